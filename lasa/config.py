@@ -1,0 +1,120 @@
+"""Frozen configuration records and their validation.
+
+A config is a frozen dataclass whose every field has a comment with its unit. Values are
+checked when the record is built, so a bad parameter fails at once with a message that
+names it and its allowed range, not deep inside a rollout. :func:`from_dict` refuses
+unknown keys: a misspelt knob must not silently fall back to its default.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any, TypeVar
+
+from lasa.errors import ConfigError
+
+__all__ = [
+    "ControlConfig",
+    "check_range",
+    "check_choice",
+    "from_dict",
+    "to_dict",
+]
+
+T = TypeVar("T")
+
+
+def check_range(
+    name: str,
+    value: float,
+    low: float = -math.inf,
+    high: float = math.inf,
+    *,
+    low_open: bool = False,
+    high_open: bool = False,
+) -> float:
+    """Return ``value`` as a float if it lies within [low, high], else raise ConfigError.
+
+    NaN is always refused; infinity only passes where the bound on that side is infinite.
+
+    Args:
+        name: Parameter name, used in the message.
+        value: The value to check.
+        low: Lower bound.
+        high: Upper bound.
+        low_open: Exclude ``low`` itself.
+        high_open: Exclude ``high`` itself.
+    """
+    lo = "(" if low_open else "["
+    hi = ")" if high_open else "]"
+    allowed = f"{lo}{low:g}, {high:g}{hi}"
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a number in {allowed}, got {value!r}") from None
+    bad = math.isnan(v) or v < low or v > high
+    bad = bad or (low_open and v == low) or (high_open and v == high)
+    if bad:
+        raise ConfigError(f"{name} must be in {allowed}, got {value!r}")
+    return v
+
+
+def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) -> str:
+    """Return ``value`` if it is one of ``choices``, else raise ConfigError listing them."""
+    if value not in choices:
+        raise ConfigError(f"unknown {name} {value!r}; choose one of {', '.join(map(repr, choices))}")
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class ControlConfig:
+    """The units of the control loop: the free parameters that give beta its meaning.
+
+    The paper's transition is s' = s + dt * a with a a joint velocity (Sec. V). These
+    values set how far one step moves, how hard the user can push (sigma_h, Eq. T4),
+    and how quickly the belief commits. Each robot has defaults chosen so that the
+    paper's regimes exist (beta = 75 noisy, beta = 1000 near optimal); the notebooks
+    state the values used and why.
+    """
+
+    dt: float = 0.1  # control period Delta [s]
+    action_scale: float = 1.0  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
+    max_joint_speed: float = 2.0  # per-joint bound on the commanded velocity [rad/s]
+    belief_beta: float = 10.0  # beta_b, temperature of the goal likelihood [1/rad]
+    belief_floor: float = 1e-6  # smallest belief any goal keeps after an update [-]
+    alpha: float = 0.5  # blend weight of the assistance in LA+SA (Eq. M1) [-]
+    n_z: int = 21  # joystick candidates per latent axis the simulated user weighs [-]
+    likelihood: str = "grasp_set"  # distance to a goal: "grasp_set" (its grasps) or "goal" (g)
+
+    def __post_init__(self) -> None:
+        check_range("dt", self.dt, 0.0, 1.0, low_open=True)
+        check_range("action_scale", self.action_scale, 0.0, low_open=True)
+        check_range("max_joint_speed", self.max_joint_speed, 0.0, low_open=True)
+        check_range("belief_beta", self.belief_beta, 0.0)
+        check_range("belief_floor", self.belief_floor, 0.0, 0.5, high_open=True)
+        check_range("alpha", self.alpha, 0.0, 1.0)
+        check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
+        if int(self.n_z) != self.n_z or self.n_z < 2:
+            raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
+
+
+def to_dict(config: Any) -> dict[str, Any]:
+    """A plain ``dict`` of a config dataclass (safe for JSON and torch checkpoints)."""
+    return dataclasses.asdict(config)
+
+
+def from_dict(cls: type[T], values: Mapping[str, Any]) -> T:
+    """Build ``cls`` from a mapping, refusing keys that ``cls`` does not have.
+
+    Raises:
+        ConfigError: if a key is unknown, naming it and the known ones.
+    """
+    known = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ConfigError(
+            f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(known)}"
+        )
+    return cls(**values)

@@ -1,0 +1,255 @@
+r"""Demonstrations D = {(s, a, b)}: reaches to each cup, then grasp adjustments there.
+
+Each demonstration is one continuous motion, as a kinesthetic teacher would give it:
+
+1. **Reach** from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)`,
+   at a constant joint-space speed that slows exponentially near the target (a
+   saturated proportional law, :math:`a = \min(k, v/\|e\|)\, e` with :math:`e = s^* - s`).
+   Unlike a minimum-jerk profile it moves off the start pose at full speed, so the
+   decoder learns that z moves the arm there too, and it slows down near the grasp,
+   so the decoder learns the small actions that precise grasping needs.
+2. **Adjust** the grasp at that cup: move along the preference curve
+   :math:`\theta \mapsto s^*(g, \theta)` to a few random new preferences, with the
+   same speed law in theta, holding still for a few steps after each.
+
+The belief of each tuple is the one the robot would have computed online along the
+demonstration (:mod:`lasa.belief`, starting uniform), so the decoder sees the
+contexts it will meet. Finally every tuple gets noisy copies: the state is perturbed
+and the action gains a correction back towards the demonstrated state, which teaches
+the decoder to return to the demonstrated manifold.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import numpy as np
+
+from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.config import ControlConfig, check_range
+from lasa.errors import ArtifactError, ConfigError
+from lasa.io import load_npz, save_npz
+from lasa.task import CupTask
+
+__all__ = [
+    "DemoConfig",
+    "Demonstrations",
+    "collect_demonstrations",
+    "save_demonstrations",
+    "load_demonstrations",
+]
+
+REACH, ADJUST, HOLD = 0, 1, 2  # phase labels of a tuple
+
+
+@dataclasses.dataclass(frozen=True)
+class DemoConfig:
+    """How many demonstrations, and how they move."""
+
+    n_theta: int = 9  # preferences demonstrated per cup, evenly spaced on [0, 1]
+    n_starts: int = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
+    start_noise: float = 0.3  # std of the start-pose perturbation [rad]
+    n_adjust: int = 3  # grasp adjustments (moves along the preference curve) per demo
+    speed: float = 0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
+    gain: float = 2.0  # proportional gain of the slow-down near each target [1/s]
+    tolerance: float = 0.01  # a motion ends this close to its target [rad]
+    hold_steps: int = 3  # steps held still after each motion [-]
+    n_perturb: int = 2  # noisy copies of every tuple [-]
+    perturb_std: float = 0.05  # std of the state perturbation of a copy [rad]
+    perturb_gain: float = 2.0  # gain of a copy's corrective action [1/s]
+    max_steps: int = 400  # cap on the length of one motion [steps]
+    seed: int = 0  # seed of the start perturbations, new preferences and copies
+
+    def __post_init__(self) -> None:
+        for name in ("n_theta", "n_starts"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
+        for name in ("n_adjust", "hold_steps", "n_perturb"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 0:
+                raise ConfigError(f"{name} must be a non-negative integer, got {getattr(self, name)!r}")
+        check_range("start_noise", self.start_noise, 0.0)
+        check_range("speed", self.speed, 0.0, 1.0, low_open=True)
+        check_range("gain", self.gain, 0.0, low_open=True)
+        check_range("tolerance", self.tolerance, 0.0, low_open=True)
+        check_range("perturb_std", self.perturb_std, 0.0)
+        check_range("perturb_gain", self.perturb_gain, 0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class Demonstrations:
+    """The dataset D, one row per (s, a, b) tuple.
+
+    Attributes:
+        robot: Robot name.
+        states: s, shape (N, n) [rad].
+        actions: a, shape (N, n) [rad/s].
+        beliefs: b, shape (N, G).
+        demo: Index of the demonstration each tuple belongs to, shape (N,).
+        goal: The demonstrated cup, shape (N,).
+        theta: The preference being moved towards, shape (N,).
+        phase: 0 reach, 1 adjust, 2 hold, shape (N,).
+        perturbed: Whether the tuple is a noisy copy, shape (N,).
+    """
+
+    robot: str
+    states: np.ndarray
+    actions: np.ndarray
+    beliefs: np.ndarray
+    demo: np.ndarray
+    goal: np.ndarray
+    theta: np.ndarray
+    phase: np.ndarray
+    perturbed: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.states)
+
+    def clean(self) -> Demonstrations:
+        """The tuples that are not noisy copies (the demonstrations themselves)."""
+        keep = ~self.perturbed
+        return dataclasses.replace(
+            self,
+            **{
+                f.name: getattr(self, f.name)[keep]
+                for f in dataclasses.fields(self)
+                if f.name != "robot"
+            },
+        )
+
+
+def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max_steps: int) -> np.ndarray:
+    """Distance travelled along a path of length ``span`` at each step, under the speed law.
+
+    The law runs on the scalar distance left, u' = min(gain * (span - u), speed), so
+    straight reaches and moves along the preference curve share it.
+    """
+    u = [0.0]
+    while span - u[-1] > tol and len(u) <= max_steps:
+        u.append(u[-1] + dt * min(gain * (span - u[-1]), speed))
+    return np.asarray(u)
+
+
+def collect_demonstrations(
+    task: CupTask, control: ControlConfig, config: DemoConfig = DemoConfig()
+) -> Demonstrations:
+    """Generate the demonstration dataset for ``task``.
+
+    Args:
+        task: The cup task (robot, goals, preference curves, start pose).
+        control: Control-loop units: dt, sigma_h (the speed scale) and the belief model.
+        config: Sizes and motion parameters of the demonstrations.
+
+    Returns:
+        The dataset, noisy copies included (see :meth:`Demonstrations.clean`).
+    """
+    rng = np.random.default_rng(config.seed)
+    robot = task.robot
+    dt = control.dt
+    cruise = config.speed * control.action_scale
+    rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+    beliefs: list[np.ndarray] = []
+    demo_id = 0
+    sets = task.belief_targets(control.likelihood)
+    thetas = np.linspace(0.0, 1.0, config.n_theta)
+    for g in range(task.n_goals):
+        for theta in thetas:
+            for j in range(config.n_starts):
+                start = task.start.copy()
+                if j > 0:
+                    start = robot.clip(start + rng.normal(0.0, config.start_noise, start.shape))
+                segments: list[tuple[np.ndarray, float, int]] = []
+                # 1. reach: straight line in joint space under the speed law
+                target = task.target(g, theta)
+                span = float(np.linalg.norm(target - start))
+                u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
+                path = start + (u / max(span, 1e-12))[:, None] * (target - start)
+                segments.append((path, theta, REACH))
+                # 2. adjustments along the preference curve, moving in theta
+                current = theta
+                for _ in range(config.n_adjust):
+                    new = float(rng.uniform(0.0, 1.0))
+                    grid = np.linspace(current, new, 64)
+                    pts = task.target(g, grid)
+                    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+                    u = _progress(float(arc[-1]), cruise, config.gain, config.tolerance, dt, config.max_steps)
+                    th_path = np.interp(u, arc, grid)
+                    segments.append((task.target(g, th_path), new, ADJUST))
+                    current = new
+                # assemble: each segment's actions are the finite differences, then a hold
+                log_b = uniform_log_belief(1, task.n_goals)[0]
+                for path, th, phase in segments:
+                    s = path[:-1]
+                    a = np.diff(path, axis=0) / dt
+                    if config.hold_steps:
+                        s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
+                        a = np.concatenate([a, np.zeros((config.hold_steps, robot.n_joints))])
+                    ph = np.full(len(s), phase)
+                    ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
+                    # online belief along the demonstration
+                    for k in range(len(s)):
+                        beliefs.append(belief(log_b))
+                        lik = log_likelihood(s[k], a[k], sets, dt, control.belief_beta)
+                        log_b = update_log_belief(log_b, lik, control.belief_floor)
+                    rows["s"].append(s)
+                    rows["a"].append(a)
+                    rows["demo"].append(np.full(len(s), demo_id))
+                    rows["goal"].append(np.full(len(s), g))
+                    rows["theta"].append(np.full(len(s), th))
+                    rows["phase"].append(ph)
+                demo_id += 1
+    states = np.concatenate(rows["s"])
+    actions = np.concatenate(rows["a"])
+    b = np.stack(beliefs)
+    meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
+    # noisy copies: perturbed state, action corrected back towards the demonstration
+    copies_s, copies_a = [states], [actions]
+    for _ in range(config.n_perturb):
+        noise = rng.normal(0.0, config.perturb_std, states.shape)
+        s_new = robot.clip(states + noise)
+        a_new = actions + config.perturb_gain * (states - s_new)
+        norm = np.linalg.norm(a_new, axis=1, keepdims=True)
+        limit = 0.99 * control.action_scale
+        a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
+        copies_s.append(s_new)
+        copies_a.append(a_new)
+    reps = config.n_perturb + 1
+    perturbed = np.zeros(len(states) * reps, dtype=bool)
+    perturbed[len(states) :] = True
+    return Demonstrations(
+        robot=robot.name,
+        states=np.concatenate(copies_s),
+        actions=np.concatenate(copies_a),
+        beliefs=np.tile(b, (reps, 1)),
+        demo=np.tile(meta["demo"], reps),
+        goal=np.tile(meta["goal"], reps),
+        theta=np.tile(meta["theta"], reps),
+        phase=np.tile(meta["phase"], reps),
+        perturbed=perturbed,
+    )
+
+
+def save_demonstrations(demos: Demonstrations, path: str | os.PathLike[str]) -> Path:
+    """Atomically save a dataset to ``.npz``."""
+    arrays = {f.name: np.asarray(getattr(demos, f.name)) for f in dataclasses.fields(demos)}
+    return save_npz(path, **arrays)
+
+
+def load_demonstrations(
+    path: str | os.PathLike[str],
+    robot: str | None = None,
+    make_hint: str = "make figures (notebook 01_demonstrations)",
+) -> Demonstrations:
+    """Load a dataset saved by :func:`save_demonstrations`, checking its robot."""
+    arrays = load_npz(path, make_hint)
+    try:
+        demos = Demonstrations(**{f.name: arrays[f.name] for f in dataclasses.fields(Demonstrations)})
+        demos = dataclasses.replace(demos, robot=str(demos.robot))
+    except KeyError as exc:
+        raise ArtifactError(f"{path} lacks field {exc}; re-make it with: {make_hint}") from exc
+    if robot is not None and demos.robot != robot:
+        raise ArtifactError(
+            f"{path} holds demonstrations for {demos.robot!r}, not {robot!r}; re-make it with: {make_hint}"
+        )
+    return demos

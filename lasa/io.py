@@ -1,0 +1,102 @@
+"""Atomic file writes and artifact loading with actionable errors.
+
+An interrupted run must never leave a half-written artifact behind: every writer here
+writes to a temporary file in the destination folder and renames it into place, which
+is atomic on POSIX file systems. Readers turn a missing or unreadable file into an
+:class:`~lasa.errors.ArtifactError` that names the command that makes it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from lasa.errors import ArtifactError
+
+__all__ = [
+    "atomic_path",
+    "write_csv",
+    "write_text",
+    "save_npz",
+    "load_npz",
+    "require_file",
+]
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    The temporary name keeps the final suffix (``x.tmp123.mp4``) so that writers which
+    infer the format from the extension (ffmpeg, matplotlib) still work. On any
+    exception the temporary file is removed and ``path`` is left untouched.
+
+    Args:
+        path: Final destination. Its parent folder is created if needed.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp_name = tempfile.mkstemp(
+        prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent
+    )
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Atomically write ``text`` to ``path`` and return the path."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    return Path(path)
+
+
+def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
+    """Atomically write a data frame as CSV (no index, fixed float format)."""
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format="%.6g")
+    return Path(path)
+
+
+def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:
+    """Atomically save arrays to a compressed ``.npz`` file."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez_compressed(f, **arrays)
+    return Path(path)
+
+
+def require_file(path: str | os.PathLike[str], make_hint: str) -> Path:
+    """Return ``path`` if it exists, else raise an :class:`ArtifactError`.
+
+    Args:
+        path: The artifact that a step needs.
+        make_hint: The command that produces it, shown to the user.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ArtifactError(f"{path} does not exist. Make it with: {make_hint}")
+    return path
+
+
+def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarray]:
+    """Load every array of an ``.npz`` file, with a clear error if it is missing or corrupt."""
+    path = require_file(path, make_hint)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {key: data[key] for key in data.files}
+    except Exception as exc:  # zipfile.BadZipFile, ValueError, EOFError, OSError...
+        raise ArtifactError(
+            f"{path} is corrupt or unreadable ({exc}). Delete it and re-make it with: {make_hint}"
+        ) from exc

@@ -1,0 +1,164 @@
+"""Robots: a MuJoCo scene plus the named quantities the cup task needs.
+
+A :class:`Robot` wraps one compiled scene (arm, table, two cups, a camera) and answers
+questions in the task's own terms: the joint limits, the home pose, where the grasp
+site is and which way it points, where each cup stands. Callers never index MuJoCo
+arrays by hand.
+
+The state ``s`` of every robot is its vector of arm joint positions (radians); the
+action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from lasa.config import ControlConfig, check_choice
+
+__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot"]
+
+ASSETS = Path(__file__).parent / "assets"
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotSpec:
+    """What lasa needs to know about a robot beyond its MJCF file."""
+
+    name: str  # registry key, e.g. "planar5"
+    scene: Path  # MJCF scene: the arm, a table, the cups and a camera
+    joints: tuple[str, ...]  # arm joints, in state order
+    grasp_site: str  # site between the finger tips; local +z is the approach direction
+    cups: tuple[str, ...]  # cup sites (grasp centres), in goal order
+    camera: str  # fixed camera used for videos
+    home_key: str  # keyframe of the start pose
+    top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
+    grasp_standoff: float  # distance from cup centre to the grasp site [m]
+    ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup
+    control: ControlConfig  # default units of the control loop for this robot
+
+
+ROBOTS: dict[str, RobotSpec] = {
+    "planar5": RobotSpec(
+        name="planar5",
+        scene=ASSETS / "planar5" / "scene.xml",
+        joints=("joint1", "joint2", "joint3", "joint4", "joint5"),
+        grasp_site="grasp",
+        cups=("cup_left", "cup_right"),
+        camera="front",
+        home_key="home",
+        # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
+        top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
+        grasp_standoff=0.10,
+        ik_seeds=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
+        control=ControlConfig(),
+    ),
+}
+
+
+def load_robot(name: str) -> Robot:
+    """Build the robot registered under ``name``.
+
+    Raises:
+        ConfigError: if ``name`` is not a registered robot.
+    """
+    check_choice("robot", name, tuple(ROBOTS))
+    return Robot(ROBOTS[name])
+
+
+class Robot:
+    """A compiled MuJoCo scene with named, task-level quantities.
+
+    Attributes:
+        spec: The :class:`RobotSpec` it was built from.
+        model: The compiled ``mujoco.MjModel`` of the scene.
+        data: A ``mujoco.MjData`` used for kinematics queries (not thread safe).
+        lower: Lower joint limits, shape (n,) [rad].
+        upper: Upper joint limits, shape (n,) [rad].
+    """
+
+    def __init__(self, spec: RobotSpec) -> None:
+        self.spec = spec
+        self.model = mujoco.MjModel.from_xml_path(str(spec.scene))
+        self.data = mujoco.MjData(self.model)
+        joint_ids = [self.model.joint(name).id for name in spec.joints]
+        self._qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
+        self.lower = np.array([self.model.jnt_range[j, 0] for j in joint_ids])
+        self.upper = np.array([self.model.jnt_range[j, 1] for j in joint_ids])
+        self._site = self.model.site(spec.grasp_site).id
+        key = self.model.key(spec.home_key).id
+        self._home = self.model.key_qpos[key][self._qpos_adr].copy()
+
+    @property
+    def name(self) -> str:
+        """Registry name of the robot."""
+        return self.spec.name
+
+    @property
+    def n_joints(self) -> int:
+        """Dimension n of the state and of the action."""
+        return len(self.spec.joints)
+
+    @property
+    def home(self) -> np.ndarray:
+        """The start pose of every episode (keyframe ``home``), shape (n,)."""
+        return self._home.copy()
+
+    @property
+    def control(self) -> ControlConfig:
+        """Default control-loop units for this robot."""
+        return self.spec.control
+
+    def clip(self, q: np.ndarray) -> np.ndarray:
+        """Clip joint positions of any leading shape to the joint limits."""
+        return np.clip(q, self.lower, self.upper)
+
+    def set_state(self, q: np.ndarray) -> None:
+        """Write arm joint positions into ``data`` and update kinematics."""
+        self.data.qpos[self._qpos_adr] = q
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def grasp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World position (3,) and rotation (3, 3) of the grasp site at joints ``q``."""
+        self.set_state(q)
+        pos = self.data.site_xpos[self._site].copy()
+        rot = self.data.site_xmat[self._site].reshape(3, 3).copy()
+        return pos, rot
+
+    def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
+        """Grasp-site positions for a batch of joint vectors, shape (..., 3).
+
+        MuJoCo's kinematics runs one configuration at a time; this loops over the batch
+        and is meant for plots and tests, not for the control loop.
+        """
+        qs = np.asarray(qs, dtype=float)
+        flat = qs.reshape(-1, self.n_joints)
+        out = np.empty((len(flat), 3))
+        for i, q in enumerate(flat):
+            self.set_state(q)
+            out[i] = self.data.site_xpos[self._site]
+        return out.reshape(*qs.shape[:-1], 3)
+
+    def grasp_axes(self, qs: np.ndarray) -> np.ndarray:
+        """Approach direction (the site's +z axis) for a batch of joint vectors, (..., 3)."""
+        qs = np.asarray(qs, dtype=float)
+        flat = qs.reshape(-1, self.n_joints)
+        out = np.empty((len(flat), 3))
+        for i, q in enumerate(flat):
+            self.set_state(q)
+            out[i] = self.data.site_xmat[self._site].reshape(3, 3)[:, 2]
+        return out.reshape(*qs.shape[:-1], 3)
+
+    def cup_positions(self) -> np.ndarray:
+        """World positions of the cups' grasp centres, shape (G, 3), in goal order."""
+        mujoco.mj_kinematics(self.model, self.data)
+        return np.stack([self.data.site(name).xpos.copy() for name in self.spec.cups])
+
+    def base_position(self) -> np.ndarray:
+        """World position of the arm's base (the first joint's anchor), shape (3,)."""
+        self.set_state(self.home)
+        first = self.model.joint(self.spec.joints[0]).id
+        return self.data.xanchor[first].copy()

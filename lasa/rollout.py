@@ -1,0 +1,152 @@
+"""Algorithm 1 (LA and LA+SA), batched over simulated users and joystick candidates.
+
+Every user of a sweep advances together, as rows of arrays. At each step:
+
+1. one decoder call evaluates phi(z, s, b) for every user and every joystick
+   candidate z on the grid (U x K rows);
+2. each user picks a candidate by Eq. S1 (:mod:`lasa.users`), which sets a_h;
+3. the robot's assistance a_r (Eq. M2) is blended with a_h (Eq. M1) using each
+   user's alpha: alpha = 0 is the method ``LA``, alpha > 0 is ``LA+SA``;
+4. the belief is updated with a_h (Alg. 1, line 8);
+5. the robot takes the safe step s' = clip(s + dt a).
+
+Users of different methods, rationalities and seeds share a batch, and so share each
+decoder call.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import torch
+
+from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.config import ControlConfig
+from lasa.control import assistance, blend, safe_step, sanitize
+from lasa.decoder import LatentActionModel
+from lasa.errors import ConfigError
+from lasa.task import CupTask
+from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs
+
+__all__ = ["Trajectories", "decode_candidates", "rollout", "METHODS", "method_alpha"]
+
+METHODS = ("LA", "LA+SA")
+
+
+def method_alpha(method: str, control: ControlConfig) -> float:
+    """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for LA+SA."""
+    if method not in METHODS:
+        raise ConfigError(f"unknown method {method!r}; choose one of {', '.join(map(repr, METHODS))}")
+    return 0.0 if method == "LA" else control.alpha
+
+
+@dataclasses.dataclass(frozen=True)
+class Trajectories:
+    """The record of a batched rollout.
+
+    Attributes:
+        states: s^t for t = 0..T, shape (T+1, U, n) [rad].
+        beliefs: b^t for t = 0..T, shape (T+1, U, G).
+        z: The joystick input chosen at each step, shape (T, U, d).
+        human_actions: a_h^t, shape (T, U, n) [rad/s].
+        actions: The blended command a^t before the safety clip, shape (T, U, n).
+    """
+
+    states: np.ndarray
+    beliefs: np.ndarray
+    z: np.ndarray
+    human_actions: np.ndarray
+    actions: np.ndarray
+
+
+def decode_candidates(
+    model: LatentActionModel, z_grid: torch.Tensor, state: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """phi(z, s, b) for every user and every candidate, in one decoder call.
+
+    Args:
+        model: The decoder.
+        z_grid: Candidates, shape (K, d).
+        state: States, shape (U, n).
+        b: Beliefs, shape (U, G).
+
+    Returns:
+        Decoded actions, shape (U, K, n), float64.
+    """
+    n_users, n_cand = state.shape[0], z_grid.shape[0]
+    s = torch.from_numpy(state.astype(np.float32))[:, None, :].expand(n_users, n_cand, -1)
+    bt = torch.from_numpy(b.astype(np.float32))[:, None, :].expand(n_users, n_cand, -1)
+    z = z_grid[None].expand(n_users, n_cand, -1)
+    with torch.inference_mode():
+        out = model.decode(z, s, bt)
+    return out.numpy().astype(np.float64)
+
+
+def rollout(
+    model: LatentActionModel,
+    task: CupTask,
+    users: UserPopulation,
+    alpha: float | np.ndarray,
+    control: ControlConfig,
+    horizon: int,
+    noise: np.ndarray,
+) -> Trajectories:
+    """Run Algorithm 1 for a batch of simulated users.
+
+    Args:
+        model: The decoder phi(z, s, b); its robot must be the task's.
+        task: The cup task (goals, start pose, joint limits via its robot).
+        users: The simulated users (targets, rationality, random streams).
+        alpha: Blend weight per user, shape (U,), or one for all.
+        control: Control-loop units (dt, speed bound, belief model, n_z).
+        horizon: Number of control steps T.
+        noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
+            ``noise[users.seed[u]]``. K must equal the number of joystick candidates.
+
+    Returns:
+        The trajectories of every user.
+    """
+    if model.config.robot != task.robot.name:
+        raise ConfigError(
+            f"decoder was trained for {model.config.robot!r}, the task is for {task.robot.name!r}"
+        )
+    if int(horizon) != horizon or horizon < 1:
+        raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
+    n_users = len(users)
+    alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
+    grid = latent_grid(control.n_z, model.config.z_dim)
+    if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
+        raise ConfigError(
+            f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}"
+        )
+    z_grid = torch.from_numpy(grid.astype(np.float32))
+    robot = task.robot
+    n = robot.n_joints
+
+    states = np.empty((horizon + 1, n_users, n))
+    beliefs = np.empty((horizon + 1, n_users, task.n_goals))
+    zs = np.empty((horizon, n_users, grid.shape[1]))
+    a_hs = np.empty((horizon, n_users, n))
+    acts = np.empty((horizon, n_users, n))
+    s = np.broadcast_to(task.start, (n_users, n)).copy()
+    log_b = uniform_log_belief(n_users, task.n_goals)
+    states[0], beliefs[0] = s, belief(log_b)
+    rows = np.arange(n_users)
+    sets = task.belief_targets(control.likelihood)
+    for t in range(horizon):
+        b = beliefs[t]
+        phi = decode_candidates(model, z_grid, s, b)  # (U, K, n): the one decoder call
+        costs = user_costs(users.target, s, phi, control.dt)
+        k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
+        a_h = sanitize(phi[rows, k])
+        a = blend(a_h, assistance(b, task.goals, s), alpha)
+        log_b = update_log_belief(
+            log_b,
+            log_likelihood(s, a_h, sets, control.dt, control.belief_beta),
+            control.belief_floor,
+        )
+        s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
+        zs[t], a_hs[t], acts[t] = grid[k], a_h, a
+        states[t + 1], beliefs[t + 1] = s, belief(log_b)
+    return Trajectories(states=states, beliefs=beliefs, z=zs, human_actions=a_hs, actions=acts)
