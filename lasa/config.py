@@ -86,7 +86,12 @@ class ControlConfig:
     belief_floor: float = 1e-6  # smallest belief any goal keeps after an update [-]
     alpha: float = 0.5  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: int = 21  # joystick candidates per latent axis the simulated user weighs [-]
-    likelihood: str = "grasp_set"  # distance to a goal: "grasp_set" (its grasps) or "goal" (g)
+    likelihood: str = "grasp_set"  # belief model: "grasp_set" (regret to grasp sets) or "goal"
+
+    @property
+    def likelihood_step(self) -> float | None:
+        """The best step the belief's normaliser assumes, dt * sigma_h, or None."""
+        return self.dt * self.action_scale if self.likelihood == "grasp_set" else None
 
     def __post_init__(self) -> None:
         check_range("dt", self.dt, 0.0, 1.0, low_open=True)
@@ -114,7 +119,5 @@ def from_dict(cls: type[T], values: Mapping[str, Any]) -> T:
     known = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     unknown = sorted(set(values) - known)
     if unknown:
-        raise ConfigError(
-            f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(known)}"
-        )
+        raise ConfigError(f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(known)}")
     return cls(**values)

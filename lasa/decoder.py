@@ -113,9 +113,7 @@ class LatentActionModel(nn.Module):
         norm = v.norm(dim=-1, keepdim=True).clamp_min(1e-8)
         return self.config.action_scale * torch.tanh(norm) * v / norm
 
-    def forward(
-        self, s: torch.Tensor, a: torch.Tensor, b: torch.Tensor
-    ) -> tuple[torch.Tensor, torch.Tensor]:
+    def forward(self, s: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Encode then decode: returns (z, reconstructed action)."""
         z = self.encode(s, a, b)
         return z, self.decode(z, s, b)
@@ -131,9 +129,7 @@ class LatentActionModel(nn.Module):
         return self.decode(zt, st, bt).double().numpy()
 
 
-def save_checkpoint(
-    model: LatentActionModel, path: str | os.PathLike[str], **extra: Any
-) -> Path:
+def save_checkpoint(model: LatentActionModel, path: str | os.PathLike[str], **extra: Any) -> Path:
     """Atomically save the model's state dict, its config and ``extra`` metadata.
 
     ``extra`` values must be plain Python data (numbers, strings, lists, dicts) so the
@@ -171,10 +167,7 @@ def load_checkpoint(
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         config = DecoderConfig(
-            **{
-                k: tuple(v) if isinstance(v, list) else v
-                for k, v in payload["config"].items()
-            }
+            **{k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()}
         )
         model = LatentActionModel(config)
         model.load_state_dict(payload["state_dict"])

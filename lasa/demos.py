@@ -111,11 +111,7 @@ class Demonstrations:
         keep = ~self.perturbed
         return dataclasses.replace(
             self,
-            **{
-                f.name: getattr(self, f.name)[keep]
-                for f in dataclasses.fields(self)
-                if f.name != "robot"
-            },
+            **{f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"},
         )
 
 
@@ -190,7 +186,9 @@ def collect_demonstrations(
                     # online belief along the demonstration
                     for k in range(len(s)):
                         beliefs.append(belief(log_b))
-                        lik = log_likelihood(s[k], a[k], sets, dt, control.belief_beta)
+                        lik = log_likelihood(
+                            s[k], a[k], sets, dt, control.belief_beta, control.likelihood_step
+                        )
                         log_b = update_log_belief(log_b, lik, control.belief_floor)
                     rows["s"].append(s)
                     rows["a"].append(a)

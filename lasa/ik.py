@@ -68,13 +68,11 @@ def solve_grasp_ik(
     model = robot.model
     configuration = mink.Configuration(model)
     q_full = configuration.q.copy()
-    adr = robot._qpos_adr
+    adr = robot.qpos_adr
     q_full[adr] = robot.clip(np.asarray(seed, dtype=float))
     configuration.update(q_full)
 
-    frame = mink.FrameTask(
-        robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0
-    )
+    frame = mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0)
     frame.set_target(
         mink.SE3.from_rotation_and_translation(
             mink.SO3.from_matrix(np.asarray(rotation, dtype=float)),

@@ -54,7 +54,11 @@ ROBOTS: dict[str, RobotSpec] = {
         top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
         grasp_standoff=0.10,
         ik_seeds=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
-        control=ControlConfig(),
+        # Units chosen so the paper's regimes exist (notebook 04 explains): one step moves
+        # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
+        # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
+        # mid-preference goal small enough for users to hold other grasps (Eq. T4).
+        control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
     ),
 }
 
@@ -76,6 +80,7 @@ class Robot:
         spec: The :class:`RobotSpec` it was built from.
         model: The compiled ``mujoco.MjModel`` of the scene.
         data: A ``mujoco.MjData`` used for kinematics queries (not thread safe).
+        qpos_adr: Index of each arm joint in ``data.qpos``, shape (n,).
         lower: Lower joint limits, shape (n,) [rad].
         upper: Upper joint limits, shape (n,) [rad].
     """
@@ -85,12 +90,12 @@ class Robot:
         self.model = mujoco.MjModel.from_xml_path(str(spec.scene))
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(name).id for name in spec.joints]
-        self._qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
+        self.qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
         self.lower = np.array([self.model.jnt_range[j, 0] for j in joint_ids])
         self.upper = np.array([self.model.jnt_range[j, 1] for j in joint_ids])
         self._site = self.model.site(spec.grasp_site).id
         key = self.model.key(spec.home_key).id
-        self._home = self.model.key_qpos[key][self._qpos_adr].copy()
+        self._home = self.model.key_qpos[key][self.qpos_adr].copy()
 
     @property
     def name(self) -> str:
@@ -118,7 +123,7 @@ class Robot:
 
     def set_state(self, q: np.ndarray) -> None:
         """Write arm joint positions into ``data`` and update kinematics."""
-        self.data.qpos[self._qpos_adr] = q
+        self.data.qpos[self.qpos_adr] = q
         mujoco.mj_kinematics(self.model, self.data)
 
     def grasp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -117,9 +117,7 @@ def rollout(
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
     grid = latent_grid(control.n_z, model.config.z_dim)
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
-        raise ConfigError(
-            f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}"
-        )
+        raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
     z_grid = torch.from_numpy(grid.astype(np.float32))
     robot = task.robot
     n = robot.n_joints
@@ -143,7 +141,7 @@ def rollout(
         a = blend(a_h, assistance(b, task.goals, s), alpha)
         log_b = update_log_belief(
             log_b,
-            log_likelihood(s, a_h, sets, control.dt, control.belief_beta),
+            log_likelihood(s, a_h, sets, control.dt, control.belief_beta, control.likelihood_step),
             control.belief_floor,
         )
         s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)

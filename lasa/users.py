@@ -54,7 +54,9 @@ class UserPopulation:
         n = len(self.goal)
         for f in dataclasses.fields(self):
             if len(getattr(self, f.name)) != n:
-                raise ConfigError(f"UserPopulation.{f.name} has {len(getattr(self, f.name))} rows, expected {n}")
+                raise ConfigError(
+                    f"UserPopulation.{f.name} has {len(getattr(self, f.name))} rows, expected {n}"
+                )
         if np.any(~np.isfinite(self.beta0) & ~np.isposinf(self.beta0)) or np.any(self.beta0 < 0):
             raise ConfigError(f"beta must be >= 0, got min {np.min(self.beta0)}")
         if np.any(~np.isfinite(self.slope)) or np.any(self.slope < 0):

@@ -1,0 +1,127 @@
+"""Run the figure notebooks headless with papermill, with checked parameters.
+
+A config file (``configs/paper.yaml`` or ``configs/quick.yaml``) holds a ``common``
+section passed to every notebook and one section per notebook, named by its file stem
+(``04_fixed_expertise``). Papermill only *warns* about a parameter that the notebook's
+``parameters`` cell does not define; here it is an error, because a misspelt knob
+would silently leave its default in place. The executed notebook is written to a
+temporary file and renamed into place, so an interrupted run leaves nothing behind
+that Make could mistake for a finished one.
+
+Usage::
+
+    python -m lasa.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
+        --out build/notebooks
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import papermill as pm
+import yaml
+
+from lasa.errors import ConfigError
+from lasa.io import atomic_path, require_file
+
+__all__ = ["notebook_parameters", "load_config", "run_notebook", "main"]
+
+
+def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
+    """Names and default values of a notebook's ``parameters`` cell.
+
+    Raises:
+        ConfigError: if the notebook has no cell tagged ``parameters``.
+    """
+    params = pm.inspect_notebook(str(notebook))
+    if not params:
+        raise ConfigError(f"{notebook} has no cell tagged 'parameters'")
+    return {name: info["default"] for name, info in params.items()}
+
+
+def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
+    """The parameters a config file passes to ``notebook``: ``common`` plus its section.
+
+    Raises:
+        ConfigError: if the file is not a mapping of sections, or if it passes a name
+            that the notebook's ``parameters`` cell does not define.
+    """
+    path = require_file(config, "it ships with the repository under configs/")
+    data = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(data, dict) or not all(isinstance(v, dict) for v in data.values()):
+        raise ConfigError(f"{path} must map section names to parameter mappings")
+    stem = Path(notebook).stem
+    params = {**data.get("common", {}), **data.get(stem, {})}
+    known = notebook_parameters(notebook)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise ConfigError(
+            f"{path} passes unknown parameter(s) {unknown} to {Path(notebook).name}; "
+            f"its parameters cell defines {sorted(known)}"
+        )
+    return params
+
+
+def run_notebook(
+    notebook: str | os.PathLike[str],
+    config: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    overrides: dict[str, Any] | None = None,
+    progress: bool = True,
+) -> Path:
+    """Execute ``notebook`` with the parameters of ``config`` into ``out_dir``.
+
+    Args:
+        notebook: The source notebook (committed without outputs).
+        config: The YAML config file.
+        out_dir: Folder of the executed copy (same file name).
+        overrides: Extra parameters, checked like the config's.
+        progress: Show papermill's cell progress bar.
+
+    Returns:
+        The path of the executed notebook.
+    """
+    params = load_config(config, notebook)
+    if overrides:
+        unknown = sorted(set(overrides) - set(notebook_parameters(notebook)))
+        if unknown:
+            raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
+        params.update(overrides)
+    out = Path(out_dir) / Path(notebook).name
+    with atomic_path(out) as tmp:
+        pm.execute_notebook(
+            str(notebook),
+            str(tmp),
+            parameters=params,
+            kernel_name="python3",
+            cwd=str(Path.cwd()),
+            progress_bar=progress,
+        )
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry point: run one notebook and report its wall time."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("notebook")
+    parser.add_argument("--config", required=True)
+    parser.add_argument("--out", required=True)
+    parser.add_argument("--no-progress", action="store_true")
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    try:
+        out = run_notebook(args.notebook, args.config, args.out, progress=not args.no_progress)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"{out} ({time.perf_counter() - start:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

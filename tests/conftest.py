@@ -1,0 +1,46 @@
+"""Shared fixtures: the planar5 task, a small dataset and a briefly trained decoder.
+
+MUJOCO_GL stays ``osmesa`` (set by lasa on import) for the whole test process: the
+render test and the notebooks that the notebook tests start need it, and MuJoCo only
+touches OpenGL when a Renderer is created, so the other tests are unaffected.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "osmesa")
+
+import pytest  # noqa: E402
+import torch  # noqa: E402
+
+from lasa.demos import DemoConfig, collect_demonstrations  # noqa: E402
+from lasa.robot import Robot, load_robot  # noqa: E402
+from lasa.task import CupTask, make_cup_task  # noqa: E402
+from lasa.train import TrainConfig, train_decoder  # noqa: E402
+
+torch.set_num_threads(1)
+
+SMALL_DEMOS = DemoConfig(n_theta=3, n_starts=1, n_adjust=1, n_perturb=1, seed=0)
+SMALL_TRAIN = TrainConfig(steps=150, hidden=32, depth=2, batch_size=128, log_every=50, seed=0)
+
+
+@pytest.fixture(scope="session")
+def robot() -> Robot:
+    return load_robot("planar5")
+
+
+@pytest.fixture(scope="session")
+def task(robot: Robot) -> CupTask:
+    return make_cup_task(robot)
+
+
+@pytest.fixture(scope="session")
+def demos(task: CupTask):
+    return collect_demonstrations(task, task.robot.control, SMALL_DEMOS)
+
+
+@pytest.fixture(scope="session")
+def model(demos, task: CupTask):
+    trained, _ = train_decoder(demos, task.robot.control, SMALL_TRAIN, progress=False)
+    return trained

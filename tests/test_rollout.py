@@ -1,0 +1,109 @@
+"""Algorithm 1, batched: one decoder call per step, invariants, determinism."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from numpy.testing import assert_allclose, assert_array_equal
+
+from lasa.errors import ConfigError
+from lasa.rollout import METHODS, method_alpha, rollout
+from lasa.users import UserPopulation
+
+HORIZON = 25
+
+
+def make_users(task, n=6, beta=50.0):
+    goal = np.arange(n) % 2
+    theta = np.linspace(0, 1, n)
+    return UserPopulation(
+        goal=goal,
+        theta=theta,
+        target=task.target(goal, theta),
+        beta0=np.full(n, beta),
+        slope=np.zeros(n),
+        seed=np.arange(n),
+    )
+
+
+def noise_for(task, n, horizon=HORIZON, seed=0):
+    return np.random.default_rng(seed).random((n, horizon, task.robot.control.n_z))
+
+
+def test_one_decoder_call_per_step_covers_every_user_and_candidate(model, task, monkeypatch):
+    users = make_users(task, 7)
+    shapes = []
+    original = type(model).decode
+
+    def counting(self, z, s, b):
+        shapes.append(tuple(z.shape))
+        return original(self, z, s, b)
+
+    monkeypatch.setattr(type(model), "decode", counting)
+    rollout(model, task, users, 0.2, task.robot.control, HORIZON, noise_for(task, 7))
+    n_z = task.robot.control.n_z
+    assert shapes == [(7, n_z, 1)] * HORIZON
+
+
+def test_invariants(model, task):
+    users = make_users(task, 8, beta=0.0)  # random users explore the most
+    ctl = task.robot.control
+    traj = rollout(model, task, users, np.linspace(0, 1, 8), ctl, HORIZON, noise_for(task, 8))
+    robot = task.robot
+    assert np.all(traj.states >= robot.lower) and np.all(traj.states <= robot.upper)
+    assert np.all(np.abs(np.diff(traj.states, axis=0)) <= ctl.dt * ctl.max_joint_speed + 1e-12)
+    assert_allclose(traj.beliefs.sum(-1), 1.0, atol=1e-9)
+    assert np.all(np.abs(traj.z) <= 1.0)
+    assert np.all(np.linalg.norm(traj.human_actions, axis=-1) <= ctl.action_scale + 1e-6)
+    assert_allclose(traj.states[0], np.broadcast_to(task.start, traj.states[0].shape))
+
+
+def test_alpha_zero_and_one(model, task):
+    users = make_users(task, 2)
+    ctl = task.robot.control
+    traj = rollout(model, task, users, np.array([0.0, 1.0]), ctl, HORIZON, noise_for(task, 2))
+    assert_allclose(traj.actions[:, 0], traj.human_actions[:, 0])  # LA: a = a_h
+    b, s = traj.beliefs[:-1, 1], traj.states[:-1, 1]
+    assert_allclose(traj.actions[:, 1], b @ task.goals - s)  # full autonomy: a = a_r
+
+
+def test_same_seed_same_trajectories(model, task):
+    users = make_users(task, 4)
+    ctl = task.robot.control
+    a = rollout(model, task, users, 0.2, ctl, HORIZON, noise_for(task, 4))
+    b = rollout(model, task, users, 0.2, ctl, HORIZON, noise_for(task, 4))
+    c = rollout(model, task, users, 0.2, ctl, HORIZON, noise_for(task, 4, seed=1))
+    assert_array_equal(a.states, b.states)
+    assert not np.array_equal(a.states, c.states)
+
+
+def test_a_user_does_not_depend_on_its_batch(model, task):
+    users = make_users(task, 4)
+    ctl = task.robot.control
+    noise = noise_for(task, 4)
+    full = rollout(model, task, users, 0.2, ctl, HORIZON, noise)
+    one = dataclasses.replace(
+        users, **{f.name: getattr(users, f.name)[2:3] for f in dataclasses.fields(users)}
+    )
+    alone = rollout(model, task, one, 0.2, ctl, HORIZON, noise)
+    assert_allclose(alone.states[:, 0], full.states[:, 2], atol=1e-5)
+
+
+def test_method_alpha_and_unknown_method(task):
+    ctl = task.robot.control
+    assert method_alpha("LA", ctl) == 0.0
+    assert method_alpha("LA+SA", ctl) == ctl.alpha
+    assert set(METHODS) == {"LA", "LA+SA"}
+    with pytest.raises(ConfigError, match="unknown method 'SA'"):
+        method_alpha("SA", ctl)
+
+
+def test_bad_arguments_are_clear(model, task):
+    users = make_users(task, 2)
+    ctl = task.robot.control
+    with pytest.raises(ConfigError, match="noise"):
+        rollout(model, task, users, 0.2, ctl, HORIZON, np.zeros((2, 3, 4)))
+    with pytest.raises(ConfigError, match="horizon"):
+        rollout(model, task, users, 0.2, ctl, 0, noise_for(task, 2))
+    with pytest.raises(ConfigError, match="alpha"):
+        rollout(model, task, users, 1.5, ctl, HORIZON, noise_for(task, 2))
