@@ -30,6 +30,7 @@ BUILD := build
 endif
 EXEC := $(BUILD)/notebooks
 LASA_SRC := $(shell find lasa -name '*.py' -o -name '*.xml') pyproject.toml
+PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.runner $< --config $(CONFIG) --out $(EXEC)
 
 .PHONY: setup sysdeps figures test lint clean
@@ -39,8 +40,8 @@ setup: $(STAMP) sysdeps
 $(STAMP): environment.lock pyproject.toml
 	@test -n "$(PYTHON)" || { echo "error: Python 3.11 not found (set PYTHON=...)"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --disable-pip-version-check -r environment.lock
-	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(BIN)/pip install --quiet --disable-pip-version-check -r environment.lock 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
+	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
 	touch $@
 
 # Software rendering (OSMesa). ffmpeg comes from the imageio-ffmpeg wheel.
