@@ -66,6 +66,8 @@ $(EXEC)/04_fixed_expertise.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/02_
 
 lint: setup
 	$(BIN)/ruff check lasa tests
+	$(BIN)/ruff format --check lasa tests
+	$(BIN)/mypy lasa
 
 test: setup lint
 	$(BIN)/python -m pytest -q

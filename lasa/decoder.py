@@ -87,6 +87,9 @@ class LatentActionModel(nn.Module):
     (the control loop does, see :func:`lasa.control.sanitize`).
     """
 
+    state_mean: torch.Tensor
+    state_std: torch.Tensor
+
     def __init__(self, config: DecoderConfig) -> None:
         super().__init__()
         self.config = config
@@ -166,9 +169,10 @@ def load_checkpoint(
     path = require_file(path, make_hint)
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
-        config = DecoderConfig(
-            **{k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()}
-        )
+        values: dict[str, Any] = {
+            k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()
+        }
+        config = DecoderConfig(**values)
         model = LatentActionModel(config)
         model.load_state_dict(payload["state_dict"])
     except Exception as exc:

@@ -242,7 +242,8 @@ def load_demonstrations(
     """Load a dataset saved by :func:`save_demonstrations`, checking its robot."""
     arrays = load_npz(path, make_hint)
     try:
-        demos = Demonstrations(**{f.name: arrays[f.name] for f in dataclasses.fields(Demonstrations)})
+        fields = {f.name: arrays[f.name] for f in dataclasses.fields(Demonstrations)}
+        demos = Demonstrations(**fields)  # type: ignore[arg-type]
         demos = dataclasses.replace(demos, robot=str(demos.robot))
     except KeyError as exc:
         raise ArtifactError(f"{path} lacks field {exc}; re-make it with: {make_hint}") from exc

@@ -74,7 +74,7 @@ def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:
     """Atomically save arrays to a compressed ``.npz`` file."""
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as f:
-            np.savez_compressed(f, **arrays)
+            np.savez_compressed(f, **arrays)  # type: ignore[arg-type]
     return Path(path)
 
 

@@ -35,7 +35,7 @@ def time_to_reach(errors: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.
     reached = errors <= tolerance
     completed = reached.any(axis=0)
     horizon = errors.shape[0] - 1
-    return np.where(completed, reached.argmax(axis=0), horizon), completed
+    return np.where(completed, reached.argmax(axis=0), horizon), np.asarray(completed)
 
 
 def confidence(beliefs: np.ndarray, goal: np.ndarray) -> np.ndarray:

@@ -65,7 +65,7 @@ def _colored_path(
     ax: Axes, xz: np.ndarray, values: np.ndarray, cmap: str, norm: plt.Normalize, lw: float = 1.2
 ):
     segs = np.stack([xz[:-1], xz[1:]], axis=1)
-    lc = LineCollection(segs, cmap=cmap, norm=norm, lw=lw)
+    lc = LineCollection(list(segs), cmap=cmap, norm=norm, lw=lw)
     lc.set_array(values[:-1])
     ax.add_collection(lc)
     return lc
@@ -165,7 +165,7 @@ def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     twin.set_ylabel("grasp preference $\\theta$ (0 top, 1 side)")
     twin.set_ylim(min(-0.05, conf.grasp_theta.min() - 0.05), max(1.05, conf.grasp_theta.max() + 0.05))
     lines = ax.get_lines()[:1] + twin.get_lines()
-    ax.legend(lines, [ln.get_label() for ln in lines], frameon=False, loc="upper left", fontsize=8)
+    ax.legend(lines, [str(ln.get_label()) for ln in lines], frameon=False, loc="upper left", fontsize=8)
     return ax
 
 

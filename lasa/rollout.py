@@ -29,7 +29,15 @@ from lasa.errors import ConfigError
 from lasa.task import CupTask
 from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs
 
-__all__ = ["Trajectories", "decode_candidates", "rollout", "METHODS", "method_alpha"]
+__all__ = [
+    "Trajectories",
+    "StepResult",
+    "decode_candidates",
+    "shared_autonomy_step",
+    "rollout",
+    "METHODS",
+    "method_alpha",
+]
 
 METHODS = ("LA", "LA+SA")
 
@@ -58,6 +66,76 @@ class Trajectories:
     z: np.ndarray
     human_actions: np.ndarray
     actions: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class StepResult:
+    """One step of Algorithm 1 for a batch of users.
+
+    Attributes:
+        state: s^{t+1}, shape (U, n) [rad].
+        log_belief: log b^{t+1}, shape (U, G).
+        human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
+        action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
+    """
+
+    state: np.ndarray
+    log_belief: np.ndarray
+    human_action: np.ndarray
+    action: np.ndarray
+
+
+def _advance(
+    task: CupTask,
+    control: ControlConfig,
+    state: np.ndarray,
+    log_b: np.ndarray,
+    a_h: np.ndarray,
+    alpha: np.ndarray,
+    sets: np.ndarray,
+) -> StepResult:
+    """Lines 6-9 of Algorithm 1: assistance, blend, belief update, safe transition."""
+    a_h = sanitize(a_h)
+    a = blend(a_h, assistance(belief(log_b), task.goals, state), alpha)
+    lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
+    new_log_b = update_log_belief(log_b, lik, control.belief_floor)
+    robot = task.robot
+    new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
+    return StepResult(state=new_state, log_belief=new_log_b, human_action=a_h, action=a)
+
+
+def shared_autonomy_step(
+    model: LatentActionModel,
+    task: CupTask,
+    control: ControlConfig,
+    state: np.ndarray,
+    log_belief: np.ndarray,
+    z: np.ndarray,
+    alpha: float | np.ndarray,
+) -> StepResult:
+    """One step of Algorithm 1 from joystick input to commanded state, batched over users.
+
+    This is the step a teleoperated robot runs: decode the joystick input, blend with
+    the assistance, update the belief, take the safe step. A joystick input that is not
+    finite (a disconnected or faulty device) decodes to no human action at all, so it
+    can never become a command; the robot's own assistance still applies.
+
+    Args:
+        model: The decoder.
+        task: The cup task.
+        control: Control-loop units.
+        state: s^t, shape (U, n).
+        log_belief: log b^t, shape (U, G).
+        z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
+        alpha: Blend weight, scalar or shape (U,).
+    """
+    z = np.asarray(z, dtype=float)
+    ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
+    a_h = model.decode_numpy(np.where(ok, z, 0.0), state, belief(log_belief))
+    a_h = np.where(ok, a_h, 0.0)
+    alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
+    sets = task.belief_targets(control.likelihood)
+    return _advance(task, control, state, log_belief, a_h, alpha_arr, sets)
 
 
 def decode_candidates(
@@ -119,8 +197,7 @@ def rollout(
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
     z_grid = torch.from_numpy(grid.astype(np.float32))
-    robot = task.robot
-    n = robot.n_joints
+    n = task.robot.n_joints
 
     states = np.empty((horizon + 1, n_users, n))
     beliefs = np.empty((horizon + 1, n_users, task.n_goals))
@@ -133,18 +210,11 @@ def rollout(
     rows = np.arange(n_users)
     sets = task.belief_targets(control.likelihood)
     for t in range(horizon):
-        b = beliefs[t]
-        phi = decode_candidates(model, z_grid, s, b)  # (U, K, n): the one decoder call
+        phi = decode_candidates(model, z_grid, s, beliefs[t])  # (U, K, n): the one decoder call
         costs = user_costs(users.target, s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
-        a_h = sanitize(phi[rows, k])
-        a = blend(a_h, assistance(b, task.goals, s), alpha)
-        log_b = update_log_belief(
-            log_b,
-            log_likelihood(s, a_h, sets, control.dt, control.belief_beta, control.likelihood_step),
-            control.belief_floor,
-        )
-        s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
-        zs[t], a_hs[t], acts[t] = grid[k], a_h, a
+        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)
+        s, log_b = step.state, step.log_belief
+        zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)
     return Trajectories(states=states, beliefs=beliefs, z=zs, human_actions=a_hs, actions=acts)

@@ -107,3 +107,46 @@ def test_bad_arguments_are_clear(model, task):
         rollout(model, task, users, 0.2, ctl, 0, noise_for(task, 2))
     with pytest.raises(ConfigError, match="alpha"):
         rollout(model, task, users, 1.5, ctl, HORIZON, noise_for(task, 2))
+
+
+def test_step_never_commands_outside_limits_for_random_huge_or_nan_input(model, task):
+    from lasa.belief import belief, uniform_log_belief
+    from lasa.rollout import shared_autonomy_step
+
+    rng = np.random.default_rng(0)
+    robot, ctl = task.robot, task.robot.control
+    n_users = 400
+    s = rng.uniform(robot.lower, robot.upper, size=(n_users, robot.n_joints))
+    log_b = uniform_log_belief(n_users, task.n_goals)
+    z = np.concatenate(
+        [
+            rng.uniform(-1, 1, (100, 1)),
+            rng.normal(scale=1e12, size=(100, 1)),
+            np.full((100, 1), np.nan),
+            np.where(rng.random((100, 1)) < 0.5, np.inf, -np.inf),
+        ]
+    )
+    for alpha in (0.0, ctl.alpha, 1.0):
+        for _ in range(20):
+            out = shared_autonomy_step(model, task, ctl, s, log_b, z, alpha)
+            assert np.all(np.isfinite(out.state))
+            assert np.all(out.state >= robot.lower) and np.all(out.state <= robot.upper)
+            assert np.all(np.abs(out.state - s) <= ctl.dt * ctl.max_joint_speed + 1e-12)
+            assert_allclose(belief(out.log_belief).sum(-1), 1.0, atol=1e-9)
+            assert np.all(out.human_action[200:] == 0.0)  # non-finite input: no human action
+            s, log_b = out.state, out.log_belief
+
+
+def test_step_matches_the_rollout(model, task):
+    """The rollout's step is the teleoperation step, for the inputs the users chose."""
+    from lasa.belief import uniform_log_belief
+    from lasa.rollout import shared_autonomy_step
+
+    users = make_users(task, 3)
+    ctl = task.robot.control
+    traj = rollout(model, task, users, 0.2, ctl, 5, noise_for(task, 3, horizon=5))
+    s, log_b = traj.states[0], uniform_log_belief(3, task.n_goals)
+    for t in range(5):
+        out = shared_autonomy_step(model, task, ctl, s, log_b, traj.z[t], 0.2)
+        assert_allclose(out.state, traj.states[t + 1], atol=1e-6)
+        s, log_b = out.state, out.log_belief
