@@ -75,6 +75,7 @@ def run_fixed_expertise(
     task: CupTask,
     control: ControlConfig,
     config: Sim1Config = Sim1Config(),
+    progress: bool = False,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim1: every method against users of fixed rationality beta.
 
@@ -98,7 +99,7 @@ def run_fixed_expertise(
         seed=seed,
     )
     alpha = np.array([method_alpha(m, control) for m in method])
-    traj = rollout(model, task, users, alpha, control, config.horizon, noise)
+    traj = rollout(model, task, users, alpha, control, config.horizon, noise, progress=progress)
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
     frame = pd.DataFrame(

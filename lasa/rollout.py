@@ -20,6 +20,7 @@ import dataclasses
 
 import numpy as np
 import torch
+from tqdm.auto import tqdm
 
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.config import ControlConfig
@@ -169,6 +170,7 @@ def rollout(
     control: ControlConfig,
     horizon: int,
     noise: np.ndarray,
+    progress: bool = False,
 ) -> Trajectories:
     """Run Algorithm 1 for a batch of simulated users.
 
@@ -181,6 +183,7 @@ def rollout(
         horizon: Number of control steps T.
         noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
             ``noise[users.seed[u]]``. K must equal the number of joystick candidates.
+        progress: Show a tqdm progress bar over the steps.
 
     Returns:
         The trajectories of every user.
@@ -209,7 +212,7 @@ def rollout(
     states[0], beliefs[0] = s, belief(log_b)
     rows = np.arange(n_users)
     sets = task.belief_targets(control.likelihood)
-    for t in range(horizon):
+    for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
         phi = decode_candidates(model, z_grid, s, beliefs[t])  # (U, K, n): the one decoder call
         costs = user_costs(users.target, s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
