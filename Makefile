@@ -52,17 +52,22 @@ sysdeps:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends libosmesa6 >/dev/null; \
 	fi
 
-figures: setup $(EXEC)/04_fixed_expertise.ipynb
-	@echo "figures written by $(CONFIG) (see $(EXEC) for the executed notebooks)"
+ROBOTS := planar5 panda
+# The figure notebooks share CSVs and the claims table: run them one at a time.
+.NOTPARALLEL:
 
-$(EXEC)/01_demonstrations.ipynb: notebooks/01_demonstrations.ipynb $(LASA_SRC) $(CONFIG) | setup
-	$(RUN)
+figures: setup $(foreach r,$(ROBOTS),$(EXEC)/04_fixed_expertise-$(r).ipynb)
+	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC))"
 
-$(EXEC)/02_decoder_training.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)/01_demonstrations.ipynb $(LASA_SRC) $(CONFIG) | setup
-	$(RUN)
+# One executed copy per (notebook, robot); `$*` is the robot.
+$(EXEC)/01_demonstrations-%.ipynb: notebooks/01_demonstrations.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
 
-$(EXEC)/04_fixed_expertise.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/02_decoder_training.ipynb $(LASA_SRC) $(CONFIG) | setup
-	$(RUN)
+$(EXEC)/02_decoder_training-%.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)/01_demonstrations-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+$(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
 
 lint: setup
 	$(BIN)/ruff check lasa tests

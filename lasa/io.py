@@ -22,6 +22,7 @@ from lasa.errors import ArtifactError
 __all__ = [
     "atomic_path",
     "write_csv",
+    "update_csv",
     "write_text",
     "save_npz",
     "load_npz",
@@ -68,6 +69,28 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
     with atomic_path(path) as tmp:
         frame.to_csv(tmp, index=False, float_format="%.6g")
     return Path(path)
+
+
+def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> pd.DataFrame:
+    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others.
+
+    Each robot's notebook run writes its own rows into a figure's shared CSV; the
+    figure is then drawn from every robot present. Written atomically.
+
+    Returns:
+        The whole table after the update.
+    """
+    path = Path(path)
+    if path.exists():
+        old = pd.read_csv(path)
+        if key not in old.columns or list(old.columns) != list(frame.columns):
+            raise ArtifactError(
+                f"{path} has columns {list(old.columns)}, expected {list(frame.columns)}; "
+                "delete it and re-run the notebooks that write it"
+            )
+        frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
+    write_csv(path, frame)
+    return frame
 
 
 def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:

@@ -2,7 +2,7 @@
 
 Each function draws one panel from data it is given (a frame, a dataset, paths), so a
 notebook composes panels freely and the data behind each figure is saved beside it.
-Planar-arm geometry is drawn in the arm's x-z plane, in metres.
+A planar arm is drawn in its x-z plane; the Panda from above (:func:`project`).
 """
 
 from __future__ import annotations
@@ -13,10 +13,11 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
-from matplotlib.patches import Rectangle
+from matplotlib.colors import Normalize
+from matplotlib.patches import Circle, Rectangle
 
 from lasa.demos import Demonstrations
-from lasa.task import CupTask
+from lasa.task import CupTask, grasp_frame
 
 __all__ = [
     "METHOD_COLORS",
@@ -24,6 +25,10 @@ __all__ = [
     "plot_demonstrations",
     "plot_training_curves",
     "plot_held_paths",
+    "plot_grasp_sweep",
+    "project",
+    "cup_axis",
+    "is_planar",
     "plot_latent_meaning",
     "plot_sim1",
     "grasp_preference",
@@ -37,38 +42,83 @@ def _ax(ax: Axes | None) -> Axes:
     return plt.gca() if ax is None else ax
 
 
+def is_planar(task: CupTask) -> bool:
+    """Whether the robot moves in the world's x-z plane (every cup at y = 0)."""
+    return bool(np.allclose(task.robot.cup_positions()[:, 1], 0.0))
+
+
+def project(task: CupTask, points: np.ndarray) -> np.ndarray:
+    """World points (..., 3) onto the plane a figure draws the task in, (..., 2).
+
+    A planar arm is drawn in its own x-z plane. Any other robot is drawn from above,
+    with the robot's left on the left: (-y, x).
+    """
+    points = np.asarray(points)
+    if is_planar(task):
+        return points[..., [0, 2]]
+    return np.stack([-points[..., 1], points[..., 0]], axis=-1)
+
+
+def cup_axis(task: CupTask, points: np.ndarray) -> np.ndarray:
+    """Signed position along the axis from the left cup to the right cup [m], (...).
+
+    Zero midway between the cups; the sign says which cup a point is closer to.
+    """
+    cups = task.robot.cup_positions()
+    axis = cups[-1] - cups[0]
+    axis[2] = 0.0
+    axis /= np.linalg.norm(axis)
+    return (np.asarray(points) - cups.mean(axis=0)) @ axis
+
+
 def draw_scene(task: CupTask, ax: Axes | None = None) -> Axes:
-    """The table, the cups and the arm's base, in the x-z plane."""
+    """The cups and the robot's base in the task's drawing plane (:func:`project`)."""
     ax = _ax(ax)
-    ax.axhline(0.0, color="#8b6d4b", lw=2, zorder=0)
-    for (x, _, _), color in zip(task.robot.cup_positions(), CUP_COLORS, strict=True):
-        ax.add_patch(Rectangle((x - 0.035, 0.0), 0.07, 0.12, color=color, alpha=0.8, zorder=1))
-    ax.add_patch(Rectangle((-0.06, 0.0), 0.12, 0.12, color="#40444c", zorder=1))
+    cups = task.robot.cup_positions()
+    if is_planar(task):
+        ax.axhline(0.0, color="#8b6d4b", lw=2, zorder=0)
+        for (x, _, _), color in zip(cups, CUP_COLORS, strict=True):
+            ax.add_patch(Rectangle((x - 0.035, 0.0), 0.07, 0.12, color=color, alpha=0.8, zorder=1))
+        ax.add_patch(Rectangle((-0.06, 0.0), 0.12, 0.12, color="#40444c", zorder=1))
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("z [m]")
+    else:
+        for cup, color in zip(project(task, cups), CUP_COLORS, strict=True):
+            ax.add_patch(Circle(tuple(cup), 0.035, color=color, alpha=0.8, zorder=1))
+        ax.add_patch(Circle(tuple(project(task, task.robot.base_position())), 0.06, color="#40444c"))
+        ax.set_xlabel("left <- -y [m] -> right")
+        ax.set_ylabel("x (forward) [m]")
     ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("z [m]")
     return ax
 
 
 def grasp_preference(task: CupTask, states: np.ndarray) -> np.ndarray:
     """The grasp preference theta that the gripper's direction shows, shape (...).
 
-    0 when the fingers point straight down, 1 when they point horizontally away from
-    the base (the angle of the approach axis from vertical, divided by pi/2).
+    0 when the fingers point straight down, 1 when they point horizontally (the angle
+    of the approach axis from vertical, divided by pi/2).
     """
     axes = task.robot.grasp_axes(states)
-    horizontal = np.abs(axes[..., 0])
+    horizontal = np.linalg.norm(axes[..., :2], axis=-1)
     return np.arctan2(horizontal, -axes[..., 2]) / (np.pi / 2)
 
 
-def _colored_path(
-    ax: Axes, xz: np.ndarray, values: np.ndarray, cmap: str, norm: plt.Normalize, lw: float = 1.2
-):
-    segs = np.stack([xz[:-1], xz[1:]], axis=1)
+def _colored_path(ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str, norm: Normalize, lw: float = 1.2):
+    segs = np.stack([xy[:-1], xy[1:]], axis=1)
     lc = LineCollection(list(segs), cmap=cmap, norm=norm, lw=lw)
     lc.set_array(values[:-1])
     ax.add_collection(lc)
     return lc
+
+
+def _frame_around(task: CupTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
+    """Limit the axes to the drawn points, the cups and the base, with some padding."""
+    cups = project(task, task.robot.cup_positions())
+    base = project(task, task.robot.base_position())[None]
+    pts = np.concatenate([points.reshape(-1, 2), cups, base])
+    lo, hi = pts.min(axis=0) - pad, pts.max(axis=0) + pad
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(min(lo[1], -0.05) if is_planar(task) else lo[1], hi[1])
 
 
 def plot_demonstrations(
@@ -84,16 +134,17 @@ def plot_demonstrations(
     """
     ax = draw_scene(task, ax)
     clean = demos.clean()
-    norm = plt.Normalize(0.0, 1.0)
+    norm = Normalize(0.0, 1.0)
     lc = None
+    drawn = []
     for d in np.unique(clean.demo):
         m = clean.demo == d
-        xyz = task.robot.grasp_positions(clean.states[m])
-        lc = _colored_path(ax, xyz[:, [0, 2]], clean.beliefs[m, goal_index], "coolwarm", norm, 0.9)
+        xy = project(task, task.robot.grasp_positions(clean.states[m]))
+        drawn.append(xy)
+        lc = _colored_path(ax, xy, clean.beliefs[m, goal_index], "coolwarm", norm, 0.9)
     if lc is not None:
         plt.colorbar(lc, ax=ax, label=f"belief in the {task.goal_names[goal_index]} cup", shrink=0.8)
-    ax.set_xlim(-0.75, 0.75)
-    ax.set_ylim(-0.05, 1.05)
+        _frame_around(task, ax, np.concatenate(drawn))
     return ax
 
 
@@ -109,12 +160,7 @@ def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
 
 def plot_held_paths(
-    task: CupTask,
-    paths: np.ndarray,
-    z_values: np.ndarray,
-    ax: Axes | None = None,
-    gripper: bool = False,
-    title: str | None = None,
+    task: CupTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes | None = None, title: str | None = None
 ) -> Axes:
     """Grasp-site paths when each joystick input is held, coloured by z.
 
@@ -123,24 +169,70 @@ def plot_held_paths(
         paths: States of each held input, shape (K, steps + 1, n).
         z_values: The held inputs, shape (K,).
         ax: Axes to draw on.
-        gripper: Also draw the final gripper direction of each path.
         title: Panel title.
     """
     ax = draw_scene(task, ax)
-    norm = plt.Normalize(-1.0, 1.0)
+    norm = Normalize(-1.0, 1.0)
     cmap = plt.get_cmap("coolwarm")
+    drawn = []
     for path, z in zip(paths, z_values, strict=True):
-        xyz = task.robot.grasp_positions(path)
-        ax.plot(xyz[:, 0], xyz[:, 2], color=cmap(norm(z)), lw=1.3)
-        if gripper:
-            axis = task.robot.grasp_axes(path[-1])
-            tip = xyz[-1, [0, 2]]
-            back = tip - 0.06 * axis[[0, 2]]
-            ax.plot([back[0], tip[0]], [back[1], tip[1]], color=cmap(norm(z)), lw=3, solid_capstyle="round")
-    start = task.robot.grasp_positions(paths[0, 0])
-    ax.plot(start[0], start[2], "ko", ms=4)
-    sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-    plt.colorbar(sm, ax=ax, label="held joystick input z", shrink=0.8)
+        xy = project(task, task.robot.grasp_positions(path))
+        drawn.append(xy)
+        ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
+    start = drawn[0][0]
+    ax.plot(start[0], start[1], "ko", ms=4)
+    _frame_around(task, ax, np.concatenate(drawn))
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_grasp_sweep(
+    task: CupTask,
+    paths: np.ndarray,
+    z_values: np.ndarray,
+    goal: int,
+    ax: Axes | None = None,
+    title: str | None = None,
+) -> Axes:
+    """Gripper directions at the end of each held input, in the cup's grasp plane.
+
+    The plane is vertical and contains the cup's side-grasp direction, so a top grasp
+    points down and a side grasp points sideways. Each input draws the gripper's last
+    6 cm as a thick segment, and the grasp site's path as a thin line.
+    """
+    ax = _ax(ax)
+    robot = task.robot
+    cup = robot.cup_positions()[goal]
+    _, r_side = grasp_frame(robot, goal, 1.0)
+    side = r_side[:, 2].copy()
+    side[2] = 0.0
+    side /= np.linalg.norm(side)
+
+    def plane(p: np.ndarray) -> np.ndarray:
+        rel = np.asarray(p) - cup
+        return np.stack([rel @ side, rel[..., 2]], axis=-1)
+
+    norm = Normalize(-1.0, 1.0)
+    cmap = plt.get_cmap("coolwarm")
+    ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=CUP_COLORS[goal], alpha=0.6))
+    for path, z in zip(paths, z_values, strict=True):
+        xy = plane(robot.grasp_positions(path))
+        ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=0.8)
+        tip = xy[-1]
+        back = tip - 0.06 * plane(cup + robot.grasp_axes(path[-1]))
+        ax.plot([back[0], tip[0]], [back[1], tip[1]], color=cmap(norm(z)), lw=3, solid_capstyle="round")
+    start = plane(robot.grasp_positions(paths[0, 0]))
+    ax.plot(start[0], start[1], "ko", ms=4)
+    ax.set_aspect("equal")
+    ax.set_xlabel("along the side-grasp direction [m]")
+    ax.set_ylabel("height above the cup's grasp point [m]")
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
     if title:
         ax.set_title(title)
     return ax
@@ -150,15 +242,16 @@ def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     """What z controls in each context: the cup reached, or the grasp.
 
     Args:
-        frame: Rows with columns ``context``, ``z``, ``final_x`` (grasp-site x after
-            holding z, metres) and ``grasp_theta`` (the grasp preference shown).
+        frame: Rows with columns ``context``, ``z``, ``cup_axis`` (grasp-site position
+            along the left-to-right cup axis after holding z, metres) and
+            ``grasp_theta`` (the grasp preference shown).
     """
     ax = _ax(ax)
     uni = frame[frame.context == "uniform"]
     conf = frame[frame.context == "confident"]
-    ax.plot(uni.z, uni.final_x, "o-", color="#444", label="from uniform belief: grasp-site x [m]")
+    ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
     ax.set_xlabel("held joystick input z")
-    ax.set_ylabel("grasp-site x after holding z [m]")
+    ax.set_ylabel("grasp site: left cup (-) ... right cup (+) [m]")
     ax.axhline(0, color="0.8", lw=0.8)
     twin = ax.twinx()
     twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")

@@ -12,12 +12,14 @@ action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
 from lasa.config import ControlConfig, check_choice
+from lasa.errors import ArtifactError
 
 __all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot"]
 
@@ -37,8 +39,10 @@ class RobotSpec:
     home_key: str  # keyframe of the start pose
     top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
     grasp_standoff: float  # distance from cup centre to the grasp site [m]
+    side_azimuth: float  # side-grasp approach: the radial direction turned this far towards the midline [rad]
     ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup
     control: ControlConfig  # default units of the control loop for this robot
+    mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
 
 
 ROBOTS: dict[str, RobotSpec] = {
@@ -53,6 +57,7 @@ ROBOTS: dict[str, RobotSpec] = {
         # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
         top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
         grasp_standoff=0.10,
+        side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
         ik_seeds=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
         # Units chosen so the paper's regimes exist (notebook 04 explains): one step moves
         # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
@@ -60,7 +65,44 @@ ROBOTS: dict[str, RobotSpec] = {
         # mid-preference goal small enough for users to hold other grasps (Eq. T4).
         control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
     ),
+    "panda": RobotSpec(
+        name="panda",
+        scene=ASSETS / "panda" / "scene.xml",
+        joints=tuple(f"joint{i}" for i in range(1, 8)),
+        grasp_site="grasp",
+        cups=("cup_left", "cup_right"),
+        camera="front",
+        home_key="home",
+        # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
+        top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
+        grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
+        # A horizontal hand pointing radially away from the base is out of the Panda's reach at
+        # table height without flipping its wrist (joint 6 hits its limit); approaching each cup
+        # from its outer side, fingers towards the midline, is a natural posture (notebook 01).
+        side_azimuth=1.5707963267948966,  # pi/2
+        ik_seeds=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
+        # The same units as planar5, for the same reasons (notebook 04).
+        control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
+        mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
+    ),
 }
+
+
+def mesh_dir(package: str, folder: str) -> Path:
+    """The folder of meshes that an installed registry package ships, found without importing it.
+
+    Raises:
+        ArtifactError: if the package is not installed or lacks the folder.
+    """
+    spec = importlib.util.find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        raise ArtifactError(
+            f"package {package!r}, which ships this robot's meshes, is not installed; run: make setup"
+        )
+    path = Path(next(iter(spec.submodule_search_locations))) / folder
+    if not path.is_dir():
+        raise ArtifactError(f"{path} is missing from package {package!r}; reinstall it with: make setup")
+    return path
 
 
 def load_robot(name: str) -> Robot:
@@ -87,7 +129,20 @@ class Robot:
 
     def __init__(self, spec: RobotSpec) -> None:
         self.spec = spec
-        self.model = mujoco.MjModel.from_xml_path(str(spec.scene))
+        mj_spec = mujoco.MjSpec.from_file(str(spec.scene))
+        if spec.mesh_package is not None:
+            # Mesh paths in the MJCF are relative to the package's mesh folder.
+            root = mesh_dir(*spec.mesh_package)
+            for mesh in mj_spec.meshes:
+                rel = (
+                    Path(mesh.file).relative_to(spec.scene.parent)
+                    if Path(mesh.file).is_absolute()
+                    else Path(mesh.file)
+                )
+                if not (root / rel).is_file():
+                    raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
+                mesh.file = str(root / rel)
+        self.model = mj_spec.compile()
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(name).id for name in spec.joints]
         self.qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])

@@ -6,12 +6,13 @@ section passed to every notebook and one section per notebook, named by its file
 ``parameters`` cell does not define; here it is an error, because a misspelt knob
 would silently leave its default in place. The executed notebook is written to a
 temporary file and renamed into place, so an interrupted run leaves nothing behind
-that Make could mistake for a finished one.
+that Make could mistake for a finished one. A run that fails in a cell is kept as
+``<name>.failed.ipynb`` for reading.
 
 Usage::
 
     python -m lasa.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
-        --out build/notebooks
+        --out build/notebooks --robot panda
 """
 
 from __future__ import annotations
@@ -79,7 +80,8 @@ def run_notebook(
     Args:
         notebook: The source notebook (committed without outputs).
         config: The YAML config file.
-        out_dir: Folder of the executed copy (same file name).
+        out_dir: Folder of the executed copy, named ``<stem>-<robot>.ipynb`` when a
+            ``robot`` override is given, else after the notebook.
         overrides: Extra parameters, checked like the config's.
         progress: Show papermill's cell progress bar.
 
@@ -92,16 +94,27 @@ def run_notebook(
         if unknown:
             raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
         params.update(overrides)
-    out = Path(out_dir) / Path(notebook).name
+    name = Path(notebook).name
+    if overrides and "robot" in overrides:
+        name = f"{Path(notebook).stem}-{overrides['robot']}.ipynb"
+    out = Path(out_dir) / name
+    failed = out.with_suffix(".failed.ipynb")
     with atomic_path(out) as tmp:
-        pm.execute_notebook(
-            str(notebook),
-            str(tmp),
-            parameters=params,
-            kernel_name="python3",
-            cwd=str(Path.cwd()),
-            progress_bar=progress,
-        )
+        try:
+            pm.execute_notebook(
+                str(notebook),
+                str(tmp),
+                parameters=params,
+                kernel_name="python3",
+                cwd=str(Path.cwd()),
+                progress_bar=progress,
+            )
+        except pm.PapermillExecutionError:
+            # Keep the partial run for reading, under a name no Make rule will take for done.
+            os.replace(tmp, failed)
+            print(f"error: {notebook} failed; the partial run is in {failed}", file=sys.stderr)
+            raise
+    failed.unlink(missing_ok=True)
     return out
 
 
@@ -111,11 +124,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("notebook")
     parser.add_argument("--config", required=True)
     parser.add_argument("--out", required=True)
+    parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
     start = time.perf_counter()
+    overrides = {"robot": args.robot} if args.robot else None
     try:
-        out = run_notebook(args.notebook, args.config, args.out, progress=not args.no_progress)
+        out = run_notebook(args.notebook, args.config, args.out, overrides, progress=not args.no_progress)
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -2,9 +2,12 @@ r"""The cup task: two goals, and a preference from a top grasp to a side grasp.
 
 Two cups stand on a table (the goals G). At either cup the user may want any grasp on
 a continuum theta in [0, 1]: theta = 0 approaches from the top (fingers pointing
-down), theta = 1 from the side (fingers horizontal, pointing away from the robot's
-base). In between, the approach direction turns by :math:`\psi = \theta \pi / 2`, and the
-grasp site sits at a fixed standoff :math:`\rho` from the cup centre c along it:
+down), theta = 1 from the side (fingers horizontal). The side direction is the
+horizontal direction from the robot's base to the cup, turned towards the midline by
+the robot's ``side_azimuth`` (0 for the planar arm; a quarter turn for the Panda,
+whose wrist cannot point radially outward at table height). In between, the approach
+direction turns by :math:`\psi = \theta \pi / 2`, and the grasp site sits at a fixed
+standoff :math:`\rho` from the cup centre c along it:
 
 .. math::
 
@@ -44,12 +47,16 @@ def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.n
     """
     check_range("theta", theta, 0.0, 1.0)
     cup = robot.cup_positions()[goal]
-    side = cup - robot.base_position()
-    side[2] = 0.0
-    norm = np.linalg.norm(side)
+    radial = cup - robot.base_position()
+    radial[2] = 0.0
+    norm = np.linalg.norm(radial)
     if norm < 1e-6:
         raise ConfigError(f"cup {goal} stands above the robot's base: no side direction")
-    side /= norm
+    radial /= norm
+    # turn the radial direction by side_azimuth towards the midline (y = 0)
+    turn = -np.sign(cup[1]) * robot.spec.side_azimuth if cup[1] != 0 else 0.0
+    c, s = np.cos(turn), np.sin(turn)
+    side = np.array([c * radial[0] - s * radial[1], s * radial[0] + c * radial[1], 0.0])
     top = np.array([0.0, 0.0, -1.0])
     psi = theta * np.pi / 2
     approach = np.cos(psi) * top + np.sin(psi) * side
@@ -139,9 +146,9 @@ class CupTask:
 def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     """Solve IK along each cup's preference curve and build the task.
 
-    Starting from the robot's per-cup seed at theta = 0.5, solve towards theta = 1 and
-    towards theta = 0, each solve warm-started (and posture-regularised) by the previous
-    one, so neighbouring grasps get neighbouring joint configurations.
+    Starting from the robot's per-cup seed at the top grasp (theta = 0), solve along the
+    grid to the side grasp, each solve warm-started (and posture-regularised) by the
+    previous one, so neighbouring grasps get neighbouring joint configurations.
 
     Args:
         robot: The robot.
@@ -153,13 +160,10 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     mid = n_grid // 2
     curves = np.empty((len(robot.spec.cups), n_grid, robot.n_joints))
     for g, seed in enumerate(robot.spec.ik_seeds):
-        q_mid = solve_grasp_ik(robot, *grasp_frame(robot, g, 0.5), np.asarray(seed))
-        curves[g, mid] = q_mid
-        for order in (range(mid + 1, n_grid), range(mid - 1, -1, -1)):
-            q = q_mid
-            for k in order:
-                q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q)
-                curves[g, k] = q
+        q = np.asarray(seed, dtype=float)
+        for k in range(n_grid):
+            q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q)
+            curves[g, k] = q
     names = tuple(name.removeprefix("cup_") for name in robot.spec.cups)
     return CupTask(
         robot=robot,

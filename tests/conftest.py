@@ -44,3 +44,15 @@ def demos(task: CupTask):
 def model(demos, task: CupTask):
     trained, _ = train_decoder(demos, task.robot.control, SMALL_TRAIN, progress=False)
     return trained
+
+
+@pytest.fixture(scope="session")
+def panda_task() -> CupTask:
+    return make_cup_task(load_robot("panda"))
+
+
+@pytest.fixture(scope="session")
+def panda_model(panda_task: CupTask):
+    data = collect_demonstrations(panda_task, panda_task.robot.control, SMALL_DEMOS)
+    trained, _ = train_decoder(data, panda_task.robot.control, SMALL_TRAIN, progress=False)
+    return trained

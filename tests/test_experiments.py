@@ -1,5 +1,6 @@
 """Fig. sim1 sweep: columns, determinism, pairing, and the claims' decision rules."""
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -72,3 +73,20 @@ def test_claims_need_the_papers_betas():
     frame = synthetic([0.3, 0.2, 0.1], [0.2, 0.1, 0.08], [1, 1, 1], [1, 1, 1])
     with pytest.raises(ConfigError, match="beta = 75"):
         sim1_claims(frame[frame.beta != 75.0])
+
+
+def test_same_seed_gives_identical_csv_on_the_panda(panda_model, panda_task, tmp_path):
+    ctl = panda_task.robot.control
+    a, traj = run_fixed_expertise(panda_model, panda_task, ctl, SMALL)
+    b, _ = run_fixed_expertise(panda_model, panda_task, ctl, SMALL)
+    a.to_csv(tmp_path / "a.csv", index=False)
+    b.to_csv(tmp_path / "b.csv", index=False)
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    assert set(a.robot) == {"panda"}
+    robot = panda_task.robot
+    assert np.all(traj.states >= robot.lower) and np.all(traj.states <= robot.upper)
+
+
+def test_a_panda_decoder_is_refused_for_the_planar_task(panda_model, task):
+    with pytest.raises(ConfigError, match="trained for 'panda'"):
+        run_fixed_expertise(panda_model, task, task.robot.control, SMALL)

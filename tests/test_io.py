@@ -39,3 +39,16 @@ def test_npz_round_trip_and_errors(tmp_path):
     assert load_npz(path, "make it")["a"].tolist() == [0, 1, 2]
     with pytest.raises(ArtifactError, match="make it"):
         load_npz(tmp_path / "missing.npz", "make it")
+
+
+def test_update_csv_replaces_one_robots_rows(tmp_path):
+    from lasa.io import update_csv
+
+    path = tmp_path / "t.csv"
+    update_csv(path, pd.DataFrame({"robot": ["a", "a"], "x": [1, 2]}))
+    update_csv(path, pd.DataFrame({"robot": ["b"], "x": [3]}))
+    table = update_csv(path, pd.DataFrame({"robot": ["a"], "x": [9]}))
+    assert sorted(zip(table.robot, table.x, strict=True)) == [("a", 9), ("b", 3)]
+    assert len(pd.read_csv(path)) == 2
+    with pytest.raises(ArtifactError, match="columns"):
+        update_csv(path, pd.DataFrame({"robot": ["a"], "y": [1]}))

@@ -1,8 +1,9 @@
 """Every notebook executed headless by papermill in QUICK mode, outputs checked.
 
-The notebooks run in order (01 -> 02 -> 04), each reading what the previous one wrote,
-into a temporary folder. Then the files each one promises are checked against the
-contracts of DESIGN.md: names, CSV columns, claims verdicts.
+The notebooks run in order (01 -> 02 -> 04) for each robot, as `make figures` does,
+each reading what the previous one wrote, into a temporary folder. Then the files each
+one promises are checked against the contracts of DESIGN.md: names, CSV columns,
+claims verdicts, and that the shared figures hold both robots.
 """
 
 from pathlib import Path
@@ -18,41 +19,51 @@ from lasa.runner import load_config, run_notebook
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "quick.yaml"
 ORDER = ["01_demonstrations", "02_decoder_training", "04_fixed_expertise"]
+ROBOTS = ["planar5", "panda"]
 
 
 @pytest.fixture(scope="module")
 def executed(tmp_path_factory):
     out = tmp_path_factory.mktemp("quick")
-    overrides = {"build_dir": str(out / "build"), "figures_dir": str(out / "figures")}
-    for stem in ORDER:
-        run_notebook(
-            ROOT / "notebooks" / f"{stem}.ipynb", QUICK, out / "notebooks", overrides, progress=False
-        )
+    for robot in ROBOTS:
+        overrides = {"build_dir": str(out / "build"), "figures_dir": str(out / "figures"), "robot": robot}
+        for stem in ORDER:
+            notebook = ROOT / "notebooks" / f"{stem}.ipynb"
+            run_notebook(notebook, QUICK, out / "notebooks", overrides, progress=False)
     return out
 
 
-def test_every_notebook_ran(executed):
-    assert sorted(p.stem for p in (executed / "notebooks").glob("*.ipynb")) == ORDER
+def test_every_notebook_ran_for_every_robot(executed):
+    ran = sorted(p.stem for p in (executed / "notebooks").glob("*.ipynb"))
+    assert ran == sorted(f"{stem}-{robot}" for stem in ORDER for robot in ROBOTS)
 
 
-def test_demonstrations_outputs(executed):
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_demonstrations_outputs(executed, robot):
     fig = executed / "figures"
-    assert (executed / "build" / "data" / "demos_planar5.npz").is_file()
-    assert (fig / "demos_planar5.png").stat().st_size > 10_000
-    video = mediapy.read_video(fig / "demos_planar5.mp4")
+    assert (executed / "build" / "data" / f"demos_{robot}.npz").is_file()
+    assert (fig / f"demos_{robot}.png").stat().st_size > 10_000
+    video = mediapy.read_video(fig / f"demos_{robot}.mp4")
     assert video.shape[1:] == (240, 320, 3) and len(video) > 10
-    summary = pd.read_csv(fig / "demos_planar5.csv")
+    summary = pd.read_csv(fig / f"demos_{robot}.csv")
     assert {"robot", "demo", "goal", "phase", "steps", "belief_min", "belief_end"} <= set(summary.columns)
+    assert set(summary.robot) == {robot}
 
 
-def test_training_outputs(executed):
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_training_outputs(executed, robot):
     fig = executed / "figures"
-    assert (executed / "build" / "models" / "decoder_planar5.pt").is_file()
-    history = pd.read_csv(fig / "training_planar5.csv")
+    assert (executed / "build" / "models" / f"decoder_{robot}.pt").is_file()
+    history = pd.read_csv(fig / f"training_{robot}.csv")
     assert history.train_loss.iloc[-1] < history.train_loss.iloc[0]
+
+
+def test_latent_map_holds_both_robots(executed):
+    fig = executed / "figures"
     latent = pd.read_csv(fig / "latent_map.csv")
-    assert {"robot", "context", "z", "final_x", "grasp_theta"} <= set(latent.columns)
+    assert {"robot", "context", "z", "cup_axis", "grasp_theta"} <= set(latent.columns)
     assert set(latent.context) == {"uniform", "confident"}
+    assert set(latent.robot) == set(ROBOTS)
     assert (fig / "latent_map.png").stat().st_size > 10_000
 
 
@@ -61,19 +72,21 @@ def test_sim1_outputs(executed):
     frame = pd.read_csv(fig / "sim1_fixed_expertise.csv")
     assert list(frame.columns[: len(SIM1_COLUMNS)]) == list(SIM1_COLUMNS)
     params = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")
-    assert len(frame) == 2 * len(params["betas"]) * params["n_seeds"]
-    assert set(frame.method) == {"LA", "LA+SA"} and set(frame.robot) == {"planar5"}
+    assert len(frame) == len(ROBOTS) * 2 * len(params["betas"]) * params["n_seeds"]
+    assert set(frame.method) == {"LA", "LA+SA"} and set(frame.robot) == set(ROBOTS)
     assert frame.final_error.notna().all()
     assert (fig / "sim1_fixed_expertise.png").stat().st_size > 10_000
-    video = mediapy.read_video(fig / "rollouts_planar5.mp4")
-    assert video.shape[2] == 640  # LA and LA+SA side by side
+    for robot in ROBOTS:
+        video = mediapy.read_video(fig / f"rollouts_{robot}.mp4")
+        assert video.shape[2] == 640  # LA and LA+SA side by side
 
 
 def test_claims_table(executed):
     fig = executed / "figures"
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
-    assert len(claims) == 3 and set(claims.figure) == {"sim1"}
+    assert len(claims) == 3 * len(ROBOTS) and set(claims.figure) == {"sim1"}
+    assert set(claims.robot) == set(ROBOTS)
     assert set(claims.reproduced) <= {"yes", "partly", "no"}
     assert all(claims.measured.str.len() > 0)
-    assert (fig / "claims.md").read_text().count("| sim1 |") == 3
+    assert (fig / "claims.md").read_text().count("| sim1 |") == 3 * len(ROBOTS)

@@ -21,8 +21,19 @@ def test_scene_compiles_and_steps_without_warnings(name):
 
 
 def test_unknown_robot_is_a_clear_error():
-    with pytest.raises(ConfigError, match="unknown robot 'ur5'.*planar5"):
+    with pytest.raises(ConfigError, match="unknown robot 'ur5'.*planar5.*panda"):
         load_robot("ur5")
+
+
+def test_missing_mesh_package_is_a_clear_error():
+    import dataclasses
+
+    from lasa.errors import ArtifactError
+    from lasa.robot import Robot
+
+    spec = dataclasses.replace(ROBOTS["panda"], mesh_package=("no_such_package_xyz", "meshes"))
+    with pytest.raises(ArtifactError, match="not installed; run: make setup"):
+        Robot(spec)
 
 
 def test_planar5_named_quantities(robot):
