@@ -56,7 +56,8 @@ ROBOTS := planar5 panda
 # The figure notebooks share CSVs and the claims table: run them one at a time.
 .NOTPARALLEL:
 
-figures: setup $(foreach r,$(ROBOTS),$(EXEC)/04_fixed_expertise-$(r).ipynb)
+FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users
+figures: setup $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC))"
 
 # One executed copy per (notebook, robot); `$*` is the robot.
@@ -66,7 +67,17 @@ $(EXEC)/01_demonstrations-%.ipynb: notebooks/01_demonstrations.ipynb $(LASA_SRC)
 $(EXEC)/02_decoder_training-%.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)/01_demonstrations-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-$(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/03_entropy_ablation-%.ipynb: notebooks/03_entropy_ablation.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+# The sweeps read both decoders: the base one (02) and the entropy one (03).
+$(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+$(EXEC)/05_changing_goals-%.ipynb: notebooks/05_changing_goals.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+$(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 lint: setup

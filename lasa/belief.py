@@ -37,6 +37,7 @@ changes their mind.
 from __future__ import annotations
 
 import numpy as np
+import torch
 from scipy.special import logsumexp
 
 from lasa.config import check_range
@@ -44,7 +45,9 @@ from lasa.config import check_range
 __all__ = [
     "uniform_log_belief",
     "distance_to_sets",
+    "distance_to_sets_torch",
     "log_likelihood",
+    "log_likelihood_torch",
     "update_log_belief",
     "belief",
 ]
@@ -55,8 +58,10 @@ def uniform_log_belief(batch: int, n_goals: int) -> np.ndarray:
     return np.full((batch, n_goals), -np.log(n_goals))
 
 
-def distance_to_sets(points: np.ndarray, sets: np.ndarray) -> np.ndarray:
+def distance_to_sets_torch(points: torch.Tensor, sets: torch.Tensor) -> torch.Tensor:
     """Euclidean distance from each point to each goal's polyline, shape (..., G).
+
+    Differentiable in ``points`` (the entropy regulariser backpropagates through it).
 
     Args:
         points: Points, shape (..., n).
@@ -64,11 +69,52 @@ def distance_to_sets(points: np.ndarray, sets: np.ndarray) -> np.ndarray:
     """
     p = points[..., None, None, :]  # (..., 1, 1, n)
     if sets.shape[1] == 1:
-        return np.linalg.norm(p[..., 0, :] - sets[:, 0], axis=-1)
-    a, ab = sets[:, :-1], np.diff(sets, axis=1)  # (G, K-1, n)
-    t = np.einsum("...gkn,gkn->...gk", p - a, ab) / np.maximum((ab * ab).sum(-1), 1e-12)
-    closest = a + np.clip(t, 0.0, 1.0)[..., None] * ab
-    return np.linalg.norm(p - closest, axis=-1).min(axis=-1)
+        return torch.linalg.vector_norm(p[..., 0, :] - sets[:, 0], dim=-1)
+    a, ab = sets[:, :-1], torch.diff(sets, dim=1)  # (G, K-1, n)
+    t = ((p - a) * ab).sum(-1) / (ab * ab).sum(-1).clamp_min(1e-12)
+    closest = a + t.clamp(0.0, 1.0)[..., None] * ab
+    return torch.linalg.vector_norm(p - closest, dim=-1).min(dim=-1).values
+
+
+def log_likelihood_torch(
+    state: torch.Tensor,
+    action: torch.Tensor,
+    sets: torch.Tensor,
+    dt: float,
+    beta: float,
+    max_step: float | None = None,
+) -> torch.Tensor:
+    """Log P(a_h | s, g) up to a constant shared by all goals, shape (..., G); differentiable.
+
+    Args:
+        state: States s, shape (..., n).
+        action: Human actions a_h, shape (..., n).
+        sets: Goal sets (polylines), shape (G, K, n); K = 1 for point goals.
+        dt: Control period Delta [s].
+        beta: Belief temperature beta_b >= 0.
+        max_step: If given, the longest step the user can make, Delta sigma_h [rad]:
+            each goal's likelihood is then normalised by its best action (the regret
+            form, see the module docstring). ``None`` is the plain progress model.
+    """
+    check_range("belief_beta", beta, 0.0)
+    before = distance_to_sets_torch(state, sets)
+    after = distance_to_sets_torch(state + dt * action, sets)
+    progress = after - before
+    if max_step is not None:
+        check_range("max_step", max_step, 0.0)
+        progress = progress + before.clamp(max=max_step)
+    return -beta * progress
+
+
+def _as_sets(goals: np.ndarray) -> np.ndarray:
+    return goals[:, None, :] if goals.ndim == 2 else goals
+
+
+def distance_to_sets(points: np.ndarray, sets: np.ndarray) -> np.ndarray:
+    """:func:`distance_to_sets_torch` on numpy arrays (float64), shape (..., G)."""
+    with torch.no_grad():
+        out = distance_to_sets_torch(torch.as_tensor(points, dtype=torch.float64), torch.as_tensor(sets))
+    return out.numpy()
 
 
 def log_likelihood(
@@ -79,27 +125,20 @@ def log_likelihood(
     beta: float,
     max_step: float | None = None,
 ) -> np.ndarray:
-    """Log P(a_h | s, g) up to a constant shared by all goals, shape (..., G).
+    """:func:`log_likelihood_torch` on numpy arrays (float64), shape (..., G).
 
-    Args:
-        state: States s, shape (..., n).
-        action: Human actions a_h, shape (..., n).
-        goals: Goal points, shape (G, n), or goal sets (polylines), shape (G, K, n).
-        dt: Control period Delta [s].
-        beta: Belief temperature beta_b >= 0.
-        max_step: If given, the longest step the user can make, Delta sigma_h [rad]:
-            each goal's likelihood is then normalised by its best action (the regret
-            form, see the module docstring). ``None`` is the plain progress model.
+    ``goals`` may be goal points, shape (G, n), or goal sets, shape (G, K, n).
     """
-    check_range("belief_beta", beta, 0.0)
-    sets = goals[:, None, :] if goals.ndim == 2 else goals
-    before = distance_to_sets(state, sets)
-    after = distance_to_sets(state + dt * action, sets)
-    progress = after - before
-    if max_step is not None:
-        check_range("max_step", max_step, 0.0)
-        progress = progress + np.minimum(max_step, before)
-    return -beta * progress
+    with torch.no_grad():
+        out = log_likelihood_torch(
+            torch.as_tensor(state, dtype=torch.float64),
+            torch.as_tensor(action, dtype=torch.float64),
+            torch.as_tensor(_as_sets(np.asarray(goals, dtype=np.float64))),
+            dt,
+            beta,
+            max_step,
+        )
+    return out.numpy()
 
 
 def update_log_belief(log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0) -> np.ndarray:

@@ -31,6 +31,10 @@ __all__ = [
     "is_planar",
     "plot_latent_meaning",
     "plot_sim1",
+    "plot_sim2",
+    "plot_sim3",
+    "plot_entropy_grid",
+    "plot_entropy_tradeoff",
     "grasp_preference",
 ]
 
@@ -295,4 +299,84 @@ def plot_sim1(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
     for beta in (75, 1000):
         ax.axvline(beta, color="0.85", lw=0.8, zorder=0)
     ax.legend(frameon=False, title=None)
+    return ax
+
+
+def _method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes) -> Axes:
+    methods = [m for m in METHOD_COLORS if m in set(frame.method)]
+    sns.lineplot(
+        data=frame,
+        x=x,
+        y=y,
+        hue="method",
+        hue_order=methods,
+        palette=METHOD_COLORS,
+        errorbar=("ci", 95),
+        n_boot=500,
+        seed=0,
+        ax=ax,
+        marker="o" if frame[x].nunique() < 30 else None,
+    )
+    ax.legend(frameon=False, title=None)
+    return ax
+
+
+def plot_sim2(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
+    """Fig. sim2: final error or confidence in the true cup against the change step N."""
+    ax = _method_lineplot(frame, "change_step", metric, _ax(ax))
+    ax.set_xlabel("change of mind at step N")
+    ax.set_ylabel(
+        {"final_error": "final state error (normalised)", "confidence": "confidence b(g*) at the end"}.get(
+            metric, metric
+        )
+    )
+    return ax
+
+
+def plot_sim3(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
+    """Fig. sim3: error over time of one kind of learner, per method, with 95% bands."""
+    part = frame[frame.learner == learner]
+    ax = _method_lineplot(part, "t", "error", _ax(ax))
+    slope = part.slope.iloc[0]
+    ax.set_title(f"{learner} learner: beta(t) = {slope:g} t")
+    ax.set_xlabel("time step t")
+    ax.set_ylabel("state error (normalised)")
+    return ax
+
+
+def plot_entropy_grid(
+    progress: np.ndarray,
+    conf: np.ndarray,
+    values: np.ndarray,
+    ax: Axes | None = None,
+    title: str | None = None,
+) -> Axes:
+    """Entropy of p_(s,b) over a grid of contexts: progress to the goal x confidence in it."""
+    ax = _ax(ax)
+    ps, cs = np.unique(progress), np.unique(conf)
+    grid = values.reshape(len(ps), len(cs)).T
+    mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
+    plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")
+    ax.set_xlabel("state: from home (0) to the right cup's goal (1)")
+    ax.set_ylabel("belief in the right cup")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = None) -> Axes:
+    """Held-out reconstruction error against entropy at confident contexts, per lambda."""
+    ax = _ax(ax)
+    ax.plot(sweep.entropy_confident, sweep.recon_error, "o-", color="#444")
+    for _, row in sweep.iterrows():
+        mark = " (chosen)" if np.isclose(row["lambda"], chosen) else ""
+        ax.annotate(
+            f"λ={row['lambda']:g}{mark}",
+            (row.entropy_confident, row.recon_error),
+            textcoords="offset points",
+            xytext=(5, 5),
+            fontsize=8,
+        )
+    ax.set_xlabel("mean entropy of p(s,b) at confident contexts [nats]")
+    ax.set_ylabel("held-out reconstruction error [(rad/s)$^2$]")
     return ax

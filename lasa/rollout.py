@@ -37,14 +37,18 @@ __all__ = [
     "shared_autonomy_step",
     "rollout",
     "METHODS",
+    "METHOD_DECODER",
     "method_alpha",
 ]
 
-METHODS = ("LA", "LA+SA")
+METHODS = ("LA", "LA+SA", "LA+SA+Entropy")
+# Which decoder each method uses: "base" is trained on reconstruction alone (Sec. III-A),
+# "entropy" with the entropy term of Eq. T6 (lasa.entropy).
+METHOD_DECODER = {"LA": "base", "LA+SA": "base", "LA+SA+Entropy": "entropy"}
 
 
 def method_alpha(method: str, control: ControlConfig) -> float:
-    """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for LA+SA."""
+    """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for the others."""
     if method not in METHODS:
         raise ConfigError(f"unknown method {method!r}; choose one of {', '.join(map(repr, METHODS))}")
     return 0.0 if method == "LA" else control.alpha
@@ -214,7 +218,7 @@ def rollout(
     sets = task.belief_targets(control.likelihood)
     for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
         phi = decode_candidates(model, z_grid, s, beliefs[t])  # (U, K, n): the one decoder call
-        costs = user_costs(users.target, s, phi, control.dt)
+        costs = user_costs(users.target_at(t), s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
         step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)
         s, log_b = step.state, step.log_belief

@@ -24,6 +24,7 @@ from tqdm.auto import tqdm
 from lasa.config import ControlConfig, check_range
 from lasa.decoder import DecoderConfig, LatentActionModel
 from lasa.demos import Demonstrations
+from lasa.entropy import EntropyRegularizer
 from lasa.errors import ConfigError
 
 __all__ = ["TrainConfig", "train_decoder", "reconstruction_error"]
@@ -45,6 +46,10 @@ class TrainConfig:
     z_dim: int = 1  # latent dimension d [-]
     holdout: float = 0.1  # fraction of demonstrations held out for validation [-]
     log_every: int = 100  # steps between logged losses [-]
+    entropy_lambda: float = 0.0  # lambda of the entropy term (Eq. T6); 0 trains plain LA [-]
+    entropy_n_z: int = 11  # joystick inputs the entropy term's sum over z runs over [-]
+    entropy_horizon: int = 10  # steps over which the entropy term reads an input's evidence [-]
+    entropy_contexts: int = 64  # contexts per batch the entropy term is evaluated on [-]
     seed: int = 0  # seed of initialisation, batches and noise [-]
 
     def __post_init__(self) -> None:
@@ -56,6 +61,13 @@ class TrainConfig:
         check_range("weight_decay", self.weight_decay, 0.0)
         check_range("z_noise", self.z_noise, 0.0)
         check_range("holdout", self.holdout, 0.0, 0.5)
+        check_range("entropy_lambda", self.entropy_lambda, 0.0)
+        if int(self.entropy_n_z) != self.entropy_n_z or self.entropy_n_z < 2:
+            raise ConfigError(f"entropy_n_z must be an integer >= 2, got {self.entropy_n_z!r}")
+        if int(self.entropy_horizon) != self.entropy_horizon or self.entropy_horizon < 1:
+            raise ConfigError(f"entropy_horizon must be a positive integer, got {self.entropy_horizon!r}")
+        if int(self.entropy_contexts) != self.entropy_contexts or self.entropy_contexts < 1:
+            raise ConfigError(f"entropy_contexts must be a positive integer, got {self.entropy_contexts!r}")
 
 
 def _split(demos: Demonstrations, holdout: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -82,6 +94,7 @@ def train_decoder(
     control: ControlConfig,
     config: TrainConfig = TrainConfig(),
     *,
+    goal_sets: np.ndarray | None = None,
     extra_loss: ExtraLoss | None = None,
     progress: bool = True,
 ) -> tuple[LatentActionModel, pd.DataFrame]:
@@ -90,16 +103,38 @@ def train_decoder(
     Args:
         demos: The dataset D (noisy copies included).
         control: Control-loop units; its ``action_scale`` is the decoder's bound sigma_h.
-        config: Optimisation settings.
-        extra_loss: Optional term added to the reconstruction loss, called as
-            ``extra_loss(model, states, beliefs)`` on each batch (used by the entropy
-            regulariser).
+        config: Optimisation settings; ``entropy_lambda > 0`` adds the entropy term of
+            Eq. T6 (:class:`lasa.entropy.EntropyRegularizer`).
+        goal_sets: The belief likelihood's goal sets, shape (G, K, n)
+            (``task.belief_targets(control.likelihood)``); needed when
+            ``entropy_lambda > 0``.
+        extra_loss: Optional further term added to the loss, called as
+            ``extra_loss(model, states, beliefs)`` on each batch.
         progress: Show a tqdm progress bar.
 
     Returns:
         The trained model (eval mode) and a frame of logged losses with columns
         ``step``, ``train_loss``, ``val_error``, ``seconds``.
     """
+    if config.entropy_lambda > 0:
+        if goal_sets is None:
+            raise ConfigError("entropy_lambda > 0 needs goal_sets (task.belief_targets(control.likelihood))")
+        regularizer = EntropyRegularizer(
+            config.entropy_lambda,
+            goal_sets,
+            control,
+            n_z=config.entropy_n_z,
+            horizon=config.entropy_horizon,
+            contexts=config.entropy_contexts,
+            seed=config.seed,
+        )
+        user_loss = extra_loss
+
+        def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+            term = regularizer(model, s, b)
+            return term if user_loss is None else term + user_loss(model, s, b)
+
+        extra_loss = combined
     rng = np.random.default_rng(config.seed)
     gen = torch.Generator().manual_seed(config.seed)
     torch.manual_seed(config.seed)  # nn.Linear initialisation draws from the global generator

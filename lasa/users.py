@@ -12,7 +12,9 @@ with the control period Delta of the transition :math:`s' = s + \Delta a` (the p
 writes :math:`s + \phi`, with Delta absorbed into its action units). The user does not
 model the robot's assistance. beta = 0 gives uniformly random inputs, beta -> inf the
 best input on the grid of candidates. The rationality may change over time,
-:math:`\beta(t) = \beta_0 + m t` (learning users, Fig. sim3, start at beta_0 = 0).
+:math:`\beta(t) = \beta_0 + m t` (learning users, Fig. sim3, start at beta_0 = 0), and so
+may the goal: a user who changes their mind (Fig. sim2) aims at ``first_target`` for
+the steps t < N and at ``target`` from step N on.
 
 Sampling uses the Gumbel-max trick on pre-drawn uniforms, so that a user's choices
 depend only on its own random stream: the same user with the same seed makes the same
@@ -41,6 +43,9 @@ class UserPopulation:
         beta0: Rationality at t = 0, shape (U,) [1/rad^2].
         slope: Growth of the rationality per step, m in beta(t) = beta0 + m t, (U,).
         seed: The random stream each user draws from (an index into the noise), (U,).
+        first_target: The pose each user aims at before changing their mind, (U, n);
+            ``None`` for users who never do.
+        change_step: N, the first step at which each user aims at ``target``, (U,).
     """
 
     goal: np.ndarray
@@ -49,21 +54,42 @@ class UserPopulation:
     beta0: np.ndarray
     slope: np.ndarray
     seed: np.ndarray
+    first_target: np.ndarray | None = None
+    change_step: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.goal)
         for f in dataclasses.fields(self):
-            if len(getattr(self, f.name)) != n:
-                raise ConfigError(
-                    f"UserPopulation.{f.name} has {len(getattr(self, f.name))} rows, expected {n}"
-                )
+            value = getattr(self, f.name)
+            if value is not None and len(value) != n:
+                raise ConfigError(f"UserPopulation.{f.name} has {len(value)} rows, expected {n}")
         if np.any(~np.isfinite(self.beta0) & ~np.isposinf(self.beta0)) or np.any(self.beta0 < 0):
             raise ConfigError(f"beta must be >= 0, got min {np.min(self.beta0)}")
         if np.any(~np.isfinite(self.slope)) or np.any(self.slope < 0):
             raise ConfigError(f"slope must be a finite number >= 0, got min {np.min(self.slope)}")
+        if (self.first_target is None) != (self.change_step is None):
+            raise ConfigError("first_target and change_step go together: give both or neither")
+        if self.change_step is not None:
+            steps = np.asarray(self.change_step)
+            if steps.dtype.kind not in "iu" or np.any(steps < 0):
+                raise ConfigError(f"change_step N must hold integers >= 0, got {steps}")
 
     def __len__(self) -> int:
         return len(self.goal)
+
+    def subset(self, index: np.ndarray) -> UserPopulation:
+        """The users at ``index`` (an integer or boolean index array), as a new population."""
+        picked = {
+            f.name: None if getattr(self, f.name) is None else np.asarray(getattr(self, f.name))[index]
+            for f in dataclasses.fields(self)
+        }
+        return UserPopulation(**picked)  # type: ignore[arg-type]
+
+    def target_at(self, t: int) -> np.ndarray:
+        """The pose each user aims at during step t, shape (U, n)."""
+        if self.first_target is None or self.change_step is None:
+            return self.target
+        return np.where((t < np.asarray(self.change_step))[:, None], self.first_target, self.target)
 
     def beta(self, t: int) -> np.ndarray:
         """Rationality beta(t) = beta0 + m t of every user at step t, shape (U,)."""
