@@ -55,6 +55,8 @@ sysdeps:
 ROBOTS := planar5 panda
 # The figure notebooks share CSVs and the claims table: run them one at a time.
 .NOTPARALLEL:
+# Executed notebooks are the pipeline's stamps: never delete them as "intermediate" files.
+.SECONDARY:
 
 FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users
 figures: setup $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))

@@ -101,12 +101,10 @@ def run_population(
     alpha = np.array([method_alpha(m, control) for m in methods])
     keys = np.array([METHOD_DECODER[m] for m in methods])
     parts: list[tuple[np.ndarray, Trajectories]] = []
-    for key in dict.fromkeys(keys):  # first-seen order: deterministic
+    for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
         if key not in decoders:
-            raise ConfigError(
-                f"methods {sorted(set(methods[keys == key]))} need the {key!r} decoder; "
-                f"pass decoders[{key!r}]"
-            )
+            needing = sorted({str(m) for m in methods[keys == key]})
+            raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
         idx = np.flatnonzero(keys == key)
         group = users.subset(idx)
         parts.append(

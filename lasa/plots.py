@@ -378,5 +378,5 @@ def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = 
             fontsize=8,
         )
     ax.set_xlabel("mean entropy of p(s,b) at confident contexts [nats]")
-    ax.set_ylabel("held-out reconstruction error [(rad/s)$^2$]")
+    ax.set_ylabel("reconstruction error on the demonstrations [(rad/s)$^2$]")
     return ax

@@ -5,9 +5,23 @@ import pandas as pd
 import pytest
 
 from lasa.errors import ConfigError
-from lasa.experiments import SIM1_COLUMNS, Sim1Config, run_fixed_expertise, sim1_claims
+from lasa.experiments import (
+    SIM1_COLUMNS,
+    SIM2_COLUMNS,
+    SIM3_COLUMNS,
+    Sim1Config,
+    Sim2Config,
+    Sim3Config,
+    run_change_of_mind,
+    run_fixed_expertise,
+    run_learning_users,
+    sim1_claims,
+    sim1_entropy_claim,
+    sim2_claims,
+    sim3_claims,
+)
 
-SMALL = Sim1Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0)
+SMALL = Sim1Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0, methods=("LA", "LA+SA"))
 
 
 def test_sim1_frame_columns_and_size(model, task):
@@ -90,3 +104,118 @@ def test_same_seed_gives_identical_csv_on_the_panda(panda_model, panda_task, tmp
 def test_a_panda_decoder_is_refused_for_the_planar_task(panda_model, task):
     with pytest.raises(ConfigError, match="trained for 'panda'"):
         run_fixed_expertise(panda_model, task, task.robot.control, SMALL)
+
+
+def both(model):
+    """Both decoders; the tests reuse one model for each, which exercises the plumbing."""
+    return {"base": model, "entropy": model}
+
+
+def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
+    frame, traj = run_fixed_expertise(
+        both(model), task, task.robot.control, Sim1Config(betas=(75.0, 1000.0), n_seeds=2, horizon=10)
+    )
+    assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
+    # the entropy rows used the same model here, with LA+SA's alpha: identical episodes
+    a = frame[frame.method == "LA+SA"].final_error.to_numpy()
+    b = frame[frame.method == "LA+SA+Entropy"].final_error.to_numpy()
+    np.testing.assert_allclose(a, b)
+
+
+def test_a_missing_decoder_is_a_clear_error(model, task):
+    with pytest.raises(ConfigError, match="need the 'entropy' decoder"):
+        run_fixed_expertise(model, task, task.robot.control, Sim1Config(betas=(75.0,), n_seeds=1, horizon=5))
+
+
+def test_sim2_frame(model, task):
+    cfg = Sim2Config(change_steps=(0, 5), n_seeds=2, settle=10)
+    frame, traj = run_change_of_mind(both(model), task, task.robot.control, cfg)
+    assert set(SIM2_COLUMNS) <= set(frame.columns)
+    assert len(frame) == 3 * 2 * 2 and traj.states.shape[0] == cfg.horizon + 1 == 16
+    assert frame.confidence.between(0, 1).all()
+
+
+def test_sim3_frame(model, task):
+    cfg = Sim3Config(n_seeds=2, horizon=10, record_every=5)
+    frame, _ = run_learning_users(both(model), task, task.robot.control, cfg)
+    assert list(frame.columns) == list(SIM3_COLUMNS)
+    assert set(frame.learner) == {"fast", "slow"} and set(frame.t) == {0, 5, 10}
+    assert len(frame) == 3 * 2 * 2 * 3
+    start = frame[frame.t == 0].error
+    assert np.allclose(start, start.iloc[0]) or start.nunique() <= 2  # everyone starts at home
+
+
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"change_steps": (-1, 5)}, "change step N"),
+        ({"change_steps": (1.5,)}, "change step N"),
+        ({"beta": -1.0}, "beta"),
+    ],
+)
+def test_bad_sim2_config(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        Sim2Config(**kw)
+
+
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"learners": (("fast", -1.0),)}, "slope"),
+        ({"learners": (("medium", 1.0),)}, "learner"),
+        ({"record_every": 0}, "record_every"),
+    ],
+)
+def test_bad_sim3_config(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        Sim3Config(**kw)
+
+
+def sim2_frame(rates):
+    """Synthetic sim2 rows: rates[method] = (success at N=0, success at N=100)."""
+    rows = []
+    for method, (lo, hi) in rates.items():
+        for n, rate in ((0, lo), (100, hi)):
+            for i in range(10):
+                ok = i < round(10 * rate)
+                rows.append(
+                    dict(
+                        robot="planar5",
+                        method=method,
+                        change_step=n,
+                        seed=i,
+                        final_error=0.01 if ok else 0.8,
+                        confidence=1.0 if ok else 0.0,
+                        success=ok,
+                    )
+                )
+    return pd.DataFrame(rows)
+
+
+def test_sim2_claim_rules():
+    trapped = sim2_claims(sim2_frame({"LA+SA": (1.0, 0.2), "LA+SA+Entropy": (1.0, 0.9)}))
+    assert [c.reproduced for c in trapped] == ["yes", "yes"]
+    mild = sim2_claims(sim2_frame({"LA+SA": (1.0, 0.7), "LA+SA+Entropy": (1.0, 0.8)}))
+    assert [c.reproduced for c in mild] == ["partly", "partly"]
+    none = sim2_claims(sim2_frame({"LA+SA": (1.0, 1.0), "LA+SA+Entropy": (1.0, 0.9)}))
+    assert [c.reproduced for c in none] == ["no", "no"]
+
+
+def test_sim3_claim_rule():
+    rows = []
+    for learner, (sa, en) in {"fast": (0.2, 0.1), "slow": (0.3, 0.4)}.items():
+        for method, err in (("LA", 0.5), ("LA+SA", sa), ("LA+SA+Entropy", en)):
+            rows += [
+                dict(robot="panda", method=method, learner=learner, slope=1.0, seed=0, t=t, error=err)
+                for t in (0, 5)
+            ]
+    claim = sim3_claims(pd.DataFrame(rows))[0]
+    assert claim.reproduced == "partly" and claim.robot == "panda"
+
+
+def test_sim1_entropy_claim_rule():
+    rows = []
+    for beta, (la, sa, en) in {75.0: (0.3, 0.2, 0.25), 1000.0: (0.1, 0.05, 0.2)}.items():
+        for method, err in (("LA", la), ("LA+SA", sa), ("LA+SA+Entropy", en)):
+            rows.append(dict(robot="planar5", method=method, beta=beta, final_error=err))
+    assert sim1_entropy_claim(pd.DataFrame(rows)).reproduced == "no"  # entropy below LA at 1 of 2

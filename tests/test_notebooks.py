@@ -9,16 +9,24 @@ claims verdicts, and that the shared figures hold both robots.
 from pathlib import Path
 
 import mediapy
+import numpy as np
 import pandas as pd
 import pytest
 
 from lasa.claims import CLAIM_COLUMNS
-from lasa.experiments import SIM1_COLUMNS
+from lasa.experiments import SIM1_COLUMNS, SIM2_COLUMNS, SIM3_COLUMNS
 from lasa.runner import load_config, run_notebook
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "quick.yaml"
-ORDER = ["01_demonstrations", "02_decoder_training", "04_fixed_expertise"]
+ORDER = [
+    "01_demonstrations",
+    "02_decoder_training",
+    "03_entropy_ablation",
+    "04_fixed_expertise",
+    "05_changing_goals",
+    "06_learning_users",
+]
 ROBOTS = ["planar5", "panda"]
 
 
@@ -72,8 +80,8 @@ def test_sim1_outputs(executed):
     frame = pd.read_csv(fig / "sim1_fixed_expertise.csv")
     assert list(frame.columns[: len(SIM1_COLUMNS)]) == list(SIM1_COLUMNS)
     params = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")
-    assert len(frame) == len(ROBOTS) * 2 * len(params["betas"]) * params["n_seeds"]
-    assert set(frame.method) == {"LA", "LA+SA"} and set(frame.robot) == set(ROBOTS)
+    assert len(frame) == len(ROBOTS) * 3 * len(params["betas"]) * params["n_seeds"]
+    assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"} and set(frame.robot) == set(ROBOTS)
     assert frame.final_error.notna().all()
     assert (fig / "sim1_fixed_expertise.png").stat().st_size > 10_000
     for robot in ROBOTS:
@@ -85,8 +93,38 @@ def test_claims_table(executed):
     fig = executed / "figures"
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
-    assert len(claims) == 3 * len(ROBOTS) and set(claims.figure) == {"sim1"}
-    assert set(claims.robot) == set(ROBOTS)
+    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1}
+    assert claims.groupby(["figure", "robot"]).size().to_dict() == {
+        (f, r): n for f, n in per_figure.items() for r in ROBOTS
+    }
     assert set(claims.reproduced) <= {"yes", "partly", "no"}
     assert all(claims.measured.str.len() > 0)
-    assert (fig / "claims.md").read_text().count("| sim1 |") == 3 * len(ROBOTS)
+    assert (fig / "claims.md").read_text().count("| sim2 |") == 2 * len(ROBOTS)
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_entropy_outputs(executed, robot):
+    from lasa.decoder import load_checkpoint
+
+    fig = executed / "figures"
+    _, extra = load_checkpoint(executed / "build" / "models" / f"decoder_{robot}_entropy.pt", robot=robot)
+    assert extra["entropy_lambda"] > 0 and extra["train"]["entropy_lambda"] == extra["entropy_lambda"]
+    table = pd.read_csv(fig / "entropy_ablation.csv")
+    part = table[table.robot == robot]
+    assert set(part.kind) == {"grid", "sweep"}
+    assert part.entropy.between(-1e-9, np.log(2) + 1e-9).all()
+    assert (fig / "entropy_ablation.png").stat().st_size > 10_000
+
+
+def test_sim2_and_sim3_outputs(executed):
+    fig = executed / "figures"
+    sim2 = pd.read_csv(fig / "sim2_change_of_mind.csv")
+    assert list(sim2.columns[: len(SIM2_COLUMNS)]) == list(SIM2_COLUMNS)
+    assert set(sim2.robot) == set(ROBOTS) and set(sim2.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
+    sim3 = pd.read_csv(fig / "sim3_learning_users.csv")
+    assert list(sim3.columns) == list(SIM3_COLUMNS)
+    assert set(sim3.learner) == {"fast", "slow"} and set(sim3.robot) == set(ROBOTS)
+    for name in ("sim2_change_of_mind.png", "sim3_learning_users.png"):
+        assert (fig / name).stat().st_size > 10_000
+    for robot in ROBOTS:
+        assert mediapy.read_video(fig / f"change_of_mind_{robot}.mp4").shape[2] == 640

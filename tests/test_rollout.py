@@ -1,7 +1,5 @@
 """Algorithm 1, batched: one decoder call per step, invariants, determinism."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
@@ -82,9 +80,7 @@ def test_a_user_does_not_depend_on_its_batch(model, task):
     ctl = task.robot.control
     noise = noise_for(task, 4)
     full = rollout(model, task, users, 0.2, ctl, HORIZON, noise)
-    one = dataclasses.replace(
-        users, **{f.name: getattr(users, f.name)[2:3] for f in dataclasses.fields(users)}
-    )
+    one = users.subset(np.array([2]))
     alone = rollout(model, task, one, 0.2, ctl, HORIZON, noise)
     assert_allclose(alone.states[:, 0], full.states[:, 2], atol=1e-5)
 
@@ -93,7 +89,8 @@ def test_method_alpha_and_unknown_method(task):
     ctl = task.robot.control
     assert method_alpha("LA", ctl) == 0.0
     assert method_alpha("LA+SA", ctl) == ctl.alpha
-    assert set(METHODS) == {"LA", "LA+SA"}
+    assert method_alpha("LA+SA+Entropy", ctl) == ctl.alpha
+    assert set(METHODS) == {"LA", "LA+SA", "LA+SA+Entropy"}
     with pytest.raises(ConfigError, match="unknown method 'SA'"):
         method_alpha("SA", ctl)
 

@@ -80,3 +80,29 @@ def test_beta_schedule():
 def test_bad_users_are_a_clear_error(field, value, match):
     with pytest.raises(ConfigError, match=match):
         _population(**{field: value})
+
+
+def test_change_of_mind_switches_exactly_at_n():
+    first = np.array([[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]])
+    users = _population(target=np.zeros((2, 3)), first_target=first, change_step=np.array([3, 0]))
+    assert_allclose(users.target_at(0), [[1, 1, 1], [0, 0, 0]])
+    assert_allclose(users.target_at(2), [[1, 1, 1], [0, 0, 0]])  # t < N: still the first target
+    assert_allclose(users.target_at(3), [[0, 0, 0], [0, 0, 0]])  # t = N: the true target
+    plain = _population()
+    assert plain.target_at(5) is plain.target
+
+
+@pytest.mark.parametrize(
+    "steps,match", [(np.array([-1, 2]), "change_step"), (np.array([1.5, 2.0]), "change_step")]
+)
+def test_bad_change_step_is_a_clear_error(steps, match):
+    with pytest.raises(ConfigError, match=match):
+        _population(first_target=np.zeros((2, 3)), change_step=steps)
+    with pytest.raises(ConfigError, match="go together"):
+        _population(first_target=np.zeros((2, 3)))
+
+
+def test_subset_keeps_every_field():
+    users = _population(first_target=np.ones((2, 3)), change_step=np.array([1, 2]))
+    one = users.subset(np.array([1]))
+    assert len(one) == 1 and one.change_step.tolist() == [2] and one.seed.tolist() == [1]

@@ -1,0 +1,141 @@
+"""The entropy term (Eqs. T5-T6): a hand-computed case, gradients, spreading, the lambda rule."""
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+import torch
+from numpy.testing import assert_allclose
+
+from lasa.config import ControlConfig
+from lasa.entropy import (
+    EntropyRegularizer,
+    choose_lambda,
+    context_entropy,
+    context_grid,
+    entropy,
+    goal_distribution,
+    goal_scores,
+)
+from lasa.errors import ConfigError
+from lasa.train import TrainConfig, train_decoder
+from tests.conftest import SMALL_TRAIN
+
+POINT_GOALS = torch.tensor([[[1.0, 0.0]], [[-1.0, 0.0]]])  # two point goals, shape (G=2, K=1, n=2)
+CTL = ControlConfig(dt=0.1, belief_beta=0.5, likelihood="goal")  # plain progress model
+
+
+class Stub:
+    """A decoder whose action is +x for z > 0 and -x otherwise, of norm 1."""
+
+    def decode(self, z, s, b):
+        return torch.cat([torch.where(z > 0, 1.0, -1.0), torch.zeros_like(z)], dim=-1)
+
+
+def test_scores_and_distribution_by_hand():
+    # From s = 0, holding a = (1, 0) for H = 10 steps of 0.1 s reaches (1, 0): one closer to
+    # g1, one farther from g2. With beta_b = 0.5: eta = softmax(+0.5, -0.5) = (0.731, 0.269).
+    s, b = torch.zeros(1, 2), torch.tensor([[0.5, 0.5]])
+    both = goal_scores(Stub(), s, b, torch.tensor([[-1.0], [1.0]]), POINT_GOALS, CTL, horizon=10)
+    e = 1 / (1 + np.exp(-1.0))
+    assert_allclose(both[0].numpy(), [[1 - e, e], [e, 1 - e]], atol=1e-6)
+    p = goal_distribution(both)
+    assert_allclose(p.numpy(), [[0.5, 0.5]], atol=1e-6)  # one input per goal: p uniform
+    assert_allclose(entropy(p).numpy(), [np.log(2)], atol=1e-6)
+    one = goal_scores(Stub(), s, b, torch.tensor([[1.0], [0.5]]), POINT_GOALS, CTL, horizon=10)
+    p1 = goal_distribution(one)
+    assert_allclose(p1.numpy(), [[e, 1 - e]], atol=1e-6)  # every input to g1
+    assert_allclose(entropy(p1).numpy(), [-(e * np.log(e) + (1 - e) * np.log(1 - e))], atol=1e-6)
+
+
+def test_p_is_a_distribution(model, task):
+    ctl = task.robot.control
+    rng = np.random.default_rng(0)
+    states = rng.uniform(task.robot.lower, task.robot.upper, size=(32, task.robot.n_joints))
+    beliefs = rng.dirichlet([1, 1], size=32)
+    scores = goal_scores(
+        model,
+        torch.tensor(states, dtype=torch.float32),
+        torch.tensor(beliefs, dtype=torch.float32),
+        torch.linspace(-1, 1, 7)[:, None],
+        torch.tensor(task.belief_targets(ctl.likelihood), dtype=torch.float32),
+        ctl,
+    )
+    p = goal_distribution(scores)
+    assert torch.all(p >= 0) and torch.allclose(p.sum(-1), torch.ones(32))
+    h = context_entropy(model, states, beliefs, task.belief_targets(ctl.likelihood), ctl)
+    assert np.all(h >= -1e-9) and np.all(h <= np.log(2) + 1e-9)
+
+
+def test_gradient_reaches_the_decoder(model, task, demos):
+    ctl = task.robot.control
+    reg = EntropyRegularizer(1.0, task.belief_targets(ctl.likelihood), ctl, contexts=16)
+    s = torch.tensor(demos.states[:64], dtype=torch.float32)
+    b = torch.tensor(demos.beliefs[:64], dtype=torch.float32)
+    model.zero_grad()
+    reg(model, s, b).backward()
+    grads = [p.grad for p in model.decoder.parameters()]
+    assert all(g is not None for g in grads)
+    assert sum(float(g.abs().sum()) for g in grads) > 0
+    model.zero_grad()
+
+
+def test_large_lambda_spreads_p_at_confident_contexts(demos, task):
+    ctl = task.robot.control
+    sets = task.belief_targets(ctl.likelihood)
+    clean = demos.clean()
+    conf = clean.beliefs.max(1) > 0.99
+    probe = (clean.states[conf], clean.beliefs[conf])
+    cfg = dataclasses.replace(SMALL_TRAIN, steps=300)
+    plain, _ = train_decoder(demos, ctl, cfg, progress=False)
+    spread, _ = train_decoder(
+        demos, ctl, dataclasses.replace(cfg, entropy_lambda=3.0), goal_sets=sets, progress=False
+    )
+    h_plain = context_entropy(plain, *probe, sets, ctl).mean()
+    h_spread = context_entropy(spread, *probe, sets, ctl).mean()
+    assert h_plain < 0.3  # without the term, confident contexts lead to one goal
+    assert h_spread > h_plain + 0.2
+
+
+def test_context_grid():
+    progress, conf, states, beliefs = context_grid(np.zeros(3), np.ones(3), 1, 2, n_pos=3, n_belief=4)
+    assert states.shape == (12, 3) and beliefs.shape == (12, 2)
+    assert_allclose(beliefs.sum(1), 1.0)
+    assert_allclose(states[progress == 1.0], 1.0)
+    assert conf.min() == pytest.approx(0.5) and conf.max() == pytest.approx(0.999)
+
+
+def test_choose_lambda_rule():
+    sweep = pd.DataFrame(
+        {
+            "lambda": [0.0, 0.1, 0.3, 1.0],
+            "entropy_confident": [0.01, 0.3, 0.6, 0.69],
+            "recon_error": [1, 1.1, 1.2, 2.0],
+        }
+    )
+    assert choose_lambda(sweep, 2) == 0.3  # smallest reaching 0.8 log 2 = 0.55 within 1.5x error
+    assert choose_lambda(sweep.assign(entropy_confident=[0.01, 0.1, 0.2, 0.69]), 2) == 0.3  # best within cost
+    with pytest.raises(ConfigError, match="include 0"):
+        choose_lambda(sweep[sweep["lambda"] > 0], 2)
+
+
+def test_bad_lambda_is_a_clear_error(task):
+    with pytest.raises(ConfigError, match="entropy_lambda"):
+        TrainConfig(entropy_lambda=-0.1)
+    with pytest.raises(ConfigError, match="entropy_lambda"):
+        EntropyRegularizer(0.0, task.curves, task.robot.control)
+    with pytest.raises(ConfigError, match="goal_sets"):
+        train_decoder(None, task.robot.control, TrainConfig(entropy_lambda=1.0))  # type: ignore[arg-type]
+
+
+def test_checkpoint_records_lambda(demos, task, tmp_path):
+    from lasa.config import to_dict
+    from lasa.decoder import load_checkpoint, save_checkpoint
+
+    ctl = task.robot.control
+    cfg = dataclasses.replace(SMALL_TRAIN, steps=5, entropy_lambda=0.3)
+    m, _ = train_decoder(demos, ctl, cfg, goal_sets=task.belief_targets(ctl.likelihood), progress=False)
+    path = save_checkpoint(m, tmp_path / "e.pt", train=to_dict(cfg), entropy_lambda=0.3)
+    _, extra = load_checkpoint(path)
+    assert extra["entropy_lambda"] == 0.3 and extra["train"]["entropy_lambda"] == 0.3
