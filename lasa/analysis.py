@@ -13,11 +13,11 @@ from __future__ import annotations
 import numpy as np
 
 from lasa.belief import belief as to_belief
-from lasa.belief import log_likelihood, update_log_belief
 from lasa.config import ControlConfig
 from lasa.control import safe_step
 from lasa.decoder import LatentActionModel
 from lasa.errors import ConfigError
+from lasa.rollout import shared_autonomy_step
 from lasa.task import CupTask
 
 __all__ = ["held_input_paths"]
@@ -60,13 +60,13 @@ def held_input_paths(
     robot = task.robot
     s = np.broadcast_to(start, (len(z), robot.n_joints)).copy()
     log_b = np.log(np.broadcast_to(np.maximum(belief, 1e-300), (len(z), task.n_goals)))
-    sets = task.belief_targets(control.likelihood)
     out = [s]
     for _ in range(steps):
-        a = model.decode_numpy(z, s, to_belief(log_b))
-        if update_belief:
-            lik = log_likelihood(s, a, sets, control.dt, control.belief_beta, control.likelihood_step)
-            log_b = update_log_belief(log_b, lik, control.belief_floor)
-        s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
+        if update_belief:  # Algorithm 1 with alpha = 0: the method LA
+            step = shared_autonomy_step(model, task, control, s, log_b, z, 0.0)
+            s, log_b = step.state, step.log_belief
+        else:
+            a = model.decode_numpy(z, s, to_belief(log_b))
+            s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
         out.append(s)
     return np.stack(out, axis=1)

@@ -160,6 +160,15 @@ def draw_episodes(
     return goal, theta, noise
 
 
+def _episodes(
+    decoders: Decoders, task: CupTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`draw_episodes` sized for the decoders' joystick grid."""
+    base = decoders if isinstance(decoders, LatentActionModel) else next(iter(decoders.values()))
+    n_candidates = len(latent_grid(control.n_z, base.config.z_dim))
+    return draw_episodes(task, n_seeds, horizon, n_candidates, seed)
+
+
 def run_fixed_expertise(
     decoders: Decoders,
     task: CupTask,
@@ -182,9 +191,7 @@ def run_fixed_expertise(
         ``theta`` and ``confidence``; and the trajectories of all episodes (users in
         the frame's row order).
     """
-    base = decoders if isinstance(decoders, LatentActionModel) else next(iter(decoders.values()))
-    n_cand = len(latent_grid(control.n_z, base.config.z_dim))
-    goal, theta, noise = draw_episodes(task, config.n_seeds, config.horizon, n_cand, config.seed)
+    goal, theta, noise = _episodes(decoders, task, control, config.n_seeds, config.horizon, config.seed)
     grid = list(itertools.product(config.methods, config.betas, range(config.n_seeds)))
     method = np.array([m for m, _, _ in grid])
     beta = np.array([b for _, b, _ in grid], dtype=float)
@@ -412,9 +419,7 @@ def run_change_of_mind(
         One row per episode with the columns of ``SIM2_COLUMNS`` plus ``goal``, ``theta``
         and ``success``; and the trajectories.
     """
-    base = decoders if isinstance(decoders, LatentActionModel) else next(iter(decoders.values()))
-    n_cand = len(latent_grid(control.n_z, base.config.z_dim))
-    goal, theta, noise = draw_episodes(task, config.n_seeds, config.horizon, n_cand, config.seed)
+    goal, theta, noise = _episodes(decoders, task, control, config.n_seeds, config.horizon, config.seed)
     grid = list(itertools.product(config.methods, config.change_steps, range(config.n_seeds)))
     method = np.array([m for m, _, _ in grid])
     change = np.array([n for _, n, _ in grid], dtype=int)
@@ -485,9 +490,7 @@ def run_learning_users(
         One row per (episode, recorded step) with the columns of ``SIM3_COLUMNS``; and
         the trajectories (users in the order method x learner x seed).
     """
-    base = decoders if isinstance(decoders, LatentActionModel) else next(iter(decoders.values()))
-    n_cand = len(latent_grid(control.n_z, base.config.z_dim))
-    goal, theta, noise = draw_episodes(task, config.n_seeds, config.horizon, n_cand, config.seed)
+    goal, theta, noise = _episodes(decoders, task, control, config.n_seeds, config.horizon, config.seed)
     grid = list(itertools.product(config.methods, config.learners, range(config.n_seeds)))
     method = np.array([m for m, _, _ in grid])
     learner = np.array([name for _, (name, _), _ in grid])

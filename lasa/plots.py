@@ -266,42 +266,6 @@ def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def plot_sim1(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """Fig. sim1: a metric against beta per method, with 95% bootstrap bands.
-
-    Args:
-        frame: The sim1 frame (columns ``beta``, ``method`` and ``metric``).
-        metric: ``final_error`` or ``time``.
-        ax: Axes to draw on.
-    """
-    ax = _ax(ax)
-    methods = [m for m in METHOD_COLORS if m in set(frame.method)]
-    sns.lineplot(
-        data=frame,
-        x="beta",
-        y=metric,
-        hue="method",
-        hue_order=methods,
-        palette=METHOD_COLORS,
-        errorbar=("ci", 95),
-        n_boot=500,
-        seed=0,
-        marker="o",
-        ax=ax,
-    )
-    ax.set_xscale("log")
-    ax.set_xlabel(r"user rationality $\beta$")
-    ax.set_ylabel(
-        {"final_error": "final state error (normalised)", "time": "time to reach s* [steps]"}.get(
-            metric, metric
-        )
-    )
-    for beta in (75, 1000):
-        ax.axvline(beta, color="0.85", lw=0.8, zorder=0)
-    ax.legend(frameon=False, title=None)
-    return ax
-
-
 def _method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes) -> Axes:
     methods = [m for m in METHOD_COLORS if m in set(frame.method)]
     sns.lineplot(
@@ -318,6 +282,27 @@ def _method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes) -> Axes:
         marker="o" if frame[x].nunique() < 30 else None,
     )
     ax.legend(frameon=False, title=None)
+    return ax
+
+
+def plot_sim1(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
+    """Fig. sim1: a metric against beta per method, with 95% bootstrap bands.
+
+    Args:
+        frame: The sim1 frame (columns ``beta``, ``method`` and ``metric``).
+        metric: ``final_error`` or ``time``.
+        ax: Axes to draw on.
+    """
+    ax = _method_lineplot(frame, "beta", metric, _ax(ax))
+    ax.set_xscale("log")
+    ax.set_xlabel(r"user rationality $\beta$")
+    ax.set_ylabel(
+        {"final_error": "final state error (normalised)", "time": "time to reach s* [steps]"}.get(
+            metric, metric
+        )
+    )
+    for beta in (75, 1000):
+        ax.axvline(beta, color="0.85", lw=0.8, zorder=0)
     return ax
 
 

@@ -188,29 +188,28 @@ class Robot:
         rot = self.data.site_xmat[self._site].reshape(3, 3).copy()
         return pos, rot
 
+    def _site_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors."""
+        qs = np.asarray(qs, dtype=float)
+        flat = qs.reshape(-1, self.n_joints)
+        pos, rot = np.empty((len(flat), 3)), np.empty((len(flat), 3, 3))
+        for i, q in enumerate(flat):  # MuJoCo's kinematics takes one configuration at a time
+            self.set_state(q)
+            pos[i] = self.data.site_xpos[self._site]
+            rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
+        lead = qs.shape[:-1]
+        return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
+
     def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
         """Grasp-site positions for a batch of joint vectors, shape (..., 3).
 
-        MuJoCo's kinematics runs one configuration at a time; this loops over the batch
-        and is meant for plots and tests, not for the control loop.
+        Meant for plots and tests, not for the control loop (see :meth:`_site_frames`).
         """
-        qs = np.asarray(qs, dtype=float)
-        flat = qs.reshape(-1, self.n_joints)
-        out = np.empty((len(flat), 3))
-        for i, q in enumerate(flat):
-            self.set_state(q)
-            out[i] = self.data.site_xpos[self._site]
-        return out.reshape(*qs.shape[:-1], 3)
+        return self._site_frames(qs)[0]
 
     def grasp_axes(self, qs: np.ndarray) -> np.ndarray:
         """Approach direction (the site's +z axis) for a batch of joint vectors, (..., 3)."""
-        qs = np.asarray(qs, dtype=float)
-        flat = qs.reshape(-1, self.n_joints)
-        out = np.empty((len(flat), 3))
-        for i, q in enumerate(flat):
-            self.set_state(q)
-            out[i] = self.data.site_xmat[self._site].reshape(3, 3)[:, 2]
-        return out.reshape(*qs.shape[:-1], 3)
+        return self._site_frames(qs)[1][..., :, 2]
 
     def cup_positions(self) -> np.ndarray:
         """World positions of the cups' grasp centres, shape (G, 3), in goal order."""
