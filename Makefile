@@ -58,7 +58,7 @@ ROBOTS := planar5 panda
 # Executed notebooks are the pipeline's stamps: never delete them as "intermediate" files.
 .SECONDARY:
 
-FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users
+FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goals
 figures: setup $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC))"
 
@@ -80,6 +80,10 @@ $(EXEC)/05_changing_goals-%.ipynb: notebooks/05_changing_goals.ipynb $(EXEC)/03_
 	$(RUN) --robot $*
 
 $(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+# New goals read the base decoder only (no retraining: that is the point of Sec. IV-C).
+$(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 lint: setup

@@ -18,12 +18,14 @@ from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from lasa.claims import Claim
-from lasa.config import ControlConfig, check_range
+from lasa.config import ControlConfig, check_choice, check_range
 from lasa.decoder import LatentActionModel
 from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error, time_to_reach
+from lasa.newgoals import MAP_KINDS, ContextMap, extend_task
 from lasa.rollout import METHOD_DECODER, METHODS, Trajectories, method_alpha, rollout
 from lasa.task import CupTask
 from lasa.users import UserPopulation, latent_grid
@@ -45,11 +47,20 @@ __all__ = [
     "SIM1_COLUMNS",
     "SIM2_COLUMNS",
     "SIM3_COLUMNS",
+    "SIM4_COLUMNS",
+    "Sim4Config",
+    "NewGoalRun",
+    "new_cup_positions",
+    "run_new_goals",
+    "fit_line",
+    "sim4_fits",
+    "sim4_claims",
 ]
 
 SIM1_COLUMNS = ("robot", "method", "beta", "seed", "final_error", "time", "completed")
 SIM2_COLUMNS = ("robot", "method", "change_step", "seed", "final_error", "confidence")
 SIM3_COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error")
+SIM4_COLUMNS = ("robot", "mapping", "distance", "seed", "error")
 
 Decoders = Mapping[str, LatentActionModel] | LatentActionModel
 
@@ -604,3 +615,252 @@ def sim3_claims(frame: pd.DataFrame) -> list[Claim]:
             robot=robot,
         )
     ]
+
+
+@dataclasses.dataclass(frozen=True)
+class Sim4Config:
+    """Fig. sim4: users who reach for new cups, with and without the context map h."""
+
+    offsets: tuple[float, ...] = (
+        0.08,
+        0.11,
+        0.14,
+        0.17,
+        0.20,
+    )  # new cups' distances from the reference cup [m]
+    direction: tuple[float, float] | None = (
+        None  # on the table; None: from the other training cup to the reference
+    )
+    ref_goal: int = 1  # the training cup the new ones are referred to [-]
+    beta: float = 1000.0  # near-optimal users [1/rad^2]
+    n_seeds: int = 30  # users per (mapping, new cup) [-]
+    horizon: int = 200  # control steps per episode [-]
+    method: str = "LA+SA"  # the method compared with and without the map
+    maps: tuple[str, ...] = ("grasp", "straight_line")  # kinds of h run "with" the map (lasa.newgoals)
+    seed: int = 0  # seed of the users' preferences and random streams [-]
+
+    def __post_init__(self) -> None:
+        if not self.offsets:
+            raise ConfigError("offsets must not be empty")
+        for offset in self.offsets:
+            check_range("offset", offset, 0.0, low_open=True)
+        if self.direction is not None and (
+            len(self.direction) != 2
+            or not np.isfinite(self.direction).all()
+            or np.hypot(*self.direction) < 1e-9
+        ):
+            raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
+        check_range("beta", self.beta, 0.0)
+        _check_positive_int("n_seeds", self.n_seeds)
+        _check_positive_int("horizon", self.horizon)
+        _check_methods((self.method,))
+        if not self.maps:
+            raise ConfigError("maps must name at least one kind of context map")
+        for kind in self.maps:
+            check_choice("map", kind, MAP_KINDS)
+
+
+@dataclasses.dataclass(frozen=True)
+class NewGoalRun:
+    """The episodes at one new cup.
+
+    Attributes:
+        offset: Distance of the new cup from the reference cup on the table [m].
+        task: The task grown by the new cup (its robot's scene shows it).
+        with_map: Trajectories with each kind of context map (belief over G + 1 goals).
+        without_map: Trajectories of the unchanged method (training goals only).
+    """
+
+    offset: float
+    task: CupTask
+    with_map: dict[str, Trajectories]
+    without_map: Trajectories
+
+
+def new_cup_positions(task: CupTask, config: Sim4Config) -> np.ndarray:
+    """Grasp centres of the new cups, shape (len(offsets), 3) [m]."""
+    cups = task.robot.cup_positions()
+    ref = cups[config.ref_goal]
+    if config.direction is None:
+        other = cups[(config.ref_goal + 1) % task.n_goals]
+        direction = (ref - other)[:2]
+    else:
+        direction = np.asarray(config.direction, dtype=float)
+    direction = np.r_[direction / np.linalg.norm(direction), 0.0]
+    return ref + np.asarray(config.offsets)[:, None] * direction
+
+
+def run_new_goals(
+    decoder: LatentActionModel,
+    task: CupTask,
+    control: ControlConfig,
+    config: Sim4Config = Sim4Config(),
+    progress: bool = False,
+) -> tuple[pd.DataFrame, list[NewGoalRun]]:
+    """Fig. sim4: grasp error at new cups against their distance from the training cup.
+
+    For each new cup (one batched rollout per cup and mapping), near-optimal users want
+    a grasp there, with preferences drawn per seed and shared by every cup and mapping.
+    ``with``: the task grows by the cup and the decoder runs through the context map
+    (:mod:`lasa.newgoals`). ``without``: the method is left unchanged, knowing the
+    training cups only. Distances and errors are joint-space, both normalised by the
+    distance D between the reference goal and the farthest new goal, as in the paper.
+
+    Returns:
+        One row per episode with the columns of ``SIM4_COLUMNS`` plus ``h`` (the kind
+        of map, ``none`` without), ``offset_m``, ``theta`` and ``confidence`` (b of the
+        new cup at the end; NaN without the map); and the runs per new cup.
+    """
+    if not 0 <= config.ref_goal < task.n_goals:
+        raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {config.ref_goal}")
+    rng = np.random.default_rng(config.seed)
+    theta = rng.uniform(0.0, 1.0, config.n_seeds)
+    n_candidates = len(latent_grid(control.n_z, decoder.config.z_dim))
+    noise = rng.random((config.n_seeds, config.horizon, n_candidates))
+    seeds = np.arange(config.n_seeds)
+    alpha = method_alpha(config.method, control)
+    grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
+    dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
+    scale = float(dist.max())
+    runs, rows = [], []
+    for offset, big, d in zip(config.offsets, grown, dist, strict=True):
+        new = big.n_goals - 1
+        target = big.target(np.full(config.n_seeds, new), theta)
+        users = UserPopulation(
+            goal=np.full(config.n_seeds, new),
+            theta=theta,
+            target=target,
+            beta0=np.full(config.n_seeds, config.beta),
+            slope=np.zeros(config.n_seeds),
+            seed=seeds,
+        )
+        with_map = {}
+        for kind in config.maps:
+            cmap = ContextMap.for_task(big, task.n_goals, config.ref_goal, kind)
+            with_map[kind] = rollout(
+                decoder, big, users, alpha, control, config.horizon, noise, progress, cmap
+            )
+        plain = dataclasses.replace(users, goal=np.full(config.n_seeds, config.ref_goal))
+        without = rollout(decoder, task, plain, alpha, control, config.horizon, noise, progress)
+        runs.append(NewGoalRun(float(offset), big, with_map, without))
+        cases = [("with", kind, traj, _final_belief(traj, new)) for kind, traj in with_map.items()]
+        cases.append(("without", "none", without, np.full(config.n_seeds, np.nan)))
+        for mapping, kind, traj, conf in cases:
+            rows.append(
+                pd.DataFrame(
+                    {
+                        "robot": task.robot.name,
+                        "mapping": mapping,
+                        "distance": d / scale,
+                        "seed": seeds,
+                        "error": normalized_error(traj.states[-1], target, scale),
+                        "h": kind,
+                        "offset_m": float(offset),
+                        "theta": theta,
+                        "confidence": conf,
+                    }
+                )
+            )
+    return pd.concat(rows, ignore_index=True), runs
+
+
+def _final_belief(traj: Trajectories, goal: int) -> np.ndarray:
+    """The belief in ``goal`` at the end of every episode, shape (U,)."""
+    return traj.beliefs[-1][:, goal]
+
+
+def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares line y = slope x + intercept; returns (slope, intercept, R^2)."""
+    res = stats.linregress(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    return float(res.slope), float(res.intercept), float(res.rvalue**2)
+
+
+def sim4_fits(frame: pd.DataFrame) -> pd.DataFrame:
+    """Linear fits of the mean error per new cup against its distance, per kind of map.
+
+    Returns:
+        One row per ``h`` (``grasp``, ``straight_line``, ``none``): ``slope``,
+        ``intercept``, ``r2`` (of the per-cup means) and ``r2_episodes`` (the same
+        line's R^2 over every episode).
+    """
+    out = []
+    for kind, part in frame.groupby("h"):
+        means = part.groupby("distance").error.mean()
+        slope, intercept, r2 = fit_line(means.index.to_numpy(), means.to_numpy())
+        _, _, r2_ep = fit_line(part.distance.to_numpy(), part.error.to_numpy())
+        out.append({"h": kind, "slope": slope, "intercept": intercept, "r2": r2, "r2_episodes": r2_ep})
+    return pd.DataFrame(out).set_index("h")
+
+
+_H_NAMES = {
+    "straight_line": "the paper's straight-line context map",
+    "grasp": "the grasp-to-grasp context map (ours)",
+}
+
+
+def sim4_claims(frame: pd.DataFrame) -> list[Claim]:
+    """Evaluate Fig. sim4's claims from a sim4 frame (both axes normalised by D).
+
+    Fits are least-squares lines through the mean error of each new cup (one point per
+    cup, as the paper's figure), by :func:`sim4_fits`. The first rule is applied to
+    every kind of map in the frame (the paper's claim is about its straight-line map).
+
+    - *With the map the error grows linearly with distance, y = 0.11x, R^2 = 0.98*:
+      ``yes`` if R^2 >= 0.9 and the slope lies in (0, 0.25] (it grows, and stays far
+      below the no-map line); ``partly`` if the slope is at most 0.5 (the map at least
+      halves the error growth) but the growth is not both linear and positive; else ``no``.
+    - *Without the map the robot only reaches for the training goal, y = x*: ``yes`` if
+      the slope is within 0.15 of 1 and R^2 >= 0.9; ``partly`` if R^2 >= 0.9 and the
+      slope lies in [0.5, 1.5]; else ``no``.
+    """
+    robot = str(frame.robot.iloc[0])
+    fits = sim4_fits(frame)
+    n_cups = frame.distance.nunique()
+
+    def line(f: pd.Series) -> str:
+        return (
+            f"y = {f.slope:.3f}x {f.intercept:+.3f}, R^2 = {f.r2:.3f} over the {n_cups} cups' means "
+            f"({f.r2_episodes:.2f} over episodes)"
+        )
+
+    claims = []
+    for kind in [k for k in ("straight_line", "grasp") if k in fits.index]:
+        f = fits.loc[kind]
+        verdict = "yes" if f.r2 >= 0.9 and 0 < f.slope <= 0.25 else "partly" if f.slope <= 0.5 else "no"
+        claims.append(
+            Claim(
+                claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
+                figure="sim4",
+                paper="y = 0.11x, R^2 = 0.98",
+                measured=line(f),
+                reproduced=verdict,
+                note=(
+                    "rule: yes if R^2 >= 0.9 and slope in (0, 0.25], partly if slope <= 0.5. "
+                    "Joint-space distances and errors, normalised by the farthest new goal's distance."
+                ),
+                robot=robot,
+            )
+        )
+    wo = fits.loc["none"]
+    verdict = (
+        "yes"
+        if abs(wo.slope - 1) <= 0.15 and wo.r2 >= 0.9
+        else "partly"
+        if wo.r2 >= 0.9 and 0.5 <= wo.slope <= 1.5
+        else "no"
+    )
+    claims.append(
+        Claim(
+            claim="without the map, the robot only reaches for the training goal",
+            figure="sim4",
+            paper="y = x",
+            measured=line(wo),
+            reproduced=verdict,
+            note=(
+                "rule: yes if |slope - 1| <= 0.15 and R^2 >= 0.9, "
+                "partly if R^2 >= 0.9 and slope in [0.5, 1.5]."
+            ),
+            robot=robot,
+        )
+    )
+    return claims

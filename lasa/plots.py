@@ -17,6 +17,7 @@ from matplotlib.colors import Normalize
 from matplotlib.patches import Circle, Rectangle
 
 from lasa.demos import Demonstrations
+from lasa.experiments import sim4_fits
 from lasa.task import CupTask, grasp_frame
 
 __all__ = [
@@ -33,6 +34,7 @@ __all__ = [
     "plot_sim1",
     "plot_sim2",
     "plot_sim3",
+    "plot_sim4",
     "plot_entropy_grid",
     "plot_entropy_tradeoff",
     "grasp_preference",
@@ -364,4 +366,56 @@ def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = 
         )
     ax.set_xlabel("mean entropy of p(s,b) at confident contexts [nats]")
     ax.set_ylabel("reconstruction error on the demonstrations [(rad/s)$^2$]")
+    return ax
+
+
+H_STYLES = {
+    "none": ("#d95f02", "without the map"),
+    "straight_line": ("#7570b3", "straight-line h (paper)"),
+    "grasp": ("#1b9e77", "grasp-to-grasp h (ours)"),
+}
+
+
+def plot_sim4(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
+    """Fig. sim4: grasp error at new cups against their distance, per kind of map.
+
+    Each cup's episodes are drawn as faint points and their mean with a 95% bootstrap
+    interval; the line is the least-squares fit through the means (its equation and R^2
+    in the legend, from :func:`lasa.experiments.sim4_fits`). The dashed line is y = x.
+    """
+    ax = _ax(ax)
+    fits = sim4_fits(frame)
+    xs = np.linspace(0.0, 1.0, 2)
+    ax.plot(xs, xs, ls="--", color="0.6", lw=1, label="y = x")
+    for kind, (color, name) in H_STYLES.items():
+        if kind not in fits.index:
+            continue
+        part = frame[frame.h == kind]
+        ax.scatter(part.distance, part.error, s=6, color=color, alpha=0.15, lw=0)
+        sns.pointplot(
+            data=part,
+            x="distance",
+            y="error",
+            native_scale=True,
+            color=color,
+            errorbar=("ci", 95),
+            n_boot=500,
+            seed=0,
+            linestyle="none",
+            markersize=4,
+            ax=ax,
+        )
+        f = fits.loc[kind]
+        ax.plot(
+            xs,
+            f.slope * xs + f.intercept,
+            color=color,
+            lw=1.5,
+            label=f"{name}: y = {f.slope:.2f}x {f.intercept:+.2f}, R² = {f.r2:.2f}",
+        )
+    ax.set_xlim(0, 1.05)
+    ax.set_ylim(0, max(1.1, float(frame.groupby(["h", "distance"]).error.mean().max()) * 1.1))
+    ax.set_xlabel("distance of the new goal from the training goal (normalised)")
+    ax.set_ylabel("grasp error (normalised)")
+    ax.legend(frameon=False, fontsize=8, loc="upper left")
     return ax

@@ -19,7 +19,7 @@ import mujoco
 import numpy as np
 
 from lasa.config import ControlConfig, check_choice
-from lasa.errors import ArtifactError
+from lasa.errors import ArtifactError, ConfigError
 
 __all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot"]
 
@@ -43,6 +43,9 @@ class RobotSpec:
     ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup
     control: ControlConfig  # default units of the control loop for this robot
     mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
+    # Cups added after training (Sec. IV-C): (site name, grasp-centre position [m]); their
+    # names end ``cups``. Built like the last cup of the scene, in their own colour.
+    extra_cups: tuple[tuple[str, tuple[float, float, float]], ...] = ()
 
 
 ROBOTS: dict[str, RobotSpec] = {
@@ -105,6 +108,25 @@ def mesh_dir(package: str, folder: str) -> Path:
     return path
 
 
+NEW_CUP_RGBA = (0.25, 0.45, 0.85, 1.0)  # new cups are blue
+
+
+def _add_cup(mj_spec: mujoco.MjSpec, name: str, site_position: np.ndarray, template: str) -> None:
+    """Add a cup whose grasp centre (site) is at ``site_position``, shaped like ``template``."""
+    site, geom = mj_spec.site(template), mj_spec.geom(template)
+    body = mj_spec.worldbody.add_body(name=name, pos=site_position - np.asarray(site.pos))
+    body.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        size=geom.size,
+        pos=geom.pos,
+        rgba=NEW_CUP_RGBA,
+        contype=0,
+        conaffinity=0,
+    )
+    body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
+
+
 def load_robot(name: str) -> Robot:
     """Build the robot registered under ``name``.
 
@@ -142,6 +164,8 @@ class Robot:
                 if not (root / rel).is_file():
                     raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
                 mesh.file = str(root / rel)
+        for name, position in spec.extra_cups:
+            _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.cups[0])
         self.model = mj_spec.compile()
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(name).id for name in spec.joints]
@@ -215,6 +239,34 @@ class Robot:
         """World positions of the cups' grasp centres, shape (G, 3), in goal order."""
         mujoco.mj_kinematics(self.model, self.data)
         return np.stack([self.data.site(name).xpos.copy() for name in self.spec.cups])
+
+    def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
+        """The same robot in a scene with one more cup, whose grasp centre is at ``position``.
+
+        The new cup becomes the last goal (``spec.cups[-1]``). Workspace checks belong to
+        the caller (:func:`lasa.newgoals.extend_task`); this only builds the scene.
+
+        Raises:
+            ConfigError: if a cup of that name exists already.
+        """
+        if name in self.spec.cups:
+            raise ConfigError(f"the scene already has a cup named {name!r}")
+        x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
+        pos = (x, y, z)
+        spec = dataclasses.replace(
+            self.spec, cups=(*self.spec.cups, name), extra_cups=(*self.spec.extra_cups, (name, pos))
+        )
+        return Robot(spec)
+
+    def table_extent(self) -> tuple[np.ndarray, np.ndarray]:
+        """Centre (3,) and half-sizes (3,) of the table box (geom ``table``)."""
+        geom = self.model.geom("table")
+        return self.model.geom_pos[geom.id].copy(), self.model.geom_size[geom.id].copy()
+
+    def first_joint_axis(self) -> np.ndarray:
+        """World direction of the first arm joint's axis at the home pose, shape (3,)."""
+        self.set_state(self.home)
+        return self.data.xaxis[self.model.joint(self.spec.joints[0]).id].copy()
 
     def base_position(self) -> np.ndarray:
         """World position of the arm's base (the first joint's anchor), shape (3,)."""

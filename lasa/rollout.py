@@ -27,6 +27,7 @@ from lasa.config import ControlConfig
 from lasa.control import assistance, blend, safe_step, sanitize
 from lasa.decoder import LatentActionModel
 from lasa.errors import ConfigError
+from lasa.newgoals import ContextMap
 from lasa.task import CupTask
 from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs
 
@@ -117,6 +118,7 @@ def shared_autonomy_step(
     log_belief: np.ndarray,
     z: np.ndarray,
     alpha: float | np.ndarray,
+    context_map: ContextMap | None = None,
 ) -> StepResult:
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
@@ -133,14 +135,41 @@ def shared_autonomy_step(
         log_belief: log b^t, shape (U, G).
         z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
         alpha: Blend weight, scalar or shape (U,).
+        context_map: For a task grown by a new goal (:mod:`lasa.newgoals`), the map h
+            that decodes in an equivalent training context; ``None`` decodes directly.
     """
+    _check_goals(model, task, context_map)
     z = np.asarray(z, dtype=float)
     ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
-    a_h = model.decode_numpy(np.where(ok, z, 0.0), state, belief(log_belief))
+    b = belief(log_belief)
+    if context_map is None:
+        a_h = model.decode_numpy(np.where(ok, z, 0.0), state, b)
+    else:
+        s_hat, b_hat = context_map(state, b)
+        a_hat = model.decode_numpy(np.where(ok, z, 0.0), s_hat, b_hat)
+        a_h = context_map.action_from_training(a_hat, state)
     a_h = np.where(ok, a_h, 0.0)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)
     return _advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+
+
+def _check_goals(model: LatentActionModel, task: CupTask, context_map: ContextMap | None) -> None:
+    """The decoder must read a belief over the task's goals (or the map's training goals)."""
+    if model.config.robot != task.robot.name:
+        raise ConfigError(
+            f"decoder was trained for {model.config.robot!r}, the task is for {task.robot.name!r}"
+        )
+    expected = task.n_goals if context_map is None else context_map.n_train
+    if model.config.n_goals != expected:
+        hint = "" if context_map else "; for a task with a new goal pass a lasa.newgoals.ContextMap"
+        raise ConfigError(
+            f"decoder reads a belief over {model.config.n_goals} goals, this context has {expected}{hint}"
+        )
+    if context_map is not None and task.n_goals != context_map.n_train + 1:
+        raise ConfigError(
+            f"the context map is for {context_map.n_train + 1} goals, the task has {task.n_goals}"
+        )
 
 
 def decode_candidates(
@@ -175,6 +204,7 @@ def rollout(
     horizon: int,
     noise: np.ndarray,
     progress: bool = False,
+    context_map: ContextMap | None = None,
 ) -> Trajectories:
     """Run Algorithm 1 for a batch of simulated users.
 
@@ -188,14 +218,13 @@ def rollout(
         noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
             ``noise[users.seed[u]]``. K must equal the number of joystick candidates.
         progress: Show a tqdm progress bar over the steps.
+        context_map: For a task grown by a new goal, the map h onto a training goal's
+            context (:mod:`lasa.newgoals`): every candidate is decoded there and mapped back.
 
     Returns:
         The trajectories of every user.
     """
-    if model.config.robot != task.robot.name:
-        raise ConfigError(
-            f"decoder was trained for {model.config.robot!r}, the task is for {task.robot.name!r}"
-        )
+    _check_goals(model, task, context_map)
     if int(horizon) != horizon or horizon < 1:
         raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
     n_users = len(users)
@@ -217,7 +246,11 @@ def rollout(
     rows = np.arange(n_users)
     sets = task.belief_targets(control.likelihood)
     for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
-        phi = decode_candidates(model, z_grid, s, beliefs[t])  # (U, K, n): the one decoder call
+        if context_map is None:
+            phi = decode_candidates(model, z_grid, s, beliefs[t])  # (U, K, n): the one decoder call
+        else:
+            s_hat, b_hat = context_map(s, beliefs[t])
+            phi = context_map.action_from_training(decode_candidates(model, z_grid, s_hat, b_hat), s[:, None])
         costs = user_costs(users.target_at(t), s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
         step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)

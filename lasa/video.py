@@ -21,7 +21,7 @@ from lasa.errors import ConfigError
 from lasa.io import atomic_path
 from lasa.robot import Robot
 
-__all__ = ["render_states", "label_frames", "side_by_side", "write_video"]
+__all__ = ["render_states", "label_frames", "side_by_side", "write_video", "read_video"]
 
 
 def _ensure_ffmpeg() -> None:
@@ -86,3 +86,18 @@ def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 1
     with atomic_path(path) as tmp:
         mediapy.write_video(tmp, frames, fps=fps)
     return Path(path)
+
+
+def read_video(path: str | os.PathLike[str]) -> np.ndarray:
+    """Decode an MP4 into frames (T, H, W, 3), uint8.
+
+    Uses the ``imageio-ffmpeg`` reader, which works with that wheel's own ffmpeg
+    (mediapy's reader passes an option newer ffmpeg builds reject).
+    """
+    import imageio_ffmpeg
+
+    reader = imageio_ffmpeg.read_frames(str(path))
+    meta = next(reader)
+    width, height = meta["size"]
+    frames = [np.frombuffer(buf, dtype=np.uint8).reshape(height, width, 3) for buf in reader]
+    return np.stack(frames)

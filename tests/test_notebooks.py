@@ -1,6 +1,6 @@
 """Every notebook executed headless by papermill in QUICK mode, outputs checked.
 
-The notebooks run in order (01 -> 02 -> 04) for each robot, as `make figures` does,
+The notebooks run in order (01 -> 07) for each robot, as `make figures` does,
 each reading what the previous one wrote, into a temporary folder. Then the files each
 one promises are checked against the contracts of DESIGN.md: names, CSV columns,
 claims verdicts, and that the shared figures hold both robots.
@@ -8,14 +8,14 @@ claims verdicts, and that the shared figures hold both robots.
 
 from pathlib import Path
 
-import mediapy
 import numpy as np
 import pandas as pd
 import pytest
 
 from lasa.claims import CLAIM_COLUMNS
-from lasa.experiments import SIM1_COLUMNS, SIM2_COLUMNS, SIM3_COLUMNS
+from lasa.experiments import SIM1_COLUMNS, SIM2_COLUMNS, SIM3_COLUMNS, SIM4_COLUMNS
 from lasa.runner import load_config, run_notebook
+from lasa.video import read_video
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "quick.yaml"
@@ -26,6 +26,7 @@ ORDER = [
     "04_fixed_expertise",
     "05_changing_goals",
     "06_learning_users",
+    "07_new_goals",
 ]
 ROBOTS = ["planar5", "panda"]
 
@@ -51,7 +52,7 @@ def test_demonstrations_outputs(executed, robot):
     fig = executed / "figures"
     assert (executed / "build" / "data" / f"demos_{robot}.npz").is_file()
     assert (fig / f"demos_{robot}.png").stat().st_size > 10_000
-    video = mediapy.read_video(fig / f"demos_{robot}.mp4")
+    video = read_video(fig / f"demos_{robot}.mp4")
     assert video.shape[1:] == (240, 320, 3) and len(video) > 10
     summary = pd.read_csv(fig / f"demos_{robot}.csv")
     assert {"robot", "demo", "goal", "phase", "steps", "belief_min", "belief_end"} <= set(summary.columns)
@@ -85,7 +86,7 @@ def test_sim1_outputs(executed):
     assert frame.final_error.notna().all()
     assert (fig / "sim1_fixed_expertise.png").stat().st_size > 10_000
     for robot in ROBOTS:
-        video = mediapy.read_video(fig / f"rollouts_{robot}.mp4")
+        video = read_video(fig / f"rollouts_{robot}.mp4")
         assert video.shape[2] == 640  # LA and LA+SA side by side
 
 
@@ -93,7 +94,7 @@ def test_claims_table(executed):
     fig = executed / "figures"
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
-    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1}
+    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n for f, n in per_figure.items() for r in ROBOTS
     }
@@ -127,4 +128,20 @@ def test_sim2_and_sim3_outputs(executed):
     for name in ("sim2_change_of_mind.png", "sim3_learning_users.png"):
         assert (fig / name).stat().st_size > 10_000
     for robot in ROBOTS:
-        assert mediapy.read_video(fig / f"change_of_mind_{robot}.mp4").shape[2] == 640
+        assert read_video(fig / f"change_of_mind_{robot}.mp4").shape[2] == 640
+
+
+def test_sim4_outputs(executed):
+    fig = executed / "figures"
+    sim4 = pd.read_csv(fig / "sim4_new_goals.csv")
+    assert list(sim4.columns[: len(SIM4_COLUMNS)]) == list(SIM4_COLUMNS)
+    assert set(sim4.robot) == set(ROBOTS) and set(sim4.mapping) == {"with", "without"}
+    for robot in ROBOTS:
+        part = sim4[sim4.robot == robot]
+        assert part.distance.max() == 1.0 and part.distance.min() > 0
+        assert np.isfinite(part.error).all() and (part.error >= 0).all()
+        # the farthest cup holds both mappings for every user
+        far = part[part.distance == 1.0]
+        assert set(far.h) == {"grasp", "straight_line", "none"}
+        assert read_video(fig / f"new_goal_{robot}.mp4").shape[2] == 640
+    assert (fig / "sim4_new_goals.png").stat().st_size > 10_000

@@ -1,11 +1,10 @@
 """Off-screen rendering (OSMesa) and video writing, at a tiny frame size."""
 
-import mediapy
 import numpy as np
 import pytest
 
 from lasa.errors import ConfigError
-from lasa.video import label_frames, render_states, side_by_side, write_video
+from lasa.video import label_frames, read_video, render_states, side_by_side, write_video
 
 
 def test_render_shows_the_arm_move(robot, task):
@@ -26,6 +25,6 @@ def test_write_video_round_trip(tmp_path):
     clip = side_by_side(label_frames(frames, "LA"), frames[:4])
     assert clip.shape == (6, 32, 96, 3)
     path = write_video(tmp_path / "v.mp4", clip, fps=5)
-    back = mediapy.read_video(path)
+    back = read_video(path)
     assert back.shape[0] == 6 and back.shape[1:3] == (32, 96)
     assert [p.name for p in tmp_path.iterdir()] == ["v.mp4"]
