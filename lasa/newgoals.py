@@ -10,37 +10,46 @@ retraining, the robot maps its context onto an *equivalent* one at a training cu
     (\hat s, \hat b) = h(s, b), \qquad \hat a_h = \phi(z, \hat s, \hat b), \qquad
     a_h = J_h(s)^{-1} \hat a_h, \quad J_h = \partial \hat s / \partial s .
 
-**The state map.** With start :math:`s_0`, new goal g and reference goal
-:math:`\hat g` (both mid-preference grasps, in joint space), let
-:math:`\lambda(s) = \langle s - s_0, g - s_0 \rangle / \|g - s_0\|^2` be the progress
-along the straight line from the start to g, and
+**The state map.** With start :math:`s_0` and new goal g (its mid-preference grasp,
+in joint space), let :math:`\lambda(s) = \langle s - s_0, g - s_0 \rangle / \|g - s_0\|^2`
+be the progress along the straight line from the start to g, and
 :math:`w(s) = \mathrm{clip}(\lambda(s) / \lambda_1, 0, 1)`, where :math:`\lambda_1 \le 1`
 is the least progress of any grasp of the new cup. Then
 
-.. math::  \hat s = s + w(s)\,(\hat g - g).
+.. math::  \hat s = s + w(s)\,u(s),
 
-At the start h is the identity (w = 0). On the straight line to g it is the paper's
-straight-line map: the point at progress lambda maps to the point at the same progress
-on the line to :math:`\hat g` (exactly so when :math:`\lambda_1 = 1`). Off the line the
-residual is kept, where the paper's projection drops it. From progress
-:math:`\lambda_1` on, and so at every grasp of the new cup, h is a pure translation by
-:math:`\hat g - g`, so the fine motions that choose a grasp keep their meaning. The
-Jacobian is a rank-one update of the identity, inverted in closed form
-(Sherman-Morrison); where w is saturated it is the identity.
+the identity at the start (w = 0), and a pure offset from progress :math:`\lambda_1` on,
+so at every grasp of the new cup. Two offsets (``kind``):
+
+- ``"straight_line"``, the paper's example: :math:`u = \hat g - g`. On the straight line
+  to g it is the paper's straight-line map, the point at progress lambda going to the
+  point at the same progress on the line to :math:`\hat g` (exactly so when
+  :math:`\lambda_1 = 1`). Off the line the residual is kept, where the paper's
+  projection drops it. Near the new cup it moves the reference cup's grasp curve
+  rigidly, so only grasps whose curve is a translate of the reference one are exact.
+- ``"grasp"`` (ours, the default): :math:`u(s) = \sum_k p_k(s)\,(s^*(\hat g, \theta_k) -
+  s^*(g, \theta_k))`, with :math:`p_k \propto \exp(-\|s - s^*(g, \theta_k)\|^2 / 2\tau^2)`
+  a soft assignment of s to the new cup's grasps. Every grasp of the new cup maps onto
+  the *same* grasp of the reference cup, whatever the geometry, and the soft assignment
+  keeps h smooth.
+
+The Jacobian :math:`J_h = I + u\,\nabla w^\top + w\,\partial u / \partial s` is exact
+(tested against finite differences), and actions are mapped back by solving
+:math:`J_h a_h = \hat a_h`, one small linear system per user.
 
 **Per robot.**
 
 - ``panda``: joint 1 turns the whole arm about the base's vertical axis. A new cup on
   the reference cup's circle about the base, given the same grasps relative to its
   bearing from the base, has exactly the reference grasps with joint 1 turned by the
-  bearing difference; the IK of the new cup is warm-started there. So ĝ - g is a pure
-  joint-1 offset and the translation maps every grasp of that cup *exactly*. A cup at
-  another radius adds a remainder that the translation only approximates.
+  bearing difference. The IK of the new cup is warm-started there, so for such a cup
+  :math:`u` is a pure joint-1 offset under both kinds, and h is the exact rotation. A
+  cup at another radius adds a remainder, which only ``"grasp"`` maps exactly.
 - ``planar5``: the only rotation of a planar arm (joint 1, about the plane's normal)
   tilts the table, so no joint-space symmetry maps one cup onto another. The new cup
-  must stand in the arm's plane on the reference cup's side, and h is the straight-line
-  map with the residual kept: the new cup's grasp curve is approximated by a translate
-  of the reference one, an approximation that worsens with distance.
+  must stand in the arm's plane, on the reference cup's side. ``"straight_line"`` then
+  approximates the new grasp curve by a translate of the reference one, an
+  approximation that worsens with distance, and ``"grasp"`` is exact at the grasps.
 
 **The belief map.** The belief and the assistance grow to G + 1 goals (the new cup
 last); the decoder still reads a belief over the G training goals. The paper gives
