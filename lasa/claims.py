@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from lasa.errors import ConfigError
-from lasa.io import write_csv, write_text
+from lasa.io import locked, write_csv, write_text
 
 __all__ = ["Claim", "update_claims", "render_markdown", "CLAIM_COLUMNS"]
 
@@ -64,18 +64,19 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
         The whole table after the update.
     """
     path = Path(path)
-    new = pd.DataFrame([dataclasses.asdict(c) for c in claims], columns=list(CLAIM_COLUMNS))
-    if path.exists():
-        old = pd.read_csv(path, dtype=str, keep_default_na=False)
-        missing = set(CLAIM_COLUMNS) - set(old.columns)
-        if missing:
-            raise ConfigError(f"{path} lacks columns {sorted(missing)}; delete it to start afresh")
-        key = ["figure", "robot", "claim"]
-        keep = ~old.set_index(key).index.isin(new.set_index(key).index)
-        table = pd.concat([old.loc[keep, list(CLAIM_COLUMNS)], new], ignore_index=True)
-    else:
-        table = new
-    table = table.sort_values(["figure", "robot"], kind="stable").reset_index(drop=True)
-    write_csv(path, table)
-    write_text(path.with_suffix(".md"), render_markdown(table))
+    with locked(path.parent):
+        new = pd.DataFrame([dataclasses.asdict(c) for c in claims], columns=list(CLAIM_COLUMNS))
+        if path.exists():
+            old = pd.read_csv(path, dtype=str, keep_default_na=False)
+            missing = set(CLAIM_COLUMNS) - set(old.columns)
+            if missing:
+                raise ConfigError(f"{path} lacks columns {sorted(missing)}; delete it to start afresh")
+            key = ["figure", "robot", "claim"]
+            keep = ~old.set_index(key).index.isin(new.set_index(key).index)
+            table = pd.concat([old.loc[keep, list(CLAIM_COLUMNS)], new], ignore_index=True)
+        else:
+            table = new
+        table = table.sort_values(["figure", "robot"], kind="stable").reset_index(drop=True)
+        write_csv(path, table)
+        write_text(path.with_suffix(".md"), render_markdown(table))
     return table

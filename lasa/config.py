@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
@@ -121,3 +122,22 @@ def from_dict(cls: type[T], values: Mapping[str, Any]) -> T:
     if unknown:
         raise ConfigError(f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(known)}")
     return cls(**values)
+
+
+def set_threads(default: int | None = None) -> int:
+    """Set torch's intra-op threads from ``LASA_THREADS`` (else ``default``, else all cores).
+
+    ``make figures`` runs notebooks in parallel and gives each a share of the cores
+    through ``LASA_THREADS``; a notebook run by hand uses the whole machine.
+
+    Returns:
+        The number of threads set.
+    """
+    import torch  # noqa: PLC0415 (config stays importable without torch's start-up cost)
+
+    value = os.environ.get("LASA_THREADS")
+    threads = int(value) if value else (default or os.cpu_count() or 1)
+    if threads < 1:
+        raise ConfigError(f"LASA_THREADS must be a positive integer, got {value!r}")
+    torch.set_num_threads(threads)
+    return threads

@@ -89,7 +89,11 @@ def goal_scores(
     actions = model.decode(z, s, b)
     step = control.likelihood_step
     max_step = None if step is None else horizon * step
-    loglik = log_likelihood_torch(s, actions, sets, horizon * control.dt, control.belief_beta, max_step)
+    # The state's own distance to each set is shared by all K inputs: pass it unexpanded
+    # (B, 1, n) so it is computed once per context, not once per (context, input).
+    loglik = log_likelihood_torch(
+        states[:, None, :], actions, sets, horizon * control.dt, control.belief_beta, max_step
+    )
     return torch.softmax(loglik, dim=-1)
 
 

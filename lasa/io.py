@@ -9,6 +9,7 @@ is atomic on POSIX file systems. Readers turn a missing or unreadable file into 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import tempfile
 from collections.abc import Iterator
@@ -21,6 +22,7 @@ from lasa.errors import ArtifactError
 
 __all__ = [
     "atomic_path",
+    "locked",
     "write_csv",
     "update_csv",
     "write_text",
@@ -57,6 +59,26 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             tmp.unlink()
 
 
+@contextlib.contextmanager
+def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
+    """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write.
+
+    ``make figures`` runs the two robots' notebooks in parallel, and both merge their
+    rows into the same CSVs (a figure's data, the claims table). The lock is an
+    advisory ``flock`` on the folder itself, so it leaves no lock file behind and is
+    released even if the process dies.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield folder
+    finally:
+        fcntl.flock(fd, fcntl.LOCK_UN)
+        os.close(fd)
+
+
 def write_text(path: str | os.PathLike[str], text: str) -> Path:
     """Atomically write ``text`` to ``path`` and return the path."""
     with atomic_path(path) as tmp:
@@ -75,21 +97,23 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
     """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others.
 
     Each robot's notebook run writes its own rows into a figure's shared CSV; the
-    figure is then drawn from every robot present. Written atomically.
+    figure is then drawn from every robot present. Written atomically, under
+    :func:`locked` so that robots running in parallel do not lose each other's rows.
 
     Returns:
         The whole table after the update.
     """
     path = Path(path)
-    if path.exists():
-        old = pd.read_csv(path)
-        if key not in old.columns or list(old.columns) != list(frame.columns):
-            raise ArtifactError(
-                f"{path} has columns {list(old.columns)}, expected {list(frame.columns)}; "
-                "delete it and re-run the notebooks that write it"
-            )
-        frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
-    write_csv(path, frame)
+    with locked(path.parent):
+        if path.exists():
+            old = pd.read_csv(path)
+            if key not in old.columns or list(old.columns) != list(frame.columns):
+                raise ArtifactError(
+                    f"{path} has columns {list(old.columns)}, expected {list(frame.columns)}; "
+                    "delete it and re-run the notebooks that write it"
+                )
+            frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
+        write_csv(path, frame)
     return frame
 
 

@@ -35,6 +35,7 @@ __all__ = [
     "Trajectories",
     "StepResult",
     "decode_candidates",
+    "advance",
     "shared_autonomy_step",
     "rollout",
     "METHODS",
@@ -91,7 +92,7 @@ class StepResult:
     action: np.ndarray
 
 
-def _advance(
+def advance(
     task: CupTask,
     control: ControlConfig,
     state: np.ndarray,
@@ -100,7 +101,11 @@ def _advance(
     alpha: np.ndarray,
     sets: np.ndarray,
 ) -> StepResult:
-    """Lines 6-9 of Algorithm 1: assistance, blend, belief update, safe transition."""
+    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
+
+    ``a_h`` is the decoded human action (U, n), ``alpha`` the blend weight per user (U,),
+    ``sets`` the belief likelihood's goal sets (``task.belief_targets``).
+    """
     a_h = sanitize(a_h)
     a = blend(a_h, assistance(belief(log_b), task.goals, state), alpha)
     lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
@@ -151,7 +156,7 @@ def shared_autonomy_step(
     a_h = np.where(ok, a_h, 0.0)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)
-    return _advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+    return advance(task, control, state, log_belief, a_h, alpha_arr, sets)
 
 
 def _check_goals(model: LatentActionModel, task: CupTask, context_map: ContextMap | None) -> None:
@@ -253,7 +258,7 @@ def rollout(
             phi = context_map.action_from_training(decode_candidates(model, z_grid, s_hat, b_hat), s[:, None])
         costs = user_costs(users.target_at(t), s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
-        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)
+        step = advance(task, control, s, log_b, phi[rows, k], alpha, sets)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)

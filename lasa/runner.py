@@ -12,12 +12,13 @@ that Make could mistake for a finished one. A run that fails in a cell is kept a
 Usage::
 
     python -m lasa.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
-        --out build/notebooks --robot panda
+        --out build/notebooks --robot panda [--param build_dir=build/x] [--timings t.jsonl]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
 import time
@@ -30,7 +31,7 @@ import yaml
 from lasa.errors import ConfigError
 from lasa.io import atomic_path, require_file
 
-__all__ = ["notebook_parameters", "load_config", "run_notebook", "main"]
+__all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
 
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
@@ -125,17 +126,51 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--config", required=True)
     parser.add_argument("--out", required=True)
     parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
+    parser.add_argument(
+        "--param",
+        "-p",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override one parameter (VALUE is read as YAML); repeatable",
+    )
+    parser.add_argument("--timings", help="append {notebook, robot, seconds} as a JSON line to this file")
     parser.add_argument("--no-progress", action="store_true")
     args = parser.parse_args(argv)
     start = time.perf_counter()
-    overrides = {"robot": args.robot} if args.robot else None
     try:
-        out = run_notebook(args.notebook, args.config, args.out, overrides, progress=not args.no_progress)
+        overrides = parse_params(args.param)
+        if args.robot:
+            overrides["robot"] = args.robot
+        out = run_notebook(
+            args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
+        )
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(f"{out} ({time.perf_counter() - start:.1f} s)")
+    seconds = time.perf_counter() - start
+    if args.timings:
+        record = {"notebook": Path(args.notebook).stem, "robot": args.robot, "seconds": round(seconds, 2)}
+        Path(args.timings).parent.mkdir(parents=True, exist_ok=True)
+        with open(args.timings, "a") as fh:  # one short line per run: appends do not interleave
+            fh.write(json.dumps(record) + "\n")
+    print(f"{out} ({seconds:.1f} s)")
     return 0
+
+
+def parse_params(items: list[str]) -> dict[str, Any]:
+    """``["name=value", ...]`` -> ``{name: yaml(value)}``.
+
+    Raises:
+        ConfigError: for an item without ``=`` or with an empty name.
+    """
+    out: dict[str, Any] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ConfigError(f"--param expects NAME=VALUE, got {item!r}")
+        out[name.strip()] = yaml.safe_load(value)
+    return out
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ ExtraLoss = Callable[[LatentActionModel, torch.Tensor, torch.Tensor], torch.Tens
 class TrainConfig:
     """Optimisation of the conditional autoencoder."""
 
-    steps: int = 6000  # optimiser steps [-]
+    steps: int = 2000  # optimiser steps [-]
     batch_size: int = 512  # tuples per step [-]
     lr: float = 2e-3  # Adam learning rate, cosine-decayed to 5% [-]
     weight_decay: float = 0.0  # AdamW weight decay [-]
@@ -96,6 +96,7 @@ def train_decoder(
     *,
     goal_sets: np.ndarray | None = None,
     extra_loss: ExtraLoss | None = None,
+    init: LatentActionModel | None = None,
     progress: bool = True,
 ) -> tuple[LatentActionModel, pd.DataFrame]:
     """Train phi(z, s, b) on ``demos``.
@@ -110,6 +111,9 @@ def train_decoder(
             ``entropy_lambda > 0``.
         extra_loss: Optional further term added to the loss, called as
             ``extra_loss(model, states, beliefs)`` on each batch.
+        init: Start from a copy of this trained model (a warm start, its architecture
+            and state normalisation kept) instead of a fresh initialisation; ``config``'s
+            ``hidden``, ``depth`` and ``z_dim`` must match it.
         progress: Show a tqdm progress bar.
 
     Returns:
@@ -159,6 +163,17 @@ def train_decoder(
             state_std=tuple(float(x) for x in std),
         )
     )
+    if init is not None:
+        mine, theirs = model.config, init.config
+        for name in ("robot", "n_joints", "n_goals", "z_dim", "hidden", "depth", "action_scale"):
+            if getattr(mine, name) != getattr(theirs, name):
+                raise ConfigError(
+                    f"cannot warm-start: init has {name}={getattr(theirs, name)!r}, "
+                    f"these demonstrations and config give {getattr(mine, name)!r}"
+                )
+        model = LatentActionModel(theirs)
+        model.load_state_dict(init.state_dict())
+        model.train()
     s_all = torch.as_tensor(demos.states[train_mask], dtype=torch.float32)
     a_all = torch.as_tensor(demos.actions[train_mask], dtype=torch.float32)
     b_all = torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32)
