@@ -43,6 +43,7 @@ export LASA_THREADS ?= $(shell n=$$(( $(NPROC) / $(JOBS) )); echo $$(( n > 0 ? n
 # ... and the same for OpenMP/BLAS: idle threads of two processes spin against each other
 # on tiny operations (measured: demonstration collection 8 s alone, 166 s oversubscribed).
 export OMP_NUM_THREADS ?= $(LASA_THREADS)
+export LP_NUM_THREADS ?= $(LASA_THREADS)  # llvmpipe (OSMesa) render threads
 LASA_SRC := $(shell find lasa -name '*.py' -o -name '*.xml') pyproject.toml
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
@@ -70,9 +71,6 @@ ROBOTS := planar5 panda
 # Executed notebooks are the pipeline's stamps: never delete them as "intermediate" files.
 .SECONDARY:
 
-# the notebooks that merge rows into a figure shared by the robots (01 writes per-robot files)
-SHARED_NBS := 02_decoder_training 03_entropy_ablation 04_fixed_expertise 05_changing_goals \
-	06_learning_users 07_new_goals
 FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goals
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
@@ -81,15 +79,9 @@ figures: setup
 
 notebooks: $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
 
-# Robots run side by side, but each notebook's runs go one robot after the other: the
-# second merges its rows into the figure's shared CSV after the first and redraws the
-# figure with both, so the files come out the same, run after run. (The claims table,
-# shared by every notebook, is merged under a lock: lasa.io.locked.)
-define robot_order
-$(EXEC)/$(1)-$(3).ipynb: $(EXEC)/$(1)-$(2).ipynb
-endef
-$(foreach n,$(SHARED_NBS),$(foreach i,$(shell seq 2 $(words $(ROBOTS))),\
-	$(eval $(call robot_order,$(n),$(word $(shell echo $$(($(i)-1))),$(ROBOTS)),$(word $(i),$(ROBOTS))))))
+# The robots' chains run side by side. Notebooks that share a figure merge their rows
+# and redraw it under a lock (lasa.io.locked), and the merged rows are ordered by robot,
+# so the files come out the same whichever robot finishes first.
 
 # One executed copy per (notebook, robot); `$*` is the robot.
 $(EXEC)/01_demonstrations-%.ipynb: notebooks/01_demonstrations.ipynb $(LASA_SRC) $(CONFIG) | setup

@@ -8,30 +8,68 @@ Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
 before anything imports mujoco (it is read once, at import). Set it yourself first
 to override (``egl``, ``glfw``, or ``disable`` when nothing renders).
 
-The public API is re-exported here; each concept lives in its own module.
+The public API is re-exported here, imported lazily; each concept lives in its own module.
 """
 
+import importlib
 import os
+from typing import TYPE_CHECKING, Any
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
-from lasa.claims import Claim, update_claims  # noqa: E402
-from lasa.config import ControlConfig  # noqa: E402
-from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint  # noqa: E402
-from lasa.demos import (  # noqa: E402
-    DemoConfig,
-    Demonstrations,
-    collect_demonstrations,
-    load_demonstrations,
-    save_demonstrations,
-)
-from lasa.errors import ArtifactError, ConfigError, IKError, LasaError  # noqa: E402
-from lasa.experiments import Sim1Config, run_fixed_expertise, sim1_claims  # noqa: E402
-from lasa.robot import ROBOTS, Robot, load_robot  # noqa: E402
-from lasa.rollout import METHODS, Trajectories, rollout, shared_autonomy_step  # noqa: E402
-from lasa.task import CupTask, make_cup_task  # noqa: E402
-from lasa.train import TrainConfig, train_decoder  # noqa: E402
-from lasa.users import UserPopulation  # noqa: E402
+# The public API, imported on first use (PEP 562): `import lasa.runner` or `lasa.errors`
+# stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
+_EXPORTS = {
+    "ArtifactError": "lasa.errors",
+    "Claim": "lasa.claims",
+    "ConfigError": "lasa.errors",
+    "ControlConfig": "lasa.config",
+    "CupTask": "lasa.task",
+    "DecoderConfig": "lasa.decoder",
+    "IKError": "lasa.errors",
+    "LasaError": "lasa.errors",
+    "LatentActionModel": "lasa.decoder",
+    "METHODS": "lasa.rollout",
+    "ROBOTS": "lasa.robot",
+    "Robot": "lasa.robot",
+    "Sim1Config": "lasa.experiments",
+    "TrainConfig": "lasa.train",
+    "Trajectories": "lasa.rollout",
+    "UserPopulation": "lasa.users",
+    "load_checkpoint": "lasa.decoder",
+    "load_robot": "lasa.robot",
+    "make_cup_task": "lasa.task",
+    "rollout": "lasa.rollout",
+    "run_fixed_expertise": "lasa.experiments",
+    "save_checkpoint": "lasa.decoder",
+    "shared_autonomy_step": "lasa.rollout",
+    "sim1_claims": "lasa.experiments",
+    "train_decoder": "lasa.train",
+    "update_claims": "lasa.claims",
+}
+
+if TYPE_CHECKING:
+    from lasa.claims import Claim, update_claims
+    from lasa.config import ControlConfig
+    from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
+    from lasa.errors import ArtifactError, ConfigError, IKError, LasaError
+    from lasa.experiments import Sim1Config, run_fixed_expertise, sim1_claims
+    from lasa.robot import ROBOTS, Robot, load_robot
+    from lasa.rollout import METHODS, Trajectories, rollout, shared_autonomy_step
+    from lasa.task import CupTask, make_cup_task
+    from lasa.train import TrainConfig, train_decoder
+    from lasa.users import UserPopulation
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name's module when the name is first used."""
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'lasa' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __version__ = "0.1.0"
 

@@ -59,22 +59,36 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
             tmp.unlink()
 
 
+_HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting depth
+
+
 @contextlib.contextmanager
 def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
     """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write.
 
     ``make figures`` runs the two robots' notebooks in parallel, and both merge their
-    rows into the same CSVs (a figure's data, the claims table). The lock is an
-    advisory ``flock`` on the folder itself, so it leaves no lock file behind and is
-    released even if the process dies.
+    rows into the same CSVs (a figure's data, the claims table) and redraw the shared
+    figure from them. The lock is an advisory ``flock`` on the folder itself, so it
+    leaves no lock file behind and is released even if the process dies. It is
+    re-entrant within a process: a notebook may hold it around a merge and a redraw,
+    and :func:`update_csv` inside takes it again without blocking.
     """
-    folder = Path(folder)
+    folder = Path(folder).resolve()
+    if _HELD.get(folder):
+        _HELD[folder] += 1
+        try:
+            yield folder
+        finally:
+            _HELD[folder] -= 1
+        return
     folder.mkdir(parents=True, exist_ok=True)
     fd = os.open(folder, os.O_RDONLY)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)
+        _HELD[folder] = 1
         yield folder
     finally:
+        _HELD.pop(folder, None)
         fcntl.flock(fd, fcntl.LOCK_UN)
         os.close(fd)
 
@@ -113,6 +127,8 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
                     "delete it and re-run the notebooks that write it"
                 )
             frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
+        # rows ordered by key whatever order the robots ran in: the same file, run after run
+        frame = frame.sort_values(key, kind="stable", ignore_index=True)
         write_csv(path, frame)
     return frame
 
