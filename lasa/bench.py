@@ -8,7 +8,8 @@ What is measured, on the machine it runs on (never asserted in tests):
   ``mj_step_us`` is one ``mujoco.mj_step`` of the Panda scene in the same run.
 - ``sweep``: simulated user-steps per second of the batched rollout
   (:func:`lasa.rollout.rollout`) for 1 to 4096 users, against a per-user, per-step
-  loop over the same decoder and the same step functions (``loop``), and against the
+  loop over the same decoder and the same step functions (``loop``: the rollout run
+  for one user at a time), and against the
   bare batched decoder forward pass at the same size (``floor``).
 - ``training_s``: the time to train each decoder of ``configs/paper.yaml`` and its
   final error, read from the checkpoints of a fresh paper-scale pipeline run.
@@ -45,16 +46,16 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from lasa.belief import belief, uniform_log_belief  # noqa: E402
 from lasa.config import ControlConfig  # noqa: E402
 from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
 from lasa.errors import ConfigError  # noqa: E402
 from lasa.io import write_text  # noqa: E402
 from lasa.realtime import Controller  # noqa: E402
 from lasa.robot import Robot, load_robot  # noqa: E402
-from lasa.rollout import advance, decode_candidates, rollout  # noqa: E402
+from lasa.rollout import rollout  # noqa: E402
 from lasa.task import CupTask, make_cup_task  # noqa: E402
-from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs  # noqa: E402
+from lasa.users import UserPopulation, latent_grid  # noqa: E402
+from lasa.video import render_states  # noqa: E402
 
 __all__ = [
     "BenchConfig",
@@ -198,22 +199,10 @@ def _loop(
     noise: np.ndarray,
     steps: int,
 ) -> float:
-    """The baseline: the same Algorithm 1 step, one user and one step at a time [user-steps/s]."""
-    grid = latent_grid(control.n_z, model.config.z_dim)
-    z_grid = torch.from_numpy(grid.astype(np.float32))
-    sets = task.belief_targets(control.likelihood)
-    alpha = np.array([control.alpha])
+    """The baseline: the same rollout, one user at a time (so one step at a time) [user-steps/s]."""
     start = time.perf_counter()
     for u in range(len(users)):
-        s = task.start[None].copy()
-        log_b = uniform_log_belief(1, task.n_goals)
-        one = users.subset(np.array([u]))
-        for t in range(steps):
-            phi = decode_candidates(model, z_grid, s, belief(log_b))
-            costs = user_costs(one.target, s, phi, control.dt)
-            k = choose_latent(costs, one.beta(t), gumbel_noise(noise[u : u + 1, t]))
-            step = advance(task, control, s, log_b, phi[np.arange(1), k], alpha, sets)
-            s, log_b = step.state, step.log_belief
+        rollout(model, task, users.subset(np.array([u])), control.alpha, control, steps, noise)
     return len(users) * steps / (time.perf_counter() - start)
 
 
@@ -254,8 +243,6 @@ def sweep_throughput(
 
 def render_fps(robot: Robot, n_frames: int) -> float:
     """Frames per second of :func:`lasa.video.render_states` at 320x240 (OSMesa)."""
-    from lasa.video import render_states  # noqa: PLC0415 (the renderer is optional here)
-
     states = np.tile(robot.home, (n_frames, 1))
     render_states(robot, states[:1])  # the GL context's first frame is dearer
     start = time.perf_counter()

@@ -708,15 +708,14 @@ def run_new_goals(
 
     Returns:
         One row per episode with the columns of ``SIM4_COLUMNS`` plus ``h`` (the kind
-        of map, ``none`` without), ``offset_m``, ``theta`` and ``confidence`` (b of the
-        new cup at the end; NaN without the map); and the runs per new cup.
+        of map, ``none`` without), ``offset_m``, ``theta``, ``confidence`` (b of the
+        new cup at the end; NaN without the map) and ``reference`` (the error of a robot
+        holding, at the training cup, the grasp the user wants at the new one: the
+        paper's "only ever reaches for the training goal"); and the runs per new cup.
     """
     if not 0 <= config.ref_goal < task.n_goals:
         raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {config.ref_goal}")
-    rng = np.random.default_rng(config.seed)
-    theta = rng.uniform(0.0, 1.0, config.n_seeds)
-    n_candidates = len(latent_grid(control.n_z, decoder.config.z_dim))
-    noise = rng.random((config.n_seeds, config.horizon, n_candidates))
+    _, theta, noise = _episodes(decoder, task, control, config.n_seeds, config.horizon, config.seed)
     seeds = np.arange(config.n_seeds)
     alpha = method_alpha(config.method, control)
     grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
@@ -743,8 +742,11 @@ def run_new_goals(
         plain = dataclasses.replace(users, goal=np.full(config.n_seeds, config.ref_goal))
         without = rollout(decoder, task, plain, alpha, control, config.horizon, noise, progress)
         runs.append(NewGoalRun(float(offset), big, with_map, without))
-        cases = [("with", kind, traj, _final_belief(traj, new)) for kind, traj in with_map.items()]
+        cases = [
+            ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
+        ]
         cases.append(("without", "none", without, np.full(config.n_seeds, np.nan)))
+        reference = normalized_error(task.target(config.ref_goal, theta), target, scale)
         for mapping, kind, traj, conf in cases:
             rows.append(
                 pd.DataFrame(
@@ -758,15 +760,11 @@ def run_new_goals(
                         "offset_m": float(offset),
                         "theta": theta,
                         "confidence": conf,
+                        "reference": reference,
                     }
                 )
             )
     return pd.concat(rows, ignore_index=True), runs
-
-
-def _final_belief(traj: Trajectories, goal: int) -> np.ndarray:
-    """The belief in ``goal`` at the end of every episode, shape (U,)."""
-    return traj.beliefs[-1][:, goal]
 
 
 def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:

@@ -69,6 +69,7 @@ import numpy as np
 from lasa.config import check_choice, check_range
 from lasa.errors import ConfigError, IKError
 from lasa.ik import solve_grasp_ik
+from lasa.robot import Robot
 from lasa.task import CupTask, grasp_frame
 
 __all__ = ["ContextMap", "extend_task", "new_goal_frames", "NEW_GOAL_NAME", "MAP_KINDS"]
@@ -120,14 +121,19 @@ def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tupl
     base = robot.base_position()
     delta = _bearing(pos, base) - _bearing(cups[ref_goal], base)
     delta = float((delta + np.pi) % (2 * np.pi) - np.pi)
-    vertical = np.allclose(np.abs(robot.first_joint_axis()), [0.0, 0.0, 1.0], atol=1e-6)
-    if not vertical and (abs(delta) > 1e-6 or abs(pos[1] - cups[ref_goal, 1]) > 1e-6):
+    if _yaw_axis(robot) == 0.0 and (abs(delta) > 1e-6 or abs(pos[1] - cups[ref_goal, 1]) > 1e-6):
         raise ConfigError(
             f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is outside {robot.name}'s workspace: the arm moves "
             f"in a vertical plane, so a new cup must stand in it (y = {cups[ref_goal, 1]:.3f}) on the "
             "reference cup's side of the base"
         )
     return pos, delta
+
+
+def _yaw_axis(robot: Robot) -> float:
+    """+1 or -1 if the first joint turns the arm about the vertical (its sign), else 0."""
+    axis = robot.first_joint_axis()
+    return float(np.sign(axis[2])) if np.allclose(np.abs(axis), [0.0, 0.0, 1.0], atol=1e-6) else 0.0
 
 
 def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -140,7 +146,11 @@ def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple
     Returns:
         Positions (K, 3) and rotations (K, 3, 3) of the grasp site.
     """
-    pos, delta = _check_placement(task, position, ref_goal)
+    return _frames(task, ref_goal, *_check_placement(task, position, ref_goal))
+
+
+def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`new_goal_frames` for a checked position and its bearing offset ``delta``."""
     ref_cup = task.robot.cup_positions()[ref_goal]
     turn = _rot_z(delta)
     positions, rotations = [], []
@@ -173,11 +183,10 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     if not 0 <= ref_goal < task.n_goals:
         raise ConfigError(f"ref_goal must be a training goal in [0, {task.n_goals}), got {ref_goal}")
     pos, delta = _check_placement(task, position, ref_goal)
-    positions, rotations = new_goal_frames(task, ref_goal, pos)
+    positions, rotations = _frames(task, ref_goal, pos, delta)
     robot = task.robot.with_cup(pos)
     seeds = task.curves[ref_goal].copy()
-    if np.allclose(np.abs(robot.first_joint_axis()), [0.0, 0.0, 1.0], atol=1e-6):
-        seeds[:, 0] += delta * np.sign(robot.first_joint_axis()[2])
+    seeds[:, 0] += delta * _yaw_axis(robot)  # turn the arm to the new bearing (no-op for a planar arm)
     curve = np.empty_like(seeds)
     for k, (p, r) in enumerate(zip(positions, rotations, strict=True)):
         try:

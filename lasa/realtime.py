@@ -29,6 +29,7 @@ import numpy as np
 import torch
 from numba.typed import List as TypedList
 
+from lasa.belief import belief
 from lasa.config import ControlConfig, check_range
 from lasa.decoder import LatentActionModel
 from lasa.errors import ConfigError
@@ -229,8 +230,7 @@ class Controller:
     @property
     def belief(self) -> np.ndarray:
         """b over the goals, shape (G,)."""
-        b = np.exp(self.log_belief - self.log_belief.max())
-        return b / b.sum()
+        return belief(self.log_belief)
 
     def decode(self, z: np.ndarray, state: np.ndarray, belief: np.ndarray) -> np.ndarray:
         """phi(z, s, b) for one input, shape (n,)."""

@@ -35,7 +35,6 @@ __all__ = [
     "Trajectories",
     "StepResult",
     "decode_candidates",
-    "advance",
     "shared_autonomy_step",
     "rollout",
     "METHODS",
@@ -92,7 +91,7 @@ class StepResult:
     action: np.ndarray
 
 
-def advance(
+def _advance(
     task: CupTask,
     control: ControlConfig,
     state: np.ndarray,
@@ -156,7 +155,7 @@ def shared_autonomy_step(
     a_h = np.where(ok, a_h, 0.0)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)
-    return advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+    return _advance(task, control, state, log_belief, a_h, alpha_arr, sets)
 
 
 def _check_goals(model: LatentActionModel, task: CupTask, context_map: ContextMap | None) -> None:
@@ -258,7 +257,7 @@ def rollout(
             phi = context_map.action_from_training(decode_candidates(model, z_grid, s_hat, b_hat), s[:, None])
         costs = user_costs(users.target_at(t), s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
-        step = advance(task, control, s, log_b, phi[rows, k], alpha, sets)
+        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)
