@@ -3,7 +3,7 @@
 #   make figures          regenerate every figure, CSV, video and the claims table (paper scale)
 #   make figures QUICK=1  the same pipeline at toy scale, into build/quick/ (figures/ untouched)
 #   make test             lint + pytest, including every notebook run in QUICK mode
-#   make bench            performance benchmarks -> benchmarks/results.json, benchmarks/scaling.png
+#   make bench            performance benchmarks (benchmarks/bench.py) -> benchmarks/results.json, scaling.png
 #   make setup            create .venv from environment.lock (+ system libraries for rendering)
 #   make clean            remove build/ (keeps .venv and the committed figures)
 #
@@ -75,6 +75,9 @@ FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goal
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
+ifeq ($(BUILD),build)
+	@$(BIN)/python -m lasa.claims README.md figures/claims.md
+endif
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC); wall times in $(BUILD)/timings.jsonl)"
 
 notebooks: $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
@@ -93,7 +96,7 @@ $(EXEC)/02_decoder_training-%.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)
 $(EXEC)/03_entropy_ablation-%.ipynb: notebooks/03_entropy_ablation.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-# The sweeps read both decoders: the base one (02) and the entropy one (03).
+# The sweeps read notebook 03's pair of decoders: the lambda = 0 control and the entropy one.
 $(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
@@ -108,8 +111,8 @@ $(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_tr
 	$(RUN) --robot $*
 
 lint: setup
-	$(BIN)/ruff check lasa tests
-	$(BIN)/ruff format --check lasa tests
+	$(BIN)/ruff check lasa tests benchmarks
+	$(BIN)/ruff format --check lasa tests benchmarks
 	$(BIN)/mypy lasa
 
 test: setup lint
@@ -118,7 +121,7 @@ test: setup lint
 # Benchmarks (not timed tests): control-step latency, sweep throughput, training, the
 # pipeline's wall time (a fresh paper-scale and QUICK run under build/bench).
 bench: setup
-	$(BIN)/python -m lasa.bench --out benchmarks
+	$(BIN)/python benchmarks/bench.py --out benchmarks
 
 clean:
 	rm -rf build

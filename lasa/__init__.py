@@ -2,7 +2,7 @@
 
 A reproducibility package: MuJoCo robots and the cup task, demonstrations, the
 conditional-autoencoder decoder phi(z, s, b), shared autonomy (Algorithm 1),
-Boltzmann-rational simulated users, and the sweeps behind the paper's figures.
+Boltzmann-rational simulated users, and one module per figure (:mod:`lasa.sims`).
 
 Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
 before anything imports mujoco (it is read once, at import). Set it yourself first
@@ -19,31 +19,40 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 
 # The public API, imported on first use (PEP 562): `import lasa.runner` or `lasa.errors`
 # stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
+# name -> module that defines it; `__all__` lists the same names (tests/test_init.py checks).
 _EXPORTS = {
     "ArtifactError": "lasa.errors",
     "Claim": "lasa.claims",
     "ConfigError": "lasa.errors",
+    "ContextMap": "lasa.newgoals",
     "ControlConfig": "lasa.config",
+    "Controller": "lasa.controller",
     "CupTask": "lasa.task",
     "DecoderConfig": "lasa.decoder",
+    "DemoConfig": "lasa.demos",
+    "Demonstrations": "lasa.demos",
     "IKError": "lasa.errors",
     "LasaError": "lasa.errors",
     "LatentActionModel": "lasa.decoder",
     "METHODS": "lasa.rollout",
+    "MappedDecoder": "lasa.newgoals",
+    "Paths": "lasa.paths",
     "ROBOTS": "lasa.robot",
     "Robot": "lasa.robot",
-    "Sim1Config": "lasa.experiments",
     "TrainConfig": "lasa.train",
     "Trajectories": "lasa.rollout",
     "UserPopulation": "lasa.users",
+    "collect_demonstrations": "lasa.demos",
+    "extend_task": "lasa.newgoals",
     "load_checkpoint": "lasa.decoder",
+    "load_demonstrations": "lasa.demos",
     "load_robot": "lasa.robot",
     "make_cup_task": "lasa.task",
+    "publish": "lasa.sims.publish",
     "rollout": "lasa.rollout",
-    "run_fixed_expertise": "lasa.experiments",
     "save_checkpoint": "lasa.decoder",
+    "save_demonstrations": "lasa.demos",
     "shared_autonomy_step": "lasa.rollout",
-    "sim1_claims": "lasa.experiments",
     "train_decoder": "lasa.train",
     "update_claims": "lasa.claims",
 }
@@ -51,11 +60,21 @@ _EXPORTS = {
 if TYPE_CHECKING:
     from lasa.claims import Claim, update_claims
     from lasa.config import ControlConfig
+    from lasa.controller import Controller
     from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
+    from lasa.demos import (
+        DemoConfig,
+        Demonstrations,
+        collect_demonstrations,
+        load_demonstrations,
+        save_demonstrations,
+    )
     from lasa.errors import ArtifactError, ConfigError, IKError, LasaError
-    from lasa.experiments import Sim1Config, run_fixed_expertise, sim1_claims
+    from lasa.newgoals import ContextMap, MappedDecoder, extend_task
+    from lasa.paths import Paths
     from lasa.robot import ROBOTS, Robot, load_robot
     from lasa.rollout import METHODS, Trajectories, rollout, shared_autonomy_step
+    from lasa.sims.publish import publish
     from lasa.task import CupTask, make_cup_task
     from lasa.train import TrainConfig, train_decoder
     from lasa.users import UserPopulation
@@ -77,7 +96,9 @@ __all__ = [
     "ArtifactError",
     "Claim",
     "ConfigError",
+    "ContextMap",
     "ControlConfig",
+    "Controller",
     "CupTask",
     "DecoderConfig",
     "DemoConfig",
@@ -86,23 +107,24 @@ __all__ = [
     "LasaError",
     "LatentActionModel",
     "METHODS",
+    "MappedDecoder",
+    "Paths",
     "ROBOTS",
     "Robot",
-    "Sim1Config",
     "TrainConfig",
     "Trajectories",
     "UserPopulation",
     "collect_demonstrations",
+    "extend_task",
     "load_checkpoint",
     "load_demonstrations",
     "load_robot",
     "make_cup_task",
+    "publish",
     "rollout",
-    "run_fixed_expertise",
     "save_checkpoint",
     "save_demonstrations",
     "shared_autonomy_step",
-    "sim1_claims",
     "train_decoder",
     "update_claims",
 ]

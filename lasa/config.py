@@ -75,17 +75,17 @@ class ControlConfig:
 
     The paper's transition is s' = s + dt * a with a a joint velocity (Sec. V). These
     values set how far one step moves, how hard the user can push (sigma_h, Eq. T4),
-    and how quickly the belief commits. Each robot has defaults chosen so that the
-    paper's regimes exist (beta = 75 noisy, beta = 1000 near optimal); the notebooks
-    state the values used and why.
+    and how quickly the belief commits. The defaults are the values both robots use
+    (``lasa.robot.ROBOTS``), chosen so that the paper's regimes exist (beta = 75 noisy,
+    beta = 1000 near optimal); notebook 04 states them and why.
     """
 
     dt: float = 0.1  # control period Delta [s]
-    action_scale: float = 1.0  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
+    action_scale: float = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
     max_joint_speed: float = 2.0  # per-joint bound on the commanded velocity [rad/s]
-    belief_beta: float = 10.0  # beta_b, temperature of the goal likelihood [1/rad]
+    belief_beta: float = 20.0  # beta_b, temperature of the goal likelihood [1/rad]
     belief_floor: float = 1e-6  # smallest belief any goal keeps after an update [-]
-    alpha: float = 0.5  # blend weight of the assistance in LA+SA (Eq. M1) [-]
+    alpha: float = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: int = 21  # joystick candidates per latent axis the simulated user weighs [-]
     likelihood: str = "grasp_set"  # belief model: "grasp_set" (regret to grasp sets) or "goal"
 
@@ -111,17 +111,30 @@ def to_dict(config: Any) -> dict[str, Any]:
     return dataclasses.asdict(config)
 
 
-def from_dict(cls: type[T], values: Mapping[str, Any]) -> T:
+def from_dict(cls: type[T], values: Mapping[str, Any] | None) -> T:
     """Build ``cls`` from a mapping, refusing keys that ``cls`` does not have.
 
+    This is the one place where a YAML section (``configs/*.yaml``, passed to a notebook
+    as its ``settings`` parameter) becomes a config: a missing key keeps the dataclass
+    default, a list becomes a tuple where the field is a tuple.
+
     Raises:
-        ConfigError: if a key is unknown, naming it and the known ones.
+        ConfigError: if ``values`` is not a mapping or a key is unknown, naming it and the
+            known ones.
     """
-    known = {f.name for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    unknown = sorted(set(values) - known)
+    if values is None:
+        values = {}
+    if not isinstance(values, Mapping):
+        raise ConfigError(f"{cls.__name__} settings must be a mapping of names to values, got {values!r}")
+    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+    unknown = sorted(set(values) - set(fields))
     if unknown:
-        raise ConfigError(f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(known)}")
-    return cls(**values)
+        raise ConfigError(f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(fields)}")
+    kwargs = {
+        name: tuple(value) if isinstance(value, list) and "tuple" in str(fields[name].type) else value
+        for name, value in values.items()
+    }
+    return cls(**kwargs)
 
 
 def set_threads(default: int | None = None) -> int:

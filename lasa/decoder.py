@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import torch
@@ -32,6 +32,7 @@ from lasa.errors import ArtifactError, ConfigError
 from lasa.io import atomic_path, require_file
 
 __all__ = [
+    "ActionDecoder",
     "DecoderConfig",
     "LatentActionModel",
     "save_checkpoint",
@@ -69,6 +70,35 @@ class DecoderConfig:
             raise ConfigError("state_std entries must be positive")
 
 
+@runtime_checkable
+class ActionDecoder(Protocol):
+    """What Algorithm 1 needs of a decoder: phi(z, s, b) on numpy arrays, and its shape.
+
+    :class:`LatentActionModel` is one; an extension that changes what the decoder sees
+    (the context map of :mod:`lasa.newgoals`) wraps one, so the rollout never needs to
+    know about it.
+    """
+
+    @property
+    def robot(self) -> str:
+        """The robot whose joint space phi acts in."""
+        ...
+
+    @property
+    def n_goals(self) -> int:
+        """G: the length of the belief phi reads."""
+        ...
+
+    @property
+    def z_dim(self) -> int:
+        """d: the joystick axes."""
+        ...
+
+    def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """phi(z, s, b), broadcast over the leading dimensions of z (..., d), s (..., n), b (..., G)."""
+        ...
+
+
 def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
     layers: list[nn.Module] = []
     width = n_in
@@ -100,6 +130,21 @@ class LatentActionModel(nn.Module):
         self.register_buffer("state_std", std)
         self.encoder = _mlp(2 * n + g, d, config.hidden, config.depth)
         self.decoder = _mlp(d + n + g, n, config.hidden, config.depth)
+
+    @property
+    def robot(self) -> str:
+        """The robot the model was trained for."""
+        return self.config.robot
+
+    @property
+    def n_goals(self) -> int:
+        """G: the length of the belief the model reads."""
+        return self.config.n_goals
+
+    @property
+    def z_dim(self) -> int:
+        """d: the latent (joystick) dimension."""
+        return self.config.z_dim
 
     def _context(self, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         return torch.cat([(s - self.state_mean) / self.state_std, b], dim=-1)
@@ -176,9 +221,12 @@ def load_checkpoint(
         model = LatentActionModel(config)
         model.load_state_dict(payload["state_dict"])
     except Exception as exc:
+        # Name the failure, not torch's message: for a file it cannot unpickle safely, torch
+        # suggests loading with weights_only=False, which would run arbitrary code from the file.
         raise ArtifactError(
-            f"{path} is not a valid lasa checkpoint ({exc}). Re-make it with: {make_hint}"
-        ) from exc
+            f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
+            f"Delete it and re-make it with: {make_hint}"
+        ) from None
     if robot is not None and config.robot != robot:
         raise ArtifactError(
             f"{path} was trained for robot {config.robot!r}, not {robot!r}. "

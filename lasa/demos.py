@@ -26,6 +26,7 @@ import os
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.config import ControlConfig, check_range
@@ -39,6 +40,7 @@ __all__ = [
     "collect_demonstrations",
     "save_demonstrations",
     "load_demonstrations",
+    "demonstration_summary",
 ]
 
 REACH, ADJUST, HOLD = 0, 1, 2  # phase labels of a tuple
@@ -113,6 +115,52 @@ class Demonstrations:
             self,
             **{f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"},
         )
+
+    def showcase(self, task: CupTask) -> list[tuple[int, str]]:
+        """Four clean demonstrations from the start pose: a top and a side grasp at each cup.
+
+        Returns:
+            (demonstration index, caption) for each, cup by cup, top grasp first.
+        """
+        clean = self.clean()
+        first = np.r_[0, np.flatnonzero(np.diff(clean.demo)) + 1]
+        starts = dict(zip(clean.demo[first].tolist(), clean.states[first], strict=True))
+        home = [d for d, s in starts.items() if np.allclose(s, task.start)]
+        theta = {d: float(clean.theta[(clean.demo == d) & (clean.phase == REACH)][0]) for d in home}
+        goal = {d: int(clean.goal[clean.demo == d][0]) for d in home}
+        out = []
+        for g in range(task.n_goals):
+            for wanted in (0.0, 1.0):
+                d = min((d for d in home if goal[d] == g), key=lambda d: abs(theta[d] - wanted))
+                caption = f"demo {d}: {task.goal_names[g]} cup, reach to theta={theta[d]:.2f}, then adjust"
+                out.append((d, caption))
+        return out
+
+
+def demonstration_summary(task: CupTask, demos: Demonstrations) -> pd.DataFrame:
+    """One row per (demonstration, phase): its length and the belief in the demonstrated cup.
+
+    Columns: ``robot``, ``demo``, ``goal`` (the cup's name), ``phase`` (``reach``,
+    ``adjust``, ``hold``), ``steps``, ``belief_min`` and ``belief_end``.
+    """
+    clean = demos.clean()
+    return (
+        pd.DataFrame(
+            {
+                "robot": demos.robot,
+                "demo": clean.demo,
+                "goal": np.asarray(task.goal_names)[clean.goal],
+                "phase": np.asarray(["reach", "adjust", "hold"])[clean.phase],
+                "belief_true_goal": clean.beliefs[np.arange(len(clean)), clean.goal],
+            }
+        )
+        .groupby(["robot", "demo", "goal", "phase"], as_index=False)
+        .agg(
+            steps=("belief_true_goal", "size"),
+            belief_min=("belief_true_goal", "min"),
+            belief_end=("belief_true_goal", "last"),
+        )
+    )
 
 
 def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max_steps: int) -> np.ndarray:

@@ -67,12 +67,13 @@ import dataclasses
 import numpy as np
 
 from lasa.config import check_choice, check_range
+from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError, IKError
 from lasa.ik import solve_grasp_ik
 from lasa.robot import Robot
 from lasa.task import CupTask, grasp_frame
 
-__all__ = ["ContextMap", "extend_task", "new_goal_frames", "NEW_GOAL_NAME", "MAP_KINDS"]
+__all__ = ["ContextMap", "MappedDecoder", "extend_task", "new_goal_frames", "NEW_GOAL_NAME", "MAP_KINDS"]
 
 MAP_KINDS = ("grasp", "straight_line")
 
@@ -368,3 +369,54 @@ class ContextMap:
         jac = np.broadcast_to(jac, (*shape, *jac.shape[-2:]))
         rhs = np.broadcast_to(action, (*shape, action.shape[-1]))
         return np.linalg.solve(jac, rhs[..., None])[..., 0]
+
+
+@dataclasses.dataclass(frozen=True)
+class MappedDecoder:
+    """The decoder seen through a context map: phi over the grown task's G + 1 goals.
+
+    .. math::  a_h = J_h(s)^{-1}\\, \\phi(z, \\hat s, \\hat b), \\qquad (\\hat s, \\hat b) = h(s, b)
+
+    It follows :class:`lasa.decoder.ActionDecoder`, so Algorithm 1
+    (:func:`lasa.rollout.rollout`, :func:`lasa.rollout.shared_autonomy_step`) runs a task
+    grown by a new goal without knowing that a map is involved.
+
+    Attributes:
+        model: The trained decoder, over the G training goals.
+        context_map: The map h onto a training goal's context.
+    """
+
+    model: ActionDecoder
+    context_map: ContextMap
+
+    def __post_init__(self) -> None:
+        if self.model.n_goals != self.context_map.n_train:
+            raise ConfigError(
+                f"the decoder reads {self.model.n_goals} goals, the context map maps onto "
+                f"{self.context_map.n_train} training goals"
+            )
+
+    @property
+    def robot(self) -> str:
+        """The robot of the wrapped decoder."""
+        return self.model.robot
+
+    @property
+    def n_goals(self) -> int:
+        """G + 1: the training goals and the new one."""
+        return self.context_map.n_train + 1
+
+    @property
+    def z_dim(self) -> int:
+        """d, as the wrapped decoder's."""
+        return self.model.z_dim
+
+    def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """phi(z, h(s, b)) mapped back to the real context, shape (..., n).
+
+        Broadcast like the wrapped decoder; the Jacobian is factorised once per state, so
+        pass ``s`` as (U, 1, n) for (U, K) candidates, as the rollout does.
+        """
+        s = np.asarray(s, dtype=float)
+        s_hat, b_hat = self.context_map(s, b)
+        return self.context_map.action_from_training(self.model.decode_numpy(z, s_hat, b_hat), s)

@@ -66,6 +66,7 @@ ROBOTS: dict[str, RobotSpec] = {
         # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
         # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
         # mid-preference goal small enough for users to hold other grasps (Eq. T4).
+        # These are ControlConfig's defaults, written out because they are this robot's.
         control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
     ),
     "panda": RobotSpec(

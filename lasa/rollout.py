@@ -11,7 +11,9 @@ Every user of a sweep advances together, as rows of arrays. At each step:
 5. the robot takes the safe step s' = clip(s + dt a).
 
 Users of different methods, rationalities and seeds share a batch, and so share each
-decoder call.
+decoder call. The decoder is anything that follows :class:`lasa.decoder.ActionDecoder`:
+the trained model, or a wrapper of it such as the context map of new goals
+(:class:`lasa.newgoals.MappedDecoder`), which this module does not need to know about.
 """
 
 from __future__ import annotations
@@ -19,21 +21,20 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-import torch
 from tqdm.auto import tqdm
 
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.config import ControlConfig
 from lasa.control import assistance, blend, safe_step, sanitize
-from lasa.decoder import LatentActionModel
+from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
-from lasa.newgoals import ContextMap
 from lasa.task import CupTask
 from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs
 
 __all__ = [
     "Trajectories",
     "StepResult",
+    "check_decoder",
     "decode_candidates",
     "shared_autonomy_step",
     "rollout",
@@ -115,74 +116,64 @@ def _advance(
 
 
 def shared_autonomy_step(
-    model: LatentActionModel,
+    decoder: ActionDecoder,
     task: CupTask,
     control: ControlConfig,
     state: np.ndarray,
     log_belief: np.ndarray,
     z: np.ndarray,
     alpha: float | np.ndarray,
-    context_map: ContextMap | None = None,
 ) -> StepResult:
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
-    This is the step a teleoperated robot runs: decode the joystick input, blend with
-    the assistance, update the belief, take the safe step. A joystick input that is not
-    finite (a disconnected or faulty device) decodes to no human action at all, so it
-    can never become a command; the robot's own assistance still applies.
+    This is the step a teleoperated robot runs (:class:`lasa.controller.Controller` is
+    this step for one user): decode the joystick input, blend with the assistance,
+    update the belief, take the safe step. A joystick input that is not finite (a
+    disconnected or faulty device) decodes to no human action at all, so it can never
+    become a command; the robot's own assistance still applies.
 
     Args:
-        model: The decoder.
+        decoder: The decoder phi (a trained model, or a wrapper such as
+            :class:`lasa.newgoals.MappedDecoder` for a task grown by a new goal).
         task: The cup task.
         control: Control-loop units.
         state: s^t, shape (U, n).
         log_belief: log b^t, shape (U, G).
         z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
         alpha: Blend weight, scalar or shape (U,).
-        context_map: For a task grown by a new goal (:mod:`lasa.newgoals`), the map h
-            that decodes in an equivalent training context; ``None`` decodes directly.
     """
-    _check_goals(model, task, context_map)
+    check_decoder(decoder, task)
     z = np.asarray(z, dtype=float)
     ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
-    b = belief(log_belief)
-    if context_map is None:
-        a_h = model.decode_numpy(np.where(ok, z, 0.0), state, b)
-    else:
-        s_hat, b_hat = context_map(state, b)
-        a_hat = model.decode_numpy(np.where(ok, z, 0.0), s_hat, b_hat)
-        a_h = context_map.action_from_training(a_hat, state)
+    a_h = decoder.decode_numpy(np.where(ok, z, 0.0), state, belief(log_belief))
     a_h = np.where(ok, a_h, 0.0)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)
     return _advance(task, control, state, log_belief, a_h, alpha_arr, sets)
 
 
-def _check_goals(model: LatentActionModel, task: CupTask, context_map: ContextMap | None) -> None:
-    """The decoder must read a belief over the task's goals (or the map's training goals)."""
-    if model.config.robot != task.robot.name:
+def check_decoder(decoder: ActionDecoder, task: CupTask) -> None:
+    """The decoder must act in the task's robot and read a belief over the task's goals.
+
+    Raises:
+        ConfigError: naming the mismatch.
+    """
+    if decoder.robot != task.robot.name:
+        raise ConfigError(f"decoder was trained for {decoder.robot!r}, the task is for {task.robot.name!r}")
+    if decoder.n_goals != task.n_goals:
         raise ConfigError(
-            f"decoder was trained for {model.config.robot!r}, the task is for {task.robot.name!r}"
-        )
-    expected = task.n_goals if context_map is None else context_map.n_train
-    if model.config.n_goals != expected:
-        hint = "" if context_map else "; for a task with a new goal pass a lasa.newgoals.ContextMap"
-        raise ConfigError(
-            f"decoder reads a belief over {model.config.n_goals} goals, this context has {expected}{hint}"
-        )
-    if context_map is not None and task.n_goals != context_map.n_train + 1:
-        raise ConfigError(
-            f"the context map is for {context_map.n_train + 1} goals, the task has {task.n_goals}"
+            f"decoder reads a belief over {decoder.n_goals} goals, the task has {task.n_goals}; "
+            "for a task grown by a new goal, wrap the decoder in lasa.newgoals.MappedDecoder"
         )
 
 
 def decode_candidates(
-    model: LatentActionModel, z_grid: torch.Tensor, state: np.ndarray, b: np.ndarray
+    decoder: ActionDecoder, z_grid: np.ndarray, state: np.ndarray, b: np.ndarray
 ) -> np.ndarray:
     """phi(z, s, b) for every user and every candidate, in one decoder call.
 
     Args:
-        model: The decoder.
+        decoder: The decoder.
         z_grid: Candidates, shape (K, d).
         state: States, shape (U, n).
         b: Beliefs, shape (U, G).
@@ -190,17 +181,11 @@ def decode_candidates(
     Returns:
         Decoded actions, shape (U, K, n), float64.
     """
-    n_users, n_cand = state.shape[0], z_grid.shape[0]
-    s = torch.from_numpy(state.astype(np.float32))[:, None, :].expand(n_users, n_cand, -1)
-    bt = torch.from_numpy(b.astype(np.float32))[:, None, :].expand(n_users, n_cand, -1)
-    z = z_grid[None].expand(n_users, n_cand, -1)
-    with torch.inference_mode():
-        out = model.decode(z, s, bt)
-    return out.numpy().astype(np.float64)
+    return decoder.decode_numpy(z_grid[None], state[:, None], b[:, None])
 
 
 def rollout(
-    model: LatentActionModel,
+    decoder: ActionDecoder,
     task: CupTask,
     users: UserPopulation,
     alpha: float | np.ndarray,
@@ -208,12 +193,11 @@ def rollout(
     horizon: int,
     noise: np.ndarray,
     progress: bool = False,
-    context_map: ContextMap | None = None,
 ) -> Trajectories:
     """Run Algorithm 1 for a batch of simulated users.
 
     Args:
-        model: The decoder phi(z, s, b); its robot must be the task's.
+        decoder: The decoder phi(z, s, b); its robot and goals must be the task's.
         task: The cup task (goals, start pose, joint limits via its robot).
         users: The simulated users (targets, rationality, random streams).
         alpha: Blend weight per user, shape (U,), or one for all.
@@ -222,21 +206,18 @@ def rollout(
         noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
             ``noise[users.seed[u]]``. K must equal the number of joystick candidates.
         progress: Show a tqdm progress bar over the steps.
-        context_map: For a task grown by a new goal, the map h onto a training goal's
-            context (:mod:`lasa.newgoals`): every candidate is decoded there and mapped back.
 
     Returns:
         The trajectories of every user.
     """
-    _check_goals(model, task, context_map)
+    check_decoder(decoder, task)
     if int(horizon) != horizon or horizon < 1:
         raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
     n_users = len(users)
     alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
-    grid = latent_grid(control.n_z, model.config.z_dim)
+    grid = latent_grid(control.n_z, decoder.z_dim)
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
-    z_grid = torch.from_numpy(grid.astype(np.float32))
     n = task.robot.n_joints
 
     states = np.empty((horizon + 1, n_users, n))
@@ -250,11 +231,7 @@ def rollout(
     rows = np.arange(n_users)
     sets = task.belief_targets(control.likelihood)
     for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
-        if context_map is None:
-            phi = decode_candidates(model, z_grid, s, beliefs[t])  # (U, K, n): the one decoder call
-        else:
-            s_hat, b_hat = context_map(s, beliefs[t])
-            phi = context_map.action_from_training(decode_candidates(model, z_grid, s_hat, b_hat), s[:, None])
+        phi = decode_candidates(decoder, grid, s, beliefs[t])  # (U, K, n): the one decoder call
         costs = user_costs(users.target_at(t), s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
         step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)

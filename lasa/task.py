@@ -34,7 +34,7 @@ from lasa.errors import ConfigError
 from lasa.ik import solve_grasp_ik
 from lasa.robot import Robot
 
-__all__ = ["CupTask", "make_cup_task", "grasp_frame"]
+__all__ = ["CupTask", "make_cup_task", "grasp_frame", "cup_axis", "grasp_preference"]
 
 
 def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.ndarray]:
@@ -173,3 +173,26 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
         goals=curves[:, mid].copy(),
         start=robot.home,
     )
+
+
+def cup_axis(task: CupTask, points: np.ndarray) -> np.ndarray:
+    """Signed position along the axis from the left cup to the right cup [m], (...).
+
+    Zero midway between the cups; the sign says which cup a point is closer to.
+    """
+    cups = task.robot.cup_positions()
+    axis = cups[-1] - cups[0]
+    axis[2] = 0.0
+    axis /= np.linalg.norm(axis)
+    return (np.asarray(points) - cups.mean(axis=0)) @ axis
+
+
+def grasp_preference(task: CupTask, states: np.ndarray) -> np.ndarray:
+    """The grasp preference theta that the gripper's direction shows, shape (...).
+
+    0 when the fingers point straight down, 1 when they point horizontally (the angle
+    of the approach axis from vertical, divided by pi/2).
+    """
+    axes = task.robot.grasp_axes(states)
+    horizontal = np.linalg.norm(axes[..., :2], axis=-1)
+    return np.arctan2(horizontal, -axes[..., 2]) / (np.pi / 2)

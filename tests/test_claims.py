@@ -1,15 +1,22 @@
-"""The claims table: merge by key, Markdown twin, verdict validation."""
+"""The claims table: rows keyed by a stable id, replaced per (figure, robot); the README's copy."""
 
 import pandas as pd
 import pytest
 
-from lasa.claims import CLAIM_COLUMNS, Claim, update_claims
+from lasa.claims import CLAIM_COLUMNS, README_MARKERS, Claim, sync_readme, update_claims
 from lasa.errors import ConfigError
 
 
-def claim(text, figure="sim1", robot="planar5", verdict="yes"):
+def claim(name, text=None, figure="sim1", robot="planar5", verdict="yes"):
     return Claim(
-        claim=text, figure=figure, paper="p", measured="m", reproduced=verdict, note="n", robot=robot
+        id=f"{figure}.{name}",
+        claim=text or f"claim {name}",
+        figure=figure,
+        paper="p",
+        measured="m",
+        reproduced=verdict,
+        note="n",
+        robot=robot,
     )
 
 
@@ -17,18 +24,53 @@ def test_update_replaces_own_rows_and_keeps_others(tmp_path):
     path = tmp_path / "claims.csv"
     update_claims(path, [claim("a"), claim("b")])
     update_claims(path, [claim("x", figure="sim2")])
-    table = update_claims(path, [claim("a", verdict="no")])
+    update_claims(path, [claim("a", robot="panda")])
+    table = update_claims(path, [claim("a", verdict="no"), claim("b")])
     assert list(table.columns) == list(CLAIM_COLUMNS)
-    assert len(table) == 3
-    assert table.set_index("claim").loc["a", "reproduced"] == "no"
-    on_disk = pd.read_csv(path)
-    assert len(on_disk) == 3
+    assert len(table) == 4
+    mine = table[(table.figure == "sim1") & (table.robot == "planar5")].set_index("id")
+    assert mine.loc["sim1.a", "reproduced"] == "no"
+    assert len(pd.read_csv(path)) == 4
     md = path.with_suffix(".md").read_text()
-    assert md.startswith("| claim | figure |") and md.count("\n") == 5
+    assert md.startswith("| id | claim | figure |") and md.count("\n") == 6
+
+
+def test_a_reworded_claim_replaces_its_row(tmp_path):
+    path = tmp_path / "claims.csv"
+    update_claims(path, [claim("a", "SA lowers the error")])
+    table = update_claims(path, [claim("a", "SA lowers the final state error")])
+    assert list(table.claim) == ["SA lowers the final state error"]
+
+
+def test_a_claim_a_figure_no_longer_makes_leaves_the_table(tmp_path):
+    path = tmp_path / "claims.csv"
+    update_claims(path, [claim("a"), claim("old")])
+    table = update_claims(path, [claim("a")])
+    assert list(table.id) == ["sim1.a"]
+
+
+def test_ids_are_checked():
+    with pytest.raises(ConfigError, match="claim id"):
+        Claim(
+            id="final error",
+            claim="c",
+            figure="sim1",
+            paper="",
+            measured="",
+            reproduced="yes",
+            note="",
+            robot="r",
+        )
+    with pytest.raises(ConfigError, match="claim id"):
+        claim("a", figure="sim1").__class__(
+            **{**claim("a").__dict__, "id": "sim2.a"}  # an id of another figure
+        )
+    with pytest.raises(ConfigError, match="unique"):
+        update_claims("unused.csv", [claim("a"), claim("a")])
 
 
 def test_pipes_in_text_are_escaped(tmp_path):
-    update_claims(tmp_path / "c.csv", [claim("a | b")])
+    update_claims(tmp_path / "c.csv", [claim("a", "a | b")])
     assert "a \\| b" in (tmp_path / "c.md").read_text()
 
 
@@ -40,5 +82,28 @@ def test_bad_verdict_is_refused():
 def test_foreign_file_is_refused(tmp_path):
     path = tmp_path / "claims.csv"
     path.write_text("a,b\n1,2\n")
-    with pytest.raises(ConfigError, match="lacks columns"):
+    with pytest.raises(ConfigError, match="columns"):
         update_claims(path, [claim("a")])
+
+
+def test_readme_gets_the_table_between_its_markers(tmp_path):
+    begin, end = README_MARKERS
+    readme, table = tmp_path / "README.md", tmp_path / "claims.md"
+    readme.write_text(f"# x\n\n{begin}\nold table\n{end}\n\nafter\n")
+    table.write_text("| id |\n| --- |\n| sim1.a |\n")
+    assert sync_readme(readme, table) is True
+    assert readme.read_text() == f"# x\n\n{begin}\n| id |\n| --- |\n| sim1.a |\n{end}\n\nafter\n"
+    assert sync_readme(readme, table) is False  # already current
+    readme.write_text("no markers\n")
+    with pytest.raises(ConfigError, match="must hold"):
+        sync_readme(readme, table)
+
+
+def test_the_repository_readme_holds_the_committed_claims_table():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    begin, end = README_MARKERS
+    text = (root / "README.md").read_text()
+    block = text.split(begin, 1)[1].split(end, 1)[0].strip()
+    assert block == (root / "figures" / "claims.md").read_text().strip()

@@ -68,6 +68,19 @@ def test_missing_and_corrupt_checkpoints_name_the_fix(tmp_path):
         load_checkpoint(bad)
 
 
+def test_an_unsafe_checkpoint_is_refused_without_torchs_unsafe_advice(tmp_path):
+    """torch advises weights_only=False for a file it cannot load safely; lasa never repeats it."""
+    import pathlib
+
+    import torch
+
+    unsafe = tmp_path / "unsafe.pt"
+    torch.save({"config": pathlib.Path("x"), "state_dict": {}}, unsafe)  # a pickled object, not data
+    with pytest.raises(ArtifactError, match="not a valid lasa checkpoint") as info:
+        load_checkpoint(unsafe)
+    assert "weights_only" not in str(info.value) and info.value.__cause__ is None
+
+
 @pytest.mark.parametrize(
     "field,value", [("n_goals", 1), ("hidden", 0), ("action_scale", -1.0), ("z_dim", 1.5)]
 )

@@ -129,13 +129,41 @@ def test_bad_lambda_is_a_clear_error(task):
         train_decoder(None, task.robot.control, TrainConfig(entropy_lambda=1.0))  # type: ignore[arg-type]
 
 
-def test_checkpoint_records_lambda(demos, task, tmp_path):
+def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
+    """Every lambda, 0 included, fine-tunes the base decoder with the same steps, schedule and seed."""
     from lasa.config import to_dict
     from lasa.decoder import load_checkpoint, save_checkpoint
+    from lasa.sims import entropy_ablation
 
     ctl = task.robot.control
-    cfg = dataclasses.replace(SMALL_TRAIN, steps=5, entropy_lambda=0.3)
-    m, _ = train_decoder(demos, ctl, cfg, goal_sets=task.belief_targets(ctl.likelihood), progress=False)
-    path = save_checkpoint(m, tmp_path / "e.pt", train=to_dict(cfg), entropy_lambda=0.3)
-    _, extra = load_checkpoint(path)
-    assert extra["entropy_lambda"] == 0.3 and extra["train"]["entropy_lambda"] == 0.3
+    cfg = entropy_ablation.Config(lambdas=(0.0, 0.3), sweep_steps=20, seed=0)
+    sweep = entropy_ablation.run_sweep(model, SMALL_TRAIN, demos, task, ctl, cfg, progress=False)
+    c0, c1 = sweep.configs[0.0], sweep.configs[0.3]
+    assert c0.steps == c1.steps == 20 and c0.entropy_lambda == 0.0
+    assert dataclasses.replace(c0, entropy_lambda=0.3) == c1  # nothing else differs
+
+    def weights(m):
+        return [t.clone() for t in m.state_dict().values()]
+
+    def same(a, b):
+        return all(torch.equal(x, y) for x, y in zip(weights(a), weights(b), strict=True))
+
+    assert not same(sweep.models[0.0], model)  # the control is fine-tuned too, not the base itself
+    assert not same(sweep.models[0.0], sweep.models[0.3])  # the term changes the weights
+    again, _ = train_decoder(
+        demos, ctl, c0, goal_sets=task.belief_targets(ctl.likelihood), init=model, progress=False
+    )
+    assert same(again, sweep.models[0.0])  # the control is reproducible: only lambda differs
+    assert list(sweep.table["lambda"]) == [0.0, 0.3] and sweep.chosen == 0.3
+    path = save_checkpoint(sweep.models[0.3], tmp_path / "e.pt", train=to_dict(c1), entropy_lambda=0.3)
+    loaded, extra = load_checkpoint(path)
+    assert same(loaded, sweep.models[0.3]) and extra["train"]["entropy_lambda"] == 0.3
+
+
+def test_ablation_config_needs_the_control():
+    from lasa.sims import entropy_ablation
+
+    with pytest.raises(ConfigError, match="include 0"):
+        entropy_ablation.Config(lambdas=(0.1, 0.3))
+    with pytest.raises(ConfigError, match="lambda"):
+        entropy_ablation.Config(lambdas=(0.0, -1.0))

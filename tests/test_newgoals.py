@@ -11,9 +11,9 @@ import pytest
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.control import assistance
 from lasa.errors import ConfigError, IKError
-from lasa.experiments import SIM4_COLUMNS, Sim4Config, run_new_goals, sim4_claims, sim4_fits
-from lasa.newgoals import MAP_KINDS, ContextMap, extend_task
+from lasa.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
 from lasa.rollout import rollout, shared_autonomy_step
+from lasa.sims import sim4
 from lasa.users import UserPopulation
 
 REF = 1  # the right-hand cup is the reference in these tests
@@ -203,31 +203,32 @@ def test_rollout_needs_the_map_for_a_grown_task(model, grown):
         seed=np.zeros(1, dtype=int),
     )
     noise = np.random.default_rng(0).random((1, 5, grown.robot.control.n_z))
-    with pytest.raises(ConfigError, match="ContextMap"):
+    with pytest.raises(ConfigError, match="MappedDecoder"):
         rollout(model, grown, users, 0.2, grown.robot.control, 5, noise)
-    cmap = ContextMap.for_task(grown, 2, REF)
-    traj = rollout(model, grown, users, 0.2, grown.robot.control, 5, noise, context_map=cmap)
+    mapped = MappedDecoder(model, ContextMap.for_task(grown, 2, REF))
+    assert (mapped.robot, mapped.n_goals, mapped.z_dim) == ("planar5", 3, 1)
+    traj = rollout(mapped, grown, users, 0.2, grown.robot.control, 5, noise)
     assert traj.beliefs.shape == (6, 1, 3)
     np.testing.assert_allclose(traj.beliefs.sum(-1), 1.0)
 
 
 def test_single_step_with_the_map_is_safe(model, grown):
     control = grown.robot.control
-    cmap = ContextMap.for_task(grown, 2, REF)
+    mapped = MappedDecoder(model, ContextMap.for_task(grown, 2, REF))
     state = np.stack([grown.start, grown.curves[-1][10]])
     log_b = uniform_log_belief(2, 3)
-    out = shared_autonomy_step(model, grown, control, state, log_b, np.array([[np.nan], [0.5]]), 0.2, cmap)
+    out = shared_autonomy_step(mapped, grown, control, state, log_b, np.array([[np.nan], [0.5]]), 0.2)
     assert np.all(np.isfinite(out.state))
     np.testing.assert_array_equal(out.human_action[0], 0.0)
     assert np.all(np.abs(out.state - state) <= control.dt * control.max_joint_speed + 1e-12)
 
 
 def test_sim4_frame_and_determinism(model, task):
-    config = Sim4Config(offsets=(0.08, 0.14), n_seeds=2, horizon=6)
-    frame, runs = run_new_goals(model, task, task.robot.control, config)
-    again, _ = run_new_goals(model, task, task.robot.control, config)
+    config = sim4.Config(offsets=(0.08, 0.14), n_seeds=2, horizon=6)
+    frame, runs = sim4.run(model, task, task.robot.control, config)
+    again, _ = sim4.run(model, task, task.robot.control, config)
     pd.testing.assert_frame_equal(frame, again)
-    assert list(frame.columns[: len(SIM4_COLUMNS)]) == list(SIM4_COLUMNS)
+    assert list(frame.columns[: len(sim4.COLUMNS)]) == list(sim4.COLUMNS)
     assert set(frame.mapping) == {"with", "without"} and set(frame.h) == {"grasp", "straight_line", "none"}
     assert len(frame) == 2 * 2 * 3
     assert frame.distance.max() == 1.0 and (frame.error >= 0).all()
@@ -247,7 +248,7 @@ def test_sim4_frame_and_determinism(model, task):
 )
 def test_bad_sim4_config(kw, match):
     with pytest.raises(ConfigError, match=match):
-        Sim4Config(**kw)
+        sim4.Config(**kw)
 
 
 def _synthetic(slopes: dict[str, float], noise: float = 0.0) -> pd.DataFrame:
@@ -270,16 +271,41 @@ def _synthetic(slopes: dict[str, float], noise: float = 0.0) -> pd.DataFrame:
 
 
 def test_sim4_claim_rules():
-    claims = sim4_claims(_synthetic({"straight_line": 0.11, "grasp": 0.0, "none": 1.0}))
+    claims = sim4.claims(_synthetic({"straight_line": 0.11, "grasp": 0.0, "none": 1.0}))
     verdicts = [c.reproduced for c in claims]
     assert verdicts == ["yes", "partly", "yes"]  # straight line, grasp (flat), without
     assert "0.110x" in claims[0].measured
-    claims = sim4_claims(_synthetic({"straight_line": 0.8, "none": 1.6}))
+    claims = sim4.claims(_synthetic({"straight_line": 0.8, "none": 1.6}))
     assert [c.reproduced for c in claims] == ["partly", "no"]  # helps, but steeply
     # a map that is worse than none at the near cups is "no", whatever its slope
     flat_high = _synthetic({"grasp": 0.0, "none": 1.0})
     flat_high.loc[flat_high.h == "grasp", "error"] = 0.5
-    assert sim4_claims(flat_high)[0].reproduced == "no"
-    fits = sim4_fits(_synthetic({"straight_line": 0.3, "none": 1.3}))
+    assert sim4.claims(flat_high)[0].reproduced == "no"
+    fits = sim4.fits(_synthetic({"straight_line": 0.3, "none": 1.3}))
     assert fits.loc["straight_line", "slope"] == pytest.approx(0.3)
     assert fits.loc["none", "r2"] == pytest.approx(1.0)
+
+
+def test_mapped_decoder_is_the_map_around_the_model(model, grown):
+    """a_h = J_h(s)^-1 phi(z, h(s, b)): the wrapper against the map and the model directly."""
+    cmap = ContextMap.for_task(grown, 2, REF)
+    mapped = MappedDecoder(model, cmap)
+    rng = np.random.default_rng(3)
+    s = grown.curves[-1][rng.integers(0, 41, 6)] + rng.normal(0, 0.05, (6, 5))
+    b = rng.dirichlet(np.ones(3), 6)
+    z = rng.uniform(-1, 1, (6, 1))
+    s_hat, b_hat = cmap(s, b)
+    expected = np.linalg.solve(cmap.jacobian(s), model.decode_numpy(z, s_hat, b_hat)[..., None])[..., 0]
+    np.testing.assert_allclose(mapped.decode_numpy(z, s, b), expected, atol=1e-12)
+    with pytest.raises(ConfigError, match="training goals"):
+        MappedDecoder(MappedDecoder(model, cmap), cmap)
+
+
+def test_sim4_refuses_a_method_whose_decoder_is_missing(model, task):
+    with pytest.raises(ConfigError, match="needs the 'entropy' decoder"):
+        sim4.run(
+            model,
+            task,
+            task.robot.control,
+            sim4.Config(offsets=(0.08,), n_seeds=1, horizon=2, method="LA+SA+Entropy"),
+        )

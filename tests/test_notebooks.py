@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 
 from lasa.claims import CLAIM_COLUMNS
-from lasa.experiments import SIM1_COLUMNS, SIM2_COLUMNS, SIM3_COLUMNS, SIM4_COLUMNS
 from lasa.runner import load_config, run_notebook
+from lasa.sims import sim1
 from lasa.video import read_video
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -79,9 +79,10 @@ def test_latent_map_holds_both_robots(executed):
 def test_sim1_outputs(executed):
     fig = executed / "figures"
     frame = pd.read_csv(fig / "sim1_fixed_expertise.csv")
-    assert list(frame.columns[: len(SIM1_COLUMNS)]) == list(SIM1_COLUMNS)
+    assert list(frame.columns[: len(sim1.COLUMNS)]) == list(sim1.COLUMNS)
     params = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")
-    assert len(frame) == len(ROBOTS) * 3 * len(params["betas"]) * params["n_seeds"]
+    sweep = params["settings"]
+    assert len(frame) == len(ROBOTS) * 3 * len(sweep["betas"]) * sweep["n_seeds"]
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"} and set(frame.robot) == set(ROBOTS)
     assert frame.final_error.notna().all()
     assert (fig / "sim1_fixed_expertise.png").stat().st_size > 10_000
@@ -94,6 +95,8 @@ def test_claims_table(executed):
     fig = executed / "figures"
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
+    assert not claims.duplicated(["id", "robot"]).any()
+    assert all(claims.id.str.startswith(claims.figure + "."))
     per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n for f, n in per_figure.items() for r in ROBOTS
@@ -108,8 +111,13 @@ def test_entropy_outputs(executed, robot):
     from lasa.decoder import load_checkpoint
 
     fig = executed / "figures"
-    _, extra = load_checkpoint(executed / "build" / "models" / f"decoder_{robot}_entropy.pt", robot=robot)
+    models = executed / "build" / "models"
+    _, extra = load_checkpoint(models / f"decoder_{robot}_entropy.pt", robot=robot)
     assert extra["entropy_lambda"] > 0 and extra["train"]["entropy_lambda"] == extra["entropy_lambda"]
+    _, control = load_checkpoint(models / f"decoder_{robot}_lambda0.pt", robot=robot)
+    assert control["entropy_lambda"] == 0.0 and control["init"] == f"decoder_{robot}.pt"
+    # the control and the entropy decoder differ by lambda only: same steps, schedule and seed
+    assert {**control["train"], "entropy_lambda": extra["entropy_lambda"]} == extra["train"]
     table = pd.read_csv(fig / "entropy_ablation.csv")
     part = table[table.robot == robot]
     assert set(part.kind) == {"grid", "sweep"}
@@ -120,10 +128,10 @@ def test_entropy_outputs(executed, robot):
 def test_sim2_and_sim3_outputs(executed):
     fig = executed / "figures"
     sim2 = pd.read_csv(fig / "sim2_change_of_mind.csv")
-    assert list(sim2.columns[: len(SIM2_COLUMNS)]) == list(SIM2_COLUMNS)
+    assert list(sim2.columns[: len(sim2.COLUMNS)]) == list(sim2.COLUMNS)
     assert set(sim2.robot) == set(ROBOTS) and set(sim2.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
     sim3 = pd.read_csv(fig / "sim3_learning_users.csv")
-    assert list(sim3.columns) == list(SIM3_COLUMNS)
+    assert list(sim3.columns) == list(sim3.COLUMNS)
     assert set(sim3.learner) == {"fast", "slow"} and set(sim3.robot) == set(ROBOTS)
     for name in ("sim2_change_of_mind.png", "sim3_learning_users.png"):
         assert (fig / name).stat().st_size > 10_000
@@ -131,10 +139,35 @@ def test_sim2_and_sim3_outputs(executed):
         assert read_video(fig / f"change_of_mind_{robot}.mp4").shape[2] == 640
 
 
+def test_a_notebook_runs_from_its_own_folder_with_relative_paths(executed, monkeypatch, tmp_path):
+    """As Jupyter runs it: the kernel in notebooks/, the default relative folders.
+
+    ``LASA_ROOT`` points the repository root at the QUICK run's folder, so the relative
+    ``build`` and ``figures`` are that run's, wherever the kernel's working directory is.
+    """
+    import papermill as pm
+
+    monkeypatch.setenv("LASA_ROOT", str(executed))
+    params = load_config(QUICK, ROOT / "notebooks" / "06_learning_users.ipynb")
+    params.update(build_dir="build", figures_dir="figures", robot="planar5")
+    before = pd.read_csv(executed / "figures" / "sim3_learning_users.csv")
+    pm.execute_notebook(
+        str(ROOT / "notebooks" / "06_learning_users.ipynb"),
+        str(tmp_path / "06.ipynb"),
+        parameters=params,
+        cwd=str(ROOT / "notebooks"),
+        kernel_name="python3",
+        progress_bar=False,
+    )
+    after = pd.read_csv(executed / "figures" / "sim3_learning_users.csv")
+    pd.testing.assert_frame_equal(before, after)  # it read the run's decoders and rewrote the same rows
+    assert not (ROOT / "notebooks" / "build").exists() and not (ROOT / "notebooks" / "figures").exists()
+
+
 def test_sim4_outputs(executed):
     fig = executed / "figures"
     sim4 = pd.read_csv(fig / "sim4_new_goals.csv")
-    assert list(sim4.columns[: len(SIM4_COLUMNS)]) == list(SIM4_COLUMNS)
+    assert list(sim4.columns[: len(sim4.COLUMNS)]) == list(sim4.COLUMNS)
     assert set(sim4.robot) == set(ROBOTS) and set(sim4.mapping) == {"with", "without"}
     for robot in ROBOTS:
         part = sim4[sim4.robot == robot]

@@ -6,7 +6,7 @@ from numpy.testing import assert_allclose, assert_array_equal
 
 from lasa.errors import ConfigError
 from lasa.rollout import METHODS, method_alpha, rollout
-from lasa.users import UserPopulation
+from lasa.users import UserPopulation, latent_grid
 
 HORIZON = 25
 
@@ -51,7 +51,11 @@ def test_invariants(model, task):
     assert np.all(traj.states >= robot.lower) and np.all(traj.states <= robot.upper)
     assert np.all(np.abs(np.diff(traj.states, axis=0)) <= ctl.dt * ctl.max_joint_speed + 1e-12)
     assert_allclose(traj.beliefs.sum(-1), 1.0, atol=1e-9)
-    assert np.all(np.abs(traj.z) <= 1.0)
+    # every input is a joystick candidate, and a_h is phi of it in the step's context
+    assert set(np.unique(traj.z)) <= set(latent_grid(ctl.n_z, 1).ravel())
+    assert_allclose(
+        traj.human_actions, model.decode_numpy(traj.z, traj.states[:-1], traj.beliefs[:-1]), atol=1e-6
+    )
     assert np.all(np.linalg.norm(traj.human_actions, axis=-1) <= ctl.action_scale + 1e-6)
     assert_allclose(traj.states[0], np.broadcast_to(task.start, traj.states[0].shape))
 

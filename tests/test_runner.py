@@ -12,7 +12,7 @@ from lasa.runner import load_config, notebook_parameters
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
 CONFIGS = [ROOT / "configs" / "paper.yaml", ROOT / "configs" / "quick.yaml"]
-COMMON = {"robot", "quick", "build_dir", "figures_dir", "seed"}
+COMMON = {"robot", "quick", "build_dir", "figures_dir", "settings"}
 
 
 def test_there_are_notebooks():
@@ -37,6 +37,38 @@ def test_committed_without_outputs(notebook):
     assert all(
         not c.get("outputs") and not c.get("execution_count") for c in cells if c["cell_type"] == "code"
     )
+
+
+def settings_class(notebook):
+    """The config dataclass that the notebook's ``settings`` comment names (``lasa.x.Y``)."""
+    import importlib
+    import re
+
+    source = "".join(json.loads(notebook.read_text())["cells"][1]["source"])
+    match = re.search(r"^settings = \{\}  # fields of (lasa[\w.]*)\.(\w+) that differ", source, re.M)
+    assert match, f"{notebook.name}: the settings comment must name its config class"
+    return getattr(importlib.import_module(match.group(1)), match.group(2))
+
+
+@pytest.mark.parametrize("config", CONFIGS, ids=lambda p: p.stem)
+@pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda p: p.stem)
+def test_shipped_settings_build_the_named_config(config, notebook):
+    """Each YAML section's settings map onto the dataclass the notebook names, with no unknown key."""
+    from lasa.config import from_dict
+
+    cls = settings_class(notebook)
+    built = from_dict(cls, load_config(config, notebook).get("settings", {}))
+    assert isinstance(built, cls)
+    if config.stem == "paper":
+        assert built == cls()  # the paper scale is the dataclass defaults, written once
+
+
+def test_an_unknown_setting_is_an_error():
+    from lasa.config import from_dict
+    from lasa.sims import sim1
+
+    with pytest.raises(ConfigError, match="unknown Config parameter.*'n_seed'"):
+        from_dict(sim1.Config, {"n_seed": 3})
 
 
 @pytest.mark.parametrize("config", CONFIGS, ids=lambda p: p.stem)

@@ -1,32 +1,19 @@
-"""Fig. sim1 sweep: columns, determinism, pairing, and the claims' decision rules."""
+"""Figs. sim1-sim3 (lasa.sims.sim1, sim2, sim3): columns, determinism, pairing, and the claims' rules."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from lasa.errors import ConfigError
-from lasa.experiments import (
-    SIM1_COLUMNS,
-    SIM2_COLUMNS,
-    SIM3_COLUMNS,
-    Sim1Config,
-    Sim2Config,
-    Sim3Config,
-    run_change_of_mind,
-    run_fixed_expertise,
-    run_learning_users,
-    sim1_claims,
-    sim1_entropy_claim,
-    sim2_claims,
-    sim3_claims,
-)
+from lasa.sims import sim1, sim2, sim3
+from lasa.sims.common import episodes
 
-SMALL = Sim1Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0, methods=("LA", "LA+SA"))
+SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0, methods=("LA", "LA+SA"))
 
 
 def test_sim1_frame_columns_and_size(model, task):
-    frame, traj = run_fixed_expertise(model, task, task.robot.control, SMALL)
-    assert set(SIM1_COLUMNS) <= set(frame.columns)
+    frame, traj = sim1.run(model, task, task.robot.control, SMALL)
+    assert set(sim1.COLUMNS) <= set(frame.columns)
     assert len(frame) == 2 * 3 * 3 == traj.states.shape[1]
     assert set(frame.method) == {"LA", "LA+SA"}
     assert frame.final_error.ge(0).all() and frame.time.between(0, SMALL.horizon).all()
@@ -35,8 +22,8 @@ def test_sim1_frame_columns_and_size(model, task):
 
 
 def test_same_seed_gives_identical_csv(model, task, tmp_path):
-    a, _ = run_fixed_expertise(model, task, task.robot.control, SMALL)
-    b, _ = run_fixed_expertise(model, task, task.robot.control, SMALL)
+    a, _ = sim1.run(model, task, task.robot.control, SMALL)
+    b, _ = sim1.run(model, task, task.robot.control, SMALL)
     a.to_csv(tmp_path / "a.csv", index=False)
     b.to_csv(tmp_path / "b.csv", index=False)
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
@@ -53,7 +40,7 @@ def test_same_seed_gives_identical_csv(model, task, tmp_path):
 )
 def test_bad_sweep_is_a_clear_error(kw, match):
     with pytest.raises(ConfigError, match=match):
-        Sim1Config(**kw)
+        sim1.Config(**kw)
 
 
 def synthetic(err_la, err_sa, t_la, t_sa):
@@ -67,18 +54,18 @@ def synthetic(err_la, err_sa, t_la, t_sa):
 
 
 def test_claim_rules_reproduced_case():
-    claims = sim1_claims(synthetic([0.3, 0.2, 0.1], [0.2, 0.1, 0.08], [100, 145, 130], [90, 100, 100]))
+    claims = sim1._sa_claims(synthetic([0.3, 0.2, 0.1], [0.2, 0.1, 0.08], [100, 145, 130], [90, 100, 100]))
     assert [c.reproduced for c in claims] == ["yes", "yes", "yes"]
     assert "1.45" in claims[1].measured and "1.30" in claims[1].measured
 
 
 def test_claim_rules_failed_case():
-    claims = sim1_claims(synthetic([0.1, 0.1, 0.1], [0.2, 0.2, 0.2], [100, 90, 90], [100, 100, 100]))
+    claims = sim1._sa_claims(synthetic([0.1, 0.1, 0.1], [0.2, 0.2, 0.2], [100, 90, 90], [100, 100, 100]))
     assert [c.reproduced for c in claims] == ["no", "no", "no"]
 
 
 def test_claim_rules_partial_case():
-    claims = sim1_claims(synthetic([0.3, 0.2, 0.1], [0.2, 0.1, 0.2], [100, 200, 110], [90, 100, 100]))
+    claims = sim1._sa_claims(synthetic([0.3, 0.2, 0.1], [0.2, 0.1, 0.2], [100, 200, 110], [90, 100, 100]))
     assert claims[0].reproduced == "partly"  # lower at 2 of 3 betas
     assert claims[1].reproduced == "partly"  # both ratios > 1 but far from the paper's
 
@@ -86,13 +73,13 @@ def test_claim_rules_partial_case():
 def test_claims_need_the_papers_betas():
     frame = synthetic([0.3, 0.2, 0.1], [0.2, 0.1, 0.08], [1, 1, 1], [1, 1, 1])
     with pytest.raises(ConfigError, match="beta = 75"):
-        sim1_claims(frame[frame.beta != 75.0])
+        sim1._sa_claims(frame[frame.beta != 75.0])
 
 
 def test_same_seed_gives_identical_csv_on_the_panda(panda_model, panda_task, tmp_path):
     ctl = panda_task.robot.control
-    a, traj = run_fixed_expertise(panda_model, panda_task, ctl, SMALL)
-    b, _ = run_fixed_expertise(panda_model, panda_task, ctl, SMALL)
+    a, traj = sim1.run(panda_model, panda_task, ctl, SMALL)
+    b, _ = sim1.run(panda_model, panda_task, ctl, SMALL)
     a.to_csv(tmp_path / "a.csv", index=False)
     b.to_csv(tmp_path / "b.csv", index=False)
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
@@ -103,7 +90,7 @@ def test_same_seed_gives_identical_csv_on_the_panda(panda_model, panda_task, tmp
 
 def test_a_panda_decoder_is_refused_for_the_planar_task(panda_model, task):
     with pytest.raises(ConfigError, match="trained for 'panda'"):
-        run_fixed_expertise(panda_model, task, task.robot.control, SMALL)
+        sim1.run(panda_model, task, task.robot.control, SMALL)
 
 
 def both(model):
@@ -112,8 +99,8 @@ def both(model):
 
 
 def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
-    frame, traj = run_fixed_expertise(
-        both(model), task, task.robot.control, Sim1Config(betas=(75.0, 1000.0), n_seeds=2, horizon=10)
+    frame, traj = sim1.run(
+        both(model), task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), n_seeds=2, horizon=10)
     )
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
     # the entropy rows used the same model here, with LA+SA's alpha: identical episodes
@@ -124,25 +111,28 @@ def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
 
 def test_a_missing_decoder_is_a_clear_error(model, task):
     with pytest.raises(ConfigError, match="need the 'entropy' decoder"):
-        run_fixed_expertise(model, task, task.robot.control, Sim1Config(betas=(75.0,), n_seeds=1, horizon=5))
+        sim1.run(model, task, task.robot.control, sim1.Config(betas=(75.0,), n_seeds=1, horizon=5))
 
 
 def test_sim2_frame(model, task):
-    cfg = Sim2Config(change_steps=(0, 5), n_seeds=2, settle=10)
-    frame, traj = run_change_of_mind(both(model), task, task.robot.control, cfg)
-    assert set(SIM2_COLUMNS) <= set(frame.columns)
+    cfg = sim2.Config(change_steps=(0, 5), n_seeds=2, settle=10)
+    frame, traj = sim2.run(both(model), task, task.robot.control, cfg)
+    assert set(sim2.COLUMNS) <= set(frame.columns)
     assert len(frame) == 3 * 2 * 2 and traj.states.shape[0] == cfg.horizon + 1 == 16
     assert frame.confidence.between(0, 1).all()
 
 
 def test_sim3_frame(model, task):
-    cfg = Sim3Config(n_seeds=2, horizon=10, record_every=5)
-    frame, _ = run_learning_users(both(model), task, task.robot.control, cfg)
-    assert list(frame.columns) == list(SIM3_COLUMNS)
+    cfg = sim3.Config(n_seeds=2, horizon=10, record_every=5)
+    frame, _ = sim3.run(both(model), task, task.robot.control, cfg)
+    assert list(frame.columns) == list(sim3.COLUMNS)
     assert set(frame.learner) == {"fast", "slow"} and set(frame.t) == {0, 5, 10}
     assert len(frame) == 3 * 2 * 2 * 3
-    start = frame[frame.t == 0].error
-    assert np.allclose(start, start.iloc[0]) or start.nunique() <= 2  # everyone starts at home
+    # everyone starts at home: the error at t = 0 is each user's distance from home to s*
+    goal, theta, _ = episodes(model, task, task.robot.control, cfg.n_seeds, cfg.horizon, cfg.seed)
+    expected = np.linalg.norm(task.start - task.target(goal, theta), axis=-1) / task.goal_distance
+    start = frame[frame.t == 0]
+    np.testing.assert_allclose(start.error, expected[start.seed.to_numpy()], rtol=1e-6)
 
 
 @pytest.mark.parametrize(
@@ -155,20 +145,20 @@ def test_sim3_frame(model, task):
 )
 def test_bad_sim2_config(kw, match):
     with pytest.raises(ConfigError, match=match):
-        Sim2Config(**kw)
+        sim2.Config(**kw)
 
 
 @pytest.mark.parametrize(
     "kw,match",
     [
-        ({"learners": (("fast", -1.0),)}, "slope"),
-        ({"learners": (("medium", 1.0),)}, "learner"),
+        ({"fast_slope": -1.0}, "fast_slope"),
+        ({"slow_slope": 0.0}, "slow_slope"),
         ({"record_every": 0}, "record_every"),
     ],
 )
 def test_bad_sim3_config(kw, match):
     with pytest.raises(ConfigError, match=match):
-        Sim3Config(**kw)
+        sim3.Config(**kw)
 
 
 def sim2_frame(rates):
@@ -193,11 +183,11 @@ def sim2_frame(rates):
 
 
 def test_sim2_claim_rules():
-    trapped = sim2_claims(sim2_frame({"LA+SA": (1.0, 0.2), "LA+SA+Entropy": (1.0, 0.9)}))
+    trapped = sim2.claims(sim2_frame({"LA+SA": (1.0, 0.2), "LA+SA+Entropy": (1.0, 0.9)}))
     assert [c.reproduced for c in trapped] == ["yes", "yes"]
-    mild = sim2_claims(sim2_frame({"LA+SA": (1.0, 0.7), "LA+SA+Entropy": (1.0, 0.8)}))
+    mild = sim2.claims(sim2_frame({"LA+SA": (1.0, 0.7), "LA+SA+Entropy": (1.0, 0.8)}))
     assert [c.reproduced for c in mild] == ["partly", "partly"]
-    none = sim2_claims(sim2_frame({"LA+SA": (1.0, 1.0), "LA+SA+Entropy": (1.0, 0.9)}))
+    none = sim2.claims(sim2_frame({"LA+SA": (1.0, 1.0), "LA+SA+Entropy": (1.0, 0.9)}))
     assert [c.reproduced for c in none] == ["no", "no"]
 
 
@@ -209,7 +199,7 @@ def test_sim3_claim_rule():
                 dict(robot="panda", method=method, learner=learner, slope=1.0, seed=0, t=t, error=err)
                 for t in (0, 5)
             ]
-    claim = sim3_claims(pd.DataFrame(rows))[0]
+    claim = sim3.claims(pd.DataFrame(rows))[0]
     assert claim.reproduced == "partly" and claim.robot == "panda"
 
 
@@ -218,4 +208,22 @@ def test_sim1_entropy_claim_rule():
     for beta, (la, sa, en) in {75.0: (0.3, 0.2, 0.25), 1000.0: (0.1, 0.05, 0.2)}.items():
         for method, err in (("LA", la), ("LA+SA", sa), ("LA+SA+Entropy", en)):
             rows.append(dict(robot="planar5", method=method, beta=beta, final_error=err))
-    assert sim1_entropy_claim(pd.DataFrame(rows)).reproduced == "no"  # entropy below LA at 1 of 2
+    assert sim1._entropy_claim(pd.DataFrame(rows)).reproduced == "no"  # entropy below LA at 1 of 2
+
+
+def test_sim1_claims_have_stable_ids():
+    claims = sim1.claims(
+        pd.DataFrame(
+            [
+                dict(robot="planar5", method=m, beta=b, final_error=e, time=t)
+                for b in (75.0, 1000.0)
+                for m, e, t in (("LA", 0.2, 100), ("LA+SA", 0.1, 80), ("LA+SA+Entropy", 0.15, 90))
+            ]
+        )
+    )
+    assert [c.id for c in claims] == [
+        "sim1.final_error",
+        "sim1.time_ratio",
+        "sim1.gap_narrows",
+        "sim1.entropy_sa",
+    ]

@@ -1,0 +1,25 @@
+"""One module per figure: its config, its tidy columns, ``run``, ``claims`` and ``plot``.
+
+========================  ================================  ===========================
+module                    figure                            notebook
+========================  ================================  ===========================
+:mod:`.latent_map`        what z means, per context         02_decoder_training
+:mod:`.entropy_ablation`  the entropy term and its lambda    03_entropy_ablation
+:mod:`.sim1`              Fig. sim1, fixed expertise        04_fixed_expertise
+:mod:`.sim2`              Fig. sim2, change of mind         05_changing_goals
+:mod:`.sim3`              Fig. sim3, learning users         06_learning_users
+:mod:`.sim4`              Fig. sim4, new goals              07_new_goals
+========================  ================================  ===========================
+
+Each module defines ``NAME`` (the figure's file stem under ``figures/``), ``COLUMNS``
+(the columns of its CSV, one row per episode or measurement), a frozen ``Config`` built
+from its notebook's ``settings`` (:func:`lasa.config.from_dict`), ``run``, ``claims``
+(each verdict's rule in its docstring) and ``plot`` (the whole figure, every robot
+present). :func:`lasa.sims.publish.publish` merges a robot's rows into the figure's CSV,
+redraws the figure and updates the claims table, as one step under the folder lock.
+Changing a figure means changing its module and its notebook, nothing else.
+
+The decision rules of the claims were written before the results they judge were
+first seen, with one exception, said where it stands: the "partly" rule of sim4's
+first claim was made stricter after its first results (:func:`lasa.sims.sim4.claims`).
+"""

@@ -1,0 +1,133 @@
+"""What the simulated-user sweeps share: drawing episodes, and rolling out mixed methods.
+
+A sweep builds one population of simulated users covering every condition (method x
+rationality x seed, or method x change step x seed, ...) and runs it batched, one
+rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
+Users that share a seed share their cup, preference and random stream across
+conditions, so methods are compared on paired episodes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+
+from lasa.config import ControlConfig
+from lasa.decoder import ActionDecoder
+from lasa.errors import ConfigError
+from lasa.rollout import METHOD_DECODER, METHODS, Trajectories, method_alpha, rollout
+from lasa.task import CupTask
+from lasa.users import UserPopulation, latent_grid
+
+__all__ = [
+    "Decoders",
+    "as_decoders",
+    "check_methods",
+    "check_positive_int",
+    "draw_episodes",
+    "episodes",
+    "run_population",
+]
+
+Decoders = Mapping[str, ActionDecoder] | ActionDecoder
+
+
+def as_decoders(decoders: Decoders) -> Mapping[str, ActionDecoder]:
+    """``{"base": ..., "entropy": ...}``; a single decoder is the ``base`` one."""
+    return {"base": decoders} if isinstance(decoders, ActionDecoder) else decoders
+
+
+def check_methods(methods: tuple[str, ...]) -> None:
+    """Every method is one of :data:`lasa.rollout.METHODS`, and there is at least one."""
+    if not methods:
+        raise ConfigError("methods must not be empty")
+    for method in methods:
+        if method not in METHODS:
+            raise ConfigError(f"unknown method {method!r}; choose from {METHODS}")
+
+
+def check_positive_int(name: str, value: int) -> None:
+    """``value`` is an integer >= 1, else a ConfigError naming ``name``."""
+    if int(value) != value or value < 1:
+        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+
+
+def draw_episodes(
+    task: CupTask, n_seeds: int, horizon: int, n_candidates: int, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each seed's cup, preference and random stream.
+
+    Returns:
+        goal (n_seeds,), theta (n_seeds,) uniform on [0, 1], and uniforms of shape
+        (n_seeds, horizon, n_candidates) for the users' choices.
+    """
+    rng = np.random.default_rng(seed)
+    goal = rng.integers(0, task.n_goals, n_seeds)
+    theta = rng.uniform(0.0, 1.0, n_seeds)
+    noise = rng.random((n_seeds, horizon, n_candidates))
+    return goal, theta, noise
+
+
+def episodes(
+    decoders: Decoders, task: CupTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`draw_episodes` sized for the decoders' joystick grid."""
+    first = next(iter(as_decoders(decoders).values()))
+    n_candidates = len(latent_grid(control.n_z, first.z_dim))
+    return draw_episodes(task, n_seeds, horizon, n_candidates, seed)
+
+
+def run_population(
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    users: UserPopulation,
+    methods: np.ndarray,
+    horizon: int,
+    noise: np.ndarray,
+    progress: bool = False,
+) -> Trajectories:
+    """Roll out a population whose users may use different methods (and decoders).
+
+    Users are grouped by the decoder their method uses (``METHOD_DECODER``); each group
+    runs as one batched rollout, and the trajectories come back in the users' order.
+
+    Args:
+        decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
+        task: The cup task.
+        control: Control-loop units.
+        users: The simulated users.
+        methods: Each user's method, shape (U,).
+        horizon: Control steps.
+        noise: The users' random streams, see :func:`lasa.rollout.rollout`.
+        progress: Show progress bars.
+
+    Raises:
+        ConfigError: if a method's decoder is missing.
+    """
+    decoders = as_decoders(decoders)
+    methods = np.asarray(methods)
+    alpha = np.array([method_alpha(m, control) for m in methods])
+    keys = np.array([METHOD_DECODER[m] for m in methods])
+    parts: list[tuple[np.ndarray, Trajectories]] = []
+    for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
+        if key not in decoders:
+            needing = sorted({str(m) for m in methods[keys == key]})
+            raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
+        idx = np.flatnonzero(keys == key)
+        group = users.subset(idx)
+        parts.append(
+            (idx, rollout(decoders[key], task, group, alpha[idx], control, horizon, noise, progress))
+        )
+    if len(parts) == 1:
+        return parts[0][1]
+    merged = {}
+    for field in dataclasses.fields(Trajectories):
+        first = getattr(parts[0][1], field.name)
+        out = np.empty((first.shape[0], len(methods), *first.shape[2:]), dtype=first.dtype)
+        for idx, traj in parts:
+            out[:, idx] = getattr(traj, field.name)
+        merged[field.name] = out
+    return Trajectories(**merged)

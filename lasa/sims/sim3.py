@@ -1,0 +1,163 @@
+"""Fig. sim3: users who learn within the task (Sec. V-C).
+
+Rationality grows from random, beta(t) = m t: fast learners (m = 20) and slow ones
+(m = 2). The paper finds the entropy term improves in-task performance for both.
+Notebook ``06_learning_users``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from lasa.claims import Claim
+from lasa.config import ControlConfig, check_range
+from lasa.metrics import normalized_error
+from lasa.plots import method_lineplot, robots_present
+from lasa.rollout import METHODS, Trajectories
+from lasa.sims.common import Decoders, check_methods, check_positive_int, episodes, run_population
+from lasa.task import CupTask
+from lasa.users import UserPopulation
+
+__all__ = ["NAME", "COLUMNS", "LEARNERS", "Config", "run", "claims", "plot", "plot_learner"]
+
+NAME = "sim3_learning_users"
+COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error")
+LEARNERS = ("fast", "slow")
+DPI = 150
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
+
+    fast_slope: float = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
+    slow_slope: float = 2.0  # m of the slow learner [1/(rad^2 step)]
+    n_seeds: int = 30  # simulated users per (method, learner) [-]
+    horizon: int = 200  # control steps per episode [-]
+    record_every: int = 5  # keep the error every this many steps in the frame [steps]
+    methods: tuple[str, ...] = METHODS  # methods compared
+    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+
+    def __post_init__(self) -> None:
+        check_range("fast_slope", self.fast_slope, 0.0, low_open=True)
+        check_range("slow_slope", self.slow_slope, 0.0, low_open=True)
+        check_positive_int("n_seeds", self.n_seeds)
+        check_positive_int("horizon", self.horizon)
+        check_positive_int("record_every", self.record_every)
+        check_methods(self.methods)
+
+    @property
+    def learners(self) -> tuple[tuple[str, float], ...]:
+        """(name, slope m) of each learner."""
+        return (("fast", float(self.fast_slope)), ("slow", float(self.slow_slope)))
+
+
+def run(
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    config: Config = Config(),
+    progress: bool = False,
+) -> tuple[pd.DataFrame, Trajectories]:
+    """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
+
+    Returns:
+        One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
+        the trajectories (users in the order method x learner x seed).
+    """
+    goal, theta, noise = episodes(decoders, task, control, config.n_seeds, config.horizon, config.seed)
+    grid = list(itertools.product(config.methods, config.learners, range(config.n_seeds)))
+    method = np.array([m for m, _, _ in grid])
+    learner = np.array([name for _, (name, _), _ in grid])
+    slope = np.array([m for _, (_, m), _ in grid], dtype=float)
+    seed = np.array([s for _, _, s in grid])
+    users = UserPopulation(
+        goal=goal[seed],
+        theta=theta[seed],
+        target=task.target(goal[seed], theta[seed]),
+        beta0=np.zeros(len(grid)),
+        slope=slope,
+        seed=seed,
+    )
+    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress)
+    errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
+    steps = np.arange(0, config.horizon + 1, config.record_every)
+    n_users = len(grid)
+    frame = pd.DataFrame(
+        {
+            "robot": task.robot.name,
+            "method": np.repeat(method, len(steps)),
+            "learner": np.repeat(learner, len(steps)),
+            "slope": np.repeat(slope, len(steps)),
+            "seed": np.repeat(seed, len(steps)),
+            "t": np.tile(steps, n_users),
+            "error": errors[steps].T.ravel(),
+        }
+    )
+    return frame, traj
+
+
+def claims(frame: pd.DataFrame) -> list[Claim]:
+    """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users.
+
+    In-task performance is each episode's mean normalised error over the recorded
+    steps. Rule: ``yes`` if LA+SA+Entropy's mean is below LA+SA's for both the fast and
+    the slow learner, ``partly`` for one, else ``no``.
+    """
+    robot = str(frame.robot.iloc[0])
+    per_episode = frame.groupby(["learner", "method", "seed"]).error.mean()
+    mean = per_episode.groupby(["learner", "method"]).mean()
+    learners = sorted(set(frame.learner))
+    better = [mean[name, "LA+SA+Entropy"] < mean[name, "LA+SA"] for name in learners]
+    verdict = "yes" if all(better) else "partly" if any(better) else "no"
+    return [
+        Claim(
+            id="sim3.entropy_learners",
+            claim="entropy improves in-task performance for both fast and slow learners",
+            figure="sim3",
+            paper="LA+SA+Entropy below LA+SA in error over time, fast and slow",
+            measured="; ".join(
+                f"{name}: mean error over the episode LA+SA {mean[name, 'LA+SA']:.3f}, "
+                f"LA+SA+Entropy {mean[name, 'LA+SA+Entropy']:.3f}, LA {mean[name, 'LA']:.3f}"
+                for name in learners
+            ),
+            reproduced=verdict,
+            note=(
+                "rule: yes if LA+SA+Entropy's mean error over the episode is below LA+SA's "
+                "for both learners, partly if for one."
+            ),
+            robot=robot,
+        )
+    ]
+
+
+def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
+    """One panel: the error over time of one kind of learner, per method, with 95% bands."""
+    part = frame[frame.learner == learner]
+    ax = method_lineplot(part, "t", "error", ax)
+    ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
+    ax.set_xlabel("time step t")
+    ax.set_ylabel("state error (normalised)")
+    return ax
+
+
+def plot(table: pd.DataFrame) -> Figure:
+    """Fig. sim3: one row per robot present, the fast and the slow learner."""
+    present = robots_present(table)
+    fig, axes = plt.subplots(len(present), 2, figsize=(11, 3.8 * len(present)), squeeze=False)
+    for name, row in zip(present, axes, strict=True):
+        part = table[table.robot == name]
+        for ax, learner in zip(row, LEARNERS, strict=True):
+            plot_learner(part, learner, ax=ax)
+            ax.set_title(f"{name}: {ax.get_title()}")
+    n = int(table.groupby(["robot", "method", "learner", "t"]).size().max())
+    fig.suptitle(f"Fig. sim3: users who learn, {n} users per curve")
+    fig.tight_layout()
+    return fig
