@@ -14,7 +14,7 @@ makes g more likely.
 That default has a flaw once the user's desired grasp is not g itself. Two refinements
 make the likelihood robust, and ``ControlConfig.likelihood`` selects them:
 
-- ``"goal"``, DESIGN.md's default, exactly as above: distances to the points g.
+- ``"goal"``, the plain progress model exactly as above: distances to the points g.
 - ``"grasp_set"``: distances to each goal's *set of grasps* (the polyline
   s*(g, theta) over theta, ``goal_sets`` of shape (G, K, n)), and each goal's
   Boltzmann normaliser approximated by its best action, so that the likelihood is

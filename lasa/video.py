@@ -1,15 +1,21 @@
-"""Off-screen MuJoCo video: render joint trajectories and write MP4s with mediapy.
+"""Off-screen MuJoCo video: render joint trajectories and write bit-exact MP4s with mediapy.
 
 Rendering is software-only (OSMesa; ``lasa`` sets ``MUJOCO_GL`` on import) and slow, so
 keep frames small (even sizes such as 320x240) and render only the frames a video
-shows. The scenes turn shadows and reflections off. mediapy needs an ``ffmpeg``
-binary; when none is on the PATH we use the one the ``imageio-ffmpeg`` wheel ships.
+shows. The scenes turn shadows and reflections off.
+
+Videos are written bit-exactly: the same frames give the same MP4 bytes on every run
+and machine with the pinned environment. mediapy always runs the ``ffmpeg`` binary
+that the pinned ``imageio-ffmpeg`` wheel ships (never one found on the PATH), with one
+thread, CPU-independent kernels and ffmpeg's bitexact flags; see :func:`write_video`.
 """
 
 from __future__ import annotations
 
+import functools
+import importlib.resources
 import os
-import shutil
+import platform
 from pathlib import Path
 
 import mediapy
@@ -24,11 +30,50 @@ from lasa.robot import Robot
 __all__ = ["render_states", "label_frames", "side_by_side", "write_video", "read_video"]
 
 
-def _ensure_ffmpeg() -> None:
-    if shutil.which("ffmpeg") is None:
-        import imageio_ffmpeg
+# x264 picks its assembly by the CPU it runs on, and the SSSE3/AVX2/AVX-512 kernels do
+# not give the same bitstream as the plain C code. Pin the instruction set to the
+# x86-64 baseline (every x86-64 CPU has SSE2; costs ~10% speed), elsewhere use plain C.
+_X264_ASM = "MMX2,SSE2" if platform.machine().lower() in {"x86_64", "amd64"} else "0"
 
-        mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
+# Output options that make the MP4 a function of the frames alone (see write_video).
+_BITEXACT_ARGS = (
+    "-threads", "1",  # one x264 thread: the thread count changes the bitstream and its SEI
+    "-x264-params", f"asm={_X264_ASM}",  # the same x264 kernels on every CPU
+    "-filter_threads", "1",  # one thread for the RGB -> YUV conversion as well
+    "-sws_flags", "bicubic+accurate_rnd+bitexact",  # RGB -> YUV as the C code, not the SIMD
+    "-flags:v", "+bitexact",  # no "Lavc..." version string in the stream
+    "-fflags", "+bitexact",  # no "Lavf..." encoder tag or other muxer extras
+    "-map_metadata", "-1",  # copy no metadata (e.g. creation time) into the container
+)  # fmt: skip
+
+
+@functools.cache
+def _pinned_ffmpeg() -> str:
+    """Return the ffmpeg binary shipped inside the installed ``imageio-ffmpeg`` wheel.
+
+    Unlike ``imageio_ffmpeg.get_ffmpeg_exe`` this never falls back to the
+    ``IMAGEIO_FFMPEG_EXE`` variable, a conda ffmpeg or one on the PATH, so the encoder
+    (ffmpeg and x264 versions) is the one that ``environment.lock`` pins.
+
+    Returns:
+        Absolute path of the executable.
+
+    Raises:
+        RuntimeError: The installed ``imageio-ffmpeg`` ships no binary for this platform.
+    """
+    folder = importlib.resources.files("imageio_ffmpeg.binaries")
+    found = [
+        Path(str(f))
+        for f in folder.iterdir()
+        if f.name.startswith("ffmpeg") and not f.name.endswith((".py", ".md", ".txt"))
+    ]
+    if len(found) != 1 or not os.access(found[0], os.X_OK):
+        raise RuntimeError(
+            f"expected one ffmpeg binary in the imageio-ffmpeg wheel, found {[f.name for f in found]} "
+            f"in {folder}; reinstall the pinned environment with `make setup` (imageio-ffmpeg "
+            "must be the platform wheel, which bundles ffmpeg)"
+        )
+    return str(found[0])
 
 
 def render_states(
@@ -81,10 +126,56 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 
 
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
-    """Atomically write frames (T, H, W, 3) to an H.264 MP4."""
-    _ensure_ffmpeg()
+    """Atomically write frames to an H.264 (yuv420p) MP4, bit-exactly.
+
+    The same frames always give the same file bytes, whatever the machine's core count
+    or PATH, so a regenerated video can be checked by its hash. Four things can
+    make the bytes vary and are pinned here:
+
+    * the encoder: mediapy runs the ffmpeg binary of the pinned ``imageio-ffmpeg``
+      wheel, never a system ``ffmpeg`` (another ffmpeg/x264 version encodes differently);
+    * threads: libx264 picks ``threads=1.5 x cores`` and frame threading changes the
+      bitstream (and the option string it writes into an SEI message), so the encoder
+      and the colour conversion run single-threaded;
+    * CPU features: x264 and ffmpeg's RGB -> YUV conversion pick SIMD kernels by CPU,
+      and some round differently from the C code, so x264 is held to the x86-64
+      baseline (``asm=MMX2,SSE2``; plain C on other machines) and swscale to its
+      ``accurate_rnd+bitexact`` paths;
+    * metadata: ``-fflags +bitexact``, ``-flags:v +bitexact`` and ``-map_metadata -1``
+      leave out the encoder version strings and any creation time.
+
+    Quality is mediapy's default, made explicit (passing ffmpeg arguments would turn it
+    off): constant quantiser 20 up to 640x480 pixels, 28 above.
+
+    Args:
+        path: Destination ``.mp4``; written to a temporary file beside it and renamed.
+        frames: Frames, shape (T, H, W, 3), uint8, with even H and W.
+        fps: Frame rate.
+
+    Returns:
+        ``path`` as a :class:`~pathlib.Path`.
+
+    Raises:
+        ConfigError: The frames are not (T, H, W, 3) or H or W is odd.
+    """
+    frames = np.asarray(frames)
+    if frames.ndim != 4 or frames.shape[-1] != 3:
+        raise ConfigError(f"frames must have shape (T, H, W, 3), got {frames.shape}")
+    height, width = frames.shape[1:3]
+    if height % 2 or width % 2:
+        raise ConfigError(f"frame size must be even for H.264 (yuv420p), got {width}x{height}")
+    mediapy.set_ffmpeg(_pinned_ffmpeg())
+    qp = 20 if height * width <= 640 * 480 else 28
     with atomic_path(path) as tmp:
-        mediapy.write_video(tmp, frames, fps=fps)
+        mediapy.write_video(
+            tmp,
+            frames,
+            fps=fps,
+            codec="h264",
+            encoded_format="yuv420p",
+            qp=qp,
+            ffmpeg_args=list(_BITEXACT_ARGS),
+        )
     return Path(path)
 
 

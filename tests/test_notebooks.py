@@ -2,7 +2,7 @@
 
 The notebooks run in order (01 -> 07) for each robot, as `make figures` does,
 each reading what the previous one wrote, into a temporary folder. Then the files each
-one promises are checked against the contracts of DESIGN.md: names, CSV columns,
+one promises are checked against the output contracts (README): names, CSV columns,
 claims verdicts, and that the shared figures hold both robots.
 """
 

@@ -1,5 +1,8 @@
 """Off-screen rendering (OSMesa) and video writing, at a tiny frame size."""
 
+import os
+
+import mediapy
 import numpy as np
 import pytest
 
@@ -28,3 +31,65 @@ def test_write_video_round_trip(tmp_path):
     back = read_video(path)
     assert back.shape[0] == 6 and back.shape[1:3] == (32, 96)
     assert [p.name for p in tmp_path.iterdir()] == ["v.mp4"]
+
+
+def _clip(seed: int = 0, height: int = 16, width: int = 24) -> np.ndarray:
+    """Four frames of a moving colour gradient with a little seeded noise."""
+    t, y, x = np.ogrid[:4, :height, :width]
+    x, y = 180 * x // width, 180 * y // height
+    smooth = np.stack(np.broadcast_arrays(x + 4 * t, y + 16 * t, 200 - (x + y) // 2), axis=-1)
+    noise = np.random.default_rng(seed).integers(-8, 9, smooth.shape)
+    return np.clip(smooth + noise + 20, 0, 255).astype(np.uint8)
+
+
+def test_write_video_is_bit_exact(tmp_path):
+    clip = _clip()
+    a = write_video(tmp_path / "a.mp4", clip).read_bytes()
+    b = write_video(tmp_path / "b.mp4", clip.copy()).read_bytes()
+    assert a == b
+    changed = clip.copy()
+    changed[2, 5, 7] = 255 - changed[2, 5, 7]  # one pixel of one frame
+    assert write_video(tmp_path / "c.mp4", changed).read_bytes() != a
+    back = read_video(tmp_path / "a.mp4")
+    assert back.shape == clip.shape and back.dtype == np.uint8
+    assert np.abs(back.astype(int) - clip).mean() < 8  # lossy, but the same picture
+
+
+def test_write_video_ignores_the_core_count(tmp_path):
+    # x264 picks threads=1.5 x cores once a frame has enough macroblock rows (64 px here),
+    # and the thread count changes the bitstream; the child ffmpeg inherits our affinity.
+    if not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2:
+        pytest.skip("needs CPU affinity and at least two cores")
+    clip = _clip(1, height=64, width=96)
+    every = os.sched_getaffinity(0)
+    a = write_video(tmp_path / "all.mp4", clip).read_bytes()
+    try:
+        os.sched_setaffinity(0, {min(every)})
+        b = write_video(tmp_path / "one.mp4", clip).read_bytes()
+    finally:
+        os.sched_setaffinity(0, every)
+    assert a == b
+    assert b"threads=1 " in a
+
+
+def test_write_video_uses_the_pinned_ffmpeg(tmp_path, monkeypatch):
+    fake = tmp_path / "bin" / "ffmpeg"
+    fake.parent.mkdir()
+    fake.write_text(f"#!/bin/sh\ntouch {tmp_path / 'called'}\nexit 1\n")
+    fake.chmod(0o755)
+    clip = _clip(2)
+    expected = write_video(tmp_path / "a.mp4", clip).read_bytes()
+    with monkeypatch.context() as m:
+        m.setenv("PATH", f"{fake.parent}{os.pathsep}{os.environ.get('PATH', '')}")
+        m.setenv("IMAGEIO_FFMPEG_EXE", str(fake))
+        m.setattr(mediapy._config, "ffmpeg_name_or_path", "ffmpeg")  # as in a fresh process
+        got = write_video(tmp_path / "b.mp4", clip).read_bytes()
+    assert not (tmp_path / "called").exists()
+    assert got == expected
+
+
+@pytest.mark.parametrize("shape", [(2, 15, 24, 3), (2, 16, 24), (16, 24, 3)])
+def test_write_video_refuses_bad_shapes(tmp_path, shape):
+    with pytest.raises(ConfigError):
+        write_video(tmp_path / "v.mp4", np.zeros(shape, np.uint8))
+    assert list(tmp_path.iterdir()) == []
