@@ -107,7 +107,7 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
     return Path(path)
 
 
-def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> pd.DataFrame:
+def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> Path:
     """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others.
 
     Each robot's notebook run writes its own rows into a figure's shared CSV; the
@@ -115,7 +115,8 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
     :func:`locked` so that robots running in parallel do not lose each other's rows.
 
     Returns:
-        The whole table after the update.
+        ``path``. Read it back for the whole table: the file holds the rows as rounded
+        on writing, the same whichever robot wrote last.
     """
     path = Path(path)
     with locked(path.parent):
@@ -130,7 +131,7 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
         # rows ordered by key whatever order the robots ran in: the same file, run after run
         frame = frame.sort_values(key, kind="stable", ignore_index=True)
         write_csv(path, frame)
-    return frame
+    return path
 
 
 def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:

@@ -15,6 +15,7 @@ import seaborn as sns
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Rectangle
 
 from lasa.demos import Demonstrations
@@ -31,6 +32,7 @@ __all__ = [
     "plot_demonstrations",
     "plot_training_curves",
     "project",
+    "robot_rows",
     "robots_present",
 ]
 
@@ -140,6 +142,25 @@ def robots_present(table: pd.DataFrame) -> list[str]:
     """The robots with rows in ``table``, in the registry's order (``lasa.robot.ROBOTS``)."""
     have = set(table.robot)
     return [name for name in ROBOTS if name in have]
+
+
+def robot_rows(
+    table: pd.DataFrame, n_cols: int, figsize_per_row: tuple[float, float]
+) -> tuple[Figure, list[tuple[str, pd.DataFrame, np.ndarray]]]:
+    """A figure with one row of ``n_cols`` panels per robot present in ``table``.
+
+    Args:
+        table: Rows of every robot (a ``robot`` column).
+        n_cols: Panels per robot.
+        figsize_per_row: (width, height) of one row [inches].
+
+    Returns:
+        The figure, and for each robot its name, its rows and its row of axes.
+    """
+    present = robots_present(table)
+    width, height = figsize_per_row
+    fig, axes = plt.subplots(len(present), n_cols, figsize=(width, height * len(present)), squeeze=False)
+    return fig, [(name, table[table.robot == name], row) for name, row in zip(present, axes, strict=True)]
 
 
 def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None) -> Axes:

@@ -47,7 +47,8 @@ def test_update_csv_replaces_one_robots_rows(tmp_path):
     path = tmp_path / "t.csv"
     update_csv(path, pd.DataFrame({"robot": ["a", "a"], "x": [1, 2]}))
     update_csv(path, pd.DataFrame({"robot": ["b"], "x": [3]}))
-    table = update_csv(path, pd.DataFrame({"robot": ["a"], "x": [9]}))
+    assert update_csv(path, pd.DataFrame({"robot": ["a"], "x": [9]})) == path
+    table = pd.read_csv(path)
     assert sorted(zip(table.robot, table.x, strict=True)) == [("a", 9), ("b", 3)]
     assert len(pd.read_csv(path)) == 2
     with pytest.raises(ArtifactError, match="columns"):

@@ -25,7 +25,7 @@ from lasa.decoder import LatentActionModel
 from lasa.demos import Demonstrations
 from lasa.entropy import choose_lambda, context_entropy, context_grid
 from lasa.errors import ConfigError
-from lasa.plots import robots_present
+from lasa.plots import robot_rows
 from lasa.sims.common import check_positive_int
 from lasa.task import CupTask
 from lasa.train import TrainConfig, reconstruction_error, train_decoder
@@ -223,10 +223,8 @@ def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = 
 def plot(table: pd.DataFrame) -> Figure:
     """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda,
     and the sweep's trade-off."""
-    present = robots_present(table)
-    fig, axes = plt.subplots(len(present), 3, figsize=(16, 4.2 * len(present)), squeeze=False)
-    for name, row in zip(present, axes, strict=True):
-        part = table[table.robot == name]
+    fig, rows = robot_rows(table, 3, (16, 4.2))
+    for name, part, row in rows:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
         for ax, lam in zip(row, lams, strict=False):
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]

@@ -69,7 +69,12 @@ def publish(
     if missing:
         raise ConfigError(f"{module.NAME} rows lack column(s) {missing}")
     with locked(paths.figures):
-        table = update_csv(paths.figure(f"{module.NAME}.csv"), frame[list(module.COLUMNS)])
+        csv = update_csv(paths.figure(f"{module.NAME}.csv"), frame[list(module.COLUMNS)])
+        # Draw from the file, not from the merged frame: the robot that publishes last has
+        # its rows in full precision in memory and the other's as rounded in the CSV, so
+        # the figure would depend on which robot finished first. From the file, it is a
+        # function of the data saved beside it.
+        table = pd.read_csv(csv)
         dpi = int(getattr(module, "DPI", 150))
         save_figure(module.plot(table, **plot_args), paths.figure(f"{module.NAME}.png"), dpi)
         if claims:

@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
@@ -20,7 +19,7 @@ from lasa.claims import Claim
 from lasa.config import ControlConfig, check_range
 from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error
-from lasa.plots import method_lineplot, robots_present
+from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
 from lasa.sims.common import Decoders, check_methods, check_positive_int, episodes, run_population
 from lasa.task import CupTask
@@ -179,10 +178,8 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
 
 def plot(table: pd.DataFrame) -> Figure:
     """Fig. sim2: one row per robot present, final error and confidence against N."""
-    present = robots_present(table)
-    fig, axes = plt.subplots(len(present), 2, figsize=(11, 3.8 * len(present)), squeeze=False)
-    for name, row in zip(present, axes, strict=True):
-        part = table[table.robot == name]
+    fig, rows = robot_rows(table, 2, (11, 3.8))
+    for name, part, row in rows:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "confidence", ax=row[1])
         row[0].set_title(f"{name}: final state error")

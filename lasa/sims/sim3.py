@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import itertools
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
@@ -19,7 +18,7 @@ from matplotlib.figure import Figure
 from lasa.claims import Claim
 from lasa.config import ControlConfig, check_range
 from lasa.metrics import normalized_error
-from lasa.plots import method_lineplot, robots_present
+from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
 from lasa.sims.common import Decoders, check_methods, check_positive_int, episodes, run_population
 from lasa.task import CupTask
@@ -150,10 +149,8 @@ def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> A
 
 def plot(table: pd.DataFrame) -> Figure:
     """Fig. sim3: one row per robot present, the fast and the slow learner."""
-    present = robots_present(table)
-    fig, axes = plt.subplots(len(present), 2, figsize=(11, 3.8 * len(present)), squeeze=False)
-    for name, row in zip(present, axes, strict=True):
-        part = table[table.robot == name]
+    fig, rows = robot_rows(table, 2, (11, 3.8))
+    for name, part, row in rows:
         for ax, learner in zip(row, LEARNERS, strict=True):
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
