@@ -38,12 +38,15 @@ endif
 EXEC := $(BUILD)/notebooks
 JOBS ?= 2
 NPROC := $(shell nproc 2>/dev/null || echo 2)
-# torch threads per notebook: the cores shared among the notebooks that run at once
-export LASA_THREADS ?= $(shell n=$$(( $(NPROC) / $(JOBS) )); echo $$(( n > 0 ? n : 1 )))
-# ... and the same for OpenMP/BLAS: idle threads of two processes spin against each other
-# on tiny operations (measured: demonstration collection 8 s alone, 166 s oversubscribed).
-export OMP_NUM_THREADS ?= $(LASA_THREADS)
-export LP_NUM_THREADS ?= $(LASA_THREADS)  # llvmpipe (OSMesa) render threads
+# One torch and one OpenMP/BLAS thread per notebook, on every machine: more threads round
+# float reductions differently, and the figures would then depend on the core count
+# (lasa.config.set_threads). Idle BLAS threads of two processes also spin against each
+# other on tiny operations (measured: demonstration collection 8 s alone, 166 s
+# oversubscribed). The parallelism is the robots' chains side by side (JOBS).
+export LASA_THREADS ?= 1
+export OMP_NUM_THREADS ?= 1
+# llvmpipe (OSMesa) render threads: the cores shared among the notebooks that run at once
+export LP_NUM_THREADS ?= $(shell n=$$(( $(NPROC) / $(JOBS) )); echo $$(( n > 0 ? n : 1 )))
 LASA_SRC := $(shell find lasa -name '*.py' -o -name '*.xml') pyproject.toml
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)

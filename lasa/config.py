@@ -137,11 +137,15 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None) -> T:
     return cls(**kwargs)
 
 
-def set_threads(default: int | None = None) -> int:
-    """Set torch's intra-op threads from ``LASA_THREADS`` (else ``default``, else all cores).
+def set_threads(default: int = 1) -> int:
+    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one).
 
-    ``make figures`` runs notebooks in parallel and gives each a share of the cores
-    through ``LASA_THREADS``; a notebook run by hand uses the whole machine.
+    One thread by default, everywhere: a float reduction split over more threads rounds
+    differently in the last bits, and training amplifies that into other decoders and
+    other figures. With one thread, a notebook run by hand, ``make figures`` and CI give
+    the same numbers on any machine, and the committed figures are reproduced byte for
+    byte. ``make figures`` gets its parallelism from running the robots' notebooks side
+    by side instead. Set ``LASA_THREADS`` for speed when exactness does not matter.
 
     Returns:
         The number of threads set.
@@ -149,7 +153,7 @@ def set_threads(default: int | None = None) -> int:
     import torch  # noqa: PLC0415 (config stays importable without torch's start-up cost)
 
     value = os.environ.get("LASA_THREADS")
-    threads = int(value) if value else (default or os.cpu_count() or 1)
+    threads = int(value) if value else default
     if threads < 1:
         raise ConfigError(f"LASA_THREADS must be a positive integer, got {value!r}")
     torch.set_num_threads(threads)

@@ -44,3 +44,22 @@ def test_from_dict_refuses_unknown_keys():
 def test_round_trip():
     cfg = ControlConfig(alpha=0.4)
     assert from_dict(ControlConfig, to_dict(cfg)) == cfg
+
+
+def test_defaults_are_the_robots_units():
+    """ControlConfig's defaults are the values both robots use, not numbers of their own."""
+    from lasa.robot import ROBOTS
+
+    assert all(spec.control == ControlConfig() for spec in ROBOTS.values())
+    cfg = ControlConfig()
+    assert (cfg.dt, cfg.action_scale, cfg.belief_beta, cfg.alpha) == (0.1, 0.375, 20.0, 0.2)
+
+
+def test_from_dict_turns_yaml_lists_into_tuples_and_refuses_non_mappings():
+    from lasa.sims import sim1
+
+    cfg = from_dict(sim1.Config, {"betas": [1, 75, 1000], "n_seeds": 2})
+    assert cfg.betas == (1.0, 75.0, 1000.0) and cfg.n_seeds == 2
+    assert from_dict(sim1.Config, None) == sim1.Config()
+    with pytest.raises(ConfigError, match="mapping"):
+        from_dict(sim1.Config, [("n_seeds", 2)])  # type: ignore[arg-type]
