@@ -1,0 +1,521 @@
+"""Performance benchmarks: ``make bench`` -> ``benchmarks/results.json`` and ``scaling.png``.
+
+A script, not part of the ``lasa`` library. What it measures, on the machine it runs on
+(never asserted in tests):
+
+- ``step_latency_us``: one user's full LA+SA step on the Panda, from joystick input to
+  commanded state (decode, assistance, blend, belief update, safe step), with
+  :class:`lasa.controller.Controller`, i.e. the reference step
+  :func:`lasa.rollout.shared_autonomy_step` run for a batch of one; median and 99th
+  percentile over 10,000 steps. ``step_deadline`` is what that step has to meet: one
+  control period ``dt`` of the robot (0.1 s, a 10 Hz loop), and the fraction of it that
+  the p99 uses. ``mj_step_us`` is one ``mujoco.mj_step`` of the Panda scene in the same run.
+- ``sweep``: simulated user-steps per second of the batched rollout
+  (:func:`lasa.rollout.rollout`) for 1 to 4096 users, against a per-user, per-step
+  loop over the same decoder and the same step functions (``loop``: the rollout run
+  for one user at a time), and against the bare batched decoder forward pass at the
+  same size (``floor``), with the notebooks' torch threads (``LASA_THREADS``, else one).
+- ``training_s``: the time to train each decoder of ``configs/paper.yaml`` and its
+  final error, read from the checkpoints of a fresh paper-scale pipeline run.
+- ``figures_s``: wall time of ``make figures`` (fresh, into ``build/bench``) per
+  notebook and in total, and the same for ``make figures QUICK=1``.
+- ``render_fps``: frames per second of the off-screen video renderer.
+
+Usage, from the repository root: ``python benchmarks/bench.py --out benchmarks``
+(``--tiny`` runs every part at a toy size in seconds, as ``tests/test_bench.py`` does;
+``--skip-pipeline`` leaves out the two ``make figures`` runs). See ``benchmarks/README.md``.
+"""
+
+from __future__ import annotations
+
+import os
+
+# Off-screen rendering: mujoco reads MUJOCO_GL once, on import (lasa sets the same default).
+os.environ.setdefault("MUJOCO_GL", "osmesa")
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import datetime  # noqa: E402
+import json  # noqa: E402
+import platform  # noqa: E402
+import shutil  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+from typing import Any  # noqa: E402
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from lasa.config import ControlConfig, set_threads  # noqa: E402
+from lasa.controller import Controller  # noqa: E402
+from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
+from lasa.errors import ConfigError  # noqa: E402
+from lasa.io import write_text  # noqa: E402
+from lasa.robot import Robot, load_robot  # noqa: E402
+from lasa.rollout import rollout  # noqa: E402
+from lasa.task import CupTask, make_cup_task  # noqa: E402
+from lasa.users import UserPopulation, latent_grid  # noqa: E402
+from lasa.video import render_states  # noqa: E402
+
+__all__ = [
+    "ROOT",
+    "TARGETS",
+    "BenchConfig",
+    "step_latency",
+    "step_deadline",
+    "mj_step_time",
+    "sweep_throughput",
+    "render_fps",
+    "training_times",
+    "read_timings",
+    "run_pipeline",
+    "machine",
+    "plot_scaling",
+    "main",
+]
+
+ROOT = Path(__file__).resolve().parents[1]  # the repository (notebooks, configs, Makefile)
+
+# Targets that do not depend on the robot. The step's target, its deadline (one control
+# period dt), is added per run from the robot's ControlConfig (``step_latency_p99_us``).
+TARGETS: dict[str, float] = {
+    "sweep_speedup_at_1024": 100.0,
+    "sweep_floor_fraction_at_1024": 0.5,
+    "figures_total_s": 300.0,
+    "figures_quick_total_s": 90.0,
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class BenchConfig:
+    """Sizes of the benchmarks (the defaults are ``make bench``'s; ``tiny()`` is for tests)."""
+
+    latency_steps: int = 10_000  # control steps timed [-]
+    mj_steps: int = 10_000  # mj_step calls timed [-]
+    batches: tuple[int, ...] = (1, 4, 16, 64, 256, 1024, 4096)  # users per batched rollout [-]
+    sweep_steps: int = 20  # control steps per throughput measurement [-]
+    loop_user_steps: int = 200  # user-steps timed in the per-user loop [-]
+    render_frames: int = 40  # frames rendered per robot [-]
+    hidden: int = 128  # decoder width, as in configs/paper.yaml [-]
+    depth: int = 3  # decoder depth, as in configs/paper.yaml [-]
+    seed: int = 0  # seed of inputs, users and weights [-]
+
+    @classmethod
+    def tiny(cls) -> BenchConfig:
+        """Every benchmark at a toy size: seconds, for ``tests/test_bench.py``."""
+        return cls(
+            latency_steps=200,
+            mj_steps=100,
+            batches=(1, 8),
+            sweep_steps=3,
+            loop_user_steps=6,
+            render_frames=2,
+            hidden=16,
+            depth=2,
+        )
+
+
+def _percentiles(seconds: np.ndarray) -> dict[str, float]:
+    """``{p50, p99, mean}`` in microseconds and ``n``, of durations in seconds."""
+    us = np.asarray(seconds) * 1e6
+    return {
+        "p50": float(np.percentile(us, 50)),
+        "p99": float(np.percentile(us, 99)),
+        "mean": float(us.mean()),
+        "n": int(us.size),
+    }
+
+
+def _decoder(task: CupTask, control: ControlConfig, config: BenchConfig) -> LatentActionModel:
+    """A decoder of the paper's size; speed does not depend on its weights."""
+    torch.manual_seed(config.seed)
+    return LatentActionModel(
+        DecoderConfig(
+            robot=task.robot.name,
+            n_joints=task.robot.n_joints,
+            n_goals=task.n_goals,
+            z_dim=1,
+            hidden=config.hidden,
+            depth=config.depth,
+            action_scale=control.action_scale,
+        )
+    ).eval()
+
+
+def step_latency(
+    model: LatentActionModel, task: CupTask, control: ControlConfig, n_steps: int, seed: int = 0
+) -> tuple[dict[str, float], np.ndarray]:
+    """Latency of one LA+SA control step for one user (:meth:`lasa.controller.Controller.step`).
+
+    The joystick input is a random walk in [-1, 1]; the episode restarts from the start
+    pose every 200 steps so the arm stays in the task's region. The first 10% are warm-up.
+
+    Args:
+        model: The decoder.
+        task: The cup task.
+        control: Control-loop units (alpha is ``control.alpha``: the method LA+SA).
+        n_steps: Steps timed, after the warm-up.
+        seed: Seed of the joystick input.
+
+    Returns:
+        ``{p50, p99, mean, n}`` in microseconds, and every timed step [s].
+
+    Raises:
+        ConfigError: if ``n_steps`` < 10.
+    """
+    if n_steps < 10:
+        raise ConfigError(f"n_steps must be >= 10, got {n_steps}")
+    ctl = Controller(model, task, control, control.alpha)
+    rng = np.random.default_rng(seed)
+    warm = n_steps // 10
+    total = n_steps + warm
+    z = np.clip(np.cumsum(rng.normal(0, 0.2, total)), -1, 1)
+    times = np.empty(total)
+    clock = time.perf_counter
+    for i in range(total):
+        if i % 200 == 0:
+            ctl.reset()
+        t0 = clock()
+        ctl.step(z[i])
+        times[i] = clock() - t0
+    return _percentiles(times[warm:]), times[warm:]
+
+
+def step_deadline(control: ControlConfig, latency_us: dict[str, float]) -> dict[str, float]:
+    """The step's real-time deadline, one control period, and the share of it the p99 uses.
+
+    The controller integrates s' = s + dt a, so a live loop runs one step per ``dt`` of
+    wall-clock time (:mod:`lasa.controller`): the deadline is ``dt``.
+
+    Returns:
+        ``{dt_s, rate_hz, deadline_us, p99_fraction}`` (``p99_fraction`` = p99 / deadline).
+    """
+    deadline_us = control.dt * 1e6
+    return {
+        "dt_s": float(control.dt),
+        "rate_hz": 1.0 / control.dt,
+        "deadline_us": deadline_us,
+        "p99_fraction": latency_us["p99"] / deadline_us,
+    }
+
+
+def mj_step_time(robot: Robot, n_steps: int) -> dict[str, float]:
+    """One ``mujoco.mj_step`` of the robot's scene: ``{p50, p99, mean}`` [us] and ``n``."""
+    data = mujoco.MjData(robot.model)
+    data.qpos[robot.qpos_adr] = robot.home
+    mujoco.mj_forward(robot.model, data)
+    times = np.empty(n_steps)
+    clock = time.perf_counter
+    for i in range(n_steps):
+        t0 = clock()
+        mujoco.mj_step(robot.model, data)
+        times[i] = clock() - t0
+    return _percentiles(times)
+
+
+def _users(task: CupTask, n_users: int, rng: np.random.Generator) -> UserPopulation:
+    """``n_users`` near-optimal users (beta = 1000) with random goals and preferences."""
+    goal = rng.integers(0, task.n_goals, n_users)
+    theta = rng.uniform(0, 1, n_users)
+    return UserPopulation(
+        goal=goal,
+        theta=theta,
+        target=task.target(goal, theta),
+        beta0=np.full(n_users, 1000.0),
+        slope=np.zeros(n_users),
+        seed=np.arange(n_users),
+    )
+
+
+def _loop(
+    model: LatentActionModel,
+    task: CupTask,
+    control: ControlConfig,
+    users: UserPopulation,
+    noise: np.ndarray,
+    steps: int,
+) -> float:
+    """The baseline: the same rollout, one user at a time (so one step at a time) [user-steps/s]."""
+    start = time.perf_counter()
+    for u in range(len(users)):
+        rollout(model, task, users.subset(np.array([u])), control.alpha, control, steps, noise)
+    return len(users) * steps / (time.perf_counter() - start)
+
+
+def _floor(model: LatentActionModel, n_users: int, n_cand: int, steps: int) -> float:
+    """The bare batched decoder forward pass at the rollout's size [user-steps/s]."""
+    n, g, d = model.config.n_joints, model.n_goals, model.z_dim
+    z = torch.zeros(n_users, n_cand, d)
+    s = torch.zeros(n_users, n_cand, n)
+    b = torch.full((n_users, n_cand, g), 1.0 / g)
+    with torch.inference_mode():
+        model.decode(z, s, b)  # warm-up
+        start = time.perf_counter()
+        for _ in range(steps):
+            model.decode(z, s, b)
+    return n_users * steps / (time.perf_counter() - start)
+
+
+def sweep_throughput(
+    model: LatentActionModel, task: CupTask, control: ControlConfig, config: BenchConfig
+) -> dict[str, dict[str, float]]:
+    """User-steps per second, per batch size.
+
+    Returns:
+        ``{"<users>": {"batched", "loop", "floor"}}``: the batched rollout, the same
+        rollout run for one user at a time (at most ``config.loop_user_steps`` user-steps),
+        and the bare batched decoder forward pass on (users x candidates) rows.
+    """
+    rng = np.random.default_rng(config.seed)
+    n_cand = len(latent_grid(control.n_z, model.z_dim))
+    out: dict[str, dict[str, float]] = {}
+    for n_users in config.batches:
+        users = _users(task, n_users, rng)
+        noise = rng.random((n_users, config.sweep_steps, n_cand))
+        rollout(model, task, users, control.alpha, control, 1, noise)  # warm-up
+        start = time.perf_counter()
+        rollout(model, task, users, control.alpha, control, config.sweep_steps, noise)
+        batched = n_users * config.sweep_steps / (time.perf_counter() - start)
+        loop_users = max(1, min(n_users, config.loop_user_steps // config.sweep_steps))
+        loop = _loop(model, task, control, users.subset(np.arange(loop_users)), noise, config.sweep_steps)
+        floor = _floor(model, n_users, n_cand, config.sweep_steps)
+        out[str(n_users)] = {"batched": batched, "loop": loop, "floor": floor}
+    return out
+
+
+def render_fps(robot: Robot, n_frames: int) -> float:
+    """Frames per second of :func:`lasa.video.render_states` at 320x240 (OSMesa)."""
+    states = np.tile(robot.home, (n_frames, 1))
+    render_states(robot, states[:1])  # the GL context's first frame is dearer
+    start = time.perf_counter()
+    render_states(robot, states)
+    return n_frames / (time.perf_counter() - start)
+
+
+def training_times(models_dir: str | os.PathLike[str]) -> dict[str, dict[str, Any]]:
+    """Training time and final error of every decoder checkpoint in ``models_dir``.
+
+    Returns:
+        ``{"<checkpoint stem>": {seconds, steps, val_error, entropy_lambda, warm_start}}``,
+        each ``None`` where the checkpoint does not record it.
+    """
+    out = {}
+    for path in sorted(Path(models_dir).glob("decoder_*.pt")):
+        robot = path.stem.split("_")[1]
+        _, extra = load_checkpoint(path, robot=robot)
+        out[path.stem] = {
+            "seconds": extra.get("train_seconds"),
+            "steps": extra.get("train", {}).get("steps"),
+            "val_error": extra.get("val_error"),
+            "entropy_lambda": extra.get("entropy_lambda"),
+            "warm_start": extra.get("init"),
+        }
+    return out
+
+
+def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
+    """``{"<notebook>-<robot>": seconds}`` from a runner ``--timings`` file (JSON lines)."""
+    out = {}
+    for line in Path(path).read_text().splitlines():
+        if line.strip():
+            rec = json.loads(line)
+            key = rec["notebook"] + (f"-{rec['robot']}" if rec.get("robot") else "")
+            out[key] = float(rec["seconds"])
+    return out
+
+
+def run_pipeline(command: list[str], out_dir: Path) -> dict[str, Any]:
+    """Run one pipeline command from scratch into ``out_dir``, from the repository root.
+
+    ``out_dir`` is deleted first; the command must write ``out_dir/timings.jsonl``.
+
+    Returns:
+        ``{total, per_notebook, sum_of_notebooks}``: wall time [s], each notebook's
+        time [s] (:func:`read_timings`) and their sum.
+
+    Raises:
+        RuntimeError: if the command fails (with the end of its output).
+    """
+    if out_dir.exists():
+        shutil.rmtree(out_dir)
+    start = time.perf_counter()
+    result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
+    total = time.perf_counter() - start
+    if result.returncode != 0:
+        raise RuntimeError(f"{' '.join(command)} failed:\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}")
+    per = read_timings(out_dir / "timings.jsonl")
+    return {"total": total, "per_notebook": per, "sum_of_notebooks": float(sum(per.values()))}
+
+
+def machine() -> dict[str, Any]:
+    """What the numbers were measured on (CPU, cores, versions, date)."""
+    cpu = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "torch": torch.__version__,
+        "numpy": np.__version__,
+        "mujoco": mujoco.__version__,
+        "date": datetime.date.today().isoformat(),
+    }
+
+
+def plot_scaling(results: dict[str, Any], latencies: np.ndarray, path: Path) -> None:
+    """Throughput against batch size, and the control step's latency against its deadline."""
+    sweep = results["sweep"]
+    sizes = np.array([int(k) for k in sweep])
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4))
+    for key, style, label in (
+        ("floor", "k--", "bare batched decoder forward"),
+        ("batched", "o-", "batched rollout (Algorithm 1)"),
+        ("loop", "s-", "per-user, per-step loop"),
+    ):
+        ax1.plot(sizes, [sweep[str(s)][key] for s in sizes], style, label=label)
+    ax1.set_xscale("log")
+    ax1.set_yscale("log")
+    ax1.set_xlabel("simulated users per batch")
+    ax1.set_ylabel("user-steps per second")
+    ax1.set_title("sweep throughput")
+    ax1.legend(frameon=False)
+    # The deadline is two to three orders above the step: a log axis shows both.
+    us = latencies * 1e6
+    lat, deadline = results["step_latency_us"], results["step_deadline"]
+    low = min(float(us.min()), results["mj_step_us"]["mean"]) / 2
+    ax2.hist(us, bins=np.geomspace(low, 2 * deadline["deadline_us"], 120), color="0.6")
+    ax2.set_xscale("log")
+    for value, color, label in (
+        (lat["p50"], "C0", f"p50 {lat['p50']:.0f} us"),
+        (lat["p99"], "C3", f"p99 {lat['p99']:.0f} us ({100 * deadline['p99_fraction']:.1f}% of dt)"),
+        (
+            deadline["deadline_us"],
+            "k",
+            f"deadline dt = {deadline['dt_s'] * 1e3:.0f} ms ({deadline['rate_hz']:.0f} Hz)",
+        ),
+        (results["mj_step_us"]["mean"], "C2", f"mj_step {results['mj_step_us']['mean']:.0f} us"),
+    ):
+        ax2.axvline(value, color=color, ls="--", label=label)
+    ax2.set_xlabel("control step latency [us]")
+    ax2.set_ylabel("steps")
+    ax2.set_title("one user's LA+SA step on the Panda (Controller)")
+    ax2.legend(frameon=False, fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp.png")
+    fig.savefig(tmp, dpi=130)
+    os.replace(tmp, path)
+    plt.close(fig)
+
+
+def _tiny_pipeline(build: Path) -> dict[str, Any]:
+    """One QUICK notebook run (01, planar5), timed as ``make figures`` is, so the timing path cannot rot."""
+    nb_out = build / "tiny"
+    command = [
+        sys.executable,
+        "-m",
+        "lasa.runner",
+        str(ROOT / "notebooks" / "01_demonstrations.ipynb"),
+        "--config",
+        str(ROOT / "configs" / "quick.yaml"),
+        "--out",
+        str(nb_out / "notebooks"),
+        "--robot",
+        "planar5",
+        "--no-progress",
+        "--timings",
+        str(nb_out / "timings.jsonl"),
+        "--param",
+        f"build_dir={nb_out}",
+        "--param",
+        f"figures_dir={nb_out / 'figures'}",
+    ]
+    return run_pipeline(command, nb_out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmarks and write ``results.json`` and ``scaling.png`` into ``--out``."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--out", default="benchmarks", help="folder of results.json and scaling.png")
+    parser.add_argument("--tiny", action="store_true", help="toy sizes, for tests/test_bench.py")
+    parser.add_argument("--skip-pipeline", action="store_true", help="leave out the make figures runs")
+    parser.add_argument("--build", default="build/bench", help="scratch folder of the pipeline runs")
+    args = parser.parse_args(argv)
+    started = time.perf_counter()
+    config = BenchConfig.tiny() if args.tiny else BenchConfig()
+    out = Path(args.out).resolve()
+    build = Path(args.build).resolve()  # the pipeline runs from the repository root
+    step_threads = 1  # one user's step: a second thread only adds overhead
+    results: dict[str, Any] = {
+        "machine": machine(),
+        "threads": {
+            "step": step_threads,
+            "sweep": None,  # set below
+            "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
+        },
+        "targets": dict(TARGETS),
+        "config": dataclasses.asdict(config),
+    }
+
+    print("control step latency (Panda, one user)", flush=True)
+    torch.set_num_threads(step_threads)
+    arm = load_robot("panda")
+    task = make_cup_task(arm)
+    control = arm.control
+    model = _decoder(task, control, config)
+    results["step_latency_us"], latencies = step_latency(
+        model, task, control, config.latency_steps, config.seed
+    )
+    results["step_deadline"] = step_deadline(control, results["step_latency_us"])
+    results["targets"]["step_latency_p99_us"] = results["step_deadline"]["deadline_us"]
+    results["mj_step_us"] = mj_step_time(arm, config.mj_steps)
+    results["step_over_mj_step"] = results["step_latency_us"]["p50"] / results["mj_step_us"]["p50"]
+
+    print("sweep throughput", flush=True)
+    # the sweeps run with the notebooks' torch threads: LASA_THREADS, else one
+    results["threads"]["sweep"] = set_threads()
+    results["sweep"] = sweep_throughput(model, task, control, config)
+    torch.set_num_threads(step_threads)
+
+    print("rendering", flush=True)
+    results["render_fps"] = {
+        name: render_fps(load_robot(name), config.render_frames) for name in ("planar5", "panda")
+    }
+
+    if not args.skip_pipeline:
+        make = os.environ.get("MAKE", "make")
+        print("make figures (fresh, paper scale)", flush=True)
+        paper = run_pipeline([make, "figures", f"OUT={build / 'paper'}"], build / "paper")
+        print("make figures QUICK=1 (fresh)", flush=True)
+        quick = run_pipeline([make, "figures", "QUICK=1", f"OUT={build / 'quick'}"], build / "quick")
+        results["figures_s"] = {**paper, "quick": quick}
+        results["training_s"] = training_times(build / "paper" / "models")
+    elif args.tiny:
+        results["figures_s"] = _tiny_pipeline(build)
+        results["training_s"] = training_times(build / "tiny" / "models")
+
+    results["bench_s"] = time.perf_counter() - started
+    write_text(out / "results.json", json.dumps(results, indent=2) + "\n")
+    plot_scaling(results, latencies, out / "scaling.png")
+    summary = {k: results[k] for k in ("step_latency_us", "step_deadline", "mj_step_us", "sweep")}
+    print(json.dumps(summary, indent=2))
+    print(f"-> {out / 'results.json'}, {out / 'scaling.png'} ({results['bench_s']:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
