@@ -96,7 +96,7 @@ def test_claims_table(executed):
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
     assert not claims.duplicated(["id", "robot"]).any()
-    assert all(claims.id.str.startswith(claims.figure + "."))
+    assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
     per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n for f, n in per_figure.items() for r in ROBOTS
@@ -127,12 +127,12 @@ def test_entropy_outputs(executed, robot):
 
 def test_sim2_and_sim3_outputs(executed):
     fig = executed / "figures"
-    sim2 = pd.read_csv(fig / "sim2_change_of_mind.csv")
-    assert list(sim2.columns[: len(sim2.COLUMNS)]) == list(sim2.COLUMNS)
-    assert set(sim2.robot) == set(ROBOTS) and set(sim2.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
-    sim3 = pd.read_csv(fig / "sim3_learning_users.csv")
-    assert list(sim3.columns) == list(sim3.COLUMNS)
-    assert set(sim3.learner) == {"fast", "slow"} and set(sim3.robot) == set(ROBOTS)
+    frame2 = pd.read_csv(fig / "sim2_change_of_mind.csv")
+    assert list(frame2.columns[: len(sim2.COLUMNS)]) == list(sim2.COLUMNS)
+    assert set(frame2.robot) == set(ROBOTS) and set(frame2.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
+    frame3 = pd.read_csv(fig / "sim3_learning_users.csv")
+    assert list(frame3.columns) == list(sim3.COLUMNS)
+    assert set(frame3.learner) == {"fast", "slow"} and set(frame3.robot) == set(ROBOTS)
     for name in ("sim2_change_of_mind.png", "sim3_learning_users.png"):
         assert (fig / name).stat().st_size > 10_000
     for robot in ROBOTS:
@@ -166,11 +166,11 @@ def test_a_notebook_runs_from_its_own_folder_with_relative_paths(executed, monke
 
 def test_sim4_outputs(executed):
     fig = executed / "figures"
-    sim4 = pd.read_csv(fig / "sim4_new_goals.csv")
-    assert list(sim4.columns[: len(sim4.COLUMNS)]) == list(sim4.COLUMNS)
-    assert set(sim4.robot) == set(ROBOTS) and set(sim4.mapping) == {"with", "without"}
+    frame4 = pd.read_csv(fig / "sim4_new_goals.csv")
+    assert list(frame4.columns[: len(sim4.COLUMNS)]) == list(sim4.COLUMNS)
+    assert set(frame4.robot) == set(ROBOTS) and set(frame4.mapping) == {"with", "without"}
     for robot in ROBOTS:
-        part = sim4[sim4.robot == robot]
+        part = frame4[frame4.robot == robot]
         assert part.distance.max() == 1.0 and part.distance.min() > 0
         assert np.isfinite(part.error).all() and (part.error >= 0).all()
         # the farthest cup holds both mappings for every user
