@@ -14,7 +14,7 @@ import pytest
 
 from lasa.claims import CLAIM_COLUMNS
 from lasa.runner import load_config, run_notebook
-from lasa.sims import sim1
+from lasa.sims import sim1, sim2, sim3, sim4
 from lasa.video import read_video
 
 ROOT = Path(__file__).resolve().parents[1]
