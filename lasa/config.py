@@ -88,6 +88,7 @@ class ControlConfig:
     alpha: float = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: int = 21  # joystick candidates per latent axis the simulated user weighs [-]
     likelihood: str = "grasp_set"  # belief model: "grasp_set" (regret to grasp sets) or "goal"
+    assistance: str = "point"  # the shared-autonomy reading (lasa.assistance): Eq. M2 towards g = s*(g, 0.5)
 
     @property
     def likelihood_step(self) -> float | None:
@@ -102,6 +103,7 @@ class ControlConfig:
         check_range("belief_floor", self.belief_floor, 0.0, 0.5, high_open=True)
         check_range("alpha", self.alpha, 0.0, 1.0)
         check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
+        check_choice("assistance", self.assistance, ("point", "grasp_set", "arbitrated", "hindsight"))
         if int(self.n_z) != self.n_z or self.n_z < 2:
             raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
 

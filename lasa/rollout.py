@@ -5,7 +5,8 @@ Every user of a sweep advances together, as rows of arrays. At each step:
 1. one decoder call evaluates phi(z, s, b) for every user and every joystick
    candidate z on the grid (U x K rows);
 2. each user picks a candidate by Eq. S1 (:mod:`lasa.users`), which sets a_h;
-3. the robot's assistance a_r (Eq. M2) is blended with a_h (Eq. M1) using each
+3. the robot's assistance a_r (Eq. M2, or another member of :mod:`lasa.assistance`
+   named by ``ControlConfig.assistance``) is blended with a_h (Eq. M1) using each
    user's alpha: alpha = 0 is the method ``LA``, alpha > 0 is ``LA+SA``;
 4. the belief is updated with a_h (Alg. 1, line 8);
 5. the robot takes the safe step s' = clip(s + dt a).
@@ -23,9 +24,10 @@ import dataclasses
 import numpy as np
 from tqdm.auto import tqdm
 
+from lasa.assistance import assist
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.config import ControlConfig
-from lasa.control import assistance, blend, safe_step, sanitize
+from lasa.control import blend, safe_step, sanitize
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
 from lasa.task import CupTask
@@ -107,7 +109,10 @@ def _advance(
     ``sets`` the belief likelihood's goal sets (``task.belief_targets``).
     """
     a_h = sanitize(a_h)
-    a = blend(a_h, assistance(belief(log_b), task.goals, state), alpha)
+    a_r, weight = assist(
+        control.assistance, belief(log_b), state, task.goals, task.curves, control.dt, control.action_scale
+    )
+    a = blend(a_h, a_r, alpha * weight)
     lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
     new_log_b = update_log_belief(log_b, lik, control.belief_floor)
     robot = task.robot

@@ -2,7 +2,8 @@
 
 There is one implementation of Algorithm 1's step (:func:`lasa.rollout.shared_autonomy_step`);
 the Controller runs it for one user and keeps that user's state and belief. These
-property tests draw the whole option space (both likelihoods, belief floor 0 and > 0,
+property tests draw the whole option space (both likelihoods, every assistance member
+of lasa.assistance, belief floor 0 and > 0,
 alpha at 0, 1 and between, decoder depths, 1- and 2-axis joysticks, a task grown by a
 new goal through the context map) with random states, beliefs and inputs, NaN and huge
 ones included, and check that the Controller follows the user's row of a batched run
@@ -20,6 +21,7 @@ import torch
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from lasa.assistance import ASSISTANCE
 from lasa.belief import belief
 from lasa.controller import Controller
 from lasa.decoder import DecoderConfig, LatentActionModel
@@ -61,6 +63,7 @@ joystick = st.one_of(
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     likelihood=st.sampled_from(["grasp_set", "goal"]),
+    assistance=st.sampled_from(ASSISTANCE),
     floor=st.sampled_from([0.0, 1e-6, 0.05]),
     alpha=st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0.0, 1.0)),
     depth=st.sampled_from([1, 3]),
@@ -70,11 +73,13 @@ joystick = st.one_of(
     inputs=st.lists(st.lists(joystick, min_size=2, max_size=2), min_size=1, max_size=6),
 )
 def test_controller_follows_its_row_of_the_batched_step(
-    likelihood, floor, alpha, depth, z_dim, grown, seed, inputs
+    likelihood, assistance, floor, alpha, depth, z_dim, grown, seed, inputs
 ):
     task = _task(grown)
     decoder = _decoder(depth, z_dim, grown)
-    control = dataclasses.replace(task.robot.control, likelihood=likelihood, belief_floor=floor)
+    control = dataclasses.replace(
+        task.robot.control, likelihood=likelihood, belief_floor=floor, assistance=assistance
+    )
     rng = np.random.default_rng(seed)
     robot, n_users, row = task.robot, 4, 2
     s = rng.uniform(robot.lower, robot.upper, (n_users, robot.n_joints))
