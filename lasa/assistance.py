@@ -36,6 +36,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from lasa.config import ASSISTANCE
 from lasa.control import assistance as eq_m2
 from lasa.errors import ConfigError
 
@@ -149,7 +150,6 @@ def hindsight(
     return speed * np.einsum("ug,ugn->un", belief, diff / dist), np.ones(len(state))
 
 
-ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 _MEMBERS: dict[str, Member] = {
     "point": point,
     "grasp_set": grasp_set,

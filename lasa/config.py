@@ -17,6 +17,7 @@ from typing import Any, TypeVar
 from lasa.errors import ConfigError
 
 __all__ = [
+    "ASSISTANCE",
     "ControlConfig",
     "check_range",
     "check_choice",
@@ -25,6 +26,9 @@ __all__ = [
 ]
 
 T = TypeVar("T")
+
+# The members of the shared-autonomy family, named once; lasa.assistance implements them.
+ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 
 
 def check_range(
@@ -103,7 +107,7 @@ class ControlConfig:
         check_range("belief_floor", self.belief_floor, 0.0, 0.5, high_open=True)
         check_range("alpha", self.alpha, 0.0, 1.0)
         check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
-        check_choice("assistance", self.assistance, ("point", "grasp_set", "arbitrated", "hindsight"))
+        check_choice("assistance", self.assistance, ASSISTANCE)
         if int(self.n_z) != self.n_z or self.n_z < 2:
             raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+from pathlib import Path
 from typing import Any
 
 from lasa.config import ControlConfig, set_threads
@@ -57,7 +58,7 @@ class Workspace:
         """The robot's name."""
         return self.robot.name
 
-    def artifact(self, name: str) -> Any:
+    def artifact(self, name: str) -> Path:
         """The path of artifact ``name`` (see :data:`lasa.paths.ARTIFACTS`) for this robot."""
         return self.paths.artifact(name, self.name)
 

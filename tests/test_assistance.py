@@ -90,6 +90,9 @@ def test_every_member_is_batched_and_names_are_checked():
 
 
 def test_the_config_knows_every_member_and_defaults_to_point():
+    from lasa import assistance
+
+    assert tuple(assistance._MEMBERS) == ASSISTANCE  # each named member is implemented, and no other
     assert ControlConfig().assistance == "point"
     for name in ASSISTANCE:
         assert dataclasses.replace(ControlConfig(), assistance=name).assistance == name
