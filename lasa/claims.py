@@ -6,7 +6,12 @@ the README's table is generated from). Each row has a stable ``id`` (``sim1.fina
 so a claim can be reworded without leaving its old row behind: a figure's run replaces
 every row of that (figure, robot) and leaves the others. Rows are unique by (id, robot).
 ``assistance`` names the reading of shared autonomy the row was measured under
-(``point``: Eq. M2 towards one pose per goal). ``reproduced`` is ``yes``, ``partly`` or ``no``;
+(``point``: Eq. M2 towards one pose per goal). Each claim has a headline row, ``<figure>.<name>``,
+measured under the default reading, and one row per member of the family,
+``<figure>.<name>@<member>`` (:mod:`lasa.verdicts`). ``ci_low`` and ``ci_high`` bound the
+number the verdict rests on (a bootstrap 95% interval over users), and ``seeds_agree``
+says on how many independent draws of users the verdict comes out the same.
+``reproduced`` is ``yes``, ``partly`` or ``no``;
 a claim that does not reproduce is a result, reported with its measured value and the
 most likely reason in ``note``.
 """
@@ -14,6 +19,7 @@ most likely reason in ``note``.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 
@@ -29,7 +35,20 @@ README_MARKERS = (
     "<!-- claims:end -->",
 )
 
-CLAIM_COLUMNS = ("id", "claim", "figure", "robot", "assistance", "paper", "measured", "reproduced", "note")
+CLAIM_COLUMNS = (
+    "id",
+    "claim",
+    "figure",
+    "robot",
+    "assistance",
+    "paper",
+    "measured",
+    "ci_low",
+    "ci_high",
+    "reproduced",
+    "seeds_agree",
+    "note",
+)
 VERDICTS = ("yes", "partly", "no")
 
 
@@ -46,12 +65,24 @@ class Claim:
     note: str  # how the verdict was decided, and the likely reason if not "yes"
     robot: str  # the robot it was measured on
     assistance: str = "point"  # the shared-autonomy reading: Eq. M2 towards one pose per goal
+    value: float = math.nan  # the number the verdict rests on (``measured`` names it first)
+    ci_low: float = math.nan  # bootstrap 95% interval of ``value`` (lasa.verdicts)
+    ci_high: float = math.nan
+    seeds_agree: str = ""  # how many independent draws of users give the same verdict, "5/5"
 
     def __post_init__(self) -> None:
         if not self.id.startswith(f"{self.figure}.") or " " in self.id:
             raise ConfigError(f"claim id must be '<figure>.<name>' without spaces, got {self.id!r}")
         if self.reproduced not in VERDICTS:
             raise ConfigError(f"reproduced must be one of {VERDICTS}, got {self.reproduced!r}")
+
+
+def _row(claim: Claim) -> dict[str, object]:
+    """A claim as a table row: the interval to 4 significant digits, empty where unknown."""
+    row: dict[str, object] = dataclasses.asdict(claim)
+    for key in ("ci_low", "ci_high"):
+        row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
+    return row
 
 
 def render_markdown(frame: pd.DataFrame) -> str:
@@ -83,7 +114,7 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
         ConfigError: if two claims share an (id, robot), or the file has other columns.
     """
     path = Path(path)
-    new = pd.DataFrame([dataclasses.asdict(c) for c in claims], columns=list(CLAIM_COLUMNS))
+    new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
     if new.duplicated(["id", "robot"]).any():
         dup = new.loc[new.duplicated(["id", "robot"]), "id"].tolist()
         raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")

@@ -5,6 +5,12 @@ rationality x seed, or method x change step x seed, ...) and runs it batched, on
 rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
 Users that share a seed share their cup, preference and random stream across
 conditions, so methods are compared on paired episodes.
+
+A sweep holds ``n_draws`` independent draws of ``n_seeds`` users each (user ``seed``
+belongs to draw ``seed // n_seeds``), so that every verdict can be recomputed on each
+draw alone (:mod:`lasa.verdicts`), and runs its assisted methods under every member of
+the shared-autonomy family it is given (:func:`arms`); LA, which no assistance touches,
+runs once.
 """
 
 from __future__ import annotations
@@ -14,15 +20,19 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from lasa.config import ControlConfig
+from lasa.config import ASSISTANCE, ControlConfig, check_choice
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
 from lasa.rollout import METHOD_DECODER, METHODS, Trajectories, method_alpha, rollout
 from lasa.task import CupTask
 from lasa.users import UserPopulation, latent_grid
+from lasa.verdicts import NO_ASSISTANCE
 
 __all__ = [
     "Decoders",
+    "arms",
+    "check_members",
+    "members_of",
     "as_decoders",
     "check_methods",
     "check_positive_int",
@@ -46,6 +56,29 @@ def check_methods(methods: tuple[str, ...]) -> None:
     for method in methods:
         if method not in METHODS:
             raise ConfigError(f"unknown method {method!r}; choose from {METHODS}")
+
+
+def check_members(members: tuple[str, ...]) -> None:
+    """Every name is a member of :data:`lasa.config.ASSISTANCE`, and there is at least one."""
+    if not members:
+        raise ConfigError("assistance must name at least one member")
+    for name in members:
+        check_choice("assistance", name, ASSISTANCE)
+
+
+def members_of(control: ControlConfig, members: tuple[str, ...]) -> tuple[str, ...]:
+    """The members a sweep runs: the headline one (``control.assistance``) first, then the rest."""
+    return tuple(dict.fromkeys((control.assistance, *members)))
+
+
+def arms(methods: tuple[str, ...], members: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(method, assistance) pairs of a sweep: LA once, every assisted method under every member.
+
+    LA has alpha = 0, so no member changes it (Eq. M1 gives a = a_h exactly); its rows
+    carry the assistance ``none`` and every member's comparison shares them.
+    """
+    out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
+    return out + [(m, a) for a in members for m in methods if m != "LA"]
 
 
 def check_positive_int(name: str, value: int) -> None:
@@ -88,11 +121,13 @@ def run_population(
     horizon: int,
     noise: np.ndarray,
     progress: bool = False,
+    assistance: np.ndarray | None = None,
 ) -> Trajectories:
-    """Roll out a population whose users may use different methods (and decoders).
+    """Roll out a population whose users may use different methods, decoders and assistance.
 
-    Users are grouped by the decoder their method uses (``METHOD_DECODER``); each group
-    runs as one batched rollout, and the trajectories come back in the users' order.
+    Users are grouped by the decoder their method uses (``METHOD_DECODER``) and their
+    assistance member; each group runs as one batched rollout, and the trajectories
+    come back in the users' order.
 
     Args:
         decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
@@ -103,6 +138,8 @@ def run_population(
         horizon: Control steps.
         noise: The users' random streams, see :func:`lasa.rollout.rollout`.
         progress: Show progress bars.
+        assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
+            ``control.assistance`` for everyone.
 
     Raises:
         ConfigError: if a method's decoder is missing.
@@ -110,17 +147,20 @@ def run_population(
     decoders = as_decoders(decoders)
     methods = np.asarray(methods)
     alpha = np.array([method_alpha(m, control) for m in methods])
-    keys = np.array([METHOD_DECODER[m] for m in methods])
+    if assistance is None:
+        assistance = np.full(len(methods), control.assistance)
+    members = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
+    keys = np.array([f"{METHOD_DECODER[m]}|{a}" for m, a in zip(methods, members, strict=True)])
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
-        if key not in decoders:
+        name, member = key.split("|")
+        if name not in decoders:
             needing = sorted({str(m) for m in methods[keys == key]})
-            raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
+            raise ConfigError(f"methods {needing} need the {name!r} decoder; pass decoders[{name!r}]")
         idx = np.flatnonzero(keys == key)
         group = users.subset(idx)
-        parts.append(
-            (idx, rollout(decoders[key], task, group, alpha[idx], control, horizon, noise, progress))
-        )
+        ctrl = dataclasses.replace(control, assistance=member)
+        parts.append((idx, rollout(decoders[name], task, group, alpha[idx], ctrl, horizon, noise, progress)))
     if len(parts) == 1:
         return parts[0][1]
     merged = {}

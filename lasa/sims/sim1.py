@@ -15,14 +15,24 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.claims import Claim
-from lasa.config import ControlConfig, check_range
+from lasa.config import ASSISTANCE, ControlConfig, check_range
 from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error, time_to_reach
 from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
-from lasa.sims.common import Decoders, check_methods, check_positive_int, episodes, run_population
+from lasa.sims.common import (
+    Decoders,
+    arms,
+    check_members,
+    check_methods,
+    check_positive_int,
+    episodes,
+    members_of,
+    run_population,
+)
 from lasa.task import CupTask
 from lasa.users import UserPopulation
+from lasa.verdicts import member_frame, member_of
 
 __all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "plot", "plot_metric"]
 
@@ -39,6 +49,8 @@ COLUMNS = (
     "goal",
     "theta",
     "confidence",
+    "assistance",
+    "draw",
 )
 DPI = 150
 
@@ -48,7 +60,9 @@ class Config:
     """Fig. sim1: users of fixed expertise."""
 
     betas: tuple[float, ...] = (0.3, 1, 3, 10, 30, 75, 200, 1000, 3000, 10000)  # rationalities [1/rad^2]
-    n_seeds: int = 30  # simulated users per (method, beta) [-]
+    n_seeds: int = 30  # simulated users per (method, beta) in each draw [-]
+    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
+    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     horizon: int = 200  # control steps per episode [-]
     tolerance: float = 0.05  # normalised error that counts as reaching s* [-]
     methods: tuple[str, ...] = METHODS  # methods compared
@@ -62,6 +76,8 @@ class Config:
             check_range("beta", beta, 0.0)
         check_methods(self.methods)
         check_positive_int("n_seeds", self.n_seeds)
+        check_positive_int("n_draws", self.n_draws)
+        check_members(self.assistance)
         check_positive_int("horizon", self.horizon)
         check_range("tolerance", self.tolerance, 0.0, low_open=True)
 
@@ -84,12 +100,16 @@ def run(
         progress: Show progress bars.
 
     Returns:
-        One row per episode with the columns of :data:`COLUMNS`; and the trajectories
-        of all episodes (users in the frame's row order).
+        One row per episode with the columns of :data:`COLUMNS` (``assistance`` is
+        ``none`` for LA, ``draw`` numbers the independent draws of users); and the
+        trajectories of all episodes (users in the frame's row order).
     """
-    goal, theta, noise = episodes(decoders, task, control, config.n_seeds, config.horizon, config.seed)
-    grid = list(itertools.product(config.methods, config.betas, range(config.n_seeds)))
-    method = np.array([m for m, _, _ in grid])
+    n_users = config.n_seeds * config.n_draws
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
+    pairs = arms(config.methods, members_of(control, config.assistance))
+    grid = list(itertools.product(pairs, config.betas, range(n_users)))
+    method = np.array([m for (m, _), _, _ in grid])
+    member = np.array([a for (_, a), _, _ in grid])
     beta = np.array([b for _, b, _ in grid], dtype=float)
     seed = np.array([s for _, _, s in grid])
     users = UserPopulation(
@@ -100,7 +120,7 @@ def run(
         slope=np.zeros(len(grid)),
         seed=seed,
     )
-    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress)
+    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress, member)
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
     frame = pd.DataFrame(
@@ -115,17 +135,21 @@ def run(
             "goal": users.goal,
             "theta": users.theta,
             "confidence": confidence(traj.beliefs[-1], users.goal),
+            "assistance": member,
+            "draw": seed // config.n_seeds,
         }
     )
     return frame, traj
 
 
-def _means(frame: pd.DataFrame, metric: str, a: str, b: str) -> pd.DataFrame:
-    table = frame.groupby(["beta", "method"])[metric].mean().unstack()
-    return table[[a, b]]
+def _means(frame: pd.DataFrame) -> pd.DataFrame:
+    """Mean final error and time per (beta, method), methods as columns."""
+    return frame.groupby(["beta", "method"])[["final_error", "time"]].mean().unstack("method")
 
 
-def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Claim]:
+def _sa_claims(
+    frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", means: pd.DataFrame | None = None
+) -> list[Claim]:
     """Evaluate the paper's Fig. sim1 claims on a sim1 frame, comparing ``a`` with ``b``.
 
     The decision rules (written before the results were first seen):
@@ -146,8 +170,8 @@ def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Cla
     betas = set(frame.beta)
     if not {75.0, 1000.0} <= betas:
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
-    err = _means(frame, "final_error", a, b)
-    tim = _means(frame, "time", a, b)
+    means = _means(frame) if means is None else means
+    err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
     verdict1 = "yes" if n_lower == n_total else "partly" if n_lower > n_total / 2 else "no"
@@ -158,8 +182,10 @@ def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Cla
             claim=f"SA lowers the final state error at every beta ({b} vs {a})",
             figure="sim1",
             paper="LA+SA below LA at every beta",
+            value=float(n_lower),
             measured=(
-                f"{b} lower at {n_lower}/{n_total} betas; mean final error {a} vs {b}: "
+                f"{b} lower at {n_lower}/{n_total} betas (the interval is for this count); "
+                f"mean final error {a} vs {b}: "
                 f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
                 f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000"
             ),
@@ -170,10 +196,14 @@ def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Cla
                     ""
                     if verdict1 == "yes"
                     else f"Largest excess of {b} at beta={worst:g} "
-                    f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}). Likely reason: the "
-                    "assistance pulls towards the mid-preference grasp g, and an Eq. S1 user, "
-                    "who does not model the assistance, never fully resists it (Eq. T4), while "
-                    "LA alone lets users settle on s* exactly."
+                    f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}). "
+                    + (
+                        "Likely reason: the assistance pulls towards the mid-preference grasp g, "
+                        "and an Eq. S1 user, who does not model the assistance, never fully "
+                        "resists it (Eq. T4), while LA alone lets users settle on s* exactly."
+                        if member_of(frame) == "point"
+                        else ""
+                    )
                 )
             ),
             robot=robot,
@@ -189,6 +219,7 @@ def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Cla
             claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
             figure="sim1",
             paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
+            value=float(r75),
             measured=(
                 f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
                 f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)"
@@ -212,7 +243,9 @@ def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Cla
             claim=f"the gap between {a} and {b} narrows as beta grows",
             figure="sim1",
             paper="time gap 45% at beta=75 -> 30% at beta=1000",
+            value=float(abs(r75 - 1) - abs(r1000 - 1)),
             measured=(
+                f"time gap narrows by {abs(r75 - 1) - abs(r1000 - 1):+.2f} (|r75-1| - |r1000-1|): "
                 f"time ratio {r75:.2f} -> {r1000:.2f}; final-error difference {a}-{b} "
                 f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)"
             ),
@@ -227,7 +260,7 @@ def _sa_claims(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA") -> list[Cla
     return claims
 
 
-def _entropy_claim(frame: pd.DataFrame) -> Claim:
+def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Claim:
     """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy.
 
     Rule: for each of LA+SA and LA+SA+Entropy, count the betas at which its mean final
@@ -235,7 +268,7 @@ def _entropy_claim(frame: pd.DataFrame) -> Claim:
     below at more than half of them, else ``no``.
     """
     robot = str(frame.robot.iloc[0])
-    err = frame.groupby(["beta", "method"]).final_error.mean().unstack()
+    err = (_means(frame) if means is None else means)["final_error"]
     counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
     total = len(err)
     verdict = (
@@ -250,7 +283,10 @@ def _entropy_claim(frame: pd.DataFrame) -> Claim:
         claim="SA improves on LA whether or not the decoder was trained with entropy",
         figure="sim1",
         paper="LA+SA and LA+SA+Entropy both below LA (final error)",
+        value=float(min(counts.values())),
         measured=(
+            f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
+            "(the interval is for this count); "
             f"final error below LA's at {counts['LA+SA']}/{total} betas (LA+SA) and "
             f"{counts['LA+SA+Entropy']}/{total} (LA+SA+Entropy); at beta=1000: "
             + ", ".join(
@@ -266,7 +302,9 @@ def _entropy_claim(frame: pd.DataFrame) -> Claim:
                 ""
                 if verdict == "yes"
                 else "Likely reason: the pull of Eq. M2 towards the mid-preference grasp "
-                "(see the first sim1 row)."
+                "(see the sim1.final_error row)."
+                if member_of(frame) == "point"
+                else ""
             )
         ),
         robot=robot,
@@ -278,7 +316,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
 
     The rules are in :func:`_sa_claims` and :func:`_entropy_claim`.
     """
-    return [*_sa_claims(frame), _entropy_claim(frame)]
+    means = _means(frame)
+    return [*_sa_claims(frame, means=means), _entropy_claim(frame, means)]
 
 
 METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time to reach s* [steps]"}
@@ -301,8 +340,14 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
     return ax
 
 
-def plot(table: pd.DataFrame) -> Figure:
-    """Fig. sim1: one row per robot present, final error (log scale) and time against beta."""
+def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
+    """Fig. sim1: one row per robot present, final error (log scale) and time against beta.
+
+    Args:
+        table: Rows of every robot and member.
+        assistance: The member drawn (the headline one); LA's rows are shared.
+    """
+    table = member_frame(table, assistance)
     fig, rows = robot_rows(table, 2, (11, 3.8))
     for name, part, row in rows:
         plot_metric(part, "final_error", ax=row[0])
@@ -311,6 +356,6 @@ def plot(table: pd.DataFrame) -> Figure:
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: time to reach s*")
     n = int(table.groupby(["robot", "method", "beta"]).size().max())
-    fig.suptitle(f"Fig. sim1: users of fixed expertise, {n} users per point")
+    fig.suptitle(f"Fig. sim1: users of fixed expertise, {n} users per point, assistance: {assistance}")
     fig.tight_layout()
     return fig

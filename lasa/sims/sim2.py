@@ -16,19 +16,41 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.claims import Claim
-from lasa.config import ControlConfig, check_range
+from lasa.config import ASSISTANCE, ControlConfig, check_range
 from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error
 from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
-from lasa.sims.common import Decoders, check_methods, check_positive_int, episodes, run_population
+from lasa.sims.common import (
+    Decoders,
+    arms,
+    check_members,
+    check_methods,
+    check_positive_int,
+    episodes,
+    members_of,
+    run_population,
+)
 from lasa.task import CupTask
 from lasa.users import UserPopulation
+from lasa.verdicts import member_frame
 
 __all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "plot", "plot_metric"]
 
 NAME = "sim2_change_of_mind"
-COLUMNS = ("robot", "method", "change_step", "seed", "final_error", "confidence", "success")
+COLUMNS = (
+    "robot",
+    "method",
+    "change_step",
+    "seed",
+    "final_error",
+    "confidence",
+    "success",
+    "goal",
+    "theta",
+    "assistance",
+    "draw",
+)
 DPI = 150
 
 
@@ -38,7 +60,9 @@ class Config:
 
     change_steps: tuple[int, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
     beta: float = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
-    n_seeds: int = 30  # simulated users per (method, N) [-]
+    n_seeds: int = 30  # simulated users per (method, N) in each draw [-]
+    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
+    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     settle: int = 150  # steps after the largest N before the episode ends [steps]
     success: float = 0.1  # normalised final error that counts as reaching the right cup [-]
     methods: tuple[str, ...] = METHODS  # methods compared
@@ -52,6 +76,8 @@ class Config:
                 raise ConfigError(f"change step N must be an integer >= 0, got {n!r}")
         check_range("beta", self.beta, 0.0)
         check_positive_int("n_seeds", self.n_seeds)
+        check_positive_int("n_draws", self.n_draws)
+        check_members(self.assistance)
         check_positive_int("settle", self.settle)
         check_range("success", self.success, 0.0, low_open=True)
         check_methods(self.methods)
@@ -78,9 +104,12 @@ def run(
         One row per episode with the columns of :data:`COLUMNS` plus ``goal`` and
         ``theta`` (for the video); and the trajectories.
     """
-    goal, theta, noise = episodes(decoders, task, control, config.n_seeds, config.horizon, config.seed)
-    grid = list(itertools.product(config.methods, config.change_steps, range(config.n_seeds)))
-    method = np.array([m for m, _, _ in grid])
+    n_users = config.n_seeds * config.n_draws
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
+    pairs = arms(config.methods, members_of(control, config.assistance))
+    grid = list(itertools.product(pairs, config.change_steps, range(n_users)))
+    method = np.array([m for (m, _), _, _ in grid])
+    member = np.array([a for (_, a), _, _ in grid])
     change = np.array([n for _, n, _ in grid], dtype=int)
     seed = np.array([s for _, _, s in grid])
     wrong = (goal[seed] + 1) % task.n_goals
@@ -94,7 +123,7 @@ def run(
         first_target=task.target(wrong, theta[seed]),
         change_step=change,
     )
-    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress)
+    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress, member)
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
         {
@@ -107,6 +136,8 @@ def run(
             "goal": users.goal,
             "theta": users.theta,
             "success": final <= config.success,
+            "assistance": member,
+            "draw": seed // config.n_seeds,
         }
     )
     return frame, traj
@@ -138,9 +169,10 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             claim="LA+SA cannot escape the wrong goal as N grows",
             figure="sim2",
             paper="LA+SA's final error grows and its confidence falls as N grows",
+            value=float(sa_hi),
             measured=(
-                f"LA+SA reaches the right cup in {sa_lo:.0%} of episodes at N={lo} "
-                f"and {sa_hi:.0%} at N={hi}; "
+                f"LA+SA reaches the right cup in {sa_hi:.0%} of episodes at N={hi} "
+                f"(the interval is for this rate) and {sa_lo:.0%} at N={lo}; "
                 f"mean final error {err['LA+SA', lo]:.3f} -> {err['LA+SA', hi]:.3f}"
             ),
             reproduced=v1,
@@ -152,6 +184,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             claim="LA+SA+Entropy can escape the wrong goal",
             figure="sim2",
             paper="LA+SA+Entropy users switch goals",
+            value=float(en_hi),
             measured=(
                 f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
                 f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}"
@@ -176,8 +209,14 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
     return ax
 
 
-def plot(table: pd.DataFrame) -> Figure:
-    """Fig. sim2: one row per robot present, final error and confidence against N."""
+def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
+    """Fig. sim2: one row per robot present, final error and confidence against N.
+
+    Args:
+        table: Rows of every robot and member.
+        assistance: The member drawn (the headline one); LA's rows are shared.
+    """
+    table = member_frame(table, assistance)
     fig, rows = robot_rows(table, 2, (11, 3.8))
     for name, part, row in rows:
         plot_metric(part, "final_error", ax=row[0])
@@ -185,6 +224,6 @@ def plot(table: pd.DataFrame) -> Figure:
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: confidence in the true cup")
     n = int(table.groupby(["robot", "method", "change_step"]).size().max())
-    fig.suptitle(f"Fig. sim2: users who change their mind, {n} users per point")
+    fig.suptitle(f"Fig. sim2: users who change their mind, {n} users per point, assistance: {assistance}")
     fig.tight_layout()
     return fig

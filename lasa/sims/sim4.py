@@ -19,15 +19,24 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from lasa.claims import Claim
-from lasa.config import ControlConfig, check_choice, check_range
+from lasa.config import ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error
 from lasa.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
 from lasa.plots import robots_present
 from lasa.rollout import METHOD_DECODER, Trajectories, method_alpha, rollout
-from lasa.sims.common import Decoders, as_decoders, check_methods, check_positive_int, episodes
+from lasa.sims.common import (
+    Decoders,
+    as_decoders,
+    check_members,
+    check_methods,
+    check_positive_int,
+    episodes,
+    members_of,
+)
 from lasa.task import CupTask
 from lasa.users import UserPopulation
+from lasa.verdicts import NO_ASSISTANCE, member_frame
 
 __all__ = [
     "NAME",
@@ -55,6 +64,8 @@ COLUMNS = (
     "theta",
     "confidence",
     "reference",
+    "assistance",
+    "draw",
 )
 DPI = 150
 
@@ -75,7 +86,9 @@ class Config:
     )
     ref_goal: int = 1  # the training cup the new ones are referred to [-]
     beta: float = 1000.0  # near-optimal users [1/rad^2]
-    n_seeds: int = 30  # users per (mapping, new cup) [-]
+    n_seeds: int = 30  # users per (mapping, new cup) in each draw [-]
+    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
+    assistance: tuple[str, ...] = ASSISTANCE  # members the method's assistance runs under
     horizon: int = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
     maps: tuple[str, ...] = ("grasp", "straight_line")  # kinds of h run "with" the map (lasa.newgoals)
@@ -95,6 +108,8 @@ class Config:
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
         check_range("beta", self.beta, 0.0)
         check_positive_int("n_seeds", self.n_seeds)
+        check_positive_int("n_draws", self.n_draws)
+        check_members(self.assistance)
         check_positive_int("horizon", self.horizon)
         check_methods((self.method,))
         if not self.maps:
@@ -162,7 +177,9 @@ def run(
         of map, ``none`` without), ``offset_m``, ``theta``, ``confidence`` (b of the
         new cup at the end; NaN without the map) and ``reference`` (the error of a robot
         holding, at the training cup, the grasp the user wants at the new one: the
-        paper's "only ever reaches for the training goal"); and the runs per new cup.
+        paper's "only ever reaches for the training goal"), ``assistance`` (the member the
+        method's assistance ran under; ``none`` for LA) and ``draw``; and the runs per new
+        cup under the headline member (``control.assistance``).
     """
     if not 0 <= config.ref_goal < task.n_goals:
         raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {config.ref_goal}")
@@ -170,53 +187,61 @@ def run(
     decoder = as_decoders(decoders).get(key)
     if decoder is None:
         raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
-    _, theta, noise = episodes(decoder, task, control, config.n_seeds, config.horizon, config.seed)
-    seeds = np.arange(config.n_seeds)
+    n_users = config.n_seeds * config.n_draws
+    _, theta, noise = episodes(decoder, task, control, n_users, config.horizon, config.seed)
+    seeds = np.arange(n_users)
     alpha = method_alpha(config.method, control)
+    members = members_of(control, config.assistance) if alpha > 0 else (NO_ASSISTANCE,)
     grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
     dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
     scale = float(dist.max())
     runs, rows = [], []
-    for offset, big, d in zip(config.offsets, grown, dist, strict=True):
-        new = big.n_goals - 1
-        target = big.target(np.full(config.n_seeds, new), theta)
-        users = UserPopulation(
-            goal=np.full(config.n_seeds, new),
-            theta=theta,
-            target=target,
-            beta0=np.full(config.n_seeds, config.beta),
-            slope=np.zeros(config.n_seeds),
-            seed=seeds,
-        )
-        with_map = {}
-        for kind in config.maps:
-            mapped = MappedDecoder(decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
-            with_map[kind] = rollout(mapped, big, users, alpha, control, config.horizon, noise, progress)
-        plain = dataclasses.replace(users, goal=np.full(config.n_seeds, config.ref_goal))
-        without = rollout(decoder, task, plain, alpha, control, config.horizon, noise, progress)
-        runs.append(NewGoalRun(float(offset), big, with_map, without))
-        cases = [
-            ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
-        ]
-        cases.append(("without", "none", without, np.full(config.n_seeds, np.nan)))
-        reference = normalized_error(task.target(config.ref_goal, theta), target, scale)
-        for mapping, kind, traj, conf in cases:
-            rows.append(
-                pd.DataFrame(
-                    {
-                        "robot": task.robot.name,
-                        "mapping": mapping,
-                        "distance": d / scale,
-                        "seed": seeds,
-                        "error": normalized_error(traj.states[-1], target, scale),
-                        "h": kind,
-                        "offset_m": float(offset),
-                        "theta": theta,
-                        "confidence": conf,
-                        "reference": reference,
-                    }
-                )
+    for member in members:
+        ctrl = control if member == NO_ASSISTANCE else dataclasses.replace(control, assistance=member)
+        for offset, big, d in zip(config.offsets, grown, dist, strict=True):
+            new = big.n_goals - 1
+            target = big.target(np.full(n_users, new), theta)
+            users = UserPopulation(
+                goal=np.full(n_users, new),
+                theta=theta,
+                target=target,
+                beta0=np.full(n_users, config.beta),
+                slope=np.zeros(n_users),
+                seed=seeds,
             )
+            with_map = {}
+            for kind in config.maps:
+                mapped = MappedDecoder(decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
+                with_map[kind] = rollout(mapped, big, users, alpha, ctrl, config.horizon, noise, progress)
+            plain = dataclasses.replace(users, goal=np.full(n_users, config.ref_goal))
+            without = rollout(decoder, task, plain, alpha, ctrl, config.horizon, noise, progress)
+            if member == members[0]:
+                runs.append(NewGoalRun(float(offset), big, with_map, without))
+            cases = [
+                ("with", kind, traj, confidence(traj.beliefs[-1], users.goal))
+                for kind, traj in with_map.items()
+            ]
+            cases.append(("without", "none", without, np.full(n_users, np.nan)))
+            reference = normalized_error(task.target(config.ref_goal, theta), target, scale)
+            for mapping, kind, traj, conf in cases:
+                rows.append(
+                    pd.DataFrame(
+                        {
+                            "robot": task.robot.name,
+                            "mapping": mapping,
+                            "distance": d / scale,
+                            "seed": seeds,
+                            "error": normalized_error(traj.states[-1], target, scale),
+                            "h": kind,
+                            "offset_m": float(offset),
+                            "theta": theta,
+                            "confidence": conf,
+                            "reference": reference,
+                            "assistance": member,
+                            "draw": seeds // config.n_seeds,
+                        }
+                    )
+                )
     return pd.concat(rows, ignore_index=True), runs
 
 
@@ -290,7 +315,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
                 claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
                 figure="sim4",
                 paper="y = 0.11x, R^2 = 0.98",
-                measured=line(f),
+                value=float(f.slope),
+                measured=line(f) + " (the interval is for the slope)",
                 reproduced=verdict,
                 note=(
                     "rule: yes if R^2 >= 0.9, slope in (0, 0.25] and below the no-map error at every cup; "
@@ -315,7 +341,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             claim="without the map, the robot only reaches for the training goal",
             figure="sim4",
             paper="y = x",
-            measured=line(wo),
+            value=float(wo.slope),
+            measured=line(wo) + " (the interval is for the slope)",
             reproduced=verdict,
             note=(
                 "rule: yes if |slope - 1| <= 0.15 and R^2 >= 0.9, "
@@ -379,14 +406,15 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def plot(table: pd.DataFrame) -> Figure:
-    """Fig. sim4: one panel per robot present (:func:`plot_robot`)."""
+def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
+    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member."""
+    table = member_frame(table, assistance)
     present = robots_present(table)
     fig, axes = plt.subplots(1, len(present), figsize=(5.6 * len(present), 4.4), squeeze=False)
     for name, ax in zip(present, axes[0], strict=True):
         plot_robot(table[table.robot == name], ax=ax)
         ax.set_title(name)
     n = int(table.groupby(["robot", "h", "distance"]).size().max())
-    fig.suptitle(f"Fig. sim4: new goals, {n} near-optimal users per point")
+    fig.suptitle(f"Fig. sim4: new goals, {n} near-optimal users per point, assistance: {assistance}")
     fig.tight_layout()
     return fig
