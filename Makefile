@@ -2,6 +2,8 @@
 #
 #   make figures          regenerate every figure, CSV, video and the claims table (paper scale)
 #   make figures QUICK=1  the same pipeline at toy scale, into build/quick/ (figures/ untouched)
+#   make figures LARGE=1  paper scale with the cluster-sized verdict map (configs/large.yaml),
+#                         into build/large/; LASA_SCHEDULER=tcp://host:8786 runs its grid on Dask
 #   make test             lint + pytest, including every notebook run in QUICK mode
 #   make bench            performance benchmarks (benchmarks/bench.py) -> benchmarks/results.json, scaling.png
 #   make setup            create .venv from environment.lock (+ system libraries for rendering)
@@ -26,6 +28,9 @@ export MUJOCO_GL ?= osmesa
 ifeq ($(QUICK),1)
 CONFIG := configs/quick.yaml
 BUILD := build/quick
+else ifeq ($(LARGE),1)
+CONFIG := configs/large.yaml
+BUILD := build/large
 else
 CONFIG := configs/paper.yaml
 BUILD := build
@@ -74,7 +79,7 @@ ROBOTS := planar5 panda
 # Executed notebooks are the pipeline's stamps: never delete them as "intermediate" files.
 .SECONDARY:
 
-FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goals
+FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goals 08_claims_robustness 09_convergence
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
@@ -111,6 +116,15 @@ $(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_
 
 # New goals read the base decoder only (no retraining: that is the point of Sec. IV-C).
 $(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+# The verdict map re-runs sims 1-3 over a grid of settings with notebook 03's decoders;
+# its cells go through joblib (a Dask cluster if LASA_SCHEDULER=tcp://... is set).
+$(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN) --robot $*
+
+# Sec. IV-A's ball along LA+SA rollouts of the lambda = 0 control decoder.
+$(EXEC)/09_convergence-%.ipynb: notebooks/09_convergence.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 lint: setup

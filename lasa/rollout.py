@@ -31,7 +31,14 @@ from lasa.control import blend, safe_step, sanitize
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
 from lasa.task import CupTask
-from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs
+from lasa.users import (
+    UserPopulation,
+    choose_latent,
+    gumbel_noise,
+    latent_grid,
+    pilot_choice,
+    user_costs,
+)
 
 __all__ = [
     "Trajectories",
@@ -102,15 +109,19 @@ def _advance(
     a_h: np.ndarray,
     alpha: np.ndarray,
     sets: np.ndarray,
+    b: np.ndarray | None = None,
 ) -> StepResult:
     """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
 
     ``a_h`` is the decoded human action (U, n), ``alpha`` the blend weight per user (U,),
-    ``sets`` the belief likelihood's goal sets (``task.belief_targets``).
+    ``sets`` the belief likelihood's goal sets (``task.belief_targets``), ``b`` the
+    belief ``belief(log_b)`` if the caller has it already.
     """
     a_h = sanitize(a_h)
+    if b is None:
+        b = belief(log_b)
     a_r, weight = assist(
-        control.assistance, belief(log_b), state, task.goals, task.curves, control.dt, control.action_scale
+        control.assistance, b, state, task.goals, task.curves, control.dt, control.action_scale
     )
     a = blend(a_h, a_r, alpha * weight)
     lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
@@ -198,6 +209,7 @@ def rollout(
     horizon: int,
     noise: np.ndarray,
     progress: bool = False,
+    pilot_noise: np.ndarray | None = None,
 ) -> Trajectories:
     """Run Algorithm 1 for a batch of simulated users.
 
@@ -211,6 +223,9 @@ def rollout(
         noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
             ``noise[users.seed[u]]``. K must equal the number of joystick candidates.
         progress: Show a tqdm progress bar over the steps.
+        pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
+            (``users.pilot``, :func:`lasa.users.pilot_choice`); user u draws from
+            ``pilot_noise[users.seed[u]]``. Needed only by those pilots.
 
     Returns:
         The trajectories of every user.
@@ -224,6 +239,18 @@ def rollout(
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
     n = task.robot.n_joints
+    piloted = users.pilot != "boltzmann" and users.pilot_prob > 0
+    if piloted and (
+        pilot_noise is None
+        or pilot_noise.ndim != 3
+        or pilot_noise.shape[1] < horizon
+        or pilot_noise.shape[2] != 2
+    ):
+        got = None if pilot_noise is None else pilot_noise.shape
+        raise ConfigError(
+            f"a {users.pilot} pilot needs pilot_noise of shape (streams, >= {horizon}, 2), got {got}"
+        )
+    k_prev: np.ndarray | None = None
 
     states = np.empty((horizon + 1, n_users, n))
     beliefs = np.empty((horizon + 1, n_users, task.n_goals))
@@ -236,10 +263,15 @@ def rollout(
     rows = np.arange(n_users)
     sets = task.belief_targets(control.likelihood)
     for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
-        phi = decode_candidates(decoder, grid, s, beliefs[t])  # (U, K, n): the one decoder call
+        b = beliefs[t]  # belief(log_b), computed once per step
+        phi = decode_candidates(decoder, grid, s, b)  # (U, K, n): the one decoder call
         costs = user_costs(users.target_at(t), s, phi, control.dt)
         k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
-        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets)
+        if piloted:
+            assert pilot_noise is not None
+            k = pilot_choice(users, k, k_prev, pilot_noise[users.seed, t], len(grid))
+            k_prev = k
+        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets, b)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)

@@ -19,6 +19,12 @@ the steps t < N and at ``target`` from step N on.
 Sampling uses the Gumbel-max trick on pre-drawn uniforms, so that a user's choices
 depend only on its own random stream: the same user with the same seed makes the same
 draws under every method, a paired comparison.
+
+Eq. S1's user is one model of a person; the shared-autonomy literature also evaluates
+with surrogate *pilots* (Reddy et al. 2018, and the pilots of diffusion shared autonomy),
+:data:`PILOTS`: a ``laggy`` pilot repeats its previous input with probability p, a
+``noisy`` one takes a uniformly random input with probability p; otherwise both choose
+as Eq. S1's user does (:func:`pilot_choice`).
 """
 
 from __future__ import annotations
@@ -29,7 +35,20 @@ import numpy as np
 
 from lasa.errors import ConfigError
 
-__all__ = ["UserPopulation", "user_costs", "choose_latent", "gumbel_noise", "latent_grid"]
+__all__ = [
+    "PILOTS",
+    "UserPopulation",
+    "user_costs",
+    "choose_latent",
+    "gumbel_noise",
+    "latent_grid",
+    "pilot_choice",
+]
+
+PILOTS = ("boltzmann", "laggy", "noisy")
+
+
+_SCALARS = ("pilot", "pilot_prob")  # UserPopulation fields shared by every user
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,6 +65,8 @@ class UserPopulation:
         first_target: The pose each user aims at before changing their mind, (U, n);
             ``None`` for users who never do.
         change_step: N, the first step at which each user aims at ``target``, (U,).
+        pilot: The kind of user, one of :data:`PILOTS` (all users of a population).
+        pilot_prob: p of the laggy or noisy pilot [-]; unused by ``boltzmann``.
     """
 
     goal: np.ndarray
@@ -56,10 +77,18 @@ class UserPopulation:
     seed: np.ndarray
     first_target: np.ndarray | None = None
     change_step: np.ndarray | None = None
+    pilot: str = "boltzmann"
+    pilot_prob: float = 0.0
 
     def __post_init__(self) -> None:
         n = len(self.goal)
+        if self.pilot not in PILOTS:
+            raise ConfigError(f"unknown pilot {self.pilot!r}; choose one of {', '.join(map(repr, PILOTS))}")
+        if not 0.0 <= self.pilot_prob <= 1.0:
+            raise ConfigError(f"pilot_prob must be in [0, 1], got {self.pilot_prob!r}")
         for f in dataclasses.fields(self):
+            if f.name in _SCALARS:
+                continue
             value = getattr(self, f.name)
             if value is not None and len(value) != n:
                 raise ConfigError(f"UserPopulation.{f.name} has {len(value)} rows, expected {n}")
@@ -82,7 +111,9 @@ class UserPopulation:
         picked = {
             f.name: None if getattr(self, f.name) is None else np.asarray(getattr(self, f.name))[index]
             for f in dataclasses.fields(self)
+            if f.name not in _SCALARS
         }
+        picked.update(pilot=self.pilot, pilot_prob=self.pilot_prob)
         return UserPopulation(**picked)  # type: ignore[arg-type]
 
     def target_at(self, t: int) -> np.ndarray:
@@ -112,14 +143,24 @@ def user_costs(target: np.ndarray, state: np.ndarray, phi: np.ndarray, dt: float
         phi: Decoded action of every candidate, shape (U, K, n).
         dt: Control period.
     """
-    diff = (target - state)[:, None, :] - dt * phi
+    offset = (target - state)[:, None, :]
+    diff = dt * phi
+    if diff.shape == np.broadcast_shapes(offset.shape, diff.shape) and diff.dtype == np.result_type(
+        offset, diff
+    ):
+        np.subtract(offset, diff, out=diff)  # the same difference, without a second buffer
+    else:
+        diff = offset - diff
     return np.einsum("ukn,ukn->uk", diff, diff)
 
 
 def gumbel_noise(uniform: np.ndarray) -> np.ndarray:
     """Gumbel(0, 1) samples from uniforms in (0, 1)."""
-    u = np.clip(uniform, 1e-12, 1.0 - 1e-12)
-    return -np.log(-np.log(u))
+    u = np.clip(uniform, 1e-12, 1.0 - 1e-12)  # a new array: the steps below reuse it
+    np.log(u, out=u)
+    np.negative(u, out=u)
+    np.log(u, out=u)
+    return np.negative(u, out=u)
 
 
 def choose_latent(costs: np.ndarray, beta: np.ndarray, gumbel: np.ndarray) -> np.ndarray:
@@ -136,8 +177,14 @@ def choose_latent(costs: np.ndarray, beta: np.ndarray, gumbel: np.ndarray) -> np
     Returns:
         Chosen candidate indices, shape (U,).
     """
-    costs = np.where(np.isfinite(costs), costs, np.inf)
     beta = np.asarray(beta, dtype=float)[:, None]
+    if np.all(np.isfinite(costs)) and np.all(np.isfinite(beta)) and np.all(beta >= 0.0):
+        # The common case, in fewer passes: every masked branch below is inactive, and a
+        # zero beta gives logits of -0.0 instead of 0.0 (the same sums with the noise).
+        logits = np.multiply(beta, costs)
+        np.negative(logits, out=logits)
+        return np.argmax(logits + gumbel, axis=1)
+    costs = np.where(np.isfinite(costs), costs, np.inf)
     finite_beta = np.isfinite(beta)
     with np.errstate(invalid="ignore"):
         logits = np.where(finite_beta, -np.where(beta > 0, beta * costs, 0.0), 0.0)
@@ -146,3 +193,33 @@ def choose_latent(costs: np.ndarray, beta: np.ndarray, gumbel: np.ndarray) -> np
     best = costs <= costs.min(axis=1, keepdims=True)
     logits = np.where(finite_beta, logits, np.where(best, 0.0, -np.inf))
     return np.argmax(logits + gumbel, axis=1)
+
+
+def pilot_choice(
+    users: UserPopulation,
+    choice: np.ndarray,
+    previous: np.ndarray | None,
+    uniforms: np.ndarray,
+    n_candidates: int,
+) -> np.ndarray:
+    """The input a pilot gives, from the one Eq. S1 would choose.
+
+    Args:
+        users: The population (its ``pilot`` and ``pilot_prob``).
+        choice: Eq. S1's candidate index per user, shape (U,).
+        previous: Each user's input at the previous step, (U,); None at the first step
+            (a laggy pilot has nothing to repeat yet).
+        uniforms: Two uniforms in [0, 1) per user, shape (U, 2): the event, and the random
+            input of the noisy pilot.
+        n_candidates: K, the number of joystick candidates.
+
+    Returns:
+        Candidate indices, shape (U,): ``choice`` itself for Boltzmann users.
+    """
+    if users.pilot == "boltzmann" or users.pilot_prob == 0.0:
+        return choice
+    event = uniforms[:, 0] < users.pilot_prob
+    if users.pilot == "laggy":
+        return choice if previous is None else np.where(event, previous, choice)
+    random = np.minimum((uniforms[:, 1] * n_candidates).astype(int), n_candidates - 1)
+    return np.where(event, random, choice)

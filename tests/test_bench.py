@@ -58,6 +58,10 @@ def test_results_hold_every_key(tiny_results):
     for row in results["sweep"].values():
         assert set(row) == {"batched", "loop", "floor"} and all(v > 0 for v in row.values())
     assert set(results["render_fps"]) == {"planar5", "panda"}
+    grid = results["dask_grid"]
+    assert grid["cells"] == TINY.grid_cells and grid["local_s"] > 0
+    assert set(grid["workers"]) == {"1", "2"} and grid["speedup_2_over_1"] > 0
+    assert grid["identical"] is True  # the same rows here and on 1 or 2 Dask workers
     figures = results["figures_s"]
     assert set(figures["per_notebook"]) == {"01_demonstrations-planar5"} and figures["total"] > 0
     assert isinstance(results["training_s"], dict)

@@ -27,6 +27,8 @@ ORDER = [
     "05_changing_goals",
     "06_learning_users",
     "07_new_goals",
+    "08_claims_robustness",
+    "09_convergence",
 ]
 ROBOTS = ["planar5", "panda"]
 
@@ -82,7 +84,8 @@ def test_sim1_outputs(executed):
     assert list(frame.columns[: len(sim1.COLUMNS)]) == list(sim1.COLUMNS)
     params = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")
     sweep = params["settings"]
-    assert len(frame) == len(ROBOTS) * 3 * len(sweep["betas"]) * sweep["n_seeds"]
+    arms = 1 + 2 * 4  # LA once, LA+SA and LA+SA+Entropy under each of the four members
+    assert len(frame) == len(ROBOTS) * arms * len(sweep["betas"]) * sweep["n_seeds"] * sweep["n_draws"]
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"} and set(frame.robot) == set(ROBOTS)
     assert frame.final_error.notna().all()
     assert (fig / "sim1_fixed_expertise.png").stat().st_size > 10_000
@@ -92,18 +95,53 @@ def test_sim1_outputs(executed):
 
 
 def test_claims_table(executed):
+    from lasa.config import ASSISTANCE
+
     fig = executed / "figures"
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
     assert not claims.duplicated(["id", "robot"]).any()
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
     per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
+    rows = 1 + len(ASSISTANCE)  # a headline row and one per member of the family
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
-        (f, r): n for f, n in per_figure.items() for r in ROBOTS
+        (f, r): n * rows for f, n in per_figure.items() for r in ROBOTS
     }
+    head = claims[~claims.id.str.contains("@")]
+    assert set(head.assistance) == {"point"} and head.note.str.startswith("Headline under").all()
+    members = claims[claims.id.str.contains("@")]
+    assert (members.id.str.split("@").str[1] == members.assistance).all()
+    assert set(members.assistance) == set(ASSISTANCE)
     assert set(claims.reproduced) <= {"yes", "partly", "no"}
     assert all(claims.measured.str.len() > 0)
-    assert (fig / "claims.md").read_text().count("| sim2 |") == 2 * len(ROBOTS)
+    draws = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]["n_draws"]
+    assert claims.seeds_agree.str.fullmatch(rf"[0-{draws}]/{draws}").all()
+    low, high = pd.to_numeric(claims.ci_low), pd.to_numeric(claims.ci_high)
+    assert (low <= high).all()
+    assert (fig / "claims.md").read_text().count("| sim2 |") == 2 * rows * len(ROBOTS)
+
+
+def test_claims_robustness_outputs(executed):
+    from lasa.sims import robustness
+
+    fig = executed / "figures"
+    frame = pd.read_csv(fig / "claims_robustness.csv")
+    assert list(frame.columns) == list(robustness.COLUMNS)
+    settings = load_config(QUICK, ROOT / "notebooks" / "08_claims_robustness.ipynb")["settings"]
+    assert set(frame.robot) == set(ROBOTS) and set(frame.assistance) == set(settings["assistance"])
+    assert set(frame.seed) == {robustness.POOLED, *range(settings["n_draws"])}
+    assert set(frame.id.str.split(".").str[0]) == {"sim1", "sim2", "sim3"}
+    assert (fig / "claims_robustness.png").stat().st_size > 10_000
+
+
+def test_convergence_outputs(executed):
+    fig = executed / "figures"
+    frame = pd.read_csv(fig / "convergence.csv")
+    contract = ["robot", "assistance", "beta", "seed", "t", "error", "delta", "v_dot"]
+    assert list(frame.columns[: len(contract)]) == contract
+    assert set(frame.robot) == set(ROBOTS)
+    assert (frame.delta > 0).all() and (frame.error >= 0).all()
+    assert (fig / "convergence.png").stat().st_size > 10_000
 
 
 @pytest.mark.parametrize("robot", ROBOTS)

@@ -11,12 +11,12 @@ from lasa.runner import load_config, notebook_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
-CONFIGS = [ROOT / "configs" / "paper.yaml", ROOT / "configs" / "quick.yaml"]
+CONFIGS = [ROOT / "configs" / n for n in ("paper.yaml", "quick.yaml", "large.yaml")]
 COMMON = {"robot", "quick", "build_dir", "figures_dir", "settings"}
 
 
 def test_there_are_notebooks():
-    assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07"]
+    assert [p.stem[:2] for p in NOTEBOOKS] == ["01", "02", "03", "04", "05", "06", "07", "08", "09"]
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda p: p.stem)

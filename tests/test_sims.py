@@ -1,5 +1,7 @@
 """Figs. sim1-sim3 (lasa.sims.sim1, sim2, sim3): columns, determinism, pairing, and the claims' rules."""
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -8,7 +10,8 @@ from lasa.errors import ConfigError
 from lasa.sims import sim1, sim2, sim3
 from lasa.sims.common import episodes
 
-SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0, methods=("LA", "LA+SA"))
+ONE = {"n_draws": 1, "assistance": ("point",)}  # one draw, the headline member: the bare sweep
+SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0, methods=("LA", "LA+SA"), **ONE)
 
 
 def test_sim1_frame_columns_and_size(model, task):
@@ -100,7 +103,7 @@ def both(model):
 
 def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
     frame, traj = sim1.run(
-        both(model), task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), n_seeds=2, horizon=10)
+        both(model), task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), n_seeds=2, horizon=10, **ONE)
     )
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
     # the entropy rows used the same model here, with LA+SA's alpha: identical episodes
@@ -115,7 +118,7 @@ def test_a_missing_decoder_is_a_clear_error(model, task):
 
 
 def test_sim2_frame(model, task):
-    cfg = sim2.Config(change_steps=(0, 5), n_seeds=2, settle=10)
+    cfg = sim2.Config(change_steps=(0, 5), n_seeds=2, settle=10, **ONE)
     frame, traj = sim2.run(both(model), task, task.robot.control, cfg)
     assert set(sim2.COLUMNS) <= set(frame.columns)
     assert len(frame) == 3 * 2 * 2 and traj.states.shape[0] == cfg.horizon + 1 == 16
@@ -123,7 +126,7 @@ def test_sim2_frame(model, task):
 
 
 def test_sim3_frame(model, task):
-    cfg = sim3.Config(n_seeds=2, horizon=10, record_every=5)
+    cfg = sim3.Config(n_seeds=2, horizon=10, record_every=5, **ONE)
     frame, _ = sim3.run(both(model), task, task.robot.control, cfg)
     assert list(frame.columns) == list(sim3.COLUMNS)
     assert set(frame.learner) == {"fast", "slow"} and set(frame.t) == {0, 5, 10}
@@ -227,3 +230,37 @@ def test_sim1_claims_have_stable_ids():
         "sim1.gap_narrows",
         "sim1.entropy_sa",
     ]
+
+
+def test_members_and_draws_share_la_and_keep_the_headline_bitwise(model, task):
+    """LA runs once (assistance 'none'); the headline member's rows equal a run of it alone."""
+    ctl = task.robot.control
+    cfg = sim1.Config(
+        betas=(75.0, 1000.0), n_seeds=2, horizon=15, n_draws=2, assistance=("point", "hindsight")
+    )
+    frame, _ = sim1.run(both(model), task, ctl, cfg)
+    la = frame[frame.method == "LA"]
+    assert set(la.assistance) == {"none"} and len(la) == 2 * 4
+    assert set(frame[frame.method != "LA"].assistance) == {"point", "hindsight"}
+    assert len(frame) == (1 + 2 * 2) * 2 * 4
+    np.testing.assert_array_equal(frame.draw, frame.seed // 2)
+    alone, _ = sim1.run(both(model), task, ctl, dataclasses.replace(cfg, assistance=("point",)))
+    head = frame[frame.assistance.isin(["none", "point"])].reset_index(drop=True)
+    pd.testing.assert_frame_equal(head, alone.reset_index(drop=True))
+    # the headline member is always run, first, even if the config leaves it out
+    other, _ = sim1.run(both(model), task, ctl, dataclasses.replace(cfg, assistance=("hindsight",)))
+    assert list(dict.fromkeys(other.assistance)) == ["none", "point", "hindsight"]
+
+
+def test_a_laggy_pilot_that_always_lags_never_moves_the_stick(model, task):
+    cfg = sim3.Config(n_seeds=3, horizon=12, pilot="laggy", pilot_prob=1.0, methods=("LA",), **ONE)
+    _, traj = sim3.run(model, task, task.robot.control, cfg)
+    assert (traj.z == traj.z[:1]).all()  # every later input repeats the first
+    _, boltzmann = sim3.run(model, task, task.robot.control, dataclasses.replace(cfg, pilot_prob=0.0))
+    assert not (boltzmann.z == boltzmann.z[:1]).all()
+
+
+@pytest.mark.parametrize("kw,match", [({"pilot": "sleepy"}, "pilot"), ({"pilot_prob": 1.5}, "pilot_prob")])
+def test_bad_pilot_is_a_clear_error(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        sim1.Config(**kw)

@@ -106,3 +106,29 @@ def test_subset_keeps_every_field():
     users = _population(first_target=np.ones((2, 3)), change_step=np.array([1, 2]))
     one = users.subset(np.array([1]))
     assert len(one) == 1 and one.change_step.tolist() == [2] and one.seed.tolist() == [1]
+
+
+def test_pilot_choice_hand_computed():
+    from lasa.users import UserPopulation, pilot_choice
+
+    def users(pilot, p):
+        n = 3
+        return UserPopulation(
+            goal=np.zeros(n, int),
+            theta=np.zeros(n),
+            target=np.zeros((n, 2)),
+            beta0=np.ones(n),
+            slope=np.zeros(n),
+            seed=np.arange(n),
+            pilot=pilot,
+            pilot_prob=p,
+        )
+
+    choice, prev = np.array([4, 5, 6]), np.array([0, 1, 2])
+    u = np.array([[0.1, 0.0], [0.5, 0.55], [0.9, 0.99]])  # event below p = 0.6 for the first two
+    np.testing.assert_array_equal(pilot_choice(users("boltzmann", 0.6), choice, prev, u, 10), choice)
+    np.testing.assert_array_equal(pilot_choice(users("laggy", 0.6), choice, prev, u, 10), [0, 1, 6])
+    np.testing.assert_array_equal(pilot_choice(users("laggy", 0.6), choice, None, u, 10), choice)
+    # noisy: the random input is floor(u2 * K): 0 and 5 for the users whose event fired
+    np.testing.assert_array_equal(pilot_choice(users("noisy", 0.6), choice, prev, u, 10), [0, 5, 6])
+    assert pilot_choice(users("noisy", 1.0), choice, prev, np.array([[0.0, 1.0]] * 3), 10).max() == 9

@@ -9,6 +9,8 @@ module                    figure                            notebook
 :mod:`.sim2`              Fig. sim2, change of mind         05_changing_goals
 :mod:`.sim3`              Fig. sim3, learning users         06_learning_users
 :mod:`.sim4`              Fig. sim4, new goals              07_new_goals
+:mod:`.robustness`        the verdict map                   08_claims_robustness
+:mod:`.convergence`       Sec. IV-A, the T1-T4 ball         09_convergence
 ========================  ================================  ===========================
 
 Each module defines ``NAME`` (the figure's file stem under ``figures/``), ``COLUMNS``
@@ -18,6 +20,10 @@ from its notebook's ``settings`` (:func:`lasa.config.from_dict`), ``run``, ``cla
 present). :func:`lasa.sims.publish.publish` merges a robot's rows into the figure's CSV,
 redraws the figure and updates the claims table, as one step under the folder lock.
 Changing a figure means changing its module and its notebook, nothing else.
+
+The claims of sims 1-4 come with their uncertainty and one row per reading of shared
+autonomy (:mod:`lasa.verdicts`); the verdict map re-evaluates the sim1-sim3 claims over
+a grid of settings, and runs its cells locally or on a Dask cluster (:mod:`lasa.scaleout`).
 
 The decision rules of the claims were written before the results they judge were
 first seen, with one exception, said where it stands: the "partly" rule of sim4's

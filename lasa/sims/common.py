@@ -20,12 +20,12 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from lasa.config import ASSISTANCE, ControlConfig, check_choice
+from lasa.config import ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
 from lasa.rollout import METHOD_DECODER, METHODS, Trajectories, method_alpha, rollout
 from lasa.task import CupTask
-from lasa.users import UserPopulation, latent_grid
+from lasa.users import PILOTS, UserPopulation, latent_grid
 from lasa.verdicts import NO_ASSISTANCE
 
 __all__ = [
@@ -33,8 +33,10 @@ __all__ = [
     "arms",
     "check_members",
     "members_of",
+    "pilot_uniforms",
     "as_decoders",
     "check_methods",
+    "check_pilot",
     "check_positive_int",
     "draw_episodes",
     "episodes",
@@ -81,6 +83,12 @@ def arms(methods: tuple[str, ...], members: tuple[str, ...]) -> list[tuple[str, 
     return out + [(m, a) for a in members for m in methods if m != "LA"]
 
 
+def check_pilot(pilot: str, prob: float) -> None:
+    """``pilot`` is one of :data:`lasa.users.PILOTS` and ``prob`` a probability."""
+    check_choice("pilot", pilot, PILOTS)
+    check_range("pilot_prob", prob, 0.0, 1.0)
+
+
 def check_positive_int(name: str, value: int) -> None:
     """``value`` is an integer >= 1, else a ConfigError naming ``name``."""
     if int(value) != value or value < 1:
@@ -103,6 +111,15 @@ def draw_episodes(
     return goal, theta, noise
 
 
+def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
+    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own stream.
+
+    Drawn from a generator of its own (``[seed, 1]``), so adding pilots leaves the users'
+    cups, preferences and Eq. S1 streams (:func:`draw_episodes`) unchanged.
+    """
+    return np.random.default_rng([seed, 1]).random((n_users, horizon, 2))
+
+
 def episodes(
     decoders: Decoders, task: CupTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -122,6 +139,7 @@ def run_population(
     noise: np.ndarray,
     progress: bool = False,
     assistance: np.ndarray | None = None,
+    pilot_noise: np.ndarray | None = None,
 ) -> Trajectories:
     """Roll out a population whose users may use different methods, decoders and assistance.
 
@@ -140,6 +158,7 @@ def run_population(
         progress: Show progress bars.
         assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
             ``control.assistance`` for everyone.
+        pilot_noise: The pilots' uniforms (:func:`pilot_uniforms`), for laggy and noisy users.
 
     Raises:
         ConfigError: if a method's decoder is missing.
@@ -160,7 +179,12 @@ def run_population(
         idx = np.flatnonzero(keys == key)
         group = users.subset(idx)
         ctrl = dataclasses.replace(control, assistance=member)
-        parts.append((idx, rollout(decoders[name], task, group, alpha[idx], ctrl, horizon, noise, progress)))
+        parts.append(
+            (
+                idx,
+                rollout(decoders[name], task, group, alpha[idx], ctrl, horizon, noise, progress, pilot_noise),
+            )
+        )
     if len(parts) == 1:
         return parts[0][1]
     merged = {}

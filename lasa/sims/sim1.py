@@ -25,9 +25,11 @@ from lasa.sims.common import (
     arms,
     check_members,
     check_methods,
+    check_pilot,
     check_positive_int,
     episodes,
     members_of,
+    pilot_uniforms,
     run_population,
 )
 from lasa.task import CupTask
@@ -63,6 +65,8 @@ class Config:
     n_seeds: int = 30  # simulated users per (method, beta) in each draw [-]
     n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
+    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
     horizon: int = 200  # control steps per episode [-]
     tolerance: float = 0.05  # normalised error that counts as reaching s* [-]
     methods: tuple[str, ...] = METHODS  # methods compared
@@ -78,6 +82,7 @@ class Config:
         check_positive_int("n_seeds", self.n_seeds)
         check_positive_int("n_draws", self.n_draws)
         check_members(self.assistance)
+        check_pilot(self.pilot, self.pilot_prob)
         check_positive_int("horizon", self.horizon)
         check_range("tolerance", self.tolerance, 0.0, low_open=True)
 
@@ -119,8 +124,13 @@ def run(
         beta0=beta,
         slope=np.zeros(len(grid)),
         seed=seed,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
     )
-    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress, member)
+    pilots = pilot_uniforms(n_users, config.horizon, config.seed) if config.pilot_prob > 0 else None
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, pilots
+    )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
     frame = pd.DataFrame(
@@ -144,7 +154,8 @@ def run(
 
 def _means(frame: pd.DataFrame) -> pd.DataFrame:
     """Mean final error and time per (beta, method), methods as columns."""
-    return frame.groupby(["beta", "method"])[["final_error", "time"]].mean().unstack("method")
+    metrics = [m for m in ("final_error", "time") if m in frame]
+    return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
 
 
 def _sa_claims(

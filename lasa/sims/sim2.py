@@ -26,9 +26,11 @@ from lasa.sims.common import (
     arms,
     check_members,
     check_methods,
+    check_pilot,
     check_positive_int,
     episodes,
     members_of,
+    pilot_uniforms,
     run_population,
 )
 from lasa.task import CupTask
@@ -63,6 +65,8 @@ class Config:
     n_seeds: int = 30  # simulated users per (method, N) in each draw [-]
     n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
+    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
     settle: int = 150  # steps after the largest N before the episode ends [steps]
     success: float = 0.1  # normalised final error that counts as reaching the right cup [-]
     methods: tuple[str, ...] = METHODS  # methods compared
@@ -78,6 +82,7 @@ class Config:
         check_positive_int("n_seeds", self.n_seeds)
         check_positive_int("n_draws", self.n_draws)
         check_members(self.assistance)
+        check_pilot(self.pilot, self.pilot_prob)
         check_positive_int("settle", self.settle)
         check_range("success", self.success, 0.0, low_open=True)
         check_methods(self.methods)
@@ -120,10 +125,15 @@ def run(
         beta0=np.full(len(grid), config.beta),
         slope=np.zeros(len(grid)),
         seed=seed,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
         first_target=task.target(wrong, theta[seed]),
         change_step=change,
     )
-    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress, member)
+    pilots = pilot_uniforms(n_users, config.horizon, config.seed) if config.pilot_prob > 0 else None
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, pilots
+    )
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
         {

@@ -25,9 +25,11 @@ from lasa.sims.common import (
     arms,
     check_members,
     check_methods,
+    check_pilot,
     check_positive_int,
     episodes,
     members_of,
+    pilot_uniforms,
     run_population,
 )
 from lasa.task import CupTask
@@ -51,6 +53,8 @@ class Config:
     n_seeds: int = 30  # simulated users per (method, learner) in each draw [-]
     n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
+    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
     horizon: int = 200  # control steps per episode [-]
     record_every: int = 5  # keep the error every this many steps in the frame [steps]
     methods: tuple[str, ...] = METHODS  # methods compared
@@ -62,6 +66,7 @@ class Config:
         check_positive_int("n_seeds", self.n_seeds)
         check_positive_int("n_draws", self.n_draws)
         check_members(self.assistance)
+        check_pilot(self.pilot, self.pilot_prob)
         check_positive_int("horizon", self.horizon)
         check_positive_int("record_every", self.record_every)
         check_methods(self.methods)
@@ -101,8 +106,13 @@ def run(
         beta0=np.zeros(len(grid)),
         slope=slope,
         seed=seed,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
     )
-    traj = run_population(decoders, task, control, users, method, config.horizon, noise, progress, member)
+    pilots = pilot_uniforms(n_users, config.horizon, config.seed) if config.pilot_prob > 0 else None
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, pilots
+    )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
     n_users = len(grid)

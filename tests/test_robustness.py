@@ -1,0 +1,140 @@
+"""The verdict map (lasa.sims.robustness) and its scale-out (lasa.scaleout): grid, determinism, Dask."""
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from lasa.errors import ConfigError
+from lasa.scaleout import run_jobs, scheduler_address
+from lasa.sims import robustness
+
+TINY = robustness.Config(
+    assistance=("point", "grasp_set"),
+    alphas=(0.2, 0.5),
+    action_scales=(0.375,),
+    pilots=("boltzmann", "noisy"),
+    betas=(75.0, 1000.0),
+    change_steps=(0, 5),
+    horizon=8,
+    settle=5,
+    n_seeds=1,
+    n_draws=2,
+)
+
+
+def both(model):
+    return {"base": model, "entropy": model}
+
+
+def test_one_at_a_time_cells_vary_one_setting_from_the_default(task):
+    cfg = robustness.Config()
+    cells = robustness.cells(cfg, task.robot.control)
+    per_member = 1 + (len(cfg.alphas) - 1) + (len(cfg.action_scales) - 1) + (len(cfg.pilots) - 1)
+    assert len(cells) == len(cfg.assistance) * per_member
+    for c in cells:
+        changed = [
+            c.alpha != 0.2,
+            c.action_scale != 0.375,
+            c.pilot != "boltzmann",
+        ]
+        assert sum(changed) == (c.setting != "default")
+    factorial = robustness.cells(dataclasses.replace(cfg, design="factorial"), task.robot.control)
+    assert len(factorial) == 4 * 3 * 3 * 3 and {c.setting for c in factorial} == {"all"}
+
+
+@pytest.mark.parametrize(
+    "kw,match",
+    [
+        ({"alphas": (0.0,)}, "alpha"),
+        ({"betas": (1.0, 75.0)}, "betas must hold 75 and 1000"),
+        ({"pilots": ("sleepy",)}, "pilot"),
+        ({"design": "latin"}, "design"),
+        ({"change_steps": (0,)}, "change_steps"),
+        ({"assistance": ("magnet",)}, "assistance"),
+    ],
+)
+def test_bad_grid_is_a_clear_error(kw, match):
+    with pytest.raises(ConfigError, match=match):
+        robustness.Config(**kw)
+
+
+def test_the_defaults_must_be_on_a_one_at_a_time_grid(task):
+    with pytest.raises(ConfigError, match="defaults on its axes"):
+        robustness.cells(dataclasses.replace(TINY, alphas=(0.5,)), task.robot.control)
+
+
+def test_scaled_decoder_scales_the_action_and_nothing_else(model, task):
+    rng = np.random.default_rng(0)
+    z, s, b = rng.uniform(-1, 1, (4, 1)), np.tile(task.start, (4, 1)), np.full((4, 2), 0.5)
+    base = model.decode_numpy(z, s, b)
+    np.testing.assert_allclose(robustness.ScaledDecoder(model, 2.0).decode_numpy(z, s, b), 2 * base)
+    np.testing.assert_array_equal(robustness.ScaledDecoder(model, 1.0).decode_numpy(z, s, b), base)
+    with pytest.raises(ConfigError, match="factor"):
+        robustness.ScaledDecoder(model, 0.0)
+
+
+@pytest.fixture(scope="module")
+def local(model, task):
+    return robustness.run(both(model), task, task.robot.control, TINY)
+
+
+def test_grid_rows_pooled_and_per_draw(local, task):
+    cells = robustness.cells(TINY, task.robot.control)
+    assert list(local.columns) == list(robustness.COLUMNS)
+    ids = {"sim1.final_error", "sim1.time_ratio", "sim1.gap_narrows", "sim1.entropy_sa"}
+    ids |= {"sim2.sa_trapped", "sim2.entropy_escapes", "sim3.entropy_learners"}
+    assert set(local.id) == ids
+    assert len(local) == len(cells) * len(ids) * (TINY.n_draws + 1)
+    assert set(local.seed) == {robustness.POOLED, 0, 1}
+    assert set(local.reproduced) <= {"yes", "partly", "no"}
+    verdicts = robustness.verdict_table(local)
+    assert len(verdicts) == len(cells) * len(ids)
+    assert verdicts.agree.between(0, TINY.n_draws).all() and (verdicts.draws == TINY.n_draws).all()
+    summary = robustness.summary(verdicts)
+    assert (summary[["yes", "partly", "no"]].sum(axis=1) == len(cells) // 2).all()
+    lines = robustness.describe(summary)
+    assert len(lines) == len(ids) and all(line.startswith("planar5 sim") for line in lines)
+    fig = robustness.plot(local)
+    assert len(fig.axes) == 2  # one robot x two members
+    fig.clf()
+
+
+def test_the_grid_is_deterministic(local, model, task):
+    again = robustness.run(both(model), task, task.robot.control, TINY)
+    pd.testing.assert_frame_equal(local, again)
+
+
+def test_a_local_dask_cluster_gives_the_same_csv(local, model, task, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        cfg = dataclasses.replace(TINY, scheduler=cluster.scheduler_address)
+        remote = robustness.run(both(model), task, task.robot.control, cfg)
+    local.to_csv(tmp_path / "local.csv", index=False)
+    remote.to_csv(tmp_path / "dask.csv", index=False)
+    assert (tmp_path / "local.csv").read_bytes() == (tmp_path / "dask.csv").read_bytes()
+
+
+def _square(x: int) -> int:
+    return x * x
+
+
+def test_run_jobs_keeps_the_order_and_checks_its_arguments(monkeypatch):
+    assert run_jobs(_square, range(6)) == [0, 1, 4, 9, 16, 25]
+    assert run_jobs(_square, range(6), n_jobs=2) == [0, 1, 4, 9, 16, 25]
+    with pytest.raises(ConfigError, match="n_jobs"):
+        run_jobs(_square, range(2), n_jobs=0)
+    monkeypatch.setenv("LASA_SCHEDULER", "tcp://10.0.0.1:8786")
+    assert scheduler_address() == "tcp://10.0.0.1:8786"
+    assert scheduler_address("tcp://a:1") == "tcp://a:1"  # the config wins over the environment
+    monkeypatch.setenv("LASA_SCHEDULER", "localhost")
+    with pytest.raises(ConfigError, match="LASA_SCHEDULER"):
+        scheduler_address()
+
+
+def test_an_unreachable_scheduler_is_a_clear_error():
+    with pytest.raises(ConfigError, match="cannot reach the Dask scheduler"):
+        run_jobs(_square, range(2), scheduler="tcp://127.0.0.1:9", timeout="1s")
