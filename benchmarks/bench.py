@@ -463,14 +463,16 @@ def dask_grid(
 ) -> dict[str, Any]:
     """Wall time of a verdict-map grid here and on LocalClusters of ``config.dask_workers``.
 
-    The first ``grid_cells`` cells of the default one-at-a-time grid, with the bench's
+    The first ``grid_cells`` cells of a factorial grid (every member in each), with the bench's
     decoder as both the base and the entropy decoder. Cluster start-up is not timed.
     """
     from distributed import LocalCluster  # noqa: PLC0415
 
     from lasa.sims import robustness  # noqa: PLC0415
 
-    grid = robustness.Config(n_seeds=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20))
+    grid = robustness.Config(
+        n_seeds=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
+    )
     cells = robustness.cells(grid, control)[: config.grid_cells]
     decoders = {"base": model, "entropy": model}
     jobs = [robustness._Job(decoders, task, control, cell, grid) for cell in cells]

@@ -26,7 +26,7 @@ from tqdm.auto import tqdm
 
 from lasa.assistance import assist
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
-from lasa.config import ControlConfig
+from lasa.config import ASSISTANCE, ControlConfig, check_choice
 from lasa.control import blend, safe_step, sanitize
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
@@ -110,6 +110,7 @@ def _advance(
     alpha: np.ndarray,
     sets: np.ndarray,
     b: np.ndarray | None = None,
+    members: np.ndarray | None = None,
 ) -> StepResult:
     """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
 
@@ -120,15 +121,28 @@ def _advance(
     a_h = sanitize(a_h)
     if b is None:
         b = belief(log_b)
-    a_r, weight = assist(
-        control.assistance, b, state, task.goals, task.curves, control.dt, control.action_scale
-    )
+    a_r, weight = _assistance(task, control, state, b, members)
     a = blend(a_h, a_r, alpha * weight)
     lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
     new_log_b = update_log_belief(log_b, lik, control.belief_floor)
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
     return StepResult(state=new_state, log_belief=new_log_b, human_action=a_h, action=a)
+
+
+def _assistance(
+    task: CupTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """a_r and the blend weight per user: ``control.assistance``, or each user's member."""
+    if members is None:
+        return assist(control.assistance, b, state, task.goals, task.curves, control.dt, control.action_scale)
+    a_r, weight = np.empty_like(state), np.empty(len(state))
+    for name in dict.fromkeys(members.tolist()):
+        rows = members == name
+        a_r[rows], weight[rows] = assist(
+            name, b[rows], state[rows], task.goals, task.curves, control.dt, control.action_scale
+        )
+    return a_r, weight
 
 
 def shared_autonomy_step(
@@ -210,6 +224,7 @@ def rollout(
     noise: np.ndarray,
     progress: bool = False,
     pilot_noise: np.ndarray | None = None,
+    assistance: np.ndarray | None = None,
 ) -> Trajectories:
     """Run Algorithm 1 for a batch of simulated users.
 
@@ -226,6 +241,9 @@ def rollout(
         pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
             (``users.pilot``, :func:`lasa.users.pilot_choice`); user u draws from
             ``pilot_noise[users.seed[u]]``. Needed only by those pilots.
+        assistance: Each user's member of :mod:`lasa.assistance`, shape (U,), so that
+            users of several readings share one batch (and each decoder call); default
+            ``control.assistance`` for everyone.
 
     Returns:
         The trajectories of every user.
@@ -239,6 +257,15 @@ def rollout(
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
     n = task.robot.n_joints
+    members = None
+    if assistance is not None:
+        members = np.asarray(assistance, dtype=str)
+        if members.shape != (n_users,):
+            raise ConfigError(
+                f"assistance must name one member per user, shape ({n_users},), got {members.shape}"
+            )
+        for name in set(members.tolist()):
+            check_choice("assistance", name, ASSISTANCE)
     piloted = users.pilot != "boltzmann" and users.pilot_prob > 0
     if piloted and (
         pilot_noise is None
@@ -271,7 +298,7 @@ def rollout(
             assert pilot_noise is not None
             k = pilot_choice(users, k, k_prev, pilot_noise[users.seed, t], len(grid))
             k_prev = k
-        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets, b)
+        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets, b, members)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)

@@ -309,3 +309,20 @@ def test_sim4_refuses_a_method_whose_decoder_is_missing(model, task):
             task.robot.control,
             sim4.Config(offsets=(0.08,), n_seeds=1, horizon=2, method="LA+SA+Entropy"),
         )
+
+
+def test_sim4_members_share_batches_without_changing_the_headline(model, task):
+    """Members run together, paired by seed; the headline member's rows equal a run of it alone."""
+    config = sim4.Config(
+        offsets=(0.08, 0.14), n_seeds=2, horizon=6, n_draws=2, assistance=("point", "grasp_set")
+    )
+    frame, runs = sim4.run(model, task, task.robot.control, config)
+    alone, alone_runs = sim4.run(
+        model, task, task.robot.control, dataclasses.replace(config, assistance=("point",))
+    )
+    assert list(dict.fromkeys(frame.assistance)) == ["point", "grasp_set"]
+    head = frame[frame.assistance == "point"].reset_index(drop=True)
+    pd.testing.assert_frame_equal(head, alone)
+    np.testing.assert_array_equal(runs[1].without_map.states, alone_runs[1].without_map.states)
+    other = frame[frame.assistance == "grasp_set"]
+    assert (other.seed.to_numpy() == head.seed.to_numpy()).all()  # paired users

@@ -143,9 +143,9 @@ def run_population(
 ) -> Trajectories:
     """Roll out a population whose users may use different methods, decoders and assistance.
 
-    Users are grouped by the decoder their method uses (``METHOD_DECODER``) and their
-    assistance member; each group runs as one batched rollout, and the trajectories
-    come back in the users' order.
+    Users are grouped by the decoder their method uses (``METHOD_DECODER``); each group
+    runs as one batched rollout (users of every assistance member together), and the
+    trajectories come back in the users' order.
 
     Args:
         decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
@@ -169,20 +169,29 @@ def run_population(
     if assistance is None:
         assistance = np.full(len(methods), control.assistance)
     members = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
-    keys = np.array([f"{METHOD_DECODER[m]}|{a}" for m, a in zip(methods, members, strict=True)])
+    keys = np.array([METHOD_DECODER[m] for m in methods])
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
-        name, member = key.split("|")
-        if name not in decoders:
+        if key not in decoders:
             needing = sorted({str(m) for m in methods[keys == key]})
-            raise ConfigError(f"methods {needing} need the {name!r} decoder; pass decoders[{name!r}]")
+            raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
         idx = np.flatnonzero(keys == key)
         group = users.subset(idx)
-        ctrl = dataclasses.replace(control, assistance=member)
         parts.append(
             (
                 idx,
-                rollout(decoders[name], task, group, alpha[idx], ctrl, horizon, noise, progress, pilot_noise),
+                rollout(
+                    decoders[key],
+                    task,
+                    group,
+                    alpha[idx],
+                    control,
+                    horizon,
+                    noise,
+                    progress,
+                    pilot_noise,
+                    members[idx],
+                ),
             )
         )
     if len(parts) == 1:

@@ -8,11 +8,12 @@ literature, :data:`lasa.users.PILOTS`). This module re-runs the sims of Figs. si
 in every cell of a grid over those settings and evaluates each claim in each cell, on
 each independent draw of users and on all draws pooled.
 
-The grid is one factor at a time around the default setting, crossed with every member:
-for each member, every alpha (at the default sigma_h, Boltzmann users), every sigma_h
-(default alpha), every pilot (default alpha and sigma_h). A full factorial grows as the
-product of the axes; ``configs/large.yaml`` asks for one (``design: factorial``) for a
-cluster.
+The grid is one factor at a time around the default setting: every alpha (at the
+default sigma_h, Boltzmann users), every sigma_h (default alpha), every pilot (default
+alpha and sigma_h); every member of the family runs in every cell, the members' users
+sharing one batch (and LA, which no member touches, running once). A full factorial
+grows as the product of the axes; ``configs/large.yaml`` asks for one (``design:
+factorial``) for a cluster.
 
 Changing sigma_h at run time scales the learned decoder's output (:class:`ScaledDecoder`):
 the same learned directions at another speed, as a joystick's gain would, and the
@@ -46,6 +47,7 @@ from lasa.sims import sim1, sim2, sim3
 from lasa.sims.common import as_decoders, check_members, check_positive_int
 from lasa.task import CupTask
 from lasa.users import PILOTS
+from lasa.verdicts import member_frame
 
 __all__ = [
     "NAME",
@@ -99,7 +101,7 @@ class Config:
     change_steps: tuple[int, ...] = (0, 120)  # sim2 change steps N (its claims read the ends) [steps]
     horizon: int = 200  # control steps of the sim1 and sim3 episodes [-]
     settle: int = 150  # sim2: steps after the largest N [-]
-    n_seeds: int = 3  # users per point in each draw [-]
+    n_seeds: int = 2  # users per point in each draw (x n_draws = 10 per point) [-]
     n_draws: int = 5  # independent draws of users per cell [-]
     seed: int = 0  # seed of the users (the same users in every cell: paired) [-]
     n_jobs: int = 1  # local worker processes for the cells [-]
@@ -136,9 +138,8 @@ class Config:
 
 @dataclasses.dataclass(frozen=True)
 class Cell:
-    """One setting of the grid."""
+    """One setting of the grid; every member of the family runs in it, in shared batches."""
 
-    assistance: str  # the member
     alpha: float  # blend weight [-]
     action_scale: float  # sigma_h [rad/s]
     pilot: str  # the simulated user
@@ -164,7 +165,9 @@ class ScaledDecoder:
 
 
 def cells(config: Config, control: ControlConfig) -> list[Cell]:
-    """The grid's cells, in a fixed order: member-major, then the setting varied.
+    """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
+
+    Every member of ``config.assistance`` runs in every cell (:func:`run_cell`).
 
     Raises:
         ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
@@ -173,22 +176,18 @@ def cells(config: Config, control: ControlConfig) -> list[Cell]:
     alpha0, scale0, pilot0 = float(control.alpha), float(control.action_scale), "boltzmann"
     if config.design == "factorial":
         return [
-            Cell(m, a, s, p, "all")
-            for m, a, s, p in itertools.product(
-                config.assistance, config.alphas, config.action_scales, config.pilots
-            )
+            Cell(a, s, p, "all")
+            for a, s, p in itertools.product(config.alphas, config.action_scales, config.pilots)
         ]
     if alpha0 not in config.alphas or scale0 not in config.action_scales or pilot0 not in config.pilots:
         raise ConfigError(
             f"a one-at-a-time grid needs the defaults on its axes: alpha {alpha0}, "
             f"action_scale {scale0}, pilot {pilot0!r}"
         )
-    out = []
-    for m in config.assistance:
-        out.append(Cell(m, alpha0, scale0, pilot0, "default"))
-        out += [Cell(m, a, scale0, pilot0, "alpha") for a in config.alphas if a != alpha0]
-        out += [Cell(m, alpha0, s, pilot0, "action_scale") for s in config.action_scales if s != scale0]
-        out += [Cell(m, alpha0, scale0, p, "pilot") for p in config.pilots if p != pilot0]
+    out = [Cell(alpha0, scale0, pilot0, "default")]
+    out += [Cell(a, scale0, pilot0, "alpha") for a in config.alphas if a != alpha0]
+    out += [Cell(alpha0, s, pilot0, "action_scale") for s in config.action_scales if s != scale0]
+    out += [Cell(alpha0, scale0, p, "pilot") for p in config.pilots if p != pilot0]
     return out
 
 
@@ -205,12 +204,14 @@ def _pilot_prob(config: Config, pilot: str) -> float:
     return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
 
 
-def _rows(claims_by_seed: dict[int, list[Claim]], cell: Cell, robot: str, users: int) -> pd.DataFrame:
+def _rows(
+    claims_by_seed: dict[int, list[Claim]], cell: Cell, member: str, robot: str, users: int
+) -> pd.DataFrame:
     rows = [
         {
             "id": c.id,
             "robot": robot,
-            "assistance": cell.assistance,
+            "assistance": member,
             "alpha": cell.alpha,
             "action_scale": cell.action_scale,
             "seed": seed,
@@ -227,10 +228,13 @@ def _rows(claims_by_seed: dict[int, list[Claim]], cell: Cell, robot: str, users:
 
 
 def run_cell(job: _Job) -> pd.DataFrame:
-    """Run sims 1-3 in one cell and evaluate their claims on each draw and pooled."""
+    """Run sims 1-3 in one cell, every member in the same batches, and judge each claim.
+
+    Each claim is evaluated per member, on each draw of users and on all draws pooled.
+    """
     cell, config, control = job.cell, job.config, job.control
     ctrl = dataclasses.replace(
-        control, alpha=cell.alpha, action_scale=cell.action_scale, assistance=cell.assistance
+        control, alpha=cell.alpha, action_scale=cell.action_scale, assistance=config.assistance[0]
     )
     factor = cell.action_scale / control.action_scale
     decoders = {k: ScaledDecoder(d, factor) for k, d in job.decoders.items()}
@@ -238,7 +242,7 @@ def run_cell(job: _Job) -> pd.DataFrame:
     common: dict[str, Any] = {
         "n_seeds": config.n_seeds,
         "n_draws": config.n_draws,
-        "assistance": (cell.assistance,),
+        "assistance": config.assistance,
         "seed": config.seed,
     }
     runs = [
@@ -254,10 +258,12 @@ def run_cell(job: _Job) -> pd.DataFrame:
     robot = job.task.robot.name
     for module, sim_config, reduce in runs:
         frame = reduce(module.run(decoders, job.task, ctrl, sim_config)[0])
-        by_seed = {POOLED: module.claims(frame)}
-        for d in range(config.n_draws):
-            by_seed[d] = module.claims(frame[frame.draw == d])
-        parts.append(_rows(by_seed, cell, robot, config.n_seeds))
+        for member in config.assistance:
+            rows = member_frame(frame, member)
+            by_seed = {POOLED: module.claims(rows)}
+            for d in range(config.n_draws):
+                by_seed[d] = module.claims(rows[rows.draw == d])
+            parts.append(_rows(by_seed, cell, member, robot, config.n_seeds))
     return pd.concat(parts, ignore_index=True)
 
 

@@ -62,8 +62,9 @@ class Config:
 
     change_steps: tuple[int, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
     beta: float = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
-    n_seeds: int = 30  # simulated users per (method, N) in each draw [-]
+    n_seeds: int = 6  # simulated users per (method, N) in each draw (x n_draws = 30 per point) [-]
     n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
+    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
     pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
@@ -81,6 +82,7 @@ class Config:
         check_range("beta", self.beta, 0.0)
         check_positive_int("n_seeds", self.n_seeds)
         check_positive_int("n_draws", self.n_draws)
+        check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_pilot(self.pilot, self.pilot_prob)
         check_positive_int("settle", self.settle)

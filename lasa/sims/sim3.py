@@ -50,8 +50,9 @@ class Config:
 
     fast_slope: float = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
     slow_slope: float = 2.0  # m of the slow learner [1/(rad^2 step)]
-    n_seeds: int = 30  # simulated users per (method, learner) in each draw [-]
+    n_seeds: int = 6  # simulated users per (method, learner) in each draw (x n_draws = 30 per point) [-]
     n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
+    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
     pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
@@ -65,6 +66,7 @@ class Config:
         check_range("slow_slope", self.slow_slope, 0.0, low_open=True)
         check_positive_int("n_seeds", self.n_seeds)
         check_positive_int("n_draws", self.n_draws)
+        check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_pilot(self.pilot, self.pilot_prob)
         check_positive_int("horizon", self.horizon)

@@ -86,8 +86,9 @@ class Config:
     )
     ref_goal: int = 1  # the training cup the new ones are referred to [-]
     beta: float = 1000.0  # near-optimal users [1/rad^2]
-    n_seeds: int = 30  # users per (mapping, new cup) in each draw [-]
+    n_seeds: int = 6  # users per (mapping, new cup) in each draw (x n_draws = 30 per point) [-]
     n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
+    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the method's assistance runs under
     horizon: int = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
@@ -109,6 +110,7 @@ class Config:
         check_range("beta", self.beta, 0.0)
         check_positive_int("n_seeds", self.n_seeds)
         check_positive_int("n_draws", self.n_draws)
+        check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_positive_int("horizon", self.horizon)
         check_methods((self.method,))
@@ -196,53 +198,76 @@ def run(
     dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
     scale = float(dist.max())
     runs, rows = [], []
-    for member in members:
-        ctrl = control if member == NO_ASSISTANCE else dataclasses.replace(control, assistance=member)
-        for offset, big, d in zip(config.offsets, grown, dist, strict=True):
-            new = big.n_goals - 1
-            target = big.target(np.full(n_users, new), theta)
-            users = UserPopulation(
-                goal=np.full(n_users, new),
-                theta=theta,
-                target=target,
-                beta0=np.full(n_users, config.beta),
-                slope=np.zeros(n_users),
-                seed=seeds,
+    # every member's users share one batch per (cup, map): member i's users are rows
+    # i * n_users ... (i + 1) * n_users - 1, with the same seeds (paired across members)
+    n_members = len(members)
+    seeds_all = np.tile(seeds, n_members)
+    theta_all = np.tile(theta, n_members)
+    member_all = np.repeat(members, n_users)
+    assisted = None if members == (NO_ASSISTANCE,) else member_all
+    for offset, big, d in zip(config.offsets, grown, dist, strict=True):
+        new = big.n_goals - 1
+        target = big.target(np.full(len(seeds_all), new), theta_all)
+        users = UserPopulation(
+            goal=np.full(len(seeds_all), new),
+            theta=theta_all,
+            target=target,
+            beta0=np.full(len(seeds_all), config.beta),
+            slope=np.zeros(len(seeds_all)),
+            seed=seeds_all,
+        )
+        with_map = {}
+        for kind in config.maps:
+            mapped = MappedDecoder(decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
+            with_map[kind] = rollout(
+                mapped, big, users, alpha, control, config.horizon, noise, progress, assistance=assisted
             )
-            with_map = {}
-            for kind in config.maps:
-                mapped = MappedDecoder(decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
-                with_map[kind] = rollout(mapped, big, users, alpha, ctrl, config.horizon, noise, progress)
-            plain = dataclasses.replace(users, goal=np.full(n_users, config.ref_goal))
-            without = rollout(decoder, task, plain, alpha, ctrl, config.horizon, noise, progress)
-            if member == members[0]:
-                runs.append(NewGoalRun(float(offset), big, with_map, without))
-            cases = [
-                ("with", kind, traj, confidence(traj.beliefs[-1], users.goal))
-                for kind, traj in with_map.items()
-            ]
-            cases.append(("without", "none", without, np.full(n_users, np.nan)))
-            reference = normalized_error(task.target(config.ref_goal, theta), target, scale)
-            for mapping, kind, traj, conf in cases:
-                rows.append(
-                    pd.DataFrame(
-                        {
-                            "robot": task.robot.name,
-                            "mapping": mapping,
-                            "distance": d / scale,
-                            "seed": seeds,
-                            "error": normalized_error(traj.states[-1], target, scale),
-                            "h": kind,
-                            "offset_m": float(offset),
-                            "theta": theta,
-                            "confidence": conf,
-                            "reference": reference,
-                            "assistance": member,
-                            "draw": seeds // config.n_seeds,
-                        }
-                    )
+        plain = dataclasses.replace(users, goal=np.full(len(seeds_all), config.ref_goal))
+        without = rollout(
+            decoder, task, plain, alpha, control, config.horizon, noise, progress, assistance=assisted
+        )
+        head = slice(0, n_users)
+        runs.append(
+            NewGoalRun(
+                float(offset),
+                big,
+                {k: _users_of(t, head) for k, t in with_map.items()},
+                _users_of(without, head),
+            )
+        )
+        cases = [
+            ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
+        ]
+        cases.append(("without", "none", without, np.full(len(seeds_all), np.nan)))
+        reference = normalized_error(task.target(config.ref_goal, theta_all), target, scale)
+        for mapping, kind, traj, conf in cases:
+            rows.append(
+                pd.DataFrame(
+                    {
+                        "robot": task.robot.name,
+                        "mapping": mapping,
+                        "distance": d / scale,
+                        "seed": seeds_all,
+                        "error": normalized_error(traj.states[-1], target, scale),
+                        "h": kind,
+                        "offset_m": float(offset),
+                        "theta": theta_all,
+                        "confidence": conf,
+                        "reference": reference,
+                        "assistance": member_all,
+                        "draw": seeds_all // config.n_seeds,
+                    }
                 )
-    return pd.concat(rows, ignore_index=True), runs
+            )
+    frame = pd.concat(rows, ignore_index=True)
+    # rows by member, then cup and map, as the members' runs came out before they shared batches
+    order = np.argsort(pd.Categorical(frame.assistance, categories=list(members)).codes, kind="stable")
+    return frame.iloc[order].reset_index(drop=True), runs
+
+
+def _users_of(traj: Trajectories, users: slice) -> Trajectories:
+    """The trajectories of some users (axis 1 of every field)."""
+    return Trajectories(**{f.name: getattr(traj, f.name)[:, users] for f in dataclasses.fields(traj)})
 
 
 def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
