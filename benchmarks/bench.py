@@ -40,6 +40,7 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 import argparse  # noqa: E402
 import dataclasses  # noqa: E402
 import datetime  # noqa: E402
+import importlib  # noqa: E402
 import json  # noqa: E402
 import platform  # noqa: E402
 import shutil  # noqa: E402
@@ -110,6 +111,7 @@ class BenchConfig:
     sweep_steps: int = 20  # control steps per throughput measurement [-]
     loop_user_steps: int = 200  # user-steps timed in the per-user loop [-]
     render_frames: int = 40  # frames rendered per robot [-]
+    repeats: int = 5  # timed runs of each sweep size; the median is reported [-]
     grid_cells: int = 8  # cells of the verdict-map grid timed locally and on Dask [-]
     grid_seeds: int = 2  # users per point and draw in each grid cell [-]
     dask_workers: tuple[int, ...] = (1, 2)  # LocalCluster sizes timed [-]
@@ -127,6 +129,7 @@ class BenchConfig:
             sweep_steps=3,
             loop_user_steps=6,
             render_frames=2,
+            repeats=1,
             grid_cells=2,
             grid_seeds=1,
             hidden=16,
@@ -283,7 +286,8 @@ def sweep_throughput(
     Returns:
         ``{"<users>": {"batched", "loop", "floor"}}``: the batched rollout, the same
         rollout run for one user at a time (at most ``config.loop_user_steps`` user-steps),
-        and the bare batched decoder forward pass on (users x candidates) rows.
+        and the bare batched decoder forward pass on (users x candidates) rows; batched
+        and floor are the medians of ``config.repeats`` interleaved runs.
     """
     rng = np.random.default_rng(config.seed)
     n_cand = len(latent_grid(control.n_z, model.z_dim))
@@ -292,13 +296,19 @@ def sweep_throughput(
         users = _users(task, n_users, rng)
         noise = rng.random((n_users, config.sweep_steps, n_cand))
         rollout(model, task, users, control.alpha, control, 1, noise)  # warm-up
-        start = time.perf_counter()
-        rollout(model, task, users, control.alpha, control, config.sweep_steps, noise)
-        batched = n_users * config.sweep_steps / (time.perf_counter() - start)
+        batched, floor = [], []
+        for _ in range(config.repeats):  # interleaved, so both see the same machine
+            start = time.perf_counter()
+            rollout(model, task, users, control.alpha, control, config.sweep_steps, noise)
+            batched.append(n_users * config.sweep_steps / (time.perf_counter() - start))
+            floor.append(_floor(model, n_users, n_cand, config.sweep_steps))
         loop_users = max(1, min(n_users, config.loop_user_steps // config.sweep_steps))
         loop = _loop(model, task, control, users.subset(np.arange(loop_users)), noise, config.sweep_steps)
-        floor = _floor(model, n_users, n_cand, config.sweep_steps)
-        out[str(n_users)] = {"batched": batched, "loop": loop, "floor": floor}
+        out[str(n_users)] = {
+            "batched": float(np.median(batched)),
+            "loop": loop,
+            "floor": float(np.median(floor)),
+        }
     return out
 
 
@@ -464,9 +474,11 @@ def dask_grid(
     """Wall time of a verdict-map grid here and on LocalClusters of ``config.dask_workers``.
 
     The first ``grid_cells`` cells of a factorial grid (every member in each), with the bench's
-    decoder as both the base and the entropy decoder. Cluster start-up is not timed.
+    decoder as both the base and the entropy decoder. Cluster start-up is not timed: the
+    workers import ``lasa`` before the clock starts. The decoders and task go to each
+    worker once (``run_jobs(shared=...)``).
     """
-    from distributed import LocalCluster  # noqa: PLC0415
+    from distributed import Client, LocalCluster  # noqa: PLC0415
 
     from lasa.sims import robustness  # noqa: PLC0415
 
@@ -474,14 +486,13 @@ def dask_grid(
         n_seeds=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
     )
     cells = robustness.cells(grid, control)[: config.grid_cells]
-    decoders = {"base": model, "entropy": model}
-    jobs = [robustness._Job(decoders, task, control, cell, grid) for cell in cells]
+    shared = robustness.Grid({"base": model, "entropy": model}, task, control, grid)
 
     def timed(scheduler: str | None) -> tuple[float, pd.DataFrame]:
         from lasa.scaleout import run_jobs  # noqa: PLC0415
 
         start = time.perf_counter()
-        frames = run_jobs(robustness.run_cell, jobs, scheduler)
+        frames = run_jobs(robustness.run_cell, cells, scheduler, shared=shared)
         return time.perf_counter() - start, pd.concat(frames, ignore_index=True)
 
     local_s, reference = timed(None)
@@ -490,6 +501,8 @@ def dask_grid(
         with LocalCluster(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
         ) as cluster:
+            with Client(cluster) as client:  # imports are start-up, not work: before the clock
+                client.run(importlib.import_module, "lasa.sims.robustness")
             seconds, frame = timed(cluster.scheduler_address)
         out["workers"][str(n)] = seconds
         out["identical"] = bool(out["identical"] and frame.equals(reference))

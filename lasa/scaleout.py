@@ -44,27 +44,31 @@ def scheduler_address(configured: str | None = None) -> str | None:
     return address
 
 
-def _threaded(fn: Callable[[T], R], item: T) -> R:
+def _threaded(fn: Callable[..., R], item: Any, shared: Any, has_shared: bool) -> R:
     """Run one job with one torch thread (the worker may be a fresh process)."""
     from lasa.config import set_threads  # noqa: PLC0415 (torch loads in the worker)
 
     set_threads()
-    return fn(item)
+    return fn(shared, item) if has_shared else fn(item)
+
+
+_NOTHING = object()  # no shared argument (a sentinel of this process only: never pickled)
 
 
 def run_jobs(
-    fn: Callable[[T], R],
+    fn: Callable[..., R],
     items: Sequence[T] | Iterable[T],
     scheduler: str | None = None,
     n_jobs: int = 1,
     progress: bool = False,
     desc: str = "jobs",
     timeout: str = "20s",
+    shared: Any = _NOTHING,
 ) -> list[R]:
     """``[fn(item) for item in items]``, through joblib, locally or on a Dask cluster.
 
     Args:
-        fn: A picklable (module-level) function of one item.
+        fn: A picklable (module-level) function of one item, or of ``(shared, item)``.
         items: The jobs' arguments (picklable).
         scheduler: A Dask scheduler address; None uses ``$LASA_SCHEDULER`` if set, else
             runs locally.
@@ -73,6 +77,9 @@ def run_jobs(
         progress: Show a progress bar over finished jobs.
         desc: The progress bar's label.
         timeout: How long to wait for the scheduler to answer (a Dask duration).
+        shared: An object every job reads (decoders, task, ...), passed as ``fn``'s first
+            argument. On a cluster it is scattered to the workers once instead of being
+            sent with every job.
 
     Returns:
         The results, in the order of ``items``.
@@ -85,7 +92,8 @@ def run_jobs(
     items = list(items)
     if int(n_jobs) != n_jobs or n_jobs < 1:
         raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
-    jobs = [delayed(_threaded)(fn, item) for item in items]
+    has_shared = shared is not _NOTHING
+    jobs = [delayed(_threaded)(fn, item, shared if has_shared else None, has_shared) for item in items]
     address = scheduler_address(scheduler)
 
     def collect(parallel: Any) -> list[R]:
@@ -100,5 +108,6 @@ def run_jobs(
         client = Client(address, timeout=timeout)
     except OSError as err:
         raise ConfigError(f"cannot reach the Dask scheduler at {address}: {err}") from err
-    with client, parallel_config(backend="dask"):
+    scatter = [shared] if has_shared else None
+    with client, parallel_config(backend="dask", scatter=scatter):
         return collect(Parallel(n_jobs=-1, return_as="generator"))

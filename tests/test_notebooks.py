@@ -1,11 +1,14 @@
 """Every notebook executed headless by papermill in QUICK mode, outputs checked.
 
-The notebooks run in order (01 -> 07) for each robot, as `make figures` does,
-each reading what the previous one wrote, into a temporary folder. Then the files each
+The notebooks run in order (01 -> 09) for each robot, the two robots side by side, as
+`make figures` does, each reading what the previous one wrote, into a temporary folder. Then the files each
 one promises are checked against the output contracts (README): names, CSV columns,
 claims verdicts, and that the shared figures hold both robots.
 """
 
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +16,7 @@ import pandas as pd
 import pytest
 
 from lasa.claims import CLAIM_COLUMNS
-from lasa.runner import load_config, run_notebook
+from lasa.runner import load_config
 from lasa.sims import sim1, sim2, sim3, sim4
 from lasa.video import read_video
 
@@ -33,14 +36,37 @@ ORDER = [
 ROBOTS = ["planar5", "panda"]
 
 
+def _chain(robot: str, out: Path) -> None:
+    """One robot's notebooks, in order, each in its own papermill run (as `make figures`)."""
+    for stem in ORDER:
+        command = [
+            sys.executable,
+            "-m",
+            "lasa.runner",
+            str(ROOT / "notebooks" / f"{stem}.ipynb"),
+            "--config",
+            str(QUICK),
+            "--out",
+            str(out / "notebooks"),
+            "--robot",
+            robot,
+            "--param",
+            f"build_dir={out / 'build'}",
+            "--param",
+            f"figures_dir={out / 'figures'}",
+        ]
+        result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
+        if result.returncode != 0:
+            raise RuntimeError(f"{stem} ({robot}) failed:\n{result.stdout[-2000:]}\n{result.stderr[-4000:]}")
+
+
 @pytest.fixture(scope="module")
 def executed(tmp_path_factory):
+    """Both robots' chains side by side, as `make figures` runs them (shared figures under a lock)."""
     out = tmp_path_factory.mktemp("quick")
-    for robot in ROBOTS:
-        overrides = {"build_dir": str(out / "build"), "figures_dir": str(out / "figures"), "robot": robot}
-        for stem in ORDER:
-            notebook = ROOT / "notebooks" / f"{stem}.ipynb"
-            run_notebook(notebook, QUICK, out / "notebooks", overrides, progress=False)
+    with ThreadPoolExecutor(max_workers=len(ROBOTS)) as pool:
+        for done in [pool.submit(_chain, robot, out) for robot in ROBOTS]:
+            done.result()
     return out
 
 

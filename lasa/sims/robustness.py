@@ -55,6 +55,7 @@ __all__ = [
     "DESIGNS",
     "Config",
     "Cell",
+    "Grid",
     "ScaledDecoder",
     "cells",
     "run_cell",
@@ -192,11 +193,12 @@ def cells(config: Config, control: ControlConfig) -> list[Cell]:
 
 
 @dataclasses.dataclass(frozen=True)
-class _Job:
-    decoders: Mapping[str, ActionDecoder]
+class Grid:
+    """What every cell of a grid shares: sent to each worker once (:func:`lasa.scaleout.run_jobs`)."""
+
+    decoders: Mapping[str, ActionDecoder]  # notebook 03's pair
     task: CupTask
-    control: ControlConfig
-    cell: Cell
+    control: ControlConfig  # the defaults the grid is centred on
     config: Config
 
 
@@ -227,17 +229,17 @@ def _rows(
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 
-def run_cell(job: _Job) -> pd.DataFrame:
+def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
     """Run sims 1-3 in one cell, every member in the same batches, and judge each claim.
 
     Each claim is evaluated per member, on each draw of users and on all draws pooled.
     """
-    cell, config, control = job.cell, job.config, job.control
+    config, control = grid.config, grid.control
     ctrl = dataclasses.replace(
         control, alpha=cell.alpha, action_scale=cell.action_scale, assistance=config.assistance[0]
     )
     factor = cell.action_scale / control.action_scale
-    decoders = {k: ScaledDecoder(d, factor) for k, d in job.decoders.items()}
+    decoders = {k: ScaledDecoder(d, factor) for k, d in grid.decoders.items()}
     pilot: dict[str, Any] = {"pilot": cell.pilot, "pilot_prob": _pilot_prob(config, cell.pilot)}
     common: dict[str, Any] = {
         "n_seeds": config.n_seeds,
@@ -255,9 +257,9 @@ def run_cell(job: _Job) -> pd.DataFrame:
         (sim3, sim3.Config(horizon=config.horizon, **common, **pilot), sim3.episode_means),
     ]
     parts = []
-    robot = job.task.robot.name
+    robot = grid.task.robot.name
     for module, sim_config, reduce in runs:
-        frame = reduce(module.run(decoders, job.task, ctrl, sim_config)[0])
+        frame = reduce(module.run(decoders, grid.task, ctrl, sim_config)[0])
         for member in config.assistance:
             rows = member_frame(frame, member)
             by_seed = {POOLED: module.claims(rows)}
@@ -288,8 +290,10 @@ def run(
         with the columns of :data:`COLUMNS`, cells in :func:`cells` order.
     """
     decoders = as_decoders(decoders)
-    jobs = [_Job(decoders, task, control, cell, config) for cell in cells(config, control)]
-    frames = run_jobs(run_cell, jobs, config.scheduler, config.n_jobs, progress, desc="grid cells")
+    grid = Grid(decoders, task, control, config)
+    frames = run_jobs(
+        run_cell, cells(config, control), config.scheduler, config.n_jobs, progress, "grid cells", shared=grid
+    )
     return pd.concat(frames, ignore_index=True)
 
 
