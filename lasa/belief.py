@@ -271,36 +271,6 @@ def log_likelihood(
     return out.numpy()
 
 
-def _logsumexp(a: np.ndarray) -> np.ndarray:
-    """``scipy.special.logsumexp(a, axis=-1, keepdims=True)``, bitwise, for real float arrays.
-
-    scipy's own steps for this case (scipy 1.15+: the largest term is summed apart, with
-    log1p), as plain numpy: the same ufuncs on the same arrays, without the array-API
-    dispatch that costs more than the arithmetic on a batch of beliefs. Other inputs go
-    to scipy.
-    """
-    a = np.asarray(a)
-    if a.dtype != np.float64 or a.ndim == 0 or a.size == 0:
-        return np.asarray(logsumexp(a, axis=-1, keepdims=True))
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        # where the result is not finite, scipy falls back to the direct formula
-        out_inf = np.log(np.sum(np.exp(a), axis=-1, keepdims=True))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a_max = np.max(a, axis=-1, keepdims=True)
-        i_max = a == a_max
-        rest = a.copy()
-        rest[i_max] = -np.inf
-        m = np.sum(i_max.astype(a.dtype), axis=-1, keepdims=True, dtype=a.dtype)
-        exp = np.exp(rest - a_max)
-        total = np.sum(exp, axis=-1, keepdims=True, dtype=exp.dtype)
-        total = np.where(total == 0, total, total / m)
-        sgn = np.sign(total + 1) * np.sign(m)
-        total = np.where(total < -1, -total - 2, total)
-        out = np.log1p(total) + np.log(np.abs(m)) + a_max
-        out[sgn < 0] = np.nan
-    return np.where(np.isfinite(out), out, out_inf)
-
-
 def update_log_belief(log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0) -> np.ndarray:
     """One Bayesian update b' ∝ P(a_h | s, g) b(g), in log space.
 
@@ -315,7 +285,7 @@ def update_log_belief(log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0
     n_goals = log_b.shape[-1]
     check_range("belief_floor", floor, 0.0, 1.0 / n_goals, high_open=True)
     post = log_b + log_lik
-    post = post - _logsumexp(post)
+    post = post - logsumexp(post, axis=-1, keepdims=True)
     if floor > 0.0:
         # Mix with the uniform distribution: b <- (1 - G f) b + f. Every goal keeps at
         # least f, the result still sums to one, and the order of beliefs is unchanged.
@@ -325,4 +295,4 @@ def update_log_belief(log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0
 
 def belief(log_b: np.ndarray) -> np.ndarray:
     """Beliefs from log-beliefs (they sum to one along the last axis)."""
-    return np.exp(log_b - _logsumexp(log_b))
+    return np.exp(log_b - logsumexp(log_b, axis=-1, keepdims=True))

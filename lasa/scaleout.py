@@ -44,15 +44,12 @@ def scheduler_address(configured: str | None = None) -> str | None:
     return address
 
 
-def _threaded(fn: Callable[..., R], item: Any, shared: Any, has_shared: bool) -> R:
+def _threaded(fn: Callable[..., R], item: Any, shared: Any) -> R:
     """Run one job with one torch thread (the worker may be a fresh process)."""
     from lasa.config import set_threads  # noqa: PLC0415 (torch loads in the worker)
 
     set_threads()
-    return fn(shared, item) if has_shared else fn(item)
-
-
-_NOTHING = object()  # no shared argument (a sentinel of this process only: never pickled)
+    return fn(item) if shared is None else fn(shared, item)
 
 
 def run_jobs(
@@ -63,7 +60,7 @@ def run_jobs(
     progress: bool = False,
     desc: str = "jobs",
     timeout: str = "20s",
-    shared: Any = _NOTHING,
+    shared: Any = None,
 ) -> list[R]:
     """``[fn(item) for item in items]``, through joblib, locally or on a Dask cluster.
 
@@ -78,7 +75,7 @@ def run_jobs(
         desc: The progress bar's label.
         timeout: How long to wait for the scheduler to answer (a Dask duration).
         shared: An object every job reads (decoders, task, ...), passed as ``fn``'s first
-            argument. On a cluster it is scattered to the workers once instead of being
+            argument when not None. On a cluster it is scattered to the workers once instead of being
             sent with every job.
 
     Returns:
@@ -92,8 +89,7 @@ def run_jobs(
     items = list(items)
     if int(n_jobs) != n_jobs or n_jobs < 1:
         raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
-    has_shared = shared is not _NOTHING
-    jobs = [delayed(_threaded)(fn, item, shared if has_shared else None, has_shared) for item in items]
+    jobs = [delayed(_threaded)(fn, item, shared) for item in items]
     address = scheduler_address(scheduler)
 
     def collect(parallel: Any) -> list[R]:
@@ -108,6 +104,6 @@ def run_jobs(
         client = Client(address, timeout=timeout)
     except OSError as err:
         raise ConfigError(f"cannot reach the Dask scheduler at {address}: {err}") from err
-    scatter = [shared] if has_shared else None
+    scatter = None if shared is None else [shared]
     with client, parallel_config(backend="dask", scatter=scatter):
         return collect(Parallel(n_jobs=-1, return_as="generator"))

@@ -16,7 +16,9 @@ runs once.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping
+import itertools
+from collections.abc import Mapping, Sequence
+from typing import TypeVar
 
 import numpy as np
 
@@ -28,6 +30,8 @@ from lasa.task import CupTask
 from lasa.users import PILOTS, UserPopulation, latent_grid
 from lasa.verdicts import NO_ASSISTANCE
 
+T = TypeVar("T")
+
 __all__ = [
     "Decoders",
     "arms",
@@ -37,6 +41,7 @@ __all__ = [
     "as_decoders",
     "check_methods",
     "check_pilot",
+    "sweep_grid",
     "check_positive_int",
     "draw_episodes",
     "episodes",
@@ -81,6 +86,21 @@ def arms(methods: tuple[str, ...], members: tuple[str, ...]) -> list[tuple[str, 
     """
     out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
     return out + [(m, a) for a in members for m in methods if m != "LA"]
+
+
+def sweep_grid(
+    methods: tuple[str, ...], members: tuple[str, ...], conditions: Sequence[T], n_users: int
+) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
+    """Every user of a sweep: (method, assistance) arm x condition x user, in that order.
+
+    Returns:
+        Each user's method, assistance member (``none`` for LA, :func:`arms`), condition
+        (e.g. its beta) and seed, the index of its cup, preference and random stream.
+    """
+    grid = list(itertools.product(arms(methods, members), conditions, range(n_users)))
+    method = np.array([m for (m, _), _, _ in grid])
+    member = np.array([a for (_, a), _, _ in grid])
+    return method, member, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
 
 
 def check_pilot(pilot: str, prob: float) -> None:
@@ -139,7 +159,7 @@ def run_population(
     noise: np.ndarray,
     progress: bool = False,
     assistance: np.ndarray | None = None,
-    pilot_noise: np.ndarray | None = None,
+    pilot_seed: int = 0,
 ) -> Trajectories:
     """Roll out a population whose users may use different methods, decoders and assistance.
 
@@ -158,7 +178,8 @@ def run_population(
         progress: Show progress bars.
         assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
             ``control.assistance`` for everyone.
-        pilot_noise: The pilots' uniforms (:func:`pilot_uniforms`), for laggy and noisy users.
+        pilot_seed: Seed of the laggy and noisy pilots' own random stream
+            (:func:`pilot_uniforms`); unused for Eq. S1 users.
 
     Raises:
         ConfigError: if a method's decoder is missing.
@@ -170,6 +191,9 @@ def run_population(
         assistance = np.full(len(methods), control.assistance)
     members = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
     keys = np.array([METHOD_DECODER[m] for m in methods])
+    pilot_noise = None
+    if users.pilot_prob > 0:
+        pilot_noise = pilot_uniforms(int(np.max(users.seed)) + 1, horizon, pilot_seed)
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
         if key not in decoders:

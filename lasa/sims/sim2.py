@@ -8,7 +8,6 @@ Without the entropy term (LA+SA) the paper finds them trapped as N grows; with i
 from __future__ import annotations
 
 import dataclasses
-import itertools
 
 import numpy as np
 import pandas as pd
@@ -23,15 +22,14 @@ from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
 from lasa.sims.common import (
     Decoders,
-    arms,
     check_members,
     check_methods,
     check_pilot,
     check_positive_int,
     episodes,
     members_of,
-    pilot_uniforms,
     run_population,
+    sweep_grid,
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
@@ -113,28 +111,24 @@ def run(
     """
     n_users = config.n_seeds * config.n_draws
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
-    pairs = arms(config.methods, members_of(control, config.assistance))
-    grid = list(itertools.product(pairs, config.change_steps, range(n_users)))
-    method = np.array([m for (m, _), _, _ in grid])
-    member = np.array([a for (_, a), _, _ in grid])
-    change = np.array([n for _, n, _ in grid], dtype=int)
-    seed = np.array([s for _, _, s in grid])
+    members = members_of(control, config.assistance)
+    method, member, conditions, seed = sweep_grid(config.methods, members, config.change_steps, n_users)
+    change = np.array(conditions, dtype=int)
     wrong = (goal[seed] + 1) % task.n_goals
     users = UserPopulation(
         goal=goal[seed],
         theta=theta[seed],
         target=task.target(goal[seed], theta[seed]),
-        beta0=np.full(len(grid), config.beta),
-        slope=np.zeros(len(grid)),
+        beta0=np.full(len(seed), config.beta),
+        slope=np.zeros(len(seed)),
         seed=seed,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
         first_target=task.target(wrong, theta[seed]),
         change_step=change,
     )
-    pilots = pilot_uniforms(n_users, config.horizon, config.seed) if config.pilot_prob > 0 else None
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, pilots
+        decoders, task, control, users, method, config.horizon, noise, progress, member, config.seed
     )
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(

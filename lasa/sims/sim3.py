@@ -8,7 +8,6 @@ Notebook ``06_learning_users``.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 
 import numpy as np
 import pandas as pd
@@ -22,15 +21,14 @@ from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
 from lasa.sims.common import (
     Decoders,
-    arms,
     check_members,
     check_methods,
     check_pilot,
     check_positive_int,
     episodes,
     members_of,
-    pilot_uniforms,
     run_population,
+    sweep_grid,
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
@@ -94,30 +92,26 @@ def run(
     """
     n_users = config.n_seeds * config.n_draws
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
-    pairs = arms(config.methods, members_of(control, config.assistance))
-    grid = list(itertools.product(pairs, config.learners, range(n_users)))
-    method = np.array([m for (m, _), _, _ in grid])
-    member = np.array([a for (_, a), _, _ in grid])
-    learner = np.array([name for _, (name, _), _ in grid])
-    slope = np.array([m for _, (_, m), _ in grid], dtype=float)
-    seed = np.array([s for _, _, s in grid])
+    members = members_of(control, config.assistance)
+    method, member, conditions, seed = sweep_grid(config.methods, members, config.learners, n_users)
+    learner = np.array([name for name, _ in conditions])
+    slope = np.array([m for _, m in conditions], dtype=float)
     users = UserPopulation(
         goal=goal[seed],
         theta=theta[seed],
         target=task.target(goal[seed], theta[seed]),
-        beta0=np.zeros(len(grid)),
+        beta0=np.zeros(len(seed)),
         slope=slope,
         seed=seed,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )
-    pilots = pilot_uniforms(n_users, config.horizon, config.seed) if config.pilot_prob > 0 else None
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, pilots
+        decoders, task, control, users, method, config.horizon, noise, progress, member, config.seed
     )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
-    n_users = len(grid)
+    n_users = len(seed)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
