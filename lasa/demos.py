@@ -22,7 +22,9 @@ the decoder to return to the demonstrated manifold.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -30,8 +32,10 @@ import pandas as pd
 
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.config import ControlConfig, check_range
+from lasa.eating import EatingTask
 from lasa.errors import ArtifactError, ConfigError
 from lasa.io import load_npz, save_npz
+from lasa.robot import Robot
 from lasa.task import CupTask
 
 __all__ = [
@@ -41,9 +45,12 @@ __all__ = [
     "save_demonstrations",
     "load_demonstrations",
     "demonstration_summary",
+    "collect_eating_demonstrations",
+    "EATING_DEMOS",
 ]
 
-REACH, ADJUST, HOLD = 0, 1, 2  # phase labels of a tuple
+REACH, ADJUST, HOLD, STROKE = 0, 1, 2, 3  # phase labels of a tuple (strokes: the eating task)
+PHASE_NAMES = ("reach", "adjust", "hold", "stroke")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -150,7 +157,7 @@ def demonstration_summary(task: CupTask, demos: Demonstrations) -> pd.DataFrame:
                 "robot": demos.robot,
                 "demo": clean.demo,
                 "goal": np.asarray(task.goal_names)[clean.goal],
-                "phase": np.asarray(["reach", "adjust", "hold"])[clean.phase],
+                "phase": np.asarray(PHASE_NAMES)[clean.phase],
                 "belief_true_goal": clean.beliefs[np.arange(len(clean)), clean.goal],
             }
         )
@@ -205,51 +212,101 @@ def collect_demonstrations(
                     start = robot.clip(start + rng.normal(0.0, config.start_noise, start.shape))
                 segments: list[tuple[np.ndarray, float, int]] = []
                 # 1. reach: straight line in joint space under the speed law
-                target = task.target(g, theta)
-                span = float(np.linalg.norm(target - start))
-                u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
-                path = start + (u / max(span, 1e-12))[:, None] * (target - start)
-                segments.append((path, theta, REACH))
+                segments.append((_line_path(start, task.target(g, theta), cruise, config, dt), theta, REACH))
                 # 2. adjustments along the preference curve, moving in theta
                 current = theta
                 for _ in range(config.n_adjust):
                     new = float(rng.uniform(0.0, 1.0))
-                    grid = np.linspace(current, new, 64)
-                    pts = task.target(g, grid)
-                    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-                    u = _progress(float(arc[-1]), cruise, config.gain, config.tolerance, dt, config.max_steps)
-                    th_path = np.interp(u, arc, grid)
-                    segments.append((task.target(g, th_path), new, ADJUST))
+                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
+                    segments.append((path, new, ADJUST))
                     current = new
-                # assemble: each segment's actions are the finite differences, then a hold
-                log_b = uniform_log_belief(1, task.n_goals)[0]
-                for path, th, phase in segments:
-                    s = path[:-1]
-                    a = np.diff(path, axis=0) / dt
-                    if config.hold_steps:
-                        s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
-                        a = np.concatenate([a, np.zeros((config.hold_steps, robot.n_joints))])
-                    ph = np.full(len(s), phase)
-                    ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
-                    # online belief along the demonstration
-                    for k in range(len(s)):
-                        beliefs.append(belief(log_b))
-                        lik = log_likelihood(
-                            s[k], a[k], sets, dt, control.belief_beta, control.likelihood_step
-                        )
-                        log_b = update_log_belief(log_b, lik, control.belief_floor)
-                    rows["s"].append(s)
-                    rows["a"].append(a)
-                    rows["demo"].append(np.full(len(s), demo_id))
-                    rows["goal"].append(np.full(len(s), g))
-                    rows["theta"].append(np.full(len(s), th))
-                    rows["phase"].append(ph)
+                _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints)
                 demo_id += 1
+    return _dataset(robot, rows, beliefs, control, config, rng)
+
+
+def _line_path(
+    start: np.ndarray, target: np.ndarray, cruise: float, config: DemoConfig, dt: float
+) -> np.ndarray:
+    """States along the straight joint-space line from ``start`` to ``target`` under the speed law."""
+    span = float(np.linalg.norm(target - start))
+    u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
+    return start + (u / max(span, 1e-12))[:, None] * (target - start)
+
+
+def _curve_path(
+    curve: Callable[[np.ndarray], np.ndarray],
+    start: float,
+    end: float,
+    cruise: float,
+    config: DemoConfig,
+    dt: float,
+) -> np.ndarray:
+    """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
+    grid = np.linspace(start, end, 64)
+    pts = curve(grid)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    u = _progress(float(arc[-1]), cruise, config.gain, config.tolerance, dt, config.max_steps)
+    return curve(np.interp(u, arc, grid))
+
+
+def _append_demo(
+    rows: dict[str, list[np.ndarray]],
+    beliefs: list[np.ndarray],
+    segments: list[tuple[np.ndarray, float, int]],
+    demo_id: int,
+    goal: int,
+    sets: np.ndarray,
+    control: ControlConfig,
+    config: DemoConfig,
+    n_joints: int,
+    start_belief: np.ndarray | None = None,
+) -> None:
+    """Append one demonstration's tuples: each segment's finite differences, then a hold.
+
+    ``segments`` are (path of states, preference, phase label); the belief is the one the
+    robot computes online along the demonstration, starting from ``start_belief``
+    (default uniform).
+    """
+    log_b = uniform_log_belief(1, len(sets))[0] if start_belief is None else np.log(start_belief)
+    for path, th, phase in segments:
+        s = path[:-1]
+        a = np.diff(path, axis=0) / control.dt
+        if config.hold_steps:
+            s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
+            a = np.concatenate([a, np.zeros((config.hold_steps, n_joints))])
+        ph = np.full(len(s), phase)
+        ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
+        # online belief along the demonstration
+        for k in range(len(s)):
+            beliefs.append(belief(log_b))
+            lik = log_likelihood(s[k], a[k], sets, control.dt, control.belief_beta, control.likelihood_step)
+            log_b = update_log_belief(log_b, lik, control.belief_floor)
+        rows["s"].append(s)
+        rows["a"].append(a)
+        rows["demo"].append(np.full(len(s), demo_id))
+        rows["goal"].append(np.full(len(s), goal))
+        rows["theta"].append(np.full(len(s), th))
+        rows["phase"].append(ph)
+
+
+def _dataset(
+    robot: Robot,
+    rows: dict[str, list[np.ndarray]],
+    beliefs: list[np.ndarray],
+    control: ControlConfig,
+    config: DemoConfig,
+    rng: np.random.Generator,
+) -> Demonstrations:
+    """The dataset from the demonstrations' tuples, with ``config.n_perturb`` noisy copies of each.
+
+    A copy's state is perturbed and its action corrected back towards the demonstrated
+    state (clipped below sigma_h), which teaches the decoder to return to the manifold.
+    """
     states = np.concatenate(rows["s"])
     actions = np.concatenate(rows["a"])
     b = np.stack(beliefs)
     meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
-    # noisy copies: perturbed state, action corrected back towards the demonstration
     copies_s, copies_a = [states], [actions]
     for _ in range(config.n_perturb):
         noise = rng.normal(0.0, config.perturb_std, states.shape)
@@ -274,6 +331,87 @@ def collect_demonstrations(
         phase=np.tile(meta["phase"], reps),
         perturbed=perturbed,
     )
+
+
+# The eating task's demonstrations: five tilts per goal, each reached from home and from
+# the entries of the three other goals, then stroked, adjusted once and stroked again:
+# about 20 minutes of motion, the paper's amount (notebook 10 measures it).
+EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
+
+
+def collect_eating_demonstrations(
+    task: EatingTask, control: ControlConfig, config: DemoConfig = EATING_DEMOS
+) -> Demonstrations:
+    """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
+
+    For every goal and each of ``config.n_theta`` tilts, from each start (home, ``n_starts
+    - 1`` perturbed homes, and the entry of every other goal at a random tilt, so that the
+    moves between bowls of a task are shown; such a move starts from the belief the robot
+    holds after working at that other goal, as in one continuous demonstration of a task):
+
+    1. **reach** the stroke's entry s*(g, theta, 0) along a straight joint-space line;
+    2. **stroke** through the food to s*(g, theta, 1) and back to the entry;
+    3. ``n_adjust`` times: **adjust** the tilt along the entries to a random new theta,
+       then **stroke** there.
+
+    Every motion follows the cup demonstrations' speed law (cruise at ``speed`` sigma_h,
+    slow down near the target), with holds after each; beliefs are computed online over
+    the task's goals and the tuples get the same noisy copies (:func:`collect_demonstrations`).
+
+    Args:
+        task: The eating task (:func:`lasa.eating.make_eating_task`).
+        control: Control-loop units.
+        config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
+    """
+    rng = np.random.default_rng(config.seed)
+    robot = task.robot
+    dt = control.dt
+    cruise = config.speed * control.action_scale
+    rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+    beliefs: list[np.ndarray] = []
+    sets = task.belief_targets(control.likelihood)
+    demo_id = 0
+
+    def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:
+        def along(depths: np.ndarray) -> np.ndarray:
+            return np.stack([task.pose(g, theta, float(u)) for u in np.atleast_1d(depths)])
+
+        down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
+        return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
+
+    for g in range(task.n_goals):
+        for theta in np.linspace(0.0, 1.0, config.n_theta):
+            starts = [task.start.copy()]
+            starts += [
+                robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
+                for _ in range(config.n_starts - 1)
+            ]
+            beliefs_0: list[np.ndarray | None] = [None] * len(starts)
+            for other in range(task.n_goals):
+                if other != g:
+                    starts.append(task.target(other, float(rng.uniform())))
+                    beliefs_0.append(_settled_belief(other, task.n_goals, control.belief_floor))
+            for start, b0 in zip(starts, beliefs_0, strict=True):
+                target = task.target(g, theta)
+                segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
+                segments += stroke(g, float(theta))
+                current = float(theta)
+                for _ in range(config.n_adjust):
+                    new = float(rng.uniform(0.0, 1.0))
+                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
+                    segments.append((path, new, ADJUST))
+                    segments += stroke(g, new)
+                    current = new
+                _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints, b0)
+                demo_id += 1
+    return _dataset(robot, rows, beliefs, control, config, rng)
+
+
+def _settled_belief(goal: int, n_goals: int, floor: float) -> np.ndarray:
+    """The belief after working at ``goal`` for a while: all but the floor of every other goal on it."""
+    b = np.full(n_goals, floor)
+    b[goal] = 1.0 - (n_goals - 1) * floor
+    return b
 
 
 def save_demonstrations(demos: Demonstrations, path: str | os.PathLike[str]) -> Path:

@@ -55,6 +55,9 @@ ARTIFACTS: dict[str, tuple[str, str]] = {
     # steps and schedule, without the term (lambda = 0) and with it (the chosen lambda).
     "decoder_lambda0": ("models/decoder_{robot}_lambda0.pt", "03_entropy_ablation"),
     "decoder_entropy": ("models/decoder_{robot}_entropy.pt", "03_entropy_ablation"),
+    # The eating study's data and 2-D decoder (Sec. VI; the Panda only).
+    "eating_demos": ("data/eating_demos_{robot}.npz", "10_eating_task"),
+    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),
 }
 
 

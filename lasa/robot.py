@@ -46,6 +46,13 @@ class RobotSpec:
     # Cups added after training (Sec. IV-C): (site name, grasp-centre position [m]); their
     # names end ``cups``. Built like the last cup of the scene, in their own colour.
     extra_cups: tuple[tuple[str, tuple[float, float, float]], ...] = ()
+    # A tool held in the hand (the eating study's fork): an MJCF file whose first body is
+    # attached to body ``tool_mount`` at the frame of site ``tool_site`` (axes aligned), its
+    # element names prefixed with ``tool_prefix`` (the fork's site ``tip`` becomes ``fork_tip``).
+    tool: Path | None = None
+    tool_mount: str = "hand"
+    tool_site: str = "grasp"
+    tool_prefix: str = "fork_"
 
 
 ROBOTS: dict[str, RobotSpec] = {
@@ -165,6 +172,11 @@ class Robot:
                 if not (root / rel).is_file():
                     raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
                 mesh.file = str(root / rel)
+        if spec.tool is not None:
+            tool = mujoco.MjSpec.from_file(str(spec.tool))
+            site = mj_spec.site(spec.tool_site)
+            frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
+            frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
         for name, position in spec.extra_cups:
             _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.cups[0])
         self.model = mj_spec.compile()

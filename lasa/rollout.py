@@ -45,6 +45,7 @@ __all__ = [
     "StepResult",
     "check_decoder",
     "decode_candidates",
+    "advance",
     "shared_autonomy_step",
     "rollout",
     "METHODS",
@@ -101,7 +102,7 @@ class StepResult:
     action: np.ndarray
 
 
-def _advance(
+def advance(
     task: CupTask,
     control: ControlConfig,
     state: np.ndarray,
@@ -133,14 +134,19 @@ def _advance(
 def _assistance(
     task: CupTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """a_r and the blend weight per user: ``control.assistance``, or each user's member."""
+    """a_r and the blend weight per user: ``control.assistance``, or each user's member.
+
+    The goal sets of ``grasp_set`` are the task's (``task.belief_targets("grasp_set")``):
+    the cups' grasp curves, or the eating task's whole stroke surfaces.
+    """
+    sets = task.belief_targets("grasp_set")
     if members is None:
-        return assist(control.assistance, b, state, task.goals, task.curves, control.dt, control.action_scale)
+        return assist(control.assistance, b, state, task.goals, sets, control.dt, control.action_scale)
     a_r, weight = np.empty_like(state), np.empty(len(state))
     for name in dict.fromkeys(members.tolist()):
         rows = members == name
         a_r[rows], weight[rows] = assist(
-            name, b[rows], state[rows], task.goals, task.curves, control.dt, control.action_scale
+            name, b[rows], state[rows], task.goals, sets, control.dt, control.action_scale
         )
     return a_r, weight
 
@@ -179,7 +185,7 @@ def shared_autonomy_step(
     a_h = np.where(ok, a_h, 0.0)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)
-    return _advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+    return advance(task, control, state, log_belief, a_h, alpha_arr, sets)
 
 
 def check_decoder(decoder: ActionDecoder, task: CupTask) -> None:
@@ -298,7 +304,7 @@ def rollout(
             assert pilot_noise is not None
             k = pilot_choice(users, k, k_prev, pilot_noise[users.seed, t], len(grid))
             k_prev = k
-        step = _advance(task, control, s, log_b, phi[rows, k], alpha, sets, b, members)
+        step = advance(task, control, s, log_b, phi[rows, k], alpha, sets, b, members)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)

@@ -11,6 +11,8 @@ module                    figure                            notebook
 :mod:`.sim4`              Fig. sim4, new goals              07_new_goals
 :mod:`.robustness`        the verdict map                   08_claims_robustness
 :mod:`.convergence`       Sec. IV-A, the T1-T4 ball         09_convergence
+:mod:`.eating_task`       the eating task's 2-D latent      10_eating_task
+:mod:`.study`             Figs. error, time, dessert        11_eating_study
 ========================  ================================  ===========================
 
 Each module defines ``NAME`` (the figure's file stem under ``figures/``), ``COLUMNS``

@@ -1,0 +1,182 @@
+r"""The eating task's 2-D latent actions (notebook 10): demonstrations, training, what z does.
+
+The study's decoder phi(z, s, b) reads a belief over the four goals of the eating task
+(:mod:`lasa.eating`) and maps a 2-axis stick z in [-1, 1]^2 to a joint velocity of the
+Panda. It is trained by the same pipeline as the cup decoders (:func:`lasa.train.train_decoder`)
+on synthetic kinesthetic-style demonstrations (:func:`lasa.demos.collect_eating_demonstrations`).
+
+The figure shows what each stick direction does at a bowl, in the fork's terms: the
+tip's velocity in the table plane (arrows), its vertical velocity and the rate at which
+the fork tilts, for the eight full deflections of the stick, when the robot is unsure
+which goal the user wants (uniform belief) and when it is confident in that bowl. That
+is the paper's central picture: near the goal, the same input changes meaning, from
+"which bowl" to "how to eat from it".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import matplotlib.pyplot as plt
+import mujoco
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.figure import Figure
+
+from lasa.config import ControlConfig, check_choice
+from lasa.decoder import ActionDecoder
+from lasa.demos import EATING_DEMOS, DemoConfig
+from lasa.eating import GOALS, EatingTask
+from lasa.errors import ConfigError
+from lasa.study import tip_frames
+from lasa.train import TrainConfig
+
+__all__ = ["NAME", "COLUMNS", "Config", "BELIEFS", "directions", "plot"]
+
+NAME = "eating_latent"
+COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
+BELIEFS = ("uncertain", "confident")
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The eating decoder's data and training (notebook 10)."""
+
+    n_theta: int = EATING_DEMOS.n_theta  # tilts demonstrated per goal [-]
+    n_starts: int = (
+        EATING_DEMOS.n_starts
+    )  # reaches per (goal, tilt) from home (the rest from other goals) [-]
+    n_adjust: int = EATING_DEMOS.n_adjust  # tilt adjustments (each followed by a stroke) per demo [-]
+    n_perturb: int = EATING_DEMOS.n_perturb  # noisy copies of every tuple [-]
+    steps: int = 2000  # optimiser steps (the cup decoders' schedule) [-]
+    hidden: int = 128  # width of the hidden layers [-]
+    depth: int = 3  # hidden layers [-]
+    seed: int = 0  # seed of the demonstrations and of training [-]
+    goal: str = "middle"  # the bowl the figure looks at [-]
+
+    def __post_init__(self) -> None:
+        check_choice("goal", self.goal, GOALS)
+        for name in ("n_theta", "n_starts", "steps", "hidden", "depth"):
+            value = getattr(self, name)
+            if int(value) != value or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+
+    def demos(self) -> DemoConfig:
+        """The demonstrations' settings."""
+        return dataclasses.replace(
+            EATING_DEMOS,
+            n_theta=self.n_theta,
+            n_starts=self.n_starts,
+            n_adjust=self.n_adjust,
+            n_perturb=self.n_perturb,
+            seed=self.seed,
+        )
+
+    def training(self) -> TrainConfig:
+        """The training settings: the cup decoders' recipe with a 2-D latent."""
+        return TrainConfig(steps=self.steps, hidden=self.hidden, depth=self.depth, z_dim=2, seed=self.seed)
+
+
+def directions(
+    task: EatingTask, decoder: ActionDecoder, control: ControlConfig, goal: str, n: int = 8
+) -> pd.DataFrame:
+    """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief.
+
+    For each belief (uniform: ``uncertain``; all but the floor on ``goal``: ``confident``)
+    and each z on the unit circle (the rest position z = 0 as well), the decoded joint
+    velocity is mapped through the fork tip's Jacobian: the tip's velocity (m/s) and the
+    rate at which the fork's tilt from vertical changes (rad/s). ``toward`` names the goal
+    whose direction the tip's velocity points most closely at (``-`` when it moves less
+    than 1 cm/s).
+    """
+    g = GOALS.index(check_choice("goal", goal, GOALS))
+    state = task.target(g, 0.5)
+    angles = 2 * np.pi * np.arange(n) / n
+    z = np.concatenate([np.zeros((1, 2)), np.stack([np.cos(angles), np.sin(angles)], axis=1)])
+    floor = control.belief_floor
+    confident = np.full(task.n_goals, floor)
+    confident[g] = 1.0 - (task.n_goals - 1) * floor
+    beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
+    data = mujoco.MjData(task.robot.model)
+    pos, axis, jp, jr = tip_frames(task.robot, data, state[None])
+    goals = task.robot.cup_positions()
+    rows = []
+    for name, b in beliefs.items():
+        qdot = decoder.decode_numpy(
+            z, np.broadcast_to(state, (len(z), len(state))), np.broadcast_to(b, (len(z), len(b)))
+        )
+        v = qdot @ jp[0].T  # (Z, 3)
+        w = qdot @ jr[0].T
+        d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
+        # tilt from vertical: angle between the axis and (0, 0, -1); its rate
+        tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)
+        to_goal = goals - pos[0]
+        to_goal /= np.linalg.norm(to_goal, axis=1, keepdims=True)
+        speed = np.linalg.norm(v, axis=1)
+        cos = (v / np.maximum(speed, 1e-12)[:, None]) @ to_goal.T
+        best = np.where(np.arange(len(GOALS)) == g, -np.inf, cos).argmax(axis=1)  # other goals
+        toward = np.where(
+            speed < 0.01, "-", np.where(cos[np.arange(len(z)), best] > 0.7, np.asarray(GOALS)[best], "here")
+        )
+        rows.append(
+            pd.DataFrame(
+                {
+                    "robot": task.robot.name,
+                    "goal": goal,
+                    "belief": name,
+                    "z1": z[:, 0],
+                    "z2": z[:, 1],
+                    "vx": v[:, 0],
+                    "vy": v[:, 1],
+                    "vz": v[:, 2],
+                    "tilt_rate": tilt_rate,
+                    "toward": toward,
+                }
+            )
+        )
+    return pd.concat(rows, ignore_index=True)
+
+
+def plot(frame: pd.DataFrame) -> Figure:
+    """Two panels (uncertain, confident): the tip's velocity for each stick direction.
+
+    Arrows are the horizontal velocity (top view, robot's x forward, y left); the arrow's
+    colour is the vertical velocity and the number beside it the tilt rate (deg/s).
+    """
+    sns.set_theme(style="whitegrid")
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), sharex=True, sharey=True)
+    vmax = max(float(frame.vz.abs().max()), 1e-3)
+    cmap = plt.get_cmap("coolwarm")
+    for ax, name in zip(axes, BELIEFS, strict=True):
+        part = frame[(frame.belief == name) & ((frame.z1 != 0) | (frame.z2 != 0))]
+        scale = 1.0
+        for _, row in part.iterrows():
+            color = cmap(0.5 + 0.5 * row.vz / vmax)
+            # top view with the robot's left (+y) to the left: plot (-y, x)
+            ax.annotate(
+                "",
+                xy=(-row.vy * scale, row.vx * scale),
+                xytext=(0.0, 0.0),
+                arrowprops={"arrowstyle": "->", "color": color, "lw": 2},
+            )
+            ax.text(
+                -row.vy * scale * 1.12,
+                row.vx * scale * 1.12,
+                f"z=({row.z1:+.1f},{row.z2:+.1f})\n{np.degrees(row.tilt_rate):+.0f}°/s",
+                fontsize=6,
+                ha="center",
+                va="center",
+            )
+        lim = max(float(np.hypot(frame.vx, frame.vy).max()) * 1.4, 0.02)
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.set_title(f"belief {name}")
+        ax.set_xlabel("tip velocity to the robot's right, -v_y [m/s]")
+    axes[0].set_ylabel("tip velocity forward, v_x [m/s]")
+    sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(-vmax, vmax))
+    fig.colorbar(sm, ax=axes, label="vertical velocity v_z [m/s]", shrink=0.8)
+    goal = frame.goal.iloc[0]
+    fig.suptitle(f"What each stick direction does at the {goal} bowl (mid-preference entry pose)")
+    return fig
