@@ -1,6 +1,7 @@
 # lasa: reproduce "Shared Autonomy with Learned Latent Actions" (RSS 2020).
 #
-#   make figures          regenerate every figure, CSV, video and the claims table (paper scale)
+#   make figures          regenerate every figure, CSV, video and the claims table (paper scale),
+#                         the eating study (notebooks 10-11, Panda only) included
 #   make figures QUICK=1  the same pipeline at toy scale, into build/quick/ (figures/ untouched)
 #   make figures LARGE=1  paper scale with the cluster-sized verdict map (configs/large.yaml),
 #                         into build/large/; LASA_SCHEDULER=tcp://host:8786 runs its grid on Dask
@@ -88,7 +89,9 @@ ifeq ($(BUILD),build)
 endif
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC); wall times in $(BUILD)/timings.jsonl)"
 
-notebooks: $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
+# The eating study (Sec. VI) runs on the Panda only: its own chain, beside the robots'.
+STUDY_NBS := 10_eating_task 11_eating_study
+notebooks: $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb)) $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb)
 
 # The robots' chains run side by side. Notebooks that share a figure merge their rows
 # and redraw it under a lock (lasa.io.locked), and the merged rows are ordered by robot,
@@ -126,6 +129,13 @@ $(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXE
 # Sec. IV-A's ball along LA+SA rollouts of the lambda = 0 control decoder.
 $(EXEC)/09_convergence-%.ipynb: notebooks/09_convergence.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
+
+# The eating task: scene, demonstrations and the 2-D decoder; then the simulated study.
+$(EXEC)/10_eating_task.ipynb: notebooks/10_eating_task.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN)
+
+$(EXEC)/11_eating_study.ipynb: notebooks/11_eating_study.ipynb $(EXEC)/10_eating_task.ipynb $(LASA_SRC) $(CONFIG) | setup
+	$(RUN)
 
 lint: setup
 	$(BIN)/ruff check lasa tests benchmarks

@@ -34,11 +34,13 @@ ORDER = [
     "09_convergence",
 ]
 ROBOTS = ["planar5", "panda"]
+STUDY = ["10_eating_task", "11_eating_study"]  # the eating study: the Panda only, its own chain
 
 
-def _chain(robot: str, out: Path) -> None:
-    """One robot's notebooks, in order, each in its own papermill run (as `make figures`)."""
-    for stem in ORDER:
+def _chain(robot: str | None, out: Path) -> None:
+    """One robot's notebooks (or, for None, the eating study's), in order, each in its own
+    papermill run (as `make figures`)."""
+    for stem in ORDER if robot else STUDY:
         command = [
             sys.executable,
             "-m",
@@ -48,8 +50,7 @@ def _chain(robot: str, out: Path) -> None:
             str(QUICK),
             "--out",
             str(out / "notebooks"),
-            "--robot",
-            robot,
+            *(["--robot", robot] if robot else []),
             "--param",
             f"build_dir={out / 'build'}",
             "--param",
@@ -62,17 +63,18 @@ def _chain(robot: str, out: Path) -> None:
 
 @pytest.fixture(scope="module")
 def executed(tmp_path_factory):
-    """Both robots' chains side by side, as `make figures` runs them (shared figures under a lock)."""
+    """Both robots' chains and the study's side by side, as `make figures` runs them (shared
+    figures under a lock)."""
     out = tmp_path_factory.mktemp("quick")
-    with ThreadPoolExecutor(max_workers=len(ROBOTS)) as pool:
-        for done in [pool.submit(_chain, robot, out) for robot in ROBOTS]:
+    with ThreadPoolExecutor(max_workers=len(ROBOTS) + 1) as pool:
+        for done in [pool.submit(_chain, robot, out) for robot in [*ROBOTS, None]]:
             done.result()
     return out
 
 
 def test_every_notebook_ran_for_every_robot(executed):
     ran = sorted(p.stem for p in (executed / "notebooks").glob("*.ipynb"))
-    assert ran == sorted(f"{stem}-{robot}" for stem in ORDER for robot in ROBOTS)
+    assert ran == sorted([f"{stem}-{robot}" for stem in ORDER for robot in ROBOTS] + STUDY)
 
 
 @pytest.mark.parametrize("robot", ROBOTS)
@@ -127,6 +129,7 @@ def test_claims_table(executed):
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
     assert not claims.duplicated(["id", "robot"]).any()
+    claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
     per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
     rows = 1 + len(ASSISTANCE)  # a headline row and one per member of the family
@@ -242,3 +245,39 @@ def test_sim4_outputs(executed):
         assert set(far.h) == {"grasp", "straight_line", "none"}
         assert read_video(fig / f"new_goal_{robot}.mp4").shape[2] == 640
     assert (fig / "sim4_new_goals.png").stat().st_size > 10_000
+
+
+def test_study_outputs(executed):
+    from lasa.sims import eating_task, study
+
+    fig = executed / "figures"
+    settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
+    members = study.Config().members
+    n = settings["n_participants"]
+    assert (executed / "build" / "models" / "eating_decoder_panda.pt").is_file()
+    latent = pd.read_csv(fig / "eating_latent.csv")
+    assert list(latent.columns) == list(eating_task.COLUMNS) and set(latent.belief) == set(
+        eating_task.BELIEFS
+    )
+    episodes = n * (2 + 2 * len(members)) * 2  # participants x arms x tasks
+    for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):
+        frame = pd.read_csv(fig / f"{spec.NAME}.csv")
+        assert list(frame.columns) == list(spec.COLUMNS)
+        assert {"participant", "condition", "task"} <= set(frame.columns)
+        assert len(frame) == episodes * (4 if spec is study.ALIGNMENT else 1)
+        assert set(frame.condition) == {"R", "R+SA", "LA", "LA+SA"}
+        assert sorted(frame.participant.unique()) == list(range(n))
+        assert (fig / f"{spec.NAME}.png").stat().st_size > 10_000
+    time = pd.read_csv(fig / "study_time.csv")
+    assert (time.total_time <= settings["horizon"] * 0.1 + 1e-9).all() and (time.idle_time >= 0).all()
+    assert (time[time.condition.str.startswith("LA")].mode_switches == 0).all()
+    error = pd.read_csv(fig / "study_goal_error.csv")
+    assert (error.goal_error > 0).all()
+    claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
+    rows = claims[claims.figure == "study"]
+    ids = {"study.h1", "study.h1_paper_test", "study.h2", "study.h3"}  # fewer than 10: no cohort rows
+    assert set(rows.id) == ids | {f"{i}@{m}" for i in ids for m in members[1:]}
+    assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= {"yes", "partly", "no"}
+    assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
+    video = read_video(fig / "study_dessert.mp4")
+    assert video.shape[1:] == (240, 4 * 320, 3)  # the four conditions side by side

@@ -1,0 +1,106 @@
+"""The study's claims rules on tables whose answers are known."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from lasa.sims import study
+from lasa.study import CONDITIONS, NO_ASSISTANCE
+
+MEMBERS = ("hindsight", "grasp_set")
+
+
+def frames(
+    n: int, sa_error: float, la_sa_time: float, scoop_gain: float, seed: int = 0
+) -> dict[str, pd.DataFrame]:
+    """Tidy tables with chosen effects: SA's change of Goal Error, LA+SA's change of time, and
+    LA+SA's gain of scoop alignment over R+SA; small participant-level noise."""
+    rng = np.random.default_rng(seed)
+    err, time, align = [], [], []
+    for p in range(n):
+        skill = rng.normal(0, 0.5)
+        for cond in CONDITIONS:
+            for member in MEMBERS if cond.endswith("+SA") else (NO_ASSISTANCE,):
+                for task in ("Entree", "Dessert"):
+                    key = {
+                        "robot": "panda",
+                        "participant": p,
+                        "condition": cond,
+                        "assistance": member,
+                        "task": task,
+                        "order": 0,
+                    }
+                    e = 5 + skill + (sa_error if cond.endswith("+SA") else 0) + rng.normal(0, 0.1)
+                    err.append({**key, "goal_error": e, "goal_error_bowls": e + 0.1})
+                    t = 60 + 5 * skill + (la_sa_time if cond == "LA+SA" else 0) + rng.normal(0, 1)
+                    time.append(
+                        {**key, "total_time": t, "idle_time": t / 3, "mode_switches": 0, "completed": True}
+                    )
+                    for phase in ("stab", "scoop", "dip", "plate"):
+                        a = (
+                            0.8
+                            + (scoop_gain if (cond == "LA+SA" and phase == "scoop") else 0)
+                            + rng.normal(0, 0.02)
+                        )
+                        align.append(
+                            {**key, "phase": phase, "preference": phase, "alignment": a, "steps": 10}
+                        )
+    return {"goal_error": pd.DataFrame(err), "time": pd.DataFrame(time), "alignment": pd.DataFrame(align)}
+
+
+def verdicts(rows):
+    return {c.id: c.reproduced for c in rows}
+
+
+def test_clear_effects_reproduce_every_hypothesis():
+    rows, analyses = study.claims(frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 20)
+    v = verdicts(rows)
+    for key in ("h1", "h1_paper_test", "h2", "h3"):
+        for suffix in ("", "_cohort"):
+            assert v[f"study.{key}{suffix}"] == "yes"
+            assert v[f"study.{key}{suffix}@grasp_set"] == "yes"
+    first = {c.id: c for c in rows}["study.h1"]
+    assert first.seeds_agree == "2/2" and first.assistance == "hindsight"
+    assert {c.id: c for c in rows}["study.h1_cohort"].seeds_agree == ""
+    # the paper's F(1,18) is the between-subjects reading; the within-subjects test has F(1,9)
+    res = analyses[("hindsight", 10)]
+    assert (res["h1_between"]["df1"], res["h1_between"]["df2"]) == (1, 18)
+    assert (res["h1_within"]["df1"], res["h1_within"]["df2"]) == (1, 9)
+
+
+def test_effects_in_the_wrong_direction_do_not_reproduce():
+    rows, _ = study.claims(frames(20, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), MEMBERS, 20)
+    v = verdicts(rows)
+    for key in ("h1", "h1_paper_test", "h2", "h3"):
+        assert v[f"study.{key}"] == "no"
+
+
+def test_a_small_effect_of_the_right_sign_is_partly():
+    # LA+SA scoops slightly better than R+SA, far within the noise: higher, not significant
+    data = frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.0, seed=4)
+    a = data["alignment"]
+    rng = np.random.default_rng(0)
+    noisy = (a.phase == "scoop") & (a.condition == "LA+SA")
+    a.loc[noisy, "alignment"] = 0.8 + 0.002 + rng.normal(0, 0.05, noisy.sum())
+    rows, analyses = study.claims(data, MEMBERS, 10)
+    mean, _, _, p, pairs = analyses[("hindsight", 10)]["h2_phases"]["scoop"]
+    expected = "yes" if mean > 0 and p < 0.05 else "partly" if mean > 0 else "no"
+    assert verdicts(rows)["study.h2"] == expected and pairs == 10
+
+
+def test_a_phase_nobody_reached_is_not_evidence():
+    data = frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
+    a = data["alignment"]
+    a.loc[a.phase == "scoop", "alignment"] = np.nan
+    rows, analyses = study.claims(data, MEMBERS, 10)
+    assert np.isnan(analyses[("hindsight", 10)]["h2_phases"]["scoop"][0])
+    assert verdicts(rows)["study.h2"] == "no"
+
+
+def test_config_errors():
+    from lasa.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="assistance"):
+        study.Config(members=("magic",))
+    with pytest.raises(ConfigError, match="video_participant"):
+        study.Config(n_participants=4, video_participant=4)
