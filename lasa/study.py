@@ -553,7 +553,8 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
         ``{"goal_error": ..., "time": ..., "alignment": ...}``: one row per participant x
         condition x task (x phase for alignment). Goal Error is given under two readings of
         "the closest goal": every goal the task visits including the plate (``goal_error``),
-        and the three bowls only (``goal_error_bowls``).
+        and the three bowls only (``goal_error_bowls``); ``mean_distance`` is Goal Error divided by
+        the task's time [m].
     """
     robot = task.robot
     goals = robot.cup_positions()
@@ -575,6 +576,7 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
             "goal_error_bowls": goal_error(tip, goals[bowls], active, episodes.dt),
         }
     )
+    error["mean_distance"] = error.goal_error / np.maximum(episodes.end * episodes.dt, episodes.dt)
     time = pd.DataFrame(
         {
             **keys,

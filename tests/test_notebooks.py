@@ -275,7 +275,13 @@ def test_study_outputs(executed):
     assert (error.goal_error > 0).all()
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     rows = claims[claims.figure == "study"]
-    ids = {"study.h1", "study.h1_paper_test", "study.h2", "study.h3"}  # fewer than 10: no cohort rows
+    ids = {
+        "study.h1",
+        "study.h1_mean_distance",
+        "study.h1_paper_test",
+        "study.h2",
+        "study.h3",
+    }  # < 10: no cohort
     assert set(rows.id) == ids | {f"{i}@{m}" for i in ids for m in members[1:]}
     assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= {"yes", "partly", "no"}
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()

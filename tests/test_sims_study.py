@@ -31,7 +31,7 @@ def frames(
                         "order": 0,
                     }
                     e = 5 + skill + (sa_error if cond.endswith("+SA") else 0) + rng.normal(0, 0.1)
-                    err.append({**key, "goal_error": e, "goal_error_bowls": e + 0.1})
+                    err.append({**key, "goal_error": e, "goal_error_bowls": e + 0.1, "mean_distance": e / 60})
                     t = 60 + 5 * skill + (la_sa_time if cond == "LA+SA" else 0) + rng.normal(0, 1)
                     time.append(
                         {**key, "total_time": t, "idle_time": t / 3, "mode_switches": 0, "completed": True}
@@ -55,7 +55,7 @@ def verdicts(rows):
 def test_clear_effects_reproduce_every_hypothesis():
     rows, analyses = study.claims(frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 20)
     v = verdicts(rows)
-    for key in ("h1", "h1_paper_test", "h2", "h3"):
+    for key in ("h1", "h1_mean_distance", "h1_paper_test", "h2", "h3"):
         for suffix in ("", "_cohort"):
             assert v[f"study.{key}{suffix}"] == "yes"
             assert v[f"study.{key}{suffix}@grasp_set"] == "yes"
@@ -71,7 +71,7 @@ def test_clear_effects_reproduce_every_hypothesis():
 def test_effects_in_the_wrong_direction_do_not_reproduce():
     rows, _ = study.claims(frames(20, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), MEMBERS, 20)
     v = verdicts(rows)
-    for key in ("h1", "h1_paper_test", "h2", "h3"):
+    for key in ("h1", "h1_mean_distance", "h1_paper_test", "h2", "h3"):
         assert v[f"study.{key}"] == "no"
 
 
@@ -104,3 +104,16 @@ def test_config_errors():
         study.Config(members=("magic",))
     with pytest.raises(ConfigError, match="video_participant"):
         study.Config(n_participants=4, video_participant=4)
+
+
+def test_a_slower_condition_with_the_same_distance_is_told_apart():
+    # SA doubles the time and leaves the distance alone: the summed Goal Error rises, the mean does not
+    data = frames(20, sa_error=0.0, la_sa_time=0.0, scoop_gain=0.15)
+    err = data["goal_error"]
+    sa = err.condition.str.endswith("+SA")
+    err.loc[sa, "goal_error"] *= 2
+    rows, _ = study.claims(data, MEMBERS, 20)
+    v = verdicts(rows)
+    assert v["study.h1"] == "no" and v["study.h1_mean_distance"] == "no"
+    res = {c.id: c for c in rows}
+    assert res["study.h1"].value > 0 and abs(res["study.h1_mean_distance"].value) < 0.01

@@ -84,7 +84,7 @@ def directions(
     """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief.
 
     For each belief (uniform: ``uncertain``; all but the floor on ``goal``: ``confident``)
-    and each z on the unit circle (the rest position z = 0 as well), the decoded joint
+    and each z on the unit circle (at rest, z = 0, the stick commands nothing), the decoded joint
     velocity is mapped through the fork tip's Jacobian: the tip's velocity (m/s) and the
     rate at which the fork's tilt from vertical changes (rad/s). ``toward`` names the goal
     whose direction the tip's velocity points most closely at (``-`` when it moves less
@@ -93,7 +93,7 @@ def directions(
     g = GOALS.index(check_choice("goal", goal, GOALS))
     state = task.target(g, 0.5)
     angles = 2 * np.pi * np.arange(n) / n
-    z = np.concatenate([np.zeros((1, 2)), np.stack([np.cos(angles), np.sin(angles)], axis=1)])
+    z = np.stack([np.cos(angles), np.sin(angles)], axis=1)  # the stick at rest commands nothing
     floor = control.belief_floor
     confident = np.full(task.n_goals, floor)
     confident[g] = 1.0 - (task.n_goals - 1) * floor
@@ -139,44 +139,49 @@ def directions(
 
 
 def plot(frame: pd.DataFrame) -> Figure:
-    """Two panels (uncertain, confident): the tip's velocity for each stick direction.
+    """Two panels (uncertain, confident belief), each the stick seen from above.
 
-    Arrows are the horizontal velocity (top view, robot's x forward, y left); the arrow's
-    colour is the vertical velocity and the number beside it the tilt rate (deg/s).
+    Each full deflection of the stick sits at its place on the unit circle (z1 right, z2
+    up); the arrow from it is the fork tip's horizontal velocity in a top view of the
+    table (up: away from the robot's base, +x; right: the robot's right, -y), 0.1 m/s to
+    half the circle's radius. The marker's colour is the rate at which the fork tilts, and
+    the label names the goal the tip heads for (``here``: it stays at this bowl) with its
+    vertical speed.
     """
-    sns.set_theme(style="whitegrid")
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.6), sharex=True, sharey=True)
-    vmax = max(float(frame.vz.abs().max()), 1e-3)
+    sns.set_theme(style="white")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
+    tilt = np.degrees(frame.tilt_rate.to_numpy())
+    vmax = max(float(np.abs(tilt).max()), 1.0)
     cmap = plt.get_cmap("coolwarm")
+    norm = plt.Normalize(-vmax, vmax)
+    scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
     for ax, name in zip(axes, BELIEFS, strict=True):
-        part = frame[(frame.belief == name) & ((frame.z1 != 0) | (frame.z2 != 0))]
-        scale = 1.0
+        part = frame[frame.belief == name]
+        ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.8", lw=1))
         for _, row in part.iterrows():
-            color = cmap(0.5 + 0.5 * row.vz / vmax)
-            # top view with the robot's left (+y) to the left: plot (-y, x)
+            x0, y0 = row.z1, row.z2
             ax.annotate(
                 "",
-                xy=(-row.vy * scale, row.vx * scale),
-                xytext=(0.0, 0.0),
-                arrowprops={"arrowstyle": "->", "color": color, "lw": 2},
+                xy=(x0 - row.vy * scale, y0 + row.vx * scale),
+                xytext=(x0, y0),
+                arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6},
             )
-            ax.text(
-                -row.vy * scale * 1.12,
-                row.vx * scale * 1.12,
-                f"z=({row.z1:+.1f},{row.z2:+.1f})\n{np.degrees(row.tilt_rate):+.0f}°/s",
-                fontsize=6,
-                ha="center",
-                va="center",
-            )
-        lim = max(float(np.hypot(frame.vx, frame.vy).max()) * 1.4, 0.02)
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
+            ax.scatter([x0], [y0], s=90, color=cmap(norm(np.degrees(row.tilt_rate))), edgecolor="k", zorder=3)
+            label = f"{row.toward}\n{100 * row.vz:+.0f} cm/s up"
+            ax.text(x0 * 1.3, y0 * 1.3 - 0.12, label, fontsize=7, ha="center", va="center")
+        ax.set_xlim(-1.9, 1.9)
+        ax.set_ylim(-1.9, 1.9)
         ax.set_aspect("equal")
+        ax.set_xticks([-1, 0, 1])
+        ax.set_yticks([-1, 0, 1])
+        ax.set_xlabel("stick axis z1")
         ax.set_title(f"belief {name}")
-        ax.set_xlabel("tip velocity to the robot's right, -v_y [m/s]")
-    axes[0].set_ylabel("tip velocity forward, v_x [m/s]")
-    sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(-vmax, vmax))
-    fig.colorbar(sm, ax=axes, label="vertical velocity v_z [m/s]", shrink=0.8)
+    axes[0].set_ylabel("stick axis z2")
+    sm = plt.cm.ScalarMappable(cmap=cmap, norm=norm)
+    fig.colorbar(sm, ax=axes, label="tilt rate of the fork [deg/s]", shrink=0.75)
     goal = frame.goal.iloc[0]
-    fig.suptitle(f"What each stick direction does at the {goal} bowl (mid-preference entry pose)")
+    fig.suptitle(
+        f"What each stick deflection does at the {goal} bowl\n"
+        "arrows: the fork tip's velocity seen from above, 0.1 m/s = half a radius"
+    )
     return fig
