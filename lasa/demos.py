@@ -195,12 +195,8 @@ def collect_demonstrations(
     Returns:
         The dataset, noisy copies included (see :meth:`Demonstrations.clean`).
     """
-    rng = np.random.default_rng(config.seed)
-    robot = task.robot
-    dt = control.dt
-    cruise = config.speed * control.action_scale
-    rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
-    beliefs: list[np.ndarray] = []
+    rng, rows, beliefs = _start(config)
+    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
     demo_id = 0
     sets = task.belief_targets(control.likelihood)
     thetas = np.linspace(0.0, 1.0, config.n_theta)
@@ -223,6 +219,12 @@ def collect_demonstrations(
                 _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints)
                 demo_id += 1
     return _dataset(robot, rows, beliefs, control, config, rng)
+
+
+def _start(config: DemoConfig) -> tuple[np.random.Generator, dict[str, list[np.ndarray]], list[np.ndarray]]:
+    """A collection's random stream, its empty columns and its empty list of beliefs."""
+    columns: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+    return np.random.default_rng(config.seed), columns, []
 
 
 def _line_path(
@@ -363,12 +365,8 @@ def collect_eating_demonstrations(
         control: Control-loop units.
         config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
     """
-    rng = np.random.default_rng(config.seed)
-    robot = task.robot
-    dt = control.dt
-    cruise = config.speed * control.action_scale
-    rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
-    beliefs: list[np.ndarray] = []
+    rng, rows, beliefs = _start(config)
+    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
     sets = task.belief_targets(control.likelihood)
     demo_id = 0
 

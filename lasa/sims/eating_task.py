@@ -93,7 +93,7 @@ def directions(
     g = GOALS.index(check_choice("goal", goal, GOALS))
     state = task.target(g, 0.5)
     angles = 2 * np.pi * np.arange(n) / n
-    z = np.stack([np.cos(angles), np.sin(angles)], axis=1)  # the stick at rest commands nothing
+    z = np.round(np.stack([np.cos(angles), np.sin(angles)], axis=1), 12)  # at rest the stick commands nothing
     floor = control.belief_floor
     confident = np.full(task.n_goals, floor)
     confident[g] = 1.0 - (task.n_goals - 1) * floor
