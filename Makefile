@@ -6,6 +6,7 @@
 #   make figures LARGE=1  paper scale with the cluster-sized verdict map (configs/large.yaml),
 #                         into build/large/; LASA_SCHEDULER=tcp://host:8786 runs its grid on Dask
 #   make test             lint + pytest, including every notebook run in QUICK mode
+#   make teleop ARGS=...  drive the robot live in MuJoCo's viewer (gamepad or keyboard), sessions logged
 #   make bench            performance benchmarks (benchmarks/bench.py) -> benchmarks/results.json, scaling.png
 #   make setup            create .venv from environment.lock (+ system libraries for rendering)
 #   make clean            remove build/ (keeps .venv and the committed figures)
@@ -57,7 +58,7 @@ LASA_SRC := $(shell find lasa -name '*.py' -o -name '*.xml') pyproject.toml
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
-.PHONY: setup sysdeps figures notebooks test lint bench clean
+.PHONY: setup sysdeps figures notebooks test lint bench clean teleop
 
 setup: $(STAMP) sysdeps
 
@@ -68,12 +69,18 @@ $(STAMP): environment.lock pyproject.toml
 	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
 	touch $@
 
-# Software rendering (OSMesa). ffmpeg comes from the imageio-ffmpeg wheel.
+# Software rendering (OSMesa); for MuJoCo's viewer (make teleop, and its test under a virtual
+# display) GLX from Mesa and Xvfb. ffmpeg comes from the imageio-ffmpeg wheel.
 sysdeps:
-	@if ! ldconfig -p | grep -q 'libOSMesa\.so'; then \
-	  echo "installing libosmesa6 (off-screen rendering)"; \
+	@missing=""; \
+	ldconfig -p | grep -q 'libOSMesa\.so' || missing="$$missing libosmesa6"; \
+	ldconfig -p | grep -q 'libGLX_mesa\.so' || missing="$$missing libglx-mesa0 libgl1-mesa-dri"; \
+	command -v Xvfb >/dev/null || missing="$$missing xvfb"; \
+	command -v xauth >/dev/null || missing="$$missing xauth"; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing$$missing (off-screen rendering, the viewer under a virtual display)"; \
 	  $(SUDO) apt-get update -qq; \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends libosmesa6 >/dev/null; \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
 	fi
 
 ROBOTS := planar5 panda
@@ -149,6 +156,11 @@ test: setup lint
 # pipeline's wall time (a fresh paper-scale and QUICK run under build/bench).
 bench: setup
 	$(BIN)/python benchmarks/bench.py --out benchmarks
+
+# Drive the robot yourself in MuJoCo's viewer (a gamepad, or the keyboard): after make figures.
+#   make teleop ARGS="--task Dessert --condition LA+SA --participant p01"
+teleop: setup
+	MUJOCO_GL=glfw $(BIN)/python -m lasa.teleop run $(ARGS)
 
 clean:
 	rm -rf build

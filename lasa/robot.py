@@ -135,6 +135,34 @@ def _add_cup(mj_spec: mujoco.MjSpec, name: str, site_position: np.ndarray, templ
     body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
 
 
+def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
+    """The robot's scene as an MjSpec: its MJCF, meshes found in their package, the tool, new cups.
+
+    Built anew on each call (an MjSpec cannot be pickled, and a Robot travels to Dask workers).
+    """
+    mj_spec = mujoco.MjSpec.from_file(str(spec.scene))
+    if spec.mesh_package is not None:
+        # Mesh paths in the MJCF are relative to the package's mesh folder.
+        root = mesh_dir(*spec.mesh_package)
+        for mesh in mj_spec.meshes:
+            rel = (
+                Path(mesh.file).relative_to(spec.scene.parent)
+                if Path(mesh.file).is_absolute()
+                else Path(mesh.file)
+            )
+            if not (root / rel).is_file():
+                raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
+            mesh.file = str(root / rel)
+    if spec.tool is not None:
+        tool = mujoco.MjSpec.from_file(str(spec.tool))
+        site = mj_spec.site(spec.tool_site)
+        frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
+        frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
+    for name, position in spec.extra_cups:
+        _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.cups[0])
+    return mj_spec
+
+
 def load_robot(name: str) -> Robot:
     """Build the robot registered under ``name``.
 
@@ -159,27 +187,7 @@ class Robot:
 
     def __init__(self, spec: RobotSpec) -> None:
         self.spec = spec
-        mj_spec = mujoco.MjSpec.from_file(str(spec.scene))
-        if spec.mesh_package is not None:
-            # Mesh paths in the MJCF are relative to the package's mesh folder.
-            root = mesh_dir(*spec.mesh_package)
-            for mesh in mj_spec.meshes:
-                rel = (
-                    Path(mesh.file).relative_to(spec.scene.parent)
-                    if Path(mesh.file).is_absolute()
-                    else Path(mesh.file)
-                )
-                if not (root / rel).is_file():
-                    raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
-                mesh.file = str(root / rel)
-        if spec.tool is not None:
-            tool = mujoco.MjSpec.from_file(str(spec.tool))
-            site = mj_spec.site(spec.tool_site)
-            frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
-            frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
-        for name, position in spec.extra_cups:
-            _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.cups[0])
-        self.model = mj_spec.compile()
+        self.model = _scene_spec(spec).compile()
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(name).id for name in spec.joints]
         self.qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
@@ -270,6 +278,11 @@ class Robot:
             self.spec, cups=(*self.spec.cups, name), extra_cups=(*self.spec.extra_cups, (name, pos))
         )
         return Robot(spec)
+
+    def xml(self) -> str:
+        """The compiled scene as one MJCF document (meshes by absolute path): a session log keeps
+        it beside its steps, so that the session replays without the code that made it."""
+        return _scene_spec(self.spec).to_xml()
 
     def table_extent(self) -> tuple[np.ndarray, np.ndarray]:
         """Centre (3,) and half-sizes (3,) of the table box (geom ``table``)."""

@@ -56,3 +56,20 @@ def panda_model(panda_task: CupTask):
     data = collect_demonstrations(panda_task, panda_task.robot.control, SMALL_DEMOS)
     trained, _ = train_decoder(data, panda_task.robot.control, SMALL_TRAIN, progress=False)
     return trained
+
+
+# Files a test leaves for a person to look at (a screenshot, say), listed at the end of the run.
+_ARTIFACTS: list[tuple[str, str]] = []
+
+
+@pytest.fixture
+def report_artifact():
+    """Call as ``report_artifact(description, path)``: the path is printed in the run's summary."""
+    return lambda description, path: _ARTIFACTS.append((description, str(path)))
+
+
+def pytest_terminal_summary(terminalreporter):
+    if _ARTIFACTS:
+        terminalreporter.section("files left for inspection")
+        for description, path in _ARTIFACTS:
+            terminalreporter.write_line(f"{description}: {path}")

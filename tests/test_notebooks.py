@@ -37,10 +37,37 @@ ROBOTS = ["planar5", "panda"]
 STUDY = ["10_eating_task", "11_eating_study"]  # the eating study: the Panda only, its own chain
 
 
+def _sessions(out: Path) -> Path:
+    """Teleoperation sessions as the kit logs them: 2 participants x 4 conditions, scripted
+    Dessert inputs, and their questionnaires; with notebook 10's decoder."""
+    from lasa.devices import ScriptedDevice
+    from lasa.studykit import survey
+    from lasa.teleop import SessionConfig, Station, new_session, run_session
+
+    folder = out / "sessions"
+    for i, participant in enumerate(("s01", "s02")):
+        for k, condition in enumerate(("R", "R+SA", "LA", "LA+SA")):
+            config = SessionConfig(
+                task="Dessert", condition=condition, participant=participant, build_dir=str(out / "build")
+            )
+            station = Station(config)
+            axes = np.random.default_rng([i, k]).uniform(-1, 1, (30, 2))
+            device = ScriptedDevice(axes, mode=np.arange(30) % 7 == 3)
+            run_session(station, device, new_session(station, folder), 30, realtime=False)
+            survey(
+                folder,
+                participant,
+                condition,
+                [6, 6, 5, 6, 7] if condition == "LA+SA" else [3 + i, 4, 3, 4, 3],
+            )
+    return folder
+
+
 def _chain(robot: str | None, out: Path) -> None:
     """One robot's notebooks (or, for None, the eating study's), in order, each in its own
-    papermill run (as `make figures`)."""
+    papermill run (as `make figures`); the study's notebook 11 also reads logged sessions."""
     for stem in ORDER if robot else STUDY:
+        extra = [] if stem != "11_eating_study" else ["--param", f"sessions_dir={_sessions(out)}"]
         command = [
             sys.executable,
             "-m",
@@ -55,6 +82,7 @@ def _chain(robot: str | None, out: Path) -> None:
             f"build_dir={out / 'build'}",
             "--param",
             f"figures_dir={out / 'figures'}",
+            *extra,
         ]
         result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
         if result.returncode != 0:
@@ -287,3 +315,17 @@ def test_study_outputs(executed):
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
     video = read_video(fig / "study_dessert.mp4")
     assert video.shape[1:] == (240, 4 * 320, 3)  # the four conditions side by side
+
+
+def test_study_notebook_reads_logged_sessions(executed):
+    """Notebook 11 with sessions_dir: people's sessions through the same measures and tests."""
+    fig = executed / "figures"
+    time = pd.read_csv(fig / "sessions_time.csv")
+    assert len(time) == 2 * 4 and set(time.condition) == {"R", "R+SA", "LA", "LA+SA"}
+    assert (time.total_time == 3.0).all()  # 30 scripted steps of 0.1 s
+    assert (time[time.condition.str.startswith("R")].mode_switches > 0).all()
+    assert len(pd.read_csv(fig / "sessions_alignment.csv")) == 8 * 4
+    sa = pd.read_csv(fig / "sessions_sa_effect.csv")
+    assert list(sa.measure) == ["goal_error", "mean_distance"] and (sa.df2 == 1).all()
+    likert = pd.read_csv(fig / "sessions_likert.csv")
+    assert len(likert) == 5 * 3 and (likert["diff"] > 0).all()  # LA+SA rated higher on every scale

@@ -344,6 +344,7 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         hue_order=CONDITIONS,
         palette=PALETTE,
         errorbar=("ci", 95),
+        seed=0,  # the bootstrap of the interval: the same PNG, run after run
         ax=ax,
         alpha=0.85,
     )
@@ -356,6 +357,7 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         palette=PALETTE,
         dodge=True,
         size=2.5,
+        jitter=False,  # seaborn jitters with an unseeded generator: the PNG would change run to run
         color="k",
         ax=ax,
         legend=False,
@@ -381,6 +383,7 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
             palette=PALETTE,
             hue="condition",
             errorbar=("ci", 95),
+            seed=0,  # the bootstrap of the interval: the same PNG, run after run
             ax=ax,
             legend=False,
         )
@@ -391,6 +394,7 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
             order=CONDITIONS,
             color="white",
             errorbar=("ci", 95),
+            seed=0,  # the bootstrap of the interval: the same PNG, run after run
             ax=ax,
             alpha=0.6,
         )
@@ -415,6 +419,7 @@ def plot_alignment(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         order=["stab", "scoop", "dip"],
         palette=PALETTE,
         errorbar=("ci", 95),
+        seed=0,  # the bootstrap of the interval: the same PNG, run after run
         dodge=0.3,
         ax=ax,
     )
