@@ -222,3 +222,35 @@ def test_the_viewer_runs_under_xvfb_and_the_screen_is_not_blank(build, tmp_path,
 
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
     assert pixels.std() > 20 and pixels.mean() > 30  # a rendered scene, not a black or flat screen
+
+
+def test_a_cups_session_with_the_simulations_decoder_replays_to_an_mp4(model, tmp_path):
+    """The cup task on planar5 under LA+SA (1-D latent: the stick's first axis), replayed and rendered."""
+    from lasa.video import read_video
+
+    save_checkpoint(model, tmp_path / "build" / "models" / "decoder_planar5_lambda0.pt")
+    config = SessionConfig(
+        robot="planar5", task="cups", condition="LA+SA", participant="c01", build_dir=str(tmp_path / "build")
+    )
+    st = Station(config)
+    writer = new_session(st, tmp_path / "sessions")
+    run_session(st, ScriptedDevice(script(20, seed=5)), writer, 40, realtime=False)
+    frame, meta = read_session(writer.csv)
+    assert meta["decoder"] == "decoder_planar5_lambda0.pt" and len(frame) == 20 and (frame.phase == -1).all()
+    assert not np.allclose(frame[[f"s{i}" for i in range(5)]].to_numpy()[-1], st.task.start)  # it moved
+    result = replay(writer.csv, mp4=tmp_path / "replay.mp4")
+    assert result["exact"]
+    assert read_video(result["mp4"]).shape == (21, 240, 320, 3)  # the start and every step
+
+
+def test_replay_refuses_another_decoder(build, tmp_path):
+    from lasa.errors import ArtifactError
+
+    st = station(build, "LA")
+    writer = new_session(st, tmp_path)
+    run_session(st, ScriptedDevice(script(5)), writer, 5, realtime=False)
+    sidecar = tmp_path / f"{writer.stem}.json"
+    meta = json.loads(sidecar.read_text())
+    sidecar.write_text(json.dumps({**meta, "decoder_sha256": "0" * 64}))
+    with pytest.raises(ArtifactError, match="checksum"):
+        replay(writer.csv)
