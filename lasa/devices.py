@@ -221,11 +221,18 @@ class GamepadDevice:
         import os
 
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+        # SDL's event queue (which the joystick needs) comes with its video subsystem; the
+        # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
+        os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
         import pygame
 
         self._pg = pygame
-        pygame.joystick.init()
-        pygame.event.pump()
+        try:
+            pygame.display.init()
+            pygame.joystick.init()
+            pygame.event.pump()
+        except pygame.error as exc:
+            raise ConfigError(f"SDL could not start its joystick subsystem: {exc}") from exc
         if pygame.joystick.get_count() <= index:
             raise ConfigError(f"no gamepad at index {index} ({pygame.joystick.get_count()} connected)")
         self._stick = pygame.joystick.Joystick(index)

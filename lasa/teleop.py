@@ -500,6 +500,19 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
         time.sleep(0.5)
 
 
+def _check_display() -> None:
+    """Refuse, with what to do, to open the viewer where there is no display to open it on."""
+    import os
+
+    if sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    ):
+        raise ConfigError(
+            "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
+            "or with --no-viewer and scripted input"
+        )
+
+
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``run``, ``replay``, ``schedule`` and ``survey``."""
     parser = argparse.ArgumentParser(prog="python -m lasa.teleop", description=__doc__.splitlines()[0])
@@ -550,6 +563,8 @@ def main(argv: list[str] | None = None) -> int:
             participant=args.participant,
             build_dir=args.build_dir,
         )
+        if not args.no_viewer:
+            _check_display()
         station = Station(config)
         if args.device.startswith("scripted:"):
             device: Device = _scripted(args.device.split(":", 1)[1])

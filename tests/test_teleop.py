@@ -254,3 +254,24 @@ def test_replay_refuses_another_decoder(build, tmp_path):
     sidecar.write_text(json.dumps({**meta, "decoder_sha256": "0" * 64}))
     with pytest.raises(ArtifactError, match="checksum"):
         replay(writer.csv)
+
+
+def test_no_display_is_a_clear_error_and_leaves_no_session(build, tmp_path, monkeypatch, capsys):
+    from lasa.teleop import main
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    args = [
+        "run",
+        "--task",
+        "Dessert",
+        "--condition",
+        "LA",
+        "--build-dir",
+        str(build),
+        "--sessions",
+        str(tmp_path / "s"),
+    ]
+    assert main(args) == 2
+    assert "no display" in capsys.readouterr().err
+    assert not (tmp_path / "s").exists()
