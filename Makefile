@@ -6,6 +6,7 @@
 #   make figures LARGE=1  paper scale with the cluster-sized verdict map (configs/large.yaml),
 #                         into build/large/; LASA_SCHEDULER=tcp://host:8786 runs its grid on Dask
 #   make test             lint + pytest, including every notebook run in QUICK mode
+#   make book             a static site of the executed notebooks, claims table first -> build/book/html
 #   make teleop ARGS=...  drive the robot live in MuJoCo's viewer (gamepad or keyboard), sessions logged
 #   make bench            performance benchmarks (benchmarks/bench.py) -> benchmarks/results.json, scaling.png
 #   make setup            create .venv from environment.lock (+ system libraries for rendering)
@@ -58,9 +59,17 @@ LASA_SRC := $(shell find lasa -name '*.py' -o -name '*.xml') pyproject.toml
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
-.PHONY: setup sysdeps figures notebooks test lint bench clean teleop
+.PHONY: setup sysdeps figures notebooks test lint bench clean teleop book
 
-setup: $(STAMP) sysdeps
+# MathJax for the book, served from the site itself (no CDN at view time): the npm package's es5 build.
+MATHJAX_VERSION := 3.2.2
+MATHJAX := $(VENV)/mathjax/es5/tex-chtml.js
+setup: $(STAMP) sysdeps $(MATHJAX)
+
+$(MATHJAX): | sysdeps
+	@rm -rf $(VENV)/mathjax && mkdir -p $(VENV)/mathjax
+	cd $(VENV)/mathjax && npm pack mathjax@$(MATHJAX_VERSION) --silent >/dev/null && tar xzf mathjax-$(MATHJAX_VERSION).tgz \
+	  && mv package/es5 es5 && rm -rf package mathjax-$(MATHJAX_VERSION).tgz
 
 $(STAMP): environment.lock pyproject.toml
 	@test -n "$(PYTHON)" || { echo "error: Python 3.11 not found (set PYTHON=...)"; exit 1; }
@@ -70,15 +79,19 @@ $(STAMP): environment.lock pyproject.toml
 	touch $@
 
 # Software rendering (OSMesa); for MuJoCo's viewer (make teleop, and its test under a virtual
-# display) GLX from Mesa and Xvfb. ffmpeg comes from the imageio-ffmpeg wheel.
+# display) GLX from Mesa and Xvfb; Chromium and its driver for the book's browser test; npm for
+# MathJax. ffmpeg comes from the imageio-ffmpeg wheel.
 sysdeps:
 	@missing=""; \
 	ldconfig -p | grep -q 'libOSMesa\.so' || missing="$$missing libosmesa6"; \
 	ldconfig -p | grep -q 'libGLX_mesa\.so' || missing="$$missing libglx-mesa0 libgl1-mesa-dri"; \
 	command -v Xvfb >/dev/null || missing="$$missing xvfb"; \
 	command -v xauth >/dev/null || missing="$$missing xauth"; \
+	command -v chromium >/dev/null || missing="$$missing chromium"; \
+	command -v chromedriver >/dev/null || missing="$$missing chromium-driver"; \
+	command -v npm >/dev/null || missing="$$missing npm"; \
 	if [ -n "$$missing" ]; then \
-	  echo "installing$$missing (off-screen rendering, the viewer under a virtual display)"; \
+	  echo "installing$$missing (off-screen rendering, the viewer under a virtual display, the book's browser test)"; \
 	  $(SUDO) apt-get update -qq; \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing >/dev/null; \
 	fi
@@ -156,6 +169,10 @@ test: setup lint
 # pipeline's wall time (a fresh paper-scale and QUICK run under build/bench).
 bench: setup
 	$(BIN)/python benchmarks/bench.py --out benchmarks
+
+# A browsable book of the executed notebooks of the last `make figures` (Jupyter Book, offline).
+book: setup
+	$(BIN)/python -m lasa.book --notebooks $(EXEC) --figures $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures) --out $(BUILD)/book
 
 # Drive the robot yourself in MuJoCo's viewer (a gamepad, or the keyboard): after make figures.
 #   make teleop ARGS="--task Dessert --condition LA+SA --participant p01"

@@ -329,3 +329,61 @@ def test_study_notebook_reads_logged_sessions(executed):
     assert list(sa.measure) == ["goal_error", "mean_distance"] and (sa.df2 == 1).all()
     likert = pd.read_csv(fig / "sessions_likert.csv")
     assert len(likert) == 5 * 3 and (likert["diff"] > 0).all()  # LA+SA rated higher on every scale
+
+
+def test_the_book_builds_offline_and_reads_in_a_real_browser(executed, report_artifact):
+    """`make book` on the QUICK run: headless Chromium loads the front page and a figure notebook's
+    page, every image loads, MathJax (served by the site itself) renders an equation, and the
+    front page's screenshot is not blank."""
+    import shutil
+    import time
+
+    from PIL import Image
+    from selenium import webdriver
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+
+    from lasa.book import build_book
+
+    index = build_book(executed / "notebooks", executed / "figures", executed / "book", progress=False)
+    site = index.parent
+    pages = {p.name for p in (site / "notebooks").glob("*.html")}
+    assert "11_eating_study.html" in pages and "04_fixed_expertise-panda.html" in pages
+    html = index.read_text() + (site / "notebooks" / "04_fixed_expertise-panda.html").read_text()
+    for cdn in ("cdn.jsdelivr.net", "cdnjs.cloudflare.com", "mathjax@", "polyfill.io"):
+        assert cdn not in html, f"{cdn}: the book must not need the network"
+    chromium, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    assert chromium and driver, "Chromium or its driver is missing: run `make setup`"
+    options = Options()
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1280,900"):
+        options.add_argument(arg)
+    options.binary_location = chromium
+    shots = ROOT / "build" / "tests"
+    shots.mkdir(parents=True, exist_ok=True)
+    browser = webdriver.Chrome(options=options, service=Service(driver))
+    try:
+        for page, equations in (("index.html", False), ("notebooks/04_fixed_expertise-panda.html", True)):
+            browser.get((site / page).as_uri())
+            assert "lasa" in browser.title
+            rendered = 0
+            for _ in range(60):  # MathJax typesets after load
+                images = browser.execute_script(
+                    "return [...document.images].map(i => [i.src, i.complete, i.naturalWidth])"
+                )
+                rendered = browser.execute_script("return document.querySelectorAll('mjx-container').length")
+                if all(done for _, done, _ in images) and (rendered or not equations):
+                    break
+                time.sleep(0.25)
+            broken = [src for src, done, width in images if not done or width == 0]
+            assert not broken, f"{page}: images that did not load: {broken}"
+            if equations:
+                assert len(images) >= 1 and rendered > 0, f"{page}: no rendered equation"
+            shot = shots / f"book_{Path(page).stem}.png"
+            browser.save_screenshot(str(shot))
+            report_artifact(f"book page {page}, screenshot", shot)
+    finally:
+        browser.quit()
+    front = np.asarray(Image.open(shots / "book_index.png").convert("L"), dtype=float)
+    assert front.std() > 20, "the front page's screenshot is blank"
+    claims_links = (site / "index.html").read_text().count('href="notebooks/')
+    assert claims_links >= 10  # the claims table links each row to its notebook
