@@ -272,12 +272,26 @@ class EatingTask(CupTask):
 def make_eating_task(robot: Robot | None = None, n_theta: int = 9, depths: int = 3) -> EatingTask:
     """Solve IK over every goal's preferences and strokes and build the task.
 
+    The default task (the default robot and grids) is solved once per process and shared:
+    it is immutable, and its 108 IK solves take seconds.
+
     Args:
         robot: The eating robot (default :func:`load_eating_robot`).
         n_theta: Tilts solved per goal (odd, so theta = 1/2 is on the grid).
         depths: Stroke depths solved per tilt (>= 2, evenly spaced on [0, 1]).
     """
-    robot = robot or load_eating_robot()
+    if robot is None:
+        return _default_task(n_theta, depths)
+    return _solve_task(robot, n_theta, depths)
+
+
+@functools.cache
+def _default_task(n_theta: int, depths: int) -> EatingTask:
+    return _solve_task(load_eating_robot(), n_theta, depths)
+
+
+def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
+    """The IK of :func:`make_eating_task`."""
     if n_theta < 3 or n_theta % 2 == 0:
         raise ConfigError(f"n_theta must be an odd integer >= 3, got {n_theta}")
     if depths < 2:
