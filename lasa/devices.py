@@ -29,6 +29,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+import pandas as pd
 
 from lasa.errors import ConfigError
 
@@ -133,6 +134,17 @@ class ScriptedDevice:
                     f"{name} must have one entry per step ({n}), got {getattr(self, name).shape}"
                 )
         self.step = 0
+
+    @classmethod
+    def from_table(cls, table: pd.DataFrame, mode: str = "mode") -> ScriptedDevice:
+        """A script from a table with columns ``raw0``, ``raw1`` and, optionally, ``mode`` (or the
+        column named by ``mode``), ``stop`` and ``connected`` (nonzero = true): a script file, or a
+        session log (whose mode column is ``mode_press``)."""
+        flags = {
+            name: table[col].to_numpy() > 0 if col in table else None
+            for name, col in (("mode", mode), ("stop", "stop"), ("connected", "connected"))
+        }
+        return cls(table[["raw0", "raw1"]].to_numpy(), **flags)
 
     def poll(self) -> Reading:
         """The next scripted reading (zero axes after the script's end)."""

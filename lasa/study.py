@@ -81,6 +81,7 @@ __all__ = [
     "williams_square",
     "draw_cohort",
     "tip_frames",
+    "waypoint_reached",
     "simulate",
     "goal_error",
     "idle_time",
@@ -281,6 +282,20 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(np.einsum("...i,...i->...", a, b), -1.0, 1.0))
 
 
+def waypoint_reached(
+    tip: np.ndarray,
+    direction: np.ndarray,
+    target: np.ndarray,
+    target_direction: np.ndarray,
+    config: StudyConfig,
+) -> np.ndarray:
+    """Whether the fork tip is within ``config.position_tol`` of its waypoint and its direction within
+    ``config.angle_tol`` of the waypoint's, vectorised over leading dimensions (the study and live
+    teleoperation share this test)."""
+    close = np.linalg.norm(tip - target, axis=-1) < config.position_tol
+    return close & (_angle(direction, target_direction) < config.angle_tol)
+
+
 def _normalise(v: np.ndarray) -> np.ndarray:
     return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
 
@@ -417,8 +432,7 @@ def simulate(
         states[t], tip[t], direction[t] = s, pos, axis
         # a waypoint reached: on to the next one, or the task is done
         here = wp_pos[tsk, w]
-        reached = running & (np.linalg.norm(pos - here, axis=1) < config.position_tol)
-        reached &= _angle(axis, wp_dir[tsk, w]) < config.angle_tol
+        reached = running & waypoint_reached(pos, axis, here, wp_dir[tsk, w], config)
         w = np.where(reached, w + 1, w)
         finished = reached & (w >= n_wp[tsk])
         end[finished] = t

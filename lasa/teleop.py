@@ -203,14 +203,12 @@ class Station:
         if not self.waypoints or self.done:
             return
         from lasa.eating import fork_frame
-        from lasa.study import tip_frames
+        from lasa.study import StudyConfig, tip_frames, waypoint_reached
 
         wp = self.waypoints[self.waypoint]
         position, rotation = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
         tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
-        close = np.linalg.norm(tip[0] - position) < 0.015
-        aligned = np.arccos(np.clip(axis[0] @ rotation[:, 2], -1.0, 1.0)) < 0.2
-        if close and aligned:
+        if waypoint_reached(tip[0], axis[0], position, rotation[:, 2], StudyConfig()):
             self.waypoint += 1
             if self.waypoint == len(self.waypoints):
                 self.waypoint -= 1
@@ -440,12 +438,7 @@ def replay(session: str | Path, mp4: str | Path | None = None) -> dict[str, Any]
                 f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
                 "replay needs the same decoder"
             )
-    device = ScriptedDevice(
-        frame[["raw0", "raw1"]].to_numpy(),
-        mode=frame.mode_press.to_numpy() > 0,
-        stop=frame.stop.to_numpy() > 0,
-        connected=frame.connected.to_numpy() > 0,
-    )
+    device = ScriptedDevice.from_table(frame, mode="mode_press")
     n = station.robot.n_joints
     logged = frame[[f"s{i}" for i in range(n)]].to_numpy()
     states = []
@@ -466,19 +459,6 @@ def replay(session: str | Path, mp4: str | Path | None = None) -> dict[str, Any]
         frames = label_frames(frames, f"replay {Path(session).name}")
         out["mp4"] = str(write_video(mp4, frames, fps=1.0 / station.control.dt))
     return out
-
-
-def _scripted(path: str) -> ScriptedDevice:
-    """A scripted device from a CSV with columns raw0, raw1 (and optionally mode, stop, connected)."""
-    import pandas as pd
-
-    table = pd.read_csv(path)
-    return ScriptedDevice(
-        table[["raw0", "raw1"]].to_numpy(),
-        mode=table["mode"].to_numpy() > 0 if "mode" in table else None,
-        stop=table["stop"].to_numpy() > 0 if "stop" in table else None,
-        connected=table["connected"].to_numpy() > 0 if "connected" in table else None,
-    )
 
 
 def _screenshot(path: str, timeout_s: float = 30.0) -> None:
@@ -567,7 +547,9 @@ def main(argv: list[str] | None = None) -> int:
             _check_display()
         station = Station(config)
         if args.device.startswith("scripted:"):
-            device: Device = _scripted(args.device.split(":", 1)[1])
+            import pandas as pd
+
+            device: Device = ScriptedDevice.from_table(pd.read_csv(args.device.split(":", 1)[1]))
             print("input: scripted")
         else:
             device, message = open_device(args.device)

@@ -327,14 +327,14 @@ def claims(
     return rows, analyses
 
 
-def _head(frame: pd.DataFrame, member: str) -> pd.DataFrame:
-    return for_member(frame, member)
+# every interval the study's figures draw: a 95% bootstrap CI, seeded so the PNG is the same run after run
+CI = {"errorbar": ("ci", 95), "seed": 0}
 
 
 def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants)."""
     sns.set_theme(style="whitegrid")
-    data = _head(frame, member)
+    data = for_member(frame, member)
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     sns.barplot(
         data=data,
@@ -343,8 +343,7 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         hue="condition",
         hue_order=CONDITIONS,
         palette=PALETTE,
-        errorbar=("ci", 95),
-        seed=0,  # the bootstrap of the interval: the same PNG, run after run
+        **CI,
         ax=ax,
         alpha=0.85,
     )
@@ -371,7 +370,7 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
 def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI."""
     sns.set_theme(style="whitegrid")
-    data = _head(frame, member)
+    data = for_member(frame, member)
     fig, axes = plt.subplots(1, 2, figsize=(9, 4.2), sharey=True, layout="constrained")
     for ax, task in zip(axes, ("Entree", "Dessert"), strict=True):
         part = data[data.task == task]
@@ -382,8 +381,7 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
             order=CONDITIONS,
             palette=PALETTE,
             hue="condition",
-            errorbar=("ci", 95),
-            seed=0,  # the bootstrap of the interval: the same PNG, run after run
+            **CI,
             ax=ax,
             legend=False,
         )
@@ -393,8 +391,7 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
             y="idle_time",
             order=CONDITIONS,
             color="white",
-            errorbar=("ci", 95),
-            seed=0,  # the bootstrap of the interval: the same PNG, run after run
+            **CI,
             ax=ax,
             alpha=0.6,
         )
@@ -405,9 +402,9 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
 
 
 def plot_alignment(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
-    """Fig. dessert (left): Preference Alignment per Dessert phase, every condition, R+SA and LA+SA bold."""
+    """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them)."""
     sns.set_theme(style="whitegrid")
-    data = _head(frame, member)
+    data = for_member(frame, member)
     data = data[(data.task == "Dessert") & data.phase.isin(["stab", "scoop", "dip"])]
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     sns.pointplot(
@@ -418,8 +415,7 @@ def plot_alignment(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         hue_order=CONDITIONS,
         order=["stab", "scoop", "dip"],
         palette=PALETTE,
-        errorbar=("ci", 95),
-        seed=0,  # the bootstrap of the interval: the same PNG, run after run
+        **CI,
         dodge=0.3,
         ax=ax,
     )
