@@ -141,9 +141,10 @@ $(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_
 $(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-# The verdict map re-runs sims 1-3 over a grid of settings with notebook 03's decoders;
-# its cells go through joblib (a Dask cluster if LASA_SCHEDULER=tcp://... is set).
-$(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+# The verdict map re-runs sims 1-3 over a grid of settings with notebook 03's decoders; its
+# default and members' cells are the first look of notebooks 04-06 (their CSVs), not run again.
+# Its cells go through joblib (a Dask cluster if LASA_SCHEDULER=tcp://... is set).
+$(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXEC)/04_fixed_expertise-%.ipynb $(EXEC)/05_changing_goals-%.ipynb $(EXEC)/06_learning_users-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 # Sec. IV-A's ball along LA+SA rollouts of the lambda = 0 control decoder.

@@ -21,12 +21,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 import pandas as pd
 
 from lasa.errors import ConfigError
 from lasa.io import locked, write_csv, write_text
+from lasa.rules import UNDECIDED
 
 __all__ = ["Claim", "update_claims", "render_markdown", "sync_readme", "CLAIM_COLUMNS", "README_MARKERS"]
 
@@ -46,10 +48,11 @@ CLAIM_COLUMNS = (
     "ci_low",
     "ci_high",
     "reproduced",
-    "seeds_agree",
+    "settled",
+    "n_users",
     "note",
 )
-VERDICTS = ("yes", "partly", "no")
+VERDICTS = ("yes", "partly", "no", UNDECIDED)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,14 +64,16 @@ class Claim:
     figure: str  # the figure it belongs to, e.g. "sim1"
     paper: str  # what the paper reports
     measured: str  # what we measured
-    reproduced: str  # "yes", "partly" or "no"
+    reproduced: str  # "yes", "partly", "no", or "undecided" when an interval straddles a threshold
     note: str  # how the verdict was decided, and the likely reason if not "yes"
     robot: str  # the robot it was measured on
     assistance: str = "point"  # the shared-autonomy reading: Eq. M2 towards one pose per goal
     value: float = math.nan  # the number the verdict rests on (``measured`` names it first)
     ci_low: float = math.nan  # bootstrap 95% interval of ``value`` (lasa.verdicts)
     ci_high: float = math.nan
-    seeds_agree: str = ""  # how many independent draws of users give the same verdict, "5/5"
+    settled: bool = False  # every interval clear of its rule's thresholds (lasa.verdicts)
+    n_users: int = 0  # simulated users (or participants) per point the verdict rests on
+    values: Mapping[str, float] = dataclasses.field(default_factory=dict)  # the rule's numbers
 
     def __post_init__(self) -> None:
         if not self.id.startswith(f"{self.figure}.") or " " in self.id:
@@ -79,7 +84,9 @@ class Claim:
 
 def _row(claim: Claim) -> dict[str, object]:
     """A claim as a table row: the interval to 4 significant digits, empty where unknown."""
-    row: dict[str, object] = dataclasses.asdict(claim)
+    row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
+    del row["values"], row["value"]
+    row["settled"] = "yes" if claim.settled else "no"
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
     return row

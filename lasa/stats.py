@@ -225,8 +225,9 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
         measure: Name of the numeric column to test.
 
     Returns:
-        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa"}``, where ``n`` is the number
-        of participants and the means are over participants' means.
+        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``, where
+        ``n`` is the number of participants, the means are over participants' means, and ``ci_*``
+        bound SA - no SA (95%, two-sample t with pooled variance, the same reading).
 
     Raises:
         ConfigError: Invalid data, fewer than 2 participants, or a participant without rows both
@@ -247,6 +248,10 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     table = pd.DataFrame({"y": means[measure].to_numpy(), "sa": means["assistance"].to_numpy()})
     fit = anova_lm(ols("y ~ C(sa)", data=table).fit())
     row = fit.loc["C(sa)"]
+    # the 95% interval of SA - no SA under the same reading: a pooled-variance two-sample t
+    ci = scipy.stats.ttest_ind(
+        table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
+    ).confidence_interval()
     return {
         "test": BETWEEN_TEST,
         "F": float(row["F"]),
@@ -256,6 +261,8 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
         "n": n,
         "mean_sa": float(table.loc[table["sa"] == "SA", "y"].mean()),
         "mean_no_sa": float(table.loc[table["sa"] == "none", "y"].mean()),
+        "ci_low": float(ci.low),
+        "ci_high": float(ci.high),
     }
 
 
@@ -313,8 +320,9 @@ def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
         measure: Name of the numeric column to test.
 
     Returns:
-        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa"}``: df are (1, N-1); the means
-        are over participants of each participant's mean with / without SA.
+        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``: df
+        are (1, N-1); the means are over participants of each participant's mean with / without SA;
+        ``ci_*`` bound SA - no SA (95%, paired t over participants).
 
     Raises:
         ConfigError: As :func:`rm_anova`.
@@ -323,6 +331,8 @@ def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     row = table.set_index("effect").loc["assistance"]
     cells = _cells(frame, measure, "mean", CONDITIONS)
     per_participant = cells.groupby(["participant", "assistance"])[measure].mean().unstack("assistance")
+    # the 95% interval of SA - no SA: a paired t over participants (its t^2 is the main effect's F)
+    ci = scipy.stats.ttest_rel(per_participant["SA"], per_participant["none"]).confidence_interval()
     return {
         "test": WITHIN_TEST,
         "F": float(row["F"]),
@@ -332,6 +342,8 @@ def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
         "n": int(len(per_participant)),
         "mean_sa": float(per_participant["SA"].mean()),
         "mean_no_sa": float(per_participant["none"].mean()),
+        "ci_low": float(ci.low),
+        "ci_high": float(ci.high),
     }
 
 

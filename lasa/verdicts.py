@@ -1,21 +1,28 @@
-"""Verdicts with their uncertainty: a bootstrap interval, agreement across draws, one row per reading.
+"""Verdicts decided by their intervals, with users added where a verdict is still open.
 
-A claim's verdict is a rule applied to the means of a sweep of simulated users, so it
-inherits their randomness. Three things make it a result rather than a draw:
+A claim's verdict is a rule (:mod:`lasa.rules`) applied to a few numbers measured on a
+sweep of simulated users, so it inherits their randomness. Three things make it a result
+rather than a draw:
 
-1. *An interval.* Each claim names the number its verdict rests on (``Claim.value``);
-   :func:`assess` resamples the users with replacement (all rows of a user together, so
-   the pairing of methods on the same user survives) and recomputes it, giving a
-   percentile 95% interval.
-2. *Agreement across draws.* A sweep holds ``n_draws`` independent draws of users (the
-   frame's ``draw`` column; each draw is a complete sweep of its own). The verdict is
-   recomputed on each draw alone, and ``seeds_agree`` says how many agree with the
-   verdict of all draws pooled (for example ``5/5``).
-3. *Every reading.* A sweep run under every member of the shared-autonomy family
-   (:mod:`lasa.assistance`) gives one row per member, ``<id>@<member>``, and a headline
-   row ``<id>`` under the default member whose note lists every member's verdict, so a
-   reader sees at once whether a verdict is about the paper or about one convention.
+1. *An interval per number.* :func:`assess` resamples the users with replacement (all
+   rows of a user together, so the pairing of methods on the same user survives),
+   recomputes every number the rule reads, and takes percentile intervals.
+2. *Settled or undecided.* A verdict is **settled** when every number's interval lies on
+   one side of each of its rule's thresholds (:meth:`lasa.rules.Rule.settled`); then it
+   reads the rule's verdict. Otherwise it reads ``undecided``, with its interval, and the
+   note says which interval straddles which threshold and what the point estimates read.
+3. *Users where the verdict is close* (:func:`sequential`). The users per point follow a
+   group-sequential design fixed before any result was seen (:class:`Design`): a first
+   look at ``first`` users per point for every arm, then blocks of ``block`` users for the
+   headline reading's arms only, until every headline verdict of the figure is settled or
+   the cap is reached. **Guard against optional stopping**: with K possible looks, every
+   look's interval has level 1 - 0.05 / K (Bonferroni over the looks), so the chance that
+   any look declares a verdict its true numbers do not support stays below 5% whatever the
+   stopping time. With the defaults (60, 30, cap 150) K = 4 and each interval is 98.75%.
 
+Every reading of shared autonomy (:mod:`lasa.assistance`) gets a row: the headline
+``<id>`` under the paper's reading, and ``<id>@<member>`` for each other member, judged at
+the first look's users (the blocks after it go where the headline verdict is open).
 ``LA`` rows carry ``assistance == "none"`` (alpha = 0: no assistance acts) and are shared
 by every member's comparison.
 """
@@ -23,6 +30,7 @@ by every member's comparison.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Iterator
 
 import numpy as np
@@ -30,13 +38,87 @@ import pandas as pd
 
 from lasa.claims import Claim
 from lasa.errors import ConfigError
+from lasa.rules import UNDECIDED, rule
 
-__all__ = ["NO_ASSISTANCE", "N_BOOT", "assess", "by_member", "member_frame", "member_of", "bootstrap_frames"]
+__all__ = [
+    "ALPHA",
+    "NO_ASSISTANCE",
+    "N_BOOT",
+    "Design",
+    "Sequential",
+    "assess",
+    "block_seed",
+    "sequential",
+    "member_frame",
+    "member_of",
+    "bootstrap_frames",
+    "check_design",
+]
 
 NO_ASSISTANCE = "none"  # the assistance label of rows without assistance (LA, alpha = 0)
-N_BOOT = 400  # bootstrap resamples per interval [-]
+N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
+ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
 
 Evaluate = Callable[[pd.DataFrame], list[Claim]]
+
+
+@dataclasses.dataclass(frozen=True)
+class Design:
+    """Users per point: a first look, blocks after it, a cap (fixed before the results).
+
+    Why these values: 60 is the verdict map's smallest cell (each of its cells must rest on
+    at least 60 users), and the first look serves both; blocks of 30 are the old fixed
+    size, so each later look costs what a whole sweep used to; the cap of 150 is the size
+    at which the last closing note re-ran the headline reading (5x the old 30).
+    """
+
+    first: int = 60  # users per point at the first look, every arm and reading [-]
+    block: int = 30  # users added per later look, the headline reading's arms only [-]
+    cap: int = 150  # most users per point [-]
+
+    def __post_init__(self) -> None:
+        check_design(self.first, self.block, self.cap)
+
+    @property
+    def sizes(self) -> tuple[int, ...]:
+        """Users per point at each possible look: first, first + block, ..., cap."""
+        out = [self.first]
+        while out[-1] < self.cap:
+            out.append(min(out[-1] + self.block, self.cap))
+        return tuple(out)
+
+    @property
+    def level(self) -> float:
+        """Each look's interval level, 1 - ALPHA / K (Bonferroni over the K looks)."""
+        return 1.0 - ALPHA / len(self.sizes)
+
+
+def check_design(first: int, block: int, cap: int) -> None:
+    """Positive integers with ``first <= cap``, else a ConfigError naming the setting."""
+    for name, value in (("users", first), ("block", block), ("cap", cap)):
+        if int(value) != value or value < 1:
+            raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+    if first > cap:
+        raise ConfigError(f"users (the first look, {first}) must not exceed cap ({cap})")
+
+
+def block_seed(seed: int, block: int) -> int:
+    """The seed of look ``block``'s new users: ``seed`` itself for the first look.
+
+    Later blocks draw from their own stream (``SeedSequence([seed, block])``), so adding a
+    block leaves the users of the earlier ones unchanged.
+    """
+    if block == 0:
+        return int(seed)
+    return int(np.random.SeedSequence([int(seed), int(block)]).generate_state(1)[0])
+
+
+def block_users(design: Design, block: int) -> tuple[int, int]:
+    """(first user index, number of users) of look ``block``'s new users."""
+    if block == 0:
+        return 0, design.first
+    start = design.sizes[block - 1]
+    return start, design.sizes[block] - start
 
 
 def bootstrap_frames(
@@ -60,42 +142,80 @@ def bootstrap_frames(
         yield sample
 
 
+def _fmt(x: float) -> str:
+    return f"{x:.3g}" if math.isfinite(x) else "nan"
+
+
 def assess(
-    evaluate: Evaluate, frame: pd.DataFrame, n_boot: int = N_BOOT, seed: int = 0, unit: str = "seed"
+    evaluate: Evaluate,
+    frame: pd.DataFrame,
+    n_boot: int = N_BOOT,
+    seed: int = 0,
+    unit: str = "seed",
+    level: float = 0.95,
 ) -> list[Claim]:
-    """Claims of ``evaluate`` on ``frame``, with their interval and their agreement across draws.
+    """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
 
     Args:
-        evaluate: A figure's rules: frame -> claims (each with its ``value``).
-        frame: Every draw's rows; a ``draw`` column numbers the draws (one draw if absent).
+        evaluate: A figure's rules: frame -> claims, each with the ``values`` its rule reads.
+        frame: The users' rows.
         n_boot: Bootstrap resamples.
         seed: Seed of the resampling.
         unit: The column naming a user: the resampled unit.
+        level: The intervals' level (1 - ALPHA / K under a sequential design).
 
     Returns:
-        ``evaluate(frame)``'s claims with ``ci_low``, ``ci_high`` and ``seeds_agree`` set.
+        ``evaluate(frame)``'s claims with ``ci_low``/``ci_high`` (the interval of the first
+        number, ``value``), ``settled``, ``n_users``, and ``reproduced`` set to ``undecided``
+        where an interval straddles a threshold.
+
+    Raises:
+        ConfigError: if a claim's verdict is not its rule's verdict at its values.
     """
-    headline = evaluate(frame)
-    draws = sorted(frame["draw"].unique()) if "draw" in frame else [0]
-    per_draw = (
-        [{c.id: c.reproduced for c in evaluate(frame[frame["draw"] == d])} for d in draws]
-        if "draw" in frame
-        else [{c.id: c.reproduced for c in headline}]
-    )
-    values: dict[str, list[float]] = {c.id: [] for c in headline}
+    if not 0.0 < level < 1.0:
+        raise ConfigError(f"level must lie in (0, 1), got {level!r}")
+    point = evaluate(frame)
+    samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
     for sample in bootstrap_frames(frame, n_boot, seed, unit):
         for c in evaluate(sample):
-            if c.id in values:
-                values[c.id].append(c.value)
+            for k, v in c.values.items():
+                if c.id in samples and k in samples[c.id]:
+                    samples[c.id][k].append(v)
+    tail = 100.0 * (1.0 - level) / 2.0
+    n_users = int(frame[unit].nunique())
     out = []
-    for c in headline:
-        v = np.asarray(values[c.id], dtype=float)
-        v = v[np.isfinite(v)]
-        low, high = np.percentile(v, [2.5, 97.5]) if len(v) else (np.nan, np.nan)
-        agree = sum(d.get(c.id) == c.reproduced for d in per_draw)
+    for c in point:
+        r = rule(c.id)
+        if c.reproduced != r.verdict(c.values):
+            raise ConfigError(f"{c.id}: verdict {c.reproduced!r} is not its rule's at {dict(c.values)}")
+        intervals: dict[str, tuple[float, float]] = {}
+        for q in r.quantities:
+            boot = np.asarray(samples[c.id][q.name], dtype=float)
+            boot = boot[np.isfinite(boot)]
+            bounds = np.percentile(boot, [tail, 100.0 - tail]) if len(boot) else np.full(2, np.nan)
+            intervals[q.name] = (float(bounds[0]), float(bounds[1]))
+        settled = r.settled(intervals)
+        numbers = "; ".join(
+            f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
+            for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
+        )
+        lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {numbers}. "
+        if not settled:
+            lead += (
+                f"Undecided: {'; '.join(r.straddled(intervals)) or 'an interval is unknown'}; "
+                f"the point estimates read {c.reproduced!r}. "
+            )
+        first = intervals[r.quantities[0].name]
         out.append(
             dataclasses.replace(
-                c, ci_low=float(low), ci_high=float(high), seeds_agree=f"{agree}/{len(per_draw)}"
+                c,
+                value=float(c.values[r.quantities[0].name]),
+                ci_low=first[0],
+                ci_high=first[1],
+                settled=settled,
+                reproduced=c.reproduced if settled else UNDECIDED,
+                n_users=n_users,
+                note=lead + f"Rule: {r.text}. " + c.note,
             )
         )
     return out
@@ -112,41 +232,94 @@ def member_of(frame: pd.DataFrame) -> str:
 
 
 def member_frame(frame: pd.DataFrame, member: str) -> pd.DataFrame:
-    """The rows of one assistance member, with the unassisted rows (LA) every member shares."""
-    return frame[frame["assistance"].isin([member, NO_ASSISTANCE])]
+    """The rows of one assistance member, with the unassisted rows (LA) every member shares.
+
+    LA rows of users the member's arms never ran (later blocks of a sequential sweep run the
+    headline arms only) are left out, so the member is compared on paired users.
+    """
+    own = frame["assistance"] == member
+    shared = frame["assistance"] == NO_ASSISTANCE
+    if own.any() and "seed" in frame:
+        shared &= frame["seed"].isin(frame.loc[own, "seed"].unique())
+    return frame[own | shared]
 
 
-def by_member(
-    evaluate: Evaluate, frame: pd.DataFrame, default: str, n_boot: int = N_BOOT, seed: int = 0
-) -> list[Claim]:
-    """A headline row per claim under ``default``, and a labelled row per member in ``frame``.
+@dataclasses.dataclass(frozen=True)
+class Sequential:
+    """The outcome of :func:`sequential`.
+
+    Attributes:
+        frame: Every look's rows (``look`` numbers them; the first look holds every arm).
+        claims: The headline row of each claim, then each other member's.
+        looks: One row per (look, claim) of the headline reading: users per point, the
+            verdict, whether it was settled.
+    """
+
+    frame: pd.DataFrame
+    claims: list[Claim]
+    looks: pd.DataFrame
+
+
+def sequential(
+    run_block: Callable[[int, tuple[str, ...]], pd.DataFrame],
+    evaluate: Evaluate,
+    members: tuple[str, ...],
+    default: str,
+    design: Design = Design(),
+    n_boot: int = N_BOOT,
+    seed: int = 0,
+) -> Sequential:
+    """Add users in blocks until every headline verdict is settled or the cap is reached.
 
     Args:
-        evaluate: A figure's rules (see :func:`assess`).
-        frame: Rows of every member (``assistance``), LA rows labelled ``none``.
-        default: The headline member.
-        n_boot: Bootstrap resamples per row.
+        run_block: ``(look, members) -> rows`` of that look's new users
+            (:func:`block_users`), under those members (LA rows labelled ``none``).
+        evaluate: The figure's rules (see :func:`assess`).
+        members: Every member to judge; the first look runs all of them.
+        default: The headline member (the paper's reading); later looks run only it.
+        design: Users per look and the cap (:class:`Design`).
+        n_boot: Bootstrap resamples per interval.
         seed: Seed of the resampling.
 
     Raises:
-        ConfigError: if the default member has no rows.
+        ConfigError: if ``default`` is not among ``members``.
     """
-    members = [m for m in dict.fromkeys(frame["assistance"]) if m != NO_ASSISTANCE]
     if default not in members:
-        raise ConfigError(f"the headline member {default!r} has no rows; members present: {members}")
-    rows = {m: assess(evaluate, member_frame(frame, m), n_boot, seed) for m in members}
-    out: list[Claim] = []
-    for i, head in enumerate(rows[default]):
-        summary = ", ".join(f"{m} {rows[m][i].reproduced} ({rows[m][i].seeds_agree})" for m in members)
-        same = len({rows[m][i].reproduced for m in members}) == 1
-        lead = (
-            f"Headline under the default reading ({default}). "
-            + ("Same verdict under every reading: " if same else "The verdict depends on the reading: ")
-            + summary
-            + ". "
+        raise ConfigError(f"the headline member {default!r} is not among the members {members}")
+    frame = run_block(0, members).assign(look=0)
+    log = []
+    for look, size in enumerate(design.sizes):
+        if look > 0:
+            frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
+        head = assess(evaluate, member_frame(frame, default), n_boot, seed, level=design.level)
+        log += [
+            {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
+            for c in head
+        ]
+        if all(c.settled for c in head):
+            break
+    first = frame[frame.look == 0]
+    others = {
+        m: assess(evaluate, member_frame(first, m), n_boot, seed, level=design.level)
+        for m in members
+        if m != default
+    }
+    rows: list[Claim] = []
+    for i, c in enumerate(head):
+        flips = [f"{m} {o[i].reproduced}" for m, o in others.items() if o[i].reproduced != c.reproduced]
+        where = (
+            f"Readings with another verdict (at {design.first} users): {', '.join(flips)}. "
+            if flips
+            else "Every other reading gives the same verdict. "
+            if others
+            else ""
         )
-        out.append(dataclasses.replace(head, assistance=default, note=lead + head.note))
-        for m in members:
-            c = rows[m][i]
-            out.append(dataclasses.replace(c, id=f"{c.id}@{m}", assistance=m))
-    return out
+        stop = (
+            f"Settled at look {look + 1} of {len(design.sizes)}. "
+            if c.settled
+            else f"Undecided at the cap ({design.cap} users). "
+        )
+        rows.append(dataclasses.replace(c, assistance=default, note=stop + where + c.note))
+    for m, claims in others.items():
+        rows += [dataclasses.replace(c, id=f"{c.id}@{m}", assistance=m) for c in claims]
+    return Sequential(frame=frame, claims=rows, looks=pd.DataFrame(log))

@@ -6,11 +6,10 @@ rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its 
 Users that share a seed share their cup, preference and random stream across
 conditions, so methods are compared on paired episodes.
 
-A sweep holds ``n_draws`` independent draws of ``n_seeds`` users each (user ``seed``
-belongs to draw ``seed // n_seeds``), so that every verdict can be recomputed on each
-draw alone (:mod:`lasa.verdicts`), and runs its assisted methods under every member of
-the shared-autonomy family it is given (:func:`arms`); LA, which no assistance touches,
-runs once.
+A sweep runs its assisted methods under every member of the shared-autonomy family it
+is given (:func:`arms`); LA, which no assistance touches, runs once. :func:`judge` runs a
+figure's sweep in looks (:func:`lasa.verdicts.sequential`): every member at the first look,
+then blocks of new users for the headline member until its verdicts are settled.
 """
 
 from __future__ import annotations
@@ -18,9 +17,10 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from collections.abc import Mapping, Sequence
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
+import pandas as pd
 
 from lasa.config import ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.decoder import ActionDecoder
@@ -28,7 +28,7 @@ from lasa.errors import ConfigError
 from lasa.rollout import METHOD_DECODER, METHODS, Trajectories, method_alpha, rollout
 from lasa.task import CupTask
 from lasa.users import PILOTS, UserPopulation, latent_grid
-from lasa.verdicts import NO_ASSISTANCE
+from lasa.verdicts import NO_ASSISTANCE, Design, Sequential, sequential
 
 T = TypeVar("T")
 
@@ -46,6 +46,7 @@ __all__ = [
     "draw_episodes",
     "episodes",
     "run_population",
+    "judge",
 ]
 
 Decoders = Mapping[str, ActionDecoder] | ActionDecoder
@@ -228,3 +229,45 @@ def run_population(
             out[:, idx] = getattr(traj, field.name)
         merged[field.name] = out
     return Trajectories(**merged)
+
+
+def judge(
+    module: Any,
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    config: Any,
+    progress: bool = False,
+    reduce: Any = None,
+) -> tuple[Any, Sequential, Any]:
+    """Run a figure's sweep in looks until its headline verdicts are settled (or the cap).
+
+    Args:
+        module: The figure's module (``run(..., look=, members=)`` and ``claims``).
+        decoders: Passed to ``module.run``.
+        task: The task.
+        control: Control-loop units; ``control.assistance`` is the headline member.
+        config: The figure's config (``users``, ``block``, ``cap``, ``n_boot``, ``assistance``).
+        progress: Show progress bars.
+        reduce: Maps a look's rows to the rows the claims read (sim3: one row per episode),
+            so the bootstrap resamples the smaller frame; identity if None.
+
+    Returns:
+        Every look's rows as ``module.run`` returns them (with a ``look`` column), the
+        :class:`lasa.verdicts.Sequential` outcome, and the first look's second output of
+        ``module.run`` (trajectories or runs, for the videos).
+    """
+    full: list[Any] = []
+    first: list[Any] = []
+
+    def block(look: int, members: tuple[str, ...]) -> Any:
+        frame, extra = module.run(decoders, task, control, config, progress, look=look, members=members)
+        full.append(frame)
+        if look == 0:
+            first.append(extra)
+        return frame if reduce is None else reduce(frame)
+
+    design = Design(config.users, config.block, config.cap)
+    members = members_of(control, config.assistance)
+    outcome = sequential(block, module.claims, members, control.assistance, design, config.n_boot)
+    return pd.concat(full, ignore_index=True), outcome, first[0]

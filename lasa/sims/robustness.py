@@ -8,12 +8,17 @@ literature, :data:`lasa.users.PILOTS`). This module re-runs the sims of Figs. si
 in every cell of a grid over those settings and evaluates each claim in each cell, on
 each independent draw of users and on all draws pooled.
 
-The grid is one factor at a time around the default setting: every alpha (at the
-default sigma_h, Boltzmann users), every sigma_h (default alpha), every pilot (default
-alpha and sigma_h); every member of the family runs in every cell, the members' users
-sharing one batch (and LA, which no member touches, running once). A full factorial
-grows as the product of the axes; ``configs/large.yaml`` asks for one (``design:
-factorial``) for a cluster.
+The grid is one factor at a time around the default setting, the member of the family
+being one more factor: every member at the default alpha, sigma_h and Boltzmann users;
+then, under the headline member, every alpha, every sigma_h, every pilot. Every cell rests
+on the same ``users`` (at least 60) simulated users per point, and each verdict is judged
+as in the claims table: settled when its 95% intervals clear its rule's thresholds
+(:mod:`lasa.verdicts`), ``undecided`` otherwise. The default column and the members'
+columns are not run again: they are the first look of notebooks 04-06 (the same users,
+horizons and seeds), restricted to the map's rationalities and change steps
+(:func:`run`'s ``defaults``). A full factorial under the headline member grows as the
+product of the axes; ``configs/large.yaml`` asks for one (``design: factorial``) for a
+cluster.
 
 Changing sigma_h at run time scales the learned decoder's output (:class:`ScaledDecoder`):
 the same learned directions at another speed, as a joystick's gain would, and the
@@ -42,12 +47,13 @@ from lasa.config import ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
 from lasa.plots import robots_present
+from lasa.rules import UNDECIDED
 from lasa.scaleout import run_jobs
 from lasa.sims import sim1, sim2, sim3
 from lasa.sims.common import as_decoders, check_members, check_positive_int
 from lasa.task import CupTask
 from lasa.users import PILOTS
-from lasa.verdicts import member_frame
+from lasa.verdicts import assess, member_frame
 
 __all__ = [
     "NAME",
@@ -60,15 +66,15 @@ __all__ = [
     "cells",
     "run_cell",
     "run",
-    "verdict_table",
+    "default_frames",
     "summary",
     "describe",
     "plot",
 ]
 
 NAME = "claims_robustness"
-# the contract's columns first: ``seed`` is the draw of users (-1: all draws pooled) and
-# ``measured`` the number the claim's verdict rests on (``lasa.claims.Claim.value``)
+# the contract's columns first: ``seed`` is the seed of the cell's users and ``measured`` the
+# number the claim's verdict rests on (``lasa.claims.Claim.value``), with its 95% interval
 COLUMNS = (
     "id",
     "robot",
@@ -78,13 +84,17 @@ COLUMNS = (
     "seed",
     "measured",
     "reproduced",
+    "settled",
+    "ci_low",
+    "ci_high",
     "pilot",
     "setting",
     "users",
 )
 DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
-POOLED = -1  # ``seed`` of the rows measured on every draw together
+SIMS = (("sim1", sim1), ("sim2", sim2), ("sim3", sim3))  # the sims each cell runs
+MIN_USERS = 60  # the fewest users per point a cell may rest on [-]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -100,10 +110,10 @@ class Config:
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
     betas: tuple[float, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
     change_steps: tuple[int, ...] = (0, 120)  # sim2 change steps N (its claims read the ends) [steps]
-    horizon: int = 200  # control steps of the sim1 and sim3 episodes [-]
-    settle: int = 150  # sim2: steps after the largest N [-]
-    n_seeds: int = 2  # users per point in each draw (x n_draws = 10 per point) [-]
-    n_draws: int = 5  # independent draws of users per cell [-]
+    horizon: int = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
+    settle: int = 150  # sim2: steps after the largest N: notebook 05's [-]
+    users: int = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
+    n_boot: int = 400  # bootstrap resamples of each cell's 95% intervals [-]
     seed: int = 0  # seed of the users (the same users in every cell: paired) [-]
     n_jobs: int = 1  # local worker processes for the cells [-]
     scheduler: str | None = None  # Dask scheduler address; None: $LASA_SCHEDULER, else local
@@ -132,8 +142,8 @@ class Config:
             raise ConfigError("change_steps needs at least two N (the sim2 claims compare the ends)")
         check_positive_int("horizon", self.horizon)
         check_positive_int("settle", self.settle)
-        check_positive_int("n_seeds", self.n_seeds)
-        check_positive_int("n_draws", self.n_draws)
+        check_positive_int("users", self.users)
+        check_positive_int("n_boot", self.n_boot)
         check_positive_int("n_jobs", self.n_jobs)
 
 
@@ -145,6 +155,7 @@ class Cell:
     action_scale: float  # sigma_h [rad/s]
     pilot: str  # the simulated user
     setting: str  # what this cell varies from the default: "default", "alpha", "action_scale", "pilot", "all"
+    members: tuple[str, ...] = ()  # the members it judges (the default cell: all; others: the headline one)
 
 
 class ScaledDecoder:
@@ -168,16 +179,20 @@ class ScaledDecoder:
 def cells(config: Config, control: ControlConfig) -> list[Cell]:
     """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
 
-    Every member of ``config.assistance`` runs in every cell (:func:`run_cell`).
+    The default cell judges every member of ``config.assistance``, the others the headline
+    member (``control.assistance``) only; a factorial grid judges every member in every cell.
 
     Raises:
         ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
             Boltzmann users) are not on the grid's axes (one-at-a-time needs them).
     """
     alpha0, scale0, pilot0 = float(control.alpha), float(control.action_scale), "boltzmann"
+    head = (control.assistance,)
+    if control.assistance not in config.assistance:
+        raise ConfigError(f"the headline member {control.assistance!r} must be among {config.assistance}")
     if config.design == "factorial":
         return [
-            Cell(a, s, p, "all")
+            Cell(a, s, p, "all", tuple(config.assistance))
             for a, s, p in itertools.product(config.alphas, config.action_scales, config.pilots)
         ]
     if alpha0 not in config.alphas or scale0 not in config.action_scales or pilot0 not in config.pilots:
@@ -185,10 +200,10 @@ def cells(config: Config, control: ControlConfig) -> list[Cell]:
             f"a one-at-a-time grid needs the defaults on its axes: alpha {alpha0}, "
             f"action_scale {scale0}, pilot {pilot0!r}"
         )
-    out = [Cell(alpha0, scale0, pilot0, "default")]
-    out += [Cell(a, scale0, pilot0, "alpha") for a in config.alphas if a != alpha0]
-    out += [Cell(alpha0, s, pilot0, "action_scale") for s in config.action_scales if s != scale0]
-    out += [Cell(alpha0, scale0, p, "pilot") for p in config.pilots if p != pilot0]
+    out = [Cell(alpha0, scale0, pilot0, "default", tuple(config.assistance))]
+    out += [Cell(a, scale0, pilot0, "alpha", head) for a in config.alphas if a != alpha0]
+    out += [Cell(alpha0, s, pilot0, "action_scale", head) for s in config.action_scales if s != scale0]
+    out += [Cell(alpha0, scale0, p, "pilot", head) for p in config.pilots if p != pilot0]
     return out
 
 
@@ -206,9 +221,7 @@ def _pilot_prob(config: Config, pilot: str) -> float:
     return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
 
 
-def _rows(
-    claims_by_seed: dict[int, list[Claim]], cell: Cell, member: str, robot: str, users: int
-) -> pd.DataFrame:
+def _rows(claims: list[Claim], cell: Cell, member: str, robot: str, config: Config) -> pd.DataFrame:
     rows = [
         {
             "id": c.id,
@@ -216,57 +229,86 @@ def _rows(
             "assistance": member,
             "alpha": cell.alpha,
             "action_scale": cell.action_scale,
-            "seed": seed,
+            "seed": config.seed,
             "measured": c.value,
             "reproduced": c.reproduced,
+            "settled": c.settled,
+            "ci_low": c.ci_low,
+            "ci_high": c.ci_high,
             "pilot": cell.pilot,
             "setting": cell.setting,
-            "users": users,
+            "users": c.n_users,
         }
-        for seed, claims in claims_by_seed.items()
         for c in claims
     ]
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 
-def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
-    """Run sims 1-3 in one cell, every member in the same batches, and judge each claim.
+def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, Any]]:
+    """(module, config, reduce) of sims 1-3 at the map's sizes: one look of ``users`` users."""
+    common: dict[str, Any] = {"users": config.users, "cap": config.users, "seed": config.seed}
+    return [
+        (sim1, sim1.Config(betas=config.betas, horizon=config.horizon, **common, **pilot), None),
+        (sim2, sim2.Config(change_steps=config.change_steps, settle=config.settle, **common, **pilot), None),
+        (sim3, sim3.Config(horizon=config.horizon, **common, **pilot), sim3.episode_means),
+    ]
 
-    Each claim is evaluated per member, on each draw of users and on all draws pooled.
-    """
+
+def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Config) -> pd.DataFrame:
+    """Every member's claims of one sim in one cell, each with its 95% intervals."""
+    parts = []
+    for member in cell.members:
+        claims = assess(module.claims, member_frame(frame, member), config.n_boot, config.seed)
+        parts.append(_rows(claims, cell, member, robot, config))
+    return pd.concat(parts, ignore_index=True)
+
+
+def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
+    """Run sims 1-3 in one cell under its members, in the same batches, and judge each claim."""
     config, control = grid.config, grid.control
-    ctrl = dataclasses.replace(
-        control, alpha=cell.alpha, action_scale=cell.action_scale, assistance=config.assistance[0]
-    )
+    ctrl = dataclasses.replace(control, alpha=cell.alpha, action_scale=cell.action_scale)
     factor = cell.action_scale / control.action_scale
     decoders = {k: ScaledDecoder(d, factor) for k, d in grid.decoders.items()}
     pilot: dict[str, Any] = {"pilot": cell.pilot, "pilot_prob": _pilot_prob(config, cell.pilot)}
-    common: dict[str, Any] = {
-        "n_seeds": config.n_seeds,
-        "n_draws": config.n_draws,
-        "assistance": config.assistance,
-        "seed": config.seed,
-    }
-    runs = [
-        (sim1, sim1.Config(betas=config.betas, horizon=config.horizon, **common, **pilot), lambda f: f),
-        (
-            sim2,
-            sim2.Config(change_steps=config.change_steps, settle=config.settle, **common, **pilot),
-            lambda f: f,
-        ),
-        (sim3, sim3.Config(horizon=config.horizon, **common, **pilot), sim3.episode_means),
-    ]
     parts = []
     robot = grid.task.robot.name
-    for module, sim_config, reduce in runs:
-        frame = reduce(module.run(decoders, grid.task, ctrl, sim_config)[0])
-        for member in config.assistance:
-            rows = member_frame(frame, member)
-            by_seed = {POOLED: module.claims(rows)}
-            for d in range(config.n_draws):
-                by_seed[d] = module.claims(rows[rows.draw == d])
-            parts.append(_rows(by_seed, cell, member, robot, config.n_seeds))
+    for module, sim_config, reduce in _sim_configs(config, pilot):
+        frame = module.run(decoders, grid.task, ctrl, sim_config, members=cell.members)[0]
+        frame = frame if reduce is None else reduce(frame)
+        parts.append(_judge(module, frame, cell, robot, config))
     return pd.concat(parts, ignore_index=True)
+
+
+def default_frames(
+    config: Config, sim1_rows: pd.DataFrame, sim2_rows: pd.DataFrame, sim3_rows: pd.DataFrame
+) -> dict[str, pd.DataFrame]:
+    """The default cell's rows from notebooks 04-06: their first look, at the map's sizes.
+
+    Keeps the users ``0 .. config.users - 1`` (the first look's, the same users every cell
+    runs), sim1's rows at the map's betas, sim2's at its change steps; sim3's as episode means.
+
+    Raises:
+        ConfigError: if a frame lacks a beta or change step of the map, or holds fewer users.
+    """
+    out = {}
+    for name, rows, column, values in (
+        ("sim1", sim1_rows, "beta", config.betas),
+        ("sim2", sim2_rows, "change_step", config.change_steps),
+        ("sim3", sim3_rows, None, ()),
+    ):
+        part = rows[rows.seed < config.users]
+        if part.seed.nunique() < config.users:
+            raise ConfigError(
+                f"{name}'s rows hold {part.seed.nunique()} users; the map's cells need {config.users} "
+                f"(set the sims' `users` to at least the map's)"
+            )
+        if column is not None:
+            missing = sorted(set(values) - set(part[column]))
+            if missing:
+                raise ConfigError(f"{name}'s rows lack {column} {missing}, which the map judges")
+            part = part[part[column].isin(values)]
+        out[name] = sim3.episode_means(part) if name == "sim3" else part
+    return out
 
 
 def run(
@@ -275,6 +317,7 @@ def run(
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
+    defaults: Mapping[str, pd.DataFrame] | None = None,
 ) -> pd.DataFrame:
     """Every cell of the grid (:func:`cells`), locally or on a Dask cluster.
 
@@ -284,61 +327,54 @@ def run(
         control: The default control units (alpha, sigma_h) the grid is centred on.
         config: The grid.
         progress: A progress bar over finished cells.
+        defaults: The default cell's rows (:func:`default_frames`, from notebooks 04-06),
+            judged instead of run again; if None, the default cell runs like the others.
 
     Returns:
-        One row per (claim, cell, draw) and per (claim, cell) pooled (``seed == -1``),
-        with the columns of :data:`COLUMNS`, cells in :func:`cells` order.
+        One row per (claim, cell, member) with the columns of :data:`COLUMNS`, cells in
+        :func:`cells` order.
     """
     decoders = as_decoders(decoders)
     grid = Grid(decoders, task, control, config)
-    frames = run_jobs(
-        run_cell, cells(config, control), config.scheduler, config.n_jobs, progress, "grid cells", shared=grid
-    )
-    return pd.concat(frames, ignore_index=True)
+    todo = cells(config, control)
+    done: list[pd.DataFrame] = []
+    if defaults is not None and todo and todo[0].setting == "default":
+        robot = task.robot.name
+        parts = [_judge(m, defaults[key], todo[0], robot, config) for key, m in SIMS]
+        done = [pd.concat(parts, ignore_index=True)]
+        todo = todo[1:]
+    frames = run_jobs(run_cell, todo, config.scheduler, config.n_jobs, progress, "grid cells", shared=grid)
+    return pd.concat([*done, *frames], ignore_index=True)
 
 
-def verdict_table(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per (robot, claim, cell): the pooled verdict and how many draws agree with it."""
-    keys = ["robot", "id", "assistance", "setting", "alpha", "action_scale", "pilot"]
-    pooled = frame[frame.seed == POOLED].set_index(keys)
-    draws = frame[frame.seed != POOLED].copy()
-    draws["agrees"] = (
-        draws.reproduced.to_numpy()
-        == pooled.reproduced.reindex(pd.MultiIndex.from_frame(draws[keys])).to_numpy()
-    )
-    agree = draws.groupby(keys).agg(agree=("agrees", "sum"), draws=("agrees", "size"))
-    out = pooled[["reproduced", "measured"]].join(agree).reset_index()
-    out["agree"] = out.agree.astype(int)
-    return out
-
-
-def summary(verdicts: pd.DataFrame) -> pd.DataFrame:
-    """Per (robot, claim, member): cells with each pooled verdict, and whether the default holds.
+def summary(table: pd.DataFrame) -> pd.DataFrame:
+    """Per (robot, claim): cells with each verdict, and whether the default verdict holds.
 
     Args:
-        verdicts: :func:`verdict_table`'s rows.
+        table: :func:`run`'s rows.
 
     Returns:
-        Columns ``yes``, ``partly``, ``no`` (cell counts), ``default`` (the verdict of the
-        default cell, empty if the grid has none), ``stable`` (every cell of the member
-        gives the default's verdict) and ``min_agree`` (the lowest draw agreement, as
-        ``k/n``).
+        Columns ``yes``, ``partly``, ``no``, ``undecided`` (cell counts over the members'
+        and the settings' cells), ``default`` (the headline member's verdict in the default
+        cell, empty if the grid has none), ``stable`` (every settled cell gives it) and
+        ``moves`` (the cells whose settled verdict differs from it).
     """
     rows = []
-    for (robot, claim, member), part in verdicts.groupby(["robot", "id", "assistance"], sort=True):
+    for (robot, claim), part in table.groupby(["robot", "id"], sort=True):
+        part = part.assign(column=part.apply(_label, axis=1))
         counts = part.reproduced.value_counts()
-        default = part.loc[part.setting == "default", "reproduced"]
+        default = part.loc[part.column == "default", "reproduced"]
         head = str(default.iloc[0]) if len(default) else ""
-        worst = part.loc[part.agree.idxmin()]
+        settled = part[part.settled.astype(bool) & (part.column != "default")]
+        moves = settled.loc[settled.reproduced != head, ["column", "reproduced"]]
         rows.append(
             {
                 "robot": robot,
                 "id": claim,
-                "assistance": member,
                 **{v: int(counts.get(v, 0)) for v in VERDICTS},
                 "default": head,
-                "stable": bool(head) and bool((part.reproduced == head).all()),
-                "min_agree": f"{int(worst.agree)}/{int(worst.draws)}",
+                "stable": bool(head) and head != UNDECIDED and moves.empty,
+                "moves": ", ".join(f"{c} {v}" for c, v in moves.itertuples(index=False)),
             }
         )
     return pd.DataFrame(rows)
@@ -347,32 +383,30 @@ def summary(verdicts: pd.DataFrame) -> pd.DataFrame:
 def describe(table: pd.DataFrame) -> list[str]:
     """One sentence per claim from :func:`summary`: does its verdict depend on a convention?"""
     lines = []
-    for (robot, claim), part in table.groupby(["robot", "id"], sort=True):
-        defaults = dict(zip(part.assistance, part.default, strict=True))
-        same_member = len(set(defaults.values())) == 1
-        stable = part.loc[part.stable, "assistance"].tolist()
-        moving = part.loc[~part.stable, "assistance"].tolist()
-        head = (
-            f"{robot} {claim}: default-cell verdict '{next(iter(defaults.values()))}' under every member"
-            if same_member
-            else f"{robot} {claim}: default-cell verdict depends on the member ("
-            + ", ".join(f"{m} {v}" for m, v in defaults.items())
-            + ")"
-        )
-        tail = (
-            "; it holds in every cell of the grid."
-            if not moving and same_member
-            else f"; alpha, sigma_h or the pilot change it under {', '.join(moving)}."
-            if moving
-            else f"; within each member it holds in every cell ({', '.join(stable)})."
-        )
-        lines.append(head + tail)
+    for row in table.itertuples(index=False):
+        undecided = int(row.undecided)
+        tail = f" ({undecided} undecided cell{'s' if undecided != 1 else ''})" if undecided else ""
+        if row.default == UNDECIDED:
+            lines.append(
+                f"{row.robot} {row.id}: undecided in the default cell"
+                + (f"; settled elsewhere: {row.moves}" if row.moves else "")
+                + tail
+                + "."
+            )
+        elif row.stable:
+            lines.append(f"{row.robot} {row.id}: '{row.default}' in every settled cell" + tail + ".")
+        else:
+            lines.append(
+                f"{row.robot} {row.id}: '{row.default}' by default; settled otherwise in {row.moves}"
+                + tail
+                + "."
+            )
     return lines
 
 
-def _label(row: pd.Series) -> str:
+def _label(row: Any) -> str:
     if row.setting == "default":
-        return "default"
+        return "default" if row.assistance == "point" else f"{row.assistance}"
     if row.setting == "alpha":
         return f"alpha={row.alpha:g}"
     if row.setting == "action_scale":
@@ -382,49 +416,62 @@ def _label(row: pd.Series) -> str:
     return f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}"
 
 
-def plot(table: pd.DataFrame) -> Figure:
-    """The verdict map: claims (rows) x settings (columns), one panel per (robot, member).
+def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
+    """The verdict map: claims (rows) x readings and settings (columns), one panel per robot.
 
-    Colour is the pooled verdict (yes / partly / no); the text is how many independent
-    draws of users agree with it.
+    The columns are the headline member's default cell, each other member at the default
+    setting, then each alpha, sigma_h and pilot under the headline member. Colour is the
+    verdict; an undecided cell is grey and hatched, with its point estimate's verdict
+    initial (y/p/n) and a "?"; the text of the others is the number the verdict rests on.
     """
-    verdicts = verdict_table(table)
-    verdicts["column"] = verdicts.apply(_label, axis=1)
-    robots = robots_present(verdicts)
-    members = list(dict.fromkeys(verdicts.assistance))
-    order_cols = list(dict.fromkeys(verdicts.column))
-    ids = sorted(dict.fromkeys(verdicts.id))
-    cmap = ListedColormap(["#1b9e77", "#e6ab02", "#d95f02"])
+    table = table.assign(
+        column=table.apply(
+            lambda r: _label(r) if r.assistance != headline or r.setting != "default" else "default", axis=1
+        )
+    )
+    robots = robots_present(table)
+    order_cols = list(dict.fromkeys(table.column))
+    ids = sorted(dict.fromkeys(table.id))
+    colours = {"yes": "#1b9e77", "partly": "#e6ab02", "no": "#d95f02", UNDECIDED: "#d9d9d9"}
+    cmap = ListedColormap([colours[v] for v in VERDICTS])
     code = {v: i for i, v in enumerate(VERDICTS)}
     fig, axes = plt.subplots(
+        1,
         len(robots),
-        len(members),
-        figsize=(2.3 + 0.42 * len(order_cols) * len(members), 0.9 + 0.36 * len(ids) * len(robots)),
+        figsize=(2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids)),
         squeeze=False,
-        sharex=True,
         sharey=True,
     )
-    for i, robot in enumerate(robots):
-        for j, member in enumerate(members):
-            ax = axes[i, j]
-            part = verdicts[(verdicts.robot == robot) & (verdicts.assistance == member)]
-            grid = np.full((len(ids), len(order_cols)), np.nan)
-            for _, row in part.iterrows():
-                r, c = ids.index(row.id), order_cols.index(row.column)
-                grid[r, c] = code[row.reproduced]
-                ax.text(c, r, f"{row.agree}/{row.draws}", ha="center", va="center", fontsize=6)
-            ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=2.5, aspect="auto")
-            ax.set_title(f"{robot}: {member}", fontsize=9)
-            ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
-            ax.set_yticks(range(len(ids)), ids, fontsize=7)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=cmap(code[v])) for v in VERDICTS]
-    fig.legend(handles, VERDICTS, loc="upper right", ncol=3, frameon=False, fontsize=8)
-    n = int(table.users.max()) if len(table) else 0
-    draws = int(table[table.seed != POOLED].seed.nunique()) if len(table) else 0
+    for j, robot in enumerate(robots):
+        ax = axes[0, j]
+        part = table[table.robot == robot]
+        grid = np.full((len(ids), len(order_cols)), np.nan)
+        for _, row in part.iterrows():
+            r, c = ids.index(row.id), order_cols.index(row.column)
+            grid[r, c] = code[row.reproduced]
+            if row.reproduced == UNDECIDED:
+                ax.add_patch(
+                    plt.Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, hatch="///", lw=0, color="0.5")
+                )
+            ax.text(
+                c,
+                r,
+                f"{row.measured:.2g}" + ("?" if row.reproduced == UNDECIDED else ""),
+                ha="center",
+                va="center",
+                fontsize=6,
+            )
+        ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=len(VERDICTS) - 0.5, aspect="auto")
+        ax.set_title(robot, fontsize=9)
+        ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
+        ax.set_yticks(range(len(ids)), ids, fontsize=7)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colours[v]) for v in VERDICTS]
+    fig.legend(handles, VERDICTS, loc="upper right", ncol=len(VERDICTS), frameon=False, fontsize=8)
+    n = int(table.users.min()) if len(table) else 0
     fig.suptitle(
-        f"Claims robustness: pooled verdict per setting; text = draws agreeing ({draws} draws x {n} "
-        "users per point)",
-        fontsize=10,
+        f"Claims robustness: verdict per reading and setting, >= {n} users per point (95% intervals; "
+        "hatched = undecided; text = the number the verdict rests on)",
+        fontsize=9,
     )
     fig.tight_layout()
     return fig

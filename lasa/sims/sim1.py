@@ -19,6 +19,7 @@ from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error, time_to_reach
 from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
+from lasa.rules import rule
 from lasa.sims.common import (
     Decoders,
     check_members,
@@ -32,7 +33,7 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import member_frame, member_of
+from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, member_frame, member_of
 
 __all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "plot", "plot_metric"]
 
@@ -50,7 +51,7 @@ COLUMNS = (
     "theta",
     "confidence",
     "assistance",
-    "draw",
+    "look",
 )
 DPI = 150
 
@@ -60,9 +61,10 @@ class Config:
     """Fig. sim1: users of fixed expertise."""
 
     betas: tuple[float, ...] = (0.3, 1, 3, 10, 30, 75, 200, 1000, 3000, 10000)  # rationalities [1/rad^2]
-    n_seeds: int = 6  # simulated users per (method, beta) in each draw (x n_draws = 30 per point) [-]
-    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
-    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
+    users: int = Design.first  # users per point at the first look, every reading (lasa.verdicts.Design) [-]
+    block: int = Design.block  # users added per later look, the headline reading only [-]
+    cap: int = Design.cap  # most users per point [-]
+    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
     pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
@@ -78,8 +80,7 @@ class Config:
         for beta in self.betas:
             check_range("beta", beta, 0.0)
         check_methods(self.methods)
-        check_positive_int("n_seeds", self.n_seeds)
-        check_positive_int("n_draws", self.n_draws)
+        check_design(self.users, self.block, self.cap)
         check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_pilot(self.pilot, self.pilot_prob)
@@ -93,8 +94,10 @@ def run(
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
+    look: int = 0,
+    members: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim1: every method against users of fixed rationality beta.
+    """Fig. sim1: every method against users of fixed rationality beta, for one look's users.
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one base model): see
@@ -103,15 +106,20 @@ def run(
         control: Control-loop units.
         config: The sweep.
         progress: Show progress bars.
+        look: Which look's new users (:func:`lasa.verdicts.block_users`): 0 is the first
+            ``config.users``, each later look ``config.block`` more from its own stream.
+        members: The assistance members the assisted methods run under; default every
+            member of ``config.assistance`` (the headline one first).
 
     Returns:
         One row per episode with the columns of :data:`COLUMNS` (``assistance`` is
-        ``none`` for LA, ``draw`` numbers the independent draws of users); and the
+        ``none`` for LA, ``seed`` is the user's index over all looks); and the
         trajectories of all episodes (users in the frame's row order).
     """
-    n_users = config.n_seeds * config.n_draws
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
-    members = members_of(control, config.assistance)
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    seed_ = block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
+    members = members_of(control, config.assistance) if members is None else members
     method, member, conditions, seed = sweep_grid(config.methods, members, config.betas, n_users)
     beta = np.array(conditions, dtype=float)
     users = UserPopulation(
@@ -125,7 +133,7 @@ def run(
         pilot_prob=config.pilot_prob,
     )
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, config.seed
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
     )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
@@ -134,7 +142,7 @@ def run(
             "robot": task.robot.name,
             "method": method,
             "beta": beta,
-            "seed": seed,
+            "seed": start + seed,
             "final_error": errors[-1],
             "time": steps,
             "completed": completed,
@@ -142,7 +150,7 @@ def run(
             "theta": users.theta,
             "confidence": confidence(traj.beliefs[-1], users.goal),
             "assistance": member,
-            "draw": seed // config.n_seeds,
+            "look": look,
         }
     )
     return frame, traj
@@ -181,7 +189,8 @@ def _sa_claims(
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
-    verdict1 = "yes" if n_lower == n_total else "partly" if n_lower > n_total / 2 else "no"
+    values1 = {"share_lower": n_lower / n_total}
+    verdict1 = rule("sim1.final_error").verdict(values1)
     worst = (err[b] - err[a]).idxmax()
     claims = [
         Claim(
@@ -189,28 +198,25 @@ def _sa_claims(
             claim=f"SA lowers the final state error at every beta ({b} vs {a})",
             figure="sim1",
             paper="LA+SA below LA at every beta",
-            value=float(n_lower),
+            values=values1,
             measured=(
-                f"{b} lower at {n_lower}/{n_total} betas (the interval is for this count); "
+                f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
                 f"mean final error {a} vs {b}: "
                 f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
                 f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000"
             ),
             reproduced=verdict1,
             note=(
-                "rule: yes if lower at every beta, partly if at most. "
+                ""
+                if verdict1 == "yes"
+                else f"Largest excess of {b} at beta={worst:g} "
+                f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}). "
                 + (
-                    ""
-                    if verdict1 == "yes"
-                    else f"Largest excess of {b} at beta={worst:g} "
-                    f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}). "
-                    + (
-                        "Likely reason: the assistance pulls towards the mid-preference grasp g, "
-                        "and an Eq. S1 user, who does not model the assistance, never fully "
-                        "resists it (Eq. T4), while LA alone lets users settle on s* exactly."
-                        if member_of(frame) == "point"
-                        else ""
-                    )
+                    "Likely reason: the assistance pulls towards the mid-preference grasp g, "
+                    "and an Eq. S1 user, who does not model the assistance, never fully "
+                    "resists it (Eq. T4), while LA alone lets users settle on s* exactly."
+                    if member_of(frame) == "point"
+                    else ""
                 )
             ),
             robot=robot,
@@ -218,23 +224,22 @@ def _sa_claims(
     ]
     r75 = tim.loc[75.0, a] / tim.loc[75.0, b]
     r1000 = tim.loc[1000.0, a] / tim.loc[1000.0, b]
-    close = abs(r75 - 1.45) <= 0.15 and abs(r1000 - 1.30) <= 0.15
-    verdict2 = "yes" if close else "partly" if (r75 > 1 and r1000 > 1) else "no"
+    values2 = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
+    verdict2 = rule("sim1.time_ratio").verdict(values2)
     claims.append(
         Claim(
             id="sim1.time_ratio",
             claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
             figure="sim1",
             paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
-            value=float(r75),
+            values=values2,
             measured=(
                 f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
                 f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)"
             ),
             reproduced=verdict2,
             note=(
-                "rule: yes if both ratios within 0.15 of the paper's, partly if both > 1. "
-                + ("The paper's numbers are for its 7-DoF arm. " if robot != "panda" else "")
+                ("The paper's numbers are for its 7-DoF arm. " if robot != "panda" else "")
                 + "Time = steps until the normalised error first drops to the tolerance "
                 "(the horizon if never)."
             ),
@@ -242,25 +247,25 @@ def _sa_claims(
         )
     )
     d75, d1000 = err.loc[75.0, a] - err.loc[75.0, b], err.loc[1000.0, a] - err.loc[1000.0, b]
-    narrows = [abs(r1000 - 1) < abs(r75 - 1), abs(d1000) < abs(d75)]
-    verdict3 = "yes" if all(narrows) else "partly" if any(narrows) else "no"
+    values3 = {
+        "time_narrowing": float(abs(r75 - 1) - abs(r1000 - 1)),
+        "error_narrowing": float(abs(d75) - abs(d1000)),
+    }
+    verdict3 = rule("sim1.gap_narrows").verdict(values3)
     claims.append(
         Claim(
             id="sim1.gap_narrows",
             claim=f"the gap between {a} and {b} narrows as beta grows",
             figure="sim1",
             paper="time gap 45% at beta=75 -> 30% at beta=1000",
-            value=float(abs(r75 - 1) - abs(r1000 - 1)),
+            values=values3,
             measured=(
                 f"time gap narrows by {abs(r75 - 1) - abs(r1000 - 1):+.2f} (|r75-1| - |r1000-1|): "
                 f"time ratio {r75:.2f} -> {r1000:.2f}; final-error difference {a}-{b} "
                 f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)"
             ),
             reproduced=verdict3,
-            note=(
-                "rule: yes if both the time gap and the error gap shrink in size from "
-                "beta=75 to 1000, partly if one does."
-            ),
+            note="",
             robot=robot,
         )
     )
@@ -278,22 +283,17 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
     err = (_means(frame) if means is None else means)["final_error"]
     counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
     total = len(err)
-    verdict = (
-        "yes"
-        if all(c == total for c in counts.values())
-        else "partly"
-        if all(c > total / 2 for c in counts.values())
-        else "no"
-    )
+    values = {"share_weaker": min(counts.values()) / total}
+    verdict = rule("sim1.entropy_sa").verdict(values)
     return Claim(
         id="sim1.entropy_sa",
         claim="SA improves on LA whether or not the decoder was trained with entropy",
         figure="sim1",
         paper="LA+SA and LA+SA+Entropy both below LA (final error)",
-        value=float(min(counts.values())),
+        values=values,
         measured=(
             f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
-            "(the interval is for this count); "
+            "(the interval is for this share); "
             f"final error below LA's at {counts['LA+SA']}/{total} betas (LA+SA) and "
             f"{counts['LA+SA+Entropy']}/{total} (LA+SA+Entropy); at beta=1000: "
             + ", ".join(
@@ -304,15 +304,12 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
         ),
         reproduced=verdict,
         note=(
-            "rule: yes if both below LA at every beta, partly if both at most. "
-            + (
-                ""
-                if verdict == "yes"
-                else "Likely reason: the pull of Eq. M2 towards the mid-preference grasp "
-                "(see the sim1.final_error row)."
-                if member_of(frame) == "point"
-                else ""
-            )
+            ""
+            if verdict == "yes"
+            else "Likely reason: the pull of Eq. M2 towards the mid-preference grasp "
+            "(see the sim1.final_error row)."
+            if member_of(frame) == "point"
+            else ""
         ),
         robot=robot,
     )

@@ -20,6 +20,7 @@ from lasa.errors import ConfigError
 from lasa.metrics import confidence, normalized_error
 from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
+from lasa.rules import rule
 from lasa.sims.common import (
     Decoders,
     check_members,
@@ -33,7 +34,7 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import member_frame
+from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, member_frame
 
 __all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "plot", "plot_metric"]
 
@@ -49,7 +50,7 @@ COLUMNS = (
     "goal",
     "theta",
     "assistance",
-    "draw",
+    "look",
 )
 DPI = 150
 
@@ -60,9 +61,10 @@ class Config:
 
     change_steps: tuple[int, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
     beta: float = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
-    n_seeds: int = 6  # simulated users per (method, N) in each draw (x n_draws = 30 per point) [-]
-    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
-    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
+    users: int = Design.first  # users per point at the first look, every reading (lasa.verdicts.Design) [-]
+    block: int = Design.block  # users added per later look, the headline reading only [-]
+    cap: int = Design.cap  # most users per point [-]
+    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
     pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
@@ -78,8 +80,7 @@ class Config:
             if int(n) != n or n < 0:
                 raise ConfigError(f"change step N must be an integer >= 0, got {n!r}")
         check_range("beta", self.beta, 0.0)
-        check_positive_int("n_seeds", self.n_seeds)
-        check_positive_int("n_draws", self.n_draws)
+        check_design(self.users, self.block, self.cap)
         check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_pilot(self.pilot, self.pilot_prob)
@@ -99,19 +100,27 @@ def run(
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
+    look: int = 0,
+    members: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim2: final error and confidence in the true cup against the change step N.
 
     Each user wants cup g* with preference theta. For the steps t < N they aim at the
     *other* cup with the same preference, from step N on at g*; both near-optimally.
 
+    Args:
+        look: Which look's new users (:func:`lasa.verdicts.block_users`).
+        members: The members the assisted methods run under; default every member of
+            ``config.assistance``. The other arguments are :func:`lasa.sims.sim1.run`'s.
+
     Returns:
         One row per episode with the columns of :data:`COLUMNS` plus ``goal`` and
         ``theta`` (for the video); and the trajectories.
     """
-    n_users = config.n_seeds * config.n_draws
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
-    members = members_of(control, config.assistance)
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    seed_ = block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
+    members = members_of(control, config.assistance) if members is None else members
     method, member, conditions, seed = sweep_grid(config.methods, members, config.change_steps, n_users)
     change = np.array(conditions, dtype=int)
     wrong = (goal[seed] + 1) % task.n_goals
@@ -128,7 +137,7 @@ def run(
         change_step=change,
     )
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, config.seed
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
     )
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
@@ -136,14 +145,14 @@ def run(
             "robot": task.robot.name,
             "method": method,
             "change_step": change,
-            "seed": seed,
+            "seed": start + seed,
             "final_error": final,
             "confidence": confidence(traj.beliefs[-1], users.goal),
             "goal": users.goal,
             "theta": users.theta,
             "success": final <= config.success,
             "assistance": member,
-            "draw": seed // config.n_seeds,
+            "look": look,
         }
     )
     return frame, traj
@@ -167,22 +176,24 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     err = frame.groupby(["method", "change_step"]).final_error.mean()
     sa_lo, sa_hi = rate["LA+SA", lo], rate["LA+SA", hi]
     en_hi = rate["LA+SA+Entropy", hi]
-    v1 = "yes" if sa_hi < 0.5 else "partly" if sa_lo - sa_hi >= 0.2 else "no"
-    v2 = "yes" if en_hi >= 0.8 and en_hi - sa_hi >= 0.2 else "partly" if en_hi > sa_hi else "no"
+    values1 = {"success_sa": float(sa_hi), "drop_sa": float(sa_lo - sa_hi)}
+    values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
+    v1 = rule("sim2.sa_trapped").verdict(values1)
+    v2 = rule("sim2.entropy_escapes").verdict(values2)
     return [
         Claim(
             id="sim2.sa_trapped",
             claim="LA+SA cannot escape the wrong goal as N grows",
             figure="sim2",
             paper="LA+SA's final error grows and its confidence falls as N grows",
-            value=float(sa_hi),
+            values=values1,
             measured=(
                 f"LA+SA reaches the right cup in {sa_hi:.0%} of episodes at N={hi} "
                 f"(the interval is for this rate) and {sa_lo:.0%} at N={lo}; "
                 f"mean final error {err['LA+SA', lo]:.3f} -> {err['LA+SA', hi]:.3f}"
             ),
             reproduced=v1,
-            note="rule: yes if success < 50% at the largest N, partly if it falls by >= 20 points.",
+            note="",
             robot=robot,
         ),
         Claim(
@@ -190,15 +201,13 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             claim="LA+SA+Entropy can escape the wrong goal",
             figure="sim2",
             paper="LA+SA+Entropy users switch goals",
-            value=float(en_hi),
+            values=values2,
             measured=(
                 f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
                 f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}"
             ),
             reproduced=v2,
-            note=(
-                "rule: yes if success >= 80% at the largest N and >= 20 points above LA+SA, partly if above."
-            ),
+            note="",
             robot=robot,
         ),
     ]

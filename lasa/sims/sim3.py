@@ -19,6 +19,7 @@ from lasa.config import ASSISTANCE, ControlConfig, check_range
 from lasa.metrics import normalized_error
 from lasa.plots import method_lineplot, robot_rows
 from lasa.rollout import METHODS, Trajectories
+from lasa.rules import rule
 from lasa.sims.common import (
     Decoders,
     check_members,
@@ -32,12 +33,12 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import member_frame
+from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, member_frame
 
 __all__ = ["NAME", "COLUMNS", "LEARNERS", "Config", "run", "claims", "episode_means", "plot", "plot_learner"]
 
 NAME = "sim3_learning_users"
-COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error", "assistance", "draw")
+COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error", "assistance", "look")
 LEARNERS = ("fast", "slow")
 DPI = 150
 
@@ -48,9 +49,10 @@ class Config:
 
     fast_slope: float = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
     slow_slope: float = 2.0  # m of the slow learner [1/(rad^2 step)]
-    n_seeds: int = 6  # simulated users per (method, learner) in each draw (x n_draws = 30 per point) [-]
-    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
-    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
+    users: int = Design.first  # users per point at the first look, every reading (lasa.verdicts.Design) [-]
+    block: int = Design.block  # users added per later look, the headline reading only [-]
+    cap: int = Design.cap  # most users per point [-]
+    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.users)
     pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
@@ -62,8 +64,7 @@ class Config:
     def __post_init__(self) -> None:
         check_range("fast_slope", self.fast_slope, 0.0, low_open=True)
         check_range("slow_slope", self.slow_slope, 0.0, low_open=True)
-        check_positive_int("n_seeds", self.n_seeds)
-        check_positive_int("n_draws", self.n_draws)
+        check_design(self.users, self.block, self.cap)
         check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_pilot(self.pilot, self.pilot_prob)
@@ -83,16 +84,24 @@ def run(
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
+    look: int = 0,
+    members: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
+
+    Args:
+        look: Which look's new users (:func:`lasa.verdicts.block_users`).
+        members: The members the assisted methods run under; default every member of
+            ``config.assistance``. The other arguments are :func:`lasa.sims.sim1.run`'s.
 
     Returns:
         One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
         the trajectories (users in the order method x learner x seed).
     """
-    n_users = config.n_seeds * config.n_draws
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, config.seed)
-    members = members_of(control, config.assistance)
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    seed_ = block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
+    members = members_of(control, config.assistance) if members is None else members
     method, member, conditions, seed = sweep_grid(config.methods, members, config.learners, n_users)
     learner = np.array([name for name, _ in conditions])
     slope = np.array([m for _, m in conditions], dtype=float)
@@ -107,7 +116,7 @@ def run(
         pilot_prob=config.pilot_prob,
     )
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, config.seed
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
     )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
@@ -118,11 +127,11 @@ def run(
             "method": np.repeat(method, len(steps)),
             "learner": np.repeat(learner, len(steps)),
             "slope": np.repeat(slope, len(steps)),
-            "seed": np.repeat(seed, len(steps)),
+            "seed": np.repeat(start + seed, len(steps)),
             "t": np.tile(steps, n_users),
             "error": errors[steps].T.ravel(),
             "assistance": np.repeat(member, len(steps)),
-            "draw": np.repeat(seed // config.n_seeds, len(steps)),
+            "look": look,
         }
     )
     return frame, traj
@@ -130,7 +139,7 @@ def run(
 
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
     """One row per episode: its mean error over the recorded steps (the claim's measure)."""
-    keys = ["robot", "method", "learner", "seed", "assistance", "draw"]
+    keys = ["robot", "method", "learner", "seed", "assistance", "look"]
     return frame.groupby(keys, sort=False, as_index=False).error.mean()
 
 
@@ -148,27 +157,25 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     mean = per_episode.groupby(["learner", "method"]).mean()
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
-    better = [gain[name] > 0 for name in learners]
-    verdict = "yes" if all(better) else "partly" if any(better) else "no"
+    values = {f"gain_{name}": float(gain[name]) for name in learners}
+    verdict = rule("sim3.entropy_learners").verdict(values)
     return [
         Claim(
             id="sim3.entropy_learners",
             claim="entropy improves in-task performance for both fast and slow learners",
             figure="sim3",
             paper="LA+SA+Entropy below LA+SA in error over time, fast and slow",
-            value=float(min(gain.values())),
-            measured=f"smaller gain of entropy over the learners {min(gain.values()):+.3f} "
-            "(LA+SA minus LA+SA+Entropy, the interval is for it); "
+            values=values,
+            measured="gain of entropy, LA+SA minus LA+SA+Entropy (the interval is for the fast learner's): "
+            + ", ".join(f"{name} {gain[name]:+.3f}" for name in learners)
+            + "; "
             + "; ".join(
                 f"{name}: mean error over the episode LA+SA {mean[name, 'LA+SA']:.3f}, "
                 f"LA+SA+Entropy {mean[name, 'LA+SA+Entropy']:.3f}, LA {mean[name, 'LA']:.3f}"
                 for name in learners
             ),
             reproduced=verdict,
-            note=(
-                "rule: yes if LA+SA+Entropy's mean error over the episode is below LA+SA's "
-                "for both learners, partly if for one."
-            ),
+            note="",
             robot=robot,
         )
     ]

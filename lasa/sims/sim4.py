@@ -25,6 +25,7 @@ from lasa.metrics import confidence, normalized_error
 from lasa.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
 from lasa.plots import robots_present
 from lasa.rollout import METHOD_DECODER, Trajectories, method_alpha, rollout
+from lasa.rules import rule
 from lasa.sims.common import (
     Decoders,
     as_decoders,
@@ -36,7 +37,7 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import NO_ASSISTANCE, member_frame
+from lasa.verdicts import N_BOOT, NO_ASSISTANCE, Design, block_seed, block_users, check_design, member_frame
 
 __all__ = [
     "NAME",
@@ -65,7 +66,7 @@ COLUMNS = (
     "confidence",
     "reference",
     "assistance",
-    "draw",
+    "look",
 )
 DPI = 150
 
@@ -86,9 +87,10 @@ class Config:
     )
     ref_goal: int = 1  # the training cup the new ones are referred to [-]
     beta: float = 1000.0  # near-optimal users [1/rad^2]
-    n_seeds: int = 6  # users per (mapping, new cup) in each draw (x n_draws = 30 per point) [-]
-    n_draws: int = 5  # independent draws of n_seeds users: verdicts are recomputed on each [-]
-    n_boot: int = 400  # bootstrap resamples of each claim's interval (lasa.verdicts) [-]
+    users: int = Design.first  # users per (mapping, new cup) at the first look, every reading [-]
+    block: int = Design.block  # users added per later look, the headline reading only [-]
+    cap: int = Design.cap  # most users per point [-]
+    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the method's assistance runs under
     horizon: int = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
@@ -108,8 +110,7 @@ class Config:
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
         check_range("beta", self.beta, 0.0)
-        check_positive_int("n_seeds", self.n_seeds)
-        check_positive_int("n_draws", self.n_draws)
+        check_design(self.users, self.block, self.cap)
         check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
         check_positive_int("horizon", self.horizon)
@@ -156,6 +157,8 @@ def run(
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
+    look: int = 0,
+    members: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
     """Fig. sim4: grasp error at new cups against their distance from the training cup.
 
@@ -173,6 +176,9 @@ def run(
         control: Control-loop units.
         config: The sweep.
         progress: Show progress bars.
+        look: Which look's new users (:func:`lasa.verdicts.block_users`).
+        members: The members the method's assistance runs under; default every member
+            of ``config.assistance``.
 
     Returns:
         One row per episode with the columns of :data:`COLUMNS`: ``h`` (the kind
@@ -180,7 +186,7 @@ def run(
         new cup at the end; NaN without the map) and ``reference`` (the error of a robot
         holding, at the training cup, the grasp the user wants at the new one: the
         paper's "only ever reaches for the training goal"), ``assistance`` (the member the
-        method's assistance ran under; ``none`` for LA) and ``draw``; and the runs per new
+        method's assistance ran under; ``none`` for LA) and ``look``; and the runs per new
         cup under the headline member (``control.assistance``).
     """
     if not 0 <= config.ref_goal < task.n_goals:
@@ -189,11 +195,13 @@ def run(
     decoder = as_decoders(decoders).get(key)
     if decoder is None:
         raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
-    n_users = config.n_seeds * config.n_draws
-    _, theta, noise = episodes(decoder, task, control, n_users, config.horizon, config.seed)
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    _, theta, noise = episodes(decoder, task, control, n_users, config.horizon, block_seed(config.seed, look))
     seeds = np.arange(n_users)
     alpha = method_alpha(config.method, control)
-    members = members_of(control, config.assistance) if alpha > 0 else (NO_ASSISTANCE,)
+    if members is None:
+        members = members_of(control, config.assistance)
+    members = members if alpha > 0 else (NO_ASSISTANCE,)
     grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
     dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
     scale = float(dist.max())
@@ -247,7 +255,7 @@ def run(
                         "robot": task.robot.name,
                         "mapping": mapping,
                         "distance": d / scale,
-                        "seed": seeds_all,
+                        "seed": start + seeds_all,
                         "error": normalized_error(traj.states[-1], target, scale),
                         "h": kind,
                         "offset_m": float(offset),
@@ -255,7 +263,7 @@ def run(
                         "confidence": conf,
                         "reference": reference,
                         "assistance": member_all,
-                        "draw": seeds_all // config.n_seeds,
+                        "look": look,
                     }
                 )
             )
@@ -331,48 +339,39 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     claims = []
     for kind in [k for k in ("straight_line", "grasp") if k in table.index]:
         f = table.loc[kind]
-        helps = bool((means[kind] < means["none"]).all())
-        linear = f.r2 >= 0.9 and 0 < f.slope <= 0.25
-        verdict = "yes" if linear and helps else "partly" if helps else "no"
+        below = means[kind] < means["none"]
+        helps = bool(below.all())
+        values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
+        verdict = rule(f"sim4.{kind}_linear").verdict(values)
         claims.append(
             Claim(
                 id=f"sim4.{kind}_linear",
                 claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
                 figure="sim4",
                 paper="y = 0.11x, R^2 = 0.98",
-                value=float(f.slope),
+                values=values,
                 measured=line(f) + " (the interval is for the slope)",
                 reproduced=verdict,
                 note=(
-                    "rule: yes if R^2 >= 0.9, slope in (0, 0.25] and below the no-map error at every cup; "
-                    "partly if below it at every cup. "
-                    + ("" if helps else "Above the no-map error at some cup. ")
+                    ("" if helps else "Above the no-map error at some cup. ")
                     + "Joint-space distances and errors, normalised by the farthest new goal's distance."
                 ),
                 robot=robot,
             )
         )
     wo = table.loc["none"]
-    verdict = (
-        "yes"
-        if abs(wo.slope - 1) <= 0.15 and wo.r2 >= 0.9
-        else "partly"
-        if wo.r2 >= 0.9 and 0.5 <= wo.slope <= 1.5
-        else "no"
-    )
+    values = {"slope": float(wo.slope), "r2": float(wo.r2)}
+    verdict = rule("sim4.no_map_training_goal").verdict(values)
     claims.append(
         Claim(
             id="sim4.no_map_training_goal",
             claim="without the map, the robot only reaches for the training goal",
             figure="sim4",
             paper="y = x",
-            value=float(wo.slope),
+            values=values,
             measured=line(wo) + " (the interval is for the slope)",
             reproduced=verdict,
-            note=(
-                "rule: yes if |slope - 1| <= 0.15 and R^2 >= 0.9, "
-                "partly if R^2 >= 0.9 and slope in [0.5, 1.5]."
-            ),
+            note="",
             robot=robot,
         )
     )

@@ -41,8 +41,9 @@ the whole cohort, under each member.
   the three comparisons of each measure): *yes* if all six comparisons are significant,
   *partly* if LA+SA has the lowest mean Total Time but not all six are, *no* otherwise.
 
-``seeds_agree`` of a 10-participant row says how many of the cohort's disjoint groups of
-10 participants give the same verdict: how much a study of the paper's size can vary.
+Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
+optimisation, 10 participants), and ``study.<claim>@<reading>`` each other (:func:`claim_id`).
+A verdict is settled when the 95% t-interval of its effect excludes zero, else ``undecided``.
 """
 
 from __future__ import annotations
@@ -63,6 +64,7 @@ from lasa.config import ASSISTANCE, ControlConfig, check_choice, from_dict
 from lasa.decoder import ActionDecoder
 from lasa.eating import EatingTask
 from lasa.errors import ConfigError
+from lasa.rules import UNDECIDED, rule
 from lasa.study import (
     CONDITIONS,
     NO_ASSISTANCE,
@@ -190,12 +192,20 @@ def analyse(frames: dict[str, pd.DataFrame], member: str, n: int | None = None) 
     others = [("LA+SA", c) for c in CONDITIONS if c != "LA+SA"]
     out["h3_total"] = stats.pairwise(time, "total_time", agg="sum", pairs=others)
     out["h3_idle"] = stats.pairwise(time, "idle_time", agg="sum", pairs=others)
-    out["means"] = time.groupby("condition")[["total_time", "idle_time"]].sum().div(out["n"])
+    means = time.groupby("condition")[["total_time", "idle_time"]].sum().div(out["n"])
+    out["means"] = means
+    totals = time.pivot_table(index="participant", columns="condition", values="total_time", aggfunc="sum")
+    best_other = str(means.total_time.drop("LA+SA").idxmin())
+    out["h3_gap"] = (best_other, *_paired(totals["LA+SA"], totals[best_other]))
     return out
 
 
 def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, float, str]]:
-    """(verdict, value, ci_low, ci_high, measured) per claim id suffix."""
+    """(the tests' verdict, value, 95% ci_low, ci_high, measured) per claim key.
+
+    The value is the effect the verdict rests on, and its interval is the t-interval of the
+    same test (paired over participants, or two-sample for the paper's F(1,18) reading).
+    """
     out: dict[str, tuple[str, float, float, float, str]] = {}
     for key, suffix, unit, scale in (("h1", "", "m s", 1.0), ("h1_mean_distance", "_mean", "cm", 100.0)):
         within, pairs = result[f"h1{suffix}_within"], result[f"h1{suffix}_pairs"]
@@ -211,8 +221,8 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
         out[key] = (
             verdict,
             diff,
-            np.nan,
-            np.nan,
+            within["ci_low"],
+            within["ci_high"],
             f"SA - no SA = {scale * diff:+.2f} {unit}; {stats.format_f(within)} (within); {pair_text}",
         )
     between = result["h1_between"]
@@ -222,8 +232,8 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
     out["h1_paper_test"] = (
         verdict,
         b_diff,
-        np.nan,
-        np.nan,
+        between["ci_low"],
+        between["ci_high"],
         f"SA - no SA = {b_diff:+.2f} m s; {stats.format_f(between)} (between, the paper's df)",
     )
     phases = result["h2_phases"]
@@ -232,9 +242,12 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
     verdict = "yes" if mean > 0 and p < 0.05 else "partly" if mean > 0 else "no"  # NaN: "no"
     text = "; ".join(f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" for ph, (m, _, _, pp, k) in phases.items())
     out["h2"] = (verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}")
-    total, idle, means = result["h3_total"], result["h3_idle"], result["means"]
+    total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
     assert (
-        isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame) and isinstance(means, pd.DataFrame)
+        isinstance(total, pd.DataFrame)
+        and isinstance(idle, pd.DataFrame)
+        and isinstance(means, pd.DataFrame)
+        and isinstance(gap, tuple)
     )
     all_sig = bool(
         ((total["diff"] < 0) & (total.p_corr < 0.05)).all()
@@ -242,10 +255,15 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
     )
     fastest = means.total_time.idxmin() == "LA+SA"
     verdict = "yes" if all_sig else "partly" if fastest else "no"
-    best_other = means.total_time.drop("LA+SA").min()
-    gap = float(means.total_time["LA+SA"] - best_other)
+    best, g_mean, g_low, g_high = gap[0], gap[1], gap[2], gap[3]
     text = ", ".join(f"{c} {means.total_time[c]:.0f} s (idle {means.idle_time[c]:.0f} s)" for c in CONDITIONS)
-    out["h3"] = (verdict, gap, np.nan, np.nan, f"total (idle) time over both tasks: {text}")
+    out["h3"] = (
+        verdict,
+        float(g_mean),
+        float(g_low),
+        float(g_high),
+        f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s; total (idle) time over both tasks: {text}",
+    )
     return out
 
 
@@ -273,40 +291,56 @@ CLAIM_TEXT = {
 }
 
 
-def _group(frames: dict[str, pd.DataFrame], k: int) -> dict[str, pd.DataFrame]:
-    """The k-th disjoint group of PAPER_N participants, renumbered from 0."""
-    lo = k * PAPER_N
-    out = {}
-    for name, f in frames.items():
-        part = f[(f.participant >= lo) & (f.participant < lo + PAPER_N)].copy()
-        part["participant"] -= lo
-        out[name] = part
-    return out
+# readings of each claim key: the claim it belongs to, and the reading's name (None: the paper's)
+_KEYS = {
+    "h1": ("h1", None),
+    "h1_mean_distance": ("h1", "mean_distance"),
+    "h1_paper_test": ("h1", "paper_test"),
+    "h2": ("h2", None),
+    "h3": ("h3", None),
+}
+
+
+def claim_id(key: str, member_index: int, member: str, cohort: bool) -> str:
+    """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
+
+    The paper's reading is its measure, the headline member (hindsight, index 0) and its 10
+    participants; every other reading names what differs, joined by ``+``:
+    ``study.h1@mean_distance+grasp_set+cohort``.
+    """
+    base, measure = _KEYS[key]
+    parts = [p for p in (measure, None if member_index == 0 else member, "cohort" if cohort else None) if p]
+    return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
 
 def claims(
     frames: dict[str, pd.DataFrame], members: tuple[str, ...], n_total: int
 ) -> tuple[list[Claim], dict[tuple[str, int], dict[str, object]]]:
-    """The claims rows (10 participants and the whole cohort, under each member) and the analyses."""
+    """The claims rows under every reading (measure, member, 10 participants or the cohort).
+
+    A verdict is settled when the 95% t-interval of its effect lies on one side of zero
+    (:data:`lasa.rules.RULES`), which is the test's own significance at p < .05; then it is
+    the tests' verdict (yes / partly / no, the rules of this module's docstring), otherwise
+    ``undecided``: a study of that size cannot tell.
+    """
     analyses: dict[tuple[str, int], dict[str, object]] = {}
     rows: list[Claim] = []
-    groups = max(1, n_total // PAPER_N)
     for m_i, member in enumerate(members):
-        sizes = [(PAPER_N, "")] + ([(n_total, "_cohort")] if n_total > PAPER_N else [])
-        for n, suffix in sizes:
+        sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
+        for n, cohort in sizes:
             result = analyse(frames, member, n)
             analyses[(member, n)] = result
-            verdicts = _verdicts(result)
-            agree: dict[str, int] = {}
-            if suffix == "" and groups > 1:
-                for k in range(groups):
-                    other = _verdicts(analyse(_group(frames, k), member, PAPER_N))
-                    for key, v in verdicts.items():
-                        agree[key] = agree.get(key, 0) + int(other[key][0] == v[0])
-            for key, (verdict, value, low, high, measured) in verdicts.items():
+            for key, (verdict, value, low, high, measured) in _verdicts(result).items():
+                cid = claim_id(key, m_i, member, cohort)
+                r = rule(cid)
+                settled = r.settled({"effect": (low, high)})
                 claim, paper = CLAIM_TEXT[key]
-                cid = f"study.{key}{suffix}" + ("" if m_i == 0 else f"@{member}")
-                note = f"{result['n']} simulated participants; SA = {member}"
+                interval = f"95% t-interval of the effect [{low:.3g}, {high:.3g}]"
+                note = (
+                    f"{result['n']} simulated participants; SA = {member}; {interval}"
+                    + ("" if settled else f", which straddles 0; the tests read {verdict!r}")
+                    + f". Rule: {r.text}."
+                )
                 rows.append(
                     Claim(
                         id=cid,
@@ -314,17 +348,35 @@ def claims(
                         figure="study",
                         paper=paper,
                         measured=measured,
-                        reproduced=verdict,
+                        reproduced=verdict if settled else UNDECIDED,
                         note=note,
                         robot="panda",
                         assistance=member,
                         value=float(value),
                         ci_low=float(low),
                         ci_high=float(high),
-                        seeds_agree=f"{agree[key]}/{groups}" if key in agree else "",
+                        settled=settled,
+                        n_users=int(result["n"]),  # type: ignore[call-overload]
+                        values={"effect": float(value)},
                     )
                 )
-    return rows, analyses
+    heads = {c.id: c for c in rows if "@" not in c.id}
+    out = []
+    for c in rows:
+        if c.id in heads:
+            flips = [
+                f"{o.id.split('@')[1]} {o.reproduced}"
+                for o in rows
+                if o.id.startswith(c.id + "@") and o.reproduced != c.reproduced
+            ]
+            lead = (
+                f"Readings with another verdict: {', '.join(flips)}. "
+                if flips
+                else "Every reading gives the same verdict. "
+            )
+            c = dataclasses.replace(c, note=lead + c.note)
+        out.append(c)
+    return out, analyses
 
 
 # every interval the study's figures draw: a 95% bootstrap CI, seeded so the PNG is the same run after run
