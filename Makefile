@@ -105,7 +105,7 @@ figures: setup
 	@rm -f $(BUILD)/timings.jsonl
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
-	@$(BIN)/python -m lasa.claims README.md figures/claims.md
+	@$(BIN)/python -m lasa.claims README.md figures/claims.csv
 endif
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC); wall times in $(BUILD)/timings.jsonl)"
 

@@ -3,11 +3,12 @@
 ``python -m lasa.book`` takes the executed notebooks of the last ``make figures``
 (``build/notebooks``) and the figures folder, and writes a static site to ``build/book``:
 
-- the **front page** is the claims table, each row linking to the notebook behind it;
+- the **front page** is the verdict table (``figures/verdicts.md``), each row linking to the
+  notebook behind it; the full claims table is a page of its own, the last;
 - then **one page per notebook**, in the order of the paper (01 to 11; the per-robot
-  notebooks for planar5, then the Panda), with their figures, tables and outputs; the
-  figures folder is copied beside them (the notebooks' Markdown shows ``../figures/*.png``
-  and links the videos);
+  notebooks for planar5, then the Panda, each titled with its robot), with their figures,
+  tables and outputs; the figures folder is copied beside them (the notebooks' Markdown
+  shows ``../figures/*.png`` and links the videos);
 - **nothing is executed again** (``execute_notebooks: off``);
 - **it works offline**: Jupyter Book 1 is Sphinx with a theme installed from the registry;
   MathJax is served from the site itself (``mathjax/``, from the ``mathjax`` npm package that
@@ -20,6 +21,7 @@ Publish it by copying ``build/book/html`` to any static host (it is plain files)
 from __future__ import annotations
 
 import argparse
+import json
 import shutil
 import subprocess
 import sys
@@ -27,11 +29,20 @@ from pathlib import Path
 
 import pandas as pd
 
+from lasa.claims import render_markdown, render_verdicts
 from lasa.errors import ArtifactError
 from lasa.io import write_text
 from lasa.paths import repo_root, resolve
 
-__all__ = ["NOTEBOOK_OF_FIGURE", "ordered_notebooks", "front_page", "build_book", "main"]
+__all__ = [
+    "NOTEBOOK_OF_FIGURE",
+    "ordered_notebooks",
+    "front_page",
+    "claims_page",
+    "retitle",
+    "build_book",
+    "main",
+]
 
 # The notebook behind each figure's claims (file stems; per robot where they run per robot).
 NOTEBOOK_OF_FIGURE = {
@@ -42,6 +53,7 @@ NOTEBOOK_OF_FIGURE = {
     "study": "11_eating_study",
 }
 ROBOT_ORDER = ("planar5", "panda")
+ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
 
 
 def ordered_notebooks(folder: Path) -> list[Path]:
@@ -55,41 +67,47 @@ def ordered_notebooks(folder: Path) -> list[Path]:
     return sorted(books, key=key)
 
 
-def _page(figure: str, robot: str, pages: set[str]) -> str | None:
-    stem = NOTEBOOK_OF_FIGURE.get(figure)
-    if stem is None:
-        return None
-    for name in (f"{stem}-{robot}", stem):
-        if name in pages:
-            return name
-    return None
-
-
 def front_page(claims: pd.DataFrame, pages: set[str]) -> str:
-    """The front page's Markdown: what the book is, then the claims table with links."""
+    """The front page's Markdown: what the book is, then the verdict table (``figures/verdicts.md``)."""
+
+    def link(stem: str) -> str:
+        for name in (f"{stem}-planar5", stem, f"{stem}-panda"):
+            if name in pages:
+                return f"{name}.ipynb"
+        return f"{stem}.ipynb"
+
     lines = [
         "# lasa: Shared Autonomy with Learned Latent Actions",
         "",
         "The executed notebooks of a `make figures` run of **lasa**, a reproducibility package for Jeon,",
         'Losey & Sadigh, "Shared Autonomy with Learned Latent Actions" (RSS 2020). The table says, claim by',
-        "claim, whether the paper's result reproduced; each row links to the notebook that measures it. The",
-        "pages that follow are the notebooks, in the paper's order.",
+        "claim and robot, whether the paper's result reproduced: the verdict, the interval of the number it",
+        "rests on, N (simulated users per point, or participants), and whether it is settled (every",
+        "interval clear of its rule's thresholds) or undecided. Each row links to the notebook that",
+        "measures it. The pages that follow are the notebooks, in the paper's order; the full claims",
+        "table, every reading of every claim, is the last page.",
         "",
-        "`agree`: how many independent draws of users (for the study, groups of 10 participants) give the",
-        "same verdict. The numbers each verdict rests on are in the notebooks and in `figures/claims.csv`.",
-        "",
-        "| claim | robot | reading | reproduced | agree | notebook |",
-        "| --- | --- | --- | --- | --- | --- |",
+        render_verdicts(claims, link),
     ]
-    for row in claims.itertuples():
-        page = _page(str(row.figure), str(row.robot), pages)
-        link = f"[{page}]({page}.ipynb)" if page else ""
-        lines.append(
-            f"| `{row.id}` | {row.robot} | {row.assistance} | **{row.reproduced}** "
-            f"| {row.seeds_agree} | {link} |"
-        )
-    lines.append("")
     return "\n".join(lines)
+
+
+def claims_page(claims: pd.DataFrame) -> str:
+    """The full claims table (``figures/claims.md``) as a page of its own."""
+    return "# Every reading of every claim\n\nThe rows of `figures/claims.csv`.\n\n" + render_markdown(claims)
+
+
+def retitle(notebook: Path, robot: str) -> None:
+    """Append the robot to a notebook's first heading, so its two robots' pages differ."""
+    nb = json.loads(notebook.read_text())
+    for cell in nb["cells"]:
+        text = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        if cell["cell_type"] == "markdown" and text.startswith("# "):
+            first, _, rest = text.partition("\n")
+            name = ROBOT_TITLES.get(robot, robot)
+            cell["source"] = f"{first} — {name}" + (f"\n{rest}" if rest else "")
+            break
+    write_text(notebook, json.dumps(nb, indent=1, ensure_ascii=False) + "\n")
 
 
 def build_book(
@@ -126,13 +144,18 @@ def build_book(
     (src / "notebooks").mkdir(parents=True)
     for book in books:
         shutil.copy2(book, src / "notebooks" / book.name)
+        _, _, robot = book.stem.partition("-")
+        if robot:
+            retitle(src / "notebooks" / book.name, robot)
     shutil.copytree(figures, src / "figures", ignore=shutil.ignore_patterns("*.csv", "*.md"))
     shutil.copytree(mathjax, src / "_extra" / "mathjax")
     pages = {b.stem for b in books}
     claims = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
     index = front_page(claims, pages).replace("](", "](notebooks/")
     write_text(src / "index.md", index)
+    write_text(src / "claims.md", claims_page(claims))
     toc = ["format: jb-book", "root: index", "chapters:"] + [f"- file: notebooks/{b.stem}" for b in books]
+    toc.append("- file: claims")
     write_text(src / "_toc.yml", "\n".join(toc) + "\n")
     write_text(
         src / "_config.yml",

@@ -21,7 +21,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import pandas as pd
@@ -30,11 +30,21 @@ from lasa.errors import ConfigError
 from lasa.io import locked, write_csv, write_text
 from lasa.rules import UNDECIDED
 
-__all__ = ["Claim", "update_claims", "render_markdown", "sync_readme", "CLAIM_COLUMNS", "README_MARKERS"]
+__all__ = [
+    "Claim",
+    "PaperClaim",
+    "PAPER_CLAIMS",
+    "update_claims",
+    "render_markdown",
+    "render_verdicts",
+    "sync_readme",
+    "CLAIM_COLUMNS",
+    "README_MARKERS",
+]
 
 README_MARKERS = (
-    "<!-- claims:begin (generated from figures/claims.md by make figures) -->",
-    "<!-- claims:end -->",
+    "<!-- verdicts:begin (generated from figures/verdicts.md by make figures) -->",
+    "<!-- verdicts:end -->",
 )
 
 CLAIM_COLUMNS = (
@@ -144,11 +154,185 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
     return table
 
 
+@dataclasses.dataclass(frozen=True)
+class PaperClaim:
+    """One row of the verdict table: a claim of the paper, and where it is measured."""
+
+    id: str  # the headline row's id in claims.csv
+    claim: str  # the claim, in the paper's words
+    paper: str  # the paper's number
+    mechanism: str  # what makes our verdict, in a line
+    notebook: str  # the notebook (file stem) that measures it
+    section: str  # its section that explains the mechanism
+
+
+PAPER_CLAIMS: tuple[PaperClaim, ...] = (
+    PaperClaim(
+        "sim1.final_error",
+        "shared autonomy reduces the final state error (Fig. sim1)",
+        "LA+SA below LA at every beta",
+        "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim1.time_ratio",
+        "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
+        "time ratio 1.45 and 1.30",
+        "the pull is largest far from the goal, where it adds to the user's input",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim1.gap_narrows",
+        "the gap between LA and LA+SA narrows as the user becomes more rational",
+        "45% at beta = 75 -> 30% at beta = 1000",
+        "near-optimal users need the assistance less, but the pull's bias stays",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim1.entropy_sa",
+        "shared autonomy helps with or without the entropy term",
+        "LA+SA and LA+SA+Entropy below LA",
+        "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim2.sa_trapped",
+        "with LA+SA, a user who changes their mind late is stuck at the first goal",
+        "final error grows, confidence falls with N",
+        "a confident belief makes the decoder's inputs all lead to the first cup",
+        "05_changing_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim2.entropy_escapes",
+        "the entropy term lets users change their mind",
+        "LA+SA+Entropy reaches the new goal",
+        "Eq. T6 keeps some input leading to each goal at every belief",
+        "05_changing_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim3.entropy_learners",
+        "entropy improves in-task performance for fast and slow learners",
+        "LA+SA+Entropy below LA+SA over time",
+        "a learner's early random inputs commit the belief; entropy lets them undo it",
+        "06_learning_users",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim4.straight_line_linear",
+        "with the context map, the error at a new goal grows linearly with its distance",
+        "y = 0.11x, R^2 = 0.98",
+        "the straight-line map moves the grasp curve rigidly, so its shape is wrong by more with distance",
+        "07_new_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim4.grasp_linear",
+        "the same, with our grasp-to-grasp context map (not the paper's)",
+        "y = 0.11x, R^2 = 0.98",
+        "the grasp-to-grasp map is exact at every grasp, so the error does not grow",
+        "07_new_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim4.no_map_training_goal",
+        "without the map, the robot only reaches for the training goal",
+        "y = x",
+        "the user's own grasp at a far cup lies farther than the goal that defines the distance",
+        "07_new_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "study.h1",
+        "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
+        "F(1,18) = 29.9, p < .001",
+        "Goal Error sums over the task, so slower assisted conditions accrue more of it",
+        "11_eating_study",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "study.h2",
+        "H2: latent actions let users execute their preferences (Dessert, scoop)",
+        "LA+SA adjusts to scoop; R+SA stays stabbing",
+        "simulated Retargeting participants turn the fork with the roll/pitch mode readily",
+        "11_eating_study",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "study.h3",
+        "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
+        "LA+SA fastest, p < .05 vs each",
+        "the eating decoder moves the fork sideways at a confident bowl (notebook 10)",
+        "11_eating_study",
+        "What it shows, against the paper",
+    ),
+)
+
+
+def _cell(row: pd.Series | None) -> str:
+    """A robot's cell: verdict, value [CI], N, settled."""
+    if row is None:
+        return "—"
+    ci = f" [{row.ci_low}, {row.ci_high}]" if str(row.ci_low) != "" else ""
+    value = str(row.measured).split(";")[0]
+    state = "settled" if str(row.settled) == "yes" else "**undecided**"
+    head = f"**{row.reproduced}**" if row.reproduced != UNDECIDED else "undecided"
+    return f"{head}{ci}, N = {row.n_users}, {state}" if value else head
+
+
+def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = None) -> str:
+    """The verdict table: one row per paper claim, both robots side by side.
+
+    Args:
+        table: ``figures/claims.csv`` (as strings).
+        link: Notebook stem -> the link target of its page (default
+            ``notebooks/<stem>.ipynb``, from the repository root).
+
+    Returns:
+        Markdown: the claim and the paper's number, then per robot the verdict with the
+        interval of the number it rests on, the users per point N and whether it is settled,
+        the readings (``<id>@<reading>`` rows) whose verdict differs, and the mechanism
+        with a link to the notebook that measures it.
+    """
+    lines = [
+        "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    for pc in PAPER_CLAIMS:
+        cells = [_cell(rows.get((pc.id, robot))) for robot in ("planar5", "panda")]
+        if cells == ["—", "—"]:
+            continue
+        flips: dict[str, list[str]] = {}
+        for (cid, robot), r in rows.items():
+            if cid.startswith(pc.id + "@"):
+                head = rows.get((pc.id, robot))
+                if head is not None and r.reproduced != head.reproduced:
+                    flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")
+        flip = "; ".join(f"`{k}` ({', '.join(v)})" for k, v in flips.items()) or "none"
+        anchor = pc.section.lower().replace(",", "").replace(" ", "-")
+        target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
+        mech = f"{pc.mechanism} ([{pc.notebook[:2]}]({target}#{anchor}))"
+        lines.append(f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {flip} | {mech} |")
+    return "\n".join(lines) + "\n"
+
+
+def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
+    """Render ``claims_csv`` as the verdict table into ``out`` (``figures/verdicts.md``)."""
+    table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
+    return write_text(out, render_verdicts(table))
+
+
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the claims table ``table_md`` between the README's claims markers.
+    """Put the verdict table ``table_md`` between the README's verdict markers.
 
     ``make figures`` runs this after the notebooks, so the README's table is always the
-    last full run's ``figures/claims.md``, never a hand-edited copy.
+    last full run's ``figures/verdicts.md``, never a hand-edited copy.
 
     Returns:
         Whether the README changed.
@@ -174,6 +358,8 @@ if __name__ == "__main__":
     import sys
 
     if len(sys.argv) != 3:
-        raise SystemExit("usage: python -m lasa.claims README.md figures/claims.md")
-    changed = sync_readme(sys.argv[1], sys.argv[2])
-    print(f"{sys.argv[1]}: claims table {'updated' if changed else 'already current'}")
+        raise SystemExit("usage: python -m lasa.claims README.md figures/claims.csv")
+    readme, csv = Path(sys.argv[1]), Path(sys.argv[2]).with_suffix(".csv")
+    verdicts = write_verdicts(csv, csv.with_name("verdicts.md"))
+    changed = sync_readme(readme, verdicts)
+    print(f"{verdicts} written; {readme}: verdict table {'updated' if changed else 'already current'}")

@@ -3,7 +3,15 @@
 import pandas as pd
 import pytest
 
-from lasa.claims import CLAIM_COLUMNS, README_MARKERS, Claim, sync_readme, update_claims
+from lasa.claims import (
+    CLAIM_COLUMNS,
+    README_MARKERS,
+    Claim,
+    _row,
+    render_verdicts,
+    sync_readme,
+    update_claims,
+)
 from lasa.errors import ConfigError
 
 
@@ -99,11 +107,35 @@ def test_readme_gets_the_table_between_its_markers(tmp_path):
         sync_readme(readme, table)
 
 
-def test_the_repository_readme_holds_the_committed_claims_table():
+def test_the_repository_readme_holds_the_committed_verdict_table():
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
     begin, end = README_MARKERS
     text = (root / "README.md").read_text()
     block = text.split(begin, 1)[1].split(end, 1)[0].strip()
-    assert block == (root / "figures" / "claims.md").read_text().strip()
+    assert block == (root / "figures" / "verdicts.md").read_text().strip()
+    assert len(text.splitlines()) <= 250 and text[: text.index(end)].count("\n") <= 80
+    table = pd.read_csv(root / "figures" / "claims.csv", dtype=str, keep_default_na=False)
+    assert (root / "figures" / "verdicts.md").read_text() == render_verdicts(table)  # generated, not edited
+
+
+def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_flips():
+    def row(cid, robot, verdict, n):
+        base = claim("time_ratio", robot=robot, verdict=verdict)
+        return Claim(**{**base.__dict__, "id": cid, "n_users": n, "settled": verdict != "undecided"})
+
+    rows = []
+    for robot, head, other in (("planar5", "no", "partly"), ("panda", "undecided", "undecided")):
+        rows.append(row("sim1.time_ratio", robot, head, 150))
+        rows.append(row("sim1.time_ratio@grasp_set", robot, other, 60))
+    table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
+    md = render_verdicts(table)
+    lines = md.strip().splitlines()
+    assert len(lines) == 3  # header, rule, one claim (claims without rows are left out)
+    cells = [c.strip() for c in lines[2].strip("|").split("|")]
+    assert cells[1] == "time ratio 1.45 and 1.30"
+    assert cells[2].startswith("**no**") and "N = 150" in cells[2] and "settled" in cells[2]
+    assert cells[3].startswith("undecided") and "**undecided**" in cells[3]
+    assert cells[4] == "`grasp_set` (planar5 partly)"  # the Panda's reading agrees with its headline
+    assert "(notebooks/04_fixed_expertise.ipynb#what-it-shows-against-the-paper)" in cells[5]

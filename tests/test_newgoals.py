@@ -224,7 +224,7 @@ def test_single_step_with_the_map_is_safe(model, grown):
 
 
 def test_sim4_frame_and_determinism(model, task):
-    config = sim4.Config(offsets=(0.08, 0.14), n_seeds=2, horizon=6, n_draws=1, assistance=("point",))
+    config = sim4.Config(offsets=(0.08, 0.14), users=2, horizon=6, assistance=("point",))
     frame, runs = sim4.run(model, task, task.robot.control, config)
     again, _ = sim4.run(model, task, task.robot.control, config)
     pd.testing.assert_frame_equal(frame, again)
@@ -242,7 +242,7 @@ def test_sim4_frame_and_determinism(model, task):
         ({"offsets": (-0.1,)}, "offset"),
         ({"direction": (0.0, 0.0)}, "direction"),
         ({"maps": ("nearest",)}, "map"),
-        ({"n_seeds": 0}, "n_seeds"),
+        ({"users": 0}, "users"),
         ({"method": "LA+XX"}, "method"),
     ],
 )
@@ -307,15 +307,13 @@ def test_sim4_refuses_a_method_whose_decoder_is_missing(model, task):
             model,
             task,
             task.robot.control,
-            sim4.Config(offsets=(0.08,), n_seeds=1, horizon=2, method="LA+SA+Entropy"),
+            sim4.Config(offsets=(0.08,), users=1, horizon=2, method="LA+SA+Entropy"),
         )
 
 
 def test_sim4_members_share_batches_without_changing_the_headline(model, task):
     """Members run together, paired by seed; the headline member's rows equal a run of it alone."""
-    config = sim4.Config(
-        offsets=(0.08, 0.14), n_seeds=2, horizon=6, n_draws=2, assistance=("point", "grasp_set")
-    )
+    config = sim4.Config(offsets=(0.08, 0.14), users=2, horizon=6, assistance=("point", "grasp_set"))
     frame, runs = sim4.run(model, task, task.robot.control, config)
     alone, alone_runs = sim4.run(
         model, task, task.robot.control, dataclasses.replace(config, assistance=("point",))

@@ -141,7 +141,11 @@ def test_sim1_outputs(executed):
     params = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")
     sweep = params["settings"]
     arms = 1 + 2 * 4  # LA once, LA+SA and LA+SA+Entropy under each of the four members
-    assert len(frame) == len(ROBOTS) * arms * len(sweep["betas"]) * sweep["n_seeds"] * sweep["n_draws"]
+    first = frame[frame.look == 0]
+    assert len(first) == len(ROBOTS) * arms * len(sweep["betas"]) * sweep["users"]
+    later = frame[frame.look > 0]  # later looks: the headline reading's arms (LA, point) only
+    assert set(later.assistance) <= {"none", "point"} and len(later) % (3 * len(sweep["betas"])) == 0
+    assert frame.groupby("robot").seed.nunique().le(sweep["cap"]).all()
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"} and set(frame.robot) == set(ROBOTS)
     assert frame.final_error.notna().all()
     assert (fig / "sim1_fixed_expertise.png").stat().st_size > 10_000
@@ -160,19 +164,28 @@ def test_claims_table(executed):
     claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
     per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
-    rows = 1 + len(ASSISTANCE)  # a headline row and one per member of the family
+    rows = len(ASSISTANCE)  # the headline row (point) and one per other member, no copy of the headline
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n * rows for f, n in per_figure.items() for r in ROBOTS
     }
+    sweep = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]
     head = claims[~claims.id.str.contains("@")]
-    assert set(head.assistance) == {"point"} and head.note.str.startswith("Headline under").all()
+    assert set(head.assistance) == {"point"}
+    assert (
+        head.note.str.startswith("Settled at look") | head.note.str.startswith("Undecided at the cap")
+    ).all()
+    n = head.n_users.astype(int)
+    assert n.between(sweep["users"], sweep["cap"]).all()
+    assert (
+        head.note.str.startswith("Undecided at the cap") == (n == sweep["cap"]) & (head.settled == "no")
+    ).all()
     members = claims[claims.id.str.contains("@")]
     assert (members.id.str.split("@").str[1] == members.assistance).all()
-    assert set(members.assistance) == set(ASSISTANCE)
-    assert set(claims.reproduced) <= {"yes", "partly", "no"}
+    assert set(members.assistance) == set(ASSISTANCE) - {"point"}
+    assert (members.n_users.astype(int) == sweep["users"]).all()  # the other readings: the first look
+    assert set(claims.reproduced) <= {"yes", "partly", "no", "undecided"}
+    assert ((claims.reproduced == "undecided") == (claims.settled == "no")).all()
     assert all(claims.measured.str.len() > 0)
-    draws = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]["n_draws"]
-    assert claims.seeds_agree.str.fullmatch(rf"[0-{draws}]/{draws}").all()
     low, high = pd.to_numeric(claims.ci_low), pd.to_numeric(claims.ci_high)
     assert (low <= high).all()
     assert (fig / "claims.md").read_text().count("| sim2 |") == 2 * rows * len(ROBOTS)
@@ -186,7 +199,11 @@ def test_claims_robustness_outputs(executed):
     assert list(frame.columns) == list(robustness.COLUMNS)
     settings = load_config(QUICK, ROOT / "notebooks" / "08_claims_robustness.ipynb")["settings"]
     assert set(frame.robot) == set(ROBOTS) and set(frame.assistance) == set(settings["assistance"])
-    assert set(frame.seed) == {robustness.POOLED, *range(settings["n_draws"])}
+    assert set(frame[frame.setting != "default"].assistance) == {
+        "point"
+    }  # settings under the headline member
+    assert (frame.users == settings["users"]).all() and set(frame.seed) == {0}
+    assert ((frame.reproduced == "undecided") == ~frame.settled).all()
     assert set(frame.id.str.split(".").str[0]) == {"sim1", "sim2", "sim3"}
     assert (fig / "claims_robustness.png").stat().st_size > 10_000
 
@@ -305,13 +322,16 @@ def test_study_outputs(executed):
     rows = claims[claims.figure == "study"]
     ids = {
         "study.h1",
-        "study.h1_mean_distance",
-        "study.h1_paper_test",
+        "study.h1@mean_distance",
+        "study.h1@paper_test",
         "study.h2",
         "study.h3",
     }  # < 10: no cohort
-    assert set(rows.id) == ids | {f"{i}@{m}" for i in ids for m in members[1:]}
-    assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= {"yes", "partly", "no"}
+    others = {i + ("+" if "@" in i else "@") + m for i in ids for m in members[1:]}
+    assert set(rows.id) == ids | others
+    assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= {"yes", "partly", "no", "undecided"}
+    assert ((rows.reproduced == "undecided") == (rows.settled == "no")).all()
+    assert (rows.n_users.astype(int) == settings["n_participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
     video = read_video(fig / "study_dessert.mp4")
     assert video.shape[1:] == (240, 4 * 320, 3)  # the four conditions side by side
@@ -385,5 +405,9 @@ def test_the_book_builds_offline_and_reads_in_a_real_browser(executed, report_ar
         browser.quit()
     front = np.asarray(Image.open(shots / "book_index.png").convert("L"), dtype=float)
     assert front.std() > 20, "the front page's screenshot is blank"
-    claims_links = (site / "index.html").read_text().count('href="notebooks/')
-    assert claims_links >= 10  # the claims table links each row to its notebook
+    front_html = (site / "index.html").read_text()
+    assert front_html.count('href="notebooks/') >= 10  # the verdict table links each row to its notebook
+    assert "readings that flip it" in front_html and (site / "claims.html").is_file()
+    # the two robots' pages of a notebook have titles that tell them apart
+    titles = [(site / "notebooks" / f"04_fixed_expertise-{r}.html").read_text() for r in ROBOTS]
+    assert "planar5 (5-DoF planar arm)" in titles[0] and "Panda (7-DoF Franka)" in titles[1]

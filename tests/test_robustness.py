@@ -19,8 +19,8 @@ TINY = robustness.Config(
     change_steps=(0, 5),
     horizon=8,
     settle=5,
-    n_seeds=1,
-    n_draws=2,
+    users=3,
+    n_boot=20,
 )
 
 
@@ -79,26 +79,41 @@ def local(model, task):
     return robustness.run(both(model), task, task.robot.control, TINY)
 
 
-def test_grid_rows_pooled_and_per_draw(local, task):
+def test_grid_rows_per_cell_and_reading(local, task):
     cells = robustness.cells(TINY, task.robot.control)
     assert list(local.columns) == list(robustness.COLUMNS)
     ids = {"sim1.final_error", "sim1.time_ratio", "sim1.gap_narrows", "sim1.entropy_sa"}
     ids |= {"sim2.sa_trapped", "sim2.entropy_escapes", "sim3.entropy_learners"}
     assert set(local.id) == ids
+    # the default cell judges every member, the others the headline member only
     members = len(TINY.assistance)
-    assert len(local) == len(cells) * members * len(ids) * (TINY.n_draws + 1)
-    assert set(local.seed) == {robustness.POOLED, 0, 1}
-    assert set(local.reproduced) <= {"yes", "partly", "no"}
-    verdicts = robustness.verdict_table(local)
-    assert len(verdicts) == len(cells) * members * len(ids)
-    assert verdicts.agree.between(0, TINY.n_draws).all() and (verdicts.draws == TINY.n_draws).all()
-    summary = robustness.summary(verdicts)
-    assert (summary[["yes", "partly", "no"]].sum(axis=1) == len(cells)).all()
+    assert len(local) == len(ids) * (members + len(cells) - 1)
+    assert set(local[local.setting != "default"].assistance) == {"point"}
+    assert set(local.reproduced) <= {"yes", "partly", "no", "undecided"}
+    assert (local.users == TINY.users).all()
+    assert ((local.reproduced == "undecided") == ~local.settled.astype(bool)).all()
+    summary = robustness.summary(local)
+    assert (summary[["yes", "partly", "no", "undecided"]].sum(axis=1) == members + len(cells) - 1).all()
     lines = robustness.describe(summary)
     assert len(lines) == len(ids) and all(line.startswith("planar5 sim") for line in lines)
     fig = robustness.plot(local)
-    assert len(fig.axes) == 2  # one robot x two members
+    assert len(fig.axes) == 1  # one robot
     fig.clf()
+
+
+def test_the_default_cell_from_the_sims_is_the_default_cell_run_again(local, model, task):
+    """Notebook 08 judges its default cell on notebooks 04-06's first look instead of running it:
+    with the same users and settings, that is the same verdicts and numbers."""
+    sims = robustness._sim_configs(TINY, {"pilot": "boltzmann", "pilot_prob": 0.0})
+    control = task.robot.control
+    frames = [m.run(both(model), task, control, c, members=TINY.assistance)[0] for m, c, _ in sims]
+    defaults = robustness.default_frames(TINY, *frames)
+    reused = robustness.run(both(model), task, control, TINY, defaults=defaults)
+    pd.testing.assert_frame_equal(reused, local)
+    with pytest.raises(ConfigError, match="the map's cells need 5"):
+        robustness.default_frames(dataclasses.replace(TINY, users=5), *frames)
+    with pytest.raises(ConfigError, match="lack beta"):
+        robustness.default_frames(dataclasses.replace(TINY, betas=(10.0, 75.0, 1000.0)), *frames)
 
 
 def test_the_grid_is_deterministic(local, model, task):

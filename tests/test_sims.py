@@ -10,8 +10,8 @@ from lasa.errors import ConfigError
 from lasa.sims import sim1, sim2, sim3
 from lasa.sims.common import episodes
 
-ONE = {"n_draws": 1, "assistance": ("point",)}  # one draw, the headline member: the bare sweep
-SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), n_seeds=3, horizon=20, seed=0, methods=("LA", "LA+SA"), **ONE)
+ONE = {"assistance": ("point",)}  # the headline member only: the bare sweep
+SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), users=3, horizon=20, seed=0, methods=("LA", "LA+SA"), **ONE)
 
 
 def test_sim1_frame_columns_and_size(model, task):
@@ -37,7 +37,8 @@ def test_same_seed_gives_identical_csv(model, task, tmp_path):
     [
         ({"betas": (-1.0,)}, "beta"),
         ({"methods": ("LA", "SA")}, "unknown method"),
-        ({"n_seeds": 0}, "n_seeds"),
+        ({"users": 0}, "users"),
+        ({"users": 200}, "must not exceed cap"),
         ({"tolerance": 0.0}, "tolerance"),
     ],
 )
@@ -103,7 +104,7 @@ def both(model):
 
 def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
     frame, traj = sim1.run(
-        both(model), task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), n_seeds=2, horizon=10, **ONE)
+        both(model), task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), users=2, horizon=10, **ONE)
     )
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
     # the entropy rows used the same model here, with LA+SA's alpha: identical episodes
@@ -114,11 +115,11 @@ def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
 
 def test_a_missing_decoder_is_a_clear_error(model, task):
     with pytest.raises(ConfigError, match="need the 'entropy' decoder"):
-        sim1.run(model, task, task.robot.control, sim1.Config(betas=(75.0,), n_seeds=1, horizon=5))
+        sim1.run(model, task, task.robot.control, sim1.Config(betas=(75.0,), users=1, horizon=5))
 
 
 def test_sim2_frame(model, task):
-    cfg = sim2.Config(change_steps=(0, 5), n_seeds=2, settle=10, **ONE)
+    cfg = sim2.Config(change_steps=(0, 5), users=2, settle=10, **ONE)
     frame, traj = sim2.run(both(model), task, task.robot.control, cfg)
     assert set(sim2.COLUMNS) <= set(frame.columns)
     assert len(frame) == 3 * 2 * 2 and traj.states.shape[0] == cfg.horizon + 1 == 16
@@ -126,13 +127,13 @@ def test_sim2_frame(model, task):
 
 
 def test_sim3_frame(model, task):
-    cfg = sim3.Config(n_seeds=2, horizon=10, record_every=5, **ONE)
+    cfg = sim3.Config(users=2, horizon=10, record_every=5, **ONE)
     frame, _ = sim3.run(both(model), task, task.robot.control, cfg)
     assert list(frame.columns) == list(sim3.COLUMNS)
     assert set(frame.learner) == {"fast", "slow"} and set(frame.t) == {0, 5, 10}
     assert len(frame) == 3 * 2 * 2 * 3
     # everyone starts at home: the error at t = 0 is each user's distance from home to s*
-    goal, theta, _ = episodes(model, task, task.robot.control, cfg.n_seeds, cfg.horizon, cfg.seed)
+    goal, theta, _ = episodes(model, task, task.robot.control, cfg.users, cfg.horizon, cfg.seed)
     expected = np.linalg.norm(task.start - task.target(goal, theta), axis=-1) / task.goal_distance
     start = frame[frame.t == 0]
     np.testing.assert_allclose(start.error, expected[start.seed.to_numpy()], rtol=1e-6)
@@ -235,15 +236,13 @@ def test_sim1_claims_have_stable_ids():
 def test_members_and_draws_share_la_and_keep_the_headline_bitwise(model, task):
     """LA runs once (assistance 'none'); the headline member's rows equal a run of it alone."""
     ctl = task.robot.control
-    cfg = sim1.Config(
-        betas=(75.0, 1000.0), n_seeds=2, horizon=15, n_draws=2, assistance=("point", "hindsight")
-    )
+    cfg = sim1.Config(betas=(75.0, 1000.0), users=4, horizon=15, assistance=("point", "hindsight"))
     frame, _ = sim1.run(both(model), task, ctl, cfg)
     la = frame[frame.method == "LA"]
     assert set(la.assistance) == {"none"} and len(la) == 2 * 4
     assert set(frame[frame.method != "LA"].assistance) == {"point", "hindsight"}
     assert len(frame) == (1 + 2 * 2) * 2 * 4
-    np.testing.assert_array_equal(frame.draw, frame.seed // 2)
+    assert (frame.look == 0).all()
     alone, _ = sim1.run(both(model), task, ctl, dataclasses.replace(cfg, assistance=("point",)))
     head = frame[frame.assistance.isin(["none", "point"])].reset_index(drop=True)
     pd.testing.assert_frame_equal(head, alone.reset_index(drop=True))
@@ -253,7 +252,7 @@ def test_members_and_draws_share_la_and_keep_the_headline_bitwise(model, task):
 
 
 def test_a_laggy_pilot_that_always_lags_never_moves_the_stick(model, task):
-    cfg = sim3.Config(n_seeds=3, horizon=12, pilot="laggy", pilot_prob=1.0, methods=("LA",), **ONE)
+    cfg = sim3.Config(users=3, horizon=12, pilot="laggy", pilot_prob=1.0, methods=("LA",), **ONE)
     _, traj = sim3.run(model, task, task.robot.control, cfg)
     assert (traj.z == traj.z[:1]).all()  # every later input repeats the first
     _, boltzmann = sim3.run(model, task, task.robot.control, dataclasses.replace(cfg, pilot_prob=0.0))
@@ -264,3 +263,46 @@ def test_a_laggy_pilot_that_always_lags_never_moves_the_stick(model, task):
 def test_bad_pilot_is_a_clear_error(kw, match):
     with pytest.raises(ConfigError, match=match):
         sim1.Config(**kw)
+
+
+def test_a_later_look_adds_new_users_of_its_own_stream(model, task):
+    ctl = task.robot.control
+    cfg = sim1.Config(
+        betas=(75.0, 1000.0), users=3, block=2, cap=5, horizon=10, assistance=("point", "hindsight")
+    )
+    first, _ = sim1.run(both(model), task, ctl, cfg)
+    later, _ = sim1.run(both(model), task, ctl, cfg, look=1, members=("point",))
+    assert sorted(set(first.seed)) == [0, 1, 2] and sorted(set(later.seed)) == [3, 4]
+    assert (later.look == 1).all() and set(later.assistance) == {"none", "point"}
+    # a look's users do not depend on the looks after it: the first look is the same with a bigger cap
+    again, _ = sim1.run(both(model), task, ctl, dataclasses.replace(cfg, cap=9))
+    pd.testing.assert_frame_equal(first, again)
+
+
+def test_judge_runs_looks_until_settled_or_the_cap(model, task):
+    from lasa.sims.common import judge
+
+    cfg = sim1.Config(
+        betas=(75.0, 1000.0),
+        users=2,
+        block=2,
+        cap=4,
+        horizon=10,
+        n_boot=20,
+        assistance=("point", "hindsight"),
+    )
+    frame, outcome, traj = judge(sim1, both(model), task, task.robot.control, cfg)
+    heads = [c for c in outcome.claims if "@" not in c.id]
+    others = [c for c in outcome.claims if "@" in c.id]
+    assert [c.id for c in heads] == [
+        "sim1.final_error",
+        "sim1.time_ratio",
+        "sim1.gap_narrows",
+        "sim1.entropy_sa",
+    ]
+    assert {c.id.split("@")[1] for c in others} == {"hindsight"} and all(c.n_users == 2 for c in others)
+    n = heads[0].n_users
+    assert n in (2, 4) and all(c.n_users == n for c in heads)
+    assert n == 4 or all(c.settled for c in heads)  # stops early only when every headline verdict is settled
+    assert frame.seed.nunique() == n and traj.states.shape[1] == (frame.look == 0).sum()
+    assert set(frame[frame.look > 0].assistance) <= {"none", "point"}

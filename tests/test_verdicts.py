@@ -1,6 +1,4 @@
-"""lasa.verdicts: the bootstrap interval, agreement across draws, and one row per reading."""
-
-import math
+"""lasa.verdicts: intervals, settled or undecided, the sequential design, one row per reading."""
 
 import numpy as np
 import pandas as pd
@@ -10,50 +8,75 @@ from hypothesis import strategies as st
 
 from lasa.claims import Claim
 from lasa.errors import ConfigError
-from lasa.verdicts import assess, bootstrap_frames, by_member, member_frame, member_of
+from lasa.rules import rule as rule_of
+from lasa.verdicts import (
+    Design,
+    assess,
+    block_seed,
+    block_users,
+    bootstrap_frames,
+    member_frame,
+    member_of,
+    sequential,
+)
+
+TOY = "sim3.entropy_learners"  # a real rule: yes if both gains > 0, partly if one
 
 
-def rule(frame: pd.DataFrame) -> list[Claim]:
-    """A toy claim: 'x is positive on average'; yes if mean > 0.1, partly if > 0, else no."""
-    m = float(frame.x.mean())
+def toy(frame: pd.DataFrame) -> list[Claim]:
+    """The sim3 rule on a toy frame: gain_fast = mean x, gain_slow = mean y."""
+    values = {"gain_fast": float(frame.x.mean()), "gain_slow": float(frame.y.mean())}
     return [
         Claim(
-            id="sim1.toy",
-            claim="x is positive",
-            figure="sim1",
-            paper="x > 0",
-            measured=f"mean x {m:.3f}",
-            reproduced="yes" if m > 0.1 else "partly" if m > 0 else "no",
-            note="rule: toy",
+            id=TOY,
+            claim="toy",
+            figure="sim3",
+            paper="both > 0",
+            measured=f"x {values['gain_fast']:.3f}",
+            reproduced=rule_of(TOY).verdict(values),
+            note="",
             robot=str(frame.robot.iloc[0]),
-            value=m,
+            values=values,
         )
     ]
 
 
-def users(x_per_draw: list[list[float]], member: str = "point") -> pd.DataFrame:
-    rows = []
-    seed = 0
-    for d, xs in enumerate(x_per_draw):
-        for x in xs:
-            rows.append(dict(robot="planar5", seed=seed, draw=d, x=x, assistance=member))
-            seed += 1
-    return pd.DataFrame(rows)
+def users(
+    xs: list[float], ys: list[float] | None = None, member: str = "point", start: int = 0
+) -> pd.DataFrame:
+    ys = [1.0] * len(xs) if ys is None else ys
+    return pd.DataFrame(
+        {
+            "robot": "planar5",
+            "seed": np.arange(start, start + len(xs)),
+            "x": xs,
+            "y": ys,
+            "assistance": member,
+        }
+    )
 
 
-def test_constant_users_give_a_degenerate_interval_and_full_agreement():
-    [c] = assess(rule, users([[0.5, 0.5]] * 5), n_boot=50)
-    assert c.reproduced == "yes" and c.value == 0.5
-    assert c.ci_low == c.ci_high == 0.5 and c.seeds_agree == "5/5"
+def test_constant_users_give_a_degenerate_settled_interval():
+    [c] = assess(toy, users([0.5] * 6), n_boot=50)
+    assert c.reproduced == "yes" and c.settled and c.value == 0.5
+    assert c.ci_low == c.ci_high == 0.5 and c.n_users == 6
+    assert "6 users per point" in c.note and "Undecided" not in c.note
 
 
-def test_agreement_counts_the_draws_whose_verdict_is_the_pooled_one():
-    # pooled mean 0.26 -> yes; draws: 1.0 yes, 0.3 yes, 0.05 partly, -0.05 no, 0.0 no
-    frame = users([[1.0, 1.0], [0.3, 0.3], [0.05, 0.05], [-0.05, -0.05], [0.0, 0.0]])
-    [c] = assess(rule, frame, n_boot=200)
-    assert c.reproduced == "yes" and c.seeds_agree == "2/5"
-    assert c.ci_low <= c.value <= c.ci_high
-    assert c.ci_low >= -0.05 and c.ci_high <= 1.0  # a mean of resampled users stays in their range
+def test_an_interval_across_zero_reads_undecided_with_the_point_verdict():
+    # mean x = 0.1 > 0 (point: yes), but users spread widely on both sides of zero
+    [c] = assess(toy, users([-1.0, 1.2, -0.9, 1.1, -1.0, 1.2]), n_boot=200)
+    assert c.reproduced == "undecided" and not c.settled
+    assert c.ci_low < 0 < c.ci_high
+    assert "gain_fast" in c.note and "reaches 0" in c.note and "read 'yes'" in c.note
+
+
+def test_a_verdict_that_is_not_its_rules_is_an_error():
+    def wrong(frame):
+        return [Claim(**{**toy(frame)[0].__dict__, "reproduced": "no"})]
+
+    with pytest.raises(ConfigError, match="is not its rule's"):
+        assess(wrong, users([0.5] * 3), n_boot=5)
 
 
 def test_bootstrap_keeps_a_users_rows_together_and_relabels_repeats():
@@ -66,46 +89,96 @@ def test_bootstrap_keeps_a_users_rows_together_and_relabels_repeats():
 
 @settings(max_examples=30, deadline=None)
 @given(st.lists(st.floats(-1, 1, allow_nan=False), min_size=4, max_size=30), st.integers(0, 10))
-def test_interval_brackets_the_resampled_range(xs, seed):
-    frame = users([xs])
-    [c] = assess(rule, frame, n_boot=40, seed=seed)
+def test_interval_brackets_the_resampled_range_and_is_seeded(xs, seed):
+    frame = users(xs)
+    [c] = assess(toy, frame, n_boot=40, seed=seed)
     assert min(xs) - 1e-12 <= c.ci_low <= c.ci_high <= max(xs) + 1e-12
-    again = assess(rule, frame, n_boot=40, seed=seed)[0]
-    assert (again.ci_low, again.ci_high) == (c.ci_low, c.ci_high)  # seeded: deterministic
+    again = assess(toy, frame, n_boot=40, seed=seed)[0]
+    assert (again.ci_low, again.ci_high, again.reproduced) == (c.ci_low, c.ci_high, c.reproduced)
+    if c.settled:  # a settled verdict is the rule's at every end of the interval
+        assert rule_of(TOY).verdict({"gain_fast": c.ci_low, "gain_slow": 1.0}) == c.reproduced
+        assert rule_of(TOY).verdict({"gain_fast": c.ci_high, "gain_slow": 1.0}) == c.reproduced
 
 
-def test_by_member_gives_a_headline_and_a_row_per_member():
-    la = users([[0.0]] * 2, member="none")
-    frame = pd.concat([la, users([[0.5]] * 2, "point"), users([[-0.5]] * 2, "grasp_set")])
-    rows = by_member(rule, frame, "point", n_boot=20)
-    assert [(c.id, c.assistance, c.reproduced) for c in rows] == [
-        ("sim1.toy", "point", "yes"),
-        ("sim1.toy@point", "point", "yes"),
-        ("sim1.toy@grasp_set", "grasp_set", "no"),
-    ]
-    assert rows[0].note.startswith("Headline under the default reading (point). The verdict depends")
-    # each member's rows include the shared unassisted ones
-    assert len(member_frame(frame, "grasp_set")) == 4 and member_of(member_frame(frame, "point")) == "point"
+def test_the_design_fixes_its_looks_and_guard():
+    d = Design()
+    assert d.sizes == (60, 90, 120, 150) and d.level == pytest.approx(1 - 0.05 / 4)
+    assert block_users(d, 0) == (0, 60) and block_users(d, 1) == (60, 30) and block_users(d, 3) == (120, 30)
+    assert Design(10, 30, 25).sizes == (10, 25)  # the last block is cut at the cap
+    assert block_seed(7, 0) == 7 and block_seed(7, 1) != block_seed(7, 2) != 7
+    with pytest.raises(ConfigError, match="must not exceed cap"):
+        Design(200, 30, 150)
+    with pytest.raises(ConfigError, match="block must be a positive integer"):
+        Design(60, 0, 150)
 
 
-def test_same_verdict_everywhere_is_said_so():
-    frame = pd.concat([users([[0.5]] * 2, "point"), users([[0.7]] * 2, "hindsight")])
-    head = by_member(rule, frame, "point", n_boot=10)[0]
-    assert "Same verdict under every reading: point yes (2/2), hindsight yes (2/2)" in head.note
+def _runner(xs_by_look: list[list[float]], log: list):
+    """A run_block of toy users: look k's new users have the values xs_by_look[k]."""
+
+    def run(look, members):
+        log.append((look, members))
+        start = sum(len(x) for x in xs_by_look[:look])
+        return pd.concat([users(xs_by_look[look], member=m, start=start) for m in members], ignore_index=True)
+
+    return run
 
 
-def test_a_missing_headline_member_or_mixed_frame_is_an_error():
-    frame = users([[0.5]], "hindsight")
-    with pytest.raises(ConfigError, match="headline member 'point' has no rows"):
-        by_member(rule, frame, "point")
-    mixed = pd.concat([users([[0.5]], "point"), users([[0.5]], "hindsight")])
+def test_sequential_stops_at_the_first_settled_look():
+    log: list = []
+    out = sequential(
+        _runner([[0.5] * 4, [0.5] * 2], log), toy, ("point", "grasp_set"), "point", Design(4, 2, 6), 20
+    )
+    assert log == [(0, ("point", "grasp_set"))]  # settled at once: no more users
+    assert [c.id for c in out.claims] == [TOY, f"{TOY}@grasp_set"]  # no copy of the headline
+    assert out.claims[0].n_users == 4 and out.claims[0].settled and out.claims[0].assistance == "point"
+    assert out.claims[0].note.startswith("Settled at look 1 of 2.")
+    assert list(out.looks.users) == [4]
+
+
+def test_sequential_adds_headline_users_until_the_cap_and_says_undecided():
+    log: list = []
+    looks = [[-1.0, 1.2, -0.9, 1.1], [-1.0, 1.2], [-0.9, 1.0]]
+    out = sequential(_runner(looks, log), toy, ("point", "hindsight"), "point", Design(4, 2, 8), 50)
+    assert log == [
+        (0, ("point", "hindsight")),
+        (1, ("point",)),
+        (2, ("point",)),
+    ]  # later looks: headline only
+    head, other = out.claims
+    assert head.n_users == 8 and head.reproduced == "undecided"
+    assert "Undecided at the cap (8 users)" in head.note
+    assert other.id == f"{TOY}@hindsight" and other.n_users == 4  # the other readings: the first look
+    assert list(out.looks.users) == [4, 6, 8] and out.frame.look.max() == 2
+
+
+def test_a_headline_member_outside_the_members_is_an_error():
+    with pytest.raises(ConfigError, match="is not among the members"):
+        sequential(_runner([[0.5]], []), toy, ("hindsight",), "point", Design(1, 1, 1))
+
+
+def test_member_frames_share_the_unassisted_rows_of_their_own_users():
+    la = users([0.0] * 6, member="none")
+    frame = pd.concat([la, users([0.5] * 6, member="point"), users([-0.5] * 3, member="grasp_set")])
+    assert len(member_frame(frame, "point")) == 12
+    assert len(member_frame(frame, "grasp_set")) == 6  # LA rows of users 0-2 only (paired)
+    assert member_of(member_frame(frame, "point")) == "point"
+    mixed = pd.concat([users([0.5], member="point"), users([0.5], member="hindsight")])
     with pytest.raises(ConfigError, match="mixes assistance members"):
         member_of(mixed)
 
 
-def test_no_finite_values_leave_the_interval_empty():
+def test_no_finite_values_leave_the_interval_unknown_and_undecided():
     def nan_rule(frame):
-        return [c.__class__(**{**c.__dict__, "value": math.nan}) for c in rule(frame)]
+        c = toy(frame)[0]
+        return [
+            Claim(
+                **{
+                    **c.__dict__,
+                    "values": {"gain_fast": float("nan"), "gain_slow": 1.0},
+                    "reproduced": "partly",
+                }
+            )
+        ]
 
-    [c] = assess(nan_rule, users([[0.5, 0.2]]), n_boot=5)
-    assert np.isnan(c.ci_low) and np.isnan(c.ci_high)
+    [c] = assess(nan_rule, users([0.5, 0.2]), n_boot=5)
+    assert np.isnan(c.ci_low) and np.isnan(c.ci_high) and c.reproduced == "undecided"

@@ -1,0 +1,80 @@
+"""lasa.rules: every rule against hand-computed cases, and settledness on boxes of intervals."""
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lasa.errors import ConfigError
+from lasa.rules import RULES, rule
+
+
+@pytest.mark.parametrize(
+    ("cid", "values", "verdict"),
+    [
+        ("sim1.final_error", {"share_lower": 1.0}, "yes"),
+        ("sim1.final_error", {"share_lower": 0.6}, "partly"),
+        ("sim1.final_error", {"share_lower": 0.5}, "no"),  # "more than half"
+        ("sim1.time_ratio", {"ratio_75": 1.45, "ratio_1000": 1.30}, "yes"),
+        ("sim1.time_ratio", {"ratio_75": 1.61, "ratio_1000": 1.30}, "partly"),
+        ("sim1.time_ratio", {"ratio_75": 0.98, "ratio_1000": 1.35}, "no"),
+        ("sim1.gap_narrows", {"time_narrowing": 0.1, "error_narrowing": 0.2}, "yes"),
+        ("sim1.gap_narrows", {"time_narrowing": -0.3, "error_narrowing": 0.2}, "partly"),
+        ("sim1.entropy_sa", {"share_weaker": 0.1}, "no"),
+        ("sim2.sa_trapped", {"success_sa": 0.07, "drop_sa": 0.93}, "yes"),
+        ("sim2.sa_trapped", {"success_sa": 0.6, "drop_sa": 0.3}, "partly"),
+        ("sim2.entropy_escapes", {"success_entropy": 0.97, "margin": 0.9}, "yes"),
+        ("sim2.entropy_escapes", {"success_entropy": 0.7, "margin": 0.1}, "partly"),
+        ("sim3.entropy_learners", {"gain_fast": 0.2, "gain_slow": -0.01}, "partly"),
+        ("sim4.grasp_linear", {"slope": 0.1, "r2": 0.95, "share_below": 1.0}, "yes"),
+        ("sim4.grasp_linear", {"slope": -0.001, "r2": 0.05, "share_below": 1.0}, "partly"),
+        ("sim4.straight_line_linear", {"slope": 0.1, "r2": 0.95, "share_below": 0.8}, "no"),
+        ("sim4.no_map_training_goal", {"slope": 1.1, "r2": 0.99}, "yes"),
+        ("sim4.no_map_training_goal", {"slope": 1.5, "r2": 0.99}, "partly"),
+        ("sim4.no_map_training_goal", {"slope": 1.55, "r2": 0.99}, "no"),
+    ],
+)
+def test_rules_against_hand_computed_cases(cid, values, verdict):
+    assert rule(cid).verdict(values) == verdict
+
+
+def test_a_reading_finds_its_claims_rule_and_an_unknown_claim_is_an_error():
+    assert rule("sim1.time_ratio@grasp_set") is RULES["sim1.time_ratio"]
+    with pytest.raises(ConfigError, match="no rule for claim"):
+        rule("sim9.nothing")
+    with pytest.raises(ConfigError, match="needs"):
+        rule("sim1.time_ratio").verdict({"ratio_75": 1.0})
+
+
+def test_settled_needs_every_interval_clear_of_the_thresholds_that_matter():
+    r = rule("sim1.time_ratio")
+    assert r.settled({"ratio_75": (1.35, 1.55), "ratio_1000": (1.2, 1.4)})  # yes everywhere
+    assert not r.settled({"ratio_75": (1.25, 1.55), "ratio_1000": (1.2, 1.4)})  # 1.30 inside: yes or partly
+    # ratio_75 below 1 decides "no" whatever ratio_1000 does: settled although it spans 1.15
+    assert r.settled({"ratio_75": (0.8, 0.95), "ratio_1000": (1.0, 1.4)})
+    assert r.verdicts_in({"ratio_75": (0.9, 1.1), "ratio_1000": (1.2, 1.4)}) == {"no", "partly"}
+    assert not r.settled({"ratio_75": (math.nan, 1.0), "ratio_1000": (1.2, 1.4)})  # unknown decides nothing
+    share = rule("sim1.final_error")
+    assert share.settled({"share_lower": (1.0, 1.0)})  # an interval at a threshold's value, not across it
+    assert not share.settled({"share_lower": (0.8, 1.0)})
+    assert share.straddled({"share_lower": (0.8, 1.0)}) == ["share_lower [0.8, 1] reaches 1"]
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(sorted(RULES)), st.data())
+def test_every_rule_is_constant_between_its_thresholds(cid, data):
+    """Moving a number without crossing one of its thresholds never changes a verdict:
+    the thresholds named are all the rule reads, which is what makes `settled` sound."""
+    r = RULES[cid]
+    values, moved = {}, {}
+    for q in r.quantities:
+        cuts = sorted({-1e3, *q.thresholds, 1e3})
+        k = data.draw(st.integers(0, len(cuts) - 2))
+        lo, hi = cuts[k], cuts[k + 1]
+        a, b = data.draw(st.floats(0.01, 0.99)), data.draw(st.floats(0.01, 0.99))
+        values[q.name] = lo + a * (hi - lo)
+        moved[q.name] = lo + b * (hi - lo)
+    assert r.verdict(values) == r.verdict(moved)
+    box = {n: (min(values[n], moved[n]), max(values[n], moved[n])) for n in values}
+    assert r.settled(box)
