@@ -32,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -53,6 +54,8 @@ __all__ = [
     "member_of",
     "bootstrap_frames",
     "check_design",
+    "group_means",
+    "resample_counts",
 ]
 
 NO_ASSISTANCE = "none"  # the assistance label of rows without assistance (LA, alpha = 0)
@@ -142,6 +145,46 @@ def bootstrap_frames(
         yield sample
 
 
+def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = "seed") -> np.ndarray:
+    """How often each user is drawn in each of ``n_boot`` resamples, shape (n_boot, users).
+
+    Users are ordered as ``pd.factorize(frame[unit], sort=True)`` orders them, and drawn from
+    the same stream as :func:`bootstrap_frames`: resample r of both is the same set of users.
+    """
+    n = int(frame[unit].nunique())
+    rng = np.random.default_rng(seed)
+    return np.stack([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)])
+
+
+def group_means(
+    frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = "seed"
+) -> dict[tuple[Any, ...], np.ndarray]:
+    """The mean of ``metric`` per group of ``keys`` in every resample, without building them.
+
+    A resample repeats each user's rows as often as ``counts`` says, so a group's mean in it
+    is sum_u c_u S_ug / sum_u c_u N_ug, with S and N each user's sum and count in the group:
+    one matrix product for all resamples (the same numbers as :func:`bootstrap_frames`'s
+    resamples give, up to float rounding).
+
+    Returns:
+        Group label (a tuple of the keys' values) -> its mean in each resample, shape (R,).
+    """
+    users = pd.factorize(frame[unit], sort=True)[0]
+    groups = frame.groupby(keys, sort=True).ngroup().to_numpy()
+    labels = list(frame.groupby(keys, sort=True).groups)
+    n_users, n_groups = counts.shape[1], len(labels)
+    sums, sizes = np.zeros((n_users, n_groups)), np.zeros((n_users, n_groups))
+    np.add.at(sums, (users, groups), frame[metric].to_numpy(dtype=float))
+    np.add.at(sizes, (users, groups), 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        means = (counts @ sums) / (counts @ sizes)
+    return {(k if isinstance(k, tuple) else (k,)): means[:, i] for i, k in enumerate(labels)}
+
+
+# a figure's vectorized bootstrap: (frame, counts) -> claim id -> number name -> values (R,)
+BootValues = Callable[[pd.DataFrame, np.ndarray], dict[str, dict[str, np.ndarray]]]
+
+
 def _fmt(x: float) -> str:
     return f"{x:.3g}" if math.isfinite(x) else "nan"
 
@@ -153,6 +196,7 @@ def assess(
     seed: int = 0,
     unit: str = "seed",
     level: float = 0.95,
+    fast: BootValues | None = None,
 ) -> list[Claim]:
     """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
 
@@ -163,6 +207,9 @@ def assess(
         seed: Seed of the resampling.
         unit: The column naming a user: the resampled unit.
         level: The intervals' level (1 - ALPHA / K under a sequential design).
+        fast: The figure's vectorized bootstrap (its module's ``boot_values``): the same
+            numbers on the same resamples as evaluating every resample, from group means
+            (:func:`group_means`); if None, ``evaluate`` runs on every resample.
 
     Returns:
         ``evaluate(frame)``'s claims with ``ci_low``/``ci_high`` (the interval of the first
@@ -176,11 +223,17 @@ def assess(
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     point = evaluate(frame)
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
-    for sample in bootstrap_frames(frame, n_boot, seed, unit):
-        for c in evaluate(sample):
-            for k, v in c.values.items():
-                if c.id in samples and k in samples[c.id]:
-                    samples[c.id][k].append(v)
+    if fast is not None:
+        for cid, arrays in fast(frame, resample_counts(frame, n_boot, seed, unit)).items():
+            for k, arr in arrays.items():
+                if cid in samples and k in samples[cid]:
+                    samples[cid][k] = [float(x) for x in arr]
+    else:
+        for sample in bootstrap_frames(frame, n_boot, seed, unit):
+            for c in evaluate(sample):
+                for k, v in c.values.items():
+                    if c.id in samples and k in samples[c.id]:
+                        samples[c.id][k].append(v)
     tail = 100.0 * (1.0 - level) / 2.0
     n_users = int(frame[unit].nunique())
     out = []
@@ -195,11 +248,11 @@ def assess(
             bounds = np.percentile(boot, [tail, 100.0 - tail]) if len(boot) else np.full(2, np.nan)
             intervals[q.name] = (float(bounds[0]), float(bounds[1]))
         settled = r.settled(intervals)
-        numbers = "; ".join(
+        text = "; ".join(
             f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
             for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
         )
-        lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {numbers}. "
+        lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
         if not settled:
             lead += (
                 f"Undecided: {'; '.join(r.straddled(intervals)) or 'an interval is unknown'}; "
@@ -268,6 +321,7 @@ def sequential(
     design: Design = Design(),
     n_boot: int = N_BOOT,
     seed: int = 0,
+    fast: BootValues | None = None,
 ) -> Sequential:
     """Add users in blocks until every headline verdict is settled or the cap is reached.
 
@@ -280,6 +334,7 @@ def sequential(
         design: Users per look and the cap (:class:`Design`).
         n_boot: Bootstrap resamples per interval.
         seed: Seed of the resampling.
+        fast: The figure's vectorized bootstrap, see :func:`assess`.
 
     Raises:
         ConfigError: if ``default`` is not among ``members``.
@@ -291,7 +346,7 @@ def sequential(
     for look, size in enumerate(design.sizes):
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
-        head = assess(evaluate, member_frame(frame, default), n_boot, seed, level=design.level)
+        head = assess(evaluate, member_frame(frame, default), n_boot, seed, level=design.level, fast=fast)
         log += [
             {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
             for c in head
@@ -300,7 +355,7 @@ def sequential(
             break
     first = frame[frame.look == 0]
     others = {
-        m: assess(evaluate, member_frame(first, m), n_boot, seed, level=design.level)
+        m: assess(evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast)
         for m in members
         if m != default
     }

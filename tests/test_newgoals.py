@@ -324,3 +324,15 @@ def test_sim4_members_share_batches_without_changing_the_headline(model, task):
     np.testing.assert_array_equal(runs[1].without_map.states, alone_runs[1].without_map.states)
     other = frame[frame.assistance == "grasp_set"]
     assert (other.seed.to_numpy() == head.seed.to_numpy()).all()  # paired users
+
+
+def test_sim4_vectorized_bootstrap_gives_the_resampled_frames_numbers(model, task):
+    from lasa.verdicts import assess
+
+    config = sim4.Config(offsets=(0.08, 0.11, 0.14), users=6, horizon=15, assistance=("point",))
+    frame, _ = sim4.run(model, task, task.robot.control, config)
+    slow = assess(sim4.claims, frame, n_boot=40, seed=1)
+    fast = assess(sim4.claims, frame, n_boot=40, seed=1, fast=sim4.boot_values)
+    for a, b in zip(slow, fast, strict=True):
+        assert (a.id, a.reproduced, a.settled) == (b.id, b.reproduced, b.settled)
+        np.testing.assert_allclose([a.ci_low, a.ci_high], [b.ci_low, b.ci_high], rtol=1e-9, atol=1e-12)

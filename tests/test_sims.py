@@ -306,3 +306,24 @@ def test_judge_runs_looks_until_settled_or_the_cap(model, task):
     assert n == 4 or all(c.settled for c in heads)  # stops early only when every headline verdict is settled
     assert frame.seed.nunique() == n and traj.states.shape[1] == (frame.look == 0).sum()
     assert set(frame[frame.look > 0].assistance) <= {"none", "point"}
+
+
+@pytest.mark.parametrize("name", ["sim1", "sim2", "sim3"])
+def test_the_vectorized_bootstrap_gives_the_resampled_frames_numbers(model, task, name):
+    """boot_values (group means from resample counts) = claims() on each resampled frame."""
+    from lasa.verdicts import assess, member_frame
+
+    module = {"sim1": sim1, "sim2": sim2, "sim3": sim3}[name]
+    small = {
+        "sim1": sim1.Config(betas=(1.0, 75.0, 1000.0), users=6, horizon=25, **ONE),
+        "sim2": sim2.Config(change_steps=(0, 5), users=6, settle=20, **ONE),
+        "sim3": sim3.Config(users=6, horizon=25, **ONE),
+    }[name]
+    frame, _ = module.run(both(model), task, task.robot.control, small)
+    frame = member_frame(sim3.episode_means(frame) if name == "sim3" else frame, "point")
+    slow = assess(module.claims, frame, n_boot=60, seed=3)
+    fast = assess(module.claims, frame, n_boot=60, seed=3, fast=module.boot_values)
+    for a, b in zip(slow, fast, strict=True):
+        assert (a.id, a.reproduced, a.settled) == (b.id, b.reproduced, b.settled)
+        np.testing.assert_allclose([a.ci_low, a.ci_high], [b.ci_low, b.ci_high], rtol=1e-9, atol=1e-12)
+        assert a.note == b.note  # every number's interval, as printed

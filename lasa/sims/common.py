@@ -269,5 +269,6 @@ def judge(
 
     design = Design(config.users, config.block, config.cap)
     members = members_of(control, config.assistance)
-    outcome = sequential(block, module.claims, members, control.assistance, design, config.n_boot)
+    fast = getattr(module, "boot_values", None)
+    outcome = sequential(block, module.claims, members, control.assistance, design, config.n_boot, fast=fast)
     return pd.concat(full, ignore_index=True), outcome, first[0]

@@ -258,7 +258,8 @@ def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Con
     """Every member's claims of one sim in one cell, each with its 95% intervals."""
     parts = []
     for member in cell.members:
-        claims = assess(module.claims, member_frame(frame, member), config.n_boot, config.seed)
+        fast = getattr(module, "boot_values", None)
+        claims = assess(module.claims, member_frame(frame, member), config.n_boot, config.seed, fast=fast)
         parts.append(_rows(claims, cell, member, robot, config))
     return pd.concat(parts, ignore_index=True)
 

@@ -33,9 +33,18 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, member_frame, member_of
+from lasa.verdicts import (
+    N_BOOT,
+    Design,
+    block_seed,
+    block_users,
+    check_design,
+    group_means,
+    member_frame,
+    member_of,
+)
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "plot", "plot_metric"]
+__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "plot_metric"]
 
 NAME = "sim1_fixed_expertise"
 # the contract's columns first, then what the notebook and the claims read
@@ -322,6 +331,37 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     """
     means = _means(frame)
     return [*_sa_claims(frame, means=means), _entropy_claim(frame, means)]
+
+
+def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.verdicts`), at once.
+
+    The same numbers as :func:`claims` on each resample, computed from the group means
+    (:func:`lasa.verdicts.group_means`) instead of a frame per resample.
+    """
+    err = group_means(frame, ["beta", "method"], "final_error", counts)
+    tim = group_means(frame, ["beta", "method"], "time", counts)
+    betas = sorted({b for b, _ in err})
+    methods = {m for _, m in err}
+
+    def lower(m: str) -> np.ndarray:
+        return np.mean([err[(b, m)] < err[(b, "LA")] for b in betas], axis=0)
+
+    r75 = tim[(75.0, "LA")] / tim[(75.0, "LA+SA")]
+    r1000 = tim[(1000.0, "LA")] / tim[(1000.0, "LA+SA")]
+    d75 = err[(75.0, "LA")] - err[(75.0, "LA+SA")]
+    d1000 = err[(1000.0, "LA")] - err[(1000.0, "LA+SA")]
+    out = {
+        "sim1.final_error": {"share_lower": lower("LA+SA")},
+        "sim1.time_ratio": {"ratio_75": r75, "ratio_1000": r1000},
+        "sim1.gap_narrows": {
+            "time_narrowing": np.abs(r75 - 1) - np.abs(r1000 - 1),
+            "error_narrowing": np.abs(d75) - np.abs(d1000),
+        },
+    }
+    if "LA+SA+Entropy" in methods:
+        out["sim1.entropy_sa"] = {"share_weaker": np.minimum(lower("LA+SA"), lower("LA+SA+Entropy"))}
+    return out
 
 
 METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time to reach s* [steps]"}

@@ -34,9 +34,9 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, member_frame
+from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, group_means, member_frame
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "plot", "plot_metric"]
+__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "plot_metric"]
 
 NAME = "sim2_change_of_mind"
 COLUMNS = (
@@ -211,6 +211,19 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             robot=robot,
         ),
     ]
+
+
+def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.verdicts`), at once."""
+    lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
+    rate = group_means(
+        frame.assign(success=frame.success.astype(float)), ["method", "change_step"], "success", counts
+    )
+    sa_lo, sa_hi, en_hi = rate[("LA+SA", lo)], rate[("LA+SA", hi)], rate[("LA+SA+Entropy", hi)]
+    return {
+        "sim2.sa_trapped": {"success_sa": sa_hi, "drop_sa": sa_lo - sa_hi},
+        "sim2.entropy_escapes": {"success_entropy": en_hi, "margin": en_hi - sa_hi},
+    }
 
 
 METRIC_LABELS = {"final_error": "final state error (normalised)", "confidence": "confidence b(g*) at the end"}

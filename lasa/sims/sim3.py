@@ -33,9 +33,20 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, member_frame
+from lasa.verdicts import N_BOOT, Design, block_seed, block_users, check_design, group_means, member_frame
 
-__all__ = ["NAME", "COLUMNS", "LEARNERS", "Config", "run", "claims", "episode_means", "plot", "plot_learner"]
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "LEARNERS",
+    "Config",
+    "run",
+    "claims",
+    "boot_values",
+    "episode_means",
+    "plot",
+    "plot_learner",
+]
 
 NAME = "sim3_learning_users"
 COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error", "assistance", "look")
@@ -179,6 +190,17 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             robot=robot,
         )
     ]
+
+
+def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.verdicts`), at once.
+
+    ``frame`` holds one row per episode (:func:`episode_means`), as the bootstrap does.
+    """
+    mean = group_means(frame, ["learner", "method"], "error", counts)
+    learners = sorted({name for name, _ in mean})
+    gains = {f"gain_{n}": mean[(n, "LA+SA")] - mean[(n, "LA+SA+Entropy")] for n in learners}
+    return {"sim3.entropy_learners": gains}
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:

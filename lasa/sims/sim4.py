@@ -37,7 +37,16 @@ from lasa.sims.common import (
 )
 from lasa.task import CupTask
 from lasa.users import UserPopulation
-from lasa.verdicts import N_BOOT, NO_ASSISTANCE, Design, block_seed, block_users, check_design, member_frame
+from lasa.verdicts import (
+    N_BOOT,
+    NO_ASSISTANCE,
+    Design,
+    block_seed,
+    block_users,
+    check_design,
+    group_means,
+    member_frame,
+)
 
 __all__ = [
     "NAME",
@@ -49,6 +58,7 @@ __all__ = [
     "fit_line",
     "fits",
     "claims",
+    "boot_values",
     "plot",
     "plot_robot",
 ]
@@ -376,6 +386,30 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         )
     )
     return claims
+
+
+def _lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares slope and R^2 of each row of ``ys`` (R, K) against ``x`` (K,)."""
+    dx = x - x.mean()
+    dy = ys - ys.mean(axis=1, keepdims=True)
+    sxy, sxx, syy = dy @ dx, float(dx @ dx), (dy**2).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return sxy / sxx, sxy**2 / (sxx * syy)
+
+
+def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.verdicts`), at once."""
+    means = group_means(frame, ["h", "distance"], "error", counts)
+    dist = np.array(sorted({d for _, d in means}))
+    curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
+    out: dict[str, dict[str, np.ndarray]] = {}
+    for kind in [k for k in ("straight_line", "grasp") if k in curve]:
+        slope, r2 = _lines(dist, curve[kind])
+        share = (curve[kind] < curve["none"]).mean(axis=1)
+        out[f"sim4.{kind}_linear"] = {"slope": slope, "r2": r2, "share_below": share}
+    slope, r2 = _lines(dist, curve["none"])
+    out["sim4.no_map_training_goal"] = {"slope": slope, "r2": r2}
+    return out
 
 
 H_STYLES = {
