@@ -62,6 +62,30 @@ def test_results_hold_every_key(tiny_results):
     assert grid["cells"] == TINY.grid_cells and grid["local_s"] > 0
     assert set(grid["workers"]) == {"1", "2"} and grid["speedup_2_over_1"] > 0
     assert grid["identical"] is True  # the same rows here and on 1 or 2 Dask workers
+    overhead = results["dask_overhead_1_worker"]
+    assert np.isfinite(overhead) and overhead == pytest.approx(grid["workers"]["1"] / grid["local_s"] - 1)
+    assert "speedup_2_over_1" not in results["targets"]  # reported only
+    vs = results["decoder_vs_gemm"]
+    assert vs["users"] == TINY.gemm_users and vs["rows"] == vs["users"] * vs["candidates"]
+    for key in ("decode_numpy", "decode_torch", "gemm_bound", "fraction", "decode_torch_fraction"):
+        assert np.isfinite(vs[key]) and vs[key] > 0, key
+    assert results["decoder_vs_gemm_fraction"] == vs["fraction"]
+    assert vs["fraction"] == pytest.approx(vs["decode_numpy"] / vs["gemm_bound"])
+    assert vs["best_chunk"] in {*TINY.gemm_chunks, vs["rows"]} and vs["best_output_layout"] in {
+        "W U^T",
+        "U W^T",
+    }
+    assert str(vs["best_chunk"]) in vs["gemm_by_chunk"] and vs["threads"] == 1
+    assert set(vs["by_users"]) == {str(b) for b in TINY.batches}
+    for row in vs["by_users"].values():
+        assert all(np.isfinite(row[k]) and row[k] > 0 for k in ("decode_numpy", "gemm_bound", "fraction"))
+    for key in (
+        "decoder_vs_gemm_fraction",
+        "dask_overhead_1_worker",
+        "figures_total_s",
+        "figures_quick_total_s",
+    ):
+        assert results["targets"][key] > 0, key
     figures = results["figures_s"]
     assert set(figures["per_notebook"]) == {"01_demonstrations-planar5"} and figures["total"] > 0
     assert isinstance(results["training_s"], dict)
@@ -80,8 +104,27 @@ def test_parts_on_another_robot(model, task):
     assert bench.step_deadline(control, latency)["rate_hz"] == pytest.approx(1 / control.dt)
     sweep = bench.sweep_throughput(model, task, control, TINY)
     assert set(sweep) == {str(b) for b in TINY.batches}
+    vs = bench.decoder_vs_gemm(model, control, TINY)
+    assert vs["fraction"] > 0 and set(vs["by_users"]) == {str(b) for b in TINY.batches}
     with pytest.raises(ConfigError, match="n_steps"):
         bench.step_latency(model, task, control, 5)
+
+
+def test_gemm_only_computes_the_decoders_products(model):
+    """The bound's work is the decoder's affine layers without activations, in either output layout."""
+    import torch
+
+    layers = [m for m in model.decoder if isinstance(m, torch.nn.Linear)]
+    x = torch.rand(50, layers[0].in_features)
+    with torch.no_grad():
+        expected = x
+        for layer in layers:
+            expected = layer(expected)
+    for chunk in (7, 50, 64):
+        plain = bench.gemm_only(model, 50, chunk, False, x)().clone()
+        transposed = bench.gemm_only(model, 50, chunk, True, x)().clone()
+        torch.testing.assert_close(plain, expected, rtol=1e-5, atol=1e-5)
+        torch.testing.assert_close(transposed.t(), expected, rtol=1e-5, atol=1e-5)
 
 
 def test_read_timings(tmp_path):
