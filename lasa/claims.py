@@ -179,7 +179,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.time_ratio",
         "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
         "time ratio 1.45 and 1.30",
-        "the pull is largest far from the goal, where it adds to the user's input",
+        "near-optimal users reach sooner with the pull, largest far from the goal; "
+        "noisy ones gain no clear time",
         "04_fixed_expertise",
         "What it shows, against the paper",
     ),
@@ -187,7 +188,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.gap_narrows",
         "the gap between LA and LA+SA narrows as the user becomes more rational",
         "45% at beta = 75 -> 30% at beta = 1000",
-        "near-optimal users need the assistance less, but the pull's bias stays",
+        "the time gap grows instead (noisy users gain no time, near-optimal ones do); the error gap narrows",
         "04_fixed_expertise",
         "What it shows, against the paper",
     ),
@@ -274,15 +275,22 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 )
 
 
+def _num(text: object) -> str:
+    try:
+        return f"{float(str(text)):.3g}"
+    except ValueError:
+        return ""
+
+
 def _cell(row: pd.Series | None) -> str:
-    """A robot's cell: verdict, value [CI], N, settled."""
+    """A robot's cell: the verdict, the interval of its first number, N, settled or undecided."""
     if row is None:
         return "—"
-    ci = f" [{row.ci_low}, {row.ci_high}]" if str(row.ci_low) != "" else ""
-    value = str(row.measured).split(";")[0]
-    state = "settled" if str(row.settled) == "yes" else "**undecided**"
-    head = f"**{row.reproduced}**" if row.reproduced != UNDECIDED else "undecided"
-    return f"{head}{ci}, N = {row.n_users}, {state}" if value else head
+    low, high = _num(row.ci_low), _num(row.ci_high)
+    ci = f" [{low}, {high}]" if low and high else ""
+    if str(row.settled) == "yes":
+        return f"**{row.reproduced}**{ci}, N = {row.n_users}, settled"
+    return f"undecided{ci}, N = {row.n_users}"
 
 
 def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = None) -> str:
@@ -296,8 +304,9 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
     Returns:
         Markdown: the claim and the paper's number, then per robot the verdict with the
         interval of the number it rests on, the users per point N and whether it is settled,
-        the readings (``<id>@<reading>`` rows) whose verdict differs, and the mechanism
-        with a link to the notebook that measures it.
+        the readings (``<id>@<reading>`` rows of one reading each; their combinations are in
+        the full table) whose verdict differs, and the mechanism with a link to the notebook
+        that measures it.
     """
     lines = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
@@ -310,7 +319,7 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
             continue
         flips: dict[str, list[str]] = {}
         for (cid, robot), r in rows.items():
-            if cid.startswith(pc.id + "@"):
+            if cid.startswith(pc.id + "@") and "+" not in cid:  # one reading at a time
                 head = rows.get((pc.id, robot))
                 if head is not None and r.reproduced != head.reproduced:
                     flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")

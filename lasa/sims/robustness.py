@@ -467,12 +467,12 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
         ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
         ax.set_yticks(range(len(ids)), ids, fontsize=7)
     handles = [plt.Rectangle((0, 0), 1, 1, color=colours[v]) for v in VERDICTS]
-    fig.legend(handles, VERDICTS, loc="upper right", ncol=len(VERDICTS), frameon=False, fontsize=8)
     n = int(table.users.min()) if len(table) else 0
     fig.suptitle(
-        f"Claims robustness: verdict per reading and setting, >= {n} users per point (95% intervals; "
-        "hatched = undecided; text = the number the verdict rests on)",
+        f"Claims robustness: the verdict per reading and setting, at least {n} users per point\n"
+        "(95% intervals; grey and hatched: undecided; text: the number the verdict rests on)",
         fontsize=9,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.legend(handles, VERDICTS, loc="lower center", ncol=len(VERDICTS), frameon=False, fontsize=8)
     return fig
