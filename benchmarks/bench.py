@@ -666,7 +666,7 @@ def dask_grid(
     from lasa.sims import robustness  # noqa: PLC0415
 
     grid = robustness.Config(
-        n_seeds=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
+        users=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
     )
     cells = robustness.cells(grid, control)[: config.grid_cells]
     shared = robustness.Grid({"base": model, "entropy": model}, task, control, grid)

@@ -58,8 +58,8 @@ def test_defaults_are_the_robots_units():
 def test_from_dict_turns_yaml_lists_into_tuples_and_refuses_non_mappings():
     from lasa.sims import sim1
 
-    cfg = from_dict(sim1.Config, {"betas": [1, 75, 1000], "n_seeds": 2})
-    assert cfg.betas == (1.0, 75.0, 1000.0) and cfg.n_seeds == 2
+    cfg = from_dict(sim1.Config, {"betas": [1, 75, 1000], "users": 2})
+    assert cfg.betas == (1.0, 75.0, 1000.0) and cfg.users == 2
     assert from_dict(sim1.Config, None) == sim1.Config()
     with pytest.raises(ConfigError, match="mapping"):
-        from_dict(sim1.Config, [("n_seeds", 2)])  # type: ignore[arg-type]
+        from_dict(sim1.Config, [("users", 2)])  # type: ignore[arg-type]
