@@ -90,7 +90,12 @@ def __getattr__(name: str) -> Any:
     return value
 
 
-__version__ = "0.1.0"
+try:  # the installed package's version (pyproject.toml), so that it cannot drift from the release
+    from importlib.metadata import version as _version
+
+    __version__ = _version("lasa")
+except Exception:  # running from a source tree that was never installed
+    __version__ = "0.0.0+unknown"
 
 __all__ = [
     "ArtifactError",

@@ -49,6 +49,7 @@ __all__ = [
     "Sequential",
     "assess",
     "block_seed",
+    "block_users",
     "sequential",
     "member_frame",
     "member_of",
