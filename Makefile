@@ -151,8 +151,9 @@ $(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXE
 $(EXEC)/09_convergence-%.ipynb: notebooks/09_convergence.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-# The eating task: scene, demonstrations and the 2-D decoder; then the simulated study.
-$(EXEC)/10_eating_task.ipynb: notebooks/10_eating_task.ipynb $(LASA_SRC) $(CONFIG) | setup
+# The eating task: scene, demonstrations and the 2-D decoder readings (after 02: the property
+# figure holds the cup decoders too); then the simulated study.
+$(EXEC)/10_eating_task.ipynb: notebooks/10_eating_task.ipynb $(EXEC)/02_decoder_training-planar5.ipynb $(EXEC)/02_decoder_training-panda.ipynb $(LASA_SRC) $(CONFIG) | setup
 	$(RUN)
 
 $(EXEC)/11_eating_study.ipynb: notebooks/11_eating_study.ipynb $(EXEC)/10_eating_task.ipynb $(LASA_SRC) $(CONFIG) | setup

@@ -31,7 +31,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
-from lasa.config import ControlConfig, check_range
+from lasa.config import ControlConfig, check_choice, check_range
 from lasa.eating import EatingTask
 from lasa.errors import ArtifactError, ConfigError
 from lasa.io import load_npz, save_npz
@@ -47,6 +47,7 @@ __all__ = [
     "demonstration_summary",
     "collect_eating_demonstrations",
     "EATING_DEMOS",
+    "EATING_READINGS",
 ]
 
 REACH, ADJUST, HOLD, STROKE = 0, 1, 2, 3  # phase labels of a tuple (strokes: the eating task)
@@ -341,15 +342,31 @@ def _dataset(
 EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
 
 
+EATING_READINGS = ("continuous", "home", "transfers")  # how the eating demonstrations are cut
+
+
 def collect_eating_demonstrations(
-    task: EatingTask, control: ControlConfig, config: DemoConfig = EATING_DEMOS
+    task: EatingTask, control: ControlConfig, config: DemoConfig = EATING_DEMOS, reading: str = "continuous"
 ) -> Demonstrations:
     """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
 
-    For every goal and each of ``config.n_theta`` tilts, from each start (home, ``n_starts
-    - 1`` perturbed homes, and the entry of every other goal at a random tilt, so that the
-    moves between bowls of a task are shown; such a move starts from the belief the robot
-    holds after working at that other goal, as in one continuous demonstration of a task):
+    The paper says only that they "guided the robot towards each plate, and then performed
+    cutting, stabbing, and scooping motions at these goals". How a teacher cuts them into
+    demonstrations is a reading (``reading``), and it decides the belief each tuple carries:
+
+    - ``continuous``: for every goal and each of ``config.n_theta`` tilts, from each start
+      (home, ``n_starts - 1`` perturbed homes, and the entry of every other goal at a random
+      tilt, so that the moves between bowls of a task are shown); a move from another goal
+      starts from the belief the robot holds after working there (all but the floor on it),
+      as in one continuous demonstration of a task;
+    - ``home``: the same number of demonstrations, all from home or perturbed homes
+      (``n_starts + G - 2`` of them), each from a uniform belief: no move between goals;
+    - ``transfers``: reach-then-manipulate from home (and ``n_starts - 1`` perturbed
+      homes) with a uniform belief, plus, for every other goal, a separate transfer
+      demonstration from that goal's entry at a random tilt to this goal's entry, which
+      starts from a uniform belief (a new recording) and ends there without manipulating.
+
+    Each manipulation demonstration, from its start:
 
     1. **reach** the stroke's entry s*(g, theta, 0) along a straight joint-space line;
     2. **stroke** through the food to s*(g, theta, 1) and back to the entry;
@@ -377,21 +394,33 @@ def collect_eating_demonstrations(
         down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
+    check_choice("reading", reading, EATING_READINGS)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
+            n_home = config.n_starts + (task.n_goals - 1 if reading == "home" else 0)
             starts = [task.start.copy()]
             starts += [
                 robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
-                for _ in range(config.n_starts - 1)
+                for _ in range(n_home - 1)
             ]
             beliefs_0: list[np.ndarray | None] = [None] * len(starts)
-            for other in range(task.n_goals):
-                if other != g:
-                    starts.append(task.target(other, float(rng.uniform())))
-                    beliefs_0.append(_settled_belief(other, task.n_goals, control.belief_floor))
-            for start, b0 in zip(starts, beliefs_0, strict=True):
+            manipulate = [True] * len(starts)
+            if reading != "home":
+                for other in range(task.n_goals):
+                    if other != g:
+                        starts.append(task.target(other, float(rng.uniform())))
+                        settled = _settled_belief(other, task.n_goals, control.belief_floor)
+                        beliefs_0.append(settled if reading == "continuous" else None)
+                        manipulate.append(reading == "continuous")
+            for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
                 target = task.target(g, theta)
                 segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
+                if not work:  # a separate transfer: the reach, and its hold, only
+                    _append_demo(
+                        rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints, b0
+                    )
+                    demo_id += 1
+                    continue
                 segments += stroke(g, float(theta))
                 current = float(theta)
                 for _ in range(config.n_adjust):

@@ -57,7 +57,9 @@ ARTIFACTS: dict[str, tuple[str, str]] = {
     "decoder_entropy": ("models/decoder_{robot}_entropy.pt", "03_entropy_ablation"),
     # The eating study's data and 2-D decoder (Sec. VI; the Panda only).
     "eating_demos": ("data/eating_demos_{robot}.npz", "10_eating_task"),
-    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),
+    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),  # the headline reading
+    "eating_reading_demos": ("data/eating_demos_{robot}_{reading}.npz", "10_eating_task"),
+    "eating_reading_decoder": ("models/eating_decoder_{robot}_{reading}.pt", "10_eating_task"),
 }
 
 
@@ -78,11 +80,17 @@ class Paths:
         """The run's folders; relative ones are under the repository root."""
         return cls(resolve(build_dir), resolve(figures_dir))
 
-    def artifact(self, name: str, robot: str) -> Path:
-        """The path of artifact ``name`` (a key of :data:`ARTIFACTS`) for ``robot``."""
+    def artifact(self, name: str, robot: str, **fields: str) -> Path:
+        """The path of artifact ``name`` (a key of :data:`ARTIFACTS`) for ``robot``.
+
+        ``fields`` fill the rest of its pattern (``reading`` for the eating readings).
+        """
         if name not in ARTIFACTS:
             raise ConfigError(f"unknown artifact {name!r}; known: {sorted(ARTIFACTS)}")
-        return self.build / ARTIFACTS[name][0].format(robot=robot)
+        try:
+            return self.build / ARTIFACTS[name][0].format(robot=robot, **fields)
+        except KeyError as exc:
+            raise ConfigError(f"artifact {name!r} needs the field {exc}") from exc
 
     @staticmethod
     def make_hint(name: str, robot: str) -> str:

@@ -79,6 +79,8 @@ __all__ = [
     "Cohort",
     "Episodes",
     "williams_square",
+    "tip_motion",
+    "progress_gain",
     "draw_cohort",
     "tip_frames",
     "waypoint_reached",
@@ -282,6 +284,44 @@ def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip(np.einsum("...i,...i->...", a, b), -1.0, 1.0))
 
 
+def tip_motion(
+    jp: np.ndarray, jr: np.ndarray, axis: np.ndarray, dq: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The tip's displacement and new direction for joint steps ``dq`` (A, K, n), to first order.
+
+    Args:
+        jp, jr: Translational and rotational Jacobians, (A, 3, n).
+        axis: The fork's direction now, (A, 3).
+        dq: Candidate joint steps, (A, K, n) [rad].
+
+    Returns:
+        Displacements (A, K, 3) [m] and unit directions (A, K, 3).
+    """
+    dp = np.einsum("aij,akj->aki", jp, dq)
+    rot = np.einsum("aij,akj->aki", jr, dq)
+    return dp, _normalise(axis[:, None, :] + np.cross(rot, axis[:, None, :]))
+
+
+def progress_gain(
+    pos: np.ndarray,
+    axis: np.ndarray,
+    dp: np.ndarray,
+    new_dir: np.ndarray,
+    p_star: np.ndarray,
+    d_star: np.ndarray,
+    rotation_weight: float,
+) -> np.ndarray:
+    """How much each candidate lowers a participant's cost to the waypoint, (A, K) [m].
+
+    The cost of a tip pose is its distance to the waypoint plus ``rotation_weight`` times
+    the angle between its direction and the waypoint's (:class:`ParticipantConfig`).
+    """
+    c_now = np.linalg.norm(pos - p_star, axis=1) + rotation_weight * _angle(axis, d_star)
+    c_new = np.linalg.norm(pos[:, None, :] + dp - p_star[:, None, :], axis=2)
+    c_new = c_new + rotation_weight * _angle(new_dir, d_star[:, None, :])
+    return c_now[:, None] - c_new
+
+
 def waypoint_reached(
     tip: np.ndarray,
     direction: np.ndarray,
@@ -317,6 +357,8 @@ class Episodes:
         end: The step each episode ended (its Total Time in steps; the horizon if unfinished), (E,).
         completed: Whether it finished within the horizon, (E,).
         dt: The control period [s].
+        belief: The robot's belief over the goals at each step, (T+1, E, G) (None: not logged).
+        waypoint: The waypoint each episode was working towards when it ended, (E,) (None: not logged).
     """
 
     participant: np.ndarray
@@ -333,6 +375,8 @@ class Episodes:
     end: np.ndarray
     completed: np.ndarray
     dt: float
+    belief: np.ndarray | None = None
+    waypoint: np.ndarray | None = None
 
     def active(self) -> np.ndarray:
         """(T, E): whether each episode was still running at each step."""
@@ -348,6 +392,7 @@ def simulate(
     config: StudyConfig = StudyConfig(),
     seed: int = 0,
     progress: bool = True,
+    interfaces: tuple[str, ...] = ("R", "LA"),
 ) -> Episodes:
     """Run every participant through both tasks under every condition, all episodes in one batch.
 
@@ -361,15 +406,19 @@ def simulate(
         seed: Seed of the participants' choices; episode (i, condition, task) draws from its
             own stream, so participant i's episodes do not depend on the cohort's size.
         progress: Show a progress bar.
+        interfaces: The control interfaces whose conditions run (``("LA",)``: only LA and
+            LA+SA, for another reading of the decoder; Retargeting does not use it).
     """
     check_decoder(decoder, task)
+    if not interfaces or not set(interfaces) <= {"R", "LA"}:
+        raise ConfigError(f"interfaces must be a non-empty subset of ('R', 'LA'), got {interfaces!r}")
     if decoder.z_dim != 2:
         raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
     members = tuple(config.members)
     robot, dt, pc = task.robot, control.dt, config.participant
     # arms: the unassisted conditions once, each assisted one under every member
-    arms = [("R", NO_ASSISTANCE), ("LA", NO_ASSISTANCE)]
-    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA")]
+    arms = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
+    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
     n_a, n_t = len(arms), len(TASK_NAMES)
     # episodes: participant-major, then arm, then task
     part = np.repeat(np.arange(len(cohort)), n_a * n_t)
@@ -416,6 +465,7 @@ def simulate(
     states = np.empty((horizon + 1, n_e, n))
     tip, direction = np.empty((horizon + 1, n_e, 3)), np.empty((horizon + 1, n_e, 3))
     phase = np.zeros((horizon + 1, n_e), dtype=int)
+    beliefs = np.empty((horizon + 1, n_e, task.n_goals))
     idle = np.zeros((horizon, n_e), dtype=bool)
     switch = np.zeros((horizon, n_e), dtype=bool)
     s = np.broadcast_to(task.start, (n_e, n)).copy()
@@ -429,7 +479,7 @@ def simulate(
     bar = tqdm(total=horizon, desc=f"study: {len(cohort)} participants, {n_e} episodes", disable=not progress)
     for t in range(horizon + 1):
         pos, axis, jp, jr = tip_frames(robot, data, s)
-        states[t], tip[t], direction[t] = s, pos, axis
+        states[t], tip[t], direction[t], beliefs[t] = s, pos, axis, belief(log_b)
         # a waypoint reached: on to the next one, or the task is done
         here = wp_pos[tsk, w]
         reached = running & waypoint_reached(pos, axis, here, wp_dir[tsk, w], config)
@@ -441,12 +491,11 @@ def simulate(
         phase[t] = wp_phase[tsk, w]
         if t == horizon or not running.any():
             states[t + 1 :], tip[t + 1 :], direction[t + 1 :] = s, pos, axis
-            phase[t + 1 :] = phase[t]
+            beliefs[t + 1 :], phase[t + 1 :] = beliefs[t], phase[t]
             break
         idx = np.flatnonzero(running)
         p_star, d_star = wp_pos[tsk[idx], w[idx]], wp_dir[tsk[idx], w[idx]]
         p_i, a_i = pos[idx], axis[idx]
-        c_now = np.linalg.norm(p_i - p_star, axis=1) + pc.rotation_weight * _angle(a_i, d_star)
         b = belief(log_b[idx])
         # predicted tip motion of every candidate: (A, M*K, 3) each
         dp = np.zeros((len(idx), n_m * n_k, 3))
@@ -455,17 +504,12 @@ def simulate(
         phi = np.zeros((len(idx), n_k, n))
         if la.any():
             phi[la] = decode_candidates(decoder, grid, s[idx[la]], b[la])
-            dq = dt * phi[la]
-            dp[la, :n_k] = np.einsum("aij,akj->aki", jp[idx[la]], dq)
-            rot = np.einsum("aij,akj->aki", jr[idx[la]], dq)
-            new_dir[la, :n_k] = _normalise(a_i[la, None, :] + np.cross(rot, a_i[la, None, :]))
+            dp[la, :n_k], new_dir[la, :n_k] = tip_motion(jp[idx[la]], jr[idx[la]], a_i[la], dt * phi[la])
         if (~la).any():
             tw = r_twist.reshape(n_m * n_k, 6)
             dp[~la] = dt * tw[None, :, :3]
             new_dir[~la] = _normalise(a_i[~la, None, :] + dt * np.cross(tw[None, :, 3:], a_i[~la, None, :]))
-        c_new = np.linalg.norm(p_i[:, None, :] + dp - p_star[:, None, :], axis=2)
-        c_new = c_new + pc.rotation_weight * _angle(new_dir, d_star[:, None, :])
-        gain = (c_now[:, None] - c_new) / unit
+        gain = progress_gain(p_i, a_i, dp, new_dir, p_star, d_star, pc.rotation_weight) / unit
         # which candidates exist: LA the K stick positions; R every (mode, z) except other modes' rest
         valid = np.zeros_like(gain, dtype=bool)
         valid[la, :n_k] = True
@@ -522,6 +566,8 @@ def simulate(
         end=end,
         completed=end < horizon,
         dt=dt,
+        belief=beliefs,
+        waypoint=w,
     )
 
 

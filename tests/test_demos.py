@@ -72,3 +72,48 @@ def test_missing_and_corrupt_datasets_name_the_fix(tmp_path):
 def test_bad_config_is_a_clear_error(field, value):
     with pytest.raises(ConfigError, match=field):
         DemoConfig(**{field: value})
+
+
+@pytest.fixture(scope="module")
+def eating_readings():
+    from lasa.demos import EATING_READINGS, collect_eating_demonstrations
+    from lasa.eating import make_eating_task
+
+    task = make_eating_task()
+    config = DemoConfig(n_theta=2, n_starts=1, n_adjust=1, n_perturb=0)
+    control = task.robot.control
+    return task, {r: collect_eating_demonstrations(task, control, config, r) for r in EATING_READINGS}
+
+
+def _firsts(demos):
+    return np.r_[0, np.flatnonzero(np.diff(demos.demo)) + 1]
+
+
+def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readings):
+    from lasa.demos import ADJUST, REACH, STROKE
+
+    task, readings = eating_readings
+    g = task.n_goals
+    uniform = np.full(g, 1.0 / g)
+    counts = {r: int(d.demo.max() + 1) for r, d in readings.items()}
+    # 4 goals x 2 tilts x (home + 3 other goals) demonstrations, in every reading
+    assert counts == {"continuous": 32, "home": 32, "transfers": 32}
+    for reading, demos in readings.items():
+        first = _firsts(demos)
+        starts, beliefs = demos.states[first], demos.beliefs[first]
+        from_home = np.all(np.isclose(starts, task.start), axis=1)
+        if reading == "home":  # home or a perturbed home (never another goal's pose), uniform belief
+            assert np.allclose(beliefs, uniform)
+            entries = [task.target(o, t) for o in range(g) for t in (0.0, 1.0)]
+            assert not any(np.allclose(s, e) for s in starts for e in entries)
+        elif reading == "continuous":  # a move from another goal starts confident in it
+            assert np.allclose(beliefs[from_home], uniform) and beliefs[~from_home].max(axis=1).min() > 0.9
+        else:  # transfers: every demonstration starts uniform; those from another goal only reach
+            assert np.allclose(beliefs, uniform)
+            for d in np.unique(demos.demo[~np.isin(demos.demo, demos.demo[first][from_home])]):
+                phases = set(demos.phase[demos.demo == d])
+                assert REACH in phases and not phases & {ADJUST, STROKE}
+    with pytest.raises(ConfigError, match="reading"):
+        from lasa.demos import collect_eating_demonstrations
+
+        collect_eating_demonstrations(task, task.robot.control, DemoConfig(n_theta=2), "sideways")

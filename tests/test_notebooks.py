@@ -292,7 +292,39 @@ def test_sim4_outputs(executed):
     assert (fig / "sim4_new_goals.png").stat().st_size > 10_000
 
 
+def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
+    from lasa import latent_property
+    from lasa.sims import eating_task
+
+    fig = executed / "figures"
+    frame = pd.read_csv(fig / "latent_property.csv")
+    assert list(frame.columns) == list(latent_property.COLUMNS)
+    assert set(frame.source) == {"cups-planar5", "cups-panda", "eating"}
+    readings = eating_task.reading_names(eating_task.Config().readings)
+    assert set(frame[frame.task == "eating"].decoder) == set(readings)
+    table = latent_property.summary(frame)
+    n_inputs = latent_property.PropertyConfig().n_inputs
+    counts = frame.groupby(["source", "decoder", "context", "goal"]).size()
+    assert (counts == n_inputs).all()
+    assert set(table[table.task == "eating"].goal) == {"rice", "middle", "icing", "plate"}
+    assert set(table[table.task == "cups"].goal) == {"left", "right"}
+    assert table.stay_share.between(0, 1).all() and (table.theta_range >= 0).all()
+    # the checkpoint the teleop kit loads is the reading the property's rule picks
+    import torch
+
+    models = executed / "build" / "models"
+    head = latent_property.choose(table[table.task == "eating"])
+    saved = torch.load(models / "eating_decoder_panda.pt", weights_only=True)
+    mine = torch.load(models / f"eating_decoder_panda_{head}.pt", weights_only=True)
+    assert saved["extra"]["reading"] == head
+    assert all(torch.equal(v, mine["state_dict"][k]) for k, v in saved["state_dict"].items())
+    for name in readings:
+        assert (models / f"eating_decoder_panda_{name}.pt").is_file()
+    assert (fig / "latent_property.png").stat().st_size > 10_000
+
+
 def test_study_outputs(executed):
+    from lasa import latent_property
     from lasa.sims import eating_task, study
 
     fig = executed / "figures"
@@ -304,7 +336,9 @@ def test_study_outputs(executed):
     assert list(latent.columns) == list(eating_task.COLUMNS) and set(latent.belief) == set(
         eating_task.BELIEFS
     )
-    episodes = n * (2 + 2 * len(members)) * 2  # participants x arms x tasks
+    readings = eating_task.reading_names(eating_task.Config().readings)
+    # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member
+    episodes = n * (2 + 2 * len(members) + 2 * (len(readings) - 1)) * 2  # participants x arms x tasks
     for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):
         frame = pd.read_csv(fig / f"{spec.NAME}.csv")
         assert list(frame.columns) == list(spec.COLUMNS)
@@ -328,7 +362,13 @@ def test_study_outputs(executed):
         "study.h3",
     }  # < 10: no cohort
     others = {i + ("+" if "@" in i else "@") + m for i in ids for m in members[1:]}
-    assert set(rows.id) == ids | others
+    prop = pd.read_csv(fig / "latent_property.csv")
+    headline = latent_property.choose(latent_property.summary(prop[prop.task == "eating"]))
+    decoders = {f"study.{h}@{d}" for h in ("h1", "h2", "h3") for d in readings if d != headline}
+    assert set(rows.id) == ids | others | decoders
+    time_la = time[time.condition.str.startswith("LA")]
+    assert set(time_la.decoder) == set(readings)
+    assert set(time[time.condition.str.startswith("R")].decoder) == {"none"}
     assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= {"yes", "partly", "no", "undecided"}
     assert ((rows.reproduced == "undecided") == (rows.settled == "no")).all()
     assert (rows.n_users.astype(int) == settings["n_participants"]).all()

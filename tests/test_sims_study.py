@@ -123,3 +123,74 @@ def test_a_slower_condition_with_the_same_distance_is_told_apart():
     assert v["study.h1"] == "no" and v["study.h1@mean_distance"] == "undecided"
     res = {c.id: c for c in rows}
     assert res["study.h1"].value > 0 and abs(res["study.h1@mean_distance"].value) < 0.01
+
+
+def with_decoders(base: dict[str, pd.DataFrame], other: dict[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
+    """The headline's tables (decoder ``head``) plus another reading's LA rows (decoder ``other``)."""
+    out = {}
+    for key in base:
+        head = base[key].assign(
+            decoder=np.where(base[key].condition.str.startswith("LA"), "head", NO_ASSISTANCE)
+        )
+        o = other[key]
+        o = o[o.condition.str.startswith("LA") & o.assistance.isin([NO_ASSISTANCE, MEMBERS[0]])]
+        out[key] = pd.concat([head, o.assign(decoder="other")], ignore_index=True)
+    return out
+
+
+def test_another_decoder_reading_is_judged_on_its_own_la_rows():
+    good = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
+    bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
+    data = with_decoders(good, bad)
+    rows, analyses = study.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    v = verdicts(rows)
+    # the headline decoder keeps every reading; the other reading gets the paper's measures only
+    assert v["study.h3"] == "yes" and v["study.h2"] == "yes"
+    assert v["study.h3@other"] == "no" and v["study.h2@other"] == "no"
+    assert v["study.h3@other+cohort"] == "no"
+    assert "study.h1@mean_distance+other" not in v and "study.h1@other+grasp_set" not in v
+    assert {"study.h1@other", "study.h1@other+cohort"} <= set(v)
+    assert ("hindsight", 10, "other") in analyses and ("hindsight", 10) in analyses
+    # the other reading's LA+SA mean is its own, the Retargeting rows are shared
+    assert (
+        analyses[("hindsight", 10, "other")]["means"].total_time["LA+SA"]
+        > analyses[("hindsight", 10)]["means"].total_time["LA+SA"]
+    )
+    assert (
+        analyses[("hindsight", 10, "other")]["means"].total_time["R"]
+        == analyses[("hindsight", 10)]["means"].total_time["R"]
+    )
+    assert (
+        len(study.for_member(data["time"], "hindsight", 10, "other")) == 10 * 4 * 2
+    )  # 4 conditions x 2 tasks
+
+
+def test_switch_share_and_completion_by_hand():
+    time = pd.DataFrame(
+        [
+            {
+                "participant": p,
+                "condition": c,
+                "assistance": a,
+                "task": t,
+                "mode_switches": m,
+                "total_time": tt,
+                "completed": done,
+            }
+            for p, c, a, t, m, tt, done in (
+                (0, "R", NO_ASSISTANCE, "Entree", 10, 10.0, True),
+                (0, "R", NO_ASSISTANCE, "Dessert", 30, 30.0, True),
+                (1, "R", NO_ASSISTANCE, "Entree", 20, 10.0, True),
+                (1, "R", NO_ASSISTANCE, "Dessert", 0, 10.0, False),
+                (0, "LA", NO_ASSISTANCE, "Entree", 0, 10.0, False),
+                (1, "LA", NO_ASSISTANCE, "Entree", 0, 10.0, True),
+            )
+        ]
+    )
+    share = study.switch_share(time, dt=0.1).set_index("condition")
+    # participant 0: 40 switches x 0.1 s / 40 s = 0.1; participant 1: 2 s / 20 s = 0.1
+    assert list(share.index) == ["R"] and share.loc["R", "switch_share"] == pytest.approx(0.1)
+    assert share.loc["R", "herlant_2016"] == 0.174
+    done = study.completion(time).set_index("condition")
+    assert done.loc["R", "finished"] == 0.75 and done.loc["LA", "finished"] == 0.5
+    assert done.loc["R", "episodes"] == 4

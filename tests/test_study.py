@@ -178,3 +178,38 @@ def test_bad_settings_are_errors(eating):
         simulate(
             eating, OneAxis(), draw_cohort(1), eating.robot.control, StudyConfig(horizon=2), progress=False
         )
+
+
+def test_an_la_only_run_repeats_the_full_runs_la_episodes(eating, small_study):
+    """Another decoder reading runs LA and LA+SA only; with the same decoder, the full run's episodes."""
+    cohort = draw_cohort(2, seed=1)
+    config = StudyConfig(horizon=40, members=("hindsight",))
+    la = simulate(
+        eating,
+        LinearDecoder(),
+        cohort,
+        eating.robot.control,
+        config,
+        seed=2,
+        progress=False,
+        interfaces=("LA",),
+    )
+    assert set(la.condition) == {"LA", "LA+SA"}
+    full = [
+        (p, c, a, t)
+        for p, c, a, t in zip(
+            small_study.participant,
+            small_study.condition,
+            small_study.assistance,
+            small_study.task,
+            strict=True,
+        )
+    ]
+    for e, key in enumerate(zip(la.participant, la.condition, la.assistance, la.task, strict=True)):
+        f = full.index(key)
+        assert la.end[e] == small_study.end[f]
+        np.testing.assert_allclose(la.states[:, e], small_study.states[:, f])
+    assert la.belief.shape == la.states.shape[:2] + (eating.n_goals,)
+    assert np.allclose(la.belief.sum(axis=-1), 1.0)
+    with pytest.raises(ConfigError, match="interfaces"):
+        simulate(eating, LinearDecoder(), cohort, eating.robot.control, config, progress=False, interfaces=())

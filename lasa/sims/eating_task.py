@@ -11,6 +11,16 @@ the fork tilts, for the eight full deflections of the stick, when the robot is u
 which goal the user wants (uniform belief) and when it is confident in that bowl. That
 is the paper's central picture: near the goal, the same input changes meaning, from
 "which bowl" to "how to eat from it".
+
+**Readings of the study's decoder.** The paper does not say how its demonstrations were
+cut or whether the study's decoder had the entropy term. Each reading of the
+demonstrations (:data:`lasa.demos.EATING_READINGS`) trains a base decoder; each base is
+then fine-tuned for the same steps with lambda = 0 and with the lambda that notebook 03's
+rule (:func:`lasa.entropy.choose_lambda`) picks from a sweep on the ``continuous``
+reading's base (one sweep, not three: each lambda > 0 run costs about a minute here), so
+that the two entropy readings of a base differ in the term only. The study's headline is
+the reading that :func:`lasa.latent_property.choose` picks, by the property alone, before
+any participant runs (:func:`train_readings`).
 """
 
 from __future__ import annotations
@@ -24,15 +34,34 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
-from lasa.config import ControlConfig, check_choice
-from lasa.decoder import ActionDecoder
-from lasa.demos import EATING_DEMOS, DemoConfig
+from lasa import latent_property
+from lasa.config import ControlConfig, check_choice, to_dict
+from lasa.decoder import ActionDecoder, LatentActionModel, save_checkpoint
+from lasa.demos import (
+    EATING_DEMOS,
+    EATING_READINGS,
+    DemoConfig,
+    collect_eating_demonstrations,
+    save_demonstrations,
+)
 from lasa.eating import GOALS, EatingTask
 from lasa.errors import ConfigError
+from lasa.paths import Paths
+from lasa.sims import entropy_ablation
 from lasa.study import tip_frames
-from lasa.train import TrainConfig
+from lasa.train import TrainConfig, train_decoder
 
-__all__ = ["NAME", "COLUMNS", "Config", "BELIEFS", "directions", "plot"]
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "Config",
+    "BELIEFS",
+    "Readings",
+    "reading_names",
+    "train_readings",
+    "directions",
+    "plot",
+]
 
 NAME = "eating_latent"
 COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
@@ -54,13 +83,25 @@ class Config:
     depth: int = 3  # hidden layers [-]
     seed: int = 0  # seed of the demonstrations and of training [-]
     goal: str = "middle"  # the bowl the figure looks at [-]
+    readings: tuple[str, ...] = EATING_READINGS  # demonstration readings trained [-]
+    lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, on the continuous base [-]
+    sweep_steps: int = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
 
     def __post_init__(self) -> None:
         check_choice("goal", self.goal, GOALS)
-        for name in ("n_theta", "n_starts", "steps", "hidden", "depth"):
+        for name in ("n_theta", "n_starts", "steps", "hidden", "depth", "sweep_steps"):
             value = getattr(self, name)
             if int(value) != value or value < 1:
                 raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        object.__setattr__(self, "readings", tuple(self.readings))
+        object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
+        if not self.readings:
+            raise ConfigError("readings must name at least one of " + ", ".join(EATING_READINGS))
+        for name in self.readings:
+            check_choice("reading", name, EATING_READINGS)
+        if "continuous" not in self.readings:
+            raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
+        entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
 
     def demos(self) -> DemoConfig:
         """The demonstrations' settings."""
@@ -76,6 +117,116 @@ class Config:
     def training(self) -> TrainConfig:
         """The training settings: the cup decoders' recipe with a 2-D latent."""
         return TrainConfig(steps=self.steps, hidden=self.hidden, depth=self.depth, z_dim=2, seed=self.seed)
+
+
+def reading_names(readings: tuple[str, ...]) -> list[str]:
+    """The decoder readings: each demonstration reading with lambda = 0, then with the entropy term."""
+    return [name for r in readings for name in (r, f"{r}_entropy")]
+
+
+@dataclasses.dataclass(frozen=True)
+class Readings:
+    """The trained readings of the study's decoder and the choice among them.
+
+    Attributes:
+        models: Decoder per reading name (:func:`reading_names`).
+        sweep: Notebook 03's sweep on the continuous base (one row per lambda).
+        chosen_lambda: The lambda its rule picked.
+        demos: Demonstration tuples (clean, noisy copies) and minutes of motion per demo reading.
+        property: :func:`lasa.latent_property.measure` rows of every reading.
+        headline: The reading the property's rule picks.
+    """
+
+    models: dict[str, LatentActionModel]
+    sweep: pd.DataFrame
+    chosen_lambda: float
+    demos: pd.DataFrame
+    property: pd.DataFrame
+    headline: str
+
+
+def train_readings(
+    task: EatingTask,
+    control: ControlConfig,
+    config: Config,
+    paths: Paths,
+    prop: latent_property.PropertyConfig = latent_property.PropertyConfig(),
+    progress: bool = True,
+) -> Readings:
+    """Train every reading, measure its property, choose the headline by the property alone.
+
+    Saves each reading's demonstrations and decoder (artifacts ``eating_reading_demos``
+    and ``eating_reading_decoder``), and the headline's as ``eating_decoder``, the one
+    the study's LA conditions and the teleop kit load first.
+    """
+    robot = task.robot.name
+    sets = task.belief_targets(control.likelihood)
+    train = config.training()
+    sweep_config = entropy_ablation.Config(
+        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=config.seed
+    )
+    bases, datasets, demo_rows = {}, {}, []
+    for reading in config.readings:
+        demos = collect_eating_demonstrations(task, control, config.demos(), reading=reading)
+        save_demonstrations(demos, paths.artifact("eating_reading_demos", robot, reading=reading))
+        clean = demos.clean()
+        demo_rows.append(
+            {
+                "reading": reading,
+                "demonstrations": int(clean.demo.max() + 1),
+                "steps": len(clean),
+                "minutes": len(clean) * control.dt / 60,
+                "tuples": len(demos),
+            }
+        )
+        datasets[reading] = demos
+        bases[reading], _ = train_decoder(demos, control, train, progress=progress)
+    sweep = entropy_ablation.run_sweep(
+        bases["continuous"], train, datasets["continuous"], task, control, sweep_config, progress=progress
+    )
+    lam = sweep.chosen
+    models: dict[str, LatentActionModel] = {}
+    fines: dict[str, TrainConfig] = {}
+    for reading in config.readings:
+        for name, weight in ((reading, 0.0), (f"{reading}_entropy", lam)):
+            if reading == "continuous":
+                models[name] = sweep.models[weight]
+                fine = sweep.configs[weight]
+            else:
+                fine = dataclasses.replace(
+                    train, steps=config.sweep_steps, entropy_lambda=weight, seed=config.seed
+                )
+                models[name], _ = train_decoder(
+                    datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=progress
+                )
+            fines[name] = fine
+            save_checkpoint(
+                models[name],
+                paths.artifact("eating_reading_decoder", robot, reading=name),
+                train=to_dict(fine),
+                control=to_dict(control),
+                demos=to_dict(config.demos()),
+                reading=name,
+            )
+    frame = pd.concat(
+        [
+            latent_property.measure(
+                task, m, control, prop, source="eating", task_name="eating", decoder_name=n
+            )
+            for n, m in models.items()
+        ],
+        ignore_index=True,
+    )
+    headline = latent_property.choose(latent_property.summary(frame))
+    save_checkpoint(
+        models[headline],
+        paths.artifact("eating_decoder", robot),
+        train=to_dict(fines[headline]),
+        control=to_dict(control),
+        demos=to_dict(config.demos()),
+        reading=headline,
+    )
+    return Readings(models, sweep.table, float(lam), pd.DataFrame(demo_rows), frame, headline)
 
 
 def directions(

@@ -28,7 +28,8 @@ __all__ = ["FigureModule", "publish", "save_figure"]
 
 class FigureModule(Protocol):
     """What :func:`publish` needs of a figure's module (see :mod:`lasa.sims`); an optional
-    ``DPI`` sets the PNG's resolution (150 if absent)."""
+    ``DPI`` sets the PNG's resolution (150 if absent), an optional ``KEY`` the column whose
+    values one run's rows replace (``robot`` if absent)."""
 
     NAME: str
     COLUMNS: tuple[str, ...]
@@ -69,7 +70,8 @@ def publish(
     if missing:
         raise ConfigError(f"{module.NAME} rows lack column(s) {missing}")
     with locked(paths.figures):
-        csv = update_csv(paths.figure(f"{module.NAME}.csv"), frame[list(module.COLUMNS)])
+        key = str(getattr(module, "KEY", "robot"))  # the column whose values a run replaces
+        csv = update_csv(paths.figure(f"{module.NAME}.csv"), frame[list(module.COLUMNS)], key=key)
         # Draw from the file, not from the merged frame: the robot that publishes last has
         # its rows in full precision in memory and the other's as rounded in the CSV, so
         # the figure would depend on which robot finished first. From the file, it is a

@@ -49,9 +49,10 @@ A verdict is settled when the 95% t-interval of its effect excludes zero, else `
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import matplotlib.pyplot as plt
+import mujoco
 import numpy as np
 import pandas as pd
 import seaborn as sns
@@ -62,19 +63,25 @@ from lasa import stats
 from lasa.claims import Claim
 from lasa.config import ASSISTANCE, ControlConfig, check_choice, from_dict
 from lasa.decoder import ActionDecoder
-from lasa.eating import EatingTask
+from lasa.eating import GOALS, TASKS, EatingTask, fork_frame, waypoints
 from lasa.errors import ConfigError
+from lasa.rollout import decode_candidates
 from lasa.rules import UNDECIDED, rule
 from lasa.study import (
     CONDITIONS,
     NO_ASSISTANCE,
+    TASK_NAMES,
     Episodes,
     ParticipantConfig,
     StudyConfig,
     draw_cohort,
     measures,
+    progress_gain,
     simulate,
+    tip_frames,
+    tip_motion,
 )
+from lasa.users import latent_grid
 
 __all__ = [
     "Config",
@@ -85,6 +92,10 @@ __all__ = [
     "PAPER_N",
     "run",
     "for_member",
+    "completion",
+    "switch_share",
+    "stuck",
+    "HERLANT_SHARE",
     "analyse",
     "claims",
     "plot_goal_error",
@@ -93,6 +104,21 @@ __all__ = [
 ]
 
 PAPER_N = 10  # the paper's participants
+HERLANT_SHARE = 0.174  # mode switching's share of execution time, JACO + joystick (Herlant et al. 2016) [-]
+STUCK_COLUMNS = (
+    "participant",
+    "condition",
+    "assistance",
+    "task",
+    "phase",
+    "goal",
+    "distance_cm",
+    "angle_deg",
+    "belief_goal",
+    "believed",
+    "best_progress",
+    "inputs_progressing",
+)
 PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
 
 
@@ -137,20 +163,165 @@ class FigureSpec:
 
 
 def run(
-    task: EatingTask, decoder: ActionDecoder, control: ControlConfig, config: Config, progress: bool = True
-) -> tuple[Episodes, dict[str, pd.DataFrame]]:
-    """Simulate the cohort and measure it: the episodes and the three tidy tables."""
+    task: EatingTask,
+    decoders: Mapping[str, ActionDecoder],
+    control: ControlConfig,
+    config: Config,
+    progress: bool = True,
+) -> tuple[dict[str, Episodes], dict[str, pd.DataFrame]]:
+    """Simulate the cohort and measure it: the episodes per decoder reading and the three tidy tables.
+
+    The first of ``decoders`` is the headline: every condition under every member. Each
+    other reading runs LA and LA+SA only, under the headline member (Retargeting does not
+    use the decoder: its episodes are the headline run's, the same participants and random
+    streams). The tables' ``decoder`` column names the reading of each LA row, and is
+    ``none`` for Retargeting.
+    """
+    if not decoders:
+        raise ConfigError("run needs at least one decoder (the headline first)")
     cohort = draw_cohort(config.n_participants, config.study().participant, config.seed)
-    episodes = simulate(task, decoder, cohort, control, config.study(), seed=config.seed, progress=progress)
-    return episodes, measures(task, episodes)
+    episodes: dict[str, Episodes] = {}
+    parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
+    for i, (name, decoder) in enumerate(decoders.items()):
+        settings = (
+            config.study() if i == 0 else dataclasses.replace(config.study(), members=config.members[:1])
+        )
+        interfaces = ("R", "LA") if i == 0 else ("LA",)
+        episodes[name] = simulate(
+            task,
+            decoder,
+            cohort,
+            control,
+            settings,
+            seed=config.seed,
+            progress=progress,
+            interfaces=interfaces,
+        )
+        for key, frame in measures(task, episodes[name]).items():
+            la = frame.condition.str.startswith("LA")
+            parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE)))
+    return episodes, {key: pd.concat(frames, ignore_index=True) for key, frames in parts.items()}
 
 
-def for_member(frame: pd.DataFrame, member: str, n: int | None = None) -> pd.DataFrame:
-    """The rows of one SA reading (the unassisted conditions included), for the first ``n`` participants."""
+def for_member(
+    frame: pd.DataFrame, member: str, n: int | None = None, decoder: str | None = None
+) -> pd.DataFrame:
+    """The rows of one SA reading (the unassisted conditions included), for the first ``n`` participants.
+
+    With ``decoder``, the LA rows are that decoder reading's (a frame without a ``decoder``
+    column holds one reading).
+    """
     rows = frame[(frame.assistance == member) | (frame.assistance == NO_ASSISTANCE)]
+    if decoder is not None and "decoder" in rows.columns:
+        rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
     if n is not None:
         rows = rows[rows.participant < n]
     return rows.reset_index(drop=True)
+
+
+def completion(time: pd.DataFrame) -> pd.DataFrame:
+    """Share of episodes finished within the horizon, per decoder reading, SA member and condition."""
+    keys = [k for k in ("decoder", "assistance", "condition") if k in time.columns]
+    return (
+        time.groupby(keys, sort=False)
+        .agg(
+            episodes=("completed", "size"), finished=("completed", "mean"), total_time=("total_time", "mean")
+        )
+        .reset_index()
+    )
+
+
+def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.DataFrame:
+    """Retargeting's mode-switch share of execution time, per condition and SA member.
+
+    Each participant's time spent pressing the mode button (one control step, ``dt``, per
+    switch) over their Total Time, summed over both tasks; the mean over participants and
+    its 95% t-interval. Herlant, Holladay & Srinivasa (HRI 2016) measured 17.4% for
+    able-bodied users of a JACO arm with a joystick.
+    """
+    rows = time[time.condition.isin(["R", "R+SA"])]
+    if n is not None:
+        rows = rows[rows.participant < n]
+    out = []
+    for (cond, member), part in rows.groupby(["condition", "assistance"], sort=False):
+        per = part.groupby("participant")[["mode_switches", "total_time"]].sum()
+        share = per.mode_switches * dt / per.total_time
+        sem = float(sps.sem(share)) if len(share) > 1 else np.nan
+        ci = (
+            (share.mean(),) * 2
+            if sem == 0
+            else sps.t.interval(0.95, len(share) - 1, loc=share.mean(), scale=sem)
+        )
+        out.append(
+            {
+                "condition": cond,
+                "assistance": member,
+                "participants": len(share),
+                "switch_share": float(share.mean()),
+                "ci_low": float(ci[0]),
+                "ci_high": float(ci[1]),
+                "switches_per_task": float(part.mode_switches.mean()),
+                "herlant_2016": HERLANT_SHARE,
+            }
+        )
+    return pd.DataFrame(out)
+
+
+def stuck(
+    task: EatingTask,
+    episodes: Episodes,
+    decoder: ActionDecoder,
+    config: Config,
+) -> pd.DataFrame:
+    """Why the unfinished LA episodes did not finish: where they were, and what the decoder offered there.
+
+    One row per unfinished LA episode: the phase and goal of the waypoint it was working
+    towards, the tip's distance to it [cm] and the angle to its direction [deg] at the
+    horizon, the belief in that goal, the goal the belief favoured, and, at that final
+    state and belief, the best progress any of the participant's stick inputs makes towards
+    the waypoint (in best-step units; the participant rests below the idle threshold, 0.1)
+    and the share of inputs that make any progress.
+    """
+    if episodes.belief is None or episodes.waypoint is None:
+        raise ConfigError("stuck needs simulated episodes (with beliefs and waypoints logged)")
+    settings = config.study()
+    pc = settings.participant
+    la = np.char.startswith(episodes.condition.astype(str), "LA") & ~episodes.completed
+    idx = np.flatnonzero(la)
+    if not len(idx):
+        return pd.DataFrame(columns=STUCK_COLUMNS)
+    robot, dt = task.robot, episodes.dt
+    plans = {name: waypoints(name) for name in TASK_NAMES}
+    wps = [plans[str(episodes.task[e])][int(episodes.waypoint[e])] for e in idx]
+    frames = [fork_frame(robot, wp.goal, wp.theta, wp.depth) for wp in wps]
+    p_star = np.stack([f[0] for f in frames])
+    d_star = np.stack([f[1][:, 2] for f in frames])
+    s = episodes.states[-1, idx]
+    b = episodes.belief[-1, idx]
+    data = mujoco.MjData(robot.model)
+    pos, axis, jp, jr = tip_frames(robot, data, s)
+    grid = latent_grid(settings.n_z, 2)
+    phi = decode_candidates(decoder, grid, s, b)
+    dp, new_dir = tip_motion(jp, jr, axis, dt * phi)
+    unit = dt * settings.retarget.linear_speed
+    gain = progress_gain(pos, axis, dp, new_dir, p_star, d_star, pc.rotation_weight) / unit
+    goal_names = np.asarray(GOALS)
+    return pd.DataFrame(
+        {
+            "participant": episodes.participant[idx],
+            "condition": episodes.condition[idx],
+            "assistance": episodes.assistance[idx],
+            "task": episodes.task[idx],
+            "phase": [TASKS[str(episodes.task[e])][wp.phase].name for e, wp in zip(idx, wps, strict=True)],
+            "goal": [GOALS[wp.goal] for wp in wps],
+            "distance_cm": 100 * np.linalg.norm(pos - p_star, axis=1),
+            "angle_deg": np.degrees(np.arccos(np.clip(np.einsum("ai,ai->a", axis, d_star), -1, 1))),
+            "belief_goal": b[np.arange(len(idx)), [wp.goal for wp in wps]],
+            "believed": goal_names[b.argmax(axis=1)],
+            "best_progress": gain.max(axis=1),
+            "inputs_progressing": (gain > 0).mean(axis=1),
+        }
+    )
 
 
 def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int]:
@@ -168,11 +339,13 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
     return float((a - b).mean()), float(ci.low), float(ci.high), float(res.pvalue), int(len(a))
 
 
-def analyse(frames: dict[str, pd.DataFrame], member: str, n: int | None = None) -> dict[str, object]:
-    """Every test the claims rest on, for one SA reading and the first ``n`` participants."""
-    err = for_member(frames["goal_error"], member, n)
-    time = for_member(frames["time"], member, n)
-    align = for_member(frames["alignment"], member, n)
+def analyse(
+    frames: dict[str, pd.DataFrame], member: str, n: int | None = None, decoder: str | None = None
+) -> dict[str, object]:
+    """Every test the claims rest on, for one SA reading, decoder reading and the first ``n`` participants."""
+    err = for_member(frames["goal_error"], member, n, decoder)
+    time = for_member(frames["time"], member, n, decoder)
+    align = for_member(frames["alignment"], member, n, decoder)
     out: dict[str, object] = {
         "n": int(err.participant.nunique()),
         "h1_within": stats.sa_effect_within(err, "goal_error"),
@@ -301,43 +474,65 @@ _KEYS = {
 }
 
 
-def claim_id(key: str, member_index: int, member: str, cohort: bool) -> str:
+def claim_id(key: str, member_index: int, member: str, cohort: bool, decoder: str | None = None) -> str:
     """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
 
-    The paper's reading is its measure, the headline member (hindsight, index 0) and its 10
-    participants; every other reading names what differs, joined by ``+``:
-    ``study.h1@mean_distance+grasp_set+cohort``.
+    The paper's reading is its measure, the headline decoder, the headline member
+    (hindsight, index 0) and its 10 participants; every other reading names what differs,
+    joined by ``+``: ``study.h1@mean_distance+grasp_set+cohort``, ``study.h3@home_entropy``
+    (``decoder``: a decoder reading other than the headline).
     """
     base, measure = _KEYS[key]
-    parts = [p for p in (measure, None if member_index == 0 else member, "cohort" if cohort else None) if p]
+    parts = [
+        p
+        for p in (measure, decoder, None if member_index == 0 else member, "cohort" if cohort else None)
+        if p
+    ]
     return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
 
+DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder reading (the paper's measures)
+
+
 def claims(
-    frames: dict[str, pd.DataFrame], members: tuple[str, ...], n_total: int
-) -> tuple[list[Claim], dict[tuple[str, int], dict[str, object]]]:
-    """The claims rows under every reading (measure, member, 10 participants or the cohort).
+    frames: dict[str, pd.DataFrame], members: tuple[str, ...], n_total: int, decoders: tuple[str, ...] = ()
+) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+    """The claims rows under every reading (measure, member, decoder, 10 participants or the cohort).
+
+    ``decoders`` names the decoder readings in the frames' ``decoder`` column, the headline
+    first (empty: the frames hold one reading). The headline decoder is judged under every
+    measure and member; each other decoder reading under the paper's measures
+    (:data:`DECODER_KEYS`) and the headline member. ``analyses`` is keyed ``(member, n)``
+    for the headline decoder and ``(member, n, decoder)`` for the others.
 
     A verdict is settled when the 95% t-interval of its effect lies on one side of zero
     (:data:`lasa.rules.RULES`), which is the test's own significance at p < .05; then it is
     the tests' verdict (yes / partly / no, the rules of this module's docstring), otherwise
     ``undecided``: a study of that size cannot tell.
     """
-    analyses: dict[tuple[str, int], dict[str, object]] = {}
+    analyses: dict[tuple, dict[str, object]] = {}
     rows: list[Claim] = []
-    for m_i, member in enumerate(members):
+    head = decoders[0] if decoders else None
+    runs = [(m_i, member, head) for m_i, member in enumerate(members)]
+    runs += [(0, members[0], d) for d in decoders[1:]]
+    for m_i, member, decoder in runs:
         sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
+        other = decoder if decoder != head else None
         for n, cohort in sizes:
-            result = analyse(frames, member, n)
-            analyses[(member, n)] = result
+            result = analyse(frames, member, n, decoder)
+            analyses[(member, n) if other is None else (member, n, other)] = result
             for key, (verdict, value, low, high, measured) in _verdicts(result).items():
-                cid = claim_id(key, m_i, member, cohort)
+                if other is not None and key not in DECODER_KEYS:
+                    continue
+                cid = claim_id(key, m_i, member, cohort, other)
                 r = rule(cid)
                 settled = r.settled({"effect": (low, high)})
                 claim, paper = CLAIM_TEXT[key]
                 interval = f"95% t-interval of the effect [{low:.3g}, {high:.3g}]"
                 note = (
-                    f"{result['n']} simulated participants; SA = {member}; {interval}"
+                    f"{result['n']} simulated participants; SA = {member}; "
+                    + (f"decoder = {decoder}; " if decoder else "")
+                    + interval
                     + ("" if settled else f", which straddles 0; the tests read {verdict!r}")
                     + f". Rule: {r.text}."
                 )
@@ -383,10 +578,10 @@ def claims(
 CI = {"errorbar": ("ci", 95), "seed": 0}
 
 
-def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
+def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants)."""
     sns.set_theme(style="whitegrid")
-    data = for_member(frame, member)
+    data = for_member(frame, member, decoder=decoder)
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     sns.barplot(
         data=data,
@@ -415,14 +610,17 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         alpha=0.5,
     )
     ax.set_ylabel("Goal Error [m s]")
-    ax.set_title(f"Goal Error ({data.participant.nunique()} simulated participants; SA = {member})")
+    ax.set_title(
+        f"Goal Error ({data.participant.nunique()} simulated participants; SA = {member}"
+        + (f"; decoder = {decoder})" if decoder else ")")
+    )
     return fig
 
 
-def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
+def plot_time(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI."""
     sns.set_theme(style="whitegrid")
-    data = for_member(frame, member)
+    data = for_member(frame, member, decoder=decoder)
     fig, axes = plt.subplots(1, 2, figsize=(9, 4.2), sharey=True, layout="constrained")
     for ax, task in zip(axes, ("Entree", "Dessert"), strict=True):
         part = data[data.task == task]
@@ -449,14 +647,17 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         )
         ax.set_title(f"{task}: total (solid) and idle (light)")
         ax.set_ylabel("time [s]")
-    fig.suptitle(f"{data.participant.nunique()} simulated participants; SA = {member}")
+    fig.suptitle(
+        f"{data.participant.nunique()} simulated participants; SA = {member}"
+        + (f"; decoder = {decoder}" if decoder else "")
+    )
     return fig
 
 
-def plot_alignment(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
+def plot_alignment(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
     """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them)."""
     sns.set_theme(style="whitegrid")
-    data = for_member(frame, member)
+    data = for_member(frame, member, decoder=decoder)
     data = data[(data.task == "Dessert") & data.phase.isin(["stab", "scoop", "dip"])]
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     sns.pointplot(
@@ -472,7 +673,11 @@ def plot_alignment(frame: pd.DataFrame, member: str = "hindsight") -> Figure:
         ax=ax,
     )
     ax.set_ylabel("Preference Alignment (d · d*)")
-    ax.set_title(f"Dessert: alignment with each phase's preference (SA = {member})")
+    ax.set_title(
+        f"Dessert: alignment with each phase's preference (SA = {member}"
+        + (f"; decoder = {decoder})" if decoder else ")"),
+        fontsize=10,
+    )
     return fig
 
 
@@ -483,6 +688,7 @@ GOAL_ERROR = FigureSpec(
         "participant",
         "condition",
         "assistance",
+        "decoder",
         "task",
         "order",
         "goal_error",
@@ -498,6 +704,7 @@ TIME = FigureSpec(
         "participant",
         "condition",
         "assistance",
+        "decoder",
         "task",
         "order",
         "total_time",
@@ -509,6 +716,17 @@ TIME = FigureSpec(
 )
 ALIGNMENT = FigureSpec(
     "study_alignment",
-    ("robot", "participant", "condition", "assistance", "task", "phase", "preference", "alignment", "steps"),
+    (
+        "robot",
+        "participant",
+        "condition",
+        "assistance",
+        "decoder",
+        "task",
+        "phase",
+        "preference",
+        "alignment",
+        "steps",
+    ),
     plot_alignment,
 )
