@@ -11,7 +11,12 @@ phase), each with its figure:
 
 The assisted conditions run under each member of ``Config.members`` (hindsight
 optimisation, the paper's study, first: the headline), the unassisted ones once
-(``assistance`` is ``none`` for them). The statistics are :mod:`lasa.stats`'s.
+(``assistance`` is ``none`` for them). The LA conditions run under every decoder reading of
+notebook 10 (:func:`run`; the headline, chosen there by the property alone, first), and the
+tables' ``decoder`` column says which. The statistics are :mod:`lasa.stats`'s. Beside the
+claims: :func:`completion` (episodes finished within the horizon), :func:`stuck` (where the
+unfinished LA episodes were, and what the decoder offered there) and :func:`switch_share`
+(Retargeting's mode-switch share of time, against Herlant et al. 2016's 17.4%).
 
 **The claims and their rules.** They follow the paper's own tests and significance
 level (p < .05), in the direction the paper reports; they were written after pilot runs
@@ -42,7 +47,9 @@ the whole cohort, under each member.
   *partly* if LA+SA has the lowest mean Total Time but not all six are, *no* otherwise.
 
 Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
-optimisation, 10 participants), and ``study.<claim>@<reading>`` each other (:func:`claim_id`).
+optimisation, 10 participants, the headline decoder), and ``study.<claim>@<reading>`` each other
+(:func:`claim_id`); every other decoder reading is judged on H1-H3 under the paper's measures and
+hindsight optimisation.
 A verdict is settled when the 95% t-interval of its effect excludes zero, else ``undecided``.
 """
 
