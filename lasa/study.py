@@ -417,7 +417,7 @@ def simulate(
     members = tuple(config.members)
     robot, dt, pc = task.robot, control.dt, config.participant
     # arms: the unassisted conditions once, each assisted one under every member
-    arms = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
+    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
     arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
     n_a, n_t = len(arms), len(TASK_NAMES)
     # episodes: participant-major, then arm, then task
