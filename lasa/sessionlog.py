@@ -103,14 +103,22 @@ class SessionWriter:
         return self.csv
 
 
-def read_session(path: str | os.PathLike[str]) -> tuple[pd.DataFrame, dict[str, Any]]:
+def read_session(
+    path: str | os.PathLike[str], allow_damaged: bool = False
+) -> tuple[pd.DataFrame, dict[str, Any]]:
     """A session's steps and sidecar, from any of its files or its stem.
 
     A session whose rows are still in ``.csv.part`` (it crashed) is read from there and
     reported with status ``interrupted``, never as complete.
 
+    A log is **damaged** when a cell does not parse as a number, when a row has the wrong
+    number of fields, or when a session that ended (``complete`` or ``interrupted``) holds
+    another number of rows than its sidecar's ``steps``. A damaged log is an error, in one
+    line that says what is wrong; with ``allow_damaged`` it is read anyway (the rows that
+    parse) and the sidecar gains ``damaged``, the reason.
+
     Raises:
-        ArtifactError: if the session's sidecar or rows are missing.
+        ArtifactError: if the session's sidecar or rows are missing, or the log is damaged.
     """
     p = Path(path)
     stem = p.name
@@ -122,13 +130,41 @@ def read_session(path: str | os.PathLike[str]) -> tuple[pd.DataFrame, dict[str, 
     if not sidecar.is_file():
         raise ArtifactError(f"no session sidecar {sidecar}")
     meta = json.loads(sidecar.read_text())
+    ended = meta.get("status") in STATUS[1:]
     rows = folder / f"{stem}.csv"
     if not rows.is_file():
         rows = folder / f"{stem}.csv.part"
-        meta["status"] = "interrupted"
+        meta["status"], ended = "interrupted", False
     if not rows.is_file():
         raise ArtifactError(f"session {stem} has no rows in {folder}")
     if meta.get("status") == "running":
         meta["status"] = "interrupted"
-    frame = pd.read_csv(rows, dtype=np.float64)
+    frame, problem = _parse_rows(rows)
+    if problem is None and ended and int(meta.get("steps", -1)) != len(frame):
+        problem = f"its sidecar records {meta.get('steps')} steps, the log holds {len(frame)} rows"
+    if problem is not None:
+        if not allow_damaged:
+            raise ArtifactError(f"session {stem} is damaged: {problem}; nothing was analysed")
+        meta["damaged"] = problem
     return frame, meta
+
+
+def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
+    """The rows as floats, and the first problem found (None for a sound log)."""
+    try:
+        raw = pd.read_csv(rows, dtype=str, keep_default_na=False)
+    except pd.errors.ParserError as exc:  # a row with another number of fields
+        detail = str(exc).strip().splitlines()[-1]
+        raw = pd.read_csv(rows, dtype=str, keep_default_na=False, on_bad_lines="skip")
+        return _floats(raw), f"a row has the wrong number of fields ({detail})"
+    numbers = _floats(raw)
+    bad = numbers.isna() & ~raw.apply(lambda c: c.str.lower().isin(["nan", "-nan"]))
+    if bad.to_numpy().any():
+        row, col = np.argwhere(bad.to_numpy())[0]
+        value = raw.iat[row, col]
+        return numbers, f"row {row + 1}, column {raw.columns[col]!r} holds {value!r}, not a number"
+    return numbers, None
+
+
+def _floats(raw: pd.DataFrame) -> pd.DataFrame:
+    return raw.apply(lambda c: pd.to_numeric(c, errors="coerce")).astype(np.float64)

@@ -108,7 +108,10 @@ def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
 
 
 def load_sessions(
-    folder: str | os.PathLike[str], task: object, include_interrupted: bool = False
+    folder: str | os.PathLike[str],
+    task: object,
+    include_interrupted: bool = False,
+    include_damaged: bool = False,
 ) -> Episodes:
     """The eating-task sessions in ``folder`` as :class:`lasa.study.Episodes`.
 
@@ -118,9 +121,12 @@ def load_sessions(
             fork's pose from the logged states.
         include_interrupted: Keep sessions that did not end normally (they count as not
             completed); by default they are left out.
+        include_damaged: Analyse a damaged log's rows anyway (a cell that does not parse,
+            or fewer or more rows than its sidecar records); by default a damaged log is an
+            error and nothing is analysed.
 
     Raises:
-        ArtifactError: if the folder holds no eating-task session.
+        ArtifactError: if the folder holds no eating-task session, or a damaged one.
     """
     import mujoco
 
@@ -131,7 +137,7 @@ def load_sessions(
     sidecars = sorted(Path(folder).glob("*.json"))
     logs = []
     for sidecar in sidecars:
-        frame, meta = read_session(sidecar)
+        frame, meta = read_session(sidecar, allow_damaged=include_damaged)
         if meta.get("task") not in ("Entree", "Dessert") or meta.get("condition") not in CONDITIONS:
             continue
         if meta["status"] != "complete" and not include_interrupted:

@@ -420,16 +420,18 @@ def new_session(station: Station, folder: str | Path, stem: str | None = None) -
     return SessionWriter(folder, stem, station.meta(), station.robot.xml(), station.columns())
 
 
-def replay(session: str | Path, mp4: str | Path | None = None) -> dict[str, Any]:
+def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
     """Re-run a logged session from its inputs and compare its states with the log.
 
     Returns:
-        ``{"steps", "max_state_difference", "exact", "status"}``; the MP4's path if rendered.
+        ``{"steps", "max_state_difference", "exact", "status"}``; the MP4's path if rendered;
+        ``damaged`` (the reason) when a damaged log was replayed with ``allow_damaged``.
 
     Raises:
-        ArtifactError: if the decoder on disk is not the one the session used.
+        ArtifactError: if the decoder on disk is not the one the session used, or the log is
+            damaged (:func:`lasa.sessionlog.read_session`) and ``allow_damaged`` is not set.
     """
-    frame, meta = read_session(session)
+    frame, meta = read_session(session, allow_damaged=allow_damaged)
     config = SessionConfig(**{k: meta[k] for k in ("robot", "task", "condition", "participant", "build_dir")})
     station = Station(config)
     if meta.get("decoder_sha256") and station.decoder_path is not None:
@@ -452,6 +454,8 @@ def replay(session: str | Path, mp4: str | Path | None = None) -> dict[str, Any]
         "exact": bool(np.array_equal(replayed, logged)),
         "status": meta["status"],
     }
+    if "damaged" in meta:
+        out["damaged"] = meta["damaged"]
     if mp4 is not None:
         from lasa.video import label_frames, render_states, write_video
 

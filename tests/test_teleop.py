@@ -275,3 +275,63 @@ def test_no_display_is_a_clear_error_and_leaves_no_session(build, tmp_path, monk
     assert main(args) == 2
     assert "no display" in capsys.readouterr().err
     assert not (tmp_path / "s").exists()
+
+
+@pytest.fixture()
+def logged(build, tmp_path):
+    """A complete 40-step session on disk."""
+    st = station(build, "LA")
+    writer = new_session(st, tmp_path)
+    run_session(st, ScriptedDevice(script(40)), writer, 40, realtime=False)
+    return writer
+
+
+def test_a_truncated_log_is_damaged_and_never_complete(logged):
+    from lasa.errors import ArtifactError
+
+    lines = logged.csv.read_text().splitlines()
+    logged.csv.write_text("\n".join(lines[:10]) + "\n")  # the header and 9 of 40 rows
+    with pytest.raises(
+        ArtifactError, match=r"damaged: its sidecar records 40 steps, the log holds 9 rows"
+    ) as err:
+        replay(logged.csv)
+    assert "\n" not in str(err.value)
+    result = replay(logged.csv, allow_damaged=True)  # asked for: replayed, and said so
+    assert result["steps"] == 9 and "40 steps" in result["damaged"]
+
+
+def test_a_corrupt_cell_names_its_row_and_column(logged):
+    from lasa.errors import ArtifactError
+
+    lines = logged.csv.read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[3] = "x"
+    lines[5] = ",".join(cells)
+    logged.csv.write_text("\n".join(lines) + "\n")
+    column = lines[0].split(",")[3]
+    with pytest.raises(ArtifactError, match=rf"row 5, column '{column}' holds 'x', not a number"):
+        read_session(logged.csv)
+    frame, meta = read_session(logged.csv, allow_damaged=True)
+    assert np.isnan(frame.iloc[4, 3]) and "not a number" in meta["damaged"]
+
+
+def test_a_row_with_missing_fields_is_damaged(logged):
+    from lasa.errors import ArtifactError
+
+    lines = logged.csv.read_text().splitlines()
+    lines[7] = lines[7] + ",1.0"  # one field too many
+    logged.csv.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ArtifactError, match="wrong number of fields"):
+        read_session(logged.csv)
+
+
+def test_load_sessions_analyses_nothing_from_a_damaged_log(logged):
+    from lasa.errors import ArtifactError
+    from lasa.studykit import load_sessions
+
+    lines = logged.csv.read_text().splitlines()
+    logged.csv.write_text("\n".join(lines[:-3]) + "\n")
+    with pytest.raises(ArtifactError, match="damaged"):
+        load_sessions(logged.folder, make_eating_task())
+    episodes = load_sessions(logged.folder, make_eating_task(), include_damaged=True)
+    assert int(episodes.end[0]) == 37
