@@ -21,3 +21,18 @@ class ArtifactError(LasaError, FileNotFoundError):
 
 class IKError(LasaError, RuntimeError):
     """Inverse kinematics did not reach a grasp pose within tolerance."""
+
+
+class NotebookError(LasaError, RuntimeError):
+    """A notebook stopped on an exception; the message is its cause and where the partial run is.
+
+    Attributes:
+        ename: The exception's class name inside the notebook (e.g. ``ConfigError``).
+        evalue: Its message.
+        partial: The executed notebook up to the failing cell.
+    """
+
+    def __init__(self, notebook: str, ename: str, evalue: str, partial: str) -> None:
+        self.ename, self.evalue, self.partial = ename, evalue, partial
+        cause = evalue.strip().splitlines()[-1] if evalue.strip() else "(no message)"
+        super().__init__(f"{notebook} failed: {ename}: {cause} (the partial run is in {partial})")

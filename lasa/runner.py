@@ -33,7 +33,7 @@ sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
 import papermill as pm  # noqa: E402
 import yaml  # noqa: E402
 
-from lasa.errors import ConfigError  # noqa: E402
+from lasa.errors import ConfigError, NotebookError  # noqa: E402
 from lasa.io import atomic_path, require_file  # noqa: E402
 
 __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
@@ -93,6 +93,11 @@ def run_notebook(
 
     Returns:
         The path of the executed notebook.
+
+    Raises:
+        NotebookError: if a cell raised; its message is that exception's class and message
+            (the library's own error, for a ``ConfigError``) and the partial run's path,
+            ``<name>.failed.ipynb``, which holds the full traceback.
     """
     params = load_config(config, notebook)
     if overrides:
@@ -115,11 +120,10 @@ def run_notebook(
                 cwd=str(Path.cwd()),
                 progress_bar=progress,
             )
-        except pm.PapermillExecutionError:
+        except pm.PapermillExecutionError as exc:
             # Keep the partial run for reading, under a name no Make rule will take for done.
             os.replace(tmp, failed)
-            print(f"error: {notebook} failed; the partial run is in {failed}", file=sys.stderr)
-            raise
+            raise NotebookError(str(notebook), exc.ename, str(exc.evalue), str(failed)) from None
     failed.unlink(missing_ok=True)
     return out
 
@@ -153,6 +157,11 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except (
+        NotebookError
+    ) as exc:  # the notebook's own cause, as the last line (its traceback is in the partial run)
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     seconds = time.perf_counter() - start
     if args.timings:
         record = {"notebook": Path(args.notebook).stem, "robot": args.robot, "seconds": round(seconds, 2)}

@@ -97,3 +97,60 @@ def test_malformed_config_is_an_error(tmp_path):
     bad.write_text("- just\n- a list\n")
     with pytest.raises(ConfigError, match="must map section names"):
         load_config(bad, NOTEBOOKS[0])
+
+
+def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
+    """The runner's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
+    import subprocess
+    import sys
+
+    nb = {
+        "cells": [
+            {
+                "cell_type": "code",
+                "id": "p",
+                "metadata": {"tags": ["parameters"]},
+                "execution_count": None,
+                "outputs": [],
+                "source": ["settings = {}\n"],
+            },
+            {
+                "cell_type": "code",
+                "id": "c",
+                "metadata": {},
+                "execution_count": None,
+                "outputs": [],
+                "source": ["from lasa.config import check_range\n", "check_range('alpha', 2.0, 0.0, 1.0)\n"],
+            },
+        ],
+        "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
+        "nbformat": 4,
+        "nbformat_minor": 5,
+    }
+    notebook = tmp_path / "broken.ipynb"
+    notebook.write_text(json.dumps(nb))
+    config = tmp_path / "c.yaml"
+    config.write_text("common: {}\n")
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "lasa.runner",
+            str(notebook),
+            "--config",
+            str(config),
+            "--out",
+            str(tmp_path / "out"),
+            "--no-progress",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    )
+    assert run.returncode == 1
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("error: ") and "ConfigError: alpha must be" in last
+    partial = tmp_path / "out" / "broken.failed.ipynb"
+    assert str(partial) in last and partial.is_file()
+    assert not (tmp_path / "out" / "broken.ipynb").exists()  # no half-written result for Make to take
