@@ -202,9 +202,9 @@ def build_book(
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``python -m lasa.book [--notebooks DIR] [--figures DIR] [--out DIR]``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--notebooks", default="build/notebooks")
-    parser.add_argument("--figures", default="figures")
-    parser.add_argument("--out", default="build/book")
+    parser.add_argument("--notebooks", default="build/notebooks", help="the executed notebooks [%(default)s]")
+    parser.add_argument("--figures", default="figures", help="the figures and claims table [%(default)s]")
+    parser.add_argument("--out", default="build/book", help="where the HTML book goes [%(default)s]")
     args = parser.parse_args(argv)
     try:
         index = build_book(args.notebooks, args.figures, args.out)

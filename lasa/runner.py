@@ -131,9 +131,11 @@ def run_notebook(
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry point: run one notebook and report its wall time."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("notebook")
-    parser.add_argument("--config", required=True)
-    parser.add_argument("--out", required=True)
+    parser.add_argument("notebook", help="the notebook to run, e.g. notebooks/04_fixed_expertise.ipynb")
+    parser.add_argument(
+        "--config", required=True, help="the YAML config: configs/paper.yaml, quick.yaml or large.yaml"
+    )
+    parser.add_argument("--out", required=True, help="folder of the executed copy")
     parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
     parser.add_argument(
         "--param",
@@ -144,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
         help="override one parameter (VALUE is read as YAML); repeatable",
     )
     parser.add_argument("--timings", help="append {notebook, robot, seconds} as a JSON line to this file")
-    parser.add_argument("--no-progress", action="store_true")
+    parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
     start = time.perf_counter()
     try:

@@ -502,32 +502,41 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m lasa.teleop", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="drive the robot live and log the session")
-    run.add_argument("--robot", default="panda")
-    run.add_argument("--task", default="Dessert", choices=TASKS)
-    run.add_argument("--condition", default="LA+SA", choices=CONDITIONS)
-    run.add_argument("--participant", default="p00")
+    run.add_argument("--robot", default="panda", help="the robot (panda: the eating scene) [%(default)s]")
+    run.add_argument("--task", default="Dessert", choices=TASKS, help="the eating task [%(default)s]")
+    run.add_argument(
+        "--condition", default="LA+SA", choices=CONDITIONS, help="interface and assistance [%(default)s]"
+    )
+    run.add_argument(
+        "--participant", default="p00", help="participant id, part of the log's name [%(default)s]"
+    )
     run.add_argument("--device", default="auto", help="auto, gamepad, keyboard, or scripted:<file.csv>")
     run.add_argument("--duration", type=float, default=300.0, help="longest session [s]")
     run.add_argument("--sessions", default="build/sessions", help="folder of the session logs")
-    run.add_argument("--build-dir", default="build")
+    run.add_argument("--build-dir", default="build", help="where make figures left the decoder [%(default)s]")
     run.add_argument("--no-viewer", action="store_true", help="run without a window (scripted input)")
     run.add_argument("--fast", action="store_true", help="do not wait for wall-clock time (no viewer)")
     run.add_argument("--screenshot", help="save a screenshot of the display when the session ends")
     rep = sub.add_parser("replay", help="re-run a session from its inputs; check its states")
-    rep.add_argument("session")
+    rep.add_argument("session", help="a session's .csv, .json or stem")
     rep.add_argument("--mp4", help="render the replay to this MP4 (off-screen)")
+    rep.add_argument(
+        "--allow-damaged",
+        action="store_true",
+        help="replay a damaged log's rows anyway (say so in the result)",
+    )
     sch = sub.add_parser("schedule", help="a counterbalanced order of conditions for N participants")
-    sch.add_argument("--participants", type=int, default=10)
-    sch.add_argument("--out", default="build/sessions/schedule.csv")
+    sch.add_argument("--participants", type=int, default=10, help="participants to schedule [%(default)s]")
+    sch.add_argument("--out", default="build/sessions/schedule.csv", help="the schedule CSV [%(default)s]")
     sur = sub.add_parser("survey", help="the 7-point Likert questionnaire after a condition")
-    sur.add_argument("--participant", required=True)
-    sur.add_argument("--condition", required=True, choices=CONDITIONS)
+    sur.add_argument("--participant", required=True, help="participant id, as in their sessions")
+    sur.add_argument("--condition", required=True, choices=CONDITIONS, help="the condition just done")
     sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
-    sur.add_argument("--sessions", default="build/sessions")
+    sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
     args = parser.parse_args(argv)
     try:
         if args.command == "replay":
-            result = replay(args.session, args.mp4)
+            result = replay(args.session, args.mp4, allow_damaged=args.allow_damaged)
             print(result)
             return 0 if result["exact"] else 1
         if args.command in ("schedule", "survey"):

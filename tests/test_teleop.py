@@ -335,3 +335,36 @@ def test_load_sessions_analyses_nothing_from_a_damaged_log(logged):
         load_sessions(logged.folder, make_eating_task())
     episodes = load_sessions(logged.folder, make_eating_task(), include_damaged=True)
     assert int(episodes.end[0]) == 37
+
+
+@pytest.mark.parametrize("module", ["lasa.teleop", "lasa.runner", "lasa.book"])
+def test_every_cli_option_has_help_text(module, monkeypatch, capsys):
+    """Every option and argument of each command says what it is (argparse's --help)."""
+    import argparse
+    import importlib
+
+    parsers: list[argparse.ArgumentParser] = []
+    original = argparse.ArgumentParser.parse_args
+
+    def capture(self, args=None, namespace=None):
+        parsers.append(self)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_args", capture)
+    with pytest.raises(SystemExit):
+        importlib.import_module(module).main(["--help"])
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_args", original)
+    seen = 0
+    for parser in parsers:
+        for action in parser._actions:
+            subs = getattr(action, "choices", None)
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in subs.values():
+                    for a in sub._actions:
+                        if not isinstance(a, argparse._HelpAction):
+                            seen += 1
+                            assert a.help, f"{module} {sub.prog}: {a.option_strings or a.dest} has no help"
+            elif not isinstance(action, argparse._HelpAction):
+                seen += 1
+                assert action.help, f"{module}: {action.option_strings or action.dest} has no help"
+    assert seen >= 3
