@@ -17,6 +17,10 @@ from typing import TYPE_CHECKING, Any
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
+from lasa.ffmpeg import pin_mediapy  # noqa: E402 (after MUJOCO_GL, which it does not touch)
+
+pin_mediapy()  # mediapy reads and writes with the pinned wheel's ffmpeg, once it is imported
+
 # The public API, imported on first use (PEP 562): `import lasa.runner` or `lasa.errors`
 # stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
 # name -> module that defines it; `__all__` lists the same names (tests/test_init.py checks).

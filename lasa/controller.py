@@ -7,9 +7,10 @@ user are driven by the same arithmetic.
 
 **Rate.** The step integrates :math:`s' = s + \Delta a` with the control period
 :math:`\Delta` = ``control.dt`` (0.1 s for both robots), so a live loop runs one step
-per :math:`\Delta` of wall-clock time: 10 Hz. One step costs about 2 ms on this
-package's 2-core reference machine (p50 1.8 ms, p99 2.6-3.1 ms; ``make bench`` measures
-it), about 3% of that 100 ms deadline, so the step needs no separate fast path.
+per :math:`\Delta` of wall-clock time: 10 Hz. One step costs about 1.5 ms on this
+package's 2-core reference machine (p50 1.5 ms, p99 2.8 ms in ``benchmarks/results.json``;
+``make bench`` measures it), under 3% of that 100 ms deadline, so the step needs no separate
+fast path.
 """
 
 from __future__ import annotations

@@ -612,9 +612,9 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
     Returns:
         ``{"goal_error": ..., "time": ..., "alignment": ...}``: one row per participant x
         condition x task (x phase for alignment). Goal Error is given under two readings of
-        "the closest goal": every goal the task visits including the plate (``goal_error``),
-        and the three bowls only (``goal_error_bowls``); ``mean_distance`` is Goal Error divided by
-        the task's time [m].
+        "the closest goal": all four goals, the three bowls and the plate, whichever the task
+        visits (``goal_error``), and the three bowls only (``goal_error_bowls``);
+        ``mean_distance`` is Goal Error divided by the task's time [m].
     """
     robot = task.robot
     goals = robot.cup_positions()

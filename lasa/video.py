@@ -6,14 +6,13 @@ shows. The scenes turn shadows and reflections off.
 
 Videos are written bit-exactly: the same frames give the same MP4 bytes on every run
 and machine with the pinned environment. mediapy always runs the ``ffmpeg`` binary
-that the pinned ``imageio-ffmpeg`` wheel ships (never one found on the PATH), with one
-thread, CPU-independent kernels and ffmpeg's bitexact flags; see :func:`write_video`.
+that the pinned ``imageio-ffmpeg`` wheel ships (never one found on the PATH; see
+:mod:`lasa.ffmpeg`), with one thread, CPU-independent kernels and ffmpeg's bitexact
+flags; see :func:`write_video`. :func:`read_video` is mediapy's reader with the same binary.
 """
 
 from __future__ import annotations
 
-import functools
-import importlib.resources
 import os
 import platform
 from pathlib import Path
@@ -24,6 +23,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 from lasa.errors import ConfigError
+from lasa.ffmpeg import pinned_ffmpeg
 from lasa.io import atomic_path
 from lasa.robot import Robot
 
@@ -45,35 +45,6 @@ _BITEXACT_ARGS = (
     "-fflags", "+bitexact",  # no "Lavf..." encoder tag or other muxer extras
     "-map_metadata", "-1",  # copy no metadata (e.g. creation time) into the container
 )  # fmt: skip
-
-
-@functools.cache
-def _pinned_ffmpeg() -> str:
-    """Return the ffmpeg binary shipped inside the installed ``imageio-ffmpeg`` wheel.
-
-    Unlike ``imageio_ffmpeg.get_ffmpeg_exe`` this never falls back to the
-    ``IMAGEIO_FFMPEG_EXE`` variable, a conda ffmpeg or one on the PATH, so the encoder
-    (ffmpeg and x264 versions) is the one that ``environment.lock`` pins.
-
-    Returns:
-        Absolute path of the executable.
-
-    Raises:
-        RuntimeError: The installed ``imageio-ffmpeg`` ships no binary for this platform.
-    """
-    folder = importlib.resources.files("imageio_ffmpeg.binaries")
-    found = [
-        Path(str(f))
-        for f in folder.iterdir()
-        if f.name.startswith("ffmpeg") and not f.name.endswith((".py", ".md", ".txt"))
-    ]
-    if len(found) != 1 or not os.access(found[0], os.X_OK):
-        raise RuntimeError(
-            f"expected one ffmpeg binary in the imageio-ffmpeg wheel, found {[f.name for f in found]} "
-            f"in {folder}; reinstall the pinned environment with `make setup` (imageio-ffmpeg "
-            "must be the platform wheel, which bundles ffmpeg)"
-        )
-    return str(found[0])
 
 
 def render_states(
@@ -164,7 +135,7 @@ def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 1
     height, width = frames.shape[1:3]
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264 (yuv420p), got {width}x{height}")
-    mediapy.set_ffmpeg(_pinned_ffmpeg())
+    mediapy.set_ffmpeg(pinned_ffmpeg())
     qp = 20 if height * width <= 640 * 480 else 28
     with atomic_path(path) as tmp:
         mediapy.write_video(
@@ -180,15 +151,6 @@ def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 1
 
 
 def read_video(path: str | os.PathLike[str]) -> np.ndarray:
-    """Decode an MP4 into frames (T, H, W, 3), uint8.
-
-    Uses the ``imageio-ffmpeg`` reader, which works with that wheel's own ffmpeg
-    (mediapy's reader passes an option newer ffmpeg builds reject).
-    """
-    import imageio_ffmpeg
-
-    reader = imageio_ffmpeg.read_frames(str(path))
-    meta = next(reader)
-    width, height = meta["size"]
-    frames = [np.frombuffer(buf, dtype=np.uint8).reshape(height, width, 3) for buf in reader]
-    return np.stack(frames)
+    """Decode an MP4 into frames (T, H, W, 3), uint8, with mediapy and the pinned ffmpeg."""
+    mediapy.set_ffmpeg(pinned_ffmpeg())
+    return np.asarray(mediapy.read_video(str(path)))

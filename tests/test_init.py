@@ -24,3 +24,78 @@ def test_unknown_name_is_an_attribute_error():
 
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         lasa.nope  # noqa: B018
+
+
+def test_every_import_of_the_library_is_a_declared_dependency():
+    """Each third-party module lasa imports (anywhere, lazily too) belongs to a distribution that
+    pyproject.toml lists: an undeclared one works here only because something else pulled it in."""
+    import ast
+    import re
+    import sys
+    import tomllib
+    from importlib.metadata import packages_distributions, requires
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    declared = {
+        re.split(r"[<>=!~;\[ ]", d, maxsplit=1)[0].strip().lower().replace("_", "-")
+        for d in tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]
+    }
+    owners = packages_distributions()
+    used: dict[str, set[str]] = {}
+    for path in (root / "lasa").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                top = name.split(".")[0]
+                if top == "lasa" or top in sys.stdlib_module_names or top == "__future__":
+                    continue
+                used.setdefault(top, set()).add(path.name)
+    assert used, "no third-party imports found: the scan is broken"
+    missing = {}
+    for top, files in sorted(used.items()):
+        dists = {d.lower().replace("_", "-") for d in owners.get(top, [])}
+        if not dists & declared:
+            missing[top] = (sorted(dists), sorted(files))
+    assert not missing, f"imported but not declared in pyproject.toml: {missing}"
+    assert requires("lasa") is not None  # the installed metadata is this pyproject's
+
+
+def test_no_notebook_depends_on_live_use_modules():
+    """Make's notebook rules depend on the library minus live use: editing teleop.py reruns nothing."""
+    import subprocess
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+
+    def var(name: str) -> set[str]:
+        out = subprocess.run(
+            ["make", "-s", f"print-{name}"], cwd=root, capture_output=True, text=True, check=True
+        )
+        return set(out.stdout.split())
+
+    lasa_src = var("LASA_SRC")
+    live = {"lasa/teleop.py", "lasa/devices.py", "lasa/book.py", "lasa/studykit.py", "lasa/sessionlog.py"}
+    assert not lasa_src & live
+    assert {"lasa/rollout.py", "lasa/sims/study.py", "lasa/video.py", "pyproject.toml"} <= lasa_src
+    assert var("STUDY_SRC") == {"lasa/studykit.py", "lasa/sessionlog.py"}
+    # and no module the notebooks run imports a live-use module
+    import ast
+
+    for path in (root / "lasa").rglob("*.py"):
+        rel = str(path.relative_to(root))
+        if rel in live:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            mods = (
+                [a.name for a in node.names]
+                if isinstance(node, ast.Import)
+                else ([node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            )
+            for m in mods:
+                assert f"{m.replace('.', '/')}.py" not in live, f"{rel} imports {m}"

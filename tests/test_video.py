@@ -95,3 +95,43 @@ def test_write_video_refuses_bad_shapes(tmp_path, shape):
     with pytest.raises(ConfigError):
         write_video(tmp_path / "v.mp4", np.zeros(shape, np.uint8))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_mediapy_reads_our_videos_after_import_lasa(tmp_path):
+    """In a fresh process with no ffmpeg on the PATH: `import lasa`, then mediapy reads an MP4 back."""
+    import subprocess
+    import sys
+
+    clip = _clip(7)
+    path = write_video(tmp_path / "v.mp4", clip)
+    code = (
+        "import lasa, mediapy, sys; v = mediapy.read_video(sys.argv[1]); "
+        "print(v.shape[0], v.shape[1], v.shape[2])"
+    )
+    env = {**os.environ, "PATH": str(tmp_path / "no-ffmpeg-here")}
+    run = subprocess.run(
+        [sys.executable, "-c", code, str(path)], capture_output=True, text=True, env=env, check=False
+    )
+    assert run.returncode == 0, run.stderr[-500:]
+    assert run.stdout.split() == [str(len(clip)), str(clip.shape[1]), str(clip.shape[2])]
+
+
+def test_the_committed_study_video_reads_back_with_its_frame_count():
+    """figures/study_dessert.mp4: participant 0's Dessert under the four conditions, every third step
+    (notebook 11), so its frame count follows from the episodes' times in figures/study_time.csv."""
+    from pathlib import Path
+
+    import pandas as pd
+
+    figures = Path(__file__).resolve().parents[1] / "figures"
+    time = pd.read_csv(figures / "study_time.csv")
+    shown = time[
+        (time.participant == 0) & (time.task == "Dessert") & time.decoder.isin(["transfers", "none"])
+    ]
+    shown = shown[shown.assistance.isin(["hindsight", "none"])]
+    assert len(shown) == 4
+    ends = np.round(shown.total_time.to_numpy() / 0.1).astype(int)
+    expected = int(max(end // 3 + 1 for end in ends))  # the longest clip; the others hold their last frame
+    video = read_video(figures / "study_dessert.mp4")
+    assert video.shape == (expected, 240, 4 * 320, 3)
+    assert mediapy.read_video(str(figures / "study_dessert.mp4")).metadata.num_images == expected
