@@ -10,6 +10,9 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
   percentile over 10,000 steps. ``step_deadline`` is what that step has to meet: one
   control period ``dt`` of the robot (0.1 s, a 10 Hz loop), and the fraction of it that
   the p99 uses. ``mj_step_us`` is one ``mujoco.mj_step`` of the Panda scene in the same run.
+- ``station_step_us``: the step live teleoperation runs (:meth:`lasa.teleop.Station.step`,
+  Dessert), for Retargeting (``R+SA``: the mink solve included) and latent actions
+  (``LA+SA``, with the eating decoder of ``--decoder-build``; skipped when there is none).
 - ``sweep``: simulated user-steps per second of the batched rollout
   (:func:`lasa.rollout.rollout`) for 1 to 4096 users, against a per-user, per-step
   loop over the same decoder and the same step functions (``loop``: the rollout run
@@ -73,7 +76,7 @@ import torch  # noqa: E402
 from lasa.config import ControlConfig, set_threads  # noqa: E402
 from lasa.controller import Controller  # noqa: E402
 from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
-from lasa.errors import ConfigError  # noqa: E402
+from lasa.errors import ArtifactError, ConfigError  # noqa: E402
 from lasa.io import write_text  # noqa: E402
 from lasa.robot import Robot, load_robot  # noqa: E402
 from lasa.rollout import rollout  # noqa: E402
@@ -224,6 +227,45 @@ def step_latency(
         ctl.step(z[i])
         times[i] = clock() - t0
     return _percentiles(times[warm:]), times[warm:]
+
+
+def station_latency(
+    condition: str, build_dir: str | os.PathLike[str], n_steps: int, seed: int = 0
+) -> dict[str, Any]:
+    """Latency of the step live teleoperation runs (:meth:`lasa.teleop.Station.step`), Dessert.
+
+    ``R+SA`` is Retargeting: a twist from the stick and its mode, mink's differential IK to a
+    joint velocity, then the blend, belief update and safe step. ``LA+SA`` decodes with the
+    eating decoder that ``make figures`` left in ``build_dir``. The stick is a random walk in
+    [-1, 1]^2, the mode button pressed every 50 steps, the session restarted every 200 steps;
+    the first 10% are warm-up.
+
+    Returns:
+        ``{p50, p99, mean, n}`` in microseconds, or ``{"skipped": why}`` when the decoder is missing.
+    """
+    from lasa.devices import Reading
+    from lasa.teleop import SessionConfig, Station
+
+    if n_steps < 10:
+        raise ConfigError(f"n_steps must be >= 10, got {n_steps}")
+    try:
+        station = Station(SessionConfig(task="Dessert", condition=condition, build_dir=str(build_dir)))
+    except ArtifactError as exc:
+        return {"skipped": str(exc)}
+    rng = np.random.default_rng(seed)
+    warm = n_steps // 10
+    total = n_steps + warm
+    z = np.clip(np.cumsum(rng.normal(0, 0.2, (total, 2)), axis=0), -1, 1)
+    times = np.empty(total)
+    clock = time.perf_counter
+    for i in range(total):
+        if i % 200 == 0:
+            station.reset()
+        reading = Reading(raw=z[i], mode=i % 50 == 25)
+        t0 = clock()
+        station.step(reading)
+        times[i] = clock() - t0
+    return _percentiles(times[warm:])
 
 
 def step_deadline(control: ControlConfig, latency_us: dict[str, float]) -> dict[str, float]:
@@ -701,6 +743,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tiny", action="store_true", help="toy sizes, for tests/test_bench.py")
     parser.add_argument("--skip-pipeline", action="store_true", help="leave out the make figures runs")
     parser.add_argument("--build", default="build/bench", help="scratch folder of the pipeline runs")
+    parser.add_argument(
+        "--decoder-build", default="build", help="the build whose eating decoder the live LA+SA step loads"
+    )
     args = parser.parse_args(argv)
     started = time.perf_counter()
     config = BenchConfig.tiny() if args.tiny else BenchConfig()
@@ -729,6 +774,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     results["step_deadline"] = step_deadline(control, results["step_latency_us"])
     results["targets"]["step_latency_p99_us"] = results["step_deadline"]["deadline_us"]
+    print("live teleoperation step (Station.step, Panda, Dessert)", flush=True)
+    results["station_step_us"] = {
+        cond: station_latency(cond, args.decoder_build, max(10, config.latency_steps // 5), config.seed)
+        for cond in ("R+SA", "LA+SA")
+    }
     results["mj_step_us"] = mj_step_time(arm, config.mj_steps)
     results["step_over_mj_step"] = results["step_latency_us"]["p50"] / results["mj_step_us"]["p50"]
 

@@ -77,7 +77,10 @@ class SessionConfig:
         if self.task != "cups" and self.robot != "panda":
             raise ConfigError(f"the {self.task} task is built for the Panda, not {self.robot!r}")
         if self.task != "cups" and self.condition == "LA+SA+Entropy":
-            raise ConfigError("the eating study has no entropy decoder; choose R, R+SA, LA or LA+SA")
+            raise ConfigError(
+                "the eating study runs R, R+SA, LA or LA+SA (its LA conditions use notebook 10's headline "
+                "decoder); LA+SA+Entropy is the cups' condition"
+            )
         if not self.participant or any(c in self.participant for c in "/\\ "):
             raise ConfigError(
                 f"participant must be a short id without spaces or slashes, got {self.participant!r}"

@@ -37,8 +37,22 @@ TINY = bench.BenchConfig.tiny()
 @pytest.fixture(scope="module")
 def tiny_results(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
+    # a small eating decoder where `make figures` would leave the real one (the live LA+SA step loads it)
+    from lasa.decoder import save_checkpoint
+    from lasa.demos import DemoConfig, collect_eating_demonstrations
+    from lasa.eating import make_eating_task
+    from lasa.train import TrainConfig, train_decoder
+
+    task = make_eating_task()
+    demos = collect_eating_demonstrations(
+        task, task.robot.control, DemoConfig(n_theta=2, n_starts=1, n_adjust=0, n_perturb=1)
+    )
+    config = TrainConfig(steps=30, hidden=16, depth=2, z_dim=2, batch_size=128)
+    model, _ = train_decoder(demos, task.robot.control, config, progress=False)
+    save_checkpoint(model, out / "decoders" / "models" / "eating_decoder_panda.pt")
     # --build is absolute: the script runs the pipeline from the repository root, whatever the cwd
-    assert bench.main(["--out", str(out), "--tiny", "--skip-pipeline", "--build", str(out / "build")]) == 0
+    argv = ["--out", str(out), "--tiny", "--skip-pipeline", "--build", str(out / "build")]
+    assert bench.main([*argv, "--decoder-build", str(out / "decoders")]) == 0
     return out
 
 
@@ -54,6 +68,10 @@ def test_results_hold_every_key(tiny_results):
     assert results["targets"]["step_latency_p99_us"] == deadline["deadline_us"]
     assert set(results["targets"]) == set(bench.TARGETS) | {"step_latency_p99_us"}
     assert results["mj_step_us"]["mean"] > 0 and results["step_over_mj_step"] > 0
+    # the step live teleoperation runs, for both interfaces (Retargeting includes its mink solve)
+    assert set(results["station_step_us"]) == {"R+SA", "LA+SA"}
+    for row in results["station_step_us"].values():
+        assert set(row) == {"p50", "p99", "mean", "n"} and 0 < row["p50"] <= row["p99"]
     assert set(results["sweep"]) == {str(b) for b in TINY.batches}
     for row in results["sweep"].values():
         assert set(row) == {"batched", "loop", "floor"} and all(v > 0 for v in row.values())
