@@ -155,6 +155,9 @@ def _assistance(
     return a_r, weight
 
 
+REST = ("decode", "zero")  # what a stick at rest commands (shared_autonomy_step's ``rest``)
+
+
 def shared_autonomy_step(
     decoder: ActionDecoder,
     task: CupTask,
@@ -163,14 +166,27 @@ def shared_autonomy_step(
     log_belief: np.ndarray,
     z: np.ndarray,
     alpha: float | np.ndarray,
+    rest: str = "decode",
 ) -> StepResult:
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
     This is the step a teleoperated robot runs (:class:`lasa.controller.Controller` is
-    this step for one user): decode the joystick input, blend with the assistance,
-    update the belief, take the safe step. A joystick input that is not finite (a
-    disconnected or faulty device) decodes to no human action at all, so it can never
-    become a command; the robot's own assistance still applies.
+    this step for one user, and :class:`lasa.teleop.Station` runs it for latent actions):
+    decode the joystick input, blend with the assistance, update the belief, take the safe
+    step. A joystick input that is not finite (a disconnected or faulty device) decodes to
+    no human action at all, so it can never become a command; the robot's own assistance
+    still applies.
+
+    **The stick at rest** (z = 0) is a named choice, ``rest``, because the loops differ:
+
+    - ``"decode"``: phi(0, s, b), the decoder's own meaning of the rest position. The
+      simulated users of sims 1-4 (Eq. S1 weighs z = 0 among its grid's inputs, and the
+      paper's phi is defined there), :class:`lasa.controller.Controller` and the
+      benchmark's reference step use it.
+    - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.teleop.Station`:
+      a person who lets go of the stick expects the arm to stop, the assistance apart), and
+      it is the convention of the study's simulated participants (:func:`lasa.study.simulate`,
+      which decodes its candidates itself: resting the stick is their idle input).
 
     Args:
         decoder: The decoder phi (a trained model, or a wrapper such as
@@ -181,11 +197,15 @@ def shared_autonomy_step(
         log_belief: log b^t, shape (U, G).
         z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
         alpha: Blend weight, scalar or shape (U,).
+        rest: What a stick at rest commands: ``"decode"`` or ``"zero"`` (see above).
     """
     check_decoder(decoder, task)
+    check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
     ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = decoder.decode_numpy(np.where(ok, z, 0.0), state, belief(log_belief))
+    if rest == "zero":
+        ok = ok & np.any(z != 0.0, axis=-1, keepdims=True)
     a_h = np.where(ok, a_h, 0.0)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)

@@ -50,7 +50,7 @@ from lasa.errors import ArtifactError, ConfigError
 from lasa.paths import Paths
 from lasa.retarget import MODES, Retargeting, next_mode, twist
 from lasa.robot import Robot, load_robot
-from lasa.rollout import advance
+from lasa.rollout import advance, shared_autonomy_step
 from lasa.sessionlog import SessionWriter, read_session
 from lasa.task import CupTask, make_cup_task
 
@@ -222,29 +222,38 @@ class Station:
         z = reading.z  # safe: zero if disconnected or not finite, within [-1, 1]
         n = self.robot.n_joints
         s = self.state
-        b = self.belief
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
         pressed = bool(reading.mode) and self.retarget is not None
         if reading.stop:
             pass  # hold: no human action, no assistance, the belief frozen
         else:
-            if pressed:
-                self.mode = int(next_mode(self.mode))
-            elif np.any(z != 0.0):
-                if self.decoder is not None:
-                    zz = z[: self.decoder.z_dim]
-                    a_h = self.decoder.decode_numpy(zz[None], s[None], b[None])[0]
-                elif self.retarget is not None:
+            if (
+                self.decoder is not None
+            ):  # latent actions: the reference step, the stick at rest commanding nothing
+                result = shared_autonomy_step(
+                    self.decoder,
+                    self.task,
+                    self.control,
+                    s[None],
+                    self.log_belief[None],
+                    z[: self.decoder.z_dim][None],
+                    self.alpha,
+                    rest="zero",
+                )
+            else:  # Retargeting: the stick is a twist in the current mode, mink's IK its joint velocity
+                if pressed:
+                    self.mode = int(next_mode(self.mode))
+                elif np.any(z != 0.0) and self.retarget is not None:
                     a_h = self.retarget.joint_velocity(s, twist(self.mode, z))
-            result = advance(
-                self.task,
-                self.control,
-                s[None],
-                self.log_belief[None],
-                a_h[None],
-                np.array([self.alpha]),
-                self.sets,
-            )
+                result = advance(
+                    self.task,
+                    self.control,
+                    s[None],
+                    self.log_belief[None],
+                    a_h[None],
+                    np.array([self.alpha]),
+                    self.sets,
+                )
             a_h = result.human_action[0]
             a_r = result.assistance[0] if result.assistance is not None else np.zeros(n)
             a = result.action[0]

@@ -151,3 +151,24 @@ def test_step_matches_the_rollout(model, task):
         out = shared_autonomy_step(model, task, ctl, s, log_b, traj.z[t], 0.2)
         assert_allclose(out.state, traj.states[t + 1], atol=1e-6)
         s, log_b = out.state, out.log_belief
+
+
+def test_the_stick_at_rest_is_a_named_choice(model, task):
+    """rest="decode" commands phi(0, s, b); rest="zero" commands nothing there, and the same elsewhere."""
+    from lasa.belief import belief, uniform_log_belief
+    from lasa.rollout import shared_autonomy_step
+
+    control = task.robot.control
+    state = np.stack([task.start, task.goals[0], task.goals[1]])
+    log_b = uniform_log_belief(3, task.n_goals)
+    z = np.array([[0.0], [0.5], [0.0]])
+    decoded = shared_autonomy_step(model, task, control, state, log_b, z, 0.0, rest="decode")
+    zero = shared_autonomy_step(model, task, control, state, log_b, z, 0.0, rest="zero")
+    phi = model.decode_numpy(z, state, belief(log_b))
+    assert np.abs(phi[[0, 2]]).max() > 0  # the decoder moves the arm at z = 0 ...
+    assert_array_equal(decoded.human_action, phi)  # ... and "decode" commands it
+    assert_array_equal(zero.human_action[[0, 2]], 0.0)  # "zero" commands nothing at rest
+    assert_array_equal(zero.human_action[1], decoded.human_action[1])
+    assert_array_equal(zero.state[0], state[0])  # alpha = 0: the arm holds
+    with pytest.raises(ConfigError, match="rest"):
+        shared_autonomy_step(model, task, control, state, log_b, z, 0.0, rest="hold")
