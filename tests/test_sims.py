@@ -102,11 +102,28 @@ def both(model):
     return {"base": model, "entropy": model}
 
 
-def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task):
+def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task, monkeypatch):
+    from lasa.sims import common
+
+    calls = []
+    real = common.rollout
+
+    def counted(decoder, task_, users, alpha, *args, **kwargs):
+        calls.append((id(decoder), len(alpha), sorted(set(np.round(alpha, 6)))))
+        return real(decoder, task_, users, alpha, *args, **kwargs)
+
+    monkeypatch.setattr(common, "rollout", counted)
+    decoders = both(model)
     frame, traj = sim1.run(
-        both(model), task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), users=2, horizon=10, **ONE)
+        decoders, task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), users=2, horizon=10, **ONE)
     )
     assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
+    # two decoders, two batched rollouts: LA and LA+SA share the lambda = 0 decoder's, the entropy
+    # method has its own; every (method, beta, user) episode rides in one of them
+    alpha = task.robot.control.alpha
+    assert len(calls) == 2
+    assert [c[2] for c in calls] == [[0.0, round(alpha, 6)], [round(alpha, 6)]]
+    assert sum(c[1] for c in calls) == len(frame) == 3 * 2 * 2
     # the entropy rows used the same model here, with LA+SA's alpha: identical episodes
     a = frame[frame.method == "LA+SA"].final_error.to_numpy()
     b = frame[frame.method == "LA+SA+Entropy"].final_error.to_numpy()
