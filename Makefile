@@ -168,6 +168,7 @@ lint: setup
 	$(BIN)/ruff check lasa tests benchmarks
 	$(BIN)/ruff format --check lasa tests benchmarks
 	$(BIN)/mypy lasa
+	$(BIN)/lint-imports --no-cache
 
 test: setup lint
 	$(BIN)/python -m pytest -q

@@ -99,3 +99,27 @@ def test_no_notebook_depends_on_live_use_modules():
             )
             for m in mods:
                 assert f"{m.replace('.', '/')}.py" not in live, f"{rel} imports {m}"
+
+
+def test_the_import_contracts_hold_and_can_fail(tmp_path):
+    """`make lint` checks pyproject's import-linter contracts; a contract the code breaks is caught."""
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    tool = shutil.which("lint-imports", path=str(Path(sys.executable).parent))
+    assert tool is not None, "import-linter is not installed (make setup)"
+    kept = subprocess.run([tool, "--no-cache"], cwd=root, capture_output=True, text=True, check=False)
+    assert kept.returncode == 0, kept.stdout[-2000:]
+    broken = tmp_path / "broken.toml"
+    broken.write_text(
+        '[tool.importlinter]\nroot_package = "lasa"\n\n[[tool.importlinter.contracts]]\n'
+        'name = "the figures never use the rollout (false: they do)"\ntype = "forbidden"\n'
+        'source_modules = ["lasa.sims"]\nforbidden_modules = ["lasa.rollout"]\n'
+    )
+    run = subprocess.run(
+        [tool, "--no-cache", "--config", str(broken)], cwd=root, capture_output=True, text=True, check=False
+    )
+    assert run.returncode != 0 and "BROKEN" in run.stdout
