@@ -158,6 +158,38 @@ def test_training_times_of_no_checkpoints(tmp_path):
     assert bench.training_times(tmp_path) == {}
 
 
+def test_training_times_read_what_the_checkpoints_record(model, tmp_path):
+    from lasa.decoder import save_checkpoint
+
+    save_checkpoint(
+        model,
+        tmp_path / f"decoder_{model.robot}.pt",
+        train={"steps": 7},
+        train_seconds=1.5,
+        val_error=0.25,
+        entropy_lambda=0.0,
+    )
+    save_checkpoint(model, tmp_path / f"decoder_{model.robot}_entropy.pt", train={"steps": 3}, init="base")
+    save_checkpoint(model, tmp_path / f"eating_decoder_{model.robot}.pt")  # not a cup decoder: left out
+    times = bench.training_times(tmp_path)
+    assert times == {
+        f"decoder_{model.robot}": {
+            "seconds": 1.5,
+            "steps": 7,
+            "val_error": 0.25,
+            "entropy_lambda": 0.0,
+            "warm_start": None,
+        },
+        f"decoder_{model.robot}_entropy": {
+            "seconds": None,
+            "steps": 3,
+            "val_error": None,
+            "entropy_lambda": None,
+            "warm_start": "base",
+        },
+    }
+
+
 def test_parse_params():
     assert parse_params(["build_dir=build/x", "n=3", "betas=[1, 2]"]) == {
         "build_dir": "build/x",

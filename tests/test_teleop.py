@@ -400,3 +400,19 @@ def test_the_live_step_is_the_reference_step(build, condition, axes):
         assert np.array_equal(rec["s"], s[0]) and np.array_equal(rec["a_h"], ref.human_action[0])
         if not np.any(z):
             assert not rec["a_h"].any()  # a stick at rest commands nothing
+
+
+def test_replay_finds_a_state_the_log_does_not_share(logged):
+    """Replay compares the re-run with the log, not the code with itself: a logged state off by
+    0.001 rad at one step is found, with that difference."""
+    frame = pd.read_csv(logged.csv)
+    frame.loc[10, "s3"] += 1e-3
+    lines = logged.csv.read_text().splitlines()
+    cells = lines[11].split(",")
+    column = lines[0].split(",").index("s3")
+    cells[column] = repr(float(frame.loc[10, "s3"]))
+    lines[11] = ",".join(cells)
+    logged.csv.write_text("\n".join(lines) + "\n")
+    result = replay(logged.csv)
+    assert not result["exact"]
+    assert result["max_state_difference"] == pytest.approx(1e-3, rel=1e-9)
