@@ -29,6 +29,8 @@ T = TypeVar("T")
 
 # The members of the shared-autonomy family, named once; lasa.assistance implements them.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
+# The assistance label of rows and episodes with none (alpha = 0: LA, R), named once.
+NO_ASSISTANCE = "none"
 
 
 def check_range(

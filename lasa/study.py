@@ -61,7 +61,7 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from lasa.belief import belief, uniform_log_belief
-from lasa.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.decoder import ActionDecoder
 from lasa.eating import GOALS, PREFERENCES, TASKS, EatingTask, fork_direction, fork_frame, waypoints
 from lasa.errors import ConfigError
@@ -92,7 +92,6 @@ __all__ = [
 ]
 
 CONDITIONS = ("R", "R+SA", "LA", "LA+SA")
-NO_ASSISTANCE = "none"  # the assistance column of the unassisted conditions
 TASK_NAMES = tuple(TASKS)
 
 

@@ -52,12 +52,13 @@ from lasa.retarget import MODES, Retargeting, next_mode, twist
 from lasa.robot import Robot, load_robot
 from lasa.rollout import advance, shared_autonomy_step
 from lasa.sessionlog import SessionWriter, read_session
+from lasa.study import CONDITIONS as STUDY_CONDITIONS
 from lasa.task import CupTask, make_cup_task
 
 __all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "run_session", "replay", "main"]
 
 TASKS = ("cups", "Entree", "Dessert")
-CONDITIONS = ("R", "R+SA", "LA", "LA+SA", "LA+SA+Entropy")
+CONDITIONS = (*STUDY_CONDITIONS, "LA+SA+Entropy")  # the study's four, and the cups' entropy decoder
 
 
 @dataclasses.dataclass(frozen=True)

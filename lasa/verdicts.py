@@ -38,6 +38,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.claims import Claim
+from lasa.config import NO_ASSISTANCE  # defined once, in the base; re-exported here
 from lasa.errors import ConfigError
 from lasa.rules import UNDECIDED, rule
 
@@ -59,7 +60,6 @@ __all__ = [
     "resample_counts",
 ]
 
-NO_ASSISTANCE = "none"  # the assistance label of rows without assistance (LA, alpha = 0)
 N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
 ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
 

@@ -22,13 +22,13 @@ from typing import Any, TypeVar
 import numpy as np
 import pandas as pd
 
-from lasa.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.decoder import ActionDecoder
 from lasa.errors import ConfigError
 from lasa.rollout import METHOD_DECODER, METHODS, Trajectories, method_alpha, rollout
 from lasa.task import CupTask
 from lasa.users import PILOTS, UserPopulation, latent_grid
-from lasa.verdicts import NO_ASSISTANCE, Design, Sequential, sequential
+from lasa.verdicts import Design, Sequential, sequential
 
 T = TypeVar("T")
 
