@@ -110,31 +110,15 @@ def test_summary_counts_by_hand() -> None:
         "drift": 0.0,
         "distance": 0.0,
     }
+    at = {  # per goal: (z1, stays, theta) of four inputs held there with a confident belief
+        "a": ((-1.0, True, 0.1), (-0.5, True, 0.8), (0.5, False, 0.5), (1.0, True, 0.3)),
+        "b": ((-1.0, True, 0.2), (-0.5, False, 0.1), (0.5, False, 0.5), (1.0, False, 0.9)),
+    }
+    conf = {"context": "confident", "stroke": 0.0, "reached": "a"}
     rows = [
-        {
-            **base,
-            "context": "confident",
-            "goal": "a",
-            "z1": z,
-            "stays": st,
-            "theta": th,
-            "stroke": 0.0,
-            "reached": "a",
-        }
-        for z, st, th in ((-1.0, True, 0.1), (-0.5, True, 0.8), (0.5, False, 0.5), (1.0, True, 0.3))
-    ]
-    rows += [
-        {
-            **base,
-            "context": "confident",
-            "goal": "b",
-            "z1": z,
-            "stays": st,
-            "theta": th,
-            "stroke": 0.0,
-            "reached": "a",
-        }
-        for z, st, th in ((-1.0, True, 0.2), (-0.5, False, 0.1), (0.5, False, 0.5), (1.0, False, 0.9))
+        {**base, **conf, "goal": g, "z1": z, "stays": st, "theta": th}
+        for g, inputs in at.items()
+        for z, st, th in inputs
     ]
     rows += [
         {

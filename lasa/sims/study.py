@@ -585,6 +585,11 @@ def claims(
 CI = {"errorbar": ("ci", 95), "seed": 0}
 
 
+def _reading(member: str, decoder: str | None) -> str:
+    """The figures' caption of what they show: the SA member, and the decoder reading if named."""
+    return f"SA = {member}" + (f"; decoder = {decoder}" if decoder else "")
+
+
 def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants)."""
     sns.set_theme(style="whitegrid")
@@ -618,8 +623,7 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight", decoder: str
     )
     ax.set_ylabel("Goal Error [m s]")
     ax.set_title(
-        f"Goal Error ({data.participant.nunique()} simulated participants; SA = {member}"
-        + (f"; decoder = {decoder})" if decoder else ")")
+        f"Goal Error ({data.participant.nunique()} simulated participants; {_reading(member, decoder)})"
     )
     return fig
 
@@ -654,10 +658,7 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight", decoder: str | Non
         )
         ax.set_title(f"{task}: total (solid) and idle (light)")
         ax.set_ylabel("time [s]")
-    fig.suptitle(
-        f"{data.participant.nunique()} simulated participants; SA = {member}"
-        + (f"; decoder = {decoder}" if decoder else "")
-    )
+    fig.suptitle(f"{data.participant.nunique()} simulated participants; {_reading(member, decoder)}")
     return fig
 
 
@@ -681,59 +682,21 @@ def plot_alignment(frame: pd.DataFrame, member: str = "hindsight", decoder: str 
     )
     ax.set_ylabel("Preference Alignment (d · d*)")
     ax.set_title(
-        f"Dessert: alignment with each phase's preference (SA = {member}"
-        + (f"; decoder = {decoder})" if decoder else ")"),
-        fontsize=10,
+        f"Dessert: alignment with each phase's preference ({_reading(member, decoder)})", fontsize=10
     )
     return fig
 
 
+# every table's keys: who, under which condition, SA member and decoder reading, which task
+ROW_KEYS = ("robot", "participant", "condition", "assistance", "decoder", "task")
 GOAL_ERROR = FigureSpec(
     "study_goal_error",
-    (
-        "robot",
-        "participant",
-        "condition",
-        "assistance",
-        "decoder",
-        "task",
-        "order",
-        "goal_error",
-        "goal_error_bowls",
-        "mean_distance",
-    ),
+    (*ROW_KEYS, "order", "goal_error", "goal_error_bowls", "mean_distance"),
     plot_goal_error,
 )
 TIME = FigureSpec(
-    "study_time",
-    (
-        "robot",
-        "participant",
-        "condition",
-        "assistance",
-        "decoder",
-        "task",
-        "order",
-        "total_time",
-        "idle_time",
-        "mode_switches",
-        "completed",
-    ),
-    plot_time,
+    "study_time", (*ROW_KEYS, "order", "total_time", "idle_time", "mode_switches", "completed"), plot_time
 )
 ALIGNMENT = FigureSpec(
-    "study_alignment",
-    (
-        "robot",
-        "participant",
-        "condition",
-        "assistance",
-        "decoder",
-        "task",
-        "phase",
-        "preference",
-        "alignment",
-        "steps",
-    ),
-    plot_alignment,
+    "study_alignment", (*ROW_KEYS, "phase", "preference", "alignment", "steps"), plot_alignment
 )
