@@ -389,7 +389,7 @@ def collect_eating_demonstrations(
 
     def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:
         def along(depths: np.ndarray) -> np.ndarray:
-            return np.stack([task.pose(g, theta, float(u)) for u in np.atleast_1d(depths)])
+            return task.pose(g, theta, np.atleast_1d(depths))
 
         down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]

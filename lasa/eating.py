@@ -229,18 +229,29 @@ class EatingTask(CupTask):
     depth_grid: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
     strokes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
 
-    def pose(self, goal: int, theta: float, depth: float) -> np.ndarray:
-        """s*(g, theta, u): the joint configuration of a stroke pose, shape (n,).
+    def pose(self, goal: int, theta: float | np.ndarray, depth: float | np.ndarray) -> np.ndarray:
+        """s*(g, theta, u): the joint configuration of stroke poses, shape (..., n).
 
-        Cubic in theta (as :meth:`target`), linear in depth between the solved depths.
+        Cubic in theta (as :meth:`target`), linear in depth between the solved depths;
+        ``theta`` and ``depth`` broadcast (scalars give one pose, shape (n,)), and each
+        stretch between two solved depths is evaluated in one call for all its poses.
         """
-        check_range("depth", depth, 0.0, 1.0)
-        k = int(np.searchsorted(self.depth_grid, depth, side="right") - 1)
-        k = min(max(k, 0), len(self.depth_grid) - 2)
-        u0, u1 = self.depth_grid[k], self.depth_grid[k + 1]
-        w = (depth - u0) / (u1 - u0)
-        splines = self._stroke_splines
-        return (1.0 - w) * splines[goal][k](theta) + w * splines[goal][k + 1](theta)
+        theta_arr, depth_arr = np.broadcast_arrays(
+            np.asarray(theta, dtype=float), np.asarray(depth, dtype=float)
+        )
+        if depth_arr.size:
+            check_range("depth", float(depth_arr.min()), 0.0, 1.0)
+            check_range("depth", float(depth_arr.max()), 0.0, 1.0)
+        th, u = theta_arr.ravel(), depth_arr.ravel()
+        grid = self.depth_grid
+        k = np.clip(np.searchsorted(grid, u, side="right") - 1, 0, len(grid) - 2)
+        w = (u - grid[k]) / (grid[k + 1] - grid[k])
+        splines = self._stroke_splines[goal]
+        out = np.empty((len(th), self.curves.shape[-1]))
+        for seg in np.unique(k):  # one stretch of depth at a time: at most len(grid) - 1 calls
+            m = k == seg
+            out[m] = (1.0 - w[m])[:, None] * splines[seg](th[m]) + w[m][:, None] * splines[seg + 1](th[m])
+        return out.reshape(*theta_arr.shape, -1)
 
     @property
     def _stroke_splines(self) -> list[list[CubicSpline]]:

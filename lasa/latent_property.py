@@ -153,7 +153,7 @@ def preference_set(task: CupTask, goal: int, n_grid: int = 41) -> PreferenceSet:
         us = np.linspace(0.0, 1.0, max(2, n_grid // 4 + 1))
         tt, uu = np.meshgrid(thetas, us, indexing="ij")
         theta, stroke = tt.ravel(), uu.ravel()
-        states = np.stack([pose(goal, float(a), float(u)) for a, u in zip(theta, stroke, strict=True)])
+        states = pose(goal, theta, stroke)
     robot = task.robot
     return PreferenceSet(theta, stroke, robot.grasp_positions(states), robot.grasp_axes(states))
 
