@@ -142,3 +142,16 @@ def test_a_demonstration_reaches_each_bowl(eating):
     # a move from another goal starts from the belief held there, not from a uniform one
     starts = np.r_[0, np.flatnonzero(np.diff(demos.demo)) + 1]
     assert (demos.beliefs[starts].max(axis=1) > 0.99).sum() == len(starts) - len(np.unique(demos.goal)) * 2
+
+
+def test_poses_of_many_tilts_and_depths_are_each_ones_pose(eating):
+    """pose() on arrays is pose() on each (theta, u): the same numbers, bit for bit, any depth stretch."""
+    rng = np.random.default_rng(3)
+    thetas, depths = rng.uniform(0, 1, 40), np.r_[rng.uniform(0, 1, 37), 0.0, 0.5, 1.0]
+    many = eating.pose(2, thetas, depths)
+    assert many.shape == (40, eating.robot.n_joints)
+    one = np.stack([eating.pose(2, float(t), float(u)) for t, u in zip(thetas, depths, strict=True)])
+    np.testing.assert_array_equal(many, one)
+    assert eating.pose(2, 0.5, np.array([0.0, 1.0])).shape == (2, eating.robot.n_joints)  # broadcast
+    with pytest.raises(ConfigError, match="depth"):
+        eating.pose(2, thetas[:2], np.array([0.5, 1.2]))

@@ -194,3 +194,25 @@ def test_switch_share_and_completion_by_hand():
     done = study.completion(time).set_index("condition")
     assert done.loc["R", "finished"] == 0.75 and done.loc["LA", "finished"] == 0.5
     assert done.loc["R", "episodes"] == 4
+
+
+def test_the_readings_table_joins_property_completion_and_verdicts():
+    good = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
+    bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
+    data = with_decoders(good, bad)
+    data["time"].loc[(data["time"].decoder == "other") & (data["time"].participant < 5), "completed"] = False
+    rows, _ = study.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    prop = pd.DataFrame(
+        {
+            "decoder": ["head", "head", "other", "other"],
+            "has_property": [True, True, False, True],
+            "stay_share": [0.6, 0.5, 0.1, 0.7],
+        }
+    )
+    table = study.readings_table(prop, study.completion(data["time"]), rows, ["head", "other"], "hindsight")
+    head, other = table.set_index("decoder").loc["head"], table.set_index("decoder").loc["other"]
+    assert bool(head.headline) and not bool(other.headline)
+    assert head["goals with the property"] == 2 and other["goals with the property"] == 1
+    assert other["least share staying"] == 0.1
+    assert head["LA finished"] == 1.0 and other["LA finished"] == 0.75  # 5 of 20 participants stuck
+    assert head["H3 (10 / all)"] == "yes / yes" and other["H3 (10 / all)"] == "no / no"

@@ -102,6 +102,8 @@ __all__ = [
     "completion",
     "switch_share",
     "stuck",
+    "stuck_summary",
+    "readings_table",
     "HERLANT_SHARE",
     "analyse",
     "claims",
@@ -344,6 +346,60 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
     res = sps.ttest_rel(a, b)
     ci = res.confidence_interval()
     return float((a - b).mean()), float(ci.low), float(ci.high), float(res.pvalue), int(len(a))
+
+
+def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
+    """:func:`stuck`'s rows (with a ``decoder`` column) grouped by where they stopped: medians per group."""
+    keys = ["decoder", "condition", "assistance", "task", "phase", "goal"]
+    medians = ("distance_cm", "angle_deg", "belief_goal", "best_progress", "inputs_progressing")
+    return stuck_rows.groupby(keys).agg(
+        episodes=("participant", "size"), **{m: (m, "median") for m in medians}
+    )
+
+
+def readings_table(
+    prop: pd.DataFrame,
+    done: pd.DataFrame,
+    rows: list[Claim],
+    decoders: list[str],
+    member: str,
+) -> pd.DataFrame:
+    """One row per decoder reading, the headline first: its property, its completion, its verdicts.
+
+    Args:
+        prop: :func:`lasa.latent_property.summary` of the eating decoders.
+        done: :func:`completion` of the study's time table.
+        rows: The study's claims rows (:func:`claims`).
+        decoders: The decoder readings, the headline first.
+        member: The headline SA member (LA+SA's completion is under it).
+
+    Columns: ``goals with the property``, ``least share staying``, ``LA finished``,
+    ``LA+SA finished``, and H1-H3's verdicts for 10 participants / the cohort (``-`` where
+    the study had no cohort).
+    """
+    verdict = {c.id: c.reproduced for c in rows}
+    finished = done.set_index(["decoder", "assistance", "condition"]).finished
+    out = []
+    for d in decoders:
+        other = None if d == decoders[0] else d
+        mine = prop[prop.decoder == d]
+        out.append(
+            {
+                "decoder": d,
+                "headline": other is None,
+                "goals with the property": int(mine.has_property.sum()),
+                "least share staying": mine.stay_share.min(),
+                "LA finished": finished.get((d, NO_ASSISTANCE, "LA")),
+                "LA+SA finished": finished.get((d, member, "LA+SA")),
+                **{
+                    f"{h.upper()} (10 / all)": " / ".join(
+                        verdict.get(claim_id(h, 0, member, cohort, other), "-") for cohort in (False, True)
+                    )
+                    for h in DECODER_KEYS
+                },
+            }
+        )
+    return pd.DataFrame(out)
 
 
 def analyse(
