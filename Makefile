@@ -13,7 +13,7 @@
 #   make clean            remove build/ (keeps .venv and the committed figures)
 #
 # Each figure notebook is a Make target (its executed copy in $(BUILD)/notebooks), which
-# depends on the notebook, the lasa sources, the config and the notebooks it reads from:
+# depends on the notebook, the lasa files it runs, the config and the notebooks it reads from:
 # after a change, `make figures` re-runs only what is stale. The two robots' chains run in
 # parallel (JOBS=2, one torch thread each); OUT=dir runs the pipeline into dir instead.
 
@@ -48,21 +48,26 @@ JOBS ?= 2
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 # One torch and one OpenMP/BLAS thread per notebook, on every machine: more threads round
 # float reductions differently, and the figures would then depend on the core count
-# (lasa.config.set_threads). Idle BLAS threads of two processes also spin against each
+# (lasa.base.config.set_threads). Idle BLAS threads of two processes also spin against each
 # other on tiny operations (measured: demonstration collection 8 s alone, 166 s
 # oversubscribed). The parallelism is the robots' chains side by side (JOBS).
 export LASA_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 # llvmpipe (OSMesa) render threads: the cores shared among the notebooks that run at once
 export LP_NUM_THREADS ?= $(shell n=$$(( $(NPROC) / $(JOBS) )); echo $$(( n > 0 ? n : 1 )))
-# What the notebooks run: the library, except live use (teleop, devices, the book, session logs and
-# the study kit), which no notebook imports; notebook 11 reads logged sessions through the study
-# kit, so it alone depends on STUDY_SRC. An edit to teleop.py leaves `make figures` nothing to do.
-LIVE_SRC := lasa/teleop.py lasa/devices.py lasa/book.py
-STUDY_SRC := lasa/studykit.py lasa/sessionlog.py
-LASA_SRC := $(filter-out $(LIVE_SRC) $(STUDY_SRC),$(shell find lasa -name '*.py' -o -name '*.xml')) pyproject.toml
+# What each notebook runs: the lasa modules it reaches by imports, read from the source by
+# lasa/pipeline/makedeps.py into NB_SRC_<notebook> (build/make-deps.mk, remade when a module or a
+# notebook changes). A notebook re-runs only when a file it runs changed: no notebook reaches live
+# use (lasa/live/), so an edit there leaves `make figures` with nothing to do, and an edit to one
+# figure's module re-runs that figure's notebooks (and those that read their outputs) alone.
+NOTEBOOK_FILES := $(sort $(wildcard notebooks/[0-9]*.ipynb))
+MAKE_DEPS := build/make-deps.mk
+$(MAKE_DEPS): lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) $(shell find lasa -name '*.py')
+	@mkdir -p $(@D)
+	@$(PYTHON) lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) > $@.tmp && mv $@.tmp $@
+include $(MAKE_DEPS)
 PIP_NOISE := is ignored: it is neither a file nor a directory
-RUN = $(BIN)/python -m lasa.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
+RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
 .PHONY: setup sysdeps figures notebooks test lint bench clean teleop book
 
@@ -110,7 +115,7 @@ figures: setup
 	@rm -f $(BUILD)/timings.jsonl
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
-	@$(BIN)/python -m lasa.claims README.md figures/claims.csv
+	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv
 endif
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC); wall times in $(BUILD)/timings.jsonl)"
 
@@ -119,49 +124,49 @@ STUDY_NBS := 10_eating_task 11_eating_study
 notebooks: $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb)) $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb)
 
 # The robots' chains run side by side. Notebooks that share a figure merge their rows
-# and redraw it under a lock (lasa.io.locked), and the merged rows are ordered by robot,
+# and redraw it under a lock (lasa.base.io.locked), and the merged rows are ordered by robot,
 # so the files come out the same whichever robot finishes first.
 
 # One executed copy per (notebook, robot); `$*` is the robot.
-$(EXEC)/01_demonstrations-%.ipynb: notebooks/01_demonstrations.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/01_demonstrations-%.ipynb: notebooks/01_demonstrations.ipynb $(NB_SRC_01_demonstrations) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-$(EXEC)/02_decoder_training-%.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)/01_demonstrations-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/02_decoder_training-%.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)/01_demonstrations-%.ipynb $(NB_SRC_02_decoder_training) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-$(EXEC)/03_entropy_ablation-%.ipynb: notebooks/03_entropy_ablation.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/03_entropy_ablation-%.ipynb: notebooks/03_entropy_ablation.ipynb $(EXEC)/02_decoder_training-%.ipynb $(NB_SRC_03_entropy_ablation) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 # The sweeps read notebook 03's pair of decoders: the lambda = 0 control and the entropy one.
-$(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_04_fixed_expertise) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-$(EXEC)/05_changing_goals-%.ipynb: notebooks/05_changing_goals.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/05_changing_goals-%.ipynb: notebooks/05_changing_goals.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_05_changing_goals) $(CONFIG) | setup
 	$(RUN) --robot $*
 
-$(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_06_learning_users) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 # New goals read the base decoder only (no retraining: that is the point of Sec. IV-C).
-$(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_training-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_training-%.ipynb $(NB_SRC_07_new_goals) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 # The verdict map re-runs sims 1-3 over a grid of settings with notebook 03's decoders; its
 # default and members' cells are the first look of notebooks 04-06 (their CSVs), not run again.
 # Its cells go through joblib (a Dask cluster if LASA_SCHEDULER=tcp://... is set).
-$(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXEC)/04_fixed_expertise-%.ipynb $(EXEC)/05_changing_goals-%.ipynb $(EXEC)/06_learning_users-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXEC)/04_fixed_expertise-%.ipynb $(EXEC)/05_changing_goals-%.ipynb $(EXEC)/06_learning_users-%.ipynb $(NB_SRC_08_claims_robustness) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 # Sec. IV-A's ball along LA+SA rollouts of the lambda = 0 control decoder.
-$(EXEC)/09_convergence-%.ipynb: notebooks/09_convergence.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/09_convergence-%.ipynb: notebooks/09_convergence.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_09_convergence) $(CONFIG) | setup
 	$(RUN) --robot $*
 
 # The eating task: scene, demonstrations and the 2-D decoder readings (after 02: the property
 # figure holds the cup decoders too); then the simulated study.
-$(EXEC)/10_eating_task.ipynb: notebooks/10_eating_task.ipynb $(EXEC)/02_decoder_training-planar5.ipynb $(EXEC)/02_decoder_training-panda.ipynb $(LASA_SRC) $(CONFIG) | setup
+$(EXEC)/10_eating_task.ipynb: notebooks/10_eating_task.ipynb $(EXEC)/02_decoder_training-planar5.ipynb $(EXEC)/02_decoder_training-panda.ipynb $(NB_SRC_10_eating_task) $(CONFIG) | setup
 	$(RUN)
 
-$(EXEC)/11_eating_study.ipynb: notebooks/11_eating_study.ipynb $(EXEC)/10_eating_task.ipynb $(LASA_SRC) $(STUDY_SRC) $(CONFIG) | setup
+$(EXEC)/11_eating_study.ipynb: notebooks/11_eating_study.ipynb $(EXEC)/10_eating_task.ipynb $(NB_SRC_11_eating_study) $(CONFIG) | setup
 	$(RUN)
 
 lint: setup
@@ -180,16 +185,16 @@ bench: setup
 
 # A browsable book of the executed notebooks of the last `make figures` (Jupyter Book, offline).
 book: setup
-	$(BIN)/python -m lasa.book --notebooks $(EXEC) --figures $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures) --out $(BUILD)/book
+	$(BIN)/python -m lasa.pipeline.book --notebooks $(EXEC) --figures $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures) --out $(BUILD)/book
 
 # Drive the robot yourself in MuJoCo's viewer (a gamepad, or the keyboard): after make figures.
 #   make teleop ARGS="--task Dessert --condition LA+SA --participant p01"
 teleop: setup
-	MUJOCO_GL=glfw $(BIN)/python -m lasa.teleop run $(ARGS)
+	MUJOCO_GL=glfw $(BIN)/python -m lasa.live.teleop run $(ARGS)
 
 clean:
 	rm -rf build
 
-# `make print-VAR`: a variable's value (tests read LASA_SRC with it)
+# `make print-VAR`: a variable's value (tests read NB_SRC_<notebook> with it)
 print-%:
 	@echo $($*)

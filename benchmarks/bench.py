@@ -5,33 +5,33 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 
 - ``step_latency_us``: one user's full LA+SA step on the Panda, from joystick input to
   commanded state (decode, assistance, blend, belief update, safe step), with
-  :class:`lasa.controller.Controller`, i.e. the reference step
-  :func:`lasa.rollout.shared_autonomy_step` run for a batch of one; median and 99th
+  :class:`lasa.method.controller.Controller`, i.e. the reference step
+  :func:`lasa.method.step.shared_autonomy_step` run for a batch of one; median and 99th
   percentile over 10,000 steps. ``step_deadline`` is what that step has to meet: one
   control period ``dt`` of the robot (0.1 s, a 10 Hz loop), and the fraction of it that
   the p99 uses. ``mj_step_us`` is one ``mujoco.mj_step`` of the Panda scene in the same run.
-- ``station_step_us``: the step live teleoperation runs (:meth:`lasa.teleop.Station.step`,
+- ``station_step_us``: the step live teleoperation runs (:meth:`lasa.live.teleop.Station.step`,
   Dessert), for Retargeting (``R+SA``: the mink solve included) and latent actions
   (``LA+SA``, with the eating decoder of ``--decoder-build``; skipped when there is none).
 - ``sweep``: simulated user-steps per second of the batched rollout
-  (:func:`lasa.rollout.rollout`) for 1 to 4096 users, against a per-user, per-step
+  (:func:`lasa.people.rollout.rollout`) for 1 to 4096 users, against a per-user, per-step
   loop over the same decoder and the same step functions (``loop``: the rollout run
   for one user at a time), and against the bare batched decoder forward pass at the
-  same size (``floor``: :meth:`lasa.decoder.LatentActionModel.decode_numpy` on the rollout's
+  same size (``floor``: :meth:`lasa.method.decoder.LatentActionModel.decode_numpy` on the rollout's
   call shapes), with the notebooks' torch threads (``LASA_THREADS``, else one).
 - ``decoder_vs_gemm``: the decoder's inference forward (``decode_numpy``) at the sweep's
   shape (1024 users x 21 candidates) on one thread, against the GEMM-only bound: the same
   matrix products (input, hidden and output layers) with no activation, into preallocated
   buffers, at the best of a few chunk sizes and both output-layer layouts; their ratio is
   ``decoder_vs_gemm_fraction``, and ``by_users`` holds it at every batch size of the sweep.
-  The previous forward (:meth:`~lasa.decoder.LatentActionModel.decode`, torch with autograd's
+  The previous forward (:meth:`~lasa.method.decoder.LatentActionModel.decode`, torch with autograd's
   layers, on expanded inputs) is timed beside them (``decode_torch``).
 - ``training_s``: the time to train each decoder of ``configs/paper.yaml`` and its
   final error, read from the checkpoints of a fresh paper-scale pipeline run.
 - ``figures_s``: wall time of ``make figures`` (fresh, into ``build/bench``) per
   notebook and in total, and the same for ``make figures QUICK=1``.
 - ``render_fps``: frames per second of the off-screen video renderer.
-- ``dask_grid``: wall time of a small verdict-map grid (:mod:`lasa.sims.robustness`) run
+- ``dask_grid``: wall time of a small verdict-map grid (:mod:`lasa.figures.robustness`) run
   in this process, and on a ``distributed.LocalCluster`` of 1 and of 2 worker processes
   (one thread each), with the speedup of 2 workers over 1 (reported, not a target) and
   whether every run gave the same rows; ``dask_overhead_1_worker`` is one worker's time
@@ -73,16 +73,17 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import torch  # noqa: E402
 
-from lasa.config import ControlConfig, set_threads  # noqa: E402
-from lasa.controller import Controller  # noqa: E402
-from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
-from lasa.errors import ArtifactError, ConfigError  # noqa: E402
-from lasa.io import write_text  # noqa: E402
-from lasa.robot import Robot, load_robot  # noqa: E402
-from lasa.rollout import rollout  # noqa: E402
-from lasa.task import CupTask, make_cup_task  # noqa: E402
-from lasa.users import UserPopulation, latent_grid  # noqa: E402
-from lasa.video import render_states  # noqa: E402
+from lasa.base.config import ControlConfig, set_threads  # noqa: E402
+from lasa.base.errors import ArtifactError, ConfigError  # noqa: E402
+from lasa.base.io import write_text  # noqa: E402
+from lasa.evidence.video import render_states  # noqa: E402
+from lasa.method.controller import Controller  # noqa: E402
+from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
+from lasa.method.step import latent_grid  # noqa: E402
+from lasa.people.rollout import rollout  # noqa: E402
+from lasa.people.users import UserPopulation
+from lasa.world.robot import Robot, load_robot  # noqa: E402
+from lasa.world.task import CupTask, make_cup_task  # noqa: E402
 
 __all__ = [
     "ROOT",
@@ -193,7 +194,7 @@ def _decoder(task: CupTask, control: ControlConfig, config: BenchConfig) -> Late
 def step_latency(
     model: LatentActionModel, task: CupTask, control: ControlConfig, n_steps: int, seed: int = 0
 ) -> tuple[dict[str, float], np.ndarray]:
-    """Latency of one LA+SA control step for one user (:meth:`lasa.controller.Controller.step`).
+    """Latency of one LA+SA control step for one user (:meth:`lasa.method.controller.Controller.step`).
 
     The joystick input is a random walk in [-1, 1]; the episode restarts from the start
     pose every 200 steps so the arm stays in the task's region. The first 10% are warm-up.
@@ -232,7 +233,7 @@ def step_latency(
 def station_latency(
     condition: str, build_dir: str | os.PathLike[str], n_steps: int, seed: int = 0
 ) -> dict[str, Any]:
-    """Latency of the step live teleoperation runs (:meth:`lasa.teleop.Station.step`), Dessert.
+    """Latency of the step live teleoperation runs (:meth:`lasa.live.teleop.Station.step`), Dessert.
 
     ``R+SA`` is Retargeting: a twist from the stick and its mode, mink's differential IK to a
     joint velocity, then the blend, belief update and safe step. ``LA+SA`` decodes with the
@@ -243,8 +244,8 @@ def station_latency(
     Returns:
         ``{p50, p99, mean, n}`` in microseconds, or ``{"skipped": why}`` when the decoder is missing.
     """
-    from lasa.devices import Reading
-    from lasa.teleop import SessionConfig, Station
+    from lasa.live.devices import Reading
+    from lasa.live.teleop import SessionConfig, Station
 
     if n_steps < 10:
         raise ConfigError(f"n_steps must be >= 10, got {n_steps}")
@@ -272,7 +273,7 @@ def step_deadline(control: ControlConfig, latency_us: dict[str, float]) -> dict[
     """The step's real-time deadline, one control period, and the share of it the p99 uses.
 
     The controller integrates s' = s + dt a, so a live loop runs one step per ``dt`` of
-    wall-clock time (:mod:`lasa.controller`): the deadline is ``dt``.
+    wall-clock time (:mod:`lasa.method.controller`): the deadline is ``dt``.
 
     Returns:
         ``{dt_s, rate_hz, deadline_us, p99_fraction}`` (``p99_fraction`` = p99 / deadline).
@@ -332,7 +333,7 @@ def _loop(
 def _floor(model: LatentActionModel, n_users: int, n_cand: int, steps: int) -> float:
     """The bare batched decoder forward pass at the rollout's size [user-steps/s].
 
-    ``decode_numpy`` with the rollout's call shapes (:func:`lasa.rollout.decode_candidates`):
+    ``decode_numpy`` with the rollout's call shapes (:func:`lasa.method.step.decode_candidates`):
     z (1, K, d), s (U, 1, n), b (U, 1, G).
     """
     z, s, b = _rollout_inputs(model, n_users, n_cand)
@@ -390,7 +391,7 @@ def sweep_throughput(
 
 
 def render_fps(robot: Robot, n_frames: int) -> float:
-    """Frames per second of :func:`lasa.video.render_states` at 320x240 (OSMesa)."""
+    """Frames per second of :func:`lasa.evidence.video.render_states` at 320x240 (OSMesa)."""
     states = np.tile(robot.home, (n_frames, 1))
     render_states(robot, states[:1])  # the GL context's first frame is dearer
     start = time.perf_counter()
@@ -526,7 +527,7 @@ def _tiny_pipeline(build: Path) -> dict[str, Any]:
     command = [
         sys.executable,
         "-m",
-        "lasa.runner",
+        "lasa.pipeline.runner",
         str(ROOT / "notebooks" / "01_demonstrations.ipynb"),
         "--config",
         str(ROOT / "configs" / "quick.yaml"),
@@ -705,7 +706,7 @@ def dask_grid(
     """
     from distributed import Client, LocalCluster  # noqa: PLC0415
 
-    from lasa.sims import robustness  # noqa: PLC0415
+    from lasa.figures import robustness  # noqa: PLC0415
 
     grid = robustness.Config(
         users=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
@@ -714,7 +715,7 @@ def dask_grid(
     shared = robustness.Grid({"base": model, "entropy": model}, task, control, grid)
 
     def timed(scheduler: str | None) -> tuple[float, pd.DataFrame]:
-        from lasa.scaleout import run_jobs  # noqa: PLC0415
+        from lasa.pipeline.scaleout import run_jobs  # noqa: PLC0415
 
         start = time.perf_counter()
         frames = run_jobs(robustness.run_cell, cells, scheduler, shared=shared)
@@ -727,7 +728,7 @@ def dask_grid(
             n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
         ) as cluster:
             with Client(cluster) as client:  # imports are start-up, not work: before the clock
-                client.run(importlib.import_module, "lasa.sims.robustness")
+                client.run(importlib.import_module, "lasa.figures.robustness")
             seconds, frame = timed(cluster.scheduler_address)
         out["workers"][str(n)] = seconds
         out["identical"] = bool(out["identical"] and frame.equals(reference))

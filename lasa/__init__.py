@@ -2,7 +2,7 @@
 
 A reproducibility package: MuJoCo robots and the cup task, demonstrations, the
 conditional-autoencoder decoder phi(z, s, b), shared autonomy (Algorithm 1),
-Boltzmann-rational simulated users, and one module per figure (:mod:`lasa.sims`).
+Boltzmann-rational simulated users, and one module per figure (:mod:`lasa.figures`).
 
 Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
 before anything imports mujoco (it is read once, at import). Set it yourself first
@@ -17,71 +17,67 @@ from typing import TYPE_CHECKING, Any
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
-from lasa.ffmpeg import pin_mediapy  # noqa: E402 (after MUJOCO_GL, which it does not touch)
+from lasa.base.ffmpeg import pin_mediapy  # noqa: E402 (after MUJOCO_GL, which it does not touch)
 
 pin_mediapy()  # mediapy reads and writes with the pinned wheel's ffmpeg, once it is imported
 
-# The public API, imported on first use (PEP 562): `import lasa.runner` or `lasa.errors`
+# The public API, imported on first use (PEP 562): `import lasa.pipeline.runner` or `lasa.base.errors`
 # stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
 # name -> module that defines it; `__all__` lists the same names (tests/test_init.py checks).
 _EXPORTS = {
-    "ArtifactError": "lasa.errors",
-    "Claim": "lasa.claims",
-    "ConfigError": "lasa.errors",
-    "ContextMap": "lasa.newgoals",
-    "ControlConfig": "lasa.config",
-    "Controller": "lasa.controller",
-    "CupTask": "lasa.task",
-    "DecoderConfig": "lasa.decoder",
-    "DemoConfig": "lasa.demos",
-    "Demonstrations": "lasa.demos",
-    "IKError": "lasa.errors",
-    "LasaError": "lasa.errors",
-    "LatentActionModel": "lasa.decoder",
-    "METHODS": "lasa.rollout",
-    "MappedDecoder": "lasa.newgoals",
-    "Paths": "lasa.paths",
-    "ROBOTS": "lasa.robot",
-    "Robot": "lasa.robot",
-    "TrainConfig": "lasa.train",
-    "Trajectories": "lasa.rollout",
-    "UserPopulation": "lasa.users",
-    "collect_demonstrations": "lasa.demos",
-    "extend_task": "lasa.newgoals",
-    "load_checkpoint": "lasa.decoder",
-    "load_demonstrations": "lasa.demos",
-    "load_robot": "lasa.robot",
-    "make_cup_task": "lasa.task",
-    "publish": "lasa.sims.publish",
-    "rollout": "lasa.rollout",
-    "save_checkpoint": "lasa.decoder",
-    "save_demonstrations": "lasa.demos",
-    "shared_autonomy_step": "lasa.rollout",
-    "train_decoder": "lasa.train",
-    "update_claims": "lasa.claims",
+    "ArtifactError": "lasa.base.errors",
+    "Claim": "lasa.evidence.claims",
+    "ConfigError": "lasa.base.errors",
+    "ContextMap": "lasa.method.newgoals",
+    "ControlConfig": "lasa.base.config",
+    "Controller": "lasa.method.controller",
+    "CupTask": "lasa.world.task",
+    "DecoderConfig": "lasa.method.decoder",
+    "DemoConfig": "lasa.people.demos",
+    "Demonstrations": "lasa.method.dataset",
+    "IKError": "lasa.base.errors",
+    "LasaError": "lasa.base.errors",
+    "LatentActionModel": "lasa.method.decoder",
+    "METHODS": "lasa.method.step",
+    "MappedDecoder": "lasa.method.newgoals",
+    "Paths": "lasa.base.paths",
+    "ROBOTS": "lasa.world.robot",
+    "Robot": "lasa.world.robot",
+    "TrainConfig": "lasa.method.train",
+    "Trajectories": "lasa.people.rollout",
+    "UserPopulation": "lasa.people.users",
+    "collect_demonstrations": "lasa.people.demos",
+    "extend_task": "lasa.method.newgoals",
+    "load_checkpoint": "lasa.method.decoder",
+    "load_demonstrations": "lasa.method.dataset",
+    "load_robot": "lasa.world.robot",
+    "make_cup_task": "lasa.world.task",
+    "publish": "lasa.evidence.publish",
+    "rollout": "lasa.people.rollout",
+    "save_checkpoint": "lasa.method.decoder",
+    "save_demonstrations": "lasa.method.dataset",
+    "shared_autonomy_step": "lasa.method.step",
+    "train_decoder": "lasa.method.train",
+    "update_claims": "lasa.evidence.claims",
 }
 
 if TYPE_CHECKING:
-    from lasa.claims import Claim, update_claims
-    from lasa.config import ControlConfig
-    from lasa.controller import Controller
-    from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
-    from lasa.demos import (
-        DemoConfig,
-        Demonstrations,
-        collect_demonstrations,
-        load_demonstrations,
-        save_demonstrations,
-    )
-    from lasa.errors import ArtifactError, ConfigError, IKError, LasaError
-    from lasa.newgoals import ContextMap, MappedDecoder, extend_task
-    from lasa.paths import Paths
-    from lasa.robot import ROBOTS, Robot, load_robot
-    from lasa.rollout import METHODS, Trajectories, rollout, shared_autonomy_step
-    from lasa.sims.publish import publish
-    from lasa.task import CupTask, make_cup_task
-    from lasa.train import TrainConfig, train_decoder
-    from lasa.users import UserPopulation
+    from lasa.base.config import ControlConfig
+    from lasa.base.errors import ArtifactError, ConfigError, IKError, LasaError
+    from lasa.base.paths import Paths
+    from lasa.evidence.claims import Claim, update_claims
+    from lasa.evidence.publish import publish
+    from lasa.method.controller import Controller
+    from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
+    from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
+    from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
+    from lasa.method.step import METHODS, shared_autonomy_step
+    from lasa.method.train import TrainConfig, train_decoder
+    from lasa.people.demos import DemoConfig, collect_demonstrations
+    from lasa.people.rollout import Trajectories, rollout
+    from lasa.people.users import UserPopulation
+    from lasa.world.robot import ROBOTS, Robot, load_robot
+    from lasa.world.task import CupTask, make_cup_task
 
 
 def __getattr__(name: str) -> Any:

@@ -14,10 +14,10 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 import pytest  # noqa: E402
 import torch  # noqa: E402
 
-from lasa.demos import DemoConfig, collect_demonstrations  # noqa: E402
-from lasa.robot import Robot, load_robot  # noqa: E402
-from lasa.task import CupTask, make_cup_task  # noqa: E402
-from lasa.train import TrainConfig, train_decoder  # noqa: E402
+from lasa.method.train import TrainConfig, train_decoder  # noqa: E402
+from lasa.people.demos import DemoConfig, collect_demonstrations  # noqa: E402
+from lasa.world.robot import Robot, load_robot  # noqa: E402
+from lasa.world.task import CupTask, make_cup_task  # noqa: E402
 
 torch.set_num_threads(1)
 

@@ -1,4 +1,4 @@
-"""The assistance family (lasa.assistance): each member against a hand-computed two-goal case."""
+"""The assistance family (lasa.method.assistance): each member against a hand-computed two-goal case."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.assistance import ASSISTANCE, assist, nearest_grasps
-from lasa.config import ControlConfig
-from lasa.errors import ConfigError
+from lasa.base.config import ControlConfig
+from lasa.base.errors import ConfigError
+from lasa.method.assistance import ASSISTANCE, assist, nearest_grasps
 
 # Two goals in a 2-D joint space. Goal 0 is the point (1, 0), its grasps the segment from
 # (1, -1) to (1, 1); goal 1 the point (-1, 0), its grasps the segment from (-1, -1) to (-1, 1).
@@ -90,7 +90,7 @@ def test_every_member_is_batched_and_names_are_checked():
 
 
 def test_the_config_knows_every_member_and_defaults_to_point():
-    from lasa import assistance
+    from lasa.method import assistance
 
     assert tuple(assistance._MEMBERS) == ASSISTANCE  # each named member is implemented, and no other
     assert ControlConfig().assistance == "point"
@@ -101,8 +101,8 @@ def test_the_config_knows_every_member_and_defaults_to_point():
 @pytest.mark.parametrize("name", ASSISTANCE)
 def test_each_member_drives_the_rollout_safely(name, model, task):
     """LA+SA with each member: limits, step bound, and alpha = 0 still ignores the assistance."""
-    from lasa.rollout import rollout
-    from lasa.users import UserPopulation
+    from lasa.people.rollout import rollout
+    from lasa.people.users import UserPopulation
 
     control = dataclasses.replace(task.robot.control, assistance=name)
     n = 4

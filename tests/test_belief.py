@@ -4,14 +4,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.belief import (
-    belief,
-    distance_to_sets,
-    log_likelihood,
-    uniform_log_belief,
-    update_log_belief,
-)
-from lasa.errors import ConfigError
+from lasa.base.errors import ConfigError
+from lasa.method.belief import belief, distance_to_sets, log_likelihood, uniform_log_belief, update_log_belief
 
 GOALS = np.array([[1.0, 0.0], [-1.0, 0.0]])
 

@@ -14,8 +14,8 @@ from types import ModuleType
 import numpy as np
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.runner import parse_params
+from lasa.base.errors import ConfigError
+from lasa.pipeline.runner import parse_params
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -38,10 +38,10 @@ TINY = bench.BenchConfig.tiny()
 def tiny_results(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
     # a small eating decoder where `make figures` would leave the real one (the live LA+SA step loads it)
-    from lasa.decoder import save_checkpoint
-    from lasa.demos import DemoConfig, collect_eating_demonstrations
-    from lasa.eating import make_eating_task
-    from lasa.train import TrainConfig, train_decoder
+    from lasa.method.decoder import save_checkpoint
+    from lasa.method.train import TrainConfig, train_decoder
+    from lasa.people.demos import DemoConfig, collect_eating_demonstrations
+    from lasa.world.eating import make_eating_task
 
     task = make_eating_task()
     demos = collect_eating_demonstrations(
@@ -159,7 +159,7 @@ def test_training_times_of_no_checkpoints(tmp_path):
 
 
 def test_training_times_read_what_the_checkpoints_record(model, tmp_path):
-    from lasa.decoder import save_checkpoint
+    from lasa.method.decoder import save_checkpoint
 
     save_checkpoint(
         model,

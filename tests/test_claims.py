@@ -3,7 +3,8 @@
 import pandas as pd
 import pytest
 
-from lasa.claims import (
+from lasa.base.errors import ConfigError
+from lasa.evidence.claims import (
     CLAIM_COLUMNS,
     README_MARKERS,
     Claim,
@@ -12,7 +13,6 @@ from lasa.claims import (
     sync_readme,
     update_claims,
 )
-from lasa.errors import ConfigError
 
 
 def claim(name, text=None, figure="sim1", robot="planar5", verdict="yes"):

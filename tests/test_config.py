@@ -4,8 +4,8 @@ import math
 
 import pytest
 
-from lasa.config import ControlConfig, check_range, from_dict, to_dict
-from lasa.errors import ConfigError
+from lasa.base.config import ControlConfig, check_range, from_dict, to_dict
+from lasa.base.errors import ConfigError
 
 
 def test_check_range():
@@ -48,7 +48,7 @@ def test_round_trip():
 
 def test_defaults_are_the_robots_units():
     """ControlConfig's defaults are the values both robots use, not numbers of their own."""
-    from lasa.robot import ROBOTS
+    from lasa.world.robot import ROBOTS
 
     assert all(spec.control == ControlConfig() for spec in ROBOTS.values())
     cfg = ControlConfig()
@@ -56,7 +56,7 @@ def test_defaults_are_the_robots_units():
 
 
 def test_from_dict_turns_yaml_lists_into_tuples_and_refuses_non_mappings():
-    from lasa.sims import sim1
+    from lasa.figures import sim1
 
     cfg = from_dict(sim1.Config, {"betas": [1, 75, 1000], "users": 2})
     assert cfg.betas == (1.0, 75.0, 1000.0) and cfg.users == 2

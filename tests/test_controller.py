@@ -1,9 +1,9 @@
-"""The single-user step (lasa.controller) against the batched reference step, over every option.
+"""The single-user step (lasa.method.controller) against the batched reference step, over every option.
 
-There is one implementation of Algorithm 1's step (:func:`lasa.rollout.shared_autonomy_step`);
+There is one implementation of Algorithm 1's step (:func:`lasa.method.step.shared_autonomy_step`);
 the Controller runs it for one user and keeps that user's state and belief. These
 property tests draw the whole option space (both likelihoods, every assistance member
-of lasa.assistance, belief floor 0 and > 0,
+of lasa.method.assistance, belief floor 0 and > 0,
 alpha at 0, 1 and between, decoder depths, 1- and 2-axis joysticks, a task grown by a
 new goal through the context map) with random states, beliefs and inputs, NaN and huge
 ones included, and check that the Controller follows the user's row of a batched run
@@ -21,15 +21,15 @@ import torch
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lasa.assistance import ASSISTANCE
-from lasa.belief import belief
-from lasa.controller import Controller
-from lasa.decoder import DecoderConfig, LatentActionModel
-from lasa.errors import ConfigError
-from lasa.newgoals import ContextMap, MappedDecoder, extend_task
-from lasa.robot import load_robot
-from lasa.rollout import shared_autonomy_step
-from lasa.task import make_cup_task
+from lasa.base.errors import ConfigError
+from lasa.method.assistance import ASSISTANCE
+from lasa.method.belief import belief
+from lasa.method.controller import Controller
+from lasa.method.decoder import DecoderConfig, LatentActionModel
+from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
+from lasa.method.step import shared_autonomy_step
+from lasa.world.robot import load_robot
+from lasa.world.task import make_cup_task
 
 REF = 1
 

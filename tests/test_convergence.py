@@ -1,4 +1,4 @@
-"""The Sec. IV-A ball (lasa.sims.convergence): hand-computed radii, measured rates, the sweep."""
+"""The Sec. IV-A ball (lasa.figures.convergence): hand-computed radii, measured rates, the sweep."""
 
 import dataclasses
 
@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.sims import convergence
+from lasa.base.errors import ConfigError
+from lasa.figures import convergence
 
 SMALL = convergence.Config(
     betas=(75.0, 1000.0), assistance=("point", "hindsight"), n_seeds=2, horizon=12, record_every=1

@@ -9,9 +9,9 @@ import torch
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lasa import decoder as decoder_module
-from lasa.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
-from lasa.errors import ArtifactError, ConfigError
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.method import decoder as decoder_module
+from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
 
 # decode_numpy against decode (float32 torch): tanh via the sigmoid and the split first layer
 # differ by float32 rounding. Measured worst over 432 random models (hidden 16-128, depth 1-3,
@@ -78,7 +78,7 @@ def trained_like(seed: int = 0, **kw) -> LatentActionModel:
 
 # leading shapes of (z, s, b) for U users and K candidates
 LAYOUTS = {
-    "rollout": lambda u, k: ((1, k), (u, 1), (u, 1)),  # lasa.rollout.decode_candidates
+    "rollout": lambda u, k: ((1, k), (u, 1), (u, 1)),  # lasa.method.step.decode_candidates
     "flat": lambda u, k: ((u * k,), (u * k,), (u * k,)),
     "step": lambda u, k: ((u,), (u,), (u,)),  # one candidate per user (shared_autonomy_step)
     "one state": lambda u, k: ((k,), (), ()),  # one context, many z (the eating task's map)

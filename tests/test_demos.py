@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from lasa.demos import DemoConfig, collect_demonstrations, load_demonstrations, save_demonstrations
-from lasa.errors import ArtifactError, ConfigError
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.method.dataset import load_demonstrations, save_demonstrations
+from lasa.people.demos import DemoConfig, collect_demonstrations
 from tests.conftest import SMALL_DEMOS
 
 
@@ -76,8 +77,8 @@ def test_bad_config_is_a_clear_error(field, value):
 
 @pytest.fixture(scope="module")
 def eating_readings():
-    from lasa.demos import EATING_READINGS, collect_eating_demonstrations
-    from lasa.eating import make_eating_task
+    from lasa.people.demos import EATING_READINGS, collect_eating_demonstrations
+    from lasa.world.eating import make_eating_task
 
     task = make_eating_task()
     config = DemoConfig(n_theta=2, n_starts=1, n_adjust=1, n_perturb=0)
@@ -90,7 +91,7 @@ def _firsts(demos):
 
 
 def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readings):
-    from lasa.demos import ADJUST, REACH, STROKE
+    from lasa.method.dataset import ADJUST, REACH, STROKE
 
     task, readings = eating_readings
     g = task.n_goals
@@ -114,6 +115,6 @@ def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readin
                 phases = set(demos.phase[demos.demo == d])
                 assert REACH in phases and not phases & {ADJUST, STROKE}
     with pytest.raises(ConfigError, match="reading"):
-        from lasa.demos import collect_eating_demonstrations
+        from lasa.people.demos import collect_eating_demonstrations
 
         collect_eating_demonstrations(task, task.robot.control, DemoConfig(n_theta=2), "sideways")

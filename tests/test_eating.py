@@ -7,8 +7,11 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.demos import REACH, DemoConfig, collect_eating_demonstrations
-from lasa.eating import (
+from lasa.base.errors import ConfigError
+from lasa.method.dataset import REACH
+from lasa.people.demos import DemoConfig, collect_eating_demonstrations
+from lasa.people.participants import tip_frames
+from lasa.world.eating import (
     EATING,
     GOALS,
     PREFERENCES,
@@ -21,9 +24,7 @@ from lasa.eating import (
     stroke_direction,
     waypoints,
 )
-from lasa.errors import ConfigError
-from lasa.robot import Robot
-from lasa.study import tip_frames
+from lasa.world.robot import Robot
 
 
 @pytest.fixture(scope="module")

@@ -8,8 +8,9 @@ import pytest
 import torch
 from numpy.testing import assert_allclose
 
-from lasa.config import ControlConfig
-from lasa.entropy import (
+from lasa.base.config import ControlConfig
+from lasa.base.errors import ConfigError
+from lasa.method.entropy import (
     EntropyRegularizer,
     choose_lambda,
     context_entropy,
@@ -18,8 +19,7 @@ from lasa.entropy import (
     goal_distribution,
     goal_scores,
 )
-from lasa.errors import ConfigError
-from lasa.train import TrainConfig, train_decoder
+from lasa.method.train import TrainConfig, train_decoder
 from tests.conftest import SMALL_TRAIN
 
 POINT_GOALS = torch.tensor([[[1.0, 0.0]], [[-1.0, 0.0]]])  # two point goals, shape (G=2, K=1, n=2)
@@ -131,9 +131,9 @@ def test_bad_lambda_is_a_clear_error(task):
 
 def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
     """Every lambda, 0 included, fine-tunes the base decoder with the same steps, schedule and seed."""
-    from lasa.config import to_dict
-    from lasa.decoder import load_checkpoint, save_checkpoint
-    from lasa.sims import entropy_ablation
+    from lasa.base.config import to_dict
+    from lasa.figures import entropy_ablation
+    from lasa.method.decoder import load_checkpoint, save_checkpoint
 
     ctl = task.robot.control
     cfg = entropy_ablation.Config(lambdas=(0.0, 0.3), sweep_steps=20, seed=0)
@@ -161,7 +161,7 @@ def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
 
 
 def test_ablation_config_needs_the_control():
-    from lasa.sims import entropy_ablation
+    from lasa.figures import entropy_ablation
 
     with pytest.raises(ConfigError, match="include 0"):
         entropy_ablation.Config(lambdas=(0.1, 0.3))

@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.errors import ArtifactError
-from lasa.io import atomic_path, load_npz, save_npz, write_csv
+from lasa.base.errors import ArtifactError
+from lasa.base.io import atomic_path, load_npz, save_npz, write_csv
 
 
 def test_interrupted_write_leaves_no_file(tmp_path):
@@ -42,7 +42,7 @@ def test_npz_round_trip_and_errors(tmp_path):
 
 
 def test_update_csv_replaces_one_robots_rows(tmp_path):
-    from lasa.io import update_csv
+    from lasa.base.io import update_csv
 
     path = tmp_path / "t.csv"
     update_csv(path, pd.DataFrame({"robot": ["a", "a"], "x": [1, 2]}))

@@ -1,10 +1,10 @@
-"""The latent map (lasa.sims.latent_map): held-input sweeps and the rows of the figure."""
+"""The latent map (lasa.figures.latent_map): held-input sweeps and the rows of the figure."""
 
 import numpy as np
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.sims.latent_map import Config, held_input_paths, run
+from lasa.base.errors import ConfigError
+from lasa.figures.latent_map import Config, held_input_paths, run
 
 
 def test_held_paths_shape_and_limits(model, task):
@@ -31,7 +31,7 @@ def test_latent_map_rows(model, task):
     )
     # at the cup, the grasp shown starts from the mid-preference one (theta = 0.5), and two steps of
     # at most dt * sigma_h per joint cannot carry it far from there
-    from lasa.task import grasp_preference
+    from lasa.world.task import grasp_preference
 
     np.testing.assert_allclose(grasp_preference(task, held["confident"][:, 0]), 0.5, atol=0.02)
     assert (frame[frame.context == "confident"].grasp_theta - 0.5).abs().max() < 0.2

@@ -1,4 +1,4 @@
-"""The latent-action property (lasa.latent_property) on hand-built decoders whose answer is known."""
+"""The latent-action property (lasa.evidence.latent_property) on hand-built decoders whose answer is known."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa import latent_property as lp
-from lasa.errors import ConfigError
-from lasa.robot import load_robot
-from lasa.task import CupTask, make_cup_task
+from lasa.base.errors import ConfigError
+from lasa.evidence import latent_property as lp
+from lasa.world.robot import load_robot
+from lasa.world.task import CupTask, make_cup_task
 
 
 @pytest.fixture(scope="module")

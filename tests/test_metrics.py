@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from lasa.errors import ConfigError
-from lasa.metrics import confidence, normalized_error, time_to_reach
+from lasa.base.errors import ConfigError
+from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
 
 
 def test_normalized_error_by_hand():

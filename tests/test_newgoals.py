@@ -8,13 +8,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
-from lasa.control import assistance
-from lasa.errors import ConfigError, IKError
-from lasa.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
-from lasa.rollout import rollout, shared_autonomy_step
-from lasa.sims import sim4
-from lasa.users import UserPopulation
+from lasa.base.errors import ConfigError, IKError
+from lasa.figures import sim4
+from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.method.blend import assistance
+from lasa.method.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
+from lasa.method.step import shared_autonomy_step
+from lasa.people.rollout import rollout
+from lasa.people.users import UserPopulation
 
 REF = 1  # the right-hand cup is the reference in these tests
 
@@ -329,7 +330,7 @@ def test_sim4_members_share_batches_without_changing_the_headline(model, task):
 
 
 def test_sim4_vectorized_bootstrap_gives_the_resampled_frames_numbers(model, task):
-    from lasa.verdicts import assess
+    from lasa.evidence.verdicts import assess
 
     config = sim4.Config(offsets=(0.08, 0.11, 0.14), users=6, horizon=15, assistance=("point",))
     frame, _ = sim4.run(model, task, task.robot.control, config)

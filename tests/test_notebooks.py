@@ -15,10 +15,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.claims import CLAIM_COLUMNS
-from lasa.runner import load_config
-from lasa.sims import sim1, sim2, sim3, sim4
-from lasa.video import read_video
+from lasa.evidence.claims import CLAIM_COLUMNS
+from lasa.evidence.video import read_video
+from lasa.figures import sim1, sim2, sim3, sim4
+from lasa.pipeline.runner import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "quick.yaml"
@@ -40,9 +40,9 @@ STUDY = ["10_eating_task", "11_eating_study"]  # the eating study: the Panda onl
 def _sessions(out: Path) -> Path:
     """Teleoperation sessions as the kit logs them: 2 participants x 4 conditions, scripted
     Dessert inputs, and their questionnaires; with notebook 10's decoder."""
-    from lasa.devices import ScriptedDevice
-    from lasa.studykit import survey
-    from lasa.teleop import SessionConfig, Station, new_session, run_session
+    from lasa.live.devices import ScriptedDevice
+    from lasa.live.studykit import survey
+    from lasa.live.teleop import SessionConfig, Station, new_session, run_session
 
     folder = out / "sessions"
     for i, participant in enumerate(("s01", "s02")):
@@ -71,7 +71,7 @@ def _chain(robot: str | None, out: Path) -> None:
         command = [
             sys.executable,
             "-m",
-            "lasa.runner",
+            "lasa.pipeline.runner",
             str(ROOT / "notebooks" / f"{stem}.ipynb"),
             "--config",
             str(QUICK),
@@ -155,7 +155,7 @@ def test_sim1_outputs(executed):
 
 
 def test_claims_table(executed):
-    from lasa.config import ASSISTANCE
+    from lasa.base.config import ASSISTANCE
 
     fig = executed / "figures"
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
@@ -192,7 +192,7 @@ def test_claims_table(executed):
 
 
 def test_claims_robustness_outputs(executed):
-    from lasa.sims import robustness
+    from lasa.figures import robustness
 
     fig = executed / "figures"
     frame = pd.read_csv(fig / "claims_robustness.csv")
@@ -220,7 +220,7 @@ def test_convergence_outputs(executed):
 
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_entropy_outputs(executed, robot):
-    from lasa.decoder import load_checkpoint
+    from lasa.method.decoder import load_checkpoint
 
     fig = executed / "figures"
     models = executed / "build" / "models"
@@ -293,8 +293,8 @@ def test_sim4_outputs(executed):
 
 
 def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
-    from lasa import latent_property
-    from lasa.sims import eating_task
+    from lasa.evidence import latent_property
+    from lasa.figures import eating_task
 
     fig = executed / "figures"
     frame = pd.read_csv(fig / "latent_property.csv")
@@ -324,8 +324,8 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
 
 
 def test_study_outputs(executed):
-    from lasa import latent_property
-    from lasa.sims import eating_task, study
+    from lasa.evidence import latent_property
+    from lasa.figures import eating_task, study
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
@@ -403,7 +403,7 @@ def test_the_book_builds_offline_and_reads_in_a_real_browser(executed, report_ar
     from selenium.webdriver.chrome.options import Options
     from selenium.webdriver.chrome.service import Service
 
-    from lasa.book import build_book
+    from lasa.pipeline.book import build_book
 
     index = build_book(executed / "notebooks", executed / "figures", executed / "book", progress=False)
     site = index.parent

@@ -5,8 +5,16 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.franka import LOWER, PACKAGED_OFFSETS, READY, UPPER, check_against_dh, dh_frames, packaged_chain
-from lasa.robot import load_robot
+from lasa.world.franka import (
+    LOWER,
+    PACKAGED_OFFSETS,
+    READY,
+    UPPER,
+    check_against_dh,
+    dh_frames,
+    packaged_chain,
+)
+from lasa.world.robot import load_robot
 
 
 @pytest.fixture(scope="module")
@@ -62,8 +70,8 @@ def test_packaged_model_departs_and_the_offsets_explain_it():
 
 
 def test_grasps_reach_every_pose_within_limits(panda):
-    from lasa.ik import pose_error
-    from lasa.task import grasp_frame, make_cup_task
+    from lasa.world.ik import pose_error
+    from lasa.world.task import grasp_frame, make_cup_task
 
     task = make_cup_task(panda)
     for g in range(task.n_goals):

@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.paths import ARTIFACTS, Paths, repo_root, resolve
+from lasa.base.errors import ConfigError
+from lasa.base.paths import ARTIFACTS, Paths, repo_root, resolve
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -14,10 +14,10 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
-from lasa.claims import Claim  # noqa: E402
-from lasa.errors import ConfigError  # noqa: E402
-from lasa.paths import Paths  # noqa: E402
-from lasa.sims.publish import publish  # noqa: E402
+from lasa.base.errors import ConfigError  # noqa: E402
+from lasa.base.paths import Paths  # noqa: E402
+from lasa.evidence.claims import Claim  # noqa: E402
+from lasa.evidence.publish import publish  # noqa: E402
 
 
 def fake_module(seen: list[pd.DataFrame]) -> types.SimpleNamespace:

@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lasa.errors import ConfigError
-from lasa.retarget import MODES, RetargetConfig, Retargeting, next_mode, twist
-from lasa.robot import Robot, load_robot
+from lasa.base.errors import ConfigError
+from lasa.method.retarget import MODES, RetargetConfig, Retargeting, next_mode, twist
+from lasa.world.robot import Robot, load_robot
 
 DT = 0.02  # control period of the finite-difference checks [s]
 CONFIG = RetargetConfig()

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.errors import ConfigError
-from lasa.robot import ROBOTS, load_robot
+from lasa.base.errors import ConfigError
+from lasa.world.robot import ROBOTS, load_robot
 
 
 @pytest.mark.parametrize("name", sorted(ROBOTS))
@@ -28,8 +28,8 @@ def test_unknown_robot_is_a_clear_error():
 def test_missing_mesh_package_is_a_clear_error():
     import dataclasses
 
-    from lasa.errors import ArtifactError
-    from lasa.robot import Robot
+    from lasa.base.errors import ArtifactError
+    from lasa.world.robot import Robot
 
     spec = dataclasses.replace(ROBOTS["panda"], mesh_package=("no_such_package_xyz", "meshes"))
     with pytest.raises(ArtifactError, match="not installed; run: make setup"):

@@ -1,4 +1,4 @@
-"""The verdict map (lasa.sims.robustness) and its scale-out (lasa.scaleout): grid, determinism, Dask."""
+"""The verdict map (lasa.figures.robustness) and its scale-out (lasa.pipeline.scaleout)."""
 
 import dataclasses
 
@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.scaleout import run_jobs, scheduler_address
-from lasa.sims import robustness
+from lasa.base.errors import ConfigError
+from lasa.figures import robustness
+from lasa.pipeline.scaleout import run_jobs, scheduler_address
 
 TINY = robustness.Config(
     assistance=("point", "grasp_set"),

@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
-from lasa.errors import ConfigError
-from lasa.rollout import METHODS, method_alpha, rollout
-from lasa.users import UserPopulation, latent_grid
+from lasa.base.errors import ConfigError
+from lasa.method.step import METHODS, latent_grid, method_alpha
+from lasa.people.rollout import rollout
+from lasa.people.users import UserPopulation
 
 HORIZON = 25
 
@@ -111,8 +112,8 @@ def test_bad_arguments_are_clear(model, task):
 
 
 def test_step_never_commands_outside_limits_for_random_huge_or_nan_input(model, task):
-    from lasa.belief import belief, uniform_log_belief
-    from lasa.rollout import shared_autonomy_step
+    from lasa.method.belief import belief, uniform_log_belief
+    from lasa.method.step import shared_autonomy_step
 
     rng = np.random.default_rng(0)
     robot, ctl = task.robot, task.robot.control
@@ -140,8 +141,8 @@ def test_step_never_commands_outside_limits_for_random_huge_or_nan_input(model, 
 
 def test_step_matches_the_rollout(model, task):
     """The rollout's step is the teleoperation step, for the inputs the users chose."""
-    from lasa.belief import uniform_log_belief
-    from lasa.rollout import shared_autonomy_step
+    from lasa.method.belief import uniform_log_belief
+    from lasa.method.step import shared_autonomy_step
 
     users = make_users(task, 3)
     ctl = task.robot.control
@@ -155,8 +156,8 @@ def test_step_matches_the_rollout(model, task):
 
 def test_the_stick_at_rest_is_a_named_choice(model, task):
     """rest="decode" commands phi(0, s, b); rest="zero" commands nothing there, and the same elsewhere."""
-    from lasa.belief import belief, uniform_log_belief
-    from lasa.rollout import shared_autonomy_step
+    from lasa.method.belief import belief, uniform_log_belief
+    from lasa.method.step import shared_autonomy_step
 
     control = task.robot.control
     state = np.stack([task.start, task.goals[0], task.goals[1]])

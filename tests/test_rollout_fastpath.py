@@ -4,14 +4,9 @@ import numpy as np
 import pytest
 import torch
 
-from lasa import belief as belief_module
-from lasa.belief import (
-    _distance_no_grad,
-    distance_to_sets_torch,
-    log_likelihood,
-    log_likelihood_torch,
-)
-from lasa.users import choose_latent, gumbel_noise, user_costs
+from lasa.method import belief as belief_module
+from lasa.method.belief import _distance_no_grad, distance_to_sets_torch, log_likelihood, log_likelihood_torch
+from lasa.people.users import choose_latent, gumbel_noise, user_costs
 
 
 def same_bits(x, y):

@@ -1,4 +1,4 @@
-"""lasa.rules: every rule against hand-computed cases, and settledness on boxes of intervals."""
+"""lasa.evidence.rules: every rule against hand-computed cases, and settledness on boxes of intervals."""
 
 import math
 
@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lasa.errors import ConfigError
-from lasa.rules import RULES, rule
+from lasa.base.errors import ConfigError
+from lasa.evidence.rules import RULES, rule
 
 
 @pytest.mark.parametrize(

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.runner import load_config, notebook_parameters
+from lasa.base.errors import ConfigError
+from lasa.pipeline.runner import load_config, notebook_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
@@ -54,7 +54,7 @@ def settings_class(notebook):
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda p: p.stem)
 def test_shipped_settings_build_the_named_config(config, notebook):
     """Each YAML section's settings map onto the dataclass the notebook names, with no unknown key."""
-    from lasa.config import from_dict
+    from lasa.base.config import from_dict
 
     cls = settings_class(notebook)
     built = from_dict(cls, load_config(config, notebook).get("settings", {}))
@@ -64,8 +64,8 @@ def test_shipped_settings_build_the_named_config(config, notebook):
 
 
 def test_an_unknown_setting_is_an_error():
-    from lasa.config import from_dict
-    from lasa.sims import sim1
+    from lasa.base.config import from_dict
+    from lasa.figures import sim1
 
     with pytest.raises(ConfigError, match="unknown Config parameter.*'n_seed'"):
         from_dict(sim1.Config, {"n_seed": 3})
@@ -120,7 +120,10 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
                 "metadata": {},
                 "execution_count": None,
                 "outputs": [],
-                "source": ["from lasa.config import check_range\n", "check_range('alpha', 2.0, 0.0, 1.0)\n"],
+                "source": [
+                    "from lasa.base.config import check_range\n",
+                    "check_range('alpha', 2.0, 0.0, 1.0)\n",
+                ],
             },
         ],
         "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
@@ -135,7 +138,7 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
         [
             sys.executable,
             "-m",
-            "lasa.runner",
+            "lasa.pipeline.runner",
             str(notebook),
             "--config",
             str(config),

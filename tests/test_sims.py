@@ -1,4 +1,4 @@
-"""Figs. sim1-sim3 (lasa.sims.sim1, sim2, sim3): columns, determinism, pairing, and the claims' rules."""
+"""Figs. sim1-sim3 (lasa.figures.sim1, sim2, sim3): columns, determinism, pairing, and the claims' rules."""
 
 import dataclasses
 
@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.sims import sim1, sim2, sim3
-from lasa.sims.common import episodes
+from lasa.base.errors import ConfigError
+from lasa.figures import sim1, sim2, sim3
+from lasa.figures.common import episodes
 
 ONE = {"assistance": ("point",)}  # the headline member only: the bare sweep
 SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), users=3, horizon=20, seed=0, methods=("LA", "LA+SA"), **ONE)
@@ -103,7 +103,7 @@ def both(model):
 
 
 def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task, monkeypatch):
-    from lasa.sims import common
+    from lasa.figures import common
 
     calls = []
     real = common.rollout
@@ -297,7 +297,7 @@ def test_a_later_look_adds_new_users_of_its_own_stream(model, task):
 
 
 def test_judge_runs_looks_until_settled_or_the_cap(model, task):
-    from lasa.sims.common import judge
+    from lasa.figures.common import judge
 
     cfg = sim1.Config(
         betas=(75.0, 1000.0),
@@ -328,7 +328,7 @@ def test_judge_runs_looks_until_settled_or_the_cap(model, task):
 @pytest.mark.parametrize("name", ["sim1", "sim2", "sim3"])
 def test_the_vectorized_bootstrap_gives_the_resampled_frames_numbers(model, task, name):
     """boot_values (group means from resample counts) = claims() on each resampled frame."""
-    from lasa.verdicts import assess, member_frame
+    from lasa.evidence.verdicts import assess, member_frame
 
     module = {"sim1": sim1, "sim2": sim2, "sim3": sim3}[name]
     small = {

@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.sims import study
-from lasa.study import CONDITIONS, NO_ASSISTANCE
+from lasa.figures import study
+from lasa.people.participants import CONDITIONS, NO_ASSISTANCE
 
 MEMBERS = ("hindsight", "grasp_set")
 
@@ -104,7 +104,7 @@ def test_a_phase_nobody_reached_is_not_evidence():
 
 
 def test_config_errors():
-    from lasa.errors import ConfigError
+    from lasa.base.errors import ConfigError
 
     with pytest.raises(ConfigError, match="assistance"):
         study.Config(members=("magic",))

@@ -13,8 +13,8 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from lasa.errors import ConfigError
-from lasa.stats import (
+from lasa.base.errors import ConfigError
+from lasa.evidence.stats import (
     CONDITIONS,
     factors,
     format_f,

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.errors import ConfigError, IKError
-from lasa.ik import pose_error, solve_grasp_ik
-from lasa.task import grasp_frame
+from lasa.base.errors import ConfigError, IKError
+from lasa.world.ik import pose_error, solve_grasp_ik
+from lasa.world.task import grasp_frame
 
 POS_TOL = 2e-3  # m
 ROT_TOL = np.deg2rad(1.0)  # rad

@@ -14,14 +14,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_array_equal
 
-from lasa.decoder import save_checkpoint
-from lasa.demos import DemoConfig, collect_eating_demonstrations
-from lasa.devices import KeyboardDevice, Reading, ScriptedDevice, safe_axes
-from lasa.eating import make_eating_task
-from lasa.errors import ConfigError
-from lasa.sessionlog import read_session
-from lasa.teleop import SessionConfig, Station, new_session, replay, run_session
-from lasa.train import TrainConfig, train_decoder
+from lasa.base.errors import ConfigError
+from lasa.evidence.sessionlog import read_session
+from lasa.live.devices import KeyboardDevice, Reading, ScriptedDevice, safe_axes
+from lasa.live.teleop import SessionConfig, Station, new_session, replay, run_session
+from lasa.method.decoder import save_checkpoint
+from lasa.method.train import TrainConfig, train_decoder
+from lasa.people.demos import DemoConfig, collect_eating_demonstrations
+from lasa.world.eating import make_eating_task
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -179,7 +179,8 @@ def test_bad_sessions_are_errors(build):
 
 
 def test_schedule_and_questionnaire(tmp_path):
-    from lasa.studykit import SCALES, likert_tests, read_likert, survey, write_schedule
+    from lasa.evidence.sessions import SCALES, likert_tests, read_likert
+    from lasa.live.studykit import survey, write_schedule
 
     schedule = pd.read_csv(write_schedule(6, tmp_path / "schedule.csv"))
     assert len(schedule) == 24 and set(schedule.groupby("participant").condition.nunique()) == {4}
@@ -207,7 +208,7 @@ def test_the_viewer_runs_under_xvfb_and_the_screen_is_not_blank(build, tmp_path,
     sessions = tmp_path / "sessions"
     env = {**os.environ, "MUJOCO_GL": "glfw"}
     command = [
-        xvfb, "-a", "-s", "-screen 0 1024x768x24", sys.executable, "-m", "lasa.teleop", "run",
+        xvfb, "-a", "-s", "-screen 0 1024x768x24", sys.executable, "-m", "lasa.live.teleop", "run",
         "--task", "Dessert", "--condition", "R+SA", "--participant", "xvfb",
         "--device", f"scripted:{tmp_path / 'script.csv'}", "--sessions", str(sessions),
         "--build-dir", str(build), "--screenshot", str(shot),
@@ -228,7 +229,7 @@ def test_the_viewer_runs_under_xvfb_and_the_screen_is_not_blank(build, tmp_path,
 
 def test_a_cups_session_with_the_simulations_decoder_replays_to_an_mp4(model, tmp_path):
     """The cup task on planar5 under LA+SA (1-D latent: the stick's first axis), replayed and rendered."""
-    from lasa.video import read_video
+    from lasa.evidence.video import read_video
 
     save_checkpoint(model, tmp_path / "build" / "models" / "decoder_planar5_lambda0.pt")
     config = SessionConfig(
@@ -246,7 +247,7 @@ def test_a_cups_session_with_the_simulations_decoder_replays_to_an_mp4(model, tm
 
 
 def test_replay_refuses_another_decoder(build, tmp_path):
-    from lasa.errors import ArtifactError
+    from lasa.base.errors import ArtifactError
 
     st = station(build, "LA")
     writer = new_session(st, tmp_path)
@@ -259,7 +260,7 @@ def test_replay_refuses_another_decoder(build, tmp_path):
 
 
 def test_no_display_is_a_clear_error_and_leaves_no_session(build, tmp_path, monkeypatch, capsys):
-    from lasa.teleop import main
+    from lasa.live.teleop import main
 
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
@@ -289,7 +290,7 @@ def logged(build, tmp_path):
 
 
 def test_a_truncated_log_is_damaged_and_never_complete(logged):
-    from lasa.errors import ArtifactError
+    from lasa.base.errors import ArtifactError
 
     lines = logged.csv.read_text().splitlines()
     logged.csv.write_text("\n".join(lines[:10]) + "\n")  # the header and 9 of 40 rows
@@ -303,7 +304,7 @@ def test_a_truncated_log_is_damaged_and_never_complete(logged):
 
 
 def test_a_corrupt_cell_names_its_row_and_column(logged):
-    from lasa.errors import ArtifactError
+    from lasa.base.errors import ArtifactError
 
     lines = logged.csv.read_text().splitlines()
     cells = lines[5].split(",")
@@ -318,7 +319,7 @@ def test_a_corrupt_cell_names_its_row_and_column(logged):
 
 
 def test_a_row_with_missing_fields_is_damaged(logged):
-    from lasa.errors import ArtifactError
+    from lasa.base.errors import ArtifactError
 
     lines = logged.csv.read_text().splitlines()
     lines[7] = lines[7] + ",1.0"  # one field too many
@@ -328,8 +329,8 @@ def test_a_row_with_missing_fields_is_damaged(logged):
 
 
 def test_load_sessions_analyses_nothing_from_a_damaged_log(logged):
-    from lasa.errors import ArtifactError
-    from lasa.studykit import load_sessions
+    from lasa.base.errors import ArtifactError
+    from lasa.evidence.sessions import load_sessions
 
     lines = logged.csv.read_text().splitlines()
     logged.csv.write_text("\n".join(lines[:-3]) + "\n")
@@ -339,7 +340,7 @@ def test_load_sessions_analyses_nothing_from_a_damaged_log(logged):
     assert int(episodes.end[0]) == 37
 
 
-@pytest.mark.parametrize("module", ["lasa.teleop", "lasa.runner", "lasa.book"])
+@pytest.mark.parametrize("module", ["lasa.live.teleop", "lasa.pipeline.runner", "lasa.pipeline.book"])
 def test_every_cli_option_has_help_text(module, monkeypatch, capsys):
     """Every option and argument of each command says what it is (argparse's --help)."""
     import argparse
@@ -385,9 +386,9 @@ def test_every_cli_option_has_help_text(module, monkeypatch, capsys):
     ),
 )
 def test_the_live_step_is_the_reference_step(build, condition, axes):
-    """Station.step (latent actions) and lasa.rollout.shared_autonomy_step with the stick-at-rest
+    """Station.step (latent actions) and lasa.method.step.shared_autonomy_step with the stick-at-rest
     convention ``rest="zero"`` agree bit for bit, step after step, from the same inputs."""
-    from lasa.rollout import shared_autonomy_step
+    from lasa.method.step import shared_autonomy_step
 
     st_ = station(build, condition)
     s, log_b = st_.state.copy()[None], st_.log_belief.copy()[None]

@@ -5,8 +5,8 @@ import dataclasses
 import pytest
 import torch
 
-from lasa.errors import ConfigError
-from lasa.train import TrainConfig, reconstruction_error, train_decoder
+from lasa.base.errors import ConfigError
+from lasa.method.train import TrainConfig, reconstruction_error, train_decoder
 from tests.conftest import SMALL_TRAIN
 
 

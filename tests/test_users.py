@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from lasa.errors import ConfigError
-from lasa.users import UserPopulation, choose_latent, gumbel_noise, latent_grid, user_costs
+from lasa.base.errors import ConfigError
+from lasa.method.step import latent_grid
+from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, user_costs
 
 
 def test_costs_by_hand():
@@ -109,7 +110,7 @@ def test_subset_keeps_every_field():
 
 
 def test_pilot_choice_hand_computed():
-    from lasa.users import UserPopulation, pilot_choice
+    from lasa.people.users import UserPopulation, pilot_choice
 
     def users(pilot, p):
         n = 3

@@ -1,4 +1,4 @@
-"""lasa.verdicts: intervals, settled or undecided, the sequential design, one row per reading."""
+"""lasa.evidence.verdicts: intervals, settled or undecided, the sequential design, one row per reading."""
 
 import numpy as np
 import pandas as pd
@@ -6,10 +6,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from lasa.claims import Claim
-from lasa.errors import ConfigError
-from lasa.rules import rule as rule_of
-from lasa.verdicts import (
+from lasa.base.errors import ConfigError
+from lasa.evidence.claims import Claim
+from lasa.evidence.rules import rule as rule_of
+from lasa.evidence.verdicts import (
     Design,
     assess,
     block_seed,

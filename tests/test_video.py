@@ -6,8 +6,8 @@ import mediapy
 import numpy as np
 import pytest
 
-from lasa.errors import ConfigError
-from lasa.video import label_frames, read_video, render_states, side_by_side, write_video
+from lasa.base.errors import ConfigError
+from lasa.evidence.video import label_frames, read_video, render_states, side_by_side, write_video
 
 
 def test_render_shows_the_arm_move(robot, task):

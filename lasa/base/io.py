@@ -1,0 +1,167 @@
+"""Atomic file writes and artifact loading with actionable errors.
+
+An interrupted run must never leave a half-written artifact behind: every writer here
+writes to a temporary file in the destination folder and renames it into place, which
+is atomic on POSIX file systems. Readers turn a missing or unreadable file into an
+:class:`~lasa.base.errors.ArtifactError` that names the command that makes it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.errors import ArtifactError
+
+__all__ = [
+    "atomic_path",
+    "locked",
+    "write_csv",
+    "update_csv",
+    "write_text",
+    "save_npz",
+    "load_npz",
+    "require_file",
+]
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+
+    The temporary name keeps the final suffix (``x.tmp123.mp4``) so that writers which
+    infer the format from the extension (ffmpeg, matplotlib) still work. On any
+    exception the temporary file is removed and ``path`` is left untouched.
+
+    Args:
+        path: Final destination. Its parent folder is created if needed.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        yield tmp
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+_HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting depth
+
+
+@contextlib.contextmanager
+def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
+    """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write.
+
+    ``make figures`` runs the two robots' notebooks in parallel, and both merge their
+    rows into the same CSVs (a figure's data, the claims table) and redraw the shared
+    figure from them. The lock is an advisory ``flock`` on the folder itself, so it
+    leaves no lock file behind and is released even if the process dies. It is
+    re-entrant within a process: a notebook may hold it around a merge and a redraw,
+    and :func:`update_csv` inside takes it again without blocking.
+    """
+    folder = Path(folder).resolve()
+    if _HELD.get(folder):
+        _HELD[folder] += 1
+        try:
+            yield folder
+        finally:
+            _HELD[folder] -= 1
+        return
+    folder.mkdir(parents=True, exist_ok=True)
+    fd = os.open(folder, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        _HELD[folder] = 1
+        yield folder
+    finally:
+        _HELD.pop(folder, None)
+        fcntl.flock(fd, fcntl.LOCK_UN)
+        os.close(fd)
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> Path:
+    """Atomically write ``text`` to ``path`` and return the path."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+    return Path(path)
+
+
+def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
+    """Atomically write a data frame as CSV (no index, fixed float format)."""
+    with atomic_path(path) as tmp:
+        frame.to_csv(tmp, index=False, float_format="%.6g")
+    return Path(path)
+
+
+def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> Path:
+    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others.
+
+    Each robot's notebook run writes its own rows into a figure's shared CSV; the
+    figure is then drawn from every robot present. Written atomically, under
+    :func:`locked` so that robots running in parallel do not lose each other's rows.
+
+    Returns:
+        ``path``. Read it back for the whole table: the file holds the rows as rounded
+        on writing, the same whichever robot wrote last.
+    """
+    path = Path(path)
+    with locked(path.parent):
+        if path.exists():
+            old = pd.read_csv(path)
+            if key not in old.columns or list(old.columns) != list(frame.columns):
+                raise ArtifactError(
+                    f"{path} has columns {list(old.columns)}, expected {list(frame.columns)}; "
+                    "delete it and re-run the notebooks that write it"
+                )
+            frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
+        # rows ordered by key whatever order the robots ran in: the same file, run after run
+        frame = frame.sort_values(key, kind="stable", ignore_index=True)
+        write_csv(path, frame)
+    return path
+
+
+def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:
+    """Atomically save arrays to a compressed ``.npz`` file."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "wb") as f:
+            np.savez_compressed(f, **arrays)  # type: ignore[arg-type]
+    return Path(path)
+
+
+def require_file(path: str | os.PathLike[str], make_hint: str) -> Path:
+    """Return ``path`` if it exists, else raise an :class:`ArtifactError`.
+
+    Args:
+        path: The artifact that a step needs.
+        make_hint: The command that produces it, shown to the user.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ArtifactError(f"{path} does not exist. Make it with: {make_hint}")
+    return path
+
+
+def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarray]:
+    """Load every array of an ``.npz`` file, with a clear error if it is missing or corrupt."""
+    path = require_file(path, make_hint)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {key: data[key] for key in data.files}
+    except Exception as exc:  # zipfile.BadZipFile, ValueError, EOFError, OSError...
+        raise ArtifactError(
+            f"{path} is corrupt or unreadable ({exc}). Delete it and re-make it with: {make_hint}"
+        ) from exc

@@ -1,0 +1,374 @@
+"""The claims table: for each claim of the paper, did it reproduce?
+
+Each figure notebook evaluates its claims from the data behind its figure and writes
+its rows into ``figures/claims.csv`` (and the same table as ``figures/claims.md``, which
+the README's table is generated from). Each row has a stable ``id`` (``sim1.final_error``),
+so a claim can be reworded without leaving its old row behind: a figure's run replaces
+every row of that (figure, robot) and leaves the others. Rows are unique by (id, robot).
+``assistance`` names the reading of shared autonomy the row was measured under
+(``point``: Eq. M2 towards one pose per goal). Each claim has a headline row, ``<figure>.<name>``,
+measured under the default reading, and one row per member of the family,
+``<figure>.<name>@<member>`` (:mod:`lasa.evidence.verdicts`). ``ci_low`` and ``ci_high`` bound the
+number the verdict rests on (a bootstrap 95% interval over users), and ``seeds_agree``
+says on how many independent draws of users the verdict comes out the same.
+``reproduced`` is ``yes``, ``partly`` or ``no``;
+a claim that does not reproduce is a result, reported with its measured value and the
+most likely reason in ``note``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Callable, Mapping
+from pathlib import Path
+
+import pandas as pd
+
+from lasa.base.errors import ConfigError
+from lasa.base.io import locked, write_csv, write_text
+from lasa.evidence.rules import UNDECIDED
+
+__all__ = [
+    "Claim",
+    "PaperClaim",
+    "PAPER_CLAIMS",
+    "update_claims",
+    "render_markdown",
+    "render_verdicts",
+    "sync_readme",
+    "CLAIM_COLUMNS",
+    "README_MARKERS",
+]
+
+README_MARKERS = (
+    "<!-- verdicts:begin (generated from figures/verdicts.md by make figures) -->",
+    "<!-- verdicts:end -->",
+)
+
+CLAIM_COLUMNS = (
+    "id",
+    "claim",
+    "figure",
+    "robot",
+    "assistance",
+    "paper",
+    "measured",
+    "ci_low",
+    "ci_high",
+    "reproduced",
+    "settled",
+    "n_users",
+    "note",
+)
+VERDICTS = ("yes", "partly", "no", UNDECIDED)
+
+
+@dataclasses.dataclass(frozen=True)
+class Claim:
+    """One row of the claims table."""
+
+    id: str  # stable key, "<figure>.<name>": survives a rewording of ``claim``
+    claim: str  # the paper's claim, in a sentence
+    figure: str  # the figure it belongs to, e.g. "sim1"
+    paper: str  # what the paper reports
+    measured: str  # what we measured
+    reproduced: str  # "yes", "partly", "no", or "undecided" when an interval straddles a threshold
+    note: str  # how the verdict was decided, and the likely reason if not "yes"
+    robot: str  # the robot it was measured on
+    assistance: str = "point"  # the shared-autonomy reading: Eq. M2 towards one pose per goal
+    value: float = math.nan  # the number the verdict rests on (``measured`` names it first)
+    ci_low: float = math.nan  # bootstrap 95% interval of ``value`` (lasa.evidence.verdicts)
+    ci_high: float = math.nan
+    settled: bool = False  # every interval clear of its rule's thresholds (lasa.evidence.verdicts)
+    n_users: int = 0  # simulated users (or participants) per point the verdict rests on
+    values: Mapping[str, float] = dataclasses.field(default_factory=dict)  # the rule's numbers
+
+    def __post_init__(self) -> None:
+        if not self.id.startswith(f"{self.figure}.") or " " in self.id:
+            raise ConfigError(f"claim id must be '<figure>.<name>' without spaces, got {self.id!r}")
+        if self.reproduced not in VERDICTS:
+            raise ConfigError(f"reproduced must be one of {VERDICTS}, got {self.reproduced!r}")
+
+
+def _row(claim: Claim) -> dict[str, object]:
+    """A claim as a table row: the interval to 4 significant digits, empty where unknown."""
+    row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
+    del row["values"], row["value"]
+    row["settled"] = "yes" if claim.settled else "no"
+    for key in ("ci_low", "ci_high"):
+        row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
+    return row
+
+
+def render_markdown(frame: pd.DataFrame) -> str:
+    """The claims table as a GitHub-flavoured Markdown table."""
+    cols = list(CLAIM_COLUMNS)
+    lines = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
+    for _, row in frame.iterrows():
+        cells = [str(row[c]).replace("|", "\\|").replace("\n", " ") for c in cols]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
+    """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``.
+
+    Every row of a (figure, robot) that ``claims`` covers is dropped first, so a claim
+    that a figure no longer makes leaves the table; rows of other figures and robots are
+    kept. The ``.md`` twin is rewritten from the result. Runs under the folder lock
+    (robots run in parallel).
+
+    Args:
+        path: The claims CSV, e.g. ``figures/claims.csv``; created if missing.
+        claims: The rows to write; (id, robot) must be unique among them.
+
+    Returns:
+        The whole table after the update, ordered by figure, robot and id.
+
+    Raises:
+        ConfigError: if two claims share an (id, robot), or the file has other columns.
+    """
+    path = Path(path)
+    new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
+    if new.duplicated(["id", "robot"]).any():
+        dup = new.loc[new.duplicated(["id", "robot"]), "id"].tolist()
+        raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")
+    with locked(path.parent):
+        if path.exists():
+            old = pd.read_csv(path, dtype=str, keep_default_na=False)
+            if list(old.columns) != list(CLAIM_COLUMNS):
+                raise ConfigError(
+                    f"{path} has columns {list(old.columns)}, expected {list(CLAIM_COLUMNS)}; "
+                    "delete it and re-run the figure notebooks"
+                )
+            covered = pd.MultiIndex.from_frame(new[["figure", "robot"]].drop_duplicates())
+            keep = ~pd.MultiIndex.from_frame(old[["figure", "robot"]]).isin(covered)
+            table = pd.concat([old.loc[keep], new], ignore_index=True)
+        else:
+            table = new
+        table = table.sort_values(["figure", "robot", "id"], kind="stable").reset_index(drop=True)
+        write_csv(path, table)
+        write_text(path.with_suffix(".md"), render_markdown(table))
+    return table
+
+
+@dataclasses.dataclass(frozen=True)
+class PaperClaim:
+    """One row of the verdict table: a claim of the paper, and where it is measured."""
+
+    id: str  # the headline row's id in claims.csv
+    claim: str  # the claim, in the paper's words
+    paper: str  # the paper's number
+    mechanism: str  # what makes our verdict, in a line
+    notebook: str  # the notebook (file stem) that measures it
+    section: str  # its section that explains the mechanism
+
+
+PAPER_CLAIMS: tuple[PaperClaim, ...] = (
+    PaperClaim(
+        "sim1.final_error",
+        "shared autonomy reduces the final state error (Fig. sim1)",
+        "LA+SA below LA at every beta",
+        "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim1.time_ratio",
+        "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
+        "time ratio 1.45 and 1.30",
+        "near-optimal users reach sooner with the pull, largest far from the goal; "
+        "noisy ones gain no clear time",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim1.gap_narrows",
+        "the gap between LA and LA+SA narrows as the user becomes more rational",
+        "45% at beta = 75 -> 30% at beta = 1000",
+        "the time gap grows instead (noisy users gain no time, near-optimal ones do); the error gap narrows",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim1.entropy_sa",
+        "shared autonomy helps with or without the entropy term",
+        "LA+SA and LA+SA+Entropy below LA",
+        "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
+        "04_fixed_expertise",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim2.sa_trapped",
+        "with LA+SA, a user who changes their mind late is stuck at the first goal",
+        "final error grows, confidence falls with N",
+        "a confident belief makes the decoder's inputs all lead to the first cup",
+        "05_changing_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim2.entropy_escapes",
+        "the entropy term lets users change their mind",
+        "LA+SA+Entropy reaches the new goal",
+        "Eq. T6 keeps some input leading to each goal at every belief",
+        "05_changing_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim3.entropy_learners",
+        "entropy improves in-task performance for fast and slow learners",
+        "LA+SA+Entropy below LA+SA over time",
+        "a learner's early random inputs commit the belief; entropy lets them undo it",
+        "06_learning_users",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim4.straight_line_linear",
+        "with the context map, the error at a new goal grows linearly with its distance",
+        "y = 0.11x, R^2 = 0.98",
+        "the straight-line map moves the grasp curve rigidly, so its shape is wrong by more with distance",
+        "07_new_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim4.grasp_linear",
+        "the same, with our grasp-to-grasp context map (not the paper's)",
+        "y = 0.11x, R^2 = 0.98",
+        "the grasp-to-grasp map is exact at every grasp, so the error does not grow",
+        "07_new_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "sim4.no_map_training_goal",
+        "without the map, the robot only reaches for the training goal",
+        "y = x",
+        "the user's own grasp at a far cup lies farther than the goal that defines the distance",
+        "07_new_goals",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "study.h1",
+        "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
+        "F(1,18) = 29.9, p < .001",
+        "with 10 participants the SA effect straddles 0; R+SA sums more error than R, LA+SA less than LA",
+        "11_eating_study",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "study.h2",
+        "H2: latent actions let users execute their preferences (Dessert, scoop)",
+        "LA+SA adjusts to scoop; R+SA stays stabbing",
+        "the headline decoder (the one with the property) tilts the fork at the bowl; other readings do not",
+        "11_eating_study",
+        "What it shows, against the paper",
+    ),
+    PaperClaim(
+        "study.h3",
+        "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
+        "LA+SA fastest, p < .05 vs each",
+        "the headline decoder keeps LA participants at the last bowl: no input leads to the plate",
+        "11_eating_study",
+        "What it shows, against the paper",
+    ),
+)
+
+
+def _num(text: object) -> str:
+    try:
+        return f"{float(str(text)):.3g}"
+    except ValueError:
+        return ""
+
+
+def _cell(row: pd.Series | None) -> str:
+    """A robot's cell: the verdict, the interval of its first number, N, settled or undecided."""
+    if row is None:
+        return "—"
+    low, high = _num(row.ci_low), _num(row.ci_high)
+    ci = f" [{low}, {high}]" if low and high else ""
+    if str(row.settled) == "yes":
+        return f"**{row.reproduced}**{ci}, N = {row.n_users}, settled"
+    return f"undecided{ci}, N = {row.n_users}"
+
+
+def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = None) -> str:
+    """The verdict table: one row per paper claim, both robots side by side.
+
+    Args:
+        table: ``figures/claims.csv`` (as strings).
+        link: Notebook stem -> the link target of its page (default
+            ``notebooks/<stem>.ipynb``, from the repository root).
+
+    Returns:
+        Markdown: the claim and the paper's number, then per robot the verdict with the
+        interval of the number it rests on, the users per point N and whether it is settled,
+        the readings (``<id>@<reading>`` rows of one reading each; their combinations are in
+        the full table) whose verdict differs, and the mechanism with a link to the notebook
+        that measures it.
+    """
+    lines = [
+        "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    for pc in PAPER_CLAIMS:
+        cells = [_cell(rows.get((pc.id, robot))) for robot in ("planar5", "panda")]
+        if cells == ["—", "—"]:
+            continue
+        flips: dict[str, list[str]] = {}
+        for (cid, robot), r in rows.items():
+            if cid.startswith(pc.id + "@") and "+" not in cid:  # one reading at a time
+                head = rows.get((pc.id, robot))
+                if head is not None and r.reproduced != head.reproduced:
+                    flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")
+        flip = "; ".join(f"`{k}` ({', '.join(v)})" for k, v in flips.items()) or "none"
+        anchor = pc.section.lower().replace(",", "").replace(" ", "-")
+        target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
+        mech = f"{pc.mechanism} ([{pc.notebook[:2]}]({target}#{anchor}))"
+        lines.append(f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {flip} | {mech} |")
+    return "\n".join(lines) + "\n"
+
+
+def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
+    """Render ``claims_csv`` as the verdict table into ``out`` (``figures/verdicts.md``)."""
+    table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
+    return write_text(out, render_verdicts(table))
+
+
+def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
+    """Put the verdict table ``table_md`` between the README's verdict markers.
+
+    ``make figures`` runs this after the notebooks, so the README's table is always the
+    last full run's ``figures/verdicts.md``, never a hand-edited copy.
+
+    Returns:
+        Whether the README changed.
+
+    Raises:
+        ConfigError: if the README lacks either marker (:data:`README_MARKERS`).
+    """
+    readme, table_md = Path(readme), Path(table_md)
+    text = readme.read_text()
+    begin, end = README_MARKERS
+    if begin not in text or end not in text or text.index(begin) > text.index(end):
+        raise ConfigError(f"{readme} must hold the lines {begin!r} and {end!r}, in that order")
+    head, rest = text.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    new = f"{head}{begin}\n{table_md.read_text().rstrip()}\n{end}{tail}"
+    if new == text:
+        return False
+    write_text(readme, new)
+    return True
+
+
+if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) != 3:
+        raise SystemExit("usage: python -m lasa.evidence.claims README.md figures/claims.csv")
+    readme, csv = Path(sys.argv[1]), Path(sys.argv[2]).with_suffix(".csv")
+    verdicts = write_verdicts(csv, csv.with_name("verdicts.md"))
+    changed = sync_readme(readme, verdicts)
+    print(f"{verdicts} written; {readme}: verdict table {'updated' if changed else 'already current'}")

@@ -1,0 +1,184 @@
+"""Panels that several figures share: data and ``ax=None`` in, axes out.
+
+Each function draws one panel from data it is given (a frame, a dataset, paths), so a
+notebook composes panels freely and the data behind each figure is saved beside it.
+A planar arm is drawn in its x-z plane; the Panda from above (:func:`project`). A
+figure's own panels live in its module of :mod:`lasa.figures`.
+"""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.axes import Axes
+from matplotlib.collections import LineCollection
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.patches import Circle, Rectangle
+
+from lasa.method.dataset import Demonstrations
+from lasa.world.robot import ROBOTS
+from lasa.world.task import CupTask
+
+__all__ = [
+    "METHOD_COLORS",
+    "CUP_COLORS",
+    "draw_scene",
+    "frame_around",
+    "is_planar",
+    "method_lineplot",
+    "plot_demonstrations",
+    "plot_training_curves",
+    "project",
+    "robot_rows",
+    "robots_present",
+]
+
+METHOD_COLORS = {"LA": "#d95f02", "LA+SA": "#1b9e77", "LA+SA+Entropy": "#7570b3"}
+CUP_COLORS = ("#e6553f", "#3f9959")
+
+
+def _ax(ax: Axes | None) -> Axes:
+    return plt.gca() if ax is None else ax
+
+
+def is_planar(task: CupTask) -> bool:
+    """Whether the robot moves in the world's x-z plane (every cup at y = 0)."""
+    return bool(np.allclose(task.robot.cup_positions()[:, 1], 0.0))
+
+
+def project(task: CupTask, points: np.ndarray) -> np.ndarray:
+    """World points (..., 3) onto the plane a figure draws the task in, (..., 2).
+
+    A planar arm is drawn in its own x-z plane. Any other robot is drawn from above,
+    with the robot's left on the left: (-y, x).
+    """
+    points = np.asarray(points)
+    if is_planar(task):
+        return points[..., [0, 2]]
+    return np.stack([-points[..., 1], points[..., 0]], axis=-1)
+
+
+def draw_scene(task: CupTask, ax: Axes | None = None) -> Axes:
+    """The cups and the robot's base in the task's drawing plane (:func:`project`)."""
+    ax = _ax(ax)
+    cups = task.robot.cup_positions()
+    if is_planar(task):
+        ax.axhline(0.0, color="#8b6d4b", lw=2, zorder=0)
+        for (x, _, _), color in zip(cups, CUP_COLORS, strict=True):
+            ax.add_patch(Rectangle((x - 0.035, 0.0), 0.07, 0.12, color=color, alpha=0.8, zorder=1))
+        ax.add_patch(Rectangle((-0.06, 0.0), 0.12, 0.12, color="#40444c", zorder=1))
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("z [m]")
+    else:
+        for cup, color in zip(project(task, cups), CUP_COLORS, strict=True):
+            ax.add_patch(Circle(tuple(cup), 0.035, color=color, alpha=0.8, zorder=1))
+        ax.add_patch(Circle(tuple(project(task, task.robot.base_position())), 0.06, color="#40444c"))
+        ax.set_xlabel("left <- -y [m] -> right")
+        ax.set_ylabel("x (forward) [m]")
+    ax.set_aspect("equal")
+    return ax
+
+
+def _colored_path(ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str, norm: Normalize, lw: float = 1.2):
+    segs = np.stack([xy[:-1], xy[1:]], axis=1)
+    lc = LineCollection(list(segs), cmap=cmap, norm=norm, lw=lw)
+    lc.set_array(values[:-1])
+    ax.add_collection(lc)
+    return lc
+
+
+def frame_around(task: CupTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
+    """Limit the axes to the drawn points, the cups and the base, with some padding."""
+    cups = project(task, task.robot.cup_positions())
+    base = project(task, task.robot.base_position())[None]
+    pts = np.concatenate([points.reshape(-1, 2), cups, base])
+    lo, hi = pts.min(axis=0) - pad, pts.max(axis=0) + pad
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(min(lo[1], -0.05) if is_planar(task) else lo[1], hi[1])
+
+
+def plot_demonstrations(
+    task: CupTask, demos: Demonstrations, ax: Axes | None = None, goal_index: int = 1
+) -> Axes:
+    """Grasp-site paths of the demonstrations, coloured by the belief in one cup.
+
+    Args:
+        task: The cup task.
+        demos: The dataset; only the clean tuples are drawn.
+        ax: Axes to draw on.
+        goal_index: Whose belief colours the paths (default: the right cup).
+    """
+    ax = draw_scene(task, ax)
+    clean = demos.clean()
+    norm = Normalize(0.0, 1.0)
+    lc = None
+    drawn = []
+    for d in np.unique(clean.demo):
+        m = clean.demo == d
+        xy = project(task, task.robot.grasp_positions(clean.states[m]))
+        drawn.append(xy)
+        lc = _colored_path(ax, xy, clean.beliefs[m, goal_index], "coolwarm", norm, 0.9)
+    if lc is not None:
+        plt.colorbar(lc, ax=ax, label=f"belief in the {task.goal_names[goal_index]} cup", shrink=0.8)
+        frame_around(task, ax, np.concatenate(drawn))
+    return ax
+
+
+def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> Axes:
+    """Training loss and held-out reconstruction error against optimiser step."""
+    ax = _ax(ax)
+    ax.plot(history["step"], history["train_loss"], label="train loss (units of $\\sigma_h^2$)")
+    ax.plot(history["step"], history["val_error"], label="held-out $\\|e_a\\|^2$ [(rad/s)$^2$]")
+    ax.set_yscale("log")
+    ax.set_xlabel("optimiser step")
+    ax.legend(frameon=False)
+    return ax
+
+
+def robots_present(table: pd.DataFrame) -> list[str]:
+    """The robots with rows in ``table``, in the registry's order (``lasa.world.robot.ROBOTS``)."""
+    have = set(table.robot)
+    return [name for name in ROBOTS if name in have]
+
+
+def robot_rows(
+    table: pd.DataFrame, n_cols: int, figsize_per_row: tuple[float, float]
+) -> tuple[Figure, list[tuple[str, pd.DataFrame, np.ndarray]]]:
+    """A figure with one row of ``n_cols`` panels per robot present in ``table``.
+
+    Args:
+        table: Rows of every robot (a ``robot`` column).
+        n_cols: Panels per robot.
+        figsize_per_row: (width, height) of one row [inches].
+
+    Returns:
+        The figure, and for each robot its name, its rows and its row of axes.
+    """
+    present = robots_present(table)
+    width, height = figsize_per_row
+    fig, axes = plt.subplots(len(present), n_cols, figsize=(width, height * len(present)), squeeze=False)
+    return fig, [(name, table[table.robot == name], row) for name, row in zip(present, axes, strict=True)]
+
+
+def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None) -> Axes:
+    """``y`` against ``x`` per method, in the methods' colours, with 95% bootstrap bands."""
+    ax = _ax(ax)
+    methods = [m for m in METHOD_COLORS if m in set(frame.method)]
+    sns.lineplot(
+        data=frame,
+        x=x,
+        y=y,
+        hue="method",
+        hue_order=methods,
+        palette=METHOD_COLORS,
+        errorbar=("ci", 95),
+        n_boot=500,
+        seed=0,
+        ax=ax,
+        marker="o" if frame[x].nunique() < 30 else None,
+    )
+    ax.legend(frameon=False, title=None)
+    return ax

@@ -1,0 +1,292 @@
+"""Every claim's decision rule, with its thresholds, in one place.
+
+A claim's verdict (``yes``, ``partly`` or ``no``) is a rule applied to a few numbers
+measured on simulated users: a time ratio, a success rate, a slope. Each number is a
+:class:`Quantity` that names the thresholds the rule compares it with, so the rule is
+piecewise constant between them. That is what lets :mod:`lasa.evidence.verdicts` decide whether a
+verdict is *settled*: when every number's interval lies on one side of each of its
+thresholds, the rule gives the same verdict everywhere in the box of intervals (checked
+by :meth:`Rule.settled`, which evaluates the rule at a point in every cell of that box).
+Otherwise the verdict reads ``undecided``.
+
+For example the time ratio of Fig. sim1 must be within 0.15 of 1.45 at beta = 75, so its
+thresholds are 1.30 and 1.60, and 1.0 for ``partly`` (LA is slower at all).
+
+The rules were written before the results they judge were first seen, with the
+exceptions that :data:`AFTER_RESULTS` names. Putting them here changed none of them;
+it only made their thresholds explicit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from collections.abc import Callable, Mapping
+
+from lasa.base.errors import ConfigError
+
+__all__ = ["Quantity", "Rule", "RULES", "AFTER_RESULTS", "rule", "VERDICTS", "UNDECIDED"]
+
+VERDICTS = ("yes", "partly", "no")  # what a rule can decide
+UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a threshold
+
+
+@dataclasses.dataclass(frozen=True)
+class Quantity:
+    """One number a verdict rests on, and the thresholds its rule compares it with."""
+
+    name: str  # key in ``Claim.values``
+    thresholds: tuple[float, ...]  # every value at which the rule's verdict can change
+    meaning: str  # what the number is, in words
+
+
+@dataclasses.dataclass(frozen=True)
+class Rule:
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds."""
+
+    id: str  # the claim id, "<figure>.<name>"
+    text: str  # the rule in words, as the claims table states it
+    quantities: tuple[Quantity, ...]  # the first is the headline number (``Claim.value``)
+    decide: Callable[[Mapping[str, float]], str]  # values -> "yes" | "partly" | "no"
+
+    def verdict(self, values: Mapping[str, float]) -> str:
+        """The rule's verdict at these values.
+
+        Raises:
+            ConfigError: if a quantity is missing, or the rule returns something else.
+        """
+        missing = [q.name for q in self.quantities if q.name not in values]
+        if missing:
+            raise ConfigError(f"{self.id}: the rule needs {missing}, got {sorted(values)}")
+        out = self.decide(values)
+        if out not in VERDICTS:
+            raise ConfigError(f"{self.id}: the rule returned {out!r}, not one of {VERDICTS}")
+        return out
+
+    def verdicts_in(self, intervals: Mapping[str, tuple[float, float]]) -> set[str]:
+        """Every verdict the rule gives inside the box of ``intervals`` (name -> (low, high)).
+
+        The rule only compares each number with its thresholds, so one point per cell
+        between consecutive thresholds (and the thresholds themselves) covers the box.
+        """
+        axes = []
+        for q in self.quantities:
+            low, high = intervals[q.name]
+            if not (math.isfinite(low) and math.isfinite(high)):
+                return set(VERDICTS)  # an unknown interval decides nothing
+            inner = sorted(t for t in q.thresholds if low <= t <= high)
+            cuts = [low, *inner, high]
+            points = set(cuts) | {(a + b) / 2 for a, b in itertools.pairwise(cuts)}
+            axes.append(sorted(points))
+        names = [q.name for q in self.quantities]
+        return {self.verdict(dict(zip(names, p, strict=True))) for p in itertools.product(*axes)}
+
+    def settled(self, intervals: Mapping[str, tuple[float, float]]) -> bool:
+        """Whether every point of the box of ``intervals`` gives the same verdict."""
+        return len(self.verdicts_in(intervals)) == 1
+
+    def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
+        """``name [low, high] reaches t`` for each threshold inside (or at the end of) an interval."""
+        out = []
+        for q in self.quantities:
+            low, high = intervals[q.name]
+            inner = [t for t in q.thresholds if low <= t <= high and low < high]
+            if inner:
+                ts = ", ".join(f"{t:g}" for t in inner)
+                out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {ts}")
+        return out
+
+
+def _q(name: str, thresholds: tuple[float, ...], meaning: str) -> Quantity:
+    return Quantity(name, tuple(float(t) for t in thresholds), meaning)
+
+
+def _sim1_final_error(v: Mapping[str, float]) -> str:
+    return "yes" if v["share_lower"] >= 1.0 else "partly" if v["share_lower"] > 0.5 else "no"
+
+
+def _sim1_time_ratio(v: Mapping[str, float]) -> str:
+    r75, r1000 = v["ratio_75"], v["ratio_1000"]
+    if abs(r75 - 1.45) <= 0.15 and abs(r1000 - 1.30) <= 0.15:
+        return "yes"
+    return "partly" if r75 > 1.0 and r1000 > 1.0 else "no"
+
+
+def _both_or_one(a: str, b: str) -> Callable[[Mapping[str, float]], str]:
+    def decide(v: Mapping[str, float]) -> str:
+        ok = [v[a] > 0.0, v[b] > 0.0]
+        return "yes" if all(ok) else "partly" if any(ok) else "no"
+
+    return decide
+
+
+def _sim1_entropy_sa(v: Mapping[str, float]) -> str:
+    return "yes" if v["share_weaker"] >= 1.0 else "partly" if v["share_weaker"] > 0.5 else "no"
+
+
+def _sim2_trapped(v: Mapping[str, float]) -> str:
+    return "yes" if v["success_sa"] < 0.5 else "partly" if v["drop_sa"] >= 0.2 else "no"
+
+
+def _sim2_escapes(v: Mapping[str, float]) -> str:
+    if v["success_entropy"] >= 0.8 and v["margin"] >= 0.2:
+        return "yes"
+    return "partly" if v["margin"] > 0.0 else "no"
+
+
+def _sim4_linear(v: Mapping[str, float]) -> str:
+    helps = v["share_below"] >= 1.0
+    linear = v["r2"] >= 0.9 and 0.0 < v["slope"] <= 0.25
+    return "yes" if linear and helps else "partly" if helps else "no"
+
+
+def _sim4_no_map(v: Mapping[str, float]) -> str:
+    slope, r2 = v["slope"], v["r2"]
+    if abs(slope - 1.0) <= 0.15 and r2 >= 0.9:
+        return "yes"
+    return "partly" if r2 >= 0.9 and 0.5 <= slope <= 1.5 else "no"
+
+
+def _effect_below_zero(v: Mapping[str, float]) -> str:
+    # the study's tests: a settled effect below zero is the paper's direction; the
+    # full yes/partly split comes from the pairwise tests (lasa.figures.study)
+    return "yes" if v["effect"] < 0.0 else "no"
+
+
+def _effect_above_zero(v: Mapping[str, float]) -> str:
+    return "yes" if v["effect"] > 0.0 else "no"
+
+
+_LINEAR_TEXT = (
+    "yes if R^2 >= 0.9, slope in (0, 0.25] and below the no-map error at every cup; "
+    "partly if below it at every cup; else no"
+)
+_LINEAR = (
+    _q("slope", (0.0, 0.25), "slope of the mean error per new cup against its distance"),
+    _q("r2", (0.9,), "R^2 of that line over the cups' means"),
+    _q("share_below", (1.0,), "share of new cups where the map's mean error is below the no-map one"),
+)
+
+RULES: dict[str, Rule] = {
+    r.id: r
+    for r in (
+        Rule(
+            "sim1.final_error",
+            "yes if LA+SA's mean final error is below LA's at every beta, partly if at more than half",
+            (_q("share_lower", (0.5, 1.0), "share of betas where LA+SA's mean final error is below LA's"),),
+            _sim1_final_error,
+        ),
+        Rule(
+            "sim1.time_ratio",
+            "yes if both time ratios LA/LA+SA lie within 0.15 of the paper's (1.45 at beta=75, 1.30 at "
+            "beta=1000), partly if both exceed 1",
+            (
+                _q("ratio_75", (1.0, 1.30, 1.60), "mean time LA / LA+SA at beta = 75"),
+                _q("ratio_1000", (1.0, 1.15, 1.45), "mean time LA / LA+SA at beta = 1000"),
+            ),
+            _sim1_time_ratio,
+        ),
+        Rule(
+            "sim1.gap_narrows",
+            "yes if both the time gap |ratio - 1| and the final-error gap |LA - LA+SA| shrink from "
+            "beta=75 to beta=1000, partly if one does",
+            (
+                _q("time_narrowing", (0.0,), "|r75 - 1| - |r1000 - 1|: > 0 if the time gap narrows"),
+                _q("error_narrowing", (0.0,), "|d75| - |d1000| of the final-error difference"),
+            ),
+            _both_or_one("time_narrowing", "error_narrowing"),
+        ),
+        Rule(
+            "sim1.entropy_sa",
+            "yes if LA+SA and LA+SA+Entropy are both below LA's final error at every beta, partly if "
+            "both at more than half",
+            (_q("share_weaker", (0.5, 1.0), "the smaller of the two shares of betas below LA"),),
+            _sim1_entropy_sa,
+        ),
+        Rule(
+            "sim2.sa_trapped",
+            "yes if LA+SA's success at the largest N is below 50%, partly if it falls by at least 20 "
+            "points from the smallest N",
+            (
+                _q("success_sa", (0.5,), "LA+SA's success rate at the largest N"),
+                _q("drop_sa", (0.2,), "LA+SA's success at the smallest N minus at the largest"),
+            ),
+            _sim2_trapped,
+        ),
+        Rule(
+            "sim2.entropy_escapes",
+            "yes if LA+SA+Entropy's success at the largest N is at least 80% and at least 20 points "
+            "above LA+SA's, partly if above",
+            (
+                _q("success_entropy", (0.8,), "LA+SA+Entropy's success rate at the largest N"),
+                _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
+            ),
+            _sim2_escapes,
+        ),
+        Rule(
+            "sim3.entropy_learners",
+            "yes if LA+SA+Entropy's mean error over the episode is below LA+SA's for both learners, "
+            "partly if for one",
+            (
+                _q("gain_fast", (0.0,), "fast learner: LA+SA minus LA+SA+Entropy mean error"),
+                _q("gain_slow", (0.0,), "slow learner: LA+SA minus LA+SA+Entropy mean error"),
+            ),
+            _both_or_one("gain_fast", "gain_slow"),
+        ),
+        Rule("sim4.straight_line_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear),
+        Rule("sim4.grasp_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear),
+        Rule(
+            "sim4.no_map_training_goal",
+            "yes if |slope - 1| <= 0.15 and R^2 >= 0.9, partly if R^2 >= 0.9 and slope in [0.5, 1.5]",
+            (
+                _q("slope", (0.5, 0.85, 1.15, 1.5), "slope of the no-map mean error against distance"),
+                _q("r2", (0.9,), "R^2 of that line over the cups' means"),
+            ),
+            _sim4_no_map,
+        ),
+        Rule(
+            "study.h1",
+            "the SA main effect on Goal Error (SA - no SA) must be below 0 with p < .05; yes if both "
+            "pairwise comparisons are significant too, partly if not",
+            (_q("effect", (0.0,), "SA - no SA, the within-subjects main effect"),),
+            _effect_below_zero,
+        ),
+        Rule(
+            "study.h2",
+            "Dessert scoop alignment LA+SA - R+SA must be above 0: yes if significant (p < .05)",
+            (_q("effect", (0.0,), "alignment LA+SA - R+SA in the scoop phase"),),
+            _effect_above_zero,
+        ),
+        Rule(
+            "study.h3",
+            "LA+SA's Total Time must be below every other condition's: yes if all six comparisons "
+            "(Total and Idle Time) are significant, partly if LA+SA is fastest on average",
+            (_q("effect", (0.0,), "LA+SA's total time minus the fastest other condition's [s]"),),
+            _effect_below_zero,
+        ),
+    )
+}
+
+# Rules (or readings) written after some of the results they judge had been seen.
+AFTER_RESULTS: dict[str, str] = {
+    "sim4.straight_line_linear": "the partly rule was made stricter (the map must help at every cup) after "
+    "the first sim4 results: the earlier 'slope <= 0.5' labelled a map worse than none at near cups partly",
+    "sim4.grasp_linear": "as sim4.straight_line_linear",
+    "study.h1": "the study's rules were written after pilots of 4 and 10 participants; the mean-distance "
+    "reading (@mean_distance) after the paper-scale run",
+    "study.h2": "written after pilots of 4 and 10 participants",
+    "study.h3": "written after pilots of 4 and 10 participants",
+}
+
+
+def rule(claim_id: str) -> Rule:
+    """The rule of a claim id, ``<figure>.<name>`` or ``<figure>.<name>@<reading>``.
+
+    Raises:
+        ConfigError: if the claim has no rule here.
+    """
+    base = claim_id.split("@", 1)[0]
+    if base not in RULES:
+        raise ConfigError(f"no rule for claim {claim_id!r}; rules exist for {sorted(RULES)}")
+    return RULES[base]

@@ -1,0 +1,170 @@
+"""Session logs of live teleoperation: one CSV of steps, a JSON sidecar and the scene's XML.
+
+A session ``<dir>/<stem>`` is three files:
+
+- ``<stem>.csv``: one row per control step: time, raw input, z, mode, stop, s, b, a_h, a_r,
+  a, the phase, whether the step ran late. Floats are written with 17 significant digits,
+  so a replay can compare states bit for bit.
+- ``<stem>.json``: robot, task, condition, participant, the decoder's SHA-256 and config,
+  the lasa version, the control units, and ``status``: ``running`` while the session
+  runs, ``complete`` or ``interrupted`` when it ends. A crash leaves ``running``:
+  readers treat it as interrupted, never as complete.
+- ``<stem>.xml``: the compiled scene, so the session replays without the code that made it.
+
+While a session runs its rows go to ``<stem>.csv.part``, flushed and synced to disk every
+``flush_every`` steps (10 steps = 1 s at 10 Hz: a crash loses at most about a second). The
+part file becomes ``<stem>.csv`` by an atomic rename when the session ends; the sidecar is
+rewritten atomically at start and end.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.errors import ArtifactError
+from lasa.base.io import write_text
+
+__all__ = ["SessionWriter", "read_session", "STATUS"]
+
+STATUS = ("running", "complete", "interrupted")
+
+
+class SessionWriter:
+    """Write one session's steps as they happen (see the module docstring).
+
+    Args:
+        folder: The sessions folder (created if missing).
+        stem: The session's file stem, e.g. ``p01_Dessert_LA+SA_20261201T120000``.
+        meta: The sidecar's fields (plain JSON data).
+        scene_xml: The compiled scene's MJCF.
+        columns: The step columns, in order.
+        flush_every: Steps between flushes to disk.
+    """
+
+    def __init__(
+        self,
+        folder: str | os.PathLike[str],
+        stem: str,
+        meta: dict[str, Any],
+        scene_xml: str,
+        columns: list[str],
+        flush_every: int = 10,
+    ) -> None:
+        self.folder = Path(folder)
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.stem = stem
+        self.columns = columns
+        self.flush_every = flush_every
+        self.meta = {**meta, "status": "running", "steps": 0}
+        self.csv = self.folder / f"{stem}.csv"
+        self.part = self.folder / f"{stem}.csv.part"
+        self.sidecar = self.folder / f"{stem}.json"
+        if self.csv.exists() or self.part.exists():
+            raise ArtifactError(f"session {self.csv} exists already; choose another participant or stem")
+        write_text(self.folder / f"{stem}.xml", scene_xml)
+        self._write_meta()
+        self._fh = open(self.part, "w", newline="")  # noqa: SIM115 (closed in close())
+        self._fh.write(",".join(columns) + "\n")
+        self._rows = 0
+
+    def _write_meta(self) -> None:
+        write_text(self.sidecar, json.dumps(self.meta, indent=2, sort_keys=True) + "\n")
+
+    def append(self, row: list[float]) -> None:
+        """Write one step's values (in ``columns`` order); flush every ``flush_every`` rows."""
+        if len(row) != len(self.columns):
+            raise ValueError(f"a row has {len(self.columns)} values, got {len(row)}")
+        self._fh.write(",".join(repr(float(v)) for v in row) + "\n")
+        self._rows += 1
+        if self._rows % self.flush_every == 0:
+            self.flush()
+
+    def flush(self) -> None:
+        """Push the rows written so far to disk."""
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+
+    def close(self, status: str = "complete", **extra: Any) -> Path:
+        """End the session: the rows become ``<stem>.csv``; the sidecar records ``status`` and ``extra``."""
+        if status not in STATUS[1:]:
+            raise ValueError(f"a session ends complete or interrupted, not {status!r}")
+        self.flush()
+        self._fh.close()
+        os.replace(self.part, self.csv)
+        self.meta.update(extra)
+        self.meta.update(status=status, steps=self._rows)
+        self._write_meta()
+        return self.csv
+
+
+def read_session(
+    path: str | os.PathLike[str], allow_damaged: bool = False
+) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """A session's steps and sidecar, from any of its files or its stem.
+
+    A session whose rows are still in ``.csv.part`` (it crashed) is read from there and
+    reported with status ``interrupted``, never as complete.
+
+    A log is **damaged** when a cell does not parse as a number, when a row has the wrong
+    number of fields, or when a session that ended (``complete`` or ``interrupted``) holds
+    another number of rows than its sidecar's ``steps``. A damaged log is an error, in one
+    line that says what is wrong; with ``allow_damaged`` it is read anyway (the rows that
+    parse) and the sidecar gains ``damaged``, the reason.
+
+    Raises:
+        ArtifactError: if the session's sidecar or rows are missing, or the log is damaged.
+    """
+    p = Path(path)
+    stem = p.name
+    for suffix in (".csv.part", ".csv", ".json", ".xml"):
+        if stem.endswith(suffix):
+            stem = stem[: -len(suffix)]
+    folder = p.parent
+    sidecar = folder / f"{stem}.json"
+    if not sidecar.is_file():
+        raise ArtifactError(f"no session sidecar {sidecar}")
+    meta = json.loads(sidecar.read_text())
+    ended = meta.get("status") in STATUS[1:]
+    rows = folder / f"{stem}.csv"
+    if not rows.is_file():
+        rows = folder / f"{stem}.csv.part"
+        meta["status"], ended = "interrupted", False
+    if not rows.is_file():
+        raise ArtifactError(f"session {stem} has no rows in {folder}")
+    if meta.get("status") == "running":
+        meta["status"] = "interrupted"
+    frame, problem = _parse_rows(rows)
+    if problem is None and ended and int(meta.get("steps", -1)) != len(frame):
+        problem = f"its sidecar records {meta.get('steps')} steps, the log holds {len(frame)} rows"
+    if problem is not None:
+        if not allow_damaged:
+            raise ArtifactError(f"session {stem} is damaged: {problem}; nothing was analysed")
+        meta["damaged"] = problem
+    return frame, meta
+
+
+def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
+    """The rows as floats, and the first problem found (None for a sound log)."""
+    try:
+        raw = pd.read_csv(rows, dtype=str, keep_default_na=False)
+    except pd.errors.ParserError as exc:  # a row with another number of fields
+        detail = str(exc).strip().splitlines()[-1]
+        raw = pd.read_csv(rows, dtype=str, keep_default_na=False, on_bad_lines="skip")
+        return _floats(raw), f"a row has the wrong number of fields ({detail})"
+    numbers = _floats(raw)
+    bad = numbers.isna() & ~raw.apply(lambda c: c.str.lower().isin(["nan", "-nan"]))
+    if bad.to_numpy().any():
+        row, col = np.argwhere(bad.to_numpy())[0]
+        value = raw.iat[row, col]
+        return numbers, f"row {row + 1}, column {raw.columns[col]!r} holds {value!r}, not a number"
+    return numbers, None
+
+
+def _floats(raw: pd.DataFrame) -> pd.DataFrame:
+    return raw.apply(lambda c: pd.to_numeric(c, errors="coerce")).astype(np.float64)

@@ -1,0 +1,453 @@
+"""Statistics for the user study: a 2x2 within-subjects design.
+
+Every participant uses each of four conditions, the crossing of two factors: the *interface*
+(Retargeting ``R`` or Latent Actions ``LA``) and the *assistance* (none, or Shared Autonomy ``SA``),
+named ``R``, ``R+SA``, ``LA`` and ``LA+SA``, and does two tasks (``Entree``, ``Dessert``) under each.
+Data arrive as a tidy frame, one row per participant x condition x task, with columns ``participant``,
+``condition``, ``task`` and a numeric measure; every test first reduces it to one value per
+participant and cell, over tasks, by their mean or (for times "summed across both tasks") their sum.
+
+The paper reports the SA effect on goal error as F(1,18). A within-subjects test of SA with N = 10
+participants has F(1, N-1) = F(1,9); F(1,18) fits 2N = 20 observations treated as independent. We read
+it as each participant's mean with SA and mean without SA (over interface and task) compared by a
+between-subjects one-way ANOVA (:func:`sa_effect_between`), and report it next to the
+repeated-measures ANOVA that the design calls for (:func:`sa_effect_within`, from :func:`rm_anova`);
+each result's ``"test"`` entry says which it is. Pairwise comparisons of conditions are paired t-tests
+with a Holm correction across the pairs tested (:func:`pairwise`).
+
+F and p values come from statsmodels (``AnovaRM``, ``ols`` + ``anova_lm``, ``multipletests``) and
+scipy (``ttest_rel``); nothing here computes them by hand.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from itertools import combinations
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import scipy.stats
+from statsmodels.formula.api import ols
+from statsmodels.stats.anova import AnovaRM, anova_lm
+from statsmodels.stats.multitest import multipletests
+
+from lasa.base.errors import ConfigError
+from lasa.people.participants import CONDITIONS
+
+__all__ = [
+    "CONDITIONS",  # re-exported from lasa.people.participants
+    "INTERFACES",
+    "SA_LEVELS",
+    "EFFECTS",
+    "factors",
+    "participant_means",
+    "sa_effect_between",
+    "rm_anova",
+    "sa_effect_within",
+    "pairwise",
+    "format_f",
+]
+
+INTERFACES: tuple[str, ...] = ("R", "LA")
+"""Levels of the interface factor."""
+
+SA_LEVELS: tuple[str, ...] = ("none", "SA")
+"""Levels of the assistance factor."""
+
+EFFECTS: tuple[str, ...] = ("interface", "assistance", "interface:assistance")
+"""Effect names of :func:`rm_anova`, in row order."""
+
+AGGS: tuple[str, ...] = ("mean", "sum")
+
+BETWEEN_TEST = "between-subjects one-way ANOVA on 2N participant means (the paper's F(1,18) reading)"
+WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
+
+# Columns every frame needs besides the measure; "interface" and "assistance" are derived from
+# "condition" (they overwrite any columns of those names).
+_KEYS: tuple[str, ...] = ("participant", "condition", "task")
+_DERIVED: tuple[str, ...] = ("interface", "assistance")
+
+
+def factors(condition: str) -> tuple[str, str]:
+    """Split a condition name into its (interface, assistance) levels.
+
+    Args:
+        condition: One of :data:`CONDITIONS`.
+
+    Returns:
+        ``(interface, assistance)``, e.g. ``"LA+SA"`` -> ``("LA", "SA")``, ``"R"`` -> ``("R", "none")``.
+
+    Raises:
+        ConfigError: ``condition`` is not one of :data:`CONDITIONS`.
+    """
+    if not isinstance(condition, str) or condition not in CONDITIONS:
+        raise ConfigError(f"unknown condition {condition!r}; allowed: {', '.join(CONDITIONS)}")
+    interface, _, assistance = condition.partition("+")
+    return interface, assistance or "none"
+
+
+def _check_agg(agg: str) -> None:
+    if agg not in AGGS:
+        raise ConfigError(f"agg must be one of {', '.join(map(repr, AGGS))}, got {agg!r}")
+
+
+def _prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
+    """Validate ``frame`` and return a copy with only the key columns, ``measure`` as float and
+    ``interface`` / ``assistance`` columns derived from ``condition``."""
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
+    if measure in _KEYS + _DERIVED:
+        raise ConfigError(f"measure {measure!r} is a key column; name the column holding the measure")
+    missing = [name for name in (*_KEYS, measure) if name not in frame.columns]
+    if missing:
+        have = [str(name) for name in frame.columns]
+        raise ConfigError(f"frame is missing column(s) {', '.join(map(repr, missing))}; it has {have}")
+    if frame.empty:
+        raise ConfigError("frame has no rows")
+    if frame["participant"].isna().any():
+        raise ConfigError("column 'participant' has missing values")
+
+    conditions = frame["condition"]
+    unknown = sorted({repr(c) for c in conditions.unique() if c not in CONDITIONS})
+    if unknown:
+        raise ConfigError(f"unknown condition(s) {', '.join(unknown)}; allowed: {', '.join(CONDITIONS)}")
+
+    values = frame[measure]
+    if not pd.api.types.is_numeric_dtype(values) or pd.api.types.is_bool_dtype(values):
+        raise ConfigError(f"measure {measure!r} must be numeric, got dtype {values.dtype}")
+    values = values.astype(float)
+    bad = ~np.isfinite(values.to_numpy())
+    if bad.any():
+        rows = frame.loc[bad, ["participant", "condition", "task"]].head(3).to_dict("records")
+        raise ConfigError(f"measure {measure!r} has {int(bad.sum())} non-finite value(s), e.g. at {rows}")
+
+    keys = ["participant", "condition", "task"]
+    duplicated = frame.duplicated(subset=keys, keep=False)
+    if duplicated.any():
+        row = frame.loc[duplicated, keys].iloc[0].to_dict()
+        raise ConfigError(
+            f"more than one row for participant x condition x task {row}; expected exactly one per cell"
+        )
+
+    out = frame[keys].copy()
+    out[measure] = values
+    levels = {name: factors(name) for name in CONDITIONS}
+    out["interface"] = conditions.map(lambda c: levels[c][0])
+    out["assistance"] = conditions.map(lambda c: levels[c][1])
+    return out
+
+
+def _check_participants(data: pd.DataFrame) -> int:
+    n = data["participant"].nunique()
+    if n < 2:
+        raise ConfigError(f"need at least 2 participants, got {n}")
+    return int(n)
+
+
+def _check_complete(data: pd.DataFrame, conditions: Sequence[str]) -> None:
+    """Every participant has every one of ``conditions``, and the same tasks in each of them."""
+    have = data.groupby("participant", sort=True)["condition"].agg(set)
+    for participant, present in have.items():
+        lacking = [c for c in conditions if c not in present]
+        if lacking:
+            raise ConfigError(
+                f"participant {participant!r} has no data for condition(s) {', '.join(lacking)}; "
+                "within-subject tests need every participant in every condition compared"
+            )
+    tasks = set(data["task"].unique())
+    subset = data[data["condition"].isin(list(conditions))]
+    cells = subset.groupby(["participant", "condition"], sort=True)["task"].agg(set)
+    for (participant, condition), present in cells.items():
+        lacking_tasks = sorted(map(str, tasks - present))
+        if lacking_tasks:
+            raise ConfigError(
+                f"participant {participant!r} has no data for task(s) {', '.join(lacking_tasks)} "
+                f"in condition {condition!r}; aggregating over tasks needs every task in every cell"
+            )
+
+
+def _aggregate(data: pd.DataFrame, measure: str, by: Sequence[str], agg: str) -> pd.DataFrame:
+    """One value of ``measure`` per participant x ``by`` levels (``data`` already prepared)."""
+    keys = ["participant", *by]
+    grouped = data.copy()
+    order = {"condition": CONDITIONS, "interface": INTERFACES, "assistance": SA_LEVELS}
+    for name in by:
+        if name in order:
+            grouped[name] = pd.Categorical(grouped[name], categories=list(order[name]), ordered=True)
+    out = grouped.groupby(keys, sort=True, observed=True)[measure].agg(agg).reset_index()
+    for name in by:
+        if name in order:
+            out[name] = out[name].astype(str)
+    return out
+
+
+def participant_means(
+    frame: pd.DataFrame, measure: str, by: Sequence[str] = ("condition",), agg: str = "mean"
+) -> pd.DataFrame:
+    """One value of ``measure`` per participant and ``by`` level, aggregated over everything else.
+
+    Args:
+        frame: Tidy study data (columns ``participant``, ``condition``, ``task`` and ``measure``).
+        measure: Name of the numeric column to aggregate.
+        by: Columns to keep besides ``participant``; ``"interface"`` and ``"assistance"`` may be used
+            (they are derived from ``condition``). ``()`` aggregates each participant over everything.
+        agg: ``"mean"`` or ``"sum"`` over the rows (tasks, by default) in each group.
+
+    Returns:
+        Columns ``participant``, ``*by``, ``measure``; rows sorted by participant and then by level in
+        the study's order (:data:`CONDITIONS`, :data:`INTERFACES`, :data:`SA_LEVELS`).
+
+    Raises:
+        ConfigError: A column is missing or unknown, a condition is unknown, a value is not finite,
+            or ``agg`` is not ``"mean"`` / ``"sum"``.
+    """
+    _check_agg(agg)
+    by = list(by)
+    data = _prepare(frame, measure)
+    unknown = [name for name in by if name not in data.columns or name == "participant" or name == measure]
+    if unknown:
+        allowed = ["condition", "task", *_DERIVED]
+        raise ConfigError(f"cannot group by {', '.join(map(repr, unknown))}; allowed: {allowed}")
+    return _aggregate(data, measure, by, agg)
+
+
+def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
+    """The SA effect read as the paper's F(1,18): a one-way ANOVA on 2N participant means.
+
+    Each participant contributes two observations, the mean of ``measure`` over their rows with SA
+    and over their rows without SA (so over interface and task), and the 2N values are compared as
+    two independent groups: F has df (1, 2N-2). This ignores the pairing; see
+    :func:`sa_effect_within` for the test that the within-subjects design calls for.
+
+    Args:
+        frame: Tidy study data.
+        measure: Name of the numeric column to test.
+
+    Returns:
+        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``, where
+        ``n`` is the number of participants, the means are over participants' means, and ``ci_*``
+        bound SA - no SA (95%, two-sample t with pooled variance, the same reading).
+
+    Raises:
+        ConfigError: Invalid data, fewer than 2 participants, or a participant without rows both
+            with and without SA.
+    """
+    data = _prepare(frame, measure)
+    n = _check_participants(data)
+    means = _aggregate(data, measure, ["assistance"], "mean")
+    counts = means.groupby("participant")["assistance"].agg(set)
+    for participant, present in counts.items():
+        lacking = [level for level in SA_LEVELS if level not in present]
+        if lacking:
+            conditions = [c for c in CONDITIONS if factors(c)[1] in lacking]
+            raise ConfigError(
+                f"participant {participant!r} has no rows with assistance {lacking[0]!r} "
+                f"(condition(s) {', '.join(conditions)}); each participant needs a mean with and without SA"
+            )
+    table = pd.DataFrame({"y": means[measure].to_numpy(), "sa": means["assistance"].to_numpy()})
+    fit = anova_lm(ols("y ~ C(sa)", data=table).fit())
+    row = fit.loc["C(sa)"]
+    # the 95% interval of SA - no SA under the same reading: a pooled-variance two-sample t
+    ci = scipy.stats.ttest_ind(
+        table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
+    ).confidence_interval()
+    return {
+        "test": BETWEEN_TEST,
+        "F": float(row["F"]),
+        "df1": int(round(float(row["df"]))),
+        "df2": int(round(float(fit.loc["Residual", "df"]))),
+        "p": float(row["PR(>F)"]),
+        "n": n,
+        "mean_sa": float(table.loc[table["sa"] == "SA", "y"].mean()),
+        "mean_no_sa": float(table.loc[table["sa"] == "none", "y"].mean()),
+        "ci_low": float(ci.low),
+        "ci_high": float(ci.high),
+    }
+
+
+def _cells(frame: pd.DataFrame, measure: str, agg: str, conditions: Sequence[str]) -> pd.DataFrame:
+    """Validated per participant x condition values for ``conditions``, complete and balanced."""
+    _check_agg(agg)
+    data = _prepare(frame, measure)
+    _check_participants(data)
+    _check_complete(data, conditions)
+    data = data[data["condition"].isin(list(conditions))]
+    return _aggregate(data, measure, ["condition", "interface", "assistance"], agg)
+
+
+def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFrame:
+    """Two-way (interface x assistance) repeated-measures ANOVA with participants as subjects.
+
+    Tasks are first aggregated per participant and condition with ``agg``; ``AnovaRM`` then tests
+    both main effects and the interaction, each with df (1, N-1).
+
+    Args:
+        frame: Tidy study data; every participant must have every condition and every task in each.
+        measure: Name of the numeric column to test.
+        agg: ``"mean"`` or ``"sum"`` over tasks.
+
+    Returns:
+        One row per effect in :data:`EFFECTS` order, columns ``effect``, ``F``, ``df1``, ``df2``, ``p``.
+
+    Raises:
+        ConfigError: Invalid data or ``agg``, fewer than 2 participants, or a participant missing a
+            condition (or a task within one).
+    """
+    cells = _cells(frame, measure, agg, CONDITIONS)
+    table = AnovaRM(cells, depvar=measure, subject="participant", within=["interface", "assistance"]).fit()
+    result = table.anova_table
+    rows = []
+    for effect in EFFECTS:
+        row = result.loc[effect]
+        rows.append(
+            {
+                "effect": effect,
+                "F": float(row["F Value"]),
+                "df1": int(round(float(row["Num DF"]))),
+                "df2": int(round(float(row["Den DF"]))),
+                "p": float(row["Pr > F"]),
+            }
+        )
+    return pd.DataFrame(rows, columns=["effect", "F", "df1", "df2", "p"])
+
+
+def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
+    """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means).
+
+    Args:
+        frame: Tidy study data; every participant must have every condition.
+        measure: Name of the numeric column to test.
+
+    Returns:
+        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``: df
+        are (1, N-1); the means are over participants of each participant's mean with / without SA;
+        ``ci_*`` bound SA - no SA (95%, paired t over participants).
+
+    Raises:
+        ConfigError: As :func:`rm_anova`.
+    """
+    table = rm_anova(frame, measure, agg="mean")
+    row = table.set_index("effect").loc["assistance"]
+    cells = _cells(frame, measure, "mean", CONDITIONS)
+    per_participant = cells.groupby(["participant", "assistance"])[measure].mean().unstack("assistance")
+    # the 95% interval of SA - no SA: a paired t over participants (its t^2 is the main effect's F)
+    ci = scipy.stats.ttest_rel(per_participant["SA"], per_participant["none"]).confidence_interval()
+    return {
+        "test": WITHIN_TEST,
+        "F": float(row["F"]),
+        "df1": int(row["df1"]),
+        "df2": int(row["df2"]),
+        "p": float(row["p"]),
+        "n": int(len(per_participant)),
+        "mean_sa": float(per_participant["SA"].mean()),
+        "mean_no_sa": float(per_participant["none"].mean()),
+        "ci_low": float(ci.low),
+        "ci_high": float(ci.high),
+    }
+
+
+def pairwise(
+    frame: pd.DataFrame,
+    measure: str,
+    agg: str = "mean",
+    pairs: Sequence[tuple[str, str]] | None = None,
+    correction: str = "holm",
+) -> pd.DataFrame:
+    """Paired t-tests between conditions on per-participant values, corrected across the pairs.
+
+    Args:
+        frame: Tidy study data; every participant must have both conditions of every pair tested.
+        measure: Name of the numeric column to compare.
+        agg: ``"mean"`` or ``"sum"`` over tasks (the paper sums times across both tasks).
+        pairs: ``(a, b)`` condition pairs; default all 6 pairs of :data:`CONDITIONS`, in order.
+        correction: A ``statsmodels.stats.multitest.multipletests`` method (default ``"holm"``), or
+            ``"none"`` for no correction. Pairs whose p is not finite (no variance in the
+            differences) are left out of the correction.
+
+    Returns:
+        One row per pair: ``a``, ``b``, ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t``
+        (positive when ``a`` is larger), ``df`` (N-1), ``p_unc``, ``p_corr``, ``correction``.
+
+    Raises:
+        ConfigError: Invalid data, ``agg``, pair or correction, fewer than 2 participants, or a
+            participant missing a condition that is compared.
+    """
+    chosen = list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
+    if not chosen:
+        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
+    for pair in chosen:
+        if len(pair) != 2:
+            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
+        for condition in pair:
+            factors(condition)
+        if pair[0] == pair[1]:
+            raise ConfigError(f"pair {pair!r} compares a condition with itself")
+    used = [c for c in CONDITIONS if any(c in pair for pair in chosen)]
+    cells = _cells(frame, measure, agg, used)
+    wide = cells.pivot(index="participant", columns="condition", values=measure)
+
+    rows = []
+    for a, b in chosen:
+        x = wide[a].to_numpy(dtype=float)
+        y = wide[b].to_numpy(dtype=float)
+        test = scipy.stats.ttest_rel(x, y)
+        rows.append(
+            {
+                "a": a,
+                "b": b,
+                "mean_a": float(x.mean()),
+                "mean_b": float(y.mean()),
+                "diff": float(x.mean() - y.mean()),
+                "t": float(test.statistic),
+                "df": len(x) - 1,
+                "p_unc": float(test.pvalue),
+            }
+        )
+    out = pd.DataFrame(rows)
+    p_unc = out["p_unc"].to_numpy(dtype=float)
+    p_corr = p_unc.copy()
+    if correction != "none":
+        finite = np.isfinite(p_unc)
+        if finite.any():
+            try:
+                p_corr[finite] = multipletests(p_unc[finite], method=correction)[1]
+            except ValueError as error:
+                raise ConfigError(
+                    f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
+                ) from error
+    out["p_corr"] = p_corr
+    out["correction"] = correction
+    return out
+
+
+def _format_df(value: Any) -> str:
+    number = float(value)
+    return str(int(number)) if number.is_integer() else f"{number:g}"
+
+
+def format_f(result: dict[str, Any]) -> str:
+    """APA-style F report, e.g. ``"F(1,9) = 12.3, p = .004"``.
+
+    F has three significant figures at most (one decimal from 10 up, two below); p has three
+    decimals without the leading zero, and ``"p < .001"`` below .001.
+
+    Args:
+        result: A dict with ``F``, ``df1``, ``df2`` and ``p`` (from :func:`sa_effect_between`,
+            :func:`sa_effect_within`, or a row of :func:`rm_anova` as a dict).
+
+    Raises:
+        ConfigError: A key is missing.
+    """
+    missing = [key for key in ("F", "df1", "df2", "p") if key not in result]
+    if missing:
+        raise ConfigError(f"result is missing {', '.join(map(repr, missing))}; got keys {sorted(result)}")
+    f_value = float(result["F"])
+    p_value = float(result["p"])
+    f_text = f"{f_value:.1f}" if abs(f_value) >= 10 else f"{f_value:.2f}"
+    if p_value < 0.001:
+        p_text = "p < .001"
+    else:
+        text = f"{p_value:.3f}"
+        p_text = f"p = {text[1:] if text.startswith('0') else text}"
+    return f"F({_format_df(result['df1'])},{_format_df(result['df2'])}) = {f_text}, {p_text}"

@@ -1,0 +1,381 @@
+"""Verdicts decided by their intervals, with users added where a verdict is still open.
+
+A claim's verdict is a rule (:mod:`lasa.evidence.rules`) applied to a few numbers measured on a
+sweep of simulated users, so it inherits their randomness. Three things make it a result
+rather than a draw:
+
+1. *An interval per number.* :func:`assess` resamples the users with replacement (all
+   rows of a user together, so the pairing of methods on the same user survives),
+   recomputes every number the rule reads, and takes percentile intervals.
+2. *Settled or undecided.* A verdict is **settled** when every number's interval lies on
+   one side of each of its rule's thresholds (:meth:`lasa.evidence.rules.Rule.settled`); then it
+   reads the rule's verdict. Otherwise it reads ``undecided``, with its interval, and the
+   note says which interval straddles which threshold and what the point estimates read.
+3. *Users where the verdict is close* (:func:`sequential`). The users per point follow a
+   group-sequential design fixed before any result was seen (:class:`Design`): a first
+   look at ``first`` users per point for every arm, then blocks of ``block`` users for the
+   headline reading's arms only, until every headline verdict of the figure is settled or
+   the cap is reached. **Guard against optional stopping**: with K possible looks, every
+   look's interval has level 1 - 0.05 / K (Bonferroni over the looks), so the chance that
+   any look declares a verdict its true numbers do not support stays below 5% whatever the
+   stopping time. With the defaults (60, 30, cap 150) K = 4 and each interval is 98.75%.
+
+Every reading of shared autonomy (:mod:`lasa.method.assistance`) gets a row: the headline
+``<id>`` under the paper's reading, and ``<id>@<member>`` for each other member, judged at
+the first look's users (the blocks after it go where the headline verdict is open).
+``LA`` rows carry ``assistance == "none"`` (alpha = 0: no assistance acts) and are shared
+by every member's comparison.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.config import NO_ASSISTANCE  # defined once, in the base; re-exported here
+from lasa.base.errors import ConfigError
+from lasa.evidence.claims import Claim
+from lasa.evidence.rules import UNDECIDED, rule
+
+__all__ = [
+    "ALPHA",
+    "NO_ASSISTANCE",
+    "N_BOOT",
+    "Design",
+    "Sequential",
+    "assess",
+    "block_seed",
+    "block_users",
+    "sequential",
+    "member_frame",
+    "member_of",
+    "bootstrap_frames",
+    "check_design",
+    "group_means",
+    "resample_counts",
+]
+
+N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
+ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
+
+Evaluate = Callable[[pd.DataFrame], list[Claim]]
+
+
+@dataclasses.dataclass(frozen=True)
+class Design:
+    """Users per point: a first look, blocks after it, a cap (fixed before the results).
+
+    Why these values: 60 is the verdict map's smallest cell (each of its cells must rest on
+    at least 60 users), and the first look serves both; blocks of 30 are the old fixed
+    size, so each later look costs what a whole sweep used to; the cap of 150 is the size
+    at which the last closing note re-ran the headline reading (5x the old 30).
+    """
+
+    first: int = 60  # users per point at the first look, every arm and reading [-]
+    block: int = 30  # users added per later look, the headline reading's arms only [-]
+    cap: int = 150  # most users per point [-]
+
+    def __post_init__(self) -> None:
+        check_design(self.first, self.block, self.cap)
+
+    @property
+    def sizes(self) -> tuple[int, ...]:
+        """Users per point at each possible look: first, first + block, ..., cap."""
+        out = [self.first]
+        while out[-1] < self.cap:
+            out.append(min(out[-1] + self.block, self.cap))
+        return tuple(out)
+
+    @property
+    def level(self) -> float:
+        """Each look's interval level, 1 - ALPHA / K (Bonferroni over the K looks)."""
+        return 1.0 - ALPHA / len(self.sizes)
+
+
+def check_design(first: int, block: int, cap: int) -> None:
+    """Positive integers with ``first <= cap``, else a ConfigError naming the setting."""
+    for name, value in (("users", first), ("block", block), ("cap", cap)):
+        if int(value) != value or value < 1:
+            raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+    if first > cap:
+        raise ConfigError(f"users (the first look, {first}) must not exceed cap ({cap})")
+
+
+def block_seed(seed: int, block: int) -> int:
+    """The seed of look ``block``'s new users: ``seed`` itself for the first look.
+
+    Later blocks draw from their own stream (``SeedSequence([seed, block])``), so adding a
+    block leaves the users of the earlier ones unchanged.
+    """
+    if block == 0:
+        return int(seed)
+    return int(np.random.SeedSequence([int(seed), int(block)]).generate_state(1)[0])
+
+
+def block_users(design: Design, block: int) -> tuple[int, int]:
+    """(first user index, number of users) of look ``block``'s new users."""
+    if block == 0:
+        return 0, design.first
+    start = design.sizes[block - 1]
+    return start, design.sizes[block] - start
+
+
+def bootstrap_frames(
+    frame: pd.DataFrame, n_boot: int, seed: int, unit: str = "seed"
+) -> Iterator[pd.DataFrame]:
+    """``n_boot`` resamples of ``frame``, drawing its users (``unit``) with replacement.
+
+    A user drawn twice appears twice, under two new ids, so rules that average per user
+    (``groupby(unit)``) count it twice instead of merging it.
+    """
+    codes, units = pd.factorize(frame[unit], sort=True)
+    order = np.argsort(codes, kind="stable")
+    starts = np.searchsorted(codes[order], np.arange(len(units) + 1))
+    rng = np.random.default_rng(seed)
+    for _ in range(n_boot):
+        picks = rng.integers(0, len(units), len(units))
+        rows = np.concatenate([order[starts[p] : starts[p + 1]] for p in picks])
+        sizes = starts[picks + 1] - starts[picks]
+        sample = frame.iloc[rows].copy()
+        sample[unit] = np.repeat(np.arange(len(picks)), sizes)
+        yield sample
+
+
+def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = "seed") -> np.ndarray:
+    """How often each user is drawn in each of ``n_boot`` resamples, shape (n_boot, users).
+
+    Users are ordered as ``pd.factorize(frame[unit], sort=True)`` orders them, and drawn from
+    the same stream as :func:`bootstrap_frames`: resample r of both is the same set of users.
+    """
+    n = int(frame[unit].nunique())
+    rng = np.random.default_rng(seed)
+    return np.stack([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)])
+
+
+def group_means(
+    frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = "seed"
+) -> dict[tuple[Any, ...], np.ndarray]:
+    """The mean of ``metric`` per group of ``keys`` in every resample, without building them.
+
+    A resample repeats each user's rows as often as ``counts`` says, so a group's mean in it
+    is sum_u c_u S_ug / sum_u c_u N_ug, with S and N each user's sum and count in the group:
+    one matrix product for all resamples (the same numbers as :func:`bootstrap_frames`'s
+    resamples give, up to float rounding).
+
+    Returns:
+        Group label (a tuple of the keys' values) -> its mean in each resample, shape (R,).
+    """
+    users = pd.factorize(frame[unit], sort=True)[0]
+    groups = frame.groupby(keys, sort=True).ngroup().to_numpy()
+    labels = list(frame.groupby(keys, sort=True).groups)
+    n_users, n_groups = counts.shape[1], len(labels)
+    sums, sizes = np.zeros((n_users, n_groups)), np.zeros((n_users, n_groups))
+    np.add.at(sums, (users, groups), frame[metric].to_numpy(dtype=float))
+    np.add.at(sizes, (users, groups), 1.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        means = (counts @ sums) / (counts @ sizes)
+    return {(k if isinstance(k, tuple) else (k,)): means[:, i] for i, k in enumerate(labels)}
+
+
+# a figure's vectorized bootstrap: (frame, counts) -> claim id -> number name -> values (R,)
+BootValues = Callable[[pd.DataFrame, np.ndarray], dict[str, dict[str, np.ndarray]]]
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.3g}" if math.isfinite(x) else "nan"
+
+
+def assess(
+    evaluate: Evaluate,
+    frame: pd.DataFrame,
+    n_boot: int = N_BOOT,
+    seed: int = 0,
+    unit: str = "seed",
+    level: float = 0.95,
+    fast: BootValues | None = None,
+) -> list[Claim]:
+    """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
+
+    Args:
+        evaluate: A figure's rules: frame -> claims, each with the ``values`` its rule reads.
+        frame: The users' rows.
+        n_boot: Bootstrap resamples.
+        seed: Seed of the resampling.
+        unit: The column naming a user: the resampled unit.
+        level: The intervals' level (1 - ALPHA / K under a sequential design).
+        fast: The figure's vectorized bootstrap (its module's ``boot_values``): the same
+            numbers on the same resamples as evaluating every resample, from group means
+            (:func:`group_means`); if None, ``evaluate`` runs on every resample.
+
+    Returns:
+        ``evaluate(frame)``'s claims with ``ci_low``/``ci_high`` (the interval of the first
+        number, ``value``), ``settled``, ``n_users``, and ``reproduced`` set to ``undecided``
+        where an interval straddles a threshold.
+
+    Raises:
+        ConfigError: if a claim's verdict is not its rule's verdict at its values.
+    """
+    if not 0.0 < level < 1.0:
+        raise ConfigError(f"level must lie in (0, 1), got {level!r}")
+    point = evaluate(frame)
+    samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
+    if fast is not None:
+        for cid, arrays in fast(frame, resample_counts(frame, n_boot, seed, unit)).items():
+            for k, arr in arrays.items():
+                if cid in samples and k in samples[cid]:
+                    samples[cid][k] = [float(x) for x in arr]
+    else:
+        for sample in bootstrap_frames(frame, n_boot, seed, unit):
+            for c in evaluate(sample):
+                for k, v in c.values.items():
+                    if c.id in samples and k in samples[c.id]:
+                        samples[c.id][k].append(v)
+    tail = 100.0 * (1.0 - level) / 2.0
+    n_users = int(frame[unit].nunique())
+    out = []
+    for c in point:
+        r = rule(c.id)
+        if c.reproduced != r.verdict(c.values):
+            raise ConfigError(f"{c.id}: verdict {c.reproduced!r} is not its rule's at {dict(c.values)}")
+        intervals: dict[str, tuple[float, float]] = {}
+        for q in r.quantities:
+            boot = np.asarray(samples[c.id][q.name], dtype=float)
+            boot = boot[np.isfinite(boot)]
+            bounds = np.percentile(boot, [tail, 100.0 - tail]) if len(boot) else np.full(2, np.nan)
+            intervals[q.name] = (float(bounds[0]), float(bounds[1]))
+        settled = r.settled(intervals)
+        text = "; ".join(
+            f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
+            for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
+        )
+        lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
+        if not settled:
+            lead += (
+                f"Undecided: {'; '.join(r.straddled(intervals)) or 'an interval is unknown'}; "
+                f"the point estimates read {c.reproduced!r}. "
+            )
+        first = intervals[r.quantities[0].name]
+        out.append(
+            dataclasses.replace(
+                c,
+                value=float(c.values[r.quantities[0].name]),
+                ci_low=first[0],
+                ci_high=first[1],
+                settled=settled,
+                reproduced=c.reproduced if settled else UNDECIDED,
+                n_users=n_users,
+                note=lead + f"Rule: {r.text}. " + c.note,
+            )
+        )
+    return out
+
+
+def member_of(frame: pd.DataFrame) -> str:
+    """The assistance member of a one-member frame (``none`` if it holds unassisted rows only)."""
+    names = (
+        [m for m in dict.fromkeys(frame["assistance"]) if m != NO_ASSISTANCE] if "assistance" in frame else []
+    )
+    if len(names) > 1:
+        raise ConfigError(f"the frame mixes assistance members {names}; select one (member_frame)")
+    return names[0] if names else NO_ASSISTANCE
+
+
+def member_frame(frame: pd.DataFrame, member: str) -> pd.DataFrame:
+    """The rows of one assistance member, with the unassisted rows (LA) every member shares.
+
+    LA rows of users the member's arms never ran (later blocks of a sequential sweep run the
+    headline arms only) are left out, so the member is compared on paired users.
+    """
+    own = frame["assistance"] == member
+    shared = frame["assistance"] == NO_ASSISTANCE
+    if own.any() and "seed" in frame:
+        shared &= frame["seed"].isin(frame.loc[own, "seed"].unique())
+    return frame[own | shared]
+
+
+@dataclasses.dataclass(frozen=True)
+class Sequential:
+    """The outcome of :func:`sequential`.
+
+    Attributes:
+        frame: Every look's rows (``look`` numbers them; the first look holds every arm).
+        claims: The headline row of each claim, then each other member's.
+        looks: One row per (look, claim) of the headline reading: users per point, the
+            verdict, whether it was settled.
+    """
+
+    frame: pd.DataFrame
+    claims: list[Claim]
+    looks: pd.DataFrame
+
+
+def sequential(
+    run_block: Callable[[int, tuple[str, ...]], pd.DataFrame],
+    evaluate: Evaluate,
+    members: tuple[str, ...],
+    default: str,
+    design: Design = Design(),
+    n_boot: int = N_BOOT,
+    seed: int = 0,
+    fast: BootValues | None = None,
+) -> Sequential:
+    """Add users in blocks until every headline verdict is settled or the cap is reached.
+
+    Args:
+        run_block: ``(look, members) -> rows`` of that look's new users
+            (:func:`block_users`), under those members (LA rows labelled ``none``).
+        evaluate: The figure's rules (see :func:`assess`).
+        members: Every member to judge; the first look runs all of them.
+        default: The headline member (the paper's reading); later looks run only it.
+        design: Users per look and the cap (:class:`Design`).
+        n_boot: Bootstrap resamples per interval.
+        seed: Seed of the resampling.
+        fast: The figure's vectorized bootstrap, see :func:`assess`.
+
+    Raises:
+        ConfigError: if ``default`` is not among ``members``.
+    """
+    if default not in members:
+        raise ConfigError(f"the headline member {default!r} is not among the members {members}")
+    frame = run_block(0, members).assign(look=0)
+    log = []
+    for look, size in enumerate(design.sizes):
+        if look > 0:
+            frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
+        head = assess(evaluate, member_frame(frame, default), n_boot, seed, level=design.level, fast=fast)
+        log += [
+            {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
+            for c in head
+        ]
+        if all(c.settled for c in head):
+            break
+    first = frame[frame.look == 0]
+    others = {
+        m: assess(evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast)
+        for m in members
+        if m != default
+    }
+    rows: list[Claim] = []
+    for i, c in enumerate(head):
+        flips = [f"{m} {o[i].reproduced}" for m, o in others.items() if o[i].reproduced != c.reproduced]
+        where = (
+            f"Readings with another verdict (at {design.first} users): {', '.join(flips)}. "
+            if flips
+            else "Every other reading gives the same verdict. "
+            if others
+            else ""
+        )
+        stop = (
+            f"Settled at look {look + 1} of {len(design.sizes)}. "
+            if c.settled
+            else f"Undecided at the cap ({design.cap} users). "
+        )
+        rows.append(dataclasses.replace(c, assistance=default, note=stop + where + c.note))
+    for m, claims in others.items():
+        rows += [dataclasses.replace(c, id=f"{c.id}@{m}", assistance=m) for c in claims]
+    return Sequential(frame=frame, claims=rows, looks=pd.DataFrame(log))

@@ -1,0 +1,156 @@
+"""Off-screen MuJoCo video: render joint trajectories and write bit-exact MP4s with mediapy.
+
+Rendering is software-only (OSMesa; ``lasa`` sets ``MUJOCO_GL`` on import) and slow, so
+keep frames small (even sizes such as 320x240) and render only the frames a video
+shows. The scenes turn shadows and reflections off.
+
+Videos are written bit-exactly: the same frames give the same MP4 bytes on every run
+and machine with the pinned environment. mediapy always runs the ``ffmpeg`` binary
+that the pinned ``imageio-ffmpeg`` wheel ships (never one found on the PATH; see
+:mod:`lasa.base.ffmpeg`), with one thread, CPU-independent kernels and ffmpeg's bitexact
+flags; see :func:`write_video`. :func:`read_video` is mediapy's reader with the same binary.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+from pathlib import Path
+
+import mediapy
+import mujoco
+import numpy as np
+from PIL import Image, ImageDraw
+
+from lasa.base.errors import ConfigError
+from lasa.base.ffmpeg import pinned_ffmpeg
+from lasa.base.io import atomic_path
+from lasa.world.robot import Robot
+
+__all__ = ["render_states", "label_frames", "side_by_side", "write_video", "read_video"]
+
+
+# x264 picks its assembly by the CPU it runs on, and the SSSE3/AVX2/AVX-512 kernels do
+# not give the same bitstream as the plain C code. Pin the instruction set to the
+# x86-64 baseline (every x86-64 CPU has SSE2; costs ~10% speed), elsewhere use plain C.
+_X264_ASM = "MMX2,SSE2" if platform.machine().lower() in {"x86_64", "amd64"} else "0"
+
+# Output options that make the MP4 a function of the frames alone (see write_video).
+_BITEXACT_ARGS = (
+    "-threads", "1",  # one x264 thread: the thread count changes the bitstream and its SEI
+    "-x264-params", f"asm={_X264_ASM}",  # the same x264 kernels on every CPU
+    "-filter_threads", "1",  # one thread for the RGB -> YUV conversion as well
+    "-sws_flags", "bicubic+accurate_rnd+bitexact",  # RGB -> YUV as the C code, not the SIMD
+    "-flags:v", "+bitexact",  # no "Lavc..." version string in the stream
+    "-fflags", "+bitexact",  # no "Lavf..." encoder tag or other muxer extras
+    "-map_metadata", "-1",  # copy no metadata (e.g. creation time) into the container
+)  # fmt: skip
+
+
+def render_states(
+    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, camera: str | None = None
+) -> np.ndarray:
+    """Render one frame per joint configuration from the robot's fixed camera.
+
+    Args:
+        robot: The robot (its scene and camera).
+        states: Joint positions, shape (T, n).
+        height: Frame height in pixels (even).
+        width: Frame width in pixels (even).
+        camera: Camera name (default: the robot's video camera).
+
+    Returns:
+        Frames, shape (T, height, width, 3), uint8.
+    """
+    if height % 2 or width % 2:
+        raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
+    states = np.atleast_2d(states)
+    model = robot.model
+    data = mujoco.MjData(model)
+    adr = robot.qpos_adr
+    frames = np.empty((len(states), height, width, 3), dtype=np.uint8)
+    with mujoco.Renderer(model, height, width) as renderer:
+        for i, q in enumerate(states):
+            data.qpos[adr] = q
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera=camera or robot.spec.camera)
+            frames[i] = renderer.render()
+    return frames
+
+
+def label_frames(frames: np.ndarray, text: str | list[str]) -> np.ndarray:
+    """Write a caption in the top-left corner of every frame (one per frame, or shared)."""
+    out = frames.copy()
+    texts = [text] * len(frames) if isinstance(text, str) else text
+    for i, t in enumerate(texts):
+        img = Image.fromarray(out[i])
+        ImageDraw.Draw(img).text((6, 4), t, fill=(20, 20, 20))
+        out[i] = np.asarray(img)
+    return out
+
+
+def side_by_side(*videos: np.ndarray) -> np.ndarray:
+    """Concatenate videos of equal frame size horizontally, padding the shorter ones."""
+    length = max(len(v) for v in videos)
+    padded = [np.concatenate([v, np.repeat(v[-1:], length - len(v), 0)]) for v in videos]
+    return np.concatenate(padded, axis=2)
+
+
+def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
+    """Atomically write frames to an H.264 (yuv420p) MP4, bit-exactly.
+
+    The same frames always give the same file bytes, whatever the machine's core count
+    or PATH, so a regenerated video can be checked by its hash. Four things can
+    make the bytes vary and are pinned here:
+
+    * the encoder: mediapy runs the ffmpeg binary of the pinned ``imageio-ffmpeg``
+      wheel, never a system ``ffmpeg`` (another ffmpeg/x264 version encodes differently);
+    * threads: libx264 picks ``threads=1.5 x cores`` and frame threading changes the
+      bitstream (and the option string it writes into an SEI message), so the encoder
+      and the colour conversion run single-threaded;
+    * CPU features: x264 and ffmpeg's RGB -> YUV conversion pick SIMD kernels by CPU,
+      and some round differently from the C code, so x264 is held to the x86-64
+      baseline (``asm=MMX2,SSE2``; plain C on other machines) and swscale to its
+      ``accurate_rnd+bitexact`` paths;
+    * metadata: ``-fflags +bitexact``, ``-flags:v +bitexact`` and ``-map_metadata -1``
+      leave out the encoder version strings and any creation time.
+
+    Quality is mediapy's default, made explicit (passing ffmpeg arguments would turn it
+    off): constant quantiser 20 up to 640x480 pixels, 28 above.
+
+    Args:
+        path: Destination ``.mp4``; written to a temporary file beside it and renamed.
+        frames: Frames, shape (T, H, W, 3), uint8, with even H and W.
+        fps: Frame rate.
+
+    Returns:
+        ``path`` as a :class:`~pathlib.Path`.
+
+    Raises:
+        ConfigError: The frames are not (T, H, W, 3) or H or W is odd.
+    """
+    frames = np.asarray(frames)
+    if frames.ndim != 4 or frames.shape[-1] != 3:
+        raise ConfigError(f"frames must have shape (T, H, W, 3), got {frames.shape}")
+    height, width = frames.shape[1:3]
+    if height % 2 or width % 2:
+        raise ConfigError(f"frame size must be even for H.264 (yuv420p), got {width}x{height}")
+    mediapy.set_ffmpeg(pinned_ffmpeg())
+    qp = 20 if height * width <= 640 * 480 else 28
+    with atomic_path(path) as tmp:
+        mediapy.write_video(
+            tmp,
+            frames,
+            fps=fps,
+            codec="h264",
+            encoded_format="yuv420p",
+            qp=qp,
+            ffmpeg_args=list(_BITEXACT_ARGS),
+        )
+    return Path(path)
+
+
+def read_video(path: str | os.PathLike[str]) -> np.ndarray:
+    """Decode an MP4 into frames (T, H, W, 3), uint8, with mediapy and the pinned ffmpeg."""
+    mediapy.set_ffmpeg(pinned_ffmpeg())
+    return np.asarray(mediapy.read_video(str(path)))

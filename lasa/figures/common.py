@@ -1,0 +1,275 @@
+"""What the simulated-user sweeps share: drawing episodes, and rolling out mixed methods.
+
+A sweep builds one population of simulated users covering every condition (method x
+rationality x seed, or method x change step x seed, ...) and runs it batched, one
+rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
+Users that share a seed share their cup, preference and random stream across
+conditions, so methods are compared on paired episodes.
+
+A sweep runs its assisted methods under every member of the shared-autonomy family it
+is given (:func:`arms`); LA, which no assistance touches, runs once. :func:`judge` runs a
+figure's sweep in looks (:func:`lasa.evidence.verdicts.sequential`): every member at the first look,
+then blocks of new users for the headline member until its verdicts are settled.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Mapping, Sequence
+from typing import Any, TypeVar
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.errors import ConfigError
+from lasa.evidence.verdicts import Design, Sequential, sequential
+from lasa.method.decoder import ActionDecoder
+from lasa.method.step import METHOD_DECODER, METHODS, latent_grid, method_alpha
+from lasa.people.rollout import Trajectories, rollout
+from lasa.people.users import PILOTS, UserPopulation
+from lasa.world.task import CupTask
+
+T = TypeVar("T")
+
+__all__ = [
+    "Decoders",
+    "arms",
+    "check_members",
+    "members_of",
+    "pilot_uniforms",
+    "as_decoders",
+    "check_methods",
+    "check_pilot",
+    "sweep_grid",
+    "check_positive_int",
+    "draw_episodes",
+    "episodes",
+    "run_population",
+    "judge",
+]
+
+Decoders = Mapping[str, ActionDecoder] | ActionDecoder
+
+
+def as_decoders(decoders: Decoders) -> Mapping[str, ActionDecoder]:
+    """``{"base": ..., "entropy": ...}``; a single decoder is the ``base`` one."""
+    return {"base": decoders} if isinstance(decoders, ActionDecoder) else decoders
+
+
+def check_methods(methods: tuple[str, ...]) -> None:
+    """Every method is one of :data:`lasa.method.step.METHODS`, and there is at least one."""
+    if not methods:
+        raise ConfigError("methods must not be empty")
+    for method in methods:
+        if method not in METHODS:
+            raise ConfigError(f"unknown method {method!r}; choose from {METHODS}")
+
+
+def check_members(members: tuple[str, ...]) -> None:
+    """Every name is a member of :data:`lasa.base.config.ASSISTANCE`, and there is at least one."""
+    if not members:
+        raise ConfigError("assistance must name at least one member")
+    for name in members:
+        check_choice("assistance", name, ASSISTANCE)
+
+
+def members_of(control: ControlConfig, members: tuple[str, ...]) -> tuple[str, ...]:
+    """The members a sweep runs: the headline one (``control.assistance``) first, then the rest."""
+    return tuple(dict.fromkeys((control.assistance, *members)))
+
+
+def arms(methods: tuple[str, ...], members: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(method, assistance) pairs of a sweep: LA once, every assisted method under every member.
+
+    LA has alpha = 0, so no member changes it (Eq. M1 gives a = a_h exactly); its rows
+    carry the assistance ``none`` and every member's comparison shares them.
+    """
+    out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
+    return out + [(m, a) for a in members for m in methods if m != "LA"]
+
+
+def sweep_grid(
+    methods: tuple[str, ...], members: tuple[str, ...], conditions: Sequence[T], n_users: int
+) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
+    """Every user of a sweep: (method, assistance) arm x condition x user, in that order.
+
+    Returns:
+        Each user's method, assistance member (``none`` for LA, :func:`arms`), condition
+        (e.g. its beta) and seed, the index of its cup, preference and random stream.
+    """
+    grid = list(itertools.product(arms(methods, members), conditions, range(n_users)))
+    method = np.array([m for (m, _), _, _ in grid])
+    member = np.array([a for (_, a), _, _ in grid])
+    return method, member, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
+
+
+def check_pilot(pilot: str, prob: float) -> None:
+    """``pilot`` is one of :data:`lasa.people.users.PILOTS` and ``prob`` a probability."""
+    check_choice("pilot", pilot, PILOTS)
+    check_range("pilot_prob", prob, 0.0, 1.0)
+
+
+def check_positive_int(name: str, value: int) -> None:
+    """``value`` is an integer >= 1, else a ConfigError naming ``name``."""
+    if int(value) != value or value < 1:
+        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+
+
+def draw_episodes(
+    task: CupTask, n_seeds: int, horizon: int, n_candidates: int, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each seed's cup, preference and random stream.
+
+    Returns:
+        goal (n_seeds,), theta (n_seeds,) uniform on [0, 1], and uniforms of shape
+        (n_seeds, horizon, n_candidates) for the users' choices.
+    """
+    rng = np.random.default_rng(seed)
+    goal = rng.integers(0, task.n_goals, n_seeds)
+    theta = rng.uniform(0.0, 1.0, n_seeds)
+    noise = rng.random((n_seeds, horizon, n_candidates))
+    return goal, theta, noise
+
+
+def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
+    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own stream.
+
+    Drawn from a generator of its own (``[seed, 1]``), so adding pilots leaves the users'
+    cups, preferences and Eq. S1 streams (:func:`draw_episodes`) unchanged.
+    """
+    return np.random.default_rng([seed, 1]).random((n_users, horizon, 2))
+
+
+def episodes(
+    decoders: Decoders, task: CupTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`draw_episodes` sized for the decoders' joystick grid."""
+    first = next(iter(as_decoders(decoders).values()))
+    n_candidates = len(latent_grid(control.n_z, first.z_dim))
+    return draw_episodes(task, n_seeds, horizon, n_candidates, seed)
+
+
+def run_population(
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    users: UserPopulation,
+    methods: np.ndarray,
+    horizon: int,
+    noise: np.ndarray,
+    progress: bool = False,
+    assistance: np.ndarray | None = None,
+    pilot_seed: int = 0,
+) -> Trajectories:
+    """Roll out a population whose users may use different methods, decoders and assistance.
+
+    Users are grouped by the decoder their method uses (``METHOD_DECODER``); each group
+    runs as one batched rollout (users of every assistance member together), and the
+    trajectories come back in the users' order.
+
+    Args:
+        decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
+        task: The cup task.
+        control: Control-loop units.
+        users: The simulated users.
+        methods: Each user's method, shape (U,).
+        horizon: Control steps.
+        noise: The users' random streams, see :func:`lasa.people.rollout.rollout`.
+        progress: Show progress bars.
+        assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
+            ``control.assistance`` for everyone.
+        pilot_seed: Seed of the laggy and noisy pilots' own random stream
+            (:func:`pilot_uniforms`); unused for Eq. S1 users.
+
+    Raises:
+        ConfigError: if a method's decoder is missing.
+    """
+    decoders = as_decoders(decoders)
+    methods = np.asarray(methods)
+    alpha = np.array([method_alpha(m, control) for m in methods])
+    if assistance is None:
+        assistance = np.full(len(methods), control.assistance)
+    members = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
+    keys = np.array([METHOD_DECODER[m] for m in methods])
+    pilot_noise = None
+    if users.pilot_prob > 0:
+        pilot_noise = pilot_uniforms(int(np.max(users.seed)) + 1, horizon, pilot_seed)
+    parts: list[tuple[np.ndarray, Trajectories]] = []
+    for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
+        if key not in decoders:
+            needing = sorted({str(m) for m in methods[keys == key]})
+            raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
+        idx = np.flatnonzero(keys == key)
+        group = users.subset(idx)
+        parts.append(
+            (
+                idx,
+                rollout(
+                    decoders[key],
+                    task,
+                    group,
+                    alpha[idx],
+                    control,
+                    horizon,
+                    noise,
+                    progress,
+                    pilot_noise,
+                    members[idx],
+                ),
+            )
+        )
+    if len(parts) == 1:
+        return parts[0][1]
+    merged = {}
+    for field in dataclasses.fields(Trajectories):
+        first = getattr(parts[0][1], field.name)
+        out = np.empty((first.shape[0], len(methods), *first.shape[2:]), dtype=first.dtype)
+        for idx, traj in parts:
+            out[:, idx] = getattr(traj, field.name)
+        merged[field.name] = out
+    return Trajectories(**merged)
+
+
+def judge(
+    module: Any,
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    config: Any,
+    progress: bool = False,
+    reduce: Any = None,
+) -> tuple[Any, Sequential, Any]:
+    """Run a figure's sweep in looks until its headline verdicts are settled (or the cap).
+
+    Args:
+        module: The figure's module (``run(..., look=, members=)`` and ``claims``).
+        decoders: Passed to ``module.run``.
+        task: The task.
+        control: Control-loop units; ``control.assistance`` is the headline member.
+        config: The figure's config (``users``, ``block``, ``cap``, ``n_boot``, ``assistance``).
+        progress: Show progress bars.
+        reduce: Maps a look's rows to the rows the claims read (sim3: one row per episode),
+            so the bootstrap resamples the smaller frame; identity if None.
+
+    Returns:
+        Every look's rows as ``module.run`` returns them (with a ``look`` column), the
+        :class:`lasa.evidence.verdicts.Sequential` outcome, and the first look's second output of
+        ``module.run`` (trajectories or runs, for the videos).
+    """
+    full: list[Any] = []
+    first: list[Any] = []
+
+    def block(look: int, members: tuple[str, ...]) -> Any:
+        frame, extra = module.run(decoders, task, control, config, progress, look=look, members=members)
+        full.append(frame)
+        if look == 0:
+            first.append(extra)
+        return frame if reduce is None else reduce(frame)
+
+    design = Design(config.users, config.block, config.cap)
+    members = members_of(control, config.assistance)
+    fast = getattr(module, "boot_values", None)
+    outcome = sequential(block, module.claims, members, control.assistance, design, config.n_boot, fast=fast)
+    return pd.concat(full, ignore_index=True), outcome, first[0]

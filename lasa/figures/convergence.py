@@ -1,0 +1,488 @@
+r"""Sec. IV-A measured: the Lyapunov ball of LA+SA along simulated rollouts.
+
+The paper's convergence argument (Sec. IV-A) takes the Lyapunov function
+
+.. math::  V(t) = \tfrac12 \|e(t)\|^2, \qquad e(t) = g^* - s(t)            \quad \text{(T1)}
+
+and, with :math:`\dot s = a` and :math:`\alpha = 0.5`, finds :math:`\dot V < 0` whenever
+:math:`b(g^*)\|e\| > \delta := \sigma_h + (1 - b(g^*))\,\sigma_r` (T4), with
+:math:`\|\phi\| < \sigma_h` and :math:`\sigma_r = \max_{g \ne g^*} \|g - s\|`. For a general
+blend :math:`a = (1 - \alpha) a_h + \alpha a_r` the same steps give
+
+.. math::  \dot V = -e^\top a \le \|e\| \big[(1-\alpha)\sigma_h - \alpha b^* \|e\|
+           + \alpha (1 - b^*) \sigma_r\big],
+
+so :math:`\dot V < 0` if :math:`b^*\|e\| > \delta_\alpha := \frac{1-\alpha}{\alpha}\sigma_h
++ (1 - b^*)\sigma_r`, which is :math:`\delta` at :math:`\alpha = 0.5`. In error units the
+ball's radius is :math:`\delta_\alpha / b^*`. Our LA+SA runs at ``ControlConfig.alpha``
+(0.2), where :math:`\delta_\alpha = 4\sigma_h + (1 - b^*)\sigma_r`: the paper's
+:math:`\delta` is then *not* a sufficient radius, and this module measures both.
+
+**Which pose is g\*.** The step from T2 to T3 needs the g* term of the assistance
+:math:`\sum_g b(g)(g - s)` to be :math:`b(g^*)\,e`, i.e. g* must be one of the points the
+assistance pulls to. Under the ``point`` reading (Eq. M2 with one pose per goal, the
+default) that is the cup's goal pose ``task.goals[goal]`` = s*(g, 0.5), not the user's
+own grasp s* = s*(g, theta*) (which the assistance does not know). So the theory's error
+``error`` is measured against ``task.goals[goal]``; the error against s*, what the user
+wants, is the extra column ``error_target``. The T4 argument is derived for ``point``
+only; for the other members of :mod:`lasa.method.assistance` the same radius is applied as the
+paper's yardstick, and the measurements say whether it still holds.
+
+**Discrete steps.** The robot moves by s' = s + dt a, so
+
+.. math::  V(t+1) - V(t) = -\Delta\, e^\top a + \tfrac12 \Delta^2 \|a\|^2 ,
+
+and the measured rate ``v_dot`` = (V(t+1) - V(t))/dt exceeds the continuous-time rate
+:math:`-e^\top a` by the *discretisation slack* ``slack`` = dt ||a||^2 / 2. V can
+therefore rise (by at most the slack) even where T4 holds. The safety clip of
+:func:`lasa.method.blend.safe_step` (joint limits, per-joint speed bound) can also change the
+step actually taken (``clipped``). Each row counts, over the steps up to the next
+recorded row, where the bound held, where V rose while it held, and where it rose by
+more than the slack: what the theory cannot explain.
+
+Notebook ``09_convergence``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.errors import ConfigError
+from lasa.evidence.plots import robot_rows
+from lasa.figures.common import check_positive_int, draw_episodes
+from lasa.method.decoder import ActionDecoder
+from lasa.method.step import latent_grid
+from lasa.people.rollout import Trajectories, rollout
+from lasa.people.users import UserPopulation
+from lasa.world.task import CupTask
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "MEMBER_COLORS",
+    "Config",
+    "radius",
+    "measure",
+    "run",
+    "summary",
+    "plot",
+]
+
+NAME = "convergence"
+# the contract's columns first, then what summary and plot read
+COLUMNS = (
+    "robot",
+    "assistance",
+    "beta",
+    "seed",
+    "t",
+    "error",  # ||e(t)|| = ||g* - s(t)|| with g* = task.goals[goal] [rad]
+    "delta",  # paper's radius (alpha = 0.5): sigma_h + (1 - b*) sigma_r [rad/s]
+    "v_dot",  # measured (V(t+1) - V(t)) / dt [rad^2/s]; empty at t = T
+    "v",  # V(t) = ||e||^2 / 2 [rad^2]
+    "belief",  # b(g*) [-]
+    "sigma_r",  # max over the other goals of ||g - s|| [rad]
+    "delta_alpha",  # radius at the run's alpha: (1 - alpha)/alpha sigma_h + (1 - b*) sigma_r
+    "bound_holds",  # b* ||e|| > delta_alpha: continuous-time V must fall [-]
+    "bound_holds_half",  # b* ||e|| > delta: the paper's condition, sufficient only at alpha = 0.5 [-]
+    "v_rose",  # v_dot > 0 [-]
+    "slack",  # discretisation slack dt ||a||^2 / 2 of the commanded a [rad^2/s]
+    "clipped",  # the safety clip changed the step s' - s from dt a [-]
+    "error_target",  # ||s* - s(t)||, the error to the user's own grasp [rad]
+    "goal",  # the user's cup [-]
+    "theta",  # the user's preferred grasp [-]
+    "steps",  # steps in this row's window [t, next recorded t) [-]
+    "bound_steps",  # ... of which bound_holds [-]
+    "rises",  # ... of which bound_holds and V rose [-]
+    "rises_beyond_slack",  # ... of which bound_holds and v_dot > slack [-]
+    "bound_steps_half",  # steps with bound_holds_half [-]
+    "rises_half",  # ... of which V rose [-]
+)
+DPI = 150
+MEMBER_COLORS = {"point": "#1b9e77", "grasp_set": "#d95f02", "arbitrated": "#7570b3", "hindsight": "#e7298a"}
+_COUNTS = ("steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_half", "rises_half")
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The Sec. IV-A ball along LA+SA rollouts of users of fixed rationality."""
+
+    betas: tuple[float, ...] = (10.0, 75.0, 1000.0)  # user rationalities, finite [1/rad^2]
+    assistance: tuple[str, ...] = ASSISTANCE  # members of lasa.method.assistance to run LA+SA under
+    n_seeds: int = 20  # simulated users per (member, beta) [-]
+    horizon: int = 200  # control steps per episode [-]
+    record_every: int = 10  # steps between recorded rows; event counts cover every step [steps]
+    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+
+    def __post_init__(self) -> None:
+        if not self.betas:
+            raise ConfigError("betas must not be empty")
+        object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
+        for beta in self.betas:
+            check_range("beta", beta, 0.0, math.inf, high_open=True)
+        if len(set(self.betas)) != len(self.betas):
+            raise ConfigError(f"betas must not repeat, got {self.betas}")
+        if not self.assistance:
+            raise ConfigError("assistance must name at least one member")
+        object.__setattr__(self, "assistance", tuple(self.assistance))
+        for name in self.assistance:
+            check_choice("assistance", name, ASSISTANCE)
+        if len(set(self.assistance)) != len(self.assistance):
+            raise ConfigError(f"assistance must not repeat a member, got {self.assistance}")
+        check_positive_int("n_seeds", self.n_seeds)
+        check_positive_int("horizon", self.horizon)
+        check_positive_int("record_every", self.record_every)
+        if self.record_every > self.horizon:
+            raise ConfigError(
+                f"record_every must be at most horizon ({self.horizon}), got {self.record_every}"
+            )
+
+
+def radius(belief: np.ndarray, sigma_r: np.ndarray, sigma_h: float, alpha: float = 0.5) -> np.ndarray:
+    """delta_alpha = (1 - alpha)/alpha sigma_h + (1 - b*) sigma_r; Eq. T4's delta at alpha = 0.5.
+
+    Args:
+        belief: b(g*), any shape.
+        sigma_r: Distance to the furthest other goal, broadcastable against ``belief`` [rad].
+        sigma_h: Bound on ||phi|| [rad/s].
+        alpha: Blend weight of the assistance, in (0, 1].
+
+    Raises:
+        ConfigError: if alpha is not in (0, 1] (alpha = 0 gives no bound at all).
+    """
+    check_range("alpha", alpha, 0.0, 1.0, low_open=True)
+    return (1.0 - alpha) / alpha * sigma_h + (1.0 - np.asarray(belief)) * np.asarray(sigma_r)
+
+
+def measure(
+    states: np.ndarray,
+    beliefs: np.ndarray,
+    actions: np.ndarray,
+    goal: np.ndarray,
+    goals: np.ndarray,
+    target: np.ndarray,
+    dt: float,
+    sigma_h: float,
+    alpha: float,
+) -> dict[str, np.ndarray]:
+    """The Lyapunov quantities of a batch of trajectories, every step, shape (T+1, U).
+
+    Args:
+        states: s(t), shape (T+1, U, n) [rad].
+        beliefs: b(t), shape (T+1, U, G).
+        actions: The commanded a(t) before the safety clip, shape (T, U, n) [rad/s].
+        goal: Each user's cup g*, shape (U,).
+        goals: The goal poses, shape (G, n) [rad]; g* = goals[goal].
+        target: Each user's s*, shape (U, n) [rad].
+        dt: Control period [s].
+        sigma_h: Bound on ||phi|| [rad/s].
+        alpha: Blend weight of the run, in (0, 1].
+
+    Returns:
+        Arrays keyed by the per-step columns of :data:`COLUMNS` (``error`` ... ``error_target``).
+        Quantities of a step (``v_dot``, ``slack``) are NaN at t = T, its flags False.
+    """
+    goal = np.asarray(goal)
+    users = np.arange(len(goal))
+    e = goals[goal][None] - states  # (T+1, U, n)
+    error = np.linalg.norm(e, axis=-1)
+    v = 0.5 * error**2
+    b_star = beliefs[:, users, goal]
+    dist = np.linalg.norm(goals[None, None] - states[:, :, None], axis=-1)  # (T+1, U, G)
+    own = np.arange(len(goals))[None, None] == goal[None, :, None]
+    others = np.where(own, -np.inf, dist)
+    sigma_r = np.maximum(others.max(axis=-1), 0.0) if len(goals) > 1 else np.zeros_like(error)
+    delta = radius(b_star, sigma_r, sigma_h, 0.5)
+    delta_alpha = radius(b_star, sigma_r, sigma_h, alpha)
+    pad = np.full((1, len(goal)), np.nan)
+    v_dot = np.concatenate([(v[1:] - v[:-1]) / dt, pad])
+    slack = np.concatenate([0.5 * dt * np.einsum("tun,tun->tu", actions, actions), pad])
+    moved = states[1:] - states[:-1] - dt * actions
+    clipped = np.concatenate([np.linalg.norm(moved, axis=-1) > 1e-9, np.zeros((1, len(goal)), bool)])
+    return {
+        "error": error,
+        "delta": delta,
+        "v_dot": v_dot,
+        "v": v,
+        "belief": b_star,
+        "sigma_r": sigma_r,
+        "delta_alpha": delta_alpha,
+        "bound_holds": b_star * error > delta_alpha,
+        "bound_holds_half": b_star * error > delta,
+        "v_rose": v_dot > 0,
+        "slack": slack,
+        "clipped": clipped,
+        "error_target": np.linalg.norm(target[None] - states, axis=-1),
+    }
+
+
+def _window_counts(m: dict[str, np.ndarray], times: np.ndarray) -> dict[str, np.ndarray]:
+    """Per recorded row, counts over the steps [times[i], times[i+1]) (none after the last)."""
+    n_steps = m["v"].shape[0] - 1
+    step = np.arange(n_steps + 1) < n_steps  # t = T is a state, not a step
+    rose = m["v_rose"] & step[:, None]
+    events = {
+        "steps": np.broadcast_to(step[:, None], m["v"].shape),
+        "bound_steps": m["bound_holds"] & step[:, None],
+        "rises": m["bound_holds"] & rose,
+        "rises_beyond_slack": m["bound_holds"] & (m["v_dot"] > m["slack"]) & step[:, None],
+        "bound_steps_half": m["bound_holds_half"] & step[:, None],
+        "rises_half": m["bound_holds_half"] & rose,
+    }
+    ends = np.append(times[1:], n_steps)
+    out = {}
+    for name, flags in events.items():
+        cum = np.concatenate([np.zeros((1, flags.shape[1]), int), np.cumsum(flags, axis=0)])
+        out[name] = cum[ends] - cum[times]
+    return out
+
+
+def run(
+    decoder: ActionDecoder,
+    task: CupTask,
+    control: ControlConfig,
+    config: Config = Config(),
+    progress: bool = False,
+) -> pd.DataFrame:
+    """LA+SA users of fixed rationality under each assistance member, with the T4 quantities.
+
+    Every member runs the same users (cup, grasp, random stream per seed; Eq. S1 with a
+    constant beta) with the base decoder and alpha = ``control.alpha``, one batched
+    rollout per member.
+
+    Args:
+        decoder: The base decoder (LA+SA's, ``Workspace.sim_decoders()["base"]``).
+        task: The cup task.
+        control: Control-loop units; ``assistance`` is replaced by each member in turn.
+        config: The sweep.
+        progress: Show progress bars.
+
+    Returns:
+        One row per (member, beta, seed, recorded step), columns :data:`COLUMNS`, ordered
+        by member (config order), beta, seed and t.
+
+    Raises:
+        ConfigError: if ``control.alpha`` is 0 (LA alone: no assistance, no ball).
+    """
+    if control.alpha <= 0:
+        raise ConfigError("the Sec. IV-A bound needs alpha > 0 (LA+SA); control.alpha is 0")
+    n_candidates = len(latent_grid(control.n_z, decoder.z_dim))
+    goal, theta, noise = draw_episodes(task, config.n_seeds, config.horizon, n_candidates, config.seed)
+    beta = np.repeat(np.asarray(config.betas), config.n_seeds)
+    seed = np.tile(np.arange(config.n_seeds), len(config.betas))
+    target = task.target(goal[seed], theta[seed])
+    users = UserPopulation(
+        goal=goal[seed],
+        theta=theta[seed],
+        target=target,
+        beta0=beta,
+        slope=np.zeros(len(seed)),
+        seed=seed,
+    )
+    times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
+    parts = []
+    for member in config.assistance:
+        ctl = dataclasses.replace(control, assistance=member)
+        traj: Trajectories = rollout(
+            decoder, task, users, control.alpha, ctl, config.horizon, noise, progress
+        )
+        m = measure(
+            traj.states,
+            traj.beliefs,
+            traj.actions,
+            users.goal,
+            task.goals,
+            target,
+            control.dt,
+            control.action_scale,
+            control.alpha,
+        )
+        counts = _window_counts(m, times)
+        n_users, n_rows = len(seed), len(times)
+        cols: dict[str, object] = {
+            "robot": task.robot.name,
+            "assistance": member,
+            "beta": np.repeat(beta, n_rows),
+            "seed": np.repeat(seed, n_rows),
+            "t": np.tile(times, n_users),
+        }
+        for name, values in {**m, **counts}.items():
+            cols[name] = values[times].T.ravel() if name in m else values.T.ravel()
+        cols["goal"] = np.repeat(users.goal, n_rows)
+        cols["theta"] = np.repeat(users.theta, n_rows)
+        parts.append(pd.DataFrame(cols))
+    return pd.concat(parts, ignore_index=True)[list(COLUMNS)]
+
+
+def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -> pd.DataFrame:
+    """Per (robot, assistance, beta): how often V rose where T4 held, and the settled ball.
+
+    Columns:
+
+    - ``users``, ``steps``: users and control steps measured;
+    - ``bound_steps``, ``bound_share``: the steps where b*||e|| > delta_alpha (the run's
+      alpha), and their share;
+    - ``rose_given_bound``: share of those steps where V rose (the continuous-time
+      theory says never); ``beyond_slack_given_bound``: where it rose by more than the
+      discretisation slack dt||a||^2/2 (what the theory cannot explain: the safety clip,
+      or a member T4 was not derived for);
+    - ``bound_share_half``, ``rose_given_bound_half``: the same for the paper's delta
+      (alpha = 0.5), not a sufficient condition at our alpha;
+    - ``ball``: the ``quantile`` of ||e|| over the last ``settle`` share of the steps,
+      pooled over users; ``ball_target``: the same for ||s* - s||;
+    - ``radius_alpha``, ``radius_half``: the median over users of delta_alpha / b* and
+      delta / b* at the last step (the ball's radius in error units);
+    - ``tightness_alpha``, ``tightness_half``: the ``quantile`` over the same rows of
+      b*||e|| / delta_alpha (resp. delta), each row against its own radius (< 1: inside
+      the theory's ball; a user whose belief is on the wrong cup has b* ~ 0 and a huge
+      radius, so the pooled ``ball`` is not compared with a pooled radius);
+    - ``late_outside_alpha``, ``late_outside_half``: share of the recorded rows of the last
+      ``settle`` share of steps still outside the ball, b*||e|| > delta_alpha (resp. delta).
+      Uniform ultimate boundedness says the first tends to 0, up to one step's overshoot;
+    - ``belief_final``: median b(g*) at the last step.
+
+    Args:
+        frame: Rows of :func:`run` (or the figure's CSV).
+        settle: Share of the horizon at its end over which the ball is measured.
+        quantile: Quantile of the error that defines the ball.
+    """
+    check_range("settle", settle, 0.0, 1.0, low_open=True)
+    check_range("quantile", quantile, 0.0, 1.0)
+    rows = []
+    for (robot, member, beta), part in frame.groupby(["robot", "assistance", "beta"], sort=False):
+        last = part.t.max()
+        late = part[part.t >= (1.0 - settle) * last]
+        end = part[part.t == last]
+        sums = part[list(_COUNTS)].sum()
+
+        def share(num: str, den: str, sums: pd.Series = sums) -> float:
+            return float(sums[num] / sums[den]) if sums[den] > 0 else math.nan
+
+        ball = float(late.error.quantile(quantile))
+        r_alpha = float((end.delta_alpha / end.belief).median())
+        r_half = float((end.delta / end.belief).median())
+        rows.append(
+            {
+                "robot": robot,
+                "assistance": member,
+                "beta": beta,
+                "users": int(part.seed.nunique()),
+                "steps": int(sums["steps"]),
+                "bound_steps": int(sums["bound_steps"]),
+                "bound_share": share("bound_steps", "steps"),
+                "rose_given_bound": share("rises", "bound_steps"),
+                "beyond_slack_given_bound": share("rises_beyond_slack", "bound_steps"),
+                "bound_share_half": share("bound_steps_half", "steps"),
+                "rose_given_bound_half": share("rises_half", "bound_steps_half"),
+                "ball": ball,
+                "ball_target": float(late.error_target.quantile(quantile)),
+                "radius_alpha": r_alpha,
+                "radius_half": r_half,
+                "tightness_alpha": float((late.belief * late.error / late.delta_alpha).quantile(quantile)),
+                "tightness_half": float((late.belief * late.error / late.delta).quantile(quantile)),
+                "late_outside_alpha": float(late.bound_holds.astype(bool).mean()),
+                "late_outside_half": float(late.bound_holds_half.astype(bool).mean()),
+                "belief_final": float(end.belief.median()),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def _members(table: pd.DataFrame) -> list[str]:
+    present = set(table.assistance)
+    return [m for m in ASSISTANCE if m in present]
+
+
+def _band(ax: Axes, part: pd.DataFrame, column: str, color: str, **line: object) -> None:
+    """Median over users against t, with the 25-75% band."""
+    q = part.groupby("t")[column].quantile([0.25, 0.5, 0.75]).unstack()
+    ax.plot(q.index, q[0.5], color=color, **line)  # type: ignore[arg-type]
+    ax.fill_between(q.index, q[0.25], q[0.75], color=color, alpha=0.15, lw=0)
+
+
+def _bars(ax: Axes, table: pd.DataFrame, column: str, hatched: bool = False) -> None:
+    """``column`` of a summary as bars per beta (x) and member (colour).
+
+    Filled bars carry a dot at their top, so a value of zero still shows; hatched bars
+    are outlines in the member's colour, drawn over the filled ones.
+    """
+    members = _members(table)
+    betas = sorted(table.beta.unique())
+    width = 0.8 / len(members)
+    for i, member in enumerate(members):
+        color = MEMBER_COLORS[member]
+        values = table[table.assistance == member].set_index("beta").reindex(betas)[column].to_numpy()
+        x = np.arange(len(betas)) - 0.4 + width * (i + 0.5)
+        if hatched:
+            ax.bar(x, values, width, fill=False, hatch="//", edgecolor=color, lw=0.8)
+        else:
+            ax.bar(x, values, width, color=color, alpha=0.85, label=member)
+            ax.plot(x, values, "o", color=color, ms=4, mec="0.2", mew=0.5)
+    ax.set_xticks(np.arange(len(betas)), [f"{b:g}" for b in betas])
+    ax.set_xlabel(r"user rationality $\beta$")
+
+
+def plot(table: pd.DataFrame) -> Figure:
+    """The Sec. IV-A ball: one row per robot present, four panels.
+
+    V(t) and ||e(t)|| against the paper's delta(t) (median and 25-75% band over users,
+    at the largest beta present); the settled ball over the theory's radius per beta and
+    member; and how often V rose where the alpha-general T4 held.
+    """
+    fig, rows = robot_rows(table, 4, (18, 3.8))
+    stats = summary(table)
+    for name, part, row in rows:
+        members = _members(part)
+        beta = part.beta.max()
+        top = part[part.beta == beta]
+        for member in members:
+            color = MEMBER_COLORS[member]
+            sub = top[top.assistance == member]
+            _band(row[0], sub, "v", color, label=member)
+            _band(row[1], sub, "error", color)
+        for column, ls, label in (
+            ("delta", "--", r"$\delta$ ($\alpha$ = 0.5)"),
+            ("delta_alpha", "-.", r"$\delta_\alpha$"),
+        ):
+            med = top.groupby("t")[column].median()
+            row[1].plot(med.index, med.to_numpy(), color="0.2", ls=ls, lw=1.2, label=label)
+        row[1].legend(frameon=False, fontsize=8)
+        row[0].set_yscale("log")
+        row[0].set_title(rf"{name}: $V(t) = \|e\|^2/2$, $\beta$ = {beta:g}")
+        row[0].set_xlabel("time step t")
+        row[0].set_ylabel(r"$V$ [rad$^2$]")
+        row[0].legend(frameon=False, fontsize=8)
+        row[1].set_title(rf"{name}: $\|e(t)\|$ and the radii, $\beta$ = {beta:g}")
+        row[1].set_xlabel("time step t")
+        row[1].set_ylabel("[rad]")
+        s = stats[stats.robot == name]
+        _bars(row[2], s, "tightness_alpha")
+        _bars(row[2], s, "tightness_half", hatched=True)
+        row[2].axhline(1.0, color="0.3", lw=0.8)
+        row[2].set_yscale("log")
+        row[2].set_title(
+            f"{name}: settled ball, 95th pct of"
+            + "\n"
+            + r"$b^*\|e\|/\delta_\alpha$ (solid), $b^*\|e\|/\delta$ (hatched)"
+        )
+        row[2].set_ylabel("last 25% of steps [-]")
+        _bars(row[3], s, "rose_given_bound")
+        _bars(row[3], s, "rose_given_bound_half", hatched=True)
+        row[3].set_ylim(0, 1)
+        row[3].set_title(
+            f"{name}: V rose, of steps with"
+            + "\n"
+            + r"$b^*\|e\| > \delta_\alpha$ (solid), $> \delta$ (hatched)"
+        )
+        row[3].set_ylabel("V rose [share of steps]")
+    n = int(table.groupby(["robot", "assistance", "beta"]).seed.nunique().max())
+    fig.suptitle(f"Sec. IV-A: the Lyapunov ball of LA+SA, {n} users per (member, beta)")
+    fig.tight_layout()
+    return fig

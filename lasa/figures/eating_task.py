@@ -1,0 +1,333 @@
+r"""The eating task's 2-D latent actions (notebook 10): demonstrations, training, what z does.
+
+The study's decoder phi(z, s, b) reads a belief over the four goals of the eating task
+(:mod:`lasa.world.eating`) and maps a 2-axis stick z in [-1, 1]^2 to a joint velocity of the
+Panda. It is trained by the same pipeline as the cup decoders (:func:`lasa.method.train.train_decoder`)
+on synthetic kinesthetic-style demonstrations (:func:`lasa.people.demos.collect_eating_demonstrations`).
+
+The figure shows what each stick direction does at a bowl, in the fork's terms: the
+tip's velocity in the table plane (arrows), its vertical velocity and the rate at which
+the fork tilts, for the eight full deflections of the stick, when the robot is unsure
+which goal the user wants (uniform belief) and when it is confident in that bowl. That
+is the paper's central picture: near the goal, the same input changes meaning, from
+"which bowl" to "how to eat from it".
+
+**Readings of the study's decoder.** The paper does not say how its demonstrations were
+cut or whether the study's decoder had the entropy term. Each reading of the
+demonstrations (:data:`lasa.people.demos.EATING_READINGS`) trains a base decoder; each base is
+then fine-tuned for the same steps with lambda = 0 and with the lambda that notebook 03's
+rule (:func:`lasa.method.entropy.choose_lambda`) picks from a sweep on the ``continuous``
+reading's base (one sweep, not three: each lambda > 0 run costs about a minute here), so
+that the two entropy readings of a base differ in the term only. The study's headline is
+the reading that :func:`lasa.evidence.latent_property.choose` picks, by the property alone, before
+any participant runs (:func:`train_readings`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import matplotlib.pyplot as plt
+import mujoco
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.figure import Figure
+
+from lasa.base.config import ControlConfig, check_choice, to_dict
+from lasa.base.errors import ConfigError
+from lasa.base.paths import Paths
+from lasa.evidence import latent_property
+from lasa.figures import entropy_ablation
+from lasa.method.dataset import save_demonstrations
+from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
+from lasa.method.train import TrainConfig, train_decoder
+from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
+from lasa.people.participants import tip_frames
+from lasa.world.eating import GOALS, EatingTask
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "Config",
+    "BELIEFS",
+    "Readings",
+    "reading_names",
+    "train_readings",
+    "directions",
+    "plot",
+]
+
+NAME = "eating_latent"
+COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
+BELIEFS = ("uncertain", "confident")
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The eating decoder's data and training (notebook 10)."""
+
+    n_theta: int = EATING_DEMOS.n_theta  # tilts demonstrated per goal [-]
+    n_starts: int = (
+        EATING_DEMOS.n_starts
+    )  # reaches per (goal, tilt) from home (the rest from other goals) [-]
+    n_adjust: int = EATING_DEMOS.n_adjust  # tilt adjustments (each followed by a stroke) per demo [-]
+    n_perturb: int = EATING_DEMOS.n_perturb  # noisy copies of every tuple [-]
+    steps: int = 2000  # optimiser steps (the cup decoders' schedule) [-]
+    hidden: int = 128  # width of the hidden layers [-]
+    depth: int = 3  # hidden layers [-]
+    seed: int = 0  # seed of the demonstrations and of training [-]
+    goal: str = "middle"  # the bowl the figure looks at [-]
+    readings: tuple[str, ...] = EATING_READINGS  # demonstration readings trained [-]
+    lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, on the continuous base [-]
+    sweep_steps: int = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
+
+    def __post_init__(self) -> None:
+        check_choice("goal", self.goal, GOALS)
+        for name in ("n_theta", "n_starts", "steps", "hidden", "depth", "sweep_steps"):
+            value = getattr(self, name)
+            if int(value) != value or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        object.__setattr__(self, "readings", tuple(self.readings))
+        object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
+        if not self.readings:
+            raise ConfigError("readings must name at least one of " + ", ".join(EATING_READINGS))
+        for name in self.readings:
+            check_choice("reading", name, EATING_READINGS)
+        if "continuous" not in self.readings:
+            raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
+        entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
+
+    def demos(self) -> DemoConfig:
+        """The demonstrations' settings."""
+        return dataclasses.replace(
+            EATING_DEMOS,
+            n_theta=self.n_theta,
+            n_starts=self.n_starts,
+            n_adjust=self.n_adjust,
+            n_perturb=self.n_perturb,
+            seed=self.seed,
+        )
+
+    def training(self) -> TrainConfig:
+        """The training settings: the cup decoders' recipe with a 2-D latent."""
+        return TrainConfig(steps=self.steps, hidden=self.hidden, depth=self.depth, z_dim=2, seed=self.seed)
+
+
+def reading_names(readings: tuple[str, ...]) -> list[str]:
+    """The decoder readings: each demonstration reading with lambda = 0, then with the entropy term."""
+    return [name for r in readings for name in (r, f"{r}_entropy")]
+
+
+@dataclasses.dataclass(frozen=True)
+class Readings:
+    """The trained readings of the study's decoder and the choice among them.
+
+    Attributes:
+        models: Decoder per reading name (:func:`reading_names`).
+        sweep: Notebook 03's sweep on the continuous base (one row per lambda).
+        chosen_lambda: The lambda its rule picked.
+        demos: Demonstration tuples (clean, noisy copies) and minutes of motion per demo reading.
+        property: :func:`lasa.evidence.latent_property.measure` rows of every reading.
+        headline: The reading the property's rule picks.
+    """
+
+    models: dict[str, LatentActionModel]
+    sweep: pd.DataFrame
+    chosen_lambda: float
+    demos: pd.DataFrame
+    property: pd.DataFrame
+    headline: str
+
+
+def train_readings(
+    task: EatingTask,
+    control: ControlConfig,
+    config: Config,
+    paths: Paths,
+    prop: latent_property.PropertyConfig = latent_property.PropertyConfig(),
+    progress: bool = True,
+) -> Readings:
+    """Train every reading, measure its property, choose the headline by the property alone.
+
+    Saves each reading's demonstrations and decoder (artifacts ``eating_reading_demos``
+    and ``eating_reading_decoder``), and the headline's as ``eating_decoder``, the one
+    the study's LA conditions and the teleop kit load first.
+    """
+    robot = task.robot.name
+    sets = task.belief_targets(control.likelihood)
+    train = config.training()
+    sweep_config = entropy_ablation.Config(
+        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=config.seed
+    )
+    bases, datasets, demo_rows = {}, {}, []
+    for reading in config.readings:
+        demos = collect_eating_demonstrations(task, control, config.demos(), reading=reading)
+        save_demonstrations(demos, paths.artifact("eating_reading_demos", robot, reading=reading))
+        clean = demos.clean()
+        demo_rows.append(
+            {
+                "reading": reading,
+                "demonstrations": int(clean.demo.max() + 1),
+                "steps": len(clean),
+                "minutes": len(clean) * control.dt / 60,
+                "tuples": len(demos),
+            }
+        )
+        datasets[reading] = demos
+        bases[reading], _ = train_decoder(demos, control, train, progress=progress)
+    sweep = entropy_ablation.run_sweep(
+        bases["continuous"], train, datasets["continuous"], task, control, sweep_config, progress=progress
+    )
+    lam = sweep.chosen
+    models: dict[str, LatentActionModel] = {}
+    fines: dict[str, TrainConfig] = {}
+    for reading in config.readings:
+        for name, weight in ((reading, 0.0), (f"{reading}_entropy", lam)):
+            if reading == "continuous":
+                models[name] = sweep.models[weight]
+                fine = sweep.configs[weight]
+            else:
+                fine = dataclasses.replace(
+                    train, steps=config.sweep_steps, entropy_lambda=weight, seed=config.seed
+                )
+                models[name], _ = train_decoder(
+                    datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=progress
+                )
+            fines[name] = fine
+            save_checkpoint(
+                models[name],
+                paths.artifact("eating_reading_decoder", robot, reading=name),
+                train=to_dict(fine),
+                control=to_dict(control),
+                demos=to_dict(config.demos()),
+                reading=name,
+            )
+    frame = pd.concat(
+        [
+            latent_property.measure(
+                task, m, control, prop, source="eating", task_name="eating", decoder_name=n
+            )
+            for n, m in models.items()
+        ],
+        ignore_index=True,
+    )
+    headline = latent_property.choose(latent_property.summary(frame))
+    save_checkpoint(
+        models[headline],
+        paths.artifact("eating_decoder", robot),
+        train=to_dict(fines[headline]),
+        control=to_dict(control),
+        demos=to_dict(config.demos()),
+        reading=headline,
+    )
+    return Readings(models, sweep.table, float(lam), pd.DataFrame(demo_rows), frame, headline)
+
+
+def directions(
+    task: EatingTask, decoder: ActionDecoder, control: ControlConfig, goal: str, n: int = 8
+) -> pd.DataFrame:
+    """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief.
+
+    For each belief (uniform: ``uncertain``; all but the floor on ``goal``: ``confident``)
+    and each z on the unit circle (at rest, z = 0, the stick commands nothing), the decoded joint
+    velocity is mapped through the fork tip's Jacobian: the tip's velocity (m/s) and the
+    rate at which the fork's tilt from vertical changes (rad/s). ``toward`` names the goal
+    whose direction the tip's velocity points most closely at (``-`` when it moves less
+    than 1 cm/s).
+    """
+    g = GOALS.index(check_choice("goal", goal, GOALS))
+    state = task.target(g, 0.5)
+    angles = 2 * np.pi * np.arange(n) / n
+    z = np.round(np.stack([np.cos(angles), np.sin(angles)], axis=1), 12)  # at rest the stick commands nothing
+    floor = control.belief_floor
+    confident = np.full(task.n_goals, floor)
+    confident[g] = 1.0 - (task.n_goals - 1) * floor
+    beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
+    data = mujoco.MjData(task.robot.model)
+    pos, axis, jp, jr = tip_frames(task.robot, data, state[None])
+    goals = task.robot.cup_positions()
+    rows = []
+    for name, b in beliefs.items():
+        qdot = decoder.decode_numpy(
+            z, np.broadcast_to(state, (len(z), len(state))), np.broadcast_to(b, (len(z), len(b)))
+        )
+        v = qdot @ jp[0].T  # (Z, 3)
+        w = qdot @ jr[0].T
+        d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
+        # tilt from vertical: angle between the axis and (0, 0, -1); its rate
+        tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)
+        to_goal = goals - pos[0]
+        to_goal /= np.linalg.norm(to_goal, axis=1, keepdims=True)
+        speed = np.linalg.norm(v, axis=1)
+        cos = (v / np.maximum(speed, 1e-12)[:, None]) @ to_goal.T
+        best = np.where(np.arange(len(GOALS)) == g, -np.inf, cos).argmax(axis=1)  # other goals
+        toward = np.where(
+            speed < 0.01, "-", np.where(cos[np.arange(len(z)), best] > 0.7, np.asarray(GOALS)[best], "here")
+        )
+        rows.append(
+            pd.DataFrame(
+                {
+                    "robot": task.robot.name,
+                    "goal": goal,
+                    "belief": name,
+                    "z1": z[:, 0],
+                    "z2": z[:, 1],
+                    "vx": v[:, 0],
+                    "vy": v[:, 1],
+                    "vz": v[:, 2],
+                    "tilt_rate": tilt_rate,
+                    "toward": toward,
+                }
+            )
+        )
+    return pd.concat(rows, ignore_index=True)
+
+
+def plot(frame: pd.DataFrame) -> Figure:
+    """Two panels (uncertain, confident belief), each the stick seen from above.
+
+    Each full deflection of the stick sits at its place on the unit circle (z1 right, z2
+    up); the arrow from it is the fork tip's horizontal velocity in a top view of the
+    table (up: away from the robot's base, +x; right: the robot's right, -y), 0.1 m/s to
+    half the circle's radius. The marker's colour is the rate at which the fork tilts, and
+    the label names the goal the tip heads for (``here``: it stays at this bowl) with its
+    vertical speed.
+    """
+    sns.set_theme(style="white")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
+    tilt = np.degrees(frame.tilt_rate.to_numpy())
+    vmax = max(float(np.abs(tilt).max()), 1.0)
+    cmap = plt.get_cmap("coolwarm")
+    norm = plt.Normalize(-vmax, vmax)
+    scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
+    for ax, name in zip(axes, BELIEFS, strict=True):
+        part = frame[frame.belief == name]
+        ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.8", lw=1))
+        for _, row in part.iterrows():
+            x0, y0 = row.z1, row.z2
+            ax.annotate(
+                "",
+                xy=(x0 - row.vy * scale, y0 + row.vx * scale),
+                xytext=(x0, y0),
+                arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6},
+            )
+            ax.scatter([x0], [y0], s=90, color=cmap(norm(np.degrees(row.tilt_rate))), edgecolor="k", zorder=3)
+            label = f"{row.toward}\n{100 * row.vz:+.0f} cm/s up"
+            ax.text(x0 * 1.3, y0 * 1.3 - 0.12, label, fontsize=7, ha="center", va="center")
+        ax.set_xlim(-1.9, 1.9)
+        ax.set_ylim(-1.9, 1.9)
+        ax.set_aspect("equal")
+        ax.set_xticks([-1, 0, 1])
+        ax.set_yticks([-1, 0, 1])
+        ax.set_xlabel("stick axis z1")
+        ax.set_title(f"belief {name}")
+    axes[0].set_ylabel("stick axis z2")
+    sm = plt.cm.ScalarMappable(cmap=cmap, norm=norm)
+    fig.colorbar(sm, ax=axes, label="tilt rate of the fork [deg/s]", shrink=0.75)
+    goal = frame.goal.iloc[0]
+    fig.suptitle(
+        f"What each stick deflection does at the {goal} bowl\n"
+        "arrows: the fork tip's velocity seen from above, 0.1 m/s = half a radius"
+    )
+    return fig

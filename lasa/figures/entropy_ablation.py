@@ -1,0 +1,242 @@
+"""The entropy term's ablation: a sweep over lambda, its rule, and what it does (Sec. IV-B).
+
+Every lambda of the sweep, lambda = 0 included, fine-tunes the base decoder of notebook
+02 for the same steps, with the same schedule, batches and noise: the runs differ only
+by the term of Eq. T6. The lambda = 0 run is the control. It gives the sims the
+decoder that ``LA`` and ``LA+SA`` use, so every comparison with ``LA+SA+Entropy``
+(the chosen lambda's run) changes one thing, the term, and not the amount of training.
+The rule :func:`lasa.method.entropy.choose_lambda` then compares each lambda with that control.
+
+Notebook ``03_entropy_ablation``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from lasa.base.config import ControlConfig, check_range
+from lasa.base.errors import ConfigError
+from lasa.evidence.plots import robot_rows
+from lasa.figures.common import check_positive_int
+from lasa.method.dataset import Demonstrations
+from lasa.method.decoder import LatentActionModel
+from lasa.method.entropy import choose_lambda, context_entropy, context_grid
+from lasa.method.train import TrainConfig, reconstruction_error, train_decoder
+from lasa.world.task import CupTask
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "Config",
+    "Sweep",
+    "run_sweep",
+    "grid_rows",
+    "plot",
+    "plot_entropy_grid",
+    "plot_entropy_tradeoff",
+]
+
+NAME = "entropy_ablation"
+# kind "sweep": one row per lambda; kind "grid": one row per context of the grid, for
+# lambda = 0 and the chosen lambda
+COLUMNS = ("robot", "kind", "lambda", "progress", "confidence", "entropy", "recon_error", "val_error")
+DPI = 130
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The lambda sweep."""
+
+    lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
+    sweep_steps: int = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
+    seed: int = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
+
+    def __post_init__(self) -> None:
+        if 0.0 not in {float(lam) for lam in self.lambdas}:
+            raise ConfigError(f"lambdas must include 0 (the control), got {self.lambdas!r}")
+        if len(set(self.lambdas)) < 2:
+            raise ConfigError("lambdas must hold 0 and at least one lambda > 0")
+        for lam in self.lambdas:
+            check_range("lambda", lam, 0.0)
+        check_positive_int("sweep_steps", self.sweep_steps)
+
+
+@dataclasses.dataclass(frozen=True)
+class Sweep:
+    """The sweep's results.
+
+    Attributes:
+        table: One row per lambda: ``lambda``, ``entropy_confident`` (mean entropy of
+            p_(s,b) at confident demonstrated contexts [nats]), ``recon_error`` (on the
+            clean demonstrations) and ``val_error`` (on the held-out ones) [(rad/s)^2].
+        models: The fine-tuned decoder of each lambda.
+        configs: The training config of each lambda.
+        histories: The training log of each lambda.
+        chosen: The lambda the rule picked.
+    """
+
+    table: pd.DataFrame
+    models: dict[float, LatentActionModel]
+    configs: dict[float, TrainConfig]
+    histories: dict[float, pd.DataFrame]
+    chosen: float
+
+
+def confident_contexts(demos: Demonstrations, every: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """Every ``every``-th clean demonstrated context with max_g b(g) > 0.99: (states, beliefs)."""
+    clean = demos.clean()
+    confident = clean.beliefs.max(axis=1) > 0.99
+    return clean.states[confident][::every], clean.beliefs[confident][::every]
+
+
+def run_sweep(
+    base: LatentActionModel,
+    base_train: TrainConfig,
+    demos: Demonstrations,
+    task: CupTask,
+    control: ControlConfig,
+    config: Config = Config(),
+    progress: bool = True,
+) -> Sweep:
+    """Fine-tune ``base`` once per lambda (0 included) and pick lambda by the fixed rule.
+
+    Args:
+        base: The base decoder (notebook 02).
+        base_train: The config that trained it; each run keeps its settings and changes
+            only ``steps``, ``entropy_lambda`` and ``seed``.
+        demos: The demonstrations.
+        task: The cup task (the belief's goal sets).
+        control: Control-loop units.
+        config: The sweep.
+        progress: Show a progress bar per run.
+    """
+    sets = task.belief_targets(control.likelihood)
+    probe = confident_contexts(demos)
+    clean = demos.clean()
+    rows, models, configs, histories = [], {}, {}, {}
+    for lam in (float(x) for x in config.lambdas):
+        configs[lam] = dataclasses.replace(
+            base_train, steps=config.sweep_steps, entropy_lambda=lam, seed=config.seed
+        )
+        models[lam], histories[lam] = train_decoder(
+            demos, control, configs[lam], goal_sets=sets, init=base, progress=progress
+        )
+        rows.append(
+            {
+                "lambda": lam,
+                "entropy_confident": float(context_entropy(models[lam], *probe, sets, control).mean()),
+                "recon_error": reconstruction_error(models[lam], clean.states, clean.actions, clean.beliefs),
+                "val_error": float(histories[lam].val_error.iloc[-1]),
+            }
+        )
+    table = pd.DataFrame(rows)
+    chosen = choose_lambda(table, task.n_goals)
+    return Sweep(table, models, configs, histories, chosen)
+
+
+def grid_rows(sweep: Sweep, task: CupTask, control: ControlConfig) -> pd.DataFrame:
+    """This robot's rows of the figure (:data:`COLUMNS`): the sweep, and the entropy over a grid.
+
+    The grid runs along the straight joint-space line from home to the right cup's goal,
+    and from a uniform belief in that cup to 0.999, for lambda = 0 and the chosen lambda.
+    """
+    sets = task.belief_targets(control.likelihood)
+    progress, conf, states, beliefs = context_grid(task.start, task.goals[1], 1, task.n_goals)
+    robot = task.robot.name
+    parts = [
+        pd.DataFrame(
+            {
+                "robot": robot,
+                "kind": "grid",
+                "lambda": lam,
+                "progress": progress,
+                "confidence": conf,
+                "entropy": context_entropy(sweep.models[lam], states, beliefs, sets, control),
+                "recon_error": np.nan,
+                "val_error": np.nan,
+            }
+        )
+        for lam in (0.0, sweep.chosen)
+    ]
+    t = sweep.table
+    parts.append(
+        pd.DataFrame(
+            {
+                "robot": robot,
+                "kind": "sweep",
+                "lambda": t["lambda"],
+                "progress": np.nan,
+                "confidence": np.nan,
+                "entropy": t.entropy_confident,
+                "recon_error": t.recon_error,
+                "val_error": t.val_error,
+            }
+        )
+    )
+    return pd.concat(parts, ignore_index=True)
+
+
+def plot_entropy_grid(
+    progress: np.ndarray,
+    conf: np.ndarray,
+    values: np.ndarray,
+    ax: Axes | None = None,
+    title: str | None = None,
+) -> Axes:
+    """Entropy of p_(s,b) over a grid of contexts: progress to the goal x confidence in it."""
+    ax = plt.gca() if ax is None else ax
+    ps, cs = np.unique(progress), np.unique(conf)
+    grid = values.reshape(len(ps), len(cs)).T
+    mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
+    plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")
+    ax.set_xlabel("state: from home (0) to the right cup's goal (1)")
+    ax.set_ylabel("belief in the right cup")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = None) -> Axes:
+    """Held-out reconstruction error against entropy at confident contexts, per lambda."""
+    ax = plt.gca() if ax is None else ax
+    ax.plot(sweep.entropy_confident, sweep.recon_error, "o-", color="#444")
+    for _, row in sweep.iterrows():
+        mark = " (chosen)" if np.isclose(row["lambda"], chosen) else ""
+        ax.annotate(
+            f"λ={row['lambda']:g}{mark}",
+            (row.entropy_confident, row.recon_error),
+            textcoords="offset points",
+            xytext=(5, 5),
+            fontsize=8,
+        )
+    ax.set_xlabel("mean entropy of p(s,b) at confident contexts [nats]")
+    ax.set_ylabel("reconstruction error on the demonstrations [(rad/s)$^2$]")
+    return ax
+
+
+def plot(table: pd.DataFrame) -> Figure:
+    """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda,
+    and the sweep's trade-off."""
+    fig, rows = robot_rows(table, 3, (16, 4.2))
+    for name, part, row in rows:
+        lams = sorted(set(part[part.kind == "grid"]["lambda"]))
+        for ax, lam in zip(row, lams, strict=False):
+            g = part[(part.kind == "grid") & (part["lambda"] == lam)]
+            plot_entropy_grid(
+                g.progress.to_numpy(),
+                g.confidence.to_numpy(),
+                g.entropy.to_numpy(),
+                ax=ax,
+                title=f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)"),
+            )
+        sw = part[part.kind == "sweep"].rename(columns={"entropy": "entropy_confident"})
+        plot_entropy_tradeoff(sw, max(lams), ax=row[2])
+        row[2].set_title(f"{name}: reconstruction vs entropy over lambda")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,249 @@
+"""What a joystick input means, per context: the latent map (Sec. III-A, Fig. 1).
+
+The heart of the paper is that the meaning of a joystick input changes with the
+robot's confidence: when the belief is uniform, z chooses *which cup*; once it is
+confident, the same z chooses *how to grasp*. This figure makes that visible by
+holding a joystick input constant and letting the robot move under it (latent actions
+alone, alpha = 0): from home with the belief updated online as in Algorithm 1, and at
+the right cup's mid-preference grasp with the belief held confident. Notebook
+``02_decoder_training``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
+
+from lasa.base.config import ControlConfig
+from lasa.base.errors import ConfigError
+from lasa.base.io import load_npz
+from lasa.base.paths import Paths
+from lasa.evidence.latent_property import held_input_paths
+from lasa.evidence.plots import CUP_COLORS, draw_scene, frame_around, project, robots_present
+from lasa.figures.common import check_positive_int
+from lasa.method.decoder import ActionDecoder
+from lasa.world.robot import load_robot
+from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, make_cup_task
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "CONTEXTS",
+    "Config",
+    "held_input_paths",
+    "run",
+    "plot",
+    "plot_held_paths",
+    "plot_grasp_sweep",
+    "plot_latent_meaning",
+]
+
+NAME = "latent_map"
+COLUMNS = ("robot", "context", "z", "cup_axis", "grasp_theta", "steps")
+CONTEXTS = ("uniform", "confident")
+DPI = 130
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The held inputs and how long each is held, per context."""
+
+    n_z: int = 11  # held joystick inputs, evenly spaced on [-1, 1] [-]
+    uniform_steps: int = 100  # steps each input is held from home: long enough to reach a cup
+    confident_steps: int = 40  # steps each input is held at the cup: long enough to sweep the grasp
+
+    def __post_init__(self) -> None:
+        if int(self.n_z) != self.n_z or self.n_z < 2:
+            raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
+        check_positive_int("uniform_steps", self.uniform_steps)
+        check_positive_int("confident_steps", self.confident_steps)
+
+
+def run(
+    decoder: ActionDecoder, task: CupTask, control: ControlConfig, config: Config = Config()
+) -> tuple[pd.DataFrame, dict[str, np.ndarray]]:
+    """Hold each input in both contexts; one row per (context, z).
+
+    Returns:
+        The rows (:data:`COLUMNS`): where the grasp site ends up along the left-to-right
+        cup axis [m], and the grasp preference the gripper shows; and the arrays to save
+        for the figure: ``z`` (K,) and the states of each context, (K, steps + 1, n).
+    """
+    z = np.linspace(-1.0, 1.0, config.n_z)
+    steps = {"uniform": config.uniform_steps, "confident": config.confident_steps}
+    contexts = {  # start state, initial belief, whether the belief updates online
+        "uniform": (task.start, np.full(task.n_goals, 1.0 / task.n_goals), True),
+        "confident": (task.goals[1], np.eye(task.n_goals)[1], False),
+    }
+    paths = {
+        name: held_input_paths(decoder, task, control, s0, b0, z, steps[name], update_belief=online)
+        for name, (s0, b0, online) in contexts.items()
+    }
+    frame = pd.concat(
+        [
+            pd.DataFrame(
+                {
+                    "robot": task.robot.name,
+                    "context": name,
+                    "z": z,
+                    "cup_axis": cup_axis(task, task.robot.grasp_positions(p[:, -1])),
+                    "grasp_theta": grasp_preference(task, p[:, -1]),
+                    "steps": steps[name],
+                }
+            )
+            for name, p in paths.items()
+        ],
+        ignore_index=True,
+    )
+    return frame, {"z": z, **paths}
+
+
+def plot_held_paths(
+    task: CupTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes | None = None, title: str | None = None
+) -> Axes:
+    """Grasp-site paths when each joystick input is held, coloured by z.
+
+    Args:
+        task: The cup task.
+        paths: States of each held input, shape (K, steps + 1, n).
+        z_values: The held inputs, shape (K,).
+        ax: Axes to draw on.
+        title: Panel title.
+    """
+    ax = draw_scene(task, ax)
+    norm = Normalize(-1.0, 1.0)
+    cmap = plt.get_cmap("coolwarm")
+    drawn = []
+    for path, z in zip(paths, z_values, strict=True):
+        xy = project(task, task.robot.grasp_positions(path))
+        drawn.append(xy)
+        ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
+    start = drawn[0][0]
+    ax.plot(start[0], start[1], "ko", ms=4)
+    frame_around(task, ax, np.concatenate(drawn))
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_grasp_sweep(
+    task: CupTask,
+    paths: np.ndarray,
+    z_values: np.ndarray,
+    goal: int,
+    ax: Axes | None = None,
+    title: str | None = None,
+) -> Axes:
+    """Gripper directions at the end of each held input, in the cup's grasp plane.
+
+    The plane is vertical and contains the cup's side-grasp direction, so a top grasp
+    points down and a side grasp points sideways. Each input draws the gripper's last
+    6 cm as a thick segment, and the grasp site's path as a thin line.
+    """
+    ax = plt.gca() if ax is None else ax
+    robot = task.robot
+    cup = robot.cup_positions()[goal]
+    _, r_side = grasp_frame(robot, goal, 1.0)
+    side = r_side[:, 2].copy()
+    side[2] = 0.0
+    side /= np.linalg.norm(side)
+
+    def plane(p: np.ndarray) -> np.ndarray:
+        rel = np.asarray(p) - cup
+        return np.stack([rel @ side, rel[..., 2]], axis=-1)
+
+    norm = Normalize(-1.0, 1.0)
+    cmap = plt.get_cmap("coolwarm")
+    ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=CUP_COLORS[goal], alpha=0.6))
+    for path, z in zip(paths, z_values, strict=True):
+        xy = plane(robot.grasp_positions(path))
+        ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=0.8)
+        tip = xy[-1]
+        back = tip - 0.06 * plane(cup + robot.grasp_axes(path[-1]))
+        ax.plot([back[0], tip[0]], [back[1], tip[1]], color=cmap(norm(z)), lw=3, solid_capstyle="round")
+    start = plane(robot.grasp_positions(paths[0, 0]))
+    ax.plot(start[0], start[1], "ko", ms=4)
+    ax.set_aspect("equal")
+    ax.set_xlabel("along the side-grasp direction [m]")
+    ax.set_ylabel("height above the cup's grasp point [m]")
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
+    """What z controls in each context: the cup reached, or the grasp.
+
+    Args:
+        frame: Rows with columns ``context``, ``z``, ``cup_axis`` (grasp-site position
+            along the left-to-right cup axis after holding z, metres) and
+            ``grasp_theta`` (the grasp preference shown).
+    """
+    ax = plt.gca() if ax is None else ax
+    uni = frame[frame.context == "uniform"]
+    conf = frame[frame.context == "confident"]
+    ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
+    ax.set_xlabel("held joystick input z")
+    ax.set_ylabel("grasp site: left cup (-) ... right cup (+) [m]")
+    ax.axhline(0, color="0.8", lw=0.8)
+    twin = ax.twinx()
+    twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")
+    twin.set_ylabel("grasp preference $\\theta$ (0 top, 1 side)")
+    twin.set_ylim(min(-0.05, conf.grasp_theta.min() - 0.05), max(1.05, conf.grasp_theta.max() + 0.05))
+    lines = ax.get_lines()[:1] + twin.get_lines()
+    ax.legend(lines, [str(ln.get_label()) for ln in lines], frameon=False, loc="upper left", fontsize=8)
+    return ax
+
+
+def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | None = None) -> Figure:
+    """The latent map: one row per robot present whose held-input paths are saved.
+
+    Args:
+        table: The merged rows of every robot.
+        run_paths: The run's folders (the held-input paths are artifact ``latent_paths``).
+        tasks: Tasks already built, by robot name (the others are built here).
+    """
+    rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
+    fig, axes = plt.subplots(
+        len(rows),
+        3,
+        figsize=(15, 4.3 * len(rows)),
+        squeeze=False,
+        gridspec_kw={"width_ratios": [1.1, 1.1, 1]},
+    )
+    for name, row in zip(rows, axes, strict=True):
+        task = (tasks or {}).get(name) or make_cup_task(load_robot(name))
+        saved = load_npz(run_paths.artifact("latent_paths", name), Paths.make_hint("latent_paths", name))
+        plot_held_paths(
+            task,
+            saved["uniform"],
+            saved["z"],
+            ax=row[0],
+            title=f"{name}: from home (belief uniform at first):\nz picks the cup",
+        )
+        plot_grasp_sweep(
+            task,
+            saved["confident"],
+            saved["z"],
+            goal=1,
+            ax=row[1],
+            title=f"{name}: confident in the right cup:\nz picks the grasp",
+        )
+        plot_latent_meaning(table[table.robot == name], ax=row[2])
+        row[2].set_title(f"{name}: what z controls, per context")
+    fig.tight_layout()
+    return fig

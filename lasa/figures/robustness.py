@@ -1,0 +1,478 @@
+"""The verdict map: every sim1-sim3 claim under each reading and setting (notebook ``08_claims_robustness``).
+
+A verdict of the claims table rests on conventions the paper leaves open: which member
+of the shared-autonomy family acts (:mod:`lasa.method.assistance`), the blend weight alpha
+(Eq. M1), the action scale sigma_h (the bound on ||phi||, Eq. T4), and the simulated
+user (Eq. S1's Boltzmann user, or the laggy and noisy pilots of the shared-autonomy
+literature, :data:`lasa.people.users.PILOTS`). This module re-runs the sims of Figs. sim1-sim3
+in every cell of a grid over those settings and evaluates each claim in each cell, on
+each independent draw of users and on all draws pooled.
+
+The grid is one factor at a time around the default setting, the member of the family
+being one more factor: every member at the default alpha, sigma_h and Boltzmann users;
+then, under the headline member, every alpha, every sigma_h, every pilot. Every cell rests
+on the same ``users`` (at least 60) simulated users per point, and each verdict is judged
+as in the claims table: settled when its 95% intervals clear its rule's thresholds
+(:mod:`lasa.evidence.verdicts`), ``undecided`` otherwise. The default column and the members'
+columns are not run again: they are the first look of notebooks 04-06 (the same users,
+horizons and seeds), restricted to the map's rationalities and change steps
+(:func:`run`'s ``defaults``). A full factorial under the headline member grows as the
+product of the axes; ``configs/large.yaml`` asks for one (``design: factorial``) for a
+cluster.
+
+Changing sigma_h at run time scales the learned decoder's output (:class:`ScaledDecoder`):
+the same learned directions at another speed, as a joystick's gain would, and the
+assistance and belief use the new sigma_h too (``ControlConfig.action_scale``). The
+decoder is not retrained.
+
+Cells are independent and seeded; they run through :func:`lasa.pipeline.scaleout.run_jobs`,
+locally or on a Dask cluster, with identical results.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+from collections.abc import Mapping
+from typing import Any
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
+
+from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.errors import ConfigError
+from lasa.evidence.claims import VERDICTS, Claim
+from lasa.evidence.plots import robots_present
+from lasa.evidence.rules import UNDECIDED
+from lasa.evidence.verdicts import assess, member_frame
+from lasa.figures import sim1, sim2, sim3
+from lasa.figures.common import as_decoders, check_members, check_positive_int
+from lasa.method.decoder import ActionDecoder
+from lasa.people.users import PILOTS
+from lasa.pipeline.scaleout import run_jobs
+from lasa.world.task import CupTask
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "DESIGNS",
+    "Config",
+    "Cell",
+    "Grid",
+    "ScaledDecoder",
+    "cells",
+    "run_cell",
+    "run",
+    "default_frames",
+    "summary",
+    "describe",
+    "plot",
+]
+
+NAME = "claims_robustness"
+# the contract's columns first: ``seed`` is the seed of the cell's users and ``measured`` the
+# number the claim's verdict rests on (``lasa.evidence.claims.Claim.value``), with its 95% interval
+COLUMNS = (
+    "id",
+    "robot",
+    "assistance",
+    "alpha",
+    "action_scale",
+    "seed",
+    "measured",
+    "reproduced",
+    "settled",
+    "ci_low",
+    "ci_high",
+    "pilot",
+    "setting",
+    "users",
+)
+DPI = 130
+DESIGNS = ("one_at_a_time", "factorial")
+SIMS = (("sim1", sim1), ("sim2", sim2), ("sim3", sim3))  # the sims each cell runs
+MIN_USERS = 60  # the fewest users per point a cell may rest on [-]
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The robustness grid of notebook 08, and the sweep run in each of its cells."""
+
+    assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
+    alphas: tuple[float, ...] = (0.1, 0.2, 0.5)  # blend weights of Eq. M1 [-]
+    action_scales: tuple[float, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
+    pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
+    lag_prob: float = 0.85  # laggy pilot: probability of repeating the last input [-]
+    noise_prob: float = 0.3  # noisy pilot: probability of a uniformly random input [-]
+    design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
+    betas: tuple[float, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
+    change_steps: tuple[int, ...] = (0, 120)  # sim2 change steps N (its claims read the ends) [steps]
+    horizon: int = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
+    settle: int = 150  # sim2: steps after the largest N: notebook 05's [-]
+    users: int = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
+    n_boot: int = 400  # bootstrap resamples of each cell's 95% intervals [-]
+    seed: int = 0  # seed of the users (the same users in every cell: paired) [-]
+    n_jobs: int = 1  # local worker processes for the cells [-]
+    scheduler: str | None = None  # Dask scheduler address; None: $LASA_SCHEDULER, else local
+
+    def __post_init__(self) -> None:
+        for name in ("alphas", "action_scales", "betas"):
+            values = tuple(float(v) for v in getattr(self, name))
+            if not values:
+                raise ConfigError(f"{name} must not be empty")
+            object.__setattr__(self, name, values)
+        for a in self.alphas:
+            check_range("alpha", a, 0.0, 1.0, low_open=True)
+        for s in self.action_scales:
+            check_range("action_scale", s, 0.0, low_open=True)
+        if not {75.0, 1000.0} <= set(self.betas):
+            raise ConfigError("betas must hold 75 and 1000 (the sim1 claims read them)")
+        check_members(self.assistance)
+        if not self.pilots:
+            raise ConfigError("pilots must not be empty")
+        for p in self.pilots:
+            check_choice("pilot", p, PILOTS)
+        check_range("lag_prob", self.lag_prob, 0.0, 1.0)
+        check_range("noise_prob", self.noise_prob, 0.0, 1.0)
+        check_choice("design", self.design, DESIGNS)
+        if len(self.change_steps) < 2:
+            raise ConfigError("change_steps needs at least two N (the sim2 claims compare the ends)")
+        check_positive_int("horizon", self.horizon)
+        check_positive_int("settle", self.settle)
+        check_positive_int("users", self.users)
+        check_positive_int("n_boot", self.n_boot)
+        check_positive_int("n_jobs", self.n_jobs)
+
+
+@dataclasses.dataclass(frozen=True)
+class Cell:
+    """One setting of the grid; every member of the family runs in it, in shared batches."""
+
+    alpha: float  # blend weight [-]
+    action_scale: float  # sigma_h [rad/s]
+    pilot: str  # the simulated user
+    setting: str  # what this cell varies from the default: "default", "alpha", "action_scale", "pilot", "all"
+    members: tuple[str, ...] = ()  # the members it judges (the default cell: all; others: the headline one)
+
+
+class ScaledDecoder:
+    """A decoder whose actions are scaled by ``factor``: the same directions at another speed.
+
+    ``ScaledDecoder(model, new_sigma_h / trained_sigma_h)`` runs a decoder trained with
+    one action scale at another, keeping the bound ||phi|| <= sigma_h of Eq. T4.
+    """
+
+    def __init__(self, model: ActionDecoder, factor: float) -> None:
+        self.model = model
+        self.factor = check_range("factor", factor, 0.0, low_open=True)
+        self.robot, self.n_goals, self.z_dim = model.robot, model.n_goals, model.z_dim
+
+    def decode_numpy(self, z: np.ndarray, state: np.ndarray, belief: np.ndarray) -> np.ndarray:
+        """factor * phi(z, s, b)."""
+        out = self.model.decode_numpy(z, state, belief)
+        return out if self.factor == 1.0 else self.factor * out
+
+
+def cells(config: Config, control: ControlConfig) -> list[Cell]:
+    """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
+
+    The default cell judges every member of ``config.assistance``, the others the headline
+    member (``control.assistance``) only; a factorial grid judges every member in every cell.
+
+    Raises:
+        ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
+            Boltzmann users) are not on the grid's axes (one-at-a-time needs them).
+    """
+    alpha0, scale0, pilot0 = float(control.alpha), float(control.action_scale), "boltzmann"
+    head = (control.assistance,)
+    if control.assistance not in config.assistance:
+        raise ConfigError(f"the headline member {control.assistance!r} must be among {config.assistance}")
+    if config.design == "factorial":
+        return [
+            Cell(a, s, p, "all", tuple(config.assistance))
+            for a, s, p in itertools.product(config.alphas, config.action_scales, config.pilots)
+        ]
+    if alpha0 not in config.alphas or scale0 not in config.action_scales or pilot0 not in config.pilots:
+        raise ConfigError(
+            f"a one-at-a-time grid needs the defaults on its axes: alpha {alpha0}, "
+            f"action_scale {scale0}, pilot {pilot0!r}"
+        )
+    out = [Cell(alpha0, scale0, pilot0, "default", tuple(config.assistance))]
+    out += [Cell(a, scale0, pilot0, "alpha", head) for a in config.alphas if a != alpha0]
+    out += [Cell(alpha0, s, pilot0, "action_scale", head) for s in config.action_scales if s != scale0]
+    out += [Cell(alpha0, scale0, p, "pilot", head) for p in config.pilots if p != pilot0]
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Grid:
+    """What every cell of a grid shares, sent to each worker once (:func:`lasa.pipeline.scaleout.run_jobs`)"""
+
+    decoders: Mapping[str, ActionDecoder]  # notebook 03's pair
+    task: CupTask
+    control: ControlConfig  # the defaults the grid is centred on
+    config: Config
+
+
+def _pilot_prob(config: Config, pilot: str) -> float:
+    return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
+
+
+def _rows(claims: list[Claim], cell: Cell, member: str, robot: str, config: Config) -> pd.DataFrame:
+    rows = [
+        {
+            "id": c.id,
+            "robot": robot,
+            "assistance": member,
+            "alpha": cell.alpha,
+            "action_scale": cell.action_scale,
+            "seed": config.seed,
+            "measured": c.value,
+            "reproduced": c.reproduced,
+            "settled": c.settled,
+            "ci_low": c.ci_low,
+            "ci_high": c.ci_high,
+            "pilot": cell.pilot,
+            "setting": cell.setting,
+            "users": c.n_users,
+        }
+        for c in claims
+    ]
+    return pd.DataFrame(rows, columns=list(COLUMNS))
+
+
+def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, Any]]:
+    """(module, config, reduce) of sims 1-3 at the map's sizes: one look of ``users`` users."""
+    common: dict[str, Any] = {"users": config.users, "cap": config.users, "seed": config.seed}
+    return [
+        (sim1, sim1.Config(betas=config.betas, horizon=config.horizon, **common, **pilot), None),
+        (sim2, sim2.Config(change_steps=config.change_steps, settle=config.settle, **common, **pilot), None),
+        (sim3, sim3.Config(horizon=config.horizon, **common, **pilot), sim3.episode_means),
+    ]
+
+
+def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Config) -> pd.DataFrame:
+    """Every member's claims of one sim in one cell, each with its 95% intervals."""
+    parts = []
+    for member in cell.members:
+        fast = getattr(module, "boot_values", None)
+        claims = assess(module.claims, member_frame(frame, member), config.n_boot, config.seed, fast=fast)
+        parts.append(_rows(claims, cell, member, robot, config))
+    return pd.concat(parts, ignore_index=True)
+
+
+def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
+    """Run sims 1-3 in one cell under its members, in the same batches, and judge each claim."""
+    config, control = grid.config, grid.control
+    ctrl = dataclasses.replace(control, alpha=cell.alpha, action_scale=cell.action_scale)
+    factor = cell.action_scale / control.action_scale
+    decoders = {k: ScaledDecoder(d, factor) for k, d in grid.decoders.items()}
+    pilot: dict[str, Any] = {"pilot": cell.pilot, "pilot_prob": _pilot_prob(config, cell.pilot)}
+    parts = []
+    robot = grid.task.robot.name
+    for module, sim_config, reduce in _sim_configs(config, pilot):
+        frame = module.run(decoders, grid.task, ctrl, sim_config, members=cell.members)[0]
+        frame = frame if reduce is None else reduce(frame)
+        parts.append(_judge(module, frame, cell, robot, config))
+    return pd.concat(parts, ignore_index=True)
+
+
+def default_frames(
+    config: Config, sim1_rows: pd.DataFrame, sim2_rows: pd.DataFrame, sim3_rows: pd.DataFrame
+) -> dict[str, pd.DataFrame]:
+    """The default cell's rows from notebooks 04-06: their first look, at the map's sizes.
+
+    Keeps the users ``0 .. config.users - 1`` (the first look's, the same users every cell
+    runs), sim1's rows at the map's betas, sim2's at its change steps; sim3's as episode means.
+
+    Raises:
+        ConfigError: if a frame lacks a beta or change step of the map, or holds fewer users.
+    """
+    out = {}
+    for name, rows, column, values in (
+        ("sim1", sim1_rows, "beta", config.betas),
+        ("sim2", sim2_rows, "change_step", config.change_steps),
+        ("sim3", sim3_rows, None, ()),
+    ):
+        part = rows[rows.seed < config.users]
+        if part.seed.nunique() < config.users:
+            raise ConfigError(
+                f"{name}'s rows hold {part.seed.nunique()} users; the map's cells need {config.users} "
+                f"(set the sims' `users` to at least the map's)"
+            )
+        if column is not None:
+            missing = sorted(set(values) - set(part[column]))
+            if missing:
+                raise ConfigError(f"{name}'s rows lack {column} {missing}, which the map judges")
+            part = part[part[column].isin(values)]
+        out[name] = sim3.episode_means(part) if name == "sim3" else part
+    return out
+
+
+def run(
+    decoders: Mapping[str, ActionDecoder] | ActionDecoder,
+    task: CupTask,
+    control: ControlConfig,
+    config: Config = Config(),
+    progress: bool = False,
+    defaults: Mapping[str, pd.DataFrame] | None = None,
+) -> pd.DataFrame:
+    """Every cell of the grid (:func:`cells`), locally or on a Dask cluster.
+
+    Args:
+        decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
+        task: The cup task.
+        control: The default control units (alpha, sigma_h) the grid is centred on.
+        config: The grid.
+        progress: A progress bar over finished cells.
+        defaults: The default cell's rows (:func:`default_frames`, from notebooks 04-06),
+            judged instead of run again; if None, the default cell runs like the others.
+
+    Returns:
+        One row per (claim, cell, member) with the columns of :data:`COLUMNS`, cells in
+        :func:`cells` order.
+    """
+    decoders = as_decoders(decoders)
+    grid = Grid(decoders, task, control, config)
+    todo = cells(config, control)
+    done: list[pd.DataFrame] = []
+    if defaults is not None and todo and todo[0].setting == "default":
+        robot = task.robot.name
+        parts = [_judge(m, defaults[key], todo[0], robot, config) for key, m in SIMS]
+        done = [pd.concat(parts, ignore_index=True)]
+        todo = todo[1:]
+    frames = run_jobs(run_cell, todo, config.scheduler, config.n_jobs, progress, "grid cells", shared=grid)
+    return pd.concat([*done, *frames], ignore_index=True)
+
+
+def summary(table: pd.DataFrame) -> pd.DataFrame:
+    """Per (robot, claim): cells with each verdict, and whether the default verdict holds.
+
+    Args:
+        table: :func:`run`'s rows.
+
+    Returns:
+        Columns ``yes``, ``partly``, ``no``, ``undecided`` (cell counts over the members'
+        and the settings' cells), ``default`` (the headline member's verdict in the default
+        cell, empty if the grid has none), ``stable`` (every settled cell gives it) and
+        ``moves`` (the cells whose settled verdict differs from it).
+    """
+    rows = []
+    for (robot, claim), part in table.groupby(["robot", "id"], sort=True):
+        part = part.assign(column=part.apply(_label, axis=1))
+        counts = part.reproduced.value_counts()
+        default = part.loc[part.column == "default", "reproduced"]
+        head = str(default.iloc[0]) if len(default) else ""
+        settled = part[part.settled.astype(bool) & (part.column != "default")]
+        moves = settled.loc[settled.reproduced != head, ["column", "reproduced"]]
+        rows.append(
+            {
+                "robot": robot,
+                "id": claim,
+                **{v: int(counts.get(v, 0)) for v in VERDICTS},
+                "default": head,
+                "stable": bool(head) and head != UNDECIDED and moves.empty,
+                "moves": ", ".join(f"{c} {v}" for c, v in moves.itertuples(index=False)),
+            }
+        )
+    return pd.DataFrame(rows)
+
+
+def describe(table: pd.DataFrame) -> list[str]:
+    """One sentence per claim from :func:`summary`: does its verdict depend on a convention?"""
+    lines = []
+    for row in table.itertuples(index=False):
+        undecided = int(row.undecided)
+        tail = f" ({undecided} undecided cell{'s' if undecided != 1 else ''})" if undecided else ""
+        if row.default == UNDECIDED:
+            lines.append(
+                f"{row.robot} {row.id}: undecided in the default cell"
+                + (f"; settled elsewhere: {row.moves}" if row.moves else "")
+                + tail
+                + "."
+            )
+        elif row.stable:
+            lines.append(f"{row.robot} {row.id}: '{row.default}' in every settled cell" + tail + ".")
+        else:
+            lines.append(
+                f"{row.robot} {row.id}: '{row.default}' by default; settled otherwise in {row.moves}"
+                + tail
+                + "."
+            )
+    return lines
+
+
+def _label(row: Any) -> str:
+    if row.setting == "default":
+        return "default" if row.assistance == "point" else f"{row.assistance}"
+    if row.setting == "alpha":
+        return f"alpha={row.alpha:g}"
+    if row.setting == "action_scale":
+        return f"sigma_h={row.action_scale:g}"
+    if row.setting == "pilot":
+        return f"{row.pilot} pilot"
+    return f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}"
+
+
+def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
+    """The verdict map: claims (rows) x readings and settings (columns), one panel per robot.
+
+    The columns are the headline member's default cell, each other member at the default
+    setting, then each alpha, sigma_h and pilot under the headline member. Colour is the
+    verdict; an undecided cell is grey and hatched, with its point estimate's verdict
+    initial (y/p/n) and a "?"; the text of the others is the number the verdict rests on.
+    """
+    table = table.assign(
+        column=table.apply(
+            lambda r: _label(r) if r.assistance != headline or r.setting != "default" else "default", axis=1
+        )
+    )
+    robots = robots_present(table)
+    order_cols = list(dict.fromkeys(table.column))
+    ids = sorted(dict.fromkeys(table.id))
+    colours = {"yes": "#1b9e77", "partly": "#e6ab02", "no": "#d95f02", UNDECIDED: "#d9d9d9"}
+    cmap = ListedColormap([colours[v] for v in VERDICTS])
+    code = {v: i for i, v in enumerate(VERDICTS)}
+    fig, axes = plt.subplots(
+        1,
+        len(robots),
+        figsize=(2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids)),
+        squeeze=False,
+        sharey=True,
+    )
+    for j, robot in enumerate(robots):
+        ax = axes[0, j]
+        part = table[table.robot == robot]
+        grid = np.full((len(ids), len(order_cols)), np.nan)
+        for _, row in part.iterrows():
+            r, c = ids.index(row.id), order_cols.index(row.column)
+            grid[r, c] = code[row.reproduced]
+            if row.reproduced == UNDECIDED:
+                ax.add_patch(
+                    plt.Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, hatch="///", lw=0, color="0.5")
+                )
+            ax.text(
+                c,
+                r,
+                f"{row.measured:.2g}" + ("?" if row.reproduced == UNDECIDED else ""),
+                ha="center",
+                va="center",
+                fontsize=6,
+            )
+        ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=len(VERDICTS) - 0.5, aspect="auto")
+        ax.set_title(robot, fontsize=9)
+        ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
+        ax.set_yticks(range(len(ids)), ids, fontsize=7)
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colours[v]) for v in VERDICTS]
+    n = int(table.users.min()) if len(table) else 0
+    fig.suptitle(
+        f"Claims robustness: the verdict per reading and setting, at least {n} users per point\n"
+        "(95% intervals; grey and hatched: undecided; text: the number the verdict rests on)",
+        fontsize=9,
+    )
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.legend(handles, VERDICTS, loc="lower center", ncol=len(VERDICTS), frameon=False, fontsize=8)
+    return fig

@@ -1,0 +1,268 @@
+"""Fig. sim2: users who change their mind (Sec. V-B).
+
+Near-optimal users aim at the wrong cup for the first N steps, then at the right one.
+Without the entropy term (LA+SA) the paper finds them trapped as N grows; with it
+(LA+SA+Entropy) they escape. Notebook ``05_changing_goals``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from lasa.base.config import ASSISTANCE, ControlConfig, check_range
+from lasa.base.errors import ConfigError
+from lasa.evidence.claims import Claim
+from lasa.evidence.metrics import confidence, normalized_error
+from lasa.evidence.plots import method_lineplot, robot_rows
+from lasa.evidence.rules import rule
+from lasa.evidence.verdicts import (
+    N_BOOT,
+    Design,
+    block_seed,
+    block_users,
+    check_design,
+    group_means,
+    member_frame,
+)
+from lasa.figures.common import (
+    Decoders,
+    check_members,
+    check_methods,
+    check_pilot,
+    check_positive_int,
+    episodes,
+    members_of,
+    run_population,
+    sweep_grid,
+)
+from lasa.method.step import METHODS
+from lasa.people.rollout import Trajectories
+from lasa.people.users import UserPopulation
+from lasa.world.task import CupTask
+
+__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "plot_metric"]
+
+NAME = "sim2_change_of_mind"
+COLUMNS = (
+    "robot",
+    "method",
+    "change_step",
+    "seed",
+    "final_error",
+    "confidence",
+    "success",
+    "goal",
+    "theta",
+    "assistance",
+    "look",
+)
+DPI = 150
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one."""
+
+    change_steps: tuple[int, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
+    beta: float = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
+    users: int = (
+        Design.first
+    )  # users per point at the first look, every reading (lasa.evidence.verdicts.Design) [-]
+    block: int = Design.block  # users added per later look, the headline reading only [-]
+    cap: int = Design.cap  # most users per point [-]
+    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
+    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
+    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
+    settle: int = 150  # steps after the largest N before the episode ends [steps]
+    success: float = 0.1  # normalised final error that counts as reaching the right cup [-]
+    methods: tuple[str, ...] = METHODS  # methods compared
+    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+
+    def __post_init__(self) -> None:
+        if not self.change_steps:
+            raise ConfigError("change_steps must not be empty")
+        for n in self.change_steps:
+            if int(n) != n or n < 0:
+                raise ConfigError(f"change step N must be an integer >= 0, got {n!r}")
+        check_range("beta", self.beta, 0.0)
+        check_design(self.users, self.block, self.cap)
+        check_positive_int("n_boot", self.n_boot)
+        check_members(self.assistance)
+        check_pilot(self.pilot, self.pilot_prob)
+        check_positive_int("settle", self.settle)
+        check_range("success", self.success, 0.0, low_open=True)
+        check_methods(self.methods)
+
+    @property
+    def horizon(self) -> int:
+        """Steps per episode: the largest N plus the settling time."""
+        return int(max(self.change_steps)) + self.settle
+
+
+def run(
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    config: Config = Config(),
+    progress: bool = False,
+    look: int = 0,
+    members: tuple[str, ...] | None = None,
+) -> tuple[pd.DataFrame, Trajectories]:
+    """Fig. sim2: final error and confidence in the true cup against the change step N.
+
+    Each user wants cup g* with preference theta. For the steps t < N they aim at the
+    *other* cup with the same preference, from step N on at g*; both near-optimally.
+
+    Args:
+        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
+        members: The members the assisted methods run under; default every member of
+            ``config.assistance``. The other arguments are :func:`lasa.figures.sim1.run`'s.
+
+    Returns:
+        One row per episode with the columns of :data:`COLUMNS` plus ``goal`` and
+        ``theta`` (for the video); and the trajectories.
+    """
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    seed_ = block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
+    members = members_of(control, config.assistance) if members is None else members
+    method, member, conditions, seed = sweep_grid(config.methods, members, config.change_steps, n_users)
+    change = np.array(conditions, dtype=int)
+    wrong = (goal[seed] + 1) % task.n_goals
+    users = UserPopulation(
+        goal=goal[seed],
+        theta=theta[seed],
+        target=task.target(goal[seed], theta[seed]),
+        beta0=np.full(len(seed), config.beta),
+        slope=np.zeros(len(seed)),
+        seed=seed,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
+        first_target=task.target(wrong, theta[seed]),
+        change_step=change,
+    )
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
+    )
+    final = normalized_error(traj.states[-1], users.target, task.goal_distance)
+    frame = pd.DataFrame(
+        {
+            "robot": task.robot.name,
+            "method": method,
+            "change_step": change,
+            "seed": start + seed,
+            "final_error": final,
+            "confidence": confidence(traj.beliefs[-1], users.goal),
+            "goal": users.goal,
+            "theta": users.theta,
+            "success": final <= config.success,
+            "assistance": member,
+            "look": look,
+        }
+    )
+    return frame, traj
+
+
+def claims(frame: pd.DataFrame) -> list[Claim]:
+    """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not.
+
+    Success is a final error within the frame's ``success`` criterion (the config's
+    tolerance, 0.1 of the goal distance by default), measured at the largest N.
+
+    - *LA+SA cannot escape the wrong goal as N grows*: ``yes`` if LA+SA's success rate
+      at the largest N is below 50%; ``partly`` if it falls by at least 20 points from
+      N = smallest but stays at or above 50%; else ``no``.
+    - *LA+SA+Entropy can*: ``yes`` if its success rate at the largest N is at least 80%
+      and at least 20 points above LA+SA's; ``partly`` if it is above LA+SA's; else ``no``.
+    """
+    robot = str(frame.robot.iloc[0])
+    lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
+    rate = frame.groupby(["method", "change_step"]).success.mean()
+    err = frame.groupby(["method", "change_step"]).final_error.mean()
+    sa_lo, sa_hi = rate["LA+SA", lo], rate["LA+SA", hi]
+    en_hi = rate["LA+SA+Entropy", hi]
+    values1 = {"success_sa": float(sa_hi), "drop_sa": float(sa_lo - sa_hi)}
+    values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
+    v1 = rule("sim2.sa_trapped").verdict(values1)
+    v2 = rule("sim2.entropy_escapes").verdict(values2)
+    return [
+        Claim(
+            id="sim2.sa_trapped",
+            claim="LA+SA cannot escape the wrong goal as N grows",
+            figure="sim2",
+            paper="LA+SA's final error grows and its confidence falls as N grows",
+            values=values1,
+            measured=(
+                f"LA+SA reaches the right cup in {sa_hi:.0%} of episodes at N={hi} "
+                f"(the interval is for this rate) and {sa_lo:.0%} at N={lo}; "
+                f"mean final error {err['LA+SA', lo]:.3f} -> {err['LA+SA', hi]:.3f}"
+            ),
+            reproduced=v1,
+            note="",
+            robot=robot,
+        ),
+        Claim(
+            id="sim2.entropy_escapes",
+            claim="LA+SA+Entropy can escape the wrong goal",
+            figure="sim2",
+            paper="LA+SA+Entropy users switch goals",
+            values=values2,
+            measured=(
+                f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
+                f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}"
+            ),
+            reproduced=v2,
+            note="",
+            robot=robot,
+        ),
+    ]
+
+
+def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
+    lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
+    rate = group_means(
+        frame.assign(success=frame.success.astype(float)), ["method", "change_step"], "success", counts
+    )
+    sa_lo, sa_hi, en_hi = rate[("LA+SA", lo)], rate[("LA+SA", hi)], rate[("LA+SA+Entropy", hi)]
+    return {
+        "sim2.sa_trapped": {"success_sa": sa_hi, "drop_sa": sa_lo - sa_hi},
+        "sim2.entropy_escapes": {"success_entropy": en_hi, "margin": en_hi - sa_hi},
+    }
+
+
+METRIC_LABELS = {"final_error": "final state error (normalised)", "confidence": "confidence b(g*) at the end"}
+
+
+def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
+    """One panel: final error or confidence in the true cup against the change step N."""
+    ax = method_lineplot(frame, "change_step", metric, ax)
+    ax.set_xlabel("change of mind at step N")
+    ax.set_ylabel(METRIC_LABELS.get(metric, metric))
+    return ax
+
+
+def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
+    """Fig. sim2: one row per robot present, final error and confidence against N.
+
+    Args:
+        table: Rows of every robot and member.
+        assistance: The member drawn (the headline one); LA's rows are shared.
+    """
+    table = member_frame(table, assistance)
+    fig, rows = robot_rows(table, 2, (11, 3.8))
+    for name, part, row in rows:
+        plot_metric(part, "final_error", ax=row[0])
+        plot_metric(part, "confidence", ax=row[1])
+        row[0].set_title(f"{name}: final state error")
+        row[1].set_title(f"{name}: confidence in the true cup")
+    n = int(table.groupby(["robot", "method", "change_step"]).size().max())
+    fig.suptitle(f"Fig. sim2: users who change their mind, {n} users per point, assistance: {assistance}")
+    fig.tight_layout()
+    return fig

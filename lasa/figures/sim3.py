@@ -1,0 +1,243 @@
+"""Fig. sim3: users who learn within the task (Sec. V-C).
+
+Rationality grows from random, beta(t) = m t: fast learners (m = 20) and slow ones
+(m = 2). The paper finds the entropy term improves in-task performance for both.
+Notebook ``06_learning_users``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from lasa.base.config import ASSISTANCE, ControlConfig, check_range
+from lasa.evidence.claims import Claim
+from lasa.evidence.metrics import normalized_error
+from lasa.evidence.plots import method_lineplot, robot_rows
+from lasa.evidence.rules import rule
+from lasa.evidence.verdicts import (
+    N_BOOT,
+    Design,
+    block_seed,
+    block_users,
+    check_design,
+    group_means,
+    member_frame,
+)
+from lasa.figures.common import (
+    Decoders,
+    check_members,
+    check_methods,
+    check_pilot,
+    check_positive_int,
+    episodes,
+    members_of,
+    run_population,
+    sweep_grid,
+)
+from lasa.method.step import METHODS
+from lasa.people.rollout import Trajectories
+from lasa.people.users import UserPopulation
+from lasa.world.task import CupTask
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "LEARNERS",
+    "Config",
+    "run",
+    "claims",
+    "boot_values",
+    "episode_means",
+    "plot",
+    "plot_learner",
+]
+
+NAME = "sim3_learning_users"
+COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error", "assistance", "look")
+LEARNERS = ("fast", "slow")
+DPI = 150
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
+
+    fast_slope: float = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
+    slow_slope: float = 2.0  # m of the slow learner [1/(rad^2 step)]
+    users: int = (
+        Design.first
+    )  # users per point at the first look, every reading (lasa.evidence.verdicts.Design) [-]
+    block: int = Design.block  # users added per later look, the headline reading only [-]
+    cap: int = Design.cap  # most users per point [-]
+    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
+    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
+    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
+    horizon: int = 200  # control steps per episode [-]
+    record_every: int = 5  # keep the error every this many steps in the frame [steps]
+    methods: tuple[str, ...] = METHODS  # methods compared
+    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+
+    def __post_init__(self) -> None:
+        check_range("fast_slope", self.fast_slope, 0.0, low_open=True)
+        check_range("slow_slope", self.slow_slope, 0.0, low_open=True)
+        check_design(self.users, self.block, self.cap)
+        check_positive_int("n_boot", self.n_boot)
+        check_members(self.assistance)
+        check_pilot(self.pilot, self.pilot_prob)
+        check_positive_int("horizon", self.horizon)
+        check_positive_int("record_every", self.record_every)
+        check_methods(self.methods)
+
+    @property
+    def learners(self) -> tuple[tuple[str, float], ...]:
+        """(name, slope m) of each learner."""
+        return (("fast", float(self.fast_slope)), ("slow", float(self.slow_slope)))
+
+
+def run(
+    decoders: Decoders,
+    task: CupTask,
+    control: ControlConfig,
+    config: Config = Config(),
+    progress: bool = False,
+    look: int = 0,
+    members: tuple[str, ...] | None = None,
+) -> tuple[pd.DataFrame, Trajectories]:
+    """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
+
+    Args:
+        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
+        members: The members the assisted methods run under; default every member of
+            ``config.assistance``. The other arguments are :func:`lasa.figures.sim1.run`'s.
+
+    Returns:
+        One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
+        the trajectories (users in the order method x learner x seed).
+    """
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    seed_ = block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
+    members = members_of(control, config.assistance) if members is None else members
+    method, member, conditions, seed = sweep_grid(config.methods, members, config.learners, n_users)
+    learner = np.array([name for name, _ in conditions])
+    slope = np.array([m for _, m in conditions], dtype=float)
+    users = UserPopulation(
+        goal=goal[seed],
+        theta=theta[seed],
+        target=task.target(goal[seed], theta[seed]),
+        beta0=np.zeros(len(seed)),
+        slope=slope,
+        seed=seed,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
+    )
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
+    )
+    errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
+    steps = np.arange(0, config.horizon + 1, config.record_every)
+    n_users = len(seed)
+    frame = pd.DataFrame(
+        {
+            "robot": task.robot.name,
+            "method": np.repeat(method, len(steps)),
+            "learner": np.repeat(learner, len(steps)),
+            "slope": np.repeat(slope, len(steps)),
+            "seed": np.repeat(start + seed, len(steps)),
+            "t": np.tile(steps, n_users),
+            "error": errors[steps].T.ravel(),
+            "assistance": np.repeat(member, len(steps)),
+            "look": look,
+        }
+    )
+    return frame, traj
+
+
+def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
+    """One row per episode: its mean error over the recorded steps (the claim's measure)."""
+    keys = ["robot", "method", "learner", "seed", "assistance", "look"]
+    return frame.groupby(keys, sort=False, as_index=False).error.mean()
+
+
+def claims(frame: pd.DataFrame) -> list[Claim]:
+    """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users.
+
+    In-task performance is each episode's mean normalised error over the recorded
+    steps. ``frame`` may hold every recorded step or one row per episode
+    (:func:`episode_means`, which makes the bootstrap of :mod:`lasa.evidence.verdicts` fast).
+    Rule: ``yes`` if LA+SA+Entropy's mean is below LA+SA's for both the fast and the
+    slow learner, ``partly`` for one, else ``no``.
+    """
+    robot = str(frame.robot.iloc[0])
+    per_episode = frame.groupby(["learner", "method", "seed"]).error.mean()
+    mean = per_episode.groupby(["learner", "method"]).mean()
+    learners = sorted(set(frame.learner))
+    gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
+    values = {f"gain_{name}": float(gain[name]) for name in learners}
+    verdict = rule("sim3.entropy_learners").verdict(values)
+    return [
+        Claim(
+            id="sim3.entropy_learners",
+            claim="entropy improves in-task performance for both fast and slow learners",
+            figure="sim3",
+            paper="LA+SA+Entropy below LA+SA in error over time, fast and slow",
+            values=values,
+            measured="gain of entropy, LA+SA minus LA+SA+Entropy (the interval is for the fast learner's): "
+            + ", ".join(f"{name} {gain[name]:+.3f}" for name in learners)
+            + "; "
+            + "; ".join(
+                f"{name}: mean error over the episode LA+SA {mean[name, 'LA+SA']:.3f}, "
+                f"LA+SA+Entropy {mean[name, 'LA+SA+Entropy']:.3f}, LA {mean[name, 'LA']:.3f}"
+                for name in learners
+            ),
+            reproduced=verdict,
+            note="",
+            robot=robot,
+        )
+    ]
+
+
+def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`).
+
+    ``frame`` holds one row per episode (:func:`episode_means`), as the bootstrap does.
+    """
+    mean = group_means(frame, ["learner", "method"], "error", counts)
+    learners = sorted({name for name, _ in mean})
+    gains = {f"gain_{n}": mean[(n, "LA+SA")] - mean[(n, "LA+SA+Entropy")] for n in learners}
+    return {"sim3.entropy_learners": gains}
+
+
+def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
+    """One panel: the error over time of one kind of learner, per method, with 95% bands."""
+    part = frame[frame.learner == learner]
+    ax = method_lineplot(part, "t", "error", ax)
+    ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
+    ax.set_xlabel("time step t")
+    ax.set_ylabel("state error (normalised)")
+    return ax
+
+
+def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
+    """Fig. sim3: one row per robot present, the fast and the slow learner.
+
+    Args:
+        table: Rows of every robot and member.
+        assistance: The member drawn (the headline one); LA's rows are shared.
+    """
+    table = member_frame(table, assistance)
+    fig, rows = robot_rows(table, 2, (11, 3.8))
+    for name, part, row in rows:
+        for ax, learner in zip(row, LEARNERS, strict=True):
+            plot_learner(part, learner, ax=ax)
+            ax.set_title(f"{name}: {ax.get_title()}")
+    n = int(table.groupby(["robot", "method", "learner", "t"]).size().max())
+    fig.suptitle(f"Fig. sim3: users who learn, {n} users per curve, assistance: {assistance}")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,757 @@
+r"""The eating study (notebook 11): Figs. error, time and dessert (left), and claims H1-H3.
+
+A cohort of simulated participants (:mod:`lasa.people.participants`) does both eating tasks under R,
+R+SA, LA and LA+SA. The first ten are the paper's study size; the whole cohort is the
+larger one. Three tidy tables come out, one row per participant x condition x task (x
+phase), each with its figure:
+
+- ``study_goal_error``: Goal Error (Fig. error);
+- ``study_time``: Total and Idle Time (Fig. time), with mode switches and completion;
+- ``study_alignment``: Preference Alignment per phase (Fig. dessert, left panel).
+
+The assisted conditions run under each member of ``Config.members`` (hindsight
+optimisation, the paper's study, first: the headline), the unassisted ones once
+(``assistance`` is ``none`` for them). The LA conditions run under every decoder reading of
+notebook 10 (:func:`run`; the headline, chosen there by the property alone, first), and the
+tables' ``decoder`` column says which. The statistics are :mod:`lasa.evidence.stats`'s. Beside the
+claims: :func:`completion` (episodes finished within the horizon), :func:`stuck` (where the
+unfinished LA episodes were, and what the decoder offered there) and :func:`switch_share`
+(Retargeting's mode-switch share of time, against Herlant et al. 2016's 17.4%).
+
+**The claims and their rules.** They follow the paper's own tests and significance
+level (p < .05), in the direction the paper reports; they were written after pilot runs
+of 4 and 10 participants had been seen (the study was new). One reading was added after
+the paper-scale run had been seen: ``study.h1_mean_distance``, because that run showed the
+summed Goal Error tracking the time taken; it is reported beside the paper's measure, not
+instead of it, and no rule was changed. Each is judged for the first 10 participants and for
+the whole cohort, under each member.
+
+- **H1** (``study.h1``), SA lowers Goal Error: *yes* if the within-subjects SA main
+  effect (2x2 repeated-measures ANOVA, F(1, N-1)) is significant with lower error under SA
+  and both pairwise comparisons (LA+SA < LA, R+SA < R; paired t-tests, Holm over the two)
+  are significant too; *partly* if the main effect is but not both comparisons; *no*
+  otherwise. ``study.h1_mean_distance`` applies the same rule to the mean distance (Goal
+  Error divided by the task's time): a sum over the task also grows with the time taken, so
+  a slower condition accrues more of it at the same distance. ``study.h1_paper_test``
+  applies the same direction-and-significance rule to the paper's reading of F(1,18): a
+  between-subjects one-way ANOVA on the 2N participant means with and without SA (which
+  ignores that they come from the same people).
+- **H2** (``study.h2``), LA lets users execute their preferences: in Dessert's scoop phase,
+  the one where the preference changes, Preference Alignment is higher with LA+SA than
+  with R+SA (paired t-test over the participants who reached that phase under both):
+  *yes* if significant, *partly* if higher but not significant, *no* otherwise (also when
+  fewer than two participants reached it under both).
+- **H3** (``study.h3``), LA+SA is the most efficient: Total and Idle Time, summed over the
+  two tasks, lower with LA+SA than with each other condition (paired t-tests, Holm over
+  the three comparisons of each measure): *yes* if all six comparisons are significant,
+  *partly* if LA+SA has the lowest mean Total Time but not all six are, *no* otherwise.
+
+Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
+optimisation, 10 participants, the headline decoder), and ``study.<claim>@<reading>`` each other
+(:func:`claim_id`); every other decoder reading is judged on H1-H3 under the paper's measures and
+hindsight optimisation.
+A verdict is settled when the 95% t-interval of its effect excludes zero, else ``undecided``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+
+import matplotlib.pyplot as plt
+import mujoco
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.figure import Figure
+from scipy import stats as sps
+
+from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, from_dict
+from lasa.base.errors import ConfigError
+from lasa.evidence import stats
+from lasa.evidence.claims import Claim
+from lasa.evidence.rules import UNDECIDED, rule
+from lasa.method.decoder import ActionDecoder
+from lasa.method.step import decode_candidates, latent_grid
+from lasa.people.participants import (
+    CONDITIONS,
+    NO_ASSISTANCE,
+    TASK_NAMES,
+    Episodes,
+    ParticipantConfig,
+    StudyConfig,
+    draw_cohort,
+    measures,
+    progress_gain,
+    simulate,
+    tip_frames,
+    tip_motion,
+)
+from lasa.world.eating import GOALS, TASKS, EatingTask, fork_frame, waypoints
+
+__all__ = [
+    "Config",
+    "FigureSpec",
+    "GOAL_ERROR",
+    "TIME",
+    "ALIGNMENT",
+    "PAPER_N",
+    "run",
+    "for_member",
+    "completion",
+    "switch_share",
+    "stuck",
+    "stuck_summary",
+    "readings_table",
+    "HERLANT_SHARE",
+    "analyse",
+    "claims",
+    "plot_goal_error",
+    "plot_time",
+    "plot_alignment",
+]
+
+PAPER_N = 10  # the paper's participants
+HERLANT_SHARE = 0.174  # mode switching's share of execution time, JACO + joystick (Herlant et al. 2016) [-]
+STUCK_COLUMNS = (
+    "participant",
+    "condition",
+    "assistance",
+    "task",
+    "phase",
+    "goal",
+    "distance_cm",
+    "angle_deg",
+    "belief_goal",
+    "believed",
+    "best_progress",
+    "inputs_progressing",
+)
+PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """The simulated study (notebook 11); the participants' parameters are ``participant``."""
+
+    n_participants: int = 40  # the larger cohort; its first 10 are the paper-sized study [-]
+    members: tuple[str, ...] = ("hindsight", "grasp_set")  # SA readings; the first is the headline [-]
+    horizon: int = 1500  # steps allowed per task (150 s) [-]
+    seed: int = 0  # seed of the cohort and of the participants' choices [-]
+    video_participant: int = 0  # whose Dessert the video shows [-]
+    participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
+
+    def __post_init__(self) -> None:
+        if int(self.n_participants) != self.n_participants or self.n_participants < 2:
+            raise ConfigError(f"n_participants must be an integer >= 2, got {self.n_participants!r}")
+        object.__setattr__(self, "members", tuple(self.members))
+        for name in self.members:
+            check_choice("assistance", name, ASSISTANCE)
+        if not 0 <= self.video_participant < self.n_participants:
+            raise ConfigError(
+                f"video_participant must be in [0, {self.n_participants}), got {self.video_participant}"
+            )
+
+    def study(self) -> StudyConfig:
+        """The session settings for :func:`lasa.people.participants.simulate`."""
+        return StudyConfig(
+            horizon=self.horizon,
+            members=self.members,
+            participant=from_dict(ParticipantConfig, self.participant),
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class FigureSpec:
+    """One of the study's figures, in the shape :func:`lasa.evidence.publish.publish` takes."""
+
+    NAME: str
+    COLUMNS: tuple[str, ...]
+    plot: Callable[..., Figure]
+
+
+def run(
+    task: EatingTask,
+    decoders: Mapping[str, ActionDecoder],
+    control: ControlConfig,
+    config: Config,
+    progress: bool = True,
+) -> tuple[dict[str, Episodes], dict[str, pd.DataFrame]]:
+    """Simulate the cohort and measure it: the episodes per decoder reading and the three tidy tables.
+
+    The first of ``decoders`` is the headline: every condition under every member. Each
+    other reading runs LA and LA+SA only, under the headline member (Retargeting does not
+    use the decoder: its episodes are the headline run's, the same participants and random
+    streams). The tables' ``decoder`` column names the reading of each LA row, and is
+    ``none`` for Retargeting.
+    """
+    if not decoders:
+        raise ConfigError("run needs at least one decoder (the headline first)")
+    cohort = draw_cohort(config.n_participants, config.study().participant, config.seed)
+    episodes: dict[str, Episodes] = {}
+    parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
+    for i, (name, decoder) in enumerate(decoders.items()):
+        settings = (
+            config.study() if i == 0 else dataclasses.replace(config.study(), members=config.members[:1])
+        )
+        interfaces = ("R", "LA") if i == 0 else ("LA",)
+        episodes[name] = simulate(
+            task,
+            decoder,
+            cohort,
+            control,
+            settings,
+            seed=config.seed,
+            progress=progress,
+            interfaces=interfaces,
+        )
+        for key, frame in measures(task, episodes[name]).items():
+            la = frame.condition.str.startswith("LA")
+            parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE)))
+    return episodes, {key: pd.concat(frames, ignore_index=True) for key, frames in parts.items()}
+
+
+def for_member(
+    frame: pd.DataFrame, member: str, n: int | None = None, decoder: str | None = None
+) -> pd.DataFrame:
+    """The rows of one SA reading (the unassisted conditions included), for the first ``n`` participants.
+
+    With ``decoder``, the LA rows are that decoder reading's (a frame without a ``decoder``
+    column holds one reading).
+    """
+    rows = frame[(frame.assistance == member) | (frame.assistance == NO_ASSISTANCE)]
+    if decoder is not None and "decoder" in rows.columns:
+        rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
+    if n is not None:
+        rows = rows[rows.participant < n]
+    return rows.reset_index(drop=True)
+
+
+def completion(time: pd.DataFrame) -> pd.DataFrame:
+    """Share of episodes finished within the horizon, per decoder reading, SA member and condition."""
+    keys = [k for k in ("decoder", "assistance", "condition") if k in time.columns]
+    return (
+        time.groupby(keys, sort=False)
+        .agg(
+            episodes=("completed", "size"), finished=("completed", "mean"), total_time=("total_time", "mean")
+        )
+        .reset_index()
+    )
+
+
+def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.DataFrame:
+    """Retargeting's mode-switch share of execution time, per condition and SA member.
+
+    Each participant's time spent pressing the mode button (one control step, ``dt``, per
+    switch) over their Total Time, summed over both tasks; the mean over participants and
+    its 95% t-interval. Herlant, Holladay & Srinivasa (HRI 2016) measured 17.4% for
+    able-bodied users of a JACO arm with a joystick.
+    """
+    rows = time[time.condition.isin(["R", "R+SA"])]
+    if n is not None:
+        rows = rows[rows.participant < n]
+    out = []
+    for (cond, member), part in rows.groupby(["condition", "assistance"], sort=False):
+        per = part.groupby("participant")[["mode_switches", "total_time"]].sum()
+        share = per.mode_switches * dt / per.total_time
+        sem = float(sps.sem(share)) if len(share) > 1 else np.nan
+        ci = (
+            (share.mean(),) * 2
+            if sem == 0
+            else sps.t.interval(0.95, len(share) - 1, loc=share.mean(), scale=sem)
+        )
+        out.append(
+            {
+                "condition": cond,
+                "assistance": member,
+                "participants": len(share),
+                "switch_share": float(share.mean()),
+                "ci_low": float(ci[0]),
+                "ci_high": float(ci[1]),
+                "switches_per_task": float(part.mode_switches.mean()),
+                "herlant_2016": HERLANT_SHARE,
+            }
+        )
+    return pd.DataFrame(out)
+
+
+def stuck(
+    task: EatingTask,
+    episodes: Episodes,
+    decoder: ActionDecoder,
+    config: Config,
+) -> pd.DataFrame:
+    """Why the unfinished LA episodes did not finish: where they were, and what the decoder offered there.
+
+    One row per unfinished LA episode: the phase and goal of the waypoint it was working
+    towards, the tip's distance to it [cm] and the angle to its direction [deg] at the
+    horizon, the belief in that goal, the goal the belief favoured, and, at that final
+    state and belief, the best progress any of the participant's stick inputs makes towards
+    the waypoint (in best-step units; the participant rests below the idle threshold, 0.1)
+    and the share of inputs that make any progress.
+    """
+    if episodes.belief is None or episodes.waypoint is None:
+        raise ConfigError("stuck needs simulated episodes (with beliefs and waypoints logged)")
+    settings = config.study()
+    pc = settings.participant
+    la = np.char.startswith(episodes.condition.astype(str), "LA") & ~episodes.completed
+    idx = np.flatnonzero(la)
+    if not len(idx):
+        return pd.DataFrame(columns=STUCK_COLUMNS)
+    robot, dt = task.robot, episodes.dt
+    plans = {name: waypoints(name) for name in TASK_NAMES}
+    wps = [plans[str(episodes.task[e])][int(episodes.waypoint[e])] for e in idx]
+    frames = [fork_frame(robot, wp.goal, wp.theta, wp.depth) for wp in wps]
+    p_star = np.stack([f[0] for f in frames])
+    d_star = np.stack([f[1][:, 2] for f in frames])
+    s = episodes.states[-1, idx]
+    b = episodes.belief[-1, idx]
+    data = mujoco.MjData(robot.model)
+    pos, axis, jp, jr = tip_frames(robot, data, s)
+    grid = latent_grid(settings.n_z, 2)
+    phi = decode_candidates(decoder, grid, s, b)
+    dp, new_dir = tip_motion(jp, jr, axis, dt * phi)
+    unit = dt * settings.retarget.linear_speed
+    gain = progress_gain(pos, axis, dp, new_dir, p_star, d_star, pc.rotation_weight) / unit
+    goal_names = np.asarray(GOALS)
+    return pd.DataFrame(
+        {
+            "participant": episodes.participant[idx],
+            "condition": episodes.condition[idx],
+            "assistance": episodes.assistance[idx],
+            "task": episodes.task[idx],
+            "phase": [TASKS[str(episodes.task[e])][wp.phase].name for e, wp in zip(idx, wps, strict=True)],
+            "goal": [GOALS[wp.goal] for wp in wps],
+            "distance_cm": 100 * np.linalg.norm(pos - p_star, axis=1),
+            "angle_deg": np.degrees(np.arccos(np.clip(np.einsum("ai,ai->a", axis, d_star), -1, 1))),
+            "belief_goal": b[np.arange(len(idx)), [wp.goal for wp in wps]],
+            "believed": goal_names[b.argmax(axis=1)],
+            "best_progress": gain.max(axis=1),
+            "inputs_progressing": (gain > 0).mean(axis=1),
+        }
+    )
+
+
+def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int]:
+    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used.
+
+    Participants without a value under either condition (a phase never reached) are left
+    out; with fewer than two pairs left, everything but the count is NaN.
+    """
+    keep = a.notna() & b.notna()
+    a, b = a[keep], b[keep]
+    if len(a) < 2:
+        return np.nan, np.nan, np.nan, np.nan, int(len(a))
+    res = sps.ttest_rel(a, b)
+    ci = res.confidence_interval()
+    return float((a - b).mean()), float(ci.low), float(ci.high), float(res.pvalue), int(len(a))
+
+
+def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
+    """:func:`stuck`'s rows (with a ``decoder`` column) grouped by where they stopped: medians per group."""
+    keys = ["decoder", "condition", "assistance", "task", "phase", "goal"]
+    medians = ("distance_cm", "angle_deg", "belief_goal", "best_progress", "inputs_progressing")
+    return stuck_rows.groupby(keys).agg(
+        episodes=("participant", "size"), **{m: (m, "median") for m in medians}
+    )
+
+
+def readings_table(
+    prop: pd.DataFrame,
+    done: pd.DataFrame,
+    rows: list[Claim],
+    decoders: list[str],
+    member: str,
+) -> pd.DataFrame:
+    """One row per decoder reading, the headline first: its property, its completion, its verdicts.
+
+    Args:
+        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
+        done: :func:`completion` of the study's time table.
+        rows: The study's claims rows (:func:`claims`).
+        decoders: The decoder readings, the headline first.
+        member: The headline SA member (LA+SA's completion is under it).
+
+    Columns: ``goals with the property``, ``least share staying``, ``LA finished``,
+    ``LA+SA finished``, and H1-H3's verdicts for 10 participants / the cohort (``-`` where
+    the study had no cohort).
+    """
+    verdict = {c.id: c.reproduced for c in rows}
+    finished = done.set_index(["decoder", "assistance", "condition"]).finished
+    out = []
+    for d in decoders:
+        other = None if d == decoders[0] else d
+        mine = prop[prop.decoder == d]
+        out.append(
+            {
+                "decoder": d,
+                "headline": other is None,
+                "goals with the property": int(mine.has_property.sum()),
+                "least share staying": mine.stay_share.min(),
+                "LA finished": finished.get((d, NO_ASSISTANCE, "LA")),
+                "LA+SA finished": finished.get((d, member, "LA+SA")),
+                **{
+                    f"{h.upper()} (10 / all)": " / ".join(
+                        verdict.get(claim_id(h, 0, member, cohort, other), "-") for cohort in (False, True)
+                    )
+                    for h in DECODER_KEYS
+                },
+            }
+        )
+    return pd.DataFrame(out)
+
+
+def analyse(
+    frames: dict[str, pd.DataFrame], member: str, n: int | None = None, decoder: str | None = None
+) -> dict[str, object]:
+    """Every test the claims rest on, for one SA reading, decoder reading and the first ``n`` participants."""
+    err = for_member(frames["goal_error"], member, n, decoder)
+    time = for_member(frames["time"], member, n, decoder)
+    align = for_member(frames["alignment"], member, n, decoder)
+    out: dict[str, object] = {
+        "n": int(err.participant.nunique()),
+        "h1_within": stats.sa_effect_within(err, "goal_error"),
+        "h1_between": stats.sa_effect_between(err, "goal_error"),
+        "h1_rm": stats.rm_anova(err, "goal_error"),
+        "h1_pairs": stats.pairwise(err, "goal_error", pairs=[("LA+SA", "LA"), ("R+SA", "R")]),
+        "h1_mean_within": stats.sa_effect_within(err, "mean_distance"),
+        "h1_mean_pairs": stats.pairwise(err, "mean_distance", pairs=[("LA+SA", "LA"), ("R+SA", "R")]),
+    }
+    scoop = align[(align.task == "Dessert")]
+    wide = scoop.pivot_table(index="participant", columns=["phase", "condition"], values="alignment")
+    missing = pd.Series(np.nan, index=wide.index)
+    out["h2_phases"] = {
+        phase: _paired(wide.get((phase, "LA+SA"), missing), wide.get((phase, "R+SA"), missing))
+        for phase in ("stab", "scoop", "dip")
+    }
+    others = [("LA+SA", c) for c in CONDITIONS if c != "LA+SA"]
+    out["h3_total"] = stats.pairwise(time, "total_time", agg="sum", pairs=others)
+    out["h3_idle"] = stats.pairwise(time, "idle_time", agg="sum", pairs=others)
+    means = time.groupby("condition")[["total_time", "idle_time"]].sum().div(out["n"])
+    out["means"] = means
+    totals = time.pivot_table(index="participant", columns="condition", values="total_time", aggfunc="sum")
+    best_other = str(means.total_time.drop("LA+SA").idxmin())
+    out["h3_gap"] = (best_other, *_paired(totals["LA+SA"], totals[best_other]))
+    return out
+
+
+def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, float, str]]:
+    """(the tests' verdict, value, 95% ci_low, ci_high, measured) per claim key.
+
+    The value is the effect the verdict rests on, and its interval is the t-interval of the
+    same test (paired over participants, or two-sample for the paper's F(1,18) reading).
+    """
+    out: dict[str, tuple[str, float, float, float, str]] = {}
+    for key, suffix, unit, scale in (("h1", "", "m s", 1.0), ("h1_mean_distance", "_mean", "cm", 100.0)):
+        within, pairs = result[f"h1{suffix}_within"], result[f"h1{suffix}_pairs"]
+        assert isinstance(within, dict) and isinstance(pairs, pd.DataFrame)
+        diff = within["mean_sa"] - within["mean_no_sa"]
+        main = diff < 0 and within["p"] < 0.05
+        both = bool(((pairs["diff"] < 0) & (pairs.p_corr < 0.05)).all())
+        verdict = "yes" if main and both else "partly" if main else "no"
+        pair_text = "; ".join(
+            f"{r.a} - {r.b} = {scale * r.diff:+.2f} {unit} (p_holm = {r.p_corr:.3g})"
+            for r in pairs.itertuples()
+        )
+        out[key] = (
+            verdict,
+            diff,
+            within["ci_low"],
+            within["ci_high"],
+            f"SA - no SA = {scale * diff:+.2f} {unit}; {stats.format_f(within)} (within); {pair_text}",
+        )
+    between = result["h1_between"]
+    assert isinstance(between, dict)
+    b_diff = between["mean_sa"] - between["mean_no_sa"]
+    verdict = "yes" if b_diff < 0 and between["p"] < 0.05 else "no"
+    out["h1_paper_test"] = (
+        verdict,
+        b_diff,
+        between["ci_low"],
+        between["ci_high"],
+        f"SA - no SA = {b_diff:+.2f} m s; {stats.format_f(between)} (between, the paper's df)",
+    )
+    phases = result["h2_phases"]
+    assert isinstance(phases, dict)
+    mean, low, high, p, _ = phases["scoop"]
+    verdict = "yes" if mean > 0 and p < 0.05 else "partly" if mean > 0 else "no"  # NaN: "no"
+    text = "; ".join(f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" for ph, (m, _, _, pp, k) in phases.items())
+    out["h2"] = (verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}")
+    total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
+    assert (
+        isinstance(total, pd.DataFrame)
+        and isinstance(idle, pd.DataFrame)
+        and isinstance(means, pd.DataFrame)
+        and isinstance(gap, tuple)
+    )
+    all_sig = bool(
+        ((total["diff"] < 0) & (total.p_corr < 0.05)).all()
+        and ((idle["diff"] < 0) & (idle.p_corr < 0.05)).all()
+    )
+    fastest = means.total_time.idxmin() == "LA+SA"
+    verdict = "yes" if all_sig else "partly" if fastest else "no"
+    best, g_mean, g_low, g_high = gap[0], gap[1], gap[2], gap[3]
+    text = ", ".join(f"{c} {means.total_time[c]:.0f} s (idle {means.idle_time[c]:.0f} s)" for c in CONDITIONS)
+    out["h3"] = (
+        verdict,
+        float(g_mean),
+        float(g_low),
+        float(g_high),
+        f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s; total (idle) time over both tasks: {text}",
+    )
+    return out
+
+
+CLAIM_TEXT = {
+    "h1": (
+        "H1: users with SA maintain their goals more accurately (Goal Error)",
+        "F(1,18) = 29.9, p < .001; LA+SA < LA p < .001; R+SA < R p < .05",
+    ),
+    "h1_mean_distance": (
+        "H1 with Goal Error read as the mean distance to the closest goal (the sum over the task / its time)",
+        "F(1,18) = 29.9, p < .001 (for the summed distance)",
+    ),
+    "h1_paper_test": (
+        "H1 under the paper's F(1,18) reading (participant means as independent groups)",
+        "F(1,18) = 29.9, p < .001",
+    ),
+    "h2": (
+        "H2: LA lets users execute their preferences (Dessert scoop alignment, LA+SA vs R+SA)",
+        "R+SA stays in a stabbing orientation; LA+SA adjusts to scoop",
+    ),
+    "h3": (
+        "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
+        "LA+SA fastest, Total and Idle Time, p < .05 vs each",
+    ),
+}
+
+
+# readings of each claim key: the claim it belongs to, and the reading's name (None: the paper's)
+_KEYS = {
+    "h1": ("h1", None),
+    "h1_mean_distance": ("h1", "mean_distance"),
+    "h1_paper_test": ("h1", "paper_test"),
+    "h2": ("h2", None),
+    "h3": ("h3", None),
+}
+
+
+def claim_id(key: str, member_index: int, member: str, cohort: bool, decoder: str | None = None) -> str:
+    """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
+
+    The paper's reading is its measure, the headline decoder, the headline member
+    (hindsight, index 0) and its 10 participants; every other reading names what differs,
+    joined by ``+``: ``study.h1@mean_distance+grasp_set+cohort``, ``study.h3@home_entropy``
+    (``decoder``: a decoder reading other than the headline).
+    """
+    base, measure = _KEYS[key]
+    parts = [
+        p
+        for p in (measure, decoder, None if member_index == 0 else member, "cohort" if cohort else None)
+        if p
+    ]
+    return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
+
+
+DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder reading (the paper's measures)
+
+
+def claims(
+    frames: dict[str, pd.DataFrame], members: tuple[str, ...], n_total: int, decoders: tuple[str, ...] = ()
+) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+    """The claims rows under every reading (measure, member, decoder, 10 participants or the cohort).
+
+    ``decoders`` names the decoder readings in the frames' ``decoder`` column, the headline
+    first (empty: the frames hold one reading). The headline decoder is judged under every
+    measure and member; each other decoder reading under the paper's measures
+    (:data:`DECODER_KEYS`) and the headline member. ``analyses`` is keyed ``(member, n)``
+    for the headline decoder and ``(member, n, decoder)`` for the others.
+
+    A verdict is settled when the 95% t-interval of its effect lies on one side of zero
+    (:data:`lasa.evidence.rules.RULES`), which is the test's own significance at p < .05; then it is
+    the tests' verdict (yes / partly / no, the rules of this module's docstring), otherwise
+    ``undecided``: a study of that size cannot tell.
+    """
+    analyses: dict[tuple, dict[str, object]] = {}
+    rows: list[Claim] = []
+    head = decoders[0] if decoders else None
+    runs = [(m_i, member, head) for m_i, member in enumerate(members)]
+    runs += [(0, members[0], d) for d in decoders[1:]]
+    for m_i, member, decoder in runs:
+        sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
+        other = decoder if decoder != head else None
+        for n, cohort in sizes:
+            result = analyse(frames, member, n, decoder)
+            analyses[(member, n) if other is None else (member, n, other)] = result
+            for key, (verdict, value, low, high, measured) in _verdicts(result).items():
+                if other is not None and key not in DECODER_KEYS:
+                    continue
+                cid = claim_id(key, m_i, member, cohort, other)
+                r = rule(cid)
+                settled = r.settled({"effect": (low, high)})
+                claim, paper = CLAIM_TEXT[key]
+                interval = f"95% t-interval of the effect [{low:.3g}, {high:.3g}]"
+                note = (
+                    f"{result['n']} simulated participants; SA = {member}; "
+                    + (f"decoder = {decoder}; " if decoder else "")
+                    + interval
+                    + ("" if settled else f", which straddles 0; the tests read {verdict!r}")
+                    + f". Rule: {r.text}."
+                )
+                rows.append(
+                    Claim(
+                        id=cid,
+                        claim=claim,
+                        figure="study",
+                        paper=paper,
+                        measured=measured,
+                        reproduced=verdict if settled else UNDECIDED,
+                        note=note,
+                        robot="panda",
+                        assistance=member,
+                        value=float(value),
+                        ci_low=float(low),
+                        ci_high=float(high),
+                        settled=settled,
+                        n_users=int(result["n"]),  # type: ignore[call-overload]
+                        values={"effect": float(value)},
+                    )
+                )
+    heads = {c.id: c for c in rows if "@" not in c.id}
+    out = []
+    for c in rows:
+        if c.id in heads:
+            flips = [
+                f"{o.id.split('@')[1]} {o.reproduced}"
+                for o in rows
+                if o.id.startswith(c.id + "@") and o.reproduced != c.reproduced
+            ]
+            lead = (
+                f"Readings with another verdict: {', '.join(flips)}. "
+                if flips
+                else "Every reading gives the same verdict. "
+            )
+            c = dataclasses.replace(c, note=lead + c.note)
+        out.append(c)
+    return out, analyses
+
+
+# every interval the study's figures draw: a 95% bootstrap CI, seeded so the PNG is the same run after run
+CI = {"errorbar": ("ci", 95), "seed": 0}
+
+
+def _reading(member: str, decoder: str | None) -> str:
+    """The figures' caption of what they show: the SA member, and the decoder reading if named."""
+    return f"SA = {member}" + (f"; decoder = {decoder}" if decoder else "")
+
+
+def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
+    """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants)."""
+    sns.set_theme(style="whitegrid")
+    data = for_member(frame, member, decoder=decoder)
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+    sns.barplot(
+        data=data,
+        x="task",
+        y="goal_error",
+        hue="condition",
+        hue_order=CONDITIONS,
+        palette=PALETTE,
+        **CI,
+        ax=ax,
+        alpha=0.85,
+    )
+    sns.stripplot(
+        data=data,
+        x="task",
+        y="goal_error",
+        hue="condition",
+        hue_order=CONDITIONS,
+        palette=PALETTE,
+        dodge=True,
+        size=2.5,
+        jitter=False,  # seaborn jitters with an unseeded generator: the PNG would change run to run
+        color="k",
+        ax=ax,
+        legend=False,
+        alpha=0.5,
+    )
+    ax.set_ylabel("Goal Error [m s]")
+    ax.set_title(
+        f"Goal Error ({data.participant.nunique()} simulated participants; {_reading(member, decoder)})"
+    )
+    return fig
+
+
+def plot_time(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
+    """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI."""
+    sns.set_theme(style="whitegrid")
+    data = for_member(frame, member, decoder=decoder)
+    fig, axes = plt.subplots(1, 2, figsize=(9, 4.2), sharey=True, layout="constrained")
+    for ax, task in zip(axes, ("Entree", "Dessert"), strict=True):
+        part = data[data.task == task]
+        sns.barplot(
+            data=part,
+            x="condition",
+            y="total_time",
+            order=CONDITIONS,
+            palette=PALETTE,
+            hue="condition",
+            **CI,
+            ax=ax,
+            legend=False,
+        )
+        sns.barplot(
+            data=part,
+            x="condition",
+            y="idle_time",
+            order=CONDITIONS,
+            color="white",
+            **CI,
+            ax=ax,
+            alpha=0.6,
+        )
+        ax.set_title(f"{task}: total (solid) and idle (light)")
+        ax.set_ylabel("time [s]")
+    fig.suptitle(f"{data.participant.nunique()} simulated participants; {_reading(member, decoder)}")
+    return fig
+
+
+def plot_alignment(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
+    """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them)."""
+    sns.set_theme(style="whitegrid")
+    data = for_member(frame, member, decoder=decoder)
+    data = data[(data.task == "Dessert") & data.phase.isin(["stab", "scoop", "dip"])]
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+    sns.pointplot(
+        data=data,
+        x="phase",
+        y="alignment",
+        hue="condition",
+        hue_order=CONDITIONS,
+        order=["stab", "scoop", "dip"],
+        palette=PALETTE,
+        **CI,
+        dodge=0.3,
+        ax=ax,
+    )
+    ax.set_ylabel("Preference Alignment (d · d*)")
+    ax.set_title(
+        f"Dessert: alignment with each phase's preference ({_reading(member, decoder)})", fontsize=10
+    )
+    return fig
+
+
+# every table's keys: who, under which condition, SA member and decoder reading, which task
+ROW_KEYS = ("robot", "participant", "condition", "assistance", "decoder", "task")
+GOAL_ERROR = FigureSpec(
+    "study_goal_error",
+    (*ROW_KEYS, "order", "goal_error", "goal_error_bowls", "mean_distance"),
+    plot_goal_error,
+)
+TIME = FigureSpec(
+    "study_time", (*ROW_KEYS, "order", "total_time", "idle_time", "mode_switches", "completed"), plot_time
+)
+ALIGNMENT = FigureSpec(
+    "study_alignment", (*ROW_KEYS, "phase", "preference", "alignment", "steps"), plot_alignment
+)

@@ -1,0 +1,4 @@
+"""Live use: teleoperation in MuJoCo's viewer, input devices, session logs and the study kit.
+
+No notebook imports this package, so an edit here leaves ``make figures`` with nothing to do.
+"""

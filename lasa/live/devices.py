@@ -1,0 +1,293 @@
+r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script.
+
+Every device answers :meth:`Device.poll` with one :class:`Reading` per control step: the
+two stick axes, whether the mode button was pressed (Retargeting cycles its modes) and
+whether the stop input is held. What reaches the control loop is made safe here, once
+(:func:`safe_axes`): a disconnected device or a non-finite axis gives zero input, never a
+command, and every axis is clipped to [-1, 1].
+
+- :class:`GamepadDevice`: pygame's SDL joystick API (axes 0 and 1, button 0 = mode,
+  button 1 = stop). A gamepad that goes away mid-session reads as disconnected: zero
+  input until it returns.
+- :class:`KeyboardDevice`: MuJoCo's viewer reports key *presses* only, never releases, so
+  a held key cannot be told from a tapped one. The keyboard therefore works by
+  press-to-set: each arrow press moves that axis one notch (a quarter of full deflection)
+  and the axis *stays* there, as a gamepad stick held still would; space recentres both
+  axes, ``M`` presses the mode button, ``S`` toggles stop. We chose this over a
+  key-state library such as ``pynput``: it needs no second connection to the display,
+  works wherever the viewer works (Xvfb included), and what the participant sees in the
+  viewer's overlay is exactly the axis value in force.
+- :class:`ScriptedDevice`: a recorded or synthetic sequence of readings, for tests,
+  demonstrations of the kit and :func:`lasa.live.teleop.replay`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+from collections.abc import Sequence
+from typing import Protocol
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.errors import ConfigError
+
+__all__ = [
+    "Reading",
+    "Device",
+    "safe_axes",
+    "ScriptedDevice",
+    "KeyboardDevice",
+    "GamepadDevice",
+    "open_device",
+]
+
+NOTCH = 0.25  # keyboard: one arrow press moves an axis by this much [-]
+DEADZONE = 0.05  # gamepad: |axis| below this reads as zero (stick drift) [-]
+
+
+@dataclasses.dataclass(frozen=True)
+class Reading:
+    """One control step's input.
+
+    Attributes:
+        raw: The device's axes as read, before any check, shape (2,) (NaN if absent).
+        mode: Whether the mode button was pressed since the last poll.
+        stop: Whether the stop input is held.
+        connected: Whether the device answered.
+    """
+
+    raw: np.ndarray
+    mode: bool = False
+    stop: bool = False
+    connected: bool = True
+
+    @property
+    def z(self) -> np.ndarray:
+        """The joystick input the controller may use: :func:`safe_axes` of ``raw``."""
+        return safe_axes(self.raw, self.connected)
+
+
+def safe_axes(raw: np.ndarray, connected: bool = True, deadzone: float = 0.0) -> np.ndarray:
+    """Stick axes made safe: zero if disconnected, non-finite axes zero, clipped to [-1, 1].
+
+    Args:
+        raw: Axes as read, shape (2,).
+        connected: Whether the device answered this step.
+        deadzone: |axis| below this becomes zero.
+
+    Returns:
+        z, shape (2,), finite and within [-1, 1].
+    """
+    axes = np.asarray(raw, dtype=float).reshape(-1)
+    if axes.shape != (2,):
+        raise ConfigError(f"a reading has 2 axes, got shape {np.shape(raw)}")
+    if not connected:
+        return np.zeros(2)
+    axes = np.where(np.isfinite(axes), axes, 0.0)
+    axes = np.where(np.abs(axes) < deadzone, 0.0, axes)
+    return np.clip(axes, -1.0, 1.0)
+
+
+class Device(Protocol):
+    """What the teleoperation loop reads from."""
+
+    name: str
+
+    def poll(self) -> Reading:
+        """This step's input."""
+        ...
+
+    def close(self) -> None:
+        """Release the device."""
+        ...
+
+
+class ScriptedDevice:
+    """Readings from a script: one per step, then rest (zero axes) once it runs out.
+
+    Args:
+        axes: Raw axes per step, shape (T, 2) (NaN allowed: it reads as zero input).
+        mode: Mode presses per step, shape (T,) (default none).
+        stop: Stop held per step, shape (T,) (default never).
+        connected: Connection per step, shape (T,) (default always).
+    """
+
+    name = "scripted"
+
+    def __init__(
+        self,
+        axes: np.ndarray,
+        mode: Sequence[bool] | np.ndarray | None = None,
+        stop: Sequence[bool] | np.ndarray | None = None,
+        connected: Sequence[bool] | np.ndarray | None = None,
+    ) -> None:
+        self.axes = np.asarray(axes, dtype=float).reshape(-1, 2)
+        n = len(self.axes)
+        self.mode = np.zeros(n, bool) if mode is None else np.asarray(mode, bool)
+        self.stop = np.zeros(n, bool) if stop is None else np.asarray(stop, bool)
+        self.connected = np.ones(n, bool) if connected is None else np.asarray(connected, bool)
+        for name in ("mode", "stop", "connected"):
+            if getattr(self, name).shape != (n,):
+                raise ConfigError(
+                    f"{name} must have one entry per step ({n}), got {getattr(self, name).shape}"
+                )
+        self.step = 0
+
+    @classmethod
+    def from_table(cls, table: pd.DataFrame, mode: str = "mode") -> ScriptedDevice:
+        """A script from a table with columns ``raw0``, ``raw1`` and, optionally, ``mode`` (or the
+        column named by ``mode``), ``stop`` and ``connected`` (nonzero = true): a script file, or a
+        session log (whose mode column is ``mode_press``)."""
+        flags = {
+            name: table[col].to_numpy() > 0 if col in table else None
+            for name, col in (("mode", mode), ("stop", "stop"), ("connected", "connected"))
+        }
+        return cls(table[["raw0", "raw1"]].to_numpy(), **flags)
+
+    def poll(self) -> Reading:
+        """The next scripted reading (zero axes after the script's end)."""
+        i = self.step
+        self.step += 1
+        if i >= len(self.axes):
+            return Reading(raw=np.zeros(2))
+        return Reading(
+            raw=self.axes[i].copy(),
+            mode=bool(self.mode[i]),
+            stop=bool(self.stop[i]),
+            connected=bool(self.connected[i]),
+        )
+
+    @property
+    def finished(self) -> bool:
+        """Whether every scripted reading has been read."""
+        return self.step >= len(self.axes)
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+# GLFW key codes, as MuJoCo's viewer reports them to its key callback
+_KEY_RIGHT, _KEY_LEFT, _KEY_DOWN, _KEY_UP = 262, 263, 264, 265
+_KEY_SPACE, _KEY_M, _KEY_S = 32, 77, 83
+
+
+class KeyboardDevice:
+    """The keyboard through MuJoCo's viewer key callback, press-to-set (see the module docstring).
+
+    Pass :meth:`key_callback` to ``mujoco.viewer.launch_passive(..., key_callback=...)``.
+    The callback runs on the viewer's thread; a lock guards the state.
+    """
+
+    name = "keyboard"
+
+    def __init__(self, notch: float = NOTCH) -> None:
+        self.notch = notch
+        self._axes = np.zeros(2)
+        self._mode = False
+        self._stop = False
+        self._lock = threading.Lock()
+
+    def key_callback(self, key: int) -> None:
+        """Update the held axes, the mode press or the stop toggle from one key press."""
+        with self._lock:
+            if key == _KEY_RIGHT:
+                self._axes[0] = min(1.0, self._axes[0] + self.notch)
+            elif key == _KEY_LEFT:
+                self._axes[0] = max(-1.0, self._axes[0] - self.notch)
+            elif key == _KEY_UP:
+                self._axes[1] = min(1.0, self._axes[1] + self.notch)
+            elif key == _KEY_DOWN:
+                self._axes[1] = max(-1.0, self._axes[1] - self.notch)
+            elif key == _KEY_SPACE:
+                self._axes[:] = 0.0
+            elif key == _KEY_M:
+                self._mode = True
+            elif key == _KEY_S:
+                self._stop = not self._stop
+
+    def poll(self) -> Reading:
+        """The axes in force, and the mode press since the last poll."""
+        with self._lock:
+            reading = Reading(raw=self._axes.copy(), mode=self._mode, stop=self._stop)
+            self._mode = False
+        return reading
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+class GamepadDevice:
+    """A gamepad through pygame's SDL joystick API: axes 0 and 1, button 0 mode, button 1 stop.
+
+    The stick's y axis points down in SDL; it is flipped so that pushing forward is +z2.
+
+    Raises:
+        ConfigError: if no gamepad is connected (use the keyboard instead).
+    """
+
+    name = "gamepad"
+
+    def __init__(self, index: int = 0) -> None:
+        import os
+
+        os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
+        # SDL's event queue (which the joystick needs) comes with its video subsystem; the
+        # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
+        os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+        import pygame
+
+        self._pg = pygame
+        try:
+            pygame.display.init()
+            pygame.joystick.init()
+            pygame.event.pump()
+        except pygame.error as exc:
+            raise ConfigError(f"SDL could not start its joystick subsystem: {exc}") from exc
+        if pygame.joystick.get_count() <= index:
+            raise ConfigError(f"no gamepad at index {index} ({pygame.joystick.get_count()} connected)")
+        self._stick = pygame.joystick.Joystick(index)
+        self._was_pressed = False
+
+    def poll(self) -> Reading:
+        """Read the stick; a gamepad that went away reads as disconnected (zero input)."""
+        pg = self._pg
+        try:
+            pg.event.pump()
+            if not self._stick.get_init() or pg.joystick.get_count() == 0:
+                return Reading(raw=np.full(2, np.nan), connected=False)
+            raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
+            pressed = bool(self._stick.get_button(0))
+            mode = pressed and not self._was_pressed  # one press, however long held
+            self._was_pressed = pressed
+            stop = bool(self._stick.get_button(1))
+        except pg.error:
+            return Reading(raw=np.full(2, np.nan), connected=False)
+        raw = np.where(np.abs(raw) < DEADZONE, 0.0, raw)
+        return Reading(raw=raw, mode=mode, stop=stop)
+
+    def close(self) -> None:
+        """Release SDL's joystick subsystem."""
+        self._pg.joystick.quit()
+
+
+def open_device(kind: str = "auto") -> tuple[Device, str]:
+    """Open an input device: ``gamepad``, ``keyboard`` or ``auto`` (a gamepad if one is connected).
+
+    Returns:
+        The device and a sentence saying which one it is, to show the user.
+    """
+    if kind not in ("auto", "gamepad", "keyboard"):
+        raise ConfigError(f"unknown device {kind!r}; choose 'auto', 'gamepad' or 'keyboard'")
+    if kind in ("auto", "gamepad"):
+        try:
+            pad = GamepadDevice()
+            return pad, "input: gamepad (stick = z, button 0 = mode, button 1 = stop)"
+        except (ConfigError, ImportError) as exc:
+            if kind == "gamepad":
+                raise ConfigError(f"no gamepad: {exc}") from exc
+    return KeyboardDevice(), (
+        "input: keyboard, no gamepad found (arrows set z by quarter steps and hold it, space recentres, "
+        "M = mode, S = stop)"
+    )

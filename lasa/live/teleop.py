@@ -1,0 +1,617 @@
+r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
+
+``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` (or ``make
+teleop ARGS="..."``) opens MuJoCo's own viewer (``mujoco.viewer.launch_passive``) on the
+task's scene and runs the simulations' control step at a fixed rate, one step per Delta of
+wall-clock time, from a gamepad (pygame) or, without one, the keyboard (:mod:`lasa.live.devices`).
+
+- **Tasks**: ``cups`` (the cup task of the simulations, either robot) and ``Entree`` /
+  ``Dessert`` (the eating study, the Panda). **Conditions**: ``R``, ``R+SA`` (Retargeting,
+  :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the cups, ``LA+SA+Entropy``. The
+  decoders are those ``make figures`` trains (``build/models``).
+- **The step** is the study's (:mod:`lasa.people.participants`): the stick at rest commands nothing; in
+  Retargeting the mode button cycles the modes; then Algorithm 1's blend, belief update and
+  safe transition (:func:`lasa.method.step.advance`), so joint limits and the speed bound hold.
+- **Safety**: the stop input holds the robot (no human action, no assistance, the belief
+  frozen); a disconnected or NaN axis is zero input; a step that overruns its deadline is
+  logged (``late``) and counted, never hidden.
+- **What the viewer shows**: the scene, a sphere over each goal whose size is the robot's
+  belief in it, and an overlay with the instruction of the current phase, the stick, the
+  mode, the condition and the stop state.
+- **Logs** (:mod:`lasa.evidence.sessionlog`): every step with its inputs and the robot's state,
+  belief and actions; a sidecar with the decoder's checksum; the compiled scene's XML.
+
+``python -m lasa.live.teleop replay <session>`` re-runs a log from its inputs and checks that it
+reproduces the logged states exactly (``--mp4`` renders it off-screen).
+``python -m lasa.live.teleop schedule`` writes the counterbalanced order of conditions for N
+participants, and ``python -m lasa.live.teleop survey`` records the paper's 7-point Likert
+questionnaire after a condition (:mod:`lasa.live.studykit`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime as dt_
+import hashlib
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from lasa.base.config import ControlConfig, check_choice, check_range
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.paths import Paths
+from lasa.evidence.sessionlog import SessionWriter, read_session
+from lasa.live.devices import Device, Reading, ScriptedDevice, open_device
+from lasa.method.belief import belief, uniform_log_belief
+from lasa.method.decoder import ActionDecoder, load_checkpoint
+from lasa.method.retarget import MODES, Retargeting, next_mode, twist
+from lasa.method.step import advance, shared_autonomy_step
+from lasa.people.participants import CONDITIONS as STUDY_CONDITIONS
+from lasa.world.robot import Robot, load_robot
+from lasa.world.task import CupTask, make_cup_task
+
+__all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "run_session", "replay", "main"]
+
+TASKS = ("cups", "Entree", "Dessert")
+CONDITIONS = (*STUDY_CONDITIONS, "LA+SA+Entropy")  # the study's four, and the cups' entropy decoder
+
+
+@dataclasses.dataclass(frozen=True)
+class SessionConfig:
+    """What a session runs: robot, task, condition and who drives."""
+
+    robot: str = "panda"  # "planar5" or "panda" (the eating tasks: the Panda)
+    task: str = "Dessert"  # "cups", "Entree" or "Dessert"
+    condition: str = "LA+SA"  # R, R+SA, LA, LA+SA (LA+SA+Entropy: cups only)
+    participant: str = "p00"  # participant id, part of the session's name
+    build_dir: str = "build"  # where `make figures` left the decoders
+
+    def __post_init__(self) -> None:
+        check_choice("robot", self.robot, ("planar5", "panda"))
+        check_choice("task", self.task, TASKS)
+        check_choice("condition", self.condition, CONDITIONS)
+        if self.task != "cups" and self.robot != "panda":
+            raise ConfigError(f"the {self.task} task is built for the Panda, not {self.robot!r}")
+        if self.task != "cups" and self.condition == "LA+SA+Entropy":
+            raise ConfigError(
+                "the eating study runs R, R+SA, LA or LA+SA (its LA conditions use notebook 10's headline "
+                "decoder); LA+SA+Entropy is the cups' condition"
+            )
+        if not self.participant or any(c in self.participant for c in "/\\ "):
+            raise ConfigError(
+                f"participant must be a short id without spaces or slashes, got {self.participant!r}"
+            )
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+class Station:
+    """The robot side of a session: task, decoder, control, and one control step per reading.
+
+    Attributes:
+        config: The session's settings.
+        robot: The robot and scene.
+        task: The cup task or the eating task.
+        control: Control-loop units.
+        decoder: phi (None for Retargeting).
+        state: s, shape (n,); log_belief: log b, shape (G,); mode: Retargeting's mode.
+        waypoint: Index of the next waypoint (eating tasks), or 0.
+        done: Whether the task's last waypoint was reached.
+    """
+
+    def __init__(self, config: SessionConfig) -> None:
+        self.config = config
+        paths = Paths.of(config.build_dir, "figures")
+        self.decoder: ActionDecoder | None = None
+        self.decoder_path: Path | None = None
+        self.waypoints: list[Any] = []
+        if config.task == "cups":
+            self.robot: Robot = load_robot(config.robot)
+            self.task: CupTask = make_cup_task(self.robot)
+            self.control: ControlConfig = self.robot.control
+            name = "decoder_entropy" if config.condition == "LA+SA+Entropy" else "decoder_lambda0"
+        else:
+            from lasa.world.eating import make_eating_task, waypoints
+
+            self.task = make_eating_task()
+            self.robot = self.task.robot
+            self.control = self.robot.control
+            self.waypoints = waypoints(config.task)
+            name = "eating_decoder"
+        if config.condition.startswith("LA"):
+            self.decoder_path = paths.artifact(name, self.robot.name)
+            self.decoder, _ = load_checkpoint(
+                self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
+            )
+        self.retarget = Retargeting(self.robot, self.control.dt) if config.condition.startswith("R") else None
+        self.alpha = self.control.alpha if "+SA" in config.condition else 0.0
+        self.sets = self.task.belief_targets(self.control.likelihood)
+        self._data = mujoco.MjData(self.robot.model)
+        self.reset()
+
+    def warm_up(self) -> None:
+        """Run the step's heavy calls once, off the record (torch's and mink's first calls are slow)."""
+        s, b = self.state[None], self.belief[None]
+        if self.decoder is not None:
+            self.decoder.decode_numpy(np.zeros((1, self.decoder.z_dim)), s, b)
+        if self.retarget is not None:
+            self.retarget.joint_velocity(self.state, twist(0, np.array([1.0, 0.0])))
+
+    def reset(self) -> None:
+        """Back to the start pose, a uniform belief, mode 0, the first waypoint."""
+        self.state = self.task.start.copy()
+        self.log_belief = uniform_log_belief(1, self.task.n_goals)[0]
+        self.mode = 0
+        self.waypoint = 0
+        self.done = False
+
+    @property
+    def belief(self) -> np.ndarray:
+        """b over the task's goals, shape (G,)."""
+        return belief(self.log_belief)
+
+    def meta(self) -> dict[str, Any]:
+        """The sidecar's description of this station."""
+        import lasa
+
+        return {
+            **dataclasses.asdict(self.config),
+            "goals": list(self.task.goal_names),
+            "joints": list(self.robot.spec.joints),
+            "dt": self.control.dt,
+            "control": dataclasses.asdict(self.control),
+            "alpha": self.alpha,
+            "decoder": None if self.decoder_path is None else self.decoder_path.name,
+            "decoder_sha256": None if self.decoder_path is None else _sha256(self.decoder_path),
+            "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
+            "lasa_version": lasa.__version__,
+        }
+
+    def columns(self) -> list[str]:
+        """The log's step columns."""
+        n, g = self.robot.n_joints, self.task.n_goals
+        cols = ["step", "time", "late", "raw0", "raw1", "connected", "mode_press", "stop", "z0", "z1"]
+        cols += ["mode", "phase", "waypoint"]
+        for name, size in (("s", n), ("b", g), ("a_h", n), ("a_r", n), ("a", n)):
+            cols += [f"{name}{i}" for i in range(size)]
+        return cols
+
+    def phase_text(self) -> str:
+        """The instruction of the current phase."""
+        if self.config.task == "cups":
+            return "Reach the cup you want, with the grasp you want"
+        if self.done:
+            return f"{self.config.task}: done"
+        from lasa.world.eating import TASKS as EATING_TASKS
+
+        wp = self.waypoints[self.waypoint]
+        phases = EATING_TASKS[self.config.task]
+        phase = phases[wp.phase]
+        where = {
+            "rice": "the rice (left bowl)",
+            "middle": "the middle bowl",
+            "icing": "the icing (right bowl)",
+        }
+        target = where.get(phase.goal, "the plate")
+        verb = "reach" if phase.preference is None else phase.preference
+        return f"{self.config.task} {wp.phase + 1}/{len(phases)}: {verb} at {target}"
+
+    def _check_waypoint(self) -> None:
+        if not self.waypoints or self.done:
+            return
+        from lasa.people.participants import StudyConfig, tip_frames, waypoint_reached
+        from lasa.world.eating import fork_frame
+
+        wp = self.waypoints[self.waypoint]
+        position, rotation = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
+        tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
+        if waypoint_reached(tip[0], axis[0], position, rotation[:, 2], StudyConfig()):
+            self.waypoint += 1
+            if self.waypoint == len(self.waypoints):
+                self.waypoint -= 1
+                self.done = True
+
+    def step(self, reading: Reading) -> dict[str, Any]:
+        """One control step from one reading; returns what the log records of it."""
+        z = reading.z  # safe: zero if disconnected or not finite, within [-1, 1]
+        n = self.robot.n_joints
+        s = self.state
+        a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
+        pressed = bool(reading.mode) and self.retarget is not None
+        if reading.stop:
+            pass  # hold: no human action, no assistance, the belief frozen
+        else:
+            if (
+                self.decoder is not None
+            ):  # latent actions: the reference step, the stick at rest commanding nothing
+                result = shared_autonomy_step(
+                    self.decoder,
+                    self.task,
+                    self.control,
+                    s[None],
+                    self.log_belief[None],
+                    z[: self.decoder.z_dim][None],
+                    self.alpha,
+                    rest="zero",
+                )
+            else:  # Retargeting: the stick is a twist in the current mode, mink's IK its joint velocity
+                if pressed:
+                    self.mode = int(next_mode(self.mode))
+                elif np.any(z != 0.0) and self.retarget is not None:
+                    a_h = self.retarget.joint_velocity(s, twist(self.mode, z))
+                result = advance(
+                    self.task,
+                    self.control,
+                    s[None],
+                    self.log_belief[None],
+                    a_h[None],
+                    np.array([self.alpha]),
+                    self.sets,
+                )
+            a_h = result.human_action[0]
+            a_r = result.assistance[0] if result.assistance is not None else np.zeros(n)
+            a = result.action[0]
+            self.state = result.state[0]
+            self.log_belief = result.log_belief[0]
+            self._check_waypoint()
+        wp = self.waypoints[self.waypoint] if self.waypoints else None
+        return {
+            "raw": np.asarray(reading.raw, float),
+            "connected": reading.connected,
+            "mode_press": bool(reading.mode),
+            "stop": bool(reading.stop),
+            "z": z,
+            "mode": self.mode,
+            "phase": -1 if wp is None else wp.phase,
+            "waypoint": self.waypoint,
+            "s": self.state.copy(),
+            "b": self.belief,
+            "a_h": a_h,
+            "a_r": a_r,
+            "a": a,
+        }
+
+
+def _row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
+    row = [
+        step,
+        t,
+        float(late),
+        *rec["raw"],
+        float(rec["connected"]),
+        float(rec["mode_press"]),
+        float(rec["stop"]),
+    ]
+    row += [*rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
+    for key in ("s", "b", "a_h", "a_r", "a"):
+        row += list(rec[key])
+    return row
+
+
+class _Overlay:
+    """The viewer's extras: belief spheres over the goals and the instruction text."""
+
+    def __init__(self, station: Station) -> None:
+        self.station = station
+        self.goals = station.robot.cup_positions()
+
+    def draw_goals(self, viewer: Any, rec: dict[str, Any]) -> None:
+        """A sphere over each goal, its radius growing with the belief in it (1 cm to 5 cm)."""
+        scn = viewer.user_scn
+        scn.ngeom = 0
+        for g, (pos, p) in enumerate(zip(self.goals, rec["b"], strict=True)):
+            if scn.ngeom >= scn.maxgeom:
+                break
+            radius = 0.01 + 0.04 * float(p)
+            mujoco.mjv_initGeom(
+                scn.geoms[scn.ngeom],
+                mujoco.mjtGeom.mjGEOM_SPHERE,
+                np.array([radius, 0.0, 0.0]),
+                pos + np.array([0.0, 0.0, 0.18]),
+                np.eye(3).ravel(),
+                np.array([0.95, 0.6 * (g % 2), 0.2, 0.55], dtype=np.float32),
+            )
+            scn.ngeom += 1
+
+    def draw_text(self, viewer: Any, rec: dict[str, Any]) -> None:
+        """The instruction of the phase, the condition (or STOPPED), the mode, z and the belief."""
+        station = self.station
+        mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
+        status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
+        text = (
+            f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
+            + "belief: "
+            + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
+        )
+        try:
+            viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
+        except (AttributeError, TypeError):  # an older viewer without text overlays
+            pass
+
+
+def run_session(
+    station: Station,
+    device: Device,
+    writer: SessionWriter | None,
+    max_steps: int,
+    *,
+    realtime: bool = True,
+    viewer: Any = None,
+    viewer_data: mujoco.MjData | None = None,
+    on_step: Any = None,
+) -> dict[str, Any]:
+    """Run the control loop: one step per Delta of wall-clock time (or as fast as possible).
+
+    The session ends after ``max_steps``, when the task is done, when a scripted device
+    runs out, or when the viewer is closed. Interrupted by an exception (Ctrl-C
+    included), the log is closed as ``interrupted`` and the exception goes on.
+
+    Args:
+        station: The robot side.
+        device: The input device.
+        writer: The session's log (None: no log).
+        max_steps: The longest session, in steps.
+        realtime: Hold each step to its deadline (else run as fast as possible).
+        viewer: A passive viewer handle to draw into, and ``viewer_data`` the MjData it shows.
+        viewer_data: See ``viewer``.
+        on_step: Called as ``on_step(step, record)`` after each step.
+
+    Returns:
+        Timing: steps, the step time's median and 99th percentile [s], and deadline misses.
+    """
+    dt = station.control.dt
+    overlay = _Overlay(station) if viewer is not None else None
+    if viewer is not None and viewer_data is None:
+        raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
+    data = viewer_data if viewer_data is not None else mujoco.MjData(station.robot.model)
+    compute, misses = [], 0
+    station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
+    start = time.perf_counter()
+    status = "complete"
+    steps = 0
+    try:
+        for step in range(max_steps):
+            deadline = start + (step + 1) * dt
+            t0 = time.perf_counter()
+            reading = device.poll()
+            rec = station.step(reading)
+            if viewer is not None:
+                if not viewer.is_running():
+                    status = "interrupted"
+                    break
+                assert overlay is not None
+                with viewer.lock():
+                    data.qpos[station.robot.qpos_adr] = rec["s"]
+                    mujoco.mj_forward(station.robot.model, data)
+                    overlay.draw_goals(viewer, rec)
+                overlay.draw_text(viewer, rec)  # takes the viewer's own lock: outside ours
+                viewer.sync()
+            elapsed = time.perf_counter() - t0
+            compute.append(elapsed)
+            late = realtime and time.perf_counter() > deadline
+            misses += int(late)
+            t = (time.perf_counter() - start) if realtime else step * dt
+            if writer is not None:
+                writer.append(_row(step, t, late, rec))
+            steps = step + 1
+            if on_step is not None:
+                on_step(step, rec)
+            if station.done or (isinstance(device, ScriptedDevice) and device.finished):
+                break
+            if realtime:
+                pause = deadline - time.perf_counter()
+                if pause > 0:
+                    time.sleep(pause)
+    except BaseException:
+        if writer is not None:
+            writer.close("interrupted", deadline_misses=misses)
+        raise
+    timing = {
+        "steps": steps,
+        "step_time_median_s": float(np.median(compute)) if compute else 0.0,
+        "step_time_p99_s": float(np.percentile(compute, 99)) if compute else 0.0,
+        "deadline_misses": misses,
+        "done": station.done,
+    }
+    if writer is not None:
+        writer.close(status, **timing)
+    return timing
+
+
+def new_session(station: Station, folder: str | Path, stem: str | None = None) -> SessionWriter:
+    """Open the log of a new session of ``station`` in ``folder``."""
+    c = station.config
+    stamp = dt_.datetime.now(dt_.UTC).strftime("%Y%m%dT%H%M%S")
+    stem = stem or f"{c.participant}_{c.task}_{c.condition}_{stamp}"
+    return SessionWriter(folder, stem, station.meta(), station.robot.xml(), station.columns())
+
+
+def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
+    """Re-run a logged session from its inputs and compare its states with the log.
+
+    Returns:
+        ``{"steps", "max_state_difference", "exact", "status"}``; the MP4's path if rendered;
+        ``damaged`` (the reason) when a damaged log was replayed with ``allow_damaged``.
+
+    Raises:
+        ArtifactError: if the decoder on disk is not the one the session used, or the log is
+            damaged (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
+    """
+    frame, meta = read_session(session, allow_damaged=allow_damaged)
+    config = SessionConfig(**{k: meta[k] for k in ("robot", "task", "condition", "participant", "build_dir")})
+    station = Station(config)
+    if meta.get("decoder_sha256") and station.decoder_path is not None:
+        if _sha256(station.decoder_path) != meta["decoder_sha256"]:
+            raise ArtifactError(
+                f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
+                "replay needs the same decoder"
+            )
+    device = ScriptedDevice.from_table(frame, mode="mode_press")
+    n = station.robot.n_joints
+    logged = frame[[f"s{i}" for i in range(n)]].to_numpy()
+    states = []
+    for _ in range(len(frame)):
+        states.append(station.step(device.poll())["s"])
+    replayed = np.asarray(states)
+    diff = float(np.abs(replayed - logged).max()) if len(logged) else 0.0
+    out: dict[str, Any] = {
+        "steps": len(frame),
+        "max_state_difference": diff,
+        "exact": bool(np.array_equal(replayed, logged)),
+        "status": meta["status"],
+    }
+    if "damaged" in meta:
+        out["damaged"] = meta["damaged"]
+    if mp4 is not None:
+        from lasa.evidence.video import label_frames, render_states, write_video
+
+        frames = render_states(station.robot, np.concatenate([station.task.start[None], replayed]), 240, 320)
+        frames = label_frames(frames, f"replay {Path(session).name}")
+        out["mp4"] = str(write_video(mp4, frames, fps=1.0 / station.control.dt))
+    return out
+
+
+def _screenshot(path: str, timeout_s: float = 30.0) -> None:
+    """Save a screenshot of the X display (the viewer's window) once it shows a drawn scene.
+
+    Software rendering on a busy machine may take seconds to draw the viewer's first
+    frames; the display is grabbed every half second until it is no longer flat (or until
+    ``timeout_s``), and the last grab is saved either way.
+    """
+    from PIL import ImageGrab
+
+    start = time.perf_counter()
+    while True:
+        image = ImageGrab.grab(xdisplay=None)
+        drawn = float(np.asarray(image.convert("L"), dtype=float).std()) > 20.0
+        if drawn or time.perf_counter() - start > timeout_s:
+            image.save(path)
+            return
+        time.sleep(0.5)
+
+
+def _check_display() -> None:
+    """Refuse, with what to do, to open the viewer where there is no display to open it on."""
+    import os
+
+    if sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    ):
+        raise ConfigError(
+            "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
+            "or with --no-viewer and scripted input"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: ``run``, ``replay``, ``schedule`` and ``survey``."""
+    parser = argparse.ArgumentParser(prog="python -m lasa.live.teleop", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="drive the robot live and log the session")
+    run.add_argument("--robot", default="panda", help="the robot (panda: the eating scene) [%(default)s]")
+    run.add_argument("--task", default="Dessert", choices=TASKS, help="the eating task [%(default)s]")
+    run.add_argument(
+        "--condition", default="LA+SA", choices=CONDITIONS, help="interface and assistance [%(default)s]"
+    )
+    run.add_argument(
+        "--participant", default="p00", help="participant id, part of the log's name [%(default)s]"
+    )
+    run.add_argument("--device", default="auto", help="auto, gamepad, keyboard, or scripted:<file.csv>")
+    run.add_argument("--duration", type=float, default=300.0, help="longest session [s]")
+    run.add_argument("--sessions", default="build/sessions", help="folder of the session logs")
+    run.add_argument("--build-dir", default="build", help="where make figures left the decoder [%(default)s]")
+    run.add_argument("--no-viewer", action="store_true", help="run without a window (scripted input)")
+    run.add_argument("--fast", action="store_true", help="do not wait for wall-clock time (no viewer)")
+    run.add_argument("--screenshot", help="save a screenshot of the display when the session ends")
+    rep = sub.add_parser("replay", help="re-run a session from its inputs; check its states")
+    rep.add_argument("session", help="a session's .csv, .json or stem")
+    rep.add_argument("--mp4", help="render the replay to this MP4 (off-screen)")
+    rep.add_argument(
+        "--allow-damaged",
+        action="store_true",
+        help="replay a damaged log's rows anyway (say so in the result)",
+    )
+    sch = sub.add_parser("schedule", help="a counterbalanced order of conditions for N participants")
+    sch.add_argument("--participants", type=int, default=10, help="participants to schedule [%(default)s]")
+    sch.add_argument("--out", default="build/sessions/schedule.csv", help="the schedule CSV [%(default)s]")
+    sur = sub.add_parser("survey", help="the 7-point Likert questionnaire after a condition")
+    sur.add_argument("--participant", required=True, help="participant id, as in their sessions")
+    sur.add_argument("--condition", required=True, choices=CONDITIONS, help="the condition just done")
+    sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
+    sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "replay":
+            result = replay(args.session, args.mp4, allow_damaged=args.allow_damaged)
+            print(result)
+            return 0 if result["exact"] else 1
+        if args.command in ("schedule", "survey"):
+            from lasa.live import studykit
+
+            if args.command == "schedule":
+                print(studykit.write_schedule(args.participants, args.out))
+            else:
+                answers = None if args.answers is None else [int(a) for a in args.answers.split(",")]
+                print(studykit.survey(args.sessions, args.participant, args.condition, answers))
+            return 0
+        check_range("duration", args.duration, 0.0, low_open=True)
+        config = SessionConfig(
+            robot=args.robot,
+            task=args.task,
+            condition=args.condition,
+            participant=args.participant,
+            build_dir=args.build_dir,
+        )
+        if not args.no_viewer:
+            _check_display()
+        station = Station(config)
+        if args.device.startswith("scripted:"):
+            import pandas as pd
+
+            device: Device = ScriptedDevice.from_table(pd.read_csv(args.device.split(":", 1)[1]))
+            print("input: scripted")
+        else:
+            device, message = open_device(args.device)
+            print(message)
+        writer = new_session(station, args.sessions)
+        max_steps = int(round(args.duration / station.control.dt))
+        if args.no_viewer:
+            timing = run_session(station, device, writer, max_steps, realtime=not args.fast)
+        else:
+            import mujoco.viewer
+
+            key_callback = getattr(device, "key_callback", None)
+            data = mujoco.MjData(station.robot.model)
+            data.qpos[station.robot.qpos_adr] = station.state
+            with mujoco.viewer.launch_passive(
+                station.robot.model, data, key_callback=key_callback, show_left_ui=False, show_right_ui=False
+            ) as viewer:
+                with viewer.lock():  # the scene's own camera, as in the videos
+                    viewer.cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
+                    viewer.cam.fixedcamid = station.robot.model.camera(station.robot.spec.camera).id
+                timing = run_session(station, device, writer, max_steps, viewer=viewer, viewer_data=data)
+                if args.screenshot:
+                    _screenshot(args.screenshot)
+            # let the viewer's thread finish closing its window before Python tears down:
+            # exiting while it still holds the GL context can crash the interpreter's exit
+            deadline = time.perf_counter() + 5.0
+            while viewer.is_running() and time.perf_counter() < deadline:
+                time.sleep(0.05)
+            time.sleep(0.5)
+        device.close()
+        print(f"session {writer.csv}: {timing}")
+        return 0
+    except (ConfigError, ArtifactError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,187 @@
+r"""Shared autonomy as a family: the readings of the robot's assistance a_r that the paper allows.
+
+The paper instantiates shared autonomy with Eq. M2, :math:`a_r = \sum_g b(g)(g - s)`, and
+blends it with the human's action by Eq. M1. Its footnote 1 says the method "is not tied
+on this particular instantiation of shared autonomy. Other instances of shared autonomy
+can similarly be used". Eq. M2 also leaves open what the goal g *is*: a cup is reached by
+a whole curve of grasps. Each member below is one reading; ``ControlConfig.assistance``
+picks one, and every method with alpha > 0 (LA+SA, LA+SA+Entropy) uses it.
+
+A member returns the assistance a_r and a weight w in [0, 1] on the blend, so that
+
+.. math::  a = (1 - \alpha w)\, a_h + \alpha w\, a_r ;
+
+w = 1 for every member but ``arbitrated``, which is Eq. M1 exactly.
+
+========================  ===========================================================
+``point``                 Eq. M2 towards one pose per goal, g = s*(g, 0.5): the paper's
+                          equation read with the mid-preference grasp (the default).
+``grasp_set``             Eq. M2 towards the nearest grasp of each goal: the goal as the
+                          set of its grasps, so the assistance holds the robot at the cup
+                          and leaves the preference to the user (Sec. III's intent).
+``arbitrated``            Policy blending with confidence-based arbitration (Dragan &
+                          Srinivasa 2013): a_r pulls towards the most likely goal only,
+                          and the blend weight rises with the belief's confidence.
+``hindsight``             Hindsight-optimisation assistance (Javdani et al. 2018), the
+                          paper's own user study: the first-order hindsight-optimal action
+                          for a distance cost-to-go (see :func:`hindsight`).
+========================  ===========================================================
+
+Every function is vectorised over users: beliefs (U, G), states (U, n).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from lasa.base.config import ASSISTANCE
+from lasa.base.errors import ConfigError
+from lasa.method.blend import assistance as eq_m2
+
+__all__ = ["ASSISTANCE", "point", "grasp_set", "arbitrated", "hindsight", "nearest_grasps", "assist"]
+
+Member = Callable[
+    [np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float], tuple[np.ndarray, np.ndarray]
+]
+
+
+def point(
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (the paper, Sec. III).
+
+    Args:
+        belief: b, shape (U, G).
+        state: s, shape (U, n).
+        goals: One pose per goal, shape (G, n).
+        sets: Unused here: each goal's grasps, shape (G, K, n).
+        dt: Unused here: the control period Delta [s].
+        speed: Unused here: sigma_h, the human's speed bound [rad/s].
+
+    Returns:
+        a_r, shape (U, n), and the blend weight w = 1, shape (U,).
+    """
+    return eq_m2(belief, goals, state), np.ones(len(state))
+
+
+def nearest_grasps(state: np.ndarray, sets: np.ndarray) -> np.ndarray:
+    """The point of each goal's grasp polyline nearest to each state, shape (U, G, n).
+
+    Args:
+        state: s, shape (U, n).
+        sets: Each goal's grasps s*(g, theta) on a grid of theta, a polyline, shape (G, K, n).
+    """
+    if sets.shape[1] == 1:
+        return np.broadcast_to(sets[None, :, 0], (len(state), *sets[:, 0].shape)).copy()
+    a, ab = sets[:, :-1], np.diff(sets, axis=1)  # segments a + t ab, (G, K-1, n)
+    rel = state[:, None, None, :] - a[None]  # (U, G, K-1, n)
+    t = np.clip(
+        np.einsum("ugkn,gkn->ugk", rel, ab) / np.maximum(np.einsum("gkn,gkn->gk", ab, ab), 1e-12), 0, 1
+    )
+    closest = a[None] + t[..., None] * ab[None]  # (U, G, K-1, n)
+    dist = np.linalg.norm(state[:, None, None, :] - closest, axis=-1)
+    k = dist.argmin(axis=-1)  # (U, G)
+    return np.take_along_axis(closest, k[..., None, None], axis=2)[:, :, 0]
+
+
+def grasp_set(
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``grasp_set``: Eq. M2 towards the nearest grasp of each goal, a_r = sum_g b(g) (c_g(s) - s).
+
+    c_g(s) is the point of goal g's grasp curve nearest to s (:func:`nearest_grasps`). The
+    goal is read as the set of its grasps: near a cup the assistance pulls onto the curve,
+    not along it, so any grasp the user holds on the curve is a fixed point of the pull.
+
+    Returns:
+        a_r, shape (U, n), and w = 1, shape (U,).
+    """
+    nearest = nearest_grasps(state, sets)
+    return np.einsum("ug,ugn->un", belief, nearest - state[:, None, :]), np.ones(len(state))
+
+
+def arbitrated(
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``arbitrated``: policy blending with confidence-based arbitration (Dragan & Srinivasa 2013).
+
+    The robot predicts the most likely goal g_hat = argmax_g b(g) and assists towards it
+    alone, a_r = g_hat - s. Its say in the blend grows with the confidence of that
+    prediction, the linear arbitration w = (max_g b(g) - 1/G) / (1 - 1/G): no assistance
+    while the belief is uniform, alpha at full confidence.
+
+    Returns:
+        a_r, shape (U, n), and w in [0, 1], shape (U,).
+    """
+    n_goals = belief.shape[-1]
+    best = belief.argmax(axis=-1)
+    weight = np.clip((belief.max(axis=-1) - 1.0 / n_goals) / (1.0 - 1.0 / n_goals), 0.0, 1.0)
+    return goals[best] - state, weight
+
+
+def hindsight(
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``hindsight``: hindsight-optimisation assistance (Javdani et al. 2018).
+
+    Hindsight optimisation takes the action that minimises the expected cost-to-go over
+    goals, a_r = argmin_a sum_g b(g) Q_g(s, a), as if the goal were revealed after this
+    step. Our cost-to-go is the distance left to the goal, V_g(s) = ||g - s||, as in
+    Javdani et al.'s user study (cost proportional to the distance still to travel at a
+    fixed speed), made quadratic within one step of the goal (a Huber cost, radius
+    delta = Delta sigma_h) so the action does not chatter at the goal. To first order in the
+    step, Q_g(s, a) = V_g(s) + Delta grad V_g(s) . a, so the expected cost-to-go falls
+    fastest down the belief-weighted gradient. We take the gradient step at the human's
+    speed bound sigma_h (its norm is at most sigma_h; we do not normalise it, so the
+    assistance fades where the goals' pulls cancel, as Eq. M2's does):
+
+    .. math::  a_r = -\\sigma_h \\nabla_s \\sum_g b(g) V_g(s)
+               = \\sigma_h \\sum_g b(g) \\frac{g - s}{\\max(\\|g - s\\|, \\delta)} .
+
+    Unlike Eq. M2 its size does not grow with the distance to the goals.
+
+    Returns:
+        a_r, shape (U, n), and w = 1, shape (U,).
+    """
+    diff = goals[None] - state[:, None, :]  # (U, G, n)
+    dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), dt * speed)
+    return speed * np.einsum("ug,ugn->un", belief, diff / dist), np.ones(len(state))
+
+
+_MEMBERS: dict[str, Member] = {
+    "point": point,
+    "grasp_set": grasp_set,
+    "arbitrated": arbitrated,
+    "hindsight": hindsight,
+}
+
+
+def assist(
+    name: str,
+    belief: np.ndarray,
+    state: np.ndarray,
+    goals: np.ndarray,
+    sets: np.ndarray,
+    dt: float,
+    speed: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The assistance a_r and the blend weight w of member ``name``.
+
+    Args:
+        name: One of :data:`ASSISTANCE`.
+        belief: b, shape (U, G).
+        state: s, shape (U, n).
+        goals: One pose per goal, shape (G, n).
+        sets: Each goal's grasps, shape (G, K, n).
+        dt: The control period Delta [s].
+        speed: sigma_h, the human's speed bound [rad/s] (``hindsight`` moves at it).
+
+    Raises:
+        ConfigError: for an unknown member.
+    """
+    member = _MEMBERS.get(name)
+    if member is None:
+        raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, ASSISTANCE))}")
+    return member(belief, state, goals, sets, dt, speed)

@@ -1,0 +1,115 @@
+"""The dataset D of demonstrations: (s, a, b) tuples, each labelled by its demonstration.
+
+Training (:mod:`lasa.method.train`) reads this type; :mod:`lasa.people.demos` collects it from a
+simulated demonstrator. Saved as ``.npz`` atomically, loaded with a check of its robot.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import numpy as np
+
+from lasa.base.errors import ArtifactError
+from lasa.base.io import load_npz, save_npz
+from lasa.world.task import CupTask
+
+__all__ = [
+    "Demonstrations",
+    "save_demonstrations",
+    "load_demonstrations",
+    "REACH",
+    "ADJUST",
+    "HOLD",
+    "STROKE",
+    "PHASE_NAMES",
+]
+
+REACH, ADJUST, HOLD, STROKE = 0, 1, 2, 3  # phase labels of a tuple (strokes: the eating task)
+PHASE_NAMES = ("reach", "adjust", "hold", "stroke")
+
+
+@dataclasses.dataclass(frozen=True)
+class Demonstrations:
+    """The dataset D, one row per (s, a, b) tuple.
+
+    Attributes:
+        robot: Robot name.
+        states: s, shape (N, n) [rad].
+        actions: a, shape (N, n) [rad/s].
+        beliefs: b, shape (N, G).
+        demo: Index of the demonstration each tuple belongs to, shape (N,).
+        goal: The demonstrated cup, shape (N,).
+        theta: The preference being moved towards, shape (N,).
+        phase: 0 reach, 1 adjust, 2 hold, shape (N,).
+        perturbed: Whether the tuple is a noisy copy, shape (N,).
+    """
+
+    robot: str
+    states: np.ndarray
+    actions: np.ndarray
+    beliefs: np.ndarray
+    demo: np.ndarray
+    goal: np.ndarray
+    theta: np.ndarray
+    phase: np.ndarray
+    perturbed: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.states)
+
+    def clean(self) -> Demonstrations:
+        """The tuples that are not noisy copies (the demonstrations themselves)."""
+        keep = ~self.perturbed
+        return dataclasses.replace(
+            self,
+            **{f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"},
+        )
+
+    def showcase(self, task: CupTask) -> list[tuple[int, str]]:
+        """Four clean demonstrations from the start pose: a top and a side grasp at each cup.
+
+        Returns:
+            (demonstration index, caption) for each, cup by cup, top grasp first.
+        """
+        clean = self.clean()
+        first = np.r_[0, np.flatnonzero(np.diff(clean.demo)) + 1]
+        starts = dict(zip(clean.demo[first].tolist(), clean.states[first], strict=True))
+        home = [d for d, s in starts.items() if np.allclose(s, task.start)]
+        theta = {d: float(clean.theta[(clean.demo == d) & (clean.phase == REACH)][0]) for d in home}
+        goal = {d: int(clean.goal[clean.demo == d][0]) for d in home}
+        out = []
+        for g in range(task.n_goals):
+            for wanted in (0.0, 1.0):
+                d = min((d for d in home if goal[d] == g), key=lambda d: abs(theta[d] - wanted))
+                caption = f"demo {d}: {task.goal_names[g]} cup, reach to theta={theta[d]:.2f}, then adjust"
+                out.append((d, caption))
+        return out
+
+
+def save_demonstrations(demos: Demonstrations, path: str | os.PathLike[str]) -> Path:
+    """Atomically save a dataset to ``.npz``."""
+    arrays = {f.name: np.asarray(getattr(demos, f.name)) for f in dataclasses.fields(demos)}
+    return save_npz(path, **arrays)
+
+
+def load_demonstrations(
+    path: str | os.PathLike[str],
+    robot: str | None = None,
+    make_hint: str = "make figures (notebook 01_demonstrations)",
+) -> Demonstrations:
+    """Load a dataset saved by :func:`save_demonstrations`, checking its robot."""
+    arrays = load_npz(path, make_hint)
+    try:
+        fields = {f.name: arrays[f.name] for f in dataclasses.fields(Demonstrations)}
+        demos = Demonstrations(**fields)  # type: ignore[arg-type]
+        demos = dataclasses.replace(demos, robot=str(demos.robot))
+    except KeyError as exc:
+        raise ArtifactError(f"{path} lacks field {exc}; re-make it with: {make_hint}") from exc
+    if robot is not None and demos.robot != robot:
+        raise ArtifactError(
+            f"{path} holds demonstrations for {demos.robot!r}, not {robot!r}; re-make it with: {make_hint}"
+        )
+    return demos

@@ -1,0 +1,519 @@
+r"""The latent-action model: a conditional autoencoder over (state, belief) contexts.
+
+The encoder maps a demonstrated action in its context to a latent action,
+:math:`z = \psi(s, a, b) \in [-1, 1]^d`, and the decoder maps it back,
+:math:`a_h = \phi(z, s, b)` (Sec. III-A). Conditioning both on the belief b is what
+lets the meaning of z change with the robot's confidence.
+
+Two bounds make the model fit the control loop:
+
+- z is squashed by ``tanh`` into [-1, 1]^d, so a joystick axis maps onto it directly;
+- the decoder's output is squashed radially, :math:`\phi = \sigma_h \tanh(\|v\|)\, v / \|v\|`,
+  so :math:`\|\phi\| < \sigma_h`, the bound that Eq. T4 assumes.
+
+Training and gradients use :meth:`LatentActionModel.decode` (torch, autograd). The
+simulations use :meth:`LatentActionModel.decode_numpy`, an inference-only forward of the
+same function on numpy arrays, written for throughput (see its docstring): it agrees with
+``decode`` to float32 rounding, not bit for bit.
+
+A checkpoint holds the state dict and the plain-dict config the model was built with;
+:func:`load_checkpoint` loads it with ``torch.load(..., weights_only=True)`` and checks
+that it was trained for the robot the caller expects.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import threading
+import weakref
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+import torch
+from torch import nn
+
+from lasa.base.config import check_range
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.io import atomic_path, require_file
+
+__all__ = [
+    "ActionDecoder",
+    "DecoderConfig",
+    "LatentActionModel",
+    "save_checkpoint",
+    "load_checkpoint",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class DecoderConfig:
+    """Architecture of the conditional autoencoder."""
+
+    robot: str  # robot the model is trained for, e.g. "planar5"
+    n_joints: int  # state and action dimension n
+    n_goals: int  # number of goals G (belief dimension)
+    z_dim: int = 1  # latent dimension d: 1 for the cup task (left/right on a joystick)
+    hidden: int = 128  # width of every hidden layer
+    depth: int = 3  # number of hidden layers in the encoder and in the decoder
+    action_scale: float = 1.0  # sigma_h: bound on ||phi|| [rad/s]
+    state_mean: tuple[float, ...] = ()  # input normalisation of s (from the data) [rad]
+    state_std: tuple[float, ...] = ()  # ... and its spread [rad]
+
+    def __post_init__(self) -> None:
+        for name in ("n_joints", "n_goals", "z_dim", "hidden", "depth"):
+            value = getattr(self, name)
+            if int(value) != value or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        if self.n_goals < 2:
+            raise ConfigError(f"n_goals must be >= 2, got {self.n_goals}")
+        check_range("action_scale", self.action_scale, 0.0, low_open=True)
+        for name in ("state_mean", "state_std"):
+            value = getattr(self, name)
+            if value and len(value) != self.n_joints:
+                raise ConfigError(f"{name} must have n_joints={self.n_joints} entries")
+        if self.state_std and min(self.state_std) <= 0:
+            raise ConfigError("state_std entries must be positive")
+
+
+@runtime_checkable
+class ActionDecoder(Protocol):
+    """What Algorithm 1 needs of a decoder: phi(z, s, b) on numpy arrays, and its shape.
+
+    :class:`LatentActionModel` is one; an extension that changes what the decoder sees
+    (the context map of :mod:`lasa.method.newgoals`) wraps one, so the rollout never needs to
+    know about it.
+    """
+
+    @property
+    def robot(self) -> str:
+        """The robot whose joint space phi acts in."""
+        ...
+
+    @property
+    def n_goals(self) -> int:
+        """G: the length of the belief phi reads."""
+        ...
+
+    @property
+    def z_dim(self) -> int:
+        """d: the joystick axes."""
+        ...
+
+    def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """phi(z, s, b), broadcast over the leading dimensions of z (..., d), s (..., n), b (..., G)."""
+        ...
+
+
+def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    width = n_in
+    for _ in range(depth):
+        layers += [nn.Linear(width, hidden), nn.Tanh()]
+        width = hidden
+    layers.append(nn.Linear(width, n_out))
+    return nn.Sequential(*layers)
+
+
+class LatentActionModel(nn.Module):
+    """Encoder psi(s, a, b) -> z and decoder phi(z, s, b) -> a_h.
+
+    Inputs are float tensors with any leading batch shape: s and a of size n, b of size
+    G, z of size d. The decoder clamps z to [-1, 1]; it does not check finiteness
+    (the control loop does, see :func:`lasa.method.blend.sanitize`).
+    """
+
+    state_mean: torch.Tensor
+    state_std: torch.Tensor
+
+    def __init__(self, config: DecoderConfig) -> None:
+        super().__init__()
+        self.config = config
+        n, g, d = config.n_joints, config.n_goals, config.z_dim
+        mean = torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32)
+        std = torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32)
+        self.register_buffer("state_mean", mean)
+        self.register_buffer("state_std", std)
+        self.encoder = _mlp(2 * n + g, d, config.hidden, config.depth)
+        self.decoder = _mlp(d + n + g, n, config.hidden, config.depth)
+
+    @property
+    def robot(self) -> str:
+        """The robot the model was trained for."""
+        return self.config.robot
+
+    @property
+    def n_goals(self) -> int:
+        """G: the length of the belief the model reads."""
+        return self.config.n_goals
+
+    @property
+    def z_dim(self) -> int:
+        """d: the latent (joystick) dimension."""
+        return self.config.z_dim
+
+    def _context(self, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+        return torch.cat([(s - self.state_mean) / self.state_std, b], dim=-1)
+
+    def encode(self, s: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+        """Latent actions z in (-1, 1)^d for actions a in contexts (s, b)."""
+        a_n = a / self.config.action_scale
+        return torch.tanh(self.encoder(torch.cat([self._context(s, b), a_n], dim=-1)))
+
+    def decode(self, z: torch.Tensor, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+        """phi(z, s, b): joint velocities with norm below sigma_h = action_scale."""
+        z = z.clamp(-1.0, 1.0)
+        v = self.decoder(torch.cat([z, self._context(s, b)], dim=-1))
+        norm = v.norm(dim=-1, keepdim=True).clamp_min(1e-8)
+        return self.config.action_scale * torch.tanh(norm) * v / norm
+
+    def forward(self, s: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Encode then decode: returns (z, reconstructed action)."""
+        z = self.encode(s, a, b)
+        return z, self.decode(z, s, b)
+
+    def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        r"""phi(z, s, b) on numpy arrays (broadcast over leading dims), as float64.
+
+        The same function as :meth:`decode` (z clamped to [-1, 1], ``||phi|| < sigma_h``),
+        computed by an inference-only forward written for the simulations' batches (U users
+        x K joystick candidates: z of shape (1, K, d), s of (U, 1, n), b of (U, 1, G)). It is
+        exact algebra on the same weights but not the same float operations: it agrees with
+        :meth:`decode` to float32 rounding (max abs difference about 1e-6 on actions bounded
+        by sigma_h = 1), not bit for bit. The changes, and what each costs in exactness:
+
+        - **tanh through the sigmoid** (the main difference, about 2e-7 absolute per
+          activation): :math:`\tanh(h) = 2(\sigma(2h) - 1/2)`. The factors 2 are folded
+          into the weights as exact powers of two, :math:`2h' = (4W)(u - 1/2) + 2c` with
+          :math:`u = \sigma(2h)`, so a hidden layer is one GEMM, an in-place ``sigmoid_``
+          and an in-place ``sub_(0.5)``. torch's CPU ``tanh_`` costs about 4 ns per element
+          here, ``sigmoid_`` about 1 ns. The activations stay centred: folding the
+          ``- 1/2`` into the next bias instead (one op fewer) made the GEMMs cancel and
+          tripled the error.
+        - **The first layer split** (rounding only): :math:`2(W_1 [z, (s - \mu)/\sigma, b]
+          + c_1) = W_z' z + (W_{sb}' [s, b] + c_1')`, the state normalisation folded in, in
+          float64, each term rounded to float32 once. The z term is computed once per
+          distinct z and the context term once per distinct (s, b), on the inputs'
+          unexpanded shapes; each row's first layer is then one broadcast add, not a GEMM
+          over a concatenated, expanded input.
+        - **The radial squash in float64** on the float32 output layer (rounding only).
+
+        And for speed alone: rows (the broadcast batch, flattened) go through the MLP in
+        chunks of about ``_CHUNK_ROWS`` = 1024 along the first broadcast axis, into two
+        activation buffers (1024 x 128 float32 = 512 KB each: the pair fills a core's 1 MB
+        L2 cache) that are reused across chunks and calls, one pair per thread; every op
+        writes in place (``torch.addmm(out=...)``, ``sigmoid_``). Measured on this
+        repository's machine (2 vCPUs of an AMD EPYC, one thread, 2026-12-02): 1024 and 2048
+        rows were equal within noise, 256-512 rows 5-25% slower (per-chunk overhead), and
+        no chunking 15-30% slower at 256-4096 users. The output layer is computed as
+        :math:`V^\top = W_o U^\top`, which MKL runs about twice as fast as :math:`U W_o^\top`
+        for n = 5-7 outputs. A row's result does not depend on its batch or chunk (with one
+        torch and OpenMP thread, on this machine, to the bit, as with :meth:`decode`).
+
+        It computes this class's :meth:`decode`: where a subclass overrides ``decode`` (or
+        a test patches it), ``decode_numpy`` calls that ``decode`` on the expanded inputs,
+        as it did before it had a fast path.
+
+        The refolded weights are cached per model and rebuilt when a weight changes: the
+        cache holds every parameter and normalisation buffer with its version counter,
+        which in-place updates (optimiser steps, ``load_state_dict``) bump, and a replaced
+        parameter or layer fails the identity check. A write through ``param.data``
+        bypasses the version counter and would go unseen; the package makes none.
+
+        Args:
+            z: Latent actions, shape (..., d); clamped to [-1, 1].
+            s: States, shape (..., n).
+            b: Beliefs, shape (..., G).
+
+        Returns:
+            phi, float64, C-contiguous, of shape ``broadcast(z.shape[:-1], s.shape[:-1],
+            b.shape[:-1]) + (n,)``.
+        """
+        if getattr(self.decode, "__func__", None) is not _DECODE:
+            return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode
+        return _inference_plan(self).decode(z, s, b)
+
+    @torch.inference_mode()
+    def _decode_numpy_reference(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """decode_numpy through :meth:`decode` itself: float32 inputs expanded to the batch."""
+        zt, st, bt = (torch.as_tensor(x, dtype=torch.float32) for x in (z, s, b))
+        shape = torch.broadcast_shapes(zt.shape[:-1], st.shape[:-1], bt.shape[:-1])
+        zt = zt.expand(*shape, zt.shape[-1])
+        st = st.expand(*shape, st.shape[-1])
+        bt = bt.expand(*shape, bt.shape[-1])
+        return self.decode(zt, st, bt).double().numpy()
+
+
+_DECODE = LatentActionModel.decode  # the decode that the inference plan implements
+
+# Rows (users x candidates) per chunk of the inference forward: two 1024 x 128 float32
+# buffers fill a core's 1 MB L2 cache; measured best (with 2048) of 256-2048 and no
+# chunking, see LatentActionModel.decode_numpy.
+_CHUNK_ROWS = 1024
+
+
+def _weight_tensors(model: LatentActionModel) -> list[torch.Tensor]:
+    """The decoder's parameters and the state normalisation, without nn.Module's (slow) traversal."""
+    tensors: list[torch.Tensor] = [
+        t
+        for layer in model.decoder._modules.values()
+        if layer is not None
+        for t in layer._parameters.values()
+        if t is not None
+    ]
+    tensors += [model.state_mean, model.state_std]
+    return tensors
+
+
+_KEEP_ROWS = 4 * _CHUNK_ROWS  # largest chunk whose buffers a thread keeps between calls
+
+
+class _Buffers(threading.local):
+    """One thread's activation buffers and their views, reused across chunks and calls."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+        self.a = torch.empty(0)
+        self.b = torch.empty(0)
+        self.views: dict[tuple[int, ...], tuple[Any, ...]] = {}
+
+    def get(self, shape: tuple[int, ...], width: int) -> tuple[Any, ...]:
+        """Views of the two (rows x width) buffers for a chunk of leading shape ``shape``.
+
+        Returns:
+            (a as numpy of shape ``shape + (width,)``, a as torch of the same shape,
+            a, b, a.T, b.T), where a and b are (rows x width), rows = prod(shape).
+        """
+        view = self.views.get(shape)
+        if view is None:
+            rows = math.prod(shape)
+            if rows > _KEEP_ROWS:  # a chunk this large (trailing axes > _CHUNK_ROWS) is not kept
+                a, b = torch.empty(rows, width), torch.empty(rows, width)
+                a_nd = a.view(*shape, width)
+                return (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
+            if len(self.views) >= 64:
+                self.views = {}
+            if rows > self.rows:
+                self.rows = rows
+                self.a = torch.empty(rows, width)
+                self.b = torch.empty(rows, width)
+                self.views = {}
+            a, b = self.a[:rows], self.b[:rows]
+            a_nd = a.view(*shape, width)
+            view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
+            self.views[shape] = view
+        return view
+
+
+class _InferencePlan:
+    """The decoder's weights refolded for :meth:`LatentActionModel.decode_numpy` (read-only)."""
+
+    def __init__(self, model: LatentActionModel) -> None:
+        cfg = model.config
+        d, n = cfg.z_dim, cfg.n_joints
+        layers = [m for m in model.decoder if isinstance(m, nn.Linear)]
+        with torch.no_grad():
+            weights = [layer.weight.detach().double() for layer in layers]
+            biases = [layer.bias.detach().double() for layer in layers]
+            mean = model.state_mean.detach().double()
+            std = model.state_std.detach().double()
+            w1, c1 = weights[0], biases[0]
+            w_s = w1[:, d : d + n] / std
+            # 2 h1 = 2 W_z z + [2 W_s / std, 2 W_b] [s, b] + 2 (c1 - W_s mean / std), in float64
+            self.w_z = (2.0 * w1[:, :d]).T.numpy().copy()  # (d, H)
+            self.w_sb = (2.0 * torch.cat([w_s, w1[:, d + n :]], dim=1)).T.numpy().copy()  # (n + G, H)
+            self.c1 = (2.0 * (c1 - w_s @ mean)).numpy()  # (H,)
+            # tanh(h_prev) = 2 (u - 1/2) with u = sigma(2 h_prev), so 2 h = (4 W)(u - 1/2) + 2 c:
+            # scalings by powers of two, exact in float32
+            self.hidden = [
+                ((4.0 * w).float().t(), (2.0 * c).float())
+                for w, c in zip(weights[1:-1], biases[1:-1], strict=True)
+            ]
+            self.w_o = (2.0 * weights[-1]).float().contiguous()  # (n, H): V^T = (2 W_o)(U - 1/2)^T + c_o
+            self.c_o = biases[-1].float()[:, None].contiguous()  # (n, 1)
+        self.tensors = _weight_tensors(model)  # held, so that identity checks are exact
+        self.versions = [t._version for t in self.tensors]
+        self.scale = float(cfg.action_scale)
+        self.width = int(w1.shape[0])
+        self.d = d
+        self.n = n
+        self.g = cfg.n_goals
+        self.buffers = _Buffers()
+
+    def fits(self, model: LatentActionModel) -> bool:
+        """Whether the plan was built from the model's current weights."""
+        tensors = _weight_tensors(model)
+        return (
+            self.scale == model.config.action_scale
+            and len(tensors) == len(self.tensors)
+            and all(
+                t is u and t._version == v
+                for t, u, v in zip(tensors, self.tensors, self.versions, strict=True)
+            )
+        )
+
+    def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """phi(z, s, b), float64; see :meth:`LatentActionModel.decode_numpy`."""
+        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)
+        s = np.asarray(s, dtype=np.float64)
+        b = np.asarray(b, dtype=np.float64)
+        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
+            raise ValueError(
+                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
+                f"got {z.shape}, {s.shape} and {b.shape}"
+            )
+        z_lead, s_lead, b_lead = z.shape[:-1], s.shape[:-1], b.shape[:-1]
+        shape = _broadcast(_broadcast(z_lead, s_lead), b_lead)
+        lead = shape or (1,)
+        width, n = self.width, self.n
+        # the first layer's two terms (float64), each on its own, unexpanded leading shape
+        if self.d == 1:
+            t_z = z * self.w_z[0]
+        else:
+            t_z = (z.reshape(-1, self.d) @ self.w_z).reshape(z_lead + (width,))
+        if s_lead == b_lead:
+            sb = np.concatenate((s, b), axis=-1)
+            t_c = (sb.reshape(-1, sb.shape[-1]) @ self.w_sb).reshape(s_lead + (width,))
+            t_c += self.c1
+        else:
+            ns = s.shape[-1]
+            t_c = s @ self.w_sb[:ns] + b @ self.w_sb[ns:] + self.c1
+        rows_total = math.prod(lead)
+        if rows_total == 0:
+            return np.zeros(shape + (n,))
+        # each term rounded to float32 once, then added in float32: a row's first layer is
+        # the same whichever chunk, batch or branch below computes it
+        t_z32 = t_z.astype(np.float32)
+        t_c32 = t_c.astype(np.float32)
+        inner = math.prod(lead[1:])
+        chunks = -(-lead[0] // max(1, _CHUNK_ROWS // max(inner, 1)))
+        step = -(-lead[0] // chunks)  # indices of the first axis per chunk, balanced
+        out_t = torch.empty(n, rows_total)  # V transposed
+        hidden, buffers, w_o, c_o = self.hidden, self.buffers, self.w_o, self.c_o
+        last_is_b = len(hidden) % 2 == 1
+        if chunks == 1:  # the first layer's add in numpy: fewer calls for small batches
+            first_np, _, h, g, a_t, b_t = buffers.get(lead, width)
+            np.add(t_z32, t_c32, out=first_np)
+            h.sigmoid_().sub_(0.5)
+            for w, c in hidden:
+                torch.addmm(c, h, w, out=g)
+                g.sigmoid_().sub_(0.5)
+                h, g = g, h
+            torch.addmm(c_o, w_o, b_t if last_is_b else a_t, out=out_t)
+        else:
+            full = len(lead) + 1
+            tz32, tc32 = torch.from_numpy(t_z32), torch.from_numpy(t_c32)
+            for start in range(0, lead[0], step):
+                stop = min(lead[0], start + step)
+                _, first, h, g, a_t, b_t = buffers.get((stop - start, *lead[1:]), width)
+                torch.add(
+                    _along_first(tz32, start, stop, full), _along_first(tc32, start, stop, full), out=first
+                )
+                h.sigmoid_().sub_(0.5)
+                for w, c in hidden:
+                    torch.addmm(c, h, w, out=g)
+                    g.sigmoid_().sub_(0.5)
+                    h, g = g, h
+                torch.addmm(c_o, w_o, b_t if last_is_b else a_t, out=out_t[:, start * inner : stop * inner])
+        v = out_t.numpy().astype(np.float64)  # (n, rows)
+        norm = np.sqrt(np.einsum("ij,ij->j", v, v))
+        np.maximum(norm, 1e-8, out=norm)
+        factor = np.tanh(norm)
+        factor /= norm
+        if self.scale != 1.0:
+            factor *= self.scale
+        return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (n,))
+
+
+def _broadcast(a: tuple[int, ...], b: tuple[int, ...]) -> tuple[int, ...]:
+    """numpy's broadcast of two shapes (a faster ``np.broadcast_shapes`` for two short ones)."""
+    if a == b:
+        return a
+    if len(a) != len(b):
+        return np.broadcast_shapes(a, b)
+    out = []
+    for x, y in zip(a, b, strict=True):
+        if x != y and x != 1 and y != 1:
+            return np.broadcast_shapes(a, b)  # raises numpy's error
+        out.append(y if x == 1 else x)
+    return tuple(out)
+
+
+def _along_first(term: torch.Tensor, start: int, stop: int, full: int) -> torch.Tensor:
+    """Indices ``start:stop`` of the first broadcast axis of a first-layer term (itself if broadcast)."""
+    if term.dim() == full and term.shape[0] != 1:
+        return term[start:stop]
+    return term
+
+
+_PLANS: weakref.WeakKeyDictionary[LatentActionModel, _InferencePlan] = weakref.WeakKeyDictionary()
+
+
+def _inference_plan(model: LatentActionModel) -> _InferencePlan:
+    """The model's cached inference plan, rebuilt when its weights have changed."""
+    plan = _PLANS.get(model)
+    if plan is None or not plan.fits(model):
+        plan = _InferencePlan(model)
+        _PLANS[model] = plan
+    return plan
+
+
+def save_checkpoint(model: LatentActionModel, path: str | os.PathLike[str], **extra: Any) -> Path:
+    """Atomically save the model's state dict, its config and ``extra`` metadata.
+
+    ``extra`` values must be plain Python data (numbers, strings, lists, dicts) so the
+    checkpoint loads with ``weights_only=True``; the training config goes here.
+    """
+    payload = {
+        "state_dict": model.state_dict(),
+        "config": dataclasses.asdict(model.config),
+        "extra": extra,
+    }
+    with atomic_path(path) as tmp:
+        torch.save(payload, tmp)
+    return Path(path)
+
+
+def load_checkpoint(
+    path: str | os.PathLike[str],
+    robot: str | None = None,
+    make_hint: str = "make figures (notebook 02_decoder_training)",
+) -> tuple[LatentActionModel, dict[str, Any]]:
+    """Load a model saved by :func:`save_checkpoint`.
+
+    Args:
+        path: Checkpoint file.
+        robot: If given, the robot the caller expects; a mismatch is an error.
+        make_hint: Command that makes the checkpoint, for the error message.
+
+    Returns:
+        The model in eval mode, and the checkpoint's ``extra`` metadata.
+
+    Raises:
+        ArtifactError: if the file is missing, corrupt, or for another robot.
+    """
+    path = require_file(path, make_hint)
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+        values: dict[str, Any] = {
+            k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()
+        }
+        config = DecoderConfig(**values)
+        model = LatentActionModel(config)
+        model.load_state_dict(payload["state_dict"])
+    except Exception as exc:
+        # Name the failure, not torch's message: for a file it cannot unpickle safely, torch
+        # suggests loading with weights_only=False, which would run arbitrary code from the file.
+        raise ArtifactError(
+            f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
+            f"Delete it and re-make it with: {make_hint}"
+        ) from None
+    if robot is not None and config.robot != robot:
+        raise ArtifactError(
+            f"{path} was trained for robot {config.robot!r}, not {robot!r}. "
+            f"Use the checkpoint for {robot!r} or re-make it with: {make_hint}"
+        )
+    model.eval()
+    return model, dict(payload.get("extra", {}))

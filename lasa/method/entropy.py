@@ -1,0 +1,233 @@
+r"""The entropy regulariser of Eqs. T5-T6: latent actions that can still change goals.
+
+Shared autonomy constrains the robot near the likely goal (Sec. IV-A). If, at a
+confident context, every latent action leads to that goal, a user who changes their
+mind is trapped. The paper therefore rewards latent spaces in which, at every context
+(s, b), some z move towards *each* goal. With a score :math:`\eta(g, s, b, z)` of how
+well z conveys "goal g",
+
+.. math::
+
+    p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z), \qquad
+    \mathcal{L} = \|e_a\|^2 + \lambda \sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g).
+
+**Our eta.** The posterior over goals that the robot's goal likelihood
+(:mod:`lasa.method.belief`) gives to the decoded action held for a short horizon of H
+control steps, under a *uniform* prior:
+
+.. math::
+
+    \eta(g, s, b, z) = \frac{P_H(\phi(z, s, b) \mid s, g)}{\sum_{g'} P_H(\phi(z, s, b) \mid s, g')},
+
+where :math:`P_H` is the likelihood with the step :math:`\Delta` replaced by
+:math:`H\Delta`. It is the evidence the robot would read from that input, so a spread
+p means that the user can move the belief towards any goal. Why a horizon: one
+control step moves at most :math:`\Delta\sigma_h` (0.0375 rad here), worth at most
+about 1.5 nats of evidence, so one-step scores barely separate the goals. p is then
+nearly uniform whatever the decoder does (we measured an entropy of 0.62 of a possible
+0.69 nats at confident contexts without the term), and the term has nothing to act
+on. "z moves towards g" is a statement about a short motion; H = 10 steps is one
+second. It is differentiable through
+the decoder. We leave the belief b out of the prior on purpose: with it, at a
+confident context the posterior is saturated by b itself, whatever the action, and
+its entropy has almost no gradient at exactly the contexts the term must fix.
+
+The sum over z runs over an even grid of joystick inputs, and the term is averaged
+over a random subset of each batch's contexts (cheap: the grid multiplies the decoder
+calls).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import torch
+
+from lasa.base.config import ControlConfig, check_range
+from lasa.base.errors import ConfigError
+from lasa.method.belief import log_likelihood_torch
+from lasa.method.decoder import LatentActionModel
+from lasa.method.step import latent_grid
+
+__all__ = [
+    "EntropyRegularizer",
+    "goal_scores",
+    "goal_distribution",
+    "entropy",
+    "context_entropy",
+    "context_grid",
+    "choose_lambda",
+]
+
+
+def goal_scores(
+    model: LatentActionModel,
+    states: torch.Tensor,
+    beliefs: torch.Tensor,
+    z_grid: torch.Tensor,
+    sets: torch.Tensor,
+    control: ControlConfig,
+    horizon: int = 10,
+) -> torch.Tensor:
+    """eta(g, s, b, z) for every context and grid input, shape (B, K, G); rows sum to one.
+
+    Args:
+        model: The decoder.
+        states: Contexts' states, shape (B, n).
+        beliefs: Contexts' beliefs, shape (B, G).
+        z_grid: Joystick inputs, shape (K, d).
+        sets: Goal sets of the likelihood, shape (G, M, n).
+        control: The belief model's units (dt, beta_b, the regret normaliser).
+        horizon: H, the steps over which an input's evidence is read.
+    """
+    n_ctx, n_z = states.shape[0], z_grid.shape[0]
+    s = states[:, None, :].expand(n_ctx, n_z, -1)
+    b = beliefs[:, None, :].expand(n_ctx, n_z, -1)
+    z = z_grid[None].expand(n_ctx, n_z, -1)
+    actions = model.decode(z, s, b)
+    step = control.likelihood_step
+    max_step = None if step is None else horizon * step
+    # The state's own distance to each set is shared by all K inputs: pass it unexpanded
+    # (B, 1, n) so it is computed once per context, not once per (context, input).
+    loglik = log_likelihood_torch(
+        states[:, None, :], actions, sets, horizon * control.dt, control.belief_beta, max_step
+    )
+    return torch.softmax(loglik, dim=-1)
+
+
+def goal_distribution(scores: torch.Tensor) -> torch.Tensor:
+    """p_(s,b)(g) ∝ sum_z eta (Eq. T5), shape (B, G), from scores of shape (B, K, G)."""
+    total = scores.sum(dim=1)
+    return total / total.sum(dim=-1, keepdim=True)
+
+
+def entropy(p: torch.Tensor) -> torch.Tensor:
+    """Shannon entropy -sum_g p log p along the last axis [nats]."""
+    return -(p * torch.log(p.clamp_min(1e-12))).sum(dim=-1)
+
+
+@dataclasses.dataclass
+class EntropyRegularizer:
+    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6).
+
+    Call it as ``regularizer(model, states, beliefs)`` on a training batch; pass it to
+    :func:`lasa.method.train.train_decoder` as ``extra_loss``.
+
+    Attributes:
+        lam: lambda > 0, the weight of the term.
+        sets: Goal sets of the belief likelihood, shape (G, M, n).
+        control: Units of the belief model.
+        n_z: Joystick inputs on the grid the sum over z runs over.
+        horizon: H, the steps over which an input's evidence is read.
+        contexts: Contexts of each batch the term is evaluated on.
+        seed: Seed of the context subsampling.
+    """
+
+    lam: float
+    sets: np.ndarray
+    control: ControlConfig
+    n_z: int = 11
+    horizon: int = 10
+    contexts: int = 64
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_range("entropy_lambda", self.lam, 0.0, low_open=True)
+        if self.n_z < 2 or self.contexts < 1 or self.horizon < 1:
+            raise ConfigError(
+                f"n_z must be >= 2, horizon and contexts >= 1; "
+                f"got {self.n_z}, {self.horizon}, {self.contexts}"
+            )
+        self._sets = torch.as_tensor(np.asarray(self.sets), dtype=torch.float32)
+        self._grid = torch.as_tensor(latent_grid(self.n_z), dtype=torch.float32)
+        self._gen = torch.Generator().manual_seed(self.seed)
+
+    def __call__(self, model: LatentActionModel, states: torch.Tensor, beliefs: torch.Tensor) -> torch.Tensor:
+        if self._grid.shape[1] != model.config.z_dim:
+            self._grid = torch.as_tensor(latent_grid(self.n_z, model.config.z_dim), dtype=torch.float32)
+        pick = torch.randperm(states.shape[0], generator=self._gen)[: self.contexts]
+        scores = goal_scores(
+            model, states[pick], beliefs[pick], self._grid, self._sets, self.control, self.horizon
+        )
+        p = goal_distribution(scores)
+        return -self.lam * entropy(p).mean()
+
+
+def context_entropy(
+    model: LatentActionModel,
+    states: np.ndarray,
+    beliefs: np.ndarray,
+    sets: np.ndarray,
+    control: ControlConfig,
+    n_z: int = 11,
+    horizon: int = 10,
+) -> np.ndarray:
+    """Entropy of p_(s,b) [nats] at each context, shape (B,), without gradients."""
+    grid = torch.as_tensor(latent_grid(n_z, model.config.z_dim), dtype=torch.float32)
+    with torch.no_grad():
+        scores = goal_scores(
+            model,
+            torch.as_tensor(states, dtype=torch.float32),
+            torch.as_tensor(beliefs, dtype=torch.float32),
+            grid,
+            torch.as_tensor(sets, dtype=torch.float32),
+            control,
+            horizon,
+        )
+        return entropy(goal_distribution(scores)).double().numpy()
+
+
+def context_grid(
+    start: np.ndarray, goal: np.ndarray, goal_index: int, n_goals: int, n_pos: int = 9, n_belief: int = 9
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Contexts along the way to a goal and across confidences in it.
+
+    Args:
+        start: The start pose, shape (n,).
+        goal: The goal pose, shape (n,).
+        goal_index: Which goal the belief grows towards.
+        n_goals: G.
+        n_pos: Positions on the straight joint-space line from start (0) to goal (1).
+        n_belief: Beliefs in the goal, from uniform to 0.999.
+
+    Returns:
+        (progress, confidence, states, beliefs): the grid's coordinates, shapes (P*C,),
+        and the contexts, shapes (P*C, n) and (P*C, G), progress-major.
+    """
+    progress = np.linspace(0.0, 1.0, n_pos)
+    conf = np.linspace(1.0 / n_goals, 0.999, n_belief)
+    pp, cc = np.meshgrid(progress, conf, indexing="ij")
+    states = start + pp.reshape(-1, 1) * (goal - start)
+    rest = (1.0 - cc.reshape(-1, 1)) / (n_goals - 1)
+    beliefs = np.repeat(rest, n_goals, axis=1)
+    beliefs[:, goal_index] = cc.reshape(-1)
+    return pp.reshape(-1), cc.reshape(-1), states, beliefs
+
+
+def choose_lambda(sweep: pd.DataFrame, n_goals: int, spread: float = 0.8, cost: float = 1.5) -> float:
+    """The lambda the pipeline trains with, by a rule fixed before looking at results.
+
+    The smallest lambda > 0 of the sweep whose mean entropy at confident contexts reaches
+    ``spread`` of the maximum (log G), while its held-out reconstruction error stays
+    within ``cost`` times that of lambda = 0. If none does, the one with the highest
+    entropy among those within the cost bound (or, failing that, the smallest).
+
+    Args:
+        sweep: One row per lambda with columns ``lambda``, ``entropy_confident`` and
+            ``recon_error``; it must include lambda = 0.
+        n_goals: G.
+        spread: Required fraction of the maximal entropy.
+        cost: Allowed factor on the reconstruction error.
+    """
+    if 0.0 not in set(sweep["lambda"]):
+        raise ConfigError("the lambda sweep must include 0 (the reference)")
+    ref = float(sweep.loc[sweep["lambda"] == 0.0, "recon_error"].iloc[0])
+    cand = sweep[(sweep["lambda"] > 0) & (sweep["recon_error"] <= cost * ref)].sort_values("lambda")
+    if cand.empty:
+        return float(sweep.loc[sweep["lambda"] > 0, "lambda"].min())
+    good = cand[cand["entropy_confident"] >= spread * np.log(n_goals)]
+    if not good.empty:
+        return float(good["lambda"].iloc[0])
+    return float(cand.loc[cand["entropy_confident"].idxmax(), "lambda"])

@@ -1,0 +1,422 @@
+r"""Goals never seen in training: the context map h(s, b) of Sec. IV-C.
+
+A new cup is put on the table after the decoder was trained. Its grasps were never
+demonstrated, so phi(z, s, b) has no latent action that reaches them. Without
+retraining, the robot maps its context onto an *equivalent* one at a training cup
+:math:`\hat g` (the reference), decodes there, and maps the action back:
+
+.. math::
+
+    (\hat s, \hat b) = h(s, b), \qquad \hat a_h = \phi(z, \hat s, \hat b), \qquad
+    a_h = J_h(s)^{-1} \hat a_h, \quad J_h = \partial \hat s / \partial s .
+
+**The state map.** With start :math:`s_0` and new goal g (its mid-preference grasp,
+in joint space), let :math:`\lambda(s) = \langle s - s_0, g - s_0 \rangle / \|g - s_0\|^2`
+be the progress along the straight line from the start to g, and
+:math:`w(s) = \mathrm{clip}(\lambda(s) / \lambda_1, 0, 1)`, where :math:`\lambda_1 \le 1`
+is the least progress of any grasp of the new cup. Then
+
+.. math::  \hat s = s + w(s)\,u(s),
+
+the identity at the start (w = 0), and a pure offset from progress :math:`\lambda_1` on,
+so at every grasp of the new cup. Two offsets (``kind``):
+
+- ``"straight_line"``, the paper's example: :math:`u = \hat g - g`. On the straight line
+  to g it is the paper's straight-line map, the point at progress lambda going to the
+  point at the same progress on the line to :math:`\hat g` (exactly so when
+  :math:`\lambda_1 = 1`). Off the line the residual is kept, where the paper's
+  projection drops it. Near the new cup it moves the reference cup's grasp curve
+  rigidly, so only grasps whose curve is a translate of the reference one are exact.
+- ``"grasp"`` (ours, the default): :math:`u(s) = \sum_k p_k(s)\,(s^*(\hat g, \theta_k) -
+  s^*(g, \theta_k))`, with :math:`p_k \propto \exp(-\|s - s^*(g, \theta_k)\|^2 / 2\tau^2)`
+  a soft assignment of s to the new cup's grasps. Every grasp of the new cup maps onto
+  the *same* grasp of the reference cup, whatever the geometry, and the soft assignment
+  keeps h smooth.
+
+The Jacobian :math:`J_h = I + u\,\nabla w^\top + w\,\partial u / \partial s` is exact
+(tested against finite differences), and actions are mapped back by solving
+:math:`J_h a_h = \hat a_h`, one small linear system per user.
+
+**Per robot.**
+
+- ``panda``: joint 1 turns the whole arm about the base's vertical axis. A new cup on
+  the reference cup's circle about the base, given the same grasps relative to its
+  bearing from the base, has exactly the reference grasps with joint 1 turned by the
+  bearing difference. The IK of the new cup is warm-started there, so for such a cup
+  :math:`u` is a pure joint-1 offset under both kinds, and h is the exact rotation. A
+  cup at another radius adds a remainder, which only ``"grasp"`` maps exactly.
+- ``planar5``: the only rotation of a planar arm (joint 1, about the plane's normal)
+  tilts the table, so no joint-space symmetry maps one cup onto another. The new cup
+  must stand in the arm's plane, on the reference cup's side. ``"straight_line"`` then
+  approximates the new grasp curve by a translate of the reference one, an
+  approximation that worsens with distance, and ``"grasp"`` is exact at the grasps.
+
+**The belief map.** The belief and the assistance grow to G + 1 goals (the new cup
+last); the decoder still reads a belief over the G training goals. The paper gives
+:math:`\hat g` the confidence the robot has in g. We give it the confidence of the pair,
+:math:`\hat b(\hat g) = b(g) + b(\hat g)`, and keep every other training goal's belief:
+this makes h exactly the identity when the new cup stands on the reference cup, and
+keeps the decoder confident near a new cup that is close to the reference one (where
+b(g) and b(ĝ) share the mass for long). Near a distant new cup the two agree.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from lasa.base.config import check_choice, check_range
+from lasa.base.errors import ConfigError, IKError
+from lasa.method.decoder import ActionDecoder
+from lasa.world.ik import solve_grasp_ik
+from lasa.world.robot import Robot
+from lasa.world.task import CupTask, grasp_frame
+
+__all__ = ["ContextMap", "MappedDecoder", "extend_task", "new_goal_frames", "NEW_GOAL_NAME", "MAP_KINDS"]
+
+MAP_KINDS = ("grasp", "straight_line")
+
+NEW_GOAL_NAME = "new"
+_MAX_JUMP = 0.5  # largest joint-space step between neighbouring grasps of a smooth curve [rad]
+
+
+def _bearing(point: np.ndarray, base: np.ndarray) -> float:
+    return float(np.arctan2(point[1] - base[1], point[0] - base[0]))
+
+
+def _rot_z(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tuple[np.ndarray, float]:
+    """Check that a new cup stands on the table, apart from the others; return it (3,) and its
+    bearing offset from the reference cup about the base [rad]."""
+    robot = task.robot
+    cups = robot.cup_positions()
+    pos = np.asarray(position, dtype=float).reshape(-1)
+    if pos.shape not in ((2,), (3,)) or not np.all(np.isfinite(pos)):
+        raise ConfigError(f"a new cup's position must be a finite (x, y) or (x, y, z) [m], got {position!r}")
+    height = cups[ref_goal, 2]
+    if pos.shape == (3,) and abs(pos[2] - height) > 1e-3:
+        raise ConfigError(
+            f"a new cup stands on the table: its grasp centre must be at z = {height:.3f} m "
+            f"like the other cups, got z = {pos[2]:.3f} m"
+        )
+    pos = np.array([pos[0], pos[1], height])
+    centre, half = robot.table_extent()
+    if np.any(np.abs(pos[:2] - centre[:2]) > half[:2]):
+        lo, hi = centre[:2] - half[:2], centre[:2] + half[:2]
+        raise ConfigError(
+            f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is outside {robot.name}'s workspace: the table "
+            f"spans x in [{lo[0]:.2f}, {hi[0]:.2f}], y in [{lo[1]:.2f}, {hi[1]:.2f}] m"
+        )
+    radius = robot.model.geom_size[robot.model.geom(robot.spec.cups[ref_goal]).id][0]
+    gaps = np.linalg.norm(cups[:, :2] - pos[:2], axis=1)
+    if gaps.min() < 2 * radius:
+        raise ConfigError(
+            f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) overlaps cup {robot.spec.cups[int(gaps.argmin())]!r} "
+            f"(centres {gaps.min():.3f} m apart, at least {2 * radius:.3f} m needed)"
+        )
+    base = robot.base_position()
+    delta = _bearing(pos, base) - _bearing(cups[ref_goal], base)
+    delta = float((delta + np.pi) % (2 * np.pi) - np.pi)
+    if _yaw_axis(robot) == 0.0 and (abs(delta) > 1e-6 or abs(pos[1] - cups[ref_goal, 1]) > 1e-6):
+        raise ConfigError(
+            f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is outside {robot.name}'s workspace: the arm moves "
+            f"in a vertical plane, so a new cup must stand in it (y = {cups[ref_goal, 1]:.3f}) on the "
+            "reference cup's side of the base"
+        )
+    return pos, delta
+
+
+def _yaw_axis(robot: Robot) -> float:
+    """+1 or -1 if the first joint turns the arm about the vertical (its sign), else 0."""
+    axis = robot.first_joint_axis()
+    return float(np.sign(axis[2])) if np.allclose(np.abs(axis), [0.0, 0.0, 1.0], atol=1e-6) else 0.0
+
+
+def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The grasps of a new cup: the reference cup's grasps, turned to the new cup's bearing.
+
+    For each preference theta on the task's grid, the reference grasp frame is rotated
+    about the vertical axis through the robot's base by the bearing difference, and
+    moved to stand at the new cup as it stood at the reference one.
+
+    Returns:
+        Positions (K, 3) and rotations (K, 3, 3) of the grasp site.
+    """
+    return _frames(task, ref_goal, *_check_placement(task, position, ref_goal))
+
+
+def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`new_goal_frames` for a checked position and its bearing offset ``delta``."""
+    ref_cup = task.robot.cup_positions()[ref_goal]
+    turn = _rot_z(delta)
+    positions, rotations = [], []
+    for theta in task.theta_grid:
+        p, r = grasp_frame(task.robot, ref_goal, float(theta))
+        positions.append(pos + turn @ (p - ref_cup))
+        rotations.append(turn @ r)
+    return np.array(positions), np.array(rotations)
+
+
+def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTask:
+    """The task with a new cup at ``position``: its grasps solved by IK, added as the last goal.
+
+    The robot of the returned task has the new cup in its scene (for videos). The IK of
+    each grasp is warm-started from the reference grasp with the arm turned about the
+    base by the bearing difference, when the first joint is vertical (the Panda), so
+    that the two grasp curves are as alike as the geometry allows.
+
+    Args:
+        task: The training task (G goals).
+        position: Grasp centre of the new cup, (x, y) or (x, y, z) [m]; z is the table's.
+        ref_goal: Index of the training cup the new one is referred to.
+
+    Raises:
+        ConfigError: if ``ref_goal`` is not a training goal, or the cup is off the table,
+            overlaps another cup, or (planar arm) stands outside the arm's plane.
+        IKError: if a grasp of the new cup is out of reach or the grasps do not form a
+            smooth curve in joint space.
+    """
+    if not 0 <= ref_goal < task.n_goals:
+        raise ConfigError(f"ref_goal must be a training goal in [0, {task.n_goals}), got {ref_goal}")
+    pos, delta = _check_placement(task, position, ref_goal)
+    positions, rotations = _frames(task, ref_goal, pos, delta)
+    robot = task.robot.with_cup(pos)
+    seeds = task.curves[ref_goal].copy()
+    seeds[:, 0] += delta * _yaw_axis(robot)  # turn the arm to the new bearing (no-op for a planar arm)
+    curve = np.empty_like(seeds)
+    for k, (p, r) in enumerate(zip(positions, rotations, strict=True)):
+        try:
+            curve[k] = solve_grasp_ik(robot, p, r, robot.clip(seeds[k]))
+        except IKError as err:
+            raise IKError(
+                f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is out of {robot.name}'s reach: no grasp at "
+                f"theta = {task.theta_grid[k]:.2f} ({err})"
+            ) from err
+    jump = float(np.linalg.norm(np.diff(curve, axis=0), axis=1).max())
+    if jump > _MAX_JUMP:
+        raise IKError(
+            f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}): {robot.name}'s grasps there do not form a smooth "
+            f"curve (a {jump:.2f} rad jump between neighbouring preferences); move the cup"
+        )
+    mid = len(task.theta_grid) // 2
+    return CupTask(
+        robot=robot,
+        goal_names=(*task.goal_names, NEW_GOAL_NAME),
+        theta_grid=task.theta_grid,
+        curves=np.concatenate([task.curves, curve[None]]),
+        goals=np.concatenate([task.goals, curve[None, mid]]),
+        start=task.start,
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class ContextMap:
+    """h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's.
+
+    Build it with :meth:`for_task`. States are (..., n) arrays, beliefs (..., G + 1)
+    over the grown task's goals (the new goal last); the decoder reads (..., G).
+
+    Attributes:
+        start: The start pose s_0, shape (n,) [rad].
+        new_curve: The new cup's grasps s*(g, theta) on the theta grid, shape (K, n) [rad].
+        ref_curve: Where each of those grasps maps: the reference cup's grasps on the same
+            grid (``kind="grasp"``), or the new ones shifted by g_hat - g, shape (K, n) [rad].
+        ref_index: Index of the reference goal among the training goals.
+        n_train: Number of training goals G.
+        saturation: lambda_1 in (0, 1], the progress from which w = 1.
+        width: tau, the joint-space width of the soft assignment to grasps [rad].
+        kind: ``"grasp"``: each grasp of the new cup maps onto the same grasp of the
+            reference cup. ``"straight_line"``: one offset, g_hat - g, for every grasp
+            (the paper's straight-line map, with the off-line residual kept).
+    """
+
+    start: np.ndarray
+    new_curve: np.ndarray
+    ref_curve: np.ndarray
+    ref_index: int
+    n_train: int
+    saturation: float
+    width: float = 0.1
+    kind: str = "grasp"
+
+    @classmethod
+    def for_task(
+        cls, task: CupTask, n_train: int, ref_index: int, kind: str = "grasp", width: float = 0.1
+    ) -> ContextMap:
+        """The map for the last goal of ``task`` (the new one) onto training goal ``ref_index``.
+
+        Raises:
+            ConfigError: if the task has no new goal, or the new goal's grasps do not lie
+                ahead of the start (the map would not be invertible).
+        """
+        if task.n_goals != n_train + 1:
+            raise ConfigError(
+                f"the task must have the {n_train} training goals plus one new goal, has {task.n_goals}"
+            )
+        if not 0 <= ref_index < n_train:
+            raise ConfigError(f"ref_index must be in [0, {n_train}), got {ref_index}")
+        check_range("width", width, 0.0, low_open=True)
+        check_choice("kind", kind, MAP_KINDS)
+        start, g = task.start, task.goals[-1]
+        line = g - start
+        if np.linalg.norm(line) < 1e-6:
+            raise ConfigError("the new goal coincides with the start pose: no path to map")
+        progress = (task.curves[-1] - start) @ line / (line @ line)
+        saturation = float(min(progress.min(), 1.0))
+        ref_curve = task.curves[ref_index].copy()
+        if kind == "straight_line":
+            ref_curve = task.curves[-1] + (task.goals[ref_index] - g)
+        cmap = cls(
+            start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, width, kind
+        )
+        # along the straight line to g, d(s_hat)/d(lambda) must keep pointing forwards
+        shift = float(line @ (task.goals[ref_index] - g)) / (float(line @ line) * saturation)
+        if saturation < 0.2 or 1.0 + shift < 0.2:
+            raise ConfigError(
+                "the new goal's grasps do not lie far enough ahead of the start along the path "
+                f"(least progress {saturation:.2f}), or the new cup is too far from the reference "
+                "one for the map to be invertible; put it nearer the reference cup"
+            )
+        return cmap
+
+    @property
+    def new_goal(self) -> np.ndarray:
+        """The new goal g (its mid-preference grasp), shape (n,)."""
+        return self.new_curve[len(self.new_curve) // 2]
+
+    def _progress(self, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """lambda(s) / lambda_1, shape (...), and its gradient direction, shape (n,)."""
+        line = self.new_goal - self.start
+        grad = line / (float(line @ line) * self.saturation)
+        return (np.asarray(state) - self.start) @ grad, grad
+
+    def weight(self, state: np.ndarray) -> np.ndarray:
+        """w(s) in [0, 1]: 0 at the start, 1 from progress lambda_1 on; shape (...)."""
+        return np.clip(self._progress(state)[0], 0.0, 1.0)
+
+    def _assignment(self, state: np.ndarray) -> np.ndarray:
+        """p_k(s): soft assignment of each state to the new cup's grasps, shape (..., K)."""
+        d2 = np.sum((np.asarray(state)[..., None, :] - self.new_curve) ** 2, axis=-1)
+        logits = -0.5 * d2 / self.width**2
+        p = np.exp(logits - logits.max(axis=-1, keepdims=True))
+        return p / p.sum(axis=-1, keepdims=True)
+
+    def offset(self, state: np.ndarray) -> np.ndarray:
+        """u(s) = sum_k p_k(s) (s*(g_hat, theta_k) - s*(g, theta_k)), shape (..., n)."""
+        return self._assignment(state) @ (self.ref_curve - self.new_curve)
+
+    def state(self, state: np.ndarray) -> np.ndarray:
+        """s_hat = s + w(s) u(s), shape (..., n)."""
+        return state + self.weight(state)[..., None] * self.offset(state)
+
+    def belief(self, belief: np.ndarray) -> np.ndarray:
+        """b_hat over the training goals: the new goal's belief joins the reference's, (..., G)."""
+        belief = np.asarray(belief, dtype=float)
+        if belief.shape[-1] != self.n_train + 1:
+            raise ConfigError(f"belief must be over {self.n_train + 1} goals, got shape {belief.shape}")
+        out = belief[..., : self.n_train].copy()
+        out[..., self.ref_index] += belief[..., self.n_train]
+        return out
+
+    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """h(s, b) = (s_hat, b_hat)."""
+        return self.state(state), self.belief(belief)
+
+    def jacobian(self, state: np.ndarray) -> np.ndarray:
+        """J_h(s) = d(s_hat)/ds = I + u grad(w)^T + w du/ds, shape (..., n, n).
+
+        With offsets u_k and grasps c_k: du/ds = sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2.
+        """
+        state = np.asarray(state, dtype=float)
+        lam, grad = self._progress(state)
+        w = np.clip(lam, 0.0, 1.0)
+        inside = ((lam > 0.0) & (lam < 1.0))[..., None]
+        p = self._assignment(state)
+        offsets = self.ref_curve - self.new_curve
+        u = p @ offsets
+        c_bar = p @ self.new_curve
+        du = np.einsum(
+            "...k,...ki,...kj->...ij", p, offsets - u[..., None, :], self.new_curve - c_bar[..., None, :]
+        )
+        du /= self.width**2
+        n = state.shape[-1]
+        return (
+            np.eye(n) + u[..., :, None] * np.where(inside, grad, 0.0)[..., None, :] + w[..., None, None] * du
+        )
+
+    def action_to_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """a_hat = J_h(s) a: a real action seen in the equivalent context, shape (..., n).
+
+        ``state`` must broadcast against ``action`` without its last axis (pass
+        ``s[:, None]`` for (U, K, n) candidates).
+        """
+        return np.einsum("...ij,...j->...i", self.jacobian(state), action)
+
+    def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """a = J_h(s)^{-1} a_hat: a decoded action mapped back to the real context, (..., n).
+
+        One Jacobian per state (so pass ``s[:, None]`` for (U, K, n) candidates: the K
+        candidates of a user share its factorisation).
+        """
+        jac = self.jacobian(state)
+        action = np.asarray(action, dtype=float)
+        shape = np.broadcast_shapes(jac.shape[:-2], action.shape[:-1])
+        jac = np.broadcast_to(jac, (*shape, *jac.shape[-2:]))
+        rhs = np.broadcast_to(action, (*shape, action.shape[-1]))
+        return np.linalg.solve(jac, rhs[..., None])[..., 0]
+
+
+@dataclasses.dataclass(frozen=True)
+class MappedDecoder:
+    """The decoder seen through a context map: phi over the grown task's G + 1 goals.
+
+    .. math::  a_h = J_h(s)^{-1}\\, \\phi(z, \\hat s, \\hat b), \\qquad (\\hat s, \\hat b) = h(s, b)
+
+    It follows :class:`lasa.method.decoder.ActionDecoder`, so Algorithm 1
+    (:func:`lasa.people.rollout.rollout`, :func:`lasa.method.step.shared_autonomy_step`) runs a task
+    grown by a new goal without knowing that a map is involved.
+
+    Attributes:
+        model: The trained decoder, over the G training goals.
+        context_map: The map h onto a training goal's context.
+    """
+
+    model: ActionDecoder
+    context_map: ContextMap
+
+    def __post_init__(self) -> None:
+        if self.model.n_goals != self.context_map.n_train:
+            raise ConfigError(
+                f"the decoder reads {self.model.n_goals} goals, the context map maps onto "
+                f"{self.context_map.n_train} training goals"
+            )
+
+    @property
+    def robot(self) -> str:
+        """The robot of the wrapped decoder."""
+        return self.model.robot
+
+    @property
+    def n_goals(self) -> int:
+        """G + 1: the training goals and the new one."""
+        return self.context_map.n_train + 1
+
+    @property
+    def z_dim(self) -> int:
+        """d, as the wrapped decoder's."""
+        return self.model.z_dim
+
+    def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """phi(z, h(s, b)) mapped back to the real context, shape (..., n).
+
+        Broadcast like the wrapped decoder; the Jacobian is factorised once per state, so
+        pass ``s`` as (U, 1, n) for (U, K) candidates, as the rollout does.
+        """
+        s = np.asarray(s, dtype=float)
+        s_hat, b_hat = self.context_map(s, b)
+        return self.context_map.action_from_training(self.model.decode_numpy(z, s_hat, b_hat), s)

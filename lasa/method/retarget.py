@@ -1,0 +1,243 @@
+"""Retargeting: direct teleoperation of the end effector, the baseline R of the user study.
+
+The paper's user study compares learned latent actions to *Retargeting* (Rakita et al.
+2017): the user's joystick commands the end effector directly, and the robot's joint
+velocities follow from inverse kinematics. Rakita et al. solve a weighted, "RelaxedIK"
+style optimisation for each step; here it is reduced to mink's differential IK, which is
+the same idea with the smoothness and self-collision terms left out.
+
+A 2-axis joystick cannot command the six components of an end-effector twist at once, so
+the user switches between *modes* (:data:`MODES`) with a button: each mode maps the two
+stick axes onto two twist components (translation in the table plane, height and yaw,
+roll and pitch). The extra effort of switching modes is part of what the latent actions
+are compared against.
+
+Each control step is one quadratic program (:class:`Retargeting`): a frame task asks the
+grasp site to move, within one control period ``dt``, to its current pose displaced by the
+commanded twist; a light posture task towards the current joints picks one solution out of
+the arm's redundancy; mink's configuration limit keeps the next state within the joint
+ranges. The QP's displacement divided by ``dt`` is the joint velocity, the action ``a`` of
+the control loop (Sec. V).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import mink
+import numpy as np
+
+from lasa.base.config import check_range
+from lasa.base.errors import ConfigError
+from lasa.world.robot import Robot
+
+__all__ = ["MODES", "TWIST_COMPONENTS", "RetargetConfig", "twist", "next_mode", "Retargeting"]
+
+# The six twist components, in the order of a twist vector (vx, vy, vz, wx, wy, wz):
+# linear velocity of the site in the world frame, then angular velocity about the world axes.
+TWIST_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
+
+# Joystick modes: stick axis 0 drives the first component, axis 1 the second.
+MODES: tuple[tuple[str, str], ...] = (("x", "y"), ("z", "yaw"), ("roll", "pitch"))
+
+
+@dataclasses.dataclass(frozen=True)
+class RetargetConfig:
+    """Units of the Retargeting baseline: how fast a full stick deflection moves the hand."""
+
+    # A full deflection carries the hand from the home pose to a cup (~0.54 m on the Panda) in
+    # under 4 s, and one control period (dt = 0.1 s) moves it 1.5 cm: fast enough to be usable,
+    # fine enough to stop at a grasp. The joint speed sigma_h = 0.375 rad/s of the latent actions
+    # moves the hand at a similar speed, so neither interface wins by being faster.
+    linear_speed: float = 0.15  # speed of the site at full stick deflection [m/s]
+    angular_speed: float = 0.6  # at full deflection: a quarter turn in ~2.6 s, 3.4 deg per 0.1 s [rad/s]
+    damping: float = 1e-3  # Levenberg-Marquardt damping of mink's QP [-]
+    posture_cost: float = 1e-3  # weight of the posture task towards the current q (redundancy) [-]
+
+    def __post_init__(self) -> None:
+        check_range("linear_speed", self.linear_speed, 0.0, low_open=True)
+        check_range("angular_speed", self.angular_speed, 0.0, low_open=True)
+        check_range("damping", self.damping, 0.0, low_open=True)
+        check_range("posture_cost", self.posture_cost, 0.0)
+
+
+def _modes(mode: int | np.ndarray) -> np.ndarray:
+    """``mode`` as an integer array, or ConfigError if any entry is not a valid mode."""
+    arr = np.asarray(mode)
+    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
+        raise ConfigError(f"mode must be an integer in [0, {len(MODES)}), got {mode!r}")
+    ints = arr.astype(np.int64)
+    if np.any((ints < 0) | (ints >= len(MODES))):
+        raise ConfigError(f"mode must be an integer in [0, {len(MODES)}), got {mode!r}")
+    return ints
+
+
+def _mode_table(config: RetargetConfig) -> np.ndarray:
+    """Twist per unit stick deflection, shape (len(MODES), 2, 6): [mode, axis] -> twist."""
+    table = np.zeros((len(MODES), 2, 6))
+    for m, names in enumerate(MODES):
+        for axis, name in enumerate(names):
+            k = TWIST_COMPONENTS.index(name)
+            table[m, axis, k] = config.linear_speed if k < 3 else config.angular_speed
+    return table
+
+
+def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = RetargetConfig()) -> np.ndarray:
+    """The end-effector twist that a joystick input commands in a mode.
+
+    Args:
+        mode: Mode index into :data:`MODES`, an int or an integer array of shape (...,).
+        z: Stick deflections, shape (..., 2), clipped to [-1, 1]; broadcast against ``mode``.
+        config: Speeds at full deflection.
+
+    Returns:
+        Twists (vx, vy, vz, wx, wy, wz), shape (..., 6) [m/s, rad/s]; world-frame linear
+        velocity of the site and angular velocity about the world axes. A row whose ``z`` is
+        not finite gets a zero twist.
+
+    Raises:
+        ConfigError: if a mode is not an integer in [0, len(MODES)).
+        ValueError: if ``z``'s last axis is not of size 2.
+    """
+    modes = _modes(mode)
+    zs = np.asarray(z, dtype=float)
+    if zs.ndim == 0 or zs.shape[-1] != 2:
+        raise ValueError(f"z must have shape (..., 2), got {zs.shape}")
+    finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
+    zs = np.where(finite, np.clip(np.nan_to_num(zs), -1.0, 1.0), 0.0)
+    lead = np.broadcast_shapes(modes.shape, zs.shape[:-1])
+    table = _mode_table(config)[np.broadcast_to(modes, lead)]  # (..., 2, 6)
+    out: np.ndarray = np.einsum("...a,...ak->...k", np.broadcast_to(zs, (*lead, 2)), table)
+    return out
+
+
+def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np.ndarray:
+    """The mode after ``presses`` presses of the mode button (cyclic; negative goes back).
+
+    Returns:
+        An int if both arguments are scalars, else an integer array of their broadcast shape.
+
+    Raises:
+        ConfigError: if a mode is not valid or ``presses`` is not an integer.
+    """
+    modes = _modes(mode)
+    steps = np.asarray(presses)
+    if not np.issubdtype(steps.dtype, np.integer) or steps.dtype == bool:
+        raise ConfigError(f"presses must be an integer, got {presses!r}")
+    out = (modes + steps) % len(MODES)
+    if out.ndim == 0:
+        return int(out)
+    return out
+
+
+class Retargeting:
+    """Joystick twist -> joint velocity by mink differential IK at ``robot``'s grasp site.
+
+    One QP per configuration: a frame task on the grasp site whose target is the site's
+    current pose moved by the twist over one control period, a posture task towards the
+    current joints (it resolves the redundancy of a 7-DoF arm), and mink's configuration
+    limit, so that ``q + dt * qdot`` stays within the joint ranges. The mink configuration and
+    tasks are built once and reused; the object is therefore not thread safe.
+
+    Attributes:
+        robot: The robot whose grasp site is commanded.
+        dt: Control period: the twist is realised over this time [s].
+        config: Speeds, damping and posture cost.
+    """
+
+    def __init__(self, robot: Robot, dt: float, config: RetargetConfig = RetargetConfig()) -> None:
+        self.robot = robot
+        self.dt = check_range("dt", dt, 0.0, low_open=True)
+        self.config = config
+        model = robot.model
+        self._site = robot.spec.grasp_site
+        self._qpos_adr = np.asarray(robot.qpos_adr, dtype=int)
+        joints = [model.joint(name).id for name in robot.spec.joints]
+        self._dof_adr = np.array([model.jnt_dofadr[j] for j in joints], dtype=int)
+        self._q_full = model.qpos0.copy()
+        self._configuration = mink.Configuration(model)
+        self._frame = mink.FrameTask(self._site, "site", position_cost=1.0, orientation_cost=1.0)
+        self._posture = mink.PostureTask(model, cost=config.posture_cost)
+        self._tasks = [self._frame, self._posture]
+        self._limits = [mink.ConfigurationLimit(model)]
+
+    @property
+    def n_joints(self) -> int:
+        """Number of arm joints n."""
+        return len(self._qpos_adr)
+
+    def _set(self, q: np.ndarray) -> None:
+        """Put the mink configuration at arm joints ``q`` (the rest from the model's qpos0)."""
+        self._q_full[self._qpos_adr] = q
+        self._configuration.update(self._q_full)
+
+    def _check_q(self, q: np.ndarray) -> np.ndarray:
+        qs = np.asarray(q, dtype=float)
+        if qs.ndim == 0 or qs.shape[-1] != self.n_joints:
+            raise ValueError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
+        if not np.all(np.isfinite(qs)):
+            raise ValueError("q must be finite; got NaN or infinite joint positions")
+        return qs
+
+    def _solve(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
+        """Joint velocity (n,) realising twist ``xi`` (6,) from ``q`` (n,): one QP."""
+        if not np.all(np.isfinite(xi)) or not np.any(xi):
+            return np.zeros(self.n_joints)
+        self._set(q)
+        pose = self._configuration.get_transform_frame_to_world(self._site, "site")
+        rotation = mink.SO3.exp(xi[3:] * self.dt) @ pose.rotation()  # world-frame rotation: left
+        target = mink.SE3.from_rotation_and_translation(rotation, pose.translation() + xi[:3] * self.dt)
+        self._frame.set_target(target)
+        self._posture.set_target(self._q_full)
+        velocity = mink.solve_ik(
+            self._configuration,
+            self._tasks,
+            self.dt,
+            "daqp",
+            damping=self.config.damping,
+            limits=self._limits,
+        )
+        out: np.ndarray = velocity[self._dof_adr]
+        return out
+
+    def joint_velocity(self, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
+        """Joint velocities that move the grasp site with ``twist`` for one control period.
+
+        Args:
+            q: Arm joint positions, shape (n,) or (B, n) [rad].
+            twist: Twists (vx, vy, vz, wx, wy, wz), shape (6,) or (B, 6) [m/s, rad/s]; world-frame
+                linear velocity of the site and angular velocity about the world axes.
+                Broadcast against ``q``'s leading shape.
+
+        Returns:
+            Joint velocities, shape (n,) or (B, n) (the broadcast leading shape) [rad/s]. Exactly
+            zero for a zero twist and for a twist row that is not finite.
+
+        Raises:
+            ValueError: if ``q`` is not finite or a shape is wrong.
+            mink.NoSolutionFound: if the QP solver fails.
+        """
+        qs = self._check_q(q)
+        xis = np.asarray(twist, dtype=float)
+        if xis.ndim == 0 or xis.shape[-1] != 6:
+            raise ValueError(f"twist must have shape (..., 6), got {xis.shape}")
+        lead = np.broadcast_shapes(qs.shape[:-1], xis.shape[:-1])
+        q_rows = np.broadcast_to(qs, (*lead, self.n_joints)).reshape(-1, self.n_joints)
+        xi_rows = np.broadcast_to(xis, (*lead, 6)).reshape(-1, 6)
+        out = np.empty((len(q_rows), self.n_joints))
+        for i in range(len(q_rows)):  # mink solves one configuration at a time
+            out[i] = self._solve(q_rows[i], xi_rows[i])
+        return out.reshape(*lead, self.n_joints)
+
+    def site_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World position (3,) and rotation (3, 3) of the grasp site at arm joints ``q`` (n,).
+
+        Raises:
+            ValueError: if ``q`` is not finite or not of shape (n,).
+        """
+        qs = self._check_q(q)
+        if qs.ndim != 1:
+            raise ValueError(f"q must have shape ({self.n_joints},), got {qs.shape}")
+        self._set(qs)
+        pose = self._configuration.get_transform_frame_to_world(self._site, "site")
+        return pose.translation().copy(), pose.rotation().as_matrix()

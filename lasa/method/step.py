@@ -1,0 +1,225 @@
+"""The one step of Algorithm 1, batched: joystick input in, commanded state out.
+
+Every loop of the package advances with this module's functions: the simulated users of sims
+1-4 (:func:`lasa.people.rollout.rollout`), the study's simulated participants
+(:func:`lasa.people.participants.simulate`), live teleoperation (:class:`lasa.live.teleop.Station`),
+the one-user :class:`lasa.method.controller.Controller` and the benchmark. At each step:
+
+1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a loop
+   that weighs many candidates decodes them in one call, :func:`decode_candidates`, and
+   passes the chosen a_h to :func:`advance`);
+2. the robot's assistance a_r (Eq. M2, or another member of :mod:`lasa.method.assistance`
+   named by ``ControlConfig.assistance``) is blended with a_h (Eq. M1) using each
+   user's alpha: alpha = 0 is the method ``LA``, alpha > 0 is ``LA+SA``;
+3. the belief is updated with a_h (Alg. 1, line 8);
+4. the robot takes the safe step s' = clip(s + dt a).
+
+The decoder is anything that follows :class:`lasa.method.decoder.ActionDecoder`: the trained
+model, or a wrapper of it such as the context map of new goals
+(:class:`lasa.method.newgoals.MappedDecoder`), which this module does not need to know about.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from lasa.base.config import ControlConfig, check_choice
+from lasa.base.errors import ConfigError
+from lasa.method.assistance import assist
+from lasa.method.belief import belief, log_likelihood, update_log_belief
+from lasa.method.blend import blend, safe_step, sanitize
+from lasa.method.decoder import ActionDecoder
+from lasa.world.task import CupTask
+
+__all__ = [
+    "StepResult",
+    "check_decoder",
+    "decode_candidates",
+    "latent_grid",
+    "advance",
+    "shared_autonomy_step",
+    "METHODS",
+    "METHOD_DECODER",
+    "method_alpha",
+    "REST",
+]
+
+METHODS = ("LA", "LA+SA", "LA+SA+Entropy")
+# Which decoder each method uses: "base" is trained on reconstruction alone (Sec. III-A),
+# "entropy" with the entropy term of Eq. T6 (lasa.method.entropy).
+METHOD_DECODER = {"LA": "base", "LA+SA": "base", "LA+SA+Entropy": "entropy"}
+
+
+def method_alpha(method: str, control: ControlConfig) -> float:
+    """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for the others."""
+    if method not in METHODS:
+        raise ConfigError(f"unknown method {method!r}; choose one of {', '.join(map(repr, METHODS))}")
+    return 0.0 if method == "LA" else control.alpha
+
+
+@dataclasses.dataclass(frozen=True)
+class StepResult:
+    """One step of Algorithm 1 for a batch of users.
+
+    Attributes:
+        state: s^{t+1}, shape (U, n) [rad].
+        log_belief: log b^{t+1}, shape (U, G).
+        human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
+        action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
+        assistance: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s].
+    """
+
+    state: np.ndarray
+    log_belief: np.ndarray
+    human_action: np.ndarray
+    action: np.ndarray
+    assistance: np.ndarray | None = None
+
+
+def advance(
+    task: CupTask,
+    control: ControlConfig,
+    state: np.ndarray,
+    log_b: np.ndarray,
+    a_h: np.ndarray,
+    alpha: np.ndarray,
+    sets: np.ndarray,
+    b: np.ndarray | None = None,
+    members: np.ndarray | None = None,
+) -> StepResult:
+    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
+
+    ``a_h`` is the decoded human action (U, n), ``alpha`` the blend weight per user (U,),
+    ``sets`` the belief likelihood's goal sets (``task.belief_targets``), ``b`` the
+    belief ``belief(log_b)`` if the caller has it already.
+    """
+    a_h = sanitize(a_h)
+    if b is None:
+        b = belief(log_b)
+    a_r, weight = _assistance(task, control, state, b, members)
+    a = blend(a_h, a_r, alpha * weight)
+    lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
+    new_log_b = update_log_belief(log_b, lik, control.belief_floor)
+    robot = task.robot
+    new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
+    return StepResult(
+        state=new_state, log_belief=new_log_b, human_action=a_h, action=a, assistance=a_r * weight[:, None]
+    )
+
+
+def _assistance(
+    task: CupTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """a_r and the blend weight per user: ``control.assistance``, or each user's member.
+
+    The goal sets of ``grasp_set`` are the task's (``task.belief_targets("grasp_set")``):
+    the cups' grasp curves, or the eating task's whole stroke surfaces.
+    """
+    sets = task.belief_targets("grasp_set")
+    if members is None:
+        return assist(control.assistance, b, state, task.goals, sets, control.dt, control.action_scale)
+    a_r, weight = np.empty_like(state), np.empty(len(state))
+    for name in dict.fromkeys(members.tolist()):
+        rows = members == name
+        a_r[rows], weight[rows] = assist(
+            name, b[rows], state[rows], task.goals, sets, control.dt, control.action_scale
+        )
+    return a_r, weight
+
+
+REST = ("decode", "zero")  # what a stick at rest commands (shared_autonomy_step's ``rest``)
+
+
+def shared_autonomy_step(
+    decoder: ActionDecoder,
+    task: CupTask,
+    control: ControlConfig,
+    state: np.ndarray,
+    log_belief: np.ndarray,
+    z: np.ndarray,
+    alpha: float | np.ndarray,
+    rest: str = "decode",
+) -> StepResult:
+    """One step of Algorithm 1 from joystick input to commanded state, batched over users.
+
+    This is the step a teleoperated robot runs (:class:`lasa.method.controller.Controller` is
+    this step for one user, and :class:`lasa.live.teleop.Station` runs it for latent actions):
+    decode the joystick input, blend with the assistance, update the belief, take the safe
+    step. A joystick input that is not finite (a disconnected or faulty device) decodes to
+    no human action at all, so it can never become a command; the robot's own assistance
+    still applies.
+
+    **The stick at rest** (z = 0) is a named choice, ``rest``, because the loops differ:
+
+    - ``"decode"``: phi(0, s, b), the decoder's own meaning of the rest position. The
+      simulated users of sims 1-4 (Eq. S1 weighs z = 0 among its grid's inputs, and the
+      paper's phi is defined there), :class:`lasa.method.controller.Controller` and the
+      benchmark's reference step use it.
+    - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.live.teleop.Station`:
+      a person who lets go of the stick expects the arm to stop, the assistance apart), and
+      it is the convention of the study's simulated participants (:func:`lasa.people.participants.simulate`,
+      which decodes its candidates itself: resting the stick is their idle input).
+
+    Args:
+        decoder: The decoder phi (a trained model, or a wrapper such as
+            :class:`lasa.method.newgoals.MappedDecoder` for a task grown by a new goal).
+        task: The cup task.
+        control: Control-loop units.
+        state: s^t, shape (U, n).
+        log_belief: log b^t, shape (U, G).
+        z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
+        alpha: Blend weight, scalar or shape (U,).
+        rest: What a stick at rest commands: ``"decode"`` or ``"zero"`` (see above).
+    """
+    check_decoder(decoder, task)
+    check_choice("rest", rest, REST)
+    z = np.asarray(z, dtype=float)
+    ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
+    a_h = decoder.decode_numpy(np.where(ok, z, 0.0), state, belief(log_belief))
+    if rest == "zero":
+        ok = ok & np.any(z != 0.0, axis=-1, keepdims=True)
+    a_h = np.where(ok, a_h, 0.0)
+    alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
+    sets = task.belief_targets(control.likelihood)
+    return advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+
+
+def check_decoder(decoder: ActionDecoder, task: CupTask) -> None:
+    """The decoder must act in the task's robot and read a belief over the task's goals.
+
+    Raises:
+        ConfigError: naming the mismatch.
+    """
+    if decoder.robot != task.robot.name:
+        raise ConfigError(f"decoder was trained for {decoder.robot!r}, the task is for {task.robot.name!r}")
+    if decoder.n_goals != task.n_goals:
+        raise ConfigError(
+            f"decoder reads a belief over {decoder.n_goals} goals, the task has {task.n_goals}; "
+            "for a task grown by a new goal, wrap the decoder in lasa.method.newgoals.MappedDecoder"
+        )
+
+
+def decode_candidates(
+    decoder: ActionDecoder, z_grid: np.ndarray, state: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """phi(z, s, b) for every user and every candidate, in one decoder call.
+
+    Args:
+        decoder: The decoder.
+        z_grid: Candidates, shape (K, d).
+        state: States, shape (U, n).
+        b: Beliefs, shape (U, G).
+
+    Returns:
+        Decoded actions, shape (U, K, n), float64.
+    """
+    return decoder.decode_numpy(z_grid[None], state[:, None], b[:, None])
+
+
+def latent_grid(n_z: int, z_dim: int = 1) -> np.ndarray:
+    """The joystick candidates a user weighs: an even grid on [-1, 1]^d, (n_z^d, d)."""
+    axis = np.linspace(-1.0, 1.0, n_z)
+    mesh = np.meshgrid(*([axis] * z_dim), indexing="ij")
+    return np.stack([m.ravel() for m in mesh], axis=-1)

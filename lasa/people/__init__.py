@@ -1,0 +1,3 @@
+"""Simulated people: Boltzmann users and their rollout (sims 1-4), the demonstrator, and the
+study's simulated participants.
+"""

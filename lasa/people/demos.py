@@ -1,0 +1,375 @@
+r"""Demonstrations D = {(s, a, b)}: reaches to each cup, then grasp adjustments there.
+
+Each demonstration is one continuous motion, as a kinesthetic teacher would give it:
+
+1. **Reach** from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)`,
+   at a constant joint-space speed that slows exponentially near the target (a
+   saturated proportional law, :math:`a = \min(k, v/\|e\|)\, e` with :math:`e = s^* - s`).
+   Unlike a minimum-jerk profile it moves off the start pose at full speed, so the
+   decoder learns that z moves the arm there too, and it slows down near the grasp,
+   so the decoder learns the small actions that precise grasping needs.
+2. **Adjust** the grasp at that cup: move along the preference curve
+   :math:`\theta \mapsto s^*(g, \theta)` to a few random new preferences, with the
+   same speed law in theta, holding still for a few steps after each.
+
+The belief of each tuple is the one the robot would have computed online along the
+demonstration (:mod:`lasa.method.belief`, starting uniform), so the decoder sees the
+contexts it will meet. Finally every tuple gets noisy copies: the state is perturbed
+and the action gains a correction back towards the demonstrated state, which teaches
+the decoder to return to the demonstrated manifold.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.config import ControlConfig, check_choice, check_range
+from lasa.base.errors import ConfigError
+from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
+from lasa.world.eating import EatingTask
+from lasa.world.robot import Robot
+from lasa.world.task import CupTask
+
+__all__ = [
+    "DemoConfig",
+    "collect_demonstrations",
+    "demonstration_summary",
+    "collect_eating_demonstrations",
+    "EATING_DEMOS",
+    "EATING_READINGS",
+]
+
+
+@dataclasses.dataclass(frozen=True)
+class DemoConfig:
+    """How many demonstrations, and how they move."""
+
+    n_theta: int = 9  # preferences demonstrated per cup, evenly spaced on [0, 1]
+    n_starts: int = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
+    start_noise: float = 0.3  # std of the start-pose perturbation [rad]
+    n_adjust: int = 3  # grasp adjustments (moves along the preference curve) per demo
+    speed: float = 0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
+    gain: float = 2.0  # proportional gain of the slow-down near each target [1/s]
+    tolerance: float = 0.01  # a motion ends this close to its target [rad]
+    hold_steps: int = 3  # steps held still after each motion [-]
+    n_perturb: int = 2  # noisy copies of every tuple [-]
+    perturb_std: float = 0.05  # std of the state perturbation of a copy [rad]
+    perturb_gain: float = 2.0  # gain of a copy's corrective action [1/s]
+    max_steps: int = 400  # cap on the length of one motion [steps]
+    seed: int = 0  # seed of the start perturbations, new preferences and copies
+
+    def __post_init__(self) -> None:
+        for name in ("n_theta", "n_starts"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
+        for name in ("n_adjust", "hold_steps", "n_perturb"):
+            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 0:
+                raise ConfigError(f"{name} must be a non-negative integer, got {getattr(self, name)!r}")
+        check_range("start_noise", self.start_noise, 0.0)
+        check_range("speed", self.speed, 0.0, 1.0, low_open=True)
+        check_range("gain", self.gain, 0.0, low_open=True)
+        check_range("tolerance", self.tolerance, 0.0, low_open=True)
+        check_range("perturb_std", self.perturb_std, 0.0)
+        check_range("perturb_gain", self.perturb_gain, 0.0)
+
+
+def demonstration_summary(task: CupTask, demos: Demonstrations) -> pd.DataFrame:
+    """One row per (demonstration, phase): its length and the belief in the demonstrated cup.
+
+    Columns: ``robot``, ``demo``, ``goal`` (the cup's name), ``phase`` (``reach``,
+    ``adjust``, ``hold``), ``steps``, ``belief_min`` and ``belief_end``.
+    """
+    clean = demos.clean()
+    return (
+        pd.DataFrame(
+            {
+                "robot": demos.robot,
+                "demo": clean.demo,
+                "goal": np.asarray(task.goal_names)[clean.goal],
+                "phase": np.asarray(PHASE_NAMES)[clean.phase],
+                "belief_true_goal": clean.beliefs[np.arange(len(clean)), clean.goal],
+            }
+        )
+        .groupby(["robot", "demo", "goal", "phase"], as_index=False)
+        .agg(
+            steps=("belief_true_goal", "size"),
+            belief_min=("belief_true_goal", "min"),
+            belief_end=("belief_true_goal", "last"),
+        )
+    )
+
+
+def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max_steps: int) -> np.ndarray:
+    """Distance travelled along a path of length ``span`` at each step, under the speed law.
+
+    The law runs on the scalar distance left, u' = min(gain * (span - u), speed), so
+    straight reaches and moves along the preference curve share it.
+    """
+    u = [0.0]
+    while span - u[-1] > tol and len(u) <= max_steps:
+        u.append(u[-1] + dt * min(gain * (span - u[-1]), speed))
+    return np.asarray(u)
+
+
+def collect_demonstrations(
+    task: CupTask, control: ControlConfig, config: DemoConfig = DemoConfig()
+) -> Demonstrations:
+    """Generate the demonstration dataset for ``task``.
+
+    Args:
+        task: The cup task (robot, goals, preference curves, start pose).
+        control: Control-loop units: dt, sigma_h (the speed scale) and the belief model.
+        config: Sizes and motion parameters of the demonstrations.
+
+    Returns:
+        The dataset, noisy copies included (see :meth:`Demonstrations.clean`).
+    """
+    rng, rows, beliefs = _start(config)
+    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
+    demo_id = 0
+    sets = task.belief_targets(control.likelihood)
+    thetas = np.linspace(0.0, 1.0, config.n_theta)
+    for g in range(task.n_goals):
+        for theta in thetas:
+            for j in range(config.n_starts):
+                start = task.start.copy()
+                if j > 0:
+                    start = robot.clip(start + rng.normal(0.0, config.start_noise, start.shape))
+                segments: list[tuple[np.ndarray, float, int]] = []
+                # 1. reach: straight line in joint space under the speed law
+                segments.append((_line_path(start, task.target(g, theta), cruise, config, dt), theta, REACH))
+                # 2. adjustments along the preference curve, moving in theta
+                current = theta
+                for _ in range(config.n_adjust):
+                    new = float(rng.uniform(0.0, 1.0))
+                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
+                    segments.append((path, new, ADJUST))
+                    current = new
+                _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints)
+                demo_id += 1
+    return _dataset(robot, rows, beliefs, control, config, rng)
+
+
+def _start(config: DemoConfig) -> tuple[np.random.Generator, dict[str, list[np.ndarray]], list[np.ndarray]]:
+    """A collection's random stream, its empty columns and its empty list of beliefs."""
+    columns: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+    return np.random.default_rng(config.seed), columns, []
+
+
+def _line_path(
+    start: np.ndarray, target: np.ndarray, cruise: float, config: DemoConfig, dt: float
+) -> np.ndarray:
+    """States along the straight joint-space line from ``start`` to ``target`` under the speed law."""
+    span = float(np.linalg.norm(target - start))
+    u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
+    return start + (u / max(span, 1e-12))[:, None] * (target - start)
+
+
+def _curve_path(
+    curve: Callable[[np.ndarray], np.ndarray],
+    start: float,
+    end: float,
+    cruise: float,
+    config: DemoConfig,
+    dt: float,
+) -> np.ndarray:
+    """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
+    grid = np.linspace(start, end, 64)
+    pts = curve(grid)
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+    u = _progress(float(arc[-1]), cruise, config.gain, config.tolerance, dt, config.max_steps)
+    return curve(np.interp(u, arc, grid))
+
+
+def _append_demo(
+    rows: dict[str, list[np.ndarray]],
+    beliefs: list[np.ndarray],
+    segments: list[tuple[np.ndarray, float, int]],
+    demo_id: int,
+    goal: int,
+    sets: np.ndarray,
+    control: ControlConfig,
+    config: DemoConfig,
+    n_joints: int,
+    start_belief: np.ndarray | None = None,
+) -> None:
+    """Append one demonstration's tuples: each segment's finite differences, then a hold.
+
+    ``segments`` are (path of states, preference, phase label); the belief is the one the
+    robot computes online along the demonstration, starting from ``start_belief``
+    (default uniform).
+    """
+    log_b = uniform_log_belief(1, len(sets))[0] if start_belief is None else np.log(start_belief)
+    for path, th, phase in segments:
+        s = path[:-1]
+        a = np.diff(path, axis=0) / control.dt
+        if config.hold_steps:
+            s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
+            a = np.concatenate([a, np.zeros((config.hold_steps, n_joints))])
+        ph = np.full(len(s), phase)
+        ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
+        # online belief along the demonstration
+        for k in range(len(s)):
+            beliefs.append(belief(log_b))
+            lik = log_likelihood(s[k], a[k], sets, control.dt, control.belief_beta, control.likelihood_step)
+            log_b = update_log_belief(log_b, lik, control.belief_floor)
+        rows["s"].append(s)
+        rows["a"].append(a)
+        rows["demo"].append(np.full(len(s), demo_id))
+        rows["goal"].append(np.full(len(s), goal))
+        rows["theta"].append(np.full(len(s), th))
+        rows["phase"].append(ph)
+
+
+def _dataset(
+    robot: Robot,
+    rows: dict[str, list[np.ndarray]],
+    beliefs: list[np.ndarray],
+    control: ControlConfig,
+    config: DemoConfig,
+    rng: np.random.Generator,
+) -> Demonstrations:
+    """The dataset from the demonstrations' tuples, with ``config.n_perturb`` noisy copies of each.
+
+    A copy's state is perturbed and its action corrected back towards the demonstrated
+    state (clipped below sigma_h), which teaches the decoder to return to the manifold.
+    """
+    states = np.concatenate(rows["s"])
+    actions = np.concatenate(rows["a"])
+    b = np.stack(beliefs)
+    meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
+    copies_s, copies_a = [states], [actions]
+    for _ in range(config.n_perturb):
+        noise = rng.normal(0.0, config.perturb_std, states.shape)
+        s_new = robot.clip(states + noise)
+        a_new = actions + config.perturb_gain * (states - s_new)
+        norm = np.linalg.norm(a_new, axis=1, keepdims=True)
+        limit = 0.99 * control.action_scale
+        a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
+        copies_s.append(s_new)
+        copies_a.append(a_new)
+    reps = config.n_perturb + 1
+    perturbed = np.zeros(len(states) * reps, dtype=bool)
+    perturbed[len(states) :] = True
+    return Demonstrations(
+        robot=robot.name,
+        states=np.concatenate(copies_s),
+        actions=np.concatenate(copies_a),
+        beliefs=np.tile(b, (reps, 1)),
+        demo=np.tile(meta["demo"], reps),
+        goal=np.tile(meta["goal"], reps),
+        theta=np.tile(meta["theta"], reps),
+        phase=np.tile(meta["phase"], reps),
+        perturbed=perturbed,
+    )
+
+
+# The eating task's demonstrations: five tilts per goal, each reached from home and from
+# the entries of the three other goals, then stroked, adjusted once and stroked again:
+# about 20 minutes of motion, the paper's amount (notebook 10 measures it).
+EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
+
+
+EATING_READINGS = ("continuous", "home", "transfers")  # how the eating demonstrations are cut
+
+
+def collect_eating_demonstrations(
+    task: EatingTask, control: ControlConfig, config: DemoConfig = EATING_DEMOS, reading: str = "continuous"
+) -> Demonstrations:
+    """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
+
+    The paper says only that they "guided the robot towards each plate, and then performed
+    cutting, stabbing, and scooping motions at these goals". How a teacher cuts them into
+    demonstrations is a reading (``reading``), and it decides the belief each tuple carries:
+
+    - ``continuous``: for every goal and each of ``config.n_theta`` tilts, from each start
+      (home, ``n_starts - 1`` perturbed homes, and the entry of every other goal at a random
+      tilt, so that the moves between bowls of a task are shown); a move from another goal
+      starts from the belief the robot holds after working there (all but the floor on it),
+      as in one continuous demonstration of a task;
+    - ``home``: the same number of demonstrations, all from home or perturbed homes
+      (``n_starts + G - 2`` of them), each from a uniform belief: no move between goals;
+    - ``transfers``: reach-then-manipulate from home (and ``n_starts - 1`` perturbed
+      homes) with a uniform belief, plus, for every other goal, a separate transfer
+      demonstration from that goal's entry at a random tilt to this goal's entry, which
+      starts from a uniform belief (a new recording) and ends there without manipulating.
+
+    Each manipulation demonstration, from its start:
+
+    1. **reach** the stroke's entry s*(g, theta, 0) along a straight joint-space line;
+    2. **stroke** through the food to s*(g, theta, 1) and back to the entry;
+    3. ``n_adjust`` times: **adjust** the tilt along the entries to a random new theta,
+       then **stroke** there.
+
+    Every motion follows the cup demonstrations' speed law (cruise at ``speed`` sigma_h,
+    slow down near the target), with holds after each; beliefs are computed online over
+    the task's goals and the tuples get the same noisy copies (:func:`collect_demonstrations`).
+
+    Args:
+        task: The eating task (:func:`lasa.world.eating.make_eating_task`).
+        control: Control-loop units.
+        config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
+    """
+    rng, rows, beliefs = _start(config)
+    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
+    sets = task.belief_targets(control.likelihood)
+    demo_id = 0
+
+    def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:
+        def along(depths: np.ndarray) -> np.ndarray:
+            return task.pose(g, theta, np.atleast_1d(depths))
+
+        down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
+        return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
+
+    check_choice("reading", reading, EATING_READINGS)
+    for g in range(task.n_goals):
+        for theta in np.linspace(0.0, 1.0, config.n_theta):
+            n_home = config.n_starts + (task.n_goals - 1 if reading == "home" else 0)
+            starts = [task.start.copy()]
+            starts += [
+                robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
+                for _ in range(n_home - 1)
+            ]
+            beliefs_0: list[np.ndarray | None] = [None] * len(starts)
+            manipulate = [True] * len(starts)
+            if reading != "home":
+                for other in range(task.n_goals):
+                    if other != g:
+                        starts.append(task.target(other, float(rng.uniform())))
+                        settled = _settled_belief(other, task.n_goals, control.belief_floor)
+                        beliefs_0.append(settled if reading == "continuous" else None)
+                        manipulate.append(reading == "continuous")
+            for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
+                target = task.target(g, theta)
+                segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
+                if not work:  # a separate transfer: the reach, and its hold, only
+                    _append_demo(
+                        rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints, b0
+                    )
+                    demo_id += 1
+                    continue
+                segments += stroke(g, float(theta))
+                current = float(theta)
+                for _ in range(config.n_adjust):
+                    new = float(rng.uniform(0.0, 1.0))
+                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
+                    segments.append((path, new, ADJUST))
+                    segments += stroke(g, new)
+                    current = new
+                _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints, b0)
+                demo_id += 1
+    return _dataset(robot, rows, beliefs, control, config, rng)
+
+
+def _settled_belief(goal: int, n_goals: int, floor: float) -> np.ndarray:
+    """The belief after working at ``goal`` for a while: all but the floor of every other goal on it."""
+    b = np.full(n_goals, floor)
+    b[goal] = 1.0 - (n_goals - 1) * floor
+    return b

@@ -1,0 +1,217 @@
+r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1).
+
+A simulated user wants the robot at :math:`s^*`, the pose of their goal cup and
+preferred grasp, and weighs each joystick input z by where it would move the robot:
+
+.. math::
+
+    p(z) \propto \exp\big\{-\beta(t)\, \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\big\}.
+
+We read :math:`s + \Delta\phi` as the next state the user's own input would produce,
+with the control period Delta of the transition :math:`s' = s + \Delta a` (the paper
+writes :math:`s + \phi`, with Delta absorbed into its action units). The user does not
+model the robot's assistance. beta = 0 gives uniformly random inputs, beta -> inf the
+best input on the grid of candidates. The rationality may change over time,
+:math:`\beta(t) = \beta_0 + m t` (learning users, Fig. sim3, start at beta_0 = 0), and so
+may the goal: a user who changes their mind (Fig. sim2) aims at ``first_target`` for
+the steps t < N and at ``target`` from step N on.
+
+Sampling uses the Gumbel-max trick on pre-drawn uniforms, so that a user's choices
+depend only on its own random stream: the same user with the same seed makes the same
+draws under every method, a paired comparison.
+
+Eq. S1's user is one model of a person; the shared-autonomy literature also evaluates
+with surrogate *pilots* (Reddy et al. 2018, and the pilots of diffusion shared autonomy),
+:data:`PILOTS`: a ``laggy`` pilot repeats its previous input with probability p, a
+``noisy`` one takes a uniformly random input with probability p; otherwise both choose
+as Eq. S1's user does (:func:`pilot_choice`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from lasa.base.errors import ConfigError
+
+__all__ = [
+    "PILOTS",
+    "UserPopulation",
+    "user_costs",
+    "choose_latent",
+    "gumbel_noise",
+    "pilot_choice",
+]
+
+PILOTS = ("boltzmann", "laggy", "noisy")
+
+
+_SCALARS = ("pilot", "pilot_prob")  # UserPopulation fields shared by every user
+
+
+@dataclasses.dataclass(frozen=True)
+class UserPopulation:
+    """A batch of U simulated users, as arrays.
+
+    Attributes:
+        goal: Index of each user's cup, shape (U,).
+        theta: Each user's preferred grasp in [0, 1], shape (U,).
+        target: Each user's desired final pose s*, shape (U, n) [rad].
+        beta0: Rationality at t = 0, shape (U,) [1/rad^2].
+        slope: Growth of the rationality per step, m in beta(t) = beta0 + m t, (U,).
+        seed: The random stream each user draws from (an index into the noise), (U,).
+        first_target: The pose each user aims at before changing their mind, (U, n);
+            ``None`` for users who never do.
+        change_step: N, the first step at which each user aims at ``target``, (U,).
+        pilot: The kind of user, one of :data:`PILOTS` (all users of a population).
+        pilot_prob: p of the laggy or noisy pilot [-]; unused by ``boltzmann``.
+    """
+
+    goal: np.ndarray
+    theta: np.ndarray
+    target: np.ndarray
+    beta0: np.ndarray
+    slope: np.ndarray
+    seed: np.ndarray
+    first_target: np.ndarray | None = None
+    change_step: np.ndarray | None = None
+    pilot: str = "boltzmann"
+    pilot_prob: float = 0.0
+
+    def __post_init__(self) -> None:
+        n = len(self.goal)
+        if self.pilot not in PILOTS:
+            raise ConfigError(f"unknown pilot {self.pilot!r}; choose one of {', '.join(map(repr, PILOTS))}")
+        if not 0.0 <= self.pilot_prob <= 1.0:
+            raise ConfigError(f"pilot_prob must be in [0, 1], got {self.pilot_prob!r}")
+        for f in dataclasses.fields(self):
+            if f.name in _SCALARS:
+                continue
+            value = getattr(self, f.name)
+            if value is not None and len(value) != n:
+                raise ConfigError(f"UserPopulation.{f.name} has {len(value)} rows, expected {n}")
+        if np.any(~np.isfinite(self.beta0) & ~np.isposinf(self.beta0)) or np.any(self.beta0 < 0):
+            raise ConfigError(f"beta must be >= 0, got min {np.min(self.beta0)}")
+        if np.any(~np.isfinite(self.slope)) or np.any(self.slope < 0):
+            raise ConfigError(f"slope must be a finite number >= 0, got min {np.min(self.slope)}")
+        if (self.first_target is None) != (self.change_step is None):
+            raise ConfigError("first_target and change_step go together: give both or neither")
+        if self.change_step is not None:
+            steps = np.asarray(self.change_step)
+            if steps.dtype.kind not in "iu" or np.any(steps < 0):
+                raise ConfigError(f"change_step N must hold integers >= 0, got {steps}")
+
+    def __len__(self) -> int:
+        return len(self.goal)
+
+    def subset(self, index: np.ndarray) -> UserPopulation:
+        """The users at ``index`` (an integer or boolean index array), as a new population."""
+        picked = {
+            f.name: None if getattr(self, f.name) is None else np.asarray(getattr(self, f.name))[index]
+            for f in dataclasses.fields(self)
+            if f.name not in _SCALARS
+        }
+        picked.update(pilot=self.pilot, pilot_prob=self.pilot_prob)
+        return UserPopulation(**picked)  # type: ignore[arg-type]
+
+    def target_at(self, t: int) -> np.ndarray:
+        """The pose each user aims at during step t, shape (U, n)."""
+        if self.first_target is None or self.change_step is None:
+            return self.target
+        return np.where((t < np.asarray(self.change_step))[:, None], self.first_target, self.target)
+
+    def beta(self, t: int) -> np.ndarray:
+        """Rationality beta(t) = beta0 + m t of every user at step t, shape (U,)."""
+        return self.beta0 + self.slope * t
+
+
+def user_costs(target: np.ndarray, state: np.ndarray, phi: np.ndarray, dt: float) -> np.ndarray:
+    """||s* - (s + dt phi(z))||^2 for every user and candidate, shape (U, K).
+
+    Args:
+        target: s* per user, shape (U, n).
+        state: s per user, shape (U, n).
+        phi: Decoded action of every candidate, shape (U, K, n).
+        dt: Control period.
+    """
+    offset = (target - state)[:, None, :]
+    diff = dt * phi
+    if diff.shape == np.broadcast_shapes(offset.shape, diff.shape) and diff.dtype == np.result_type(
+        offset, diff
+    ):
+        np.subtract(offset, diff, out=diff)  # the same difference, without a second buffer
+    else:
+        diff = offset - diff
+    return np.einsum("ukn,ukn->uk", diff, diff)
+
+
+def gumbel_noise(uniform: np.ndarray) -> np.ndarray:
+    """Gumbel(0, 1) samples from uniforms in (0, 1)."""
+    u = np.clip(uniform, 1e-12, 1.0 - 1e-12)  # a new array: the steps below reuse it
+    np.log(u, out=u)
+    np.negative(u, out=u)
+    np.log(u, out=u)
+    return np.negative(u, out=u)
+
+
+def choose_latent(costs: np.ndarray, beta: np.ndarray, gumbel: np.ndarray) -> np.ndarray:
+    """Sample a candidate index per user from p(z) ∝ exp(-beta cost) (Gumbel-max).
+
+    An infinite beta picks the best candidate (ties broken by the noise). Non-finite
+    costs (a decoder fault) are never chosen over a finite one.
+
+    Args:
+        costs: Cost of every candidate, shape (U, K).
+        beta: Rationality per user, shape (U,).
+        gumbel: Gumbel noise, shape (U, K).
+
+    Returns:
+        Chosen candidate indices, shape (U,).
+    """
+    beta = np.asarray(beta, dtype=float)[:, None]
+    if np.all(np.isfinite(costs)) and np.all(np.isfinite(beta)) and np.all(beta >= 0.0):
+        # The common case, in fewer passes: every masked branch below is inactive, and a
+        # zero beta gives logits of -0.0 instead of 0.0 (the same sums with the noise).
+        logits = np.multiply(beta, costs)
+        np.negative(logits, out=logits)
+        return np.argmax(logits + gumbel, axis=1)
+    costs = np.where(np.isfinite(costs), costs, np.inf)
+    finite_beta = np.isfinite(beta)
+    with np.errstate(invalid="ignore"):
+        logits = np.where(finite_beta, -np.where(beta > 0, beta * costs, 0.0), 0.0)
+        logits = np.where(np.isinf(costs), -np.inf, logits)
+    # infinitely rational users: the best cost wins, noise only breaks exact ties
+    best = costs <= costs.min(axis=1, keepdims=True)
+    logits = np.where(finite_beta, logits, np.where(best, 0.0, -np.inf))
+    return np.argmax(logits + gumbel, axis=1)
+
+
+def pilot_choice(
+    users: UserPopulation,
+    choice: np.ndarray,
+    previous: np.ndarray | None,
+    uniforms: np.ndarray,
+    n_candidates: int,
+) -> np.ndarray:
+    """The input a pilot gives, from the one Eq. S1 would choose.
+
+    Args:
+        users: The population (its ``pilot`` and ``pilot_prob``).
+        choice: Eq. S1's candidate index per user, shape (U,).
+        previous: Each user's input at the previous step, (U,); None at the first step
+            (a laggy pilot has nothing to repeat yet).
+        uniforms: Two uniforms in [0, 1) per user, shape (U, 2): the event, and the random
+            input of the noisy pilot.
+        n_candidates: K, the number of joystick candidates.
+
+    Returns:
+        Candidate indices, shape (U,): ``choice`` itself for Boltzmann users.
+    """
+    if users.pilot == "boltzmann" or users.pilot_prob == 0.0:
+        return choice
+    event = uniforms[:, 0] < users.pilot_prob
+    if users.pilot == "laggy":
+        return choice if previous is None else np.where(event, previous, choice)
+    random = np.minimum((uniforms[:, 1] * n_candidates).astype(int), n_candidates - 1)
+    return np.where(event, random, choice)

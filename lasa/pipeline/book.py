@@ -1,0 +1,219 @@
+"""A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
+
+``python -m lasa.pipeline.book`` takes the executed notebooks of the last ``make figures``
+(``build/notebooks``) and the figures folder, and writes a static site to ``build/book``:
+
+- the **front page** is the verdict table (``figures/verdicts.md``), each row linking to the
+  notebook behind it; the full claims table is a page of its own, the last;
+- then **one page per notebook**, in the order of the paper (01 to 11; the per-robot
+  notebooks for planar5, then the Panda, each titled with its robot), with their figures,
+  tables and outputs; the figures folder is copied beside them (the notebooks' Markdown
+  shows ``../figures/*.png`` and links the videos);
+- **nothing is executed again** (``execute_notebooks: off``);
+- **it works offline**: Jupyter Book 1 is Sphinx with a theme installed from the registry;
+  MathJax is served from the site itself (``mathjax/``, from the ``mathjax`` npm package that
+  ``make setup`` fetches into ``.venv/mathjax``), and the widget scripts that myst-nb would load
+  from a CDN are switched off (progress bars show as text).
+
+Publish it by copying ``build/book/html`` to any static host (it is plain files).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+from lasa.base.errors import ArtifactError
+from lasa.base.io import write_text
+from lasa.base.paths import repo_root, resolve
+from lasa.evidence.claims import render_markdown, render_verdicts
+
+__all__ = [
+    "NOTEBOOK_OF_FIGURE",
+    "ordered_notebooks",
+    "front_page",
+    "claims_page",
+    "retitle",
+    "build_book",
+    "main",
+]
+
+# The notebook behind each figure's claims (file stems; per robot where they run per robot).
+NOTEBOOK_OF_FIGURE = {
+    "sim1": "04_fixed_expertise",
+    "sim2": "05_changing_goals",
+    "sim3": "06_learning_users",
+    "sim4": "07_new_goals",
+    "study": "11_eating_study",
+}
+ROBOT_ORDER = ("planar5", "panda")
+ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
+
+
+def ordered_notebooks(folder: Path) -> list[Path]:
+    """The executed notebooks in ``folder``, in the paper's order (number, then planar5, Panda)."""
+    books = [p for p in folder.glob("*.ipynb") if not p.name.endswith(".failed.ipynb")]
+
+    def key(path: Path) -> tuple[str, int]:
+        stem, _, robot = path.stem.partition("-")
+        return stem, ROBOT_ORDER.index(robot) if robot in ROBOT_ORDER else -1
+
+    return sorted(books, key=key)
+
+
+def front_page(claims: pd.DataFrame, pages: set[str]) -> str:
+    """The front page's Markdown: what the book is, then the verdict table (``figures/verdicts.md``)."""
+
+    def link(stem: str) -> str:
+        for name in (f"{stem}-planar5", stem, f"{stem}-panda"):
+            if name in pages:
+                return f"{name}.ipynb"
+        return f"{stem}.ipynb"
+
+    lines = [
+        "# lasa: Shared Autonomy with Learned Latent Actions",
+        "",
+        "The executed notebooks of a `make figures` run of **lasa**, a reproducibility package for Jeon,",
+        'Losey & Sadigh, "Shared Autonomy with Learned Latent Actions" (RSS 2020). The table says, claim by',
+        "claim and robot, whether the paper's result reproduced: the verdict, the interval of the number it",
+        "rests on, N (simulated users per point, or participants), and whether it is settled (every",
+        "interval clear of its rule's thresholds) or undecided. Each row links to the notebook that",
+        "measures it. The pages that follow are the notebooks, in the paper's order; the full claims",
+        "table, every reading of every claim, is the last page.",
+        "",
+        render_verdicts(claims, link),
+    ]
+    return "\n".join(lines)
+
+
+def claims_page(claims: pd.DataFrame) -> str:
+    """The full claims table (``figures/claims.md``) as a page of its own."""
+    return "# Every reading of every claim\n\nThe rows of `figures/claims.csv`.\n\n" + render_markdown(claims)
+
+
+def retitle(notebook: Path, robot: str) -> None:
+    """Append the robot to a notebook's first heading, so its two robots' pages differ."""
+    nb = json.loads(notebook.read_text())
+    for cell in nb["cells"]:
+        text = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        if cell["cell_type"] == "markdown" and text.startswith("# "):
+            first, _, rest = text.partition("\n")
+            name = ROBOT_TITLES.get(robot, robot)
+            cell["source"] = f"{first} — {name}" + (f"\n{rest}" if rest else "")
+            break
+    write_text(notebook, json.dumps(nb, indent=1, ensure_ascii=False) + "\n")
+
+
+def build_book(
+    notebooks: str | Path,
+    figures: str | Path,
+    out: str | Path,
+    mathjax: str | Path | None = None,
+    progress: bool = True,
+) -> Path:
+    """Assemble the book's sources under ``out/src`` and build the site into ``out/html``.
+
+    Args:
+        notebooks: The executed notebooks (``build/notebooks``).
+        figures: The figures folder (its ``claims.csv`` makes the front page).
+        out: The book's folder; ``out/html/index.html`` is the front page.
+        mathjax: MathJax's ``es5`` folder (default ``.venv/mathjax/es5``, made by ``make setup``).
+        progress: Show Jupyter Book's output.
+
+    Raises:
+        ArtifactError: if there are no executed notebooks, no claims table or no MathJax.
+    """
+    notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
+    books = ordered_notebooks(notebooks)
+    if not books:
+        raise ArtifactError(f"no executed notebooks in {notebooks}; run: make figures")
+    claims_csv = figures / "claims.csv"
+    if not claims_csv.is_file():
+        raise ArtifactError(f"no claims table {claims_csv}; run: make figures")
+    mathjax = Path(mathjax) if mathjax else repo_root() / ".venv" / "mathjax" / "es5"
+    if not (mathjax / "tex-chtml.js").is_file():
+        raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
+    src = out / "src"
+    shutil.rmtree(src, ignore_errors=True)
+    (src / "notebooks").mkdir(parents=True)
+    for book in books:
+        shutil.copy2(book, src / "notebooks" / book.name)
+        _, _, robot = book.stem.partition("-")
+        if robot:
+            retitle(src / "notebooks" / book.name, robot)
+    shutil.copytree(figures, src / "figures", ignore=shutil.ignore_patterns("*.csv", "*.md"))
+    shutil.copytree(mathjax, src / "_extra" / "mathjax")
+    pages = {b.stem for b in books}
+    claims = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
+    index = front_page(claims, pages).replace("](", "](notebooks/")
+    write_text(src / "index.md", index)
+    write_text(src / "claims.md", claims_page(claims))
+    toc = ["format: jb-book", "root: index", "chapters:"] + [f"- file: notebooks/{b.stem}" for b in books]
+    toc.append("- file: claims")
+    write_text(src / "_toc.yml", "\n".join(toc) + "\n")
+    write_text(
+        src / "_config.yml",
+        "\n".join(
+            [
+                "title: lasa",
+                "author: the lasa developers",
+                "only_build_toc_files: true",
+                "execute:",
+                "  execute_notebooks: 'off'",
+                "launch_buttons:",
+                "  thebe: false",
+                "sphinx:",
+                "  config:",
+                "    mathjax_path: ../mathjax/tex-chtml.js",
+                "    html_extra_path: ['_extra']",
+                "    nb_ipywidgets_js: {}",
+                "    html_show_sourcelink: false",
+                "",
+            ]
+        ),
+    )
+    build = out / "_build"
+    shutil.rmtree(build, ignore_errors=True)
+    command = [
+        str(Path(sys.executable).parent / "jupyter-book"),
+        "build",
+        str(src),
+        "--path-output",
+        str(out),
+    ]
+    result = subprocess.run(command, capture_output=not progress, text=True)
+    html = out / "_build" / "html"
+    if result.returncode != 0 or not (html / "index.html").is_file():
+        detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
+        raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")
+    target = out / "html"
+    shutil.rmtree(target, ignore_errors=True)
+    shutil.move(str(html), target)
+    shutil.rmtree(build, ignore_errors=True)
+    return target / "index.html"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: ``python -m lasa.pipeline.book [--notebooks DIR] [--figures DIR] [--out DIR]``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--notebooks", default="build/notebooks", help="the executed notebooks [%(default)s]")
+    parser.add_argument("--figures", default="figures", help="the figures and claims table [%(default)s]")
+    parser.add_argument("--out", default="build/book", help="where the HTML book goes [%(default)s]")
+    args = parser.parse_args(argv)
+    try:
+        index = build_book(args.notebooks, args.figures, args.out)
+    except ArtifactError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"book: {index}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,126 @@
+"""Which of lasa's files each notebook runs: the Make prerequisites of the figure targets.
+
+A notebook's executed copy must be re-made when a module it imports changes, directly or
+through other modules, and only then: an edit to live use (:mod:`lasa.live`), which no
+notebook reaches, leaves ``make figures`` with nothing to do, and an edit to one figure's
+module re-runs that figure's notebooks alone.
+
+The closure is read from the source, never by importing it (Make runs this with the system
+Python, before the environment exists): every ``import`` and ``from ... import`` of the
+notebook's code cells, then of each lasa module they reach, anywhere in the file (imports
+inside functions included, those under ``if TYPE_CHECKING:`` left out), with
+``from lasa import X`` resolved through the package's lazy exports (``lasa._EXPORTS``) or to
+the submodule ``X``. A module that reaches the robots
+(:mod:`lasa.world.robot`) also depends on their MJCF assets. Every notebook depends on
+``lasa/__init__.py`` (imported first) and ``pyproject.toml`` (the version it records).
+
+Run as a script: ``python lasa/pipeline/makedeps.py notebooks/*.ipynb`` prints one Make
+variable per notebook, ``NB_SRC_<stem> := <files>``. Standard library only.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import sys
+from pathlib import Path
+
+__all__ = ["module_file", "imports_of", "closure", "notebook_sources", "main"]
+
+ROOT = Path(__file__).resolve().parents[2]
+ALWAYS = ("lasa/__init__.py", "pyproject.toml")
+
+
+def module_file(name: str, root: Path = ROOT) -> Path | None:
+    """The source file of lasa module ``name`` (a package's ``__init__.py``), or None."""
+    if name != "lasa" and not name.startswith("lasa."):
+        return None
+    base = root.joinpath(*name.split("."))
+    for path in (base.with_suffix(".py"), base / "__init__.py"):
+        if path.is_file():
+            return path
+    return None
+
+
+def _exports(root: Path) -> dict[str, str]:
+    """``lasa._EXPORTS``: name -> defining module, read from the package's source."""
+    for node in ast.walk(ast.parse((root / "lasa" / "__init__.py").read_text())):
+        if isinstance(node, ast.Assign) and any(
+            isinstance(t, ast.Name) and t.id == "_EXPORTS" for t in node.targets
+        ):
+            return dict(ast.literal_eval(node.value))
+    return {}
+
+
+def _run_nodes(tree: ast.AST) -> list[ast.AST]:
+    """Every node of ``tree`` except those under ``if TYPE_CHECKING:`` (imports for typing only)."""
+    out: list[ast.AST] = []
+    todo = [tree]
+    while todo:
+        node = todo.pop()
+        out.append(node)
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            todo.extend(node.orelse)
+            continue
+        todo.extend(ast.iter_child_nodes(node))
+    return out
+
+
+def imports_of(source: str, root: Path = ROOT) -> set[str]:
+    """The lasa modules a piece of Python source imports (each name resolved to its module)."""
+    found: set[str] = set()
+    exports = _exports(root)
+    for node in _run_nodes(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                parts = alias.name.split(".")
+                found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            parts = node.module.split(".")
+            found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
+            for alias in node.names:
+                sub = f"{node.module}.{alias.name}"
+                if module_file(sub, root) is not None:
+                    found.add(sub)
+                elif node.module == "lasa" and alias.name in exports:
+                    found.add(exports[alias.name])
+    return {m for m in found if module_file(m, root) is not None}
+
+
+def closure(modules: set[str], root: Path = ROOT) -> set[str]:
+    """Every lasa module reached from ``modules`` by imports (them included)."""
+    seen: set[str] = set()
+    todo = sorted(modules)
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        path = module_file(name, root)
+        assert path is not None
+        todo.extend(sorted(imports_of(path.read_text(), root) - seen))
+    return seen
+
+
+def notebook_sources(notebook: str | Path, root: Path = ROOT) -> list[str]:
+    """The repository files a notebook's run depends on, sorted, relative to ``root``."""
+    cells = json.loads(Path(notebook).read_text())["cells"]
+    code = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
+    # IPython magics and shell escapes are not Python: leave them out of the parse
+    lines = [line for line in code.splitlines() if not line.lstrip().startswith(("%", "!"))]
+    modules = closure(imports_of("\n".join(lines), root) | {"lasa"}, root)
+    files = {str(module_file(m, root).relative_to(root)) for m in modules}  # type: ignore[union-attr]
+    if "lasa.world.robot" in modules:
+        files |= {str(p.relative_to(root)) for p in (root / "lasa" / "world" / "assets").rglob("*.xml")}
+    return sorted(files | set(ALWAYS))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Print ``NB_SRC_<stem> := <files>`` for each notebook named on the command line."""
+    for notebook in argv if argv is not None else sys.argv[1:]:
+        print(f"NB_SRC_{Path(notebook).stem} := {' '.join(notebook_sources(notebook))}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

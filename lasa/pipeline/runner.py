@@ -1,0 +1,193 @@
+"""Run the figure notebooks headless with papermill, with checked parameters.
+
+A config file (``configs/paper.yaml`` or ``configs/quick.yaml``) holds a ``common``
+section passed to every notebook and one section per notebook, named by its file stem
+(``04_fixed_expertise``). Papermill only *warns* about a parameter that the notebook's
+``parameters`` cell does not define; here it is an error, because a misspelt knob
+would silently leave its default in place. The executed notebook is written to a
+temporary file and renamed into place, so an interrupted run leaves nothing behind
+that Make could mistake for a finished one. A run that fails in a cell is kept as
+``<name>.failed.ipynb`` for reading.
+
+Usage::
+
+    python -m lasa.pipeline.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
+        --out build/notebooks --robot panda [--param build_dir=build/x] [--timings t.jsonl]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+# nbformat validates notebooks with jsonschema, whose optional IRI format checker
+# (rfc3987_syntax) builds a parser grammar on import: 1.3 s of every notebook run, for a
+# format that notebook schemas never use. Without the module, jsonschema skips it.
+sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
+
+import papermill as pm  # noqa: E402
+import yaml  # noqa: E402
+
+from lasa.base.errors import ConfigError, NotebookError  # noqa: E402
+from lasa.base.io import atomic_path, require_file  # noqa: E402
+
+__all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
+
+
+def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
+    """Names and default values of a notebook's ``parameters`` cell.
+
+    Raises:
+        ConfigError: if the notebook has no cell tagged ``parameters``.
+    """
+    params = pm.inspect_notebook(str(notebook))
+    if not params:
+        raise ConfigError(f"{notebook} has no cell tagged 'parameters'")
+    return {name: info["default"] for name, info in params.items()}
+
+
+def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
+    """The parameters a config file passes to ``notebook``: ``common`` plus its section.
+
+    Raises:
+        ConfigError: if the file is not a mapping of sections, or if it passes a name
+            that the notebook's ``parameters`` cell does not define.
+    """
+    path = require_file(config, "it ships with the repository under configs/")
+    data = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(data, dict) or not all(isinstance(v, dict) for v in data.values()):
+        raise ConfigError(f"{path} must map section names to parameter mappings")
+    stem = Path(notebook).stem
+    params = {**data.get("common", {}), **data.get(stem, {})}
+    known = notebook_parameters(notebook)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise ConfigError(
+            f"{path} passes unknown parameter(s) {unknown} to {Path(notebook).name}; "
+            f"its parameters cell defines {sorted(known)}"
+        )
+    return params
+
+
+def run_notebook(
+    notebook: str | os.PathLike[str],
+    config: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    overrides: dict[str, Any] | None = None,
+    progress: bool = True,
+) -> Path:
+    """Execute ``notebook`` with the parameters of ``config`` into ``out_dir``.
+
+    Args:
+        notebook: The source notebook (committed without outputs).
+        config: The YAML config file.
+        out_dir: Folder of the executed copy, named ``<stem>-<robot>.ipynb`` when a
+            ``robot`` override is given, else after the notebook.
+        overrides: Extra parameters, checked like the config's.
+        progress: Show papermill's cell progress bar.
+
+    Returns:
+        The path of the executed notebook.
+
+    Raises:
+        NotebookError: if a cell raised; its message is that exception's class and message
+            (the library's own error, for a ``ConfigError``) and the partial run's path,
+            ``<name>.failed.ipynb``, which holds the full traceback.
+    """
+    params = load_config(config, notebook)
+    if overrides:
+        unknown = sorted(set(overrides) - set(notebook_parameters(notebook)))
+        if unknown:
+            raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
+        params.update(overrides)
+    name = Path(notebook).name
+    if overrides and "robot" in overrides:
+        name = f"{Path(notebook).stem}-{overrides['robot']}.ipynb"
+    out = Path(out_dir) / name
+    failed = out.with_suffix(".failed.ipynb")
+    with atomic_path(out) as tmp:
+        try:
+            pm.execute_notebook(
+                str(notebook),
+                str(tmp),
+                parameters=params,
+                kernel_name="python3",
+                cwd=str(Path.cwd()),
+                progress_bar=progress,
+            )
+        except pm.PapermillExecutionError as exc:
+            # Keep the partial run for reading, under a name no Make rule will take for done.
+            os.replace(tmp, failed)
+            raise NotebookError(str(notebook), exc.ename, str(exc.evalue), str(failed)) from None
+    failed.unlink(missing_ok=True)
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry point: run one notebook and report its wall time."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("notebook", help="the notebook to run, e.g. notebooks/04_fixed_expertise.ipynb")
+    parser.add_argument(
+        "--config", required=True, help="the YAML config: configs/paper.yaml, quick.yaml or large.yaml"
+    )
+    parser.add_argument("--out", required=True, help="folder of the executed copy")
+    parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
+    parser.add_argument(
+        "--param",
+        "-p",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override one parameter (VALUE is read as YAML); repeatable",
+    )
+    parser.add_argument("--timings", help="append {notebook, robot, seconds} as a JSON line to this file")
+    parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
+    args = parser.parse_args(argv)
+    start = time.perf_counter()
+    try:
+        overrides = parse_params(args.param)
+        if args.robot:
+            overrides["robot"] = args.robot
+        out = run_notebook(
+            args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
+        )
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except (
+        NotebookError
+    ) as exc:  # the notebook's own cause, as the last line (its traceback is in the partial run)
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    seconds = time.perf_counter() - start
+    if args.timings:
+        record = {"notebook": Path(args.notebook).stem, "robot": args.robot, "seconds": round(seconds, 2)}
+        Path(args.timings).parent.mkdir(parents=True, exist_ok=True)
+        with open(args.timings, "a") as fh:  # one short line per run: appends do not interleave
+            fh.write(json.dumps(record) + "\n")
+    print(f"{out} ({seconds:.1f} s)")
+    return 0
+
+
+def parse_params(items: list[str]) -> dict[str, Any]:
+    """``["name=value", ...]`` -> ``{name: yaml(value)}``.
+
+    Raises:
+        ConfigError: for an item without ``=`` or with an empty name.
+    """
+    out: dict[str, Any] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise ConfigError(f"--param expects NAME=VALUE, got {item!r}")
+        out[name.strip()] = yaml.safe_load(value)
+    return out
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

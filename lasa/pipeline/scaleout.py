@@ -1,0 +1,109 @@
+"""Independent jobs, run locally or on a Dask cluster, with the same results either way.
+
+A sweep grid (:mod:`lasa.figures.robustness`) is a list of independent cells. :func:`run_jobs`
+runs them through ``joblib``: in this process by default (``n_jobs`` worker processes if
+asked), or, given a Dask scheduler address, on that cluster through joblib's ``dask``
+backend (``dask.distributed``). The address comes from the caller (a config key) or from
+the environment variable ``LASA_SCHEDULER`` (``tcp://host:8786``); with neither, nothing
+needs a cluster.
+
+Each job is a pure function of its arguments, seeded, and runs with one torch thread
+(:func:`lasa.base.config.set_threads`), and results come back in the jobs' order: the CSV a
+grid writes is the same wherever its cells ran.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any, TypeVar
+
+from tqdm.auto import tqdm
+
+from lasa.base.errors import ConfigError
+
+__all__ = ["SCHEDULER_ENV", "scheduler_address", "run_jobs"]
+
+SCHEDULER_ENV = "LASA_SCHEDULER"
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def scheduler_address(configured: str | None = None) -> str | None:
+    """The Dask scheduler to use: ``configured``, else ``$LASA_SCHEDULER``, else None (local).
+
+    Raises:
+        ConfigError: if the address is not of the form ``scheme://host:port``.
+    """
+    address = configured or os.environ.get(SCHEDULER_ENV) or None
+    if address is not None and "://" not in address:
+        raise ConfigError(
+            f"Dask scheduler address must look like tcp://host:8786, got {address!r} "
+            f"(from {'the config' if configured else SCHEDULER_ENV})"
+        )
+    return address
+
+
+def _threaded(fn: Callable[..., R], item: Any, shared: Any) -> R:
+    """Run one job with one torch thread (the worker may be a fresh process)."""
+    from lasa.base.config import set_threads  # noqa: PLC0415 (torch loads in the worker)
+
+    set_threads()
+    return fn(item) if shared is None else fn(shared, item)
+
+
+def run_jobs(
+    fn: Callable[..., R],
+    items: Sequence[T] | Iterable[T],
+    scheduler: str | None = None,
+    n_jobs: int = 1,
+    progress: bool = False,
+    desc: str = "jobs",
+    timeout: str = "20s",
+    shared: Any = None,
+) -> list[R]:
+    """``[fn(item) for item in items]``, through joblib, locally or on a Dask cluster.
+
+    Args:
+        fn: A picklable (module-level) function of one item, or of ``(shared, item)``.
+        items: The jobs' arguments (picklable).
+        scheduler: A Dask scheduler address; None uses ``$LASA_SCHEDULER`` if set, else
+            runs locally.
+        n_jobs: Local worker processes (1: in this process). Ignored on a cluster, which
+            uses all its workers.
+        progress: Show a progress bar over finished jobs.
+        desc: The progress bar's label.
+        timeout: How long to wait for the scheduler to answer (a Dask duration).
+        shared: An object every job reads (decoders, task, ...), passed as ``fn``'s first
+            argument when not None. On a cluster it is scattered to the workers once instead of being
+            sent with every job.
+
+    Returns:
+        The results, in the order of ``items``.
+
+    Raises:
+        ConfigError: for a bad address, or a scheduler that cannot be reached.
+    """
+    from joblib import Parallel, delayed, parallel_config  # noqa: PLC0415
+
+    items = list(items)
+    if int(n_jobs) != n_jobs or n_jobs < 1:
+        raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
+    jobs = [delayed(_threaded)(fn, item, shared) for item in items]
+    address = scheduler_address(scheduler)
+
+    def collect(parallel: Any) -> list[R]:
+        out = parallel(jobs)
+        return list(tqdm(out, total=len(jobs), desc=desc, disable=not progress))
+
+    if address is None:
+        return collect(Parallel(n_jobs=n_jobs, return_as="generator"))
+    from dask.distributed import Client  # noqa: PLC0415 (only when a cluster is asked for)
+
+    try:
+        client = Client(address, timeout=timeout)
+    except OSError as err:
+        raise ConfigError(f"cannot reach the Dask scheduler at {address}: {err}") from err
+    scatter = None if shared is None else [shared]
+    with client, parallel_config(backend="dask", scatter=scatter):
+        return collect(Parallel(n_jobs=-1, return_as="generator"))

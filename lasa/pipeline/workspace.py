@@ -1,0 +1,84 @@
+"""A notebook's workspace: one robot's task and units, the run's folders, its artifacts.
+
+Every notebook starts the same way: set the threads, load the robot, build the cup
+task, resolve the folders against the repository root (so Jupyter, papermill and Make
+agree), and load what earlier notebooks made. :meth:`Workspace.open` does all of it,
+and the loaders name the notebook that makes a missing artifact.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+from typing import Any
+
+from lasa.base.config import ControlConfig, set_threads
+from lasa.base.paths import Paths
+from lasa.method.dataset import Demonstrations, load_demonstrations
+from lasa.method.decoder import LatentActionModel, load_checkpoint
+from lasa.world.robot import Robot, load_robot
+from lasa.world.task import CupTask, make_cup_task
+
+__all__ = ["Workspace"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Workspace:
+    """One robot's task and control units, and the run's folders.
+
+    Attributes:
+        robot: The robot (its MuJoCo scene).
+        task: The cup task (goals, preference curves, start pose).
+        control: The robot's control-loop units.
+        paths: The run's build and figures folders.
+    """
+
+    robot: Robot
+    task: CupTask
+    control: ControlConfig
+    paths: Paths
+
+    @classmethod
+    def open(
+        cls,
+        robot: str,
+        build_dir: str | os.PathLike[str] = "build",
+        figures_dir: str | os.PathLike[str] = "figures",
+    ) -> Workspace:
+        """Set torch's threads (``LASA_THREADS``), build the robot's task, resolve the folders."""
+        set_threads()
+        arm = load_robot(robot)
+        paths = Paths.of(build_dir, figures_dir)
+        paths.figures.mkdir(parents=True, exist_ok=True)
+        return cls(arm, make_cup_task(arm), arm.control, paths)
+
+    @property
+    def name(self) -> str:
+        """The robot's name."""
+        return self.robot.name
+
+    def artifact(self, name: str) -> Path:
+        """The path of artifact ``name`` (see :data:`lasa.base.paths.ARTIFACTS`) for this robot."""
+        return self.paths.artifact(name, self.name)
+
+    def demonstrations(self) -> Demonstrations:
+        """The dataset of notebook 01."""
+        return load_demonstrations(
+            self.artifact("demos"), robot=self.name, make_hint=Paths.make_hint("demos", self.name)
+        )
+
+    def decoder(self, name: str = "decoder") -> tuple[LatentActionModel, dict[str, Any]]:
+        """A checkpoint (``decoder``, ``decoder_lambda0`` or ``decoder_entropy``) and its metadata."""
+        return load_checkpoint(
+            self.artifact(name), robot=self.name, make_hint=Paths.make_hint(name, self.name)
+        )
+
+    def sim_decoders(self) -> dict[str, LatentActionModel]:
+        """The pair the sims compare (notebook 03): ``base`` for LA and LA+SA, ``entropy``.
+
+        ``base`` is the lambda = 0 run of the entropy ablation, the control: it was
+        fine-tuned from notebook 02's decoder for the same steps, schedule, batches and
+        noise as the entropy decoder, so the two differ only by the entropy term.
+        """
+        return {"base": self.decoder("decoder_lambda0")[0], "entropy": self.decoder("decoder_entropy")[0]}

@@ -1,0 +1,345 @@
+r"""The eating task of the paper's user study (Sec. VI): bowls, a plate, a fork and preferences.
+
+The Panda holds a fork (``assets/panda/fork.xml``) over a table with three bowls and the
+user's plate (``assets/panda/eating.xml``). The goals G are, in order, the left bowl
+(rice), the middle bowl (marshmallows, and the tofu of the Entree), the right bowl
+(icing) and the plate. The study controls and measures the fork's tip (site
+``fork_tip``), whose approach axis is the fork's pointing direction.
+
+**Preferences.** At a goal the user wants one of a few fine-grained motions: *stab*,
+*cut*, *scoop*, *dip* (and *place*, on the plate). Each is defined once, here, as the
+fork orientation it needs and the direction the tines travel through the food. Both are
+one-parameter families in a tilt :math:`\theta \in [0, 1]`: the fork turns by
+:math:`\psi = \theta\,\psi_{max}` from pointing straight down towards a horizontal
+direction r at the goal (sideways: the base-to-goal direction turned a quarter turn to the
+robot's left, the way the Panda's wrist can tilt that far at table height), and the tines
+move along
+
+.. math::
+
+    d(\theta) = \cos\psi\, d_{down} + \sin\psi\, r, \qquad
+    m(\theta) = \frac{(1 - \theta)\, d_{down} + \theta\, r}{\|(1 - \theta)\, d_{down} + \theta\, r\|}.
+
+Stab, dip and place point straight down and press down (theta = 0); a scoop tilts the
+fork by psi_max = 60 degrees and drags it sideways through the food (theta = 1); a cut
+presses the tilted fork's edge down and sideways (theta = 1/2). Preference Alignment
+(:mod:`lasa.people.participants`) is the dot product of the fork's actual direction with d(theta) of
+the phase's preference: the same definition.
+
+**Strokes.** A preference is carried out as a stroke of length 5 cm along m(theta), ending
+1 cm into the food: the tip at depth u in [0, 1] along the stroke is
+
+.. math::  p(g, \theta, u) = c_g - 0.01\, d_{up} + (u - 1)\, 0.05\, m(\theta),
+
+(u = 0 the entry point, above or beside the food; u = 1 the end). The joint
+configurations s*(g, theta, u) come from mink IK (:func:`lasa.world.ik.solve_grasp_ik`) on a
+grid of theta and u, warm-started along the grid so neighbours are smooth, as for the
+cups. A goal g in joint space (what Eq. M2 and the hindsight assistance pull towards) is
+the mid-preference entry pose s*(g, 1/2, 0), the convention of the cup task.
+
+**Tasks as phases.** *Entree*: reach the tofu bowl, cut a slice, stab it, set it on the
+plate. *Dessert*: stab a marshmallow (middle bowl), scoop it through the icing (right),
+dip it in the rice (left), set it on the plate. A phase with a preference has two
+waypoints (its stroke's entry, then its end); the reach has one (the entry of a stab
+above the tofu).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+
+import mink
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from lasa.base.config import ControlConfig, check_choice, check_range
+from lasa.base.errors import ConfigError
+from lasa.world.ik import solve_grasp_ik
+from lasa.world.robot import ASSETS, ROBOTS, Robot, RobotSpec
+from lasa.world.task import CupTask
+
+__all__ = [
+    "EATING",
+    "GOALS",
+    "TILT_MAX",
+    "STROKE",
+    "Preference",
+    "PREFERENCES",
+    "Phase",
+    "TASKS",
+    "Waypoint",
+    "EatingTask",
+    "load_eating_robot",
+    "fork_direction",
+    "stroke_direction",
+    "fork_frame",
+    "make_eating_task",
+    "waypoints",
+]
+
+GOALS = ("rice", "middle", "icing", "plate")  # goal names, in goal order (left, middle, right bowl; plate)
+TILT_MAX = np.pi / 3  # psi_max: the tilt of a scoop from pointing straight down [rad]
+STROKE = 0.05  # length of a stroke through the food [m]
+INTO_FOOD = 0.01  # a stroke ends this far below the food's surface [m]
+
+EATING = RobotSpec(
+    name="panda",  # the Panda's joint space: the same robot as the cup task's
+    scene=ASSETS / "panda" / "eating.xml",
+    joints=ROBOTS["panda"].joints,
+    grasp_site="fork_tip",
+    cups=("bowl_left", "bowl_middle", "bowl_right", "plate"),
+    camera="table",
+    home_key="home",
+    top_grasp_rotation=ROBOTS["panda"].top_grasp_rotation,  # hand, so fork, pointing down
+    grasp_standoff=0.0,
+    side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._radial)
+    ik_seeds=(ROBOTS["panda"].ik_seeds[0],) * 4,
+    # The cup sims' units (notebook 04 states why); the study's assistance is hindsight
+    # optimisation, the member the paper's user study used (Javdani et al. 2018).
+    control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2, assistance="hindsight"),
+    mesh_package=ROBOTS["panda"].mesh_package,
+    tool=ASSETS / "panda" / "fork.xml",
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class Preference:
+    """A fine-grained motion at a goal: the fork's tilt theta in [0, 1] (see the module docstring)."""
+
+    name: str  # "stab", "cut", "scoop", "dip" or "place"
+    theta: float  # tilt as a fraction of TILT_MAX [-]
+
+
+PREFERENCES: dict[str, Preference] = {
+    p.name: p
+    for p in (
+        Preference("stab", 0.0),
+        Preference("cut", 0.5),
+        Preference("scoop", 1.0),
+        Preference("dip", 0.0),
+        Preference("place", 0.0),
+    )
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Phase:
+    """One phase of a task: a preference carried out at a goal, or a reach to it (preference None)."""
+
+    name: str  # e.g. "stab"; the CSVs' phase column
+    goal: str  # one of GOALS
+    preference: str | None  # a key of PREFERENCES; None: reach the goal's stab entry
+
+
+TASKS: dict[str, tuple[Phase, ...]] = {
+    "Entree": (
+        Phase("reach", "middle", None),
+        Phase("cut", "middle", "cut"),
+        Phase("stab", "middle", "stab"),
+        Phase("plate", "plate", "place"),
+    ),
+    "Dessert": (
+        Phase("stab", "middle", "stab"),
+        Phase("scoop", "icing", "scoop"),
+        Phase("dip", "rice", "dip"),
+        Phase("plate", "plate", "place"),
+    ),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Waypoint:
+    """A pose the user must reach, in the order of the task."""
+
+    phase: int  # index of its phase in the task
+    goal: int  # goal index
+    theta: float  # the preference's tilt [-]
+    depth: float  # u: 0 the stroke's entry, 1 its end [-]
+
+
+@functools.cache
+def load_eating_robot() -> Robot:
+    """The Panda with its fork in the eating scene (built once per process; do not mutate)."""
+    return Robot(EATING)
+
+
+def _radial(robot: Robot, goal: int) -> np.ndarray:
+    """The horizontal direction r a preference tilts the fork towards at ``goal``, unit (3,).
+
+    Sideways: the direction from the robot's base to the goal turned a quarter turn
+    counter-clockwise (to the robot's left). At table height the Panda's wrist cannot tilt
+    the fork's tines more than about 40 degrees outward (away from the base) or inward:
+    mink's IK fails there; sideways it reaches the scoop's 60 degrees at every goal.
+    """
+    radial = robot.cup_positions()[goal] - robot.base_position()
+    radial[2] = 0.0
+    norm = np.linalg.norm(radial)
+    if norm < 1e-6:
+        raise ConfigError(f"goal {goal} stands above the robot's base: no tilt direction")
+    return np.cross([0.0, 0.0, 1.0], radial / norm)
+
+
+def fork_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.ndarray:
+    """d(theta): the fork's pointing direction that preference theta needs at ``goal``, (..., 3)."""
+    psi = np.asarray(theta, dtype=float)[..., None] * TILT_MAX
+    return np.cos(psi) * np.array([0.0, 0.0, -1.0]) + np.sin(psi) * _radial(robot, goal)
+
+
+def stroke_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.ndarray:
+    """m(theta): the direction the tines travel through the food at ``goal``, (..., 3)."""
+    th = np.asarray(theta, dtype=float)[..., None]
+    m = (1.0 - th) * np.array([0.0, 0.0, -1.0]) + th * _radial(robot, goal)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.ndarray, np.ndarray]:
+    """Fork-tip position (3,) and rotation (3, 3) at preference ``theta``, stroke depth ``depth``.
+
+    Args:
+        robot: The eating robot (:func:`load_eating_robot`).
+        goal: Goal index (:data:`GOALS`).
+        theta: Tilt in [0, 1].
+        depth: u in [0, 1] along the stroke.
+    """
+    check_range("theta", theta, 0.0, 1.0)
+    check_range("depth", depth, 0.0, 1.0)
+    radial = _radial(robot, goal)
+    down = np.array([0.0, 0.0, -1.0])
+    axis = np.cross(down, radial)  # rotating down about it by psi turns it towards radial
+    r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
+    rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ r_top
+    surface = robot.cup_positions()[goal]
+    position = surface + INTO_FOOD * down + (depth - 1.0) * STROKE * stroke_direction(robot, goal, theta)
+    return position, rotation
+
+
+@dataclasses.dataclass(frozen=True)
+class EatingTask(CupTask):
+    """The eating task: the cup task's goals-and-preferences structure, plus strokes.
+
+    ``curves`` (G, K, n) are the stroke entries s*(g, theta, 0) on ``theta_grid`` and
+    ``goals`` the mid-preference entries; ``target(g, theta)`` interpolates the entries.
+
+    Attributes:
+        depth_grid: Stroke depths u at which IK was solved, shape (D,).
+        strokes: s*(g, theta, u) on both grids, shape (G, K, D, n) [rad].
+    """
+
+    depth_grid: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    strokes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+
+    def pose(self, goal: int, theta: float | np.ndarray, depth: float | np.ndarray) -> np.ndarray:
+        """s*(g, theta, u): the joint configuration of stroke poses, shape (..., n).
+
+        Cubic in theta (as :meth:`target`), linear in depth between the solved depths;
+        ``theta`` and ``depth`` broadcast (scalars give one pose, shape (n,)), and each
+        stretch between two solved depths is evaluated in one call for all its poses.
+        """
+        theta_arr, depth_arr = np.broadcast_arrays(
+            np.asarray(theta, dtype=float), np.asarray(depth, dtype=float)
+        )
+        if depth_arr.size:
+            check_range("depth", float(depth_arr.min()), 0.0, 1.0)
+            check_range("depth", float(depth_arr.max()), 0.0, 1.0)
+        th, u = theta_arr.ravel(), depth_arr.ravel()
+        grid = self.depth_grid
+        k = np.clip(np.searchsorted(grid, u, side="right") - 1, 0, len(grid) - 2)
+        w = (u - grid[k]) / (grid[k + 1] - grid[k])
+        splines = self._stroke_splines[goal]
+        out = np.empty((len(th), self.curves.shape[-1]))
+        for seg in np.unique(k):  # one stretch of depth at a time: at most len(grid) - 1 calls
+            m = k == seg
+            out[m] = (1.0 - w[m])[:, None] * splines[seg](th[m]) + w[m][:, None] * splines[seg + 1](th[m])
+        return out.reshape(*theta_arr.shape, -1)
+
+    @property
+    def _stroke_splines(self) -> list[list[CubicSpline]]:
+        cache = self.__dict__.get("_stroke_cache")
+        if cache is None:
+            cache = [
+                [
+                    CubicSpline(self.theta_grid, self.strokes[g, :, d], axis=0)
+                    for d in range(len(self.depth_grid))
+                ]
+                for g in range(self.n_goals)
+            ]
+            object.__setattr__(self, "_stroke_cache", cache)
+        return cache
+
+    def belief_targets(self, likelihood: str) -> np.ndarray:
+        """What the belief measures progress towards, shape (G, K', n).
+
+        ``"goal"``: the goal points. ``"grasp_set"``: each goal's whole stroke surface,
+        as one polyline per goal that runs along the entries (theta from 0 to 1) and back
+        along the stroke ends, so that carrying out a stroke is not evidence against
+        the goal it happens at.
+        """
+        if likelihood == "grasp_set":
+            return np.concatenate([self.strokes[:, :, 0], self.strokes[:, ::-1, -1]], axis=1)
+        return super().belief_targets(likelihood)
+
+
+def make_eating_task(robot: Robot | None = None, n_theta: int = 9, depths: int = 3) -> EatingTask:
+    """Solve IK over every goal's preferences and strokes and build the task.
+
+    The default task (the default robot and grids) is solved once per process and shared:
+    it is immutable, and its 108 IK solves take seconds.
+
+    Args:
+        robot: The eating robot (default :func:`load_eating_robot`).
+        n_theta: Tilts solved per goal (odd, so theta = 1/2 is on the grid).
+        depths: Stroke depths solved per tilt (>= 2, evenly spaced on [0, 1]).
+    """
+    if robot is None:
+        return _default_task(n_theta, depths)
+    return _solve_task(robot, n_theta, depths)
+
+
+@functools.cache
+def _default_task(n_theta: int, depths: int) -> EatingTask:
+    return _solve_task(load_eating_robot(), n_theta, depths)
+
+
+def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
+    """The IK of :func:`make_eating_task`."""
+    if n_theta < 3 or n_theta % 2 == 0:
+        raise ConfigError(f"n_theta must be an odd integer >= 3, got {n_theta}")
+    if depths < 2:
+        raise ConfigError(f"depths must be >= 2, got {depths}")
+    thetas, us = np.linspace(0.0, 1.0, n_theta), np.linspace(0.0, 1.0, depths)
+    strokes = np.empty((len(GOALS), n_theta, depths, robot.n_joints))
+    for g, seed in enumerate(robot.spec.ik_seeds):
+        q = np.asarray(seed, dtype=float)
+        for k, theta in enumerate(thetas):
+            q = solve_grasp_ik(robot, *fork_frame(robot, g, theta, 0.0), q)
+            strokes[g, k, 0] = q
+            q_depth = q
+            for d in range(1, depths):
+                q_depth = solve_grasp_ik(robot, *fork_frame(robot, g, theta, us[d]), q_depth)
+                strokes[g, k, d] = q_depth
+    curves = strokes[:, :, 0].copy()
+    return EatingTask(
+        robot=robot,
+        goal_names=GOALS,
+        theta_grid=thetas,
+        curves=curves,
+        goals=curves[:, n_theta // 2].copy(),
+        start=robot.home,
+        depth_grid=us,
+        strokes=strokes,
+    )
+
+
+def waypoints(task: str) -> list[Waypoint]:
+    """The poses a user reaches, in order, to complete ``task`` ("Entree" or "Dessert")."""
+    check_choice("task", task, tuple(TASKS))
+    out: list[Waypoint] = []
+    for i, phase in enumerate(TASKS[task]):
+        goal = GOALS.index(phase.goal)
+        if phase.preference is None:
+            out.append(Waypoint(i, goal, PREFERENCES["stab"].theta, 0.0))
+            continue
+        theta = PREFERENCES[phase.preference].theta
+        out += [Waypoint(i, goal, theta, 0.0), Waypoint(i, goal, theta, 1.0)]
+    return out

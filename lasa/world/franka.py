@@ -1,0 +1,184 @@
+r"""Franka's official Panda conventions, as a reference to check models against.
+
+A decoder trained on our ``panda`` must speak a real arm's joint space, so joint angles
+must mean what Franka's documentation says they mean. This module holds that
+documentation's numbers: the modified (Craig) Denavit-Hartenberg table, the flange and
+TCP offsets, the joint limits and the "ready" pose. It also holds a kinematics-only
+compile of the Panda that the ``gymnasium-robotics`` package ships, so that the
+departure of the packaged model from the table can be *measured*.
+
+Nothing here drives the robot. lasa's kinematics come from MuJoCo; this module is
+the yardstick in ``tests/test_panda.py`` and notebook 01.
+
+With the modified DH convention each frame i follows from frame i-1 by
+
+.. math::
+
+    T_i = R_x(\alpha_{i-1})\, T_x(a_{i-1})\, R_z(\theta_i)\, T_z(d_i),
+
+and the flange is ``d = 0.107`` m beyond frame 7. The hand is turned -pi/4 about the
+flange's z axis, and the TCP lies 0.1034 m further along z.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import mujoco
+import numpy as np
+import pandas as pd
+
+from lasa.world.robot import Robot, mesh_dir
+
+__all__ = [
+    "DH",
+    "FLANGE_D",
+    "TCP_D",
+    "HAND_YAW",
+    "LOWER",
+    "UPPER",
+    "READY",
+    "dh_frames",
+    "packaged_chain",
+    "PACKAGED_OFFSETS",
+    "check_against_dh",
+]
+
+# (a_{i-1} [m], d_i [m], alpha_{i-1} [rad]) for joints 1..7, from Franka's documentation.
+DH: tuple[tuple[float, float, float], ...] = (
+    (0.0, 0.333, 0.0),
+    (0.0, 0.0, -np.pi / 2),
+    (0.0, 0.316, np.pi / 2),
+    (0.0825, 0.0, np.pi / 2),
+    (-0.0825, 0.384, -np.pi / 2),
+    (0.0, 0.0, np.pi / 2),
+    (0.088, 0.0, np.pi / 2),
+)
+FLANGE_D = 0.107  # flange, along z of frame 7 [m]
+TCP_D = 0.1034  # Franka Hand TCP beyond the flange [m]
+HAND_YAW = -np.pi / 4  # hand mounting rotation about the flange's z [rad]
+LOWER = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973])  # [rad]
+UPPER = np.array([2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973])  # [rad]
+READY = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, np.pi / 4])  # [rad]
+
+# The packaged chain's joints 6 and 7 are re-framed: its q equals Franka's q minus these.
+PACKAGED_OFFSETS = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 1.57, np.pi / 4])  # [rad]
+
+
+def _rot_x(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
+
+
+def _rot_z(a: float) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+
+
+def _trans(x: float = 0.0, z: float = 0.0) -> np.ndarray:
+    t = np.eye(4)
+    t[0, 3], t[2, 3] = x, z
+    return t
+
+
+def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
+    """World transforms (4x4) of frames 1..7, the flange and the TCP for joints ``q``.
+
+    Args:
+        q: Joint angles in Franka's convention, shape (7,) [rad].
+
+    Returns:
+        ``{"link1": T1, ..., "link7": T7, "flange": T_F, "tcp": T_TCP}``.
+    """
+    q = np.asarray(q, dtype=float)
+    if q.shape != (7,):
+        raise ValueError(f"q must have 7 entries, got shape {q.shape}")
+    frames: dict[str, np.ndarray] = {}
+    t = np.eye(4)
+    for i, ((a, d, alpha), theta) in enumerate(zip(DH, q, strict=True), start=1):
+        t = t @ _rot_x(alpha) @ _trans(x=a) @ _rot_z(theta) @ _trans(z=d)
+        frames[f"link{i}"] = t
+    flange = t @ _trans(z=FLANGE_D)
+    frames["flange"] = flange
+    frames["tcp"] = flange @ _rot_z(HAND_YAW) @ _trans(z=TCP_D)
+    return frames
+
+
+def packaged_chain() -> mujoco.MjModel:
+    """The Panda chain that ``gymnasium-robotics`` ships, compiled for kinematics only.
+
+    Geoms, inertias and classes are stripped from its ``chain.xml`` (which needs the
+    package's defaults and meshes otherwise); bodies, joints and sites are kept
+    exactly, so its forward kinematics are the packaged model's. Its site
+    ``end_effector`` is the packaged TCP.
+    """
+    root = mesh_dir("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets")
+    chain = ET.parse(root / "chain.xml").getroot()
+    for parent in list(chain.iter()):
+        for child in list(parent):
+            if child.tag in ("geom", "inertial"):
+                parent.remove(child)
+    for element in chain.iter():
+        element.attrib.pop("class", None)
+        element.attrib.pop("childclass", None)
+        if element.tag == "joint" and "axis" not in element.attrib:
+            element.set("axis", "0 0 1")
+        if element.tag == "body":
+            ET.SubElement(element, "inertial", pos="0 0 0", mass="0.1", diaginertia="1e-3 1e-3 1e-3")
+    world = "".join(ET.tostring(body, encoding="unicode") for body in chain)
+    xml = f'<mujoco><compiler angle="radian" autolimits="true"/><worldbody>{world}</worldbody></mujoco>'
+    return mujoco.MjModel.from_xml_string(xml)
+
+
+def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
+    """How far models' forward kinematics are from Franka's DH table.
+
+    Draws ``n`` joint vectors uniformly within Franka's limits and compares, at each,
+    the TCP pose of (a) ``robot`` (our ``panda``), (b) the packaged chain at the same
+    joint vector, and (c) the packaged chain with its joint-6/7 offsets undone.
+
+    Returns:
+        One row per model: the largest TCP position error [m] and orientation error
+        [rad], and the largest position error over frames 1..7 [m] (our model only).
+    """
+    rng = np.random.default_rng(seed)
+    qs = rng.uniform(LOWER, UPPER, size=(n, 7))
+    ours = mujoco.MjData(robot.model)
+    packaged = packaged_chain()
+    pdata = mujoco.MjData(packaged)
+    site = robot.model.site(robot.spec.grasp_site).id
+    rows = {name: [0.0, 0.0, 0.0] for name in ("lasa panda", "packaged, same q", "packaged, q - offsets")}
+
+    def rot_err(a: np.ndarray, b: np.ndarray) -> float:
+        return float(np.arccos(np.clip((np.trace(a.T @ b) - 1) / 2, -1.0, 1.0)))
+
+    for q in qs:
+        ref = dh_frames(q)
+        tcp = ref["tcp"]
+        ours.qpos[robot.qpos_adr] = q
+        mujoco.mj_kinematics(robot.model, ours)
+        frames = max(
+            float(np.linalg.norm(ours.body(f"link{i}").xpos - ref[f"link{i}"][:3, 3])) for i in range(1, 8)
+        )
+        cases = {"lasa panda": (ours.site_xpos[site].copy(), ours.site_xmat[site].copy(), frames)}
+        for name, qq in (("packaged, same q", q), ("packaged, q - offsets", q - PACKAGED_OFFSETS)):
+            pdata.qpos[:7] = qq
+            mujoco.mj_kinematics(packaged, pdata)
+            s = pdata.site("end_effector")
+            cases[name] = (s.xpos.copy(), s.xmat.copy(), float("nan"))
+        for name, (pos, mat, fr) in cases.items():
+            row = rows[name]
+            row[0] = max(row[0], float(np.linalg.norm(pos - tcp[:3, 3])))
+            row[1] = max(row[1], rot_err(mat.reshape(3, 3), tcp[:3, :3]))
+            row[2] = fr if np.isnan(fr) else max(row[2], fr)
+    return pd.DataFrame(
+        [
+            {
+                "model": k,
+                "max_tcp_position_error_m": v[0],
+                "max_tcp_rotation_error_rad": v[1],
+                "max_frame_position_error_m": v[2],
+            }
+            for k, v in rows.items()
+        ]
+    )

@@ -1,0 +1,102 @@
+"""Inverse kinematics of grasp poses, solved with mink.
+
+A grasp pose is a position and an orientation of the robot's grasp site. We solve
+for the arm's joint positions with mink's differential IK: a frame task on the grasp
+site (position and orientation), a light posture task that picks one solution out of
+the arm's redundancy, and mink's configuration limits so the answer stays inside the
+joint ranges. Iterating the QP from a seed converges to a nearby solution, so solving
+a sequence of poses warm-started from the previous answer gives a smooth curve.
+"""
+
+from __future__ import annotations
+
+import mink
+import numpy as np
+
+from lasa.base.errors import IKError
+from lasa.world.robot import Robot
+
+__all__ = ["solve_grasp_ik", "pose_error"]
+
+
+def pose_error(
+    robot: Robot, q: np.ndarray, position: np.ndarray, rotation: np.ndarray
+) -> tuple[float, float]:
+    """Position error [m] and orientation error [rad] of the grasp site at ``q``."""
+    pos, rot = robot.grasp_pose(q)
+    pos_err = float(np.linalg.norm(pos - position))
+    cos = (np.trace(rotation.T @ rot) - 1.0) / 2.0
+    rot_err = float(np.arccos(np.clip(cos, -1.0, 1.0)))
+    return pos_err, rot_err
+
+
+def solve_grasp_ik(
+    robot: Robot,
+    position: np.ndarray,
+    rotation: np.ndarray,
+    seed: np.ndarray,
+    *,
+    posture: np.ndarray | None = None,
+    posture_cost: float = 1e-3,
+    position_tol: float = 5e-4,
+    rotation_tol: float = 5e-3,
+    max_iters: int = 400,
+    dt: float = 0.05,
+    damping: float = 1e-4,
+) -> np.ndarray:
+    """Joint positions that put the grasp site at ``position`` with ``rotation``.
+
+    Args:
+        robot: The robot whose grasp site is placed.
+        position: Target site position in the world, shape (3,) [m].
+        rotation: Target site rotation matrix, shape (3, 3).
+        seed: Initial joint positions, shape (n,) [rad].
+        posture: Joint positions the posture task pulls towards (default: ``seed``).
+        posture_cost: Weight of the posture task relative to the frame task.
+        position_tol: Accept when the position error is below this [m].
+        rotation_tol: ... and the orientation error below this [rad].
+        max_iters: Iteration budget of the differential IK.
+        dt: Integration step of each IK iteration [s].
+        damping: Levenberg-Marquardt damping of the QP.
+
+    Returns:
+        Joint positions within the joint limits, shape (n,).
+
+    Raises:
+        IKError: if the tolerances are not met within ``max_iters`` iterations.
+    """
+    model = robot.model
+    configuration = mink.Configuration(model)
+    q_full = configuration.q.copy()
+    adr = robot.qpos_adr
+    q_full[adr] = robot.clip(np.asarray(seed, dtype=float))
+    configuration.update(q_full)
+
+    frame = mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0)
+    frame.set_target(
+        mink.SE3.from_rotation_and_translation(
+            mink.SO3.from_matrix(np.asarray(rotation, dtype=float)),
+            np.asarray(position, dtype=float),
+        )
+    )
+    posture_task = mink.PostureTask(model, cost=posture_cost)
+    target = q_full.copy()
+    target[adr] = seed if posture is None else posture
+    posture_task.set_target(target)
+    limits = [mink.ConfigurationLimit(model)]
+
+    q = configuration.q[adr]
+    for _ in range(max_iters):
+        velocity = mink.solve_ik(
+            configuration, [frame, posture_task], dt, "daqp", damping=damping, limits=limits
+        )
+        configuration.integrate_inplace(velocity, dt)
+        q = configuration.q[adr].copy()
+        pos_err, rot_err = pose_error(robot, q, position, rotation)
+        if pos_err < position_tol and rot_err < rotation_tol:
+            return robot.clip(q)
+    raise IKError(
+        f"IK for {robot.name} did not converge: position error {pos_err:.2e} m "
+        f"(tol {position_tol:g}), orientation error {rot_err:.2e} rad (tol {rotation_tol:g}) "
+        f"after {max_iters} iterations. Is the pose reachable? Try another seed."
+    )

@@ -1,0 +1,301 @@
+"""Robots: a MuJoCo scene plus the named quantities the cup task needs.
+
+A :class:`Robot` wraps one compiled scene (arm, table, two cups, a camera) and answers
+questions in the task's own terms: the joint limits, the home pose, where the grasp
+site is and which way it points, where each cup stands. Callers never index MuJoCo
+arrays by hand.
+
+The state ``s`` of every robot is its vector of arm joint positions (radians); the
+action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from lasa.base.config import ControlConfig, check_choice
+from lasa.base.errors import ArtifactError, ConfigError
+
+__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot"]
+
+ASSETS = Path(__file__).parent / "assets"
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotSpec:
+    """What lasa needs to know about a robot beyond its MJCF file."""
+
+    name: str  # registry key, e.g. "planar5"
+    scene: Path  # MJCF scene: the arm, a table, the cups and a camera
+    joints: tuple[str, ...]  # arm joints, in state order
+    grasp_site: str  # site between the finger tips; local +z is the approach direction
+    cups: tuple[str, ...]  # cup sites (grasp centres), in goal order
+    camera: str  # fixed camera used for videos
+    home_key: str  # keyframe of the start pose
+    top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
+    grasp_standoff: float  # distance from cup centre to the grasp site [m]
+    side_azimuth: float  # side-grasp approach: the radial direction turned this far towards the midline [rad]
+    ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup
+    control: ControlConfig  # default units of the control loop for this robot
+    mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
+    # Cups added after training (Sec. IV-C): (site name, grasp-centre position [m]); their
+    # names end ``cups``. Built like the last cup of the scene, in their own colour.
+    extra_cups: tuple[tuple[str, tuple[float, float, float]], ...] = ()
+    # A tool held in the hand (the eating study's fork): an MJCF file whose first body is
+    # attached to body ``tool_mount`` at the frame of site ``tool_site`` (axes aligned), its
+    # element names prefixed with ``tool_prefix`` (the fork's site ``tip`` becomes ``fork_tip``).
+    tool: Path | None = None
+    tool_mount: str = "hand"
+    tool_site: str = "grasp"
+    tool_prefix: str = "fork_"
+
+
+ROBOTS: dict[str, RobotSpec] = {
+    "planar5": RobotSpec(
+        name="planar5",
+        scene=ASSETS / "planar5" / "scene.xml",
+        joints=("joint1", "joint2", "joint3", "joint4", "joint5"),
+        grasp_site="grasp",
+        cups=("cup_left", "cup_right"),
+        camera="front",
+        home_key="home",
+        # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
+        top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
+        grasp_standoff=0.10,
+        side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
+        ik_seeds=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
+        # Units chosen so the paper's regimes exist (notebook 04 explains): one step moves
+        # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
+        # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
+        # mid-preference goal small enough for users to hold other grasps (Eq. T4).
+        # These are ControlConfig's defaults, written out because they are this robot's.
+        control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
+    ),
+    "panda": RobotSpec(
+        name="panda",
+        scene=ASSETS / "panda" / "scene.xml",
+        joints=tuple(f"joint{i}" for i in range(1, 8)),
+        grasp_site="grasp",
+        cups=("cup_left", "cup_right"),
+        camera="front",
+        home_key="home",
+        # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
+        top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
+        grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
+        # A horizontal hand pointing radially away from the base is out of the Panda's reach at
+        # table height without flipping its wrist (joint 6 hits its limit); approaching each cup
+        # from its outer side, fingers towards the midline, is a natural posture (notebook 01).
+        side_azimuth=1.5707963267948966,  # pi/2
+        ik_seeds=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
+        # The same units as planar5, for the same reasons (notebook 04).
+        control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
+        mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
+    ),
+}
+
+
+def mesh_dir(package: str, folder: str) -> Path:
+    """The folder of meshes that an installed registry package ships, found without importing it.
+
+    Raises:
+        ArtifactError: if the package is not installed or lacks the folder.
+    """
+    spec = importlib.util.find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        raise ArtifactError(
+            f"package {package!r}, which ships this robot's meshes, is not installed; run: make setup"
+        )
+    path = Path(next(iter(spec.submodule_search_locations))) / folder
+    if not path.is_dir():
+        raise ArtifactError(f"{path} is missing from package {package!r}; reinstall it with: make setup")
+    return path
+
+
+NEW_CUP_RGBA = (0.25, 0.45, 0.85, 1.0)  # new cups are blue
+
+
+def _add_cup(mj_spec: mujoco.MjSpec, name: str, site_position: np.ndarray, template: str) -> None:
+    """Add a cup whose grasp centre (site) is at ``site_position``, shaped like ``template``."""
+    site, geom = mj_spec.site(template), mj_spec.geom(template)
+    body = mj_spec.worldbody.add_body(name=name, pos=site_position - np.asarray(site.pos))
+    body.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+        size=geom.size,
+        pos=geom.pos,
+        rgba=NEW_CUP_RGBA,
+        contype=0,
+        conaffinity=0,
+    )
+    body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
+
+
+def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
+    """The robot's scene as an MjSpec: its MJCF, meshes found in their package, the tool, new cups.
+
+    Built anew on each call (an MjSpec cannot be pickled, and a Robot travels to Dask workers).
+    """
+    mj_spec = mujoco.MjSpec.from_file(str(spec.scene))
+    if spec.mesh_package is not None:
+        # Mesh paths in the MJCF are relative to the package's mesh folder.
+        root = mesh_dir(*spec.mesh_package)
+        for mesh in mj_spec.meshes:
+            rel = (
+                Path(mesh.file).relative_to(spec.scene.parent)
+                if Path(mesh.file).is_absolute()
+                else Path(mesh.file)
+            )
+            if not (root / rel).is_file():
+                raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
+            mesh.file = str(root / rel)
+    if spec.tool is not None:
+        tool = mujoco.MjSpec.from_file(str(spec.tool))
+        site = mj_spec.site(spec.tool_site)
+        frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
+        frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
+    for name, position in spec.extra_cups:
+        _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.cups[0])
+    return mj_spec
+
+
+def load_robot(name: str) -> Robot:
+    """Build the robot registered under ``name``.
+
+    Raises:
+        ConfigError: if ``name`` is not a registered robot.
+    """
+    check_choice("robot", name, tuple(ROBOTS))
+    return Robot(ROBOTS[name])
+
+
+class Robot:
+    """A compiled MuJoCo scene with named, task-level quantities.
+
+    Attributes:
+        spec: The :class:`RobotSpec` it was built from.
+        model: The compiled ``mujoco.MjModel`` of the scene.
+        data: A ``mujoco.MjData`` used for kinematics queries (not thread safe).
+        qpos_adr: Index of each arm joint in ``data.qpos``, shape (n,).
+        lower: Lower joint limits, shape (n,) [rad].
+        upper: Upper joint limits, shape (n,) [rad].
+    """
+
+    def __init__(self, spec: RobotSpec) -> None:
+        self.spec = spec
+        self.model = _scene_spec(spec).compile()
+        self.data = mujoco.MjData(self.model)
+        joint_ids = [self.model.joint(name).id for name in spec.joints]
+        self.qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
+        self.lower = np.array([self.model.jnt_range[j, 0] for j in joint_ids])
+        self.upper = np.array([self.model.jnt_range[j, 1] for j in joint_ids])
+        self._site = self.model.site(spec.grasp_site).id
+        key = self.model.key(spec.home_key).id
+        self._home = self.model.key_qpos[key][self.qpos_adr].copy()
+
+    @property
+    def name(self) -> str:
+        """Registry name of the robot."""
+        return self.spec.name
+
+    @property
+    def n_joints(self) -> int:
+        """Dimension n of the state and of the action."""
+        return len(self.spec.joints)
+
+    @property
+    def home(self) -> np.ndarray:
+        """The start pose of every episode (keyframe ``home``), shape (n,)."""
+        return self._home.copy()
+
+    @property
+    def control(self) -> ControlConfig:
+        """Default control-loop units for this robot."""
+        return self.spec.control
+
+    def clip(self, q: np.ndarray) -> np.ndarray:
+        """Clip joint positions of any leading shape to the joint limits."""
+        return np.clip(q, self.lower, self.upper)
+
+    def set_state(self, q: np.ndarray) -> None:
+        """Write arm joint positions into ``data`` and update kinematics."""
+        self.data.qpos[self.qpos_adr] = q
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def grasp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World position (3,) and rotation (3, 3) of the grasp site at joints ``q``."""
+        self.set_state(q)
+        pos = self.data.site_xpos[self._site].copy()
+        rot = self.data.site_xmat[self._site].reshape(3, 3).copy()
+        return pos, rot
+
+    def _site_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors."""
+        qs = np.asarray(qs, dtype=float)
+        flat = qs.reshape(-1, self.n_joints)
+        pos, rot = np.empty((len(flat), 3)), np.empty((len(flat), 3, 3))
+        for i, q in enumerate(flat):  # MuJoCo's kinematics takes one configuration at a time
+            self.set_state(q)
+            pos[i] = self.data.site_xpos[self._site]
+            rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
+        lead = qs.shape[:-1]
+        return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
+
+    def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
+        """Grasp-site positions for a batch of joint vectors, shape (..., 3).
+
+        Meant for plots and tests, not for the control loop (see :meth:`_site_frames`).
+        """
+        return self._site_frames(qs)[0]
+
+    def grasp_axes(self, qs: np.ndarray) -> np.ndarray:
+        """Approach direction (the site's +z axis) for a batch of joint vectors, (..., 3)."""
+        return self._site_frames(qs)[1][..., :, 2]
+
+    def cup_positions(self) -> np.ndarray:
+        """World positions of the cups' grasp centres, shape (G, 3), in goal order."""
+        mujoco.mj_kinematics(self.model, self.data)
+        return np.stack([self.data.site(name).xpos.copy() for name in self.spec.cups])
+
+    def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
+        """The same robot in a scene with one more cup, whose grasp centre is at ``position``.
+
+        The new cup becomes the last goal (``spec.cups[-1]``). Workspace checks belong to
+        the caller (:func:`lasa.method.newgoals.extend_task`); this only builds the scene.
+
+        Raises:
+            ConfigError: if a cup of that name exists already.
+        """
+        if name in self.spec.cups:
+            raise ConfigError(f"the scene already has a cup named {name!r}")
+        x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
+        pos = (x, y, z)
+        spec = dataclasses.replace(
+            self.spec, cups=(*self.spec.cups, name), extra_cups=(*self.spec.extra_cups, (name, pos))
+        )
+        return Robot(spec)
+
+    def xml(self) -> str:
+        """The compiled scene as one MJCF document (meshes by absolute path): a session log keeps
+        it beside its steps, so that the session replays without the code that made it."""
+        return _scene_spec(self.spec).to_xml()
+
+    def table_extent(self) -> tuple[np.ndarray, np.ndarray]:
+        """Centre (3,) and half-sizes (3,) of the table box (geom ``table``)."""
+        geom = self.model.geom("table")
+        return self.model.geom_pos[geom.id].copy(), self.model.geom_size[geom.id].copy()
+
+    def first_joint_axis(self) -> np.ndarray:
+        """World direction of the first arm joint's axis at the home pose, shape (3,)."""
+        self.set_state(self.home)
+        return self.data.xaxis[self.model.joint(self.spec.joints[0]).id].copy()
+
+    def base_position(self) -> np.ndarray:
+        """World position of the arm's base (the first joint's anchor), shape (3,)."""
+        self.set_state(self.home)
+        first = self.model.joint(self.spec.joints[0]).id
+        return self.data.xanchor[first].copy()
