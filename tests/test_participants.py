@@ -9,10 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 
+from lasa.base.conditions import CONDITIONS
+from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.people.participants import (
-    CONDITIONS,
-    NO_ASSISTANCE,
     ParticipantConfig,
     StudyConfig,
     alignment,

@@ -4,8 +4,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from lasa.base.conditions import CONDITIONS
+from lasa.base.config import NO_ASSISTANCE
 from lasa.figures import study
-from lasa.people.participants import CONDITIONS, NO_ASSISTANCE
 
 MEMBERS = ("hindsight", "grasp_set")
 

@@ -417,3 +417,37 @@ def test_replay_finds_a_state_the_log_does_not_share(logged):
     result = replay(logged.csv)
     assert not result["exact"]
     assert result["max_state_difference"] == pytest.approx(1e-3, rel=1e-9)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(
+    condition=st.sampled_from(["R", "R+SA"]),
+    inputs=st.lists(
+        st.tuples(
+            st.sampled_from([0.0, 0.0, -1.0, 1.0]) | st.floats(-1.0, 1.0),
+            st.sampled_from([0.0, 0.0, 1.0, -0.5]) | st.floats(-1.0, 1.0),
+            st.booleans(),
+        ),
+        min_size=1,
+        max_size=12,
+    ),
+)
+def test_the_live_retargeting_step_is_the_participants_step(build, condition, inputs):
+    """Station.step (Retargeting) and the path the study's simulated participants take,
+    lasa.method.retarget.retarget_action then lasa.method.step.advance, agree bit for bit, mode
+    presses included."""
+    from lasa.method.retarget import retarget_action
+    from lasa.method.step import advance
+
+    st_ = station(build, condition)
+    s, log_b, mode = st_.state.copy()[None], st_.log_belief.copy()[None], np.array([st_.mode])
+    for z0, z1, press in inputs:
+        z = np.array([[z0, z1]])
+        rec = st_.step(Reading(raw=z[0], mode=press))
+        a_h, mode = retarget_action(st_.retarget, s, mode, z, np.array([press]))
+        ref = advance(st_.task, st_.control, s, log_b, a_h, np.array([st_.alpha]), st_.sets)
+        s, log_b = ref.state, ref.log_belief
+        assert np.array_equal(rec["s"], s[0]) and np.array_equal(rec["a_h"], a_h[0])
+        assert rec["mode"] == int(mode[0])
+        if press or not (z0 or z1):
+            assert not rec["a_h"].any()  # a press or a stick at rest moves nothing

@@ -18,9 +18,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import parse as parse_condition
+from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
-from lasa.people.participants import CONDITIONS, NO_ASSISTANCE, Episodes, tip_frames
+from lasa.people.participants import Episodes, tip_frames
 
 __all__ = ["SCALES", "read_likert", "load_sessions", "likert_tests", "analyse_sessions"]
 
@@ -90,7 +93,8 @@ def load_sessions(
         phase[len(s) + 1 :, e] = phase[len(s), e]
         moved = (frame[["z0", "z1"]].to_numpy() != 0).any(axis=1)
         # a mode press is input in Retargeting (it switches modes) and nothing in latent actions
-        pressed = (frame.mode_press.to_numpy() > 0) & str(logs[e][1]["condition"]).startswith("R")
+        retargeting = parse_condition(str(logs[e][1]["condition"])).interface == "R"
+        pressed = (frame.mode_press.to_numpy() > 0) & retargeting
         held = frame.stop.to_numpy() > 0
         idle[: len(s), e] = ~moved & ~pressed & ~held
         switch[: len(s), e] = pressed & ~held
@@ -104,7 +108,7 @@ def load_sessions(
         participant=np.array([m["participant"] for m in meta_list]),
         condition=conditions,
         assistance=np.where(
-            np.char.endswith(conditions.astype(str), "+SA"),
+            np.array([parse_condition(str(c)).assisted for c in conditions], dtype=bool),
             np.array([m.get("control", {}).get("assistance", "hindsight") for m in meta_list]),
             NO_ASSISTANCE,
         ),

@@ -32,11 +32,10 @@ from statsmodels.formula.api import ols
 from statsmodels.stats.anova import AnovaRM, anova_lm
 from statsmodels.stats.multitest import multipletests
 
+from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
-from lasa.people.participants import CONDITIONS
 
 __all__ = [
-    "CONDITIONS",  # re-exported from lasa.people.participants
     "INTERFACES",
     "SA_LEVELS",
     "EFFECTS",

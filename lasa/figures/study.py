@@ -66,7 +66,8 @@ import seaborn as sns
 from matplotlib.figure import Figure
 from scipy import stats as sps
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, from_dict
+from lasa.base.conditions import CONDITIONS
+from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, from_dict
 from lasa.base.errors import ConfigError
 from lasa.evidence import stats
 from lasa.evidence.claims import Claim
@@ -74,13 +75,12 @@ from lasa.evidence.rules import UNDECIDED, rule
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people.participants import (
-    CONDITIONS,
-    NO_ASSISTANCE,
     TASK_NAMES,
     Episodes,
     ParticipantConfig,
     StudyConfig,
     draw_cohort,
+    interface_of,
     measures,
     progress_gain,
     simulate,
@@ -206,7 +206,7 @@ def run(
             interfaces=interfaces,
         )
         for key, frame in measures(task, episodes[name]).items():
-            la = frame.condition.str.startswith("LA")
+            la = frame.condition.map(interface_of) == "LA"
             parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE)))
     return episodes, {key: pd.concat(frames, ignore_index=True) for key, frames in parts.items()}
 

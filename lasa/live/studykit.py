@@ -18,10 +18,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
 from lasa.evidence.sessions import SCALES
-from lasa.people.participants import CONDITIONS, williams_square
+from lasa.people.participants import williams_square
 
 __all__ = [
     "write_schedule",

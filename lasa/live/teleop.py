@@ -42,6 +42,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from lasa.base.conditions import ALL as CONDITIONS
+from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.paths import Paths
@@ -49,16 +51,14 @@ from lasa.evidence.sessionlog import SessionWriter, read_session
 from lasa.live.devices import Device, Reading, ScriptedDevice, open_device
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
-from lasa.method.retarget import MODES, Retargeting, next_mode, twist
+from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
 from lasa.method.step import advance, shared_autonomy_step
-from lasa.people.participants import CONDITIONS as STUDY_CONDITIONS
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import CupTask, make_cup_task
 
 __all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "run_session", "replay", "main"]
 
 TASKS = ("cups", "Entree", "Dessert")
-CONDITIONS = (*STUDY_CONDITIONS, "LA+SA+Entropy")  # the study's four, and the cups' entropy decoder
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,11 +112,12 @@ class Station:
         self.decoder: ActionDecoder | None = None
         self.decoder_path: Path | None = None
         self.waypoints: list[Any] = []
+        condition = parse_condition(config.condition)
         if config.task == "cups":
             self.robot: Robot = load_robot(config.robot)
             self.task: CupTask = make_cup_task(self.robot)
             self.control: ControlConfig = self.robot.control
-            name = "decoder_entropy" if config.condition == "LA+SA+Entropy" else "decoder_lambda0"
+            name = "decoder_entropy" if condition.decoder == "entropy" else "decoder_lambda0"
         else:
             from lasa.world.eating import make_eating_task, waypoints
 
@@ -125,13 +126,13 @@ class Station:
             self.control = self.robot.control
             self.waypoints = waypoints(config.task)
             name = "eating_decoder"
-        if config.condition.startswith("LA"):
+        if condition.interface == "LA":
             self.decoder_path = paths.artifact(name, self.robot.name)
             self.decoder, _ = load_checkpoint(
                 self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
             )
-        self.retarget = Retargeting(self.robot, self.control.dt) if config.condition.startswith("R") else None
-        self.alpha = self.control.alpha if "+SA" in config.condition else 0.0
+        self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
+        self.alpha = self.control.alpha if condition.assisted else 0.0
         self.sets = self.task.belief_targets(self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self.reset()
@@ -228,9 +229,7 @@ class Station:
         if reading.stop:
             pass  # hold: no human action, no assistance, the belief frozen
         else:
-            if (
-                self.decoder is not None
-            ):  # latent actions: the reference step, the stick at rest commanding nothing
+            if self.decoder is not None:  # latent actions: the one step, the stick at rest commanding nothing
                 result = shared_autonomy_step(
                     self.decoder,
                     self.task,
@@ -241,11 +240,12 @@ class Station:
                     self.alpha,
                     rest="zero",
                 )
-            else:  # Retargeting: the stick is a twist in the current mode, mink's IK its joint velocity
-                if pressed:
-                    self.mode = int(next_mode(self.mode))
-                elif np.any(z != 0.0) and self.retarget is not None:
-                    a_h = self.retarget.joint_velocity(s, twist(self.mode, z))
+            else:  # Retargeting: a press, the stick at rest, or a twist in the mode by mink's IK
+                if self.retarget is not None:
+                    a_hs, modes = retarget_action(
+                        self.retarget, s[None], np.array([self.mode]), z[None, :2], np.array([pressed])
+                    )
+                    a_h, self.mode = a_hs[0], int(modes[0])
                 result = advance(
                     self.task,
                     self.control,

@@ -31,7 +31,15 @@ from lasa.base.config import check_range
 from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot
 
-__all__ = ["MODES", "TWIST_COMPONENTS", "RetargetConfig", "twist", "next_mode", "Retargeting"]
+__all__ = [
+    "MODES",
+    "TWIST_COMPONENTS",
+    "RetargetConfig",
+    "twist",
+    "next_mode",
+    "Retargeting",
+    "retarget_action",
+]
 
 # The six twist components, in the order of a twist vector (vx, vy, vz, wx, wy, wz):
 # linear velocity of the site in the world frame, then angular velocity about the world axes.
@@ -241,3 +249,36 @@ class Retargeting:
         self._set(qs)
         pose = self._configuration.get_transform_frame_to_world(self._site, "site")
         return pose.translation().copy(), pose.rotation().as_matrix()
+
+
+def retarget_action(
+    retarget: Retargeting, state: np.ndarray, mode: np.ndarray, z: np.ndarray, press: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Retargeting's human action a_h for a batch, and each row's mode after the step.
+
+    A press of the mode button cycles the mode (:func:`next_mode`) and moves nothing; a stick
+    at rest (z = 0) commands nothing; otherwise the stick is a twist in the current mode
+    (:func:`twist`, at ``retarget.config``'s speeds), realised by mink's IK
+    (:meth:`Retargeting.joint_velocity`). Live teleoperation (:class:`lasa.live.teleop.Station`)
+    and the study's simulated participants (:func:`lasa.people.participants.simulate`) both
+    take their Retargeting action here, and pass it to :func:`lasa.method.step.advance`.
+
+    Args:
+        retarget: The IK solver.
+        state: Joint positions, shape (U, n) [rad].
+        mode: Each row's mode, shape (U,).
+        z: Stick deflections, shape (U, 2).
+        press: Whether each row presses the mode button this step, shape (U,).
+
+    Returns:
+        a_h, shape (U, n) [rad/s], and the modes after the step, shape (U,).
+    """
+    state = np.asarray(state, dtype=float)
+    z = np.asarray(z, dtype=float)
+    mode = np.asarray(mode, dtype=int)
+    press = np.asarray(press, dtype=bool)
+    a_h = np.zeros(state.shape)
+    move = ~press & np.any(z != 0.0, axis=-1)
+    if move.any():
+        a_h[move] = retarget.joint_velocity(state[move], twist(mode[move], z[move], retarget.config))
+    return a_h, np.where(press, np.asarray(next_mode(mode)), mode)

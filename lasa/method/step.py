@@ -25,6 +25,8 @@ import dataclasses
 
 import numpy as np
 
+from lasa.base import conditions
+from lasa.base.conditions import METHODS
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
 from lasa.method.assistance import assist
@@ -40,23 +42,21 @@ __all__ = [
     "latent_grid",
     "advance",
     "shared_autonomy_step",
+    "human_action",
     "METHODS",
     "METHOD_DECODER",
     "method_alpha",
     "REST",
 ]
 
-METHODS = ("LA", "LA+SA", "LA+SA+Entropy")
-# Which decoder each method uses: "base" is trained on reconstruction alone (Sec. III-A),
-# "entropy" with the entropy term of Eq. T6 (lasa.method.entropy).
-METHOD_DECODER = {"LA": "base", "LA+SA": "base", "LA+SA+Entropy": "entropy"}
+# Which decoder each method uses (:mod:`lasa.base.conditions`): "base" is trained on
+# reconstruction alone (Sec. III-A), "entropy" with the entropy term of Eq. T6 (lasa.method.entropy).
+METHOD_DECODER: dict[str, str] = {m: str(conditions.parse(m, METHODS).decoder) for m in METHODS}
 
 
 def method_alpha(method: str, control: ControlConfig) -> float:
-    """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for the others."""
-    if method not in METHODS:
-        raise ConfigError(f"unknown method {method!r}; choose one of {', '.join(map(repr, METHODS))}")
-    return 0.0 if method == "LA" else control.alpha
+    """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for the assisted ones."""
+    return control.alpha if conditions.parse(method, METHODS, "method").assisted else 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -158,9 +158,15 @@ def shared_autonomy_step(
       paper's phi is defined there), :class:`lasa.method.controller.Controller` and the
       benchmark's reference step use it.
     - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.live.teleop.Station`:
-      a person who lets go of the stick expects the arm to stop, the assistance apart), and
-      it is the convention of the study's simulated participants (:func:`lasa.people.participants.simulate`,
-      which decodes its candidates itself: resting the stick is their idle input).
+      a person who lets go of the stick expects the arm to stop, the assistance apart), and so
+      do the study's simulated participants (:func:`lasa.people.participants.simulate`, for
+      whom resting the stick is the idle input). The participants weigh every candidate, so
+      they decode them in one call (:func:`decode_candidates`) and apply the convention to the
+      chosen one with :func:`human_action`, the function this step applies it with; then
+      :func:`advance`, as here. Their Retargeting action, and Station's, is
+      :func:`lasa.method.retarget.retarget_action`, then :func:`advance`.
+
+    The benchmark (``make bench``) times this step and ``Station.step`` for both interfaces.
 
     Args:
         decoder: The decoder phi (a trained model, or a wrapper such as
@@ -176,14 +182,33 @@ def shared_autonomy_step(
     check_decoder(decoder, task)
     check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
-    ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
-    a_h = decoder.decode_numpy(np.where(ok, z, 0.0), state, belief(log_belief))
-    if rest == "zero":
-        ok = ok & np.any(z != 0.0, axis=-1, keepdims=True)
-    a_h = np.where(ok, a_h, 0.0)
+    finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
+    a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
     sets = task.belief_targets(control.likelihood)
     return advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+
+
+def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
+    """Latent actions' a_h from the decoded phi(z, s, b), under the stick-at-rest convention.
+
+    A row whose input is not finite commands nothing; with ``rest="zero"`` neither does a
+    stick at rest (z = 0); with ``rest="decode"`` the rest position means phi(0, s, b). The
+    one place the convention is applied: :func:`shared_autonomy_step` (sims 1-4's reference
+    step, teleop, the benchmark) and the study's participants, who decode their candidates
+    themselves (:func:`lasa.people.participants.simulate`), both call it.
+
+    Args:
+        decoded: phi(z, s, b) for each row, shape (U, n) [rad/s].
+        z: The inputs, shape (U, d).
+        rest: ``"decode"`` or ``"zero"``.
+    """
+    check_choice("rest", rest, REST)
+    z = np.asarray(z, dtype=float)
+    ok = np.all(np.isfinite(z), axis=-1, keepdims=True)
+    if rest == "zero":
+        ok = ok & np.any(z != 0.0, axis=-1, keepdims=True)
+    return np.where(ok, decoded, 0.0)
 
 
 def check_decoder(decoder: ActionDecoder, task: CupTask) -> None:

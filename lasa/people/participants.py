@@ -60,19 +60,19 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
+from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, check_range
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, RetargetConfig, Retargeting, next_mode, twist
-from lasa.method.step import advance, check_decoder, decode_candidates, latent_grid
+from lasa.method.retarget import MODES, RetargetConfig, Retargeting, retarget_action, twist
+from lasa.method.step import advance, check_decoder, decode_candidates, human_action, latent_grid
 from lasa.people.users import choose_latent, gumbel_noise
 from lasa.world.eating import GOALS, PREFERENCES, TASKS, EatingTask, fork_direction, fork_frame, waypoints
 from lasa.world.robot import Robot
 
 __all__ = [
-    "CONDITIONS",
-    "NO_ASSISTANCE",
     "TASK_NAMES",
     "ParticipantConfig",
     "StudyConfig",
@@ -91,18 +91,17 @@ __all__ = [
     "measures",
 ]
 
-CONDITIONS = ("R", "R+SA", "LA", "LA+SA")
 TASK_NAMES = tuple(TASKS)
 
 
 def interface_of(condition: str) -> str:
-    """``R`` or ``LA``: the control interface of a condition."""
-    return check_choice("condition", condition, CONDITIONS).split("+")[0]
+    """``R`` or ``LA``: the control interface of one of the study's conditions."""
+    return parse_condition(condition, CONDITIONS).interface
 
 
 def assisted(condition: str) -> bool:
-    """Whether a condition blends in shared autonomy."""
-    return check_choice("condition", condition, CONDITIONS).endswith("+SA")
+    """Whether one of the study's conditions blends in shared autonomy."""
+    return parse_condition(condition, CONDITIONS).assisted
 
 
 @dataclasses.dataclass(frozen=True)
@@ -533,16 +532,16 @@ def simulate(
         choice = np.where(wants, choice, rest_col)
         chosen_mode, chosen_z = choice // n_k, choice % n_k
         is_rest = choice == rest_col
+        # the human action, as the live step makes it from the same input: latent actions with
+        # the stick at rest commanding nothing; Retargeting's press, rest or twist by IK
         a_h = np.zeros((len(idx), n))
-        la_move = la & ~is_rest
-        a_h[la_move] = phi[la_move, chosen_z[la_move]]
+        a_h[la] = human_action(phi[la, chosen_z[la]], grid[chosen_z[la]], rest="zero")
         presses = ~la & (chosen_mode != mode[idx])
-        r_move = ~la & ~presses & ~is_rest
-        if r_move.any():
-            a_h[r_move] = retarget.joint_velocity(
-                s[idx[r_move]], r_twist[chosen_mode[r_move], chosen_z[r_move]]
+        r = ~la
+        if r.any():
+            a_h[r], mode[idx[r]] = retarget_action(
+                retarget, s[idx[r]], mode[idx[r]], grid[chosen_z[r]], presses[r]
             )
-        mode[idx[presses]] = next_mode(mode[idx[presses]])
         idle[t, idx] = is_rest
         waited[idx] = np.where(is_rest, waited[idx] + 1, 0)
         switch[t, idx] = presses

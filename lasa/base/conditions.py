@@ -1,0 +1,80 @@
+"""The conditions and methods, named once and parsed in one place.
+
+A condition's name says three things: the **interface** that turns the stick into a human
+action (``R``, Retargeting: a twist in one of three modes, by IK; ``LA``, latent actions:
+a_h = phi(z, s, b)), whether shared autonomy is **assisted** (``+SA``: blended by Eq. M1 with
+the robot's assistance; else alpha = 0), and which **decoder** latent actions use (``base``,
+trained on reconstruction alone; ``entropy``, with the entropy term of Eq. T6: ``+Entropy``).
+
+=================  =========  ========  =======  =====================================
+name               interface  assisted  decoder  used by
+=================  =========  ========  =======  =====================================
+``R``              R          no        --       the study (Sec. VI), teleop
+``R+SA``           R          yes       --       the study, teleop
+``LA``             LA         no        base     sims 1-4 (a method), the study, teleop
+``LA+SA``          LA         yes       base     sims 1-4, the study, teleop
+``LA+SA+Entropy``  LA         yes       entropy  sims 1-4, teleop (the cups)
+=================  =========  ========  =======  =====================================
+
+The simulations call the three latent-action conditions *methods* (:data:`METHODS`), the
+study its 2x2 design *conditions* (:data:`CONDITIONS`); :func:`parse` reads any of them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from lasa.base.errors import ConfigError
+
+__all__ = ["Condition", "parse", "METHODS", "CONDITIONS", "ALL", "alpha_of"]
+
+METHODS = ("LA", "LA+SA", "LA+SA+Entropy")  # the simulations' methods (sims 1-4)
+CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x assistance)
+ALL = ("R", "R+SA", "LA", "LA+SA", "LA+SA+Entropy")  # every condition a person can drive
+
+
+@dataclasses.dataclass(frozen=True)
+class Condition:
+    """A condition, parsed.
+
+    Attributes:
+        name: Its name, one of :data:`ALL`.
+        interface: ``"R"`` (Retargeting) or ``"LA"`` (latent actions).
+        assisted: Whether shared autonomy blends in (alpha > 0).
+        decoder: ``"base"`` or ``"entropy"`` for latent actions, ``None`` for Retargeting.
+    """
+
+    name: str
+    interface: str
+    assisted: bool
+    decoder: str | None
+
+
+_TABLE = {
+    "R": Condition("R", "R", False, None),
+    "R+SA": Condition("R+SA", "R", True, None),
+    "LA": Condition("LA", "LA", False, "base"),
+    "LA+SA": Condition("LA+SA", "LA", True, "base"),
+    "LA+SA+Entropy": Condition("LA+SA+Entropy", "LA", True, "entropy"),
+}
+
+
+def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
+    """The :class:`Condition` a name stands for.
+
+    Args:
+        name: A condition's or method's name.
+        allowed: The names this caller accepts (:data:`METHODS`, :data:`CONDITIONS` or :data:`ALL`).
+        what: What the name is called in the error (``"condition"`` or ``"method"``).
+
+    Raises:
+        ConfigError: naming the value and the allowed names.
+    """
+    if not isinstance(name, str) or name not in allowed:
+        raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(map(repr, allowed))}")
+    return _TABLE[name]
+
+
+def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL) -> float:
+    """The blend weight of a condition: ``alpha`` if it is assisted, else 0."""
+    return alpha if parse(name, allowed).assisted else 0.0
