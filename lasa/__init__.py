@@ -1,8 +1,10 @@
 """lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020).
 
-A reproducibility package: MuJoCo robots and the cup task, demonstrations, the
-conditional-autoencoder decoder phi(z, s, b), shared autonomy (Algorithm 1),
-Boltzmann-rational simulated users, and one module per figure (:mod:`lasa.figures`).
+A reproducibility package: MuJoCo robots and their goal tasks (the cups, the eating
+scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared autonomy
+(Algorithm 1), Boltzmann-rational simulated users, and one module per figure
+(:mod:`lasa.figures`). Extending it (a robot, an assistance member, a claim, a decoder of
+your own) is in ``docs/extending.md``.
 
 Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
 before anything imports mujoco (it is read once, at import). Set it yourself first
@@ -35,6 +37,7 @@ _EXPORTS = {
     "DecoderConfig": "lasa.method.decoder",
     "DemoConfig": "lasa.people.demos",
     "Demonstrations": "lasa.method.dataset",
+    "GoalTask": "lasa.world.goals",
     "IKError": "lasa.base.errors",
     "LasaError": "lasa.base.errors",
     "LatentActionModel": "lasa.method.decoder",
@@ -76,6 +79,7 @@ if TYPE_CHECKING:
     from lasa.people.demos import DemoConfig, collect_demonstrations
     from lasa.people.rollout import Trajectories, rollout
     from lasa.people.users import UserPopulation
+    from lasa.world.goals import GoalTask
     from lasa.world.robot import ROBOTS, Robot, load_robot
     from lasa.world.task import CupTask, make_cup_task
 
@@ -108,6 +112,7 @@ __all__ = [
     "DecoderConfig",
     "DemoConfig",
     "Demonstrations",
+    "GoalTask",
     "IKError",
     "LasaError",
     "LatentActionModel",

@@ -23,7 +23,7 @@ from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import advance, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = ["Trajectories", "rollout"]
 
@@ -49,7 +49,7 @@ class Trajectories:
 
 def rollout(
     decoder: ActionDecoder,
-    task: CupTask,
+    task: GoalTask,
     users: UserPopulation,
     alpha: float | np.ndarray,
     control: ControlConfig,
@@ -63,7 +63,7 @@ def rollout(
 
     Args:
         decoder: The decoder phi(z, s, b); its robot and goals must be the task's.
-        task: The cup task (goals, start pose, joint limits via its robot).
+        task: The goal task (goals, start pose, joint limits via its robot).
         users: The simulated users (targets, rationality, random streams).
         alpha: Blend weight per user, shape (U,), or one for all.
         control: Control-loop units (dt, speed bound, belief model, n_z).
