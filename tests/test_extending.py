@@ -198,6 +198,8 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
         lasa.register_robot(dataclasses.replace(toy_spec(broken), name="toy3_seeds", ik_seeds=((0.0,) * 3,)))
     with pytest.raises(lasa.ConfigError, match="registered already"):
         lasa.register_robot(toy_spec(broken))
+    with pytest.raises(lasa.ConfigError, match="one of the package's robots"):
+        lasa.register_robot(dataclasses.replace(toy_spec(broken), name="planar5"), replace=True)
 
 
 # --- 2. an assistance member -----------------------------------------------------------------

@@ -105,6 +105,9 @@ ROBOTS: dict[str, RobotSpec] = {
 }
 
 
+_PACKAGE_ROBOTS = frozenset(ROBOTS)  # the package's own, which register_robot never replaces
+
+
 def mesh_dir(package: str, folder: str) -> Path:
     """The folder of meshes that an installed registry package ships, found without importing it.
 
@@ -210,8 +213,11 @@ def scene_problems(spec: RobotSpec, model: mujoco.MjModel) -> list[str]:
             out.append(f"no site {cup!r} (a cup's grasp centre, RobotSpec.cups)")
         if not has(obj.mjOBJ_GEOM, cup):
             out.append(f"no geom {cup!r} (the cup's body, beside its site: new cups copy it)")
-    if not has(obj.mjOBJ_GEOM, "table"):
+    table = mujoco.mj_name2id(model, obj.mjOBJ_GEOM, "table")
+    if table < 0:
         out.append("no geom 'table' (a box: the table new cups must stand on)")
+    elif int(model.geom_type[table]) != int(mujoco.mjtGeom.mjGEOM_BOX):
+        out.append("geom 'table' must be a box (new cups must stand within its extent)")
     if not has(obj.mjOBJ_CAMERA, spec.camera):
         out.append(f"no camera {spec.camera!r} (the videos' camera, RobotSpec.camera)")
     if not has(obj.mjOBJ_KEY, spec.home_key):
@@ -245,16 +251,19 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
 
     Args:
         spec: The robot.
-        replace: Replace a robot already registered under ``spec.name``.
+        replace: Replace a robot registered under ``spec.name`` before (never the package's own).
 
     Returns:
-        The robot, built (its scene compiled once, to check it).
+        The robot, built.
 
     Raises:
-        ConfigError: if the name is taken (and ``replace`` is false), the scene file is
-            missing or does not compile, the scene lacks a name of the contract (the message
-            names each), or the spec's seeds or rotation do not fit.
+        ConfigError: if the name is one of the package's robots, or taken (and ``replace``
+            is false), the scene file is missing or does not compile, the scene lacks a name
+            of the contract (the message names each), or the spec's seeds or rotation do not
+            fit.
     """
+    if spec.name in _PACKAGE_ROBOTS:
+        raise ConfigError(f"{spec.name!r} is one of the package's robots; register yours under another name")
     if spec.name in ROBOTS and not replace:
         raise ConfigError(f"a robot named {spec.name!r} is registered already; pass replace=True")
     if not Path(spec.scene).is_file():
