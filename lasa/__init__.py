@@ -1,8 +1,10 @@
 """lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020).
 
-A reproducibility package: MuJoCo robots and the cup task, demonstrations, the
-conditional-autoencoder decoder phi(z, s, b), shared autonomy (Algorithm 1),
-Boltzmann-rational simulated users, and one module per figure (:mod:`lasa.figures`).
+A reproducibility package: MuJoCo robots and their goal tasks (the cups, the eating
+scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared autonomy
+(Algorithm 1), Boltzmann-rational simulated users, and one module per figure
+(:mod:`lasa.figures`). Extending it (a robot, an assistance member, a claim, a decoder of
+your own) is in ``docs/extending.md``.
 
 Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
 before anything imports mujoco (it is read once, at import). Set it yourself first
@@ -25,6 +27,7 @@ pin_mediapy()  # mediapy reads and writes with the pinned wheel's ffmpeg, once i
 # stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
 # name -> module that defines it; `__all__` lists the same names (tests/test_init.py checks).
 _EXPORTS = {
+    "ActionDecoder": "lasa.method.decoder",
     "ArtifactError": "lasa.base.errors",
     "Claim": "lasa.evidence.claims",
     "ConfigError": "lasa.base.errors",
@@ -35,6 +38,7 @@ _EXPORTS = {
     "DecoderConfig": "lasa.method.decoder",
     "DemoConfig": "lasa.people.demos",
     "Demonstrations": "lasa.method.dataset",
+    "GoalTask": "lasa.world.goals",
     "IKError": "lasa.base.errors",
     "LasaError": "lasa.base.errors",
     "LatentActionModel": "lasa.method.decoder",
@@ -43,6 +47,7 @@ _EXPORTS = {
     "Paths": "lasa.base.paths",
     "ROBOTS": "lasa.world.robot",
     "Robot": "lasa.world.robot",
+    "RobotSpec": "lasa.world.robot",
     "TrainConfig": "lasa.method.train",
     "Trajectories": "lasa.people.rollout",
     "UserPopulation": "lasa.people.users",
@@ -53,6 +58,8 @@ _EXPORTS = {
     "load_robot": "lasa.world.robot",
     "make_cup_task": "lasa.world.task",
     "publish": "lasa.evidence.publish",
+    "register_member": "lasa.method.assistance",
+    "register_robot": "lasa.world.robot",
     "rollout": "lasa.people.rollout",
     "save_checkpoint": "lasa.method.decoder",
     "save_demonstrations": "lasa.method.dataset",
@@ -67,16 +74,24 @@ if TYPE_CHECKING:
     from lasa.base.paths import Paths
     from lasa.evidence.claims import Claim, update_claims
     from lasa.evidence.publish import publish
+    from lasa.method.assistance import register_member
     from lasa.method.controller import Controller
     from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
-    from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
+    from lasa.method.decoder import (
+        ActionDecoder,
+        DecoderConfig,
+        LatentActionModel,
+        load_checkpoint,
+        save_checkpoint,
+    )
     from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
     from lasa.method.step import METHODS, shared_autonomy_step
     from lasa.method.train import TrainConfig, train_decoder
     from lasa.people.demos import DemoConfig, collect_demonstrations
     from lasa.people.rollout import Trajectories, rollout
     from lasa.people.users import UserPopulation
-    from lasa.world.robot import ROBOTS, Robot, load_robot
+    from lasa.world.goals import GoalTask
+    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot, register_robot
     from lasa.world.task import CupTask, make_cup_task
 
 
@@ -98,6 +113,7 @@ except Exception:  # running from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
 __all__ = [
+    "ActionDecoder",
     "ArtifactError",
     "Claim",
     "ConfigError",
@@ -108,6 +124,7 @@ __all__ = [
     "DecoderConfig",
     "DemoConfig",
     "Demonstrations",
+    "GoalTask",
     "IKError",
     "LasaError",
     "LatentActionModel",
@@ -116,6 +133,7 @@ __all__ = [
     "Paths",
     "ROBOTS",
     "Robot",
+    "RobotSpec",
     "TrainConfig",
     "Trajectories",
     "UserPopulation",
@@ -126,6 +144,8 @@ __all__ = [
     "load_robot",
     "make_cup_task",
     "publish",
+    "register_member",
+    "register_robot",
     "rollout",
     "save_checkpoint",
     "save_demonstrations",

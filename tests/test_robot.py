@@ -59,3 +59,14 @@ def test_planar_arm_stays_in_its_plane(robot):
 def test_clip_respects_limits(robot):
     q = robot.clip(np.full(robot.n_joints, 100.0))
     assert_allclose(q, robot.upper)
+
+
+@pytest.mark.parametrize("name", ["planar5", "panda", "eating"])
+def test_the_package_scenes_meet_the_naming_contract_register_robot_checks(name):
+    from lasa.world.eating import EATING, load_eating_robot
+    from lasa.world.robot import scene_problems
+
+    robot = load_eating_robot() if name == "eating" else load_robot(name)
+    spec = EATING if name == "eating" else ROBOTS[name]
+    assert scene_problems(spec, robot.model) == []
+    assert len(spec.ik_seeds) == len(spec.cups)

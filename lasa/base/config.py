@@ -29,6 +29,9 @@ T = TypeVar("T")
 
 # The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
+# Members added from outside the package (lasa.method.assistance.register_member, the only writer),
+# which ControlConfig accepts too; the figures' default members stay ASSISTANCE.
+REGISTERED_ASSISTANCE: list[str] = []
 # The assistance label of rows and episodes with none (alpha = 0: LA, R), named once.
 NO_ASSISTANCE = "none"
 
@@ -111,7 +114,7 @@ class ControlConfig:
         check_range("belief_floor", self.belief_floor, 0.0, 0.5, high_open=True)
         check_range("alpha", self.alpha, 0.0, 1.0)
         check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
-        check_choice("assistance", self.assistance, ASSISTANCE)
+        check_choice("assistance", self.assistance, (*ASSISTANCE, *REGISTERED_ASSISTANCE))
         if int(self.n_z) != self.n_z or self.n_z < 2:
             raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
 

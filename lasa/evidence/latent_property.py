@@ -50,7 +50,7 @@ from lasa.method.belief import belief as to_belief
 from lasa.method.blend import safe_step
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import shared_autonomy_step
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
@@ -142,7 +142,7 @@ class PreferenceSet:
     axes: np.ndarray
 
 
-def preference_set(task: CupTask, goal: int, n_grid: int = 41) -> PreferenceSet:
+def preference_set(task: GoalTask, goal: int, n_grid: int = 41) -> PreferenceSet:
     """Goal ``goal``'s preference set: the curve s*(g, theta), or a bowl's surface s*(g, theta, u)."""
     thetas = np.linspace(0.0, 1.0, n_grid)
     pose = getattr(task, "pose", None)
@@ -170,7 +170,7 @@ def ring(n: int, z_dim: int) -> np.ndarray:
 
 def held_input_paths(
     decoder: ActionDecoder,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     start: np.ndarray,
     belief: np.ndarray,
@@ -227,7 +227,7 @@ def _nearest(
 
 
 def measure(
-    task: CupTask,
+    task: GoalTask,
     decoder: ActionDecoder,
     control: ControlConfig,
     config: PropertyConfig = PropertyConfig(),

@@ -19,12 +19,15 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Rectangle
 
 from lasa.method.dataset import Demonstrations
+from lasa.world.goals import GoalTask
 from lasa.world.robot import ROBOTS
 from lasa.world.task import CupTask
 
 __all__ = [
     "METHOD_COLORS",
     "CUP_COLORS",
+    "GOAL_COLORS",
+    "goal_colors",
     "draw_scene",
     "frame_around",
     "is_planar",
@@ -37,19 +40,27 @@ __all__ = [
 ]
 
 METHOD_COLORS = {"LA": "#d95f02", "LA+SA": "#1b9e77", "LA+SA+Entropy": "#7570b3"}
-CUP_COLORS = ("#e6553f", "#3f9959")
+CUP_COLORS = ("#e6553f", "#3f9959")  # the first two goals: the paper's two cups, left and right
+# Every goal's colour, in goal order: the two cups', then a third in the blue of a new cup's
+# render (lasa.world.robot.NEW_CUP_RGBA), then more for tasks with more goals.
+GOAL_COLORS = (*CUP_COLORS, "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")
+
+
+def goal_colors(n_goals: int) -> tuple[str, ...]:
+    """A colour for each of ``n_goals`` goals: :data:`GOAL_COLORS` in turn, repeated past its end."""
+    return tuple(GOAL_COLORS[g % len(GOAL_COLORS)] for g in range(n_goals))
 
 
 def _ax(ax: Axes | None) -> Axes:
     return plt.gca() if ax is None else ax
 
 
-def is_planar(task: CupTask) -> bool:
+def is_planar(task: GoalTask) -> bool:
     """Whether the robot moves in the world's x-z plane (every cup at y = 0)."""
     return bool(np.allclose(task.robot.cup_positions()[:, 1], 0.0))
 
 
-def project(task: CupTask, points: np.ndarray) -> np.ndarray:
+def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
     """World points (..., 3) onto the plane a figure draws the task in, (..., 2).
 
     A planar arm is drawn in its own x-z plane. Any other robot is drawn from above,
@@ -61,19 +72,23 @@ def project(task: CupTask, points: np.ndarray) -> np.ndarray:
     return np.stack([-points[..., 1], points[..., 0]], axis=-1)
 
 
-def draw_scene(task: CupTask, ax: Axes | None = None) -> Axes:
-    """The cups and the robot's base in the task's drawing plane (:func:`project`)."""
+def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
+    """The goals (cups) and the robot's base in the task's drawing plane (:func:`project`).
+
+    Each goal in its colour (:func:`goal_colors`), for any number of goals.
+    """
     ax = _ax(ax)
     cups = task.robot.cup_positions()
+    colors = goal_colors(len(cups))
     if is_planar(task):
         ax.axhline(0.0, color="#8b6d4b", lw=2, zorder=0)
-        for (x, _, _), color in zip(cups, CUP_COLORS, strict=True):
+        for (x, _, _), color in zip(cups, colors, strict=True):
             ax.add_patch(Rectangle((x - 0.035, 0.0), 0.07, 0.12, color=color, alpha=0.8, zorder=1))
         ax.add_patch(Rectangle((-0.06, 0.0), 0.12, 0.12, color="#40444c", zorder=1))
         ax.set_xlabel("x [m]")
         ax.set_ylabel("z [m]")
     else:
-        for cup, color in zip(project(task, cups), CUP_COLORS, strict=True):
+        for cup, color in zip(project(task, cups), colors, strict=True):
             ax.add_patch(Circle(tuple(cup), 0.035, color=color, alpha=0.8, zorder=1))
         ax.add_patch(Circle(tuple(project(task, task.robot.base_position())), 0.06, color="#40444c"))
         ax.set_xlabel("left <- -y [m] -> right")
@@ -90,8 +105,8 @@ def _colored_path(ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str, norm:
     return lc
 
 
-def frame_around(task: CupTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
-    """Limit the axes to the drawn points, the cups and the base, with some padding."""
+def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
+    """Limit the axes to the drawn points, the goals and the base, with some padding."""
     cups = project(task, task.robot.cup_positions())
     base = project(task, task.robot.base_position())[None]
     pts = np.concatenate([points.reshape(-1, 2), cups, base])

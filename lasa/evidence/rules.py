@@ -9,6 +9,9 @@ thresholds, the rule gives the same verdict everywhere in the box of intervals (
 by :meth:`Rule.settled`, which evaluates the rule at a point in every cell of that box).
 Otherwise the verdict reads ``undecided``.
 
+A claim of your own gets its rule with :func:`register_rule`: then
+:func:`lasa.evidence.verdicts.assess` judges it like the paper's (``docs/extending.md``).
+
 For example the time ratio of Fig. sim1 must be within 0.15 of 1.45 at beta = 75, so its
 thresholds are 1.30 and 1.60, and 1.0 for ``partly`` (LA is slower at all).
 
@@ -26,7 +29,7 @@ from collections.abc import Callable, Mapping
 
 from lasa.base.errors import ConfigError
 
-__all__ = ["Quantity", "Rule", "RULES", "AFTER_RESULTS", "rule", "VERDICTS", "UNDECIDED"]
+__all__ = ["Quantity", "Rule", "RULES", "AFTER_RESULTS", "rule", "register_rule", "VERDICTS", "UNDECIDED"]
 
 VERDICTS = ("yes", "partly", "no")  # what a rule can decide
 UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a threshold
@@ -290,3 +293,37 @@ def rule(claim_id: str) -> Rule:
     if base not in RULES:
         raise ConfigError(f"no rule for claim {claim_id!r}; rules exist for {sorted(RULES)}")
     return RULES[base]
+
+
+_PAPER_RULES = frozenset(RULES)  # the paper's claims' rules, which register_rule never replaces
+
+
+def register_rule(new: Rule, *, replace: bool = False) -> Rule:
+    """Add the rule of a claim of your own to :data:`RULES`, from outside the package.
+
+    Then :func:`rule` finds it, for ``<id>`` and every ``<id>@<reading>``, and
+    :func:`lasa.evidence.verdicts.assess` gives its claims intervals and settles them.
+
+    Args:
+        new: The rule; its id is ``<figure>.<name>``, as its claims' ids.
+        replace: Replace a rule registered under that id before (never a paper claim's).
+
+    Returns:
+        The rule.
+
+    Raises:
+        ConfigError: if the id is not ``<figure>.<name>``, has no quantity, or is taken
+            (a paper claim's always, another only unless ``replace``).
+    """
+    figure, _, name = new.id.partition(".")
+    if not figure or not name or " " in new.id or "@" in new.id:
+        raise ConfigError(f"a rule's id must be '<figure>.<name>' without spaces or '@', got {new.id!r}")
+    if not new.quantities:
+        raise ConfigError(f"{new.id}: a rule reads at least one quantity")
+    if new.id in RULES and (new.id in _PAPER_RULES or not replace):
+        raise ConfigError(
+            f"a rule for {new.id!r} exists already"
+            + ("" if new.id in _PAPER_RULES else "; pass replace=True")
+        )
+    RULES[new.id] = new
+    return new

@@ -29,7 +29,7 @@ from lasa.method.decoder import ActionDecoder
 from lasa.method.step import METHOD_DECODER, METHODS, latent_grid, method_alpha
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import PILOTS, UserPopulation
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 T = TypeVar("T")
 
@@ -118,7 +118,7 @@ def check_positive_int(name: str, value: int) -> None:
 
 
 def draw_episodes(
-    task: CupTask, n_seeds: int, horizon: int, n_candidates: int, seed: int
+    task: GoalTask, n_seeds: int, horizon: int, n_candidates: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each seed's cup, preference and random stream.
 
@@ -143,7 +143,7 @@ def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
 
 
 def episodes(
-    decoders: Decoders, task: CupTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
+    decoders: Decoders, task: GoalTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`draw_episodes` sized for the decoders' joystick grid."""
     first = next(iter(as_decoders(decoders).values()))
@@ -153,7 +153,7 @@ def episodes(
 
 def run_population(
     decoders: Decoders,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     users: UserPopulation,
     methods: np.ndarray,
@@ -171,7 +171,7 @@ def run_population(
 
     Args:
         decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
-        task: The cup task.
+        task: The goal task.
         control: Control-loop units.
         users: The simulated users.
         methods: Each user's method, shape (U,).
@@ -235,7 +235,7 @@ def run_population(
 def judge(
     module: Any,
     decoders: Decoders,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     config: Any,
     progress: bool = False,

@@ -61,7 +61,7 @@ from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
@@ -246,7 +246,7 @@ def _window_counts(m: dict[str, np.ndarray], times: np.ndarray) -> dict[str, np.
 
 def run(
     decoder: ActionDecoder,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
@@ -259,7 +259,7 @@ def run(
 
     Args:
         decoder: The base decoder (LA+SA's, ``Workspace.sim_decoders()["base"]``).
-        task: The cup task.
+        task: The goal task.
         control: Control-loop units; ``assistance`` is replaced by each member in turn.
         config: The sweep.
         progress: Show progress bars.

@@ -28,7 +28,7 @@ from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import LatentActionModel
 from lasa.method.entropy import choose_lambda, context_entropy, context_grid
 from lasa.method.train import TrainConfig, reconstruction_error, train_decoder
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
@@ -99,7 +99,7 @@ def run_sweep(
     base: LatentActionModel,
     base_train: TrainConfig,
     demos: Demonstrations,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = True,
@@ -111,7 +111,7 @@ def run_sweep(
         base_train: The config that trained it; each run keeps its settings and changes
             only ``steps``, ``entropy_lambda`` and ``seed``.
         demos: The demonstrations.
-        task: The cup task (the belief's goal sets).
+        task: The goal task (the belief's goal sets).
         control: Control-loop units.
         config: The sweep.
         progress: Show a progress bar per run.
@@ -140,7 +140,7 @@ def run_sweep(
     return Sweep(table, models, configs, histories, chosen)
 
 
-def grid_rows(sweep: Sweep, task: CupTask, control: ControlConfig) -> pd.DataFrame:
+def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFrame:
     """This robot's rows of the figure (:data:`COLUMNS`): the sweep, and the entropy over a grid.
 
     The grid runs along the straight joint-space line from home to the right cup's goal,

@@ -27,9 +27,10 @@ from lasa.base.errors import ConfigError
 from lasa.base.io import load_npz
 from lasa.base.paths import Paths
 from lasa.evidence.latent_property import held_input_paths
-from lasa.evidence.plots import CUP_COLORS, draw_scene, frame_around, project, robots_present
+from lasa.evidence.plots import draw_scene, frame_around, goal_colors, project, robots_present
 from lasa.figures.common import check_positive_int
 from lasa.method.decoder import ActionDecoder
+from lasa.world.goals import GoalTask
 from lasa.world.robot import load_robot
 from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, make_cup_task
 
@@ -107,12 +108,12 @@ def run(
 
 
 def plot_held_paths(
-    task: CupTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes | None = None, title: str | None = None
+    task: GoalTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes | None = None, title: str | None = None
 ) -> Axes:
     """Grasp-site paths when each joystick input is held, coloured by z.
 
     Args:
-        task: The cup task.
+        task: The task.
         paths: States of each held input, shape (K, steps + 1, n).
         z_values: The held inputs, shape (K,).
         ax: Axes to draw on.
@@ -165,7 +166,9 @@ def plot_grasp_sweep(
 
     norm = Normalize(-1.0, 1.0)
     cmap = plt.get_cmap("coolwarm")
-    ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=CUP_COLORS[goal], alpha=0.6))
+    ax.add_patch(
+        Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=goal_colors(task.n_goals)[goal], alpha=0.6)
+    )
     for path, z in zip(paths, z_values, strict=True):
         xy = plane(robot.grasp_positions(path))
         ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=0.8)

@@ -53,7 +53,7 @@ from lasa.figures.common import as_decoders, check_members, check_positive_int
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
@@ -212,7 +212,7 @@ class Grid:
     """What every cell of a grid shares, sent to each worker once (:func:`lasa.pipeline.scaleout.run_jobs`)"""
 
     decoders: Mapping[str, ActionDecoder]  # notebook 03's pair
-    task: CupTask
+    task: GoalTask
     control: ControlConfig  # the defaults the grid is centred on
     config: Config
 
@@ -314,7 +314,7 @@ def default_frames(
 
 def run(
     decoders: Mapping[str, ActionDecoder] | ActionDecoder,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,
@@ -324,7 +324,7 @@ def run(
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
-        task: The cup task.
+        task: The goal task.
         control: The default control units (alpha, sigma_h) the grid is centred on.
         config: The grid.
         progress: A progress bar over finished cells.

@@ -43,7 +43,7 @@ from lasa.figures.common import (
 from lasa.method.step import METHODS
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "plot_metric"]
 
@@ -107,7 +107,7 @@ class Config:
 
 def run(
     decoders: Decoders,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,

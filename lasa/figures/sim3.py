@@ -42,7 +42,7 @@ from lasa.figures.common import (
 from lasa.method.step import METHODS
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
@@ -102,7 +102,7 @@ class Config:
 
 def run(
     decoders: Decoders,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
     progress: bool = False,

@@ -53,8 +53,9 @@ from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
 from lasa.method.step import advance, shared_autonomy_step
+from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
-from lasa.world.task import CupTask, make_cup_task
+from lasa.world.task import make_cup_task
 
 __all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "run_session", "replay", "main"]
 
@@ -115,7 +116,7 @@ class Station:
         condition = parse_condition(config.condition)
         if config.task == "cups":
             self.robot: Robot = load_robot(config.robot)
-            self.task: CupTask = make_cup_task(self.robot)
+            self.task: GoalTask = make_cup_task(self.robot)
             self.control: ControlConfig = self.robot.control
             name = "decoder_entropy" if condition.decoder == "entropy" else "decoder_lambda0"
         else:

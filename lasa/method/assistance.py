@@ -27,7 +27,13 @@ w = 1 for every member but ``arbitrated``, which is Eq. M1 exactly.
                           for a distance cost-to-go (see :func:`hindsight`).
 ========================  ===========================================================
 
-Every function is vectorised over users: beliefs (U, G), states (U, n).
+Every function is vectorised over users: beliefs (U, G), states (U, n), for any number
+of goals G.
+
+**A member of your own.** Any function with a member's signature (:data:`Member`: belief,
+state, goals, sets, dt, speed -> a_r, w) joins the family with :func:`register_member`; then
+``ControlConfig(assistance=name)`` and the rollout's per-user ``assistance`` run it like the
+four above (``docs/extending.md``).
 """
 
 from __future__ import annotations
@@ -36,12 +42,26 @@ from collections.abc import Callable
 
 import numpy as np
 
-from lasa.base.config import ASSISTANCE
+from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, REGISTERED_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.method.blend import assistance as eq_m2
 
-__all__ = ["ASSISTANCE", "point", "grasp_set", "arbitrated", "hindsight", "nearest_grasps", "assist"]
+__all__ = [
+    "ASSISTANCE",
+    "Member",
+    "point",
+    "grasp_set",
+    "arbitrated",
+    "hindsight",
+    "nearest_grasps",
+    "assist",
+    "members",
+    "register_member",
+    "unregister_member",
+]
 
+# A member: (belief (U, G), state (U, n), goals (G, n), sets (G, K, n), dt [s], speed [rad/s])
+# -> (a_r (U, n) [rad/s], blend weight w (U,) in [0, 1]).
 Member = Callable[
     [np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float], tuple[np.ndarray, np.ndarray]
 ]
@@ -158,6 +178,57 @@ _MEMBERS: dict[str, Member] = {
 }
 
 
+def members() -> tuple[str, ...]:
+    """Every member's name: the four of :data:`ASSISTANCE`, then the registered ones in turn."""
+    return tuple(_MEMBERS)
+
+
+def register_member(name: str, member: Member, *, replace: bool = False) -> None:
+    """Add a member to the family, from outside the package.
+
+    After it, ``ControlConfig(assistance=name)`` is valid and every assisted step under it
+    (:func:`lasa.method.step.shared_autonomy_step`, :func:`lasa.people.rollout.rollout`, the
+    :class:`lasa.method.controller.Controller`) calls ``member``, as :func:`assist` calls the
+    built-in ones: ``member(belief, state, goals, sets, dt, speed)`` with the shapes of
+    :func:`assist`, returning a_r (U, n) and the blend weight w (U,) in [0, 1]. The figures'
+    default members stay the four of :data:`ASSISTANCE`.
+
+    Args:
+        name: The member's name (not a built-in's, nor ``"none"``).
+        member: The function.
+        replace: Replace a member registered under ``name`` before.
+
+    Raises:
+        ConfigError: for a built-in's name, ``"none"``, an empty name, or a name taken
+            (unless ``replace``).
+    """
+    if not isinstance(name, str) or not name or name == NO_ASSISTANCE or name in ASSISTANCE:
+        raise ConfigError(
+            f"a registered member needs a new name (not {NO_ASSISTANCE!r} or a built-in's), got {name!r}"
+        )
+    if name in _MEMBERS and not replace:
+        raise ConfigError(f"assistance member {name!r} is registered already; pass replace=True")
+    if not callable(member):
+        raise ConfigError(f"assistance member {name!r} must be a function, got {member!r}")
+    _MEMBERS[name] = member
+    if name not in REGISTERED_ASSISTANCE:
+        REGISTERED_ASSISTANCE.append(name)
+
+
+def unregister_member(name: str) -> None:
+    """Remove a member added by :func:`register_member` (the built-in ones stay).
+
+    Raises:
+        ConfigError: if ``name`` is not a registered member.
+    """
+    if name not in REGISTERED_ASSISTANCE:
+        raise ConfigError(
+            f"{name!r} is not a registered assistance member; registered: {REGISTERED_ASSISTANCE}"
+        )
+    del _MEMBERS[name]
+    REGISTERED_ASSISTANCE.remove(name)
+
+
 def assist(
     name: str,
     belief: np.ndarray,
@@ -170,7 +241,7 @@ def assist(
     """The assistance a_r and the blend weight w of member ``name``.
 
     Args:
-        name: One of :data:`ASSISTANCE`.
+        name: One of :func:`members`: :data:`ASSISTANCE`, or a registered member.
         belief: b, shape (U, G).
         state: s, shape (U, n).
         goals: One pose per goal, shape (G, n).
@@ -183,5 +254,5 @@ def assist(
     """
     member = _MEMBERS.get(name)
     if member is None:
-        raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, ASSISTANCE))}")
+        raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, _MEMBERS))}")
     return member(belief, state, goals, sets, dt, speed)

@@ -22,7 +22,7 @@ from lasa.base.errors import ConfigError
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import StepResult, check_decoder, shared_autonomy_step
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = ["Controller"]
 
@@ -33,7 +33,7 @@ class Controller:
     Args:
         decoder: The decoder phi (a trained model, or a wrapper such as
             :class:`lasa.method.newgoals.MappedDecoder`); its robot and goals must be the task's.
-        task: The cup task (goals, belief sets, joint limits).
+        task: The goal task (goals, belief sets, joint limits).
         control: Control-loop units.
         alpha: Blend weight in [0, 1] (0 is ``LA``).
 
@@ -44,7 +44,7 @@ class Controller:
             ``None`` before the first step.
     """
 
-    def __init__(self, decoder: ActionDecoder, task: CupTask, control: ControlConfig, alpha: float) -> None:
+    def __init__(self, decoder: ActionDecoder, task: GoalTask, control: ControlConfig, alpha: float) -> None:
         check_decoder(decoder, task)
         self.alpha = check_range("alpha", alpha, 0.0, 1.0)
         self.decoder, self.task, self.control = decoder, task, control

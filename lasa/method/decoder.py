@@ -18,7 +18,11 @@ same function on numpy arrays, written for throughput (see its docstring): it ag
 
 A checkpoint holds the state dict and the plain-dict config the model was built with;
 :func:`load_checkpoint` loads it with ``torch.load(..., weights_only=True)`` and checks
-that it was trained for the robot the caller expects.
+that it was trained for the robot the caller expects (and, if asked, for its number of
+goals). Any decoder of your own saves and loads the same way: a ``torch.nn.Module`` that
+follows :class:`ActionDecoder`, built from one frozen dataclass of plain values (its
+``config``, whose class is its ``config_class``), as :class:`LatentActionModel` is; pass
+its class to :func:`load_checkpoint` (``docs/extending.md``).
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ import os
 import threading
 import weakref
 from pathlib import Path
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, TypeVar, overload, runtime_checkable
 
 import numpy as np
 import torch
@@ -125,6 +129,7 @@ class LatentActionModel(nn.Module):
     (the control loop does, see :func:`lasa.method.blend.sanitize`).
     """
 
+    config_class: ClassVar[type[DecoderConfig]] = DecoderConfig  # what a checkpoint's config builds
     state_mean: torch.Tensor
     state_std: torch.Tensor
 
@@ -460,60 +465,145 @@ def _inference_plan(model: LatentActionModel) -> _InferencePlan:
     return plan
 
 
-def save_checkpoint(model: LatentActionModel, path: str | os.PathLike[str], **extra: Any) -> Path:
+M = TypeVar("M", bound=nn.Module)
+
+
+def _class_name(cls: type) -> str:
+    return f"{cls.__module__}.{cls.__qualname__}"
+
+
+def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any) -> Path:
     """Atomically save the model's state dict, its config and ``extra`` metadata.
+
+    ``model`` is a :class:`LatentActionModel` or any decoder module built from a dataclass
+    ``model.config`` of plain values. A checkpoint of another class than
+    :class:`LatentActionModel` also records the class's name, so that loading it with the
+    wrong class is an error that names the right one.
 
     ``extra`` values must be plain Python data (numbers, strings, lists, dicts) so the
     checkpoint loads with ``weights_only=True``; the training config goes here.
+
+    Raises:
+        ConfigError: if ``model.config`` is not a dataclass instance.
     """
-    payload = {
+    config = getattr(model, "config", None)
+    if not dataclasses.is_dataclass(config) or isinstance(config, type):
+        raise ConfigError(
+            f"{type(model).__name__} has no dataclass `config`: a checkpoint saves the config "
+            "the decoder is built from"
+        )
+    payload: dict[str, Any] = {
         "state_dict": model.state_dict(),
-        "config": dataclasses.asdict(model.config),
+        "config": dataclasses.asdict(config),
         "extra": extra,
     }
+    if type(model) is not LatentActionModel:
+        payload["decoder"] = _class_name(type(model))
     with atomic_path(path) as tmp:
         torch.save(payload, tmp)
     return Path(path)
+
+
+@overload
+def load_checkpoint(
+    path: str | os.PathLike[str],
+    robot: str | None = None,
+    make_hint: str = ...,
+    *,
+    n_goals: int | None = None,
+) -> tuple[LatentActionModel, dict[str, Any]]: ...
+
+
+@overload
+def load_checkpoint(
+    path: str | os.PathLike[str],
+    robot: str | None = None,
+    make_hint: str = ...,
+    *,
+    decoder: type[M],
+    n_goals: int | None = None,
+) -> tuple[M, dict[str, Any]]: ...
 
 
 def load_checkpoint(
     path: str | os.PathLike[str],
     robot: str | None = None,
     make_hint: str = "make figures (notebook 02_decoder_training)",
-) -> tuple[LatentActionModel, dict[str, Any]]:
+    *,
+    decoder: type[nn.Module] = LatentActionModel,
+    n_goals: int | None = None,
+) -> tuple[nn.Module, dict[str, Any]]:
     """Load a model saved by :func:`save_checkpoint`.
 
     Args:
         path: Checkpoint file.
         robot: If given, the robot the caller expects; a mismatch is an error.
         make_hint: Command that makes the checkpoint, for the error message.
+        decoder: The decoder's class (default :class:`LatentActionModel`): a
+            ``torch.nn.Module`` that follows :class:`ActionDecoder`, built as
+            ``decoder(decoder.config_class(**config))``.
+        n_goals: If given, the number of goals G the caller's task has; a decoder that
+            reads a belief over another number is an error.
 
     Returns:
         The model in eval mode, and the checkpoint's ``extra`` metadata.
 
     Raises:
-        ArtifactError: if the file is missing, corrupt, or for another robot.
+        ArtifactError: if the file is missing, corrupt, saved from another decoder class,
+            or for another robot or number of goals.
+        ConfigError: if ``decoder`` has no ``config_class`` or does not follow
+            :class:`ActionDecoder`.
     """
+    config_class = getattr(decoder, "config_class", None)
+    if not isinstance(config_class, type) or not dataclasses.is_dataclass(config_class):
+        raise ConfigError(
+            f"decoder class {decoder.__name__} needs a `config_class` attribute: the dataclass its "
+            "constructor takes"
+        )
     path = require_file(path, make_hint)
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
+        saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
         values: dict[str, Any] = {
             k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()
         }
-        config = DecoderConfig(**values)
-        model = LatentActionModel(config)
+    except Exception as exc:
+        raise _invalid(path, exc, make_hint) from None
+    if saved_as != _class_name(decoder):
+        raise ArtifactError(
+            f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
+            f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
+        )
+    try:
+        model = decoder(config_class(**values))
         model.load_state_dict(payload["state_dict"])
     except Exception as exc:
-        # Name the failure, not torch's message: for a file it cannot unpickle safely, torch
-        # suggests loading with weights_only=False, which would run arbitrary code from the file.
+        raise _invalid(path, exc, make_hint) from None
+    if not isinstance(model, ActionDecoder):
+        raise ConfigError(
+            f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
+        )
+    if robot is not None and model.robot != robot:
         raise ArtifactError(
-            f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
-            f"Delete it and re-make it with: {make_hint}"
-        ) from None
-    if robot is not None and config.robot != robot:
-        raise ArtifactError(
-            f"{path} was trained for robot {config.robot!r}, not {robot!r}. "
+            f"{path} was trained for robot {model.robot!r}, not {robot!r}. "
             f"Use the checkpoint for {robot!r} or re-make it with: {make_hint}"
+        )
+    if n_goals is not None and model.n_goals != n_goals:
+        raise ArtifactError(
+            f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
+            f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
     model.eval()
     return model, dict(payload.get("extra", {}))
+
+
+def _invalid(path: Path, exc: Exception, make_hint: str) -> ArtifactError:
+    """The error of a checkpoint that does not load: it names the failure, not torch's message.
+
+    For a file it cannot unpickle safely, torch suggests loading with weights_only=False,
+    which would run arbitrary code from the file.
+    """
+    return ArtifactError(
+        f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
+        f"Delete it and re-make it with: {make_hint}"
+    )

@@ -33,7 +33,7 @@ from lasa.method.assistance import assist
 from lasa.method.belief import belief, log_likelihood, update_log_belief
 from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = [
     "StepResult",
@@ -79,7 +79,7 @@ class StepResult:
 
 
 def advance(
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     state: np.ndarray,
     log_b: np.ndarray,
@@ -110,7 +110,7 @@ def advance(
 
 
 def _assistance(
-    task: CupTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
+    task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
     """a_r and the blend weight per user: ``control.assistance``, or each user's member.
 
@@ -134,7 +134,7 @@ REST = ("decode", "zero")  # what a stick at rest commands (shared_autonomy_step
 
 def shared_autonomy_step(
     decoder: ActionDecoder,
-    task: CupTask,
+    task: GoalTask,
     control: ControlConfig,
     state: np.ndarray,
     log_belief: np.ndarray,
@@ -211,7 +211,7 @@ def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
     return np.where(ok, decoded, 0.0)
 
 
-def check_decoder(decoder: ActionDecoder, task: CupTask) -> None:
+def check_decoder(decoder: ActionDecoder, task: GoalTask) -> None:
     """The decoder must act in the task's robot and read a belief over the task's goals.
 
     Raises:

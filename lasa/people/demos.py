@@ -33,8 +33,8 @@ from lasa.base.errors import ConfigError
 from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
 from lasa.world.eating import EatingTask
+from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot
-from lasa.world.task import CupTask
 
 __all__ = [
     "DemoConfig",
@@ -79,10 +79,10 @@ class DemoConfig:
         check_range("perturb_gain", self.perturb_gain, 0.0)
 
 
-def demonstration_summary(task: CupTask, demos: Demonstrations) -> pd.DataFrame:
-    """One row per (demonstration, phase): its length and the belief in the demonstrated cup.
+def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame:
+    """One row per (demonstration, phase): its length and the belief in the demonstrated goal.
 
-    Columns: ``robot``, ``demo``, ``goal`` (the cup's name), ``phase`` (``reach``,
+    Columns: ``robot``, ``demo``, ``goal`` (the goal's name: a cup's, on the cup task), ``phase`` (``reach``,
     ``adjust``, ``hold``), ``steps``, ``belief_min`` and ``belief_end``.
     """
     clean = demos.clean()
@@ -118,12 +118,12 @@ def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max
 
 
 def collect_demonstrations(
-    task: CupTask, control: ControlConfig, config: DemoConfig = DemoConfig()
+    task: GoalTask, control: ControlConfig, config: DemoConfig = DemoConfig()
 ) -> Demonstrations:
     """Generate the demonstration dataset for ``task``.
 
     Args:
-        task: The cup task (robot, goals, preference curves, start pose).
+        task: The goal task (robot, goals, preference curves, start pose).
         control: Control-loop units: dt, sigma_h (the speed scale) and the belief model.
         config: Sizes and motion parameters of the demonstrations.
 

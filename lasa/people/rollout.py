@@ -17,13 +17,14 @@ import dataclasses
 import numpy as np
 from tqdm.auto import tqdm
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_choice
+from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
+from lasa.method.assistance import members as members_of_family
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import advance, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
-from lasa.world.task import CupTask
+from lasa.world.goals import GoalTask
 
 __all__ = ["Trajectories", "rollout"]
 
@@ -49,7 +50,7 @@ class Trajectories:
 
 def rollout(
     decoder: ActionDecoder,
-    task: CupTask,
+    task: GoalTask,
     users: UserPopulation,
     alpha: float | np.ndarray,
     control: ControlConfig,
@@ -63,7 +64,7 @@ def rollout(
 
     Args:
         decoder: The decoder phi(z, s, b); its robot and goals must be the task's.
-        task: The cup task (goals, start pose, joint limits via its robot).
+        task: The goal task (goals, start pose, joint limits via its robot).
         users: The simulated users (targets, rationality, random streams).
         alpha: Blend weight per user, shape (U,), or one for all.
         control: Control-loop units (dt, speed bound, belief model, n_z).
@@ -74,7 +75,8 @@ def rollout(
         pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
             (``users.pilot``, :func:`lasa.people.users.pilot_choice`); user u draws from
             ``pilot_noise[users.seed[u]]``. Needed only by those pilots.
-        assistance: Each user's member of :mod:`lasa.method.assistance`, shape (U,), so that
+        assistance: Each user's member of :mod:`lasa.method.assistance` (built in, or added by
+            :func:`lasa.method.assistance.register_member`), shape (U,), so that
             users of several readings share one batch (and each decoder call); default
             ``control.assistance`` for everyone.
 
@@ -98,7 +100,7 @@ def rollout(
                 f"assistance must name one member per user, shape ({n_users},), got {members.shape}"
             )
         for name in set(members.tolist()):
-            check_choice("assistance", name, ASSISTANCE)
+            check_choice("assistance", name, members_of_family())
     piloted = users.pilot != "boltzmann" and users.pilot_prob > 0
     if piloted and (
         pilot_noise is None

@@ -55,9 +55,9 @@ from scipy.interpolate import CubicSpline
 
 from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ConfigError
+from lasa.world.goals import GoalTask
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import ASSETS, ROBOTS, Robot, RobotSpec
-from lasa.world.task import CupTask
 
 __all__ = [
     "EATING",
@@ -93,7 +93,7 @@ EATING = RobotSpec(
     home_key="home",
     top_grasp_rotation=ROBOTS["panda"].top_grasp_rotation,  # hand, so fork, pointing down
     grasp_standoff=0.0,
-    side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._radial)
+    side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._sideways)
     ik_seeds=(ROBOTS["panda"].ik_seeds[0],) * 4,
     # The cup sims' units (notebook 04 states why); the study's assistance is hindsight
     # optimisation, the member the paper's user study used (Javdani et al. 2018).
@@ -164,7 +164,7 @@ def load_eating_robot() -> Robot:
     return Robot(EATING)
 
 
-def _radial(robot: Robot, goal: int) -> np.ndarray:
+def _sideways(robot: Robot, goal: int) -> np.ndarray:
     """The horizontal direction r a preference tilts the fork towards at ``goal``, unit (3,).
 
     Sideways: the direction from the robot's base to the goal turned a quarter turn
@@ -172,24 +172,24 @@ def _radial(robot: Robot, goal: int) -> np.ndarray:
     the fork's tines more than about 40 degrees outward (away from the base) or inward:
     mink's IK fails there; sideways it reaches the scoop's 60 degrees at every goal.
     """
-    radial = robot.cup_positions()[goal] - robot.base_position()
-    radial[2] = 0.0
-    norm = np.linalg.norm(radial)
+    outward = robot.cup_positions()[goal] - robot.base_position()
+    outward[2] = 0.0
+    norm = np.linalg.norm(outward)
     if norm < 1e-6:
         raise ConfigError(f"goal {goal} stands above the robot's base: no tilt direction")
-    return np.cross([0.0, 0.0, 1.0], radial / norm)
+    return np.cross([0.0, 0.0, 1.0], outward / norm)
 
 
 def fork_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.ndarray:
     """d(theta): the fork's pointing direction that preference theta needs at ``goal``, (..., 3)."""
     psi = np.asarray(theta, dtype=float)[..., None] * TILT_MAX
-    return np.cos(psi) * np.array([0.0, 0.0, -1.0]) + np.sin(psi) * _radial(robot, goal)
+    return np.cos(psi) * np.array([0.0, 0.0, -1.0]) + np.sin(psi) * _sideways(robot, goal)
 
 
 def stroke_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.ndarray:
     """m(theta): the direction the tines travel through the food at ``goal``, (..., 3)."""
     th = np.asarray(theta, dtype=float)[..., None]
-    m = (1.0 - th) * np.array([0.0, 0.0, -1.0]) + th * _radial(robot, goal)
+    m = (1.0 - th) * np.array([0.0, 0.0, -1.0]) + th * _sideways(robot, goal)
     return m / np.linalg.norm(m, axis=-1, keepdims=True)
 
 
@@ -204,9 +204,9 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
     """
     check_range("theta", theta, 0.0, 1.0)
     check_range("depth", depth, 0.0, 1.0)
-    radial = _radial(robot, goal)
+    sideways = _sideways(robot, goal)
     down = np.array([0.0, 0.0, -1.0])
-    axis = np.cross(down, radial)  # rotating down about it by psi turns it towards radial
+    axis = np.cross(down, sideways)  # rotating down about it by psi turns it towards sideways
     r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
     rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ r_top
     surface = robot.cup_positions()[goal]
@@ -215,8 +215,8 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
 
 
 @dataclasses.dataclass(frozen=True)
-class EatingTask(CupTask):
-    """The eating task: the cup task's goals-and-preferences structure, plus strokes.
+class EatingTask(GoalTask):
+    """The eating task: a goal task (bowls and the plate, a tilt at each), plus strokes.
 
     ``curves`` (G, K, n) are the stroke entries s*(g, theta, 0) on ``theta_grid`` and
     ``goals`` the mid-preference entries; ``target(g, theta)`` interpolates the entries.
@@ -226,8 +226,8 @@ class EatingTask(CupTask):
         strokes: s*(g, theta, u) on both grids, shape (G, K, D, n) [rad].
     """
 
-    depth_grid: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
-    strokes: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    depth_grid: np.ndarray
+    strokes: np.ndarray
 
     def pose(self, goal: int, theta: float | np.ndarray, depth: float | np.ndarray) -> np.ndarray:
         """s*(g, theta, u): the joint configuration of stroke poses, shape (..., n).

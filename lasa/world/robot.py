@@ -1,9 +1,13 @@
-"""Robots: a MuJoCo scene plus the named quantities the cup task needs.
+"""Robots: a MuJoCo scene plus the named quantities the goal tasks need.
 
-A :class:`Robot` wraps one compiled scene (arm, table, two cups, a camera) and answers
+A :class:`Robot` wraps one compiled scene (arm, table, the cups, a camera) and answers
 questions in the task's own terms: the joint limits, the home pose, where the grasp
 site is and which way it points, where each cup stands. Callers never index MuJoCo
 arrays by hand.
+
+The robots are :data:`ROBOTS`, a registry keyed by name: the package's two, and any that
+:func:`register_robot` adds from outside it (a :class:`RobotSpec` naming an MJCF file).
+:func:`register_robot` states the names a scene must have, and checks them.
 
 The state ``s`` of every robot is its vector of arm joint positions (radians); the
 action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper.
@@ -21,14 +25,15 @@ import numpy as np
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
 
-__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot"]
+__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot", "register_robot", "scene_problems"]
 
 ASSETS = Path(__file__).parent / "assets"
 
 
 @dataclasses.dataclass(frozen=True)
 class RobotSpec:
-    """What lasa needs to know about a robot beyond its MJCF file."""
+    """What lasa needs to know about a robot beyond its MJCF file (whose names it refers to:
+    :func:`register_robot` states the contract)."""
 
     name: str  # registry key, e.g. "planar5"
     scene: Path  # MJCF scene: the arm, a table, the cups and a camera
@@ -55,6 +60,7 @@ class RobotSpec:
     tool_prefix: str = "fork_"
 
 
+# The registry, by name: the package's robots, and those register_robot adds.
 ROBOTS: dict[str, RobotSpec] = {
     "planar5": RobotSpec(
         name="planar5",
@@ -97,6 +103,9 @@ ROBOTS: dict[str, RobotSpec] = {
         mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
     ),
 }
+
+
+_PACKAGE_ROBOTS = frozenset(ROBOTS)  # the package's own, which register_robot never replaces
 
 
 def mesh_dir(package: str, folder: str) -> Path:
@@ -163,8 +172,125 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
     return mj_spec
 
 
+def _compile(spec: RobotSpec) -> mujoco.MjModel:
+    """The spec's compiled scene, or a ConfigError naming the file and MuJoCo's complaint."""
+    try:
+        return _scene_spec(spec).compile()
+    except ValueError as err:  # MuJoCo's parse and compile errors
+        raise ConfigError(f"robot {spec.name!r}: MuJoCo cannot load {spec.scene}: {err}") from None
+
+
+def scene_problems(spec: RobotSpec, model: mujoco.MjModel) -> list[str]:
+    """What the compiled scene ``model`` lacks of the naming contract of ``spec``: one entry per
+    missing or unfit element, empty if none.
+
+    Each entry names the element and what the package reads it for (see
+    :func:`register_robot`).
+    """
+
+    def has(kind: mujoco.mjtObj, name: str) -> bool:
+        return mujoco.mj_name2id(model, kind, name) >= 0
+
+    obj = mujoco.mjtObj
+    out = []
+    for joint in spec.joints:
+        j = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, joint)
+        if j < 0:
+            out.append(f"no joint {joint!r} (an arm joint of the state, RobotSpec.joints)")
+        elif int(model.jnt_type[j]) not in (
+            int(mujoco.mjtJoint.mjJNT_HINGE),
+            int(mujoco.mjtJoint.mjJNT_SLIDE),
+        ):
+            out.append(f"joint {joint!r} must be a hinge or a slide joint (one coordinate of the state)")
+        elif not model.jnt_limited[j]:
+            out.append(f"joint {joint!r} needs a range (its limits clip every step)")
+    if not has(obj.mjOBJ_SITE, spec.grasp_site):
+        out.append(
+            f"no site {spec.grasp_site!r} (the grasp site, RobotSpec.grasp_site; its +z is the approach)"
+        )
+    for cup in spec.cups:
+        if not has(obj.mjOBJ_SITE, cup):
+            out.append(f"no site {cup!r} (a cup's grasp centre, RobotSpec.cups)")
+        if not has(obj.mjOBJ_GEOM, cup):
+            out.append(f"no geom {cup!r} (the cup's body, beside its site: new cups copy it)")
+    table = mujoco.mj_name2id(model, obj.mjOBJ_GEOM, "table")
+    if table < 0:
+        out.append("no geom 'table' (a box: the table new cups must stand on)")
+    elif int(model.geom_type[table]) != int(mujoco.mjtGeom.mjGEOM_BOX):
+        out.append("geom 'table' must be a box (new cups must stand within its extent)")
+    if not has(obj.mjOBJ_CAMERA, spec.camera):
+        out.append(f"no camera {spec.camera!r} (the videos' camera, RobotSpec.camera)")
+    if not has(obj.mjOBJ_KEY, spec.home_key):
+        out.append(f"no keyframe {spec.home_key!r} (the start pose, RobotSpec.home_key)")
+    return out
+
+
+def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
+    """Add a robot to :data:`ROBOTS` from outside the package, after checking its scene.
+
+    Then :func:`load_robot` builds it by name, and :func:`lasa.world.task.make_cup_task`
+    gives its cup task, with as many goals as the spec names cups.
+
+    **The naming contract.** The MJCF file ``spec.scene`` (the arm, its table, the cups and a
+    camera, in one scene) must hold:
+
+    - a joint per name of ``spec.joints``, each a hinge (or slide) with a ``range``: the state
+      is those joints' positions, in that order, clipped to their ranges;
+    - a site ``spec.grasp_site``, whose local +z axis is the approach direction (a top grasp
+      points it down, ``spec.top_grasp_rotation`` is that grasp's site rotation);
+    - per name of ``spec.cups`` (at least two: the goals, in goal order), a site (the cup's
+      grasp centre) and a geom of the same name (the cup: a new cup of
+      :func:`lasa.method.newgoals.extend_task` copies it, its ``size[0]`` is its radius);
+      a name ``cup_<x>`` gives the goal name ``<x>``;
+    - a box geom named ``table`` (new cups must stand on it);
+    - a camera ``spec.camera`` and a keyframe ``spec.home_key`` (the start pose of every
+      episode, within the joint ranges).
+
+    And the spec gives one IK seed per cup (``spec.ik_seeds``, each of ``len(spec.joints)``
+    values), a 9-value ``top_grasp_rotation``, and the control units (``spec.control``).
+
+    Args:
+        spec: The robot.
+        replace: Replace a robot registered under ``spec.name`` before (never the package's own).
+
+    Returns:
+        The robot, built.
+
+    Raises:
+        ConfigError: if the name is one of the package's robots, or taken (and ``replace``
+            is false), the scene file is missing or does not compile, the scene lacks a name
+            of the contract (the message names each), or the spec's seeds or rotation do not
+            fit.
+    """
+    if spec.name in _PACKAGE_ROBOTS:
+        raise ConfigError(f"{spec.name!r} is one of the package's robots; register yours under another name")
+    if spec.name in ROBOTS and not replace:
+        raise ConfigError(f"a robot named {spec.name!r} is registered already; pass replace=True")
+    if not Path(spec.scene).is_file():
+        raise ConfigError(f"robot {spec.name!r}: its scene {spec.scene} is not a file")
+    problems = []
+    if len(spec.cups) < 2:
+        problems.append(f"{len(spec.cups)} cups: at least two are needed (the goals)")
+    if len(spec.ik_seeds) != len(spec.cups) or any(len(q) != len(spec.joints) for q in spec.ik_seeds):
+        problems.append(f"ik_seeds must hold one seed of {len(spec.joints)} joint values per cup")
+    if len(spec.top_grasp_rotation) != 9:
+        problems.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
+    model = _compile(spec)
+    problems += scene_problems(spec, model)
+    if problems:
+        raise ConfigError(
+            f"robot {spec.name!r} ({spec.scene}) breaks the naming contract of register_robot: "
+            + "; ".join(problems)
+        )
+    robot = Robot(spec)
+    if np.any(robot.home < robot.lower) or np.any(robot.home > robot.upper):
+        raise ConfigError(f"robot {spec.name!r}: keyframe {spec.home_key!r} lies outside the joint ranges")
+    ROBOTS[spec.name] = spec
+    return robot
+
+
 def load_robot(name: str) -> Robot:
-    """Build the robot registered under ``name``.
+    """Build the robot registered under ``name`` (in :data:`ROBOTS`; see :func:`register_robot`).
 
     Raises:
         ConfigError: if ``name`` is not a registered robot.

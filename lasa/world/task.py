@@ -1,6 +1,7 @@
-r"""The cup task: two goals, and a preference from a top grasp to a side grasp.
+r"""The cup task: cups as the goals, and a preference from a top grasp to a side grasp.
 
-Two cups stand on a table (the goals G). At either cup the user may want any grasp on
+Cups stand on a table (the goals G: two in the paper's scenes, as many as a registered
+robot's scene has, :func:`lasa.world.robot.register_robot`). At any cup the user may want any grasp on
 a continuum theta in [0, 1]: theta = 0 approaches from the top (fingers pointing
 down), theta = 1 from the side (fingers horizontal). The side direction is the
 horizontal direction from the robot's base to the cup, turned towards the midline by
@@ -18,7 +19,8 @@ The desired final pose :math:`s^*(g, \theta)` is the joint configuration that pu
 grasp site there, solved with mink on a grid of theta, warm-starting each solve from
 its neighbour so the curve is smooth, and interpolated between grid points with a
 cubic spline. A goal g is the mid-preference pose :math:`s^*(g, 0.5)`, so that the
-assistance of Eq. M2 lives in joint space, as in the paper.
+assistance of Eq. M2 lives in joint space, as in the paper. :class:`CupTask` is a
+:class:`lasa.world.goals.GoalTask`, as the eating task is.
 """
 
 from __future__ import annotations
@@ -27,10 +29,10 @@ import dataclasses
 
 import mink
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from lasa.base.config import check_range
 from lasa.base.errors import ConfigError
+from lasa.world.goals import GoalTask
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import Robot
 
@@ -68,79 +70,16 @@ def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.n
 
 
 @dataclasses.dataclass(frozen=True)
-class CupTask:
-    """Goals, preference curves and the start pose of the cup task for one robot.
+class CupTask(GoalTask):
+    """The cup task for one robot: a goal task whose goals are cups and whose preference
+    runs from a top grasp (theta = 0) to a side grasp (theta = 1).
 
-    Attributes:
-        robot: The robot.
-        goal_names: Names of the cups, in goal order.
-        theta_grid: Preferences at which IK was solved, shape (K,).
-        curves: s*(g, theta) on the grid, shape (G, K, n) [rad].
-        goals: The goals g = s*(g, 0.5), shape (G, n) [rad].
-        start: Start pose of every episode, shape (n,) [rad].
+    Everything it holds is a :class:`lasa.world.goals.GoalTask`'s: the robot, the cups'
+    names (``goal_names``), the IK grid ``theta_grid``, the grasp curves s*(g, theta)
+    (``curves``, shape (G, K, n)), the goals g = s*(g, 0.5) and the start pose. What makes
+    it the cup task is how :func:`make_cup_task` solves the curves (:func:`grasp_frame`);
+    new cups are added by :func:`lasa.method.newgoals.extend_task`.
     """
-
-    robot: Robot
-    goal_names: tuple[str, ...]
-    theta_grid: np.ndarray
-    curves: np.ndarray
-    goals: np.ndarray
-    start: np.ndarray
-
-    @property
-    def n_goals(self) -> int:
-        """Number of goals G."""
-        return len(self.goal_names)
-
-    @property
-    def goal_distance(self) -> float:
-        """Largest joint-space distance between two goals: the paper's error normaliser."""
-        diff = self.goals[:, None, :] - self.goals[None, :, :]
-        return float(np.linalg.norm(diff, axis=-1).max())
-
-    def belief_targets(self, likelihood: str) -> np.ndarray:
-        """What the belief measures progress towards, shape (G, K, n).
-
-        ``"goal"``: the goal points g (K = 1). ``"grasp_set"``: each goal's grasps
-        s*(g, theta) on the IK grid, a polyline (see :mod:`lasa.method.belief`).
-        """
-        if likelihood == "goal":
-            return self.goals[:, None, :]
-        if likelihood == "grasp_set":
-            return self.curves
-        raise ConfigError(f"unknown likelihood {likelihood!r}; choose 'grasp_set' or 'goal'")
-
-    def target(self, goal: np.ndarray | int, theta: np.ndarray | float) -> np.ndarray:
-        """Desired final poses s*(g, theta), shape (..., n), vectorised over both arguments.
-
-        Args:
-            goal: Goal indices (integers in [0, G)).
-            theta: Preferences in [0, 1], broadcastable against ``goal``.
-        """
-        goal_arr, theta_arr = np.broadcast_arrays(np.asarray(goal), np.asarray(theta, float))
-        if goal_arr.size and (goal_arr.min() < 0 or goal_arr.max() >= self.n_goals):
-            raise ConfigError(f"goal index must be in [0, {self.n_goals}), got {goal}")
-        if theta_arr.size and (
-            not np.all(np.isfinite(theta_arr)) or theta_arr.min() < 0 or theta_arr.max() > 1
-        ):
-            raise ConfigError(f"theta must be in [0, 1], got {theta}")
-        out = np.empty((*goal_arr.shape, self.robot.n_joints))
-        for g in range(self.n_goals):  # G is 2: a loop over goals, not over users
-            mask = goal_arr == g
-            out[mask] = self._splines[g](theta_arr[mask])
-        return out
-
-    def tangent(self, goal: int, theta: np.ndarray | float) -> np.ndarray:
-        """ds*/dtheta along the preference curve of ``goal``, shape (..., n)."""
-        return self._splines[goal](np.asarray(theta, float), 1)
-
-    @property
-    def _splines(self) -> list[CubicSpline]:
-        cache = self.__dict__.get("_spline_cache")
-        if cache is None:
-            cache = [CubicSpline(self.theta_grid, c, axis=0) for c in self.curves]
-            object.__setattr__(self, "_spline_cache", cache)
-        return cache
 
 
 def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
@@ -153,9 +92,18 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     Args:
         robot: The robot.
         n_grid: Number of preferences solved per cup (odd, so 0.5 is on the grid).
+
+    Raises:
+        ConfigError: if ``n_grid`` is not an odd integer >= 5, or the robot's spec does not
+            give one IK seed per cup.
     """
     if n_grid < 5 or n_grid % 2 == 0:
         raise ConfigError(f"n_grid must be an odd integer >= 5, got {n_grid}")
+    if len(robot.spec.ik_seeds) != len(robot.spec.cups):
+        raise ConfigError(
+            f"robot {robot.name!r} has {len(robot.spec.cups)} cups but {len(robot.spec.ik_seeds)} IK "
+            "seeds (RobotSpec.ik_seeds): one seed per cup"
+        )
     grid = np.linspace(0.0, 1.0, n_grid)
     mid = n_grid // 2
     curves = np.empty((len(robot.spec.cups), n_grid, robot.n_joints))

@@ -1,0 +1,106 @@
+r"""The goal task: what every task of the package has, whatever its goals are.
+
+A goal task is a robot, G >= 2 goals, and at each goal a one-parameter family of desired
+final poses :math:`s^*(g, \theta)`, :math:`\theta \in [0, 1]` (the user's preference
+there), solved by IK on a grid of theta and interpolated between grid points with a
+cubic spline. A goal g in joint space is its mid-preference pose, which is what Eq. M2
+pulls towards; every episode starts from one start pose.
+
+Everything the method (:mod:`lasa.method`), the simulated users (:mod:`lasa.people`) and
+the shared plots need of a task is here, for any number of goals. The tasks themselves
+are its subclasses, equals of one another:
+
+- :class:`lasa.world.task.CupTask`: cups on a table, from a top to a side grasp;
+- :class:`lasa.world.eating.EatingTask`: the study's bowls and plate, from stabbing to
+  scooping, with a stroke at each preference.
+
+A new task subclasses :class:`GoalTask` and builds its curves however it likes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from lasa.base.errors import ConfigError
+from lasa.world.robot import Robot
+
+__all__ = ["GoalTask"]
+
+
+@dataclasses.dataclass(frozen=True)
+class GoalTask:
+    """Goals, preference curves and the start pose of a task for one robot.
+
+    Attributes:
+        robot: The robot.
+        goal_names: Names of the goals, in goal order.
+        theta_grid: Preferences at which IK was solved, shape (K,).
+        curves: s*(g, theta) on the grid, shape (G, K, n) [rad].
+        goals: The goals g in joint space, the mid-preference poses, shape (G, n) [rad].
+        start: Start pose of every episode, shape (n,) [rad].
+    """
+
+    robot: Robot
+    goal_names: tuple[str, ...]
+    theta_grid: np.ndarray
+    curves: np.ndarray
+    goals: np.ndarray
+    start: np.ndarray
+
+    @property
+    def n_goals(self) -> int:
+        """Number of goals G."""
+        return len(self.goal_names)
+
+    @property
+    def goal_distance(self) -> float:
+        """Largest joint-space distance between two goals: the paper's error normaliser."""
+        diff = self.goals[:, None, :] - self.goals[None, :, :]
+        return float(np.linalg.norm(diff, axis=-1).max())
+
+    def belief_targets(self, likelihood: str) -> np.ndarray:
+        """What the belief measures progress towards, shape (G, K, n).
+
+        ``"goal"``: the goal points g (K = 1). ``"grasp_set"``: each goal's preferred poses
+        s*(g, theta) on the IK grid, a polyline (see :mod:`lasa.method.belief`).
+        """
+        if likelihood == "goal":
+            return self.goals[:, None, :]
+        if likelihood == "grasp_set":
+            return self.curves
+        raise ConfigError(f"unknown likelihood {likelihood!r}; choose 'grasp_set' or 'goal'")
+
+    def target(self, goal: np.ndarray | int, theta: np.ndarray | float) -> np.ndarray:
+        """Desired final poses s*(g, theta), shape (..., n), vectorised over both arguments.
+
+        Args:
+            goal: Goal indices (integers in [0, G)).
+            theta: Preferences in [0, 1], broadcastable against ``goal``.
+        """
+        goal_arr, theta_arr = np.broadcast_arrays(np.asarray(goal), np.asarray(theta, float))
+        if goal_arr.size and (goal_arr.min() < 0 or goal_arr.max() >= self.n_goals):
+            raise ConfigError(f"goal index must be in [0, {self.n_goals}), got {goal}")
+        if theta_arr.size and (
+            not np.all(np.isfinite(theta_arr)) or theta_arr.min() < 0 or theta_arr.max() > 1
+        ):
+            raise ConfigError(f"theta must be in [0, 1], got {theta}")
+        out = np.empty((*goal_arr.shape, self.robot.n_joints))
+        for g in range(self.n_goals):  # G is a handful: a loop over goals, not over users
+            mask = goal_arr == g
+            out[mask] = self._splines[g](theta_arr[mask])
+        return out
+
+    def tangent(self, goal: int, theta: np.ndarray | float) -> np.ndarray:
+        """ds*/dtheta along the preference curve of ``goal``, shape (..., n)."""
+        return self._splines[goal](np.asarray(theta, float), 1)
+
+    @property
+    def _splines(self) -> list[CubicSpline]:
+        cache = self.__dict__.get("_spline_cache")
+        if cache is None:
+            cache = [CubicSpline(self.theta_grid, c, axis=0) for c in self.curves]
+            object.__setattr__(self, "_spline_cache", cache)
+        return cache
