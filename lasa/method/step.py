@@ -171,7 +171,7 @@ def shared_autonomy_step(
     Args:
         decoder: The decoder phi (a trained model, or a wrapper such as
             :class:`lasa.method.newgoals.MappedDecoder` for a task grown by a new goal).
-        task: The cup task.
+        task: The goal task (cups, or the eating task).
         control: Control-loop units.
         state: s^t, shape (U, n).
         log_belief: log b^t, shape (U, G).
