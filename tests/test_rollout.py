@@ -21,7 +21,7 @@ def make_users(task, n=6, beta=50.0):
         target=task.target(goal, theta),
         beta0=np.full(n, beta),
         slope=np.zeros(n),
-        seed=np.arange(n),
+        stream=np.arange(n),
     )
 
 

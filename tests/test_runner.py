@@ -67,8 +67,10 @@ def test_an_unknown_setting_is_an_error():
     from lasa.base.config import from_dict
     from lasa.figures import sim1
 
-    with pytest.raises(ConfigError, match="unknown Config parameter.*'n_seed'"):
-        from_dict(sim1.Config, {"n_seed": 3})
+    with pytest.raises(
+        ConfigError, match=r"^notebook 04 settings: unknown setting\(s\) \['n_seed'\]; known: .*'users'"
+    ):
+        from_dict(sim1.Config, {"n_seed": 3}, where="notebook 04")
 
 
 @pytest.mark.parametrize("config", CONFIGS, ids=lambda p: p.stem)

@@ -159,14 +159,34 @@ def test_sim3_frame(model, task):
 @pytest.mark.parametrize(
     "kw,match",
     [
-        ({"change_steps": (-1, 5)}, "change step N"),
-        ({"change_steps": (1.5,)}, "change step N"),
+        ({"change_steps": (5, -1)}, r"^change_steps\[1\] must be an integer >= 0, got -1$"),
+        ({"change_steps": (1.5,)}, r"^change_steps\[0\] must be an integer >= 0, got 1.5$"),
         ({"beta": -1.0}, "beta"),
     ],
 )
 def test_bad_sim2_config(kw, match):
     with pytest.raises(ConfigError, match=match):
         sim2.Config(**kw)
+
+
+def test_sims_1_to_3_share_one_sweep_config_and_a_bad_setting_names_its_notebook():
+    from lasa.base.config import from_dict
+    from lasa.figures.common import SweepConfig
+
+    shared = {f.name for f in dataclasses.fields(SweepConfig)}
+    for sim in (sim1, sim2, sim3):
+        assert issubclass(sim.Config, SweepConfig)
+        own = {f.name for f in dataclasses.fields(sim.Config)} - shared
+        assert own and not own & shared  # each adds only its own sweep
+    with pytest.raises(ConfigError) as err:
+        from_dict(sim1.Config, {"betas": "x"}, where="notebook 04_fixed_expertise")
+    assert str(err.value) == (
+        "notebook 04_fixed_expertise settings: betas must be a list, each a number in [0, inf], got 'x'"
+    )
+    with pytest.raises(ConfigError, match=r"^betas\[1\] must be a number in \[0, inf\], got 'x'$"):
+        sim1.Config(betas=(1.0, "x"))
+    with pytest.raises(ConfigError, match=r"^notebook 06 settings: users must be an integer >= 1, got 0$"):
+        from_dict(sim3.Config, {"users": 0}, where="notebook 06")
 
 
 @pytest.mark.parametrize(

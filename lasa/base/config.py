@@ -9,15 +9,30 @@ unknown keys: a misspelt knob must not silently fall back to its default.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
+import types
+import typing
 from collections.abc import Mapping
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
+
+import annotated_types as at
+import pydantic
+from typing_extensions import TypedDict
 
 from lasa.base.errors import ConfigError
 
 __all__ = [
     "ASSISTANCE",
+    "PositiveInt",
+    "NonNegativeInt",
+    "AtLeastTwo",
+    "Positive",
+    "NonNegative",
+    "UnitInterval",
+    "validate",
+    "expects",
     "ControlConfig",
     "check_range",
     "check_choice",
@@ -26,6 +41,91 @@ __all__ = [
 ]
 
 T = TypeVar("T")
+
+# Field types with their bounds, written once: a config record states a field's allowed values in
+# its annotation, and validate() (pydantic) checks them when the record is built.
+PositiveInt = Annotated[int, at.Ge(1)]  # an integer >= 1 (counts, steps, sizes)
+NonNegativeInt = Annotated[int, at.Ge(0)]  # an integer >= 0
+AtLeastTwo = Annotated[int, at.Ge(2)]  # an integer >= 2 (grids that hold both ends)
+Positive = Annotated[float, at.Gt(0.0)]  # a number > 0
+NonNegative = Annotated[float, at.Ge(0.0)]  # a number >= 0
+UnitInterval = Annotated[float, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
+
+
+def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:
+    """(low, high, low_open, high_open) of an Annotated number type's bounds."""
+    low, high, low_open, high_open = -math.inf, math.inf, False, False
+    for meta in getattr(annotation, "__metadata__", ()):
+        if isinstance(meta, at.Ge):
+            low = float(meta.ge)  # type: ignore[arg-type]
+        elif isinstance(meta, at.Gt):
+            low, low_open = float(meta.gt), True  # type: ignore[arg-type]
+        elif isinstance(meta, at.Le):
+            high = float(meta.le)  # type: ignore[arg-type]
+        elif isinstance(meta, at.Lt):
+            high, high_open = float(meta.lt), True  # type: ignore[arg-type]
+    return low, high, low_open, high_open
+
+
+def expects(annotation: Any) -> str:
+    """What a field of this type accepts, in words: ``an integer >= 1``, ``a number in [0, 1]``."""
+    origin = typing.get_origin(annotation)
+    if origin is Annotated:
+        base = typing.get_args(annotation)[0]
+        low, high, low_open, high_open = _bounds(annotation)
+        if base is int and high == math.inf:
+            return f"an integer >= {low + 1 if low_open else low:g}"
+        lo, hi = "(" if low_open else "[", ")" if high_open else "]"
+        return f"{'an integer' if base is int else 'a number'} in {lo}{low:g}, {high:g}{hi}"
+    if origin is tuple:
+        return f"a list, each {expects(typing.get_args(annotation)[0])}"
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(expects(a) for a in typing.get_args(annotation))
+    return {
+        int: "an integer",
+        float: "a number",
+        str: "a string",
+        bool: "true or false",
+        type(None): "null",
+    }.get(annotation, f"a {getattr(annotation, '__name__', annotation)}")
+
+
+@functools.cache
+def _schema(cls: type) -> tuple[pydantic.TypeAdapter[Any], dict[str, Any]]:
+    """A pydantic validator of ``cls``'s fields (their annotated types), and the types by name."""
+    hints = typing.get_type_hints(cls, include_extras=True)
+    fields = {f.name: hints[f.name] for f in dataclasses.fields(cls) if f.init}
+    record = TypedDict(cls.__name__, fields)  # type: ignore[misc, operator]
+    record.__pydantic_config__ = pydantic.ConfigDict(arbitrary_types_allowed=True)  # type: ignore[attr-defined]
+    return pydantic.TypeAdapter(record), fields
+
+
+def validate(record: Any) -> None:
+    """Check every field of a config record against its annotated type (pydantic).
+
+    Called first by each record's ``__post_init__``; the record keeps the values it was given
+    (nothing is converted here), so a setting means the same number it did before validation.
+
+    Raises:
+        ConfigError: one line naming the field (and the item, in a list), what it expects and
+            what it got, e.g. ``betas[0] must be a number >= 0, got 'x'``.
+    """
+    adapter, fields = _schema(type(record))  # type: ignore[arg-type]
+    values = {name: getattr(record, name) for name in fields}
+    try:
+        adapter.validate_python(values)
+    except pydantic.ValidationError as exc:
+        err = exc.errors()[0]
+        loc = [str(x) for x in err["loc"]]
+        name = loc[0] + "".join(f"[{x}]" for x in loc[1:])
+        annotation = fields[loc[0]]
+        if len(loc) > 1 and typing.get_origin(annotation) is tuple:
+            annotation = typing.get_args(annotation)[0]
+        expected = expects(annotation)
+        if isinstance(err["input"], int | float) and expected.startswith("a number in "):
+            expected = expected.removeprefix("a number ")  # it is a number: only the range is wrong
+        raise ConfigError(f"{name} must be {expected}, got {err['input']!r}") from None
+
 
 # The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
@@ -89,13 +189,15 @@ class ControlConfig:
     beta = 1000 near optimal); notebook 04 states them and why.
     """
 
-    dt: float = 0.1  # control period Delta [s]
-    action_scale: float = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
-    max_joint_speed: float = 2.0  # per-joint bound on the commanded velocity [rad/s]
-    belief_beta: float = 20.0  # beta_b, temperature of the goal likelihood [1/rad]
-    belief_floor: float = 1e-6  # smallest belief any goal keeps after an update [-]
-    alpha: float = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
-    n_z: int = 21  # joystick candidates per latent axis the simulated user weighs [-]
+    dt: Annotated[float, at.Gt(0.0), at.Le(1.0)] = 0.1  # control period Delta [s]
+    action_scale: Positive = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
+    max_joint_speed: Positive = 2.0  # per-joint bound on the commanded velocity [rad/s]
+    belief_beta: NonNegative = 20.0  # beta_b, temperature of the goal likelihood [1/rad]
+    belief_floor: Annotated[float, at.Ge(0.0), at.Lt(0.5)] = (
+        1e-6  # smallest belief any goal keeps after an update [-]
+    )
+    alpha: UnitInterval = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
+    n_z: AtLeastTwo = 21  # joystick candidates per latent axis the simulated user weighs [-]
     likelihood: str = "grasp_set"  # belief model: "grasp_set" (regret to grasp sets) or "goal"
     assistance: str = (
         "point"  # the shared-autonomy reading (lasa.method.assistance): Eq. M2 towards g = s*(g, 0.5)
@@ -107,16 +209,9 @@ class ControlConfig:
         return self.dt * self.action_scale if self.likelihood == "grasp_set" else None
 
     def __post_init__(self) -> None:
-        check_range("dt", self.dt, 0.0, 1.0, low_open=True)
-        check_range("action_scale", self.action_scale, 0.0, low_open=True)
-        check_range("max_joint_speed", self.max_joint_speed, 0.0, low_open=True)
-        check_range("belief_beta", self.belief_beta, 0.0)
-        check_range("belief_floor", self.belief_floor, 0.0, 0.5, high_open=True)
-        check_range("alpha", self.alpha, 0.0, 1.0)
+        validate(self)
         check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
         check_choice("assistance", self.assistance, (*ASSISTANCE, *REGISTERED_ASSISTANCE))
-        if int(self.n_z) != self.n_z or self.n_z < 2:
-            raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
 
 
 def to_dict(config: Any) -> dict[str, Any]:
@@ -124,30 +219,60 @@ def to_dict(config: Any) -> dict[str, Any]:
     return dataclasses.asdict(config)
 
 
-def from_dict(cls: type[T], values: Mapping[str, Any] | None) -> T:
+def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
     """Build ``cls`` from a mapping, refusing keys that ``cls`` does not have.
 
     This is the one place where a YAML section (``configs/*.yaml``, passed to a notebook
     as its ``settings`` parameter) becomes a config: a missing key keeps the dataclass
-    default, a list becomes a tuple where the field is a tuple.
+    default, a list becomes a tuple where the field is a tuple, and a mapping given for a
+    nested record (e.g. ``train: {steps: 200}``) changes those fields of its default. The
+    record validates its fields (:func:`validate`).
+
+    Args:
+        cls: The config record's class.
+        values: Setting name -> value.
+        where: Whose settings these are, for the error (a notebook passes its name, e.g.
+            ``"notebook 04_fixed_expertise"``); default the class's name.
 
     Raises:
-        ConfigError: if ``values`` is not a mapping or a key is unknown, naming it and the
-            known ones.
+        ConfigError: one line, ``<where> settings: <setting> must be <expected>, got <value>``;
+            an unknown key names the known ones.
     """
+    owner = where or cls.__name__
     if values is None:
         values = {}
     if not isinstance(values, Mapping):
-        raise ConfigError(f"{cls.__name__} settings must be a mapping of names to values, got {values!r}")
+        raise ConfigError(f"{owner} settings must be a mapping of names to values, got {values!r}")
     fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     unknown = sorted(set(values) - set(fields))
     if unknown:
-        raise ConfigError(f"unknown {cls.__name__} parameter(s) {unknown}; known: {sorted(fields)}")
-    kwargs = {
-        name: tuple(value) if isinstance(value, list) and "tuple" in str(fields[name].type) else value
-        for name, value in values.items()
-    }
-    return cls(**kwargs)
+        raise ConfigError(f"{owner} settings: unknown setting(s) {unknown}; known: {sorted(fields)}")
+    kwargs: dict[str, Any] = {}
+    try:
+        for name, value in values.items():
+            default = fields[name].default
+            if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
+                kwargs[name] = _nested(name, default, value)  # a nested record: its own fields
+            elif isinstance(value, list) and "tuple" in str(fields[name].type):
+                kwargs[name] = tuple(value)
+            else:
+                kwargs[name] = value
+        return cls(**kwargs)
+    except ConfigError as exc:
+        raise ConfigError(f"{owner} settings: {exc}") from None
+
+
+def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
+    """A nested record: ``default`` with ``values`` changed; its errors name ``name.setting``."""
+    known = {f.name for f in dataclasses.fields(default)}
+    unknown = sorted(set(values) - known)
+    if unknown:
+        raise ConfigError(f"unknown setting(s) {[f'{name}.{u}' for u in unknown]}; known: {sorted(known)}")
+    try:
+        lists = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+        return dataclasses.replace(default, **lists)
+    except ConfigError as exc:
+        raise ConfigError(f"{name}.{exc}") from None
 
 
 def set_threads(default: int = 1) -> int:

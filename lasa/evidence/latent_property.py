@@ -44,7 +44,7 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, check_range
+from lasa.base.config import AtLeastTwo, ControlConfig, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief as to_belief
 from lasa.method.blend import safe_step
@@ -107,19 +107,16 @@ class PropertyConfig:
     home, 10 s at sigma_h covers the 2-3 rad to the farthest goal.
     """
 
-    n_inputs: int = 64  # stick inputs on the ring [-]
+    n_inputs: AtLeastTwo = 64  # stick inputs on the ring [-]
     hold: float = 4.0  # seconds each input is held at a goal, the belief held confident [s]
     drift_speed: float = 0.02  # v: an input stays when d(t) <= v t through the hold [m/s]
     uncertain_hold: float = 10.0  # seconds each input is held from home, the belief updated online [s]
     reach_distance: float = 0.05  # an input reaches a goal when the tip ends this close to its set [m]
     rotation_weight: float = 0.125  # metres per radian of direction when matching a preference [m/rad]
-    n_grid: int = 41  # preference grid per coordinate of the preference set [-]
+    n_grid: AtLeastTwo = 41  # preference grid per coordinate of the preference set [-]
 
     def __post_init__(self) -> None:
-        if int(self.n_inputs) != self.n_inputs or self.n_inputs < 2:
-            raise ConfigError(f"n_inputs must be an integer >= 2, got {self.n_inputs!r}")
-        if int(self.n_grid) != self.n_grid or self.n_grid < 2:
-            raise ConfigError(f"n_grid must be an integer >= 2, got {self.n_grid!r}")
+        validate(self)
         for name in ("hold", "drift_speed", "uncertain_hold", "reach_distance"):
             check_range(name, getattr(self, name), 0.0, low_open=True)
         check_range("rotation_weight", self.rotation_weight, 0.0)

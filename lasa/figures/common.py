@@ -1,10 +1,12 @@
 """What the simulated-user sweeps share: drawing episodes, and rolling out mixed methods.
 
 A sweep builds one population of simulated users covering every condition (method x
-rationality x seed, or method x change step x seed, ...) and runs it batched, one
+rationality x user, or method x change step x user, ...) and runs it batched, one
 rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
-Users that share a seed share their cup, preference and random stream across
-conditions, so methods are compared on paired episodes.
+User i has the same cup, preference and random stream (``UserPopulation.stream``) in every
+condition, so methods are compared on paired episodes. The figures' CSVs keep the column
+name ``seed`` for that user index (their contract); in the code, ``seed`` is only ever the
+seed of a random generator.
 
 A sweep runs its assisted methods under every member of the shared-autonomy family it
 is given (:func:`arms`); LA, which no assistance touches, runs once. :func:`judge` runs a
@@ -22,9 +24,18 @@ from typing import Any, TypeVar
 import numpy as np
 import pandas as pd
 
-from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.config import (
+    ASSISTANCE,
+    NO_ASSISTANCE,
+    ControlConfig,
+    PositiveInt,
+    UnitInterval,
+    check_choice,
+    check_range,
+    validate,
+)
 from lasa.base.errors import ConfigError
-from lasa.evidence.verdicts import Design, Sequential, sequential
+from lasa.evidence.verdicts import N_BOOT, Design, Sequential, check_design, sequential
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import METHOD_DECODER, METHODS, latent_grid, method_alpha
 from lasa.people.rollout import Trajectories, rollout
@@ -44,6 +55,7 @@ __all__ = [
     "check_pilot",
     "sweep_grid",
     "check_positive_int",
+    "SweepConfig",
     "draw_episodes",
     "episodes",
     "run_population",
@@ -112,24 +124,51 @@ def check_pilot(pilot: str, prob: float) -> None:
 
 
 def check_positive_int(name: str, value: int) -> None:
-    """``value`` is an integer >= 1, else a ConfigError naming ``name``."""
+    """``value`` is an integer >= 1, else a ConfigError naming ``name`` (for a value outside a record)."""
     if int(value) != value or value < 1:
-        raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        raise ConfigError(f"{name} must be an integer >= 1, got {value!r}")
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepConfig:
+    """The settings sims 1-3 share: the users per point, the readings, the pilot, the methods.
+
+    Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
+    slopes) and its episode's length; the verdict map (:mod:`lasa.figures.robustness`) reads the
+    same names. Every field is validated by its annotated type (:func:`lasa.base.config.validate`).
+    """
+
+    users: PositiveInt = Design.first  # users per point at the first look, every reading (Design) [-]
+    block: PositiveInt = Design.block  # users added per later look, the headline reading only [-]
+    cap: PositiveInt = Design.cap  # most users per point [-]
+    n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
+    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
+    pilot_prob: UnitInterval = 0.0  # p of the laggy or noisy pilot [-]
+    methods: tuple[str, ...] = METHODS  # methods compared
+    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+
+    def __post_init__(self) -> None:
+        validate(self)
+        check_design(self.users, self.block, self.cap)
+        check_members(self.assistance)
+        check_pilot(self.pilot, self.pilot_prob)
+        check_methods(self.methods)
 
 
 def draw_episodes(
-    task: GoalTask, n_seeds: int, horizon: int, n_candidates: int, seed: int
+    task: GoalTask, n_users: int, horizon: int, n_candidates: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each seed's cup, preference and random stream.
+    """Each user's cup, preference and random stream (users 0..n_users-1).
 
     Returns:
-        goal (n_seeds,), theta (n_seeds,) uniform on [0, 1], and uniforms of shape
-        (n_seeds, horizon, n_candidates) for the users' choices.
+        goal (n_users,), theta (n_users,) uniform on [0, 1], and uniforms of shape
+        (n_users, horizon, n_candidates) for the users' choices.
     """
     rng = np.random.default_rng(seed)
-    goal = rng.integers(0, task.n_goals, n_seeds)
-    theta = rng.uniform(0.0, 1.0, n_seeds)
-    noise = rng.random((n_seeds, horizon, n_candidates))
+    goal = rng.integers(0, task.n_goals, n_users)
+    theta = rng.uniform(0.0, 1.0, n_users)
+    noise = rng.random((n_users, horizon, n_candidates))
     return goal, theta, noise
 
 
@@ -143,12 +182,12 @@ def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
 
 
 def episodes(
-    decoders: Decoders, task: GoalTask, control: ControlConfig, n_seeds: int, horizon: int, seed: int
+    decoders: Decoders, task: GoalTask, control: ControlConfig, n_users: int, horizon: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`draw_episodes` sized for the decoders' joystick grid."""
     first = next(iter(as_decoders(decoders).values()))
     n_candidates = len(latent_grid(control.n_z, first.z_dim))
-    return draw_episodes(task, n_seeds, horizon, n_candidates, seed)
+    return draw_episodes(task, n_users, horizon, n_candidates, seed)
 
 
 def run_population(
@@ -195,7 +234,7 @@ def run_population(
     keys = np.array([METHOD_DECODER[m] for m in methods])
     pilot_noise = None
     if users.pilot_prob > 0:
-        pilot_noise = pilot_uniforms(int(np.max(users.seed)) + 1, horizon, pilot_seed)
+        pilot_noise = pilot_uniforms(int(np.max(users.stream)) + 1, horizon, pilot_seed)
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
         if key not in decoders:

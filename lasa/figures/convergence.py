@@ -53,10 +53,10 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.config import ASSISTANCE, ControlConfig, PositiveInt, check_choice, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
-from lasa.figures.common import check_positive_int, draw_episodes
+from lasa.figures.common import draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
 from lasa.people.rollout import Trajectories, rollout
@@ -116,12 +116,13 @@ class Config:
 
     betas: tuple[float, ...] = (10.0, 75.0, 1000.0)  # user rationalities, finite [1/rad^2]
     assistance: tuple[str, ...] = ASSISTANCE  # members of lasa.method.assistance to run LA+SA under
-    n_seeds: int = 20  # simulated users per (member, beta) [-]
-    horizon: int = 200  # control steps per episode [-]
-    record_every: int = 10  # steps between recorded rows; event counts cover every step [steps]
+    n_users: PositiveInt = 20  # simulated users per (member, beta) [-]
+    horizon: PositiveInt = 200  # control steps per episode [-]
+    record_every: PositiveInt = 10  # steps between recorded rows; event counts cover every step [steps]
     seed: int = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
+        validate(self)
         if not self.betas:
             raise ConfigError("betas must not be empty")
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
@@ -136,9 +137,6 @@ class Config:
             check_choice("assistance", name, ASSISTANCE)
         if len(set(self.assistance)) != len(self.assistance):
             raise ConfigError(f"assistance must not repeat a member, got {self.assistance}")
-        check_positive_int("n_seeds", self.n_seeds)
-        check_positive_int("horizon", self.horizon)
-        check_positive_int("record_every", self.record_every)
         if self.record_every > self.horizon:
             raise ConfigError(
                 f"record_every must be at most horizon ({self.horizon}), got {self.record_every}"
@@ -274,9 +272,9 @@ def run(
     if control.alpha <= 0:
         raise ConfigError("the Sec. IV-A bound needs alpha > 0 (LA+SA); control.alpha is 0")
     n_candidates = len(latent_grid(control.n_z, decoder.z_dim))
-    goal, theta, noise = draw_episodes(task, config.n_seeds, config.horizon, n_candidates, config.seed)
-    beta = np.repeat(np.asarray(config.betas), config.n_seeds)
-    seed = np.tile(np.arange(config.n_seeds), len(config.betas))
+    goal, theta, noise = draw_episodes(task, config.n_users, config.horizon, n_candidates, config.seed)
+    beta = np.repeat(np.asarray(config.betas), config.n_users)
+    seed = np.tile(np.arange(config.n_users), len(config.betas))
     target = task.target(goal[seed], theta[seed])
     users = UserPopulation(
         goal=goal[seed],
@@ -284,7 +282,7 @@ def run(
         target=target,
         beta0=beta,
         slope=np.zeros(len(seed)),
-        seed=seed,
+        stream=seed,
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []

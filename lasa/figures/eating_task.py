@@ -34,7 +34,7 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, check_choice, to_dict
+from lasa.base.config import ControlConfig, PositiveInt, check_choice, to_dict, validate
 from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property
@@ -67,27 +67,25 @@ BELIEFS = ("uncertain", "confident")
 class Config:
     """The eating decoder's data and training (notebook 10)."""
 
-    n_theta: int = EATING_DEMOS.n_theta  # tilts demonstrated per goal [-]
-    n_starts: int = (
-        EATING_DEMOS.n_starts
-    )  # reaches per (goal, tilt) from home (the rest from other goals) [-]
-    n_adjust: int = EATING_DEMOS.n_adjust  # tilt adjustments (each followed by a stroke) per demo [-]
-    n_perturb: int = EATING_DEMOS.n_perturb  # noisy copies of every tuple [-]
-    steps: int = 2000  # optimiser steps (the cup decoders' schedule) [-]
-    hidden: int = 128  # width of the hidden layers [-]
-    depth: int = 3  # hidden layers [-]
+    # the demonstrations (lasa.people.demos.DemoConfig; its seed is `seed` below): tilts per goal
+    # (n_theta), reaches from home per (goal, tilt) (n_starts), tilt adjustments (n_adjust), ...
+    demos: DemoConfig = EATING_DEMOS
+    # training (lasa.method.train.TrainConfig; its seed is `seed`): the cup decoders' recipe,
+    # 2000 steps of a 3 x 128 network, with a 2-D latent (z_dim must stay 2: two stick axes)
+    train: TrainConfig = TrainConfig(z_dim=2)
     seed: int = 0  # seed of the demonstrations and of training [-]
     goal: str = "middle"  # the bowl the figure looks at [-]
     readings: tuple[str, ...] = EATING_READINGS  # demonstration readings trained [-]
     lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, on the continuous base [-]
-    sweep_steps: int = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
+    sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
 
     def __post_init__(self) -> None:
+        validate(self)
         check_choice("goal", self.goal, GOALS)
-        for name in ("n_theta", "n_starts", "steps", "hidden", "depth", "sweep_steps"):
-            value = getattr(self, name)
-            if int(value) != value or value < 1:
-                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        if self.train.z_dim != 2:
+            raise ConfigError(
+                f"train.z_dim must be 2 (the study's stick has two axes), got {self.train.z_dim}"
+            )
         object.__setattr__(self, "readings", tuple(self.readings))
         object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
         if not self.readings:
@@ -98,20 +96,13 @@ class Config:
             raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
 
-    def demos(self) -> DemoConfig:
-        """The demonstrations' settings."""
-        return dataclasses.replace(
-            EATING_DEMOS,
-            n_theta=self.n_theta,
-            n_starts=self.n_starts,
-            n_adjust=self.n_adjust,
-            n_perturb=self.n_perturb,
-            seed=self.seed,
-        )
+    def demo_settings(self) -> DemoConfig:
+        """The demonstrations' settings, with this config's seed."""
+        return dataclasses.replace(self.demos, seed=self.seed)
 
-    def training(self) -> TrainConfig:
-        """The training settings: the cup decoders' recipe with a 2-D latent."""
-        return TrainConfig(steps=self.steps, hidden=self.hidden, depth=self.depth, z_dim=2, seed=self.seed)
+    def train_settings(self) -> TrainConfig:
+        """The training settings (the cup decoders' recipe with a 2-D latent), with this config's seed."""
+        return dataclasses.replace(self.train, seed=self.seed)
 
 
 def reading_names(readings: tuple[str, ...]) -> list[str]:
@@ -156,13 +147,13 @@ def train_readings(
     """
     robot = task.robot.name
     sets = task.belief_targets(control.likelihood)
-    train = config.training()
+    train = config.train_settings()
     sweep_config = entropy_ablation.Config(
         lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=config.seed
     )
     bases, datasets, demo_rows = {}, {}, []
     for reading in config.readings:
-        demos = collect_eating_demonstrations(task, control, config.demos(), reading=reading)
+        demos = collect_eating_demonstrations(task, control, config.demo_settings(), reading=reading)
         save_demonstrations(demos, paths.artifact("eating_reading_demos", robot, reading=reading))
         clean = demos.clean()
         demo_rows.append(
@@ -200,7 +191,7 @@ def train_readings(
                 paths.artifact("eating_reading_decoder", robot, reading=name),
                 train=to_dict(fine),
                 control=to_dict(control),
-                demos=to_dict(config.demos()),
+                demos=to_dict(config.demo_settings()),
                 reading=name,
             )
     frame = pd.concat(
@@ -218,7 +209,7 @@ def train_readings(
         paths.artifact("eating_decoder", robot),
         train=to_dict(fines[headline]),
         control=to_dict(control),
-        demos=to_dict(config.demos()),
+        demos=to_dict(config.demo_settings()),
         reading=headline,
     )
     return Readings(models, sweep.table, float(lam), pd.DataFrame(demo_rows), frame, headline)

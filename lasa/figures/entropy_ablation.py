@@ -20,10 +20,9 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, check_range
+from lasa.base.config import ControlConfig, PositiveInt, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
-from lasa.figures.common import check_positive_int
 from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import LatentActionModel
 from lasa.method.entropy import choose_lambda, context_entropy, context_grid
@@ -54,17 +53,17 @@ class Config:
     """The lambda sweep."""
 
     lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
-    sweep_steps: int = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
+    sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
     seed: int = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
 
     def __post_init__(self) -> None:
+        validate(self)
         if 0.0 not in {float(lam) for lam in self.lambdas}:
             raise ConfigError(f"lambdas must include 0 (the control), got {self.lambdas!r}")
         if len(set(self.lambdas)) < 2:
             raise ConfigError("lambdas must hold 0 and at least one lambda > 0")
         for lam in self.lambdas:
             check_range("lambda", lam, 0.0)
-        check_positive_int("sweep_steps", self.sweep_steps)
 
 
 @dataclasses.dataclass(frozen=True)

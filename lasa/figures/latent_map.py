@@ -22,13 +22,11 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
-from lasa.base.config import ControlConfig
-from lasa.base.errors import ConfigError
+from lasa.base.config import AtLeastTwo, ControlConfig, PositiveInt, validate
 from lasa.base.io import load_npz
 from lasa.base.paths import Paths
 from lasa.evidence.latent_property import held_input_paths
 from lasa.evidence.plots import draw_scene, frame_around, goal_colors, project, robots_present
-from lasa.figures.common import check_positive_int
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
 from lasa.world.robot import load_robot
@@ -57,15 +55,12 @@ DPI = 130
 class Config:
     """The held inputs and how long each is held, per context."""
 
-    n_z: int = 11  # held joystick inputs, evenly spaced on [-1, 1] [-]
-    uniform_steps: int = 100  # steps each input is held from home: long enough to reach a cup
-    confident_steps: int = 40  # steps each input is held at the cup: long enough to sweep the grasp
+    n_z: AtLeastTwo = 11  # held joystick inputs, evenly spaced on [-1, 1] [-]
+    uniform_steps: PositiveInt = 100  # steps each input is held from home: long enough to reach a cup
+    confident_steps: PositiveInt = 40  # steps each input is held at the cup: long enough to sweep the grasp
 
     def __post_init__(self) -> None:
-        if int(self.n_z) != self.n_z or self.n_z < 2:
-            raise ConfigError(f"n_z must be an integer >= 2, got {self.n_z!r}")
-        check_positive_int("uniform_steps", self.uniform_steps)
-        check_positive_int("confident_steps", self.confident_steps)
+        validate(self)
 
 
 def run(

@@ -42,14 +42,22 @@ import pandas as pd
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.config import (
+    ASSISTANCE,
+    ControlConfig,
+    PositiveInt,
+    UnitInterval,
+    check_choice,
+    check_range,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import VERDICTS, Claim
 from lasa.evidence.plots import robots_present
 from lasa.evidence.rules import UNDECIDED
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.figures import sim1, sim2, sim3
-from lasa.figures.common import as_decoders, check_members, check_positive_int
+from lasa.figures.common import as_decoders, check_members
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
@@ -105,20 +113,21 @@ class Config:
     alphas: tuple[float, ...] = (0.1, 0.2, 0.5)  # blend weights of Eq. M1 [-]
     action_scales: tuple[float, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
-    lag_prob: float = 0.85  # laggy pilot: probability of repeating the last input [-]
-    noise_prob: float = 0.3  # noisy pilot: probability of a uniformly random input [-]
+    lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
+    noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
     betas: tuple[float, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
     change_steps: tuple[int, ...] = (0, 120)  # sim2 change steps N (its claims read the ends) [steps]
-    horizon: int = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
-    settle: int = 150  # sim2: steps after the largest N: notebook 05's [-]
-    users: int = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
-    n_boot: int = 400  # bootstrap resamples of each cell's 95% intervals [-]
+    horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
+    settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
+    users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
+    n_boot: PositiveInt = 400  # bootstrap resamples of each cell's 95% intervals [-]
     seed: int = 0  # seed of the users (the same users in every cell: paired) [-]
-    n_jobs: int = 1  # local worker processes for the cells [-]
+    n_jobs: PositiveInt = 1  # local worker processes for the cells [-]
     scheduler: str | None = None  # Dask scheduler address; None: $LASA_SCHEDULER, else local
 
     def __post_init__(self) -> None:
+        validate(self)
         for name in ("alphas", "action_scales", "betas"):
             values = tuple(float(v) for v in getattr(self, name))
             if not values:
@@ -135,16 +144,9 @@ class Config:
             raise ConfigError("pilots must not be empty")
         for p in self.pilots:
             check_choice("pilot", p, PILOTS)
-        check_range("lag_prob", self.lag_prob, 0.0, 1.0)
-        check_range("noise_prob", self.noise_prob, 0.0, 1.0)
         check_choice("design", self.design, DESIGNS)
         if len(self.change_steps) < 2:
             raise ConfigError("change_steps needs at least two N (the sim2 claims compare the ends)")
-        check_positive_int("horizon", self.horizon)
-        check_positive_int("settle", self.settle)
-        check_positive_int("users", self.users)
-        check_positive_int("n_boot", self.n_boot)
-        check_positive_int("n_jobs", self.n_jobs)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -13,34 +13,28 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_range
+from lasa.base.config import ControlConfig, NonNegative, Positive, PositiveInt
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
 from lasa.evidence.plots import method_lineplot, robot_rows
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
-    N_BOOT,
     Design,
     block_seed,
     block_users,
-    check_design,
     group_means,
     member_frame,
     member_of,
 )
 from lasa.figures.common import (
     Decoders,
-    check_members,
-    check_methods,
-    check_pilot,
-    check_positive_int,
+    SweepConfig,
     episodes,
     members_of,
     run_population,
     sweep_grid,
 )
-from lasa.method.step import METHODS
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
@@ -67,37 +61,29 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config:
+class Config(SweepConfig):
     """Fig. sim1: users of fixed expertise."""
 
-    betas: tuple[float, ...] = (0.3, 1, 3, 10, 30, 75, 200, 1000, 3000, 10000)  # rationalities [1/rad^2]
-    users: int = (
-        Design.first
-    )  # users per point at the first look, every reading (lasa.evidence.verdicts.Design) [-]
-    block: int = Design.block  # users added per later look, the headline reading only [-]
-    cap: int = Design.cap  # most users per point [-]
-    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
-    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
-    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
-    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
-    horizon: int = 200  # control steps per episode [-]
-    tolerance: float = 0.05  # normalised error that counts as reaching s* [-]
-    methods: tuple[str, ...] = METHODS  # methods compared
-    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+    betas: tuple[NonNegative, ...] = (
+        0.3,
+        1,
+        3,
+        10,
+        30,
+        75,
+        200,
+        1000,
+        3000,
+        10000,
+    )  # rationalities [1/rad^2]
+    horizon: PositiveInt = 200  # control steps per episode [-]
+    tolerance: Positive = 0.05  # normalised error that counts as reaching s* [-]
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if not self.betas:
             raise ConfigError("betas must not be empty")
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
-        for beta in self.betas:
-            check_range("beta", beta, 0.0)
-        check_methods(self.methods)
-        check_design(self.users, self.block, self.cap)
-        check_positive_int("n_boot", self.n_boot)
-        check_members(self.assistance)
-        check_pilot(self.pilot, self.pilot_prob)
-        check_positive_int("horizon", self.horizon)
-        check_range("tolerance", self.tolerance, 0.0, low_open=True)
 
 
 def run(
@@ -140,7 +126,7 @@ def run(
         target=task.target(goal[seed], theta[seed]),
         beta0=beta,
         slope=np.zeros(len(seed)),
-        seed=seed,
+        stream=seed,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )

@@ -14,33 +14,33 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_range
+from lasa.base.config import (
+    ControlConfig,
+    NonNegative,
+    NonNegativeInt,
+    Positive,
+    PositiveInt,
+)
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import method_lineplot, robot_rows
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
-    N_BOOT,
     Design,
     block_seed,
     block_users,
-    check_design,
     group_means,
     member_frame,
 )
 from lasa.figures.common import (
     Decoders,
-    check_members,
-    check_methods,
-    check_pilot,
-    check_positive_int,
+    SweepConfig,
     episodes,
     members_of,
     run_population,
     sweep_grid,
 )
-from lasa.method.step import METHODS
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
@@ -65,39 +65,18 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config:
+class Config(SweepConfig):
     """Fig. sim2: users who aim at the wrong cup until step N, then at the right one."""
 
-    change_steps: tuple[int, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
-    beta: float = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
-    users: int = (
-        Design.first
-    )  # users per point at the first look, every reading (lasa.evidence.verdicts.Design) [-]
-    block: int = Design.block  # users added per later look, the headline reading only [-]
-    cap: int = Design.cap  # most users per point [-]
-    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
-    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
-    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
-    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
-    settle: int = 150  # steps after the largest N before the episode ends [steps]
-    success: float = 0.1  # normalised final error that counts as reaching the right cup [-]
-    methods: tuple[str, ...] = METHODS  # methods compared
-    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+    change_steps: tuple[NonNegativeInt, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
+    beta: NonNegative = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
+    settle: PositiveInt = 150  # steps after the largest N before the episode ends [steps]
+    success: Positive = 0.1  # normalised final error that counts as reaching the right cup [-]
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if not self.change_steps:
             raise ConfigError("change_steps must not be empty")
-        for n in self.change_steps:
-            if int(n) != n or n < 0:
-                raise ConfigError(f"change step N must be an integer >= 0, got {n!r}")
-        check_range("beta", self.beta, 0.0)
-        check_design(self.users, self.block, self.cap)
-        check_positive_int("n_boot", self.n_boot)
-        check_members(self.assistance)
-        check_pilot(self.pilot, self.pilot_prob)
-        check_positive_int("settle", self.settle)
-        check_range("success", self.success, 0.0, low_open=True)
-        check_methods(self.methods)
 
     @property
     def horizon(self) -> int:
@@ -141,7 +120,7 @@ def run(
         target=task.target(goal[seed], theta[seed]),
         beta0=np.full(len(seed), config.beta),
         slope=np.zeros(len(seed)),
-        seed=seed,
+        stream=seed,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
         first_target=task.target(wrong, theta[seed]),

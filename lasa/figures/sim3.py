@@ -14,32 +14,26 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_range
+from lasa.base.config import ControlConfig, Positive, PositiveInt
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import normalized_error
 from lasa.evidence.plots import method_lineplot, robot_rows
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
-    N_BOOT,
     Design,
     block_seed,
     block_users,
-    check_design,
     group_means,
     member_frame,
 )
 from lasa.figures.common import (
     Decoders,
-    check_members,
-    check_methods,
-    check_pilot,
-    check_positive_int,
+    SweepConfig,
     episodes,
     members_of,
     run_population,
     sweep_grid,
 )
-from lasa.method.step import METHODS
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
@@ -64,35 +58,16 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config:
+class Config(SweepConfig):
     """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
 
-    fast_slope: float = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
-    slow_slope: float = 2.0  # m of the slow learner [1/(rad^2 step)]
-    users: int = (
-        Design.first
-    )  # users per point at the first look, every reading (lasa.evidence.verdicts.Design) [-]
-    block: int = Design.block  # users added per later look, the headline reading only [-]
-    cap: int = Design.cap  # most users per point [-]
-    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
-    assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
-    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
-    pilot_prob: float = 0.0  # p of the laggy or noisy pilot [-]
-    horizon: int = 200  # control steps per episode [-]
-    record_every: int = 5  # keep the error every this many steps in the frame [steps]
-    methods: tuple[str, ...] = METHODS  # methods compared
-    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+    fast_slope: Positive = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
+    slow_slope: Positive = 2.0  # m of the slow learner [1/(rad^2 step)]
+    horizon: PositiveInt = 200  # control steps per episode [-]
+    record_every: PositiveInt = 5  # keep the error every this many steps in the frame [steps]
 
     def __post_init__(self) -> None:
-        check_range("fast_slope", self.fast_slope, 0.0, low_open=True)
-        check_range("slow_slope", self.slow_slope, 0.0, low_open=True)
-        check_design(self.users, self.block, self.cap)
-        check_positive_int("n_boot", self.n_boot)
-        check_members(self.assistance)
-        check_pilot(self.pilot, self.pilot_prob)
-        check_positive_int("horizon", self.horizon)
-        check_positive_int("record_every", self.record_every)
-        check_methods(self.methods)
+        super().__post_init__()
 
     @property
     def learners(self) -> tuple[tuple[str, float], ...]:
@@ -133,7 +108,7 @@ def run(
         target=task.target(goal[seed], theta[seed]),
         beta0=np.zeros(len(seed)),
         slope=slope,
-        seed=seed,
+        stream=seed,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )

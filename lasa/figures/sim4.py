@@ -233,7 +233,7 @@ def run(
             target=target,
             beta0=np.full(len(seeds_all), config.beta),
             slope=np.zeros(len(seeds_all)),
-            seed=seeds_all,
+            stream=seeds_all,
         )
         with_map = {}
         for kind in config.maps:

@@ -67,7 +67,16 @@ from matplotlib.figure import Figure
 from scipy import stats as sps
 
 from lasa.base.conditions import CONDITIONS
-from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, from_dict
+from lasa.base.config import (
+    ASSISTANCE,
+    NO_ASSISTANCE,
+    AtLeastTwo,
+    ControlConfig,
+    PositiveInt,
+    check_choice,
+    from_dict,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.evidence import stats
 from lasa.evidence.claims import Claim
@@ -134,16 +143,15 @@ PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868
 class Config:
     """The simulated study (notebook 11); the participants' parameters are ``participant``."""
 
-    n_participants: int = 40  # the larger cohort; its first 10 are the paper-sized study [-]
+    n_participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
     members: tuple[str, ...] = ("hindsight", "grasp_set")  # SA readings; the first is the headline [-]
-    horizon: int = 1500  # steps allowed per task (150 s) [-]
+    horizon: PositiveInt = 1500  # steps allowed per task (150 s) [-]
     seed: int = 0  # seed of the cohort and of the participants' choices [-]
     video_participant: int = 0  # whose Dessert the video shows [-]
     participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
 
     def __post_init__(self) -> None:
-        if int(self.n_participants) != self.n_participants or self.n_participants < 2:
-            raise ConfigError(f"n_participants must be an integer >= 2, got {self.n_participants!r}")
+        validate(self)
         object.__setattr__(self, "members", tuple(self.members))
         for name in self.members:
             check_choice("assistance", name, ASSISTANCE)

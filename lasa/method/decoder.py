@@ -39,7 +39,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from lasa.base.config import check_range
+from lasa.base.config import AtLeastTwo, Positive, PositiveInt, validate
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import atomic_path, require_file
 
@@ -57,23 +57,17 @@ class DecoderConfig:
     """Architecture of the conditional autoencoder."""
 
     robot: str  # robot the model is trained for, e.g. "planar5"
-    n_joints: int  # state and action dimension n
-    n_goals: int  # number of goals G (belief dimension)
-    z_dim: int = 1  # latent dimension d: 1 for the cup task (left/right on a joystick)
-    hidden: int = 128  # width of every hidden layer
-    depth: int = 3  # number of hidden layers in the encoder and in the decoder
-    action_scale: float = 1.0  # sigma_h: bound on ||phi|| [rad/s]
+    n_joints: PositiveInt  # state and action dimension n
+    n_goals: AtLeastTwo  # number of goals G (belief dimension)
+    z_dim: PositiveInt = 1  # latent dimension d: 1 for the cup task (left/right on a joystick)
+    hidden: PositiveInt = 128  # width of every hidden layer
+    depth: PositiveInt = 3  # number of hidden layers in the encoder and in the decoder
+    action_scale: Positive = 1.0  # sigma_h: bound on ||phi|| [rad/s]
     state_mean: tuple[float, ...] = ()  # input normalisation of s (from the data) [rad]
     state_std: tuple[float, ...] = ()  # ... and its spread [rad]
 
     def __post_init__(self) -> None:
-        for name in ("n_joints", "n_goals", "z_dim", "hidden", "depth"):
-            value = getattr(self, name)
-            if int(value) != value or value < 1:
-                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
-        if self.n_goals < 2:
-            raise ConfigError(f"n_goals must be >= 2, got {self.n_goals}")
-        check_range("action_scale", self.action_scale, 0.0, low_open=True)
+        validate(self)
         for name in ("state_mean", "state_std"):
             value = getattr(self, name)
             if value and len(value) != self.n_joints:

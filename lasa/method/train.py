@@ -15,13 +15,22 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Callable
+from typing import Annotated
 
+import annotated_types as at
 import numpy as np
 import pandas as pd
 import torch
 from tqdm.auto import tqdm
 
-from lasa.base.config import ControlConfig, check_range
+from lasa.base.config import (
+    AtLeastTwo,
+    ControlConfig,
+    NonNegative,
+    Positive,
+    PositiveInt,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import DecoderConfig, LatentActionModel
@@ -36,38 +45,28 @@ ExtraLoss = Callable[[LatentActionModel, torch.Tensor, torch.Tensor], torch.Tens
 class TrainConfig:
     """Optimisation of the conditional autoencoder."""
 
-    steps: int = 2000  # optimiser steps; the held-out error is lowest at step 1200 (planar5), 600 (Panda) [-]
-    batch_size: int = 512  # tuples per step [-]
-    lr: float = 2e-3  # Adam learning rate, cosine-decayed to 5% [-]
-    weight_decay: float = 0.0  # AdamW weight decay [-]
-    z_noise: float = 0.05  # std of the noise added to z while training [-]
-    hidden: int = 128  # width of the hidden layers [-]
-    depth: int = 3  # hidden layers in encoder and decoder [-]
-    z_dim: int = 1  # latent dimension d [-]
-    holdout: float = 0.1  # fraction of demonstrations held out for validation [-]
-    log_every: int = 100  # steps between logged losses [-]
-    entropy_lambda: float = 0.0  # lambda of the entropy term (Eq. T6); 0 trains plain LA [-]
-    entropy_n_z: int = 11  # joystick inputs the entropy term's sum over z runs over [-]
-    entropy_horizon: int = 10  # steps over which the entropy term reads an input's evidence [-]
-    entropy_contexts: int = 64  # contexts per batch the entropy term is evaluated on [-]
+    steps: PositiveInt = (
+        2000  # optimiser steps; the held-out error is lowest at step 1200 (planar5), 600 (Panda) [-]
+    )
+    batch_size: PositiveInt = 512  # tuples per step [-]
+    lr: Positive = 2e-3  # Adam learning rate, cosine-decayed to 5% [-]
+    weight_decay: NonNegative = 0.0  # AdamW weight decay [-]
+    z_noise: NonNegative = 0.05  # std of the noise added to z while training [-]
+    hidden: PositiveInt = 128  # width of the hidden layers [-]
+    depth: PositiveInt = 3  # hidden layers in encoder and decoder [-]
+    z_dim: PositiveInt = 1  # latent dimension d [-]
+    holdout: Annotated[float, at.Ge(0.0), at.Le(0.5)] = (
+        0.1  # fraction of demonstrations held out for validation [-]
+    )
+    log_every: PositiveInt = 100  # steps between logged losses [-]
+    entropy_lambda: NonNegative = 0.0  # lambda of the entropy term (Eq. T6); 0 trains plain LA [-]
+    entropy_n_z: AtLeastTwo = 11  # joystick inputs the entropy term's sum over z runs over [-]
+    entropy_horizon: PositiveInt = 10  # steps over which the entropy term reads an input's evidence [-]
+    entropy_contexts: PositiveInt = 64  # contexts per batch the entropy term is evaluated on [-]
     seed: int = 0  # seed of initialisation, batches and noise [-]
 
     def __post_init__(self) -> None:
-        for name in ("steps", "batch_size", "hidden", "depth", "z_dim", "log_every"):
-            v = getattr(self, name)
-            if int(v) != v or v < 1:
-                raise ConfigError(f"{name} must be a positive integer, got {v!r}")
-        check_range("lr", self.lr, 0.0, low_open=True)
-        check_range("weight_decay", self.weight_decay, 0.0)
-        check_range("z_noise", self.z_noise, 0.0)
-        check_range("holdout", self.holdout, 0.0, 0.5)
-        check_range("entropy_lambda", self.entropy_lambda, 0.0)
-        if int(self.entropy_n_z) != self.entropy_n_z or self.entropy_n_z < 2:
-            raise ConfigError(f"entropy_n_z must be an integer >= 2, got {self.entropy_n_z!r}")
-        if int(self.entropy_horizon) != self.entropy_horizon or self.entropy_horizon < 1:
-            raise ConfigError(f"entropy_horizon must be a positive integer, got {self.entropy_horizon!r}")
-        if int(self.entropy_contexts) != self.entropy_contexts or self.entropy_contexts < 1:
-            raise ConfigError(f"entropy_contexts must be a positive integer, got {self.entropy_contexts!r}")
+        validate(self)
 
 
 def _split(demos: Demonstrations, holdout: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

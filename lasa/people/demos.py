@@ -24,12 +24,21 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Callable
+from typing import Annotated
 
+import annotated_types as at
 import numpy as np
 import pandas as pd
 
-from lasa.base.config import ControlConfig, check_choice, check_range
-from lasa.base.errors import ConfigError
+from lasa.base.config import (
+    ControlConfig,
+    NonNegative,
+    NonNegativeInt,
+    Positive,
+    PositiveInt,
+    check_choice,
+    validate,
+)
 from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
 from lasa.world.eating import EatingTask
@@ -50,33 +59,24 @@ __all__ = [
 class DemoConfig:
     """How many demonstrations, and how they move."""
 
-    n_theta: int = 9  # preferences demonstrated per cup, evenly spaced on [0, 1]
-    n_starts: int = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
-    start_noise: float = 0.3  # std of the start-pose perturbation [rad]
-    n_adjust: int = 3  # grasp adjustments (moves along the preference curve) per demo
-    speed: float = 0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
-    gain: float = 2.0  # proportional gain of the slow-down near each target [1/s]
-    tolerance: float = 0.01  # a motion ends this close to its target [rad]
-    hold_steps: int = 3  # steps held still after each motion [-]
-    n_perturb: int = 2  # noisy copies of every tuple [-]
-    perturb_std: float = 0.05  # std of the state perturbation of a copy [rad]
-    perturb_gain: float = 2.0  # gain of a copy's corrective action [1/s]
+    n_theta: PositiveInt = 9  # preferences demonstrated per cup, evenly spaced on [0, 1]
+    n_starts: PositiveInt = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
+    start_noise: NonNegative = 0.3  # std of the start-pose perturbation [rad]
+    n_adjust: NonNegativeInt = 3  # grasp adjustments (moves along the preference curve) per demo
+    speed: Annotated[float, at.Gt(0.0), at.Le(1.0)] = (
+        0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
+    )
+    gain: Positive = 2.0  # proportional gain of the slow-down near each target [1/s]
+    tolerance: Positive = 0.01  # a motion ends this close to its target [rad]
+    hold_steps: NonNegativeInt = 3  # steps held still after each motion [-]
+    n_perturb: NonNegativeInt = 2  # noisy copies of every tuple [-]
+    perturb_std: NonNegative = 0.05  # std of the state perturbation of a copy [rad]
+    perturb_gain: NonNegative = 2.0  # gain of a copy's corrective action [1/s]
     max_steps: int = 400  # cap on the length of one motion [steps]
     seed: int = 0  # seed of the start perturbations, new preferences and copies
 
     def __post_init__(self) -> None:
-        for name in ("n_theta", "n_starts"):
-            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 1:
-                raise ConfigError(f"{name} must be a positive integer, got {getattr(self, name)!r}")
-        for name in ("n_adjust", "hold_steps", "n_perturb"):
-            if int(getattr(self, name)) != getattr(self, name) or getattr(self, name) < 0:
-                raise ConfigError(f"{name} must be a non-negative integer, got {getattr(self, name)!r}")
-        check_range("start_noise", self.start_noise, 0.0)
-        check_range("speed", self.speed, 0.0, 1.0, low_open=True)
-        check_range("gain", self.gain, 0.0, low_open=True)
-        check_range("tolerance", self.tolerance, 0.0, low_open=True)
-        check_range("perturb_std", self.perturb_std, 0.0)
-        check_range("perturb_gain", self.perturb_gain, 0.0)
+        validate(self)
 
 
 def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame:

@@ -62,7 +62,15 @@ from tqdm.auto import tqdm
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.conditions import parse as parse_condition
-from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.config import (
+    ASSISTANCE,
+    NO_ASSISTANCE,
+    ControlConfig,
+    PositiveInt,
+    check_choice,
+    check_range,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
@@ -153,9 +161,8 @@ class ParticipantConfig:
 class StudyConfig:
     """How a study session runs (the participants' parameters are in ``participant``)."""
 
-    horizon: int = (
-        1500  # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
-    )
+    # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
+    horizon: PositiveInt = 1500
     position_tol: float = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
     angle_tol: float = 0.2  # ... with the fork's direction this close (~11 degrees) [rad]
     # The SA members the assisted conditions run under (lasa.method.assistance); the first is the
@@ -166,8 +173,7 @@ class StudyConfig:
     retarget: RetargetConfig = RetargetConfig()
 
     def __post_init__(self) -> None:
-        if int(self.horizon) != self.horizon or self.horizon < 1:
-            raise ConfigError(f"horizon must be a positive integer, got {self.horizon!r}")
+        validate(self)
         check_range("position_tol", self.position_tol, 0.0, low_open=True)
         check_range("angle_tol", self.angle_tol, 0.0, np.pi, low_open=True)
         if not self.members:

@@ -70,11 +70,11 @@ def rollout(
         control: Control-loop units (dt, speed bound, belief model, n_z).
         horizon: Number of control steps T.
         noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
-            ``noise[users.seed[u]]``. K must equal the number of joystick candidates.
+            ``noise[users.stream[u]]``. K must equal the number of joystick candidates.
         progress: Show a tqdm progress bar over the steps.
         pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
             (``users.pilot``, :func:`lasa.people.users.pilot_choice`); user u draws from
-            ``pilot_noise[users.seed[u]]``. Needed only by those pilots.
+            ``pilot_noise[users.stream[u]]``. Needed only by those pilots.
         assistance: Each user's member of :mod:`lasa.method.assistance` (built in, or added by
             :func:`lasa.method.assistance.register_member`), shape (U,), so that
             users of several readings share one batch (and each decoder call); default
@@ -128,10 +128,10 @@ def rollout(
         b = beliefs[t]  # belief(log_b), computed once per step
         phi = decode_candidates(decoder, grid, s, b)  # (U, K, n): the one decoder call
         costs = user_costs(users.target_at(t), s, phi, control.dt)
-        k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.seed, t]))
+        k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.stream, t]))
         if piloted:
             assert pilot_noise is not None
-            k = pilot_choice(users, k, k_prev, pilot_noise[users.seed, t], len(grid))
+            k = pilot_choice(users, k, k_prev, pilot_noise[users.stream, t], len(grid))
             k_prev = k
         step = advance(task, control, s, log_b, phi[rows, k], alpha, sets, b, members)
         s, log_b = step.state, step.log_belief

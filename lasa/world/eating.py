@@ -97,7 +97,7 @@ EATING = RobotSpec(
     ik_seeds=(ROBOTS["panda"].ik_seeds[0],) * 4,
     # The cup sims' units (notebook 04 states why); the study's assistance is hindsight
     # optimisation, the member the paper's user study used (Javdani et al. 2018).
-    control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2, assistance="hindsight"),
+    control=ControlConfig(assistance="hindsight"),  # the robots' units; the study's assistance (Sec. VI)
     mesh_package=ROBOTS["panda"].mesh_package,
     tool=ASSETS / "panda" / "fork.xml",
 )

@@ -80,7 +80,7 @@ ROBOTS: dict[str, RobotSpec] = {
         # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
         # mid-preference goal small enough for users to hold other grasps (Eq. T4).
         # These are ControlConfig's defaults, written out because they are this robot's.
-        control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
+        control=ControlConfig(),  # the defaults are the values both robots use
     ),
     "panda": RobotSpec(
         name="panda",
@@ -99,7 +99,7 @@ ROBOTS: dict[str, RobotSpec] = {
         side_azimuth=1.5707963267948966,  # pi/2
         ik_seeds=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
         # The same units as planar5, for the same reasons (notebook 04).
-        control=ControlConfig(dt=0.1, action_scale=0.375, belief_beta=20.0, alpha=0.2),
+        control=ControlConfig(),  # the defaults are the values both robots use
         mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
     ),
 }
