@@ -85,6 +85,8 @@ $(STAMP): environment.lock pyproject.toml
 	@test -n "$(PYTHON)" || { echo "error: Python 3.11 not found (set PYTHON=...)"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --disable-pip-version-check -r environment.lock 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
+	@# an older build's lasa.egg-info in the tree would shadow the installed version (lasa.__version__)
+	rm -rf lasa.egg-info
 	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
 	touch $@
 

@@ -31,7 +31,7 @@ def test_a_name_outside_what_the_caller_accepts_is_an_error():
 def test_every_loop_reads_the_same_table():
     from lasa.live.teleop import CONDITIONS as TELEOP
     from lasa.method.step import METHOD_DECODER, METHODS, method_alpha
-    from lasa.people.participants import assisted, interface_of
+    from lasa.people.participants import interface_of
 
     control = ControlConfig(alpha=0.4)
     assert METHODS == conditions.METHODS and TELEOP == conditions.ALL
@@ -39,6 +39,5 @@ def test_every_loop_reads_the_same_table():
     assert [method_alpha(m, control) for m in METHODS] == [0.0, 0.4, 0.4]
     assert [conditions.alpha_of(c, 0.4) for c in conditions.CONDITIONS] == [0.0, 0.4, 0.0, 0.4]
     assert [interface_of(c) for c in conditions.CONDITIONS] == ["R", "R", "LA", "LA"]
-    assert [assisted(c) for c in conditions.CONDITIONS] == [False, True, False, True]
     with pytest.raises(ConfigError, match="unknown method"):
         method_alpha("R+SA", control)

@@ -88,3 +88,24 @@ def test_the_import_contracts_hold_and_can_fail(tmp_path):
         [tool, "--no-cache", "--config", str(broken)], cwd=root, capture_output=True, text=True, check=False
     )
     assert run.returncode != 0 and "BROKEN" in run.stdout
+
+
+def test_the_version_is_pyprojects_even_from_the_repository_root():
+    """`lasa.__version__` comes from the package metadata; run from the repository root (where a
+    stale lasa.egg-info would be found first, which `make setup` removes), it is pyproject's."""
+    import subprocess
+    import sys
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    declared = tomllib.loads((root / "pyproject.toml").read_text())["project"]["version"]
+    got = subprocess.run(
+        [sys.executable, "-c", "import lasa; print(lasa.__version__)"],
+        cwd=root,
+        capture_output=True,
+        text=True,
+        check=True,
+        env={"MUJOCO_GL": "disable", "PATH": ""},
+    ).stdout.strip()
+    assert got == declared

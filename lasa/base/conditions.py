@@ -30,7 +30,6 @@ __all__ = ["Condition", "parse", "METHODS", "CONDITIONS", "ALL", "alpha_of"]
 
 METHODS = ("LA", "LA+SA", "LA+SA+Entropy")  # the simulations' methods (sims 1-4)
 CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x assistance)
-ALL = ("R", "R+SA", "LA", "LA+SA", "LA+SA+Entropy")  # every condition a person can drive
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,6 +56,7 @@ _TABLE = {
     "LA+SA": Condition("LA+SA", "LA", True, "base"),
     "LA+SA+Entropy": Condition("LA+SA+Entropy", "LA", True, "entropy"),
 }
+ALL = tuple(_TABLE)  # every condition a person can drive (the table's order)
 
 
 def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
@@ -75,6 +75,6 @@ def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") ->
     return _TABLE[name]
 
 
-def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL) -> float:
-    """The blend weight of a condition: ``alpha`` if it is assisted, else 0."""
-    return alpha if parse(name, allowed).assisted else 0.0
+def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str = "condition") -> float:
+    """The blend weight of a condition: ``alpha`` if it is assisted, else 0 (LA and R: alpha = 0)."""
+    return alpha if parse(name, allowed, what).assisted else 0.0

@@ -25,6 +25,8 @@ from lasa.base.errors import ConfigError
 
 __all__ = [
     "ASSISTANCE",
+    "Number",
+    "Integer",
     "PositiveInt",
     "NonNegativeInt",
     "AtLeastTwo",
@@ -32,6 +34,7 @@ __all__ = [
     "NonNegative",
     "UnitInterval",
     "validate",
+    "interval",
     "expects",
     "ControlConfig",
     "check_range",
@@ -42,14 +45,26 @@ __all__ = [
 
 T = TypeVar("T")
 
+
 # Field types with their bounds, written once: a config record states a field's allowed values in
 # its annotation, and validate() (pydantic) checks them when the record is built.
-PositiveInt = Annotated[int, at.Ge(1)]  # an integer >= 1 (counts, steps, sizes)
-NonNegativeInt = Annotated[int, at.Ge(0)]  # an integer >= 0
-AtLeastTwo = Annotated[int, at.Ge(2)]  # an integer >= 2 (grids that hold both ends)
-Positive = Annotated[float, at.Gt(0.0)]  # a number > 0
-NonNegative = Annotated[float, at.Ge(0.0)]  # a number >= 0
-UnitInterval = Annotated[float, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
+def _not_text(value: Any) -> Any:
+    """A number field never takes text: pydantic's lax mode would parse '3', and the record keeps
+    the value as given (:func:`validate` converts nothing), so '3' would stay a string."""
+    if isinstance(value, str | bytes):
+        raise ValueError("text is not a number")
+    return value
+
+
+# A record's own range: Annotated[Number, at.Gt(0.0), at.Le(1.0)] (the bounds are read for the error).
+Number = Annotated[float, pydantic.BeforeValidator(_not_text)]
+Integer = Annotated[int, pydantic.BeforeValidator(_not_text)]
+PositiveInt = Annotated[Integer, at.Ge(1)]  # an integer >= 1 (counts, steps, sizes)
+NonNegativeInt = Annotated[Integer, at.Ge(0)]  # an integer >= 0
+AtLeastTwo = Annotated[Integer, at.Ge(2)]  # an integer >= 2 (grids that hold both ends)
+Positive = Annotated[Number, at.Gt(0.0)]  # a number > 0
+NonNegative = Annotated[Number, at.Ge(0.0)]  # a number >= 0
+UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
 
 
 def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:
@@ -67,6 +82,11 @@ def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:
     return low, high, low_open, high_open
 
 
+def interval(low: float, high: float, low_open: bool = False, high_open: bool = False) -> str:
+    """An interval in words, ``[0, 1]`` or ``(0, inf]``: how every range error states its bounds."""
+    return f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+
+
 def expects(annotation: Any) -> str:
     """What a field of this type accepts, in words: ``an integer >= 1``, ``a number in [0, 1]``."""
     origin = typing.get_origin(annotation)
@@ -75,8 +95,7 @@ def expects(annotation: Any) -> str:
         low, high, low_open, high_open = _bounds(annotation)
         if base is int and high == math.inf:
             return f"an integer >= {low + 1 if low_open else low:g}"
-        lo, hi = "(" if low_open else "[", ")" if high_open else "]"
-        return f"{'an integer' if base is int else 'a number'} in {lo}{low:g}, {high:g}{hi}"
+        return f"{'an integer' if base is int else 'a number'} in {interval(low, high, low_open, high_open)}"
     if origin is tuple:
         return f"a list, each {expects(typing.get_args(annotation)[0])}"
     if origin in (typing.Union, types.UnionType):
@@ -157,9 +176,7 @@ def check_range(
         low_open: Exclude ``low`` itself.
         high_open: Exclude ``high`` itself.
     """
-    lo = "(" if low_open else "["
-    hi = ")" if high_open else "]"
-    allowed = f"{lo}{low:g}, {high:g}{hi}"
+    allowed = interval(low, high, low_open, high_open)
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -189,11 +206,11 @@ class ControlConfig:
     beta = 1000 near optimal); notebook 04 states them and why.
     """
 
-    dt: Annotated[float, at.Gt(0.0), at.Le(1.0)] = 0.1  # control period Delta [s]
+    dt: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = 0.1  # control period Delta [s]
     action_scale: Positive = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
     max_joint_speed: Positive = 2.0  # per-joint bound on the commanded velocity [rad/s]
     belief_beta: NonNegative = 20.0  # beta_b, temperature of the goal likelihood [1/rad]
-    belief_floor: Annotated[float, at.Ge(0.0), at.Lt(0.5)] = (
+    belief_floor: Annotated[Number, at.Ge(0.0), at.Lt(0.5)] = (
         1e-6  # smallest belief any goal keeps after an update [-]
     )
     alpha: UnitInterval = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]

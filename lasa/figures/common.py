@@ -28,6 +28,7 @@ from lasa.base.config import (
     ASSISTANCE,
     NO_ASSISTANCE,
     ControlConfig,
+    Integer,
     PositiveInt,
     UnitInterval,
     check_choice,
@@ -146,7 +147,7 @@ class SweepConfig:
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
     pilot_prob: UnitInterval = 0.0  # p of the laggy or noisy pilot [-]
     methods: tuple[str, ...] = METHODS  # methods compared
-    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+    seed: Integer = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)

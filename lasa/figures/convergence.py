@@ -53,7 +53,15 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ASSISTANCE, ControlConfig, PositiveInt, check_choice, check_range, validate
+from lasa.base.config import (
+    ASSISTANCE,
+    ControlConfig,
+    Integer,
+    PositiveInt,
+    check_choice,
+    check_range,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
 from lasa.figures.common import draw_episodes
@@ -119,7 +127,7 @@ class Config:
     n_users: PositiveInt = 20  # simulated users per (member, beta) [-]
     horizon: PositiveInt = 200  # control steps per episode [-]
     record_every: PositiveInt = 10  # steps between recorded rows; event counts cover every step [steps]
-    seed: int = 0  # seed of the users' cups, preferences and random streams [-]
+    seed: Integer = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)

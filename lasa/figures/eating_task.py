@@ -34,7 +34,7 @@ import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, PositiveInt, check_choice, to_dict, validate
+from lasa.base.config import ControlConfig, Integer, PositiveInt, check_choice, to_dict, validate
 from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property
@@ -73,7 +73,7 @@ class Config:
     # training (lasa.method.train.TrainConfig; its seed is `seed`): the cup decoders' recipe,
     # 2000 steps of a 3 x 128 network, with a 2-D latent (z_dim must stay 2: two stick axes)
     train: TrainConfig = TrainConfig(z_dim=2)
-    seed: int = 0  # seed of the demonstrations and of training [-]
+    seed: Integer = 0  # seed of the demonstrations and of training [-]
     goal: str = "middle"  # the bowl the figure looks at [-]
     readings: tuple[str, ...] = EATING_READINGS  # demonstration readings trained [-]
     lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, on the continuous base [-]

@@ -20,7 +20,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, PositiveInt, check_range, validate
+from lasa.base.config import ControlConfig, Integer, PositiveInt, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
 from lasa.method.dataset import Demonstrations
@@ -54,7 +54,7 @@ class Config:
 
     lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
-    seed: int = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
+    seed: Integer = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
 
     def __post_init__(self) -> None:
         validate(self)

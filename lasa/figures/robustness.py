@@ -45,6 +45,7 @@ from matplotlib.figure import Figure
 from lasa.base.config import (
     ASSISTANCE,
     ControlConfig,
+    Integer,
     PositiveInt,
     UnitInterval,
     check_choice,
@@ -122,7 +123,7 @@ class Config:
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
     n_boot: PositiveInt = 400  # bootstrap resamples of each cell's 95% intervals [-]
-    seed: int = 0  # seed of the users (the same users in every cell: paired) [-]
+    seed: Integer = 0  # seed of the users (the same users in every cell: paired) [-]
     n_jobs: PositiveInt = 1  # local worker processes for the cells [-]
     scheduler: str | None = None  # Dask scheduler address; None: $LASA_SCHEDULER, else local
 

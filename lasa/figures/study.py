@@ -72,6 +72,7 @@ from lasa.base.config import (
     NO_ASSISTANCE,
     AtLeastTwo,
     ControlConfig,
+    Integer,
     PositiveInt,
     check_choice,
     from_dict,
@@ -146,7 +147,7 @@ class Config:
     n_participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
     members: tuple[str, ...] = ("hindsight", "grasp_set")  # SA readings; the first is the headline [-]
     horizon: PositiveInt = 1500  # steps allowed per task (150 s) [-]
-    seed: int = 0  # seed of the cohort and of the participants' choices [-]
+    seed: Integer = 0  # seed of the cohort and of the participants' choices [-]
     video_participant: int = 0  # whose Dessert the video shows [-]
     participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
 
@@ -214,7 +215,7 @@ def run(
             interfaces=interfaces,
         )
         for key, frame in measures(task, episodes[name]).items():
-            la = frame.condition.map(interface_of) == "LA"
+            la = frame.condition.map({c: interface_of(c) == "LA" for c in CONDITIONS}).astype(bool)
             parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE)))
     return episodes, {key: pd.concat(frames, ignore_index=True) for key, frames in parts.items()}
 

@@ -43,6 +43,7 @@ import mujoco
 import numpy as np
 
 from lasa.base.conditions import ALL as CONDITIONS
+from lasa.base.conditions import alpha_of
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ArtifactError, ConfigError
@@ -133,7 +134,7 @@ class Station:
                 self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
             )
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
-        self.alpha = self.control.alpha if condition.assisted else 0.0
+        self.alpha = alpha_of(condition.name, self.control.alpha)
         self.sets = self.task.belief_targets(self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self.reset()

@@ -56,7 +56,7 @@ METHOD_DECODER: dict[str, str] = {m: str(conditions.parse(m, METHODS).decoder) f
 
 def method_alpha(method: str, control: ControlConfig) -> float:
     """The blend weight alpha of a method: 0 for LA, ``control.alpha`` for the assisted ones."""
-    return control.alpha if conditions.parse(method, METHODS, "method").assisted else 0.0
+    return conditions.alpha_of(method, control.alpha, METHODS, "method")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -26,7 +26,9 @@ from tqdm.auto import tqdm
 from lasa.base.config import (
     AtLeastTwo,
     ControlConfig,
+    Integer,
     NonNegative,
+    Number,
     Positive,
     PositiveInt,
     validate,
@@ -55,7 +57,7 @@ class TrainConfig:
     hidden: PositiveInt = 128  # width of the hidden layers [-]
     depth: PositiveInt = 3  # hidden layers in encoder and decoder [-]
     z_dim: PositiveInt = 1  # latent dimension d [-]
-    holdout: Annotated[float, at.Ge(0.0), at.Le(0.5)] = (
+    holdout: Annotated[Number, at.Ge(0.0), at.Le(0.5)] = (
         0.1  # fraction of demonstrations held out for validation [-]
     )
     log_every: PositiveInt = 100  # steps between logged losses [-]
@@ -63,7 +65,7 @@ class TrainConfig:
     entropy_n_z: AtLeastTwo = 11  # joystick inputs the entropy term's sum over z runs over [-]
     entropy_horizon: PositiveInt = 10  # steps over which the entropy term reads an input's evidence [-]
     entropy_contexts: PositiveInt = 64  # contexts per batch the entropy term is evaluated on [-]
-    seed: int = 0  # seed of initialisation, batches and noise [-]
+    seed: Integer = 0  # seed of initialisation, batches and noise [-]
 
     def __post_init__(self) -> None:
         validate(self)

@@ -32,8 +32,10 @@ import pandas as pd
 
 from lasa.base.config import (
     ControlConfig,
+    Integer,
     NonNegative,
     NonNegativeInt,
+    Number,
     Positive,
     PositiveInt,
     check_choice,
@@ -63,7 +65,7 @@ class DemoConfig:
     n_starts: PositiveInt = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
     start_noise: NonNegative = 0.3  # std of the start-pose perturbation [rad]
     n_adjust: NonNegativeInt = 3  # grasp adjustments (moves along the preference curve) per demo
-    speed: Annotated[float, at.Gt(0.0), at.Le(1.0)] = (
+    speed: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = (
         0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
     )
     gain: Positive = 2.0  # proportional gain of the slow-down near each target [1/s]
@@ -73,7 +75,7 @@ class DemoConfig:
     perturb_std: NonNegative = 0.05  # std of the state perturbation of a copy [rad]
     perturb_gain: NonNegative = 2.0  # gain of a copy's corrective action [1/s]
     max_steps: int = 400  # cap on the length of one motion [steps]
-    seed: int = 0  # seed of the start perturbations, new preferences and copies
+    seed: Integer = 0  # seed of the start perturbations, new preferences and copies
 
     def __post_init__(self) -> None:
         validate(self)

@@ -60,7 +60,7 @@ import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import CONDITIONS, alpha_of
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import (
     ASSISTANCE,
@@ -105,11 +105,6 @@ TASK_NAMES = tuple(TASKS)
 def interface_of(condition: str) -> str:
     """``R`` or ``LA``: the control interface of one of the study's conditions."""
     return parse_condition(condition, CONDITIONS).interface
-
-
-def assisted(condition: str) -> bool:
-    """Whether one of the study's conditions blends in shared autonomy."""
-    return parse_condition(condition, CONDITIONS).assisted
 
 
 @dataclasses.dataclass(frozen=True)
@@ -431,8 +426,9 @@ def simulate(
     cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
     member = np.array([arms[a][1] for a in arm])
     n_e = len(part)
-    is_la = np.array([interface_of(CONDITIONS[c]) == "LA" for c in cond])
-    alpha = np.array([control.alpha if assisted(CONDITIONS[c]) else 0.0 for c in cond])
+    # per condition once, then indexed by each episode's condition
+    is_la = np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond]
+    alpha = np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond]
     members_run = np.where(member == NO_ASSISTANCE, members[0], member)  # alpha = 0 there
     rank = np.argsort(cohort.order, axis=1)  # position of each condition in the session
     order = rank[part, cond]

@@ -21,6 +21,7 @@ variable per notebook, ``NB_SRC_<stem> := <files>``. Standard library only.
 from __future__ import annotations
 
 import ast
+import functools
 import json
 import sys
 from pathlib import Path
@@ -42,8 +43,9 @@ def module_file(name: str, root: Path = ROOT) -> Path | None:
     return None
 
 
+@functools.cache
 def _exports(root: Path) -> dict[str, str]:
-    """``lasa._EXPORTS``: name -> defining module, read from the package's source."""
+    """``lasa._EXPORTS``: name -> defining module, read from the package's source (once)."""
     for node in ast.walk(ast.parse((root / "lasa" / "__init__.py").read_text())):
         if isinstance(node, ast.Assign) and any(
             isinstance(t, ast.Name) and t.id == "_EXPORTS" for t in node.targets
