@@ -20,18 +20,40 @@ latent actions alone (alpha = 0), every input held for a while:
   after ``uncertain_hold`` seconds an input has *reached* the goal whose preference set
   the tip is nearest, if it is within ``reach_distance``. Reported: which goal each input
   reaches, and whether every goal is reached by some input.
+- **Leaving a confident goal** (Sec. IV-B: "in a given context (s, b) there exist latent
+  actions z that cause the robot to move towards each of the goals"; Sec. IV: "can the
+  latent actions change goals even when shared autonomy is confident?"). Start at each pose
+  where a task's phase at g ends (:func:`phase_ends`: a bowl's stroke ends, a cup's
+  mid-preference grasp) with the belief all but the floor on g, and hold each input for
+  ``leave_hold`` seconds with the belief updated online, under latent actions alone (``LA``,
+  alpha = 0) and blended with the task's assistance (``LA+SA``, the control's alpha and
+  member: the study's). An input *reaches* another goal h when the tip comes within
+  ``reach_distance`` of h's preference set at some step; its *exit time* is the first such
+  step. Reported: per start, condition and other goal, the inputs that reach it and their
+  median exit time.
 
 The inputs are a dense ring of full stick deflections: ``n_inputs`` angles on the unit
 circle for a 2-axis stick, ``n_inputs`` evenly spaced deflections of [-1, 1] (rest left out)
 for a 1-axis stick.
 
-**The rule** (:func:`has_property`, :func:`choose`), written before any eating decoder's
-property was measured and before any participant ran: a decoder has the property at a goal
-when at least :data:`STAY_SHARE` of the inputs stay there and the staying inputs reach a
-range of tilt (theta) of at least :data:`TILT_RANGE` of [0, 1]. Among several decoders of
-one task, the one chosen is the best by, in order: every goal reached from home; the number
-of goals with the property; the smallest share that stays at any goal; the smallest tilt
-range at any goal.
+**The rule** (:func:`has_property`, :func:`holds`, :func:`choose`). Its *stay* half was
+written before any eating decoder's property was measured (0.9.0); its *leave* half was
+written after the stay-only rule's choice had been seen to strand the study's participants,
+and before any decoder it judges was trained (notebook 10 states it above the first
+training run). The property holds at goal g when
+
+- **stay**: at least :data:`STAY_SHARE` of the inputs stay at g with a confident belief,
+  and the staying inputs reach a range of tilt (theta) of at least :data:`TILT_RANGE`;
+- **leave**: from every phase end at g, for every other goal, at least
+  :data:`LEAVE_COUNT` of the 64 inputs reach it within ``leave_hold`` under ``LA+SA``;
+- and every goal of the task is reached from home by some input.
+
+A decoder meets the rule when the property holds at every goal (:func:`holds`). Among
+several decoders of one task, :func:`choose` ranks by, in order: meeting the rule; every
+goal reached from home; the number of goals with the property; the number of goals with the
+stay half; the smallest leave count; the smallest share that stays at any goal; the
+smallest tilt range at any goal. The stay-only rule of 0.9.0 is the first, fourth, sixth
+and seventh of these without the leave half (:func:`stay_holds`).
 """
 
 from __future__ import annotations
@@ -43,6 +65,7 @@ import numpy as np
 import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
+from scipy.spatial import cKDTree
 
 from lasa.base.config import AtLeastTwo, ControlConfig, check_range, validate
 from lasa.base.errors import ConfigError
@@ -50,6 +73,7 @@ from lasa.method.belief import belief as to_belief
 from lasa.method.blend import safe_step
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import shared_autonomy_step
+from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -58,14 +82,22 @@ __all__ = [
     "KEY",
     "STAY_SHARE",
     "TILT_RANGE",
+    "LEAVE_COUNT",
+    "CONDITIONS",
     "PropertyConfig",
     "PreferenceSet",
     "preference_set",
     "ring",
     "held_input_paths",
+    "phase_ends",
+    "leave_paths",
     "measure",
     "summary",
+    "leave_table",
     "has_property",
+    "stay_holds",
+    "holds",
+    "ranking",
     "choose",
     "plot",
 ]
@@ -87,9 +119,15 @@ COLUMNS = (
     "stroke",
     "reached",
     "distance",
+    "start",
+    "condition",
+    "target",
+    "exit_time",
 )
 STAY_SHARE = 0.5  # share of the ring's inputs that must stay at a goal [-]
 TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 1] [-]
+LEAVE_COUNT = 7  # inputs of the ring's 64 (about 10%) that must reach each other goal, LA+SA [-]
+CONDITIONS = ("LA", "LA+SA")  # the leave half's conditions: alpha = 0, and the control's alpha
 DPI = 130
 
 
@@ -104,7 +142,8 @@ class PropertyConfig:
     the preference can reach either end of it from the middle. A drift of 2 cm/s is the
     issue's example; with ``d(t) <= v t`` at every step it is a bound on the tip's mean speed
     away from the goal's preferences over every stretch of the hold from its start. From
-    home, 10 s at sigma_h covers the 2-3 rad to the farthest goal.
+    home, 10 s at sigma_h covers the 2-3 rad to the farthest goal; leaving a confident goal
+    gets the same 10 s, and the same 5 cm to count as arriving.
     """
 
     n_inputs: AtLeastTwo = 64  # stick inputs on the ring [-]
@@ -114,10 +153,11 @@ class PropertyConfig:
     reach_distance: float = 0.05  # an input reaches a goal when the tip ends this close to its set [m]
     rotation_weight: float = 0.125  # metres per radian of direction when matching a preference [m/rad]
     n_grid: AtLeastTwo = 41  # preference grid per coordinate of the preference set [-]
+    leave_hold: float = 10.0  # seconds each input is held from a confident goal's phase end [s]
 
     def __post_init__(self) -> None:
         validate(self)
-        for name in ("hold", "drift_speed", "uncertain_hold", "reach_distance"):
+        for name in ("hold", "drift_speed", "uncertain_hold", "reach_distance", "leave_hold"):
             check_range(name, getattr(self, name), 0.0, low_open=True)
         check_range("rotation_weight", self.rotation_weight, 0.0)
 
@@ -214,6 +254,70 @@ def held_input_paths(
     return np.stack(out, axis=1)
 
 
+def phase_ends(task: GoalTask, goal: int) -> list[tuple[str, np.ndarray]]:
+    """The poses where a task's phases at ``goal`` end: where a user leaves that goal from.
+
+    For the eating task, the end of every stroke its tasks carry out at the goal (the
+    waypoints at depth 1 of :data:`lasa.world.eating.TASKS`: the middle bowl's cut and stab,
+    the icing's scoop, the rice's dip, the plate's place), labelled by the preference; for a
+    task without strokes (the cups), the mid-preference grasp s*(g, 1/2), labelled ``grasp``.
+
+    Returns:
+        (label, joint positions (n,)) per phase end, in the tasks' order.
+    """
+    if not isinstance(task, EatingTask):
+        return [("grasp", task.target(goal, 0.5))]
+    ends: dict[str, float] = {}
+    for name, phases in TASKS.items():
+        for wp in waypoints(name):
+            preference = phases[wp.phase].preference
+            if wp.goal == goal and wp.depth == 1.0 and preference is not None:
+                ends.setdefault(preference, wp.theta)
+    return [(label, task.pose(goal, np.array([theta]), np.array([1.0]))[0]) for label, theta in ends.items()]
+
+
+def leave_paths(
+    decoder: ActionDecoder,
+    task: GoalTask,
+    control: ControlConfig,
+    starts: np.ndarray,
+    beliefs: np.ndarray,
+    z_values: np.ndarray,
+    alphas: np.ndarray,
+    steps: int,
+) -> np.ndarray:
+    """States reached by holding input ``z_values[i]`` from ``starts[i]``, the belief updated online.
+
+    Each row runs the one step of Algorithm 1 (:func:`lasa.method.step.shared_autonomy_step`,
+    the stick at rest commanding nothing) with its own blend weight ``alphas[i]`` and the
+    control's assistance member; all rows advance together, one decoder call per step.
+
+    Args:
+        decoder: The decoder.
+        task: The task.
+        control: Control-loop units (dt, the assistance member, the belief model).
+        starts: Start states, (R, n).
+        beliefs: Initial beliefs, (R, G).
+        z_values: Held inputs, (R, d).
+        alphas: Blend weights, (R,) (0: latent actions alone).
+        steps: Steps each input is held.
+
+    Returns:
+        States, (R, steps + 1, n).
+    """
+    if steps < 1:
+        raise ConfigError(f"steps must be >= 1, got {steps}")
+    s = np.asarray(starts, dtype=float).copy()
+    log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))
+    z = np.asarray(z_values, dtype=float)
+    out = [s]
+    for _ in range(steps):
+        step = shared_autonomy_step(decoder, task, control, s, log_b, z, alphas, rest="zero")
+        s, log_b = step.state, step.log_belief
+        out.append(s)
+    return np.stack(out, axis=1)
+
+
 def _nearest(
     pset: PreferenceSet, pos: np.ndarray, axis: np.ndarray, weight: float
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -251,8 +355,7 @@ def measure(
     base = {"source": source, "robot": robot.name, "task": task_name, "decoder": decoder_name}
     z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
     for g, pset in enumerate(sets):
-        b = np.full(task.n_goals, floor)
-        b[g] = 1.0 - (task.n_goals - 1) * floor
+        b = _confident(task, g, floor)
         paths = held_input_paths(decoder, task, control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
         pos, axis = robot.grasp_positions(paths[:, 1:]), robot.grasp_axes(paths[:, 1:])
         dist, _ = _nearest(pset, pos, axis, config.rotation_weight)  # (K, H)
@@ -301,7 +404,82 @@ def measure(
             }
         )
     )
+    rows.append(_leave_rows(task, decoder, control, config, sets, z, base))
     return pd.concat(rows, ignore_index=True)
+
+
+def _confident(task: GoalTask, goal: int, floor: float) -> np.ndarray:
+    """The belief after working at ``goal``: all but the floor of every other goal on it, (G,)."""
+    b = np.full(task.n_goals, floor)
+    b[goal] = 1.0 - (task.n_goals - 1) * floor
+    return b
+
+
+def _leave_rows(
+    task: GoalTask,
+    decoder: ActionDecoder,
+    control: ControlConfig,
+    config: PropertyConfig,
+    sets: list[PreferenceSet],
+    z: np.ndarray,
+    base: dict[str, str],
+) -> pd.DataFrame:
+    """The leave half's rows: one per (goal, phase end, condition, input, other goal).
+
+    Every goal's phase ends, both conditions and all inputs run in one batch.
+    """
+    names = list(task.goal_names)
+    alphas = {"LA": 0.0, "LA+SA": control.alpha}
+    runs = [
+        (g, label, state, cond)
+        for g in range(task.n_goals)
+        for label, state in phase_ends(task, g)
+        for cond in CONDITIONS
+    ]
+    k = len(z)
+    starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
+    beliefs = np.concatenate(
+        [np.broadcast_to(_confident(task, g, control.belief_floor), (k, task.n_goals)) for g, _, _, _ in runs]
+    )
+    alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
+    steps = max(1, round(config.leave_hold / control.dt))
+    paths = leave_paths(decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)
+    pos = task.robot.grasp_positions(paths[:, 1:])  # (R, T, 3)
+    dist = np.stack(
+        [cKDTree(pset.positions).query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for pset in sets], axis=1
+    )  # (R, G, T)
+    near = dist <= config.reach_distance
+    first = np.where(near.any(axis=2), near.argmax(axis=2) + 1, -1)  # first step within reach, (R, G)
+    z2 = z[:, 1] if z.shape[1] > 1 else np.full(k, np.nan)
+    frames = []
+    for i, (g, label, _, cond) in enumerate(runs):
+        rows = slice(i * k, (i + 1) * k)
+        for h in range(task.n_goals):
+            if h == g:
+                continue
+            arrived = first[rows, h] > 0
+            frames.append(
+                pd.DataFrame(
+                    {
+                        **base,
+                        "context": "leave",
+                        "goal": names[g],
+                        "z1": z[:, 0],
+                        "z2": z2,
+                        "drift": np.nan,
+                        "stays": False,
+                        "theta": np.nan,
+                        "stroke": np.nan,
+                        "reached": np.where(arrived, names[h], "-"),
+                        "distance": dist[rows, h].min(axis=1),
+                        "start": label,
+                        "condition": cond,
+                        "target": names[h],
+                        "exit_time": np.where(arrived, first[rows, h] * control.dt, np.nan),
+                    }
+                )
+            )
+    return pd.concat(frames, ignore_index=True)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
@@ -311,22 +489,29 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
     ``theta_max``, ``theta_range``, ``stroke_range``; the range is 0 when none stays);
     ``from_home``, the share of the ring's inputs that reach this goal from home under the
     uncertain belief; ``all_reached``, whether every goal of the decoder's task is reached
-    from home by some input; ``has_property`` (:func:`has_property`).
+    from home by some input; ``n_inputs``; ``leave_min`` and ``leave_la_min``, the fewest
+    inputs that reach another goal from one of this goal's phase ends, under ``LA+SA`` and
+    ``LA`` (the least over phase ends and other goals; NaN without leave rows);
+    ``stay_holds``, ``leave_holds`` and ``has_property`` (:func:`has_property`).
     """
     keys = ["source", "robot", "task", "decoder"]
     rows = []
     for key, part in frame.groupby(keys, sort=False):
         conf = part[part.context == "confident"]
         home = part[part.context == "uncertain"]
+        counts = _leave_counts(part)
         goals = list(dict.fromkeys(conf.goal))
         all_reached = set(goals) <= set(home.reached)
         for goal in goals:
             at = conf[conf.goal == goal]
             stay = at[at.stays.astype(bool)]
+            mine = counts[counts.goal == goal] if len(counts) else counts
+            least = {c: mine[mine.condition == c].inputs.min() if len(mine) else np.nan for c in CONDITIONS}
             rows.append(
                 {
                     **dict(zip(keys, key, strict=True)),
                     "goal": goal,
+                    "n_inputs": len(at),
                     "stay_share": float(at.stays.astype(bool).mean()),
                     "theta_min": float(stay.theta.min()) if len(stay) else np.nan,
                     "theta_max": float(stay.theta.max()) if len(stay) else np.nan,
@@ -334,105 +519,188 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
                     "stroke_range": float(np.ptp(stay.stroke)) if len(stay) else 0.0,
                     "from_home": float((home.reached == goal).mean()) if len(home) else np.nan,
                     "all_reached": bool(all_reached),
+                    "leave_min": float(least["LA+SA"]),
+                    "leave_la_min": float(least["LA"]),
                 }
             )
     table = pd.DataFrame(rows)
+    table["stay_holds"] = stay_holds(table)
+    table["leave_holds"] = table.leave_min >= LEAVE_COUNT * table.n_inputs / 64
     table["has_property"] = has_property(table)
     return table
 
 
-def has_property(table: pd.DataFrame) -> pd.Series:
-    """Per row of :func:`summary`: at least STAY_SHARE of the inputs stay and reach TILT_RANGE of tilt."""
+def _leave_counts(frame: pd.DataFrame) -> pd.DataFrame:
+    """Per (goal, start, condition, target) of the leave rows: the inputs that reach the target."""
+    leave = frame[frame.context == "leave"]
+    if leave.empty:
+        return pd.DataFrame(columns=["goal", "start", "condition", "target", "inputs", "exit_time"])
+    arrived = leave.assign(arrived=leave.reached == leave.target)
+    return (
+        arrived.groupby(["goal", "start", "condition", "target"], sort=False)
+        .agg(inputs=("arrived", "sum"), exit_time=("exit_time", "median"))
+        .reset_index()
+    )
+
+
+def leave_table(frame: pd.DataFrame) -> pd.DataFrame:
+    """The leave half per decoder: one row per (decoder, goal, phase end, condition, other goal).
+
+    Columns: the keys, ``inputs`` (of the ring's) that come within reach of the other goal's
+    preference set within the hold, and ``exit_time``, their median first arrival [s] (NaN
+    when none arrives).
+    """
+    keys = ["source", "robot", "task", "decoder"]
+    parts = [
+        _leave_counts(part).assign(**dict(zip(keys, key, strict=True)))
+        for key, part in frame.groupby(keys, sort=False)
+    ]
+    out = pd.concat(parts, ignore_index=True) if parts else _leave_counts(frame)
+    return out[[*keys, "goal", "start", "condition", "target", "inputs", "exit_time"]]
+
+
+def stay_holds(table: pd.DataFrame) -> pd.Series:
+    """The stay half, per row of :func:`summary`: STAY_SHARE of the inputs stay and reach TILT_RANGE."""
     return (table.stay_share >= STAY_SHARE) & (table.theta_range >= TILT_RANGE)
 
 
-def choose(table: pd.DataFrame) -> str:
-    """The decoder the rule picks among ``table``'s (one task's :func:`summary`), by name.
+def has_property(table: pd.DataFrame) -> pd.Series:
+    """Per row of :func:`summary`: both halves hold at the goal, and every goal is reached from home."""
+    return table.stay_holds & table.leave_holds & table.all_reached.astype(bool)
 
-    In order: every goal reached from home; the most goals with the property; the largest
-    smallest share staying at a goal; the largest smallest tilt range. A tie keeps the
-    decoder listed first.
-    """
+
+def holds(table: pd.DataFrame) -> pd.Series:
+    """Per decoder of a :func:`summary`: whether the property holds at every goal (the rule)."""
+    return table.groupby("decoder", sort=False).has_property.all()
+
+
+def ranking(table: pd.DataFrame) -> pd.DataFrame:
+    """The decoders of one task's :func:`summary`, best first by the rule's order (module docstring)."""
     if table.empty:
         raise ConfigError("no decoders to choose from")
     if table.task.nunique() != 1:
         raise ConfigError(f"choose among the decoders of one task, got tasks {sorted(table.task.unique())}")
     per = table.groupby("decoder", sort=False).agg(
+        meets=("has_property", "all"),
         all_reached=("all_reached", "all"),
         goals=("has_property", "sum"),
+        stay_goals=("stay_holds", "sum"),
+        leave=("leave_min", "min"),
         stay=("stay_share", "min"),
         tilt=("theta_range", "min"),
     )
-    order = per.sort_values(["all_reached", "goals", "stay", "tilt"], ascending=False, kind="stable")
-    return str(order.index[0])
+    order = ["meets", "all_reached", "goals", "stay_goals", "leave", "stay", "tilt"]
+    return per.sort_values(order, ascending=False, kind="stable")
+
+
+def choose(table: pd.DataFrame) -> str:
+    """The decoder the rule ranks first among ``table``'s (one task's :func:`summary`), by name.
+
+    It meets the rule only if :func:`holds` says so; otherwise it is the best reading, whose
+    numbers a study that cannot test the paper shows. A tie keeps the decoder listed first.
+    """
+    return str(ranking(table).index[0])
 
 
 def plot(frame: pd.DataFrame) -> Figure:
-    """Per decoder (rows) and goal (columns): the share of inputs that stay, and the tilt they reach.
+    """Per decoder (rows) and goal (columns): the property's two halves, and reaching from home.
 
-    Left, the share of the ring's inputs that stay at each goal with a confident belief;
-    middle, the range of tilt the staying inputs reach; right, the share of inputs that
-    reach each goal from home with an uncertain belief. Cells where the decoder has the
-    property are framed in red. Where a task has several decoders, the one :func:`choose`
-    picks is starred.
+    Panels, left to right: the share of inputs that stay at each goal with a confident
+    belief; the tilt range the staying inputs reach; the fewest inputs (of the ring's) that
+    leave the confident goal for another goal under LA+SA (the least over phase ends and
+    other goals); the share of inputs that reach the goal from home with an uncertain belief.
+    A cell is framed in red where its half holds (stay: first two panels; leave: third) and
+    a decoder's row is starred where :func:`choose` picks it; "✓" marks a decoder that
+    meets the rule at every goal.
     """
     table = summary(frame)
     table["row"] = table.task + " · " + table.robot + " · " + table.decoder
+    meets = holds(table) if not table.empty else pd.Series(dtype=bool)
+    table.loc[table.decoder.map(meets).fillna(False).astype(bool), "row"] += " ✓"
     for name, part in table.groupby("task"):
         if part.decoder.nunique() > 1:
             star = (table.task == name) & (table.decoder == choose(part))
             table.loc[star, "row"] = table.loc[star, "row"] + " ★"
     tasks = list(dict.fromkeys(table.task))
-    heights = [table[table.task == t].row.nunique() + 1.2 for t in tasks]
+    heights = [table[table.task == t].row.nunique() + 1.4 for t in tasks]
     n_goals = max(table[table.task == t].goal.nunique() for t in tasks)
     sns.set_theme(style="white")
     fig, axes = plt.subplots(
         len(tasks),
-        3,
-        figsize=(4.2 + 3 * 0.9 * n_goals, 0.9 + 0.38 * sum(heights)),
+        4,
+        figsize=(5.0 + 4 * 0.9 * n_goals, 1.3 + 0.38 * sum(heights)),
         gridspec_kw={"height_ratios": heights},
         squeeze=False,
     )
-    panels = (
-        ("stay_share", "share of inputs that stay\n(confident belief)", "viridis"),
-        ("theta_range", "tilt range the staying inputs reach\n(confident belief)", "magma"),
-        ("from_home", "share of inputs that reach the goal\nfrom home (uncertain belief)", "cividis"),
-    )
     for row_axes, name in zip(axes, tasks, strict=True):
-        part = table[table.task == name]
-        rows = list(dict.fromkeys(part.row))
-        goals = list(dict.fromkeys(part.goal))
-        ok = part.pivot(index="row", columns="goal", values="has_property").reindex(index=rows, columns=goals)
-        for ax, (column, title, cmap) in zip(row_axes, panels, strict=True):
-            grid = part.pivot(index="row", columns="goal", values=column).reindex(index=rows, columns=goals)
-            sns.heatmap(
-                grid.astype(float),
-                ax=ax,
-                vmin=0.0,
-                vmax=1.0,
-                cmap=cmap,
-                annot=True,
-                fmt=".2f",
-                cbar=False,
-                linewidths=0.5,
-                linecolor="white",
-                annot_kws={"fontsize": 8},
-            )
-            ax.set_title(title, fontsize=9)
-            ax.set_xlabel(f"goal ({name})")
-            ax.set_ylabel("")
-            if column != "from_home":
-                for i, r in enumerate(rows):
-                    for j, g in enumerate(goals):
-                        if ok.loc[r, g] is True or ok.loc[r, g] == 1:
-                            ax.add_patch(plt.Rectangle((j, i), 1, 1, fill=False, edgecolor="red", lw=2))
-            if column != "stay_share":
-                ax.set_yticklabels([])
+        _plot_task(row_axes, table[table.task == name], name)
     fig.suptitle(
-        f"The latent-action property (Sec. III). Red frame: the decoder has it at that goal (at least "
-        f"{STAY_SHARE:.0%} of inputs stay, reaching a tilt range of at least {TILT_RANGE}); "
-        "★: the rule's choice",
+        f"The latent-action property, both halves (Sec. III, IV-B). Red frame: the half holds at that goal "
+        f"(stay: at least {STAY_SHARE:.0%} of inputs stay, reaching a tilt range of at least {TILT_RANGE}; "
+        f"leave: at least {LEAVE_COUNT} of 64 inputs reach every other goal in 10 s under LA+SA)\n"
+        "✓: the property holds at every goal (the rule); ★: the rule's choice among a task's decoders",
         fontsize=10,
     )
     fig.tight_layout()
     return fig
+
+
+def _plot_task(row_axes: np.ndarray, part: pd.DataFrame, name: str) -> None:
+    """One task's four heatmaps (see :func:`plot`)."""
+    rows = list(dict.fromkeys(part.row))
+    goals = list(dict.fromkeys(part.goal))
+    n = int(part.n_inputs.max())
+    panels = (
+        ("stay_share", "share of inputs that stay\n(confident belief)", "viridis", 1.0, ".2f", "stay_holds"),
+        (
+            "theta_range",
+            "tilt range the staying inputs\nreach (confident belief)",
+            "magma",
+            1.0,
+            ".2f",
+            "stay_holds",
+        ),
+        (
+            "leave_min",
+            f"fewest of {n} inputs that leave\nfor another goal (LA+SA, 10 s)",
+            "crest",
+            n,
+            ".0f",
+            "leave_holds",
+        ),
+        (
+            "from_home",
+            "share of inputs that reach\nthe goal from home (uncertain)",
+            "cividis",
+            1.0,
+            ".2f",
+            None,
+        ),
+    )
+    for ax, (column, title, cmap, vmax, fmt, frame_by) in zip(row_axes, panels, strict=True):
+        grid = part.pivot(index="row", columns="goal", values=column).reindex(index=rows, columns=goals)
+        sns.heatmap(
+            grid.astype(float),
+            ax=ax,
+            vmin=0.0,
+            vmax=vmax,
+            cmap=cmap,
+            annot=True,
+            fmt=fmt,
+            cbar=True,
+            cbar_kws={"shrink": 0.8},
+            linewidths=0.5,
+            linecolor="white",
+            annot_kws={"fontsize": 8},
+        )
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel(f"goal ({name})")
+        ax.set_ylabel("")
+        if frame_by is not None:
+            ok = part.pivot(index="row", columns="goal", values=frame_by).reindex(index=rows, columns=goals)
+            for i, r in enumerate(rows):
+                for j, g in enumerate(goals):
+                    if ok.loc[r, g] is True or ok.loc[r, g] == 1:
+                        ax.add_patch(plt.Rectangle((j, i), 1, 1, fill=False, edgecolor="red", lw=2))
+        if column != "stay_share":
+            ax.set_yticklabels([])
