@@ -98,7 +98,7 @@ def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readin
     uniform = np.full(g, 1.0 / g)
     counts = {r: int(d.demo.max() + 1) for r, d in readings.items()}
     # 4 goals x 2 tilts x (home + 3 other goals) demonstrations, in every reading
-    assert counts == {"continuous": 32, "home": 32, "transfers": 32}
+    assert counts == {"continuous": 32, "home": 32, "transfers": 32, "leaves": 32}
     for reading, demos in readings.items():
         first = _firsts(demos)
         starts, beliefs = demos.states[first], demos.beliefs[first]
@@ -109,11 +109,20 @@ def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readin
             assert not any(np.allclose(s, e) for s in starts for e in entries)
         elif reading == "continuous":  # a move from another goal starts confident in it
             assert np.allclose(beliefs[from_home], uniform) and beliefs[~from_home].max(axis=1).min() > 0.9
-        else:  # transfers: every demonstration starts uniform; those from another goal only reach
-            assert np.allclose(beliefs, uniform)
+        else:  # transfers, leaves: those from another goal only reach
             for d in np.unique(demos.demo[~np.isin(demos.demo, demos.demo[first][from_home])]):
                 phases = set(demos.phase[demos.demo == d])
                 assert REACH in phases and not phases & {ADJUST, STROKE}
+            if reading == "transfers":  # every demonstration starts uniform, a transfer at an entry
+                assert np.allclose(beliefs, uniform)
+            else:  # leaves: a transfer starts confident in the goal it leaves, at a stroke's end
+                assert np.allclose(beliefs[from_home], uniform)
+                confident = beliefs[~from_home]
+                assert confident.max(axis=1).min() > 0.9
+                ends = {o: task.pose(o, np.linspace(0, 1, 201), np.ones(201)) for o in range(g)}
+                for s, b in zip(starts[~from_home], confident, strict=True):
+                    # on the stroke's end curve of the goal the belief is confident in
+                    assert np.linalg.norm(ends[int(b.argmax())] - s, axis=1).min() < 0.02
     with pytest.raises(ConfigError, match="reading"):
         from lasa.people.demos import collect_eating_demonstrations
 

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from lasa.base.config import from_dict
 from lasa.evidence.claims import CLAIM_COLUMNS
 from lasa.evidence.video import read_video
 from lasa.figures import sim1, sim2, sim3, sim4
@@ -300,12 +301,29 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     frame = pd.read_csv(fig / "latent_property.csv")
     assert list(frame.columns) == list(latent_property.COLUMNS)
     assert set(frame.source) == {"cups-planar5", "cups-panda", "eating"}
-    readings = eating_task.reading_names(eating_task.Config().readings)
+    settings = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
+    readings = eating_task.reading_names(from_dict(eating_task.Config, settings))
     assert set(frame[frame.task == "eating"].decoder) == set(readings)
     table = latent_property.summary(frame)
     n_inputs = latent_property.PropertyConfig().n_inputs
-    counts = frame.groupby(["source", "decoder", "context", "goal"]).size()
-    assert (counts == n_inputs).all()
+    stay_home = frame[frame.context != "leave"]
+    assert (stay_home.groupby(["source", "decoder", "context", "goal"]).size() == n_inputs).all()
+    # the leave half: per decoder, goal, phase end and condition, every input once per other goal
+    leave = frame[frame.context == "leave"]
+    per = leave.groupby(["source", "decoder", "goal", "start", "condition", "target"]).size()
+    assert (per == n_inputs).all() and set(leave.condition) == set(latent_property.CONDITIONS)
+    assert (leave.goal != leave.target).all()
+    eating_leave = leave[leave.task == "eating"]
+    assert set(zip(eating_leave.goal, eating_leave.start, strict=True)) == {
+        ("rice", "dip"),
+        ("middle", "cut"),
+        ("middle", "stab"),
+        ("icing", "scoop"),
+        ("plate", "place"),
+    }
+    arrived = leave[leave.reached == leave.target]
+    assert arrived.exit_time.between(0.1, 10.0).all() and leave[leave.reached == "-"].exit_time.isna().all()
+    assert {"leave_min", "stay_holds", "leave_holds", "has_property"} <= set(table.columns)
     assert set(table[table.task == "eating"].goal) == {"rice", "middle", "icing", "plate"}
     assert set(table[table.task == "cups"].goal) == {"left", "right"}
     assert table.stay_share.between(0, 1).all() and (table.theta_range >= 0).all()
@@ -336,7 +354,8 @@ def test_study_outputs(executed):
     assert list(latent.columns) == list(eating_task.COLUMNS) and set(latent.belief) == set(
         eating_task.BELIEFS
     )
-    readings = eating_task.reading_names(eating_task.Config().readings)
+    settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
+    readings = eating_task.reading_names(from_dict(eating_task.Config, settings10))
     # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member
     episodes = n * (2 + 2 * len(members) + 2 * (len(readings) - 1)) * 2  # participants x arms x tasks
     for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):

@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
+from tqdm.auto import tqdm
 
 from lasa.base.config import ControlConfig, Integer, PositiveInt, check_choice, to_dict, validate
 from lasa.base.errors import ConfigError
@@ -78,6 +79,12 @@ class Config:
     readings: tuple[str, ...] = EATING_READINGS  # demonstration readings trained [-]
     lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, on the continuous base [-]
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
+    # The search for a decoder with both halves of the property: small entropy weights, which
+    # trade the leave half against the stay half less than notebook 03's rule's lambda does,
+    # on the bases whose demonstrations show departures (transfers; leaves, from a confident
+    # belief). Each run costs one fine-tune of sweep_steps.
+    search_lambdas: tuple[float, ...] = (0.003, 0.01, 0.03)  # entropy weights of the search [-]
+    search_readings: tuple[str, ...] = ("transfers", "leaves")  # bases the search fine-tunes [-]
 
     def __post_init__(self) -> None:
         validate(self)
@@ -95,6 +102,13 @@ class Config:
         if "continuous" not in self.readings:
             raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
+        object.__setattr__(self, "search_lambdas", tuple(float(x) for x in self.search_lambdas))
+        object.__setattr__(self, "search_readings", tuple(self.search_readings))
+        if any(not x > 0 for x in self.search_lambdas):
+            raise ConfigError(f"search_lambdas must each be > 0, got {self.search_lambdas}")
+        for name in self.search_readings:
+            if name not in self.readings:
+                raise ConfigError(f"search_readings must be among readings {self.readings}, got {name!r}")
 
     def demo_settings(self) -> DemoConfig:
         """The demonstrations' settings, with this config's seed."""
@@ -105,9 +119,24 @@ class Config:
         return dataclasses.replace(self.train, seed=self.seed)
 
 
-def reading_names(readings: tuple[str, ...]) -> list[str]:
-    """The decoder readings: each demonstration reading with lambda = 0, then with the entropy term."""
-    return [name for r in readings for name in (r, f"{r}_entropy")]
+def reading_names(config: Config) -> list[str]:
+    """The decoder readings, in training order (:func:`fine_tunes`)."""
+    return [name for name, _, _ in fine_tunes(config, 0.0)]
+
+
+def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | None]]:
+    """(name, base reading, lambda) of every decoder reading; lambda None: notebook 03's rule's.
+
+    Each demonstration reading gives its base fine-tuned with lambda = 0 (its own name) and
+    with the rule's lambda (``<reading>_entropy``, ``chosen``); each reading of the search
+    adds one per search lambda (``<reading>_lambda<value>``).
+    """
+    out: list[tuple[str, str, float | None]] = []
+    for r in config.readings:
+        out += [(r, r, 0.0), (f"{r}_entropy", r, None)]
+        if r in config.search_readings:
+            out += [(f"{r}_lambda{w:g}", r, w) for w in config.search_lambdas]
+    return out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -173,27 +202,27 @@ def train_readings(
     lam = sweep.chosen
     models: dict[str, LatentActionModel] = {}
     fines: dict[str, TrainConfig] = {}
-    for reading in config.readings:
-        for name, weight in ((reading, 0.0), (f"{reading}_entropy", lam)):
-            if reading == "continuous":
-                models[name] = sweep.models[weight]
-                fine = sweep.configs[weight]
-            else:
-                fine = dataclasses.replace(
-                    train, steps=config.sweep_steps, entropy_lambda=weight, seed=config.seed
-                )
-                models[name], _ = train_decoder(
-                    datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=progress
-                )
-            fines[name] = fine
-            save_checkpoint(
-                models[name],
-                paths.artifact("eating_reading_decoder", robot, reading=name),
-                train=to_dict(fine),
-                control=to_dict(control),
-                demos=to_dict(config.demo_settings()),
-                reading=name,
+    runs = fine_tunes(config, lam)
+    for name, reading, weight in tqdm(runs, desc="decoder readings", disable=not progress):
+        weight = lam if weight is None else weight
+        if reading == "continuous" and weight in sweep.models:
+            models[name], fine = sweep.models[weight], sweep.configs[weight]
+        else:
+            fine = dataclasses.replace(
+                train, steps=config.sweep_steps, entropy_lambda=weight, seed=config.seed
             )
+            models[name], _ = train_decoder(
+                datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=False
+            )
+        fines[name] = fine
+        save_checkpoint(
+            models[name],
+            paths.artifact("eating_reading_decoder", robot, reading=name),
+            train=to_dict(fine),
+            control=to_dict(control),
+            demos=to_dict(config.demo_settings()),
+            reading=name,
+        )
     frame = pd.concat(
         [
             latent_property.measure(

@@ -278,7 +278,7 @@ def _dataset(
 EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
 
 
-EATING_READINGS = ("continuous", "home", "transfers")  # how the eating demonstrations are cut
+EATING_READINGS = ("continuous", "home", "transfers", "leaves")  # how the eating demonstrations are cut
 
 
 def collect_eating_demonstrations(
@@ -300,7 +300,11 @@ def collect_eating_demonstrations(
     - ``transfers``: reach-then-manipulate from home (and ``n_starts - 1`` perturbed
       homes) with a uniform belief, plus, for every other goal, a separate transfer
       demonstration from that goal's entry at a random tilt to this goal's entry, which
-      starts from a uniform belief (a new recording) and ends there without manipulating.
+      starts from a uniform belief (a new recording) and ends there without manipulating;
+    - ``leaves``: as ``transfers``, but each transfer leaves the other goal from the end of
+      a stroke there (at a random tilt) with the belief the robot holds after working there
+      (all but the floor on it): it shows the decoder a departure from a confident context,
+      the leave half of the property (Sec. IV-B), with the same number of demonstrations.
 
     Each manipulation demonstration, from its start:
 
@@ -344,9 +348,15 @@ def collect_eating_demonstrations(
             if reading != "home":
                 for other in range(task.n_goals):
                     if other != g:
-                        starts.append(task.target(other, float(rng.uniform())))
+                        tilt = float(rng.uniform())
+                        leaves = reading == "leaves"
+                        starts.append(
+                            task.pose(other, np.array([tilt]), np.array([1.0]))[0]
+                            if leaves
+                            else task.target(other, tilt)
+                        )
                         settled = _settled_belief(other, task.n_goals, control.belief_floor)
-                        beliefs_0.append(settled if reading == "continuous" else None)
+                        beliefs_0.append(settled if reading in ("continuous", "leaves") else None)
                         manipulate.append(reading == "continuous")
             for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
                 target = task.target(g, theta)
