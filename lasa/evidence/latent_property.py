@@ -353,7 +353,6 @@ def measure(
     hold = max(1, round(config.hold / dt))
     rows = []
     base = {"source": source, "robot": robot.name, "task": task_name, "decoder": decoder_name}
-    z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
     for g, pset in enumerate(sets):
         b = _confident(task, g, floor)
         paths = held_input_paths(decoder, task, control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
@@ -364,20 +363,17 @@ def measure(
         ends = np.stack([_nearest(s, pos[:, -1], axis[:, -1], 0.0)[0] for s in sets], axis=1)  # (K, G)
         stays = drift <= config.drift_speed
         rows.append(
-            pd.DataFrame(
-                {
-                    **base,
-                    "context": "confident",
-                    "goal": names[g],
-                    "z1": z[:, 0],
-                    "z2": z2,
-                    "drift": drift,
-                    "stays": stays,
-                    "theta": pset.theta[idx],
-                    "stroke": pset.stroke[idx],
-                    "reached": np.where(stays, names[g], np.asarray(names)[ends.argmin(axis=1)]),
-                    "distance": ends[:, g],
-                }
+            _rows(
+                base,
+                "confident",
+                names[g],
+                z,
+                drift=drift,
+                stays=stays,
+                theta=pset.theta[idx],
+                stroke=pset.stroke[idx],
+                reached=np.where(stays, names[g], np.asarray(names)[ends.argmin(axis=1)]),
+                distance=ends[:, g],
             )
         )
     steps = max(1, round(config.uncertain_hold / dt))
@@ -388,24 +384,27 @@ def measure(
     near = dist.argmin(axis=1)
     best = dist[np.arange(len(z)), near]
     rows.append(
-        pd.DataFrame(
-            {
-                **base,
-                "context": "uncertain",
-                "goal": "home",
-                "z1": z[:, 0],
-                "z2": z2,
-                "drift": np.nan,
-                "stays": False,
-                "theta": np.nan,
-                "stroke": np.nan,
-                "reached": np.where(best <= config.reach_distance, np.asarray(names)[near], "-"),
-                "distance": best,
-            }
+        _rows(
+            base,
+            "uncertain",
+            "home",
+            z,
+            reached=np.where(best <= config.reach_distance, np.asarray(names)[near], "-"),
+            distance=best,
         )
     )
     rows.append(_leave_rows(task, decoder, control, config, sets, z, base))
     return pd.concat(rows, ignore_index=True)
+
+
+def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **columns: object) -> pd.DataFrame:
+    """Rows of :data:`COLUMNS` for the ring's inputs ``z``, the columns not given left empty."""
+    empty = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
+    z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
+    frame = pd.DataFrame(
+        {**base, "context": context, "goal": goal, "z1": z[:, 0], "z2": z2, **empty, **columns}
+    )
+    return frame.reindex(columns=list(COLUMNS))
 
 
 def _confident(task: GoalTask, goal: int, floor: float) -> np.ndarray:
@@ -450,7 +449,6 @@ def _leave_rows(
     )  # (R, G, T)
     near = dist <= config.reach_distance
     first = np.where(near.any(axis=2), near.argmax(axis=2) + 1, -1)  # first step within reach, (R, G)
-    z2 = z[:, 1] if z.shape[1] > 1 else np.full(k, np.nan)
     frames = []
     for i, (g, label, _, cond) in enumerate(runs):
         rows = slice(i * k, (i + 1) * k)
@@ -459,24 +457,17 @@ def _leave_rows(
                 continue
             arrived = first[rows, h] > 0
             frames.append(
-                pd.DataFrame(
-                    {
-                        **base,
-                        "context": "leave",
-                        "goal": names[g],
-                        "z1": z[:, 0],
-                        "z2": z2,
-                        "drift": np.nan,
-                        "stays": False,
-                        "theta": np.nan,
-                        "stroke": np.nan,
-                        "reached": np.where(arrived, names[h], "-"),
-                        "distance": dist[rows, h].min(axis=1),
-                        "start": label,
-                        "condition": cond,
-                        "target": names[h],
-                        "exit_time": np.where(arrived, first[rows, h] * control.dt, np.nan),
-                    }
+                _rows(
+                    base,
+                    "leave",
+                    names[g],
+                    z,
+                    reached=np.where(arrived, names[h], "-"),
+                    distance=dist[rows, h].min(axis=1),
+                    start=label,
+                    condition=cond,
+                    target=names[h],
+                    exit_time=np.where(arrived, first[rows, h] * control.dt, np.nan),
                 )
             )
     return pd.concat(frames, ignore_index=True)
