@@ -13,13 +13,18 @@ patience, cost and waypoints), so the study can run either model
 n_z x n_z grid; the rest position is not a plan) and a hold h from ``holds``; they hold z
 until the next re-plan, or until h ends if it is shorter (then the stick rests until the
 re-plan). A plan's value is the progress it makes towards the current waypoint, under the
-participants' cost :math:`C = \|p - p^*\| + \ell\,\angle(d, d^*)`, per step of the hold,
+participants' cost :math:`C = \|p - p^*\| + \ell\,\angle(d, d^*)`, per step of the time it
+commits the participant to,
 
-.. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{(h / \Delta t)\ \Delta t\, v_\text{lin}},
+.. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
+    \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
 
 a progress *rate* in units of Retargeting's best step, the scale of the one-step model's
-values, so that beta and ``idle_threshold`` keep their meaning (a 0.1 s hold is the one-step
-model's candidate, predicted by the real step instead of the Jacobian). The participant picks
+values, so that beta and ``idle_threshold`` keep their meaning. A hold shorter than the
+re-plan period is followed by rest until the re-plan, so its progress is spread over the
+re-plan period: divided by its own steps, a 0.1 s tap would be worth as much as a 0.5 s push
+in the same direction, and half the choices would be taps followed by 0.4 s of rest (measured:
+Retargeting participants idle 60% of the time, none finishing in 30 s). The participant picks
 a plan by the Boltzmann rule with their beta(t) (Gumbel-max, their episode's own stream),
 and rests until the next re-plan when the best plan is worth less than ``idle_threshold``,
 until their ``patience`` runs out (:class:`lasa.people.participants.ParticipantConfig`).
@@ -29,11 +34,15 @@ until their ``patience`` runs out (:class:`lasa.people.participants.ParticipantC
 - *Latent actions* (``LA``, ``LA+SA``): by rolling the real step forward. Every candidate
   input is held for the longest hold, all candidates of all running episodes in one batch,
   each step decoding phi(z, s, b), blending with the episode's own alpha and SA member and
-  updating the belief, exactly as the executed step does
+  updating the belief, as the executed step does
   (:func:`lasa.method.step.human_action`, :func:`lasa.method.step.advance`); the fork's pose
   is read (:func:`lasa.people.participants.tip_frames`) only at the step counts of the
-  holds. Under ``LA+SA`` the plan therefore includes the assistance's pull: the participant
-  has learned how the robot responds, input and assistance together.
+  holds. The roll is exact up to the re-plan period (the holds that will be executed as
+  they are); beyond it each rolled step spans ``coarse`` control steps (the same ``advance``
+  with ``coarse * dt``), for cost: 60 exact steps of every candidate at every re-plan would cost
+  over ten times the one-step study. Under ``LA+SA`` the plan therefore includes the
+  assistance's pull: the participant has learned how the robot responds, input and
+  assistance together.
 - *Retargeting* (``R``, ``R+SA``): by what the interface promises. The twist of (mode, z)
   held for h translates the tip by h v and turns the fork's direction by the rotation
   exp(h omega); a mode press costs one step, so a plan in another mode spreads its progress
@@ -44,13 +53,13 @@ until their ``patience`` runs out (:class:`lasa.people.participants.ParticipantC
   step is the real one (:func:`lasa.method.retarget.retarget_action`, then ``advance``).
 
 **Parameters** (:class:`PlanConfig`, each with its reason): ``replan`` 0.5 s, ``holds``
-(0.1, 0.5, 2, 6) s.
+(0.1, 0.5, 2, 6) s, ``coarse`` 5 steps (``coarse = 1``: every rolled step is the executed one).
 
 **What a planning participant cannot stand in for.** Everything the one-step participant
 cannot (fatigue, frustration, trust, perception, the questionnaire), and: plans of more
 than one input (a sequence, a detour through another input), foresight of Retargeting's
 IK and assistance, and re-planning between re-plans (they push on for the rest of a hold
-even once the fork has reached its waypoint). Their foresight of latent actions is perfect
+even once the fork has reached its waypoint). Their foresight of latent actions is near exact
 over 6 s: a person's is learned and imperfect, so this model is an optimistic bound for
 latent actions, as the one-step model is a pessimistic one.
 """
@@ -100,7 +109,7 @@ class PlanConfig:
     # A tap (one control step: the one-step model's candidate), a re-plan's worth, a short
     # push and a long one: 6 s at 1.5 cm per step covers the ~0.5 m from a bowl to the plate.
     holds: tuple[Positive, ...] = (0.1, 0.5, 2.0, 6.0)  # hold times a plan chooses from [s]
-    # Cost: rolling every candidate 60 exact steps at every re-plan costs ~20x the one-step
+    # Cost: rolling every candidate 60 exact steps at every re-plan costs >10x the one-step
     # study. Up to the re-plan the roll is exact (the holds the participant will execute);
     # beyond it, one rolled step spans `coarse` control steps (the held input's action over
     # coarse * dt, through the same advance), a person's foresight being no finer than that.
