@@ -1,0 +1,581 @@
+r"""Planning participants: the eating study's simulated people who plan over held inputs.
+
+The participants of :mod:`lasa.people.participants` look one step ahead. With a decoder whose
+good inputs only pay off after a while (the study's headline decoder at the end of a stroke:
+every input first moves the fork away from the plate, but several, *held* for a few seconds,
+reach it) they never finish, although the paper's people, who practised up to 5 minutes per
+condition, held the stick and did. The participant here plans over held inputs instead; it
+is the same person otherwise (the same cohort, learning curve, Boltzmann choice, idleness and
+patience, cost and waypoints), so the study can run either model
+(:func:`simulate` has the signature and the record of :func:`lasa.people.participants.simulate`).
+
+**The plan.** Every ``replan`` seconds the participant chooses a stick input z (the same
+n_z x n_z grid; the rest position is not a plan) and a hold h from ``holds``; they hold z
+until the next re-plan, or until h ends if it is shorter (then the stick rests until the
+re-plan). A plan's value is the progress it makes towards the current waypoint, under the
+participants' cost :math:`C = \|p - p^*\| + \ell\,\angle(d, d^*)`, per step of the time it
+commits the participant to,
+
+.. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
+    \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
+
+a progress *rate* in units of Retargeting's best step, the scale of the one-step model's
+values, so that beta and ``idle_threshold`` keep their meaning. A hold shorter than the
+re-plan period is followed by rest until the re-plan, so its progress is spread over the
+re-plan period: divided by its own steps, a 0.1 s tap would be worth as much as a 0.5 s push
+in the same direction, and half the choices would be taps followed by 0.4 s of rest (measured:
+Retargeting participants idle 60% of the time, none finishing in 30 s). The participant picks
+a plan by the Boltzmann rule with their beta(t) (Gumbel-max, their episode's own stream),
+and rests until the next re-plan when the best plan is worth less than ``idle_threshold``,
+until their ``patience`` runs out (:class:`lasa.people.participants.ParticipantConfig`).
+
+**How the plans are foreseen: an asymmetry, for cost.**
+
+- *Latent actions* (``LA``, ``LA+SA``): by rolling the real step forward. Every candidate
+  input is held for the longest hold, all candidates of all running episodes in one batch,
+  each step decoding phi(z, s, b), blending with the episode's own alpha and SA member and
+  updating the belief, as the executed step does
+  (:func:`lasa.method.step.human_action`, :func:`lasa.method.step.advance`); the fork's pose
+  is read (:func:`lasa.people.participants.tip_frames`) only at the step counts of the
+  holds. The roll is exact up to the re-plan period (the holds that will be executed as
+  they are); beyond it each rolled step spans ``coarse`` control steps (the same ``advance``
+  with ``coarse * dt``), for cost: 60 exact steps of every candidate at every re-plan would cost
+  over ten times the one-step study. Under ``LA+SA`` the plan therefore includes the
+  assistance's pull: the participant has learned how the robot responds, input and
+  assistance together.
+- *Retargeting* (``R``, ``R+SA``): by what the interface promises. The twist of (mode, z)
+  held for h translates the tip by h v and turns the fork's direction by the rotation
+  exp(h omega); a mode press costs one step, so a plan in another mode spreads its progress
+  over the presses and the hold's steps (as in :mod:`lasa.people.participants`). Rolling
+  mink's IK forward for every candidate at every step would cost a QP per candidate per
+  step (thousands per re-plan); the promise costs nothing, and it is what a Retargeting user
+  is told the stick does. It does not foresee the assistance under ``R+SA``. The executed
+  step is the real one (:func:`lasa.method.retarget.retarget_action`, then ``advance``).
+
+**Parameters** (:class:`PlanConfig`, each with its reason): ``replan`` 0.5 s, ``holds``
+(0.1, 0.5, 2, 6) s, ``coarse`` 5 steps (``coarse = 1``: every rolled step is the executed one).
+
+**What a planning participant cannot stand in for.** Everything the one-step participant
+cannot (fatigue, frustration, trust, perception, the questionnaire), and: plans of more
+than one input (a sequence, a detour through another input), foresight of Retargeting's
+IK and assistance, and re-planning between re-plans (they push on for the rest of a hold
+even once the fork has reached its waypoint). Their foresight of latent actions is near exact
+over 6 s: a person's is learned and imperfect, so this model is an optimistic bound for
+latent actions, as the one-step model is a pessimistic one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import mujoco
+import numpy as np
+from tqdm.auto import tqdm
+
+from lasa.base.conditions import CONDITIONS, alpha_of
+from lasa.base.config import NO_ASSISTANCE, ControlConfig, Positive, PositiveInt, validate
+from lasa.base.errors import ConfigError
+from lasa.method.belief import belief, uniform_log_belief
+from lasa.method.decoder import ActionDecoder
+from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
+from lasa.method.step import advance, check_decoder, human_action, latent_grid
+from lasa.people.participants import (
+    TASK_NAMES,
+    Cohort,
+    Episodes,
+    StudyConfig,
+    interface_of,
+    progress_gain,
+    tip_frames,
+    waypoint_reached,
+)
+from lasa.people.users import choose_latent, gumbel_noise
+from lasa.world.eating import EatingTask, fork_frame, waypoints
+from lasa.world.robot import Robot
+
+__all__ = ["PlanConfig", "simulate"]
+
+
+@dataclasses.dataclass(frozen=True)
+class PlanConfig:
+    """How a planning participant plans, each setting with its reason.
+
+    Set before any planning study was run, from what they mean.
+    """
+
+    # A person re-decides about twice a second: a choice reaction time (~0.3-0.5 s) plus
+    # the time to see the fork respond; faster re-planning would be a second one-step model.
+    replan: Positive = 0.5  # time between re-plans [s]
+    # A tap (one control step: the one-step model's candidate), a re-plan's worth, a short
+    # push and a long one: 6 s at 1.5 cm per step covers the ~0.5 m from a bowl to the plate.
+    holds: tuple[Positive, ...] = (0.1, 0.5, 2.0, 6.0)  # hold times a plan chooses from [s]
+    # Cost: rolling every candidate 60 exact steps at every re-plan costs >10x the one-step
+    # study. Up to the re-plan the roll is exact (the holds the participant will execute);
+    # beyond it, one rolled step spans `coarse` control steps (the held input's action over
+    # coarse * dt, through the same advance), a person's foresight being no finer than that.
+    # 1: every rolled step is the executed one.
+    coarse: PositiveInt = 5  # control steps per rolled step beyond the re-plan period [-]
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.holds, tuple | list) or not self.holds:
+            raise ConfigError(f"holds must be a non-empty sequence of times in seconds, got {self.holds!r}")
+        object.__setattr__(self, "holds", tuple(self.holds))
+        validate(self)
+        if any(b <= a for a, b in zip(self.holds, self.holds[1:], strict=False)):
+            raise ConfigError(f"holds must be strictly increasing, got {self.holds!r}")
+
+    def steps(self, dt: float) -> tuple[int, np.ndarray]:
+        """The re-plan period and the holds in control steps of ``dt``.
+
+        Raises:
+            ConfigError: if one of them is not a whole number (>= 1) of steps.
+        """
+        out = []
+        for name, value in [("replan", self.replan)] + [("holds", h) for h in self.holds]:
+            n = round(value / dt)
+            if n < 1 or abs(n * dt - value) > 1e-6 * max(1.0, value):
+                raise ConfigError(
+                    f"{name} must be a whole number of control steps (dt = {dt} s), got {value}"
+                )
+            out.append(n)
+        replan, holds = out[0], np.asarray(out[1:])
+        for hold, n in zip(self.holds, holds, strict=True):
+            if n > replan and (n - replan) % self.coarse:
+                raise ConfigError(
+                    f"holds longer than replan must exceed it by a multiple of coarse = {self.coarse} "
+                    f"steps (dt = {dt} s), got {hold}"
+                )
+        return replan, holds
+
+
+@dataclasses.dataclass(frozen=True)
+class _Layout:
+    """The episodes of a study and each one's fixed settings, (E,) each (participants' order)."""
+
+    part: np.ndarray  # participant index
+    tsk: np.ndarray  # task index into TASK_NAMES
+    cond: np.ndarray  # condition index into CONDITIONS
+    member: np.ndarray  # SA member, NO_ASSISTANCE for R and LA
+    members_run: np.ndarray  # the member advance() runs (alpha = 0 where there is none)
+    is_la: np.ndarray  # latent actions (else Retargeting)
+    alpha: np.ndarray  # blend weight
+    order: np.ndarray  # position of the condition in the participant's session
+    e0: np.ndarray  # experience before the condition [s]
+    beta_inf: np.ndarray
+    tau: np.ndarray  # learning time constant [s]
+
+
+def _layout(
+    cohort: Cohort, control: ControlConfig, members: tuple[str, ...], interfaces: tuple[str, ...]
+) -> _Layout:
+    """Episodes participant-major, then arm, then task: :func:`lasa.people.participants.simulate`'s
+    order (written again here: that function builds it inline)."""
+    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
+    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
+    n_a, n_t = len(arms), len(TASK_NAMES)
+    part = np.repeat(np.arange(len(cohort)), n_a * n_t)
+    arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
+    cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
+    member = np.array([arms[a][1] for a in arm])
+    return _Layout(
+        part=part,
+        tsk=np.tile(np.arange(n_t), len(cohort) * n_a),
+        cond=cond,
+        member=member,
+        members_run=np.where(member == NO_ASSISTANCE, members[0], member),
+        is_la=np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond],
+        alpha=np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond],
+        order=np.argsort(cohort.order, axis=1)[part, cond],
+        e0=cohort.experience()[part, cond],
+        beta_inf=cohort.beta[part],
+        tau=cohort.learning_time[part],
+    )
+
+
+def _waypoint_arrays(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every task's waypoints, padded: positions (T, W, 3), directions (T, W, 3), phases (T, W),
+    counts (T,) (as :func:`lasa.people.participants.simulate` builds them inline)."""
+    plans = [waypoints(name) for name in TASK_NAMES]
+    n_wp = np.array([len(p) for p in plans])
+    w_max, n_t = int(n_wp.max()), len(plans)
+    wp_pos, wp_dir = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
+    wp_phase = np.zeros((n_t, w_max), dtype=int)
+    for k, plan in enumerate(plans):
+        for j, wp in enumerate(plan):
+            pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
+            wp_pos[k, j], wp_dir[k, j], wp_phase[k, j] = pos, rot[:, 2], wp.phase
+    return wp_pos, wp_dir, wp_phase, n_wp
+
+
+def _rotate(v: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
+    """Rotate vectors ``v`` (..., 3) by rotation vectors ``rotvec`` (..., 3) (Rodrigues), broadcast."""
+    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
+    k = rotvec / np.maximum(angle, 1e-12)
+    kv = np.sum(k * v, axis=-1, keepdims=True)
+    return v * np.cos(angle) + np.cross(k, v) * np.sin(angle) + k * kv * (1.0 - np.cos(angle))
+
+
+@dataclasses.dataclass(frozen=True)
+class _Study:
+    """What every step of a planning study reads and never changes."""
+
+    task: EatingTask
+    decoder: ActionDecoder
+    control: ControlConfig
+    config: StudyConfig
+    layout: _Layout
+    streams: list[np.random.Generator]
+    wp_pos: np.ndarray
+    wp_dir: np.ndarray
+    wp_phase: np.ndarray
+    n_wp: np.ndarray
+    grid: np.ndarray  # the stick's grid (K, 2), rest in the middle
+    rest: int  # index of the rest position in grid
+    moves: np.ndarray  # grid indices of the plans' inputs (every one but rest), (K',)
+    replan_steps: int
+    coarse: int  # control steps per rolled step beyond the re-plan period
+    hold_steps: np.ndarray  # (H,)
+    r_twist: np.ndarray  # twist of every (mode, move) at full scale, (M, K', 6)
+    unit: float  # the best translation one step of Retargeting makes [m]
+    retarget: Retargeting
+    sets: np.ndarray
+    data: mujoco.MjData
+
+    @property
+    def n_plans(self) -> int:
+        """Plans per episode, Retargeting's (every mode); latent actions use the first K' H."""
+        return len(MODES) * len(self.moves) * len(self.hold_steps)
+
+
+@dataclasses.dataclass
+class _Run:
+    """The state of a running study: the robots, the participants' plans, and the record."""
+
+    s: np.ndarray  # joints (E, n)
+    log_b: np.ndarray  # log belief (E, G)
+    mode: np.ndarray  # Retargeting mode (E,)
+    w: np.ndarray  # current waypoint (E,)
+    end: np.ndarray  # step each episode ended (E,)
+    waited: np.ndarray  # consecutive idle steps (E,)
+    running: np.ndarray  # (E,) bool
+    z_plan: np.ndarray  # grid index of the held input (E,)
+    presses_left: np.ndarray  # mode presses before the hold (E,)
+    hold_left: np.ndarray  # steps of the hold left (E,)
+    pos: np.ndarray  # tip position now (E, 3)
+    axis: np.ndarray  # fork direction now (E, 3)
+    states: np.ndarray
+    tip: np.ndarray
+    direction: np.ndarray
+    phase: np.ndarray
+    beliefs: np.ndarray
+    idle: np.ndarray
+    switch: np.ndarray
+
+
+def _prepare(
+    task: EatingTask,
+    decoder: ActionDecoder,
+    cohort: Cohort,
+    control: ControlConfig,
+    config: StudyConfig,
+    seed: int,
+    interfaces: tuple[str, ...],
+    plan: PlanConfig,
+) -> _Study:
+    """Check the inputs and build the study's fixed parts."""
+    check_decoder(decoder, task)
+    if not interfaces or not set(interfaces) <= {"R", "LA"}:
+        raise ConfigError(f"interfaces must be a non-empty subset of ('R', 'LA'), got {interfaces!r}")
+    if decoder.z_dim != 2:
+        raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
+    replan_steps, hold_steps = plan.steps(control.dt)
+    layout = _layout(cohort, control, tuple(config.members), interfaces)
+    streams = [
+        np.random.default_rng([seed, int(p), int(c), int(k)])
+        for p, c, k in zip(layout.part, layout.cond, layout.tsk, strict=True)
+    ]
+    grid = latent_grid(config.n_z, 2)
+    rest = int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0])
+    moves = np.flatnonzero(np.arange(len(grid)) != rest)
+    r_twist = np.stack(
+        [twist(np.full(len(moves), m), grid[moves], config.retarget) for m in range(len(MODES))]
+    )
+    robot = task.robot
+    wp_pos, wp_dir, wp_phase, n_wp = _waypoint_arrays(robot)
+    return _Study(
+        task=task,
+        decoder=decoder,
+        control=control,
+        config=config,
+        layout=layout,
+        streams=streams,
+        wp_pos=wp_pos,
+        wp_dir=wp_dir,
+        wp_phase=wp_phase,
+        n_wp=n_wp,
+        grid=grid,
+        rest=rest,
+        moves=moves,
+        replan_steps=replan_steps,
+        coarse=plan.coarse,
+        hold_steps=hold_steps,
+        r_twist=r_twist,
+        unit=control.dt * config.retarget.linear_speed,
+        retarget=Retargeting(robot, control.dt, config.retarget),
+        sets=task.belief_targets(control.likelihood),
+        data=mujoco.MjData(robot.model),
+    )
+
+
+def _start(study: _Study) -> _Run:
+    """Every episode at the task's start, nothing recorded yet."""
+    n_e, horizon = len(study.layout.part), study.config.horizon
+    n, g = study.task.robot.n_joints, study.task.n_goals
+    zeros = np.zeros(n_e, dtype=int)
+    return _Run(
+        s=np.broadcast_to(study.task.start, (n_e, n)).copy(),
+        log_b=uniform_log_belief(n_e, g),
+        mode=zeros.copy(),
+        w=zeros.copy(),
+        end=np.full(n_e, horizon),
+        waited=zeros.copy(),
+        running=np.ones(n_e, dtype=bool),
+        z_plan=np.full(n_e, study.rest),
+        presses_left=zeros.copy(),
+        hold_left=zeros.copy(),
+        pos=np.zeros((n_e, 3)),
+        axis=np.zeros((n_e, 3)),
+        states=np.empty((horizon + 1, n_e, n)),
+        tip=np.empty((horizon + 1, n_e, 3)),
+        direction=np.empty((horizon + 1, n_e, 3)),
+        phase=np.zeros((horizon + 1, n_e), dtype=int),
+        beliefs=np.empty((horizon + 1, n_e, g)),
+        idle=np.zeros((horizon, n_e), dtype=bool),
+        switch=np.zeros((horizon, n_e), dtype=bool),
+    )
+
+
+def _observe(study: _Study, run: _Run, t: int) -> bool:
+    """Record step t, move on past reached waypoints; True when the study is over."""
+    tsk = study.layout.tsk
+    pos, axis, _, _ = tip_frames(study.task.robot, study.data, run.s)
+    run.pos, run.axis = pos, axis
+    run.states[t], run.tip[t], run.direction[t], run.beliefs[t] = run.s, pos, axis, belief(run.log_b)
+    here = study.wp_pos[tsk, run.w]
+    reached = run.running & waypoint_reached(pos, axis, here, study.wp_dir[tsk, run.w], study.config)
+    run.w = np.where(reached, run.w + 1, run.w)
+    finished = reached & (run.w >= study.n_wp[tsk])
+    run.end[finished] = t
+    run.running &= ~finished
+    run.w = np.minimum(run.w, study.n_wp[tsk] - 1)
+    run.phase[t] = study.wp_phase[tsk, run.w]
+    if t < study.config.horizon and run.running.any():
+        return False
+    run.states[t + 1 :], run.tip[t + 1 :], run.direction[t + 1 :] = run.s, pos, axis
+    run.beliefs[t + 1 :], run.phase[t + 1 :] = run.beliefs[t], run.phase[t]
+    return True
+
+
+def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
+    """Hold every move from every latent-action episode ``idx`` for the longest hold, in one batch.
+
+    Each rolled step is the executed step: decode phi(z, s, b) (every row its own z, state and
+    belief: the call :func:`lasa.method.step.decode_candidates` makes, with per-row states),
+    the stick-at-rest convention, then :func:`lasa.method.step.advance` with the episode's alpha
+    and SA member, the belief updating.
+
+    Returns:
+        The joints at the end of each hold, (A, K', H, n).
+    """
+    lay, moves, holds = study.layout, study.moves, study.hold_steps
+    k = len(moves)
+    s = np.repeat(run.s[idx], k, axis=0)
+    log_b = np.repeat(run.log_b[idx], k, axis=0)
+    alpha, members = np.repeat(lay.alpha[idx], k), np.repeat(lay.members_run[idx], k)
+    z = np.tile(study.grid[moves], (len(idx), 1))
+    snaps = np.empty((len(s), len(holds), s.shape[1]))
+    coarse = dataclasses.replace(study.control, dt=study.control.dt * study.coarse)
+    j = 0
+    while j < holds[-1]:
+        control = study.control if j < study.replan_steps else coarse
+        b = belief(log_b)
+        a_h = human_action(study.decoder.decode_numpy(z, s, b), z, rest="zero")
+        step = advance(study.task, control, s, log_b, a_h, alpha, study.sets, b, members)
+        s, log_b = step.state, step.log_belief
+        j += 1 if j < study.replan_steps else study.coarse
+        snaps[:, holds == j] = s[:, None]
+    return snaps.reshape(len(idx), k, len(holds), -1)
+
+
+def _latent_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
+    """Progress rate of every (move, hold) plan of latent-action episodes ``idx``, (A, K' H)."""
+    q = _rollout_states(study, run, idx)
+    pos, axis, _, _ = tip_frames(study.task.robot, study.data, q.reshape(-1, q.shape[-1]))
+    pos, axis = pos.reshape(len(idx), -1, 3), axis.reshape(len(idx), -1, 3)
+    steps = np.maximum(np.tile(study.hold_steps, len(study.moves)), study.replan_steps)
+    return _rate(study, run, idx, pos - run.pos[idx, None], axis, steps)
+
+
+def _retarget_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
+    """Progress rate of every (mode, move, hold) plan of Retargeting episodes ``idx``, (A, M K' H).
+
+    The interface's promise: the twist held for h translates the tip by h v and turns the
+    fork by exp(h omega); a plan in another mode takes its presses first, one step each.
+    """
+    h = study.hold_steps * study.control.dt  # (H,)
+    tw = study.r_twist[:, :, None, :] * h[None, None, :, None]  # (M, K', H, 6)
+    dp = tw[..., :3].reshape(1, -1, 3)
+    new_dir = _rotate(run.axis[idx, None, :], tw[..., 3:].reshape(1, -1, 3))
+    n_m, n_k, n_h = tw.shape[:3]
+    presses = (np.arange(n_m)[None, :] - run.mode[idx, None]) % n_m  # (A, M)
+    steps = np.maximum(presses[:, :, None, None] + study.hold_steps, study.replan_steps)  # (A, M, 1, H)
+    steps = np.broadcast_to(steps, (len(idx), n_m, n_k, n_h)).reshape(len(idx), -1)
+    return _rate(study, run, idx, np.broadcast_to(dp, new_dir.shape), new_dir, steps)
+
+
+def _rate(
+    study: _Study, run: _Run, idx: np.ndarray, dp: np.ndarray, new_dir: np.ndarray, steps: np.ndarray
+) -> np.ndarray:
+    """Progress per step, in best-step units, of tip motions ``dp`` and directions ``new_dir`` (A, P, 3)
+    taking ``steps`` steps each ((P,) or (A, P))."""
+    w, tsk = run.w[idx], study.layout.tsk[idx]
+    gain = progress_gain(
+        run.pos[idx],
+        run.axis[idx],
+        dp,
+        new_dir,
+        study.wp_pos[tsk, w],
+        study.wp_dir[tsk, w],
+        study.config.participant.rotation_weight,
+    )
+    return gain / (steps * study.unit)
+
+
+def _plan(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
+    """Every running episode ``idx`` chooses its next plan (or to rest until the next re-plan)."""
+    lay, pc, n_h = study.layout, study.config.participant, len(study.hold_steps)
+    n_la = len(study.moves) * n_h
+    values = np.full((len(idx), study.n_plans), -np.inf)
+    la = lay.is_la[idx]
+    if la.any():
+        values[la, :n_la] = _latent_values(study, run, idx[la])
+    if (~la).any():
+        values[~la] = _retarget_values(study, run, idx[~la])
+    experience = lay.e0[idx] + t * study.control.dt
+    beta = lay.beta_inf[idx] * (1.0 - (1.0 - pc.novice_fraction) * np.exp(-experience / lay.tau[idx]))
+    uniforms = np.stack([study.streams[e].random(study.n_plans) for e in idx])
+    choice = choose_latent(-values, beta, gumbel_noise(uniforms))
+    patience_steps = max(1, round(pc.patience / study.control.dt))
+    wants = (values.max(axis=1) >= pc.idle_threshold) | (run.waited[idx] >= patience_steps)
+    plan_mode, rem = np.divmod(choice, len(study.moves) * n_h)
+    move, hold = np.divmod(rem, n_h)
+    run.z_plan[idx] = np.where(wants, study.moves[move], study.rest)
+    run.hold_left[idx] = np.where(wants, study.hold_steps[hold], 0)
+    run.presses_left[idx] = np.where(wants & ~la, (plan_mode - run.mode[idx]) % len(MODES), 0)
+
+
+def _execute(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
+    """One real step of the running episodes ``idx``: a press, the held input, or rest."""
+    lay = study.layout
+    la = lay.is_la[idx]
+    press = run.presses_left[idx] > 0
+    moving = ~press & (run.hold_left[idx] > 0)
+    z = study.grid[np.where(moving, run.z_plan[idx], study.rest)]
+    b = belief(run.log_b[idx])
+    a_h = np.zeros((len(idx), study.task.robot.n_joints))
+    if la.any():
+        rows = idx[la]
+        a_h[la] = human_action(study.decoder.decode_numpy(z[la], run.s[rows], b[la]), z[la], rest="zero")
+    r = ~la
+    if r.any():
+        rows = idx[r]
+        a_h[r], run.mode[rows] = retarget_action(study.retarget, run.s[rows], run.mode[rows], z[r], press[r])
+    resting = ~press & ~moving
+    run.idle[t, idx], run.switch[t, idx] = resting, press
+    run.waited[idx] = np.where(resting, run.waited[idx] + 1, 0)
+    run.presses_left[idx] -= press
+    run.hold_left[idx] -= moving
+    step = advance(
+        study.task,
+        study.control,
+        run.s[idx],
+        run.log_b[idx],
+        a_h,
+        lay.alpha[idx],
+        study.sets,
+        b,
+        lay.members_run[idx],
+    )
+    run.s[idx], run.log_b[idx] = step.state, step.log_belief
+
+
+def simulate(
+    task: EatingTask,
+    decoder: ActionDecoder,
+    cohort: Cohort,
+    control: ControlConfig,
+    config: StudyConfig = StudyConfig(),
+    seed: int = 0,
+    progress: bool = True,
+    interfaces: tuple[str, ...] = ("R", "LA"),
+    *,
+    plan: PlanConfig = PlanConfig(),
+) -> Episodes:
+    """Run every planning participant through both tasks under every condition, in one batch.
+
+    The same study, record and random streams as :func:`lasa.people.participants.simulate`
+    (episode (i, condition, task) draws from ``default_rng([seed, i, condition, task])``, so
+    participant i's episodes do not depend on the cohort's size); only the participants
+    differ: they plan over held inputs (module docstring).
+
+    Args:
+        task: The eating task.
+        decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
+        cohort: The simulated participants (:func:`lasa.people.participants.draw_cohort`).
+        control: Control-loop units; the assisted conditions run under each of ``config.members``.
+        config: Session settings and the participants' free parameters.
+        seed: Seed of the participants' choices.
+        progress: Show a progress bar.
+        interfaces: The control interfaces whose conditions run.
+        plan: How the participants plan (re-plan period, holds).
+
+    Raises:
+        ConfigError: on a decoder that does not fit the task, unknown interfaces, or a
+            re-plan period or hold that is not a whole number of control steps.
+    """
+    study = _prepare(task, decoder, cohort, control, config, seed, interfaces, plan)
+    run = _start(study)
+    n_e = len(study.layout.part)
+    bar = tqdm(
+        total=config.horizon,
+        desc=f"planning study: {len(cohort)} participants, {n_e} episodes",
+        disable=not progress,
+    )
+    for t in range(config.horizon + 1):
+        if _observe(study, run, t):
+            break
+        idx = np.flatnonzero(run.running)
+        if t % study.replan_steps == 0:
+            _plan(study, run, t, idx)
+        _execute(study, run, t, idx)
+        bar.update(1)
+    bar.close()
+    lay = study.layout
+    return Episodes(
+        participant=lay.part,
+        condition=np.asarray(CONDITIONS)[lay.cond],
+        assistance=lay.member,
+        task=np.asarray(TASK_NAMES)[lay.tsk],
+        order=lay.order,
+        states=run.states,
+        tip=run.tip,
+        direction=run.direction,
+        phase=run.phase,
+        idle=run.idle,
+        switch=run.switch,
+        end=run.end,
+        completed=run.end < config.horizon,
+        dt=control.dt,
+        belief=run.beliefs,
+        waypoint=run.w,
+    )

@@ -1,0 +1,208 @@
+"""Planning participants: the one-step study's record, timing of holds, and a detour they find."""
+
+import inspect
+
+import mujoco
+import numpy as np
+import pytest
+from numpy.testing import assert_array_equal
+
+from lasa.base.errors import ConfigError
+from lasa.people import participants, planning
+from lasa.people.participants import StudyConfig, draw_cohort, measures, progress_gain, tip_frames, tip_motion
+from lasa.people.planning import PlanConfig
+from lasa.world.eating import GOALS, PREFERENCES, fork_frame, make_eating_task
+
+FIELDS = ("states", "tip", "direction", "phase", "idle", "switch", "end", "completed", "belief", "waypoint")
+
+
+class LinearDecoder:
+    """A stand-in phi(z, s, b) = z W: the study's mechanics without a trained model."""
+
+    robot, n_goals, z_dim = "panda", 4, 2
+
+    def __init__(self, seed: int = 0, scale: float = 0.3) -> None:
+        self.weights = scale * np.random.default_rng(seed).normal(size=(2, 7))
+
+    def decode_numpy(self, z, s, b):
+        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
+        return np.broadcast_to(np.asarray(z) @ self.weights, (*shape, 7)).copy()
+
+
+class DetourDecoder:
+    """Pushing stick axis 1 forward (z1 > 0) drives the arm along a detour to a target pose q*.
+
+    First along a straight leg to a via point that moves the fork away from its waypoint,
+    then straight to q*; the leg is chosen by how far the state has come along q* - start
+    (monotone along both legs), so the field needs no memory. Any other input does nothing.
+    """
+
+    robot, n_goals, z_dim = "panda", 4, 2
+
+    def __init__(
+        self, start: np.ndarray, target: np.ndarray, via: np.ndarray, speed: float, dt: float
+    ) -> None:
+        self.start, self.target, self.speed, self.dt = start, target, speed, dt
+        self.forward = (target - start) / np.linalg.norm(target - start)
+        self.leg = (via - start) / np.linalg.norm(via - start)
+        self.switch = float((via - start) @ self.forward)
+
+    def decode_numpy(self, z, s, b):
+        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
+        s = np.broadcast_to(s, (*shape, 7))
+        push = np.clip(np.broadcast_to(np.asarray(z)[..., 0], shape), 0.0, 1.0)
+        to_target = self.target - s
+        dist = np.linalg.norm(to_target, axis=-1, keepdims=True)
+        home = to_target / np.maximum(dist, 1e-12) * np.minimum(1.0, dist / (self.speed * self.dt))
+        first = ((s - self.start) @ self.forward < self.switch)[..., None]
+        return push[..., None] * self.speed * np.where(first, self.leg, home)
+
+
+@pytest.fixture(scope="module")
+def eating():
+    return make_eating_task()
+
+
+def _run(module, eating, decoder=None, n=2, horizon=30, interfaces=("R", "LA"), **kw):
+    return module.simulate(
+        eating,
+        decoder or LinearDecoder(),
+        draw_cohort(n, seed=1),
+        eating.robot.control,
+        StudyConfig(horizon=horizon),
+        seed=2,
+        progress=False,
+        interfaces=interfaces,
+        **kw,
+    )
+
+
+@pytest.fixture(scope="module")
+def small(eating):
+    return _run(planning, eating)
+
+
+def test_signature_extends_the_one_step_study():
+    one_step = list(inspect.signature(participants.simulate).parameters.values())
+    planned = list(inspect.signature(planning.simulate).parameters.values())
+    assert planned[: len(one_step)] == one_step
+    assert [p.name for p in planned[len(one_step) :]] == ["plan"]
+    assert planned[-1].kind is inspect.Parameter.KEYWORD_ONLY
+
+
+def test_same_record_and_ordering_as_the_one_step_study(eating, small):
+    one_step = _run(participants, eating)
+    for name in ("participant", "condition", "assistance", "task", "order"):
+        assert_array_equal(getattr(small, name), getattr(one_step, name))
+    for name in FIELDS:
+        assert np.shape(getattr(small, name)) == np.shape(getattr(one_step, name)), name
+    assert small.dt == one_step.dt
+    tables, ref = measures(eating, small), measures(eating, one_step)
+    for key, frame in tables.items():
+        assert list(frame.columns) == list(ref[key].columns) and len(frame) == len(ref[key])
+
+
+def test_deterministic(eating, small):
+    again = _run(planning, eating)
+    for name in FIELDS:
+        assert_array_equal(getattr(small, name), getattr(again, name))
+
+
+def test_a_participant_does_not_depend_on_the_cohort_size(eating, small):
+    alone = _run(planning, eating, n=1)
+    cols = small.participant == 0
+    for name in FIELDS:
+        ours, theirs = getattr(small, name), getattr(alone, name)
+        assert_array_equal(ours[..., cols, :] if ours.ndim == 3 else ours[..., cols], theirs, err_msg=name)
+
+
+def test_an_input_held_at_least_a_replan_is_constant_until_the_next_replan(eating):
+    # phi = z W does not depend on the state: a latent-action step reveals the input held
+    ep = _run(planning, eating, LinearDecoder(scale=0.05), n=1, horizon=40, interfaces=("LA",),
+              plan=PlanConfig(holds=(0.5, 1.0)))  # fmt: skip
+    cols = np.flatnonzero(ep.condition == "LA")
+    steps = np.diff(ep.states[:, cols], axis=0)[:40].reshape(8, 5, len(cols), 7)  # blocks of 0.5 s
+    assert np.allclose(steps, steps[:, :1], atol=1e-12)
+    assert np.all(ep.idle[:40, cols].reshape(8, 5, -1) == ep.idle[:40:5, cols][:, None])
+    assert (~ep.idle[:, cols]).any()  # the participant does push
+
+
+def test_a_tap_is_followed_by_rest_until_the_replan(eating):
+    ep = _run(planning, eating, LinearDecoder(scale=0.05), n=1, horizon=20, plan=PlanConfig(holds=(0.1,)))
+    phase = np.arange(20) % 5
+    la = np.char.startswith(ep.condition.astype(str), "LA")
+    assert ep.idle[phase != 0][:, la].all()  # a tap, then the stick rests
+    assert ep.idle[phase >= 3].all()  # Retargeting: up to two presses and the tap first
+    assert (~ep.idle[phase == 0]).any()
+
+
+@pytest.fixture(scope="module")
+def detour(eating):
+    """A decoder whose pushes first lead away from the first waypoint, then to it."""
+    robot, control = eating.robot, eating.robot.control
+    stab = PREFERENCES["stab"].theta
+    target = eating.pose(GOALS.index("middle"), stab, 0.0)
+    p_star, r_star = fork_frame(robot, GOALS.index("middle"), stab, 0.0)
+    start = eating.start
+    data = mujoco.MjData(robot.model)
+
+    def cost(q):
+        """The participants' cost of the pose at q: the progress of a move onto the waypoint."""
+        pos, axis, _, _ = tip_frames(robot, data, q[None])
+        return progress_gain(pos, axis, (p_star - pos)[:, None], r_star[None, None, :, 2], p_star[None],
+                             r_star[None, :, 2], 0.125)[0, 0]  # fmt: skip
+
+    assert cost(target) < 0.01  # q* is the waypoint's pose
+    # the via point: a bit towards the target, mostly up the cost's gradient across that
+    grad = np.array([(cost(start + 1e-6 * e) - cost(start)) / 1e-6 for e in np.eye(7)])
+    forward = (target - start) / np.linalg.norm(target - start)
+    across = grad - (grad @ forward) * forward
+    via = start + 0.05 * forward + 0.3 * across / np.linalg.norm(across)
+    return DetourDecoder(start, target, via, control.action_scale, control.dt), (p_star, r_star[:, 2])
+
+
+def test_one_step_progress_of_every_detour_input_is_not_positive(eating, detour):
+    decoder, (p_star, d_star) = detour
+    robot, dt = eating.robot, eating.robot.control.dt
+    pos, axis, jp, jr = tip_frames(robot, mujoco.MjData(robot.model), eating.start[None])
+    grid = np.stack(np.meshgrid(np.linspace(-1, 1, 5), np.linspace(-1, 1, 5), indexing="ij"), -1).reshape(
+        -1, 2
+    )
+    phi = decoder.decode_numpy(grid[None], eating.start[None, None], np.full((1, 1, 4), 0.25))
+    dp, new_dir = tip_motion(jp, jr, axis, dt * phi)
+    gain = progress_gain(pos, axis, dp, new_dir, p_star[None], d_star[None], 0.125)
+    assert gain.max() <= 1e-6 and gain.min() < -0.3 * dt * 0.15
+
+
+def test_a_planner_finds_the_detour_a_one_step_participant_does_not(eating, detour):
+    decoder, _ = detour
+    kw = dict(decoder=decoder, n=1, horizon=300, interfaces=("LA",))
+    planned, one_step = _run(planning, eating, **kw), _run(participants, eating, **kw)
+    la = planned.condition == "LA"  # unassisted: nothing but the participant moves the arm
+    assert np.all(planned.waypoint[la] >= 1)
+    assert np.all(one_step.waypoint[la] == 0)
+
+
+@pytest.mark.parametrize(
+    ("settings", "match"),
+    [
+        ({"replan": 0.0}, "replan must be in"),
+        ({"replan": "1"}, "replan must be a number"),
+        ({"holds": ()}, "holds must be a non-empty"),
+        ({"holds": (2.0, 0.5)}, "strictly increasing"),
+        ({"holds": (0.1, -1.0)}, r"holds\[1\] must be in"),
+        ({"coarse": 0}, "coarse must be an integer"),
+    ],
+)
+def test_config_errors_are_one_clear_line(settings, match):
+    with pytest.raises(ConfigError, match=match) as err:
+        PlanConfig(**settings)
+    assert "\n" not in str(err.value)
+
+
+def test_holds_must_be_whole_steps(eating):
+    with pytest.raises(ConfigError, match="whole number of control steps") as err:
+        _run(planning, eating, horizon=2, plan=PlanConfig(holds=(0.15,)))
+    assert "\n" not in str(err.value)
+    with pytest.raises(ConfigError, match="multiple of coarse"):
+        PlanConfig(holds=(0.5, 0.8)).steps(0.1)
