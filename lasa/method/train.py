@@ -37,6 +37,7 @@ from lasa.base.errors import ConfigError
 from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import DecoderConfig, LatentActionModel
 from lasa.method.entropy import EntropyRegularizer
+from lasa.method.sectors import sector_loss, sector_roles
 
 __all__ = ["TrainConfig", "train_decoder", "reconstruction_error"]
 
@@ -65,10 +66,18 @@ class TrainConfig:
     entropy_n_z: AtLeastTwo = 11  # joystick inputs the entropy term's sum over z runs over [-]
     entropy_horizon: PositiveInt = 10  # steps over which the entropy term reads an input's evidence [-]
     entropy_contexts: PositiveInt = 64  # contexts per batch the entropy term is evaluated on [-]
+    # the latent's sectors (lasa.method.sectors; 2-D latents): departures from a confident goal
+    # in a share of the ring, manipulation outside it; 0 trains without
+    sector_weight: NonNegative = 0.0  # weight of the sector loss [1/rad] [-]
+    sector_share: Annotated[Number, at.Gt(0.0), at.Lt(1.0)] = (
+        0.375  # the departure sector's share of the ring [-]
+    )
     seed: Integer = 0  # seed of initialisation, batches and noise [-]
 
     def __post_init__(self) -> None:
         validate(self)
+        if self.sector_weight > 0 and self.z_dim != 2:
+            raise ConfigError(f"sector_weight > 0 needs z_dim = 2 (a 2-axis stick), got z_dim={self.z_dim}")
 
 
 def _split(demos: Demonstrations, holdout: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -178,6 +187,7 @@ def train_decoder(
     s_all = torch.as_tensor(demos.states[train_mask], dtype=torch.float32)
     a_all = torch.as_tensor(demos.actions[train_mask], dtype=torch.float32)
     b_all = torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32)
+    roles = torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None
     val = (demos.states[val_mask], demos.actions[val_mask], demos.beliefs[val_mask])
     scale = control.action_scale
 
@@ -191,9 +201,14 @@ def train_decoder(
         idx = torch.randint(len(s_all), (config.batch_size,), generator=gen)
         s, a, b = s_all[idx], a_all[idx], b_all[idx]
         z = model.encode(s, a, b)
+        sector = (
+            config.sector_weight * sector_loss(z, roles[idx], config.sector_share)
+            if roles is not None
+            else 0.0
+        )
         z = (z + config.z_noise * torch.randn(z.shape, generator=gen)).clamp(-1.0, 1.0)
         a_hat = model.decode(z, s, b)
-        loss = (((a_hat - a) / scale) ** 2).sum(-1).mean()
+        loss = (((a_hat - a) / scale) ** 2).sum(-1).mean() + sector
         if extra_loss is not None:
             loss = loss + extra_loss(model, s, b)
         optim.zero_grad(set_to_none=True)
