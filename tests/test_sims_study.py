@@ -216,4 +216,7 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     assert head["goals with the property"] == 2 and other["goals with the property"] == 1
     assert other["least share staying"] == 0.1
     assert head["LA finished"] == 1.0 and other["LA finished"] == 0.75  # 5 of 20 participants stuck
-    assert head["H3 (10 / all)"] == "yes / yes" and other["H3 (10 / all)"] == "no / no"
+    # the other reading's LA finishes 5 of 10 (first 10) and 15 of 20 episodes (cohort): below 95%
+    assert head["H3 (10 / all)"] == "yes / yes" and other["H3 (10 / all)"] == "not testable / not testable"
+    assert other["H1 (10 / all)"] == head["H1 (10 / all)"] == "yes / yes"  # the guard is H3's alone
+    assert head["R finished"] == head["R+SA finished"] == other["R finished"] == 1.0
