@@ -9,7 +9,10 @@ phase), each with its figure:
 - ``study_time``: Total and Idle Time (Fig. time), with mode switches and completion;
 - ``study_alignment``: Preference Alignment per phase (Fig. dessert, left panel).
 
-The assisted conditions run under each member of ``Config.members`` (hindsight
+Each participant model of ``Config.participant_models`` (:data:`PARTICIPANT_MODELS`: ``planning``,
+who plans over held inputs, the headline once :mod:`lasa.people.planning` exists, and ``one_step``,
+:func:`lasa.people.participants.simulate`) runs the whole study; the tables' ``model`` column says
+which. The assisted conditions run under each member of ``Config.members`` (hindsight
 optimisation, the paper's study, first: the headline), the unassisted ones once
 (``assistance`` is ``none`` for them). The LA conditions run under every decoder reading of
 notebook 10 (:func:`run`; the headline, chosen there by the property alone, first), and the
@@ -41,16 +44,30 @@ the whole cohort, under each member.
   with R+SA (paired t-test over the participants who reached that phase under both):
   *yes* if significant, *partly* if higher but not significant, *no* otherwise (also when
   fewer than two participants reached it under both).
-- **H3** (``study.h3``), LA+SA is the most efficient: Total and Idle Time, summed over the
-  two tasks, lower with LA+SA than with each other condition (paired t-tests, Holm over
-  the three comparisons of each measure): *yes* if all six comparisons are significant,
-  *partly* if LA+SA has the lowest mean Total Time but not all six are, *no* otherwise.
+- **H3** (``study.h3``), LA+SA is the most efficient: an episode not finished within the
+  horizon has its time cut there (censored), so H3 is *not testable* when any of the four
+  conditions finishes fewer than 95% of its episodes (among the participants analysed; the
+  row names each such condition and its completion). Otherwise each participant's
+  restricted time, ``min(T, horizon)`` summed over the two tasks, of LA+SA minus each other
+  condition, Total and Idle Time, with a paired bootstrap over participants (10,000
+  resamples, percentile 95% intervals, seeded): *yes* if all six intervals lie below 0,
+  *partly* if LA+SA has the lowest restricted mean Total Time but not all six do, *no*
+  otherwise; settled when the interval of LA+SA minus the fastest other condition's Total
+  Time excludes 0. This test replaced paired t-tests on the capped times after the previous
+  version's results were seen, because they were censored (``AFTER_RESULTS``).
+
+**Not testable.** ``claims(untestable=...)`` marks every row ``not testable`` with the reason in
+its note (e.g. no decoder has both halves of the property, :func:`untestable_reason`), and
+``untestable_decoders`` does so per decoder reading; ``measured`` still shows the tests' numbers.
 
 Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
-optimisation, 10 participants, the headline decoder), and ``study.<claim>@<reading>`` each other
-(:func:`claim_id`); every other decoder reading is judged on H1-H3 under the paper's measures and
-hindsight optimisation.
-A verdict is settled when the 95% t-interval of its effect excludes zero, else ``undecided``.
+optimisation, 10 participants, the headline decoder, the headline participant model), and
+``study.<claim>@<reading>`` each other (:func:`claim_id`: measure, decoder, participant model,
+member, cohort, joined by ``+``, e.g. ``study.h2@transfers_entropy+one_step``); every other
+decoder reading is judged on H1-H3 under the paper's measures and hindsight optimisation, and
+every other participant model as the headline one.
+A verdict is settled when the 95% interval of its effect (H1, H2: the t-interval; H3: the
+bootstrap's) excludes zero, else ``undecided``.
 """
 
 from __future__ import annotations
