@@ -386,3 +386,32 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
     # and 38 of 40 (the cohort: 95%, testable; its LA+SA is slow there)
     assert t.loc[("b", "head"), "H3 (10 / all)"] == "not testable / no"
     assert t.loc[("b", "head"), "H2 (10 / all)"] == "no / no"  # the guard is H3's alone
+
+
+def test_untestable_reason_needs_a_decoder_with_the_property_at_every_goal_that_reaches_every_goal():
+    def table(holds, reached, stay):
+        return pd.DataFrame(
+            [
+                {
+                    "task": "eating",
+                    "decoder": d,
+                    "goal": g,
+                    "has_property": h,
+                    "all_reached": r,
+                    "stay_share": s,
+                    "theta_range": 1.0,
+                }
+                for d, hs, r, ss in zip(("stays", "leaves"), holds, reached, stay, strict=True)
+                for g, h, s in zip(range(4), hs, ss, strict=True)
+            ]
+        )
+
+    every, three = [True] * 4, [True, True, True, False]
+    assert study.untestable_reason(table([every, three], [True, True], [[0.6] * 4, [0.5] * 4])) is None
+    # the property everywhere but a goal not reached from home: the other half is missing
+    why = study.untestable_reason(table([every, three], [False, True], [[0.6] * 4, [0.5, 0.7, 0.2, 0.1]]))
+    assert why == (
+        "no decoder with both halves of the property; best reading leaves: the property at 3 of 4 goals, "
+        "every goal reached from home, least share staying 0.10"
+    )  # latent_property.choose puts reaching every goal first
+    assert "(" not in why  # the verdict table's cell quotes it inside parentheses

@@ -433,8 +433,18 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
 
 
 def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
-    """:func:`stuck`'s rows (with a ``decoder`` column) grouped by where they stopped: medians per group."""
-    keys = ["decoder", "condition", "assistance", "task", "phase", "goal"]
+    """:func:`stuck`'s rows (with ``decoder``, and ``model`` if any) grouped by where they stopped.
+
+    Medians per group.
+    """
+    keys = ["model"] * ("model" in stuck_rows.columns) + [
+        "decoder",
+        "condition",
+        "assistance",
+        "task",
+        "phase",
+        "goal",
+    ]
     medians = ("distance_cm", "angle_deg", "belief_goal", "best_progress", "inputs_progressing")
     return stuck_rows.groupby(keys).agg(
         episodes=("participant", "size"), **{m: (m, "median") for m in medians}
