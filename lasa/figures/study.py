@@ -620,7 +620,10 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
     assert isinstance(phases, dict)
     mean, low, high, p, _ = phases["scoop"]
     verdict = "yes" if mean > 0 and p < 0.05 else "partly" if mean > 0 else "no"  # NaN: "no"
-    text = "; ".join(f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" for ph, (m, _, _, pp, k) in phases.items())
+    text = "; ".join(
+        f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" if np.isfinite(pp) else f"{ph}: no test ({k} pairs)"
+        for ph, (m, _, _, pp, k) in phases.items()
+    )
     out["h2"] = (verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}")
     out["h3"] = _h3_verdict(result)
     return out
@@ -807,6 +810,8 @@ def _claim_row(
     if verdict == NOT_TESTABLE:
         why = measured.split(";", 1)[0] + ": every condition must finish "
         why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its times are compared"
+    elif not (math.isfinite(low) and math.isfinite(high)):
+        why = f"no interval of the effect (too few participants to test); the tests read {verdict!r}"
     else:
         why = f"95% interval of the effect [{low:.3g}, {high:.3g}]" + (
             "" if settled else f", which straddles 0; the tests read {verdict!r}"
@@ -984,6 +989,7 @@ def plot_time(
         )
         ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
         ax.set_ylabel("time [s]")
+    axes[0].set_ylim(top=1.08 * axes[0].get_ylim()[1])  # room for the labels above the tallest bar
     censored = mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="///", label="")
     when = "" if math.isnan(horizon) else f" {horizon:g} s"
     fig.legend(
