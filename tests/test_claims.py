@@ -139,3 +139,35 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
     assert cells[3].startswith("undecided") and "settled" not in cells[3]
     assert cells[4] == "`grasp_set` (planar5 partly)"  # the Panda's reading agrees with its headline
     assert "(notebooks/04_fixed_expertise.ipynb#what-it-shows-against-the-paper)" in cells[5]
+
+
+def test_a_claim_that_is_not_testable_is_written_and_rendered_with_its_reason(tmp_path):
+    from lasa.evidence.claims import VERDICTS
+    from lasa.evidence.rules import NOT_TESTABLE
+
+    assert NOT_TESTABLE == "not testable" and NOT_TESTABLE in VERDICTS
+    with pytest.raises(ConfigError, match="never settled"):
+        Claim(**{**claim("h3", figure="study").__dict__, "reproduced": NOT_TESTABLE, "settled": True})
+    measured = "not testable (completion: LA 0%, LA+SA 0%); mean total (idle) time ..."
+    guard = Claim(
+        **{
+            **claim("h3", figure="study", robot="panda").__dict__,
+            "id": "study.h3",
+            "reproduced": NOT_TESTABLE,
+            "measured": measured,
+            "n_users": 10,
+        }
+    )
+    reason = "not testable (no decoder with both halves of the property; best reading t). 10 participants"
+    other = Claim(**{**guard.__dict__, "id": "study.h2", "measured": "alignment +0.04", "note": reason})
+    table = update_claims(tmp_path / "claims.csv", [guard, other]).set_index("id")
+    assert table.loc["study.h3", "reproduced"] == NOT_TESTABLE and table.loc["study.h3", "settled"] == "no"
+    assert table.loc["study.h3", "ci_low"] == "" and "nan" not in (tmp_path / "claims.md").read_text()
+    cells = {
+        line.split("|")[1].strip(): line.split("|")[4].strip()
+        for line in render_verdicts(table.reset_index().astype(str)).splitlines()[2:]
+    }
+    h3 = next(v for k, v in cells.items() if k.startswith("H3"))
+    h2 = next(v for k, v in cells.items() if k.startswith("H2"))
+    assert h3 == "not testable, N = 10 (completion: LA 0%, LA+SA 0%)"  # the reason from measured
+    assert h2 == "not testable, N = 10 (no decoder with both halves of the property; best reading t)"

@@ -348,6 +348,7 @@ def test_study_outputs(executed):
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
     members = study.Config().members
+    models = study.Config().participant_models  # the headline first
     n = settings["n_participants"]
     assert (executed / "build" / "models" / "eating_decoder_panda.pt").is_file()
     latent = pd.read_csv(fig / "eating_latent.csv")
@@ -357,7 +358,8 @@ def test_study_outputs(executed):
     settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
     readings = eating_task.reading_names(from_dict(eating_task.Config, settings10))
     # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member
-    episodes = n * (2 + 2 * len(members) + 2 * (len(readings) - 1)) * 2  # participants x arms x tasks
+    # per participant model: participants x arms x tasks
+    episodes = len(models) * n * (2 + 2 * len(members) + 2 * (len(readings) - 1)) * 2
     for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):
         frame = pd.read_csv(fig / f"{spec.NAME}.csv")
         assert list(frame.columns) == list(spec.COLUMNS)
@@ -384,12 +386,24 @@ def test_study_outputs(executed):
     prop = pd.read_csv(fig / "latent_property.csv")
     headline = latent_property.choose(latent_property.summary(prop[prop.task == "eating"]))
     decoders = {f"study.{h}@{d}" for h in ("h1", "h2", "h3") for d in readings if d != headline}
-    assert set(rows.id) == ids | others | decoders
+    heads = ids | others | decoders
+
+    def with_model(cid: str, model: str) -> str:
+        """A headline model's id under another model: its name after the measure and decoder."""
+        base, _, reading = cid.partition("@")
+        parts = reading.split("+") if reading else []
+        tail = [p for p in parts if p in members or p == "cohort"]
+        return f"{base}@" + "+".join([p for p in parts if p not in tail] + [model] + tail)
+
+    assert set(rows.id) == heads | {with_model(i, m) for i in heads for m in models[1:]}
     time_la = time[time.condition.str.startswith("LA")]
     assert set(time_la.decoder) == set(readings)
     assert set(time[time.condition.str.startswith("R")].decoder) == {"none"}
-    assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= {"yes", "partly", "no", "undecided"}
-    assert ((rows.reproduced == "undecided") == (rows.settled == "no")).all()
+    assert set(time.model) == set(models)
+    verdicts = {"yes", "partly", "no", "undecided", "not testable"}
+    assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= verdicts
+    assert ((rows.reproduced.isin(["undecided", "not testable"])) == (rows.settled == "no")).all()
+    assert not rows.measured.str.contains(r"\bnan\b").any()
     assert (rows.n_users.astype(int) == settings["n_participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
     video = read_video(fig / "study_dessert.mp4")

@@ -78,3 +78,17 @@ def test_every_rule_is_constant_between_its_thresholds(cid, data):
     assert r.verdict(values) == r.verdict(moved)
     box = {n: (min(values[n], moved[n]), max(values[n], moved[n])) for n in values}
     assert r.settled(box)
+
+
+def test_not_testable_is_exported_and_h3_states_its_guard_and_its_late_change():
+    import lasa.evidence.rules as rules
+
+    assert "NOT_TESTABLE" in rules.__all__ and rules.NOT_TESTABLE == "not testable"
+    assert rules.NOT_TESTABLE not in rules.VERDICTS  # a rule never decides it: the data's precondition does
+    text = rule("study.h3").text
+    assert "95%" in text and "restricted mean" in text and "bootstrap" in text and "t-test" not in text
+    late = rules.AFTER_RESULTS["study.h3"]
+    assert "censored" in late and "t-tests on times capped" in late and "95%" in late
+    h3 = rule("study.h3@one_step")
+    assert h3.verdict({"effect": -1.0}) == "yes" and h3.settled({"effect": (-9.0, -0.5)})
+    assert not h3.settled({"effect": (-9.0, 0.5)})  # the fastest-other gap's interval straddles 0

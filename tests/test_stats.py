@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from lasa.base.errors import ConfigError
+from lasa.evidence import stats
 from lasa.evidence.stats import (
     CONDITIONS,
     factors,
@@ -388,3 +389,63 @@ def test_participant_offset_leaves_within_statistics_unchanged(n, seed, who, shi
     assert_allclose(after, before, rtol=1e-7, atol=1e-9)
     # the SA effect of the RM-ANOVA, not the between-subjects reading, is the invariant one
     assert_allclose(sa_effect_within(make_frame(shifted), "y")["F"], before[1], rtol=1e-7, atol=1e-9)
+
+
+# --- restricted mean times and the paired bootstrap (H3) ---------------------------------------
+
+
+def test_paired_bootstrap_by_hand():
+    # two participants with differences 1 and 3: every resample's mean is 1, 2 or 3, and with
+    # 10,000 resamples both tails (each 1/4 of the resamples) reach the extremes
+    mean, low, high = stats.paired_bootstrap(np.array([1.0, 3.0]))
+    assert (float(mean), float(low), float(high)) == (2.0, 1.0, 3.0)
+    # a constant difference has a degenerate interval; columns share their resamples, so a
+    # column twice another has an interval exactly twice as wide
+    mean, low, high = stats.paired_bootstrap(np.array([[-5.0, 1.0], [-5.0, 2.0], [-5.0, 4.0]]), seed=3)
+    assert mean.tolist() == [-5.0, 7 / 3] and low[0] == high[0] == -5.0
+    m2, l2, h2 = stats.paired_bootstrap(np.array([[1.0, 2.0], [2.0, 4.0], [4.0, 8.0]]), seed=3)
+    assert l2[1] == pytest.approx(2 * l2[0]) and h2[1] == pytest.approx(2 * h2[0])
+
+
+def test_paired_bootstrap_is_the_per_resample_loop_batched_and_seeded():
+    x = np.array([0.3, -1.2, 2.5, 0.0, 4.1])
+    mean, low, high = stats.paired_bootstrap(x, n_resamples=500, seed=7)
+    rng = np.random.default_rng(7)
+    idx = rng.integers(0, len(x), size=(500, len(x)))
+    loop = [x[row].mean() for row in idx]
+    assert (low, high) == pytest.approx(tuple(np.percentile(loop, [2.5, 97.5])), rel=1e-12)
+    assert stats.paired_bootstrap(x, n_resamples=500, seed=7)[1] == low  # the same seed, the same interval
+    assert stats.paired_bootstrap(x, n_resamples=500, seed=8)[1] != low
+    with pytest.raises(ConfigError, match=">= 2 participants"):
+        stats.paired_bootstrap(np.array([1.0]))
+    with pytest.raises(ConfigError, match="non-finite"):
+        stats.paired_bootstrap(np.array([1.0, np.nan]))
+
+
+def _times(rows):
+    return pd.DataFrame(rows, columns=["participant", "condition", "task", "total_time"])
+
+
+def test_restricted_times_cut_each_episode_at_the_horizon_then_sum_the_tasks():
+    rows = []
+    for p in (0, 1):
+        for c in CONDITIONS:
+            rows += [(p, c, "Entree", 10.0 * (p + 1)), (p, c, "Dessert", 20.0)]
+    rows[0] = (0, "R", "Entree", 200.0)  # ran past a 150 s horizon: counts 150
+    wide = stats.restricted_times(_times(rows), "total_time", horizon=150.0)
+    assert list(wide.columns) == list(CONDITIONS)
+    assert wide.loc[0, "R"] == 170.0 and wide.loc[0, "LA"] == 30.0 and wide.loc[1, "LA+SA"] == 40.0
+    assert stats.restricted_times(_times(rows), "total_time").loc[0, "R"] == 220.0  # no horizon: uncut
+
+
+def test_rmst_contrasts_by_hand():
+    # LA+SA is 5 s faster than LA for both participants, 10 s faster than R+SA for one, as fast as R
+    base = {"R": 30.0, "R+SA": 30.0, "LA": 35.0, "LA+SA": 30.0}
+    rows = [(p, c, t, v / 2) for p in (0, 1) for c, v in base.items() for t in ("Entree", "Dessert")]
+    rows = [(p, c, t, v + (5.0 if (p, c) == (1, "R+SA") else 0.0)) for p, c, t, v in rows]
+    out = stats.rmst_contrasts(_times(rows), "total_time", horizon=150.0).set_index("b")
+    assert list(out.index) == ["R", "R+SA", "LA"] and (out.a == "LA+SA").all() and (out.n == 2).all()
+    assert out.loc["LA", ["diff", "ci_low", "ci_high"]].tolist() == [-5.0, -5.0, -5.0]
+    assert out.loc["R+SA", "diff"] == -5.0 and out.loc["R+SA", ["ci_low", "ci_high"]].tolist() == [-10.0, 0.0]
+    assert out.loc["R", ["diff", "ci_low", "ci_high"]].tolist() == [0.0, 0.0, 0.0]
+    assert out.loc["LA", "mean_b"] == 35.0 and out.loc["LA", "mean_a"] == 30.0

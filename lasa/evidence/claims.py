@@ -11,9 +11,10 @@ measured under the default reading, and one row per member of the family,
 ``<figure>.<name>@<member>`` (:mod:`lasa.evidence.verdicts`). ``ci_low`` and ``ci_high`` bound the
 number the verdict rests on (a bootstrap 95% interval over users), and ``seeds_agree``
 says on how many independent draws of users the verdict comes out the same.
-``reproduced`` is ``yes``, ``partly`` or ``no``;
-a claim that does not reproduce is a result, reported with its measured value and the
-most likely reason in ``note``.
+``reproduced`` is ``yes``, ``partly`` or ``no`` (``undecided`` when an interval straddles a
+threshold, ``not testable`` when the claim's test cannot run on the data, never settled, with the
+reason as ``not testable (<why>)`` in ``measured`` or ``note``); a claim that does not reproduce
+is a result, reported with its measured value and the most likely reason in ``note``.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
@@ -28,7 +30,7 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv, write_text
-from lasa.evidence.rules import UNDECIDED
+from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED
 
 __all__ = [
     "Claim",
@@ -62,7 +64,7 @@ CLAIM_COLUMNS = (
     "n_users",
     "note",
 )
-VERDICTS = ("yes", "partly", "no", UNDECIDED)
+VERDICTS = ("yes", "partly", "no", UNDECIDED, NOT_TESTABLE)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,7 +76,7 @@ class Claim:
     figure: str  # the figure it belongs to, e.g. "sim1"
     paper: str  # what the paper reports
     measured: str  # what we measured
-    reproduced: str  # "yes", "partly", "no", or "undecided" when an interval straddles a threshold
+    reproduced: str  # "yes", "partly", "no"; "undecided" (an interval straddles a threshold); "not testable"
     note: str  # how the verdict was decided, and the likely reason if not "yes"
     robot: str  # the robot it was measured on
     assistance: str = "point"  # the shared-autonomy reading: Eq. M2 towards one pose per goal
@@ -90,6 +92,8 @@ class Claim:
             raise ConfigError(f"claim id must be '<figure>.<name>' without spaces, got {self.id!r}")
         if self.reproduced not in VERDICTS:
             raise ConfigError(f"reproduced must be one of {VERDICTS}, got {self.reproduced!r}")
+        if self.reproduced == NOT_TESTABLE and self.settled:
+            raise ConfigError(f"{self.id}: a claim that is not testable is never settled")
 
 
 def _row(claim: Claim) -> dict[str, object]:
@@ -275,6 +279,11 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 )
 
 
+_WHY = re.compile(
+    re.escape(NOT_TESTABLE) + r" \(([^()]*)\)"
+)  # "not testable (<why>)", <why> without parentheses
+
+
 def _num(text: object) -> str:
     try:
         return f"{float(str(text)):.3g}"
@@ -283,9 +292,16 @@ def _num(text: object) -> str:
 
 
 def _cell(row: pd.Series | None) -> str:
-    """A robot's cell: the verdict, the interval of its first number, N, settled or undecided."""
+    """A robot's cell: the verdict, the interval of its first number, N, settled or undecided.
+
+    A claim that is not testable reads ``not testable``, N, and why: the first
+    ``not testable (<why>)`` in its ``measured`` text or else its note, without an interval.
+    """
     if row is None:
         return "—"
+    if row.reproduced == NOT_TESTABLE:
+        found = _WHY.search(str(row.measured)) or _WHY.search(str(row.note))
+        return f"not testable, N = {row.n_users}" + (f" ({found.group(1)})" if found else "")
     low, high = _num(row.ci_low), _num(row.ci_high)
     ci = f" [{low}, {high}]" if low and high else ""
     if str(row.settled) == "yes":

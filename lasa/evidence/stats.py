@@ -15,6 +15,11 @@ repeated-measures ANOVA that the design calls for (:func:`sa_effect_within`, fro
 each result's ``"test"`` entry says which it is. Pairwise comparisons of conditions are paired t-tests
 with a Holm correction across the pairs tested (:func:`pairwise`).
 
+Times cut at a horizon (an episode not finished counts the horizon) are censored: a t-test on them
+compares the horizon with itself. :func:`rmst_contrasts` compares restricted mean times instead, each
+episode's time ``min(T, horizon)`` summed over tasks, with a paired bootstrap over participants
+(:func:`paired_bootstrap`, percentile intervals, every resample in one numpy batch).
+
 F and p values come from statsmodels (``AnovaRM``, ``ols`` + ``anova_lm``, ``multipletests``) and
 scipy (``ttest_rel``); nothing here computes them by hand.
 """
@@ -45,6 +50,9 @@ __all__ = [
     "rm_anova",
     "sa_effect_within",
     "pairwise",
+    "paired_bootstrap",
+    "restricted_times",
+    "rmst_contrasts",
     "format_f",
 ]
 
@@ -418,6 +426,103 @@ def pairwise(
     out["p_corr"] = p_corr
     out["correction"] = correction
     return out
+
+
+def paired_bootstrap(
+    diffs: np.ndarray, n_resamples: int = 10_000, seed: int = 0, level: float = 0.95
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean of paired differences and its percentile bootstrap interval, resampling participants.
+
+    Every column is resampled with the same participants (rows), so the intervals of several
+    contrasts come from one set of resamples; all resamples are drawn and averaged in one batch.
+
+    Args:
+        diffs: ``(participants,)`` or ``(participants, contrasts)`` paired differences.
+        n_resamples: Bootstrap resamples of the participants, with replacement.
+        seed: Seed of the resampling (the same seed, the same interval).
+        level: Coverage of the percentile interval, in (0, 1).
+
+    Returns:
+        ``(mean, low, high)``, each of shape ``diffs.shape[1:]``.
+
+    Raises:
+        ConfigError: Fewer than 2 participants, a non-finite difference, ``n_resamples`` < 1 or
+            ``level`` outside (0, 1).
+    """
+    x = np.asarray(diffs, dtype=float)
+    if x.ndim not in (1, 2) or len(x) < 2:
+        raise ConfigError(f"diffs must be (participants[, contrasts]) with >= 2 participants, got {x.shape}")
+    if not np.isfinite(x).all():
+        raise ConfigError("diffs has non-finite values; drop the participants without a pair first")
+    if n_resamples < 1 or not 0 < level < 1:
+        raise ConfigError(f"need n_resamples >= 1 and level in (0, 1), got {n_resamples} and {level}")
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, len(x), size=(n_resamples, len(x)))
+    means = x[idx].mean(axis=1)  # (n_resamples[, contrasts])
+    tail = 100 * (1 - level) / 2
+    low, high = np.percentile(means, [tail, 100 - tail], axis=0)
+    return x.mean(axis=0), low, high
+
+
+def restricted_times(frame: pd.DataFrame, measure: str, horizon: float = np.inf) -> pd.DataFrame:
+    """Each participant's restricted time per condition: ``min(T, horizon)`` summed over tasks.
+
+    Args:
+        frame: Tidy study data; every participant must have every condition and every task in each.
+        measure: The time column (``total_time``, ``idle_time``) [s].
+        horizon: The time an episode is cut at [s]; ``inf``: the times are used as they are.
+
+    Returns:
+        Participants x :data:`CONDITIONS`, the restricted times summed over tasks.
+
+    Raises:
+        ConfigError: Invalid data, or a participant missing a condition or a task in one.
+    """
+    clipped = frame.assign(**{measure: np.minimum(frame[measure].astype(float), horizon)})
+    cells = _cells(clipped, measure, "sum", CONDITIONS)
+    return cells.pivot(index="participant", columns="condition", values=measure)[list(CONDITIONS)]
+
+
+def rmst_contrasts(
+    frame: pd.DataFrame,
+    measure: str,
+    horizon: float = np.inf,
+    reference: str = "LA+SA",
+    n_resamples: int = 10_000,
+    seed: int = 0,
+) -> pd.DataFrame:
+    """Restricted mean time of ``reference`` minus each other condition, paired bootstrap intervals.
+
+    Args:
+        frame: Tidy study data (see :func:`restricted_times`).
+        measure: The time column [s].
+        horizon: The time an episode is cut at [s].
+        reference: The condition compared with each other one.
+        n_resamples: Bootstrap resamples of the participants (:func:`paired_bootstrap`).
+        seed: Seed of the resampling.
+
+    Returns:
+        One row per other condition, in :data:`CONDITIONS` order: ``a`` (``reference``), ``b``,
+        ``mean_a``, ``mean_b`` (restricted means over participants), ``diff`` (``mean_a - mean_b``),
+        ``ci_low``, ``ci_high`` (95% percentile interval of ``diff``), ``n`` (participants).
+    """
+    factors(reference)
+    wide = restricted_times(frame, measure, horizon)
+    others = [c for c in CONDITIONS if c != reference]
+    diffs = wide[reference].to_numpy()[:, None] - wide[others].to_numpy()
+    mean, low, high = paired_bootstrap(diffs, n_resamples, seed)
+    return pd.DataFrame(
+        {
+            "a": reference,
+            "b": others,
+            "mean_a": float(wide[reference].mean()),
+            "mean_b": wide[others].mean().to_numpy(),
+            "diff": mean,
+            "ci_low": low,
+            "ci_high": high,
+            "n": len(wide),
+        }
+    )
 
 
 def _format_df(value: Any) -> str:

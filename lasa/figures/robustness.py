@@ -55,7 +55,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import VERDICTS, Claim
 from lasa.evidence.plots import robots_present
-from lasa.evidence.rules import UNDECIDED
+from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.figures import sim1, sim2, sim3
 from lasa.figures.common import as_decoders, check_members
@@ -358,7 +358,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
         table: :func:`run`'s rows.
 
     Returns:
-        Columns ``yes``, ``partly``, ``no``, ``undecided`` (cell counts over the members'
+        Columns ``yes``, ``partly``, ``no``, ``undecided``, ``not testable`` (cell counts over the members'
         and the settings' cells), ``default`` (the headline member's verdict in the default
         cell, empty if the grid has none), ``stable`` (every settled cell gives it) and
         ``moves`` (the cells whose settled verdict differs from it).
@@ -436,7 +436,13 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     robots = robots_present(table)
     order_cols = list(dict.fromkeys(table.column))
     ids = sorted(dict.fromkeys(table.id))
-    colours = {"yes": "#1b9e77", "partly": "#e6ab02", "no": "#d95f02", UNDECIDED: "#d9d9d9"}
+    colours = {
+        "yes": "#1b9e77",
+        "partly": "#e6ab02",
+        "no": "#d95f02",
+        UNDECIDED: "#d9d9d9",
+        NOT_TESTABLE: "#ffffff",
+    }
     cmap = ListedColormap([colours[v] for v in VERDICTS])
     code = {v: i for i, v in enumerate(VERDICTS)}
     fig, axes = plt.subplots(

@@ -9,7 +9,10 @@ phase), each with its figure:
 - ``study_time``: Total and Idle Time (Fig. time), with mode switches and completion;
 - ``study_alignment``: Preference Alignment per phase (Fig. dessert, left panel).
 
-The assisted conditions run under each member of ``Config.members`` (hindsight
+Each participant model of ``Config.participant_models`` (:data:`PARTICIPANT_MODELS`: ``planning``,
+who plans over held inputs, the headline once :mod:`lasa.people.planning` exists, and ``one_step``,
+:func:`lasa.people.participants.simulate`) runs the whole study; the tables' ``model`` column says
+which. The assisted conditions run under each member of ``Config.members`` (hindsight
 optimisation, the paper's study, first: the headline), the unassisted ones once
 (``assistance`` is ``none`` for them). The LA conditions run under every decoder reading of
 notebook 10 (:func:`run`; the headline, chosen there by the property alone, first), and the
@@ -41,23 +44,40 @@ the whole cohort, under each member.
   with R+SA (paired t-test over the participants who reached that phase under both):
   *yes* if significant, *partly* if higher but not significant, *no* otherwise (also when
   fewer than two participants reached it under both).
-- **H3** (``study.h3``), LA+SA is the most efficient: Total and Idle Time, summed over the
-  two tasks, lower with LA+SA than with each other condition (paired t-tests, Holm over
-  the three comparisons of each measure): *yes* if all six comparisons are significant,
-  *partly* if LA+SA has the lowest mean Total Time but not all six are, *no* otherwise.
+- **H3** (``study.h3``), LA+SA is the most efficient: an episode not finished within the
+  horizon has its time cut there (censored), so H3 is *not testable* when any of the four
+  conditions finishes fewer than 95% of its episodes (among the participants analysed; the
+  row names each such condition and its completion). Otherwise each participant's
+  restricted time, ``min(T, horizon)`` summed over the two tasks, of LA+SA minus each other
+  condition, Total and Idle Time, with a paired bootstrap over participants (10,000
+  resamples, percentile 95% intervals, seeded): *yes* if all six intervals lie below 0,
+  *partly* if LA+SA has the lowest restricted mean Total Time but not all six do, *no*
+  otherwise; settled when the interval of LA+SA minus the fastest other condition's Total
+  Time excludes 0. This test replaced paired t-tests on the capped times after the previous
+  version's results were seen, because they were censored (``AFTER_RESULTS``).
+
+**Not testable.** ``claims(untestable=...)`` marks every row ``not testable`` with the reason in
+its note (e.g. no decoder has both halves of the property, :func:`untestable_reason`), and
+``untestable_decoders`` does so per decoder reading; ``measured`` still shows the tests' numbers.
 
 Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
-optimisation, 10 participants, the headline decoder), and ``study.<claim>@<reading>`` each other
-(:func:`claim_id`); every other decoder reading is judged on H1-H3 under the paper's measures and
-hindsight optimisation.
-A verdict is settled when the 95% t-interval of its effect excludes zero, else ``undecided``.
+optimisation, 10 participants, the headline decoder, the headline participant model), and
+``study.<claim>@<reading>`` each other (:func:`claim_id`: measure, decoder, participant model,
+member, cohort, joined by ``+``, e.g. ``study.h2@transfers_entropy+one_step``); every other
+decoder reading is judged on H1-H3 under the paper's measures and hindsight optimisation, and
+every other participant model as the headline one.
+A verdict is settled when the 95% interval of its effect (H1, H2: the t-interval; H3: the
+bootstrap's) excludes zero, else ``undecided``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import importlib
+import math
 from collections.abc import Callable, Mapping
 
+import matplotlib.patches as mpatches
 import matplotlib.pyplot as plt
 import mujoco
 import numpy as np
@@ -79,11 +99,12 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.evidence import stats
+from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
-from lasa.evidence.rules import UNDECIDED, rule
+from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED, rule
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
+from lasa.people import participants
 from lasa.people.participants import (
     TASK_NAMES,
     Episodes,
@@ -93,7 +114,6 @@ from lasa.people.participants import (
     interface_of,
     measures,
     progress_gain,
-    simulate,
     tip_frames,
     tip_motion,
 )
@@ -106,6 +126,9 @@ __all__ = [
     "TIME",
     "ALIGNMENT",
     "PAPER_N",
+    "COMPLETION_BAR",
+    "PARTICIPANT_MODELS",
+    "Simulate",
     "run",
     "for_member",
     "completion",
@@ -116,6 +139,8 @@ __all__ = [
     "HERLANT_SHARE",
     "analyse",
     "claims",
+    "claim_id",
+    "untestable_reason",
     "plot_goal_error",
     "plot_time",
     "plot_alignment",
@@ -137,6 +162,36 @@ STUCK_COLUMNS = (
     "best_progress",
     "inputs_progressing",
 )
+COMPLETION_BAR = 0.95  # H3 compares times only if every condition finishes this share of its episodes [-]
+Simulate = Callable[..., Episodes]  # lasa.people.participants.simulate's signature and return type
+
+
+def _participant_models() -> dict[str, Simulate]:
+    """The participant models :func:`run` knows: ``one_step`` always, ``planning`` once its module exists.
+
+    ``planning`` (:mod:`lasa.people.planning`, a participant who plans over held inputs) comes
+    first, as the headline, when that module can be imported.
+    """
+    models: dict[str, Simulate] = {"one_step": participants.simulate}
+    try:
+        planning = importlib.import_module("lasa.people.planning")
+    except ModuleNotFoundError as error:
+        if error.name != "lasa.people.planning":
+            raise
+        return models
+    return {"planning": planning.simulate, **models}
+
+
+# participant model name -> its simulate (the signature of lasa.people.participants.simulate);
+# a model of your own: add it here before building the Config that names it
+PARTICIPANT_MODELS: dict[str, Simulate] = _participant_models()
+
+
+def _default_models() -> tuple[str, ...]:
+    """``("planning", "one_step")``, without ``planning`` while :mod:`lasa.people.planning` does not exist."""
+    return tuple(m for m in ("planning", "one_step") if m in PARTICIPANT_MODELS)
+
+
 PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
 
 
@@ -150,12 +205,20 @@ class Config:
     seed: Integer = 0  # seed of the cohort and of the participants' choices [-]
     video_participant: int = 0  # whose Dessert the video shows [-]
     participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
+    # participant models (PARTICIPANT_MODELS); the first is the headline [-]
+    participant_models: tuple[str, ...] = dataclasses.field(default_factory=_default_models)
 
     def __post_init__(self) -> None:
         validate(self)
         object.__setattr__(self, "members", tuple(self.members))
+        object.__setattr__(self, "participant_models", tuple(self.participant_models))
         for name in self.members:
             check_choice("assistance", name, ASSISTANCE)
+        models = self.participant_models
+        if not models or len(set(models)) != len(models):
+            raise ConfigError(f"participant_models must be non-empty and without repeats, got {models}")
+        for name in models:
+            check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
         if not 0 <= self.video_participant < self.n_participants:
             raise ConfigError(
                 f"video_participant must be in [0, {self.n_participants}), got {self.video_participant}"
@@ -185,60 +248,73 @@ def run(
     control: ControlConfig,
     config: Config,
     progress: bool = True,
-) -> tuple[dict[str, Episodes], dict[str, pd.DataFrame]]:
-    """Simulate the cohort and measure it: the episodes per decoder reading and the three tidy tables.
+) -> tuple[dict[str, dict[str, Episodes]], dict[str, pd.DataFrame]]:
+    """Simulate the cohort under each participant model and measure it.
 
-    The first of ``decoders`` is the headline: every condition under every member. Each
-    other reading runs LA and LA+SA only, under the headline member (Retargeting does not
-    use the decoder: its episodes are the headline run's, the same participants and random
-    streams). The tables' ``decoder`` column names the reading of each LA row, and is
-    ``none`` for Retargeting.
+    Each of ``config.participant_models`` (the headline first) runs the same cohort. The first
+    of ``decoders`` is the headline: every condition under every member. Each other reading
+    runs LA and LA+SA only, under the headline member (Retargeting does not use the decoder:
+    its episodes are the headline run's, the same participants and random streams).
+
+    Returns:
+        The episodes per participant model and decoder reading (``episodes[model][decoder]``),
+        and the three tidy tables. Their ``decoder`` column names the reading of each LA row
+        (``none`` for Retargeting), their ``model`` column the participant model.
     """
     if not decoders:
         raise ConfigError("run needs at least one decoder (the headline first)")
     cohort = draw_cohort(config.n_participants, config.study().participant, config.seed)
-    episodes: dict[str, Episodes] = {}
+    episodes: dict[str, dict[str, Episodes]] = {}
     parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
-    for i, (name, decoder) in enumerate(decoders.items()):
-        settings = (
-            config.study() if i == 0 else dataclasses.replace(config.study(), members=config.members[:1])
-        )
-        interfaces = ("R", "LA") if i == 0 else ("LA",)
-        episodes[name] = simulate(
-            task,
-            decoder,
-            cohort,
-            control,
-            settings,
-            seed=config.seed,
-            progress=progress,
-            interfaces=interfaces,
-        )
-        for key, frame in measures(task, episodes[name]).items():
-            la = frame.condition.map({c: interface_of(c) == "LA" for c in CONDITIONS}).astype(bool)
-            parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE)))
+    for model in config.participant_models:
+        simulate = PARTICIPANT_MODELS[model]
+        episodes[model] = {}
+        for i, (name, decoder) in enumerate(decoders.items()):
+            settings = (
+                config.study() if i == 0 else dataclasses.replace(config.study(), members=config.members[:1])
+            )
+            episodes[model][name] = simulate(
+                task,
+                decoder,
+                cohort,
+                control,
+                settings,
+                seed=config.seed,
+                progress=progress,
+                interfaces=("R", "LA") if i == 0 else ("LA",),
+            )
+            for key, frame in measures(task, episodes[model][name]).items():
+                la = frame.condition.map({c: interface_of(c) == "LA" for c in CONDITIONS}).astype(bool)
+                parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE), model=model))
     return episodes, {key: pd.concat(frames, ignore_index=True) for key, frames in parts.items()}
 
 
 def for_member(
-    frame: pd.DataFrame, member: str, n: int | None = None, decoder: str | None = None
+    frame: pd.DataFrame,
+    member: str,
+    n: int | None = None,
+    decoder: str | None = None,
+    model: str | None = None,
 ) -> pd.DataFrame:
     """The rows of one SA reading (the unassisted conditions included), for the first ``n`` participants.
 
     With ``decoder``, the LA rows are that decoder reading's (a frame without a ``decoder``
-    column holds one reading).
+    column holds one reading); with ``model``, the rows are that participant model's (a frame
+    without a ``model`` column holds one model).
     """
     rows = frame[(frame.assistance == member) | (frame.assistance == NO_ASSISTANCE)]
     if decoder is not None and "decoder" in rows.columns:
         rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
+    if model is not None and "model" in rows.columns:
+        rows = rows[rows.model == model]
     if n is not None:
         rows = rows[rows.participant < n]
     return rows.reset_index(drop=True)
 
 
 def completion(time: pd.DataFrame) -> pd.DataFrame:
-    """Share of episodes finished within the horizon, per decoder reading, SA member and condition."""
-    keys = [k for k in ("decoder", "assistance", "condition") if k in time.columns]
+    """Share of episodes finished within the horizon, per model, decoder reading, SA member and condition."""
+    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in time.columns]
     return (
         time.groupby(keys, sort=False)
         .agg(
@@ -357,8 +433,18 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
 
 
 def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
-    """:func:`stuck`'s rows (with a ``decoder`` column) grouped by where they stopped: medians per group."""
-    keys = ["decoder", "condition", "assistance", "task", "phase", "goal"]
+    """:func:`stuck`'s rows (with ``decoder``, and ``model`` if any) grouped by where they stopped.
+
+    Medians per group.
+    """
+    keys = ["model"] * ("model" in stuck_rows.columns) + [
+        "decoder",
+        "condition",
+        "assistance",
+        "task",
+        "phase",
+        "goal",
+    ]
     medians = ("distance_cm", "angle_deg", "belief_goal", "best_progress", "inputs_progressing")
     return stuck_rows.groupby(keys).agg(
         episodes=("participant", "size"), **{m: (m, "median") for m in medians}
@@ -371,52 +457,77 @@ def readings_table(
     rows: list[Claim],
     decoders: list[str],
     member: str,
+    models: tuple[str, ...] = (),
 ) -> pd.DataFrame:
-    """One row per decoder reading, the headline first: its property, its completion, its verdicts.
+    """One row per participant model and decoder reading, the headlines first: property, completion, verdicts.
 
     Args:
         prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
         done: :func:`completion` of the study's time table.
         rows: The study's claims rows (:func:`claims`).
         decoders: The decoder readings, the headline first.
-        member: The headline SA member (LA+SA's completion is under it).
+        member: The headline SA member (the assisted conditions' completion is under it).
+        models: The participant models, the headline first; default: ``done``'s ``model``
+            column in order of appearance (none: one model, and no ``model`` column).
 
-    Columns: ``goals with the property``, ``least share staying``, ``LA finished``,
-    ``LA+SA finished``, and H1-H3's verdicts for 10 participants / the cohort (``-`` where
-    the study had no cohort).
+    Columns: ``model`` (with models), ``decoder``, ``headline`` (the headline decoder),
+    ``goals with the property``, ``least share staying``, ``R finished``, ``R+SA finished``,
+    ``LA finished``, ``LA+SA finished`` (that model's; Retargeting's do not depend on the
+    decoder), and H1-H3's verdicts for 10 participants / the cohort (``-`` where the study
+    had no cohort).
     """
+    if not models and "model" in done.columns:
+        models = tuple(dict.fromkeys(done.model))
     verdict = {c.id: c.reproduced for c in rows}
-    finished = done.set_index(["decoder", "assistance", "condition"]).finished
+    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
+    finished = done.set_index(keys).finished
     out = []
-    for d in decoders:
-        other = None if d == decoders[0] else d
-        mine = prop[prop.decoder == d]
-        out.append(
-            {
-                "decoder": d,
-                "headline": other is None,
-                "goals with the property": int(mine.has_property.sum()),
-                "least share staying": mine.stay_share.min(),
-                "LA finished": finished.get((d, NO_ASSISTANCE, "LA")),
-                "LA+SA finished": finished.get((d, member, "LA+SA")),
-                **{
-                    f"{h.upper()} (10 / all)": " / ".join(
-                        verdict.get(claim_id(h, 0, member, cohort, other), "-") for cohort in (False, True)
-                    )
-                    for h in DECODER_KEYS
-                },
+    for k, model in enumerate(models or (None,)):
+        lead = () if model is None else (model,)
+        for d in decoders:
+            other = None if d == decoders[0] else d
+            mine = prop[prop.decoder == d]
+            arms = {
+                c: (NO_ASSISTANCE if interface_of(c) == "R" else d, member if "+" in c else NO_ASSISTANCE)
+                for c in CONDITIONS
             }
-        )
+            out.append(
+                {
+                    **({} if model is None else {"model": model}),
+                    "decoder": d,
+                    "headline": other is None,
+                    "goals with the property": int(mine.has_property.sum()),
+                    "least share staying": mine.stay_share.min(),
+                    **{f"{c} finished": finished.get((*lead, *arms[c], c)) for c in CONDITIONS},
+                    **{
+                        f"{h.upper()} (10 / all)": " / ".join(
+                            verdict.get(claim_id(h, 0, member, cohort, other, model if k else None), "-")
+                            for cohort in (False, True)
+                        )
+                        for h in DECODER_KEYS
+                    },
+                }
+            )
     return pd.DataFrame(out)
 
 
 def analyse(
-    frames: dict[str, pd.DataFrame], member: str, n: int | None = None, decoder: str | None = None
+    frames: dict[str, pd.DataFrame],
+    member: str,
+    n: int | None = None,
+    decoder: str | None = None,
+    model: str | None = None,
+    horizon: float = math.inf,
+    n_resamples: int = 10_000,
 ) -> dict[str, object]:
-    """Every test the claims rest on, for one SA reading, decoder reading and the first ``n`` participants."""
-    err = for_member(frames["goal_error"], member, n, decoder)
-    time = for_member(frames["time"], member, n, decoder)
-    align = for_member(frames["alignment"], member, n, decoder)
+    """Every test the claims rest on, for one SA reading, decoder reading, participant model and first ``n``.
+
+    ``horizon`` [s] is where an unfinished episode's time was cut (H3's restricted times);
+    ``n_resamples`` the paired bootstrap's resamples for H3.
+    """
+    err = for_member(frames["goal_error"], member, n, decoder, model)
+    time = for_member(frames["time"], member, n, decoder, model)
+    align = for_member(frames["alignment"], member, n, decoder, model)
     out: dict[str, object] = {
         "n": int(err.participant.nunique()),
         "h1_within": stats.sa_effect_within(err, "goal_error"),
@@ -433,22 +544,47 @@ def analyse(
         phase: _paired(wide.get((phase, "LA+SA"), missing), wide.get((phase, "R+SA"), missing))
         for phase in ("stab", "scoop", "dip")
     }
-    others = [("LA+SA", c) for c in CONDITIONS if c != "LA+SA"]
-    out["h3_total"] = stats.pairwise(time, "total_time", agg="sum", pairs=others)
-    out["h3_idle"] = stats.pairwise(time, "idle_time", agg="sum", pairs=others)
-    means = time.groupby("condition")[["total_time", "idle_time"]].sum().div(out["n"])
-    out["means"] = means
-    totals = time.pivot_table(index="participant", columns="condition", values="total_time", aggfunc="sum")
-    best_other = str(means.total_time.drop("LA+SA").idxmin())
-    out["h3_gap"] = (best_other, *_paired(totals["LA+SA"], totals[best_other]))
+    out.update(_h3(time, horizon, n_resamples))
     return out
+
+
+def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
+    """H3's numbers: completion per condition, restricted means, and LA+SA's bootstrap contrasts.
+
+    ``h3_short`` names each condition that finishes fewer than :data:`COMPLETION_BAR` of its
+    episodes (``"LA 0%, LA+SA 0%"``; empty if none): then H3 is not testable. ``h3_total`` and
+    ``h3_idle`` are :func:`lasa.evidence.stats.rmst_contrasts` (LA+SA minus each other
+    condition), ``means`` the restricted means per participant over both tasks, and
+    ``h3_gap`` the contrast with the fastest other condition (by restricted mean Total Time).
+    """
+    done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
+    short = done[~(done >= COMPLETION_BAR)]  # an arm without episodes (NaN) is short too
+    contrasts = {
+        m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples)
+        for m in ("total_time", "idle_time")
+    }
+    means = pd.DataFrame(
+        {m: stats.restricted_times(time, m, horizon).mean() for m in ("total_time", "idle_time")}
+    )
+    best = str(means.total_time.drop("LA+SA").idxmin())
+    gap = contrasts["total_time"].set_index("b").loc[best]
+    return {
+        "h3_completion": done,
+        "h3_short": ", ".join(f"{c} {100 * v:.3g}%" for c, v in short.fillna(0.0).items()),
+        "h3_total": contrasts["total_time"],
+        "h3_idle": contrasts["idle_time"],
+        "means": means,
+        "h3_gap": (best, float(gap["diff"]), float(gap.ci_low), float(gap.ci_high)),
+        "horizon": horizon,
+    }
 
 
 def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, float, str]]:
     """(the tests' verdict, value, 95% ci_low, ci_high, measured) per claim key.
 
     The value is the effect the verdict rests on, and its interval is the t-interval of the
-    same test (paired over participants, or two-sample for the paper's F(1,18) reading).
+    same test (paired over participants, or two-sample for the paper's F(1,18) reading); for
+    H3 the percentile interval of the paired bootstrap (:func:`_h3_verdict`).
     """
     out: dict[str, tuple[str, float, float, float, str]] = {}
     for key, suffix, unit, scale in (("h1", "", "m s", 1.0), ("h1_mean_distance", "_mean", "cm", 100.0)):
@@ -484,31 +620,48 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
     assert isinstance(phases, dict)
     mean, low, high, p, _ = phases["scoop"]
     verdict = "yes" if mean > 0 and p < 0.05 else "partly" if mean > 0 else "no"  # NaN: "no"
-    text = "; ".join(f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" for ph, (m, _, _, pp, k) in phases.items())
+    text = "; ".join(
+        f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" if np.isfinite(pp) else f"{ph}: no test ({k} pairs)"
+        for ph, (m, _, _, pp, k) in phases.items()
+    )
     out["h2"] = (verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}")
+    out["h3"] = _h3_verdict(result)
+    return out
+
+
+def _h3_verdict(result: Mapping[str, object]) -> tuple[str, float, float, float, str]:
+    """H3's verdict, the LA+SA gap to the fastest other condition, its bootstrap interval, measured.
+
+    Not testable (the value and interval NaN) when a condition finishes fewer than
+    :data:`COMPLETION_BAR` of its episodes; else yes if every restricted-mean contrast of
+    LA+SA (Total and Idle Time, against R, R+SA and LA) has its 95% interval below 0, partly
+    if LA+SA has the lowest restricted mean Total Time, no otherwise.
+    """
     total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
-    assert (
-        isinstance(total, pd.DataFrame)
-        and isinstance(idle, pd.DataFrame)
-        and isinstance(means, pd.DataFrame)
-        and isinstance(gap, tuple)
+    short, done, horizon = result["h3_short"], result["h3_completion"], result["horizon"]
+    assert isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame)
+    assert isinstance(means, pd.DataFrame) and isinstance(gap, tuple) and isinstance(done, pd.Series)
+    assert isinstance(horizon, float | int)
+    to = "uncut" if math.isinf(horizon) else f"restricted to the {horizon:g} s horizon"
+    times = ", ".join(
+        f"{c} {means.total_time[c]:.0f} s (idle {means.idle_time[c]:.0f} s)" for c in CONDITIONS
     )
-    all_sig = bool(
-        ((total["diff"] < 0) & (total.p_corr < 0.05)).all()
-        and ((idle["diff"] < 0) & (idle.p_corr < 0.05)).all()
-    )
+    finished = ", ".join(f"{c} {100 * v:.3g}%" for c, v in done.fillna(0.0).items())
+    tail = f"mean total (idle) time over both tasks, {to}: {times}; completion: {finished}"
+    if short:
+        return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
+    all_below = bool((total.ci_high < 0).all() and (idle.ci_high < 0).all())
     fastest = means.total_time.idxmin() == "LA+SA"
-    verdict = "yes" if all_sig else "partly" if fastest else "no"
-    best, g_mean, g_low, g_high = gap[0], gap[1], gap[2], gap[3]
-    text = ", ".join(f"{c} {means.total_time[c]:.0f} s (idle {means.idle_time[c]:.0f} s)" for c in CONDITIONS)
-    out["h3"] = (
+    verdict = "yes" if all_below else "partly" if fastest else "no"
+    best, g_mean, g_low, g_high = gap
+    return (
         verdict,
         float(g_mean),
         float(g_low),
         float(g_high),
-        f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s; total (idle) time over both tasks: {text}",
+        f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s [{g_low:+.1f}, {g_high:+.1f}] (restricted "
+        f"means, paired bootstrap); {tail}",
     )
-    return out
 
 
 CLAIM_TEXT = {
@@ -545,20 +698,26 @@ _KEYS = {
 }
 
 
-def claim_id(key: str, member_index: int, member: str, cohort: bool, decoder: str | None = None) -> str:
+def claim_id(
+    key: str,
+    member_index: int,
+    member: str,
+    cohort: bool,
+    decoder: str | None = None,
+    model: str | None = None,
+) -> str:
     """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
 
-    The paper's reading is its measure, the headline decoder, the headline member
-    (hindsight, index 0) and its 10 participants; every other reading names what differs,
-    joined by ``+``: ``study.h1@mean_distance+grasp_set+cohort``, ``study.h3@home_entropy``
-    (``decoder``: a decoder reading other than the headline).
+    The paper's reading is its measure, the headline decoder, the headline participant model,
+    the headline member (hindsight, index 0) and its 10 participants; every other reading
+    names what differs, joined by ``+`` in that order: ``study.h1@mean_distance+grasp_set+cohort``,
+    ``study.h3@home_entropy``, ``study.h3@one_step``, ``study.h2@transfers_entropy+one_step+cohort``
+    (``decoder``: a decoder reading other than the headline; ``model``: a participant model
+    other than the headline).
     """
     base, measure = _KEYS[key]
-    parts = [
-        p
-        for p in (measure, decoder, None if member_index == 0 else member, "cohort" if cohort else None)
-        if p
-    ]
+    reading = (measure, decoder, model, None if member_index == 0 else member, "cohort" if cohort else None)
+    parts = [p for p in reading if p]
     return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
 
@@ -566,67 +725,127 @@ DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder r
 
 
 def claims(
-    frames: dict[str, pd.DataFrame], members: tuple[str, ...], n_total: int, decoders: tuple[str, ...] = ()
+    frames: dict[str, pd.DataFrame],
+    members: tuple[str, ...],
+    n_total: int,
+    decoders: tuple[str, ...] = (),
+    *,
+    models: tuple[str, ...] = (),
+    horizon: float = math.inf,
+    untestable: str | None = None,
+    untestable_decoders: Mapping[str, str] | None = None,
+    n_resamples: int = 10_000,
 ) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
-    """The claims rows under every reading (measure, member, decoder, 10 participants or the cohort).
+    """The claims rows under every reading (measure, member, decoder, participant model, 10 or the cohort).
 
-    ``decoders`` names the decoder readings in the frames' ``decoder`` column, the headline
-    first (empty: the frames hold one reading). The headline decoder is judged under every
-    measure and member; each other decoder reading under the paper's measures
-    (:data:`DECODER_KEYS`) and the headline member. ``analyses`` is keyed ``(member, n)``
-    for the headline decoder and ``(member, n, decoder)`` for the others.
+    Args:
+        frames: :func:`run`'s tables.
+        members: The SA members, the headline first.
+        n_total: The cohort's size (its first :data:`PAPER_N` are the paper's study).
+        decoders: The decoder readings in the frames' ``decoder`` column, the headline first
+            (empty: the frames hold one reading). The headline decoder is judged under every
+            measure and member; each other one under the paper's measures
+            (:data:`DECODER_KEYS`) and the headline member.
+        models: The participant models in the frames' ``model`` column, the headline first
+            (default: that column's, in order of appearance; none: one model). Each is judged
+            as the headline is, its ids naming it (:func:`claim_id`).
+        horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
+        untestable: If given, why the study cannot test its hypotheses at all (e.g. no
+            decoder has both halves of the property): every row reads ``not testable`` with
+            this reason in its note; ``measured`` keeps the numbers.
+        untestable_decoders: Decoder reading -> why its rows are not testable, the same way.
+        n_resamples: The paired bootstrap's resamples (H3).
 
-    A verdict is settled when the 95% t-interval of its effect lies on one side of zero
-    (:data:`lasa.evidence.rules.RULES`), which is the test's own significance at p < .05; then it is
-    the tests' verdict (yes / partly / no, the rules of this module's docstring), otherwise
-    ``undecided``: a study of that size cannot tell.
+    Returns:
+        The rows, and the analyses keyed ``(member, n)`` for the headline decoder and model,
+        ``(member, n, decoder)`` for another decoder under the headline model, and
+        ``(member, n, decoder, model)`` under every other model (``decoder`` None when the
+        frames hold one reading).
+
+    A verdict is settled when the 95% interval of its effect lies on one side of zero
+    (:data:`lasa.evidence.rules.RULES`): then it is the tests' verdict (yes / partly / no, the
+    rules of this module's docstring), otherwise ``undecided``; ``not testable`` is never settled.
     """
-    analyses: dict[tuple, dict[str, object]] = {}
-    rows: list[Claim] = []
+    if not models and "model" in frames["time"].columns:
+        models = tuple(dict.fromkeys(frames["time"].model))
     head = decoders[0] if decoders else None
     runs = [(m_i, member, head) for m_i, member in enumerate(members)]
     runs += [(0, members[0], d) for d in decoders[1:]]
-    for m_i, member, decoder in runs:
-        sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
-        other = decoder if decoder != head else None
-        for n, cohort in sizes:
-            result = analyse(frames, member, n, decoder)
-            analyses[(member, n) if other is None else (member, n, other)] = result
-            for key, (verdict, value, low, high, measured) in _verdicts(result).items():
-                if other is not None and key not in DECODER_KEYS:
-                    continue
-                cid = claim_id(key, m_i, member, cohort, other)
-                r = rule(cid)
-                settled = r.settled({"effect": (low, high)})
-                claim, paper = CLAIM_TEXT[key]
-                interval = f"95% t-interval of the effect [{low:.3g}, {high:.3g}]"
-                note = (
-                    f"{result['n']} simulated participants; SA = {member}; "
-                    + (f"decoder = {decoder}; " if decoder else "")
-                    + interval
-                    + ("" if settled else f", which straddles 0; the tests read {verdict!r}")
-                    + f". Rule: {r.text}."
-                )
-                rows.append(
-                    Claim(
-                        id=cid,
-                        claim=claim,
-                        figure="study",
-                        paper=paper,
-                        measured=measured,
-                        reproduced=verdict if settled else UNDECIDED,
-                        note=note,
-                        robot="panda",
-                        assistance=member,
-                        value=float(value),
-                        ci_low=float(low),
-                        ci_high=float(high),
-                        settled=settled,
-                        n_users=int(result["n"]),  # type: ignore[call-overload]
-                        values={"effect": float(value)},
-                    )
-                )
-    heads = {c.id: c for c in rows if "@" not in c.id}
+    sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
+    analyses: dict[tuple, dict[str, object]] = {}
+    rows: list[Claim] = []
+    for k, model in enumerate(models or (None,)):
+        other_model = model if k else None
+        for m_i, member, decoder in runs:
+            other = decoder if decoder != head else None
+            reason = untestable or (untestable_decoders or {}).get(str(decoder))
+            for n, cohort in sizes:
+                result = analyse(frames, member, n, decoder, model, horizon, n_resamples)
+                key = (member, n) + ((other,) if other else ()) if not k else (member, n, decoder, model)
+                analyses[key] = result
+                for name, judged in _verdicts(result).items():
+                    if other is not None and name not in DECODER_KEYS:
+                        continue
+                    cid = claim_id(name, m_i, member, cohort, other, other_model)
+                    rows.append(_claim_row(cid, name, judged, result, member, decoder, model, reason))
+    return _with_flips(rows), analyses
+
+
+def _claim_row(
+    cid: str,
+    key: str,
+    judged: tuple[str, float, float, float, str],
+    result: Mapping[str, object],
+    member: str,
+    decoder: str | None,
+    model: str | None,
+    reason: str | None,
+) -> Claim:
+    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason."""
+    verdict, value, low, high, measured = judged
+    r = rule(cid)
+    testable = verdict != NOT_TESTABLE and reason is None
+    settled = testable and r.settled({"effect": (low, high)})
+    n = int(result["n"])  # type: ignore[call-overload]
+    if verdict == NOT_TESTABLE:
+        why = measured.split(";", 1)[0] + ": every condition must finish "
+        why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its times are compared"
+    elif not (math.isfinite(low) and math.isfinite(high)):
+        why = f"no interval of the effect (too few participants to test); the tests read {verdict!r}"
+    else:
+        why = f"95% interval of the effect [{low:.3g}, {high:.3g}]" + (
+            "" if settled else f", which straddles 0; the tests read {verdict!r}"
+        )
+    note = (
+        (f"{NOT_TESTABLE} ({reason}). " if reason else "")
+        + f"{n} simulated participants; SA = {member}; "
+        + (f"decoder = {decoder}; " if decoder else "")
+        + (f"participant model = {model}; " if model else "")
+        + f"{why}. Rule: {r.text}."
+    )
+    claim, paper = CLAIM_TEXT[key]
+    return Claim(
+        id=cid,
+        claim=claim,
+        figure="study",
+        paper=paper,
+        measured=measured,
+        reproduced=verdict if settled else NOT_TESTABLE if not testable else UNDECIDED,
+        note=note,
+        robot="panda",
+        assistance=member,
+        value=float(value),
+        ci_low=float(low),
+        ci_high=float(high),
+        settled=settled,
+        n_users=n,
+        values={"effect": float(value)},
+    )
+
+
+def _with_flips(rows: list[Claim]) -> list[Claim]:
+    """Each headline row's note led by the readings whose verdict differs from it."""
+    heads = {c.id for c in rows if "@" not in c.id}
     out = []
     for c in rows:
         if c.id in heads:
@@ -642,7 +861,38 @@ def claims(
             )
             c = dataclasses.replace(c, note=lead + c.note)
         out.append(c)
-    return out, analyses
+    return out
+
+
+def untestable_reason(prop: pd.DataFrame) -> str | None:
+    """Why the study cannot test H1-H3, or None: is there a decoder with both halves of the property?
+
+    Args:
+        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders (one row
+            per decoder and goal, with ``has_property``, ``all_reached`` and ``stay_share``).
+
+    Returns:
+        None if some decoder has the property at every goal and reaches every goal from
+        home; else a reason naming the best reading (:func:`lasa.evidence.latent_property.choose`),
+        at how many goals it has the property, whether it reaches every goal, and its least
+        share of inputs that stay.
+    """
+    per = prop.groupby("decoder", sort=False).agg(
+        goals=("has_property", "sum"),
+        n=("has_property", "size"),
+        held=("has_property", "all"),
+        reached=("all_reached", "all"),
+        stay=("stay_share", "min"),
+    )
+    if (per.held & per.reached).any():
+        return None
+    best = latent_property.choose(prop)
+    b = per.loc[best]
+    return (
+        f"no decoder with both halves of the property; best reading {best}: the property at "
+        f"{int(b.goals)} of {int(b.n)} goals, {'every' if b.reached else 'not every'} goal reached "
+        f"from home, least share staying {b.stay:.2f}"
+    )
 
 
 # every interval the study's figures draw: a 95% bootstrap CI, seeded so the PNG is the same run after run
@@ -654,10 +904,12 @@ def _reading(member: str, decoder: str | None) -> str:
     return f"SA = {member}" + (f"; decoder = {decoder}" if decoder else "")
 
 
-def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
+def plot_goal_error(
+    frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None, model: str | None = None
+) -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants)."""
     sns.set_theme(style="whitegrid")
-    data = for_member(frame, member, decoder=decoder)
+    data = for_member(frame, member, decoder=decoder, model=model)
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     sns.barplot(
         data=data,
@@ -692,11 +944,25 @@ def plot_goal_error(frame: pd.DataFrame, member: str = "hindsight", decoder: str
     return fig
 
 
-def plot_time(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
-    """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI."""
+def plot_time(
+    frame: pd.DataFrame,
+    member: str = "hindsight",
+    decoder: str | None = None,
+    model: str | None = None,
+    horizon: float | None = None,
+) -> Figure:
+    """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
+
+    A bar whose episodes did not all finish within the horizon is hatched (its times are
+    censored: cut at the horizon), and every bar says which share finished. ``horizon`` [s]
+    names the horizon in the caption (default: the longest unfinished episode's time).
+    """
     sns.set_theme(style="whitegrid")
-    data = for_member(frame, member, decoder=decoder)
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4.2), sharey=True, layout="constrained")
+    data = for_member(frame, member, decoder=decoder, model=model)
+    if horizon is None:
+        cut = data.total_time[~data.completed.astype(bool)]
+        horizon = float(cut.max()) if len(cut) else math.nan
+    fig, axes = plt.subplots(1, 2, figsize=(9, 4.6), sharey=True, layout="constrained")
     for ax, task in zip(axes, ("Entree", "Dessert"), strict=True):
         part = data[data.task == task]
         sns.barplot(
@@ -710,6 +976,7 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight", decoder: str | Non
             ax=ax,
             legend=False,
         )
+        _mark_censored(ax, part.groupby("condition").completed.mean())
         sns.barplot(
             data=part,
             x="condition",
@@ -720,16 +987,50 @@ def plot_time(frame: pd.DataFrame, member: str = "hindsight", decoder: str | Non
             ax=ax,
             alpha=0.6,
         )
-        ax.set_title(f"{task}: total (solid) and idle (light)")
+        ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
         ax.set_ylabel("time [s]")
-    fig.suptitle(f"{data.participant.nunique()} simulated participants; {_reading(member, decoder)}")
+    axes[0].set_ylim(top=1.08 * axes[0].get_ylim()[1])  # room for the labels above the tallest bar
+    censored = mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="///", label="")
+    when = "" if math.isnan(horizon) else f" {horizon:g} s"
+    fig.legend(
+        [censored],
+        [f"hatched: censored at the{when} horizon (not every episode finished); text: share finished"],
+        loc="outside lower center",
+        frameon=False,
+        fontsize=8,
+    )
+    what = _reading(member, decoder) + (f"; participant model = {model}" if model else "")
+    fig.suptitle(f"{data.participant.nunique()} simulated participants; {what}", fontsize=10)
     return fig
 
 
-def plot_alignment(frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None) -> Figure:
+def _mark_censored(ax: plt.Axes, done: pd.Series) -> None:
+    """Hatch each bar (the axes' patches, one per condition) whose share finished is below 1; label each."""
+    for bar in [p for p in ax.patches if isinstance(p, mpatches.Rectangle)]:
+        i = round(bar.get_x() + bar.get_width() / 2)
+        if math.isnan(bar.get_height()) or not 0 <= i < len(CONDITIONS) or CONDITIONS[i] not in done:
+            continue
+        share = float(done[CONDITIONS[i]])
+        if share < 1:
+            bar.set_hatch("///")
+            bar.set_edgecolor("0.3")
+        ax.annotate(
+            f"{100 * share:.0f}% done",
+            (bar.get_x() + bar.get_width() / 2, bar.get_height()),
+            xytext=(0, 2),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=7,
+        )
+
+
+def plot_alignment(
+    frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None, model: str | None = None
+) -> Figure:
     """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them)."""
     sns.set_theme(style="whitegrid")
-    data = for_member(frame, member, decoder=decoder)
+    data = for_member(frame, member, decoder=decoder, model=model)
     data = data[(data.task == "Dessert") & data.phase.isin(["stab", "scoop", "dip"])]
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
     sns.pointplot(
@@ -751,8 +1052,8 @@ def plot_alignment(frame: pd.DataFrame, member: str = "hindsight", decoder: str 
     return fig
 
 
-# every table's keys: who, under which condition, SA member and decoder reading, which task
-ROW_KEYS = ("robot", "participant", "condition", "assistance", "decoder", "task")
+# every table's keys: who, under which condition, SA member, decoder reading and participant model, which task
+ROW_KEYS = ("robot", "participant", "condition", "assistance", "decoder", "model", "task")
 GOAL_ERROR = FigureSpec(
     "study_goal_error",
     (*ROW_KEYS, "order", "goal_error", "goal_error_bowls", "mean_distance"),

@@ -1,0 +1,112 @@
+"""The study's participant-model dimension and its time figure, on a tiny simulated cohort."""
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+
+from lasa.base.errors import ConfigError
+from lasa.figures import study
+from lasa.people import participants
+from lasa.world.eating import make_eating_task
+
+matplotlib.use("Agg")
+
+
+class LinearDecoder:
+    """A stand-in phi(z, s, b) = z W: the study's mechanics without a trained model."""
+
+    robot, n_goals, z_dim = "panda", 4, 2
+
+    def __init__(self, seed: int = 0) -> None:
+        self.weights = 0.3 * np.random.default_rng(seed).normal(size=(2, 7))
+
+    def decode_numpy(self, z, s, b):
+        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
+        return np.broadcast_to(np.asarray(z) @ self.weights, (*shape, 7)).copy()
+
+
+@pytest.fixture
+def twin(monkeypatch):
+    """A second participant model, ``twin``: participants.simulate, its calls recorded."""
+    calls = []
+
+    def simulate(*args, **kwargs):
+        calls.append(kwargs["interfaces"])
+        return participants.simulate(*args, **kwargs)
+
+    monkeypatch.setitem(study.PARTICIPANT_MODELS, "twin", simulate)
+    return calls
+
+
+def test_the_registry_and_the_config_validate_participant_models(twin):
+    assert study.PARTICIPANT_MODELS["one_step"] is participants.simulate
+    default = study.Config().participant_models
+    assert default[-1] == "one_step" and set(default) <= {"planning", "one_step"}
+    assert ("planning" in default) == ("planning" in study.PARTICIPANT_MODELS)
+    assert study.Config(participant_models=["twin", "one_step"]).participant_models == ("twin", "one_step")
+    with pytest.raises(ConfigError, match="participant model 'psychic'"):
+        study.Config(participant_models=("one_step", "psychic"))
+    with pytest.raises(ConfigError, match="without repeats"):
+        study.Config(participant_models=("one_step", "one_step"))
+    with pytest.raises(ConfigError, match="non-empty"):
+        study.Config(participant_models=())
+
+
+def test_run_simulates_each_model_and_labels_its_rows(twin):
+    task = make_eating_task()
+    config = study.Config(
+        n_participants=2, horizon=20, members=("hindsight",), participant_models=("one_step", "twin")
+    )
+    decoders = {"head": LinearDecoder(0), "other": LinearDecoder(1)}
+    episodes, frames = study.run(task, decoders, task.robot.control, config, progress=False)
+    assert twin == [("R", "LA"), ("LA",)]  # the headline decoder: every condition; the other: LA only
+    assert list(episodes) == ["one_step", "twin"] and list(episodes["twin"]) == ["head", "other"]
+    time = frames["time"]
+    assert list(dict.fromkeys(time.model)) == ["one_step", "twin"]
+    assert set(study.ROW_KEYS) <= set(time.columns) and "model" in study.ROW_KEYS
+    for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):
+        assert set(spec.COLUMNS) <= set(frames[spec.NAME.removeprefix("study_")].columns)
+    per_model = 2 * (4 + 2) * 2  # participants x (4 arms of the headline + LA, LA+SA of the other) x tasks
+    assert len(time) == 2 * per_model
+    one, two = (
+        time[time.model == m].drop(columns="model").reset_index(drop=True) for m in ("one_step", "twin")
+    )
+    pd.testing.assert_frame_equal(one, two)  # the same simulate, seed and cohort: the same episodes
+    rows, analyses = study.claims(frames, config.members, 2, ("head", "other"), horizon=2.0)
+    ids = {c.id for c in rows}
+    assert {"study.h3", "study.h3@twin", "study.h2@other+twin", "study.h1@mean_distance+twin"} <= ids
+    # 20 steps of 0.1 s: nobody finishes, so H3 is not testable under each model
+    assert {c.reproduced for c in rows if c.id.startswith("study.h3")} == {"not testable"}
+    done = study.completion(time)
+    assert set(done.model) == {"one_step", "twin"} and (done.finished == 0).all()
+
+
+def test_plot_time_hatches_censored_bars_and_says_how_many_finished():
+    rows = []
+    for p in range(4):
+        for cond in ("R", "R+SA", "LA", "LA+SA"):
+            asst = "hindsight" if "+" in cond else "none"
+            for task in ("Entree", "Dessert"):
+                done = cond.startswith("R") or (cond == "LA+SA" and p < 2)  # LA 0%, LA+SA 50%
+                t = 30.0 if done else 150.0
+                rows.append(
+                    {
+                        "participant": p,
+                        "condition": cond,
+                        "assistance": asst,
+                        "decoder": "none",
+                        "task": task,
+                        "total_time": t,
+                        "idle_time": t / 3,
+                        "completed": done,
+                    }
+                )
+    fig = study.plot_time(pd.DataFrame(rows))
+    for ax in fig.axes:
+        labels = sorted(t.get_text() for t in ax.texts)
+        assert labels == ["0% done", "100% done", "100% done", "50% done"]
+        hatched = [p for p in ax.patches if p.get_hatch()]
+        assert len(hatched) == 2 and all(p.get_height() > 30 for p in hatched)  # LA and LA+SA only
+    legend = " ".join(t.get_text() for leg in fig.legends for t in leg.get_texts())
+    assert "censored at the 150 s horizon" in legend
