@@ -391,30 +391,37 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
     assert t.loc[("b", "head"), "H2 (10 / all)"] == "no / no"  # the guard is H3's alone
 
 
-def test_untestable_reason_needs_a_decoder_with_the_property_at_every_goal_that_reaches_every_goal():
-    def table(holds, reached, stay):
-        return pd.DataFrame(
-            [
-                {
-                    "task": "eating",
-                    "decoder": d,
-                    "goal": g,
-                    "has_property": h,
-                    "all_reached": r,
-                    "stay_share": s,
-                    "theta_range": 1.0,
-                }
-                for d, hs, r, ss in zip(("stays", "leaves"), holds, reached, stay, strict=True)
-                for g, h, s in zip(range(4), hs, ss, strict=True)
-            ]
-        )
+def test_untestable_reason_needs_a_decoder_that_meets_the_rule():
+    def table(stay, leave, reached):
+        rows = []
+        for d, ss, ls, r in zip(("stays", "leaves"), stay, leave, reached, strict=True):
+            for g, st, lv in zip(range(4), ss, ls, strict=True):
+                rows.append(
+                    {
+                        "task": "eating",
+                        "decoder": d,
+                        "goal": g,
+                        "n_inputs": 64,
+                        "stay_share": st,
+                        "theta_range": 1.0,
+                        "leave_min": lv,
+                        "all_reached": r,
+                        "stay_holds": st >= 0.5,
+                    }
+                )
+        frame = pd.DataFrame(rows)
+        frame["has_property"] = frame.stay_holds & (frame.leave_min >= 7) & frame.all_reached
+        return frame
 
-    every, three = [True] * 4, [True, True, True, False]
-    assert study.untestable_reason(table([every, three], [True, True], [[0.6] * 4, [0.5] * 4])) is None
-    # the property everywhere but a goal not reached from home: the other half is missing
-    why = study.untestable_reason(table([every, three], [False, True], [[0.6] * 4, [0.5, 0.7, 0.2, 0.1]]))
+    # "leaves" has both halves at every goal and reaches every goal: testable
+    assert study.untestable_reason(table([[0.6] * 4, [0.5] * 4], [[0] * 4, [7] * 4], [True, True])) is None
+    # "stays" stays everywhere but never leaves; "leaves" leaves everywhere but stays at one goal only
+    why = study.untestable_reason(
+        table([[0.6] * 4, [0.5, 0.2, 0.1, 0.3]], [[0, 2, 0, 1], [30] * 4], [True, True])
+    )
     assert why == (
-        "no decoder with both halves of the property; best reading leaves: the property at 3 of 4 goals, "
-        "every goal reached from home, least share staying 0.10"
-    )  # latent_property.choose puts reaching every goal first
+        "no decoder with both halves of the property; best reading leaves: both halves at 1 of 4 goals, "
+        "the stay half at 1, every goal reached from home, least share staying 0.10, fewest inputs leaving "
+        "a goal for another 30 of 64"
+    )  # latent_property.choose ranks goals with both halves before goals with the stay half
     assert "(" not in why  # the verdict table's cell quotes it inside parentheses

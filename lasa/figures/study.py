@@ -73,7 +73,6 @@ bootstrap's) excludes zero, else ``undecided``.
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import math
 from collections.abc import Callable, Mapping
 
@@ -104,7 +103,7 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED, rule
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
-from lasa.people import participants
+from lasa.people import participants, planning
 from lasa.people.participants import (
     TASK_NAMES,
     Episodes,
@@ -166,30 +165,9 @@ COMPLETION_BAR = 0.95  # H3 compares times only if every condition finishes this
 Simulate = Callable[..., Episodes]  # lasa.people.participants.simulate's signature and return type
 
 
-def _participant_models() -> dict[str, Simulate]:
-    """The participant models :func:`run` knows: ``one_step`` always, ``planning`` once its module exists.
-
-    ``planning`` (:mod:`lasa.people.planning`, a participant who plans over held inputs) comes
-    first, as the headline, when that module can be imported.
-    """
-    models: dict[str, Simulate] = {"one_step": participants.simulate}
-    try:
-        planning = importlib.import_module("lasa.people.planning")
-    except ModuleNotFoundError as error:
-        if error.name != "lasa.people.planning":
-            raise
-        return models
-    return {"planning": planning.simulate, **models}
-
-
 # participant model name -> its simulate (the signature of lasa.people.participants.simulate);
-# a model of your own: add it here before building the Config that names it
-PARTICIPANT_MODELS: dict[str, Simulate] = _participant_models()
-
-
-def _default_models() -> tuple[str, ...]:
-    """``("planning", "one_step")``, without ``planning`` while :mod:`lasa.people.planning` does not exist."""
-    return tuple(m for m in ("planning", "one_step") if m in PARTICIPANT_MODELS)
+# the headline first. A model of your own: add it here before building the Config that names it.
+PARTICIPANT_MODELS: dict[str, Simulate] = {"planning": planning.simulate, "one_step": participants.simulate}
 
 
 PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
@@ -206,7 +184,7 @@ class Config:
     video_participant: int = 0  # whose Dessert the video shows [-]
     participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
     # participant models (PARTICIPANT_MODELS); the first is the headline [-]
-    participant_models: tuple[str, ...] = dataclasses.field(default_factory=_default_models)
+    participant_models: tuple[str, ...] = ("planning", "one_step")
 
     def __post_init__(self) -> None:
         validate(self)
@@ -865,33 +843,29 @@ def _with_flips(rows: list[Claim]) -> list[Claim]:
 
 
 def untestable_reason(prop: pd.DataFrame) -> str | None:
-    """Why the study cannot test H1-H3, or None: is there a decoder with both halves of the property?
+    """Why the study cannot test H1-H3, or None: does a decoder meet the property's rule?
 
     Args:
-        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders (one row
-            per decoder and goal, with ``has_property``, ``all_reached`` and ``stay_share``).
+        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
 
     Returns:
-        None if some decoder has the property at every goal and reaches every goal from
-        home; else a reason naming the best reading (:func:`lasa.evidence.latent_property.choose`),
-        at how many goals it has the property, whether it reaches every goal, and its least
-        share of inputs that stay.
+        None if some decoder has both halves of the property at every goal and reaches every
+        goal from home (:func:`lasa.evidence.latent_property.holds`); else a reason naming the
+        best reading (:func:`lasa.evidence.latent_property.choose`) and its numbers: the goals
+        with both halves and with the stay half, whether every goal is reached from home, its
+        least share staying and the fewest inputs that leave a goal for another (LA+SA).
     """
-    per = prop.groupby("decoder", sort=False).agg(
-        goals=("has_property", "sum"),
-        n=("has_property", "size"),
-        held=("has_property", "all"),
-        reached=("all_reached", "all"),
-        stay=("stay_share", "min"),
-    )
-    if (per.held & per.reached).any():
+    if latent_property.holds(prop).any():
         return None
     best = latent_property.choose(prop)
-    b = per.loc[best]
+    mine = prop[prop.decoder == best]
+    both, stay = int(mine.has_property.sum()), int(mine.stay_holds.sum())
+    reached = "every" if mine.all_reached.all() else "not every"
     return (
-        f"no decoder with both halves of the property; best reading {best}: the property at "
-        f"{int(b.goals)} of {int(b.n)} goals, {'every' if b.reached else 'not every'} goal reached "
-        f"from home, least share staying {b.stay:.2f}"
+        f"no decoder with both halves of the property; best reading {best}: both halves at {both} of "
+        f"{len(mine)} goals, the stay half at {stay}, {reached} goal reached from home, least share staying "
+        f"{mine.stay_share.min():.2f}, fewest inputs leaving a goal for another {mine.leave_min.min():.0f} "
+        f"of {int(mine.n_inputs.max())}"
     )
 
 
