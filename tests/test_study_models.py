@@ -110,3 +110,28 @@ def test_plot_time_hatches_censored_bars_and_says_how_many_finished():
         assert len(hatched) == 2 and all(p.get_height() > 30 for p in hatched)  # LA and LA+SA only
     legend = " ".join(t.get_text() for leg in fig.legends for t in leg.get_texts())
     assert "censored at the 150 s horizon" in legend
+
+
+def test_headline_model_is_the_first_whose_retargeting_episodes_finish() -> None:
+    def rows(model: str, finished: dict[str, list[bool]]) -> list[dict[str, object]]:
+        return [
+            {
+                "model": model,
+                "condition": c,
+                "assistance": "none" if c in ("R", "LA") else "hindsight",
+                "completed": f,
+            }
+            for c, flags in finished.items()
+            for f in flags
+        ]
+
+    ok = {"R": [True] * 20, "R+SA": [True] * 19 + [False], "LA": [False] * 20}  # LA plays no part
+    short = {"R": [True] * 18 + [False] * 2, "R+SA": [True] * 20}  # R: 90%
+    time = pd.DataFrame(rows("planning", short) + rows("one_step", ok))
+    assert study.headline_model(time, ("planning", "one_step")) == "one_step"
+    time = pd.DataFrame(rows("planning", ok) + rows("one_step", ok))
+    assert study.headline_model(time, ("planning", "one_step")) == "planning"
+    time = pd.DataFrame(rows("planning", short) + rows("one_step", short))
+    assert study.headline_model(time, ("planning", "one_step")) == "planning"  # none qualifies: the first
+    with pytest.raises(ConfigError, match="at least one"):
+        study.headline_model(time, ())
