@@ -626,9 +626,9 @@ def plot(frame: pd.DataFrame) -> Figure:
     for row_axes, name in zip(axes, tasks, strict=True):
         _plot_task(row_axes, table[table.task == name], name)
     fig.suptitle(
-        f"The latent-action property, both halves (Sec. III, IV-B). Red frame: the half holds at that goal "
-        f"(stay: at least {STAY_SHARE:.0%} of inputs stay, reaching a tilt range of at least {TILT_RANGE}; "
-        f"leave: at least {LEAVE_COUNT} of 64 inputs reach every other goal in 10 s under LA+SA)\n"
+        "The latent-action property, both halves (Sec. III, IV-B). Red frame: the half holds at that goal\n"
+        f"stay: at least {STAY_SHARE:.0%} of inputs stay, reaching a tilt range of at least {TILT_RANGE}; "
+        f"leave: at least {LEAVE_COUNT} of 64 inputs reach every other goal within 10 s under LA+SA\n"
         "✓: the property holds at every goal (the rule); ★: the rule's choice among a task's decoders",
         fontsize=10,
     )
