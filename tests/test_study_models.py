@@ -82,6 +82,27 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
     assert set(done.model) == {"one_step", "twin"} and (done.finished == 0).all()
 
 
+def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(twin):
+    task = make_eating_task()
+    config = study.Config(
+        n_participants=2,
+        horizon=20,
+        members=("hindsight",),
+        participant_models=("one_step", "twin"),
+        readings_per_model={"twin": 1},
+    )
+    decoders = {"head": LinearDecoder(0), "other": LinearDecoder(1)}
+    episodes, frames = study.run(task, decoders, task.robot.control, config, progress=False)
+    assert twin == [("R", "LA")] and list(episodes["twin"]) == ["head"]
+    time = frames["time"]
+    assert set(time[time.model == "twin"].decoder) == {"head", "none"}
+    rows, _ = study.claims(frames, config.members, 2, ("head", "other"), horizon=2.0)
+    ids = {c.id for c in rows}
+    assert {"study.h3@twin", "study.h2@other"} <= ids and not any("other+twin" in i for i in ids)
+    with pytest.raises(ConfigError, match="readings_per_model"):
+        study.Config(readings_per_model={"psychic": 1})
+
+
 def test_plot_time_hatches_censored_bars_and_says_how_many_finished():
     rows = []
     for p in range(4):

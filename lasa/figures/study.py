@@ -186,6 +186,9 @@ class Config:
     participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
     # participant models (PARTICIPANT_MODELS); the first is the headline [-]
     participant_models: tuple[str, ...] = ("planning", "one_step")
+    # decoder readings a model runs, the headline and the next ones in notebook 10's ranking (a
+    # model not named runs every reading): a planning study costs ~5x a one-step one per reading
+    readings_per_model: dict[str, PositiveInt] = dataclasses.field(default_factory=lambda: {"planning": 4})
 
     def __post_init__(self) -> None:
         validate(self)
@@ -198,6 +201,8 @@ class Config:
             raise ConfigError(f"participant_models must be non-empty and without repeats, got {models}")
         for name in models:
             check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
+        for name in self.readings_per_model:
+            check_choice("readings_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
         if not 0 <= self.video_participant < self.n_participants:
             raise ConfigError(
                 f"video_participant must be in [0, {self.n_participants}), got {self.video_participant}"
@@ -233,7 +238,8 @@ def run(
     Each of ``config.participant_models`` (the headline first) runs the same cohort. The first
     of ``decoders`` is the headline: every condition under every member. Each other reading
     runs LA and LA+SA only, under the headline member (Retargeting does not use the decoder:
-    its episodes are the headline run's, the same participants and random streams).
+    its episodes are the headline run's, the same participants and random streams). A model
+    named in ``config.readings_per_model`` runs only the first that many of ``decoders``.
 
     Returns:
         The episodes per participant model and decoder reading (``episodes[model][decoder]``),
@@ -248,7 +254,8 @@ def run(
     for model in config.participant_models:
         simulate = PARTICIPANT_MODELS[model]
         episodes[model] = {}
-        for i, (name, decoder) in enumerate(decoders.items()):
+        limit = config.readings_per_model.get(model, len(decoders))
+        for i, (name, decoder) in enumerate(list(decoders.items())[:limit]):
             settings = (
                 config.study() if i == 0 else dataclasses.replace(config.study(), members=config.members[:1])
             )
@@ -488,6 +495,8 @@ def readings_table(
     for k, model in enumerate(models or (None,)):
         lead = () if model is None else (model,)
         for d in decoders:
+            if not _ran(done, model, d):
+                continue
             other = None if d == decoders[0] else d
             mine = prop[prop.decoder == d]
             arms = {
@@ -780,6 +789,8 @@ def claims(
     for k, model in enumerate(models or (None,)):
         other_model = model if k else None
         for m_i, member, decoder in runs:
+            if not _ran(frames["time"], model, decoder):
+                continue
             other = decoder if decoder != head else None
             reason = untestable or (untestable_decoders or {}).get(str(decoder))
             for n, cohort in sizes:
@@ -792,6 +803,16 @@ def claims(
                     cid = claim_id(name, m_i, member, cohort, other, other_model)
                     rows.append(_claim_row(cid, name, judged, result, member, decoder, model, reason))
     return _with_flips(rows), analyses
+
+
+def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
+    """Whether the time table holds LA episodes of this participant model and decoder reading."""
+    rows = time
+    if model is not None and "model" in time.columns:
+        rows = rows[rows.model == model]
+    if decoder is not None and "decoder" in time.columns:
+        rows = rows[rows.decoder == decoder]
+    return len(rows) > 0
 
 
 def _claim_row(
