@@ -357,9 +357,11 @@ def test_study_outputs(executed):
     )
     settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
     readings = eating_task.reading_names(from_dict(eating_task.Config, settings10))
-    # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member
-    # per participant model: participants x arms x tasks
-    episodes = len(models) * n * (2 + 2 * len(members) + 2 * (len(readings) - 1)) * 2
+    # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member;
+    # per participant model (the first readings_per_model of the ranking): participants x arms x tasks
+    limits = study.Config().readings_per_model
+    runs = [min(limits.get(m, len(readings)), len(readings)) for m in models]
+    episodes = sum(n * (2 + 2 * len(members) + 2 * (k - 1)) * 2 for k in runs)
     for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):
         frame = pd.read_csv(fig / f"{spec.NAME}.csv")
         assert list(frame.columns) == list(spec.COLUMNS)
@@ -384,9 +386,12 @@ def test_study_outputs(executed):
     }  # < 10: no cohort
     others = {i + ("+" if "@" in i else "@") + m for i in ids for m in members[1:]}
     prop = pd.read_csv(fig / "latent_property.csv")
-    headline = latent_property.choose(latent_property.summary(prop[prop.task == "eating"]))
-    decoders = {f"study.{h}@{d}" for h in ("h1", "h2", "h3") for d in readings if d != headline}
-    heads = ids | others | decoders
+    ranked = list(latent_property.ranking(latent_property.summary(prop[prop.task == "eating"])).index)
+
+    def heads(model: str) -> set[str]:
+        """The headline model's ids for the readings ``model`` ran (the first of the ranking)."""
+        k = min(limits.get(model, len(ranked)), len(ranked))
+        return ids | others | {f"study.{h}@{d}" for h in ("h1", "h2", "h3") for d in ranked[1:k]}
 
     def with_model(cid: str, model: str) -> str:
         """A headline model's id under another model: its name after the measure and decoder."""
@@ -395,7 +400,7 @@ def test_study_outputs(executed):
         tail = [p for p in parts if p in members or p == "cohort"]
         return f"{base}@" + "+".join([p for p in parts if p not in tail] + [model] + tail)
 
-    assert set(rows.id) == heads | {with_model(i, m) for i in heads for m in models[1:]}
+    assert set(rows.id) == heads(models[0]) | {with_model(i, m) for m in models[1:] for i in heads(m)}
     time_la = time[time.condition.str.startswith("LA")]
     assert set(time_la.decoder) == set(readings)
     assert set(time[time.condition.str.startswith("R")].decoder) == {"none"}
