@@ -638,6 +638,31 @@ def _verdicts(result: dict[str, object]) -> dict[str, tuple[str, float, float, f
     )
     out["h2"] = (verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}")
     out["h3"] = _h3_verdict(result)
+    return _censored_goal_error(out, str(result["h3_short"]))
+
+
+def _censored_goal_error(
+    out: dict[str, tuple[str, float, float, float, str]], short: str
+) -> dict[str, tuple[str, float, float, float, str]]:
+    """H1's readings are not testable when a condition finishes too few episodes (``short``).
+
+    Goal Error is summed over the task's steps (and the mean distance is that sum over the
+    task's time): an episode cut at the horizon has its sum cut there too, a censored measure
+    like its time, so H1 takes H3's completion guard. H2 compares the alignment within the
+    scoop phase among the participants who reached it under both conditions, with its pairs
+    counted, and keeps its verdict.
+    """
+    if not short:
+        return out
+    for key in ("h1", "h1_mean_distance", "h1_paper_test"):
+        measured = out[key][4]
+        out[key] = (
+            NOT_TESTABLE,
+            math.nan,
+            math.nan,
+            math.nan,
+            f"{NOT_TESTABLE} (completion: {short}); {measured}",
+        )
     return out
 
 
