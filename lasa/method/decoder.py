@@ -195,7 +195,7 @@ class LatentActionModel(nn.Module):
         buffers (1024 x 128 float32, 512 KB each) reused across chunks and calls, one pair
         per thread, with the output layer's buffers; every op writes in place. The output
         layer is :math:`V^\top = W_o U^\top` (MKL runs it up to 2x faster than
-        :math:`U W_o^\top` for n = 5-7). Until 2026-12-03 tanh went through an in-place
+        :math:`U W_o^\top` for n = 5-7). Until late on 2026-12-02 tanh went through an in-place
         ``sigmoid_`` (faster on the AMD EPYC it was tuned on, 1.5-2x slower on the Xeon
         that replaced it, where ``tanh_`` costs about 0.6 ns per element); see
         ``benchmarks/README.md``. A row's result does not depend on its batch or chunk (with
