@@ -198,3 +198,25 @@ def test_parse_params():
     }
     with pytest.raises(ConfigError, match="NAME=VALUE"):
         parse_params(["oops"])
+
+
+def test_only_remeasures_one_part_and_keeps_the_rest(tmp_path):
+    """``--only decoder_vs_gemm`` replaces that part's keys, records when, and keeps every other key."""
+    path = tmp_path / "results.json"
+    path.write_text(
+        json.dumps({"machine": {"date": "old"}, "sweep": {"1": 1.0}, "decoder_vs_gemm_fraction": -1})
+    )
+    assert bench.main(["--out", str(tmp_path), "--tiny", "--only", "decoder_vs_gemm"]) == 0
+    results = json.loads(path.read_text())
+    assert results["machine"] == {"date": "old"} and results["sweep"] == {"1": 1.0}
+    assert results["decoder_vs_gemm_fraction"] == results["decoder_vs_gemm"]["fraction"] > 0
+    assert results["remeasured"]["decoder_vs_gemm"]["machine"]["date"]
+
+
+def test_interleaved_warms_each_call_before_its_timing():
+    """With ``warm_each``, every timing is preceded by an untimed call of the same callable."""
+    order: list[str] = []
+    calls = {"a": lambda: order.append("a"), "b": lambda: order.append("b")}
+    bench._interleaved(calls, 2, budget_s=0.0, clock=lambda: 0.0, warm_each=True)
+    # warm-up (two calls each), then per round: a warm call and one timed call of each
+    assert order == ["a", "a", "b", "b"] + ["a", "a", "b", "b"] * 2

@@ -167,3 +167,28 @@ def test_ablation_config_needs_the_control():
         entropy_ablation.Config(lambdas=(0.1, 0.3))
     with pytest.raises(ConfigError, match="lambda"):
         entropy_ablation.Config(lambdas=(0.0, -1.0))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_nearest_distance_is_distance_to_sets(task, seed):
+    """The entropy term's distance: distance_to_sets_torch's value to the bit, its gradient to rounding."""
+    from lasa.method.belief import distance_to_sets_torch
+    from lasa.method.entropy import nearest_distance
+
+    sets = torch.as_tensor(task.belief_targets("grasp_set"), dtype=torch.float32)
+    rng = np.random.default_rng(seed)
+    lo, hi = task.robot.lower, task.robot.upper
+    # states of the workspace, and points on the sets' vertices and segments (ties between segments)
+    near = sets.reshape(-1, sets.shape[-1]).numpy()
+    mid = 0.5 * (near[:-1] + near[1:])
+    pts = np.concatenate(
+        [rng.uniform(lo, hi, (500, len(lo))), near, mid, near + 1e-4 * rng.normal(size=near.shape)]
+    )
+    points = torch.tensor(pts, dtype=torch.float32).reshape(-1, 1, len(lo)).requires_grad_()
+    weight = torch.as_tensor(rng.normal(size=(len(pts), 1, sets.shape[0])), dtype=torch.float32)
+    ref = distance_to_sets_torch(points, sets)
+    (ref_grad,) = torch.autograd.grad((ref * weight).sum(), points)
+    out = nearest_distance(points, sets)
+    (grad,) = torch.autograd.grad((out * weight).sum(), points)
+    assert out.shape == ref.shape and torch.equal(out, ref)
+    torch.testing.assert_close(grad, ref_grad, rtol=0, atol=1e-6)

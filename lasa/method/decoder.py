@@ -14,7 +14,7 @@ Two bounds make the model fit the control loop:
 Training and gradients use :meth:`LatentActionModel.decode` (torch, autograd). The
 simulations use :meth:`LatentActionModel.decode_numpy`, an inference-only forward of the
 same function on numpy arrays, written for throughput (see its docstring): it agrees with
-``decode`` to float32 rounding, not bit for bit.
+``decode`` to float32 rounding (below 1e-6), not bit for bit.
 
 A checkpoint holds the state dict and the plain-dict config the model was built with;
 :func:`load_checkpoint` loads it with ``torch.load(..., weights_only=True)`` and checks
@@ -178,38 +178,28 @@ class LatentActionModel(nn.Module):
 
         The same function as :meth:`decode` (z clamped to [-1, 1], ``||phi|| < sigma_h``),
         computed by an inference-only forward written for the simulations' batches (U users
-        x K joystick candidates: z of shape (1, K, d), s of (U, 1, n), b of (U, 1, G)). It is
-        exact algebra on the same weights but not the same float operations: it agrees with
-        :meth:`decode` to float32 rounding (max abs difference about 1e-6 on actions bounded
-        by sigma_h = 1), not bit for bit. The changes, and what each costs in exactness:
+        x K joystick candidates: z of shape (1, K, d), s of (U, 1, n), b of (U, 1, G)). The
+        same float32 layers (``addmm`` then ``tanh_``, as ``nn.Linear`` and ``nn.Tanh``), two
+        changes of rounding only (max abs difference from :meth:`decode` below 1e-6 at
+        sigma_h = 1, ``tests/test_decoder.py``):
 
-        - **tanh through the sigmoid** (the main difference, about 2e-7 absolute per
-          activation): :math:`\tanh(h) = 2(\sigma(2h) - 1/2)`. The factors 2 are folded
-          into the weights as exact powers of two, :math:`2h' = (4W)(u - 1/2) + 2c` with
-          :math:`u = \sigma(2h)`, so a hidden layer is one GEMM, an in-place ``sigmoid_``
-          and an in-place ``sub_(0.5)``. torch's CPU ``tanh_`` costs about 4 ns per element
-          here, ``sigmoid_`` about 1 ns. The activations stay centred: folding the
-          ``- 1/2`` into the next bias instead (one op fewer) made the GEMMs cancel and
-          tripled the error.
-        - **The first layer split** (rounding only): :math:`2(W_1 [z, (s - \mu)/\sigma, b]
-          + c_1) = W_z' z + (W_{sb}' [s, b] + c_1')`, the state normalisation folded in, in
-          float64, each term rounded to float32 once. The z term is computed once per
-          distinct z and the context term once per distinct (s, b), on the inputs'
-          unexpanded shapes; each row's first layer is then one broadcast add, not a GEMM
-          over a concatenated, expanded input.
-        - **The radial squash in float64** on the float32 output layer (rounding only).
+        - **The first layer split**: :math:`W_1 [z, (s - \mu)/\sigma, b] + c_1 = (W_z z + c_1')
+          + W_{sb}' [s, b]`, the state normalisation folded in, in float64, each term rounded
+          to float32 once: the z term once per distinct z, the context term once per
+          distinct (s, b), on the inputs' unexpanded shapes; each row's first layer is then
+          one broadcast add, not a GEMM over a concatenated, expanded input.
+        - **The radial squash in float64** on the float32 output layer.
 
-        And for speed alone: rows (the broadcast batch, flattened) go through the MLP in
-        chunks of about ``_CHUNK_ROWS`` = 1024 along the first broadcast axis, into two
-        activation buffers (1024 x 128 float32 = 512 KB each: the pair fills a core's 1 MB
-        L2 cache) that are reused across chunks and calls, one pair per thread; every op
-        writes in place (``torch.addmm(out=...)``, ``sigmoid_``). Measured on this
-        repository's machine (2 vCPUs of an AMD EPYC, one thread, 2026-12-02): 1024 and 2048
-        rows were equal within noise, 256-512 rows 5-25% slower (per-chunk overhead), and
-        no chunking 15-30% slower at 256-4096 users. The output layer is computed as
-        :math:`V^\top = W_o U^\top`, which MKL runs about twice as fast as :math:`U W_o^\top`
-        for n = 5-7 outputs. A row's result does not depend on its batch or chunk (with one
-        torch and OpenMP thread, on this machine, to the bit, as with :meth:`decode`).
+        For speed: rows (the broadcast batch, flattened) go through the MLP in chunks of
+        about ``_CHUNK_ROWS`` = 1024 along the first broadcast axis, into two activation
+        buffers (1024 x 128 float32, 512 KB each) reused across chunks and calls, one pair
+        per thread, with the output layer's buffers; every op writes in place. The output
+        layer is :math:`V^\top = W_o U^\top` (MKL runs it up to 2x faster than
+        :math:`U W_o^\top` for n = 5-7). Until late on 2026-12-02 tanh went through an in-place
+        ``sigmoid_`` (faster on the AMD EPYC it was tuned on, 1.5-2x slower on the Xeon
+        that replaced it, where ``tanh_`` costs about 0.6 ns per element); see
+        ``benchmarks/README.md``. A row's result does not depend on its batch or chunk (with
+        one torch and OpenMP thread, to the bit, as with :meth:`decode`).
 
         It computes this class's :meth:`decode`: where a subclass overrides ``decode`` (or
         a test patches it), ``decode_numpy`` calls that ``decode`` on the expanded inputs,
@@ -248,8 +238,8 @@ class LatentActionModel(nn.Module):
 _DECODE = LatentActionModel.decode  # the decode that the inference plan implements
 
 # Rows (users x candidates) per chunk of the inference forward: two 1024 x 128 float32
-# buffers fill a core's 1 MB L2 cache; measured best (with 2048) of 256-2048 and no
-# chunking, see LatentActionModel.decode_numpy.
+# buffers stay in a core's L2 cache (1 MB on the AMD EPYC, 2 MB on the Xeon); measured best
+# (with 2048) of 256-2048 and no chunking there, and 512-2048 equal within noise here.
 _CHUNK_ROWS = 1024
 
 
@@ -277,6 +267,21 @@ class _Buffers(threading.local):
         self.a = torch.empty(0)
         self.b = torch.empty(0)
         self.views: dict[tuple[int, ...], tuple[Any, ...]] = {}
+        self.out = torch.empty(0, 0)
+        self.out64 = np.empty((0, 0))
+
+    def output(self, n: int, rows: int) -> tuple[torch.Tensor, np.ndarray]:
+        """The (n x rows) output layer's buffer, float32, and one of float64 for its squash.
+
+        Kept between calls up to ``_KEEP_ROWS`` x 8 rows (the squash's fresh result is the
+        only array a call allocates at full size); larger ones are made for the call.
+        """
+        if rows > 8 * _KEEP_ROWS:
+            return torch.empty(n, rows), np.empty((n, rows))
+        if self.out.shape[0] != n or self.out.shape[1] < rows:
+            self.out = torch.empty(n, max(rows, self.out.shape[1]))
+            self.out64 = np.empty(self.out.shape)
+        return self.out[:, :rows], self.out64[:, :rows]
 
     def get(self, shape: tuple[int, ...], width: int) -> tuple[Any, ...]:
         """Views of the two (rows x width) buffers for a chunk of leading shape ``shape``.
@@ -320,18 +325,15 @@ class _InferencePlan:
             std = model.state_std.detach().double()
             w1, c1 = weights[0], biases[0]
             w_s = w1[:, d : d + n] / std
-            # 2 h1 = 2 W_z z + [2 W_s / std, 2 W_b] [s, b] + 2 (c1 - W_s mean / std), in float64
-            self.w_z = (2.0 * w1[:, :d]).T.numpy().copy()  # (d, H)
-            self.w_sb = (2.0 * torch.cat([w_s, w1[:, d + n :]], dim=1)).T.numpy().copy()  # (n + G, H)
-            self.c1 = (2.0 * (c1 - w_s @ mean)).numpy()  # (H,)
-            # tanh(h_prev) = 2 (u - 1/2) with u = sigma(2 h_prev), so 2 h = (4 W)(u - 1/2) + 2 c:
-            # scalings by powers of two, exact in float32
+            # h1 = W_z z + [W_s / std, W_b] [s, b] + (c1 - W_s mean / std), in float64
+            self.w_z = w1[:, :d].T.numpy().copy()  # (d, H)
+            self.w_sb = torch.cat([w_s, w1[:, d + n :]], dim=1).T.numpy().copy()  # (n + G, H)
+            self.c1 = (c1 - w_s @ mean).numpy()  # (H,)
             self.hidden = [
-                ((4.0 * w).float().t(), (2.0 * c).float())
-                for w, c in zip(weights[1:-1], biases[1:-1], strict=True)
-            ]
-            self.w_o = (2.0 * weights[-1]).float().contiguous()  # (n, H): V^T = (2 W_o)(U - 1/2)^T + c_o
-            self.c_o = biases[-1].float()[:, None].contiguous()  # (n, 1)
+                (layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]
+            ]  # float32 views of the weights, as decode's nn.Linear reads them
+            self.w_o = layers[-1].weight.detach().contiguous()  # (n, H): V^T = W_o U^T + c_o
+            self.c_o = layers[-1].bias.detach()[:, None].contiguous()  # (n, 1)
         self.tensors = _weight_tensors(model)  # held, so that identity checks are exact
         self.versions = [t._version for t in self.tensors]
         self.scale = float(cfg.action_scale)
@@ -368,17 +370,17 @@ class _InferencePlan:
         lead = shape or (1,)
         width, n = self.width, self.n
         # the first layer's two terms (float64), each on its own, unexpanded leading shape
+        # (the bias goes with z: the rollouts' z term has K rows, their context term U)
         if self.d == 1:
-            t_z = z * self.w_z[0]
+            t_z = z * self.w_z[0] + self.c1
         else:
-            t_z = (z.reshape(-1, self.d) @ self.w_z).reshape(z_lead + (width,))
+            t_z = (z.reshape(-1, self.d) @ self.w_z + self.c1).reshape(z_lead + (width,))
         if s_lead == b_lead:
             sb = np.concatenate((s, b), axis=-1)
             t_c = (sb.reshape(-1, sb.shape[-1]) @ self.w_sb).reshape(s_lead + (width,))
-            t_c += self.c1
         else:
             ns = s.shape[-1]
-            t_c = s @ self.w_sb[:ns] + b @ self.w_sb[ns:] + self.c1
+            t_c = s @ self.w_sb[:ns] + b @ self.w_sb[ns:]
         rows_total = math.prod(lead)
         if rows_total == 0:
             return np.zeros(shape + (n,))
@@ -389,16 +391,16 @@ class _InferencePlan:
         inner = math.prod(lead[1:])
         chunks = -(-lead[0] // max(1, _CHUNK_ROWS // max(inner, 1)))
         step = -(-lead[0] // chunks)  # indices of the first axis per chunk, balanced
-        out_t = torch.empty(n, rows_total)  # V transposed
         hidden, buffers, w_o, c_o = self.hidden, self.buffers, self.w_o, self.c_o
+        out_t, v = buffers.output(n, rows_total)  # V transposed, and its float64 copy
         last_is_b = len(hidden) % 2 == 1
         if chunks == 1:  # the first layer's add in numpy: fewer calls for small batches
             first_np, _, h, g, a_t, b_t = buffers.get(lead, width)
             np.add(t_z32, t_c32, out=first_np)
-            h.sigmoid_().sub_(0.5)
+            h.tanh_()
             for w, c in hidden:
                 torch.addmm(c, h, w, out=g)
-                g.sigmoid_().sub_(0.5)
+                g.tanh_()
                 h, g = g, h
             torch.addmm(c_o, w_o, b_t if last_is_b else a_t, out=out_t)
         else:
@@ -410,13 +412,13 @@ class _InferencePlan:
                 torch.add(
                     _along_first(tz32, start, stop, full), _along_first(tc32, start, stop, full), out=first
                 )
-                h.sigmoid_().sub_(0.5)
+                h.tanh_()
                 for w, c in hidden:
                     torch.addmm(c, h, w, out=g)
-                    g.sigmoid_().sub_(0.5)
+                    g.tanh_()
                     h, g = g, h
                 torch.addmm(c_o, w_o, b_t if last_is_b else a_t, out=out_t[:, start * inner : stop * inner])
-        v = out_t.numpy().astype(np.float64)  # (n, rows)
+        np.copyto(v, out_t.numpy())  # (n, rows), float64
         norm = np.sqrt(np.einsum("ij,ij->j", v, v))
         np.maximum(norm, 1e-8, out=norm)
         factor = np.tanh(norm)
