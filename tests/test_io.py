@@ -53,3 +53,19 @@ def test_update_csv_replaces_one_robots_rows(tmp_path):
     assert len(pd.read_csv(path)) == 2
     with pytest.raises(ArtifactError, match="columns"):
         update_csv(path, pd.DataFrame({"robot": ["a"], "y": [1]}))
+
+
+def test_update_csv_replaces_an_older_version_only_when_every_row_goes(tmp_path):
+    from lasa.base.io import update_csv
+
+    path = tmp_path / "t.csv"
+    update_csv(path, pd.DataFrame({"robot": ["a", "a"], "x": [1, 2]}))
+    # new columns, and every old row is the robot being replaced: the file is the new table
+    update_csv(path, pd.DataFrame({"robot": ["a"], "x": [5], "model": ["m"]}))
+    table = pd.read_csv(path)
+    assert list(table.columns) == ["robot", "x", "model"] and list(table.x) == [5]
+    # another robot's rows would be lost: still an error, and the file is untouched
+    update_csv(path, pd.DataFrame({"robot": ["b"], "x": [3], "model": ["m"]}))
+    with pytest.raises(ArtifactError, match="columns"):
+        update_csv(path, pd.DataFrame({"robot": ["a"], "y": [1]}))
+    assert len(pd.read_csv(path)) == 2

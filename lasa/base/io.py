@@ -114,6 +114,9 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
     figure is then drawn from every robot present. Written atomically, under
     :func:`locked` so that robots running in parallel do not lose each other's rows.
 
+    A file of other columns (an older version's) is replaced when ``frame`` replaces every
+    one of its rows, since none of them would be kept; otherwise it is an error.
+
     Returns:
         ``path``. Read it back for the whole table: the file holds the rows as rounded
         on writing, the same whichever robot wrote last.
@@ -122,7 +125,10 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
     with locked(path.parent):
         if path.exists():
             old = pd.read_csv(path)
-            if key not in old.columns or list(old.columns) != list(frame.columns):
+            replaced = key in old.columns and old[key].isin(frame[key].unique()).all()
+            if list(old.columns) != list(frame.columns) and replaced:
+                old = old.iloc[:0].reindex(columns=frame.columns)
+            elif key not in old.columns or list(old.columns) != list(frame.columns):
                 raise ArtifactError(
                     f"{path} has columns {list(old.columns)}, expected {list(frame.columns)}; "
                     "delete it and re-run the notebooks that write it"
