@@ -73,7 +73,7 @@ class Design:
     Why these values: 60 is the verdict map's smallest cell (each of its cells must rest on
     at least 60 users), and the first look serves both; blocks of 30 are the old fixed
     size, so each later look costs what a whole sweep used to; the cap of 150 is the size
-    at which the last closing note re-ran the headline reading (5x the old 30).
+    at which an earlier version re-ran the headline reading by hand (5x the old 30).
     """
 
     first: int = 60  # users per point at the first look, every arm and reading [-]
