@@ -92,6 +92,9 @@ __all__ = [
     "draw_cohort",
     "tip_frames",
     "waypoint_reached",
+    "Layout",
+    "layout",
+    "waypoint_arrays",
     "simulate",
     "goal_error",
     "idle_time",
@@ -383,6 +386,65 @@ class Episodes:
         return steps < self.end[None, :]
 
 
+@dataclasses.dataclass(frozen=True)
+class Layout:
+    """The episodes of a study and each one's fixed settings, (E,) each (participants' order)."""
+
+    part: np.ndarray  # participant index
+    tsk: np.ndarray  # task index into TASK_NAMES
+    cond: np.ndarray  # condition index into CONDITIONS
+    member: np.ndarray  # SA member, NO_ASSISTANCE for R and LA
+    members_run: np.ndarray  # the member advance() runs (alpha = 0 where there is none)
+    is_la: np.ndarray  # latent actions (else Retargeting)
+    alpha: np.ndarray  # blend weight
+    order: np.ndarray  # position of the condition in the participant's session
+    e0: np.ndarray  # experience before the condition [s]
+    beta_inf: np.ndarray
+    tau: np.ndarray  # learning time constant [s]
+
+
+def layout(
+    cohort: Cohort, control: ControlConfig, members: tuple[str, ...], interfaces: tuple[str, ...]
+) -> Layout:
+    """The study's episodes, participant-major, then arm (the unassisted conditions once, each
+    assisted one under every member), then task; every model of participant runs this order."""
+    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
+    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
+    n_a, n_t = len(arms), len(TASK_NAMES)
+    part = np.repeat(np.arange(len(cohort)), n_a * n_t)
+    arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
+    cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
+    member = np.array([arms[a][1] for a in arm])
+    return Layout(
+        part=part,
+        tsk=np.tile(np.arange(n_t), len(cohort) * n_a),
+        cond=cond,
+        member=member,
+        members_run=np.where(member == NO_ASSISTANCE, members[0], member),
+        is_la=np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond],
+        alpha=np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond],
+        order=np.argsort(cohort.order, axis=1)[part, cond],
+        e0=cohort.experience()[part, cond],
+        beta_inf=cohort.beta[part],
+        tau=cohort.learning_time[part],
+    )
+
+
+def waypoint_arrays(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every task's waypoints, padded: positions (T, W, 3), directions (T, W, 3), phases (T, W),
+    counts (T,)."""
+    plans = [waypoints(name) for name in TASK_NAMES]
+    n_wp = np.array([len(p) for p in plans])
+    w_max, n_t = int(n_wp.max()), len(plans)
+    wp_pos, wp_dir = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
+    wp_phase = np.zeros((n_t, w_max), dtype=int)
+    for k, plan in enumerate(plans):
+        for j, wp in enumerate(plan):
+            pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
+            wp_pos[k, j], wp_dir[k, j], wp_phase[k, j] = pos, rot[:, 2], wp.phase
+    return wp_pos, wp_dir, wp_phase, n_wp
+
+
 def simulate(
     task: EatingTask,
     decoder: ActionDecoder,
@@ -415,41 +477,17 @@ def simulate(
         raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
     members = tuple(config.members)
     robot, dt, pc = task.robot, control.dt, config.participant
-    # arms: the unassisted conditions once, each assisted one under every member
-    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
-    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
-    n_a, n_t = len(arms), len(TASK_NAMES)
-    # episodes: participant-major, then arm, then task
-    part = np.repeat(np.arange(len(cohort)), n_a * n_t)
-    arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
-    tsk = np.tile(np.arange(n_t), len(cohort) * n_a)
-    cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
-    member = np.array([arms[a][1] for a in arm])
+    lay = layout(cohort, control, members, interfaces)
+    part, tsk, cond, member = lay.part, lay.tsk, lay.cond, lay.member
+    is_la, alpha, members_run, order = lay.is_la, lay.alpha, lay.members_run, lay.order
+    e0, beta_inf, tau = lay.e0, lay.beta_inf, lay.tau
     n_e = len(part)
-    # per condition once, then indexed by each episode's condition
-    is_la = np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond]
-    alpha = np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond]
-    members_run = np.where(member == NO_ASSISTANCE, members[0], member)  # alpha = 0 there
-    rank = np.argsort(cohort.order, axis=1)  # position of each condition in the session
-    order = rank[part, cond]
-    e0 = cohort.experience()[part, cond]
-    beta_inf, tau = cohort.beta[part], cohort.learning_time[part]
     # episode (participant, condition, task) draws from its own stream, shared by the members
     # (common random numbers: the members' comparisons are paired)
     streams = [
         np.random.default_rng([seed, int(p), int(c), int(k)]) for p, c, k in zip(part, cond, tsk, strict=True)
     ]
-
-    # waypoints, padded per task: target tip positions, directions, phases
-    plans = [waypoints(name) for name in TASK_NAMES]
-    n_wp = np.array([len(p) for p in plans])
-    w_max = int(n_wp.max())
-    wp_pos, wp_dir = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
-    wp_phase = np.zeros((n_t, w_max), dtype=int)
-    for k, plan in enumerate(plans):
-        for j, wp in enumerate(plan):
-            pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
-            wp_pos[k, j], wp_dir[k, j], wp_phase[k, j] = pos, rot[:, 2], wp.phase
+    wp_pos, wp_dir, wp_phase, n_wp = waypoint_arrays(robot)  # padded per task
 
     grid = latent_grid(config.n_z, 2)  # (K, 2), the rest position in the middle
     rest = int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0])

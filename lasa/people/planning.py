@@ -72,8 +72,8 @@ import mujoco
 import numpy as np
 from tqdm.auto import tqdm
 
-from lasa.base.conditions import CONDITIONS, alpha_of
-from lasa.base.config import NO_ASSISTANCE, ControlConfig, Positive, PositiveInt, validate
+from lasa.base.conditions import CONDITIONS
+from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
@@ -83,15 +83,16 @@ from lasa.people.participants import (
     TASK_NAMES,
     Cohort,
     Episodes,
+    Layout,
     StudyConfig,
-    interface_of,
+    layout,
     progress_gain,
     tip_frames,
+    waypoint_arrays,
     waypoint_reached,
 )
 from lasa.people.users import choose_latent, gumbel_noise
-from lasa.world.eating import EatingTask, fork_frame, waypoints
-from lasa.world.robot import Robot
+from lasa.world.eating import EatingTask
 
 __all__ = ["PlanConfig", "simulate"]
 
@@ -148,65 +149,6 @@ class PlanConfig:
         return replan, holds
 
 
-@dataclasses.dataclass(frozen=True)
-class _Layout:
-    """The episodes of a study and each one's fixed settings, (E,) each (participants' order)."""
-
-    part: np.ndarray  # participant index
-    tsk: np.ndarray  # task index into TASK_NAMES
-    cond: np.ndarray  # condition index into CONDITIONS
-    member: np.ndarray  # SA member, NO_ASSISTANCE for R and LA
-    members_run: np.ndarray  # the member advance() runs (alpha = 0 where there is none)
-    is_la: np.ndarray  # latent actions (else Retargeting)
-    alpha: np.ndarray  # blend weight
-    order: np.ndarray  # position of the condition in the participant's session
-    e0: np.ndarray  # experience before the condition [s]
-    beta_inf: np.ndarray
-    tau: np.ndarray  # learning time constant [s]
-
-
-def _layout(
-    cohort: Cohort, control: ControlConfig, members: tuple[str, ...], interfaces: tuple[str, ...]
-) -> _Layout:
-    """Episodes participant-major, then arm, then task: :func:`lasa.people.participants.simulate`'s
-    order (written again here: that function builds it inline)."""
-    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
-    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
-    n_a, n_t = len(arms), len(TASK_NAMES)
-    part = np.repeat(np.arange(len(cohort)), n_a * n_t)
-    arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
-    cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
-    member = np.array([arms[a][1] for a in arm])
-    return _Layout(
-        part=part,
-        tsk=np.tile(np.arange(n_t), len(cohort) * n_a),
-        cond=cond,
-        member=member,
-        members_run=np.where(member == NO_ASSISTANCE, members[0], member),
-        is_la=np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond],
-        alpha=np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond],
-        order=np.argsort(cohort.order, axis=1)[part, cond],
-        e0=cohort.experience()[part, cond],
-        beta_inf=cohort.beta[part],
-        tau=cohort.learning_time[part],
-    )
-
-
-def _waypoint_arrays(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Every task's waypoints, padded: positions (T, W, 3), directions (T, W, 3), phases (T, W),
-    counts (T,) (as :func:`lasa.people.participants.simulate` builds them inline)."""
-    plans = [waypoints(name) for name in TASK_NAMES]
-    n_wp = np.array([len(p) for p in plans])
-    w_max, n_t = int(n_wp.max()), len(plans)
-    wp_pos, wp_dir = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
-    wp_phase = np.zeros((n_t, w_max), dtype=int)
-    for k, plan in enumerate(plans):
-        for j, wp in enumerate(plan):
-            pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
-            wp_pos[k, j], wp_dir[k, j], wp_phase[k, j] = pos, rot[:, 2], wp.phase
-    return wp_pos, wp_dir, wp_phase, n_wp
-
-
 def _rotate(v: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
     """Rotate vectors ``v`` (..., 3) by rotation vectors ``rotvec`` (..., 3) (Rodrigues), broadcast."""
     angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
@@ -223,7 +165,7 @@ class _Study:
     decoder: ActionDecoder
     control: ControlConfig
     config: StudyConfig
-    layout: _Layout
+    layout: Layout
     streams: list[np.random.Generator]
     wp_pos: np.ndarray
     wp_dir: np.ndarray
@@ -289,10 +231,10 @@ def _prepare(
     if decoder.z_dim != 2:
         raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
     replan_steps, hold_steps = plan.steps(control.dt)
-    layout = _layout(cohort, control, tuple(config.members), interfaces)
+    episodes = layout(cohort, control, tuple(config.members), interfaces)
     streams = [
         np.random.default_rng([seed, int(p), int(c), int(k)])
-        for p, c, k in zip(layout.part, layout.cond, layout.tsk, strict=True)
+        for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
     ]
     grid = latent_grid(config.n_z, 2)
     rest = int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0])
@@ -301,13 +243,13 @@ def _prepare(
         [twist(np.full(len(moves), m), grid[moves], config.retarget) for m in range(len(MODES))]
     )
     robot = task.robot
-    wp_pos, wp_dir, wp_phase, n_wp = _waypoint_arrays(robot)
+    wp_pos, wp_dir, wp_phase, n_wp = waypoint_arrays(robot)
     return _Study(
         task=task,
         decoder=decoder,
         control=control,
         config=config,
-        layout=layout,
+        layout=episodes,
         streams=streams,
         wp_pos=wp_pos,
         wp_dir=wp_dir,
