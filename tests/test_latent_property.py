@@ -46,32 +46,26 @@ class CurveDecoder:
             mine = confident & (goal == g) & (dist.min(axis=-1) < 0.05)
             out = np.where(mine[..., None], self.speed * z[..., None] * tangent[dist.argmin(axis=-1)], out)
             on_curve |= mine
+        return np.where(on_curve[..., None], out, self.head(goal, s))
+
+    def head(self, goal: np.ndarray, s: np.ndarray) -> np.ndarray:
+        """Towards each row's goal configuration at sigma_h, slowing within 0.1 sigma_h of it."""
         to_goal = self.task.goals[goal] - s
         dist = np.linalg.norm(to_goal, axis=-1, keepdims=True)
-        head = self.speed * to_goal / np.maximum(dist, 0.1 * self.speed)
-        return np.where(on_curve[..., None], out, head)
+        return self.speed * to_goal / np.maximum(dist, 0.1 * self.speed)
 
 
 @dataclasses.dataclass
-class TwoHalvesDecoder:
+class TwoHalvesDecoder(CurveDecoder):
     """Both halves by construction: confident, |z| <= 0.7 moves along the believed cup's grasp
     curve and a larger deflection heads for the cup it points at (z < 0 left, z > 0 right);
     unsure, as :class:`CurveDecoder`."""
 
-    task: CupTask
-    speed: float
-    robot: str = "planar5"
-    n_goals: int = 2
-    z_dim: int = 1
-
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         zz = np.broadcast_to(z, s.shape[:-1] + (1,))[..., 0]
-        curve = CurveDecoder(self.task, self.speed).decode_numpy(np.clip(zz / 0.7, -1, 1)[..., None], s, b)
-        confident = b.max(axis=-1) > 0.9
-        to_goal = self.task.goals[np.where(zz < 0, 0, 1)] - s
-        dist = np.linalg.norm(to_goal, axis=-1, keepdims=True)
-        head = self.speed * to_goal / np.maximum(dist, 0.1 * self.speed)
-        return np.where((confident & (np.abs(zz) > 0.7))[..., None], head, curve)
+        curve = super().decode_numpy(np.clip(zz / 0.7, -1, 1)[..., None], s, b)
+        leave = (b.max(axis=-1) > 0.9) & (np.abs(zz) > 0.7)
+        return np.where(leave[..., None], self.head(np.where(zz < 0, 0, 1), s), curve)
 
 
 @dataclasses.dataclass

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
+from stand_ins import LinearDecoder
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
@@ -24,19 +25,6 @@ from lasa.people.participants import (
     williams_square,
 )
 from lasa.world.eating import make_eating_task
-
-
-class LinearDecoder:
-    """A stand-in phi(z, s, b) = z W: the study's mechanics without a trained model."""
-
-    robot, n_goals, z_dim = "panda", 4, 2
-
-    def __init__(self, seed: int = 0) -> None:
-        self.weights = 0.3 * np.random.default_rng(seed).normal(size=(2, 7))
-
-    def decode_numpy(self, z, s, b):
-        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
-        return np.broadcast_to(np.asarray(z) @ self.weights, (*shape, 7)).copy()
 
 
 @pytest.fixture(scope="module")

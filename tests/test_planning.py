@@ -6,6 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 from numpy.testing import assert_array_equal
+from stand_ins import LinearDecoder
 
 from lasa.base.errors import ConfigError
 from lasa.people import participants, planning
@@ -14,19 +15,6 @@ from lasa.people.planning import PlanConfig
 from lasa.world.eating import GOALS, PREFERENCES, fork_frame, make_eating_task
 
 FIELDS = ("states", "tip", "direction", "phase", "idle", "switch", "end", "completed", "belief", "waypoint")
-
-
-class LinearDecoder:
-    """A stand-in phi(z, s, b) = z W: the study's mechanics without a trained model."""
-
-    robot, n_goals, z_dim = "panda", 4, 2
-
-    def __init__(self, seed: int = 0, scale: float = 0.3) -> None:
-        self.weights = scale * np.random.default_rng(seed).normal(size=(2, 7))
-
-    def decode_numpy(self, z, s, b):
-        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
-        return np.broadcast_to(np.asarray(z) @ self.weights, (*shape, 7)).copy()
 
 
 class DetourDecoder:

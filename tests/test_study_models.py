@@ -1,9 +1,9 @@
 """The study's participant-model dimension and its time figure, on a tiny simulated cohort."""
 
 import matplotlib
-import numpy as np
 import pandas as pd
 import pytest
+from stand_ins import LinearDecoder
 
 from lasa.base.errors import ConfigError
 from lasa.figures import study
@@ -11,19 +11,6 @@ from lasa.people import participants
 from lasa.world.eating import make_eating_task
 
 matplotlib.use("Agg")
-
-
-class LinearDecoder:
-    """A stand-in phi(z, s, b) = z W: the study's mechanics without a trained model."""
-
-    robot, n_goals, z_dim = "panda", 4, 2
-
-    def __init__(self, seed: int = 0) -> None:
-        self.weights = 0.3 * np.random.default_rng(seed).normal(size=(2, 7))
-
-    def decode_numpy(self, z, s, b):
-        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
-        return np.broadcast_to(np.asarray(z) @ self.weights, (*shape, 7)).copy()
 
 
 @pytest.fixture
