@@ -99,6 +99,69 @@ def reconstruction_error(
         return float(((a_hat - a) ** 2).sum(-1).mean())
 
 
+def _with_entropy(
+    config: TrainConfig, control: ControlConfig, goal_sets: np.ndarray | None, extra_loss: ExtraLoss | None
+) -> ExtraLoss | None:
+    """``extra_loss`` plus the entropy term of Eq. T6 when ``config.entropy_lambda > 0``."""
+    if config.entropy_lambda > 0:
+        if goal_sets is None:
+            raise ConfigError("entropy_lambda > 0 needs goal_sets (task.belief_targets(control.likelihood))")
+        regularizer = EntropyRegularizer(
+            config.entropy_lambda,
+            goal_sets,
+            control,
+            n_z=config.entropy_n_z,
+            horizon=config.entropy_horizon,
+            contexts=config.entropy_contexts,
+            seed=config.seed,
+        )
+        user_loss = extra_loss
+
+        def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+            term = regularizer(model, s, b)
+            return term if user_loss is None else term + user_loss(model, s, b)
+
+        return combined
+    return extra_loss
+
+
+def _initial_model(
+    demos: Demonstrations, control: ControlConfig, config: TrainConfig, init: LatentActionModel | None
+) -> LatentActionModel:
+    """A fresh model with the demonstrations' state normalisation, or a trainable copy of ``init``.
+
+    Raises:
+        ConfigError: if ``init``'s architecture differs from what ``demos`` and ``config`` give.
+    """
+    clean_states = demos.states[~demos.perturbed]
+    std = np.maximum(clean_states.std(axis=0), 1e-3)
+    model = LatentActionModel(
+        DecoderConfig(
+            robot=demos.robot,
+            n_joints=demos.states.shape[1],
+            n_goals=demos.beliefs.shape[1],
+            z_dim=config.z_dim,
+            hidden=config.hidden,
+            depth=config.depth,
+            action_scale=control.action_scale,
+            state_mean=tuple(float(x) for x in clean_states.mean(axis=0)),
+            state_std=tuple(float(x) for x in std),
+        )
+    )
+    if init is not None:
+        mine, theirs = model.config, init.config
+        for name in ("robot", "n_joints", "n_goals", "z_dim", "hidden", "depth", "action_scale"):
+            if getattr(mine, name) != getattr(theirs, name):
+                raise ConfigError(
+                    f"cannot warm-start: init has {name}={getattr(theirs, name)!r}, "
+                    f"these demonstrations and config give {getattr(mine, name)!r}"
+                )
+        model = LatentActionModel(theirs)
+        model.load_state_dict(init.state_dict())
+        model.train()
+    return model
+
+
 def train_decoder(
     demos: Demonstrations,
     control: ControlConfig,
@@ -130,25 +193,7 @@ def train_decoder(
         The trained model (eval mode) and a frame of logged losses with columns
         ``step``, ``train_loss``, ``val_error``, ``seconds``.
     """
-    if config.entropy_lambda > 0:
-        if goal_sets is None:
-            raise ConfigError("entropy_lambda > 0 needs goal_sets (task.belief_targets(control.likelihood))")
-        regularizer = EntropyRegularizer(
-            config.entropy_lambda,
-            goal_sets,
-            control,
-            n_z=config.entropy_n_z,
-            horizon=config.entropy_horizon,
-            contexts=config.entropy_contexts,
-            seed=config.seed,
-        )
-        user_loss = extra_loss
-
-        def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-            term = regularizer(model, s, b)
-            return term if user_loss is None else term + user_loss(model, s, b)
-
-        extra_loss = combined
+    extra_loss = _with_entropy(config, control, goal_sets, extra_loss)
     rng = np.random.default_rng(config.seed)
     gen = torch.Generator().manual_seed(config.seed)
     torch.manual_seed(config.seed)  # nn.Linear initialisation draws from the global generator
@@ -158,32 +203,7 @@ def train_decoder(
             f"only {train_mask.sum()} training tuples for batch_size={config.batch_size}; "
             "collect more demonstrations or lower batch_size"
         )
-    clean_states = demos.states[~demos.perturbed]
-    std = np.maximum(clean_states.std(axis=0), 1e-3)
-    model = LatentActionModel(
-        DecoderConfig(
-            robot=demos.robot,
-            n_joints=demos.states.shape[1],
-            n_goals=demos.beliefs.shape[1],
-            z_dim=config.z_dim,
-            hidden=config.hidden,
-            depth=config.depth,
-            action_scale=control.action_scale,
-            state_mean=tuple(float(x) for x in clean_states.mean(axis=0)),
-            state_std=tuple(float(x) for x in std),
-        )
-    )
-    if init is not None:
-        mine, theirs = model.config, init.config
-        for name in ("robot", "n_joints", "n_goals", "z_dim", "hidden", "depth", "action_scale"):
-            if getattr(mine, name) != getattr(theirs, name):
-                raise ConfigError(
-                    f"cannot warm-start: init has {name}={getattr(theirs, name)!r}, "
-                    f"these demonstrations and config give {getattr(mine, name)!r}"
-                )
-        model = LatentActionModel(theirs)
-        model.load_state_dict(init.state_dict())
-        model.train()
+    model = _initial_model(demos, control, config, init)
     s_all = torch.as_tensor(demos.states[train_mask], dtype=torch.float32)
     a_all = torch.as_tensor(demos.actions[train_mask], dtype=torch.float32)
     b_all = torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32)
