@@ -124,9 +124,15 @@ def test_the_committed_study_video_reads_back_with_its_frame_count():
     import pandas as pd
 
     figures = Path(__file__).resolve().parents[1] / "figures"
+    from lasa.figures import study
+
     time = pd.read_csv(figures / "study_time.csv")
+    model = study.headline_model(time, study.Config().participant_models)  # the video's participants
     shown = time[
-        (time.participant == 0) & (time.task == "Dessert") & time.decoder.isin(["transfers", "none"])
+        (time.participant == 0)
+        & (time.task == "Dessert")
+        & time.decoder.isin(["transfers", "none"])
+        & (time.model == model)
     ]
     shown = shown[shown.assistance.isin(["hindsight", "none"])]
     assert len(shown) == 4
