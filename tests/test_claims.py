@@ -37,7 +37,7 @@ def test_update_replaces_own_rows_and_keeps_others(tmp_path):
     assert list(table.columns) == list(CLAIM_COLUMNS)
     assert len(table) == 4
     mine = table[(table.figure == "sim1") & (table.robot == "planar5")].set_index("id")
-    assert mine.loc["sim1.a", "reproduced"] == "no"
+    assert mine.loc["sim1.a", "reproduced"] == "not reproduced"  # the table's word for a settled no
     assert len(pd.read_csv(path)) == 4
     md = path.with_suffix(".md").read_text()
     assert md.startswith("| id | claim | figure |") and md.count("\n") == 6
@@ -132,10 +132,14 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
     table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
     md = render_verdicts(table)
     lines = md.strip().splitlines()
-    assert len(lines) == 3  # header, rule, one claim (claims without rows are left out)
-    cells = [c.strip() for c in lines[2].strip("|").split("|")]
+    # the count line, a blank line, header, rule, one claim (claims without rows are left out)
+    assert len(lines) == 5
+    assert lines[0] == (
+        "Of 2 paper claims × robot: 0 reproduced, 0 partly, 1 not reproduced, 1 undecided, 0 not testable."
+    )
+    cells = [c.strip() for c in lines[4].strip("|").split("|")]
     assert cells[1] == "time ratio 1.45 and 1.30"
-    assert cells[2].startswith("**no**") and "N = 150" in cells[2] and "settled" in cells[2]
+    assert cells[2].startswith("**not reproduced**") and "N = 150" in cells[2] and "settled" in cells[2]
     assert cells[3].startswith("undecided") and "settled" not in cells[3]
     assert cells[4] == "`grasp_set` (planar5 partly)"  # the Panda's reading agrees with its headline
     assert "(notebooks/04_fixed_expertise.ipynb#what-it-shows-against-the-paper)" in cells[5]
@@ -165,9 +169,70 @@ def test_a_claim_that_is_not_testable_is_written_and_rendered_with_its_reason(tm
     assert table.loc["study.h3", "ci_low"] == "" and "nan" not in (tmp_path / "claims.md").read_text()
     cells = {
         line.split("|")[1].strip(): line.split("|")[4].strip()
-        for line in render_verdicts(table.reset_index().astype(str)).splitlines()[2:]
+        for line in render_verdicts(table.reset_index().astype(str)).splitlines()[4:]
     }
     h3 = next(v for k, v in cells.items() if k.startswith("H3"))
     h2 = next(v for k, v in cells.items() if k.startswith("H2"))
     assert h3 == "not testable, N = 10 (completion: LA 0%, LA+SA 0%)"  # the reason from measured
     assert h2 == "not testable, N = 10 (no decoder with both halves of the property; best reading t)"
+
+
+def _time_ratio(robot, low75, high75, low1000, high1000, reading="undecided"):
+    base = claim("time_ratio", robot=robot, verdict=reading)
+    intervals = {"ratio_75": (low75, high75), "ratio_1000": (low1000, high1000)}
+    values = {k: (lo + hi) / 2 for k, (lo, hi) in intervals.items()}
+    return Claim(**{**base.__dict__, "n_users": 150, "intervals": intervals, "values": values})
+
+
+def test_a_paper_number_outside_the_interval_is_not_reproduced_and_each_number_is_shown():
+    # the paper: 1.45 at beta = 75 and 1.30 at beta = 1000, each +- 0.15 by the rule
+    row = _row(_time_ratio("planar5", 0.844, 1.1, 1.34, 1.39))
+    assert row["reproduced"] == "not reproduced"  # [0.844, 1.1] misses [1.30, 1.60]
+    assert row["paper_in_ci"] == "no; yes"  # 1.30 +- 0.15 meets [1.34, 1.39]
+    assert row["direction"] == "no"  # ratio_75's interval straddles 1
+    assert row["paper_numbers"] == (
+        "1.45 ± 0.15 (beta = 75): not reproduced, 0.972 [0.844, 1.1]; "
+        "1.3 ± 0.15 (beta = 1000): reproduced, 1.36 [1.34, 1.39]"
+    )
+    both_in = _row(_time_ratio("panda", 1.35, 1.55, 1.2, 1.5))
+    assert both_in["reproduced"] == "undecided" and both_in["paper_in_ci"] == "yes; yes"
+    assert both_in["direction"] == "yes"
+    table = pd.DataFrame([row, both_in], columns=list(CLAIM_COLUMNS)).astype(str)
+    md = render_verdicts(table)
+    assert "1.45 ± 0.15 (beta = 75): not reproduced, 0.972 [0.844, 1.1]" in md and "nan" not in md
+
+
+def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
+    trapped = Claim(
+        **{
+            **claim("sa_trapped", figure="sim2").__dict__,
+            "settled": True,
+            "intervals": {"success_sa": (0.05, 0.27), "drop_sa": (0.7, 0.9)},
+        }
+    )
+    row = _row(trapped)
+    assert row["paper_in_ci"] == "n/a" and row["paper_numbers"] == ""  # the paper states an ordering
+    assert row["direction"] == "yes" and row["reproduced"] == "reproduced"  # success below one half
+    base = claim("grasp_linear", figure="sim4")
+    ours = Claim(**{**base.__dict__, "reproduced": "undecided", "intervals": {"slope": (0.05, 0.2)}})
+    assert _row(ours)["paper_in_ci"] == "yes; n/a"  # 0.11 in [0.05, 0.2]; R^2's interval unknown
+    table = pd.DataFrame([row, _row(ours)], columns=list(CLAIM_COLUMNS)).astype(str)
+    md = render_verdicts(table)
+    head, apart = md.split("Our additions, not claims of the paper (not counted above):")
+    assert "grasp-to-grasp" in apart and "grasp-to-grasp" not in head
+    assert head.startswith("Of 1 paper claims × robot: 1 reproduced,")
+
+
+def test_the_word_follows_the_vocabulary():
+    from lasa.evidence.rules import PaperNumber, word
+
+    ratio = (PaperNumber("r", 1.45, 0.15, "beta = 75"),)
+    assert word("yes", {"r": (1.35, 1.55)}, ratio) == "reproduced"
+    assert word("yes", {"r": (1.61, 1.7)}, ratio) == "not reproduced"  # the paper's value is excluded
+    assert word("partly", {"r": (1.2, 1.4)}, ratio) == "partly"
+    assert word("undecided", {"r": (1.2, 1.4)}, ratio) == "undecided"
+    assert word("undecided", {"r": (0.8, 1.29)}, ratio) == "not reproduced"
+    assert word("not testable", {"r": (0.8, 1.0)}, ratio) == "not testable"
+    assert word("no", {}, ()) == "not reproduced"
+    with pytest.raises(ConfigError, match="cannot word"):
+        word("maybe", {}, ())

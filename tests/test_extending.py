@@ -315,7 +315,7 @@ def test_a_claim_of_ones_own_is_judged_by_its_rule_and_lands_in_the_claims_table
         lasa.publish(figure, frame, paths, claims, task=task)
         table = pd.read_csv(paths.claims, dtype=str, keep_default_na=False)
         row = table.set_index("id").loc["toy.sa_lower"]
-        assert (row.robot, row.reproduced, row.settled, row.n_users) == ("toy3", "yes", "yes", "60")
+        assert (row.robot, row.reproduced, row.settled, row.n_users) == ("toy3", "reproduced", "yes", "60")
         assert float(row.ci_low) == float(row.ci_high) == 1.0
         assert paths.figure("toy_sa.png").stat().st_size > 0
         assert len(pd.read_csv(paths.figure("toy_sa.csv"))) == len(frame)

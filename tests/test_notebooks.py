@@ -184,8 +184,15 @@ def test_claims_table(executed):
     assert (members.id.str.split("@").str[1] == members.assistance).all()
     assert set(members.assistance) == set(ASSISTANCE) - {"point"}
     assert (members.n_users.astype(int) == sweep["users"]).all()  # the other readings: the first look
-    assert set(claims.reproduced) <= {"yes", "partly", "no", "undecided"}
-    assert ((claims.reproduced == "undecided") == (claims.settled == "no")).all()
+    assert set(claims.reproduced) <= {"reproduced", "partly", "not reproduced", "undecided"}
+    # undecided only while an interval straddles; settled words come from the rule; a paper
+    # number outside its interval reads "not reproduced" even when the rule's reading is open
+    assert (claims[claims.reproduced == "undecided"].settled == "no").all()
+    assert (claims[claims.settled == "yes"].reproduced != "undecided").all()
+    open_ = claims[(claims.settled == "no") & (claims.reproduced == "not reproduced")]
+    assert open_.paper_in_ci.str.contains(r"\bno\b").all()
+    assert set(claims.direction) <= {"yes", "no", "n/a"}
+    assert not (fig / "claims.md").read_text().count("nan")
     assert all(claims.measured.str.len() > 0)
     low, high = pd.to_numeric(claims.ci_low), pd.to_numeric(claims.ci_high)
     assert (low <= high).all()
@@ -405,9 +412,12 @@ def test_study_outputs(executed):
     assert set(time_la.decoder) == set(readings)
     assert set(time[time.condition.str.startswith("R")].decoder) == {"none"}
     assert set(time.model) == set(models)
-    verdicts = {"yes", "partly", "no", "undecided", "not testable"}
+    verdicts = {"reproduced", "partly", "not reproduced", "undecided", "not testable"}
     assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= verdicts
     assert ((rows.reproduced.isin(["undecided", "not testable"])) == (rows.settled == "no")).all()
+    assert (rows.paper_in_ci == "n/a").all()  # the study's rules compare effects, not the paper's numbers
+    assert (rows[rows.reproduced == "not testable"].direction == "n/a").all()
+    assert rows[rows.ci_low == ""].reproduced.eq("not testable").all()  # no interval, no verdict
     assert not rows.measured.str.contains(r"\bnan\b").any()
     assert (rows.n_users.astype(int) == settings["n_participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()

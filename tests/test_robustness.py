@@ -89,11 +89,11 @@ def test_grid_rows_per_cell_and_reading(local, task):
     members = len(TINY.assistance)
     assert len(local) == len(ids) * (members + len(cells) - 1)
     assert set(local[local.setting != "default"].assistance) == {"point"}
-    assert set(local.reproduced) <= {"yes", "partly", "no", "undecided"}
+    assert set(local.reproduced) <= {"reproduced", "partly", "not reproduced", "undecided"}
     assert (local.users == TINY.users).all()
     assert ((local.reproduced == "undecided") == ~local.settled.astype(bool)).all()
     summary = robustness.summary(local)
-    assert (summary[["yes", "partly", "no", "undecided"]].sum(axis=1) == members + len(cells) - 1).all()
+    assert (summary[["reproduced", "partly", "not reproduced", "undecided"]].sum(axis=1) == members + len(cells) - 1).all()
     lines = robustness.describe(summary)
     assert len(lines) == len(ids) and all(line.startswith("planar5 sim") for line in lines)
     fig = robustness.plot(local)

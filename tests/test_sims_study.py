@@ -433,3 +433,18 @@ def test_untestable_reason_needs_a_decoder_that_meets_the_rule():
         "a goal for another 30 of 64"
     )  # latent_property.choose ranks goals with both halves before goals with the stay half
     assert "(" not in why  # the verdict table's cell quotes it inside parentheses
+
+
+def test_a_reading_without_an_interval_is_not_testable_never_undecided():
+    # H2 with one pair in the scoop phase: no t interval, so no verdict and no `nan` in the table
+    judged = (
+        "partly",
+        0.02,
+        float("nan"),
+        float("nan"),
+        "alignment LA+SA - R+SA, Dessert phases: scoop: +0.020",
+    )
+    row = study._claim_row("study.h2@leaves", "h2", judged, {"n": 10}, "hindsight", "leaves", None, None)
+    assert (row.reproduced, row.settled) == ("not testable", False)
+    assert row.measured.startswith("not testable (too few pairs for an interval)")
+    assert "fewer than two participants" in row.note and "nan" not in row.note

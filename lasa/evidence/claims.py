@@ -30,7 +30,7 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv, write_text
-from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED
+from lasa.evidence.rules import NOT_TESTABLE, RULES, UNDECIDED, WORDS, word
 
 __all__ = [
     "Claim",
@@ -61,10 +61,14 @@ CLAIM_COLUMNS = (
     "ci_high",
     "reproduced",
     "settled",
+    "paper_in_ci",
+    "direction",
+    "paper_numbers",
     "n_users",
     "note",
 )
-VERDICTS = ("yes", "partly", "no", UNDECIDED, NOT_TESTABLE)
+VERDICTS = ("yes", "partly", "no", UNDECIDED, NOT_TESTABLE)  # what Claim.reproduced holds
+ROBOTS = ("planar5", "panda")  # the verdict table's robot columns, in order
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,6 +90,8 @@ class Claim:
     settled: bool = False  # every interval clear of its rule's thresholds (lasa.evidence.verdicts)
     n_users: int = 0  # simulated users (or participants) per point the verdict rests on
     values: Mapping[str, float] = dataclasses.field(default_factory=dict)  # the rule's numbers
+    # each of the rule's numbers' interval, at the row's level (lasa.evidence.verdicts)
+    intervals: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.id.startswith(f"{self.figure}.") or " " in self.id:
@@ -96,11 +102,41 @@ class Claim:
             raise ConfigError(f"{self.id}: a claim that is not testable is never settled")
 
 
+def criteria(claim: Claim) -> dict[str, str]:
+    """The row's verdict word and its replication criteria (Open Science Collaboration, 2015).
+
+    Returns:
+        ``reproduced``: the word (:func:`lasa.evidence.rules.word`); ``paper_in_ci``: per number
+        the paper states, ``yes``/``no`` (its value, give or take the rule's tolerance, inside our
+        interval), joined by ``; ``, or ``n/a`` where it states none; ``direction``: ``yes`` if our
+        effect's interval lies on the paper's side of no effect, ``no`` if not, ``n/a`` where the
+        paper gives no sign or the claim is not testable; ``paper_numbers``: each paper number
+        with its own verdict and our value and interval.
+    """
+    r = RULES.get(claim.id.split("@", 1)[0])
+    paper = r.paper if r is not None else ()
+    testable = claim.reproduced != NOT_TESTABLE
+    nan = (math.nan, math.nan)
+    found = [(p, claim.intervals.get(p.quantity, nan)) for p in paper] if testable else []
+    direction = r.direction if r is not None else None
+    return {
+        "reproduced": word(claim.reproduced, claim.intervals, paper),
+        "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
+        "direction": direction.judge(claim.intervals.get(direction.quantity, nan))
+        if direction is not None and testable
+        else "n/a",
+        "paper_numbers": "; ".join(
+            p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found
+        ),
+    }
+
+
 def _row(claim: Claim) -> dict[str, object]:
     """A claim as a table row: the interval to 4 significant digits, empty where unknown."""
     row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
-    del row["values"], row["value"]
+    del row["values"], row["value"], row["intervals"]
     row["settled"] = "yes" if claim.settled else "no"
+    row.update(criteria(claim))
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
     return row
@@ -168,6 +204,7 @@ class PaperClaim:
     mechanism: str  # what makes our verdict, in a line
     notebook: str  # the notebook (file stem) that measures it
     section: str  # its section that explains the mechanism
+    ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
 
 
 PAPER_CLAIMS: tuple[PaperClaim, ...] = (
@@ -243,6 +280,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "the grasp-to-grasp map is exact at every grasp, so the error does not grow",
         "07_new_goals",
         "What it shows, against the paper",
+        ours=True,
     ),
     PaperClaim(
         "sim4.no_map_training_goal",
@@ -292,10 +330,12 @@ def _num(text: object) -> str:
 
 
 def _cell(row: pd.Series | None) -> str:
-    """A robot's cell: the verdict, the interval of its first number, N, settled or undecided.
+    """A robot's cell: the verdict word, the numbers it rests on, N, and the direction.
 
     A claim that is not testable reads ``not testable``, N, and why: the first
     ``not testable (<why>)`` in its ``measured`` text or else its note, without an interval.
+    A claim whose paper states numbers shows each of them with its own word, our value and
+    interval (``paper_numbers``); any other shows the interval of the number it rests on.
     """
     if row is None:
         return "—"
@@ -303,14 +343,40 @@ def _cell(row: pd.Series | None) -> str:
         found = _WHY.search(str(row.measured)) or _WHY.search(str(row.note))
         return f"not testable, N = {row.n_users}" + (f" ({found.group(1)})" if found else "")
     low, high = _num(row.ci_low), _num(row.ci_high)
-    ci = f" [{low}, {high}]" if low and high else ""
-    if str(row.settled) == "yes":
-        return f"**{row.reproduced}**{ci}, N = {row.n_users}, settled"
-    return f"undecided{ci}, N = {row.n_users}"
+    numbers = str(row.get("paper_numbers", ""))
+    detail = f": {numbers}" if numbers else (f" [{low}, {high}]" if low and high else "")
+    head = f"**{row.reproduced}**" if row.reproduced != UNDECIDED else UNDECIDED
+    settled = ", settled" if str(row.settled) == "yes" else ""
+    return f"{head}{detail}, N = {row.n_users}{settled}; direction {row.get('direction', 'n/a')}"
+
+
+def count_line(table: pd.DataFrame) -> str:
+    """``Of 23 paper claims × robot: 6 reproduced, 2 partly, ...``: the headline rows' words."""
+    rows = {(r.id, r.robot): r.reproduced for _, r in table.iterrows()}
+    words = [
+        rows[(pc.id, robot)]
+        for pc in PAPER_CLAIMS
+        if not pc.ours
+        for robot in ROBOTS
+        if (pc.id, robot) in rows
+    ]
+    counts = ", ".join(f"{words.count(w)} {w}" for w in WORDS)
+    return f"Of {len(words)} paper claims × robot: {counts}."
+
+
+def _flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> str:
+    """The readings (``<id>@<reading>``, one reading at a time) whose word differs from the headline's."""
+    flips: dict[str, list[str]] = {}
+    for (cid, robot), r in rows.items():
+        if cid.startswith(claim_id + "@") and "+" not in cid:
+            head = rows.get((claim_id, robot))
+            if head is not None and r.reproduced != head.reproduced:
+                flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")
+    return "; ".join(f"`{k}` ({', '.join(v)})" for k, v in flips.items()) or "none"
 
 
 def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = None) -> str:
-    """The verdict table: one row per paper claim, both robots side by side.
+    """The verdict table: one row per paper claim, both robots side by side, our additions apart.
 
     Args:
         table: ``figures/claims.csv`` (as strings).
@@ -318,33 +384,31 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
             ``notebooks/<stem>.ipynb``, from the repository root).
 
     Returns:
-        Markdown: the claim and the paper's number, then per robot the verdict with the
-        interval of the number it rests on, the users per point N and whether it is settled,
-        the readings (``<id>@<reading>`` rows of one reading each; their combinations are in
-        the full table) whose verdict differs, and the mechanism with a link to the notebook
-        that measures it.
+        Markdown: a count line of the headline words; then per claim its paper number, per
+        robot the word with the numbers it rests on (each number the paper states with its
+        own word), the users per point N and the direction criterion, the readings whose
+        word differs, and the mechanism with a link to the notebook that measures it. Rows
+        that are our additions, not the paper's claims, follow in a table of their own.
     """
-    lines = [
+    head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
     ]
     rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    paper, ours = list(head), list(head)
     for pc in PAPER_CLAIMS:
-        cells = [_cell(rows.get((pc.id, robot))) for robot in ("planar5", "panda")]
+        cells = [_cell(rows.get((pc.id, robot))) for robot in ROBOTS]
         if cells == ["—", "—"]:
             continue
-        flips: dict[str, list[str]] = {}
-        for (cid, robot), r in rows.items():
-            if cid.startswith(pc.id + "@") and "+" not in cid:  # one reading at a time
-                head = rows.get((pc.id, robot))
-                if head is not None and r.reproduced != head.reproduced:
-                    flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")
-        flip = "; ".join(f"`{k}` ({', '.join(v)})" for k, v in flips.items()) or "none"
         anchor = pc.section.lower().replace(",", "").replace(" ", "-")
         target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
         mech = f"{pc.mechanism} ([{pc.notebook[:2]}]({target}#{anchor}))"
-        lines.append(f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {flip} | {mech} |")
-    return "\n".join(lines) + "\n"
+        line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {_flips(rows, pc.id)} | {mech} |"
+        (ours if pc.ours else paper).append(line)
+    out = [count_line(table), "", *paper]
+    if len(ours) > len(head):
+        out += ["", "Our additions, not claims of the paper (not counted above):", "", *ours]
+    return "\n".join(out) + "\n"
 
 
 def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:

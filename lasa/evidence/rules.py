@@ -39,13 +39,30 @@ __all__ = [
     "VERDICTS",
     "UNDECIDED",
     "NOT_TESTABLE",
+    "REPRODUCED",
+    "PARTLY",
+    "NOT_REPRODUCED",
+    "WORDS",
+    "PaperNumber",
+    "Direction",
+    "word",
 ]
 
 VERDICTS = ("yes", "partly", "no")  # what a rule can decide
 UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a threshold
 # what a claim reads when its test cannot be run on the data: the claim's precondition fails
-# (e.g. the episodes it compares were cut at the horizon); never settled, the reason in its note
+# (e.g. the episodes it compares were cut at the horizon, too few pairs); never settled, the
+# reason in its note
 NOT_TESTABLE = "not testable"
+
+# The verdict words of the claims table, the one vocabulary a reader sees (:func:`word`):
+REPRODUCED = "reproduced"  # the rule reads yes, settled
+PARTLY = "partly"  # the rule reads partly, settled
+# the rule reads no, settled; or a number the paper states lies outside our interval
+# (give or take the rule's tolerance), whatever the rule reads
+NOT_REPRODUCED = "not reproduced"
+WORDS = (REPRODUCED, PARTLY, NOT_REPRODUCED, UNDECIDED, NOT_TESTABLE)
+_SETTLED_WORD = {"yes": REPRODUCED, "partly": PARTLY, "no": NOT_REPRODUCED}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,6 +75,70 @@ class Quantity:
 
 
 @dataclasses.dataclass(frozen=True)
+class PaperNumber:
+    """A number the paper states, the quantity that measures it, and the rule's tolerance.
+
+    The replication criterion "the paper's value lies inside our interval" (Open Science
+    Collaboration, 2015), with the rule's tolerance: the paper's value is *in* our interval
+    when the band ``value +- tolerance`` meets it. ``tolerance`` is the one the rule applies
+    around this number (0.15 for the time ratios), and 0 where the rule states none: a rule
+    that accepts a range (a slope in (0, 0.25]) states no tolerance around the paper's value.
+    """
+
+    quantity: str  # the rule's quantity that measures it
+    value: float  # the paper's number
+    tolerance: float  # the rule's tolerance around it; 0 where the rule states none
+    where: str  # where the paper states it, e.g. "beta = 75"
+
+    def inside(self, interval: tuple[float, float]) -> str:
+        """``yes`` if ``value +- tolerance`` meets the interval, ``no`` if not, ``n/a`` if unknown."""
+        low, high = interval
+        if not (math.isfinite(low) and math.isfinite(high)):
+            return "n/a"
+        return "yes" if low <= self.value + self.tolerance and high >= self.value - self.tolerance else "no"
+
+    def word(self, interval: tuple[float, float]) -> str:
+        """This number's verdict: the interval inside the band, outside it, or across its edge."""
+        low, high = interval
+        if self.inside(interval) == "n/a":
+            return NOT_TESTABLE
+        if self.inside(interval) == "no":
+            return NOT_REPRODUCED
+        inner = self.value - self.tolerance <= low and high <= self.value + self.tolerance
+        return REPRODUCED if inner else UNDECIDED
+
+    def describe(self, interval: tuple[float, float], measured: float) -> str:
+        """``1.45 ± 0.15 (beta = 75): not reproduced, 0.961 [0.844, 1.1]``."""
+        tol = f" ± {self.tolerance:g}" if self.tolerance else ""
+        low, high = interval
+        return (
+            f"{self.value:g}{tol} ({self.where}): {self.word(interval)}, "
+            f"{measured:.3g} [{low:.3g}, {high:.3g}]"
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class Direction:
+    """The sign the paper gives an effect, for the criterion "same direction, interval clear of null"."""
+
+    quantity: str  # the rule's quantity that carries the effect
+    sign: int  # +1: the paper's effect is above ``null``; -1: below
+    null: float = 0.0  # no effect (1 for a ratio, one half for a share of conditions)
+
+    def __post_init__(self) -> None:
+        if self.sign not in (-1, 1):
+            raise ConfigError(f"{self.quantity}: a direction's sign is +1 or -1, got {self.sign!r}")
+
+    def judge(self, interval: tuple[float, float]) -> str:
+        """``yes`` if the interval lies on the paper's side of ``null``; ``n/a`` if unknown; else ``no``."""
+        low, high = interval
+        if not (math.isfinite(low) and math.isfinite(high)):
+            return "n/a"
+        clear = low > self.null if self.sign > 0 else high < self.null
+        return "yes" if clear else "no"
+
+
+@dataclasses.dataclass(frozen=True)
 class Rule:
     """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds."""
 
@@ -65,6 +146,8 @@ class Rule:
     text: str  # the rule in words, as the claims table states it
     quantities: tuple[Quantity, ...]  # the first is the headline number (``Claim.value``)
     decide: Callable[[Mapping[str, float]], str]  # values -> "yes" | "partly" | "no"
+    paper: tuple[PaperNumber, ...] = ()  # the numbers the paper states, each with its quantity
+    direction: Direction | None = None  # the paper's sign of the effect, None if it states none
 
     def verdict(self, values: Mapping[str, float]) -> str:
         """The rule's verdict at these values.
@@ -102,6 +185,16 @@ class Rule:
         """Whether every point of the box of ``intervals`` gives the same verdict."""
         return len(self.verdicts_in(intervals)) == 1
 
+    def __post_init__(self) -> None:
+        names = {q.name for q in self.quantities}
+        extra = [p.quantity for p in self.paper if p.quantity not in names]
+        if self.direction is not None and self.direction.quantity not in names:
+            extra.append(self.direction.quantity)
+        if extra:
+            raise ConfigError(
+                f"{self.id}: paper numbers or direction name {extra}, not quantities {sorted(names)}"
+            )
+
     def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
         """``name [low, high] reaches t`` for each threshold inside (or at the end of) an interval."""
         out = []
@@ -112,6 +205,36 @@ class Rule:
                 ts = ", ".join(f"{t:g}" for t in inner)
                 out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {ts}")
         return out
+
+
+def word(
+    reading: str, intervals: Mapping[str, tuple[float, float]], paper: tuple[PaperNumber, ...] = ()
+) -> str:
+    """The claims table's verdict word (:data:`WORDS`): the strongest thing that is settled.
+
+    Args:
+        reading: What the rule reads at the intervals: ``yes``, ``partly`` or ``no`` when
+            settled, else ``undecided``; or ``not testable``.
+        intervals: Quantity name -> interval (the row's own level).
+        paper: The numbers the paper states (the rule's :attr:`Rule.paper`).
+
+    Returns:
+        ``not testable`` as it is; ``not reproduced`` if a number the paper states lies
+        outside its interval (give or take the rule's tolerance: :meth:`PaperNumber.inside`),
+        whatever the rule reads; else the settled reading's word, or ``undecided``.
+
+    Raises:
+        ConfigError: if ``reading`` is not a rule's verdict, ``undecided`` or ``not testable``.
+    """
+    if reading not in (*VERDICTS, UNDECIDED, NOT_TESTABLE):
+        raise ConfigError(
+            f"cannot word the reading {reading!r}: not one of {(*VERDICTS, UNDECIDED, NOT_TESTABLE)}"
+        )
+    if reading == NOT_TESTABLE:
+        return NOT_TESTABLE
+    if any(p.inside(intervals.get(p.quantity, (math.nan, math.nan))) == "no" for p in paper):
+        return NOT_REPRODUCED
+    return _SETTLED_WORD.get(reading, UNDECIDED)
 
 
 def _q(name: str, thresholds: tuple[float, ...], meaning: str) -> Quantity:
@@ -183,6 +306,11 @@ _LINEAR = (
     _q("r2", (0.9,), "R^2 of that line over the cups' means"),
     _q("share_below", (1.0,), "share of new cups where the map's mean error is below the no-map one"),
 )
+# The paper's Fig. sim4 line, y = 0.11x with R^2 = 0.98: the rule accepts a range of slopes,
+# (0, 0.25], and states no tolerance around 0.11 (our axes are joint-space distances; a slope
+# is unitless either way)
+_LINEAR_PAPER = (PaperNumber("slope", 0.11, 0.0, "y = 0.11x"), PaperNumber("r2", 0.98, 0.0, "R^2 = 0.98"))
+_GROWS = Direction("slope", +1)  # the error grows with the new cup's distance
 
 RULES: dict[str, Rule] = {
     r.id: r
@@ -192,6 +320,7 @@ RULES: dict[str, Rule] = {
             "yes if LA+SA's mean final error is below LA's at every beta, partly if at more than half",
             (_q("share_lower", (0.5, 1.0), "share of betas where LA+SA's mean final error is below LA's"),),
             _sim1_final_error,
+            direction=Direction("share_lower", +1, 0.5),
         ),
         Rule(
             "sim1.time_ratio",
@@ -202,6 +331,11 @@ RULES: dict[str, Rule] = {
                 _q("ratio_1000", (1.0, 1.15, 1.45), "mean time LA / LA+SA at beta = 1000"),
             ),
             _sim1_time_ratio,
+            paper=(
+                PaperNumber("ratio_75", 1.45, 0.15, "beta = 75"),
+                PaperNumber("ratio_1000", 1.30, 0.15, "beta = 1000"),
+            ),
+            direction=Direction("ratio_75", +1, 1.0),
         ),
         Rule(
             "sim1.gap_narrows",
@@ -212,6 +346,7 @@ RULES: dict[str, Rule] = {
                 _q("error_narrowing", (0.0,), "|d75| - |d1000| of the final-error difference"),
             ),
             _both_or_one("time_narrowing", "error_narrowing"),
+            direction=Direction("time_narrowing", +1),  # its paper numbers are sim1.time_ratio's
         ),
         Rule(
             "sim1.entropy_sa",
@@ -219,6 +354,7 @@ RULES: dict[str, Rule] = {
             "both at more than half",
             (_q("share_weaker", (0.5, 1.0), "the smaller of the two shares of betas below LA"),),
             _sim1_entropy_sa,
+            direction=Direction("share_weaker", +1, 0.5),
         ),
         Rule(
             "sim2.sa_trapped",
@@ -229,6 +365,7 @@ RULES: dict[str, Rule] = {
                 _q("drop_sa", (0.2,), "LA+SA's success at the smallest N minus at the largest"),
             ),
             _sim2_trapped,
+            direction=Direction("success_sa", -1, 0.5),
         ),
         Rule(
             "sim2.entropy_escapes",
@@ -239,6 +376,7 @@ RULES: dict[str, Rule] = {
                 _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
             ),
             _sim2_escapes,
+            direction=Direction("margin", +1),
         ),
         Rule(
             "sim3.entropy_learners",
@@ -249,9 +387,10 @@ RULES: dict[str, Rule] = {
                 _q("gain_slow", (0.0,), "slow learner: LA+SA minus LA+SA+Entropy mean error"),
             ),
             _both_or_one("gain_fast", "gain_slow"),
+            direction=Direction("gain_fast", +1),
         ),
-        Rule("sim4.straight_line_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear),
-        Rule("sim4.grasp_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear),
+        Rule("sim4.straight_line_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
+        Rule("sim4.grasp_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
         Rule(
             "sim4.no_map_training_goal",
             "yes if |slope - 1| <= 0.15 and R^2 >= 0.9, partly if R^2 >= 0.9 and slope in [0.5, 1.5]",
@@ -260,6 +399,8 @@ RULES: dict[str, Rule] = {
                 _q("r2", (0.9,), "R^2 of that line over the cups' means"),
             ),
             _sim4_no_map,
+            paper=(PaperNumber("slope", 1.0, 0.15, "y = x"),),
+            direction=_GROWS,
         ),
         Rule(
             "study.h1",
@@ -268,12 +409,14 @@ RULES: dict[str, Rule] = {
             "finishes at least 95% of its episodes (Goal Error is summed over the task's time)",
             (_q("effect", (0.0,), "SA - no SA, the within-subjects main effect"),),
             _effect_below_zero,
+            direction=Direction("effect", -1),
         ),
         Rule(
             "study.h2",
             "Dessert scoop alignment LA+SA - R+SA must be above 0: yes if significant (p < .05)",
             (_q("effect", (0.0,), "alignment LA+SA - R+SA in the scoop phase"),),
             _effect_above_zero,
+            direction=Direction("effect", +1),
         ),
         Rule(
             "study.h3",
@@ -289,6 +432,7 @@ RULES: dict[str, Rule] = {
                 ),
             ),
             _effect_below_zero,
+            direction=Direction("effect", -1),
         ),
     )
 }

@@ -267,6 +267,7 @@ def assess(
                 ci_low=first[0],
                 ci_high=first[1],
                 settled=settled,
+                intervals=intervals,
                 reproduced=c.reproduced if settled else UNDECIDED,
                 n_users=n_users,
                 note=lead + f"Rule: {r.text}. " + c.note,

@@ -53,9 +53,9 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.evidence.claims import VERDICTS, Claim
+from lasa.evidence.claims import Claim, criteria
 from lasa.evidence.plots import robots_present
-from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED
+from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.figures import sim1, sim2, sim3
 from lasa.figures.common import as_decoders, check_members
@@ -234,7 +234,7 @@ def _rows(claims: list[Claim], cell: Cell, member: str, robot: str, config: Conf
             "action_scale": cell.action_scale,
             "seed": config.seed,
             "measured": c.value,
-            "reproduced": c.reproduced,
+            "reproduced": criteria(c)["reproduced"],  # the claims table's word
             "settled": c.settled,
             "ci_low": c.ci_low,
             "ci_high": c.ci_high,
@@ -358,8 +358,8 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
         table: :func:`run`'s rows.
 
     Returns:
-        Columns ``yes``, ``partly``, ``no``, ``undecided``, ``not testable`` (cell counts over the members'
-        and the settings' cells), ``default`` (the headline member's verdict in the default
+        Columns ``reproduced``, ``partly``, ``not reproduced``, ``undecided``, ``not testable``
+        (cell counts over the members' and the settings' cells), ``default`` (the headline member's verdict in the default
         cell, empty if the grid has none), ``stable`` (every settled cell gives it) and
         ``moves`` (the cells whose settled verdict differs from it).
     """
@@ -375,7 +375,7 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
             {
                 "robot": robot,
                 "id": claim,
-                **{v: int(counts.get(v, 0)) for v in VERDICTS},
+                **{v: int(counts.get(v, 0)) for v in WORDS},
                 "default": head,
                 "stable": bool(head) and head != UNDECIDED and moves.empty,
                 "moves": ", ".join(f"{c} {v}" for c, v in moves.itertuples(index=False)),
@@ -437,14 +437,14 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     order_cols = list(dict.fromkeys(table.column))
     ids = sorted(dict.fromkeys(table.id))
     colours = {
-        "yes": "#1b9e77",
+        "reproduced": "#1b9e77",
         "partly": "#e6ab02",
-        "no": "#d95f02",
+        "not reproduced": "#d95f02",
         UNDECIDED: "#d9d9d9",
         NOT_TESTABLE: "#ffffff",
     }
-    cmap = ListedColormap([colours[v] for v in VERDICTS])
-    code = {v: i for i, v in enumerate(VERDICTS)}
+    cmap = ListedColormap([colours[v] for v in WORDS])
+    code = {v: i for i, v in enumerate(WORDS)}
     fig, axes = plt.subplots(
         1,
         len(robots),
@@ -471,11 +471,11 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
                 va="center",
                 fontsize=6,
             )
-        ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=len(VERDICTS) - 0.5, aspect="auto")
+        ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=len(WORDS) - 0.5, aspect="auto")
         ax.set_title(robot, fontsize=9)
         ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
         ax.set_yticks(range(len(ids)), ids, fontsize=7)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=colours[v]) for v in VERDICTS]
+    handles = [plt.Rectangle((0, 0), 1, 1, color=colours[v]) for v in WORDS]
     n = int(table.users.min()) if len(table) else 0
     fig.suptitle(
         f"Claims robustness: the verdict per reading and setting, at least {n} users per point\n"
@@ -483,5 +483,5 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
         fontsize=9,
     )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
-    fig.legend(handles, VERDICTS, loc="lower center", ncol=len(VERDICTS), frameon=False, fontsize=8)
+    fig.legend(handles, WORDS, loc="lower center", ncol=len(WORDS), frameon=False, fontsize=8)
     return fig

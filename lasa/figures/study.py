@@ -853,14 +853,17 @@ def _claim_row(
     """One claims row: the tests' verdict, settled or undecided, or not testable with its reason."""
     verdict, value, low, high, measured = judged
     r = rule(cid)
+    if verdict != NOT_TESTABLE and not (math.isfinite(low) and math.isfinite(high)):
+        verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (too few pairs for an interval); {measured}"
     testable = verdict != NOT_TESTABLE and reason is None
     settled = testable and r.settled({"effect": (low, high)})
     n = int(result["n"])  # type: ignore[call-overload]
-    if verdict == NOT_TESTABLE:
+    if verdict == NOT_TESTABLE and "too few pairs" in measured:
+        why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
+        why += "reached the compared phase under both conditions"
+    elif verdict == NOT_TESTABLE:
         why = measured.split(";", 1)[0] + ": every condition must finish "
         why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its times are compared"
-    elif not (math.isfinite(low) and math.isfinite(high)):
-        why = f"no interval of the effect (too few participants to test); the tests read {verdict!r}"
     else:
         why = f"95% interval of the effect [{low:.3g}, {high:.3g}]" + (
             "" if settled else f", which straddles 0; the tests read {verdict!r}"
@@ -889,6 +892,7 @@ def _claim_row(
         settled=settled,
         n_users=n,
         values={"effect": float(value)},
+        intervals={"effect": (float(low), float(high))},
     )
 
 
