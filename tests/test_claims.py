@@ -115,7 +115,13 @@ def test_the_repository_readme_holds_the_committed_verdict_table():
     text = (root / "README.md").read_text()
     block = text.split(begin, 1)[1].split(end, 1)[0].strip()
     assert block == (root / "figures" / "verdicts.md").read_text().strip()
-    assert len(text.splitlines()) <= 250 and text[: text.index(end)].count("\n") <= 80
+    assert len(text.splitlines()) <= 200 and text[: text.index(end)].count("\n") <= 80
+    # for a newcomer: the prerequisites by the commands, the reading names before the table uses
+    # them, and what does not reproduce (at most 10 lines) right under it
+    assert text.index("**Needs:**") < text.index("make figures") < text.index(begin)
+    assert "**Reading names.**" in text[: text.index(begin)]
+    after = text[text.index(end) :].split("\n\n")[1]
+    assert after.startswith("**What does not reproduce, and why.**") and after.count("\n") < 10
     table = pd.read_csv(root / "figures" / "claims.csv", dtype=str, keep_default_na=False)
     assert (root / "figures" / "verdicts.md").read_text() == render_verdicts(table)  # generated, not edited
 
