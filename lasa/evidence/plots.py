@@ -40,6 +40,7 @@ __all__ = [
     "paper_note",
     "paper_point",
     "paper_slope",
+    "wrap_to",
     "plot_demonstrations",
     "plot_training_curves",
     "project",
@@ -284,3 +285,11 @@ def paper_note(ax: Axes, text: str, loc: str = "upper center", width: int = 48) 
             "alpha": 0.85,
         },
     )
+
+
+def wrap_to(text: str, inches: float, fontsize: float = 12.0) -> str:
+    """``text`` wrapped into lines that fit ``inches`` at ``fontsize`` [pt] (a title that is not clipped).
+
+    A character is taken as 0.55 of the font size wide, a little more than most are.
+    """
+    return textwrap.fill(text, max(20, int(inches * 72 / (0.55 * fontsize))))

@@ -18,7 +18,7 @@ from lasa.base.config import ControlConfig, NonNegative, Positive, PositiveInt
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
-from lasa.evidence.plots import METHOD_COLORS, method_lineplot, paper_point, robot_rows
+from lasa.evidence.plots import METHOD_COLORS, method_lineplot, paper_point, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     Design,
@@ -464,6 +464,11 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         paper = "\n(the paper's numbers are its 7-DoF Panda's)" if name != "panda" else ""
         row[2].set_title(f"{name}: time ratio LA / LA+SA{paper}")
     n = int(table.groupby(["robot", "method", "beta"]).size().max())
-    fig.suptitle(f"Fig. sim1: users of fixed expertise, {n} users per point, assistance: {assistance}")
+    fig.suptitle(
+        wrap_to(
+            f"Fig. sim1: users of fixed expertise, {n} users per point, assistance: {assistance}",
+            fig.get_figwidth(),
+        )
+    )
     fig.tight_layout()
     return fig
