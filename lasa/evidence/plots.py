@@ -9,6 +9,7 @@ figure's own panels live in its module of :mod:`lasa.figures`.
 from __future__ import annotations
 
 import textwrap
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -209,10 +210,10 @@ def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None)
 
 
 # the paper's numbers and orderings, drawn the same way in every figure: black, dotted, labelled
-PAPER_STYLE = {"color": "0.1", "ls": ":", "lw": 1.3, "zorder": 4}
+PAPER_STYLE: dict[str, Any] = {"color": "0.1", "ls": ":", "lw": 1.3, "zorder": 4}
 
 
-def paper_line(ax: Axes, y: float, label: str, **style: object) -> Line2D:
+def paper_line(ax: Axes, y: float, label: str, **style: Any) -> Line2D:
     """A horizontal reference line at the paper's value ``y``, labelled for the legend.
 
     ``style`` overrides :data:`PAPER_STYLE` (e.g. ``ls="--"``).
@@ -220,7 +221,7 @@ def paper_line(ax: Axes, y: float, label: str, **style: object) -> Line2D:
     return ax.axhline(y, label=label, **{**PAPER_STYLE, **style})
 
 
-def paper_slope(ax: Axes, slope: float, label: str, x_max: float = 1.0, **style: object) -> Line2D:
+def paper_slope(ax: Axes, slope: float, label: str, x_max: float = 1.0, **style: Any) -> Line2D:
     """The paper's line ``y = slope * x`` through the origin, drawn on [0, x_max], labelled."""
     xs = np.array([0.0, x_max])
     (line,) = ax.plot(xs, slope * xs, label=label, **{**PAPER_STYLE, **style})
