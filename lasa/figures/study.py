@@ -1009,10 +1009,9 @@ def plot_time(
 ) -> Figure:
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
 
-    A bar whose episodes did not all finish within the horizon is hatched (its times are
-    censored: cut at the horizon), and every bar says which share finished. ``horizon`` [s]
-    names the horizon in the caption (default: the longest unfinished episode's time). The
-    caption's last line is the paper's H3 ordering (:data:`PAPER_H`).
+    A bar whose episodes did not all finish within the horizon is hatched (censored: cut at
+    the horizon), and every bar says which share finished. ``horizon`` [s] names the horizon
+    (default: the longest unfinished episode's time); the last line is the paper's H3 (:data:`PAPER_H`).
     """
     sns.set_theme(style="whitegrid")
     data = for_member(frame, member, decoder=decoder, model=model)
