@@ -8,6 +8,9 @@ figure's own panels live in its module of :mod:`lasa.figures`.
 
 from __future__ import annotations
 
+import textwrap
+from typing import Any
+
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
@@ -16,7 +19,9 @@ from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Rectangle
+from matplotlib.text import Text
 
 from lasa.method.dataset import Demonstrations
 from lasa.world.goals import GoalTask
@@ -32,6 +37,11 @@ __all__ = [
     "frame_around",
     "is_planar",
     "method_lineplot",
+    "paper_line",
+    "paper_note",
+    "paper_point",
+    "paper_slope",
+    "wrap_to",
     "plot_demonstrations",
     "plot_training_curves",
     "project",
@@ -197,3 +207,90 @@ def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None)
     )
     ax.legend(frameon=False, title=None)
     return ax
+
+
+# the paper's numbers and orderings, drawn the same way in every figure: black, dotted, labelled
+PAPER_STYLE: dict[str, Any] = {"color": "0.1", "ls": ":", "lw": 1.3, "zorder": 4}
+
+
+def paper_line(ax: Axes, y: float, label: str, **style: Any) -> Line2D:
+    """A horizontal reference line at the paper's value ``y``, labelled for the legend.
+
+    ``style`` overrides :data:`PAPER_STYLE` (e.g. ``ls="--"``).
+    """
+    return ax.axhline(y, label=label, **{**PAPER_STYLE, **style})
+
+
+def paper_slope(ax: Axes, slope: float, label: str, x_max: float = 1.0, **style: Any) -> Line2D:
+    """The paper's line ``y = slope * x`` through the origin, drawn on [0, x_max], labelled."""
+    xs = np.array([0.0, x_max])
+    (line,) = ax.plot(xs, slope * xs, label=label, **{**PAPER_STYLE, **style})
+    return line
+
+
+def paper_point(
+    ax: Axes, x: float, y: float, label: str, tolerance: float | None = None, tol_label: str | None = None
+) -> Line2D:
+    """The paper's value ``y`` at ``x``: a star, labelled in the legend and beside it.
+
+    ``tolerance`` draws y +- it faintly.
+
+    Args:
+        ax: Axes to draw on.
+        x, y: Where the paper's number is.
+        label: The legend's text, e.g. ``"paper: 1.45 (β = 75)"``.
+        tolerance: Half-width of the band a rule accepts around ``y`` (none if ``None``).
+        tol_label: The band's legend text (unlabelled if ``None``).
+    """
+    if tolerance is not None:
+        ax.errorbar(
+            [x],
+            [y],
+            yerr=tolerance,
+            fmt="none",
+            ecolor="0.1",
+            alpha=0.3,
+            elinewidth=6,
+            capsize=0,
+            label=tol_label,
+            zorder=3,
+        )
+    (point,) = ax.plot([x], [y], marker="*", ms=11, ls="none", color="0.1", label=label, zorder=5)
+    ax.annotate(f"paper {y:g}", (x, y), xytext=(7, 0), textcoords="offset points", fontsize=7, va="center")
+    return point
+
+
+def paper_note(ax: Axes, text: str, loc: str = "upper center", width: int = 48) -> Text:
+    """A short statement of what the paper reports, in a box inside the axes, wrapped to ``width``.
+
+    ``loc`` is ``"upper|lower left|center|right"``.
+    """
+    vert, horiz = loc.split()
+    x = {"left": 0.02, "center": 0.5, "right": 0.98}[horiz]
+    y = {"upper": 0.97, "lower": 0.03}[vert]
+    return ax.text(
+        x,
+        y,
+        textwrap.fill(text, width),
+        transform=ax.transAxes,
+        ha=horiz,
+        va="top" if vert == "upper" else "bottom",
+        fontsize=7.5,
+        style="italic",
+        zorder=6,
+        bbox={
+            "boxstyle": "round,pad=0.3",
+            "facecolor": "white",
+            "edgecolor": "0.1",
+            "ls": ":",
+            "alpha": 0.85,
+        },
+    )
+
+
+def wrap_to(text: str, inches: float, fontsize: float = 12.0) -> str:
+    """``text`` wrapped into lines that fit ``inches`` at ``fontsize`` [pt] (a title that is not clipped).
+
+    A character is taken as 0.55 of the font size wide, a little more than most are.
+    """
+    return textwrap.fill(text, max(20, int(inches * 72 / (0.55 * fontsize))))

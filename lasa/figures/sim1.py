@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.axes import Axes
@@ -17,7 +18,7 @@ from lasa.base.config import ControlConfig, NonNegative, Positive, PositiveInt
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
-from lasa.evidence.plots import method_lineplot, robot_rows
+from lasa.evidence.plots import METHOD_COLORS, method_lineplot, paper_point, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     Design,
@@ -39,7 +40,18 @@ from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "plot_metric"]
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "Config",
+    "run",
+    "claims",
+    "boot_values",
+    "plot",
+    "plot_metric",
+    "plot_time_ratio",
+    "time_ratio_band",
+]
 
 NAME = "sim1_fixed_expertise"
 # the contract's columns first, then what the notebook and the claims read
@@ -354,10 +366,14 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 
 
 METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time to reach s* [steps]"}
+PAPER_RATIOS = {75.0: 1.45, 1000.0: 1.30}  # the paper's time ratio LA / LA+SA at these betas (Panda) [-]
+RATIO_TOLERANCE = 0.15  # how far from the paper's ratio rule("sim1.time_ratio") says "yes" [-]
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
     """One panel: a metric against beta per method, with 95% bootstrap bands.
+
+    Faint vertical lines mark the betas of the paper's time ratios (75 and 1000).
 
     Args:
         frame: One robot's rows (columns ``beta``, ``method`` and ``metric``).
@@ -368,27 +384,91 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
-    for beta in (75, 1000):
-        ax.axvline(beta, color="0.85", lw=0.8, zorder=0)
+    for i, beta in enumerate(PAPER_RATIOS):
+        label = "β = 75, 1000: the paper's time ratios" if i == 0 else None
+        ax.axvline(beta, color="0.8", lw=0.8, zorder=0, label=label)
+    ax.legend(frameon=False, fontsize=8)
+    return ax
+
+
+def time_ratio_band(
+    frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000, seed: int = 0
+) -> pd.DataFrame:
+    """Mean time of ``a`` over mean time of ``b`` per beta, with a 95% percentile bootstrap interval.
+
+    ``ratio`` is the claims' number (each method's mean over its rows, :func:`_means`); the
+    interval resamples the users (``seed``) present under both methods, with replacement,
+    ``n_boot`` times from a generator seeded by ``seed`` (the same band run after run).
+
+    Returns:
+        One row per beta with both methods: ``beta``, ``ratio``, ``low``, ``high``.
+    """
+    rng = np.random.default_rng(seed)
+    times = frame.pivot_table(index=["beta", "seed"], columns="method", values="time", aggfunc="mean")
+    means = frame.groupby(["beta", "method"]).time.mean()
+    rows = []
+    for beta, part in times.groupby(level="beta"):
+        if a not in part or b not in part:
+            continue
+        pair = part[[a, b]].dropna().to_numpy()
+        low = high = np.nan  # no user ran under both: no interval
+        if len(pair):
+            pick = rng.integers(0, len(pair), (n_boot, len(pair)))
+            boot = pair[pick, 0].mean(axis=1) / pair[pick, 1].mean(axis=1)
+            low, high = np.percentile(boot, [2.5, 97.5])
+        rows.append({"beta": beta, "ratio": means[beta, a] / means[beta, b], "low": low, "high": high})
+    return pd.DataFrame(rows, columns=["beta", "ratio", "low", "high"])
+
+
+def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
+    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars.
+
+    The paper's 1.45 (beta = 75) and 1.30 (beta = 1000) are labelled stars, each with the
+    +-0.15 that rule ``sim1.time_ratio`` accepts drawn faintly; the dashed line is ratio 1
+    (no difference). Our curve is :func:`time_ratio_band`'s.
+    """
+    ax = plt.gca() if ax is None else ax
+    band = time_ratio_band(frame)
+    color = METHOD_COLORS["LA+SA"]
+    ax.fill_between(
+        band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label="ours: 95% bootstrap CI"
+    )
+    ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
+    ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
+    for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
+        tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
+        paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
+    ax.set_xscale("log")
+    ax.set_xlabel(r"user rationality $\beta$")
+    ax.set_ylabel("time ratio LA / LA+SA [-]")
+    ax.legend(frameon=False, fontsize=7)
     return ax
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim1: one row per robot present, final error (log scale) and time against beta.
+    """Fig. sim1: one row per robot present: final error (log scale), time and time ratio against beta.
 
     Args:
         table: Rows of every robot and member.
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
     table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 2, (11, 3.8))
+    fig, rows = robot_rows(table, 3, (16, 4.2))
     for name, part, row in rows:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
+        plot_time_ratio(part, ax=row[2])
         row[0].set_yscale("log")
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: time to reach s*")
+        paper = "\n(the paper's numbers are its 7-DoF Panda's)" if name != "panda" else ""
+        row[2].set_title(f"{name}: time ratio LA / LA+SA{paper}")
     n = int(table.groupby(["robot", "method", "beta"]).size().max())
-    fig.suptitle(f"Fig. sim1: users of fixed expertise, {n} users per point, assistance: {assistance}")
+    fig.suptitle(
+        wrap_to(
+            f"Fig. sim1: users of fixed expertise, {n} users per point, assistance: {assistance}",
+            fig.get_figwidth(),
+        )
+    )
     fig.tight_layout()
     return fig

@@ -24,7 +24,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
-from lasa.evidence.plots import method_lineplot, robot_rows
+from lasa.evidence.plots import method_lineplot, paper_note, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     Design,
@@ -219,11 +219,24 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 METRIC_LABELS = {"final_error": "final state error (normalised)", "confidence": "confidence b(g*) at the end"}
 
 
+# what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled note
+PAPER_SHAPES = {
+    "final_error": "paper: LA+SA's error grows with N; LA+SA+Entropy stays low",
+    "confidence": "paper: LA+SA's confidence in the true cup falls with N; LA+SA+Entropy's stays high",
+}
+
+
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: final error or confidence in the true cup against the change step N."""
+    """One panel: final error or confidence in the true cup against the change step N.
+
+    The paper's shape (:data:`PAPER_SHAPES`) is stated in a note above the curves.
+    """
     ax = method_lineplot(frame, "change_step", metric, ax)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
+    if metric in PAPER_SHAPES:
+        paper_note(ax, PAPER_SHAPES[metric], loc="upper center", width=44)
+        ax.set_ylim(top=ax.get_ylim()[1] + 0.3 * np.ptp(ax.get_ylim()))  # room for the note
     return ax
 
 
@@ -242,6 +255,11 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: confidence in the true cup")
     n = int(table.groupby(["robot", "method", "change_step"]).size().max())
-    fig.suptitle(f"Fig. sim2: users who change their mind, {n} users per point, assistance: {assistance}")
+    fig.suptitle(
+        wrap_to(
+            f"Fig. sim2: users who change their mind, {n} users per point, assistance: {assistance}",
+            fig.get_figwidth(),
+        )
+    )
     fig.tight_layout()
     return fig

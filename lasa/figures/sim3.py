@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from lasa.base.config import ControlConfig, Positive, PositiveInt
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import normalized_error
-from lasa.evidence.plots import method_lineplot, robot_rows
+from lasa.evidence.plots import method_lineplot, paper_note, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     Design,
@@ -189,13 +189,20 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     return {"sim3.entropy_learners": gains}
 
 
+PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
+
+
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
-    """One panel: the error over time of one kind of learner, per method, with 95% bands."""
+    """One panel: the error over time of one kind of learner, per method, with 95% bands.
+
+    The paper's ordering (:data:`PAPER_SHAPE`) is stated in a note at the upper right.
+    """
     part = frame[frame.learner == learner]
     ax = method_lineplot(part, "t", "error", ax)
     ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
     ax.set_xlabel("time step t")
     ax.set_ylabel("state error (normalised)")
+    paper_note(ax, PAPER_SHAPE, loc="upper right", width=36)
     return ax
 
 
@@ -213,6 +220,10 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
     n = int(table.groupby(["robot", "method", "learner", "t"]).size().max())
-    fig.suptitle(f"Fig. sim3: users who learn, {n} users per curve, assistance: {assistance}")
+    fig.suptitle(
+        wrap_to(
+            f"Fig. sim3: users who learn, {n} users per curve, assistance: {assistance}", fig.get_figwidth()
+        )
+    )
     fig.tight_layout()
     return fig

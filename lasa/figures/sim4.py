@@ -22,7 +22,7 @@ from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, check_rang
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
-from lasa.evidence.plots import robots_present
+from lasa.evidence.plots import paper_slope, robots_present, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     N_BOOT,
@@ -420,17 +420,25 @@ H_STYLES = {
 }
 
 
+# the paper's lines (Sec. V-D): slope -> (legend label, line style)
+PAPER_LINES = {0.11: ("paper, with the map: y = 0.11x", ":"), 1.0: ("paper, without the map: y = x", "--")}
+PAPER_UNITS = "(both axes ÷ the farthest new goal's distance, as the paper's; ours in joint space)"
+
+
 def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     """One robot's panel: grasp error at new cups against their distance, per kind of map.
 
     Each cup's episodes are drawn as faint points and their mean with a 95% bootstrap
     interval; the line is the least-squares fit through the means (its equation and R^2
-    in the legend, from :func:`fits`). The dashed line is y = x.
+    in the legend, from :func:`fits`). The paper's two lines (:data:`PAPER_LINES`) are drawn
+    in black: both axes are normalised by the farthest new goal's distance, as the paper's
+    are, so its slopes are drawn as they are (ours in joint space; the paper's space unstated).
     """
     ax = plt.gca() if ax is None else ax
     table = fits(frame)
     xs = np.linspace(0.0, 1.0, 2)
-    ax.plot(xs, xs, ls="--", color="0.6", lw=1, label="y = x")
+    for slope, (label, ls) in PAPER_LINES.items():
+        paper_slope(ax, slope, label, x_max=1.05, ls=ls)
     for kind, (color, name) in H_STYLES.items():
         if kind not in table.index:
             continue
@@ -459,9 +467,9 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
         )
     ax.set_xlim(0, 1.05)
     ax.set_ylim(0, max(1.1, float(frame.groupby(["h", "distance"]).error.mean().max()) * 1.1))
-    ax.set_xlabel("distance of the new goal from the training goal (normalised)")
+    ax.set_xlabel(f"distance of the new goal from the training goal (normalised)\n{PAPER_UNITS}", fontsize=8)
     ax.set_ylabel("grasp error (normalised)")
-    ax.legend(frameon=False, fontsize=8, loc="upper left")
+    ax.legend(frameon=False, fontsize=7, loc="upper left")
     return ax
 
 
@@ -474,6 +482,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         plot_robot(table[table.robot == name], ax=ax)
         ax.set_title(name)
     n = int(table.groupby(["robot", "h", "distance"]).size().max())
-    fig.suptitle(f"Fig. sim4: new goals, {n} near-optimal users per point, assistance: {assistance}")
+    title = f"Fig. sim4: new goals, {n} near-optimal users per point, assistance: {assistance}"
+    fig.suptitle(wrap_to(title, fig.get_figwidth()))
     fig.tight_layout()
     return fig

@@ -100,6 +100,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
+from lasa.evidence.plots import wrap_to
 from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED, rule
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
@@ -948,6 +949,14 @@ def untestable_reason(prop: pd.DataFrame) -> str | None:
 CI = {"errorbar": ("ci", 95), "seed": 0}
 
 
+# what the paper reports for each hypothesis (Sec. VI), as the figures label their reference
+PAPER_H = {
+    "h1": "paper: F(1,18) = 29.9, p < .001 (H1: the SA conditions lower Goal Error, R+SA < R and LA+SA < LA)",
+    "h2": "paper (H2): in the scoop phase LA+SA's alignment is above R+SA's",
+    "h3": "paper (H3): LA+SA fastest, Total and Idle Time (p < .05)",
+}
+
+
 def _reading(member: str, decoder: str | None) -> str:
     """The figures' caption of what they show: the SA member, and the decoder reading if named."""
     return f"SA = {member}" + (f"; decoder = {decoder}" if decoder else "")
@@ -956,7 +965,10 @@ def _reading(member: str, decoder: str | None) -> str:
 def plot_goal_error(
     frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None, model: str | None = None
 ) -> Figure:
-    """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants)."""
+    """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants).
+
+    The title's second line is the paper's H1 result and ordering (:data:`PAPER_H`).
+    """
     sns.set_theme(style="whitegrid")
     data = for_member(frame, member, decoder=decoder, model=model)
     fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
@@ -987,9 +999,8 @@ def plot_goal_error(
         alpha=0.5,
     )
     ax.set_ylabel("Goal Error [m s]")
-    ax.set_title(
-        f"Goal Error ({data.participant.nunique()} simulated participants; {_reading(member, decoder)})"
-    )
+    what = f"Goal Error ({data.participant.nunique()} simulated participants; {_reading(member, decoder)})"
+    ax.set_title(f"{wrap_to(what, 5.0, 10)}\n{wrap_to(PAPER_H['h1'], 5.0, 10)}", fontsize=10)
     return fig
 
 
@@ -1002,9 +1013,9 @@ def plot_time(
 ) -> Figure:
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
 
-    A bar whose episodes did not all finish within the horizon is hatched (its times are
-    censored: cut at the horizon), and every bar says which share finished. ``horizon`` [s]
-    names the horizon in the caption (default: the longest unfinished episode's time).
+    A bar whose episodes did not all finish within the horizon is hatched (censored: cut at
+    the horizon), and every bar says which share finished. ``horizon`` [s] names the horizon
+    (default: the longest unfinished episode's time); the last line is the paper's H3 (:data:`PAPER_H`).
     """
     sns.set_theme(style="whitegrid")
     data = for_member(frame, member, decoder=decoder, model=model)
@@ -1049,7 +1060,8 @@ def plot_time(
         fontsize=8,
     )
     what = _reading(member, decoder) + (f"; participant model = {model}" if model else "")
-    fig.suptitle(f"{data.participant.nunique()} simulated participants; {what}", fontsize=10)
+    title = wrap_to(f"{data.participant.nunique()} simulated participants; {what}", 9, 10)
+    fig.suptitle(f"{title}\n{wrap_to(PAPER_H['h3'], 9, 10)}", fontsize=10)
     return fig
 
 
@@ -1077,11 +1089,14 @@ def _mark_censored(ax: plt.Axes, done: pd.Series) -> None:
 def plot_alignment(
     frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None, model: str | None = None
 ) -> Figure:
-    """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them)."""
+    """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them).
+
+    The shaded scoop phase is labelled with the paper's H2 ordering there (:data:`PAPER_H`).
+    """
     sns.set_theme(style="whitegrid")
     data = for_member(frame, member, decoder=decoder, model=model)
     data = data[(data.task == "Dessert") & data.phase.isin(["stab", "scoop", "dip"])]
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+    fig, ax = plt.subplots(figsize=(7.6, 4.0), layout="constrained")
     sns.pointplot(
         data=data,
         x="phase",
@@ -1095,9 +1110,10 @@ def plot_alignment(
         ax=ax,
     )
     ax.set_ylabel("Preference Alignment (d · d*)")
-    ax.set_title(
-        f"Dessert: alignment with each phase's preference ({_reading(member, decoder)})", fontsize=10
-    )
+    ax.axvspan(0.6, 1.4, color="0.92", zorder=0, label=wrap_to(PAPER_H["h2"], 1.8, 8))  # the scoop phase
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    what = f"Dessert: alignment with each phase's preference ({_reading(member, decoder)})"
+    ax.set_title(wrap_to(what, 4.5, 10), fontsize=10)
     return fig
 
 
