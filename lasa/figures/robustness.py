@@ -359,9 +359,9 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
 
     Returns:
         Columns ``reproduced``, ``partly``, ``not reproduced``, ``undecided``, ``not testable``
-        (cell counts over the members' and the settings' cells), ``default`` (the headline member's verdict in the default
-        cell, empty if the grid has none), ``stable`` (every settled cell gives it) and
-        ``moves`` (the cells whose settled verdict differs from it).
+        (cell counts over the members' and the settings' cells), ``default`` (the headline
+        member's verdict in the default cell, empty if the grid has none), ``stable`` (every
+        settled cell gives it) and ``moves`` (the cells whose settled verdict differs from it).
     """
     rows = []
     for (robot, claim), part in table.groupby(["robot", "id"], sort=True):

@@ -366,8 +366,9 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 
 
 METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time to reach s* [steps]"}
-PAPER_RATIOS = {75.0: 1.45, 1000.0: 1.30}  # the paper's time ratio LA / LA+SA at these betas (Panda) [-]
-RATIO_TOLERANCE = 0.15  # how far from the paper's ratio rule("sim1.time_ratio") says "yes" [-]
+# the paper's time ratio LA / LA+SA at these betas (Panda) and the rule's tolerance, from its rule [-]
+PAPER_RATIOS = {float(p.where.split("=")[1]): p.value for p in rule("sim1.time_ratio").paper}
+RATIO_TOLERANCE = rule("sim1.time_ratio").paper[0].tolerance
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
