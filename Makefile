@@ -1,10 +1,14 @@
 # lasa: reproduce "Shared Autonomy with Learned Latent Actions" (RSS 2020).
 #
+#   make                  this list (make help)
 #   make figures          regenerate every figure, CSV, video and the claims table (paper scale),
 #                         the eating study (notebooks 10-11, Panda only) included
 #   make figures QUICK=1  the same pipeline at toy scale, into build/quick/ (figures/ untouched)
 #   make figures LARGE=1  paper scale with the cluster-sized verdict map (configs/large.yaml),
 #                         into build/large/; LASA_SCHEDULER=tcp://host:8786 runs its grid on Dask
+#   make verify           regenerate everything (paper scale) into build/verify/, then compare it with
+#                         figures/: CSV values, bytes of images and videos, and every claim's verdict
+#                         (fails if and only if a verdict differs)
 #   make test             lint + pytest, including every notebook run in QUICK mode
 #   make book             a static site of the executed notebooks, claims table first -> build/book/html
 #   make teleop ARGS=...  drive the robot live in MuJoCo's viewer (gamepad or keyboard), sessions logged
@@ -20,6 +24,11 @@
 SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
 .DELETE_ON_ERROR:
+
+# The first target, so the default goal (a bare `make`): the usage block at the top of this file,
+# its leading comment lines up to the first blank line, without the comment marks.
+help:
+	@sed -n '1,/^$$/{/^#/s/^# \{0,1\}//p}' $(firstword $(MAKEFILE_LIST))
 
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
@@ -69,7 +78,7 @@ include $(MAKE_DEPS)
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
-.PHONY: setup sysdeps figures notebooks test lint bench clean teleop book
+.PHONY: help setup sysdeps figures notebooks verify test lint bench clean teleop book
 
 # MathJax for the book, served from the site itself (no CDN at view time): the npm package's es5 build.
 MATHJAX_VERSION := 3.2.2
@@ -170,6 +179,14 @@ $(EXEC)/10_eating_task.ipynb: notebooks/10_eating_task.ipynb $(EXEC)/02_decoder_
 
 $(EXEC)/11_eating_study.ipynb: notebooks/11_eating_study.ipynb $(EXEC)/10_eating_task.ipynb $(NB_SRC_11_eating_study) $(CONFIG) | setup
 	$(RUN)
+
+# Did this machine reproduce the committed figures? The whole pipeline, fresh, into its own folder
+# (figures/ and README.md untouched: the claims/README sync runs only when BUILD is build), then
+# lasa.pipeline.verify compares the two figures folders and fails if any claim's verdict differs.
+VERIFY_OUT := build/verify
+verify: setup
+	@$(MAKE) --no-print-directory figures OUT=$(VERIFY_OUT)
+	$(BIN)/python -m lasa.pipeline.verify figures $(VERIFY_OUT)/figures
 
 lint: setup
 	$(BIN)/ruff check lasa tests benchmarks

@@ -31,15 +31,18 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 - ``figures_s``: wall time of ``make figures`` (fresh, into ``build/bench``) per
   notebook and in total, and the same for ``make figures QUICK=1``.
 - ``render_fps``: frames per second of the off-screen video renderer.
-- ``dask_grid``: wall time of a small verdict-map grid (:mod:`lasa.figures.robustness`) run
-  in this process, and on a ``distributed.LocalCluster`` of 1 and of 2 worker processes
-  (one thread each), with the speedup of 2 workers over 1 (reported, not a target) and
-  whether every run gave the same rows; ``dask_overhead_1_worker`` is one worker's time
-  over the in-process time, minus one.
+- ``dask_overhead_1_worker``: what running the verdict map (:mod:`lasa.figures.robustness`)
+  through a one-worker ``distributed.LocalCluster`` costs over running it in this process, at
+  two grid sizes (the larger at least ``grid_min_s``, 60 s, in-process), split into a fixed
+  cost and a per-cell fraction by a straight-line fit (:func:`fit_overhead`);
+  ``overhead_fraction`` at the large grid is the target. ``dask_grid``: the small grid in
+  this process and on 1 and 2 worker processes (one thread each), with the speedup of 2
+  workers over 1 (reported, not a target) and whether every run gave the same rows.
 
 Usage, from the repository root: ``python benchmarks/bench.py --out benchmarks``
 (``--tiny`` runs every part at a toy size in seconds, as ``tests/test_bench.py`` does;
-``--skip-pipeline`` leaves out the two ``make figures`` runs). See ``benchmarks/README.md``.
+``--skip-pipeline`` leaves out the two ``make figures`` runs; ``--only dask`` or
+``--only decoder_vs_gemm`` re-measures one part and updates its keys). See ``benchmarks/README.md``.
 """
 
 from __future__ import annotations
@@ -50,16 +53,18 @@ import os
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
 import argparse  # noqa: E402
+import contextlib  # noqa: E402
 import dataclasses  # noqa: E402
 import datetime  # noqa: E402
 import importlib  # noqa: E402
 import json  # noqa: E402
+import math  # noqa: E402
 import platform  # noqa: E402
 import shutil  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from collections.abc import Callable  # noqa: E402
+from collections.abc import Callable, Iterator  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -100,6 +105,7 @@ __all__ = [
     "machine",
     "plot_scaling",
     "dask_grid",
+    "fit_overhead",
     "decoder_vs_gemm",
     "gemm_only",
     "remeasure",
@@ -117,7 +123,7 @@ TARGETS: dict[str, float] = {
     "sweep_speedup_at_1024": 100.0,
     "sweep_floor_fraction_at_1024": 0.85,
     "decoder_vs_gemm_fraction": 0.75,  # decode_numpy / GEMM-only bound, 1024 users, one thread
-    "dask_overhead_1_worker": 0.10,  # one Dask worker's grid time / in-process time - 1
+    "dask_overhead_1_worker": 0.10,  # overhead_fraction: 1 Dask worker / in-process - 1, large grid
     "figures_total_s": 720.0,  # make figures, paper scale, fresh (12 min)
     "figures_quick_total_s": 90.0,
 }
@@ -134,7 +140,10 @@ class BenchConfig:
     loop_user_steps: int = 200  # user-steps timed in the per-user loop [-]
     render_frames: int = 40  # frames rendered per robot [-]
     repeats: int = 5  # timed runs of each sweep size; the median is reported [-]
-    grid_cells: int = 8  # cells of the verdict-map grid timed locally and on Dask [-]
+    # the verdict-map grid's two sizes, timed in-process and on one Dask worker; the large one
+    # grows until its in-process run takes grid_min_s (a few cells' fixed cost is noise beside it)
+    grid_cells: tuple[int, int] = (8, 40)  # cells [-]
+    grid_min_s: float = 60.0  # the large grid's in-process wall time, at least [s]
     grid_seeds: int = 2  # users per point and draw in each grid cell [-]
     dask_workers: tuple[int, ...] = (1, 2)  # LocalCluster sizes timed [-]
     gemm_users: int = 1024  # users of the decoder-vs-GEMM comparison (x 21 candidates) [-]
@@ -155,7 +164,8 @@ class BenchConfig:
             loop_user_steps=6,
             render_frames=2,
             repeats=1,
-            grid_cells=2,
+            grid_cells=(1, 2),
+            grid_min_s=0.0,
             grid_seeds=1,
             gemm_users=16,
             gemm_repeats=1,
@@ -715,70 +725,167 @@ def decoder_vs_gemm(model: LatentActionModel, control: ControlConfig, config: Be
     return out
 
 
-def dask_grid(
+def _grid_cells(
     model: LatentActionModel, task: CupTask, control: ControlConfig, config: BenchConfig
-) -> dict[str, Any]:
-    """Wall time of a verdict-map grid here and on LocalClusters of ``config.dask_workers``.
-
-    The first ``grid_cells`` cells of a factorial grid (every member in each), with the bench's
-    decoder as both the base and the entropy decoder. Cluster start-up is not timed: the
-    workers import ``lasa`` before the clock starts. The decoders and task go to each
-    worker once (``run_jobs(shared=...)``).
-    """
-    from distributed import Client, LocalCluster  # noqa: PLC0415
-
+) -> tuple[list[Any], Any]:
+    """The factorial verdict-map grid's cells (every member in each) and what they share."""
     from lasa.figures import robustness  # noqa: PLC0415
 
     grid = robustness.Config(
         users=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
     )
-    cells = robustness.cells(grid, control)[: config.grid_cells]
+    cells = robustness.cells(grid, control)
     shared = robustness.Grid({"base": model, "entropy": model}, task, control, grid)
-
-    def timed(scheduler: str | None) -> tuple[float, pd.DataFrame]:
-        from lasa.pipeline.scaleout import run_jobs  # noqa: PLC0415
-
-        start = time.perf_counter()
-        frames = run_jobs(robustness.run_cell, cells, scheduler, shared=shared)
-        return time.perf_counter() - start, pd.concat(frames, ignore_index=True)
-
-    local_s, reference = timed(None)
-    out: dict[str, Any] = {"cells": len(cells), "local_s": local_s, "workers": {}, "identical": True}
-    for n in config.dask_workers:
-        with LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
-        ) as cluster:
-            with Client(cluster) as client:  # imports are start-up, not work: before the clock
-                client.run(importlib.import_module, "lasa.figures.robustness")
-            seconds, frame = timed(cluster.scheduler_address)
-        out["workers"][str(n)] = seconds
-        out["identical"] = bool(out["identical"] and frame.equals(reference))
-    if {"1", "2"} <= set(out["workers"]):
-        out["speedup_2_over_1"] = out["workers"]["1"] / out["workers"]["2"]  # reported, not a target
-    return out
+    return cells, shared
 
 
-def remeasure(part: str, config: BenchConfig, path: Path) -> int:
-    """Re-run one part (``decoder_vs_gemm``) and update its keys in the results at ``path``.
+def _take(cells: list[Any], n: int) -> list[Any]:
+    """``n`` cells of the grid in order, starting over when it runs out (same work per cell)."""
+    return [cells[i % len(cells)] for i in range(n)]
 
-    Every other key is kept as it was. ``remeasured[part]`` records the machine and date
-    of the new numbers (``machine`` stays that of the whole run); ``scaling.png`` is not
-    redrawn. A missing ``path`` starts from an empty record.
+
+def _time_grid(cells: list[Any], shared: Any, scheduler: str | None) -> tuple[float, pd.DataFrame]:
+    """Wall time of the cells through :func:`lasa.pipeline.scaleout.run_jobs`, and their rows."""
+    from lasa.figures import robustness  # noqa: PLC0415
+    from lasa.pipeline.scaleout import run_jobs  # noqa: PLC0415
+
+    start = time.perf_counter()
+    frames = run_jobs(robustness.run_cell, cells, scheduler, shared=shared)
+    return time.perf_counter() - start, pd.concat(frames, ignore_index=True)
+
+
+@contextlib.contextmanager
+def _local_cluster(n_workers: int) -> Iterator[str]:
+    """A ``LocalCluster`` of one-thread worker processes that have imported lasa: its address."""
+    from distributed import Client, LocalCluster  # noqa: PLC0415
+
+    with LocalCluster(
+        n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        with Client(cluster) as client:  # imports are start-up, not work: before the clock
+            client.run(importlib.import_module, "lasa.figures.robustness")
+        yield cluster.scheduler_address
+
+
+def fit_overhead(
+    cells: tuple[int, int], in_process_s: tuple[float, float], dask_s: tuple[float, float]
+) -> dict[str, Any]:
+    """Dask's overhead split into a fixed and a per-cell part, from two grid sizes.
+
+    Each way of running is fitted with ``time = fixed + per_cell * cells`` through its two
+    points. ``fixed_s`` is the difference of the intercepts (what Dask costs once per grid:
+    scattering the shared decoders and task, scheduling), ``per_cell_fraction`` the ratio of
+    the slopes minus one (what it adds to every cell: sending it, its rows back), and
+    ``overhead_fraction`` the whole overhead at the larger grid, Dask's time over the
+    in-process time minus one (the target).
+
+    Raises:
+        ConfigError: if the two sizes are not increasing.
     """
-    results: dict[str, Any] = json.loads(path.read_text()) if path.exists() else {}
-    print(f"{part} alone (one thread)", flush=True)
+    (n1, n2), (l1, l2), (d1, d2) = cells, in_process_s, dask_s
+    if not 0 < n1 < n2:
+        raise ConfigError(f"grid sizes must be 0 < small < large, got {cells}")
+    slope_local, slope_dask = (l2 - l1) / (n2 - n1), (d2 - d1) / (n2 - n1)
+    fixed_local, fixed_dask = l1 - slope_local * n1, d1 - slope_dask * n1
+    per_cell = slope_dask / slope_local - 1.0 if slope_local > 0 else None  # None: noise swamped it
+    return {
+        "cells": [n1, n2],
+        "seconds": {"in_process": [l1, l2], "dask_1_worker": [d1, d2]},
+        "grid_seconds_in_process": l2,
+        "grid_seconds_dask": d2,
+        "per_cell_s": {"in_process": slope_local, "dask_1_worker": slope_dask},
+        "intercept_s": {"in_process": fixed_local, "dask_1_worker": fixed_dask},
+        "fixed_s": fixed_dask - fixed_local,
+        "per_cell_fraction": per_cell,
+        "overhead_fraction": d2 / l2 - 1.0,
+    }
+
+
+def _large_size(config: BenchConfig, small_s: float) -> int:
+    """Cells of the large grid: ``grid_cells[1]``, or more if that would run under ``grid_min_s``."""
+    small, large = config.grid_cells
+    per_cell = small_s / small  # an over-estimate (the fixed cost included): add a margin
+    return max(large, math.ceil(1.15 * config.grid_min_s / per_cell))
+
+
+def dask_grid(
+    model: LatentActionModel, task: CupTask, control: ControlConfig, config: BenchConfig
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The verdict-map grid here and on LocalClusters: ``(dask_grid, dask_overhead_1_worker)``.
+
+    Cells of a factorial grid (every member in each, taken in order and starting over past
+    its 27 cells), with the bench's decoder as both the base and the entropy decoder. The
+    overhead of one Dask worker is measured at two sizes, ``grid_cells`` (the large one grown
+    until the in-process run takes ``grid_min_s``, estimated from the small one), in this
+    process and then on a 1-worker cluster, and split by :func:`fit_overhead`. The speedup of
+    the other ``dask_workers`` is timed at the small size (reported, not a target). Cluster
+    start-up is not timed: the workers import ``lasa`` before the clock starts. The
+    decoders and task go to each worker once (``run_jobs(shared=...)``).
+    """
+    all_cells, shared = _grid_cells(model, task, control, config)
+    small = config.grid_cells[0]
+    local = [_time_grid(_take(all_cells, small), shared, None)]
+    sizes = (small, _large_size(config, local[0][0]))
+    local.append(_time_grid(_take(all_cells, sizes[1]), shared, None))
+    if local[1][0] < config.grid_min_s:
+        print(f"warning: the large grid ran {local[1][0]:.1f} s in-process (< {config.grid_min_s} s)")
+    with _local_cluster(1) as address:
+        dask = [_time_grid(_take(all_cells, n), shared, address) for n in sizes]
+    identical = all(d[1].equals(lo[1]) for d, lo in zip(dask, local, strict=True))
+    grid: dict[str, Any] = {"cells": small, "local_s": local[0][0], "workers": {"1": dask[0][0]}}
+    for n in (w for w in config.dask_workers if w != 1):
+        with _local_cluster(n) as address:
+            seconds, frame = _time_grid(_take(all_cells, small), shared, address)
+        grid["workers"][str(n)] = seconds
+        identical = identical and frame.equals(local[0][1])
+    grid["identical"] = bool(identical)
+    if "2" in grid["workers"]:
+        grid["speedup_2_over_1"] = grid["workers"]["1"] / grid["workers"]["2"]  # reported, not a target
+    overhead = fit_overhead(sizes, (local[0][0], local[1][0]), (dask[0][0], dask[1][0]))
+    overhead["grid_min_s"] = config.grid_min_s
+    overhead["identical"] = bool(identical)
+    return grid, overhead
+
+
+PARTS = ("decoder_vs_gemm", "dask")  # what ``--only`` re-measures alone
+PART_SIZES = {"decoder_vs_gemm": ("gemm_", "hidden", "depth", "batches"), "dask": ("grid_", "dask_")}
+
+
+def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tuple[str, ...]:
+    """Measure ``part`` on the Panda into ``results``; the keys it wrote."""
     arm = load_robot("panda")
     task = make_cup_task(arm)
     model = _decoder(task, arm.control, config)
+    if part == "dask":
+        results["dask_grid"], results["dask_overhead_1_worker"] = dask_grid(model, task, arm.control, config)
+        return ("dask_overhead_1_worker", "dask_grid")
     results["decoder_vs_gemm"] = decoder_vs_gemm(model, arm.control, config)
     results["decoder_vs_gemm_fraction"] = results["decoder_vs_gemm"]["fraction"]
+    return ("decoder_vs_gemm_fraction",)
+
+
+def remeasure(part: str, config: BenchConfig, path: Path) -> int:
+    """Re-run one part (``decoder_vs_gemm`` or ``dask``) and update its keys in the results at ``path``.
+
+    Every other key is kept as it was. ``remeasured[part]`` records the machine and date
+    of the new numbers (``machine`` stays that of the whole run) and the sizes used;
+    ``scaling.png`` is not redrawn. A missing ``path`` starts from an empty record.
+    """
+    if part not in PARTS:
+        raise ConfigError(f"--only takes one of {', '.join(PARTS)}, got {part!r}")
+    results: dict[str, Any] = json.loads(path.read_text()) if path.exists() else {}
+    print(f"{part} alone", flush=True)
+    torch.set_num_threads(1)
+    shown = _measure_part(part, results, config)
+    results.setdefault("targets", dict(TARGETS))
     results.setdefault("remeasured", {})[part] = {
         "machine": machine(),
         "threads": {"torch": 1, "omp_num_threads": os.environ.get("OMP_NUM_THREADS")},
+        "config": {k: v for k, v in dataclasses.asdict(config).items() if k.startswith(PART_SIZES[part])},
         "note": "benchmarks/bench.py --only " + part + "; every other key is from the run of `machine`",
     }
     write_text(path, json.dumps(results, indent=2) + "\n")
-    print(json.dumps({k: results[k] for k in ("decoder_vs_gemm_fraction", "remeasured")}, indent=2))
+    print(json.dumps({k: results[k] for k in (*shown, "remeasured")}, indent=2))
     return 0
 
 
@@ -794,12 +901,26 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         "--only",
-        choices=("decoder_vs_gemm",),
+        choices=PARTS,
         help="re-measure this part alone and update its keys in --out's results.json",
+    )
+    parser.add_argument(
+        "--grid-cells",
+        type=int,
+        nargs=2,
+        metavar=("SMALL", "LARGE"),
+        help="the verdict-map grid's two sizes for the Dask overhead [default: 8 40; --tiny: 1 2]",
+    )
+    parser.add_argument(
+        "--grid-min-s", type=float, help="the large grid's in-process time, at least [s; default 60]"
     )
     args = parser.parse_args(argv)
     started = time.perf_counter()
     config = BenchConfig.tiny() if args.tiny else BenchConfig()
+    if args.grid_cells is not None:
+        config = dataclasses.replace(config, grid_cells=tuple(args.grid_cells))
+    if args.grid_min_s is not None:
+        config = dataclasses.replace(config, grid_min_s=args.grid_min_s)
     out = Path(args.out).resolve()
     if args.only:
         return remeasure(args.only, config, out / "results.json")
@@ -845,11 +966,8 @@ def main(argv: list[str] | None = None) -> int:
     results["decoder_vs_gemm"] = decoder_vs_gemm(model, control, config)
     results["decoder_vs_gemm_fraction"] = results["decoder_vs_gemm"]["fraction"]
 
-    print("verdict-map grid: local and on Dask LocalClusters", flush=True)
-    results["dask_grid"] = dask_grid(model, task, control, config)
-    if "1" in results["dask_grid"]["workers"]:
-        grid = results["dask_grid"]
-        results["dask_overhead_1_worker"] = grid["workers"]["1"] / grid["local_s"] - 1.0
+    print("verdict-map grid: local and on Dask LocalClusters (two sizes)", flush=True)
+    results["dask_grid"], results["dask_overhead_1_worker"] = dask_grid(model, task, control, config)
 
     print("rendering", flush=True)
     results["render_fps"] = {

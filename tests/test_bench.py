@@ -77,11 +77,16 @@ def test_results_hold_every_key(tiny_results):
         assert set(row) == {"batched", "loop", "floor"} and all(v > 0 for v in row.values())
     assert set(results["render_fps"]) == {"planar5", "panda"}
     grid = results["dask_grid"]
-    assert grid["cells"] == TINY.grid_cells and grid["local_s"] > 0
+    assert grid["cells"] == TINY.grid_cells[0] and grid["local_s"] > 0
     assert set(grid["workers"]) == {"1", "2"} and grid["speedup_2_over_1"] > 0
     assert grid["identical"] is True  # the same rows here and on 1 or 2 Dask workers
     overhead = results["dask_overhead_1_worker"]
-    assert np.isfinite(overhead) and overhead == pytest.approx(grid["workers"]["1"] / grid["local_s"] - 1)
+    assert overhead["cells"] == list(TINY.grid_cells) and overhead["identical"] is True
+    assert overhead["seconds"]["in_process"][0] == grid["local_s"]
+    assert overhead["seconds"]["dask_1_worker"][0] == grid["workers"]["1"]
+    large = overhead["grid_seconds_in_process"]
+    assert overhead["overhead_fraction"] == pytest.approx(overhead["grid_seconds_dask"] / large - 1)
+    assert np.isfinite(overhead["fixed_s"])
     assert "speedup_2_over_1" not in results["targets"]  # reported only
     vs = results["decoder_vs_gemm"]
     assert vs["users"] == TINY.gemm_users and vs["rows"] == vs["users"] * vs["candidates"]
@@ -220,3 +225,38 @@ def test_interleaved_warms_each_call_before_its_timing():
     bench._interleaved(calls, 2, budget_s=0.0, clock=lambda: 0.0, warm_each=True)
     # warm-up (two calls each), then per round: a warm call and one timed call of each
     assert order == ["a", "a", "b", "b"] + ["a", "a", "b", "b"] * 2
+
+
+def test_fit_overhead_splits_a_fixed_and_a_per_cell_cost():
+    """In-process 1 + 2 s per cell; Dask 3 + 2.2 s per cell: fixed 2 s, per cell +10%."""
+    fit = bench.fit_overhead((10, 40), (21.0, 81.0), (25.0, 91.0))
+    assert fit["fixed_s"] == pytest.approx(2.0)
+    assert fit["per_cell_fraction"] == pytest.approx(0.1)
+    assert fit["overhead_fraction"] == pytest.approx(91 / 81 - 1)
+    assert fit["grid_seconds_in_process"] == 81.0 and fit["cells"] == [10, 40]
+    with pytest.raises(ConfigError, match="small < large"):
+        bench.fit_overhead((40, 40), (1.0, 1.0), (1.0, 1.0))
+
+
+def test_the_large_grid_grows_to_the_minimum_time():
+    config = bench.BenchConfig(grid_cells=(8, 40), grid_min_s=60.0)
+    assert bench._large_size(config, 8.0) == 69  # 1 s per cell: 60 s and a 15% margin
+    assert bench._large_size(config, 80.0) == 40  # already long enough
+
+
+def test_only_dask_updates_its_keys_with_the_sizes_given(tmp_path, monkeypatch):
+    """``--only dask --grid-cells 3 5`` measures that part alone (stubbed here) and keeps the rest."""
+    seen = {}
+
+    def stub(model, task, control, config):
+        seen["cells"] = config.grid_cells
+        return {"cells": 3}, {"overhead_fraction": 0.05}
+
+    monkeypatch.setattr(bench, "dask_grid", stub)
+    (tmp_path / "results.json").write_text(json.dumps({"sweep": {"1": 1.0}}))
+    assert bench.main(["--out", str(tmp_path), "--tiny", "--only", "dask", "--grid-cells", "3", "5"]) == 0
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert seen["cells"] == (3, 5) and results["sweep"] == {"1": 1.0}
+    assert results["dask_overhead_1_worker"] == {"overhead_fraction": 0.05}
+    assert results["remeasured"]["dask"]["config"]["grid_cells"] == [3, 5]
+    assert results["targets"]["dask_overhead_1_worker"] == 0.10

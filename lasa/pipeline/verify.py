@@ -1,0 +1,311 @@
+"""Did a regenerated figures folder reproduce the committed one? (``make verify``)
+
+``python -m lasa.pipeline.verify <committed_dir> <new_dir> [--rtol R] [--atol A]`` compares two
+figures folders file by file and prints one table, then a summary line:
+
+- **every CSV** present in either folder: missing or extra; its shape; per column, the largest
+  absolute and relative difference (numeric columns) or the number of differing cells (text
+  columns); and the number of rows with a numeric cell beyond the tolerance. Rows are matched by
+  position when the files have as many rows and their key columns agree row by row
+  (:func:`key_columns`), else the file is reported as "rows differ";
+- **every other file** (PNG, MP4, Markdown): identical bytes or not;
+- **the claims table** (``claims.csv``): for every ``(id, robot)``, whether its verdict (the
+  ``reproduced`` and ``settled`` columns) is the same, each differing one listed.
+
+The exit status is 1 if and only if a verdict differs, a claim is in one table only, or
+``claims.csv`` is missing from either folder; value differences in the CSVs are reported, never
+fatal (a new platform may round the last digit differently and still reach every verdict). A
+missing folder is an error (status 2).
+
+Tolerance: a numeric cell differs when ``|new - committed| > atol + rtol * |committed|`` (numpy's
+``isclose``; two NaN are equal). The defaults, ``rtol = 1e-6`` and ``atol = 1e-9``, mean
+"identical to print precision": every CSV is written with 6 significant digits
+(:func:`lasa.base.io.write_csv`, ``%.6g``), so two values read back either agree exactly or
+differ by at least one unit of the 6th digit, a relative step of more than 1e-6; ``rtol`` flags
+every such change. ``atol`` only lets values that are zero to any physical resolution (below
+1e-9 rad, m, s or probability, e.g. a confidence of 2e-6 moving in its 6th digit) pass.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.errors import ArtifactError
+
+__all__ = [
+    "CLAIMS",
+    "VERDICT_COLUMNS",
+    "Tolerance",
+    "Row",
+    "Report",
+    "key_columns",
+    "compare_csv",
+    "compare_bytes",
+    "compare_verdicts",
+    "compare_folders",
+    "format_table",
+    "main",
+]
+
+CLAIMS = "claims.csv"
+VERDICT_COLUMNS = ("reproduced", "settled")  # a claim's verdict, per (id, robot)
+CLAIM_KEY = ("id", "robot")
+
+
+@dataclasses.dataclass(frozen=True)
+class Tolerance:
+    """When two numbers are the same: ``|a - b| <= atol + rtol * |b|`` (``b`` committed)."""
+
+    rtol: float = 1e-6  # below one unit of the 6th significant digit that the CSVs hold [-]
+    atol: float = 1e-9  # values below it are zero to any physical resolution [unit of the column]
+
+
+@dataclasses.dataclass(frozen=True)
+class Row:
+    """One line of the table: a file, the part of it compared, the result and its numbers."""
+
+    file: str
+    part: str
+    result: str
+    detail: str = ""
+
+
+@dataclasses.dataclass
+class Report:
+    """The comparison of two folders: the table's rows and what makes it fail."""
+
+    rows: list[Row] = dataclasses.field(default_factory=list)
+    verdicts_differ: list[str] = dataclasses.field(default_factory=list)  # "id / robot: why"
+    claims_missing: bool = False
+
+    @property
+    def failed(self) -> bool:
+        """A verdict differs, or the claims table is missing from either folder."""
+        return bool(self.verdicts_differ) or self.claims_missing
+
+    def summary(self) -> str:
+        """One line: files compared, what differs, and whether the verdicts are the same."""
+        files = {r.file for r in self.rows}
+        differing = {r.file for r in self.rows if r.result != "identical"}
+        if self.claims_missing:
+            verdicts = f"{CLAIMS} missing: verdicts not compared"
+        elif self.verdicts_differ:
+            verdicts = f"{len(self.verdicts_differ)} verdict(s) differ"
+        else:
+            verdicts = "every verdict identical"
+        status = "FAILED" if self.failed else "OK"
+        return f"{status}: {len(files)} files compared, {len(differing)} with differences; {verdicts}"
+
+
+def _files(folder: Path) -> dict[str, Path]:
+    """Every file under ``folder``, by its path relative to it (POSIX form)."""
+    if not folder.is_dir():
+        raise ArtifactError(f"figures folder {folder} does not exist (run `make figures OUT=...` first)")
+    return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def compare_bytes(name: str, old: Path, new: Path) -> Row:
+    """A file that is not a CSV (PNG, MP4, Markdown): identical bytes or not."""
+    a, b = old.read_bytes(), new.read_bytes()
+    if a == b:
+        return Row(name, "bytes", "identical", f"{len(a)} bytes")
+    return Row(name, "bytes", "differs", f"{len(a)} -> {len(b)} bytes")
+
+
+def _numeric(frame: pd.DataFrame, column: str) -> bool:
+    """Whether ``column`` holds numbers (booleans are labels, compared as text)."""
+    dtype = frame[column].dtype
+    return bool(pd.api.types.is_numeric_dtype(dtype) and not pd.api.types.is_bool_dtype(dtype))
+
+
+def _text(column: pd.Series) -> np.ndarray:
+    """A column's cells as strings, missing ones as ``<NA>`` (so that two missing cells agree)."""
+    return column.astype(object).where(column.notna(), "<NA>").astype(str).to_numpy()
+
+
+def key_columns(frame: pd.DataFrame) -> list[str]:
+    """The columns that say what a row is: the leading label columns, before the first number.
+
+    A label column is a text column whose every value is one token (no whitespace): ``robot``,
+    ``method``, ``id``; free text (a claim, a note) is not a key. E.g. ``robot, method`` of a
+    simulation's rows, ``id`` and ``figure, robot, assistance`` of the claims table.
+    """
+    keys = []
+    for column in frame.columns:
+        if _numeric(frame, column):
+            break
+        values = frame[column].dropna().astype(str)
+        if not values.str.contains(r"\s").any():
+            keys.append(column)
+    return keys
+
+
+def _numeric_diff(a: pd.Series, b: pd.Series, tol: Tolerance) -> tuple[np.ndarray, str]:
+    """Cells beyond the tolerance (a mask) and ``max abs .., max rel ..`` of numeric columns."""
+    old, new = a.to_numpy(dtype=float), b.to_numpy(dtype=float)
+    both_nan = np.isnan(old) & np.isnan(new)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        diff = np.where(both_nan, 0.0, np.abs(new - old))
+        diff = np.where(np.isnan(diff), np.inf, diff)  # NaN against a number
+        rel = np.where(diff == 0, 0.0, diff / np.abs(old))
+        rel = np.where(np.isnan(rel), np.inf, rel)
+    beyond = diff > tol.atol + tol.rtol * np.abs(np.nan_to_num(old))
+    detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
+    return beyond, detail
+
+
+def _rows_match(name: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
+    """None if rows can be matched by position; else the table's ``rows differ`` line."""
+    if len(old) != len(new):
+        return Row(name, "rows", "rows differ", f"{len(old)} -> {len(new)} rows")
+    keys = [k for k in key_columns(old) if k in new.columns]
+    if keys:
+        moved = np.any([_text(old[k]) != _text(new[k]) for k in keys], axis=0)
+        if moved.any():
+            where = f"key columns {', '.join(keys)} differ at {moved.sum()} rows"
+            return Row(name, "rows", "rows differ", where)
+    return None
+
+
+def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance) -> list[Row]:
+    """One line per common column that differs, and one for the rows beyond the tolerance."""
+    rows, beyond_any = [], np.zeros(len(old), dtype=bool)
+    for column in [c for c in old.columns if c in new.columns]:
+        if _numeric(old, column) and _numeric(new, column):
+            beyond, detail = _numeric_diff(old[column], new[column], tol)
+            if beyond.any():
+                rows.append(Row(name, column, "beyond tolerance", f"{detail}, {beyond.sum()} rows"))
+            beyond_any |= beyond
+        else:
+            cells = int((_text(old[column]) != _text(new[column])).sum())
+            if cells:
+                rows.append(Row(name, column, "text differs", f"{cells} cells"))
+    if beyond_any.any():
+        rows.insert(0, Row(name, "rows", "beyond tolerance", f"{beyond_any.sum()} of {len(old)} rows"))
+    return rows
+
+
+def compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> list[Row]:
+    """The table's lines for one CSV: identical, or its shape, columns and values that differ."""
+    old, new = pd.read_csv(old_path), pd.read_csv(new_path)
+    rows = []
+    missing = [c for c in old.columns if c not in new.columns]
+    extra = [c for c in new.columns if c not in old.columns]
+    if missing or extra:
+        detail = f"missing: {', '.join(missing) or '-'}; extra: {', '.join(extra) or '-'}"
+        rows.append(Row(name, "columns", "columns differ", detail))
+    mismatch = _rows_match(name, old, new)
+    if mismatch is not None:
+        return [*rows, mismatch]
+    rows += _column_rows(name, old, new, tol)
+    return rows or [Row(name, "all", "identical", f"{old.shape[0]} rows x {old.shape[1]} columns")]
+
+
+def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
+    """``(id, robot) -> (reproduced, settled)`` of a claims table, every cell as written."""
+    frame = pd.read_csv(path, dtype=str, keep_default_na=False)
+    needed = [*CLAIM_KEY, *VERDICT_COLUMNS]
+    absent = [c for c in needed if c not in frame.columns]
+    if absent:
+        raise ArtifactError(f"{path} has no column(s) {', '.join(absent)}: not a claims table")
+    return {
+        (r[CLAIM_KEY[0]], r[CLAIM_KEY[1]]): tuple(r[c] for c in VERDICT_COLUMNS)
+        for r in frame[needed].to_dict("records")
+    }
+
+
+def compare_verdicts(old_path: Path, new_path: Path) -> list[str]:
+    """Every ``(id, robot)`` whose verdict differs (or that is in one table only), with why."""
+    old, new = _verdicts(old_path), _verdicts(new_path)
+    differ = []
+    for key in sorted(old.keys() | new.keys()):
+        a, b = old.get(key), new.get(key)
+        if a == b:
+            continue
+        if a is None or b is None:
+            why = "only in the new table" if a is None else "missing from the new table"
+        else:
+            pairs = zip(VERDICT_COLUMNS, a, b, strict=True)
+            why = "; ".join(f"{c} {x} -> {y}" for c, x, y in pairs if x != y)
+        differ.append(f"{key[0]} / {key[1]}: {why}")
+    return differ
+
+
+def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
+    """Add the claims table's verdict lines to ``report`` (or mark it missing)."""
+    old, new = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
+    if old is None or new is None:
+        report.claims_missing = True
+        return
+    report.verdicts_differ = compare_verdicts(old, new)
+    for line in report.verdicts_differ:
+        part, _, why = line.partition(": ")
+        report.rows.append(Row(CLAIMS, f"verdict {part}", "verdict differs", why))
+    if not report.verdicts_differ:
+        report.rows.append(Row(CLAIMS, "verdicts", "identical", f"{len(_verdicts(old))} (id, robot)"))
+
+
+def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | None = None) -> Report:
+    """Compare every file of the two folders and the claims' verdicts.
+
+    Raises:
+        ArtifactError: if either folder does not exist, or a claims table lacks its key or verdict columns.
+    """
+    tol = tol or Tolerance()
+    files = {"old": _files(Path(committed)), "new": _files(Path(new))}
+    report = Report()
+    for name in sorted(files["old"].keys() | files["new"].keys()):
+        old, fresh = files["old"].get(name), files["new"].get(name)
+        if old is None or fresh is None:
+            where = "new" if fresh is None else "committed"
+            report.rows.append(Row(name, "file", f"missing in {where}"))
+        elif name.endswith(".csv"):
+            report.rows += compare_csv(name, old, fresh, tol)
+        else:
+            report.rows.append(compare_bytes(name, old, fresh))
+    _compare_claims(report, files)
+    return report
+
+
+def format_table(rows: Sequence[Row]) -> str:
+    """The rows as a Markdown table (readable as plain text too)."""
+    header = [f.name for f in dataclasses.fields(Row)]
+    cells = [header] + [[str(getattr(r, h)) for h in header] for r in rows]
+    widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
+
+    def line(values: list[str]) -> str:
+        return "| " + " | ".join(v.ljust(w) for v, w in zip(values, widths, strict=True)) + " |"
+
+    rule = "| " + " | ".join("-" * w for w in widths) + " |"
+    return "\n".join([line(cells[0]), rule, *(line(c) for c in cells[1:])])
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: ``python -m lasa.pipeline.verify COMMITTED NEW [--rtol R] [--atol A]``."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("committed", help="the committed figures folder (e.g. figures)")
+    parser.add_argument("new", help="the regenerated figures folder (e.g. build/verify/figures)")
+    parser.add_argument("--rtol", type=float, default=Tolerance.rtol, help="relative tolerance [%(default)g]")
+    parser.add_argument("--atol", type=float, default=Tolerance.atol, help="absolute tolerance [%(default)g]")
+    args = parser.parse_args(argv)
+    try:
+        report = compare_folders(args.committed, args.new, Tolerance(args.rtol, args.atol))
+    except ArtifactError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(format_table(report.rows))
+    if report.claims_missing:
+        print(f"error: {CLAIMS} is missing from {args.committed} or {args.new}", file=sys.stderr)
+    print(report.summary())
+    return 1 if report.failed else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
