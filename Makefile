@@ -185,6 +185,7 @@ $(EXEC)/11_eating_study.ipynb: notebooks/11_eating_study.ipynb $(EXEC)/10_eating
 # lasa.pipeline.verify compares the two figures folders and fails if any claim's verdict differs.
 VERIFY_OUT := build/verify
 verify: setup
+	@if [ "$(QUICK)$(LARGE)" != "" ]; then echo "error: make verify compares a paper-scale run with figures/; drop QUICK/LARGE"; exit 2; fi
 	@$(MAKE) --no-print-directory figures OUT=$(VERIFY_OUT)
 	$(BIN)/python -m lasa.pipeline.verify figures $(VERIFY_OUT)/figures
 
