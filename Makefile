@@ -12,6 +12,8 @@
 #   make test             lint + pytest, including every notebook run in QUICK mode
 #   make book             a static site of the executed notebooks, claims table first -> build/book/html
 #   make teleop ARGS=...  drive the robot live in MuJoCo's viewer (gamepad or keyboard), sessions logged
+#   make study-server ARGS=...  the eating study in participants' browsers (python -m lasa.live.web),
+#                         on 127.0.0.1 unless ARGS has --host; links from `python -m lasa.live.web schedule`
 #   make bench            performance benchmarks (benchmarks/bench.py) -> benchmarks/results.json, scaling.png
 #   make setup            create .venv from environment.lock (+ system libraries for rendering)
 #   make clean            remove build/ (keeps .venv and the committed figures)
@@ -78,7 +80,7 @@ include $(MAKE_DEPS)
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
-.PHONY: help setup sysdeps figures notebooks verify test lint bench clean teleop book
+.PHONY: help setup sysdeps figures notebooks verify test lint bench clean teleop study-server book
 
 # MathJax for the book, served from the site itself (no CDN at view time): the npm package's es5 build.
 MATHJAX_VERSION := 3.2.2
@@ -211,6 +213,12 @@ book: setup
 #   make teleop ARGS="--task Dessert --condition LA+SA --participant p01"
 teleop: setup
 	MUJOCO_GL=glfw $(BIN)/python -m lasa.live.teleop run $(ARGS)
+
+# The study in participants' browsers: the server runs the control step and logs the sessions.
+#   $(BIN)/python -m lasa.live.web schedule --participants 10 --sessions build/sessions   (the links)
+#   make study-server ARGS="--port 8000 --sessions build/sessions"
+study-server: setup
+	$(BIN)/python -m lasa.live.web $(ARGS)
 
 clean:
 	rm -rf build

@@ -1,0 +1,86 @@
+"""Command line of the web study: ``serve`` (the default) and ``schedule``.
+
+``python -m lasa.live.web --port 8000 --sessions build/sessions [--host H]`` serves the study;
+``python -m lasa.live.web schedule --participants 10 --sessions build/sessions --url http://...``
+writes the schedule and one link per participant.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from lasa.base.errors import ConfigError
+
+DEFAULT_HOST = "127.0.0.1"
+TLS_HINT = (
+    "serving on {host} without TLS: put a reverse proxy that terminates HTTPS in front "
+    "(e.g. Caddy: `caddy reverse-proxy --from study.example.org --to {host}:{port}`), and pass "
+    "--origin https://study.example.org so its pages may connect"
+)
+
+
+def _schedule(argv: list[str]) -> int:
+    from lasa.live.web.tokens import issue_links
+
+    parser = argparse.ArgumentParser(
+        prog="python -m lasa.live.web schedule", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument("--participants", type=int, default=10, help="participants to schedule [%(default)s]")
+    parser.add_argument("--sessions", default="build/sessions", help="the sessions folder [%(default)s]")
+    parser.add_argument("--url", default="http://127.0.0.1:8000", help="the server as participants reach it")
+    args = parser.parse_args(argv)
+    links = issue_links(args.participants, args.sessions, args.url)
+    print(f"links (the only copy of the tokens; send each to its participant): {links}")
+    return 0
+
+
+def _serve(argv: list[str]) -> int:
+    import uvicorn
+
+    from lasa.live.web.app import WebConfig, create_app
+    from lasa.live.web.protocol import MAX_MESSAGE_BYTES
+
+    parser = argparse.ArgumentParser(prog="python -m lasa.live.web", description=__doc__.splitlines()[0])
+    parser.add_argument("--port", type=int, default=8000, help="the port [%(default)s]")
+    parser.add_argument("--host", help=f"the interface to listen on [{DEFAULT_HOST}: this machine only]")
+    parser.add_argument("--sessions", default="build/sessions", help="the sessions folder [%(default)s]")
+    parser.add_argument(
+        "--build-dir", default="build", help="where make figures left the decoders [%(default)s]"
+    )
+    parser.add_argument("--practice-s", type=float, default=300.0, help="longest practice [s] [%(default)s]")
+    parser.add_argument("--trial-s", type=float, default=300.0, help="longest trial [s] [%(default)s]")
+    parser.add_argument("--no-frames", action="store_true", help="send no rendered frames of the robot")
+    parser.add_argument(
+        "--origin", action="append", default=[], help="a page origin allowed besides the server's"
+    )
+    args = parser.parse_args(argv)
+    host = args.host or DEFAULT_HOST
+    config = WebConfig(
+        sessions=args.sessions,
+        build_dir=args.build_dir,
+        practice_s=args.practice_s,
+        trial_s=args.trial_s,
+        frames=not args.no_frames,
+        origins=tuple(args.origin),
+    )
+    app = create_app(config)
+    if args.host:
+        print(TLS_HINT.format(host=host, port=args.port), file=sys.stderr)
+    print(f"study of {args.sessions} at http://{host}:{args.port}/study?token=...", file=sys.stderr)
+    uvicorn.run(app, host=host, port=args.port, ws_max_size=MAX_MESSAGE_BYTES, access_log=False)
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``schedule ...`` writes the links; anything else serves the study."""
+    argv = sys.argv[1:] if argv is None else argv
+    try:
+        return _schedule(argv[1:]) if argv[:1] == ["schedule"] else _serve(argv)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

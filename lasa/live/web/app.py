@@ -1,0 +1,135 @@
+"""The study's web application (Starlette): the page, its files and the participants' WebSocket.
+
+- ``GET /study?token=...``: the study page, for a valid token of a participant whose schedule is not
+  done; anything else is 403 and writes nothing.
+- ``GET /static/...``: the page's script and style (served from this package: no CDN).
+- ``WS /ws?token=...``: the participant's connection (:class:`lasa.live.web.conversation.Conversation`).
+  Refused before it opens (HTTP 403) without a valid token, from another site's page (the
+  ``Origin`` must be this server's own, or one given with ``--origin``), while the same token is
+  connected elsewhere, or once the participant's schedule is done.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+from collections.abc import AsyncIterator
+from pathlib import Path
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import FileResponse, PlainTextResponse, Response
+from starlette.routing import Mount, Route, WebSocketRoute
+from starlette.staticfiles import StaticFiles
+from starlette.websockets import WebSocket
+
+from lasa.live.web.conversation import Conversation
+from lasa.live.web.frames import FrameRenderer
+from lasa.live.web.plan import Progress, plan_of
+from lasa.live.web.tokens import TokenStore
+
+__all__ = ["WebConfig", "Study", "create_app"]
+
+STATIC = Path(__file__).parent / "static"
+HEADERS = {
+    "Cache-Control": "no-store",
+    "Referrer-Policy": "no-referrer",  # the token is in the page's address
+    "X-Content-Type-Options": "nosniff",
+    "X-Frame-Options": "DENY",
+    "Content-Security-Policy": (
+        "default-src 'self'; img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
+    ),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class WebConfig:
+    """The server's settings.
+
+    Attributes:
+        sessions: The sessions folder (its ``study/`` subfolder holds the schedule and tokens).
+        build_dir: Where ``make figures`` left the decoders.
+        practice_s: The longest practice per condition [s] (the paper: 5 minutes).
+        trial_s: The longest trial [s].
+        frames: Send rendered frames of the robot to the page.
+        origins: Page origins allowed besides the server's own (e.g. ``https://study.example.org``
+            behind a reverse proxy).
+    """
+
+    sessions: str
+    build_dir: str = "build"
+    practice_s: float = 300.0
+    trial_s: float = 300.0
+    frames: bool = True
+    origins: tuple[str, ...] = ()
+
+
+class Study:
+    """The server's state: settings, tokens, progress, the connected participants, the renderer."""
+
+    def __init__(self, config: WebConfig) -> None:
+        self.config = config
+        self.tokens = TokenStore(config.sessions)
+        self.progress = Progress(config.sessions)
+        self.active: set[str] = set()
+        self.renderer = FrameRenderer() if config.frames else None
+
+    def admit(self, token: str | None) -> str | None:
+        """The participant of a valid token whose schedule is not done, else None."""
+        participant = self.tokens.participant(token)
+        if participant is None:
+            return None
+        plan = plan_of(self.config.sessions, participant)
+        if not plan or self.progress.finished(participant, plan):
+            return None
+        return participant
+
+
+def _same_origin(ws: WebSocket, extra: tuple[str, ...]) -> bool:
+    origin, host = ws.headers.get("origin"), ws.headers.get("host")
+    return bool(origin and host) and origin in {f"http://{host}", f"https://{host}", *extra}
+
+
+async def page(request: Request) -> Response:
+    """The study page for a valid token, else 403."""
+    study: Study = request.app.state.study
+    if study.admit(request.query_params.get("token")) is None:
+        return PlainTextResponse("This link is not valid (or its study is done).", 403, headers=HEADERS)
+    return FileResponse(STATIC / "index.html", headers=HEADERS)
+
+
+async def socket(ws: WebSocket) -> None:
+    """A participant's connection; refused (403, before it opens) unless every check passes."""
+    study: Study = ws.app.state.study
+    participant = study.admit(ws.query_params.get("token"))
+    if participant is None or participant in study.active or not _same_origin(ws, study.config.origins):
+        await ws.close(code=1008)
+        return
+    study.active.add(participant)
+    try:
+        await ws.accept()
+        await Conversation(ws, study, participant).run()
+    finally:
+        study.active.discard(participant)
+
+
+def create_app(config: WebConfig) -> Starlette:
+    """The application serving ``config``'s study."""
+    study = Study(config)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: Starlette) -> AsyncIterator[None]:
+        yield
+        if study.renderer is not None:
+            study.renderer.close()
+
+    app = Starlette(
+        lifespan=lifespan,
+        routes=[
+            Route("/study", page),
+            Mount("/static", StaticFiles(directory=STATIC), name="static"),
+            WebSocketRoute("/ws", socket),
+        ],
+    )
+    app.state.study = study
+    return app

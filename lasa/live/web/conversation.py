@@ -1,0 +1,181 @@
+"""One participant's connection: the protocol's steps, driven by the server, over one WebSocket.
+
+The server decides what comes next (:mod:`lasa.live.web.plan`); the page shows it and answers.
+A receiving task checks every page message (:mod:`lasa.live.web.protocol`): input updates the
+next tick's reading, anything else goes to the step waiting for it. A refused message closes
+the connection; a page that goes away mid-trial leaves that session ``interrupted`` with its
+rows, and its progress where it was, so the same link resumes with a new session.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+from typing import TYPE_CHECKING, Any
+
+from starlette.websockets import WebSocket
+
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.live.teleop import SessionConfig
+from lasa.live.web.loop import open_trial, run_trial
+from lasa.live.web.plan import Step, plan_of, session_folder
+from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
+
+if TYPE_CHECKING:
+    from lasa.live.web.app import Study
+
+__all__ = ["Gone", "Conversation"]
+
+
+class Gone(Exception):
+    """The page went away (or was sent away for a refused message)."""
+
+
+@dataclasses.dataclass
+class Conversation:
+    """The connection of participant ``participant`` (an id from the schedule) to ``study``."""
+
+    ws: WebSocket
+    study: Study
+    participant: str
+    inputs: Inputs = dataclasses.field(default_factory=Inputs)
+    gone: bool = False
+    finish: bool = False
+
+    def __post_init__(self) -> None:
+        self._queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
+        self._send_lock = asyncio.Lock()
+        self._frames: set[asyncio.Task[None]] = set()
+
+    async def run(self) -> None:
+        """Serve the participant until their plan is done or the page goes."""
+        receiver = asyncio.create_task(self._receive())
+        try:
+            await self._protocol()
+        except Gone:
+            pass
+        finally:
+            receiver.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await receiver
+
+    async def _receive(self) -> None:
+        limit = RateLimit()
+        try:
+            while True:
+                message = await self.ws.receive()
+                if message["type"] == "websocket.disconnect":
+                    break
+                if not limit.allow():
+                    raise ProtocolError("too many messages")
+                msg = parse(message.get("text"))
+                if msg["type"] == "input":
+                    self.inputs.update(msg)
+                elif msg["type"] == "finish":
+                    self.finish = True
+                else:
+                    self._queue.put_nowait(msg)
+        except ProtocolError as exc:
+            with contextlib.suppress(Exception):
+                await self.ws.close(code=exc.code, reason=str(exc)[:100])
+        except Exception:  # a broken connection: the page is gone either way
+            pass
+        finally:
+            self.gone = True
+            self._queue.put_nowait({"type": "_gone"})
+
+    async def send(self, message: dict[str, Any]) -> None:
+        """Send one JSON message; a failed send means the page is gone."""
+        try:
+            async with self._send_lock:
+                await self.ws.send_json(message)
+        except Exception:
+            self.gone = True
+
+    async def _expect(self, kind: str) -> dict[str, Any]:
+        while True:
+            msg = await self._queue.get()
+            if msg["type"] == "_gone":
+                raise Gone
+            if msg["type"] == kind:
+                return msg
+
+    async def _protocol(self) -> None:
+        study, participant = self.study, self.participant
+        plan = plan_of(study.config.sessions, participant)
+        if not study.progress.of(participant)["consented"]:
+            await self.send({"type": "phase", "kind": "consent"})
+            await self._expect("consent")
+            study.progress.consent(participant)
+        while not study.progress.finished(participant, plan):
+            index = int(study.progress.of(participant)["step"])
+            step = plan[index]
+            header: dict[str, Any] = {"type": "phase", "kind": step.kind, "condition": step.condition}
+            header |= {"task": step.task, "index": index + 1, "total": len(plan)}
+            if step.kind == "survey":
+                await self._survey(step, header)
+            else:
+                limit = study.config.practice_s if step.kind == "practice" else study.config.trial_s
+                await self.send(header | {"limit_s": limit})
+                await self._expect("start")
+                if await self._drive(step, limit) != "complete":
+                    raise Gone
+            study.progress.advance(participant)
+        await self.send({"type": "phase", "kind": "thanks"})
+        with contextlib.suppress(Exception):
+            await self.ws.close(code=1000)
+
+    async def _survey(self, step: Step, header: dict[str, Any]) -> None:
+        from lasa.evidence.sessions import SCALES
+        from lasa.live.studykit import QUESTIONS, survey
+
+        questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
+        await self.send(header | {"questions": questions})
+        while True:
+            answers = (await self._expect("survey"))["answers"]
+            try:
+                survey(self.study.config.sessions, self.participant, step.condition, answers)
+                return
+            except ConfigError as exc:
+                await self.send({"type": "error", "message": str(exc)})
+
+    async def _drive(self, step: Step, limit_s: float) -> str:
+        config = SessionConfig(
+            robot="panda",
+            task=step.task,
+            condition=step.condition,
+            participant=self.participant,
+            build_dir=self.study.config.build_dir,
+        )
+        attempt = self.study.progress.attempt(self.participant)
+        folder = session_folder(self.study.config.sessions, step)
+        try:
+            trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s)
+        except (ConfigError, ArtifactError) as exc:
+            await self.send({"type": "error", "message": f"the server cannot run this step: {exc}"})
+            raise Gone from exc
+        self.finish = False
+        practice = step.kind == "practice"
+        return await run_trial(
+            trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
+        )
+
+    async def _tick(self, message: dict[str, Any]) -> None:
+        await self.send(message)
+        renderer = self.study.renderer
+        if renderer is not None and not self._frames:
+            task = asyncio.create_task(self._frame(message["q"]))
+            self._frames.add(task)
+            task.add_done_callback(self._frames.discard)
+
+    async def _frame(self, q: list[float]) -> None:
+        assert self.study.renderer is not None
+        jpeg = await self.study.renderer.frame(q)
+        if jpeg is None or self.gone:
+            return
+        try:
+            async with self._send_lock:
+                await self.ws.send_bytes(jpeg)
+        except Exception:
+            self.gone = True

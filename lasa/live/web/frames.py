@@ -1,0 +1,75 @@
+"""The robot drawn on the server: MuJoCo's off-screen renderer, small JPEG frames for the page.
+
+The page shows the scene as the videos do (the scene's own camera). Software rendering is slow
+(about 0.1-0.2 s a frame on a busy machine), so frames are best effort: one worker thread
+renders the newest state it is given and a request that arrives while it is busy is dropped;
+the control loop never waits for a frame.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FrameRenderer"]
+
+
+class FrameRenderer:
+    """JPEG frames of the eating scene at given joint positions, from one rendering thread.
+
+    Args:
+        width: Frame width [px].
+        height: Frame height [px].
+        quality: JPEG quality (1-95).
+    """
+
+    def __init__(self, width: int = 320, height: int = 240, quality: int = 70) -> None:
+        self.size = (height, width)
+        self.quality = quality
+        self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="frames")
+        self._busy = False
+        self._scene: Any = None  # (robot, renderer, data, camera), made on the rendering thread
+
+    def _render(self, q: Sequence[float]) -> bytes:
+        import mujoco
+        from PIL import Image
+
+        if self._scene is None:
+            from lasa.world.eating import make_eating_task
+
+            robot = make_eating_task().robot
+            renderer = mujoco.Renderer(robot.model, *self.size)
+            camera = robot.model.camera(robot.spec.camera).id
+            self._scene = (robot, renderer, mujoco.MjData(robot.model), camera)
+        robot, renderer, data, camera = self._scene
+        data.qpos[robot.qpos_adr] = np.asarray(q, dtype=float)
+        mujoco.mj_forward(robot.model, data)
+        renderer.update_scene(data, camera=camera)
+        buffer = io.BytesIO()
+        Image.fromarray(renderer.render()).save(buffer, "JPEG", quality=self.quality)
+        return buffer.getvalue()
+
+    async def frame(self, q: Sequence[float]) -> bytes | None:
+        """A frame at joint positions ``q``, or None if the renderer is busy with another."""
+        if self._busy:
+            return None
+        self._busy = True
+        try:
+            return await asyncio.get_running_loop().run_in_executor(self._pool, self._render, list(q))
+        finally:
+            self._busy = False
+
+    def _free(self) -> None:
+        if self._scene is not None:
+            self._scene[1].close()  # on the thread that made its GL context
+            self._scene = None
+
+    def close(self) -> None:
+        """Free the renderer and stop the rendering thread."""
+        self._pool.submit(self._free)
+        self._pool.shutdown(wait=True, cancel_futures=False)

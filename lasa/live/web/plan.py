@@ -1,0 +1,95 @@
+"""A participant's protocol and their progress through it, kept on the server.
+
+The protocol follows the paper's eating study: consent; then, for each of the four conditions
+in the participant's counterbalanced order (``study/schedule.csv``), a practice of up to 5
+minutes, the Entree and the Dessert tasks, and the 7-point questionnaire; then thanks.
+Progress (``study/progress.json``) records consent, the next step and the attempts made, so a
+participant who disconnects comes back where they left off, and a finished participant's
+link stops working.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from lasa.base.io import write_text
+from lasa.live.web.tokens import check_participant, study_dir
+
+__all__ = ["Step", "plan_of", "Progress", "session_folder", "PRACTICE_TASK"]
+
+PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessions>/practice/
+
+
+@dataclasses.dataclass(frozen=True)
+class Step:
+    """One step of the protocol: ``practice``, ``trial`` or ``survey`` under a condition."""
+
+    kind: str
+    condition: str
+    task: str = ""
+
+
+def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
+    """The participant's steps, from the study's schedule (empty if they are not in it)."""
+    schedule = pd.read_csv(study_dir(sessions) / "schedule.csv", dtype={"participant": str})
+    rows = schedule[schedule.participant == check_participant(participant)].sort_values("position")
+    steps: list[Step] = []
+    for condition in rows.condition:
+        steps += [
+            Step("practice", condition, PRACTICE_TASK),
+            Step("trial", condition, "Entree"),
+            Step("trial", condition, "Dessert"),
+            Step("survey", condition),
+        ]
+    return steps
+
+
+class Progress:
+    """Each participant's consent, next step and attempts, saved atomically on every change."""
+
+    def __init__(self, sessions: str | os.PathLike[str]) -> None:
+        self.path = study_dir(sessions) / "progress.json"
+        self._state: dict[str, dict[str, Any]] = (
+            json.loads(self.path.read_text()) if self.path.is_file() else {}
+        )
+
+    def of(self, participant: str) -> dict[str, Any]:
+        """``{"consented", "step", "attempts"}`` of one participant (a fresh one: nothing done)."""
+        return self._state.setdefault(
+            check_participant(participant), {"consented": False, "step": 0, "attempts": 0}
+        )
+
+    def consent(self, participant: str) -> None:
+        """Record the participant's consent."""
+        self.of(participant)["consented"] = True
+        self._save()
+
+    def attempt(self, participant: str) -> int:
+        """Count one more session started by the participant; returns its number (1, 2, ...)."""
+        entry = self.of(participant)
+        entry["attempts"] += 1
+        self._save()
+        return int(entry["attempts"])
+
+    def advance(self, participant: str) -> None:
+        """The participant's current step is done."""
+        self.of(participant)["step"] += 1
+        self._save()
+
+    def finished(self, participant: str, plan: list[Step]) -> bool:
+        """Whether every step of ``plan`` is done."""
+        return int(self.of(participant)["step"]) >= len(plan)
+
+    def _save(self) -> None:
+        write_text(self.path, json.dumps(self._state, indent=2, sort_keys=True) + "\n")
+
+
+def session_folder(sessions: str | os.PathLike[str], step: Step) -> Path:
+    """Where a step's session is logged: practice apart, so the analysis reads the trials only."""
+    return Path(sessions) / "practice" if step.kind == "practice" else Path(sessions)

@@ -1,0 +1,128 @@
+"""The messages between the page and the server, and the limits on what a page may send.
+
+The page sends JSON text messages, each at most :data:`MAX_MESSAGE_BYTES`:
+
+- ``{"type": "consent"}``, ``{"type": "start"}`` (begin the practice or trial shown),
+  ``{"type": "finish"}`` (end the practice early);
+- ``{"type": "input", "axes": [x, y], "mode": bool, "stop": bool}``: the stick (keyboard or the
+  browser's Gamepad API), a mode press since the last message, and whether stop is held;
+- ``{"type": "survey", "answers": [1..7 x 5]}``.
+
+Anything else, a message too large, or more than :data:`MAX_RATE` messages a second ends the
+connection (:class:`ProtocolError`). The server sends ``phase`` messages (what the page shows),
+``tick`` messages (the robot's joint positions, the belief, the instruction, the late-tick
+counter) and, when frames are on, JPEG images as binary messages.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from lasa.live.devices import Reading
+
+__all__ = [
+    "MAX_MESSAGE_BYTES",
+    "MAX_RATE",
+    "STALE_S",
+    "ProtocolError",
+    "parse",
+    "RateLimit",
+    "Inputs",
+]
+
+MAX_MESSAGE_BYTES = 4096
+MAX_RATE = 50.0  # messages per second, averaged over a burst of as many
+STALE_S = 0.5  # input older than this reads as disconnected: zero input, never a held command
+KINDS = ("consent", "start", "finish", "input", "survey")
+
+
+class ProtocolError(ValueError):
+    """A message the server refuses; the connection is closed with :attr:`code`."""
+
+    def __init__(self, message: str, code: int = 1008) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+def _no_constants(name: str) -> float:
+    raise ProtocolError(f"{name} is not a number the protocol accepts")
+
+
+def parse(text: str | bytes | None) -> dict[str, Any]:
+    """One page message, checked: its size, JSON, type and fields (else :class:`ProtocolError`)."""
+    if not isinstance(text, str):
+        raise ProtocolError("messages are JSON text")
+    if len(text.encode()) > MAX_MESSAGE_BYTES:
+        raise ProtocolError(f"a message is at most {MAX_MESSAGE_BYTES} bytes", code=1009)
+    try:
+        msg = json.loads(text, parse_constant=_no_constants)
+    except json.JSONDecodeError as exc:
+        raise ProtocolError("a message is one JSON object") from exc
+    if not isinstance(msg, dict) or msg.get("type") not in KINDS:
+        raise ProtocolError(f"a message's type is one of {KINDS}")
+    if msg["type"] == "input":
+        axes = msg.get("axes")
+        if not (isinstance(axes, list) and len(axes) == 2 and all(_number(a) for a in axes)):
+            raise ProtocolError("input carries two numeric axes")
+        if not isinstance(msg.get("mode", False), bool) or not isinstance(msg.get("stop", False), bool):
+            raise ProtocolError("input's mode and stop are true or false")
+    if msg["type"] == "survey":
+        answers = msg.get("answers")
+        if not (isinstance(answers, list) and len(answers) <= 16 and all(type(a) is int for a in answers)):
+            raise ProtocolError("survey answers are a short list of integers")
+    return msg
+
+
+def _number(value: Any) -> bool:
+    return type(value) in (int, float) and math.isfinite(value)
+
+
+class RateLimit:
+    """A token bucket: ``rate`` messages a second, bursts of up to ``rate``."""
+
+    def __init__(self, rate: float = MAX_RATE) -> None:
+        self.rate = rate
+        self._level = rate
+        self._last = time.monotonic()
+
+    def allow(self) -> bool:
+        """Whether one more message is within the limit now."""
+        now = time.monotonic()
+        self._level = min(self.rate, self._level + (now - self._last) * self.rate)
+        self._last = now
+        if self._level < 1.0:
+            return False
+        self._level -= 1.0
+        return True
+
+
+@dataclasses.dataclass
+class Inputs:
+    """The latest input of one page: what the next control step reads (:meth:`take`)."""
+
+    axes: tuple[float, float] = (0.0, 0.0)
+    mode: bool = False
+    stop: bool = False
+    received: float = -math.inf
+
+    def update(self, msg: dict[str, Any]) -> None:
+        """Take an ``input`` message; a mode press is kept until a step reads it."""
+        self.axes = (float(msg["axes"][0]), float(msg["axes"][1]))
+        self.mode = self.mode or bool(msg.get("mode", False))
+        self.stop = bool(msg.get("stop", False))
+        self.received = time.monotonic()
+
+    def take(self) -> Reading:
+        """This step's reading; stale input (a stalled page or network) reads as disconnected."""
+        fresh = time.monotonic() - self.received <= STALE_S
+        reading = Reading(
+            raw=np.array(self.axes, dtype=float), mode=self.mode and fresh, stop=self.stop, connected=fresh
+        )
+        self.mode = False
+        return reading

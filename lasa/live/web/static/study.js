@@ -1,0 +1,155 @@
+// The study page: shows what the server says and sends the stick. The robot's step runs on the
+// server only (lasa.live.web.loop); this page never computes a state.
+"use strict";
+
+const SEND_HZ = 20; // input messages a second while driving (the server allows 50)
+const DEADZONE = 0.05;
+const $ = (id) => document.getElementById(id);
+const token = new URLSearchParams(location.search).get("token") || "";
+const scheme = location.protocol === "https:" ? "wss" : "ws";
+const ws = new WebSocket(`${scheme}://${location.host}/ws?token=${encodeURIComponent(token)}`);
+ws.binaryType = "blob";
+
+const keys = { left: false, right: false, up: false, down: false };
+let keyStop = false, modePress = false, driving = false, padWasPressed = false, frameUrl = null;
+
+function show(id) {
+  for (const s of document.querySelectorAll("section")) s.hidden = s.id !== id;
+}
+
+function send(msg) {
+  if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+}
+
+function phase(msg) {
+  driving = false;
+  $("status").textContent = msg.index ? `Step ${msg.index} of ${msg.total}` : "";
+  if (msg.kind === "consent" || msg.kind === "thanks") return show(msg.kind);
+  if (msg.kind === "survey") return survey(msg);
+  const practice = msg.kind === "practice";
+  $("intro-title").textContent = practice ? `Practice: ${msg.condition}` : `${msg.task}: ${msg.condition}`;
+  $("intro-text").textContent = practice
+    ? `Get to know this way of controlling the robot, for up to ${Math.round(msg.limit_s / 60)} minutes. End the practice when you are ready.`
+    : `Feed the ${msg.task.toLowerCase()} following the instruction at the top of the screen (at most ${Math.round(msg.limit_s)} s).`;
+  $("ready").hidden = !practice;
+  show("intro");
+}
+
+function survey(msg) {
+  $("survey-title").textContent = `About the condition you just used (${msg.condition})`;
+  const form = $("survey-form");
+  form.replaceChildren();
+  for (const q of msg.questions) {
+    const div = document.createElement("div");
+    div.className = "question";
+    div.append(Object.assign(document.createElement("p"), { textContent: q.text }));
+    for (let v = 1; v <= 7; v++) {
+      const label = document.createElement("label");
+      const input = Object.assign(document.createElement("input"), { type: "radio", name: q.scale, value: v });
+      label.append(input, ` ${v}`);
+      div.append(label);
+    }
+    form.append(div);
+  }
+  show("survey");
+}
+
+function tick(msg) {
+  $("instruction").textContent = msg.instruction;
+  $("tick").textContent = msg.step;
+  $("late").textContent = msg.late;
+  $("left").textContent = msg.remaining_s.toFixed(0);
+  $("stopped").hidden = !msg.stop;
+  const belief = $("belief");
+  if (belief.children.length !== msg.goals.length) {
+    belief.replaceChildren(...msg.goals.map((g) => {
+      const row = document.createElement("div");
+      row.className = "goal";
+      row.innerHTML = '<span class="name"></span><span class="track"><div class="bar"></div></span><span class="value"></span>';
+      row.querySelector(".name").textContent = g;
+      return row;
+    }));
+  }
+  msg.belief.forEach((p, i) => {
+    const row = belief.children[i];
+    row.querySelector(".bar").style.width = `${(100 * p).toFixed(1)}%`;
+    row.querySelector(".value").textContent = p.toFixed(2);
+  });
+}
+
+function frame(blob) {
+  if (frameUrl) URL.revokeObjectURL(frameUrl);
+  frameUrl = URL.createObjectURL(blob);
+  $("view").src = frameUrl;
+}
+
+function stick() {
+  let x = (keys.right ? 1 : 0) - (keys.left ? 1 : 0);
+  let y = (keys.up ? 1 : 0) - (keys.down ? 1 : 0);
+  let stop = keyStop, mode = modePress;
+  const pad = navigator.getGamepads ? [...navigator.getGamepads()].find((p) => p && p.connected) : null;
+  if (pad) {
+    const ax = pad.axes[0] || 0, ay = -(pad.axes[1] || 0);
+    if (Math.abs(ax) >= DEADZONE) x = ax;
+    if (Math.abs(ay) >= DEADZONE) y = ay;
+    const pressed = !!(pad.buttons[0] && pad.buttons[0].pressed);
+    mode = mode || (pressed && !padWasPressed);
+    padWasPressed = pressed;
+    stop = stop || !!(pad.buttons[1] && pad.buttons[1].pressed);
+  }
+  modePress = false;
+  return { type: "input", axes: [x, y], mode, stop };
+}
+
+setInterval(() => {
+  if (!driving) return;
+  const msg = stick();
+  $("stick").textContent = `${msg.axes[0].toFixed(2)}, ${msg.axes[1].toFixed(2)}`;
+  send(msg);
+}, 1000 / SEND_HZ);
+
+const KEYS = { ArrowLeft: "left", ArrowRight: "right", ArrowUp: "up", ArrowDown: "down" };
+document.addEventListener("keydown", (e) => {
+  if (!driving) return;
+  if (KEYS[e.key]) keys[KEYS[e.key]] = true;
+  else if (e.key === "m" || e.key === "M") modePress = true;
+  else if ((e.key === "s" || e.key === "S" || e.key === " ") && !e.repeat) keyStop = !keyStop;
+  else return;
+  e.preventDefault();
+});
+document.addEventListener("keyup", (e) => {
+  if (KEYS[e.key]) keys[KEYS[e.key]] = false;
+});
+window.addEventListener("blur", () => { for (const k in keys) keys[k] = false; });
+
+$("agree").onclick = () => send({ type: "consent" });
+$("start").onclick = () => {
+  for (const k in keys) keys[k] = false;
+  keyStop = false;
+  driving = true;
+  $("instruction").textContent = "Starting…";
+  show("drive");
+  send({ type: "start" });
+};
+$("ready").onclick = () => send({ type: "finish" });
+$("submit").onclick = () => {
+  const answers = [...$("survey-form").querySelectorAll(".question")].map((q) => {
+    const checked = q.querySelector("input:checked");
+    return checked ? Number(checked.value) : 0;
+  });
+  if (answers.includes(0)) { alert("Please answer every question."); return; }
+  send({ type: "survey", answers });
+};
+
+ws.onmessage = (event) => {
+  if (typeof event.data !== "string") return frame(event.data);
+  const msg = JSON.parse(event.data);
+  if (msg.type === "phase") phase(msg);
+  else if (msg.type === "tick") tick(msg);
+  else if (msg.type === "error") { $("error-text").textContent = msg.message; show("error"); }
+};
+ws.onclose = (event) => {
+  driving = false;
+  if (!$("thanks").hidden) return;
+  $("status").textContent = event.code === 1000 ? "" : "Disconnected. Reload this page to go on where you left off.";
+};

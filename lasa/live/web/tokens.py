@@ -1,0 +1,104 @@
+"""The study's links: one secret token per participant, kept on the server only as its hash.
+
+:func:`issue_links` writes the counterbalanced schedule (:func:`lasa.live.studykit.write_schedule`) into
+``<sessions>/study/``, draws one token per participant with :func:`secrets.token_urlsafe`, stores its
+SHA-256 in ``tokens.json`` and writes the links (the only copy of the tokens) to ``links.csv``.
+:class:`TokenStore` answers which participant a presented token belongs to, or None.
+
+Participant ids come from the schedule only and must match :data:`PARTICIPANT_ID` (``p`` and digits):
+no string a browser sends ever becomes part of a path.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import json
+import os
+import re
+import secrets
+from pathlib import Path
+
+import pandas as pd
+
+from lasa.base.errors import ConfigError
+from lasa.base.io import write_csv, write_text
+
+__all__ = ["PARTICIPANT_ID", "check_participant", "study_dir", "issue_links", "TokenStore"]
+
+PARTICIPANT_ID = re.compile(r"p[0-9]{2,4}")
+TOKEN_BYTES = 32  # 256 bits of randomness per link
+MAX_TOKEN_CHARS = 128  # a longer presented token is refused before hashing
+
+
+def check_participant(participant: str) -> str:
+    """``participant`` if it is a strict id (``p`` and 2-4 digits), else a ConfigError."""
+    if not isinstance(participant, str) or not PARTICIPANT_ID.fullmatch(participant):
+        raise ConfigError(f"a participant id is 'p' and 2-4 digits, got {participant!r}")
+    return participant
+
+
+def study_dir(sessions: str | os.PathLike[str]) -> Path:
+    """The server's own files beside the sessions (a subfolder: the analysis reads ``<sessions>/*.json``)."""
+    return Path(sessions) / "study"
+
+
+def _hash(token: str) -> str:
+    return hashlib.sha256(token.encode()).hexdigest()
+
+
+def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path:
+    """Schedule ``n`` participants and write one link each; returns the links' CSV.
+
+    Refuses to overwrite an existing study (its tokens, progress and sessions belong together).
+
+    Args:
+        n: Participants to schedule.
+        sessions: The sessions folder the server will write to.
+        base_url: The server's address as participants reach it, e.g. ``http://127.0.0.1:8000``.
+    """
+    from lasa.live.studykit import write_schedule
+
+    folder = study_dir(sessions)
+    if (folder / "tokens.json").exists():
+        raise ConfigError(f"{folder} holds a study already; give another --sessions folder")
+    folder.mkdir(parents=True, exist_ok=True)
+    schedule = pd.read_csv(write_schedule(n, folder / "schedule.csv"), dtype={"participant": str})
+    participants = [check_participant(p) for p in dict.fromkeys(schedule.participant)]
+    tokens = {p: secrets.token_urlsafe(TOKEN_BYTES) for p in participants}
+    write_text(folder / "tokens.json", json.dumps({p: _hash(t) for p, t in tokens.items()}, indent=2) + "\n")
+    links = pd.DataFrame(
+        {
+            "participant": participants,
+            "link": [f"{base_url.rstrip('/')}/study?token={tokens[p]}" for p in participants],
+        }
+    )
+    path = write_csv(folder / "links.csv", links)
+    path.chmod(0o600)  # the only copy of the tokens
+    return path
+
+
+class TokenStore:
+    """The tokens' hashes of one study (``<sessions>/study/tokens.json``), read once at start.
+
+    Entries whose participant id is not strict are dropped, so a hand-edited file cannot put a
+    path into a session's name.
+    """
+
+    def __init__(self, sessions: str | os.PathLike[str]) -> None:
+        path = study_dir(sessions) / "tokens.json"
+        if not path.is_file():
+            raise ConfigError(f"no study in {Path(sessions)}: run `python -m lasa.live.web schedule` first")
+        raw = json.loads(path.read_text())
+        self._hashes = {p: str(h) for p, h in raw.items() if PARTICIPANT_ID.fullmatch(str(p))}
+
+    def participant(self, token: str | None) -> str | None:
+        """The participant whose token this is, or None (compared in constant time)."""
+        if not token or len(token) > MAX_TOKEN_CHARS:
+            return None
+        digest = _hash(token)
+        found = None
+        for participant, stored in self._hashes.items():
+            if hmac.compare_digest(digest, stored):
+                found = participant
+        return found

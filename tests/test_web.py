@@ -1,0 +1,340 @@
+"""The web study: refused requests write nothing; a browser's trial is logged as `teleop run` logs it."""
+
+import json
+import shutil
+import socket
+import threading
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from starlette.websockets import WebSocketDisconnect
+
+from lasa.base.errors import ConfigError
+from lasa.evidence.sessionlog import read_session
+from lasa.live.teleop import replay
+from lasa.live.web.app import WebConfig, create_app
+from lasa.live.web.plan import Progress, plan_of
+from lasa.live.web.protocol import MAX_MESSAGE_BYTES
+from lasa.live.web.tokens import check_participant, issue_links, study_dir
+
+with warnings.catch_warnings():  # Starlette 1.x suggests httpx2 for its test client; httpx works
+    warnings.simplefilter("ignore")
+    from starlette.testclient import TestClient
+
+ROOT = Path(__file__).resolve().parents[1]
+ORIGIN = {"origin": "http://testserver"}
+
+
+@pytest.fixture()
+def study(tmp_path):
+    """A study of three participants: the sessions folder and each participant's token."""
+    sessions = tmp_path / "sessions"
+    links = pd.read_csv(issue_links(3, sessions, "http://testserver"))
+    return sessions, {
+        p: link.split("token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)
+    }
+
+
+def client(sessions, **settings):
+    config = dict(sessions=str(sessions), build_dir="no-decoders", practice_s=30.0, trial_s=0.4, frames=False)
+    return TestClient(create_app(WebConfig(**(config | settings))))
+
+
+def files(sessions):
+    return {p.relative_to(sessions): p.stat().st_mtime_ns for p in sessions.rglob("*")}
+
+
+def refused(app, url, headers=ORIGIN):
+    """Whether a WebSocket to ``url`` is refused before it opens."""
+    try:
+        with app.websocket_connect(url, headers=headers) as ws:
+            ws.receive_json()
+    except WebSocketDisconnect as exc:
+        return exc.code == 1008
+    return False
+
+
+def test_links_carry_random_tokens_stored_as_hashes(study):
+    sessions, tokens = study
+    assert len(set(tokens.values())) == 3 and all(len(t) >= 40 for t in tokens.values())
+    stored = (study_dir(sessions) / "tokens.json").read_text()
+    assert not any(t in stored for t in tokens.values())
+    assert (study_dir(sessions) / "links.csv").stat().st_mode & 0o077 == 0
+    with pytest.raises(ConfigError, match="holds a study already"):
+        issue_links(3, sessions, "http://testserver")
+
+
+@pytest.mark.parametrize("bad", ["../p00", "p00/../../x", "p0", "P01", "p01 ", "", "p12345"])
+def test_participant_ids_are_strict(bad):
+    with pytest.raises(ConfigError):
+        check_participant(bad)
+
+
+def test_requests_without_a_valid_token_are_refused_and_write_nothing(study, tmp_path):
+    sessions, tokens = study
+    other = tmp_path / "other"
+    other_token = pd.read_csv(issue_links(1, other, "http://x")).link[0].split("token=")[1]
+    before = files(sessions)
+    with client(sessions) as app:
+        for query in ("", "?token=", "?token=wrong", f"?token={other_token}", f"?token={'x' * 5000}"):
+            assert app.get(f"/study{query}").status_code == 403
+            assert refused(app, f"/ws{query}")
+        assert app.get(f"/study?token={tokens['p01']}").status_code == 200
+        assert refused(app, f"/ws?token={tokens['p01']}", headers={"origin": "http://evil.example"})
+        assert refused(app, f"/ws?token={tokens['p01']}", headers={})
+    assert files(sessions) == before
+
+
+def test_a_token_is_its_own_participants_only_and_ends_with_the_schedule(study):
+    sessions, tokens = study
+    progress = Progress(sessions)
+    progress.of("p02")["step"] = len(plan_of(sessions, "p02"))
+    progress._save()
+    before = files(sessions)
+    with client(sessions) as app:
+        assert app.get(f"/study?token={tokens['p02']}").status_code == 403  # schedule done
+        assert refused(app, f"/ws?token={tokens['p02']}")
+        # the participant comes from the token alone: a client cannot name another one
+        with app.websocket_connect(f"/ws?token={tokens['p01']}&participant=p00", headers=ORIGIN) as ws:
+            assert ws.receive_json()["kind"] == "consent"
+            ws.send_json({"type": "consent"})
+            assert ws.receive_json()["kind"] == "practice"
+    assert Progress(sessions).of("p01")["consented"] and not Progress(sessions).of("p00")["consented"]
+    assert {p for p in set(files(sessions)) - set(before) if p.parts[0] != "study"} == set()
+
+
+def test_a_second_browser_on_one_token_is_refused_while_the_first_is_connected(study):
+    sessions, tokens = study
+    with client(sessions) as app:
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as first:
+            assert first.receive_json()["kind"] == "consent"
+            assert refused(app, f"/ws?token={tokens['p00']}")
+            assert refused(app, f"/ws?token={tokens['p00']}")
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as again:
+            assert again.receive_json()["kind"] == "consent"  # free again once the first has gone
+
+
+@pytest.mark.parametrize(
+    "message, code",
+    [
+        ("x" * (10 * 1024 * 1024), 1009),
+        ("x" * (MAX_MESSAGE_BYTES + 1), 1009),
+        ("not json", 1008),
+        (json.dumps({"type": "input", "axes": ["../etc", 1]}), 1008),
+        ('{"type": "input", "axes": [NaN, 0]}', 1008),
+        (json.dumps({"type": "open", "path": "/etc/passwd"}), 1008),
+    ],
+)
+def test_an_oversized_or_malformed_message_closes_the_connection_and_writes_nothing(study, message, code):
+    sessions, tokens = study
+    before = files(sessions)
+    with client(sessions) as app:
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+            assert ws.receive_json()["kind"] == "consent"
+            ws.send_text(message)
+            with pytest.raises(WebSocketDisconnect) as closed:
+                ws.receive_json()
+            assert closed.value.code == code
+    assert files(sessions) == before
+
+
+def test_a_flood_of_messages_is_cut_off(study):
+    sessions, tokens = study
+    with client(sessions) as app:
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+            ws.receive_json()
+            for _ in range(200):
+                ws.send_json({"type": "input", "axes": [0, 0]})
+            with pytest.raises(WebSocketDisconnect) as closed:
+                ws.receive_json()
+            assert closed.value.code == 1008
+
+
+def test_a_hand_edited_token_file_cannot_put_a_path_into_a_session(study):
+    sessions, tokens = study
+    path = study_dir(sessions) / "tokens.json"
+    hashes = json.loads(path.read_text())
+    path.write_text(json.dumps({"../../evil": hashes["p00"]}))
+    before = files(sessions)
+    with client(sessions) as app:
+        assert app.get(f"/study?token={tokens['p00']}").status_code == 403
+        assert refused(app, f"/ws?token={tokens['p00']}")
+    assert files(sessions) == before and not (sessions.parent / "evil").exists()
+
+
+def drive(ws, ticks=None, axes=(0.6, 0.4)):
+    """Start the step shown, send input, read ticks; return them and the next message (None if cut)."""
+    ws.send_json({"type": "start"})
+    seen = []
+    while True:
+        ws.send_json({"type": "input", "axes": list(axes), "mode": False, "stop": False})
+        msg = ws.receive_json()
+        if msg["type"] != "tick":
+            return seen, msg
+        seen.append(msg)
+        if ticks is not None and len(seen) >= ticks:
+            return seen, None
+
+
+def test_a_browser_drives_a_trial_logged_as_teleop_logs_it(study):
+    from lasa.evidence.sessions import load_sessions
+    from lasa.world.eating import make_eating_task
+
+    sessions, tokens = study
+    with client(sessions) as app:
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+            ws.receive_json()
+            ws.send_json({"type": "consent"})
+            assert ws.receive_json() | {"limit_s": 0} == {
+                "type": "phase", "kind": "practice", "condition": "R", "task": "Dessert",
+                "index": 1, "total": 16, "limit_s": 0,
+            }  # fmt: skip
+            ticks, _ = drive(ws, ticks=3)
+            ws.send_json({"type": "finish"})
+            while (msg := ws.receive_json())["type"] == "tick":
+                pass
+            assert msg["kind"] == "trial" and msg["task"] == "Entree"
+            ticks, nxt = drive(ws)
+            assert nxt["kind"] == "trial" and nxt["task"] == "Dessert"
+    assert len(ticks) == 4 and ticks[-1]["step"] == 4 and len(ticks[-1]["belief"]) == 4
+    assert {"q", "belief", "goals", "instruction", "late"} <= set(ticks[-1])
+    assert abs(sum(ticks[-1]["belief"]) - 1) < 1e-9 and ticks[-1]["q"] != ticks[0]["q"]
+    (practice,) = (sessions / "practice").glob("*.csv")
+    (entree,) = sessions.glob("p00_Entree_R_*_a2.csv")
+    for suffix in (".csv", ".json", ".xml"):
+        assert entree.with_suffix(suffix).is_file()
+    frame, meta = read_session(entree)
+    assert meta["status"] == "complete" and meta["steps"] == len(frame) == 4
+    assert meta["interface"] == "web" and meta["participant"] == "p00" and "deadline_misses" in meta
+    assert read_session(practice)[1]["status"] == "complete"
+    result = replay(entree)
+    assert result["exact"] and result["steps"] == 4
+    episodes = load_sessions(sessions, make_eating_task())
+    assert list(episodes.participant) == ["p00"] and list(episodes.task) == ["Entree"]
+
+
+def test_a_disconnect_leaves_the_session_interrupted_and_the_link_resumes_anew(study):
+    sessions, tokens = study
+    progress = Progress(sessions)
+    progress.consent("p01")
+    progress.of("p01")["step"] = 1  # p01's first trial (R+SA, Entree)
+    progress._save()
+    with client(sessions, trial_s=30.0) as app:
+        with app.websocket_connect(f"/ws?token={tokens['p01']}", headers=ORIGIN) as ws:
+            assert ws.receive_json()["task"] == "Entree"
+            drive(ws, ticks=3)
+        deadline = time.monotonic() + 10
+        while not list(sessions.glob("p01_*.csv")) and time.monotonic() < deadline:
+            time.sleep(0.05)  # the server notices at its next tick
+        (first,) = sessions.glob("p01_*.csv")
+        frame, meta = read_session(first)
+        assert meta["status"] == "interrupted" and len(frame) >= 3 and meta["steps"] == len(frame)
+        kept = first.read_bytes()
+        with app.websocket_connect(f"/ws?token={tokens['p01']}", headers=ORIGIN) as ws:
+            msg = ws.receive_json()
+            assert (msg["kind"], msg["task"], msg["condition"]) == ("trial", "Entree", "R+SA")
+            drive(ws, ticks=2)
+    assert first.read_bytes() == kept and len(list(sessions.glob("p01_Entree_R+SA_*.csv"))) == 2
+
+
+def test_the_survey_is_stored_as_the_terminal_survey_stores_it(study):
+    from lasa.evidence.sessions import read_likert
+
+    sessions, tokens = study
+    progress = Progress(sessions)
+    progress.consent("p00")
+    progress.of("p00")["step"] = 3
+    progress._save()
+    with client(sessions) as app:
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+            msg = ws.receive_json()
+            assert msg["kind"] == "survey" and len(msg["questions"]) == 5
+            ws.send_json({"type": "survey", "answers": [9, 1, 1, 1, 1]})
+            assert ws.receive_json()["type"] == "error"
+            ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3]})
+            assert ws.receive_json()["condition"] == "R+SA"
+    likert = read_likert(sessions)
+    assert list(likert.answer) == [7, 6, 5, 4, 3] and set(likert.condition) == {"R"}
+
+
+def _free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_a_real_browser_consents_drives_and_sees_the_belief_and_ticks(study, report_artifact):
+    """Headless Chromium against the real server (uvicorn): consent, the practice, keys held for a
+    few ticks; the page shows a bar per goal, the tick and late-tick counters, and a frame."""
+    import uvicorn
+    from PIL import Image
+    from selenium import webdriver
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    sessions, tokens = study
+    chromium, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    assert chromium and driver, "Chromium or its driver is missing: run `make setup`"
+    port = _free_port()
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames=True)
+    server = uvicorn.Server(
+        uvicorn.Config(create_app(config), host="127.0.0.1", port=port, log_level="warning")
+    )
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    options = Options()
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1100,800"):
+        options.add_argument(arg)
+    options.binary_location = chromium
+    browser = webdriver.Chrome(options=options, service=Service(driver))
+    try:
+        while not server.started:
+            time.sleep(0.05)
+        browser.get(f"http://127.0.0.1:{port}/study?token={tokens['p00']}")
+        wait_for(lambda: browser.find_element(By.ID, "agree").is_displayed())
+        browser.find_element(By.ID, "agree").click()
+        wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
+        browser.find_element(By.ID, "start").click()
+        ActionChains(browser).key_down(Keys.ARROW_RIGHT).key_down(Keys.ARROW_UP).perform()
+        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
+        wait_for(lambda: browser.execute_script("return document.getElementById('view').naturalWidth") > 0)
+        bars = browser.find_elements(By.CSS_SELECTOR, "#belief .goal")
+        assert len(bars) == 4 and browser.find_element(By.ID, "late").text.isdigit()
+        assert "Dessert" in browser.find_element(By.ID, "instruction").text
+        values = [float(b.find_element(By.CSS_SELECTOR, ".value").text) for b in bars]
+        assert abs(sum(values) - 1) < 0.03 and max(values) > 0.3  # the held stick moved the belief
+        shot = ROOT / "docs" / "web_study.png"
+        browser.save_screenshot(str(shot))
+        report_artifact("the web study's page, driving", shot)
+        ActionChains(browser).key_up(Keys.ARROW_RIGHT).key_up(Keys.ARROW_UP).perform()
+        browser.find_element(By.ID, "ready").click()
+        wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed())
+    finally:
+        browser.quit()
+        server.should_exit = True
+        thread.join(10)
+    assert np.asarray(Image.open(shot).convert("L"), dtype=float).std() > 20
+    (practice,) = (sessions / "practice").glob("p00_*.csv")
+    frame, meta = read_session(practice)
+    assert meta["status"] == "complete" and (frame[["z0", "z1"]].to_numpy() == [1.0, 1.0]).all(axis=1).any()
+
+
+def wait_for(condition, timeout=20.0):
+    deadline = time.monotonic() + timeout
+    while True:
+        try:
+            if condition():
+                return
+        except Exception:
+            if time.monotonic() > deadline:
+                raise
+        if time.monotonic() > deadline:
+            raise AssertionError("the page did not get there in time")
+        time.sleep(0.1)
