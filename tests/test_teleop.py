@@ -451,3 +451,53 @@ def test_the_live_retargeting_step_is_the_participants_step(build, condition, in
         assert rec["mode"] == int(mode[0])
         if press or not (z0 or z1):
             assert not rec["a_h"].any()  # a press or a stick at rest moves nothing
+
+
+def _start_live_session(build, tmp_path, device, participant):
+    """A headless, real-time teleop run (60 s at most) in a subprocess, once its log has rows on disk."""
+    import time
+
+    if device == "scripted":
+        pd.DataFrame(script(600, seed=4), columns=["raw0", "raw1"]).to_csv(tmp_path / "s.csv", index=False)
+        device = f"scripted:{tmp_path / 's.csv'}"
+    sessions = tmp_path / "sessions"
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy", "MUJOCO_GL": "disable"}
+    env.pop("SDL_NO_SIGNAL_HANDLERS", None)  # what SDL does by default is what is tested
+    command = [
+        sys.executable, "-m", "lasa.live.teleop", "run", "--task", "Dessert", "--condition", "R+SA",
+        "--participant", participant, "--device", device, "--sessions", str(sessions),
+        "--build-dir", str(build), "--no-viewer", "--duration", "60",
+    ]  # fmt: skip
+    proc = subprocess.Popen(
+        command, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline and proc.poll() is None:
+        parts = list(sessions.glob("*.csv.part"))
+        if parts and parts[0].read_text().count("\n") > 11:  # the header and 10 flushed rows
+            return proc, sessions
+        time.sleep(0.2)
+    proc.kill()
+    out, err = proc.communicate()
+    raise AssertionError(f"the session never logged a row: {out[-1000:]} {err[-2000:]}")
+
+
+@pytest.mark.parametrize(
+    ("device", "name"),
+    [("auto", "SIGTERM"), ("auto", "SIGINT"), ("auto", "SIGHUP"), ("scripted", "SIGTERM")],
+)
+def test_a_killed_session_reads_interrupted_and_keeps_its_rows(build, tmp_path, device, name):
+    """SDL (``--device auto`` starts it to look for a gamepad) would swallow SIGTERM and the
+    session would run its full length and read complete: a signal stops it at the next step."""
+    import signal
+
+    proc, sessions = _start_live_session(build, tmp_path, device, "k01")
+    proc.send_signal(getattr(signal, name))
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + getattr(signal, name), out[-1000:] + err[-2000:]
+    assert err.strip().splitlines()[-1].endswith("(its rows are kept; it reads interrupted)")
+    assert f"interrupted by {name} after" in err
+    frame, meta = read_session(next(sessions.glob("k01_*.json")))
+    assert meta["status"] == "interrupted" and meta["signal"] == name
+    assert 10 <= len(frame) == meta["steps"] < 600
+    assert not list(sessions.glob("*.part"))

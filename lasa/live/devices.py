@@ -236,6 +236,9 @@ class GamepadDevice:
         # SDL's event queue (which the joystick needs) comes with its video subsystem; the
         # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
         os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+        # SDL would turn SIGINT and SIGTERM into a quit event nobody reads: the session's own
+        # handlers stop it instead (lasa.live.interrupts)
+        os.environ["SDL_NO_SIGNAL_HANDLERS"] = "1"
         import pygame
 
         self._pg = pygame
