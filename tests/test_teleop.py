@@ -501,3 +501,188 @@ def test_a_killed_session_reads_interrupted_and_keeps_its_rows(build, tmp_path, 
     assert meta["status"] == "interrupted" and meta["signal"] == name
     assert 10 <= len(frame) == meta["steps"] < 600
     assert not list(sessions.glob("*.part"))
+
+
+@pytest.fixture(scope="module")
+def cohort(build, tmp_path_factory):
+    """Three participants' complete Dessert sessions: p1 and p2 every condition, p3 all but LA."""
+    folder = tmp_path_factory.mktemp("cohort")
+    for i, participant in enumerate(("p1", "p2", "p3")):
+        for k, condition in enumerate(("R", "R+SA", "LA", "LA+SA")):
+            if participant == "p3" and condition == "LA":
+                continue
+            config = SessionConfig(
+                task="Dessert", condition=condition, participant=participant, build_dir=str(build)
+            )
+            st_ = Station(config)
+            device = ScriptedDevice(np.random.default_rng([i, k]).uniform(-1, 1, (12, 2)))
+            run_session(st_, device, new_session(st_, folder), 12, realtime=False)
+    return folder
+
+
+def _copy(folder, tmp_path):
+    out = tmp_path / "sessions"
+    shutil.copytree(folder, out)
+    return out
+
+
+def _stem(folder, participant, condition):
+    return next(p for p in folder.glob(f"{participant}_Dessert_{condition}_*.json")).stem
+
+
+def _edit_cell(csv, row, column, value):
+    lines = csv.read_text().splitlines()
+    cells = lines[row].split(",")
+    cells[lines[0].split(",").index(column)] = value
+    lines[row] = ",".join(cells)
+    csv.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize(
+    ("value", "reason"), [("nan", "holds nan, not a finite"), ("inf", "holds inf, not a finite")]
+)
+def test_a_non_finite_state_is_damaged(logged, value, reason):
+    from lasa.base.errors import ArtifactError
+
+    _edit_cell(logged.csv, 4, "s2", value)
+    with pytest.raises(ArtifactError, match=rf"damaged: row 4, column 's2' {reason}"):
+        read_session(logged.csv)
+
+
+def test_rows_out_of_time_order_are_damaged(logged):
+    from lasa.base.errors import ArtifactError
+
+    lines = logged.csv.read_text().splitlines()
+    lines[6], lines[7] = lines[7], lines[6]
+    logged.csv.write_text("\n".join(lines) + "\n")
+    with pytest.raises(
+        ArtifactError, match=r"damaged: rows out of time order: row 7's step does not come after row 6's"
+    ):
+        read_session(logged.csv)
+
+
+def test_a_bad_sidecar_or_empty_log_is_one_line(logged):
+    from lasa.base.errors import ArtifactError
+
+    text = logged.sidecar.read_text()
+    logged.sidecar.write_text(text[: len(text) // 2])  # torn
+    with pytest.raises(ArtifactError, match=r"sidecar .* is damaged: not JSON") as err:
+        read_session(logged.csv)
+    assert "\n" not in str(err.value)
+    logged.sidecar.write_text(text)
+    logged.csv.write_text("")
+    with pytest.raises(ArtifactError, match=r"damaged: its log .* is empty \(not even a header\)"):
+        read_session(logged.csv, allow_damaged=True)
+
+
+def test_replay_checks_the_scene(logged):
+    from lasa.base.errors import ArtifactError
+
+    scene = logged.folder / f"{logged.stem}.xml"
+    scene.write_text(scene.read_text().replace("<mujoco", "<mujoco ", 1))
+    with pytest.raises(ArtifactError, match="is not the scene session .* logged"):
+        replay(logged.csv)
+    scene.unlink()
+    with pytest.raises(ArtifactError, match="has no scene"):
+        replay(logged.csv)
+
+
+def test_replay_requires_the_decoder_record(logged):
+    from lasa.base.errors import ArtifactError
+
+    meta = json.loads(logged.sidecar.read_text())
+    logged.sidecar.write_text(json.dumps({k: v for k, v in meta.items() if k != "decoder_sha256"}))
+    with pytest.raises(ArtifactError, match="records no decoder_sha256: replay cannot tell what it ran"):
+        replay(logged.csv)
+    logged.sidecar.write_text(json.dumps({**meta, "decoder_sha256": None}))
+    with pytest.raises(ArtifactError, match="records no decoder checksum for LA"):
+        replay(logged.csv)
+    logged.sidecar.write_text(
+        json.dumps({**meta, "decoder_config": {**meta["decoder_config"], "hidden": 99}})
+    )
+    with pytest.raises(
+        ArtifactError, match="decoder's config differs from the one session .* logged in hidden"
+    ):
+        replay(logged.csv)
+
+
+def test_a_decoder_for_another_task_is_refused_before_the_session(tmp_path):
+    """A Panda decoder for the cups under the eating decoder's name: refused when the station is
+    built, before any log exists (it used to fail in the loop, leaving a session at running)."""
+    from lasa.base.errors import ArtifactError
+    from lasa.method.decoder import DecoderConfig, LatentActionModel
+    from lasa.world.robot import load_robot
+    from lasa.world.task import make_cup_task
+
+    cups = make_cup_task(load_robot("panda"))
+    config = DecoderConfig(robot="panda", n_joints=7, n_goals=cups.n_goals, z_dim=1, hidden=8, depth=1)
+    save_checkpoint(LatentActionModel(config), tmp_path / "models" / "eating_decoder_panda.pt")
+    with pytest.raises(ArtifactError, match="does not fit the Dessert task"):
+        Station(SessionConfig(task="Dessert", condition="LA", participant="t", build_dir=str(tmp_path)))
+
+
+def test_one_bad_session_is_left_out_by_name(cohort, tmp_path):
+    """A crashed session with a torn last line, a damaged one and an interrupted one are left
+    out by name; the others are analysed."""
+    from lasa.evidence.sessions import load_sessions, scan_sessions
+
+    folder = _copy(cohort, tmp_path)
+    torn = _stem(folder, "p1", "R")
+    os.replace(folder / f"{torn}.csv", folder / f"{torn}.csv.part")  # it crashed: never renamed
+    part = folder / f"{torn}.csv.part"
+    text = part.read_text()
+    part.write_text(text[: text.rindex("\n", 0, -1) + 60])  # ... mid-row
+    meta = json.loads((folder / f"{torn}.json").read_text())
+    (folder / f"{torn}.json").write_text(json.dumps({**meta, "status": "running"}))
+    bad = _stem(folder, "p2", "LA")
+    _edit_cell(folder / f"{bad}.csv", 3, "s0", "inf")
+    logs, left_out = scan_sessions(folder)
+    assert len(logs) == 11 - 2
+    reasons = dict(zip(left_out.session, left_out.reason, strict=True))
+    assert set(reasons) == {torn, bad}
+    assert "not a number" in reasons[torn] and "not a finite number" in reasons[bad]
+    with pytest.warns(UserWarning, match=f"left out session {bad}: session {bad} is damaged"):
+        episodes = load_sessions(folder, make_eating_task())
+    assert len(episodes.participant) == 9
+
+
+def test_the_same_participant_condition_and_task_twice_is_refused(cohort, tmp_path):
+    from lasa.base.errors import ArtifactError
+    from lasa.evidence.sessions import load_sessions
+
+    folder = _copy(cohort, tmp_path)
+    stem = _stem(folder, "p1", "LA")
+    for suffix in (".json", ".csv", ".xml"):
+        shutil.copy(folder / f"{stem}{suffix}", folder / f"{stem}9{suffix}")
+    with pytest.raises(
+        ArtifactError,
+        match=rf"sessions {stem}.json and {stem}9.json .* both log participant p1, condition LA",
+    ):
+        load_sessions(folder, make_eating_task())
+
+
+def test_the_analysis_names_who_it_dropped_and_replaces_its_tables_whole(cohort, tmp_path):
+    from lasa.evidence.sessions import analyse_sessions, write_session_tables
+
+    with pytest.warns(
+        UserWarning, match="left out participant p3 from sa_effect, time_tests: missing LA in Dessert"
+    ):
+        people = analyse_sessions(cohort, make_eating_task())
+    assert people["dropped"].to_dict("records") == [
+        {"participant": "p3", "test": "sa_effect, time_tests", "reason": "missing LA in Dessert"}
+    ]
+    assert people["sa_effect"].n.tolist() == [2, 2] and set(people["time_tests"].measure) == {
+        "total_time",
+        "idle_time",
+    }
+    figures = tmp_path / "figures"
+    write_session_tables(people, figures)
+    assert (figures / "sessions_sa_effect.csv").is_file()
+    (figures / "other.csv").write_text("kept\n")
+    fewer = {
+        k: v for k, v in people.items() if k not in ("sa_effect", "time_tests")
+    }  # as one participant less
+    write_session_tables(fewer, figures)
+    assert sorted(p.name for p in figures.iterdir()) == sorted(
+        ["other.csv", *(f"sessions_{k}.csv" for k in fewer)]
+    )

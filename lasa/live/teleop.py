@@ -34,6 +34,7 @@ import argparse
 import dataclasses
 import datetime as dt_
 import hashlib
+import json
 import sys
 import time
 from pathlib import Path
@@ -48,7 +49,7 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ArtifactError, ConfigError, LasaError
 from lasa.base.paths import Paths
-from lasa.evidence.sessionlog import SessionWriter, read_session
+from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live.devices import Device, Reading, ScriptedDevice, open_device
 from lasa.live.interrupts import StopOnSignals
 from lasa.method.belief import belief, uniform_log_belief
@@ -134,11 +135,23 @@ class Station:
             self.decoder, _ = load_checkpoint(
                 self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
             )
+            self._check_fit(self.decoder, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self.sets = self.task.belief_targets(self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self.reset()
+
+    def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
+        """Refuse, before any session starts, a decoder made for another task's goals or joints."""
+        config = getattr(decoder, "config", None)
+        shape = (getattr(config, "n_joints", None), getattr(config, "n_goals", None))
+        if shape != (self.robot.n_joints, self.task.n_goals) or decoder.z_dim > 2:
+            raise ArtifactError(
+                f"{path} does not fit the {self.config.task} task: it decodes {decoder.z_dim}-D z for "
+                f"{shape[0]} joints and {shape[1]} goals, the task needs at most 2-D z, "
+                f"{self.robot.n_joints} joints and {self.task.n_goals} goals"
+            )
 
     def warm_up(self) -> None:
         """Run the step's heavy calls once, off the record (torch's and mink's first calls are slow)."""
@@ -441,6 +454,28 @@ def new_session(station: Station, folder: str | Path, stem: str | None = None) -
     return SessionWriter(folder, stem, station.meta(), station.robot.xml(), station.columns())
 
 
+def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) -> None:
+    """Refuse a replay whose decoder on disk is not the one the session logged (checksum, config)."""
+    logged, here = meta["decoder_sha256"], station.meta()
+    if logged is None and station.decoder_path is not None:
+        raise ArtifactError(
+            f"session {session}'s sidecar records no decoder checksum for {station.config.condition}: "
+            "replay cannot tell which decoder it used"
+        )
+    if logged != here["decoder_sha256"]:
+        raise ArtifactError(
+            f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
+            "replay needs the same decoder"
+        )
+    now = json.loads(json.dumps(here["decoder_config"])) or {}  # tuples as the sidecar's lists
+    then = meta["decoder_config"] or {}
+    diff = sorted(k for k in set(now) | set(then) if now.get(k) != then.get(k))
+    if diff:
+        raise ArtifactError(
+            f"the decoder's config differs from the one session {session} logged in {', '.join(diff)}"
+        )
+
+
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
     """Re-run a logged session from its inputs and compare its states with the log.
 
@@ -449,18 +484,21 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
         ``damaged`` (the reason) when a damaged log was replayed with ``allow_damaged``.
 
     Raises:
-        ArtifactError: if the decoder on disk is not the one the session used, or the log is
-            damaged (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
+        ArtifactError: if the sidecar does not record the decoder (its checksum, its config),
+            the decoder on disk is not the one the session used, the scene XML is missing or
+            another (:func:`lasa.evidence.sessionlog.check_scene`), or the log is damaged
+            (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
     """
     frame, meta = read_session(session, allow_damaged=allow_damaged)
-    config = SessionConfig(**{k: meta[k] for k in ("robot", "task", "condition", "participant", "build_dir")})
-    station = Station(config)
-    if meta.get("decoder_sha256") and station.decoder_path is not None:
-        if _sha256(station.decoder_path) != meta["decoder_sha256"]:
-            raise ArtifactError(
-                f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
-                "replay needs the same decoder"
-            )
+    check_scene(session, meta)
+    fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
+    missing = [k for k in fields if k not in meta]
+    if missing:
+        raise ArtifactError(
+            f"session {session}'s sidecar records no {', '.join(missing)}: replay cannot tell what it ran"
+        )
+    station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
+    _check_decoder(station, meta, session)
     device = ScriptedDevice.from_table(frame, mode="mode_press")
     n = station.robot.n_joints
     logged = frame[[f"s{i}" for i in range(n)]].to_numpy()
