@@ -188,13 +188,13 @@ def test_schedule_and_questionnaire(tmp_path):
         survey(tmp_path, p, "LA+SA", answers)
         for c in ("R", "R+SA", "LA"):
             survey(tmp_path, p, c, [3, 4, 3, 3, 2])
-    survey(tmp_path, "p00", "R", [2, 4, 3, 3, 2])  # a re-answer replaces the old one
+    survey(tmp_path, "p00", "R", [2, 4, 3, 3, 2], overwrite=True)  # a re-answer replaces the old one
     likert = read_likert(tmp_path)
     assert len(likert) == 3 * 4 * len(SCALES)
     tests = likert_tests(likert)
     assert set(tests.scale) == set(SCALES) and (tests["diff"] > 0).all()
-    with pytest.raises(ConfigError, match="1..7"):
-        survey(tmp_path, "p00", "LA", [8, 1, 1, 1, 1])
+    with pytest.raises(ConfigError, match="whole number from 1 to 7"):
+        survey(tmp_path, "p09", "LA", [8, 1, 1, 1, 1])
 
 
 def test_the_viewer_runs_under_xvfb_and_the_screen_is_not_blank(build, tmp_path, report_artifact):
@@ -686,3 +686,92 @@ def test_the_analysis_names_who_it_dropped_and_replaces_its_tables_whole(cohort,
     assert sorted(p.name for p in figures.iterdir()) == sorted(
         ["other.csv", *(f"sessions_{k}.csv" for k in fewer)]
     )
+
+
+def _cli(args, capsys):
+    from lasa.live.teleop import main
+
+    code = main(args)
+    err = capsys.readouterr().err.strip()
+    return code, err
+
+
+def test_a_bad_likert_answer_is_one_line(tmp_path, capsys):
+    from lasa.live.studykit import survey
+
+    for answers in ("7,6,4.5,7,7", "7,,6,7,7", "7,6,five,7,7"):
+        code, err = _cli(
+            [
+                "survey",
+                "--participant",
+                "p1",
+                "--condition",
+                "LA",
+                "--answers",
+                answers,
+                "--sessions",
+                str(tmp_path),
+            ],
+            capsys,
+        )
+        assert code == 2 and len(err.splitlines()) == 1
+        assert err.startswith("error: a Likert answer is a whole number from 1 to 7, got")
+    with pytest.raises(ConfigError, match="whole number from 1 to 7, got '5.7'"):
+        survey(tmp_path, "p1", "LA", [7, 6, 5.7, 7, 7])
+    assert not (tmp_path / "likert.csv").exists()
+
+
+def test_the_prompt_asks_again_and_keeps_the_answers_given(tmp_path, monkeypatch, capsys):
+    from lasa.evidence.sessions import read_likert
+    from lasa.live.studykit import survey
+
+    typed = iter(["7", "6", "five", "4.5", "", "5", "3", "2"])
+    monkeypatch.setattr("builtins.input", lambda prompt: next(typed))
+    survey(tmp_path, "p1", "LA", None)
+    assert read_likert(tmp_path).answer.tolist() == [7, 6, 5, 3, 2]
+    assert capsys.readouterr().out.count("please answer again") == 3
+
+
+def test_a_second_survey_or_schedule_needs_overwrite(tmp_path, capsys):
+    from lasa.evidence.sessions import read_likert
+
+    survey = ["survey", "--participant", "p1", "--condition", "LA", "--sessions", str(tmp_path), "--answers"]
+    assert _cli([*survey, "7,6,5,4,3"], capsys)[0] == 0
+    code, err = _cli([*survey, "1,1,1,1,1"], capsys)
+    likert = tmp_path / "likert.csv"
+    assert (
+        code == 2
+        and err == f"error: p1 answered for LA already in {likert}: pass --overwrite to replace those answers"
+    )
+    assert read_likert(tmp_path).answer.tolist() == [7, 6, 5, 4, 3]
+    assert _cli([*survey, "1,1,1,1,1", "--overwrite"], capsys)[0] == 0
+    assert read_likert(tmp_path).answer.tolist() == [1, 1, 1, 1, 1]
+    out = tmp_path / "schedule.csv"
+    assert _cli(["schedule", "--participants", "4", "--out", str(out)], capsys)[0] == 0
+    code, err = _cli(["schedule", "--participants", "6", "--out", str(out)], capsys)
+    assert code == 2 and err == f"error: {out} exists already: pass --overwrite to replace the schedule"
+    assert len(pd.read_csv(out)) == 16
+    assert _cli(["schedule", "--participants", "6", "--out", str(out), "--overwrite"], capsys)[0] == 0
+    assert len(pd.read_csv(out)) == 24
+
+
+def test_a_schedule_is_bounded(tmp_path, capsys):
+    code, err = _cli(["schedule", "--participants", "1000000", "--out", str(tmp_path / "s.csv")], capsys)
+    assert (
+        code == 2
+        and err == "error: the number of participants must be a whole number in 1..1000, got 1000000"
+    )
+    assert not (tmp_path / "s.csv").exists()
+
+
+@pytest.mark.parametrize("content", [None, "", "a,b\n1,2\n"])
+def test_a_bad_script_file_is_one_line(build, tmp_path, capsys, content):
+    script_file = tmp_path / "script.csv"
+    if content is not None:
+        script_file.write_text(content)
+    args = ["run", "--task", "Dessert", "--condition", "R", "--build-dir", str(build), "--no-viewer"]
+    code, err = _cli(
+        [*args, "--device", f"scripted:{script_file}", "--sessions", str(tmp_path / "s")], capsys
+    )
+    assert code == 2 and len(err.splitlines()) == 1 and "script" in err
+    assert not (tmp_path / "s").exists()

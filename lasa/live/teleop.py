@@ -587,20 +587,20 @@ def _parser() -> argparse.ArgumentParser:
     sch = sub.add_parser("schedule", help="a counterbalanced order of conditions for N participants")
     sch.add_argument("--participants", type=int, default=10, help="participants to schedule [%(default)s]")
     sch.add_argument("--out", default="build/sessions/schedule.csv", help="the schedule CSV [%(default)s]")
+    sch.add_argument("--overwrite", action="store_true", help="replace an existing schedule")
     sur = sub.add_parser("survey", help="the 7-point Likert questionnaire after a condition")
     sur.add_argument("--participant", required=True, help="participant id, as in their sessions")
     sur.add_argument("--condition", required=True, choices=CONDITIONS, help="the condition just done")
     sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
     sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
+    sur.add_argument("--overwrite", action="store_true", help="replace answers given for this condition")
     return parser
 
 
 def _open_input(spec: str) -> Device:
     """The device ``--device`` names, saying which one it is."""
     if spec.startswith("scripted:"):
-        import pandas as pd
-
-        device: Device = ScriptedDevice.from_table(pd.read_csv(spec.split(":", 1)[1]))
+        device: Device = ScriptedDevice.from_file(spec.split(":", 1)[1])
         print("input: scripted")
         return device
     device, message = open_device(spec)
@@ -676,10 +676,10 @@ def _study(args: argparse.Namespace) -> int:
     from lasa.live import studykit
 
     if args.command == "schedule":
-        print(studykit.write_schedule(args.participants, args.out))
+        print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
     else:
-        answers = None if args.answers is None else [int(a) for a in args.answers.split(",")]
-        print(studykit.survey(args.sessions, args.participant, args.condition, answers))
+        answers = None if args.answers is None else studykit.parse_answers(args.answers)
+        print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
     return 0
 
 
