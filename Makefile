@@ -134,7 +134,9 @@ endif
 
 # The eating study (Sec. VI) runs on the Panda only: its own chain, beside the robots'.
 STUDY_NBS := 10_eating_task 11_eating_study
-notebooks: $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb)) $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb)
+# The study chain first: it is the longest (10 then 11, each on one core), so under -j it starts
+# as soon as both robots' decoders exist and the robots' chains share the other core.
+notebooks: $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb) $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
 
 # The robots' chains run side by side. Notebooks that share a figure merge their rows
 # and redraw it under a lock (lasa.base.io.locked), and the merged rows are ordered by robot,
