@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     links = pd.read_csv(issue_links(sum(levels), folder, f"http://127.0.0.1:{port}"))
     tokens = dict(zip(links.participant, (lk.split("token=", 1)[1] for lk in links.link), strict=True))
     command = [sys.executable, "-m", "lasa.live.web", "--port", str(port), "--sessions", str(folder)]
-    command += ["--build-dir", args.build_dir, "--no-frames", "--practice-s", str(args.duration + 30)]
+    command += ["--build-dir", args.build_dir, "--frames", "none", "--practice-s", str(args.duration + 30)]
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     server = subprocess.Popen(command, env=env, stderr=subprocess.DEVNULL)
     results = []

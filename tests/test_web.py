@@ -40,7 +40,9 @@ def study(tmp_path):
 
 
 def client(sessions, **settings):
-    config = dict(sessions=str(sessions), build_dir="no-decoders", practice_s=30.0, trial_s=0.4, frames=False)
+    config = dict(
+        sessions=str(sessions), build_dir="no-decoders", practice_s=30.0, trial_s=0.4, frames="none"
+    )
     return TestClient(create_app(WebConfig(**(config | settings))))
 
 
@@ -283,7 +285,7 @@ def test_a_real_browser_consents_drives_and_sees_the_belief_and_ticks(study, rep
     chromium, driver = shutil.which("chromium"), shutil.which("chromedriver")
     assert chromium and driver, "Chromium or its driver is missing: run `make setup`"
     port = _free_port()
-    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames=True)
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server")
     server = uvicorn.Server(
         uvicorn.Config(create_app(config), host="127.0.0.1", port=port, log_level="warning")
     )
