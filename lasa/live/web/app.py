@@ -78,7 +78,7 @@ class WebConfig:
     build_dir: str = "build"
     practice_s: float = 300.0
     trial_s: float = 300.0
-    frames: str = "server"
+    frames: str = "browser"
     origins: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
@@ -179,6 +179,8 @@ def create_app(config: WebConfig) -> Starlette:
 
     @contextlib.asynccontextmanager
     async def lifespan(app: Starlette) -> AsyncIterator[None]:
+        if study.renderer is not None:
+            await study.renderer.warm_up()
         yield
         if study.renderer is not None:
             study.renderer.close()
