@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from lasa.base.errors import ConfigError
+from lasa.base.errors import ArtifactError, ConfigError
 
 DEFAULT_HOST = "127.0.0.1"
 TLS_HINT = (
@@ -83,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     try:
         return _schedule(argv[1:]) if argv[:1] == ["schedule"] else _serve(argv)
-    except ConfigError as exc:
+    except (ConfigError, ArtifactError) as exc:  # a bad setting; npm files missing (make setup)
         print(f"error: {exc}", file=sys.stderr)
         return 2
 
