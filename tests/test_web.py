@@ -506,3 +506,73 @@ def wait_for(condition, timeout=20.0):
         if time.monotonic() > deadline:
             raise AssertionError("the page did not get there in time")
         time.sleep(0.1)
+
+
+@pytest.fixture()
+def decoder_build(tmp_path):
+    """A build folder with an (untrained) eating decoder of the study's shape: LA+SA runs on it."""
+    from lasa.method.decoder import DecoderConfig, LatentActionModel, save_checkpoint
+    from lasa.world.eating import make_eating_task
+
+    task = make_eating_task()
+    config = DecoderConfig(robot="panda", n_joints=7, n_goals=task.n_goals, z_dim=2, hidden=8, depth=1)
+    save_checkpoint(LatentActionModel(config), tmp_path / "build" / "models" / "eating_decoder_panda.pt")
+    return tmp_path / "build"
+
+
+def next_step(browser, section):
+    """Wait until ``section`` of the page is shown."""
+    from selenium.webdriver.common.by import By
+
+    wait_for(lambda: browser.find_element(By.ID, section).is_displayed(), timeout=60)
+
+
+def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, decoder_build):
+    """The paper's protocol for one condition in headless Chromium, by keys: consent, a practice,
+    the LA+SA Entree and Dessert trials, the survey; the Dessert session then replays exactly, and
+    the analysis of people's sessions reads it."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    from lasa.evidence.sessions import analyse_sessions, load_sessions
+    from lasa.world.eating import make_eating_task
+
+    sessions = tmp_path / "sessions"  # four participants: one of them starts with LA+SA
+    links = pd.read_csv(issue_links(4, sessions, "http://testserver"))
+    tokens = {p: link.split("token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)}
+    who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition == "LA+SA")
+    config = WebConfig(
+        sessions=str(sessions), build_dir=str(decoder_build), practice_s=60.0, trial_s=2.0, frames="none"
+    )
+    with served(config) as port, chromium() as browser:
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens[who]}")  # the practice
+        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 5, timeout=60)
+        end_practice(browser)
+        for _task in ("Entree", "Dessert"):  # each trial ends at its 2 s limit, keys held
+            browser.find_element(By.ID, "start").click()
+            ActionChains(browser).key_down(Keys.ARROW_LEFT).perform()
+            next_step(browser, "drive")
+            wait_for(lambda: not browser.find_element(By.ID, "drive").is_displayed(), timeout=60)
+            ActionChains(browser).key_up(Keys.ARROW_LEFT).perform()
+        next_step(browser, "survey")
+        for question in browser.find_elements(By.CSS_SELECTOR, "#survey-form .question"):
+            question.find_elements(By.CSS_SELECTOR, "input")[4].click()  # 5 of 7 on every scale
+        browser.find_element(By.ID, "submit").click()
+        wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed(), timeout=30)
+    (dessert,) = sessions.glob(f"{who}_Dessert_LA+SA_*.csv")
+    frame, meta = read_session(dessert)
+    assert meta["status"] == "complete" and meta["condition"] == "LA+SA" and len(frame) >= 10
+    assert (frame.z0 < 0).any()  # the held left arrow reached the step
+    assert replay(dessert)["exact"]
+    episodes = load_sessions(sessions, make_eating_task())
+    with pytest.warns(UserWarning, match="left out participant"):  # one condition of four: no test
+        people = analyse_sessions(sessions, make_eating_task())
+    assert set(people["goal_error"].participant) == {who}
+    assert "LA+SA" in set(people["means"].reset_index().condition), people["means"]
+    assert {(who, "LA+SA", "Dessert"), (who, "LA+SA", "Entree")} <= set(
+        zip(episodes.participant, episodes.condition, episodes.task, strict=True)
+    )
+    likert = pd.read_csv(sessions / "likert.csv", dtype={"participant": str})
+    mine = likert[(likert.participant == who) & (likert.condition == "LA+SA")]
+    assert len(mine) > 0 and (mine.answer == 5).all()
