@@ -82,15 +82,38 @@ RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) 
 
 .PHONY: help setup sysdeps figures notebooks verify test lint bench clean teleop study-server book
 
-# MathJax for the book, served from the site itself (no CDN at view time): the npm package's es5 build.
+# npm packages, pinned here (the Python ones are in environment.lock), each served by lasa itself
+# (no CDN at view time): MathJax for the book (its es5 build); MuJoCo's official WebAssembly
+# bindings (@mujoco/mujoco, the single-threaded build: mujoco.js + mujoco.wasm) and three.js
+# (its build/ ES modules) for the web study's page, which draws the robot with them
+# (`--frames browser`). A stamp per version keeps `make setup` fast once they are there.
 MATHJAX_VERSION := 3.2.2
 MATHJAX := $(VENV)/mathjax/es5/tex-chtml.js
-setup: $(STAMP) sysdeps $(MATHJAX)
+MUJOCO_JS_VERSION := 3.14.0
+MUJOCO_JS := $(VENV)/mujoco-js/.installed-$(MUJOCO_JS_VERSION)
+THREE_VERSION := 0.187.0
+THREE := $(VENV)/three/.installed-$(THREE_VERSION)
+setup: $(STAMP) sysdeps $(MATHJAX) $(MUJOCO_JS) $(THREE)
 
 $(MATHJAX): | sysdeps
 	@rm -rf $(VENV)/mathjax && mkdir -p $(VENV)/mathjax
 	cd $(VENV)/mathjax && npm pack mathjax@$(MATHJAX_VERSION) --silent >/dev/null && tar xzf mathjax-$(MATHJAX_VERSION).tgz \
 	  && mv package/es5 es5 && rm -rf package mathjax-$(MATHJAX_VERSION).tgz
+
+$(MUJOCO_JS): | sysdeps
+	@rm -rf $(VENV)/mujoco-js && mkdir -p $(VENV)/mujoco-js
+	cd $(VENV)/mujoco-js && npm pack @mujoco/mujoco@$(MUJOCO_JS_VERSION) --silent >/dev/null \
+	  && tar xzf mujoco-mujoco-$(MUJOCO_JS_VERSION).tgz \
+	  && mv package/mujoco.js package/mujoco.wasm package/package.json package/README.md . \
+	  && rm -rf package mujoco-mujoco-$(MUJOCO_JS_VERSION).tgz
+	touch $@
+
+$(THREE): | sysdeps
+	@rm -rf $(VENV)/three && mkdir -p $(VENV)/three
+	cd $(VENV)/three && npm pack three@$(THREE_VERSION) --silent >/dev/null && tar xzf three-$(THREE_VERSION).tgz \
+	  && mv package/build/three.module.js package/build/three.core.js package/LICENSE package/package.json . \
+	  && rm -rf package three-$(THREE_VERSION).tgz
+	touch $@
 
 $(STAMP): environment.lock pyproject.toml
 	@test -n "$(PYTHON)" || { echo "error: Python 3.11 not found (set PYTHON=...)"; exit 1; }
@@ -102,8 +125,9 @@ $(STAMP): environment.lock pyproject.toml
 	touch $@
 
 # Software rendering (OSMesa); for MuJoCo's viewer (make teleop, and its test under a virtual
-# display) GLX from Mesa and Xvfb; Chromium and its driver for the book's browser test; npm for
-# MathJax. ffmpeg comes from the imageio-ffmpeg wheel.
+# display) GLX from Mesa and Xvfb; Chromium and its driver for the book's and the web study's
+# browser tests; npm for MathJax, MuJoCo's WebAssembly bindings and three.js. ffmpeg comes from the
+# imageio-ffmpeg wheel.
 sysdeps:
 	@missing=""; \
 	ldconfig -p | grep -q 'libOSMesa\.so' || missing="$$missing libosmesa6"; \

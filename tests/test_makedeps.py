@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -89,7 +90,9 @@ def test_an_edit_to_live_use_leaves_make_figures_nothing_to_do(tmp_path):
         shutil.copy2(ROOT / name, tree / name)
     for name in ("lasa", "notebooks", "configs"):
         shutil.copytree(ROOT / name, tree / name, ignore=shutil.ignore_patterns("__pycache__"))
-    for stamp in (".venv/.lasa-installed", ".venv/mathjax/es5/tex-chtml.js", "o/notebooks/.keep"):
+    pins = dict(re.findall(r"^(MUJOCO_JS|THREE)_VERSION := (\S+)$", (ROOT / "Makefile").read_text(), re.M))
+    npm = [f".venv/mujoco-js/.installed-{pins['MUJOCO_JS']}", f".venv/three/.installed-{pins['THREE']}"]
+    for stamp in (".venv/.lasa-installed", ".venv/mathjax/es5/tex-chtml.js", *npm, "o/notebooks/.keep"):
         (tree / stamp).parent.mkdir(parents=True, exist_ok=True)
         (tree / stamp).touch()
     subprocess.run(["make", "-t", "notebooks", "OUT=o"], cwd=tree, capture_output=True, check=True)

@@ -159,3 +159,22 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
     partial = tmp_path / "out" / "broken.failed.ipynb"
     assert str(partial) in last and partial.is_file()
     assert not (tmp_path / "out" / "broken.ipynb").exists()  # no half-written result for Make to take
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (None, r"error: .*missing\.yaml does not exist"),
+        ("common: [unclosed\n", r"error: .*is not a YAML file \(line "),
+    ],
+)
+def test_a_missing_or_non_yaml_config_is_one_line(tmp_path, capsys, text, message):
+    from lasa.pipeline.runner import main
+
+    config = tmp_path / ("missing.yaml" if text is None else "bad.yaml")
+    if text is not None:
+        config.write_text(text)
+    code = main([str(NOTEBOOKS[0]), "--config", str(config), "--out", str(tmp_path), "--no-progress"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert __import__("re").match(message, err), err

@@ -101,9 +101,9 @@ def test_a_phase_nobody_reached_is_not_evidence():
     a.loc[a.phase == "scoop", "alignment"] = np.nan
     rows, analyses = study.claims(data, MEMBERS[:1], 10)
     assert np.isnan(analyses[("hindsight", 10)]["h2_phases"]["scoop"][0])
-    assert verdicts(rows)["study.h2"] == "undecided"  # no interval: nothing is decided
+    assert verdicts(rows)["study.h2"] == "not testable"  # no interval: the test cannot run
     h2 = by_id(rows)["study.h2"]
-    assert "scoop: no test (0 pairs)" in h2.measured and "no interval of the effect" in h2.note
+    assert "scoop: no test (0 pairs)" in h2.measured and "too few pairs for an interval" in h2.note
     assert "nan" not in h2.measured + h2.note
 
 

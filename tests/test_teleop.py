@@ -188,13 +188,13 @@ def test_schedule_and_questionnaire(tmp_path):
         survey(tmp_path, p, "LA+SA", answers)
         for c in ("R", "R+SA", "LA"):
             survey(tmp_path, p, c, [3, 4, 3, 3, 2])
-    survey(tmp_path, "p00", "R", [2, 4, 3, 3, 2])  # a re-answer replaces the old one
+    survey(tmp_path, "p00", "R", [2, 4, 3, 3, 2], overwrite=True)  # a re-answer replaces the old one
     likert = read_likert(tmp_path)
     assert len(likert) == 3 * 4 * len(SCALES)
     tests = likert_tests(likert)
     assert set(tests.scale) == set(SCALES) and (tests["diff"] > 0).all()
-    with pytest.raises(ConfigError, match="1..7"):
-        survey(tmp_path, "p00", "LA", [8, 1, 1, 1, 1])
+    with pytest.raises(ConfigError, match="whole number from 1 to 7"):
+        survey(tmp_path, "p09", "LA", [8, 1, 1, 1, 1])
 
 
 def test_the_viewer_runs_under_xvfb_and_the_screen_is_not_blank(build, tmp_path, report_artifact):
@@ -451,3 +451,327 @@ def test_the_live_retargeting_step_is_the_participants_step(build, condition, in
         assert rec["mode"] == int(mode[0])
         if press or not (z0 or z1):
             assert not rec["a_h"].any()  # a press or a stick at rest moves nothing
+
+
+def _start_live_session(build, tmp_path, device, participant):
+    """A headless, real-time teleop run (60 s at most) in a subprocess, once its log has rows on disk."""
+    import time
+
+    if device == "scripted":
+        pd.DataFrame(script(600, seed=4), columns=["raw0", "raw1"]).to_csv(tmp_path / "s.csv", index=False)
+        device = f"scripted:{tmp_path / 's.csv'}"
+    sessions = tmp_path / "sessions"
+    env = {**os.environ, "SDL_VIDEODRIVER": "dummy", "SDL_AUDIODRIVER": "dummy", "MUJOCO_GL": "disable"}
+    env.pop("SDL_NO_SIGNAL_HANDLERS", None)  # what SDL does by default is what is tested
+    command = [
+        sys.executable, "-m", "lasa.live.teleop", "run", "--task", "Dessert", "--condition", "R+SA",
+        "--participant", participant, "--device", device, "--sessions", str(sessions),
+        "--build-dir", str(build), "--no-viewer", "--duration", "60",
+    ]  # fmt: skip
+    proc = subprocess.Popen(
+        command, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 180
+    while time.monotonic() < deadline and proc.poll() is None:
+        parts = list(sessions.glob("*.csv.part"))
+        if parts and parts[0].read_text().count("\n") > 11:  # the header and 10 flushed rows
+            return proc, sessions
+        time.sleep(0.2)
+    proc.kill()
+    out, err = proc.communicate()
+    raise AssertionError(f"the session never logged a row: {out[-1000:]} {err[-2000:]}")
+
+
+@pytest.mark.parametrize(
+    ("device", "name"),
+    [("auto", "SIGTERM"), ("auto", "SIGINT"), ("auto", "SIGHUP"), ("scripted", "SIGTERM")],
+)
+def test_a_killed_session_reads_interrupted_and_keeps_its_rows(build, tmp_path, device, name):
+    """SDL (``--device auto`` starts it to look for a gamepad) would swallow SIGTERM and the
+    session would run its full length and read complete: a signal stops it at the next step."""
+    import signal
+
+    proc, sessions = _start_live_session(build, tmp_path, device, "k01")
+    proc.send_signal(getattr(signal, name))
+    out, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + getattr(signal, name), out[-1000:] + err[-2000:]
+    assert err.strip().splitlines()[-1].endswith("(its rows are kept; it reads interrupted)")
+    assert f"interrupted by {name} after" in err
+    frame, meta = read_session(next(sessions.glob("k01_*.json")))
+    assert meta["status"] == "interrupted" and meta["signal"] == name
+    assert 10 <= len(frame) == meta["steps"] < 600
+    assert not list(sessions.glob("*.part"))
+
+
+@pytest.fixture(scope="module")
+def cohort(build, tmp_path_factory):
+    """Three participants' complete Dessert sessions: p1 and p2 every condition, p3 all but LA."""
+    folder = tmp_path_factory.mktemp("cohort")
+    for i, participant in enumerate(("p1", "p2", "p3")):
+        for k, condition in enumerate(("R", "R+SA", "LA", "LA+SA")):
+            if participant == "p3" and condition == "LA":
+                continue
+            config = SessionConfig(
+                task="Dessert", condition=condition, participant=participant, build_dir=str(build)
+            )
+            st_ = Station(config)
+            device = ScriptedDevice(np.random.default_rng([i, k]).uniform(-1, 1, (12, 2)))
+            run_session(st_, device, new_session(st_, folder), 12, realtime=False)
+    return folder
+
+
+def _copy(folder, tmp_path):
+    out = tmp_path / "sessions"
+    shutil.copytree(folder, out)
+    return out
+
+
+def _stem(folder, participant, condition):
+    return next(p for p in folder.glob(f"{participant}_Dessert_{condition}_*.json")).stem
+
+
+def _edit_cell(csv, row, column, value):
+    lines = csv.read_text().splitlines()
+    cells = lines[row].split(",")
+    cells[lines[0].split(",").index(column)] = value
+    lines[row] = ",".join(cells)
+    csv.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize(
+    ("value", "reason"), [("nan", "holds nan, not a finite"), ("inf", "holds inf, not a finite")]
+)
+def test_a_non_finite_state_is_damaged(logged, value, reason):
+    from lasa.base.errors import ArtifactError
+
+    _edit_cell(logged.csv, 4, "s2", value)
+    with pytest.raises(ArtifactError, match=rf"damaged: row 4, column 's2' {reason}"):
+        read_session(logged.csv)
+
+
+def test_rows_out_of_time_order_are_damaged(logged):
+    from lasa.base.errors import ArtifactError
+
+    lines = logged.csv.read_text().splitlines()
+    lines[6], lines[7] = lines[7], lines[6]
+    logged.csv.write_text("\n".join(lines) + "\n")
+    with pytest.raises(
+        ArtifactError, match=r"damaged: rows out of time order: row 7's step does not come after row 6's"
+    ):
+        read_session(logged.csv)
+
+
+def test_a_bad_sidecar_or_empty_log_is_one_line(logged):
+    from lasa.base.errors import ArtifactError
+
+    text = logged.sidecar.read_text()
+    logged.sidecar.write_text(text[: len(text) // 2])  # torn
+    with pytest.raises(ArtifactError, match=r"sidecar .* is damaged: not JSON") as err:
+        read_session(logged.csv)
+    assert "\n" not in str(err.value)
+    logged.sidecar.write_text(text)
+    logged.csv.write_text("")
+    with pytest.raises(ArtifactError, match=r"damaged: its log .* is empty \(not even a header\)"):
+        read_session(logged.csv, allow_damaged=True)
+
+
+def test_replay_checks_the_scene(logged):
+    from lasa.base.errors import ArtifactError
+
+    scene = logged.folder / f"{logged.stem}.xml"
+    scene.write_text(scene.read_text().replace("<mujoco", "<mujoco ", 1))
+    with pytest.raises(ArtifactError, match="is not the scene session .* logged"):
+        replay(logged.csv)
+    scene.unlink()
+    with pytest.raises(ArtifactError, match="has no scene"):
+        replay(logged.csv)
+
+
+def test_replay_requires_the_decoder_record(logged):
+    from lasa.base.errors import ArtifactError
+
+    meta = json.loads(logged.sidecar.read_text())
+    logged.sidecar.write_text(json.dumps({k: v for k, v in meta.items() if k != "decoder_sha256"}))
+    with pytest.raises(ArtifactError, match="records no decoder_sha256: replay cannot tell what it ran"):
+        replay(logged.csv)
+    logged.sidecar.write_text(json.dumps({**meta, "decoder_sha256": None}))
+    with pytest.raises(ArtifactError, match="records no decoder checksum for LA"):
+        replay(logged.csv)
+    logged.sidecar.write_text(
+        json.dumps({**meta, "decoder_config": {**meta["decoder_config"], "hidden": 99}})
+    )
+    with pytest.raises(
+        ArtifactError, match="decoder's config differs from the one session .* logged in hidden"
+    ):
+        replay(logged.csv)
+
+
+def test_a_decoder_for_another_task_is_refused_before_the_session(tmp_path):
+    """A Panda decoder for the cups under the eating decoder's name: refused when the station is
+    built, before any log exists (it used to fail in the loop, leaving a session at running)."""
+    from lasa.base.errors import ArtifactError
+    from lasa.method.decoder import DecoderConfig, LatentActionModel
+    from lasa.world.robot import load_robot
+    from lasa.world.task import make_cup_task
+
+    cups = make_cup_task(load_robot("panda"))
+    config = DecoderConfig(robot="panda", n_joints=7, n_goals=cups.n_goals, z_dim=1, hidden=8, depth=1)
+    save_checkpoint(LatentActionModel(config), tmp_path / "models" / "eating_decoder_panda.pt")
+    with pytest.raises(ArtifactError, match="does not fit the Dessert task"):
+        Station(SessionConfig(task="Dessert", condition="LA", participant="t", build_dir=str(tmp_path)))
+
+
+def test_one_bad_session_is_left_out_by_name(cohort, tmp_path):
+    """A crashed session with a torn last line, a damaged one and an interrupted one are left
+    out by name; the others are analysed."""
+    from lasa.evidence.sessions import load_sessions, scan_sessions
+
+    folder = _copy(cohort, tmp_path)
+    torn = _stem(folder, "p1", "R")
+    os.replace(folder / f"{torn}.csv", folder / f"{torn}.csv.part")  # it crashed: never renamed
+    part = folder / f"{torn}.csv.part"
+    text = part.read_text()
+    part.write_text(text[: text.rindex("\n", 0, -1) + 60])  # ... mid-row
+    meta = json.loads((folder / f"{torn}.json").read_text())
+    (folder / f"{torn}.json").write_text(json.dumps({**meta, "status": "running"}))
+    bad = _stem(folder, "p2", "LA")
+    _edit_cell(folder / f"{bad}.csv", 3, "s0", "inf")
+    logs, left_out = scan_sessions(folder)
+    assert len(logs) == 11 - 2
+    reasons = dict(zip(left_out.session, left_out.reason, strict=True))
+    assert set(reasons) == {torn, bad}
+    assert "not a number" in reasons[torn] and "not a finite number" in reasons[bad]
+    with pytest.warns(UserWarning, match=f"left out session {bad}: session {bad} is damaged"):
+        episodes = load_sessions(folder, make_eating_task())
+    assert len(episodes.participant) == 9
+
+
+def test_the_same_participant_condition_and_task_twice_is_refused(cohort, tmp_path):
+    from lasa.base.errors import ArtifactError
+    from lasa.evidence.sessions import load_sessions
+
+    folder = _copy(cohort, tmp_path)
+    stem = _stem(folder, "p1", "LA")
+    for suffix in (".json", ".csv", ".xml"):
+        shutil.copy(folder / f"{stem}{suffix}", folder / f"{stem}9{suffix}")
+    with pytest.raises(
+        ArtifactError,
+        match=rf"sessions {stem}.json and {stem}9.json .* both log participant p1, condition LA",
+    ):
+        load_sessions(folder, make_eating_task())
+
+
+def test_the_analysis_names_who_it_dropped_and_replaces_its_tables_whole(cohort, tmp_path):
+    from lasa.evidence.sessions import analyse_sessions, write_session_tables
+
+    with pytest.warns(
+        UserWarning, match="left out participant p3 from sa_effect, time_tests: missing LA in Dessert"
+    ):
+        people = analyse_sessions(cohort, make_eating_task())
+    assert people["dropped"].to_dict("records") == [
+        {"participant": "p3", "test": "sa_effect, time_tests", "reason": "missing LA in Dessert"}
+    ]
+    assert people["sa_effect"].n.tolist() == [2, 2] and set(people["time_tests"].measure) == {
+        "total_time",
+        "idle_time",
+    }
+    figures = tmp_path / "figures"
+    write_session_tables(people, figures)
+    assert (figures / "sessions_sa_effect.csv").is_file()
+    (figures / "other.csv").write_text("kept\n")
+    fewer = {
+        k: v for k, v in people.items() if k not in ("sa_effect", "time_tests")
+    }  # as one participant less
+    write_session_tables(fewer, figures)
+    assert sorted(p.name for p in figures.iterdir()) == sorted(
+        ["other.csv", *(f"sessions_{k}.csv" for k in fewer)]
+    )
+
+
+def _cli(args, capsys):
+    from lasa.live.teleop import main
+
+    code = main(args)
+    err = capsys.readouterr().err.strip()
+    return code, err
+
+
+def test_a_bad_likert_answer_is_one_line(tmp_path, capsys):
+    from lasa.live.studykit import survey
+
+    for answers in ("7,6,4.5,7,7", "7,,6,7,7", "7,6,five,7,7"):
+        code, err = _cli(
+            [
+                "survey",
+                "--participant",
+                "p1",
+                "--condition",
+                "LA",
+                "--answers",
+                answers,
+                "--sessions",
+                str(tmp_path),
+            ],
+            capsys,
+        )
+        assert code == 2 and len(err.splitlines()) == 1
+        assert err.startswith("error: a Likert answer is a whole number from 1 to 7, got")
+    with pytest.raises(ConfigError, match="whole number from 1 to 7, got '5.7'"):
+        survey(tmp_path, "p1", "LA", [7, 6, 5.7, 7, 7])
+    assert not (tmp_path / "likert.csv").exists()
+
+
+def test_the_prompt_asks_again_and_keeps_the_answers_given(tmp_path, monkeypatch, capsys):
+    from lasa.evidence.sessions import read_likert
+    from lasa.live.studykit import survey
+
+    typed = iter(["7", "6", "five", "4.5", "", "5", "3", "2"])
+    monkeypatch.setattr("builtins.input", lambda prompt: next(typed))
+    survey(tmp_path, "p1", "LA", None)
+    assert read_likert(tmp_path).answer.tolist() == [7, 6, 5, 3, 2]
+    assert capsys.readouterr().out.count("please answer again") == 3
+
+
+def test_a_second_survey_or_schedule_needs_overwrite(tmp_path, capsys):
+    from lasa.evidence.sessions import read_likert
+
+    survey = ["survey", "--participant", "p1", "--condition", "LA", "--sessions", str(tmp_path), "--answers"]
+    assert _cli([*survey, "7,6,5,4,3"], capsys)[0] == 0
+    code, err = _cli([*survey, "1,1,1,1,1"], capsys)
+    likert = tmp_path / "likert.csv"
+    assert (
+        code == 2
+        and err == f"error: p1 answered for LA already in {likert}: pass --overwrite to replace those answers"
+    )
+    assert read_likert(tmp_path).answer.tolist() == [7, 6, 5, 4, 3]
+    assert _cli([*survey, "1,1,1,1,1", "--overwrite"], capsys)[0] == 0
+    assert read_likert(tmp_path).answer.tolist() == [1, 1, 1, 1, 1]
+    out = tmp_path / "schedule.csv"
+    assert _cli(["schedule", "--participants", "4", "--out", str(out)], capsys)[0] == 0
+    code, err = _cli(["schedule", "--participants", "6", "--out", str(out)], capsys)
+    assert code == 2 and err == f"error: {out} exists already: pass --overwrite to replace the schedule"
+    assert len(pd.read_csv(out)) == 16
+    assert _cli(["schedule", "--participants", "6", "--out", str(out), "--overwrite"], capsys)[0] == 0
+    assert len(pd.read_csv(out)) == 24
+
+
+def test_a_schedule_is_bounded(tmp_path, capsys):
+    code, err = _cli(["schedule", "--participants", "1000000", "--out", str(tmp_path / "s.csv")], capsys)
+    assert (
+        code == 2
+        and err == "error: the number of participants must be a whole number in 1..1000, got 1000000"
+    )
+    assert not (tmp_path / "s.csv").exists()
+
+
+@pytest.mark.parametrize("content", [None, "", "a,b\n1,2\n"])
+def test_a_bad_script_file_is_one_line(build, tmp_path, capsys, content):
+    script_file = tmp_path / "script.csv"
+    if content is not None:
+        script_file.write_text(content)
+    args = ["run", "--task", "Dessert", "--condition", "R", "--build-dir", str(build), "--no-viewer"]
+    code, err = _cli(
+        [*args, "--device", f"scripted:{script_file}", "--sessions", str(tmp_path / "s")], capsys
+    )
+    assert code == 2 and len(err.splitlines()) == 1 and "script" in err
+    assert not (tmp_path / "s").exists()

@@ -1,6 +1,9 @@
-"""The web study: refused requests write nothing; a browser's trial is logged as `teleop run` logs it."""
+"""The web study: refused requests write nothing; a browser's trial is logged as `teleop run` logs it;
+the page draws the robot from server frames or with MuJoCo's WebAssembly build."""
 
+import contextlib
 import json
+import re
 import shutil
 import socket
 import threading
@@ -19,6 +22,7 @@ from lasa.live.teleop import replay
 from lasa.live.web.app import WebConfig, create_app
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import MAX_MESSAGE_BYTES
+from lasa.live.web.scene import NPM_PACKAGES
 from lasa.live.web.tokens import check_participant, issue_links, study_dir
 
 with warnings.catch_warnings():  # Starlette 1.x suggests httpx2 for its test client; httpx works
@@ -40,7 +44,9 @@ def study(tmp_path):
 
 
 def client(sessions, **settings):
-    config = dict(sessions=str(sessions), build_dir="no-decoders", practice_s=30.0, trial_s=0.4, frames=False)
+    config = dict(
+        sessions=str(sessions), build_dir="no-decoders", practice_s=30.0, trial_s=0.4, frames="none"
+    )
     return TestClient(create_app(WebConfig(**(config | settings))))
 
 
@@ -267,64 +273,225 @@ def _free_port():
         return s.getsockname()[1]
 
 
-def test_a_real_browser_consents_drives_and_sees_the_belief_and_ticks(study, report_artifact, tmp_path):
-    """Headless Chromium against the real server (uvicorn): consent, the practice, keys held for a
-    few ticks; the page shows a bar per goal, the tick and late-tick counters, and a frame."""
+@contextlib.contextmanager
+def served(config):
+    """The real server (uvicorn) on a free port, in a thread; yields the port."""
     import uvicorn
-    from PIL import Image
-    from selenium import webdriver
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
-    from selenium.webdriver.common.action_chains import ActionChains
-    from selenium.webdriver.common.by import By
-    from selenium.webdriver.common.keys import Keys
 
-    sessions, tokens = study
-    chromium, driver = shutil.which("chromium"), shutil.which("chromedriver")
-    assert chromium and driver, "Chromium or its driver is missing: run `make setup`"
     port = _free_port()
-    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames=True)
     server = uvicorn.Server(
         uvicorn.Config(create_app(config), host="127.0.0.1", port=port, log_level="warning")
     )
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
-    options = Options()
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1100,800"):
-        options.add_argument(arg)
-    options.binary_location = chromium
-    browser = webdriver.Chrome(options=options, service=Service(driver))
     try:
         while not server.started:
             time.sleep(0.05)
-        browser.get(f"http://127.0.0.1:{port}/study?token={tokens['p00']}")
-        wait_for(lambda: browser.find_element(By.ID, "agree").is_displayed())
-        browser.find_element(By.ID, "agree").click()
-        wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
-        browser.find_element(By.ID, "start").click()
-        ActionChains(browser).key_down(Keys.ARROW_RIGHT).key_down(Keys.ARROW_UP).perform()
+        yield port
+    finally:
+        server.should_exit = True
+        thread.join(10)
+
+
+@contextlib.contextmanager
+def chromium():
+    """Headless Chromium; WebGL through its software renderer (SwiftShader), as on a machine without a GPU."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.options import Options
+    from selenium.webdriver.chrome.service import Service
+
+    binary, driver = shutil.which("chromium"), shutil.which("chromedriver")
+    assert binary and driver, "Chromium or its driver is missing: run `make setup`"
+    options = Options()
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader"):
+        options.add_argument(arg)
+    options.add_argument("--window-size=1100,800")
+    options.binary_location = binary
+    browser = webdriver.Chrome(options=options, service=Service(driver))
+    try:
+        yield browser
+    finally:
+        browser.quit()
+
+
+def consent_and_start(browser, url):
+    """Open ``url``, consent, start the practice and hold the stick right and up."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    browser.get(url)
+    wait_for(lambda: browser.find_element(By.ID, "agree").is_displayed())
+    browser.find_element(By.ID, "agree").click()
+    wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
+    browser.find_element(By.ID, "start").click()
+    ActionChains(browser).key_down(Keys.ARROW_RIGHT).key_down(Keys.ARROW_UP).perform()
+
+
+def belief_shown(browser):
+    """The page's belief bars: four, summing to 1, moved by the held stick."""
+    from selenium.webdriver.common.by import By
+
+    bars = browser.find_elements(By.CSS_SELECTOR, "#belief .goal")
+    assert len(bars) == 4 and browser.find_element(By.ID, "late").text.isdigit()
+    assert "Dessert" in browser.find_element(By.ID, "instruction").text
+    values = [float(b.find_element(By.CSS_SELECTOR, ".value").text) for b in bars]
+    assert abs(sum(values) - 1) < 0.03 and max(values) > 0.3  # the held stick moved the belief
+
+
+def end_practice(browser):
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    ActionChains(browser).key_up(Keys.ARROW_RIGHT).key_up(Keys.ARROW_UP).perform()
+    browser.find_element(By.ID, "ready").click()
+    wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed())
+
+
+def test_a_real_browser_consents_drives_and_sees_the_belief_and_ticks(study, report_artifact, tmp_path):
+    """Headless Chromium against the real server (uvicorn), frames from the server: consent, the
+    practice, keys held for a few ticks; the page shows a bar per goal, the tick and late-tick
+    counters, and a frame."""
+    from PIL import Image
+    from selenium.webdriver.common.by import By
+
+    sessions, tokens = study
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server")
+    with served(config) as port, chromium() as browser:
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens['p00']}")
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
         wait_for(lambda: browser.execute_script("return document.getElementById('view').naturalWidth") > 0)
-        bars = browser.find_elements(By.CSS_SELECTOR, "#belief .goal")
-        assert len(bars) == 4 and browser.find_element(By.ID, "late").text.isdigit()
-        assert "Dessert" in browser.find_element(By.ID, "instruction").text
-        values = [float(b.find_element(By.CSS_SELECTOR, ".value").text) for b in bars]
-        assert abs(sum(values) - 1) < 0.03 and max(values) > 0.3  # the held stick moved the belief
+        belief_shown(browser)
         # the committed docs/web_study.png is this screenshot; the test never writes into the tree
         shot = tmp_path / "web_study.png"
         browser.save_screenshot(str(shot))
         report_artifact("the web study's page, driving", shot)
-        ActionChains(browser).key_up(Keys.ARROW_RIGHT).key_up(Keys.ARROW_UP).perform()
-        browser.find_element(By.ID, "ready").click()
-        wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed())
-    finally:
-        browser.quit()
-        server.should_exit = True
-        thread.join(10)
+        end_practice(browser)
     assert np.asarray(Image.open(shot).convert("L"), dtype=float).std() > 20
     (practice,) = (sessions / "practice").glob("p00_*.csv")
     frame, meta = read_session(practice)
     assert meta["status"] == "complete" and (frame[["z0", "z1"]].to_numpy() == [1.0, 1.0]).all(axis=1).any()
+
+
+def npm_installed():
+    for folder, marker in NPM_PACKAGES.values():
+        path = ROOT / ".venv" / folder / marker
+        assert path.is_file(), f"{path} is missing: run make setup"
+
+
+def test_the_npm_packages_are_served_locally_with_their_types(study):
+    """MuJoCo's wasm build and three.js come from the server itself, the .wasm as application/wasm."""
+    npm_installed()
+    sessions, tokens = study
+    with client(sessions, frames="browser") as app:
+        for url, kind in [
+            ("/npm/mujoco/mujoco.wasm", "application/wasm"),
+            ("/npm/mujoco/mujoco.js", "text/javascript"),
+            ("/npm/three/three.module.js", "text/javascript"),
+            ("/npm/three/three.core.js", "text/javascript"),
+            ("/static/view.js", "text/javascript"),
+        ]:
+            reply = app.get(url)
+            assert reply.status_code == 200 and reply.headers["content-type"].startswith(kind), url
+        assert app.get("/npm/mujoco/mujoco.wasm").content[:4] == b"\0asm"
+        for url in (
+            "/npm/mujoco/../../pyproject.toml",
+            "/npm/mujoco/%2e%2e/%2e%2e/pyproject.toml",
+            "/npm/x.js",
+        ):
+            assert app.get(url).status_code == 404, url
+        csp = app.get(f"/study?token={tokens['p00']}").headers["content-security-policy"]
+        assert "'wasm-unsafe-eval'" in csp and "connect-src 'self'" in csp and "http" not in csp
+    with client(sessions, frames="server") as app:  # the JPEG page evaluates no code and loads no wasm
+        assert "eval" not in app.get(f"/study?token={tokens['p00']}").headers["content-security-policy"]
+        assert app.get("/npm/mujoco/mujoco.js").status_code == 404
+    with pytest.raises(ConfigError, match="frames is one of"):
+        WebConfig(sessions=str(sessions), frames="gpu")
+
+
+def test_the_scene_route_needs_a_token_and_serves_only_the_servers_files(study):
+    """The page gets its trial's scene with the meshes under names the server chose; nothing else."""
+    sessions, tokens = study
+    before = files(sessions)
+    with client(sessions, frames="browser") as app:
+        for query in ("", "?token=", "?token=wrong", f"?token={'x' * 5000}"):
+            assert app.get(f"/scene{query}").status_code == 403
+            assert app.get(f"/scene/asset0.stl{query}").status_code == 403
+        assert app.get(f"/scene?token={tokens['p00']}").status_code == 404  # no trial running
+        assert files(sessions) == before
+        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+            ws.receive_json()
+            ws.send_json({"type": "consent"})
+            assert ws.receive_json()["kind"] == "practice"
+            ws.send_json({"type": "start"})
+            announced = ws.receive_json()
+            assert announced["type"] == "scene" and announced["qpos_adr"] == list(range(7))
+            ws.send_json({"type": "input", "axes": [0.5, 0.5]})
+            assert ws.receive_json()["type"] == "tick"  # state only: no frame in browser mode
+            reply = app.get(f"/scene?token={tokens['p00']}")
+            assert reply.status_code == 200 and reply.headers["cache-control"] == "no-store"
+            scene = reply.json()
+            (logged,) = (sessions / "practice").glob("p00_*.xml")  # the file SessionWriter wrote
+            originals = re.findall(r'file="([^"]+)"', logged.read_text())
+            assert scene["assets"] == sorted(f"asset{k}.stl" for k in range(len(originals))) != []
+            assert 'file="/' not in scene["xml"] and str(ROOT) not in scene["xml"]
+            by_name = dict(re.findall(r'name="([^"]+)"[^>]*file="(asset\d+\.stl)"', scene["xml"]))
+            for name, source in zip(
+                re.findall(r'<mesh name="([^"]+)"', logged.read_text()), originals, strict=True
+            ):
+                served = app.get(f"/scene/{by_name[name]}?token={tokens['p00']}")
+                assert served.headers["content-type"] == "model/stl"
+                assert served.content == Path(source).read_bytes()
+            for bad in (
+                "asset99.stl",
+                "..%2F..%2Fpyproject.toml",
+                "%2Fetc%2Fpasswd",
+                "scene.xml",
+                logged.name,
+            ):
+                assert app.get(f"/scene/{bad}?token={tokens['p00']}").status_code == 404, bad
+            assert app.get(f"/scene/../pyproject.toml?token={tokens['p00']}").status_code == 404
+            assert app.get(f"/scene?token={tokens['p01']}").status_code == 404  # p01 runs no trial
+            assert app.get(f"/scene/asset0.stl?token={tokens['p01']}").status_code == 404
+
+
+def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact, tmp_path):
+    """Headless Chromium, --frames browser: the page loads MuJoCo's wasm build and the trial's scene from
+    the server, draws the robot from each tick's joint positions (the canvas is not blank), and the
+    belief and the tick counter update."""
+    import base64
+    import io
+
+    from PIL import Image
+    from selenium.webdriver.common.by import By
+
+    npm_installed()
+    sessions, tokens = study
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="browser")
+    with served(config) as port, chromium() as browser:
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens['p00']}")
+        wait_for(lambda: browser.execute_script("return window.lasaView.frames") >= 10, timeout=90)
+        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
+        first = int(browser.find_element(By.ID, "tick").text)
+        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) > first)
+        belief_shown(browser)
+        stats = browser.execute_script("return window.lasaView")
+        assert stats["geoms"] >= 20 and stats["modelMs"] > 0  # the arm's links, the table, the food
+        assert browser.find_element(By.ID, "canvas").is_displayed()
+        assert not browser.find_element(By.ID, "view").is_displayed()
+        url = browser.execute_script("return document.getElementById('canvas').toDataURL('image/png')")
+        canvas = Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).convert("L")
+        shot = tmp_path / "web_study_wasm.png"
+        browser.save_screenshot(str(shot))
+        report_artifact(
+            f"the web study's page drawn in the browser (scene loaded in {stats['modelMs']:.0f} ms)", shot
+        )
+        end_practice(browser)
+    pixels = np.asarray(canvas, dtype=float)
+    assert pixels.shape == (360, 480) and pixels.std() > 20  # not blank: the robot and the table
+    (practice,) = (sessions / "practice").glob("p00_*.csv")
+    assert read_session(practice)[1]["status"] == "complete"
 
 
 def wait_for(condition, timeout=20.0):
@@ -339,3 +506,73 @@ def wait_for(condition, timeout=20.0):
         if time.monotonic() > deadline:
             raise AssertionError("the page did not get there in time")
         time.sleep(0.1)
+
+
+@pytest.fixture()
+def decoder_build(tmp_path):
+    """A build folder with an (untrained) eating decoder of the study's shape: LA+SA runs on it."""
+    from lasa.method.decoder import DecoderConfig, LatentActionModel, save_checkpoint
+    from lasa.world.eating import make_eating_task
+
+    task = make_eating_task()
+    config = DecoderConfig(robot="panda", n_joints=7, n_goals=task.n_goals, z_dim=2, hidden=8, depth=1)
+    save_checkpoint(LatentActionModel(config), tmp_path / "build" / "models" / "eating_decoder_panda.pt")
+    return tmp_path / "build"
+
+
+def next_step(browser, section):
+    """Wait until ``section`` of the page is shown."""
+    from selenium.webdriver.common.by import By
+
+    wait_for(lambda: browser.find_element(By.ID, section).is_displayed(), timeout=60)
+
+
+def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, decoder_build):
+    """The paper's protocol for one condition in headless Chromium, by keys: consent, a practice,
+    the LA+SA Entree and Dessert trials, the survey; the Dessert session then replays exactly, and
+    the analysis of people's sessions reads it."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    from lasa.evidence.sessions import analyse_sessions, load_sessions
+    from lasa.world.eating import make_eating_task
+
+    sessions = tmp_path / "sessions"  # four participants: one of them starts with LA+SA
+    links = pd.read_csv(issue_links(4, sessions, "http://testserver"))
+    tokens = {p: link.split("token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)}
+    who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition == "LA+SA")
+    config = WebConfig(
+        sessions=str(sessions), build_dir=str(decoder_build), practice_s=60.0, trial_s=2.0, frames="none"
+    )
+    with served(config) as port, chromium() as browser:
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens[who]}")  # the practice
+        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 5, timeout=60)
+        end_practice(browser)
+        for _task in ("Entree", "Dessert"):  # each trial ends at its 2 s limit, keys held
+            browser.find_element(By.ID, "start").click()
+            ActionChains(browser).key_down(Keys.ARROW_LEFT).perform()
+            next_step(browser, "drive")
+            wait_for(lambda: not browser.find_element(By.ID, "drive").is_displayed(), timeout=60)
+            ActionChains(browser).key_up(Keys.ARROW_LEFT).perform()
+        next_step(browser, "survey")
+        for question in browser.find_elements(By.CSS_SELECTOR, "#survey-form .question"):
+            question.find_elements(By.CSS_SELECTOR, "input")[4].click()  # 5 of 7 on every scale
+        browser.find_element(By.ID, "submit").click()
+        wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed(), timeout=30)
+    (dessert,) = sessions.glob(f"{who}_Dessert_LA+SA_*.csv")
+    frame, meta = read_session(dessert)
+    assert meta["status"] == "complete" and meta["condition"] == "LA+SA" and len(frame) >= 10
+    assert (frame.z0 < 0).any()  # the held left arrow reached the step
+    assert replay(dessert)["exact"]
+    episodes = load_sessions(sessions, make_eating_task())
+    with pytest.warns(UserWarning, match="left out participant"):  # one condition of four: no test
+        people = analyse_sessions(sessions, make_eating_task())
+    assert set(people["goal_error"].participant) == {who}
+    assert "LA+SA" in set(people["means"].reset_index().condition), people["means"]
+    assert {(who, "LA+SA", "Dessert"), (who, "LA+SA", "Entree")} <= set(
+        zip(episodes.participant, episodes.condition, episodes.task, strict=True)
+    )
+    likert = pd.read_csv(sessions / "likert.csv", dtype={"participant": str})
+    mine = likert[(likert.participant == who) & (likert.condition == "LA+SA")]
+    assert len(mine) > 0 and (mine.answer == 5).all()

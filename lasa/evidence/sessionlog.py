@@ -9,7 +9,8 @@ A session ``<dir>/<stem>`` is three files:
   the lasa version, the control units, and ``status``: ``running`` while the session
   runs, ``complete`` or ``interrupted`` when it ends. A crash leaves ``running``:
   readers treat it as interrupted, never as complete.
-- ``<stem>.xml``: the compiled scene, so the session replays without the code that made it.
+- ``<stem>.xml``: the compiled scene, so the session replays without the code that made it;
+  the sidecar's ``scene_sha256`` is its checksum (:func:`check_scene`).
 
 While a session runs its rows go to ``<stem>.csv.part``, flushed and synced to disk every
 ``flush_every`` steps (10 steps = 1 s at 10 Hz: a crash loses at most about a second). The
@@ -19,6 +20,7 @@ rewritten atomically at start and end.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from pathlib import Path
@@ -30,7 +32,7 @@ import pandas as pd
 from lasa.base.errors import ArtifactError
 from lasa.base.io import write_text
 
-__all__ = ["SessionWriter", "read_session", "STATUS"]
+__all__ = ["SessionWriter", "read_session", "check_scene", "STATUS"]
 
 STATUS = ("running", "complete", "interrupted")
 
@@ -61,7 +63,7 @@ class SessionWriter:
         self.stem = stem
         self.columns = columns
         self.flush_every = flush_every
-        self.meta = {**meta, "status": "running", "steps": 0}
+        self.meta = {**meta, "status": "running", "steps": 0, "scene_sha256": _text_sha256(scene_xml)}
         self.csv = self.folder / f"{stem}.csv"
         self.part = self.folder / f"{stem}.csv.part"
         self.sidecar = self.folder / f"{stem}.json"
@@ -111,25 +113,19 @@ def read_session(
     A session whose rows are still in ``.csv.part`` (it crashed) is read from there and
     reported with status ``interrupted``, never as complete.
 
-    A log is **damaged** when a cell does not parse as a number, when a row has the wrong
-    number of fields, or when a session that ended (``complete`` or ``interrupted``) holds
-    another number of rows than its sidecar's ``steps``. A damaged log is an error, in one
-    line that says what is wrong; with ``allow_damaged`` it is read anyway (the rows that
-    parse) and the sidecar gains ``damaged``, the reason.
+    A log is **damaged** when its sidecar is not JSON, when the log is empty, when a cell
+    does not parse as a number, when a cell other than the raw axes is NaN or infinite,
+    when the steps or times do not increase, when a row has the wrong number of fields,
+    or when a session that ended (``complete`` or ``interrupted``) holds another number of
+    rows than its sidecar's ``steps``. A damaged log is an error, in one line that says what
+    is wrong; with ``allow_damaged`` it is read anyway (the rows that parse; an empty log or
+    an unreadable sidecar never) and the sidecar gains ``damaged``, the reason.
 
     Raises:
         ArtifactError: if the session's sidecar or rows are missing, or the log is damaged.
     """
-    p = Path(path)
-    stem = p.name
-    for suffix in (".csv.part", ".csv", ".json", ".xml"):
-        if stem.endswith(suffix):
-            stem = stem[: -len(suffix)]
-    folder = p.parent
-    sidecar = folder / f"{stem}.json"
-    if not sidecar.is_file():
-        raise ArtifactError(f"no session sidecar {sidecar}")
-    meta = json.loads(sidecar.read_text())
+    folder, stem = _locate(path)
+    meta = _read_sidecar(folder / f"{stem}.json")
     ended = meta.get("status") in STATUS[1:]
     rows = folder / f"{stem}.csv"
     if not rows.is_file():
@@ -143,16 +139,63 @@ def read_session(
     if problem is None and ended and int(meta.get("steps", -1)) != len(frame):
         problem = f"its sidecar records {meta.get('steps')} steps, the log holds {len(frame)} rows"
     if problem is not None:
-        if not allow_damaged:
-            raise ArtifactError(f"session {stem} is damaged: {problem}; nothing was analysed")
+        if not allow_damaged or not len(frame.columns):
+            raise ArtifactError(f"session {stem} is damaged: {problem}")
         meta["damaged"] = problem
     return frame, meta
+
+
+def check_scene(path: str | os.PathLike[str], meta: dict[str, Any]) -> Path:
+    """The session's scene XML, checked: it exists and, if the sidecar holds its checksum, matches it.
+
+    Raises:
+        ArtifactError: if the scene is missing or not the one the session logged.
+    """
+    folder, stem = _locate(path)
+    scene = folder / f"{stem}.xml"
+    if not scene.is_file():
+        raise ArtifactError(
+            f"session {stem} has no scene {scene}: it cannot be checked against the scene it ran in"
+        )
+    expected = meta.get("scene_sha256")
+    if expected and _text_sha256(scene.read_text()) != expected:
+        raise ArtifactError(f"{scene} is not the scene session {stem} logged (checksum differs)")
+    return scene
+
+
+def _text_sha256(text: str) -> str:
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
+    """A session's folder and stem, from any of its files or its stem."""
+    p = Path(path)
+    stem = p.name
+    for suffix in (".csv.part", ".csv", ".json", ".xml"):
+        if stem.endswith(suffix):
+            stem = stem[: -len(suffix)]
+    return p.parent, stem
+
+
+def _read_sidecar(sidecar: Path) -> dict[str, Any]:
+    """The sidecar's fields; a missing or unreadable sidecar is an error in one line."""
+    if not sidecar.is_file():
+        raise ArtifactError(f"no session sidecar {sidecar}")
+    try:
+        meta = json.loads(sidecar.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ArtifactError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ArtifactError(f"session sidecar {sidecar} is damaged: not a JSON object")
+    return meta
 
 
 def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
     """The rows as floats, and the first problem found (None for a sound log)."""
     try:
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False)
+    except pd.errors.EmptyDataError:
+        return pd.DataFrame(), f"its log {rows.name} is empty (not even a header)"
     except pd.errors.ParserError as exc:  # a row with another number of fields
         detail = str(exc).strip().splitlines()[-1]
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False, on_bad_lines="skip")
@@ -163,7 +206,25 @@ def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
         row, col = np.argwhere(bad.to_numpy())[0]
         value = raw.iat[row, col]
         return numbers, f"row {row + 1}, column {raw.columns[col]!r} holds {value!r}, not a number"
-    return numbers, None
+    return numbers, _unsound(numbers)
+
+
+def _unsound(numbers: pd.DataFrame) -> str | None:
+    """Rows that parse but cannot have been logged: a non-finite value where only the raw axes
+    may hold one (a faulty stick), or steps and times that do not increase."""
+    checked = [c for c in numbers.columns if not str(c).startswith("raw")]
+    finite = np.isfinite(numbers[checked].to_numpy())
+    if not finite.all():
+        row, col = np.argwhere(~finite)[0]
+        value = float(numbers[checked].iat[row, col])
+        return f"row {row + 1}, column {checked[col]!r} holds {value}, not a finite number"
+    for column in ("step", "time"):
+        if column in numbers and len(numbers) > 1:
+            back = np.flatnonzero(np.diff(numbers[column].to_numpy()) <= 0)
+            if back.size:
+                row = int(back[0]) + 2
+                return f"rows out of time order: row {row}'s {column} does not come after row {row - 1}'s"
+    return None
 
 
 def _floats(raw: pd.DataFrame) -> pd.DataFrame:

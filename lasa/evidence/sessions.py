@@ -13,7 +13,11 @@
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
+import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -25,7 +29,15 @@ from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
 from lasa.people.participants import Episodes, tip_frames
 
-__all__ = ["SCALES", "read_likert", "load_sessions", "likert_tests", "analyse_sessions"]
+__all__ = [
+    "SCALES",
+    "read_likert",
+    "scan_sessions",
+    "load_sessions",
+    "likert_tests",
+    "analyse_sessions",
+    "write_session_tables",
+]
 
 SCALES = ("Easy", "Helpful", "Precise", "Intuitive", "Prefer")
 
@@ -36,6 +48,58 @@ def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
     return pd.read_csv(path, dtype={"participant": str}) if path.is_file() else None
 
 
+def scan_sessions(
+    folder: str | os.PathLike[str], include_interrupted: bool = False, include_damaged: bool = False
+) -> tuple[list[tuple[pd.DataFrame, dict[str, Any]]], pd.DataFrame]:
+    """The eating-task sessions in ``folder`` that can be analysed, and those left out, by name.
+
+    A damaged session (:func:`lasa.evidence.sessionlog.read_session`: an unreadable sidecar, a
+    torn or non-finite row, rows out of time order, ...) or one that did not end normally is
+    left out, with the reason; sessions of the cup task are left out too. One bad session never
+    stops the others from being analysed.
+
+    Args:
+        folder: The sessions folder.
+        include_interrupted: Keep sessions that did not end normally.
+        include_damaged: Keep a damaged log's rows that parse.
+
+    Returns:
+        The kept ``(rows, sidecar)`` pairs, in the order of their names, and a table of the
+        sessions left out (``session``, ``reason``).
+
+    Raises:
+        ArtifactError: if two kept sessions log the same participant, condition and task
+            (both files named).
+    """
+    logs, left_out = [], []
+    for sidecar in sorted(Path(folder).glob("*.json")):
+        try:
+            frame, meta = read_session(sidecar, allow_damaged=include_damaged)
+        except ArtifactError as exc:
+            left_out.append((sidecar.stem, str(exc)))
+            continue
+        if meta.get("task") not in ("Entree", "Dessert") or meta.get("condition") not in CONDITIONS:
+            left_out.append((sidecar.stem, f"not an eating-study session (task {meta.get('task')!r})"))
+        elif meta["status"] != "complete" and not include_interrupted:
+            left_out.append((sidecar.stem, f"{meta['status']}: it did not end normally"))
+        else:
+            logs.append((frame, {**meta, "session": sidecar.name}))
+    _refuse_duplicates([m for _, m in logs], folder)
+    return logs, pd.DataFrame(left_out, columns=["session", "reason"])
+
+
+def _refuse_duplicates(metas: list[dict[str, Any]], folder: str | os.PathLike[str]) -> None:
+    seen: dict[tuple[str, str, str], str] = {}
+    for meta in metas:
+        key = (str(meta.get("participant")), str(meta["condition"]), str(meta["task"]))
+        if key in seen:
+            raise ArtifactError(
+                f"sessions {seen[key]} and {meta['session']} in {folder} both log participant {key[0]}, "
+                f"condition {key[1]}, task {key[2]}: move one of them out of the folder"
+            )
+        seen[key] = meta["session"]
+
+
 def load_sessions(
     folder: str | os.PathLike[str],
     task: object,
@@ -44,6 +108,9 @@ def load_sessions(
 ) -> Episodes:
     """The eating-task sessions in ``folder`` as :class:`lasa.people.participants.Episodes`.
 
+    Sessions are chosen by :func:`scan_sessions`; each one left out is named in a warning,
+    with the reason.
+
     Args:
         folder: The sessions folder.
         task: The eating task (:func:`lasa.world.eating.make_eating_task`): its robot gives the
@@ -51,31 +118,34 @@ def load_sessions(
         include_interrupted: Keep sessions that did not end normally (they count as not
             completed); by default they are left out.
         include_damaged: Analyse a damaged log's rows anyway (a cell that does not parse,
-            or fewer or more rows than its sidecar records); by default a damaged log is an
-            error and nothing is analysed.
+            or fewer or more rows than its sidecar records); by default it is left out.
 
     Raises:
-        ArtifactError: if the folder holds no eating-task session, or a damaged one.
+        ArtifactError: if the folder holds no sound eating-task session, or a duplicate.
     """
-    import mujoco
-
     from lasa.world.eating import EatingTask
 
     if not isinstance(task, EatingTask):
         raise ConfigError(
             "load_sessions reads eating-task sessions; pass lasa.world.eating.make_eating_task()"
         )
-    sidecars = sorted(Path(folder).glob("*.json"))
-    logs = []
-    for sidecar in sidecars:
-        frame, meta = read_session(sidecar, allow_damaged=include_damaged)
-        if meta.get("task") not in ("Entree", "Dessert") or meta.get("condition") not in CONDITIONS:
-            continue
-        if meta["status"] != "complete" and not include_interrupted:
-            continue
-        logs.append((frame, meta))
+    logs, left_out = scan_sessions(folder, include_interrupted, include_damaged)
+    for row in left_out.itertuples():
+        warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=2)
+    return _episodes(logs, left_out, folder, task)
+
+
+def _episodes(
+    logs: list[tuple[pd.DataFrame, dict[str, Any]]], left_out: pd.DataFrame, folder: object, task: Any
+) -> Episodes:
+    """Logged sessions as the simulated cohort's record; none is an error naming those left out."""
+    import mujoco
+
     if not logs:
-        raise ArtifactError(f"no eating-task session in {folder}")
+        why = "; ".join(f"{r.session}: {r.reason}" for r in left_out.itertuples())
+        raise ArtifactError(
+            f"no sound eating-task session in {folder}" + (f" (left out: {why})" if why else "")
+        )
     robot = task.robot
     n = robot.n_joints
     horizon = max(len(f) for f, _ in logs)
@@ -139,41 +209,122 @@ def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(out, ignore_index=True)
 
 
+def _complete(frame: pd.DataFrame, test: str, by_task: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The rows of the participants who did every condition (in every task present), and who was dropped.
+
+    A within-subject test compares each participant with themselves: one who missed a
+    condition cannot take part, and is named instead of silently falling out.
+
+    Args:
+        frame: Tidy data with ``participant``, ``condition`` (and ``task`` if ``by_task``).
+        test: The test's name, for the table of dropped participants.
+        by_task: Require every condition in every task of ``frame`` (else every condition once).
+
+    Returns:
+        The kept rows, and a table ``participant``, ``test``, ``reason`` of those dropped.
+    """
+    tasks = sorted(set(frame.task)) if by_task else [None]
+    dropped = []
+    for participant, part in frame.groupby("participant", sort=True):
+        tags = part.task if by_task else [None] * len(part)
+        done = set(zip(part.condition, tags, strict=True))
+        missing = [
+            c + ("" if t is None else f" in {t}") for t in tasks for c in CONDITIONS if (c, t) not in done
+        ]
+        if missing:
+            dropped.append((participant, test, "missing " + ", ".join(missing)))
+    table = pd.DataFrame(dropped, columns=["participant", "test", "reason"])
+    return frame[~frame.participant.isin(table.participant)], table
+
+
 def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, pd.DataFrame]:
     """People's sessions through the simulated cohort's measures and statistics.
 
     Returns:
         The tidy ``goal_error``, ``time`` and ``alignment`` tables of the sessions
-        (:func:`lasa.people.participants.measures`), ``means`` per condition, and, when every participant
-        did every condition, ``sa_effect`` (the within-subjects SA test on Goal Error and on
-        the mean distance) and ``time_tests`` (LA+SA against each condition, times summed over
-        tasks, Holm); with questionnaire answers, ``likert`` (:func:`likert_tests`).
+        (:func:`lasa.people.participants.measures`), ``means`` per condition; over the
+        participants who did every condition in every task (at least two), ``sa_effect``
+        (the within-subjects SA test on Goal Error and on the mean distance) and
+        ``time_tests`` (LA+SA against each condition, times summed over tasks, Holm); with
+        questionnaire answers, ``likert`` (:func:`likert_tests`, over the participants who
+        answered for every condition). ``left_out`` names the sessions not analysed
+        (:func:`scan_sessions`) and ``dropped`` the participants left out of a
+        within-subject test, each with the reason (also given as warnings).
     """
     from lasa.evidence import stats
     from lasa.people.participants import measures
+    from lasa.world.eating import EatingTask
 
-    episodes = load_sessions(folder, task)
-    frames = measures(task, episodes)  # type: ignore[arg-type]
+    if not isinstance(task, EatingTask):
+        raise ConfigError(
+            "analyse_sessions reads eating-task sessions; pass lasa.world.eating.make_eating_task()"
+        )
+    logs, left_out = scan_sessions(folder)
+    frames = measures(task, _episodes(logs, left_out, folder, task))
     out = dict(frames)
+    out["left_out"] = left_out
     out["means"] = (
         frames["time"]
         .merge(frames["goal_error"], on=["robot", "participant", "condition", "assistance", "task", "order"])
         .groupby("condition")[["total_time", "idle_time", "mode_switches", "goal_error", "mean_distance"]]
         .mean()
+        .reset_index()
     )
-    counts = frames["time"].groupby("participant").condition.nunique()
-    if len(counts) >= 2 and (counts == len(CONDITIONS)).all():
-        err = frames["goal_error"]
+    err, dropped = _complete(frames["goal_error"], "sa_effect, time_tests")
+    if err.participant.nunique() >= 2:
         rows = [stats.sa_effect_within(err, m) | {"measure": m} for m in ("goal_error", "mean_distance")]
         out["sa_effect"] = pd.DataFrame(rows)
         others = [("LA+SA", c) for c in CONDITIONS if c != "LA+SA"]
+        time = frames["time"][frames["time"].participant.isin(set(err.participant))]
         out["time_tests"] = pd.concat(
-            {
-                m: stats.pairwise(frames["time"], m, agg="sum", pairs=others)
+            [
+                stats.pairwise(time, m, agg="sum", pairs=others).assign(measure=m)
                 for m in ("total_time", "idle_time")
-            }
+            ],
+            ignore_index=True,
         )
     answers = read_likert(folder)
-    if answers is not None and answers.participant.nunique() >= 2:
-        out["likert"] = likert_tests(answers)
+    if answers is not None:
+        answers, dropped_likert = _complete(answers, "likert", by_task=False)
+        dropped = pd.concat([dropped, dropped_likert], ignore_index=True)
+        if answers.participant.nunique() >= 2:
+            out["likert"] = likert_tests(answers)
+    out["dropped"] = dropped
+    for row in [*out["left_out"].itertuples(), *dropped.itertuples()]:
+        what = (
+            f"session {row.session}"
+            if hasattr(row, "session")
+            else f"participant {row.participant} from {row.test}"
+        )
+        warnings.warn(f"left out {what}: {row.reason}", stacklevel=2)
     return out
+
+
+def write_session_tables(tables: dict[str, pd.DataFrame], folder: str | os.PathLike[str]) -> list[Path]:
+    """Write one analysis's tables as ``<folder>/sessions_<name>.csv``, replacing the previous set whole.
+
+    Every table is written to a staging folder first; only when all are written are the
+    previous ``sessions_*.csv`` removed and the new ones renamed into place, so the folder
+    never holds tables of two analyses (a test the new analysis did not run leaves no file
+    of the old one behind), and a failure leaves the previous set untouched.
+
+    Returns:
+        The paths written, in the order of ``tables``.
+    """
+    from lasa.base.io import locked
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    with locked(folder):
+        stage = Path(tempfile.mkdtemp(prefix=".sessions.", dir=folder))
+        try:
+            for name, table in tables.items():
+                table.to_csv(stage / f"sessions_{name}.csv", index=False, float_format="%.6g")
+            for old in folder.glob("sessions_*.csv"):
+                old.unlink()
+            paths = [folder / f"sessions_{name}.csv" for name in tables]
+            for path in paths:
+                os.replace(stage / path.name, path)
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+    return paths

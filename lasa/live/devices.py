@@ -146,6 +146,25 @@ class ScriptedDevice:
         }
         return cls(table[["raw0", "raw1"]].to_numpy(), **flags)
 
+    @classmethod
+    def from_file(cls, path: str) -> ScriptedDevice:
+        """A script from a CSV file (columns as :meth:`from_table`).
+
+        Raises:
+            ConfigError: if the file is missing, empty, or lacks ``raw0`` and ``raw1``, in one line.
+        """
+        try:
+            table = pd.read_csv(path)
+        except FileNotFoundError:
+            raise ConfigError(f"no script file {path} for --device scripted:<file.csv>") from None
+        except (pd.errors.EmptyDataError, pd.errors.ParserError, UnicodeDecodeError) as exc:
+            raise ConfigError(
+                f"script {path} is not a CSV table: {str(exc).strip().splitlines()[-1]}"
+            ) from None
+        if not {"raw0", "raw1"} <= set(table.columns):
+            raise ConfigError(f"script {path} needs columns raw0 and raw1, has {list(table.columns)}")
+        return cls.from_table(table)
+
     def poll(self) -> Reading:
         """The next scripted reading (zero axes after the script's end)."""
         i = self.step
@@ -236,6 +255,9 @@ class GamepadDevice:
         # SDL's event queue (which the joystick needs) comes with its video subsystem; the
         # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
         os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+        # SDL would turn SIGINT and SIGTERM into a quit event nobody reads: the session's own
+        # handlers stop it instead (lasa.live.interrupts)
+        os.environ["SDL_NO_SIGNAL_HANDLERS"] = "1"
         import pygame
 
         self._pg = pygame

@@ -1,11 +1,14 @@
 """The kit for running the eating study with people: the schedule and the questionnaire.
 
-- :func:`write_schedule`: the order of the four conditions for N participants, a balanced
-  Latin square (Williams design, :func:`lasa.people.participants.williams_square`), participant i on row
-  i mod 4, as the simulated cohort.
+- :func:`write_schedule`: the order of the four conditions for N participants (at most
+  :data:`MAX_PARTICIPANTS`), a balanced Latin square (Williams design,
+  :func:`lasa.people.participants.williams_square`), participant i on row i mod 4, as the
+  simulated cohort. An existing schedule is replaced only when asked (``overwrite``).
 - :func:`survey`: the paper's 7-point Likert questionnaire after each condition, on five
   scales (Easy, Helpful, Precise, Intuitive, Prefer), saved beside the sessions in
-  ``likert.csv`` (one row per participant x condition x scale).
+  ``likert.csv`` (one row per participant x condition x scale). An answer is a whole number
+  in 1..7; on the terminal a bad one is asked again, the answers given kept. A participant's
+  answers for a condition are replaced only when asked (``overwrite``).
 
 Reading the logged sessions and the answers back for analysis is :mod:`lasa.evidence.sessions`
 (notebook 11 uses it; no notebook imports this module).
@@ -25,7 +28,11 @@ from lasa.evidence.sessions import SCALES
 from lasa.people.participants import williams_square
 
 __all__ = [
+    "MAX_PARTICIPANTS",
     "write_schedule",
+    "parse_answer",
+    "parse_answers",
+    "ask",
     "survey",
 ]
 
@@ -38,21 +45,81 @@ QUESTIONS = {
 }
 
 
-def write_schedule(n: int, out: str | os.PathLike[str]) -> Path:
-    """Write the order of conditions for ``n`` participants (CSV: participant, position, condition)."""
-    if int(n) != n or n < 1:
-        raise ConfigError(f"the number of participants must be a positive integer, got {n!r}")
+MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the kit runs
+
+
+def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False) -> Path:
+    """Write the order of conditions for ``n`` participants (CSV: participant, position, condition).
+
+    Raises:
+        ConfigError: if ``n`` is not a whole number in 1..:data:`MAX_PARTICIPANTS`, or ``out``
+            exists and ``overwrite`` is not set.
+    """
+    if isinstance(n, bool) or int(n) != n or not 1 <= n <= MAX_PARTICIPANTS:
+        raise ConfigError(
+            f"the number of participants must be a whole number in 1..{MAX_PARTICIPANTS}, got {n!r}"
+        )
+    if Path(out).exists() and not overwrite:
+        raise ConfigError(f"{out} exists already: pass --overwrite to replace the schedule")
     square = williams_square(len(CONDITIONS))
     rows = [
         {"participant": f"p{i:02d}", "position": k + 1, "condition": CONDITIONS[c]}
-        for i in range(n)
+        for i in range(int(n))
         for k, c in enumerate(square[i % len(CONDITIONS)])
     ]
     return write_csv(out, pd.DataFrame(rows))
 
 
+def parse_answer(answer: object) -> int:
+    """One Likert answer as an int: a whole number in 1..7 (``6``, ``"6"``, ``6.0``).
+
+    Raises:
+        ConfigError: for anything else (``4.5``, ``""``, ``"five"``, ``8``), in one line.
+    """
+    text = str(answer).strip()
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if isinstance(answer, bool) or not value.is_integer() or not 1 <= value <= 7:
+        raise ConfigError(f"a Likert answer is a whole number from 1 to 7, got {text!r}")
+    return int(value)
+
+
+def parse_answers(text: str) -> list[int]:
+    """``"7,6,6,7,7"`` as one answer per scale of :data:`SCALES`."""
+    answers = [parse_answer(a) for a in text.split(",")]
+    if len(answers) != len(SCALES):
+        raise ConfigError(f"give {len(SCALES)} answers in 1..7 ({', '.join(SCALES)}), got {len(answers)}")
+    return answers
+
+
+def ask(participant: str, condition: str) -> list[int]:
+    """The questionnaire on the terminal: a bad answer is said and asked again, the others kept."""
+    answers: list[int] = []
+    print(f"{participant}, {condition}: 1 = strongly disagree ... 7 = strongly agree")
+    for scale in SCALES:
+        while True:
+            try:
+                text = input(f"{QUESTIONS[scale]} [1-7]: ")
+            except EOFError:
+                raise ConfigError(
+                    f"the questionnaire ended after {len(answers)} answers; nothing was saved"
+                ) from None
+            try:
+                answers.append(parse_answer(text))
+                break
+            except ConfigError as exc:
+                print(f"{exc}; please answer again")
+    return answers
+
+
 def survey(
-    folder: str | os.PathLike[str], participant: str, condition: str, answers: list[int] | None = None
+    folder: str | os.PathLike[str],
+    participant: str,
+    condition: str,
+    answers: list[int] | None = None,
+    overwrite: bool = False,
 ) -> Path:
     """Record one participant's questionnaire after one condition in ``<folder>/likert.csv``.
 
@@ -61,33 +128,45 @@ def survey(
         participant: The participant's id.
         condition: The condition just done.
         answers: One answer in 1..7 per scale of :data:`SCALES`; asked on the terminal if None.
+        overwrite: Replace this participant's answers for this condition if there are some.
 
     Raises:
-        ConfigError: for an answer outside 1..7, or the wrong number of answers.
+        ConfigError: for an answer that is not a whole number in 1..7, the wrong number of
+            answers, or answers already recorded for this participant and condition (without
+            ``overwrite``).
     """
     if condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; choose one of {CONDITIONS}")
-    if answers is None:
-        answers = []
-        print(f"{participant}, {condition}: 1 = strongly disagree ... 7 = strongly agree")
-        for scale in SCALES:
-            answers.append(int(input(f"{QUESTIONS[scale]} [1-7]: ")))
-    if len(answers) != len(SCALES) or any(not 1 <= int(a) <= 7 for a in answers):
-        raise ConfigError(f"give {len(SCALES)} answers in 1..7 ({', '.join(SCALES)}), got {answers}")
     path = Path(folder) / "likert.csv"
+    if not overwrite:  # before asking: refused answers would be lost
+        _refuse_answered(path, participant, condition)
+    if answers is None:
+        answers = ask(participant, condition)
+    values = [parse_answer(a) for a in answers]
+    if len(values) != len(SCALES):
+        raise ConfigError(f"give {len(SCALES)} answers in 1..7 ({', '.join(SCALES)}), got {answers}")
     path.parent.mkdir(parents=True, exist_ok=True)
     new = pd.DataFrame(
-        {
-            "participant": participant,
-            "condition": condition,
-            "scale": SCALES,
-            "answer": [int(a) for a in answers],
-        }
+        {"participant": participant, "condition": condition, "scale": SCALES, "answer": values}
     )
     with locked(path.parent):
         if path.exists():
             old = pd.read_csv(path, dtype={"participant": str})
+            if not overwrite and ((old.participant == participant) & (old.condition == condition)).any():
+                raise ConfigError(
+                    f"{participant} answered for {condition} already in {path}: pass --overwrite"
+                )
             keep = ~((old.participant == participant) & (old.condition == condition))
             new = pd.concat([old[keep], new], ignore_index=True)
         write_csv(path, new)
     return path
+
+
+def _refuse_answered(path: Path, participant: str, condition: str) -> None:
+    if path.is_file():
+        old = pd.read_csv(path, dtype={"participant": str})
+        if ((old.participant == participant) & (old.condition == condition)).any():
+            raise ConfigError(
+                f"{participant} answered for {condition} already in {path}: "
+                "pass --overwrite to replace those answers"
+            )

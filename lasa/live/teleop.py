@@ -34,6 +34,7 @@ import argparse
 import dataclasses
 import datetime as dt_
 import hashlib
+import json
 import sys
 import time
 from pathlib import Path
@@ -46,10 +47,11 @@ from lasa.base.conditions import ALL as CONDITIONS
 from lasa.base.conditions import alpha_of
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice, check_range
-from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.errors import ArtifactError, ConfigError, LasaError
 from lasa.base.paths import Paths
-from lasa.evidence.sessionlog import SessionWriter, read_session
+from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live.devices import Device, Reading, ScriptedDevice, open_device
+from lasa.live.interrupts import StopOnSignals
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
@@ -133,11 +135,23 @@ class Station:
             self.decoder, _ = load_checkpoint(
                 self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
             )
+            self._check_fit(self.decoder, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self.sets = self.task.belief_targets(self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self.reset()
+
+    def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
+        """Refuse, before any session starts, a decoder made for another task's goals or joints."""
+        config = getattr(decoder, "config", None)
+        shape = (getattr(config, "n_joints", None), getattr(config, "n_goals", None))
+        if shape != (self.robot.n_joints, self.task.n_goals) or decoder.z_dim > 2:
+            raise ArtifactError(
+                f"{path} does not fit the {self.config.task} task: it decodes {decoder.z_dim}-D z for "
+                f"{shape[0]} joints and {shape[1]} goals, the task needs at most 2-D z, "
+                f"{self.robot.n_joints} joints and {self.task.n_goals} goals"
+            )
 
     def warm_up(self) -> None:
         """Run the step's heavy calls once, off the record (torch's and mink's first calls are slow)."""
@@ -337,6 +351,15 @@ class _Overlay:
         except (AttributeError, TypeError):  # an older viewer without text overlays
             pass
 
+    def show(self, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
+        """Pose the viewer's robot at this step's state, draw the extras, and sync the window."""
+        with viewer.lock():
+            data.qpos[self.station.robot.qpos_adr] = rec["s"]
+            mujoco.mj_forward(self.station.robot.model, data)
+            self.draw_goals(viewer, rec)
+        self.draw_text(viewer, rec)  # takes the viewer's own lock: outside ours
+        viewer.sync()
+
 
 def run_session(
     station: Station,
@@ -352,8 +375,10 @@ def run_session(
     """Run the control loop: one step per Delta of wall-clock time (or as fast as possible).
 
     The session ends after ``max_steps``, when the task is done, when a scripted device
-    runs out, or when the viewer is closed. Interrupted by an exception (Ctrl-C
-    included), the log is closed as ``interrupted`` and the exception goes on.
+    runs out, or when the viewer is closed. SIGINT, SIGTERM or SIGHUP stop it at the next
+    step (:class:`lasa.live.interrupts.StopOnSignals`): the log is closed as ``interrupted``
+    and ``signal`` in the result names the signal. Interrupted by an exception, the log is
+    closed as ``interrupted`` and the exception goes on.
 
     Args:
         station: The robot side.
@@ -366,51 +391,44 @@ def run_session(
         on_step: Called as ``on_step(step, record)`` after each step.
 
     Returns:
-        Timing: steps, the step time's median and 99th percentile [s], and deadline misses.
+        Timing: steps, the step time's median and 99th percentile [s], deadline misses, whether
+        the task was done, and the signal that stopped the session (or None).
     """
     dt = station.control.dt
     overlay = _Overlay(station) if viewer is not None else None
     if viewer is not None and viewer_data is None:
         raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
     data = viewer_data if viewer_data is not None else mujoco.MjData(station.robot.model)
-    compute, misses = [], 0
-    station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
-    start = time.perf_counter()
-    status = "complete"
-    steps = 0
+    compute, misses, steps, status = [], 0, 0, "complete"
     try:
-        for step in range(max_steps):
-            deadline = start + (step + 1) * dt
-            t0 = time.perf_counter()
-            reading = device.poll()
-            rec = station.step(reading)
-            if viewer is not None:
-                if not viewer.is_running():
+        with StopOnSignals() as stop:
+            station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
+            start = time.perf_counter()
+            for step in range(max_steps):
+                if stop.received is not None:
                     status = "interrupted"
                     break
-                assert overlay is not None
-                with viewer.lock():
-                    data.qpos[station.robot.qpos_adr] = rec["s"]
-                    mujoco.mj_forward(station.robot.model, data)
-                    overlay.draw_goals(viewer, rec)
-                overlay.draw_text(viewer, rec)  # takes the viewer's own lock: outside ours
-                viewer.sync()
-            elapsed = time.perf_counter() - t0
-            compute.append(elapsed)
-            late = realtime and time.perf_counter() > deadline
-            misses += int(late)
-            t = (time.perf_counter() - start) if realtime else step * dt
-            if writer is not None:
-                writer.append(_row(step, t, late, rec))
-            steps = step + 1
-            if on_step is not None:
-                on_step(step, rec)
-            if station.done or (isinstance(device, ScriptedDevice) and device.finished):
-                break
-            if realtime:
-                pause = deadline - time.perf_counter()
-                if pause > 0:
-                    time.sleep(pause)
+                deadline = start + (step + 1) * dt
+                t0 = time.perf_counter()
+                rec = station.step(device.poll())
+                if overlay is not None:
+                    if not viewer.is_running():
+                        status = "interrupted"
+                        break
+                    overlay.show(viewer, data, rec)
+                compute.append(time.perf_counter() - t0)
+                late = realtime and time.perf_counter() > deadline
+                misses += int(late)
+                t = (time.perf_counter() - start) if realtime else step * dt
+                if writer is not None:
+                    writer.append(_row(step, t, late, rec))
+                steps = step + 1
+                if on_step is not None:
+                    on_step(step, rec)
+                if station.done or (isinstance(device, ScriptedDevice) and device.finished):
+                    break
+                if realtime:
+                    time.sleep(max(0.0, deadline - time.perf_counter()))
     except BaseException:
         if writer is not None:
             writer.close("interrupted", deadline_misses=misses)
@@ -421,6 +439,7 @@ def run_session(
         "step_time_p99_s": float(np.percentile(compute, 99)) if compute else 0.0,
         "deadline_misses": misses,
         "done": station.done,
+        "signal": stop.received,
     }
     if writer is not None:
         writer.close(status, **timing)
@@ -435,6 +454,28 @@ def new_session(station: Station, folder: str | Path, stem: str | None = None) -
     return SessionWriter(folder, stem, station.meta(), station.robot.xml(), station.columns())
 
 
+def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) -> None:
+    """Refuse a replay whose decoder on disk is not the one the session logged (checksum, config)."""
+    logged, here = meta["decoder_sha256"], station.meta()
+    if logged is None and station.decoder_path is not None:
+        raise ArtifactError(
+            f"session {session}'s sidecar records no decoder checksum for {station.config.condition}: "
+            "replay cannot tell which decoder it used"
+        )
+    if logged != here["decoder_sha256"]:
+        raise ArtifactError(
+            f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
+            "replay needs the same decoder"
+        )
+    now = json.loads(json.dumps(here["decoder_config"])) or {}  # tuples as the sidecar's lists
+    then = meta["decoder_config"] or {}
+    diff = sorted(k for k in set(now) | set(then) if now.get(k) != then.get(k))
+    if diff:
+        raise ArtifactError(
+            f"the decoder's config differs from the one session {session} logged in {', '.join(diff)}"
+        )
+
+
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
     """Re-run a logged session from its inputs and compare its states with the log.
 
@@ -443,18 +484,21 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
         ``damaged`` (the reason) when a damaged log was replayed with ``allow_damaged``.
 
     Raises:
-        ArtifactError: if the decoder on disk is not the one the session used, or the log is
-            damaged (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
+        ArtifactError: if the sidecar does not record the decoder (its checksum, its config),
+            the decoder on disk is not the one the session used, the scene XML is missing or
+            another (:func:`lasa.evidence.sessionlog.check_scene`), or the log is damaged
+            (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
     """
     frame, meta = read_session(session, allow_damaged=allow_damaged)
-    config = SessionConfig(**{k: meta[k] for k in ("robot", "task", "condition", "participant", "build_dir")})
-    station = Station(config)
-    if meta.get("decoder_sha256") and station.decoder_path is not None:
-        if _sha256(station.decoder_path) != meta["decoder_sha256"]:
-            raise ArtifactError(
-                f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
-                "replay needs the same decoder"
-            )
+    check_scene(session, meta)
+    fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
+    missing = [k for k in fields if k not in meta]
+    if missing:
+        raise ArtifactError(
+            f"session {session}'s sidecar records no {', '.join(missing)}: replay cannot tell what it ran"
+        )
+    station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
+    _check_decoder(station, meta, session)
     device = ScriptedDevice.from_table(frame, mode="mode_press")
     n = station.robot.n_joints
     logged = frame[[f"s{i}" for i in range(n)]].to_numpy()
@@ -512,8 +556,8 @@ def _check_display() -> None:
         )
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Command line: ``run``, ``replay``, ``schedule`` and ``survey``."""
+def _parser() -> argparse.ArgumentParser:
+    """The command line's parser: ``run``, ``replay``, ``schedule`` and ``survey``."""
     parser = argparse.ArgumentParser(prog="python -m lasa.live.teleop", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="drive the robot live and log the session")
@@ -543,74 +587,114 @@ def main(argv: list[str] | None = None) -> int:
     sch = sub.add_parser("schedule", help="a counterbalanced order of conditions for N participants")
     sch.add_argument("--participants", type=int, default=10, help="participants to schedule [%(default)s]")
     sch.add_argument("--out", default="build/sessions/schedule.csv", help="the schedule CSV [%(default)s]")
+    sch.add_argument("--overwrite", action="store_true", help="replace an existing schedule")
     sur = sub.add_parser("survey", help="the 7-point Likert questionnaire after a condition")
     sur.add_argument("--participant", required=True, help="participant id, as in their sessions")
     sur.add_argument("--condition", required=True, choices=CONDITIONS, help="the condition just done")
     sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
     sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
-    args = parser.parse_args(argv)
+    sur.add_argument("--overwrite", action="store_true", help="replace answers given for this condition")
+    return parser
+
+
+def _open_input(spec: str) -> Device:
+    """The device ``--device`` names, saying which one it is."""
+    if spec.startswith("scripted:"):
+        device: Device = ScriptedDevice.from_file(spec.split(":", 1)[1])
+        print("input: scripted")
+        return device
+    device, message = open_device(spec)
+    print(message)
+    return device
+
+
+def _in_viewer(
+    station: Station, device: Device, writer: SessionWriter, max_steps: int, screenshot: str | None
+) -> dict[str, Any]:
+    """Run the session in MuJoCo's passive viewer, on the scene's own camera."""
+    import mujoco.viewer
+
+    key_callback = getattr(device, "key_callback", None)
+    data = mujoco.MjData(station.robot.model)
+    data.qpos[station.robot.qpos_adr] = station.state
+    with mujoco.viewer.launch_passive(
+        station.robot.model, data, key_callback=key_callback, show_left_ui=False, show_right_ui=False
+    ) as viewer:
+        with viewer.lock():  # the scene's own camera, as in the videos
+            viewer.cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            viewer.cam.fixedcamid = station.robot.model.camera(station.robot.spec.camera).id
+        timing = run_session(station, device, writer, max_steps, viewer=viewer, viewer_data=data)
+        if screenshot:
+            _screenshot(screenshot)
+    # let the viewer's thread finish closing its window before Python tears down:
+    # exiting while it still holds the GL context can crash the interpreter's exit
+    deadline = time.perf_counter() + 5.0
+    while viewer.is_running() and time.perf_counter() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)
+    return timing
+
+
+def _run(args: argparse.Namespace) -> int:
+    """``run``: one live session; 128 + the signal's number when a signal stopped it."""
+    import signal
+
+    check_range("duration", args.duration, 0.0, low_open=True)
+    config = SessionConfig(
+        robot=args.robot,
+        task=args.task,
+        condition=args.condition,
+        participant=args.participant,
+        build_dir=args.build_dir,
+    )
+    if not args.no_viewer:
+        _check_display()
+    station = Station(config)
+    device = _open_input(args.device)
+    writer = new_session(station, args.sessions)
+    max_steps = int(round(args.duration / station.control.dt))
+    try:
+        if args.no_viewer:
+            timing = run_session(station, device, writer, max_steps, realtime=not args.fast)
+        else:
+            timing = _in_viewer(station, device, writer, max_steps, args.screenshot)
+    finally:
+        device.close()
+    if timing["signal"] is not None:
+        print(
+            f"session {writer.csv} interrupted by {timing['signal']} after {timing['steps']} steps "
+            "(its rows are kept; it reads interrupted)",
+            file=sys.stderr,
+        )
+        return 128 + int(getattr(signal, timing["signal"]))
+    print(f"session {writer.csv}: {timing}")
+    return 0
+
+
+def _study(args: argparse.Namespace) -> int:
+    """``schedule`` and ``survey``: the study kit."""
+    from lasa.live import studykit
+
+    if args.command == "schedule":
+        print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
+    else:
+        answers = None if args.answers is None else studykit.parse_answers(args.answers)
+        print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: ``run``, ``replay``, ``schedule`` and ``survey``; a bad input is one line, exit 2."""
+    args = _parser().parse_args(argv)
     try:
         if args.command == "replay":
             result = replay(args.session, args.mp4, allow_damaged=args.allow_damaged)
             print(result)
             return 0 if result["exact"] else 1
         if args.command in ("schedule", "survey"):
-            from lasa.live import studykit
-
-            if args.command == "schedule":
-                print(studykit.write_schedule(args.participants, args.out))
-            else:
-                answers = None if args.answers is None else [int(a) for a in args.answers.split(",")]
-                print(studykit.survey(args.sessions, args.participant, args.condition, answers))
-            return 0
-        check_range("duration", args.duration, 0.0, low_open=True)
-        config = SessionConfig(
-            robot=args.robot,
-            task=args.task,
-            condition=args.condition,
-            participant=args.participant,
-            build_dir=args.build_dir,
-        )
-        if not args.no_viewer:
-            _check_display()
-        station = Station(config)
-        if args.device.startswith("scripted:"):
-            import pandas as pd
-
-            device: Device = ScriptedDevice.from_table(pd.read_csv(args.device.split(":", 1)[1]))
-            print("input: scripted")
-        else:
-            device, message = open_device(args.device)
-            print(message)
-        writer = new_session(station, args.sessions)
-        max_steps = int(round(args.duration / station.control.dt))
-        if args.no_viewer:
-            timing = run_session(station, device, writer, max_steps, realtime=not args.fast)
-        else:
-            import mujoco.viewer
-
-            key_callback = getattr(device, "key_callback", None)
-            data = mujoco.MjData(station.robot.model)
-            data.qpos[station.robot.qpos_adr] = station.state
-            with mujoco.viewer.launch_passive(
-                station.robot.model, data, key_callback=key_callback, show_left_ui=False, show_right_ui=False
-            ) as viewer:
-                with viewer.lock():  # the scene's own camera, as in the videos
-                    viewer.cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
-                    viewer.cam.fixedcamid = station.robot.model.camera(station.robot.spec.camera).id
-                timing = run_session(station, device, writer, max_steps, viewer=viewer, viewer_data=data)
-                if args.screenshot:
-                    _screenshot(args.screenshot)
-            # let the viewer's thread finish closing its window before Python tears down:
-            # exiting while it still holds the GL context can crash the interpreter's exit
-            deadline = time.perf_counter() + 5.0
-            while viewer.is_running() and time.perf_counter() < deadline:
-                time.sleep(0.05)
-            time.sleep(0.5)
-        device.close()
-        print(f"session {writer.csv}: {timing}")
-        return 0
-    except (ConfigError, ArtifactError) as exc:
+            return _study(args)
+        return _run(args)
+    except LasaError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
 

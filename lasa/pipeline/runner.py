@@ -33,7 +33,7 @@ sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
 import papermill as pm  # noqa: E402
 import yaml  # noqa: E402
 
-from lasa.base.errors import ConfigError, NotebookError  # noqa: E402
+from lasa.base.errors import ArtifactError, ConfigError, NotebookError  # noqa: E402
 from lasa.base.io import atomic_path, require_file  # noqa: E402
 
 __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
@@ -55,11 +55,17 @@ def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]
     """The parameters a config file passes to ``notebook``: ``common`` plus its section.
 
     Raises:
-        ConfigError: if the file is not a mapping of sections, or if it passes a name
-            that the notebook's ``parameters`` cell does not define.
+        ArtifactError: if the config file is missing.
+        ConfigError: if the file is not YAML, not a mapping of sections, or if it passes a
+            name that the notebook's ``parameters`` cell does not define.
     """
     path = require_file(config, "it ships with the repository under configs/")
-    data = yaml.safe_load(path.read_text()) or {}
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        where = getattr(exc, "problem_mark", None)
+        at = f" (line {where.line + 1})" if where is not None else ""
+        raise ConfigError(f"{path} is not a YAML file{at}: {getattr(exc, 'problem', None) or exc}") from None
     if not isinstance(data, dict) or not all(isinstance(v, dict) for v in data.values()):
         raise ConfigError(f"{path} must map section names to parameter mappings")
     stem = Path(notebook).stem
@@ -156,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
         out = run_notebook(
             args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
         )
-    except ConfigError as exc:
+    except (ConfigError, ArtifactError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except (

@@ -10,6 +10,9 @@ counterbalanced schedule and one link per participant (:mod:`lasa.live.web.token
 - :mod:`~lasa.live.web.protocol`: the messages between page and server, with their size and rate limits.
 - :mod:`~lasa.live.web.loop`: the server's 10 Hz loop, one :meth:`lasa.live.teleop.Station.step` per tick,
   logged by :class:`lasa.evidence.sessionlog.SessionWriter` exactly as ``teleop run`` logs it.
-- :mod:`~lasa.live.web.frames`: the robot drawn on the server (MuJoCo's off-screen renderer), sent as JPEG.
+- :mod:`~lasa.live.web.frames`: the robot drawn on the server (MuJoCo's off-screen renderer), sent as JPEG
+  (``--frames server``).
+- :mod:`~lasa.live.web.scene`: the robot drawn in the browser (``--frames browser``): MuJoCo's WebAssembly
+  build and three.js, served by the server, and the trial's scene with its meshes under safe names.
 - :mod:`~lasa.live.web.app`: the Starlette application: the page, its files and the WebSocket.
 """

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from lasa.base.errors import ConfigError
+from lasa.base.errors import ArtifactError, ConfigError
 
 DEFAULT_HOST = "127.0.0.1"
 TLS_HINT = (
@@ -38,7 +38,7 @@ def _schedule(argv: list[str]) -> int:
 def _serve(argv: list[str]) -> int:
     import uvicorn
 
-    from lasa.live.web.app import WebConfig, create_app
+    from lasa.live.web.app import FRAMES, WebConfig, create_app
     from lasa.live.web.protocol import MAX_MESSAGE_BYTES
 
     parser = argparse.ArgumentParser(prog="python -m lasa.live.web", description=__doc__.splitlines()[0])
@@ -50,7 +50,13 @@ def _serve(argv: list[str]) -> int:
     )
     parser.add_argument("--practice-s", type=float, default=300.0, help="longest practice [s] [%(default)s]")
     parser.add_argument("--trial-s", type=float, default=300.0, help="longest trial [s] [%(default)s]")
-    parser.add_argument("--no-frames", action="store_true", help="send no rendered frames of the robot")
+    parser.add_argument(
+        "--frames",
+        choices=FRAMES,
+        default=WebConfig.frames,
+        help="who draws the robot: the server (JPEG frames), the browser (MuJoCo in WebAssembly, "
+        "from the state), or nobody [%(default)s]",
+    )
     parser.add_argument(
         "--origin", action="append", default=[], help="a page origin allowed besides the server's"
     )
@@ -61,7 +67,7 @@ def _serve(argv: list[str]) -> int:
         build_dir=args.build_dir,
         practice_s=args.practice_s,
         trial_s=args.trial_s,
-        frames=not args.no_frames,
+        frames=args.frames,
         origins=tuple(args.origin),
     )
     app = create_app(config)
@@ -77,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     try:
         return _schedule(argv[1:]) if argv[:1] == ["schedule"] else _serve(argv)
-    except ConfigError as exc:
+    except (ConfigError, ArtifactError) as exc:  # a bad setting; npm files missing (make setup)
         print(f"error: {exc}", file=sys.stderr)
         return 2
 

@@ -157,9 +157,18 @@ class Conversation:
             raise Gone from exc
         self.finish = False
         practice = step.kind == "practice"
-        return await run_trial(
-            trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
-        )
+        if self.study.config.frames == "browser":
+            # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
+            self.study.scenes[self.participant] = trial.writer.folder / f"{trial.writer.stem}.xml"
+            robot = trial.station.robot
+            camera = robot.model.camera(robot.spec.camera).id
+            await self.send({"type": "scene", "qpos_adr": robot.qpos_adr.tolist(), "camera": camera})
+        try:
+            return await run_trial(
+                trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
+            )
+        finally:
+            self.study.scenes.pop(self.participant, None)
 
     async def _tick(self, message: dict[str, Any]) -> None:
         await self.send(message)

@@ -35,7 +35,7 @@ class FrameRenderer:
         self._busy = False
         self._scene: Any = None  # (robot, renderer, data, camera), made on the rendering thread
 
-    def _render(self, q: Sequence[float]) -> bytes:
+    def _render(self, q: Sequence[float] | None) -> bytes:
         import mujoco
         from PIL import Image
 
@@ -47,12 +47,18 @@ class FrameRenderer:
             camera = robot.model.camera(robot.spec.camera).id
             self._scene = (robot, renderer, mujoco.MjData(robot.model), camera)
         robot, renderer, data, camera = self._scene
-        data.qpos[robot.qpos_adr] = np.asarray(q, dtype=float)
+        if q is not None:
+            data.qpos[robot.qpos_adr] = np.asarray(q, dtype=float)
         mujoco.mj_forward(robot.model, data)
         renderer.update_scene(data, camera=camera)
         buffer = io.BytesIO()
         Image.fromarray(renderer.render()).save(buffer, "JPEG", quality=self.quality)
         return buffer.getvalue()
+
+    async def warm_up(self) -> None:
+        """Build the scene and the GL context, and render once: at the server's start, not in a
+        participant's first ticks (building them holds the interpreter for a few hundred ms)."""
+        await asyncio.get_running_loop().run_in_executor(self._pool, self._render, None)
 
     async def frame(self, q: Sequence[float]) -> bytes | None:
         """A frame at joint positions ``q``, or None if the renderer is busy with another."""

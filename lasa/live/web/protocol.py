@@ -11,7 +11,9 @@ The page sends JSON text messages, each at most :data:`MAX_MESSAGE_BYTES`:
 Anything else, a message too large, or more than :data:`MAX_RATE` messages a second ends the
 connection (:class:`ProtocolError`). The server sends ``phase`` messages (what the page shows),
 ``tick`` messages (the robot's joint positions, the belief, the instruction, the late-tick
-counter) and, when frames are on, JPEG images as binary messages.
+counter) and, with ``--frames server``, JPEG images as binary messages; with ``--frames browser``
+a ``scene`` message when a trial starts (the arm's ``qpos`` addresses and the camera's index:
+the page then fetches the scene, :mod:`lasa.live.web.scene`, and draws each tick's state).
 """
 
 from __future__ import annotations

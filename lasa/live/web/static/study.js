@@ -1,5 +1,7 @@
 // The study page: shows what the server says and sends the stick. The robot's step runs on the
-// server only (lasa.live.web.loop); this page never computes a state.
+// server only (lasa.live.web.loop); this page never computes a state. The robot is a JPEG frame from
+// the server (--frames server) or drawn here from the tick's joint positions (--frames browser:
+// view.js, MuJoCo's WebAssembly build and three.js, loaded on the server's first "scene" message).
 "use strict";
 
 const SEND_HZ = 20; // input messages a second while driving (the server allows 50)
@@ -12,6 +14,7 @@ ws.binaryType = "blob";
 
 const keys = { left: false, right: false, up: false, down: false };
 let keyStop = false, modePress = false, driving = false, padWasPressed = false, frameUrl = null;
+let view = null; // view.js once a "scene" message has come (--frames browser)
 
 function show(id) {
   for (const s of document.querySelectorAll("section")) s.hidden = s.id !== id;
@@ -74,6 +77,15 @@ function tick(msg) {
     const row = belief.children[i];
     row.querySelector(".bar").style.width = `${(100 * p).toFixed(1)}%`;
     row.querySelector(".value").textContent = p.toFixed(2);
+  });
+}
+
+function scene(msg) {
+  $("view").hidden = true;
+  $("canvas").hidden = false;
+  view = import("/static/view.js");
+  view.then((m) => m.load(token, msg, $("canvas"))).catch((err) => {
+    $("status").textContent = `The robot cannot be drawn in this browser (${err.message || err}); the task goes on.`;
   });
 }
 
@@ -145,7 +157,8 @@ ws.onmessage = (event) => {
   if (typeof event.data !== "string") return frame(event.data);
   const msg = JSON.parse(event.data);
   if (msg.type === "phase") phase(msg);
-  else if (msg.type === "tick") tick(msg);
+  else if (msg.type === "tick") { tick(msg); if (view) view.then((m) => m.show(msg.q)); }
+  else if (msg.type === "scene") scene(msg);
   else if (msg.type === "error") { $("error-text").textContent = msg.message; show("error"); }
 };
 ws.onclose = (event) => {
