@@ -266,7 +266,7 @@ def record_participants(path: Path, summary: dict[str, object]) -> None:
         "levels": summary,
     }
     tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(results, indent=1) + "\n")
+    tmp.write_text(json.dumps(results, indent=2) + "\n")
     tmp.replace(path)
 
 
