@@ -242,3 +242,27 @@ def test_the_word_follows_the_vocabulary():
     assert word("no", {}, ()) == "not reproduced"
     with pytest.raises(ConfigError, match="cannot word"):
         word("maybe", {}, ())
+
+
+def test_the_cell_shows_every_number_the_rule_reads():
+    # the note as lasa.evidence.verdicts.assess writes it; the paper's number first, with its word
+    note = (
+        "150 users per point; 98.75% intervals: slope = 0.0131 [0.00828, 0.0177]; r2 = 0.964 [0.786, 0.997]; "
+    )
+    note += "share_below = 1 [1, 1]. Rule: ..."
+    base = claim("straight_line_linear", figure="sim4")
+    intervals = {"slope": (0.00828, 0.0177), "r2": (0.786, 0.997), "share_below": (1.0, 1.0)}
+    row = Claim(
+        **{
+            **base.__dict__,
+            "reproduced": "undecided",
+            "note": note,
+            "intervals": intervals,
+            "values": {"slope": 0.0131, "r2": 0.964, "share_below": 1.0},
+        }
+    )
+    table = pd.DataFrame([_row(row)], columns=list(CLAIM_COLUMNS)).astype(str)
+    cell = render_verdicts(table).splitlines()[4].split("|")[3].strip()
+    assert cell.startswith("**not reproduced**: 0.11 (y = 0.11x): not reproduced, 0.0131 [0.00828, 0.0177]")
+    assert "0.98 (R^2 = 0.98): undecided, 0.964 [0.786, 0.997]" in cell
+    assert "; share_below 1 [1, 1], N = 0" in cell and "r2 0.964" not in cell  # each number once

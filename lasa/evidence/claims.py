@@ -322,6 +322,11 @@ _WHY = re.compile(
 )  # "not testable (<why>)", <why> without parentheses
 
 
+# every number a rule reads, as lasa.evidence.verdicts.assess states it in a row's note:
+# "<level>% intervals: <name> = <value> [<low>, <high>]; ...". "
+_NUMBERS = re.compile(r"(\w+) = (\S+ \[[^\]]*\])(?=[;.] )")
+
+
 def _num(text: object) -> str:
     try:
         return f"{float(str(text)):.3g}"
@@ -330,12 +335,14 @@ def _num(text: object) -> str:
 
 
 def _cell(row: pd.Series | None) -> str:
-    """A robot's cell: the verdict word, the numbers it rests on, N, and the direction.
+    """A robot's cell: the verdict word, every number its rule reads, N, and the direction.
 
     A claim that is not testable reads ``not testable``, N, and why: the first
     ``not testable (<why>)`` in its ``measured`` text or else its note, without an interval.
-    A claim whose paper states numbers shows each of them with its own word, our value and
-    interval (``paper_numbers``); any other shows the interval of the number it rests on.
+    Each number the paper states comes with its own word, our value and interval
+    (``paper_numbers``); every other number the rule reads follows with its value and interval
+    (from the row's note, as :func:`lasa.evidence.verdicts.assess` wrote it); a row whose note
+    states none (the study's) shows the interval of the effect it rests on.
     """
     if row is None:
         return "—"
@@ -343,7 +350,11 @@ def _cell(row: pd.Series | None) -> str:
         found = _WHY.search(str(row.measured)) or _WHY.search(str(row.note))
         return f"not testable, N = {row.n_users}" + (f" ({found.group(1)})" if found else "")
     low, high = _num(row.ci_low), _num(row.ci_high)
-    numbers = str(row.get("paper_numbers", ""))
+    paper_numbers = str(row.get("paper_numbers", ""))
+    rule = RULES.get(str(row.id).split("@", 1)[0])
+    stated = {p.quantity for p in rule.paper} if rule is not None else set()
+    others = [f"{name} {text}" for name, text in _NUMBERS.findall(str(row.note)) if name not in stated]
+    numbers = "; ".join(n for n in (paper_numbers, *others) if n)
     detail = f": {numbers}" if numbers else (f" [{low}, {high}]" if low and high else "")
     head = f"**{row.reproduced}**" if row.reproduced != UNDECIDED else UNDECIDED
     settled = ", settled" if str(row.settled) == "yes" else ""
