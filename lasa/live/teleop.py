@@ -140,6 +140,7 @@ class Station:
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self.sets = self.task.belief_targets(self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
+        self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
         self.reset()
 
     def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
@@ -226,8 +227,10 @@ class Station:
         from lasa.people.participants import StudyConfig, tip_frames, waypoint_reached
         from lasa.world.eating import fork_frame
 
-        wp = self.waypoints[self.waypoint]
-        position, rotation = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
+        if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once
+            wp = self.waypoints[self.waypoint]
+            self._frames[self.waypoint] = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
+        position, rotation = self._frames[self.waypoint]
         tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
         if waypoint_reached(tip[0], axis[0], position, rotation[:, 2], StudyConfig()):
             self.waypoint += 1

@@ -16,6 +16,7 @@ action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib.util
 from pathlib import Path
 
@@ -142,6 +143,13 @@ def _add_cup(mj_spec: mujoco.MjSpec, name: str, site_position: np.ndarray, templ
         conaffinity=0,
     )
     body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
+
+
+@functools.lru_cache(maxsize=16)
+def _scene_xml(spec: RobotSpec) -> str:
+    """:func:`_scene_spec`'s MJCF text, written once per spec (MuJoCo takes tens of ms to write it,
+    and the web study's server opens a session log, scene included, for every trial)."""
+    return _scene_spec(spec).to_xml()
 
 
 def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
@@ -408,7 +416,7 @@ class Robot:
     def xml(self) -> str:
         """The compiled scene as one MJCF document (meshes by absolute path): a session log keeps
         it beside its steps, so that the session replays without the code that made it."""
-        return _scene_spec(self.spec).to_xml()
+        return _scene_xml(self.spec)
 
     def table_extent(self) -> tuple[np.ndarray, np.ndarray]:
         """Centre (3,) and half-sizes (3,) of the table box (geom ``table``)."""

@@ -36,6 +36,7 @@ def _schedule(argv: list[str]) -> int:
 
 
 def _serve(argv: list[str]) -> int:
+    import torch
     import uvicorn
 
     from lasa.live.web.app import FRAMES, WebConfig, create_app
@@ -71,10 +72,20 @@ def _serve(argv: list[str]) -> int:
         origins=tuple(args.origin),
     )
     app = create_app(config)
+    # one participant's step at a time decodes one row: torch's own threads only contend with the
+    # event loop's thread for the machine's cores (the load test measured it)
+    torch.set_num_threads(1)
     if args.host:
         print(TLS_HINT.format(host=host, port=args.port), file=sys.stderr)
     print(f"study of {args.sessions} at http://{host}:{args.port}/study?token=...", file=sys.stderr)
-    uvicorn.run(app, host=host, port=args.port, ws_max_size=MAX_MESSAGE_BYTES, access_log=False)
+    uvicorn.run(
+        app,
+        host=host,
+        port=args.port,
+        ws_max_size=MAX_MESSAGE_BYTES,
+        ws_per_message_deflate=False,  # the messages are small: compressing them costs more than it saves
+        access_log=False,
+    )
     return 0
 
 

@@ -7,11 +7,18 @@ the sidecar, the scene XML) and returns the state message for the page. :func:`r
 calls it once per Delta of wall-clock time, counts the ticks that overran their deadline (the
 page shows the count, the sidecar records it), and closes the log ``complete`` when the task
 is done, the time is up or the participant ends a practice, ``interrupted`` when the page goes.
+
+**Every participant's step runs in one worker thread, in turn** (:data:`STEPPER`). A step is a
+few milliseconds of small NumPy and torch calls that hold Python's GIL; run in several threads
+at once, they hand the GIL back and forth and each takes several times as long (the load test,
+``benchmarks/web_load.py``, measured it). One thread runs them back to back instead, and the
+event loop's thread keeps the WebSockets moving meanwhile.
 """
 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import dataclasses
 import datetime as dt_
 import time
@@ -26,7 +33,10 @@ from lasa.live.devices import Reading
 from lasa.live.teleop import SessionConfig, Station, _row
 from lasa.live.web.protocol import Inputs
 
-__all__ = ["Trial", "open_trial", "tick", "run_trial"]
+__all__ = ["STEPPER", "Trial", "open_trial", "tick", "run_trial"]
+
+STEPPER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="lasa-step")
+"""The one thread that runs every participant's :func:`tick`, one after another."""
 
 
 @dataclasses.dataclass
@@ -114,8 +124,7 @@ async def run_trial(
 ) -> str:
     """Tick at the station's rate until done, out of time, ``finish()`` or the page goes; returns the status.
 
-    Each step runs in a worker thread, so one participant's step never holds up another's
-    messages. Whatever ends the loop, the log is closed: ``interrupted`` if the page went away
+    Each step runs in :data:`STEPPER`'s thread, so a step never holds up the page's messages. Whatever ends the loop, the log is closed: ``interrupted`` if the page went away
     (or anything raised), its rows kept; else ``complete``.
     """
     dt = trial.station.control.dt
@@ -126,7 +135,7 @@ async def run_trial(
             if not connected():
                 status = "interrupted"
                 break
-            message = await asyncio.to_thread(tick, trial, inputs.take())
+            message = await asyncio.get_running_loop().run_in_executor(STEPPER, tick, trial, inputs.take())
             await send(message)
             if trial.station.done or finish():
                 break
