@@ -247,6 +247,47 @@ def test_a_disconnect_leaves_the_session_interrupted_and_the_link_resumes_anew(s
     assert first.read_bytes() == kept and len(list(sessions.glob("p01_Entree_R+SA_*.csv"))) == 2
 
 
+def test_a_server_shutdown_mid_step_logs_that_step_before_closing_interrupted(tmp_path, monkeypatch):
+    """Cancelling the loop (the server stopping) while a step runs: the step's row goes in, then the
+    log closes ``interrupted`` with every row it ran, and no step writes to a closed log."""
+    import asyncio
+
+    from lasa.live.teleop import SessionConfig
+    from lasa.live.web import loop
+    from lasa.live.web.protocol import Inputs
+
+    trial = loop.open_trial(SessionConfig(task="Entree", condition="R"), tmp_path, 1, 30.0)
+    in_step, real_tick, errors = threading.Event(), loop.tick, []
+
+    def slow_tick(trial, reading):
+        if trial.steps == 3:
+            in_step.set()
+            time.sleep(0.3)  # the cancel lands while this step runs
+        try:
+            return real_tick(trial, reading)
+        except Exception as exc:  # a write to a closed log would land here
+            errors.append(exc)
+            raise
+
+    monkeypatch.setattr(loop, "tick", slow_tick)
+
+    async def main():
+        async def send(message):
+            pass
+
+        task = asyncio.create_task(loop.run_trial(trial, Inputs(), send, lambda: True, lambda: False))
+        while not in_step.is_set():
+            await asyncio.sleep(0.01)
+        task.cancel()
+        with pytest.raises(asyncio.CancelledError):
+            await task
+
+    asyncio.run(main())
+    frame, meta = read_session(trial.writer.csv)
+    assert errors == [] and meta["status"] == "interrupted"
+    assert trial.steps == 4 and meta["steps"] == len(frame) == 4 and frame.step.tolist() == [0, 1, 2, 3]
+
+
 def test_the_survey_is_stored_as_the_terminal_survey_stores_it(study):
     from lasa.evidence.sessions import read_likert
 

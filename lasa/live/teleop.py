@@ -60,7 +60,7 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
 
-__all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "run_session", "replay", "main"]
+__all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "log_row", "run_session", "replay", "main"]
 
 TASKS = ("cups", "Entree", "Dessert")
 
@@ -298,7 +298,8 @@ class Station:
         }
 
 
-def _row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
+def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
+    """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
     row = [
         step,
         t,
@@ -424,7 +425,7 @@ def run_session(
                 misses += int(late)
                 t = (time.perf_counter() - start) if realtime else step * dt
                 if writer is not None:
-                    writer.append(_row(step, t, late, rec))
+                    writer.append(log_row(step, t, late, rec))
                 steps = step + 1
                 if on_step is not None:
                     on_step(step, rec)

@@ -30,7 +30,7 @@ import numpy as np
 
 from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import Reading
-from lasa.live.teleop import SessionConfig, Station, _row
+from lasa.live.teleop import SessionConfig, Station, log_row
 from lasa.live.web.protocol import Inputs
 
 __all__ = ["STEPPER", "Trial", "open_trial", "tick", "run_trial"]
@@ -86,7 +86,7 @@ def tick(trial: Trial, reading: Reading) -> dict[str, Any]:
     late = now > deadline
     trial.compute.append(now - t0)
     trial.misses += int(late)
-    trial.writer.append(_row(k, now - trial.started, late, rec))
+    trial.writer.append(log_row(k, now - trial.started, late, rec))
     trial.steps = k + 1
     return {
         "type": "tick",
@@ -124,18 +124,22 @@ async def run_trial(
 ) -> str:
     """Tick at the station's rate until done, out of time, ``finish()`` or the page goes; returns the status.
 
-    Each step runs in :data:`STEPPER`'s thread, so a step never holds up the page's messages. Whatever ends the loop, the log is closed: ``interrupted`` if the page went away
-    (or anything raised), its rows kept; else ``complete``.
+    Each step runs in :data:`STEPPER`'s thread, so a step never holds up the page's messages.
+    Whatever ends the loop, the log is closed: ``interrupted`` if the page went away (or anything
+    raised, the server's shutdown included), its rows kept; else ``complete``. A step under way
+    when the loop is cancelled finishes and logs its row first, so the log never closes under it.
     """
     dt = trial.station.control.dt
     status = "complete"
     trial.started = time.perf_counter()
+    step: concurrent.futures.Future[dict[str, Any]] | None = None
     try:
         while trial.steps < trial.max_steps:
             if not connected():
                 status = "interrupted"
                 break
-            message = await asyncio.get_running_loop().run_in_executor(STEPPER, tick, trial, inputs.take())
+            step = STEPPER.submit(tick, trial, inputs.take())
+            message = await asyncio.wrap_future(step)
             await send(message)
             if trial.station.done or finish():
                 break
@@ -143,6 +147,8 @@ async def run_trial(
             if pause > 0:
                 await asyncio.sleep(pause)
     except BaseException:
+        if step is not None:
+            concurrent.futures.wait([step])  # a few ms: the step's row goes in before the log closes
         _close(trial, "interrupted")
         raise
     _close(trial, status)
