@@ -33,6 +33,8 @@ __all__ = [
     "Positive",
     "NonNegative",
     "UnitInterval",
+    "Seed",
+    "FiniteNonNegative",
     "validate",
     "interval",
     "expects",
@@ -65,6 +67,8 @@ AtLeastTwo = Annotated[Integer, at.Ge(2)]  # an integer >= 2 (grids that hold bo
 Positive = Annotated[Number, at.Gt(0.0)]  # a number > 0
 NonNegative = Annotated[Number, at.Ge(0.0)]  # a number >= 0
 UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
+FiniteNonNegative = Annotated[Number, at.Ge(0.0), at.Lt(math.inf)]  # a number in [0, inf) (a finite beta)
+Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
 
 
 def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:

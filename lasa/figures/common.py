@@ -28,8 +28,8 @@ from lasa.base.config import (
     ASSISTANCE,
     NO_ASSISTANCE,
     ControlConfig,
-    Integer,
     PositiveInt,
+    Seed,
     UnitInterval,
     check_choice,
     check_range,
@@ -147,7 +147,7 @@ class SweepConfig:
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
     pilot_prob: UnitInterval = 0.0  # p of the laggy or noisy pilot [-]
     methods: tuple[str, ...] = METHODS  # methods compared
-    seed: Integer = 0  # seed of the users' cups, preferences and random streams [-]
+    seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)

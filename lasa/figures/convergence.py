@@ -56,8 +56,9 @@ from matplotlib.figure import Figure
 from lasa.base.config import (
     ASSISTANCE,
     ControlConfig,
-    Integer,
+    FiniteNonNegative,
     PositiveInt,
+    Seed,
     check_choice,
     check_range,
     validate,
@@ -122,20 +123,18 @@ _COUNTS = ("steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_h
 class Config:
     """The Sec. IV-A ball along LA+SA rollouts of users of fixed rationality."""
 
-    betas: tuple[float, ...] = (10.0, 75.0, 1000.0)  # user rationalities, finite [1/rad^2]
+    betas: tuple[FiniteNonNegative, ...] = (10.0, 75.0, 1000.0)  # user rationalities, finite [1/rad^2]
     assistance: tuple[str, ...] = ASSISTANCE  # members of lasa.method.assistance to run LA+SA under
     n_users: PositiveInt = 20  # simulated users per (member, beta) [-]
     horizon: PositiveInt = 200  # control steps per episode [-]
     record_every: PositiveInt = 10  # steps between recorded rows; event counts cover every step [steps]
-    seed: Integer = 0  # seed of the users' cups, preferences and random streams [-]
+    seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)
         if not self.betas:
             raise ConfigError("betas must not be empty")
         object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
-        for beta in self.betas:
-            check_range("beta", beta, 0.0, math.inf, high_open=True)
         if len(set(self.betas)) != len(self.betas):
             raise ConfigError(f"betas must not repeat, got {self.betas}")
         if not self.assistance:

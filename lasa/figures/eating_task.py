@@ -35,7 +35,15 @@ import seaborn as sns
 from matplotlib.figure import Figure
 from tqdm.auto import tqdm
 
-from lasa.base.config import ControlConfig, Integer, NonNegative, PositiveInt, check_choice, to_dict, validate
+from lasa.base.config import (
+    ControlConfig,
+    NonNegative,
+    Positive,
+    PositiveInt,
+    check_choice,
+    to_dict,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property
@@ -68,22 +76,28 @@ BELIEFS = ("uncertain", "confident")
 class Config:
     """The eating decoder's data and training (notebook 10)."""
 
-    # the demonstrations (lasa.people.demos.DemoConfig; its seed is `seed` below): tilts per goal
+    # the demonstrations (lasa.people.demos.DemoConfig, its own seed included): tilts per goal
     # (n_theta), reaches from home per (goal, tilt) (n_starts), tilt adjustments (n_adjust), ...
     demos: DemoConfig = EATING_DEMOS
-    # training (lasa.method.train.TrainConfig; its seed is `seed`): the cup decoders' recipe,
-    # 2000 steps of a 3 x 128 network, with a 2-D latent (z_dim must stay 2: two stick axes)
+    # training (lasa.method.train.TrainConfig, its own seed included, which every fine-tune uses):
+    # the cup decoders' recipe, 2000 steps of a 3 x 128 network, with a 2-D latent (z_dim must
+    # stay 2: two stick axes)
     train: TrainConfig = TrainConfig(z_dim=2)
-    seed: Integer = 0  # seed of the demonstrations and of training [-]
     goal: str = "middle"  # the bowl the figure looks at [-]
     readings: tuple[str, ...] = EATING_READINGS  # demonstration readings trained [-]
-    lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, on the continuous base [-]
+    lambdas: tuple[NonNegative, ...] = (
+        0.0,
+        0.1,
+        0.3,
+        1.0,
+        3.0,
+    )  # notebook 03's sweep, on the continuous base [-]
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
     # The search for a decoder with both halves of the property: small entropy weights, which
     # trade the leave half against the stay half less than notebook 03's rule's lambda does,
     # on the bases whose demonstrations show departures (transfers; leaves, from a confident
     # belief). Each run costs one fine-tune of sweep_steps.
-    search_lambdas: tuple[float, ...] = (0.003, 0.01, 0.03)  # entropy weights of the search [-]
+    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)  # entropy weights of the search [-]
     search_readings: tuple[str, ...] = ("transfers", "leaves")  # bases the search fine-tunes [-]
     # A latent whose ring keeps departures and manipulation apart (lasa.method.sectors): these
     # readings' bases are trained with the sector loss too (<reading>_sectors, lambda = 0). The
@@ -110,8 +124,6 @@ class Config:
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
         object.__setattr__(self, "search_lambdas", tuple(float(x) for x in self.search_lambdas))
         object.__setattr__(self, "search_readings", tuple(self.search_readings))
-        if any(not x > 0 for x in self.search_lambdas):
-            raise ConfigError(f"search_lambdas must each be > 0, got {self.search_lambdas}")
         object.__setattr__(self, "sector_readings", tuple(self.sector_readings))
         for field in ("search_readings", "sector_readings"):
             for name in getattr(self, field):
@@ -121,14 +133,6 @@ class Config:
             raise ConfigError(
                 f"sector_weight must be > 0 when sector_readings are trained, got {self.sector_weight}"
             )
-
-    def demo_settings(self) -> DemoConfig:
-        """The demonstrations' settings, with this config's seed."""
-        return dataclasses.replace(self.demos, seed=self.seed)
-
-    def train_settings(self) -> TrainConfig:
-        """The training settings (the cup decoders' recipe with a 2-D latent), with this config's seed."""
-        return dataclasses.replace(self.train, seed=self.seed)
 
 
 def reading_names(config: Config) -> list[str]:
@@ -199,13 +203,13 @@ def train_readings(
     """
     robot = task.robot.name
     sets = task.belief_targets(control.likelihood)
-    train = config.train_settings()
+    train = config.train
     sweep_config = entropy_ablation.Config(
-        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=config.seed
+        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed
     )
     bases, datasets, demo_rows = {}, {}, []
     for reading in config.readings:
-        demos = collect_eating_demonstrations(task, control, config.demo_settings(), reading=reading)
+        demos = collect_eating_demonstrations(task, control, config.demos, reading=reading)
         save_demonstrations(demos, paths.artifact("eating_reading_demos", robot, reading=reading))
         clean = demos.clean()
         demo_rows.append(
@@ -235,7 +239,7 @@ def train_readings(
             models[name], fine = sweep.models[weight], sweep.configs[weight]
         else:
             fine = dataclasses.replace(
-                trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=config.seed
+                trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=train.seed
             )
             models[name], _ = train_decoder(
                 datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=False
@@ -246,7 +250,7 @@ def train_readings(
             paths.artifact("eating_reading_decoder", robot, reading=name),
             train=to_dict(fine),
             control=to_dict(control),
-            demos=to_dict(config.demo_settings()),
+            demos=to_dict(config.demos),
             reading=name,
         )
     frame = pd.concat(
@@ -264,7 +268,7 @@ def train_readings(
         paths.artifact("eating_decoder", robot),
         train=to_dict(fines[headline]),
         control=to_dict(control),
-        demos=to_dict(config.demo_settings()),
+        demos=to_dict(config.demos),
         reading=headline,
     )
     return Readings(models, sweep.table, float(lam), pd.DataFrame(demo_rows), frame, headline)

@@ -20,7 +20,7 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, Integer, PositiveInt, check_range, validate
+from lasa.base.config import ControlConfig, NonNegative, PositiveInt, Seed, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
 from lasa.method.dataset import Demonstrations
@@ -52,9 +52,9 @@ DPI = 130
 class Config:
     """The lambda sweep."""
 
-    lambdas: tuple[float, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
-    seed: Integer = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
+    seed: Seed = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
 
     def __post_init__(self) -> None:
         validate(self)
@@ -62,8 +62,6 @@ class Config:
             raise ConfigError(f"lambdas must include 0 (the control), got {self.lambdas!r}")
         if len(set(self.lambdas)) < 2:
             raise ConfigError("lambdas must hold 0 and at least one lambda > 0")
-        for lam in self.lambdas:
-            check_range("lambda", lam, 0.0)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -34,8 +34,9 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from collections.abc import Mapping
-from typing import Any
+from typing import Annotated, Any
 
+import annotated_types as at
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
@@ -45,8 +46,12 @@ from matplotlib.figure import Figure
 from lasa.base.config import (
     ASSISTANCE,
     ControlConfig,
-    Integer,
+    NonNegative,
+    NonNegativeInt,
+    Number,
+    Positive,
     PositiveInt,
+    Seed,
     UnitInterval,
     check_choice,
     check_range,
@@ -111,19 +116,26 @@ class Config:
     """The robustness grid of notebook 08, and the sweep run in each of its cells."""
 
     assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
-    alphas: tuple[float, ...] = (0.1, 0.2, 0.5)  # blend weights of Eq. M1 [-]
-    action_scales: tuple[float, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
+    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (
+        0.1,
+        0.2,
+        0.5,
+    )  # blend weights of Eq. M1 [-]
+    action_scales: tuple[Positive, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
     noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
-    betas: tuple[float, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
-    change_steps: tuple[int, ...] = (0, 120)  # sim2 change steps N (its claims read the ends) [steps]
+    betas: tuple[NonNegative, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
+    change_steps: tuple[NonNegativeInt, ...] = (
+        0,
+        120,
+    )  # sim2 change steps N (its claims read the ends) [steps]
     horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
     n_boot: PositiveInt = 400  # bootstrap resamples of each cell's 95% intervals [-]
-    seed: Integer = 0  # seed of the users (the same users in every cell: paired) [-]
+    seed: Seed = 0  # seed of the users (the same users in every cell: paired) [-]
     n_jobs: PositiveInt = 1  # local worker processes for the cells [-]
     scheduler: str | None = None  # Dask scheduler address; None: $LASA_SCHEDULER, else local
 
@@ -134,10 +146,6 @@ class Config:
             if not values:
                 raise ConfigError(f"{name} must not be empty")
             object.__setattr__(self, name, values)
-        for a in self.alphas:
-            check_range("alpha", a, 0.0, 1.0, low_open=True)
-        for s in self.action_scales:
-            check_range("action_scale", s, 0.0, low_open=True)
         if not {75.0, 1000.0} <= set(self.betas):
             raise ConfigError("betas must hold 75 and 1000 (the sim1 claims read them)")
         check_members(self.assistance)

@@ -27,7 +27,7 @@ import dataclasses
 import mink
 import numpy as np
 
-from lasa.base.config import check_range
+from lasa.base.config import NonNegative, Positive, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot
 
@@ -57,16 +57,13 @@ class RetargetConfig:
     # under 4 s, and one control period (dt = 0.1 s) moves it 1.5 cm: fast enough to be usable,
     # fine enough to stop at a grasp. The joint speed sigma_h = 0.375 rad/s of the latent actions
     # moves the hand at a similar speed, so neither interface wins by being faster.
-    linear_speed: float = 0.15  # speed of the site at full stick deflection [m/s]
-    angular_speed: float = 0.6  # at full deflection: a quarter turn in ~2.6 s, 3.4 deg per 0.1 s [rad/s]
-    damping: float = 1e-3  # Levenberg-Marquardt damping of mink's QP [-]
-    posture_cost: float = 1e-3  # weight of the posture task towards the current q (redundancy) [-]
+    linear_speed: Positive = 0.15  # speed of the site at full stick deflection [m/s]
+    angular_speed: Positive = 0.6  # at full deflection: a quarter turn in ~2.6 s, 3.4 deg per 0.1 s [rad/s]
+    damping: Positive = 1e-3  # Levenberg-Marquardt damping of mink's QP [-]
+    posture_cost: NonNegative = 1e-3  # weight of the posture task towards the current q (redundancy) [-]
 
     def __post_init__(self) -> None:
-        check_range("linear_speed", self.linear_speed, 0.0, low_open=True)
-        check_range("angular_speed", self.angular_speed, 0.0, low_open=True)
-        check_range("damping", self.damping, 0.0, low_open=True)
-        check_range("posture_cost", self.posture_cost, 0.0)
+        validate(self)
 
 
 def _modes(mode: int | np.ndarray) -> np.ndarray:

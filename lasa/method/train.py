@@ -26,11 +26,11 @@ from tqdm.auto import tqdm
 from lasa.base.config import (
     AtLeastTwo,
     ControlConfig,
-    Integer,
     NonNegative,
     Number,
     Positive,
     PositiveInt,
+    Seed,
     validate,
 )
 from lasa.base.errors import ConfigError
@@ -72,7 +72,7 @@ class TrainConfig:
     sector_share: Annotated[Number, at.Gt(0.0), at.Lt(1.0)] = (
         0.375  # the departure sector's share of the ring [-]
     )
-    seed: Integer = 0  # seed of initialisation, batches and noise [-]
+    seed: Seed = 0  # seed of initialisation, batches and noise [-]
 
     def __post_init__(self) -> None:
         validate(self)

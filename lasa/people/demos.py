@@ -32,12 +32,12 @@ import pandas as pd
 
 from lasa.base.config import (
     ControlConfig,
-    Integer,
     NonNegative,
     NonNegativeInt,
     Number,
     Positive,
     PositiveInt,
+    Seed,
     check_choice,
     validate,
 )
@@ -74,8 +74,8 @@ class DemoConfig:
     n_perturb: NonNegativeInt = 2  # noisy copies of every tuple [-]
     perturb_std: NonNegative = 0.05  # std of the state perturbation of a copy [rad]
     perturb_gain: NonNegative = 2.0  # gain of a copy's corrective action [1/s]
-    max_steps: int = 400  # cap on the length of one motion [steps]
-    seed: Integer = 0  # seed of the start perturbations, new preferences and copies
+    max_steps: PositiveInt = 400  # cap on the length of one motion [steps]
+    seed: Seed = 0  # seed of the start perturbations, new preferences and copies
 
     def __post_init__(self) -> None:
         validate(self)

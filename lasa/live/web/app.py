@@ -28,6 +28,7 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket
 
+from lasa.base.config import Positive, validate
 from lasa.base.errors import ConfigError
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
@@ -76,12 +77,13 @@ class WebConfig:
 
     sessions: str
     build_dir: str = "build"
-    practice_s: float = 300.0
-    trial_s: float = 300.0
+    practice_s: Positive = 300.0
+    trial_s: Positive = 300.0
     frames: str = "browser"
     origins: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
+        validate(self)
         if self.frames not in FRAMES:
             raise ConfigError(f"frames is one of {FRAMES}, got {self.frames!r}")
 
