@@ -10,7 +10,7 @@ from numpy.testing import assert_allclose
 from lasa.base.errors import ConfigError
 from lasa.method.dataset import REACH
 from lasa.people.demos import DemoConfig, collect_eating_demonstrations
-from lasa.people.participants import tip_frames
+from lasa.people.kinematics import tip_frames
 from lasa.world.eating import (
     EATING,
     GOALS,

@@ -13,17 +13,10 @@ from stand_ins import LinearDecoder
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.people.participants import (
-    ParticipantConfig,
-    StudyConfig,
-    alignment,
-    draw_cohort,
-    goal_error,
-    idle_time,
-    measures,
-    simulate,
-    williams_square,
-)
+from lasa.people.cohort import ParticipantConfig, draw_cohort, williams_square
+from lasa.people.design import StudyConfig
+from lasa.people.measures import alignment, goal_error, idle_time, measures
+from lasa.people.participants import simulate
 from lasa.world.eating import make_eating_task
 
 

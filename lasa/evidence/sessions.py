@@ -1,9 +1,9 @@
 """People's sessions of the eating study, read back for analysis: the logs and the questionnaire.
 
 - :func:`load_sessions`: logged sessions (:mod:`lasa.evidence.sessionlog`, written live by
-  :mod:`lasa.live.teleop`) as the :class:`lasa.people.participants.Episodes` that the simulated
+  :mod:`lasa.live.teleop`) as the :class:`lasa.people.design.Episodes` that the simulated
   cohort produces, so people's sessions go through the same measures
-  (:func:`lasa.people.participants.measures`) and statistics.
+  (:func:`lasa.people.measures.measures`) and statistics.
 - :func:`read_likert`: the answers :func:`lasa.live.studykit.survey` saved (``likert.csv``).
 - :func:`likert_tests`: the paired t-tests of Fig. dessert's right panel, LA+SA against each
   other condition on each scale (Holm's correction over the three comparisons of a scale).
@@ -27,7 +27,8 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
-from lasa.people.participants import Episodes, tip_frames
+from lasa.people.design import Episodes
+from lasa.people.kinematics import tip_frames
 
 __all__ = [
     "SCALES",
@@ -106,7 +107,7 @@ def load_sessions(
     include_interrupted: bool = False,
     include_damaged: bool = False,
 ) -> Episodes:
-    """The eating-task sessions in ``folder`` as :class:`lasa.people.participants.Episodes`.
+    """The eating-task sessions in ``folder`` as :class:`lasa.people.design.Episodes`.
 
     Sessions are chosen by :func:`scan_sessions`; each one left out is named in a warning,
     with the reason.
@@ -242,7 +243,7 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
 
     Returns:
         The tidy ``goal_error``, ``time`` and ``alignment`` tables of the sessions
-        (:func:`lasa.people.participants.measures`), ``means`` per condition; over the
+        (:func:`lasa.people.measures.measures`), ``means`` per condition; over the
         participants who did every condition in every task (at least two), ``sa_effect``
         (the within-subjects SA test on Goal Error and on the mean distance) and
         ``time_tests`` (LA+SA against each condition, times summed over tasks, Holm); with
@@ -252,7 +253,7 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
         within-subject test, each with the reason (also given as warnings).
     """
     from lasa.evidence import stats
-    from lasa.people.participants import measures
+    from lasa.people.measures import measures
     from lasa.world.eating import EatingTask
 
     if not isinstance(task, EatingTask):

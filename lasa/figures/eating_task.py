@@ -52,7 +52,7 @@ from lasa.method.dataset import save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig, train_decoder
 from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
-from lasa.people.participants import tip_frames
+from lasa.people.kinematics import tip_frames
 from lasa.world.eating import GOALS, EatingTask
 
 __all__ = [

@@ -1,6 +1,6 @@
 r"""The eating study (notebook 11): Figs. error, time and dessert (left), and claims H1-H3.
 
-A cohort of simulated participants (:mod:`lasa.people.participants`) does both eating tasks under R,
+A cohort of simulated participants (:mod:`lasa.people.cohort`) does both eating tasks under R,
 R+SA, LA and LA+SA. The first ten are the paper's study size; the whole cohort is the
 larger one. Three tidy tables come out, one row per participant x condition x task (x
 phase), each with its figure:
@@ -105,18 +105,11 @@ from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED, rule
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people import participants, planning
-from lasa.people.participants import (
-    TASK_NAMES,
-    Episodes,
-    ParticipantConfig,
-    StudyConfig,
-    draw_cohort,
-    interface_of,
-    measures,
-    progress_gain,
-    tip_frames,
-    tip_motion,
-)
+from lasa.people.cohort import ParticipantConfig, draw_cohort
+from lasa.people.design import TASK_NAMES, Episodes, StudyConfig, interface_of
+from lasa.people.kinematics import tip_frames, tip_motion
+from lasa.people.measures import measures
+from lasa.people.policy import progress_gain
 from lasa.world.eating import GOALS, TASKS, EatingTask, fork_frame, waypoints
 
 __all__ = [

@@ -224,7 +224,8 @@ class Station:
     def _check_waypoint(self) -> None:
         if not self.waypoints or self.done:
             return
-        from lasa.people.participants import StudyConfig, tip_frames, waypoint_reached
+        from lasa.people.design import StudyConfig
+        from lasa.people.kinematics import tip_frames, waypoint_reached
         from lasa.world.eating import fork_frame
 
         if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once

@@ -6,8 +6,9 @@ every input first moves the fork away from the plate, but several, *held* for a 
 reach it) they never finish, although the paper's people, who practised up to 5 minutes per
 condition, held the stick and did. The participant here plans over held inputs instead; it
 is the same person otherwise (the same cohort, learning curve, Boltzmann choice, idleness and
-patience, cost and waypoints), so the study can run either model
-(:func:`simulate` has the signature and the record of :func:`lasa.people.participants.simulate`).
+patience, cost and waypoints: :mod:`lasa.people.policy`; the same loop: :mod:`lasa.people.loop`),
+so the study can run either model (:func:`simulate` has the signature and the record of
+:func:`lasa.people.participants.simulate`).
 
 **The plan.** Every ``replan`` seconds the participant chooses a stick input z (the same
 n_z x n_z grid; the rest position is not a plan) and a hold h from ``holds``; they hold z
@@ -27,7 +28,7 @@ in the same direction, and half the choices would be taps followed by 0.4 s of r
 Retargeting participants idle 60% of the time, none finishing in 30 s). The participant picks
 a plan by the Boltzmann rule with their beta(t) (Gumbel-max, their episode's own stream),
 and rests until the next re-plan when the best plan is worth less than ``idle_threshold``,
-until their ``patience`` runs out (:class:`lasa.people.participants.ParticipantConfig`).
+until their ``patience`` runs out (:class:`lasa.people.cohort.ParticipantConfig`).
 
 **How the plans are foreseen: an asymmetry, for cost.**
 
@@ -36,7 +37,7 @@ until their ``patience`` runs out (:class:`lasa.people.participants.ParticipantC
   each step decoding phi(z, s, b), blending with the episode's own alpha and SA member and
   updating the belief, as the executed step does
   (:func:`lasa.method.step.human_action`, :func:`lasa.method.step.advance`); the fork's pose
-  is read (:func:`lasa.people.participants.tip_frames`) only at the step counts of the
+  is read (:func:`lasa.people.kinematics.tip_frames`) only at the step counts of the
   holds. The roll is exact up to the re-plan period (the holds that will be executed as
   they are); beyond it each rolled step spans ``coarse`` control steps (the same ``advance``
   with ``coarse * dt``), for cost: 60 exact steps of every candidate at every re-plan would cost
@@ -67,31 +68,21 @@ latent actions, as the one-step model is a pessimistic one.
 from __future__ import annotations
 
 import dataclasses
+import functools
 
-import mujoco
 import numpy as np
-from tqdm.auto import tqdm
 
-from lasa.base.conditions import CONDITIONS
 from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
-from lasa.method.belief import belief, uniform_log_belief
+from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
-from lasa.method.step import advance, check_decoder, human_action, latent_grid
-from lasa.people.participants import (
-    TASK_NAMES,
-    Cohort,
-    Episodes,
-    Layout,
-    StudyConfig,
-    layout,
-    progress_gain,
-    tip_frames,
-    waypoint_arrays,
-    waypoint_reached,
-)
-from lasa.people.users import choose_latent, gumbel_noise
+from lasa.method.retarget import MODES, retarget_action, twist
+from lasa.method.step import advance, human_action
+from lasa.people.cohort import Cohort
+from lasa.people.design import Episodes, StudyConfig
+from lasa.people.kinematics import tip_frames
+from lasa.people.loop import Setting, State, move_robots, prepare, run_steps, start
+from lasa.people.policy import choose, progress_gain, rationality
 from lasa.world.eating import EatingTask
 
 __all__ = ["PlanConfig", "simulate"]
@@ -158,30 +149,14 @@ def _rotate(v: np.ndarray, rotvec: np.ndarray) -> np.ndarray:
 
 
 @dataclasses.dataclass(frozen=True)
-class _Study:
-    """What every step of a planning study reads and never changes."""
+class _Study(Setting):
+    """A planning study's fixed parts: the loop's, and the plans' inputs and holds."""
 
-    task: EatingTask
-    decoder: ActionDecoder
-    control: ControlConfig
-    config: StudyConfig
-    layout: Layout
-    streams: list[np.random.Generator]
-    wp_pos: np.ndarray
-    wp_dir: np.ndarray
-    wp_phase: np.ndarray
-    n_wp: np.ndarray
-    grid: np.ndarray  # the stick's grid (K, 2), rest in the middle
-    rest: int  # index of the rest position in grid
     moves: np.ndarray  # grid indices of the plans' inputs (every one but rest), (K',)
     replan_steps: int
     coarse: int  # control steps per rolled step beyond the re-plan period
     hold_steps: np.ndarray  # (H,)
     r_twist: np.ndarray  # twist of every (mode, move) at full scale, (M, K', 6)
-    unit: float  # the best translation one step of Retargeting makes [m]
-    retarget: Retargeting
-    sets: np.ndarray
-    data: mujoco.MjData
 
     @property
     def n_plans(self) -> int:
@@ -190,28 +165,12 @@ class _Study:
 
 
 @dataclasses.dataclass
-class _Run:
-    """The state of a running study: the robots, the participants' plans, and the record."""
+class _Run(State):
+    """A running planning study: the loop's state, and each episode's plan."""
 
-    s: np.ndarray  # joints (E, n)
-    log_b: np.ndarray  # log belief (E, G)
-    mode: np.ndarray  # Retargeting mode (E,)
-    w: np.ndarray  # current waypoint (E,)
-    end: np.ndarray  # step each episode ended (E,)
-    waited: np.ndarray  # consecutive idle steps (E,)
-    running: np.ndarray  # (E,) bool
     z_plan: np.ndarray  # grid index of the held input (E,)
     presses_left: np.ndarray  # mode presses before the hold (E,)
     hold_left: np.ndarray  # steps of the hold left (E,)
-    pos: np.ndarray  # tip position now (E, 3)
-    axis: np.ndarray  # fork direction now (E, 3)
-    states: np.ndarray
-    tip: np.ndarray
-    direction: np.ndarray
-    phase: np.ndarray
-    beliefs: np.ndarray
-    idle: np.ndarray
-    switch: np.ndarray
 
 
 def _prepare(
@@ -225,97 +184,31 @@ def _prepare(
     plan: PlanConfig,
 ) -> _Study:
     """Check the inputs and build the study's fixed parts."""
-    check_decoder(decoder, task)
-    if not interfaces or not set(interfaces) <= {"R", "LA"}:
-        raise ConfigError(f"interfaces must be a non-empty subset of ('R', 'LA'), got {interfaces!r}")
-    if decoder.z_dim != 2:
-        raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
+    setting = prepare(task, decoder, cohort, control, config, seed, interfaces)
     replan_steps, hold_steps = plan.steps(control.dt)
-    episodes = layout(cohort, control, tuple(config.members), interfaces)
-    streams = [
-        np.random.default_rng([seed, int(p), int(c), int(k)])
-        for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
-    ]
-    grid = latent_grid(config.n_z, 2)
-    rest = int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0])
-    moves = np.flatnonzero(np.arange(len(grid)) != rest)
+    moves = np.flatnonzero(np.arange(len(setting.grid)) != setting.rest)
     r_twist = np.stack(
-        [twist(np.full(len(moves), m), grid[moves], config.retarget) for m in range(len(MODES))]
+        [twist(np.full(len(moves), m), setting.grid[moves], config.retarget) for m in range(len(MODES))]
     )
-    robot = task.robot
-    wp_pos, wp_dir, wp_phase, n_wp = waypoint_arrays(robot)
     return _Study(
-        task=task,
-        decoder=decoder,
-        control=control,
-        config=config,
-        layout=episodes,
-        streams=streams,
-        wp_pos=wp_pos,
-        wp_dir=wp_dir,
-        wp_phase=wp_phase,
-        n_wp=n_wp,
-        grid=grid,
-        rest=rest,
+        **vars(setting),
         moves=moves,
         replan_steps=replan_steps,
         coarse=plan.coarse,
         hold_steps=hold_steps,
         r_twist=r_twist,
-        unit=control.dt * config.retarget.linear_speed,
-        retarget=Retargeting(robot, control.dt, config.retarget),
-        sets=task.belief_targets(control.likelihood),
-        data=mujoco.MjData(robot.model),
     )
 
 
 def _start(study: _Study) -> _Run:
-    """Every episode at the task's start, nothing recorded yet."""
-    n_e, horizon = len(study.layout.part), study.config.horizon
-    n, g = study.task.robot.n_joints, study.task.n_goals
-    zeros = np.zeros(n_e, dtype=int)
+    """Every episode at the task's start with no plan, nothing recorded yet."""
+    zeros = np.zeros(len(study.layout.part), dtype=int)
     return _Run(
-        s=np.broadcast_to(study.task.start, (n_e, n)).copy(),
-        log_b=uniform_log_belief(n_e, g),
-        mode=zeros.copy(),
-        w=zeros.copy(),
-        end=np.full(n_e, horizon),
-        waited=zeros.copy(),
-        running=np.ones(n_e, dtype=bool),
-        z_plan=np.full(n_e, study.rest),
+        **vars(start(study)),
+        z_plan=np.full(len(zeros), study.rest),
         presses_left=zeros.copy(),
         hold_left=zeros.copy(),
-        pos=np.zeros((n_e, 3)),
-        axis=np.zeros((n_e, 3)),
-        states=np.empty((horizon + 1, n_e, n)),
-        tip=np.empty((horizon + 1, n_e, 3)),
-        direction=np.empty((horizon + 1, n_e, 3)),
-        phase=np.zeros((horizon + 1, n_e), dtype=int),
-        beliefs=np.empty((horizon + 1, n_e, g)),
-        idle=np.zeros((horizon, n_e), dtype=bool),
-        switch=np.zeros((horizon, n_e), dtype=bool),
     )
-
-
-def _observe(study: _Study, run: _Run, t: int) -> bool:
-    """Record step t, move on past reached waypoints; True when the study is over."""
-    tsk = study.layout.tsk
-    pos, axis, _, _ = tip_frames(study.task.robot, study.data, run.s)
-    run.pos, run.axis = pos, axis
-    run.states[t], run.tip[t], run.direction[t], run.beliefs[t] = run.s, pos, axis, belief(run.log_b)
-    here = study.wp_pos[tsk, run.w]
-    reached = run.running & waypoint_reached(pos, axis, here, study.wp_dir[tsk, run.w], study.config)
-    run.w = np.where(reached, run.w + 1, run.w)
-    finished = reached & (run.w >= study.n_wp[tsk])
-    run.end[finished] = t
-    run.running &= ~finished
-    run.w = np.minimum(run.w, study.n_wp[tsk] - 1)
-    run.phase[t] = study.wp_phase[tsk, run.w]
-    if t < study.config.horizon and run.running.any():
-        return False
-    run.states[t + 1 :], run.tip[t + 1 :], run.direction[t + 1 :] = run.s, pos, axis
-    run.beliefs[t + 1 :], run.phase[t + 1 :] = run.beliefs[t], run.phase[t]
-    return True
 
 
 def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
@@ -403,12 +296,8 @@ def _plan(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
         values[la, :n_la] = _latent_values(study, run, idx[la])
     if (~la).any():
         values[~la] = _retarget_values(study, run, idx[~la])
-    experience = lay.e0[idx] + t * study.control.dt
-    beta = lay.beta_inf[idx] * (1.0 - (1.0 - pc.novice_fraction) * np.exp(-experience / lay.tau[idx]))
-    uniforms = np.stack([study.streams[e].random(study.n_plans) for e in idx])
-    choice = choose_latent(-values, beta, gumbel_noise(uniforms))
-    patience_steps = max(1, round(pc.patience / study.control.dt))
-    wants = (values.max(axis=1) >= pc.idle_threshold) | (run.waited[idx] >= patience_steps)
+    beta = rationality(lay, idx, t, study.control.dt, pc)
+    choice, wants = choose(values, beta, study.streams, idx, run.waited, study.control.dt, pc)
     plan_mode, rem = np.divmod(choice, len(study.moves) * n_h)
     move, hold = np.divmod(rem, n_h)
     run.z_plan[idx] = np.where(wants, study.moves[move], study.rest)
@@ -437,18 +326,14 @@ def _execute(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
     run.waited[idx] = np.where(resting, run.waited[idx] + 1, 0)
     run.presses_left[idx] -= press
     run.hold_left[idx] -= moving
-    step = advance(
-        study.task,
-        study.control,
-        run.s[idx],
-        run.log_b[idx],
-        a_h,
-        lay.alpha[idx],
-        study.sets,
-        b,
-        lay.members_run[idx],
-    )
-    run.s[idx], run.log_b[idx] = step.state, step.log_belief
+    move_robots(study, run, idx, a_h, b)
+
+
+def _step(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
+    """One control step of the running episodes ``idx``: a re-plan when one is due, then the plan's step."""
+    if t % study.replan_steps == 0:
+        _plan(study, run, t, idx)
+    _execute(study, run, t, idx)
 
 
 def simulate(
@@ -473,7 +358,7 @@ def simulate(
     Args:
         task: The eating task.
         decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
-        cohort: The simulated participants (:func:`lasa.people.participants.draw_cohort`).
+        cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
         control: Control-loop units; the assisted conditions run under each of ``config.members``.
         config: Session settings and the participants' free parameters.
         seed: Seed of the participants' choices.
@@ -487,37 +372,5 @@ def simulate(
     """
     study = _prepare(task, decoder, cohort, control, config, seed, interfaces, plan)
     run = _start(study)
-    n_e = len(study.layout.part)
-    bar = tqdm(
-        total=config.horizon,
-        desc=f"planning study: {len(cohort)} participants, {n_e} episodes",
-        disable=not progress,
-    )
-    for t in range(config.horizon + 1):
-        if _observe(study, run, t):
-            break
-        idx = np.flatnonzero(run.running)
-        if t % study.replan_steps == 0:
-            _plan(study, run, t, idx)
-        _execute(study, run, t, idx)
-        bar.update(1)
-    bar.close()
-    lay = study.layout
-    return Episodes(
-        participant=lay.part,
-        condition=np.asarray(CONDITIONS)[lay.cond],
-        assistance=lay.member,
-        task=np.asarray(TASK_NAMES)[lay.tsk],
-        order=lay.order,
-        states=run.states,
-        tip=run.tip,
-        direction=run.direction,
-        phase=run.phase,
-        idle=run.idle,
-        switch=run.switch,
-        end=run.end,
-        completed=run.end < config.horizon,
-        dt=control.dt,
-        belief=run.beliefs,
-        waypoint=run.w,
-    )
+    desc = f"planning study: {len(cohort)} participants, {len(study.layout.part)} episodes"
+    return run_steps(study, run, functools.partial(_step, study, run), desc, progress)

@@ -1,0 +1,157 @@
+"""The eating study's design: its settings, its episodes, and what each episode records.
+
+Every simulated participant (:mod:`lasa.people.cohort`) does both tasks
+(:data:`lasa.world.eating.TASKS`) under the four conditions of the 2x2 design
+(:data:`lasa.base.conditions.CONDITIONS`), each assisted condition under every SA member of
+:class:`StudyConfig`: one episode per participant x arm x task (:func:`layout`). A study's
+record (:class:`Episodes`) is the same whichever participant model ran it, and the same for
+logged sessions of real people (:mod:`lasa.evidence.sessions`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from lasa.base.conditions import CONDITIONS, alpha_of
+from lasa.base.conditions import parse as parse_condition
+from lasa.base.config import (
+    ASSISTANCE,
+    NO_ASSISTANCE,
+    ControlConfig,
+    PositiveInt,
+    check_choice,
+    check_range,
+    validate,
+)
+from lasa.base.errors import ConfigError
+from lasa.method.retarget import RetargetConfig
+from lasa.people.cohort import Cohort, ParticipantConfig
+from lasa.world.eating import TASKS
+
+__all__ = ["TASK_NAMES", "interface_of", "StudyConfig", "Episodes", "Layout", "layout"]
+
+TASK_NAMES = tuple(TASKS)
+
+
+def interface_of(condition: str) -> str:
+    """``R`` or ``LA``: the control interface of one of the study's conditions."""
+    return parse_condition(condition, CONDITIONS).interface
+
+
+@dataclasses.dataclass(frozen=True)
+class StudyConfig:
+    """How a study session runs (the participants' parameters are in ``participant``)."""
+
+    # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
+    horizon: PositiveInt = 1500
+    position_tol: float = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
+    angle_tol: float = 0.2  # ... with the fork's direction this close (~11 degrees) [rad]
+    # The SA members the assisted conditions run under (lasa.method.assistance); the first is the
+    # headline. The paper's study used hindsight optimisation.
+    members: tuple[str, ...] = ("hindsight",)
+    n_z: int = 5  # stick positions per axis the participant weighs (25 incl. rest) [-]
+    participant: ParticipantConfig = ParticipantConfig()
+    retarget: RetargetConfig = RetargetConfig()
+
+    def __post_init__(self) -> None:
+        validate(self)
+        check_range("position_tol", self.position_tol, 0.0, low_open=True)
+        check_range("angle_tol", self.angle_tol, 0.0, np.pi, low_open=True)
+        if not self.members:
+            raise ConfigError("members must name at least one assistance member")
+        for name in self.members:
+            check_choice("assistance", name, ASSISTANCE)
+        if int(self.n_z) != self.n_z or self.n_z < 3 or self.n_z % 2 == 0:
+            raise ConfigError(
+                f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"
+            )
+
+
+@dataclasses.dataclass(frozen=True)
+class Episodes:
+    """The record of a simulated study: one episode per participant x condition x task.
+
+    Attributes:
+        participant, condition, task: Who, under which condition (name), which task (name), (E,).
+        assistance: The SA member of each episode (``"none"`` for R and LA), (E,).
+        order: The position of the condition in the participant's session (0-3), (E,).
+        states: Joint positions, (T+1, E, n) [rad] (held after an episode ends).
+        tip: Fork-tip positions, (T+1, E, 3) [m].
+        direction: Fork directions (unit), (T+1, E, 3).
+        phase: Index of the phase each step belongs to, (T+1, E).
+        idle: Whether the participant gave no stick input at each step, (T, E).
+        switch: Whether the step was a mode switch (Retargeting), (T, E).
+        end: The step each episode ended (its Total Time in steps; the horizon if unfinished), (E,).
+        completed: Whether it finished within the horizon, (E,).
+        dt: The control period [s].
+        belief: The robot's belief over the goals at each step, (T+1, E, G) (None: not logged).
+        waypoint: The waypoint each episode was working towards when it ended, (E,) (None: not logged).
+    """
+
+    participant: np.ndarray
+    condition: np.ndarray
+    assistance: np.ndarray
+    task: np.ndarray
+    order: np.ndarray
+    states: np.ndarray
+    tip: np.ndarray
+    direction: np.ndarray
+    phase: np.ndarray
+    idle: np.ndarray
+    switch: np.ndarray
+    end: np.ndarray
+    completed: np.ndarray
+    dt: float
+    belief: np.ndarray | None = None
+    waypoint: np.ndarray | None = None
+
+    def active(self) -> np.ndarray:
+        """(T, E): whether each episode was still running at each step."""
+        steps = np.arange(self.idle.shape[0])[:, None]
+        return steps < self.end[None, :]
+
+
+@dataclasses.dataclass(frozen=True)
+class Layout:
+    """The episodes of a study and each one's fixed settings, (E,) each (participants' order)."""
+
+    part: np.ndarray  # participant index
+    tsk: np.ndarray  # task index into TASK_NAMES
+    cond: np.ndarray  # condition index into CONDITIONS
+    member: np.ndarray  # SA member, NO_ASSISTANCE for R and LA
+    members_run: np.ndarray  # the member advance() runs (alpha = 0 where there is none)
+    is_la: np.ndarray  # latent actions (else Retargeting)
+    alpha: np.ndarray  # blend weight
+    order: np.ndarray  # position of the condition in the participant's session
+    e0: np.ndarray  # experience before the condition [s]
+    beta_inf: np.ndarray
+    tau: np.ndarray  # learning time constant [s]
+
+
+def layout(
+    cohort: Cohort, control: ControlConfig, members: tuple[str, ...], interfaces: tuple[str, ...]
+) -> Layout:
+    """The study's episodes, participant-major, then arm (the unassisted conditions once, each
+    assisted one under every member), then task; every model of participant runs this order."""
+    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
+    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
+    n_a, n_t = len(arms), len(TASK_NAMES)
+    part = np.repeat(np.arange(len(cohort)), n_a * n_t)
+    arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
+    cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
+    member = np.array([arms[a][1] for a in arm])
+    return Layout(
+        part=part,
+        tsk=np.tile(np.arange(n_t), len(cohort) * n_a),
+        cond=cond,
+        member=member,
+        members_run=np.where(member == NO_ASSISTANCE, members[0], member),
+        is_la=np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond],
+        alpha=np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond],
+        order=np.argsort(cohort.order, axis=1)[part, cond],
+        e0=cohort.experience()[part, cond],
+        beta_inf=cohort.beta[part],
+        tau=cohort.learning_time[part],
+    )

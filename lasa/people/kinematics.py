@@ -1,0 +1,109 @@
+"""The fork's tip in the eating study: its frames, how a joint step moves it, and its waypoints.
+
+The study's participants (:mod:`lasa.people.participants`, :mod:`lasa.people.planning`) and live
+teleoperation (:mod:`lasa.live.teleop`) read the fork's pose through :func:`tip_frames` and test
+a waypoint with :func:`waypoint_reached`, so a simulated and a real participant finish a phase by
+the same rule.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from lasa.people.design import TASK_NAMES, StudyConfig
+from lasa.world.eating import fork_frame, waypoints
+from lasa.world.robot import Robot
+
+__all__ = [
+    "tip_frames",
+    "angle_between",
+    "normalise",
+    "tip_motion",
+    "waypoint_arrays",
+    "waypoint_reached",
+]
+
+
+def tip_frames(
+    robot: Robot, data: mujoco.MjData, qs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The grasp site's position, direction (+z) and Jacobians at joint vectors ``qs`` (B, n).
+
+    Returns:
+        position (B, 3), direction (B, 3), translational Jacobian (B, 3, n) and rotational
+        Jacobian (B, 3, n) with respect to the arm joints.
+    """
+    model = robot.model
+    site = model.site(robot.spec.grasp_site).id
+    dofs = np.array([model.jnt_dofadr[model.joint(j).id] for j in robot.spec.joints])
+    b = len(qs)
+    pos, axis = np.empty((b, 3)), np.empty((b, 3))
+    jp, jr = np.empty((b, 3, len(dofs))), np.empty((b, 3, len(dofs)))
+    jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+    for i, q in enumerate(qs):  # MuJoCo's kinematics take one configuration at a time
+        data.qpos[robot.qpos_adr] = q
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        mujoco.mj_jacSite(model, data, jacp, jacr, site)
+        pos[i] = data.site_xpos[site]
+        axis[i] = data.site_xmat[site].reshape(3, 3)[:, 2]
+        jp[i], jr[i] = jacp[:, dofs], jacr[:, dofs]
+    return pos, axis, jp, jr
+
+
+def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle between unit vectors along the last axis [rad]."""
+    return np.arccos(np.clip(np.einsum("...i,...i->...", a, b), -1.0, 1.0))
+
+
+def normalise(v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` scaled to unit length along the last axis (a zero vector stays zero)."""
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)
+
+
+def tip_motion(
+    jp: np.ndarray, jr: np.ndarray, axis: np.ndarray, dq: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The tip's displacement and new direction for joint steps ``dq`` (A, K, n), to first order.
+
+    Args:
+        jp, jr: Translational and rotational Jacobians, (A, 3, n).
+        axis: The fork's direction now, (A, 3).
+        dq: Candidate joint steps, (A, K, n) [rad].
+
+    Returns:
+        Displacements (A, K, 3) [m] and unit directions (A, K, 3).
+    """
+    dp = np.einsum("aij,akj->aki", jp, dq)
+    rot = np.einsum("aij,akj->aki", jr, dq)
+    return dp, normalise(axis[:, None, :] + np.cross(rot, axis[:, None, :]))
+
+
+def waypoint_arrays(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every task's waypoints, padded: positions (T, W, 3), directions (T, W, 3), phases (T, W),
+    counts (T,)."""
+    plans = [waypoints(name) for name in TASK_NAMES]
+    n_wp = np.array([len(p) for p in plans])
+    w_max, n_t = int(n_wp.max()), len(plans)
+    wp_pos, wp_dir = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
+    wp_phase = np.zeros((n_t, w_max), dtype=int)
+    for k, plan in enumerate(plans):
+        for j, wp in enumerate(plan):
+            pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
+            wp_pos[k, j], wp_dir[k, j], wp_phase[k, j] = pos, rot[:, 2], wp.phase
+    return wp_pos, wp_dir, wp_phase, n_wp
+
+
+def waypoint_reached(
+    tip: np.ndarray,
+    direction: np.ndarray,
+    target: np.ndarray,
+    target_direction: np.ndarray,
+    config: StudyConfig,
+) -> np.ndarray:
+    """Whether the fork tip is within ``config.position_tol`` of its waypoint and its direction within
+    ``config.angle_tol`` of the waypoint's, vectorised over leading dimensions (the study and live
+    teleoperation share this test)."""
+    close = np.linalg.norm(tip - target, axis=-1) < config.position_tol
+    return close & (angle_between(direction, target_direction) < config.angle_tol)

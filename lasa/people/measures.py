@@ -1,0 +1,125 @@
+"""The eating study's measures (Sec. VI), from the record of a simulated or logged session.
+
+*Total Time* to finish the task, *Idle Time* without stick input, *Goal Error* the tip's
+distance to the closest goal summed over the task (times dt: metre-seconds), *Preference
+Alignment* the dot product between the fork's direction and the direction the phase's
+preference needs, averaged over the phase. The Likert questionnaire is not among them: people
+answer it (the teleoperation kit), simulated participants do not.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from lasa.people.design import TASK_NAMES, Episodes
+from lasa.world.eating import GOALS, PREFERENCES, TASKS, EatingTask, fork_direction
+from lasa.world.robot import Robot
+
+__all__ = ["goal_error", "idle_time", "alignment", "measures"]
+
+
+def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
+    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.
+
+    Args:
+        tip: Tip positions, (T, E, 3) [m].
+        goals: Goal positions, (G, 3) [m].
+        active: Which steps count (the episode was running), (T, E).
+        dt: Control period [s].
+
+    Returns:
+        Per episode [m s], shape (E,).
+    """
+    dist = np.linalg.norm(tip[:, :, None, :] - goals[None, None], axis=-1).min(axis=-1)
+    return (dist * active).sum(axis=0) * dt
+
+
+def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
+    """Idle Time: time without stick input while the task ran, per episode [s], (E,)."""
+    return (idle & active).sum(axis=0) * dt
+
+
+def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,).
+
+    Args:
+        direction: The fork's direction (unit), (T, E, 3).
+        desired: The preference's direction d(theta) (unit), (E, 3) or (T, E, 3).
+        mask: The steps of the phase, (T, E).
+    """
+    dots = np.einsum("tei,tei->te", direction, np.broadcast_to(desired, direction.shape))
+    count = mask.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(count > 0, (dots * mask).sum(axis=0) / count, np.nan)
+
+
+def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
+    """The study's tidy tables from a simulated (or logged) session.
+
+    Returns:
+        ``{"goal_error": ..., "time": ..., "alignment": ...}``: one row per participant x
+        condition x task (x phase for alignment). Goal Error is given under two readings of
+        "the closest goal": all four goals, the three bowls and the plate, whichever the task
+        visits (``goal_error``), and the three bowls only (``goal_error_bowls``);
+        ``mean_distance`` is Goal Error divided by the task's time [m].
+    """
+    robot = task.robot
+    goals = robot.cup_positions()
+    active = episodes.active()
+    tip = episodes.tip[:-1]
+    keys = {
+        "robot": robot.name,
+        "participant": episodes.participant,
+        "condition": episodes.condition,
+        "assistance": episodes.assistance,
+        "task": episodes.task,
+        "order": episodes.order,
+    }
+    bowls = [i for i, g in enumerate(GOALS) if g != "plate"]
+    error = pd.DataFrame(
+        {
+            **keys,
+            "goal_error": goal_error(tip, goals, active, episodes.dt),
+            "goal_error_bowls": goal_error(tip, goals[bowls], active, episodes.dt),
+        }
+    )
+    error["mean_distance"] = error.goal_error / np.maximum(episodes.end * episodes.dt, episodes.dt)
+    time = pd.DataFrame(
+        {
+            **keys,
+            "total_time": episodes.end * episodes.dt,
+            "idle_time": idle_time(episodes.idle, active, episodes.dt),
+            "mode_switches": (episodes.switch & active).sum(axis=0),
+            "completed": episodes.completed,
+        }
+    )
+    return {"goal_error": error, "time": time, "alignment": _alignment_table(robot, episodes, active)}
+
+
+def _alignment_table(robot: Robot, episodes: Episodes, active: np.ndarray) -> pd.DataFrame:
+    """Preference Alignment, one row per episode x phase of its task."""
+    direction = episodes.direction[:-1]
+    rows = []
+    for name in TASK_NAMES:
+        cols = episodes.task == name
+        for i, ph in enumerate(TASKS[name]):
+            pref = PREFERENCES[ph.preference or "stab"]
+            desired = fork_direction(robot, GOALS.index(ph.goal), pref.theta)
+            mask = (episodes.phase[:-1, cols] == i) & active[:, cols]
+            rows.append(
+                pd.DataFrame(
+                    {
+                        "robot": robot.name,
+                        "participant": episodes.participant[cols],
+                        "condition": episodes.condition[cols],
+                        "assistance": episodes.assistance[cols],
+                        "task": name,
+                        "phase": ph.name,
+                        "preference": pref.name,
+                        "alignment": alignment(direction[:, cols], desired, mask),
+                        "steps": mask.sum(axis=0),
+                    }
+                )
+            )
+    return pd.concat(rows, ignore_index=True)
