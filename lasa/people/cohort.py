@@ -16,11 +16,12 @@ input is :mod:`lasa.people.policy`.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
 from lasa.base.conditions import CONDITIONS
-from lasa.base.config import check_range
+from lasa.base.config import NonNegative, Positive, UnitInterval, interval, validate
 from lasa.base.errors import ConfigError
 
 __all__ = ["ParticipantConfig", "Cohort", "williams_square", "draw_cohort"]
@@ -38,37 +39,32 @@ class ParticipantConfig:
     # step worse than the best is chosen e^2 ~ 7x less often: people pick near-best stick
     # directions but not the exact best one. Spread across people: lognormal, sigma 0.5
     # (a factor ~1.6 either way), as the paper's users differed in skill.
-    beta_median: float = 20.0  # median beta_inf across participants [-]
-    beta_spread: float = 0.5  # sigma of log beta_inf [-]
-    novice_fraction: float = 0.25  # rho: beta / beta_inf with no experience at all [-]
+    beta_median: Positive = 20.0  # median beta_inf across participants [-]
+    beta_spread: NonNegative = 0.5  # sigma of log beta_inf [-]
+    novice_fraction: UnitInterval = 0.25  # rho: beta / beta_inf with no experience at all [-]
     # Joystick skills settle within minutes of practice; the paper gave up to 5 minutes.
-    learning_median: float = 60.0  # median time constant tau of the improvement [s]
-    learning_spread: float = 0.5  # sigma of log tau [-]
-    practice_min: float = 120.0  # practice before a condition, uniform in [min, max] [s]
-    practice_max: float = 300.0  # ... "up to 5 minutes" (the paper) [s]
-    transfer: float = 0.5  # share of earlier conditions' practice that carries over [-]
+    learning_median: Positive = 60.0  # median time constant tau of the improvement [s]
+    learning_spread: NonNegative = 0.5  # sigma of log tau [-]
+    practice_min: NonNegative = 120.0  # practice before a condition, uniform in [min, max] [s]
+    practice_max: NonNegative = 300.0  # ... "up to 5 minutes" (the paper) [s]
+    transfer: UnitInterval = 0.5  # share of earlier conditions' practice that carries over [-]
     # A motion of under ~1.5 mm per step (10% of the best step) is not worth a push: the
     # participant rests the stick.
-    idle_threshold: float = 0.1  # least progress, in best-step units, worth an input [-]
+    idle_threshold: NonNegative = 0.1  # least progress, in best-step units, worth an input [-]
     # Resting is not forever: after about a second with nothing worth a push (a choice
     # reaction time with an unfamiliar mapping), a person tries an input anyway.
-    patience: float = 1.0  # idle time after which the participant tries their Boltzmann choice [s]
+    patience: Positive = 1.0  # idle time after which the participant tries their Boltzmann choice [s]
     # A turn of the fork by 1 rad about its tip moves its grip by the fork's length (0.125 m):
     # orientation errors weigh like the displacement they cause at the hand.
-    rotation_weight: float = 0.125  # l: metres of cost per radian of direction error [m/rad]
+    rotation_weight: NonNegative = 0.125  # l: metres of cost per radian of direction error [m/rad]
 
     def __post_init__(self) -> None:
-        check_range("beta_median", self.beta_median, 0.0, low_open=True)
-        check_range("beta_spread", self.beta_spread, 0.0)
-        check_range("novice_fraction", self.novice_fraction, 0.0, 1.0)
-        check_range("learning_median", self.learning_median, 0.0, low_open=True)
-        check_range("learning_spread", self.learning_spread, 0.0)
-        check_range("practice_min", self.practice_min, 0.0)
-        check_range("practice_max", self.practice_max, self.practice_min)
-        check_range("transfer", self.transfer, 0.0, 1.0)
-        check_range("idle_threshold", self.idle_threshold, 0.0)
-        check_range("rotation_weight", self.rotation_weight, 0.0)
-        check_range("patience", self.patience, 0.0, low_open=True)
+        validate(self)
+        if self.practice_max < self.practice_min:
+            raise ConfigError(
+                f"practice_max must be in {interval(self.practice_min, math.inf)} (at least practice_min), "
+                f"got {self.practice_max!r}"
+            )
 
 
 def williams_square(n: int) -> np.ndarray:

@@ -11,7 +11,10 @@ logged sessions of real people (:mod:`lasa.evidence.sessions`).
 from __future__ import annotations
 
 import dataclasses
+import math
+from typing import Annotated
 
+import annotated_types as at
 import numpy as np
 
 from lasa.base.conditions import CONDITIONS, alpha_of
@@ -20,9 +23,11 @@ from lasa.base.config import (
     ASSISTANCE,
     NO_ASSISTANCE,
     ControlConfig,
+    Integer,
+    Number,
+    Positive,
     PositiveInt,
     check_choice,
-    check_range,
     validate,
 )
 from lasa.base.errors import ConfigError
@@ -46,24 +51,26 @@ class StudyConfig:
 
     # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
     horizon: PositiveInt = 1500
-    position_tol: float = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
-    angle_tol: float = 0.2  # ... with the fork's direction this close (~11 degrees) [rad]
+    position_tol: Positive = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
+    angle_tol: Annotated[Number, at.Gt(0.0), at.Le(math.pi)] = (
+        0.2  # ... with the fork's direction this close (~11 degrees) [rad]
+    )
     # The SA members the assisted conditions run under (lasa.method.assistance); the first is the
     # headline. The paper's study used hindsight optimisation.
     members: tuple[str, ...] = ("hindsight",)
-    n_z: int = 5  # stick positions per axis the participant weighs (25 incl. rest) [-]
+    n_z: Annotated[Integer, at.Ge(3)] = (
+        5  # stick positions per axis the participant weighs (25 incl. rest) [-]
+    )
     participant: ParticipantConfig = ParticipantConfig()
     retarget: RetargetConfig = RetargetConfig()
 
     def __post_init__(self) -> None:
         validate(self)
-        check_range("position_tol", self.position_tol, 0.0, low_open=True)
-        check_range("angle_tol", self.angle_tol, 0.0, np.pi, low_open=True)
         if not self.members:
             raise ConfigError("members must name at least one assistance member")
         for name in self.members:
             check_choice("assistance", name, ASSISTANCE)
-        if int(self.n_z) != self.n_z or self.n_z < 3 or self.n_z % 2 == 0:
+        if self.n_z % 2 == 0:
             raise ConfigError(
                 f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"
             )
