@@ -1,9 +1,13 @@
-"""docs/extending.md, done: a robot, an assistance member, a claim and a decoder of one's own.
+"""docs/extending.md, tested: a robot, an assistance member, a claim and a decoder of one's own.
 
-Each test does one extension through the public API only (``import lasa`` names and the
-documented functions of lasa.evidence), on a toy 3-joint planar arm with three cups, whose
-MJCF the test writes: what a user would write in their own files, and nothing in the package.
-The fixtures put the registries back afterwards, so that the other tests see the package's own.
+tests/test_docs.py runs the page's code as written; this file does each extension again and
+tests what the page only shows: the naming contract's errors (a missing name, a scene in
+degrees, a cup out of reach), that a member is called by the step and the rollout, a claim's
+verdict in the claims table, a checkpoint's round trip. Each test goes through the public API
+only (``import lasa`` names and the documented functions of lasa.evidence), on the page's toy
+3-joint planar arm with three cups, whose MJCF the test writes: what a user would write in
+their own files, and nothing in the package. The fixtures put the registries back afterwards,
+so that the other tests see the package's own.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from lasa.method.assistance import unregister_member
 
 TOY_SCENE = """
 <mujoco model="toy3">
-  <compiler angle="radian" autolimits="true"/>
+  {compiler}
   <worldbody>
     {table}
     <body name="link1" pos="0 0 0.12">
@@ -57,11 +61,23 @@ HOME = '<keyframe><key name="home" qpos="0 0 0"/></keyframe>'
 CUPS = {"cup_left": -0.45, "cup_mid": 0.30, "cup_right": 0.55}
 
 
-def write_scene(folder: Path, table: bool = True, cup_geoms: bool = True, home: bool = True) -> Path:
-    cups = "\n".join(CUP.format(x=x, name=name) for name, x in CUPS.items())
+RADIAN = '<compiler angle="radian" autolimits="true"/>'
+
+
+def write_scene(
+    folder: Path,
+    table: bool = True,
+    cup_geoms: bool = True,
+    home: bool = True,
+    compiler: str = RADIAN,
+    cups_at: dict[str, float] = CUPS,
+) -> Path:
+    cups = "\n".join(CUP.format(x=x, name=name) for name, x in cups_at.items())
     if not cup_geoms:  # sites only
-        cups = "\n".join(f'<site name="{name}" pos="{x} 0 0.07"/>' for name, x in CUPS.items())
-    xml = TOY_SCENE.format(table=TABLE if table else "", cups=cups, keyframe=HOME if home else "")
+        cups = "\n".join(f'<site name="{name}" pos="{x} 0 0.07"/>' for name, x in cups_at.items())
+    xml = TOY_SCENE.format(
+        compiler=compiler, table=TABLE if table else "", cups=cups, keyframe=HOME if home else ""
+    )
     path = folder / "toy3.xml"
     path.write_text(xml)
     return path
@@ -200,6 +216,34 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
         lasa.register_robot(toy_spec(broken))
     with pytest.raises(lasa.ConfigError, match="one of the package's robots"):
         lasa.register_robot(dataclasses.replace(toy_spec(broken), name="planar5"), replace=True)
+
+
+def test_a_scene_in_degrees_is_refused_in_one_line_that_says_how_to_fix_it(tmp_path):
+    """MJCF's default unit is the degree: the page's ranges (-2.9, 2.9) would compile to +-0.05 rad,
+    where no grasp can be reached. register_robot refuses the scene rather than guess."""
+    for compiler in ("", '<compiler autolimits="true"/>', '<compiler angle="degree" autolimits="true"/>'):
+        scene = write_scene(tmp_path, compiler=compiler)
+        with pytest.raises(lasa.ConfigError) as info:
+            lasa.register_robot(dataclasses.replace(toy_spec(scene), name="toy3_degrees"))
+        message = str(info.value)
+        assert "\n" not in message and "angles are in degrees" in message, message
+        assert '<compiler angle="radian"/>' in message, message
+        assert "toy3_degrees" not in lasa.ROBOTS
+
+
+def test_a_cup_out_of_reach_is_an_ik_error_naming_the_cup_and_theta(tmp_path):
+    """The toy arm reaches 0.75 m from its shoulder; a cup 0.78 m out, grasped from 0.05 m above,
+    is beyond it. The error says which cup, and at which preference, the solve gave up."""
+    far = {"cup_left": -0.45, "cup_mid": 0.30, "cup_right": 0.78}
+    spec = dataclasses.replace(toy_spec(write_scene(tmp_path, cups_at=far)), name="toy3_far")
+    robot = lasa.register_robot(spec)
+    try:
+        with pytest.raises(
+            lasa.IKError, match=r"toy3_far \(cup 'cup_right', theta = 0\.000\) did not converge"
+        ):
+            lasa.make_cup_task(robot, n_grid=5)
+    finally:
+        lasa.ROBOTS.pop("toy3_far")
 
 
 # --- 2. an assistance member -----------------------------------------------------------------

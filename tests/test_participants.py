@@ -2,7 +2,9 @@
 
 import dataclasses
 import itertools
+import math
 
+import mujoco
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -15,6 +17,7 @@ from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.people.cohort import ParticipantConfig, draw_cohort, williams_square
 from lasa.people.design import StudyConfig
+from lasa.people.kinematics import tip_frames, tip_motion
 from lasa.people.measures import alignment, goal_error, idle_time, measures
 from lasa.people.participants import simulate
 from lasa.world.eating import make_eating_task
@@ -139,16 +142,64 @@ def test_measures_tables(eating, small_study):
     assert (time.total_time <= 40 * eating.robot.control.dt + 1e-9).all()
     assert (time.idle_time <= time.total_time + 1e-9).all()
     assert set(time.condition) == set(CONDITIONS)
-    # Goal Error by hand from the logged tip: the distance to the closest of all four goals (and of
-    # the three bowls), summed over the steps each episode ran, times dt
+    # Goal Error of a few episodes by hand, a step at a time: the tip's distance to the closest of the
+    # four goals (and of the three bowls: rice, middle, icing), over the steps the episode ran, times dt
     goals = eating.robot.cup_positions()
-    dist = np.linalg.norm(small_study.tip[:-1, :, None, :] - goals[None, None], axis=-1)  # (T, E, G)
-    active = small_study.active()
-    dt = small_study.dt
-    assert_allclose(frames["goal_error"].goal_error, (dist.min(axis=-1) * active).sum(axis=0) * dt)
-    assert_allclose(
-        frames["goal_error"].goal_error_bowls, (dist[..., :3].min(axis=-1) * active).sum(axis=0) * dt
+    for e in (0, 7, len(small_study.end) - 1):
+        steps = range(int(small_study.end[e]))
+        tips = [small_study.tip[t, e] for t in steps]
+        every = sum(min(math.dist(tip, goal) for goal in goals) for tip in tips) * small_study.dt
+        bowls = sum(min(math.dist(tip, goal) for goal in goals[:3]) for tip in tips) * small_study.dt
+        assert frames["goal_error"].goal_error[e] == pytest.approx(every, rel=1e-12)
+        assert frames["goal_error"].goal_error_bowls[e] == pytest.approx(bowls, rel=1e-12)
+
+
+def test_goal_error_on_a_small_case_by_hand():
+    """Two goals 1 m apart; episode 0 runs three steps, episode 1 two (its third is not counted)."""
+    goals = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    tip = np.array(
+        [
+            [[0.1, 0.0, 0.0], [2.0, 0.0, 0.0]],  # 0.1 from goal 0; 1.0 from goal 1
+            [[0.3, 0.4, 0.0], [1.0, 0.6, 0.8]],  # 0.5 from goal 0 (3-4-5); 1.0 from goal 1
+            [[1.0, 0.0, 0.2], [0.5, 0.0, 0.0]],  # 0.2 from goal 1; 0.5 from either, after the end
+        ]
     )
+    active = np.array([[True, True], [True, True], [True, False]])
+    assert_allclose(goal_error(tip, goals, active, dt=0.1), [(0.1 + 0.5 + 0.2) * 0.1, (1.0 + 1.0) * 0.1])
+
+
+def test_tip_motion_is_the_first_order_motion_of_the_kinematics(eating):
+    """tip_motion predicts, from the Jacobians, the fork tip's displacement and new direction for a
+    joint step dq; finite differences of the kinematics (tip_frames at q + dq) must agree to second
+    order in the step, and the miss must shrink four-fold when the step halves.
+
+    Tolerance, for steps of h = 1e-4 rad along unit joint directions u: the tip's second derivative
+    along u is at most (sum |u_i|)^2 R <= n R, R the largest distance from the tip to a joint axis
+    (under 1.5 m on the Panda with its fork), so the first-order displacement misses by at most
+    n R h^2 / 2 = 5.3e-8 m; the direction, a unit vector that turns at most sum |u_i| <= sqrt(n)
+    radians per radian, by at most n h^2 = 7e-8 (the turn's second order and the renormalisation).
+    A wrong Jacobian column would miss by the order of h = 1e-4."""
+    robot = eating.robot
+    data = mujoco.MjData(robot.model)
+    rng = np.random.default_rng(0)
+    qs = rng.uniform(robot.lower + 0.2, robot.upper - 0.2, (5, robot.n_joints))
+    units = rng.normal(size=(5, 6, robot.n_joints))
+    units /= np.linalg.norm(units, axis=-1, keepdims=True)
+    pos, axis, jp, jr = tip_frames(robot, data, qs)
+
+    def misses(h: float) -> tuple[float, float]:
+        dp, new_dir = tip_motion(jp, jr, axis, h * units)
+        moved = (qs[:, None, :] + h * units).reshape(-1, robot.n_joints)
+        pos_h, axis_h, _, _ = tip_frames(robot, data, moved)
+        dp_fd = pos_h.reshape(dp.shape) - pos[:, None, :]
+        return np.abs(dp_fd - dp).max(), np.abs(axis_h.reshape(new_dir.shape) - new_dir).max()
+
+    n, reach, h = robot.n_joints, 1.5, 1e-4
+    position_miss, direction_miss = misses(h)
+    assert position_miss <= n * reach * h**2 / 2
+    assert direction_miss <= n * h**2
+    coarse, half = misses(1e-2), misses(5e-3)  # second order: halving the step quarters the miss
+    assert 3.0 < coarse[0] / half[0] < 5.0 and 3.0 < coarse[1] / half[1] < 5.0
 
 
 def test_bad_settings_are_errors(eating):

@@ -12,7 +12,8 @@ import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from numpy.testing import assert_array_equal
+from numpy.testing import assert_allclose, assert_array_equal
+from reference_step import latent_step, softmax, step_with
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.sessionlog import read_session
@@ -385,20 +386,23 @@ def test_every_cli_option_has_help_text(module, monkeypatch, capsys):
         max_size=25,
     ),
 )
-def test_the_live_step_is_the_reference_step(build, condition, axes):
-    """Station.step (latent actions) and lasa.method.step.shared_autonomy_step with the stick-at-rest
-    convention ``rest="zero"`` agree bit for bit, step after step, from the same inputs."""
-    from lasa.method.step import shared_autonomy_step
+def test_the_live_step_is_algorithm_1_by_hand(build, condition, axes):
+    """Station.step (latent actions) against Algorithm 1 written out by hand (tests/reference_step.py):
+    phi of the stick (nothing for a stick at rest), Eq. M2, the blend, the belief's update and the
+    safe transition, from the state and belief the station held before each step.
 
+    Tolerance: phi runs in float32 (its ulp near sigma_h = 0.375 is 3e-8), and the reference's belief,
+    computed in another order, may move phi by a few ulps; a_h to 1e-7, the state (dt a) to 1e-8,
+    the belief (beta_b dt a_h in its exponent) to 1e-6. A wrong formula misses by 1e-3 or more."""
     st_ = station(build, condition)
-    s, log_b = st_.state.copy()[None], st_.log_belief.copy()[None]
     for z in axes:
+        s, b = st_.state.copy(), softmax(st_.log_belief)
         rec = st_.step(Reading(raw=np.asarray(z, dtype=float)))
-        ref = shared_autonomy_step(
-            st_.decoder, st_.task, st_.control, s, log_b, np.asarray(z)[None], st_.alpha, rest="zero"
-        )
-        s, log_b = ref.state, ref.log_belief
-        assert np.array_equal(rec["s"], s[0]) and np.array_equal(rec["a_h"], ref.human_action[0])
+        ref = latent_step(st_.decoder, st_.task, st_.control, s, b, z, st_.alpha, rest="zero")
+        assert_allclose(rec["a_h"], ref["a_h"], rtol=0, atol=1e-7)
+        assert_allclose(rec["a_r"], ref["a_r"], rtol=0, atol=1e-12)
+        assert_allclose(rec["s"], ref["s"], rtol=0, atol=1e-8)
+        assert_allclose(rec["b"], ref["b"], rtol=0, atol=1e-6)
         if not np.any(z):
             assert not rec["a_h"].any()  # a stick at rest commands nothing
 
@@ -432,25 +436,47 @@ def test_replay_finds_a_state_the_log_does_not_share(logged):
         max_size=12,
     ),
 )
-def test_the_live_retargeting_step_is_the_participants_step(build, condition, inputs):
-    """Station.step (Retargeting) and the path the study's simulated participants take,
-    lasa.method.retarget.retarget_action then lasa.method.step.advance, agree bit for bit, mode
-    presses included."""
-    from lasa.method.retarget import retarget_action
-    from lasa.method.step import advance
+def test_the_live_retargeting_step_moves_the_hand_by_the_twist_of_its_mode(build, condition, inputs):
+    """Station.step (Retargeting) against the baseline's definition: a press switches to the next of
+    the three modes and moves nothing; otherwise the stick's two axes are two components of the
+    hand's twist (x, y; z, yaw; roll, pitch) at 0.15 m/s and 0.6 rad/s full deflection, and the
+    joint velocity a_h realises it: J(s) a_h = twist, J the grasp site's Jacobian from MuJoCo.
+    The rest of the step (Eq. M2, blend, belief, transition) is Algorithm 1 by hand.
+
+    Tolerance of J a_h: the QP trades the twist against a posture task and damping (both 1e-3)
+    and realises a displacement over dt rather than the instantaneous twist; it misses by under
+    3% of a full deflection's speed here, 5% is allowed. A wrong mode or axis misses by 100%."""
+    import mujoco
 
     st_ = station(build, condition)
-    s, log_b, mode = st_.state.copy()[None], st_.log_belief.copy()[None], np.array([st_.mode])
+    robot = st_.robot
+    model, data = robot.model, mujoco.MjData(robot.model)
+    site = model.site(robot.spec.grasp_site).id
+    dofs = [model.jnt_dofadr[model.joint(j).id] for j in robot.spec.joints]
+    components = {0: (0, 1), 1: (2, 5), 2: (3, 4)}  # mode -> twist components (vx vy vz wx wy wz)
+    speed = np.array([0.15, 0.15, 0.15, 0.6, 0.6, 0.6])
     for z0, z1, press in inputs:
-        z = np.array([[z0, z1]])
-        rec = st_.step(Reading(raw=z[0], mode=press))
-        a_h, mode = retarget_action(st_.retarget, s, mode, z, np.array([press]))
-        ref = advance(st_.task, st_.control, s, log_b, a_h, np.array([st_.alpha]), st_.sets)
-        s, log_b = ref.state, ref.log_belief
-        assert np.array_equal(rec["s"], s[0]) and np.array_equal(rec["a_h"], a_h[0])
-        assert rec["mode"] == int(mode[0])
+        s, b, mode = st_.state.copy(), softmax(st_.log_belief), st_.mode
+        rec = st_.step(Reading(raw=np.array([z0, z1]), mode=press))
         if press or not (z0 or z1):
             assert not rec["a_h"].any()  # a press or a stick at rest moves nothing
+            assert rec["mode"] == ((mode + 1) % 3 if press else mode)
+        else:
+            assert rec["mode"] == mode
+            wanted = np.zeros(6)
+            wanted[list(components[mode])] = [z0, z1]
+            wanted *= speed
+            data.qpos[robot.qpos_adr] = s
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_comPos(model, data)
+            jp, jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+            mujoco.mj_jacSite(model, data, jp, jr, site)
+            moved = np.vstack([jp, jr])[:, dofs] @ rec["a_h"]
+            assert np.all(np.abs(moved - wanted) <= 0.05 * speed), (mode, moved, wanted)
+        ref = step_with(st_.task, st_.control, s, b, rec["a_h"], st_.alpha)
+        assert_allclose(rec["a_r"], ref["a_r"], rtol=0, atol=1e-12)
+        assert_allclose(rec["s"], ref["s"], rtol=0, atol=1e-12)
+        assert_allclose(rec["b"], ref["b"], rtol=0, atol=1e-9)
 
 
 def _start_live_session(build, tmp_path, device, participant):

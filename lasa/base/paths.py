@@ -77,7 +77,12 @@ class Paths:
 
     @classmethod
     def of(cls, build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
-        """The run's folders; relative ones are under the repository root."""
+        """The run's folders; relative ones are under the repository root, not the working directory.
+
+        That is what the notebooks need (the same files from Jupyter, papermill and Make). Code of
+        your own that should write where it runs passes absolute folders, or builds
+        ``Paths(build, figures)`` itself (``docs/extending.md``).
+        """
         return cls(resolve(build_dir), resolve(figures_dir))
 
     def artifact(self, name: str, robot: str, **fields: str) -> Path:

@@ -35,7 +35,6 @@ from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, ma
 __all__ = [
     "NAME",
     "COLUMNS",
-    "CONTEXTS",
     "Config",
     "held_input_paths",
     "run",
@@ -47,7 +46,6 @@ __all__ = [
 
 NAME = "latent_map"
 COLUMNS = ("robot", "context", "z", "cup_axis", "grasp_theta", "steps")
-CONTEXTS = ("uniform", "confident")
 DPI = 130
 
 

@@ -71,6 +71,7 @@ from lasa.base.errors import ConfigError, IKError
 from lasa.method.decoder import ActionDecoder
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import Robot
+from lasa.world.rotations import rot_z
 from lasa.world.task import CupTask, grasp_frame
 
 __all__ = ["ContextMap", "MappedDecoder", "extend_task", "new_goal_frames", "NEW_GOAL_NAME", "MAP_KINDS"]
@@ -83,11 +84,6 @@ _MAX_JUMP = 0.5  # largest joint-space step between neighbouring grasps of a smo
 
 def _bearing(point: np.ndarray, base: np.ndarray) -> float:
     return float(np.arctan2(point[1] - base[1], point[0] - base[0]))
-
-
-def _rot_z(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tuple[np.ndarray, float]:
@@ -153,7 +149,7 @@ def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple
 def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
     """:func:`new_goal_frames` for a checked position and its bearing offset ``delta``."""
     ref_cup = task.robot.cup_positions()[ref_goal]
-    turn = _rot_z(delta)
+    turn = rot_z(delta)
     positions, rotations = [], []
     for theta in task.theta_grid:
         p, r = grasp_frame(task.robot, ref_goal, float(theta))

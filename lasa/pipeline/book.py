@@ -35,7 +35,6 @@ from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 
 __all__ = [
-    "NOTEBOOK_OF_FIGURE",
     "ordered_notebooks",
     "front_page",
     "claims_page",
@@ -44,14 +43,6 @@ __all__ = [
     "main",
 ]
 
-# The notebook behind each figure's claims (file stems; per robot where they run per robot).
-NOTEBOOK_OF_FIGURE = {
-    "sim1": "04_fixed_expertise",
-    "sim2": "05_changing_goals",
-    "sim3": "06_learning_users",
-    "sim4": "07_new_goals",
-    "study": "11_eating_study",
-}
 ROBOT_ORDER = ("planar5", "panda")
 ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
 

@@ -312,11 +312,13 @@ def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
     for g, seed in enumerate(robot.spec.ik_seeds):
         q = np.asarray(seed, dtype=float)
         for k, theta in enumerate(thetas):
-            q = solve_grasp_ik(robot, *fork_frame(robot, g, theta, 0.0), q)
+            label = f"goal {GOALS[g]!r}, theta = {theta:.3f}"
+            q = solve_grasp_ik(robot, *fork_frame(robot, g, theta, 0.0), q, label=label)
             strokes[g, k, 0] = q
             q_depth = q
             for d in range(1, depths):
-                q_depth = solve_grasp_ik(robot, *fork_frame(robot, g, theta, us[d]), q_depth)
+                where = f"{label}, depth u = {us[d]:.3f}"
+                q_depth = solve_grasp_ik(robot, *fork_frame(robot, g, theta, us[d]), q_depth, label=where)
                 strokes[g, k, d] = q_depth
     curves = strokes[:, :, 0].copy()
     return EatingTask(

@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.world.robot import Robot, mesh_dir
+from lasa.world.rotations import rot_z
 
 __all__ = [
     "DH",
@@ -70,9 +71,11 @@ def _rot_x(a: float) -> np.ndarray:
     return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
 
 
-def _rot_z(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
-    return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+def _about_z(a: float) -> np.ndarray:
+    """R_z(a) as a 4 x 4 transform."""
+    t = np.eye(4)
+    t[:3, :3] = rot_z(a)
+    return t
 
 
 def _trans(x: float = 0.0, z: float = 0.0) -> np.ndarray:
@@ -96,11 +99,11 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
     frames: dict[str, np.ndarray] = {}
     t = np.eye(4)
     for i, ((a, d, alpha), theta) in enumerate(zip(DH, q, strict=True), start=1):
-        t = t @ _rot_x(alpha) @ _trans(x=a) @ _rot_z(theta) @ _trans(z=d)
+        t = t @ _rot_x(alpha) @ _trans(x=a) @ _about_z(theta) @ _trans(z=d)
         frames[f"link{i}"] = t
     flange = t @ _trans(z=FLANGE_D)
     frames["flange"] = flange
-    frames["tcp"] = flange @ _rot_z(HAND_YAW) @ _trans(z=TCP_D)
+    frames["tcp"] = flange @ _about_z(HAND_YAW) @ _trans(z=TCP_D)
     return frames
 
 

@@ -43,6 +43,7 @@ def solve_grasp_ik(
     max_iters: int = 400,
     dt: float = 0.05,
     damping: float = 1e-4,
+    label: str = "",
 ) -> np.ndarray:
     """Joint positions that put the grasp site at ``position`` with ``rotation``.
 
@@ -58,6 +59,8 @@ def solve_grasp_ik(
         max_iters: Iteration budget of the differential IK.
         dt: Integration step of each IK iteration [s].
         damping: Levenberg-Marquardt damping of the QP.
+        label: What the pose is, for the error message: the goal and the preference
+            (``"cup 'cup_left', theta = 0.250"``).
 
     Returns:
         Joint positions within the joint limits, shape (n,).
@@ -95,8 +98,9 @@ def solve_grasp_ik(
         pos_err, rot_err = pose_error(robot, q, position, rotation)
         if pos_err < position_tol and rot_err < rotation_tol:
             return robot.clip(q)
+    where = f" ({label})" if label else ""
     raise IKError(
-        f"IK for {robot.name} did not converge: position error {pos_err:.2e} m "
+        f"IK for {robot.name}{where} did not converge: position error {pos_err:.2e} m "
         f"(tol {position_tol:g}), orientation error {rot_err:.2e} rad (tol {rotation_tol:g}) "
         f"after {max_iters} iterations. Is the pose reachable? Try another seed."
     )

@@ -7,7 +7,7 @@ arrays by hand.
 
 The robots are :data:`ROBOTS`, a registry keyed by name: the package's two, and any that
 :func:`register_robot` adds from outside it (a :class:`RobotSpec` naming an MJCF file).
-:func:`register_robot` states the names a scene must have, and checks them.
+:func:`register_robot` states the names a scene must have and the unit of its angles, and checks them.
 
 The state ``s`` of every robot is its vector of arm joint positions (radians); the
 action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper.
@@ -26,7 +26,15 @@ import numpy as np
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
 
-__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot", "register_robot", "scene_problems"]
+__all__ = [
+    "RobotSpec",
+    "Robot",
+    "ROBOTS",
+    "load_robot",
+    "register_robot",
+    "scene_problems",
+    "angle_problem",
+]
 
 ASSETS = Path(__file__).parent / "assets"
 
@@ -46,7 +54,7 @@ class RobotSpec:
     top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
     grasp_standoff: float  # distance from cup centre to the grasp site [m]
     side_azimuth: float  # side-grasp approach: the radial direction turned this far towards the midline [rad]
-    ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup
+    ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup [rad]
     control: ControlConfig  # default units of the control loop for this robot
     mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
     # Cups added after training (Sec. IV-C): (site name, grasp-centre position [m]); their
@@ -80,7 +88,6 @@ ROBOTS: dict[str, RobotSpec] = {
         # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
         # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
         # mid-preference goal small enough for users to hold other grasps (Eq. T4).
-        # These are ControlConfig's defaults, written out because they are this robot's.
         control=ControlConfig(),  # the defaults are the values both robots use
     ),
     "panda": RobotSpec(
@@ -233,6 +240,21 @@ def scene_problems(spec: RobotSpec, model: mujoco.MjModel) -> list[str]:
     return out
 
 
+def angle_problem(spec: RobotSpec) -> str | None:
+    """Why the scene's angle unit breaks the naming contract, or None if it is radians.
+
+    MJCF reads the angles it is given (joint ranges, ``euler``, ``axisangle``) in degrees
+    unless the scene says ``<compiler angle="radian"/>``; lasa's are radians throughout.
+    """
+    if not mujoco.MjSpec.from_file(str(spec.scene)).compiler.degree:
+        return None
+    return (
+        'its angles are in degrees (MJCF\'s default: the scene has no <compiler angle="radian"/>), '
+        "while lasa's are radians (the state, the keyframe, RobotSpec.ik_seeds); add "
+        '<compiler angle="radian"/> and write the joint ranges in radians'
+    )
+
+
 def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
     """Add a robot to :data:`ROBOTS` from outside the package, after checking its scene.
 
@@ -252,7 +274,13 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
       a name ``cup_<x>`` gives the goal name ``<x>``;
     - a box geom named ``table`` (new cups must stand on it);
     - a camera ``spec.camera`` and a keyframe ``spec.home_key`` (the start pose of every
-      episode, within the joint ranges).
+      episode, within the joint ranges);
+    - its angles in radians: ``<compiler angle="radian"/>``. MJCF reads the angles of a scene
+      that does not say so (joint ranges, ``euler``, ``axisangle``) in degrees, while a
+      keyframe's ``qpos``, the state and every angle of the spec are radians. A scene in
+      degrees is refused rather than accepted: ranges written in degrees would compile right,
+      ranges written in radians would compile 57 times too narrow (and the IK fail), and
+      nothing in the file tells the two apart (:func:`angle_problem`).
 
     And the spec gives one IK seed per cup (``spec.ik_seeds``, each of ``len(spec.joints)``
     values), a 9-value ``top_grasp_rotation``, and the control units (``spec.control``).
@@ -266,9 +294,9 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
 
     Raises:
         ConfigError: if the name is one of the package's robots, or taken (and ``replace``
-            is false), the scene file is missing or does not compile, the scene lacks a name
-            of the contract (the message names each), or the spec's seeds or rotation do not
-            fit.
+            is false), the scene file is missing or does not compile, its angles are in
+            degrees, the scene lacks a name of the contract (the message names each), or the
+            spec's seeds or rotation do not fit.
     """
     if spec.name in _PACKAGE_ROBOTS:
         raise ConfigError(f"{spec.name!r} is one of the package's robots; register yours under another name")
@@ -284,7 +312,8 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
     if len(spec.top_grasp_rotation) != 9:
         problems.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
     model = _compile(spec)
-    problems += scene_problems(spec, model)
+    unit = angle_problem(spec)
+    problems += ([unit] if unit else []) + scene_problems(spec, model)
     if problems:
         raise ConfigError(
             f"robot {spec.name!r} ({spec.scene}) breaks the naming contract of register_robot: "
@@ -343,7 +372,7 @@ class Robot:
 
     @property
     def home(self) -> np.ndarray:
-        """The start pose of every episode (keyframe ``home``), shape (n,)."""
+        """The start pose of every episode (keyframe ``spec.home_key``), shape (n,) [rad]."""
         return self._home.copy()
 
     @property

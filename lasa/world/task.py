@@ -96,6 +96,7 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     Raises:
         ConfigError: if ``n_grid`` is not an odd integer >= 5, or the robot's spec does not
             give one IK seed per cup.
+        IKError: if a grasp is out of reach from its seed; the message names the cup and theta.
     """
     if n_grid < 5 or n_grid % 2 == 0:
         raise ConfigError(f"n_grid must be an odd integer >= 5, got {n_grid}")
@@ -110,7 +111,8 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     for g, seed in enumerate(robot.spec.ik_seeds):
         q = np.asarray(seed, dtype=float)
         for k in range(n_grid):
-            q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q)
+            label = f"cup {robot.spec.cups[g]!r}, theta = {grid[k]:.3f}"
+            q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q, label=label)
             curves[g, k] = q
     names = tuple(name.removeprefix("cup_") for name in robot.spec.cups)
     return CupTask(

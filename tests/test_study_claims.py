@@ -1,4 +1,4 @@
-"""The study's claims rules on tables whose answers are known."""
+"""The study's claims rules (lasa.figures.study) on tables whose answers are known."""
 
 import numpy as np
 import pandas as pd
