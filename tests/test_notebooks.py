@@ -42,8 +42,9 @@ def _sessions(out: Path) -> Path:
     """Teleoperation sessions as the kit logs them: 2 participants x 4 conditions, scripted
     Dessert inputs, and their questionnaires; with notebook 10's decoder."""
     from lasa.live.devices import ScriptedDevice
+    from lasa.live.station import SessionConfig, Station
     from lasa.live.studykit import survey
-    from lasa.live.teleop import SessionConfig, Station, new_session, run_session
+    from lasa.live.teleop import new_session, run_session
 
     folder = out / "sessions"
     for i, participant in enumerate(("s01", "s02")):
