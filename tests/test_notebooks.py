@@ -303,7 +303,7 @@ def test_sim4_outputs(executed):
 
 
 def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
-    from lasa.evidence import latent_property
+    from lasa.evidence import latent_measure, latent_property
     from lasa.figures import eating_task
 
     fig = executed / "figures"
@@ -314,7 +314,7 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     readings = eating_task.reading_names(from_dict(eating_task.Config, settings))
     assert set(frame[frame.task == "eating"].decoder) == set(readings)
     table = latent_property.summary(frame)
-    n_inputs = latent_property.PropertyConfig().n_inputs
+    n_inputs = latent_measure.PropertyConfig().n_inputs
     stay_home = frame[frame.context != "leave"]
     assert (stay_home.groupby(["source", "decoder", "context", "goal"]).size() == n_inputs).all()
     # the leave half: per decoder, goal, phase end and condition, every input once per other goal
