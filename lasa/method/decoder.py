@@ -332,6 +332,23 @@ def load_checkpoint(
             "constructor takes"
         )
     path = require_file(path, make_hint)
+    payload, values = _read(path, decoder, make_hint)
+    try:
+        model = decoder(config_class(**values))
+        model.load_state_dict(payload["state_dict"])
+    except Exception as exc:
+        raise _invalid(path, exc, make_hint) from None
+    _check_loaded(model, path, decoder, robot, n_goals, make_hint)
+    model.eval()
+    return model, dict(payload.get("extra", {}))
+
+
+def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """A checkpoint's payload and its config's values (lists as tuples), saved from ``decoder``.
+
+    Raises:
+        ArtifactError: if the file does not load, or holds another decoder class.
+    """
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
@@ -345,11 +362,23 @@ def load_checkpoint(
             f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
             f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
         )
-    try:
-        model = decoder(config_class(**values))
-        model.load_state_dict(payload["state_dict"])
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
+    return payload, values
+
+
+def _check_loaded(
+    model: nn.Module,
+    path: Path,
+    decoder: type[nn.Module],
+    robot: str | None,
+    n_goals: int | None,
+    make_hint: str,
+) -> None:
+    """Refuse a loaded model that does not follow :class:`ActionDecoder`, or not the caller's robot or G.
+
+    Raises:
+        ConfigError: if ``model`` does not follow :class:`ActionDecoder`.
+        ArtifactError: if it was trained for another robot or number of goals.
+    """
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
@@ -364,8 +393,6 @@ def load_checkpoint(
             f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
             f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
-    model.eval()
-    return model, dict(payload.get("extra", {}))
 
 
 def _invalid(path: Path, exc: Exception, make_hint: str) -> ArtifactError:
