@@ -10,7 +10,7 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
   percentile over 10,000 steps. ``step_deadline`` is what that step has to meet: one
   control period ``dt`` of the robot (0.1 s, a 10 Hz loop), and the fraction of it that
   the p99 uses. ``mj_step_us`` is one ``mujoco.mj_step`` of the Panda scene in the same run.
-- ``station_step_us``: the step live teleoperation runs (:meth:`lasa.live.teleop.Station.step`,
+- ``station_step_us``: the step live teleoperation runs (:meth:`lasa.live.station.Station.step`,
   Dessert), for Retargeting (``R+SA``: the mink solve included) and latent actions
   (``LA+SA``, with the eating decoder of ``--decoder-build``; skipped when there is none).
 - ``sweep``: simulated user-steps per second of the batched rollout
@@ -244,7 +244,7 @@ def step_latency(
 def station_latency(
     condition: str, build_dir: str | os.PathLike[str], n_steps: int, seed: int = 0
 ) -> dict[str, Any]:
-    """Latency of the step live teleoperation runs (:meth:`lasa.live.teleop.Station.step`), Dessert.
+    """Latency of the step live teleoperation runs (:meth:`lasa.live.station.Station.step`), Dessert.
 
     ``R+SA`` is Retargeting: a twist from the stick and its mode, mink's differential IK to a
     joint velocity, then the blend, belief update and safe step. ``LA+SA`` decodes with the
@@ -256,7 +256,7 @@ def station_latency(
         ``{p50, p99, mean, n}`` in microseconds, or ``{"skipped": why}`` when the decoder is missing.
     """
     from lasa.live.devices import Reading
-    from lasa.live.teleop import SessionConfig, Station
+    from lasa.live.station import SessionConfig, Station
 
     if n_steps < 10:
         raise ConfigError(f"n_steps must be >= 10, got {n_steps}")

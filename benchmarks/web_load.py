@@ -6,7 +6,7 @@ and, for each mode of ``--modes`` (``--frames server``: the server renders JPEG 
 ``python -m lasa.live.web`` in its own process and, for each N of ``--clients``, connects N
 WebSocket clients that consent, start their practice and send the stick at 10 Hz for
 ``--duration`` seconds, then end the practice. Every participant's loop runs
-:meth:`lasa.live.teleop.Station.step` on the server, each condition as the schedule orders it
+:meth:`lasa.live.station.Station.step` on the server, each condition as the schedule orders it
 (the LA conditions need the decoders of ``--build-dir``). The simulated clients read and drop
 what the server sends (frames included) and draw nothing, so what differs between the modes is
 the server's own work per tick: rendering and encoding frames, or not. The script also counts

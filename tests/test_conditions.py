@@ -29,7 +29,7 @@ def test_a_name_outside_what_the_caller_accepts_is_an_error():
 
 
 def test_every_loop_reads_the_same_table():
-    from lasa.live.teleop import CONDITIONS as TELEOP
+    from lasa.live.station import CONDITIONS as TELEOP
     from lasa.method.step import METHOD_DECODER, METHODS, method_alpha
     from lasa.people.design import interface_of
 

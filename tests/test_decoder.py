@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.method import decoder as decoder_module
+from lasa.method import inference as inference_module
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
 
 # decode_numpy against decode (float32 torch): the split first layer and the float64 squash
@@ -107,7 +107,7 @@ def test_decode_numpy_matches_decode(layout, users, cands, chunk, z_dim, n_goals
     z = rng.uniform(-1.5, 1.5, zl + (z_dim,))  # beyond [-1, 1]: the clamp
     s = rng.normal(0.2, 1.5, sl + (5,))
     b = rng.dirichlet(np.ones(n_goals), bl or None)
-    with mock.patch.object(decoder_module, "_CHUNK_ROWS", chunk):
+    with mock.patch.object(inference_module, "_CHUNK_ROWS", chunk):
         out = model.decode_numpy(z, s, b)
     ref = reference(model, z, s, b)
     assert out.shape == ref.shape and out.dtype == np.float64 and out.flags.c_contiguous
@@ -130,7 +130,7 @@ def test_decode_numpy_at_chunk_boundaries(users, cands, chunk):
     rng = np.random.default_rng(users)
     z = np.linspace(-1, 1, cands)[None, :, None]
     s, b = rng.normal(0.2, 1.0, (users, 1, 5)), rng.dirichlet([1, 1], users)[:, None]
-    with mock.patch.object(decoder_module, "_CHUNK_ROWS", chunk):
+    with mock.patch.object(inference_module, "_CHUNK_ROWS", chunk):
         out = model.decode_numpy(z, s, b)
     np.testing.assert_allclose(out, reference(model, z, s, b), rtol=0, atol=FAST_ATOL * 0.5)
     # a user's actions do not depend on its batch (to the bit with one thread on MKL; 1e-7 anywhere)

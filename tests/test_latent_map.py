@@ -8,7 +8,8 @@ from numpy.testing import assert_allclose
 from reference_step import latent_step
 
 from lasa.base.errors import ConfigError
-from lasa.figures.latent_map import Config, held_input_paths, run
+from lasa.evidence.latent_measure import held_input_paths
+from lasa.figures.latent_map import Config, run
 
 
 def test_held_paths_shape_and_limits(model, task):

@@ -1,4 +1,5 @@
-"""The latent-action property (lasa.evidence.latent_property) on hand-built decoders whose answer is known."""
+"""The latent-action property (lasa.evidence.latent_measure, .latent_property) on hand-built decoders
+whose answer is known."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import pandas as pd
 import pytest
 
 from lasa.base.errors import ConfigError
+from lasa.evidence import latent_measure as lm
 from lasa.evidence import latent_property as lp
 from lasa.world.robot import load_robot
 from lasa.world.task import CupTask, make_cup_task
@@ -85,8 +87,8 @@ class DriftDecoder:
 
 def _measure(task: CupTask, decoder: object, name: str) -> pd.DataFrame:
     control = task.robot.control
-    config = lp.PropertyConfig(n_inputs=16)
-    return lp.measure(task, decoder, control, config, source="test", task_name="cups", decoder_name=name)  # type: ignore[arg-type]
+    config = lm.PropertyConfig(n_inputs=16)
+    return lm.measure(task, decoder, control, config, source="test", task_name="cups", decoder_name=name)  # type: ignore[arg-type]
 
 
 def test_a_decoder_built_to_stay_has_the_stay_half_only(task: CupTask) -> None:
@@ -255,25 +257,25 @@ def test_choose_orders_by_rule_then_reach_then_goals_then_shares() -> None:
 
 
 def test_ring_and_bad_input() -> None:
-    two = lp.ring(8, 2)
+    two = lm.ring(8, 2)
     assert two.shape == (8, 2) and np.allclose(np.linalg.norm(two, axis=1), 1.0)
-    one = lp.ring(7, 1)
+    one = lm.ring(7, 1)
     assert one.shape == (8, 1) and not np.any(one == 0.0) and one.min() == -1.0 and one.max() == 1.0
     with pytest.raises(ConfigError, match="z_dim=3"):
-        lp.ring(8, 3)
+        lm.ring(8, 3)
     with pytest.raises(ConfigError, match="hold"):
-        lp.PropertyConfig(hold=0.0)
+        lm.PropertyConfig(hold=0.0)
     with pytest.raises(ConfigError, match="n_inputs"):
-        lp.PropertyConfig(n_inputs=1)
+        lm.PropertyConfig(n_inputs=1)
     with pytest.raises(ConfigError, match="leave_hold"):
-        lp.PropertyConfig(leave_hold=-1.0)
+        lm.PropertyConfig(leave_hold=-1.0)
 
 
 def test_phase_ends_are_the_eating_tasks_stroke_ends() -> None:
     from lasa.world.eating import GOALS, fork_frame, make_eating_task
 
     eating = make_eating_task()
-    ends = {GOALS[g]: lp.phase_ends(eating, g) for g in range(eating.n_goals)}
+    ends = {GOALS[g]: lm.phase_ends(eating, g) for g in range(eating.n_goals)}
     assert {g: [label for label, _ in e] for g, e in ends.items()} == {
         "rice": ["dip"],
         "middle": ["cut", "stab"],
@@ -289,5 +291,5 @@ def test_phase_ends_are_the_eating_tasks_stroke_ends() -> None:
 
 def test_phase_ends_of_the_cups_are_their_mid_grasps(task: CupTask) -> None:
     for g in range(task.n_goals):
-        ((label, state),) = lp.phase_ends(task, g)
+        ((label, state),) = lm.phase_ends(task, g)
         assert label == "grasp" and np.allclose(state, task.target(g, 0.5))

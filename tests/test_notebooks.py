@@ -42,8 +42,9 @@ def _sessions(out: Path) -> Path:
     """Teleoperation sessions as the kit logs them: 2 participants x 4 conditions, scripted
     Dessert inputs, and their questionnaires; with notebook 10's decoder."""
     from lasa.live.devices import ScriptedDevice
+    from lasa.live.station import SessionConfig, Station
     from lasa.live.studykit import survey
-    from lasa.live.teleop import SessionConfig, Station, new_session, run_session
+    from lasa.live.teleop import new_session, run_session
 
     folder = out / "sessions"
     for i, participant in enumerate(("s01", "s02")):
@@ -302,7 +303,7 @@ def test_sim4_outputs(executed):
 
 
 def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
-    from lasa.evidence import latent_property
+    from lasa.evidence import latent_measure, latent_property
     from lasa.figures import eating_task
 
     fig = executed / "figures"
@@ -313,7 +314,7 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     readings = eating_task.reading_names(from_dict(eating_task.Config, settings))
     assert set(frame[frame.task == "eating"].decoder) == set(readings)
     table = latent_property.summary(frame)
-    n_inputs = latent_property.PropertyConfig().n_inputs
+    n_inputs = latent_measure.PropertyConfig().n_inputs
     stay_home = frame[frame.context != "leave"]
     assert (stay_home.groupby(["source", "decoder", "context", "goal"]).size() == n_inputs).all()
     # the leave half: per decoder, goal, phase end and condition, every input once per other goal

@@ -17,14 +17,13 @@ from lasa.base.errors import ConfigError
 from lasa.evidence import stats
 from lasa.evidence.stats import (
     CONDITIONS,
-    factors,
     format_f,
     pairwise,
-    participant_means,
     rm_anova,
     sa_effect_between,
     sa_effect_within,
 )
+from lasa.evidence.study_design import factors, participant_means
 
 TASKS = ("Entree", "Dessert")
 

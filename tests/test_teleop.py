@@ -18,7 +18,8 @@ from reference_step import latent_step, softmax, step_with
 from lasa.base.errors import ConfigError
 from lasa.evidence.sessionlog import read_session
 from lasa.live.devices import KeyboardDevice, Reading, ScriptedDevice, safe_axes
-from lasa.live.teleop import SessionConfig, Station, new_session, replay, run_session
+from lasa.live.station import SessionConfig, Station
+from lasa.live.teleop import new_session, replay, run_session
 from lasa.method.decoder import save_checkpoint
 from lasa.method.train import TrainConfig, train_decoder
 from lasa.people.demos import DemoConfig, collect_eating_demonstrations

@@ -252,7 +252,7 @@ def test_a_server_shutdown_mid_step_logs_that_step_before_closing_interrupted(tm
     log closes ``interrupted`` with every row it ran, and no step writes to a closed log."""
     import asyncio
 
-    from lasa.live.teleop import SessionConfig
+    from lasa.live.station import SessionConfig
     from lasa.live.web import loop
     from lasa.live.web.protocol import Inputs
 

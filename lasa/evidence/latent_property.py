@@ -1,40 +1,15 @@
-r"""The property latent actions rest on (Sec. III), measured for any decoder.
+r"""The property latent actions rest on (Sec. III): the rule that judges it, its tables and figure.
 
 Sec. III: while the robot is unsure of the goal, the joystick input z chooses *which goal*;
 "once the robot is confident about the human's goal, the latent actions change to convey
 the preferred manipulation". Shared autonomy (Sec. IV) then holds the tool near the likely
 goal, and the user's input fine-tunes *how* to act there. A decoder without this property
-makes the method's assistance fight its user. It is measured here in two contexts, with
-latent actions alone (alpha = 0), every input held for a while:
-
-- **Confident at goal g**: start at g's mid-preference pose :math:`s^*(g, 1/2)` with the
-  belief all but the floor on g, held fixed. An input *stays* when the tool tip's distance
-  to g's **preference set** (the tip positions of every preference at g: the grasp curve
-  :math:`\theta \mapsto s^*(g, \theta)` of a cup, the stroke surface
-  :math:`(\theta, u) \mapsto s^*(g, \theta, u)` of a bowl) grows more slowly than
-  ``drift_speed``: :math:`d(t) \le v\,t` at every step of the hold. Reported: the share of
-  the ring's inputs that stay, and the range of preference the staying inputs reach (the
-  preference coordinates of the nearest preference pose at the end of the hold, by tip
-  position and direction, the direction weighted by ``rotation_weight`` metres per radian).
-- **Uncertain**: start at home with a uniform belief, updated online as in Algorithm 1;
-  after ``uncertain_hold`` seconds an input has *reached* the goal whose preference set
-  the tip is nearest, if it is within ``reach_distance``. Reported: which goal each input
-  reaches, and whether every goal is reached by some input.
-- **Leaving a confident goal** (Sec. IV-B: "in a given context (s, b) there exist latent
-  actions z that cause the robot to move towards each of the goals"; Sec. IV: "can the
-  latent actions change goals even when shared autonomy is confident?"). Start at each pose
-  where a task's phase at g ends (:func:`phase_ends`: a bowl's stroke ends, a cup's
-  mid-preference grasp) with the belief all but the floor on g, and hold each input for
-  ``leave_hold`` seconds with the belief updated online, under latent actions alone (``LA``,
-  alpha = 0) and blended with the task's assistance (``LA+SA``, the control's alpha and
-  member: the study's). An input *reaches* another goal h when the tip comes within
-  ``reach_distance`` of h's preference set at some step; its *exit time* is the first such
-  step. Reported: per start, condition and other goal, the inputs that reach it and their
-  median exit time.
-
-The inputs are a dense ring of full stick deflections: ``n_inputs`` angles on the unit
-circle for a 2-axis stick, ``n_inputs`` evenly spaced deflections of [-1, 1] (rest left out)
-for a 1-axis stick.
+makes the method's assistance fight its user. :func:`lasa.evidence.latent_measure.measure`
+measures it for any decoder, holding each input of a ring of stick deflections in three
+contexts: confident at a goal (does the input *stay* near the goal's preference set, and how
+much of the preference does it reach), uncertain at home (which goal does it *reach*), and
+confident at the end of a phase at a goal (does it *leave* for each other goal, under ``LA``
+and ``LA+SA``). Its rows, in :data:`COLUMNS`, are what this module reads.
 
 **The rule** (:func:`has_property`, :func:`holds`, :func:`choose`). Its *stay* half was
 written before any eating decoder's property was measured (0.9.0); its *leave* half was
@@ -58,23 +33,13 @@ and seventh of these without the leave half (:func:`stay_holds`).
 
 from __future__ import annotations
 
-import dataclasses
-
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
-from scipy.spatial import cKDTree
 
-from lasa.base.config import AtLeastTwo, ControlConfig, check_range, validate
 from lasa.base.errors import ConfigError
-from lasa.method.belief import belief as to_belief
-from lasa.method.blend import safe_step
-from lasa.method.decoder import ActionDecoder
-from lasa.method.step import shared_autonomy_step
-from lasa.world.eating import TASKS, EatingTask, waypoints
-from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
@@ -84,14 +49,6 @@ __all__ = [
     "TILT_RANGE",
     "LEAVE_COUNT",
     "CONDITIONS",
-    "PropertyConfig",
-    "PreferenceSet",
-    "preference_set",
-    "ring",
-    "held_input_paths",
-    "phase_ends",
-    "leave_paths",
-    "measure",
     "summary",
     "leave_table",
     "has_property",
@@ -129,348 +86,6 @@ TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 
 LEAVE_COUNT = 7  # inputs of the ring's 64 (about 10%) that must reach each other goal, LA+SA [-]
 CONDITIONS = ("LA", "LA+SA")  # the leave half's conditions: alpha = 0, and the control's alpha
 DPI = 130
-
-
-@dataclasses.dataclass(frozen=True)
-class PropertyConfig:
-    """How the property is measured; every value is set from what it means, not from a result.
-
-    The hold at a goal (4 s) is the time a decoder moving at the demonstrators' cruise speed
-    (0.8 sigma_h = 0.3 rad/s) needs to sweep half of the longest preference curve of our
-    tasks in joint space (1.1 rad, from theta = 1/2 to an end of the Panda's cup curve; the
-    bowls' tilt curves are 0.85-1.06 rad from the middle to an end), so a decoder that conveys
-    the preference can reach either end of it from the middle. A drift of 2 cm/s is the
-    issue's example; with ``d(t) <= v t`` at every step it is a bound on the tip's mean speed
-    away from the goal's preferences over every stretch of the hold from its start. From
-    home, 10 s at sigma_h covers the 2-3 rad to the farthest goal; leaving a confident goal
-    gets the same 10 s, and the same 5 cm to count as arriving.
-    """
-
-    n_inputs: AtLeastTwo = 64  # stick inputs on the ring [-]
-    hold: float = 4.0  # seconds each input is held at a goal, the belief held confident [s]
-    drift_speed: float = 0.02  # v: an input stays when d(t) <= v t through the hold [m/s]
-    uncertain_hold: float = 10.0  # seconds each input is held from home, the belief updated online [s]
-    reach_distance: float = 0.05  # an input reaches a goal when the tip ends this close to its set [m]
-    rotation_weight: float = 0.125  # metres per radian of direction when matching a preference [m/rad]
-    n_grid: AtLeastTwo = 41  # preference grid per coordinate of the preference set [-]
-    leave_hold: float = 10.0  # seconds each input is held from a confident goal's phase end [s]
-
-    def __post_init__(self) -> None:
-        validate(self)
-        for name in ("hold", "drift_speed", "uncertain_hold", "reach_distance", "leave_hold"):
-            check_range(name, getattr(self, name), 0.0, low_open=True)
-        check_range("rotation_weight", self.rotation_weight, 0.0)
-
-
-@dataclasses.dataclass(frozen=True)
-class PreferenceSet:
-    """The preferences at one goal, sampled: coordinates and the tool tip's pose at each.
-
-    Attributes:
-        theta: Tilt (cups: top 0 to side 1; bowls: straight down 0 to a scoop's 60 deg 1), (P,).
-        stroke: Depth u along the stroke (bowls), 0 where the task has no strokes, (P,).
-        positions: Tip positions, (P, 3) [m].
-        axes: Tip directions (unit), (P, 3).
-    """
-
-    theta: np.ndarray
-    stroke: np.ndarray
-    positions: np.ndarray
-    axes: np.ndarray
-
-
-def preference_set(task: GoalTask, goal: int, n_grid: int = 41) -> PreferenceSet:
-    """Goal ``goal``'s preference set: the curve s*(g, theta), or a bowl's surface s*(g, theta, u)."""
-    thetas = np.linspace(0.0, 1.0, n_grid)
-    pose = getattr(task, "pose", None)
-    if pose is None or not len(getattr(task, "depth_grid", ())):
-        states = task.target(goal, thetas)
-        theta, stroke = thetas, np.zeros_like(thetas)
-    else:
-        us = np.linspace(0.0, 1.0, max(2, n_grid // 4 + 1))
-        tt, uu = np.meshgrid(thetas, us, indexing="ij")
-        theta, stroke = tt.ravel(), uu.ravel()
-        states = pose(goal, theta, stroke)
-    robot = task.robot
-    return PreferenceSet(theta, stroke, robot.grasp_positions(states), robot.grasp_axes(states))
-
-
-def ring(n: int, z_dim: int) -> np.ndarray:
-    """``n`` full stick deflections, shape (n, z_dim): the unit circle (2 axes) or [-1, 1] (1 axis)."""
-    if z_dim == 1:
-        return np.linspace(-1.0, 1.0, n + n % 2)[:, None]  # an even count: rest is not among them
-    if z_dim == 2:
-        angles = 2 * np.pi * np.arange(n) / n
-        return np.round(np.stack([np.cos(angles), np.sin(angles)], axis=1), 12)
-    raise ConfigError(f"the property is measured for 1- or 2-axis sticks, not z_dim={z_dim}")
-
-
-def held_input_paths(
-    decoder: ActionDecoder,
-    task: GoalTask,
-    control: ControlConfig,
-    start: np.ndarray,
-    belief: np.ndarray,
-    z_values: np.ndarray,
-    steps: int,
-    update_belief: bool = False,
-) -> np.ndarray:
-    """States reached by holding each joystick input for ``steps`` steps (LA, alpha = 0).
-
-    All inputs advance together in one batch: each step makes one decoder call.
-
-    Args:
-        decoder: The decoder.
-        task: The task (for the joint limits).
-        control: Control-loop units.
-        start: Start state, shape (n,).
-        belief: The initial belief, shape (G,).
-        z_values: Joystick inputs, shape (K,) or (K, d).
-        steps: Number of steps each input is held.
-        update_belief: Update the belief online with each decoded action (Algorithm 1);
-            otherwise hold it fixed.
-
-    Returns:
-        States, shape (K, steps + 1, n).
-    """
-    if steps < 1:
-        raise ConfigError(f"steps must be >= 1, got {steps}")
-    belief = np.asarray(belief, dtype=float)
-    if belief.shape != (task.n_goals,) or not np.isclose(belief.sum(), 1.0) or belief.min() < 0:
-        raise ConfigError(f"belief must be a distribution over {task.n_goals} goals, got {belief}")
-    z = np.asarray(z_values, dtype=float).reshape(len(z_values), -1)
-    robot = task.robot
-    s = np.broadcast_to(start, (len(z), robot.n_joints)).copy()
-    log_b = np.log(np.broadcast_to(np.maximum(belief, 1e-300), (len(z), task.n_goals)))
-    out = [s]
-    for _ in range(steps):
-        if update_belief:  # Algorithm 1 with alpha = 0: the method LA
-            step = shared_autonomy_step(decoder, task, control, s, log_b, z, 0.0)
-            s, log_b = step.state, step.log_belief
-        else:
-            a = decoder.decode_numpy(z, s, to_belief(log_b))
-            s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
-        out.append(s)
-    return np.stack(out, axis=1)
-
-
-def phase_ends(task: GoalTask, goal: int) -> list[tuple[str, np.ndarray]]:
-    """The poses where a task's phases at ``goal`` end: where a user leaves that goal from.
-
-    For the eating task, the end of every stroke its tasks carry out at the goal (the
-    waypoints at depth 1 of :data:`lasa.world.eating.TASKS`: the middle bowl's cut and stab,
-    the icing's scoop, the rice's dip, the plate's place), labelled by the preference; for a
-    task without strokes (the cups), the mid-preference grasp s*(g, 1/2), labelled ``grasp``.
-
-    Returns:
-        (label, joint positions (n,)) per phase end, in the tasks' order.
-    """
-    if not isinstance(task, EatingTask):
-        return [("grasp", task.target(goal, 0.5))]
-    ends: dict[str, float] = {}
-    for name, phases in TASKS.items():
-        for wp in waypoints(name):
-            preference = phases[wp.phase].preference
-            if wp.goal == goal and wp.depth == 1.0 and preference is not None:
-                ends.setdefault(preference, wp.theta)
-    return [(label, task.pose(goal, np.array([theta]), np.array([1.0]))[0]) for label, theta in ends.items()]
-
-
-def leave_paths(
-    decoder: ActionDecoder,
-    task: GoalTask,
-    control: ControlConfig,
-    starts: np.ndarray,
-    beliefs: np.ndarray,
-    z_values: np.ndarray,
-    alphas: np.ndarray,
-    steps: int,
-) -> np.ndarray:
-    """States reached by holding input ``z_values[i]`` from ``starts[i]``, the belief updated online.
-
-    Each row runs the one step of Algorithm 1 (:func:`lasa.method.step.shared_autonomy_step`,
-    the stick at rest commanding nothing) with its own blend weight ``alphas[i]`` and the
-    control's assistance member; all rows advance together, one decoder call per step.
-
-    Args:
-        decoder: The decoder.
-        task: The task.
-        control: Control-loop units (dt, the assistance member, the belief model).
-        starts: Start states, (R, n).
-        beliefs: Initial beliefs, (R, G).
-        z_values: Held inputs, (R, d).
-        alphas: Blend weights, (R,) (0: latent actions alone).
-        steps: Steps each input is held.
-
-    Returns:
-        States, (R, steps + 1, n).
-    """
-    if steps < 1:
-        raise ConfigError(f"steps must be >= 1, got {steps}")
-    s = np.asarray(starts, dtype=float).copy()
-    log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))
-    z = np.asarray(z_values, dtype=float)
-    out = [s]
-    for _ in range(steps):
-        step = shared_autonomy_step(decoder, task, control, s, log_b, z, alphas, rest="zero")
-        s, log_b = step.state, step.log_belief
-        out.append(s)
-    return np.stack(out, axis=1)
-
-
-def _nearest(
-    pset: PreferenceSet, pos: np.ndarray, axis: np.ndarray, weight: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Per point: the distance to the set's positions (...,), and the index of the nearest preference pose."""
-    d_pos = np.linalg.norm(pos[..., None, :] - pset.positions, axis=-1)  # (..., P)
-    angle = np.arccos(np.clip(axis @ pset.axes.T, -1.0, 1.0))
-    return d_pos.min(axis=-1), (d_pos + weight * angle).argmin(axis=-1)
-
-
-def measure(
-    task: GoalTask,
-    decoder: ActionDecoder,
-    control: ControlConfig,
-    config: PropertyConfig = PropertyConfig(),
-    *,
-    source: str,
-    task_name: str,
-    decoder_name: str,
-) -> pd.DataFrame:
-    """The property of ``decoder`` on ``task``, one row per (context, goal, input) (:data:`COLUMNS`).
-
-    ``confident`` rows: ``drift`` is the largest d(t)/t over the hold [m/s], ``stays``
-    whether it is at most ``drift_speed``, ``theta``/``stroke`` the preference reached,
-    ``reached`` the goal whose set the tip ends nearest (this goal's name when it stays).
-    ``uncertain`` rows (goal ``home``): ``reached`` the goal reached (``-`` for none) and
-    ``distance`` the tip's distance to that goal's set at the end [m].
-    """
-    robot, dt = task.robot, control.dt
-    z = ring(config.n_inputs, decoder.z_dim)
-    sets = [preference_set(task, g, config.n_grid) for g in range(task.n_goals)]
-    names = list(task.goal_names)
-    floor = control.belief_floor
-    hold = max(1, round(config.hold / dt))
-    rows = []
-    base = {"source": source, "robot": robot.name, "task": task_name, "decoder": decoder_name}
-    for g, pset in enumerate(sets):
-        b = _confident(task, g, floor)
-        paths = held_input_paths(decoder, task, control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
-        pos, axis = robot.grasp_positions(paths[:, 1:]), robot.grasp_axes(paths[:, 1:])
-        dist, _ = _nearest(pset, pos, axis, config.rotation_weight)  # (K, H)
-        drift = (dist / (dt * np.arange(1, hold + 1))).max(axis=1)
-        _, idx = _nearest(pset, pos[:, -1], axis[:, -1], config.rotation_weight)
-        ends = np.stack([_nearest(s, pos[:, -1], axis[:, -1], 0.0)[0] for s in sets], axis=1)  # (K, G)
-        stays = drift <= config.drift_speed
-        rows.append(
-            _rows(
-                base,
-                "confident",
-                names[g],
-                z,
-                drift=drift,
-                stays=stays,
-                theta=pset.theta[idx],
-                stroke=pset.stroke[idx],
-                reached=np.where(stays, names[g], np.asarray(names)[ends.argmin(axis=1)]),
-                distance=ends[:, g],
-            )
-        )
-    steps = max(1, round(config.uncertain_hold / dt))
-    uniform = np.full(task.n_goals, 1.0 / task.n_goals)
-    end = held_input_paths(decoder, task, control, task.start, uniform, z, steps, update_belief=True)[:, -1]
-    pos, axis = robot.grasp_positions(end), robot.grasp_axes(end)
-    dist = np.stack([_nearest(s, pos, axis, 0.0)[0] for s in sets], axis=1)  # (K, G)
-    near = dist.argmin(axis=1)
-    best = dist[np.arange(len(z)), near]
-    rows.append(
-        _rows(
-            base,
-            "uncertain",
-            "home",
-            z,
-            reached=np.where(best <= config.reach_distance, np.asarray(names)[near], "-"),
-            distance=best,
-        )
-    )
-    rows.append(_leave_rows(task, decoder, control, config, sets, z, base))
-    return pd.concat(rows, ignore_index=True)
-
-
-def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **columns: object) -> pd.DataFrame:
-    """Rows of :data:`COLUMNS` for the ring's inputs ``z``, the columns not given left empty."""
-    empty = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
-    z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
-    frame = pd.DataFrame(
-        {**base, "context": context, "goal": goal, "z1": z[:, 0], "z2": z2, **empty, **columns}
-    )
-    return frame.reindex(columns=list(COLUMNS))
-
-
-def _confident(task: GoalTask, goal: int, floor: float) -> np.ndarray:
-    """The belief after working at ``goal``: all but the floor of every other goal on it, (G,)."""
-    b = np.full(task.n_goals, floor)
-    b[goal] = 1.0 - (task.n_goals - 1) * floor
-    return b
-
-
-def _leave_rows(
-    task: GoalTask,
-    decoder: ActionDecoder,
-    control: ControlConfig,
-    config: PropertyConfig,
-    sets: list[PreferenceSet],
-    z: np.ndarray,
-    base: dict[str, str],
-) -> pd.DataFrame:
-    """The leave half's rows: one per (goal, phase end, condition, input, other goal).
-
-    Every goal's phase ends, both conditions and all inputs run in one batch.
-    """
-    names = list(task.goal_names)
-    alphas = {"LA": 0.0, "LA+SA": control.alpha}
-    runs = [
-        (g, label, state, cond)
-        for g in range(task.n_goals)
-        for label, state in phase_ends(task, g)
-        for cond in CONDITIONS
-    ]
-    k = len(z)
-    starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
-    beliefs = np.concatenate(
-        [np.broadcast_to(_confident(task, g, control.belief_floor), (k, task.n_goals)) for g, _, _, _ in runs]
-    )
-    alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
-    steps = max(1, round(config.leave_hold / control.dt))
-    paths = leave_paths(decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)
-    pos = task.robot.grasp_positions(paths[:, 1:])  # (R, T, 3)
-    dist = np.stack(
-        [cKDTree(pset.positions).query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for pset in sets], axis=1
-    )  # (R, G, T)
-    near = dist <= config.reach_distance
-    first = np.where(near.any(axis=2), near.argmax(axis=2) + 1, -1)  # first step within reach, (R, G)
-    frames = []
-    for i, (g, label, _, cond) in enumerate(runs):
-        rows = slice(i * k, (i + 1) * k)
-        for h in range(task.n_goals):
-            if h == g:
-                continue
-            arrived = first[rows, h] > 0
-            frames.append(
-                _rows(
-                    base,
-                    "leave",
-                    names[g],
-                    z,
-                    reached=np.where(arrived, names[h], "-"),
-                    distance=dist[rows, h].min(axis=1),
-                    start=label,
-                    condition=cond,
-                    target=names[h],
-                    exit_time=np.where(arrived, first[rows, h] * control.dt, np.nan),
-                )
-            )
-    return pd.concat(frames, ignore_index=True)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:

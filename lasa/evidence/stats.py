@@ -1,11 +1,8 @@
-"""Statistics for the user study: a 2x2 within-subjects design.
+"""Statistics for the user study: its tests on a 2x2 within-subjects design.
 
-Every participant uses each of four conditions, the crossing of two factors: the *interface*
-(Retargeting ``R`` or Latent Actions ``LA``) and the *assistance* (none, or Shared Autonomy ``SA``),
-named ``R``, ``R+SA``, ``LA`` and ``LA+SA``, and does two tasks (``Entree``, ``Dessert``) under each.
-Data arrive as a tidy frame, one row per participant x condition x task, with columns ``participant``,
-``condition``, ``task`` and a numeric measure; every test first reduces it to one value per
-participant and cell, over tasks, by their mean or (for times "summed across both tasks") their sum.
+The design (two factors, interface and assistance; four conditions; two tasks each) and its data,
+validated and reduced to one value per participant and cell over tasks, are
+:mod:`lasa.evidence.study_design`; every test here first makes that reduction.
 
 The paper reports the SA effect on goal error as F(1,18). A within-subjects test of SA with N = 10
 participants has F(1, N-1) = F(1,9); F(1,18) fits 2N = 20 observations treated as independent. We read
@@ -39,13 +36,17 @@ from statsmodels.stats.multitest import multipletests
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
+from lasa.evidence.study_design import (
+    SA_LEVELS,
+    aggregate,
+    check_participants,
+    condition_cells,
+    factors,
+    prepare,
+)
 
 __all__ = [
-    "INTERFACES",
-    "SA_LEVELS",
     "EFFECTS",
-    "factors",
-    "participant_means",
     "sa_effect_between",
     "rm_anova",
     "sa_effect_within",
@@ -56,167 +57,11 @@ __all__ = [
     "format_f",
 ]
 
-INTERFACES: tuple[str, ...] = ("R", "LA")
-"""Levels of the interface factor."""
-
-SA_LEVELS: tuple[str, ...] = ("none", "SA")
-"""Levels of the assistance factor."""
-
 EFFECTS: tuple[str, ...] = ("interface", "assistance", "interface:assistance")
 """Effect names of :func:`rm_anova`, in row order."""
 
-AGGS: tuple[str, ...] = ("mean", "sum")
-
 BETWEEN_TEST = "between-subjects one-way ANOVA on 2N participant means (the paper's F(1,18) reading)"
 WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
-
-# Columns every frame needs besides the measure; "interface" and "assistance" are derived from
-# "condition" (they overwrite any columns of those names).
-_KEYS: tuple[str, ...] = ("participant", "condition", "task")
-_DERIVED: tuple[str, ...] = ("interface", "assistance")
-
-
-def factors(condition: str) -> tuple[str, str]:
-    """Split a condition name into its (interface, assistance) levels.
-
-    Args:
-        condition: One of :data:`CONDITIONS`.
-
-    Returns:
-        ``(interface, assistance)``, e.g. ``"LA+SA"`` -> ``("LA", "SA")``, ``"R"`` -> ``("R", "none")``.
-
-    Raises:
-        ConfigError: ``condition`` is not one of :data:`CONDITIONS`.
-    """
-    if not isinstance(condition, str) or condition not in CONDITIONS:
-        raise ConfigError(f"unknown condition {condition!r}; allowed: {', '.join(CONDITIONS)}")
-    interface, _, assistance = condition.partition("+")
-    return interface, assistance or "none"
-
-
-def _check_agg(agg: str) -> None:
-    if agg not in AGGS:
-        raise ConfigError(f"agg must be one of {', '.join(map(repr, AGGS))}, got {agg!r}")
-
-
-def _prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
-    """Validate ``frame`` and return a copy with only the key columns, ``measure`` as float and
-    ``interface`` / ``assistance`` columns derived from ``condition``."""
-    if not isinstance(frame, pd.DataFrame):
-        raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
-    if measure in _KEYS + _DERIVED:
-        raise ConfigError(f"measure {measure!r} is a key column; name the column holding the measure")
-    missing = [name for name in (*_KEYS, measure) if name not in frame.columns]
-    if missing:
-        have = [str(name) for name in frame.columns]
-        raise ConfigError(f"frame is missing column(s) {', '.join(map(repr, missing))}; it has {have}")
-    if frame.empty:
-        raise ConfigError("frame has no rows")
-    if frame["participant"].isna().any():
-        raise ConfigError("column 'participant' has missing values")
-
-    conditions = frame["condition"]
-    unknown = sorted({repr(c) for c in conditions.unique() if c not in CONDITIONS})
-    if unknown:
-        raise ConfigError(f"unknown condition(s) {', '.join(unknown)}; allowed: {', '.join(CONDITIONS)}")
-
-    values = frame[measure]
-    if not pd.api.types.is_numeric_dtype(values) or pd.api.types.is_bool_dtype(values):
-        raise ConfigError(f"measure {measure!r} must be numeric, got dtype {values.dtype}")
-    values = values.astype(float)
-    bad = ~np.isfinite(values.to_numpy())
-    if bad.any():
-        rows = frame.loc[bad, ["participant", "condition", "task"]].head(3).to_dict("records")
-        raise ConfigError(f"measure {measure!r} has {int(bad.sum())} non-finite value(s), e.g. at {rows}")
-
-    keys = ["participant", "condition", "task"]
-    duplicated = frame.duplicated(subset=keys, keep=False)
-    if duplicated.any():
-        row = frame.loc[duplicated, keys].iloc[0].to_dict()
-        raise ConfigError(
-            f"more than one row for participant x condition x task {row}; expected exactly one per cell"
-        )
-
-    out = frame[keys].copy()
-    out[measure] = values
-    levels = {name: factors(name) for name in CONDITIONS}
-    out["interface"] = conditions.map(lambda c: levels[c][0])
-    out["assistance"] = conditions.map(lambda c: levels[c][1])
-    return out
-
-
-def _check_participants(data: pd.DataFrame) -> int:
-    n = data["participant"].nunique()
-    if n < 2:
-        raise ConfigError(f"need at least 2 participants, got {n}")
-    return int(n)
-
-
-def _check_complete(data: pd.DataFrame, conditions: Sequence[str]) -> None:
-    """Every participant has every one of ``conditions``, and the same tasks in each of them."""
-    have = data.groupby("participant", sort=True)["condition"].agg(set)
-    for participant, present in have.items():
-        lacking = [c for c in conditions if c not in present]
-        if lacking:
-            raise ConfigError(
-                f"participant {participant!r} has no data for condition(s) {', '.join(lacking)}; "
-                "within-subject tests need every participant in every condition compared"
-            )
-    tasks = set(data["task"].unique())
-    subset = data[data["condition"].isin(list(conditions))]
-    cells = subset.groupby(["participant", "condition"], sort=True)["task"].agg(set)
-    for (participant, condition), present in cells.items():
-        lacking_tasks = sorted(map(str, tasks - present))
-        if lacking_tasks:
-            raise ConfigError(
-                f"participant {participant!r} has no data for task(s) {', '.join(lacking_tasks)} "
-                f"in condition {condition!r}; aggregating over tasks needs every task in every cell"
-            )
-
-
-def _aggregate(data: pd.DataFrame, measure: str, by: Sequence[str], agg: str) -> pd.DataFrame:
-    """One value of ``measure`` per participant x ``by`` levels (``data`` already prepared)."""
-    keys = ["participant", *by]
-    grouped = data.copy()
-    order = {"condition": CONDITIONS, "interface": INTERFACES, "assistance": SA_LEVELS}
-    for name in by:
-        if name in order:
-            grouped[name] = pd.Categorical(grouped[name], categories=list(order[name]), ordered=True)
-    out = grouped.groupby(keys, sort=True, observed=True)[measure].agg(agg).reset_index()
-    for name in by:
-        if name in order:
-            out[name] = out[name].astype(str)
-    return out
-
-
-def participant_means(
-    frame: pd.DataFrame, measure: str, by: Sequence[str] = ("condition",), agg: str = "mean"
-) -> pd.DataFrame:
-    """One value of ``measure`` per participant and ``by`` level, aggregated over everything else.
-
-    Args:
-        frame: Tidy study data (columns ``participant``, ``condition``, ``task`` and ``measure``).
-        measure: Name of the numeric column to aggregate.
-        by: Columns to keep besides ``participant``; ``"interface"`` and ``"assistance"`` may be used
-            (they are derived from ``condition``). ``()`` aggregates each participant over everything.
-        agg: ``"mean"`` or ``"sum"`` over the rows (tasks, by default) in each group.
-
-    Returns:
-        Columns ``participant``, ``*by``, ``measure``; rows sorted by participant and then by level in
-        the study's order (:data:`CONDITIONS`, :data:`INTERFACES`, :data:`SA_LEVELS`).
-
-    Raises:
-        ConfigError: A column is missing or unknown, a condition is unknown, a value is not finite,
-            or ``agg`` is not ``"mean"`` / ``"sum"``.
-    """
-    _check_agg(agg)
-    by = list(by)
-    data = _prepare(frame, measure)
-    unknown = [name for name in by if name not in data.columns or name == "participant" or name == measure]
-    if unknown:
-        allowed = ["condition", "task", *_DERIVED]
-        raise ConfigError(f"cannot group by {', '.join(map(repr, unknown))}; allowed: {allowed}")
-    return _aggregate(data, measure, by, agg)
 
 
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
@@ -240,9 +85,9 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
         ConfigError: Invalid data, fewer than 2 participants, or a participant without rows both
             with and without SA.
     """
-    data = _prepare(frame, measure)
-    n = _check_participants(data)
-    means = _aggregate(data, measure, ["assistance"], "mean")
+    data = prepare(frame, measure)
+    n = check_participants(data)
+    means = aggregate(data, measure, ["assistance"], "mean")
     counts = means.groupby("participant")["assistance"].agg(set)
     for participant, present in counts.items():
         lacking = [level for level in SA_LEVELS if level not in present]
@@ -273,16 +118,6 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     }
 
 
-def _cells(frame: pd.DataFrame, measure: str, agg: str, conditions: Sequence[str]) -> pd.DataFrame:
-    """Validated per participant x condition values for ``conditions``, complete and balanced."""
-    _check_agg(agg)
-    data = _prepare(frame, measure)
-    _check_participants(data)
-    _check_complete(data, conditions)
-    data = data[data["condition"].isin(list(conditions))]
-    return _aggregate(data, measure, ["condition", "interface", "assistance"], agg)
-
-
 def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFrame:
     """Two-way (interface x assistance) repeated-measures ANOVA with participants as subjects.
 
@@ -301,7 +136,7 @@ def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFra
         ConfigError: Invalid data or ``agg``, fewer than 2 participants, or a participant missing a
             condition (or a task within one).
     """
-    cells = _cells(frame, measure, agg, CONDITIONS)
+    cells = condition_cells(frame, measure, agg, CONDITIONS)
     table = AnovaRM(cells, depvar=measure, subject="participant", within=["interface", "assistance"]).fit()
     result = table.anova_table
     rows = []
@@ -336,7 +171,7 @@ def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     """
     table = rm_anova(frame, measure, agg="mean")
     row = table.set_index("effect").loc["assistance"]
-    cells = _cells(frame, measure, "mean", CONDITIONS)
+    cells = condition_cells(frame, measure, "mean", CONDITIONS)
     per_participant = cells.groupby(["participant", "assistance"])[measure].mean().unstack("assistance")
     # the 95% interval of SA - no SA: a paired t over participants (its t^2 is the main effect's F)
     ci = scipy.stats.ttest_rel(per_participant["SA"], per_participant["none"]).confidence_interval()
@@ -380,18 +215,9 @@ def pairwise(
         ConfigError: Invalid data, ``agg``, pair or correction, fewer than 2 participants, or a
             participant missing a condition that is compared.
     """
-    chosen = list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
-    if not chosen:
-        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
-    for pair in chosen:
-        if len(pair) != 2:
-            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
-        for condition in pair:
-            factors(condition)
-        if pair[0] == pair[1]:
-            raise ConfigError(f"pair {pair!r} compares a condition with itself")
+    chosen = _chosen_pairs(pairs)
     used = [c for c in CONDITIONS if any(c in pair for pair in chosen)]
-    cells = _cells(frame, measure, agg, used)
+    cells = condition_cells(frame, measure, agg, used)
     wide = cells.pivot(index="participant", columns="condition", values=measure)
 
     rows = []
@@ -412,7 +238,38 @@ def pairwise(
             }
         )
     out = pd.DataFrame(rows)
-    p_unc = out["p_unc"].to_numpy(dtype=float)
+    out["p_corr"] = _corrected(out["p_unc"].to_numpy(dtype=float), correction)
+    out["correction"] = correction
+    return out
+
+
+def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
+    """The pairs :func:`pairwise` tests: ``pairs``, or every pair of :data:`CONDITIONS` in order.
+
+    Raises:
+        ConfigError: No pair, a pair not of two conditions, or a condition compared with itself.
+    """
+    chosen: list[tuple[str, ...]] = (
+        list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
+    )
+    if not chosen:
+        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
+    for pair in chosen:
+        if len(pair) != 2:
+            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
+        for condition in pair:
+            factors(condition)
+        if pair[0] == pair[1]:
+            raise ConfigError(f"pair {pair!r} compares a condition with itself")
+    return chosen
+
+
+def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
+    """The p values corrected by ``correction`` across the finite ones (``"none"``: as they are).
+
+    Raises:
+        ConfigError: ``correction`` is not a ``multipletests`` method.
+    """
     p_corr = p_unc.copy()
     if correction != "none":
         finite = np.isfinite(p_unc)
@@ -423,9 +280,7 @@ def pairwise(
                 raise ConfigError(
                     f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
                 ) from error
-    out["p_corr"] = p_corr
-    out["correction"] = correction
-    return out
+    return p_corr
 
 
 def paired_bootstrap(
@@ -479,7 +334,7 @@ def restricted_times(frame: pd.DataFrame, measure: str, horizon: float = np.inf)
         ConfigError: Invalid data, or a participant missing a condition or a task in one.
     """
     clipped = frame.assign(**{measure: np.minimum(frame[measure].astype(float), horizon)})
-    cells = _cells(clipped, measure, "sum", CONDITIONS)
+    cells = condition_cells(clipped, measure, "sum", CONDITIONS)
     return cells.pivot(index="participant", columns="condition", values=measure)[list(CONDITIONS)]
 
 

@@ -23,6 +23,8 @@ verdict's rule in its docstring; those that simulate define ``run`` (not
 ``entropy_ablation``, whose step is ``run_sweep``, nor ``eating_task``, whose is
 ``train_readings``). :mod:`.study` has three figures, each a :class:`lasa.figures.study.FigureSpec`
 (``GOAL_ERROR``, ``TIME``, ``ALIGNMENT``) with its own ``NAME``, ``COLUMNS`` and ``plot``.
+Two modules are no figure's own: :mod:`.common`, what several figures share, and
+:mod:`.new_cups`, the episodes that sim4's ``run`` tabulates.
 :func:`lasa.evidence.publish.publish` merges a robot's rows into the figure's CSV, redraws the
 figure and updates the claims table, as one step under the folder lock. Changing a figure
 means changing its module and its notebook; a new figure also needs its Make target and its

@@ -46,7 +46,7 @@ from lasa.base.config import (
 )
 from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
-from lasa.evidence import latent_property
+from lasa.evidence import latent_measure, latent_property
 from lasa.figures import entropy_ablation
 from lasa.method.dataset import save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
@@ -175,7 +175,7 @@ class Readings:
         sweep: Notebook 03's sweep on the continuous base (one row per lambda).
         chosen_lambda: The lambda its rule picked.
         demos: Demonstration tuples (clean, noisy copies) and minutes of motion per demo reading.
-        property: :func:`lasa.evidence.latent_property.measure` rows of every reading.
+        property: :func:`lasa.evidence.latent_measure.measure` rows of every reading.
         headline: The reading the property's rule picks.
     """
 
@@ -192,7 +192,7 @@ def train_readings(
     control: ControlConfig,
     config: Config,
     paths: Paths,
-    prop: latent_property.PropertyConfig = latent_property.PropertyConfig(),
+    prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
 ) -> Readings:
     """Train every reading, measure its property, choose the headline by the property alone.
@@ -255,7 +255,7 @@ def train_readings(
         )
     frame = pd.concat(
         [
-            latent_property.measure(
+            latent_measure.measure(
                 task, m, control, prop, source="eating", task_name="eating", decoder_name=n
             )
             for n, m in models.items()

@@ -25,7 +25,7 @@ from matplotlib.patches import Rectangle
 from lasa.base.config import AtLeastTwo, ControlConfig, PositiveInt, validate
 from lasa.base.io import load_npz
 from lasa.base.paths import Paths
-from lasa.evidence.latent_property import held_input_paths
+from lasa.evidence.latent_measure import held_input_paths
 from lasa.evidence.plots import draw_scene, frame_around, goal_colors, project, robots_present
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
@@ -36,7 +36,6 @@ __all__ = [
     "NAME",
     "COLUMNS",
     "Config",
-    "held_input_paths",
     "run",
     "plot",
     "plot_held_paths",

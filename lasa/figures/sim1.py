@@ -132,16 +132,7 @@ def run(
     members = members_of(control, config.assistance) if members is None else members
     method, member, conditions, seed = sweep_grid(config.methods, members, config.betas, n_users)
     beta = np.array(conditions, dtype=float)
-    users = UserPopulation(
-        goal=goal[seed],
-        theta=theta[seed],
-        target=task.target(goal[seed], theta[seed]),
-        beta0=beta,
-        slope=np.zeros(len(seed)),
-        stream=seed,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-    )
+    users = _users(task, config, goal[seed], theta[seed], beta, seed)
     traj = run_population(
         decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
     )
@@ -164,6 +155,22 @@ def run(
         }
     )
     return frame, traj
+
+
+def _users(
+    task: GoalTask, config: Config, goal: np.ndarray, theta: np.ndarray, beta: np.ndarray, seed: np.ndarray
+) -> UserPopulation:
+    """The sweep's users: one per row of the grid, of fixed rationality ``beta`` (no learning)."""
+    return UserPopulation(
+        goal=goal,
+        theta=theta,
+        target=task.target(goal, theta),
+        beta0=beta,
+        slope=np.zeros(len(seed)),
+        stream=seed,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
+    )
 
 
 def _means(frame: pd.DataFrame) -> pd.DataFrame:
@@ -197,89 +204,101 @@ def _sa_claims(
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
     means = _means(frame) if means is None else means
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
-    lower = err[b] < err[a]
-    n_lower, n_total = int(lower.sum()), len(lower)
-    values1 = {"share_lower": n_lower / n_total}
-    verdict1 = rule("sim1.final_error").verdict(values1)
-    worst = (err[b] - err[a]).idxmax()
-    claims = [
-        Claim(
-            id="sim1.final_error",
-            claim=f"SA lowers the final state error at every beta ({b} vs {a})",
-            figure="sim1",
-            paper="LA+SA below LA at every beta",
-            values=values1,
-            measured=(
-                f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
-                f"mean final error {a} vs {b}: "
-                f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
-                f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000"
-            ),
-            reproduced=verdict1,
-            note=(
-                ""
-                if verdict1 == "yes"
-                else f"Largest excess of {b} at beta={worst:g} "
-                f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}). "
-                + (
-                    "Likely reason: the assistance pulls towards the mid-preference grasp g, "
-                    "and an Eq. S1 user, who does not model the assistance, never fully "
-                    "resists it (Eq. T4), while LA alone lets users settle on s* exactly."
-                    if member_of(frame) == "point"
-                    else ""
-                )
-            ),
-            robot=robot,
-        )
-    ]
     r75 = tim.loc[75.0, a] / tim.loc[75.0, b]
     r1000 = tim.loc[1000.0, a] / tim.loc[1000.0, b]
-    values2 = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
-    verdict2 = rule("sim1.time_ratio").verdict(values2)
-    claims.append(
-        Claim(
-            id="sim1.time_ratio",
-            claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
-            figure="sim1",
-            paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
-            values=values2,
-            measured=(
-                f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
-                f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)"
-            ),
-            reproduced=verdict2,
-            note=(
-                ("The paper's numbers are for its 7-DoF arm. " if robot != "panda" else "")
-                + "Time = steps until the normalised error first drops to the tolerance "
-                "(the horizon if never)."
-            ),
-            robot=robot,
-        )
+    return [
+        _final_error_claim(frame, err, a, b, robot),
+        _time_ratio_claim(tim, r75, r1000, a, b, robot),
+        _gap_claim(err, r75, r1000, a, b, robot),
+    ]
+
+
+def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, robot: str) -> Claim:
+    """sim1.final_error: b's mean final error below a's at every beta (``err``: per beta, a and b).
+
+    Its note, when the verdict is not ``yes``, names the likely reason under the ``point``
+    member (the member of ``frame``, read only then).
+    """
+    lower = err[b] < err[a]
+    n_lower, n_total = int(lower.sum()), len(lower)
+    values = {"share_lower": n_lower / n_total}
+    verdict = rule("sim1.final_error").verdict(values)
+    worst = (err[b] - err[a]).idxmax()
+    return Claim(
+        id="sim1.final_error",
+        claim=f"SA lowers the final state error at every beta ({b} vs {a})",
+        figure="sim1",
+        paper="LA+SA below LA at every beta",
+        values=values,
+        measured=(
+            f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
+            f"mean final error {a} vs {b}: "
+            f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
+            f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000"
+        ),
+        reproduced=verdict,
+        note=(
+            ""
+            if verdict == "yes"
+            else f"Largest excess of {b} at beta={worst:g} "
+            f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}). "
+            + (
+                "Likely reason: the assistance pulls towards the mid-preference grasp g, "
+                "and an Eq. S1 user, who does not model the assistance, never fully "
+                "resists it (Eq. T4), while LA alone lets users settle on s* exactly."
+                if member_of(frame) == "point"
+                else ""
+            )
+        ),
+        robot=robot,
     )
+
+
+def _time_ratio_claim(tim: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
+    """sim1.time_ratio: a's mean time over b's at beta = 75 and 1000 (``tim``: per beta, a and b)."""
+    values = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
+    return Claim(
+        id="sim1.time_ratio",
+        claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
+        figure="sim1",
+        paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
+        values=values,
+        measured=(
+            f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
+            f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)"
+        ),
+        reproduced=rule("sim1.time_ratio").verdict(values),
+        note=(
+            ("The paper's numbers are for its 7-DoF arm. " if robot != "panda" else "")
+            + "Time = steps until the normalised error first drops to the tolerance "
+            "(the horizon if never)."
+        ),
+        robot=robot,
+    )
+
+
+def _gap_claim(err: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
+    """sim1.gap_narrows: the time ratio and the final-error gap from beta = 75 to 1000."""
     d75, d1000 = err.loc[75.0, a] - err.loc[75.0, b], err.loc[1000.0, a] - err.loc[1000.0, b]
-    values3 = {
+    values = {
         "time_narrowing": float(abs(r75 - 1) - abs(r1000 - 1)),
         "error_narrowing": float(abs(d75) - abs(d1000)),
     }
-    verdict3 = rule("sim1.gap_narrows").verdict(values3)
-    claims.append(
-        Claim(
-            id="sim1.gap_narrows",
-            claim=f"the gap between {a} and {b} narrows as beta grows",
-            figure="sim1",
-            paper="time gap 45% at beta=75 -> 30% at beta=1000",
-            values=values3,
-            measured=(
-                f"time gap narrows by {abs(r75 - 1) - abs(r1000 - 1):+.2f} (|r75-1| - |r1000-1|): "
-                f"time ratio {r75:.2f} -> {r1000:.2f}; final-error difference {a}-{b} "
-                f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)"
-            ),
-            reproduced=verdict3,
-            note="",
-            robot=robot,
-        )
+    return Claim(
+        id="sim1.gap_narrows",
+        claim=f"the gap between {a} and {b} narrows as beta grows",
+        figure="sim1",
+        paper="time gap 45% at beta=75 -> 30% at beta=1000",
+        values=values,
+        measured=(
+            f"time gap narrows by {abs(r75 - 1) - abs(r1000 - 1):+.2f} (|r75-1| - |r1000-1|): "
+            f"time ratio {r75:.2f} -> {r1000:.2f}; final-error difference {a}-{b} "
+            f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)"
+        ),
+        reproduced=rule("sim1.gap_narrows").verdict(values),
+        note="",
+        robot=robot,
     )
-    return claims
 
 
 def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Claim:

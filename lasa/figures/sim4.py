@@ -2,8 +2,8 @@
 
 A new cup is put on the table after training, at growing distances from a training
 cup. Near-optimal users reach for it with and without the context map
-(:mod:`lasa.method.newgoals`), and the grasp error is fitted against the new cup's distance.
-Notebook ``07_new_goals``.
+(:mod:`lasa.method.newgoals`; the episodes are :mod:`lasa.figures.new_cups`), and the grasp
+error is fitted against the new cup's distance. Notebook ``07_new_goals``.
 """
 
 from __future__ import annotations
@@ -24,37 +24,16 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, wrap_to
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    N_BOOT,
-    NO_ASSISTANCE,
-    Design,
-    block_seed,
-    block_users,
-    check_design,
-    group_means,
-    member_frame,
-)
-from lasa.figures.common import (
-    Decoders,
-    as_decoders,
-    check_members,
-    check_methods,
-    check_positive_int,
-    episodes,
-    members_of,
-)
-from lasa.method.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
-from lasa.method.step import METHOD_DECODER, method_alpha
-from lasa.people.rollout import Trajectories, rollout
-from lasa.people.users import UserPopulation
+from lasa.evidence.verdicts import N_BOOT, Design, check_design, group_means, member_frame
+from lasa.figures.common import Decoders, check_members, check_methods, check_positive_int
+from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
+from lasa.method.newgoals import MAP_KINDS
 from lasa.world.task import CupTask
 
 __all__ = [
     "NAME",
     "COLUMNS",
     "Config",
-    "NewGoalRun",
-    "new_cup_positions",
     "run",
     "fit_line",
     "fits",
@@ -132,36 +111,6 @@ class Config:
             check_choice("map", kind, MAP_KINDS)
 
 
-@dataclasses.dataclass(frozen=True)
-class NewGoalRun:
-    """The episodes at one new cup.
-
-    Attributes:
-        offset: Distance of the new cup from the reference cup on the table [m].
-        task: The task grown by the new cup (its robot's scene shows it).
-        with_map: Trajectories with each kind of context map (belief over G + 1 goals).
-        without_map: Trajectories of the unchanged method (training goals only).
-    """
-
-    offset: float
-    task: CupTask
-    with_map: dict[str, Trajectories]
-    without_map: Trajectories
-
-
-def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
-    """Grasp centres of the new cups, shape (len(offsets), 3) [m]."""
-    cups = task.robot.cup_positions()
-    ref = cups[config.ref_goal]
-    if config.direction is None:
-        other = cups[(config.ref_goal + 1) % task.n_goals]
-        direction = (ref - other)[:2]
-    else:
-        direction = np.asarray(config.direction, dtype=float)
-    direction = np.r_[direction / np.linalg.norm(direction), 0.0]
-    return ref + np.asarray(config.offsets)[:, None] * direction
-
-
 def run(
     decoders: Decoders,
     task: CupTask,
@@ -200,93 +149,45 @@ def run(
         method's assistance ran under; ``none`` for LA) and ``look``; and the runs per new
         cup under the headline member (``control.assistance``).
     """
-    if not 0 <= config.ref_goal < task.n_goals:
-        raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {config.ref_goal}")
-    key = METHOD_DECODER[config.method]
-    decoder = as_decoders(decoders).get(key)
-    if decoder is None:
-        raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    _, theta, noise = episodes(decoder, task, control, n_users, config.horizon, block_seed(config.seed, look))
-    seeds = np.arange(n_users)
-    alpha = method_alpha(config.method, control)
-    if members is None:
-        members = members_of(control, config.assistance)
-    members = members if alpha > 0 else (NO_ASSISTANCE,)
-    grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
-    dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
-    scale = float(dist.max())
+    sweep = Sweep.of(decoders, task, control, config, progress, look, members)
     runs, rows = [], []
-    # every member's users share one batch per (cup, map): member i's users are rows
-    # i * n_users ... (i + 1) * n_users - 1, with the same seeds (paired across members)
-    n_members = len(members)
-    seeds_all = np.tile(seeds, n_members)
-    theta_all = np.tile(theta, n_members)
-    member_all = np.repeat(members, n_users)
-    assisted = None if members == (NO_ASSISTANCE,) else member_all
-    for offset, big, d in zip(config.offsets, grown, dist, strict=True):
-        new = big.n_goals - 1
-        target = big.target(np.full(len(seeds_all), new), theta_all)
-        users = UserPopulation(
-            goal=np.full(len(seeds_all), new),
-            theta=theta_all,
-            target=target,
-            beta0=np.full(len(seeds_all), config.beta),
-            slope=np.zeros(len(seeds_all)),
-            stream=seeds_all,
-        )
-        with_map = {}
-        for kind in config.maps:
-            mapped = MappedDecoder(decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
-            with_map[kind] = rollout(
-                mapped, big, users, alpha, control, config.horizon, noise, progress, assistance=assisted
-            )
-        plain = dataclasses.replace(users, goal=np.full(len(seeds_all), config.ref_goal))
-        without = rollout(
-            decoder, task, plain, alpha, control, config.horizon, noise, progress, assistance=assisted
-        )
-        head = slice(0, n_users)
-        runs.append(
-            NewGoalRun(
-                float(offset),
-                big,
-                {k: _users_of(t, head) for k, t in with_map.items()},
-                _users_of(without, head),
-            )
-        )
-        cases = [
-            ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
-        ]
-        cases.append(("without", "none", without, np.full(len(seeds_all), np.nan)))
-        reference = normalized_error(task.target(config.ref_goal, theta_all), target, scale)
-        for mapping, kind, traj, conf in cases:
-            rows.append(
-                pd.DataFrame(
-                    {
-                        "robot": task.robot.name,
-                        "mapping": mapping,
-                        "distance": d / scale,
-                        "seed": start + seeds_all,
-                        "error": normalized_error(traj.states[-1], target, scale),
-                        "h": kind,
-                        "offset_m": float(offset),
-                        "theta": theta_all,
-                        "confidence": conf,
-                        "reference": reference,
-                        "assistance": member_all,
-                        "look": look,
-                    }
-                )
-            )
+    for offset, big, d in zip(config.offsets, sweep.grown, sweep.distances, strict=True):
+        at_cup, cup = episodes_at(sweep, float(offset), big)
+        runs.append(at_cup)
+        rows += _rows(sweep, cup, float(offset), d)
     frame = pd.concat(rows, ignore_index=True)
     # rows by member, then cup and map, as the members' runs came out before they shared batches
-    order = np.argsort(pd.Categorical(frame.assistance, categories=list(members)).codes, kind="stable")
+    order = np.argsort(pd.Categorical(frame.assistance, categories=list(sweep.members)).codes, kind="stable")
     return frame.iloc[order].reset_index(drop=True), runs
 
 
-def _users_of(traj: Trajectories, users: slice) -> Trajectories:
-    """The trajectories of some users (axis 1 of every field)."""
-    return Trajectories(**{f.name: getattr(traj, f.name)[:, users] for f in dataclasses.fields(traj)})
+def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, d: float) -> list[pd.DataFrame]:
+    """The rows of every case at one new cup (each kind of map, and none), ``d`` from the reference."""
+    config, task, users = sweep.config, sweep.task, cup.users
+    cases = [
+        ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in cup.with_map.items()
+    ]
+    cases.append(("without", "none", cup.without, np.full(len(sweep.seeds), np.nan)))
+    reference = normalized_error(task.target(config.ref_goal, sweep.theta), users.target, sweep.scale)
+    return [
+        pd.DataFrame(
+            {
+                "robot": task.robot.name,
+                "mapping": mapping,
+                "distance": d / sweep.scale,
+                "seed": sweep.first + sweep.seeds,
+                "error": normalized_error(traj.states[-1], users.target, sweep.scale),
+                "h": kind,
+                "offset_m": offset,
+                "theta": sweep.theta,
+                "confidence": conf,
+                "reference": reference,
+                "assistance": sweep.member,
+                "look": sweep.look,
+            }
+        )
+        for mapping, kind, traj, conf in cases
+    ]
 
 
 def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
@@ -339,37 +240,11 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     robot = str(frame.robot.iloc[0])
     table = fits(frame)
     n_cups = frame.distance.nunique()
-
-    def line(f: pd.Series) -> str:
-        return (
-            f"y = {f.slope:.3f}x {f.intercept:+.3f}, R^2 = {f.r2:.3f} over the {n_cups} cups' means "
-            f"({f.r2_episodes:.2f} over episodes)"
-        )
-
     means = frame.groupby(["h", "distance"]).error.mean()
-    claims = []
-    for kind in [k for k in ("straight_line", "grasp") if k in table.index]:
-        f = table.loc[kind]
-        below = means[kind] < means["none"]
-        helps = bool(below.all())
-        values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
-        verdict = rule(f"sim4.{kind}_linear").verdict(values)
-        claims.append(
-            Claim(
-                id=f"sim4.{kind}_linear",
-                claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
-                figure="sim4",
-                paper="y = 0.11x, R^2 = 0.98",
-                values=values,
-                measured=line(f) + " (the interval is for the slope)",
-                reproduced=verdict,
-                note=(
-                    ("" if helps else "Above the no-map error at some cup. ")
-                    + "Joint-space distances and errors, normalised by the farthest new goal's distance."
-                ),
-                robot=robot,
-            )
-        )
+    claims = [
+        _map_claim(kind, table.loc[kind], means, n_cups, robot)
+        for kind in [k for k in ("straight_line", "grasp") if k in table.index]
+    ]
     wo = table.loc["none"]
     values = {"slope": float(wo.slope), "r2": float(wo.r2)}
     verdict = rule("sim4.no_map_training_goal").verdict(values)
@@ -380,13 +255,43 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             figure="sim4",
             paper="y = x",
             values=values,
-            measured=line(wo) + " (the interval is for the slope)",
+            measured=_line(wo, n_cups) + " (the interval is for the slope)",
             reproduced=verdict,
             note="",
             robot=robot,
         )
     )
     return claims
+
+
+def _map_claim(kind: str, f: pd.Series, means: pd.Series, n_cups: int, robot: str) -> Claim:
+    """sim4.<kind>_linear, from the map's fit ``f`` and the mean error per (h, distance)."""
+    below = means[kind] < means["none"]
+    helps = bool(below.all())
+    values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
+    verdict = rule(f"sim4.{kind}_linear").verdict(values)
+    return Claim(
+        id=f"sim4.{kind}_linear",
+        claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
+        figure="sim4",
+        paper="y = 0.11x, R^2 = 0.98",
+        values=values,
+        measured=_line(f, n_cups) + " (the interval is for the slope)",
+        reproduced=verdict,
+        note=(
+            ("" if helps else "Above the no-map error at some cup. ")
+            + "Joint-space distances and errors, normalised by the farthest new goal's distance."
+        ),
+        robot=robot,
+    )
+
+
+def _line(f: pd.Series, n_cups: int) -> str:
+    """A fit's line, its R^2 over the cups' means and over the episodes."""
+    return (
+        f"y = {f.slope:.3f}x {f.intercept:+.3f}, R^2 = {f.r2:.3f} over the {n_cups} cups' means "
+        f"({f.r2_episodes:.2f} over episodes)"
+    )
 
 
 def _lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,5 +1,7 @@
-"""Live use: teleoperation in MuJoCo's viewer, the web study's server, input devices and the study kit.
+"""Live use: the station, teleoperation in MuJoCo's viewer, the web study's server, input devices
+and the study kit.
 
+- :mod:`~lasa.live.station`: the robot side of a session, one control step per reading;
 - :mod:`~lasa.live.teleop`: drive a condition in MuJoCo's viewer, log the session, replay it;
 - :mod:`~lasa.live.web`: the eating study in participants' browsers, the control step on the server;
 - :mod:`~lasa.live.devices`: a gamepad, the keyboard or a script, made safe for the control loop;

@@ -9,7 +9,8 @@ wall-clock time, from a gamepad (pygame) or, without one, the keyboard (:mod:`la
   ``Dessert`` (the eating study, the Panda). **Conditions**: ``R``, ``R+SA`` (Retargeting,
   :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the cups, ``LA+SA+Entropy``. The
   decoders are those ``make figures`` trains (``build/models``).
-- **The step** is the study's (:mod:`lasa.people.participants`): the stick at rest commands nothing; in
+- **The step** is the station's (:mod:`lasa.live.station`, the robot side of a session), the
+  study's (:mod:`lasa.people.participants`): the stick at rest commands nothing; in
   Retargeting the mode button cycles the modes; then Algorithm 1's blend, belief update and
   safe transition (:func:`lasa.method.step.advance`), so joint limits and the speed bound hold.
 - **Safety**: the stop input holds the robot (no human action, no assistance, the belief
@@ -33,7 +34,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime as dt_
-import hashlib
 import json
 import sys
 import time
@@ -43,277 +43,15 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from lasa.base.conditions import ALL as CONDITIONS
-from lasa.base.conditions import alpha_of
-from lasa.base.conditions import parse as parse_condition
-from lasa.base.config import ControlConfig, check_choice, check_range
+from lasa.base.config import check_range
 from lasa.base.errors import ArtifactError, ConfigError, LasaError
-from lasa.base.paths import Paths
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
-from lasa.live.devices import Device, Reading, ScriptedDevice, open_device
+from lasa.live.devices import Device, ScriptedDevice, open_device
 from lasa.live.interrupts import StopOnSignals
-from lasa.method.belief import belief, uniform_log_belief
-from lasa.method.decoder import ActionDecoder, load_checkpoint
-from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
-from lasa.method.step import advance, shared_autonomy_step
-from lasa.world.goals import GoalTask
-from lasa.world.robot import Robot, load_robot
-from lasa.world.task import make_cup_task
+from lasa.live.station import CONDITIONS, TASKS, SessionConfig, Station, log_row
+from lasa.method.retarget import MODES
 
-__all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "log_row", "run_session", "replay", "main"]
-
-TASKS = ("cups", "Entree", "Dessert")
-
-
-@dataclasses.dataclass(frozen=True)
-class SessionConfig:
-    """What a session runs: robot, task, condition and who drives."""
-
-    robot: str = "panda"  # "planar5" or "panda" (the eating tasks: the Panda)
-    task: str = "Dessert"  # "cups", "Entree" or "Dessert"
-    condition: str = "LA+SA"  # R, R+SA, LA, LA+SA (LA+SA+Entropy: cups only)
-    participant: str = "p00"  # participant id, part of the session's name
-    build_dir: str = "build"  # where `make figures` left the decoders
-
-    def __post_init__(self) -> None:
-        check_choice("robot", self.robot, ("planar5", "panda"))
-        check_choice("task", self.task, TASKS)
-        check_choice("condition", self.condition, CONDITIONS)
-        if self.task != "cups" and self.robot != "panda":
-            raise ConfigError(f"the {self.task} task is built for the Panda, not {self.robot!r}")
-        if self.task != "cups" and self.condition == "LA+SA+Entropy":
-            raise ConfigError(
-                "the eating study runs R, R+SA, LA or LA+SA (its LA conditions use notebook 10's headline "
-                "decoder); LA+SA+Entropy is the cups' condition"
-            )
-        if not self.participant or any(c in self.participant for c in "/\\ "):
-            raise ConfigError(
-                f"participant must be a short id without spaces or slashes, got {self.participant!r}"
-            )
-
-
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-class Station:
-    """The robot side of a session: task, decoder, control, and one control step per reading.
-
-    Attributes:
-        config: The session's settings.
-        robot: The robot and scene.
-        task: The cup task or the eating task.
-        control: Control-loop units.
-        decoder: phi (None for Retargeting).
-        state: s, shape (n,); log_belief: log b, shape (G,); mode: Retargeting's mode.
-        waypoint: Index of the next waypoint (eating tasks), or 0.
-        done: Whether the task's last waypoint was reached.
-    """
-
-    def __init__(self, config: SessionConfig) -> None:
-        self.config = config
-        paths = Paths.of(config.build_dir, "figures")
-        self.decoder: ActionDecoder | None = None
-        self.decoder_path: Path | None = None
-        self.waypoints: list[Any] = []
-        condition = parse_condition(config.condition)
-        if config.task == "cups":
-            self.robot: Robot = load_robot(config.robot)
-            self.task: GoalTask = make_cup_task(self.robot)
-            self.control: ControlConfig = self.robot.control
-            name = "decoder_entropy" if condition.decoder == "entropy" else "decoder_lambda0"
-        else:
-            from lasa.world.eating import make_eating_task, waypoints
-
-            self.task = make_eating_task()
-            self.robot = self.task.robot
-            self.control = self.robot.control
-            self.waypoints = waypoints(config.task)
-            name = "eating_decoder"
-        if condition.interface == "LA":
-            self.decoder_path = paths.artifact(name, self.robot.name)
-            self.decoder, _ = load_checkpoint(
-                self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
-            )
-            self._check_fit(self.decoder, self.decoder_path)
-        self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
-        self.alpha = alpha_of(condition.name, self.control.alpha)
-        self.sets = self.task.belief_targets(self.control.likelihood)
-        self._data = mujoco.MjData(self.robot.model)
-        self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
-        self.reset()
-
-    def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
-        """Refuse, before any session starts, a decoder made for another task's goals or joints."""
-        config = getattr(decoder, "config", None)
-        shape = (getattr(config, "n_joints", None), getattr(config, "n_goals", None))
-        if shape != (self.robot.n_joints, self.task.n_goals) or decoder.z_dim > 2:
-            raise ArtifactError(
-                f"{path} does not fit the {self.config.task} task: it decodes {decoder.z_dim}-D z for "
-                f"{shape[0]} joints and {shape[1]} goals, the task needs at most 2-D z, "
-                f"{self.robot.n_joints} joints and {self.task.n_goals} goals"
-            )
-
-    def warm_up(self) -> None:
-        """Run the step's heavy calls once, off the record (torch's and mink's first calls are slow)."""
-        s, b = self.state[None], self.belief[None]
-        if self.decoder is not None:
-            self.decoder.decode_numpy(np.zeros((1, self.decoder.z_dim)), s, b)
-        if self.retarget is not None:
-            self.retarget.joint_velocity(self.state, twist(0, np.array([1.0, 0.0])))
-
-    def reset(self) -> None:
-        """Back to the start pose, a uniform belief, mode 0, the first waypoint."""
-        self.state = self.task.start.copy()
-        self.log_belief = uniform_log_belief(1, self.task.n_goals)[0]
-        self.mode = 0
-        self.waypoint = 0
-        self.done = False
-
-    @property
-    def belief(self) -> np.ndarray:
-        """b over the task's goals, shape (G,)."""
-        return belief(self.log_belief)
-
-    def meta(self) -> dict[str, Any]:
-        """The sidecar's description of this station."""
-        import lasa
-
-        return {
-            **dataclasses.asdict(self.config),
-            "goals": list(self.task.goal_names),
-            "joints": list(self.robot.spec.joints),
-            "dt": self.control.dt,
-            "control": dataclasses.asdict(self.control),
-            "alpha": self.alpha,
-            "decoder": None if self.decoder_path is None else self.decoder_path.name,
-            "decoder_sha256": None if self.decoder_path is None else _sha256(self.decoder_path),
-            "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
-            "lasa_version": lasa.__version__,
-        }
-
-    def columns(self) -> list[str]:
-        """The log's step columns."""
-        n, g = self.robot.n_joints, self.task.n_goals
-        cols = ["step", "time", "late", "raw0", "raw1", "connected", "mode_press", "stop", "z0", "z1"]
-        cols += ["mode", "phase", "waypoint"]
-        for name, size in (("s", n), ("b", g), ("a_h", n), ("a_r", n), ("a", n)):
-            cols += [f"{name}{i}" for i in range(size)]
-        return cols
-
-    def phase_text(self) -> str:
-        """The instruction of the current phase."""
-        if self.config.task == "cups":
-            return "Reach the cup you want, with the grasp you want"
-        if self.done:
-            return f"{self.config.task}: done"
-        from lasa.world.eating import TASKS as EATING_TASKS
-
-        wp = self.waypoints[self.waypoint]
-        phases = EATING_TASKS[self.config.task]
-        phase = phases[wp.phase]
-        where = {
-            "rice": "the rice (left bowl)",
-            "middle": "the middle bowl",
-            "icing": "the icing (right bowl)",
-        }
-        target = where.get(phase.goal, "the plate")
-        verb = "reach" if phase.preference is None else phase.preference
-        return f"{self.config.task} {wp.phase + 1}/{len(phases)}: {verb} at {target}"
-
-    def _check_waypoint(self) -> None:
-        if not self.waypoints or self.done:
-            return
-        from lasa.people.design import StudyConfig
-        from lasa.people.kinematics import tip_frames, waypoint_reached
-        from lasa.world.eating import fork_frame
-
-        if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once
-            wp = self.waypoints[self.waypoint]
-            self._frames[self.waypoint] = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
-        position, rotation = self._frames[self.waypoint]
-        tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
-        if waypoint_reached(tip[0], axis[0], position, rotation[:, 2], StudyConfig()):
-            self.waypoint += 1
-            if self.waypoint == len(self.waypoints):
-                self.waypoint -= 1
-                self.done = True
-
-    def step(self, reading: Reading) -> dict[str, Any]:
-        """One control step from one reading; returns what the log records of it."""
-        z = reading.z  # safe: zero if disconnected or not finite, within [-1, 1]
-        n = self.robot.n_joints
-        s = self.state
-        a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
-        pressed = bool(reading.mode) and self.retarget is not None
-        if reading.stop:
-            pass  # hold: no human action, no assistance, the belief frozen
-        else:
-            if self.decoder is not None:  # latent actions: the one step, the stick at rest commanding nothing
-                result = shared_autonomy_step(
-                    self.decoder,
-                    self.task,
-                    self.control,
-                    s[None],
-                    self.log_belief[None],
-                    z[: self.decoder.z_dim][None],
-                    self.alpha,
-                    rest="zero",
-                )
-            else:  # Retargeting: a press, the stick at rest, or a twist in the mode by mink's IK
-                if self.retarget is not None:
-                    a_hs, modes = retarget_action(
-                        self.retarget, s[None], np.array([self.mode]), z[None, :2], np.array([pressed])
-                    )
-                    a_h, self.mode = a_hs[0], int(modes[0])
-                result = advance(
-                    self.task,
-                    self.control,
-                    s[None],
-                    self.log_belief[None],
-                    a_h[None],
-                    np.array([self.alpha]),
-                    self.sets,
-                )
-            a_h = result.human_action[0]
-            a_r = result.assistance[0] if result.assistance is not None else np.zeros(n)
-            a = result.action[0]
-            self.state = result.state[0]
-            self.log_belief = result.log_belief[0]
-            self._check_waypoint()
-        wp = self.waypoints[self.waypoint] if self.waypoints else None
-        return {
-            "raw": np.asarray(reading.raw, float),
-            "connected": reading.connected,
-            "mode_press": bool(reading.mode),
-            "stop": bool(reading.stop),
-            "z": z,
-            "mode": self.mode,
-            "phase": -1 if wp is None else wp.phase,
-            "waypoint": self.waypoint,
-            "s": self.state.copy(),
-            "b": self.belief,
-            "a_h": a_h,
-            "a_r": a_r,
-            "a": a,
-        }
-
-
-def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
-    """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    row = [
-        step,
-        t,
-        float(late),
-        *rec["raw"],
-        float(rec["connected"]),
-        float(rec["mode_press"]),
-        float(rec["stop"]),
-    ]
-    row += [*rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
-    for key in ("s", "b", "a_h", "a_r", "a"):
-        row += list(rec[key])
-    return row
+__all__ = ["run_session", "replay", "main"]
 
 
 class _Overlay:
@@ -366,6 +104,71 @@ class _Overlay:
         viewer.sync()
 
 
+@dataclasses.dataclass
+class _Loop:
+    """A running session's loop: what one step reads and writes, and the counts kept so far.
+
+    Attributes:
+        station: The robot side; device: the input; writer: the log (None: no log).
+        realtime: Hold each step to its deadline; dt: the step [s].
+        overlay: The viewer's extras (None: no viewer), drawn into ``viewer`` with ``data``.
+        on_step: Called as ``on_step(step, record)`` after each step, or None.
+        compute: Each step's compute time [s]; misses: deadline misses; steps: steps logged.
+        status: ``complete``, or ``interrupted`` once a signal or the viewer's closing stopped it.
+    """
+
+    station: Station
+    device: Device
+    writer: SessionWriter | None
+    realtime: bool
+    dt: float
+    overlay: _Overlay | None
+    viewer: Any
+    data: mujoco.MjData
+    on_step: Any
+    compute: list[float] = dataclasses.field(default_factory=list)
+    misses: int = 0
+    steps: int = 0
+    status: str = "complete"
+
+    def step(self, step: int, start: float) -> bool:
+        """Step ``step`` of a loop started at ``start`` [s, perf_counter]; whether the session goes on."""
+        deadline = start + (step + 1) * self.dt
+        t0 = time.perf_counter()
+        rec = self.station.step(self.device.poll())
+        if self.overlay is not None:
+            if not self.viewer.is_running():
+                self.status = "interrupted"
+                return False
+            self.overlay.show(self.viewer, self.data, rec)
+        self.compute.append(time.perf_counter() - t0)
+        late = self.realtime and time.perf_counter() > deadline
+        self.misses += int(late)
+        t = (time.perf_counter() - start) if self.realtime else step * self.dt
+        if self.writer is not None:
+            self.writer.append(log_row(step, t, late, rec))
+        self.steps = step + 1
+        if self.on_step is not None:
+            self.on_step(step, rec)
+        if self.station.done or (isinstance(self.device, ScriptedDevice) and self.device.finished):
+            return False
+        if self.realtime:
+            time.sleep(max(0.0, deadline - time.perf_counter()))
+        return True
+
+    def timing(self, signal: str | None) -> dict[str, Any]:
+        """The session's timing, as :func:`run_session` returns it."""
+        compute = self.compute
+        return {
+            "steps": self.steps,
+            "step_time_median_s": float(np.median(compute)) if compute else 0.0,
+            "step_time_p99_s": float(np.percentile(compute, 99)) if compute else 0.0,
+            "deadline_misses": self.misses,
+            "done": self.station.done,
+            "signal": signal,
+        }
+
+
 def run_session(
     station: Station,
     device: Device,
@@ -399,55 +202,28 @@ def run_session(
         Timing: steps, the step time's median and 99th percentile [s], deadline misses, whether
         the task was done, and the signal that stopped the session (or None).
     """
-    dt = station.control.dt
     overlay = _Overlay(station) if viewer is not None else None
     if viewer is not None and viewer_data is None:
         raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
     data = viewer_data if viewer_data is not None else mujoco.MjData(station.robot.model)
-    compute, misses, steps, status = [], 0, 0, "complete"
+    loop = _Loop(station, device, writer, realtime, station.control.dt, overlay, viewer, data, on_step)
     try:
         with StopOnSignals() as stop:
             station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
             start = time.perf_counter()
             for step in range(max_steps):
                 if stop.received is not None:
-                    status = "interrupted"
+                    loop.status = "interrupted"
                     break
-                deadline = start + (step + 1) * dt
-                t0 = time.perf_counter()
-                rec = station.step(device.poll())
-                if overlay is not None:
-                    if not viewer.is_running():
-                        status = "interrupted"
-                        break
-                    overlay.show(viewer, data, rec)
-                compute.append(time.perf_counter() - t0)
-                late = realtime and time.perf_counter() > deadline
-                misses += int(late)
-                t = (time.perf_counter() - start) if realtime else step * dt
-                if writer is not None:
-                    writer.append(log_row(step, t, late, rec))
-                steps = step + 1
-                if on_step is not None:
-                    on_step(step, rec)
-                if station.done or (isinstance(device, ScriptedDevice) and device.finished):
+                if not loop.step(step, start):
                     break
-                if realtime:
-                    time.sleep(max(0.0, deadline - time.perf_counter()))
     except BaseException:
         if writer is not None:
-            writer.close("interrupted", deadline_misses=misses)
+            writer.close("interrupted", deadline_misses=loop.misses)
         raise
-    timing = {
-        "steps": steps,
-        "step_time_median_s": float(np.median(compute)) if compute else 0.0,
-        "step_time_p99_s": float(np.percentile(compute, 99)) if compute else 0.0,
-        "deadline_misses": misses,
-        "done": station.done,
-        "signal": stop.received,
-    }
+    timing = loop.timing(stop.received)
     if writer is not None:
-        writer.close(status, **timing)
+        writer.close(loop.status, **timing)
     return timing
 
 

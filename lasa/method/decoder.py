@@ -13,8 +13,9 @@ Two bounds make the model fit the control loop:
 
 Training and gradients use :meth:`LatentActionModel.decode` (torch, autograd). The
 simulations use :meth:`LatentActionModel.decode_numpy`, an inference-only forward of the
-same function on numpy arrays, written for throughput (see its docstring): it agrees with
-``decode`` to float32 rounding (below 1e-6), not bit for bit.
+same function on numpy arrays, written for throughput (see its docstring; the forward itself is
+:mod:`lasa.method.inference`): it agrees with ``decode`` to float32 rounding (below 1e-6), not
+bit for bit.
 
 A checkpoint holds the state dict and the plain-dict config the model was built with;
 :func:`load_checkpoint` loads it with ``torch.load(..., weights_only=True)`` and checks
@@ -28,10 +29,7 @@ its class to :func:`load_checkpoint` (``docs/extending.md``).
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
-import threading
-import weakref
 from pathlib import Path
 from typing import Any, ClassVar, Protocol, TypeVar, overload, runtime_checkable
 
@@ -42,6 +40,7 @@ from torch import nn
 from lasa.base.config import AtLeastTwo, Positive, PositiveInt, validate
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import atomic_path, require_file
+from lasa.method.inference import inference_plan
 
 __all__ = [
     "ActionDecoder",
@@ -190,15 +189,15 @@ class LatentActionModel(nn.Module):
           one broadcast add, not a GEMM over a concatenated, expanded input.
         - **The radial squash in float64** on the float32 output layer.
 
-        For speed: rows (the broadcast batch, flattened) go through the MLP in chunks of
-        about ``_CHUNK_ROWS`` = 1024 along the first broadcast axis, into two activation
-        buffers (1024 x 128 float32, 512 KB each) reused across chunks and calls, one pair
-        per thread, with the output layer's buffers; every op writes in place. The output
-        layer is :math:`V^\top = W_o U^\top` (MKL runs it up to 2x faster than
-        :math:`U W_o^\top` for n = 5-7). Until late on 2026-12-02 tanh went through an in-place
-        ``sigmoid_`` (faster on the AMD EPYC it was tuned on, 1.5-2x slower on the Xeon
-        that replaced it, where ``tanh_`` costs about 0.6 ns per element); see
-        ``benchmarks/README.md``. A row's result does not depend on its batch or chunk (with
+        For speed (:mod:`lasa.method.inference`): rows (the broadcast batch, flattened) go
+        through the MLP in chunks of about ``_CHUNK_ROWS`` = 1024 along the first broadcast
+        axis, into two activation buffers (1024 x 128 float32, 512 KB each) reused across
+        chunks and calls, one pair per thread, with the output layer's buffers; every op
+        writes in place. The output layer is :math:`V^\top = W_o U^\top` (MKL runs it up to
+        2x faster than :math:`U W_o^\top` for n = 5-7). Until late on 2026-12-02 tanh went
+        through an in-place ``sigmoid_`` (faster on the AMD EPYC it was tuned on, 1.5-2x
+        slower on the Xeon that replaced it, where ``tanh_`` costs about 0.6 ns per element);
+        see ``benchmarks/README.md``. A row's result does not depend on its batch or chunk (with
         one torch and OpenMP thread, to the bit, as with :meth:`decode`).
 
         It computes this class's :meth:`decode`: where a subclass overrides ``decode`` (or
@@ -222,7 +221,7 @@ class LatentActionModel(nn.Module):
         """
         if getattr(self.decode, "__func__", None) is not _DECODE:
             return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode
-        return _inference_plan(self).decode(z, s, b)
+        return inference_plan(self).decode(z, s, b)
 
     @torch.inference_mode()
     def _decode_numpy_reference(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -236,230 +235,6 @@ class LatentActionModel(nn.Module):
 
 
 _DECODE = LatentActionModel.decode  # the decode that the inference plan implements
-
-# Rows (users x candidates) per chunk of the inference forward: two 1024 x 128 float32
-# buffers stay in a core's L2 cache (1 MB on the AMD EPYC, 2 MB on the Xeon); measured best
-# (with 2048) of 256-2048 and no chunking there, and 512-2048 equal within noise here.
-_CHUNK_ROWS = 1024
-
-
-def _weight_tensors(model: LatentActionModel) -> list[torch.Tensor]:
-    """The decoder's parameters and the state normalisation, without nn.Module's (slow) traversal."""
-    tensors: list[torch.Tensor] = [
-        t
-        for layer in model.decoder._modules.values()
-        if layer is not None
-        for t in layer._parameters.values()
-        if t is not None
-    ]
-    tensors += [model.state_mean, model.state_std]
-    return tensors
-
-
-_KEEP_ROWS = 4 * _CHUNK_ROWS  # largest chunk whose buffers a thread keeps between calls
-
-
-class _Buffers(threading.local):
-    """One thread's activation buffers and their views, reused across chunks and calls."""
-
-    def __init__(self) -> None:
-        self.rows = 0
-        self.a = torch.empty(0)
-        self.b = torch.empty(0)
-        self.views: dict[tuple[int, ...], tuple[Any, ...]] = {}
-        self.out = torch.empty(0, 0)
-        self.out64 = np.empty((0, 0))
-
-    def output(self, n: int, rows: int) -> tuple[torch.Tensor, np.ndarray]:
-        """The (n x rows) output layer's buffer, float32, and one of float64 for its squash.
-
-        Kept between calls up to ``_KEEP_ROWS`` x 8 rows (the squash's fresh result is the
-        only array a call allocates at full size); larger ones are made for the call.
-        """
-        if rows > 8 * _KEEP_ROWS:
-            return torch.empty(n, rows), np.empty((n, rows))
-        if self.out.shape[0] != n or self.out.shape[1] < rows:
-            self.out = torch.empty(n, max(rows, self.out.shape[1]))
-            self.out64 = np.empty(self.out.shape)
-        return self.out[:, :rows], self.out64[:, :rows]
-
-    def get(self, shape: tuple[int, ...], width: int) -> tuple[Any, ...]:
-        """Views of the two (rows x width) buffers for a chunk of leading shape ``shape``.
-
-        Returns:
-            (a as numpy of shape ``shape + (width,)``, a as torch of the same shape,
-            a, b, a.T, b.T), where a and b are (rows x width), rows = prod(shape).
-        """
-        view = self.views.get(shape)
-        if view is None:
-            rows = math.prod(shape)
-            if rows > _KEEP_ROWS:  # a chunk this large (trailing axes > _CHUNK_ROWS) is not kept
-                a, b = torch.empty(rows, width), torch.empty(rows, width)
-                a_nd = a.view(*shape, width)
-                return (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
-            if len(self.views) >= 64:
-                self.views = {}
-            if rows > self.rows:
-                self.rows = rows
-                self.a = torch.empty(rows, width)
-                self.b = torch.empty(rows, width)
-                self.views = {}
-            a, b = self.a[:rows], self.b[:rows]
-            a_nd = a.view(*shape, width)
-            view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
-            self.views[shape] = view
-        return view
-
-
-class _InferencePlan:
-    """The decoder's weights refolded for :meth:`LatentActionModel.decode_numpy` (read-only)."""
-
-    def __init__(self, model: LatentActionModel) -> None:
-        cfg = model.config
-        d, n = cfg.z_dim, cfg.n_joints
-        layers = [m for m in model.decoder if isinstance(m, nn.Linear)]
-        with torch.no_grad():
-            weights = [layer.weight.detach().double() for layer in layers]
-            biases = [layer.bias.detach().double() for layer in layers]
-            mean = model.state_mean.detach().double()
-            std = model.state_std.detach().double()
-            w1, c1 = weights[0], biases[0]
-            w_s = w1[:, d : d + n] / std
-            # h1 = W_z z + [W_s / std, W_b] [s, b] + (c1 - W_s mean / std), in float64
-            self.w_z = w1[:, :d].T.numpy().copy()  # (d, H)
-            self.w_sb = torch.cat([w_s, w1[:, d + n :]], dim=1).T.numpy().copy()  # (n + G, H)
-            self.c1 = (c1 - w_s @ mean).numpy()  # (H,)
-            self.hidden = [
-                (layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]
-            ]  # float32 views of the weights, as decode's nn.Linear reads them
-            self.w_o = layers[-1].weight.detach().contiguous()  # (n, H): V^T = W_o U^T + c_o
-            self.c_o = layers[-1].bias.detach()[:, None].contiguous()  # (n, 1)
-        self.tensors = _weight_tensors(model)  # held, so that identity checks are exact
-        self.versions = [t._version for t in self.tensors]
-        self.scale = float(cfg.action_scale)
-        self.width = int(w1.shape[0])
-        self.d = d
-        self.n = n
-        self.g = cfg.n_goals
-        self.buffers = _Buffers()
-
-    def fits(self, model: LatentActionModel) -> bool:
-        """Whether the plan was built from the model's current weights."""
-        tensors = _weight_tensors(model)
-        return (
-            self.scale == model.config.action_scale
-            and len(tensors) == len(self.tensors)
-            and all(
-                t is u and t._version == v
-                for t, u, v in zip(tensors, self.tensors, self.versions, strict=True)
-            )
-        )
-
-    def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """phi(z, s, b), float64; see :meth:`LatentActionModel.decode_numpy`."""
-        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)
-        s = np.asarray(s, dtype=np.float64)
-        b = np.asarray(b, dtype=np.float64)
-        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
-            raise ValueError(
-                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
-                f"got {z.shape}, {s.shape} and {b.shape}"
-            )
-        z_lead, s_lead, b_lead = z.shape[:-1], s.shape[:-1], b.shape[:-1]
-        shape = _broadcast(_broadcast(z_lead, s_lead), b_lead)
-        lead = shape or (1,)
-        width, n = self.width, self.n
-        # the first layer's two terms (float64), each on its own, unexpanded leading shape
-        # (the bias goes with z: the rollouts' z term has K rows, their context term U)
-        if self.d == 1:
-            t_z = z * self.w_z[0] + self.c1
-        else:
-            t_z = (z.reshape(-1, self.d) @ self.w_z + self.c1).reshape(z_lead + (width,))
-        if s_lead == b_lead:
-            sb = np.concatenate((s, b), axis=-1)
-            t_c = (sb.reshape(-1, sb.shape[-1]) @ self.w_sb).reshape(s_lead + (width,))
-        else:
-            ns = s.shape[-1]
-            t_c = s @ self.w_sb[:ns] + b @ self.w_sb[ns:]
-        rows_total = math.prod(lead)
-        if rows_total == 0:
-            return np.zeros(shape + (n,))
-        # each term rounded to float32 once, then added in float32: a row's first layer is
-        # the same whichever chunk, batch or branch below computes it
-        t_z32 = t_z.astype(np.float32)
-        t_c32 = t_c.astype(np.float32)
-        inner = math.prod(lead[1:])
-        chunks = -(-lead[0] // max(1, _CHUNK_ROWS // max(inner, 1)))
-        step = -(-lead[0] // chunks)  # indices of the first axis per chunk, balanced
-        hidden, buffers, w_o, c_o = self.hidden, self.buffers, self.w_o, self.c_o
-        out_t, v = buffers.output(n, rows_total)  # V transposed, and its float64 copy
-        last_is_b = len(hidden) % 2 == 1
-        if chunks == 1:  # the first layer's add in numpy: fewer calls for small batches
-            first_np, _, h, g, a_t, b_t = buffers.get(lead, width)
-            np.add(t_z32, t_c32, out=first_np)
-            h.tanh_()
-            for w, c in hidden:
-                torch.addmm(c, h, w, out=g)
-                g.tanh_()
-                h, g = g, h
-            torch.addmm(c_o, w_o, b_t if last_is_b else a_t, out=out_t)
-        else:
-            full = len(lead) + 1
-            tz32, tc32 = torch.from_numpy(t_z32), torch.from_numpy(t_c32)
-            for start in range(0, lead[0], step):
-                stop = min(lead[0], start + step)
-                _, first, h, g, a_t, b_t = buffers.get((stop - start, *lead[1:]), width)
-                torch.add(
-                    _along_first(tz32, start, stop, full), _along_first(tc32, start, stop, full), out=first
-                )
-                h.tanh_()
-                for w, c in hidden:
-                    torch.addmm(c, h, w, out=g)
-                    g.tanh_()
-                    h, g = g, h
-                torch.addmm(c_o, w_o, b_t if last_is_b else a_t, out=out_t[:, start * inner : stop * inner])
-        np.copyto(v, out_t.numpy())  # (n, rows), float64
-        norm = np.sqrt(np.einsum("ij,ij->j", v, v))
-        np.maximum(norm, 1e-8, out=norm)
-        factor = np.tanh(norm)
-        factor /= norm
-        if self.scale != 1.0:
-            factor *= self.scale
-        return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (n,))
-
-
-def _broadcast(a: tuple[int, ...], b: tuple[int, ...]) -> tuple[int, ...]:
-    """numpy's broadcast of two shapes (a faster ``np.broadcast_shapes`` for two short ones)."""
-    if a == b:
-        return a
-    if len(a) != len(b):
-        return np.broadcast_shapes(a, b)
-    out = []
-    for x, y in zip(a, b, strict=True):
-        if x != y and x != 1 and y != 1:
-            return np.broadcast_shapes(a, b)  # raises numpy's error
-        out.append(y if x == 1 else x)
-    return tuple(out)
-
-
-def _along_first(term: torch.Tensor, start: int, stop: int, full: int) -> torch.Tensor:
-    """Indices ``start:stop`` of the first broadcast axis of a first-layer term (itself if broadcast)."""
-    if term.dim() == full and term.shape[0] != 1:
-        return term[start:stop]
-    return term
-
-
-_PLANS: weakref.WeakKeyDictionary[LatentActionModel, _InferencePlan] = weakref.WeakKeyDictionary()
-
-
-def _inference_plan(model: LatentActionModel) -> _InferencePlan:
-    """The model's cached inference plan, rebuilt when its weights have changed."""
-    plan = _PLANS.get(model)
-    if plan is None or not plan.fits(model):
-        plan = _InferencePlan(model)
-        _PLANS[model] = plan
-    return plan
-
 
 M = TypeVar("M", bound=nn.Module)
 
@@ -557,6 +332,23 @@ def load_checkpoint(
             "constructor takes"
         )
     path = require_file(path, make_hint)
+    payload, values = _read(path, decoder, make_hint)
+    try:
+        model = decoder(config_class(**values))
+        model.load_state_dict(payload["state_dict"])
+    except Exception as exc:
+        raise _invalid(path, exc, make_hint) from None
+    _check_loaded(model, path, decoder, robot, n_goals, make_hint)
+    model.eval()
+    return model, dict(payload.get("extra", {}))
+
+
+def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """A checkpoint's payload and its config's values (lists as tuples), saved from ``decoder``.
+
+    Raises:
+        ArtifactError: if the file does not load, or holds another decoder class.
+    """
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
@@ -570,11 +362,23 @@ def load_checkpoint(
             f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
             f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
         )
-    try:
-        model = decoder(config_class(**values))
-        model.load_state_dict(payload["state_dict"])
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
+    return payload, values
+
+
+def _check_loaded(
+    model: nn.Module,
+    path: Path,
+    decoder: type[nn.Module],
+    robot: str | None,
+    n_goals: int | None,
+    make_hint: str,
+) -> None:
+    """Refuse a loaded model that does not follow :class:`ActionDecoder`, or not the caller's robot or G.
+
+    Raises:
+        ConfigError: if ``model`` does not follow :class:`ActionDecoder`.
+        ArtifactError: if it was trained for another robot or number of goals.
+    """
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
@@ -589,8 +393,6 @@ def load_checkpoint(
             f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
             f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
-    model.eval()
-    return model, dict(payload.get("extra", {}))
 
 
 def _invalid(path: Path, exc: Exception, make_hint: str) -> ArtifactError:

@@ -256,7 +256,7 @@ def retarget_action(
     A press of the mode button cycles the mode (:func:`next_mode`) and moves nothing; a stick
     at rest (z = 0) commands nothing; otherwise the stick is a twist in the current mode
     (:func:`twist`, at ``retarget.config``'s speeds), realised by mink's IK
-    (:meth:`Retargeting.joint_velocity`). Live teleoperation (:class:`lasa.live.teleop.Station`)
+    (:meth:`Retargeting.joint_velocity`). Live teleoperation (:class:`lasa.live.station.Station`)
     and the study's simulated participants (:func:`lasa.people.participants.simulate`) both
     take their Retargeting action here, and pass it to :func:`lasa.method.step.advance`.
 

@@ -2,7 +2,7 @@
 
 Every loop of the package advances with this module's functions: the simulated users of sims
 1-4 (:func:`lasa.people.rollout.rollout`), the study's simulated participants
-(:func:`lasa.people.participants.simulate`), live teleoperation (:class:`lasa.live.teleop.Station`),
+(:func:`lasa.people.participants.simulate`), live teleoperation (:class:`lasa.live.station.Station`),
 the one-user :class:`lasa.method.controller.Controller` and the benchmark. At each step:
 
 1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a loop
@@ -145,7 +145,7 @@ def shared_autonomy_step(
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
     This is the step a teleoperated robot runs (:class:`lasa.method.controller.Controller` is
-    this step for one user, and :class:`lasa.live.teleop.Station` runs it for latent actions):
+    this step for one user, and :class:`lasa.live.station.Station` runs it for latent actions):
     decode the joystick input, blend with the assistance, update the belief, take the safe
     step. A joystick input that is not finite (a disconnected or faulty device) decodes to
     no human action at all, so it can never become a command; the robot's own assistance
@@ -157,7 +157,7 @@ def shared_autonomy_step(
       simulated users of sims 1-4 (Eq. S1 weighs z = 0 among its grid's inputs, and the
       paper's phi is defined there), :class:`lasa.method.controller.Controller` and the
       benchmark's reference step use it.
-    - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.live.teleop.Station`:
+    - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.live.station.Station`:
       a person who lets go of the stick expects the arm to stop, the assistance apart), and so
       do the study's simulated participants (:func:`lasa.people.participants.simulate`, for
       whom resting the stick is the idle input). The participants weigh every candidate, so

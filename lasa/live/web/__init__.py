@@ -8,7 +8,7 @@ counterbalanced schedule and one link per participant (:mod:`lasa.live.web.token
 - :mod:`~lasa.live.web.plan`: a participant's protocol (consent, then per condition practice, the two
   tasks and the questionnaire, then thanks) and their progress through it, kept on the server.
 - :mod:`~lasa.live.web.protocol`: the messages between page and server, with their size and rate limits.
-- :mod:`~lasa.live.web.loop`: the server's 10 Hz loop, one :meth:`lasa.live.teleop.Station.step` per tick,
+- :mod:`~lasa.live.web.loop`: the server's 10 Hz loop, one :meth:`lasa.live.station.Station.step` per tick,
   logged by :class:`lasa.evidence.sessionlog.SessionWriter` exactly as ``teleop run`` logs it.
 - :mod:`~lasa.live.web.frames`: the robot drawn on the server (MuJoCo's off-screen renderer), sent as JPEG
   (``--frames server``).

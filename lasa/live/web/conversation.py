@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.live.teleop import SessionConfig
+from lasa.live.station import SessionConfig
 from lasa.live.web.loop import open_trial, run_trial
 from lasa.live.web.plan import Step, plan_of, session_folder
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse

@@ -1,4 +1,4 @@
-"""The server's control loop: one :meth:`lasa.live.teleop.Station.step` per tick, 10 Hz per participant.
+"""The server's control loop: one :meth:`lasa.live.station.Station.step` per tick, 10 Hz per participant.
 
 The robot's step runs here and only here (the page draws and reads input). :func:`tick` is the
 loop's one step: it reads the page's latest input, runs the station's step, logs the row
@@ -30,7 +30,7 @@ import numpy as np
 
 from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import Reading
-from lasa.live.teleop import SessionConfig, Station, log_row
+from lasa.live.station import SessionConfig, Station, log_row
 from lasa.live.web.protocol import Inputs
 
 __all__ = ["STEPPER", "Trial", "open_trial", "tick", "run_trial"]
@@ -44,7 +44,7 @@ class Trial:
     """One logged session in progress.
 
     Attributes:
-        station: The robot side (:class:`lasa.live.teleop.Station`).
+        station: The robot side (:class:`lasa.live.station.Station`).
         writer: The session's log.
         max_steps: The longest session, in ticks.
         started: Wall-clock start of the first tick [s, ``time.perf_counter``].

@@ -1,0 +1,203 @@
+"""The user study's 2x2 within-subjects design: its factors, and its data reduced to cells.
+
+Every participant uses each of four conditions, the crossing of two factors: the *interface*
+(Retargeting ``R`` or Latent Actions ``LA``) and the *assistance* (none, or Shared Autonomy ``SA``),
+named ``R``, ``R+SA``, ``LA`` and ``LA+SA``, and does two tasks (``Entree``, ``Dessert``) under each.
+Data arrive as a tidy frame, one row per participant x condition x task, with columns ``participant``,
+``condition``, ``task`` and a numeric measure. :func:`prepare` validates it; :func:`aggregate`,
+:func:`participant_means` and :func:`condition_cells` reduce it to one value per participant and cell,
+over tasks, by their mean or (for times "summed across both tasks") their sum. The tests on those
+values are :mod:`lasa.evidence.stats`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.conditions import CONDITIONS
+from lasa.base.errors import ConfigError
+
+__all__ = [
+    "INTERFACES",
+    "SA_LEVELS",
+    "AGGS",
+    "factors",
+    "check_agg",
+    "prepare",
+    "check_participants",
+    "aggregate",
+    "participant_means",
+    "condition_cells",
+]
+
+INTERFACES: tuple[str, ...] = ("R", "LA")
+"""Levels of the interface factor."""
+
+SA_LEVELS: tuple[str, ...] = ("none", "SA")
+"""Levels of the assistance factor."""
+
+AGGS: tuple[str, ...] = ("mean", "sum")
+"""How the rows of a participant's cell (its tasks) reduce to one value."""
+
+# Columns every frame needs besides the measure; "interface" and "assistance" are derived from
+# "condition" (they overwrite any columns of those names).
+_KEYS: tuple[str, ...] = ("participant", "condition", "task")
+_DERIVED: tuple[str, ...] = ("interface", "assistance")
+
+
+def factors(condition: str) -> tuple[str, str]:
+    """Split a condition name into its (interface, assistance) levels.
+
+    Args:
+        condition: One of :data:`CONDITIONS`.
+
+    Returns:
+        ``(interface, assistance)``, e.g. ``"LA+SA"`` -> ``("LA", "SA")``, ``"R"`` -> ``("R", "none")``.
+
+    Raises:
+        ConfigError: ``condition`` is not one of :data:`CONDITIONS`.
+    """
+    if not isinstance(condition, str) or condition not in CONDITIONS:
+        raise ConfigError(f"unknown condition {condition!r}; allowed: {', '.join(CONDITIONS)}")
+    interface, _, assistance = condition.partition("+")
+    return interface, assistance or "none"
+
+
+def check_agg(agg: str) -> None:
+    """Refuse an ``agg`` other than those of :data:`AGGS`."""
+    if agg not in AGGS:
+        raise ConfigError(f"agg must be one of {', '.join(map(repr, AGGS))}, got {agg!r}")
+
+
+def prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
+    """Validate ``frame`` and return a copy with only the key columns, ``measure`` as float and
+    ``interface`` / ``assistance`` columns derived from ``condition``."""
+    if not isinstance(frame, pd.DataFrame):
+        raise TypeError(f"frame must be a pandas DataFrame, got {type(frame).__name__}")
+    if measure in _KEYS + _DERIVED:
+        raise ConfigError(f"measure {measure!r} is a key column; name the column holding the measure")
+    missing = [name for name in (*_KEYS, measure) if name not in frame.columns]
+    if missing:
+        have = [str(name) for name in frame.columns]
+        raise ConfigError(f"frame is missing column(s) {', '.join(map(repr, missing))}; it has {have}")
+    if frame.empty:
+        raise ConfigError("frame has no rows")
+    if frame["participant"].isna().any():
+        raise ConfigError("column 'participant' has missing values")
+
+    conditions = frame["condition"]
+    unknown = sorted({repr(c) for c in conditions.unique() if c not in CONDITIONS})
+    if unknown:
+        raise ConfigError(f"unknown condition(s) {', '.join(unknown)}; allowed: {', '.join(CONDITIONS)}")
+
+    values = frame[measure]
+    if not pd.api.types.is_numeric_dtype(values) or pd.api.types.is_bool_dtype(values):
+        raise ConfigError(f"measure {measure!r} must be numeric, got dtype {values.dtype}")
+    values = values.astype(float)
+    bad = ~np.isfinite(values.to_numpy())
+    if bad.any():
+        rows = frame.loc[bad, ["participant", "condition", "task"]].head(3).to_dict("records")
+        raise ConfigError(f"measure {measure!r} has {int(bad.sum())} non-finite value(s), e.g. at {rows}")
+
+    keys = ["participant", "condition", "task"]
+    duplicated = frame.duplicated(subset=keys, keep=False)
+    if duplicated.any():
+        row = frame.loc[duplicated, keys].iloc[0].to_dict()
+        raise ConfigError(
+            f"more than one row for participant x condition x task {row}; expected exactly one per cell"
+        )
+
+    out = frame[keys].copy()
+    out[measure] = values
+    levels = {name: factors(name) for name in CONDITIONS}
+    out["interface"] = conditions.map(lambda c: levels[c][0])
+    out["assistance"] = conditions.map(lambda c: levels[c][1])
+    return out
+
+
+def check_participants(data: pd.DataFrame) -> int:
+    """The number of participants in prepared ``data``; fewer than 2 is an error."""
+    n = data["participant"].nunique()
+    if n < 2:
+        raise ConfigError(f"need at least 2 participants, got {n}")
+    return int(n)
+
+
+def _check_complete(data: pd.DataFrame, conditions: Sequence[str]) -> None:
+    """Every participant has every one of ``conditions``, and the same tasks in each of them."""
+    have = data.groupby("participant", sort=True)["condition"].agg(set)
+    for participant, present in have.items():
+        lacking = [c for c in conditions if c not in present]
+        if lacking:
+            raise ConfigError(
+                f"participant {participant!r} has no data for condition(s) {', '.join(lacking)}; "
+                "within-subject tests need every participant in every condition compared"
+            )
+    tasks = set(data["task"].unique())
+    subset = data[data["condition"].isin(list(conditions))]
+    cells = subset.groupby(["participant", "condition"], sort=True)["task"].agg(set)
+    for (participant, condition), present in cells.items():
+        lacking_tasks = sorted(map(str, tasks - present))
+        if lacking_tasks:
+            raise ConfigError(
+                f"participant {participant!r} has no data for task(s) {', '.join(lacking_tasks)} "
+                f"in condition {condition!r}; aggregating over tasks needs every task in every cell"
+            )
+
+
+def aggregate(data: pd.DataFrame, measure: str, by: Sequence[str], agg: str) -> pd.DataFrame:
+    """One value of ``measure`` per participant x ``by`` levels (``data`` already prepared)."""
+    keys = ["participant", *by]
+    grouped = data.copy()
+    order = {"condition": CONDITIONS, "interface": INTERFACES, "assistance": SA_LEVELS}
+    for name in by:
+        if name in order:
+            grouped[name] = pd.Categorical(grouped[name], categories=list(order[name]), ordered=True)
+    out = grouped.groupby(keys, sort=True, observed=True)[measure].agg(agg).reset_index()
+    for name in by:
+        if name in order:
+            out[name] = out[name].astype(str)
+    return out
+
+
+def participant_means(
+    frame: pd.DataFrame, measure: str, by: Sequence[str] = ("condition",), agg: str = "mean"
+) -> pd.DataFrame:
+    """One value of ``measure`` per participant and ``by`` level, aggregated over everything else.
+
+    Args:
+        frame: Tidy study data (columns ``participant``, ``condition``, ``task`` and ``measure``).
+        measure: Name of the numeric column to aggregate.
+        by: Columns to keep besides ``participant``; ``"interface"`` and ``"assistance"`` may be used
+            (they are derived from ``condition``). ``()`` aggregates each participant over everything.
+        agg: ``"mean"`` or ``"sum"`` over the rows (tasks, by default) in each group.
+
+    Returns:
+        Columns ``participant``, ``*by``, ``measure``; rows sorted by participant and then by level in
+        the study's order (:data:`CONDITIONS`, :data:`INTERFACES`, :data:`SA_LEVELS`).
+
+    Raises:
+        ConfigError: A column is missing or unknown, a condition is unknown, a value is not finite,
+            or ``agg`` is not ``"mean"`` / ``"sum"``.
+    """
+    check_agg(agg)
+    by = list(by)
+    data = prepare(frame, measure)
+    unknown = [name for name in by if name not in data.columns or name == "participant" or name == measure]
+    if unknown:
+        allowed = ["condition", "task", *_DERIVED]
+        raise ConfigError(f"cannot group by {', '.join(map(repr, unknown))}; allowed: {allowed}")
+    return aggregate(data, measure, by, agg)
+
+
+def condition_cells(frame: pd.DataFrame, measure: str, agg: str, conditions: Sequence[str]) -> pd.DataFrame:
+    """Validated per participant x condition values for ``conditions``, complete and balanced."""
+    check_agg(agg)
+    data = prepare(frame, measure)
+    check_participants(data)
+    _check_complete(data, conditions)
+    data = data[data["condition"].isin(list(conditions))]
+    return aggregate(data, measure, ["condition", "interface", "assistance"], agg)

@@ -1,0 +1,229 @@
+"""Fig. sim4's episodes (:mod:`lasa.figures.sim4`): new cups on the table, and users who reach for them.
+
+A new cup is put on the table after training (:func:`new_cup_positions`), at a growing distance
+from a training cup, and the task grows by it (:func:`lasa.method.newgoals.extend_task`).
+Near-optimal users who want a grasp there run the method twice (:func:`episodes_at`): ``with``
+the context map, the task grown by the cup and the method's decoder run through the map
+(:class:`lasa.method.newgoals.MappedDecoder`, one rollout per kind of map), and ``without``
+it, the method unchanged and knowing the training cups only. The users' preferences are drawn
+per seed and shared by every cup and mapping; every member's users share one batch per (cup,
+map) (:class:`Sweep`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from lasa.base.config import ControlConfig
+from lasa.base.errors import ConfigError
+from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
+from lasa.figures.common import Decoders, as_decoders, episodes, members_of
+from lasa.method.decoder import ActionDecoder
+from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
+from lasa.method.step import METHOD_DECODER, method_alpha
+from lasa.people.rollout import Trajectories, rollout
+from lasa.people.users import UserPopulation
+from lasa.world.task import CupTask
+
+if TYPE_CHECKING:
+    from lasa.figures.sim4 import Config
+
+__all__ = ["NewGoalRun", "new_cup_positions", "Sweep", "CupEpisodes", "episodes_at"]
+
+
+@dataclasses.dataclass(frozen=True)
+class NewGoalRun:
+    """The episodes at one new cup.
+
+    Attributes:
+        offset: Distance of the new cup from the reference cup on the table [m].
+        task: The task grown by the new cup (its robot's scene shows it).
+        with_map: Trajectories with each kind of context map (belief over G + 1 goals).
+        without_map: Trajectories of the unchanged method (training goals only).
+    """
+
+    offset: float
+    task: CupTask
+    with_map: dict[str, Trajectories]
+    without_map: Trajectories
+
+
+def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
+    """Grasp centres of the new cups, shape (len(offsets), 3) [m]."""
+    cups = task.robot.cup_positions()
+    ref = cups[config.ref_goal]
+    if config.direction is None:
+        other = cups[(config.ref_goal + 1) % task.n_goals]
+        direction = (ref - other)[:2]
+    else:
+        direction = np.asarray(config.direction, dtype=float)
+    direction = np.r_[direction / np.linalg.norm(direction), 0.0]
+    return ref + np.asarray(config.offsets)[:, None] * direction
+
+
+@dataclasses.dataclass(frozen=True)
+class Sweep:
+    """What the episodes at every new cup share: the method, one look's users, the new cups.
+
+    Every member's users share one batch per (cup, map): member i's users are rows
+    i * n_users ... (i + 1) * n_users - 1, with the same seeds (paired across members).
+
+    Attributes:
+        decoder: The method's decoder; task: the training task; control, config, progress and
+            look: as :func:`lasa.figures.sim4.run` has them.
+        alpha: The method's blend weight; noise: the users' noise, as
+            :func:`lasa.figures.common.episodes` draws it.
+        members: The members the method's assistance runs under (``none`` alone without it).
+        n_users: Users per member; first: the look's first user.
+        seeds: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
+            member: its member; assisted: ``member``, or None when the method has no assistance.
+        grown: The task grown by each new cup; distances: each new cup's distance from the
+            reference goal (joint space); scale: D, the largest of them.
+    """
+
+    decoder: ActionDecoder
+    task: CupTask
+    control: ControlConfig
+    config: Config
+    progress: bool
+    look: int
+    alpha: float
+    noise: np.ndarray
+    members: tuple[str, ...]
+    n_users: int
+    first: int
+    seeds: np.ndarray
+    theta: np.ndarray
+    member: np.ndarray
+    assisted: np.ndarray | None
+    grown: list[CupTask]
+    distances: np.ndarray
+    scale: float
+
+    @classmethod
+    def of(
+        cls,
+        decoders: Decoders,
+        task: CupTask,
+        control: ControlConfig,
+        config: Config,
+        progress: bool = False,
+        look: int = 0,
+        members: tuple[str, ...] | None = None,
+    ) -> Sweep:
+        """The sweep of :func:`lasa.figures.sim4.run` (its arguments).
+
+        Raises:
+            ConfigError: if ``config.ref_goal`` is not a goal of ``task``, or the method's
+                decoder is not among ``decoders``.
+        """
+        decoder = _method_decoder(decoders, task, config)
+        first, n_users = block_users(Design(config.users, config.block, config.cap), look)
+        _, theta, noise = episodes(
+            decoder, task, control, n_users, config.horizon, block_seed(config.seed, look)
+        )
+        alpha = method_alpha(config.method, control)
+        if members is None:
+            members = members_of(control, config.assistance)
+        members = members if alpha > 0 else (NO_ASSISTANCE,)
+        grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
+        dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
+        member = np.repeat(members, n_users)
+        return cls(
+            decoder,
+            task,
+            control,
+            config,
+            progress,
+            look,
+            alpha,
+            noise,
+            members,
+            n_users,
+            first,
+            seeds=np.tile(np.arange(n_users), len(members)),
+            theta=np.tile(theta, len(members)),
+            member=member,
+            assisted=None if members == (NO_ASSISTANCE,) else member,
+            grown=grown,
+            distances=dist,
+            scale=float(dist.max()),
+        )
+
+
+def _method_decoder(decoders: Decoders, task: CupTask, config: Config) -> ActionDecoder:
+    """The decoder of ``config.method`` among ``decoders``, after checking ``config.ref_goal``."""
+    if not 0 <= config.ref_goal < task.n_goals:
+        raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {config.ref_goal}")
+    key = METHOD_DECODER[config.method]
+    decoder = as_decoders(decoders).get(key)
+    if decoder is None:
+        raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
+    return decoder
+
+
+@dataclasses.dataclass(frozen=True)
+class CupEpisodes:
+    """Every user's episodes at one new cup.
+
+    Attributes:
+        users: The users, who want a grasp at the new cup (goal G, the grown task's last).
+        with_map: Their trajectories with each kind of context map.
+        without: Their trajectories of the unchanged method.
+    """
+
+    users: UserPopulation
+    with_map: dict[str, Trajectories]
+    without: Trajectories
+
+
+def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, CupEpisodes]:
+    """The episodes at the new cup ``offset`` [m] from the reference cup (``big``'s last goal).
+
+    Returns:
+        The headline member's run (its users alone), and every user's episodes.
+    """
+    config, task, n = sweep.config, sweep.task, len(sweep.seeds)
+    new = big.n_goals - 1
+    users = UserPopulation(
+        goal=np.full(n, new),
+        theta=sweep.theta,
+        target=big.target(np.full(n, new), sweep.theta),
+        beta0=np.full(n, config.beta),
+        slope=np.zeros(n),
+        stream=sweep.seeds,
+    )
+    with_map = {}
+    for kind in config.maps:
+        mapped = MappedDecoder(sweep.decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
+        with_map[kind] = _rollout(sweep, mapped, big, users)
+    plain = dataclasses.replace(users, goal=np.full(n, config.ref_goal))
+    without = _rollout(sweep, sweep.decoder, task, plain)
+    head = slice(0, sweep.n_users)
+    at_cup = NewGoalRun(
+        offset, big, {k: _users_of(t, head) for k, t in with_map.items()}, _users_of(without, head)
+    )
+    return at_cup, CupEpisodes(users, with_map, without)
+
+
+def _rollout(sweep: Sweep, decoder: ActionDecoder, task: CupTask, users: UserPopulation) -> Trajectories:
+    """The method's rollout of ``users`` on ``task`` through ``decoder``, every member in one batch."""
+    return rollout(
+        decoder,
+        task,
+        users,
+        sweep.alpha,
+        sweep.control,
+        sweep.config.horizon,
+        sweep.noise,
+        sweep.progress,
+        assistance=sweep.assisted,
+    )
+
+
+def _users_of(traj: Trajectories, users: slice) -> Trajectories:
+    """The trajectories of some users (axis 1 of every field)."""
+    return Trajectories(**{f.name: getattr(traj, f.name)[:, users] for f in dataclasses.fields(traj)})
