@@ -46,7 +46,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial import cKDTree
 
-from lasa.base.config import AtLeastTwo, ControlConfig, check_range, validate
+from lasa.base.config import AtLeastTwo, ControlConfig, NonNegative, Positive, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.latent_property import COLUMNS, CONDITIONS
 from lasa.method.belief import belief as to_belief
@@ -76,27 +76,24 @@ class PropertyConfig:
     (0.8 sigma_h = 0.3 rad/s) needs to sweep half of the longest preference curve of our
     tasks in joint space (1.1 rad, from theta = 1/2 to an end of the Panda's cup curve; the
     bowls' tilt curves are 0.85-1.06 rad from the middle to an end), so a decoder that conveys
-    the preference can reach either end of it from the middle. A drift of 2 cm/s is the
-    issue's example; with ``d(t) <= v t`` at every step it is a bound on the tip's mean speed
+    the preference can reach either end of it from the middle. A drift of 2 cm/s is a
+    slow creep, 8 cm over the hold; with ``d(t) <= v t`` at every step it is a bound on the tip's mean speed
     away from the goal's preferences over every stretch of the hold from its start. From
     home, 10 s at sigma_h covers the 2-3 rad to the farthest goal; leaving a confident goal
     gets the same 10 s, and the same 5 cm to count as arriving.
     """
 
     n_inputs: AtLeastTwo = 64  # stick inputs on the ring [-]
-    hold: float = 4.0  # seconds each input is held at a goal, the belief held confident [s]
-    drift_speed: float = 0.02  # v: an input stays when d(t) <= v t through the hold [m/s]
-    uncertain_hold: float = 10.0  # seconds each input is held from home, the belief updated online [s]
-    reach_distance: float = 0.05  # an input reaches a goal when the tip ends this close to its set [m]
-    rotation_weight: float = 0.125  # metres per radian of direction when matching a preference [m/rad]
+    hold: Positive = 4.0  # seconds each input is held at a goal, the belief held confident [s]
+    drift_speed: Positive = 0.02  # v: an input stays when d(t) <= v t through the hold [m/s]
+    uncertain_hold: Positive = 10.0  # seconds each input is held from home, the belief updated online [s]
+    reach_distance: Positive = 0.05  # an input reaches a goal when the tip ends this close to its set [m]
+    rotation_weight: NonNegative = 0.125  # metres per radian of direction when matching a preference [m/rad]
     n_grid: AtLeastTwo = 41  # preference grid per coordinate of the preference set [-]
-    leave_hold: float = 10.0  # seconds each input is held from a confident goal's phase end [s]
+    leave_hold: Positive = 10.0  # seconds each input is held from a confident goal's phase end [s]
 
     def __post_init__(self) -> None:
         validate(self)
-        for name in ("hold", "drift_speed", "uncertain_hold", "reach_distance", "leave_hold"):
-            check_range(name, getattr(self, name), 0.0, low_open=True)
-        check_range("rotation_weight", self.rotation_weight, 0.0)
 
 
 @dataclasses.dataclass(frozen=True)

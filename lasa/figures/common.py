@@ -55,7 +55,6 @@ __all__ = [
     "check_methods",
     "check_pilot",
     "sweep_grid",
-    "check_positive_int",
     "SweepConfig",
     "draw_episodes",
     "episodes",
@@ -122,12 +121,6 @@ def check_pilot(pilot: str, prob: float) -> None:
     """``pilot`` is one of :data:`lasa.people.users.PILOTS` and ``prob`` a probability."""
     check_choice("pilot", pilot, PILOTS)
     check_range("pilot_prob", prob, 0.0, 1.0)
-
-
-def check_positive_int(name: str, value: int) -> None:
-    """``value`` is an integer >= 1, else a ConfigError naming ``name`` (for a value outside a record)."""
-    if int(value) != value or value < 1:
-        raise ConfigError(f"{name} must be an integer >= 1, got {value!r}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -18,14 +18,25 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from scipy import stats
 
-from lasa.base.config import ASSISTANCE, ControlConfig, check_choice, check_range
+from lasa.base.config import (
+    ASSISTANCE,
+    ControlConfig,
+    NonNegative,
+    NonNegativeInt,
+    Number,
+    Positive,
+    PositiveInt,
+    Seed,
+    check_choice,
+    validate,
+)
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import N_BOOT, Design, check_design, group_means, member_frame
-from lasa.figures.common import Decoders, check_members, check_methods, check_positive_int
+from lasa.figures.common import Decoders, check_members, check_methods
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
 from lasa.world.task import CupTask
@@ -65,45 +76,41 @@ DPI = 150
 class Config:
     """Fig. sim4: users who reach for new cups, with and without the context map h."""
 
-    offsets: tuple[float, ...] = (
+    offsets: tuple[Positive, ...] = (
         0.08,
         0.11,
         0.14,
         0.17,
         0.20,
     )  # new cups' distances from the reference cup [m]
-    direction: tuple[float, float] | None = (
+    direction: tuple[Number, Number] | None = (
         None  # on the table; None: from the other training cup to the reference
     )
-    ref_goal: int = 1  # the training cup the new ones are referred to [-]
-    beta: float = 1000.0  # near-optimal users [1/rad^2]
-    users: int = Design.first  # users per (mapping, new cup) at the first look, every reading [-]
-    block: int = Design.block  # users added per later look, the headline reading only [-]
-    cap: int = Design.cap  # most users per point [-]
-    n_boot: int = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
+    ref_goal: NonNegativeInt = 1  # the training cup the new ones are referred to [-]
+    beta: NonNegative = 1000.0  # near-optimal users [1/rad^2]
+    users: PositiveInt = Design.first  # users per (mapping, new cup) at the first look, every reading [-]
+    block: PositiveInt = Design.block  # users added per later look, the headline reading only [-]
+    cap: PositiveInt = Design.cap  # most users per point [-]
+    n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the method's assistance runs under
-    horizon: int = 200  # control steps per episode [-]
+    horizon: PositiveInt = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
     maps: tuple[str, ...] = ("grasp", "straight_line")  # kinds of h run "with" the map (lasa.method.newgoals)
-    seed: int = 0  # seed of the users' preferences and random streams [-]
+    seed: Seed = 0  # seed of the users' preferences and random streams [-]
 
     def __post_init__(self) -> None:
+        validate(self)
         if not self.offsets:
             raise ConfigError("offsets must not be empty")
         object.__setattr__(self, "offsets", tuple(float(o) for o in self.offsets))
-        for offset in self.offsets:
-            check_range("offset", offset, 0.0, low_open=True)
         if self.direction is not None and (
             len(self.direction) != 2
             or not np.isfinite(self.direction).all()
             or np.hypot(*self.direction) < 1e-9
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
-        check_range("beta", self.beta, 0.0)
         check_design(self.users, self.block, self.cap)
-        check_positive_int("n_boot", self.n_boot)
         check_members(self.assistance)
-        check_positive_int("horizon", self.horizon)
         check_methods((self.method,))
         if not self.maps:
             raise ConfigError("maps must name at least one kind of context map")
