@@ -29,12 +29,16 @@ def test_a_name_outside_what_the_caller_accepts_is_an_error():
 
 
 def test_every_loop_reads_the_same_table():
-    from lasa.live.station import CONDITIONS as TELEOP
+    from lasa.live.station import SessionConfig
     from lasa.method.step import METHOD_DECODER, METHODS, method_alpha
     from lasa.people.design import interface_of
 
     control = ControlConfig(alpha=0.4)
-    assert METHODS == conditions.METHODS and TELEOP == conditions.ALL
+    assert METHODS == conditions.METHODS
+    for name in conditions.ALL:  # a live session runs every condition of the table, and no other
+        assert SessionConfig(task="cups", condition=name).condition == name
+    with pytest.raises(ConfigError, match="unknown condition"):
+        SessionConfig(task="cups", condition="LA+Entropy")
     assert METHOD_DECODER == {"LA": "base", "LA+SA": "base", "LA+SA+Entropy": "entropy"}
     assert [method_alpha(m, control) for m in METHODS] == [0.0, 0.4, 0.4]
     assert [conditions.alpha_of(c, 0.4) for c in conditions.CONDITIONS] == [0.0, 0.4, 0.0, 0.4]

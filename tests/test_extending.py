@@ -253,12 +253,12 @@ def test_an_assistance_member_of_ones_own_is_called_by_the_step_and_the_rollout(
     task = toy_task
     calls: list[tuple[int, ...]] = []
 
-    def likeliest(belief, state, goals, sets, dt, speed):
+    def likeliest(belief, state, goals, sets, dt, action_scale):
         """Straight to the likeliest goal at the human's speed, with full say in the blend."""
         calls.append(belief.shape)
         diff = goals[belief.argmax(axis=1)] - state
         norm = np.maximum(np.linalg.norm(diff, axis=1, keepdims=True), 1e-9)
-        return speed * diff / norm, np.ones(len(state))
+        return action_scale * diff / norm, np.ones(len(state))
 
     with pytest.raises(lasa.ConfigError, match="unknown assistance 'likeliest'"):
         lasa.ControlConfig(assistance="likeliest")

@@ -7,8 +7,8 @@ device (:meth:`Station.step`); :func:`log_row` is a step's row of the session lo
 :meth:`Station.columns` order. ``teleop run`` (:mod:`lasa.live.teleop`) and the web study's
 server (:mod:`lasa.live.web.loop`) drive the same station and log the same rows.
 
-- **Tasks** (:data:`TASKS`): ``cups`` (the cup task of the simulations, either robot) and
-  ``Entree`` / ``Dessert`` (the eating study, the Panda). **Conditions** (:data:`CONDITIONS`):
+- **Tasks** (:data:`SESSION_TASKS`): ``cups`` (the cup task of the simulations, either robot) and
+  ``Entree`` / ``Dessert`` (the eating study, the Panda). **Conditions** (:data:`lasa.base.conditions.ALL`):
   ``R``, ``R+SA`` (Retargeting, :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the
   cups, ``LA+SA+Entropy``.
 - **The step** is the study's (:mod:`lasa.people.participants`): the stick at rest commands
@@ -27,8 +27,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from lasa.base.conditions import ALL as CONDITIONS
-from lasa.base.conditions import alpha_of
+from lasa.base.conditions import ALL, alpha_of
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
@@ -42,9 +41,9 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
 
-__all__ = ["TASKS", "CONDITIONS", "SessionConfig", "Station", "log_row"]
+__all__ = ["SESSION_TASKS", "SessionConfig", "Station", "log_row"]
 
-TASKS = ("cups", "Entree", "Dessert")
+SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs: the cups, and the eating tasks
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,8 +58,8 @@ class SessionConfig:
 
     def __post_init__(self) -> None:
         check_choice("robot", self.robot, ("planar5", "panda"))
-        check_choice("task", self.task, TASKS)
-        check_choice("condition", self.condition, CONDITIONS)
+        check_choice("task", self.task, SESSION_TASKS)
+        check_choice("condition", self.condition, ALL)
         if self.task != "cups" and self.robot != "panda":
             raise ConfigError(f"the {self.task} task is built for the Panda, not {self.robot!r}")
         if self.task != "cups" and self.condition == "LA+SA+Entropy":

@@ -43,12 +43,13 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from lasa.base.conditions import ALL
 from lasa.base.config import check_range
 from lasa.base.errors import ArtifactError, ConfigError, LasaError
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live.devices import Device, ScriptedDevice, open_device
 from lasa.live.interrupts import StopOnSignals
-from lasa.live.station import CONDITIONS, TASKS, SessionConfig, Station, log_row
+from lasa.live.station import SESSION_TASKS, SessionConfig, Station, log_row
 from lasa.method.retarget import MODES
 
 __all__ = ["run_session", "replay", "main"]
@@ -343,9 +344,9 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="drive the robot live and log the session")
     run.add_argument("--robot", default="panda", help="the robot (panda: the eating scene) [%(default)s]")
-    run.add_argument("--task", default="Dessert", choices=TASKS, help="the eating task [%(default)s]")
+    run.add_argument("--task", default="Dessert", choices=SESSION_TASKS, help="the eating task [%(default)s]")
     run.add_argument(
-        "--condition", default="LA+SA", choices=CONDITIONS, help="interface and assistance [%(default)s]"
+        "--condition", default="LA+SA", choices=ALL, help="interface and assistance [%(default)s]"
     )
     run.add_argument(
         "--participant", default="p00", help="participant id, part of the log's name [%(default)s]"
@@ -371,7 +372,7 @@ def _parser() -> argparse.ArgumentParser:
     sch.add_argument("--overwrite", action="store_true", help="replace an existing schedule")
     sur = sub.add_parser("survey", help="the 7-point Likert questionnaire after a condition")
     sur.add_argument("--participant", required=True, help="participant id, as in their sessions")
-    sur.add_argument("--condition", required=True, choices=CONDITIONS, help="the condition just done")
+    sur.add_argument("--condition", required=True, choices=ALL, help="the condition just done")
     sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
     sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
     sur.add_argument("--overwrite", action="store_true", help="replace answers given for this condition")

@@ -31,7 +31,7 @@ Every function is vectorised over users: beliefs (U, G), states (U, n), for any 
 of goals G.
 
 **A member of your own.** Any function with a member's signature (:data:`Member`: belief,
-state, goals, sets, dt, speed -> a_r, w) joins the family with :func:`register_member`; then
+state, goals, sets, dt, action_scale -> a_r, w) joins the family with :func:`register_member`; then
 ``ControlConfig(assistance=name)`` and the rollout's per-user ``assistance`` run it like the
 four above (``docs/extending.md``).
 """
@@ -60,7 +60,7 @@ __all__ = [
     "unregister_member",
 ]
 
-# A member: (belief (U, G), state (U, n), goals (G, n), sets (G, K, n), dt [s], speed [rad/s])
+# A member: (belief (U, G), state (U, n), goals (G, n), sets (G, K, n), dt [s], action_scale: sigma_h [rad/s])
 # -> (a_r (U, n) [rad/s], blend weight w (U,) in [0, 1]).
 Member = Callable[
     [np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float], tuple[np.ndarray, np.ndarray]
@@ -68,7 +68,7 @@ Member = Callable[
 
 
 def point(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (the paper, Sec. III).
 
@@ -78,7 +78,7 @@ def point(
         goals: One pose per goal, shape (G, n).
         sets: Unused here: each goal's grasps, shape (G, K, n).
         dt: Unused here: the control period Delta [s].
-        speed: Unused here: sigma_h, the human's speed bound [rad/s].
+        action_scale: Unused here: sigma_h, the human's speed bound [rad/s].
 
     Returns:
         a_r, shape (U, n), and the blend weight w = 1, shape (U,).
@@ -107,7 +107,7 @@ def nearest_grasps(state: np.ndarray, sets: np.ndarray) -> np.ndarray:
 
 
 def grasp_set(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``grasp_set``: Eq. M2 towards the nearest grasp of each goal, a_r = sum_g b(g) (c_g(s) - s).
 
@@ -123,7 +123,7 @@ def grasp_set(
 
 
 def arbitrated(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``arbitrated``: policy blending with confidence-based arbitration (Dragan & Srinivasa 2013).
 
@@ -142,7 +142,7 @@ def arbitrated(
 
 
 def hindsight(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, speed: float
+    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``hindsight``: hindsight-optimisation assistance (Javdani et al. 2018).
 
@@ -166,8 +166,8 @@ def hindsight(
         a_r, shape (U, n), and w = 1, shape (U,).
     """
     diff = goals[None] - state[:, None, :]  # (U, G, n)
-    dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), dt * speed)
-    return speed * np.einsum("ug,ugn->un", belief, diff / dist), np.ones(len(state))
+    dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), dt * action_scale)
+    return action_scale * np.einsum("ug,ugn->un", belief, diff / dist), np.ones(len(state))
 
 
 _MEMBERS: dict[str, Member] = {
@@ -189,7 +189,7 @@ def register_member(name: str, member: Member, *, replace: bool = False) -> None
     After it, ``ControlConfig(assistance=name)`` is valid and every assisted step under it
     (:func:`lasa.method.step.shared_autonomy_step`, :func:`lasa.people.rollout.rollout`, the
     :class:`lasa.method.controller.Controller`) calls ``member``, as :func:`assist` calls the
-    built-in ones: ``member(belief, state, goals, sets, dt, speed)`` with the shapes of
+    built-in ones: ``member(belief, state, goals, sets, dt, action_scale)`` with the shapes of
     :func:`assist`, returning a_r (U, n) and the blend weight w (U,) in [0, 1]. The figures'
     default members stay the four of :data:`ASSISTANCE`.
 
@@ -236,7 +236,7 @@ def assist(
     goals: np.ndarray,
     sets: np.ndarray,
     dt: float,
-    speed: float,
+    action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The assistance a_r and the blend weight w of member ``name``.
 
@@ -247,7 +247,7 @@ def assist(
         goals: One pose per goal, shape (G, n).
         sets: Each goal's grasps, shape (G, K, n).
         dt: The control period Delta [s].
-        speed: sigma_h, the human's speed bound [rad/s] (``hindsight`` moves at it).
+        action_scale: sigma_h, the human's speed bound [rad/s] (``hindsight`` moves at it).
 
     Raises:
         ConfigError: for an unknown member.
@@ -255,4 +255,4 @@ def assist(
     member = _MEMBERS.get(name)
     if member is None:
         raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, _MEMBERS))}")
-    return member(belief, state, goals, sets, dt, speed)
+    return member(belief, state, goals, sets, dt, action_scale)
