@@ -153,7 +153,7 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
 
 def test_a_claim_that_is_not_testable_is_written_and_rendered_with_its_reason(tmp_path):
     from lasa.evidence.claims import VERDICTS
-    from lasa.evidence.rules import NOT_TESTABLE
+    from lasa.evidence.decision import NOT_TESTABLE
 
     assert NOT_TESTABLE == "not testable" and NOT_TESTABLE in VERDICTS
     with pytest.raises(ConfigError, match="never settled"):
@@ -230,7 +230,7 @@ def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
 
 
 def test_the_word_follows_the_vocabulary():
-    from lasa.evidence.rules import PaperNumber, word
+    from lasa.evidence.decision import PaperNumber, word
 
     ratio = (PaperNumber("r", 1.45, 0.15, "beta = 75"),)
     assert word("yes", {"r": (1.35, 1.55)}, ratio) == "reproduced"

@@ -30,7 +30,8 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv, write_text
-from lasa.evidence.rules import NOT_TESTABLE, RULES, UNDECIDED, WORDS, word
+from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS, word
+from lasa.evidence.rules import RULES
 
 __all__ = [
     "Claim",
@@ -106,7 +107,7 @@ def criteria(claim: Claim) -> dict[str, str]:
     """The row's verdict word and its replication criteria (Open Science Collaboration, 2015).
 
     Returns:
-        ``reproduced``: the word (:func:`lasa.evidence.rules.word`); ``paper_in_ci``: per number
+        ``reproduced``: the word (:func:`lasa.evidence.decision.word`); ``paper_in_ci``: per number
         the paper states, ``yes``/``no`` (its value, give or take the rule's tolerance, inside our
         interval), joined by ``; ``, or ``n/a`` where it states none; ``direction``: ``yes`` if our
         effect's interval lies on the paper's side of no effect, ``no`` if not, ``n/a`` where the
