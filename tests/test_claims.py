@@ -7,6 +7,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import (
     CLAIM_COLUMNS,
     README_MARKERS,
+    ROBOTS,
     Claim,
     _row,
     render_verdicts,
@@ -153,7 +154,7 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
 
 def test_a_claim_that_is_not_testable_is_written_and_rendered_with_its_reason(tmp_path):
     from lasa.evidence.claims import VERDICTS
-    from lasa.evidence.rules import NOT_TESTABLE
+    from lasa.evidence.decision import NOT_TESTABLE
 
     assert NOT_TESTABLE == "not testable" and NOT_TESTABLE in VERDICTS
     with pytest.raises(ConfigError, match="never settled"):
@@ -230,7 +231,7 @@ def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
 
 
 def test_the_word_follows_the_vocabulary():
-    from lasa.evidence.rules import PaperNumber, word
+    from lasa.evidence.decision import PaperNumber, word
 
     ratio = (PaperNumber("r", 1.45, 0.15, "beta = 75"),)
     assert word("yes", {"r": (1.35, 1.55)}, ratio) == "reproduced"
@@ -266,3 +267,79 @@ def test_the_cell_shows_every_number_the_rule_reads():
     assert cell.startswith("**not reproduced**: 0.11 (y = 0.11x): not reproduced, 0.0131 [0.00828, 0.0177]")
     assert "0.98 (R^2 = 0.98): undecided, 0.964 [0.786, 0.997]" in cell
     assert "; share_below 1 [1, 1], N = 0" in cell and "r2 0.964" not in cell  # each number once
+
+
+def _note_row(cid, robot, **intervals):
+    """A claims row whose note states each number's interval as lasa.evidence.verdicts.assess does."""
+    text = "; ".join(f"{k} = {(lo + hi) / 2:.3g} [{lo:.3g}, {hi:.3g}]" for k, (lo, hi) in intervals.items())
+    base = claim(cid.split(".", 1)[1], figure=cid.split(".", 1)[0], robot=robot, verdict="undecided")
+    return Claim(**{**base.__dict__, "note": f"150 users per point; 98.75% intervals: {text}. Rule: ..."})
+
+
+def _mechanism(rows):
+    table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
+    return render_verdicts(table).splitlines()[4].split("|")[6].strip()
+
+
+def test_a_result_sentence_follows_the_numbers_of_its_rows():
+    # the time gap grows on both robots, the error gap narrows on one and is unclear on the other
+    rows = [
+        _note_row("sim1.gap_narrows", "planar5", time_narrowing=(-0.4, -0.2), error_narrowing=(0.01, 0.02)),
+        _note_row("sim1.gap_narrows", "panda", time_narrowing=(-0.4, -0.3), error_narrowing=(-0.01, 0.02)),
+    ]
+    assert _mechanism(rows).startswith(
+        "the time gap grows instead (time_narrowing's interval below 0 on both robots); "
+        "the error gap narrows (error_narrowing's interval above 0 on planar5); "
+        "the error gap's change is unclear (error_narrowing's interval reaches 0 on the Panda) ([04]("
+    )
+    # the same claim with the time gap narrowing: the sentence says so, nothing hand-written is left
+    rows = [
+        _note_row("sim1.gap_narrows", r, time_narrowing=(0.1, 0.2), error_narrowing=(0.1, 0.2))
+        for r in ROBOTS
+    ]
+    assert _mechanism(rows).startswith(
+        "the time gap narrows (time_narrowing's interval above 0 on both robots)"
+    )
+    # a row without the numbers (a hand-made table) states no result, only the mechanism
+    rows = [claim("time_ratio", robot=r) for r in ROBOTS]
+    assert _mechanism(rows).startswith("the pull is largest far from the goal ([04](")
+
+
+def _study_row(cid, reproduced, low, high, n, measured="m", note="participant model = planning; n"):
+    base = claim(cid.split("@", 1)[0].split(".", 1)[1], figure="study", robot="panda", verdict="undecided")
+    values = {"id": cid, "reproduced": reproduced, "ci_low": low, "ci_high": high, "n_users": n}
+    return Claim(**{**base.__dict__, **values, "measured": measured, "note": note})
+
+
+def test_the_studys_sentences_say_what_each_n_tells_and_what_was_cut():
+    nan = float("nan")
+    h2 = [
+        _study_row("study.h2", "undecided", -0.01, 0.05, 10),
+        _study_row("study.h2@cohort", "yes", 0.03, 0.06, 40),
+    ]
+    assert _mechanism(h2).startswith(
+        "LA+SA tilts the fork further into the scoop than R+SA; 10 participants cannot tell, 40 can"
+    )
+    h2[0] = _study_row("study.h2", "yes", 0.01, 0.05, 10)
+    assert "; 10 participants can, 40 can (" in _mechanism(h2)
+    h2 = [
+        _study_row("study.h2", "undecided", -0.01, 0.05, 10),
+        _study_row("study.h2@cohort", "no", -0.06, -0.03, 40),
+    ]
+    assert _mechanism(h2).startswith(
+        "R+SA tilts the fork further into the scoop than LA+SA; 10 participants cannot"
+    )
+    cut = "not testable (completion: LA 90%, LA+SA 45%); SA - no SA = ..."
+    h1 = [_study_row("study.h1", "not testable", nan, nan, 10, measured=cut)]
+    assert _mechanism(h1).startswith(
+        "the planning participants finish 90% of their LA episodes and 45% of their LA+SA episodes "
+        "within the horizon: the rest are cut there, so Goal Error is censored ("
+    )
+    h3 = [_study_row("study.h3", "not testable", nan, nan, 10, measured=cut.replace("LA 90%, ", ""))]
+    assert _mechanism(h3).startswith(
+        "LA+SA finishes 45% of its episodes: the assistance holds planning participants at a bowl ("
+    )
+    h3 = [
+        _study_row("study.h3", "not testable", nan, nan, 10, measured="not testable (completion: R 80%); x")
+    ]
+    assert _mechanism(h3).startswith("R finishes 80% of its episodes ([11](")  # not LA+SA: no bowl

@@ -23,7 +23,7 @@ import torch
 from matplotlib.figure import Figure
 
 import lasa
-from lasa.evidence import plots, rules, verdicts
+from lasa.evidence import decision, plots, rules, verdicts
 from lasa.method.assistance import unregister_member
 
 # --- the user's MJCF: three hinge joints about y (a planar arm), a table, three cups --------
@@ -294,14 +294,14 @@ def test_an_assistance_member_of_ones_own_is_called_by_the_step_and_the_rollout(
 # --- 3. a claim ------------------------------------------------------------------------------
 
 
-def _toy_rule() -> rules.Rule:
+def _toy_rule() -> decision.Rule:
     def decide(v):
         return "yes" if v["share_lower"] >= 1.0 else "partly" if v["share_lower"] > 0.5 else "no"
 
-    return rules.Rule(
+    return decision.Rule(
         id="toy.sa_lower",
         text="yes if LA+SA's mean final error is below LA's at every cup, partly if at more than half",
-        quantities=(rules.Quantity("share_lower", (0.5, 1.0), "share of cups where LA+SA is below LA"),),
+        quantities=(decision.Quantity("share_lower", (0.5, 1.0), "share of cups where LA+SA is below LA"),),
         decide=decide,
     )
 

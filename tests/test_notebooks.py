@@ -352,7 +352,7 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
 
 def test_study_outputs(executed):
     from lasa.evidence import latent_property
-    from lasa.figures import eating_task, study
+    from lasa.figures import eating_task, study, study_plots
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
@@ -371,11 +371,11 @@ def test_study_outputs(executed):
     limits = study.Config().readings_per_model
     runs = [min(limits.get(m, len(readings)), len(readings)) for m in models]
     episodes = sum(n * (2 + 2 * len(members) + 2 * (k - 1)) * 2 for k in runs)
-    for spec in (study.GOAL_ERROR, study.TIME, study.ALIGNMENT):
+    for spec in (study_plots.GOAL_ERROR, study_plots.TIME, study_plots.ALIGNMENT):
         frame = pd.read_csv(fig / f"{spec.NAME}.csv")
         assert list(frame.columns) == list(spec.COLUMNS)
         assert {"participant", "condition", "task"} <= set(frame.columns)
-        assert len(frame) == episodes * (4 if spec is study.ALIGNMENT else 1)
+        assert len(frame) == episodes * (4 if spec is study_plots.ALIGNMENT else 1)
         assert set(frame.condition) == {"R", "R+SA", "LA", "LA+SA"}
         assert sorted(frame.participant.unique()) == list(range(n))
         assert (fig / f"{spec.NAME}.png").stat().st_size > 10_000

@@ -81,10 +81,13 @@ def test_every_rule_is_constant_between_its_thresholds(cid, data):
 
 
 def test_not_testable_is_exported_and_h3_states_its_guard_and_its_late_change():
+    import lasa.evidence.decision as decision
     import lasa.evidence.rules as rules
 
-    assert "NOT_TESTABLE" in rules.__all__ and rules.NOT_TESTABLE == "not testable"
-    assert rules.NOT_TESTABLE not in rules.VERDICTS  # a rule never decides it: the data's precondition does
+    assert "NOT_TESTABLE" in decision.__all__ and decision.NOT_TESTABLE == "not testable"
+    assert (
+        decision.NOT_TESTABLE not in decision.VERDICTS
+    )  # never a rule's: the data's precondition decides it
     text = rule("study.h3").text
     assert "95%" in text and "restricted mean" in text and "bootstrap" in text and "t-test" not in text
     late = rules.AFTER_RESULTS["study.h3"]
@@ -92,3 +95,45 @@ def test_not_testable_is_exported_and_h3_states_its_guard_and_its_late_change():
     h3 = rule("study.h3@one_step")
     assert h3.verdict({"effect": -1.0}) == "yes" and h3.settled({"effect": (-9.0, -0.5)})
     assert not h3.settled({"effect": (-9.0, 0.5)})  # the fastest-other gap's interval straddles 0
+
+
+@pytest.mark.parametrize(
+    ("cid", "results", "verdict"),
+    [
+        # H1: the main effect and both pairwise comparisons, below 0 and significant
+        ("study.h1", {"effect": -1.0, "p": 0.01, "effect a - b": -0.5, "p a - b": 0.04}, "yes"),
+        ("study.h1", {"effect": -1.0, "p": 0.01, "effect a - b": -0.5, "p a - b": 0.05}, "partly"),
+        ("study.h1", {"effect": -1.0, "p": 0.01, "effect a - b": 0.5, "p a - b": 0.01}, "partly"),
+        ("study.h1", {"effect": -1.0, "p": 0.05, "effect a - b": -0.5, "p a - b": 0.01}, "no"),
+        ("study.h1", {"effect": 1.0, "p": 0.01}, "no"),
+        ("study.h1@paper_test", {"effect": -1.0, "p": 0.01}, "yes"),  # no comparisons: yes or no
+        # H2: above 0, significant or not
+        ("study.h2", {"effect": 0.02, "p": 0.01}, "yes"),
+        ("study.h2", {"effect": 0.02, "p": 0.2}, "partly"),
+        ("study.h2", {"effect": -0.02, "p": 0.01}, "no"),
+        ("study.h2", {"effect": math.nan, "p": math.nan}, "no"),  # too few pairs
+        # H3: every contrast's interval below 0; else LA+SA's restricted mean the lowest
+        (
+            "study.h3",
+            {"high t LA+SA - R": -1.0, "high i LA+SA - R": -0.1, "mean R": 9.0, "mean LA+SA": 5.0},
+            "yes",
+        ),
+        (
+            "study.h3",
+            {"high t LA+SA - R": -1.0, "high i LA+SA - R": 0.1, "mean R": 9.0, "mean LA+SA": 5.0},
+            "partly",
+        ),
+        (
+            "study.h3",
+            {"high t LA+SA - R": 1.0, "mean R": 5.0, "mean LA+SA": 5.0},
+            "no",
+        ),  # a tie is not the lowest
+    ],
+)
+def test_the_studys_tests_decide_yes_partly_no(cid, results, verdict):
+    assert rule(cid).tested(results) == verdict
+
+
+def test_a_rule_without_tests_has_no_tested_verdict():
+    with pytest.raises(ConfigError, match="rests on no tests"):
+        rule("sim1.final_error").tested({"share_lower": 1.0})

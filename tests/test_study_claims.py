@@ -6,7 +6,7 @@ import pytest
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
-from lasa.figures import study
+from lasa.figures import study, study_analysis, study_claims, study_tests
 
 MEMBERS = ("hindsight", "grasp_set")
 
@@ -54,7 +54,9 @@ def verdicts(rows):
 
 
 def test_clear_effects_reproduce_every_hypothesis():
-    rows, analyses = study.claims(frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 20)
+    rows, analyses = study_claims.claims(
+        frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 20
+    )
     v = verdicts(rows)
     heads = ("study.h1", "study.h1@mean_distance", "study.h1@paper_test", "study.h2", "study.h3")
     for head in heads:
@@ -74,7 +76,9 @@ def test_clear_effects_reproduce_every_hypothesis():
 
 
 def test_effects_in_the_wrong_direction_do_not_reproduce():
-    rows, _ = study.claims(frames(10, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), MEMBERS[:1], 10)
+    rows, _ = study_claims.claims(
+        frames(10, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), MEMBERS[:1], 10
+    )
     v = verdicts(rows)
     for cid in ("study.h1", "study.h1@mean_distance", "study.h1@paper_test", "study.h2", "study.h3"):
         assert v[cid] == "no", cid  # settled: the effect is clearly the wrong way
@@ -87,7 +91,7 @@ def test_a_small_effect_of_the_right_sign_is_partly():
     rng = np.random.default_rng(0)
     noisy = (a.phase == "scoop") & (a.condition == "LA+SA")
     a.loc[noisy, "alignment"] = 0.8 + 0.002 + rng.normal(0, 0.05, noisy.sum())
-    rows, analyses = study.claims(data, MEMBERS[:1], 10)
+    rows, analyses = study_claims.claims(data, MEMBERS[:1], 10)
     mean, low, high, p, pairs = analyses[("hindsight", 10)]["h2_phases"]["scoop"]
     assert pairs == 10 and low < 0 < high and p >= 0.05  # the interval straddles zero: cannot tell
     h2 = {c.id: c for c in rows}["study.h2"]
@@ -99,7 +103,7 @@ def test_a_phase_nobody_reached_is_not_evidence():
     data = frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
     a = data["alignment"]
     a.loc[a.phase == "scoop", "alignment"] = np.nan
-    rows, analyses = study.claims(data, MEMBERS[:1], 10)
+    rows, analyses = study_claims.claims(data, MEMBERS[:1], 10)
     assert np.isnan(analyses[("hindsight", 10)]["h2_phases"]["scoop"][0])
     assert verdicts(rows)["study.h2"] == "not testable"  # no interval: the test cannot run
     h2 = by_id(rows)["study.h2"]
@@ -122,7 +126,7 @@ def test_a_slower_condition_with_the_same_distance_is_told_apart():
     err = data["goal_error"]
     sa = err.condition.str.endswith("+SA")
     err.loc[sa, "goal_error"] *= 2
-    rows, _ = study.claims(data, MEMBERS[:1], 10)
+    rows, _ = study_claims.claims(data, MEMBERS[:1], 10)
     v = verdicts(rows)
     assert v["study.h1"] == "no" and v["study.h1@mean_distance"] == "undecided"
     res = {c.id: c for c in rows}
@@ -146,7 +150,7 @@ def test_another_decoder_reading_is_judged_on_its_own_la_rows():
     good = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
     bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
     data = with_decoders(good, bad)
-    rows, analyses = study.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, analyses = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
     v = verdicts(rows)
     # the headline decoder keeps every reading; the other reading gets the paper's measures only
     assert v["study.h3"] == "yes" and v["study.h2"] == "yes"
@@ -191,11 +195,11 @@ def test_switch_share_and_completion_by_hand():
             )
         ]
     )
-    share = study.switch_share(time, dt=0.1).set_index("condition")
+    share = study_analysis.switch_share(time, dt=0.1).set_index("condition")
     # participant 0: 40 switches x 0.1 s / 40 s = 0.1; participant 1: 2 s / 20 s = 0.1
     assert list(share.index) == ["R"] and share.loc["R", "switch_share"] == pytest.approx(0.1)
     assert share.loc["R", "herlant_2016"] == 0.174
-    done = study.completion(time).set_index("condition")
+    done = study_analysis.completion(time).set_index("condition")
     assert done.loc["R", "finished"] == 0.75 and done.loc["LA", "finished"] == 0.5
     assert done.loc["R", "episodes"] == 4
 
@@ -205,7 +209,7 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
     data = with_decoders(good, bad)
     data["time"].loc[(data["time"].decoder == "other") & (data["time"].participant < 5), "completed"] = False
-    rows, _ = study.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, _ = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
     prop = pd.DataFrame(
         {
             "decoder": ["head", "head", "other", "other"],
@@ -213,7 +217,9 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
             "stay_share": [0.6, 0.5, 0.1, 0.7],
         }
     )
-    table = study.readings_table(prop, study.completion(data["time"]), rows, ["head", "other"], "hindsight")
+    table = study_claims.readings_table(
+        prop, study_analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
+    )
     head, other = table.set_index("decoder").loc["head"], table.set_index("decoder").loc["other"]
     assert bool(head.headline) and not bool(other.headline)
     assert head["goals with the property"] == 2 and other["goals with the property"] == 1
@@ -240,7 +246,7 @@ def test_h3_is_not_testable_when_an_arm_misses_95_percent_completion():
     cut = time.condition.isin(["LA", "LA+SA"])
     time.loc[cut, "completed"] = False
     time.loc[cut, ["total_time", "idle_time"]] = 150.0  # every LA episode cut at the horizon
-    rows, _ = study.claims(data, MEMBERS, 10, horizon=150.0)
+    rows, _ = study_claims.claims(data, MEMBERS, 10, horizon=150.0)
     h3 = by_id(rows)["study.h3"]
     assert h3.reproduced == "not testable" and not h3.settled
     assert h3.measured.startswith("not testable (completion: LA 0%, LA+SA 0%); ")
@@ -264,11 +270,13 @@ def test_the_completion_guard_is_95_percent_of_the_episodes_analysed(unfinished,
         (time.condition == "R+SA") & (time.assistance == "hindsight") & (time.participant >= 10)
     ]
     time.loc[late[:unfinished], "completed"] = False
-    cohort = by_id(study.claims(data, MEMBERS[:1], 20)[0])["study.h3@cohort"]
+    cohort = by_id(study_claims.claims(data, MEMBERS[:1], 20)[0])["study.h3@cohort"]
     assert (cohort.reproduced == "yes") is testable
     if not testable:
         assert cohort.measured.startswith("not testable (completion: R+SA 92.5%)")
-    assert by_id(study.claims(data, MEMBERS[:1], 20)[0])["study.h3"].reproduced == "yes"  # first 10: all
+    assert (
+        by_id(study_claims.claims(data, MEMBERS[:1], 20)[0])["study.h3"].reproduced == "yes"
+    )  # first 10: all
 
 
 def h3_frames(total: dict[str, float], idle: dict[str, float], n: int = 6) -> dict[str, pd.DataFrame]:
@@ -283,39 +291,41 @@ def h3_frames(total: dict[str, float], idle: dict[str, float], n: int = 6) -> di
 def test_h3_by_hand_yes_partly_no_on_restricted_means():
     slow = {"R": 40.0, "R+SA": 45.0, "LA": 50.0}
     yes = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0})
-    rows, analyses = study.claims(yes, MEMBERS[:1], 6)
+    rows, analyses = study_claims.claims(yes, MEMBERS[:1], 6)
     h3 = by_id(rows)["study.h3"]
     # every participant's gap is the same: LA+SA - R = 2 x (30 - 40) = -20 s exactly, interval degenerate
     assert (h3.reproduced, h3.value, h3.ci_low, h3.ci_high, h3.settled) == ("yes", -20.0, -20.0, -20.0, True)
     assert analyses[("hindsight", 10)]["h3_gap"][0] == "R"
     # fastest on Total Time, but idle as long as R's: partly, settled (the Total gap excludes 0)
     partly = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 10.0})
-    h3 = by_id(study.claims(partly, MEMBERS[:1], 6)[0])["study.h3"]
+    h3 = by_id(study_claims.claims(partly, MEMBERS[:1], 6)[0])["study.h3"]
     assert (h3.reproduced, h3.settled) == ("partly", True)
     # slower than R: no, settled; the gap is to R, LA+SA - R = +10 s
     no = h3_frames({**slow, "LA+SA": 45.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0})
-    h3 = by_id(study.claims(no, MEMBERS[:1], 6)[0])["study.h3"]
+    h3 = by_id(study_claims.claims(no, MEMBERS[:1], 6)[0])["study.h3"]
     assert (h3.reproduced, h3.value, h3.settled) == ("no", 10.0, True)
 
 
 def test_h3_runs_no_t_test_on_times(monkeypatch):
-    real = study.stats.pairwise
+    real = study_tests.stats.pairwise
 
     def guarded(frame, measure, *args, **kwargs):
         assert measure not in ("total_time", "idle_time"), "H3 must not t-test (capped) times"
         return real(frame, measure, *args, **kwargs)
 
-    monkeypatch.setattr(study.stats, "pairwise", guarded)
-    rows, analyses = study.claims(frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 10)
+    monkeypatch.setattr(study_tests.stats, "pairwise", guarded)
+    rows, analyses = study_claims.claims(
+        frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 10
+    )
     assert by_id(rows)["study.h3"].reproduced == "yes"
     assert "p_corr" not in analyses[("hindsight", 10)]["h3_total"].columns
 
 
 def test_untestable_marks_every_row_and_keeps_the_numbers():
     data = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
-    plain, _ = study.claims(data, MEMBERS, 20)
+    plain, _ = study_claims.claims(data, MEMBERS, 20)
     reason = "no decoder with both halves of the property; best reading t: least share staying 0.10"
-    marked, _ = study.claims(data, MEMBERS, 20, untestable=reason)
+    marked, _ = study_claims.claims(data, MEMBERS, 20, untestable=reason)
     assert [c.id for c in marked] == [c.id for c in plain] and len(marked) == 20
     for before, after in zip(plain, marked, strict=True):
         assert after.reproduced == "not testable" and not after.settled, after.id
@@ -336,7 +346,7 @@ def test_untestable_decoders_marks_that_readings_rows_only():
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15),
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15, seed=1),
     )
-    rows, _ = study.claims(
+    rows, _ = study_claims.claims(
         data, MEMBERS, 10, decoders=("head", "other"), untestable_decoders={"other": "why"}
     )
     v = verdicts(rows)
@@ -347,7 +357,7 @@ def test_untestable_decoders_marks_that_readings_rows_only():
 
 def test_each_participant_model_is_judged_and_named_in_the_ids():
     data = with_decoders_and_models()
-    rows, analyses = study.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, analyses = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
     v = verdicts(rows)
     # model a (the first, the headline) keeps the paper's ids; model b names itself, after the decoder
     assert v["study.h3"] == "yes" and v["study.h3@b"] == "no" and v["study.h1@b+cohort"] == "yes"
@@ -361,13 +371,13 @@ def test_each_participant_model_is_judged_and_named_in_the_ids():
     assert ("hindsight", 10, "head", "b") in analyses and ("hindsight", 10, "other", "b") in analyses
     assert ("hindsight", 10) in analyses and ("hindsight", 20, "other") in analyses
     assert "b no" in by_id(rows)["study.h3"].note  # a reading that flips it
-    assert study.claim_id("h3", 0, "hindsight", False, None, "one_step") == "study.h3@one_step"
-    assert study.claim_id("h1", 0, "hindsight", True, None, "one_step") == "study.h1@one_step+cohort"
+    assert study_claims.claim_id("h3", 0, "hindsight", False, None, "one_step") == "study.h3@one_step"
+    assert study_claims.claim_id("h1", 0, "hindsight", True, None, "one_step") == "study.h1@one_step+cohort"
     assert (
-        study.claim_id("h2", 0, "hindsight", False, "transfers_entropy", "one_step")
+        study_claims.claim_id("h2", 0, "hindsight", False, "transfers_entropy", "one_step")
         == "study.h2@transfers_entropy+one_step"
     )
-    done = study.completion(data["time"])
+    done = study_analysis.completion(data["time"])
     assert list(done.columns[:4]) == ["model", "decoder", "assistance", "condition"]
     assert len(done) == 2 * (2 + 2 * 2 + 2)  # per model: R, R+SA x 2, LA, LA+SA x 2 (head), LA, LA+SA (other)
 
@@ -378,11 +388,13 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
         (data["time"].model == "b") & (data["time"].condition == "R") & (data["time"].participant == 0),
         "completed",
     ] = False
-    rows, _ = study.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, _ = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
     prop = pd.DataFrame(
         {"decoder": ["head", "other"], "has_property": [True, False], "stay_share": [0.6, 0.1]}
     )
-    table = study.readings_table(prop, study.completion(data["time"]), rows, ["head", "other"], "hindsight")
+    table = study_claims.readings_table(
+        prop, study_analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
+    )
     assert list(zip(table.model, table.decoder, strict=True)) == [
         ("a", "head"),
         ("a", "other"),
@@ -422,9 +434,12 @@ def test_untestable_reason_needs_a_decoder_that_meets_the_rule():
         return frame
 
     # "leaves" has both halves at every goal and reaches every goal: testable
-    assert study.untestable_reason(table([[0.6] * 4, [0.5] * 4], [[0] * 4, [7] * 4], [True, True])) is None
+    assert (
+        study_claims.untestable_reason(table([[0.6] * 4, [0.5] * 4], [[0] * 4, [7] * 4], [True, True]))
+        is None
+    )
     # "stays" stays everywhere but never leaves; "leaves" leaves everywhere but stays at one goal only
-    why = study.untestable_reason(
+    why = study_claims.untestable_reason(
         table([[0.6] * 4, [0.5, 0.2, 0.1, 0.3]], [[0, 2, 0, 1], [30] * 4], [True, True])
     )
     assert why == (
@@ -444,7 +459,9 @@ def test_a_reading_without_an_interval_is_not_testable_never_undecided():
         float("nan"),
         "alignment LA+SA - R+SA, Dessert phases: scoop: +0.020",
     )
-    row = study._claim_row("study.h2@leaves", "h2", judged, {"n": 10}, "hindsight", "leaves", None, None)
+    row = study_claims._claim_row(
+        "study.h2@leaves", "h2", judged, {"n": 10}, "hindsight", "leaves", None, None
+    )
     assert (row.reproduced, row.settled) == ("not testable", False)
     assert row.measured.startswith("not testable (too few pairs for an interval)")
     assert "fewer than two participants" in row.note and "nan" not in row.note

@@ -22,7 +22,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import re
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
@@ -30,7 +29,9 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv, write_text
-from lasa.evidence.rules import NOT_TESTABLE, RULES, UNDECIDED, WORDS, word
+from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS, word
+from lasa.evidence.findings import finding, not_testable_why, stated_numbers
+from lasa.evidence.rules import RULES
 
 __all__ = [
     "Claim",
@@ -106,7 +107,7 @@ def criteria(claim: Claim) -> dict[str, str]:
     """The row's verdict word and its replication criteria (Open Science Collaboration, 2015).
 
     Returns:
-        ``reproduced``: the word (:func:`lasa.evidence.rules.word`); ``paper_in_ci``: per number
+        ``reproduced``: the word (:func:`lasa.evidence.decision.word`); ``paper_in_ci``: per number
         the paper states, ``yes``/``no`` (its value, give or take the rule's tolerance, inside our
         interval), joined by ``; ``, or ``n/a`` where it states none; ``direction``: ``yes`` if our
         effect's interval lies on the paper's side of no effect, ``no`` if not, ``n/a`` where the
@@ -201,7 +202,9 @@ class PaperClaim:
     id: str  # the headline row's id in claims.csv
     claim: str  # the claim, in the paper's words
     paper: str  # the paper's number
-    mechanism: str  # what makes our verdict, in a line
+    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
+    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
+    mechanism: str
     notebook: str  # the notebook (file stem) that measures it
     section: str  # its section that explains the mechanism
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
@@ -220,8 +223,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.time_ratio",
         "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
         "time ratio 1.45 and 1.30",
-        "near-optimal users reach sooner with the pull, largest far from the goal; "
-        "noisy ones gain no clear time",
+        "the pull is largest far from the goal",
         "04_fixed_expertise",
         "What it shows, against the paper",
     ),
@@ -229,7 +231,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.gap_narrows",
         "the gap between LA and LA+SA narrows as the user becomes more rational",
         "45% at beta = 75 -> 30% at beta = 1000",
-        "the time gap grows instead (noisy users gain no time, near-optimal ones do); the error gap narrows",
+        "",
         "04_fixed_expertise",
         "What it shows, against the paper",
     ),
@@ -269,7 +271,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "the straight-line map moves the grasp curve rigidly, so its shape is wrong by more with distance",
+        "the straight-line map moves the grasp curve rigidly",
         "07_new_goals",
         "What it shows, against the paper",
     ),
@@ -277,7 +279,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.grasp_linear",
         "the same, with our grasp-to-grasp context map (not the paper's)",
         "y = 0.11x, R^2 = 0.98",
-        "the grasp-to-grasp map is exact at every grasp, so the error does not grow",
+        "the grasp-to-grasp map is exact at every grasp",
         "07_new_goals",
         "What it shows, against the paper",
         ours=True,
@@ -294,7 +296,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h1",
         "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
         "F(1,18) = 29.9, p < .001",
-        "55% of the planning participants' LA+SA episodes are cut at the horizon: Goal Error is censored",
+        "",
         "11_eating_study",
         "What it shows, against the paper",
     ),
@@ -302,7 +304,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h2",
         "H2: latent actions let users execute their preferences (Dessert, scoop)",
         "LA+SA adjusts to scoop; R+SA stays stabbing",
-        "LA+SA tilts the fork further into the scoop than R+SA; 10 participants cannot tell, 40 can",
+        "",
         "11_eating_study",
         "What it shows, against the paper",
     ),
@@ -310,21 +312,11 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h3",
         "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
         "LA+SA fastest, p < .05 vs each",
-        "LA+SA finishes 45% of its episodes: the assistance holds planning participants at a bowl",
+        "",
         "11_eating_study",
         "What it shows, against the paper",
     ),
 )
-
-
-_WHY = re.compile(
-    re.escape(NOT_TESTABLE) + r" \(([^()]*)\)"
-)  # "not testable (<why>)", <why> without parentheses
-
-
-# every number a rule reads, as lasa.evidence.verdicts.assess states it in a row's note:
-# "<level>% intervals: <name> = <value> [<low>, <high>]; ...". "
-_NUMBERS = re.compile(r"(\w+) = (\S+ \[[^\]]*\])(?=[;.] )")
 
 
 def _num(text: object) -> str:
@@ -347,13 +339,13 @@ def _cell(row: pd.Series | None) -> str:
     if row is None:
         return "—"
     if row.reproduced == NOT_TESTABLE:
-        found = _WHY.search(str(row.measured)) or _WHY.search(str(row.note))
-        return f"not testable, N = {row.n_users}" + (f" ({found.group(1)})" if found else "")
+        why = not_testable_why(row)
+        return f"not testable, N = {row.n_users}" + (f" ({why})" if why else "")
     low, high = _num(row.ci_low), _num(row.ci_high)
     paper_numbers = str(row.get("paper_numbers", ""))
     rule = RULES.get(str(row.id).split("@", 1)[0])
     stated = {p.quantity for p in rule.paper} if rule is not None else set()
-    others = [f"{name} {text}" for name, text in _NUMBERS.findall(str(row.note)) if name not in stated]
+    others = [f"{name} {text}" for name, text in stated_numbers(row.note) if name not in stated]
     numbers = "; ".join(n for n in (paper_numbers, *others) if n)
     detail = f": {numbers}" if numbers else (f" [{low}, {high}]" if low and high else "")
     head = f"**{row.reproduced}**" if row.reproduced != UNDECIDED else UNDECIDED
@@ -398,8 +390,10 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
         Markdown: a count line of the headline words; then per claim its paper number, per
         robot the word with the numbers it rests on (each number the paper states with its
         own word), the users per point N and the direction criterion, the readings whose
-        word differs, and the mechanism with a link to the notebook that measures it. Rows
-        that are our additions, not the paper's claims, follow in a table of their own.
+        word differs, and what makes the verdict: the result sentences written from the rows'
+        numbers (:func:`lasa.evidence.findings.finding`), then the mechanism, with a link to the
+        notebook that measures it. Rows that are our additions, not the paper's claims, follow
+        in a table of their own.
     """
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
@@ -413,7 +407,8 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
             continue
         anchor = pc.section.lower().replace(",", "").replace(" ", "-")
         target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
-        mech = f"{pc.mechanism} ([{pc.notebook[:2]}]({target}#{anchor}))"
+        said = "; ".join(s for s in (finding(pc.id, rows, ROBOTS), pc.mechanism) if s)
+        mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
         line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {_flips(rows, pc.id)} | {mech} |"
         (ours if pc.ours else paper).append(line)
     out = [count_line(table), "", *paper]

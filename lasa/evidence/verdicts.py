@@ -8,7 +8,7 @@ rather than a draw:
    rows of a user together, so the pairing of methods on the same user survives),
    recomputes every number the rule reads, and takes percentile intervals.
 2. *Settled or undecided.* A verdict is **settled** when every number's interval lies on
-   one side of each of its rule's thresholds (:meth:`lasa.evidence.rules.Rule.settled`); then it
+   one side of each of its rule's thresholds (:meth:`lasa.evidence.decision.Rule.settled`); then it
    reads the rule's verdict. Otherwise it reads ``undecided``, with its interval, and the
    note says which interval straddles which threshold and what the point estimates read.
 3. *Users where the verdict is close* (:func:`sequential`). The users per point follow a
@@ -40,7 +40,8 @@ import pandas as pd
 from lasa.base.config import NO_ASSISTANCE  # defined once, in the base; re-exported here
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
-from lasa.evidence.rules import UNDECIDED, rule
+from lasa.evidence.decision import UNDECIDED
+from lasa.evidence.rules import rule
 
 __all__ = [
     "ALPHA",

@@ -59,8 +59,8 @@ from lasa.base.config import (
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, criteria
+from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
-from lasa.evidence.rules import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.figures import sim1, sim2, sim3
 from lasa.figures.common import as_decoders, check_members

@@ -1,0 +1,245 @@
+"""What a decision rule is, and the words its verdicts read.
+
+A claim's verdict (``yes``, ``partly`` or ``no``) is a rule applied to a few numbers
+measured on simulated users: a time ratio, a success rate, a slope. Each number is a
+:class:`Quantity` that names the thresholds the rule compares it with, so the rule is
+piecewise constant between them. That is what lets :mod:`lasa.evidence.verdicts` decide whether a
+verdict is *settled*: when every number's interval lies on one side of each of its
+thresholds, the rule gives the same verdict everywhere in the box of intervals (checked
+by :meth:`Rule.settled`, which evaluates the rule at a point in every cell of that box).
+Otherwise the verdict reads ``undecided``. A claim whose yes/partly/no rests on significance
+tests (the study's) also has :attr:`Rule.tests`, the verdict from the tests' numbers; its
+quantities then only settle it.
+
+The claims table words a reading (:func:`word`, :data:`WORDS`) against the numbers the paper
+states (:class:`PaperNumber`) and the sign it gives an effect (:class:`Direction`). The
+paper's rules themselves are :mod:`lasa.evidence.rules`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from collections.abc import Callable, Mapping
+
+from lasa.base.errors import ConfigError
+
+__all__ = [
+    "Quantity",
+    "Rule",
+    "VERDICTS",
+    "UNDECIDED",
+    "NOT_TESTABLE",
+    "REPRODUCED",
+    "PARTLY",
+    "NOT_REPRODUCED",
+    "WORDS",
+    "PaperNumber",
+    "Direction",
+    "word",
+]
+
+VERDICTS = ("yes", "partly", "no")  # what a rule can decide
+UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a threshold
+# what a claim reads when its test cannot be run on the data: the claim's precondition fails
+# (e.g. the episodes it compares were cut at the horizon, too few pairs); never settled, the
+# reason in its note
+NOT_TESTABLE = "not testable"
+
+# The verdict words of the claims table, the one vocabulary a reader sees (:func:`word`):
+REPRODUCED = "reproduced"  # the rule reads yes, settled
+PARTLY = "partly"  # the rule reads partly, settled
+# the rule reads no, settled; or a number the paper states lies outside our interval
+# (give or take the rule's tolerance), whatever the rule reads
+NOT_REPRODUCED = "not reproduced"
+WORDS = (REPRODUCED, PARTLY, NOT_REPRODUCED, UNDECIDED, NOT_TESTABLE)
+_SETTLED_WORD = {"yes": REPRODUCED, "partly": PARTLY, "no": NOT_REPRODUCED}
+
+
+@dataclasses.dataclass(frozen=True)
+class Quantity:
+    """One number a verdict rests on, and the thresholds its rule compares it with."""
+
+    name: str  # key in ``Claim.values``
+    thresholds: tuple[float, ...]  # every value at which the rule's verdict can change
+    meaning: str  # what the number is, in words
+
+
+@dataclasses.dataclass(frozen=True)
+class PaperNumber:
+    """A number the paper states, the quantity that measures it, and the rule's tolerance.
+
+    The replication criterion "the paper's value lies inside our interval" (Open Science
+    Collaboration, 2015), with the rule's tolerance: the paper's value is *in* our interval
+    when the band ``value +- tolerance`` meets it. ``tolerance`` is the one the rule applies
+    around this number (0.15 for the time ratios), and 0 where the rule states none: a rule
+    that accepts a range (a slope in (0, 0.25]) states no tolerance around the paper's value.
+    """
+
+    quantity: str  # the rule's quantity that measures it
+    value: float  # the paper's number
+    tolerance: float  # the rule's tolerance around it; 0 where the rule states none
+    where: str  # where the paper states it, e.g. "beta = 75"
+
+    def inside(self, interval: tuple[float, float]) -> str:
+        """``yes`` if ``value +- tolerance`` meets the interval, ``no`` if not, ``n/a`` if unknown."""
+        low, high = interval
+        if not (math.isfinite(low) and math.isfinite(high)):
+            return "n/a"
+        return "yes" if low <= self.value + self.tolerance and high >= self.value - self.tolerance else "no"
+
+    def word(self, interval: tuple[float, float]) -> str:
+        """This number's verdict: the interval inside the band, outside it, or across its edge."""
+        low, high = interval
+        if self.inside(interval) == "n/a":
+            return NOT_TESTABLE
+        if self.inside(interval) == "no":
+            return NOT_REPRODUCED
+        inner = self.value - self.tolerance <= low and high <= self.value + self.tolerance
+        return REPRODUCED if inner else UNDECIDED
+
+    def describe(self, interval: tuple[float, float], measured: float) -> str:
+        """``1.45 ± 0.15 (beta = 75): not reproduced, 0.961 [0.844, 1.1]``."""
+        tol = f" ± {self.tolerance:g}" if self.tolerance else ""
+        low, high = interval
+        return (
+            f"{self.value:g}{tol} ({self.where}): {self.word(interval)}, "
+            f"{measured:.3g} [{low:.3g}, {high:.3g}]"
+        )
+
+
+@dataclasses.dataclass(frozen=True)
+class Direction:
+    """The sign the paper gives an effect, for the criterion "same direction, interval clear of null"."""
+
+    quantity: str  # the rule's quantity that carries the effect
+    sign: int  # +1: the paper's effect is above ``null``; -1: below
+    null: float = 0.0  # no effect (1 for a ratio, one half for a share of conditions)
+
+    def __post_init__(self) -> None:
+        if self.sign not in (-1, 1):
+            raise ConfigError(f"{self.quantity}: a direction's sign is +1 or -1, got {self.sign!r}")
+
+    def judge(self, interval: tuple[float, float]) -> str:
+        """``yes`` if the interval lies on the paper's side of ``null``; ``n/a`` if unknown; else ``no``."""
+        low, high = interval
+        if not (math.isfinite(low) and math.isfinite(high)):
+            return "n/a"
+        clear = low > self.null if self.sign > 0 else high < self.null
+        return "yes" if clear else "no"
+
+
+@dataclasses.dataclass(frozen=True)
+class Rule:
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds."""
+
+    id: str  # the claim id, "<figure>.<name>"
+    text: str  # the rule in words, as the claims table states it
+    quantities: tuple[Quantity, ...]  # the first is the headline number (``Claim.value``)
+    decide: Callable[[Mapping[str, float]], str]  # values -> "yes" | "partly" | "no"
+    paper: tuple[PaperNumber, ...] = ()  # the numbers the paper states, each with its quantity
+    direction: Direction | None = None  # the paper's sign of the effect, None if it states none
+    # a claim whose yes/partly/no rests on significance tests (the study's): the tests' numbers
+    # (effects, p-values) -> "yes" | "partly" | "no"; its quantities then only settle it
+    tests: Callable[[Mapping[str, float]], str] | None = None
+
+    def verdict(self, values: Mapping[str, float]) -> str:
+        """The rule's verdict at these values.
+
+        Raises:
+            ConfigError: if a quantity is missing, or the rule returns something else.
+        """
+        missing = [q.name for q in self.quantities if q.name not in values]
+        if missing:
+            raise ConfigError(f"{self.id}: the rule needs {missing}, got {sorted(values)}")
+        out = self.decide(values)
+        if out not in VERDICTS:
+            raise ConfigError(f"{self.id}: the rule returned {out!r}, not one of {VERDICTS}")
+        return out
+
+    def tested(self, results: Mapping[str, float]) -> str:
+        """The verdict of the claim's significance tests at ``results`` (:attr:`tests`).
+
+        Raises:
+            ConfigError: if the rule has no tests, or they return something else.
+        """
+        if self.tests is None:
+            raise ConfigError(f"{self.id}: the rule rests on no tests; its verdict is Rule.verdict")
+        out = self.tests(results)
+        if out not in VERDICTS:
+            raise ConfigError(f"{self.id}: the tests returned {out!r}, not one of {VERDICTS}")
+        return out
+
+    def verdicts_in(self, intervals: Mapping[str, tuple[float, float]]) -> set[str]:
+        """Every verdict the rule gives inside the box of ``intervals`` (name -> (low, high)).
+
+        The rule only compares each number with its thresholds, so one point per cell
+        between consecutive thresholds (and the thresholds themselves) covers the box.
+        """
+        axes = []
+        for q in self.quantities:
+            low, high = intervals[q.name]
+            if not (math.isfinite(low) and math.isfinite(high)):
+                return set(VERDICTS)  # an unknown interval decides nothing
+            inner = sorted(t for t in q.thresholds if low <= t <= high)
+            cuts = [low, *inner, high]
+            points = set(cuts) | {(a + b) / 2 for a, b in itertools.pairwise(cuts)}
+            axes.append(sorted(points))
+        names = [q.name for q in self.quantities]
+        return {self.verdict(dict(zip(names, p, strict=True))) for p in itertools.product(*axes)}
+
+    def settled(self, intervals: Mapping[str, tuple[float, float]]) -> bool:
+        """Whether every point of the box of ``intervals`` gives the same verdict."""
+        return len(self.verdicts_in(intervals)) == 1
+
+    def __post_init__(self) -> None:
+        names = {q.name for q in self.quantities}
+        extra = [p.quantity for p in self.paper if p.quantity not in names]
+        if self.direction is not None and self.direction.quantity not in names:
+            extra.append(self.direction.quantity)
+        if extra:
+            raise ConfigError(
+                f"{self.id}: paper numbers or direction name {extra}, not quantities {sorted(names)}"
+            )
+
+    def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
+        """``name [low, high] reaches t`` for each threshold inside (or at the end of) an interval."""
+        out = []
+        for q in self.quantities:
+            low, high = intervals[q.name]
+            inner = [t for t in q.thresholds if low <= t <= high and low < high]
+            if inner:
+                ts = ", ".join(f"{t:g}" for t in inner)
+                out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {ts}")
+        return out
+
+
+def word(
+    reading: str, intervals: Mapping[str, tuple[float, float]], paper: tuple[PaperNumber, ...] = ()
+) -> str:
+    """The claims table's verdict word (:data:`WORDS`): the strongest thing that is settled.
+
+    Args:
+        reading: What the rule reads at the intervals: ``yes``, ``partly`` or ``no`` when
+            settled, else ``undecided``; or ``not testable``.
+        intervals: Quantity name -> interval (the row's own level).
+        paper: The numbers the paper states (the rule's :attr:`Rule.paper`).
+
+    Returns:
+        ``not testable`` as it is; ``not reproduced`` if a number the paper states lies
+        outside its interval (give or take the rule's tolerance: :meth:`PaperNumber.inside`),
+        whatever the rule reads; else the settled reading's word, or ``undecided``.
+
+    Raises:
+        ConfigError: if ``reading`` is not a rule's verdict, ``undecided`` or ``not testable``.
+    """
+    if reading not in (*VERDICTS, UNDECIDED, NOT_TESTABLE):
+        raise ConfigError(
+            f"cannot word the reading {reading!r}: not one of {(*VERDICTS, UNDECIDED, NOT_TESTABLE)}"
+        )
+    if reading == NOT_TESTABLE:
+        return NOT_TESTABLE
+    if any(p.inside(intervals.get(p.quantity, (math.nan, math.nan))) == "no" for p in paper):
+        return NOT_REPRODUCED
+    return _SETTLED_WORD.get(reading, UNDECIDED)

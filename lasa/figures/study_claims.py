@@ -1,0 +1,401 @@
+r"""The eating study's claims H1-H3 (notebook 11): one row per reading, each with its verdict.
+
+**The claims and their rules.** They follow the paper's own tests and significance
+level (p < .05), in the direction the paper reports; they were written after pilot runs
+of 4 and 10 participants had been seen (the study was new). One reading was added after
+the paper-scale run had been seen: ``study.h1_mean_distance``, because that run showed the
+summed Goal Error tracking the time taken; it is reported beside the paper's measure, not
+instead of it, and no rule was changed. Each is judged for the first 10 participants and for
+the whole cohort, under each member.
+
+- **H1** (``study.h1``), SA lowers Goal Error: *yes* if the within-subjects SA main
+  effect (2x2 repeated-measures ANOVA, F(1, N-1)) is significant with lower error under SA
+  and both pairwise comparisons (LA+SA < LA, R+SA < R; paired t-tests, Holm over the two)
+  are significant too; *partly* if the main effect is but not both comparisons; *no*
+  otherwise. ``study.h1_mean_distance`` applies the same rule to the mean distance (Goal
+  Error divided by the task's time): a sum over the task also grows with the time taken, so
+  a slower condition accrues more of it at the same distance. ``study.h1_paper_test``
+  applies the same direction-and-significance rule to the paper's reading of F(1,18): a
+  between-subjects one-way ANOVA on the 2N participant means with and without SA (which
+  ignores that they come from the same people).
+- **H2** (``study.h2``), LA lets users execute their preferences: in Dessert's scoop phase,
+  the one where the preference changes, Preference Alignment is higher with LA+SA than
+  with R+SA (paired t-test over the participants who reached that phase under both):
+  *yes* if significant, *partly* if higher but not significant, *no* otherwise (also when
+  fewer than two participants reached it under both).
+- **H3** (``study.h3``), LA+SA is the most efficient: an episode not finished within the
+  horizon has its time cut there (censored), so H3 is *not testable* when any of the four
+  conditions finishes fewer than 95% of its episodes (among the participants analysed; the
+  row names each such condition and its completion). Otherwise each participant's
+  restricted time, ``min(T, horizon)`` summed over the two tasks, of LA+SA minus each other
+  condition, Total and Idle Time, with a paired bootstrap over participants (10,000
+  resamples, percentile 95% intervals, seeded): *yes* if all six intervals lie below 0,
+  *partly* if LA+SA has the lowest restricted mean Total Time but not all six do, *no*
+  otherwise; settled when the interval of LA+SA minus the fastest other condition's Total
+  Time excludes 0. This test replaced paired t-tests on the capped times after the previous
+  version's results were seen, because they were censored (``AFTER_RESULTS``).
+
+The yes / partly / no of each is its rule's (:mod:`lasa.evidence.rules`, ``Rule.tests``) on the
+numbers of :mod:`lasa.figures.study_tests`, which also guards H1 and H3 with the completion bar.
+
+**Not testable.** ``claims(untestable=...)`` marks every row ``not testable`` with the reason in
+its note (e.g. no decoder has both halves of the property, :func:`untestable_reason`), and
+``untestable_decoders`` does so per decoder reading; ``measured`` still shows the tests' numbers.
+
+Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
+optimisation, 10 participants, the headline decoder, the headline participant model), and
+``study.<claim>@<reading>`` each other (:func:`claim_id`: measure, decoder, participant model,
+member, cohort, joined by ``+``, e.g. ``study.h2@transfers_entropy+one_step``); every other
+decoder reading is judged on H1-H3 under the paper's measures and hindsight optimisation, and
+every other participant model as the headline one.
+A verdict is settled when the 95% interval of its effect (H1, H2: the t-interval; H3: the
+bootstrap's) excludes zero, else ``undecided``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+
+import pandas as pd
+
+from lasa.base.conditions import CONDITIONS
+from lasa.base.config import NO_ASSISTANCE
+from lasa.evidence import latent_property
+from lasa.evidence.claims import Claim
+from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED
+from lasa.evidence.rules import rule
+from lasa.figures.study import PAPER_N
+from lasa.figures.study_tests import COMPLETION_BAR, Judged, analyse, judge
+from lasa.people.design import interface_of
+
+__all__ = [
+    "CLAIM_TEXT",
+    "DECODER_KEYS",
+    "claims",
+    "claim_id",
+    "readings_table",
+    "untestable_reason",
+]
+
+
+CLAIM_TEXT = {
+    "h1": (
+        "H1: users with SA maintain their goals more accurately (Goal Error)",
+        "F(1,18) = 29.9, p < .001; LA+SA < LA p < .001; R+SA < R p < .05",
+    ),
+    "h1_mean_distance": (
+        "H1 with Goal Error read as the mean distance to the closest goal (the sum over the task / its time)",
+        "F(1,18) = 29.9, p < .001 (for the summed distance)",
+    ),
+    "h1_paper_test": (
+        "H1 under the paper's F(1,18) reading (participant means as independent groups)",
+        "F(1,18) = 29.9, p < .001",
+    ),
+    "h2": (
+        "H2: LA lets users execute their preferences (Dessert scoop alignment, LA+SA vs R+SA)",
+        "R+SA stays in a stabbing orientation; LA+SA adjusts to scoop",
+    ),
+    "h3": (
+        "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
+        "LA+SA fastest, Total and Idle Time, p < .05 vs each",
+    ),
+}
+
+
+# readings of each claim key: the claim it belongs to, and the reading's name (None: the paper's)
+_KEYS = {
+    "h1": ("h1", None),
+    "h1_mean_distance": ("h1", "mean_distance"),
+    "h1_paper_test": ("h1", "paper_test"),
+    "h2": ("h2", None),
+    "h3": ("h3", None),
+}
+
+
+def claim_id(
+    key: str,
+    member_index: int,
+    member: str,
+    cohort: bool,
+    decoder: str | None = None,
+    model: str | None = None,
+) -> str:
+    """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
+
+    The paper's reading is its measure, the headline decoder, the headline participant model,
+    the headline member (hindsight, index 0) and its 10 participants; every other reading
+    names what differs, joined by ``+`` in that order: ``study.h1@mean_distance+grasp_set+cohort``,
+    ``study.h3@home_entropy``, ``study.h3@one_step``, ``study.h2@transfers_entropy+one_step+cohort``
+    (``decoder``: a decoder reading other than the headline; ``model``: a participant model
+    other than the headline).
+    """
+    base, measure = _KEYS[key]
+    reading = (measure, decoder, model, None if member_index == 0 else member, "cohort" if cohort else None)
+    parts = [p for p in reading if p]
+    return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
+
+
+DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder reading (the paper's measures)
+
+
+def claims(
+    frames: dict[str, pd.DataFrame],
+    members: tuple[str, ...],
+    n_total: int,
+    decoders: tuple[str, ...] = (),
+    *,
+    models: tuple[str, ...] = (),
+    horizon: float = math.inf,
+    untestable: str | None = None,
+    untestable_decoders: Mapping[str, str] | None = None,
+    n_resamples: int = 10_000,
+) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+    """The claims rows under every reading (measure, member, decoder, participant model, 10 or the cohort).
+
+    Args:
+        frames: :func:`lasa.figures.study.run`'s tables.
+        members: The SA members, the headline first.
+        n_total: The cohort's size (its first :data:`lasa.figures.study.PAPER_N` are the paper's study).
+        decoders: The decoder readings in the frames' ``decoder`` column, the headline first
+            (empty: the frames hold one reading). The headline decoder is judged under every
+            measure and member; each other one under the paper's measures
+            (:data:`DECODER_KEYS`) and the headline member.
+        models: The participant models in the frames' ``model`` column, the headline first
+            (default: that column's, in order of appearance; none: one model). Each is judged
+            as the headline is, its ids naming it (:func:`claim_id`).
+        horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
+        untestable: If given, why the study cannot test its hypotheses at all (e.g. no
+            decoder has both halves of the property): every row reads ``not testable`` with
+            this reason in its note; ``measured`` keeps the numbers.
+        untestable_decoders: Decoder reading -> why its rows are not testable, the same way.
+        n_resamples: The paired bootstrap's resamples (H3).
+
+    Returns:
+        The rows, and the analyses keyed ``(member, n)`` for the headline decoder and model,
+        ``(member, n, decoder)`` for another decoder under the headline model, and
+        ``(member, n, decoder, model)`` under every other model (``decoder`` None when the
+        frames hold one reading).
+
+    A verdict is settled when its effect's 95% interval lies on one side of zero: then it is the
+    tests' verdict (the rules of this module's docstring), else ``undecided`` (never ``not testable``).
+    """
+    if not models and "model" in frames["time"].columns:
+        models = tuple(dict.fromkeys(frames["time"].model))
+    head = decoders[0] if decoders else None
+    analyses: dict[tuple, dict[str, object]] = {}
+    rows: list[Claim] = []
+    for k, model in enumerate(models or (None,)):
+        for m_i, member, decoder, n, cohort in _readings(members, decoders, n_total):
+            if not _ran(frames["time"], model, decoder):
+                continue
+            other = decoder if decoder != head else None
+            reason = untestable or (untestable_decoders or {}).get(str(decoder))
+            key = (member, n, decoder, model) if k else (member, n, other) if other else (member, n)
+            analyses[key] = result = analyse(frames, member, n, decoder, model, horizon, n_resamples)
+            for name, judged in judge(result).items():
+                if other is None or name in DECODER_KEYS:
+                    cid = claim_id(name, m_i, member, cohort, other, model if k else None)
+                    rows.append(_claim_row(cid, name, judged, result, member, decoder, model, reason))
+    return _with_flips(rows), analyses
+
+
+def _readings(
+    members: tuple[str, ...], decoders: tuple[str, ...], n_total: int
+) -> list[tuple[int, str, str | None, int, bool]]:
+    """(member index, member, decoder, participants, cohort) of each reading a participant model is judged in.
+
+    Every member under the headline decoder, then every other decoder under the headline member;
+    each for the first :data:`lasa.figures.study.PAPER_N` participants and, if larger, the cohort.
+    """
+    head = decoders[0] if decoders else None
+    runs = [(m_i, member, head) for m_i, member in enumerate(members)]
+    runs += [(0, members[0], d) for d in decoders[1:]]
+    sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
+    return [(m_i, member, decoder, n, cohort) for m_i, member, decoder in runs for n, cohort in sizes]
+
+
+def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
+    """Whether the time table holds LA episodes of this participant model and decoder reading."""
+    rows = time
+    if model is not None and "model" in time.columns:
+        rows = rows[rows.model == model]
+    if decoder is not None and "decoder" in time.columns:
+        rows = rows[rows.decoder == decoder]
+    return len(rows) > 0
+
+
+def _claim_row(
+    cid: str,
+    key: str,
+    judged: Judged,
+    result: Mapping[str, object],
+    member: str,
+    decoder: str | None,
+    model: str | None,
+    reason: str | None,
+) -> Claim:
+    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason."""
+    verdict, value, low, high, measured = judged
+    r = rule(cid)
+    if verdict != NOT_TESTABLE and not (math.isfinite(low) and math.isfinite(high)):
+        verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (too few pairs for an interval); {measured}"
+    testable = verdict != NOT_TESTABLE and reason is None
+    settled = testable and r.settled({"effect": (low, high)})
+    n = int(result["n"])  # type: ignore[call-overload]
+    if verdict == NOT_TESTABLE and "too few pairs" in measured:
+        why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
+        why += "reached the compared phase under both conditions"
+    elif verdict == NOT_TESTABLE:
+        why = measured.split(";", 1)[0] + ": every condition must finish "
+        why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its times are compared"
+    else:
+        why = f"95% interval of the effect [{low:.3g}, {high:.3g}]" + (
+            "" if settled else f", which straddles 0; the tests read {verdict!r}"
+        )
+    note = (
+        (f"{NOT_TESTABLE} ({reason}). " if reason else "")
+        + f"{n} simulated participants; SA = {member}; "
+        + (f"decoder = {decoder}; " if decoder else "")
+        + (f"participant model = {model}; " if model else "")
+        + f"{why}. Rule: {r.text}."
+    )
+    claim, paper = CLAIM_TEXT[key]
+    return Claim(
+        id=cid,
+        claim=claim,
+        figure="study",
+        paper=paper,
+        measured=measured,
+        reproduced=verdict if settled else NOT_TESTABLE if not testable else UNDECIDED,
+        note=note,
+        robot="panda",
+        assistance=member,
+        value=float(value),
+        ci_low=float(low),
+        ci_high=float(high),
+        settled=settled,
+        n_users=n,
+        values={"effect": float(value)},
+        intervals={"effect": (float(low), float(high))},
+    )
+
+
+def _with_flips(rows: list[Claim]) -> list[Claim]:
+    """Each headline row's note led by the readings whose verdict differs from it."""
+    heads = {c.id for c in rows if "@" not in c.id}
+    out = []
+    for c in rows:
+        if c.id in heads:
+            flips = [
+                f"{o.id.split('@')[1]} {o.reproduced}"
+                for o in rows
+                if o.id.startswith(c.id + "@") and o.reproduced != c.reproduced
+            ]
+            lead = (
+                f"Readings with another verdict: {', '.join(flips)}. "
+                if flips
+                else "Every reading gives the same verdict. "
+            )
+            c = dataclasses.replace(c, note=lead + c.note)
+        out.append(c)
+    return out
+
+
+def untestable_reason(prop: pd.DataFrame) -> str | None:
+    """Why the study cannot test H1-H3, or None: does a decoder meet the property's rule?
+
+    Args:
+        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
+
+    Returns:
+        None if some decoder has both halves of the property at every goal and reaches every
+        goal from home (:func:`lasa.evidence.latent_property.holds`); else a reason naming the
+        best reading (:func:`lasa.evidence.latent_property.choose`) and its numbers: the goals
+        with both halves and with the stay half, whether every goal is reached from home, its
+        least share staying and the fewest inputs that leave a goal for another (LA+SA).
+    """
+    if latent_property.holds(prop).any():
+        return None
+    best = latent_property.choose(prop)
+    mine = prop[prop.decoder == best]
+    both, stay = int(mine.has_property.sum()), int(mine.stay_holds.sum())
+    reached = "every" if mine.all_reached.all() else "not every"
+    return (
+        f"no decoder with both halves of the property; best reading {best}: both halves at {both} of "
+        f"{len(mine)} goals, the stay half at {stay}, {reached} goal reached from home, least share staying "
+        f"{mine.stay_share.min():.2f}, fewest inputs leaving a goal for another {mine.leave_min.min():.0f} "
+        f"of {int(mine.n_inputs.max())}"
+    )
+
+
+def readings_table(
+    prop: pd.DataFrame,
+    done: pd.DataFrame,
+    rows: list[Claim],
+    decoders: list[str],
+    member: str,
+    models: tuple[str, ...] = (),
+) -> pd.DataFrame:
+    """One row per participant model and decoder reading, the headlines first: property, completion, verdicts.
+
+    Args:
+        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
+        done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
+        rows: The study's claims rows (:func:`claims`).
+        decoders: The decoder readings, the headline first.
+        member: The headline SA member (the assisted conditions' completion is under it).
+        models: The participant models, the headline first; default: ``done``'s ``model``
+            column in order of appearance (none: one model, and no ``model`` column).
+
+    Columns: ``model`` (with models), ``decoder``, ``headline`` (the headline decoder),
+    ``goals with the property``, ``least share staying``, ``R finished``, ``R+SA finished``,
+    ``LA finished``, ``LA+SA finished`` (that model's; Retargeting's do not depend on the
+    decoder), and H1-H3's verdicts for 10 participants / the cohort (``-`` where the study
+    had no cohort).
+    """
+    if not models and "model" in done.columns:
+        models = tuple(dict.fromkeys(done.model))
+    verdict = {c.id: c.reproduced for c in rows}
+    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
+    finished = done.set_index(keys).finished
+    out = []
+    for k, model in enumerate(models or (None,)):
+        lead = () if model is None else (model,)
+        for d in decoders:
+            if not _ran(done, model, d):
+                continue
+            other = None if d == decoders[0] else d
+            mine = prop[prop.decoder == d]
+            arms = {
+                c: (NO_ASSISTANCE if interface_of(c) == "R" else d, member if "+" in c else NO_ASSISTANCE)
+                for c in CONDITIONS
+            }
+            out.append(
+                {
+                    **({} if model is None else {"model": model}),
+                    "decoder": d,
+                    "headline": other is None,
+                    "goals with the property": int(mine.has_property.sum()),
+                    "least share staying": mine.stay_share.min(),
+                    **{f"{c} finished": finished.get((*lead, *arms[c], c)) for c in CONDITIONS},
+                    **_verdict_cells(verdict, member, other, model if k else None),
+                }
+            )
+    return pd.DataFrame(out)
+
+
+def _verdict_cells(
+    verdict: Mapping[str, str], member: str, decoder: str | None, model: str | None
+) -> dict[str, str]:
+    """H1-H3's verdicts of one reading (:func:`claim_id`'s ``decoder`` and ``model``), ``10 / all``.
+
+    ``-`` where the study had no such row (no cohort beyond the first 10).
+    """
+    return {
+        f"{h.upper()} (10 / all)": " / ".join(
+            verdict.get(claim_id(h, 0, member, cohort, decoder, model), "-") for cohort in (False, True)
+        )
+        for h in DECODER_KEYS
+    }

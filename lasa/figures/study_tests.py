@@ -1,0 +1,246 @@
+"""The tests the study's claims rest on, and each claim's verdict from them.
+
+:func:`analyse` runs every test for one reading (SA member, decoder reading, participant model,
+first ``n`` participants): H1's ANOVAs and pairwise t-tests on Goal Error and on the mean
+distance, H2's paired t-tests of Preference Alignment per Dessert phase, and H3's restricted
+mean times with their paired bootstrap. :func:`judge` hands each claim's numbers to its rule
+(:attr:`lasa.evidence.decision.Rule.tests` of :mod:`lasa.evidence.rules`, where the yes / partly
+/ no is decided) and writes what was measured; H1 and H3 are not testable when a condition
+finishes fewer than :data:`COMPLETION_BAR` of its episodes (their measures are censored at the
+horizon). The statistics are :mod:`lasa.evidence.stats`'s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+from scipy import stats as sps
+
+from lasa.base.conditions import CONDITIONS
+from lasa.evidence import stats
+from lasa.evidence.decision import NOT_TESTABLE
+from lasa.evidence.rules import rule
+from lasa.figures.study import for_member
+
+__all__ = ["COMPLETION_BAR", "Judged", "analyse", "judge"]
+
+COMPLETION_BAR = 0.95  # H1 and H3 are judged only if every condition finishes this share of its episodes [-]
+# a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
+Judged = tuple[str, float, float, float, str]
+
+
+def analyse(
+    frames: dict[str, pd.DataFrame],
+    member: str,
+    n: int | None = None,
+    decoder: str | None = None,
+    model: str | None = None,
+    horizon: float = math.inf,
+    n_resamples: int = 10_000,
+) -> dict[str, object]:
+    """Every test the claims rest on, for one SA reading, decoder reading, participant model and first ``n``.
+
+    ``horizon`` [s] is where an unfinished episode's time was cut (H3's restricted times);
+    ``n_resamples`` the paired bootstrap's resamples for H3.
+    """
+    err = for_member(frames["goal_error"], member, n, decoder, model)
+    time = for_member(frames["time"], member, n, decoder, model)
+    align = for_member(frames["alignment"], member, n, decoder, model)
+    out: dict[str, object] = {
+        "n": int(err.participant.nunique()),
+        "h1_within": stats.sa_effect_within(err, "goal_error"),
+        "h1_between": stats.sa_effect_between(err, "goal_error"),
+        "h1_rm": stats.rm_anova(err, "goal_error"),
+        "h1_pairs": stats.pairwise(err, "goal_error", pairs=[("LA+SA", "LA"), ("R+SA", "R")]),
+        "h1_mean_within": stats.sa_effect_within(err, "mean_distance"),
+        "h1_mean_pairs": stats.pairwise(err, "mean_distance", pairs=[("LA+SA", "LA"), ("R+SA", "R")]),
+    }
+    scoop = align[(align.task == "Dessert")]
+    wide = scoop.pivot_table(index="participant", columns=["phase", "condition"], values="alignment")
+    missing = pd.Series(np.nan, index=wide.index)
+    out["h2_phases"] = {
+        phase: _paired(wide.get((phase, "LA+SA"), missing), wide.get((phase, "R+SA"), missing))
+        for phase in ("stab", "scoop", "dip")
+    }
+    out.update(_h3(time, horizon, n_resamples))
+    return out
+
+
+def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
+    """H3's numbers: completion per condition, restricted means, and LA+SA's bootstrap contrasts.
+
+    ``h3_short`` names each condition that finishes fewer than :data:`COMPLETION_BAR` of its
+    episodes (``"LA 0%, LA+SA 0%"``; empty if none): then H3 is not testable. ``h3_total`` and
+    ``h3_idle`` are :func:`lasa.evidence.stats.rmst_contrasts` (LA+SA minus each other
+    condition), ``means`` the restricted means per participant over both tasks, and
+    ``h3_gap`` the contrast with the fastest other condition (by restricted mean Total Time).
+    """
+    done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
+    short = done[~(done >= COMPLETION_BAR)]  # an arm without episodes (NaN) is short too
+    contrasts = {
+        m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples)
+        for m in ("total_time", "idle_time")
+    }
+    means = pd.DataFrame(
+        {m: stats.restricted_times(time, m, horizon).mean() for m in ("total_time", "idle_time")}
+    )
+    best = str(means.total_time.drop("LA+SA").idxmin())
+    gap = contrasts["total_time"].set_index("b").loc[best]
+    return {
+        "h3_completion": done,
+        "h3_short": ", ".join(f"{c} {100 * v:.3g}%" for c, v in short.fillna(0.0).items()),
+        "h3_total": contrasts["total_time"],
+        "h3_idle": contrasts["idle_time"],
+        "means": means,
+        "h3_gap": (best, float(gap["diff"]), float(gap.ci_low), float(gap.ci_high)),
+        "horizon": horizon,
+    }
+
+
+def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int]:
+    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used.
+
+    Participants without a value under either condition (a phase never reached) are left
+    out; with fewer than two pairs left, everything but the count is NaN.
+    """
+    keep = a.notna() & b.notna()
+    a, b = a[keep], b[keep]
+    if len(a) < 2:
+        return np.nan, np.nan, np.nan, np.nan, int(len(a))
+    res = sps.ttest_rel(a, b)
+    ci = res.confidence_interval()
+    return float((a - b).mean()), float(ci.low), float(ci.high), float(res.pvalue), int(len(a))
+
+
+def judge(result: Mapping[str, object]) -> dict[str, Judged]:
+    """(the tests' verdict, value, 95% ci_low, ci_high, measured) per claim key.
+
+    The verdict is the claim's rule applied to its tests' numbers (:func:`lasa.evidence.rules.rule`,
+    its ``tested``). The value is the effect the verdict rests on, and its interval is the
+    t-interval of the same test (paired over participants, or two-sample for the paper's F(1,18)
+    reading); for H3 the percentile interval of the paired bootstrap (:func:`_h3_verdict`).
+    """
+    out = {
+        "h1": _h1(result, "", "m s", 1.0),
+        "h1_mean_distance": _h1(result, "_mean", "cm", 100.0),
+        "h1_paper_test": _h1_paper_test(result),
+        "h2": _h2(result),
+        "h3": _h3_verdict(result),
+    }
+    return _censored_goal_error(out, str(result["h3_short"]))
+
+
+def _h1(result: Mapping[str, object], suffix: str, unit: str, scale: float) -> Judged:
+    """H1 on Goal Error (``suffix`` empty) or the mean distance (``_mean``): main effect and pairs.
+
+    ``unit`` and ``scale`` are how ``measured`` writes the differences (``cm``, 100 for the mean distance).
+    """
+    within, pairs = result[f"h1{suffix}_within"], result[f"h1{suffix}_pairs"]
+    assert isinstance(within, dict) and isinstance(pairs, pd.DataFrame)
+    diff = within["mean_sa"] - within["mean_no_sa"]
+    tests = {"effect": diff, "p": within["p"]}
+    for r in pairs.itertuples():
+        tests |= {f"effect {r.a} - {r.b}": r.diff, f"p {r.a} - {r.b}": r.p_corr}
+    pair_text = "; ".join(
+        f"{r.a} - {r.b} = {scale * r.diff:+.2f} {unit} (p_holm = {r.p_corr:.3g})" for r in pairs.itertuples()
+    )
+    return (
+        rule("study.h1").tested(tests),
+        diff,
+        within["ci_low"],
+        within["ci_high"],
+        f"SA - no SA = {scale * diff:+.2f} {unit}; {stats.format_f(within)} (within); {pair_text}",
+    )
+
+
+def _h1_paper_test(result: Mapping[str, object]) -> Judged:
+    """H1 under the paper's F(1,18) reading: the between-subjects main effect, no pairwise comparisons."""
+    between = result["h1_between"]
+    assert isinstance(between, dict)
+    b_diff = between["mean_sa"] - between["mean_no_sa"]
+    return (
+        rule("study.h1@paper_test").tested({"effect": b_diff, "p": between["p"]}),
+        b_diff,
+        between["ci_low"],
+        between["ci_high"],
+        f"SA - no SA = {b_diff:+.2f} m s; {stats.format_f(between)} (between, the paper's df)",
+    )
+
+
+def _h2(result: Mapping[str, object]) -> Judged:
+    """H2: scoop-phase alignment LA+SA - R+SA; ``measured`` lists every Dessert phase."""
+    phases = result["h2_phases"]
+    assert isinstance(phases, dict)
+    mean, low, high, p, _ = phases["scoop"]
+    text = "; ".join(
+        f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" if np.isfinite(pp) else f"{ph}: no test ({k} pairs)"
+        for ph, (m, _, _, pp, k) in phases.items()
+    )
+    verdict = rule("study.h2").tested({"effect": mean, "p": p})
+    return verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}"
+
+
+def _censored_goal_error(out: dict[str, Judged], short: str) -> dict[str, Judged]:
+    """H1's readings are not testable when a condition finishes too few episodes (``short``).
+
+    Goal Error is summed over the task's steps (and the mean distance is that sum over the
+    task's time): an episode cut at the horizon has its sum cut there too, a censored measure
+    like its time, so H1 takes H3's completion guard. H2 compares the alignment within the
+    scoop phase among the participants who reached it under both conditions, with its pairs
+    counted, and keeps its verdict.
+    """
+    if not short:
+        return out
+    for key in ("h1", "h1_mean_distance", "h1_paper_test"):
+        measured = out[key][4]
+        out[key] = (
+            NOT_TESTABLE,
+            math.nan,
+            math.nan,
+            math.nan,
+            f"{NOT_TESTABLE} (completion: {short}); {measured}",
+        )
+    return out
+
+
+def _h3_verdict(result: Mapping[str, object]) -> Judged:
+    """H3's verdict, the LA+SA gap to the fastest other condition, its bootstrap interval, measured.
+
+    Not testable (the value and interval NaN) when a condition finishes fewer than
+    :data:`COMPLETION_BAR` of its episodes; else the rule's tests on every restricted-mean
+    contrast of LA+SA (Total and Idle Time, against R, R+SA and LA) and the restricted mean
+    Total Times: yes if every contrast's 95% interval lies below 0, partly if LA+SA has the
+    lowest restricted mean Total Time, no otherwise.
+    """
+    total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
+    short, done, horizon = result["h3_short"], result["h3_completion"], result["horizon"]
+    assert isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame)
+    assert isinstance(means, pd.DataFrame) and isinstance(gap, tuple) and isinstance(done, pd.Series)
+    assert isinstance(horizon, float | int)
+    to = "uncut" if math.isinf(horizon) else f"restricted to the {horizon:g} s horizon"
+    times = ", ".join(
+        f"{c} {means.total_time[c]:.0f} s (idle {means.idle_time[c]:.0f} s)" for c in CONDITIONS
+    )
+    finished = ", ".join(f"{c} {100 * v:.3g}%" for c, v in done.fillna(0.0).items())
+    tail = f"mean total (idle) time over both tasks, {to}: {times}; completion: {finished}"
+    if short:
+        return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
+    tests = {
+        f"high {m} {r.a} - {r.b}": r.ci_high
+        for m, contrasts in (("total_time", total), ("idle_time", idle))
+        for r in contrasts.itertuples()
+    }
+    tests |= {f"mean {c}": means.total_time[c] for c in means.index}
+    verdict = rule("study.h3").tested(tests)
+    best, g_mean, g_low, g_high = gap
+    return (
+        verdict,
+        float(g_mean),
+        float(g_low),
+        float(g_high),
+        f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s [{g_low:+.1f}, {g_high:+.1f}] (restricted "
+        f"means, paired bootstrap); {tail}",
+    )
