@@ -356,7 +356,7 @@ def test_study_outputs(executed):
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
-    members = study.Config().members
+    members = study.Config().session.members
     models = study.Config().participant_models  # the headline first
     n = settings["n_participants"]
     assert (executed / "build" / "models" / "eating_decoder_panda.pt").is_file()

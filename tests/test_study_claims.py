@@ -112,10 +112,16 @@ def test_a_phase_nobody_reached_is_not_evidence():
 
 
 def test_config_errors():
+    from lasa.base.config import from_dict
     from lasa.base.errors import ConfigError
 
     with pytest.raises(ConfigError, match="assistance"):
-        study.Config(members=("magic",))
+        from_dict(study.Config, {"session": {"members": ["magic"]}})
+    with pytest.raises(ConfigError, match=r"^study settings: session\.participant\.beta_median must be "):
+        from_dict(study.Config, {"session": {"participant": {"beta_median": "20"}}}, where="study")
+    nested = from_dict(study.Config, {"session": {"horizon": 30, "participant": {"beta_median": 30}}})
+    assert (nested.session.horizon, nested.session.participant.beta_median) == (30, 30)
+    assert nested.session.members == study.Config().session.members == ("hindsight", "grasp_set")
     with pytest.raises(ConfigError, match="video_participant"):
         study.Config(n_participants=4, video_participant=4)
 

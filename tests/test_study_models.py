@@ -8,6 +8,7 @@ from stand_ins import LinearDecoder
 from lasa.base.errors import ConfigError
 from lasa.figures import study, study_analysis, study_claims, study_plots
 from lasa.people import participants
+from lasa.people.design import StudyConfig
 from lasa.world.eating import make_eating_task
 
 matplotlib.use("Agg")
@@ -43,7 +44,9 @@ def test_the_registry_and_the_config_validate_participant_models(twin):
 def test_run_simulates_each_model_and_labels_its_rows(twin):
     task = make_eating_task()
     config = study.Config(
-        n_participants=2, horizon=20, members=("hindsight",), participant_models=("one_step", "twin")
+        n_participants=2,
+        session=StudyConfig(horizon=20, members=("hindsight",)),
+        participant_models=("one_step", "twin"),
     )
     decoders = {"head": LinearDecoder(0), "other": LinearDecoder(1)}
     episodes, frames = study.run(task, decoders, task.robot.control, config, progress=False)
@@ -60,7 +63,7 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
         time[time.model == m].drop(columns="model").reset_index(drop=True) for m in ("one_step", "twin")
     )
     pd.testing.assert_frame_equal(one, two)  # the same simulate, seed and cohort: the same episodes
-    rows, analyses = study_claims.claims(frames, config.members, 2, ("head", "other"), horizon=2.0)
+    rows, analyses = study_claims.claims(frames, config.session.members, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3", "study.h3@twin", "study.h2@other+twin", "study.h1@mean_distance+twin"} <= ids
     # 20 steps of 0.1 s: nobody finishes, so H3 is not testable under each model
@@ -73,8 +76,7 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
     task = make_eating_task()
     config = study.Config(
         n_participants=2,
-        horizon=20,
-        members=("hindsight",),
+        session=StudyConfig(horizon=20, members=("hindsight",)),
         participant_models=("one_step", "twin"),
         readings_per_model={"twin": 1},
     )
@@ -83,7 +85,7 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
     assert twin == [("R", "LA")] and list(episodes["twin"]) == ["head"]
     time = frames["time"]
     assert set(time[time.model == "twin"].decoder) == {"head", "none"}
-    rows, _ = study_claims.claims(frames, config.members, 2, ("head", "other"), horizon=2.0)
+    rows, _ = study_claims.claims(frames, config.session.members, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3@twin", "study.h2@other"} <= ids and not any("other+twin" in i for i in ids)
     with pytest.raises(ConfigError, match="readings_per_model"):

@@ -284,14 +284,20 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
 
 
 def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
-    """A nested record: ``default`` with ``values`` changed; its errors name ``name.setting``."""
-    known = {f.name for f in dataclasses.fields(default)}
-    unknown = sorted(set(values) - known)
+    """A nested record: ``default`` with ``values`` changed, a record inside it the same way; its
+    errors name the setting's whole path (``session.participant.beta_median``)."""
+    known = {f.name: getattr(default, f.name) for f in dataclasses.fields(default)}
+    unknown = sorted(set(values) - set(known))
     if unknown:
         raise ConfigError(f"unknown setting(s) {[f'{name}.{u}' for u in unknown]}; known: {sorted(known)}")
+    changes = {}
+    for key, value in values.items():
+        if isinstance(value, Mapping) and dataclasses.is_dataclass(known[key]):
+            changes[key] = _nested(f"{name}.{key}", known[key], value)
+        else:
+            changes[key] = tuple(value) if isinstance(value, list) else value
     try:
-        lists = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
-        return dataclasses.replace(default, **lists)
+        return dataclasses.replace(default, **changes)
     except ConfigError as exc:
         raise ConfigError(f"{name}.{exc}") from None
 

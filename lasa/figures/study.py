@@ -34,20 +34,19 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import (
-    ASSISTANCE,
     NO_ASSISTANCE,
     AtLeastTwo,
     ControlConfig,
-    Integer,
+    NonNegativeInt,
     PositiveInt,
+    Seed,
     check_choice,
-    from_dict,
     validate,
 )
 from lasa.base.errors import ConfigError
 from lasa.method.decoder import ActionDecoder
 from lasa.people import participants, planning
-from lasa.people.cohort import ParticipantConfig, draw_cohort
+from lasa.people.cohort import draw_cohort
 from lasa.people.design import Episodes, StudyConfig, interface_of
 from lasa.people.measures import measures
 from lasa.world.eating import EatingTask
@@ -74,11 +73,12 @@ class Config:
     """The simulated study (notebook 11); the participants' parameters are ``participant``."""
 
     n_participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
-    members: tuple[str, ...] = ("hindsight", "grasp_set")  # SA readings; the first is the headline [-]
-    horizon: PositiveInt = 1500  # steps allowed per task (150 s) [-]
-    seed: Integer = 0  # seed of the cohort and of the participants' choices [-]
-    video_participant: int = 0  # whose Dessert the video shows [-]
-    participant: dict[str, float] = dataclasses.field(default_factory=dict)  # ParticipantConfig overrides
+    # how a session runs (horizon, waypoint tolerances, stick grid) and the participants' parameters
+    # (session.participant); the SA readings, the first the headline: hindsight, as in the paper's
+    # study, and grasp_set [-]
+    session: StudyConfig = StudyConfig(members=("hindsight", "grasp_set"))
+    seed: Seed = 0  # seed of the cohort and of the participants' choices [-]
+    video_participant: NonNegativeInt = 0  # whose Dessert the video shows [-]
     # participant models (PARTICIPANT_MODELS); the first is the headline [-]
     participant_models: tuple[str, ...] = ("planning", "one_step")
     # decoder readings a model runs, the headline and the next ones in notebook 10's ranking (a
@@ -87,10 +87,7 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        object.__setattr__(self, "members", tuple(self.members))
         object.__setattr__(self, "participant_models", tuple(self.participant_models))
-        for name in self.members:
-            check_choice("assistance", name, ASSISTANCE)
         models = self.participant_models
         if not models or len(set(models)) != len(models):
             raise ConfigError(f"participant_models must be non-empty and without repeats, got {models}")
@@ -102,14 +99,6 @@ class Config:
             raise ConfigError(
                 f"video_participant must be in [0, {self.n_participants}), got {self.video_participant}"
             )
-
-    def study(self) -> StudyConfig:
-        """The session settings for :func:`lasa.people.participants.simulate`."""
-        return StudyConfig(
-            horizon=self.horizon,
-            members=self.members,
-            participant=from_dict(ParticipantConfig, self.participant),
-        )
 
 
 def run(
@@ -134,7 +123,7 @@ def run(
     """
     if not decoders:
         raise ConfigError("run needs at least one decoder (the headline first)")
-    cohort = draw_cohort(config.n_participants, config.study().participant, config.seed)
+    cohort = draw_cohort(config.n_participants, config.session.participant, config.seed)
     episodes: dict[str, dict[str, Episodes]] = {}
     parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
     for model in config.participant_models:
@@ -142,9 +131,8 @@ def run(
         episodes[model] = {}
         limit = config.readings_per_model.get(model, len(decoders))
         for i, (name, decoder) in enumerate(list(decoders.items())[:limit]):
-            settings = (
-                config.study() if i == 0 else dataclasses.replace(config.study(), members=config.members[:1])
-            )
+            headline_only = dataclasses.replace(config.session, members=config.session.members[:1])
+            settings = config.session if i == 0 else headline_only
             episodes[model][name] = simulate(
                 task,
                 decoder,

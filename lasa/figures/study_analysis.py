@@ -141,7 +141,7 @@ def stuck(
     """
     if episodes.belief is None or episodes.waypoint is None:
         raise ConfigError("stuck needs simulated episodes (with beliefs and waypoints logged)")
-    settings = config.study()
+    settings = config.session
     pc = settings.participant
     la = np.char.startswith(episodes.condition.astype(str), "LA") & ~episodes.completed
     idx = np.flatnonzero(la)
