@@ -26,6 +26,7 @@ any participant runs (:func:`train_readings`).
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import mujoco
@@ -48,7 +49,7 @@ from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_measure, latent_property
 from lasa.figures import entropy_ablation
-from lasa.method.dataset import save_demonstrations
+from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig, train_decoder
 from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
@@ -201,58 +202,20 @@ def train_readings(
     and ``eating_reading_decoder``), and the headline's as ``eating_decoder``, the one
     the study's LA conditions and the teleop kit load first.
     """
-    robot = task.robot.name
-    sets = task.belief_targets(control.likelihood)
     train = config.train
-    sweep_config = entropy_ablation.Config(
-        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed
-    )
-    bases, datasets, demo_rows = {}, {}, []
-    for reading in config.readings:
-        demos = collect_eating_demonstrations(task, control, config.demos, reading=reading)
-        save_demonstrations(demos, paths.artifact("eating_reading_demos", robot, reading=reading))
-        clean = demos.clean()
-        demo_rows.append(
-            {
-                "reading": reading,
-                "demonstrations": int(clean.demo.max() + 1),
-                "steps": len(clean),
-                "minutes": len(clean) * control.dt / 60,
-                "tuples": len(demos),
-            }
-        )
-        datasets[reading] = demos
+    datasets, demo_rows = _demonstrations(task, control, config, paths)
+    bases: dict[str, LatentActionModel] = {}
     trained: dict[str, TrainConfig] = {}
     for base, (reading, settings) in _bases(config, train).items():
         bases[base], _ = train_decoder(datasets[reading], control, settings, progress=progress)
         datasets[base], trained[base] = datasets[reading], settings
+    sweep_config = entropy_ablation.Config(
+        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed
+    )
     sweep = entropy_ablation.run_sweep(
         bases["continuous"], train, datasets["continuous"], task, control, sweep_config, progress=progress
     )
-    lam = sweep.chosen
-    models: dict[str, LatentActionModel] = {}
-    fines: dict[str, TrainConfig] = {}
-    runs = fine_tunes(config, lam)
-    for name, reading, weight in tqdm(runs, desc="decoder readings", disable=not progress):
-        weight = lam if weight is None else weight
-        if reading == "continuous" and weight in sweep.models:
-            models[name], fine = sweep.models[weight], sweep.configs[weight]
-        else:
-            fine = dataclasses.replace(
-                trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=train.seed
-            )
-            models[name], _ = train_decoder(
-                datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=False
-            )
-        fines[name] = fine
-        save_checkpoint(
-            models[name],
-            paths.artifact("eating_reading_decoder", robot, reading=name),
-            train=to_dict(fine),
-            control=to_dict(control),
-            demos=to_dict(config.demos),
-            reading=name,
-        )
+    models, fines = _fine_tune(task, control, config, paths, sweep, bases, trained, datasets, progress)
     frame = pd.concat(
         [
             latent_measure.measure(
@@ -263,15 +226,83 @@ def train_readings(
         ignore_index=True,
     )
     headline = latent_property.choose(latent_property.summary(frame))
+    path = paths.artifact("eating_decoder", task.robot.name)
+    _save(models[headline], path, fines[headline], control, config, reading=headline)
+    return Readings(models, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
+
+
+def _demonstrations(
+    task: EatingTask, control: ControlConfig, config: Config, paths: Paths
+) -> tuple[dict[str, Demonstrations], list[dict[str, object]]]:
+    """Each demonstration reading's tuples (saved), and a row of its sizes."""
+    datasets, rows = {}, []
+    for reading in config.readings:
+        demos = collect_eating_demonstrations(task, control, config.demos, reading=reading)
+        save_demonstrations(demos, paths.artifact("eating_reading_demos", task.robot.name, reading=reading))
+        clean = demos.clean()
+        rows.append(
+            {
+                "reading": reading,
+                "demonstrations": int(clean.demo.max() + 1),
+                "steps": len(clean),
+                "minutes": len(clean) * control.dt / 60,
+                "tuples": len(demos),
+            }
+        )
+        datasets[reading] = demos
+    return datasets, rows
+
+
+def _fine_tune(
+    task: EatingTask,
+    control: ControlConfig,
+    config: Config,
+    paths: Paths,
+    sweep: entropy_ablation.Sweep,
+    bases: dict[str, LatentActionModel],
+    trained: dict[str, TrainConfig],
+    datasets: dict[str, Demonstrations],
+    progress: bool,
+) -> tuple[dict[str, LatentActionModel], dict[str, TrainConfig]]:
+    """Every reading's decoder (:func:`fine_tunes`; the sweep's own where it trained it), saved."""
+    sets = task.belief_targets(control.likelihood)
+    lam = sweep.chosen
+    models: dict[str, LatentActionModel] = {}
+    fines: dict[str, TrainConfig] = {}
+    for name, reading, weight in tqdm(fine_tunes(config, lam), desc="decoder readings", disable=not progress):
+        weight = lam if weight is None else weight
+        if reading == "continuous" and weight in sweep.models:
+            models[name], fine = sweep.models[weight], sweep.configs[weight]
+        else:
+            fine = dataclasses.replace(
+                trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=config.train.seed
+            )
+            models[name], _ = train_decoder(
+                datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=False
+            )
+        fines[name] = fine
+        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=name)
+        _save(models[name], path, fine, control, config, reading=name)
+    return models, fines
+
+
+def _save(
+    model: LatentActionModel,
+    path: Path,
+    fine: TrainConfig,
+    control: ControlConfig,
+    config: Config,
+    reading: str,
+) -> None:
+    """A reading's decoder, saved with the settings that made it and its reading's name."""
     save_checkpoint(
-        models[headline],
-        paths.artifact("eating_decoder", robot),
-        train=to_dict(fines[headline]),
+        model,
+        path,
+        train=to_dict(fine),
         control=to_dict(control),
         demos=to_dict(config.demos),
-        reading=headline,
+        reading=reading,
     )
-    return Readings(models, sweep.table, float(lam), pd.DataFrame(demo_rows), frame, headline)
 
 
 def directions(

@@ -204,12 +204,13 @@ def train_decoder(
             "collect more demonstrations or lower batch_size"
         )
     model = _initial_model(demos, control, config, init)
-    s_all = torch.as_tensor(demos.states[train_mask], dtype=torch.float32)
-    a_all = torch.as_tensor(demos.actions[train_mask], dtype=torch.float32)
-    b_all = torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32)
-    roles = torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None
+    data = (
+        torch.as_tensor(demos.states[train_mask], dtype=torch.float32),
+        torch.as_tensor(demos.actions[train_mask], dtype=torch.float32),
+        torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32),
+        torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None,
+    )
     val = (demos.states[val_mask], demos.actions[val_mask], demos.beliefs[val_mask])
-    scale = control.action_scale
 
     # fused: one kernel per parameter for the whole update (the same AdamW, about 3x faster
     # than the per-tensor loop torch uses on CPU by default; float rounding aside)
@@ -220,19 +221,7 @@ def train_decoder(
     bar = tqdm(range(1, config.steps + 1), desc=f"train {demos.robot}", disable=not progress)
     running = 0.0
     for step in bar:
-        idx = torch.randint(len(s_all), (config.batch_size,), generator=gen)
-        s, a, b = s_all[idx], a_all[idx], b_all[idx]
-        z = model.encode(s, a, b)
-        sector = (
-            config.sector_weight * sector_loss(z, roles[idx], config.sector_share)
-            if roles is not None
-            else 0.0
-        )
-        z = (z + config.z_noise * torch.randn(z.shape, generator=gen)).clamp(-1.0, 1.0)
-        a_hat = model.decode(z, s, b)
-        loss = (((a_hat - a) / scale) ** 2).sum(-1).mean() + sector
-        if extra_loss is not None:
-            loss = loss + extra_loss(model, s, b)
+        loss = _batch_loss(model, data, gen, config, control.action_scale, extra_loss)
         optim.zero_grad(set_to_none=True)
         loss.backward()
         optim.step()
@@ -240,18 +229,55 @@ def train_decoder(
         running += loss.item()
         if step % config.log_every == 0 or step == config.steps:
             n = config.log_every if step % config.log_every == 0 else step % config.log_every
-            model.eval()
-            val_err = reconstruction_error(model, *val) if len(val[0]) else float("nan")
-            model.train()
-            log.append(
-                {
-                    "step": step,
-                    "train_loss": running / n,
-                    "val_error": val_err,
-                    "seconds": time.perf_counter() - start,
-                }
-            )
-            bar.set_postfix(loss=f"{running / n:.4f}", val=f"{val_err:.4f}")
+            log.append(_logged(model, val, step, running / n, start))
+            bar.set_postfix(loss=f"{running / n:.4f}", val=f"{log[-1]['val_error']:.4f}")
             running = 0.0
     model.eval()
     return model, pd.DataFrame(log)
+
+
+def _batch_loss(
+    model: LatentActionModel,
+    data: tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor | None],
+    gen: torch.Generator,
+    config: TrainConfig,
+    scale: float,
+    extra_loss: ExtraLoss | None,
+) -> torch.Tensor:
+    """One batch's loss: reconstruction (in sigma_h units), the sector loss and any extra term.
+
+    ``data`` holds the training states, actions, beliefs and sector roles (None: no sector
+    loss); the batch and the noise on z are drawn from ``gen``, in that order.
+    """
+    s_all, a_all, b_all, roles = data
+    idx = torch.randint(len(s_all), (config.batch_size,), generator=gen)
+    s, a, b = s_all[idx], a_all[idx], b_all[idx]
+    z = model.encode(s, a, b)
+    sector = (
+        config.sector_weight * sector_loss(z, roles[idx], config.sector_share) if roles is not None else 0.0
+    )
+    z = (z + config.z_noise * torch.randn(z.shape, generator=gen)).clamp(-1.0, 1.0)
+    a_hat = model.decode(z, s, b)
+    loss = (((a_hat - a) / scale) ** 2).sum(-1).mean() + sector
+    if extra_loss is not None:
+        loss = loss + extra_loss(model, s, b)
+    return loss
+
+
+def _logged(
+    model: LatentActionModel,
+    val: tuple[np.ndarray, np.ndarray, np.ndarray],
+    step: int,
+    train_loss: float,
+    start: float,
+) -> dict[str, float]:
+    """A row of the training log: the mean training loss since the last row, the held-out error."""
+    model.eval()
+    val_err = reconstruction_error(model, *val) if len(val[0]) else float("nan")
+    model.train()
+    return {
+        "step": step,
+        "train_loss": train_loss,
+        "val_error": val_err,
+        "seconds": time.perf_counter() - start,
+    }

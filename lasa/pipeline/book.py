@@ -131,6 +131,29 @@ def build_book(
     if not (mathjax / "tex-chtml.js").is_file():
         raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
     src = out / "src"
+    _write_sources(src, books, figures, mathjax, pd.read_csv(claims_csv, dtype=str, keep_default_na=False))
+    return _jupyter_book(src, out, progress)
+
+
+_CONFIG = """title: lasa
+author: the lasa developers
+only_build_toc_files: true
+execute:
+  execute_notebooks: 'off'
+launch_buttons:
+  thebe: false
+sphinx:
+  config:
+    mathjax_path: ../mathjax/tex-chtml.js
+    html_extra_path: ['_extra']
+    nb_ipywidgets_js: {}
+    html_show_sourcelink: false
+"""  # Jupyter Book's _config.yml: nothing executed, MathJax served from the site, no CDN widgets
+
+
+def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, claims: pd.DataFrame) -> None:
+    """The book's sources in ``src``: the notebooks (retitled per robot), figures, MathJax, the
+    front page and the claims page, the table of contents and the configuration."""
     shutil.rmtree(src, ignore_errors=True)
     (src / "notebooks").mkdir(parents=True)
     for book in books:
@@ -140,35 +163,17 @@ def build_book(
             retitle(src / "notebooks" / book.name, robot)
     shutil.copytree(figures, src / "figures", ignore=shutil.ignore_patterns("*.csv", "*.md"))
     shutil.copytree(mathjax, src / "_extra" / "mathjax")
-    pages = {b.stem for b in books}
-    claims = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
-    index = front_page(claims, pages).replace("](", "](notebooks/")
+    index = front_page(claims, {b.stem for b in books}).replace("](", "](notebooks/")
     write_text(src / "index.md", index)
     write_text(src / "claims.md", claims_page(claims))
     toc = ["format: jb-book", "root: index", "chapters:"] + [f"- file: notebooks/{b.stem}" for b in books]
     toc.append("- file: claims")
     write_text(src / "_toc.yml", "\n".join(toc) + "\n")
-    write_text(
-        src / "_config.yml",
-        "\n".join(
-            [
-                "title: lasa",
-                "author: the lasa developers",
-                "only_build_toc_files: true",
-                "execute:",
-                "  execute_notebooks: 'off'",
-                "launch_buttons:",
-                "  thebe: false",
-                "sphinx:",
-                "  config:",
-                "    mathjax_path: ../mathjax/tex-chtml.js",
-                "    html_extra_path: ['_extra']",
-                "    nb_ipywidgets_js: {}",
-                "    html_show_sourcelink: false",
-                "",
-            ]
-        ),
-    )
+    write_text(src / "_config.yml", _CONFIG)
+
+
+def _jupyter_book(src: Path, out: Path, progress: bool) -> Path:
+    """Build the site from ``src`` with Jupyter Book into ``out/html``; returns its front page."""
     build = out / "_build"
     shutil.rmtree(build, ignore_errors=True)
     command = [
