@@ -9,12 +9,15 @@ every row of that (figure, robot) and leaves the others. Rows are unique by (id,
 (``point``: Eq. M2 towards one pose per goal). Each claim has a headline row, ``<figure>.<name>``,
 measured under the default reading, and one row per member of the family,
 ``<figure>.<name>@<member>`` (:mod:`lasa.evidence.verdicts`). ``ci_low`` and ``ci_high`` bound the
-number the verdict rests on (a bootstrap 95% interval over users), and ``seeds_agree``
-says on how many independent draws of users the verdict comes out the same.
-``reproduced`` is ``yes``, ``partly`` or ``no`` (``undecided`` when an interval straddles a
-threshold, ``not testable`` when the claim's test cannot run on the data, never settled, with the
-reason as ``not testable (<why>)`` in ``measured`` or ``note``); a claim that does not reproduce
-is a result, reported with its measured value and the most likely reason in ``note``.
+number the verdict rests on (a 95% interval over users or participants: a bootstrap, or for the
+study's H1 and H2 a paired t interval), and ``n_users`` says how many users or participants it rests on. A
+:class:`Claim` holds its rule's reading, ``yes``, ``partly`` or ``no`` (``undecided`` when an
+interval straddles a threshold; ``not testable`` when the claim's test cannot run on the data,
+with the reason in ``measured`` or ``note``); the table's ``reproduced`` column holds the word
+for it (:data:`lasa.evidence.decision.WORDS`), ``not reproduced`` also where the interval
+excludes a number the paper states (``paper_in_ci``), and ``settled`` whether the interval
+decides it. A claim that does not reproduce is a result, reported with its measured value and
+the most likely reason in ``note``.
 """
 
 from __future__ import annotations
