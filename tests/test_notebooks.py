@@ -380,7 +380,8 @@ def test_study_outputs(executed):
         assert sorted(frame.participant.unique()) == list(range(n))
         assert (fig / f"{spec.NAME}.png").stat().st_size > 10_000
     time = pd.read_csv(fig / "study_time.csv")
-    assert (time.total_time <= settings["horizon"] * 0.1 + 1e-9).all() and (time.idle_time >= 0).all()
+    horizon_s = settings["session"]["horizon"] * 0.1
+    assert (time.total_time <= horizon_s + 1e-9).all() and (time.idle_time >= 0).all()
     assert (time[time.condition.str.startswith("LA")].mode_switches == 0).all()
     error = pd.read_csv(fig / "study_goal_error.csv")
     assert (error.goal_error > 0).all()

@@ -25,6 +25,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.decision import Direction, PaperNumber, Quantity, Rule
 
 __all__ = [
+    "COMPLETION_BAR",
     "RULES",
     "AFTER_RESULTS",
     "rule",
@@ -32,6 +33,7 @@ __all__ = [
 ]
 
 _SIGNIFICANCE = 0.05  # the paper's significance level, the study's tests' [-]
+COMPLETION_BAR = 0.95  # H1 and H3 are judged only if every condition finishes this share of its episodes [-]
 
 
 def _q(name: str, thresholds: tuple[float, ...], meaning: str) -> Quantity:
@@ -240,7 +242,8 @@ RULES: dict[str, Rule] = {
             "study.h1",
             "the SA main effect on Goal Error (SA - no SA) must be below 0 with p < .05; yes if both "
             "pairwise comparisons are significant too, partly if not; not testable unless every condition "
-            "finishes at least 95% of its episodes (Goal Error is summed over the task's time)",
+            f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes (Goal Error is summed over the "
+            "task's time)",
             (_q("effect", (0.0,), "SA - no SA, the within-subjects main effect"),),
             _effect_below_zero,
             direction=Direction("effect", -1),
@@ -256,7 +259,8 @@ RULES: dict[str, Rule] = {
         ),
         Rule(
             "study.h3",
-            "not testable if any condition finishes fewer than 95% of its episodes; else restricted mean "
+            f"not testable if any condition finishes fewer than {100 * COMPLETION_BAR:.0f}% of its episodes; "
+            "else restricted mean "
             "times to the horizon (min(T, horizon) summed over both tasks), LA+SA minus each other "
             "condition, paired bootstrap 95% intervals over participants: yes if all six (Total and "
             "Idle Time) lie below 0, partly if LA+SA has the lowest restricted mean Total Time, else no",
@@ -288,7 +292,7 @@ AFTER_RESULTS: dict[str, str] = {
     "version's results were seen, because they were censored (no LA or LA+SA episode of the headline "
     "decoder finished within the 150 s horizon): from paired t-tests on times capped at the horizon to "
     "restricted mean times with a paired bootstrap, behind a guard (not testable unless every condition "
-    "finishes at least 95% of its episodes)",
+    f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes)",
 }
 
 

@@ -15,8 +15,8 @@ import pandas as pd
 from scipy import stats as sps
 
 from lasa.base.errors import ConfigError
+from lasa.evidence.rules import COMPLETION_BAR
 from lasa.figures.study import Config
-from lasa.figures.study_tests import COMPLETION_BAR
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people.design import TASK_NAMES, Episodes
@@ -71,7 +71,7 @@ def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
     order of preference. A model stands in for people only if it can do what the paper's
     people did with the interface that does not depend on the decoder: the first model whose
     Retargeting episodes (R, and R+SA under every member) each finish at least
-    :data:`lasa.figures.study_tests.COMPLETION_BAR` of the time is the headline; if none does,
+    :data:`lasa.evidence.rules.COMPLETION_BAR` of the time is the headline; if none does,
     the first of ``models``.
 
     Args:

@@ -65,9 +65,9 @@ from lasa.base.config import NO_ASSISTANCE
 from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED
-from lasa.evidence.rules import rule
+from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import PAPER_N
-from lasa.figures.study_tests import COMPLETION_BAR, Judged, analyse, judge
+from lasa.figures.study_tests import Judged, analyse, judge
 from lasa.people.design import interface_of
 
 __all__ = [

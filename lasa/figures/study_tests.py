@@ -6,8 +6,8 @@ distance, H2's paired t-tests of Preference Alignment per Dessert phase, and H3'
 mean times with their paired bootstrap. :func:`judge` hands each claim's numbers to its rule
 (:attr:`lasa.evidence.decision.Rule.tests` of :mod:`lasa.evidence.rules`, where the yes / partly
 / no is decided) and writes what was measured; H1 and H3 are not testable when a condition
-finishes fewer than :data:`COMPLETION_BAR` of its episodes (their measures are censored at the
-horizon). The statistics are :mod:`lasa.evidence.stats`'s.
+finishes fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes (their measures are
+censored at the horizon). The statistics are :mod:`lasa.evidence.stats`'s.
 """
 
 from __future__ import annotations
@@ -22,12 +22,11 @@ from scipy import stats as sps
 from lasa.base.conditions import CONDITIONS
 from lasa.evidence import stats
 from lasa.evidence.decision import NOT_TESTABLE
-from lasa.evidence.rules import rule
+from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import for_member
 
-__all__ = ["COMPLETION_BAR", "Judged", "analyse", "judge"]
+__all__ = ["Judged", "analyse", "judge"]
 
-COMPLETION_BAR = 0.95  # H1 and H3 are judged only if every condition finishes this share of its episodes [-]
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
 
@@ -72,11 +71,12 @@ def analyse(
 def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
     """H3's numbers: completion per condition, restricted means, and LA+SA's bootstrap contrasts.
 
-    ``h3_short`` names each condition that finishes fewer than :data:`COMPLETION_BAR` of its
-    episodes (``"LA 0%, LA+SA 0%"``; empty if none): then H3 is not testable. ``h3_total`` and
-    ``h3_idle`` are :func:`lasa.evidence.stats.rmst_contrasts` (LA+SA minus each other
-    condition), ``means`` the restricted means per participant over both tasks, and
-    ``h3_gap`` the contrast with the fastest other condition (by restricted mean Total Time).
+    ``h3_short`` names each condition that finishes fewer than
+    :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes (``"LA 0%, LA+SA 0%"``; empty if
+    none): then H3 is not testable. ``h3_total`` and ``h3_idle`` are
+    :func:`lasa.evidence.stats.rmst_contrasts` (LA+SA minus each other condition), ``means`` the
+    restricted means per participant over both tasks, and ``h3_gap`` the contrast with the
+    fastest other condition (by restricted mean Total Time).
     """
     done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
     short = done[~(done >= COMPLETION_BAR)]  # an arm without episodes (NaN) is short too
@@ -210,7 +210,7 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
     """H3's verdict, the LA+SA gap to the fastest other condition, its bootstrap interval, measured.
 
     Not testable (the value and interval NaN) when a condition finishes fewer than
-    :data:`COMPLETION_BAR` of its episodes; else the rule's tests on every restricted-mean
+    :data:`lasa.evidence.rules.COMPLETION_BAR` of its episodes; else the rule's tests on every restricted-mean
     contrast of LA+SA (Total and Idle Time, against R, R+SA and LA) and the restricted mean
     Total Times: yes if every contrast's 95% interval lies below 0, partly if LA+SA has the
     lowest restricted mean Total Time, no otherwise.
