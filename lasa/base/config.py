@@ -271,31 +271,33 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
     kwargs: dict[str, Any] = {}
     try:
         for name, value in values.items():
-            default = fields[name].default
-            if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
-                kwargs[name] = _nested(name, default, value)  # a nested record: its own fields
-            elif isinstance(value, list) and "tuple" in str(fields[name].type):
-                kwargs[name] = tuple(value)
-            else:
-                kwargs[name] = value
+            kwargs[name] = _setting(name, fields[name], fields[name].default, value)
         return cls(**kwargs)
     except ConfigError as exc:
         raise ConfigError(f"{owner} settings: {exc}") from None
 
 
+def _setting(path: str, field: dataclasses.Field[Any], default: Any, value: Any) -> Any:
+    """One setting's value as its record takes it: a mapping given for a nested record becomes
+    that record (:func:`_nested`), a list given for a tuple field a tuple; anything else as given."""
+    if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
+        return _nested(path, default, value)
+    if isinstance(value, list) and "tuple" in str(field.type):
+        return tuple(value)
+    return value
+
+
 def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
     """A nested record: ``default`` with ``values`` changed, a record inside it the same way; its
     errors name the setting's whole path (``session.participant.beta_median``)."""
-    known = {f.name: getattr(default, f.name) for f in dataclasses.fields(default)}
+    known = {f.name: f for f in dataclasses.fields(default)}
     unknown = sorted(set(values) - set(known))
     if unknown:
         raise ConfigError(f"unknown setting(s) {[f'{name}.{u}' for u in unknown]}; known: {sorted(known)}")
-    changes = {}
-    for key, value in values.items():
-        if isinstance(value, Mapping) and dataclasses.is_dataclass(known[key]):
-            changes[key] = _nested(f"{name}.{key}", known[key], value)
-        else:
-            changes[key] = tuple(value) if isinstance(value, list) else value
+    changes = {
+        key: _setting(f"{name}.{key}", known[key], getattr(default, key), value)
+        for key, value in values.items()
+    }
     try:
         return dataclasses.replace(default, **changes)
     except ConfigError as exc:
