@@ -41,11 +41,13 @@ def polyline_distance(point: np.ndarray, polyline: np.ndarray) -> float:
     return best
 
 
-def belief_update(b: np.ndarray, s: np.ndarray, a_h: np.ndarray, sets: np.ndarray, control) -> np.ndarray:
+def belief_update(
+    b: np.ndarray, s: np.ndarray, a_h: np.ndarray, goal_sets: np.ndarray, control
+) -> np.ndarray:
     """b' after the human action ``a_h`` at ``s``; ``sets`` (G, K, n) are the goals' polylines."""
     moved = s + control.dt * a_h
     regret = np.empty(len(b))
-    for g, polyline in enumerate(sets):
+    for g, polyline in enumerate(goal_sets):
         before, after = polyline_distance(s, polyline), polyline_distance(moved, polyline)
         regret[g] = after - before
         if control.likelihood == "grasp_set":
@@ -79,13 +81,13 @@ def step_with(task, control, s: np.ndarray, b: np.ndarray, a_h: np.ndarray, alph
     """Lines 6-9 of Algorithm 1 for one user, given the human action: a_r, a, s' and b'."""
     a_r = assistance(control.assistance, b, s, task.goals, control)
     a = (1.0 - alpha) * a_h + alpha * a_r
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     return {
         "a_h": a_h,
         "a_r": a_r,
         "a": a,
         "s": transition(s, a, control, task.robot),
-        "b": belief_update(b, s, a_h, sets, control),
+        "b": belief_update(b, s, a_h, goal_sets, control),
     }
 
 

@@ -40,8 +40,8 @@ def test_regret_likelihood_by_hand():
 
 
 def test_distance_to_polyline_by_hand():
-    sets = np.array([[[0.0, 0.0], [2.0, 0.0]], [[0.0, 3.0], [0.0, 3.0 + 1e-9]]])
-    d = distance_to_sets(np.array([[1.0, 1.0], [3.0, 0.0]]), sets)
+    goal_sets = np.array([[[0.0, 0.0], [2.0, 0.0]], [[0.0, 3.0], [0.0, 3.0 + 1e-9]]])
+    d = distance_to_sets(np.array([[1.0, 1.0], [3.0, 0.0]]), goal_sets)
     assert_allclose(d, [[1.0, np.hypot(1.0, 2.0)], [1.0, np.hypot(3.0, 3.0)]], rtol=1e-6)
 
 

@@ -37,7 +37,7 @@ REF = 1
 @functools.cache
 def _task(grown: bool):
     task = make_cup_task(load_robot("planar5"))
-    return extend_task(task, task.robot.cup_positions()[REF] + [0.12, 0.0, 0.0], REF) if grown else task
+    return extend_task(task, task.robot.goal_positions()[REF] + [0.12, 0.0, 0.0], REF) if grown else task
 
 
 @functools.cache

@@ -87,7 +87,7 @@ def test_stroke_geometry():
     for g in range(len(GOALS)):
         entry, _ = fork_frame(robot, g, 0.0, 0.0)
         end, rot = fork_frame(robot, g, 0.0, 1.0)
-        surface = robot.cup_positions()[g]
+        surface = robot.goal_positions()[g]
         assert np.isclose(np.linalg.norm(end - entry), STROKE)
         assert np.isclose(end[2], surface[2] - 0.01)  # ends 1 cm into the food
         assert_allclose(rot[:, 2], fork_direction(robot, g, 0.0), atol=1e-12)
@@ -108,7 +108,7 @@ def test_ik_puts_the_fork_where_each_preference_needs_it(eating):
                 assert np.linalg.norm(tip[0] - pos) < 2e-3
                 assert np.arccos(np.clip(axis[0] @ rot[:, 2], -1, 1)) < 0.01
     assert_allclose(eating.goals, eating.strokes[:, eating.strokes.shape[1] // 2, 0])  # mid-tilt entries
-    assert eating.belief_targets("grasp_set").shape == (4, 2 * len(eating.theta_grid), 7)
+    assert eating.goal_sets("grasp_set").shape == (4, 2 * len(eating.theta_grid), 7)
     assert np.all(eating.strokes >= robot.lower) and np.all(eating.strokes <= robot.upper)
 
 

@@ -59,18 +59,18 @@ def test_p_is_a_distribution(model, task):
         torch.tensor(states, dtype=torch.float32),
         torch.tensor(beliefs, dtype=torch.float32),
         torch.linspace(-1, 1, 7)[:, None],
-        torch.tensor(task.belief_targets(ctl.likelihood), dtype=torch.float32),
+        torch.tensor(task.goal_sets(ctl.likelihood), dtype=torch.float32),
         ctl,
     )
     p = goal_distribution(scores)
     assert torch.all(p >= 0) and torch.allclose(p.sum(-1), torch.ones(32))
-    h = context_entropy(model, states, beliefs, task.belief_targets(ctl.likelihood), ctl)
+    h = context_entropy(model, states, beliefs, task.goal_sets(ctl.likelihood), ctl)
     assert np.all(h >= -1e-9) and np.all(h <= np.log(2) + 1e-9)
 
 
 def test_gradient_reaches_the_decoder(model, task, demos):
     ctl = task.robot.control
-    reg = EntropyRegularizer(1.0, task.belief_targets(ctl.likelihood), ctl, contexts=16)
+    reg = EntropyRegularizer(1.0, task.goal_sets(ctl.likelihood), ctl, contexts=16)
     s = torch.tensor(demos.states[:64], dtype=torch.float32)
     b = torch.tensor(demos.beliefs[:64], dtype=torch.float32)
     model.zero_grad()
@@ -83,17 +83,17 @@ def test_gradient_reaches_the_decoder(model, task, demos):
 
 def test_large_lambda_spreads_p_at_confident_contexts(demos, task):
     ctl = task.robot.control
-    sets = task.belief_targets(ctl.likelihood)
+    goal_sets = task.goal_sets(ctl.likelihood)
     clean = demos.clean()
     conf = clean.beliefs.max(1) > 0.99
     probe = (clean.states[conf], clean.beliefs[conf])
     cfg = dataclasses.replace(SMALL_TRAIN, steps=300)
     plain, _ = train_decoder(demos, ctl, cfg, progress=False)
     spread, _ = train_decoder(
-        demos, ctl, dataclasses.replace(cfg, entropy_lambda=3.0), goal_sets=sets, progress=False
+        demos, ctl, dataclasses.replace(cfg, entropy_lambda=3.0), goal_sets=goal_sets, progress=False
     )
-    h_plain = context_entropy(plain, *probe, sets, ctl).mean()
-    h_spread = context_entropy(spread, *probe, sets, ctl).mean()
+    h_plain = context_entropy(plain, *probe, goal_sets, ctl).mean()
+    h_spread = context_entropy(spread, *probe, goal_sets, ctl).mean()
     assert h_plain < 0.3  # without the term, confident contexts lead to one goal
     assert h_spread > h_plain + 0.2
 
@@ -151,7 +151,7 @@ def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
     assert not same(sweep.models[0.0], model)  # the control is fine-tuned too, not the base itself
     assert not same(sweep.models[0.0], sweep.models[0.3])  # the term changes the weights
     again, _ = train_decoder(
-        demos, ctl, c0, goal_sets=task.belief_targets(ctl.likelihood), init=model, progress=False
+        demos, ctl, c0, goal_sets=task.goal_sets(ctl.likelihood), init=model, progress=False
     )
     assert same(again, sweep.models[0.0])  # the control is reproducible: only lambda differs
     assert list(sweep.table["lambda"]) == [0.0, 0.3] and sweep.chosen == 0.3
@@ -175,20 +175,20 @@ def test_nearest_distance_is_distance_to_sets(task, seed):
     from lasa.method.belief import distance_to_sets_torch
     from lasa.method.entropy import nearest_distance
 
-    sets = torch.as_tensor(task.belief_targets("grasp_set"), dtype=torch.float32)
+    goal_sets = torch.as_tensor(task.goal_sets("grasp_set"), dtype=torch.float32)
     rng = np.random.default_rng(seed)
     lo, hi = task.robot.lower, task.robot.upper
     # states of the workspace, and points on the sets' vertices and segments (ties between segments)
-    near = sets.reshape(-1, sets.shape[-1]).numpy()
+    near = goal_sets.reshape(-1, goal_sets.shape[-1]).numpy()
     mid = 0.5 * (near[:-1] + near[1:])
     pts = np.concatenate(
         [rng.uniform(lo, hi, (500, len(lo))), near, mid, near + 1e-4 * rng.normal(size=near.shape)]
     )
     points = torch.tensor(pts, dtype=torch.float32).reshape(-1, 1, len(lo)).requires_grad_()
-    weight = torch.as_tensor(rng.normal(size=(len(pts), 1, sets.shape[0])), dtype=torch.float32)
-    ref = distance_to_sets_torch(points, sets)
+    weight = torch.as_tensor(rng.normal(size=(len(pts), 1, goal_sets.shape[0])), dtype=torch.float32)
+    ref = distance_to_sets_torch(points, goal_sets)
     (ref_grad,) = torch.autograd.grad((ref * weight).sum(), points)
-    out = nearest_distance(points, sets)
+    out = nearest_distance(points, goal_sets)
     (grad,) = torch.autograd.grad((out * weight).sum(), points)
     assert out.shape == ref.shape and torch.equal(out, ref)
     torch.testing.assert_close(grad, ref_grad, rtol=0, atol=1e-6)

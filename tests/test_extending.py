@@ -90,7 +90,7 @@ def toy_spec(scene: Path) -> lasa.RobotSpec:
         scene=scene,
         joints=("j1", "j2", "j3"),
         grasp_site="grasp",
-        cups=tuple(CUPS),
+        goal_sites=tuple(CUPS),
         camera="front",
         home_key="home",
         top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),  # fingers down
@@ -185,7 +185,7 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
     assert task.n_goals == 3 and task.goal_names == ("left", "mid", "right")
     # s*(g, theta) puts the grasp site at each cup, from a top grasp to a side grasp
     robot = task.robot
-    cups = robot.cup_positions()
+    cups = robot.goal_positions()
     for g in range(3):
         top, side = robot.grasp_axes(task.target(g, np.array([0.0, 1.0])))
         np.testing.assert_allclose(top, [0.0, 0.0, -1.0], atol=1e-2)
@@ -210,7 +210,7 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
     for missing in ("geom 'table'", "geom 'cup_left'", "geom 'cup_right'", "keyframe 'home'"):
         assert missing in message, message
     assert "toy3_broken" not in lasa.ROBOTS
-    with pytest.raises(lasa.ConfigError, match="one seed of 3 joint values per cup"):
+    with pytest.raises(lasa.ConfigError, match="one seed of 3 joint values per goal site"):
         lasa.register_robot(dataclasses.replace(toy_spec(broken), name="toy3_seeds", ik_seeds=((0.0,) * 3,)))
     with pytest.raises(lasa.ConfigError, match="registered already"):
         lasa.register_robot(toy_spec(broken))
@@ -253,7 +253,7 @@ def test_an_assistance_member_of_ones_own_is_called_by_the_step_and_the_rollout(
     task = toy_task
     calls: list[tuple[int, ...]] = []
 
-    def likeliest(belief, state, goals, sets, dt, action_scale):
+    def likeliest(belief, state, goals, goal_sets, dt, action_scale):
         """Straight to the likeliest goal at the human's speed, with full say in the blend."""
         calls.append(belief.shape)
         diff = goals[belief.argmax(axis=1)] - state

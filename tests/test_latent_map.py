@@ -32,7 +32,7 @@ def test_latent_map_rows(model, task):
     assert held["uniform"].shape == (3, 5, task.robot.n_joints) and held["confident"].shape[1] == 3
     assert list(held["z"]) == [-1.0, 0.0, 1.0]
     robot, control = task.robot, task.robot.control
-    cups = robot.cup_positions()
+    cups = robot.goal_positions()
     # the confident context starts at the right cup with the mid-preference grasp, by the geometry:
     # the grasp site at the standoff from the cup's centre, the approach turned 45 degrees (theta =
     # 0.5 of a quarter turn) from pointing down, in the arm's plane towards the far side of the cup

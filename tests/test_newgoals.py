@@ -23,14 +23,14 @@ REF = 1  # the right-hand cup is the reference in these tests
 @pytest.fixture(scope="module")
 def grown(task):
     """planar5's task with a new cup 0.12 m beyond the right-hand one."""
-    return extend_task(task, task.robot.cup_positions()[REF] + [0.12, 0.0, 0.0], REF)
+    return extend_task(task, task.robot.goal_positions()[REF] + [0.12, 0.0, 0.0], REF)
 
 
 @pytest.fixture(scope="module")
 def panda_rotated(panda_task):
     """The Panda's task with a new cup on the reference cup's circle about the base, 0.3 rad on."""
     arm = panda_task.robot
-    base, cup = arm.base_position(), arm.cup_positions()[REF]
+    base, cup = arm.base_position(), arm.goal_positions()[REF]
     rel = cup - base
     radius, bearing = np.hypot(rel[0], rel[1]), np.arctan2(rel[1], rel[0])
     pos = base + [radius * np.cos(bearing - 0.3), radius * np.sin(bearing - 0.3), 0.0]
@@ -143,11 +143,13 @@ def test_new_goal_belief_update_and_assistance(grown):
     s = grown.start[None]
     toward_new = (grown.goals[-1] - grown.start)[None]
     toward_new *= control.action_scale / np.linalg.norm(toward_new)
-    sets = grown.belief_targets(control.likelihood)
-    assert sets.shape[0] == 3
+    goal_sets = grown.goal_sets(control.likelihood)
+    assert goal_sets.shape[0] == 3
     log_b = uniform_log_belief(1, 3)
     for _ in range(5):
-        lik = log_likelihood(s, toward_new, sets, control.dt, control.belief_beta, control.likelihood_step)
+        lik = log_likelihood(
+            s, toward_new, goal_sets, control.dt, control.belief_beta, control.likelihood_step
+        )
         log_b = update_log_belief(log_b, lik, control.belief_floor)
         s = s + control.dt * toward_new
     b = belief(log_b)[0]
@@ -163,10 +165,10 @@ def test_new_goal_belief_update_and_assistance(grown):
 
 
 def test_grown_robot_has_the_new_cup(grown, task):
-    cups = grown.robot.cup_positions()
+    cups = grown.robot.goal_positions()
     assert cups.shape == (3, 3)
-    np.testing.assert_allclose(cups[:2], task.robot.cup_positions())
-    np.testing.assert_allclose(cups[2], task.robot.cup_positions()[REF] + [0.12, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(cups[:2], task.robot.goal_positions())
+    np.testing.assert_allclose(cups[2], task.robot.goal_positions()[REF] + [0.12, 0, 0], atol=1e-12)
     assert grown.goal_names[-1] == "new"
 
 
@@ -175,7 +177,7 @@ def test_grown_robot_has_the_new_cup(grown, task):
     [
         ([0.6, 0.1], ConfigError, "outside planar5's workspace: the arm moves in a vertical plane"),
         ([2.0, 0.0], ConfigError, "outside planar5's workspace: the table"),
-        ([0.48, 0.0], ConfigError, "overlaps cup 'cup_right'"),
+        ([0.48, 0.0], ConfigError, "overlaps goal 'cup_right'"),
         ([0.55, 0.0, 0.5], ConfigError, "stands on the table"),
         ([float("nan"), 0.0], ConfigError, "finite"),
     ],

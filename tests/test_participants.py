@@ -144,7 +144,7 @@ def test_measures_tables(eating, small_study):
     assert set(time.condition) == set(CONDITIONS)
     # Goal Error of a few episodes by hand, a step at a time: the tip's distance to the closest of the
     # four goals (and of the three bowls: rice, middle, icing), over the steps the episode ran, times dt
-    goals = eating.robot.cup_positions()
+    goals = eating.robot.goal_positions()
     for e in (0, 7, len(small_study.end) - 1):
         steps = range(int(small_study.end[e]))
         tips = [small_study.tip[t, e] for t in steps]

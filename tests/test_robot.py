@@ -45,7 +45,7 @@ def test_planar5_named_quantities(robot):
     assert_allclose(pos[[0, 1]], [0.0, 0.0], atol=1e-12)
     assert_allclose(pos[2], 0.12 + 0.30 + 0.25 + 0.15 + 0.10 + 0.09)
     assert_allclose(rot[:, 2], [0.0, 0.0, 1.0], atol=1e-12)
-    cups = robot.cup_positions()
+    cups = robot.goal_positions()
     assert_allclose(cups[:, 0], [-0.45, 0.45])
 
 
@@ -70,4 +70,4 @@ def test_the_package_scenes_meet_the_naming_contract_register_robot_checks(name)
     spec = EATING if name == "eating" else ROBOTS[name]
     assert scene_problems(spec, robot.model) == []
     assert angle_problem(spec) is None  # the scene's angles are radians
-    assert len(spec.ik_seeds) == len(spec.cups)
+    assert len(spec.ik_seeds) == len(spec.goal_sites)

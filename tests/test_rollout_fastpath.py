@@ -17,7 +17,7 @@ def same_bits(x, y):
 @pytest.mark.parametrize("rows", [1, 5, 63, 64, 500, 2000])
 def test_distance_matches_the_differentiable_one(task, rows):
     rng = np.random.default_rng(rows)
-    sets = torch.as_tensor(task.curves)
+    goal_sets = torch.as_tensor(task.curves)
     on_curve = task.curves[:, :-1] + rng.uniform(0, 1, (*task.curves[:, :-1].shape[:2], 1)) * np.diff(
         task.curves, axis=1
     )
@@ -27,24 +27,26 @@ def test_distance_matches_the_differentiable_one(task, rows):
         rng.normal(size=(rows, task.robot.n_joints)),
     ):
         pts = torch.as_tensor(points)
-        assert torch.equal(_distance_no_grad(pts, sets), distance_to_sets_torch(pts, sets))
+        assert torch.equal(_distance_no_grad(pts, goal_sets), distance_to_sets_torch(pts, goal_sets))
 
 
 def test_distance_blocked_path_and_non_finite_points(task, monkeypatch):
     rng = np.random.default_rng(0)
-    sets = torch.as_tensor(task.curves)
+    goal_sets = torch.as_tensor(task.curves)
     pts = torch.as_tensor(rng.normal(size=(300, task.robot.n_joints)))
     pts[3, 1] = torch.nan
     pts[7, 0] = torch.inf
-    assert torch.equal(_distance_no_grad(pts, sets).isnan(), distance_to_sets_torch(pts, sets).isnan())
+    assert torch.equal(
+        _distance_no_grad(pts, goal_sets).isnan(), distance_to_sets_torch(pts, goal_sets).isnan()
+    )
     assert same_bits(
-        np.nan_to_num(_distance_no_grad(pts, sets).numpy()),
-        np.nan_to_num(distance_to_sets_torch(pts, sets).numpy()),
+        np.nan_to_num(_distance_no_grad(pts, goal_sets).numpy()),
+        np.nan_to_num(distance_to_sets_torch(pts, goal_sets).numpy()),
     )
     monkeypatch.setattr(belief_module, "_CHUNK_ELEMENTS", 1000)  # many chunks
     pts = pts.nan_to_num(0.0, 0.0, 0.0)
     monkeypatch.setattr(belief_module, "_PRUNE_MIN_POINTS", 10**9)
-    assert torch.equal(_distance_no_grad(pts, sets), distance_to_sets_torch(pts, sets))
+    assert torch.equal(_distance_no_grad(pts, goal_sets), distance_to_sets_torch(pts, goal_sets))
 
 
 @pytest.mark.parametrize("max_step", [None, 0.0375])

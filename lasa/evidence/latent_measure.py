@@ -286,7 +286,7 @@ def measure(
         control,
         config,
         z=ring(config.n_inputs, decoder.z_dim),
-        sets=[preference_set(task, g, config.n_grid) for g in range(task.n_goals)],
+        preference_sets=[preference_set(task, g, config.n_grid) for g in range(task.n_goals)],
         base={"source": source, "robot": task.robot.name, "task": task_name, "decoder": decoder_name},
     )
     rows = [_confident_rows(run, g) for g in range(task.n_goals)]
@@ -302,7 +302,7 @@ class _Run:
     Attributes:
         task, decoder, control, config: As :func:`measure` takes them.
         z: The ring's inputs, (K, d).
-        sets: Each goal's :class:`PreferenceSet`.
+        preference_sets: Each goal's :class:`PreferenceSet`.
         base: The rows' source, robot, task and decoder columns.
     """
 
@@ -311,24 +311,24 @@ class _Run:
     control: ControlConfig
     config: PropertyConfig
     z: np.ndarray
-    sets: list[PreferenceSet]
+    preference_sets: list[PreferenceSet]
     base: dict[str, str]
 
 
 def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     """Goal ``g``'s confident rows: each input held from s*(g, 1/2), the belief held on g."""
-    task, config, z, sets = run.task, run.config, run.z, run.sets
+    task, config, z, preference_sets = run.task, run.config, run.z, run.preference_sets
     robot, dt = task.robot, run.control.dt
     names = list(task.goal_names)
     hold = max(1, round(config.hold / dt))
-    pset = sets[g]
+    pset = preference_sets[g]
     b = _confident(task, g, run.control.belief_floor)
     paths = held_input_paths(run.decoder, task, run.control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
     pos, axis = robot.grasp_positions(paths[:, 1:]), robot.grasp_axes(paths[:, 1:])
     dist, _ = _nearest(pset, pos, axis, config.rotation_weight)  # (K, H)
     drift = (dist / (dt * np.arange(1, hold + 1))).max(axis=1)
     _, idx = _nearest(pset, pos[:, -1], axis[:, -1], config.rotation_weight)
-    ends = np.stack([_nearest(s, pos[:, -1], axis[:, -1], 0.0)[0] for s in sets], axis=1)  # (K, G)
+    ends = np.stack([_nearest(s, pos[:, -1], axis[:, -1], 0.0)[0] for s in preference_sets], axis=1)  # (K, G)
     stays = drift <= config.drift_speed
     return _rows(
         run.base,
@@ -355,7 +355,7 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
     )
     end = paths[:, -1]
     pos, axis = robot.grasp_positions(end), robot.grasp_axes(end)
-    dist = np.stack([_nearest(s, pos, axis, 0.0)[0] for s in run.sets], axis=1)  # (K, G)
+    dist = np.stack([_nearest(s, pos, axis, 0.0)[0] for s in run.preference_sets], axis=1)  # (K, G)
     near = dist.argmin(axis=1)
     best = dist[np.arange(len(z)), near]
     return _rows(
@@ -412,7 +412,10 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     paths = leave_paths(run.decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)
     pos = task.robot.grasp_positions(paths[:, 1:])  # (R, T, 3)
     dist = np.stack(
-        [cKDTree(pset.positions).query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for pset in run.sets],
+        [
+            cKDTree(pset.positions).query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2])
+            for pset in run.preference_sets
+        ],
         axis=1,
     )  # (R, G, T)
     near = dist <= run.config.reach_distance

@@ -67,7 +67,7 @@ def _ax(ax: Axes | None) -> Axes:
 
 def is_planar(task: GoalTask) -> bool:
     """Whether the robot moves in the world's x-z plane (every cup at y = 0)."""
-    return bool(np.allclose(task.robot.cup_positions()[:, 1], 0.0))
+    return bool(np.allclose(task.robot.goal_positions()[:, 1], 0.0))
 
 
 def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
@@ -88,7 +88,7 @@ def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
     Each goal in its colour (:func:`goal_colors`), for any number of goals.
     """
     ax = _ax(ax)
-    cups = task.robot.cup_positions()
+    cups = task.robot.goal_positions()
     colors = goal_colors(len(cups))
     if is_planar(task):
         ax.axhline(0.0, color="#8b6d4b", lw=2, zorder=0)
@@ -117,7 +117,7 @@ def _colored_path(ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str, norm:
 
 def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
     """Limit the axes to the drawn points, the goals and the base, with some padding."""
-    cups = project(task, task.robot.cup_positions())
+    cups = project(task, task.robot.goal_positions())
     base = project(task, task.robot.base_position())[None]
     pts = np.concatenate([points.reshape(-1, 2), cups, base])
     lo, hi = pts.min(axis=0) - pad, pts.max(axis=0) + pad

@@ -265,7 +265,7 @@ def _fine_tune(
     progress: bool,
 ) -> tuple[dict[str, LatentActionModel], dict[str, TrainConfig]]:
     """Every reading's decoder (:func:`fine_tunes`; the sweep's own where it trained it), saved."""
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     lam = sweep.chosen
     models: dict[str, LatentActionModel] = {}
     fines: dict[str, TrainConfig] = {}
@@ -278,7 +278,7 @@ def _fine_tune(
                 trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=config.train.seed
             )
             models[name], _ = train_decoder(
-                datasets[reading], control, fine, goal_sets=sets, init=bases[reading], progress=False
+                datasets[reading], control, fine, goal_sets=goal_sets, init=bases[reading], progress=False
             )
         fines[name] = fine
         path = paths.artifact("eating_reading_decoder", task.robot.name, reading=name)
@@ -327,7 +327,7 @@ def directions(
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
     data = mujoco.MjData(task.robot.model)
     pos, axis, jp, jr = tip_frames(task.robot, data, state[None])
-    goals = task.robot.cup_positions()
+    goals = task.robot.goal_positions()
     rows = []
     for name, b in beliefs.items():
         qdot = decoder.decode_numpy(

@@ -113,7 +113,7 @@ def run_sweep(
         config: The sweep.
         progress: Show a progress bar per run.
     """
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     probe = confident_contexts(demos)
     clean = demos.clean()
     rows, models, configs, histories = [], {}, {}, {}
@@ -122,12 +122,12 @@ def run_sweep(
             base_train, steps=config.sweep_steps, entropy_lambda=lam, seed=config.seed
         )
         models[lam], histories[lam] = train_decoder(
-            demos, control, configs[lam], goal_sets=sets, init=base, progress=progress
+            demos, control, configs[lam], goal_sets=goal_sets, init=base, progress=progress
         )
         rows.append(
             {
                 "lambda": lam,
-                "entropy_confident": float(context_entropy(models[lam], *probe, sets, control).mean()),
+                "entropy_confident": float(context_entropy(models[lam], *probe, goal_sets, control).mean()),
                 "recon_error": reconstruction_error(models[lam], clean.states, clean.actions, clean.beliefs),
                 "val_error": float(histories[lam].val_error.iloc[-1]),
             }
@@ -143,7 +143,7 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
     The grid runs along the straight joint-space line from home to the right cup's goal,
     and from a uniform belief in that cup to 0.999, for lambda = 0 and the chosen lambda.
     """
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     progress, conf, states, beliefs = context_grid(task.start, task.goals[1], 1, task.n_goals)
     robot = task.robot.name
     parts = [
@@ -154,7 +154,7 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
                 "lambda": lam,
                 "progress": progress,
                 "confidence": conf,
-                "entropy": context_entropy(sweep.models[lam], states, beliefs, sets, control),
+                "entropy": context_entropy(sweep.models[lam], states, beliefs, goal_sets, control),
                 "recon_error": np.nan,
                 "val_error": np.nan,
             }

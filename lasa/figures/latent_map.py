@@ -146,7 +146,7 @@ def plot_grasp_sweep(
     """
     ax = plt.gca() if ax is None else ax
     robot = task.robot
-    cup = robot.cup_positions()[goal]
+    cup = robot.goal_positions()[goal]
     _, r_side = grasp_frame(robot, goal, 1.0)
     side = r_side[:, 2].copy()
     side[2] = 0.0

@@ -53,7 +53,7 @@ class NewGoalRun:
 
 def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
     """Grasp centres of the new cups, shape (len(offsets), 3) [m]."""
-    cups = task.robot.cup_positions()
+    cups = task.robot.goal_positions()
     ref = cups[config.ref_goal]
     if config.direction is None:
         other = cups[(config.ref_goal + 1) % task.n_goals]

@@ -119,7 +119,7 @@ class Station:
             self._check_fit(self.decoder, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
-        self.sets = self.task.belief_targets(self.control.likelihood)
+        self.goal_sets = self.task.goal_sets(self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
         self.reset()
@@ -285,7 +285,7 @@ class Station:
             self.log_belief[None],
             a_h[None],
             np.array([self.alpha]),
-            self.sets,
+            self.goal_sets,
         )
 
 

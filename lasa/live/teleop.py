@@ -60,7 +60,7 @@ class _Overlay:
 
     def __init__(self, station: Station) -> None:
         self.station = station
-        self.goals = station.robot.cup_positions()
+        self.goals = station.robot.goal_positions()
 
     def draw_goals(self, viewer: Any, rec: dict[str, Any]) -> None:
         """A sphere over each goal, its radius growing with the belief in it (1 cm to 5 cm)."""

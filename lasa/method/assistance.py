@@ -31,7 +31,7 @@ Every function is vectorised over users: beliefs (U, G), states (U, n), for any 
 of goals G.
 
 **A member of your own.** Any function with a member's signature (:data:`Member`: belief,
-state, goals, sets, dt, action_scale -> a_r, w) joins the family with :func:`register_member`; then
+state, goals, goal_sets, dt, action_scale -> a_r, w) joins the family with :func:`register_member`; then
 ``ControlConfig(assistance=name)`` and the rollout's per-user ``assistance`` run it like the
 four above (``docs/extending.md``).
 """
@@ -60,7 +60,8 @@ __all__ = [
     "unregister_member",
 ]
 
-# A member: (belief (U, G), state (U, n), goals (G, n), sets (G, K, n), dt [s], action_scale: sigma_h [rad/s])
+# A member: (belief (U, G), state (U, n), goals (G, n), goal_sets (G, K, n), dt [s],
+#   action_scale: sigma_h [rad/s])
 # -> (a_r (U, n) [rad/s], blend weight w (U,) in [0, 1]).
 Member = Callable[
     [np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float], tuple[np.ndarray, np.ndarray]
@@ -68,7 +69,12 @@ Member = Callable[
 
 
 def point(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
+    belief: np.ndarray,
+    state: np.ndarray,
+    goals: np.ndarray,
+    goal_sets: np.ndarray,
+    dt: float,
+    action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (the paper, Sec. III).
 
@@ -76,7 +82,7 @@ def point(
         belief: b, shape (U, G).
         state: s, shape (U, n).
         goals: One pose per goal, shape (G, n).
-        sets: Unused here: each goal's grasps, shape (G, K, n).
+        goal_sets: Unused here: each goal's grasps, shape (G, K, n).
         dt: Unused here: the control period Delta [s].
         action_scale: Unused here: sigma_h, the human's speed bound [rad/s].
 
@@ -86,16 +92,16 @@ def point(
     return eq_m2(belief, goals, state), np.ones(len(state))
 
 
-def nearest_grasps(state: np.ndarray, sets: np.ndarray) -> np.ndarray:
+def nearest_grasps(state: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:
     """The point of each goal's grasp polyline nearest to each state, shape (U, G, n).
 
     Args:
         state: s, shape (U, n).
-        sets: Each goal's grasps s*(g, theta) on a grid of theta, a polyline, shape (G, K, n).
+        goal_sets: Each goal's grasps s*(g, theta) on a grid of theta, a polyline, shape (G, K, n).
     """
-    if sets.shape[1] == 1:
-        return np.broadcast_to(sets[None, :, 0], (len(state), *sets[:, 0].shape)).copy()
-    a, ab = sets[:, :-1], np.diff(sets, axis=1)  # segments a + t ab, (G, K-1, n)
+    if goal_sets.shape[1] == 1:
+        return np.broadcast_to(goal_sets[None, :, 0], (len(state), *goal_sets[:, 0].shape)).copy()
+    a, ab = goal_sets[:, :-1], np.diff(goal_sets, axis=1)  # segments a + t ab, (G, K-1, n)
     rel = state[:, None, None, :] - a[None]  # (U, G, K-1, n)
     t = np.clip(
         np.einsum("ugkn,gkn->ugk", rel, ab) / np.maximum(np.einsum("gkn,gkn->gk", ab, ab), 1e-12), 0, 1
@@ -107,7 +113,12 @@ def nearest_grasps(state: np.ndarray, sets: np.ndarray) -> np.ndarray:
 
 
 def grasp_set(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
+    belief: np.ndarray,
+    state: np.ndarray,
+    goals: np.ndarray,
+    goal_sets: np.ndarray,
+    dt: float,
+    action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``grasp_set``: Eq. M2 towards the nearest grasp of each goal, a_r = sum_g b(g) (c_g(s) - s).
 
@@ -118,12 +129,17 @@ def grasp_set(
     Returns:
         a_r, shape (U, n), and w = 1, shape (U,).
     """
-    nearest = nearest_grasps(state, sets)
+    nearest = nearest_grasps(state, goal_sets)
     return np.einsum("ug,ugn->un", belief, nearest - state[:, None, :]), np.ones(len(state))
 
 
 def arbitrated(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
+    belief: np.ndarray,
+    state: np.ndarray,
+    goals: np.ndarray,
+    goal_sets: np.ndarray,
+    dt: float,
+    action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``arbitrated``: policy blending with confidence-based arbitration (Dragan & Srinivasa 2013).
 
@@ -142,7 +158,12 @@ def arbitrated(
 
 
 def hindsight(
-    belief: np.ndarray, state: np.ndarray, goals: np.ndarray, sets: np.ndarray, dt: float, action_scale: float
+    belief: np.ndarray,
+    state: np.ndarray,
+    goals: np.ndarray,
+    goal_sets: np.ndarray,
+    dt: float,
+    action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``hindsight``: hindsight-optimisation assistance (Javdani et al. 2018).
 
@@ -189,7 +210,7 @@ def register_member(name: str, member: Member, *, replace: bool = False) -> None
     After it, ``ControlConfig(assistance=name)`` is valid and every assisted step under it
     (:func:`lasa.method.step.shared_autonomy_step`, :func:`lasa.people.rollout.rollout`, the
     :class:`lasa.method.controller.Controller`) calls ``member``, as :func:`assist` calls the
-    built-in ones: ``member(belief, state, goals, sets, dt, action_scale)`` with the shapes of
+    built-in ones: ``member(belief, state, goals, goal_sets, dt, action_scale)`` with the shapes of
     :func:`assist`, returning a_r (U, n) and the blend weight w (U,) in [0, 1]. The figures'
     default members stay the four of :data:`ASSISTANCE`.
 
@@ -234,7 +255,7 @@ def assist(
     belief: np.ndarray,
     state: np.ndarray,
     goals: np.ndarray,
-    sets: np.ndarray,
+    goal_sets: np.ndarray,
     dt: float,
     action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -245,7 +266,7 @@ def assist(
         belief: b, shape (U, G).
         state: s, shape (U, n).
         goals: One pose per goal, shape (G, n).
-        sets: Each goal's grasps, shape (G, K, n).
+        goal_sets: Each goal's grasps, shape (G, K, n).
         dt: The control period Delta [s].
         action_scale: sigma_h, the human's speed bound [rad/s] (``hindsight`` moves at it).
 
@@ -255,4 +276,4 @@ def assist(
     member = _MEMBERS.get(name)
     if member is None:
         raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, _MEMBERS))}")
-    return member(belief, state, goals, sets, dt, action_scale)
+    return member(belief, state, goals, goal_sets, dt, action_scale)

@@ -60,19 +60,19 @@ def uniform_log_belief(batch: int, n_goals: int) -> np.ndarray:
     return np.full((batch, n_goals), -np.log(n_goals))
 
 
-def distance_to_sets_torch(points: torch.Tensor, sets: torch.Tensor) -> torch.Tensor:
+def distance_to_sets_torch(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
     """Euclidean distance from each point to each goal's polyline, shape (..., G).
 
     Differentiable in ``points`` (the entropy regulariser backpropagates through it).
 
     Args:
         points: Points, shape (..., n).
-        sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
+        goal_sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
     """
     p = points[..., None, None, :]  # (..., 1, 1, n)
-    if sets.shape[1] == 1:
-        return torch.linalg.vector_norm(p[..., 0, :] - sets[:, 0], dim=-1)
-    a, ab = sets[:, :-1], torch.diff(sets, dim=1)  # (G, K-1, n)
+    if goal_sets.shape[1] == 1:
+        return torch.linalg.vector_norm(p[..., 0, :] - goal_sets[:, 0], dim=-1)
+    a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
     t = ((p - a) * ab).sum(-1) / (ab * ab).sum(-1).clamp_min(1e-12)
     closest = a + t.clamp(0.0, 1.0)[..., None] * ab
     return torch.linalg.vector_norm(p - closest, dim=-1).min(dim=-1).values
@@ -81,7 +81,7 @@ def distance_to_sets_torch(points: torch.Tensor, sets: torch.Tensor) -> torch.Te
 def log_likelihood_torch(
     state: torch.Tensor,
     action: torch.Tensor,
-    sets: torch.Tensor,
+    goal_sets: torch.Tensor,
     dt: float,
     beta: float,
     max_step: float | None = None,
@@ -91,32 +91,32 @@ def log_likelihood_torch(
     Args:
         state: States s, shape (..., n).
         action: Human actions a_h, shape (..., n).
-        sets: Goal sets (polylines), shape (G, K, n); K = 1 for point goals.
+        goal_sets: Goal sets (polylines), shape (G, K, n); K = 1 for point goals.
         dt: Control period Delta [s].
         beta: Belief temperature beta_b >= 0.
         max_step: If given, the longest step the user can make, Delta sigma_h [rad]:
             each goal's likelihood is then normalised by its best action (the regret
             form, see the module docstring). ``None`` is the plain progress model.
     """
-    return _log_likelihood(state, action, sets, dt, beta, max_step, distance_to_sets_torch)
+    return _log_likelihood(state, action, goal_sets, dt, beta, max_step, distance_to_sets_torch)
 
 
 def _log_likelihood(
     state: torch.Tensor,
     action: torch.Tensor,
-    sets: torch.Tensor,
+    goal_sets: torch.Tensor,
     dt: float,
     beta: float,
     max_step: float | None,
     distance: Callable[[torch.Tensor, torch.Tensor], torch.Tensor],
 ) -> torch.Tensor:
-    """:func:`log_likelihood_torch` with the distance function ``distance(points, sets)``."""
+    """:func:`log_likelihood_torch` with the distance function ``distance(points, goal_sets)``."""
     check_range("belief_beta", beta, 0.0)
     moved = state + dt * action
     if distance is _distance_no_grad and moved.shape == state.shape:
-        before, after = distance(torch.stack([state, moved]), sets).unbind(0)  # one pass for both
+        before, after = distance(torch.stack([state, moved]), goal_sets).unbind(0)  # one pass for both
     else:
-        before, after = distance(state, sets), distance(moved, sets)
+        before, after = distance(state, goal_sets), distance(moved, goal_sets)
     progress = after - before
     if max_step is not None:
         check_range("max_step", max_step, 0.0)
@@ -211,7 +211,7 @@ def _distance_pruned(
     return out.view(rows, n_goals)
 
 
-def _distance_no_grad(points: torch.Tensor, sets: torch.Tensor) -> torch.Tensor:
+def _distance_no_grad(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
     """:func:`distance_to_sets_torch` without autograd, bitwise equal to it, in less time.
 
     Each distance to a segment is computed by the same operations on the same values as
@@ -220,49 +220,49 @@ def _distance_no_grad(points: torch.Tensor, sets: torch.Tensor) -> torch.Tensor:
     nearest (:func:`_distance_pruned`), and from working in cache-sized chunks into reused
     buffers instead of six fresh (U, G, K-1, n) temporaries.
     """
-    if sets.shape[1] == 1 or points.requires_grad or sets.requires_grad:
-        return distance_to_sets_torch(points, sets)
-    dtype = torch.promote_types(points.dtype, sets.dtype)
+    if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad:
+        return distance_to_sets_torch(points, goal_sets)
+    dtype = torch.promote_types(points.dtype, goal_sets.dtype)
     if dtype != torch.float64:
-        return distance_to_sets_torch(points, sets)
-    a, ab = sets[:, :-1], torch.diff(sets, dim=1)  # (G, K-1, n)
+        return distance_to_sets_torch(points, goal_sets)
+    a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
     denom = (ab * ab).sum(-1).clamp_min(1e-12)
     a, ab, denom = a.to(dtype), ab.to(dtype), denom.to(dtype)  # exact: promotion to float64
     lead, n = points.shape[:-1], points.shape[-1]
     flat = points.reshape(-1, n)
     out = None
-    finite = bool(torch.isfinite(flat).all()) and bool(torch.isfinite(sets).all())
+    finite = bool(torch.isfinite(flat).all()) and bool(torch.isfinite(goal_sets).all())
     if flat.shape[0] >= _PRUNE_MIN_POINTS and finite:
         out = _distance_pruned(flat, a, ab, denom)
     if out is None:
         out = _distance_blocked(flat, a, ab, denom)
-    return out.reshape(*lead, sets.shape[0])
+    return out.reshape(*lead, goal_sets.shape[0])
 
 
-def distance_to_sets(points: np.ndarray, sets: np.ndarray) -> np.ndarray:
+def distance_to_sets(points: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:
     """:func:`distance_to_sets_torch` on numpy arrays (float64), shape (..., G)."""
     with torch.no_grad():
-        out = _distance_no_grad(torch.as_tensor(points, dtype=torch.float64), torch.as_tensor(sets))
+        out = _distance_no_grad(torch.as_tensor(points, dtype=torch.float64), torch.as_tensor(goal_sets))
     return out.numpy()
 
 
 def log_likelihood(
     state: np.ndarray,
     action: np.ndarray,
-    goals: np.ndarray,
+    goal_sets: np.ndarray,
     dt: float,
     beta: float,
     max_step: float | None = None,
 ) -> np.ndarray:
     """:func:`log_likelihood_torch` on numpy arrays (float64), shape (..., G).
 
-    ``goals`` may be goal points, shape (G, n), or goal sets, shape (G, K, n).
+    ``goal_sets`` may also be goal points, shape (G, n), read as sets of one pose (K = 1).
     """
     with torch.no_grad():
         out = _log_likelihood(
             torch.as_tensor(state, dtype=torch.float64),
             torch.as_tensor(action, dtype=torch.float64),
-            torch.as_tensor(_as_sets(np.asarray(goals, dtype=np.float64))),
+            torch.as_tensor(_as_sets(np.asarray(goal_sets, dtype=np.float64))),
             dt,
             beta,
             max_step,

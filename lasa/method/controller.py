@@ -33,7 +33,7 @@ class Controller:
     Args:
         decoder: The decoder phi (a trained model, or a wrapper such as
             :class:`lasa.method.newgoals.MappedDecoder`); its robot and goals must be the task's.
-        task: The goal task (goals, belief sets, joint limits).
+        task: The goal task (goals, belief's goal sets, joint limits).
         control: Control-loop units.
         alpha: Blend weight in [0, 1] (0 is ``LA``).
 

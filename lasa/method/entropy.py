@@ -136,7 +136,7 @@ def _nearest_segment(
     return index
 
 
-def nearest_distance(points: torch.Tensor, sets: torch.Tensor) -> torch.Tensor:
+def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
     """:func:`lasa.method.belief.distance_to_sets_torch`, differentiated through the nearest segment only.
 
     The same value and gradient: the minimum over a goal's segments passes its gradient to
@@ -146,15 +146,15 @@ def nearest_distance(points: torch.Tensor, sets: torch.Tensor) -> torch.Tensor:
 
     Args:
         points: Points, shape (..., n).
-        sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
+        goal_sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
 
     Returns:
         Distances, shape (..., G).
     """
-    if sets.shape[1] == 1 or not bool(torch.isfinite(points).all()):
-        return distance_to_sets_torch(points, sets)
-    lead, n, n_goals = points.shape[:-1], points.shape[-1], sets.shape[0]
-    a, ab = sets[:, :-1], torch.diff(sets, dim=1)  # (G, K-1, n)
+    if goal_sets.shape[1] == 1 or not bool(torch.isfinite(points).all()):
+        return distance_to_sets_torch(points, goal_sets)
+    lead, n, n_goals = points.shape[:-1], points.shape[-1], goal_sets.shape[0]
+    a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
     denom = (ab * ab).sum(-1).clamp_min(1e-12)
     flat = points.reshape(-1, n)
     seg = _nearest_segment(flat, a, ab, denom)  # (rows, G)
@@ -168,7 +168,7 @@ def goal_scores(
     states: torch.Tensor,
     beliefs: torch.Tensor,
     z_grid: torch.Tensor,
-    sets: torch.Tensor,
+    goal_sets: torch.Tensor,
     control: ControlConfig,
     horizon: int = 10,
 ) -> torch.Tensor:
@@ -179,7 +179,7 @@ def goal_scores(
         states: Contexts' states, shape (B, n).
         beliefs: Contexts' beliefs, shape (B, G).
         z_grid: Joystick inputs, shape (K, d).
-        sets: Goal sets of the likelihood, shape (G, M, n).
+        goal_sets: Goal sets of the likelihood, shape (G, M, n).
         control: The belief model's units (dt, beta_b, the regret normaliser).
         horizon: H, the steps over which an input's evidence is read.
     """
@@ -197,7 +197,7 @@ def goal_scores(
     loglik = _log_likelihood(
         states[:, None, :],
         actions,
-        sets,
+        goal_sets,
         horizon * control.dt,
         control.belief_beta,
         max_step,
@@ -226,7 +226,7 @@ class EntropyRegularizer:
 
     Attributes:
         lam: lambda > 0, the weight of the term.
-        sets: Goal sets of the belief likelihood, shape (G, M, n).
+        goal_sets: Goal sets of the belief likelihood, shape (G, M, n).
         control: Units of the belief model.
         n_z: Joystick inputs on the grid the sum over z runs over.
         horizon: H, the steps over which an input's evidence is read.
@@ -235,7 +235,7 @@ class EntropyRegularizer:
     """
 
     lam: float
-    sets: np.ndarray
+    goal_sets: np.ndarray
     control: ControlConfig
     n_z: int = 11
     horizon: int = 10
@@ -249,7 +249,7 @@ class EntropyRegularizer:
                 f"n_z must be >= 2, horizon and contexts >= 1; "
                 f"got {self.n_z}, {self.horizon}, {self.contexts}"
             )
-        self._sets = torch.as_tensor(np.asarray(self.sets), dtype=torch.float32)
+        self._goal_sets = torch.as_tensor(np.asarray(self.goal_sets), dtype=torch.float32)
         self._grid = torch.as_tensor(latent_grid(self.n_z), dtype=torch.float32)
         self._gen = torch.Generator().manual_seed(self.seed)
 
@@ -258,7 +258,7 @@ class EntropyRegularizer:
             self._grid = torch.as_tensor(latent_grid(self.n_z, model.config.z_dim), dtype=torch.float32)
         pick = torch.randperm(states.shape[0], generator=self._gen)[: self.contexts]
         scores = goal_scores(
-            model, states[pick], beliefs[pick], self._grid, self._sets, self.control, self.horizon
+            model, states[pick], beliefs[pick], self._grid, self._goal_sets, self.control, self.horizon
         )
         p = goal_distribution(scores)
         return -self.lam * entropy(p).mean()
@@ -268,7 +268,7 @@ def context_entropy(
     model: LatentActionModel,
     states: np.ndarray,
     beliefs: np.ndarray,
-    sets: np.ndarray,
+    goal_sets: np.ndarray,
     control: ControlConfig,
     n_z: int = 11,
     horizon: int = 10,
@@ -281,7 +281,7 @@ def context_entropy(
             torch.as_tensor(states, dtype=torch.float32),
             torch.as_tensor(beliefs, dtype=torch.float32),
             grid,
-            torch.as_tensor(sets, dtype=torch.float32),
+            torch.as_tensor(goal_sets, dtype=torch.float32),
             control,
             horizon,
         )

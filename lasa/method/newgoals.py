@@ -90,7 +90,7 @@ def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tupl
     """Check that a new cup stands on the table, apart from the others; return it (3,) and its
     bearing offset from the reference cup about the base [rad]."""
     robot = task.robot
-    cups = robot.cup_positions()
+    cups = robot.goal_positions()
     pos = np.asarray(position, dtype=float).reshape(-1)
     if pos.shape not in ((2,), (3,)) or not np.all(np.isfinite(pos)):
         raise ConfigError(f"a new cup's position must be a finite (x, y) or (x, y, z) [m], got {position!r}")
@@ -108,11 +108,12 @@ def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tupl
             f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is outside {robot.name}'s workspace: the table "
             f"spans x in [{lo[0]:.2f}, {hi[0]:.2f}], y in [{lo[1]:.2f}, {hi[1]:.2f}] m"
         )
-    radius = robot.model.geom_size[robot.model.geom(robot.spec.cups[ref_goal]).id][0]
+    radius = robot.model.geom_size[robot.model.geom(robot.spec.goal_sites[ref_goal]).id][0]
     gaps = np.linalg.norm(cups[:, :2] - pos[:2], axis=1)
     if gaps.min() < 2 * radius:
         raise ConfigError(
-            f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) overlaps cup {robot.spec.cups[int(gaps.argmin())]!r} "
+            f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) overlaps goal "
+            f"{robot.spec.goal_sites[int(gaps.argmin())]!r} "
             f"(centres {gaps.min():.3f} m apart, at least {2 * radius:.3f} m needed)"
         )
     base = robot.base_position()
@@ -148,7 +149,7 @@ def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple
 
 def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
     """:func:`new_goal_frames` for a checked position and its bearing offset ``delta``."""
-    ref_cup = task.robot.cup_positions()[ref_goal]
+    ref_cup = task.robot.goal_positions()[ref_goal]
     turn = rot_z(delta)
     positions, rotations = [], []
     for theta in task.theta_grid:

@@ -85,14 +85,14 @@ def advance(
     log_b: np.ndarray,
     a_h: np.ndarray,
     alpha: np.ndarray,
-    sets: np.ndarray,
+    goal_sets: np.ndarray,
     b: np.ndarray | None = None,
     members: np.ndarray | None = None,
 ) -> StepResult:
     """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
 
     ``a_h`` is the decoded human action (U, n), ``alpha`` the blend weight per user (U,),
-    ``sets`` the belief likelihood's goal sets (``task.belief_targets``), ``b`` the
+    ``sets`` the belief likelihood's goal sets (``task.goal_sets``), ``b`` the
     belief ``belief(log_b)`` if the caller has it already.
     """
     a_h = sanitize(a_h)
@@ -100,7 +100,7 @@ def advance(
         b = belief(log_b)
     a_r, weight = _assistance(task, control, state, b, members)
     a = blend(a_h, a_r, alpha * weight)
-    lik = log_likelihood(state, a_h, sets, control.dt, control.belief_beta, control.likelihood_step)
+    lik = log_likelihood(state, a_h, goal_sets, control.dt, control.belief_beta, control.likelihood_step)
     new_log_b = update_log_belief(log_b, lik, control.belief_floor)
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
@@ -114,17 +114,17 @@ def _assistance(
 ) -> tuple[np.ndarray, np.ndarray]:
     """a_r and the blend weight per user: ``control.assistance``, or each user's member.
 
-    The goal sets of ``grasp_set`` are the task's (``task.belief_targets("grasp_set")``):
+    The goal sets of ``grasp_set`` are the task's (``task.goal_sets("grasp_set")``):
     the cups' grasp curves, or the eating task's whole stroke surfaces.
     """
-    sets = task.belief_targets("grasp_set")
+    goal_sets = task.goal_sets("grasp_set")
     if members is None:
-        return assist(control.assistance, b, state, task.goals, sets, control.dt, control.action_scale)
+        return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
     a_r, weight = np.empty_like(state), np.empty(len(state))
     for name in dict.fromkeys(members.tolist()):
         rows = members == name
         a_r[rows], weight[rows] = assist(
-            name, b[rows], state[rows], task.goals, sets, control.dt, control.action_scale
+            name, b[rows], state[rows], task.goals, goal_sets, control.dt, control.action_scale
         )
     return a_r, weight
 
@@ -185,8 +185,8 @@ def shared_autonomy_step(
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
-    sets = task.belief_targets(control.likelihood)
-    return advance(task, control, state, log_belief, a_h, alpha_arr, sets)
+    goal_sets = task.goal_sets(control.likelihood)
+    return advance(task, control, state, log_belief, a_h, alpha_arr, goal_sets)
 
 
 def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:

@@ -135,7 +135,7 @@ def collect_demonstrations(
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
     demo_id = 0
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     thetas = np.linspace(0.0, 1.0, config.n_theta)
     for g in range(task.n_goals):
         for theta in thetas:
@@ -153,7 +153,7 @@ def collect_demonstrations(
                     path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
                     segments.append((path, new, ADJUST))
                     current = new
-                _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints)
+                _append_demo(rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints)
                 demo_id += 1
     return _dataset(robot, rows, beliefs, control, config, rng)
 
@@ -195,7 +195,7 @@ def _append_demo(
     segments: list[tuple[np.ndarray, float, int]],
     demo_id: int,
     goal: int,
-    sets: np.ndarray,
+    goal_sets: np.ndarray,
     control: ControlConfig,
     config: DemoConfig,
     n_joints: int,
@@ -207,7 +207,7 @@ def _append_demo(
     robot computes online along the demonstration, starting from ``start_belief``
     (default uniform).
     """
-    log_b = uniform_log_belief(1, len(sets))[0] if start_belief is None else np.log(start_belief)
+    log_b = uniform_log_belief(1, len(goal_sets))[0] if start_belief is None else np.log(start_belief)
     for path, th, phase in segments:
         s = path[:-1]
         a = np.diff(path, axis=0) / control.dt
@@ -219,7 +219,9 @@ def _append_demo(
         # online belief along the demonstration
         for k in range(len(s)):
             beliefs.append(belief(log_b))
-            lik = log_likelihood(s[k], a[k], sets, control.dt, control.belief_beta, control.likelihood_step)
+            lik = log_likelihood(
+                s[k], a[k], goal_sets, control.dt, control.belief_beta, control.likelihood_step
+            )
             log_b = update_log_belief(log_b, lik, control.belief_floor)
         rows["s"].append(s)
         rows["a"].append(a)
@@ -324,7 +326,7 @@ def collect_eating_demonstrations(
     """
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     demo_id = 0
 
     def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:
@@ -363,7 +365,7 @@ def collect_eating_demonstrations(
                 segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
                 if not work:  # a separate transfer: the reach, and its hold, only
                     _append_demo(
-                        rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints, b0
+                        rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints, b0
                     )
                     demo_id += 1
                     continue
@@ -375,7 +377,9 @@ def collect_eating_demonstrations(
                     segments.append((path, new, ADJUST))
                     segments += stroke(g, new)
                     current = new
-                _append_demo(rows, beliefs, segments, demo_id, g, sets, control, config, robot.n_joints, b0)
+                _append_demo(
+                    rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints, b0
+                )
                 demo_id += 1
     return _dataset(robot, rows, beliefs, control, config, rng)
 

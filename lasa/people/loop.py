@@ -51,7 +51,7 @@ class Setting:
     rest: int  # index of the rest position in grid
     unit: float  # the best translation one step of Retargeting makes [m]
     retarget: Retargeting
-    sets: np.ndarray  # the belief's targets
+    goal_sets: np.ndarray  # the belief's targets
     data: mujoco.MjData
 
 
@@ -126,7 +126,7 @@ def prepare(
         rest=int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0]),
         unit=control.dt * config.retarget.linear_speed,
         retarget=Retargeting(robot, control.dt, config.retarget),
-        sets=task.belief_targets(control.likelihood),
+        goal_sets=task.goal_sets(control.likelihood),
         data=mujoco.MjData(robot.model),
     )
 
@@ -192,7 +192,7 @@ def move_robots(setting: Setting, state: State, idx: np.ndarray, a_h: np.ndarray
         state.log_b[idx],
         a_h,
         lay.alpha[idx],
-        setting.sets,
+        setting.goal_sets,
         b,
         lay.members_run[idx],
     )

@@ -65,7 +65,7 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
         ``mean_distance`` is Goal Error divided by the task's time [m].
     """
     robot = task.robot
-    goals = robot.cup_positions()
+    goals = robot.goal_positions()
     active = episodes.active()
     tip = episodes.tip[:-1]
     keys = {

@@ -235,7 +235,7 @@ def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
         control = study.control if j < study.replan_steps else coarse
         b = belief(log_b)
         a_h = human_action(study.decoder.decode_numpy(z, s, b), z, rest="zero")
-        step = advance(study.task, control, s, log_b, a_h, alpha, study.sets, b, members)
+        step = advance(study.task, control, s, log_b, a_h, alpha, study.goal_sets, b, members)
         s, log_b = step.state, step.log_belief
         j += 1 if j < study.replan_steps else study.coarse
         snaps[:, holds == j] = s[:, None]

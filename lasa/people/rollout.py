@@ -123,7 +123,7 @@ def rollout(
     log_b = uniform_log_belief(n_users, task.n_goals)
     states[0], beliefs[0] = s, belief(log_b)
     rows = np.arange(n_users)
-    sets = task.belief_targets(control.likelihood)
+    goal_sets = task.goal_sets(control.likelihood)
     for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
         b = beliefs[t]  # belief(log_b), computed once per step
         phi = decode_candidates(decoder, grid, s, b)  # (U, K, n): the one decoder call
@@ -133,7 +133,7 @@ def rollout(
             assert pilot_noise is not None
             k = pilot_choice(users, k, k_prev, pilot_noise[users.stream, t], len(grid))
             k_prev = k
-        step = advance(task, control, s, log_b, phi[rows, k], alpha, sets, b, members)
+        step = advance(task, control, s, log_b, phi[rows, k], alpha, goal_sets, b, members)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)

@@ -88,7 +88,7 @@ EATING = RobotSpec(
     scene=ASSETS / "panda" / "eating.xml",
     joints=ROBOTS["panda"].joints,
     grasp_site="fork_tip",
-    cups=("bowl_left", "bowl_middle", "bowl_right", "plate"),
+    goal_sites=("bowl_left", "bowl_middle", "bowl_right", "plate"),
     camera="table",
     home_key="home",
     top_grasp_rotation=ROBOTS["panda"].top_grasp_rotation,  # hand, so fork, pointing down
@@ -172,7 +172,7 @@ def _sideways(robot: Robot, goal: int) -> np.ndarray:
     the fork's tines more than about 40 degrees outward (away from the base) or inward:
     mink's IK fails there; sideways it reaches the scoop's 60 degrees at every goal.
     """
-    outward = robot.cup_positions()[goal] - robot.base_position()
+    outward = robot.goal_positions()[goal] - robot.base_position()
     outward[2] = 0.0
     norm = np.linalg.norm(outward)
     if norm < 1e-6:
@@ -209,7 +209,7 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
     axis = np.cross(down, sideways)  # rotating down about it by psi turns it towards sideways
     r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
     rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ r_top
-    surface = robot.cup_positions()[goal]
+    surface = robot.goal_positions()[goal]
     position = surface + INTO_FOOD * down + (depth - 1.0) * STROKE * stroke_direction(robot, goal, theta)
     return position, rotation
 
@@ -267,7 +267,7 @@ class EatingTask(GoalTask):
             object.__setattr__(self, "_stroke_cache", cache)
         return cache
 
-    def belief_targets(self, likelihood: str) -> np.ndarray:
+    def goal_sets(self, likelihood: str) -> np.ndarray:
         """What the belief measures progress towards, shape (G, K', n).
 
         ``"goal"``: the goal points. ``"grasp_set"``: each goal's whole stroke surface,
@@ -277,7 +277,7 @@ class EatingTask(GoalTask):
         """
         if likelihood == "grasp_set":
             return np.concatenate([self.strokes[:, :, 0], self.strokes[:, ::-1, -1]], axis=1)
-        return super().belief_targets(likelihood)
+        return super().goal_sets(likelihood)
 
 
 def make_eating_task(robot: Robot | None = None, n_theta: int = 9, depths: int = 3) -> EatingTask:

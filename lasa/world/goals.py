@@ -61,7 +61,7 @@ class GoalTask:
         diff = self.goals[:, None, :] - self.goals[None, :, :]
         return float(np.linalg.norm(diff, axis=-1).max())
 
-    def belief_targets(self, likelihood: str) -> np.ndarray:
+    def goal_sets(self, likelihood: str) -> np.ndarray:
         """What the belief measures progress towards, shape (G, K, n).
 
         ``"goal"``: the goal points g (K = 1). ``"grasp_set"``: each goal's preferred poses

@@ -45,10 +45,10 @@ class RobotSpec:
     :func:`register_robot` states the contract)."""
 
     name: str  # registry key, e.g. "planar5"
-    scene: Path  # MJCF scene: the arm, a table, the cups and a camera
+    scene: Path  # MJCF scene: the arm, a table, the goals (cups, bowls) and a camera
     joints: tuple[str, ...]  # arm joints, in state order
     grasp_site: str  # site between the finger tips; local +z is the approach direction
-    cups: tuple[str, ...]  # cup sites (grasp centres), in goal order
+    goal_sites: tuple[str, ...]  # one site per goal (a cup's grasp centre, a bowl's surface), in goal order
     camera: str  # fixed camera used for videos
     home_key: str  # keyframe of the start pose
     top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
@@ -76,7 +76,7 @@ ROBOTS: dict[str, RobotSpec] = {
         scene=ASSETS / "planar5" / "scene.xml",
         joints=("joint1", "joint2", "joint3", "joint4", "joint5"),
         grasp_site="grasp",
-        cups=("cup_left", "cup_right"),
+        goal_sites=("cup_left", "cup_right"),
         camera="front",
         home_key="home",
         # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
@@ -95,7 +95,7 @@ ROBOTS: dict[str, RobotSpec] = {
         scene=ASSETS / "panda" / "scene.xml",
         joints=tuple(f"joint{i}" for i in range(1, 8)),
         grasp_site="grasp",
-        cups=("cup_left", "cup_right"),
+        goal_sites=("cup_left", "cup_right"),
         camera="front",
         home_key="home",
         # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
@@ -183,7 +183,7 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
         frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
     for name, position in spec.extra_cups:
-        _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.cups[0])
+        _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.goal_sites[0])
     return mj_spec
 
 
@@ -223,11 +223,11 @@ def scene_problems(spec: RobotSpec, model: mujoco.MjModel) -> list[str]:
         out.append(
             f"no site {spec.grasp_site!r} (the grasp site, RobotSpec.grasp_site; its +z is the approach)"
         )
-    for cup in spec.cups:
-        if not has(obj.mjOBJ_SITE, cup):
-            out.append(f"no site {cup!r} (a cup's grasp centre, RobotSpec.cups)")
-        if not has(obj.mjOBJ_GEOM, cup):
-            out.append(f"no geom {cup!r} (the cup's body, beside its site: new cups copy it)")
+    for site in spec.goal_sites:
+        if not has(obj.mjOBJ_SITE, site):
+            out.append(f"no site {site!r} (a goal's site, RobotSpec.goal_sites)")
+        if not has(obj.mjOBJ_GEOM, site):
+            out.append(f"no geom {site!r} (the goal's body, beside its site: new cups copy it)")
     table = mujoco.mj_name2id(model, obj.mjOBJ_GEOM, "table")
     if table < 0:
         out.append("no geom 'table' (a box: the table new cups must stand on)")
@@ -268,7 +268,7 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
       is those joints' positions, in that order, clipped to their ranges;
     - a site ``spec.grasp_site``, whose local +z axis is the approach direction (a top grasp
       points it down, ``spec.top_grasp_rotation`` is that grasp's site rotation);
-    - per name of ``spec.cups`` (at least two: the goals, in goal order), a site (the cup's
+    - per name of ``spec.goal_sites`` (at least two: the goals, in goal order), a site (a cup's
       grasp centre) and a geom of the same name (the cup: a new cup of
       :func:`lasa.method.newgoals.extend_task` copies it, its ``size[0]`` is its radius);
       a name ``cup_<x>`` gives the goal name ``<x>``;
@@ -305,10 +305,10 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
     if not Path(spec.scene).is_file():
         raise ConfigError(f"robot {spec.name!r}: its scene {spec.scene} is not a file")
     problems = []
-    if len(spec.cups) < 2:
-        problems.append(f"{len(spec.cups)} cups: at least two are needed (the goals)")
-    if len(spec.ik_seeds) != len(spec.cups) or any(len(q) != len(spec.joints) for q in spec.ik_seeds):
-        problems.append(f"ik_seeds must hold one seed of {len(spec.joints)} joint values per cup")
+    if len(spec.goal_sites) < 2:
+        problems.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
+    if len(spec.ik_seeds) != len(spec.goal_sites) or any(len(q) != len(spec.joints) for q in spec.ik_seeds):
+        problems.append(f"ik_seeds must hold one seed of {len(spec.joints)} joint values per goal site")
     if len(spec.top_grasp_rotation) != 9:
         problems.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
     model = _compile(spec)
@@ -419,26 +419,28 @@ class Robot:
         """Approach direction (the site's +z axis) for a batch of joint vectors, (..., 3)."""
         return self._site_frames(qs)[1][..., :, 2]
 
-    def cup_positions(self) -> np.ndarray:
-        """World positions of the cups' grasp centres, shape (G, 3), in goal order."""
+    def goal_positions(self) -> np.ndarray:
+        """World positions of the goals' sites, shape (G, 3), in goal order."""
         mujoco.mj_kinematics(self.model, self.data)
-        return np.stack([self.data.site(name).xpos.copy() for name in self.spec.cups])
+        return np.stack([self.data.site(name).xpos.copy() for name in self.spec.goal_sites])
 
     def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
         """The same robot in a scene with one more cup, whose grasp centre is at ``position``.
 
-        The new cup becomes the last goal (``spec.cups[-1]``). Workspace checks belong to
+        The new cup becomes the last goal (``spec.goal_sites[-1]``). Workspace checks belong to
         the caller (:func:`lasa.method.newgoals.extend_task`); this only builds the scene.
 
         Raises:
             ConfigError: if a cup of that name exists already.
         """
-        if name in self.spec.cups:
+        if name in self.spec.goal_sites:
             raise ConfigError(f"the scene already has a cup named {name!r}")
         x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
         pos = (x, y, z)
         spec = dataclasses.replace(
-            self.spec, cups=(*self.spec.cups, name), extra_cups=(*self.spec.extra_cups, (name, pos))
+            self.spec,
+            goal_sites=(*self.spec.goal_sites, name),
+            extra_cups=(*self.spec.extra_cups, (name, pos)),
         )
         return Robot(spec)
 

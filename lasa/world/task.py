@@ -48,7 +48,7 @@ def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.n
         theta: Preference in [0, 1]; 0 is a top grasp, 1 a side grasp.
     """
     check_range("theta", theta, 0.0, 1.0)
-    cup = robot.cup_positions()[goal]
+    cup = robot.goal_positions()[goal]
     radial = cup - robot.base_position()
     radial[2] = 0.0
     norm = np.linalg.norm(radial)
@@ -100,21 +100,21 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     """
     if n_grid < 5 or n_grid % 2 == 0:
         raise ConfigError(f"n_grid must be an odd integer >= 5, got {n_grid}")
-    if len(robot.spec.ik_seeds) != len(robot.spec.cups):
+    if len(robot.spec.ik_seeds) != len(robot.spec.goal_sites):
         raise ConfigError(
-            f"robot {robot.name!r} has {len(robot.spec.cups)} cups but {len(robot.spec.ik_seeds)} IK "
-            "seeds (RobotSpec.ik_seeds): one seed per cup"
+            f"robot {robot.name!r} has {len(robot.spec.goal_sites)} goal sites but "
+            f"{len(robot.spec.ik_seeds)} IK seeds (RobotSpec.ik_seeds): one seed per goal site"
         )
     grid = np.linspace(0.0, 1.0, n_grid)
     mid = n_grid // 2
-    curves = np.empty((len(robot.spec.cups), n_grid, robot.n_joints))
+    curves = np.empty((len(robot.spec.goal_sites), n_grid, robot.n_joints))
     for g, seed in enumerate(robot.spec.ik_seeds):
         q = np.asarray(seed, dtype=float)
         for k in range(n_grid):
-            label = f"cup {robot.spec.cups[g]!r}, theta = {grid[k]:.3f}"
+            label = f"cup {robot.spec.goal_sites[g]!r}, theta = {grid[k]:.3f}"
             q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q, label=label)
             curves[g, k] = q
-    names = tuple(name.removeprefix("cup_") for name in robot.spec.cups)
+    names = tuple(name.removeprefix("cup_") for name in robot.spec.goal_sites)
     return CupTask(
         robot=robot,
         goal_names=names,
@@ -130,7 +130,7 @@ def cup_axis(task: CupTask, points: np.ndarray) -> np.ndarray:
 
     Zero midway between the cups; the sign says which cup a point is closer to.
     """
-    cups = task.robot.cup_positions()
+    cups = task.robot.goal_positions()
     axis = cups[-1] - cups[0]
     axis[2] = 0.0
     axis /= np.linalg.norm(axis)
