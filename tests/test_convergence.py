@@ -10,7 +10,7 @@ from lasa.base.errors import ConfigError
 from lasa.figures import convergence
 
 SMALL = convergence.Config(
-    betas=(75.0, 1000.0), assistance=("point", "hindsight"), n_users=2, horizon=12, record_every=1
+    betas=(75.0, 1000.0), assistance=("point", "hindsight"), users=2, horizon=12, record_every=1
 )
 
 
@@ -137,7 +137,7 @@ def test_zero_alpha_is_refused(model, task):
         ({"betas": (75.0, 75.0)}, "repeat"),
         ({"assistance": ()}, "assistance"),
         ({"assistance": ("blend",)}, "unknown assistance"),
-        ({"n_users": 0}, "n_users"),
+        ({"users": 0}, "users"),
         ({"horizon": 1.5}, "horizon"),
         ({"record_every": 0}, "record_every"),
         ({"horizon": 10, "record_every": 20}, "record_every"),

@@ -96,7 +96,7 @@ def toy_spec(scene: Path) -> lasa.RobotSpec:
         top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),  # fingers down
         grasp_standoff=0.05,
         side_azimuth=0.0,
-        ik_seeds=((-0.5, -1.5, -1.0), (0.3, 1.5, 1.2), (0.5, 1.5, 1.0)),
+        ik_guesses=((-0.5, -1.5, -1.0), (0.3, 1.5, 1.2), (0.5, 1.5, 1.0)),
         control=lasa.ControlConfig(),
     )
 
@@ -210,8 +210,10 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
     for missing in ("geom 'table'", "geom 'cup_left'", "geom 'cup_right'", "keyframe 'home'"):
         assert missing in message, message
     assert "toy3_broken" not in lasa.ROBOTS
-    with pytest.raises(lasa.ConfigError, match="one seed of 3 joint values per goal site"):
-        lasa.register_robot(dataclasses.replace(toy_spec(broken), name="toy3_seeds", ik_seeds=((0.0,) * 3,)))
+    with pytest.raises(lasa.ConfigError, match="one guess of 3 joint values per goal site"):
+        lasa.register_robot(
+            dataclasses.replace(toy_spec(broken), name="toy3_guesses", ik_guesses=((0.0,) * 3,))
+        )
     with pytest.raises(lasa.ConfigError, match="registered already"):
         lasa.register_robot(toy_spec(broken))
     with pytest.raises(lasa.ConfigError, match="one of the package's robots"):

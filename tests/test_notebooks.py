@@ -358,7 +358,7 @@ def test_study_outputs(executed):
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
     members = study.Config().session.members
     models = study.Config().participant_models  # the headline first
-    n = settings["n_participants"]
+    n = settings["participants"]
     assert (executed / "build" / "models" / "eating_decoder_panda.pt").is_file()
     latent = pd.read_csv(fig / "eating_latent.csv")
     assert list(latent.columns) == list(eating_task.COLUMNS) and set(latent.belief) == set(
@@ -422,7 +422,7 @@ def test_study_outputs(executed):
     assert (rows[rows.reproduced == "not testable"].direction == "n/a").all()
     assert rows[rows.ci_low == ""].reproduced.eq("not testable").all()  # no interval, no verdict
     assert not rows.measured.str.contains(r"\bnan\b").any()
-    assert (rows.n_users.astype(int) == settings["n_participants"]).all()
+    assert (rows.n_users.astype(int) == settings["participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
     video = read_video(fig / "study_dessert.mp4")
     assert video.shape[1:] == (240, 4 * 320, 3)  # the four conditions side by side

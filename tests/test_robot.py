@@ -70,4 +70,4 @@ def test_the_package_scenes_meet_the_naming_contract_register_robot_checks(name)
     spec = EATING if name == "eating" else ROBOTS[name]
     assert scene_problems(spec, robot.model) == []
     assert angle_problem(spec) is None  # the scene's angles are radians
-    assert len(spec.ik_seeds) == len(spec.goal_sites)
+    assert len(spec.ik_guesses) == len(spec.goal_sites)

@@ -123,7 +123,7 @@ def test_config_errors():
     assert (nested.session.horizon, nested.session.participant.beta_median) == (30, 30)
     assert nested.session.members == study.Config().session.members == ("hindsight", "grasp_set")
     with pytest.raises(ConfigError, match="video_participant"):
-        study.Config(n_participants=4, video_participant=4)
+        study.Config(participants=4, video_participant=4)
 
 
 def test_a_slower_condition_with_the_same_distance_is_told_apart():

@@ -44,7 +44,7 @@ def test_the_registry_and_the_config_validate_participant_models(twin):
 def test_run_simulates_each_model_and_labels_its_rows(twin):
     task = make_eating_task()
     config = study.Config(
-        n_participants=2,
+        participants=2,
         session=StudyConfig(horizon=20, members=("hindsight",)),
         participant_models=("one_step", "twin"),
     )
@@ -75,7 +75,7 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
 def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(twin):
     task = make_eating_task()
     config = study.Config(
-        n_participants=2,
+        participants=2,
         session=StudyConfig(horizon=20, members=("hindsight",)),
         participant_models=("one_step", "twin"),
         readings_per_model={"twin": 1},

@@ -45,6 +45,7 @@ from lasa.evidence.rules import rule
 
 __all__ = [
     "ALPHA",
+    "USER",
     "NO_ASSISTANCE",
     "N_BOOT",
     "Design",
@@ -63,6 +64,10 @@ __all__ = [
 
 N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
 ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
+# The column naming a simulated user in the sims' frames and CSVs: the user's index (its cup,
+# preference and random stream), the unit a bootstrap resamples. The file contracts name it
+# "seed", so the CSVs keep that name; the code says USER, and seed is a generator's seed.
+USER = "seed"
 
 Evaluate = Callable[[pd.DataFrame], list[Claim]]
 
@@ -126,9 +131,7 @@ def block_users(design: Design, block: int) -> tuple[int, int]:
     return start, design.sizes[block] - start
 
 
-def bootstrap_frames(
-    frame: pd.DataFrame, n_boot: int, seed: int, unit: str = "seed"
-) -> Iterator[pd.DataFrame]:
+def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> Iterator[pd.DataFrame]:
     """``n_boot`` resamples of ``frame``, drawing its users (``unit``) with replacement.
 
     A user drawn twice appears twice, under two new ids, so rules that average per user
@@ -147,7 +150,7 @@ def bootstrap_frames(
         yield sample
 
 
-def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = "seed") -> np.ndarray:
+def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> np.ndarray:
     """How often each user is drawn in each of ``n_boot`` resamples, shape (n_boot, users).
 
     Users are ordered as ``pd.factorize(frame[unit], sort=True)`` orders them, and drawn from
@@ -159,7 +162,7 @@ def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = "se
 
 
 def group_means(
-    frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = "seed"
+    frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = USER
 ) -> dict[tuple[Any, ...], np.ndarray]:
     """The mean of ``metric`` per group of ``keys`` in every resample, without building them.
 
@@ -196,7 +199,7 @@ def assess(
     frame: pd.DataFrame,
     n_boot: int = N_BOOT,
     seed: int = 0,
-    unit: str = "seed",
+    unit: str = USER,
     level: float = 0.95,
     fast: BootValues | None = None,
 ) -> list[Claim]:
@@ -295,8 +298,8 @@ def member_frame(frame: pd.DataFrame, member: str) -> pd.DataFrame:
     """
     own = frame["assistance"] == member
     shared = frame["assistance"] == NO_ASSISTANCE
-    if own.any() and "seed" in frame:
-        shared &= frame["seed"].isin(frame.loc[own, "seed"].unique())
+    if own.any() and USER in frame:
+        shared &= frame[USER].isin(frame.loc[own, USER].unique())
     return frame[own | shared]
 
 

@@ -5,8 +5,9 @@ rationality x user, or method x change step x user, ...) and runs it batched, on
 rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
 User i has the same cup, preference and random stream (``UserPopulation.stream``) in every
 condition, so methods are compared on paired episodes. The figures' CSVs keep the column
-name ``seed`` for that user index (their contract); in the code, ``seed`` is only ever the
-seed of a random generator.
+name ``seed`` for that user index (their contract); the code names the column
+:data:`lasa.evidence.verdicts.USER` and the index ``user``, and ``seed`` is only ever the seed
+of a random generator.
 
 A sweep runs its assisted methods under every member of the shared-autonomy family it
 is given (:func:`arms`); LA, which no assistance touches, runs once. :func:`judge` runs a
@@ -109,7 +110,7 @@ def sweep_grid(
 
     Returns:
         Each user's method, assistance member (``none`` for LA, :func:`arms`), condition
-        (e.g. its beta) and seed, the index of its cup, preference and random stream.
+        (e.g. its beta) and user, the index of its cup, preference and random stream.
     """
     grid = list(itertools.product(arms(methods, members), conditions, range(n_users)))
     method = np.array([m for (m, _), _, _ in grid])

@@ -65,6 +65,7 @@ from lasa.base.config import (
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
+from lasa.evidence.verdicts import USER
 from lasa.figures.common import draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
@@ -90,7 +91,7 @@ COLUMNS = (
     "robot",
     "assistance",
     "beta",
-    "seed",
+    USER,
     "t",
     "error",  # ||e(t)|| = ||g* - s(t)|| with g* = task.goals[goal] [rad]
     "delta",  # paper's radius (alpha = 0.5): sigma_h + (1 - b*) sigma_r [rad/s]
@@ -125,7 +126,7 @@ class Config:
 
     betas: tuple[FiniteNonNegative, ...] = (10.0, 75.0, 1000.0)  # user rationalities, finite [1/rad^2]
     assistance: tuple[str, ...] = ASSISTANCE  # members of lasa.method.assistance to run LA+SA under
-    n_users: PositiveInt = 20  # simulated users per (member, beta) [-]
+    users: PositiveInt = 20  # simulated users per (member, beta) [-]
     horizon: PositiveInt = 200  # control steps per episode [-]
     record_every: PositiveInt = 10  # steps between recorded rows; event counts cover every step [steps]
     seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
@@ -258,7 +259,7 @@ def run(
 ) -> pd.DataFrame:
     """LA+SA users of fixed rationality under each assistance member, with the T4 quantities.
 
-    Every member runs the same users (cup, grasp, random stream per seed; Eq. S1 with a
+    Every member runs the same users (cup, grasp, random stream per user; Eq. S1 with a
     constant beta) with the base decoder and alpha = ``control.alpha``, one batched
     rollout per member.
 
@@ -270,8 +271,8 @@ def run(
         progress: Show progress bars.
 
     Returns:
-        One row per (member, beta, seed, recorded step), columns :data:`COLUMNS`, ordered
-        by member (config order), beta, seed and t.
+        One row per (member, beta, user, recorded step), columns :data:`COLUMNS`, ordered
+        by member (config order), beta, user and t.
 
     Raises:
         ConfigError: if ``control.alpha`` is 0 (LA alone: no assistance, no ball).
@@ -279,17 +280,17 @@ def run(
     if control.alpha <= 0:
         raise ConfigError("the Sec. IV-A bound needs alpha > 0 (LA+SA); control.alpha is 0")
     n_candidates = len(latent_grid(control.n_z, decoder.z_dim))
-    goal, theta, noise = draw_episodes(task, config.n_users, config.horizon, n_candidates, config.seed)
-    beta = np.repeat(np.asarray(config.betas), config.n_users)
-    seed = np.tile(np.arange(config.n_users), len(config.betas))
-    target = task.target(goal[seed], theta[seed])
+    goal, theta, noise = draw_episodes(task, config.users, config.horizon, n_candidates, config.seed)
+    beta = np.repeat(np.asarray(config.betas), config.users)
+    user = np.tile(np.arange(config.users), len(config.betas))
+    target = task.target(goal[user], theta[user])
     users = UserPopulation(
-        goal=goal[seed],
-        theta=theta[seed],
+        goal=goal[user],
+        theta=theta[user],
         target=target,
         beta0=beta,
-        slope=np.zeros(len(seed)),
-        stream=seed,
+        slope=np.zeros(len(user)),
+        stream=user,
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []
@@ -310,12 +311,12 @@ def run(
             control.alpha,
         )
         counts = _window_counts(m, times)
-        n_users, n_rows = len(seed), len(times)
+        n_users, n_rows = len(user), len(times)
         cols: dict[str, object] = {
             "robot": task.robot.name,
             "assistance": member,
             "beta": np.repeat(beta, n_rows),
-            "seed": np.repeat(seed, n_rows),
+            USER: np.repeat(user, n_rows),
             "t": np.tile(times, n_users),
         }
         for name, values in {**m, **counts}.items():
@@ -378,7 +379,7 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
                 "robot": robot,
                 "assistance": member,
                 "beta": beta,
-                "users": int(part.seed.nunique()),
+                "users": int(part[USER].nunique()),
                 "steps": int(sums["steps"]),
                 "bound_steps": int(sums["bound_steps"]),
                 "bound_share": share("bound_steps", "steps"),
@@ -487,7 +488,7 @@ def plot(table: pd.DataFrame) -> Figure:
             + r"$b^*\|e\| > \delta_\alpha$ (solid), $> \delta$ (hatched)"
         )
         row[3].set_ylabel("V rose [share of steps]")
-    n = int(table.groupby(["robot", "assistance", "beta"]).seed.nunique().max())
+    n = int(table.groupby(["robot", "assistance", "beta"])[USER].nunique().max())
     fig.suptitle(f"Sec. IV-A: the Lyapunov ball of LA+SA, {n} users per (member, beta)")
     fig.tight_layout()
     return fig

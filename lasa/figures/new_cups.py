@@ -6,7 +6,7 @@ Near-optimal users who want a grasp there run the method twice (:func:`episodes_
 the context map, the task grown by the cup and the method's decoder run through the map
 (:class:`lasa.method.newgoals.MappedDecoder`, one rollout per kind of map), and ``without``
 it, the method unchanged and knowing the training cups only. The users' preferences are drawn
-per seed and shared by every cup and mapping; every member's users share one batch per (cup,
+per user and shared by every cup and mapping; every member's users share one batch per (cup,
 map) (:class:`Sweep`).
 """
 
@@ -69,7 +69,7 @@ class Sweep:
     """What the episodes at every new cup share: the method, one look's users, the new cups.
 
     Every member's users share one batch per (cup, map): member i's users are rows
-    i * n_users ... (i + 1) * n_users - 1, with the same seeds (paired across members).
+    i * n_users ... (i + 1) * n_users - 1, the same users in each (paired across members).
 
     Attributes:
         decoder: The method's decoder; task: the training task; control, config, progress and
@@ -78,7 +78,7 @@ class Sweep:
             :func:`lasa.figures.common.episodes` draws it.
         members: The members the method's assistance runs under (``none`` alone without it).
         n_users: Users per member; first: the look's first user.
-        seeds: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
+        users: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
             member: its member; assisted: ``member``, or None when the method has no assistance.
         grown: The task grown by each new cup; distances: each new cup's distance from the
             reference goal (joint space); scale: D, the largest of them.
@@ -95,7 +95,7 @@ class Sweep:
     members: tuple[str, ...]
     n_users: int
     first: int
-    seeds: np.ndarray
+    users: np.ndarray
     theta: np.ndarray
     member: np.ndarray
     assisted: np.ndarray | None
@@ -144,7 +144,7 @@ class Sweep:
             members,
             n_users,
             first,
-            seeds=np.tile(np.arange(n_users), len(members)),
+            users=np.tile(np.arange(n_users), len(members)),
             theta=np.tile(theta, len(members)),
             member=member,
             assisted=None if members == (NO_ASSISTANCE,) else member,
@@ -186,7 +186,7 @@ def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, 
     Returns:
         The headline member's run (its users alone), and every user's episodes.
     """
-    config, task, n = sweep.config, sweep.task, len(sweep.seeds)
+    config, task, n = sweep.config, sweep.task, len(sweep.users)
     new = big.n_goals - 1
     users = UserPopulation(
         goal=np.full(n, new),
@@ -194,7 +194,7 @@ def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, 
         target=big.target(np.full(n, new), sweep.theta),
         beta0=np.full(n, config.beta),
         slope=np.zeros(n),
-        stream=sweep.seeds,
+        stream=sweep.users,
     )
     with_map = {}
     for kind in config.maps:

@@ -61,7 +61,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, criteria
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
-from lasa.evidence.verdicts import assess, member_frame
+from lasa.evidence.verdicts import USER, assess, member_frame
 from lasa.figures import sim1, sim2, sim3
 from lasa.figures.common import as_decoders, check_members
 from lasa.method.decoder import ActionDecoder
@@ -308,10 +308,10 @@ def default_frames(
         ("sim2", sim2_rows, "change_step", config.change_steps),
         ("sim3", sim3_rows, None, ()),
     ):
-        part = rows[rows.seed < config.users]
-        if part.seed.nunique() < config.users:
+        part = rows[rows[USER] < config.users]
+        if part[USER].nunique() < config.users:
             raise ConfigError(
-                f"{name}'s rows hold {part.seed.nunique()} users; the map's cells need {config.users} "
+                f"{name}'s rows hold {part[USER].nunique()} users; the map's cells need {config.users} "
                 f"(set the sims' `users` to at least the map's)"
             )
         if column is not None:

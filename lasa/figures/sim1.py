@@ -21,6 +21,7 @@ from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
 from lasa.evidence.plots import METHOD_COLORS, method_lineplot, paper_point, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
+    USER,
     Design,
     block_seed,
     block_users,
@@ -59,7 +60,7 @@ COLUMNS = (
     "robot",
     "method",
     "beta",
-    "seed",
+    USER,
     "final_error",
     "time",
     "completed",
@@ -123,16 +124,17 @@ def run(
 
     Returns:
         One row per episode with the columns of :data:`COLUMNS` (``assistance`` is
-        ``none`` for LA, ``seed`` is the user's index over all looks); and the
-        trajectories of all episodes (users in the frame's row order).
+        ``none`` for LA, the column ``seed`` (:data:`~lasa.evidence.verdicts.USER`) is the user's
+        index over all looks); and the trajectories of all episodes (users in the frame's row
+        order).
     """
     start, n_users = block_users(Design(config.users, config.block, config.cap), look)
     seed_ = block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
     members = members_of(control, config.assistance) if members is None else members
-    method, member, conditions, seed = sweep_grid(config.methods, members, config.betas, n_users)
+    method, member, conditions, user = sweep_grid(config.methods, members, config.betas, n_users)
     beta = np.array(conditions, dtype=float)
-    users = _users(task, config, goal[seed], theta[seed], beta, seed)
+    users = _users(task, config, goal[user], theta[user], beta, user)
     traj = run_population(
         decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
     )
@@ -143,7 +145,7 @@ def run(
             "robot": task.robot.name,
             "method": method,
             "beta": beta,
-            "seed": start + seed,
+            USER: start + user,
             "final_error": errors[-1],
             "time": steps,
             "completed": completed,
@@ -158,7 +160,7 @@ def run(
 
 
 def _users(
-    task: GoalTask, config: Config, goal: np.ndarray, theta: np.ndarray, beta: np.ndarray, seed: np.ndarray
+    task: GoalTask, config: Config, goal: np.ndarray, theta: np.ndarray, beta: np.ndarray, user: np.ndarray
 ) -> UserPopulation:
     """The sweep's users: one per row of the grid, of fixed rationality ``beta`` (no learning)."""
     return UserPopulation(
@@ -166,8 +168,8 @@ def _users(
         theta=theta,
         target=task.target(goal, theta),
         beta0=beta,
-        slope=np.zeros(len(seed)),
-        stream=seed,
+        slope=np.zeros(len(user)),
+        stream=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )
@@ -417,14 +419,14 @@ def time_ratio_band(
     """Mean time of ``a`` over mean time of ``b`` per beta, with a 95% percentile bootstrap interval.
 
     ``ratio`` is the claims' number (each method's mean over its rows, :func:`_means`); the
-    interval resamples the users (``seed``) present under both methods, with replacement,
+    interval resamples the users (column ``seed``) present under both methods, with replacement,
     ``n_boot`` times from a generator seeded by ``seed`` (the same band run after run).
 
     Returns:
         One row per beta with both methods: ``beta``, ``ratio``, ``low``, ``high``.
     """
     rng = np.random.default_rng(seed)
-    times = frame.pivot_table(index=["beta", "seed"], columns="method", values="time", aggfunc="mean")
+    times = frame.pivot_table(index=["beta", USER], columns="method", values="time", aggfunc="mean")
     means = frame.groupby(["beta", "method"]).time.mean()
     rows = []
     for beta, part in times.groupby(level="beta"):

@@ -27,6 +27,7 @@ from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import method_lineplot, paper_note, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
+    USER,
     Design,
     block_seed,
     block_users,
@@ -52,7 +53,7 @@ COLUMNS = (
     "robot",
     "method",
     "change_step",
-    "seed",
+    USER,
     "final_error",
     "confidence",
     "success",
@@ -111,19 +112,19 @@ def run(
     seed_ = block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
     members = members_of(control, config.assistance) if members is None else members
-    method, member, conditions, seed = sweep_grid(config.methods, members, config.change_steps, n_users)
+    method, member, conditions, user = sweep_grid(config.methods, members, config.change_steps, n_users)
     change = np.array(conditions, dtype=int)
-    wrong = (goal[seed] + 1) % task.n_goals
+    wrong = (goal[user] + 1) % task.n_goals
     users = UserPopulation(
-        goal=goal[seed],
-        theta=theta[seed],
-        target=task.target(goal[seed], theta[seed]),
-        beta0=np.full(len(seed), config.beta),
-        slope=np.zeros(len(seed)),
-        stream=seed,
+        goal=goal[user],
+        theta=theta[user],
+        target=task.target(goal[user], theta[user]),
+        beta0=np.full(len(user), config.beta),
+        slope=np.zeros(len(user)),
+        stream=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
-        first_target=task.target(wrong, theta[seed]),
+        first_target=task.target(wrong, theta[user]),
         change_step=change,
     )
     traj = run_population(
@@ -135,7 +136,7 @@ def run(
             "robot": task.robot.name,
             "method": method,
             "change_step": change,
-            "seed": start + seed,
+            USER: start + user,
             "final_error": final,
             "confidence": confidence(traj.beliefs[-1], users.goal),
             "goal": users.goal,

@@ -20,6 +20,7 @@ from lasa.evidence.metrics import normalized_error
 from lasa.evidence.plots import method_lineplot, paper_note, robot_rows, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
+    USER,
     Design,
     block_seed,
     block_users,
@@ -52,7 +53,7 @@ __all__ = [
 ]
 
 NAME = "sim3_learning_users"
-COLUMNS = ("robot", "method", "learner", "slope", "seed", "t", "error", "assistance", "look")
+COLUMNS = ("robot", "method", "learner", "slope", USER, "t", "error", "assistance", "look")
 LEARNERS = ("fast", "slow")
 DPI = 150
 
@@ -93,22 +94,22 @@ def run(
 
     Returns:
         One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
-        the trajectories (users in the order method x learner x seed).
+        the trajectories (users in the order method x learner x user).
     """
     start, n_users = block_users(Design(config.users, config.block, config.cap), look)
     seed_ = block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
     members = members_of(control, config.assistance) if members is None else members
-    method, member, conditions, seed = sweep_grid(config.methods, members, config.learners, n_users)
+    method, member, conditions, user = sweep_grid(config.methods, members, config.learners, n_users)
     learner = np.array([name for name, _ in conditions])
     slope = np.array([m for _, m in conditions], dtype=float)
     users = UserPopulation(
-        goal=goal[seed],
-        theta=theta[seed],
-        target=task.target(goal[seed], theta[seed]),
-        beta0=np.zeros(len(seed)),
+        goal=goal[user],
+        theta=theta[user],
+        target=task.target(goal[user], theta[user]),
+        beta0=np.zeros(len(user)),
         slope=slope,
-        stream=seed,
+        stream=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )
@@ -117,14 +118,14 @@ def run(
     )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
-    n_users = len(seed)
+    n_users = len(user)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": np.repeat(method, len(steps)),
             "learner": np.repeat(learner, len(steps)),
             "slope": np.repeat(slope, len(steps)),
-            "seed": np.repeat(start + seed, len(steps)),
+            USER: np.repeat(start + user, len(steps)),
             "t": np.tile(steps, n_users),
             "error": errors[steps].T.ravel(),
             "assistance": np.repeat(member, len(steps)),
@@ -136,7 +137,7 @@ def run(
 
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
     """One row per episode: its mean error over the recorded steps (the claim's measure)."""
-    keys = ["robot", "method", "learner", "seed", "assistance", "look"]
+    keys = ["robot", "method", "learner", USER, "assistance", "look"]
     return frame.groupby(keys, sort=False, as_index=False).error.mean()
 
 
@@ -150,7 +151,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     slow learner, ``partly`` for one, else ``no``.
     """
     robot = str(frame.robot.iloc[0])
-    per_episode = frame.groupby(["learner", "method", "seed"]).error.mean()
+    per_episode = frame.groupby(["learner", "method", USER]).error.mean()
     mean = per_episode.groupby(["learner", "method"]).mean()
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}

@@ -35,7 +35,7 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, wrap_to
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import N_BOOT, Design, check_design, group_means, member_frame
+from lasa.evidence.verdicts import N_BOOT, USER, Design, check_design, group_means, member_frame
 from lasa.figures.common import Decoders, check_members, check_methods
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
@@ -59,7 +59,7 @@ COLUMNS = (
     "robot",
     "mapping",
     "distance",
-    "seed",
+    USER,
     "error",
     "h",
     "offset_m",
@@ -130,7 +130,7 @@ def run(
     """Fig. sim4: grasp error at new cups against their distance from the training cup.
 
     For each new cup (one batched rollout per cup and mapping), near-optimal users want
-    a grasp there, with preferences drawn per seed and shared by every cup and mapping.
+    a grasp there, with preferences drawn per user and shared by every cup and mapping.
     ``with``: the task grows by the cup and the method's decoder runs through the
     context map (:class:`lasa.method.newgoals.MappedDecoder`). ``without``: the method is left
     unchanged, knowing the training cups only. Distances and errors are joint-space, both normalised by the
@@ -174,7 +174,7 @@ def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, d: float) -> list[pd.Da
     cases = [
         ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in cup.with_map.items()
     ]
-    cases.append(("without", "none", cup.without, np.full(len(sweep.seeds), np.nan)))
+    cases.append(("without", "none", cup.without, np.full(len(sweep.users), np.nan)))
     reference = normalized_error(task.target(config.ref_goal, sweep.theta), users.target, sweep.scale)
     return [
         pd.DataFrame(
@@ -182,7 +182,7 @@ def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, d: float) -> list[pd.Da
                 "robot": task.robot.name,
                 "mapping": mapping,
                 "distance": d / sweep.scale,
-                "seed": sweep.first + sweep.seeds,
+                USER: sweep.first + sweep.users,
                 "error": normalized_error(traj.states[-1], users.target, sweep.scale),
                 "h": kind,
                 "offset_m": offset,

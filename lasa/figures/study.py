@@ -72,7 +72,7 @@ PARTICIPANT_MODELS: dict[str, Simulate] = {"planning": planning.simulate, "one_s
 class Config:
     """The simulated study (notebook 11); the participants' parameters are ``participant``."""
 
-    n_participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
+    participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
     # how a session runs (horizon, waypoint tolerances, stick grid) and the participants' parameters
     # (session.participant); the SA readings, the first the headline: hindsight, as in the paper's
     # study, and grasp_set [-]
@@ -95,9 +95,9 @@ class Config:
             check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
         for name in self.readings_per_model:
             check_choice("readings_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
-        if not 0 <= self.video_participant < self.n_participants:
+        if not 0 <= self.video_participant < self.participants:
             raise ConfigError(
-                f"video_participant must be in [0, {self.n_participants}), got {self.video_participant}"
+                f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
             )
 
 
@@ -123,7 +123,7 @@ def run(
     """
     if not decoders:
         raise ConfigError("run needs at least one decoder (the headline first)")
-    cohort = draw_cohort(config.n_participants, config.session.participant, config.seed)
+    cohort = draw_cohort(config.participants, config.session.participant, config.seed)
     episodes: dict[str, dict[str, Episodes]] = {}
     parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
     for model in config.participant_models:

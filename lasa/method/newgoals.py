@@ -183,12 +183,12 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     pos, delta = _check_placement(task, position, ref_goal)
     positions, rotations = _frames(task, ref_goal, pos, delta)
     robot = task.robot.with_cup(pos)
-    seeds = task.curves[ref_goal].copy()
-    seeds[:, 0] += delta * _yaw_axis(robot)  # turn the arm to the new bearing (no-op for a planar arm)
-    curve = np.empty_like(seeds)
+    guesses = task.curves[ref_goal].copy()
+    guesses[:, 0] += delta * _yaw_axis(robot)  # turn the arm to the new bearing (no-op for a planar arm)
+    curve = np.empty_like(guesses)
     for k, (p, r) in enumerate(zip(positions, rotations, strict=True)):
         try:
-            curve[k] = solve_grasp_ik(robot, p, r, robot.clip(seeds[k]))
+            curve[k] = solve_grasp_ik(robot, p, r, robot.clip(guesses[k]))
         except IKError as err:
             raise IKError(
                 f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is out of {robot.name}'s reach: no grasp at "

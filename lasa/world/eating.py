@@ -94,7 +94,7 @@ EATING = RobotSpec(
     top_grasp_rotation=ROBOTS["panda"].top_grasp_rotation,  # hand, so fork, pointing down
     grasp_standoff=0.0,
     side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._sideways)
-    ik_seeds=(ROBOTS["panda"].ik_seeds[0],) * 4,
+    ik_guesses=(ROBOTS["panda"].ik_guesses[0],) * 4,
     # The cup sims' units (notebook 04 states why); the study's assistance is hindsight
     # optimisation, the member the paper's user study used (Javdani et al. 2018).
     control=ControlConfig(assistance="hindsight"),  # the robots' units; the study's assistance (Sec. VI)
@@ -309,8 +309,8 @@ def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
         raise ConfigError(f"depths must be >= 2, got {depths}")
     thetas, us = np.linspace(0.0, 1.0, n_theta), np.linspace(0.0, 1.0, depths)
     strokes = np.empty((len(GOALS), n_theta, depths, robot.n_joints))
-    for g, seed in enumerate(robot.spec.ik_seeds):
-        q = np.asarray(seed, dtype=float)
+    for g, guess in enumerate(robot.spec.ik_guesses):
+        q = np.asarray(guess, dtype=float)
         for k, theta in enumerate(thetas):
             label = f"goal {GOALS[g]!r}, theta = {theta:.3f}"
             q = solve_grasp_ik(robot, *fork_frame(robot, g, theta, 0.0), q, label=label)

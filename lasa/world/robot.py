@@ -54,7 +54,7 @@ class RobotSpec:
     top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
     grasp_standoff: float  # distance from cup centre to the grasp site [m]
     side_azimuth: float  # side-grasp approach: the radial direction turned this far towards the midline [rad]
-    ik_seeds: tuple[tuple[float, ...], ...]  # one joint-space IK seed per cup [rad]
+    ik_guesses: tuple[tuple[float, ...], ...]  # one joint-space IK guess per cup [rad]
     control: ControlConfig  # default units of the control loop for this robot
     mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
     # Cups added after training (Sec. IV-C): (site name, grasp-centre position [m]); their
@@ -83,7 +83,7 @@ ROBOTS: dict[str, RobotSpec] = {
         top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
         grasp_standoff=0.10,
         side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
-        ik_seeds=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
+        ik_guesses=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
         # Units chosen so the paper's regimes exist (notebook 04 explains): one step moves
         # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
         # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
@@ -105,7 +105,7 @@ ROBOTS: dict[str, RobotSpec] = {
         # table height without flipping its wrist (joint 6 hits its limit); approaching each cup
         # from its outer side, fingers towards the midline, is a natural posture (notebook 01).
         side_azimuth=1.5707963267948966,  # pi/2
-        ik_seeds=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
+        ik_guesses=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
         # The same units as planar5, for the same reasons (notebook 04).
         control=ControlConfig(),  # the defaults are the values both robots use
         mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
@@ -250,7 +250,7 @@ def angle_problem(spec: RobotSpec) -> str | None:
         return None
     return (
         'its angles are in degrees (MJCF\'s default: the scene has no <compiler angle="radian"/>), '
-        "while lasa's are radians (the state, the keyframe, RobotSpec.ik_seeds); add "
+        "while lasa's are radians (the state, the keyframe, RobotSpec.ik_guesses); add "
         '<compiler angle="radian"/> and write the joint ranges in radians'
     )
 
@@ -282,7 +282,7 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
       ranges written in radians would compile 57 times too narrow (and the IK fail), and
       nothing in the file tells the two apart (:func:`angle_problem`).
 
-    And the spec gives one IK seed per cup (``spec.ik_seeds``, each of ``len(spec.joints)``
+    And the spec gives one IK guess per cup (``spec.ik_guesses``, each of ``len(spec.joints)``
     values), a 9-value ``top_grasp_rotation``, and the control units (``spec.control``).
 
     Args:
@@ -296,7 +296,7 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
         ConfigError: if the name is one of the package's robots, or taken (and ``replace``
             is false), the scene file is missing or does not compile, its angles are in
             degrees, the scene lacks a name of the contract (the message names each), or the
-            spec's seeds or rotation do not fit.
+            spec's guesses or rotation do not fit.
     """
     if spec.name in _PACKAGE_ROBOTS:
         raise ConfigError(f"{spec.name!r} is one of the package's robots; register yours under another name")
@@ -307,8 +307,10 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
     problems = []
     if len(spec.goal_sites) < 2:
         problems.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
-    if len(spec.ik_seeds) != len(spec.goal_sites) or any(len(q) != len(spec.joints) for q in spec.ik_seeds):
-        problems.append(f"ik_seeds must hold one seed of {len(spec.joints)} joint values per goal site")
+    if len(spec.ik_guesses) != len(spec.goal_sites) or any(
+        len(q) != len(spec.joints) for q in spec.ik_guesses
+    ):
+        problems.append(f"ik_guesses must hold one guess of {len(spec.joints)} joint values per goal site")
     if len(spec.top_grasp_rotation) != 9:
         problems.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
     model = _compile(spec)

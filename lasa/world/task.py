@@ -85,7 +85,7 @@ class CupTask(GoalTask):
 def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
     """Solve IK along each cup's preference curve and build the task.
 
-    Starting from the robot's per-cup seed at the top grasp (theta = 0), solve along the
+    Starting from the robot's per-goal IK guess at the top grasp (theta = 0), solve along the
     grid to the side grasp, each solve warm-started (and posture-regularised) by the
     previous one, so neighbouring grasps get neighbouring joint configurations.
 
@@ -95,21 +95,21 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
 
     Raises:
         ConfigError: if ``n_grid`` is not an odd integer >= 5, or the robot's spec does not
-            give one IK seed per cup.
-        IKError: if a grasp is out of reach from its seed; the message names the cup and theta.
+            give one IK guess per cup.
+        IKError: if a grasp is out of reach from its guess; the message names the cup and theta.
     """
     if n_grid < 5 or n_grid % 2 == 0:
         raise ConfigError(f"n_grid must be an odd integer >= 5, got {n_grid}")
-    if len(robot.spec.ik_seeds) != len(robot.spec.goal_sites):
+    if len(robot.spec.ik_guesses) != len(robot.spec.goal_sites):
         raise ConfigError(
             f"robot {robot.name!r} has {len(robot.spec.goal_sites)} goal sites but "
-            f"{len(robot.spec.ik_seeds)} IK seeds (RobotSpec.ik_seeds): one seed per goal site"
+            f"{len(robot.spec.ik_guesses)} IK guesses (RobotSpec.ik_guesses): one guess per goal site"
         )
     grid = np.linspace(0.0, 1.0, n_grid)
     mid = n_grid // 2
     curves = np.empty((len(robot.spec.goal_sites), n_grid, robot.n_joints))
-    for g, seed in enumerate(robot.spec.ik_seeds):
-        q = np.asarray(seed, dtype=float)
+    for g, guess in enumerate(robot.spec.ik_guesses):
+        q = np.asarray(guess, dtype=float)
         for k in range(n_grid):
             label = f"cup {robot.spec.goal_sites[g]!r}, theta = {grid[k]:.3f}"
             q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q, label=label)
