@@ -56,6 +56,7 @@ __all__ = [
     "check_methods",
     "check_pilot",
     "sweep_grid",
+    "LooksConfig",
     "SweepConfig",
     "draw_episodes",
     "episodes",
@@ -125,12 +126,12 @@ def check_pilot(pilot: str, prob: float) -> None:
 
 
 @dataclasses.dataclass(frozen=True)
-class SweepConfig:
-    """The settings sims 1-3 share: the users per point, the readings, the pilot, the methods.
+class LooksConfig:
+    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the readings.
 
-    Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
-    slopes) and its episode's length; the verdict map (:mod:`lasa.figures.robustness`) reads the
-    same names. Every field is validated by its annotated type (:func:`lasa.base.config.validate`).
+    Sims 1-3 (through :class:`SweepConfig`) and sim 4 (:class:`lasa.figures.sim4.Config`) extend
+    it with their own sweep. Every field is validated by its annotated type
+    (:func:`lasa.base.config.validate`); the design's sizes are checked together (:class:`Design`).
     """
 
     users: PositiveInt = Design.first  # users per point at the first look, every reading (Design) [-]
@@ -138,15 +139,29 @@ class SweepConfig:
     cap: PositiveInt = Design.cap  # most users per point [-]
     n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
-    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
-    pilot_prob: UnitInterval = 0.0  # p of the laggy or noisy pilot [-]
-    methods: tuple[str, ...] = METHODS  # methods compared
     seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)
         check_design(self.users, self.block, self.cap)
         check_members(self.assistance)
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepConfig(LooksConfig):
+    """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods.
+
+    Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
+    slopes) and its episode's length; the verdict map (:mod:`lasa.figures.robustness`) reads the
+    same names.
+    """
+
+    pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
+    pilot_prob: UnitInterval = 0.0  # p of the laggy or noisy pilot [-]
+    methods: tuple[str, ...] = METHODS  # methods compared
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
         check_pilot(self.pilot, self.pilot_prob)
         check_methods(self.methods)
 

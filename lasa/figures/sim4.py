@@ -19,24 +19,21 @@ from matplotlib.figure import Figure
 from scipy import stats
 
 from lasa.base.config import (
-    ASSISTANCE,
     ControlConfig,
     NonNegative,
     NonNegativeInt,
     Number,
     Positive,
     PositiveInt,
-    Seed,
     check_choice,
-    validate,
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, wrap_to
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import N_BOOT, USER, Design, check_design, group_means, member_frame
-from lasa.figures.common import Decoders, check_members, check_methods
+from lasa.evidence.verdicts import USER, group_means, member_frame
+from lasa.figures.common import Decoders, LooksConfig, check_methods
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
 from lasa.world.task import CupTask
@@ -73,8 +70,12 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config:
-    """Fig. sim4: users who reach for new cups, with and without the context map h."""
+class Config(LooksConfig):
+    """Fig. sim4: users who reach for new cups, with and without the context map h.
+
+    The users per point, the bootstrap, the readings and the users' seed are
+    :class:`~lasa.figures.common.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
+    """
 
     offsets: tuple[Positive, ...] = (
         0.08,
@@ -88,18 +89,12 @@ class Config:
     )
     ref_goal: NonNegativeInt = 1  # the training cup the new ones are referred to [-]
     beta: NonNegative = 1000.0  # near-optimal users [1/rad^2]
-    users: PositiveInt = Design.first  # users per (mapping, new cup) at the first look, every reading [-]
-    block: PositiveInt = Design.block  # users added per later look, the headline reading only [-]
-    cap: PositiveInt = Design.cap  # most users per point [-]
-    n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
-    assistance: tuple[str, ...] = ASSISTANCE  # members the method's assistance runs under
     horizon: PositiveInt = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
     maps: tuple[str, ...] = ("grasp", "straight_line")  # kinds of h run "with" the map (lasa.method.newgoals)
-    seed: Seed = 0  # seed of the users' preferences and random streams [-]
 
     def __post_init__(self) -> None:
-        validate(self)
+        super().__post_init__()
         if not self.offsets:
             raise ConfigError("offsets must not be empty")
         object.__setattr__(self, "offsets", tuple(float(o) for o in self.offsets))
@@ -109,8 +104,6 @@ class Config:
             or np.hypot(*self.direction) < 1e-9
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
-        check_design(self.users, self.block, self.cap)
-        check_members(self.assistance)
         check_methods((self.method,))
         if not self.maps:
             raise ConfigError("maps must name at least one kind of context map")
