@@ -231,7 +231,7 @@ class Station:
         else:
             result = self._advance(z, pressed)
             a_h = result.human_action[0]
-            a_r = result.assistance[0] if result.assistance is not None else np.zeros(n)
+            a_r = result.robot_action[0] if result.robot_action is not None else np.zeros(n)
             a = result.action[0]
             self.state = result.state[0]
             self.log_belief = result.log_belief[0]

@@ -68,14 +68,14 @@ class StepResult:
         log_belief: log b^{t+1}, shape (U, G).
         human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
         action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
-        assistance: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s].
+        robot_action: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s].
     """
 
     state: np.ndarray
     log_belief: np.ndarray
     human_action: np.ndarray
     action: np.ndarray
-    assistance: np.ndarray | None = None
+    robot_action: np.ndarray | None = None
 
 
 def advance(
@@ -105,7 +105,7 @@ def advance(
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
     return StepResult(
-        state=new_state, log_belief=new_log_b, human_action=a_h, action=a, assistance=a_r * weight[:, None]
+        state=new_state, log_belief=new_log_b, human_action=a_h, action=a, robot_action=a_r * weight[:, None]
     )
 
 
