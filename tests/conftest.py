@@ -59,17 +59,23 @@ def panda_model(panda_task: CupTask):
 
 
 # Files a test leaves for a person to look at (a screenshot, say), listed at the end of the run.
-_ARTIFACTS: list[tuple[str, str]] = []
+# They ride on the test's report (``user_properties``), which pytest-xdist's workers send back to
+# the process that prints the summary.
+ARTIFACT = "artifact"
 
 
 @pytest.fixture
-def report_artifact():
+def report_artifact(request):
     """Call as ``report_artifact(description, path)``: the path is printed in the run's summary."""
-    return lambda description, path: _ARTIFACTS.append((description, str(path)))
+    return lambda description, path: request.node.user_properties.append((ARTIFACT, (description, str(path))))
 
 
 def pytest_terminal_summary(terminalreporter):
-    if _ARTIFACTS:
+    reports = [r for outcome in ("passed", "failed") for r in terminalreporter.stats.get(outcome, [])]
+    found = [
+        value for r in reports if r.when == "call" for key, value in r.user_properties if key == ARTIFACT
+    ]
+    if found:
         terminalreporter.section("files left for inspection")
-        for description, path in _ARTIFACTS:
+        for description, path in found:
             terminalreporter.write_line(f"{description}: {path}")

@@ -6,7 +6,7 @@ evaluates phi(z, s, b) for every user and every joystick candidate z on the grid
 (:mod:`lasa.people.users`), which sets a_h; and :func:`lasa.method.step.advance`, the shared
 step, blends, updates the belief and takes the safe step.
 
-Users of different methods, rationalities and seeds share a batch, and so share each
+Users of different methods, rationalities and streams share a batch, and so share each
 decoder call.
 """
 
