@@ -339,27 +339,7 @@ def collect_eating_demonstrations(
     check_choice("reading", reading, EATING_READINGS)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
-            n_home = config.n_starts + (task.n_goals - 1 if reading == "home" else 0)
-            starts = [task.start.copy()]
-            starts += [
-                robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
-                for _ in range(n_home - 1)
-            ]
-            beliefs_0: list[np.ndarray | None] = [None] * len(starts)
-            manipulate = [True] * len(starts)
-            if reading != "home":
-                for other in range(task.n_goals):
-                    if other != g:
-                        tilt = float(rng.uniform())
-                        leaves = reading == "leaves"
-                        starts.append(
-                            task.pose(other, np.array([tilt]), np.array([1.0]))[0]
-                            if leaves
-                            else task.target(other, tilt)
-                        )
-                        settled = _settled_belief(other, task.n_goals, control.belief_floor)
-                        beliefs_0.append(settled if reading in ("continuous", "leaves") else None)
-                        manipulate.append(reading == "continuous")
+            starts, beliefs_0, manipulate = _eating_starts(task, control, config, reading, g, rng)
             for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
                 target = task.target(g, theta)
                 segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
@@ -389,3 +369,44 @@ def _settled_belief(goal: int, n_goals: int, floor: float) -> np.ndarray:
     b = np.full(n_goals, floor)
     b[goal] = 1.0 - (n_goals - 1) * floor
     return b
+
+
+def _eating_starts(
+    task: EatingTask,
+    control: ControlConfig,
+    config: DemoConfig,
+    reading: str,
+    g: int,
+    rng: np.random.Generator,
+) -> tuple[list[np.ndarray], list[np.ndarray | None], list[bool]]:
+    """The starts of goal ``g``'s demonstrations under ``reading``: (pose, start belief, manipulates).
+
+    Home and ``n_starts - 1`` perturbed homes (``n_starts + G - 2`` for ``home``), each from a
+    uniform belief (None) and manipulating; then, unless ``home``, one start per other goal:
+    its entry at a random tilt (``leaves``: its stroke's end), from the belief settled there
+    (``continuous``, ``leaves``) or a uniform one (``transfers``), manipulating for
+    ``continuous`` only. Draws from ``rng`` in that order.
+    """
+    robot = task.robot
+    n_home = config.n_starts + (task.n_goals - 1 if reading == "home" else 0)
+    starts = [task.start.copy()]
+    starts += [
+        robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
+        for _ in range(n_home - 1)
+    ]
+    beliefs_0: list[np.ndarray | None] = [None] * len(starts)
+    manipulate = [True] * len(starts)
+    if reading == "home":
+        return starts, beliefs_0, manipulate
+    for other in range(task.n_goals):
+        if other == g:
+            continue
+        tilt = float(rng.uniform())
+        if reading == "leaves":
+            starts.append(task.pose(other, np.array([tilt]), np.array([1.0]))[0])
+        else:
+            starts.append(task.target(other, tilt))
+        settled = _settled_belief(other, task.n_goals, control.belief_floor)
+        beliefs_0.append(settled if reading in ("continuous", "leaves") else None)
+        manipulate.append(reading == "continuous")
+    return starts, beliefs_0, manipulate
