@@ -1,5 +1,7 @@
 """Algorithm 1, batched: one decoder call per step, invariants, determinism."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose, assert_array_equal
@@ -109,6 +111,21 @@ def test_bad_arguments_are_clear(model, task):
         rollout(model, task, users, 0.2, ctl, 0, noise_for(task, 2))
     with pytest.raises(ConfigError, match="alpha"):
         rollout(model, task, users, 1.5, ctl, HORIZON, noise_for(task, 2))
+
+
+def test_bad_members_and_pilot_noise_are_clear(model, task):
+    users, ctl, noise = make_users(task, 2), task.robot.control, noise_for(task, 2)
+    with pytest.raises(ConfigError, match=r"one member per user, shape \(2,\), got \(3,\)"):
+        rollout(model, task, users, 0.2, ctl, HORIZON, noise, assistance=np.array(["point"] * 3))
+    with pytest.raises(ConfigError, match="unknown assistance 'nearest'; choose one of"):
+        rollout(model, task, users, 0.2, ctl, HORIZON, noise, assistance=np.array(["point", "nearest"]))
+    laggy = dataclasses.replace(users, pilot="laggy", pilot_prob=0.3)
+    for bad in (None, np.zeros((2, HORIZON - 1, 2)), np.zeros((2, HORIZON, 3))):
+        with pytest.raises(
+            ConfigError, match=r"a laggy pilot needs pilot_noise of shape \(streams, >= 25, 2\)"
+        ):
+            rollout(model, task, laggy, 0.2, ctl, HORIZON, noise, pilot_noise=bad)
+    rollout(model, task, laggy, 0.2, ctl, HORIZON, noise, pilot_noise=np.full((2, HORIZON, 2), 0.5))
 
 
 def test_step_never_commands_outside_limits_for_random_huge_or_nan_input(model, task):

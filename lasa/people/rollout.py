@@ -92,26 +92,8 @@ def rollout(
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
     n = task.robot.n_joints
-    members = None
-    if assistance is not None:
-        members = np.asarray(assistance, dtype=str)
-        if members.shape != (n_users,):
-            raise ConfigError(
-                f"assistance must name one member per user, shape ({n_users},), got {members.shape}"
-            )
-        for name in set(members.tolist()):
-            check_choice("assistance", name, members_of_family())
-    piloted = users.pilot != "boltzmann" and users.pilot_prob > 0
-    if piloted and (
-        pilot_noise is None
-        or pilot_noise.ndim != 3
-        or pilot_noise.shape[1] < horizon
-        or pilot_noise.shape[2] != 2
-    ):
-        got = None if pilot_noise is None else pilot_noise.shape
-        raise ConfigError(
-            f"a {users.pilot} pilot needs pilot_noise of shape (streams, >= {horizon}, 2), got {got}"
-        )
+    members = _members(assistance, n_users)
+    piloted = _piloted(users, pilot_noise, horizon)
     k_prev: np.ndarray | None = None
 
     states = np.empty((horizon + 1, n_users, n))
@@ -138,3 +120,29 @@ def rollout(
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)
     return Trajectories(states=states, beliefs=beliefs, z=zs, human_actions=a_hs, actions=acts)
+
+
+def _members(assistance: np.ndarray | None, n_users: int) -> np.ndarray | None:
+    """Each user's assistance member, checked: one known member per user (None: the control's)."""
+    if assistance is None:
+        return None
+    members = np.asarray(assistance, dtype=str)
+    if members.shape != (n_users,):
+        raise ConfigError(
+            f"assistance must name one member per user, shape ({n_users},), got {members.shape}"
+        )
+    for name in set(members.tolist()):
+        check_choice("assistance", name, members_of_family())
+    return members
+
+
+def _piloted(users: UserPopulation, pilot_noise: np.ndarray | None, horizon: int) -> bool:
+    """Whether the users are laggy or noisy pilots; if so, their uniforms must cover the horizon."""
+    piloted = users.pilot != "boltzmann" and users.pilot_prob > 0
+    shape_ok = pilot_noise is not None and pilot_noise.ndim == 3 and pilot_noise.shape[1] >= horizon
+    if piloted and not (shape_ok and pilot_noise is not None and pilot_noise.shape[2] == 2):
+        got = None if pilot_noise is None else pilot_noise.shape
+        raise ConfigError(
+            f"a {users.pilot} pilot needs pilot_noise of shape (streams, >= {horizon}, 2), got {got}"
+        )
+    return bool(piloted)
