@@ -227,57 +227,71 @@ def assess(
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     point = evaluate(frame)
+    samples = _boot_samples(evaluate, frame, point, n_boot, seed, unit, fast)
+    n_users = int(frame[unit].nunique())
+    return [_judged(c, samples[c.id], level, n_users) for c in point]
+
+
+def _boot_samples(
+    evaluate: Evaluate,
+    frame: pd.DataFrame,
+    point: list[Claim],
+    n_boot: int,
+    seed: int,
+    unit: str,
+    fast: BootValues | None,
+) -> dict[str, dict[str, list[float]]]:
+    """Claim id -> number name -> its values over the resamples (:func:`assess`'s arguments)."""
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
     if fast is not None:
         for cid, arrays in fast(frame, resample_counts(frame, n_boot, seed, unit)).items():
             for k, arr in arrays.items():
                 if cid in samples and k in samples[cid]:
                     samples[cid][k] = [float(x) for x in arr]
-    else:
-        for sample in bootstrap_frames(frame, n_boot, seed, unit):
-            for c in evaluate(sample):
-                for k, v in c.values.items():
-                    if c.id in samples and k in samples[c.id]:
-                        samples[c.id][k].append(v)
+        return samples
+    for sample in bootstrap_frames(frame, n_boot, seed, unit):
+        for c in evaluate(sample):
+            for k, v in c.values.items():
+                if c.id in samples and k in samples[c.id]:
+                    samples[c.id][k].append(v)
+    return samples
+
+
+def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int) -> Claim:
+    """Claim ``c`` with its rule's intervals at ``level`` from its resampled numbers, settled or not."""
+    r = rule(c.id)
+    if c.reproduced != r.verdict(c.values):
+        raise ConfigError(f"{c.id}: verdict {c.reproduced!r} is not its rule's at {dict(c.values)}")
     tail = 100.0 * (1.0 - level) / 2.0
-    n_users = int(frame[unit].nunique())
-    out = []
-    for c in point:
-        r = rule(c.id)
-        if c.reproduced != r.verdict(c.values):
-            raise ConfigError(f"{c.id}: verdict {c.reproduced!r} is not its rule's at {dict(c.values)}")
-        intervals: dict[str, tuple[float, float]] = {}
-        for q in r.quantities:
-            boot = np.asarray(samples[c.id][q.name], dtype=float)
-            boot = boot[np.isfinite(boot)]
-            bounds = np.percentile(boot, [tail, 100.0 - tail]) if len(boot) else np.full(2, np.nan)
-            intervals[q.name] = (float(bounds[0]), float(bounds[1]))
-        settled = r.settled(intervals)
-        text = "; ".join(
-            f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
-            for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
+    intervals: dict[str, tuple[float, float]] = {}
+    for q in r.quantities:
+        boot = np.asarray(samples[q.name], dtype=float)
+        boot = boot[np.isfinite(boot)]
+        bounds = np.percentile(boot, [tail, 100.0 - tail]) if len(boot) else np.full(2, np.nan)
+        intervals[q.name] = (float(bounds[0]), float(bounds[1]))
+    settled = r.settled(intervals)
+    text = "; ".join(
+        f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
+        for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
+    )
+    lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
+    if not settled:
+        lead += (
+            f"Undecided: {'; '.join(r.straddled(intervals)) or 'an interval is unknown'}; "
+            f"the point estimates read {c.reproduced!r}. "
         )
-        lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
-        if not settled:
-            lead += (
-                f"Undecided: {'; '.join(r.straddled(intervals)) or 'an interval is unknown'}; "
-                f"the point estimates read {c.reproduced!r}. "
-            )
-        first = intervals[r.quantities[0].name]
-        out.append(
-            dataclasses.replace(
-                c,
-                value=float(c.values[r.quantities[0].name]),
-                ci_low=first[0],
-                ci_high=first[1],
-                settled=settled,
-                intervals=intervals,
-                reproduced=c.reproduced if settled else UNDECIDED,
-                n_users=n_users,
-                note=lead + f"Rule: {r.text}. " + c.note,
-            )
-        )
-    return out
+    first = intervals[r.quantities[0].name]
+    return dataclasses.replace(
+        c,
+        value=float(c.values[r.quantities[0].name]),
+        ci_low=first[0],
+        ci_high=first[1],
+        settled=settled,
+        intervals=intervals,
+        reproduced=c.reproduced if settled else UNDECIDED,
+        n_users=n_users,
+        note=lead + f"Rule: {r.text}. " + c.note,
+    )
 
 
 def member_of(frame: pd.DataFrame) -> str:
