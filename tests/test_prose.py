@@ -10,6 +10,7 @@ its check rewritten too.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 from pathlib import Path
@@ -18,6 +19,7 @@ import pandas as pd
 import pytest
 
 from lasa.evidence import latent_property
+from lasa.evidence.findings import stated_numbers
 from lasa.figures import study_analysis
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,12 +34,21 @@ def _shows(notebook: str) -> str:
     return " ".join(next(t for t in text if t.startswith("## What it shows")).split())
 
 
+@functools.cache
 def _claims() -> pd.DataFrame:
     return pd.read_csv(FIGURES / "claims.csv", dtype=str).set_index(["id", "robot"])
 
 
 def _row(cid: str, robot: str = "panda") -> pd.Series:
     return _claims().loc[(cid, robot)]
+
+
+def _number(cid: str, robot: str, name: str) -> tuple[float, float, float]:
+    """(value, low, high) of the number ``name`` a row's rule reads, as its note states it."""
+    text = dict(stated_numbers(_row(cid, robot).note))[name]  # "<value> [<low>, <high>]"
+    value, interval = text.split(" [")
+    low, high = interval.rstrip("]").split(", ")
+    return float(value), float(low), float(high)
 
 
 def _pct(x: float) -> str:
@@ -66,15 +77,10 @@ def test_04_time_ratio_at_both_rationalities(nb04: str) -> None:
     assert "For near-optimal users (β = 1000) assistance shortens the reach on both robots" in nb04
     for robot in ("planar5", "panda"):
         row = _row("sim1.time_ratio", robot)
-        assert float(row.ci_low) < 1 < float(row.ci_high), (
-            robot,
-            row.ci_low,
-            row.ci_high,
-        )  # ratio at beta = 75
         assert row.n_users == "150" and row.reproduced == "not reproduced"
-        at_1000 = row.paper_numbers.split("(beta = 1000): ")[1]  # "<word>, <value> [<low>, <high>]"
-        low = float(at_1000.split("[")[1].split(",")[0])
-        assert low > 1, (robot, at_1000)
+        _, low, high = _number("sim1.time_ratio", robot, "ratio_75")
+        assert low < 1 < high, (robot, low, high)
+        assert _number("sim1.time_ratio", robot, "ratio_1000")[1] > 1, robot
 
 
 def test_11_the_study_decoder_meets_the_two_half_rule(nb11: str, eating: pd.DataFrame) -> None:
@@ -165,34 +171,31 @@ def _readme_why() -> str:
     return " ".join(text[start : text.index("\n\n", start)].split())
 
 
-def _paper_number(row: pd.Series, label: str) -> tuple[str, float, float, float]:
-    """(word, value, low, high) of one of the paper's numbers in a row's ``paper_numbers``."""
-    part = row.paper_numbers.split(f"({label}): ")[1].split(";")[0]  # "<word>, <value> [<low>, <high>]"
-    word, rest = part.split(", ", 1)
-    value, interval = rest.split(" [")
-    low, high = interval.rstrip("]").split(", ")
-    return word, float(value), float(low), float(high)
-
-
 def test_readme_time_ratios() -> None:
     why = _readme_why()
     robots = ("planar5", "panda")
-    at_75 = [_paper_number(_row("sim1.time_ratio", r), "beta = 75") for r in robots]
-    at_1000 = [_paper_number(_row("sim1.time_ratio", r), "beta = 1000") for r in robots]
-    assert all(low < 1 < high for _, _, low, high in at_75)  # "no clear time"
-    assert f"(ratio {at_75[0][1]:.2f} on planar5, {at_75[1][1]:.2f} on the Panda, not 1.45)" in why
-    assert all(low > 1 for _, _, low, _ in at_1000)
-    more = [f"{100 * (v - 1):.0f}%" for _, v, _, _ in at_1000]
+    at_75 = [_number("sim1.time_ratio", r, "ratio_75") for r in robots]
+    at_1000 = [_number("sim1.time_ratio", r, "ratio_1000") for r in robots]
+    assert all(low < 1 < high for _, low, high in at_75)  # "no clear time"
+    assert f"(ratio {at_75[0][0]:.2f} on planar5, {at_75[1][0]:.2f} on the Panda, not 1.45)" in why
+    assert all(low > 1 for _, low, _ in at_1000)
+    more = [f"{100 * (v - 1):.0f}%" for v, _, _ in at_1000]
     assert f"take {more[0]} and {more[1]} more time without it, against the paper's 30%" in why
 
 
 def test_readme_new_goals() -> None:
     why = _readme_why()
-    slopes = [_paper_number(_row("sim4.straight_line_linear", r), "y = 0.11x") for r in ("planar5", "panda")]
-    assert all(w == "not reproduced" and low > 0 for w, _, low, _ in slopes)  # grows, but not at 0.11
-    assert f"with slope {slopes[0][1]:.2g} (planar5) and {slopes[1][1]:.2g} (Panda) in joint space" in why
-    word, _, low, _ = _paper_number(_row("sim4.no_map_training_goal", "panda"), "y = x")
-    assert word == "not reproduced" and low > 1 + 0.15  # above y = x, beyond its tolerance
+    robots = ("planar5", "panda")
+    slopes = [_number("sim4.straight_line_linear", r, "slope") for r in robots]
+    assert all(
+        "0.11 (y = 0.11x): not reproduced" in _row("sim4.straight_line_linear", r).paper_numbers
+        for r in robots
+    )
+    assert all(low > 0 and not low <= 0.11 <= high for _, low, high in slopes)  # grows, but not at 0.11
+    assert f"with slope {slopes[0][0]:.2g} (planar5) and {slopes[1][0]:.2g} (Panda) in joint space" in why
+    _, low, _ = _number("sim4.no_map_training_goal", "panda", "slope")
+    assert "1 ± 0.15 (y = x): not reproduced" in _row("sim4.no_map_training_goal", "panda").paper_numbers
+    assert low > 1 + 0.15  # above y = x, beyond its tolerance
     assert "without the map it grows faster than y = x on the Panda" in why
 
 

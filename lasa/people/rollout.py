@@ -138,11 +138,10 @@ def _members(assistance: np.ndarray | None, n_users: int) -> np.ndarray | None:
 
 def _piloted(users: UserPopulation, pilot_noise: np.ndarray | None, horizon: int) -> bool:
     """Whether the users are laggy or noisy pilots; if so, their uniforms must cover the horizon."""
-    piloted = users.pilot != "boltzmann" and users.pilot_prob > 0
-    shape_ok = pilot_noise is not None and pilot_noise.ndim == 3 and pilot_noise.shape[1] >= horizon
-    if piloted and not (shape_ok and pilot_noise is not None and pilot_noise.shape[2] == 2):
-        got = None if pilot_noise is None else pilot_noise.shape
+    piloted = bool(users.pilot != "boltzmann" and users.pilot_prob > 0)
+    got = None if pilot_noise is None else pilot_noise.shape
+    if piloted and (got is None or len(got) != 3 or got[1] < horizon or got[2] != 2):
         raise ConfigError(
             f"a {users.pilot} pilot needs pilot_noise of shape (streams, >= {horizon}, 2), got {got}"
         )
-    return bool(piloted)
+    return piloted
