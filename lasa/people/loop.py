@@ -23,7 +23,7 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import Retargeting
+from lasa.method.retarget import MODES, Retargeting, twist
 from lasa.method.step import advance, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import TASK_NAMES, Episodes, Layout, StudyConfig, layout
@@ -51,6 +51,7 @@ class Setting:
     rest: int  # index of the rest position in grid
     unit: float  # the best translation one step of Retargeting makes [m]
     retarget: Retargeting
+    r_twist: np.ndarray  # the fork twist of every (Retargeting mode, grid input) at full scale (M, K, 6)
     goal_sets: np.ndarray  # the belief's targets
     data: mujoco.MjData
 
@@ -126,6 +127,7 @@ def prepare(
         rest=int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0]),
         unit=control.dt * config.retarget.linear_speed,
         retarget=Retargeting(robot, control.dt, config.retarget),
+        r_twist=twist(np.arange(len(MODES))[:, None], grid, config.retarget),
         goal_sets=task.goal_sets(control.likelihood),
         data=mujoco.MjData(robot.model),
     )

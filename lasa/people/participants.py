@@ -39,7 +39,6 @@ error and preference alignment.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 
 import numpy as np
@@ -47,7 +46,7 @@ import numpy as np
 from lasa.base.config import ControlConfig
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, retarget_action, twist
+from lasa.method.retarget import MODES, retarget_action
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import Episodes, StudyConfig
@@ -59,15 +58,8 @@ from lasa.world.eating import EatingTask
 __all__ = ["simulate"]
 
 
-@dataclasses.dataclass(frozen=True)
-class _Study(Setting):
-    """A one-step study's fixed parts: the loop's, and Retargeting's candidates."""
-
-    r_twist: np.ndarray  # twist of every (mode, z) at full scale, (M, K, 6)
-
-
 def _foresee(
-    study: _Study, run: State, idx: np.ndarray, b: np.ndarray, la: np.ndarray
+    study: Setting, run: State, idx: np.ndarray, b: np.ndarray, la: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What every candidate of the running episodes ``idx`` would do, as the participant sees it.
 
@@ -92,7 +84,7 @@ def _foresee(
 
 
 def _values(
-    study: _Study, run: State, idx: np.ndarray, la: np.ndarray, dp: np.ndarray, new_dir: np.ndarray
+    study: Setting, run: State, idx: np.ndarray, la: np.ndarray, dp: np.ndarray, new_dir: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Each candidate's progress in best-step units (-inf: no such input), (A, M K), and each
     episode's rest position among them, (A,)."""
@@ -119,7 +111,7 @@ def _values(
 
 
 def _act(
-    study: _Study,
+    study: Setting,
     run: State,
     t: int,
     idx: np.ndarray,
@@ -150,7 +142,7 @@ def _act(
     move_robots(study, run, idx, a_h, b)
 
 
-def _step(study: _Study, run: State, t: int, idx: np.ndarray) -> None:
+def _step(study: Setting, run: State, t: int, idx: np.ndarray) -> None:
     """One control step of the running episodes ``idx``: each participant weighs every candidate
     input one step ahead, chooses one (or rests), and the robot moves."""
     b = belief(run.log_b[idx])
@@ -195,11 +187,7 @@ def simulate(
         ConfigError: on a decoder that does not fit the task or the 2-axis stick, or unknown
             interfaces.
     """
-    setting = prepare(task, decoder, cohort, control, config, seed, interfaces)
-    # Retargeting's candidates: (mode, z) for every mode, one rest position (the current mode's)
-    n_k = len(setting.grid)
-    r_twist = np.stack([twist(np.full(n_k, m), setting.grid, config.retarget) for m in range(len(MODES))])
-    study = _Study(**vars(setting), r_twist=r_twist)
+    study = prepare(task, decoder, cohort, control, config, seed, interfaces)
     run = start(study)
     desc = f"study: {len(cohort)} participants, {len(study.layout.part)} episodes"
     return run_steps(study, run, functools.partial(_step, study, run), desc, progress)

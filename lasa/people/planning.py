@@ -76,7 +76,7 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, retarget_action, twist
+from lasa.method.retarget import MODES, retarget_action
 from lasa.method.step import advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import Episodes, StudyConfig
@@ -156,7 +156,6 @@ class _Study(Setting):
     replan_steps: int
     coarse: int  # control steps per rolled step beyond the re-plan period
     hold_steps: np.ndarray  # (H,)
-    r_twist: np.ndarray  # twist of every (mode, move) at full scale, (M, K', 6)
 
     @property
     def n_plans(self) -> int:
@@ -187,16 +186,12 @@ def _prepare(
     setting = prepare(task, decoder, cohort, control, config, seed, interfaces)
     replan_steps, hold_steps = plan.steps(control.dt)
     moves = np.flatnonzero(np.arange(len(setting.grid)) != setting.rest)
-    r_twist = np.stack(
-        [twist(np.full(len(moves), m), setting.grid[moves], config.retarget) for m in range(len(MODES))]
-    )
     return _Study(
         **vars(setting),
         moves=moves,
         replan_steps=replan_steps,
         coarse=plan.coarse,
         hold_steps=hold_steps,
-        r_twist=r_twist,
     )
 
 
@@ -258,7 +253,7 @@ def _retarget_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
     fork by exp(h omega); a plan in another mode takes its presses first, one step each.
     """
     h = study.hold_steps * study.control.dt  # (H,)
-    tw = study.r_twist[:, :, None, :] * h[None, None, :, None]  # (M, K', H, 6)
+    tw = study.r_twist[:, study.moves, None, :] * h[None, None, :, None]  # (M, K', H, 6)
     dp = tw[..., :3].reshape(1, -1, 3)
     new_dir = _rotate(run.axis[idx, None, :], tw[..., 3:].reshape(1, -1, 3))
     n_m, n_k, n_h = tw.shape[:3]
