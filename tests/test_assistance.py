@@ -6,11 +6,14 @@ import dataclasses
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import ASSISTANCE, assist, nearest_grasps
+from lasa.method.assistance import BUILT_IN_ASSISTANCE, assist, hindsight_value, nearest_grasps
 
 # Two goals in a 2-D joint space. Goal 0 is the point (1, 0), its grasps the segment from
 # (1, -1) to (1, 1); goal 1 the point (-1, 0), its grasps the segment from (-1, -1) to (-1, 1).
@@ -62,22 +65,89 @@ def test_arbitrated_pulls_to_the_likeliest_goal_with_confidence_weight():
     assert_allclose(w, [1.0])
 
 
-def test_hindsight_is_the_belief_weighted_distance_gradient_at_sigma_h():
-    # both goals are sqrt(1.25) away: a_r = 0.5 (0.75 (1, -0.5) + 0.25 (-1, -0.5)) / sqrt(1.25)
-    a_r, w = run("hindsight")
+def test_hindsight_point_is_the_belief_weighted_distance_gradient_at_sigma_h():
+    # both goal poses are sqrt(1.25) away: a_r = 0.5 (0.75 (1, -0.5) + 0.25 (-1, -0.5)) / sqrt(1.25)
+    a_r, w = run("hindsight_point")
     assert_allclose(a_r, 0.5 * np.array([[0.5, -0.5]]) / np.sqrt(1.25))
     assert_allclose(w, [1.0])
     # within delta = 0.05 of the goal the cost is quadratic: a_r = sigma_h (g - s) / delta
-    a_r, _ = run("hindsight", belief=np.array([[1.0, 0.0]]), state=np.array([[1.0, 0.02]]))
+    a_r, _ = run("hindsight_point", belief=np.array([[1.0, 0.0]]), state=np.array([[1.0, 0.02]]))
     assert_allclose(a_r, 0.5 * np.array([[0.0, -0.02]]) / 0.05)
-    assert np.linalg.norm(run("hindsight", state=np.array([[40.0, -7.0]]))[0]) <= SPEED + 1e-12
+    assert np.linalg.norm(run("hindsight_point", state=np.array([[40.0, -7.0]]))[0]) <= SPEED + 1e-12
+
+
+def test_hindsight_pulls_to_the_nearest_target_of_each_goal_by_hand():
+    # nearest targets of (0, 0.5): (1, 0.5) and (-1, 0.5), each 1 away (> delta):
+    # a_r = 0.5 (0.75 (1, 0) / 1 + 0.25 (-1, 0) / 1) = (0.25, 0)
+    a_r, w = run("hindsight")
+    assert_allclose(a_r, [[0.25, 0.0]])
+    assert_allclose(w, [1.0])
+    # within delta of goal 0's set, (1.03, 0.9): the quadratic part, sigma_h (c - s) / delta
+    a_r, _ = run("hindsight", belief=np.array([[1.0, 0.0]]), state=np.array([[1.03, 0.9]]))
+    assert_allclose(a_r, 0.5 * np.array([[-0.03, 0.0]]) / 0.05)
+    # V of goal 0 at (0, 0.5): distance 1; of goal 1 at (-1.02, 0): 0.02^2 / 0.1 + 0.025 = 0.029
+    assert_allclose(hindsight_value(np.array([[0.0, 0.5], [-1.02, 0.0]]), SETS, 0.05)[:, 0][0], 1.0)
+    assert_allclose(hindsight_value(np.array([[-1.02, 0.0]]), SETS, 0.05)[0, 1], 0.029)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    far=arrays(np.float64, (1, 2), elements=st.floats(-3, 3)),
+    near=st.tuples(st.sampled_from([-1.0, 1.0]), st.floats(-0.1, 0.1), st.floats(-1.05, 1.05)),
+    at_set=st.booleans(),
+    b0=st.floats(0.0, 1.0),
+)
+def test_hindsight_is_minus_sigma_h_times_the_gradient_of_the_expected_cost(far, near, at_set, b0):
+    """a_r = -sigma_h grad_s sum_g b(g) V_g(s), checked by central differences of V.
+
+    Half the states lie within 0.1 of a goal's set, where the Huber radius (0.05) matters.
+    """
+    state = np.array([[near[0] + near[1], near[2]]]) if at_set else far
+    belief = np.array([[b0, 1.0 - b0]])
+    delta, h = DT * SPEED, 1e-6
+    near = nearest_grasps(state, SETS)[0]  # the distance to a set is not differentiable where
+    # two nearest points tie or at a target (within h of one), so keep away from such states
+    ties = np.linalg.norm(near - state[0], axis=-1)
+    assume(np.all(ties > 10 * h) and np.all(np.abs(np.abs(state[0, 1]) - 1.0) > 1e-3))
+    assume(np.all(np.abs(ties - delta) > 1e-4))
+
+    def expected(s):
+        return float(hindsight_value(s[None], SETS, delta)[0] @ belief[0])
+
+    grad = np.array([(expected(state[0] + h * e) - expected(state[0] - h * e)) / (2 * h) for e in np.eye(2)])
+    a_r, _ = run("hindsight", belief=belief, state=state)
+    assert_allclose(a_r[0], -SPEED * grad, atol=1e-5)
+
+
+@settings(max_examples=40, deadline=None)
+@given(y=st.floats(-1.0, 1.0), goal=st.sampled_from([0, 1]))
+def test_hindsight_holds_any_target_of_a_confident_goal(y, goal):
+    """With a confident belief, every pose on the goal's set is a fixed point (a_r = 0)..."""
+    belief = np.eye(2)[[goal]]
+    on_set = np.array([[1.0 if goal == 0 else -1.0, y]])
+    a_r, _ = run("hindsight", belief=belief, state=on_set)
+    assert_allclose(a_r, 0.0, atol=1e-12)
+    # ... while the one-target reading pulls back to the goal's mid pose, unless it is there
+    pulled, _ = run("hindsight_point", belief=belief, state=on_set)
+    assert np.linalg.norm(pulled) > 0 or abs(y) < 1e-12
+
+
+@settings(max_examples=40, deadline=None)
+@given(state=arrays(np.float64, (1, 2), elements=st.floats(-3, 3)), goal=st.sampled_from([0, 1]))
+def test_hindsight_and_grasp_set_agree_in_direction_for_a_confident_belief(state, goal):
+    """Both pull towards the nearest target of the believed goal; they differ only in size."""
+    belief = np.eye(2)[[goal]]
+    h, _ = run("hindsight", belief=belief, state=state)
+    g, _ = run("grasp_set", belief=belief, state=state)
+    dist = np.linalg.norm(g)
+    assert_allclose(h, SPEED * g / max(dist, DT * SPEED), atol=1e-12)
 
 
 def test_every_member_is_batched_and_names_are_checked():
     rng = np.random.default_rng(0)
     states = rng.normal(size=(7, 2))
     beliefs = rng.dirichlet(np.ones(2), 7)
-    for name in ASSISTANCE:
+    for name in BUILT_IN_ASSISTANCE:
         a_r, w = assist(name, beliefs, states, GOALS, SETS, DT, SPEED)
         one = [assist(name, beliefs[i : i + 1], states[i : i + 1], GOALS, SETS, DT, SPEED) for i in range(7)]
         assert_allclose(a_r, np.concatenate([o[0] for o in one]))
@@ -92,13 +162,13 @@ def test_every_member_is_batched_and_names_are_checked():
 def test_the_config_knows_every_member_and_defaults_to_point():
     from lasa.method import assistance
 
-    assert tuple(assistance._MEMBERS) == ASSISTANCE  # each named member is implemented, and no other
+    assert tuple(assistance._MEMBERS) == BUILT_IN_ASSISTANCE  # each named member is implemented, no other
     assert ControlConfig().assistance == "point"
-    for name in ASSISTANCE:
+    for name in BUILT_IN_ASSISTANCE:
         assert dataclasses.replace(ControlConfig(), assistance=name).assistance == name
 
 
-@pytest.mark.parametrize("name", ASSISTANCE)
+@pytest.mark.parametrize("name", BUILT_IN_ASSISTANCE)
 def test_each_member_drives_the_rollout_safely(name, model, task):
     """LA+SA with each member: limits, step bound, and alpha = 0 still ignores the assistance."""
     from lasa.people.rollout import rollout

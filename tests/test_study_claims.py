@@ -121,7 +121,11 @@ def test_config_errors():
         from_dict(study.Config, {"session": {"participant": {"beta_median": "20"}}}, where="study")
     nested = from_dict(study.Config, {"session": {"horizon": 30, "participant": {"beta_median": 30}}})
     assert (nested.session.horizon, nested.session.participant.beta_median) == (30, 30)
-    assert nested.session.members == study.Config().session.members == ("hindsight", "grasp_set")
+    assert (
+        nested.session.members
+        == study.Config().session.members
+        == ("hindsight", "hindsight_point", "grasp_set")
+    )
     with pytest.raises(ConfigError, match="video_participant"):
         study.Config(participants=4, video_participant=4)
 
@@ -231,11 +235,13 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     assert head["goals with the property"] == 2 and other["goals with the property"] == 1
     assert other["least share staying"] == 0.1
     assert head["LA finished"] == 1.0 and other["LA finished"] == 0.75  # 5 of 20 participants stuck
-    # the other reading's LA finishes 5 of 10 (first 10) and 15 of 20 episodes (cohort): below 95%
-    assert head["H3 (10 / all)"] == "yes / yes" and other["H3 (10 / all)"] == "not testable / not testable"
-    # Goal Error is summed over the task's time: H1 takes the guard too; H2 (within a phase) does not
+    # the other reading's LA finishes 5 of 10 (first 10) and 15 of 20 episodes (cohort): below 95%;
+    # its LA+SA is slower than R even as a lower bound, so H3 reads no (censored)
+    assert head["H3 (10 / all)"] == "yes / yes" and other["H3 (10 / all)"] == "no / no"
+    # Goal Error is summed over the task's time: H1 takes the guard too, and so does H2, whose
+    # LA+SA participants may not have reached the phases it compares
     assert head["H1 (10 / all)"] == "yes / yes" and other["H1 (10 / all)"] == "not testable / not testable"
-    assert "not testable" not in other["H2 (10 / all)"]
+    assert other["H2 (10 / all)"] == "not testable / not testable"
     assert head["R finished"] == head["R+SA finished"] == other["R finished"] == 1.0
 
 
@@ -254,17 +260,67 @@ def test_h3_is_not_testable_when_an_arm_misses_95_percent_completion():
     time.loc[cut, ["total_time", "idle_time"]] = 150.0  # every LA episode cut at the horizon
     rows, _ = study_claims.claims(data, MEMBERS, 10, horizon=150.0)
     h3 = by_id(rows)["study.h3"]
-    assert h3.reproduced == "not testable" and not h3.settled
-    assert h3.measured.startswith("not testable (completion: LA 0%, LA+SA 0%); ")
+    # LA+SA's times, cut at 150 s, are a lower bound already above R's: no, censored
+    assert h3.reproduced == "no" and h3.settled
+    assert h3.measured.startswith("censored: lower bound (completion: LA 0%, LA+SA 0%): ")
     assert "nan" not in h3.measured.lower() and "nan" not in h3.note.lower()
     assert "R 100%" in h3.measured and "150 s horizon" in h3.measured
-    assert by_id(rows)["study.h3@grasp_set"].reproduced == "not testable"
+    assert by_id(rows)["study.h3@grasp_set"].reproduced == "no"
     # H1 sums Goal Error over the task's time: censored too, so not testable with the same reason
     for cid in ("study.h1", "study.h1@mean_distance", "study.h1@paper_test"):
         h1 = by_id(rows)[cid]
         assert h1.reproduced == "not testable" and not h1.settled
         assert h1.measured.startswith("not testable (completion: LA 0%, LA+SA 0%); SA - no SA = ")
-    assert by_id(rows)["study.h2"].reproduced == "yes"  # within the scoop phase: no sum over the task
+    # H2 compares LA+SA with R+SA only on the phases reached: LA+SA's censored episodes gate it too
+    h2 = by_id(rows)["study.h2"]
+    assert h2.reproduced == "not testable" and not h2.settled
+    assert h2.measured.startswith("not testable (completion: LA+SA 0%, alignment only on the phases reached)")
+
+
+def censored(data, conditions, share=0.5):
+    """The first ``share`` of the participants' episodes of ``conditions`` cut at the horizon."""
+    time = data["time"]
+    cut = time.condition.isin(conditions) & (time.participant < share * time.participant.nunique())
+    time.loc[cut, "completed"] = False
+    return data
+
+
+@pytest.mark.parametrize(
+    ("sa_error", "cut", "word"),
+    [
+        (+2.0, ["LA+SA"], "no"),  # SA's lower bound is already higher: contradicted
+        (-2.0, ["LA+SA"], "not testable"),  # a lower bound below the comparator: consistent with H1
+        (+2.0, ["LA", "LA+SA"], "not testable"),  # a comparator censored too: nothing is bounded
+    ],
+)
+def test_h1_reads_not_reproduced_when_its_censored_lower_bound_contradicts_it(sa_error, cut, word):
+    data = censored(frames(10, sa_error=sa_error, la_sa_time=0.0, scoop_gain=0.15), cut)
+    rows = by_id(study_claims.claims(data, MEMBERS, 10, horizon=150.0)[0])
+    for cid in ("study.h1", "study.h1@paper_test"):
+        assert rows[cid].reproduced == word and rows[cid].settled == (word == "no")
+        assert rows[cid].measured.startswith("censored: lower bound" if word == "no" else word)
+    assert rows["study.h1@mean_distance"].reproduced == "not testable"  # a sum over a cut time: no bound
+    if word == "no":
+        assert rows["study.h1"].ci_low > 0 and "SA - no SA = +1.99" in rows["study.h1"].measured
+
+
+@pytest.mark.parametrize(
+    ("la_sa_time", "cut", "word"),
+    [
+        (+30.0, ["LA+SA"], "no"),
+        (-20.0, ["LA+SA"], "not testable"),
+        (+30.0, ["R", "LA+SA"], "no"),  # R censored: the contrast is with a measured arm
+        (+30.0, ["R", "R+SA", "LA", "LA+SA"], "not testable"),
+    ],
+)
+def test_h3_reads_not_reproduced_when_la_sa_lower_bound_is_already_slower(la_sa_time, cut, word):
+    data = censored(frames(10, sa_error=-2.0, la_sa_time=la_sa_time, scoop_gain=0.15), cut)
+    h3 = by_id(study_claims.claims(data, MEMBERS, 10, horizon=150.0)[0])["study.h3"]
+    assert h3.reproduced == word
+    if word == "no":
+        assert h3.settled and h3.ci_low > 0 and h3.measured.startswith("censored: lower bound")
+        assert "a lower bound, against" in h3.measured
+        assert ("against R's" in h3.measured) == ("R" not in cut)  # never compared with a censored arm
 
 
 @pytest.mark.parametrize(("unfinished", "testable"), [(2, True), (3, False)])

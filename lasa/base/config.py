@@ -25,6 +25,7 @@ from lasa.base.errors import ConfigError
 
 __all__ = [
     "ASSISTANCE",
+    "BUILT_IN_ASSISTANCE",
     "Number",
     "Integer",
     "PositiveInt",
@@ -151,7 +152,10 @@ def validate(record: Any) -> None:
 
 
 # The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
+# ASSISTANCE are the figures' default members; hindsight_point (hindsight with one target per goal)
+# is a built-in reading that only the study runs by default.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
+BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
 # Members added from outside the package (lasa.method.assistance.register_member, the only writer),
 # which ControlConfig accepts too; the figures' default members stay ASSISTANCE.
 REGISTERED_ASSISTANCE: list[str] = []
@@ -232,7 +236,7 @@ class ControlConfig:
     def __post_init__(self) -> None:
         validate(self)
         check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
-        check_choice("assistance", self.assistance, (*ASSISTANCE, *REGISTERED_ASSISTANCE))
+        check_choice("assistance", self.assistance, (*BUILT_IN_ASSISTANCE, *REGISTERED_ASSISTANCE))
 
 
 def to_dict(config: Any) -> dict[str, Any]:

@@ -31,6 +31,7 @@ __all__ = [
     "VERDICTS",
     "UNDECIDED",
     "NOT_TESTABLE",
+    "CENSORED",
     "REPRODUCED",
     "PARTLY",
     "NOT_REPRODUCED",
@@ -46,6 +47,9 @@ UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a thre
 # (e.g. the episodes it compares were cut at the horizon, too few pairs); never settled, the
 # reason in its note
 NOT_TESTABLE = "not testable"
+# what a settled "not reproduced" carries when it rests on a censored arm: that arm's measure is
+# a lower bound (its unfinished episodes would only add to it), already worse than a comparator's
+CENSORED = "censored: lower bound"
 
 # The verdict words of the claims table, the one vocabulary a reader sees (:func:`word`):
 REPRODUCED = "reproduced"  # the rule reads yes, settled

@@ -27,6 +27,7 @@ import pandas as pd
 
 from lasa.base.config import (
     ASSISTANCE,
+    BUILT_IN_ASSISTANCE,
     NO_ASSISTANCE,
     ControlConfig,
     PositiveInt,
@@ -82,11 +83,11 @@ def check_methods(methods: tuple[str, ...]) -> None:
 
 
 def check_members(members: tuple[str, ...]) -> None:
-    """Every name is a member of :data:`lasa.base.config.ASSISTANCE`, and there is at least one."""
+    """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one."""
     if not members:
         raise ConfigError("assistance must name at least one member")
     for name in members:
-        check_choice("assistance", name, ASSISTANCE)
+        check_choice("assistance", name, BUILT_IN_ASSISTANCE)
 
 
 def members_of(control: ControlConfig, members: tuple[str, ...]) -> tuple[str, ...]:

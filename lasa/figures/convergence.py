@@ -55,6 +55,7 @@ from matplotlib.figure import Figure
 
 from lasa.base.config import (
     ASSISTANCE,
+    BUILT_IN_ASSISTANCE,
     ControlConfig,
     FiniteNonNegative,
     PositiveInt,
@@ -142,7 +143,7 @@ class Config:
             raise ConfigError("assistance must name at least one member")
         object.__setattr__(self, "assistance", tuple(self.assistance))
         for name in self.assistance:
-            check_choice("assistance", name, ASSISTANCE)
+            check_choice("assistance", name, BUILT_IN_ASSISTANCE)
         if len(set(self.assistance)) != len(self.assistance):
             raise ConfigError(f"assistance must not repeat a member, got {self.assistance}")
         if self.record_every > self.horizon:

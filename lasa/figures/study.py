@@ -44,23 +44,28 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
+from lasa.evidence import latent_property
 from lasa.method.decoder import ActionDecoder
 from lasa.people import participants, planning
-from lasa.people.cohort import draw_cohort
+from lasa.people.cohort import Cohort, draw_cohort
 from lasa.people.design import Episodes, StudyConfig, interface_of
 from lasa.people.measures import measures
+from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
 
 __all__ = [
     "Config",
     "PAPER_N",
     "PARTICIPANT_MODELS",
+    "DECODER_SELECTIONS",
     "Simulate",
+    "readings_to_run",
     "run",
     "for_member",
 ]
 
 PAPER_N = 10  # the paper's participants
+DECODER_SELECTIONS = ("property", "all")  # Config.decoders: which decoder readings the study runs
 Simulate = Callable[..., Episodes]  # lasa.people.participants.simulate's signature and return type
 
 # participant model name -> its simulate (the signature of lasa.people.participants.simulate);
@@ -74,9 +79,10 @@ class Config:
 
     participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
     # how a session runs (horizon, waypoint tolerances, stick grid) and the participants' parameters
-    # (session.participant); the SA readings, the first the headline: hindsight, as in the paper's
-    # study, and grasp_set [-]
-    session: StudyConfig = StudyConfig(members=("hindsight", "grasp_set"))
+    # (session.participant), and the SA readings (session.members):
+    # the SA readings, the first the headline: hindsight optimisation with goals as sets, as in
+    # the paper's study; its one-target reading; grasp_set [-]
+    session: StudyConfig = StudyConfig(members=("hindsight", "hindsight_point", "grasp_set"))
     seed: Seed = 0  # seed of the cohort and of the participants' choices [-]
     video_participant: NonNegativeInt = 0  # whose Dessert the video shows [-]
     # participant models (PARTICIPANT_MODELS); the first is the headline [-]
@@ -84,6 +90,11 @@ class Config:
     # decoder readings a model runs, the headline and the next ones in notebook 10's ranking (a
     # model not named runs every reading): a planning study costs ~5x a one-step one per reading
     readings_per_model: dict[str, PositiveInt] = dataclasses.field(default_factory=lambda: {"planning": 4})
+    # which of notebook 10's decoder readings the participants run (:func:`readings_to_run`):
+    # "property", those that meet the property rule and the headline's entropy version (the paper's
+    # remedy, as a contrast); "all", every reading (LARGE=1) [-]
+    decoders: str = "property"
+    scheduler: str = ""  # a Dask scheduler address for the readings' runs ("" local; $LASA_SCHEDULER) [-]
 
     def __post_init__(self) -> None:
         validate(self)
@@ -93,12 +104,66 @@ class Config:
             raise ConfigError(f"participant_models must be non-empty and without repeats, got {models}")
         for name in models:
             check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
+        check_choice("decoders", self.decoders, DECODER_SELECTIONS)
         for name in self.readings_per_model:
             check_choice("readings_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
         if not 0 <= self.video_participant < self.participants:
             raise ConfigError(
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
             )
+
+
+def readings_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str]:
+    """The decoder readings the participants run, the headline first (notebook 10's ranking).
+
+    ``"property"`` (paper scale): only decoders that meet the property rule
+    (:func:`lasa.evidence.latent_property.holds`), and the headline's entropy version
+    ``<headline>_entropy`` (Eq. T6, the paper's remedy for a trapped user) as a contrast, if
+    notebook 10 trained it. A reading that fails the rule is reported by its property row and
+    not run through the participants. If no decoder meets the rule, the best-ranked one runs as
+    the headline (its rows read "not testable", :func:`lasa.figures.study_claims.untestable_reason`).
+    ``"all"``: every reading, in the ranking's order (``LARGE=1``).
+
+    Args:
+        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
+        selection: One of :data:`DECODER_SELECTIONS`.
+    """
+    check_choice("decoders", selection, DECODER_SELECTIONS)
+    ranked = list(latent_property.ranking(prop).index)
+    if selection == "all":
+        return ranked
+    meets = latent_property.holds(prop)
+    keep = [d for d in ranked if meets.get(d, False)] or ranked[:1]
+    contrast = f"{keep[0]}_entropy"
+    return keep + ([contrast] if contrast in ranked and contrast not in keep else [])
+
+
+@dataclasses.dataclass(frozen=True)
+class _Shared:
+    """What every (participant model, decoder reading) run reads: sent to each worker once."""
+
+    task: EatingTask
+    decoders: dict[str, ActionDecoder]
+    cohort: Cohort
+    control: ControlConfig
+    config: Config
+
+
+def _run_reading(shared: _Shared, job: tuple[str, int, str]) -> Episodes:
+    """One participant model's study with one decoder reading (the headline, index 0, runs R too)."""
+    model, i, name = job
+    config = shared.config
+    headline_only = dataclasses.replace(config.session, members=config.session.members[:1])
+    return PARTICIPANT_MODELS[model](
+        shared.task,
+        shared.decoders[name],
+        shared.cohort,
+        shared.control,
+        config.session if i == 0 else headline_only,
+        seed=config.seed,
+        progress=False,
+        interfaces=("R", "LA") if i == 0 else ("LA",),
+    )
 
 
 def run(
@@ -114,7 +179,9 @@ def run(
     of ``decoders`` is the headline: every condition under every member. Each other reading
     runs LA and LA+SA only, under the headline member (Retargeting does not use the decoder:
     its episodes are the headline run's, the same participants and random streams). A model
-    named in ``config.readings_per_model`` runs only the first that many of ``decoders``.
+    named in ``config.readings_per_model`` runs only the first that many of ``decoders``. The
+    runs are independent jobs (:func:`lasa.pipeline.scaleout.run_jobs`): in this process, or on
+    the Dask cluster that ``config.scheduler`` or ``$LASA_SCHEDULER`` names, with the same result.
 
     Returns:
         The episodes per participant model and decoder reading (``episodes[model][decoder]``),
@@ -124,28 +191,28 @@ def run(
     if not decoders:
         raise ConfigError("run needs at least one decoder (the headline first)")
     cohort = draw_cohort(config.participants, config.session.participant, config.seed)
+    names = list(decoders)
+    jobs = [
+        (model, i, name)
+        for model in config.participant_models
+        for i, name in enumerate(names[: config.readings_per_model.get(model, len(names))])
+    ]
+    shared = _Shared(task, dict(decoders), cohort, control, config)
+    ran = run_jobs(
+        _run_reading,
+        jobs,
+        scheduler=config.scheduler or None,
+        progress=progress,
+        desc="study runs",
+        shared=shared,
+    )
     episodes: dict[str, dict[str, Episodes]] = {}
     parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
-    for model in config.participant_models:
-        simulate = PARTICIPANT_MODELS[model]
-        episodes[model] = {}
-        limit = config.readings_per_model.get(model, len(decoders))
-        for i, (name, decoder) in enumerate(list(decoders.items())[:limit]):
-            headline_only = dataclasses.replace(config.session, members=config.session.members[:1])
-            settings = config.session if i == 0 else headline_only
-            episodes[model][name] = simulate(
-                task,
-                decoder,
-                cohort,
-                control,
-                settings,
-                seed=config.seed,
-                progress=progress,
-                interfaces=("R", "LA") if i == 0 else ("LA",),
-            )
-            for key, frame in measures(task, episodes[model][name]).items():
-                la = frame.condition.map({c: interface_of(c) == "LA" for c in CONDITIONS}).astype(bool)
-                parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE), model=model))
+    for (model, _, name), record in zip(jobs, ran, strict=True):
+        episodes.setdefault(model, {})[name] = record
+        for key, frame in measures(task, record).items():
+            la = frame.condition.map({c: interface_of(c) == "LA" for c in CONDITIONS}).astype(bool)
+            parts[key].append(frame.assign(decoder=np.where(la, name, NO_ASSISTANCE), model=model))
     return episodes, {key: pd.concat(frames, ignore_index=True) for key, frames in parts.items()}
 
 

@@ -21,11 +21,11 @@ from scipy import stats as sps
 
 from lasa.base.conditions import CONDITIONS
 from lasa.evidence import stats
-from lasa.evidence.decision import NOT_TESTABLE
+from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import for_member
 
-__all__ = ["Judged", "analyse", "judge"]
+__all__ = ["Judged", "analyse", "judge", "censored_arms", "censored_contradiction"]
 
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
@@ -130,7 +130,9 @@ def judge(result: Mapping[str, object]) -> dict[str, Judged]:
         "h2": _h2(result),
         "h3": _h3_verdict(result),
     }
-    return _censored_goal_error(out, str(result["h3_short"]))
+    done = result["h3_completion"]
+    assert isinstance(done, pd.Series)
+    return _censored_goal_error(out, done)
 
 
 def _h1(result: Mapping[str, object], suffix: str, unit: str, scale: float) -> Judged:
@@ -183,26 +185,67 @@ def _h2(result: Mapping[str, object]) -> Judged:
     return verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}"
 
 
-def _censored_goal_error(out: dict[str, Judged], short: str) -> dict[str, Judged]:
-    """H1's readings are not testable when a condition finishes too few episodes (``short``).
+def censored_arms(done: pd.Series) -> list[str]:
+    """The conditions that finish fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of their episodes.
 
-    Goal Error is summed over the task's steps (and the mean distance is that sum over the
-    task's time): an episode cut at the horizon has its sum cut there too, a censored measure
-    like its time, so H1 takes H3's completion guard. H2 compares the alignment within the
-    scoop phase among the participants who reached it under both conditions, with its pairs
-    counted, and keeps its verdict.
+    Their Total Time and Goal Error are lower bounds: an episode cut at the horizon would only
+    have added to both. A condition without episodes (NaN) counts as censored too.
     """
-    if not short:
+    return [str(c) for c, v in done.items() if not v >= COMPLETION_BAR]
+
+
+def _short_text(done: pd.Series, arms: list[str]) -> str:
+    """``"LA 0%, LA+SA 45%"``: the completion of ``arms``."""
+    return ", ".join(f"{c} {100 * v:.3g}%" for c, v in done.reindex(arms).fillna(0.0).items())
+
+
+def censored_contradiction(censored: list[str], claimed: set[str], low: float) -> bool:
+    """Whether a censored comparison already contradicts a claim that ``claimed`` arms are better.
+
+    The claimed-better arms' measure is at most a lower bound (censored), the comparators' is
+    measured (every comparator finishes at least the bar): if the lower bound is already worse
+    with the interval of the difference (claimed minus comparator, higher is worse) clear of 0
+    (``low > 0``), finishing the censored episodes could only widen the gap. Otherwise the
+    censored numbers are consistent with the claim, and it is not testable.
+    """
+    return bool(censored) and set(censored) <= claimed and math.isfinite(low) and low > 0.0
+
+
+def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, Judged]:
+    """H1 and H2 when some condition finishes too few episodes (:func:`censored_arms`).
+
+    Goal Error is summed over the task's steps: an episode cut at the horizon has its sum cut
+    there too, a lower bound like its time. When only SA arms are censored and SA's Goal Error
+    is already significantly higher, H1 reads ``not reproduced`` (censored: lower bound), with
+    both means; otherwise H1 is not testable. The mean distance (that sum over a censored time)
+    is no bound, so ``h1_mean_distance`` is not testable whenever a condition is censored. H2
+    compares alignment in phases that a censored episode may never have reached: not testable
+    when LA+SA or R+SA finishes fewer than the bar.
+    """
+    censored = censored_arms(done)
+    if not censored:
         return out
+    short = _short_text(done, censored)
+    sa = {c for c in done.index if str(c).endswith("+SA")}
     for key in ("h1", "h1_mean_distance", "h1_paper_test"):
-        measured = out[key][4]
-        out[key] = (
-            NOT_TESTABLE,
-            math.nan,
-            math.nan,
-            math.nan,
-            f"{NOT_TESTABLE} (completion: {short}); {measured}",
-        )
+        verdict, value, low, high, measured = out[key]
+        if key != "h1_mean_distance" and censored_contradiction(censored, sa, low):
+            lead = f"{CENSORED} (completion: {short}): SA's Goal Error, a lower bound, is already higher"
+            out[key] = ("no", value, low, high, f"{lead}; {measured}")
+        else:
+            out[key] = (
+                NOT_TESTABLE,
+                math.nan,
+                math.nan,
+                math.nan,
+                f"{NOT_TESTABLE} (completion: {short}); {measured}",
+            )
+    compared = [c for c in censored if c in ("LA+SA", "R+SA")]
+    if compared:
+        measured = out["h2"][4]
+        gate = f"completion: {_short_text(done, compared)}, alignment only on the phases reached"
+        text = f"{NOT_TESTABLE} ({gate})"
+        out["h2"] = (NOT_TESTABLE, math.nan, math.nan, math.nan, f"{text}; {measured}")
     return out
 
 
@@ -227,7 +270,7 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
     finished = ", ".join(f"{c} {100 * v:.3g}%" for c, v in done.fillna(0.0).items())
     tail = f"mean total (idle) time over both tasks, {to}: {times}; completion: {finished}"
     if short:
-        return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
+        return _h3_censored(total, done, tail)
     tests = {
         f"high {m} {r.a} - {r.b}": r.ci_high
         for m, contrasts in (("total_time", total), ("idle_time", idle))
@@ -243,4 +286,30 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
         float(g_high),
         f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s [{g_low:+.1f}, {g_high:+.1f}] (restricted "
         f"means, paired bootstrap); {tail}",
+    )
+
+
+def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
+    """H3 with a censored condition: not reproduced if LA+SA's lower bound is slower, else not testable.
+
+    LA+SA censored: its restricted mean Total Time is a lower bound of its mean time. If it is
+    already above that of a measured comparator (one that finishes at least the bar), with the
+    bootstrap interval clear of 0, LA+SA cannot be the fastest (:func:`censored_contradiction`);
+    the contrast reported is the one with the fastest such comparator, both means named. Other
+    censored comparators do not matter to it; a censored comparator is never compared.
+    """
+    censored = censored_arms(done)
+    short = _short_text(done, censored)
+    clear = total[(total.ci_low > 0.0) & ~total.b.isin(censored)]  # measured comparators, clear of 0
+    if clear.empty or not censored_contradiction([c for c in censored if c == "LA+SA"], {"LA+SA"}, 1.0):
+        return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
+    r = clear.loc[clear.mean_b.idxmin()]
+    return (
+        "no",
+        float(r["diff"]),
+        float(r.ci_low),
+        float(r.ci_high),
+        f"{CENSORED} (completion: {short}): LA+SA's restricted mean Total Time {r.mean_a:.0f} s, a lower "
+        f"bound, against {r.b}'s {r.mean_b:.0f} s: LA+SA - {r.b} = {r['diff']:+.1f} s "
+        f"[{r.ci_low:+.1f}, {r.ci_high:+.1f}] (paired bootstrap); {tail}",
     )

@@ -24,7 +24,10 @@ w = 1 for every member but ``arbitrated``, which is Eq. M1 exactly.
                           and the blend weight rises with the belief's confidence.
 ``hindsight``             Hindsight-optimisation assistance (Javdani et al. 2018), the
                           paper's own user study: the first-order hindsight-optimal action
-                          for a distance cost-to-go (see :func:`hindsight`).
+                          for a distance cost-to-go, each goal a set of targets whose
+                          cost is the least over them (see :func:`hindsight`).
+``hindsight_point``       The same with one target per goal, its mid-preference pose: a
+                          reading of the study (``study.*@hindsight_point``), not a default.
 ========================  ===========================================================
 
 Every function is vectorised over users: beliefs (U, G), states (U, n), for any number
@@ -33,7 +36,7 @@ of goals G.
 **A member of your own.** Any function with a member's signature (:data:`Member`: belief,
 state, goals, goal_sets, dt, action_scale -> a_r, w) joins the family with :func:`register_member`; then
 ``ControlConfig(assistance=name)`` and the rollout's per-user ``assistance`` run it like the
-four above (``docs/extending.md``).
+built-in ones (``docs/extending.md``).
 """
 
 from __future__ import annotations
@@ -42,17 +45,20 @@ from collections.abc import Callable
 
 import numpy as np
 
-from lasa.base.config import ASSISTANCE, NO_ASSISTANCE, REGISTERED_ASSISTANCE
+from lasa.base.config import ASSISTANCE, BUILT_IN_ASSISTANCE, NO_ASSISTANCE, REGISTERED_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.method.blend import assistance as eq_m2
 
 __all__ = [
     "ASSISTANCE",
+    "BUILT_IN_ASSISTANCE",
     "Member",
     "point",
     "grasp_set",
     "arbitrated",
     "hindsight",
+    "hindsight_point",
+    "hindsight_value",
     "nearest_grasps",
     "assist",
     "members",
@@ -157,6 +163,29 @@ def arbitrated(
     return goals[best] - state, weight
 
 
+def hindsight_value(state: np.ndarray, goal_sets: np.ndarray, delta: float) -> np.ndarray:
+    """V_g(s): each goal's hindsight cost-to-go, the Huber distance to its nearest target, (U, G).
+
+    V_g(s) = min_k H(||g_k - s||), where the targets g_k are the goal's set (a polyline of
+    poses, :func:`nearest_grasps`; one pose is a set of one) and H is the Huber cost of radius
+    ``delta``: H(d) = d for d >= delta, d^2 / (2 delta) + delta / 2 within it (continuous, with
+    a continuous gradient). H is increasing, so the least over the targets is H of the distance
+    to the nearest one.
+    """
+    nearest = nearest_grasps(state, goal_sets)
+    dist = np.linalg.norm(nearest - state[:, None, :], axis=-1)
+    return np.where(dist >= delta, dist, dist**2 / (2.0 * delta) + delta / 2.0)
+
+
+def _hindsight_pull(
+    belief: np.ndarray, state: np.ndarray, targets: np.ndarray, delta: float, action_scale: float
+) -> np.ndarray:
+    """sigma_h sum_g b(g) (t_g - s) / max(||t_g - s||, delta), with t_g each goal's target, (U, G, n)."""
+    diff = targets - state[:, None, :]  # (U, G, n)
+    dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), delta)
+    return action_scale * np.einsum("ug,ugn->un", belief, diff / dist)
+
+
 def hindsight(
     belief: np.ndarray,
     state: np.ndarray,
@@ -165,30 +194,59 @@ def hindsight(
     dt: float,
     action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``hindsight``: hindsight-optimisation assistance (Javdani et al. 2018).
+    """``hindsight``: hindsight optimisation with goals as sets of targets (Javdani et al. 2018).
 
     Hindsight optimisation takes the action that minimises the expected cost-to-go over
-    goals, a_r = argmin_a sum_g b(g) Q_g(s, a), as if the goal were revealed after this
-    step. Our cost-to-go is the distance left to the goal, V_g(s) = ||g - s||, as in
-    Javdani et al.'s user study (cost proportional to the distance still to travel at a
-    fixed speed), made quadratic within one step of the goal (a Huber cost, radius
-    delta = Delta sigma_h) so the action does not chatter at the goal. To first order in the
-    step, Q_g(s, a) = V_g(s) + Delta grad V_g(s) . a, so the expected cost-to-go falls
-    fastest down the belief-weighted gradient. We take the gradient step at the human's
-    speed bound sigma_h (its norm is at most sigma_h; we do not normalise it, so the
-    assistance fades where the goals' pulls cancel, as Eq. M2's does):
+    goals, a_r = argmin_a sum_g b(g) Q_g(s, a), as if the goal were revealed after this step.
+    In Javdani et al.'s formulation a goal may have several targets (a bowl can be stabbed
+    or scooped: the multi-target MDP), and a goal's cost-to-go is the least over its
+    targets, V_g(s) = min_k V_{g,k}(s). Their cost is the distance still to travel at a fixed
+    speed; we make it quadratic within one step of a target (a Huber cost, radius
+    delta = Delta sigma_h) so the action does not chatter there (:func:`hindsight_value`). The
+    targets of goal g are its set ``goal_sets[g]``: the poses of each of its preferences (for
+    the eating task, a bowl's strokes; for the cups, a cup's grasps). To first order in the
+    step, Q_g(s, a) = V_g(s) + Delta grad V_g(s) . a. The gradient of a least over targets is
+    the gradient at the nearest target c_g(s), so the expected cost falls fastest down
 
     .. math::  a_r = -\\sigma_h \\nabla_s \\sum_g b(g) V_g(s)
-               = \\sigma_h \\sum_g b(g) \\frac{g - s}{\\max(\\|g - s\\|, \\delta)} .
+               = \\sigma_h \\sum_g b(g) \\frac{c_g(s) - s}{\\max(\\|c_g(s) - s\\|, \\delta)} ,
 
-    Unlike Eq. M2 its size does not grow with the distance to the goals.
+    taken at the human's speed bound sigma_h (its norm is at most sigma_h; not normalised,
+    so the assistance fades where the goals' pulls cancel, as Eq. M2's does). Its size does
+    not grow with the distance to the goals. Every pose of a goal's set is a target, so with
+    a confident belief the pull vanishes anywhere on the set: the assistance holds the goal
+    and leaves the preference to the user ("maintain this goal while the human focuses on
+    conveying their preference", Sec. III). The one-target reading, towards the goal's
+    mid-preference pose alone, is :func:`hindsight_point`.
 
     Returns:
         a_r, shape (U, n), and w = 1, shape (U,).
     """
-    diff = goals[None] - state[:, None, :]  # (U, G, n)
-    dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), dt * action_scale)
-    return action_scale * np.einsum("ug,ugn->un", belief, diff / dist), np.ones(len(state))
+    delta = dt * action_scale
+    return _hindsight_pull(belief, state, nearest_grasps(state, goal_sets), delta, action_scale), np.ones(
+        len(state)
+    )
+
+
+def hindsight_point(
+    belief: np.ndarray,
+    state: np.ndarray,
+    goals: np.ndarray,
+    goal_sets: np.ndarray,
+    dt: float,
+    action_scale: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``hindsight_point``: :func:`hindsight` with one target per goal, its pose in ``goals``.
+
+    The reading in which each goal is the single pose g (the mid-preference pose, as Eq. M2's
+    ``point``): a_r = sigma_h sum_g b(g) (g - s) / max(||g - s||, delta). Near a goal it pulls
+    towards that one pose, so it resists every preference that lies elsewhere in the goal's set.
+
+    Returns:
+        a_r, shape (U, n), and w = 1, shape (U,).
+    """
+    targets = np.broadcast_to(goals[None], (len(state), *goals.shape))
+    return _hindsight_pull(belief, state, targets, dt * action_scale, action_scale), np.ones(len(state))
 
 
 _MEMBERS: dict[str, Member] = {
@@ -196,11 +254,12 @@ _MEMBERS: dict[str, Member] = {
     "grasp_set": grasp_set,
     "arbitrated": arbitrated,
     "hindsight": hindsight,
+    "hindsight_point": hindsight_point,
 }
 
 
 def members() -> tuple[str, ...]:
-    """Every member's name: the four of :data:`ASSISTANCE`, then the registered ones in turn."""
+    """Every member's name: :data:`BUILT_IN_ASSISTANCE`, then the registered ones in turn."""
     return tuple(_MEMBERS)
 
 
@@ -223,7 +282,7 @@ def register_member(name: str, member: Member, *, replace: bool = False) -> None
         ConfigError: for a built-in's name, ``"none"``, an empty name, or a name taken
             (unless ``replace``).
     """
-    if not isinstance(name, str) or not name or name == NO_ASSISTANCE or name in ASSISTANCE:
+    if not isinstance(name, str) or not name or name == NO_ASSISTANCE or name in BUILT_IN_ASSISTANCE:
         raise ConfigError(
             f"a registered member needs a new name (not {NO_ASSISTANCE!r} or a built-in's), got {name!r}"
         )

@@ -20,7 +20,7 @@ import numpy as np
 from lasa.base.conditions import CONDITIONS, alpha_of
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import (
-    ASSISTANCE,
+    BUILT_IN_ASSISTANCE,
     NO_ASSISTANCE,
     ControlConfig,
     Integer,
@@ -69,7 +69,7 @@ class StudyConfig:
         if not self.members:
             raise ConfigError("members must name at least one assistance member")
         for name in self.members:
-            check_choice("assistance", name, ASSISTANCE)
+            check_choice("assistance", name, BUILT_IN_ASSISTANCE)
         if self.n_z % 2 == 0:
             raise ConfigError(
                 f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"
