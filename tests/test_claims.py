@@ -136,6 +136,8 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
     for robot, head, other in (("planar5", "no", "partly"), ("panda", "undecided", "undecided")):
         rows.append(row("sim1.time_ratio", robot, head, 150))
         rows.append(row("sim1.time_ratio@grasp_set", robot, other, 60))
+        rows.append(row("sim1.time_ratio@grasp_set+one_step", robot, head, 60))  # agrees: not listed
+    rows.append(row("sim1.time_ratio@hindsight+one_step", "panda", "no", 60))  # compound, differs
     table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
     md = render_verdicts(table)
     lines = md.strip().splitlines()
@@ -148,7 +150,8 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
     assert cells[1] == "time ratio 1.45 and 1.30"
     assert cells[2].startswith("**not reproduced**") and "N = 150" in cells[2] and "settled" in cells[2]
     assert cells[3].startswith("undecided") and "settled" not in cells[3]
-    assert cells[4] == "`grasp_set` (planar5 partly)"  # the Panda's reading agrees with its headline
+    # the Panda's grasp_set agrees with its headline; a compound reading that differs is listed too
+    assert cells[4] == "`grasp_set` (planar5 partly); `hindsight+one_step` (panda not reproduced)"
     assert "(notebooks/04_fixed_expertise.ipynb#what-it-shows-against-the-paper)" in cells[5]
 
 

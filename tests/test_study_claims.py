@@ -68,7 +68,11 @@ def test_clear_effects_reproduce_every_hypothesis():
     first = by_id["study.h1"]
     assert first.assistance == "hindsight" and first.n_users == 10 and first.settled
     assert first.ci_high < 0 and by_id["study.h1@cohort"].n_users == 20
-    assert first.note.startswith("Every reading gives the same verdict.")
+    # the note states the effect in words with its sign, then the readings that flip it
+    assert first.note.startswith("Effect: SA lowers Goal Error by -2.01 m s, F(1,9) = ")
+    assert ". Every reading gives the same verdict. " in first.note
+    h3 = by_id["study.h3"].note
+    assert h3.startswith("Effect: LA+SA is faster than ") and " by -" in h3.split(". ")[0]
     # the paper's F(1,18) is the between-subjects reading; the within-subjects test has F(1,9)
     res = analyses[("hindsight", 10)]
     assert (res["h1_between"]["df1"], res["h1_between"]["df2"]) == (1, 18)
@@ -237,7 +241,10 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     assert head["LA finished"] == 1.0 and other["LA finished"] == 0.75  # 5 of 20 participants stuck
     # the other reading's LA finishes 5 of 10 (first 10) and 15 of 20 episodes (cohort): below 95%;
     # its LA+SA is slower than R even as a lower bound, so H3 reads no (censored)
-    assert head["H3 (10 / all)"] == "yes / yes" and other["H3 (10 / all)"] == "no / no"
+    assert head["H3 (10 / all)"] == "yes / yes"
+    assert other["H3 (10 / all)"] == "no (censored: lower bound) / no (censored: lower bound)"
+    assert other["H3 effect (10)"].startswith("LA+SA is slower than R by at least +")
+    assert head["H1 effect (10)"].startswith("SA lowers Goal Error by -")
     # Goal Error is summed over the task's time: H1 takes the guard too, and so does H2, whose
     # LA+SA participants may not have reached the phases it compares
     assert head["H1 (10 / all)"] == "yes / yes" and other["H1 (10 / all)"] == "not testable / not testable"
@@ -522,7 +529,7 @@ def test_a_reading_without_an_interval_is_not_testable_never_undecided():
         "alignment LA+SA - R+SA, Dessert phases: scoop: +0.020",
     )
     row = study_claims._claim_row(
-        "study.h2@leaves", "h2", judged, {"n": 10}, "hindsight", "leaves", None, None
+        "study.h2@leaves", "h2", judged, {"n": 10}, "hindsight", "leaves", None, None, "no comparison"
     )
     assert (row.reproduced, row.settled) == ("not testable", False)
     assert row.measured.startswith("not testable (too few pairs for an interval)")

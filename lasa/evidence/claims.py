@@ -32,8 +32,8 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv, write_text
-from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS, word
-from lasa.evidence.findings import finding, not_testable_why, stated_numbers
+from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, WORDS, word
+from lasa.evidence.findings import effect_of, finding, not_testable_why, stated_numbers
 from lasa.evidence.rules import RULES
 
 __all__ = [
@@ -337,21 +337,29 @@ def _cell(row: pd.Series | None) -> str:
     Each number the paper states comes with its own word, our value and interval
     (``paper_numbers``); every other number the rule reads follows with its value and interval
     (from the row's note, as :func:`lasa.evidence.verdicts.assess` wrote it); a row whose note
-    states none (the study's) shows the interval of the effect it rests on.
+    states none shows the interval of the effect it rests on. A study row's note states its
+    effect in words with its sign (:func:`lasa.evidence.findings.effect_of`): the cell says it,
+    a not-testable one as "measured, not judged", and a verdict that rests on a censored arm's
+    lower bound reads ``not reproduced (censored: lower bound)``.
     """
     if row is None:
         return "—"
     if row.reproduced == NOT_TESTABLE:
-        why = not_testable_why(row)
-        return f"not testable, N = {row.n_users}" + (f" ({why})" if why else "")
+        why, effect = not_testable_why(row), effect_of(row.note)
+        seen = f"; measured, not judged: {effect}" if effect else ""
+        return f"not testable, N = {row.n_users}" + (f" ({why})" if why else "") + seen
     low, high = _num(row.ci_low), _num(row.ci_high)
     paper_numbers = str(row.get("paper_numbers", ""))
     rule = RULES.get(str(row.id).split("@", 1)[0])
     stated = {p.quantity for p in rule.paper} if rule is not None else set()
     others = [f"{name} {text}" for name, text in stated_numbers(row.note) if name not in stated]
     numbers = "; ".join(n for n in (paper_numbers, *others) if n)
+    effect = effect_of(row.note)
+    if effect:
+        numbers = "; ".join(n for n in (numbers, effect) if n)
     detail = f": {numbers}" if numbers else (f" [{low}, {high}]" if low and high else "")
-    head = f"**{row.reproduced}**" if row.reproduced != UNDECIDED else UNDECIDED
+    word = f"{row.reproduced} ({CENSORED})" if str(row.measured).startswith(CENSORED) else row.reproduced
+    head = f"**{word}**" if row.reproduced != UNDECIDED else UNDECIDED
     settled = ", settled" if str(row.settled) == "yes" else ""
     return f"{head}{detail}, N = {row.n_users}{settled}; direction {row.get('direction', 'n/a')}"
 
@@ -371,10 +379,10 @@ def count_line(table: pd.DataFrame) -> str:
 
 
 def _flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> str:
-    """The readings (``<id>@<reading>``, one reading at a time) whose word differs from the headline's."""
+    """Every reading (``<id>@<reading>``, compound ones such as ``a+b`` included) whose word differs."""
     flips: dict[str, list[str]] = {}
     for (cid, robot), r in rows.items():
-        if cid.startswith(claim_id + "@") and "+" not in cid:
+        if cid.startswith(claim_id + "@"):
             head = rows.get((claim_id, robot))
             if head is not None and r.reproduced != head.reproduced:
                 flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")

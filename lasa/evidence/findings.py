@@ -19,7 +19,7 @@ import pandas as pd
 
 from lasa.evidence.decision import NOT_TESTABLE
 
-__all__ = ["Rows", "FINDINGS", "finding", "stated_numbers", "not_testable_why"]
+__all__ = ["Rows", "FINDINGS", "finding", "stated_numbers", "not_testable_why", "effect_of"]
 
 Rows = Mapping[tuple[str, str], pd.Series]  # (id, robot) -> a row of claims.csv, read as strings
 
@@ -31,6 +31,13 @@ _WHY = re.compile(
 )  # "not testable (<why>)", <why> without parentheses
 _COMPLETION = re.compile(r"(\S+) ([\d.]+)%")  # "LA+SA 45%" in "completion: LA+SA 45%, LA 90%"
 _MODEL = re.compile(r"participant model = ([^;]+);")  # a study row's note
+_EFFECT = re.compile(r"^Effect: (.*?)\. ")  # a study row's note begins with its effect in words
+
+
+def effect_of(note: object) -> str | None:
+    """The effect a study row's note states first (``Effect: <sentence>. ``), or None."""
+    found = _EFFECT.search(str(note))
+    return found.group(1) if found else None
 
 
 def stated_numbers(note: object) -> list[tuple[str, str]]:

@@ -62,9 +62,10 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
-from lasa.evidence import latent_property
+from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
-from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED
+from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED
+from lasa.evidence.findings import effect_of
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import PAPER_N
 from lasa.figures.study_tests import Judged, analyse, judge
@@ -75,6 +76,7 @@ __all__ = [
     "DECODER_KEYS",
     "claims",
     "claim_id",
+    "effect_sentence",
     "readings_table",
     "untestable_reason",
 ]
@@ -197,7 +199,8 @@ def claims(
             for name, judged in judge(result).items():
                 if other is None or name in DECODER_KEYS:
                     cid = claim_id(name, m_i, member, cohort, other, model if k else None)
-                    rows.append(_claim_row(cid, name, judged, result, member, decoder, model, reason))
+                    effect = effect_sentence(name, result, judged)
+                    rows.append(_claim_row(cid, name, judged, result, member, decoder, model, reason, effect))
     return _with_flips(rows), analyses
 
 
@@ -226,6 +229,49 @@ def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
     return len(rows) > 0
 
 
+def _raises(value: float, up: str, down: str) -> str:
+    return up if value > 0 else down
+
+
+def effect_sentence(key: str, result: Mapping[str, object], judged: Judged) -> str:
+    """The effect a row rests on, in words with its sign and test: what its verdict cell says.
+
+    E.g. ``SA raises Goal Error by +1.24 m s, F(1,9) = 32.8, p < .001``; a censored arm's
+    ``by at least`` (its measure a lower bound). Never contains ``". "`` (the note's
+    ``Effect: <sentence>. `` is read back by :func:`lasa.evidence.findings.effect_of`).
+    """
+    verdict, value, low, high, measured = judged
+    bound = "at least " if measured.startswith(CENSORED) else ""
+    if key in ("h1", "h1_mean_distance", "h1_paper_test"):
+        test = result[
+            "h1_between" if key == "h1_paper_test" else "h1_mean_within" if "mean" in key else "h1_within"
+        ]
+        assert isinstance(test, dict)
+        diff = test["mean_sa"] - test["mean_no_sa"]
+        what, unit, scale = (
+            ("the mean distance", "cm", 100.0) if "mean" in key else ("Goal Error", "m s", 1.0)
+        )
+        change = _raises(diff, "raises", "lowers")
+        return f"SA {change} {what} by {bound}{scale * diff:+.2f} {unit}, {stats.format_f(test)}"
+    if key == "h2":
+        phases = result["h2_phases"]
+        assert isinstance(phases, dict)
+        mean, _, _, p, pairs = phases["scoop"]
+        if not math.isfinite(p):
+            return f"no scoop-phase comparison ({pairs} pairs)"
+        side = _raises(mean, "above", "below")
+        return f"LA+SA's scoop alignment is {side} R+SA's by {mean:+.3f}, paired t over {pairs}, p = {p:.3g}"
+    if not math.isfinite(value):
+        return "no contrast (a compared condition finishes too few episodes)"
+    other = (
+        measured.split("LA+SA - ", 1)[1].split(" ", 1)[0] if "LA+SA - " in measured else "the fastest other"
+    )
+    side = _raises(value, "slower", "faster")
+    return (
+        f"LA+SA is {side} than {other} by {bound}{value:+.1f} s [{low:+.1f}, {high:+.1f}] (restricted means)"
+    )
+
+
 def _claim_row(
     cid: str,
     key: str,
@@ -235,8 +281,12 @@ def _claim_row(
     decoder: str | None,
     model: str | None,
     reason: str | None,
+    effect: str,
 ) -> Claim:
-    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason."""
+    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason.
+
+    Its note starts with ``Effect: <effect>.`` (:func:`effect_sentence`).
+    """
     verdict, value, low, high, measured = judged
     r = rule(cid)
     if verdict != NOT_TESTABLE and not (math.isfinite(low) and math.isfinite(high)):
@@ -248,14 +298,15 @@ def _claim_row(
         why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
         why += "reached the compared phase under both conditions"
     elif verdict == NOT_TESTABLE:
-        why = measured.split(";", 1)[0] + ": every condition must finish "
-        why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its times are compared"
+        why = measured.split(";", 1)[0] + ": every compared condition must finish "
+        why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its measure is compared"
     else:
         why = f"95% interval of the effect [{low:.3g}, {high:.3g}]" + (
             "" if settled else f", which straddles 0; the tests read {verdict!r}"
         )
     note = (
-        (f"{NOT_TESTABLE} ({reason}). " if reason else "")
+        f"Effect: {effect}. "
+        + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
         + f"{n} simulated participants; SA = {member}; "
         + (f"decoder = {decoder}; " if decoder else "")
         + (f"participant model = {model}; " if model else "")
@@ -298,7 +349,8 @@ def _with_flips(rows: list[Claim]) -> list[Claim]:
                 if flips
                 else "Every reading gives the same verdict. "
             )
-            c = dataclasses.replace(c, note=lead + c.note)
+            effect, rest = c.note.split(". ", 1) if c.note.startswith("Effect: ") else ("", c.note)
+            c = dataclasses.replace(c, note=(f"{effect}. " if effect else "") + lead + rest)
         out.append(c)
     return out
 
@@ -352,12 +404,12 @@ def readings_table(
     Columns: ``model`` (with models), ``decoder``, ``headline`` (the headline decoder),
     ``goals with the property``, ``least share staying``, ``R finished``, ``R+SA finished``,
     ``LA finished``, ``LA+SA finished`` (that model's; Retargeting's do not depend on the
-    decoder), and H1-H3's verdicts for 10 participants / the cohort (``-`` where the study
-    had no cohort).
+    decoder), H1-H3's verdicts for 10 participants / the cohort (``-`` where the study
+    had no cohort), and each one's effect for the first 10 in words (``H1 effect (10)``, ...).
     """
     if not models and "model" in done.columns:
         models = tuple(dict.fromkeys(done.model))
-    verdict = {c.id: c.reproduced for c in rows}
+    by_id = {c.id: c for c in rows}
     keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
     finished = done.set_index(keys).finished
     out = []
@@ -380,22 +432,29 @@ def readings_table(
                     "goals with the property": int(mine.has_property.sum()),
                     "least share staying": mine.stay_share.min(),
                     **{f"{c} finished": finished.get((*lead, *arms[c], c)) for c in CONDITIONS},
-                    **_verdict_cells(verdict, member, other, model if k else None),
+                    **_verdict_cells(by_id, member, other, model if k else None),
                 }
             )
     return pd.DataFrame(out)
 
 
 def _verdict_cells(
-    verdict: Mapping[str, str], member: str, decoder: str | None, model: str | None
+    by_id: Mapping[str, Claim], member: str, decoder: str | None, model: str | None
 ) -> dict[str, str]:
     """H1-H3's verdicts of one reading (:func:`claim_id`'s ``decoder`` and ``model``), ``10 / all``.
 
-    ``-`` where the study had no such row (no cohort beyond the first 10).
+    Beside each, ``H<k> effect (10)``: the first 10's effect in words with its sign
+    (:func:`effect_sentence`). ``-`` where the study had no such row (no cohort beyond the first 10).
     """
-    return {
-        f"{h.upper()} (10 / all)": " / ".join(
-            verdict.get(claim_id(h, 0, member, cohort, decoder, model), "-") for cohort in (False, True)
-        )
-        for h in DECODER_KEYS
-    }
+    out = {}
+    for h in DECODER_KEYS:
+        ids = [claim_id(h, 0, member, cohort, decoder, model) for cohort in (False, True)]
+        words = [_word(by_id[i]) if i in by_id else "-" for i in ids]
+        out[f"{h.upper()} (10 / all)"] = " / ".join(words)
+        out[f"{h.upper()} effect (10)"] = effect_of(by_id[ids[0]].note) or "-" if ids[0] in by_id else "-"
+    return out
+
+
+def _word(row: Claim) -> str:
+    """A row's verdict, ``(censored: lower bound)`` added where it rests on a censored arm."""
+    return f"{row.reproduced} ({CENSORED})" if row.measured.startswith(CENSORED) else row.reproduced

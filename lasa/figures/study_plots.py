@@ -3,24 +3,45 @@
 Each is a :class:`FigureSpec` (:data:`GOAL_ERROR`, :data:`TIME`, :data:`ALIGNMENT`), the shape
 :func:`lasa.evidence.publish.publish` takes: its file stem, the columns of its CSV (the tidy
 tables of :func:`lasa.figures.study.run`) and its plot, which draws one reading
-(:func:`lasa.figures.study.for_member`) with the paper's result beside it (:data:`PAPER_H`).
+(:func:`lasa.figures.study.for_member`) with the paper's result in its title (:data:`PAPER_H`).
+
+Every figure has the same shape:
+
+- **Panels.** The main panel (:data:`HEADLINE`) is the first :data:`~lasa.figures.study.PAPER_N`
+  participants, the N the verdicts rest on; beside it, the whole table (:data:`COHORT`, "cohort
+  of 40 (a reading)"), drawn only when the table holds more participants than the main panel.
+  Each panel's title says its N, counted from the rows it draws.
+- **Our statistic beside the paper's.** The figure's title ends with the paper's result; the
+  optional ``stats`` of each plot (``{HEADLINE: "ours (10): ...", COHORT: "ours (40): ..."}``,
+  built by the caller from its analyses) puts our result in each panel's title, under its N. A panel
+  without an entry prints nothing extra.
+- **Censored bars.** A bar whose episodes did not all finish within the horizon is hatched
+  (:data:`HATCH`): its value is a lower bound. The Time table has a ``completed`` column; the
+  Goal Error and Alignment tables do not, so their plots take the Time table (or any table of
+  :data:`ROW_KEYS` and ``completed``) as ``completed`` and join it on the row keys. Alignment
+  hatches a bar also where some participant did not reach the phase (``steps == 0``), and says
+  how many participants each bar rests on (``n=9``).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
 
 import matplotlib.patches as mpatches
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 import seaborn as sns
-from matplotlib.figure import Figure
+from matplotlib.artist import Artist
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure, SubFigure
 
 from lasa.base.conditions import CONDITIONS
+from lasa.base.errors import ConfigError
 from lasa.evidence.plots import wrap_to
-from lasa.figures.study import for_member
+from lasa.figures.study import PAPER_N, for_member
 
 __all__ = [
     "FigureSpec",
@@ -29,12 +50,27 @@ __all__ = [
     "TIME",
     "ALIGNMENT",
     "PAPER_H",
+    "HEADLINE",
+    "COHORT",
+    "HATCH",
+    "CENSORED",
     "plot_goal_error",
     "plot_time",
     "plot_alignment",
 ]
 
 PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
+TASKS = ("Entree", "Dessert")
+PHASES = ("stab", "scoop", "dip")  # the Dessert phases the alignment figure draws (the paper's three)
+
+HEADLINE = "headline"  # the main panel, and its key in a plot's ``stats``: the first PAPER_N participants
+COHORT = "cohort"  # the second panel, and its key in ``stats``: every participant of the table
+PANELS = (HEADLINE, COHORT)
+HATCH = "///"  # a censored bar's hatch
+CUT = "hatched: some episodes cut at the horizon"
+CENSORED = f"{CUT} (a lower bound)"  # the legend's reading of HATCH
+Stats = Mapping[str, str] | None  # our result per panel (HEADLINE, COHORT), a short line each
+Bars = dict[Hashable, mpatches.Rectangle]  # a drawn bar by its group (a condition, or a (x level, condition))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,51 +94,227 @@ PAPER_H = {
 }
 
 
-def _reading(member: str, decoder: str | None) -> str:
-    """The figures' caption of what they show: the SA member, and the decoder reading if named."""
-    return f"SA = {member}" + (f"; decoder = {decoder}" if decoder else "")
+def _reading(member: str, decoder: str | None, model: str | None) -> str:
+    """The figures' caption of what they show: the SA member, the decoder and participant model if named."""
+    return (
+        f"SA = {member}"
+        + (f"; decoder = {decoder}" if decoder else "")
+        + (f"; participant model = {model}" if model else "")
+    )
+
+
+def _panels(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
+    """The panels' names and rows: the first PAPER_N participants; the whole table if it holds more."""
+    head = data[data.participant < PAPER_N]
+    panels = [(HEADLINE, head)]
+    if data.participant.nunique() > head.participant.nunique():
+        panels.append((COHORT, data))
+    return panels
+
+
+def _panel_titles(panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, inches: float) -> list[str]:
+    """Each panel's title: its N (counted from its rows) and, if ``stats`` has one, our result there.
+
+    The titles are padded to the same number of lines, so the panels' axes line up.
+    """
+    titles = []
+    for panel, part in panels:
+        n = part.participant.nunique()
+        what = (
+            f"first {n} simulated participants (the headline)"
+            if panel == HEADLINE
+            else f"cohort of {n} (a reading)"
+        )
+        ours = (stats or {}).get(panel)
+        titles.append("\n".join(wrap_to(line, inches, 10) for line in (what, ours) if line))
+    lines = max(t.count("\n") for t in titles)
+    return [t + "\n " * (lines - t.count("\n")) for t in titles]
+
+
+def _layout(
+    panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, size: tuple[float, float], n_axes: int = 1
+) -> tuple[Figure, list[list[Axes]]]:
+    """A figure of one subfigure per panel (side by side), each titled and holding ``n_axes`` axes.
+
+    Raises:
+        ConfigError: if ``stats`` names a panel other than :data:`HEADLINE` and :data:`COHORT`.
+    """
+    unknown = sorted(set(stats or {}) - set(PANELS))
+    if unknown:
+        raise ConfigError(f"stats keys must be among {PANELS}, got {unknown}")
+    sns.set_theme(style="whitegrid")
+    width, height = size
+    fig = plt.figure(figsize=(width * len(panels), height), layout="constrained")
+    subs: Iterable[SubFigure] = fig.subfigures(1, len(panels), squeeze=False)[0]
+    grid = []
+    # the titles fit the panel beside a legend on the right (of the conditions, ~1.6 in)
+    for sub, title in zip(subs, _panel_titles(panels, stats, width - 1.6), strict=True):
+        sub.suptitle(title, fontsize=10)
+        grid.append(list(np.atleast_1d(sub.subplots(1, n_axes, sharey=True))))
+    return fig, grid
+
+
+def _finish(
+    fig: Figure,
+    axes: Sequence[Axes],
+    title: str,
+    notes: Sequence[tuple[Artist, str]],
+    keys: Sequence[Artist] | None = (),
+) -> Figure:
+    """Share the y range of every axes, title the figure, and add its legends.
+
+    Args:
+        fig: The figure.
+        axes: Its axes, every panel's.
+        title: The figure's title (what it shows; the paper's result).
+        notes: The legend below the panels: what the hatch, a shade or a label means.
+        keys: Entries after the conditions' colours in the legend on the right (None: no such legend).
+    """
+    top = max(ax.get_ylim()[1] for ax in axes)
+    bottom = min(0.0, *(ax.get_ylim()[0] for ax in axes))
+    for ax in axes:
+        ax.set_ylim(bottom, 1.08 * top)  # room for the labels above the tallest bar
+    if keys is not None:
+        handles = [mpatches.Patch(facecolor=PALETTE[c], label=c) for c in CONDITIONS]
+        fig.legend(handles=[*handles, *keys], loc="outside right center", frameon=False, fontsize=9)
+    fig.legend(
+        [h for h, _ in notes], [t for _, t in notes], loc="outside lower center", frameon=False, fontsize=8
+    )
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def _hatch_note(data: pd.DataFrame, horizon: float | None = None, also: str = "") -> tuple[Artist, str]:
+    """The legend's entry for the hatch (:data:`CENSORED`, ``also`` another reason), or that it is unknown."""
+    patch = mpatches.Patch(facecolor="white", edgecolor="0.3", hatch=HATCH)
+    if "completed" not in data.columns:
+        if also:
+            return patch, f"hatched: {also} (completion not given)"
+        return mpatches.Patch(visible=False), "completion not given: censored bars not marked"
+    if also:
+        return patch, f"{CUT}, or {also}"
+    when = "" if horizon is None or math.isnan(horizon) else f"; censored at the {horizon:g} s horizon"
+    return patch, f"{CUT} (a lower bound{when})"
+
+
+def _with_completion(data: pd.DataFrame, completed: pd.DataFrame | None) -> pd.DataFrame:
+    """``data`` with its episodes' ``completed`` (bool): its own column, else joined from ``completed``.
+
+    The join is on the :data:`ROW_KEYS` both tables hold (one episode per key in ``completed``).
+    Without either, ``data`` is returned as it is (no column: nothing can be marked censored).
+
+    Raises:
+        ConfigError: if an episode of ``data`` has no row in ``completed``.
+    """
+    if "completed" in data.columns:
+        return data.assign(completed=data.completed.astype(bool))
+    if completed is None:
+        return data
+    keys = [k for k in ROW_KEYS if k in data.columns and k in completed.columns]
+    table = completed[[*keys, "completed"]]
+    joined = data.merge(table, on=keys, how="left", validate="many_to_one")
+    missing = joined.completed.isna()
+    if missing.any():
+        raise ConfigError(
+            f"completed has no row for {int(missing.sum())} of the figure's rows (joined on {keys})"
+        )
+    return joined.assign(completed=joined.completed.astype(bool))
+
+
+def _censored(part: pd.DataFrame, by: Sequence[str]) -> dict[Hashable, bool]:
+    """Per group of ``by`` (its key a tuple when ``by`` has two columns): whether an episode is unfinished."""
+    if "completed" not in part.columns:
+        return {}
+    done = part.groupby(list(by)).completed.all()
+    return {key: not bool(ok) for key, ok in done.items()}
+
+
+def _slots(levels: Sequence[str], hues: Sequence[str] = ()) -> dict[Hashable, float]:
+    """The centre of each bar seaborn draws: per level at 0, 1, ...; with hues, dodged over 0.8 of a level."""
+    if not hues:
+        return {level: float(i) for i, level in enumerate(levels)}
+    width = 0.8 / len(hues)
+    return {
+        (level, hue): i - 0.4 + width * (j + 0.5)
+        for i, level in enumerate(levels)
+        for j, hue in enumerate(hues)
+    }
+
+
+def _bars_at(patches: Iterable[Artist], slots: Mapping[Hashable, float]) -> Bars:
+    """The drawn bars (rectangles of a finite height) by the group whose slot their centre is at."""
+    bars: Bars = {}
+    for bar in patches:
+        if not isinstance(bar, mpatches.Rectangle) or math.isnan(bar.get_height()):
+            continue
+        centre = bar.get_x() + bar.get_width() / 2
+        for key, x in slots.items():
+            if abs(centre - x) < 0.02:
+                bars[key] = bar
+    return bars
+
+
+def _hatch(bars: Bars, censored: Mapping[Hashable, bool]) -> None:
+    """Hatch the bars of the censored groups (the others are left as they are)."""
+    for key, bar in bars.items():
+        if censored.get(key, False):
+            bar.set_hatch(HATCH)
+            bar.set_edgecolor("0.3")
 
 
 def plot_goal_error(
-    frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None, model: str | None = None
+    frame: pd.DataFrame,
+    member: str = "hindsight",
+    decoder: str | None = None,
+    model: str | None = None,
+    stats: Stats = None,
+    completed: pd.DataFrame | None = None,
 ) -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants).
 
-    The title's second line is the paper's H1 result and ordering (:data:`PAPER_H`).
+    Args:
+        frame: The Goal Error table (:data:`GOAL_ERROR`'s columns).
+        member: The SA member drawn (the unassisted conditions beside it).
+        decoder: The decoder reading of the LA rows (None: every row).
+        model: The participant model (None: every row).
+        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT` (e.g.
+            ``"ours (10): SA − no SA = +1.24 m s, F(1,9) = 32.8, p < .001"``); printed in
+            the panel's title under its N, beside the paper's H1 (:data:`PAPER_H`) in the figure's title.
+        completed: A table of the episodes' ``completed`` (the Time table), joined on the row
+            keys, to hatch the bars of unfinished episodes (unneeded if ``frame`` has the column).
+
+    Returns:
+        The figure: one panel per :func:`_panels`, each a bar per task x condition.
     """
-    sns.set_theme(style="whitegrid")
-    data = for_member(frame, member, decoder=decoder, model=model)
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
-    sns.barplot(
-        data=data,
-        x="task",
-        y="goal_error",
-        hue="condition",
-        hue_order=CONDITIONS,
-        palette=PALETTE,
-        **CI,
-        ax=ax,
-        alpha=0.85,
-    )
+    data = _with_completion(for_member(frame, member, decoder=decoder, model=model), completed)
+    panels = _panels(data)
+    fig, grid = _layout(panels, stats, (5.6, 4.4))
+    for (_, part), (ax,) in zip(panels, grid, strict=True):
+        _goal_error_axes(ax, part)
+    paper = wrap_to(PAPER_H["h1"], 5.6 * len(panels), 10)
+    title = f"Goal Error ({_reading(member, decoder, model)})\n{paper}"
+    return _finish(fig, [ax for axes in grid for ax in axes], title, [_hatch_note(data)])
+
+
+def _goal_error_axes(ax: Axes, part: pd.DataFrame) -> None:
+    """One panel of Goal Error: bars per task x condition (censored ones hatched), a dot per participant."""
+    before = len(ax.patches)
+    kwargs = {"x": "task", "y": "goal_error", "order": TASKS, "hue": "condition", "hue_order": CONDITIONS}
+    sns.barplot(data=part, **kwargs, palette=PALETTE, **CI, ax=ax, alpha=0.85, legend=False)
+    _hatch(_bars_at(ax.patches[before:], _slots(TASKS, CONDITIONS)), _censored(part, ("task", "condition")))
     sns.stripplot(
-        data=data,
-        x="task",
-        y="goal_error",
-        hue="condition",
-        hue_order=CONDITIONS,
+        data=part,
+        **kwargs,
         palette=PALETTE,
         dodge=True,
         size=2.5,
         jitter=False,  # seaborn jitters with an unseeded generator: the PNG would change run to run
-        color="k",
         ax=ax,
         legend=False,
         alpha=0.5,
     )
+    ax.set_xlabel("task")
     ax.set_ylabel("Goal Error [m s]")
-    what = f"Goal Error ({data.participant.nunique()} simulated participants; {_reading(member, decoder)})"
-    ax.set_title(f"{wrap_to(what, 5.0, 10)}\n{wrap_to(PAPER_H['h1'], 5.0, 10)}", fontsize=10)
-    return fig
 
 
 def plot_time(
@@ -111,41 +323,46 @@ def plot_time(
     decoder: str | None = None,
     model: str | None = None,
     horizon: float | None = None,
+    stats: Stats = None,
 ) -> Figure:
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
 
     A bar whose episodes did not all finish within the horizon is hatched (censored: cut at
-    the horizon), and every bar says which share finished. ``horizon`` [s] names the horizon
-    (default: the longest unfinished episode's time); the last line is the paper's H3 (:data:`PAPER_H`).
+    the horizon), and every bar says which share finished.
+
+    Args:
+        frame: The Time table (:data:`TIME`'s columns, ``completed`` among them).
+        member: The SA member drawn (the unassisted conditions beside it).
+        decoder: The decoder reading of the LA rows (None: every row).
+        model: The participant model (None: every row).
+        horizon: The horizon [s] the legend names (default: the longest unfinished episode's time).
+        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT`; printed in the
+            panel's title under its N, beside the paper's H3 (:data:`PAPER_H`) in the figure's title.
+
+    Returns:
+        The figure: one panel per :func:`_panels`, each an axes per task.
     """
-    sns.set_theme(style="whitegrid")
-    data = for_member(frame, member, decoder=decoder, model=model)
+    data = _with_completion(for_member(frame, member, decoder=decoder, model=model), None)
     if horizon is None:
-        cut = data.total_time[~data.completed.astype(bool)]
+        cut = data.total_time[~data.completed]
         horizon = float(cut.max()) if len(cut) else math.nan
-    fig, axes = plt.subplots(1, 2, figsize=(9, 4.6), sharey=True, layout="constrained")
-    for ax, task in zip(axes, ("Entree", "Dessert"), strict=True):
-        _time_bars(ax, data[data.task == task])
-        ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
-        ax.set_ylabel("time [s]")
-    axes[0].set_ylim(top=1.08 * axes[0].get_ylim()[1])  # room for the labels above the tallest bar
-    censored = mpatches.Patch(facecolor="white", edgecolor="0.3", hatch="///", label="")
-    when = "" if math.isnan(horizon) else f" {horizon:g} s"
-    fig.legend(
-        [censored],
-        [f"hatched: censored at the{when} horizon (not every episode finished); text: share finished"],
-        loc="outside lower center",
-        frameon=False,
-        fontsize=8,
-    )
-    what = _reading(member, decoder) + (f"; participant model = {model}" if model else "")
-    title = wrap_to(f"{data.participant.nunique()} simulated participants; {what}", 9, 10)
-    fig.suptitle(f"{title}\n{wrap_to(PAPER_H['h3'], 9, 10)}", fontsize=10)
-    return fig
+    panels = _panels(data)
+    fig, grid = _layout(panels, stats, (7.6, 4.8), n_axes=len(TASKS))
+    for (_, part), axes in zip(panels, grid, strict=True):
+        for ax, task in zip(axes, TASKS, strict=True):
+            _time_bars(ax, part[part.task == task])
+            ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
+            ax.set_ylabel("time [s]")
+    idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
+    notes = [_hatch_note(data, horizon), (idle, "light: Idle Time; text: share of episodes finished")]
+    title = wrap_to(f"Total and Idle Time ({_reading(member, decoder, model)})", 7.6 * len(panels), 10)
+    title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
+    return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=None)
 
 
-def _time_bars(ax: plt.Axes, part: pd.DataFrame) -> None:
-    """One task's bars: Total Time per condition (hatched where censored), Idle Time over it."""
+def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
+    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it."""
+    before = len(ax.patches)
     sns.barplot(
         data=part,
         x="condition",
@@ -157,7 +374,12 @@ def _time_bars(ax: plt.Axes, part: pd.DataFrame) -> None:
         ax=ax,
         legend=False,
     )
-    _mark_censored(ax, part.groupby("condition").completed.mean())
+    bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
+    _hatch(bars, _censored(part, ("condition",)))
+    done = part.groupby("condition").completed.mean()
+    for condition, bar in bars.items():
+        if condition in done:
+            _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
     sns.barplot(
         data=part,
         x="condition",
@@ -170,56 +392,105 @@ def _time_bars(ax: plt.Axes, part: pd.DataFrame) -> None:
     )
 
 
-def _mark_censored(ax: plt.Axes, done: pd.Series) -> None:
-    """Hatch each bar (the axes' patches, one per condition) whose share finished is below 1; label each."""
-    for bar in [p for p in ax.patches if isinstance(p, mpatches.Rectangle)]:
-        i = round(bar.get_x() + bar.get_width() / 2)
-        if math.isnan(bar.get_height()) or not 0 <= i < len(CONDITIONS) or CONDITIONS[i] not in done:
-            continue
-        share = float(done[CONDITIONS[i]])
-        if share < 1:
-            bar.set_hatch("///")
-            bar.set_edgecolor("0.3")
-        ax.annotate(
-            f"{100 * share:.0f}% done",
-            (bar.get_x() + bar.get_width() / 2, bar.get_height()),
-            xytext=(0, 2),
-            textcoords="offset points",
-            ha="center",
-            va="bottom",
-            fontsize=7,
-        )
+def _label(ax: Axes, bar: mpatches.Rectangle, text: str, foot: bool = False) -> None:
+    """A small label at a bar's centre: just above its top, or (``foot``) upright, boxed, at its foot."""
+    ax.annotate(
+        text,
+        (bar.get_x() + bar.get_width() / 2, 0.0 if foot else bar.get_height()),
+        xytext=(0, 3 if foot else 2),
+        textcoords="offset points",
+        ha="center",
+        va="bottom",
+        rotation=90 if foot else 0,
+        fontsize=7,
+        bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.8}
+        if foot
+        else None,
+    )
 
 
 def plot_alignment(
-    frame: pd.DataFrame, member: str = "hindsight", decoder: str | None = None, model: str | None = None
+    frame: pd.DataFrame,
+    member: str = "hindsight",
+    decoder: str | None = None,
+    model: str | None = None,
+    stats: Stats = None,
+    completed: pd.DataFrame | None = None,
 ) -> Figure:
     """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them).
 
-    The shaded scoop phase is labelled with the paper's H2 ordering there (:data:`PAPER_H`).
+    Each bar (mean over the participants who reached the phase, 95% CI) says its n, and is
+    hatched where some participant did not reach the phase or did not finish Dessert. The
+    scoop phase is shaded (the paper's H2, :data:`PAPER_H`, in the figure's title).
+
+    Args:
+        frame: The Alignment table (:data:`ALIGNMENT`'s columns; a phase is reached where
+            ``steps > 0``, or where ``alignment`` is not NaN if the table lacks ``steps``).
+        member: The SA member drawn (the unassisted conditions beside it).
+        decoder: The decoder reading of the LA rows (None: every row).
+        model: The participant model (None: every row).
+        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT`; printed in the
+            panel's title under its N, beside the paper's H2 in the figure's title.
+        completed: A table of the episodes' ``completed`` (the Time table), joined on the row
+            keys; without it, only the phases not reached mark a bar.
+
+    Returns:
+        The figure: one panel per :func:`_panels`, each a bar per phase x condition.
     """
-    sns.set_theme(style="whitegrid")
     data = for_member(frame, member, decoder=decoder, model=model)
-    data = data[(data.task == "Dessert") & data.phase.isin(["stab", "scoop", "dip"])]
-    fig, ax = plt.subplots(figsize=(7.6, 4.0), layout="constrained")
-    sns.pointplot(
-        data=data,
+    data = data[(data.task == "Dessert") & data.phase.isin(PHASES)]
+    data = _with_completion(data, completed)
+    panels = _panels(data)
+    fig, grid = _layout(panels, stats, (6.6, 4.4))
+    for (_, part), (ax,) in zip(panels, grid, strict=True):
+        _alignment_axes(ax, part)
+    scoop = mpatches.Patch(facecolor="0.92", label="shaded: the scoop phase (H2)")
+    count = (mpatches.Patch(visible=False), "n (at a bar's foot): participants who reached the phase")
+    notes = [_hatch_note(data, also="some participant did not reach the phase"), count]
+    title = f"Dessert: alignment with each phase's preference ({_reading(member, decoder, model)})"
+    title = f"{wrap_to(title, 6.6 * len(panels), 10)}\n{PAPER_H['h2']}"
+    return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=[scoop])
+
+
+def _alignment_axes(ax: Axes, part: pd.DataFrame) -> None:
+    """One panel of alignment: bars per phase x condition, hatched where censored, each with its n."""
+    ax.axvspan(0.5, 1.5, color="0.92", zorder=0)  # the scoop phase
+    before = len(ax.patches)
+    sns.barplot(
+        data=part,
         x="phase",
         y="alignment",
+        order=PHASES,
         hue="condition",
         hue_order=CONDITIONS,
-        order=["stab", "scoop", "dip"],
         palette=PALETTE,
         **CI,
-        dodge=0.3,
         ax=ax,
+        legend=False,
     )
+    slots = _slots(PHASES, CONDITIONS)
+    counts = _reached(part)
+    bars = _bars_at(ax.patches[before:], slots)
+    _hatch(bars, {key: bool(row.censored) for key, row in counts.iterrows()})
+    for key, bar in bars.items():
+        n = int(counts.n[key]) if key in counts.index else 0
+        _label(ax, bar, f"n={n}", foot=True)
     ax.set_ylabel("Preference Alignment (d · d*)")
-    ax.axvspan(0.6, 1.4, color="0.92", zorder=0, label=wrap_to(PAPER_H["h2"], 1.8, 8))  # the scoop phase
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    what = f"Dessert: alignment with each phase's preference ({_reading(member, decoder)})"
-    ax.set_title(wrap_to(what, 4.5, 10), fontsize=10)
-    return fig
+
+
+def _reached(part: pd.DataFrame) -> pd.DataFrame:
+    """Per (phase, condition): ``n`` who reached the phase, ``of`` participants, and whether ``censored``.
+
+    Censored: someone did not reach the phase, or (where ``completed`` is known) did not finish.
+    """
+    reached = part.steps > 0 if "steps" in part.columns else part.alignment.notna()
+    groups = part.groupby(["phase", "condition"])
+    of = groups.participant.nunique()
+    n = part[reached].groupby(["phase", "condition"]).participant.nunique().reindex(of.index, fill_value=0)
+    censored = n < of
+    if "completed" in part.columns:
+        censored |= ~groups.completed.all()
+    return pd.DataFrame({"n": n, "of": of, "censored": censored})
 
 
 # every table's keys: who, under which condition, SA member, decoder reading and participant model, which task
