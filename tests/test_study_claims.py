@@ -534,3 +534,23 @@ def test_a_reading_without_an_interval_is_not_testable_never_undecided():
     assert (row.reproduced, row.settled) == ("not testable", False)
     assert row.measured.startswith("not testable (too few pairs for an interval)")
     assert "fewer than two participants" in row.note and "nan" not in row.note
+
+
+def test_the_members_table_sets_the_sa_readings_side_by_side():
+    data = with_decoders(
+        frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), frames(20, -2.0, -20.0, 0.15)
+    )
+    data = {k: v.assign(model="planning") for k, v in data.items()}
+    time = data["time"]
+    time.loc[
+        (time.assistance == MEMBERS[1]) & (time.condition == "LA+SA") & (time.participant < 4), "completed"
+    ] = False
+    rows, _ = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    table = study_claims.members_table(study_analysis.completion(time), rows, MEMBERS, "head", "planning")
+    assert list(table.SA) == list(MEMBERS) and list(table.headline) == [True, False]
+    head, other = table.iloc[0], table.iloc[1]
+    assert head["LA+SA finished"] == 1.0 and other["LA+SA finished"] == 0.8  # 8 of 40 episodes cut
+    assert head["R+SA finished"] == other["R+SA finished"] == 1.0
+    assert head["H1 (10 / all)"] == "yes / yes" and other["H1 (10 / all)"] == "not testable / not testable"
+    assert head["H1 effect (10)"].startswith("SA lowers Goal Error by -")
+    assert other["H3 effect (10)"] == "no contrast (a compared condition finishes too few episodes)"

@@ -77,6 +77,7 @@ __all__ = [
     "claims",
     "claim_id",
     "effect_sentence",
+    "members_table",
     "readings_table",
     "untestable_reason",
 ]
@@ -439,22 +440,52 @@ def readings_table(
 
 
 def _verdict_cells(
-    by_id: Mapping[str, Claim], member: str, decoder: str | None, model: str | None
+    by_id: Mapping[str, Claim], member: str, decoder: str | None, model: str | None, member_index: int = 0
 ) -> dict[str, str]:
-    """H1-H3's verdicts of one reading (:func:`claim_id`'s ``decoder`` and ``model``), ``10 / all``.
+    """H1-H3's verdicts of one reading (:func:`claim_id`'s arguments), ``10 / all``.
 
     Beside each, ``H<k> effect (10)``: the first 10's effect in words with its sign
     (:func:`effect_sentence`). ``-`` where the study had no such row (no cohort beyond the first 10).
     """
     out = {}
     for h in DECODER_KEYS:
-        ids = [claim_id(h, 0, member, cohort, decoder, model) for cohort in (False, True)]
-        words = [_word(by_id[i]) if i in by_id else "-" for i in ids]
-        out[f"{h.upper()} (10 / all)"] = " / ".join(words)
-        out[f"{h.upper()} effect (10)"] = effect_of(by_id[ids[0]].note) or "-" if ids[0] in by_id else "-"
+        ids = [claim_id(h, member_index, member, cohort, decoder, model) for cohort in (False, True)]
+        out[f"{h.upper()} (10 / all)"] = " / ".join(_word(by_id[i]) if i in by_id else "-" for i in ids)
+        out[f"{h.upper()} effect (10)"] = (effect_of(by_id[ids[0]].note) or "-") if ids[0] in by_id else "-"
     return out
 
 
 def _word(row: Claim) -> str:
     """A row's verdict, ``(censored: lower bound)`` added where it rests on a censored arm."""
     return f"{row.reproduced} ({CENSORED})" if row.measured.startswith(CENSORED) else row.reproduced
+
+
+def members_table(
+    done: pd.DataFrame, rows: list[Claim], members: tuple[str, ...], decoder: str, model: str
+) -> pd.DataFrame:
+    """The SA readings side by side, under the headline decoder and participant model.
+
+    One row per member (the headline first): the assisted conditions' completion (R+SA and
+    LA+SA; R and LA do not depend on the member), and H1-H3's verdicts for 10 participants /
+    the cohort, each with its effect for the first 10 in words (:func:`effect_sentence`).
+
+    Args:
+        done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
+        rows: The study's claims rows (:func:`claims`).
+        members: The SA members, the headline first.
+        decoder: The headline decoder reading.
+        model: The headline participant model.
+    """
+    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
+    finished = done.set_index(keys).finished
+    by_id = {c.id: c for c in rows}
+    out = []
+    for m_i, member in enumerate(members):
+        cells: dict[str, object] = {"SA": member, "headline": m_i == 0}
+        for c in ("R+SA", "LA+SA"):
+            arm = {"model": model, "decoder": NO_ASSISTANCE if c == "R+SA" else decoder}
+            arm |= {"assistance": member, "condition": c}
+            cells[f"{c} finished"] = finished.get(tuple(arm[k] for k in keys))
+        cells |= _verdict_cells(by_id, member, None, None, m_i)
+        out.append(cells)
+    return pd.DataFrame(out)
