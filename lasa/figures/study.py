@@ -95,6 +95,11 @@ class Config:
     # remedy, as a contrast); "all", every reading (LARGE=1) [-]
     decoders: str = "property"
     scheduler: str = ""  # a Dask scheduler address for the readings' runs ("" local; $LASA_SCHEDULER) [-]
+    # who a replication needs (lasa.figures.study_power): cohort sizes drawn from the simulated
+    # participants [participants], and cohorts drawn per size (each one analysis, ~0.3 s; 100 draws
+    # give a power of 80% to within 4 points) [-]
+    power_sizes: tuple[AtLeastTwo, ...] = (6, 10, 16, 24, 40, 60)
+    power_draws: PositiveInt = 100
 
     def __post_init__(self) -> None:
         validate(self)

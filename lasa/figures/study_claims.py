@@ -77,6 +77,7 @@ __all__ = [
     "claims",
     "claim_id",
     "effect_sentence",
+    "figure_stats",
     "members_table",
     "readings_table",
     "untestable_reason",
@@ -489,3 +490,22 @@ def members_table(
         cells |= _verdict_cells(by_id, member, None, None, m_i)
         out.append(cells)
     return pd.DataFrame(out)
+
+
+def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
+    """Our result beside the paper's in each study figure: H1, H2, H3's headline rows, 10 and the cohort.
+
+    ``{"h1": {"headline": "ours (10): <word>; <effect>", "cohort": ...}, "h2": ..., "h3": ...}``
+    (:func:`lasa.figures.study_plots.plot_goal_error`'s ``stats``); ``cohort`` only when the
+    study has one.
+    """
+    by_id = {c.id: c for c in rows}
+    out: dict[str, dict[str, str]] = {}
+    for h in DECODER_KEYS:
+        out[h] = {}
+        for panel, cohort in (("headline", False), ("cohort", True)):
+            row = by_id.get(claim_id(h, 0, "", cohort))
+            if row is None or (cohort and n_total <= PAPER_N):
+                continue
+            out[h][panel] = f"ours ({row.n_users}): {_word(row)}; {effect_of(row.note) or '-'}"
+    return out

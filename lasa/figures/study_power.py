@@ -1,0 +1,405 @@
+"""Who a human replication of the eating study needs: the power of H1-H3's tests, by simulation.
+
+The simulated cohort's effects, with their spread between participants, stand in for people's:
+:func:`power` draws cohorts of ``n`` participants from the simulated ones (with replacement;
+each drawn participant is relabelled as a new participant, so a participant drawn twice counts
+as two people) and applies each claim's own test to every drawn cohort, the tests and rules of
+:mod:`lasa.figures.study_tests` (:func:`~lasa.figures.study_tests.analyse`, then
+:func:`~lasa.figures.study_tests.judge`):
+
+- **H1** (``h1``): the within-subjects SA main effect on Goal Error (2x2 repeated-measures ANOVA;
+  its paired t-interval of SA - no SA);
+- **H2** (``h2``): the paired t-test of Dessert scoop alignment, LA+SA - R+SA;
+- **H3** (``h3``): LA+SA's restricted mean Total Time minus the fastest other condition's, with
+  its paired bootstrap interval, here with a reduced bootstrap (``n_resamples``, 500 by default,
+  against the claims' 10,000: percentile ends are noisier, the verdicts rarely differ).
+
+A drawn cohort is *significant* when its effect's 95% interval (``judge``'s) excludes 0 on the
+side of the whole cohort's effect (α = .05, two-sided); the **power** at ``n`` is the share of
+drawn cohorts that are. A cohort whose test cannot run (``judge`` reads ``not testable``, e.g. a
+condition finishes fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes, or the
+interval is undefined) counts as not significant, and its share is reported. When the whole
+cohort's own test cannot run, power is counted in the paper's direction and the table says so.
+:func:`needed` gives the smallest simulated cohort from which power stays at the target (80%),
+:func:`sentence` says it in one line for the guide or a notebook.
+
+Each drawn cohort costs one :func:`~lasa.figures.study_tests.analyse` (statsmodels and scipy
+tests, ~0.2-0.35 s of one core, more for larger n). Measured on the committed data (2 cores,
+one of them taken by a paper-scale notebook run): 6 sizes x 100 draws, the default, 175 s in
+one process (144 s of CPU); 6 x 200 draws 517 s with ``n_jobs=2`` (the workers first load
+lasa and torch; on a busy 2-core machine they gained nothing). Run with one BLAS thread
+(``OMP_NUM_THREADS=1``, as ``make`` sets; joblib's workers get it by themselves): with two,
+the repeated-measures ANOVA's least squares (a 4n x 4n design) made the cohorts of 40-60 twice
+as slow.
+
+These numbers rest on simulated participants: they say what a replication needs if people
+differed as the simulated ones do, not what people do.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import math
+import warnings
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+import pandas as pd
+
+from lasa.base.config import NO_ASSISTANCE, check_choice
+from lasa.base.errors import ConfigError
+from lasa.evidence.decision import NOT_TESTABLE
+from lasa.evidence.rules import rule
+from lasa.figures.study import for_member
+from lasa.figures.study_tests import analyse, judge
+from lasa.pipeline.scaleout import run_jobs
+
+__all__ = ["POWER_CLAIMS", "SIZES", "power", "needed", "sentence"]
+
+POWER_CLAIMS: tuple[str, ...] = ("h1", "h2", "h3")  # the claim keys of judge whose power is simulated
+SIZES: tuple[int, ...] = (6, 10, 16, 24, 40, 60)  # cohort sizes simulated by default [participants]
+_CHUNK = 10  # drawn cohorts per job (the progress bar steps by a job) [-]
+
+# what each claim's effect says, by its sign: (above 0, below 0)
+_SAYS: dict[str, tuple[str, str]] = {
+    "h1": ("SA raises Goal Error", "SA lowers Goal Error"),
+    "h2": (
+        "LA+SA aligns better than R+SA in the Dessert scoop phase",
+        "LA+SA aligns worse than R+SA in the Dessert scoop phase",
+    ),
+    "h3": ("LA+SA slower than the fastest other condition", "LA+SA faster than the fastest other condition"),
+}
+_COLUMNS = [
+    "claim",
+    "n",
+    "power",
+    "opposite_share",
+    "untestable_share",
+    "yes_share",
+    "direction",
+    "paper_direction",
+    "draws",
+]
+
+
+def power(
+    frames: dict[str, pd.DataFrame],
+    member: str,
+    decoder: str | None = None,
+    model: str | None = None,
+    sizes: Sequence[int] = SIZES,
+    draws: int = 100,
+    seed: int = 0,
+    horizon: float = math.inf,
+    progress: bool = False,
+    n_resamples: int = 500,
+    n_jobs: int = 1,
+) -> pd.DataFrame:
+    """The power of H1-H3's tests per cohort size, drawing cohorts from the simulated participants.
+
+    Every drawn cohort runs :func:`~lasa.figures.study_tests.analyse` once (all three claims); the
+    draws are made up front with ``numpy.random.default_rng(seed)``, so the same inputs give the
+    same table whatever ``n_jobs``.
+
+    Args:
+        frames: :func:`lasa.figures.study.run`'s tables (``goal_error``, ``time``, ``alignment``).
+        member: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
+        decoder: The decoder reading of the LA rows (None: the frames hold one).
+        model: The participant model (None: the frames hold one).
+        sizes: Cohort sizes to simulate, each at least 2.
+        draws: Drawn cohorts per size, at least 1 (100: a power of 0.8 within +-0.04, one
+            standard error; the paper-scale table in about 2-3 minutes).
+        seed: Seed of the draws.
+        horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
+        progress: Show a progress bar over the drawn cohorts (in jobs of 10).
+        n_resamples: H3's paired bootstrap resamples per drawn cohort (reduced from the claims'
+            10,000 for speed), at least 1.
+        n_jobs: Worker processes (:func:`lasa.pipeline.scaleout.run_jobs`; 1: this process).
+
+    Returns:
+        One row per claim (:data:`POWER_CLAIMS`) and size: ``claim``, ``n``, ``power`` (share of
+        drawn cohorts significant in ``direction``), ``opposite_share`` (significant the other
+        way), ``untestable_share`` (whose test could not run), ``yes_share`` (whose claims row
+        would read the rule's *yes*, settled: for H1 with both pairwise comparisons too, for H3
+        with all six contrasts), ``direction`` (the whole cohort's effect in words),
+        ``paper_direction`` (whether that is the paper's; NA when the whole cohort's test cannot
+        run and the paper's direction is counted) and ``draws``.
+
+    Raises:
+        ConfigError: ``sizes`` empty, repeated or below 2, ``draws``, ``n_resamples`` or
+            ``n_jobs`` below 1, or a member, decoder or model the frames do not hold.
+    """
+    sizes = _checked(sizes, draws, n_resamples, n_jobs)
+    reading = _reading(frames, member, decoder, model)
+    setting = (member, decoder, model, float(horizon), int(n_resamples))
+    full = _outcome(reading, setting, strict=True)
+    ids = _participants(reading)
+    rng = np.random.default_rng(seed)
+    drawn = [rng.integers(0, len(ids), size=(draws, n)) for n in sizes]
+    jobs = [(k, block[i : i + _CHUNK]) for k, block in enumerate(drawn) for i in range(0, draws, _CHUNK)]
+    results = run_jobs(
+        _evaluate, jobs, n_jobs=n_jobs, progress=progress, desc="power", shared=(reading, ids, setting)
+    )
+    per_size: list[list[dict[str, tuple[int, bool, bool]]]] = [[] for _ in sizes]
+    for (k, _), outcomes in zip(jobs, results, strict=True):
+        per_size[k].extend(outcomes)
+    rows = [
+        _row(claim, n, [o[claim] for o in per_size[k]], full[claim])
+        for claim in POWER_CLAIMS
+        for k, n in enumerate(sizes)
+    ]
+    return pd.DataFrame(rows, columns=_COLUMNS).astype({"paper_direction": "boolean"})
+
+
+def _checked(sizes: Sequence[int], draws: int, n_resamples: int, n_jobs: int) -> list[int]:
+    """``sizes`` as a list of ints, after checking every argument of :func:`power` it is given."""
+    sizes = list(sizes)
+    if not sizes or any(int(n) != n or n < 2 for n in sizes) or len(set(sizes)) != len(sizes):
+        raise ConfigError(f"sizes must be distinct whole numbers >= 2 (participants), got {sizes}")
+    if int(draws) != draws or draws < 1:
+        raise ConfigError(f"draws must be a whole number >= 1, got {draws!r}")
+    if int(n_resamples) != n_resamples or n_resamples < 1:
+        raise ConfigError(f"n_resamples must be a whole number >= 1, got {n_resamples!r}")
+    if int(n_jobs) != n_jobs or n_jobs < 1:
+        raise ConfigError(f"n_jobs must be a whole number >= 1 (worker processes), got {n_jobs!r}")
+    return [int(n) for n in sizes]
+
+
+def _reading(
+    frames: dict[str, pd.DataFrame], member: str, decoder: str | None, model: str | None
+) -> dict[str, pd.DataFrame]:
+    """The three tables' rows of one reading (:func:`lasa.figures.study.for_member`), checked.
+
+    Raises:
+        ConfigError: A table is missing, or the member, decoder or model is not in the tables.
+    """
+    missing = [k for k in ("goal_error", "time", "alignment") if k not in frames]
+    if missing:
+        raise ConfigError(f"frames lacks {missing}; pass lasa.figures.study.run's three tables")
+    time = frames["time"]
+    for name, value, column in (("member", member, "assistance"), ("decoder", decoder, "decoder")):
+        if value is not None and column in time.columns:
+            check_choice(name, value, sorted(set(time[column]) - {NO_ASSISTANCE}))
+    if model is not None and "model" in time.columns:
+        check_choice("participant model", model, sorted(set(time.model)))
+    out = {
+        k: for_member(frames[k], member, None, decoder, model) for k in ("goal_error", "time", "alignment")
+    }
+    if out["time"].participant.nunique() < 2:
+        raise ConfigError(f"the reading ({member}, {decoder}, {model}) has fewer than 2 participants")
+    return out
+
+
+def _participants(reading: dict[str, pd.DataFrame]) -> np.ndarray:
+    """The simulated participants' ids that cohorts are drawn from, sorted."""
+    return np.sort(reading["time"].participant.unique())
+
+
+def _drawn(reading: dict[str, pd.DataFrame], ids: np.ndarray, chosen: np.ndarray) -> dict[str, pd.DataFrame]:
+    """The tables of a drawn cohort: participant ``ids[chosen[j]]``'s rows as new participant ``j``."""
+    out = {}
+    for key, frame in reading.items():
+        codes = np.searchsorted(ids, frame.participant.to_numpy())
+        order = np.argsort(codes, kind="stable")
+        starts = np.searchsorted(codes[order], np.arange(len(ids) + 1))
+        lengths = np.diff(starts)[chosen]
+        ends = np.cumsum(lengths)
+        pos = np.repeat(starts[chosen] - ends + lengths, lengths) + np.arange(ends[-1])
+        rows = frame.iloc[order[pos]].reset_index(drop=True)
+        out[key] = rows.assign(participant=np.repeat(np.arange(len(chosen)), lengths))
+    return out
+
+
+@contextlib.contextmanager
+def _quiet_gc() -> Iterator[None]:
+    """Exempt the objects alive now from collection while the tests run, then restore them.
+
+    statsmodels' Holm correction calls ``gc.collect()`` on every call; with the modules a
+    study session has loaded that costs ~0.15 s per drawn cohort. Freezing them first
+    leaves only the tests' own objects to collect (the same results, ~3x faster).
+    """
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
+
+
+def _outcome(
+    reading: dict[str, pd.DataFrame],
+    setting: tuple[str, str | None, str | None, float, int],
+    strict: bool = False,
+) -> dict[str, tuple[float, float, float, str]]:
+    """Per claim of :data:`POWER_CLAIMS`: the (value, ci_low, ci_high, verdict) ``judge`` gives a cohort.
+
+    Unless ``strict`` (the whole cohort: its errors are the caller's), a drawn cohort whose tests
+    raise :class:`~lasa.base.errors.ConfigError` (its data do not admit them) reads ``not
+    testable``. Runtime warnings of degenerate drawn cohorts are silenced.
+    """
+    member, decoder, model, horizon, n_resamples = setting
+    with warnings.catch_warnings(), _quiet_gc():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        try:
+            judged = judge(analyse(reading, member, None, decoder, model, horizon, n_resamples))
+        except ConfigError:
+            if strict:
+                raise
+            return {c: (math.nan, math.nan, math.nan, NOT_TESTABLE) for c in POWER_CLAIMS}
+    return {c: (judged[c][1], judged[c][2], judged[c][3], judged[c][0]) for c in POWER_CLAIMS}
+
+
+def _evaluate(
+    shared: tuple[dict[str, pd.DataFrame], np.ndarray, tuple], job: tuple[int, np.ndarray]
+) -> list[dict[str, tuple[int, bool, bool]]]:
+    """Per drawn cohort of the job, per claim: (side of 0 it is significant on, untestable, settled yes).
+
+    The side is +1 or -1 when the 95% interval lies above or below 0, else 0.
+    """
+    reading, ids, setting = shared
+    out = []
+    for chosen in job[1]:
+        judged = _outcome(_drawn(reading, ids, chosen), setting)
+        out.append({claim: _side(claim, *v) for claim, v in judged.items()})
+    return out
+
+
+def _side(claim: str, value: float, low: float, high: float, verdict: str) -> tuple[int, bool, bool]:
+    """(side of 0 the interval lies on, else 0; whether the test could not run; reads yes, settled)."""
+    if verdict == NOT_TESTABLE or not (math.isfinite(low) and math.isfinite(high)):
+        return 0, True, False
+    side = 1 if low > 0.0 else -1 if high < 0.0 else 0
+    settled = rule(f"study.{claim}").settled({"effect": (low, high)})
+    return side, False, bool(settled and verdict == "yes")
+
+
+def _row(
+    claim: str, n: int, outcomes: list[tuple[int, bool, bool]], full: tuple[float, float, float, str]
+) -> dict[str, object]:
+    """One row of :func:`power`'s table: a claim at one size, from its drawn cohorts' outcomes."""
+    paper = rule(f"study.{claim}").direction
+    assert paper is not None
+    value, _, _, verdict = full
+    testable = verdict != NOT_TESTABLE and math.isfinite(value)
+    signed = testable and value != 0.0
+    sign = (1 if value > 0.0 else -1) if signed else paper.sign
+    says = _SAYS[claim][0 if sign > 0 else 1]
+    why = "the whole cohort is not testable" if not testable else "the whole cohort's effect is 0"
+    sides = np.array([o[0] for o in outcomes])
+    return {
+        "claim": claim,
+        "n": n,
+        "power": float(np.mean(sides == sign)),
+        "opposite_share": float(np.mean(sides == -sign)),
+        "untestable_share": float(np.mean([o[1] for o in outcomes])),
+        "yes_share": float(np.mean([o[2] for o in outcomes])),
+        "direction": says if signed else f"{says} (the paper's; {why})",
+        "paper_direction": (sign == paper.sign) if signed else pd.NA,
+        "draws": len(outcomes),
+    }
+
+
+def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) -> pd.DataFrame:
+    """Per claim, the smallest simulated cohort from which power stays at ``target`` or above.
+
+    Simulated power need not grow with n: the completion bar is a share of episodes, so whether
+    a drawn cohort is testable jumps with n (one unfinished episode in 12 is below 95%, one in
+    20 is not). A size counts only if it and every larger simulated size reach ``target``; an
+    earlier size that reached it and a larger one that fell below are named in ``explanation``.
+
+    Args:
+        table: :func:`power`'s table.
+        target: The power wanted, in (0, 1).
+        interpolate: Without it, that simulated size; with it, the size where power crosses
+            ``target`` linearly in n between the simulated size below it and it, rounded up
+            (the smallest simulated size if that one already reaches it).
+
+    Returns:
+        One row per claim: ``claim``, ``target``, ``needed`` (participants; NA if the largest
+        simulated size falls short), ``needed_text`` (``"16"``, or ``"more than 60"``),
+        ``power`` (at the needed size; else at the largest simulated one), ``direction``,
+        ``paper_direction`` and ``explanation``.
+
+    Raises:
+        ConfigError: ``target`` outside (0, 1), or ``table`` lacks :func:`power`'s columns.
+    """
+    if not 0.0 < target < 1.0:
+        raise ConfigError(f"target must be a power in (0, 1), got {target!r}")
+    lacking = [c for c in _COLUMNS if c not in table.columns]
+    if lacking:
+        raise ConfigError(f"table lacks {lacking}; pass study_power.power's table")
+    rows = [
+        _needed_row(claim, part.sort_values("n"), target, interpolate)
+        for claim, part in table.groupby("claim", sort=False)
+    ]
+    return pd.DataFrame(rows).astype({"needed": "Int64", "paper_direction": "boolean"})
+
+
+def _needed_row(claim: str, part: pd.DataFrame, target: float, interpolate: bool) -> dict[str, object]:
+    """One claim's row of :func:`needed`, from its rows of :func:`power`'s table sorted by n."""
+    n, p = part.n.to_numpy(), part.power.to_numpy(dtype=float)
+    short = np.flatnonzero(p < target)
+    i = int(short[-1]) + 1 if len(short) else 0  # from here on, every size reaches the target
+    head = {"claim": claim, "target": target}
+    tail = {"direction": part.direction.iloc[0], "paper_direction": part.paper_direction.iloc[0]}
+    early = np.flatnonzero(p[:i] >= target)
+    dip = (
+        f"; it reached {target:g} at n = {int(n[early[0]])} ({p[early[0]]:.2f}) but fell below it "
+        if len(early)
+        else ""
+    )
+    if i == len(n):
+        last = part.iloc[-1]
+        why = f"power {p[-1]:.2f} at n = {int(n[-1])}, the largest size simulated"
+        why += f"{dip}after" if dip else ""
+        if last.untestable_share > 0.0:  # a share power cannot reach past
+            why += (
+                f"; the test cannot run in {100 * last.untestable_share:.0f}% of the drawn cohorts of "
+                f"{int(n[-1])} (not testable, e.g. a condition finishing too few episodes)"
+            )
+        more = {"needed": pd.NA, "needed_text": f"more than {int(n[-1])}", "power": float(p[-1])}
+        return head | more | tail | {"explanation": why}
+    size, how = float(n[i]), "the smallest simulated size from which every size reaches it"
+    if interpolate and i > 0:
+        size = n[i - 1] + (target - p[i - 1]) / (p[i] - p[i - 1]) * (n[i] - n[i - 1])
+        how = f"interpolated linearly between n = {int(n[i - 1])} ({p[i - 1]:.2f}) and n = {int(n[i])}"
+    whole = math.ceil(size - 1e-9)  # rounded up; 1e-9: a float error (12.000000000000002) adds none
+    found = {"needed": whole, "needed_text": str(whole), "power": float(p[i])}
+    why = f"power {p[i]:.2f} at n = {int(n[i])} and at least {target:g} at every larger size simulated"
+    why += f" ({int(part.draws.min())} drawn cohorts each); {how}"
+    if dip:
+        why += f"{dip}at n = {int(n[short[-1]])} ({p[short[-1]]:.2f})"
+    untestable = float(part.untestable_share.iloc[i])
+    if untestable > 0.0:
+        why += f"; {100 * untestable:.0f}% of the drawn cohorts of {int(n[i])} could not run the test"
+    return head | found | tail | {"explanation": why}
+
+
+def sentence(table: pd.DataFrame, claim: str) -> str:
+    """One line for the guide or a notebook: whom a replication of ``claim`` should recruit.
+
+    Args:
+        table: :func:`needed`'s table.
+        claim: A claim key of it (``h1``, ``h2``, ``h3``).
+
+    Raises:
+        ConfigError: ``claim`` is not in ``table``.
+    """
+    check_choice("claim", claim, list(table.claim))
+    row = table.set_index("claim").loc[claim]
+    pct = f"{100 * row.target:.0f}%"
+    if pd.isna(row.paper_direction):
+        said = row.direction  # it says why it is the paper's direction
+    else:
+        said = f"{row.direction}; {'the' if row.paper_direction else 'against the'} paper's direction"
+    basis = "this rests on simulated participants' effects and spread, not on people"
+    if pd.isna(row.needed):
+        largest = row.needed_text.removeprefix("more than ")
+        return (
+            f"No simulated cohort of up to {largest} gives {claim.upper()} ({said}) {pct} power at "
+            f"α = .05: {row.explanation}; {basis}."
+        )
+    return (
+        f"To test {claim.upper()} ({said}) with {pct} power at α = .05, recruit {row.needed} "
+        f"participants; {basis}."
+    )
