@@ -364,8 +364,14 @@ def test_study_outputs(executed):
     assert list(latent.columns) == list(eating_task.COLUMNS) and set(latent.belief) == set(
         eating_task.BELIEFS
     )
+    prop = pd.read_csv(fig / "latent_property.csv")
+    summary = latent_property.summary(prop[prop.task == "eating"])
+    # only decoders that meet the property rule run (else the best one), and the headline's entropy
+    # version if notebook 10 trained it
+    readings = study.readings_to_run(summary, "property")
     settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
-    readings = eating_task.reading_names(from_dict(eating_task.Config, settings10))
+    assert set(readings) <= set(eating_task.reading_names(from_dict(eating_task.Config, settings10)))
+    assert len(readings) < len(summary.decoder.unique())
     # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member;
     # per participant model (the first readings_per_model of the ranking): participants x arms x tasks
     limits = study.Config().readings_per_model
@@ -395,8 +401,7 @@ def test_study_outputs(executed):
         "study.h3",
     }  # < 10: no cohort
     others = {i + ("+" if "@" in i else "@") + m for i in ids for m in members[1:]}
-    prop = pd.read_csv(fig / "latent_property.csv")
-    ranked = list(latent_property.ranking(latent_property.summary(prop[prop.task == "eating"])).index)
+    ranked = readings
 
     def heads(model: str) -> set[str]:
         """The headline model's ids for the readings ``model`` ran (the first of the ranking)."""
@@ -424,6 +429,11 @@ def test_study_outputs(executed):
     assert not rows.measured.str.contains(r"\bnan\b").any()
     assert (rows.n_users.astype(int) == settings["participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
+    assert rows.note.str.match(r"Effect: (SA (raises|lowers)|LA\+SA|no )").all()  # the effect in words
+    assert {f"study.h1@{m}" for m in members[1:]} <= set(rows.id)  # hindsight_point and grasp_set
+    book = (executed / "notebooks" / "11_eating_study.ipynb").read_text()
+    assert "LA+SA finished" in book and "H1 effect (10)" in book  # the SA readings side by side
+    assert book.count("rests on simulated participants") >= 3  # the power sentence of H1, H2 and H3
     video = read_video(fig / "study_dessert.mp4")
     assert video.shape[1:] == (240, 4 * 320, 3)  # the four conditions side by side
 
