@@ -6,6 +6,7 @@ import pytest
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
+from lasa.base.errors import ConfigError
 from lasa.figures import study, study_analysis, study_claims, study_tests
 
 MEMBERS = ("hindsight", "grasp_set")
@@ -554,3 +555,39 @@ def test_the_members_table_sets_the_sa_readings_side_by_side():
     assert head["H1 (10 / all)"] == "yes / yes" and other["H1 (10 / all)"] == "not testable / not testable"
     assert head["H1 effect (10)"].startswith("SA lowers Goal Error by -")
     assert other["H3 effect (10)"] == "no contrast (a compared condition finishes too few episodes)"
+
+
+def _property(meets: dict[str, bool]) -> pd.DataFrame:
+    """A property summary of two goals per decoder: ``meets[d]`` says whether d has both halves at both."""
+    rows = []
+    for d, ok in meets.items():
+        for goal in ("a", "b"):
+            rows.append(
+                {
+                    "task": "eating",
+                    "decoder": d,
+                    "goal": goal,
+                    "has_property": ok,
+                    "all_reached": True,
+                    "stay_holds": ok,
+                    "leave_min": 10.0 if ok else 3.0,
+                    "stay_share": 0.6 if ok else 0.2,
+                    "theta_range": 1.0,
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def test_only_decoders_with_the_property_and_the_headlines_entropy_version_run():
+    prop = _property({"leaves": False, "transfers": True, "transfers_entropy": False, "home": False})
+    assert study.readings_to_run(prop) == ["transfers", "transfers_entropy"]
+    assert set(study.readings_to_run(prop, "all")) == {"leaves", "transfers", "transfers_entropy", "home"}
+    assert study.readings_to_run(prop, "all")[0] == "transfers"  # the ranking's order, the headline first
+    both = _property({"home": True, "transfers": True, "home_entropy": False})
+    assert study.readings_to_run(both) == ["home", "transfers", "home_entropy"]  # every one that meets it
+    none = _property({"leaves": False, "home": False})
+    assert len(study.readings_to_run(none)) == 1  # no decoder meets the rule: the best-ranked one alone
+    with pytest.raises(ConfigError, match="decoders"):
+        study.readings_to_run(prop, "some")
+    with pytest.raises(ConfigError, match="decoders"):
+        study.Config(decoders="some")
