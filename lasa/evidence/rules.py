@@ -267,8 +267,8 @@ RULES: dict[str, Rule] = {
             "times to the horizon (min(T, horizon) summed over both tasks), LA+SA minus each other "
             "condition, paired bootstrap 95% intervals over participants: yes if all six (Total and "
             "Idle Time) lie below 0, partly if LA+SA has the lowest restricted mean Total Time, else no; "
-            "when LA+SA is the condition short of the bar, no (censored: lower bound) if its restricted "
-            "mean, a lower bound, is already above a measured condition's with the interval clear of 0",
+            "when a condition is short of the bar, no if LA+SA's restricted mean (a lower bound if LA+SA is "
+            "the one short: censored) is already above a measured condition's with the interval clear of 0",
             (
                 _q(
                     "effect",
@@ -301,7 +301,8 @@ AFTER_RESULTS: dict[str, str] = {
     "restricted mean times with a paired bootstrap, behind a guard (not testable unless every condition "
     f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes); the censored lower bound's 'no' (for "
     "H1 too) was added after an audit saw the guard hide a significant reversal, before this version's "
-    "verdicts were seen",
+    "verdicts were seen; its extension to a measured LA+SA beside another censored condition after this "
+    "version's first paper-scale run",
 }
 
 

@@ -262,7 +262,9 @@ def effect_sentence(key: str, result: Mapping[str, object], judged: Judged) -> s
         if not math.isfinite(p):
             return f"no scoop-phase comparison ({pairs} pairs)"
         side = _raises(mean, "above", "below")
-        return f"LA+SA's scoop alignment is {side} R+SA's by {mean:+.3f}, paired t over {pairs}, p = {p:.3g}"
+        return (
+            f"LA+SA's scoop alignment is {side} R+SA's by {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"
+        )
     if not math.isfinite(value):
         return "no contrast (a compared condition finishes too few episodes)"
     other = (
