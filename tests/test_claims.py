@@ -321,10 +321,21 @@ def test_the_studys_sentences_say_what_each_n_tells_and_what_was_cut():
         _study_row("study.h2@cohort", "yes", 0.03, 0.06, 40),
     ]
     assert _mechanism(h2).startswith(
-        "LA+SA tilts the fork further into the scoop than R+SA; 10 participants cannot tell, 40 can"
+        "LA+SA tilts the fork further into the scoop than R+SA; 10 participants cannot tell, 40 tell it"
     )
     h2[0] = _study_row("study.h2", "yes", 0.01, 0.05, 10)
-    assert "; 10 participants can, 40 can (" in _mechanism(h2)
+    assert "; 10 and 40 participants alike tell it (" in _mechanism(h2)
+    # H2 gated by the compared conditions' completion: the sentence names it, not what each N tells
+    gated = "not testable (completion: LA+SA 85%, alignment only on the phases reached); alignment ..."
+    h2g = [_study_row("study.h2", "not testable", nan, nan, 10, measured=gated)]
+    assert _mechanism(h2g).startswith(
+        "the planning participants finish 85% of their LA+SA episodes: alignment is measured only on the "
+        "phases they reached ("
+    )
+    # H3 settled on a censored lower bound: the sentence says the bound already decides it
+    low = "censored: lower bound (completion: LA+SA 85%): LA+SA's restricted mean ..."
+    h3c = [_study_row("study.h3", "no", 25.0, 88.0, 10, measured=low)]
+    assert _mechanism(h3c).startswith("another condition is faster than LA+SA even as a lower bound; 10 ")
     h2 = [
         _study_row("study.h2", "undecided", -0.01, 0.05, 10),
         _study_row("study.h2@cohort", "no", -0.06, -0.03, 40),

@@ -17,7 +17,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import pandas as pd
 
-from lasa.evidence.decision import NOT_TESTABLE
+from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 
 __all__ = ["Rows", "FINDINGS", "finding", "stated_numbers", "not_testable_why", "effect_of"]
 
@@ -155,10 +155,13 @@ def _study(rows: Rows, cid: str, says: Mapping[str, str]) -> str:
         return ""
     told = [side for _, side in sides if side in ("above", "below")]
     lead = told[-1] if told else "reaches"
-    tell = {lead: "can", "reaches": "cannot tell", NOT_TESTABLE: "cannot be tested"}
+    tell = {lead: "tell it", "reaches": "cannot tell", NOT_TESTABLE: "cannot test it"}
+    verbs = [tell.get(side, "tell the opposite") for _, side in sides]
+    if len(set(verbs)) == 1 and len(sides) > 1:
+        return f"{says[lead]}; {' and '.join(str(n) for n, _ in sides)} participants alike {verbs[0]}"
     clauses = [
-        f"{n}{' participants' if i == 0 else ''} {tell.get(side, 'tell the opposite')}"
-        for i, (n, side) in enumerate(sides)
+        f"{n}{' participants' if i == 0 else ''} {verb}"
+        for i, ((n, _), verb) in enumerate(zip(sides, verbs, strict=True))
     ]
     return f"{says[lead]}; {', '.join(clauses)}"
 
@@ -201,7 +204,13 @@ def _h1(rows: Rows, robots: Sequence[str]) -> str:
 
 
 def _h2(rows: Rows, robots: Sequence[str]) -> str:
-    """study.h2: whether LA+SA's scoop alignment is above R+SA's, and which N tells."""
+    """study.h2: the compared conditions' completion when it gates H2, or whether LA+SA's scoop alignment is
+    above R+SA's, and which N tells."""
+    short = _censored(rows, "study.h2")
+    if short:
+        done = " and ".join(f"{pct}% of their {cond} episodes" for cond, pct in short)
+        model = _model(rows, "study.h2")
+        return f"the {model}participants finish {done}: alignment is measured only on the phases they reached"
     return _study(
         rows,
         "study.h2",
@@ -220,12 +229,14 @@ def _h3(rows: Rows, robots: Sequence[str]) -> str:
         done = ", ".join(f"{cond} finishes {pct}% of its episodes" for cond, pct in short)
         held = f": the assistance holds {_model(rows, 'study.h3')}participants at a bowl"
         return done + (held if any(cond == "LA+SA" for cond, _ in short) else "")
+    head = rows.get(("study.h3", "panda"))
+    bound = " even as a lower bound" if head is not None and str(head.measured).startswith(CENSORED) else ""
     return _study(
         rows,
         "study.h3",
         {
             "below": "LA+SA is faster than the fastest other condition",
-            "above": "another condition is faster than LA+SA",
+            "above": f"another condition is faster than LA+SA{bound}",
             "reaches": "LA+SA's gap to the fastest other condition is unclear",
         },
     )
