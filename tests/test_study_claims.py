@@ -242,13 +242,19 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     assert head["LA finished"] == 1.0 and other["LA finished"] == 0.75  # 5 of 20 participants stuck
     # the other reading's LA finishes 5 of 10 (first 10) and 15 of 20 episodes (cohort): below 95%;
     # its LA+SA is slower than R even as a lower bound, so H3 reads no (censored)
-    assert head["H3 (10 / all)"] == "yes / yes"
-    assert other["H3 (10 / all)"] == "no (censored: lower bound) / no (censored: lower bound)"
+    assert head["H3 (10 / all)"] == "reproduced / reproduced"
+    assert (
+        other["H3 (10 / all)"]
+        == "not reproduced (censored: lower bound) / not reproduced (censored: lower bound)"
+    )
     assert other["H3 effect (10)"].startswith("LA+SA is slower than R by at least +")
     assert head["H1 effect (10)"].startswith("SA lowers Goal Error by -")
     # Goal Error is summed over the task's time: H1 takes the guard too, and so does H2, whose
     # LA+SA participants may not have reached the phases it compares
-    assert head["H1 (10 / all)"] == "yes / yes" and other["H1 (10 / all)"] == "not testable / not testable"
+    assert (
+        head["H1 (10 / all)"] == "reproduced / reproduced"
+        and other["H1 (10 / all)"] == "not testable / not testable"
+    )
     assert other["H2 (10 / all)"] == "not testable / not testable"
     assert head["R finished"] == head["R+SA finished"] == other["R finished"] == 1.0
 
@@ -476,11 +482,13 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
     ]
     t = table.set_index(["model", "decoder"])
     assert t.loc[("a", "head"), "R finished"] == 1.0 and t.loc[("b", "other"), "R finished"] == 0.95  # 38/40
-    assert t.loc[("a", "head"), "H3 (10 / all)"] == "yes / yes"
+    assert t.loc[("a", "head"), "H3 (10 / all)"] == "reproduced / reproduced"
     # model b's R: participant 0 unfinished in both tasks, 18 of 20 episodes (first 10: censored, not
     # compared, but LA+SA is already slower than a measured condition) and 38 of 40 (the cohort: 95%)
-    assert t.loc[("b", "head"), "H3 (10 / all)"] == "no / no"
-    assert t.loc[("b", "head"), "H2 (10 / all)"] == "no / no"  # the guard is H1's and H3's
+    assert t.loc[("b", "head"), "H3 (10 / all)"] == "not reproduced / not reproduced"
+    assert (
+        t.loc[("b", "head"), "H2 (10 / all)"] == "not reproduced / not reproduced"
+    )  # the guard is H1's and H3's
     assert t.loc[("b", "head"), "H1 (10 / all)"].startswith("not testable / ")
 
 
@@ -555,7 +563,10 @@ def test_the_members_table_sets_the_sa_readings_side_by_side():
     head, other = table.iloc[0], table.iloc[1]
     assert head["LA+SA finished"] == 1.0 and other["LA+SA finished"] == 0.8  # 8 of 40 episodes cut
     assert head["R+SA finished"] == other["R+SA finished"] == 1.0
-    assert head["H1 (10 / all)"] == "yes / yes" and other["H1 (10 / all)"] == "not testable / not testable"
+    assert (
+        head["H1 (10 / all)"] == "reproduced / reproduced"
+        and other["H1 (10 / all)"] == "not testable / not testable"
+    )
     assert head["H1 effect (10)"].startswith("SA lowers Goal Error by -")
     assert other["H3 effect (10)"] == "no contrast (a compared condition finishes too few episodes)"
 

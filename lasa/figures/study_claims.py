@@ -64,7 +64,7 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
-from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED
+from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, word
 from lasa.evidence.findings import effect_of
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import PAPER_N
@@ -459,8 +459,10 @@ def _verdict_cells(
 
 
 def _word(row: Claim) -> str:
-    """A row's verdict, ``(censored: lower bound)`` added where it rests on a censored arm."""
-    return f"{row.reproduced} ({CENSORED})" if row.measured.startswith(CENSORED) else row.reproduced
+    """A row's word in the claims table's vocabulary, ``(censored: lower bound)`` added where it rests
+    on a censored arm."""
+    said = word(row.reproduced, {})
+    return f"{said} ({CENSORED})" if row.measured.startswith(CENSORED) else said
 
 
 def members_table(
