@@ -8,7 +8,8 @@ as lasa/method/belief.py and blend.py state them:
 
 - the human action a_h = phi(z, s, b), or nothing for a stick at rest under ``rest="zero"``;
 - the assistance, blend weight 1: Eq. M2 (the ``point`` member), a_r = sum_g b(g) (g - s), or
-  ``hindsight``, a_r = sigma_h sum_g b(g) (g - s) / max(||g - s||, dt sigma_h);
+  ``hindsight``, a_r = sigma_h sum_g b(g) (c_g - s) / max(||c_g - s||, dt sigma_h), c_g the point of
+  goal g's set (its ``grasp_set`` polyline) nearest to s (``hindsight_point``: c_g = g);
 - Eq. M1: a = (1 - alpha) a_h + alpha a_r;
 - the belief: b'(g) proportional to b(g) exp(-beta_b regret_g), regret_g = d_g(s + dt a_h) - d_g(s)
   (+ min(dt sigma_h, d_g(s)) under the ``grasp_set`` likelihood), d_g the distance to goal g's
@@ -29,16 +30,22 @@ def softmax(log_b: np.ndarray) -> np.ndarray:
     return w / w.sum()
 
 
-def polyline_distance(point: np.ndarray, polyline: np.ndarray) -> float:
-    """Distance from ``point`` (n,) to the polyline through ``polyline``'s K rows (K = 1: a point)."""
+def nearest_on_polyline(point: np.ndarray, polyline: np.ndarray) -> np.ndarray:
+    """The point of the polyline through ``polyline``'s K rows nearest to ``point`` (n,) (K = 1: a point)."""
     if len(polyline) == 1:
-        return math.dist(point, polyline[0])
-    best = math.inf
+        return polyline[0]
+    best, nearest = math.inf, polyline[0]
     for a, b in zip(polyline[:-1], polyline[1:], strict=True):
         ab = b - a
         t = min(max(float((point - a) @ ab) / max(float(ab @ ab), 1e-12), 0.0), 1.0)
-        best = min(best, math.dist(point, a + t * ab))
-    return best
+        if math.dist(point, a + t * ab) < best:
+            best, nearest = math.dist(point, a + t * ab), a + t * ab
+    return nearest
+
+
+def polyline_distance(point: np.ndarray, polyline: np.ndarray) -> float:
+    """Distance from ``point`` (n,) to the polyline through ``polyline``'s K rows (K = 1: a point)."""
+    return math.dist(point, nearest_on_polyline(point, polyline))
 
 
 def belief_update(
@@ -63,23 +70,27 @@ def transition(s: np.ndarray, a: np.ndarray, control, robot) -> np.ndarray:
     return np.clip(s + control.dt * velocity, robot.lower, robot.upper)
 
 
-def assistance(member: str, b: np.ndarray, s: np.ndarray, goals: np.ndarray, control) -> np.ndarray:
-    """a_r of the member ``point`` (Eq. M2) or ``hindsight``, shape (n,)."""
+def assistance(member: str, b: np.ndarray, s: np.ndarray, task, control) -> np.ndarray:
+    """a_r of the member ``point`` (Eq. M2), ``hindsight`` or ``hindsight_point``, shape (n,)."""
     a_r = np.zeros(len(s))
-    for weight, goal in zip(b, goals, strict=True):
+    sets = task.goal_sets("grasp_set")  # the members' goal sets (lasa.method.step)
+    for weight, goal, polyline in zip(b, task.goals, sets, strict=True):
         if member == "point":
             a_r += weight * (goal - s)
-        elif member == "hindsight":
-            reach = max(math.dist(goal, s), control.dt * control.action_scale)
-            a_r += control.action_scale * weight * (goal - s) / reach
+        elif member in ("hindsight", "hindsight_point"):
+            target = nearest_on_polyline(s, polyline) if member == "hindsight" else goal
+            reach = max(math.dist(target, s), control.dt * control.action_scale)
+            a_r += control.action_scale * weight * (target - s) / reach
         else:
-            raise NotImplementedError(f"the reference writes out 'point' and 'hindsight', not {member!r}")
+            raise NotImplementedError(
+                f"the reference writes out 'point' and the hindsight ones, not {member!r}"
+            )
     return a_r
 
 
 def step_with(task, control, s: np.ndarray, b: np.ndarray, a_h: np.ndarray, alpha: float) -> dict:
     """Lines 6-9 of Algorithm 1 for one user, given the human action: a_r, a, s' and b'."""
-    a_r = assistance(control.assistance, b, s, task.goals, control)
+    a_r = assistance(control.assistance, b, s, task, control)
     a = (1.0 - alpha) * a_h + alpha * a_r
     goal_sets = task.goal_sets(control.likelihood)
     return {
