@@ -79,7 +79,6 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
     fastest other condition (by restricted mean Total Time).
     """
     done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
-    short = done[~(done >= COMPLETION_BAR)]  # an arm without episodes (NaN) is short too
     contrasts = {
         m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples)
         for m in ("total_time", "idle_time")
@@ -91,7 +90,7 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
     gap = contrasts["total_time"].set_index("b").loc[best]
     return {
         "h3_completion": done,
-        "h3_short": ", ".join(f"{c} {100 * v:.3g}%" for c, v in short.fillna(0.0).items()),
+        "h3_short": _short_text(done, censored_arms(done)),
         "h3_total": contrasts["total_time"],
         "h3_idle": contrasts["idle_time"],
         "means": means,
