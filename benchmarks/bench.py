@@ -448,8 +448,9 @@ def run_pipeline(command: list[str], out_dir: Path) -> dict[str, Any]:
     ``out_dir`` is deleted first; the command must write ``out_dir/timings.jsonl``.
 
     Returns:
-        ``{total, per_notebook, sum_of_notebooks}``: wall time [s], each notebook's
-        time [s] (:func:`read_timings`) and their sum.
+        ``{total, per_notebook, sum_of_notebooks, measured}``: wall time [s], each notebook's
+        time [s] (:func:`read_timings`), their sum, and the run that measured them (:func:`machine`
+        and the commit), so that a time the package reports names its run.
 
     Raises:
         RuntimeError: if the command fails (with the end of its output).
@@ -462,7 +463,14 @@ def run_pipeline(command: list[str], out_dir: Path) -> dict[str, Any]:
     if result.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed:\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}")
     per = read_timings(out_dir / "timings.jsonl")
-    return {"total": total, "per_notebook": per, "sum_of_notebooks": float(sum(per.values()))}
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
+    measured = {**machine(), "commit": head.stdout.strip() or "unknown", "command": " ".join(command)}
+    return {
+        "total": total,
+        "per_notebook": per,
+        "sum_of_notebooks": float(sum(per.values())),
+        "measured": measured,
+    }
 
 
 def machine() -> dict[str, Any]:
