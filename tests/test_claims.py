@@ -144,14 +144,18 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
     # the count line, a blank line, header, rule, one claim (claims without rows are left out)
     assert len(lines) == 5
     assert lines[0] == (
-        "Of 2 paper claims × robot: 0 reproduced, 0 partly, 1 not reproduced, 1 undecided, 0 not testable."
+        "Of 2 paper claims × robot, the effect: 0 reproduced, 0 partly, 1 not reproduced, 1 undecided, "
+        "0 not testable. Of the 0 numbers the paper states (× robot), the number: 0 in, 0 out, 0 undecided."
     )
     cells = [c.strip() for c in lines[4].strip("|").split("|")]
     assert cells[1] == "time ratio 1.45 and 1.30"
-    assert cells[2].startswith("**not reproduced**") and "N = 150" in cells[2] and "settled" in cells[2]
-    assert cells[3].startswith("undecided") and "settled" not in cells[3]
+    assert cells[2].startswith("**effect not reproduced**") and "N = 150" in cells[2] and "settled" in cells[2]
+    assert cells[3].startswith("effect undecided") and "settled" not in cells[3]
     # the Panda's grasp_set agrees with its headline; a compound reading that differs is listed too
-    assert cells[4] == "`grasp_set` (planar5 partly); `hindsight+one_step` (panda not reproduced)"
+    assert cells[4] == (
+        "`grasp_set` (planar5: effect partly; number n/a); "
+        "`hindsight+one_step` (panda: effect not reproduced; number n/a)"
+    )
     assert "(notebooks/04_fixed_expertise.ipynb#what-it-shows-against-the-paper)" in cells[5]
 
 
@@ -183,8 +187,9 @@ def test_a_claim_that_is_not_testable_is_written_and_rendered_with_its_reason(tm
     }
     h3 = next(v for k, v in cells.items() if k.startswith("H3"))
     h2 = next(v for k, v in cells.items() if k.startswith("H2"))
-    assert h3 == "not testable, N = 10 (completion: LA 0%, LA+SA 0%)"  # the reason from measured
-    assert h2 == "not testable, N = 10 (no decoder with both halves of the property; best reading t)"
+    assert h3 == "effect not testable, N = 10 (completion: LA 0%, LA+SA 0%)"  # the reason from measured
+    assert h2 == "effect not testable, N = 10 (no decoder with both halves of the property; best reading t)"
+    assert table.loc["study.h3", "effect"] == NOT_TESTABLE and table.loc["study.h3", "number"] == "n/a"
 
 
 def _time_ratio(robot, low75, high75, low1000, high1000, reading="undecided"):
@@ -194,22 +199,28 @@ def _time_ratio(robot, low75, high75, low1000, high1000, reading="undecided"):
     return Claim(**{**base.__dict__, "n_users": 150, "intervals": intervals, "values": values})
 
 
-def test_a_paper_number_outside_the_interval_is_not_reproduced_and_each_number_is_shown():
+def test_each_paper_number_gets_its_own_word_beside_the_effect():
     # the paper: 1.45 at beta = 75 and 1.30 at beta = 1000, each +- 0.15 by the rule
     row = _row(_time_ratio("planar5", 0.844, 1.1, 1.34, 1.39))
-    assert row["reproduced"] == "not reproduced"  # [0.844, 1.1] misses [1.30, 1.60]
+    assert row["effect"] == "undecided"  # the rule's reading: ratio_75's interval straddles 1
+    assert row["number"] == "out; in"  # [0.844, 1.1] misses [1.30, 1.60]; [1.34, 1.39] inside [1.15, 1.45]
+    assert row["reproduced"] == "not reproduced"  # both in one word: a number is out
     assert row["paper_in_ci"] == "no; yes"  # 1.30 +- 0.15 meets [1.34, 1.39]
     assert row["direction"] == "no"  # ratio_75's interval straddles 1
     assert row["paper_numbers"] == (
-        "1.45 ± 0.15 (beta = 75): not reproduced, 0.972 [0.844, 1.1]; "
-        "1.3 ± 0.15 (beta = 1000): reproduced, 1.36 [1.34, 1.39]"
+        "1.45 ± 0.15 (beta = 75): out, 0.972 [0.844, 1.1]; 1.3 ± 0.15 (beta = 1000): in, 1.36 [1.34, 1.39]"
     )
-    both_in = _row(_time_ratio("panda", 1.35, 1.55, 1.2, 1.5))
-    assert both_in["reproduced"] == "undecided" and both_in["paper_in_ci"] == "yes; yes"
-    assert both_in["direction"] == "yes"
-    table = pd.DataFrame([row, both_in], columns=list(CLAIM_COLUMNS)).astype(str)
+    assert str(row["note"]).startswith("Effect undecided; 1.45 out, 1.3 in. ")  # the note's words: the row's
+    both = _row(_time_ratio("panda", 1.35, 1.55, 1.2, 1.5, reading="yes"))
+    assert both["effect"] == "reproduced" and both["number"] == "in; undecided"  # [1.2, 1.5] crosses 1.45
+    assert both["reproduced"] == "undecided" and both["paper_in_ci"] == "yes; yes"
+    assert both["direction"] == "yes"
+    table = pd.DataFrame([row, both], columns=list(CLAIM_COLUMNS)).astype(str)
     md = render_verdicts(table)
-    assert "1.45 ± 0.15 (beta = 75): not reproduced, 0.972 [0.844, 1.1]" in md and "nan" not in md
+    assert "effect undecided; 1.45 out (0.972 [0.844, 1.1]); 1.3 in (1.36 [1.34, 1.39])" in md
+    assert "**effect reproduced**; 1.45 in (1.45 [1.35, 1.55]); 1.3 undecided (1.35 [1.2, 1.5])" in md
+    assert "Of the 4 numbers the paper states (× robot), the number: 2 in, 1 out, 1 undecided." in md
+    assert "nan" not in md
 
 
 def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
@@ -217,31 +228,42 @@ def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
         **{
             **claim("sa_trapped", figure="sim2").__dict__,
             "settled": True,
-            "intervals": {"success_sa": (0.05, 0.27), "drop_sa": (0.7, 0.9)},
+            "intervals": {"error_growth": (0.05, 0.27), "confidence_drop": (0.7, 0.9)},
         }
     )
     row = _row(trapped)
     assert row["paper_in_ci"] == "n/a" and row["paper_numbers"] == ""  # the paper states an ordering
-    assert row["direction"] == "yes" and row["reproduced"] == "reproduced"  # success below one half
+    assert row["number"] == "n/a" and row["effect"] == "reproduced" == row["reproduced"]
+    assert row["direction"] == "yes"  # the final error grows with N
+    assert str(row["note"]).startswith("Effect reproduced; number n/a. ")
     base = claim("grasp_linear", figure="sim4")
     ours = Claim(**{**base.__dict__, "reproduced": "undecided", "intervals": {"slope": (0.05, 0.2)}})
     assert _row(ours)["paper_in_ci"] == "yes; n/a"  # 0.11 in [0.05, 0.2]; R^2's interval unknown
+    assert _row(ours)["number"] == "in; n/a"  # no tolerance: in when our interval contains 0.11
     table = pd.DataFrame([row, _row(ours)], columns=list(CLAIM_COLUMNS)).astype(str)
     md = render_verdicts(table)
     head, apart = md.split("Our additions, not claims of the paper (not counted above):")
     assert "grasp-to-grasp" in apart and "grasp-to-grasp" not in head
-    assert head.startswith("Of 1 paper claims × robot: 1 reproduced,")
+    assert head.startswith("Of 1 paper claims × robot, the effect: 1 reproduced,")
 
 
 def test_the_word_follows_the_vocabulary():
-    from lasa.evidence.decision import PaperNumber, word
+    from lasa.evidence.decision import PaperNumber, effect_word, word
 
     ratio = (PaperNumber("r", 1.45, 0.15, "beta = 75"),)
     assert word("yes", {"r": (1.35, 1.55)}, ratio) == "reproduced"
     assert word("yes", {"r": (1.61, 1.7)}, ratio) == "not reproduced"  # the paper's value is excluded
+    assert word("yes", {"r": (1.5, 1.7)}, ratio) == "undecided"  # the number crosses 1.60
     assert word("partly", {"r": (1.2, 1.4)}, ratio) == "partly"
     assert word("undecided", {"r": (1.2, 1.4)}, ratio) == "undecided"
     assert word("undecided", {"r": (0.8, 1.29)}, ratio) == "not reproduced"
+    assert [effect_word(r) for r in ("yes", "partly", "no", "undecided", "not testable")] == [
+        "reproduced",
+        "partly",
+        "not reproduced",
+        "undecided",
+        "not testable",
+    ]
     assert word("not testable", {"r": (0.8, 1.0)}, ratio) == "not testable"
     assert word("no", {}, ()) == "not reproduced"
     with pytest.raises(ConfigError, match="cannot word"):
@@ -267,8 +289,8 @@ def test_the_cell_shows_every_number_the_rule_reads():
     )
     table = pd.DataFrame([_row(row)], columns=list(CLAIM_COLUMNS)).astype(str)
     cell = render_verdicts(table).splitlines()[4].split("|")[3].strip()
-    assert cell.startswith("**not reproduced**: 0.11 (y = 0.11x): not reproduced, 0.0131 [0.00828, 0.0177]")
-    assert "0.98 (R^2 = 0.98): undecided, 0.964 [0.786, 0.997]" in cell
+    assert cell.startswith("effect undecided; 0.11 out (0.0131 [0.00828, 0.0177])")
+    assert "; 0.98 in (0.964 [0.786, 0.997])" in cell  # no tolerance: in when the interval holds it
     assert "; share_below 1 [1, 1], N = 0" in cell and "r2 0.964" not in cell  # each number once
 
 

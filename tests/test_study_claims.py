@@ -70,10 +70,10 @@ def test_clear_effects_reproduce_every_hypothesis():
     assert first.assistance == "hindsight" and first.n_users == 10 and first.settled
     assert first.ci_high < 0 and by_id["study.h1@cohort"].n_users == 20
     # the note states the effect in words with its sign, then the readings that flip it
-    assert first.note.startswith("Effect: SA lowers Goal Error by -2.01 m s, F(1,9) = ")
-    assert ". Every reading gives the same verdict. " in first.note
+    assert first.note.startswith("Measured effect: SA lowers Goal Error by -2.01 m s, F(1,9) = ")
+    assert ". Every reading gives the same words. " in first.note
     h3 = by_id["study.h3"].note
-    assert h3.startswith("Effect: LA+SA is faster than ") and " by -" in h3.split(". ")[0]
+    assert h3.startswith("Measured effect: LA+SA is faster than ") and " by -" in h3.split(". ")[0]
     # the paper's F(1,18) is the between-subjects reading; the within-subjects test has F(1,9)
     res = analyses[("hindsight", 10)]
     assert (res["h1_between"]["df1"], res["h1_between"]["df2"]) == (1, 18)
@@ -449,7 +449,7 @@ def test_each_participant_model_is_judged_and_named_in_the_ids():
     assert len(rows) == 2 * (5 * 4 + 3 * 2)  # per model: 5 keys x (2 members x 2 sizes) + 3 x 2 sizes
     assert ("hindsight", 10, "head", "b") in analyses and ("hindsight", 10, "other", "b") in analyses
     assert ("hindsight", 10) in analyses and ("hindsight", 20, "other") in analyses
-    assert "b no" in by_id(rows)["study.h3"].note  # a reading that flips it
+    assert "b (effect not reproduced)" in by_id(rows)["study.h3"].note  # a reading that flips it
     assert study_claims.claim_id("h3", 0, "hindsight", False, None, "one_step") == "study.h3@one_step"
     assert study_claims.claim_id("h1", 0, "hindsight", True, None, "one_step") == "study.h1@one_step+cohort"
     assert (

@@ -35,6 +35,8 @@ def _folder(root: Path) -> Path:
             "measured": [0.1, 0.2, 0.3],
             "reproduced": ["yes", "partly", "no"],
             "settled": ["yes", "no", "yes"],
+            "effect": ["reproduced", "partly", "not reproduced"],
+            "number": ["in", "undecided", "out; in"],
         }
     ).to_csv(root / "claims.csv", index=False)
     return root
@@ -100,6 +102,13 @@ def test_a_changed_verdict_fails_and_names_the_claim(folders, capsys):
     assert "verdict sim1.a / planar5" in out and "reproduced partly -> yes" in out
     assert "sim1.a / panda" not in out
     assert out.splitlines()[-1].startswith("FAILED:") and "1 verdict(s) differ" in out
+
+
+def test_a_changed_number_word_alone_fails(folders, capsys):
+    committed, new = folders
+    _edit(new / "claims.csv", "number", 2, "in; in")
+    assert main([str(committed), str(new)]) == 1
+    assert "number out; in -> in; in" in capsys.readouterr().out
 
 
 def test_a_claim_in_one_table_only_fails(folders):

@@ -13,11 +13,15 @@ number the verdict rests on (a 95% interval over users or participants: a bootst
 study's H1 and H2 a paired t interval), and ``n_users`` says how many users or participants it rests on. A
 :class:`Claim` holds its rule's reading, ``yes``, ``partly`` or ``no`` (``undecided`` when an
 interval straddles a threshold; ``not testable`` when the claim's test cannot run on the data,
-with the reason in ``measured`` or ``note``); the table's ``reproduced`` column holds the word
-for it (:data:`lasa.evidence.decision.WORDS`), ``not reproduced`` also where the interval
-excludes a number the paper states (``paper_in_ci``), and ``settled`` whether the interval
-decides it. A claim that does not reproduce is a result, reported with its measured value and
-the most likely reason in ``note``.
+with the reason in ``measured`` or ``note``). Each row carries two words (Open Science
+Collaboration, 2015): ``effect``, the claim's shape as the rule reads it
+(:data:`lasa.evidence.decision.WORDS`), and ``number``, for each number the paper states whether
+it lies in our interval give or take the rule's tolerance (``in``/``out``/``undecided``, joined
+by ``; ``; ``n/a`` where the paper states none). ``reproduced`` keeps both in one word for older
+readers (:func:`lasa.evidence.decision.word`), and ``settled`` says whether the intervals decide
+the effect. Every sentence of a row's ``note`` is generated from the row's own numbers and words
+(:func:`note_lead`), never written by hand; a claim that does not reproduce is a result,
+reported with its measured value.
 """
 
 from __future__ import annotations
@@ -32,7 +36,17 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv, write_text
-from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, WORDS, word
+from lasa.evidence.decision import (
+    CENSORED,
+    NOT_APPLICABLE,
+    NOT_TESTABLE,
+    NUMBER_WORDS,
+    UNDECIDED,
+    WORDS,
+    PaperNumber,
+    effect_word,
+    word,
+)
 from lasa.evidence.findings import effect_of, finding, not_testable_why, stated_numbers
 from lasa.evidence.rules import RULES
 
@@ -68,6 +82,8 @@ CLAIM_COLUMNS = (
     "paper_in_ci",
     "direction",
     "paper_numbers",
+    "effect",
+    "number",
     "n_users",
     "note",
 )
@@ -107,10 +123,13 @@ class Claim:
 
 
 def criteria(claim: Claim) -> dict[str, str]:
-    """The row's verdict word and its replication criteria (Open Science Collaboration, 2015).
+    """The row's two words and its replication criteria (Open Science Collaboration, 2015).
 
     Returns:
-        ``reproduced``: the word (:func:`lasa.evidence.decision.word`); ``paper_in_ci``: per number
+        ``effect``: the rule's reading in words (:func:`lasa.evidence.decision.effect_word`);
+        ``number``: per number the paper states its word (:meth:`PaperNumber.word`), joined by
+        ``; ``, ``n/a`` where it states none or the claim is not testable; ``reproduced``: both in
+        one word (:func:`lasa.evidence.decision.word`); ``paper_in_ci``: per number
         the paper states, ``yes``/``no`` (its value, give or take the rule's tolerance, inside our
         interval), joined by ``; ``, or ``n/a`` where it states none; ``direction``: ``yes`` if our
         effect's interval lies on the paper's side of no effect, ``no`` if not, ``n/a`` where the
@@ -124,6 +143,8 @@ def criteria(claim: Claim) -> dict[str, str]:
     found = [(p, claim.intervals.get(p.quantity, nan)) for p in paper] if testable else []
     direction = r.direction if r is not None else None
     return {
+        "effect": effect_word(claim.reproduced),
+        "number": _numbers_word([p.word(iv) for p, iv in found]),
         "reproduced": word(claim.reproduced, claim.intervals, paper),
         "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
         "direction": direction.judge(claim.intervals.get(direction.quantity, nan))
@@ -135,12 +156,42 @@ def criteria(claim: Claim) -> dict[str, str]:
     }
 
 
+def _numbers_word(words: list[str]) -> str:
+    """The ``number`` column: each paper number's word joined by ``; ``; ``n/a`` if none is known."""
+    return "; ".join(words) if any(w != NOT_APPLICABLE for w in words) else NOT_APPLICABLE
+
+
+def paper_numbers_of(claim_id: str) -> tuple[PaperNumber, ...]:
+    """The numbers the paper states for a claim (its rule's), none if it has no rule."""
+    r = RULES.get(claim_id.split("@", 1)[0])
+    return r.paper if r is not None else ()
+
+
+def words_text(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
+    """``effect undecided; 1.45 out, 1.3 in``: a row's two words, each number named by its value."""
+    numbers = number.split("; ")
+    if number == NOT_APPLICABLE or len(numbers) != len(paper):
+        return f"effect {effect}; number {number}"
+    return f"effect {effect}; " + ", ".join(f"{p.value:g} {w}" for p, w in zip(paper, numbers, strict=True))
+
+
+def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
+    """The sentence a row's note begins with: its two words, ``Effect reproduced; 0.11 out.``."""
+    text = words_text(effect, number, paper)
+    return text[0].upper() + text[1:] + ". "
+
+
 def _row(claim: Claim) -> dict[str, object]:
-    """A claim as a table row: the interval to 4 significant digits, empty where unknown."""
+    """A claim as a table row: the interval to 4 significant digits, empty where unknown.
+
+    Its note begins with the row's two words (:func:`note_lead`).
+    """
     row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
     del row["values"], row["value"], row["intervals"]
     row["settled"] = "yes" if claim.settled else "no"
     row.update(criteria(claim))
+    lead = note_lead(str(row["effect"]), str(row["number"]), paper_numbers_of(claim.id))
+    row["note"] = lead + claim.note
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
     return row
@@ -330,63 +381,73 @@ def _num(text: object) -> str:
 
 
 def _cell(row: pd.Series | None) -> str:
-    """A robot's cell: the verdict word, every number its rule reads, N, and the direction.
+    """A robot's cell: both words, the numbers they rest on, N and whether the effect is settled.
 
-    A claim that is not testable reads ``not testable``, N, and why: the first
-    ``not testable (<why>)`` in its ``measured`` text or else its note, without an interval.
-    Each number the paper states comes with its own word, our value and interval
-    (``paper_numbers``); every other number the rule reads follows with its value and interval
-    (from the row's note, as :func:`lasa.evidence.verdicts.assess` wrote it); a row whose note
-    states none shows the interval of the effect it rests on. A study row's note states its
-    effect in words with its sign (:func:`lasa.evidence.findings.effect_of`): the cell says it,
-    a not-testable one as "measured, not judged", and a verdict that rests on a censored arm's
-    lower bound reads ``not reproduced (censored: lower bound)``.
+    ``effect <word>`` first, then each number the paper states with its word, our value and
+    interval (``0.11 out (0.0131 [0.00828, 0.0177])``), then every other number the rule reads
+    with its value and interval (from the row's note, as :func:`lasa.evidence.verdicts.assess`
+    wrote it). A study row's note states its effect in words with its sign
+    (:func:`lasa.evidence.findings.effect_of`): the cell says it, a not-testable one as "measured,
+    not judged", and an effect that rests on a censored arm's lower bound reads ``not reproduced
+    (censored: lower bound)``. A claim that is not testable reads ``not testable``, N, and why.
     """
     if row is None:
         return "—"
-    if row.reproduced == NOT_TESTABLE:
+    if row.effect == NOT_TESTABLE:
         why, effect = not_testable_why(row), effect_of(row.note)
         seen = f"; measured, not judged: {effect}" if effect else ""
-        return f"not testable, N = {row.n_users}" + (f" ({why})" if why else "") + seen
-    low, high = _num(row.ci_low), _num(row.ci_high)
-    paper_numbers = str(row.get("paper_numbers", ""))
-    rule = RULES.get(str(row.id).split("@", 1)[0])
-    stated = {p.quantity for p in rule.paper} if rule is not None else set()
-    others = [f"{name} {text}" for name, text in stated_numbers(row.note) if name not in stated]
-    numbers = "; ".join(n for n in (paper_numbers, *others) if n)
+        return f"effect not testable, N = {row.n_users}" + (f" ({why})" if why else "") + seen
+    paper = paper_numbers_of(str(row.id))
+    stated = {p.quantity for p in paper}
+    numbers = [_paper_number(text) for text in str(row.paper_numbers).split("; ") if text]
+    numbers += [f"{name} {text}" for name, text in stated_numbers(row.note) if name not in stated]
     effect = effect_of(row.note)
     if effect:
-        numbers = "; ".join(n for n in (numbers, effect) if n)
-    detail = f": {numbers}" if numbers else (f" [{low}, {high}]" if low and high else "")
-    word = f"{row.reproduced} ({CENSORED})" if str(row.measured).startswith(CENSORED) else row.reproduced
-    head = f"**{word}**" if row.reproduced != UNDECIDED else UNDECIDED
+        numbers.append(effect)
+    word = f"{row.effect} ({CENSORED})" if str(row.measured).startswith(CENSORED) else row.effect
+    head = f"**effect {word}**" if row.effect != UNDECIDED else f"effect {UNDECIDED}"
     settled = ", settled" if str(row.settled) == "yes" else ""
-    return f"{head}{detail}, N = {row.n_users}{settled}; direction {row.get('direction', 'n/a')}"
+    return "; ".join([head, *numbers]) + f", N = {row.n_users}{settled}"
+
+
+def _paper_number(text: str) -> str:
+    """``0.11 out (0.0131 [0.00828, 0.0177])`` from ``0.11 (y = 0.11x): out, 0.0131 [0.00828, 0.0177]``."""
+    label, _, rest = text.partition(": ")
+    value = label.split(" (", 1)[0].split(" ±", 1)[0]
+    number_word, _, measured = rest.partition(", ")
+    return f"{value} {number_word} ({measured})"
 
 
 def count_line(table: pd.DataFrame) -> str:
-    """``Of 23 paper claims × robot: 6 reproduced, 2 partly, ...``: the headline rows' words."""
-    rows = {(r.id, r.robot): r.reproduced for _, r in table.iterrows()}
-    words = [
+    """``Of 21 paper claims × robot, the effect: 6 reproduced, ...; of the 12 numbers ...: 3 in, ...``."""
+    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    heads = [
         rows[(pc.id, robot)]
         for pc in PAPER_CLAIMS
         if not pc.ours
         for robot in ROBOTS
         if (pc.id, robot) in rows
     ]
-    counts = ", ".join(f"{words.count(w)} {w}" for w in WORDS)
-    return f"Of {len(words)} paper claims × robot: {counts}."
+    effects = [str(r.effect) for r in heads]
+    numbers = [w for r in heads for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
+    counts = ", ".join(f"{effects.count(w)} {w}" for w in WORDS)
+    stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    return (
+        f"Of {len(effects)} paper claims × robot, the effect: {counts}. "
+        f"Of the {len(numbers)} numbers the paper states (× robot), the number: {stated}."
+    )
 
 
 def _flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> str:
-    """Every reading (``<id>@<reading>``, compound ones such as ``a+b`` included) whose word differs."""
+    """Every reading (``<id>@<reading>``, compound ones such as ``a+b`` included) whose words differ."""
     flips: dict[str, list[str]] = {}
     for (cid, robot), r in rows.items():
         if cid.startswith(claim_id + "@"):
             head = rows.get((claim_id, robot))
-            if head is not None and r.reproduced != head.reproduced:
-                flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot} {r.reproduced}")
-    return "; ".join(f"`{k}` ({', '.join(v)})" for k, v in flips.items()) or "none"
+            if head is not None and (r.effect, r.number) != (head.effect, head.number):
+                said = words_text(str(r.effect), str(r.number), paper_numbers_of(claim_id))
+                flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot}: {said}")
+    return "; ".join(f"`{k}` ({'; '.join(v)})" for k, v in flips.items()) or "none"
 
 
 def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = None) -> str:
@@ -398,10 +459,10 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
             ``notebooks/<stem>.ipynb``, from the repository root).
 
     Returns:
-        Markdown: a count line of the headline words; then per claim its paper number, per
-        robot the word with the numbers it rests on (each number the paper states with its
-        own word), the users per point N and the direction criterion, the readings whose
-        word differs, and what makes the verdict: the result sentences written from the rows'
+        Markdown: a count line of the headline rows' two words; then per claim its paper
+        number, per robot the effect's word with the numbers it rests on (each number the
+        paper states with its own word), the users per point N, the readings whose words
+        differ, and what makes the verdict: the result sentences written from the rows'
         numbers (:func:`lasa.evidence.findings.finding`), then the mechanism, with a link to the
         notebook that measures it. Rows that are our additions, not the paper's claims, follow
         in a table of their own.

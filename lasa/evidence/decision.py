@@ -11,9 +11,11 @@ Otherwise the verdict reads ``undecided``. A claim whose yes/partly/no rests on 
 tests (the study's) also has :attr:`Rule.tests`, the verdict from the tests' numbers; its
 quantities then only settle it.
 
-The claims table words a reading (:func:`word`, :data:`WORDS`) against the numbers the paper
-states (:class:`PaperNumber`) and the sign it gives an effect (:class:`Direction`). The
-paper's rules themselves are :mod:`lasa.evidence.rules`.
+A rule judges the claim's *shape*: its direction and significance (LA is slower than LA+SA, the
+error grows with distance), never whether a number has the paper's size. The claims table gives
+each claim two words: the *effect* (:func:`effect_word`, :data:`WORDS`), what the rule reads, and
+the *number* (:meth:`PaperNumber.word`, :data:`NUMBER_WORDS`), for each number the paper states
+whether it lies in our interval. The paper's rules themselves are :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -36,8 +38,13 @@ __all__ = [
     "PARTLY",
     "NOT_REPRODUCED",
     "WORDS",
+    "IN",
+    "OUT",
+    "NOT_APPLICABLE",
+    "NUMBER_WORDS",
     "PaperNumber",
     "Direction",
+    "effect_word",
     "word",
 ]
 
@@ -51,14 +58,19 @@ NOT_TESTABLE = "not testable"
 # a lower bound (its unfinished episodes would only add to it), already worse than a comparator's
 CENSORED = "censored: lower bound"
 
-# The verdict words of the claims table, the one vocabulary a reader sees (:func:`word`):
+# Two words per claim (Open Science Collaboration, 2015), the one vocabulary a reader sees.
+# The *effect* (:func:`effect_word`): the claim's shape, its direction and significance, as
+# the rule reads it (a rule's yes/partly/no judges the shape only, never a number's size):
 REPRODUCED = "reproduced"  # the rule reads yes, settled
-PARTLY = "partly"  # the rule reads partly, settled
-# the rule reads no, settled; or a number the paper states lies outside our interval
-# (give or take the rule's tolerance), whatever the rule reads
-NOT_REPRODUCED = "not reproduced"
+PARTLY = "partly"  # the rule reads partly, settled: some parts hold, each in the paper's direction
+NOT_REPRODUCED = "not reproduced"  # the rule reads no, settled
 WORDS = (REPRODUCED, PARTLY, NOT_REPRODUCED, UNDECIDED, NOT_TESTABLE)
 _SETTLED_WORD = {"yes": REPRODUCED, "partly": PARTLY, "no": NOT_REPRODUCED}
+# The *number* (:meth:`PaperNumber.word`): for each number the paper states, against our interval
+IN = "in"  # the paper's number lies in our interval, give or take the rule's tolerance
+OUT = "out"  # our interval is clear of the paper's number and its tolerance
+NOT_APPLICABLE = "n/a"  # the paper states no number for the claim, or the claim is not testable
+NUMBER_WORDS = (IN, OUT, UNDECIDED, NOT_APPLICABLE)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,10 +87,8 @@ class PaperNumber:
     """A number the paper states, the quantity that measures it, and the rule's tolerance.
 
     The replication criterion "the paper's value lies inside our interval" (Open Science
-    Collaboration, 2015), with the rule's tolerance: the paper's value is *in* our interval
-    when the band ``value +- tolerance`` meets it. ``tolerance`` is the one the rule applies
-    around this number (0.15 for the time ratios), and 0 where the rule states none: a rule
-    that accepts a range (a slope in (0, 0.25]) states no tolerance around the paper's value.
+    Collaboration, 2015), with the rule's tolerance (:meth:`word`). ``tolerance`` is the one the
+    rule applies around this number (0.15 for the time ratios), and 0 where the rule states none.
     """
 
     quantity: str  # the rule's quantity that measures it
@@ -94,23 +104,33 @@ class PaperNumber:
         return "yes" if low <= self.value + self.tolerance and high >= self.value - self.tolerance else "no"
 
     def word(self, interval: tuple[float, float]) -> str:
-        """This number's verdict: the interval inside the band, outside it, or across its edge."""
+        """This number's word (:data:`NUMBER_WORDS`) against our interval.
+
+        ``out`` if the interval misses ``value +- tolerance``. With a tolerance, ``in`` if the
+        interval lies inside that band (every value we cannot exclude is within tolerance),
+        ``undecided`` if it crosses the band's edge. Without one (0: the rule states none), ``in``
+        if the interval contains the value (the Open Science Collaboration's criterion). ``n/a``
+        if the interval is unknown.
+        """
         low, high = interval
-        if self.inside(interval) == "n/a":
-            return NOT_TESTABLE
-        if self.inside(interval) == "no":
-            return NOT_REPRODUCED
+        met = self.inside(interval)
+        if met != "yes":
+            return OUT if met == "no" else NOT_APPLICABLE
+        if self.tolerance == 0.0:
+            return IN
         inner = self.value - self.tolerance <= low and high <= self.value + self.tolerance
-        return REPRODUCED if inner else UNDECIDED
+        return IN if inner else UNDECIDED
 
     def describe(self, interval: tuple[float, float], measured: float) -> str:
-        """``1.45 ± 0.15 (beta = 75): not reproduced, 0.961 [0.844, 1.1]``."""
-        tol = f" ± {self.tolerance:g}" if self.tolerance else ""
+        """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``."""
         low, high = interval
-        return (
-            f"{self.value:g}{tol} ({self.where}): {self.word(interval)}, "
-            f"{measured:.3g} [{low:.3g}, {high:.3g}]"
-        )
+        return f"{self.label}: {self.word(interval)}, {measured:.3g} [{low:.3g}, {high:.3g}]"
+
+    @property
+    def label(self) -> str:
+        """``1.45 ± 0.15 (beta = 75)``: the number, its tolerance and where the paper states it."""
+        tol = f" ± {self.tolerance:g}" if self.tolerance else ""
+        return f"{self.value:g}{tol} ({self.where})"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -219,21 +239,16 @@ class Rule:
         return out
 
 
-def word(
-    reading: str, intervals: Mapping[str, tuple[float, float]], paper: tuple[PaperNumber, ...] = ()
-) -> str:
-    """The claims table's verdict word (:data:`WORDS`): the strongest thing that is settled.
+def effect_word(reading: str) -> str:
+    """The effect's word (:data:`WORDS`) of a rule's reading.
 
     Args:
         reading: What the rule reads at the intervals: ``yes``, ``partly`` or ``no`` when
             settled, else ``undecided``; or ``not testable``.
-        intervals: Quantity name -> interval (the row's own level).
-        paper: The numbers the paper states (the rule's :attr:`Rule.paper`).
 
     Returns:
-        ``not testable`` as it is; ``not reproduced`` if a number the paper states lies
-        outside its interval (give or take the rule's tolerance: :meth:`PaperNumber.inside`),
-        whatever the rule reads; else the settled reading's word, or ``undecided``.
+        ``reproduced``, ``partly`` or ``not reproduced`` for a settled reading; else the
+        reading itself.
 
     Raises:
         ConfigError: if ``reading`` is not a rule's verdict, ``undecided`` or ``not testable``.
@@ -242,8 +257,31 @@ def word(
         raise ConfigError(
             f"cannot word the reading {reading!r}: not one of {(*VERDICTS, UNDECIDED, NOT_TESTABLE)}"
         )
-    if reading == NOT_TESTABLE:
+    return _SETTLED_WORD.get(reading, reading)
+
+
+def word(
+    reading: str, intervals: Mapping[str, tuple[float, float]], paper: tuple[PaperNumber, ...] = ()
+) -> str:
+    """Both words in one (the claims table's ``reproduced`` column, kept for its older readers).
+
+    Args:
+        reading: The rule's reading (see :func:`effect_word`).
+        intervals: Quantity name -> interval (the row's own level).
+        paper: The numbers the paper states (the rule's :attr:`Rule.paper`).
+
+    Returns:
+        ``not testable`` as it is; ``not reproduced`` if a number the paper states is ``out``;
+        ``undecided`` if the effect reads ``reproduced`` while a number is ``undecided``; else
+        the effect's word.
+
+    Raises:
+        ConfigError: if ``reading`` is not a rule's verdict, ``undecided`` or ``not testable``.
+    """
+    effect = effect_word(reading)
+    if effect == NOT_TESTABLE:
         return NOT_TESTABLE
-    if any(p.inside(intervals.get(p.quantity, (math.nan, math.nan))) == "no" for p in paper):
+    numbers = [p.word(intervals.get(p.quantity, (math.nan, math.nan))) for p in paper]
+    if OUT in numbers:
         return NOT_REPRODUCED
-    return _SETTLED_WORD.get(reading, UNDECIDED)
+    return UNDECIDED if effect == REPRODUCED and UNDECIDED in numbers else effect

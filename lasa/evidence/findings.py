@@ -31,11 +31,11 @@ _WHY = re.compile(
 )  # "not testable (<why>)", <why> without parentheses
 _COMPLETION = re.compile(r"(\S+) ([\d.]+)%")  # "LA+SA 45%" in "completion: LA+SA 45%, LA 90%"
 _MODEL = re.compile(r"participant model = ([^;]+);")  # a study row's note
-_EFFECT = re.compile(r"^Effect: (.*?)\. ")  # a study row's note begins with its effect in words
+_EFFECT = re.compile(r"Measured effect: (.*?)\. ")  # a study row's note states its effect in words
 
 
 def effect_of(note: object) -> str | None:
-    """The effect a study row's note states first (``Effect: <sentence>. ``), or None."""
+    """The effect a study row's note states (``Measured effect: <sentence>. ``), or None."""
     found = _EFFECT.search(str(note))
     return found.group(1) if found else None
 

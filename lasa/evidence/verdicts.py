@@ -39,7 +39,7 @@ import pandas as pd
 
 from lasa.base.config import NO_ASSISTANCE  # defined once, in the base; re-exported here
 from lasa.base.errors import ConfigError
-from lasa.evidence.claims import Claim
+from lasa.evidence.claims import Claim, criteria, paper_numbers_of, words_text
 from lasa.evidence.decision import UNDECIDED
 from lasa.evidence.rules import rule
 
@@ -294,6 +294,12 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
     )
 
 
+def _words(c: Claim) -> str:
+    """``effect undecided; 1.45 out, 1.3 in``: a claim's two words (:func:`lasa.evidence.claims.criteria`)."""
+    said = criteria(c)
+    return words_text(said["effect"], said["number"], paper_numbers_of(c.id))
+
+
 def member_of(frame: pd.DataFrame) -> str:
     """The assistance member of a one-member frame (``none`` if it holds unassisted rows only)."""
     names = (
@@ -381,18 +387,18 @@ def sequential(
     }
     rows: list[Claim] = []
     for i, c in enumerate(head):
-        flips = [f"{m} {o[i].reproduced}" for m, o in others.items() if o[i].reproduced != c.reproduced]
+        flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
         where = (
-            f"Readings with another verdict (at {design.first} users): {', '.join(flips)}. "
+            f"Readings with other words (at {design.first} users): {'; '.join(flips)}. "
             if flips
-            else "Every other reading gives the same verdict. "
+            else "Every other reading gives the same words. "
             if others
             else ""
         )
         stop = (
-            f"Settled at look {look + 1} of {len(design.sizes)}. "
+            f"The effect settled at look {look + 1} of {len(design.sizes)}. "
             if c.settled
-            else f"Undecided at the cap ({design.cap} users). "
+            else f"The effect is undecided at the cap ({design.cap} users). "
         )
         rows.append(dataclasses.replace(c, assistance=default, note=stop + where + c.note))
     for m, claims in others.items():

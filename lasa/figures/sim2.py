@@ -155,9 +155,9 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     Success is a final error within the frame's ``success`` criterion (the config's
     tolerance, 0.1 of the goal distance by default), measured at the largest N.
 
-    - *LA+SA cannot escape the wrong goal as N grows*: ``yes`` if LA+SA's success rate
-      at the largest N is below 50%; ``partly`` if it falls by at least 20 points from
-      N = smallest but stays at or above 50%; else ``no``.
+    - *LA+SA cannot escape the wrong goal as N grows*, in the paper's two parts: LA+SA's
+      mean final error grows from the smallest N to the largest, and its mean confidence
+      in the true cup falls; ``yes`` if both hold, ``partly`` if one, else ``no``.
     - *LA+SA+Entropy can*: ``yes`` if its success rate at the largest N is at least 80%
       and at least 20 points above LA+SA's; ``partly`` if it is above LA+SA's; else ``no``.
     """
@@ -165,9 +165,13 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
     rate = frame.groupby(["method", "change_step"]).success.mean()
     err = frame.groupby(["method", "change_step"]).final_error.mean()
+    conf = frame.groupby(["method", "change_step"]).confidence.mean()
     sa_lo, sa_hi = rate["LA+SA", lo], rate["LA+SA", hi]
     en_hi = rate["LA+SA+Entropy", hi]
-    values1 = {"success_sa": float(sa_hi), "drop_sa": float(sa_lo - sa_hi)}
+    values1 = {
+        "error_growth": float(err["LA+SA", hi] - err["LA+SA", lo]),
+        "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),
+    }
     values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
     v1 = rule("sim2.sa_trapped").verdict(values1)
     v2 = rule("sim2.entropy_escapes").verdict(values2)
@@ -179,9 +183,10 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             paper="LA+SA's final error grows and its confidence falls as N grows",
             values=values1,
             measured=(
-                f"LA+SA reaches the right cup in {sa_hi:.0%} of episodes at N={hi} "
-                f"(the interval is for this rate) and {sa_lo:.0%} at N={lo}; "
-                f"mean final error {err['LA+SA', lo]:.3f} -> {err['LA+SA', hi]:.3f}"
+                f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
+                f"at N={hi} (the interval is for this growth); mean confidence in the true cup "
+                f"{conf['LA+SA', lo]:.3f} -> {conf['LA+SA', hi]:.3f}; it reaches the right cup in "
+                f"{sa_lo:.0%} -> {sa_hi:.0%} of episodes"
             ),
             reproduced=v1,
             note="",
@@ -210,9 +215,14 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     rate = group_means(
         frame.assign(success=frame.success.astype(float)), ["method", "change_step"], "success", counts
     )
-    sa_lo, sa_hi, en_hi = rate[("LA+SA", lo)], rate[("LA+SA", hi)], rate[("LA+SA+Entropy", hi)]
+    err = group_means(frame, ["method", "change_step"], "final_error", counts)
+    conf = group_means(frame, ["method", "change_step"], "confidence", counts)
+    sa_hi, en_hi = rate[("LA+SA", hi)], rate[("LA+SA+Entropy", hi)]
     return {
-        "sim2.sa_trapped": {"success_sa": sa_hi, "drop_sa": sa_lo - sa_hi},
+        "sim2.sa_trapped": {
+            "error_growth": err[("LA+SA", hi)] - err[("LA+SA", lo)],
+            "confidence_drop": conf[("LA+SA", lo)] - conf[("LA+SA", hi)],
+        },
         "sim2.entropy_escapes": {"success_entropy": en_hi, "margin": en_hi - sa_hi},
     }
 

@@ -64,7 +64,7 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
-from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, word
+from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_word, word
 from lasa.evidence.findings import effect_of
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import PAPER_N
@@ -240,7 +240,7 @@ def effect_sentence(key: str, result: Mapping[str, object], judged: Judged) -> s
 
     E.g. ``SA raises Goal Error by +1.24 m s, F(1,9) = 32.8, p < .001``; a censored arm's
     ``by at least`` (its measure a lower bound). Never contains ``". "`` (the note's
-    ``Effect: <sentence>. `` is read back by :func:`lasa.evidence.findings.effect_of`).
+    ``Measured effect: <sentence>. `` is read back by :func:`lasa.evidence.findings.effect_of`).
     """
     verdict, value, low, high, measured = judged
     bound = "at least " if measured.startswith(CENSORED) else ""
@@ -289,7 +289,8 @@ def _claim_row(
 ) -> Claim:
     """One claims row: the tests' verdict, settled or undecided, or not testable with its reason.
 
-    Its note starts with ``Effect: <effect>.`` (:func:`effect_sentence`).
+    Its note starts with ``Measured effect: <effect>.`` (:func:`effect_sentence`); the claims
+    table puts the row's two words before it (:func:`lasa.evidence.claims.note_lead`).
     """
     verdict, value, low, high, measured = judged
     r = rule(cid)
@@ -309,7 +310,7 @@ def _claim_row(
             "" if settled else f", which straddles 0; the tests read {verdict!r}"
         )
     note = (
-        f"Effect: {effect}. "
+        f"Measured effect: {effect}. "
         + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
         + f"{n} simulated participants; SA = {member}; "
         + (f"decoder = {decoder}; " if decoder else "")
@@ -338,22 +339,27 @@ def _claim_row(
 
 
 def _with_flips(rows: list[Claim]) -> list[Claim]:
-    """Each headline row's note led by the readings whose verdict differs from it."""
+    """Each headline row's note led by the readings whose effect differs from it.
+
+    The paper states no number the study's rules compare, so the effect is the only word that
+    can differ (its number is ``n/a``).
+    """
     heads = {c.id for c in rows if "@" not in c.id}
     out = []
     for c in rows:
         if c.id in heads:
             flips = [
-                f"{o.id.split('@')[1]} {o.reproduced}"
+                f"{o.id.split('@')[1]} (effect {effect_word(o.reproduced)})"
                 for o in rows
                 if o.id.startswith(c.id + "@") and o.reproduced != c.reproduced
             ]
             lead = (
-                f"Readings with another verdict: {', '.join(flips)}. "
+                f"Readings with other words: {'; '.join(flips)}. "
                 if flips
-                else "Every reading gives the same verdict. "
+                else "Every reading gives the same words. "
             )
-            effect, rest = c.note.split(". ", 1) if c.note.startswith("Effect: ") else ("", c.note)
+            measured = "Measured effect: "
+            effect, rest = c.note.split(". ", 1) if c.note.startswith(measured) else ("", c.note)
             c = dataclasses.replace(c, note=(f"{effect}. " if effect else "") + lead + rest)
         out.append(c)
     return out

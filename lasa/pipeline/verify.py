@@ -9,8 +9,9 @@ figures folders file by file and prints one table, then a summary line:
   position when the files have as many rows and their key columns agree row by row
   (:func:`key_columns`), else the file is reported as "rows differ";
 - **every other file** (PNG, MP4, Markdown): identical bytes or not;
-- **the claims table** (``claims.csv``): for every ``(id, robot)``, whether its verdict (the
-  ``reproduced`` and ``settled`` columns) is the same, each differing one listed.
+- **the claims table** (``claims.csv``): for every ``(id, robot)``, whether its verdict (its two
+  words ``effect`` and ``number``, and the ``reproduced`` and ``settled`` columns) is the same,
+  each differing one listed.
 
 The exit status is 1 if and only if a verdict differs, a claim is in one table only, or
 ``claims.csv`` is missing from either folder; value differences in the CSVs are reported, never
@@ -55,7 +56,7 @@ __all__ = [
 ]
 
 CLAIMS = "claims.csv"
-VERDICT_COLUMNS = ("reproduced", "settled")  # a claim's verdict, per (id, robot)
+VERDICT_COLUMNS = ("effect", "number", "reproduced", "settled")  # a claim's words, per (id, robot)
 CLAIM_KEY = ("id", "robot")
 
 
@@ -209,7 +210,7 @@ def compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> li
 
 
 def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
-    """``(id, robot) -> (reproduced, settled)`` of a claims table, every cell as written."""
+    """``(id, robot) -> (effect, number, reproduced, settled)`` of a claims table, every cell as written."""
     frame = pd.read_csv(path, dtype=str, keep_default_na=False)
     needed = [*CLAIM_KEY, *VERDICT_COLUMNS]
     absent = [c for c in needed if c not in frame.columns]
