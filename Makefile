@@ -148,11 +148,19 @@ ROBOTS := planar5 panda
 .SECONDARY:
 
 FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goals 08_claims_robustness 09_convergence
+# The paper-scale build and the QUICK one record their wall times in benchmarks/results.json
+# (figures_s, figures_s.quick) from this invocation's timings.jsonl, then the READMEs' wall times
+# from it (lasa.pipeline.timings); a run in which Make skipped up-to-date notebooks records nothing.
+TIMED_PART := $(if $(filter build,$(BUILD)),paper,$(if $(filter build/quick,$(BUILD)),quick))
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
 	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv
+endif
+ifneq ($(TIMED_PART),)
+	@$(BIN)/python -m lasa.pipeline.timings $(BUILD)/timings.jsonl --part $(TIMED_PART) \
+	  --command "make figures$(if $(filter quick,$(TIMED_PART)), QUICK=1)" --expect $(RUNS)
 endif
 	@echo "figures written by $(CONFIG) (executed notebooks in $(EXEC); wall times in $(BUILD)/timings.jsonl)"
 
@@ -161,6 +169,8 @@ STUDY_NBS := 10_eating_task 11_eating_study
 # The study chain first: it is the longest (10 then 11, each on one core), so under -j it starts
 # as soon as both robots' decoders exist and the robots' chains share the other core.
 notebooks: $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb) $(foreach r,$(ROBOTS),$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
+# Every notebook run of a whole `make figures`, as the runner names them in timings.jsonl.
+RUNS := $(STUDY_NBS) $(foreach r,$(ROBOTS),$(foreach n,01_demonstrations 02_decoder_training 03_entropy_ablation $(FIGURE_NBS),$(n)-$(r)))
 
 # The robots' chains run side by side. Notebooks that share a figure merge their rows
 # and redraw it under a lock (lasa.base.io.locked), and the merged rows are ordered by robot,

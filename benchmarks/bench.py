@@ -29,7 +29,9 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 - ``training_s``: the time to train each decoder of ``configs/paper.yaml`` and its
   final error, read from the checkpoints of a fresh paper-scale pipeline run.
 - ``figures_s``: wall time of ``make figures`` (fresh, into ``build/bench``) per
-  notebook and in total, and the same for ``make figures QUICK=1``.
+  notebook and in total (the first notebook's start to the last one's end), and the same for
+  ``make figures QUICK=1``, summarized as ``make figures`` itself writes them
+  (:mod:`lasa.pipeline.timings`).
 - ``render_fps``: frames per second of the off-screen video renderer.
 - ``dask_overhead_1_worker``: what running the verdict map (:mod:`lasa.figures.robustness`)
   through a one-worker ``distributed.LocalCluster`` costs over running it in this process, at
@@ -59,7 +61,6 @@ import datetime  # noqa: E402
 import importlib  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
-import platform  # noqa: E402
 import shutil  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
@@ -86,7 +87,9 @@ from lasa.method.controller import Controller  # noqa: E402
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
 from lasa.method.step import latent_grid  # noqa: E402
 from lasa.people.rollout import rollout  # noqa: E402
-from lasa.people.users import UserPopulation
+from lasa.people.users import UserPopulation  # noqa: E402
+from lasa.pipeline.timings import git_commit, read_runs, read_timings, summarize  # noqa: E402
+from lasa.pipeline.timings import machine as timings_machine  # noqa: E402
 from lasa.world.robot import Robot, load_robot  # noqa: E402
 from lasa.world.task import CupTask, make_cup_task  # noqa: E402
 
@@ -431,67 +434,32 @@ def training_times(models_dir: str | os.PathLike[str]) -> dict[str, dict[str, An
     return out
 
 
-def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
-    """``{"<notebook>-<robot>": seconds}`` from a runner ``--timings`` file (JSON lines)."""
-    out = {}
-    for line in Path(path).read_text().splitlines():
-        if line.strip():
-            rec = json.loads(line)
-            key = rec["notebook"] + (f"-{rec['robot']}" if rec.get("robot") else "")
-            out[key] = float(rec["seconds"])
-    return out
-
-
 def run_pipeline(command: list[str], out_dir: Path) -> dict[str, Any]:
     """Run one pipeline command from scratch into ``out_dir``, from the repository root.
 
     ``out_dir`` is deleted first; the command must write ``out_dir/timings.jsonl``.
 
     Returns:
-        ``{total, per_notebook, sum_of_notebooks, measured}``: wall time [s], each notebook's
-        time [s] (:func:`read_timings`), their sum, and the run that measured them (:func:`machine`
-        and the commit), so that a time the package reports names its run.
+        ``{total, per_notebook, sum_of_notebooks, measured}``, as ``make figures`` writes it
+        (:func:`lasa.pipeline.timings.summarize`): the wall time from the first notebook's start
+        to the last one's end [s], each notebook's time [s], their sum, and the run that measured
+        them (the machine, date, commit and command), so that a time the package reports names its run.
 
     Raises:
         RuntimeError: if the command fails (with the end of its output).
     """
     if out_dir.exists():
         shutil.rmtree(out_dir)
-    start = time.perf_counter()
     result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
-    total = time.perf_counter() - start
     if result.returncode != 0:
         raise RuntimeError(f"{' '.join(command)} failed:\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}")
-    per = read_timings(out_dir / "timings.jsonl")
-    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT)
-    measured = {**machine(), "commit": head.stdout.strip() or "unknown", "command": " ".join(command)}
-    return {
-        "total": total,
-        "per_notebook": per,
-        "sum_of_notebooks": float(sum(per.values())),
-        "measured": measured,
-    }
+    timings = out_dir / "timings.jsonl"
+    return summarize(read_runs(timings), " ".join(command), str(timings), commit=git_commit(ROOT))
 
 
 def machine() -> dict[str, Any]:
-    """What the numbers were measured on (CPU, cores, versions, date)."""
-    cpu = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {
-        "cpu": cpu,
-        "cores": os.cpu_count(),
-        "python": platform.python_version(),
-        "torch": torch.__version__,
-        "numpy": np.__version__,
-        "mujoco": mujoco.__version__,
-        "date": datetime.date.today().isoformat(),
-    }
+    """What the numbers were measured on: :func:`lasa.pipeline.timings.machine` and today's date."""
+    return {**timings_machine(), "date": datetime.date.today().isoformat()}
 
 
 def plot_scaling(results: dict[str, Any], latencies: np.ndarray, path: Path) -> None:

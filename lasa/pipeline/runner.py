@@ -18,7 +18,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
+import datetime
 import os
 import sys
 import time
@@ -35,6 +35,7 @@ import yaml  # noqa: E402
 
 from lasa.base.errors import ArtifactError, ConfigError, NotebookError  # noqa: E402
 from lasa.base.io import atomic_path, require_file  # noqa: E402
+from lasa.pipeline.timings import append_run, timing_record  # noqa: E402
 
 __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
 
@@ -151,9 +152,13 @@ def main(argv: list[str] | None = None) -> int:
         metavar="NAME=VALUE",
         help="override one parameter (VALUE is read as YAML); repeatable",
     )
-    parser.add_argument("--timings", help="append {notebook, robot, seconds} as a JSON line to this file")
+    parser.add_argument(
+        "--timings",
+        help="append {notebook, robot, seconds, start, end} as a JSON line to this file (start, end: UTC)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
+    started = datetime.datetime.now(datetime.UTC)
     start = time.perf_counter()
     try:
         overrides = parse_params(args.param)
@@ -171,11 +176,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     seconds = time.perf_counter() - start
-    if args.timings:
-        record = {"notebook": Path(args.notebook).stem, "robot": args.robot, "seconds": round(seconds, 2)}
-        Path(args.timings).parent.mkdir(parents=True, exist_ok=True)
-        with open(args.timings, "a") as fh:  # one short line per run: appends do not interleave
-            fh.write(json.dumps(record) + "\n")
+    if args.timings:  # lasa.pipeline.timings reads them into benchmarks/results.json
+        ended = datetime.datetime.now(datetime.UTC)
+        record = timing_record(Path(args.notebook).stem, args.robot, seconds, started, ended)
+        append_run(args.timings, record)
     print(f"{out} ({seconds:.1f} s)")
     return 0
 

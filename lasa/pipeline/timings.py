@@ -1,0 +1,449 @@
+"""The pipeline's wall times, from the run that measured them.
+
+Every notebook run by :mod:`lasa.pipeline.runner` with ``--timings`` appends one JSON line,
+``{notebook, robot, seconds, start, end}`` (``start`` and ``end`` in ISO 8601, UTC), to
+``<build>/timings.jsonl``; ``make figures`` removes the file first, so after a run it holds that
+invocation's notebooks. :func:`record_figures` turns it into ``figures_s`` of
+``benchmarks/results.json``: ``total`` (the wall time, from the first notebook's start to the last
+one's end: not the sum, since notebooks run side by side), ``per_notebook``, ``sum_of_notebooks``
+and ``measured`` (the machine, the date, the commit, the command and how the total was taken).
+A paper-scale run writes the top level of ``figures_s``, a QUICK run its ``quick`` part. A run in
+which Make skipped up-to-date notebooks is partial: its span is not the pipeline's time, so it is
+refused and ``results.json`` is left as it was.
+
+:func:`sync_readmes` then writes the README's sentence on ``make figures``'s time and the table of
+``benchmarks/README.md`` from ``results.json``, between markers (:data:`README_MARKERS`,
+:data:`BENCH_MARKERS`), as :func:`lasa.evidence.claims.sync_readme` does for the verdict table.
+
+Usage (``make figures`` runs it after the notebooks, for ``build`` and ``build/quick``)::
+
+    python -m lasa.pipeline.timings build/timings.jsonl --part paper --command "make figures" \\
+        --expect 01_demonstrations-planar5 ... 11_eating_study
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import importlib.metadata
+import json
+import os
+import platform
+import subprocess
+import sys
+from collections.abc import Collection, Mapping
+from pathlib import Path
+from typing import Any
+
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.io import locked, write_text
+
+__all__ = [
+    "README_MARKERS",
+    "BENCH_MARKERS",
+    "PARTS",
+    "Run",
+    "timing_record",
+    "append_run",
+    "read_runs",
+    "read_timings",
+    "incomplete",
+    "machine",
+    "git_commit",
+    "summarize",
+    "record_figures",
+    "duration",
+    "render_sentence",
+    "render_table",
+    "sync_between",
+    "sync_readmes",
+    "main",
+]
+
+README_MARKERS = (
+    "<!-- figures-time:begin (generated from benchmarks/results.json by make figures) -->",
+    "<!-- figures-time:end -->",
+)
+BENCH_MARKERS = (
+    "<!-- figures-table:begin (generated from results.json by make figures) -->",
+    "<!-- figures-table:end -->",
+)
+# A part of figures_s: the paper-scale run (the top level) or the QUICK one (under "quick"),
+# with the results.json target each is held to.
+PARTS = ("paper", "quick")
+_TARGETS = {"paper": "figures_total_s", "quick": "figures_quick_total_s"}
+_ROWS = {"paper": "`make figures`, paper scale, fresh", "quick": "`make figures QUICK=1`, fresh"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Run:
+    """One notebook run, a line of ``timings.jsonl``.
+
+    Attributes:
+        name: ``<notebook>-<robot>``, or ``<notebook>`` for a notebook run without a robot.
+        seconds: Its wall time as the runner measured it [s].
+        start: When it started (UTC); ``None`` in a line of a runner before start and end.
+        end: When it ended (UTC); ``None`` likewise.
+    """
+
+    name: str
+    seconds: float
+    start: datetime.datetime | None = None
+    end: datetime.datetime | None = None
+
+
+def timing_record(
+    notebook: str, robot: str | None, seconds: float, start: datetime.datetime, end: datetime.datetime
+) -> dict[str, Any]:
+    """The JSON line of one notebook run: ``{notebook, robot, seconds, start, end}``."""
+    return {
+        "notebook": notebook,
+        "robot": robot,
+        "seconds": round(seconds, 2),
+        "start": start.astimezone(datetime.UTC).isoformat(timespec="milliseconds"),
+        "end": end.astimezone(datetime.UTC).isoformat(timespec="milliseconds"),
+    }
+
+
+def append_run(path: str | os.PathLike[str], record: Mapping[str, Any]) -> None:
+    """Append ``record`` to ``path`` as one line (a short line: parallel appends do not interleave)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as fh:
+        fh.write(json.dumps(record) + "\n")
+
+
+def _when(value: str | None) -> datetime.datetime | None:
+    """An ISO 8601 time, as an aware UTC datetime (a naive one is read as UTC)."""
+    if value is None:
+        return None
+    when = datetime.datetime.fromisoformat(value)
+    if when.tzinfo is None:
+        when = when.replace(tzinfo=datetime.UTC)
+    return when.astimezone(datetime.UTC)
+
+
+def read_runs(path: str | os.PathLike[str]) -> list[Run]:
+    """The runs of a ``timings.jsonl``, in the order they finished.
+
+    Raises:
+        ArtifactError: if the file is missing.
+        ConfigError: if a line is not a runner's record.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ArtifactError(f"{path} does not exist: `make figures` writes it (the runner's --timings)")
+    runs = []
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            rec = json.loads(line)
+            name = rec["notebook"] + (f"-{rec['robot']}" if rec.get("robot") else "")
+            runs.append(Run(name, float(rec["seconds"]), _when(rec.get("start")), _when(rec.get("end"))))
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ConfigError(f"{path}, line {number}: not a runner's timing record ({exc})") from None
+    return runs
+
+
+def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
+    """``{"<notebook>-<robot>": seconds}`` from a runner ``--timings`` file (JSON lines)."""
+    return {run.name: run.seconds for run in read_runs(path)}
+
+
+def incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
+    """Why ``runs`` are not one whole run of the ``expected`` notebooks, or ``None`` if they are.
+
+    A whole run holds every expected notebook once and nothing else, each with its start and end.
+    """
+    names = [run.name for run in runs]
+    missing = sorted(set(expected) - set(names))
+    extra = sorted(set(names) - set(expected))
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if missing:
+        return f"{len(names)} of {len(set(expected))} notebooks ran; not run: {', '.join(missing)}"
+    if extra:
+        return f"notebooks outside the expected set ran: {', '.join(extra)}"
+    if twice:
+        return f"notebooks recorded more than once: {', '.join(twice)}"
+    undated = [run.name for run in runs if run.start is None or run.end is None]
+    if undated:
+        return f"runs without start and end times (an older runner): {', '.join(undated)}"
+    return None
+
+
+def machine() -> dict[str, Any]:
+    """What this process runs on: CPU model, cores, and the Python, torch, numpy, MuJoCo versions.
+
+    The versions are read from the installed distributions, so nothing heavy is imported.
+    """
+    cpu = platform.processor() or ""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    out: dict[str, Any] = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version()}
+    for package in ("torch", "numpy", "mujoco"):
+        try:
+            out[package] = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            out[package] = None
+    return out
+
+
+def git_commit(cwd: str | os.PathLike[str] | None = None) -> str:
+    """The short hash of ``HEAD`` in ``cwd``, or ``"unknown"`` outside a git checkout."""
+    try:
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=cwd, check=False
+        )
+    except OSError:
+        return "unknown"
+    return head.stdout.strip() or "unknown"
+
+
+def summarize(
+    runs: list[Run],
+    command: str,
+    source: str,
+    host: Mapping[str, Any] | None = None,
+    commit: str | None = None,
+) -> dict[str, Any]:
+    """One part of ``figures_s`` from a whole run's ``runs``.
+
+    Args:
+        runs: Every notebook of the run, each with its start and end.
+        command: The command that ran them (``make figures``).
+        source: Where the times were read (the timings file).
+        host: The machine (:func:`machine`); this one's by default.
+        commit: The code's commit (:func:`git_commit`); this checkout's ``HEAD`` by default.
+
+    Returns:
+        ``{total, per_notebook, sum_of_notebooks, measured}``: the wall time from the first start
+        to the last end [s], each notebook's seconds, their sum, and ``measured``: the machine,
+        the ``date`` (UTC) of the first start, the commit, the command and the ``source``.
+
+    Raises:
+        ConfigError: if there are no runs, or a run lacks its start or end.
+    """
+    if not runs:
+        raise ConfigError("no notebook runs to summarize")
+    if any(run.start is None or run.end is None for run in runs):
+        raise ConfigError("every run needs its start and end (a timings.jsonl of an older runner?)")
+    first = min(run.start for run in runs if run.start is not None)
+    last = max(run.end for run in runs if run.end is not None)
+    per = {run.name: run.seconds for run in runs}
+    span = f"{first:%H:%M:%S} to {last:%H:%M:%S} UTC"
+    measured = {
+        **(machine() if host is None else host),
+        "date": first.date().isoformat(),
+        "commit": git_commit() if commit is None else commit,
+        "command": command,
+        "source": f"{source}: total from the first notebook's start to the last one's end ({span})",
+    }
+    return {
+        "total": round((last - first).total_seconds(), 2),
+        "per_notebook": per,
+        "sum_of_notebooks": round(sum(per.values()), 2),
+        "measured": measured,
+    }
+
+
+def _read_results(path: Path) -> dict[str, Any]:
+    """``results.json`` as a dict (empty if the file does not exist yet)."""
+    if not path.exists():
+        return {}
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError as exc:
+        raise ConfigError(f"{path} is not JSON ({exc})") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path} must hold a JSON object")
+    return data
+
+
+def record_figures(
+    timings: str | os.PathLike[str],
+    results: str | os.PathLike[str],
+    part: str,
+    expected: Collection[str],
+    command: str,
+    **summary: Any,
+) -> dict[str, Any] | None:
+    """Write a whole run's times from ``timings`` into ``results``' ``figures_s``, atomically.
+
+    ``part`` ``"paper"`` replaces the top level of ``figures_s`` (its ``quick`` part is kept),
+    ``"quick"`` replaces ``figures_s.quick``; every other key of ``results`` is kept.
+
+    Args:
+        timings: The run's ``timings.jsonl``.
+        results: ``benchmarks/results.json``.
+        part: ``"paper"`` or ``"quick"`` (:data:`PARTS`).
+        expected: The notebooks a whole run runs (``<notebook>-<robot>`` or ``<notebook>``).
+        command: The command that ran them, recorded in ``measured``.
+        **summary: ``host`` and ``commit`` for :func:`summarize`.
+
+    Returns:
+        The part written, or ``None`` when the run was not whole (no timings file, or not every
+        expected notebook ran once in it): then ``results`` is left untouched and the reason printed.
+
+    Raises:
+        ConfigError: for an unknown ``part``, or a ``results`` that is not a JSON object.
+    """
+    if part not in PARTS:
+        raise ConfigError(f"part must be one of {PARTS}, got {part!r}")
+    timings, results = Path(timings), Path(results)
+    if not timings.is_file():
+        print(f"{results} left as it was: no notebook ran in this invocation ({timings} does not exist)")
+        return None
+    runs = read_runs(timings)
+    why = incomplete(runs, expected)
+    if why is not None:
+        print(f"{results} left as it was: not a whole run ({why}); a whole run needs `make clean` first")
+        return None
+    written = summarize(runs, command, str(timings), **summary)
+    with locked(results.parent):  # a paper and a QUICK run may finish at once
+        data = _read_results(results)
+        figures = data.get("figures_s") or {}
+        if part == "paper":
+            data["figures_s"] = {**written, **({"quick": figures["quick"]} if "quick" in figures else {})}
+        else:
+            data["figures_s"] = {**figures, "quick": written}
+        write_text(results, json.dumps(data, indent=2) + "\n")
+    print(f"{results}: figures_s{'.quick' if part == 'quick' else ''} = {written['total']:.0f} s ({timings})")
+    return written
+
+
+def duration(seconds: float) -> str:
+    """A wall time in words: seconds below two minutes, else whole minutes (``50 min``)."""
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
+
+
+def render_sentence(figures_s: Mapping[str, Any]) -> str:
+    """The README's words on the paper-scale ``make figures`` time, from ``figures_s``."""
+    m = figures_s["measured"]
+    return (
+        f"on {m['cores']} cores `make figures` took {duration(figures_s['total'])} "
+        f"({m['cpu']}, {m['date']}, at {m['commit']}: `figures_s` in benchmarks/results.json)"
+    )
+
+
+def _row(part: str, figures: Mapping[str, Any] | None, target: float | None) -> str:
+    """One row of the pipeline's table: a part's time, its run, its target and whether it is met."""
+    bound = f"≤ {target:,.0f} s" if target is not None else "(none)"
+    if not figures:
+        return f"| {_ROWS[part]} | not measured | | | {bound} | |"
+    m, total = figures["measured"], figures["total"]
+    verdict = "" if target is None else ("met" if total <= target else "**missed**")
+    at = "commit unknown" if m["commit"] == "unknown" else f"at {m['commit']}"
+    run = f"{m['cpu']}, {m['cores']} cores, {m['date']}, {at}: `{m['command']}`"
+    return (
+        f"| {_ROWS[part]} | **{total:,.0f} s** ({duration(total)}) | "
+        f"{figures['sum_of_notebooks']:,.0f} s | {run} | {bound} | {verdict} |"
+    )
+
+
+def render_table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> str:
+    """``benchmarks/README.md``'s table of the pipeline's wall times, from ``figures_s``."""
+    paper = figures_s if "total" in figures_s else None
+    lines = [
+        "| run | wall time | sum of its notebooks | measured (`figures_s.measured`) | target | |",
+        "| --- | ---: | ---: | --- | --- | --- |",
+        _row("paper", paper, targets.get(_TARGETS["paper"])),
+        _row("quick", figures_s.get("quick"), targets.get(_TARGETS["quick"])),
+    ]
+    return "\n".join(lines)
+
+
+def sync_between(
+    path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
+) -> bool:
+    """Put ``text`` between ``markers`` in the file ``path``.
+
+    Args:
+        path: The markdown file.
+        markers: Its begin and end markers.
+        text: What goes between them.
+        inline: Within a line (a sentence), else on the lines between the markers' lines.
+
+    Returns:
+        Whether the file changed.
+
+    Raises:
+        ConfigError: if the file lacks either marker, or holds them out of order.
+    """
+    path = Path(path)
+    content = path.read_text()
+    begin, end = markers
+    if begin not in content or end not in content or content.index(begin) > content.index(end):
+        raise ConfigError(f"{path} must hold the markers {begin!r} and {end!r}, in that order")
+    head, rest = content.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    body = text.strip() if inline else f"\n{text.strip()}\n"
+    new = f"{head}{begin}{body}{end}{tail}"
+    if new == content:
+        return False
+    write_text(path, new)
+    return True
+
+
+def sync_readmes(
+    results: str | os.PathLike[str],
+    readme: str | os.PathLike[str] | None = "README.md",
+    bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
+) -> list[Path]:
+    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results``.
+
+    Args:
+        results: ``benchmarks/results.json``.
+        readme: The README with :data:`README_MARKERS` (``None``: leave it).
+        bench_readme: The benchmarks' README with :data:`BENCH_MARKERS` (``None``: leave it).
+
+    Returns:
+        The files that changed.
+
+    Raises:
+        ConfigError: if ``results`` has no paper-scale ``figures_s``, or a file lacks its markers.
+    """
+    data = _read_results(Path(results))
+    figures = data.get("figures_s") or {}
+    if "total" not in figures:
+        raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
+    changed = []
+    if readme is not None and sync_between(readme, README_MARKERS, render_sentence(figures), inline=True):
+        changed.append(Path(readme))
+    table = render_table(figures, data.get("targets", {}))
+    if bench_readme is not None and sync_between(bench_readme, BENCH_MARKERS, table):
+        changed.append(Path(bench_readme))
+    return changed
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command-line entry point: record a whole run's times, then sync the READMEs from them."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("timings", help="the run's timings.jsonl (build/timings.jsonl)")
+    parser.add_argument("--part", choices=PARTS, required=True, help="paper scale, or QUICK=1")
+    parser.add_argument("--expect", nargs="+", required=True, help="the notebooks of a whole run")
+    parser.add_argument("--command", required=True, help="the command that ran them, for the record")
+    parser.add_argument("--results", default="benchmarks/results.json", help="the file of figures_s")
+    parser.add_argument("--readme", default="README.md", help="the README with the figures-time markers")
+    parser.add_argument(
+        "--bench-readme", default="benchmarks/README.md", help="the README with the figures-table markers"
+    )
+    args = parser.parse_args(argv)
+    try:
+        record_figures(args.timings, args.results, args.part, args.expect, args.command)
+        changed = sync_readmes(args.results, args.readme, args.bench_readme)
+    except (ConfigError, ArtifactError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wall times: {', '.join(map(str, changed)) or 'the READMEs already current'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
