@@ -173,25 +173,31 @@ def test_claims_table(executed):
     sweep = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]
     head = claims[~claims.id.str.contains("@")]
     assert set(head.assistance) == {"point"}
+    stop = head.note.str.split(". ", n=1).str[1]  # after the row's two words
     assert (
-        head.note.str.startswith("Settled at look") | head.note.str.startswith("Undecided at the cap")
+        stop.str.startswith("The effect settled at look") | stop.str.startswith("The effect is undecided")
     ).all()
     n = head.n_users.astype(int)
     assert n.between(sweep["users"], sweep["cap"]).all()
     assert (
-        head.note.str.startswith("Undecided at the cap") == (n == sweep["cap"]) & (head.settled == "no")
+        stop.str.startswith("The effect is undecided at the cap")
+        == (n == sweep["cap"]) & (head.settled == "no")
     ).all()
     members = claims[claims.id.str.contains("@")]
     assert (members.id.str.split("@").str[1] == members.assistance).all()
     assert set(members.assistance) == set(ASSISTANCE) - {"point"}
     assert (members.n_users.astype(int) == sweep["users"]).all()  # the other readings: the first look
     assert set(claims.reproduced) <= {"reproduced", "partly", "not reproduced", "undecided"}
-    # undecided only while an interval straddles; settled words come from the rule; a paper
-    # number outside its interval reads "not reproduced" even when the rule's reading is open
-    assert (claims[claims.reproduced == "undecided"].settled == "no").all()
-    assert (claims[claims.settled == "yes"].reproduced != "undecided").all()
-    open_ = claims[(claims.settled == "no") & (claims.reproduced == "not reproduced")]
-    assert open_.paper_in_ci.str.contains(r"\bno\b").all()
+    assert set(claims.effect) <= {"reproduced", "partly", "not reproduced", "undecided"}
+    # the effect is undecided exactly while an interval straddles; a paper number outside its
+    # interval reads "out", and makes the one-word "reproduced" read "not reproduced"
+    assert ((claims.effect == "undecided") == (claims.settled == "no")).all()
+    assert set(claims.number.str.split("; ").explode()) <= {"in", "out", "undecided", "n/a"}
+    out = claims.number.str.contains(r"\bout\b")
+    crossed = (claims.effect == "reproduced") & claims.number.str.contains("undecided")
+    one_word = claims.effect.where(~crossed, "undecided").where(~out, "not reproduced")
+    assert (claims.reproduced == one_word).all()
+    assert not claims[claims.number == "n/a"].paper_in_ci.str.contains(r"\b(?:yes|no)\b").any()
     assert set(claims.direction) <= {"yes", "no", "n/a"}
     assert not (fig / "claims.md").read_text().count("nan")
     assert all(claims.measured.str.len() > 0)
@@ -422,6 +428,7 @@ def test_study_outputs(executed):
     assert set(time.model) == set(models)
     verdicts = {"reproduced", "partly", "not reproduced", "undecided", "not testable"}
     assert set(rows.robot) == {"panda"} and set(rows.reproduced) <= verdicts
+    assert (rows.effect == rows.reproduced).all() and (rows.number == "n/a").all()  # no paper number
     assert ((rows.reproduced.isin(["undecided", "not testable"])) == (rows.settled == "no")).all()
     assert (rows.paper_in_ci == "n/a").all()  # the study's rules compare effects, not the paper's numbers
     assert (rows[rows.reproduced == "not testable"].direction == "n/a").all()
@@ -429,7 +436,7 @@ def test_study_outputs(executed):
     assert not rows.measured.str.contains(r"\bnan\b").any()
     assert (rows.n_users.astype(int) == settings["participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
-    assert rows.note.str.match(r"Effect: (SA (raises|lowers)|LA\+SA|no )").all()  # the effect in words
+    assert rows.note.str.contains(r"Measured effect: (SA (raises|lowers)|LA\+SA|no )").all()  # in words
     assert {f"study.h1@{m}" for m in members[1:]} <= set(rows.id)  # hindsight_point and grasp_set
     book = (executed / "notebooks" / "11_eating_study.ipynb").read_text()
     assert "LA+SA finished" in book and "H1 effect (10)" in book  # the SA readings side by side

@@ -1,0 +1,87 @@
+"""Every row of the committed claims table: its note's words and numbers are the row's own.
+
+A note is generated from its row (lasa.evidence.claims.note_lead, lasa.evidence.verdicts.assess,
+sequential and the study's rows); these checks read the note back and hold it against the row's
+columns, so a sentence that contradicts its own row fails here.
+"""
+
+import math
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from lasa.evidence.claims import note_lead, paper_numbers_of, words_text
+from lasa.evidence.decision import NOT_TESTABLE, NUMBER_WORDS, UNDECIDED, WORDS
+from lasa.evidence.findings import stated_numbers
+
+ROOT = Path(__file__).resolve().parents[1]
+TABLE = pd.read_csv(ROOT / "figures" / "claims.csv", dtype=str, keep_default_na=False)
+ROWS = {(r.id, r.robot): r for r in TABLE.itertuples(index=False)}
+_READINGS = re.compile(r"Readings with other words(?: \(at \d+ users\))?: (.*?)\. (?=[A-Z0-9])")
+_READING = re.compile(r"([\w+]+) \((effect [^()]*)\)")
+
+
+def _close(text: str, number: str) -> bool:
+    """Whether ``text`` (a note's ``.3g``) and ``number`` (the column's ``.4g``) are one number."""
+    a, b = float(text), float(number)
+    return math.isclose(a, b, rel_tol=5e-3, abs_tol=1e-9) or (a == b)
+
+
+@pytest.fixture(params=sorted(ROWS), ids=lambda k: f"{k[0]}-{k[1]}")
+def row(request):
+    return ROWS[request.param]
+
+
+def test_the_note_begins_with_the_rows_two_words(row):
+    assert row.effect in WORDS
+    assert all(w in NUMBER_WORDS for w in row.number.split("; "))
+    assert row.note.startswith(note_lead(row.effect, row.number, paper_numbers_of(row.id)))
+
+
+def test_each_paper_numbers_word_is_the_number_columns(row):
+    described = [part.split(": ", 1)[1].split(", ", 1)[0] for part in row.paper_numbers.split("; ") if part]
+    assert "; ".join(described) == (row.number if described else "")
+
+
+def test_the_intervals_the_note_states_are_the_rows(row):
+    numbers = dict(stated_numbers(row.note))
+    if row.figure == "study":
+        if row.effect != NOT_TESTABLE:
+            low, high = re.search(r"95% interval of the effect \[(\S+), (\S+)\]", row.note).groups()
+            assert _close(low, row.ci_low) and _close(high, row.ci_high)
+        return
+    first = next(iter(numbers.values()))  # the rule's first quantity: the row's value
+    low, high = first.split("[", 1)[1].rstrip("]").split(", ")
+    assert _close(low, row.ci_low) and _close(high, row.ci_high)
+
+
+def test_settled_and_undecided_sentences_follow_the_effect(row):
+    assert ("The effect settled at look" in row.note) <= (row.settled == "yes")
+    assert ("The effect is undecided at the cap" in row.note) <= (row.effect == UNDECIDED)
+    assert ("Undecided: " in row.note) == (row.effect == UNDECIDED)
+    assert (row.settled == "yes") == (row.effect not in (UNDECIDED, NOT_TESTABLE))
+    if row.effect == NOT_TESTABLE:
+        assert f"{NOT_TESTABLE} (" in row.note or f"{NOT_TESTABLE} (" in row.measured
+
+
+def test_the_readings_a_note_names_have_the_words_it_gives_them(row):
+    found = _READINGS.search(row.note)
+    if "@" in row.id:
+        return
+    named = dict(_READING.findall(found.group(1))) if found else {}
+    for reading, words in named.items():
+        other = ROWS[(f"{row.id}@{reading}", row.robot)]
+        assert words == words_text(other.effect, other.number, paper_numbers_of(row.id))
+    if "Every other reading gives the same words" in row.note or "Every reading gives" in row.note:
+        assert not named
+        own = words_text(row.effect, row.number, paper_numbers_of(row.id))
+        members = [o for (cid, rb), o in ROWS.items() if rb == row.robot and cid.startswith(row.id + "@")]
+        single = [o for o in members if "+" not in o.id.split("@", 1)[1]]
+        assert all(words_text(o.effect, o.number, paper_numbers_of(row.id)) == own for o in single)
+
+
+def test_no_hand_written_reason_is_left_in_a_note():
+    assert not TABLE.note.str.contains("Likely reason").any()
+    assert not TABLE.note.str.contains("Joint-space distances").any()
