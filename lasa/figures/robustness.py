@@ -104,6 +104,8 @@ COLUMNS = (
     "pilot",
     "setting",
     "users",
+    "effect",
+    "number",
 )
 DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
@@ -242,7 +244,9 @@ def _rows(claims: list[Claim], cell: Cell, member: str, robot: str, config: Conf
             "action_scale": cell.action_scale,
             "seed": config.seed,
             "measured": c.value,
-            "reproduced": criteria(c)["reproduced"],  # the claims table's word
+            "reproduced": criteria(c)["reproduced"],  # the claims table's one word
+            "effect": criteria(c)["effect"],  # and its two: the claim's shape, each paper number's word
+            "number": criteria(c)["number"],
             "settled": c.settled,
             "ci_low": c.ci_low,
             "ci_high": c.ci_high,
