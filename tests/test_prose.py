@@ -15,6 +15,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -242,3 +243,72 @@ def test_readme_final_error() -> None:
     for robot in ("planar5", "panda"):
         assert _row("sim1.final_error", robot).reproduced == "not reproduced"
         assert _row("sim1.entropy_sa", robot).reproduced == "not reproduced"
+
+
+@pytest.fixture(scope="module")
+def nb05() -> str:
+    return _shows("05_changing_goals.ipynb")
+
+
+@functools.cache
+def _sim2(robot: str, method: str) -> pd.DataFrame:
+    """The headline member's (``point``) sim2 rows of one robot and method."""
+    from lasa.evidence.verdicts import member_frame
+
+    frame = member_frame(pd.read_csv(FIGURES / "sim2_change_of_mind.csv"), "point")
+    return frame[(frame.robot == robot) & (frame.method == method)]
+
+
+def _success(robot: str, method: str) -> pd.Series:
+    return _sim2(robot, method).groupby("change_step").success.mean()
+
+
+def test_05_planar5_la_sa_runs_out_of_time(nb05: str) -> None:
+    from lasa.figures import sim2
+    from lasa.world.robot import load_robot
+    from lasa.world.task import make_cup_task
+
+    methods = ("LA", "LA+SA", "LA+SA+Entropy")
+    conf = pd.concat([_sim2("planar5", m) for m in methods]).groupby(["method", "change_step"]).confidence
+    assert (conf.median().round(6) >= 0.999997).all() and (conf.median()["LA+SA"].round(6) == 0.999998).all()
+    assert "true cup is 0.999998 at every $N$ under LA+SA (at least 0.999997 under every method)" in nb05
+    rate = _success("planar5", "LA+SA")
+    assert (rate[rate.index <= 40] == 1.0).all() and "from 100% ($N \\le 40$)" in nb05
+    falls = ", ".join(_pct(rate[n]) for n in (60, 80, 100)) + f" and {_pct(rate[120])}"
+    assert f"to {falls} at $N$ = 60, 80, 100 and 120" in nb05
+    # none ends within 0.1 of the wrong cup's grasp: |s - s*(wrong)| >= |s*(g*) - s*(wrong)| - error
+    task = make_cup_task(load_robot("planar5"))
+    rows = _sim2("planar5", "LA+SA")
+    lost = rows[~rows.success.astype(bool)]
+    goal, theta = lost.goal.to_numpy(), lost.theta.to_numpy()
+    apart = np.linalg.norm(task.target(goal, theta) - task.target(1 - goal, theta), axis=-1)
+    assert (apart / task.goal_distance - lost.final_error > 0.1).all()
+    last = lost[lost.change_step == 120].final_error
+    assert f"errors run from {last.min():.2f} to {last.max():.2f} (median {last.median():.2f})" in nb05
+    horizon = sim2.Config().horizon
+    assert horizon == 270 and "(the horizon is 270" in nb05 and "the 170 and 150 left" in nb05
+    assert f"falls to {_pct(_success('planar5', 'LA')[120])} at\n$N = 120$".replace("\n", " ") in nb05
+    entropy = _success("planar5", "LA+SA+Entropy")
+    assert f"LA+SA+Entropy stays at {_pct(entropy.min())[:-1]}–{_pct(entropy.max())}" in nb05
+
+
+def test_05_panda_la_sa_keeps_the_wrong_cup(nb05: str) -> None:
+    conf = _sim2("panda", "LA+SA").groupby("change_step").confidence.median()
+    assert (conf[conf.index >= 20] < 0.001).all() and "in the true cup is below 0.001" in nb05
+    rate = _success("panda", "LA+SA")
+    assert f"success falls from {_pct(rate[20])} to {_pct(rate[120])} at $N = 120$" in nb05
+
+
+def test_05_the_panda_la_spike_at_n_20(nb05: str) -> None:
+    from lasa.figures import sim2
+
+    at20 = _sim2("panda", "LA")
+    at20 = at20[at20.change_step == 20]
+    assert len(at20) == 60 and not at20.success.any() and "(0 of 60; final" in nb05
+    err = at20.final_error
+    assert f"error {err.min():.2f} to {err.max():.2f}, mean {err.mean():.2f})" in nb05
+    rate = _success("panda", "LA")
+    assert f"while {_pct(rate[40])} do at $N = 40$" in nb05
+    assert f"at least {_pct(rate[rate.index >= 60].min())} from $N = 60$ on" in nb05
+    assert sim2.Config().horizon - 20 == 250 and "250 steps are left" in nb05
+    assert at20.confidence.max() <= 0.00045 and "is at most 0.00045" in nb05

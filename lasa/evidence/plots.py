@@ -9,18 +9,20 @@ figure's own panels live in its module of :mod:`lasa.figures`.
 from __future__ import annotations
 
 import textwrap
+from collections.abc import Sequence
 from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 import seaborn as sns
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Circle, Rectangle
+from matplotlib.patches import Circle, Patch, Rectangle
 from matplotlib.text import Text
 
 from lasa.method.dataset import Demonstrations
@@ -37,6 +39,12 @@ __all__ = [
     "frame_around",
     "is_planar",
     "method_lineplot",
+    "band_handle",
+    "legend_below",
+    "paper_handle",
+    "probability_axis",
+    "users_per_point",
+    "users_text",
     "paper_line",
     "paper_note",
     "paper_point",
@@ -188,8 +196,12 @@ def robot_rows(
     return fig, [(name, table[table.robot == name], row) for name, row in zip(present, axes, strict=True)]
 
 
-def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None) -> Axes:
-    """``y`` against ``x`` per method, in the methods' colours, with 95% bootstrap bands."""
+def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None, level: float = 0.95) -> Axes:
+    """``y`` against ``x`` per method, in the methods' colours, with bootstrap bands at ``level``.
+
+    Each band is the percentile interval of the mean over the rows at that ``x`` (one row per
+    user in the sims), 1000 resamples from a fixed seed.
+    """
     ax = _ax(ax)
     methods = [m for m in METHOD_COLORS if m in set(frame.method)]
     sns.lineplot(
@@ -199,14 +211,67 @@ def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None)
         hue="method",
         hue_order=methods,
         palette=METHOD_COLORS,
-        errorbar=("ci", 95),
-        n_boot=500,
+        errorbar=("ci", 100.0 * level),
+        n_boot=1000,
         seed=0,
         ax=ax,
         marker="o" if frame[x].nunique() < 30 else None,
     )
     ax.legend(frameon=False, title=None)
     return ax
+
+
+def band_handle(level: float) -> Patch:
+    """A legend entry that says what the bands are: bootstrap intervals over users at ``level``."""
+    return Patch(color="0.5", alpha=0.3, lw=0, label=f"bands: {100 * level:.4g}% bootstrap CI over users")
+
+
+def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize: float = 7.5) -> None:
+    """The axes' legend, plus ``extra`` entries, below the axes: it covers no data.
+
+    ``tight_layout`` makes room for it (a legend counts in the axes' extent).
+    """
+    handles, labels = ax.get_legend_handles_labels()
+    handles += list(extra)
+    labels += [h.get_label() for h in extra]
+    ax.legend(
+        handles,
+        labels,
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.17),
+        ncol=ncol,
+        frameon=False,
+        fontsize=fontsize,
+    )
+
+
+PROBABILITY_LIMITS = (-0.02, 1.02)  # a probability axis: [0, 1] and a margin for the markers [-]
+
+
+def probability_axis(ax: Axes) -> None:
+    """Limit ``ax``'s y axis to :data:`PROBABILITY_LIMITS`."""
+    ax.set_ylim(*PROBABILITY_LIMITS)
+
+
+def users_per_point(
+    table: pd.DataFrame, keys: Sequence[str], unit: str = "seed"
+) -> dict[str, tuple[int, int]]:
+    """Per robot, the fewest and the most distinct users (``unit``) over the groups of ``keys``."""
+    counts = table.groupby(["robot", *keys])[unit].nunique()
+    return {r: (int(counts[r].min()), int(counts[r].max())) for r in robots_present(table)}
+
+
+def users_text(table: pd.DataFrame, keys: Sequence[str], per: str = "point") -> str:
+    """A title's N: ``"150 users per point"``, or per robot ``"users per point: planar5 60, panda 150"``.
+
+    The N is that of the rows drawn (:func:`users_per_point` over ``keys``); a range ``60–150``
+    where a robot's groups differ.
+    """
+    counts = users_per_point(table, keys)
+    text = {r: f"{lo}" if lo == hi else f"{lo}–{hi}" for r, (lo, hi) in counts.items()}
+    if len(set(text.values())) == 1:
+        return f"{next(iter(text.values()))} users per {per}"
+    return f"users per {per}: " + ", ".join(f"{r} {n}" for r, n in text.items())
 
 
 # the paper's numbers and orderings, drawn the same way in every figure: black, dotted, labelled
@@ -219,6 +284,11 @@ def paper_line(ax: Axes, y: float, label: str, **style: Any) -> Line2D:
     ``style`` overrides :data:`PAPER_STYLE` (e.g. ``ls="--"``).
     """
     return ax.axhline(y, label=label, **{**PAPER_STYLE, **style})
+
+
+def paper_handle(text: str) -> Line2D:
+    """A legend entry in the paper's style (:data:`PAPER_STYLE`) for an ordering the paper states."""
+    return Line2D([], [], label=text, **PAPER_STYLE)
 
 
 def paper_slope(ax: Axes, slope: float, label: str, x_max: float = 1.0, **style: Any) -> Line2D:

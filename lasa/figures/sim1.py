@@ -7,19 +7,33 @@ state error and the time to reach s*, per beta. Notebook ``04_fixed_expertise``.
 from __future__ import annotations
 
 import dataclasses
+import textwrap
 from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.transforms import blended_transform_factory
 
 from lasa.base.config import ControlConfig, NonNegative, Positive, PositiveInt
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
-from lasa.evidence.plots import METHOD_COLORS, method_lineplot, paper_point, robot_rows, wrap_to
+from lasa.evidence.plots import (
+    METHOD_COLORS,
+    band_handle,
+    legend_below,
+    method_lineplot,
+    paper_handle,
+    paper_point,
+    robot_rows,
+    users_text,
+    wrap_to,
+)
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     USER,
@@ -380,42 +394,93 @@ METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time 
 # the paper's time ratio LA / LA+SA at these betas (Panda) and the rule's tolerance, from its rule [-]
 PAPER_RATIOS = {float(p.where.split("=")[1]): p.value for p in rule("sim1.time_ratio").paper}
 RATIO_TOLERANCE = rule("sim1.time_ratio").paper[0].tolerance
+LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
+PAPER_FINAL_ERROR = "paper: LA+SA below LA at every β"  # Fig. sim1 (Sec. V-A), rule sim1.final_error
+OPEN = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "zorder": 6}  # a censored point's marker
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: a metric against beta per method, with 95% bootstrap bands.
+    """One panel: a metric against beta per method, with bootstrap bands at the verdicts' level.
 
-    Faint vertical lines mark the betas of the paper's time ratios (75 and 1000).
+    Faint vertical lines mark the betas of the paper's time ratios (75 and 1000). The
+    final-error panel states the paper's ordering and marks the betas where LA+SA's mean is
+    below LA's (the verdict's share); the time panel draws a point open where episodes were
+    cut at the horizon (:func:`_mark_censored`). The legend is below the axes.
 
     Args:
-        frame: One robot's rows (columns ``beta``, ``method`` and ``metric``).
+        frame: One robot's rows (columns ``beta``, ``method`` and ``metric``; ``completed``
+            for the time).
         metric: ``final_error`` or ``time``.
         ax: Axes to draw on.
     """
-    ax = method_lineplot(frame, "beta", metric, ax)
+    ax = method_lineplot(frame, "beta", metric, ax, level=LEVEL)
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     for i, beta in enumerate(PAPER_RATIOS):
         label = "β = 75, 1000: the paper's time ratios" if i == 0 else None
         ax.axvline(beta, color="0.8", lw=0.8, zorder=0, label=label)
-    ax.legend(frameon=False, fontsize=8)
+    extra: list[Artist] = [band_handle(LEVEL)]
+    if metric == "final_error" and {"LA", "LA+SA"} <= set(frame.method):
+        _mark_lower(frame, ax)
+        extra.append(paper_handle(PAPER_FINAL_ERROR))
+    if metric == "time" and "completed" in frame:
+        extra += _mark_censored(frame, ax)
+    legend_below(ax, extra)
     return ax
 
 
+def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
+    """Mark, at the top of ``ax``, each beta where LA+SA's mean final error is below LA's (labelled)."""
+    err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
+    lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
+    top = blended_transform_factory(ax.transData, ax.transAxes)
+    label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
+    (line,) = ax.plot(
+        lower, np.full(len(lower), 0.97), "v", color=METHOD_COLORS["LA+SA"], ms=6, transform=top, label=label
+    )
+    return line
+
+
+def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
+    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry.
+
+    A cut episode counts the horizon as its time, so such a mean is a lower bound.
+    """
+    stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
+    cut = stats[stats.done < 1.0]
+    for method, part in cut.groupby(level="method"):
+        ax.plot(part.index.get_level_values("beta"), part.time, mec=METHOD_COLORS[str(method)], **OPEN)
+    if cut.empty:
+        return []
+    horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
+    label = (
+        f"open: episodes cut at the horizon ({horizon} steps) count {horizon}, so the mean is a "
+        f"lower bound; completion there {cut.done.min():.0%}–{cut.done.max():.0%}"
+    )
+    return [Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN)]
+
+
 def time_ratio_band(
-    frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000, seed: int = 0
+    frame: pd.DataFrame,
+    a: str = "LA",
+    b: str = "LA+SA",
+    n_boot: int = 1000,
+    seed: int = 0,
+    level: float = LEVEL,
 ) -> pd.DataFrame:
-    """Mean time of ``a`` over mean time of ``b`` per beta, with a 95% percentile bootstrap interval.
+    """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at ``level``.
 
     ``ratio`` is the claims' number (each method's mean over its rows, :func:`_means`); the
     interval resamples the users (column ``seed``) present under both methods, with replacement,
-    ``n_boot`` times from a generator seeded by ``seed`` (the same band run after run).
+    ``n_boot`` times from a generator seeded by ``seed`` (the same band run after run). The
+    default level is the verdicts' (:data:`LEVEL`).
 
     Returns:
         One row per beta with both methods: ``beta``, ``ratio``, ``low``, ``high``.
     """
     rng = np.random.default_rng(seed)
+    tail = 50.0 * (1.0 - level)
     times = frame.pivot_table(index=["beta", USER], columns="method", values="time", aggfunc="mean")
     means = frame.groupby(["beta", "method"]).time.mean()
     rows = []
@@ -427,7 +492,7 @@ def time_ratio_band(
         if len(pair):
             pick = rng.integers(0, len(pair), (n_boot, len(pair)))
             boot = pair[pick, 0].mean(axis=1) / pair[pick, 1].mean(axis=1)
-            low, high = np.percentile(boot, [2.5, 97.5])
+            low, high = np.percentile(boot, [tail, 100.0 - tail])
         rows.append({"beta": beta, "ratio": means[beta, a] / means[beta, b], "low": low, "high": high})
     return pd.DataFrame(rows, columns=["beta", "ratio", "low", "high"])
 
@@ -437,15 +502,28 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
     The paper's 1.45 (beta = 75) and 1.30 (beta = 1000) are labelled stars, each with the
     +-0.15 that rule ``sim1.time_ratio`` accepts drawn faintly; the dashed line is ratio 1
-    (no difference). Our curve is :func:`time_ratio_band`'s.
+    (no difference). Our curve and its band at the verdicts' level are :func:`time_ratio_band`'s;
+    a ratio is drawn open where episodes of LA or LA+SA were cut at the horizon.
     """
     ax = plt.gca() if ax is None else ax
     band = time_ratio_band(frame)
     color = METHOD_COLORS["LA+SA"]
     ax.fill_between(
-        band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label="ours: 95% bootstrap CI"
+        band.beta,
+        band.low,
+        band.high,
+        color=color,
+        alpha=0.25,
+        lw=0,
+        label=f"ours: {100 * LEVEL:.4g}% bootstrap CI (the verdicts' level)",
     )
     ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
+    if "completed" in frame:
+        done = frame[frame.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()
+        cut = band[band.beta.map(done).lt(1.0).to_numpy()]
+        if len(cut):
+            label = "open: some LA or LA+SA episodes cut at the horizon (their times are lower bounds)"
+            ax.plot(cut.beta, cut.ratio, mec=color, label=textwrap.fill(label, 60), **OPEN)
     ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
     for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
         tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
@@ -453,7 +531,7 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel("time ratio LA / LA+SA [-]")
-    ax.legend(frameon=False, fontsize=7)
+    legend_below(ax)
     return ax
 
 
@@ -465,7 +543,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
     table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 3, (16, 4.2))
+    fig, rows = robot_rows(table, 3, (16, 6.4))
     for name, part, row in rows:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
@@ -475,12 +553,9 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         row[1].set_title(f"{name}: time to reach s*")
         paper = "\n(the paper's numbers are its 7-DoF Panda's)" if name != "panda" else ""
         row[2].set_title(f"{name}: time ratio LA / LA+SA{paper}")
-    n = int(table.groupby(["robot", "method", "beta"]).size().max())
+    n = users_text(table, ["method", "beta"])
     fig.suptitle(
-        wrap_to(
-            f"Fig. sim1: users of fixed expertise, {n} users per point, assistance: {assistance}",
-            fig.get_figwidth(),
-        )
+        wrap_to(f"Fig. sim1: users of fixed expertise, {n}, assistance: {assistance}", fig.get_figwidth())
     )
     fig.tight_layout()
     return fig

@@ -8,9 +8,11 @@ Without the entropy term (LA+SA) the paper finds them trapped as N grows; with i
 from __future__ import annotations
 
 import dataclasses
+import textwrap
 
 import numpy as np
 import pandas as pd
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
@@ -24,7 +26,17 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
-from lasa.evidence.plots import method_lineplot, paper_note, robot_rows, wrap_to
+from lasa.evidence.plots import (
+    METHOD_COLORS,
+    band_handle,
+    legend_below,
+    method_lineplot,
+    paper_handle,
+    probability_axis,
+    robot_rows,
+    users_text,
+    wrap_to,
+)
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     USER,
@@ -46,7 +58,19 @@ from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "plot_metric"]
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "Config",
+    "run",
+    "claims",
+    "boot_values",
+    "plot",
+    "plot_metric",
+    "after_the_change",
+    "failures",
+    "escape_times",
+]
 
 NAME = "sim2_change_of_mind"
 COLUMNS = (
@@ -227,50 +251,164 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     }
 
 
-METRIC_LABELS = {"final_error": "final state error (normalised)", "confidence": "confidence b(g*) at the end"}
+LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
+METRIC_LABELS = {
+    "final_error": "final state error (normalised)",
+    "success": "success: share that reach the true cup",
+    "confidence": "confidence b(g*) at the end",
+}
+PROBABILITIES = ("success", "confidence")  # panels of a share or a probability: a [0, 1] axis
 
 
-# what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled note
+# what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled legend entry
 PAPER_SHAPES = {
     "final_error": "paper: LA+SA's error grows with N; LA+SA+Entropy stays low",
+    "success": "paper: LA+SA users cannot escape the wrong cup as N grows; LA+SA+Entropy users switch",
     "confidence": "paper: LA+SA's confidence in the true cup falls with N; LA+SA+Entropy's stays high",
 }
+# the success thresholds of the verdicts at the largest N: (rule, its number, the method it reads)
+SUCCESS_RULES = (
+    ("sim2.sa_trapped", "success_sa", "LA+SA"),
+    ("sim2.entropy_escapes", "success_entropy", "LA+SA+Entropy"),
+)
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: final error or confidence in the true cup against the change step N.
+    """One panel: final error, success share or confidence in the true cup against the change step N.
 
-    The paper's shape (:data:`PAPER_SHAPES`) is stated in a note above the curves.
+    Bands are bootstrap intervals over users at the verdicts' level (:data:`LEVEL`). The
+    success share is the verdicts' number (``success``: the final error within the config's
+    tolerance of s*); its panel marks the rules' thresholds at the largest N
+    (:func:`_mark_thresholds`). A share or probability is drawn on [0, 1]. The paper's shape
+    (:data:`PAPER_SHAPES`) is a legend entry; the legend is below the axes.
     """
-    ax = method_lineplot(frame, "change_step", metric, ax)
+    if metric == "success":
+        frame = frame.assign(success=frame.success.astype(float))
+    ax = method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
+    if metric == "success":
+        _mark_thresholds(ax, int(frame.change_step.max()))
+    if metric in PROBABILITIES:
+        probability_axis(ax)
+    extra: list[Artist] = [band_handle(LEVEL)]
     if metric in PAPER_SHAPES:
-        paper_note(ax, PAPER_SHAPES[metric], loc="upper center", width=44)
-        ax.set_ylim(top=ax.get_ylim()[1] + 0.3 * np.ptp(ax.get_ylim()))  # room for the note
+        extra.append(paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
+    legend_below(ax, extra)
     return ax
 
 
+def _mark_thresholds(ax: Axes, n_max: int) -> None:
+    """Short dashed marks at the largest N: each success threshold of :data:`SUCCESS_RULES`, labelled."""
+    for rule_id, name, method in SUCCESS_RULES:
+        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}.get(name, ())
+        for i, level in enumerate(limits):
+            label = f"{rule_id}: {method}'s threshold at N = {n_max}" if i == 0 else None
+            xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
+            ax.plot(xs, [level, level], "--", color=METHOD_COLORS[method], lw=1.5, label=label)
+
+
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim2: one row per robot present, final error and confidence against N.
+    """Fig. sim2: one row per robot present: final error, success share and confidence against N.
 
     Args:
         table: Rows of every robot and member.
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
     table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 2, (11, 3.8))
+    fig, rows = robot_rows(table, 3, (16, 5.6))
     for name, part, row in rows:
-        plot_metric(part, "final_error", ax=row[0])
-        plot_metric(part, "confidence", ax=row[1])
+        for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):
+            plot_metric(part, metric, ax=ax)
         row[0].set_title(f"{name}: final state error")
-        row[1].set_title(f"{name}: confidence in the true cup")
-    n = int(table.groupby(["robot", "method", "change_step"]).size().max())
+        row[1].set_title(f"{name}: success (the verdicts' number)")
+        row[2].set_title(f"{name}: confidence in the true cup")
+    n = users_text(table, ["method", "change_step"])
     fig.suptitle(
-        wrap_to(
-            f"Fig. sim2: users who change their mind, {n} users per point, assistance: {assistance}",
-            fig.get_figwidth(),
-        )
+        wrap_to(f"Fig. sim2: users who change their mind, {n}, assistance: {assistance}", fig.get_figwidth())
     )
     fig.tight_layout()
     return fig
+
+
+STILL = 0.01  # an arm that moves less than this (normalised) in its last STILL_STEPS steps stands still [-]
+STILL_STEPS = 50  # [steps]
+
+
+def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, success: float) -> pd.DataFrame:
+    """Per episode, what happens after the change of mind at step N: why a user does or does not succeed.
+
+    Args:
+        frame: :func:`run`'s rows of the episodes in ``traj`` (the first look), in its order.
+        traj: Their trajectories.
+        task: The goal task.
+        success: The normalised final error that counts as success (``Config.success``).
+
+    Returns:
+        ``frame``'s columns plus ``steps_left`` (the horizon minus N), ``away_at_n`` (the
+        distance from home at step N), ``belief_at_n`` (b(g*) at step N), ``turn`` (steps after N
+        until b(g*) first exceeds 0.5, NaN if never), ``reach`` (steps after N until the error
+        first drops to ``success``, NaN if never) and ``still`` (whether the arm moved less than
+        :data:`STILL` in its last :data:`STILL_STEPS` steps). Distances over the goal distance.
+    """
+    n_steps, goal = len(traj.states) - 1, frame.goal.to_numpy()
+    rows = np.arange(len(frame))
+    states, change = traj.states, frame.change_step.to_numpy()
+    target = task.target(goal, frame.theta.to_numpy())
+    error = normalized_error(states, target[None], task.goal_distance)  # (T+1, U)
+    belief = traj.beliefs[:, rows, goal]  # (T+1, U)
+    t = np.arange(n_steps + 1)[:, None]
+    after = t >= change[None]
+    moved = np.linalg.norm(states[-1] - states[-1 - min(STILL_STEPS, n_steps)], axis=-1)
+    return frame.assign(
+        steps_left=n_steps - change,
+        away_at_n=np.linalg.norm(states[change, rows] - task.start, axis=-1) / task.goal_distance,
+        belief_at_n=belief[change, rows],
+        turn=_first(after & (belief > 0.5)) - change,
+        reach=_first(after & (error <= success)) - change,
+        still=moved / task.goal_distance < STILL,
+    )
+
+
+def _first(mask: np.ndarray) -> np.ndarray:
+    """Per column of ``mask`` (T, U), the first row that is True; NaN where none is."""
+    return np.where(mask.any(axis=0), mask.argmax(axis=0), np.nan)
+
+
+def failures(after: pd.DataFrame) -> list[str]:
+    """One line per (method, N) where under half the users succeed: what the episodes show.
+
+    ``after`` is :func:`after_the_change`'s; medians over the users of the point, an event that
+    never happens counting as later than the horizon.
+    """
+    lines = []
+    for (method, n), part in after.groupby(["method", "change_step"]):
+        if part.success.mean() >= 0.5:
+            continue
+        lost, left = part[~part.success.astype(bool)], int(part.steps_left.iloc[0])
+        lines.append(
+            f"{method}, N = {n}: {part.success.mean():.0%} succeed, {left} steps left. "
+            f"At step N the arm is {part.away_at_n.median():.2f} from home, "
+            f"b(g*) = {part.belief_at_n.median():.1e}; b(g*) passes 0.5 after {_median(part.turn, left)} "
+            f"steps ({part.turn.isna().mean():.0%} never), the error reaches the tolerance after "
+            f"{_median(part.reach, left)}. The unsuccessful end at error {lost.final_error.median():.2f} "
+            f"with b(g*) = {lost.confidence.median():.6f}, {lost.still.mean():.0%} standing still."
+        )
+    return lines
+
+
+def escape_times(after: pd.DataFrame) -> pd.DataFrame:
+    """Median steps after N until b(g*) > 0.5 (``turn``) and until success (``reach``), per method and N.
+
+    ``after`` is :func:`after_the_change`'s; an event that never happens counts as later than
+    the horizon (``inf`` where it is the median).
+    """
+    times = after.fillna({"turn": np.inf, "reach": np.inf})
+    out = times.groupby(["method", "change_step"])[["turn", "reach"]].median()
+    return out.join(after.groupby(["method", "change_step"])[["steps_left", "success"]].mean())
+
+
+def _median(values: pd.Series, left: int) -> str:
+    """The median of ``values`` (NaN: never) as a whole number, or "more than ``left``"."""
+    median = values.fillna(np.inf).median()
+    return f"more than {left}" if not np.isfinite(median) else f"{median:.0f}"

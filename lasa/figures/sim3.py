@@ -17,7 +17,15 @@ from matplotlib.figure import Figure
 from lasa.base.config import ControlConfig, Positive, PositiveInt
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import normalized_error
-from lasa.evidence.plots import method_lineplot, paper_note, robot_rows, wrap_to
+from lasa.evidence.plots import (
+    band_handle,
+    legend_below,
+    method_lineplot,
+    paper_handle,
+    robot_rows,
+    users_text,
+    wrap_to,
+)
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     USER,
@@ -191,19 +199,26 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 
 
 PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
+LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
-    """One panel: the error over time of one kind of learner, per method, with 95% bands.
+    """One panel: the error over time of one kind of learner, per method, with bands at the verdicts' level.
 
-    The paper's ordering (:data:`PAPER_SHAPE`) is stated in a note at the upper right.
+    The paper's ordering (:data:`PAPER_SHAPE`) is a legend entry; the legend, below the axes,
+    gives each method's mean error over the episode, the number the verdict compares.
     """
     part = frame[frame.learner == learner]
-    ax = method_lineplot(part, "t", "error", ax)
+    ax = method_lineplot(part, "t", "error", ax, level=LEVEL)
     ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
     ax.set_xlabel("time step t")
     ax.set_ylabel("state error (normalised)")
-    paper_note(ax, PAPER_SHAPE, loc="upper right", width=36)
+    mean = part.groupby(["method", USER]).error.mean().groupby("method").mean()
+    handles, _ = ax.get_legend_handles_labels()
+    for handle in handles:
+        if handle.get_label() in mean:
+            handle.set_label(f"{handle.get_label()}: mean over the episode {mean[handle.get_label()]:.3f}")
+    legend_below(ax, [band_handle(LEVEL), paper_handle(PAPER_SHAPE)])
     return ax
 
 
@@ -215,16 +230,12 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
     table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 2, (11, 3.8))
+    fig, rows = robot_rows(table, 2, (11, 5.2))
     for name, part, row in rows:
         for ax, learner in zip(row, LEARNERS, strict=True):
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
-    n = int(table.groupby(["robot", "method", "learner", "t"]).size().max())
-    fig.suptitle(
-        wrap_to(
-            f"Fig. sim3: users who learn, {n} users per curve, assistance: {assistance}", fig.get_figwidth()
-        )
-    )
+    n = users_text(table, ["method", "learner", "t"], per="curve")
+    fig.suptitle(wrap_to(f"Fig. sim3: users who learn, {n}, assistance: {assistance}", fig.get_figwidth()))
     fig.tight_layout()
     return fig
