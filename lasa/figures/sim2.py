@@ -266,19 +266,18 @@ PAPER_SHAPES = {
     "success": "paper: LA+SA users cannot escape the wrong cup as N grows; LA+SA+Entropy users switch",
     "confidence": "paper: LA+SA's confidence in the true cup falls with N; LA+SA+Entropy's stays high",
 }
-# the success thresholds of the verdicts at the largest N: (rule, its number, the method it reads)
-SUCCESS_RULES = (
-    ("sim2.sa_trapped", "success_sa", "LA+SA"),
-    ("sim2.entropy_escapes", "success_entropy", "LA+SA+Entropy"),
-)
+# the success thresholds of the verdicts at the largest N: (rule, its number, the method it reads);
+# sim2.sa_trapped rests on the final error and the confidence, the other two panels
+SUCCESS_RULES = (("sim2.entropy_escapes", "success_entropy", "LA+SA+Entropy"),)
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
     """One panel: final error, success share or confidence in the true cup against the change step N.
 
     Bands are bootstrap intervals over users at the verdicts' level (:data:`LEVEL`). The
-    success share is the verdicts' number (``success``: the final error within the config's
-    tolerance of s*); its panel marks the rules' thresholds at the largest N
+    success share is sim2.entropy_escapes' number (``success``: the final error within the
+    config's tolerance of s*); sim2.sa_trapped's are the growth of the final error and the drop of
+    the confidence from the smallest N to the largest. The success panel marks the rule's thresholds
     (:func:`_mark_thresholds`). A share or probability is drawn on [0, 1]. The paper's shape
     (:data:`PAPER_SHAPES`) is a legend entry; the legend is below the axes.
     """
@@ -301,7 +300,7 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
 def _mark_thresholds(ax: Axes, n_max: int) -> None:
     """Short dashed marks at the largest N: each success threshold of :data:`SUCCESS_RULES`, labelled."""
     for rule_id, name, method in SUCCESS_RULES:
-        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}.get(name, ())
+        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}[name]
         for i, level in enumerate(limits):
             label = f"{rule_id}: {method}'s threshold at N = {n_max}" if i == 0 else None
             xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
@@ -321,7 +320,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):
             plot_metric(part, metric, ax=ax)
         row[0].set_title(f"{name}: final state error")
-        row[1].set_title(f"{name}: success (the verdicts' number)")
+        row[1].set_title(f"{name}: success (sim2.entropy_escapes' number)")
         row[2].set_title(f"{name}: confidence in the true cup")
     n = users_text(table, ["method", "change_step"])
     fig.suptitle(
