@@ -76,12 +76,28 @@ def test_04_time_ratio_at_both_rationalities(nb04: str) -> None:
     assert "For noisy users (β = 75) the time ratio's interval contains 1 on both robots" in nb04
     assert "even at 150 users per point" in nb04
     assert "For near-optimal users (β = 1000) assistance shortens the reach on both robots" in nb04
-    for robot in ("planar5", "panda"):
+    assert "The claim's effect (LA slower at both β) is therefore *undecided*" in nb04
+    assert "the paper's 1.45 ± 0.15 at β = 75 is *out* on both robots" in nb04
+    assert "1.30 ± 0.15 at β = 1000 is *in* on planar5 and *undecided* on the Panda" in nb04
+    for robot, at_1000 in (("planar5", "in"), ("panda", "undecided")):
         row = _row("sim1.time_ratio", robot)
-        assert row.n_users == "150" and row.reproduced == "not reproduced"
+        assert row.n_users == "150" and row.effect == "undecided" and row.number == f"out; {at_1000}"
         _, low, high = _number("sim1.time_ratio", robot, "ratio_75")
         assert low < 1 < high, (robot, low, high)
         assert _number("sim1.time_ratio", robot, "ratio_1000")[1] > 1, robot
+    assert _number("sim1.time_ratio", "panda", "ratio_1000")[2] > 1.45  # crosses the band's edge
+
+
+def test_04_the_gap_is_not_the_papers(nb04: str) -> None:
+    gaps = [_number("sim1.gap_narrows", r, "error_gap_75") for r in ("planar5", "panda")]
+    assert all(high < 0 for _, _, high in gaps)  # LA+SA ends farther from s* at beta = 75
+    said = f"of {gaps[0][0]:.3f} on planar5 and {gaps[1][0]:.3f} on the Panda"
+    assert said.replace("-", "−") in nb04
+    for robot in ("planar5", "panda"):
+        assert _row("sim1.gap_narrows", robot).effect == "not reproduced"
+        _, low, high = _number("sim1.gap_narrows", robot, "time_gap_75")
+        assert low < 0 < high  # "the time gap's sign is unclear on both robots"
+    assert "At β = 75 the time gap's sign is unclear on both robots" in nb04
 
 
 def test_11_the_study_decoder_meets_the_two_half_rule(nb11: str, eating: pd.DataFrame) -> None:
@@ -248,6 +264,21 @@ def test_readme_final_error() -> None:
 @pytest.fixture(scope="module")
 def nb05() -> str:
     return _shows("05_changing_goals.ipynb")
+
+
+def test_05_both_parts_of_the_claim(nb05: str) -> None:
+    grow = [_number("sim2.sa_trapped", r, "error_growth") for r in ("planar5", "panda")]
+    drop = [_number("sim2.sa_trapped", r, "confidence_drop") for r in ("planar5", "panda")]
+    assert all(low > 0 for _, low, _ in grow + drop)  # both parts hold on both robots
+    assert f"grows by {grow[0][0]:.2f} on planar5 and {grow[1][0]:.2f} on the Panda" in nb05
+    assert f"falls by {drop[0][0]:.2f} and {drop[1][0]:.2f}: both parts hold on both robots" in nb05
+    frame = pd.read_csv(FIGURES / "sim2_change_of_mind.csv")
+    late = frame[(frame.robot == "planar5") & (frame.method == "LA+SA") & (frame.assistance == "point")]
+    late = late[late.change_step == late.change_step.max()]
+    assert f"because {_pct((late.confidence < 0.5).mean())} of the users at $N = 120$" in nb05
+    assert late.confidence.median() > 0.99  # "the median does not" fall
+    for robot in ("planar5", "panda"):
+        assert _row("sim2.sa_trapped", robot).effect == "reproduced"
 
 
 @functools.cache

@@ -301,7 +301,9 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim2.sa_trapped",
         "with LA+SA, a user who changes their mind late is stuck at the first goal",
         "final error grows, confidence falls with N",
-        "a confident belief makes the decoder's inputs all lead to the first cup",
+        "on the Panda the belief stays on the first cup, where the decoder offers no input towards the "
+        "true one; on planar5 it turns, but Eq. M2 pulls towards the first cup until it does, and late "
+        "changers run out of steps",
         "05_changing_goals",
         "What it shows, against the paper",
     ),
