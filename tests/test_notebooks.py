@@ -165,13 +165,21 @@ def test_claims_table(executed):
     assert not claims.duplicated(["id", "robot"]).any()
     claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
-    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
+    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 6}  # sim4: 3 claims, and 3 @joint_space
     rows = len(ASSISTANCE)  # the headline row (point) and one per other member, no copy of the headline
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n * rows for f, n in per_figure.items() for r in ROBOTS
     }
     sweep = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]
     head = claims[~claims.id.str.contains("@")]
+    # sim4's joint-space reading beside its headline: judged with it (the headline member, its users)
+    joint = claims[claims.id.str.contains("@joint_space") & (claims.assistance == "point")]
+    assert len(joint) == 3 * len(ROBOTS) and set(joint.id.str.split("@").str[1]) == {"joint_space"}
+    head_n = head.set_index(["id", "robot"]).n_users
+    assert all(
+        head_n[(i.split("@")[0], r)] == n
+        for i, r, n in zip(joint.id, joint.robot, joint.n_users, strict=True)
+    )
     assert set(head.assistance) == {"point"}
     assert (
         head.note.str.startswith("Settled at look") | head.note.str.startswith("Undecided at the cap")
@@ -181,8 +189,8 @@ def test_claims_table(executed):
     assert (
         head.note.str.startswith("Undecided at the cap") == (n == sweep["cap"]) & (head.settled == "no")
     ).all()
-    members = claims[claims.id.str.contains("@")]
-    assert (members.id.str.split("@").str[1] == members.assistance).all()
+    members = claims[claims.id.str.contains("@") & (claims.assistance != "point")]
+    assert (members.id.str.split("@").str[1].str.split("+").str[-1] == members.assistance).all()
     assert set(members.assistance) == set(ASSISTANCE) - {"point"}
     assert (members.n_users.astype(int) == sweep["users"]).all()  # the other readings: the first look
     assert set(claims.reproduced) <= {"reproduced", "partly", "not reproduced", "undecided"}

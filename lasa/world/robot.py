@@ -410,6 +410,13 @@ class Robot:
         lead = qs.shape[:-1]
         return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
 
+    def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors.
+
+        Meant for measures at the episodes' ends, not for the control loop (see :meth:`_site_frames`).
+        """
+        return self._site_frames(qs)
+
     def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
         """Grasp-site positions for a batch of joint vectors, shape (..., 3).
 
