@@ -165,16 +165,18 @@ def test_claims_table(executed):
     assert not claims.duplicated(["id", "robot"]).any()
     claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
-    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 6}  # sim4: 3 claims, and 3 @joint_space
+    # sim4: 3 claims and the straight line's @ee_line, each also @joint_space
+    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 8}
     rows = len(ASSISTANCE)  # the headline row (point) and one per other member, no copy of the headline
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n * rows for f, n in per_figure.items() for r in ROBOTS
     }
     sweep = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]
     head = claims[~claims.id.str.contains("@")]
-    # sim4's joint-space reading beside its headline: judged with it (the headline member, its users)
-    joint = claims[claims.id.str.contains("@joint_space") & (claims.assistance == "point")]
-    assert len(joint) == 3 * len(ROBOTS) and set(joint.id.str.split("@").str[1]) == {"joint_space"}
+    # sim4's readings (joint space, the gripper's line) beside its headline: judged with it (its users)
+    joint = claims[claims.id.str.contains("@") & (claims.assistance == "point")]
+    assert len(joint) == 5 * len(ROBOTS)
+    assert set(joint.id.str.split("@").str[1]) == {"joint_space", "ee_line", "ee_line+joint_space"}
     head_n = head.set_index(["id", "robot"]).n_users
     assert all(
         head_n[(i.split("@")[0], r)] == n
@@ -305,7 +307,7 @@ def test_sim4_outputs(executed):
         assert np.isfinite(part.error).all() and (part.error >= 0).all()
         # the farthest cup holds both mappings for every user
         far = part[part.distance == 1.0]
-        assert set(far.h) == {"grasp", "straight_line", "none"}
+        assert set(far.h) == {"grasp", "straight_line", "straight_line_ee", "none"}
         assert read_video(fig / f"new_goal_{robot}.mp4").shape[2] == 640
     assert (fig / "sim4_new_goals.png").stat().st_size > 10_000
 

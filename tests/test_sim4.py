@@ -169,9 +169,11 @@ def test_plot_shows_every_point_and_says_its_users():
 def test_map_geometry_on_planar5(task):
     config = sim4.Config(offsets=(0.08, 0.2))
     geo = map_geometry(task, config)
-    assert set(geo.index.get_level_values("h")) == {"grasp", "straight_line"}
-    # the grasp-to-grasp map is exact at the grasps up to its soft assignment; the straight line is not
+    assert set(geo.index.get_level_values("h")) == {"grasp", "straight_line", "straight_line_ee"}
+    # the grasp-to-grasp map is exact at the grasps up to its soft assignment, the gripper's line up
+    # to the IK; the joint-space straight line is not
     assert (geo.xs("grasp", level="h").misfit_m < 0.005).all()
+    assert (geo.xs("straight_line_ee", level="h").misfit_m < 0.002).all()
     line = geo.xs("straight_line", level="h")
     assert (line.misfit_m > 0.01).all() and line.misfit_m.is_monotonic_increasing
     assert (geo.branch_rad < 0.1).all() and (geo.margin_rad > 0).all()
@@ -185,13 +187,19 @@ def test_judged_rows_name_the_measure_then_the_member(model, task):
     )
     frame, outcome, _ = judge(sim4, model, task, task.robot.control, config)
     ids = {(c.id, c.assistance) for c in outcome.claims}
-    for name in ("straight_line_linear", "grasp_linear", "no_map_training_goal"):
+    for name in (
+        "straight_line_linear",
+        "grasp_linear",
+        "no_map_training_goal",
+        "straight_line_linear@ee_line",
+    ):
+        plain, reading = f"sim4.{name}", f"sim4.{name}{'+' if '@' in name else '@'}"
         assert {
-            (f"sim4.{name}", "point"),
-            (f"sim4.{name}@joint_space", "point"),
-            (f"sim4.{name}@grasp_set", "grasp_set"),
-            (f"sim4.{name}@joint_space+grasp_set", "grasp_set"),
+            (plain, "point"),
+            (f"{reading}joint_space", "point"),
+            (f"{reading}grasp_set", "grasp_set"),
+            (f"{reading}joint_space+grasp_set", "grasp_set"),
         } <= ids
-    assert len(ids) == 12 and all(c.id.count("@") <= 1 for c in outcome.claims)
+    assert len(ids) == 16 and all(c.id.count("@") <= 1 for c in outcome.claims)
     assert {"end_goal", "angle_error_deg", "error_joint"} <= set(frame.columns)
     assert set(frame.end_goal) <= {"new", "reference", "other"}

@@ -23,7 +23,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
 from lasa.figures.common import Decoders, as_decoders, episodes, members_of
 from lasa.method.decoder import ActionDecoder
-from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
+from lasa.method.newgoals import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
@@ -77,8 +77,8 @@ def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
     - ``margin_rad``: the least distance of the mapped grasps to a joint limit [rad] (negative:
       outside, where the robot would clip);
     - ``stretch``: ``1 + <g - s_0, g_hat - g> / (|g - s_0|^2 lambda_1)``, the factor by which the
-      map scales progress along the straight line (1: none; the Jacobian's smallest eigenvalue
-      there);
+      joint-space maps scale progress along the straight line (1: none; NaN for the gripper's
+      line, ``straight_line_ee``);
 
     and per new cup (the same for every kind): ``joint1_rad`` and ``joint_last_rad``, the largest
     difference of the first and the last joint between the new cup's and the training cup's
@@ -106,12 +106,16 @@ def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
             "grasp_margin_rad": float(np.minimum(new - robot.lower, robot.upper - new).min()),
         }
         for kind in config.maps:
-            cmap = ContextMap.for_task(big, task.n_goals, ref, kind)
+            cmap = context_map(big, task.n_goals, ref, kind)
             mapped = cmap.state(new)
             pos_m, rot_m = robot.grasp_frames(np.stack([mapped, old]))
             cosine = np.clip(np.einsum("ki,ki->k", rot_m[0][:, :, 2], rot_m[1][:, :, 2]), -1.0, 1.0)
             line = cmap.new_goal - cmap.start
-            shift = float(line @ (task.goals[ref] - cmap.new_goal)) / (float(line @ line) * cmap.saturation)
+            shift = np.nan  # the joint-space line's stretch; the gripper's line (TaskSpaceMap) has none here
+            if isinstance(cmap, ContextMap):
+                shift = float(line @ (task.goals[ref] - cmap.new_goal)) / (
+                    float(line @ line) * cmap.saturation
+                )
             rows.append(
                 {
                     **per_cup,
@@ -268,7 +272,7 @@ def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, 
     )
     with_map = {}
     for kind in config.maps:
-        mapped = MappedDecoder(sweep.decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
+        mapped = MappedDecoder(sweep.decoder, context_map(big, task.n_goals, config.ref_goal, kind))
         with_map[kind] = _rollout(sweep, mapped, big, users)
     plain = dataclasses.replace(users, goal=np.full(n, config.ref_goal))
     without = _rollout(sweep, sweep.decoder, task, plain)
