@@ -12,7 +12,14 @@ from lasa.base.errors import ConfigError, IKError
 from lasa.figures import sim4
 from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.blend import assistance
-from lasa.method.newgoals import MAP_KINDS, ContextMap, MappedDecoder, extend_task
+from lasa.method.newgoals import (
+    JOINT_KINDS,
+    ContextMap,
+    MappedDecoder,
+    TaskSpaceMap,
+    context_map,
+    extend_task,
+)
 from lasa.method.step import shared_autonomy_step
 from lasa.people.rollout import rollout
 from lasa.people.users import UserPopulation
@@ -49,7 +56,7 @@ def _duplicate(task, kind="grasp"):
     return ContextMap.for_task(dup, task.n_goals, REF, kind)
 
 
-@pytest.mark.parametrize("kind", MAP_KINDS)
+@pytest.mark.parametrize("kind", JOINT_KINDS)
 def test_h_is_the_identity_at_a_training_goal(task, kind):
     cmap = _duplicate(task, kind)
     rng = np.random.default_rng(0)
@@ -91,12 +98,12 @@ def test_panda_new_cup_on_the_circle_is_a_joint1_rotation(panda_task, panda_rota
     expected = np.zeros(7)
     expected[0] = -0.3
     assert np.abs(offset - expected).max() < 2e-3  # IK tolerance
-    for kind in MAP_KINDS:
+    for kind in JOINT_KINDS:
         cmap = ContextMap.for_task(panda_rotated, 2, REF, kind)
         assert np.abs(cmap.state(panda_rotated.curves[-1]) - panda_task.curves[REF]).max() < 2e-3
 
 
-@pytest.mark.parametrize("kind", MAP_KINDS)
+@pytest.mark.parametrize("kind", JOINT_KINDS)
 def test_jacobian_matches_finite_differences(grown, kind):
     cmap = ContextMap.for_task(grown, 2, REF, kind)
     rng = np.random.default_rng(1)
@@ -116,7 +123,7 @@ def test_jacobian_matches_finite_differences(grown, kind):
         np.testing.assert_allclose(cmap.jacobian(s), numeric, atol=1e-5)
 
 
-@pytest.mark.parametrize("kind", MAP_KINDS)
+@pytest.mark.parametrize("kind", JOINT_KINDS)
 def test_action_round_trip(grown, kind):
     cmap = ContextMap.for_task(grown, 2, REF, kind)
     rng = np.random.default_rng(2)
@@ -234,8 +241,9 @@ def test_sim4_frame_and_determinism(model, task):
     again, _ = sim4.run(model, task, task.robot.control, config)
     pd.testing.assert_frame_equal(frame, again)
     assert list(frame.columns[: len(sim4.COLUMNS)]) == list(sim4.COLUMNS)
-    assert set(frame.mapping) == {"with", "without"} and set(frame.h) == {"grasp", "straight_line", "none"}
-    assert len(frame) == 2 * 2 * 3
+    assert set(frame.mapping) == {"with", "without"}
+    assert set(frame.h) == {"grasp", "straight_line", "straight_line_ee", "none"}
+    assert len(frame) == 2 * 2 * 4
     assert frame.distance.max() == 1.0 and (frame.error >= 0).all()
     assert len(runs) == 2 and runs[0].task.n_goals == 3
 
@@ -341,3 +349,54 @@ def test_sim4_vectorized_bootstrap_gives_the_resampled_frames_numbers(model, tas
     for a, b in zip(slow, fast, strict=True):
         assert (a.id, a.reproduced, a.settled) == (b.id, b.reproduced, b.settled)
         np.testing.assert_allclose([a.ci_low, a.ci_high], [b.ci_low, b.ci_high], rtol=1e-9, atol=1e-12)
+
+
+def _dup_site_task(task):
+    """A 'new' cup standing on the reference cup, in the scene too: the gripper's map is the identity."""
+    robot = task.robot.with_cup(task.robot.goal_positions()[REF])
+    return dataclasses.replace(
+        task,
+        robot=robot,
+        goal_names=(*task.goal_names, "copy"),
+        curves=np.concatenate([task.curves, task.curves[REF][None]]),
+        goals=np.concatenate([task.goals, task.goals[REF][None]]),
+    )
+
+
+@pytest.mark.parametrize("which", ["task", "panda_task"])
+def test_gripper_line_map_is_the_identity_at_a_training_goal(which, request):
+    task = request.getfixturevalue(which)
+    cmap = context_map(_dup_site_task(task), task.n_goals, REF, "straight_line_ee")
+    assert isinstance(cmap, TaskSpaceMap) and cmap.delta == 0.0
+    rng = np.random.default_rng(0)
+    states = task.curves[REF][::8] + rng.normal(0, 0.02, (6, task.robot.n_joints))
+    np.testing.assert_allclose(cmap.state(states), states, atol=2e-3)
+    actions = rng.normal(size=(6, 3, task.robot.n_joints))
+    np.testing.assert_allclose(cmap.action_from_training(actions, states[:, None]), actions, atol=2e-2)
+
+
+def test_gripper_line_map_sends_each_new_grasp_to_the_same_training_grasp(panda_task, panda_rotated):
+    cmap = context_map(panda_rotated, 2, REF, "straight_line_ee")
+    assert cmap.delta == pytest.approx(-0.3, abs=1e-6)
+    mapped = cmap.state(panda_rotated.curves[-1])
+    metres, degrees = sim4.grasp_error(panda_task.robot, mapped, panda_task.curves[REF])
+    assert metres.max() < 1e-3 and degrees.max() < 0.2 and cmap.fallbacks == 0
+
+
+def test_gripper_line_map_differential_and_actions(task, grown):
+    """M(s) against finite differences of the mapped site, and J(s_hat) a_hat = M(s) a."""
+    cmap = context_map(grown, 2, REF, "straight_line_ee")
+    rng = np.random.default_rng(2)
+    lam = rng.uniform(0.2, 0.7, 4)[:, None]
+    states = grown.start + lam * (grown.goals[-1] - grown.start) + rng.normal(0, 0.03, (4, 5))
+    m, eps = cmap.differential(states), 1e-4
+    for i, s in enumerate(states):
+        for k, e in enumerate(np.eye(5)):
+            hi, lo = task.robot.grasp_positions(np.stack([cmap.state(s + eps * e), cmap.state(s - eps * e)]))
+            np.testing.assert_allclose((hi - lo) / (2 * eps), m[i, :3, k], atol=2e-3)
+    a_hat = rng.normal(size=(4, 2, 5))
+    a = cmap.action_from_training(a_hat, states[:, None])
+    _, _, j_hat = task.robot.grasp_jacobians(cmap.state(states))
+    np.testing.assert_allclose(
+        np.einsum("uin,ukn->uki", m, a), np.einsum("uin,ukn->uki", j_hat, a_hat), atol=1e-8
+    )

@@ -165,13 +165,23 @@ def test_claims_table(executed):
     assert not claims.duplicated(["id", "robot"]).any()
     claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
-    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 3}
+    # sim4: 3 claims and the straight line's @ee_line, each also @joint_space
+    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 8}
     rows = len(ASSISTANCE)  # the headline row (point) and one per other member, no copy of the headline
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n * rows for f, n in per_figure.items() for r in ROBOTS
     }
     sweep = load_config(QUICK, ROOT / "notebooks" / "04_fixed_expertise.ipynb")["settings"]
     head = claims[~claims.id.str.contains("@")]
+    # sim4's readings (joint space, the gripper's line) beside its headline: judged with it (its users)
+    joint = claims[claims.id.str.contains("@") & (claims.assistance == "point")]
+    assert len(joint) == 5 * len(ROBOTS)
+    assert set(joint.id.str.split("@").str[1]) == {"joint_space", "ee_line", "ee_line+joint_space"}
+    head_n = head.set_index(["id", "robot"]).n_users
+    assert all(
+        head_n[(i.split("@")[0], r)] == n
+        for i, r, n in zip(joint.id, joint.robot, joint.n_users, strict=True)
+    )
     assert set(head.assistance) == {"point"}
     stop = head.note.str.split(". ", n=1).str[1]  # after the row's two words
     assert (
@@ -183,8 +193,8 @@ def test_claims_table(executed):
         stop.str.startswith("The effect is undecided at the cap")
         == (n == sweep["cap"]) & (head.settled == "no")
     ).all()
-    members = claims[claims.id.str.contains("@")]
-    assert (members.id.str.split("@").str[1] == members.assistance).all()
+    members = claims[claims.id.str.contains("@") & (claims.assistance != "point")]
+    assert (members.id.str.split("@").str[1].str.split("+").str[-1] == members.assistance).all()
     assert set(members.assistance) == set(ASSISTANCE) - {"point"}
     assert (members.n_users.astype(int) == sweep["users"]).all()  # the other readings: the first look
     assert set(claims.reproduced) <= {"reproduced", "partly", "not reproduced", "undecided"}
@@ -303,7 +313,7 @@ def test_sim4_outputs(executed):
         assert np.isfinite(part.error).all() and (part.error >= 0).all()
         # the farthest cup holds both mappings for every user
         far = part[part.distance == 1.0]
-        assert set(far.h) == {"grasp", "straight_line", "none"}
+        assert set(far.h) == {"grasp", "straight_line", "straight_line_ee", "none"}
         assert read_video(fig / f"new_goal_{robot}.mp4").shape[2] == 640
     assert (fig / "sim4_new_goals.png").stat().st_size > 10_000
 

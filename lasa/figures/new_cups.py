@@ -16,13 +16,14 @@ import dataclasses
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pandas as pd
 
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
 from lasa.figures.common import Decoders, as_decoders, episodes, members_of
 from lasa.method.decoder import ActionDecoder
-from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
+from lasa.method.newgoals import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
@@ -31,7 +32,7 @@ from lasa.world.task import CupTask
 if TYPE_CHECKING:
     from lasa.figures.sim4 import Config
 
-__all__ = ["NewGoalRun", "new_cup_positions", "Sweep", "CupEpisodes", "episodes_at"]
+__all__ = ["NewGoalRun", "new_cup_positions", "map_geometry", "Sweep", "CupEpisodes", "episodes_at"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +65,71 @@ def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
     return ref + np.asarray(config.offsets)[:, None] * direction
 
 
+def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
+    """Where each kind of context map sends the new cups' grasps, and how their IK compares.
+
+    For every new cup and kind of map (``config.maps``), from the grasps alone (no users):
+
+    - ``misfit_rad``: the largest ``||h(s*(g, theta)) - s*(g_hat, theta)||`` over the preference
+      grid, how far the map sends a grasp of the new cup from the same grasp of the training
+      cup [rad]; ``misfit_m`` and ``misfit_deg``: the same at the gripper, position [m] and
+      approach axis [deg] (0 for an exact map);
+    - ``margin_rad``: the least distance of the mapped grasps to a joint limit [rad] (negative:
+      outside, where the robot would clip);
+    - ``stretch``: ``1 + <g - s_0, g_hat - g> / (|g - s_0|^2 lambda_1)``, the factor by which the
+      joint-space maps scale progress along the straight line (1: none; NaN for the gripper's
+      line, ``straight_line_ee``);
+
+    and per new cup (the same for every kind): ``joint1_rad`` and ``joint_last_rad``, the largest
+    difference of the first and the last joint between the new cup's and the training cup's
+    grasps; ``branch_rad``, the largest change of that difference between neighbouring
+    preferences (an IK branch switch, a wrist flip, shows as a jump); and ``grasp_margin_rad``,
+    the new grasps' least distance to a joint limit.
+
+    Returns:
+        One row per (``offset_m``, ``h``), with ``distance`` (on the table, over the farthest).
+    """
+    robot, ref = task.robot, config.ref_goal
+    cups = new_cup_positions(task, config)
+    scale = float(np.linalg.norm(cups - robot.goal_positions()[ref], axis=1).max())
+    rows = []
+    for offset, pos in zip(config.offsets, cups, strict=True):
+        big = extend_task(task, pos, ref)
+        new, old = big.curves[-1], task.curves[ref]
+        diff = new - old
+        per_cup = {
+            "offset_m": float(offset),
+            "distance": float(np.linalg.norm(pos - robot.goal_positions()[ref])) / scale,
+            "joint1_rad": float(np.abs(diff[:, 0]).max()),
+            "joint_last_rad": float(np.abs(diff[:, -1]).max()),
+            "branch_rad": float(np.linalg.norm(np.diff(diff, axis=0), axis=1).max()),
+            "grasp_margin_rad": float(np.minimum(new - robot.lower, robot.upper - new).min()),
+        }
+        for kind in config.maps:
+            cmap = context_map(big, task.n_goals, ref, kind)
+            mapped = cmap.state(new)
+            pos_m, rot_m = robot.grasp_frames(np.stack([mapped, old]))
+            cosine = np.clip(np.einsum("ki,ki->k", rot_m[0][:, :, 2], rot_m[1][:, :, 2]), -1.0, 1.0)
+            line = cmap.new_goal - cmap.start
+            shift = np.nan  # the joint-space line's stretch; the gripper's line (TaskSpaceMap) has none here
+            if isinstance(cmap, ContextMap):
+                shift = float(line @ (task.goals[ref] - cmap.new_goal)) / (
+                    float(line @ line) * cmap.saturation
+                )
+            rows.append(
+                {
+                    **per_cup,
+                    "h": kind,
+                    "misfit_rad": float(np.linalg.norm(mapped - old, axis=1).max()),
+                    "misfit_m": float(np.linalg.norm(pos_m[0] - pos_m[1], axis=1).max()),
+                    "misfit_deg": float(np.degrees(np.arccos(cosine)).max()),
+                    "margin_rad": float(np.minimum(mapped - robot.lower, robot.upper - mapped).min()),
+                    "stretch": 1.0 + shift,
+                }
+            )
+    return pd.DataFrame(rows).set_index(["offset_m", "h"])
+
+
 @dataclasses.dataclass(frozen=True)
 class Sweep:
     """What the episodes at every new cup share: the method, one look's users, the new cups.
@@ -81,7 +147,9 @@ class Sweep:
         users: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
             member: its member; assisted: ``member``, or None when the method has no assistance.
         grown: The task grown by each new cup; distances: each new cup's distance from the
-            reference goal (joint space); scale: D, the largest of them.
+            reference goal (joint space, between mid-preference goals) [rad]; scale: the
+            largest of them; cup_distances: each new cup's distance from the reference cup on
+            the table [m]; cup_scale: D, the largest of them (the farthest new cup's).
     """
 
     decoder: ActionDecoder
@@ -102,6 +170,8 @@ class Sweep:
     grown: list[CupTask]
     distances: np.ndarray
     scale: float
+    cup_distances: np.ndarray
+    cup_scale: float
 
     @classmethod
     def of(
@@ -129,8 +199,10 @@ class Sweep:
         if members is None:
             members = members_of(control, config.assistance)
         members = members if alpha > 0 else (NO_ASSISTANCE,)
-        grown = [extend_task(task, p, config.ref_goal) for p in new_cup_positions(task, config)]
+        cups = new_cup_positions(task, config)
+        grown = [extend_task(task, p, config.ref_goal) for p in cups]
         dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
+        on_table = np.linalg.norm(cups - task.robot.goal_positions()[config.ref_goal], axis=1)
         member = np.repeat(members, n_users)
         return cls(
             decoder,
@@ -151,6 +223,8 @@ class Sweep:
             grown=grown,
             distances=dist,
             scale=float(dist.max()),
+            cup_distances=on_table,
+            cup_scale=float(on_table.max()),
         )
 
 
@@ -198,7 +272,7 @@ def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, 
     )
     with_map = {}
     for kind in config.maps:
-        mapped = MappedDecoder(sweep.decoder, ContextMap.for_task(big, task.n_goals, config.ref_goal, kind))
+        mapped = MappedDecoder(sweep.decoder, context_map(big, task.n_goals, config.ref_goal, kind))
         with_map[kind] = _rollout(sweep, mapped, big, users)
     plain = dataclasses.replace(users, goal=np.full(n, config.ref_goal))
     without = _rollout(sweep, sweep.decoder, task, plain)

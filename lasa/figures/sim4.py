@@ -4,6 +4,11 @@ A new cup is put on the table after training, at growing distances from a traini
 cup. Near-optimal users reach for it with and without the context map
 (:mod:`lasa.method.newgoals`; the episodes are :mod:`lasa.figures.new_cups`), and the grasp
 error is fitted against the new cup's distance. Notebook ``07_new_goals``.
+
+Measured as the paper's caption and text measure (the headline rows): the new cup's distance
+on the table and the grasp error at the gripper, both over the farthest new cup's distance.
+The joint-space measure is the reading ``@joint_space``; the paper's straight line drawn in the
+gripper's space (map kind ``straight_line_ee``) is the reading ``@ee_line`` of its claim.
 """
 
 from __future__ import annotations
@@ -13,9 +18,9 @@ import dataclasses
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-import seaborn as sns
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from mpl_toolkits.axes_grid1 import make_axes_locatable
 from scipy import stats
 
 from lasa.base.config import (
@@ -36,6 +41,8 @@ from lasa.evidence.verdicts import USER, group_means, member_frame
 from lasa.figures.common import Decoders, LooksConfig, check_methods
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
+from lasa.people.kinematics import angle_between
+from lasa.world.robot import Robot
 from lasa.world.task import CupTask
 
 __all__ = [
@@ -45,6 +52,11 @@ __all__ = [
     "run",
     "fit_line",
     "fits",
+    "no_map_check",
+    "end_shares",
+    "by_preference",
+    "grasp_error",
+    "MEASURES",
     "claims",
     "boot_values",
     "plot",
@@ -65,8 +77,18 @@ COLUMNS = (
     "reference",
     "assistance",
     "look",
+    "angle_error_deg",
+    "distance_joint",
+    "error_joint",
+    "reference_joint",
+    "end_goal",
 )
 DPI = 150
+
+# the measures: (distance column, error column); "table" is the headline, the others are
+# readings whose claims carry ``@<measure>`` ids
+MEASURES = {"table": ("distance", "error"), "joint_space": ("distance_joint", "error_joint")}
+HEADLINE = "table"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,7 +113,9 @@ class Config(LooksConfig):
     beta: NonNegative = 1000.0  # near-optimal users [1/rad^2]
     horizon: PositiveInt = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
-    maps: tuple[str, ...] = ("grasp", "straight_line")  # kinds of h run "with" the map (lasa.method.newgoals)
+    # kinds of h run "with" the map (lasa.method.newgoals); straight_line_ee, the paper's line read in
+    # the gripper's space, is the reading @ee_line of the straight-line claim (one IK per user and step)
+    maps: tuple[str, ...] = ("grasp", "straight_line", "straight_line_ee")
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -126,8 +150,16 @@ def run(
     a grasp there, with preferences drawn per user and shared by every cup and mapping.
     ``with``: the task grows by the cup and the method's decoder runs through the
     context map (:class:`lasa.method.newgoals.MappedDecoder`). ``without``: the method is left
-    unchanged, knowing the training cups only. Distances and errors are joint-space, both normalised by the
-    distance D between the reference goal and the farthest new goal, as in the paper.
+    unchanged, knowing the training cups only.
+
+    Measured where the paper's caption measures (the headline, columns ``distance`` and
+    ``error``): the new cup's distance on the table from the reference cup [m], and the grasp
+    error at the gripper, the distance [m] between the grasp site at the episode's end and
+    the wanted grasp's site (the forward kinematics of the user's target pose at the new
+    cup), both divided by D, the farthest new cup's distance on the table. The joint-space
+    measure is the reading ``@joint_space`` (``distance_joint``: between mid-preference
+    goals, ``error_joint``: ``||s_T - s*||``, both divided by the farthest new goal's
+    joint-space distance).
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one base model): the method's
@@ -143,51 +175,89 @@ def run(
     Returns:
         One row per episode with the columns of :data:`COLUMNS`: ``h`` (the kind
         of map, ``none`` without), ``offset_m``, ``theta``, ``confidence`` (b of the
-        new cup at the end; NaN without the map) and ``reference`` (the error of a robot
+        new cup at the end; NaN without the map), ``reference`` (the error of a robot
         holding, at the training cup, the grasp the user wants at the new one: the
         paper's "only ever reaches for the training goal"), ``assistance`` (the member the
-        method's assistance ran under; ``none`` for LA) and ``look``; and the runs per new
-        cup under the headline member (``control.assistance``).
+        method's assistance ran under; ``none`` for LA), ``look``, ``angle_error_deg`` (the
+        angle between the gripper's approach axis at the end and the wanted grasp's [deg]),
+        the joint-space reading's ``distance_joint``, ``error_joint`` and
+        ``reference_joint``, and ``end_goal``: the goal the belief ends on (``new``,
+        ``reference``, or ``other``, another training cup); and the runs per new cup under the headline member
+        (``control.assistance``).
     """
     sweep = Sweep.of(decoders, task, control, config, progress, look, members)
     runs, rows = [], []
-    for offset, big, d in zip(config.offsets, sweep.grown, sweep.distances, strict=True):
+    for i, (offset, big) in enumerate(zip(config.offsets, sweep.grown, strict=True)):
         at_cup, cup = episodes_at(sweep, float(offset), big)
         runs.append(at_cup)
-        rows += _rows(sweep, cup, float(offset), d)
+        rows += _rows(sweep, cup, float(offset), i)
     frame = pd.concat(rows, ignore_index=True)
     # rows by member, then cup and map, as the members' runs came out before they shared batches
     order = np.argsort(pd.Categorical(frame.assistance, categories=list(sweep.members)).codes, kind="stable")
     return frame.iloc[order].reset_index(drop=True), runs
 
 
-def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, d: float) -> list[pd.DataFrame]:
-    """The rows of every case at one new cup (each kind of map, and none), ``d`` from the reference."""
+def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The grasp error at the gripper: where the grasp site is at ``states`` against ``targets``.
+
+    Args:
+        robot: The robot (its grasp site, by MuJoCo's forward kinematics).
+        states: Joint vectors, shape (..., n) [rad].
+        targets: The wanted grasps' joint vectors, broadcastable to ``states``.
+
+    Returns:
+        The distance between the two grasp sites [m] and the angle between their approach
+        axes (the site's +z) [deg], each of shape (...).
+    """
+    states = np.asarray(states, dtype=float)
+    targets = np.broadcast_to(np.asarray(targets, dtype=float), states.shape)
+    pos, rot = robot.grasp_frames(np.stack([states, targets]))
+    angle = angle_between(rot[0][..., :, 2], rot[1][..., :, 2])
+    return np.linalg.norm(pos[0] - pos[1], axis=-1), np.degrees(angle)
+
+
+def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, i: int) -> list[pd.DataFrame]:
+    """The rows of every case at the ``i``-th new cup (each kind of map, and none), ``offset`` [m] away."""
     config, task, users = sweep.config, sweep.task, cup.users
+    robot = task.robot
     cases = [
         ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in cup.with_map.items()
     ]
     cases.append(("without", "none", cup.without, np.full(len(sweep.users), np.nan)))
-    reference = normalized_error(task.target(config.ref_goal, sweep.theta), users.target, sweep.scale)
-    return [
-        pd.DataFrame(
-            {
-                "robot": task.robot.name,
-                "mapping": mapping,
-                "distance": d / sweep.scale,
-                USER: sweep.first + sweep.users,
-                "error": normalized_error(traj.states[-1], users.target, sweep.scale),
-                "h": kind,
-                "offset_m": offset,
-                "theta": sweep.theta,
-                "confidence": conf,
-                "reference": reference,
-                "assistance": sweep.member,
-                "look": sweep.look,
-            }
+    held = task.target(config.ref_goal, sweep.theta)  # the wanted grasp, held at the training cup
+    d_cup, d_joint = float(sweep.cup_distances[i]), float(sweep.distances[i])
+    ref_m, _ = grasp_error(robot, held, users.target)
+    frames = []
+    for mapping, kind, traj, conf in cases:
+        err_m, angle = grasp_error(robot, traj.states[-1], users.target)
+        end = traj.beliefs[-1].argmax(axis=-1)
+        end_goal = np.where(
+            end == task.n_goals, "new", np.where(end == config.ref_goal, "reference", "other")
         )
-        for mapping, kind, traj, conf in cases
-    ]
+        frames.append(
+            pd.DataFrame(
+                {
+                    "robot": robot.name,
+                    "mapping": mapping,
+                    "distance": d_cup / sweep.cup_scale,
+                    USER: sweep.first + sweep.users,
+                    "error": err_m / sweep.cup_scale,
+                    "h": kind,
+                    "offset_m": offset,
+                    "theta": sweep.theta,
+                    "confidence": conf,
+                    "reference": ref_m / sweep.cup_scale,
+                    "assistance": sweep.member,
+                    "look": sweep.look,
+                    "angle_error_deg": angle,
+                    "distance_joint": d_joint / sweep.scale,
+                    "error_joint": normalized_error(traj.states[-1], users.target, sweep.scale),
+                    "reference_joint": normalized_error(held, users.target, sweep.scale),
+                    "end_goal": end_goal,
+                }
+            )
+        )
+    return frames
 
 
 def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
@@ -196,19 +266,25 @@ def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
     return float(res.slope), float(res.intercept), float(res.rvalue**2)
 
 
-def fits(frame: pd.DataFrame) -> pd.DataFrame:
+def fits(frame: pd.DataFrame, measure: str = HEADLINE) -> pd.DataFrame:
     """Linear fits of the mean error per new cup against its distance, per kind of map.
 
+    Args:
+        frame: sim4 rows.
+        measure: Which distance and error (:data:`MEASURES`): ``table`` (the headline: the cup
+            on the table, the grasp at the gripper) or ``joint_space``.
+
     Returns:
-        One row per ``h`` (``grasp``, ``straight_line``, ``none``): ``slope``,
+        One row per ``h`` (``grasp``, ``straight_line``, ``none``, ...): ``slope``,
         ``intercept``, ``r2`` (of the per-cup means) and ``r2_episodes`` (the same
         line's R^2 over every episode).
     """
+    x, y = MEASURES[measure]
     out = []
     for kind, part in frame.groupby("h"):
-        means = part.groupby("distance").error.mean()
+        means = part.groupby(x)[y].mean()
         slope, intercept, r2 = fit_line(means.index.to_numpy(), means.to_numpy())
-        _, _, r2_ep = fit_line(part.distance.to_numpy(), part.error.to_numpy())
+        _, _, r2_ep = fit_line(part[x].to_numpy(), part[y].to_numpy())
         out.append({"h": kind, "slope": slope, "intercept": intercept, "r2": r2, "r2_episodes": r2_ep})
     return pd.DataFrame(out).set_index("h")
 
@@ -216,11 +292,43 @@ def fits(frame: pd.DataFrame) -> pd.DataFrame:
 _H_NAMES = {
     "straight_line": "the paper's straight-line context map",
     "grasp": "the grasp-to-grasp context map (ours)",
+    "straight_line_ee": "the paper's straight-line context map, the line in the gripper's space",
+}
+# the claim each kind of map is judged under, and the reading it is (None: the claim's own map):
+# the paper's straight line "between the start and g", read in the gripper's space, is the
+# reading ``@ee_line`` of its claim
+_KIND_CLAIMS = {
+    "straight_line": ("straight_line", None),
+    "grasp": ("grasp", None),
+    "straight_line_ee": ("straight_line", "ee_line"),
 }
 
 
+def _claim_id(name: str, *readings: str | None) -> str:
+    """``sim4.<name>``, or ``sim4.<name>@<reading>+<reading>`` for the readings given."""
+    parts = [r for r in readings if r]
+    return f"sim4.{name}" + (f"@{'+'.join(parts)}" if parts else "")
+
+
+def _measures(frame: pd.DataFrame) -> list[str]:
+    """The measures a frame holds, the headline first (the joint-space reading needs its columns)."""
+    return [m for m, cols in MEASURES.items() if set(cols) <= set(frame.columns)]
+
+
+def _reading(measure: str) -> str | None:
+    return None if measure == HEADLINE else measure
+
+
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim4's claims from a sim4 frame (both axes normalised by D).
+    """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds.
+
+    The headline rows (``sim4.straight_line_linear``, ``sim4.grasp_linear``,
+    ``sim4.no_map_training_goal``) read the measure of the paper's caption: the new cup's
+    distance on the table and the grasp error at the gripper, both over the farthest new
+    cup's distance (``distance``, ``error``). The same claims under the joint-space measure
+    (``distance_joint``, ``error_joint``) are the reading ``@joint_space``
+    (``sim4.straight_line_linear@joint_space``, ...), judged by the same rules; being
+    judged with the headline ones, they also keep the looks going until they settle.
 
     Fits are least-squares lines through the mean error of each new cup (one point per
     cup, as the paper's figure), by :func:`fits`. The first rule is applied to
@@ -237,52 +345,176 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
       the slope is within 0.15 of 1 and R^2 >= 0.9; ``partly`` if R^2 >= 0.9 and the
       slope lies in [0.5, 1.5]; else ``no``.
     """
+    out: list[Claim] = []
+    for measure in _measures(frame):
+        out += _claims_under(frame, measure)
+    return out
+
+
+def _claims_under(frame: pd.DataFrame, measure: str) -> list[Claim]:
+    """:func:`claims` under one measure."""
     robot = str(frame.robot.iloc[0])
-    table = fits(frame)
-    n_cups = frame.distance.nunique()
-    means = frame.groupby(["h", "distance"]).error.mean()
-    claims = [
-        _map_claim(kind, table.loc[kind], means, n_cups, robot)
-        for kind in [k for k in ("straight_line", "grasp") if k in table.index]
+    x, y = MEASURES[measure]
+    table = fits(frame, measure)
+    n_cups = frame[x].nunique()
+    means = frame.groupby(["h", x])[y].mean()
+    angles = None
+    if measure == HEADLINE and "angle_error_deg" in frame:
+        angles = frame.groupby(["h", x]).angle_error_deg.mean()
+    out = [
+        _map_claim(kind, measure, table.loc[kind], means, n_cups, robot, angles)
+        for kind in _KIND_CLAIMS
+        if kind in table.index
     ]
     wo = table.loc["none"]
     values = {"slope": float(wo.slope), "r2": float(wo.r2)}
-    verdict = rule("sim4.no_map_training_goal").verdict(values)
-    claims.append(
+    cid = _claim_id("no_map_training_goal", _reading(measure))
+    out.append(
         Claim(
-            id="sim4.no_map_training_goal",
+            id=cid,
             claim="without the map, the robot only reaches for the training goal",
             figure="sim4",
             paper="y = x",
             values=values,
             measured=_line(wo, n_cups) + " (the interval is for the slope)",
-            reproduced=verdict,
-            note="",
+            reproduced=rule(cid).verdict(values),
+            note=_angle_note(angles, "none"),
             robot=robot,
         )
     )
-    return claims
+    return out
 
 
-def _map_claim(kind: str, f: pd.Series, means: pd.Series, n_cups: int, robot: str) -> Claim:
-    """sim4.<kind>_linear, from the map's fit ``f`` and the mean error per (h, distance)."""
+def _angle_note(angles: pd.Series | None, kind: str) -> str:
+    """The mean approach-axis error at the nearest and the farthest cup, as a sentence of numbers."""
+    if angles is None or kind not in angles.index.get_level_values(0):
+        return ""
+    per_cup = angles[kind]
+    return (
+        f"Mean approach-axis error {per_cup.iloc[0]:.1f}° at the nearest cup, "
+        f"{per_cup.iloc[-1]:.1f}° at the farthest."
+    )
+
+
+def _map_claim(
+    kind: str,
+    measure: str,
+    f: pd.Series,
+    means: pd.Series,
+    n_cups: int,
+    robot: str,
+    angles: pd.Series | None,
+) -> Claim:
+    """sim4.<claim>_linear[@readings], from the map's fit ``f`` and the mean error per (h, distance)."""
+    name, kind_reading = _KIND_CLAIMS[kind]
     below = means[kind] < means["none"]
-    helps = bool(below.all())
     values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
-    verdict = rule(f"sim4.{kind}_linear").verdict(values)
+    cid = _claim_id(f"{name}_linear", kind_reading, _reading(measure))
+    above = int((~below).sum())
     return Claim(
-        id=f"sim4.{kind}_linear",
+        id=cid,
         claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
         figure="sim4",
         paper="y = 0.11x, R^2 = 0.98",
         values=values,
         measured=_line(f, n_cups) + " (the interval is for the slope)",
-        reproduced=verdict,
-        note=(
-            ("" if helps else "Above the no-map error at some cup. ")
-            + "Joint-space distances and errors, normalised by the farthest new goal's distance."
+        reproduced=rule(cid).verdict(values),
+        note=" ".join(
+            t
+            for t in (
+                f"Above the no-map error at {above} of {n_cups} cups." if above else "",
+                _angle_note(angles, kind),
+            )
+            if t
         ),
         robot=robot,
+    )
+
+
+def no_map_check(frame: pd.DataFrame) -> pd.DataFrame:
+    """The paper's "without the map ... y = x", taken apart (the headline measure).
+
+    y = x needs two things: the wanted grasp at a new cup is the training grasp moved with
+    the cup (then a robot holding the training grasp is off by the cup's distance: the
+    ``reference`` column), and the robot does reach the training cup. One row per line:
+
+    - ``held at the training cup``: the ``reference`` error;
+    - ``without the map``: every episode (the claim's line);
+    - ``... belief ends on the training cup`` / ``... on another cup``: the episodes by the goal
+      their belief ends on (``end_goal``).
+
+    Returns:
+        ``slope``, ``intercept``, ``r2`` (over the cups' means; NaN with fewer than two cups),
+        ``mean_error`` and ``share`` (of the no-map episodes) per row.
+    """
+    none = frame[frame.h == "none"]
+    parts = {"held at the training cup": none.assign(error=none.reference), "without the map": none}
+    if "end_goal" in none:
+        parts["without the map, belief ends on the training cup"] = none[none.end_goal == "reference"]
+        parts["without the map, belief ends on another cup"] = none[none.end_goal == "other"]
+    rows = []
+    for name, part in parts.items():
+        means = part.groupby("distance").error.mean()
+        line = fit_line(means.index.to_numpy(), means.to_numpy()) if len(means) >= 2 else (np.nan,) * 3
+        rows.append(
+            {
+                "line": name,
+                "slope": line[0],
+                "intercept": line[1],
+                "r2": line[2],
+                "mean_error": float(part.error.mean()) if len(part) else np.nan,
+                "share": len(part) / max(len(none), 1),
+            }
+        )
+    return pd.DataFrame(rows).set_index("line")
+
+
+def end_shares(frame: pd.DataFrame) -> pd.DataFrame:
+    """Per map and new cup: where the beliefs end, and the error with and without the episodes that left.
+
+    Returns:
+        One row per (``h``, ``distance``): ``other`` (share of episodes whose belief ends on
+        another training cup), ``mean`` and ``median`` error, ``mean_left`` (the mean error of
+        those episodes) and ``mean_stayed`` (of the rest).
+    """
+    rows = []
+    for (kind, d), part in frame.groupby(["h", "distance"]):
+        left = part.end_goal == "other"
+        rows.append(
+            {
+                "h": kind,
+                "distance": d,
+                "other": float(left.mean()),
+                "mean": float(part.error.mean()),
+                "median": float(part.error.median()),
+                "mean_left": float(part.error[left].mean()) if left.any() else np.nan,
+                "mean_stayed": float(part.error[~left].mean()) if (~left).any() else np.nan,
+            }
+        )
+    return pd.DataFrame(rows).set_index(["h", "distance"])
+
+
+# the grasps the users want, in three bands of the preference theta (0: top, 1: side)
+BANDS = {"top (θ < 1/3)": (0.0, 1 / 3), "middle": (1 / 3, 2 / 3), "side (θ ≥ 2/3)": (2 / 3, 1.0 + 1e-9)}
+
+
+def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
+    """Mean error, approach-axis error and the share of beliefs that end on another cup, per band of
+    the wanted grasp (:data:`BANDS`), map and new cup.
+
+    Returns:
+        One row per (``h``, ``band``, ``distance``): ``error``, ``angle_error_deg``, ``other``, ``n``.
+    """
+    edges = [lo for lo, _ in BANDS.values()] + [1.0 + 1e-9]
+    band = pd.cut(frame.theta, edges, right=False, labels=list(BANDS))
+    grouped = frame.assign(band=band, other=frame.end_goal == "other").groupby(
+        ["h", "band", "distance"], observed=True
+    )
+    return grouped.agg(
+        error=("error", "mean"),
+        angle_error_deg=("angle_error_deg", "mean"),
+        other=("other", "mean"),
+        n=("error", "size"),
     )
 
 
@@ -304,17 +536,22 @@ def _lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
-    means = group_means(frame, ["h", "distance"], "error", counts)
-    dist = np.array(sorted({d for _, d in means}))
-    curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`),
+    under the same ids (the headline measure's and the ``@joint_space`` reading's)."""
     out: dict[str, dict[str, np.ndarray]] = {}
-    for kind in [k for k in ("straight_line", "grasp") if k in curve]:
-        slope, r2 = _lines(dist, curve[kind])
-        share = (curve[kind] < curve["none"]).mean(axis=1)
-        out[f"sim4.{kind}_linear"] = {"slope": slope, "r2": r2, "share_below": share}
-    slope, r2 = _lines(dist, curve["none"])
-    out["sim4.no_map_training_goal"] = {"slope": slope, "r2": r2}
+    for measure in _measures(frame):
+        x, y = MEASURES[measure]
+        means = group_means(frame, ["h", x], y, counts)
+        dist = np.array(sorted({d for _, d in means}))
+        curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
+        for kind in [k for k in _KIND_CLAIMS if k in curve]:
+            name, kind_reading = _KIND_CLAIMS[kind]
+            slope, r2 = _lines(dist, curve[kind])
+            share = (curve[kind] < curve["none"]).mean(axis=1)
+            cid = _claim_id(f"{name}_linear", kind_reading, _reading(measure))
+            out[cid] = {"slope": slope, "r2": r2, "share_below": share}
+        slope, r2 = _lines(dist, curve["none"])
+        out[_claim_id("no_map_training_goal", _reading(measure))] = {"slope": slope, "r2": r2}
     return out
 
 
@@ -322,72 +559,128 @@ H_STYLES = {
     "none": ("#d95f02", "without the map"),
     "straight_line": ("#7570b3", "straight-line h (paper)"),
     "grasp": ("#1b9e77", "grasp-to-grasp h (ours)"),
+    "straight_line_ee": ("#e7298a", "straight-line h, gripper's space"),
 }
 
 
-# the paper's lines (Sec. V-D): slope -> (legend label, line style)
+# the paper's lines (Sec. V-D): slope -> (legend label, line style); drawn above ours
 PAPER_LINES = {0.11: ("paper, with the map: y = 0.11x", ":"), 1.0: ("paper, without the map: y = x", "--")}
-PAPER_UNITS = "(both axes ÷ the farthest new goal's distance, as the paper's; ours in joint space)"
+PAPER_UNITS = (
+    "(both axes ÷ D, the farthest new cup's distance, as the paper's; the grasp error at the gripper)"
+)
+CI_LEVEL = 0.95  # the error bars: bootstrap interval of each cup's mean error, users resampled
+N_BOOT_PLOT = 1000
+
+
+def users_per_point(frame: pd.DataFrame) -> dict[str, int]:
+    """Robot -> the users behind each point of its panel (the least over its (map, cup) points)."""
+    sizes = frame.groupby(["robot", "h", "distance"])[USER].nunique()
+    return {str(r): int(n) for r, n in sizes.groupby(level="robot").min().items()}
+
+
+def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
+    """Each cup's mean of ``y`` and its :data:`CI_LEVEL` bootstrap interval (users resampled)."""
+    rng = np.random.default_rng(0)
+    rows = []
+    for d, cup in part.groupby("distance"):
+        v = cup[y].to_numpy(dtype=float)
+        boot = v[rng.integers(0, len(v), (N_BOOT_PLOT, len(v)))].mean(axis=1)
+        tail = 50.0 * (1.0 - CI_LEVEL)
+        lo, hi = np.percentile(boot, [tail, 100.0 - tail])
+        rows.append({"distance": d, "mean": v.mean(), "low": lo, "high": hi})
+    return pd.DataFrame(rows)
 
 
 def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     """One robot's panel: grasp error at new cups against their distance, per kind of map.
 
-    Each cup's episodes are drawn as faint points and their mean with a 95% bootstrap
-    interval; the line is the least-squares fit through the means (its equation and R^2
-    in the legend, from :func:`fits`). The paper's two lines (:data:`PAPER_LINES`) are drawn
-    in black: both axes are normalised by the farthest new goal's distance, as the paper's
-    are, so its slopes are drawn as they are (ours in joint space; the paper's space unstated).
+    The main axes show each cup's mean error with its 95% bootstrap interval (users
+    resampled; :data:`CI_LEVEL`) and the least-squares fit through the means (its equation
+    and R^2 in the legend, from :func:`fits`; with the mean approach-axis error at the
+    nearest and the farthest cup when the frame has it). The paper's two lines
+    (:data:`PAPER_LINES`) are drawn above ours, in black. A narrow panel beside it shows every episode.
+    Neither axis is cut: each one's y-limits lie around everything drawn in it.
     """
     ax = plt.gca() if ax is None else ax
     table = fits(frame)
-    xs = np.linspace(0.0, 1.0, 2)
-    for slope, (label, ls) in PAPER_LINES.items():
-        paper_slope(ax, slope, label, x_max=1.05, ls=ls)
+    xs = np.array([float(frame.distance.min()), 1.0])  # the fits over the cups measured
+    tops, bottoms = [1.05], [0.0]  # the paper's y = x, drawn to x = 1.05
+    angles = frame.groupby(["h", "distance"]).angle_error_deg.mean() if "angle_error_deg" in frame else None
     for kind, (color, name) in H_STYLES.items():
         if kind not in table.index:
             continue
-        part = frame[frame.h == kind]
-        ax.scatter(part.distance, part.error, s=6, color=color, alpha=0.15, lw=0)
-        sns.pointplot(
-            data=part,
-            x="distance",
-            y="error",
-            native_scale=True,
+        cups = _cup_means(frame[frame.h == kind])
+        ax.errorbar(
+            cups.distance,
+            cups["mean"],
+            yerr=[cups["mean"] - cups.low, cups.high - cups["mean"]],
+            fmt="o",
             color=color,
-            errorbar=("ci", 95),
-            n_boot=500,
-            seed=0,
-            linestyle="none",
-            markersize=4,
-            ax=ax,
+            ms=4,
+            capsize=2,
+            zorder=3,
         )
         f = table.loc[kind]
-        ax.plot(
-            xs,
-            f.slope * xs + f.intercept,
-            color=color,
-            lw=1.5,
-            label=f"{name}: y = {f.slope:.2f}x {f.intercept:+.2f}, R² = {f.r2:.2f}",
-        )
+        label = f"{name}: y = {f.slope:.2f}x {f.intercept:+.2f}, R² = {f.r2:.2f}"
+        if angles is not None:
+            per_cup = angles[kind]
+            label += f"; approach error {per_cup.iloc[0]:.1f}° → {per_cup.iloc[-1]:.1f}°"
+        ax.plot(xs, f.slope * xs + f.intercept, color=color, lw=1.5, label=label, zorder=2)
+        tops += [float(cups.high.max()), float(max(f.slope * xs + f.intercept))]
+        bottoms += [float(cups.low.min()), float(min(f.slope * xs + f.intercept))]
+    ax.errorbar(
+        [],
+        [],
+        yerr=[],
+        fmt="o",
+        color="0.4",
+        ms=4,
+        capsize=2,
+        label=f"mean per cup, bars: {100 * CI_LEVEL:.0f}% bootstrap interval (users resampled)",
+    )
+    for slope, (label, ls) in PAPER_LINES.items():
+        paper_slope(ax, slope, label, x_max=1.05, ls=ls, lw=1.8, zorder=6)
     ax.set_xlim(0, 1.05)
-    ax.set_ylim(0, max(1.1, float(frame.groupby(["h", "distance"]).error.mean().max()) * 1.1))
-    ax.set_xlabel(f"distance of the new goal from the training goal (normalised)\n{PAPER_UNITS}", fontsize=8)
-    ax.set_ylabel("grasp error (normalised)")
-    ax.legend(frameon=False, fontsize=7, loc="upper left")
+    ax.set_ylim(min(bottoms) - 0.02 * max(tops), max(1.1, max(tops) * 1.08))
+    ax.set_xlabel(f"distance of the new cup from the training cup (normalised)\n{PAPER_UNITS}", fontsize=8)
+    ax.set_ylabel("grasp error at the gripper (normalised)")
+    ax.legend(frameon=False, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2))
+    _episodes_panel(ax, frame, table)
     return ax
 
 
+def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
+    """Every episode's error, in a panel beside ``ax`` whose y-axis reaches the largest of them."""
+    side = make_axes_locatable(ax).append_axes("right", size="38%", pad=0.45)
+    for kind, (color, _) in H_STYLES.items():
+        if kind in table.index:
+            part = frame[frame.h == kind]
+            side.scatter(part.distance, part.error, s=5, color=color, alpha=0.35, lw=0)
+    side.set_xlim(0, 1.05)
+    side.set_ylim(0, max(1.1, float(frame.error.max()) * 1.05))
+    side.set_title("every episode", fontsize=8)
+    side.tick_params(labelsize=7)
+    return side
+
+
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member."""
+    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member.
+
+    The title gives the users per point of the rows drawn (per robot when they differ).
+    """
     table = member_frame(table, assistance)
     present = robots_present(table)
-    fig, axes = plt.subplots(1, len(present), figsize=(5.6 * len(present), 4.4), squeeze=False)
+    fig, axes = plt.subplots(1, len(present), figsize=(7.6 * len(present), 6.6), squeeze=False)
     for name, ax in zip(present, axes[0], strict=True):
         plot_robot(table[table.robot == name], ax=ax)
         ax.set_title(name)
-    n = int(table.groupby(["robot", "h", "distance"]).size().max())
-    title = f"Fig. sim4: new goals, {n} near-optimal users per point, assistance: {assistance}"
+    n = users_per_point(table)
+    counts = (
+        f"{next(iter(n.values()))}"
+        if len(set(n.values())) == 1
+        else ", ".join(f"{n[r]} ({r})" for r in present)
+    )
+    title = f"Fig. sim4: new goals, N = {counts} near-optimal users per point, assistance: {assistance}"
     fig.suptitle(wrap_to(title, fig.get_figwidth()))
     fig.tight_layout()
     return fig

@@ -74,9 +74,20 @@ from lasa.world.robot import Robot
 from lasa.world.rotations import rot_z
 from lasa.world.task import CupTask, grasp_frame
 
-__all__ = ["ContextMap", "MappedDecoder", "extend_task", "new_goal_frames", "NEW_GOAL_NAME", "MAP_KINDS"]
+__all__ = [
+    "ContextMap",
+    "TaskSpaceMap",
+    "context_map",
+    "MappedDecoder",
+    "extend_task",
+    "new_goal_frames",
+    "NEW_GOAL_NAME",
+    "MAP_KINDS",
+    "JOINT_KINDS",
+]
 
-MAP_KINDS = ("grasp", "straight_line")
+JOINT_KINDS = ("grasp", "straight_line")  # the maps of :class:`ContextMap`, in joint space
+MAP_KINDS = (*JOINT_KINDS, "straight_line_ee")  # and :class:`TaskSpaceMap`'s, in the gripper's space
 
 NEW_GOAL_NAME = "new"
 _MAX_JUMP = 0.5  # largest joint-space step between neighbouring grasps of a smooth curve [rad]
@@ -258,7 +269,7 @@ class ContextMap:
         if not 0 <= ref_index < n_train:
             raise ConfigError(f"ref_index must be in [0, {n_train}), got {ref_index}")
         check_range("width", width, 0.0, low_open=True)
-        check_choice("kind", kind, MAP_KINDS)
+        check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
         line = g - start
         if np.linalg.norm(line) < 1e-6:
@@ -368,6 +379,198 @@ class ContextMap:
         return np.linalg.solve(jac, rhs[..., None])[..., 0]
 
 
+@dataclasses.dataclass
+class TaskSpaceMap:
+    r"""The paper's straight-line map read in the gripper's space (kind ``"straight_line_ee"``).
+
+    Sec. IV-C: h "could project the robot's current state s to a straight-line path between the
+    start and g, and output the equivalent state :math:`\hat s` along the straight-line path between
+    the start and :math:`\hat g`". Here the path is the grasp site's. The new cup's grasps are the
+    training cup's moved by a rigid motion T of the table (a turn by the bearing difference
+    :math:`\delta` about the vertical, :func:`new_goal_frames`). With the site's pose
+    :math:`X(s) = (p, R)`, its start :math:`p_0` and the new goal's site :math:`p_g`, the progress
+    :math:`\lambda(s) = \langle p - p_0, p_g - p_0\rangle / \|p_g - p_0\|^2` gives
+    :math:`w = \mathrm{clip}(\lambda / \lambda_1, 0, 1)` (:math:`\lambda_1`: the least progress of a
+    new grasp), and the equivalent pose moves w of the way by :math:`T^{-1}`:
+
+    .. math::  \hat p = p + w\,(T^{-1} p - p), \qquad \hat R = R_z(-w\delta)\,R,
+
+    so a point at progress lambda on the site's line to g goes to the point at the same progress
+    on its line to :math:`\hat g` (exactly when :math:`\lambda_1 = 1` and :math:`\delta = 0`), and every
+    grasp of the new cup to the same grasp of the training cup. :math:`\hat s` is that pose's IK
+    (mink, :func:`lasa.world.ik.solve_grasp_ik`), seeded and posture-regularised at
+    :math:`s + w(\hat g - g)` (the joint-space straight line's state); where the IK fails the seed is
+    kept (counted in ``fallbacks``). Actions are mapped back through the task space: a real action
+    a moves :math:`\hat X` by :math:`M(s) a` (M: the map's differential, from the site's Jacobian J),
+    a decoded :math:`\hat a` moves it by :math:`J(\hat s)\hat a`; a solves
+    :math:`[M(s); N^\top] a = [J(\hat s)\hat a; N^\top \hat a]` in least squares, N spanning
+    :math:`J(\hat s)`'s null space (the arm's redundancy keeps the decoded motion). One IK per user
+    and step: slower than the joint-space maps by about the IK's time (~2 ms on one core).
+    """
+
+    robot: Robot
+    start: np.ndarray
+    new_goal: np.ndarray
+    ref_goal: np.ndarray
+    new_cup: np.ndarray
+    ref_cup: np.ndarray
+    delta: float
+    site_start: np.ndarray
+    site_goal: np.ndarray
+    saturation: float
+    ref_index: int
+    n_train: int
+    fallbacks: int = 0
+    _cache: tuple[bytes, np.ndarray] | None = dataclasses.field(default=None, repr=False)
+
+    @classmethod
+    def for_task(cls, task: CupTask, n_train: int, ref_index: int) -> TaskSpaceMap:
+        """The map for the last goal of ``task`` (the new cup) onto training goal ``ref_index``."""
+        if task.n_goals != n_train + 1:
+            raise ConfigError(
+                f"the task must have the {n_train} training goals plus one new goal, has {task.n_goals}"
+            )
+        if not 0 <= ref_index < n_train:
+            raise ConfigError(f"ref_index must be in [0, {n_train}), got {ref_index}")
+        robot = task.robot
+        cups = robot.goal_positions()
+        base = robot.base_position()
+        delta = _bearing(cups[-1], base) - _bearing(cups[ref_index], base)
+        delta = float((delta + np.pi) % (2 * np.pi) - np.pi) * abs(_yaw_axis(robot))
+        sites = robot.grasp_positions(
+            np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
+        )
+        p0, pg = sites[0], sites[1]
+        line = pg - p0
+        if np.linalg.norm(line) < 1e-6:
+            raise ConfigError("the new goal's grasp site coincides with the start's: no path to map")
+        progress = (sites[2:] - p0) @ line / (line @ line)
+        saturation = float(min(progress.min(), 1.0))
+        if saturation < 0.2:
+            raise ConfigError(
+                "the new cup's grasps do not lie far enough ahead of the start "
+                f"(least progress {saturation:.2f})"
+            )
+        return cls(
+            robot,
+            task.start.copy(),
+            task.goals[-1].copy(),
+            task.goals[ref_index].copy(),
+            cups[-1].copy(),
+            cups[ref_index].copy(),
+            delta,
+            p0,
+            pg,
+            saturation,
+            ref_index,
+            n_train,
+        )
+
+    def _weight(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """w (B,) at site positions p (B, 3), and whether it lies strictly inside (0, 1)."""
+        line = self.site_goal - self.site_start
+        lam = (p - self.site_start) @ line / (float(line @ line) * self.saturation)
+        return np.clip(lam, 0.0, 1.0), (lam > 0.0) & (lam < 1.0)
+
+    def _poses(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Site positions, rotations and Jacobians at s (B, n); w, inside; p_hat and R_hat."""
+        p, rot, jac = self.robot.grasp_jacobians(s)
+        w, inside = self._weight(p)
+        back = self.ref_cup + (p - self.new_cup) @ rot_z(-self.delta).T  # T^-1 p
+        p_hat = p + w[:, None] * (back - p)
+        r_hat = np.einsum("bij,bjk->bik", np.stack([rot_z(-wi * self.delta) for wi in w]), rot)
+        return p, rot, jac, w, inside, back, p_hat, r_hat
+
+    def state(self, state: np.ndarray) -> np.ndarray:
+        """s_hat: the IK of the equivalent site pose, shape (..., n)."""
+        state = np.asarray(state, dtype=float)
+        key = state.tobytes()
+        if self._cache is not None and self._cache[0] == key:
+            return self._cache[1]
+        flat = state.reshape(-1, state.shape[-1])
+        _, _, _, w, _, _, p_hat, r_hat = self._poses(flat)
+        seeds = self.robot.clip(flat + w[:, None] * (self.ref_goal - self.new_goal))
+        out = np.empty_like(flat)
+        for i in range(len(flat)):
+            try:
+                out[i] = solve_grasp_ik(
+                    self.robot,
+                    p_hat[i],
+                    r_hat[i],
+                    seeds[i],
+                    position_tol=1e-5,
+                    rotation_tol=1e-4,
+                    max_iters=200,
+                )
+            except IKError:
+                out[i] = seeds[i]
+                self.fallbacks += 1
+        out = out.reshape(state.shape)
+        self._cache = (key, out)
+        return out
+
+    def belief(self, belief: np.ndarray) -> np.ndarray:
+        """b_hat over the training goals, as :meth:`ContextMap.belief`."""
+        belief = np.asarray(belief, dtype=float)
+        if belief.shape[-1] != self.n_train + 1:
+            raise ConfigError(f"belief must be over {self.n_train + 1} goals, got shape {belief.shape}")
+        out = belief[..., : self.n_train].copy()
+        out[..., self.ref_index] += belief[..., self.n_train]
+        return out
+
+    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """h(s, b) = (s_hat, b_hat)."""
+        return self.state(state), self.belief(belief)
+
+    def differential(self, state: np.ndarray) -> np.ndarray:
+        """M(s) = d X_hat / ds, the equivalent site pose's (translation over rotation), (B, 6, n)."""
+        flat = np.asarray(state, dtype=float).reshape(-1, self.robot.n_joints)
+        p, _, jac, w, inside, back, _, _ = self._poses(flat)
+        line = self.site_goal - self.site_start
+        grad = np.einsum("bin,i->bn", jac[:, :3], line) / (float(line @ line) * self.saturation)
+        grad *= inside[:, None]
+        turn = rot_z(-self.delta)
+        a_pos = (1.0 - w)[:, None, None] * np.eye(3) + w[:, None, None] * turn
+        top = np.einsum("bij,bjn->bin", a_pos, jac[:, :3]) + (back - p)[:, :, None] * grad[:, None, :]
+        spin = np.stack([rot_z(-wi * self.delta) for wi in w])
+        bottom = np.einsum("bij,bjn->bin", spin, jac[:, 3:])
+        bottom[:, 2] -= self.delta * grad
+        return np.concatenate([top, bottom], axis=1)
+
+    def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """a from a decoded a_hat: the same motion of the equivalent site pose, (..., n).
+
+        ``state`` is (U, n) or (U, 1, n) for (U, K, n) candidates, as :class:`ContextMap` takes it.
+        """
+        state = np.asarray(state, dtype=float)
+        action = np.asarray(action, dtype=float)
+        n = state.shape[-1]
+        users = state.reshape(-1, n)
+        s_hat = self.state(state).reshape(-1, n)
+        m = self.differential(users)
+        _, _, j_hat = self.robot.grasp_jacobians(s_hat)
+        _, sv, vt = np.linalg.svd(j_hat)
+        rank = int(np.median((sv > 1e-8 * sv[:, :1]).sum(axis=1)))
+        null = vt[:, rank:, :]  # (U, n - rank, n)
+        lhs = np.concatenate([m, null], axis=1)
+        solve = np.linalg.pinv(lhs)  # (U, n, 6 + n - rank)
+        a_hat = action.reshape(len(users), -1, n)
+        rhs = np.concatenate(
+            [np.einsum("uin,ukn->uki", j_hat, a_hat), np.einsum("uin,ukn->uki", null, a_hat)], axis=-1
+        )
+        return np.einsum("unr,ukr->ukn", solve, rhs).reshape(action.shape)
+
+
+def context_map(
+    task: CupTask, n_train: int, ref_index: int, kind: str = "grasp"
+) -> ContextMap | TaskSpaceMap:
+    """The context map of ``kind`` (:data:`MAP_KINDS`) for the last goal of ``task`` onto ``ref_index``."""
+    check_choice("kind", kind, MAP_KINDS)
+    if kind == "straight_line_ee":
+        return TaskSpaceMap.for_task(task, n_train, ref_index)
+    return ContextMap.for_task(task, n_train, ref_index, kind)
+
+
 @dataclasses.dataclass(frozen=True)
 class MappedDecoder:
     """The decoder seen through a context map: phi over the grown task's G + 1 goals.
@@ -384,7 +587,7 @@ class MappedDecoder:
     """
 
     model: ActionDecoder
-    context_map: ContextMap
+    context_map: ContextMap | TaskSpaceMap
 
     def __post_init__(self) -> None:
         if self.model.n_goals != self.context_map.n_train:

@@ -410,6 +410,33 @@ class Robot:
         lead = qs.shape[:-1]
         return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
 
+    def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors.
+
+        Meant for measures at the episodes' ends, not for the control loop (see :meth:`_site_frames`).
+        """
+        return self._site_frames(qs)
+
+    def grasp_jacobians(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Grasp-site positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n) at joints ``qs`` (B, n).
+
+        The Jacobian stacks the translational rows over the rotational ones (world frame), with
+        respect to the arm joints.
+        """
+        qs = np.asarray(qs, dtype=float).reshape(-1, self.n_joints)
+        dofs = np.array([self.model.jnt_dofadr[self.model.joint(j).id] for j in self.spec.joints])
+        jacp, jacr = np.zeros((3, self.model.nv)), np.zeros((3, self.model.nv))
+        pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))
+        jac = np.empty((len(qs), 6, self.n_joints))
+        for i, q in enumerate(qs):  # MuJoCo's kinematics take one configuration at a time
+            self.set_state(q)
+            mujoco.mj_comPos(self.model, self.data)
+            mujoco.mj_jacSite(self.model, self.data, jacp, jacr, self._site)
+            pos[i] = self.data.site_xpos[self._site]
+            rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
+            jac[i, :3], jac[i, 3:] = jacp[:, dofs], jacr[:, dofs]
+        return pos, rot, jac
+
     def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
         """Grasp-site positions for a batch of joint vectors, shape (..., 3).
 

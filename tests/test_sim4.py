@@ -1,0 +1,205 @@
+"""Fig. sim4's measure (the cup on the table, the grasp at the gripper), its readings and its plot."""
+
+from __future__ import annotations
+
+import re
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import pytest
+
+from lasa.evidence.verdicts import assess, member_frame
+from lasa.figures import sim4
+from lasa.figures.new_cups import map_geometry, new_cup_positions
+from lasa.method.newgoals import extend_task, new_goal_frames
+
+REF = 1
+
+
+def test_grasp_error_of_the_held_training_grasp_is_the_cup_distance(task):
+    """A robot that holds, at the training cup, the grasp the user wants at a new cup is off by the
+    cup's distance on the table: y = x by construction (planar5's new cups are translates)."""
+    config = sim4.Config(offsets=(0.08, 0.2))
+    theta = np.linspace(0.0, 1.0, 7)
+    for offset, pos in zip(config.offsets, new_cup_positions(task, config), strict=True):
+        big = extend_task(task, pos, REF)
+        held, wanted = task.target(REF, theta), big.target(np.full(7, 2), theta)
+        metres, degrees = sim4.grasp_error(task.robot, held, wanted)
+        np.testing.assert_allclose(metres, offset, rtol=5e-3)  # IK tolerance and the spline
+        np.testing.assert_allclose(degrees, 0.0, atol=0.5)  # the same approach direction
+        # the wanted grasp's site is the new cup's grasp frame (by hand: the reference frame moved)
+        frames, _ = new_goal_frames(task, REF, pos)
+        at_grid, _ = sim4.grasp_error(task.robot, big.curves[-1], big.curves[-1])
+        assert np.all(at_grid == 0.0)
+        np.testing.assert_allclose(task.robot.grasp_positions(big.curves[-1]), frames, atol=2e-3)
+
+
+def test_grasp_error_against_forward_kinematics_by_hand(task):
+    arm = task.robot
+    q = task.goals[REF]
+    p, r = arm.grasp_pose(q)
+    q2 = q + np.array([0.0, 0.0, 0.0, 0.0, 0.3])  # the last joint alone: the site turns about the wrist
+    p2, r2 = arm.grasp_pose(q2)
+    metres, degrees = sim4.grasp_error(arm, q2[None], q[None])
+    assert metres[0] == pytest.approx(np.linalg.norm(p2 - p))
+    assert degrees[0] == pytest.approx(np.degrees(np.arccos(np.clip(r[:, 2] @ r2[:, 2], -1, 1))))
+    assert degrees[0] > 1.0  # the wrist's turn shows
+
+
+def _rows(n_users: dict[str, int], big: float = 4.0) -> pd.DataFrame:
+    """Synthetic sim4 rows under both measures: the headline's slopes differ from the joint ones."""
+    rng = np.random.default_rng(0)
+    out = []
+    for robot, n in n_users.items():
+        for d in (0.4, 0.7, 1.0):
+            for h, (slope, slope_joint) in {
+                "none": (1.0, 1.5),
+                "straight_line": (0.11, 1.1),
+                "grasp": (0.05, 0.01),
+            }.items():
+                err = slope * d + 0.01 * rng.normal(size=n)
+                out.append(
+                    pd.DataFrame(
+                        {
+                            "robot": robot,
+                            "mapping": "without" if h == "none" else "with",
+                            "distance": d,
+                            "seed": np.arange(n),
+                            "error": np.abs(err),
+                            "h": h,
+                            "assistance": "point",
+                            "angle_error_deg": 10.0 * d,
+                            "distance_joint": 0.9 * d,
+                            "error_joint": slope_joint * 0.9 * d + 0.01 * rng.normal(size=n),
+                        }
+                    )
+                )
+    frame = pd.concat(out, ignore_index=True)
+    frame.loc[(frame.h == "none") & (frame.distance == 1.0) & (frame.seed == 0), "error"] = big
+    return frame
+
+
+def test_headline_is_the_table_measure_and_joint_space_a_reading():
+    frame = _rows({"panda": 8})
+    claims = {c.id: c for c in sim4.claims(frame)}
+    assert set(claims) == {
+        "sim4.straight_line_linear",
+        "sim4.grasp_linear",
+        "sim4.no_map_training_goal",
+        "sim4.straight_line_linear@joint_space",
+        "sim4.grasp_linear@joint_space",
+        "sim4.no_map_training_goal@joint_space",
+    }
+    table, joint = sim4.fits(frame), sim4.fits(frame, "joint_space")
+    assert claims["sim4.straight_line_linear"].values["slope"] == pytest.approx(
+        table.loc["straight_line", "slope"]
+    )
+    assert claims["sim4.straight_line_linear@joint_space"].values["slope"] == pytest.approx(
+        joint.loc["straight_line", "slope"]
+    )
+    assert claims["sim4.straight_line_linear"].values["slope"] == pytest.approx(0.11, abs=0.02)
+    assert claims["sim4.straight_line_linear@joint_space"].values["slope"] == pytest.approx(1.1, abs=0.02)
+    # the vectorized bootstrap gives numbers under the same ids, and the verdicts come out
+    boot = sim4.boot_values(frame, np.ones((3, 8)))
+    assert set(boot) == set(claims)
+    for cid, values in boot.items():
+        assert set(values) == set(claims[cid].values)
+        for k, v in values.items():
+            np.testing.assert_allclose(v, claims[cid].values[k], rtol=1e-9)
+    judged = assess(sim4.claims, frame, n_boot=20, fast=sim4.boot_values)
+    assert [c.id for c in judged] == [c.id for c in sim4.claims(frame)]
+
+
+def test_notes_hold_numbers_only():
+    frame = _rows({"panda": 8})
+    frame.loc[(frame.h == "straight_line") & (frame.distance == 0.4), "error"] = 5.0  # above none there
+    notes = [c.note for c in sim4.claims(frame) if c.note]
+    assert notes
+    allowed = (
+        r"Above the no-map error at \d+ of \d+ cups\.",
+        r"Mean approach-axis error [\d.]+° at the nearest cup, [\d.]+° at the farthest\.",
+    )
+    for note in notes:
+        assert re.sub("|".join(allowed), "", note).strip() == "", note
+    assert any(note.startswith("Above the no-map error at 1 of 3 cups.") for note in notes)
+
+
+def _drawn_ys(ax) -> np.ndarray:
+    """The y of everything drawn in ``ax`` (lines, points, error bars)."""
+    ys = [np.asarray(line.get_ydata(), dtype=float) for line in ax.lines]
+    for coll in ax.collections:
+        offsets = np.asarray(coll.get_offsets(), dtype=float)
+        if offsets.size:
+            ys.append(offsets[:, 1])
+        ys += [
+            np.asarray(seg, dtype=float)[:, 1] for seg in getattr(coll, "get_segments", list)() if len(seg)
+        ]
+    return np.concatenate(ys)
+
+
+def test_plot_shows_every_point_and_says_its_users():
+    frame = _rows({"planar5": 6, "panda": 4}, big=4.0)
+    fig = sim4.plot(frame)
+    axes = fig.axes
+    assert len(axes) == 4  # two panels, each with its panel of episodes
+    for ax in axes:
+        ys = _drawn_ys(ax)
+        assert ax.get_ylim()[0] <= np.nanmin(ys) and ax.get_ylim()[1] >= np.nanmax(ys)
+    assert max(ax.get_ylim()[1] for ax in axes) >= 4.0  # the outlier is in view
+    title = fig._suptitle.get_text().replace("\n", " ")
+    assert "N = 6 (planar5), 4 (panda) near-optimal users per point" in title
+    plt.close(fig)
+    one = _rows({"panda": 5})
+    fig = sim4.plot(one)
+    title = fig._suptitle.get_text().replace("\n", " ")
+    n = int(member_frame(one, "point").groupby(["h", "distance"]).seed.nunique().min())
+    assert f"N = {n} near-optimal users per point" in title
+    # the paper's y = 0.11x is drawn above our lines, in a style of its own
+    ax = fig.axes[0]
+    paper = next(line for line in ax.lines if line.get_label() == "paper, with the map: y = 0.11x")
+    ours = [line for line in ax.lines if line.get_label().startswith(("straight-line", "grasp-to-grasp"))]
+    assert ours and all(paper.get_zorder() > line.get_zorder() for line in ours)
+    assert all(paper.get_linestyle() != line.get_linestyle() for line in ours)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("95% bootstrap interval" in t for t in labels)
+    plt.close(fig)
+
+
+def test_map_geometry_on_planar5(task):
+    config = sim4.Config(offsets=(0.08, 0.2))
+    geo = map_geometry(task, config)
+    assert set(geo.index.get_level_values("h")) == {"grasp", "straight_line", "straight_line_ee"}
+    # the grasp-to-grasp map is exact at the grasps up to its soft assignment, the gripper's line up
+    # to the IK; the joint-space straight line is not
+    assert (geo.xs("grasp", level="h").misfit_m < 0.005).all()
+    assert (geo.xs("straight_line_ee", level="h").misfit_m < 0.002).all()
+    line = geo.xs("straight_line", level="h")
+    assert (line.misfit_m > 0.01).all() and line.misfit_m.is_monotonic_increasing
+    assert (geo.branch_rad < 0.1).all() and (geo.margin_rad > 0).all()
+
+
+def test_judged_rows_name_the_measure_then_the_member(model, task):
+    from lasa.figures.common import judge
+
+    config = sim4.Config(
+        offsets=(0.08, 0.14), users=2, block=2, cap=2, horizon=6, n_boot=10, assistance=("point", "grasp_set")
+    )
+    frame, outcome, _ = judge(sim4, model, task, task.robot.control, config)
+    ids = {(c.id, c.assistance) for c in outcome.claims}
+    for name in (
+        "straight_line_linear",
+        "grasp_linear",
+        "no_map_training_goal",
+        "straight_line_linear@ee_line",
+    ):
+        plain, reading = f"sim4.{name}", f"sim4.{name}{'+' if '@' in name else '@'}"
+        assert {
+            (plain, "point"),
+            (f"{reading}joint_space", "point"),
+            (f"{reading}grasp_set", "grasp_set"),
+            (f"{reading}joint_space+grasp_set", "grasp_set"),
+        } <= ids
+    assert len(ids) == 16 and all(c.id.count("@") <= 1 for c in outcome.claims)
+    assert {"end_goal", "angle_error_deg", "error_joint"} <= set(frame.columns)
+    assert set(frame.end_goal) <= {"new", "reference", "other"}
