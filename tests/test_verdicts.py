@@ -131,7 +131,7 @@ def test_sequential_stops_at_the_first_settled_look():
     assert log == [(0, ("point", "grasp_set"))]  # settled at once: no more users
     assert [c.id for c in out.claims] == [TOY, f"{TOY}@grasp_set"]  # no copy of the headline
     assert out.claims[0].n_users == 4 and out.claims[0].settled and out.claims[0].assistance == "point"
-    assert out.claims[0].note.startswith("The effect settled at look 1 of 2.")
+    assert out.claims[0].note.startswith("The effect is settled at look 1 of 2.")
     assert list(out.looks.users) == [4]
 
 
@@ -146,7 +146,7 @@ def test_sequential_adds_headline_users_until_the_cap_and_says_undecided():
     ]  # later looks: headline only
     head, other = out.claims
     assert head.n_users == 8 and head.reproduced == "undecided"
-    assert "The effect is undecided at the cap (8 users)" in head.note
+    assert "The effect is undecided at look 3 of 3, the cap (8 users)." in head.note
     assert other.id == f"{TOY}@hindsight" and other.n_users == 4  # the other readings: the first look
     assert list(out.looks.users) == [4, 6, 8] and out.frame.look.max() == 2
 

@@ -377,7 +377,9 @@ def sequential(
             {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
             for c in head
         ]
-        if all(c.settled for c in head):
+        # the design's stopping rule reads the headline claims only, never a figure's own readings
+        # (sim4's ``@joint_space``), which are judged at whatever look the headline stops
+        if all(c.settled for c in head if "@" not in c.id):
             break
     first = frame[frame.look == 0]
     others = {
@@ -389,17 +391,15 @@ def sequential(
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
         where = (
-            f"Readings with other words (at {design.first} users): {'; '.join(flips)}. "
+            f"Members with other words (at {design.first} users): {'; '.join(flips)}. "
             if flips
-            else "Every other reading gives the same words. "
+            else "Every other member gives the same words. "
             if others
             else ""
         )
-        stop = (
-            f"The effect settled at look {look + 1} of {len(design.sizes)}. "
-            if c.settled
-            else f"The effect is undecided at the cap ({design.cap} users). "
-        )
+        at = f"look {look + 1} of {len(design.sizes)}"
+        cap = f", the cap ({design.cap} users)" if look + 1 == len(design.sizes) else ""
+        stop = f"The effect is settled at {at}. " if c.settled else f"The effect is undecided at {at}{cap}. "
         rows.append(dataclasses.replace(c, assistance=default, note=stop + where + c.note))
     for m, claims in others.items():
         rows += [dataclasses.replace(c, id=f"{c.id}@{m}", assistance=m) for c in claims]
