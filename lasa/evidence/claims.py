@@ -327,7 +327,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "the straight-line map moves the grasp curve rigidly",
+        "the straight-line map moves the training cup's grasp curve rigidly in joint space, so the mapped "
+        "grasps miss the new cup's by a margin that grows with the distance",
         "07_new_goals",
         "What it shows, against the paper",
     ),
@@ -344,7 +345,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "the user's own grasp at a far cup lies farther than the goal that defines the distance",
+        "without the map the robot reaches for the training cup, error = distance; a share of users that "
+        "grows with the distance ends with the belief on the other training cup, farther off",
         "07_new_goals",
         "What it shows, against the paper",
     ),

@@ -503,12 +503,14 @@ def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
     the wanted grasp (:data:`BANDS`), map and new cup.
 
     Returns:
-        One row per (``h``, ``band``, ``distance``): ``error``, ``angle_error_deg``, ``other``, ``n``.
+        One row per (``h``, ``band``, ``distance``): ``error``, ``angle_error_deg``, ``other``, ``n``
+        (every band, an empty one with NaN numbers and ``n`` 0).
     """
     edges = [lo for lo, _ in BANDS.values()] + [1.0 + 1e-9]
     band = pd.cut(frame.theta, edges, right=False, labels=list(BANDS))
+    # every band appears, empty ones with NaN numbers and n = 0 (a small run may draw no middle grasp)
     grouped = frame.assign(band=band, other=frame.end_goal == "other").groupby(
-        ["h", "band", "distance"], observed=True
+        ["h", "band", "distance"], observed=False
     )
     return grouped.agg(
         error=("error", "mean"),
