@@ -162,7 +162,7 @@ def test_plot_shows_every_point_and_says_its_users():
     assert ours and all(paper.get_zorder() > line.get_zorder() for line in ours)
     assert all(paper.get_linestyle() != line.get_linestyle() for line in ours)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert any("95% bootstrap interval" in t for t in labels)
+    assert any("98.75% bootstrap interval" in t for t in labels)  # the verdicts' level
     plt.close(fig)
 
 

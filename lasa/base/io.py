@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from lasa.base.errors import ArtifactError
+from lasa.base.errors import ArtifactError, ConfigError
 
 __all__ = [
+    "sync_between",
     "atomic_path",
     "locked",
     "write_csv",
@@ -171,3 +172,35 @@ def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarr
         raise ArtifactError(
             f"{path} is corrupt or unreadable ({exc}). Delete it and re-make it with: {make_hint}"
         ) from exc
+
+
+def sync_between(
+    path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
+) -> bool:
+    """Put ``text`` between ``markers`` in the file ``path``.
+
+    Args:
+        path: The markdown file.
+        markers: Its begin and end markers.
+        text: What goes between them.
+        inline: Within a line (a sentence), else on the lines between the markers' lines.
+
+    Returns:
+        Whether the file changed.
+
+    Raises:
+        ConfigError: if the file lacks either marker, or holds them out of order.
+    """
+    path = Path(path)
+    content = path.read_text()
+    begin, end = markers
+    if begin not in content or end not in content or content.index(begin) > content.index(end):
+        raise ConfigError(f"{path} must hold the markers {begin!r} and {end!r}, in that order")
+    head, rest = content.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    body = text.strip() if inline else f"\n{text.strip()}\n"
+    new = f"{head}{begin}{body}{end}{tail}"
+    if new == content:
+        return False
+    write_text(path, new)
+    return True

@@ -35,7 +35,7 @@ from pathlib import Path
 import pandas as pd
 
 from lasa.base.errors import ConfigError
-from lasa.base.io import locked, write_csv, write_text
+from lasa.base.io import locked, sync_between, write_csv, write_text
 from lasa.evidence.decision import (
     CENSORED,
     NOT_APPLICABLE,
@@ -345,8 +345,9 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "without the map the robot reaches for the training cup, error = distance; a share of users that "
-        "grows with the distance ends with the belief on the other training cup, farther off",
+        "without the map the robot reaches for the training cup, its error about the cup's distance; a "
+        "share of users that grows with the distance ends with the belief on the other training cup, "
+        "farther off",
         "07_new_goals",
         "What it shows, against the paper",
     ),
@@ -511,18 +512,7 @@ def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]
     Raises:
         ConfigError: if the README lacks either marker (:data:`README_MARKERS`).
     """
-    readme, table_md = Path(readme), Path(table_md)
-    text = readme.read_text()
-    begin, end = README_MARKERS
-    if begin not in text or end not in text or text.index(begin) > text.index(end):
-        raise ConfigError(f"{readme} must hold the lines {begin!r} and {end!r}, in that order")
-    head, rest = text.split(begin, 1)
-    _, tail = rest.split(end, 1)
-    new = f"{head}{begin}\n{table_md.read_text().rstrip()}\n{end}{tail}"
-    if new == text:
-        return False
-    write_text(readme, new)
-    return True
+    return sync_between(readme, README_MARKERS, Path(table_md).read_text())
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, wrap_to
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.figures.common import Decoders, LooksConfig, check_methods
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
@@ -563,6 +563,14 @@ H_STYLES = {
     "grasp": ("#1b9e77", "grasp-to-grasp h (ours)"),
     "straight_line_ee": ("#e7298a", "straight-line h, gripper's space"),
 }
+# per kind of map: (marker, line dashes, x offset of its markers): near-equal lines and means of two
+# maps (the grasp-to-grasp and the gripper's-space maps lie within 0.01 D) stay visible side by side
+H_MARKS = {
+    "none": ("o", (None, None), -0.015),
+    "straight_line": ("s", (None, None), -0.005),
+    "grasp": ("^", (5.0, 2.0), 0.005),
+    "straight_line_ee": ("D", (1.5, 1.5), 0.015),
+}
 
 
 # the paper's lines (Sec. V-D): slope -> (legend label, line style); drawn above ours
@@ -570,7 +578,7 @@ PAPER_LINES = {0.11: ("paper, with the map: y = 0.11x", ":"), 1.0: ("paper, with
 PAPER_UNITS = (
     "(both axes ÷ D, the farthest new cup's distance, as the paper's; the grasp error at the gripper)"
 )
-CI_LEVEL = 0.95  # the error bars: bootstrap interval of each cup's mean error, users resampled
+CI_LEVEL = Design().level  # the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
 N_BOOT_PLOT = 1000
 
 
@@ -596,9 +604,10 @@ def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
 def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     """One robot's panel: grasp error at new cups against their distance, per kind of map.
 
-    The main axes show each cup's mean error with its 95% bootstrap interval (users
-    resampled; :data:`CI_LEVEL`) and the least-squares fit through the means (its equation
-    and R^2 in the legend, from :func:`fits`; with the mean approach-axis error at the
+    The main axes show each cup's mean error with its bootstrap interval at the verdicts' level
+    (users resampled; :data:`CI_LEVEL`), each map's markers a little apart and its line dashed its
+    own way (:data:`H_MARKS`) so that no map hides another, and the least-squares fit through the
+    means (its equation and R^2 in the legend, from :func:`fits`; with the mean approach-axis error at the
     nearest and the farthest cup when the frame has it). The paper's two lines
     (:data:`PAPER_LINES`) are drawn above ours, in black. A narrow panel beside it shows every episode.
     Neither axis is cut: each one's y-limits lie around everything drawn in it.
@@ -612,11 +621,12 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
         if kind not in table.index:
             continue
         cups = _cup_means(frame[frame.h == kind])
+        marker, dashes, dx = H_MARKS[kind]
         ax.errorbar(
-            cups.distance,
+            cups.distance + dx,
             cups["mean"],
             yerr=[cups["mean"] - cups.low, cups.high - cups["mean"]],
-            fmt="o",
+            fmt=marker,
             color=color,
             ms=4,
             capsize=2,
@@ -627,7 +637,9 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
         if angles is not None:
             per_cup = angles[kind]
             label += f"; approach error {per_cup.iloc[0]:.1f}° → {per_cup.iloc[-1]:.1f}°"
-        ax.plot(xs, f.slope * xs + f.intercept, color=color, lw=1.5, label=label, zorder=2)
+        line = ax.plot(xs, f.slope * xs + f.intercept, color=color, lw=1.5, label=label, zorder=2)[0]
+        if dashes[0] is not None:
+            line.set_dashes(dashes)
         tops += [float(cups.high.max()), float(max(f.slope * xs + f.intercept))]
         bottoms += [float(cups.low.min()), float(min(f.slope * xs + f.intercept))]
     ax.errorbar(
@@ -638,7 +650,7 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
         color="0.4",
         ms=4,
         capsize=2,
-        label=f"mean per cup, bars: {100 * CI_LEVEL:.0f}% bootstrap interval (users resampled)",
+        label=f"mean per cup, bars: {100 * CI_LEVEL:.4g}% bootstrap interval (the verdicts' level)",
     )
     for slope, (label, ls) in PAPER_LINES.items():
         paper_slope(ax, slope, label, x_max=1.05, ls=ls, lw=1.8, zorder=6)

@@ -222,6 +222,20 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     )
 
 
+def merged_belief(belief: np.ndarray, n_train: int, ref_index: int) -> np.ndarray:
+    """b_hat over the ``n_train`` training goals: the new goal's (the last) joins ``ref_index``'s.
+
+    Raises:
+        ConfigError: if ``belief`` is not over ``n_train + 1`` goals.
+    """
+    belief = np.asarray(belief, dtype=float)
+    if belief.shape[-1] != n_train + 1:
+        raise ConfigError(f"belief must be over {n_train + 1} goals, got shape {belief.shape}")
+    out = belief[..., :n_train].copy()
+    out[..., ref_index] += belief[..., n_train]
+    return out
+
+
 @dataclasses.dataclass(frozen=True)
 class ContextMap:
     """h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's.
@@ -324,12 +338,7 @@ class ContextMap:
 
     def belief(self, belief: np.ndarray) -> np.ndarray:
         """b_hat over the training goals: the new goal's belief joins the reference's, (..., G)."""
-        belief = np.asarray(belief, dtype=float)
-        if belief.shape[-1] != self.n_train + 1:
-            raise ConfigError(f"belief must be over {self.n_train + 1} goals, got shape {belief.shape}")
-        out = belief[..., : self.n_train].copy()
-        out[..., self.ref_index] += belief[..., self.n_train]
-        return out
+        return merged_belief(belief, self.n_train, self.ref_index)
 
     def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """h(s, b) = (s_hat, b_hat)."""
@@ -511,12 +520,7 @@ class TaskSpaceMap:
 
     def belief(self, belief: np.ndarray) -> np.ndarray:
         """b_hat over the training goals, as :meth:`ContextMap.belief`."""
-        belief = np.asarray(belief, dtype=float)
-        if belief.shape[-1] != self.n_train + 1:
-            raise ConfigError(f"belief must be over {self.n_train + 1} goals, got shape {belief.shape}")
-        out = belief[..., : self.n_train].copy()
-        out[..., self.ref_index] += belief[..., self.n_train]
-        return out
+        return merged_belief(belief, self.n_train, self.ref_index)
 
     def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """h(s, b) = (s_hat, b_hat)."""

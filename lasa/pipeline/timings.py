@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.base.io import locked, write_text
+from lasa.base.io import locked, sync_between, write_text
 
 __all__ = [
     "README_MARKERS",
@@ -56,7 +56,6 @@ __all__ = [
     "duration",
     "render_sentence",
     "render_table",
-    "sync_between",
     "sync_readmes",
     "main",
 ]
@@ -357,38 +356,6 @@ def render_table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> 
         _row("quick", figures_s.get("quick"), targets.get(_TARGETS["quick"])),
     ]
     return "\n".join(lines)
-
-
-def sync_between(
-    path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
-) -> bool:
-    """Put ``text`` between ``markers`` in the file ``path``.
-
-    Args:
-        path: The markdown file.
-        markers: Its begin and end markers.
-        text: What goes between them.
-        inline: Within a line (a sentence), else on the lines between the markers' lines.
-
-    Returns:
-        Whether the file changed.
-
-    Raises:
-        ConfigError: if the file lacks either marker, or holds them out of order.
-    """
-    path = Path(path)
-    content = path.read_text()
-    begin, end = markers
-    if begin not in content or end not in content or content.index(begin) > content.index(end):
-        raise ConfigError(f"{path} must hold the markers {begin!r} and {end!r}, in that order")
-    head, rest = content.split(begin, 1)
-    _, tail = rest.split(end, 1)
-    body = text.strip() if inline else f"\n{text.strip()}\n"
-    new = f"{head}{begin}{body}{end}{tail}"
-    if new == content:
-        return False
-    write_text(path, new)
-    return True
 
 
 def sync_readmes(
