@@ -396,7 +396,7 @@ PAPER_RATIOS = {float(p.where.split("=")[1]): p.value for p in rule("sim1.time_r
 RATIO_TOLERANCE = rule("sim1.time_ratio").paper[0].tolerance
 LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 PAPER_FINAL_ERROR = "paper: LA+SA below LA at every β"  # Fig. sim1 (Sec. V-A), rule sim1.final_error
-OPEN = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "zorder": 6}  # a censored point's marker
+OPEN: dict[str, Any] = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "zorder": 6}  # a censored point
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:

@@ -565,9 +565,9 @@ H_STYLES = {
 }
 # per kind of map: (marker, line dashes, x offset of its markers): near-equal lines and means of two
 # maps (the grasp-to-grasp and the gripper's-space maps lie within 0.01 D) stay visible side by side
-H_MARKS = {
-    "none": ("o", (None, None), -0.015),
-    "straight_line": ("s", (None, None), -0.005),
+H_MARKS: dict[str, tuple[str, tuple[float, ...], float]] = {
+    "none": ("o", (), -0.015),
+    "straight_line": ("s", (), -0.005),
     "grasp": ("^", (5.0, 2.0), 0.005),
     "straight_line_ee": ("D", (1.5, 1.5), 0.015),
 }
@@ -638,7 +638,7 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
             per_cup = angles[kind]
             label += f"; approach error {per_cup.iloc[0]:.1f}° → {per_cup.iloc[-1]:.1f}°"
         line = ax.plot(xs, f.slope * xs + f.intercept, color=color, lw=1.5, label=label, zorder=2)[0]
-        if dashes[0] is not None:
+        if dashes:  # () keeps the solid line
             line.set_dashes(dashes)
         tops += [float(cups.high.max()), float(max(f.slope * xs + f.intercept))]
         bottoms += [float(cups.low.min()), float(min(f.slope * xs + f.intercept))]
