@@ -440,10 +440,11 @@ def run_pipeline(command: list[str], out_dir: Path) -> dict[str, Any]:
     ``out_dir`` is deleted first; the command must write ``out_dir/timings.jsonl``.
 
     Returns:
-        ``{total, per_notebook, sum_of_notebooks, measured}``, as ``make figures`` writes it
-        (:func:`lasa.pipeline.timings.summarize`): the wall time from the first notebook's start
-        to the last one's end [s], each notebook's time [s], their sum, and the run that measured
-        them (the machine, date, commit and command), so that a time the package reports names its run.
+        ``{total, per_notebook, sum_of_notebooks, date, machine, commit, command, source}``, as
+        ``make figures`` writes it (:func:`lasa.pipeline.timings.summarize`): the wall time from the
+        first notebook's start to the last one's end [s], each notebook's time [s], their sum, and
+        the run that measured them (date, machine, commit, command), so that a reported time names
+        its run.
 
     Raises:
         RuntimeError: if the command fails (with the end of its output).

@@ -111,7 +111,8 @@ def test_results_hold_every_key(tiny_results):
         assert results["targets"][key] > 0, key
     figures = results["figures_s"]
     assert set(figures["per_notebook"]) == {"01_demonstrations-planar5"} and figures["total"] > 0
-    assert {"cpu", "cores", "date", "commit", "command", "source"} <= set(figures["measured"])  # its run
+    assert {"date", "machine", "commit", "command", "source"} <= set(figures)  # the run that measured it
+    assert {"cpu", "cores"} <= set(figures["machine"])
     assert isinstance(results["training_s"], dict)
     assert results["machine"]["cores"] >= 1
     assert set(results["threads"]) == {"step", "sweep", "omp_num_threads"}

@@ -52,8 +52,14 @@ def _write(path: Path, runs: list[tuple[str, str | None, float, float]]) -> Path
 def results(tmp_path: Path) -> Path:
     """A results.json with other keys, an old paper-scale figures_s and a quick part."""
     path = tmp_path / "results.json"
-    run = {**HOST, "date": "2026-01-01", "commit": "old", "command": "make figures", "source": "by hand"}
-    old = {"total": 1.0, "per_notebook": {}, "sum_of_notebooks": 0.0, "measured": run}
+    run = {
+        "date": "2026-01-01",
+        "machine": HOST,
+        "commit": "old",
+        "command": "make figures",
+        "source": "by hand",
+    }
+    old = {"total": 1.0, "per_notebook": {}, "sum_of_notebooks": 0.0, **run}
     data = {
         "machine": {"cpu": "old"},
         "targets": {"figures_total_s": 300.0},
@@ -78,11 +84,10 @@ def test_the_total_is_the_wall_span_not_the_sum(tmp_path, results):
         "02_decoder_training-planar5": 150.0,
         "10_eating_task": 270.0,
     }
-    measured = figures["measured"]
-    assert {k: measured[k] for k in HOST} == HOST
-    assert measured["date"] == "2026-12-04"  # the first start's date (UTC), not today's
-    assert measured["commit"] == "abc1234" and measured["command"] == "make figures"
-    assert str(jsonl) in measured["source"] and "23:59:00 to 00:05:40 UTC" in measured["source"]
+    assert figures["machine"] == HOST
+    assert figures["date"] == "2026-12-04"  # the first start's date (UTC), not today's
+    assert figures["commit"] == "abc1234" and figures["command"] == "make figures"
+    assert str(jsonl) in figures["source"] and "23:59:00 to 00:05:40 UTC" in figures["source"]
     assert written == {k: v for k, v in figures.items() if k != "quick"}
     # the quick part and every other key are kept
     assert figures["quick"]["total"] == 1.0 and data["machine"] == {"cpu": "old"}
@@ -95,19 +100,16 @@ def test_a_quick_run_writes_the_quick_part_alone(tmp_path, results):
     )
     figures = json.loads(results.read_text())["figures_s"]
     assert figures["total"] == 1.0  # the paper-scale part untouched
-    assert (
-        figures["quick"]["total"] == 100.0
-        and figures["quick"]["measured"]["command"] == "make figures QUICK=1"
-    )
+    assert figures["quick"]["total"] == 100.0 and figures["quick"]["command"] == "make figures QUICK=1"
 
 
 def test_the_machine_is_read_here_by_default(tmp_path, results):
     jsonl = _write(tmp_path / "timings.jsonl", RUNS[:1])
     written = timings.record_figures(jsonl, results, "paper", EXPECTED[:1], "make figures")
     assert written is not None
-    measured = written["measured"]
-    assert measured["cores"] >= 1 and measured["numpy"] and measured["torch"] and measured["python"]
-    assert set(measured) == {*HOST, "date", "commit", "command", "source"}
+    host = written["machine"]
+    assert host["cores"] >= 1 and host["numpy"] and host["torch"] and host["python"]
+    assert set(host) == set(HOST) and {"date", "commit", "command", "source"} <= set(written)
 
 
 @pytest.mark.parametrize(
@@ -230,7 +232,7 @@ def test_the_committed_results_have_the_writers_shape(tmp_path):
     written = timings.summarize(timings.read_runs(jsonl), "make figures", str(jsonl))
     for part in (committed, committed["quick"]):
         assert set(part) - {"quick"} == set(written)
-        assert set(part["measured"]) == set(written["measured"])
+        assert set(part["machine"]) == set(written["machine"]) and part["date"] and part["machine"]["cpu"]
         assert part["sum_of_notebooks"] == pytest.approx(sum(part["per_notebook"].values()), abs=0.05)
 
 

@@ -222,9 +222,10 @@ def summarize(
         commit: The code's commit (:func:`git_commit`); this checkout's ``HEAD`` by default.
 
     Returns:
-        ``{total, per_notebook, sum_of_notebooks, measured}``: the wall time from the first start
-        to the last end [s], each notebook's seconds, their sum, and ``measured``: the machine,
-        the ``date`` (UTC) of the first start, the commit, the command and the ``source``.
+        ``{total, per_notebook, sum_of_notebooks, date, machine, commit, command, source}``: the
+        wall time from the first start to the last end [s], each notebook's seconds, their sum, the
+        ``date`` (UTC) of the first start, the ``machine`` (:func:`machine`), the code's commit, the
+        command and where the times were read (``source``): the run that measured them.
 
     Raises:
         ConfigError: if there are no runs, or a run lacks its start or end.
@@ -237,18 +238,15 @@ def summarize(
     last = max(run.end for run in runs if run.end is not None)
     per = {run.name: run.seconds for run in runs}
     span = f"{first:%H:%M:%S} to {last:%H:%M:%S} UTC"
-    measured = {
-        **(machine() if host is None else host),
-        "date": first.date().isoformat(),
-        "commit": git_commit() if commit is None else commit,
-        "command": command,
-        "source": f"{source}: total from the first notebook's start to the last one's end ({span})",
-    }
     return {
         "total": round((last - first).total_seconds(), 2),
         "per_notebook": per,
         "sum_of_notebooks": round(sum(per.values()), 2),
-        "measured": measured,
+        "date": first.date().isoformat(),
+        "machine": dict(machine() if host is None else host),
+        "commit": git_commit() if commit is None else commit,
+        "command": command,
+        "source": f"{source}: total from the first notebook's start to the last one's end ({span})",
     }
 
 
@@ -283,7 +281,7 @@ def record_figures(
         results: ``benchmarks/results.json``.
         part: ``"paper"`` or ``"quick"`` (:data:`PARTS`).
         expected: The notebooks a whole run runs (``<notebook>-<robot>`` or ``<notebook>``).
-        command: The command that ran them, recorded in ``measured``.
+        command: The command that ran them, recorded beside the times.
         **summary: ``host`` and ``commit`` for :func:`summarize`.
 
     Returns:
@@ -324,10 +322,10 @@ def duration(seconds: float) -> str:
 
 def render_sentence(figures_s: Mapping[str, Any]) -> str:
     """The README's words on the paper-scale ``make figures`` time, from ``figures_s``."""
-    m = figures_s["measured"]
+    m, f = figures_s["machine"], figures_s
     return (
-        f"on {m['cores']} cores `make figures` took {duration(figures_s['total'])} "
-        f"({m['cpu']}, {m['date']}, at {m['commit']}: `figures_s` in benchmarks/results.json)"
+        f"on {m['cores']} cores `make figures` took {duration(f['total'])} "
+        f"({m['cpu']}, {f['date']}, at {f['commit']}: `figures_s` in benchmarks/results.json)"
     )
 
 
@@ -336,10 +334,10 @@ def _row(part: str, figures: Mapping[str, Any] | None, target: float | None) -> 
     bound = f"≤ {target:,.0f} s" if target is not None else "(none)"
     if not figures:
         return f"| {_ROWS[part]} | not measured | | | {bound} | |"
-    m, total = figures["measured"], figures["total"]
+    m, total = figures["machine"], figures["total"]
     verdict = "" if target is None else ("met" if total <= target else "**missed**")
-    at = "commit unknown" if m["commit"] == "unknown" else f"at {m['commit']}"
-    run = f"{m['cpu']}, {m['cores']} cores, {m['date']}, {at}: `{m['command']}`"
+    at = "commit unknown" if figures["commit"] == "unknown" else f"at {figures['commit']}"
+    run = f"{m['cpu']}, {m['cores']} cores, {figures['date']}, {at}: `{figures['command']}`"
     return (
         f"| {_ROWS[part]} | **{total:,.0f} s** ({duration(total)}) | "
         f"{figures['sum_of_notebooks']:,.0f} s | {run} | {bound} | {verdict} |"
@@ -350,7 +348,7 @@ def render_table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> 
     """``benchmarks/README.md``'s table of the pipeline's wall times, from ``figures_s``."""
     paper = figures_s if "total" in figures_s else None
     lines = [
-        "| run | wall time | sum of its notebooks | measured (`figures_s.measured`) | target | |",
+        "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |",
         "| --- | ---: | ---: | --- | --- | --- |",
         _row("paper", paper, targets.get(_TARGETS["paper"])),
         _row("quick", figures_s.get("quick"), targets.get(_TARGETS["quick"])),
