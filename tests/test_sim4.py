@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -203,3 +204,17 @@ def test_judged_rows_name_the_measure_then_the_member(model, task):
     assert len(ids) == 16 and all(c.id.count("@") <= 1 for c in outcome.claims)
     assert {"end_goal", "angle_error_deg", "error_joint"} <= set(frame.columns)
     assert set(frame.end_goal) <= {"new", "reference", "other"}
+
+
+def test_the_identity_and_map_sentences_state_the_committed_numbers():
+    """Notebook 07's two result sentences come from lasa, and say what the committed rows hold."""
+    frame = pd.read_csv(Path(__file__).resolve().parents[1] / "figures" / "sim4_new_goals.csv")
+    for robot, part in frame[frame.assistance == "point"].groupby("robot"):
+        said = sim4.identity_sentence(part)
+        held = float(re.search(r"held at the training cup, the error is y = ([\d.]+)x", said).group(1))
+        assert held == pytest.approx(1.0, abs=0.005)  # y = x by construction
+        check = sim4.no_map_check(part)
+        stayed = check.loc["without the map, belief ends on the training cup", "share"]
+        assert f"over the {100 * stayed:.0f}% of episodes" in said and said.startswith(f"{robot}, ")
+    bands = sim4.by_preference(frame[(frame.robot == "panda") & (frame.h == "straight_line")])
+    assert set(bands.index.get_level_values("band")) == set(sim4.BANDS)  # every band, for the sentence

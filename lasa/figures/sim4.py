@@ -59,6 +59,8 @@ __all__ = [
     "MEASURES",
     "claims",
     "boot_values",
+    "identity_sentence",
+    "map_sentences",
     "plot",
     "plot_robot",
 ]
@@ -518,6 +520,70 @@ def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
         other=("other", "mean"),
         n=("error", "size"),
     )
+
+
+def identity_sentence(frame: pd.DataFrame) -> str:
+    """What :func:`no_map_check` and :func:`end_shares` say of y = x on one robot's headline rows."""
+    check, share = no_map_check(frame), end_shares(frame).loc["none", "other"]
+    held, every = check.loc["held at the training cup"], check.loc["without the map"]
+    stay = check.loc["without the map, belief ends on the training cup"]
+    left = check.loc["without the map, belief ends on another cup"]
+    text = (
+        f"{frame.robot.iloc[0]}, {frame[USER].nunique()} users per cup: held at the training cup, the "
+        f"error is y = {held.slope:.3f}x {held.intercept:+.3f} (R² = {held.r2:.3f}). Without the map it "
+        f"is y = {every.slope:.2f}x {every.intercept:+.2f} (R² = {every.r2:.2f}); over the "
+        f"{100 * stay.share:.0f}% of episodes whose belief ends on the training cup, "
+        f"y = {stay.slope:.2f}x {stay.intercept:+.2f} (R² = {stay.r2:.2f}). "
+    )
+    if not left.share > 0:
+        return text + "No episode's belief ends on the other training cup."
+    return text + (
+        f"The belief ends on the other training cup in {100 * share.iloc[0]:.0f}% of the episodes at "
+        f"the nearest new cup and {100 * share.iloc[-1]:.0f}% at the farthest, and those episodes end "
+        f"{left.mean_error:.2f} D from the wanted grasp on average."
+    )
+
+
+def map_sentences(frame: pd.DataFrame, geometry: pd.DataFrame) -> list[str]:
+    """Why the straight-line map errs, from the maps' geometry and the episodes by wanted grasp.
+
+    Args:
+        frame: One robot's headline rows.
+        geometry: :func:`lasa.figures.new_cups.map_geometry` of its task and config.
+
+    Returns:
+        The straight-line map's sentence (branch, limits, misfit, errors per band of
+        :data:`BANDS`), then the gripper's-space map's if the frame has it.
+    """
+    g, bands = geometry, by_preference(frame[frame.h != "none"])
+    far = g.xs(g.index.get_level_values("offset_m").max(), level="offset_m")
+    line = far.loc["straight_line"]
+    top, middle, side = (bands.loc["straight_line"].xs(name, level="band") for name in BANDS)
+    out = [
+        f"{frame.robot.iloc[0]}: the new cups' grasps differ from the training cup's by at most "
+        f"{g.joint1_rad.max():.2f} rad in joint 1 and {g.joint_last_rad.max():.2f} rad in the last joint, "
+        f"and that difference changes by at most {g.branch_rad.max():.3f} rad between neighbouring "
+        f"preferences: no branch switch. The mapped grasps keep at least {g.margin_rad.min():.2f} rad "
+        f"from every joint limit, and the map stretches progress along the line by {g.stretch.min():.2f} "
+        f"to {g.stretch.max():.2f}. At the farthest cup the straight-line map sends the new cup's grasps "
+        f"up to {line.misfit_rad:.3f} rad from the training cup's same grasps ({100 * line.misfit_m:.1f} cm "
+        f"and {line.misfit_deg:.1f}° at the gripper; the grasp-to-grasp map "
+        f"{100 * far.loc['grasp', 'misfit_m']:.1f} cm). With the straight-line map, users who want a top "
+        f"grasp end {top.error.min():.2f} to {top.error.max():.2f} D off (approach error up to "
+        f"{top.angle_error_deg.max():.0f}°; belief on the other training cup in up to "
+        f"{100 * top.other.max():.0f}% of them), middle grasps {middle.error.min():.3f} to "
+        f"{middle.error.max():.3f} D, side grasps {side.error.min():.3f} to {side.error.max():.3f} D."
+    ]
+    if "straight_line_ee" in bands.index.get_level_values("h"):
+        ee, ends = bands.loc["straight_line_ee"], end_shares(frame).loc["straight_line_ee"]
+        ee_top, ee_side = (ee.xs(name, level="band").error.max() for name in (*BANDS,)[::2])
+        out.append(
+            f"The same line in the gripper's space (@ee_line) sends the farthest cup's grasps "
+            f"{100 * far.loc['straight_line_ee', 'misfit_m']:.2f} cm from the training cup's; its users "
+            f"end {ee_top:.3f} D off at most for top grasps, {ee_side:.3f} D for side grasps, with a median "
+            f"error of {ends['median'].min():.3f} to {ends['median'].max():.3f} D over the cups."
+        )
+    return out
 
 
 def _line(f: pd.Series, n_cups: int) -> str:
