@@ -182,3 +182,10 @@ def test_no_finite_values_leave_the_interval_unknown_and_undecided():
 
     [c] = assess(nan_rule, users([0.5, 0.2]), n_boot=5)
     assert np.isnan(c.ci_low) and np.isnan(c.ci_high) and c.reproduced == "undecided"
+
+
+def test_a_reading_joins_the_readings_an_id_names_already():
+    from lasa.evidence.verdicts import with_reading
+
+    assert with_reading("sim1.time_ratio", "grasp_set") == "sim1.time_ratio@grasp_set"
+    assert with_reading("sim4.x@joint_space", "grasp_set") == "sim4.x@joint_space+grasp_set"  # one "@"

@@ -54,6 +54,7 @@ __all__ = [
     "block_seed",
     "block_users",
     "sequential",
+    "with_reading",
     "member_frame",
     "member_of",
     "bootstrap_frames",
@@ -294,6 +295,15 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
     )
 
 
+def with_reading(claim_id: str, reading: str) -> str:
+    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already.
+
+    One ``@`` per id, its readings joined by ``+`` (as the study's): a figure's own reading (sim4's
+    ``@joint_space``) under another member reads ``sim4.x@joint_space+grasp_set``.
+    """
+    return f"{claim_id}{'+' if '@' in claim_id else '@'}{reading}"
+
+
 def _words(c: Claim) -> str:
     """``effect undecided; 1.45 out, 1.3 in``: a claim's two words (:func:`lasa.evidence.claims.criteria`)."""
     said = criteria(c)
@@ -402,5 +412,5 @@ def sequential(
         stop = f"The effect is settled at {at}. " if c.settled else f"The effect is undecided at {at}{cap}. "
         rows.append(dataclasses.replace(c, assistance=default, note=stop + where + c.note))
     for m, claims in others.items():
-        rows += [dataclasses.replace(c, id=f"{c.id}@{m}", assistance=m) for c in claims]
+        rows += [dataclasses.replace(c, id=with_reading(c.id, m), assistance=m) for c in claims]
     return Sequential(frame=frame, claims=rows, looks=pd.DataFrame(log))

@@ -322,12 +322,4 @@ def judge(
     members = members_of(control, config.assistance)
     fast = getattr(module, "boot_values", None)
     outcome = sequential(block, module.claims, members, control.assistance, design, config.n_boot, fast=fast)
-    # a figure's own readings (sim4's ``@joint_space``) under another member: ``<id>@<reading>+<member>``
-    claims = [dataclasses.replace(c, id=_compound(c.id)) for c in outcome.claims]
-    return pd.concat(full, ignore_index=True), dataclasses.replace(outcome, claims=claims), first[0]
-
-
-def _compound(claim_id: str) -> str:
-    """``a@b@c`` -> ``a@b+c``: one ``@``, the readings joined by ``+`` (as the study's ids)."""
-    base, _, readings = claim_id.partition("@")
-    return f"{base}@{readings.replace('@', '+')}" if readings else base
+    return pd.concat(full, ignore_index=True), outcome, first[0]
