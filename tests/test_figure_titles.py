@@ -24,17 +24,18 @@ from matplotlib.figure import Figure
 from matplotlib.path import Path as MplPath
 
 from lasa.evidence.verdicts import USER, member_frame
-from lasa.figures import sim1, sim2, sim3
+from lasa.figures import sim1, sim2, sim3, sim4
 
 matplotlib.use("Agg")
 
 FIGURES_DIR = Path(__file__).resolve().parents[1] / "figures"
 HEADLINE = "point"  # the member ``plot`` draws by default
-# name: (module, its CSV under figures/, the columns besides robot and method that make one point)
+# name: (module, its CSV under figures/, the columns besides robot that make one point)
 FIGURES: dict[str, tuple[ModuleType, str, tuple[str, ...]]] = {
-    "sim1": (sim1, "sim1_fixed_expertise.csv", ("beta",)),
-    "sim2": (sim2, "sim2_change_of_mind.csv", ("change_step",)),
-    "sim3": (sim3, "sim3_learning_users.csv", ("learner", "t")),
+    "sim1": (sim1, "sim1_fixed_expertise.csv", ("method", "beta")),
+    "sim2": (sim2, "sim2_change_of_mind.csv", ("method", "change_step")),
+    "sim3": (sim3, "sim3_learning_users.csv", ("method", "learner", "t")),
+    "sim4": (sim4, "sim4_new_goals.csv", ("h", "distance")),
 }
 PROBABILITY = re.compile(r"confidence|success|share|probability", re.IGNORECASE)
 LIMITS = (-0.05, 1.05)  # a probability axis lies within these, and shows all of [0, 1] [-]
@@ -68,8 +69,8 @@ def title_ns(title: str) -> dict[str | None, tuple[int, int]]:
 
 
 def shown_ns(table: pd.DataFrame, keys: tuple[str, ...]) -> dict[str, tuple[int, int]]:
-    """Per robot, the fewest and most distinct users per (method, point) of the headline member."""
-    counts = member_frame(table, HEADLINE).groupby(["robot", "method", *keys])[USER].nunique()
+    """Per robot, the fewest and most distinct users per point (``keys``) of the headline member."""
+    counts = member_frame(table, HEADLINE).groupby(["robot", *keys])[USER].nunique()
     return {str(r): (int(c.min()), int(c.max())) for r, c in counts.groupby(level="robot")}
 
 

@@ -149,13 +149,13 @@ def test_plot_shows_every_point_and_says_its_users():
         assert ax.get_ylim()[0] <= np.nanmin(ys) and ax.get_ylim()[1] >= np.nanmax(ys)
     assert max(ax.get_ylim()[1] for ax in axes) >= 4.0  # the outlier is in view
     title = fig._suptitle.get_text().replace("\n", " ")
-    assert "N = 6 (planar5), 4 (panda) near-optimal users per point" in title
+    assert "users per point: planar5 6, panda 4" in title
     plt.close(fig)
     one = _rows({"panda": 5})
     fig = sim4.plot(one)
     title = fig._suptitle.get_text().replace("\n", " ")
     n = int(member_frame(one, "point").groupby(["h", "distance"]).seed.nunique().min())
-    assert f"N = {n} near-optimal users per point" in title
+    assert f"near-optimal users, {n} users per point" in title
     # the paper's y = 0.11x is drawn above our lines, in a style of its own
     ax = fig.axes[0]
     paper = next(line for line in ax.lines if line.get_label() == "paper, with the map: y = 0.11x")

@@ -35,7 +35,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
-from lasa.evidence.plots import paper_slope, robots_present, wrap_to
+from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.figures.common import Decoders, LooksConfig, check_methods
@@ -648,12 +648,6 @@ CI_LEVEL = Design().level  # the error bars: the verdicts' level (98.75%), each 
 N_BOOT_PLOT = 1000
 
 
-def users_per_point(frame: pd.DataFrame) -> dict[str, int]:
-    """Robot -> the users behind each point of its panel (the least over its (map, cup) points)."""
-    sizes = frame.groupby(["robot", "h", "distance"])[USER].nunique()
-    return {str(r): int(n) for r, n in sizes.groupby(level="robot").min().items()}
-
-
 def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
     """Each cup's mean of ``y`` and its :data:`CI_LEVEL` bootstrap interval (users resampled)."""
     rng = np.random.default_rng(0)
@@ -754,13 +748,8 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     for name, ax in zip(present, axes[0], strict=True):
         plot_robot(table[table.robot == name], ax=ax)
         ax.set_title(name)
-    n = users_per_point(table)
-    counts = (
-        f"{next(iter(n.values()))}"
-        if len(set(n.values())) == 1
-        else ", ".join(f"{n[r]} ({r})" for r in present)
-    )
-    title = f"Fig. sim4: new goals, N = {counts} near-optimal users per point, assistance: {assistance}"
+    n = users_text(table, ["h", "distance"])  # per (map, new cup)
+    title = f"Fig. sim4: new goals, near-optimal users, {n}, assistance: {assistance}"
     fig.suptitle(wrap_to(title, fig.get_figwidth()))
     fig.tight_layout()
     return fig
