@@ -64,6 +64,17 @@ NPROC := $(shell nproc 2>/dev/null || echo 2)
 # oversubscribed). The parallelism is the robots' chains side by side (JOBS).
 export LASA_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
+# The numerical kernels on their AVX2 paths on every x86 CPU, for the same bytes everywhere: the
+# values of lasa/base/kernels.py (PINNED), which lasa also sets on import; exported here so that
+# a process importing numpy or torch before lasa (pytest, a notebook's first cell) gets them too.
+# One you set yourself is kept. make figures records those in effect in figures/kernels.json.
+export ATEN_CPU_CAPABILITY ?= avx2
+export ONEDNN_MAX_CPU_ISA ?= AVX2
+export DNNL_MAX_CPU_ISA ?= AVX2
+export MKL_CBWR ?= AVX2
+export MKL_ENABLE_INSTRUCTIONS ?= AVX2
+export NPY_DISABLE_CPU_FEATURES ?= X86_V4 AVX512F AVX512_SKX AVX512_CLX AVX512_CNL AVX512_ICL AVX512_SPR
+export OPENBLAS_CORETYPE ?= Haswell
 # llvmpipe (OSMesa) render threads: the cores shared among the notebooks that run at once
 export LP_NUM_THREADS ?= $(shell n=$$(( $(NPROC) / $(JOBS) )); echo $$(( n > 0 ? n : 1 )))
 # What each notebook runs: the lasa modules it reaches by imports, read from the source by
@@ -152,8 +163,10 @@ FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goal
 # (figures_s, figures_s.quick) from this invocation's timings.jsonl, then the READMEs' wall times
 # from it (lasa.pipeline.timings); a run in which Make skipped up-to-date notebooks records nothing.
 TIMED_PART := $(if $(filter build,$(BUILD)),paper,$(if $(filter build/quick,$(BUILD)),quick))
+FIGURES_DIR := $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures)
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
+	@$(BIN)/python -m lasa.base.kernels --out $(FIGURES_DIR)/kernels.json
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
 	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv

@@ -8,7 +8,8 @@ your own) is in ``docs/extending.md``.
 
 Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
 before anything imports mujoco (it is read once, at import). Set it yourself first
-to override (``egl``, ``glfw``, or ``disable`` when nothing renders).
+to override (``egl``, ``glfw``, or ``disable`` when nothing renders). The numerical kernels
+are pinned to AVX2 here too, for the same bytes on any x86 CPU (:mod:`lasa.base.kernels`).
 
 The public API is re-exported here, imported lazily; each concept lives in its own module.
 """
@@ -18,6 +19,10 @@ import os
 from typing import TYPE_CHECKING, Any
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
+
+from lasa.base.kernels import pin_kernels  # noqa: E402 (stdlib only: it imports neither torch nor numpy)
+
+pin_kernels()  # torch, MKL, oneDNN, numpy, OpenBLAS on their AVX2 paths, before any of them loads
 
 from lasa.base.ffmpeg import pin_mediapy  # noqa: E402 (after MUJOCO_GL, which it does not touch)
 

@@ -74,3 +74,21 @@ def test_unreachable_pose_raises_ik_error(robot):
     far = np.array([3.0, 0.0, 0.5])
     with pytest.raises(IKError, match="did not converge"):
         solve_grasp_ik(robot, far, np.eye(3), robot.home, max_iters=50)
+
+
+def test_a_solve_after_others_equals_a_solve_with_fresh_mink_objects(robot):
+    """solve_grasp_ik reuses mink's objects per robot: no solve may carry state into the next."""
+    from lasa.world import ik  # noqa: PLC0415
+
+    rng = np.random.default_rng(3)
+    qs = [robot.clip(robot.home + rng.normal(0.0, 0.3, robot.n_joints)) for _ in range(3)]
+    poses = [robot.grasp_pose(q) for q in qs]
+    seed = robot.clip(robot.home + 0.05)
+    after_others = []
+    for pose in poses:
+        with pytest.raises(IKError):  # a failed solve before each: it leaves the objects mid-iteration
+            solve_grasp_ik(robot, np.array([3.0, 0.0, 0.5]), np.eye(3), robot.home, max_iters=5)
+        after_others.append(solve_grasp_ik(robot, *pose, seed, position_tol=1e-5))
+    for pose, expected in zip(poses, after_others, strict=True):
+        ik._SOLVERS.clear()  # fresh objects, as every solve made them before they were reused
+        assert np.array_equal(solve_grasp_ik(robot, *pose, seed, position_tol=1e-5), expected)

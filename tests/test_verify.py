@@ -59,8 +59,10 @@ def test_identical_folders_pass(folders, capsys):
     out = capsys.readouterr().out
     for name in ("sim.csv", "sim.png", "claims.csv"):
         assert f"| {name}" in out
-    *table, summary = out.strip().splitlines()
-    assert all(line.endswith("|") for line in table)  # one table, then the summary line
+    *kernels, summary = out.strip().splitlines()
+    table = kernels[2:]  # the two runs' kernel lines, one table, then the summary line
+    assert all(line.startswith("kernels of the ") for line in kernels[:2])
+    assert all(line.endswith("|") for line in table)
     assert [line.split("|")[3].strip() for line in table[2:]] == ["identical"] * 4
     assert summary == "OK: 3 files compared, 0 with differences; every verdict identical"
 
@@ -178,3 +180,31 @@ def test_a_bare_make_prints_the_usage(tree):
     out = _make(tree)
     assert "make figures" in out and "make verify" in out and "make help" in out
     assert not any(line.startswith("#") for line in out.splitlines())
+
+
+def test_a_value_that_became_non_finite_is_named_with_its_rows(folders, capsys):
+    _edit(folders[1] / "sim.csv", "error", 1, float("inf"))
+    _edit(folders[1] / "sim.csv", "error", 2, float("nan"))
+    assert main([str(f) for f in folders]) == 0  # values are reported, never fatal
+    out = capsys.readouterr().out
+    line = next(x for x in out.splitlines() if "non-finite" in x)
+    assert "2 rows" in line and "row 1 (panda): 1.25 -> inf" in line and "row 2 (planar5): 3 -> nan" in line
+    beyond = next(x for x in out.splitlines() if "| error" in x and "beyond tolerance" in x)
+    assert "max abs 0," in beyond and "2 rows" in beyond  # no infinite difference among the finite pairs
+
+
+def test_two_equal_non_finite_values_are_the_same(folders):
+    for folder in folders:
+        _edit(folder / "sim.csv", "error", 0, float("-inf"))
+    report = compare_folders(*folders)
+    assert all(r.result == "identical" for r in report.rows if r.file == "sim.csv")
+
+
+def test_each_runs_kernels_are_printed_above_the_table(folders, capsys):
+    (folders[0] / "kernels.json").write_text(
+        '{"environment": {"ATEN_CPU_CAPABILITY": "avx2"}, "pinned": true, "torch_cpu_capability": "AVX2"}'
+    )
+    main([str(f) for f in folders])
+    out = capsys.readouterr().out.splitlines()
+    assert out[0] == "kernels of the committed run: pinned, torch AVX2; ATEN_CPU_CAPABILITY=avx2"
+    assert out[1] == "kernels of the new run: kernels.json missing (its kernels were not recorded)"

@@ -13,6 +13,10 @@ figures folders file by file and prints one table, then a summary line:
   words ``effect`` and ``number``, and the ``reproduced`` and ``settled`` columns) is the same,
   each differing one listed.
 
+A value finite on one side and NaN or ±inf on the other is named with its rows (``non-finite``),
+not folded into an infinite difference. Above the table, each run's ``kernels.json`` says what its
+numerical kernels ran with (:mod:`lasa.base.kernels`).
+
 The exit status is 1 if and only if a verdict differs, a claim is in one table only, or
 ``claims.csv`` is missing from either folder; value differences in the CSVs are reported, never
 fatal (a new platform may round the last digit differently and still reach every verdict). A
@@ -31,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -51,11 +56,13 @@ __all__ = [
     "compare_bytes",
     "compare_verdicts",
     "compare_folders",
+    "kernels_text",
     "format_table",
     "main",
 ]
 
 CLAIMS = "claims.csv"
+KERNELS = "kernels.json"  # the run's kernel settings (lasa.base.kernels), printed for both runs
 VERDICT_COLUMNS = ("effect", "number", "reproduced", "settled")  # a claim's words, per (id, robot)
 CLAIM_KEY = ("id", "robot")
 
@@ -149,17 +156,32 @@ def key_columns(frame: pd.DataFrame) -> list[str]:
 
 
 def _numeric_diff(a: pd.Series, b: pd.Series, tol: Tolerance) -> tuple[np.ndarray, str]:
-    """Cells beyond the tolerance (a mask) and ``max abs .., max rel ..`` of numeric columns."""
+    """Cells beyond the tolerance (a mask) and ``max abs .., max rel ..`` of numeric columns, over
+    the cells that are finite on both sides (:func:`_non_finite` reports the others)."""
     old, new = a.to_numpy(dtype=float), b.to_numpy(dtype=float)
-    both_nan = np.isnan(old) & np.isnan(new)
+    finite = np.isfinite(old) & np.isfinite(new)
+    same = (old == new) | (np.isnan(old) & np.isnan(new))  # inf == inf; two NaN are equal
     with np.errstate(invalid="ignore", divide="ignore"):
-        diff = np.where(both_nan, 0.0, np.abs(new - old))
-        diff = np.where(np.isnan(diff), np.inf, diff)  # NaN against a number
+        diff = np.where(finite, np.abs(new - old), 0.0)
         rel = np.where(diff == 0, 0.0, diff / np.abs(old))
-        rel = np.where(np.isnan(rel), np.inf, rel)
-    beyond = diff > tol.atol + tol.rtol * np.abs(np.nan_to_num(old))
+    beyond = np.where(finite, diff > tol.atol + tol.rtol * np.abs(np.where(finite, old, 0.0)), ~same)
     detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
     return beyond, detail
+
+
+def _non_finite(name: str, column: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
+    """A line naming the rows of ``column`` whose value is non-finite (NaN, ±inf) on one side
+    only, or became another non-finite value, with both values; None when there is none."""
+    a, b = old[column].to_numpy(dtype=float), new[column].to_numpy(dtype=float)
+    same = (a == b) | (np.isnan(a) & np.isnan(b))
+    where = np.flatnonzero(~(np.isfinite(a) & np.isfinite(b)) & ~same)
+    if not len(where):
+        return None
+    keys = [k for k in key_columns(old) if k in new.columns]
+    label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
+    shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
+    more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
+    return Row(name, column, "non-finite", f"{len(where)} rows: {shown}{more}")
 
 
 def _rows_match(name: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
@@ -181,6 +203,9 @@ def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
     for column in [c for c in old.columns if c in new.columns]:
         if _numeric(old, column) and _numeric(new, column):
             beyond, detail = _numeric_diff(old[column], new[column], tol)
+            non_finite = _non_finite(name, column, old, new)
+            if non_finite is not None:
+                rows.append(non_finite)
             if beyond.any():
                 rows.append(Row(name, column, "beyond tolerance", f"{detail}, {beyond.sum()} rows"))
             beyond_any |= beyond
@@ -275,6 +300,24 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
     return report
 
 
+def kernels_text(committed: str | Path, new: str | Path) -> str:
+    """What each run's numerical kernels ran with (its ``kernels.json``, written by ``make figures``
+    from :func:`lasa.base.kernels.kernel_settings`), one line per folder: the pinned variables and
+    torch's CPU capability, or that the file is missing (a run from before the kernels were pinned)."""
+    lines = []
+    for label, folder in (("committed", committed), ("new", new)):
+        path = Path(folder) / KERNELS
+        if not path.is_file():
+            lines.append(f"kernels of the {label} run: {KERNELS} missing (its kernels were not recorded)")
+            continue
+        data = json.loads(path.read_text())
+        env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
+        state = "pinned" if data.get("pinned") else "NOT pinned"
+        capability = data.get("torch_cpu_capability")
+        lines.append(f"kernels of the {label} run: {state}, torch {capability}; {env}")
+    return "\n".join(lines)
+
+
 def format_table(rows: Sequence[Row]) -> str:
     """The rows as a Markdown table (readable as plain text too)."""
     header = [f.name for f in dataclasses.fields(Row)]
@@ -301,6 +344,7 @@ def main(argv: list[str] | None = None) -> int:
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    print(kernels_text(args.committed, args.new))
     print(format_table(report.rows))
     if report.claims_missing:
         print(f"error: {CLAIMS} is missing from {args.committed} or {args.new}", file=sys.stderr)

@@ -10,6 +10,9 @@ a sequence of poses warm-started from the previous answer gives a smooth curve.
 
 from __future__ import annotations
 
+import dataclasses
+import weakref
+
 import mink
 import numpy as np
 
@@ -17,6 +20,39 @@ from lasa.base.errors import IKError
 from lasa.world.robot import Robot
 
 __all__ = ["solve_grasp_ik", "pose_error"]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Solver:
+    """mink's objects for one robot and posture cost, made once and reused by every solve.
+
+    Making them costs more than a solve (``mink.Configuration`` allocates an ``MjData``; measured:
+    a third of notebook 07's time at paper scale). Reusing them changes no result: a solve sets
+    the configuration's every joint (from ``qpos0``, the state a new one starts in) and each task's
+    target before its first step, and their kinematics read nothing else.
+    """
+
+    configuration: mink.Configuration
+    frame: mink.FrameTask
+    posture: mink.PostureTask
+    limits: list[mink.ConfigurationLimit]
+
+
+_SOLVERS: weakref.WeakKeyDictionary[Robot, dict[float, _Solver]] = weakref.WeakKeyDictionary()
+
+
+def _solver(robot: Robot, posture_cost: float) -> _Solver:
+    """The reused mink objects of ``robot`` at ``posture_cost`` (made on first use)."""
+    by_cost = _SOLVERS.setdefault(robot, {})
+    if posture_cost not in by_cost:
+        model = robot.model
+        by_cost[posture_cost] = _Solver(
+            mink.Configuration(model),
+            mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0),
+            mink.PostureTask(model, cost=posture_cost),
+            [mink.ConfigurationLimit(model)],
+        )
+    return by_cost[posture_cost]
 
 
 def pose_error(
@@ -68,25 +104,22 @@ def solve_grasp_ik(
     Raises:
         IKError: if the tolerances are not met within ``max_iters`` iterations.
     """
-    model = robot.model
-    configuration = mink.Configuration(model)
-    q_full = configuration.q.copy()
+    solver = _solver(robot, posture_cost)
+    configuration, frame, posture_task = solver.configuration, solver.frame, solver.posture
+    q_full = robot.model.qpos0.copy()  # what a fresh configuration holds: no state of the last solve
     adr = robot.qpos_adr
     q_full[adr] = robot.clip(np.asarray(seed, dtype=float))
     configuration.update(q_full)
-
-    frame = mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0)
     frame.set_target(
         mink.SE3.from_rotation_and_translation(
             mink.SO3.from_matrix(np.asarray(rotation, dtype=float)),
             np.asarray(position, dtype=float),
         )
     )
-    posture_task = mink.PostureTask(model, cost=posture_cost)
     target = q_full.copy()
     target[adr] = seed if posture is None else posture
     posture_task.set_target(target)
-    limits = [mink.ConfigurationLimit(model)]
+    limits = solver.limits
 
     q = configuration.q[adr]
     for _ in range(max_iters):
