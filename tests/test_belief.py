@@ -2,10 +2,19 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from lasa.base.errors import ConfigError
-from lasa.method.belief import belief, distance_to_sets, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.method.belief import (
+    belief,
+    distance_to_sets,
+    log_likelihood,
+    logsumexp,
+    uniform_log_belief,
+    update_log_belief,
+)
 
 GOALS = np.array([[1.0, 0.0], [-1.0, 0.0]])
 
@@ -69,3 +78,18 @@ def test_bad_parameters_are_clear():
         log_likelihood(np.zeros(2), np.zeros(2), GOALS, 0.1, -1.0)
     with pytest.raises(ConfigError, match="belief_floor"):
         update_log_belief(np.zeros(2), np.zeros(2), floor=0.5)
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    rows=st.lists(
+        st.lists(st.floats(-1e3, 1e3) | st.just(-np.inf), min_size=1, max_size=6), min_size=1, max_size=5
+    ).filter(lambda r: len({len(x) for x in r}) == 1)
+)
+def test_logsumexp_is_scipys(rows):
+    from scipy.special import logsumexp as scipy_logsumexp  # noqa: PLC0415
+
+    x = np.array(rows)
+    with np.errstate(divide="ignore"):
+        expected = scipy_logsumexp(x, axis=-1, keepdims=True)
+    np.testing.assert_allclose(logsumexp(x), expected, rtol=1e-13, atol=1e-12)

@@ -192,3 +192,25 @@ def test_nearest_distance_is_distance_to_sets(task, seed):
     (grad,) = torch.autograd.grad((out * weight).sum(), points)
     assert out.shape == ref.shape and torch.equal(out, ref)
     torch.testing.assert_close(grad, ref_grad, rtol=0, atol=1e-6)
+
+
+def test_runs_spread_over_worker_processes_train_the_same_decoders(model, demos, task):
+    """train_all: two worker processes give the decoders one process gives, bit for bit."""
+    from lasa.figures import entropy_ablation
+
+    ctl = task.robot.control
+    goal_sets = task.goal_sets(ctl.likelihood)
+    runs = [
+        entropy_ablation.Run(
+            demos, ctl, dataclasses.replace(SMALL_TRAIN, steps=15, entropy_lambda=lam), goal_sets, model
+        )
+        for lam in (0.0, 0.3, 1.0)
+    ]
+    here = entropy_ablation.train_all(runs, jobs=1)
+    spread = entropy_ablation.train_all(runs, jobs=2)
+    for (a, _), (b, _) in zip(here, spread, strict=True):
+        sa, sb = a.state_dict(), b.state_dict()
+        assert all(torch.equal(sa[k], sb[k]) for k in sa)
+    assert not torch.equal(
+        here[0][0].state_dict()["decoder.0.weight"], here[1][0].state_dict()["decoder.0.weight"]
+    )

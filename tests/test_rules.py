@@ -159,3 +159,23 @@ def test_the_studys_tests_decide_yes_partly_no(cid, results, verdict):
 def test_a_rule_without_tests_has_no_tested_verdict():
     with pytest.raises(ConfigError, match="rests on no tests"):
         rule("sim1.final_error").tested({"share_lower": 1.0})
+
+
+def test_an_interval_ending_within_a_fifth_of_its_width_of_a_threshold_is_fragile():
+    r = rule("sim1.time_ratio")  # thresholds 1 on both ratios; paper 1.45 ± 0.15 and 1.3 ± 0.15
+    far = {"ratio_75": (1.2, 1.25), "ratio_1000": (1.9, 2.0)}  # no end within 0.01 / 0.02 of an edge
+    assert r.fragile(far) == []
+    # width 0.1, margin 0.02: 1.01 is 0.01 from the threshold 1
+    near = {"ratio_75": (1.01, 1.11), "ratio_1000": (1.9, 2.0)}
+    assert r.fragile(near) == ["ratio_75 [1.01, 1.11] ends 0.01 from 1"]
+    # the paper number's band edge counts too: 1.3 + 0.15 = 1.45, 0.015 from 1.465 (margin 0.02)
+    band = {"ratio_75": (1.2, 1.25), "ratio_1000": (1.365, 1.465)}
+    assert r.fragile(band) == ["ratio_1000 [1.36, 1.47] ends 0.015 from 1.45"]
+    # just outside the margin (0.021 > 0.02), and a zero-width interval, are not fragile
+    assert r.fragile({"ratio_75": (1.021, 1.121), "ratio_1000": (1.9, 2.0)}) == []
+    assert r.fragile({"ratio_75": (1.0, 1.0), "ratio_1000": (1.9, 2.0)}) == []
+
+
+def test_an_unknown_interval_is_not_fragile():
+    r = rule("sim1.time_ratio")
+    assert r.fragile({"ratio_75": (math.nan, 1.0), "ratio_1000": (1.9, 2.0)}) == []

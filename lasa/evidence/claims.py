@@ -51,6 +51,8 @@ from lasa.evidence.findings import effect_of, finding, not_testable_why, stated_
 from lasa.evidence.rules import RULES
 
 __all__ = [
+    "fragile_because",
+    "fragile_line",
     "Claim",
     "PaperClaim",
     "PAPER_CLAIMS",
@@ -85,6 +87,7 @@ CLAIM_COLUMNS = (
     "effect",
     "number",
     "n_users",
+    "fragile",
     "note",
 )
 VERDICTS = ("yes", "partly", "no", UNDECIDED, NOT_TESTABLE)  # what Claim.reproduced holds
@@ -134,7 +137,8 @@ def criteria(claim: Claim) -> dict[str, str]:
         interval), joined by ``; ``, or ``n/a`` where it states none; ``direction``: ``yes`` if our
         effect's interval lies on the paper's side of no effect, ``no`` if not, ``n/a`` where the
         paper gives no sign or the claim is not testable; ``paper_numbers``: each paper number
-        with its own verdict and our value and interval.
+        with its own verdict and our value and interval; ``fragile``: ``yes`` if an interval ends
+        near a value at which a word changes (:func:`fragile_because`), else ``no``.
     """
     r = RULES.get(claim.id.split("@", 1)[0])
     paper = r.paper if r is not None else ()
@@ -153,7 +157,17 @@ def criteria(claim: Claim) -> dict[str, str]:
         "paper_numbers": "; ".join(
             p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found
         ),
+        "fragile": "yes" if fragile_because(claim) else "no",
     }
+
+
+def fragile_because(claim: Claim) -> list[str]:
+    """Why the row's words are fragile (:meth:`lasa.evidence.decision.Rule.fragile`); none if they
+    are not, or if the claim has no rule or is not testable."""
+    r = RULES.get(claim.id.split("@", 1)[0])
+    if r is None or claim.reproduced == NOT_TESTABLE:
+        return []
+    return r.fragile({k: v for k, v in claim.intervals.items()})
 
 
 def _numbers_word(words: list[str]) -> str:
@@ -191,7 +205,11 @@ def _row(claim: Claim) -> dict[str, object]:
     row["settled"] = "yes" if claim.settled else "no"
     row.update(criteria(claim))
     lead = note_lead(str(row["effect"]), str(row["number"]), paper_numbers_of(claim.id))
-    row["note"] = lead + claim.note
+    note = lead + claim.note
+    why = fragile_because(claim)
+    if why:
+        note = f"{note.rstrip()} Fragile: {'; '.join(why)} (within a fifth of its width)."
+    row["note"] = note
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
     return row
@@ -443,6 +461,21 @@ def count_line(table: pd.DataFrame) -> str:
     )
 
 
+def fragile_line(table: pd.DataFrame) -> str:
+    """The sentence naming the table's fragile headline rows, and counting the readings' ones."""
+    heads = {pc.id for pc in PAPER_CLAIMS}
+    fragile = table[table.fragile.astype(str) == "yes"]
+    named = [f"`{r.id}` ({r.robot})" for _, r in fragile.iterrows() if r.id in heads]
+    readings = table[table.id.astype(str).str.contains("@", regex=False)]
+    shaky = int((readings.fragile.astype(str) == "yes").sum())
+    lead = (
+        "Fragile (an interval ends within a fifth of its width, one standard error, of a value at which "
+        "a word changes; another CPU, seed or library version may flip them): "
+    )
+    said = ", ".join(named) if named else "no headline row"
+    return f"{lead}{said}; and {shaky} of the {len(readings)} readings' rows (`fragile` in claims.csv)."
+
+
 def _flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> str:
     """Every reading (``<id>@<reading>``, compound ones such as ``a+b`` included) whose words differ."""
     flips: dict[str, list[str]] = {}
@@ -464,7 +497,8 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
             ``notebooks/<stem>.ipynb``, from the repository root).
 
     Returns:
-        Markdown: a count line of the headline rows' two words; then per claim its paper
+        Markdown: a count line of the headline rows' two words, the fragile rows
+        (:func:`fragile_line`); then per claim its paper
         number, per robot the effect's word with the numbers it rests on (each number the
         paper states with its own word), the users per point N, the readings whose words
         differ, and what makes the verdict: the result sentences written from the rows'
@@ -488,7 +522,7 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
         mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
         line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {_flips(rows, pc.id)} | {mech} |"
         (ours if pc.ours else paper).append(line)
-    out = [count_line(table), "", *paper]
+    out = [count_line(table), "", fragile_line(table), "", *paper]
     if len(ours) > len(head):
         out += ["", "Our additions, not claims of the paper (not counted above):", "", *ours]
     return "\n".join(out) + "\n"

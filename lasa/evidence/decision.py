@@ -42,6 +42,7 @@ __all__ = [
     "OUT",
     "NOT_APPLICABLE",
     "NUMBER_WORDS",
+    "FRAGILE_FRACTION",
     "PaperNumber",
     "Direction",
     "effect_word",
@@ -71,6 +72,12 @@ IN = "in"  # the paper's number lies in our interval, give or take the rule's to
 OUT = "out"  # our interval is clear of the paper's number and its tolerance
 NOT_APPLICABLE = "n/a"  # the paper states no number for the claim, or the claim is not testable
 NUMBER_WORDS = (IN, OUT, UNDECIDED, NOT_APPLICABLE)
+# A verdict is *fragile* (:meth:`Rule.fragile`) when an interval ends within this fraction of its
+# width of a value at which a word changes. A fifth of the width is one standard error at the
+# verdicts' 98.75% level (the width is 2 x 2.5 SE): about what another draw of the users moves an
+# interval's end, and more than another CPU or library moves it (that re-draws only the chaotic
+# episodes). Fixed before any verdict was marked with it. [-]
+FRAGILE_FRACTION = 0.2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -226,6 +233,26 @@ class Rule:
             raise ConfigError(
                 f"{self.id}: paper numbers or direction name {extra}, not quantities {sorted(names)}"
             )
+
+    def fragile(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
+        """``name [low, high] ends d from t`` for each interval end within :data:`FRAGILE_FRACTION`
+        of its width of a value at which a word can change: one of the rule's thresholds (the
+        effect) or an edge of a number the paper states, ``value ± tolerance`` (the number)."""
+        edges: dict[str, list[float]] = {q.name: list(q.thresholds) for q in self.quantities}
+        for p in self.paper:
+            edges[p.quantity] += [p.value - p.tolerance, p.value + p.tolerance] if p.tolerance else [p.value]
+        out = []
+        for name, values in edges.items():
+            low, high = intervals.get(name, (math.nan, math.nan))
+            margin = FRAGILE_FRACTION * (high - low)
+            if not (math.isfinite(low) and math.isfinite(high)) or margin <= 0.0:
+                continue
+            near = sorted({t for t in values if min(abs(low - t), abs(high - t)) < margin})
+            out += [
+                f"{name} [{low:.3g}, {high:.3g}] ends {min(abs(low - t), abs(high - t)):.2g} from {t:g}"
+                for t in near
+            ]
+        return out
 
     def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
         """``name [low, high] reaches t`` for each threshold inside (or at the end of) an interval."""

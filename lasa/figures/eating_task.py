@@ -34,7 +34,6 @@ import numpy as np
 import pandas as pd
 import seaborn as sns
 from matplotlib.figure import Figure
-from tqdm.auto import tqdm
 
 from lasa.base.config import (
     ControlConfig,
@@ -51,7 +50,7 @@ from lasa.evidence import latent_measure, latent_property
 from lasa.figures import entropy_ablation
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
-from lasa.method.train import TrainConfig, train_decoder
+from lasa.method.train import TrainConfig
 from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
 from lasa.people.kinematics import tip_frames
 from lasa.world.eating import GOALS, EatingTask
@@ -106,6 +105,9 @@ class Config:
     # the inputs at a bowl), for its lower held-out reconstruction error (0.0085 against 0.0118).
     sector_readings: tuple[str, ...] = ("leaves",)  # demonstration readings trained with sectors [-]
     sector_weight: NonNegative = 0.2  # weight of the sector loss of those readings [-]
+    # local worker processes the trainings are spread over (entropy_ablation.train_all): the same
+    # decoders with any number; two put this notebook, the pipeline's longest chain, on both cores [-]
+    jobs: PositiveInt = 2
 
     def __post_init__(self) -> None:
         validate(self)
@@ -204,13 +206,14 @@ def train_readings(
     """
     train = config.train
     datasets, demo_rows = _demonstrations(task, control, config, paths)
-    bases: dict[str, LatentActionModel] = {}
-    trained: dict[str, TrainConfig] = {}
-    for base, (reading, settings) in _bases(config, train).items():
-        bases[base], _ = train_decoder(datasets[reading], control, settings, progress=progress)
-        datasets[base], trained[base] = datasets[reading], settings
+    plan = _bases(config, train)
+    runs = [entropy_ablation.Run(datasets[reading], control, settings) for reading, settings in plan.values()]
+    fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="base decoders")
+    bases = {base: model for base, (model, _) in zip(plan, fitted, strict=True)}
+    trained = {base: settings for base, (_, settings) in plan.items()}
+    datasets.update({base: datasets[reading] for base, (reading, _) in plan.items()})
     sweep_config = entropy_ablation.Config(
-        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed
+        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed, jobs=config.jobs
     )
     sweep = entropy_ablation.run_sweep(
         bases["continuous"], train, datasets["continuous"], task, control, sweep_config, progress=progress
@@ -269,20 +272,22 @@ def _fine_tune(
     lam = sweep.chosen
     models: dict[str, LatentActionModel] = {}
     fines: dict[str, TrainConfig] = {}
-    for name, reading, weight in tqdm(fine_tunes(config, lam), desc="decoder readings", disable=not progress):
+    runs: dict[str, entropy_ablation.Run] = {}
+    for name, reading, weight in fine_tunes(config, lam):
         weight = lam if weight is None else weight
         if reading == "continuous" and weight in sweep.models:
-            models[name], fine = sweep.models[weight], sweep.configs[weight]
-        else:
-            fine = dataclasses.replace(
-                trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=config.train.seed
-            )
-            models[name], _ = train_decoder(
-                datasets[reading], control, fine, goal_sets=goal_sets, init=bases[reading], progress=False
-            )
-        fines[name] = fine
+            models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
+            continue
+        fines[name] = dataclasses.replace(
+            trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=config.train.seed
+        )
+        runs[name] = entropy_ablation.Run(datasets[reading], control, fines[name], goal_sets, bases[reading])
+    fitted = entropy_ablation.train_all(list(runs.values()), config.jobs, progress, desc="decoder readings")
+    models.update({name: model for name, (model, _) in zip(runs, fitted, strict=True)})
+    models = {name: models[name] for name, _, _ in fine_tunes(config, lam)}  # in training order
+    for name, model in models.items():
         path = paths.artifact("eating_reading_decoder", task.robot.name, reading=name)
-        _save(models[name], path, fine, control, config, reading=name)
+        _save(model, path, fines[name], control, config, reading=name)
     return models, fines
 
 

@@ -27,6 +27,7 @@ from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import LatentActionModel
 from lasa.method.entropy import choose_lambda, context_entropy, context_grid
 from lasa.method.train import TrainConfig, reconstruction_error, train_decoder
+from lasa.pipeline.scaleout import run_jobs
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -34,6 +35,8 @@ __all__ = [
     "COLUMNS",
     "Config",
     "Sweep",
+    "Run",
+    "train_all",
     "run_sweep",
     "grid_rows",
     "plot",
@@ -55,6 +58,9 @@ class Config:
     lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
     seed: Seed = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
+    # local worker processes the runs are spread over (train_all): the same decoders with any
+    # number, each run seeded and single-threaded [-]
+    jobs: PositiveInt = 1
 
     def __post_init__(self) -> None:
         validate(self)
@@ -85,6 +91,35 @@ class Sweep:
     chosen: float
 
 
+@dataclasses.dataclass(frozen=True)
+class Run:
+    """One training run: :func:`lasa.method.train.train_decoder`'s arguments."""
+
+    demos: Demonstrations
+    control: ControlConfig
+    config: TrainConfig
+    goal_sets: np.ndarray | None = None
+    init: LatentActionModel | None = None
+
+
+def _train(run: Run) -> tuple[LatentActionModel, pd.DataFrame]:
+    return train_decoder(
+        run.demos, run.control, run.config, goal_sets=run.goal_sets, init=run.init, progress=False
+    )
+
+
+def train_all(
+    runs: list[Run], jobs: int = 1, progress: bool = False, desc: str = "training runs"
+) -> list[tuple[LatentActionModel, pd.DataFrame]]:
+    """Each run's decoder and loss history, in order, over ``jobs`` local worker processes.
+
+    Every run seeds its own initialisation, batches and noise and trains on one thread, so the
+    decoders are the same, bit for bit, whichever process trains them (``tests/test_entropy.py``);
+    only the histories' ``seconds`` differ.
+    """
+    return run_jobs(_train, runs, n_jobs=jobs, progress=progress, desc=desc)
+
+
 def confident_contexts(demos: Demonstrations, every: int = 10) -> tuple[np.ndarray, np.ndarray]:
     """Every ``every``-th clean demonstrated context with max_g b(g) > 0.99: (states, beliefs)."""
     clean = demos.clean()
@@ -111,19 +146,22 @@ def run_sweep(
         task: The goal task (the belief's goal sets).
         control: Control-loop units.
         config: The sweep.
-        progress: Show a progress bar per run.
+        progress: Show a progress bar over the runs.
     """
     goal_sets = task.goal_sets(control.likelihood)
     probe = confident_contexts(demos)
     clean = demos.clean()
-    rows, models, configs, histories = [], {}, {}, {}
-    for lam in (float(x) for x in config.lambdas):
-        configs[lam] = dataclasses.replace(
-            base_train, steps=config.sweep_steps, entropy_lambda=lam, seed=config.seed
-        )
-        models[lam], histories[lam] = train_decoder(
-            demos, control, configs[lam], goal_sets=goal_sets, init=base, progress=progress
-        )
+    lambdas = [float(x) for x in config.lambdas]
+    configs = {
+        lam: dataclasses.replace(base_train, steps=config.sweep_steps, entropy_lambda=lam, seed=config.seed)
+        for lam in lambdas
+    }
+    runs = [Run(demos, control, configs[lam], goal_sets, base) for lam in lambdas]
+    trained = train_all(runs, config.jobs, progress, desc="lambda sweep")
+    models = {lam: model for lam, (model, _) in zip(lambdas, trained, strict=True)}
+    histories = {lam: history for lam, (_, history) in zip(lambdas, trained, strict=True)}
+    rows = []
+    for lam in lambdas:
         rows.append(
             {
                 "lambda": lam,

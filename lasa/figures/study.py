@@ -95,6 +95,9 @@ class Config:
     # remedy, as a contrast); "all", every reading (LARGE=1) [-]
     decoders: str = "property"
     scheduler: str = ""  # a Dask scheduler address for the readings' runs ("" local; $LASA_SCHEDULER) [-]
+    # local worker processes of the readings' runs: the same episodes with any number (each run
+    # is seeded and single-threaded); two use both cores when this notebook runs alone, last [-]
+    jobs: PositiveInt = 2
     # who a replication needs (lasa.figures.study_power): cohort sizes drawn from the simulated
     # participants [participants], and cohorts drawn per size (each one analysis, ~0.3 s; 100 draws
     # give a power of 80% to within 4 points) [-]
@@ -207,6 +210,7 @@ def run(
         _run_reading,
         jobs,
         scheduler=config.scheduler or None,
+        n_jobs=config.jobs,
         progress=progress,
         desc="study runs",
         shared=shared,

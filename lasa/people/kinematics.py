@@ -30,10 +30,16 @@ def tip_frames(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The grasp site's position, direction (+z) and Jacobians at joint vectors ``qs`` (B, n).
 
+    ``data`` is the MjData MuJoCo's one-at-a-time loop writes, for a robot whose arm is not a
+    chain of hinges (:class:`lasa.world.chain.SerialChain`); a chain's batch needs none.
+
     Returns:
         position (B, 3), direction (B, 3), translational Jacobian (B, 3, n) and rotational
         Jacobian (B, 3, n) with respect to the arm joints.
     """
+    if robot.chain is not None:  # the batch at once (lasa.world.chain); ``data`` is not needed
+        pos, rot, jac = robot.grasp_jacobians(qs)
+        return pos, rot[:, :, 2], jac[:, :3], jac[:, 3:]
     model = robot.model
     site = model.site(robot.spec.grasp_site).id
     dofs = np.array([model.jnt_dofadr[model.joint(j).id] for j in robot.spec.joints])

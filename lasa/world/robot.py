@@ -25,6 +25,7 @@ import numpy as np
 
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.world.chain import SerialChain
 
 __all__ = [
     "RobotSpec",
@@ -361,6 +362,14 @@ class Robot:
         self._site = self.model.site(spec.grasp_site).id
         key = self.model.key(spec.home_key).id
         self._home = self.model.key_qpos[key][self.qpos_adr].copy()
+        # the site's kinematics for a whole batch at once, where the arm is a chain of hinges
+        self._chain = SerialChain.of(self.model, self._site, self.qpos_adr)
+
+    @property
+    def chain(self) -> SerialChain | None:
+        """The grasp site's batched kinematics (:mod:`lasa.world.chain`); None if the arm is not a
+        chain of hinges, where MuJoCo's one-configuration-at-a-time loop runs instead."""
+        return self._chain
 
     @property
     def name(self) -> str:
@@ -402,12 +411,15 @@ class Robot:
         """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors."""
         qs = np.asarray(qs, dtype=float)
         flat = qs.reshape(-1, self.n_joints)
+        lead = qs.shape[:-1]
+        if self._chain is not None:  # the batch at once (lasa.world.chain)
+            pos, rot = self._chain.site_frames(flat)
+            return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
         pos, rot = np.empty((len(flat), 3)), np.empty((len(flat), 3, 3))
         for i, q in enumerate(flat):  # MuJoCo's kinematics takes one configuration at a time
             self.set_state(q)
             pos[i] = self.data.site_xpos[self._site]
             rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
-        lead = qs.shape[:-1]
         return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
 
     def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -424,6 +436,8 @@ class Robot:
         respect to the arm joints.
         """
         qs = np.asarray(qs, dtype=float).reshape(-1, self.n_joints)
+        if self._chain is not None:  # the batch at once (lasa.world.chain)
+            return self._chain.site_jacobians(qs)
         dofs = np.array([self.model.jnt_dofadr[self.model.joint(j).id] for j in self.spec.joints])
         jacp, jacr = np.zeros((3, self.model.nv)), np.zeros((3, self.model.nv))
         pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))

@@ -1,0 +1,48 @@
+"""lasa.world.chain: the batched site kinematics against MuJoCo's, one configuration at a time."""
+
+import mujoco
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lasa.world.chain import SerialChain
+from lasa.world.robot import load_robot
+
+
+def _mujoco(robot, q):
+    """The site's position, rotation and (translation over rotation) Jacobian by MuJoCo."""
+    m, d = robot.model, mujoco.MjData(robot.model)
+    d.qpos[robot.qpos_adr] = q
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    site = m.site(robot.spec.grasp_site).id
+    jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    mujoco.mj_jacSite(m, d, jacp, jacr, site)
+    dofs = [m.jnt_dofadr[m.joint(j).id] for j in robot.spec.joints]
+    return d.site_xpos[site].copy(), d.site_xmat[site].reshape(3, 3).copy(), np.vstack([jacp, jacr])[:, dofs]
+
+
+@pytest.mark.parametrize("name", ["panda", "planar5"])
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1))
+def test_the_chain_is_mujocos_kinematics(name, seed):
+    robot = load_robot(name)
+    chain = SerialChain.of(robot.model, robot.model.site(robot.spec.grasp_site).id, robot.qpos_adr)
+    assert chain is not None
+    rng = np.random.default_rng(seed)
+    qs = rng.uniform(robot.lower, robot.upper, (4, robot.n_joints))
+    pos, rot, jac = chain.site_jacobians(qs)
+    frames = chain.site_frames(qs)
+    for i, q in enumerate(qs):
+        p, r, j = _mujoco(robot, q)
+        np.testing.assert_allclose(pos[i], p, atol=1e-12)
+        np.testing.assert_allclose(rot[i], r, atol=1e-12)
+        np.testing.assert_allclose(jac[i], j, atol=1e-12)
+        np.testing.assert_array_equal(frames[0][i], pos[i])
+
+
+def test_a_chain_with_a_joint_that_is_not_the_arms_is_not_covered():
+    robot = load_robot("panda")
+    site = robot.model.site(robot.spec.grasp_site).id
+    assert SerialChain.of(robot.model, site, robot.qpos_adr[:-1]) is None  # joint7 not an arm joint
