@@ -166,7 +166,7 @@ TIMED_PART := $(if $(filter build,$(BUILD)),paper,$(if $(filter build/quick,$(BU
 FIGURES_DIR := $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures)
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
-	@$(BIN)/python -m lasa.base.kernels --out $(FIGURES_DIR)/kernels.json
+	@$(BIN)/python -m lasa.pipeline.kernels --out $(FIGURES_DIR)/kernels.json
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
 	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv

@@ -11,18 +11,15 @@ The settings are environment variables, read once when each library loads or fir
 :func:`pin_kernels` must run before torch and numpy are imported: ``lasa`` calls it on import, as it
 sets ``MUJOCO_GL``, and ``make`` exports the same values. A variable already set is kept (set
 ``ATEN_CPU_CAPABILITY=avx512`` yourself for speed when sameness across CPUs does not matter);
-:func:`kernel_settings` reports what is in effect, and ``make figures`` writes it to
-``figures/kernels.json``, which ``make verify`` prints for both runs.
+:func:`kernel_settings` reports what is in effect; ``make figures`` writes it to
+``figures/kernels.json`` (:mod:`lasa.pipeline.kernels`), which ``make verify`` prints for both runs.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import os
-import sys
 
-__all__ = ["PINNED", "pin_kernels", "kernel_settings", "main"]
+__all__ = ["PINNED", "pin_kernels", "kernel_settings"]
 
 PINNED: dict[str, str] = {
     # torch's own vectorised kernels (tanh, exp, reductions): its AVX2 build of each (DispatchStub)
@@ -62,22 +59,3 @@ def kernel_settings() -> dict[str, object]:
         "pinned": all(env[name] == value for name, value in PINNED.items()),
         "torch_cpu_capability": torch.backends.cpu.get_cpu_capability(),
     }
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m lasa.base.kernels [--out FILE]``: the settings in effect, as JSON."""
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--out", help="write the JSON to this file (else print it)")
-    args = parser.parse_args(argv)
-    text = json.dumps(kernel_settings(), indent=2, sort_keys=True) + "\n"
-    if args.out is None:
-        sys.stdout.write(text)
-        return 0
-    from lasa.base.io import write_text  # noqa: PLC0415
-
-    write_text(args.out, text)
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
