@@ -43,8 +43,9 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 
 Usage, from the repository root: ``python benchmarks/bench.py --out benchmarks``
 (``--tiny`` runs every part at a toy size in seconds, as ``tests/test_bench.py`` does;
-``--skip-pipeline`` leaves out the two ``make figures`` runs; ``--only dask`` or
-``--only decoder_vs_gemm`` re-measures one part and updates its keys). See ``benchmarks/README.md``.
+``--skip-pipeline`` leaves out the two ``make figures`` runs; ``--only dask``,
+``--only decoder_vs_gemm`` or ``--only pinning`` re-measures one part and updates its keys).
+See ``benchmarks/README.md``.
 """
 
 from __future__ import annotations
@@ -82,6 +83,7 @@ import torch  # noqa: E402
 from lasa.base.config import ControlConfig, set_threads  # noqa: E402
 from lasa.base.errors import ArtifactError, ConfigError  # noqa: E402
 from lasa.base.io import write_text  # noqa: E402
+from lasa.base.kernels import PINNED  # noqa: E402
 from lasa.evidence.video import render_states  # noqa: E402
 from lasa.method.controller import Controller  # noqa: E402
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
@@ -152,6 +154,8 @@ class BenchConfig:
     gemm_users: int = 1024  # users of the decoder-vs-GEMM comparison (x 21 candidates) [-]
     gemm_repeats: int = 7  # interleaved timed runs of each, at gemm_users; the median is reported [-]
     gemm_chunks: tuple[int, ...] = (256, 512, 1024, 2048, 4096)  # GEMM-only chunk sizes tried [rows]
+    pinning_rounds: int = 5  # alternated proxy runs with the kernels pinned and free [-]
+    pinning_steps: int = 150  # entropy fine-tuning steps of each proxy run [-]
     hidden: int = 128  # decoder width, as in configs/paper.yaml [-]
     depth: int = 3  # decoder depth, as in configs/paper.yaml [-]
     seed: int = 0  # seed of inputs, users and weights [-]
@@ -173,6 +177,8 @@ class BenchConfig:
             gemm_users=16,
             gemm_repeats=1,
             gemm_chunks=(64, 256),
+            pinning_rounds=1,
+            pinning_steps=5,
             hidden=16,
             depth=2,
         )
@@ -824,8 +830,58 @@ def dask_grid(
     return grid, overhead
 
 
-PARTS = ("decoder_vs_gemm", "dask")  # what ``--only`` re-measures alone
-PART_SIZES = {"decoder_vs_gemm": ("gemm_", "hidden", "depth", "batches"), "dask": ("grid_", "dask_")}
+def _free_kernels() -> dict[str, str]:
+    """Each library left to pick its own kernels on this CPU (lasa pins only what is unset)."""
+    avx512 = "avx512f" in Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else False
+    return {
+        "ATEN_CPU_CAPABILITY": "avx512" if avx512 else "avx2",
+        "ONEDNN_MAX_CPU_ISA": "ALL",
+        "DNNL_MAX_CPU_ISA": "ALL",
+        "MKL_CBWR": "AUTO",
+        "MKL_ENABLE_INSTRUCTIONS": "AVX512" if avx512 else "AVX2",
+        "NPY_DISABLE_CPU_FEATURES": " ",  # no feature named: numpy dispatches to the best it finds
+        "OPENBLAS_CORETYPE": "SkylakeX" if avx512 else "Haswell",
+    }
+
+
+def pinning_cost(rounds: int, steps: int) -> dict[str, Any]:
+    """Thread CPU time of benchmarks/pinning_proxy.py with the kernels pinned and free, alternated.
+
+    Each round runs the proxy once each way in a fresh process (the variables are read at load),
+    so a drift of the machine's speed falls on both alike; medians over the rounds, and the ratio
+    pinned / free per kind of work (> 1: pinning costs that much).
+    """
+    proxy = Path(__file__).with_name("pinning_proxy.py")
+    env = {k: v for k, v in os.environ.items() if k not in PINNED}
+    runs: dict[str, list[dict[str, Any]]] = {"pinned": [], "free": []}
+    for _ in range(rounds):
+        for name, extra in (("pinned", {}), ("free", _free_kernels())):
+            out = subprocess.run(
+                [sys.executable, str(proxy), str(steps)],
+                env={**env, **extra},
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+            runs[name].append(json.loads(out.stdout.strip().splitlines()[-1]))
+    kinds = ("training", "forward", "belief")
+    median = {name: {k: float(np.median([r[k] for r in rs])) for k in kinds} for name, rs in runs.items()}
+    return {
+        "seconds": median,
+        "ratio": {k: median["pinned"][k] / median["free"][k] for k in kinds},
+        "capability": {name: rs[0]["capability"] for name, rs in runs.items()},
+        "rounds": rounds,
+        "training_steps": steps,
+        "free": _free_kernels(),
+    }
+
+
+PARTS = ("decoder_vs_gemm", "dask", "pinning")  # what ``--only`` re-measures alone
+PART_SIZES = {
+    "decoder_vs_gemm": ("gemm_", "hidden", "depth", "batches"),
+    "dask": ("grid_", "dask_"),
+    "pinning": ("pinning_",),
+}
 
 
 def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tuple[str, ...]:
@@ -836,6 +892,9 @@ def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tu
     if part == "dask":
         results["dask_grid"], results["dask_overhead_1_worker"] = dask_grid(model, task, arm.control, config)
         return ("dask_overhead_1_worker", "dask_grid")
+    if part == "pinning":
+        results["pinning"] = pinning_cost(config.pinning_rounds, config.pinning_steps)
+        return ("pinning",)
     results["decoder_vs_gemm"] = decoder_vs_gemm(model, arm.control, config)
     results["decoder_vs_gemm_fraction"] = results["decoder_vs_gemm"]["fraction"]
     return ("decoder_vs_gemm_fraction",)
@@ -945,6 +1004,9 @@ def main(argv: list[str] | None = None) -> int:
 
     print("verdict-map grid: local and on Dask LocalClusters (two sizes)", flush=True)
     results["dask_grid"], results["dask_overhead_1_worker"] = dask_grid(model, task, control, config)
+
+    print("the kernels pinned to AVX2 against each library's own choice (fresh processes)", flush=True)
+    results["pinning"] = pinning_cost(config.pinning_rounds, config.pinning_steps)
 
     print("rendering", flush=True)
     results["render_fps"] = {
