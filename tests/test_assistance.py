@@ -190,3 +190,27 @@ def test_each_member_drives_the_rollout_safely(name, model, task):
     assert np.all(traj.states >= robot.lower) and np.all(traj.states <= robot.upper)
     assert np.all(np.abs(np.diff(traj.states, axis=0)) <= control.dt * control.max_joint_speed + 1e-12)
     assert_allclose(traj.actions[:, 0], traj.human_actions[:, 0])  # LA: a = a_h whatever the member
+
+
+def _nearest_by_every_segment(state, goal_sets):
+    """The reference: every segment's nearest point and distance, the first nearest per goal."""
+    a, ab = goal_sets[:, :-1], np.diff(goal_sets, axis=1)
+    rel = state[:, None, None, :] - a[None]
+    den = np.maximum(np.einsum("gkn,gkn->gk", ab, ab), 1e-12)
+    t = np.clip(np.einsum("ugkn,gkn->ugk", rel, ab) / den, 0, 1)
+    closest = a[None] + t[..., None] * ab[None]
+    k = np.linalg.norm(state[:, None, None, :] - closest, axis=-1).argmin(axis=-1)
+    return np.take_along_axis(closest, k[..., None, None], axis=2)[:, :, 0]
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), on_set=st.booleans())
+def test_nearest_grasps_is_every_segments_nearest(seed, on_set):
+    rng = np.random.default_rng(seed)
+    sets = np.cumsum(rng.normal(0, 0.3, (3, 6, 4)), axis=1)  # folded polylines in 4-D
+    state = rng.normal(0, 1.0, (50, 4))
+    if on_set:  # on the polylines, and at their vertices: where segments tie
+        k, t = rng.integers(0, 5, 50), rng.choice([0.0, 1.0, rng.uniform()], 50)
+        g = rng.integers(0, 3, 50)
+        state = sets[g, k] + t[:, None] * (sets[g, k + 1] - sets[g, k])
+    np.testing.assert_array_equal(nearest_grasps(state, sets), _nearest_by_every_segment(state, sets))

@@ -172,8 +172,7 @@ def test_ablation_config_needs_the_control():
 @pytest.mark.parametrize("seed", range(3))
 def test_nearest_distance_is_distance_to_sets(task, seed):
     """The entropy term's distance: distance_to_sets_torch's value to the bit, its gradient to rounding."""
-    from lasa.method.belief import distance_to_sets_torch
-    from lasa.method.entropy import nearest_distance
+    from lasa.method.belief import distance_to_sets_torch, nearest_distance
 
     goal_sets = torch.as_tensor(task.goal_sets("grasp_set"), dtype=torch.float32)
     rng = np.random.default_rng(seed)

@@ -99,7 +99,14 @@ def point(
 
 
 def nearest_grasps(state: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:
-    """The point of each goal's grasp polyline nearest to each state, shape (U, G, n).
+    r"""The point of each goal's grasp polyline nearest to each state, shape (U, G, n).
+
+    The segments that can be nearest come first from the squared distances in expanded form,
+    :math:`\|s - a\|^2 - 2 t u + t^2 \|ab\|^2` with :math:`u = (s - a) \cdot ab` and
+    :math:`t = \mathrm{clip}(u / \|ab\|^2, 0, 1)`, whose dot products are two (U, n) x (n, G (K-1))
+    matrix products instead of (U, G, K-1, n) temporaries: every segment within a margin far above
+    that form's rounding of the least. Those few get the direct arithmetic, :math:`a + t\,ab` and
+    its distance, and the first nearest is taken, as an argmin over every segment takes it.
 
     Args:
         state: s, shape (U, n).
@@ -108,14 +115,30 @@ def nearest_grasps(state: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:
     if goal_sets.shape[1] == 1:
         return np.broadcast_to(goal_sets[None, :, 0], (len(state), *goal_sets[:, 0].shape)).copy()
     a, ab = goal_sets[:, :-1], np.diff(goal_sets, axis=1)  # segments a + t ab, (G, K-1, n)
-    rel = state[:, None, None, :] - a[None]  # (U, G, K-1, n)
-    t = np.clip(
-        np.einsum("ugkn,gkn->ugk", rel, ab) / np.maximum(np.einsum("gkn,gkn->gk", ab, ab), 1e-12), 0, 1
-    )
-    closest = a[None] + t[..., None] * ab[None]  # (U, G, K-1, n)
-    dist = np.linalg.norm(state[:, None, None, :] - closest, axis=-1)
-    k = dist.argmin(axis=-1)  # (U, G)
-    return np.take_along_axis(closest, k[..., None, None], axis=2)[:, :, 0]
+    den = np.maximum(np.einsum("gkn,gkn->gk", ab, ab), 1e-12)
+    user, goal, seg = np.nonzero(_candidates(state, a, ab, den))
+    rel = state[user] - a[goal, seg]
+    t = np.clip(np.einsum("cn,cn->c", rel, ab[goal, seg]) / den[goal, seg], 0.0, 1.0)
+    closest = a[goal, seg] + t[:, None] * ab[goal, seg]
+    dist = np.linalg.norm(state[user] - closest, axis=-1)
+    pair = user * a.shape[0] + goal
+    order = np.lexsort((seg, dist, pair))  # by (user, goal), then distance, then the first segment
+    first = order[np.r_[True, pair[order][1:] != pair[order][:-1]]]
+    return closest[first].reshape(len(state), a.shape[0], -1)
+
+
+def _candidates(state: np.ndarray, a: np.ndarray, ab: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """Segments (U, G, K-1) whose squared distance, in expanded form, is within a margin of the
+    least; the margin, 1e-12 of the squares' scale, is thousands of times that form's rounding."""
+    n_goals, n_seg, n = ab.shape
+    a2, ab2 = a.reshape(-1, n), ab.reshape(-1, n)
+    u = state @ ab2.T - np.einsum("kn,kn->k", a2, ab2)  # (s - a) . ab, (U, G (K-1))
+    t = np.clip(u / den.reshape(-1), 0.0, 1.0)
+    ss = np.einsum("un,un->u", state, state)[:, None]
+    sq = ss - 2.0 * (state @ a2.T) + np.einsum("kn,kn->k", a2, a2) + t * (t * den.reshape(-1) - 2.0 * u)
+    sq = sq.reshape(len(state), n_goals, n_seg)
+    scale = 1.0 + ss[:, :, None] + float(np.max(a2 * a2, initial=0.0) * n + np.max(ab2 * ab2) * n)
+    return sq <= sq.min(axis=-1, keepdims=True) + 1e-12 * scale
 
 
 def grasp_set(

@@ -47,6 +47,7 @@ __all__ = [
     "uniform_log_belief",
     "distance_to_sets",
     "distance_to_sets_torch",
+    "nearest_distance",
     "log_likelihood",
     "log_likelihood_torch",
     "logsumexp",
@@ -128,115 +129,121 @@ def _as_sets(goals: np.ndarray) -> np.ndarray:
     return goals[:, None, :] if goals.ndim == 2 else goals
 
 
-# Elements of the (rows, G, K-1, n) work buffer of _distance_blocked: a chunk of rows that
-# stays in cache, and few enough chunks that the Python loop costs nothing.
-_CHUNK_ELEMENTS = 1 << 18
-# Below this many points, _distance_no_grad skips the pruning (its fixed cost dominates).
-_PRUNE_MIN_POINTS = 64
-
-
-def _segment_rows(
-    p: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor, out: torch.Tensor
+def _segment_distances(
+    p: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
 ) -> torch.Tensor:
-    """distance_to_sets_torch's per-segment arithmetic on rows (..., n) into ``out`` (..., n).
+    """Distances from points to segments, row by row: distance_to_sets_torch's operations.
 
-    ``p``, ``a``, ``ab`` broadcast to ``out``'s shape and ``denom`` to its leading shape. The
-    same operations in the same order on each row as there; only addition and multiplication
-    swap operands (``t * ab + a`` for ``a + t * ab``), which IEEE arithmetic leaves exact.
-    Every reduction runs over a contiguous last axis of n, as there. Returns the distances.
+    Args:
+        p: Points, shape (..., n).
+        a: Segment starts, broadcast to ``p``.
+        ab: Segment vectors, broadcast to ``p``.
+        denom: ``||ab||^2`` clamped to at least 1e-12, broadcast to ``p``'s leading shape.
     """
-    t = torch.sub(p, a, out=out).mul_(ab).sum(-1)
-    t.div_(denom).clamp_(0.0, 1.0)
-    torch.mul(t[..., None], ab, out=out)
-    out.add_(a)  # closest = a + t ab
-    torch.sub(p, out, out=out)
-    return torch.linalg.vector_norm(out, dim=-1)
+    t = ((p - a) * ab).sum(-1) / denom
+    closest = a + t.clamp(0.0, 1.0)[..., None] * ab
+    return torch.linalg.vector_norm(p - closest, dim=-1)
 
 
-def _distance_blocked(
-    flat: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
+def _candidates(points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor) -> torch.Tensor:
+    r"""The segments that can be a point's nearest, shape (rows, G, K-1), bool; no gradient.
+
+    Each distance is computed in float64 from (rows, G (K-1)) matrices, not (rows, G, K-1, n)
+    arrays: with :math:`u = (p - a) \cdot ab` and :math:`t = \mathrm{clamp}(u / \|ab\|^2, 0, 1)`,
+    :math:`d^2 = \|p - a\|^2 - 2 t u + t^2 \|ab\|^2`, where :math:`p \cdot a` and
+    :math:`p \cdot ab` are two small matrix products. Its error is far below float32's, so a
+    segment more than a margin (about 170 float32 rounding units of the coordinates) farther
+    than the nearest cannot be float32's minimum.
+    """
+    n_goals, n_seg, n = ab.shape
+    p = points.double()
+    a64, ab64 = a.double().reshape(-1, n), ab.double().reshape(-1, n)
+    den = denom.double().reshape(-1)
+    u = torch.addmm((a64 * ab64).sum(-1), p, ab64.T, beta=-1.0)  # (p - a) . ab
+    t = (u / den).clamp_(0.0, 1.0)
+    sq = torch.addmm((a64 * a64).sum(-1), p, a64.T, alpha=-2.0)  # ||p - a||^2 - ||p||^2
+    sq.add_((p * p).sum(-1, keepdim=True)).sub_(2.0 * t * u).add_(t * t * den)
+    dist = sq.clamp_min_(0.0).sqrt_().view(-1, n_goals, n_seg)
+    scale = 1.0 + p.abs().amax(-1) + float(a64.abs().max() + ab64.abs().max())  # (rows,)
+    return dist <= (dist.amin(-1) + 1e-5 * scale[:, None])[..., None]
+
+
+def _nearest_segment(
+    points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
 ) -> torch.Tensor:
-    """Distances (rows, G) of points (rows, n) to every segment, in cache-sized chunks of rows."""
-    rows = flat.shape[0]
-    out = torch.empty(rows, ab.shape[0], dtype=ab.dtype)
-    chunk = max(1, min(rows, _CHUNK_ELEMENTS // max(1, ab.numel())))
-    work = torch.empty(chunk, *ab.shape, dtype=ab.dtype)
-    for start in range(0, rows, chunk):
-        p = flat[start : start + chunk, None, None, :]
-        dist = _segment_rows(p, a, ab, denom, work[: p.shape[0]])
-        out[start : start + p.shape[0]] = dist.min(dim=-1).values
-    return out
+    """The segment distance_to_sets_torch takes each goal's minimum at, shape (rows, G); no gradient.
 
+    The segments that can be nearest come from :func:`_candidates`; where a goal has more
+    than one (most often the two segments at a vertex), their float32 distances are
+    computed as there and the first of the least is taken, as ``min`` takes it. So the
+    index is the original's, bit for bit, at a fraction of the cost.
 
-def _distance_pruned(
-    flat: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
-) -> torch.Tensor | None:
-    """Distances (rows, G) like :func:`_distance_blocked`, on the segments that can be nearest.
-
-    A cheap bound drops every segment that cannot hold a point's minimum: with m the
-    segment's midpoint, h the longest half-segment and D the least ||p - m|| over a goal's
-    segments, the computed distance to a segment is within h (plus rounding) of ||p - m||,
-    so a segment with ||p - m|| > D + 2h (plus generous rounding margins) is farther than
-    the nearest midpoint's segment. The kept segments get the exact per-row arithmetic of
-    :func:`_segment_rows`, and the minimum over them is the minimum over all, bit for bit.
-    Returns None (use :func:`_distance_blocked`) where the bound would keep most segments.
+    Args:
+        points: Finite points, shape (rows, n).
+        a: Segment starts, shape (G, K-1, n).
+        ab: Segment vectors, shape (G, K-1, n).
+        denom: ``||ab||^2`` clamped to at least 1e-12, shape (G, K-1).
     """
-    rows, n = flat.shape
-    n_goals, n_seg = ab.shape[:2]
-    mid = (a + 0.5 * ab).reshape(-1, n)  # (G (K-1), n)
-    half = 0.5 * torch.linalg.vector_norm(ab, dim=-1).max()
-    pp = (flat * flat).sum(-1, keepdim=True)  # (rows, 1)
-    mm = (mid * mid).sum(-1)
-    sq = torch.addmm(pp + mm, flat, mid.T, alpha=-2.0).view(rows, n_goals, n_seg)  # ||p - m||^2
-    scale = pp + mm.max() + 1.0  # (rows, 1)
-    err_sq = 1e-12 * scale  # >> the rounding of sq, about 1e-15 (||p||^2 + ||m||^2)
-    slack = 1e-9 * scale.sqrt()  # >> the rounding of a computed distance
-    reach = (sq.amin(-1) + err_sq).clamp_min(0.0).sqrt_() + 2.0 * half + 2.0 * slack  # (rows, G)
-    keep = sq <= (reach * reach + err_sq)[..., None]
-    idx = keep.view(-1).nonzero().squeeze(1)
-    if 2 * idx.numel() > keep.numel():
-        return None
-    point = torch.div(idx, n_goals * n_seg, rounding_mode="floor")
-    seg = idx - point * (n_goals * n_seg)
-    p = flat.index_select(0, point)
-    dist = _segment_rows(
-        p,
-        a.reshape(-1, n).index_select(0, seg),
-        ab.reshape(-1, n).index_select(0, seg),
-        denom.reshape(-1).index_select(0, seg),
-        torch.empty_like(p),
-    )
-    out = torch.full((rows * n_goals,), torch.inf, dtype=dist.dtype)
-    out.scatter_reduce_(0, torch.div(idx, n_seg, rounding_mode="floor"), dist, "amin")
-    return out.view(rows, n_goals)
+    n_goals, n_seg, _ = ab.shape
+    with torch.no_grad():
+        points = points.detach()
+        cand = _candidates(points, a, ab, denom)
+        index = cand.to(torch.uint8).argmax(dim=-1)  # the first candidate
+        row, goal, seg = (cand & (cand.sum(-1) > 1)[..., None]).nonzero(as_tuple=True)
+        if row.numel():
+            dist = _segment_distances(points[row], a[goal, seg], ab[goal, seg], denom[goal, seg])
+            pair = row * n_goals + goal
+            least = torch.full((index.numel(),), torch.inf, dtype=dist.dtype)
+            least.scatter_reduce_(0, pair, dist, "amin")
+            first = torch.full((index.numel(),), n_seg, dtype=seg.dtype)
+            ties = dist == least[pair]
+            first.scatter_reduce_(0, pair[ties], seg[ties], "amin")
+            first = first.view_as(index)
+            index = torch.where(first < n_seg, first, index)
+    return index
+
+
+def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
+    """:func:`lasa.method.belief.distance_to_sets_torch`, differentiated through the nearest segment only.
+
+    The same value and gradient: the minimum over a goal's segments passes its gradient to
+    the segment it picks alone, so the segment is found first without autograd
+    (:func:`_nearest_segment`), and only that segment's distance, (..., G, n) instead of
+    (..., G, K-1, n), is computed on the autograd graph, by the same operations.
+
+    Args:
+        points: Points, shape (..., n).
+        goal_sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
+
+    Returns:
+        Distances, shape (..., G).
+    """
+    if goal_sets.shape[1] == 1 or not bool(torch.isfinite(points).all()):
+        return distance_to_sets_torch(points, goal_sets)
+    lead, n, n_goals = points.shape[:-1], points.shape[-1], goal_sets.shape[0]
+    a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
+    denom = (ab * ab).sum(-1).clamp_min(1e-12)
+    flat = points.reshape(-1, n)
+    seg = _nearest_segment(flat, a, ab, denom)  # (rows, G)
+    goal = torch.arange(n_goals)
+    a_k, ab_k, denom_k = a[goal, seg], ab[goal, seg], denom[goal, seg]  # (rows, G, n), (rows, G)
+    return _segment_distances(flat[:, None, :], a_k, ab_k, denom_k).reshape(*lead, n_goals)
 
 
 def _distance_no_grad(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
     """:func:`distance_to_sets_torch` without autograd, bitwise equal to it, in less time.
 
-    Each distance to a segment is computed by the same operations on the same values as
-    there (:func:`_segment_rows`), and the minimum over segments is exact, so the result
-    is the same to the bit; the speed comes from skipping the segments that cannot be
-    nearest (:func:`_distance_pruned`), and from working in cache-sized chunks into reused
-    buffers instead of six fresh (U, G, K-1, n) temporaries.
+    Each goal's nearest segment is found first (:func:`nearest_distance`: a superset of the
+    candidates from two small matrix products, ties settled by the reference arithmetic), and
+    only that segment's distance is computed, by the reference's operations on the same values;
+    so the result is the same to the bit, without the (rows, G, K-1, n) temporaries.
     """
     if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad:
         return distance_to_sets_torch(points, goal_sets)
     dtype = torch.promote_types(points.dtype, goal_sets.dtype)
     if dtype != torch.float64:
         return distance_to_sets_torch(points, goal_sets)
-    a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
-    denom = (ab * ab).sum(-1).clamp_min(1e-12)
-    a, ab, denom = a.to(dtype), ab.to(dtype), denom.to(dtype)  # exact: promotion to float64
-    lead, n = points.shape[:-1], points.shape[-1]
-    flat = points.reshape(-1, n)
-    out = None
-    finite = bool(torch.isfinite(flat).all()) and bool(torch.isfinite(goal_sets).all())
-    if flat.shape[0] >= _PRUNE_MIN_POINTS and finite:
-        out = _distance_pruned(flat, a, ab, denom)
-    if out is None:
-        out = _distance_blocked(flat, a, ab, denom)
-    return out.reshape(*lead, goal_sets.shape[0])
+    return nearest_distance(points.to(dtype), goal_sets.to(dtype))
 
 
 def distance_to_sets(points: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:

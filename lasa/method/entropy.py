@@ -47,7 +47,7 @@ import torch
 
 from lasa.base.config import ControlConfig, check_range
 from lasa.base.errors import ConfigError
-from lasa.method.belief import _log_likelihood, distance_to_sets_torch
+from lasa.method.belief import _log_likelihood, nearest_distance
 from lasa.method.decoder import LatentActionModel
 from lasa.method.step import latent_grid
 
@@ -60,107 +60,6 @@ __all__ = [
     "context_grid",
     "choose_lambda",
 ]
-
-
-def _segment_distances(
-    p: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
-) -> torch.Tensor:
-    """Distances from points to segments, row by row: distance_to_sets_torch's operations.
-
-    Args:
-        p: Points, shape (..., n).
-        a: Segment starts, broadcast to ``p``.
-        ab: Segment vectors, broadcast to ``p``.
-        denom: ``||ab||^2`` clamped to at least 1e-12, broadcast to ``p``'s leading shape.
-    """
-    t = ((p - a) * ab).sum(-1) / denom
-    closest = a + t.clamp(0.0, 1.0)[..., None] * ab
-    return torch.linalg.vector_norm(p - closest, dim=-1)
-
-
-def _candidates(points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor) -> torch.Tensor:
-    r"""The segments that can be a point's nearest, shape (rows, G, K-1), bool; no gradient.
-
-    Each distance is computed in float64 from (rows, G (K-1)) matrices, not (rows, G, K-1, n)
-    arrays: with :math:`u = (p - a) \cdot ab` and :math:`t = \mathrm{clamp}(u / \|ab\|^2, 0, 1)`,
-    :math:`d^2 = \|p - a\|^2 - 2 t u + t^2 \|ab\|^2`, where :math:`p \cdot a` and
-    :math:`p \cdot ab` are two small matrix products. Its error is far below float32's, so a
-    segment more than a margin (about 170 float32 rounding units of the coordinates) farther
-    than the nearest cannot be float32's minimum.
-    """
-    n_goals, n_seg, n = ab.shape
-    p = points.double()
-    a64, ab64 = a.double().reshape(-1, n), ab.double().reshape(-1, n)
-    den = denom.double().reshape(-1)
-    u = torch.addmm((a64 * ab64).sum(-1), p, ab64.T, beta=-1.0)  # (p - a) . ab
-    t = (u / den).clamp_(0.0, 1.0)
-    sq = torch.addmm((a64 * a64).sum(-1), p, a64.T, alpha=-2.0)  # ||p - a||^2 - ||p||^2
-    sq.add_((p * p).sum(-1, keepdim=True)).sub_(2.0 * t * u).add_(t * t * den)
-    dist = sq.clamp_min_(0.0).sqrt_().view(-1, n_goals, n_seg)
-    scale = 1.0 + p.abs().amax(-1) + float(a64.abs().max() + ab64.abs().max())  # (rows,)
-    return dist <= (dist.amin(-1) + 1e-5 * scale[:, None])[..., None]
-
-
-def _nearest_segment(
-    points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
-) -> torch.Tensor:
-    """The segment distance_to_sets_torch takes each goal's minimum at, shape (rows, G); no gradient.
-
-    The segments that can be nearest come from :func:`_candidates`; where a goal has more
-    than one (most often the two segments at a vertex), their float32 distances are
-    computed as there and the first of the least is taken, as ``min`` takes it. So the
-    index is the original's, bit for bit, at a fraction of the cost.
-
-    Args:
-        points: Finite points, shape (rows, n).
-        a: Segment starts, shape (G, K-1, n).
-        ab: Segment vectors, shape (G, K-1, n).
-        denom: ``||ab||^2`` clamped to at least 1e-12, shape (G, K-1).
-    """
-    n_goals, n_seg, _ = ab.shape
-    with torch.no_grad():
-        points = points.detach()
-        cand = _candidates(points, a, ab, denom)
-        index = cand.to(torch.uint8).argmax(dim=-1)  # the first candidate
-        row, goal, seg = (cand & (cand.sum(-1) > 1)[..., None]).nonzero(as_tuple=True)
-        if row.numel():
-            dist = _segment_distances(points[row], a[goal, seg], ab[goal, seg], denom[goal, seg])
-            pair = row * n_goals + goal
-            least = torch.full((index.numel(),), torch.inf, dtype=dist.dtype)
-            least.scatter_reduce_(0, pair, dist, "amin")
-            first = torch.full((index.numel(),), n_seg, dtype=seg.dtype)
-            ties = dist == least[pair]
-            first.scatter_reduce_(0, pair[ties], seg[ties], "amin")
-            first = first.view_as(index)
-            index = torch.where(first < n_seg, first, index)
-    return index
-
-
-def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
-    """:func:`lasa.method.belief.distance_to_sets_torch`, differentiated through the nearest segment only.
-
-    The same value and gradient: the minimum over a goal's segments passes its gradient to
-    the segment it picks alone, so the segment is found first without autograd
-    (:func:`_nearest_segment`), and only that segment's distance, (..., G, n) instead of
-    (..., G, K-1, n), is computed on the autograd graph, by the same operations.
-
-    Args:
-        points: Points, shape (..., n).
-        goal_sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
-
-    Returns:
-        Distances, shape (..., G).
-    """
-    if goal_sets.shape[1] == 1 or not bool(torch.isfinite(points).all()):
-        return distance_to_sets_torch(points, goal_sets)
-    lead, n, n_goals = points.shape[:-1], points.shape[-1], goal_sets.shape[0]
-    a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
-    denom = (ab * ab).sum(-1).clamp_min(1e-12)
-    flat = points.reshape(-1, n)
-    seg = _nearest_segment(flat, a, ab, denom)  # (rows, G)
-    goal = torch.arange(n_goals)
-    a_k, ab_k, denom_k = a[goal, seg], ab[goal, seg], denom[goal, seg]  # (rows, G, n), (rows, G)
-    return _segment_distances(flat[:, None, :], a_k, ab_k, denom_k).reshape(*lead, n_goals)
 
 
 def goal_scores(
