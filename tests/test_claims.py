@@ -141,11 +141,13 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
     table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
     md = render_verdicts(table)
     lines = md.strip().splitlines()
-    # the count line, a blank line, header, rule, one claim (claims without rows are left out)
+    # the count line with the fragile rows, a blank line, header, rule, one claim (claims without
+    # rows are left out)
     assert len(lines) == 5
-    assert lines[0] == (
+    assert lines[0].startswith(
         "Of 2 paper claims × robot, the effect: 0 reproduced, 0 partly, 1 not reproduced, 1 undecided, "
-        "0 not testable. Of the 0 numbers the paper states (× robot), the number: 0 in, 0 out, 0 undecided."
+        "0 not testable. Of the 0 numbers the paper states (× robot), the number: 0 in, 0 out, 0 undecided. "
+        "Fragile (an interval ends within a fifth of its width"
     )
     cells = [c.strip() for c in lines[4].strip("|").split("|")]
     assert cells[1] == "time ratio 1.45 and 1.30"
@@ -400,3 +402,24 @@ def test_the_studys_sentences_say_what_each_n_tells_and_what_was_cut():
         _study_row("study.h3", "not testable", nan, nan, 10, measured="not testable (completion: R 80%); x")
     ]
     assert _mechanism(h3).startswith("R finishes 80% of its episodes ([11](")  # not LA+SA: no bowl
+
+
+def test_the_fragile_line_names_the_headline_rows_and_counts_the_readings():
+    from lasa.evidence.claims import fragile_line
+
+    table = pd.DataFrame(
+        {
+            "id": [
+                "sim1.time_ratio",
+                "sim1.time_ratio",
+                "sim1.time_ratio@grasp_set",
+                "sim2.sa_trapped@hindsight",
+            ],
+            "robot": ["panda", "planar5", "panda", "panda"],
+            "fragile": ["yes", "no", "yes", "no"],
+        }
+    )
+    line = fragile_line(table)
+    assert "`sim1.time_ratio` (panda)" in line and "planar5" not in line
+    assert line.endswith("and 1 of the 2 readings' rows (`fragile` in claims.csv).")
+    assert "no headline row" in fragile_line(table.assign(fragile="no"))

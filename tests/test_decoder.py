@@ -133,9 +133,11 @@ def test_decode_numpy_at_chunk_boundaries(users, cands, chunk):
     with mock.patch.object(inference_module, "_CHUNK_ROWS", chunk):
         out = model.decode_numpy(z, s, b)
     np.testing.assert_allclose(out, reference(model, z, s, b), rtol=0, atol=FAST_ATOL * 0.5)
-    # a user's actions do not depend on its batch (to the bit with one thread on MKL; 1e-7 anywhere)
+    # a user's actions depend on its batch only through MKL's kernel for the batch's size: to the bit
+    # on AVX-512; on the pinned AVX2 kernels up to 2.1e-7 (measured at 1000 users). The bound was 1e-7
+    # before the kernels were pinned; 1e-6 is the forward's own accuracy against decode's float32.
     alone = model.decode_numpy(z, s[-1:], b[-1:])
-    np.testing.assert_allclose(alone[0], out[-1], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(alone[0], out[-1], rtol=0, atol=1e-6)
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -59,8 +59,13 @@ def test_shipped_settings_build_the_named_config(config, notebook):
     cls = settings_class(notebook)
     built = from_dict(cls, load_config(config, notebook).get("settings", {}))
     assert isinstance(built, cls)
-    if config.stem == "paper":
-        assert built == cls()  # the paper scale is the dataclass defaults, written once
+    if config.stem == "paper":  # the paper scale is the dataclass defaults, written once; but for
+        # `jobs`, the worker processes of notebooks 10 and 11 (how many cores, not what is computed)
+        import dataclasses
+
+        if "jobs" in {f.name for f in dataclasses.fields(cls)}:
+            built = dataclasses.replace(built, jobs=cls().jobs)
+        assert built == cls()
 
 
 def test_an_unknown_setting_is_an_error():

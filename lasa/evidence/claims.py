@@ -522,7 +522,7 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
         mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
         line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {_flips(rows, pc.id)} | {mech} |"
         (ours if pc.ours else paper).append(line)
-    out = [count_line(table), "", fragile_line(table), "", *paper]
+    out = [f"{count_line(table)} {fragile_line(table)}", "", *paper]
     if len(ours) > len(head):
         out += ["", "Our additions, not claims of the paper (not counted above):", "", *ours]
     return "\n".join(out) + "\n"

@@ -96,8 +96,10 @@ class Config:
     decoders: str = "property"
     scheduler: str = ""  # a Dask scheduler address for the readings' runs ("" local; $LASA_SCHEDULER) [-]
     # local worker processes of the readings' runs: the same episodes with any number (each run
-    # is seeded and single-threaded); two use both cores when this notebook runs alone, last [-]
-    jobs: PositiveInt = 2
+    # is seeded and single-threaded); configs/paper.yaml asks for two (both cores: this notebook
+    # runs alone, last). One by default: a participant model registered in this process only
+    # (tests, a notebook cell) is unknown to a worker [-]
+    jobs: PositiveInt = 1
     # who a replication needs (lasa.figures.study_power): cohort sizes drawn from the simulated
     # participants [participants], and cohorts drawn per size (each one analysis, ~0.3 s; 100 draws
     # give a power of 80% to within 4 points) [-]

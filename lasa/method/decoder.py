@@ -197,8 +197,10 @@ class LatentActionModel(nn.Module):
         2x faster than :math:`U W_o^\top` for n = 5-7). Until late on 2026-12-02 tanh went
         through an in-place ``sigmoid_`` (faster on the AMD EPYC it was tuned on, 1.5-2x
         slower on the Xeon that replaced it, where ``tanh_`` costs about 0.6 ns per element);
-        see ``benchmarks/README.md``. A row's result does not depend on its batch or chunk (with
-        one torch and OpenMP thread, to the bit, as with :meth:`decode`).
+        see ``benchmarks/README.md``. A row's result depends on its batch or chunk only through
+        MKL's choice of GEMM kernel for the batch's size (one torch and OpenMP thread): on the
+        AVX2 kernels ``lasa`` pins (:mod:`lasa.base.kernels`) by up to about 2e-7, as with
+        :meth:`decode`; to the bit on AVX-512 ones.
 
         It computes this class's :meth:`decode`: where a subclass overrides ``decode`` (or
         a test patches it), ``decode_numpy`` calls that ``decode`` on the expanded inputs,

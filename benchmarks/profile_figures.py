@@ -3,7 +3,7 @@
 Record (py-spy is pinned in ``environment.lock``), then read::
 
     .venv/bin/py-spy record --subprocesses --rate 20 --format raw -o build/figures.raw -- make figures
-    .venv/bin/python benchmarks/profile.py build/figures.raw --top 8
+    .venv/bin/python benchmarks/profile_figures.py build/figures.raw --top 8
 
 py-spy's raw format is one line per distinct stack, ``frame;frame;... count``, and with
 ``--subprocesses`` each stack starts with its processes' command lines: a notebook's kernel hangs
