@@ -54,6 +54,7 @@ import os
 
 # Off-screen rendering: mujoco reads MUJOCO_GL once, on import (lasa sets the same default).
 os.environ.setdefault("MUJOCO_GL", "osmesa")
+__import__("lasa")  # first: lasa pins the numerical kernels before numpy and torch load
 
 import argparse  # noqa: E402
 import contextlib  # noqa: E402

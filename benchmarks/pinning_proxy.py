@@ -15,14 +15,16 @@ import json
 import sys
 import time
 
-import numpy as np
-import torch
+__import__("lasa")  # first: it pins the kernels (unless the caller set them) before numpy loads
 
-from lasa.method.belief import log_likelihood
-from lasa.method.train import TrainConfig, train_decoder
-from lasa.people.demos import DemoConfig, collect_demonstrations
-from lasa.world.robot import load_robot
-from lasa.world.task import make_cup_task
+import numpy as np  # noqa: E402
+import torch  # noqa: E402
+
+from lasa.method.belief import log_likelihood  # noqa: E402
+from lasa.method.train import TrainConfig, train_decoder  # noqa: E402
+from lasa.people.demos import DemoConfig, collect_demonstrations  # noqa: E402
+from lasa.world.robot import load_robot  # noqa: E402
+from lasa.world.task import make_cup_task  # noqa: E402
 
 
 def _timed(call) -> float:

@@ -11,6 +11,8 @@ import os
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
+__import__("lasa")  # first: lasa pins the numerical kernels before numpy and torch load, as make does
+
 import pytest  # noqa: E402
 import torch  # noqa: E402
 

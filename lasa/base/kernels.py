@@ -18,6 +18,8 @@ sets ``MUJOCO_GL``, and ``make`` exports the same values. A variable already set
 from __future__ import annotations
 
 import os
+import sys
+import warnings
 
 __all__ = ["PINNED", "pin_kernels", "kernel_settings"]
 
@@ -43,8 +45,15 @@ def pin_kernels() -> dict[str, str]:
     Returns:
         The values in effect afterwards, by variable.
     """
-    for name, value in PINNED.items():
-        os.environ.setdefault(name, value)
+    unset = [name for name in PINNED if name not in os.environ]
+    for name in unset:
+        os.environ[name] = PINNED[name]
+    if "NPY_DISABLE_CPU_FEATURES" in unset and "numpy" in sys.modules:
+        warnings.warn(
+            "numpy was imported before lasa, so its loops run on this CPU's own SIMD in this process: "
+            "results may differ in the last bits from another CPU's. Import lasa first.",
+            stacklevel=2,
+        )
     return {name: os.environ[name] for name in PINNED}
 
 
