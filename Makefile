@@ -170,6 +170,8 @@ figures: setup
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
 	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv
+else
+	@$(BIN)/python -m lasa.evidence.claims $(FIGURES_DIR)/claims.csv
 endif
 ifneq ($(TIMED_PART),)
 	@$(BIN)/python -m lasa.pipeline.timings $(BUILD)/timings.jsonl --part $(TIMED_PART) \

@@ -423,3 +423,15 @@ def test_the_fragile_line_names_the_headline_rows_and_counts_the_readings():
     assert "`sim1.time_ratio` (panda)" in line and "planar5" not in line
     assert line.endswith("and 1 of the 2 readings' rows (`fragile` in claims.csv).")
     assert "no headline row" in fragile_line(table.assign(fragile="no"))
+
+
+def test_the_cli_writes_an_out_runs_verdicts_beside_its_claims(tmp_path):
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    shutil.copy(Path(__file__).resolve().parents[1] / "figures" / "claims.csv", tmp_path / "claims.csv")
+    subprocess.run([sys.executable, "-m", "lasa.evidence.claims", str(tmp_path / "claims.csv")], check=True)
+    committed = Path(__file__).resolve().parents[1] / "figures" / "verdicts.md"
+    assert (tmp_path / "verdicts.md").read_text() == committed.read_text()

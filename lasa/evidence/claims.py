@@ -552,9 +552,13 @@ def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]
 if __name__ == "__main__":
     import sys
 
-    if len(sys.argv) != 3:
-        raise SystemExit("usage: python -m lasa.evidence.claims README.md figures/claims.csv")
-    readme, csv = Path(sys.argv[1]), Path(sys.argv[2]).with_suffix(".csv")
+    if len(sys.argv) not in (2, 3):
+        raise SystemExit("usage: python -m lasa.evidence.claims [README.md] figures/claims.csv")
+    csv = Path(sys.argv[-1]).with_suffix(".csv")
     verdicts = write_verdicts(csv, csv.with_name("verdicts.md"))
+    if len(sys.argv) == 2:  # an OUT= or QUICK run: its verdicts.md beside its claims, no README
+        print(f"{verdicts} written")
+        raise SystemExit(0)
+    readme = Path(sys.argv[1])
     changed = sync_readme(readme, verdicts)
     print(f"{verdicts} written; {readme}: verdict table {'updated' if changed else 'already current'}")
