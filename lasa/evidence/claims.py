@@ -167,7 +167,7 @@ def fragile_because(claim: Claim) -> list[str]:
     r = RULES.get(claim.id.split("@", 1)[0])
     if r is None or claim.reproduced == NOT_TESTABLE:
         return []
-    return r.fragile({k: v for k, v in claim.intervals.items()})
+    return r.fragile(claim.intervals)
 
 
 def _numbers_word(words: list[str]) -> str:
@@ -206,9 +206,9 @@ def _row(claim: Claim) -> dict[str, object]:
     row.update(criteria(claim))
     lead = note_lead(str(row["effect"]), str(row["number"]), paper_numbers_of(claim.id))
     note = lead + claim.note
-    why = fragile_because(claim)
-    if why:
-        note = f"{note.rstrip()} Fragile: {'; '.join(why)} (within a fifth of its width)."
+    if row["fragile"] == "yes":  # criteria found it so; the note says why
+        why = "; ".join(fragile_because(claim))
+        note = f"{note.rstrip()} Fragile: {why} (within a fifth of its width)."
     row["note"] = note
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"

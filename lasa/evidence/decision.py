@@ -247,10 +247,11 @@ class Rule:
             margin = FRAGILE_FRACTION * (high - low)
             if not (math.isfinite(low) and math.isfinite(high)) or margin <= 0.0:
                 continue
-            near = sorted({t for t in values if min(abs(low - t), abs(high - t)) < margin})
+            gaps = {t: min(abs(low - t), abs(high - t)) for t in sorted(set(values))}
             out += [
-                f"{name} [{low:.3g}, {high:.3g}] ends {min(abs(low - t), abs(high - t)):.2g} from {t:g}"
-                for t in near
+                f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}"
+                for t, gap in gaps.items()
+                if gap < margin
             ]
         return out
 

@@ -487,7 +487,7 @@ class TaskSpaceMap:
         w, inside = self._weight(p)
         back = self.ref_cup + (p - self.new_cup) @ rot_z(-self.delta).T  # T^-1 p
         p_hat = p + w[:, None] * (back - p)
-        r_hat = np.einsum("bij,bjk->bik", np.stack([rot_z(-wi * self.delta) for wi in w]), rot)
+        r_hat = np.einsum("bij,bjk->bik", rot_z(-w * self.delta), rot)
         return p, rot, jac, w, inside, back, p_hat, r_hat
 
     def state(self, state: np.ndarray) -> np.ndarray:
@@ -536,7 +536,7 @@ class TaskSpaceMap:
         turn = rot_z(-self.delta)
         a_pos = (1.0 - w)[:, None, None] * np.eye(3) + w[:, None, None] * turn
         top = np.einsum("bij,bjn->bin", a_pos, jac[:, :3]) + (back - p)[:, :, None] * grad[:, None, :]
-        spin = np.stack([rot_z(-wi * self.delta) for wi in w])
+        spin = rot_z(-w * self.delta)
         bottom = np.einsum("bij,bjn->bin", spin, jac[:, 3:])
         bottom[:, 2] -= self.delta * grad
         return np.concatenate([top, bottom], axis=1)

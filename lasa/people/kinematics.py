@@ -30,32 +30,15 @@ def tip_frames(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The grasp site's position, direction (+z) and Jacobians at joint vectors ``qs`` (B, n).
 
-    ``data`` is the MjData MuJoCo's one-at-a-time loop writes, for a robot whose arm is not a
-    chain of hinges (:class:`lasa.world.chain.SerialChain`); a chain's batch needs none.
+    :meth:`lasa.world.robot.Robot.grasp_jacobians`, split: ``data`` is the MjData it writes where
+    the arm is not a chain of hinges (a chain's batch needs none).
 
     Returns:
         position (B, 3), direction (B, 3), translational Jacobian (B, 3, n) and rotational
         Jacobian (B, 3, n) with respect to the arm joints.
     """
-    if robot.chain is not None:  # the batch at once (lasa.world.chain); ``data`` is not needed
-        pos, rot, jac = robot.grasp_jacobians(qs)
-        return pos, rot[:, :, 2], jac[:, :3], jac[:, 3:]
-    model = robot.model
-    site = model.site(robot.spec.grasp_site).id
-    dofs = np.array([model.jnt_dofadr[model.joint(j).id] for j in robot.spec.joints])
-    b = len(qs)
-    pos, axis = np.empty((b, 3)), np.empty((b, 3))
-    jp, jr = np.empty((b, 3, len(dofs))), np.empty((b, 3, len(dofs)))
-    jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
-    for i, q in enumerate(qs):  # MuJoCo's kinematics take one configuration at a time
-        data.qpos[robot.qpos_adr] = q
-        mujoco.mj_kinematics(model, data)
-        mujoco.mj_comPos(model, data)
-        mujoco.mj_jacSite(model, data, jacp, jacr, site)
-        pos[i] = data.site_xpos[site]
-        axis[i] = data.site_xmat[site].reshape(3, 3)[:, 2]
-        jp[i], jr[i] = jacp[:, dofs], jacr[:, dofs]
-    return pos, axis, jp, jr
+    pos, rot, jac = robot.grasp_jacobians(qs, data)
+    return pos, rot[:, :, 2], jac[:, :3], jac[:, 3:]
 
 
 def angle_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -155,16 +155,21 @@ def key_columns(frame: pd.DataFrame) -> list[str]:
     return keys
 
 
+def _non_finite_changed(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """Cells non-finite (NaN, ±inf) on at least one side that are not the same on both (a mask)."""
+    same = (old == new) | (np.isnan(old) & np.isnan(new))  # inf == inf; two NaN are equal
+    return ~(np.isfinite(old) & np.isfinite(new)) & ~same
+
+
 def _numeric_diff(a: pd.Series, b: pd.Series, tol: Tolerance) -> tuple[np.ndarray, str]:
     """Cells beyond the tolerance (a mask) and ``max abs .., max rel ..`` of numeric columns, over
     the cells that are finite on both sides (:func:`_non_finite` reports the others)."""
     old, new = a.to_numpy(dtype=float), b.to_numpy(dtype=float)
     finite = np.isfinite(old) & np.isfinite(new)
-    same = (old == new) | (np.isnan(old) & np.isnan(new))  # inf == inf; two NaN are equal
     with np.errstate(invalid="ignore", divide="ignore"):
         diff = np.where(finite, np.abs(new - old), 0.0)
         rel = np.where(diff == 0, 0.0, diff / np.abs(old))
-    beyond = np.where(finite, diff > tol.atol + tol.rtol * np.abs(np.where(finite, old, 0.0)), ~same)
+    beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, old, 0.0))) | _non_finite_changed(old, new)
     detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
     return beyond, detail
 
@@ -173,8 +178,7 @@ def _non_finite(name: str, column: str, old: pd.DataFrame, new: pd.DataFrame) ->
     """A line naming the rows of ``column`` whose value is non-finite (NaN, ±inf) on one side
     only, or became another non-finite value, with both values; None when there is none."""
     a, b = old[column].to_numpy(dtype=float), new[column].to_numpy(dtype=float)
-    same = (a == b) | (np.isnan(a) & np.isnan(b))
-    where = np.flatnonzero(~(np.isfinite(a) & np.isfinite(b)) & ~same)
+    where = np.flatnonzero(_non_finite_changed(a, b))
     if not len(where):
         return None
     keys = [k for k in key_columns(old) if k in new.columns]

@@ -429,25 +429,31 @@ class Robot:
         """
         return self._site_frames(qs)
 
-    def grasp_jacobians(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def grasp_jacobians(
+        self, qs: np.ndarray, data: mujoco.MjData | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Grasp-site positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n) at joints ``qs`` (B, n).
 
         The Jacobian stacks the translational rows over the rotational ones (world frame), with
-        respect to the arm joints.
+        respect to the arm joints. A chain of hinges computes the batch at once (:attr:`chain`);
+        any other arm goes through MuJoCo one configuration at a time, writing ``data`` (default:
+        this robot's own).
         """
         qs = np.asarray(qs, dtype=float).reshape(-1, self.n_joints)
         if self._chain is not None:  # the batch at once (lasa.world.chain)
             return self._chain.site_jacobians(qs)
+        data = self.data if data is None else data
         dofs = np.array([self.model.jnt_dofadr[self.model.joint(j).id] for j in self.spec.joints])
         jacp, jacr = np.zeros((3, self.model.nv)), np.zeros((3, self.model.nv))
         pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))
         jac = np.empty((len(qs), 6, self.n_joints))
         for i, q in enumerate(qs):  # MuJoCo's kinematics take one configuration at a time
-            self.set_state(q)
-            mujoco.mj_comPos(self.model, self.data)
-            mujoco.mj_jacSite(self.model, self.data, jacp, jacr, self._site)
-            pos[i] = self.data.site_xpos[self._site]
-            rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
+            data.qpos[self.qpos_adr] = q
+            mujoco.mj_kinematics(self.model, data)
+            mujoco.mj_comPos(self.model, data)
+            mujoco.mj_jacSite(self.model, data, jacp, jacr, self._site)
+            pos[i] = data.site_xpos[self._site]
+            rot[i] = data.site_xmat[self._site].reshape(3, 3)
             jac[i, :3], jac[i, 3:] = jacp[:, dofs], jacr[:, dofs]
         return pos, rot, jac
 

@@ -11,7 +11,10 @@ import numpy as np
 __all__ = ["rot_z"]
 
 
-def rot_z(angle: float) -> np.ndarray:
-    """The rotation by ``angle`` [rad] about the z axis, shape (3, 3)."""
+def rot_z(angle: float | np.ndarray) -> np.ndarray:
+    """The rotation by ``angle`` [rad] about the z axis, shape (3, 3); for angles of shape (...,),
+    one per angle, shape (..., 3, 3)."""
     c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    zero, one = np.zeros_like(c), np.ones_like(c)
+    rows = [np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)]
+    return np.stack(rows, -2)
