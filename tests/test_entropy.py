@@ -1,11 +1,14 @@
 """The entropy term (Eqs. T5-T6): a hand-computed case, gradients, spreading, the lambda rule."""
 
 import dataclasses
+from unittest import mock
 
 import numpy as np
 import pandas as pd
 import pytest
 import torch
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from lasa.base.config import ControlConfig
@@ -213,3 +216,26 @@ def test_runs_spread_over_worker_processes_train_the_same_decoders(model, demos,
     assert not torch.equal(
         here[0][0].state_dict()["decoder.0.weight"], here[1][0].state_dict()["decoder.0.weight"]
     )
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), rows=st.integers(1, 60), block=st.integers(1, 17))
+def test_candidates_in_blocks_give_the_reference_distance(seed, rows, block):
+    """nearest_distance, whatever the row blocks of its candidate search: the reference's value to the bit.
+
+    Random polylines, and points anywhere, on their vertices and at their segments' midpoints
+    (ties between segments).
+    """
+    from lasa.method import belief
+
+    rng = np.random.default_rng(seed)
+    sets = torch.as_tensor(rng.normal(size=(3, 6, 7)), dtype=torch.float32)
+    verts = sets.reshape(-1, 7).numpy()
+    pick = rng.integers(0, len(verts) - 1, rows)
+    kind = rng.integers(0, 3, rows)[:, None]
+    mid = 0.5 * (verts[pick] + verts[pick + 1])
+    pts = np.where(kind == 0, rng.normal(size=(rows, 7)), np.where(kind == 1, verts[pick], mid))
+    points = torch.as_tensor(pts, dtype=torch.float32)
+    with mock.patch.object(belief, "_CANDIDATE_ROWS", block):
+        out = belief.nearest_distance(points, sets)
+    assert torch.equal(out, belief.distance_to_sets_torch(points, sets))

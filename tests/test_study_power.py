@@ -140,11 +140,13 @@ def test_each_drawn_cohort_counts_on_the_side_its_interval_lies(committed, monke
     assert table.paper_direction.tolist()[1:] == [True, False]  # H2 above 0 is the paper's; H3 is not
 
 
-def test_the_same_seed_gives_the_same_table(committed):
+def test_the_same_seed_gives_the_same_table_in_any_number_of_processes(committed):
     study = synthetic(committed, effect=-0.1)
     first = power(study, **READING, sizes=(6, 8), draws=2, seed=11)
     again = power(study, **READING, sizes=(6, 8), draws=2, seed=11)
     pd.testing.assert_frame_equal(first, again)
+    spread = power(study, **READING, sizes=(6, 8), draws=2, seed=11, n_jobs=2)  # notebook 11's two processes
+    pd.testing.assert_frame_equal(first, spread)
     assert list(first.n) == [6, 8] * 3
 
 

@@ -95,9 +95,10 @@ class Config:
     # remedy, as a contrast); "all", every reading (LARGE=1) [-]
     decoders: str = "property"
     scheduler: str = ""  # a Dask scheduler address for the readings' runs ("" local; $LASA_SCHEDULER) [-]
-    # local worker processes of the readings' runs: the same episodes with any number (each run
-    # is seeded and single-threaded); configs/paper.yaml asks for two (both cores: this notebook
-    # runs alone, last). One by default: a participant model registered in this process only
+    # local worker processes of the readings' runs and of the power's drawn cohorts: the same
+    # episodes and table with any number (each run is seeded and single-threaded, the draws are
+    # made up front); configs/paper.yaml asks for two (both cores: this notebook runs last).
+    # One by default: a participant model registered in this process only
     # (tests, a notebook cell) is unknown to a worker [-]
     jobs: PositiveInt = 1
     # who a replication needs (lasa.figures.study_power): cohort sizes drawn from the simulated

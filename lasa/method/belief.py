@@ -145,27 +145,42 @@ def _segment_distances(
     return torch.linalg.vector_norm(p - closest, dim=-1)
 
 
+# Rows per block of :func:`_candidates`: its (rows, G (K-1)) float64 work arrays stay in a core's
+# L2 cache (1024 x 68 x 8 B = 0.56 MB for the eating task's 4 x 17 segments), where the whole
+# batch's (8,000 rows: 4.3 MB each) would stream through memory at every elementwise pass.
+_CANDIDATE_ROWS = 1024
+
+
 def _candidates(points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor) -> torch.Tensor:
     r"""The segments that can be a point's nearest, shape (rows, G, K-1), bool; no gradient.
 
-    Each distance is computed in float64 from (rows, G (K-1)) matrices, not (rows, G, K-1, n)
-    arrays: with :math:`u = (p - a) \cdot ab` and :math:`t = \mathrm{clamp}(u / \|ab\|^2, 0, 1)`,
-    :math:`d^2 = \|p - a\|^2 - 2 t u + t^2 \|ab\|^2`, where :math:`p \cdot a` and
+    Each squared distance is computed in float64 from (rows, G (K-1)) matrices, not
+    (rows, G, K-1, n) arrays: with :math:`u = (p - a) \cdot ab` and
+    :math:`t = \mathrm{clamp}(u / \|ab\|^2, 0, 1)`,
+    :math:`d^2 = \|p - a\|^2 + t (t \|ab\|^2 - 2 u)`, where :math:`p \cdot a` and
     :math:`p \cdot ab` are two small matrix products. Its error is far below float32's, so a
-    segment more than a margin (about 170 float32 rounding units of the coordinates) farther
-    than the nearest cannot be float32's minimum.
+    segment more than a margin :math:`m` (about 170 float32 rounding units of the coordinates)
+    farther than the nearest cannot be float32's minimum: a segment is kept when
+    :math:`d^2 \le (d_{\min} + m)^2`, one square root per goal instead of one per segment.
+    The rows go in blocks of ``_CANDIDATE_ROWS``, each block's work arrays in cache.
     """
     n_goals, n_seg, n = ab.shape
-    p = points.double()
     a64, ab64 = a.double().reshape(-1, n), ab.double().reshape(-1, n)
     den = denom.double().reshape(-1)
-    u = torch.addmm((a64 * ab64).sum(-1), p, ab64.T, beta=-1.0)  # (p - a) . ab
-    t = (u / den).clamp_(0.0, 1.0)
-    sq = torch.addmm((a64 * a64).sum(-1), p, a64.T, alpha=-2.0)  # ||p - a||^2 - ||p||^2
-    sq.add_((p * p).sum(-1, keepdim=True)).sub_(2.0 * t * u).add_(t * t * den)
-    dist = sq.clamp_min_(0.0).sqrt_().view(-1, n_goals, n_seg)
-    scale = 1.0 + p.abs().amax(-1) + float(a64.abs().max() + ab64.abs().max())  # (rows,)
-    return dist <= (dist.amin(-1) + 1e-5 * scale[:, None])[..., None]
+    a_ab, a_a = (a64 * ab64).sum(-1), (a64 * a64).sum(-1)
+    shift = 1.0 + float(a64.abs().max() + ab64.abs().max())
+    out = torch.empty(points.shape[0], n_goals, n_seg, dtype=torch.bool)
+    for start in range(0, points.shape[0], _CANDIDATE_ROWS):
+        p = points[start : start + _CANDIDATE_ROWS].double()
+        u = torch.addmm(a_ab, p, ab64.T, beta=-1.0)  # (p - a) . ab
+        t = (u / den).clamp_(0.0, 1.0)
+        sq = torch.addmm(a_a, p, a64.T, alpha=-2.0)  # ||p - a||^2 - ||p||^2
+        sq.add_((p * p).sum(-1, keepdim=True)).addcmul_(t, u.mul_(-2.0).addcmul_(t, den))
+        sq = sq.clamp_min_(0.0).view(-1, n_goals, n_seg)
+        margin = 1e-5 * (shift + p.abs().amax(-1))  # (rows,)
+        bound = sq.amin(-1).sqrt_().add_(margin[:, None]).square_()
+        torch.le(sq, bound[..., None], out=out[start : start + _CANDIDATE_ROWS])
+    return out
 
 
 def _nearest_segment(
