@@ -20,8 +20,8 @@
 #
 # Each figure notebook is a Make target (its executed copy in $(BUILD)/notebooks), which
 # depends on the notebook, the lasa files it runs, the config and the notebooks it reads from:
-# after a change, `make figures` re-runs only what is stale. The study's chain and the two robots'
-# chains run side by side (JOBS=3, one torch thread each); OUT=dir runs the pipeline into dir instead.
+# after a change, `make figures` re-runs only what is stale. Two notebooks run at a time (JOBS=2,
+# one torch thread each): the study's chain and the robots'; OUT=dir runs the pipeline into dir instead.
 
 SHELL := /bin/bash
 .SHELLFLAGS := -eu -o pipefail -c
@@ -55,12 +55,7 @@ BUILD := $(OUT)
 OUT_PARAMS := --param build_dir=$(OUT) --param figures_dir=$(OUT)/figures
 endif
 EXEC := $(BUILD)/notebooks
-# Notebooks that run at once: the study's chain (10 then 11, the critical path, whose trainings and
-# readings use two worker processes of their own) and the two robots' chains. The robots' notebooks
-# run under `nice` (SIDE): they take the cores the study's chain leaves idle (its serial parts,
-# the tails of its worker pools), not cores it needs. Scheduling only: no number depends on it.
-JOBS ?= 3
-SIDE := nice -n 10
+JOBS ?= 2
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 # One torch and one OpenMP/BLAS thread per notebook, on every machine: more threads round
 # float reductions differently, and the figures would then depend on the core count
@@ -186,8 +181,8 @@ endif
 
 # The eating study (Sec. VI) runs on the Panda only: its own chain, beside the robots'.
 STUDY_NBS := 10_eating_task 11_eating_study
-# The study chain first: it is the longest (10 then 11), so it starts at once, at full priority,
-# and the robots' chains (under SIDE's nice) fill the cores it leaves idle.
+# The study chain first: it is the longest (10 then 11), so it starts at once (it reads no other
+# notebook's output) and the robots' chains share the other slot.
 # Make starts prerequisites in this order, so the costliest chains go first (measured per notebook:
 # benchmarks/results.json, figures_s): the study (10 then 11, which also use two worker processes
 # each), then each robot's 07 (sim4, the longest of the sims), then the rest, Panda first.
@@ -203,37 +198,37 @@ RUNS := $(STUDY_NBS) $(foreach r,$(ROBOTS),$(foreach n,01_demonstrations 02_deco
 
 # One executed copy per (notebook, robot); `$*` is the robot.
 $(EXEC)/01_demonstrations-%.ipynb: notebooks/01_demonstrations.ipynb $(NB_SRC_01_demonstrations) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 $(EXEC)/02_decoder_training-%.ipynb: notebooks/02_decoder_training.ipynb $(EXEC)/01_demonstrations-%.ipynb $(NB_SRC_02_decoder_training) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 $(EXEC)/03_entropy_ablation-%.ipynb: notebooks/03_entropy_ablation.ipynb $(EXEC)/02_decoder_training-%.ipynb $(NB_SRC_03_entropy_ablation) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 # The sweeps read notebook 03's pair of decoders: the lambda = 0 control and the entropy one.
 $(EXEC)/04_fixed_expertise-%.ipynb: notebooks/04_fixed_expertise.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_04_fixed_expertise) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 $(EXEC)/05_changing_goals-%.ipynb: notebooks/05_changing_goals.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_05_changing_goals) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 $(EXEC)/06_learning_users-%.ipynb: notebooks/06_learning_users.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_06_learning_users) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 # New goals read the base decoder only (no retraining: that is the point of Sec. IV-C).
 $(EXEC)/07_new_goals-%.ipynb: notebooks/07_new_goals.ipynb $(EXEC)/02_decoder_training-%.ipynb $(NB_SRC_07_new_goals) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 # The verdict map re-runs sims 1-3 over a grid of settings with notebook 03's decoders; its
 # default and members' cells are the first look of notebooks 04-06 (their CSVs), not run again.
 # Its cells go through joblib (a Dask cluster if LASA_SCHEDULER=tcp://... is set).
 $(EXEC)/08_claims_robustness-%.ipynb: notebooks/08_claims_robustness.ipynb $(EXEC)/04_fixed_expertise-%.ipynb $(EXEC)/05_changing_goals-%.ipynb $(EXEC)/06_learning_users-%.ipynb $(NB_SRC_08_claims_robustness) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 # Sec. IV-A's ball along LA+SA rollouts of the lambda = 0 control decoder.
 $(EXEC)/09_convergence-%.ipynb: notebooks/09_convergence.ipynb $(EXEC)/03_entropy_ablation-%.ipynb $(NB_SRC_09_convergence) $(CONFIG) | setup
-	$(SIDE) $(RUN) --robot $*
+	$(RUN) --robot $*
 
 # The eating task: scene, demonstrations and the 2-D decoder readings; then the simulated study.
 # The property figure holds the cup decoders too (notebook 02's), whichever publishes first: its
