@@ -64,12 +64,13 @@ def listening(port: int) -> bool:
         return s.connect_ex(("127.0.0.1", port)) == 0
 
 
-async def participant(url: str, origin: str, duration: float) -> int:
-    """One simulated participant: consent, start the practice, a slowly turning stick at 10 Hz, finish;
-    returns the frames (binary messages) it received."""
+async def participant(url: str, token: str, origin: str, duration: float) -> int:
+    """One simulated participant: its token, consent, start the practice, a slowly turning stick at
+    10 Hz, finish; returns the frames (binary messages) it received."""
     from websockets.asyncio.client import connect
 
     async with connect(url, origin=origin, max_size=2**20) as ws:  # type: ignore[arg-type]
+        await ws.send(json.dumps({"type": "hello", "token": token}))
         assert json.loads(await ws.recv())["kind"] == "consent"
         await ws.send(json.dumps({"type": "consent"}))
         assert json.loads(await ws.recv())["kind"] == "practice"
@@ -110,7 +111,7 @@ async def level(port: int, tokens: dict[str, str], duration: float) -> list[int]
     """N participants at once (N = len(tokens)); the frames each received."""
     origin = f"http://127.0.0.1:{port}"
     return await asyncio.gather(
-        *(participant(f"ws://127.0.0.1:{port}/ws?token={t}", origin, duration) for t in tokens.values())
+        *(participant(f"ws://127.0.0.1:{port}/ws", t, origin, duration) for t in tokens.values())
     )
 
 
@@ -145,7 +146,7 @@ def in_chromium(port: int, token: str, seconds: float = 60.0) -> dict[str, float
     options.binary_location = shutil.which("chromium") or "chromium"
     browser = webdriver.Chrome(options=options, service=Service(shutil.which("chromedriver")))
     try:
-        browser.get(f"http://127.0.0.1:{port}/study?token={token}")
+        browser.get(f"http://127.0.0.1:{port}/study#token={token}")
         t0 = time.monotonic()
         while time.monotonic() - t0 < seconds:
             if browser.find_element(By.ID, "agree").is_displayed():

@@ -54,14 +54,28 @@ def files(sessions):
     return {p.relative_to(sessions): p.stat().st_mtime_ns for p in sessions.rglob("*")}
 
 
-def refused(app, url, headers=ORIGIN):
-    """Whether a WebSocket to ``url`` is refused before it opens."""
+@contextlib.contextmanager
+def connect(app, token, headers=ORIGIN):
+    """A participant's connection: ``/ws`` (no token in the URL), the token in its first message."""
+    with app.websocket_connect("/ws", headers=headers) as ws:
+        ws.send_json({"type": "hello", "token": token})
+        yield ws
+
+
+def refused(app, token, headers=ORIGIN):
+    """Why a connection with ``token`` is refused: "origin" (403, before it opens), the server's
+    reason (a ``refused`` message, then close 1008), or None if it was not refused."""
     try:
-        with app.websocket_connect(url, headers=headers) as ws:
-            ws.receive_json()
+        with connect(app, token, headers) as ws:
+            msg = ws.receive_json()
+            if msg["type"] != "refused":
+                return None
+            with pytest.raises(WebSocketDisconnect) as closed:
+                ws.receive_json()
+            assert closed.value.code == 1008
+            return msg["reason"]
     except WebSocketDisconnect as exc:
-        return exc.code == 1008
-    return False
+        return "origin" if exc.code == 1008 else None
 
 
 def test_links_carry_random_tokens_stored_as_hashes(study):
@@ -86,13 +100,27 @@ def test_requests_without_a_valid_token_are_refused_and_write_nothing(study, tmp
     other_token = pd.read_csv(issue_links(1, other, "http://x")).link[0].split("token=")[1]
     before = files(sessions)
     with client(sessions) as app:
-        for query in ("", "?token=", "?token=wrong", f"?token={other_token}", f"?token={'x' * 5000}"):
-            assert app.get(f"/study{query}").status_code == 403
-            assert refused(app, f"/ws{query}")
-        assert app.get(f"/study?token={tokens['p01']}").status_code == 200
-        assert refused(app, f"/ws?token={tokens['p01']}", headers={"origin": "http://evil.example"})
-        assert refused(app, f"/ws?token={tokens['p01']}", headers={})
+        for token in ("", "wrong", other_token, "x" * 128):
+            assert refused(app, token) == "invalid", token
+        for token in ("x" * 129, "x" * 5000, 12, None):  # longer than a token, or not a string
+            assert refused(app, token) == "no_hello", token
+        assert app.get("/study").status_code == 200  # the page is everyone's: it holds no secret
+        assert refused(app, tokens["p01"], headers={"origin": "http://evil.example"}) == "origin"
+        assert refused(app, tokens["p01"], headers={}) == "origin"
     assert files(sessions) == before
+
+
+def test_a_connection_that_sends_no_token_in_time_is_refused(study, monkeypatch):
+    from lasa.live.web import app as web_app
+
+    sessions, _ = study
+    monkeypatch.setattr(web_app, "HELLO_S", 0.2)
+    with client(sessions) as app, app.websocket_connect("/ws", headers=ORIGIN) as ws:
+        assert ws.receive_json() == {"type": "refused", "reason": "no_hello"}
+        ws.send_json({"type": "consent"})  # too late: the server has closed
+        with pytest.raises(WebSocketDisconnect) as closed:
+            ws.receive_json()
+        assert closed.value.code == 1008
 
 
 def test_a_token_is_its_own_participants_only_and_ends_with_the_schedule(study):
@@ -102,10 +130,10 @@ def test_a_token_is_its_own_participants_only_and_ends_with_the_schedule(study):
     progress._save()
     before = files(sessions)
     with client(sessions) as app:
-        assert app.get(f"/study?token={tokens['p02']}").status_code == 403  # schedule done
-        assert refused(app, f"/ws?token={tokens['p02']}")
+        assert refused(app, tokens["p02"]) == "finished"  # schedule done
         # the participant comes from the token alone: a client cannot name another one
-        with app.websocket_connect(f"/ws?token={tokens['p01']}&participant=p00", headers=ORIGIN) as ws:
+        with app.websocket_connect("/ws?participant=p00", headers=ORIGIN) as ws:
+            ws.send_json({"type": "hello", "token": tokens["p01"], "participant": "p00"})
             assert ws.receive_json()["kind"] == "consent"
             ws.send_json({"type": "consent"})
             assert ws.receive_json()["kind"] == "practice"
@@ -116,11 +144,11 @@ def test_a_token_is_its_own_participants_only_and_ends_with_the_schedule(study):
 def test_a_second_browser_on_one_token_is_refused_while_the_first_is_connected(study):
     sessions, tokens = study
     with client(sessions) as app:
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as first:
+        with connect(app, tokens["p00"]) as first:
             assert first.receive_json()["kind"] == "consent"
-            assert refused(app, f"/ws?token={tokens['p00']}")
-            assert refused(app, f"/ws?token={tokens['p00']}")
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as again:
+            assert refused(app, tokens["p00"]) == "elsewhere"
+            assert refused(app, tokens["p00"]) == "elsewhere"
+        with connect(app, tokens["p00"]) as again:
             assert again.receive_json()["kind"] == "consent"  # free again once the first has gone
 
 
@@ -139,7 +167,7 @@ def test_an_oversized_or_malformed_message_closes_the_connection_and_writes_noth
     sessions, tokens = study
     before = files(sessions)
     with client(sessions) as app:
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+        with connect(app, tokens["p00"]) as ws:
             assert ws.receive_json()["kind"] == "consent"
             ws.send_text(message)
             with pytest.raises(WebSocketDisconnect) as closed:
@@ -151,7 +179,7 @@ def test_an_oversized_or_malformed_message_closes_the_connection_and_writes_noth
 def test_a_flood_of_messages_is_cut_off(study):
     sessions, tokens = study
     with client(sessions) as app:
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+        with connect(app, tokens["p00"]) as ws:
             ws.receive_json()
             for _ in range(200):
                 ws.send_json({"type": "input", "axes": [0, 0]})
@@ -167,8 +195,7 @@ def test_a_hand_edited_token_file_cannot_put_a_path_into_a_session(study):
     path.write_text(json.dumps({"../../evil": hashes["p00"]}))
     before = files(sessions)
     with client(sessions) as app:
-        assert app.get(f"/study?token={tokens['p00']}").status_code == 403
-        assert refused(app, f"/ws?token={tokens['p00']}")
+        assert refused(app, tokens["p00"]) == "invalid"
     assert files(sessions) == before and not (sessions.parent / "evil").exists()
 
 
@@ -191,12 +218,12 @@ def test_a_browser_drives_a_trial_logged_as_teleop_logs_it(study):
     from lasa.world.eating import make_eating_task
 
     sessions, tokens = study
-    with client(sessions) as app:
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+    with client(sessions, show_belief=True) as app:
+        with connect(app, tokens["p00"]) as ws:
             ws.receive_json()
             ws.send_json({"type": "consent"})
             assert ws.receive_json() | {"limit_s": 0} == {
-                "type": "phase", "kind": "practice", "condition": "R", "task": "Dessert",
+                "type": "phase", "kind": "practice", "label": "A", "task": "Dessert",
                 "index": 1, "total": 16, "limit_s": 0,
             }  # fmt: skip
             ticks, _ = drive(ws, ticks=3)
@@ -230,7 +257,7 @@ def test_a_disconnect_leaves_the_session_interrupted_and_the_link_resumes_anew(s
     progress.of("p01")["step"] = 1  # p01's first trial (R+SA, Entree)
     progress._save()
     with client(sessions, trial_s=30.0) as app:
-        with app.websocket_connect(f"/ws?token={tokens['p01']}", headers=ORIGIN) as ws:
+        with connect(app, tokens["p01"]) as ws:
             assert ws.receive_json()["task"] == "Entree"
             drive(ws, ticks=3)
         deadline = time.monotonic() + 10
@@ -240,9 +267,9 @@ def test_a_disconnect_leaves_the_session_interrupted_and_the_link_resumes_anew(s
         frame, meta = read_session(first)
         assert meta["status"] == "interrupted" and len(frame) >= 3 and meta["steps"] == len(frame)
         kept = first.read_bytes()
-        with app.websocket_connect(f"/ws?token={tokens['p01']}", headers=ORIGIN) as ws:
+        with connect(app, tokens["p01"]) as ws:
             msg = ws.receive_json()
-            assert (msg["kind"], msg["task"], msg["condition"]) == ("trial", "Entree", "R+SA")
+            assert (msg["kind"], msg["task"], msg["label"]) == ("trial", "Entree", "A")  # R+SA, first for p01
             drive(ws, ticks=2)
     assert first.read_bytes() == kept and len(list(sessions.glob("p01_Entree_R+SA_*.csv"))) == 2
 
@@ -297,13 +324,13 @@ def test_the_survey_is_stored_as_the_terminal_survey_stores_it(study):
     progress.of("p00")["step"] = 3
     progress._save()
     with client(sessions) as app:
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+        with connect(app, tokens["p00"]) as ws:
             msg = ws.receive_json()
             assert msg["kind"] == "survey" and len(msg["questions"]) == 5
             ws.send_json({"type": "survey", "answers": [9, 1, 1, 1, 1]})
             assert ws.receive_json()["type"] == "error"
             ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3]})
-            assert ws.receive_json()["condition"] == "R+SA"
+            assert ws.receive_json()["label"] == "B"  # R+SA, p00's second condition
     likert = read_likert(sessions)
     assert list(likert.answer) == [7, 6, 5, 4, 3] and set(likert.condition) == {"R"}
 
@@ -398,9 +425,11 @@ def test_a_real_browser_consents_drives_and_sees_the_belief_and_ticks(study, rep
     from selenium.webdriver.common.by import By
 
     sessions, tokens = study
-    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server")
+    config = WebConfig(
+        sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server", show_belief=True
+    )
     with served(config) as port, chromium() as browser:
-        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens['p00']}")
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
         wait_for(lambda: browser.execute_script("return document.getElementById('view').naturalWidth") > 0)
         belief_shown(browser)
@@ -442,35 +471,37 @@ def test_the_npm_packages_are_served_locally_with_their_types(study):
             "/npm/x.js",
         ):
             assert app.get(url).status_code == 404, url
-        csp = app.get(f"/study?token={tokens['p00']}").headers["content-security-policy"]
+        csp = app.get("/study").headers["content-security-policy"]
         assert "'wasm-unsafe-eval'" in csp and "connect-src 'self'" in csp and "http" not in csp
     with client(sessions, frames="server") as app:  # the JPEG page evaluates no code and loads no wasm
-        assert "eval" not in app.get(f"/study?token={tokens['p00']}").headers["content-security-policy"]
+        assert "eval" not in app.get("/study").headers["content-security-policy"]
         assert app.get("/npm/mujoco/mujoco.js").status_code == 404
     with pytest.raises(ConfigError, match="frames is one of"):
         WebConfig(sessions=str(sessions), frames="gpu")
 
 
-def test_the_scene_route_needs_a_token_and_serves_only_the_servers_files(study):
+def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(study):
     """The page gets its trial's scene with the meshes under names the server chose; nothing else."""
     sessions, tokens = study
     before = files(sessions)
     with client(sessions, frames="browser") as app:
-        for query in ("", "?token=", "?token=wrong", f"?token={'x' * 5000}"):
-            assert app.get(f"/scene{query}").status_code == 403
-            assert app.get(f"/scene/asset0.stl{query}").status_code == 403
-        assert app.get(f"/scene?token={tokens['p00']}").status_code == 404  # no trial running
+        for key in ({}, {"x-scene-key": ""}, {"x-scene-key": "wrong"}, {"x-scene-key": "x" * 5000}):
+            assert app.get("/scene", headers=key).status_code == 404
+            assert app.get("/scene/asset0.stl", headers=key).status_code == 404
+        assert app.get(f"/scene?token={tokens['p00']}").status_code == 404  # a token is not a key
         assert files(sessions) == before
-        with app.websocket_connect(f"/ws?token={tokens['p00']}", headers=ORIGIN) as ws:
+        with connect(app, tokens["p00"]) as ws:
             ws.receive_json()
             ws.send_json({"type": "consent"})
             assert ws.receive_json()["kind"] == "practice"
             ws.send_json({"type": "start"})
             announced = ws.receive_json()
             assert announced["type"] == "scene" and announced["qpos_adr"] == list(range(7))
+            key = {"x-scene-key": announced["key"]}
+            assert tokens["p00"] not in json.dumps(announced)
             ws.send_json({"type": "input", "axes": [0.5, 0.5]})
             assert ws.receive_json()["type"] == "tick"  # state only: no frame in browser mode
-            reply = app.get(f"/scene?token={tokens['p00']}")
+            reply = app.get("/scene", headers=key)
             assert reply.status_code == 200 and reply.headers["cache-control"] == "no-store"
             scene = reply.json()
             (logged,) = (sessions / "practice").glob("p00_*.xml")  # the file SessionWriter wrote
@@ -481,7 +512,7 @@ def test_the_scene_route_needs_a_token_and_serves_only_the_servers_files(study):
             for name, source in zip(
                 re.findall(r'<mesh name="([^"]+)"', logged.read_text()), originals, strict=True
             ):
-                served = app.get(f"/scene/{by_name[name]}?token={tokens['p00']}")
+                served = app.get(f"/scene/{by_name[name]}", headers=key)
                 assert served.headers["content-type"] == "model/stl"
                 assert served.content == Path(source).read_bytes()
             for bad in (
@@ -491,10 +522,9 @@ def test_the_scene_route_needs_a_token_and_serves_only_the_servers_files(study):
                 "scene.xml",
                 logged.name,
             ):
-                assert app.get(f"/scene/{bad}?token={tokens['p00']}").status_code == 404, bad
-            assert app.get(f"/scene/../pyproject.toml?token={tokens['p00']}").status_code == 404
-            assert app.get(f"/scene?token={tokens['p01']}").status_code == 404  # p01 runs no trial
-            assert app.get(f"/scene/asset0.stl?token={tokens['p01']}").status_code == 404
+                assert app.get(f"/scene/{bad}", headers=key).status_code == 404, bad
+            assert app.get("/scene/../pyproject.toml", headers=key).status_code == 404
+        assert app.get("/scene", headers=key).status_code == 404  # the trial is over: its key too
 
 
 def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact, tmp_path):
@@ -509,9 +539,11 @@ def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact,
 
     npm_installed()
     sessions, tokens = study
-    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="browser")
+    config = WebConfig(
+        sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="browser", show_belief=True
+    )
     with served(config) as port, chromium() as browser:
-        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens['p00']}")
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: browser.execute_script("return window.lasaView.frames") >= 10, timeout=90)
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
         first = int(browser.find_element(By.ID, "tick").text)
@@ -587,7 +619,7 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
         sessions=str(sessions), build_dir=str(decoder_build), practice_s=60.0, trial_s=2.0, frames="none"
     )
     with served(config) as port, chromium() as browser:
-        consent_and_start(browser, f"http://127.0.0.1:{port}/study?token={tokens[who]}")  # the practice
+        consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens[who]}")  # the practice
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 5, timeout=60)
         end_practice(browser)
         for _task in ("Entree", "Dessert"):  # each trial ends at its 2 s limit, keys held
@@ -617,3 +649,101 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
     likert = pd.read_csv(sessions / "likert.csv", dtype={"participant": str})
     mine = likert[(likert.participant == who) & (likert.condition == "LA+SA")]
     assert len(mine) > 0 and (mine.answer == 5).all()
+
+
+async def _take_part(port: int, token: str, seconds: float = 1.0) -> None:
+    """A participant through the real server: the token, consent, the practice driven, ended."""
+    import asyncio
+
+    from websockets.asyncio.client import connect as ws_connect
+
+    async with ws_connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}") as ws:
+        await ws.send(json.dumps({"type": "hello", "token": token}))
+        assert json.loads(await ws.recv())["kind"] == "consent"
+        await ws.send(json.dumps({"type": "consent"}))
+        assert json.loads(await ws.recv())["kind"] == "practice"
+        await ws.send(json.dumps({"type": "start"}))
+        for _ in range(int(seconds * 10)):
+            await ws.send(json.dumps({"type": "input", "axes": [0.5, -0.5]}))
+            assert json.loads(await ws.recv())["type"] == "tick"
+            await asyncio.sleep(0.1)
+        await ws.send(json.dumps({"type": "finish"}))
+        while json.loads(await ws.recv())["type"] != "phase":
+            pass
+
+
+async def _refused_twice(port: int, token: str) -> list[str]:
+    """Two pages at once on one link: the second is refused, with its reason."""
+    from websockets.asyncio.client import connect as ws_connect
+
+    url, origin = f"ws://127.0.0.1:{port}/ws", f"http://127.0.0.1:{port}"
+    async with ws_connect(url, origin=origin) as first, ws_connect(url, origin=origin) as second:
+        await first.send(json.dumps({"type": "hello", "token": token}))
+        assert json.loads(await first.recv())["type"] == "phase"
+        await second.send(json.dumps({"type": "hello", "token": token}))
+        return [json.loads(await second.recv())["reason"]]
+
+
+def test_no_token_reaches_the_servers_log_or_any_file_but_the_links(tmp_path):
+    """The real server (the CLI, uvicorn's own logging) and a participant who takes part; every
+    line it logs and every file written, but study/links.csv, is searched for every token."""
+    import asyncio
+    import os
+    import signal
+    import subprocess
+    import sys
+    import urllib.request
+
+    sessions = tmp_path / "sessions"
+    links = pd.read_csv(issue_links(4, sessions, "http://127.0.0.1"))
+    tokens = {p: link.split("#token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)}
+    who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition.startswith("R"))
+    port, log = _free_port(), tmp_path / "server.log"
+    command = [sys.executable, "-m", "lasa.live.web", "--port", str(port), "--sessions", str(sessions)]
+    command += ["--build-dir", "no-decoders", "--frames", "none", "--practice-s", "30"]
+    with open(log, "wb") as out:
+        server = subprocess.Popen(
+            command, stdout=out, stderr=subprocess.STDOUT, env={**os.environ, "PYTHONPATH": str(ROOT)}
+        )
+        try:
+            wait_for(lambda: "Uvicorn running" in log.read_text(), timeout=60)
+            page = urllib.request.urlopen(f"http://127.0.0.1:{port}/study").read().decode()
+            assert "study.js" in page
+            asyncio.run(_take_part(port, tokens[who]))
+            assert asyncio.run(_refused_twice(port, tokens[who])) == ["elsewhere"]
+        finally:
+            server.send_signal(signal.SIGINT)
+            server.wait(timeout=30)
+    text = log.read_text()
+    assert '"WebSocket /ws" [accepted]' in text  # uvicorn logged each connection: a real log is read
+    written = [p for p in sessions.rglob("*") if p.is_file() and p != study_dir(sessions) / "links.csv"]
+    assert any(p.suffix == ".csv" and who in p.name for p in written)  # the practice was logged
+    for token in tokens.values():
+        assert token not in text
+        assert not [p for p in written if token in p.read_text(errors="replace")]
+
+
+def test_participants_see_letters_not_condition_codes_and_no_belief_by_default(study):
+    """A blind protocol: the page is told the condition's letter in the participant's own order,
+    never its code, and (by default) not the robot's belief; the logs keep the code."""
+    sessions, tokens = study
+    plan = plan_of(sessions, "p01")
+    codes = list(dict.fromkeys(step.condition for step in plan))
+    assert [step.label for step in plan] == [c for c in "ABCD" for _ in range(4)]
+    seen = []
+    with client(sessions, practice_s=90.0, trial_s=45.0) as app, connect(app, tokens["p01"]) as ws:
+        seen.append(ws.receive_json())
+        ws.send_json({"type": "consent"})
+        seen.append(ws.receive_json())
+        ticks, _ = drive(ws, ticks=3)
+    consent, practice = seen
+    assert consent == {
+        "type": "phase", "kind": "consent", "practice_s": 90.0, "trial_s": 45.0, "conditions": 4,
+        "longest_min": round(4 * (90 + 2 * 45 + 120) / 60),
+    }  # fmt: skip
+    assert practice["label"] == "A" and "condition" not in practice
+    shown = json.dumps(seen + ticks)
+    assert not [code for code in codes if f'"{code}"' in shown]  # no code as a value the page gets
+    assert ticks and not {"belief", "goals"} & set(ticks[-1])
+    (log,) = (sessions / "practice").glob("p01_*.csv")
+    assert read_session(log)[1]["condition"] == codes[0]

@@ -61,6 +61,12 @@ def _serve(argv: list[str]) -> int:
     parser.add_argument(
         "--origin", action="append", default=[], help="a page origin allowed besides the server's"
     )
+    parser.add_argument(
+        "--show-belief",
+        action="store_true",
+        help="show participants the robot's belief over the goals (off: the paper's people saw "
+        "the robot only)",
+    )
     args = parser.parse_args(argv)
     host = args.host or DEFAULT_HOST
     config = WebConfig(
@@ -70,6 +76,7 @@ def _serve(argv: list[str]) -> int:
         trial_s=args.trial_s,
         frames=args.frames,
         origins=tuple(args.origin),
+        show_belief=args.show_belief,
     )
     app = create_app(config)
     # one participant's step at a time decodes one row: torch's own threads only contend with the
@@ -77,7 +84,7 @@ def _serve(argv: list[str]) -> int:
     torch.set_num_threads(1)
     if args.host:
         print(TLS_HINT.format(host=host, port=args.port), file=sys.stderr)
-    print(f"study of {args.sessions} at http://{host}:{args.port}/study?token=...", file=sys.stderr)
+    print(f"study of {args.sessions} at http://{host}:{args.port}/study#token=...", file=sys.stderr)
     uvicorn.run(
         app,
         host=host,

@@ -1,23 +1,31 @@
 """The study's web application (Starlette): the page, its files and the participants' WebSocket.
 
-- ``GET /study?token=...``: the study page, for a valid token of a participant whose schedule is not
-  done; anything else is 403 and writes nothing.
+No URL carries a secret, so none reaches a server's or a proxy's log: a participant's link is
+``/study#token=...``, whose fragment the browser never sends; the page sends the token once, as
+the WebSocket's first message.
+
+- ``GET /study``: the study page (the same for everyone; it holds nothing secret).
 - ``GET /static/...``: the page's script and style (served from this package: no CDN).
 - ``GET /npm/mujoco/...``, ``GET /npm/three/...``: MuJoCo's WebAssembly bindings and three.js, with
   ``--frames browser`` only (:mod:`lasa.live.web.scene`; read-only, installed by ``make setup``).
-- ``GET /scene?token=...``: the scene of the participant's current trial as the page loads it (its
-  MJCF, the names of its mesh files); ``GET /scene/<name>?token=...``: one of those files. A valid
-  token, a trial in progress and a name the server gave, else 403 or 404.
-- ``WS /ws?token=...``: the participant's connection (:class:`lasa.live.web.conversation.Conversation`).
-  Refused before it opens (HTTP 403) without a valid token, from another site's page (the
-  ``Origin`` must be this server's own, or one given with ``--origin``), while the same token is
-  connected elsewhere, or once the participant's schedule is done.
+- ``GET /scene``: the scene of the participant's current trial as the page loads it (its MJCF, the
+  names of its mesh files); ``GET /scene/<name>``: one of those files. Each needs the header
+  ``X-Scene-Key``: a random key the server sends with the trial's ``scene`` message, valid while
+  that trial runs; else 403 or 404.
+- ``WS /ws``: the participant's connection (:class:`lasa.live.web.conversation.Conversation`).
+  Refused before it opens (HTTP 403) from another site's page (the ``Origin`` must be this
+  server's own, or one given with ``--origin``). Its first message is ``{"type": "hello",
+  "token": ...}`` within :data:`HELLO_S`; a token that is not valid, whose schedule is done or
+  that is connected elsewhere is answered ``{"type": "refused", "reason": ...}`` (one of
+  :data:`REFUSALS`) and the connection closed (1008), with nothing written.
 """
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import dataclasses
+import secrets
 from collections.abc import AsyncIterator
 from pathlib import Path
 
@@ -33,19 +41,25 @@ from lasa.base.errors import ConfigError
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
 from lasa.live.web.plan import Progress, plan_of
+from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_scene, npm_folder
 from lasa.live.web.tokens import TokenStore
 
-__all__ = ["FRAMES", "WebConfig", "Study", "create_app"]
+__all__ = ["FRAMES", "HELLO_S", "REFUSALS", "WebConfig", "Study", "create_app"]
 
 # How the page shows the robot: drawn by the server (JPEG), by the browser (MuJoCo in WebAssembly
 # and three.js, from the joint positions), or not at all.
 FRAMES = ("server", "browser", "none")
 
+# How long a connection may take to send its token [s].
+HELLO_S = 10.0
+# Why a connection was refused, as the page is told (it shows each its own message).
+REFUSALS = ("invalid", "finished", "elsewhere", "no_hello")
+
 STATIC = Path(__file__).parent / "static"
 HEADERS = {
     "Cache-Control": "no-store",
-    "Referrer-Policy": "no-referrer",  # the token is in the page's address
+    "Referrer-Policy": "no-referrer",  # the token is in the page's address (its fragment)
     "X-Content-Type-Options": "nosniff",
     "X-Frame-Options": "DENY",
     "Content-Security-Policy": (
@@ -73,6 +87,10 @@ class WebConfig:
             rendered here, ``browser`` sends the state only and the page draws it.
         origins: Page origins allowed besides the server's own (e.g. ``https://study.example.org``
             behind a reverse proxy).
+        show_belief: Show the participant the robot's belief over the goals while driving. Off by
+            default: the paper describes no such display, and seeing what the robot infers
+            changes how people steer (under R and LA too, which have no shared autonomy); turn
+            it on for pilots or demonstrations, and report it.
     """
 
     sessions: str
@@ -81,11 +99,24 @@ class WebConfig:
     trial_s: Positive = 300.0
     frames: str = "browser"
     origins: tuple[str, ...] = ()
+    show_belief: bool = False
 
     def __post_init__(self) -> None:
         validate(self)
         if self.frames not in FRAMES:
             raise ConfigError(f"frames is one of {FRAMES}, got {self.frames!r}")
+
+    def durations(self, conditions: int) -> dict[str, float]:
+        """What the consent page states, from these settings: the longest practice and trial [s],
+        the conditions, and the longest the study can take [min] (a practice, two trials and
+        the questions, about 2 minutes, per condition)."""
+        per_condition = self.practice_s + 2 * self.trial_s + 120.0
+        return {
+            "practice_s": self.practice_s,
+            "trial_s": self.trial_s,
+            "conditions": conditions,
+            "longest_min": round(conditions * per_condition / 60.0),
+        }
 
 
 class Study:
@@ -97,20 +128,29 @@ class Study:
         self.progress = Progress(config.sessions)
         self.active: set[str] = set()
         self.renderer = FrameRenderer() if config.frames == "server" else None
-        self.scenes: dict[str, Path] = {}  # participant -> the scene XML of their current trial
+        self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
         if config.frames == "browser":
             for name in NPM_PACKAGES:
                 npm_folder(name)  # fail at start, not in a participant's page
 
-    def admit(self, token: str | None) -> str | None:
-        """The participant of a valid token whose schedule is not done, else None."""
+    def admit(self, token: str | None) -> tuple[str | None, str]:
+        """(participant, "") for a valid token whose schedule is not done and that is not connected
+        elsewhere, else (None, the reason: one of :data:`REFUSALS`)."""
         participant = self.tokens.participant(token)
         if participant is None:
-            return None
+            return None, "invalid"
         plan = plan_of(self.config.sessions, participant)
         if not plan or self.progress.finished(participant, plan):
-            return None
-        return participant
+            return None, "finished"
+        if participant in self.active:
+            return None, "elsewhere"
+        return participant, ""
+
+    def scene_key(self, xml: Path) -> str:
+        """A new random key for a trial's scene (the ``X-Scene-Key`` of its requests)."""
+        key = secrets.token_urlsafe(24)
+        self.scenes[key] = xml
+        return key
 
 
 def _same_origin(ws: WebSocket, extra: tuple[str, ...]) -> bool:
@@ -119,10 +159,8 @@ def _same_origin(ws: WebSocket, extra: tuple[str, ...]) -> bool:
 
 
 async def page(request: Request) -> Response:
-    """The study page for a valid token, else 403."""
+    """The study page: the same for everyone (the token stays in the address's fragment)."""
     study: Study = request.app.state.study
-    if study.admit(request.query_params.get("token")) is None:
-        return PlainTextResponse("This link is not valid (or its study is done).", 403, headers=HEADERS)
     headers = (
         HEADERS | {"Content-Security-Policy": BROWSER_CSP} if study.config.frames == "browser" else HEADERS
     )
@@ -131,12 +169,10 @@ async def page(request: Request) -> Response:
 
 def _scene_of(request: Request) -> tuple[str, dict[str, Path]] | Response:
     study: Study = request.app.state.study
-    participant = study.admit(request.query_params.get("token"))
-    if participant is None:
-        return PlainTextResponse("This link is not valid (or its study is done).", 403, headers=HEADERS)
-    xml = study.scenes.get(participant)
+    key = request.headers.get("x-scene-key", "")
+    xml = study.scenes.get(key) if 0 < len(key) <= 64 else None
     if xml is None or study.config.frames != "browser":
-        return PlainTextResponse("No trial is running.", 404, headers=HEADERS)
+        return PlainTextResponse("No trial of this page is running.", 404, headers=HEADERS)
     return browser_scene(xml)
 
 
@@ -160,16 +196,36 @@ async def scene_asset(request: Request) -> Response:
     return FileResponse(path, media_type=ASSET_TYPES[path.suffix.lower()], headers=HEADERS)
 
 
-async def socket(ws: WebSocket) -> None:
-    """A participant's connection; refused (403, before it opens) unless every check passes."""
-    study: Study = ws.app.state.study
-    participant = study.admit(ws.query_params.get("token"))
-    if participant is None or participant in study.active or not _same_origin(ws, study.config.origins):
+async def _hello(ws: WebSocket) -> str | None:
+    """The token of the connection's first message, or None (not a hello, or not in time)."""
+    try:
+        message = await asyncio.wait_for(ws.receive(), HELLO_S)
+        msg = parse(message.get("text"))
+    except (TimeoutError, ProtocolError, KeyError):
+        return None
+    return msg.get("token") if msg["type"] == "hello" else None
+
+
+async def _refuse(ws: WebSocket, reason: str) -> None:
+    with contextlib.suppress(Exception):
+        await ws.send_json({"type": "refused", "reason": reason})
         await ws.close(code=1008)
+
+
+async def socket(ws: WebSocket) -> None:
+    """A participant's connection: the origin checked before it opens, the token in its first message."""
+    study: Study = ws.app.state.study
+    if not _same_origin(ws, study.config.origins):
+        await ws.close(code=1008)
+        return
+    await ws.accept()
+    token = await _hello(ws)
+    participant, reason = study.admit(token) if token is not None else (None, "no_hello")
+    if participant is None:
+        await _refuse(ws, reason)
         return
     study.active.add(participant)
     try:
-        await ws.accept()
         await Conversation(ws, study, participant).run()
     finally:
         study.active.discard(participant)

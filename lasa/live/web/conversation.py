@@ -105,13 +105,15 @@ class Conversation:
         study, participant = self.study, self.participant
         plan = plan_of(study.config.sessions, participant)
         if not study.progress.of(participant)["consented"]:
-            await self.send({"type": "phase", "kind": "consent"})
+            conditions = len({step.condition for step in plan})
+            await self.send({"type": "phase", "kind": "consent"} | study.config.durations(conditions))
             await self._expect("consent")
             study.progress.consent(participant)
         while not study.progress.finished(participant, plan):
             index = int(study.progress.of(participant)["step"])
             step = plan[index]
-            header: dict[str, Any] = {"type": "phase", "kind": step.kind, "condition": step.condition}
+            # the condition's letter, never its code (the page is blind to it, as the paper's people were)
+            header: dict[str, Any] = {"type": "phase", "kind": step.kind, "label": step.label}
             header |= {"task": step.task, "index": index + 1, "total": len(plan)}
             if step.kind == "survey":
                 await self._survey(step, header)
@@ -159,18 +161,23 @@ class Conversation:
         practice = step.kind == "practice"
         if self.study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
-            self.study.scenes[self.participant] = trial.writer.folder / f"{trial.writer.stem}.xml"
+            # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
+            key = self.study.scene_key(trial.writer.folder / f"{trial.writer.stem}.xml")
             robot = trial.station.robot
             camera = robot.model.camera(robot.spec.camera).id
-            await self.send({"type": "scene", "qpos_adr": robot.qpos_adr.tolist(), "camera": camera})
+            scene = {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
+            await self.send(scene)
         try:
             return await run_trial(
                 trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
             )
         finally:
-            self.study.scenes.pop(self.participant, None)
+            if self.study.config.frames == "browser":
+                self.study.scenes.pop(key, None)
 
     async def _tick(self, message: dict[str, Any]) -> None:
+        if not self.study.config.show_belief:  # the paper's people saw the robot only
+            message = {k: v for k, v in message.items() if k not in ("belief", "goals")}
         await self.send(message)
         renderer = self.study.renderer
         if renderer is not None and not self._frames:

@@ -28,11 +28,17 @@ PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessio
 
 @dataclasses.dataclass(frozen=True)
 class Step:
-    """One step of the protocol: ``practice``, ``trial`` or ``survey`` under a condition."""
+    """One step of the protocol: ``practice``, ``trial`` or ``survey`` under a condition.
+
+    ``label`` is the name the participant sees for the condition: its letter in their own order
+    (A for the first, ...), so the page never shows a condition's code (a blind protocol, as the
+    paper's); the code stays in the logs and the analysis.
+    """
 
     kind: str
     condition: str
     task: str = ""
+    label: str = ""
 
 
 def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
@@ -40,12 +46,13 @@ def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
     schedule = pd.read_csv(study_dir(sessions) / "schedule.csv", dtype={"participant": str})
     rows = schedule[schedule.participant == check_participant(participant)].sort_values("position")
     steps: list[Step] = []
-    for condition in rows.condition:
+    for position, condition in enumerate(rows.condition):
+        label = chr(ord("A") + position)
         steps += [
-            Step("practice", condition, PRACTICE_TASK),
-            Step("trial", condition, "Entree"),
-            Step("trial", condition, "Dessert"),
-            Step("survey", condition),
+            Step("practice", condition, PRACTICE_TASK, label),
+            Step("trial", condition, "Entree", label),
+            Step("trial", condition, "Dessert", label),
+            Step("survey", condition, "", label),
         ]
     return steps
 

@@ -2,6 +2,8 @@
 
 The page sends JSON text messages, each at most :data:`MAX_MESSAGE_BYTES`:
 
+- ``{"type": "hello", "token": "..."}``: the connection's first message, the participant's token
+  (from the link's fragment: a token never travels in a URL);
 - ``{"type": "consent"}``, ``{"type": "start"}`` (begin the practice or trial shown),
   ``{"type": "finish"}`` (end the practice early);
 - ``{"type": "input", "axes": [x, y], "mode": bool, "stop": bool}``: the stick (keyboard or the
@@ -12,8 +14,9 @@ Anything else, a message too large, or more than :data:`MAX_RATE` messages a sec
 connection (:class:`ProtocolError`). The server sends ``phase`` messages (what the page shows),
 ``tick`` messages (the robot's joint positions, the belief, the instruction, the late-tick
 counter) and, with ``--frames server``, JPEG images as binary messages; with ``--frames browser``
-a ``scene`` message when a trial starts (the arm's ``qpos`` addresses and the camera's index:
-the page then fetches the scene, :mod:`lasa.live.web.scene`, and draws each tick's state).
+a ``scene`` message when a trial starts (the arm's ``qpos`` addresses, the camera's index and the
+trial's scene key: the page then fetches the scene, :mod:`lasa.live.web.scene`, and draws each
+tick's state). A refused connection is told why, ``{"type": "refused", "reason": ...}``.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from lasa.live.devices import Reading
+from lasa.live.web.tokens import MAX_TOKEN_CHARS
 
 __all__ = [
     "MAX_MESSAGE_BYTES",
@@ -41,7 +45,7 @@ __all__ = [
 MAX_MESSAGE_BYTES = 4096
 MAX_RATE = 50.0  # messages per second, averaged over a burst of as many
 STALE_S = 0.5  # input older than this reads as disconnected: zero input, never a held command
-KINDS = ("consent", "start", "finish", "input", "survey")
+KINDS = ("hello", "consent", "start", "finish", "input", "survey")
 
 
 class ProtocolError(ValueError):
@@ -68,6 +72,10 @@ def parse(text: str | bytes | None) -> dict[str, Any]:
         raise ProtocolError("a message is one JSON object") from exc
     if not isinstance(msg, dict) or msg.get("type") not in KINDS:
         raise ProtocolError(f"a message's type is one of {KINDS}")
+    if msg["type"] == "hello" and not (
+        isinstance(msg.get("token"), str) and len(msg["token"]) <= MAX_TOKEN_CHARS
+    ):
+        raise ProtocolError("hello carries the token, a short string")
     if msg["type"] == "input":
         axes = msg.get("axes")
         if not (isinstance(axes, list) and len(axes) == 2 and all(_number(a) for a in axes)):

@@ -70,7 +70,8 @@ def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path
     links = pd.DataFrame(
         {
             "participant": participants,
-            "link": [f"{base_url.rstrip('/')}/study?token={tokens[p]}" for p in participants],
+            # the token in the fragment, which browsers never send: no server or proxy logs it
+            "link": [f"{base_url.rstrip('/')}/study#token={tokens[p]}" for p in participants],
         }
     )
     path = write_csv(folder / "links.csv", links)

@@ -7,10 +7,22 @@
 const SEND_HZ = 20; // input messages a second while driving (the server allows 50)
 const DEADZONE = 0.05;
 const $ = (id) => document.getElementById(id);
-const token = new URLSearchParams(location.search).get("token") || "";
+// The token is in the link's fragment (#token=...), which the browser never sends: it travels once,
+// as the WebSocket's first message, and never in a URL that a server or a proxy could log.
+const token = new URLSearchParams(location.hash.slice(1)).get("token") || "";
 const scheme = location.protocol === "https:" ? "wss" : "ws";
-const ws = new WebSocket(`${scheme}://${location.host}/ws?token=${encodeURIComponent(token)}`);
+const ws = new WebSocket(`${scheme}://${location.host}/ws`);
 ws.binaryType = "blob";
+ws.onopen = () => ws.send(JSON.stringify({ type: "hello", token }));
+
+// Why the server refused this page's connection (lasa.live.web.app.REFUSALS), in the participant's words.
+const REFUSED = {
+  invalid: "This link is not valid. Check that you opened the whole link you were sent, then try again.",
+  finished: "You have finished the study with this link. Thank you! You may close this page.",
+  elsewhere: "This link is open in another window or tab. Close that one, then reload this page.",
+  no_hello: "This page could not reach the study in time. Reload this page.",
+};
+let refused = false;
 
 const keys = { left: false, right: false, up: false, down: false };
 let keyStop = false, modePress = false, driving = false, padWasPressed = false, frameUrl = null;
@@ -24,22 +36,41 @@ function send(msg) {
   if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
 }
 
+// A duration as a person reads it: "45 seconds", "1 minute", "5 minutes", "about 1.5 hours".
+function duration(seconds) {
+  if (seconds < 90) return `${Math.round(seconds)} seconds`;
+  const minutes = Math.round(seconds / 60);
+  if (minutes < 90) return minutes === 1 ? "1 minute" : `${minutes} minutes`;
+  const hours = Math.round(minutes / 30) / 2;
+  return hours === 1 ? "about an hour" : `about ${hours} hours`;
+}
+
+function consent(msg) {
+  $("consent-conditions").textContent = ["no", "one", "two", "three", "four", "five", "six"][msg.conditions] || msg.conditions;
+  $("consent-practice").textContent = duration(msg.practice_s);
+  $("consent-trial").textContent = duration(msg.trial_s);
+  $("consent-total").textContent = duration(60 * msg.longest_min);
+  show("consent");
+}
+
 function phase(msg) {
   driving = false;
   $("status").textContent = msg.index ? `Step ${msg.index} of ${msg.total}` : "";
-  if (msg.kind === "consent" || msg.kind === "thanks") return show(msg.kind);
+  if (msg.kind === "consent") return consent(msg);
+  if (msg.kind === "thanks") return show(msg.kind);
   if (msg.kind === "survey") return survey(msg);
   const practice = msg.kind === "practice";
-  $("intro-title").textContent = practice ? `Practice: ${msg.condition}` : `${msg.task}: ${msg.condition}`;
+  // the condition's letter in this participant's order, never its code (a blind protocol)
+  $("intro-title").textContent = practice ? `Practice: way ${msg.label}` : `${msg.task}: way ${msg.label}`;
   $("intro-text").textContent = practice
-    ? `Get to know this way of controlling the robot, for up to ${Math.round(msg.limit_s / 60)} minutes. End the practice when you are ready.`
-    : `Feed the ${msg.task.toLowerCase()} following the instruction at the top of the screen (at most ${Math.round(msg.limit_s)} s).`;
+    ? `Get to know way ${msg.label} of controlling the robot, for up to ${duration(msg.limit_s)}. End the practice when you are ready.`
+    : `Feed the ${msg.task.toLowerCase()} following the instruction at the top of the screen (at most ${duration(msg.limit_s)}).`;
   $("ready").hidden = !practice;
   show("intro");
 }
 
 function survey(msg) {
-  $("survey-title").textContent = `About the condition you just used (${msg.condition})`;
+  $("survey-title").textContent = `About way ${msg.label}, which you just used`;
   const form = $("survey-form");
   form.replaceChildren();
   for (const q of msg.questions) {
@@ -63,6 +94,8 @@ function tick(msg) {
   $("late").textContent = msg.late;
   $("left").textContent = msg.remaining_s.toFixed(0);
   $("stopped").hidden = !msg.stop;
+  $("belief-panel").hidden = !msg.belief; // only when the study shows it (off by default)
+  if (!msg.belief) return;
   const belief = $("belief");
   if (belief.children.length !== msg.goals.length) {
     belief.replaceChildren(...msg.goals.map((g) => {
@@ -84,7 +117,7 @@ function scene(msg) {
   $("view").hidden = true;
   $("canvas").hidden = false;
   view = import("/static/view.js");
-  view.then((m) => m.load(token, msg, $("canvas"))).catch((err) => {
+  view.then((m) => m.load(msg.key, msg, $("canvas"))).catch((err) => {
     $("status").textContent = `The robot cannot be drawn in this browser (${err.message || err}); the task goes on.`;
   });
 }
@@ -160,9 +193,15 @@ ws.onmessage = (event) => {
   else if (msg.type === "tick") { tick(msg); if (view) view.then((m) => m.show(msg.q)); }
   else if (msg.type === "scene") scene(msg);
   else if (msg.type === "error") { $("error-text").textContent = msg.message; show("error"); }
+  else if (msg.type === "refused") {
+    refused = true;
+    $("status").textContent = "";
+    $("error-text").textContent = REFUSED[msg.reason] || REFUSED.invalid;
+    show("error");
+  }
 };
 ws.onclose = (event) => {
   driving = false;
-  if (!$("thanks").hidden) return;
+  if (!$("thanks").hidden || refused) return;
   $("status").textContent = event.code === 1000 ? "" : "Disconnected. Reload this page to go on where you left off.";
 };

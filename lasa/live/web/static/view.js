@@ -103,14 +103,14 @@ function draw() {
 }
 
 /** Load the current trial's scene (GET /scene) into MuJoCo, once per distinct scene, and draw on `canvas`. */
-export async function load(token, msg, canvas) {
+export async function load(key, msg, canvas) {
   const t0 = performance.now();
   mujocoReady ??= loadMujoco();
   const mujoco = await mujocoReady;
   if (stats.moduleMs === null) stats.moduleMs = performance.now() - t0;
   const t1 = performance.now();
-  const auth = `token=${encodeURIComponent(token)}`;
-  const reply = await fetch(`/scene?${auth}`);
+  const auth = { headers: { "X-Scene-Key": key } }; // the trial's key, from its scene message
+  const reply = await fetch("/scene", auth);
   if (!reply.ok) throw new Error(`the scene is not available (${reply.status})`);
   const spec = await reply.json();
   if (view && view.xml === spec.xml) { // the same scene as the last trial: keep it
@@ -118,7 +118,7 @@ export async function load(token, msg, canvas) {
     return stats;
   }
   const files = await Promise.all(spec.assets.map(async (name) => {
-    const r = await fetch(`/scene/${encodeURIComponent(name)}?${auth}`);
+    const r = await fetch(`/scene/${encodeURIComponent(name)}`, auth);
     if (!r.ok) throw new Error(`the scene's file ${name} is not available (${r.status})`);
     return [name, new Uint8Array(await r.arrayBuffer())];
   }));
