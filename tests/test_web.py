@@ -37,7 +37,8 @@ ORIGIN = {"origin": "http://testserver"}
 def study(tmp_path):
     """A study of three participants: the sessions folder and each participant's token."""
     sessions = tmp_path / "sessions"
-    links = pd.read_csv(issue_links(3, sessions, "http://testserver"))
+    with pytest.warns(UserWarning, match="unevenly"):  # three of the square's four orders
+        links = pd.read_csv(issue_links(3, sessions, "http://testserver"))
     return sessions, {
         p: link.split("token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)
     }
@@ -97,7 +98,8 @@ def test_participant_ids_are_strict(bad):
 def test_requests_without_a_valid_token_are_refused_and_write_nothing(study, tmp_path):
     sessions, tokens = study
     other = tmp_path / "other"
-    other_token = pd.read_csv(issue_links(1, other, "http://x")).link[0].split("token=")[1]
+    with pytest.warns(UserWarning, match="unevenly"):
+        other_token = pd.read_csv(issue_links(1, other, "http://x")).link[0].split("token=")[1]
     before = files(sessions)
     with client(sessions) as app:
         for token in ("", "wrong", other_token, "x" * 128):
@@ -651,6 +653,28 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
     assert len(mine) > 0 and (mine.answer == 5).all()
 
 
+@contextlib.contextmanager
+def cli_server(sessions, build_dir, log, *options):
+    """``python -m lasa.live.web`` (uvicorn's own logging into ``log``) on a free port; yields it."""
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    port = _free_port()
+    command = [sys.executable, "-m", "lasa.live.web", "--port", str(port), "--sessions", str(sessions)]
+    command += ["--build-dir", str(build_dir), "--frames", "none", "--practice-s", "30", *options]
+    with open(log, "wb") as out:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        server = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, env=env)
+        try:
+            wait_for(lambda: "Uvicorn running" in log.read_text(), timeout=60)
+            yield port
+        finally:
+            server.send_signal(signal.SIGINT)
+            server.wait(timeout=30)
+
+
 async def _take_part(port: int, token: str, seconds: float = 1.0) -> None:
     """A participant through the real server: the token, consent, the practice driven, ended."""
     import asyncio
@@ -684,36 +708,22 @@ async def _refused_twice(port: int, token: str) -> list[str]:
         return [json.loads(await second.recv())["reason"]]
 
 
-def test_no_token_reaches_the_servers_log_or_any_file_but_the_links(tmp_path):
+def test_no_token_reaches_the_servers_log_or_any_file_but_the_links(tmp_path, decoder_build):
     """The real server (the CLI, uvicorn's own logging) and a participant who takes part; every
     line it logs and every file written, but study/links.csv, is searched for every token."""
     import asyncio
-    import os
-    import signal
-    import subprocess
-    import sys
     import urllib.request
 
     sessions = tmp_path / "sessions"
     links = pd.read_csv(issue_links(4, sessions, "http://127.0.0.1"))
     tokens = {p: link.split("#token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)}
     who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition.startswith("R"))
-    port, log = _free_port(), tmp_path / "server.log"
-    command = [sys.executable, "-m", "lasa.live.web", "--port", str(port), "--sessions", str(sessions)]
-    command += ["--build-dir", "no-decoders", "--frames", "none", "--practice-s", "30"]
-    with open(log, "wb") as out:
-        server = subprocess.Popen(
-            command, stdout=out, stderr=subprocess.STDOUT, env={**os.environ, "PYTHONPATH": str(ROOT)}
-        )
-        try:
-            wait_for(lambda: "Uvicorn running" in log.read_text(), timeout=60)
-            page = urllib.request.urlopen(f"http://127.0.0.1:{port}/study").read().decode()
-            assert "study.js" in page
-            asyncio.run(_take_part(port, tokens[who]))
-            assert asyncio.run(_refused_twice(port, tokens[who])) == ["elsewhere"]
-        finally:
-            server.send_signal(signal.SIGINT)
-            server.wait(timeout=30)
+    log = tmp_path / "server.log"
+    with cli_server(sessions, decoder_build, log) as port:
+        page = urllib.request.urlopen(f"http://127.0.0.1:{port}/study").read().decode()
+        assert "study.js" in page
+        asyncio.run(_take_part(port, tokens[who]))
+        assert asyncio.run(_refused_twice(port, tokens[who])) == ["elsewhere"]
     text = log.read_text()
     assert '"WebSocket /ws" [accepted]' in text  # uvicorn logged each connection: a real log is read
     written = [p for p in sessions.rglob("*") if p.is_file() and p != study_dir(sessions) / "links.csv"]
@@ -747,3 +757,150 @@ def test_participants_see_letters_not_condition_codes_and_no_belief_by_default(s
     assert ticks and not {"belief", "goals"} & set(ticks[-1])
     (log,) = (sessions / "practice").glob("p01_*.csv")
     assert read_session(log)[1]["condition"] == codes[0]
+
+
+def test_a_server_missing_a_decoder_exits_at_startup_in_one_line(tmp_path, decoder_build):
+    """The CLI checks every step the schedule needs before it listens (lasa.live.web.preflight)."""
+    import os
+    import subprocess
+    import sys
+
+    sessions = tmp_path / "sessions"
+    issue_links(4, sessions, "http://127.0.0.1")
+    command = [
+        sys.executable,
+        "-m",
+        "lasa.live.web",
+        "--port",
+        str(_free_port()),
+        "--sessions",
+        str(sessions),
+    ]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    empty = tmp_path / "empty-build"
+    out = subprocess.run(
+        [*command, "--build-dir", str(empty), "--frames", "none"],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
+    errors = [line for line in out.stderr.splitlines() if line.startswith("error:")]
+    assert out.returncode == 2 and "Uvicorn running" not in out.stderr + out.stdout
+    assert len(errors) == 1 and "eating_decoder_panda.pt" in errors[0] and "make figures" in errors[0], (
+        out.stderr
+    )
+    assert "condition cannot run" in errors[0]
+
+
+def test_a_step_the_server_cannot_run_shows_the_page_no_server_path(study):
+    """Without preflight (a decoder deleted mid-study): the page gets a plain message; the log the detail."""
+    from lasa.live.web.conversation import UNAVAILABLE
+
+    sessions, tokens = study
+    who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition.startswith("LA"))
+    with client(sessions, build_dir=str(sessions / "no-decoders")) as app, connect(app, tokens[who]) as ws:
+        ws.receive_json()
+        ws.send_json({"type": "consent"})
+        assert ws.receive_json()["kind"] == "practice"
+        ws.send_json({"type": "start"})
+        msg = ws.receive_json()
+    assert msg == {"type": "error", "message": UNAVAILABLE}
+    assert str(sessions) not in msg["message"] and "make" not in msg["message"]
+
+
+async def _stale_start_and_held_stick(port: int, token: str) -> list[str]:
+    """Two Starts for the practice and the stick held to its end; then the Entree's phase: what comes
+    before this page's own Start (nothing, if the stale Start was dropped), then its first ticks."""
+    import asyncio
+
+    from websockets.asyncio.client import connect as ws_connect
+
+    async with ws_connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}") as ws:
+        await ws.send(json.dumps({"type": "hello", "token": token}))
+        assert json.loads(await ws.recv())["kind"] == "consent"
+        await ws.send(json.dumps({"type": "consent"}))
+        assert json.loads(await ws.recv())["kind"] == "practice"
+        await ws.send(json.dumps({"type": "start"}))
+        await ws.send(json.dumps({"type": "start"}))  # a double click: the second is out of step
+        for _ in range(5):
+            await ws.send(json.dumps({"type": "input", "axes": [1.0, 1.0]}))
+            assert json.loads(await ws.recv())["type"] == "tick"
+        await ws.send(json.dumps({"type": "input", "axes": [1.0, 1.0]}))  # held as the practice ends
+        await ws.send(json.dumps({"type": "finish"}))
+        while (msg := json.loads(await ws.recv()))["type"] == "tick":
+            pass
+        assert msg["kind"] == "trial" and msg["task"] == "Entree"
+        early = []
+        with contextlib.suppress(TimeoutError):
+            early.append(json.loads(await asyncio.wait_for(ws.recv(), 1.0))["type"])
+        await ws.send(json.dumps({"type": "start"}))  # no input after it: the stick is at rest
+        for _ in range(3):
+            assert json.loads(await ws.recv())["type"] == "tick"
+        return early
+
+
+def test_a_step_starts_from_its_own_start_and_a_resting_stick(tmp_path, decoder_build):
+    """A stale Start does not start the next trial; the stick held at a step's end is not carried
+    into the next; the sidecar records the condition's position in the schedule (order)."""
+    import asyncio
+
+    from lasa.evidence.sessions import load_sessions
+    from lasa.world.eating import make_eating_task
+
+    sessions = tmp_path / "sessions"
+    links = pd.read_csv(issue_links(4, sessions, "http://127.0.0.1"))
+    tokens = {p: link.split("#token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)}
+    who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition.startswith("R"))
+    with cli_server(sessions, decoder_build, tmp_path / "server.log") as port:
+        assert asyncio.run(_stale_start_and_held_stick(port, tokens[who])) == []
+    (entree,) = sessions.glob(f"{who}_Entree_*.csv")
+    frame, meta = read_session(entree)
+    assert (frame[["z0", "z1"]].to_numpy() == 0).all() and len(frame) >= 3
+    assert meta["order"] == 0
+    second = plan_of(sessions, who)[4]  # the next condition's practice: its order is 1
+    assert second.order == 1 and second.label == "B"
+    episodes = load_sessions(sessions, make_eating_task(), include_interrupted=True)
+    assert list(episodes.order) == [0]
+
+
+@pytest.mark.parametrize(
+    "message",
+    [
+        '{"type": "input", "axes": [' + "9" * 400 + ", 0]}",  # a float of it overflows
+        "[" * 2000 + "]" * 2000,  # nesting deeper than the parser's recursion
+        '{"type": "hello", "token": ' + "[" * 1000 + "]" * 1000 + "}",
+    ],
+)
+def test_huge_integers_and_deep_nesting_close_with_a_protocol_error(study, message):
+    sessions, tokens = study
+    before = files(sessions)
+    with client(sessions) as app, connect(app, tokens["p00"]) as ws:
+        assert ws.receive_json()["kind"] == "consent"
+        ws.send_text(message)
+        with pytest.raises(WebSocketDisconnect) as closed:
+            ws.receive_json()
+        assert closed.value.code in (1008, 1009)
+    assert files(sessions) == before
+
+
+def test_a_stick_beyond_its_range_is_read_and_logged_at_its_end():
+    from lasa.live.web.protocol import Inputs, parse
+
+    inputs = Inputs()
+    inputs.update(parse(json.dumps({"type": "input", "axes": [1e308, -5.0]})))
+    assert inputs.axes == (1.0, -1.0) and list(inputs.take().raw) == [1.0, -1.0]
+    inputs.reset()
+    assert inputs.axes == (0.0, 0.0) and not inputs.take().connected
+
+
+def test_a_refused_schedule_leaves_no_folder_and_an_uneven_one_warns(tmp_path):
+    for bad in (0, -1, 2.5, 10**6):
+        with pytest.raises(ConfigError, match="whole number"):
+            issue_links(bad, tmp_path / "sessions", "http://x")
+        assert not (tmp_path / "sessions").exists()
+    with pytest.warns(UserWarning, match="multiple of 4"):
+        issue_links(3, tmp_path / "three", "http://x")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        issue_links(8, tmp_path / "eight", "http://x")  # two full rounds of the square: no warning

@@ -184,7 +184,9 @@ def _episodes(
             NO_ASSISTANCE,
         ),
         task=np.array([m["task"] for m in meta_list]),
-        order=np.zeros(len(logs), dtype=int),
+        # the condition's position in the participant's schedule, as the web study records it (0
+        # where a session does not say: the terminal's `teleop run`)
+        order=np.array([int(m.get("order", 0)) for m in meta_list], dtype=int),
         states=states,
         tip=tip.reshape(horizon + 1, len(logs), 3),
         direction=direction.reshape(horizon + 1, len(logs), 3),

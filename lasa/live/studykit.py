@@ -17,6 +17,7 @@ Reading the logged sessions and the answers back for analysis is :mod:`lasa.evid
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -62,6 +63,14 @@ def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False)
     if Path(out).exists() and not overwrite:
         raise ConfigError(f"{out} exists already: pass --overwrite to replace the schedule")
     square = williams_square(len(CONDITIONS))
+    if n % len(square):
+        warnings.warn(
+            f"a schedule of {n} participants fills the balanced Latin square's {len(square)} orders unevenly "
+            f"({n // len(square)} full rounds and {n % len(square)} more): the orders and their "
+            f"carry-over are balanced only for a multiple of {len(square)}",
+            UserWarning,
+            stacklevel=2,
+        )
     rows = [
         {"participant": f"p{i:02d}", "position": k + 1, "condition": CONDITIONS[c]}
         for i in range(int(n))

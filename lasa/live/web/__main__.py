@@ -40,6 +40,7 @@ def _serve(argv: list[str]) -> int:
     import uvicorn
 
     from lasa.live.web.app import FRAMES, WebConfig, create_app
+    from lasa.live.web.preflight import preflight
     from lasa.live.web.protocol import MAX_MESSAGE_BYTES
 
     parser = argparse.ArgumentParser(prog="python -m lasa.live.web", description=__doc__.splitlines()[0])
@@ -78,6 +79,8 @@ def _serve(argv: list[str]) -> int:
         origins=tuple(args.origin),
         show_belief=args.show_belief,
     )
+    conditions = preflight(config)  # every decoder, scene and npm file the schedule needs, or exit
+    print(f"checked: every step of {', '.join(conditions)} can run", file=sys.stderr)
     app = create_app(config)
     # one participant's step at a time decodes one row: torch's own threads only contend with the
     # event loop's thread for the machine's cores (the load test measured it)

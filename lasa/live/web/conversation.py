@@ -12,6 +12,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import dataclasses
+import logging
 from typing import TYPE_CHECKING, Any
 
 from starlette.websockets import WebSocket
@@ -26,6 +27,16 @@ if TYPE_CHECKING:
     from lasa.live.web.app import Study
 
 __all__ = ["Gone", "Conversation"]
+
+LOG = logging.getLogger("lasa.live.web")
+# Page messages (consent, start, survey, hello) waiting for the step that reads them: a connection
+# holds at most this many; more, and any a step did not ask for, are dropped and counted.
+QUEUE_MAX = 8
+# What a participant reads when the server cannot run their step (preflight makes it rare).
+UNAVAILABLE = (
+    "The study cannot go on right now, through no fault of yours. Please tell the person who sent "
+    "you the link; you can come back with the same link later."
+)
 
 
 class Gone(Exception):
@@ -42,9 +53,10 @@ class Conversation:
     inputs: Inputs = dataclasses.field(default_factory=Inputs)
     gone: bool = False
     finish: bool = False
+    dropped: int = 0  # out-of-step page messages dropped (logged when the connection ends)
 
     def __post_init__(self) -> None:
-        self._queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
+        self._queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue(QUEUE_MAX)
         self._send_lock = asyncio.Lock()
         self._frames: set[asyncio.Task[None]] = set()
 
@@ -59,6 +71,8 @@ class Conversation:
             receiver.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await receiver
+            if self.dropped:
+                LOG.info("participant %s: %d out-of-step messages dropped", self.participant, self.dropped)
 
     async def _receive(self) -> None:
         limit = RateLimit()
@@ -75,7 +89,7 @@ class Conversation:
                 elif msg["type"] == "finish":
                     self.finish = True
                 else:
-                    self._queue.put_nowait(msg)
+                    self._put(msg)
         except ProtocolError as exc:
             with contextlib.suppress(Exception):
                 await self.ws.close(code=exc.code, reason=str(exc)[:100])
@@ -83,7 +97,26 @@ class Conversation:
             pass
         finally:
             self.gone = True
+            if self._queue.full():  # the end always reaches the step waiting for a message
+                self._queue.get_nowait()
+                self.dropped += 1
             self._queue.put_nowait({"type": "_gone"})
+
+    def _put(self, msg: dict[str, Any]) -> None:
+        try:
+            self._queue.put_nowait(msg)
+        except asyncio.QueueFull:
+            self.dropped += 1
+
+    def _clear(self) -> None:
+        """Start a step from a clean queue (a second start, an early survey: dropped) and a zero stick."""
+        while not self._queue.empty():
+            msg = self._queue.get_nowait()
+            if msg["type"] == "_gone":
+                raise Gone
+            self.dropped += 1
+        self.inputs.reset()
+        self.finish = False
 
     async def send(self, message: dict[str, Any]) -> None:
         """Send one JSON message; a failed send means the page is gone."""
@@ -100,6 +133,7 @@ class Conversation:
                 raise Gone
             if msg["type"] == kind:
                 return msg
+            self.dropped += 1
 
     async def _protocol(self) -> None:
         study, participant = self.study, self.participant
@@ -110,6 +144,7 @@ class Conversation:
             await self._expect("consent")
             study.progress.consent(participant)
         while not study.progress.finished(participant, plan):
+            self._clear()
             index = int(study.progress.of(participant)["step"])
             step = plan[index]
             # the condition's letter, never its code (the page is blind to it, as the paper's people were)
@@ -121,6 +156,7 @@ class Conversation:
                 limit = study.config.practice_s if step.kind == "practice" else study.config.trial_s
                 await self.send(header | {"limit_s": limit})
                 await self._expect("start")
+                self.inputs.reset()  # nothing the page sent before Start moves the robot
                 if await self._drive(step, limit) != "complete":
                     raise Gone
             study.progress.advance(participant)
@@ -153,9 +189,11 @@ class Conversation:
         attempt = self.study.progress.attempt(self.participant)
         folder = session_folder(self.study.config.sessions, step)
         try:
-            trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s)
+            trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
         except (ConfigError, ArtifactError) as exc:
-            await self.send({"type": "error", "message": f"the server cannot run this step: {exc}"})
+            # the detail (paths, commands) is the experimenter's, in the server's log; never the page's
+            LOG.error("participant %s cannot run %s %s: %s", self.participant, step.task, step.condition, exc)
+            await self.send({"type": "error", "message": UNAVAILABLE})
             raise Gone from exc
         self.finish = False
         practice = step.kind == "practice"

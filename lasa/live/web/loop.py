@@ -60,17 +60,18 @@ class Trial:
     compute: list[float] = dataclasses.field(default_factory=list)
 
 
-def open_trial(config: SessionConfig, folder: Path, attempt: int, duration_s: float) -> Trial:
+def open_trial(config: SessionConfig, folder: Path, attempt: int, duration_s: float, order: int = 0) -> Trial:
     """Build the station, warm it up and open its log ``<participant>_<task>_<condition>_<time>_a<n>``.
 
     The attempt number makes every session's name new: a participant who comes back after a
-    disconnect starts a new session and never overwrites one.
+    disconnect starts a new session and never overwrites one. ``order`` is the condition's
+    position in the participant's schedule (0 first), kept in the sidecar for the analysis.
     """
     station = Station(config)
     station.warm_up()
     stamp = dt_.datetime.now(dt_.UTC).strftime("%Y%m%dT%H%M%S")
     stem = f"{config.participant}_{config.task}_{config.condition}_{stamp}_a{attempt}"
-    meta = {**station.meta(), "interface": "web", "attempt": attempt}
+    meta = {**station.meta(), "interface": "web", "attempt": attempt, "order": int(order)}
     writer = SessionWriter(folder, stem, meta, station.robot.xml(), station.columns())
     return Trial(station, writer, max(1, int(round(duration_s / station.control.dt))))
 

@@ -30,15 +30,21 @@ PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessio
 class Step:
     """One step of the protocol: ``practice``, ``trial`` or ``survey`` under a condition.
 
-    ``label`` is the name the participant sees for the condition: its letter in their own order
-    (A for the first, ...), so the page never shows a condition's code (a blind protocol, as the
-    paper's); the code stays in the logs and the analysis.
+    ``order`` is the condition's position in the participant's schedule (0 for the first), which
+    the session's sidecar records for the analysis; :attr:`label` is the name the participant sees
+    for the condition.
     """
 
     kind: str
     condition: str
     task: str = ""
-    label: str = ""
+    order: int = 0
+
+    @property
+    def label(self) -> str:
+        """The condition's letter in the participant's own order (A for the first, ...): the page never
+        shows a condition's code (a blind protocol, as the paper's); the logs and analysis keep it."""
+        return chr(ord("A") + self.order)
 
 
 def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
@@ -46,13 +52,12 @@ def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
     schedule = pd.read_csv(study_dir(sessions) / "schedule.csv", dtype={"participant": str})
     rows = schedule[schedule.participant == check_participant(participant)].sort_values("position")
     steps: list[Step] = []
-    for position, condition in enumerate(rows.condition):
-        label = chr(ord("A") + position)
+    for order, condition in enumerate(rows.condition):
         steps += [
-            Step("practice", condition, PRACTICE_TASK, label),
-            Step("trial", condition, "Entree", label),
-            Step("trial", condition, "Dessert", label),
-            Step("survey", condition, "", label),
+            Step("practice", condition, PRACTICE_TASK, order),
+            Step("trial", condition, "Entree", order),
+            Step("trial", condition, "Dessert", order),
+            Step("survey", condition, "", order),
         ]
     return steps
 

@@ -68,7 +68,7 @@ def parse(text: str | bytes | None) -> dict[str, Any]:
         raise ProtocolError(f"a message is at most {MAX_MESSAGE_BYTES} bytes", code=1009)
     try:
         msg = json.loads(text, parse_constant=_no_constants)
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, RecursionError, ValueError) as exc:  # deep nesting; 5,000-digit ints
         raise ProtocolError("a message is one JSON object") from exc
     if not isinstance(msg, dict) or msg.get("type") not in KINDS:
         raise ProtocolError(f"a message's type is one of {KINDS}")
@@ -90,7 +90,13 @@ def parse(text: str | bytes | None) -> dict[str, Any]:
 
 
 def _number(value: Any) -> bool:
-    return type(value) in (int, float) and math.isfinite(value)
+    """A finite int or float (a 400-digit int is not: as a float it overflows)."""
+    if type(value) not in (int, float):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
 
 
 class RateLimit:
@@ -121,9 +127,14 @@ class Inputs:
     stop: bool = False
     received: float = -math.inf
 
+    def reset(self) -> None:
+        """A zero stick, nothing pressed, nothing received: how every step starts."""
+        self.axes, self.mode, self.stop, self.received = (0.0, 0.0), False, False, -math.inf
+
     def update(self, msg: dict[str, Any]) -> None:
         """Take an ``input`` message; a mode press is kept until a step reads it."""
-        self.axes = (float(msg["axes"][0]), float(msg["axes"][1]))
+        # a stick reads [-1, 1] (the Gamepad API's range): 1e308 is the stick held, logged as 1
+        self.axes = tuple(min(1.0, max(-1.0, float(a))) for a in msg["axes"][:2])  # type: ignore[assignment]
         self.mode = self.mode or bool(msg.get("mode", False))
         self.stop = bool(msg.get("stop", False))
         self.received = time.monotonic()

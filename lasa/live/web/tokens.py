@@ -11,6 +11,7 @@ no string a browser sends ever becomes part of a path.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import hmac
 import json
@@ -62,8 +63,15 @@ def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path
     folder = study_dir(sessions)
     if (folder / "tokens.json").exists():
         raise ConfigError(f"{folder} holds a study already; give another --sessions folder")
+    made = [p for p in (folder, *folder.parents) if not p.exists()]
     folder.mkdir(parents=True, exist_ok=True)
-    schedule = pd.read_csv(write_schedule(n, folder / "schedule.csv"), dtype={"participant": str})
+    try:
+        schedule = pd.read_csv(write_schedule(n, folder / "schedule.csv"), dtype={"participant": str})
+    except ConfigError:  # a refused schedule leaves no folder behind
+        for path in made:
+            with contextlib.suppress(OSError):
+                path.rmdir()
+        raise
     participants = [check_participant(p) for p in dict.fromkeys(schedule.participant)]
     tokens = {p: secrets.token_urlsafe(TOKEN_BYTES) for p in participants}
     write_text(folder / "tokens.json", json.dumps({p: _hash(t) for p, t in tokens.items()}, indent=2) + "\n")

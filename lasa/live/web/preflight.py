@@ -1,0 +1,58 @@
+"""Before the server listens: everything the study's schedule needs is there.
+
+A missing decoder would otherwise show up mid-study, in the page of the first participant who
+reaches an LA condition (after their R and R+SA ones, for half the schedule). :func:`preflight`
+builds the step of every condition in the schedule, on every task the protocol runs, as a trial
+would (:class:`lasa.live.station.Station`: the scene, its meshes, the decoder of the LA
+conditions and its fit to the task), and checks the npm files of ``--frames browser``. The
+first missing piece is one line: what is missing and the command that makes it.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import pandas as pd
+
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.live.station import SessionConfig, Station
+from lasa.live.web.plan import PRACTICE_TASK
+from lasa.live.web.scene import NPM_PACKAGES, npm_folder
+from lasa.live.web.tokens import study_dir
+
+if TYPE_CHECKING:
+    from lasa.live.web.app import WebConfig
+
+__all__ = ["TASKS", "preflight"]
+
+TASKS = tuple(dict.fromkeys((PRACTICE_TASK, "Entree", "Dessert")))  # the tasks a condition runs
+
+
+def preflight(config: WebConfig) -> list[str]:
+    """Check that every step of ``config``'s schedule can run; the conditions checked.
+
+    Raises:
+        ConfigError: naming the first thing missing (a decoder, the schedule, an npm package)
+            and the command that makes it, in one line.
+    """
+    schedule = study_dir(config.sessions) / "schedule.csv"
+    if not schedule.is_file():
+        raise ConfigError(f"no study in {config.sessions}: run `python -m lasa.live.web schedule` first")
+    conditions = list(dict.fromkeys(pd.read_csv(schedule).condition))
+    for condition in conditions:
+        for task in TASKS:
+            session = SessionConfig(
+                robot="panda", task=task, condition=condition, participant="p00", build_dir=config.build_dir
+            )
+            try:
+                Station(session)
+            except (ArtifactError, ConfigError) as exc:
+                first = " ".join(str(exc).split())
+                raise ConfigError(f"the study's {condition} condition cannot run: {first}") from exc
+    if config.frames == "browser":
+        for name in NPM_PACKAGES:
+            try:
+                npm_folder(name)
+            except ArtifactError as exc:
+                raise ConfigError(f"--frames browser cannot draw the robot: {exc}") from exc
+    return conditions
