@@ -654,21 +654,23 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
 
 
 @contextlib.contextmanager
-def cli_server(sessions, build_dir, log, *options):
-    """``python -m lasa.live.web`` (uvicorn's own logging into ``log``) on a free port; yields it."""
+def cli_server(sessions, build_dir, log, *options, port=None):
+    """``python -m lasa.live.web`` (uvicorn's own logging into ``log``) on ``port`` (a free one if
+    None); yields the port."""
     import os
     import signal
     import subprocess
     import sys
 
-    port = _free_port()
+    port = port or _free_port()
     command = [sys.executable, "-m", "lasa.live.web", "--port", str(port), "--sessions", str(sessions)]
     command += ["--build-dir", str(build_dir), "--frames", "none", "--practice-s", "30", *options]
-    with open(log, "wb") as out:
+    starts = log.read_text().count("Uvicorn running") if log.exists() else 0  # earlier runs' lines
+    with open(log, "ab") as out:
         env = {**os.environ, "PYTHONPATH": str(ROOT)}
         server = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, env=env)
         try:
-            wait_for(lambda: "Uvicorn running" in log.read_text(), timeout=60)
+            wait_for(lambda: log.read_text().count("Uvicorn running") > starts, timeout=60)
             yield port
         finally:
             server.send_signal(signal.SIGINT)
@@ -904,3 +906,99 @@ def test_a_refused_schedule_leaves_no_folder_and_an_uneven_one_warns(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         issue_links(8, tmp_path / "eight", "http://x")  # two full rounds of the square: no warning
+
+
+DEAD_CLIENT = """
+import asyncio, json, sys
+from websockets.asyncio.client import connect
+
+async def main(port, token):
+    url, origin = f"ws://127.0.0.1:{port}/ws", f"http://127.0.0.1:{port}"
+    async with connect(url, origin=origin, ping_interval=None) as ws:
+        await ws.send(json.dumps({"type": "hello", "token": token}))
+        await ws.recv()
+        print("connected", flush=True)
+        await asyncio.sleep(600)
+
+asyncio.run(main(int(sys.argv[1]), sys.argv[2]))
+"""
+
+
+async def _first_reply(port: int, token: str) -> dict:
+    from websockets.asyncio.client import connect as ws_connect
+
+    async with ws_connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}") as ws:
+        await ws.send(json.dumps({"type": "hello", "token": token}))
+        return json.loads(await ws.recv())
+
+
+def test_a_connection_that_dies_silently_frees_its_link_within_10_s(tmp_path, decoder_build):
+    """A page that stops answering (its process frozen, as a laptop asleep: the TCP connection stays
+    open) is dropped by the heartbeat, and the same link works again within 10 s."""
+    import asyncio
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    from lasa.live.web.app import PING_S, PING_TIMEOUT_S
+
+    sessions = tmp_path / "sessions"
+    links = pd.read_csv(issue_links(4, sessions, "http://127.0.0.1"))
+    token = links.link[0].split("#token=", 1)[1]
+    with cli_server(sessions, decoder_build, tmp_path / "server.log") as port:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        dead = subprocess.Popen(
+            [sys.executable, "-c", DEAD_CLIENT, str(port), token], stdout=subprocess.PIPE, text=True, env=env
+        )
+        try:
+            assert dead.stdout.readline().strip() == "connected"
+            os.kill(dead.pid, signal.SIGSTOP)
+            frozen = time.monotonic()
+            assert asyncio.run(_first_reply(port, token)) == {"type": "refused", "reason": "elsewhere"}
+            while (reply := asyncio.run(_first_reply(port, token)))["type"] == "refused":
+                assert reply["reason"] == "elsewhere" and time.monotonic() - frozen < 15
+                time.sleep(0.25)
+            freed = time.monotonic() - frozen
+        finally:
+            dead.kill()
+            dead.wait()
+    assert reply["kind"] == "consent" and freed <= 10.0 and PING_S + PING_TIMEOUT_S <= 10.0, freed
+
+
+def test_a_real_browser_says_what_happened_and_recovers_from_a_restart(tmp_path, decoder_build):
+    """Headless Chromium against the CLI server: a finished link, the same link in a second window,
+    and a server restart each get their own message; after the restart the page reconnects by
+    itself and goes on where it was."""
+    from selenium.webdriver.common.by import By
+
+    sessions = tmp_path / "sessions"
+    links = pd.read_csv(issue_links(4, sessions, "http://127.0.0.1"))
+    tokens = {p: link.split("#token=", 1)[1] for p, link in zip(links.participant, links.link, strict=True)}
+    progress = Progress(sessions)
+    progress.of("p03")["step"] = len(plan_of(sessions, "p03"))  # p03 has done the study
+    progress._save()
+    log, port = tmp_path / "server.log", _free_port()
+    text = lambda browser, id_: browser.find_element(By.ID, id_).text  # noqa: E731
+    with chromium() as browser:
+        with cli_server(sessions, decoder_build, log, port=port):
+            browser.get(f"http://127.0.0.1:{port}/study#token={tokens['p03']}")
+            wait_for(lambda: "finished the study" in text(browser, "error-text"))
+            browser.get("about:blank")  # a new fragment alone would not load the page again
+            browser.get(f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
+            wait_for(lambda: browser.find_element(By.ID, "agree").is_displayed())
+            first = browser.current_window_handle
+            browser.switch_to.new_window("window")
+            browser.get(f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
+            wait_for(lambda: "open in another window" in text(browser, "error-text"))
+            browser.close()
+            browser.switch_to.window(first)
+            assert "token" not in browser.current_url.split("#")[0]
+        # the server is gone (SIGINT: uvicorn closes its WebSockets with 1012, "service restart")
+        wait_for(lambda: "restarting" in text(browser, "notice"))
+        assert browser.find_element(By.ID, "agree").is_displayed()  # the page is kept as it was
+        with cli_server(sessions, decoder_build, log, port=port):
+            wait_for(lambda: not browser.find_element(By.ID, "notice").is_displayed(), timeout=30)
+            browser.find_element(By.ID, "agree").click()
+            wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
+    assert Progress(sessions).of("p00")["consented"]

@@ -39,7 +39,7 @@ def _serve(argv: list[str]) -> int:
     import torch
     import uvicorn
 
-    from lasa.live.web.app import FRAMES, WebConfig, create_app
+    from lasa.live.web.app import FRAMES, PING_S, PING_TIMEOUT_S, WebConfig, create_app
     from lasa.live.web.preflight import preflight
     from lasa.live.web.protocol import MAX_MESSAGE_BYTES
 
@@ -94,6 +94,8 @@ def _serve(argv: list[str]) -> int:
         port=args.port,
         ws_max_size=MAX_MESSAGE_BYTES,
         ws_per_message_deflate=False,  # the messages are small: compressing them costs more than it saves
+        ws_ping_interval=PING_S,  # the heartbeat: a dead connection frees its link within ~8 s
+        ws_ping_timeout=PING_TIMEOUT_S,
         access_log=False,
     )
     return 0

@@ -45,7 +45,7 @@ from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_scene, npm_folder
 from lasa.live.web.tokens import TokenStore
 
-__all__ = ["FRAMES", "HELLO_S", "REFUSALS", "WebConfig", "Study", "create_app"]
+__all__ = ["FRAMES", "HELLO_S", "PING_S", "PING_TIMEOUT_S", "REFUSALS", "WebConfig", "Study", "create_app"]
 
 # How the page shows the robot: drawn by the server (JPEG), by the browser (MuJoCo in WebAssembly
 # and three.js, from the joint positions), or not at all.
@@ -53,6 +53,11 @@ FRAMES = ("server", "browser", "none")
 
 # How long a connection may take to send its token [s].
 HELLO_S = 10.0
+# The heartbeat (uvicorn's WebSocket pings): one every PING_S, answered within PING_TIMEOUT_S, else
+# the connection is closed and its link is free again: a laptop gone to sleep holds a link for at
+# most PING_S + PING_TIMEOUT_S [s]. The page reconnects by itself (static/study.js).
+PING_S = 3.0
+PING_TIMEOUT_S = 5.0
 # Why a connection was refused, as the page is told (it shows each its own message).
 REFUSALS = ("invalid", "finished", "elsewhere", "no_hello")
 

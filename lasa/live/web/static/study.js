@@ -11,9 +11,8 @@ const $ = (id) => document.getElementById(id);
 // as the WebSocket's first message, and never in a URL that a server or a proxy could log.
 const token = new URLSearchParams(location.hash.slice(1)).get("token") || "";
 const scheme = location.protocol === "https:" ? "wss" : "ws";
-const ws = new WebSocket(`${scheme}://${location.host}/ws`);
-ws.binaryType = "blob";
-ws.onopen = () => ws.send(JSON.stringify({ type: "hello", token }));
+const RETRY_S = [1, 2, 3, 5, 5, 10]; // waits between reconnection attempts, then every 10 s
+let ws = null, retries = 0;
 
 // Why the server refused this page's connection (lasa.live.web.app.REFUSALS), in the participant's words.
 const REFUSED = {
@@ -23,6 +22,12 @@ const REFUSED = {
   no_hello: "This page could not reach the study in time. Reload this page.",
 };
 let refused = false;
+// How a connection ended, by its close code, when the page will try again by itself.
+const LOST = {
+  1012: "The study server is restarting. This page reconnects by itself; you will go on where you left off.",
+  1001: "The study server is restarting. This page reconnects by itself; you will go on where you left off.",
+};
+const LOST_OTHER = "The connection to the study was lost. This page reconnects by itself; you will go on where you left off.";
 
 const keys = { left: false, right: false, up: false, down: false };
 let keyStop = false, modePress = false, driving = false, padWasPressed = false, frameUrl = null;
@@ -186,22 +191,42 @@ $("submit").onclick = () => {
   send({ type: "survey", answers });
 };
 
-ws.onmessage = (event) => {
+function received(event) {
   if (typeof event.data !== "string") return frame(event.data);
   const msg = JSON.parse(event.data);
   if (msg.type === "phase") phase(msg);
   else if (msg.type === "tick") { tick(msg); if (view) view.then((m) => m.show(msg.q)); }
   else if (msg.type === "scene") scene(msg);
-  else if (msg.type === "error") { $("error-text").textContent = msg.message; show("error"); }
+  else if (msg.type === "error") notice(msg.message); // the page stays as it is: a form keeps its answers
   else if (msg.type === "refused") {
     refused = true;
+    notice("");
     $("status").textContent = "";
     $("error-text").textContent = REFUSED[msg.reason] || REFUSED.invalid;
     show("error");
   }
-};
-ws.onclose = (event) => {
-  driving = false;
-  if (!$("thanks").hidden || refused) return;
-  $("status").textContent = event.code === 1000 ? "" : "Disconnected. Reload this page to go on where you left off.";
-};
+}
+
+// A message above the page's current step, which it never replaces ("" clears it).
+function notice(text) {
+  $("notice").textContent = text;
+  $("notice").hidden = !text;
+}
+
+function connect() {
+  ws = new WebSocket(`${scheme}://${location.host}/ws`);
+  ws.binaryType = "blob";
+  ws.onopen = () => { ws.send(JSON.stringify({ type: "hello", token })); };
+  ws.onmessage = (event) => {
+    if (retries) { retries = 0; notice(""); } // the server answered: back where we left off
+    received(event);
+  };
+  ws.onclose = (event) => {
+    driving = false;
+    if (!$("thanks").hidden || refused || event.code === 1000) return;
+    notice(LOST[event.code] || LOST_OTHER);
+    setTimeout(connect, 1000 * RETRY_S[Math.min(retries, RETRY_S.length - 1)]);
+    retries += 1;
+  };
+}
+connect();
