@@ -32,6 +32,8 @@ from lasa.people.kinematics import tip_frames
 
 __all__ = [
     "SCALES",
+    "LEFT_OUT",
+    "DROPPED",
     "read_likert",
     "scan_sessions",
     "load_sessions",
@@ -47,6 +49,16 @@ def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
     """The questionnaire answers saved in ``folder``, or None if there are none."""
     path = Path(folder) / "likert.csv"
     return pd.read_csv(path, dtype={"participant": str}) if path.is_file() else None
+
+
+# Why a session is left out of the analysis (scan_sessions), as a pre-registration states it.
+LEFT_OUT = {
+    "damaged": "a damaged log: an unreadable sidecar, a torn or non-finite row, rows out of time order",
+    "task": "not an eating-study session (another task, or a condition outside the four)",
+    "status": "a session that did not end normally (interrupted, or stopped by a failure)",
+}
+# Who a within-subject test leaves out (_complete).
+DROPPED = "a participant who did not do every condition (in every task the test reads) is named and left out."
 
 
 def scan_sessions(
@@ -77,12 +89,12 @@ def scan_sessions(
         try:
             frame, meta = read_session(sidecar, allow_damaged=include_damaged)
         except ArtifactError as exc:
-            left_out.append((sidecar.stem, str(exc)))
+            left_out.append((sidecar.stem, f"{LEFT_OUT['damaged']} ({exc})"))
             continue
         if meta.get("task") not in ("Entree", "Dessert") or meta.get("condition") not in CONDITIONS:
-            left_out.append((sidecar.stem, f"not an eating-study session (task {meta.get('task')!r})"))
+            left_out.append((sidecar.stem, f"{LEFT_OUT['task']} (task {meta.get('task')!r})"))
         elif meta["status"] != "complete" and not include_interrupted:
-            left_out.append((sidecar.stem, f"{meta['status']}: it did not end normally"))
+            left_out.append((sidecar.stem, f"{LEFT_OUT['status']} ({meta['status']})"))
         else:
             logs.append((frame, {**meta, "session": sidecar.name}))
     _refuse_duplicates([m for _, m in logs], folder)

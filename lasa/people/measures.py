@@ -16,7 +16,7 @@ from lasa.people.design import TASK_NAMES, Episodes
 from lasa.world.eating import GOALS, PREFERENCES, TASKS, EatingTask, fork_direction
 from lasa.world.robot import Robot
 
-__all__ = ["goal_error", "idle_time", "alignment", "measures"]
+__all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]
 
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
@@ -33,6 +33,16 @@ def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float
     """
     dist = np.linalg.norm(tip[:, :, None, :] - goals[None, None], axis=-1).min(axis=-1)
     return (dist * active).sum(axis=0) * dt
+
+
+def total_time(end: np.ndarray, dt: float) -> np.ndarray:
+    """Total Time: the steps until the task was done (or to the limit, if never) times dt, per episode [s].
+
+    Args:
+        end: Steps each episode ran, (E,).
+        dt: Control period [s].
+    """
+    return end * dt
 
 
 def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
@@ -88,7 +98,7 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
     time = pd.DataFrame(
         {
             **keys,
-            "total_time": episodes.end * episodes.dt,
+            "total_time": total_time(episodes.end, episodes.dt),
             "idle_time": idle_time(episodes.idle, active, episodes.dt),
             "mode_switches": (episodes.switch & active).sum(axis=0),
             "completed": episodes.completed,

@@ -1,0 +1,192 @@
+"""A pre-registration of the web study, written from the package itself.
+
+``python -m lasa.live.web preregister --out prereg.md`` writes a Markdown document in the order of
+AsPredicted's questions (which OSF's pre-registration template also asks): data collected,
+hypotheses, dependent variables, conditions, analyses, exclusions, sample size, design, other.
+Every rule in it is the one the analysis applies, taken from where the analysis takes it:
+
+- the hypotheses' tests and decision rules: :data:`lasa.evidence.rules.RULES` (``study.h1``-``h3``);
+- the measures: the docstrings of :mod:`lasa.people.measures` (:data:`MEASURES`);
+- the exclusions: :data:`lasa.evidence.sessions.LEFT_OUT` (sessions) and
+  :data:`lasa.evidence.sessions.DROPPED` (participants of a within-subject test), and the
+  completion bar :data:`lasa.evidence.rules.COMPLETION_BAR`;
+- the sample size: :func:`lasa.figures.study_power.power` on the simulated cohort's committed
+  tables (``figures/study_*.csv``), for the reading notebook 11 calls the headline;
+- the design: the schedule's balanced Latin square (:func:`lasa.live.studykit.write_schedule`),
+  the protocol (:mod:`lasa.live.web.plan`) and the server's settings.
+
+Notebook 11 with ``--param sessions_dir=...`` then analyses exactly what the document names.
+Fields only the experimenter can answer (whether data exist, the recruitment) are marked
+``[to fill in]``.
+"""
+
+from __future__ import annotations
+
+import inspect
+import re
+from pathlib import Path
+
+import pandas as pd
+
+from lasa.base.conditions import CONDITIONS
+from lasa.base.io import require_file
+from lasa.evidence import latent_property
+from lasa.evidence.rules import COMPLETION_BAR, rule
+from lasa.evidence.sessions import DROPPED, LEFT_OUT, SCALES
+from lasa.figures import study, study_analysis, study_power
+from lasa.live.studykit import QUESTIONS
+from lasa.live.web.plan import PRACTICE_TASK
+from lasa.people import measures
+
+__all__ = ["HYPOTHESES", "MEASURES", "Reading", "headline_reading", "power_table", "document"]
+
+# The paper's three hypotheses (Sec. VI), each with the claim whose rule tests it.
+HYPOTHESES = {
+    "study.h1": "H1: shared autonomy (SA) reduces Goal Error, with retargeting or latent actions.",
+    "study.h2": "H2: with SA, latent actions (LA+SA) align the fork with the preference better than "
+    "retargeting (R+SA) in the Dessert's scoop phase.",
+    "study.h3": "H3: LA+SA completes the tasks faster, and with less idle time, than every other condition.",
+}
+# The dependent variables: each one's definition is the first line of the function that computes it.
+MEASURES = {
+    "Total Time": measures.total_time,
+    "Idle Time": measures.idle_time,
+    "Goal Error": measures.goal_error,
+    "Preference Alignment": measures.alignment,
+}
+
+Reading = tuple[str, str, str]  # (SA member, decoder reading, participant model)
+
+
+def definition(function: object) -> str:
+    """The first line of a measure's docstring, its definition (without the array shape it ends with)."""
+    return re.sub(r",? \(E,\)\.$", ".", inspect.getdoc(function).splitlines()[0])  # type: ignore[union-attr]
+
+
+def headline_reading(figures: Path) -> Reading:
+    """Notebook 11's headline: its first SA member, the property rule's decoder, its model rule's model."""
+    config = study.Config()
+    prop = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
+    decoder = study.readings_to_run(latent_property.summary(prop.query("task == 'eating'")), "property")[0]
+    time = pd.read_csv(require_file(figures / "study_time.csv", "make figures (notebook 11)"))
+    model = study_analysis.headline_model(time, config.participant_models)
+    return config.session.members[0], decoder, model
+
+
+def power_table(
+    figures: Path,
+    reading: Reading,
+    draws: int,
+    sizes: tuple[int, ...],
+    n_jobs: int = 1,
+    progress: bool = False,
+) -> pd.DataFrame:
+    """:func:`lasa.figures.study_power.power` on the committed simulated cohort, for ``reading``."""
+    frames = {
+        name: pd.read_csv(require_file(figures / f"study_{name}.csv", "make figures (notebook 11)"))
+        for name in ("goal_error", "time", "alignment")
+    }
+    from lasa.world.eating import make_eating_task
+
+    member, decoder, model = reading
+    config = study.Config()
+    horizon = config.session.horizon * make_eating_task().robot.control.dt  # notebook 11's [s]
+    return study_power.power(
+        frames,
+        member,
+        decoder=decoder,
+        model=model,
+        sizes=sizes,
+        draws=draws,
+        seed=config.seed,
+        horizon=horizon,
+        n_jobs=n_jobs,
+        progress=progress,
+    )
+
+
+def _power_lines(table: pd.DataFrame) -> list[str]:
+    need = study_power.needed(table)
+    lines = ["| hypothesis | " + " | ".join(f"n = {n}" for n in sorted(set(table.n))) + " |"]
+    lines.append("| --- |" + " ---: |" * len(set(table.n)))
+    for claim, rows in table.groupby("claim", sort=False):
+        cells = [f"{p:.2f}" for p in rows.sort_values("n").power]
+        lines.append(f"| {claim.upper()} | " + " | ".join(cells) + " |")
+    lines += ["", *[f"- {study_power.sentence(need, claim)}" for claim in study_power.POWER_CLAIMS]]
+    return lines
+
+
+def document(
+    table: pd.DataFrame,
+    reading: Reading,
+    practice_s: float,
+    trial_s: float,
+    conditions: tuple[str, ...] = CONDITIONS,
+) -> str:
+    """The pre-registration, Markdown, from the power ``table`` of ``reading`` and the server's settings."""
+    member, decoder, model = reading
+    bar = f"{100 * COMPLETION_BAR:.0f}%"
+    out = [
+        "# Pre-registration: shared autonomy with learned latent actions, the eating study",
+        "",
+        "Generated by `python -m lasa.live.web preregister` from the `lasa` package: every rule below is "
+        "the one its analysis (notebook 11 with `sessions_dir`) applies.",
+        "",
+        "## 1. Data collection",
+        "",
+        "Have any data been collected for this study already? [to fill in]",
+        "",
+        "## 2. Hypotheses",
+        "",
+    ]
+    for claim, text in HYPOTHESES.items():
+        out += [f"- **{text}** Test and decision rule (`{claim}`): {rule(claim).text}."]
+    out += ["", "## 3. Dependent variables", ""]
+    out += [f"- {definition(fn)}" for fn in MEASURES.values()]
+    out += ["- Questionnaire, after each condition, 7-point Likert (1 = strongly disagree):"]
+    out += [f"  - {scale}: {QUESTIONS[scale]}" for scale in SCALES]
+    out += [
+        "",
+        "## 4. Conditions",
+        "",
+        f"Within subjects, 2 x 2: interface (retargeting R, latent actions LA) x shared autonomy (without, "
+        f"with SA): {', '.join(conditions)}. Participants see each condition as a letter in their own "
+        "order (A-D), never its name. The robot's belief is not shown.",
+        "",
+        "## 5. Analyses",
+        "",
+        f"Significance level .05, two-sided. H1 and H3 are judged only if every condition finishes at least "
+        f"{bar} of its episodes (H2: LA+SA and R+SA), as stated in each rule above. The planned reading: "
+        f"SA as `{member}`, the latent-action decoder `{decoder}`.",
+        "",
+        "## 6. Outliers and exclusions",
+        "",
+        "Sessions left out of every analysis, each named with its reason:",
+        "",
+        *[f"- {reason}" for reason in LEFT_OUT.values()],
+        "",
+        f"Participants left out of a within-subject test: {DROPPED}",
+        "",
+        "## 7. Sample size",
+        "",
+        f"From the simulated cohort (participant model `{model}`): the power of each hypothesis's own test "
+        f"for cohorts of n drawn from the simulated participants ({int(table.draws.iloc[0])} draws per n). "
+        "These numbers say what a replication needs if people differed as the simulated ones do.",
+        "",
+        *_power_lines(table),
+        "",
+        "N = [to fill in: at least the largest n above for the hypotheses you test, a multiple of 4]",
+        "",
+        "## 8. Design",
+        "",
+        f"Each participant: consent; then, for each condition in a balanced Latin square order (Williams: "
+        f"each condition first once and after each other once per 4 participants), a practice on the "
+        f"{PRACTICE_TASK} of up to {practice_s:g} s, the Entree and the Dessert tasks (each at most "
+        f"{trial_s:g} s), and the questionnaire.",
+        "",
+        "## 9. Other",
+        "",
+        "[to fill in]",
+        "",
+    ]
+    return "\n".join(out)

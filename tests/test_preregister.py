@@ -1,0 +1,87 @@
+"""The pre-registration names the hypotheses, measures and exclusions the analysis applies."""
+
+import inspect
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from lasa.evidence import sessions
+from lasa.evidence.rules import COMPLETION_BAR, rule
+from lasa.live.web import preregister
+from lasa.people import measures
+
+ROOT = Path(__file__).resolve().parents[1]
+FIGURES = ROOT / "figures"
+
+
+@pytest.fixture(scope="module")
+def reading_and_table():
+    reading = preregister.headline_reading(FIGURES)
+    return reading, preregister.power_table(FIGURES, reading, draws=2, sizes=(6, 10))
+
+
+@pytest.fixture(scope="module")
+def text(reading_and_table):
+    reading, table = reading_and_table
+    return preregister.document(table, reading, practice_s=240.0, trial_s=150.0)
+
+
+def test_every_hypothesis_is_stated_with_the_rule_that_judges_it(text):
+    assert set(preregister.HYPOTHESES) == {"study.h1", "study.h2", "study.h3"}
+    for claim, hypothesis in preregister.HYPOTHESES.items():
+        assert hypothesis in text and rule(claim).text in text
+    assert f"at least {100 * COMPLETION_BAR:.0f}% of its episodes" in text
+
+
+def test_every_measure_is_defined_by_the_function_the_analysis_calls(text):
+    source = inspect.getsource(measures.measures) + inspect.getsource(measures._alignment_table)
+    for name, function in preregister.MEASURES.items():
+        assert f"{function.__name__}(" in source  # the tidy tables come from this function
+        line = preregister.definition(function)
+        assert line.startswith(f"{name}:") and line in text
+        assert inspect.getdoc(function).startswith(line.removesuffix(".")), name
+
+
+def test_the_exclusions_are_the_analysis_own(text, tmp_path):
+    for reason in sessions.LEFT_OUT.values():
+        assert f"- {reason}" in text
+    assert sessions.DROPPED in text
+    (tmp_path / "p00_Entree_R_x_a1.json").write_text("{ not json")  # a damaged sidecar
+    _, left_out = sessions.scan_sessions(tmp_path)
+    assert list(left_out.session) == ["p00_Entree_R_x_a1"]
+    assert left_out.reason[0].startswith(sessions.LEFT_OUT["damaged"])
+
+
+def test_the_sample_size_and_design_come_from_the_power_and_the_settings(reading_and_table, text):
+    (member, decoder, model), table = reading_and_table
+    assert f"`{member}`" in text and f"`{decoder}`" in text and f"`{model}`" in text
+    for claim, rows in table.groupby("claim"):
+        row = rows.sort_values("n")
+        assert f"| {claim.upper()} | " + " | ".join(f"{p:.2f}" for p in row.power) + " |" in text
+    assert "up to 240 s" in text and "each at most 150 s" in text and "[to fill in]" in text
+
+
+def test_the_command_writes_the_document(tmp_path):
+    out = tmp_path / "prereg.md"
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "lasa.live.web",
+            "preregister",
+            "--draws",
+            "2",
+            "--sizes",
+            "6",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr
+    assert out.read_text().startswith("# Pre-registration") and "## 7. Sample size" in out.read_text()
