@@ -669,7 +669,9 @@ def test_one_bad_session_is_left_out_by_name(cohort, tmp_path):
     reasons = dict(zip(left_out.session, left_out.reason, strict=True))
     assert set(reasons) == {torn, bad}
     assert "not a number" in reasons[torn] and "not a finite number" in reasons[bad]
-    with pytest.warns(UserWarning, match=f"left out session {bad}: a damaged log.* \\(session {bad} is damaged"):
+    with pytest.warns(
+        UserWarning, match=f"left out session {bad}: a damaged log.* \\(session {bad} is damaged"
+    ):
         episodes = load_sessions(folder, make_eating_task())
     assert len(episodes.participant) == 9
 

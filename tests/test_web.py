@@ -394,6 +394,7 @@ def consent_and_start(browser, url):
     wait_for(lambda: browser.find_element(By.ID, "agree").is_displayed())
     browser.find_element(By.ID, "agree").click()
     wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
+    assert browser.find_element(By.ID, "intro-title").text == "Practice: way A"  # never a code
     browser.find_element(By.ID, "start").click()
     ActionChains(browser).key_down(Keys.ARROW_RIGHT).key_down(Keys.ARROW_UP).perform()
 
@@ -409,6 +410,19 @@ def belief_shown(browser):
     assert abs(sum(values) - 1) < 0.03 and max(values) > 0.3  # the held stick moved the belief
 
 
+def labels_shown(browser):
+    """The goals' names over the picture, in the picture (its box), rice right of the plate."""
+    from selenium.webdriver.common.by import By
+
+    stage = browser.find_element(By.CSS_SELECTOR, ".stage").rect
+    spans = {s.text: s.rect for s in browser.find_elements(By.CSS_SELECTOR, "#labels span")}
+    assert set(spans) == {"rice", "middle", "icing", "plate"}, spans
+    for rect in spans.values():
+        assert stage["x"] < rect["x"] < stage["x"] + stage["width"]
+        assert stage["y"] < rect["y"] < stage["y"] + stage["height"]
+    assert spans["rice"]["x"] > spans["plate"]["x"]
+
+
 def end_practice(browser):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
@@ -419,22 +433,21 @@ def end_practice(browser):
     wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed())
 
 
-def test_a_real_browser_consents_drives_and_sees_the_belief_and_ticks(study, report_artifact, tmp_path):
-    """Headless Chromium against the real server (uvicorn), frames from the server: consent, the
-    practice, keys held for a few ticks; the page shows a bar per goal, the tick and late-tick
-    counters, and a frame."""
+def test_a_real_browser_consents_drives_and_sees_the_goals_and_ticks(study, report_artifact, tmp_path):
+    """Headless Chromium against the real server (uvicorn), frames from the server, the study's
+    defaults: consent, the practice, keys held for a few ticks; the page shows the goals' names
+    over a frame, the tick and late-tick counters, and no belief (off by default)."""
     from PIL import Image
     from selenium.webdriver.common.by import By
 
     sessions, tokens = study
-    config = WebConfig(
-        sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server", show_belief=True
-    )
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server")
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
         wait_for(lambda: browser.execute_script("return document.getElementById('view').naturalWidth") > 0)
-        belief_shown(browser)
+        assert not browser.find_element(By.ID, "belief-panel").is_displayed()
+        labels_shown(browser)
         # the committed docs/web_study.png is this screenshot; the test never writes into the tree
         shot = tmp_path / "web_study.png"
         browser.save_screenshot(str(shot))
@@ -497,6 +510,9 @@ def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(
             ws.send_json({"type": "consent"})
             assert ws.receive_json()["kind"] == "practice"
             ws.send_json({"type": "start"})
+            labelled = ws.receive_json()  # the goals' names and their places on the picture
+            assert [g["name"] for g in labelled["labels"]] == ["rice", "middle", "icing", "plate"]
+            assert all(0.1 < g["x"] < 0.9 and 0.1 < g["y"] < 0.9 for g in labelled["labels"])
             announced = ws.receive_json()
             assert announced["type"] == "scene" and announced["qpos_adr"] == list(range(7))
             key = {"x-scene-key": announced["key"]}
@@ -551,6 +567,7 @@ def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact,
         first = int(browser.find_element(By.ID, "tick").text)
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) > first)
         belief_shown(browser)
+        labels_shown(browser)
         stats = browser.execute_script("return window.lasaView")
         assert stats["geoms"] >= 20 and stats["modelMs"] > 0  # the arm's links, the table, the food
         assert browser.find_element(By.ID, "canvas").is_displayed()

@@ -19,6 +19,7 @@ from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.live.station import SessionConfig
+from lasa.live.web.labels import goal_labels
 from lasa.live.web.loop import open_trial, run_trial
 from lasa.live.web.plan import Step, plan_of, session_folder
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
@@ -197,12 +198,14 @@ class Conversation:
             raise Gone from exc
         self.finish = False
         practice = step.kind == "practice"
+        robot = trial.station.robot
+        camera = robot.model.camera(robot.spec.camera).id
+        if self.study.config.frames != "none":  # the goals' names over the picture
+            await self.send({"type": "labels", "labels": goal_labels(trial.station.task, camera)})
         if self.study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
             key = self.study.scene_key(trial.writer.folder / f"{trial.writer.stem}.xml")
-            robot = trial.station.robot
-            camera = robot.model.camera(robot.spec.camera).id
             scene = {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
             await self.send(scene)
         try:

@@ -16,7 +16,9 @@ connection (:class:`ProtocolError`). The server sends ``phase`` messages (what t
 counter) and, with ``--frames server``, JPEG images as binary messages; with ``--frames browser``
 a ``scene`` message when a trial starts (the arm's ``qpos`` addresses, the camera's index and the
 trial's scene key: the page then fetches the scene, :mod:`lasa.live.web.scene`, and draws each
-tick's state). A refused connection is told why, ``{"type": "refused", "reason": ...}``.
+tick's state); with either, a ``labels`` message when a trial starts (each goal's name and its
+place on the picture, :mod:`lasa.live.web.labels`). A refused connection is told why,
+``{"type": "refused", "reason": ...}``.
 """
 
 from __future__ import annotations

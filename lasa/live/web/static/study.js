@@ -118,6 +118,16 @@ function tick(msg) {
   });
 }
 
+// The goals' names over the picture, where the server's camera sees each goal (lasa.live.web.labels).
+function labels(msg) {
+  $("labels").replaceChildren(...msg.labels.map((g) => {
+    const span = Object.assign(document.createElement("span"), { textContent: g.name });
+    span.style.left = `${(100 * g.x).toFixed(2)}%`;
+    span.style.top = `${(100 * g.y).toFixed(2)}%`;
+    return span;
+  }));
+}
+
 function scene(msg) {
   $("view").hidden = true;
   $("canvas").hidden = false;
@@ -197,6 +207,7 @@ function received(event) {
   if (msg.type === "phase") phase(msg);
   else if (msg.type === "tick") { tick(msg); if (view) view.then((m) => m.show(msg.q)); }
   else if (msg.type === "scene") scene(msg);
+  else if (msg.type === "labels") labels(msg);
   else if (msg.type === "error") notice(msg.message); // the page stays as it is: a form keeps its answers
   else if (msg.type === "refused") {
     refused = true;
