@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import math
 import os
 import socket
 import subprocess
@@ -194,19 +195,17 @@ def main(argv: list[str] | None = None) -> int:
     levels = [int(n) for n in args.clients.split(",")]
     modes = args.modes.split(",")
     sys.path.insert(0, str(ROOT))
-    from lasa.live.web.plan import plan_of
     from lasa.live.web.tokens import issue_links
 
     folder = Path(tempfile.mkdtemp(prefix="web_load_"))
     wanted = len(modes) * sum(levels) + 1
-    # without the eating decoder (no `make figures` in --build-dir), only participants whose first
-    # condition is a retargeting one (R, R+SA) can start their practice: schedule twice as many
-    decoders = (Path(args.build_dir) / "models" / "eating_decoder_panda.pt").is_file()
-    links = pd.read_csv(issue_links(wanted * (1 if decoders else 2) + 4, folder, "http://127.0.0.1"))
+    # the server checks at startup that every condition can run (lasa.live.web.preflight)
+    if not (Path(args.build_dir) / "models" / "eating_decoder_panda.pt").is_file():
+        raise SystemExit(f"no eating decoder in {args.build_dir}: run make figures first")
+    total = 4 * math.ceil((wanted + 4) / 4)  # whole rounds of the Latin square
+    links = pd.read_csv(issue_links(total, folder, "http://127.0.0.1"))
     tokens = dict(zip(links.participant, (lk.split("token=", 1)[1] for lk in links.link), strict=True))
-    names = [p for p in tokens if decoders or plan_of(folder, p)[0].condition.startswith("R")]
-    if not decoders:
-        print(f"no eating decoder in {args.build_dir}: R and R+SA participants only", flush=True)
+    names = list(tokens)
     summary: dict[str, object] = {"duration_s": args.duration, "cpus": os.cpu_count(), "modes": {}}
     for mode in modes:
         port = free_port()

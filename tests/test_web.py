@@ -1019,3 +1019,20 @@ def test_a_real_browser_says_what_happened_and_recovers_from_a_restart(tmp_path,
             browser.find_element(By.ID, "agree").click()
             wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
     assert Progress(sessions).of("p00")["consented"]
+
+
+def test_a_connections_queue_is_bounded_and_out_of_step_messages_are_counted():
+    import asyncio
+
+    from lasa.live.web.conversation import QUEUE_MAX, Conversation
+
+    async def main():
+        conv = Conversation(ws=None, study=None, participant="p00")  # type: ignore[arg-type]
+        for _ in range(3 * QUEUE_MAX):
+            conv._put({"type": "survey", "answers": [1] * 5})  # 4 KB each in a flood: never all kept
+        assert conv._queue.qsize() == QUEUE_MAX and conv.dropped == 2 * QUEUE_MAX
+        conv.inputs.update({"type": "input", "axes": [1.0, 1.0]})
+        conv._clear()  # a new step: nothing queued before it, a stick at rest
+        assert conv._queue.empty() and conv.dropped == 3 * QUEUE_MAX and conv.inputs.axes == (0.0, 0.0)
+
+    asyncio.run(main())
