@@ -85,3 +85,30 @@ def test_the_command_writes_the_document(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     assert out.read_text().startswith("# Pre-registration") and "## 7. Sample size" in out.read_text()
+
+
+def test_peoples_sessions_are_judged_by_the_claims_own_tests():
+    """study_tests.people_claims, which notebook 11 applies to people's sessions, is analyse + judge
+    over the participants who did every condition: here ten simulated ones, relabelled as people."""
+    import pandas as pd
+
+    from lasa.figures import study_tests
+
+    frames = {}
+    for name in ("goal_error", "time", "alignment"):
+        frame = pd.read_csv(FIGURES / f"study_{name}.csv")
+        frame = frame[(frame.model == "planning") & frame.decoder.isin(["transfers", "none"])]
+        frame = frame[(frame.participant < 10) & frame.assistance.isin(["none", "hindsight"])]
+        frames[name] = frame.drop(columns=["model", "decoder"]).assign(
+            participant=lambda d: "p" + d.participant.astype(str)
+        )
+    one_short = {n: f[~((f.participant == "p9") & (f.condition == "LA"))] for n, f in frames.items()}
+    table = study_tests.people_claims(one_short, n_resamples=200)
+    kept = {n: f[f.participant != "p9"] for n, f in frames.items()}
+    horizon = float(frames["time"].total_time.max())
+    direct = study_tests.judge(study_tests.analyse(kept, "hindsight", horizon=horizon, n_resamples=200))
+    assert list(table.member.unique()) == ["hindsight"] and set(table.participants) == {9}
+    for row in table.itertuples():
+        assert row.verdict == direct[row.claim][0] and row.measured == direct[row.claim][4]
+    assert set(table.claim) >= {"h1", "h2", "h3"}
+    assert study_tests.people_claims({n: f[f.participant == "p0"] for n, f in frames.items()}).empty

@@ -20,12 +20,13 @@ import pandas as pd
 from scipy import stats as sps
 
 from lasa.base.conditions import CONDITIONS
+from lasa.base.config import NO_ASSISTANCE
 from lasa.evidence import stats
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.figures.study import for_member
 
-__all__ = ["Judged", "analyse", "judge", "censored_arms", "censored_contradiction"]
+__all__ = ["Judged", "analyse", "judge", "people_claims", "censored_arms", "censored_contradiction"]
 
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
@@ -112,6 +113,46 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
     res = sps.ttest_rel(a, b)
     ci = res.confidence_interval()
     return float((a - b).mean()), float(ci.low), float(ci.high), float(res.pvalue), int(len(a))
+
+
+def people_claims(
+    frames: dict[str, pd.DataFrame], horizon: float | None = None, n_resamples: int = 10_000
+) -> pd.DataFrame:
+    """H1-H3 on people's sessions, by the claims' own tests and rules (:func:`analyse`, :func:`judge`).
+
+    What a pre-registration (``python -m lasa.live.web preregister``) names is what this applies:
+    the same tests, completion bar and rules as the simulated cohort's claims, per SA member the
+    sessions used.
+
+    Args:
+        frames: :func:`lasa.evidence.sessions.analyse_sessions`' ``goal_error``, ``time`` and
+            ``alignment`` tables.
+        horizon: Where an unfinished trial's time was cut [s] (H3's restricted times); None: the
+            longest logged Total Time, the trials' limit when one did not finish.
+        n_resamples: H3's paired bootstrap resamples.
+
+    Returns:
+        One row per SA member and claim key: ``member``, ``claim``, ``verdict``, ``value``,
+        ``ci_low``, ``ci_high``, ``measured``, ``participants`` (none if fewer than two did
+        every condition in every task).
+    """
+    time = frames["time"]
+    horizon = float(time.total_time.max()) if horizon is None else horizon
+    # within-subject tests: the participants who did every condition in every task (as
+    # lasa.evidence.sessions' DROPPED states; at least two, else no row)
+    done = time.drop_duplicates(["participant", "condition", "task"]).groupby("participant").size()
+    full = set(done[done == len(CONDITIONS) * time.task.nunique()].index)
+    frames = {name: frame[frame.participant.isin(full)] for name, frame in frames.items()}
+    rows = []
+    for member in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
+        result = analyse(frames, member, horizon=horizon, n_resamples=n_resamples)
+        for claim, (verdict, value, low, high, measured) in judge(result).items():
+            rows.append(
+                {"member": member, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
+                 "ci_high": high, "measured": measured, "participants": result["n"]}
+            )  # fmt: skip
+    columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]
+    return pd.DataFrame(rows, columns=columns)
 
 
 def judge(result: Mapping[str, object]) -> dict[str, Judged]:

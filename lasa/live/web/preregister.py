@@ -156,8 +156,10 @@ def document(
         "## 5. Analyses",
         "",
         f"Significance level .05, two-sided. H1 and H3 are judged only if every condition finishes at least "
-        f"{bar} of its episodes (H2: LA+SA and R+SA), as stated in each rule above. The planned reading: "
-        f"SA as `{member}`, the latent-action decoder `{decoder}`.",
+        f"{bar} of its episodes (H2: LA+SA and R+SA), as stated in each rule above; H3's restricted times "
+        f"end at the trials' limit ({trial_s:g} s). Notebook 11 applies these tests and rules to the "
+        "sessions (`lasa.figures.study_tests.people_claims`: the simulated cohort's own `analyse` and "
+        f"`judge`). The planned reading: SA as `{member}`, the latent-action decoder `{decoder}`.",
         "",
         "## 6. Outliers and exclusions",
         "",
