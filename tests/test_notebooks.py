@@ -6,6 +6,7 @@ one promises are checked against the output contracts (README): names, CSV colum
 claims verdicts, and that the shared figures hold both robots.
 """
 
+import json
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -465,6 +466,11 @@ def test_study_notebook_reads_logged_sessions(executed):
     assert list(sa.measure) == ["goal_error", "mean_distance"] and (sa.df2 == 1).all()
     likert = pd.read_csv(fig / "sessions_likert.csv")
     assert len(likert) == 5 * 3 and (likert["diff"] > 0).all()  # LA+SA rated higher on every scale
+    cells = json.loads((executed / "notebooks" / "11_eating_study.ipynb").read_text())["cells"]
+    (cell,) = [c for c in cells if "people_claims(people)" in "".join(c["source"])]
+    shown = "".join("".join(o.get("data", {}).get("text/plain", "")) for o in cell["outputs"])
+    # H1-H3 by the claims' own tests and rules, for the two people who did every condition
+    assert "verdict" in shown and all(f" {claim} " in shown for claim in ("h1", "h2", "h3")), shown[-2000:]
 
 
 def test_the_book_builds_offline_and_reads_in_a_real_browser(executed, report_artifact):

@@ -142,7 +142,10 @@ def people_claims(
     # lasa.evidence.sessions' DROPPED states; at least two, else no row)
     done = time.drop_duplicates(["participant", "condition", "task"]).groupby("participant").size()
     full = set(done[done == len(CONDITIONS) * time.task.nunique()].index)
-    frames = {name: frame[frame.participant.isin(full)] for name, frame in frames.items()}
+    frames = {
+        name: frames[name][frames[name].participant.isin(full)]
+        for name in ("goal_error", "time", "alignment")
+    }
     rows = []
     for member in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
         result = analyse(frames, member, horizon=horizon, n_resamples=n_resamples)
