@@ -694,10 +694,9 @@ def cli_server(sessions, build_dir, log, *options, port=None):
             server.wait(timeout=30)
 
 
-async def _take_part(port: int, token: str, seconds: float = 1.0) -> None:
-    """A participant through the real server: the token, consent, the practice driven, ended."""
-    import asyncio
-
+@contextlib.asynccontextmanager
+async def _at_practice(port: int, token: str):
+    """A page of the real server that has sent its token and consented: its practice is shown."""
     from websockets.asyncio.client import connect as ws_connect
 
     async with ws_connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}") as ws:
@@ -705,6 +704,14 @@ async def _take_part(port: int, token: str, seconds: float = 1.0) -> None:
         assert json.loads(await ws.recv())["kind"] == "consent"
         await ws.send(json.dumps({"type": "consent"}))
         assert json.loads(await ws.recv())["kind"] == "practice"
+        yield ws
+
+
+async def _take_part(port: int, token: str, seconds: float = 1.0) -> None:
+    """A participant through the real server: the token, consent, the practice driven, ended."""
+    import asyncio
+
+    async with _at_practice(port, token) as ws:
         await ws.send(json.dumps({"type": "start"}))
         for _ in range(int(seconds * 10)):
             await ws.send(json.dumps({"type": "input", "axes": [0.5, -0.5]}))
@@ -833,13 +840,7 @@ async def _stale_start_and_held_stick(port: int, token: str) -> list[str]:
     before this page's own Start (nothing, if the stale Start was dropped), then its first ticks."""
     import asyncio
 
-    from websockets.asyncio.client import connect as ws_connect
-
-    async with ws_connect(f"ws://127.0.0.1:{port}/ws", origin=f"http://127.0.0.1:{port}") as ws:
-        await ws.send(json.dumps({"type": "hello", "token": token}))
-        assert json.loads(await ws.recv())["kind"] == "consent"
-        await ws.send(json.dumps({"type": "consent"}))
-        assert json.loads(await ws.recv())["kind"] == "practice"
+    async with _at_practice(port, token) as ws:
         await ws.send(json.dumps({"type": "start"}))
         await ws.send(json.dumps({"type": "start"}))  # a double click: the second is out of step
         for _ in range(5):
