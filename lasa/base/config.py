@@ -55,7 +55,7 @@ def _not_text(value: Any) -> Any:
     """A number field never takes text: pydantic's lax mode would parse '3', and the record keeps
     the value as given (:func:`validate` converts nothing), so '3' would stay a string."""
     if isinstance(value, str | bytes):
-        raise ValueError("text is not a number")
+        raise ConfigError("text is not a number")
     return value
 
 

@@ -45,7 +45,6 @@ __all__ = [
     "probability_axis",
     "users_per_point",
     "users_text",
-    "paper_line",
     "paper_note",
     "paper_point",
     "paper_slope",
@@ -276,14 +275,6 @@ def users_text(table: pd.DataFrame, keys: Sequence[str], per: str = "point") -> 
 
 # the paper's numbers and orderings, drawn the same way in every figure: black, dotted, labelled
 PAPER_STYLE: dict[str, Any] = {"color": "0.1", "ls": ":", "lw": 1.3, "zorder": 4}
-
-
-def paper_line(ax: Axes, y: float, label: str, **style: Any) -> Line2D:
-    """A horizontal reference line at the paper's value ``y``, labelled for the legend.
-
-    ``style`` overrides :data:`PAPER_STYLE` (e.g. ``ls="--"``).
-    """
-    return ax.axhline(y, label=label, **{**PAPER_STYLE, **style})
 
 
 def paper_handle(text: str) -> Line2D:

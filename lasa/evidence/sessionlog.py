@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from lasa.base.errors import ArtifactError
+from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import write_text
 
 __all__ = ["SessionWriter", "read_session", "check_scene", "STATUS"]
@@ -81,7 +81,7 @@ class SessionWriter:
     def append(self, row: list[float]) -> None:
         """Write one step's values (in ``columns`` order); flush every ``flush_every`` rows."""
         if len(row) != len(self.columns):
-            raise ValueError(f"a row has {len(self.columns)} values, got {len(row)}")
+            raise ConfigError(f"a row has {len(self.columns)} values, got {len(row)}")
         self._fh.write(",".join(repr(float(v)) for v in row) + "\n")
         self._rows += 1
         if self._rows % self.flush_every == 0:
@@ -95,7 +95,7 @@ class SessionWriter:
     def close(self, status: str = "complete", **extra: Any) -> Path:
         """End the session: the rows become ``<stem>.csv``; the sidecar records ``status`` and ``extra``."""
         if status not in STATUS[1:]:
-            raise ValueError(f"a session ends complete or interrupted, not {status!r}")
+            raise ConfigError(f"a session ends complete or interrupted, not {status!r}")
         self.flush()
         self._fh.close()
         os.replace(self.part, self.csv)

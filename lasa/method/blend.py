@@ -82,9 +82,9 @@ def safe_step(
         max_speed: Per-joint speed bound [rad/s].
 
     Raises:
-        ValueError: if ``state`` is not finite (a sensor fault is not a command).
+        ConfigError: if ``state`` is not finite (a sensor fault is not a command).
     """
     if not np.all(np.isfinite(state)):
-        raise ValueError("state holds NaN or infinite joint positions; refusing to command")
+        raise ConfigError("state holds NaN or infinite joint positions; refusing to command")
     velocity = np.clip(sanitize(action), -max_speed, max_speed)
     return np.clip(state + dt * velocity, lower, upper)

@@ -19,6 +19,8 @@ import numpy as np
 import torch
 from torch import nn
 
+from lasa.base.errors import ConfigError
+
 if TYPE_CHECKING:
     from lasa.method.decoder import LatentActionModel
 
@@ -160,13 +162,13 @@ class _InferencePlan:
         """z clamped to [-1, 1], s and b, as float64 arrays of the model's trailing sizes.
 
         Raises:
-            ValueError: if a trailing size is not d, n or G.
+            ConfigError: if a trailing size is not d, n or G.
         """
         z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)
         s = np.asarray(s, dtype=np.float64)
         b = np.asarray(b, dtype=np.float64)
         if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
-            raise ValueError(
+            raise ConfigError(
                 f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
                 f"got {z.shape}, {s.shape} and {b.shape}"
             )

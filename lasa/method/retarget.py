@@ -102,12 +102,12 @@ def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = Retarg
 
     Raises:
         ConfigError: if a mode is not an integer in [0, len(MODES)).
-        ValueError: if ``z``'s last axis is not of size 2.
+        ConfigError: if ``z``'s last axis is not of size 2.
     """
     modes = _modes(mode)
     zs = np.asarray(z, dtype=float)
     if zs.ndim == 0 or zs.shape[-1] != 2:
-        raise ValueError(f"z must have shape (..., 2), got {zs.shape}")
+        raise ConfigError(f"z must have shape (..., 2), got {zs.shape}")
     finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
     zs = np.where(finite, np.clip(np.nan_to_num(zs), -1.0, 1.0), 0.0)
     lead = np.broadcast_shapes(modes.shape, zs.shape[:-1])
@@ -179,9 +179,9 @@ class Retargeting:
     def _check_q(self, q: np.ndarray) -> np.ndarray:
         qs = np.asarray(q, dtype=float)
         if qs.ndim == 0 or qs.shape[-1] != self.n_joints:
-            raise ValueError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
+            raise ConfigError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
         if not np.all(np.isfinite(qs)):
-            raise ValueError("q must be finite; got NaN or infinite joint positions")
+            raise ConfigError("q must be finite; got NaN or infinite joint positions")
         return qs
 
     def _solve(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
@@ -219,13 +219,13 @@ class Retargeting:
             zero for a zero twist and for a twist row that is not finite.
 
         Raises:
-            ValueError: if ``q`` is not finite or a shape is wrong.
+            ConfigError: if ``q`` is not finite or a shape is wrong.
             mink.NoSolutionFound: if the QP solver fails.
         """
         qs = self._check_q(q)
         xis = np.asarray(twist, dtype=float)
         if xis.ndim == 0 or xis.shape[-1] != 6:
-            raise ValueError(f"twist must have shape (..., 6), got {xis.shape}")
+            raise ConfigError(f"twist must have shape (..., 6), got {xis.shape}")
         lead = np.broadcast_shapes(qs.shape[:-1], xis.shape[:-1])
         q_rows = np.broadcast_to(qs, (*lead, self.n_joints)).reshape(-1, self.n_joints)
         xi_rows = np.broadcast_to(xis, (*lead, 6)).reshape(-1, 6)
@@ -238,11 +238,11 @@ class Retargeting:
         """World position (3,) and rotation (3, 3) of the grasp site at arm joints ``q`` (n,).
 
         Raises:
-            ValueError: if ``q`` is not finite or not of shape (n,).
+            ConfigError: if ``q`` is not finite or not of shape (n,).
         """
         qs = self._check_q(q)
         if qs.ndim != 1:
-            raise ValueError(f"q must have shape ({self.n_joints},), got {qs.shape}")
+            raise ConfigError(f"q must have shape ({self.n_joints},), got {qs.shape}")
         self._set(qs)
         pose = self._configuration.get_transform_frame_to_world(self._site, "site")
         return pose.translation().copy(), pose.rotation().as_matrix()

@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 import pandas as pd
 
+from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot, mesh_dir
 from lasa.world.rotations import rot_z
 
@@ -95,7 +96,7 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
     """
     q = np.asarray(q, dtype=float)
     if q.shape != (7,):
-        raise ValueError(f"q must have 7 entries, got shape {q.shape}")
+        raise ConfigError(f"q must have 7 entries, got shape {q.shape}")
     frames: dict[str, np.ndarray] = {}
     t = np.eye(4)
     for i, ((a, d, alpha), theta) in enumerate(zip(DH, q, strict=True), start=1):

@@ -93,10 +93,6 @@ class GoalTask:
             out[mask] = self._splines[g](theta_arr[mask])
         return out
 
-    def tangent(self, goal: int, theta: np.ndarray | float) -> np.ndarray:
-        """ds*/dtheta along the preference curve of ``goal``, shape (..., n)."""
-        return self._splines[goal](np.asarray(theta, float), 1)
-
     @property
     def _splines(self) -> list[CubicSpline]:
         cache = self.__dict__.get("_spline_cache")

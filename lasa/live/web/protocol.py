@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from lasa.base.errors import LasaError
 from lasa.live.devices import Reading
 from lasa.live.web.tokens import MAX_TOKEN_CHARS
 
@@ -50,7 +51,7 @@ STALE_S = 0.5  # input older than this reads as disconnected: zero input, never 
 KINDS = ("hello", "consent", "start", "finish", "input", "survey")
 
 
-class ProtocolError(ValueError):
+class ProtocolError(LasaError, ValueError):
     """A message the server refuses; the connection is closed with :attr:`code`."""
 
     def __init__(self, message: str, code: int = 1008) -> None:
