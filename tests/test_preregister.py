@@ -18,8 +18,9 @@ FIGURES = ROOT / "figures"
 
 @pytest.fixture(scope="module")
 def reading_and_table():
-    reading = preregister.headline_reading(FIGURES)
-    return reading, preregister.power_table(FIGURES, reading, draws=2, sizes=(6, 10))
+    frames = preregister.cohort(FIGURES)
+    reading = preregister.headline_reading(FIGURES, frames)
+    return reading, preregister.power_table(frames, reading, draws=2, sizes=(6, 10))
 
 
 @pytest.fixture(scope="module")

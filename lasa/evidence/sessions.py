@@ -34,6 +34,7 @@ __all__ = [
     "SCALES",
     "LEFT_OUT",
     "DROPPED",
+    "complete_participants",
     "read_likert",
     "scan_sessions",
     "load_sessions",
@@ -57,7 +58,7 @@ LEFT_OUT = {
     "task": "not an eating-study session (another task, or a condition outside the four)",
     "status": "a session that did not end normally (interrupted, or stopped by a failure)",
 }
-# Who a within-subject test leaves out (_complete).
+# Who a within-subject test leaves out (complete_participants).
 DROPPED = "a participant who did not do every condition (in every task the test reads) is named and left out."
 
 
@@ -224,7 +225,9 @@ def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(out, ignore_index=True)
 
 
-def _complete(frame: pd.DataFrame, test: str, by_task: bool = True) -> tuple[pd.DataFrame, pd.DataFrame]:
+def complete_participants(
+    frame: pd.DataFrame, test: str, by_task: bool = True
+) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The rows of the participants who did every condition (in every task present), and who was dropped.
 
     A within-subject test compares each participant with themselves: one who missed a
@@ -285,7 +288,7 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
         .mean()
         .reset_index()
     )
-    err, dropped = _complete(frames["goal_error"], "sa_effect, time_tests")
+    err, dropped = complete_participants(frames["goal_error"], "sa_effect, time_tests")
     if err.participant.nunique() >= 2:
         rows = [stats.sa_effect_within(err, m) | {"measure": m} for m in ("goal_error", "mean_distance")]
         out["sa_effect"] = pd.DataFrame(rows)
@@ -300,7 +303,7 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
         )
     answers = read_likert(folder)
     if answers is not None:
-        answers, dropped_likert = _complete(answers, "likert", by_task=False)
+        answers, dropped_likert = complete_participants(answers, "likert", by_task=False)
         dropped = pd.concat([dropped, dropped_likert], ignore_index=True)
         if answers.participant.nunique() >= 2:
             out["likert"] = likert_tests(answers)

@@ -24,6 +24,7 @@ from lasa.base.config import NO_ASSISTANCE
 from lasa.evidence import stats
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 from lasa.evidence.rules import COMPLETION_BAR, rule
+from lasa.evidence.sessions import complete_participants
 from lasa.figures.study import for_member
 
 __all__ = ["Judged", "analyse", "judge", "people_claims", "censored_arms", "censored_contradiction"]
@@ -138,10 +139,9 @@ def people_claims(
     """
     time = frames["time"]
     horizon = float(time.total_time.max()) if horizon is None else horizon
-    # within-subject tests: the participants who did every condition in every task (as
-    # lasa.evidence.sessions' DROPPED states; at least two, else no row)
-    done = time.drop_duplicates(["participant", "condition", "task"]).groupby("participant").size()
-    full = set(done[done == len(CONDITIONS) * time.task.nunique()].index)
+    # within-subject tests: the participants who did every condition in every task (the rule
+    # people's other tests apply, lasa.evidence.sessions.DROPPED; at least two, else no row)
+    full = set(complete_participants(time, "claims")[0].participant)
     frames = {
         name: frames[name][frames[name].participant.isin(full)]
         for name in ("goal_error", "time", "alignment")

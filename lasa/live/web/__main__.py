@@ -60,8 +60,9 @@ def _preregister(argv: list[str]) -> int:
     parser.add_argument("--jobs", type=int, default=1, help="worker processes of the power [%(default)s]")
     args = parser.parse_args(argv)
     figures = Path(args.figures)
-    reading = preregister.headline_reading(figures)
-    table = preregister.power_table(figures, reading, args.draws, tuple(args.sizes), args.jobs, progress=True)
+    frames = preregister.cohort(figures)
+    reading = preregister.headline_reading(figures, frames)
+    table = preregister.power_table(frames, reading, args.draws, tuple(args.sizes), args.jobs, progress=True)
     text = preregister.document(table, reading, args.practice_s, args.trial_s)
     print(f"pre-registration: {write_text(args.out, text)}")
     return 0

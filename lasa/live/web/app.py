@@ -28,6 +28,7 @@ import dataclasses
 import secrets
 from collections.abc import AsyncIterator
 from pathlib import Path
+from typing import Any
 
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -38,8 +39,10 @@ from starlette.websockets import WebSocket
 
 from lasa.base.config import Positive, validate
 from lasa.base.errors import ConfigError
+from lasa.live.station import Station
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
+from lasa.live.web.labels import goal_labels
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_scene, npm_folder
@@ -134,6 +137,7 @@ class Study:
         self.active: set[str] = set()
         self.renderer = FrameRenderer() if config.frames == "server" else None
         self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
+        self._labels: list[dict[str, Any]] | None = None  # the goals' places: one scene, one camera
         if config.frames == "browser":
             for name in NPM_PACKAGES:
                 npm_folder(name)  # fail at start, not in a participant's page
@@ -150,6 +154,14 @@ class Study:
         if participant in self.active:
             return None, "elsewhere"
         return participant, ""
+
+    def labels(self, station: Station) -> list[dict[str, Any]]:
+        """The goals' names and places on the picture (:func:`lasa.live.web.labels.goal_labels`),
+        computed for the first trial: every trial has the eating scene and its camera."""
+        if self._labels is None:
+            robot = station.robot
+            self._labels = goal_labels(station.task, robot.model.camera(robot.spec.camera).id)
+        return self._labels
 
     def scene_key(self, xml: Path) -> str:
         """A new random key for a trial's scene (the ``X-Scene-Key`` of its requests)."""

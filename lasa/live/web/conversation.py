@@ -19,7 +19,6 @@ from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.live.station import SessionConfig
-from lasa.live.web.labels import goal_labels
 from lasa.live.web.loop import open_trial, run_trial
 from lasa.live.web.plan import Step, plan_of, session_folder
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
@@ -110,14 +109,13 @@ class Conversation:
             self.dropped += 1
 
     def _clear(self) -> None:
-        """Start a step from a clean queue (a second start, an early survey: dropped) and a zero stick."""
+        """Start a step from a clean queue: what the page sent before it (a second Start, an early
+        survey) is dropped and counted."""
         while not self._queue.empty():
             msg = self._queue.get_nowait()
             if msg["type"] == "_gone":
                 raise Gone
             self.dropped += 1
-        self.inputs.reset()
-        self.finish = False
 
     async def send(self, message: dict[str, Any]) -> None:
         """Send one JSON message; a failed send means the page is gone."""
@@ -157,7 +155,6 @@ class Conversation:
                 limit = study.config.practice_s if step.kind == "practice" else study.config.trial_s
                 await self.send(header | {"limit_s": limit})
                 await self._expect("start")
-                self.inputs.reset()  # nothing the page sent before Start moves the robot
                 if await self._drive(step, limit) != "complete":
                     raise Gone
             study.progress.advance(participant)
@@ -197,15 +194,17 @@ class Conversation:
             await self.send({"type": "error", "message": UNAVAILABLE})
             raise Gone from exc
         self.finish = False
+        self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
         practice = step.kind == "practice"
-        robot = trial.station.robot
-        camera = robot.model.camera(robot.spec.camera).id
         if self.study.config.frames != "none":  # the goals' names over the picture
-            await self.send({"type": "labels", "labels": goal_labels(trial.station.task, camera)})
+            await self.send({"type": "labels", "labels": self.study.labels(trial.station)})
+        key = None
         if self.study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
             key = self.study.scene_key(trial.writer.folder / f"{trial.writer.stem}.xml")
+            robot = trial.station.robot
+            camera = robot.model.camera(robot.spec.camera).id
             scene = {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
             await self.send(scene)
         try:
@@ -213,8 +212,7 @@ class Conversation:
                 trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
             )
         finally:
-            if self.study.config.frames == "browser":
-                self.study.scenes.pop(key, None)
+            self.study.scenes.pop(key or "", None)
 
     async def _tick(self, message: dict[str, Any]) -> None:
         if not self.study.config.show_belief:  # the paper's people saw the robot only

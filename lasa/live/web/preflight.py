@@ -4,8 +4,9 @@ A missing decoder would otherwise show up mid-study, in the page of the first pa
 reaches an LA condition (after their R and R+SA ones, for half the schedule). :func:`preflight`
 builds the step of every condition in the schedule, on every task the protocol runs, as a trial
 would (:class:`lasa.live.station.Station`: the scene, its meshes, the decoder of the LA
-conditions and its fit to the task), and checks the npm files of ``--frames browser``. The
-first missing piece is one line: what is missing and the command that makes it.
+conditions and its fit to the task); the npm files of ``--frames browser`` are checked when the
+app's :class:`lasa.live.web.app.Study` is made, before it listens too. The first missing piece is
+one line: what is missing and the command that makes it.
 """
 
 from __future__ import annotations
@@ -17,7 +18,6 @@ import pandas as pd
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.live.station import SessionConfig, Station
 from lasa.live.web.plan import PRACTICE_TASK
-from lasa.live.web.scene import NPM_PACKAGES, npm_folder
 from lasa.live.web.tokens import study_dir
 
 if TYPE_CHECKING:
@@ -32,8 +32,8 @@ def preflight(config: WebConfig) -> list[str]:
     """Check that every step of ``config``'s schedule can run; the conditions checked.
 
     Raises:
-        ConfigError: naming the first thing missing (a decoder, the schedule, an npm package)
-            and the command that makes it, in one line.
+        ConfigError: naming the first thing missing (a decoder, the schedule) and the command
+            that makes it, in one line.
     """
     schedule = study_dir(config.sessions) / "schedule.csv"
     if not schedule.is_file():
@@ -49,10 +49,4 @@ def preflight(config: WebConfig) -> list[str]:
             except (ArtifactError, ConfigError) as exc:
                 first = " ".join(str(exc).split())
                 raise ConfigError(f"the study's {condition} condition cannot run: {first}") from exc
-    if config.frames == "browser":
-        for name in NPM_PACKAGES:
-            try:
-                npm_folder(name)
-            except ArtifactError as exc:
-                raise ConfigError(f"--frames browser cannot draw the robot: {exc}") from exc
     return conditions

@@ -38,7 +38,7 @@ from lasa.live.studykit import QUESTIONS
 from lasa.live.web.plan import PRACTICE_TASK
 from lasa.people import measures
 
-__all__ = ["HYPOTHESES", "MEASURES", "Reading", "headline_reading", "power_table", "document"]
+__all__ = ["HYPOTHESES", "MEASURES", "Reading", "cohort", "headline_reading", "power_table", "document"]
 
 # The paper's three hypotheses (Sec. VI), each with the claim whose rule tests it.
 HYPOTHESES = {
@@ -63,34 +63,37 @@ def definition(function: object) -> str:
     return re.sub(r",? \(E,\)\.$", ".", inspect.getdoc(function).splitlines()[0])  # type: ignore[union-attr]
 
 
-def headline_reading(figures: Path) -> Reading:
+def cohort(figures: Path) -> dict[str, pd.DataFrame]:
+    """The simulated cohort's committed tables (``study_{goal_error,time,alignment}.csv``)."""
+    return {
+        name: pd.read_csv(require_file(figures / f"study_{name}.csv", "make figures (notebook 11)"))
+        for name in ("goal_error", "time", "alignment")
+    }
+
+
+def headline_reading(figures: Path, frames: dict[str, pd.DataFrame]) -> Reading:
     """Notebook 11's headline: its first SA member, the property rule's decoder, its model rule's model."""
     config = study.Config()
     prop = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
     decoder = study.readings_to_run(latent_property.summary(prop.query("task == 'eating'")), "property")[0]
-    time = pd.read_csv(require_file(figures / "study_time.csv", "make figures (notebook 11)"))
-    model = study_analysis.headline_model(time, config.participant_models)
+    model = study_analysis.headline_model(frames["time"], config.participant_models)
     return config.session.members[0], decoder, model
 
 
 def power_table(
-    figures: Path,
+    frames: dict[str, pd.DataFrame],
     reading: Reading,
     draws: int,
     sizes: tuple[int, ...],
     n_jobs: int = 1,
     progress: bool = False,
 ) -> pd.DataFrame:
-    """:func:`lasa.figures.study_power.power` on the committed simulated cohort, for ``reading``."""
-    frames = {
-        name: pd.read_csv(require_file(figures / f"study_{name}.csv", "make figures (notebook 11)"))
-        for name in ("goal_error", "time", "alignment")
-    }
-    from lasa.world.eating import make_eating_task
+    """:func:`lasa.figures.study_power.power` on the simulated cohort's ``frames``, for ``reading``."""
+    from lasa.world.eating import load_eating_robot
 
     member, decoder, model = reading
     config = study.Config()
-    horizon = config.session.horizon * make_eating_task().robot.control.dt  # notebook 11's [s]
+    horizon = config.session.horizon * load_eating_robot().control.dt  # notebook 11's [s]
     return study_power.power(
         frames,
         member,
