@@ -265,7 +265,7 @@ def station_latency(
     Returns:
         ``{p50, p99, mean, n}`` in microseconds, or ``{"skipped": why}`` when the decoder is missing.
     """
-    from lasa.live.devices import Reading
+    from lasa.live.devices import StickSample
     from lasa.live.station import SessionConfig, Station
 
     if n_steps < 10:
@@ -283,9 +283,9 @@ def station_latency(
     for i in range(total):
         if i % 200 == 0:
             station.reset()
-        reading = Reading(raw=z[i], mode=i % 50 == 25)
+        sample = StickSample(raw=z[i], mode=i % 50 == 25)
         t0 = clock()
-        station.step(reading)
+        station.step(sample)
         times[i] = clock() - t0
     return _percentiles(times[warm:])
 

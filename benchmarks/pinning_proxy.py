@@ -20,7 +20,7 @@ __import__("lasa")  # first: it pins the kernels (unless the caller set them) be
 import numpy as np  # noqa: E402
 import torch  # noqa: E402
 
-from lasa.method.belief import log_likelihood  # noqa: E402
+from lasa.method.belief import belief_targets, log_likelihood  # noqa: E402
 from lasa.method.train import TrainConfig, train_decoder  # noqa: E402
 from lasa.people.demos import DemoConfig, collect_demonstrations  # noqa: E402
 from lasa.world.robot import load_robot  # noqa: E402
@@ -39,7 +39,7 @@ def main(steps: int) -> None:
     task = make_cup_task(robot)
     control = robot.control
     demos = collect_demonstrations(task, control, DemoConfig(n_theta=3, n_starts=1, n_adjust=1, seed=0))
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     base, _ = train_decoder(demos, control, TrainConfig(steps=20, seed=0), progress=False)
     fine = TrainConfig(steps=steps, entropy_lambda=0.3, seed=0)
     rng = np.random.default_rng(0)

@@ -9,10 +9,10 @@ as lasa/method/belief.py and blend.py state them:
 - the human action a_h = phi(z, s, b), or nothing for a stick at rest under ``rest="zero"``;
 - the assistance, blend weight 1: Eq. M2 (the ``point`` member), a_r = sum_g b(g) (g - s), or
   ``hindsight``, a_r = sigma_h sum_g b(g) (c_g - s) / max(||c_g - s||, dt sigma_h), c_g the point of
-  goal g's set (its ``grasp_set`` polyline) nearest to s (``hindsight_point``: c_g = g);
+  goal g's set (its ``preference_sets`` polyline) nearest to s (``hindsight_point``: c_g = g);
 - Eq. M1: a = (1 - alpha) a_h + alpha a_r;
 - the belief: b'(g) proportional to b(g) exp(-beta_b regret_g), regret_g = d_g(s + dt a_h) - d_g(s)
-  (+ min(dt sigma_h, d_g(s)) under the ``grasp_set`` likelihood), d_g the distance to goal g's
+  (+ min(dt sigma_h, d_g(s)) under the ``preferences`` likelihood), d_g the distance to goal g's
   polyline; then every goal keeps at least the floor f: b' <- (1 - G f) b' + f;
 - the transition s' = clip(s + dt clip(a, -v, v), lower, upper), v the joint speed bound.
 """
@@ -57,7 +57,7 @@ def belief_update(
     for g, polyline in enumerate(goal_sets):
         before, after = polyline_distance(s, polyline), polyline_distance(moved, polyline)
         regret[g] = after - before
-        if control.likelihood == "grasp_set":
+        if control.likelihood == "preferences":
             regret[g] += min(control.dt * control.action_scale, before)
     post = b * np.exp(-control.belief_beta * (regret - regret.min()))
     post = post / post.sum()
@@ -73,7 +73,7 @@ def transition(s: np.ndarray, a: np.ndarray, control, robot) -> np.ndarray:
 def assistance(member: str, b: np.ndarray, s: np.ndarray, task, control) -> np.ndarray:
     """a_r of the member ``point`` (Eq. M2), ``hindsight`` or ``hindsight_point``, shape (n,)."""
     a_r = np.zeros(len(s))
-    sets = task.goal_sets("grasp_set")  # the members' goal sets (lasa.method.step)
+    sets = task.preference_sets  # the members' goal sets (lasa.method.step)
     for weight, goal, polyline in zip(b, task.goals, sets, strict=True):
         if member == "point":
             a_r += weight * (goal - s)
@@ -92,7 +92,7 @@ def step_with(task, control, s: np.ndarray, b: np.ndarray, a_h: np.ndarray, alph
     """Lines 6-9 of Algorithm 1 for one user, given the human action: a_r, a, s' and b'."""
     a_r = assistance(control.assistance, b, s, task, control)
     a = (1.0 - alpha) * a_h + alpha * a_r
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = task.goals[:, None, :] if control.likelihood == "goal" else task.preference_sets
     return {
         "a_h": a_h,
         "a_r": a_r,

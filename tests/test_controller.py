@@ -62,7 +62,7 @@ joystick = st.one_of(
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
-    likelihood=st.sampled_from(["grasp_set", "goal"]),
+    likelihood=st.sampled_from(["preferences", "goal"]),
     assistance=st.sampled_from(ASSISTANCE),
     floor=st.sampled_from([0.0, 1e-6, 0.05]),
     alpha=st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0.0, 1.0)),

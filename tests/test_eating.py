@@ -108,7 +108,7 @@ def test_ik_puts_the_fork_where_each_preference_needs_it(eating):
                 assert np.linalg.norm(tip[0] - pos) < 2e-3
                 assert np.arccos(np.clip(axis[0] @ rot[:, 2], -1, 1)) < 0.01
     assert_allclose(eating.goals, eating.strokes[:, eating.strokes.shape[1] // 2, 0])  # mid-tilt entries
-    assert eating.goal_sets("grasp_set").shape == (4, 2 * len(eating.theta_grid), 7)
+    assert eating.preference_sets.shape == (4, 2 * len(eating.theta_grid), 7)
     assert np.all(eating.strokes >= robot.lower) and np.all(eating.strokes <= robot.upper)
 
 

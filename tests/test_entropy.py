@@ -13,6 +13,7 @@ from numpy.testing import assert_allclose
 
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
+from lasa.method.belief import belief_targets
 from lasa.method.entropy import (
     EntropyRegularizer,
     choose_lambda,
@@ -62,18 +63,18 @@ def test_p_is_a_distribution(model, task):
         torch.tensor(states, dtype=torch.float32),
         torch.tensor(beliefs, dtype=torch.float32),
         torch.linspace(-1, 1, 7)[:, None],
-        torch.tensor(task.goal_sets(ctl.likelihood), dtype=torch.float32),
+        torch.tensor(belief_targets(task, ctl.likelihood), dtype=torch.float32),
         ctl,
     )
     p = goal_distribution(scores)
     assert torch.all(p >= 0) and torch.allclose(p.sum(-1), torch.ones(32))
-    h = context_entropy(model, states, beliefs, task.goal_sets(ctl.likelihood), ctl)
+    h = context_entropy(model, states, beliefs, belief_targets(task, ctl.likelihood), ctl)
     assert np.all(h >= -1e-9) and np.all(h <= np.log(2) + 1e-9)
 
 
 def test_gradient_reaches_the_decoder(model, task, demos):
     ctl = task.robot.control
-    reg = EntropyRegularizer(1.0, task.goal_sets(ctl.likelihood), ctl, contexts=16)
+    reg = EntropyRegularizer(1.0, belief_targets(task, ctl.likelihood), ctl, contexts=16)
     s = torch.tensor(demos.states[:64], dtype=torch.float32)
     b = torch.tensor(demos.beliefs[:64], dtype=torch.float32)
     model.zero_grad()
@@ -86,7 +87,7 @@ def test_gradient_reaches_the_decoder(model, task, demos):
 
 def test_large_lambda_spreads_p_at_confident_contexts(demos, task):
     ctl = task.robot.control
-    goal_sets = task.goal_sets(ctl.likelihood)
+    goal_sets = belief_targets(task, ctl.likelihood)
     clean = demos.clean()
     conf = clean.beliefs.max(1) > 0.99
     probe = (clean.states[conf], clean.beliefs[conf])
@@ -154,7 +155,7 @@ def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
     assert not same(sweep.models[0.0], model)  # the control is fine-tuned too, not the base itself
     assert not same(sweep.models[0.0], sweep.models[0.3])  # the term changes the weights
     again, _ = train_decoder(
-        demos, ctl, c0, goal_sets=task.goal_sets(ctl.likelihood), init=model, progress=False
+        demos, ctl, c0, goal_sets=belief_targets(task, ctl.likelihood), init=model, progress=False
     )
     assert same(again, sweep.models[0.0])  # the control is reproducible: only lambda differs
     assert list(sweep.table["lambda"]) == [0.0, 0.3] and sweep.chosen == 0.3
@@ -177,7 +178,7 @@ def test_nearest_distance_is_distance_to_sets(task, seed):
     """The entropy term's distance: distance_to_sets_torch's value to the bit, its gradient to rounding."""
     from lasa.method.belief import distance_to_sets_torch, nearest_distance
 
-    goal_sets = torch.as_tensor(task.goal_sets("grasp_set"), dtype=torch.float32)
+    goal_sets = torch.as_tensor(task.preference_sets, dtype=torch.float32)
     rng = np.random.default_rng(seed)
     lo, hi = task.robot.lower, task.robot.upper
     # states of the workspace, and points on the sets' vertices and segments (ties between segments)
@@ -201,7 +202,7 @@ def test_runs_spread_over_worker_processes_train_the_same_decoders(model, demos,
     from lasa.figures import entropy_ablation
 
     ctl = task.robot.control
-    goal_sets = task.goal_sets(ctl.likelihood)
+    goal_sets = belief_targets(task, ctl.likelihood)
     runs = [
         entropy_ablation.Run(
             demos, ctl, dataclasses.replace(SMALL_TRAIN, steps=15, entropy_lambda=lam), goal_sets, model

@@ -10,7 +10,7 @@ import pytest
 
 from lasa.base.errors import ConfigError, IKError
 from lasa.figures import sim4
-from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.blend import assistance
 from lasa.method.newgoals import (
     JOINT_KINDS,
@@ -150,7 +150,7 @@ def test_new_goal_belief_update_and_assistance(grown):
     s = grown.start[None]
     toward_new = (grown.goals[-1] - grown.start)[None]
     toward_new *= control.action_scale / np.linalg.norm(toward_new)
-    goal_sets = grown.goal_sets(control.likelihood)
+    goal_sets = belief_targets(grown, control.likelihood)
     assert goal_sets.shape[0] == 3
     log_b = uniform_log_belief(1, 3)
     for _ in range(5):

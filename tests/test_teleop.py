@@ -17,7 +17,7 @@ from reference_step import latent_step, softmax, step_with
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.sessionlog import read_session
-from lasa.live.devices import KeyboardDevice, Reading, ScriptedDevice, safe_axes
+from lasa.live.devices import KeyboardDevice, ScriptedDevice, StickSample, safe_axes
 from lasa.live.station import SessionConfig, Station
 from lasa.live.teleop import new_session, replay, run_session
 from lasa.method.decoder import save_checkpoint
@@ -95,11 +95,11 @@ def test_bad_axes_are_zero_input():
 
 def test_a_nan_or_lost_axis_never_becomes_a_human_action(build):
     st = station(build, "LA")
-    for reading in (
-        Reading(raw=np.array([np.nan, np.nan])),
-        Reading(raw=np.array([0.9, 0.9]), connected=False),
+    for sample in (
+        StickSample(raw=np.array([np.nan, np.nan])),
+        StickSample(raw=np.array([0.9, 0.9]), connected=False),
     ):
-        rec = st.step(reading)
+        rec = st.step(sample)
         assert_array_equal(rec["a_h"], np.zeros(7))
         assert np.all(np.isfinite(rec["s"]))
 
@@ -107,10 +107,10 @@ def test_a_nan_or_lost_axis_never_becomes_a_human_action(build):
 def test_the_stop_input_holds_the_robot(build):
     st = station(build, "R+SA")
     for _ in range(5):
-        st.step(Reading(raw=np.array([1.0, 1.0])))
+        st.step(StickSample(raw=np.array([1.0, 1.0])))
     held, belief = st.state.copy(), st.belief.copy()
     for _ in range(10):
-        rec = st.step(Reading(raw=np.array([1.0, -1.0]), mode=True, stop=True))
+        rec = st.step(StickSample(raw=np.array([1.0, -1.0]), mode=True, stop=True))
         assert_array_equal(rec["a"], np.zeros(7))
     assert_array_equal(st.state, held)
     assert_array_equal(st.belief, belief)
@@ -123,7 +123,7 @@ def test_limits_and_speed_bound_hold_under_random_input(build):
         rng = np.random.default_rng(1)
         before = st.state.copy()
         for _ in range(80):
-            st.step(Reading(raw=rng.uniform(-3, 3, 2), mode=bool(rng.random() < 0.2)))
+            st.step(StickSample(raw=rng.uniform(-3, 3, 2), mode=bool(rng.random() < 0.2)))
             assert np.all(st.state >= st.robot.lower) and np.all(st.state <= st.robot.upper)
             step = np.abs(st.state - before).max()
             assert step <= st.control.dt * st.control.max_joint_speed + 1e-12
@@ -399,7 +399,7 @@ def test_the_live_step_is_algorithm_1_by_hand(build, condition, axes):
     st_ = station(build, condition)
     for z in axes:
         s, b = st_.state.copy(), softmax(st_.log_belief)
-        rec = st_.step(Reading(raw=np.asarray(z, dtype=float)))
+        rec = st_.step(StickSample(raw=np.asarray(z, dtype=float)))
         ref = latent_step(st_.decoder, st_.task, st_.control, s, b, z, st_.alpha, rest="zero")
         assert_allclose(rec["a_h"], ref["a_h"], rtol=0, atol=1e-7)
         assert_allclose(rec["a_r"], ref["a_r"], rtol=0, atol=1e-12)
@@ -459,7 +459,7 @@ def test_the_live_retargeting_step_moves_the_hand_by_the_twist_of_its_mode(build
     speed = np.array([0.15, 0.15, 0.15, 0.6, 0.6, 0.6])
     for z0, z1, press in inputs:
         s, b, mode = st_.state.copy(), softmax(st_.log_belief), st_.mode
-        rec = st_.step(Reading(raw=np.array([z0, z1]), mode=press))
+        rec = st_.step(StickSample(raw=np.array([z0, z1]), mode=press))
         if press or not (z0 or z1):
             assert not rec["a_h"].any()  # a press or a stick at rest moves nothing
             assert rec["mode"] == ((mode + 1) % 3 if press else mode)

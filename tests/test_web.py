@@ -288,12 +288,12 @@ def test_a_server_shutdown_mid_step_logs_that_step_before_closing_interrupted(tm
     trial = loop.open_trial(SessionConfig(task="Entree", condition="R"), tmp_path, 1, 30.0)
     in_step, real_tick, errors = threading.Event(), loop.tick, []
 
-    def slow_tick(trial, reading):
+    def slow_tick(trial, sample):
         if trial.steps == 3:
             in_step.set()
             time.sleep(0.3)  # the cancel lands while this step runs
         try:
-            return real_tick(trial, reading)
+            return real_tick(trial, sample)
         except Exception as exc:  # a write to a closed log would land here
             errors.append(exc)
             raise

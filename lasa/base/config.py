@@ -154,6 +154,7 @@ def validate(record: Any) -> None:
 # The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
 # ASSISTANCE are the figures' default members; hindsight_point (hindsight with one target per goal)
 # is a built-in reading that only the study runs by default.
+LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
 # Members added from outside the package (lasa.method.assistance.register_member, the only writer),
@@ -223,7 +224,7 @@ class ControlConfig:
     )
     alpha: UnitInterval = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: AtLeastTwo = 21  # joystick candidates per latent axis the simulated user weighs [-]
-    likelihood: str = "grasp_set"  # belief model: "grasp_set" (regret to grasp sets) or "goal"
+    likelihood: str = "preferences"  # belief model: "preferences" (regret to preference sets) or "goal"
     assistance: str = (
         "point"  # the shared-autonomy reading (lasa.method.assistance): Eq. M2 towards g = s*(g, 0.5)
     )
@@ -231,11 +232,11 @@ class ControlConfig:
     @property
     def likelihood_step(self) -> float | None:
         """The best step the belief's normaliser assumes, dt * sigma_h, or None."""
-        return self.dt * self.action_scale if self.likelihood == "grasp_set" else None
+        return self.dt * self.action_scale if self.likelihood == "preferences" else None
 
     def __post_init__(self) -> None:
         validate(self)
-        check_choice("likelihood", self.likelihood, ("grasp_set", "goal"))
+        check_choice("likelihood", self.likelihood, LIKELIHOODS)
         check_choice("assistance", self.assistance, (*BUILT_IN_ASSISTANCE, *REGISTERED_ASSISTANCE))
 
 

@@ -48,6 +48,7 @@ from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_measure, latent_property
 from lasa.figures import entropy_ablation
+from lasa.method.belief import belief_targets
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig
@@ -269,7 +270,7 @@ def _fine_tune(
     progress: bool,
 ) -> tuple[dict[str, LatentActionModel], dict[str, TrainConfig]]:
     """Every reading's decoder (:func:`fine_tunes`; the sweep's own where it trained it), saved."""
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     lam = sweep.chosen
     models: dict[str, LatentActionModel] = {}
     fines: dict[str, TrainConfig] = {}

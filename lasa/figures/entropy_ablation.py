@@ -23,6 +23,7 @@ from matplotlib.figure import Figure
 from lasa.base.config import ControlConfig, NonNegative, PositiveInt, Seed, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
+from lasa.method.belief import belief_targets
 from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import LatentActionModel
 from lasa.method.entropy import choose_lambda, context_entropy, context_grid
@@ -148,7 +149,7 @@ def run_sweep(
         config: The sweep.
         progress: Show a progress bar over the runs.
     """
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     probe = confident_contexts(demos)
     clean = demos.clean()
     lambdas = [float(x) for x in config.lambdas]
@@ -181,7 +182,7 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
     The grid runs along the straight joint-space line from home to the right cup's goal,
     and from a uniform belief in that cup to 0.999, for lambda = 0 and the chosen lambda.
     """
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     progress, conf, states, beliefs = context_grid(task.start, task.goals[1], 1, task.n_goals)
     robot = task.robot.name
     parts = [

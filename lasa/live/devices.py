@@ -1,6 +1,6 @@
 r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script.
 
-Every device answers :meth:`Device.poll` with one :class:`Reading` per control step: the
+Every device answers :meth:`Device.poll` with one :class:`StickSample` per control step: the
 two stick axes, whether the mode button was pressed (Retargeting cycles its modes) and
 whether the stop input is held. What reaches the control loop is made safe here, once
 (:func:`safe_axes`): a disconnected device or a non-finite axis gives zero input, never a
@@ -17,7 +17,7 @@ command, and every axis is clipped to [-1, 1].
   key-state library such as ``pynput``: it needs no second connection to the display,
   works wherever the viewer works (Xvfb included), and what the participant sees in the
   viewer's overlay is exactly the axis value in force.
-- :class:`ScriptedDevice`: a recorded or synthetic sequence of readings, for tests,
+- :class:`ScriptedDevice`: a recorded or synthetic sequence of samples, for tests,
   demonstrations of the kit and :func:`lasa.live.teleop.replay`.
 """
 
@@ -34,7 +34,7 @@ import pandas as pd
 from lasa.base.errors import ConfigError
 
 __all__ = [
-    "Reading",
+    "StickSample",
     "Device",
     "safe_axes",
     "ScriptedDevice",
@@ -48,7 +48,7 @@ DEADZONE = 0.05  # gamepad: |axis| below this reads as zero (stick drift) [-]
 
 
 @dataclasses.dataclass(frozen=True)
-class Reading:
+class StickSample:
     """One control step's input.
 
     Attributes:
@@ -82,7 +82,7 @@ def safe_axes(raw: np.ndarray, connected: bool = True, deadzone: float = 0.0) ->
     """
     axes = np.asarray(raw, dtype=float).reshape(-1)
     if axes.shape != (2,):
-        raise ConfigError(f"a reading has 2 axes, got shape {np.shape(raw)}")
+        raise ConfigError(f"a stick sample has 2 axes, got shape {np.shape(raw)}")
     if not connected:
         return np.zeros(2)
     axes = np.where(np.isfinite(axes), axes, 0.0)
@@ -95,7 +95,7 @@ class Device(Protocol):
 
     name: str
 
-    def poll(self) -> Reading:
+    def poll(self) -> StickSample:
         """This step's input."""
         ...
 
@@ -165,13 +165,13 @@ class ScriptedDevice:
             raise ConfigError(f"script {path} needs columns raw0 and raw1, has {list(table.columns)}")
         return cls.from_table(table)
 
-    def poll(self) -> Reading:
-        """The next scripted reading (zero axes after the script's end)."""
+    def poll(self) -> StickSample:
+        """The next scripted sample (zero axes after the script's end)."""
         i = self.step
         self.step += 1
         if i >= len(self.axes):
-            return Reading(raw=np.zeros(2))
-        return Reading(
+            return StickSample(raw=np.zeros(2))
+        return StickSample(
             raw=self.axes[i].copy(),
             mode=bool(self.mode[i]),
             stop=bool(self.stop[i]),
@@ -180,7 +180,7 @@ class ScriptedDevice:
 
     @property
     def finished(self) -> bool:
-        """Whether every scripted reading has been read."""
+        """Whether every scripted sample has been read."""
         return self.step >= len(self.axes)
 
     def close(self) -> None:
@@ -226,12 +226,12 @@ class KeyboardDevice:
             elif key == _KEY_S:
                 self._stop = not self._stop
 
-    def poll(self) -> Reading:
+    def poll(self) -> StickSample:
         """The axes in force, and the mode press since the last poll."""
         with self._lock:
-            reading = Reading(raw=self._axes.copy(), mode=self._mode, stop=self._stop)
+            sample = StickSample(raw=self._axes.copy(), mode=self._mode, stop=self._stop)
             self._mode = False
-        return reading
+        return sample
 
     def close(self) -> None:
         """Nothing to release."""
@@ -272,22 +272,22 @@ class GamepadDevice:
         self._stick = pygame.joystick.Joystick(index)
         self._was_pressed = False
 
-    def poll(self) -> Reading:
+    def poll(self) -> StickSample:
         """Read the stick; a gamepad that went away reads as disconnected (zero input)."""
         pg = self._pg
         try:
             pg.event.pump()
             if not self._stick.get_init() or pg.joystick.get_count() == 0:
-                return Reading(raw=np.full(2, np.nan), connected=False)
+                return StickSample(raw=np.full(2, np.nan), connected=False)
             raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
             pressed = bool(self._stick.get_button(0))
             mode = pressed and not self._was_pressed  # one press, however long held
             self._was_pressed = pressed
             stop = bool(self._stick.get_button(1))
         except pg.error:
-            return Reading(raw=np.full(2, np.nan), connected=False)
+            return StickSample(raw=np.full(2, np.nan), connected=False)
         raw = np.where(np.abs(raw) < DEADZONE, 0.0, raw)
-        return Reading(raw=raw, mode=mode, stop=stop)
+        return StickSample(raw=raw, mode=mode, stop=stop)
 
     def close(self) -> None:
         """Release SDL's joystick subsystem."""

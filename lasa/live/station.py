@@ -1,8 +1,8 @@
-r"""The robot side of a live session: its settings, and one control step per input reading.
+r"""The robot side of a live session: its settings, and one control step per input sample.
 
 A :class:`SessionConfig` names the robot, the task, the condition and the participant; a
 :class:`Station` builds what it runs (the robot and its scene, the cup task or the eating task,
-the decoder ``make figures`` trained for it) and runs one control step per reading of an input
+the decoder ``make figures`` trained for it) and runs one control step per sample of an input
 device (:meth:`Station.step`); :func:`log_row` is a step's row of the session log, in
 :meth:`Station.columns` order. ``teleop run`` (:mod:`lasa.live.teleop`) and the web study's
 server (:mod:`lasa.live.web.loop`) drive the same station and log the same rows.
@@ -32,8 +32,8 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.paths import Paths
-from lasa.live.devices import Reading
-from lasa.method.belief import belief, uniform_log_belief
+from lasa.live.devices import StickSample
+from lasa.method.belief import belief, belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.method.retarget import Retargeting, retarget_action, twist
 from lasa.method.step import StepResult, advance, shared_autonomy_step
@@ -78,7 +78,7 @@ def _sha256(path: Path) -> str:
 
 
 class Station:
-    """The robot side of a session: task, decoder, control, and one control step per reading.
+    """The robot side of a session: task, decoder, control, and one control step per sample.
 
     Attributes:
         config: The session's settings.
@@ -119,7 +119,7 @@ class Station:
             self._check_fit(self.decoder, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
-        self.goal_sets = self.task.goal_sets(self.control.likelihood)
+        self.goal_sets = belief_targets(self.task, self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
         self.reset()
@@ -220,13 +220,13 @@ class Station:
                 self.waypoint -= 1
                 self.done = True
 
-    def step(self, reading: Reading) -> dict[str, Any]:
-        """One control step from one reading; returns what the log records of it."""
-        z = reading.z  # safe: zero if disconnected or not finite, within [-1, 1]
+    def step(self, sample: StickSample) -> dict[str, Any]:
+        """One control step from one sample; returns what the log records of it."""
+        z = sample.z  # safe: zero if disconnected or not finite, within [-1, 1]
         n = self.robot.n_joints
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
-        pressed = bool(reading.mode) and self.retarget is not None
-        if reading.stop:
+        pressed = bool(sample.mode) and self.retarget is not None
+        if sample.stop:
             pass  # hold: no human action, no assistance, the belief frozen
         else:
             result = self._advance(z, pressed)
@@ -238,10 +238,10 @@ class Station:
             self._check_waypoint()
         wp = self.waypoints[self.waypoint] if self.waypoints else None
         return {
-            "raw": np.asarray(reading.raw, float),
-            "connected": reading.connected,
-            "mode_press": bool(reading.mode),
-            "stop": bool(reading.stop),
+            "raw": np.asarray(sample.raw, float),
+            "connected": sample.connected,
+            "mode_press": bool(sample.mode),
+            "stop": bool(sample.stop),
             "z": z,
             "mode": self.mode,
             "phase": -1 if wp is None else wp.phase,

@@ -15,8 +15,8 @@ That default has a flaw once the user's desired grasp is not g itself. Two refin
 make the likelihood robust, and ``ControlConfig.likelihood`` selects them:
 
 - ``"goal"``, the plain progress model exactly as above: distances to the points g.
-- ``"grasp_set"``: distances to each goal's *set of grasps* (the polyline
-  s*(g, theta) over theta, ``goal_sets`` of shape (G, K, n)), and each goal's
+- ``"preferences"``: distances to each goal's *set of preferred poses* (the polyline
+  s*(g, theta) over theta, :func:`belief_targets` of shape (G, K, n)), and each goal's
   Boltzmann normaliser approximated by its best action, so that the likelihood is
   exp(-beta_b * regret) with regret = d_g(s') - d_g(s) + min(Delta sigma_h, d_g(s)) >= 0,
   the progress lost against the best one step could make. Far from every goal the
@@ -41,9 +41,11 @@ from collections.abc import Callable
 import numpy as np
 import torch
 
-from lasa.base.config import check_range
+from lasa.base.config import LIKELIHOODS, check_choice, check_range
+from lasa.world.goals import GoalTask
 
 __all__ = [
+    "belief_targets",
     "uniform_log_belief",
     "distance_to_sets",
     "distance_to_sets_torch",
@@ -54,6 +56,16 @@ __all__ = [
     "update_log_belief",
     "belief",
 ]
+
+
+def belief_targets(task: GoalTask, likelihood: str) -> np.ndarray:
+    """What the belief measures progress towards under ``likelihood``, shape (G, K, n).
+
+    ``"goal"``: the goal points g (K = 1). ``"preferences"``: each goal's preference set,
+    a polyline (:attr:`lasa.world.goals.GoalTask.preference_sets`).
+    """
+    check_choice("likelihood", likelihood, LIKELIHOODS)
+    return task.goals[:, None, :] if likelihood == "goal" else task.preference_sets
 
 
 def uniform_log_belief(batch: int, n_goals: int) -> np.ndarray:

@@ -30,7 +30,7 @@ from lasa.base.conditions import METHODS
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
 from lasa.method.assistance import assist
-from lasa.method.belief import belief, log_likelihood, update_log_belief
+from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
 from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
@@ -114,10 +114,10 @@ def _assistance(
 ) -> tuple[np.ndarray, np.ndarray]:
     """a_r and the blend weight per user: ``control.assistance``, or each user's member.
 
-    The goal sets of ``grasp_set`` are the task's (``task.goal_sets("grasp_set")``):
+    The members' goal sets are the task's preference sets (``task.preference_sets``):
     the cups' grasp curves, or the eating task's whole stroke surfaces.
     """
-    goal_sets = task.goal_sets("grasp_set")
+    goal_sets = task.preference_sets
     if members is None:
         return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
     a_r, weight = np.empty_like(state), np.empty(len(state))
@@ -185,7 +185,7 @@ def shared_autonomy_step(
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     return advance(task, control, state, log_belief, a_h, alpha_arr, goal_sets)
 
 

@@ -105,7 +105,7 @@ def _with_entropy(
     """``extra_loss`` plus the entropy term of Eq. T6 when ``config.entropy_lambda > 0``."""
     if config.entropy_lambda > 0:
         if goal_sets is None:
-            raise ConfigError("entropy_lambda > 0 needs goal_sets (task.goal_sets(control.likelihood))")
+            raise ConfigError("entropy_lambda > 0 needs goal_sets (belief_targets(task, control.likelihood))")
         regularizer = EntropyRegularizer(
             config.entropy_lambda,
             goal_sets,
@@ -180,7 +180,7 @@ def train_decoder(
         config: Optimisation settings; ``entropy_lambda > 0`` adds the entropy term of
             Eq. T6 (:class:`lasa.method.entropy.EntropyRegularizer`).
         goal_sets: The belief likelihood's goal sets, shape (G, K, n)
-            (``task.goal_sets(control.likelihood)``); needed when
+            (``belief_targets(task, control.likelihood)``); needed when
             ``entropy_lambda > 0``.
         extra_loss: Optional further term added to the loss, called as
             ``extra_loss(model, states, beliefs)`` on each batch.

@@ -41,7 +41,7 @@ from lasa.base.config import (
     check_choice,
     validate,
 )
-from lasa.method.belief import belief, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
@@ -135,7 +135,7 @@ def collect_demonstrations(
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
     demo_id = 0
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     thetas = np.linspace(0.0, 1.0, config.n_theta)
     for g in range(task.n_goals):
         for theta in thetas:
@@ -326,7 +326,7 @@ def collect_eating_demonstrations(
     """
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     demo_id = 0
 
     def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:

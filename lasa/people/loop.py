@@ -21,7 +21,7 @@ from tqdm.auto import tqdm
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
-from lasa.method.belief import belief, uniform_log_belief
+from lasa.method.belief import belief, belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.retarget import MODES, Retargeting, twist
 from lasa.method.step import advance, check_decoder, latent_grid
@@ -128,7 +128,7 @@ def prepare(
         unit=control.dt * config.retarget.linear_speed,
         retarget=Retargeting(robot, control.dt, config.retarget),
         r_twist=twist(np.arange(len(MODES))[:, None], grid, config.retarget),
-        goal_sets=task.goal_sets(control.likelihood),
+        goal_sets=belief_targets(task, control.likelihood),
         data=mujoco.MjData(robot.model),
     )
 

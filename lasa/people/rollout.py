@@ -20,7 +20,7 @@ from tqdm.auto import tqdm
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
 from lasa.method.assistance import members as members_of_family
-from lasa.method.belief import belief, uniform_log_belief
+from lasa.method.belief import belief, belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import advance, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
@@ -105,7 +105,7 @@ def rollout(
     log_b = uniform_log_belief(n_users, task.n_goals)
     states[0], beliefs[0] = s, belief(log_b)
     rows = np.arange(n_users)
-    goal_sets = task.goal_sets(control.likelihood)
+    goal_sets = belief_targets(task, control.likelihood)
     for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
         b = beliefs[t]  # belief(log_b), computed once per step
         phi = decode_candidates(decoder, grid, s, b)  # (U, K, n): the one decoder call

@@ -267,17 +267,14 @@ class EatingTask(GoalTask):
             object.__setattr__(self, "_stroke_cache", cache)
         return cache
 
-    def goal_sets(self, likelihood: str) -> np.ndarray:
-        """What the belief measures progress towards, shape (G, K', n).
+    @property
+    def preference_sets(self) -> np.ndarray:
+        """Each goal's whole stroke surface as one polyline, shape (G, K', n).
 
-        ``"goal"``: the goal points. ``"grasp_set"``: each goal's whole stroke surface,
-        as one polyline per goal that runs along the entries (theta from 0 to 1) and back
-        along the stroke ends, so that carrying out a stroke is not evidence against
-        the goal it happens at.
+        The polyline runs along the entries (theta from 0 to 1) and back along the stroke
+        ends, so that carrying out a stroke is not evidence against the goal it happens at.
         """
-        if likelihood == "grasp_set":
-            return np.concatenate([self.strokes[:, :, 0], self.strokes[:, ::-1, -1]], axis=1)
-        return super().goal_sets(likelihood)
+        return np.concatenate([self.strokes[:, :, 0], self.strokes[:, ::-1, -1]], axis=1)
 
 
 def make_eating_task(robot: Robot | None = None, n_theta: int = 9, depths: int = 3) -> EatingTask:

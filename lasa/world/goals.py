@@ -61,17 +61,10 @@ class GoalTask:
         diff = self.goals[:, None, :] - self.goals[None, :, :]
         return float(np.linalg.norm(diff, axis=-1).max())
 
-    def goal_sets(self, likelihood: str) -> np.ndarray:
-        """What the belief measures progress towards, shape (G, K, n).
-
-        ``"goal"``: the goal points g (K = 1). ``"grasp_set"``: each goal's preferred poses
-        s*(g, theta) on the IK grid, a polyline (see :mod:`lasa.method.belief`).
-        """
-        if likelihood == "goal":
-            return self.goals[:, None, :]
-        if likelihood == "grasp_set":
-            return self.curves
-        raise ConfigError(f"unknown likelihood {likelihood!r}; choose 'grasp_set' or 'goal'")
+    @property
+    def preference_sets(self) -> np.ndarray:
+        """Each goal's preferred poses s*(g, theta) on the IK grid, a polyline, shape (G, K, n)."""
+        return self.curves
 
     def target(self, goal: np.ndarray | int, theta: np.ndarray | float) -> np.ndarray:
         """Desired final poses s*(g, theta), shape (..., n), vectorised over both arguments.

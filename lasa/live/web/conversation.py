@@ -2,7 +2,7 @@
 
 The server decides what comes next (:mod:`lasa.live.web.plan`); the page shows it and answers.
 A receiving task checks every page message (:mod:`lasa.live.web.protocol`): input updates the
-next tick's reading, anything else goes to the step waiting for it. A refused message closes
+next tick's sample, anything else goes to the step waiting for it. A refused message closes
 the connection; a page that goes away mid-trial leaves that session ``interrupted`` with its
 rows, and its progress where it was, so the same link resumes with a new session.
 """

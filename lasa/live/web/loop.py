@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from lasa.evidence.sessionlog import SessionWriter
-from lasa.live.devices import Reading
+from lasa.live.devices import StickSample
 from lasa.live.station import SessionConfig, Station, log_row
 from lasa.live.web.protocol import Inputs
 
@@ -76,13 +76,13 @@ def open_trial(config: SessionConfig, folder: Path, attempt: int, duration_s: fl
     return Trial(station, writer, max(1, int(round(duration_s / station.control.dt))))
 
 
-def tick(trial: Trial, reading: Reading) -> dict[str, Any]:
-    """The loop's one step: the station's step on ``reading``, its log row, and the page's state message."""
+def tick(trial: Trial, sample: StickSample) -> dict[str, Any]:
+    """The loop's one step: the station's step on ``sample``, its log row, and the page's state message."""
     station = trial.station
     k = trial.steps
     deadline = trial.started + (k + 1) * station.control.dt
     t0 = time.perf_counter()
-    rec = station.step(reading)
+    rec = station.step(sample)
     now = time.perf_counter()
     late = now > deadline
     trial.compute.append(now - t0)

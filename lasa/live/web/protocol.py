@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from lasa.base.errors import LasaError
-from lasa.live.devices import Reading
+from lasa.live.devices import StickSample
 from lasa.live.web.tokens import MAX_TOKEN_CHARS
 
 __all__ = [
@@ -142,11 +142,11 @@ class Inputs:
         self.stop = bool(msg.get("stop", False))
         self.received = time.monotonic()
 
-    def take(self) -> Reading:
-        """This step's reading; stale input (a stalled page or network) reads as disconnected."""
+    def take(self) -> StickSample:
+        """This step's sample; stale input (a stalled page or network) reads as disconnected."""
         fresh = time.monotonic() - self.received <= STALE_S
-        reading = Reading(
+        sample = StickSample(
             raw=np.array(self.axes, dtype=float), mode=self.mode and fresh, stop=self.stop, connected=fresh
         )
         self.mode = False
-        return reading
+        return sample
