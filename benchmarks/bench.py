@@ -5,7 +5,7 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 
 - ``step_latency_us``: one user's full LA+SA step on the Panda, from joystick input to
   commanded state (decode, assistance, blend, belief update, safe step), with
-  :class:`lasa.method.controller.Controller`, i.e. the reference step
+  :class:`lasa.method.episodes.Runner` stepping one user, i.e. the reference step
   :func:`lasa.method.step.shared_autonomy_step` run for a batch of one; median and 99th
   percentile over 10,000 steps. ``step_deadline`` is what that step has to meet: one
   control period ``dt`` of the robot (0.1 s, a 10 Hz loop), and the fraction of it that
@@ -86,9 +86,10 @@ from lasa.base.errors import ArtifactError, ConfigError  # noqa: E402
 from lasa.base.io import write_text  # noqa: E402
 from lasa.base.kernels import PINNED  # noqa: E402
 from lasa.evidence.video import render_states  # noqa: E402
-from lasa.method.controller import Controller  # noqa: E402
+from lasa.method.belief import uniform_log_belief  # noqa: E402
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
-from lasa.method.step import latent_grid  # noqa: E402
+from lasa.method.episodes import Runner, held_input  # noqa: E402
+from lasa.method.step import Assist, latent_grid  # noqa: E402
 from lasa.people.rollout import rollout  # noqa: E402
 from lasa.people.users import UserPopulation  # noqa: E402
 from lasa.pipeline.timings import git_commit, read_runs, read_timings, summarize  # noqa: E402
@@ -215,7 +216,7 @@ def _decoder(task: CupTask, control: ControlConfig, config: BenchConfig) -> Late
 def step_latency(
     model: LatentActionModel, task: CupTask, control: ControlConfig, n_steps: int, seed: int = 0
 ) -> tuple[dict[str, float], np.ndarray]:
-    """Latency of one LA+SA control step for one user (:meth:`lasa.method.controller.Controller.step`).
+    """Latency of one LA+SA control step for one user (:meth:`lasa.method.episodes.Runner.step`).
 
     The joystick input is a random walk in [-1, 1]; the episode restarts from the start
     pose every 200 steps so the arm stays in the task's region. The first 10% are warm-up.
@@ -235,7 +236,7 @@ def step_latency(
     """
     if n_steps < 10:
         raise ConfigError(f"n_steps must be >= 10, got {n_steps}")
-    ctl = Controller(model, task, control, control.alpha)
+    assist = Assist(task, control, np.array([control.alpha]))
     rng = np.random.default_rng(seed)
     warm = n_steps // 10
     total = n_steps + warm
@@ -244,9 +245,9 @@ def step_latency(
     clock = time.perf_counter
     for i in range(total):
         if i % 200 == 0:
-            ctl.reset()
+            runner = Runner(assist, task.start[None], uniform_log_belief(1, task.n_goals))
         t0 = clock()
-        ctl.step(z[i])
+        runner.step(held_input(model, np.array([[z[i]]])))
         times[i] = clock() - t0
     return _percentiles(times[warm:]), times[warm:]
 
@@ -293,8 +294,8 @@ def station_latency(
 def step_deadline(control: ControlConfig, latency_us: dict[str, float]) -> dict[str, float]:
     """The step's real-time deadline, one control period, and the share of it the p99 uses.
 
-    The controller integrates s' = s + dt a, so a live loop runs one step per ``dt`` of
-    wall-clock time (:mod:`lasa.method.controller`): the deadline is ``dt``.
+    The step integrates s' = s + dt a, so a live loop runs one step per ``dt`` of
+    wall-clock time: the deadline is ``dt``.
 
     Returns:
         ``{dt_s, rate_hz, deadline_us, p99_fraction}`` (``p99_fraction`` = p99 / deadline).
@@ -506,7 +507,7 @@ def plot_scaling(results: dict[str, Any], latencies: np.ndarray, path: Path) -> 
         ax2.axvline(value, color=color, ls="--", label=label)
     ax2.set_xlabel("control step latency [us]")
     ax2.set_ylabel("steps")
-    ax2.set_title("one user's LA+SA step on the Panda (Controller)")
+    ax2.set_title("one user's LA+SA step on the Panda (Runner.step)")
     ax2.legend(frameon=False, fontsize=8)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)

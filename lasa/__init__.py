@@ -34,11 +34,11 @@ pin_mediapy()  # mediapy reads and writes with the pinned wheel's ffmpeg, once i
 _EXPORTS = {
     "ActionDecoder": "lasa.method.decoder",
     "ArtifactError": "lasa.base.errors",
+    "Assist": "lasa.method.step",
     "Claim": "lasa.evidence.claims",
     "ConfigError": "lasa.base.errors",
     "ContextMap": "lasa.method.newgoals",
     "ControlConfig": "lasa.base.config",
-    "Controller": "lasa.method.controller",
     "CupTask": "lasa.world.task",
     "DecoderConfig": "lasa.method.decoder",
     "DemoConfig": "lasa.people.demos",
@@ -52,6 +52,7 @@ _EXPORTS = {
     "Paths": "lasa.base.paths",
     "ROBOTS": "lasa.world.robot",
     "Robot": "lasa.world.robot",
+    "Runner": "lasa.method.episodes",
     "RobotSpec": "lasa.world.robot",
     "TrainConfig": "lasa.method.train",
     "Trajectories": "lasa.people.rollout",
@@ -80,7 +81,6 @@ if TYPE_CHECKING:
     from lasa.evidence.claims import Claim, update_claims
     from lasa.evidence.publish import publish
     from lasa.method.assistance import register_member
-    from lasa.method.controller import Controller
     from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
     from lasa.method.decoder import (
         ActionDecoder,
@@ -89,8 +89,9 @@ if TYPE_CHECKING:
         load_checkpoint,
         save_checkpoint,
     )
+    from lasa.method.episodes import Runner
     from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
-    from lasa.method.step import METHODS, shared_autonomy_step
+    from lasa.method.step import METHODS, Assist, shared_autonomy_step
     from lasa.method.train import TrainConfig, train_decoder
     from lasa.people.demos import DemoConfig, collect_demonstrations
     from lasa.people.rollout import Trajectories, rollout
@@ -120,11 +121,11 @@ except Exception:  # running from a source tree that was never installed
 __all__ = [
     "ActionDecoder",
     "ArtifactError",
+    "Assist",
     "Claim",
     "ConfigError",
     "ContextMap",
     "ControlConfig",
-    "Controller",
     "CupTask",
     "DecoderConfig",
     "DemoConfig",
@@ -138,6 +139,7 @@ __all__ = [
     "Paths",
     "ROBOTS",
     "Robot",
+    "Runner",
     "RobotSpec",
     "TrainConfig",
     "Trajectories",

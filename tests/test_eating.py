@@ -10,7 +10,6 @@ from numpy.testing import assert_allclose
 from lasa.base.errors import ConfigError
 from lasa.method.dataset import REACH
 from lasa.people.demos import DemoConfig, collect_eating_demonstrations
-from lasa.people.kinematics import tip_frames
 from lasa.world.eating import (
     EATING,
     GOALS,
@@ -24,6 +23,7 @@ from lasa.world.eating import (
     stroke_direction,
     waypoints,
 )
+from lasa.world.fork import tip_frames
 from lasa.world.robot import Robot
 
 

@@ -7,10 +7,10 @@ import lasa
 
 
 def test_star_import_works_in_a_fresh_interpreter():
-    code = "from lasa import *; print(Controller.__name__, publish.__name__, DemoConfig.__name__)"
+    code = "from lasa import *; print(Runner.__name__, publish.__name__, DemoConfig.__name__)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.split() == ["Controller", "publish", "DemoConfig"]
+    assert out.stdout.split() == ["Runner", "publish", "DemoConfig"]
 
 
 def test_all_and_the_lazy_table_agree():

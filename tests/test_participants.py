@@ -12,15 +12,15 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 from stand_ins import LinearDecoder
 
-from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.people.cohort import ParticipantConfig, draw_cohort, williams_square
+from lasa.people.cohort import ParticipantConfig, draw_cohort
 from lasa.people.design import StudyConfig
-from lasa.people.kinematics import tip_frames, tip_motion
-from lasa.people.measures import alignment, goal_error, idle_time, measures
 from lasa.people.participants import simulate
 from lasa.world.eating import make_eating_task
+from lasa.world.fork import tip_frames, tip_motion
+from lasa.world.measures import alignment, goal_error, idle_time, measures
 
 
 @pytest.fixture(scope="module")

@@ -12,11 +12,11 @@ from lasa.base.errors import ConfigError
 from lasa.people import participants, planning
 from lasa.people.cohort import draw_cohort
 from lasa.people.design import StudyConfig
-from lasa.people.kinematics import tip_frames, tip_motion
-from lasa.people.measures import measures
 from lasa.people.planning import PlanConfig
 from lasa.people.policy import progress_gain
 from lasa.world.eating import GOALS, PREFERENCES, fork_frame, make_eating_task
+from lasa.world.fork import tip_frames, tip_motion
+from lasa.world.measures import measures
 
 FIELDS = ("states", "tip", "direction", "phase", "idle", "switch", "end", "completed", "belief", "waypoint")
 

@@ -115,7 +115,7 @@ def test_bad_arguments_are_clear(model, task):
 
 def test_bad_members_and_pilot_noise_are_clear(model, task):
     users, ctl, noise = make_users(task, 2), task.robot.control, noise_for(task, 2)
-    with pytest.raises(ConfigError, match=r"one member per user, shape \(2,\), got \(3,\)"):
+    with pytest.raises(ConfigError, match=r"one member per row, shape \(2,\), got \(3,\)"):
         rollout(model, task, users, 0.2, ctl, HORIZON, noise, assistance=np.array(["point"] * 3))
     with pytest.raises(ConfigError, match="unknown assistance 'nearest'; choose one of"):
         rollout(model, task, users, 0.2, ctl, HORIZON, noise, assistance=np.array(["point", "nearest"]))

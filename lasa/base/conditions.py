@@ -24,9 +24,11 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
+
 from lasa.base.errors import ConfigError
 
-__all__ = ["Condition", "parse", "METHODS", "CONDITIONS", "ALL", "alpha_of"]
+__all__ = ["Condition", "parse", "METHODS", "CONDITIONS", "ALL", "alpha_of", "williams_square"]
 
 METHODS = ("LA", "LA+SA", "LA+SA+Entropy")  # the simulations' methods (sims 1-4)
 CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x assistance)
@@ -78,3 +80,22 @@ def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") ->
 def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str = "condition") -> float:
     """The blend weight of a condition: ``alpha`` if it is assisted, else 0 (LA and R: alpha = 0)."""
     return alpha if parse(name, allowed, what).assisted else 0.0
+
+
+def williams_square(n: int) -> np.ndarray:
+    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n).
+
+    Every condition appears once in every position, and follows every other condition
+    exactly once, so first-order carry-over effects are balanced.
+    """
+    if n < 2 or n % 2:
+        raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
+    first = [0]
+    low, high = 1, n - 1
+    while len(first) < n:
+        first.append(low)
+        low += 1
+        if len(first) < n:
+            first.append(high)
+            high -= 1
+    return (np.asarray(first)[None, :] + np.arange(n)[:, None]) % n

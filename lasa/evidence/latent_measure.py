@@ -49,10 +49,9 @@ from scipy.spatial import cKDTree
 from lasa.base.config import AtLeastTwo, ControlConfig, NonNegative, Positive, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.latent_property import COLUMNS, CONDITIONS
-from lasa.method.belief import belief as to_belief
-from lasa.method.blend import safe_step
 from lasa.method.decoder import ActionDecoder
-from lasa.method.step import shared_autonomy_step
+from lasa.method.episodes import Runner, held_input
+from lasa.method.step import Assist
 from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
 
@@ -162,7 +161,7 @@ def held_input_paths(
         z_values: Joystick inputs, shape (K,) or (K, d).
         steps: Number of steps each input is held.
         update_belief: Update the belief online with each decoded action (Algorithm 1);
-            otherwise hold it fixed.
+            otherwise hold it fixed (alpha = 0 either way: latent actions alone).
 
     Returns:
         States, shape (K, steps + 1, n).
@@ -173,19 +172,10 @@ def held_input_paths(
     if belief.shape != (task.n_goals,) or not np.isclose(belief.sum(), 1.0) or belief.min() < 0:
         raise ConfigError(f"belief must be a distribution over {task.n_goals} goals, got {belief}")
     z = np.asarray(z_values, dtype=float).reshape(len(z_values), -1)
-    robot = task.robot
-    s = np.broadcast_to(start, (len(z), robot.n_joints)).copy()
+    starts = np.broadcast_to(start, (len(z), task.robot.n_joints))
     log_b = np.log(np.broadcast_to(np.maximum(belief, 1e-300), (len(z), task.n_goals)))
-    out = [s]
-    for _ in range(steps):
-        if update_belief:  # Algorithm 1 with alpha = 0: the method LA
-            step = shared_autonomy_step(decoder, task, control, s, log_b, z, 0.0)
-            s, log_b = step.state, step.log_belief
-        else:
-            a = decoder.decode_numpy(z, s, to_belief(log_b))
-            s = safe_step(s, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
-        out.append(s)
-    return np.stack(out, axis=1)
+    runner = Runner(Assist(task, control, np.zeros(len(z))), starts, log_b, update_belief=update_belief)
+    return runner.run(held_input(decoder, z), steps).states.swapaxes(0, 1)
 
 
 def phase_ends(task: GoalTask, goal: int) -> list[tuple[str, np.ndarray]]:
@@ -222,9 +212,9 @@ def leave_paths(
 ) -> np.ndarray:
     """States reached by holding input ``z_values[i]`` from ``starts[i]``, the belief updated online.
 
-    Each row runs the one step of Algorithm 1 (:func:`lasa.method.step.shared_autonomy_step`,
-    the stick at rest commanding nothing) with its own blend weight ``alphas[i]`` and the
-    control's assistance member; all rows advance together, one decoder call per step.
+    Each row runs the one step of Algorithm 1 (:class:`lasa.method.episodes.Runner`, the stick
+    at rest commanding nothing) with its own blend weight ``alphas[i]`` and the control's
+    assistance member; all rows advance together, one decoder call per step.
 
     Args:
         decoder: The decoder.
@@ -241,15 +231,11 @@ def leave_paths(
     """
     if steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
-    s = np.asarray(starts, dtype=float).copy()
     log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))
-    z = np.asarray(z_values, dtype=float)
-    out = [s]
-    for _ in range(steps):
-        step = shared_autonomy_step(decoder, task, control, s, log_b, z, alphas, rest="zero")
-        s, log_b = step.state, step.log_belief
-        out.append(s)
-    return np.stack(out, axis=1)
+    runner = Runner(Assist(task, control, np.asarray(alphas, dtype=float)), starts, log_b)
+    return runner.run(
+        held_input(decoder, np.asarray(z_values, dtype=float), rest="zero"), steps
+    ).states.swapaxes(0, 1)
 
 
 def _nearest(

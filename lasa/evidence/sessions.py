@@ -3,7 +3,7 @@
 - :func:`load_sessions`: logged sessions (:mod:`lasa.evidence.sessionlog`, written live by
   :mod:`lasa.live.teleop`) as the :class:`lasa.people.design.Episodes` that the simulated
   cohort produces, so people's sessions go through the same measures
-  (:func:`lasa.people.measures.measures`) and statistics.
+  (:func:`lasa.world.measures.measures`) and statistics.
 - :func:`read_likert`: the answers :func:`lasa.live.studykit.survey` saved (``likert.csv``).
 - :func:`likert_tests`: the paired t-tests of Fig. dessert's right panel, LA+SA against each
   other condition on each scale (Holm's correction over the three comparisons of a scale).
@@ -27,8 +27,8 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
-from lasa.people.design import Episodes
-from lasa.people.kinematics import tip_frames
+from lasa.world.episodes import Episodes
+from lasa.world.fork import tip_frames
 
 __all__ = [
     "SCALES",
@@ -260,7 +260,7 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
 
     Returns:
         The tidy ``goal_error``, ``time`` and ``alignment`` tables of the sessions
-        (:func:`lasa.people.measures.measures`), ``means`` per condition; over the
+        (:func:`lasa.world.measures.measures`), ``means`` per condition; over the
         participants who did every condition in every task (at least two), ``sa_effect``
         (the within-subjects SA test on Goal Error and on the mean distance) and
         ``time_tests`` (LA+SA against each condition, times summed over tasks, Holm); with
@@ -270,8 +270,8 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
         within-subject test, each with the reason (also given as warnings).
     """
     from lasa.evidence import stats
-    from lasa.people.measures import measures
     from lasa.world.eating import EatingTask
+    from lasa.world.measures import measures
 
     if not isinstance(task, EatingTask):
         raise ConfigError(

@@ -53,8 +53,8 @@ from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig
 from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
-from lasa.people.kinematics import tip_frames
 from lasa.world.eating import GOALS, EatingTask
+from lasa.world.fork import tip_frames
 
 __all__ = [
     "NAME",

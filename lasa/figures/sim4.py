@@ -41,7 +41,7 @@ from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.figures.common import Decoders, LooksConfig, check_methods
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
-from lasa.people.kinematics import angle_between
+from lasa.world.fork import angle_between
 from lasa.world.robot import Robot
 from lasa.world.task import CupTask
 

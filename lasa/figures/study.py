@@ -48,10 +48,11 @@ from lasa.evidence import latent_property
 from lasa.method.decoder import ActionDecoder
 from lasa.people import participants, planning
 from lasa.people.cohort import Cohort, draw_cohort
-from lasa.people.design import Episodes, StudyConfig, interface_of
-from lasa.people.measures import measures
+from lasa.people.design import StudyConfig, interface_of
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
+from lasa.world.episodes import Episodes
+from lasa.world.measures import measures
 
 __all__ = [
     "Config",

@@ -19,10 +19,10 @@ from lasa.evidence.rules import COMPLETION_BAR
 from lasa.figures.study import Config
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
-from lasa.people.design import TASK_NAMES, Episodes
-from lasa.people.kinematics import tip_frames, tip_motion
 from lasa.people.policy import progress_gain
-from lasa.world.eating import GOALS, TASKS, EatingTask, fork_frame, waypoints
+from lasa.world.eating import GOALS, TASK_NAMES, TASKS, EatingTask, fork_frame, waypoints
+from lasa.world.episodes import Episodes
+from lasa.world.fork import tip_frames, tip_motion
 
 __all__ = [
     "HERLANT_SHARE",

@@ -11,10 +11,11 @@ server (:mod:`lasa.live.web.loop`) drive the same station and log the same rows.
   ``Entree`` / ``Dessert`` (the eating study, the Panda). **Conditions** (:data:`lasa.base.conditions.ALL`):
   ``R``, ``R+SA`` (Retargeting, :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the
   cups, ``LA+SA+Entropy``.
-- **The step** is the study's (:mod:`lasa.people.participants`): the stick at rest commands
-  nothing; in Retargeting the mode button cycles the modes; then Algorithm 1's blend, belief
-  update and safe transition (:func:`lasa.method.step.advance`), so joint limits and the speed
-  bound hold. The stop input holds the robot (no human action, no assistance, the belief frozen).
+- **The step** is the study's: the stick at rest commands nothing; in Retargeting the mode
+  button cycles the modes; the live device is a chooser of the episode runner
+  (:class:`lasa.method.episodes.Runner`), whose step blends, updates the belief and takes the
+  safe transition, so joint limits and the speed bound hold. The stop input holds the robot
+  (no human action, no assistance, the belief frozen).
 """
 
 from __future__ import annotations
@@ -33,10 +34,11 @@ from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.paths import Paths
 from lasa.live.devices import StickSample
-from lasa.method.belief import belief, belief_targets, uniform_log_belief
+from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
+from lasa.method.episodes import Chooser, Now, Runner, held_input
 from lasa.method.retarget import Retargeting, retarget_action, twist
-from lasa.method.step import StepResult, advance, shared_autonomy_step
+from lasa.method.step import Assist
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
@@ -119,7 +121,6 @@ class Station:
             self._check_fit(self.decoder, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
-        self.goal_sets = belief_targets(self.task, self.control.likelihood)
         self._data = mujoco.MjData(self.robot.model)
         self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
         self.reset()
@@ -145,11 +146,21 @@ class Station:
 
     def reset(self) -> None:
         """Back to the start pose, a uniform belief, mode 0, the first waypoint."""
-        self.state = self.task.start.copy()
-        self.log_belief = uniform_log_belief(1, self.task.n_goals)[0]
+        assist = Assist(self.task, self.control, np.array([self.alpha]))
+        self.runner = Runner(assist, self.task.start[None], uniform_log_belief(1, self.task.n_goals))
         self.mode = 0
         self.waypoint = 0
         self.done = False
+
+    @property
+    def state(self) -> np.ndarray:
+        """s, shape (n,) [rad]."""
+        return self.runner.state[0]
+
+    @property
+    def log_belief(self) -> np.ndarray:
+        """log b, shape (G,)."""
+        return self.runner.log_belief[0]
 
     @property
     def belief(self) -> np.ndarray:
@@ -205,16 +216,15 @@ class Station:
     def _check_waypoint(self) -> None:
         if not self.waypoints or self.done:
             return
-        from lasa.people.design import StudyConfig
-        from lasa.people.kinematics import tip_frames, waypoint_reached
         from lasa.world.eating import fork_frame
+        from lasa.world.fork import tip_frames, waypoint_reached
 
         if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once
             wp = self.waypoints[self.waypoint]
             self._frames[self.waypoint] = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
         position, rotation = self._frames[self.waypoint]
         tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
-        if waypoint_reached(tip[0], axis[0], position, rotation[:, 2], StudyConfig()):
+        if waypoint_reached(tip[0], axis[0], position, rotation[:, 2]):
             self.waypoint += 1
             if self.waypoint == len(self.waypoints):
                 self.waypoint -= 1
@@ -229,12 +239,10 @@ class Station:
         if sample.stop:
             pass  # hold: no human action, no assistance, the belief frozen
         else:
-            result = self._advance(z, pressed)
+            result = self.runner.step(self._chooser(z, pressed))
             a_h = result.human_action[0]
             a_r = result.robot_action[0] if result.robot_action is not None else np.zeros(n)
             a = result.action[0]
-            self.state = result.state[0]
-            self.log_belief = result.log_belief[0]
             self._check_waypoint()
         wp = self.waypoints[self.waypoint] if self.waypoints else None
         return {
@@ -253,40 +261,25 @@ class Station:
             "a": a,
         }
 
-    def _advance(self, z: np.ndarray, pressed: bool) -> StepResult:
-        """The step from the current state for stick ``z`` (and a mode press, in Retargeting).
+    def _chooser(self, z: np.ndarray, pressed: bool) -> Chooser:
+        """The live device as the runner's chooser: stick ``z`` (and a mode press, in Retargeting).
 
-        Latent actions run the one step, the stick at rest commanding nothing; Retargeting
-        turns a press, the stick at rest, or a twist in the mode into a human action by mink's
-        IK (updating the mode), then advances with it.
+        Latent actions decode the stick, the stick at rest commanding nothing; Retargeting turns
+        a press, the stick at rest, or a twist in the mode into a human action by mink's IK.
         """
-        s = self.state
         if self.decoder is not None:
-            return shared_autonomy_step(
-                self.decoder,
-                self.task,
-                self.control,
-                s[None],
-                self.log_belief[None],
-                z[: self.decoder.z_dim][None],
-                self.alpha,
-                rest="zero",
+            return held_input(self.decoder, z[: self.decoder.z_dim][None], rest="zero")
+        retarget = self.retarget
+        assert retarget is not None  # a condition is latent actions or Retargeting
+
+        def choose(now: Now) -> np.ndarray:
+            a_h, modes = retarget_action(
+                retarget, now.state, np.array([self.mode]), z[None, :2], np.array([pressed])
             )
-        a_h = np.zeros(self.robot.n_joints)
-        if self.retarget is not None:
-            a_hs, modes = retarget_action(
-                self.retarget, s[None], np.array([self.mode]), z[None, :2], np.array([pressed])
-            )
-            a_h, self.mode = a_hs[0], int(modes[0])
-        return advance(
-            self.task,
-            self.control,
-            s[None],
-            self.log_belief[None],
-            a_h[None],
-            np.array([self.alpha]),
-            self.goal_sets,
-        )
+            self.mode = int(modes[0])
+            return a_h
+
+        return choose
 
 
 def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:

@@ -2,7 +2,7 @@
 
 - :func:`write_schedule`: the order of the four conditions for N participants (at most
   :data:`MAX_PARTICIPANTS`), a balanced Latin square (Williams design,
-  :func:`lasa.people.cohort.williams_square`), participant i on row i mod 4, as the
+  :func:`lasa.base.conditions.williams_square`), participant i on row i mod 4, as the
   simulated cohort. An existing schedule is replaced only when asked (``overwrite``).
 - :func:`survey`: the paper's 7-point Likert questionnaire after each condition, on five
   scales (Easy, Helpful, Precise, Intuitive, Prefer), saved beside the sessions in
@@ -22,11 +22,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
 from lasa.evidence.sessions import SCALES
-from lasa.people.cohort import williams_square
 
 __all__ = [
     "MAX_PARTICIPANTS",

@@ -29,13 +29,14 @@ from lasa.base import conditions
 from lasa.base.conditions import METHODS
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import assist
+from lasa.method.assistance import assist, members
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
 from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
 
 __all__ = [
+    "Assist",
     "StepResult",
     "check_decoder",
     "decode_candidates",
@@ -78,29 +79,66 @@ class StepResult:
     robot_action: np.ndarray | None = None
 
 
-def advance(
-    task: GoalTask,
-    control: ControlConfig,
-    state: np.ndarray,
-    log_b: np.ndarray,
-    a_h: np.ndarray,
-    alpha: np.ndarray,
-    goal_sets: np.ndarray,
-    b: np.ndarray | None = None,
-    members: np.ndarray | None = None,
-) -> StepResult:
-    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
+@dataclasses.dataclass(frozen=True)
+class Assist:
+    """What the step's assistance, blend and belief update read for a batch, and never change.
 
-    ``a_h`` is the decoded human action (U, n), ``alpha`` the blend weight per user (U,),
-    ``sets`` the belief likelihood's goal sets (``task.goal_sets``), ``b`` the
-    belief ``belief(log_b)`` if the caller has it already.
+    Attributes:
+        task: The goal task (goals, preference sets, joint limits).
+        control: Control-loop units (dt, speed bound, belief model, the default member).
+        alpha: The blend weight of each row, (U,) (0: latent actions alone).
+        assistance: Each row's member of :mod:`lasa.method.assistance`, (U,); ``None``: every row
+            runs ``control.assistance``.
+        goal_sets: The belief's targets (:func:`lasa.method.belief.belief_targets`); ``None``:
+            those of ``control.likelihood``.
     """
+
+    task: GoalTask
+    control: ControlConfig
+    alpha: np.ndarray
+    assistance: np.ndarray | None = None
+    goal_sets: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "alpha", np.asarray(self.alpha, dtype=float).reshape(-1))
+        if self.goal_sets is None:
+            object.__setattr__(self, "goal_sets", belief_targets(self.task, self.control.likelihood))
+        if self.assistance is not None:
+            names = np.asarray(self.assistance, dtype=str)
+            if names.shape != self.alpha.shape:
+                raise ConfigError(
+                    f"assistance must name one member per row, shape {self.alpha.shape}, got {names.shape}"
+                )
+            for name in set(names.tolist()):
+                check_choice("assistance", name, members())
+            object.__setattr__(self, "assistance", names)
+
+    def rows(self, idx: np.ndarray) -> Assist:
+        """The same for rows ``idx`` of the batch."""
+        assistance = None if self.assistance is None else self.assistance[idx]
+        return dataclasses.replace(self, alpha=self.alpha[idx], assistance=assistance)
+
+
+def advance(
+    assist: Assist, state: np.ndarray, log_b: np.ndarray, a_h: np.ndarray, b: np.ndarray | None = None
+) -> StepResult:
+    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step.
+
+    Args:
+        assist: The batch's fixed parts (one row per episode).
+        state: s^t, (U, n). log_b: log b^t, (U, G).
+        a_h: The decoded human actions, (U, n) (a row that is not finite commands nothing).
+        b: ``belief(log_b)``, if the caller has it already.
+    """
+    task, control = assist.task, assist.control
     a_h = sanitize(a_h)
     if b is None:
         b = belief(log_b)
-    a_r, weight = _assistance(task, control, state, b, members)
-    a = blend(a_h, a_r, alpha * weight)
-    lik = log_likelihood(state, a_h, goal_sets, control.dt, control.belief_beta, control.likelihood_step)
+    a_r, weight = _assistance(task, control, state, b, assist.assistance)
+    a = blend(a_h, a_r, assist.alpha * weight)
+    sets, beta, max_step = assist.goal_sets, control.belief_beta, control.likelihood_step
+    assert sets is not None  # filled in by Assist.__post_init__
+    lik = log_likelihood(state, a_h, sets, control.dt, beta, max_step)
     new_log_b = update_log_belief(log_b, lik, control.belief_floor)
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
@@ -110,19 +148,19 @@ def advance(
 
 
 def _assistance(
-    task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
+    task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, assistance: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """a_r and the blend weight per user: ``control.assistance``, or each user's member.
+    """a_r and the blend weight per row: ``control.assistance``, or each row's member.
 
     The members' goal sets are the task's preference sets (``task.preference_sets``):
     the cups' grasp curves, or the eating task's whole stroke surfaces.
     """
     goal_sets = task.preference_sets
-    if members is None:
+    if assistance is None:
         return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
     a_r, weight = np.empty_like(state), np.empty(len(state))
-    for name in dict.fromkeys(members.tolist()):
-        rows = members == name
+    for name in dict.fromkeys(assistance.tolist()):
+        rows = assistance == name
         a_r[rows], weight[rows] = assist(
             name, b[rows], state[rows], task.goals, goal_sets, control.dt, control.action_scale
         )
@@ -185,8 +223,7 @@ def shared_autonomy_step(
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
-    goal_sets = belief_targets(task, control.likelihood)
-    return advance(task, control, state, log_belief, a_h, alpha_arr, goal_sets)
+    return advance(Assist(task, control, alpha_arr), state, log_belief, a_h)
 
 
 def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:

@@ -3,7 +3,7 @@ r"""Who takes part in the eating study: the simulated participants' parameters a
 Ten people did the paper's study; here a cohort of simulated participants stands in for
 them (:func:`draw_cohort`). Each one has their own rationality and learning time, and does
 the four conditions of the 2x2 design in a counterbalanced order (a balanced Latin square,
-Williams 1949: :func:`williams_square`). Their experience before a condition,
+Williams 1949: :func:`lasa.base.conditions.williams_square`). Their experience before a condition,
 
 .. math::  E_0 = \text{practice with this condition} + \text{transfer} \times
     \text{practice with the conditions done before it},
@@ -20,11 +20,11 @@ import math
 
 import numpy as np
 
-from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.config import NonNegative, Positive, UnitInterval, interval, validate
 from lasa.base.errors import ConfigError
 
-__all__ = ["ParticipantConfig", "Cohort", "williams_square", "draw_cohort"]
+__all__ = ["ParticipantConfig", "Cohort", "draw_cohort"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,25 +67,6 @@ class ParticipantConfig:
             )
 
 
-def williams_square(n: int) -> np.ndarray:
-    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n).
-
-    Every condition appears once in every position, and follows every other condition
-    exactly once, so first-order carry-over effects are balanced.
-    """
-    if n < 2 or n % 2:
-        raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
-    first = [0]
-    low, high = 1, n - 1
-    while len(first) < n:
-        first.append(low)
-        low += 1
-        if len(first) < n:
-            first.append(high)
-            high -= 1
-    return (np.asarray(first)[None, :] + np.arange(n)[:, None]) % n
-
-
 @dataclasses.dataclass(frozen=True)
 class Cohort:
     """Simulated participants: each one's rationality, learning and order of conditions.
@@ -121,8 +102,8 @@ class Cohort:
 def draw_cohort(n: int, config: ParticipantConfig = ParticipantConfig(), seed: int = 0) -> Cohort:
     """Draw ``n`` participants; participant i is the same whatever n is (its own random stream).
 
-    Participant i runs row ``i mod 4`` of :func:`williams_square`, so any 4 consecutive
-    participants balance order and carry-over.
+    Participant i runs row ``i mod 4`` of :func:`lasa.base.conditions.williams_square`, so any 4
+    consecutive participants balance order and carry-over.
     """
     if int(n) != n or n < 1:
         raise ConfigError(f"the number of participants must be a positive integer, got {n!r}")

@@ -33,11 +33,10 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.method.retarget import RetargetConfig
 from lasa.people.cohort import Cohort, ParticipantConfig
-from lasa.world.eating import TASKS
+from lasa.world.eating import TASK_NAMES
+from lasa.world.fork import ANGLE_TOL, POSITION_TOL
 
-__all__ = ["TASK_NAMES", "interface_of", "StudyConfig", "Episodes", "Layout", "layout"]
-
-TASK_NAMES = tuple(TASKS)
+__all__ = ["interface_of", "StudyConfig", "Layout", "layout"]
 
 
 def interface_of(condition: str) -> str:
@@ -51,9 +50,9 @@ class StudyConfig:
 
     # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
     horizon: PositiveInt = 1500
-    position_tol: Positive = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
+    position_tol: Positive = POSITION_TOL  # a waypoint is reached this close to it (the tines' width) [m]
     angle_tol: Annotated[Number, at.Gt(0.0), at.Le(math.pi)] = (
-        0.2  # ... with the fork's direction this close (~11 degrees) [rad]
+        ANGLE_TOL  # ... with the direction this close [rad]
     )
     # The SA members the assisted conditions run under (lasa.method.assistance); the first is the
     # headline. The paper's study used hindsight optimisation.
@@ -74,50 +73,6 @@ class StudyConfig:
             raise ConfigError(
                 f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"
             )
-
-
-@dataclasses.dataclass(frozen=True)
-class Episodes:
-    """The record of a simulated study: one episode per participant x condition x task.
-
-    Attributes:
-        participant, condition, task: Who, under which condition (name), which task (name), (E,).
-        assistance: The SA member of each episode (``"none"`` for R and LA), (E,).
-        order: The position of the condition in the participant's session (0-3), (E,).
-        states: Joint positions, (T+1, E, n) [rad] (held after an episode ends).
-        tip: Fork-tip positions, (T+1, E, 3) [m].
-        direction: Fork directions (unit), (T+1, E, 3).
-        phase: Index of the phase each step belongs to, (T+1, E).
-        idle: Whether the participant gave no stick input at each step, (T, E).
-        switch: Whether the step was a mode switch (Retargeting), (T, E).
-        end: The step each episode ended (its Total Time in steps; the horizon if unfinished), (E,).
-        completed: Whether it finished within the horizon, (E,).
-        dt: The control period [s].
-        belief: The robot's belief over the goals at each step, (T+1, E, G) (None: not logged).
-        waypoint: The waypoint each episode was working towards when it ended, (E,) (None: not logged).
-    """
-
-    participant: np.ndarray
-    condition: np.ndarray
-    assistance: np.ndarray
-    task: np.ndarray
-    order: np.ndarray
-    states: np.ndarray
-    tip: np.ndarray
-    direction: np.ndarray
-    phase: np.ndarray
-    idle: np.ndarray
-    switch: np.ndarray
-    end: np.ndarray
-    completed: np.ndarray
-    dt: float
-    belief: np.ndarray | None = None
-    waypoint: np.ndarray | None = None
-
-    def active(self) -> np.ndarray:
-        """(T, E): whether each episode was still running at each step."""
-        steps = np.arange(self.idle.shape[0])[:, None]
-        return steps < self.end[None, :]
 
 
 @dataclasses.dataclass(frozen=True)

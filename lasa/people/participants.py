@@ -20,7 +20,7 @@ study, by default); the robot infers its belief from a_h in every condition.
 input (a stick position z on a grid, and in Retargeting also each mode) would move the
 fork's tip by some dp and turn its direction by some dw. The participant predicts a latent
 action's effect through the arm's Jacobian at the current state (what phi(z) would do,
-:func:`lasa.people.kinematics.tip_motion`), and a Retargeting input's effect as the twist it
+:func:`lasa.world.fork.tip_motion`), and a Retargeting input's effect as the twist it
 commands (what the interface promises). They value and choose among the candidates as every
 participant does (:mod:`lasa.people.policy`: progress under their cost, a Boltzmann choice,
 idleness and patience, rationality that grows with experience); choosing the stick's rest
@@ -33,7 +33,7 @@ steps it takes (the presses and the move). The planning participants of
 the strategies people invent; perception (they see the fork's pose exactly); anticipation
 beyond one step (a person plans a path, they do not); the Likert questionnaire (not
 simulated at all: people answer it, see the teleoperation kit). The measures
-(:mod:`lasa.people.measures`) are what such a participant can show: time, idleness, goal
+(:mod:`lasa.world.measures`) are what such a participant can show: time, idleness, goal
 error and preference alignment.
 """
 
@@ -44,37 +44,38 @@ import functools
 import numpy as np
 
 from lasa.base.config import ControlConfig
-from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
+from lasa.method.episodes import Now
 from lasa.method.retarget import MODES, retarget_action
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
-from lasa.people.design import Episodes, StudyConfig
-from lasa.people.kinematics import normalise, tip_motion
-from lasa.people.loop import Setting, State, move_robots, prepare, run_steps, start
+from lasa.people.design import StudyConfig
+from lasa.people.loop import Setting, State, prepare, run_steps, start
 from lasa.people.policy import choose, progress_gain, rationality
 from lasa.world.eating import EatingTask
+from lasa.world.episodes import Episodes
+from lasa.world.fork import normalise, tip_motion
 
 __all__ = ["simulate"]
 
 
 def _foresee(
-    study: Setting, run: State, idx: np.ndarray, b: np.ndarray, la: np.ndarray
+    study: Setting, run: State, now: Now, la: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What every candidate of the running episodes ``idx`` would do, as the participant sees it.
+    """What every candidate of the running episodes would do, as the participant sees it.
 
     Returns:
         phi of the stick positions (A, K, n) (zero for Retargeting), and the predicted tip
         motion of every (mode, z) candidate: displacements and new directions, (A, M K, 3) each.
     """
-    n_k, n_m, dt = len(study.grid), len(MODES), study.control.dt
+    n_k, n_m, dt, idx = len(study.grid), len(MODES), study.control.dt, now.rows
     a_i = run.axis[idx]
     dp = np.zeros((len(idx), n_m * n_k, 3))
     new_dir = np.repeat(a_i[:, None, :], n_m * n_k, axis=1)
     phi = np.zeros((len(idx), n_k, study.task.robot.n_joints))
     if la.any():
         rows = idx[la]
-        phi[la] = decode_candidates(study.decoder, study.grid, run.s[rows], b[la])
+        phi[la] = decode_candidates(study.decoder, study.grid, now.state[la], now.belief[la])
         dp[la, :n_k], new_dir[la, :n_k] = tip_motion(run.jp[rows], run.jr[rows], a_i[la], dt * phi[la])
     if (~la).any():
         tw = study.r_twist.reshape(n_m * n_k, 6)
@@ -111,20 +112,14 @@ def _values(
 
 
 def _act(
-    study: Setting,
-    run: State,
-    t: int,
-    idx: np.ndarray,
-    choice: np.ndarray,
-    is_rest: np.ndarray,
-    phi: np.ndarray,
-    b: np.ndarray,
-) -> None:
-    """The chosen inputs of the running episodes ``idx``, recorded, and the robots' step.
+    study: Setting, run: State, now: Now, choice: np.ndarray, is_rest: np.ndarray, phi: np.ndarray
+) -> np.ndarray:
+    """The chosen inputs of the running episodes, recorded, and their human actions (A, n).
 
     The human action is the one the live step makes from the same input: latent actions with
     the stick at rest commanding nothing; Retargeting's press, rest or twist by IK.
     """
+    t, idx = now.t, now.rows
     n_k, la = len(study.grid), study.layout.is_la[idx]
     chosen_mode, chosen_z = choice // n_k, choice % n_k
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
@@ -134,20 +129,20 @@ def _act(
     if r.any():
         rows = idx[r]
         a_h[r], run.mode[rows] = retarget_action(
-            study.retarget, run.s[rows], run.mode[rows], study.grid[chosen_z[r]], presses[r]
+            study.retarget, now.state[r], run.mode[rows], study.grid[chosen_z[r]], presses[r]
         )
     run.idle[t, idx] = is_rest
     run.waited[idx] = np.where(is_rest, run.waited[idx] + 1, 0)
     run.switch[t, idx] = presses
-    move_robots(study, run, idx, a_h, b)
+    return a_h
 
 
-def _step(study: Setting, run: State, t: int, idx: np.ndarray) -> None:
-    """One control step of the running episodes ``idx``: each participant weighs every candidate
-    input one step ahead, chooses one (or rests), and the robot moves."""
-    b = belief(run.log_b[idx])
+def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
+    """The chooser: each running participant weighs every candidate input one step ahead and
+    chooses one (or rests); their human actions, (A, n)."""
+    t, idx = now.t, now.rows
     la = study.layout.is_la[idx]
-    phi, dp, new_dir = _foresee(study, run, idx, b, la)
+    phi, dp, new_dir = _foresee(study, run, now, la)
     gain, rest_col = _values(study, run, idx, la, dp, new_dir)
     pc, dt = study.config.participant, study.control.dt
     beta = rationality(study.layout, idx, t, dt, pc)
@@ -155,7 +150,7 @@ def _step(study: Setting, run: State, t: int, idx: np.ndarray) -> None:
     # nothing worth a push: rest, unless the participant has waited out their patience
     # (then they try the input their Boltzmann choice gives, as a person tries things)
     choice = np.where(wants, choice, rest_col)
-    _act(study, run, t, idx, choice, choice == rest_col, phi, b)
+    return _act(study, run, now, choice, choice == rest_col, phi)
 
 
 def simulate(
@@ -190,4 +185,4 @@ def simulate(
     study = prepare(task, decoder, cohort, control, config, seed, interfaces)
     run = start(study)
     desc = f"study: {len(cohort)} participants, {len(study.layout.part)} episodes"
-    return run_steps(study, run, functools.partial(_step, study, run), desc, progress)
+    return run_steps(study, run, functools.partial(_choose, study, run), desc, progress)

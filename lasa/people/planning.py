@@ -37,7 +37,7 @@ until their ``patience`` runs out (:class:`lasa.people.cohort.ParticipantConfig`
   each step decoding phi(z, s, b), blending with the episode's own alpha and SA member and
   updating the belief, as the executed step does
   (:func:`lasa.method.step.human_action`, :func:`lasa.method.step.advance`); the fork's pose
-  is read (:func:`lasa.people.kinematics.tip_frames`) only at the step counts of the
+  is read (:func:`lasa.world.fork.tip_frames`) only at the step counts of the
   holds. The roll is exact up to the re-plan period (the holds that will be executed as
   they are); beyond it each rolled step spans ``coarse`` control steps (the same ``advance``
   with ``coarse * dt``), for cost: 60 exact steps of every candidate at every re-plan would cost
@@ -76,14 +76,16 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
+from lasa.method.episodes import Now
 from lasa.method.retarget import MODES, retarget_action
-from lasa.method.step import advance, human_action
+from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
-from lasa.people.design import Episodes, StudyConfig
-from lasa.people.kinematics import tip_frames
-from lasa.people.loop import Setting, State, move_robots, prepare, run_steps, start
+from lasa.people.design import StudyConfig
+from lasa.people.loop import Setting, State, prepare, run_steps, start
 from lasa.people.policy import choose, progress_gain, rationality
 from lasa.world.eating import EatingTask
+from lasa.world.episodes import Episodes
+from lasa.world.fork import tip_frames
 
 __all__ = ["PlanConfig", "simulate"]
 
@@ -206,8 +208,9 @@ def _start(study: _Study) -> _Run:
     )
 
 
-def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
-    """Hold every move from every latent-action episode ``idx`` for the longest hold, in one batch.
+def _rollout_states(study: _Study, idx: np.ndarray, state: np.ndarray, log_b: np.ndarray) -> np.ndarray:
+    """Hold every move from every latent-action episode ``idx`` (at ``state``, ``log_b``) for the
+    longest hold, in one batch.
 
     Each rolled step is the executed step: decode phi(z, s, b) (every row its own z, state and
     belief: the call :func:`lasa.method.step.decode_candidates` makes, with per-row states),
@@ -219,8 +222,8 @@ def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
     """
     lay, moves, holds = study.layout, study.moves, study.hold_steps
     k = len(moves)
-    s = np.repeat(run.s[idx], k, axis=0)
-    log_b = np.repeat(run.log_b[idx], k, axis=0)
+    s = np.repeat(state, k, axis=0)
+    log_b = np.repeat(log_b, k, axis=0)
     alpha, members = np.repeat(lay.alpha[idx], k), np.repeat(lay.members_run[idx], k)
     z = np.tile(study.grid[moves], (len(idx), 1))
     snaps = np.empty((len(s), len(holds), s.shape[1]))
@@ -230,16 +233,18 @@ def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
         control = study.control if j < study.replan_steps else coarse
         b = belief(log_b)
         a_h = human_action(study.decoder.decode_numpy(z, s, b), z, rest="zero")
-        step = advance(study.task, control, s, log_b, a_h, alpha, study.goal_sets, b, members)
+        step = advance(Assist(study.task, control, alpha, members, study.goal_sets), s, log_b, a_h, b)
         s, log_b = step.state, step.log_belief
         j += 1 if j < study.replan_steps else study.coarse
         snaps[:, holds == j] = s[:, None]
     return snaps.reshape(len(idx), k, len(holds), -1)
 
 
-def _latent_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
+def _latent_values(
+    study: _Study, run: _Run, idx: np.ndarray, state: np.ndarray, log_b: np.ndarray
+) -> np.ndarray:
     """Progress rate of every (move, hold) plan of latent-action episodes ``idx``, (A, K' H)."""
-    q = _rollout_states(study, run, idx)
+    q = _rollout_states(study, idx, state, log_b)
     pos, axis, _, _ = tip_frames(study.task.robot, study.data, q.reshape(-1, q.shape[-1]))
     pos, axis = pos.reshape(len(idx), -1, 3), axis.reshape(len(idx), -1, 3)
     steps = np.maximum(np.tile(study.hold_steps, len(study.moves)), study.replan_steps)
@@ -281,14 +286,15 @@ def _rate(
     return gain / (steps * study.unit)
 
 
-def _plan(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
-    """Every running episode ``idx`` chooses its next plan (or to rest until the next re-plan)."""
+def _plan(study: _Study, run: _Run, now: Now) -> None:
+    """Every running episode chooses its next plan (or to rest until the next re-plan)."""
+    t, idx = now.t, now.rows
     lay, pc, n_h = study.layout, study.config.participant, len(study.hold_steps)
     n_la = len(study.moves) * n_h
     values = np.full((len(idx), study.n_plans), -np.inf)
     la = lay.is_la[idx]
     if la.any():
-        values[la, :n_la] = _latent_values(study, run, idx[la])
+        values[la, :n_la] = _latent_values(study, run, idx[la], now.state[la], now.log_belief[la])
     if (~la).any():
         values[~la] = _retarget_values(study, run, idx[~la])
     beta = rationality(lay, idx, t, study.control.dt, pc)
@@ -300,35 +306,34 @@ def _plan(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
     run.presses_left[idx] = np.where(wants & ~la, (plan_mode - run.mode[idx]) % len(MODES), 0)
 
 
-def _execute(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
-    """One real step of the running episodes ``idx``: a press, the held input, or rest."""
+def _execute(study: _Study, run: _Run, now: Now) -> np.ndarray:
+    """One real step of the running episodes: a press, the held input, or rest; their a_h (A, n)."""
+    t, idx, b = now.t, now.rows, now.belief
     lay = study.layout
     la = lay.is_la[idx]
     press = run.presses_left[idx] > 0
     moving = ~press & (run.hold_left[idx] > 0)
     z = study.grid[np.where(moving, run.z_plan[idx], study.rest)]
-    b = belief(run.log_b[idx])
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
     if la.any():
-        rows = idx[la]
-        a_h[la] = human_action(study.decoder.decode_numpy(z[la], run.s[rows], b[la]), z[la], rest="zero")
+        a_h[la] = human_action(study.decoder.decode_numpy(z[la], now.state[la], b[la]), z[la], rest="zero")
     r = ~la
     if r.any():
         rows = idx[r]
-        a_h[r], run.mode[rows] = retarget_action(study.retarget, run.s[rows], run.mode[rows], z[r], press[r])
+        a_h[r], run.mode[rows] = retarget_action(study.retarget, now.state[r], run.mode[rows], z[r], press[r])
     resting = ~press & ~moving
     run.idle[t, idx], run.switch[t, idx] = resting, press
     run.waited[idx] = np.where(resting, run.waited[idx] + 1, 0)
     run.presses_left[idx] -= press
     run.hold_left[idx] -= moving
-    move_robots(study, run, idx, a_h, b)
+    return a_h
 
 
-def _step(study: _Study, run: _Run, t: int, idx: np.ndarray) -> None:
-    """One control step of the running episodes ``idx``: a re-plan when one is due, then the plan's step."""
-    if t % study.replan_steps == 0:
-        _plan(study, run, t, idx)
-    _execute(study, run, t, idx)
+def _choose(study: _Study, run: _Run, now: Now) -> np.ndarray:
+    """The chooser: a re-plan when one is due, then the plan's step; the human actions (A, n)."""
+    if now.t % study.replan_steps == 0:
+        _plan(study, run, now)
+    return _execute(study, run, now)
 
 
 def simulate(
@@ -368,4 +373,4 @@ def simulate(
     study = _prepare(task, decoder, cohort, control, config, seed, interfaces, plan)
     run = _start(study)
     desc = f"planning study: {len(cohort)} participants, {len(study.layout.part)} episodes"
-    return run_steps(study, run, functools.partial(_step, study, run), desc, progress)
+    return run_steps(study, run, functools.partial(_choose, study, run), desc, progress)

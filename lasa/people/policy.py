@@ -26,8 +26,8 @@ import numpy as np
 
 from lasa.people.cohort import ParticipantConfig
 from lasa.people.design import Layout
-from lasa.people.kinematics import angle_between
 from lasa.people.users import choose_latent, gumbel_noise
+from lasa.world.fork import angle_between
 
 __all__ = ["progress_gain", "rationality", "choose"]
 

@@ -1,13 +1,11 @@
 """Algorithm 1 (LA and LA+SA) for a batch of simulated users choosing among joystick candidates.
 
-Every user of a sweep advances together, as rows of arrays. At each step one decoder call
-evaluates phi(z, s, b) for every user and every joystick candidate z on the grid (U x K rows,
-:func:`lasa.method.step.decode_candidates`); each user picks a candidate by Eq. S1
-(:mod:`lasa.people.users`), which sets a_h; and :func:`lasa.method.step.advance`, the shared
-step, blends, updates the belief and takes the safe step.
-
-Users of different methods, rationalities and streams share a batch, and so share each
-decoder call.
+The users are a chooser of the episode runner (:class:`lasa.method.episodes.Runner`). At each
+step one decoder call evaluates phi(z, s, b) for every user and every joystick candidate z on the
+grid (U x K rows, :func:`lasa.method.step.decode_candidates`); each user picks a candidate by
+Eq. S1 (:mod:`lasa.people.users`), a laggy or noisy pilot then maybe another, and the runner takes
+Algorithm 1's step. Users of different methods, rationalities and streams share a batch, and so
+share each decoder call.
 """
 
 from __future__ import annotations
@@ -15,14 +13,13 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from tqdm.auto import tqdm
 
-from lasa.base.config import ControlConfig, check_choice
+from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import members as members_of_family
-from lasa.method.belief import belief, belief_targets, uniform_log_belief
+from lasa.method.belief import uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.step import advance, check_decoder, decode_candidates, latent_grid
+from lasa.method.episodes import Now, Runner
+from lasa.method.step import Assist, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
 from lasa.world.goals import GoalTask
 
@@ -46,6 +43,41 @@ class Trajectories:
     z: np.ndarray
     human_actions: np.ndarray
     actions: np.ndarray
+
+
+class BoltzmannUsers:
+    """The chooser of simulated users (Eq. S1), and of laggy or noisy pilots among them.
+
+    Attributes:
+        z: The joystick input each user chose at each step, (T, U, d).
+    """
+
+    def __init__(
+        self,
+        decoder: ActionDecoder,
+        users: UserPopulation,
+        control: ControlConfig,
+        horizon: int,
+        noise: np.ndarray,
+        pilot_noise: np.ndarray | None,
+    ) -> None:
+        self.decoder, self.users, self.dt = decoder, users, control.dt
+        self.grid = latent_grid(control.n_z, decoder.z_dim)
+        self.noise, self.pilot_noise = noise, pilot_noise
+        self.z = np.empty((horizon, len(users), self.grid.shape[1]))
+        self._k_prev: np.ndarray | None = None
+
+    def __call__(self, now: Now) -> np.ndarray:
+        """Every user's a_h at step ``now.t``: phi of the candidate each one picks."""
+        t, users = now.t, self.users
+        phi = decode_candidates(self.decoder, self.grid, now.state, now.belief)  # (U, K, n): one call
+        costs = user_costs(users.target_at(t), now.state, phi, self.dt)
+        k = choose_latent(costs, users.beta(t), gumbel_noise(self.noise[users.stream, t]))
+        if self.pilot_noise is not None:
+            k = pilot_choice(users, k, self._k_prev, self.pilot_noise[users.stream, t], len(self.grid))
+            self._k_prev = k
+        self.z[t] = self.grid[k]
+        return phi[np.arange(len(k)), k]
 
 
 def rollout(
@@ -75,10 +107,8 @@ def rollout(
         pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
             (``users.pilot``, :func:`lasa.people.users.pilot_choice`); user u draws from
             ``pilot_noise[users.stream[u]]``. Needed only by those pilots.
-        assistance: Each user's member of :mod:`lasa.method.assistance` (built in, or added by
-            :func:`lasa.method.assistance.register_member`), shape (U,), so that
-            users of several readings share one batch (and each decoder call); default
-            ``control.assistance`` for everyone.
+        assistance: Each user's member of :mod:`lasa.method.assistance`, shape (U,), so that
+            users of several readings share one batch; default ``control.assistance`` for everyone.
 
     Returns:
         The trajectories of every user.
@@ -86,54 +116,18 @@ def rollout(
     check_decoder(decoder, task)
     if int(horizon) != horizon or horizon < 1:
         raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
-    n_users = len(users)
-    alpha = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
-    grid = latent_grid(control.n_z, decoder.z_dim)
-    if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
-        raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
-    n = task.robot.n_joints
-    members = _members(assistance, n_users)
+    n_users, k = len(users), control.n_z**decoder.z_dim
+    if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != k:
+        raise ConfigError(f"noise must have shape (streams, >= {horizon}, {k}), got {noise.shape}")
     piloted = _piloted(users, pilot_noise, horizon)
-    k_prev: np.ndarray | None = None
-
-    states = np.empty((horizon + 1, n_users, n))
-    beliefs = np.empty((horizon + 1, n_users, task.n_goals))
-    zs = np.empty((horizon, n_users, grid.shape[1]))
-    a_hs = np.empty((horizon, n_users, n))
-    acts = np.empty((horizon, n_users, n))
-    s = np.broadcast_to(task.start, (n_users, n)).copy()
-    log_b = uniform_log_belief(n_users, task.n_goals)
-    states[0], beliefs[0] = s, belief(log_b)
-    rows = np.arange(n_users)
-    goal_sets = belief_targets(task, control.likelihood)
-    for t in tqdm(range(horizon), desc=f"rollout {n_users} users", disable=not progress):
-        b = beliefs[t]  # belief(log_b), computed once per step
-        phi = decode_candidates(decoder, grid, s, b)  # (U, K, n): the one decoder call
-        costs = user_costs(users.target_at(t), s, phi, control.dt)
-        k = choose_latent(costs, users.beta(t), gumbel_noise(noise[users.stream, t]))
-        if piloted:
-            assert pilot_noise is not None
-            k = pilot_choice(users, k, k_prev, pilot_noise[users.stream, t], len(grid))
-            k_prev = k
-        step = advance(task, control, s, log_b, phi[rows, k], alpha, goal_sets, b, members)
-        s, log_b = step.state, step.log_belief
-        zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
-        states[t + 1], beliefs[t + 1] = s, belief(log_b)
-    return Trajectories(states=states, beliefs=beliefs, z=zs, human_actions=a_hs, actions=acts)
-
-
-def _members(assistance: np.ndarray | None, n_users: int) -> np.ndarray | None:
-    """Each user's assistance member, checked: one known member per user (None: the control's)."""
-    if assistance is None:
-        return None
-    members = np.asarray(assistance, dtype=str)
-    if members.shape != (n_users,):
-        raise ConfigError(
-            f"assistance must name one member per user, shape ({n_users},), got {members.shape}"
-        )
-    for name in set(members.tolist()):
-        check_choice("assistance", name, members_of_family())
-    return members
+    chooser = BoltzmannUsers(decoder, users, control, horizon, noise, pilot_noise if piloted else None)
+    alphas = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
+    start = np.broadcast_to(task.start, (n_users, task.robot.n_joints))
+    runner = Runner(
+        Assist(task, control, alphas, assistance), start, uniform_log_belief(n_users, task.n_goals)
+    )
+    record = runner.run(chooser, horizon, progress=progress, desc=f"rollout {n_users} users")
+    return Trajectories(record.states, record.beliefs, chooser.z, record.human_actions, record.actions)
 
 
 def _piloted(users: UserPopulation, pilot_noise: np.ndarray | None, horizon: int) -> bool:

@@ -23,7 +23,7 @@ move along
 Stab, dip and place point straight down and press down (theta = 0); a scoop tilts the
 fork by psi_max = 60 degrees and drags it sideways through the food (theta = 1); a cut
 presses the tilted fork's edge down and sideways (theta = 1/2). Preference Alignment
-(:func:`lasa.people.measures.alignment`) is the dot product of the fork's actual direction with d(theta) of
+(:func:`lasa.world.measures.alignment`) is the dot product of the fork's actual direction with d(theta) of
 the phase's preference: the same definition.
 
 **Strokes.** A preference is carried out as a stroke of length 5 cm along m(theta), ending
@@ -68,6 +68,7 @@ __all__ = [
     "PREFERENCES",
     "Phase",
     "TASKS",
+    "TASK_NAMES",
     "Waypoint",
     "EatingTask",
     "load_eating_robot",
@@ -146,6 +147,7 @@ TASKS: dict[str, tuple[Phase, ...]] = {
         Phase("plate", "plate", "place"),
     ),
 }
+TASK_NAMES = tuple(TASKS)  # the study's tasks, in their order
 
 
 @dataclasses.dataclass(frozen=True)

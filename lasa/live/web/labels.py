@@ -15,7 +15,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from lasa.people.kinematics import tip_frames
+from lasa.world.fork import tip_frames
 from lasa.world.goals import GoalTask
 
 __all__ = ["ASPECT", "project", "goal_labels"]

@@ -6,7 +6,7 @@ hypotheses, dependent variables, conditions, analyses, exclusions, sample size, 
 Every rule in it is the one the analysis applies, taken from where the analysis takes it:
 
 - the hypotheses' tests and decision rules: :data:`lasa.evidence.rules.RULES` (``study.h1``-``h3``);
-- the measures: the docstrings of :mod:`lasa.people.measures` (:data:`MEASURES`);
+- the measures: the docstrings of :mod:`lasa.world.measures` (:data:`MEASURES`);
 - the exclusions: :data:`lasa.evidence.sessions.LEFT_OUT` (sessions) and
   :data:`lasa.evidence.sessions.DROPPED` (participants of a within-subject test), and the
   completion bar :data:`lasa.evidence.rules.COMPLETION_BAR`;
@@ -36,7 +36,7 @@ from lasa.evidence.sessions import DROPPED, LEFT_OUT, SCALES
 from lasa.figures import study, study_analysis, study_power
 from lasa.live.studykit import QUESTIONS
 from lasa.live.web.plan import PRACTICE_TASK
-from lasa.people import measures
+from lasa.world import measures
 
 __all__ = ["HYPOTHESES", "MEASURES", "Reading", "cohort", "headline_reading", "power_table", "document"]
 

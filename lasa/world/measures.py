@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from lasa.people.design import TASK_NAMES, Episodes
-from lasa.world.eating import GOALS, PREFERENCES, TASKS, EatingTask, fork_direction
+from lasa.world.eating import GOALS, PREFERENCES, TASK_NAMES, TASKS, EatingTask, fork_direction
+from lasa.world.episodes import Episodes
 from lasa.world.robot import Robot
 
 __all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]

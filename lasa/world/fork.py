@@ -1,9 +1,8 @@
-"""The fork's tip in the eating study: its frames, how a joint step moves it, and its waypoints.
+"""The fork's tip in the eating tasks: its frames, how a joint step moves it, and its waypoints.
 
-The study's participants (:mod:`lasa.people.participants`, :mod:`lasa.people.planning`) and live
-teleoperation (:mod:`lasa.live.teleop`) read the fork's pose through :func:`tip_frames` and test
-a waypoint with :func:`waypoint_reached`, so a simulated and a real participant finish a phase by
-the same rule.
+Simulated participants (:mod:`lasa.people`) and real ones (:mod:`lasa.live`) read the fork's pose
+through :func:`tip_frames` and test a waypoint with :func:`waypoint_reached`, so both finish a
+phase by the same rule.
 """
 
 from __future__ import annotations
@@ -11,11 +10,15 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from lasa.people.design import TASK_NAMES, StudyConfig
-from lasa.world.eating import fork_frame, waypoints
+from lasa.world.eating import TASK_NAMES, fork_frame, waypoints
 from lasa.world.robot import Robot
 
+POSITION_TOL = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
+ANGLE_TOL = 0.2  # ... with the fork's direction this close (~11 degrees) [rad]
+
 __all__ = [
+    "POSITION_TOL",
+    "ANGLE_TOL",
     "tip_frames",
     "angle_between",
     "normalise",
@@ -89,10 +92,10 @@ def waypoint_reached(
     direction: np.ndarray,
     target: np.ndarray,
     target_direction: np.ndarray,
-    config: StudyConfig,
+    position_tol: float = POSITION_TOL,
+    angle_tol: float = ANGLE_TOL,
 ) -> np.ndarray:
-    """Whether the fork tip is within ``config.position_tol`` of its waypoint and its direction within
-    ``config.angle_tol`` of the waypoint's, vectorised over leading dimensions (the study and live
-    teleoperation share this test)."""
-    close = np.linalg.norm(tip - target, axis=-1) < config.position_tol
-    return close & (angle_between(direction, target_direction) < config.angle_tol)
+    """Whether the fork tip is within ``position_tol`` [m] of its waypoint and its direction within
+    ``angle_tol`` [rad] of the waypoint's, vectorised over leading dimensions."""
+    close = np.linalg.norm(tip - target, axis=-1) < position_tol
+    return close & (angle_between(direction, target_direction) < angle_tol)

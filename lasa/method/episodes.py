@@ -1,0 +1,180 @@
+"""The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop.
+
+Every loop of the package runs here: the simulated users of sims 1-4, the study's simulated
+participants, the property's held inputs, teleoperation and the web study. The :class:`Runner`
+owns what every loop shares, the state s, the belief b, the step (:func:`lasa.method.step.advance`:
+assistance, blend, belief update, safe transition), the record and stopping. What differs between
+the loops is a *chooser*: given the running episodes at step t (:class:`Now`), it returns their
+human actions a_h, decoded from a joystick input (a trained decoder, or Retargeting's IK).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from lasa.base.errors import ConfigError
+from lasa.method.belief import belief
+from lasa.method.decoder import ActionDecoder
+from lasa.method.step import Assist, StepResult, advance, human_action
+
+__all__ = ["Now", "Chooser", "Observer", "Record", "Runner", "held_input"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Now:
+    """What a chooser sees of the running episodes at step t.
+
+    Attributes:
+        t: The step, from 0.
+        rows: Indices of the running episodes in the batch, (A,).
+        state: Their states s^t, (A, n) [rad].
+        belief: Their beliefs b^t, (A, G).
+        log_belief: log b^t, (A, G) (a chooser that looks ahead steps from it).
+    """
+
+    t: int
+    rows: np.ndarray
+    state: np.ndarray
+    belief: np.ndarray
+    log_belief: np.ndarray
+
+
+Chooser = Callable[[Now], np.ndarray]  # the running episodes' human actions a_h, (A, n) [rad/s]
+Observer = Callable[[int, "Runner"], np.ndarray]  # after step t's state: the episodes that finished, (U,)
+
+
+def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> Chooser:
+    """The chooser that holds input ``z[row]`` for each episode: a_h = phi(z, s, b).
+
+    ``rest`` is the stick-at-rest convention of :func:`lasa.method.step.human_action`. A live
+    device is this chooser for one episode and one step, with the stick's current input.
+
+    Args:
+        decoder: The decoder phi.
+        z: Each episode's input, (U, d).
+        rest: ``"decode"`` (phi(0, s, b)) or ``"zero"`` (no human action at rest).
+    """
+    z = np.asarray(z, dtype=float)
+
+    def choose(now: Now) -> np.ndarray:
+        rows = z[now.rows]
+        return human_action(decoder.decode_numpy(rows, now.state, now.belief), rows, rest)
+
+    return choose
+
+
+@dataclasses.dataclass(frozen=True)
+class Record:
+    """A batch of finished episodes.
+
+    Attributes:
+        states: s^t for t = 0..T, (T+1, U, n) [rad]; held at its last value after an episode stops.
+        beliefs: b^t for t = 0..T, (T+1, U, G); held likewise.
+        human_actions: a_h^t, (T, U, n) [rad/s]; zero once an episode has stopped.
+        actions: The blended command a^t before the safety clip, (T, U, n); zero likewise.
+        end: The step each episode stopped at (T if it ran to the horizon), (U,).
+    """
+
+    states: np.ndarray
+    beliefs: np.ndarray
+    human_actions: np.ndarray
+    actions: np.ndarray
+    end: np.ndarray
+
+
+class Runner:
+    """Episodes advanced together through Algorithm 1's step; one step or a whole run.
+
+    Args:
+        assist: The step's fixed parts for every episode (:class:`lasa.method.step.Assist`).
+        start: s^0 of every episode, (U, n) [rad].
+        log_belief: log b^0 of every episode, (U, G).
+        update_belief: Update the belief with each human action (Algorithm 1, line 8); ``False``
+            holds it at b^0 (the property's confident hold).
+
+    Attributes:
+        state: s, (U, n). log_belief: log b, (U, G). running: which episodes run, (U,).
+        t: The steps taken.
+    """
+
+    def __init__(
+        self, assist: Assist, start: np.ndarray, log_belief: np.ndarray, update_belief: bool = True
+    ) -> None:
+        self.assist, self.update_belief = assist, update_belief
+        self.state = np.array(start, dtype=float)
+        self.log_belief = np.array(log_belief, dtype=float)
+        n_users = len(self.state)
+        if self.state.ndim != 2 or self.log_belief.shape != (n_users, assist.task.n_goals):
+            raise ConfigError(
+                f"start must be (U, n) and log_belief (U, {assist.task.n_goals}); "
+                f"got {self.state.shape} and {self.log_belief.shape}"
+            )
+        if len(assist.alpha) != n_users:
+            raise ConfigError(f"the assist has {len(assist.alpha)} rows, the batch {n_users} episodes")
+        self.running = np.ones(n_users, dtype=bool)
+        self.t = 0
+
+    @property
+    def belief(self) -> np.ndarray:
+        """b of every episode, (U, G)."""
+        return belief(self.log_belief)
+
+    def step(self, choose: Chooser) -> StepResult:
+        """One step of the running episodes: their chooser's a_h, then Algorithm 1's step.
+
+        Returns:
+            The step of the running rows (in ``np.flatnonzero(running)`` order).
+        """
+        rows = np.flatnonzero(self.running)
+        state, log_b = self.state[rows], self.log_belief[rows]
+        b = belief(log_b)
+        a_h = choose(Now(self.t, rows, state, b, log_b))
+        result = advance(self.assist.rows(rows), state, log_b, a_h, b)
+        self.state[rows] = result.state
+        if self.update_belief:
+            self.log_belief[rows] = result.log_belief
+        self.t += 1
+        return result
+
+    def run(
+        self,
+        choose: Chooser,
+        horizon: int,
+        observe: Observer | None = None,
+        progress: bool = False,
+        desc: str = "episodes",
+    ) -> Record:
+        """Run every episode until it stops or the horizon: record s and b, step, observe.
+
+        Args:
+            choose: The human actions of the running episodes at each step.
+            horizon: The most steps T an episode takes.
+            observe: Called with (t, runner) at every recorded state (t = 0..); returns the
+                episodes that have finished there, which stop (default: none stop).
+            progress: Show a progress bar over the steps.
+            desc: The progress bar's label.
+        """
+        if int(horizon) != horizon or horizon < 1:
+            raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
+        n_users, (n, g) = len(self.state), (self.state.shape[1], self.log_belief.shape[1])
+        states, beliefs = np.empty((horizon + 1, n_users, n)), np.empty((horizon + 1, n_users, g))
+        a_hs, acts = np.zeros((horizon, n_users, n)), np.zeros((horizon, n_users, n))
+        end = np.full(n_users, horizon)
+        with tqdm(total=horizon, desc=desc, disable=not progress) as bar:
+            for t in range(horizon + 1):
+                states[t], beliefs[t] = self.state, self.belief
+                if observe is not None:
+                    finished = observe(t, self) & self.running
+                    end[finished], self.running = t, self.running & ~finished
+                if t == horizon or not self.running.any():
+                    break
+                rows = np.flatnonzero(self.running)
+                result = self.step(choose)
+                a_hs[t, rows], acts[t, rows] = result.human_action, result.action
+                bar.update(1)
+        states[t + 1 :], beliefs[t + 1 :] = states[t], beliefs[t]
+        return Record(states=states, beliefs=beliefs, human_actions=a_hs, actions=acts, end=end)
