@@ -1,21 +1,12 @@
 r"""The property latent actions rest on (Sec. III): the rule that judges it, its tables and figure.
 
-Sec. III: while the robot is unsure of the goal, the joystick input z chooses *which goal*;
-"once the robot is confident about the human's goal, the latent actions change to convey
-the preferred manipulation". Shared autonomy (Sec. IV) then holds the tool near the likely
-goal, and the user's input fine-tunes *how* to act there. A decoder without this property
-makes the method's assistance fight its user. :func:`lasa.evidence.latent_measure.measure`
-measures it for any decoder, holding each input of a ring of stick deflections in three
-contexts: confident at a goal (does the input *stay* near the goal's preference set, and how
-much of the preference does it reach), uncertain at home (which goal does it *reach*), and
-confident at the end of a phase at a goal (does it *leave* for each other goal, under ``LA``
-and ``LA+SA``). Its rows, in :data:`COLUMNS`, are what this module reads.
+Sec. III: while the robot is unsure of the goal, the input z chooses *which goal*; once it is
+confident, z conveys *how* to act there. :func:`lasa.evidence.latent_measure.measure` measures
+this for any decoder (rows in :data:`COLUMNS`): does an input *stay* at a goal, *reach* a goal
+from home, *leave* a phase's end for each other goal.
 
-**The rule** (:func:`has_property`, :func:`holds`, :func:`choose`). Its *stay* half was
-written before any eating decoder's property was measured (0.9.0); its *leave* half was
-written after the stay-only rule's choice had been seen to strand the study's participants,
-and before any decoder it judges was trained (notebook 10 states it above the first
-training run). The property holds at goal g when
+**The rule** (:func:`has_property`, :func:`holds`, :func:`choose`). The property holds at goal g
+when
 
 - **stay**: at least :data:`STAY_SHARE` of the inputs stay at g with a confident belief,
   and the staying inputs reach a range of tilt (theta) of at least :data:`TILT_RANGE`;
@@ -23,12 +14,12 @@ training run). The property holds at goal g when
   :data:`LEAVE_COUNT` of the 64 inputs reach it within ``leave_hold`` under ``LA+SA``;
 - and every goal of the task is reached from home by some input.
 
-A decoder meets the rule when the property holds at every goal (:func:`holds`). Among
-several decoders of one task, :func:`choose` ranks by, in order: meeting the rule; every
-goal reached from home; the number of goals with the property; the number of goals with the
-stay half; the smallest leave count; the smallest share that stays at any goal; the
-smallest tilt range at any goal. The stay-only rule of 0.9.0 is the first, fourth, sixth
-and seventh of these without the leave half (:func:`stay_holds`).
+A decoder meets the rule when the property holds at every goal (:func:`holds`). :func:`choose`
+ranks several decoders of one task by, in order: meeting the rule; every goal reached from
+home; the number of goals with the property; the number with the stay half; the smallest leave
+count; the smallest share that stays at any goal; the smallest tilt range at any goal.
+:func:`stay_holds` is the stay-only rule of 0.9.0. When each half was written:
+``docs/method-notes.md``.
 """
 
 from __future__ import annotations

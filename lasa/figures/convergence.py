@@ -1,46 +1,18 @@
-r"""Sec. IV-A measured: the Lyapunov ball of LA+SA along simulated rollouts.
+r"""Sec. IV-A measured: the Lyapunov ball of LA+SA along simulated rollouts (notebook ``09_convergence``).
 
-The paper's convergence argument (Sec. IV-A) takes the Lyapunov function
+The paper's convergence argument takes :math:`V = \tfrac12 \|e\|^2`, :math:`e = g^* - s` (T1),
+and at :math:`\alpha = 0.5` finds :math:`\dot V < 0` whenever
+:math:`b(g^*)\|e\| > \delta := \sigma_h + (1 - b(g^*))\,\sigma_r` (T4). For a general blend the
+same steps give :math:`\dot V < 0` if
 
-.. math::  V(t) = \tfrac12 \|e(t)\|^2, \qquad e(t) = g^* - s(t)            \quad \text{(T1)}
+.. math::  b^*\|e\| > \delta_\alpha := \frac{1-\alpha}{\alpha}\sigma_h + (1 - b^*)\sigma_r
 
-and, with :math:`\dot s = a` and :math:`\alpha = 0.5`, finds :math:`\dot V < 0` whenever
-:math:`b(g^*)\|e\| > \delta := \sigma_h + (1 - b(g^*))\,\sigma_r` (T4), with
-:math:`\|\phi\| < \sigma_h` and :math:`\sigma_r = \max_{g \ne g^*} \|g - s\|`. For a general
-blend :math:`a = (1 - \alpha) a_h + \alpha a_r` the same steps give
-
-.. math::  \dot V = -e^\top a \le \|e\| \big[(1-\alpha)\sigma_h - \alpha b^* \|e\|
-           + \alpha (1 - b^*) \sigma_r\big],
-
-so :math:`\dot V < 0` if :math:`b^*\|e\| > \delta_\alpha := \frac{1-\alpha}{\alpha}\sigma_h
-+ (1 - b^*)\sigma_r`, which is :math:`\delta` at :math:`\alpha = 0.5`. In error units the
-ball's radius is :math:`\delta_\alpha / b^*`. Our LA+SA runs at ``ControlConfig.alpha``
-(0.2), where :math:`\delta_\alpha = 4\sigma_h + (1 - b^*)\sigma_r`: the paper's
-:math:`\delta` is then *not* a sufficient radius, and this module measures both.
-
-**Which pose is g\*.** The step from T2 to T3 needs the g* term of the assistance
-:math:`\sum_g b(g)(g - s)` to be :math:`b(g^*)\,e`, i.e. g* must be one of the points the
-assistance pulls to. Under the ``point`` reading (Eq. M2 with one pose per goal, the
-default) that is the cup's goal pose ``task.goals[goal]`` = s*(g, 0.5), not the user's
-own grasp s* = s*(g, theta*) (which the assistance does not know). So the theory's error
-``error`` is measured against ``task.goals[goal]``; the error against s*, what the user
-wants, is the extra column ``error_target``. The T4 argument is derived for ``point``
-only; for the other members of :mod:`lasa.method.assistance` the same radius is applied as the
-paper's yardstick, and the measurements say whether it still holds.
-
-**Discrete steps.** The robot moves by s' = s + dt a, so
-
-.. math::  V(t+1) - V(t) = -\Delta\, e^\top a + \tfrac12 \Delta^2 \|a\|^2 ,
-
-and the measured rate ``v_dot`` = (V(t+1) - V(t))/dt exceeds the continuous-time rate
-:math:`-e^\top a` by the *discretisation slack* ``slack`` = dt ||a||^2 / 2. V can
-therefore rise (by at most the slack) even where T4 holds. The safety clip of
-:func:`lasa.method.blend.safe_step` (joint limits, per-joint speed bound) can also change the
-step actually taken (``clipped``). Each row counts, over the steps up to the next
-recorded row, where the bound held, where V rose while it held, and where it rose by
-more than the slack: what the theory cannot explain.
-
-Notebook ``09_convergence``.
+(:func:`radius`), which is :math:`\delta` at :math:`\alpha = 0.5`. Our LA+SA runs at
+``ControlConfig.alpha`` (0.2), where the paper's :math:`\delta` is *not* a sufficient radius:
+this module measures both (:func:`run`, :func:`measure`, :func:`summary`). g* is the cup's goal
+pose ``task.goals[goal]`` (column ``error``; the user's own grasp: ``error_target``), and the
+discrete step's rate exceeds the continuous one by the slack dt ||a||^2 / 2 (``slack``). The
+derivation and both choices: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

@@ -1,55 +1,21 @@
 r"""The eating study's claims H1-H3 (notebook 11): one row per reading, each with its verdict.
 
-**The claims and their rules.** They follow the paper's own tests and significance
-level (p < .05), in the direction the paper reports; they were written after pilot runs
-of 4 and 10 participants had been seen (the study was new). One reading was added after
-the paper-scale run had been seen: ``study.h1_mean_distance``, because that run showed the
-summed Goal Error tracking the time taken; it is reported beside the paper's measure, not
-instead of it, and no rule was changed. Each is judged for the first 10 participants and for
-the whole cohort, under each member.
+The claims follow the paper's own tests and significance level (p < .05), in the direction the
+paper reports (:data:`CLAIM_TEXT`; rules in :mod:`lasa.evidence.rules`, on the numbers of
+:mod:`lasa.figures.study_tests`):
 
-- **H1** (``study.h1``), SA lowers Goal Error: *yes* if the within-subjects SA main
-  effect (2x2 repeated-measures ANOVA, F(1, N-1)) is significant with lower error under SA
-  and both pairwise comparisons (LA+SA < LA, R+SA < R; paired t-tests, Holm over the two)
-  are significant too; *partly* if the main effect is but not both comparisons; *no*
-  otherwise. ``study.h1_mean_distance`` applies the same rule to the mean distance (Goal
-  Error divided by the task's time): a sum over the task also grows with the time taken, so
-  a slower condition accrues more of it at the same distance. ``study.h1_paper_test``
-  applies the same direction-and-significance rule to the paper's reading of F(1,18): a
-  between-subjects one-way ANOVA on the 2N participant means with and without SA (which
-  ignores that they come from the same people).
-- **H2** (``study.h2``), LA lets users execute their preferences: in Dessert's scoop phase,
-  the one where the preference changes, Preference Alignment is higher with LA+SA than
-  with R+SA (paired t-test over the participants who reached that phase under both):
-  *yes* if significant, *partly* if higher but not significant, *no* otherwise (also when
-  fewer than two participants reached it under both).
-- **H3** (``study.h3``), LA+SA is the most efficient: an episode not finished within the
-  horizon has its time cut there (censored), so H3 is *not testable* when any of the four
-  conditions finishes fewer than 95% of its episodes (among the participants analysed; the
-  row names each such condition and its completion). Otherwise each participant's
-  restricted time, ``min(T, horizon)`` summed over the two tasks, of LA+SA minus each other
-  condition, Total and Idle Time, with a paired bootstrap over participants (10,000
-  resamples, percentile 95% intervals, seeded): *yes* if all six intervals lie below 0,
-  *partly* if LA+SA has the lowest restricted mean Total Time but not all six do, *no*
-  otherwise; settled when the interval of LA+SA minus the fastest other condition's Total
-  Time excludes 0. This test replaced paired t-tests on the capped times after the previous
-  version's results were seen, because they were censored (``AFTER_RESULTS``).
+- **H1** (``study.h1``), SA lowers Goal Error: the within-subjects SA main effect of a 2x2
+  repeated-measures ANOVA, with both pairwise comparisons; also as mean distance
+  (``study.h1_mean_distance``) and as the paper's between-subjects F (``study.h1_paper_test``);
+- **H2** (``study.h2``), LA lets users execute their preferences: Dessert scoop alignment,
+  LA+SA against R+SA (paired t-test);
+- **H3** (``study.h3``), LA+SA is the most efficient: restricted times, paired bootstrap;
+  *not testable* when a condition finishes fewer than 95% of its episodes.
 
-The yes / partly / no of each is its rule's (:mod:`lasa.evidence.rules`, ``Rule.tests``) on the
-numbers of :mod:`lasa.figures.study_tests`, which also guards H1 and H3 with the completion bar.
-
-**Not testable.** ``claims(untestable=...)`` marks every row ``not testable`` with the reason in
-its note (e.g. no decoder has both halves of the property, :func:`untestable_reason`), and
-``untestable_decoders`` does so per decoder reading; ``measured`` still shows the tests' numbers.
-
-Each claim has one row per reading: ``study.<claim>`` is the paper's (its measure, hindsight
-optimisation, 10 participants, the headline decoder, the headline participant model), and
-``study.<claim>@<reading>`` each other (:func:`claim_id`: measure, decoder, participant model,
-member, cohort, joined by ``+``, e.g. ``study.h2@transfers_entropy+one_step``); every other
-decoder reading is judged on H1-H3 under the paper's measures and hindsight optimisation, and
-every other participant model as the headline one.
-A verdict is settled when the 95% interval of its effect (H1, H2: the t-interval; H3: the
-bootstrap's) excludes zero, else ``undecided``.
+:func:`claims` writes one row per reading, ``study.<claim>`` the paper's and
+``study.<claim>@<reading>`` each other (:func:`claim_id`); a verdict is settled when the 95%
+interval of its effect excludes zero, else ``undecided``. Each rule in full, and when it was
+written: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -183,7 +149,8 @@ def claims(
         frames hold one reading).
 
     A verdict is settled when its effect's 95% interval lies on one side of zero: then it is the
-    tests' verdict (the rules of this module's docstring), else ``undecided`` (never ``not testable``).
+    tests' verdict (the rules: the module docstring, in full ``docs/method-notes.md``), else ``undecided``
+    (never ``not testable``).
     """
     if not models and "model" in frames["time"].columns:
         models = tuple(dict.fromkeys(frames["time"].model))

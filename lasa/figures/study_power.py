@@ -1,39 +1,17 @@
 """Who a human replication of the eating study needs: the power of H1-H3's tests, by simulation.
 
-The simulated cohort's effects, with their spread between participants, stand in for people's:
-:func:`power` draws cohorts of ``n`` participants from the simulated ones (with replacement;
-each drawn participant is relabelled as a new participant, so a participant drawn twice counts
-as two people) and applies each claim's own test to every drawn cohort, the tests and rules of
-:mod:`lasa.figures.study_tests` (:func:`~lasa.figures.study_tests.analyse`, then
-:func:`~lasa.figures.study_tests.judge`):
-
-- **H1** (``h1``): the within-subjects SA main effect on Goal Error (2x2 repeated-measures ANOVA;
-  its paired t-interval of SA - no SA);
-- **H2** (``h2``): the paired t-test of Dessert scoop alignment, LA+SA - R+SA;
-- **H3** (``h3``): LA+SA's restricted mean Total Time minus the fastest other condition's, with
-  its paired bootstrap interval, here with a reduced bootstrap (``n_resamples``, 500 by default,
-  against the claims' 10,000: percentile ends are noisier, the verdicts rarely differ).
-
-A drawn cohort is *significant* when its effect's 95% interval (``judge``'s) excludes 0 on the
-side of the whole cohort's effect (α = .05, two-sided); the **power** at ``n`` is the share of
-drawn cohorts that are. A cohort whose test cannot run (``judge`` reads ``not testable``, e.g. a
-condition finishes fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes, or the
-interval is undefined) counts as not significant, and its share is reported. When the whole
-cohort's own test cannot run, power is counted in the paper's direction and the table says so.
-:func:`needed` gives the smallest simulated cohort from which power stays at the target (80%),
-:func:`sentence` says it in one line for the guide or a notebook.
-
-Each drawn cohort costs one :func:`~lasa.figures.study_tests.analyse` (statsmodels and scipy
-tests, ~0.2-0.35 s of one core, more for larger n). Measured on the committed data (2 cores,
-one of them taken by a paper-scale notebook run): 6 sizes x 100 draws, the default, 175 s in
-one process (144 s of CPU); 6 x 200 draws 517 s with ``n_jobs=2`` (the workers first load
-lasa and torch; on a busy 2-core machine they gained nothing). Run with one BLAS thread
-(``OMP_NUM_THREADS=1``, as ``make`` sets; joblib's workers get it by themselves): with two,
-the repeated-measures ANOVA's least squares (a 4n x 4n design) made the cohorts of 40-60 twice
-as slow.
+:func:`power` draws cohorts of ``n`` participants from the simulated ones (with replacement, each
+drawn participant a new person) and applies each claim's own test to every drawn cohort
+(:func:`~lasa.figures.study_tests.analyse`, then :func:`~lasa.figures.study_tests.judge`; H3 with
+a reduced bootstrap). A drawn cohort is *significant* when its effect's 95% interval excludes 0
+on the side of the whole cohort's effect; the **power** at ``n`` is the share of drawn cohorts
+that are, a cohort whose test cannot run counting as not significant. :func:`needed` gives the
+smallest simulated cohort from which power stays at the target (80%), :func:`sentence` says it
+in one line. Run with one BLAS thread (``OMP_NUM_THREADS=1``, as ``make`` sets).
 
 These numbers rest on simulated participants: they say what a replication needs if people
-differed as the simulated ones do, not what people do.
+differed as the simulated ones do, not what people do. Each test, and the cost measured:
+``docs/method-notes.md``.
 """
 
 from __future__ import annotations

@@ -1,42 +1,23 @@
 r"""Shared autonomy as a family: the readings of the robot's assistance a_r that the paper allows.
 
-The paper instantiates shared autonomy with Eq. M2, :math:`a_r = \sum_g b(g)(g - s)`, and
-blends it with the human's action by Eq. M1. Its footnote 1 says the method "is not tied
-on this particular instantiation of shared autonomy. Other instances of shared autonomy
-can similarly be used". Eq. M2 also leaves open what the goal g *is*: a cup is reached by
-a whole curve of grasps. Each member below is one reading; ``ControlConfig.assistance``
-picks one, and every method with alpha > 0 (LA+SA, LA+SA+Entropy) uses it.
-
-A member returns the assistance a_r and a weight w in [0, 1] on the blend, so that
+The paper instantiates shared autonomy with Eq. M2, :math:`a_r = \sum_g b(g)(g - s)`, blended
+with the human's action by Eq. M1; its footnote 1 allows other instances, and Eq. M2 leaves
+open what the goal g *is*. Each member is one reading; ``ControlConfig.assistance`` picks one
+for every method with alpha > 0. A member returns a_r and a weight w in [0, 1] on the blend,
 
 .. math::  a = (1 - \alpha w)\, a_h + \alpha w\, a_r ;
 
-w = 1 for every member but ``arbitrated``, which is Eq. M1 exactly.
+w = 1 for every member but ``arbitrated``, which is Eq. M1 exactly. The members:
 
-========================  ===========================================================
-``point``                 Eq. M2 towards one pose per goal, g = s*(g, 0.5): the paper's
-                          equation read with the mid-preference grasp (the default).
-``grasp_set``             Eq. M2 towards the nearest grasp of each goal: the goal as the
-                          set of its grasps, so the assistance holds the robot at the cup
-                          and leaves the preference to the user (Sec. III's intent).
-``arbitrated``            Policy blending with confidence-based arbitration (Dragan &
-                          Srinivasa 2013): a_r pulls towards the most likely goal only,
-                          and the blend weight rises with the belief's confidence.
-``hindsight``             Hindsight-optimisation assistance (Javdani et al. 2018), the
-                          paper's own user study: the first-order hindsight-optimal action
-                          for a distance cost-to-go, each goal a set of targets whose
-                          cost is the least over them (see :func:`hindsight`).
-``hindsight_point``       The same with one target per goal, its mid-preference pose: a
-                          reading of the study (``study.*@hindsight_point``), not a default.
-========================  ===========================================================
+- :func:`point`: Eq. M2 towards one pose per goal, g = s*(g, 0.5) (the default);
+- :func:`grasp_set`: Eq. M2 towards the nearest grasp of each goal;
+- :func:`arbitrated`: confidence-based arbitration (Dragan & Srinivasa 2013);
+- :func:`hindsight`: hindsight optimisation, goals as sets of targets (Javdani et al. 2018);
+- :func:`hindsight_point`: the same with one target per goal.
 
-Every function is vectorised over users: beliefs (U, G), states (U, n), for any number
-of goals G.
-
-**A member of your own.** Any function with a member's signature (:data:`Member`: belief,
-state, goals, goal_sets, dt, action_scale -> a_r, w) joins the family with :func:`register_member`; then
-``ControlConfig(assistance=name)`` and the rollout's per-user ``assistance`` run it like the
-built-in ones (``docs/extending.md``).
+Every function is vectorised over users: beliefs (U, G), states (U, n), any number of goals G.
+:func:`register_member` adds a member of one's own (``docs/extending.md``). What each reading
+means and the derivation of ``hindsight``: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -219,28 +200,17 @@ def hindsight(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``hindsight``: hindsight optimisation with goals as sets of targets (Javdani et al. 2018).
 
-    Hindsight optimisation takes the action that minimises the expected cost-to-go over
-    goals, a_r = argmin_a sum_g b(g) Q_g(s, a), as if the goal were revealed after this step.
-    In Javdani et al.'s formulation a goal may have several targets (a bowl can be stabbed
-    or scooped: the multi-target MDP), and a goal's cost-to-go is the least over its
-    targets, V_g(s) = min_k V_{g,k}(s). Their cost is the distance still to travel at a fixed
-    speed; we make it quadratic within one step of a target (a Huber cost, radius
-    delta = Delta sigma_h) so the action does not chatter there (:func:`hindsight_value`). The
-    targets of goal g are its set ``goal_sets[g]``: the poses of each of its preferences (for
-    the eating task, a bowl's strokes; for the cups, a cup's grasps). To first order in the
-    step, Q_g(s, a) = V_g(s) + Delta grad V_g(s) . a. The gradient of a least over targets is
-    the gradient at the nearest target c_g(s), so the expected cost falls fastest down
+    The first-order hindsight-optimal action, a_r = argmin_a sum_g b(g) Q_g(s, a), for a
+    cost-to-go that is the distance to the nearest target of each goal's set ``goal_sets[g]``
+    (Huber within one step, radius delta = Delta sigma_h: :func:`hindsight_value`), taken at the
+    human's speed bound sigma_h, with c_g(s) the nearest target:
 
     .. math::  a_r = -\\sigma_h \\nabla_s \\sum_g b(g) V_g(s)
-               = \\sigma_h \\sum_g b(g) \\frac{c_g(s) - s}{\\max(\\|c_g(s) - s\\|, \\delta)} ,
+               = \\sigma_h \\sum_g b(g) \\frac{c_g(s) - s}{\\max(\\|c_g(s) - s\\|, \\delta)} .
 
-    taken at the human's speed bound sigma_h (its norm is at most sigma_h; not normalised,
-    so the assistance fades where the goals' pulls cancel, as Eq. M2's does). Its size does
-    not grow with the distance to the goals. Every pose of a goal's set is a target, so with
-    a confident belief the pull vanishes anywhere on the set: the assistance holds the goal
-    and leaves the preference to the user ("maintain this goal while the human focuses on
-    conveying their preference", Sec. III). The one-target reading, towards the goal's
-    mid-preference pose alone, is :func:`hindsight_point`.
+    With a confident belief the pull vanishes anywhere on the goal's set: the assistance holds
+    the goal and leaves the preference to the user (Sec. III). The derivation:
+    ``docs/method-notes.md``; one target per goal: :func:`hindsight_point`.
 
     Returns:
         a_r, shape (U, n), and w = 1, shape (U,).

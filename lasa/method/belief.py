@@ -8,30 +8,15 @@ multiplied by the likelihood of that action and renormalised:
     b'(g) \propto P(a_h \mid s, g)\, b(g), \qquad
     P(a_h \mid s, g) \propto \exp\!\big(-\beta_b \,(\|g - (s + \Delta a_h)\| - \|g - s\|)\big),
 
-a Boltzmann model of progress towards g: an action that brings the robot closer to g
-makes g more likely.
-
-That default has a flaw once the user's desired grasp is not g itself. Two refinements
-make the likelihood robust, and ``ControlConfig.likelihood`` selects them:
+a Boltzmann model of progress towards g. ``ControlConfig.likelihood`` selects it:
 
 - ``"goal"``, the plain progress model exactly as above: distances to the points g.
-- ``"preferences"``: distances to each goal's *set of preferred poses* (the polyline
-  s*(g, theta) over theta, :func:`belief_targets` of shape (G, K, n)), and each goal's
-  Boltzmann normaliser approximated by its best action, so that the likelihood is
-  exp(-beta_b * regret) with regret = d_g(s') - d_g(s) + min(Delta sigma_h, d_g(s)) >= 0,
-  the progress lost against the best one step could make. Far from every goal the
-  extra term is the same for all goals and cancels (this *is* the default, on sets).
-  Near a goal it stops counting "not moving further into a goal one already stands
-  at" as evidence against it.
+- ``"preferences"``: distances to each goal's set of preferred poses (:func:`belief_targets`,
+  shape (G, K, n)), each goal's normaliser approximated by its best action: the likelihood is
+  exp(-beta_b * regret), regret = d_g(s') - d_g(s) + min(Delta sigma_h, d_g(s)) >= 0.
 
-Why both matter, measured on planar5 (notebook 04 states them): with point goals the
-belief in the true cup fell to a median of 0.07 during demonstrated grasp
-adjustments; with sets but no normaliser, a user holding a top grasp against the
-assistance kept pushing along the preference curve, every push counted as evidence
-for the *other* cup, and 17% of near-optimal LA+SA users ended at the wrong cup.
-A floor keeps every goal's belief at least ``belief_floor`` (a goal-switch prior):
-without it a saturated belief could take arbitrarily long to recover when the user
-changes their mind.
+A floor keeps every goal's belief at least ``belief_floor`` (a goal-switch prior,
+:func:`update_log_belief`). Why the refinements, as measured: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

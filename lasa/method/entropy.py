@@ -1,40 +1,20 @@
 r"""The entropy regulariser of Eqs. T5-T6: latent actions that can still change goals.
 
-Shared autonomy constrains the robot near the likely goal (Sec. IV-A). If, at a
-confident context, every latent action leads to that goal, a user who changes their
-mind is trapped. The paper therefore rewards latent spaces in which, at every context
-(s, b), some z move towards *each* goal. With a score :math:`\eta(g, s, b, z)` of how
-well z conveys "goal g",
+Shared autonomy constrains the robot near the likely goal (Sec. IV-A), so the paper rewards
+latent spaces in which, at every context (s, b), some z move towards *each* goal. With a score
+:math:`\eta(g, s, b, z)` of how well z conveys "goal g",
 
 .. math::
 
     p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z), \qquad
     \mathcal{L} = \|e_a\|^2 + \lambda \sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g).
 
-**Our eta.** The posterior over goals that the robot's goal likelihood
-(:mod:`lasa.method.belief`) gives to the decoded action held for a short horizon of H
-control steps, under a *uniform* prior:
-
-.. math::
-
-    \eta(g, s, b, z) = \frac{P_H(\phi(z, s, b) \mid s, g)}{\sum_{g'} P_H(\phi(z, s, b) \mid s, g')},
-
-where :math:`P_H` is the likelihood with the step :math:`\Delta` replaced by
-:math:`H\Delta`. It is the evidence the robot would read from that input, so a spread
-p means that the user can move the belief towards any goal. Why a horizon: one
-control step moves at most :math:`\Delta\sigma_h` (0.0375 rad here), worth at most
-about 1.5 nats of evidence, so one-step scores barely separate the goals. p is then
-nearly uniform whatever the decoder does (we measured an entropy of 0.62 of a possible
-0.69 nats at confident contexts without the term), and the term has nothing to act
-on. "z moves towards g" is a statement about a short motion; H = 10 steps is one
-second. It is differentiable through
-the decoder. We leave the belief b out of the prior on purpose: with it, at a
-confident context the posterior is saturated by b itself, whatever the action, and
-its entropy has almost no gradient at exactly the contexts the term must fix.
-
-The sum over z runs over an even grid of joystick inputs, and the term is averaged
-over a random subset of each batch's contexts (cheap: the grid multiplies the decoder
-calls).
+Our eta (:func:`goal_scores`) is the posterior over goals that the belief's likelihood
+(:mod:`lasa.method.belief`) gives to the decoded action held for H control steps, under a
+uniform prior: :math:`\eta = P_H(\phi \mid s, g) / \sum_{g'} P_H(\phi \mid s, g')`, with
+:math:`P_H` the likelihood at step :math:`H\Delta`. The sum over z runs over an even grid of
+joystick inputs, and :class:`EntropyRegularizer` averages the term over a random subset of each
+batch's contexts. Why a horizon (H = 10) and a uniform prior: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

@@ -1,63 +1,23 @@
 r"""Goals never seen in training: the context map h(s, b) of Sec. IV-C.
 
-A new cup is put on the table after the decoder was trained. Its grasps were never
-demonstrated, so phi(z, s, b) has no latent action that reaches them. Without
-retraining, the robot maps its context onto an *equivalent* one at a training cup
-:math:`\hat g` (the reference), decodes there, and maps the action back:
+A new cup is put on the table after the decoder was trained; phi(z, s, b) has no latent action
+that reaches its grasps. Without retraining, the robot maps its context onto an *equivalent*
+one at a training cup :math:`\hat g` (the reference), decodes there, and maps the action back:
 
 .. math::
 
     (\hat s, \hat b) = h(s, b), \qquad \hat a_h = \phi(z, \hat s, \hat b), \qquad
     a_h = J_h(s)^{-1} \hat a_h, \quad J_h = \partial \hat s / \partial s .
 
-**The state map.** With start :math:`s_0` and new goal g (its mid-preference grasp,
-in joint space), let :math:`\lambda(s) = \langle s - s_0, g - s_0 \rangle / \|g - s_0\|^2`
-be the progress along the straight line from the start to g, and
-:math:`w(s) = \mathrm{clip}(\lambda(s) / \lambda_1, 0, 1)`, where :math:`\lambda_1 \le 1`
-is the least progress of any grasp of the new cup. Then
-
-.. math::  \hat s = s + w(s)\,u(s),
-
-the identity at the start (w = 0), and a pure offset from progress :math:`\lambda_1` on,
-so at every grasp of the new cup. Two offsets (``kind``):
-
-- ``"straight_line"``, the paper's example: :math:`u = \hat g - g`. On the straight line
-  to g it is the paper's straight-line map, the point at progress lambda going to the
-  point at the same progress on the line to :math:`\hat g` (exactly so when
-  :math:`\lambda_1 = 1`). Off the line the residual is kept, where the paper's
-  projection drops it. Near the new cup it moves the reference cup's grasp curve
-  rigidly, so only grasps whose curve is a translate of the reference one are exact.
-- ``"grasp"`` (ours, the default): :math:`u(s) = \sum_k p_k(s)\,(s^*(\hat g, \theta_k) -
-  s^*(g, \theta_k))`, with :math:`p_k \propto \exp(-\|s - s^*(g, \theta_k)\|^2 / 2\tau^2)`
-  a soft assignment of s to the new cup's grasps. Every grasp of the new cup maps onto
-  the *same* grasp of the reference cup, whatever the geometry, and the soft assignment
-  keeps h smooth.
-
-The Jacobian :math:`J_h = I + u\,\nabla w^\top + w\,\partial u / \partial s` is exact
-(tested against finite differences), and actions are mapped back by solving
-:math:`J_h a_h = \hat a_h`, one small linear system per user.
-
-**Per robot.**
-
-- ``panda``: joint 1 turns the whole arm about the base's vertical axis. A new cup on
-  the reference cup's circle about the base, given the same grasps relative to its
-  bearing from the base, has exactly the reference grasps with joint 1 turned by the
-  bearing difference. The IK of the new cup is warm-started there, so for such a cup
-  :math:`u` is a pure joint-1 offset under both kinds, and h is the exact rotation. A
-  cup at another radius adds a remainder, which only ``"grasp"`` maps exactly.
-- ``planar5``: the only rotation of a planar arm (joint 1, about the plane's normal)
-  tilts the table, so no joint-space symmetry maps one cup onto another. The new cup
-  must stand in the arm's plane, on the reference cup's side. ``"straight_line"`` then
-  approximates the new grasp curve by a translate of the reference one, an
-  approximation that worsens with distance, and ``"grasp"`` is exact at the grasps.
-
-**The belief map.** The belief and the assistance grow to G + 1 goals (the new cup
-last); the decoder still reads a belief over the G training goals. The paper gives
-:math:`\hat g` the confidence the robot has in g. We give it the confidence of the pair,
-:math:`\hat b(\hat g) = b(g) + b(\hat g)`, and keep every other training goal's belief:
-this makes h exactly the identity when the new cup stands on the reference cup, and
-keeps the decoder confident near a new cup that is close to the reference one (where
-b(g) and b(ĝ) share the mass for long). Near a distant new cup the two agree.
+The state map is :math:`\hat s = s + w(s)\,u(s)`, w the progress along the straight line from
+the start to g, clipped to 1 at the new cup's grasps. :class:`ContextMap` has two offsets u:
+``"straight_line"`` (the paper's example, :math:`u = \hat g - g`) and ``"grasp"`` (ours, the
+default: each grasp of the new cup onto the same grasp of the reference cup), with the exact
+Jacobian; :class:`TaskSpaceMap` reads the straight-line map in the gripper's space. The belief
+map gives :math:`\hat g` the pair's confidence, :math:`\hat b(\hat g) = b(g) + b(\hat g)`
+(:func:`merged_belief`). :func:`extend_task` adds the new cup, :class:`MappedDecoder` decodes
+through the map. The derivation, exactness per robot and why this belief map:
+``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -392,29 +352,18 @@ class ContextMap:
 class TaskSpaceMap:
     r"""The paper's straight-line map read in the gripper's space (kind ``"straight_line_ee"``).
 
-    Sec. IV-C: h "could project the robot's current state s to a straight-line path between the
-    start and g, and output the equivalent state :math:`\hat s` along the straight-line path between
-    the start and :math:`\hat g`". Here the path is the grasp site's. The new cup's grasps are the
-    training cup's moved by a rigid motion T of the table (a turn by the bearing difference
-    :math:`\delta` about the vertical, :func:`new_goal_frames`). With the site's pose
-    :math:`X(s) = (p, R)`, its start :math:`p_0` and the new goal's site :math:`p_g`, the progress
-    :math:`\lambda(s) = \langle p - p_0, p_g - p_0\rangle / \|p_g - p_0\|^2` gives
-    :math:`w = \mathrm{clip}(\lambda / \lambda_1, 0, 1)` (:math:`\lambda_1`: the least progress of a
-    new grasp), and the equivalent pose moves w of the way by :math:`T^{-1}`:
+    Sec. IV-C's straight-line map along the grasp site's path: with the site's pose
+    :math:`X(s) = (p, R)`, w its progress from the start towards the new goal's site (clipped
+    as in :class:`ContextMap`), and T the turn of the table by the bearing difference
+    :math:`\delta` that takes the training cup to the new one (:func:`new_goal_frames`), the
+    equivalent pose moves w of the way by :math:`T^{-1}`:
 
     .. math::  \hat p = p + w\,(T^{-1} p - p), \qquad \hat R = R_z(-w\delta)\,R,
 
-    so a point at progress lambda on the site's line to g goes to the point at the same progress
-    on its line to :math:`\hat g` (exactly when :math:`\lambda_1 = 1` and :math:`\delta = 0`), and every
-    grasp of the new cup to the same grasp of the training cup. :math:`\hat s` is that pose's IK
-    (mink, :func:`lasa.world.ik.solve_grasp_ik`), seeded and posture-regularised at
-    :math:`s + w(\hat g - g)` (the joint-space straight line's state); where the IK fails the seed is
-    kept (counted in ``fallbacks``). Actions are mapped back through the task space: a real action
-    a moves :math:`\hat X` by :math:`M(s) a` (M: the map's differential, from the site's Jacobian J),
-    a decoded :math:`\hat a` moves it by :math:`J(\hat s)\hat a`; a solves
-    :math:`[M(s); N^\top] a = [J(\hat s)\hat a; N^\top \hat a]` in least squares, N spanning
-    :math:`J(\hat s)`'s null space (the arm's redundancy keeps the decoded motion). One IK per user
-    and step: slower than the joint-space maps by about the IK's time (~2 ms on one core).
+    and :math:`\hat s` is its IK (:func:`lasa.world.ik.solve_grasp_ik`), seeded at
+    :math:`s + w(\hat g - g)`, the seed kept where the IK fails (``fallbacks``). Actions are mapped
+    back through the task space, in least squares, keeping the decoded motion in the arm's null
+    space. One IK per user and step (~2 ms on one core). The derivation: ``docs/method-notes.md``.
     """
 
     robot: Robot

@@ -1,10 +1,15 @@
 r"""The eating study with simulated participants who look one step ahead (Sec. VI).
 
-Ten people did the paper's study; here a cohort of simulated participants
-(:mod:`lasa.people.cohort`) stands in for them. Each does both tasks
-(:data:`lasa.world.eating.TASKS`) under the four conditions of the 2x2 design, in a
-counterbalanced order (:mod:`lasa.people.design`):
+A cohort of simulated participants (:mod:`lasa.people.cohort`) stands in for the paper's ten
+people. Each does both tasks (:data:`lasa.world.eating.TASKS`) under the four conditions of the
+2x2 design, in a counterbalanced order (:mod:`lasa.people.design`): ``R`` (Retargeting: a fork
+twist in one of three modes, by mink's IK, :mod:`lasa.method.retarget`), ``R+SA`` (the same
+a_h blended with the assistance by Eq. M1), ``LA`` (a_h = phi(z, s, b), the 2-D decoder;
+alpha = 0) and ``LA+SA`` (Algorithm 1). The assistance is a member of
+:mod:`lasa.method.assistance` (``hindsight``, the paper's study, by default); the robot infers
+its belief from a_h in every condition.
 
+<<<<<<< HEAD
 =========  =================================================================================
 ``R``      Retargeting: the stick commands a fork twist in one of three modes, realised by
            mink's differential IK (:mod:`lasa.method.retarget`); a button cycles the modes.
@@ -35,6 +40,14 @@ beyond one step (a person plans a path, they do not); the Likert questionnaire (
 simulated at all: people answer it, see the teleoperation kit). The measures
 (:mod:`lasa.world.measures`) are what such a participant can show: time, idleness, goal
 error and preference alignment.
+=======
+A one-step participant predicts each candidate input's motion of the fork's tip, a latent
+action's through the arm's Jacobian (:func:`lasa.people.kinematics.tip_motion`), a Retargeting
+input's as the twist it commands, and chooses as every participant does
+(:mod:`lasa.people.policy`); an input of another mode first presses the mode button. The
+planning participants of :mod:`lasa.people.planning` differ only in how far they look. What a
+simulated participant cannot stand in for: ``docs/method-notes.md``.
+>>>>>>> h/docstrings
 """
 
 from __future__ import annotations

@@ -1,25 +1,18 @@
 r"""Planning participants: the eating study's simulated people who plan over held inputs.
 
-The participants of :mod:`lasa.people.participants` look one step ahead. With a decoder whose
-good inputs only pay off after a while (the study's headline decoder at the end of a stroke:
-every input first moves the fork away from the plate, but several, *held* for a few seconds,
-reach it) they never finish, although the paper's people, who practised up to 5 minutes per
-condition, held the stick and did. The participant here plans over held inputs instead; it
-is the same person otherwise (the same cohort, learning curve, Boltzmann choice, idleness and
-patience, cost and waypoints: :mod:`lasa.people.policy`; the same loop: :mod:`lasa.people.loop`),
-so the study can run either model (:func:`simulate` has the signature and the record of
-:func:`lasa.people.participants.simulate`).
+The participants of :mod:`lasa.people.participants` look one step ahead, and with a decoder
+whose good inputs only pay off when held (the study's headline decoder at the end of a stroke)
+they never finish. The participant here plans over held inputs instead; it is the same person
+otherwise (:mod:`lasa.people.policy`; the same loop: :mod:`lasa.people.loop`), and
+:func:`simulate` has the signature and the record of :func:`lasa.people.participants.simulate`.
 
-**The plan.** Every ``replan`` seconds the participant chooses a stick input z (the same
-n_z x n_z grid; the rest position is not a plan) and a hold h from ``holds``; they hold z
-until the next re-plan, or until h ends if it is shorter (then the stick rests until the
-re-plan). A plan's value is the progress it makes towards the current waypoint, under the
-participants' cost :math:`C = \|p - p^*\| + \ell\,\angle(d, d^*)`, per step of the time it
-commits the participant to,
+Every ``replan`` seconds the participant chooses a stick input z and a hold h from ``holds``
+(:class:`PlanConfig`) by the Boltzmann rule on the plan's progress rate under their cost,
 
 .. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
     \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
 
+<<<<<<< HEAD
 a progress *rate* in units of Retargeting's best step, the scale of the one-step model's
 values, so that beta and ``idle_threshold`` keep their meaning. A hold shorter than the
 re-plan period is followed by rest until the re-plan, so its progress is spread over the
@@ -63,6 +56,12 @@ IK and assistance, and re-planning between re-plans (they push on for the rest o
 even once the fork has reached its waypoint). Their foresight of latent actions is near exact
 over 6 s: a person's is learned and imperfect, so this model is an optimistic bound for
 latent actions, as the one-step model is a pessimistic one.
+=======
+and rests when the best plan is worth less than ``idle_threshold``. Latent-action plans are
+foreseen by rolling the real step forward (coarser beyond the re-plan period); Retargeting plans
+by the twist the interface promises. Why the rate, the asymmetry, the parameters, and what the
+model cannot stand in for: ``docs/method-notes.md``.
+>>>>>>> h/docstrings
 """
 
 from __future__ import annotations

@@ -1,34 +1,17 @@
 """Did a regenerated figures folder reproduce the committed one? (``make verify``)
 
 ``python -m lasa.pipeline.verify <committed_dir> <new_dir> [--rtol R] [--atol A]`` compares two
-figures folders file by file and prints one table, then a summary line:
-
-- **every CSV** present in either folder: missing or extra; its shape; per column, the largest
-  absolute and relative difference (numeric columns) or the number of differing cells (text
-  columns); and the number of rows with a numeric cell beyond the tolerance. Rows are matched by
-  position when the files have as many rows and their key columns agree row by row
-  (:func:`key_columns`), else the file is reported as "rows differ";
-- **every other file** (PNG, MP4, Markdown): identical bytes or not;
-- **the claims table** (``claims.csv``): for every ``(id, robot)``, whether its verdict (its two
-  words ``effect`` and ``number``, and the ``reproduced`` and ``settled`` columns) is the same,
-  each differing one listed.
-
-A value finite on one side and NaN or ±inf on the other is named with its rows (``non-finite``),
-not folded into an infinite difference. Above the table, each run's ``kernels.json`` says what its
-numerical kernels ran with (:mod:`lasa.base.kernels`).
+figures folders file by file (:func:`compare_folders`) and prints one table, then a summary line:
+every CSV's shape and per-column differences (:func:`compare_csv`, rows matched by
+:func:`key_columns`), every other file's bytes (:func:`compare_bytes`), and every claim whose
+verdict (:data:`VERDICT_COLUMNS`) differs (:func:`compare_verdicts`); above it, each run's
+``kernels.json`` (:mod:`lasa.base.kernels`).
 
 The exit status is 1 if and only if a verdict differs, a claim is in one table only, or
-``claims.csv`` is missing from either folder; value differences in the CSVs are reported, never
-fatal (a new platform may round the last digit differently and still reach every verdict). A
-missing folder is an error (status 2).
-
-Tolerance: a numeric cell differs when ``|new - committed| > atol + rtol * |committed|`` (numpy's
-``isclose``; two NaN are equal). The defaults, ``rtol = 1e-6`` and ``atol = 1e-9``, mean
-"identical to print precision": every CSV is written with 6 significant digits
-(:func:`lasa.base.io.write_csv`, ``%.6g``), so two values read back either agree exactly or
-differ by at least one unit of the 6th digit, a relative step of more than 1e-6; ``rtol`` flags
-every such change. ``atol`` only lets values that are zero to any physical resolution (below
-1e-9 rad, m, s or probability, e.g. a confidence of 2e-6 moving in its 6th digit) pass.
+``claims.csv`` is missing from either folder; value differences are reported, never fatal. A
+missing folder is an error (status 2). A numeric cell differs when ``|new - committed| > atol +
+rtol * |committed|``; the defaults, ``rtol = 1e-6`` and ``atol = 1e-9``, mean "identical to
+print precision" (why: ``docs/method-notes.md``).
 """
 
 from __future__ import annotations

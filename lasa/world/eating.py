@@ -1,47 +1,24 @@
 r"""The eating task of the paper's user study (Sec. VI): bowls, a plate, a fork and preferences.
 
 The Panda holds a fork (``assets/panda/fork.xml``) over a table with three bowls and the
-user's plate (``assets/panda/eating.xml``). The goals G are, in order, the left bowl
-(rice), the middle bowl (marshmallows, and the tofu of the Entree), the right bowl
-(icing) and the plate. The study controls and measures the fork's tip (site
-``fork_tip``), whose approach axis is the fork's pointing direction.
+user's plate (``assets/panda/eating.xml``). The goals G are, in order (:data:`GOALS`), the left
+bowl (rice), the middle bowl (marshmallows, and the tofu of the Entree), the right bowl (icing)
+and the plate. The study controls and measures the fork's tip (site ``fork_tip``).
 
-**Preferences.** At a goal the user wants one of a few fine-grained motions: *stab*,
-*cut*, *scoop*, *dip* (and *place*, on the plate). Each is defined once, here, as the
-fork orientation it needs and the direction the tines travel through the food. Both are
-one-parameter families in a tilt :math:`\theta \in [0, 1]`: the fork turns by
-:math:`\psi = \theta\,\psi_{max}` from pointing straight down towards a horizontal
-direction r at the goal (sideways: the base-to-goal direction turned a quarter turn to the
-robot's left, the way the Panda's wrist can tilt that far at table height), and the tines
-move along
+**Preferences** (:data:`PREFERENCES`: *stab*, *cut*, *scoop*, *dip*, *place*) are a tilt
+:math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}` from pointing
+straight down towards a horizontal direction r at the goal, and the tines move along
 
 .. math::
 
     d(\theta) = \cos\psi\, d_{down} + \sin\psi\, r, \qquad
     m(\theta) = \frac{(1 - \theta)\, d_{down} + \theta\, r}{\|(1 - \theta)\, d_{down} + \theta\, r\|}.
 
-Stab, dip and place point straight down and press down (theta = 0); a scoop tilts the
-fork by psi_max = 60 degrees and drags it sideways through the food (theta = 1); a cut
-presses the tilted fork's edge down and sideways (theta = 1/2). Preference Alignment
-(:func:`lasa.world.measures.alignment`) is the dot product of the fork's actual direction with d(theta) of
-the phase's preference: the same definition.
-
-**Strokes.** A preference is carried out as a stroke of length 5 cm along m(theta), ending
-1 cm into the food: the tip at depth u in [0, 1] along the stroke is
-
-.. math::  p(g, \theta, u) = c_g - 0.01\, d_{up} + (u - 1)\, 0.05\, m(\theta),
-
-(u = 0 the entry point, above or beside the food; u = 1 the end). The joint
-configurations s*(g, theta, u) come from mink IK (:func:`lasa.world.ik.solve_grasp_ik`) on a
-grid of theta and u, warm-started along the grid so neighbours are smooth, as for the
-cups. A goal g in joint space (what Eq. M2 and the hindsight assistance pull towards) is
-the mid-preference entry pose s*(g, 1/2, 0), the convention of the cup task.
-
-**Tasks as phases.** *Entree*: reach the tofu bowl, cut a slice, stab it, set it on the
-plate. *Dessert*: stab a marshmallow (middle bowl), scoop it through the icing (right),
-dip it in the rice (left), set it on the plate. A phase with a preference has two
-waypoints (its stroke's entry, then its end); the reach has one (the entry of a stab
-above the tofu).
+**Strokes** run 5 cm along m(theta) and end 1 cm into the food:
+:math:`p(g, \theta, u) = c_g - 0.01\, d_{up} + (u - 1)\, 0.05\, m(\theta)`, solved by mink IK
+on a grid of theta and u (:func:`make_eating_task`). **Tasks** (:data:`TASKS`, Entree and
+Dessert) are phases, each with its waypoints (:func:`waypoints`). Why r, each preference's
+tilt, and the phases: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
