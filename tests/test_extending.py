@@ -405,3 +405,12 @@ def test_a_decoder_of_ones_own_round_trips_through_a_checkpoint_and_drives_the_s
     start, end = (np.linalg.norm(x - task.goals[[2, 0]], axis=1) for x in (state, s))
     assert np.all(end < 0.2 * start), (start, end)
     assert list(np.exp(lb).argmax(axis=1)) == [2, 0]
+
+
+def test_a_decoder_class_of_the_script_being_run_is_refused_before_anything_is_written(toy_task, tmp_path):
+    """A class defined in ``__main__`` would be recorded as ``__main__.Class``: no other process loads it."""
+    in_main = type("GoalPointer", (GoalPointer,), {"__module__": "__main__"})  # as if defined in the script
+    model = in_main(pointer_for(toy_task).config)
+    with pytest.raises(lasa.ConfigError, match=r"GoalPointer is defined in __main__.*module of its own"):
+        lasa.save_checkpoint(model, tmp_path / "pointer.pt")
+    assert list(tmp_path.iterdir()) == []

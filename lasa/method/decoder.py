@@ -23,7 +23,9 @@ that it was trained for the robot the caller expects (and, if asked, for its num
 goals). Any decoder of your own saves and loads the same way: a ``torch.nn.Module`` that
 follows :class:`ActionDecoder`, built from one frozen dataclass of plain values (its
 ``config``, whose class is its ``config_class``), as :class:`LatentActionModel` is; pass
-its class to :func:`load_checkpoint` (``docs/extending.md``).
+its class to :func:`load_checkpoint` (``docs/extending.md``). Define that class in a module
+of its own: the checkpoint records it as ``module.Class``, and :func:`save_checkpoint` refuses a
+class of ``__main__``, which no other process could import.
 """
 
 from __future__ import annotations
@@ -256,8 +258,13 @@ def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any
     ``extra`` values must be plain Python data (numbers, strings, lists, dicts) so the
     checkpoint loads with ``weights_only=True``; the training config goes here.
 
+    The class is recorded as ``module.Class``, so it must live in a module that another process
+    can import: a class defined in the script being run (or a notebook) is ``__main__.Class``,
+    which loads nowhere else.
+
     Raises:
-        ConfigError: if ``model.config`` is not a dataclass instance.
+        ConfigError: if ``model.config`` is not a dataclass instance, or the model's class (other
+            than :class:`LatentActionModel`) is defined in ``__main__``.
     """
     config = getattr(model, "config", None)
     if not dataclasses.is_dataclass(config) or isinstance(config, type):
@@ -271,7 +278,15 @@ def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any
         "extra": extra,
     }
     if type(model) is not LatentActionModel:
-        payload["decoder"] = _class_name(type(model))
+        cls = type(model)
+        if cls.__module__ == "__main__":
+            raise ConfigError(
+                f"{cls.__qualname__} is defined in __main__ (the script or notebook being run): its "
+                f"checkpoint would name the class __main__.{cls.__qualname__}, which no other process "
+                f"can import to load it. Define {cls.__qualname__} in a module of its own (e.g. "
+                "my_decoder.py) and import it from the script (docs/extending.md, 'A decoder')"
+            )
+        payload["decoder"] = _class_name(cls)
     with atomic_path(path) as tmp:
         torch.save(payload, tmp)
     return Path(path)
