@@ -333,7 +333,7 @@ def unregister_member(name: str) -> None:
 
 
 def assist(
-    name: str,
+    assistance: str,
     belief: np.ndarray,
     state: np.ndarray,
     goals: np.ndarray,
@@ -341,10 +341,10 @@ def assist(
     dt: float,
     action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The assistance a_r and the blend weight w of member ``name``.
+    """The assistance a_r and the blend weight w of member ``assistance``.
 
     Args:
-        name: One of :func:`members`: :data:`ASSISTANCE`, or a registered member.
+        assistance: One of :func:`members`: :data:`ASSISTANCE`, or a registered member.
         belief: b, shape (U, G).
         state: s, shape (U, n).
         goals: One pose per goal, shape (G, n).
@@ -355,7 +355,9 @@ def assist(
     Raises:
         ConfigError: for an unknown member.
     """
-    member = _MEMBERS.get(name)
+    member = _MEMBERS.get(assistance)
     if member is None:
-        raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, _MEMBERS))}")
+        raise ConfigError(
+            f"unknown assistance {assistance!r}; choose one of {', '.join(map(repr, _MEMBERS))}"
+        )
     return member(belief, state, goals, goal_sets, dt, action_scale)

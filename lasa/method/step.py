@@ -87,18 +87,19 @@ def advance(
     alpha: np.ndarray,
     goal_sets: np.ndarray,
     b: np.ndarray | None = None,
-    members: np.ndarray | None = None,
+    assistance: np.ndarray | None = None,
 ) -> StepResult:
     """Lines 6-9 of Algorithm 1 for a batch: assistance, blend, belief update, safe transition.
 
     ``a_h`` is the decoded human action (U, n), ``alpha`` the blend weight per user (U,),
     ``sets`` the belief likelihood's goal sets (``task.goal_sets``), ``b`` the
-    belief ``belief(log_b)`` if the caller has it already.
+    belief ``belief(log_b)`` if the caller has it already, ``assistance`` each user's member
+    (None: ``control.assistance`` for all).
     """
     a_h = sanitize(a_h)
     if b is None:
         b = belief(log_b)
-    a_r, weight = _assistance(task, control, state, b, members)
+    a_r, weight = _assistance(task, control, state, b, assistance)
     a = blend(a_h, a_r, alpha * weight)
     lik = log_likelihood(state, a_h, goal_sets, control.dt, control.belief_beta, control.likelihood_step)
     new_log_b = update_log_belief(log_b, lik, control.belief_floor)
@@ -110,7 +111,7 @@ def advance(
 
 
 def _assistance(
-    task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, members: np.ndarray | None
+    task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, assistance: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
     """a_r and the blend weight per user: ``control.assistance``, or each user's member.
 
@@ -118,11 +119,11 @@ def _assistance(
     the cups' grasp curves, or the eating task's whole stroke surfaces.
     """
     goal_sets = task.preference_sets
-    if members is None:
+    if assistance is None:
         return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
     a_r, weight = np.empty_like(state), np.empty(len(state))
-    for name in dict.fromkeys(members.tolist()):
-        rows = members == name
+    for name in dict.fromkeys(assistance.tolist()):
+        rows = assistance == name
         a_r[rows], weight[rows] = assist(
             name, b[rows], state[rows], task.goals, goal_sets, control.dt, control.action_scale
         )

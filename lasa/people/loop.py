@@ -104,7 +104,7 @@ def prepare(
         raise ConfigError(f"interfaces must be a non-empty subset of ('R', 'LA'), got {interfaces!r}")
     if decoder.z_dim != 2:
         raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
-    episodes = layout(cohort, control, tuple(config.members), interfaces)
+    episodes = layout(cohort, control, tuple(config.assistance), interfaces)
     streams = [
         np.random.default_rng([seed, int(p), int(c), int(k)])
         for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
@@ -196,7 +196,7 @@ def move_robots(setting: Setting, state: State, idx: np.ndarray, a_h: np.ndarray
         lay.alpha[idx],
         setting.goal_sets,
         b,
-        lay.members_run[idx],
+        lay.assistance_run[idx],
     )
     state.s[idx], state.log_b[idx] = result.state, result.log_belief
 
@@ -207,7 +207,7 @@ def _episodes(setting: Setting, state: State) -> Episodes:
     return Episodes(
         participant=lay.part,
         condition=np.asarray(CONDITIONS)[lay.cond],
-        assistance=lay.member,
+        assistance=lay.assistance,
         task=np.asarray(TASK_NAMES)[lay.tsk],
         order=lay.order,
         states=state.states,

@@ -175,7 +175,7 @@ def simulate(
         decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
         cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
         control: Control-loop units (dt, sigma_h, belief model, alpha); the assisted
-            conditions run under each of ``config.members``.
+            conditions run under each of ``config.assistance``.
         config: Session settings and the participants' free parameters.
         seed: Seed of the participants' choices; episode (i, condition, task) draws from its
             own stream, so participant i's episodes do not depend on the cohort's size.

@@ -221,7 +221,7 @@ def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
     k = len(moves)
     s = np.repeat(run.s[idx], k, axis=0)
     log_b = np.repeat(run.log_b[idx], k, axis=0)
-    alpha, members = np.repeat(lay.alpha[idx], k), np.repeat(lay.members_run[idx], k)
+    alpha, assistance = np.repeat(lay.alpha[idx], k), np.repeat(lay.assistance_run[idx], k)
     z = np.tile(study.grid[moves], (len(idx), 1))
     snaps = np.empty((len(s), len(holds), s.shape[1]))
     coarse = dataclasses.replace(study.control, dt=study.control.dt * study.coarse)
@@ -230,7 +230,7 @@ def _rollout_states(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
         control = study.control if j < study.replan_steps else coarse
         b = belief(log_b)
         a_h = human_action(study.decoder.decode_numpy(z, s, b), z, rest="zero")
-        step = advance(study.task, control, s, log_b, a_h, alpha, study.goal_sets, b, members)
+        step = advance(study.task, control, s, log_b, a_h, alpha, study.goal_sets, b, assistance)
         s, log_b = step.state, step.log_belief
         j += 1 if j < study.replan_steps else study.coarse
         snaps[:, holds == j] = s[:, None]
@@ -354,7 +354,7 @@ def simulate(
         task: The eating task.
         decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
         cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
-        control: Control-loop units; the assisted conditions run under each of ``config.members``.
+        control: Control-loop units; the assisted conditions run under each of ``config.assistance``.
         config: Session settings and the participants' free parameters.
         seed: Seed of the participants' choices.
         progress: Show a progress bar.

@@ -92,7 +92,7 @@ def rollout(
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != len(grid):
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {len(grid)}), got {noise.shape}")
     n = task.robot.n_joints
-    members = _members(assistance, n_users)
+    assistance = _assistance_rows(assistance, n_users)
     piloted = _piloted(users, pilot_noise, horizon)
     k_prev: np.ndarray | None = None
 
@@ -115,25 +115,25 @@ def rollout(
             assert pilot_noise is not None
             k = pilot_choice(users, k, k_prev, pilot_noise[users.stream, t], len(grid))
             k_prev = k
-        step = advance(task, control, s, log_b, phi[rows, k], alpha, goal_sets, b, members)
+        step = advance(task, control, s, log_b, phi[rows, k], alpha, goal_sets, b, assistance)
         s, log_b = step.state, step.log_belief
         zs[t], a_hs[t], acts[t] = grid[k], step.human_action, step.action
         states[t + 1], beliefs[t + 1] = s, belief(log_b)
     return Trajectories(states=states, beliefs=beliefs, z=zs, human_actions=a_hs, actions=acts)
 
 
-def _members(assistance: np.ndarray | None, n_users: int) -> np.ndarray | None:
+def _assistance_rows(assistance: np.ndarray | None, n_users: int) -> np.ndarray | None:
     """Each user's assistance member, checked: one known member per user (None: the control's)."""
     if assistance is None:
         return None
-    members = np.asarray(assistance, dtype=str)
-    if members.shape != (n_users,):
+    assistance = np.asarray(assistance, dtype=str)
+    if assistance.shape != (n_users,):
         raise ConfigError(
-            f"assistance must name one member per user, shape ({n_users},), got {members.shape}"
+            f"assistance must name one member per user, shape ({n_users},), got {assistance.shape}"
         )
-    for name in set(members.tolist()):
+    for name in set(assistance.tolist()):
         check_choice("assistance", name, members_of_family())
-    return members
+    return assistance
 
 
 def _piloted(users: UserPopulation, pilot_noise: np.ndarray | None, horizon: int) -> bool:
