@@ -283,8 +283,8 @@ def test_an_assistance_member_of_ones_own_is_called_by_the_step_and_the_rollout(
         horizon = 5
         noise = np.random.default_rng(1).random((len(users), horizon, control.n_z))
         before = len(calls)
-        members = np.array(["likeliest", "point"] * 3)
-        traj = lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=members)
+        assistance = np.array(["likeliest", "point"] * 3)
+        traj = lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=assistance)
         assert len(calls) == before + horizon and all(shape == (3, 3) for shape in calls[before:])
         assert np.all(np.isfinite(traj.states))
     finally:

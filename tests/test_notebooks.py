@@ -371,7 +371,7 @@ def test_study_outputs(executed):
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
-    members = study.Config().session.members
+    assistance = study.Config().session.assistance
     models = study.Config().participant_models  # the headline first
     n = settings["participants"]
     assert (executed / "build" / "models" / "eating_decoder_panda.pt").is_file()
@@ -391,7 +391,7 @@ def test_study_outputs(executed):
     # per participant model (the first readings_per_model of the ranking): participants x arms x tasks
     limits = study.Config().readings_per_model
     runs = [min(limits.get(m, len(readings)), len(readings)) for m in models]
-    episodes = sum(n * (2 + 2 * len(members) + 2 * (k - 1)) * 2 for k in runs)
+    episodes = sum(n * (2 + 2 * len(assistance) + 2 * (k - 1)) * 2 for k in runs)
     for spec in (study_plots.GOAL_ERROR, study_plots.TIME, study_plots.ALIGNMENT):
         frame = pd.read_csv(fig / f"{spec.NAME}.csv")
         assert list(frame.columns) == list(spec.COLUMNS)
@@ -415,7 +415,7 @@ def test_study_outputs(executed):
         "study.h2",
         "study.h3",
     }  # < 10: no cohort
-    others = {i + ("+" if "@" in i else "@") + m for i in ids for m in members[1:]}
+    others = {i + ("+" if "@" in i else "@") + m for i in ids for m in assistance[1:]}
     ranked = readings
 
     def heads(model: str) -> set[str]:
@@ -427,7 +427,7 @@ def test_study_outputs(executed):
         """A headline model's id under another model: its name after the measure and decoder."""
         base, _, reading = cid.partition("@")
         parts = reading.split("+") if reading else []
-        tail = [p for p in parts if p in members or p == "cohort"]
+        tail = [p for p in parts if p in assistance or p == "cohort"]
         return f"{base}@" + "+".join([p for p in parts if p not in tail] + [model] + tail)
 
     assert set(rows.id) == heads(models[0]) | {with_model(i, m) for m in models[1:] for i in heads(m)}
@@ -446,7 +446,7 @@ def test_study_outputs(executed):
     assert (rows.n_users.astype(int) == settings["participants"]).all()
     assert rows[rows.id == "study.h1"].measured.str.contains(r"F\(1,\d+\)").all()
     assert rows.note.str.contains(r"Measured effect: (SA (raises|lowers)|LA\+SA|no )").all()  # in words
-    assert {f"study.h1@{m}" for m in members[1:]} <= set(rows.id)  # hindsight_point and grasp_set
+    assert {f"study.h1@{m}" for m in assistance[1:]} <= set(rows.id)  # hindsight_point and grasp_set
     book = (executed / "notebooks" / "11_eating_study.ipynb").read_text()
     assert "LA+SA finished" in book and "H1 effect (10)" in book  # the SA readings side by side
     assert book.count("rests on simulated participants") >= 3  # the power sentence of H1, H2 and H3

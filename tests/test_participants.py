@@ -31,7 +31,7 @@ def eating():
 @pytest.fixture(scope="module")
 def small_study(eating):
     cohort = draw_cohort(2, seed=1)
-    config = StudyConfig(horizon=40, members=("hindsight", "grasp_set"))
+    config = StudyConfig(horizon=40, assistance=("hindsight", "grasp_set"))
     return simulate(eating, LinearDecoder(), cohort, eating.robot.control, config, seed=2, progress=False)
 
 
@@ -97,7 +97,7 @@ def test_simulation_is_deterministic_and_safe(eating, small_study):
         LinearDecoder(),
         draw_cohort(2, seed=1),
         eating.robot.control,
-        StudyConfig(horizon=40, members=("hindsight", "grasp_set")),
+        StudyConfig(horizon=40, assistance=("hindsight", "grasp_set")),
         seed=2,
         progress=False,
     )
@@ -206,7 +206,7 @@ def test_bad_settings_are_errors(eating):
     with pytest.raises(ConfigError, match="n_z"):
         StudyConfig(n_z=4)
     with pytest.raises(ConfigError, match="assistance"):
-        StudyConfig(members=("telepathy",))
+        StudyConfig(assistance=("telepathy",))
     with pytest.raises(ConfigError, match="transfer"):
         ParticipantConfig(transfer=1.5)
     with pytest.raises(ConfigError, match="participants"):
@@ -224,7 +224,7 @@ def test_bad_settings_are_errors(eating):
 def test_an_la_only_run_repeats_the_full_runs_la_episodes(eating, small_study):
     """Another decoder reading runs LA and LA+SA only; with the same decoder, the full run's episodes."""
     cohort = draw_cohort(2, seed=1)
-    config = StudyConfig(horizon=40, members=("hindsight",))
+    config = StudyConfig(horizon=40, assistance=("hindsight",))
     la = simulate(
         eating,
         LinearDecoder(),

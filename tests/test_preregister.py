@@ -56,8 +56,8 @@ def test_the_exclusions_are_the_analysis_own(text, tmp_path):
 
 
 def test_the_sample_size_and_design_come_from_the_power_and_the_settings(reading_and_table, text):
-    (member, decoder, model), table = reading_and_table
-    assert f"`{member}`" in text and f"`{decoder}`" in text and f"`{model}`" in text
+    (assistance, decoder, model), table = reading_and_table
+    assert f"`{assistance}`" in text and f"`{decoder}`" in text and f"`{model}`" in text
     for claim, rows in table.groupby("claim"):
         row = rows.sort_values("n")
         assert f"| {claim.upper()} | " + " | ".join(f"{p:.2f}" for p in row.power) + " |" in text

@@ -110,7 +110,7 @@ def test_the_default_cell_from_the_sims_is_the_default_cell_run_again(local, mod
     with the same users and settings, that is the same verdicts and numbers."""
     sims = robustness._sim_configs(TINY, {"pilot": "boltzmann", "pilot_prob": 0.0})
     control = task.robot.control
-    frames = [m.run(both(model), task, control, c, members=TINY.assistance)[0] for m, c, _ in sims]
+    frames = [m.run(both(model), task, control, c, assistance=TINY.assistance)[0] for m, c, _ in sims]
     defaults = robustness.default_frames(TINY, *frames)
     reused = robustness.run(both(model), task, control, TINY, defaults=defaults)
     pd.testing.assert_frame_equal(reused, local)

@@ -313,7 +313,7 @@ def test_a_later_look_adds_new_users_of_its_own_stream(model, task):
         betas=(75.0, 1000.0), users=3, block=2, cap=5, horizon=10, assistance=("point", "hindsight")
     )
     first, _ = sim1.run(both(model), task, ctl, cfg)
-    later, _ = sim1.run(both(model), task, ctl, cfg, look=1, members=("point",))
+    later, _ = sim1.run(both(model), task, ctl, cfg, look=1, assistance=("point",))
     assert sorted(set(first.seed)) == [0, 1, 2] and sorted(set(later.seed)) == [3, 4]
     assert (later.look == 1).all() and set(later.assistance) == {"none", "point"}
     # a look's users do not depend on the looks after it: the first look is the same with a bigger cap

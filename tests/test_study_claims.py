@@ -9,7 +9,7 @@ from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.figures import study, study_analysis, study_claims, study_tests
 
-MEMBERS = ("hindsight", "grasp_set")
+STUDY_ASSISTANCE = ("hindsight", "grasp_set")
 
 
 def frames(
@@ -22,13 +22,13 @@ def frames(
     for p in range(n):
         skill = rng.normal(0, 0.5)
         for cond in CONDITIONS:
-            for member in MEMBERS if cond.endswith("+SA") else (NO_ASSISTANCE,):
+            for assistance in STUDY_ASSISTANCE if cond.endswith("+SA") else (NO_ASSISTANCE,):
                 for task in ("Entree", "Dessert"):
                     key = {
                         "robot": "panda",
                         "participant": p,
                         "condition": cond,
-                        "assistance": member,
+                        "assistance": assistance,
                         "task": task,
                         "order": 0,
                     }
@@ -56,7 +56,7 @@ def verdicts(rows):
 
 def test_clear_effects_reproduce_every_hypothesis():
     rows, analyses = study_claims.claims(
-        frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 20
+        frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), STUDY_ASSISTANCE, 20
     )
     v = verdicts(rows)
     heads = ("study.h1", "study.h1@mean_distance", "study.h1@paper_test", "study.h2", "study.h3")
@@ -82,7 +82,7 @@ def test_clear_effects_reproduce_every_hypothesis():
 
 def test_effects_in_the_wrong_direction_do_not_reproduce():
     rows, _ = study_claims.claims(
-        frames(10, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), MEMBERS[:1], 10
+        frames(10, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), STUDY_ASSISTANCE[:1], 10
     )
     v = verdicts(rows)
     for cid in ("study.h1", "study.h1@mean_distance", "study.h1@paper_test", "study.h2", "study.h3"):
@@ -96,7 +96,7 @@ def test_a_small_effect_of_the_right_sign_is_partly():
     rng = np.random.default_rng(0)
     noisy = (a.phase == "scoop") & (a.condition == "LA+SA")
     a.loc[noisy, "alignment"] = 0.8 + 0.002 + rng.normal(0, 0.05, noisy.sum())
-    rows, analyses = study_claims.claims(data, MEMBERS[:1], 10)
+    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     mean, low, high, p, pairs = analyses[("hindsight", 10)]["h2_phases"]["scoop"]
     assert pairs == 10 and low < 0 < high and p >= 0.05  # the interval straddles zero: cannot tell
     h2 = {c.id: c for c in rows}["study.h2"]
@@ -108,7 +108,7 @@ def test_a_phase_nobody_reached_is_not_evidence():
     data = frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
     a = data["alignment"]
     a.loc[a.phase == "scoop", "alignment"] = np.nan
-    rows, analyses = study_claims.claims(data, MEMBERS[:1], 10)
+    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     assert np.isnan(analyses[("hindsight", 10)]["h2_phases"]["scoop"][0])
     assert verdicts(rows)["study.h2"] == "not testable"  # no interval: the test cannot run
     h2 = by_id(rows)["study.h2"]
@@ -121,14 +121,14 @@ def test_config_errors():
     from lasa.base.errors import ConfigError
 
     with pytest.raises(ConfigError, match="assistance"):
-        from_dict(study.Config, {"session": {"members": ["magic"]}})
+        from_dict(study.Config, {"session": {"assistance": ["magic"]}})
     with pytest.raises(ConfigError, match=r"^study settings: session\.participant\.beta_median must be "):
         from_dict(study.Config, {"session": {"participant": {"beta_median": "20"}}}, where="study")
     nested = from_dict(study.Config, {"session": {"horizon": 30, "participant": {"beta_median": 30}}})
     assert (nested.session.horizon, nested.session.participant.beta_median) == (30, 30)
     assert (
-        nested.session.members
-        == study.Config().session.members
+        nested.session.assistance
+        == study.Config().session.assistance
         == ("hindsight", "hindsight_point", "grasp_set")
     )
     with pytest.raises(ConfigError, match="video_participant"):
@@ -141,7 +141,7 @@ def test_a_slower_condition_with_the_same_distance_is_told_apart():
     err = data["goal_error"]
     sa = err.condition.str.endswith("+SA")
     err.loc[sa, "goal_error"] *= 2
-    rows, _ = study_claims.claims(data, MEMBERS[:1], 10)
+    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     v = verdicts(rows)
     assert v["study.h1"] == "no" and v["study.h1@mean_distance"] == "undecided"
     res = {c.id: c for c in rows}
@@ -156,7 +156,7 @@ def with_decoders(base: dict[str, pd.DataFrame], other: dict[str, pd.DataFrame])
             decoder=np.where(base[key].condition.str.startswith("LA"), "head", NO_ASSISTANCE)
         )
         o = other[key]
-        o = o[o.condition.str.startswith("LA") & o.assistance.isin([NO_ASSISTANCE, MEMBERS[0]])]
+        o = o[o.condition.str.startswith("LA") & o.assistance.isin([NO_ASSISTANCE, STUDY_ASSISTANCE[0]])]
         out[key] = pd.concat([head, o.assign(decoder="other")], ignore_index=True)
     return out
 
@@ -165,7 +165,7 @@ def test_another_decoder_reading_is_judged_on_its_own_la_rows():
     good = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
     bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
     data = with_decoders(good, bad)
-    rows, analyses = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     v = verdicts(rows)
     # the headline decoder keeps every reading; the other reading gets the paper's measures only
     assert v["study.h3"] == "yes" and v["study.h2"] == "yes"
@@ -224,7 +224,7 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
     data = with_decoders(good, bad)
     data["time"].loc[(data["time"].decoder == "other") & (data["time"].participant < 5), "completed"] = False
-    rows, _ = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     prop = pd.DataFrame(
         {
             "decoder": ["head", "head", "other", "other"],
@@ -272,7 +272,7 @@ def test_h3_is_not_testable_when_an_arm_misses_95_percent_completion():
     cut = time.condition.isin(["LA", "LA+SA"])
     time.loc[cut, "completed"] = False
     time.loc[cut, ["total_time", "idle_time"]] = 150.0  # every LA episode cut at the horizon
-    rows, _ = study_claims.claims(data, MEMBERS, 10, horizon=150.0)
+    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)
     h3 = by_id(rows)["study.h3"]
     # LA+SA's times, cut at 150 s, are a lower bound already above R's: no, censored
     assert h3.reproduced == "no" and h3.settled
@@ -309,7 +309,7 @@ def censored(data, conditions, share=0.5):
 )
 def test_h1_reads_not_reproduced_when_its_censored_lower_bound_contradicts_it(sa_error, cut, word):
     data = censored(frames(10, sa_error=sa_error, la_sa_time=0.0, scoop_gain=0.15), cut)
-    rows = by_id(study_claims.claims(data, MEMBERS, 10, horizon=150.0)[0])
+    rows = by_id(study_claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)[0])
     for cid in ("study.h1", "study.h1@paper_test"):
         assert rows[cid].reproduced == word and rows[cid].settled == (word == "no")
         assert rows[cid].measured.startswith("censored: lower bound" if word == "no" else word)
@@ -331,7 +331,7 @@ def test_h1_reads_not_reproduced_when_its_censored_lower_bound_contradicts_it(sa
 )
 def test_h3_reads_not_reproduced_when_la_sa_lower_bound_is_already_slower(la_sa_time, cut, word):
     data = censored(frames(10, sa_error=-2.0, la_sa_time=la_sa_time, scoop_gain=0.15), cut)
-    h3 = by_id(study_claims.claims(data, MEMBERS, 10, horizon=150.0)[0])["study.h3"]
+    h3 = by_id(study_claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)[0])["study.h3"]
     assert h3.reproduced == word
     if word == "no":
         bound = "LA+SA" in cut  # its time a lower bound only when LA+SA itself is censored
@@ -349,12 +349,12 @@ def test_the_completion_guard_is_95_percent_of_the_episodes_analysed(unfinished,
         (time.condition == "R+SA") & (time.assistance == "hindsight") & (time.participant >= 10)
     ]
     time.loc[late[:unfinished], "completed"] = False
-    cohort = by_id(study_claims.claims(data, MEMBERS[:1], 20)[0])["study.h3@cohort"]
+    cohort = by_id(study_claims.claims(data, STUDY_ASSISTANCE[:1], 20)[0])["study.h3@cohort"]
     assert (cohort.reproduced == "yes") is testable
     if not testable:
         assert cohort.measured.startswith("not testable (completion: R+SA 92.5%)")
     assert (
-        by_id(study_claims.claims(data, MEMBERS[:1], 20)[0])["study.h3"].reproduced == "yes"
+        by_id(study_claims.claims(data, STUDY_ASSISTANCE[:1], 20)[0])["study.h3"].reproduced == "yes"
     )  # first 10: all
 
 
@@ -370,18 +370,18 @@ def h3_frames(total: dict[str, float], idle: dict[str, float], n: int = 6) -> di
 def test_h3_by_hand_yes_partly_no_on_restricted_means():
     slow = {"R": 40.0, "R+SA": 45.0, "LA": 50.0}
     yes = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0})
-    rows, analyses = study_claims.claims(yes, MEMBERS[:1], 6)
+    rows, analyses = study_claims.claims(yes, STUDY_ASSISTANCE[:1], 6)
     h3 = by_id(rows)["study.h3"]
     # every participant's gap is the same: LA+SA - R = 2 x (30 - 40) = -20 s exactly, interval degenerate
     assert (h3.reproduced, h3.value, h3.ci_low, h3.ci_high, h3.settled) == ("yes", -20.0, -20.0, -20.0, True)
     assert analyses[("hindsight", 10)]["h3_gap"][0] == "R"
     # fastest on Total Time, but idle as long as R's: partly, settled (the Total gap excludes 0)
     partly = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 10.0})
-    h3 = by_id(study_claims.claims(partly, MEMBERS[:1], 6)[0])["study.h3"]
+    h3 = by_id(study_claims.claims(partly, STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
     assert (h3.reproduced, h3.settled) == ("partly", True)
     # slower than R: no, settled; the gap is to R, LA+SA - R = +10 s
     no = h3_frames({**slow, "LA+SA": 45.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0})
-    h3 = by_id(study_claims.claims(no, MEMBERS[:1], 6)[0])["study.h3"]
+    h3 = by_id(study_claims.claims(no, STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
     assert (h3.reproduced, h3.value, h3.settled) == ("no", 10.0, True)
 
 
@@ -394,7 +394,7 @@ def test_h3_runs_no_t_test_on_times(monkeypatch):
 
     monkeypatch.setattr(study_tests.stats, "pairwise", guarded)
     rows, analyses = study_claims.claims(
-        frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), MEMBERS, 10
+        frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), STUDY_ASSISTANCE, 10
     )
     assert by_id(rows)["study.h3"].reproduced == "yes"
     assert "p_corr" not in analyses[("hindsight", 10)]["h3_total"].columns
@@ -402,9 +402,9 @@ def test_h3_runs_no_t_test_on_times(monkeypatch):
 
 def test_untestable_marks_every_row_and_keeps_the_numbers():
     data = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
-    plain, _ = study_claims.claims(data, MEMBERS, 20)
+    plain, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20)
     reason = "no decoder with both halves of the property; best reading t: least share staying 0.10"
-    marked, _ = study_claims.claims(data, MEMBERS, 20, untestable=reason)
+    marked, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, untestable=reason)
     assert [c.id for c in marked] == [c.id for c in plain] and len(marked) == 20
     for before, after in zip(plain, marked, strict=True):
         assert after.reproduced == "not testable" and not after.settled, after.id
@@ -426,7 +426,7 @@ def test_untestable_decoders_marks_that_readings_rows_only():
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15, seed=1),
     )
     rows, _ = study_claims.claims(
-        data, MEMBERS, 10, decoders=("head", "other"), untestable_decoders={"other": "why"}
+        data, STUDY_ASSISTANCE, 10, decoders=("head", "other"), untestable_decoders={"other": "why"}
     )
     v = verdicts(rows)
     assert {v[f"study.{h}@other"] for h in ("h1", "h2", "h3")} == {"not testable"}
@@ -436,7 +436,7 @@ def test_untestable_decoders_marks_that_readings_rows_only():
 
 def test_each_participant_model_is_judged_and_named_in_the_ids():
     data = with_decoders_and_models()
-    rows, analyses = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     v = verdicts(rows)
     # model a (the first, the headline) keeps the paper's ids; model b names itself, after the decoder
     assert v["study.h3"] == "yes" and v["study.h3@b"] == "no" and v["study.h1@b+cohort"] == "yes"
@@ -467,7 +467,7 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
         (data["time"].model == "b") & (data["time"].condition == "R") & (data["time"].participant == 0),
         "completed",
     ] = False
-    rows, _ = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
+    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     prop = pd.DataFrame(
         {"decoder": ["head", "other"], "has_property": [True, False], "stay_share": [0.6, 0.1]}
     )
@@ -555,11 +555,14 @@ def test_the_members_table_sets_the_sa_readings_side_by_side():
     data = {k: v.assign(model="planning") for k, v in data.items()}
     time = data["time"]
     time.loc[
-        (time.assistance == MEMBERS[1]) & (time.condition == "LA+SA") & (time.participant < 4), "completed"
+        (time.assistance == STUDY_ASSISTANCE[1]) & (time.condition == "LA+SA") & (time.participant < 4),
+        "completed",
     ] = False
-    rows, _ = study_claims.claims(data, MEMBERS, 20, decoders=("head", "other"))
-    table = study_claims.members_table(study_analysis.completion(time), rows, MEMBERS, "head", "planning")
-    assert list(table.SA) == list(MEMBERS) and list(table.headline) == [True, False]
+    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    table = study_claims.members_table(
+        study_analysis.completion(time), rows, STUDY_ASSISTANCE, "head", "planning"
+    )
+    assert list(table.SA) == list(STUDY_ASSISTANCE) and list(table.headline) == [True, False]
     head, other = table.iloc[0], table.iloc[1]
     assert head["LA+SA finished"] == 1.0 and other["LA+SA finished"] == 0.8  # 8 of 40 episodes cut
     assert head["R+SA finished"] == other["R+SA finished"] == 1.0

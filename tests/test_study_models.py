@@ -45,7 +45,7 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
     task = make_eating_task()
     config = study.Config(
         participants=2,
-        session=StudyConfig(horizon=20, members=("hindsight",)),
+        session=StudyConfig(horizon=20, assistance=("hindsight",)),
         participant_models=("one_step", "twin"),
     )
     decoders = {"head": LinearDecoder(0), "other": LinearDecoder(1)}
@@ -63,7 +63,7 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
         time[time.model == m].drop(columns="model").reset_index(drop=True) for m in ("one_step", "twin")
     )
     pd.testing.assert_frame_equal(one, two)  # the same simulate, seed and cohort: the same episodes
-    rows, analyses = study_claims.claims(frames, config.session.members, 2, ("head", "other"), horizon=2.0)
+    rows, analyses = study_claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3", "study.h3@twin", "study.h2@other+twin", "study.h1@mean_distance+twin"} <= ids
     # 20 steps of 0.1 s: nobody finishes, so H3 is not testable under each model
@@ -76,7 +76,7 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
     task = make_eating_task()
     config = study.Config(
         participants=2,
-        session=StudyConfig(horizon=20, members=("hindsight",)),
+        session=StudyConfig(horizon=20, assistance=("hindsight",)),
         participant_models=("one_step", "twin"),
         readings_per_model={"twin": 1},
     )
@@ -85,7 +85,7 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
     assert twin == [("R", "LA")] and list(episodes["twin"]) == ["head"]
     time = frames["time"]
     assert set(time[time.model == "twin"].decoder) == {"head", "none"}
-    rows, _ = study_claims.claims(frames, config.session.members, 2, ("head", "other"), horizon=2.0)
+    rows, _ = study_claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3@twin", "study.h2@other"} <= ids and not any("other+twin" in i for i in ids)
     with pytest.raises(ConfigError, match="readings_per_model"):

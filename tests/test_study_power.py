@@ -20,7 +20,7 @@ from lasa.figures.study import for_member
 from lasa.figures.study_power import needed, power, sentence
 
 FIGURES = Path(__file__).resolve().parents[1] / "figures"
-READING = {"member": "hindsight", "decoder": "transfers", "model": "planning"}
+READING = {"assistance": "hindsight", "decoder": "transfers", "model": "planning"}
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +33,7 @@ def committed() -> dict[str, pd.DataFrame]:
     out = {}
     for key in ("goal_error", "time", "alignment"):
         frame = pd.read_csv(FIGURES / f"study_{key}.csv")
-        out[key] = for_member(frame, READING["member"], 20, READING["decoder"], READING["model"])
+        out[key] = for_member(frame, READING["assistance"], 20, READING["decoder"], READING["model"])
     return out
 
 
@@ -206,7 +206,7 @@ def test_sentence_names_whom_to_recruit():
         ({"draws": 0}, "draws"),
         ({"n_resamples": 0}, "n_resamples"),
         ({"n_jobs": 0}, "n_jobs"),
-        ({"member": "nobody"}, "member"),
+        ({"assistance": "nobody"}, "assistance"),
         ({"decoder": "nothing"}, "decoder"),
         ({"model": "nobody"}, "participant model"),
     ],

@@ -42,7 +42,7 @@ def toy(frame: pd.DataFrame) -> list[Claim]:
 
 
 def users(
-    xs: list[float], ys: list[float] | None = None, member: str = "point", start: int = 0
+    xs: list[float], ys: list[float] | None = None, assistance: str = "point", start: int = 0
 ) -> pd.DataFrame:
     ys = [1.0] * len(xs) if ys is None else ys
     return pd.DataFrame(
@@ -51,7 +51,7 @@ def users(
             "seed": np.arange(start, start + len(xs)),
             "x": xs,
             "y": ys,
-            "assistance": member,
+            "assistance": assistance,
         }
     )
 
@@ -115,10 +115,12 @@ def test_the_design_fixes_its_looks_and_guard():
 def _runner(xs_by_look: list[list[float]], log: list):
     """A run_block of toy users: look k's new users have the values xs_by_look[k]."""
 
-    def run(look, members):
-        log.append((look, members))
+    def run(look, assistance):
+        log.append((look, assistance))
         start = sum(len(x) for x in xs_by_look[:look])
-        return pd.concat([users(xs_by_look[look], member=m, start=start) for m in members], ignore_index=True)
+        return pd.concat(
+            [users(xs_by_look[look], assistance=m, start=start) for m in assistance], ignore_index=True
+        )
 
     return run
 
@@ -157,12 +159,12 @@ def test_a_headline_member_outside_the_members_is_an_error():
 
 
 def test_member_frames_share_the_unassisted_rows_of_their_own_users():
-    la = users([0.0] * 6, member="none")
-    frame = pd.concat([la, users([0.5] * 6, member="point"), users([-0.5] * 3, member="grasp_set")])
+    la = users([0.0] * 6, assistance="none")
+    frame = pd.concat([la, users([0.5] * 6, assistance="point"), users([-0.5] * 3, assistance="grasp_set")])
     assert len(member_frame(frame, "point")) == 12
     assert len(member_frame(frame, "grasp_set")) == 6  # LA rows of users 0-2 only (paired)
     assert member_of(member_frame(frame, "point")) == "point"
-    mixed = pd.concat([users([0.5], member="point"), users([0.5], member="hindsight")])
+    mixed = pd.concat([users([0.5], assistance="point"), users([0.5], assistance="hindsight")])
     with pytest.raises(ConfigError, match="mixes assistance members"):
         member_of(mixed)
 

@@ -320,13 +320,13 @@ def member_of(frame: pd.DataFrame) -> str:
     return names[0] if names else NO_ASSISTANCE
 
 
-def member_frame(frame: pd.DataFrame, member: str) -> pd.DataFrame:
-    """The rows of one assistance member, with the unassisted rows (LA) every member shares.
+def member_frame(frame: pd.DataFrame, assistance: str) -> pd.DataFrame:
+    """The rows of member ``assistance``, with the unassisted rows (LA) every member shares.
 
     LA rows of users the member's arms never ran (later blocks of a sequential sweep run the
     headline arms only) are left out, so the member is compared on paired users.
     """
-    own = frame["assistance"] == member
+    own = frame["assistance"] == assistance
     shared = frame["assistance"] == NO_ASSISTANCE
     if own.any() and USER in frame:
         shared &= frame[USER].isin(frame.loc[own, USER].unique())
@@ -352,7 +352,7 @@ class Sequential:
 def sequential(
     run_block: Callable[[int, tuple[str, ...]], pd.DataFrame],
     evaluate: Evaluate,
-    members: tuple[str, ...],
+    assistance: tuple[str, ...],
     default: str,
     design: Design = Design(),
     n_boot: int = N_BOOT,
@@ -362,10 +362,10 @@ def sequential(
     """Add users in blocks until every headline verdict is settled or the cap is reached.
 
     Args:
-        run_block: ``(look, members) -> rows`` of that look's new users
+        run_block: ``(look, assistance) -> rows`` of that look's new users
             (:func:`block_users`), under those members (LA rows labelled ``none``).
         evaluate: The figure's rules (see :func:`assess`).
-        members: Every member to judge; the first look runs all of them.
+        assistance: Every member to judge; the first look runs all of them.
         default: The headline member (the paper's reading); later looks run only it.
         design: Users per look and the cap (:class:`Design`).
         n_boot: Bootstrap resamples per interval.
@@ -373,11 +373,11 @@ def sequential(
         fast: The figure's vectorized bootstrap, see :func:`assess`.
 
     Raises:
-        ConfigError: if ``default`` is not among ``members``.
+        ConfigError: if ``default`` is not among ``assistance``.
     """
-    if default not in members:
-        raise ConfigError(f"the headline member {default!r} is not among the members {members}")
-    frame = run_block(0, members).assign(look=0)
+    if default not in assistance:
+        raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
+    frame = run_block(0, assistance).assign(look=0)
     log = []
     for look, size in enumerate(design.sizes):
         if look > 0:
@@ -394,7 +394,7 @@ def sequential(
     first = frame[frame.look == 0]
     others = {
         m: assess(evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast)
-        for m in members
+        for m in assistance
         if m != default
     }
     rows: list[Claim] = []

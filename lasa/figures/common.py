@@ -50,8 +50,8 @@ T = TypeVar("T")
 __all__ = [
     "Decoders",
     "arms",
-    "check_members",
-    "members_of",
+    "check_assistance",
+    "swept_assistance",
     "pilot_uniforms",
     "as_decoders",
     "check_methods",
@@ -82,31 +82,31 @@ def check_methods(methods: tuple[str, ...]) -> None:
             raise ConfigError(f"unknown method {method!r}; choose from {METHODS}")
 
 
-def check_members(members: tuple[str, ...]) -> None:
+def check_assistance(assistance: tuple[str, ...]) -> None:
     """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one."""
-    if not members:
+    if not assistance:
         raise ConfigError("assistance must name at least one member")
-    for name in members:
+    for name in assistance:
         check_choice("assistance", name, BUILT_IN_ASSISTANCE)
 
 
-def members_of(control: ControlConfig, members: tuple[str, ...]) -> tuple[str, ...]:
+def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tuple[str, ...]:
     """The members a sweep runs: the headline one (``control.assistance``) first, then the rest."""
-    return tuple(dict.fromkeys((control.assistance, *members)))
+    return tuple(dict.fromkeys((control.assistance, *assistance)))
 
 
-def arms(methods: tuple[str, ...], members: tuple[str, ...]) -> list[tuple[str, str]]:
+def arms(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
     """(method, assistance) pairs of a sweep: LA once, every assisted method under every member.
 
     LA has alpha = 0, so no member changes it (Eq. M1 gives a = a_h exactly); its rows
     carry the assistance ``none`` and every member's comparison shares them.
     """
     out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
-    return out + [(m, a) for a in members for m in methods if m != "LA"]
+    return out + [(m, a) for a in assistance for m in methods if m != "LA"]
 
 
 def sweep_grid(
-    methods: tuple[str, ...], members: tuple[str, ...], conditions: Sequence[T], n_users: int
+    methods: tuple[str, ...], assistance: tuple[str, ...], conditions: Sequence[T], n_users: int
 ) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
     """Every user of a sweep: (method, assistance) arm x condition x user, in that order.
 
@@ -114,10 +114,10 @@ def sweep_grid(
         Each user's method, assistance member (``none`` for LA, :func:`arms`), condition
         (e.g. its beta) and user, the index of its cup, preference and random stream.
     """
-    grid = list(itertools.product(arms(methods, members), conditions, range(n_users)))
+    grid = list(itertools.product(arms(methods, assistance), conditions, range(n_users)))
     method = np.array([m for (m, _), _, _ in grid])
-    member = np.array([a for (_, a), _, _ in grid])
-    return method, member, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
+    assistance_rows = np.array([a for (_, a), _, _ in grid])
+    return method, assistance_rows, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
 
 
 def check_pilot(pilot: str, prob: float) -> None:
@@ -145,7 +145,7 @@ class LooksConfig:
     def __post_init__(self) -> None:
         validate(self)
         check_design(self.users, self.block, self.cap)
-        check_members(self.assistance)
+        check_assistance(self.assistance)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -241,7 +241,7 @@ def run_population(
     alpha = np.array([method_alpha(m, control) for m in methods])
     if assistance is None:
         assistance = np.full(len(methods), control.assistance)
-    members = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
+    assistance = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
     keys = np.array([METHOD_DECODER[m] for m in methods])
     pilot_noise = None
     if users.pilot_prob > 0:
@@ -266,7 +266,7 @@ def run_population(
                     noise,
                     progress,
                     pilot_noise,
-                    members[idx],
+                    assistance[idx],
                 ),
             )
         )
@@ -294,7 +294,7 @@ def judge(
     """Run a figure's sweep in looks until its headline verdicts are settled (or the cap).
 
     Args:
-        module: The figure's module (``run(..., look=, members=)`` and ``claims``).
+        module: The figure's module (``run(..., look=, assistance=)`` and ``claims``).
         decoders: Passed to ``module.run``.
         task: The task.
         control: Control-loop units; ``control.assistance`` is the headline member.
@@ -311,15 +311,17 @@ def judge(
     full: list[Any] = []
     first: list[Any] = []
 
-    def block(look: int, members: tuple[str, ...]) -> Any:
-        frame, extra = module.run(decoders, task, control, config, progress, look=look, members=members)
+    def block(look: int, assistance: tuple[str, ...]) -> Any:
+        frame, extra = module.run(decoders, task, control, config, progress, look=look, assistance=assistance)
         full.append(frame)
         if look == 0:
             first.append(extra)
         return frame if reduce is None else reduce(frame)
 
     design = Design(config.users, config.block, config.cap)
-    members = members_of(control, config.assistance)
+    assistance = swept_assistance(control, config.assistance)
     fast = getattr(module, "boot_values", None)
-    outcome = sequential(block, module.claims, members, control.assistance, design, config.n_boot, fast=fast)
+    outcome = sequential(
+        block, module.claims, assistance, control.assistance, design, config.n_boot, fast=fast
+    )
     return pd.concat(full, ignore_index=True), outcome, first[0]

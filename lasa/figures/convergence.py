@@ -267,8 +267,8 @@ def run(
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []
-    for member in config.assistance:
-        ctl = dataclasses.replace(control, assistance=member)
+    for assistance in config.assistance:
+        ctl = dataclasses.replace(control, assistance=assistance)
         traj: Trajectories = rollout(
             decoder, task, users, control.alpha, ctl, config.horizon, noise, progress
         )
@@ -287,7 +287,7 @@ def run(
         n_users, n_rows = len(user), len(times)
         cols: dict[str, object] = {
             "robot": task.robot.name,
-            "assistance": member,
+            "assistance": assistance,
             "beta": np.repeat(beta, n_rows),
             USER: np.repeat(user, n_rows),
             "t": np.tile(times, n_users),
@@ -335,7 +335,7 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
     check_range("settle", settle, 0.0, 1.0, low_open=True)
     check_range("quantile", quantile, 0.0, 1.0)
     rows = []
-    for (robot, member, beta), part in frame.groupby(["robot", "assistance", "beta"], sort=False):
+    for (robot, assistance, beta), part in frame.groupby(["robot", "assistance", "beta"], sort=False):
         last = part.t.max()
         late = part[part.t >= (1.0 - settle) * last]
         end = part[part.t == last]
@@ -350,7 +350,7 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
         rows.append(
             {
                 "robot": robot,
-                "assistance": member,
+                "assistance": assistance,
                 "beta": beta,
                 "users": int(part[USER].nunique()),
                 "steps": int(sums["steps"]),
@@ -374,7 +374,7 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
     return pd.DataFrame(rows)
 
 
-def _members(table: pd.DataFrame) -> list[str]:
+def _assistance_present(table: pd.DataFrame) -> list[str]:
     present = set(table.assistance)
     return [m for m in ASSISTANCE if m in present]
 
@@ -392,17 +392,17 @@ def _bars(ax: Axes, table: pd.DataFrame, column: str, hatched: bool = False) -> 
     Filled bars carry a dot at their top, so a value of zero still shows; hatched bars
     are outlines in the member's colour, drawn over the filled ones.
     """
-    members = _members(table)
+    assistance = _assistance_present(table)
     betas = sorted(table.beta.unique())
-    width = 0.8 / len(members)
-    for i, member in enumerate(members):
-        color = MEMBER_COLORS[member]
-        values = table[table.assistance == member].set_index("beta").reindex(betas)[column].to_numpy()
+    width = 0.8 / len(assistance)
+    for i, sa in enumerate(assistance):
+        color = MEMBER_COLORS[sa]
+        values = table[table.assistance == sa].set_index("beta").reindex(betas)[column].to_numpy()
         x = np.arange(len(betas)) - 0.4 + width * (i + 0.5)
         if hatched:
             ax.bar(x, values, width, fill=False, hatch="//", edgecolor=color, lw=0.8)
         else:
-            ax.bar(x, values, width, color=color, alpha=0.85, label=member)
+            ax.bar(x, values, width, color=color, alpha=0.85, label=sa)
             ax.plot(x, values, "o", color=color, ms=4, mec="0.2", mew=0.5)
     ax.set_xticks(np.arange(len(betas)), [f"{b:g}" for b in betas])
     ax.set_xlabel(r"user rationality $\beta$")
@@ -418,13 +418,13 @@ def plot(table: pd.DataFrame) -> Figure:
     fig, rows = robot_rows(table, 4, (18, 3.8))
     stats = summary(table)
     for name, part, row in rows:
-        members = _members(part)
+        assistance = _assistance_present(part)
         beta = part.beta.max()
         top = part[part.beta == beta]
-        for member in members:
-            color = MEMBER_COLORS[member]
-            sub = top[top.assistance == member]
-            _band(row[0], sub, "v", color, label=member)
+        for sa in assistance:
+            color = MEMBER_COLORS[sa]
+            sub = top[top.assistance == sa]
+            _band(row[0], sub, "v", color, label=sa)
             _band(row[1], sub, "error", color)
         for column, ls, label in (
             ("delta", "--", r"$\delta$ ($\alpha$ = 0.5)"),

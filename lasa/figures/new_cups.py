@@ -21,7 +21,7 @@ import pandas as pd
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
-from lasa.figures.common import Decoders, as_decoders, episodes, members_of
+from lasa.figures.common import Decoders, as_decoders, episodes, swept_assistance
 from lasa.method.decoder import ActionDecoder
 from lasa.method.newgoals import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
@@ -142,10 +142,11 @@ class Sweep:
             look: as :func:`lasa.figures.sim4.run` has them.
         alpha: The method's blend weight; noise: the users' noise, as
             :func:`lasa.figures.common.episodes` draws it.
-        members: The members the method's assistance runs under (``none`` alone without it).
+        assistance: The members the method's assistance runs under (``none`` alone without it).
         n_users: Users per member; first: the look's first user.
         users: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
-            member: its member; assisted: ``member``, or None when the method has no assistance.
+            assistance_rows: its member; assisted: ``assistance_rows``, or None when the method has
+            no assistance.
         grown: The task grown by each new cup; distances: each new cup's distance from the
             reference goal (joint space, between mid-preference goals) [rad]; scale: the
             largest of them; cup_distances: each new cup's distance from the reference cup on
@@ -160,12 +161,12 @@ class Sweep:
     look: int
     alpha: float
     noise: np.ndarray
-    members: tuple[str, ...]
+    assistance: tuple[str, ...]
     n_users: int
     first: int
     users: np.ndarray
     theta: np.ndarray
-    member: np.ndarray
+    assistance_rows: np.ndarray
     assisted: np.ndarray | None
     grown: list[CupTask]
     distances: np.ndarray
@@ -182,7 +183,7 @@ class Sweep:
         config: Config,
         progress: bool = False,
         look: int = 0,
-        members: tuple[str, ...] | None = None,
+        assistance: tuple[str, ...] | None = None,
     ) -> Sweep:
         """The sweep of :func:`lasa.figures.sim4.run` (its arguments).
 
@@ -196,14 +197,14 @@ class Sweep:
             decoder, task, control, n_users, config.horizon, block_seed(config.seed, look)
         )
         alpha = method_alpha(config.method, control)
-        if members is None:
-            members = members_of(control, config.assistance)
-        members = members if alpha > 0 else (NO_ASSISTANCE,)
+        if assistance is None:
+            assistance = swept_assistance(control, config.assistance)
+        assistance = assistance if alpha > 0 else (NO_ASSISTANCE,)
         cups = new_cup_positions(task, config)
         grown = [extend_task(task, p, config.ref_goal) for p in cups]
         dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
         on_table = np.linalg.norm(cups - task.robot.goal_positions()[config.ref_goal], axis=1)
-        member = np.repeat(members, n_users)
+        assistance_rows = np.repeat(assistance, n_users)
         return cls(
             decoder,
             task,
@@ -213,13 +214,13 @@ class Sweep:
             look,
             alpha,
             noise,
-            members,
+            assistance,
             n_users,
             first,
-            users=np.tile(np.arange(n_users), len(members)),
-            theta=np.tile(theta, len(members)),
-            member=member,
-            assisted=None if members == (NO_ASSISTANCE,) else member,
+            users=np.tile(np.arange(n_users), len(assistance)),
+            theta=np.tile(theta, len(assistance)),
+            assistance_rows=assistance_rows,
+            assisted=None if assistance == (NO_ASSISTANCE,) else assistance_rows,
             grown=grown,
             distances=dist,
             scale=float(dist.max()),

@@ -63,7 +63,7 @@ from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import USER, assess, member_frame
 from lasa.figures import sim1, sim2, sim3
-from lasa.figures.common import as_decoders, check_members
+from lasa.figures.common import as_decoders, check_assistance
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
@@ -150,7 +150,7 @@ class Config:
             object.__setattr__(self, name, values)
         if not {75.0, 1000.0} <= set(self.betas):
             raise ConfigError("betas must hold 75 and 1000 (the sim1 claims read them)")
-        check_members(self.assistance)
+        check_assistance(self.assistance)
         if not self.pilots:
             raise ConfigError("pilots must not be empty")
         for p in self.pilots:
@@ -168,7 +168,7 @@ class Cell:
     action_scale: float  # sigma_h [rad/s]
     pilot: str  # the simulated user
     setting: str  # what this cell varies from the default: "default", "alpha", "action_scale", "pilot", "all"
-    members: tuple[str, ...] = ()  # the members it judges (the default cell: all; others: the headline one)
+    assistance: tuple[str, ...] = ()  # members judged (the default cell: all; others: the headline one)
 
 
 class ScaledDecoder:
@@ -234,12 +234,12 @@ def _pilot_prob(config: Config, pilot: str) -> float:
     return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
 
 
-def _rows(claims: list[Claim], cell: Cell, member: str, robot: str, config: Config) -> pd.DataFrame:
+def _rows(claims: list[Claim], cell: Cell, assistance: str, robot: str, config: Config) -> pd.DataFrame:
     rows = [
         {
             "id": c.id,
             "robot": robot,
-            "assistance": member,
+            "assistance": assistance,
             "alpha": cell.alpha,
             "action_scale": cell.action_scale,
             "seed": config.seed,
@@ -272,10 +272,10 @@ def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, 
 def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Config) -> pd.DataFrame:
     """Every member's claims of one sim in one cell, each with its 95% intervals."""
     parts = []
-    for member in cell.members:
+    for assistance in cell.assistance:
         fast = getattr(module, "boot_values", None)
-        claims = assess(module.claims, member_frame(frame, member), config.n_boot, config.seed, fast=fast)
-        parts.append(_rows(claims, cell, member, robot, config))
+        claims = assess(module.claims, member_frame(frame, assistance), config.n_boot, config.seed, fast=fast)
+        parts.append(_rows(claims, cell, assistance, robot, config))
     return pd.concat(parts, ignore_index=True)
 
 
@@ -289,7 +289,7 @@ def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
     parts = []
     robot = grid.task.robot.name
     for module, sim_config, reduce in _sim_configs(config, pilot):
-        frame = module.run(decoders, grid.task, ctrl, sim_config, members=cell.members)[0]
+        frame = module.run(decoders, grid.task, ctrl, sim_config, assistance=cell.assistance)[0]
         frame = frame if reduce is None else reduce(frame)
         parts.append(_judge(module, frame, cell, robot, config))
     return pd.concat(parts, ignore_index=True)

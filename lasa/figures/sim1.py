@@ -47,9 +47,9 @@ from lasa.figures.common import (
     Decoders,
     SweepConfig,
     episodes,
-    members_of,
     run_population,
     sweep_grid,
+    swept_assistance,
 )
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
@@ -120,7 +120,7 @@ def run(
     config: Config = Config(),
     progress: bool = False,
     look: int = 0,
-    members: tuple[str, ...] | None = None,
+    assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim1: every method against users of fixed rationality beta, for one look's users.
 
@@ -133,7 +133,7 @@ def run(
         progress: Show progress bars.
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`): 0 is the first
             ``config.users``, each later look ``config.block`` more from its own stream.
-        members: The assistance members the assisted methods run under; default every
+        assistance: The assistance members the assisted methods run under; default every
             member of ``config.assistance`` (the headline one first).
 
     Returns:
@@ -145,12 +145,12 @@ def run(
     start, n_users = block_users(Design(config.users, config.block, config.cap), look)
     seed_ = block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    members = members_of(control, config.assistance) if members is None else members
-    method, member, conditions, user = sweep_grid(config.methods, members, config.betas, n_users)
+    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
+    method, assistance_rows, conditions, user = sweep_grid(config.methods, assistance, config.betas, n_users)
     beta = np.array(conditions, dtype=float)
     users = _users(task, config, goal[user], theta[user], beta, user)
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
+        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
     )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
@@ -166,7 +166,7 @@ def run(
             "goal": users.goal,
             "theta": users.theta,
             "confidence": confidence(traj.beliefs[-1], users.goal),
-            "assistance": member,
+            "assistance": assistance_rows,
             "look": look,
         }
     )

@@ -50,9 +50,9 @@ from lasa.figures.common import (
     Decoders,
     SweepConfig,
     episodes,
-    members_of,
     run_population,
     sweep_grid,
+    swept_assistance,
 )
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
@@ -116,7 +116,7 @@ def run(
     config: Config = Config(),
     progress: bool = False,
     look: int = 0,
-    members: tuple[str, ...] | None = None,
+    assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim2: final error and confidence in the true cup against the change step N.
 
@@ -125,7 +125,7 @@ def run(
 
     Args:
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        members: The members the assisted methods run under; default every member of
+        assistance: The members the assisted methods run under; default every member of
             ``config.assistance``. The other arguments are :func:`lasa.figures.sim1.run`'s.
 
     Returns:
@@ -135,8 +135,10 @@ def run(
     start, n_users = block_users(Design(config.users, config.block, config.cap), look)
     seed_ = block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    members = members_of(control, config.assistance) if members is None else members
-    method, member, conditions, user = sweep_grid(config.methods, members, config.change_steps, n_users)
+    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
+    method, assistance_rows, conditions, user = sweep_grid(
+        config.methods, assistance, config.change_steps, n_users
+    )
     change = np.array(conditions, dtype=int)
     wrong = (goal[user] + 1) % task.n_goals
     users = UserPopulation(
@@ -152,7 +154,7 @@ def run(
         change_step=change,
     )
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
+        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
     )
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
@@ -166,7 +168,7 @@ def run(
             "goal": users.goal,
             "theta": users.theta,
             "success": final <= config.success,
-            "assistance": member,
+            "assistance": assistance_rows,
             "look": look,
         }
     )

@@ -39,9 +39,9 @@ from lasa.figures.common import (
     Decoders,
     SweepConfig,
     episodes,
-    members_of,
     run_population,
     sweep_grid,
+    swept_assistance,
 )
 from lasa.people.rollout import Trajectories
 from lasa.people.users import UserPopulation
@@ -91,13 +91,13 @@ def run(
     config: Config = Config(),
     progress: bool = False,
     look: int = 0,
-    members: tuple[str, ...] | None = None,
+    assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
 
     Args:
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        members: The members the assisted methods run under; default every member of
+        assistance: The members the assisted methods run under; default every member of
             ``config.assistance``. The other arguments are :func:`lasa.figures.sim1.run`'s.
 
     Returns:
@@ -107,8 +107,10 @@ def run(
     start, n_users = block_users(Design(config.users, config.block, config.cap), look)
     seed_ = block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    members = members_of(control, config.assistance) if members is None else members
-    method, member, conditions, user = sweep_grid(config.methods, members, config.learners, n_users)
+    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
+    method, assistance_rows, conditions, user = sweep_grid(
+        config.methods, assistance, config.learners, n_users
+    )
     learner = np.array([name for name, _ in conditions])
     slope = np.array([m for _, m in conditions], dtype=float)
     users = UserPopulation(
@@ -122,7 +124,7 @@ def run(
         pilot_prob=config.pilot_prob,
     )
     traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, member, seed_
+        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
     )
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
@@ -136,7 +138,7 @@ def run(
             USER: np.repeat(start + user, len(steps)),
             "t": np.tile(steps, n_users),
             "error": errors[steps].T.ravel(),
-            "assistance": np.repeat(member, len(steps)),
+            "assistance": np.repeat(assistance_rows, len(steps)),
             "look": look,
         }
     )

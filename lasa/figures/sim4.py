@@ -144,7 +144,7 @@ def run(
     config: Config = Config(),
     progress: bool = False,
     look: int = 0,
-    members: tuple[str, ...] | None = None,
+    assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
     """Fig. sim4: grasp error at new cups against their distance from the training cup.
 
@@ -171,7 +171,7 @@ def run(
         config: The sweep.
         progress: Show progress bars.
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        members: The members the method's assistance runs under; default every member
+        assistance: The members the method's assistance runs under; default every member
             of ``config.assistance``.
 
     Returns:
@@ -187,7 +187,7 @@ def run(
         ``reference``, or ``other``, another training cup); and the runs per new cup under the headline member
         (``control.assistance``).
     """
-    sweep = Sweep.of(decoders, task, control, config, progress, look, members)
+    sweep = Sweep.of(decoders, task, control, config, progress, look, assistance)
     runs, rows = [], []
     for i, (offset, big) in enumerate(zip(config.offsets, sweep.grown, strict=True)):
         at_cup, cup = episodes_at(sweep, float(offset), big)
@@ -195,7 +195,9 @@ def run(
         rows += _rows(sweep, cup, float(offset), i)
     frame = pd.concat(rows, ignore_index=True)
     # rows by member, then cup and map, as the members' runs came out before they shared batches
-    order = np.argsort(pd.Categorical(frame.assistance, categories=list(sweep.members)).codes, kind="stable")
+    order = np.argsort(
+        pd.Categorical(frame.assistance, categories=list(sweep.assistance)).codes, kind="stable"
+    )
     return frame.iloc[order].reset_index(drop=True), runs
 
 
@@ -249,7 +251,7 @@ def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, i: int) -> list[pd.Data
                     "theta": sweep.theta,
                     "confidence": conf,
                     "reference": ref_m / sweep.cup_scale,
-                    "assistance": sweep.member,
+                    "assistance": sweep.assistance_rows,
                     "look": sweep.look,
                     "angle_error_deg": angle,
                     "distance_joint": d_joint / sweep.scale,

@@ -12,7 +12,7 @@ phase), each with its figure (:mod:`lasa.figures.study_plots`):
 Each participant model of ``Config.participant_models`` (:data:`PARTICIPANT_MODELS`: ``planning``,
 who plans over held inputs, the headline once :mod:`lasa.people.planning` exists, and ``one_step``,
 :func:`lasa.people.participants.simulate`) runs the whole study; the tables' ``model`` column says
-which. The assisted conditions run under each member of ``Config.members`` (hindsight
+which. The assisted conditions run under each member of ``Config.session.assistance`` (hindsight
 optimisation, the paper's study, first: the headline), the unassisted ones once
 (``assistance`` is ``none`` for them). The LA conditions run under every decoder reading of
 notebook 10 (:func:`run`; the headline, chosen there by the property alone, first), and the
@@ -80,10 +80,10 @@ class Config:
 
     participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
     # how a session runs (horizon, waypoint tolerances, stick grid) and the participants' parameters
-    # (session.participant), and the SA readings (session.members):
+    # (session.participant), and the SA readings (session.assistance):
     # the SA readings, the first the headline: hindsight optimisation with goals as sets, as in
     # the paper's study; its one-target reading; grasp_set [-]
-    session: StudyConfig = StudyConfig(members=("hindsight", "hindsight_point", "grasp_set"))
+    session: StudyConfig = StudyConfig(assistance=("hindsight", "hindsight_point", "grasp_set"))
     seed: Seed = 0  # seed of the cohort and of the participants' choices [-]
     video_participant: NonNegativeInt = 0  # whose Dessert the video shows [-]
     # participant models (PARTICIPANT_MODELS); the first is the headline [-]
@@ -165,7 +165,7 @@ def _run_reading(shared: _Shared, job: tuple[str, int, str]) -> Episodes:
     """One participant model's study with one decoder reading (the headline, index 0, runs R too)."""
     model, i, name = job
     config = shared.config
-    headline_only = dataclasses.replace(config.session, members=config.session.members[:1])
+    headline_only = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
     return PARTICIPANT_MODELS[model](
         shared.task,
         shared.decoders[name],
@@ -231,7 +231,7 @@ def run(
 
 def for_member(
     frame: pd.DataFrame,
-    member: str,
+    assistance: str,
     n: int | None = None,
     decoder: str | None = None,
     model: str | None = None,
@@ -242,7 +242,7 @@ def for_member(
     column holds one reading); with ``model``, the rows are that participant model's (a frame
     without a ``model`` column holds one model).
     """
-    rows = frame[(frame.assistance == member) | (frame.assistance == NO_ASSISTANCE)]
+    rows = frame[(frame.assistance == assistance) | (frame.assistance == NO_ASSISTANCE)]
     if decoder is not None and "decoder" in rows.columns:
         rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
     if model is not None and "model" in rows.columns:

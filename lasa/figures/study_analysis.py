@@ -100,7 +100,7 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
     if n is not None:
         rows = rows[rows.participant < n]
     out = []
-    for (cond, member), part in rows.groupby(["condition", "assistance"], sort=False):
+    for (cond, assistance), part in rows.groupby(["condition", "assistance"], sort=False):
         per = part.groupby("participant")[["mode_switches", "total_time"]].sum()
         share = per.mode_switches * dt / per.total_time
         sem = float(sps.sem(share)) if len(share) > 1 else np.nan
@@ -112,7 +112,7 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
         out.append(
             {
                 "condition": cond,
-                "assistance": member,
+                "assistance": assistance,
                 "participants": len(share),
                 "switch_share": float(share.mean()),
                 "ci_low": float(ci[0]),

@@ -86,8 +86,8 @@ _KEYS = {
 
 def claim_id(
     key: str,
-    member_index: int,
-    member: str,
+    assistance_index: int,
+    assistance: str,
     cohort: bool,
     decoder: str | None = None,
     model: str | None = None,
@@ -102,7 +102,8 @@ def claim_id(
     other than the headline).
     """
     base, measure = _KEYS[key]
-    reading = (measure, decoder, model, None if member_index == 0 else member, "cohort" if cohort else None)
+    named = None if assistance_index == 0 else assistance  # the headline member goes unnamed
+    reading = (measure, decoder, model, named, "cohort" if cohort else None)
     parts = [p for p in reading if p]
     return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
@@ -112,7 +113,7 @@ DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder r
 
 def claims(
     frames: dict[str, pd.DataFrame],
-    members: tuple[str, ...],
+    assistance: tuple[str, ...],
     n_total: int,
     decoders: tuple[str, ...] = (),
     *,
@@ -126,7 +127,7 @@ def claims(
 
     Args:
         frames: :func:`lasa.figures.study.run`'s tables.
-        members: The SA members, the headline first.
+        assistance: The SA members, the headline first.
         n_total: The cohort's size (its first :data:`lasa.figures.study.PAPER_N` are the paper's study).
         decoders: The decoder readings in the frames' ``decoder`` column, the headline first
             (empty: the frames hold one reading). The headline decoder is judged under every
@@ -158,23 +159,23 @@ def claims(
     analyses: dict[tuple, dict[str, object]] = {}
     rows: list[Claim] = []
     for k, model in enumerate(models or (None,)):
-        for m_i, member, decoder, n, cohort in _readings(members, decoders, n_total):
+        for m_i, sa, decoder, n, cohort in _readings(assistance, decoders, n_total):
             if not _ran(frames["time"], model, decoder):
                 continue
             other = decoder if decoder != head else None
             reason = untestable or (untestable_decoders or {}).get(str(decoder))
-            key = (member, n, decoder, model) if k else (member, n, other) if other else (member, n)
-            analyses[key] = result = analyse(frames, member, n, decoder, model, horizon, n_resamples)
+            key = (sa, n, decoder, model) if k else (sa, n, other) if other else (sa, n)
+            analyses[key] = result = analyse(frames, sa, n, decoder, model, horizon, n_resamples)
             for name, judged in judge(result).items():
                 if other is None or name in DECODER_KEYS:
-                    cid = claim_id(name, m_i, member, cohort, other, model if k else None)
+                    cid = claim_id(name, m_i, sa, cohort, other, model if k else None)
                     effect = effect_sentence(name, result, judged)
-                    rows.append(_claim_row(cid, name, judged, result, member, decoder, model, reason, effect))
+                    rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason, effect))
     return _with_flips(rows), analyses
 
 
 def _readings(
-    members: tuple[str, ...], decoders: tuple[str, ...], n_total: int
+    assistance: tuple[str, ...], decoders: tuple[str, ...], n_total: int
 ) -> list[tuple[int, str, str | None, int, bool]]:
     """(member index, member, decoder, participants, cohort) of each reading a participant model is judged in.
 
@@ -182,10 +183,10 @@ def _readings(
     each for the first :data:`lasa.figures.study.PAPER_N` participants and, if larger, the cohort.
     """
     head = decoders[0] if decoders else None
-    runs = [(m_i, member, head) for m_i, member in enumerate(members)]
-    runs += [(0, members[0], d) for d in decoders[1:]]
+    runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
+    runs += [(0, assistance[0], d) for d in decoders[1:]]
     sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
-    return [(m_i, member, decoder, n, cohort) for m_i, member, decoder in runs for n, cohort in sizes]
+    return [(m_i, sa, decoder, n, cohort) for m_i, sa, decoder in runs for n, cohort in sizes]
 
 
 def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
@@ -248,7 +249,7 @@ def _claim_row(
     key: str,
     judged: Judged,
     result: Mapping[str, object],
-    member: str,
+    assistance: str,
     decoder: str | None,
     model: str | None,
     reason: str | None,
@@ -279,7 +280,7 @@ def _claim_row(
     note = (
         f"Measured effect: {effect}. "
         + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
-        + f"{n} simulated participants; SA = {member}; "
+        + f"{n} simulated participants; SA = {assistance}; "
         + (f"decoder = {decoder}; " if decoder else "")
         + (f"participant model = {model}; " if model else "")
         + f"{why}. Rule: {r.text}."
@@ -294,7 +295,7 @@ def _claim_row(
         reproduced=verdict if settled else NOT_TESTABLE if not testable else UNDECIDED,
         note=note,
         robot="panda",
-        assistance=member,
+        assistance=assistance,
         value=float(value),
         ci_low=float(low),
         ci_high=float(high),
@@ -364,7 +365,7 @@ def readings_table(
     done: pd.DataFrame,
     rows: list[Claim],
     decoders: list[str],
-    member: str,
+    assistance: str,
     models: tuple[str, ...] = (),
 ) -> pd.DataFrame:
     """One row per participant model and decoder reading, the headlines first: property, completion, verdicts.
@@ -374,7 +375,7 @@ def readings_table(
         done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
         rows: The study's claims rows (:func:`claims`).
         decoders: The decoder readings, the headline first.
-        member: The headline SA member (the assisted conditions' completion is under it).
+        assistance: The headline SA member (the assisted conditions' completion is under it).
         models: The participant models, the headline first; default: ``done``'s ``model``
             column in order of appearance (none: one model, and no ``model`` column).
 
@@ -398,7 +399,7 @@ def readings_table(
             other = None if d == decoders[0] else d
             mine = prop[prop.decoder == d]
             arms = {
-                c: (NO_ASSISTANCE if interface_of(c) == "R" else d, member if "+" in c else NO_ASSISTANCE)
+                c: (NO_ASSISTANCE if interface_of(c) == "R" else d, assistance if "+" in c else NO_ASSISTANCE)
                 for c in CONDITIONS
             }
             out.append(
@@ -409,14 +410,18 @@ def readings_table(
                     "goals with the property": int(mine.has_property.sum()),
                     "least share staying": mine.stay_share.min(),
                     **{f"{c} finished": finished.get((*lead, *arms[c], c)) for c in CONDITIONS},
-                    **_verdict_cells(by_id, member, other, model if k else None),
+                    **_verdict_cells(by_id, assistance, other, model if k else None),
                 }
             )
     return pd.DataFrame(out)
 
 
 def _verdict_cells(
-    by_id: Mapping[str, Claim], member: str, decoder: str | None, model: str | None, member_index: int = 0
+    by_id: Mapping[str, Claim],
+    assistance: str,
+    decoder: str | None,
+    model: str | None,
+    assistance_index: int = 0,
 ) -> dict[str, str]:
     """H1-H3's verdicts of one reading (:func:`claim_id`'s arguments), ``10 / all``.
 
@@ -425,7 +430,7 @@ def _verdict_cells(
     """
     out = {}
     for h in DECODER_KEYS:
-        ids = [claim_id(h, member_index, member, cohort, decoder, model) for cohort in (False, True)]
+        ids = [claim_id(h, assistance_index, assistance, cohort, decoder, model) for cohort in (False, True)]
         out[f"{h.upper()} (10 / all)"] = " / ".join(_word(by_id[i]) if i in by_id else "-" for i in ids)
         out[f"{h.upper()} effect (10)"] = (effect_of(by_id[ids[0]].note) or "-") if ids[0] in by_id else "-"
     return out
@@ -439,7 +444,7 @@ def _word(row: Claim) -> str:
 
 
 def members_table(
-    done: pd.DataFrame, rows: list[Claim], members: tuple[str, ...], decoder: str, model: str
+    done: pd.DataFrame, rows: list[Claim], assistance: tuple[str, ...], decoder: str, model: str
 ) -> pd.DataFrame:
     """The SA readings side by side, under the headline decoder and participant model.
 
@@ -450,7 +455,7 @@ def members_table(
     Args:
         done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
         rows: The study's claims rows (:func:`claims`).
-        members: The SA members, the headline first.
+        assistance: The SA members, the headline first.
         decoder: The headline decoder reading.
         model: The headline participant model.
     """
@@ -458,13 +463,13 @@ def members_table(
     finished = done.set_index(keys).finished
     by_id = {c.id: c for c in rows}
     out = []
-    for m_i, member in enumerate(members):
-        cells: dict[str, object] = {"SA": member, "headline": m_i == 0}
+    for m_i, sa in enumerate(assistance):
+        cells: dict[str, object] = {"SA": sa, "headline": m_i == 0}
         for c in ("R+SA", "LA+SA"):
             arm = {"model": model, "decoder": NO_ASSISTANCE if c == "R+SA" else decoder}
-            arm |= {"assistance": member, "condition": c}
+            arm |= {"assistance": sa, "condition": c}
             cells[f"{c} finished"] = finished.get(tuple(arm[k] for k in keys))
-        cells |= _verdict_cells(by_id, member, None, None, m_i)
+        cells |= _verdict_cells(by_id, sa, None, None, m_i)
         out.append(cells)
     return pd.DataFrame(out)
 

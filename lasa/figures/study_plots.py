@@ -94,10 +94,10 @@ PAPER_H = {
 }
 
 
-def _reading(member: str, decoder: str | None, model: str | None) -> str:
+def _reading(assistance: str, decoder: str | None, model: str | None) -> str:
     """The figures' caption of what they show: the SA member, the decoder and participant model if named."""
     return (
-        f"SA = {member}"
+        f"SA = {assistance}"
         + (f"; decoder = {decoder}" if decoder else "")
         + (f"; participant model = {model}" if model else "")
     )
@@ -264,7 +264,7 @@ def _hatch(bars: Bars, censored: Mapping[Hashable, bool]) -> None:
 
 def plot_goal_error(
     frame: pd.DataFrame,
-    member: str = "hindsight",
+    assistance: str = "hindsight",
     decoder: str | None = None,
     model: str | None = None,
     stats: Stats = None,
@@ -274,7 +274,7 @@ def plot_goal_error(
 
     Args:
         frame: The Goal Error table (:data:`GOAL_ERROR`'s columns).
-        member: The SA member drawn (the unassisted conditions beside it).
+        assistance: The SA member drawn (the unassisted conditions beside it).
         decoder: The decoder reading of the LA rows (None: every row).
         model: The participant model (None: every row).
         stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT` (e.g.
@@ -286,13 +286,13 @@ def plot_goal_error(
     Returns:
         The figure: one panel per :func:`_panels`, each a bar per task x condition.
     """
-    data = _with_completion(for_member(frame, member, decoder=decoder, model=model), completed)
+    data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), completed)
     panels = _panels(data)
     fig, grid = _layout(panels, stats, (5.6, 4.4))
     for (_, part), (ax,) in zip(panels, grid, strict=True):
         _goal_error_axes(ax, part)
     paper = wrap_to(PAPER_H["h1"], 5.6 * len(panels), 10)
-    title = f"Goal Error ({_reading(member, decoder, model)})\n{paper}"
+    title = f"Goal Error ({_reading(assistance, decoder, model)})\n{paper}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, [_hatch_note(data)])
 
 
@@ -319,7 +319,7 @@ def _goal_error_axes(ax: Axes, part: pd.DataFrame) -> None:
 
 def plot_time(
     frame: pd.DataFrame,
-    member: str = "hindsight",
+    assistance: str = "hindsight",
     decoder: str | None = None,
     model: str | None = None,
     horizon: float | None = None,
@@ -332,7 +332,7 @@ def plot_time(
 
     Args:
         frame: The Time table (:data:`TIME`'s columns, ``completed`` among them).
-        member: The SA member drawn (the unassisted conditions beside it).
+        assistance: The SA member drawn (the unassisted conditions beside it).
         decoder: The decoder reading of the LA rows (None: every row).
         model: The participant model (None: every row).
         horizon: The horizon [s] the legend names (default: the longest unfinished episode's time).
@@ -342,7 +342,7 @@ def plot_time(
     Returns:
         The figure: one panel per :func:`_panels`, each an axes per task.
     """
-    data = _with_completion(for_member(frame, member, decoder=decoder, model=model), None)
+    data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), None)
     if horizon is None:
         cut = data.total_time[~data.completed]
         horizon = float(cut.max()) if len(cut) else math.nan
@@ -355,7 +355,7 @@ def plot_time(
             ax.set_ylabel("time [s]")
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
     notes = [_hatch_note(data, horizon), (idle, "light: Idle Time; text: share of episodes finished")]
-    title = wrap_to(f"Total and Idle Time ({_reading(member, decoder, model)})", 7.6 * len(panels), 10)
+    title = wrap_to(f"Total and Idle Time ({_reading(assistance, decoder, model)})", 7.6 * len(panels), 10)
     title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=None)
 
@@ -411,7 +411,7 @@ def _label(ax: Axes, bar: mpatches.Rectangle, text: str, foot: bool = False) -> 
 
 def plot_alignment(
     frame: pd.DataFrame,
-    member: str = "hindsight",
+    assistance: str = "hindsight",
     decoder: str | None = None,
     model: str | None = None,
     stats: Stats = None,
@@ -426,7 +426,7 @@ def plot_alignment(
     Args:
         frame: The Alignment table (:data:`ALIGNMENT`'s columns; a phase is reached where
             ``steps > 0``, or where ``alignment`` is not NaN if the table lacks ``steps``).
-        member: The SA member drawn (the unassisted conditions beside it).
+        assistance: The SA member drawn (the unassisted conditions beside it).
         decoder: The decoder reading of the LA rows (None: every row).
         model: The participant model (None: every row).
         stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT`; printed in the
@@ -437,7 +437,7 @@ def plot_alignment(
     Returns:
         The figure: one panel per :func:`_panels`, each a bar per phase x condition.
     """
-    data = for_member(frame, member, decoder=decoder, model=model)
+    data = for_member(frame, assistance, decoder=decoder, model=model)
     data = data[(data.task == "Dessert") & data.phase.isin(PHASES)]
     data = _with_completion(data, completed)
     panels = _panels(data)
@@ -447,7 +447,7 @@ def plot_alignment(
     scoop = mpatches.Patch(facecolor="0.92", label="shaded: the scoop phase (H2)")
     count = (mpatches.Patch(visible=False), "n (at a bar's foot): participants who reached the phase")
     notes = [_hatch_note(data, also="some participant did not reach the phase"), count]
-    title = f"Dessert: alignment with each phase's preference ({_reading(member, decoder, model)})"
+    title = f"Dessert: alignment with each phase's preference ({_reading(assistance, decoder, model)})"
     title = f"{wrap_to(title, 6.6 * len(panels), 10)}\n{PAPER_H['h2']}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=[scoop])
 

@@ -63,7 +63,7 @@ _COLUMNS = [
 
 def power(
     frames: dict[str, pd.DataFrame],
-    member: str,
+    assistance: str,
     decoder: str | None = None,
     model: str | None = None,
     sizes: Sequence[int] = SIZES,
@@ -82,7 +82,7 @@ def power(
 
     Args:
         frames: :func:`lasa.figures.study.run`'s tables (``goal_error``, ``time``, ``alignment``).
-        member: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
+        assistance: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
         decoder: The decoder reading of the LA rows (None: the frames hold one).
         model: The participant model (None: the frames hold one).
         sizes: Cohort sizes to simulate, each at least 2.
@@ -109,8 +109,8 @@ def power(
             ``n_jobs`` below 1, or a member, decoder or model the frames do not hold.
     """
     sizes = _checked(sizes, draws, n_resamples, n_jobs)
-    reading = _reading(frames, member, decoder, model)
-    setting = (member, decoder, model, float(horizon), int(n_resamples))
+    reading = _reading(frames, assistance, decoder, model)
+    setting = (assistance, decoder, model, float(horizon), int(n_resamples))
     full = _outcome(reading, setting, strict=True)
     ids = _participants(reading)
     rng = np.random.default_rng(seed)
@@ -145,7 +145,7 @@ def _checked(sizes: Sequence[int], draws: int, n_resamples: int, n_jobs: int) ->
 
 
 def _reading(
-    frames: dict[str, pd.DataFrame], member: str, decoder: str | None, model: str | None
+    frames: dict[str, pd.DataFrame], assistance: str, decoder: str | None, model: str | None
 ) -> dict[str, pd.DataFrame]:
     """The three tables' rows of one reading (:func:`lasa.figures.study.for_member`), checked.
 
@@ -156,16 +156,17 @@ def _reading(
     if missing:
         raise ConfigError(f"frames lacks {missing}; pass lasa.figures.study.run's three tables")
     time = frames["time"]
-    for name, value, column in (("member", member, "assistance"), ("decoder", decoder, "decoder")):
+    for name, value, column in (("assistance", assistance, "assistance"), ("decoder", decoder, "decoder")):
         if value is not None and column in time.columns:
             check_choice(name, value, sorted(set(time[column]) - {NO_ASSISTANCE}))
     if model is not None and "model" in time.columns:
         check_choice("participant model", model, sorted(set(time.model)))
     out = {
-        k: for_member(frames[k], member, None, decoder, model) for k in ("goal_error", "time", "alignment")
+        k: for_member(frames[k], assistance, None, decoder, model)
+        for k in ("goal_error", "time", "alignment")
     }
     if out["time"].participant.nunique() < 2:
-        raise ConfigError(f"the reading ({member}, {decoder}, {model}) has fewer than 2 participants")
+        raise ConfigError(f"the reading ({assistance}, {decoder}, {model}) has fewer than 2 participants")
     return out
 
 
@@ -215,11 +216,11 @@ def _outcome(
     raise :class:`~lasa.base.errors.ConfigError` (its data do not admit them) reads ``not
     testable``. Runtime warnings of degenerate drawn cohorts are silenced.
     """
-    member, decoder, model, horizon, n_resamples = setting
+    assistance, decoder, model, horizon, n_resamples = setting
     with warnings.catch_warnings(), _quiet_gc():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
-            judged = judge(analyse(reading, member, None, decoder, model, horizon, n_resamples))
+            judged = judge(analyse(reading, assistance, None, decoder, model, horizon, n_resamples))
         except ConfigError:
             if strict:
                 raise

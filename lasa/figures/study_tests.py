@@ -35,7 +35,7 @@ Judged = tuple[str, float, float, float, str]
 
 def analyse(
     frames: dict[str, pd.DataFrame],
-    member: str,
+    assistance: str,
     n: int | None = None,
     decoder: str | None = None,
     model: str | None = None,
@@ -47,9 +47,9 @@ def analyse(
     ``horizon`` [s] is where an unfinished episode's time was cut (H3's restricted times);
     ``n_resamples`` the paired bootstrap's resamples for H3.
     """
-    err = for_member(frames["goal_error"], member, n, decoder, model)
-    time = for_member(frames["time"], member, n, decoder, model)
-    align = for_member(frames["alignment"], member, n, decoder, model)
+    err = for_member(frames["goal_error"], assistance, n, decoder, model)
+    time = for_member(frames["time"], assistance, n, decoder, model)
+    align = for_member(frames["alignment"], assistance, n, decoder, model)
     out: dict[str, object] = {
         "n": int(err.participant.nunique()),
         "h1_within": stats.sa_effect_within(err, "goal_error"),
@@ -147,11 +147,11 @@ def people_claims(
         for name in ("goal_error", "time", "alignment")
     }
     rows = []
-    for member in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
-        result = analyse(frames, member, horizon=horizon, n_resamples=n_resamples)
+    for assistance in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
+        result = analyse(frames, assistance, horizon=horizon, n_resamples=n_resamples)
         for claim, (verdict, value, low, high, measured) in judge(result).items():
             rows.append(
-                {"member": member, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
+                {"member": assistance, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
                  "ci_high": high, "measured": measured, "participants": result["n"]}
             )  # fmt: skip
     columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]

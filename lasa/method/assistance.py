@@ -261,7 +261,7 @@ def register_member(name: str, member: Member, *, replace: bool = False) -> None
 
     After it, ``ControlConfig(assistance=name)`` is valid and every assisted step under it
     (:func:`lasa.method.step.shared_autonomy_step`, :func:`lasa.people.rollout.rollout`, the
-    :class:`lasa.method.controller.Controller`) calls ``member``, as :func:`assist` calls the
+    :class:`lasa.method.episodes.Runner`) calls ``member``, as :func:`assist` calls the
     built-in ones: ``member(belief, state, goals, goal_sets, dt, action_scale)`` with the shapes of
     :func:`assist`, returning a_r (U, n) and the blend weight w (U,) in [0, 1]. The figures'
     default members stay the four of :data:`ASSISTANCE`.
@@ -303,7 +303,7 @@ def unregister_member(name: str) -> None:
 
 
 def assist(
-    name: str,
+    assistance: str,
     belief: np.ndarray,
     state: np.ndarray,
     goals: np.ndarray,
@@ -311,10 +311,10 @@ def assist(
     dt: float,
     action_scale: float,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The assistance a_r and the blend weight w of member ``name``.
+    """The assistance a_r and the blend weight w of member ``assistance``.
 
     Args:
-        name: One of :func:`members`: :data:`ASSISTANCE`, or a registered member.
+        assistance: One of :func:`members`: :data:`ASSISTANCE`, or a registered member.
         belief: b, shape (U, G).
         state: s, shape (U, n).
         goals: One pose per goal, shape (G, n).
@@ -325,7 +325,9 @@ def assist(
     Raises:
         ConfigError: for an unknown member.
     """
-    member = _MEMBERS.get(name)
+    member = _MEMBERS.get(assistance)
     if member is None:
-        raise ConfigError(f"unknown assistance {name!r}; choose one of {', '.join(map(repr, _MEMBERS))}")
+        raise ConfigError(
+            f"unknown assistance {assistance!r}; choose one of {', '.join(map(repr, _MEMBERS))}"
+        )
     return member(belief, state, goals, goal_sets, dt, action_scale)

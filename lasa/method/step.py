@@ -1,13 +1,10 @@
 """The one step of Algorithm 1, batched: joystick input in, commanded state out.
 
-Every loop of the package advances with this module's functions: the simulated users of sims
-1-4 (:func:`lasa.people.rollout.rollout`), the study's simulated participants
-(:func:`lasa.people.participants.simulate`), live teleoperation (:class:`lasa.live.station.Station`),
-the one-user :class:`lasa.method.controller.Controller` and the benchmark. At each step:
+Every loop of the package advances with :func:`advance`, through the episode runner
+(:class:`lasa.method.episodes.Runner`). At each step:
 
-1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a loop
-   that weighs many candidates decodes them in one call, :func:`decode_candidates`, and
-   passes the chosen a_h to :func:`advance`);
+1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a
+   chooser that weighs many candidates decodes them in one call, :func:`decode_candidates`);
 2. the robot's assistance a_r (Eq. M2, or another member of :mod:`lasa.method.assistance`
    named by ``ControlConfig.assistance``) is blended with a_h (Eq. M1) using each
    user's alpha: alpha = 0 is the method ``LA``, alpha > 0 is ``LA+SA``;
@@ -182,29 +179,24 @@ def shared_autonomy_step(
 ) -> StepResult:
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
-    This is the step a teleoperated robot runs (:class:`lasa.method.controller.Controller` is
-    this step for one user, and :class:`lasa.live.station.Station` runs it for latent actions):
-    decode the joystick input, blend with the assistance, update the belief, take the safe
-    step. A joystick input that is not finite (a disconnected or faulty device) decodes to
-    no human action at all, so it can never become a command; the robot's own assistance
+    Decode the joystick input, blend with the assistance, update the belief, take the safe
+    step: what the episode runner does with a held input
+    (:func:`lasa.method.episodes.held_input`). A joystick input that is not finite (a
+    disconnected or faulty device) decodes to no human action at all, so it can never become a command; the robot's own assistance
     still applies.
 
     **The stick at rest** (z = 0) is a named choice, ``rest``, because the loops differ:
 
     - ``"decode"``: phi(0, s, b), the decoder's own meaning of the rest position. The
       simulated users of sims 1-4 (Eq. S1 weighs z = 0 among its grid's inputs, and the
-      paper's phi is defined there), :class:`lasa.method.controller.Controller` and the
-      benchmark's reference step use it.
+      paper's phi is defined there) and the benchmark's reference step use it.
     - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.live.station.Station`:
       a person who lets go of the stick expects the arm to stop, the assistance apart), and so
       do the study's simulated participants (:func:`lasa.people.participants.simulate`, for
       whom resting the stick is the idle input). The participants weigh every candidate, so
       they decode them in one call (:func:`decode_candidates`) and apply the convention to the
-      chosen one with :func:`human_action`, the function this step applies it with; then
-      :func:`advance`, as here. Their Retargeting action, and Station's, is
-      :func:`lasa.method.retarget.retarget_action`, then :func:`advance`.
-
-    The benchmark (``make bench``) times this step and ``Station.step`` for both interfaces.
+      chosen one with :func:`human_action`, the function this step applies it with. Their
+      Retargeting action, and Station's, is :func:`lasa.method.retarget.retarget_action`.
 
     Args:
         decoder: The decoder phi (a trained model, or a wrapper such as

@@ -56,7 +56,7 @@ class StudyConfig:
     )
     # The SA members the assisted conditions run under (lasa.method.assistance); the first is the
     # headline. The paper's study used hindsight optimisation.
-    members: tuple[str, ...] = ("hindsight",)
+    assistance: tuple[str, ...] = ("hindsight",)
     n_z: Annotated[Integer, at.Ge(3)] = (
         5  # stick positions per axis the participant weighs (25 incl. rest) [-]
     )
@@ -65,9 +65,9 @@ class StudyConfig:
 
     def __post_init__(self) -> None:
         validate(self)
-        if not self.members:
-            raise ConfigError("members must name at least one assistance member")
-        for name in self.members:
+        if not self.assistance:
+            raise ConfigError("assistance must name at least one member")
+        for name in self.assistance:
             check_choice("assistance", name, BUILT_IN_ASSISTANCE)
         if self.n_z % 2 == 0:
             raise ConfigError(
@@ -82,8 +82,8 @@ class Layout:
     part: np.ndarray  # participant index
     tsk: np.ndarray  # task index into TASK_NAMES
     cond: np.ndarray  # condition index into CONDITIONS
-    member: np.ndarray  # SA member, NO_ASSISTANCE for R and LA
-    members_run: np.ndarray  # the member advance() runs (alpha = 0 where there is none)
+    assistance: np.ndarray  # SA member, NO_ASSISTANCE for R and LA
+    assistance_run: np.ndarray  # the member advance() runs (alpha = 0 where there is none)
     is_la: np.ndarray  # latent actions (else Retargeting)
     alpha: np.ndarray  # blend weight
     order: np.ndarray  # position of the condition in the participant's session
@@ -93,23 +93,23 @@ class Layout:
 
 
 def layout(
-    cohort: Cohort, control: ControlConfig, members: tuple[str, ...], interfaces: tuple[str, ...]
+    cohort: Cohort, control: ControlConfig, assistance: tuple[str, ...], interfaces: tuple[str, ...]
 ) -> Layout:
     """The study's episodes, participant-major, then arm (the unassisted conditions once, each
     assisted one under every member), then task; every model of participant runs this order."""
     arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
-    arms += [(c, m) for m in members for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
+    arms += [(c, m) for m in assistance for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
     n_a, n_t = len(arms), len(TASK_NAMES)
     part = np.repeat(np.arange(len(cohort)), n_a * n_t)
     arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
     cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
-    member = np.array([arms[a][1] for a in arm])
+    assistance_rows = np.array([arms[a][1] for a in arm])
     return Layout(
         part=part,
         tsk=np.tile(np.arange(n_t), len(cohort) * n_a),
         cond=cond,
-        member=member,
-        members_run=np.where(member == NO_ASSISTANCE, members[0], member),
+        assistance=assistance_rows,
+        assistance_run=np.where(assistance_rows == NO_ASSISTANCE, assistance[0], assistance_rows),
         is_la=np.array([interface_of(c) == "LA" for c in CONDITIONS])[cond],
         alpha=np.array([alpha_of(c, control.alpha, CONDITIONS) for c in CONDITIONS])[cond],
         order=np.argsort(cohort.order, axis=1)[part, cond],

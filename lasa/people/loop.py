@@ -100,7 +100,7 @@ def prepare(
         raise ConfigError(f"interfaces must be a non-empty subset of ('R', 'LA'), got {interfaces!r}")
     if decoder.z_dim != 2:
         raise ConfigError(f"the study's joystick has 2 axes; the decoder has z_dim={decoder.z_dim}")
-    episodes = layout(cohort, control, tuple(config.members), interfaces)
+    episodes = layout(cohort, control, tuple(config.assistance), interfaces)
     streams = [
         np.random.default_rng([seed, int(p), int(c), int(k)])
         for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
@@ -175,7 +175,7 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
     return Episodes(
         participant=lay.part,
         condition=np.asarray(CONDITIONS)[lay.cond],
-        assistance=lay.member,
+        assistance=lay.assistance,
         task=np.asarray(TASK_NAMES)[lay.tsk],
         order=lay.order,
         states=record.states,
@@ -206,7 +206,7 @@ def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progre
         The study's record.
     """
     lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
-    assist = Assist(task, setting.control, lay.alpha, lay.members_run, setting.goal_sets)
+    assist = Assist(task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets)
     start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
     runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
     observe = functools.partial(_observe, setting, state)

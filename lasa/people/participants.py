@@ -9,8 +9,6 @@ alpha = 0) and ``LA+SA`` (Algorithm 1). The assistance is a member of
 :mod:`lasa.method.assistance` (``hindsight``, the paper's study, by default); the robot infers
 its belief from a_h in every condition.
 
-<<<<<<< HEAD
-=========  =================================================================================
 ``R``      Retargeting: the stick commands a fork twist in one of three modes, realised by
            mink's differential IK (:mod:`lasa.method.retarget`); a button cycles the modes.
 ``R+SA``   the same human action a_h, blended with the assistance by Eq. M1.
@@ -42,12 +40,11 @@ simulated at all: people answer it, see the teleoperation kit). The measures
 error and preference alignment.
 =======
 A one-step participant predicts each candidate input's motion of the fork's tip, a latent
-action's through the arm's Jacobian (:func:`lasa.people.kinematics.tip_motion`), a Retargeting
+action's through the arm's Jacobian (:func:`lasa.world.fork.tip_motion`), a Retargeting
 input's as the twist it commands, and chooses as every participant does
 (:mod:`lasa.people.policy`); an input of another mode first presses the mode button. The
 planning participants of :mod:`lasa.people.planning` differ only in how far they look. What a
 simulated participant cannot stand in for: ``docs/method-notes.md``.
->>>>>>> h/docstrings
 """
 
 from __future__ import annotations
@@ -183,7 +180,7 @@ def simulate(
         decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
         cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
         control: Control-loop units (dt, sigma_h, belief model, alpha); the assisted
-            conditions run under each of ``config.members``.
+            conditions run under each of ``config.assistance``.
         config: Session settings and the participants' free parameters.
         seed: Seed of the participants' choices; episode (i, condition, task) draws from its
             own stream, so participant i's episodes do not depend on the cohort's size.

@@ -223,7 +223,7 @@ def _rollout_states(study: _Study, idx: np.ndarray, state: np.ndarray, log_b: np
     k = len(moves)
     s = np.repeat(state, k, axis=0)
     log_b = np.repeat(log_b, k, axis=0)
-    alpha, members = np.repeat(lay.alpha[idx], k), np.repeat(lay.members_run[idx], k)
+    alpha, assistance = np.repeat(lay.alpha[idx], k), np.repeat(lay.assistance_run[idx], k)
     z = np.tile(study.grid[moves], (len(idx), 1))
     snaps = np.empty((len(s), len(holds), s.shape[1]))
     coarse = dataclasses.replace(study.control, dt=study.control.dt * study.coarse)
@@ -232,7 +232,7 @@ def _rollout_states(study: _Study, idx: np.ndarray, state: np.ndarray, log_b: np
         control = study.control if j < study.replan_steps else coarse
         b = belief(log_b)
         a_h = human_action(study.decoder.decode_numpy(z, s, b), z, rest="zero")
-        step = advance(Assist(study.task, control, alpha, members, study.goal_sets), s, log_b, a_h, b)
+        step = advance(Assist(study.task, control, alpha, assistance, study.goal_sets), s, log_b, a_h, b)
         s, log_b = step.state, step.log_belief
         j += 1 if j < study.replan_steps else study.coarse
         snaps[:, holds == j] = s[:, None]
@@ -358,7 +358,7 @@ def simulate(
         task: The eating task.
         decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
         cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
-        control: Control-loop units; the assisted conditions run under each of ``config.members``.
+        control: Control-loop units; the assisted conditions run under each of ``config.assistance``.
         config: Session settings and the participants' free parameters.
         seed: Seed of the participants' choices.
         progress: Show a progress bar.

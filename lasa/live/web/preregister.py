@@ -77,7 +77,7 @@ def headline_reading(figures: Path, frames: dict[str, pd.DataFrame]) -> Reading:
     prop = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
     decoder = study.readings_to_run(latent_property.summary(prop.query("task == 'eating'")), "property")[0]
     model = study_analysis.headline_model(frames["time"], config.participant_models)
-    return config.session.members[0], decoder, model
+    return config.session.assistance[0], decoder, model
 
 
 def power_table(
@@ -91,12 +91,12 @@ def power_table(
     """:func:`lasa.figures.study_power.power` on the simulated cohort's ``frames``, for ``reading``."""
     from lasa.world.eating import load_eating_robot
 
-    member, decoder, model = reading
+    assistance, decoder, model = reading
     config = study.Config()
     horizon = config.session.horizon * load_eating_robot().control.dt  # notebook 11's [s]
     return study_power.power(
         frames,
-        member,
+        assistance,
         decoder=decoder,
         model=model,
         sizes=sizes,
@@ -127,7 +127,7 @@ def document(
     conditions: tuple[str, ...] = CONDITIONS,
 ) -> str:
     """The pre-registration, Markdown, from the power ``table`` of ``reading`` and the server's settings."""
-    member, decoder, model = reading
+    assistance, decoder, model = reading
     bar = f"{100 * COMPLETION_BAR:.0f}%"
     out = [
         "# Pre-registration: shared autonomy with learned latent actions, the eating study",
@@ -162,7 +162,7 @@ def document(
         f"{bar} of its episodes (H2: LA+SA and R+SA), as stated in each rule above; H3's restricted times "
         f"end at the trials' limit ({trial_s:g} s). Notebook 11 applies these tests and rules to the "
         "sessions (`lasa.figures.study_tests.people_claims`: the simulated cohort's own `analyse` and "
-        f"`judge`). The planned reading: SA as `{member}`, the latent-action decoder `{decoder}`.",
+        f"`judge`). The planned reading: SA as `{assistance}`, the latent-action decoder `{decoder}`.",
         "",
         "## 6. Outliers and exclusions",
         "",
