@@ -8,8 +8,10 @@ from lasa.evidence.claims import (
     CLAIM_COLUMNS,
     README_MARKERS,
     ROBOTS,
+    SHOWN_COLUMNS,
     Claim,
     _row,
+    claims_frame,
     render_verdicts,
     sync_readme,
     update_claims,
@@ -435,3 +437,16 @@ def test_the_cli_writes_an_out_runs_verdicts_beside_its_claims(tmp_path):
     subprocess.run([sys.executable, "-m", "lasa.evidence.claims", str(tmp_path / "claims.csv")], check=True)
     committed = Path(__file__).resolve().parents[1] / "figures" / "verdicts.md"
     assert (tmp_path / "verdicts.md").read_text() == committed.read_text()
+
+
+def test_claims_frame_shows_a_notebooks_rows_in_order():
+    rows = [claim("b", verdict="no"), claim("a", robot="panda")]
+    shown = claims_frame(rows)
+    assert list(shown.columns) == list(SHOWN_COLUMNS) and list(shown.id) == ["sim1.b", "sim1.a"]
+    assert list(shown.reproduced) == ["no", "yes"] and list(shown.assistance) == ["point", "point"]
+    assert "assistance" not in claims_frame(rows, assistance=False).columns
+    assert list(claims_frame(rows, assistance=False).columns) == [
+        c for c in SHOWN_COLUMNS if c != "assistance"
+    ]
+    empty = claims_frame([])
+    assert empty.empty and list(empty.columns) == list(SHOWN_COLUMNS)

@@ -10,7 +10,7 @@ import pytest
 from lasa.evidence import sessions
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.live.web import preregister
-from lasa.people import measures
+from lasa.world import measures
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = ROOT / "figures"

@@ -145,6 +145,23 @@ def test_sim2_frame(model, task):
     assert frame.confidence.between(0, 1).all()
 
 
+def test_sim2s_wrong_goal_is_the_next_cup_for_any_number_of_cups(model, task):
+    assert [sim2.wrong_goal(g, 2) for g in range(2)] == [1, 0]
+    assert [sim2.wrong_goal(g, 3) for g in range(3)] == [1, 2, 0]
+    with pytest.raises(ConfigError, match="goal must be in"):
+        sim2.wrong_goal(2, 2)
+    cfg = sim2.Config(change_steps=(0, 5), users=2, settle=10, **ONE)
+    frame, traj = sim2.run(both(model), task, task.robot.control, cfg)
+    first = frame[frame.change_step == 5].index  # these users aim at the wrong cup first
+    wrong = task.target(
+        [sim2.wrong_goal(int(g), task.n_goals) for g in frame.goal[first]], frame.theta[first]
+    )
+    right = task.target(frame.goal[first].to_numpy(), frame.theta[first].to_numpy())
+    moved = traj.states[4, first] - traj.states[0, first]  # the first 4 steps go towards the wrong cup
+    toward = np.einsum("un,un->u", moved, wrong - traj.states[0, first])
+    assert (toward > np.einsum("un,un->u", moved, right - traj.states[0, first])).mean() > 0.5
+
+
 def test_sim3_frame(model, task):
     cfg = sim3.Config(users=2, horizon=10, record_every=5, **ONE)
     frame, _ = sim3.run(both(model), task, task.robot.control, cfg)

@@ -608,3 +608,122 @@ def test_only_decoders_with_the_property_and_the_headlines_entropy_version_run()
         study.readings_to_run(prop, "some")
     with pytest.raises(ConfigError, match="decoders"):
         study.Config(decoders="some")
+
+
+def test_reading_of_fills_in_what_the_headlines_keys_leave_out():
+    assert study_claims.reading_of(("hindsight", 10), "head", "a") == ("hindsight", "head", "a")
+    assert study_claims.reading_of(("hindsight", 10, "other"), "head", "a") == ("hindsight", "other", "a")
+    assert study_claims.reading_of(("hindsight", 40, None, "b"), "head", "a") == ("hindsight", "head", "b")
+    assert study_claims.reading_of(("grasp_set", 10, "other", "b"), "head", "a") == (
+        "grasp_set",
+        "other",
+        "b",
+    )
+
+
+def test_the_h1_h2_h3_tables_have_a_block_per_analysis_named_by_its_reading():
+    data = with_decoders_and_models()
+    _, analyses = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    h1 = study_claims.h1_table(analyses, "head", "a")
+    assert len(h1) == 3 * len(analyses)
+    assert set(h1.measure) == {"Goal Error [m s]", "mean distance [m]"} and set(h1.model) == {"a", "b"}
+    assert set(h1.decoder) == {"head", "other"} and set(h1.SA) == set(STUDY_ASSISTANCE)
+    first = analyses[("hindsight", 10)]["h1_within"]
+    row = h1[(h1.model == "a") & (h1.decoder == "head") & (h1.SA == "hindsight") & (h1.participants == 10)]
+    assert row.iloc[1].F == first["F"] and row.iloc[1].df == f"({first['df1']},{first['df2']})"
+    h2 = study_claims.h2_table(analyses, "head", "a")
+    assert len(h2) == 3 * len(analyses) and list(h2.phase[:3]) == ["stab", "scoop", "dip"]
+    scoop = analyses[("hindsight", 10)]["h2_phases"]["scoop"]
+    assert h2.iloc[1]["LA+SA - R+SA"] == scoop[0] and h2.iloc[1].pairs == scoop[4]
+    h3 = study_claims.h3_tables(analyses, "head", "a")
+    assert len(h3) == len(analyses)
+    title, means, times = h3[0]
+    assert title.startswith("model = a, decoder = head, SA = hindsight, 10 participants:")
+    assert "not testable" not in title  # every episode finished
+    assert list(means.index) == list(CONDITIONS) and (means.finished == 1.0).all()
+    assert list(times.index.get_level_values(0).unique()) == ["total", "idle"]
+    assert any("decoder = other" in t for t, _, _ in h3) and any(t.startswith("model = b") for t, _, _ in h3)
+
+
+def test_switch_shares_split_each_model_into_the_first_10_and_the_cohort():
+    rows = [
+        {"participant": p, "condition": "R", "assistance": NO_ASSISTANCE, "task": t, "model": m,
+         "mode_switches": 10 + p, "total_time": 20.0, "completed": True}
+        for m in ("a", "b") for p in range(12) for t in ("Entree", "Dessert")
+    ]  # fmt: skip
+    time = pd.DataFrame(rows)
+    out = study_analysis.switch_shares(time, 0.1, ("b", "a"))
+    assert list(zip(out.model, out.participants_of, strict=True)) == [
+        ("b", "first 10"), ("b", "cohort"), ("a", "first 10"), ("a", "cohort")
+    ]  # fmt: skip
+    assert list(out.participants) == [10, 12, 10, 12]
+    first = study_analysis.switch_share(time[time.model == "a"], 0.1, n=study.PAPER_N)
+    assert out.switch_share.iloc[2] == pytest.approx(first.switch_share.iloc[0])
+
+
+def test_break_even_is_the_time_gap_per_mode_switch_by_hand():
+    # mean total time per task and mode switches of each arm: (condition, member) -> (time, switches)
+    arms = {
+        ("R", NO_ASSISTANCE): (40.0, 10), ("LA", NO_ASSISTANCE): (80.0, 0),
+        ("R+SA", "hindsight"): (50.0, 5), ("LA+SA", "hindsight"): (60.0, 0),
+        ("R+SA", "grasp_set"): (45.0, 5), ("LA+SA", "grasp_set"): (70.0, 0),
+    }  # fmt: skip
+    rows = []
+    for (cond, member), (t, switches) in arms.items():
+        decoder = "head" if cond.startswith("LA") else NO_ASSISTANCE
+        for p in range(2):
+            key = {"participant": p, "condition": cond, "assistance": member, "task": "Dessert"}
+            rows.append({**key, "decoder": decoder, "model": "a", "total_time": t, "mode_switches": switches})
+            # another participant model and another decoder reading, both ignored
+            rows.append({**key, "decoder": decoder, "model": "b", "total_time": 999.0, "mode_switches": 1})
+            if cond.startswith("LA"):
+                rows.append(
+                    {**key, "decoder": "other", "model": "a", "total_time": 999.0, "mode_switches": 0}
+                )
+    gap = study_analysis.break_even(pd.DataFrame(rows), STUDY_ASSISTANCE, "head", "a")
+    cost = gap["break-even cost per switch [s]"]
+    assert list(gap.index) == [(m, c) for m in STUDY_ASSISTANCE for c in ("R", "R+SA")]
+    assert cost.to_dict() == pytest.approx(
+        {
+            ("hindsight", "R"): 2.0,
+            ("hindsight", "R+SA"): 2.0,
+            ("grasp_set", "R"): 3.0,
+            ("grasp_set", "R+SA"): 5.0,
+        }
+    )
+    assert gap.loc[("grasp_set", "R+SA"), "LA+SA time [s]"] == 70.0
+    assert gap.loc[("hindsight", "R"), "switches per task"] == 10
+
+
+def test_stuck_episodes_runs_stuck_over_every_model_and_reading(monkeypatch):
+    seen = []
+
+    def fake(task, episodes, decoder, config):
+        seen.append((episodes, decoder))
+        return pd.DataFrame({"participant": [episodes]})
+
+    monkeypatch.setattr(study_analysis, "stuck", fake)
+    episodes = {"a": {"head": "a-head", "other": "a-other"}, "b": {"head": "b-head"}}
+    decoders = {"head": "phi-head", "other": "phi-other"}
+    out = study_analysis.stuck_episodes(None, episodes, decoders, None, ("b", "a"))
+    assert seen == [("b-head", "phi-head"), ("a-head", "phi-head"), ("a-other", "phi-other")]
+    assert list(out.participant) == ["b-head", "a-head", "a-other"]
+    assert list(out.model) == ["b", "a", "a"] and list(out.decoder) == ["head", "head", "other"]
+
+
+def test_the_participants_table_lists_every_parameter(tmp_path):
+    import dataclasses
+
+    from lasa.base.errors import ArtifactError
+    from lasa.base.paths import Paths
+    from lasa.people.cohort import ParticipantConfig
+
+    participant = ParticipantConfig()
+    table = study.participant_table(participant)
+    assert list(table.parameter) == [f.name for f in dataclasses.fields(ParticipantConfig)]
+    assert len(table) == len(dataclasses.fields(participant)) and list(table.columns) == [
+        "parameter",
+        "value",
+    ]
+    with pytest.raises(ArtifactError, match="notebook 10"):
+        study.eating_property(Paths(tmp_path / "build", tmp_path / "figures"))

@@ -249,3 +249,36 @@ def test_specs_keep_their_names_and_columns():
         "study_alignment",
     ]
     assert "completed" in study_plots.TIME.COLUMNS and "completed" not in study_plots.GOAL_ERROR.COLUMNS
+
+
+def test_video_clips_take_one_participants_episode_under_each_condition():
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from lasa.base.config import NO_ASSISTANCE
+
+    members = ("hindsight", "grasp_set", NO_ASSISTANCE)
+    keys = [(p, c, a, t) for p in (0, 1) for c in CONDITIONS for a in members
+            if (a == NO_ASSISTANCE) != c.endswith("+SA") for t in TASKS]  # fmt: skip
+    n_steps = 12
+    states = (
+        np.arange(n_steps)[:, None, None] + 100 * np.arange(len(keys))[None, :, None] + np.zeros((1, 1, 7))
+    )
+    episodes = SimpleNamespace(
+        participant=np.array([k[0] for k in keys]),
+        condition=np.array([k[1] for k in keys]),
+        assistance=np.array([k[2] for k in keys]),
+        task=np.array([k[3] for k in keys]),
+        end=np.array([5 + CONDITIONS.index(k[1]) for k in keys]),
+        states=states,
+    )
+    clips = study_plots.video_clips(episodes, 1, "grasp_set", stride=2, dt=0.1)
+    assert len(clips) == len(CONDITIONS)
+    for cond, (frames, captions) in zip(CONDITIONS, clips, strict=True):
+        e = keys.index((1, cond, "grasp_set" if cond.endswith("+SA") else NO_ASSISTANCE, "Dessert"))
+        steps = np.arange(0, 5 + CONDITIONS.index(cond) + 1, 2)  # up to the episode's end
+        assert (frames == states[steps, e]).all()
+        assert captions == [f"{cond}  t = {s * 0.1:.1f} s" for s in steps]
+    with pytest.raises(ConfigError, match="participant 2"):
+        study_plots.video_clips(episodes, 2, "grasp_set", stride=2, dt=0.1)

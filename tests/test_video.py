@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.evidence.video import label_frames, read_video, render_states, side_by_side, write_video
+from lasa.evidence.video import (
+    label_frames,
+    read_video,
+    render_states,
+    side_by_side,
+    write_clips,
+    write_video,
+)
 
 
 def test_render_shows_the_arm_move(robot, task):
@@ -141,3 +148,39 @@ def test_the_committed_study_video_reads_back_with_its_frame_count():
     video = read_video(figures / "study_dessert.mp4")
     assert video.shape == (expected, 240, 4 * 320, 3)
     assert mediapy.read_video(str(figures / "study_dessert.mp4")).metadata.num_images == expected
+
+
+def test_write_clips_lays_out_any_number_of_clips(robot, task, tmp_path):
+    """Three clips (one per cup of a three-cup scene) side by side and in turn: the frame counts,
+    the per-frame captions and the MP4 read back."""
+    three = robot.with_cup(robot.goal_positions()[1] + np.array([0.15, 0.0, 0.0]))
+    assert len(three.spec.goal_sites) == 3
+    aims = [task.goals[0], task.goals[1], task.goals[1] + 0.2]  # a pose towards each cup
+    clips = [
+        (np.linspace(robot.home, aim, n), [f"cup {g}, t={t}" for t in range(n)] if g else "cup 0")
+        for g, (aim, n) in enumerate(zip(aims, (3, 2, 4), strict=True))
+    ]
+    video, shown = write_clips(three, clips, tmp_path / "side.mp4", fps=5, height=48, width=64)
+    assert video.shape == (4, 48, 3 * 64, 3) and [len(c) for c in shown] == [3, 2, 4]
+    assert (video[-1, :, 64:128] == shown[1][-1]).all()  # a shorter clip holds its last frame
+    assert read_video(tmp_path / "side.mp4").shape == (4, 48, 192, 3)
+    plain = render_states(three, clips[2][0], height=48, width=64)
+    assert (shown[2] != plain).any() and (shown[2][:, 20:] == plain[:, 20:]).all()  # a caption, at the top
+    video, _ = write_clips(three, clips, tmp_path / "turn.mp4", fps=5, layout="in_turn", height=48, width=64)
+    assert video.shape == (3 + 2 + 4, 48, 64, 3)
+    assert read_video(tmp_path / "turn.mp4").shape[0] == 9
+
+
+@pytest.mark.parametrize(
+    ("clips", "layout", "match"),
+    [
+        ([], "side_by_side", "at least one clip"),
+        ([(np.zeros((0, 5)), "empty")], "side_by_side", "no states"),
+        ([(np.zeros((3, 5)), ["one", "two"])], "side_by_side", "2 captions for 3 frames"),
+        ([(np.zeros((3, 5)), "x")], "diagonal", "layout"),
+    ],
+)
+def test_write_clips_refuses_bad_input(robot, tmp_path, clips, layout, match):
+    with pytest.raises(ConfigError, match=match):
+        write_clips(robot, clips, tmp_path / "v.mp4", fps=5, layout=layout, height=16, width=16)
+    assert not list(tmp_path.iterdir())  # nothing written

@@ -29,7 +29,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import pandas as pd
@@ -62,6 +62,8 @@ __all__ = [
     "sync_readme",
     "CLAIM_COLUMNS",
     "README_MARKERS",
+    "SHOWN_COLUMNS",
+    "claims_frame",
 ]
 
 README_MARKERS = (
@@ -123,6 +125,23 @@ class Claim:
             raise ConfigError(f"reproduced must be one of {VERDICTS}, got {self.reproduced!r}")
         if self.reproduced == NOT_TESTABLE and self.settled:
             raise ConfigError(f"{self.id}: a claim that is not testable is never settled")
+
+
+# what a notebook shows of its claims (claims_frame): the row, its reading, its evidence, its verdict
+SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high", "reproduced", "settled")
+
+
+def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFrame:
+    """A notebook's claims, one row each, in the columns of :data:`SHOWN_COLUMNS`.
+
+    Args:
+        claims: The claims, in the order to show them.
+        assistance: Show the ``assistance`` column (the study's ids name their reading already).
+    """
+    columns = [c for c in SHOWN_COLUMNS if assistance or c != "assistance"]
+    if not claims:
+        return pd.DataFrame(columns=columns)
+    return pd.DataFrame([c.__dict__ for c in claims])[columns]
 
 
 def criteria(claim: Claim) -> dict[str, str]:

@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import os
 import platform
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Literal
 
 import mediapy
 import mujoco
@@ -27,7 +29,9 @@ from lasa.base.ffmpeg import pinned_ffmpeg
 from lasa.base.io import atomic_path
 from lasa.world.robot import Robot
 
-__all__ = ["render_states", "label_frames", "side_by_side", "write_video", "read_video"]
+__all__ = ["render_states", "label_frames", "side_by_side", "write_video", "read_video", "write_clips"]
+
+LAYOUTS = ("side_by_side", "in_turn")  # write_clips: the clips beside each other, or one after another
 
 
 # x264 picks its assembly by the CPU it runs on, and the SSSE3/AVX2/AVX-512 kernels do
@@ -148,6 +152,58 @@ def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 1
             ffmpeg_args=list(_BITEXACT_ARGS),
         )
     return Path(path)
+
+
+def write_clips(
+    robot: Robot,
+    clips: Sequence[tuple[np.ndarray, str | Sequence[str]]],
+    path: str | os.PathLike[str],
+    fps: float,
+    layout: Literal["side_by_side", "in_turn"] = "side_by_side",
+    height: int = 240,
+    width: int = 320,
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Render clips of joint states, caption each frame, lay the clips out and write the MP4.
+
+    What a notebook's video is: one clip per method, condition or demonstration, each the
+    rendered states of one episode (already thinned to the frames the video shows), with
+    its caption; side by side (the shorter clips hold their last frame) or one after another.
+    The clips are independent of the task: any number of them, of any goals.
+
+    Args:
+        robot: The robot whose scene renders the states.
+        clips: ``(states, caption)`` per clip: joint positions, shape (T, n), and one caption
+            for every frame or a caption per frame (T of them).
+        path: Destination ``.mp4`` (written bit-exactly, see :func:`write_video`).
+        fps: Frame rate.
+        layout: ``"side_by_side"`` (one clip per column) or ``"in_turn"`` (concatenated in time).
+        height: Frame height in pixels (even).
+        width: Frame width of one clip in pixels (even).
+
+    Returns:
+        The video, shape (T', height, width', 3), and the captioned clips, one per clip
+        (shape (T, height, width, 3) each).
+
+    Raises:
+        ConfigError: No clips, a clip without states, a caption list of the wrong length,
+            an unknown ``layout`` or an odd frame size.
+    """
+    if layout not in LAYOUTS:
+        raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
+    if not clips:
+        raise ConfigError("write_clips needs at least one clip")
+    shown = []
+    for i, (states, caption) in enumerate(clips):
+        states = np.atleast_2d(states)
+        if not len(states):
+            raise ConfigError(f"clip {i} has no states to render")
+        if not isinstance(caption, str) and len(caption) != len(states):
+            raise ConfigError(f"clip {i}: {len(caption)} captions for {len(states)} frames")
+        text = caption if isinstance(caption, str) else list(caption)
+        shown.append(label_frames(render_states(robot, states, height, width), text))
+    video = side_by_side(*shown) if layout == "side_by_side" else np.concatenate(shown)
+    write_video(path, video, fps=fps)
+    return video, shown
 
 
 def read_video(path: str | os.PathLike[str]) -> np.ndarray:

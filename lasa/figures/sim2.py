@@ -70,6 +70,7 @@ __all__ = [
     "after_the_change",
     "failures",
     "escape_times",
+    "wrong_goal",
 ]
 
 NAME = "sim2_change_of_mind"
@@ -334,6 +335,16 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
 
 STILL = 0.01  # an arm that moves less than this (normalised) in its last STILL_STEPS steps stands still [-]
 STILL_STEPS = 50  # [steps]
+
+
+def wrong_goal(goal: int, n_goals: int) -> int:
+    """The cup a user who wants ``goal`` aims at before the change step: the next one.
+
+    :func:`run` aims the first N steps at ``(goal + 1) % n_goals``; with two cups, the other one.
+    """
+    if not 0 <= goal < n_goals:
+        raise ConfigError(f"goal must be in [0, {n_goals}), got {goal}")
+    return (goal + 1) % n_goals
 
 
 def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, success: float) -> pd.DataFrame:

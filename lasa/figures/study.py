@@ -44,10 +44,12 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
+from lasa.base.io import require_file
+from lasa.base.paths import Paths
 from lasa.evidence import latent_property
 from lasa.method.decoder import ActionDecoder
 from lasa.people import participants, planning
-from lasa.people.cohort import Cohort, draw_cohort
+from lasa.people.cohort import Cohort, ParticipantConfig, draw_cohort
 from lasa.people.design import StudyConfig, interface_of
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
@@ -60,6 +62,8 @@ __all__ = [
     "PARTICIPANT_MODELS",
     "DECODER_SELECTIONS",
     "Simulate",
+    "eating_property",
+    "participant_table",
     "readings_to_run",
     "run",
     "for_member",
@@ -123,6 +127,23 @@ class Config:
             raise ConfigError(
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
             )
+
+
+def eating_property(paths: Paths) -> pd.DataFrame:
+    """Notebook 10's property of the eating decoders: :func:`lasa.evidence.latent_property.summary`
+    of the eating rows of the run's ``latent_property.csv``.
+
+    Raises:
+        ArtifactError: The file is missing (notebook 10 makes it).
+    """
+    frame = pd.read_csv(require_file(paths.figure("latent_property.csv"), "make figures (notebook 10)"))
+    return latent_property.summary(frame.query("task == 'eating'"))
+
+
+def participant_table(participant: ParticipantConfig) -> pd.DataFrame:
+    """The participants' parameters, one row each (``parameter``, ``value``), in their field order."""
+    fields = dataclasses.fields(participant)
+    return pd.DataFrame([{"parameter": f.name, "value": getattr(participant, f.name)} for f in fields])
 
 
 def readings_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str]:

@@ -4,19 +4,24 @@
 :func:`headline_model` picks the headline participant model by it (a criterion fixed before any
 verdict). :func:`switch_share` is Retargeting's mode-switch share of time, against Herlant et
 al. 2016's 17.4% (:data:`HERLANT_SHARE`); :func:`stuck` says where the unfinished LA episodes
-were and what the decoder offered there, :func:`stuck_summary` groups them.
+were and what the decoder offered there, :func:`stuck_summary` groups them;
+:func:`stuck_episodes` and :func:`switch_shares` run them over every reading, and
+:func:`break_even` is the cost per mode switch that would make Retargeting as slow as LA+SA.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
 
 import mujoco
 import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
+from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.evidence.rules import COMPLETION_BAR
-from lasa.figures.study import Config
+from lasa.figures.study import PAPER_N, Config, for_member
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people.policy import progress_gain
@@ -30,8 +35,11 @@ __all__ = [
     "completion",
     "headline_model",
     "switch_share",
+    "switch_shares",
     "stuck",
+    "stuck_episodes",
     "stuck_summary",
+    "break_even",
 ]
 
 HERLANT_SHARE = 0.174  # mode switching's share of execution time, JACO + joystick (Herlant et al. 2016) [-]
@@ -124,6 +132,21 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
     return pd.DataFrame(out)
 
 
+def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.DataFrame:
+    """:func:`switch_share` of each participant model, for the first :data:`~lasa.figures.study.PAPER_N`
+    participants and for the cohort; columns ``model`` and ``participants_of`` (``first 10``, ``cohort``)
+    added, one block per model in the order of ``models``."""
+    parts = [("first 10", time[time.participant < PAPER_N]), ("cohort", time)]
+    return pd.concat(
+        [
+            switch_share(for_n[for_n.model == m], dt).assign(model=m, participants_of=label)
+            for m in models
+            for label, for_n in parts
+        ],
+        ignore_index=True,
+    )
+
+
 def stuck(
     task: EatingTask,
     episodes: Episodes,
@@ -179,6 +202,64 @@ def stuck(
             "inputs_progressing": (gain > 0).mean(axis=1),
         }
     )
+
+
+def stuck_episodes(
+    task: EatingTask,
+    episodes: Mapping[str, Mapping[str, Episodes]],
+    decoders: Mapping[str, ActionDecoder],
+    config: Config,
+    models: Sequence[str],
+) -> pd.DataFrame:
+    """:func:`stuck` over every participant model and decoder reading, with ``decoder`` and ``model`` columns.
+
+    Args:
+        task: The eating task.
+        episodes: :func:`lasa.figures.study.run`'s episodes, by model, then decoder reading.
+        decoders: The decoder of each reading.
+        config: The study's configuration.
+        models: The participant models, in the order of the rows.
+    """
+    return pd.concat(
+        [
+            stuck(task, episodes[m][n], decoders[n], config).assign(decoder=n, model=m)
+            for m in models
+            for n in episodes[m]
+        ],
+        ignore_index=True,
+    )
+
+
+def break_even(time: pd.DataFrame, assistance: Sequence[str], decoder: str, model: str) -> pd.DataFrame:
+    """The time per mode switch at which Retargeting would be as slow as LA+SA, per SA member.
+
+    One row per member and Retargeting condition (R, and R+SA under that member), indexed
+    ``(member, condition)``, for the headline decoder and participant model: the mean total
+    time per task of R or R+SA and of LA+SA under the member [s], R's mode switches per task, and
+    ``break-even cost per switch [s]``, the time gap divided by the switches.
+
+    Args:
+        time: :func:`lasa.figures.study.run`'s time table.
+        assistance: The SA members, the headline first.
+        decoder: The headline decoder reading (the LA conditions' rows).
+        model: The headline participant model.
+    """
+    head = for_member(time, assistance[0], decoder=decoder, model=model)
+    others = time.assistance.isin(assistance[1:]) & time.decoder.isin([decoder, NO_ASSISTANCE])
+    rows = pd.concat([head, time[others & (time.model == model)]])
+    means = rows.groupby(["assistance", "condition"])[["total_time", "mode_switches"]].mean()
+    gap = {}
+    for sa in assistance:
+        la_sa = means.loc[(sa, "LA+SA"), "total_time"]
+        for cond, asst in (("R", NO_ASSISTANCE), ("R+SA", sa)):
+            r = means.loc[(asst, cond)]
+            gap[(sa, cond)] = {
+                "R time [s]": r.total_time,
+                "LA+SA time [s]": la_sa,
+                "switches per task": r.mode_switches,
+                "break-even cost per switch [s]": (la_sa - r.total_time) / max(r.mode_switches, 1e-9),
+            }
+    return pd.DataFrame(gap).T
 
 
 def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import pandas as pd
 
@@ -44,10 +45,16 @@ __all__ = [
     "claim_id",
     "effect_sentence",
     "figure_stats",
+    "h1_table",
+    "h2_table",
+    "h3_tables",
     "members_table",
+    "reading_of",
     "readings_table",
     "untestable_reason",
 ]
+
+Analyses = Mapping[tuple, Mapping[str, Any]]  # claims()'s analyses, keyed by reading
 
 
 CLAIM_TEXT = {
@@ -172,6 +179,97 @@ def claims(
                     effect = effect_sentence(name, result, judged)
                     rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason, effect))
     return _with_flips(rows), analyses
+
+
+def reading_of(key: tuple, decoder: str, model: str) -> tuple[str, str, str]:
+    """(member, decoder reading, participant model) of an analyses key of :func:`claims`.
+
+    The headline's keys do not name its decoder or model: ``decoder`` and ``model`` are the
+    headline's, filled in where the key leaves them out.
+    """
+    return key[0], key[2] if len(key) > 2 and key[2] else decoder, key[3] if len(key) > 3 else model
+
+
+def h1_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
+    """H1's tests under every reading: three rows per analysis, unrounded.
+
+    Goal Error by the paper's between-subjects ANOVA and the within-subjects SA effect, and the
+    mean distance within subjects; each with its test, F, degrees of freedom, p and the means
+    with and without SA.
+
+    Args:
+        analyses: :func:`claims`'s analyses.
+        decoder: The headline decoder reading.
+        model: The headline participant model.
+    """
+    out = []
+    for key, res in analyses.items():
+        member, reading, m = reading_of(key, decoder, model)
+        for name in ("h1_between", "h1_within", "h1_mean_within"):
+            r = res[name]
+            measure = "mean distance [m]" if name == "h1_mean_within" else "Goal Error [m s]"
+            out.append(
+                {
+                    "model": m,
+                    "decoder": reading,
+                    "SA": member,
+                    "participants": res["n"],
+                    "measure": measure,
+                    "test": r["test"],
+                    "F": r["F"],
+                    "df": f"({r['df1']},{r['df2']})",
+                    "p": r["p"],
+                    "mean with SA": r["mean_sa"],
+                    "mean without": r["mean_no_sa"],
+                }
+            )
+    return pd.DataFrame(out)
+
+
+def h2_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
+    """H2's paired comparison per reading and Dessert phase, unrounded: LA+SA - R+SA's alignment,
+    its interval, p and the participants paired (the arguments are :func:`h1_table`'s)."""
+    return pd.DataFrame(
+        [
+            {
+                "model": m,
+                "decoder": reading,
+                "SA": member,
+                "participants": res["n"],
+                "phase": ph,
+                "LA+SA - R+SA": v[0],
+                "ci_low": v[1],
+                "ci_high": v[2],
+                "p": v[3],
+                "pairs": v[4],
+            }
+            for key, res in analyses.items()
+            for member, reading, m in [reading_of(key, decoder, model)]
+            for ph, v in res["h2_phases"].items()
+        ]
+    )
+
+
+def h3_tables(analyses: Analyses, decoder: str, model: str) -> list[tuple[str, pd.DataFrame, pd.DataFrame]]:
+    """H3's times per reading, unrounded: ``(title, means, times)`` per analysis.
+
+    ``title`` names the reading, its participants and, where a condition finishes too few
+    episodes, why H3 is not testable; ``means`` is the restricted mean time per participant
+    over both tasks [s] with its completion (``finished``), one row per condition; ``times``
+    stacks the bootstrap comparisons of LA+SA with each other condition, ``total`` then
+    ``idle`` (the arguments are :func:`h1_table`'s).
+    """
+    out = []
+    for key, res in analyses.items():
+        member, reading, m = reading_of(key, decoder, model)
+        short = f"; H3 not testable (completion: {res['h3_short']})" if res["h3_short"] else ""
+        title = (
+            f"model = {m}, decoder = {reading}, SA = {member}, {res['n']} participants: restricted mean "
+            f"time per participant over both tasks [s], completion{short}"
+        )
+        means = res["means"].assign(finished=res["h3_completion"])
+        out.append((title, means, pd.concat({"total": res["h3_total"], "idle": res["h3_idle"]})))
+    return out
 
 
 def _readings(

@@ -39,9 +39,11 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure, SubFigure
 
 from lasa.base.conditions import CONDITIONS
+from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import wrap_to
 from lasa.figures.study import PAPER_N, for_member
+from lasa.world.episodes import Episodes
 
 __all__ = [
     "FigureSpec",
@@ -57,6 +59,7 @@ __all__ = [
     "plot_goal_error",
     "plot_time",
     "plot_alignment",
+    "video_clips",
 ]
 
 PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
@@ -494,6 +497,43 @@ def _reached(part: pd.DataFrame) -> pd.DataFrame:
 
 
 # every table's keys: who, under which condition, SA member, decoder reading and participant model, which task
+def video_clips(
+    episodes: Episodes, participant: int, member: str, stride: int, dt: float, task: str = "Dessert"
+) -> list[tuple[np.ndarray, list[str]]]:
+    """One participant's episode of ``task`` under each condition, as clips for a video.
+
+    The ``(states, captions)`` of :func:`lasa.evidence.video.write_clips`, in the order of
+    :data:`~lasa.base.conditions.CONDITIONS`: every ``stride``-th state up to the episode's end,
+    each captioned with its condition and time.
+
+    Args:
+        episodes: One decoder reading's episodes (:func:`lasa.figures.study.run`).
+        participant: Whose episodes.
+        member: The SA member of the assisted conditions.
+        stride: Control steps per frame.
+        dt: The control period [s].
+        task: The eating task.
+
+    Raises:
+        ConfigError: The episodes hold no such episode under some condition.
+    """
+    clips = []
+    for cond in CONDITIONS:
+        asst = member if cond.endswith("+SA") else NO_ASSISTANCE
+        hits = np.flatnonzero(
+            (episodes.participant == participant)
+            & (episodes.task == task)
+            & (episodes.condition == cond)
+            & (episodes.assistance == asst)
+        )
+        if not len(hits):
+            raise ConfigError(f"no {task} episode of participant {participant} under {cond} ({asst})")
+        e = int(hits[0])
+        steps = np.arange(0, episodes.end[e] + 1, stride)
+        clips.append((episodes.states[steps, e], [f"{cond}  t = {s * dt:.1f} s" for s in steps]))
+    return clips
+
+
 ROW_KEYS = ("robot", "participant", "condition", "assistance", "decoder", "model", "task")
 GOAL_ERROR = FigureSpec(
     "study_goal_error",

@@ -182,8 +182,8 @@ def shared_autonomy_step(
     Decode the joystick input, blend with the assistance, update the belief, take the safe
     step: what the episode runner does with a held input
     (:func:`lasa.method.episodes.held_input`). A joystick input that is not finite (a
-    disconnected or faulty device) decodes to no human action at all, so it can never become a command; the robot's own assistance
-    still applies.
+    disconnected or faulty device) decodes to no human action at all, so it can never become
+    a command; the robot's own assistance still applies.
 
     **The stick at rest** (z = 0) is a named choice, ``rest``, because the loops differ:
 

@@ -3,7 +3,8 @@
 Every notebook starts the same way: set the threads, load the robot, build the cup
 task, resolve the folders against the repository root (so Jupyter, papermill and Make
 agree), and load what earlier notebooks made. :meth:`Workspace.open` does all of it,
-and the loaders name the notebook that makes a missing artifact.
+and the loaders name the notebook that makes a missing artifact. The eating study
+(notebooks 10 and 11) starts the same way in the eating scene: :meth:`Workspace.eating`.
 """
 
 from __future__ import annotations
@@ -11,56 +12,82 @@ from __future__ import annotations
 import dataclasses
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Generic, TypeVar
 
-from lasa.base.config import ControlConfig, set_threads
+from lasa.base.config import ControlConfig, check_choice, set_threads
 from lasa.base.paths import Paths
 from lasa.method.dataset import Demonstrations, load_demonstrations
 from lasa.method.decoder import LatentActionModel, load_checkpoint
+from lasa.world.eating import EatingTask, make_eating_task
+from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import CupTask, make_cup_task
 
-__all__ = ["Workspace"]
+__all__ = ["Workspace", "EATING_ROBOTS"]
+
+EATING_ROBOTS = ("panda",)  # the robots the eating scene is built for
+TaskT = TypeVar("TaskT", bound=GoalTask)
 
 
 @dataclasses.dataclass(frozen=True)
-class Workspace:
+class Workspace(Generic[TaskT]):
     """One robot's task and control units, and the run's folders.
 
     Attributes:
         robot: The robot (its MuJoCo scene).
-        task: The cup task (goals, preference curves, start pose).
+        task: The cup task (goals, preference curves, start pose), or the eating task
+            (:meth:`eating`).
         control: The robot's control-loop units.
         paths: The run's build and figures folders.
     """
 
     robot: Robot
-    task: CupTask
+    task: TaskT
     control: ControlConfig
     paths: Paths
 
-    @classmethod
+    @staticmethod
     def open(
-        cls,
         robot: str,
         build_dir: str | os.PathLike[str] = "build",
         figures_dir: str | os.PathLike[str] = "figures",
-    ) -> Workspace:
+    ) -> Workspace[CupTask]:
         """Set torch's threads (``LASA_THREADS``), build the robot's task, resolve the folders."""
         set_threads()
         arm = load_robot(robot)
         paths = Paths.of(build_dir, figures_dir)
         paths.figures.mkdir(parents=True, exist_ok=True)
-        return cls(arm, make_cup_task(arm), arm.control, paths)
+        return Workspace(arm, make_cup_task(arm), arm.control, paths)
+
+    @staticmethod
+    def eating(
+        robot: str = "panda",
+        build_dir: str | os.PathLike[str] = "build",
+        figures_dir: str | os.PathLike[str] = "figures",
+    ) -> Workspace[EatingTask]:
+        """:meth:`open` for the eating study: the robot with its fork in the eating scene, its task.
+
+        Raises:
+            ConfigError: ``robot`` is not one of :data:`EATING_ROBOTS`.
+        """
+        check_choice("robot", robot, EATING_ROBOTS)
+        set_threads()
+        paths = Paths.of(build_dir, figures_dir)
+        paths.figures.mkdir(parents=True, exist_ok=True)
+        task = make_eating_task()  # mink IK over every goal's tilts and strokes (once per process)
+        return Workspace(task.robot, task, task.robot.control, paths)
 
     @property
     def name(self) -> str:
         """The robot's name."""
         return self.robot.name
 
-    def artifact(self, name: str) -> Path:
-        """The path of artifact ``name`` (see :data:`lasa.base.paths.ARTIFACTS`) for this robot."""
-        return self.paths.artifact(name, self.name)
+    def artifact(self, name: str, **fields: str) -> Path:
+        """The path of artifact ``name`` (see :data:`lasa.base.paths.ARTIFACTS`) for this robot.
+
+        ``fields`` fill the rest of its pattern (``reading`` for the eating readings).
+        """
+        return self.paths.artifact(name, self.name, **fields)
 
     def demonstrations(self) -> Demonstrations:
         """The dataset of notebook 01."""
@@ -68,10 +95,11 @@ class Workspace:
             self.artifact("demos"), robot=self.name, make_hint=Paths.make_hint("demos", self.name)
         )
 
-    def decoder(self, name: str = "decoder") -> tuple[LatentActionModel, dict[str, Any]]:
-        """A checkpoint (``decoder``, ``decoder_lambda0`` or ``decoder_entropy``) and its metadata."""
+    def decoder(self, name: str = "decoder", **fields: str) -> tuple[LatentActionModel, dict[str, Any]]:
+        """A checkpoint (``decoder``, ``decoder_lambda0``, ``decoder_entropy``, ``eating_decoder``, or
+        ``eating_reading_decoder`` with its ``reading``) and its metadata."""
         return load_checkpoint(
-            self.artifact(name), robot=self.name, make_hint=Paths.make_hint(name, self.name)
+            self.artifact(name, **fields), robot=self.name, make_hint=Paths.make_hint(name, self.name)
         )
 
     def sim_decoders(self) -> dict[str, LatentActionModel]:
