@@ -36,7 +36,9 @@ _EXPORTS = {
     "ArtifactError": "lasa.base.errors",
     "Assist": "lasa.method.step",
     "Claim": "lasa.evidence.claims",
+    "CheckpointError": "lasa.base.errors",
     "ConfigError": "lasa.base.errors",
+    "DamagedLogError": "lasa.base.errors",
     "ContextMap": "lasa.method.newgoals",
     "ControlConfig": "lasa.base.config",
     "CupTask": "lasa.world.task",
@@ -76,7 +78,14 @@ _EXPORTS = {
 
 if TYPE_CHECKING:
     from lasa.base.config import ControlConfig
-    from lasa.base.errors import ArtifactError, ConfigError, IKError, LasaError
+    from lasa.base.errors import (
+        ArtifactError,
+        CheckpointError,
+        ConfigError,
+        DamagedLogError,
+        IKError,
+        LasaError,
+    )
     from lasa.base.paths import Paths
     from lasa.evidence.claims import Claim, update_claims
     from lasa.evidence.publish import publish
@@ -123,7 +132,9 @@ __all__ = [
     "ArtifactError",
     "Assist",
     "Claim",
+    "CheckpointError",
     "ConfigError",
+    "DamagedLogError",
     "ContextMap",
     "ControlConfig",
     "CupTask",

@@ -9,7 +9,7 @@ import torch
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.errors import ArtifactError, CheckpointError, ConfigError
 from lasa.method import inference as inference_module
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
 
@@ -262,7 +262,7 @@ def test_checkpoint_round_trip_carries_config(tmp_path):
 
 def test_checkpoint_for_another_robot_is_refused(tmp_path):
     path = save_checkpoint(make_model(), tmp_path / "m.pt")
-    with pytest.raises(ArtifactError, match="trained for robot 'planar5', not 'panda'"):
+    with pytest.raises(CheckpointError, match="trained for robot 'planar5', not 'panda'"):
         load_checkpoint(path, robot="panda")
 
 
@@ -271,7 +271,7 @@ def test_missing_and_corrupt_checkpoints_name_the_fix(tmp_path):
         load_checkpoint(tmp_path / "nope.pt")
     bad = tmp_path / "bad.pt"
     bad.write_bytes(b"not a checkpoint")
-    with pytest.raises(ArtifactError, match="not a valid lasa checkpoint"):
+    with pytest.raises(CheckpointError, match="not a valid lasa checkpoint"):
         load_checkpoint(bad)
 
 
@@ -283,7 +283,7 @@ def test_an_unsafe_checkpoint_is_refused_without_torchs_unsafe_advice(tmp_path):
 
     unsafe = tmp_path / "unsafe.pt"
     torch.save({"config": pathlib.Path("x"), "state_dict": {}}, unsafe)  # a pickled object, not data
-    with pytest.raises(ArtifactError, match="not a valid lasa checkpoint") as info:
+    with pytest.raises(CheckpointError, match="not a valid lasa checkpoint") as info:
         load_checkpoint(unsafe)
     assert "weights_only" not in str(info.value) and info.value.__cause__ is None
 

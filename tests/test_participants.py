@@ -254,3 +254,61 @@ def test_an_la_only_run_repeats_the_full_runs_la_episodes(eating, small_study):
     assert np.allclose(la.belief.sum(axis=-1), 1.0)
     with pytest.raises(ConfigError, match="interfaces"):
         simulate(eating, LinearDecoder(), cohort, eating.robot.control, config, progress=False, interfaces=())
+
+
+def test_the_one_step_chooser_is_the_jacobian_foresight_argmax_by_hand(eating):
+    """A near-deterministic one-step participant (beta ~ 1e7) under LA: the first input is the
+    candidate whose first-order tip motion (MuJoCo's site Jacobian, one candidate at a time) most
+    lowers ||p - p*|| + l angle(d, d*), and the robot moves by it (alpha = 0: a = a_h)."""
+    from lasa.world.eating import waypoints
+    from lasa.world.fork import waypoint_arrays
+
+    participant = ParticipantConfig(beta_median=1e7, beta_spread=0.0)
+    config = StudyConfig(horizon=1, participant=participant)
+    decoder, control = LinearDecoder(seed=3), eating.robot.control
+    record = simulate(
+        eating, decoder, draw_cohort(1, participant, seed=4), control, config, 0, False, ("LA",)
+    )
+    robot, s0 = eating.robot, eating.start
+    model, data = robot.model, mujoco.MjData(robot.model)
+    data.qpos[robot.qpos_adr] = s0
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    site = model.site(robot.spec.grasp_site).id
+    jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+    mujoco.mj_jacSite(model, data, jacp, jacr, site)
+    dofs = [model.jnt_dofadr[model.joint(j).id] for j in robot.spec.joints]
+    jp, jr = jacp[:, dofs], jacr[:, dofs]
+    pos, axis = data.site_xpos[site].copy(), data.site_xmat[site].reshape(3, 3)[:, 2].copy()
+    wp_pos, wp_dir, _, _ = waypoint_arrays(robot)
+    axis_grid = np.linspace(-1.0, 1.0, config.n_z)
+    grid = [np.array([a, b]) for a in axis_grid for b in axis_grid]
+    unit, weight = control.dt * config.retarget.linear_speed, participant.rotation_weight
+
+    def cost(p, d, p_star, d_star):
+        return np.linalg.norm(p - p_star) + weight * math.acos(np.clip(d @ d_star, -1.0, 1.0))
+
+    la = np.flatnonzero(record.condition == "LA")
+    assert len(la) == 2 and all(waypoints(t) for t in ("Entree", "Dessert"))
+    for e in la:
+        k = ["Entree", "Dessert"].index(record.task[e])
+        p_star, d_star = wp_pos[k, 0], wp_dir[k, 0]
+        best, best_phi = -math.inf, np.zeros(7)
+        for z in grid:
+            if not z.any():
+                continue  # rest moves nothing
+            phi = decoder.decode_numpy(z[None], s0[None], np.full((1, 4), 0.25))[0]
+            dq = control.dt * phi
+            new_dir = axis + np.cross(jr @ dq, axis)
+            new_dir /= np.linalg.norm(new_dir)
+            gain = (cost(pos, axis, p_star, d_star) - cost(pos + jp @ dq, new_dir, p_star, d_star)) / unit
+            if gain > best:
+                best, best_phi = gain, phi
+        assert best >= participant.idle_threshold  # worth a push: not idle
+        assert not record.idle[0, e]
+        expected = np.clip(
+            s0 + control.dt * np.clip(best_phi, -control.max_joint_speed, control.max_joint_speed),
+            robot.lower,
+            robot.upper,
+        )
+        assert_allclose(record.states[1, e], expected, atol=1e-12)

@@ -1,6 +1,6 @@
 """Planning participants: the one-step study's record, timing of holds, and a detour they find."""
 
-import inspect
+import dataclasses
 
 import mujoco
 import numpy as np
@@ -16,7 +16,6 @@ from lasa.people.planning import PlanConfig
 from lasa.people.policy import progress_gain
 from lasa.world.eating import GOALS, PREFERENCES, fork_frame, make_eating_task
 from lasa.world.fork import tip_frames, tip_motion
-from lasa.world.measures import measures
 
 FIELDS = ("states", "tip", "direction", "phase", "idle", "switch", "end", "completed", "belief", "waypoint")
 
@@ -74,24 +73,49 @@ def small(eating):
     return _run(planning, eating)
 
 
-def test_signature_extends_the_one_step_study():
-    one_step = list(inspect.signature(participants.simulate).parameters.values())
-    planned = list(inspect.signature(planning.simulate).parameters.values())
-    assert planned[: len(one_step)] == one_step
-    assert [p.name for p in planned[len(one_step) :]] == ["plan"]
-    assert planned[-1].kind is inspect.Parameter.KEYWORD_ONLY
+def test_the_planned_roll_of_a_latent_input_is_the_reference_step_held(eating):
+    """The plan foresees a latent input by holding it through Algorithm 1's step: with every rolled
+    step exact (``coarse = 1``), each hold's end is the independent reference step applied h times."""
+    from reference_step import latent_step, softmax
+
+    plan = PlanConfig(replan=0.5, holds=(0.1, 0.5, 1.0), coarse=1)
+    config = StudyConfig(horizon=30)
+    study = planning._prepare(
+        eating, LinearDecoder(), draw_cohort(1, seed=1), eating.robot.control, config, 2, ("LA",), plan
+    )
+    idx = np.flatnonzero(study.layout.alpha > 0)[:1]  # one LA+SA episode: assistance in the roll
+    n, g = eating.robot.n_joints, eating.n_goals
+    state = eating.start[None] + 0.01
+    log_b = np.log(np.array([[0.4, 0.3, 0.2, 0.1]]))
+    snaps = planning._rollout_states(study, idx, state, log_b)  # (1, K', H, n)
+    control = dataclasses.replace(eating.robot.control, assistance=str(study.layout.assistance_run[idx[0]]))
+    alpha = float(study.layout.alpha[idx[0]])
+    for m in (0, 7, len(study.moves) - 1):
+        z = study.grid[study.moves[m]]
+        s, b = state[0].copy(), softmax(log_b[0])
+        for step in range(1, int(study.hold_steps[-1]) + 1):
+            out = latent_step(study.decoder, eating, control, s, b, z, alpha, "zero")
+            s, b = out["s"], out["b"]
+            for h in np.flatnonzero(study.hold_steps == step):
+                np.testing.assert_allclose(snaps[0, m, h], s, atol=1e-9)
+    assert alpha > 0 and snaps.shape == (1, len(study.moves), 3, n) and g == 4
 
 
-def test_same_record_and_ordering_as_the_one_step_study(eating, small):
+def test_a_planning_record_keeps_the_study_invariants(eating, small):
+    """Same episodes as the one-step study, states held after each episode's end, no input recorded
+    after it, phases that only move forward, and completion exactly when the end is before the horizon."""
     one_step = _run(participants, eating)
     for name in ("participant", "condition", "assistance", "task", "order"):
         assert_array_equal(getattr(small, name), getattr(one_step, name))
-    for name in FIELDS:
-        assert np.shape(getattr(small, name)) == np.shape(getattr(one_step, name)), name
-    assert small.dt == one_step.dt
-    tables, ref = measures(eating, small), measures(eating, one_step)
-    for key, frame in tables.items():
-        assert list(frame.columns) == list(ref[key].columns) and len(frame) == len(ref[key])
+    horizon = small.idle.shape[0]
+    for e, end in enumerate(small.end):
+        assert_array_equal(
+            small.states[end:, e], np.broadcast_to(small.states[end, e], small.states[end:, e].shape)
+        )
+        assert not small.switch[end:, e].any()
+        assert np.all(np.diff(small.phase[: end + 1, e]) >= 0)
+    assert_array_equal(small.completed, small.end < horizon)
+    assert small.idle[: small.end.max()].any()  # some participant rested while running
 
 
 def test_deterministic(eating, small):

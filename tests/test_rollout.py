@@ -190,3 +190,36 @@ def test_the_stick_at_rest_is_a_named_choice(model, task):
     assert_array_equal(zero.state[0], state[0])  # alpha = 0: the arm holds
     with pytest.raises(ConfigError, match="rest"):
         shared_autonomy_step(model, task, control, state, log_b, z, 0.0, rest="hold")
+
+
+def test_the_users_chooser_is_eq_s1_written_out_per_user(model, task):
+    """BoltzmannUsers against Eq. S1 by hand, one user and one candidate at a time: each user's
+    cost ||s* - (s + dt phi(z))||^2, Gumbel-max over -beta cost, and a laggy pilot's repeat."""
+    import math
+
+    from lasa.method.belief import belief, uniform_log_belief
+    from lasa.method.episodes import Now
+    from lasa.people.rollout import BoltzmannUsers
+
+    control = task.robot.control
+    users = dataclasses.replace(make_users(task, n=4, beta=30.0), pilot="laggy", pilot_prob=0.5)
+    noise, pilot = noise_for(task, 4, horizon=2, seed=3), np.random.default_rng(4).random((4, 2, 2))
+    chooser = BoltzmannUsers(model, users, control, 2, noise, pilot)
+    rng = np.random.default_rng(5)
+    state = task.start + 0.05 * rng.standard_normal((4, task.robot.n_joints))
+    log_b = uniform_log_belief(4, task.n_goals)
+    grid = np.linspace(-1.0, 1.0, control.n_z)
+    previous = [None] * 4
+    for t in range(2):
+        a_h = chooser(Now(t, np.arange(4), state, belief(log_b), log_b))
+        for u in range(4):
+            s, target, beta = state[u], users.target_at(t)[u], users.beta(t)[u]
+            phis = [model.decode_numpy(np.array([[z]]), s[None], belief(log_b[u : u + 1]))[0] for z in grid]
+            costs = [float(np.sum((target - (s + control.dt * phi)) ** 2)) for phi in phis]
+            gumbel = [-math.log(-math.log(x)) for x in noise[users.stream[u], t]]
+            k = int(np.argmax([-beta * c + g for c, g in zip(costs, gumbel, strict=True)]))
+            event = pilot[users.stream[u], t, 0] < 0.5
+            k = previous[u] if (event and previous[u] is not None) else k
+            previous[u] = k
+            assert chooser.z[t, u, 0] == grid[k], (t, u)
+            assert_allclose(a_h[u], phis[k], atol=1e-6)

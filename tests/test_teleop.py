@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 from reference_step import latent_step, softmax, step_with
 
-from lasa.base.errors import ConfigError
+from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, DamagedLogError
 from lasa.evidence.sessionlog import read_session
 from lasa.live.devices import KeyboardDevice, ScriptedDevice, StickSample, safe_axes
 from lasa.live.station import SessionConfig, Station
@@ -250,7 +250,6 @@ def test_a_cups_session_with_the_simulations_decoder_replays_to_an_mp4(model, tm
 
 
 def test_replay_refuses_another_decoder(build, tmp_path):
-    from lasa.base.errors import ArtifactError
 
     st = station(build, "LA")
     writer = new_session(st, tmp_path)
@@ -258,7 +257,7 @@ def test_replay_refuses_another_decoder(build, tmp_path):
     sidecar = tmp_path / f"{writer.stem}.json"
     meta = json.loads(sidecar.read_text())
     sidecar.write_text(json.dumps({**meta, "decoder_sha256": "0" * 64}))
-    with pytest.raises(ArtifactError, match="checksum"):
+    with pytest.raises(CheckpointError, match="checksum"):
         replay(writer.csv)
 
 
@@ -307,7 +306,6 @@ def test_a_truncated_log_is_damaged_and_never_complete(logged):
 
 
 def test_a_corrupt_cell_names_its_row_and_column(logged):
-    from lasa.base.errors import ArtifactError
 
     lines = logged.csv.read_text().splitlines()
     cells = lines[5].split(",")
@@ -315,29 +313,27 @@ def test_a_corrupt_cell_names_its_row_and_column(logged):
     lines[5] = ",".join(cells)
     logged.csv.write_text("\n".join(lines) + "\n")
     column = lines[0].split(",")[3]
-    with pytest.raises(ArtifactError, match=rf"row 5, column '{column}' holds 'x', not a number"):
+    with pytest.raises(DamagedLogError, match=rf"row 5, column '{column}' holds 'x', not a number"):
         read_session(logged.csv)
     frame, meta = read_session(logged.csv, allow_damaged=True)
     assert np.isnan(frame.iloc[4, 3]) and "not a number" in meta["damaged"]
 
 
 def test_a_row_with_missing_fields_is_damaged(logged):
-    from lasa.base.errors import ArtifactError
 
     lines = logged.csv.read_text().splitlines()
     lines[7] = lines[7] + ",1.0"  # one field too many
     logged.csv.write_text("\n".join(lines) + "\n")
-    with pytest.raises(ArtifactError, match="wrong number of fields"):
+    with pytest.raises(DamagedLogError, match="wrong number of fields"):
         read_session(logged.csv)
 
 
 def test_load_sessions_analyses_nothing_from_a_damaged_log(logged):
-    from lasa.base.errors import ArtifactError
     from lasa.evidence.sessions import load_sessions
 
     lines = logged.csv.read_text().splitlines()
     logged.csv.write_text("\n".join(lines[:-3]) + "\n")
-    with pytest.raises(ArtifactError, match="damaged"):
+    with pytest.raises(ArtifactError, match="damaged"):  # no sound session left: the folder's error
         load_sessions(logged.folder, make_eating_task())
     episodes = load_sessions(logged.folder, make_eating_task(), include_damaged=True)
     assert int(episodes.end[0]) == 37
@@ -570,10 +566,9 @@ def _edit_cell(csv, row, column, value):
     ("value", "reason"), [("nan", "holds nan, not a finite"), ("inf", "holds inf, not a finite")]
 )
 def test_a_non_finite_state_is_damaged(logged, value, reason):
-    from lasa.base.errors import ArtifactError
 
     _edit_cell(logged.csv, 4, "s2", value)
-    with pytest.raises(ArtifactError, match=rf"damaged: row 4, column 's2' {reason}"):
+    with pytest.raises(DamagedLogError, match=rf"damaged: row 4, column 's2' {reason}"):
         read_session(logged.csv)
 
 
@@ -590,16 +585,15 @@ def test_rows_out_of_time_order_are_damaged(logged):
 
 
 def test_a_bad_sidecar_or_empty_log_is_one_line(logged):
-    from lasa.base.errors import ArtifactError
 
     text = logged.sidecar.read_text()
     logged.sidecar.write_text(text[: len(text) // 2])  # torn
-    with pytest.raises(ArtifactError, match=r"sidecar .* is damaged: not JSON") as err:
+    with pytest.raises(DamagedLogError, match=r"sidecar .* is damaged: not JSON") as err:
         read_session(logged.csv)
     assert "\n" not in str(err.value)
     logged.sidecar.write_text(text)
     logged.csv.write_text("")
-    with pytest.raises(ArtifactError, match=r"damaged: its log .* is empty \(not even a header\)"):
+    with pytest.raises(DamagedLogError, match=r"damaged: its log .* is empty \(not even a header\)"):
         read_session(logged.csv, allow_damaged=True)
 
 
@@ -608,7 +602,7 @@ def test_replay_checks_the_scene(logged):
 
     scene = logged.folder / f"{logged.stem}.xml"
     scene.write_text(scene.read_text().replace("<mujoco", "<mujoco ", 1))
-    with pytest.raises(ArtifactError, match="is not the scene session .* logged"):
+    with pytest.raises(DamagedLogError, match="is not the scene session .* logged"):
         replay(logged.csv)
     scene.unlink()
     with pytest.raises(ArtifactError, match="has no scene"):
@@ -637,7 +631,6 @@ def test_replay_requires_the_decoder_record(logged):
 def test_a_decoder_for_another_task_is_refused_before_the_session(tmp_path):
     """A Panda decoder for the cups under the eating decoder's name: refused when the station is
     built, before any log exists (it used to fail in the loop, leaving a session at running)."""
-    from lasa.base.errors import ArtifactError
     from lasa.method.decoder import DecoderConfig, LatentActionModel
     from lasa.world.robot import load_robot
     from lasa.world.task import make_cup_task
@@ -645,7 +638,7 @@ def test_a_decoder_for_another_task_is_refused_before_the_session(tmp_path):
     cups = make_cup_task(load_robot("panda"))
     config = DecoderConfig(robot="panda", n_joints=7, n_goals=cups.n_goals, z_dim=1, hidden=8, depth=1)
     save_checkpoint(LatentActionModel(config), tmp_path / "models" / "eating_decoder_panda.pt")
-    with pytest.raises(ArtifactError, match="does not fit the Dessert task"):
+    with pytest.raises(CheckpointError, match="does not fit the Dessert task"):
         Station(SessionConfig(task="Dessert", condition="LA", participant="t", build_dir=str(tmp_path)))
 
 

@@ -19,6 +19,15 @@ class ArtifactError(LasaError, FileNotFoundError):
     """A dataset, checkpoint or figure input is missing, corrupt or for another robot."""
 
 
+class CheckpointError(ArtifactError):
+    """A checkpoint that does not fit: it does not load, or holds another decoder class, or was
+    made for another robot, number of goals or task."""
+
+
+class DamagedLogError(ArtifactError):
+    """A session log or its sidecar that does not parse, or disagrees with itself or its scene."""
+
+
 class IKError(LasaError, RuntimeError):
     """Inverse kinematics did not reach a grasp pose within tolerance."""
 

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.errors import ArtifactError, ConfigError, DamagedLogError
 from lasa.base.io import write_text
 
 __all__ = ["SessionWriter", "read_session", "check_scene", "STATUS"]
@@ -122,7 +122,7 @@ def read_session(
     an unreadable sidecar never) and the sidecar gains ``damaged``, the reason.
 
     Raises:
-        ArtifactError: if the session's sidecar or rows are missing, or the log is damaged.
+        ArtifactError: if the session's sidecar or rows are missing (DamagedLogError: damaged).
     """
     folder, stem = _locate(path)
     meta = _read_sidecar(folder / f"{stem}.json")
@@ -140,7 +140,7 @@ def read_session(
         problem = f"its sidecar records {meta.get('steps')} steps, the log holds {len(frame)} rows"
     if problem is not None:
         if not allow_damaged or not len(frame.columns):
-            raise ArtifactError(f"session {stem} is damaged: {problem}")
+            raise DamagedLogError(f"session {stem} is damaged: {problem}")
         meta["damaged"] = problem
     return frame, meta
 
@@ -149,7 +149,8 @@ def check_scene(path: str | os.PathLike[str], meta: dict[str, Any]) -> Path:
     """The session's scene XML, checked: it exists and, if the sidecar holds its checksum, matches it.
 
     Raises:
-        ArtifactError: if the scene is missing or not the one the session logged.
+        ArtifactError: if the scene is missing.
+        DamagedLogError: if it is not the one the session logged.
     """
     folder, stem = _locate(path)
     scene = folder / f"{stem}.xml"
@@ -159,7 +160,7 @@ def check_scene(path: str | os.PathLike[str], meta: dict[str, Any]) -> Path:
         )
     expected = meta.get("scene_sha256")
     if expected and _text_sha256(scene.read_text()) != expected:
-        raise ArtifactError(f"{scene} is not the scene session {stem} logged (checksum differs)")
+        raise DamagedLogError(f"{scene} is not the scene session {stem} logged (checksum differs)")
     return scene
 
 
@@ -184,9 +185,9 @@ def _read_sidecar(sidecar: Path) -> dict[str, Any]:
     try:
         meta = json.loads(sidecar.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ArtifactError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
+        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
     if not isinstance(meta, dict):
-        raise ArtifactError(f"session sidecar {sidecar} is damaged: not a JSON object")
+        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not a JSON object")
     return meta
 
 

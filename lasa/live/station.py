@@ -31,7 +31,7 @@ import numpy as np
 from lasa.base.conditions import ALL, alpha_of
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import ControlConfig, check_choice
-from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.paths import Paths
 from lasa.live.devices import StickSample
 from lasa.method.belief import belief, uniform_log_belief
@@ -130,7 +130,7 @@ class Station:
         config = getattr(decoder, "config", None)
         shape = (getattr(config, "n_joints", None), getattr(config, "n_goals", None))
         if shape != (self.robot.n_joints, self.task.n_goals) or decoder.z_dim > 2:
-            raise ArtifactError(
+            raise CheckpointError(
                 f"{path} does not fit the {self.config.task} task: it decodes {decoder.z_dim}-D z for "
                 f"{shape[0]} joints and {shape[1]} goals, the task needs at most 2-D z, "
                 f"{self.robot.n_joints} joints and {self.task.n_goals} goals"

@@ -45,7 +45,7 @@ import numpy as np
 
 from lasa.base.conditions import ALL
 from lasa.base.config import check_range
-from lasa.base.errors import ArtifactError, ConfigError, LasaError
+from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaError
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live.devices import Device, ScriptedDevice, open_device
 from lasa.live.interrupts import StopOnSignals
@@ -245,7 +245,7 @@ def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) 
             "replay cannot tell which decoder it used"
         )
     if logged != here["decoder_sha256"]:
-        raise ArtifactError(
+        raise CheckpointError(
             f"{station.decoder_path} is not the decoder session {session} used (checksum differs); "
             "replay needs the same decoder"
         )
@@ -253,7 +253,7 @@ def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) 
     then = meta["decoder_config"] or {}
     diff = sorted(k for k in set(now) | set(then) if now.get(k) != then.get(k))
     if diff:
-        raise ArtifactError(
+        raise CheckpointError(
             f"the decoder's config differs from the one session {session} logged in {', '.join(diff)}"
         )
 

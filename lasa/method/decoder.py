@@ -40,7 +40,7 @@ import torch
 from torch import nn
 
 from lasa.base.config import AtLeastTwo, Positive, PositiveInt, validate
-from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import atomic_path, require_file
 from lasa.method.inference import inference_plan
 
@@ -337,8 +337,9 @@ def load_checkpoint(
         The model in eval mode, and the checkpoint's ``extra`` metadata.
 
     Raises:
-        ArtifactError: if the file is missing, corrupt, saved from another decoder class,
-            or for another robot or number of goals.
+        ArtifactError: if the file is missing.
+        CheckpointError: if it is corrupt, saved from another decoder class, or for another
+            robot or number of goals.
         ConfigError: if ``decoder`` has no ``config_class`` or does not follow
             :class:`ActionDecoder`.
     """
@@ -364,7 +365,7 @@ def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[st
     """A checkpoint's payload and its config's values (lists as tuples), saved from ``decoder``.
 
     Raises:
-        ArtifactError: if the file does not load, or holds another decoder class.
+        CheckpointError: if the file does not load, or holds another decoder class.
     """
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
@@ -375,7 +376,7 @@ def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[st
     except Exception as exc:
         raise _invalid(path, exc, make_hint) from None
     if saved_as != _class_name(decoder):
-        raise ArtifactError(
+        raise CheckpointError(
             f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
             f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
         )
@@ -394,31 +395,31 @@ def _check_loaded(
 
     Raises:
         ConfigError: if ``model`` does not follow :class:`ActionDecoder`.
-        ArtifactError: if it was trained for another robot or number of goals.
+        CheckpointError: if it was trained for another robot or number of goals.
     """
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
         )
     if robot is not None and model.robot != robot:
-        raise ArtifactError(
+        raise CheckpointError(
             f"{path} was trained for robot {model.robot!r}, not {robot!r}. "
             f"Use the checkpoint for {robot!r} or re-make it with: {make_hint}"
         )
     if n_goals is not None and model.n_goals != n_goals:
-        raise ArtifactError(
+        raise CheckpointError(
             f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
             f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
 
 
-def _invalid(path: Path, exc: Exception, make_hint: str) -> ArtifactError:
+def _invalid(path: Path, exc: Exception, make_hint: str) -> CheckpointError:
     """The error of a checkpoint that does not load: it names the failure, not torch's message.
 
     For a file it cannot unpickle safely, torch suggests loading with weights_only=False,
     which would run arbitrary code from the file.
     """
-    return ArtifactError(
+    return CheckpointError(
         f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
         f"Delete it and re-make it with: {make_hint}"
     )
