@@ -415,13 +415,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 )
 
 
-def _num(text: object) -> str:
-    try:
-        return f"{float(str(text)):.3g}"
-    except ValueError:
-        return ""
-
-
 def _cell(row: pd.Series | None) -> str:
     """A robot's cell: both words, the numbers they rest on, N and whether the effect is settled.
 

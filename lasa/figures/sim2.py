@@ -141,7 +141,7 @@ def run(
         config.methods, assistance, config.change_steps, n_users
     )
     change = np.array(conditions, dtype=int)
-    wrong = (goal[user] + 1) % task.n_goals
+    wrong = wrong_goal(goal[user], task.n_goals)
     users = UserPopulation(
         goal=goal[user],
         theta=theta[user],
@@ -337,14 +337,14 @@ STILL = 0.01  # an arm that moves less than this (normalised) in its last STILL_
 STILL_STEPS = 50  # [steps]
 
 
-def wrong_goal(goal: int, n_goals: int) -> int:
-    """The cup a user who wants ``goal`` aims at before the change step: the next one.
-
-    :func:`run` aims the first N steps at ``(goal + 1) % n_goals``; with two cups, the other one.
-    """
-    if not 0 <= goal < n_goals:
+def wrong_goal(goal: int | np.ndarray, n_goals: int) -> int | np.ndarray:
+    """The cup a user who wants ``goal`` aims at before the change step: the next one,
+    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them."""
+    goals = np.asarray(goal)
+    if goals.size and (goals.min() < 0 or goals.max() >= n_goals):
         raise ConfigError(f"goal must be in [0, {n_goals}), got {goal}")
-    return (goal + 1) % n_goals
+    wrong = (goals + 1) % n_goals
+    return int(wrong) if wrong.ndim == 0 else wrong
 
 
 def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, success: float) -> pd.DataFrame:

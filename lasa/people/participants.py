@@ -9,36 +9,6 @@ alpha = 0) and ``LA+SA`` (Algorithm 1). The assistance is a member of
 :mod:`lasa.method.assistance` (``hindsight``, the paper's study, by default); the robot infers
 its belief from a_h in every condition.
 
-``R``      Retargeting: the stick commands a fork twist in one of three modes, realised by
-           mink's differential IK (:mod:`lasa.method.retarget`); a button cycles the modes.
-``R+SA``   the same human action a_h, blended with the assistance by Eq. M1.
-``LA``     latent actions: a_h = phi(z, s, b), the 2-D decoder; alpha = 0.
-``LA+SA``  Algorithm 1: latent actions blended with the assistance.
-=========  =================================================================================
-
-The assistance is a member of :mod:`lasa.method.assistance` (hindsight optimisation, the paper's
-study, by default); the robot infers its belief from a_h in every condition.
-
-**A one-step participant** looks one step ahead, in the fork's own terms: each candidate
-input (a stick position z on a grid, and in Retargeting also each mode) would move the
-fork's tip by some dp and turn its direction by some dw. The participant predicts a latent
-action's effect through the arm's Jacobian at the current state (what phi(z) would do,
-:func:`lasa.world.fork.tip_motion`), and a Retargeting input's effect as the twist it
-commands (what the interface promises). They value and choose among the candidates as every
-participant does (:mod:`lasa.people.policy`: progress under their cost, a Boltzmann choice,
-idleness and patience, rationality that grows with experience); choosing the stick's rest
-position is idle too. Choosing a Retargeting input of another mode presses the mode button
-(one step, no motion; a mode switch), so such an input is worth its progress divided by the
-steps it takes (the presses and the move). The planning participants of
-:mod:`lasa.people.planning` differ only in how far they look.
-
-**What a simulated participant cannot stand in for.** Fatigue, frustration, trust, and
-the strategies people invent; perception (they see the fork's pose exactly); anticipation
-beyond one step (a person plans a path, they do not); the Likert questionnaire (not
-simulated at all: people answer it, see the teleoperation kit). The measures
-(:mod:`lasa.world.measures`) are what such a participant can show: time, idleness, goal
-error and preference alignment.
-=======
 A one-step participant predicts each candidate input's motion of the fork's tip, a latent
 action's through the arm's Jacobian (:func:`lasa.world.fork.tip_motion`), a Retargeting
 input's as the twist it commands, and chooses as every participant does

@@ -12,56 +12,10 @@ Every ``replan`` seconds the participant chooses a stick input z and a hold h fr
 .. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
     \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
 
-<<<<<<< HEAD
-a progress *rate* in units of Retargeting's best step, the scale of the one-step model's
-values, so that beta and ``idle_threshold`` keep their meaning. A hold shorter than the
-re-plan period is followed by rest until the re-plan, so its progress is spread over the
-re-plan period: divided by its own steps, a 0.1 s tap would be worth as much as a 0.5 s push
-in the same direction, and half the choices would be taps followed by 0.4 s of rest (measured:
-Retargeting participants idle 60% of the time, none finishing in 30 s). The participant picks
-a plan by the Boltzmann rule with their beta(t) (Gumbel-max, their episode's own stream),
-and rests until the next re-plan when the best plan is worth less than ``idle_threshold``,
-until their ``patience`` runs out (:class:`lasa.people.cohort.ParticipantConfig`).
-
-**How the plans are foreseen: an asymmetry, for cost.**
-
-- *Latent actions* (``LA``, ``LA+SA``): by rolling the real step forward. Every candidate
-  input is held for the longest hold, all candidates of all running episodes in one batch,
-  each step decoding phi(z, s, b), blending with the episode's own alpha and SA member and
-  updating the belief, as the executed step does
-  (:func:`lasa.method.step.human_action`, :func:`lasa.method.step.advance`); the fork's pose
-  is read (:func:`lasa.world.fork.tip_frames`) only at the step counts of the
-  holds. The roll is exact up to the re-plan period (the holds that will be executed as
-  they are); beyond it each rolled step spans ``coarse`` control steps (the same ``advance``
-  with ``coarse * dt``), for cost: 60 exact steps of every candidate at every re-plan would cost
-  over ten times the one-step study. Under ``LA+SA`` the plan therefore includes the
-  assistance's pull: the participant has learned how the robot responds, input and
-  assistance together.
-- *Retargeting* (``R``, ``R+SA``): by what the interface promises. The twist of (mode, z)
-  held for h translates the tip by h v and turns the fork's direction by the rotation
-  exp(h omega); a mode press costs one step, so a plan in another mode spreads its progress
-  over the presses and the hold's steps (as in :mod:`lasa.people.participants`). Rolling
-  mink's IK forward for every candidate at every step would cost a QP per candidate per
-  step (thousands per re-plan); the promise costs nothing, and it is what a Retargeting user
-  is told the stick does. It does not foresee the assistance under ``R+SA``. The executed
-  step is the real one (:func:`lasa.method.retarget.retarget_action`, then ``advance``).
-
-**Parameters** (:class:`PlanConfig`, each with its reason): ``replan`` 0.5 s, ``holds``
-(0.1, 0.5, 2, 6) s, ``coarse`` 5 steps (``coarse = 1``: every rolled step is the executed one).
-
-**What a planning participant cannot stand in for.** Everything the one-step participant
-cannot (fatigue, frustration, trust, perception, the questionnaire), and: plans of more
-than one input (a sequence, a detour through another input), foresight of Retargeting's
-IK and assistance, and re-planning between re-plans (they push on for the rest of a hold
-even once the fork has reached its waypoint). Their foresight of latent actions is near exact
-over 6 s: a person's is learned and imperfect, so this model is an optimistic bound for
-latent actions, as the one-step model is a pessimistic one.
-=======
 and rests when the best plan is worth less than ``idle_threshold``. Latent-action plans are
 foreseen by rolling the real step forward (coarser beyond the re-plan period); Retargeting plans
 by the twist the interface promises. Why the rate, the asymmetry, the parameters, and what the
 model cannot stand in for: ``docs/method-notes.md``.
->>>>>>> h/docstrings
 """
 
 from __future__ import annotations
