@@ -62,3 +62,22 @@ def test_latent_map_rows(model, task):
         assert row.steps == {"uniform": 4, "confident": 2}[row.context]
     # two steps of at most dt * sigma_h per joint cannot carry the grasp far from theta = 0.5
     assert (frame[frame.context == "confident"].grasp_theta - 0.5).abs().max() < 0.2
+
+
+def test_leave_paths_are_the_reference_step_held_with_each_rows_alpha(model, task):
+    """The leave half's held inputs: every row, with its own alpha, the stick at rest commanding
+    nothing, is Algorithm 1 written out by hand (tests/reference_step.py), the belief updated."""
+    from lasa.evidence.latent_measure import leave_paths
+
+    control = task.robot.control
+    starts = np.stack([task.target(0, 0.5), task.target(1, 0.3), task.start])
+    beliefs = np.array([[0.9, 0.1], [0.2, 0.8], [0.5, 0.5]])
+    z, alphas = np.array([[0.7], [0.0], [-1.0]]), np.array([0.0, 0.5, 0.3])
+    paths = leave_paths(model, task, control, starts, beliefs, z, alphas, steps=6)
+    assert paths.shape == (3, 7, task.robot.n_joints)
+    for row in range(3):
+        s, b = starts[row], beliefs[row]
+        for t in range(6):
+            ref = latent_step(model, task, control, s, b, z[row], alpha=alphas[row], rest="zero")
+            s, b = ref["s"], ref["b"]
+            assert_allclose(paths[row, t + 1], s, rtol=0, atol=1e-6)
