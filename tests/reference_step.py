@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
 
@@ -110,3 +111,17 @@ def latent_step(decoder, task, control, s, b, z, alpha: float, rest: str = "deco
     else:
         a_h = decoder.decode_numpy(z[None], s[None], b[None])[0]
     return step_with(task, control, s, b, a_h, alpha)
+
+
+def site_frame(robot, q):
+    """The grasp site's position, rotation and (translation over rotation) Jacobian, by MuJoCo
+    itself (mj_jacSite) at joints ``q``: not lasa's chain kinematics."""
+    m, d = robot.model, mujoco.MjData(robot.model)
+    d.qpos[robot.qpos_adr] = q
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    site = m.site(robot.spec.grasp_site).id
+    jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    mujoco.mj_jacSite(m, d, jacp, jacr, site)
+    dofs = [m.jnt_dofadr[m.joint(j).id] for j in robot.spec.joints]
+    return d.site_xpos[site].copy(), d.site_xmat[site].reshape(3, 3).copy(), np.vstack([jacp, jacr])[:, dofs]

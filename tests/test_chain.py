@@ -5,22 +5,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference_step import site_frame
 
 from lasa.world.chain import SerialChain
 from lasa.world.robot import load_robot
-
-
-def _mujoco(robot, q):
-    """The site's position, rotation and (translation over rotation) Jacobian by MuJoCo."""
-    m, d = robot.model, mujoco.MjData(robot.model)
-    d.qpos[robot.qpos_adr] = q
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
-    site = m.site(robot.spec.grasp_site).id
-    jacp, jacr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
-    mujoco.mj_jacSite(m, d, jacp, jacr, site)
-    dofs = [m.jnt_dofadr[m.joint(j).id] for j in robot.spec.joints]
-    return d.site_xpos[site].copy(), d.site_xmat[site].reshape(3, 3).copy(), np.vstack([jacp, jacr])[:, dofs]
 
 
 @pytest.mark.parametrize("name", ["panda", "planar5"])
@@ -35,7 +23,7 @@ def test_the_chain_is_mujocos_kinematics(name, seed):
     pos, rot, jac = chain.site_jacobians(qs)
     frames = chain.site_frames(qs)
     for i, q in enumerate(qs):
-        p, r, j = _mujoco(robot, q)
+        p, r, j = site_frame(robot, q)
         np.testing.assert_allclose(pos[i], p, atol=1e-12)
         np.testing.assert_allclose(rot[i], r, atol=1e-12)
         np.testing.assert_allclose(jac[i], j, atol=1e-12)

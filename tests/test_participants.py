@@ -260,6 +260,8 @@ def test_the_one_step_chooser_is_the_jacobian_foresight_argmax_by_hand(eating):
     """A near-deterministic one-step participant (beta ~ 1e7) under LA: the first input is the
     candidate whose first-order tip motion (MuJoCo's site Jacobian, one candidate at a time) most
     lowers ||p - p*|| + l angle(d, d*), and the robot moves by it (alpha = 0: a = a_h)."""
+    from reference_step import site_frame
+
     from lasa.world.eating import waypoints
     from lasa.world.fork import waypoint_arrays
 
@@ -270,16 +272,8 @@ def test_the_one_step_chooser_is_the_jacobian_foresight_argmax_by_hand(eating):
         eating, decoder, draw_cohort(1, participant, seed=4), control, config, 0, False, ("LA",)
     )
     robot, s0 = eating.robot, eating.start
-    model, data = robot.model, mujoco.MjData(robot.model)
-    data.qpos[robot.qpos_adr] = s0
-    mujoco.mj_kinematics(model, data)
-    mujoco.mj_comPos(model, data)
-    site = model.site(robot.spec.grasp_site).id
-    jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
-    mujoco.mj_jacSite(model, data, jacp, jacr, site)
-    dofs = [model.jnt_dofadr[model.joint(j).id] for j in robot.spec.joints]
-    jp, jr = jacp[:, dofs], jacr[:, dofs]
-    pos, axis = data.site_xpos[site].copy(), data.site_xmat[site].reshape(3, 3)[:, 2].copy()
+    pos, rot, jac = site_frame(robot, s0)
+    jp, jr, axis = jac[:3], jac[3:], rot[:, 2]
     wp_pos, wp_dir, _, _ = waypoint_arrays(robot)
     axis_grid = np.linspace(-1.0, 1.0, config.n_z)
     grid = [np.array([a, b]) for a in axis_grid for b in axis_grid]
