@@ -1,41 +1,17 @@
 r"""Measuring the latent-action property (:mod:`lasa.evidence.latent_property`) of any decoder.
 
-Every input of a ring of stick deflections is held for a while from a pose and a belief, and
-where the tool tip goes says whether the input stays at a goal, reaches one, or leaves one. Three
-contexts, the first two with latent actions alone (alpha = 0):
+Each input of a ring of full stick deflections (:func:`ring`) is held from a pose and a belief, and
+where the tool tip goes says whether it stays at a goal, reaches one, or leaves one (Secs. III,
+IV-B). Three contexts:
 
-- **Confident at goal g**: start at g's mid-preference pose :math:`s^*(g, 1/2)` with the
-  belief all but the floor on g, held fixed. An input *stays* when the tool tip's distance
-  to g's **preference set** (the tip positions of every preference at g: the grasp curve
-  :math:`\theta \mapsto s^*(g, \theta)` of a cup, the stroke surface
-  :math:`(\theta, u) \mapsto s^*(g, \theta, u)` of a bowl) grows more slowly than
-  ``drift_speed``: :math:`d(t) \le v\,t` at every step of the hold. Reported: the share of
-  the ring's inputs that stay, and the range of preference the staying inputs reach (the
-  preference coordinates of the nearest preference pose at the end of the hold, by tip
-  position and direction, the direction weighted by ``rotation_weight`` metres per radian).
-- **Uncertain**: start at home with a uniform belief, updated online as in Algorithm 1;
-  after ``uncertain_hold`` seconds an input has *reached* the goal whose preference set
-  the tip is nearest, if it is within ``reach_distance``. Reported: which goal each input
-  reaches, and whether every goal is reached by some input.
-- **Leaving a confident goal** (Sec. IV-B: "in a given context (s, b) there exist latent
-  actions z that cause the robot to move towards each of the goals"; Sec. IV: "can the
-  latent actions change goals even when shared autonomy is confident?"). Start at each pose
-  where a task's phase at g ends (:func:`phase_ends`: a bowl's stroke ends, a cup's
-  mid-preference grasp) with the belief all but the floor on g, and hold each input for
-  ``leave_hold`` seconds with the belief updated online, under latent actions alone (``LA``,
-  alpha = 0) and blended with the task's assistance (``LA+SA``, the control's alpha and
-  member: the study's). An input *reaches* another goal h when the tip comes within
-  ``reach_distance`` of h's preference set at some step; its *exit time* is the first such
-  step. Reported: per start, condition and other goal, the inputs that reach it and their
-  median exit time.
-
-The inputs are a dense ring of full stick deflections: ``n_inputs`` angles on the unit
-circle for a 2-axis stick, ``n_inputs`` evenly spaced deflections of [-1, 1] (rest left out)
-for a 1-axis stick.
+- **confident at goal g** (LA): does the input *stay* near g's preference set (its tip's distance
+  grows more slowly than ``drift_speed``), and what range of preference do the staying inputs reach;
+- **uncertain** at home (LA, belief updated online): which goal does each input *reach*;
+- **leaving** from each phase end at g (:func:`phase_ends`), under ``LA`` and ``LA+SA``: which
+  other goals does each input reach within ``leave_hold``, and how soon.
 
 :func:`measure` returns one row per (context, goal, input), in the columns of
-:data:`lasa.evidence.latent_property.COLUMNS`; the rule that judges them, its tables and its
-figure are in that module.
+:data:`lasa.evidence.latent_property.COLUMNS`. Each context in full: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

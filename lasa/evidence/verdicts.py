@@ -1,30 +1,13 @@
 """Verdicts decided by their intervals, with users added where a verdict is still open.
 
-A claim's verdict is a rule (:mod:`lasa.evidence.rules`) applied to a few numbers measured on a
-sweep of simulated users, so it inherits their randomness. Three things make it a result
-rather than a draw:
-
-1. *An interval per number.* :func:`assess` resamples the users with replacement (all
-   rows of a user together, so the pairing of methods on the same user survives),
-   recomputes every number the rule reads, and takes percentile intervals.
-2. *Settled or undecided.* A verdict is **settled** when every number's interval lies on
-   one side of each of its rule's thresholds (:meth:`lasa.evidence.decision.Rule.settled`); then it
-   reads the rule's verdict. Otherwise it reads ``undecided``, with its interval, and the
-   note says which interval straddles which threshold and what the point estimates read.
-3. *Users where the verdict is close* (:func:`sequential`). The users per point follow a
-   group-sequential design fixed before any result was seen (:class:`Design`): a first
-   look at ``first`` users per point for every arm, then blocks of ``block`` users for the
-   headline reading's arms only, until every headline verdict of the figure is settled or
-   the cap is reached. **Guard against optional stopping**: with K possible looks, every
-   look's interval has level 1 - 0.05 / K (Bonferroni over the looks), so the chance that
-   any look declares a verdict its true numbers do not support stays below 5% whatever the
-   stopping time. With the defaults (60, 30, cap 150) K = 4 and each interval is 98.75%.
-
-Every reading of shared autonomy (:mod:`lasa.method.assistance`) gets a row: the headline
-``<id>`` under the paper's reading, and ``<id>@<member>`` for each other member, judged at
-the first look's users (the blocks after it go where the headline verdict is open).
-``LA`` rows carry ``assistance == "none"`` (alpha = 0: no assistance acts) and are shared
-by every member's comparison.
+A claim's verdict is a rule (:mod:`lasa.evidence.rules`) applied to numbers measured on simulated
+users. :func:`assess` resamples users (all rows of a user together) for a percentile interval per
+number; a verdict is **settled** when every interval lies on one side of each of its rule's
+thresholds, else ``undecided``. :func:`sequential` adds users where a headline verdict is open, by
+a group-sequential :class:`Design` fixed in advance, each look's level 1 - 0.05 / K over K looks
+(98.75% with the defaults). Each member of :mod:`lasa.method.assistance` gets a row,
+``<id>@<member>`` beside the headline ``<id>``; ``LA`` rows carry ``assistance == "none"``.
+The design, the guard against optional stopping and the rows: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

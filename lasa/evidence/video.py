@@ -103,24 +103,10 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
     """Atomically write frames to an H.264 (yuv420p) MP4, bit-exactly.
 
-    The same frames always give the same file bytes, whatever the machine's core count
-    or PATH, so a regenerated video can be checked by its hash. Four things can
-    make the bytes vary and are pinned here:
-
-    * the encoder: mediapy runs the ffmpeg binary of the pinned ``imageio-ffmpeg``
-      wheel, never a system ``ffmpeg`` (another ffmpeg/x264 version encodes differently);
-    * threads: libx264 picks ``threads=1.5 x cores`` and frame threading changes the
-      bitstream (and the option string it writes into an SEI message), so the encoder
-      and the colour conversion run single-threaded;
-    * CPU features: x264 and ffmpeg's RGB -> YUV conversion pick SIMD kernels by CPU,
-      and some round differently from the C code, so x264 is held to the x86-64
-      baseline (``asm=MMX2,SSE2``; plain C on other machines) and swscale to its
-      ``accurate_rnd+bitexact`` paths;
-    * metadata: ``-fflags +bitexact``, ``-flags:v +bitexact`` and ``-map_metadata -1``
-      leave out the encoder version strings and any creation time.
-
-    Quality is mediapy's default, made explicit (passing ffmpeg arguments would turn it
-    off): constant quantiser 20 up to 640x480 pixels, 28 above.
+    The same frames give the same bytes whatever the machine: the pinned ``imageio-ffmpeg`` binary,
+    one thread, x264 at the x86-64 baseline (``asm=MMX2,SSE2``), swscale's bitexact paths, no version
+    or time metadata; constant quantiser 20 up to 640x480 pixels, 28 above (mediapy's default).
+    Why each is pinned: ``docs/method-notes.md``.
 
     Args:
         path: Destination ``.mp4``; written to a temporary file beside it and renamed.
@@ -165,28 +151,24 @@ def write_clips(
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Render clips of joint states, caption each frame, lay the clips out and write the MP4.
 
-    What a notebook's video is: one clip per method, condition or demonstration, each the
-    rendered states of one episode (already thinned to the frames the video shows), with
-    its caption; side by side (the shorter clips hold their last frame) or one after another.
-    The clips are independent of the task: any number of them, of any goals.
+    One clip per method, condition or demonstration (an episode's states, thinned), of any task, side
+    by side (shorter clips hold their last frame) or one after another (``docs/method-notes.md``).
 
     Args:
         robot: The robot whose scene renders the states.
-        clips: ``(states, caption)`` per clip: joint positions, shape (T, n), and one caption
-            for every frame or a caption per frame (T of them).
-        path: Destination ``.mp4`` (written bit-exactly, see :func:`write_video`).
+        clips: ``(states, caption)`` per clip: states (T, n); one caption, or one per frame.
+        path: Destination ``.mp4`` (bit-exact, :func:`write_video`).
         fps: Frame rate.
         layout: ``"side_by_side"`` (one clip per column) or ``"in_turn"`` (concatenated in time).
         height: Frame height in pixels (even).
         width: Frame width of one clip in pixels (even).
 
     Returns:
-        The video, shape (T', height, width', 3), and the captioned clips, one per clip
-        (shape (T, height, width, 3) each).
+        The video (T', height, width', 3) and the captioned clips, (T, height, width, 3) each.
 
     Raises:
-        ConfigError: No clips, a clip without states, a caption list of the wrong length,
-            an unknown ``layout`` or an odd frame size.
+        ConfigError: No clips, a clip without states, a caption list of the wrong length, an
+            unknown ``layout`` or an odd frame size.
     """
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")

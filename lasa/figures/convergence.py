@@ -303,28 +303,16 @@ def run(
 def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -> pd.DataFrame:
     """Per (robot, assistance, beta): how often V rose where T4 held, and the settled ball.
 
-    Columns:
+    Columns (each in full: ``docs/method-notes.md``):
 
     - ``users``, ``steps``: users and control steps measured;
-    - ``bound_steps``, ``bound_share``: the steps where b*||e|| > delta_alpha (the run's
-      alpha), and their share;
-    - ``rose_given_bound``: share of those steps where V rose (the continuous-time
-      theory says never); ``beyond_slack_given_bound``: where it rose by more than the
-      discretisation slack dt||a||^2/2 (what the theory cannot explain: the safety clip,
-      or a member T4 was not derived for);
-    - ``bound_share_half``, ``rose_given_bound_half``: the same for the paper's delta
-      (alpha = 0.5), not a sufficient condition at our alpha;
-    - ``ball``: the ``quantile`` of ||e|| over the last ``settle`` share of the steps,
-      pooled over users; ``ball_target``: the same for ||s* - s||;
-    - ``radius_alpha``, ``radius_half``: the median over users of delta_alpha / b* and
-      delta / b* at the last step (the ball's radius in error units);
-    - ``tightness_alpha``, ``tightness_half``: the ``quantile`` over the same rows of
-      b*||e|| / delta_alpha (resp. delta), each row against its own radius (< 1: inside
-      the theory's ball; a user whose belief is on the wrong cup has b* ~ 0 and a huge
-      radius, so the pooled ``ball`` is not compared with a pooled radius);
-    - ``late_outside_alpha``, ``late_outside_half``: share of the recorded rows of the last
-      ``settle`` share of steps still outside the ball, b*||e|| > delta_alpha (resp. delta).
-      Uniform ultimate boundedness says the first tends to 0, up to one step's overshoot;
+    - ``bound_steps``, ``bound_share``: the steps where b*||e|| > delta_alpha (the run's alpha), their share;
+    - ``rose_given_bound``, ``beyond_slack_given_bound``: share of those where V rose, by over dt||a||^2/2;
+    - ``bound_share_half``, ``rose_given_bound_half``: the same for the paper's delta (alpha = 0.5);
+    - ``ball``, ``ball_target``: the ``quantile`` of ||e|| (||s* - s||) over the last ``settle`` share;
+    - ``radius_alpha``, ``radius_half``: median over users of delta_alpha / b* (delta / b*) at the end;
+    - ``tightness_alpha``, ``tightness_half``: ``quantile`` of b*||e|| / delta_alpha (delta), row by row;
+    - ``late_outside_alpha``, ``late_outside_half``: share of the late rows still outside that ball;
     - ``belief_final``: median b(g*) at the last step.
 
     Args:

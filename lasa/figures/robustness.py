@@ -1,32 +1,14 @@
 """The verdict map: every sim1-sim3 claim under each reading and setting (notebook ``08_claims_robustness``).
 
-A verdict of the claims table rests on conventions the paper leaves open: which member
-of the shared-autonomy family acts (:mod:`lasa.method.assistance`), the blend weight alpha
-(Eq. M1), the action scale sigma_h (the bound on ||phi||, Eq. T4), and the simulated
-user (Eq. S1's Boltzmann user, or the laggy and noisy pilots of the shared-autonomy
-literature, :data:`lasa.people.users.PILOTS`). This module re-runs the sims of Figs. sim1-sim3
-in every cell of a grid over those settings and evaluates each claim in each cell, on
-each independent draw of users and on all draws pooled.
-
-The grid is one factor at a time around the default setting, the member of the family
-being one more factor: every member at the default alpha, sigma_h and Boltzmann users;
-then, under the headline member, every alpha, every sigma_h, every pilot. Every cell rests
-on the same ``users`` (at least 60) simulated users per point, and each verdict is judged
-as in the claims table: settled when its 95% intervals clear its rule's thresholds
-(:mod:`lasa.evidence.verdicts`), ``undecided`` otherwise. The default column and the members'
-columns are not run again: they are the first look of notebooks 04-06 (the same users,
-horizons and seeds), restricted to the map's rationalities and change steps
-(:func:`run`'s ``defaults``). A full factorial under the headline member grows as the
-product of the axes; ``configs/large.yaml`` asks for one (``design: factorial``) for a
-cluster.
-
-Changing sigma_h at run time scales the learned decoder's output (:class:`ScaledDecoder`):
-the same learned directions at another speed, as a joystick's gain would, and the
-assistance and belief use the new sigma_h too (``ControlConfig.action_scale``). The
-decoder is not retrained.
-
-Cells are independent and seeded; they run through :func:`lasa.pipeline.scaleout.run_jobs`,
-locally or on a Dask cluster, with identical results.
+A verdict rests on conventions the paper leaves open: the member of the shared-autonomy family
+(:mod:`lasa.method.assistance`), alpha (Eq. M1), sigma_h (the bound on ||phi||, Eq. T4) and the
+simulated user (Eq. S1, or the pilots :data:`lasa.people.users.PILOTS`). This module re-runs the sims
+of Figs. sim1-sim3 in every cell of a grid over those settings (:func:`cells`: one factor at a time
+around the default, or a full factorial) and judges each claim in each cell as the claims table does
+(:mod:`lasa.evidence.verdicts`), per draw of users and pooled. A run-time sigma_h scales the learned
+decoder's output (:class:`ScaledDecoder`, not retrained). Cells run through
+:func:`lasa.pipeline.scaleout.run_jobs`, locally or on a Dask cluster, with identical results.
+The grid's design and what each cell reuses: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

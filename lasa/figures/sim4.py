@@ -146,46 +146,26 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
-    """Fig. sim4: grasp error at new cups against their distance from the training cup.
+    """Fig. sim4: grasp error at new cups against their distance from the training cup (Sec. V-D).
 
-    For each new cup (one batched rollout per cup and mapping), near-optimal users want
-    a grasp there, with preferences drawn per user and shared by every cup and mapping.
-    ``with``: the task grows by the cup and the method's decoder runs through the
-    context map (:class:`lasa.method.newgoals.MappedDecoder`). ``without``: the method is left
-    unchanged, knowing the training cups only.
-
-    Measured where the paper's caption measures (the headline, columns ``distance`` and
-    ``error``): the new cup's distance on the table from the reference cup [m], and the grasp
-    error at the gripper, the distance [m] between the grasp site at the episode's end and
-    the wanted grasp's site (the forward kinematics of the user's target pose at the new
-    cup), both divided by D, the farthest new cup's distance on the table. The joint-space
-    measure is the reading ``@joint_space`` (``distance_joint``: between mid-preference
-    goals, ``error_joint``: ``||s_T - s*||``, both divided by the farthest new goal's
-    joint-space distance).
+    One batched rollout per new cup and mapping: near-optimal users want a grasp at the new cup
+    (preferences drawn per user, shared by every cup and mapping); ``with`` runs the method's decoder
+    through the context map (:class:`lasa.method.newgoals.MappedDecoder`) on the grown task,
+    ``without`` knows the training cups only. Distance and error are over the farthest new cup's
+    distance, on the table and at the gripper (the headline) or in joint space (``@joint_space``).
 
     Args:
-        decoders: ``{"base": ..., "entropy": ...}`` (or one base model): the method's
-            decoder (``lasa.method.step.METHOD_DECODER``) must be among them.
+        decoders: ``{"base": ..., "entropy": ...}`` (or one model), ``METHOD_DECODER`` among them.
         task: The training task.
         control: Control-loop units.
         config: The sweep.
         progress: Show progress bars.
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        assistance: The members the method's assistance runs under; default every member
-            of ``config.assistance``.
+        assistance: The members the method's assistance runs under (default ``config.assistance``).
 
     Returns:
-        One row per episode with the columns of :data:`COLUMNS`: ``h`` (the kind
-        of map, ``none`` without), ``offset_m``, ``theta``, ``confidence`` (b of the
-        new cup at the end; NaN without the map), ``reference`` (the error of a robot
-        holding, at the training cup, the grasp the user wants at the new one: the
-        paper's "only ever reaches for the training goal"), ``assistance`` (the member the
-        method's assistance ran under; ``none`` for LA), ``look``, ``angle_error_deg`` (the
-        angle between the gripper's approach axis at the end and the wanted grasp's [deg]),
-        the joint-space reading's ``distance_joint``, ``error_joint`` and
-        ``reference_joint``, and ``end_goal``: the goal the belief ends on (``new``,
-        ``reference``, or ``other``, another training cup); and the runs per new cup under the headline member
-        (``control.assistance``).
+        One row per episode in the columns of :data:`COLUMNS` (each explained in
+        ``docs/method-notes.md``), and the runs per new cup under ``control.assistance``.
     """
     sweep = Sweep.of(decoders, task, control, config, progress, look, assistance)
     runs, rows = [], []
@@ -326,28 +306,16 @@ def _reading(measure: str) -> str | None:
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds.
 
-    The headline rows (``sim4.straight_line_linear``, ``sim4.grasp_linear``,
-    ``sim4.no_map_training_goal``) read the measure of the paper's caption: the new cup's
-    distance on the table and the grasp error at the gripper, both over the farthest new
-    cup's distance (``distance``, ``error``). The same claims under the joint-space measure
-    (``distance_joint``, ``error_joint``) are the reading ``@joint_space``
-    (``sim4.straight_line_linear@joint_space``, ...), judged by the same rules; being
-    judged with the headline ones, they also keep the looks going until they settle.
+    The headline rows read the paper caption's measure (``distance``, ``error``); the joint-space
+    measure gives the ``@joint_space`` rows, by the same rules. Lines are least-squares fits through
+    each new cup's mean error (:func:`fits`); the first rule judges every kind of map in the frame.
 
-    Fits are least-squares lines through the mean error of each new cup (one point per
-    cup, as the paper's figure), by :func:`fits`. The first rule is applied to
-    every kind of map in the frame (the paper's claim is about its straight-line map).
-
-    - *With the map the error grows linearly with distance, y = 0.11x, R^2 = 0.98*:
-      ``yes`` if R^2 >= 0.9, the slope lies in (0, 0.25] (it grows, far below the
-      no-map line) and the mean error is below the no-map one at every cup; ``partly``
-      if it is below the no-map error at every cup (the map helps) but the growth is not
-      linear; else ``no``. (A first version said ``partly`` whenever the slope was at
-      most 0.5, which labelled a map that is worse than none at near cups "partly"; the
-      level test replaced it, the stricter way.)
-    - *Without the map the robot only reaches for the training goal, y = x*: ``yes`` if
-      the slope is within 0.15 of 1 and R^2 >= 0.9; ``partly`` if R^2 >= 0.9 and the
-      slope lies in [0.5, 1.5]; else ``no``.
+    - *With the map the error grows linearly, y = 0.11x, R^2 = 0.98*: ``yes`` if R^2 >= 0.9, the slope
+      is in (0, 0.25] and the mean error is below the no-map one at every cup; ``partly`` if it is
+      below at every cup but the growth is not linear; else ``no``.
+    - *Without the map the robot only reaches for the training goal, y = x*: ``yes`` if R^2 >= 0.9
+      and the slope is within 0.15 of 1; ``partly`` if R^2 >= 0.9 and the slope is in [0.5, 1.5];
+      else ``no``. The rules' history and the readings: ``docs/method-notes.md``.
     """
     out: list[Claim] = []
     for measure in _measures(frame):

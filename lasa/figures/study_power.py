@@ -76,37 +76,28 @@ def power(
 ) -> pd.DataFrame:
     """The power of H1-H3's tests per cohort size, drawing cohorts from the simulated participants.
 
-    Every drawn cohort runs :func:`~lasa.figures.study_tests.analyse` once (all three claims); the
-    draws are made up front with ``numpy.random.default_rng(seed)``, so the same inputs give the
-    same table whatever ``n_jobs``.
+    Each drawn cohort runs :func:`~lasa.figures.study_tests.analyse` once; the draws are made up front
+    from ``seed``, so the table does not depend on ``n_jobs``. Columns and costs: ``docs/method-notes.md``.
 
     Args:
         frames: :func:`lasa.figures.study.run`'s tables (``goal_error``, ``time``, ``alignment``).
         assistance: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
         decoder: The decoder reading of the LA rows (None: the frames hold one).
         model: The participant model (None: the frames hold one).
-        sizes: Cohort sizes to simulate, each at least 2.
-        draws: Drawn cohorts per size, at least 1 (100: a power of 0.8 within +-0.04, one
-            standard error; the paper-scale table in about 2-3 minutes).
+        sizes: Cohort sizes, each at least 2.
+        draws: Drawn cohorts per size, at least 1.
         seed: Seed of the draws.
         horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
-        progress: Show a progress bar over the drawn cohorts (in jobs of 10).
-        n_resamples: H3's paired bootstrap resamples per drawn cohort (reduced from the claims'
-            10,000 for speed), at least 1.
+        progress: Show a progress bar.
+        n_resamples: H3's bootstrap resamples per drawn cohort, at least 1.
         n_jobs: Worker processes (:func:`lasa.pipeline.scaleout.run_jobs`; 1: this process).
 
     Returns:
-        One row per claim (:data:`POWER_CLAIMS`) and size: ``claim``, ``n``, ``power`` (share of
-        drawn cohorts significant in ``direction``), ``opposite_share`` (significant the other
-        way), ``untestable_share`` (whose test could not run), ``yes_share`` (whose claims row
-        would read the rule's *yes*, settled: for H1 with both pairwise comparisons too, for H3
-        with all six contrasts), ``direction`` (the whole cohort's effect in words),
-        ``paper_direction`` (whether that is the paper's; NA when the whole cohort's test cannot
-        run and the paper's direction is counted) and ``draws``.
+        One row per claim and size: ``claim``, ``n``, ``power``, ``opposite_share``,
+        ``untestable_share``, ``yes_share``, ``direction``, ``paper_direction`` and ``draws``.
 
     Raises:
-        ConfigError: ``sizes`` empty, repeated or below 2, ``draws``, ``n_resamples`` or
-            ``n_jobs`` below 1, or a member, decoder or model the frames do not hold.
+        ConfigError: Bad ``sizes``, ``draws``, ``n_resamples`` or ``n_jobs``, or a reading not in ``frames``.
     """
     sizes = _checked(sizes, draws, n_resamples, n_jobs)
     reading = _reading(frames, assistance, decoder, model)
@@ -281,23 +272,17 @@ def _row(
 def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) -> pd.DataFrame:
     """Per claim, the smallest simulated cohort from which power stays at ``target`` or above.
 
-    Simulated power need not grow with n: the completion bar is a share of episodes, so whether
-    a drawn cohort is testable jumps with n (one unfinished episode in 12 is below 95%, one in
-    20 is not). A size counts only if it and every larger simulated size reach ``target``; an
-    earlier size that reached it and a larger one that fell below are named in ``explanation``.
+    A size counts only if it and every larger simulated size reach ``target`` (power need not grow
+    with n: ``docs/method-notes.md``); an earlier size that reached it is named in ``explanation``.
 
     Args:
         table: :func:`power`'s table.
         target: The power wanted, in (0, 1).
-        interpolate: Without it, that simulated size; with it, the size where power crosses
-            ``target`` linearly in n between the simulated size below it and it, rounded up
-            (the smallest simulated size if that one already reaches it).
+        interpolate: Give the size where power crosses ``target``, linear in n, rounded up.
 
     Returns:
-        One row per claim: ``claim``, ``target``, ``needed`` (participants; NA if the largest
-        simulated size falls short), ``needed_text`` (``"16"``, or ``"more than 60"``),
-        ``power`` (at the needed size; else at the largest simulated one), ``direction``,
-        ``paper_direction`` and ``explanation``.
+        One row per claim: ``claim``, ``target``, ``needed`` (NA if the largest size falls short),
+        ``needed_text``, ``power``, ``direction``, ``paper_direction`` and ``explanation``.
 
     Raises:
         ConfigError: ``target`` outside (0, 1), or ``table`` lacks :func:`power`'s columns.

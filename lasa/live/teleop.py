@@ -1,32 +1,13 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
 ``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` (or ``make
-teleop ARGS="..."``) opens MuJoCo's own viewer (``mujoco.viewer.launch_passive``) on the
-task's scene and runs the simulations' control step at a fixed rate, one step per Delta of
-wall-clock time, from a gamepad (pygame) or, without one, the keyboard (:mod:`lasa.live.devices`).
-
-- **Tasks**: ``cups`` (the cup task of the simulations, either robot) and ``Entree`` /
-  ``Dessert`` (the eating study, the Panda). **Conditions**: ``R``, ``R+SA`` (Retargeting,
-  :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the cups, ``LA+SA+Entropy``. The
-  decoders are those ``make figures`` trains (``build/models``).
-- **The step** is the station's (:mod:`lasa.live.station`, the robot side of a session), the
-  study's (:mod:`lasa.people.participants`): the stick at rest commands nothing; in
-  Retargeting the mode button cycles the modes; then Algorithm 1's blend, belief update and
-  safe transition (:func:`lasa.method.step.advance`), so joint limits and the speed bound hold.
-- **Safety**: the stop input holds the robot (no human action, no assistance, the belief
-  frozen); a disconnected or NaN axis is zero input; a step that overruns its deadline is
-  logged (``late``) and counted, never hidden.
-- **What the viewer shows**: the scene, a sphere over each goal whose size is the robot's
-  belief in it, and an overlay with the instruction of the current phase, the stick, the
-  mode, the condition and the stop state.
-- **Logs** (:mod:`lasa.evidence.sessionlog`): every step with its inputs and the robot's state,
-  belief and actions; a sidecar with the decoder's checksum; the compiled scene's XML.
-
-``python -m lasa.live.teleop replay <session>`` re-runs a log from its inputs and checks that it
-reproduces the logged states exactly (``--mp4`` renders it off-screen).
-``python -m lasa.live.teleop schedule`` writes the counterbalanced order of conditions for N
-participants, and ``python -m lasa.live.teleop survey`` records the paper's 7-point Likert
-questionnaire after a condition (:mod:`lasa.live.studykit`).
+teleop ARGS="..."``) runs the simulations' control step (Algorithm 1, :mod:`lasa.live.station`) at a
+fixed rate in MuJoCo's passive viewer, from a gamepad or the keyboard (:mod:`lasa.live.devices`), on
+``cups``, ``Entree`` or ``Dessert`` under ``R``, ``R+SA``, ``LA``, ``LA+SA`` (and, for the cups,
+``LA+SA+Entropy``), and logs every step (:mod:`lasa.evidence.sessionlog`). ``replay <session>``
+re-runs a log and checks it reproduces the logged states exactly (``--mp4`` renders it);
+``schedule`` writes the counterbalanced order of conditions; ``survey`` records the 7-point Likert
+questionnaire (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

@@ -1,31 +1,17 @@
 r"""The latent-action model: a conditional autoencoder over (state, belief) contexts.
 
 The encoder maps a demonstrated action in its context to a latent action,
-:math:`z = \psi(s, a, b) \in [-1, 1]^d`, and the decoder maps it back,
-:math:`a_h = \phi(z, s, b)` (Sec. III-A). Conditioning both on the belief b is what
-lets the meaning of z change with the robot's confidence.
+:math:`z = \psi(s, a, b) \in [-1, 1]^d`, and the decoder maps it back, :math:`a_h = \phi(z, s, b)`
+(Sec. III-A). z is squashed by ``tanh`` into [-1, 1]^d, and the decoder's output radially,
+:math:`\phi = \sigma_h \tanh(\|v\|)\, v / \|v\|`, so :math:`\|\phi\| < \sigma_h` (the bound of Eq. T4).
+Training uses :meth:`LatentActionModel.decode` (torch); the simulations use
+:meth:`LatentActionModel.decode_numpy`, the same function on numpy arrays, to float32 rounding.
 
-Two bounds make the model fit the control loop:
-
-- z is squashed by ``tanh`` into [-1, 1]^d, so a joystick axis maps onto it directly;
-- the decoder's output is squashed radially, :math:`\phi = \sigma_h \tanh(\|v\|)\, v / \|v\|`,
-  so :math:`\|\phi\| < \sigma_h`, the bound that Eq. T4 assumes.
-
-Training and gradients use :meth:`LatentActionModel.decode` (torch, autograd). The
-simulations use :meth:`LatentActionModel.decode_numpy`, an inference-only forward of the
-same function on numpy arrays, written for throughput (see its docstring; the forward itself is
-:mod:`lasa.method.inference`): it agrees with ``decode`` to float32 rounding (below 1e-6), not
-bit for bit.
-
-A checkpoint holds the state dict and the plain-dict config the model was built with;
-:func:`load_checkpoint` loads it with ``torch.load(..., weights_only=True)`` and checks
-that it was trained for the robot the caller expects (and, if asked, for its number of
-goals). Any decoder of your own saves and loads the same way: a ``torch.nn.Module`` that
-follows :class:`ActionDecoder`, built from one frozen dataclass of plain values (its
-``config``, whose class is its ``config_class``), as :class:`LatentActionModel` is; pass
-its class to :func:`load_checkpoint` (``docs/extending.md``). Define that class in a module
-of its own: the checkpoint records it as ``module.Class``, and :func:`save_checkpoint` refuses a
-class of ``__main__``, which no other process could import.
+:func:`save_checkpoint` stores the state dict and the config; :func:`load_checkpoint` loads it
+(``weights_only=True``) and checks the robot (and, if asked, the goals). A decoder of your own
+(:class:`ActionDecoder`, built from one frozen config dataclass) saves and loads the same way, if
+its class is defined in an importable module, not ``__main__`` (``docs/extending.md``). Why the
+bounds, and how checkpoints record the class: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -177,42 +163,13 @@ class LatentActionModel(nn.Module):
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         r"""phi(z, s, b) on numpy arrays (broadcast over leading dims), as float64.
 
-        The same function as :meth:`decode` (z clamped to [-1, 1], ``||phi|| < sigma_h``),
-        computed by an inference-only forward written for the simulations' batches (U users
-        x K joystick candidates: z of shape (1, K, d), s of (U, 1, n), b of (U, 1, G)). The
-        same float32 layers (``addmm`` then ``tanh_``, as ``nn.Linear`` and ``nn.Tanh``), two
-        changes of rounding only (max abs difference from :meth:`decode` below 1e-6 at
-        sigma_h = 1, ``tests/test_decoder.py``):
-
-        - **The first layer split**: :math:`W_1 [z, (s - \mu)/\sigma, b] + c_1 = (W_z z + c_1')
-          + W_{sb}' [s, b]`, the state normalisation folded in, in float64, each term rounded
-          to float32 once: the z term once per distinct z, the context term once per
-          distinct (s, b), on the inputs' unexpanded shapes; each row's first layer is then
-          one broadcast add, not a GEMM over a concatenated, expanded input.
-        - **The radial squash in float64** on the float32 output layer.
-
-        For speed (:mod:`lasa.method.inference`): rows (the broadcast batch, flattened) go
-        through the MLP in chunks of about ``_CHUNK_ROWS`` = 1024 along the first broadcast
-        axis, into two activation buffers (1024 x 128 float32, 512 KB each) reused across
-        chunks and calls, one pair per thread, with the output layer's buffers; every op
-        writes in place. The output layer is :math:`V^\top = W_o U^\top` (MKL runs it up to
-        2x faster than :math:`U W_o^\top` for n = 5-7). Until late on 2026-12-02 tanh went
-        through an in-place ``sigmoid_`` (faster on the AMD EPYC it was tuned on, 1.5-2x
-        slower on the Xeon that replaced it, where ``tanh_`` costs about 0.6 ns per element);
-        see ``benchmarks/README.md``. A row's result depends on its batch or chunk only through
-        MKL's choice of GEMM kernel for the batch's size (one torch and OpenMP thread): on the
-        AVX2 kernels ``lasa`` pins (:mod:`lasa.base.kernels`) by up to about 2e-7, as with
-        :meth:`decode`; to the bit on AVX-512 ones.
-
-        It computes this class's :meth:`decode`: where a subclass overrides ``decode`` (or
-        a test patches it), ``decode_numpy`` calls that ``decode`` on the expanded inputs,
-        as it did before it had a fast path.
-
-        The refolded weights are cached per model and rebuilt when a weight changes: the
-        cache holds every parameter and normalisation buffer with its version counter,
-        which in-place updates (optimiser steps, ``load_state_dict``) bump, and a replaced
-        parameter or layer fails the identity check. A write through ``param.data``
-        bypasses the version counter and would go unseen; the package makes none.
+        The same function as :meth:`decode` (z clamped to [-1, 1], ``||phi|| < sigma_h``, Eq. T4),
+        by an inference-only forward for the simulations' batches (:mod:`lasa.method.inference`):
+        the first layer split into a z term and an (s, b) term, the radial squash in float64, rows in
+        chunks through reused buffers. It agrees with :meth:`decode` to float32 rounding (below 1e-6
+        at sigma_h = 1), not bit for bit. A subclass's (or a patched) ``decode`` runs on the expanded
+        inputs instead. The refolded weights are cached per model and rebuilt when a weight changes
+        (a write through ``param.data`` goes unseen). The forward in detail: ``docs/method-notes.md``.
 
         Args:
             z: Latent actions, shape (..., d); clamped to [-1, 1].
@@ -220,8 +177,7 @@ class LatentActionModel(nn.Module):
             b: Beliefs, shape (..., G).
 
         Returns:
-            phi, float64, C-contiguous, of shape ``broadcast(z.shape[:-1], s.shape[:-1],
-            b.shape[:-1]) + (n,)``.
+            phi, float64, C-contiguous, shape ``broadcast(z, s, b leading shapes) + (n,)``.
         """
         if getattr(self.decode, "__func__", None) is not _DECODE:
             return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode

@@ -1,33 +1,17 @@
 r"""A 2-D latent whose ring keeps departures and manipulation apart (an optional training loss).
 
-The paper asks two things of latent actions at a context where the robot is confident in a
-goal (Sec. III, IV-B): most inputs convey *how* to act at that goal (stay), and some input
-leads to *each other goal* (leave). A plain autoencoder has no reason to give both: the
-encoder places each demonstrated action where reconstruction is easiest, and departures
-from a confident goal, a small share of the data, may get no part of the stick at all.
-
-This loss gives them one. With a 2-axis stick, the angle of z on the ring,
-:math:`\vartheta = \operatorname{atan2}(z_2, z_1)`, is split into a *departure sector*
-:math:`|\vartheta| \le \pi s` (a share s of the ring, centred on +z1) and the rest. A tuple is
-
-- a **departure** when it is a reach (:data:`lasa.method.dataset.REACH`) whose belief is
-  confident (its largest entry at least ``confident``) in another goal than the one reached:
-  the robot is confident in the goal being left;
-- **manipulation** when it is a stroke, an adjustment or a hold and its belief is confident
-  (its largest entry at least ``confident``);
-- free otherwise (reaches from home with an uncertain belief choose among goals with the
-  whole ring, as before).
-
-The loss is a hinge on the angle outside a tuple's sector, averaged over the batch,
+With a 2-axis stick, the angle of z, :math:`\vartheta = \operatorname{atan2}(z_2, z_1)`, is split
+into a *departure sector* :math:`|\vartheta| \le \pi s` (a share s of the ring, centred on +z1) and
+the rest. :func:`sector_roles` labels each tuple a **departure** (a reach confident in another goal
+than the one reached), **manipulation** (a stroke, adjustment or hold with a confident belief) or
+free; :func:`sector_loss` is the hinge on the angle outside a tuple's sector (Secs. III, IV-B: stay
+and leave at a confident goal),
 
 .. math::  L_\text{sector} = \frac{1}{B}\Big(\sum_{\text{departures}} [\,|\vartheta| - \pi s\,]_+
     + \sum_{\text{manipulation}} [\,\pi s - |\vartheta|\,]_+\Big),
 
-added to the reconstruction loss with weight ``sector_weight``
-(:class:`lasa.method.train.TrainConfig`). The encoder then puts departures in the sector and
-manipulation outside it; the decoder, trained on those codes, decodes the sector's inputs as
-departures at a confident context. It touches the encoder's codes only, never the decoder's
-reconstruction target.
+added to the reconstruction loss with weight ``sector_weight`` (:class:`lasa.method.train.TrainConfig`).
+It touches the encoder's codes only. Why, and what each role is: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations

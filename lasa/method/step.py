@@ -179,35 +179,22 @@ def shared_autonomy_step(
 ) -> StepResult:
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
-    Decode the joystick input, blend with the assistance, update the belief, take the safe
-    step: what the episode runner does with a held input
-    (:func:`lasa.method.episodes.held_input`). A joystick input that is not finite (a
-    disconnected or faulty device) decodes to no human action at all, so it can never become
-    a command; the robot's own assistance still applies.
-
-    **The stick at rest** (z = 0) is a named choice, ``rest``, because the loops differ:
-
-    - ``"decode"``: phi(0, s, b), the decoder's own meaning of the rest position. The
-      simulated users of sims 1-4 (Eq. S1 weighs z = 0 among its grid's inputs, and the
-      paper's phi is defined there) and the benchmark's reference step use it.
-    - ``"zero"``: no human action. Live teleoperation uses it (:class:`lasa.live.station.Station`:
-      a person who lets go of the stick expects the arm to stop, the assistance apart), and so
-      do the study's simulated participants (:func:`lasa.people.participants.simulate`, for
-      whom resting the stick is the idle input). The participants weigh every candidate, so
-      they decode them in one call (:func:`decode_candidates`) and apply the convention to the
-      chosen one with :func:`human_action`, the function this step applies it with. Their
-      Retargeting action, and Station's, is :func:`lasa.method.retarget.retarget_action`.
+    Decode z (a_h = phi(z, s, b)), blend with the assistance (Eqs. M1-M2), update the belief
+    (Alg. 1, line 8), take the safe step: the episode runner's step for a held input
+    (:func:`lasa.method.episodes.held_input`). A non-finite input decodes to no human action;
+    the assistance still applies. ``rest`` is what the stick at rest (z = 0) commands:
+    ``"decode"``, phi(0, s, b) (sims 1-4, Eq. S1); ``"zero"``, no human action (live
+    teleoperation, the study's participants, through :func:`human_action`). Why: ``docs/method-notes.md``.
 
     Args:
-        decoder: The decoder phi (a trained model, or a wrapper such as
-            :class:`lasa.method.newgoals.MappedDecoder` for a task grown by a new goal).
-        task: The goal task (cups, or the eating task).
+        decoder: The decoder phi (a trained model or a wrapper, e.g. a ``MappedDecoder``).
+        task: The goal task (cups or eating).
         control: Control-loop units.
         state: s^t, shape (U, n).
         log_belief: log b^t, shape (U, G).
         z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
         alpha: Blend weight, scalar or shape (U,).
-        rest: What a stick at rest commands: ``"decode"`` or ``"zero"`` (see above).
+        rest: ``"decode"`` or ``"zero"``.
     """
     check_decoder(decoder, task)
     check_choice("rest", rest, REST)

@@ -288,41 +288,22 @@ def collect_eating_demonstrations(
 ) -> Demonstrations:
     """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
 
-    The paper says only that they "guided the robot towards each plate, and then performed
-    cutting, stabbing, and scooping motions at these goals". How a teacher cuts them into
-    demonstrations is a reading (``reading``), and it decides the belief each tuple carries:
-
-    - ``continuous``: for every goal and each of ``config.n_theta`` tilts, from each start
-      (home, ``n_starts - 1`` perturbed homes, and the entry of every other goal at a random
-      tilt, so that the moves between bowls of a task are shown); a move from another goal
-      starts from the belief the robot holds after working there (all but the floor on it),
-      as in one continuous demonstration of a task;
-    - ``home``: the same number of demonstrations, all from home or perturbed homes
-      (``n_starts + G - 2`` of them), each from a uniform belief: no move between goals;
-    - ``transfers``: reach-then-manipulate from home (and ``n_starts - 1`` perturbed
-      homes) with a uniform belief, plus, for every other goal, a separate transfer
-      demonstration from that goal's entry at a random tilt to this goal's entry, which
-      starts from a uniform belief (a new recording) and ends there without manipulating;
-    - ``leaves``: as ``transfers``, but each transfer leaves the other goal from the end of
-      a stroke there (at a random tilt) with the belief the robot holds after working there
-      (all but the floor on it): it shows the decoder a departure from a confident context,
-      the leave half of the property (Sec. IV-B), with the same number of demonstrations.
-
-    Each manipulation demonstration, from its start:
-
-    1. **reach** the stroke's entry s*(g, theta, 0) along a straight joint-space line;
-    2. **stroke** through the food to s*(g, theta, 1) and back to the entry;
-    3. ``n_adjust`` times: **adjust** the tilt along the entries to a random new theta,
-       then **stroke** there.
-
-    Every motion follows the cup demonstrations' speed law (cruise at ``speed`` sigma_h,
-    slow down near the target), with holds after each; beliefs are computed online over
-    the task's goals and the tuples get the same noisy copies (:func:`collect_demonstrations`).
+    For every goal and each of ``config.n_theta`` tilts, from each start: **reach** the stroke's
+    entry s*(g, theta, 0) along a straight joint-space line, **stroke** through the food to
+    s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there. Motions
+    follow the cup demonstrations' speed law, with holds; beliefs are computed online over the task's
+    goals, with the same noisy copies (:func:`collect_demonstrations`). ``reading`` is how a teacher
+    cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start from the
+    belief held after working there), ``home`` (all from (perturbed) home, uniform belief),
+    ``transfers`` (from home, plus separate moves between goals' entries, uniform belief) or ``leaves``
+    (those moves leave a stroke's end, confident: the leave half of Sec. IV-B). In full:
+    ``docs/method-notes.md``.
 
     Args:
         task: The eating task (:func:`lasa.world.eating.make_eating_task`).
         control: Control-loop units.
         config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
+        reading: How the demonstrations are cut, one of :data:`EATING_READINGS`.
     """
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale

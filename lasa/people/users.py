@@ -1,30 +1,16 @@
 r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1).
 
-A simulated user wants the robot at :math:`s^*`, the pose of their goal cup and
-preferred grasp, and weighs each joystick input z by where it would move the robot:
+A simulated user wants the robot at :math:`s^*` (their goal cup and preferred grasp) and weighs
+each joystick input z by where it would move the robot,
 
 .. math::
 
-    p(z) \propto \exp\big\{-\beta(t)\, \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\big\}.
+    p(z) \propto \exp\big\{-\beta(t)\, \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\big\},
 
-We read :math:`s + \Delta\phi` as the next state the user's own input would produce,
-with the control period Delta of the transition :math:`s' = s + \Delta a` (the paper
-writes :math:`s + \phi`, with Delta absorbed into its action units). The user does not
-model the robot's assistance. beta = 0 gives uniformly random inputs, beta -> inf the
-best input on the grid of candidates. The rationality may change over time,
-:math:`\beta(t) = \beta_0 + m t` (learning users, Fig. sim3, start at beta_0 = 0), and so
-may the goal: a user who changes their mind (Fig. sim2) aims at ``first_target`` for
-the steps t < N and at ``target`` from step N on.
-
-Sampling uses the Gumbel-max trick on pre-drawn uniforms, so that a user's choices
-depend only on its own random stream: the same user with the same seed makes the same
-draws under every method, a paired comparison.
-
-Eq. S1's user is one model of a person; the shared-autonomy literature also evaluates
-with surrogate *pilots* (Reddy et al. 2018, and the pilots of diffusion shared autonomy),
-:data:`PILOTS`: a ``laggy`` pilot repeats its previous input with probability p, a
-``noisy`` one takes a uniformly random input with probability p; otherwise both choose
-as Eq. S1's user does (:func:`pilot_choice`).
+with :math:`\beta(t) = \beta_0 + m t` (Fig. sim3) and a goal that may change at step N (Fig. sim2).
+Choices use the Gumbel-max trick on each user's own random stream, so the same user draws the same
+under every method. :data:`PILOTS` adds the ``laggy`` and ``noisy`` pilots of the shared-autonomy
+literature (:func:`pilot_choice`). The reading of Delta and the pilots: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
