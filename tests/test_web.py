@@ -1014,6 +1014,8 @@ def test_a_real_browser_says_what_happened_and_recovers_from_a_restart(tmp_path,
             assert "token" not in browser.current_url.split("#")[0]
         # the server is gone (SIGINT: uvicorn closes its WebSockets with 1012, "service restart")
         wait_for(lambda: "restarting" in text(browser, "notice"))
+        time.sleep(3.5)  # retries at 1 s and 2 s find no server: the notice still says why
+        assert "restarting" in text(browser, "notice")
         assert browser.find_element(By.ID, "agree").is_displayed()  # the page is kept as it was
         with cli_server(sessions, decoder_build, log, port=port):
             wait_for(lambda: not browser.find_element(By.ID, "notice").is_displayed(), timeout=30)

@@ -237,9 +237,11 @@ function connect() {
     if (!$("thanks").hidden || refused || event.code === 1000) return;
     // a refused message (1008: too many, not the protocol's; 1009: too large) names its reason
     const refusedMessage = (event.code === 1008 || event.code === 1009) && event.reason;
-    notice(refusedMessage
+    // a retry that finds no server yet keeps the notice of why the connection ended ("restarting")
+    const message = refusedMessage
       ? `The study server closed this page's connection: ${event.reason}. This page reconnects by itself; you will go on where you left off.`
-      : LOST[event.code] || LOST_OTHER);
+      : LOST[event.code] || (retries ? $("notice").textContent : LOST_OTHER);
+    notice(message || LOST_OTHER);
     setTimeout(connect, 1000 * RETRY_S[Math.min(retries, RETRY_S.length - 1)]);
     retries += 1;
   };
