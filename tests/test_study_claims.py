@@ -715,7 +715,6 @@ def test_the_participants_table_lists_every_parameter(tmp_path):
     import dataclasses
 
     from lasa.base.errors import ArtifactError
-    from lasa.base.paths import Paths
     from lasa.people.cohort import ParticipantConfig
 
     participant = ParticipantConfig()
@@ -726,4 +725,4 @@ def test_the_participants_table_lists_every_parameter(tmp_path):
         "value",
     ]
     with pytest.raises(ArtifactError, match="notebook 10"):
-        study.eating_property(Paths(tmp_path / "build", tmp_path / "figures"))
+        study.eating_property(tmp_path / "figures")

@@ -142,16 +142,13 @@ def held_input_paths(
     Returns:
         States, shape (K, steps + 1, n).
     """
-    if steps < 1:
-        raise ConfigError(f"steps must be >= 1, got {steps}")
     belief = np.asarray(belief, dtype=float)
     if belief.shape != (task.n_goals,) or not np.isclose(belief.sum(), 1.0) or belief.min() < 0:
         raise ConfigError(f"belief must be a distribution over {task.n_goals} goals, got {belief}")
     z = np.asarray(z_values, dtype=float).reshape(len(z_values), -1)
     starts = np.broadcast_to(start, (len(z), task.robot.n_joints))
-    log_b = np.log(np.broadcast_to(np.maximum(belief, 1e-300), (len(z), task.n_goals)))
-    runner = Runner(Assist(task, control, np.zeros(len(z))), starts, log_b, update_belief=update_belief)
-    return runner.run(held_input(decoder, z), steps).states.swapaxes(0, 1)
+    beliefs = np.broadcast_to(belief, (len(z), task.n_goals))
+    return _hold(decoder, task, control, starts, beliefs, z, np.zeros(len(z)), steps, "decode", update_belief)
 
 
 def phase_ends(task: GoalTask, goal: int) -> list[tuple[str, np.ndarray]]:
@@ -205,13 +202,28 @@ def leave_paths(
     Returns:
         States, (R, steps + 1, n).
     """
+    return _hold(decoder, task, control, starts, beliefs, np.asarray(z_values, dtype=float), alphas, steps)
+
+
+def _hold(
+    decoder: ActionDecoder,
+    task: GoalTask,
+    control: ControlConfig,
+    starts: np.ndarray,
+    beliefs: np.ndarray,
+    z: np.ndarray,
+    alphas: np.ndarray,
+    steps: int,
+    rest: str = "zero",
+    update_belief: bool = True,
+) -> np.ndarray:
+    """Row i holds ``z[i]`` from ``starts[i]`` and ``beliefs[i]`` with blend weight ``alphas[i]``,
+    through the episode runner; the states, (R, steps + 1, n)."""
     if steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
     log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))
-    runner = Runner(Assist(task, control, np.asarray(alphas, dtype=float)), starts, log_b)
-    return runner.run(
-        held_input(decoder, np.asarray(z_values, dtype=float), rest="zero"), steps
-    ).states.swapaxes(0, 1)
+    runner = Runner(Assist(task, control, np.asarray(alphas, dtype=float)), starts, log_b, update_belief)
+    return runner.run(held_input(decoder, z, rest), steps).states.swapaxes(0, 1)
 
 
 def _nearest(

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Mapping
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -45,7 +46,6 @@ from lasa.base.config import (
 )
 from lasa.base.errors import ConfigError
 from lasa.base.io import require_file
-from lasa.base.paths import Paths
 from lasa.evidence import latent_property
 from lasa.method.decoder import ActionDecoder
 from lasa.people import participants, planning
@@ -129,14 +129,14 @@ class Config:
             )
 
 
-def eating_property(paths: Paths) -> pd.DataFrame:
+def eating_property(figures: Path) -> pd.DataFrame:
     """Notebook 10's property of the eating decoders: :func:`lasa.evidence.latent_property.summary`
-    of the eating rows of the run's ``latent_property.csv``.
+    of the eating rows of ``latent_property.csv`` in the ``figures`` folder.
 
     Raises:
         ArtifactError: The file is missing (notebook 10 makes it).
     """
-    frame = pd.read_csv(require_file(paths.figure("latent_property.csv"), "make figures (notebook 10)"))
+    frame = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
     return latent_property.summary(frame.query("task == 'eating'"))
 
 

@@ -498,7 +498,7 @@ def _reached(part: pd.DataFrame) -> pd.DataFrame:
 
 # every table's keys: who, under which condition, SA member, decoder reading and participant model, which task
 def video_clips(
-    episodes: Episodes, participant: int, member: str, stride: int, dt: float, task: str = "Dessert"
+    episodes: Episodes, participant: int, assistance: str, stride: int, dt: float, task: str = "Dessert"
 ) -> list[tuple[np.ndarray, list[str]]]:
     """One participant's episode of ``task`` under each condition, as clips for a video.
 
@@ -509,7 +509,7 @@ def video_clips(
     Args:
         episodes: One decoder reading's episodes (:func:`lasa.figures.study.run`).
         participant: Whose episodes.
-        member: The SA member of the assisted conditions.
+        assistance: The SA member of the assisted conditions.
         stride: Control steps per frame.
         dt: The control period [s].
         task: The eating task.
@@ -519,7 +519,7 @@ def video_clips(
     """
     clips = []
     for cond in CONDITIONS:
-        asst = member if cond.endswith("+SA") else NO_ASSISTANCE
+        asst = assistance if cond.endswith("+SA") else NO_ASSISTANCE
         hits = np.flatnonzero(
             (episodes.participant == participant)
             & (episodes.task == task)

@@ -217,18 +217,16 @@ class Station:
         if not self.waypoints or self.done:
             return
         from lasa.world.eating import fork_frame
-        from lasa.world.fork import tip_frames, waypoint_reached
+        from lasa.world.fork import next_waypoint, tip_frames, waypoint_reached
 
         if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once
             wp = self.waypoints[self.waypoint]
             self._frames[self.waypoint] = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
         position, rotation = self._frames[self.waypoint]
         tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
-        if waypoint_reached(tip[0], axis[0], position, rotation[:, 2]):
-            self.waypoint += 1
-            if self.waypoint == len(self.waypoints):
-                self.waypoint -= 1
-                self.done = True
+        reached = waypoint_reached(tip[0], axis[0], position, rotation[:, 2])
+        waypoint, done = next_waypoint(reached, np.array(self.waypoint), np.array(len(self.waypoints)))
+        self.waypoint, self.done = int(waypoint), bool(done)
 
     def step(self, sample: StickSample) -> dict[str, Any]:
         """One control step from one sample; returns what the log records of it."""

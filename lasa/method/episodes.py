@@ -21,7 +21,7 @@ from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import Assist, StepResult, advance, human_action
 
-__all__ = ["Now", "Chooser", "Observer", "Record", "Runner", "held_input"]
+__all__ = ["Now", "Chooser", "Observer", "Record", "Runner", "held_input", "check_horizon"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -45,6 +45,16 @@ class Now:
 
 Chooser = Callable[[Now], np.ndarray]  # the running episodes' human actions a_h, (A, n) [rad/s]
 Observer = Callable[[int, "Runner"], np.ndarray]  # after step t's state: the episodes that finished, (U,)
+
+
+def check_horizon(horizon: int) -> None:
+    """A run's horizon is a positive whole number of steps.
+
+    Raises:
+        ConfigError: naming the value.
+    """
+    if int(horizon) != horizon or horizon < 1:
+        raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
 
 
 def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> Chooser:
@@ -130,8 +140,11 @@ class Runner:
             The step of the running rows (in ``np.flatnonzero(running)`` order).
         """
         rows = np.flatnonzero(self.running)
+        return self._step(choose, rows, belief(self.log_belief[rows]))
+
+    def _step(self, choose: Chooser, rows: np.ndarray, b: np.ndarray) -> StepResult:
+        """:meth:`step` of the running ``rows``, whose beliefs ``b`` the caller has."""
         state, log_b = self.state[rows], self.log_belief[rows]
-        b = belief(log_b)
         a_h = choose(Now(self.t, rows, state, b, log_b))
         result = advance(self.assist.rows(rows), state, log_b, a_h, b)
         self.state[rows] = result.state
@@ -158,22 +171,22 @@ class Runner:
             progress: Show a progress bar over the steps.
             desc: The progress bar's label.
         """
-        if int(horizon) != horizon or horizon < 1:
-            raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
+        check_horizon(horizon)
         n_users, (n, g) = len(self.state), (self.state.shape[1], self.log_belief.shape[1])
         states, beliefs = np.empty((horizon + 1, n_users, n)), np.empty((horizon + 1, n_users, g))
         a_hs, acts = np.zeros((horizon, n_users, n)), np.zeros((horizon, n_users, n))
         end = np.full(n_users, horizon)
         with tqdm(total=horizon, desc=desc, disable=not progress) as bar:
             for t in range(horizon + 1):
-                states[t], beliefs[t] = self.state, self.belief
+                b = self.belief  # recorded, and the running rows' b at this step
+                states[t], beliefs[t] = self.state, b
                 if observe is not None:
                     finished = observe(t, self) & self.running
                     end[finished], self.running = t, self.running & ~finished
                 if t == horizon or not self.running.any():
                     break
                 rows = np.flatnonzero(self.running)
-                result = self.step(choose)
+                result = self._step(choose, rows, b[rows])
                 a_hs[t, rows], acts[t, rows] = result.human_action, result.action
                 bar.update(1)
         states[t + 1 :], beliefs[t + 1 :] = states[t], beliefs[t]

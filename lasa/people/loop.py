@@ -30,7 +30,7 @@ from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
 from lasa.world.eating import TASK_NAMES, EatingTask
 from lasa.world.episodes import Episodes
-from lasa.world.fork import tip_frames, waypoint_arrays, waypoint_reached
+from lasa.world.fork import next_waypoint, tip_frames, waypoint_arrays, waypoint_reached
 
 __all__ = ["Setting", "State", "prepare", "start", "run_steps"]
 
@@ -160,9 +160,7 @@ def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarr
     here, there = setting.wp_pos[tsk, state.w], setting.wp_dir[tsk, state.w]
     tol = setting.config.position_tol, setting.config.angle_tol
     reached = runner.running & waypoint_reached(pos, axis, here, there, *tol)
-    state.w = np.where(reached, state.w + 1, state.w)
-    finished = reached & (state.w >= setting.n_wp[tsk])
-    state.w = np.minimum(state.w, setting.n_wp[tsk] - 1)
+    state.w, finished = next_waypoint(reached, state.w, setting.n_wp[tsk])
     state.phase[t] = setting.wp_phase[tsk, state.w]
     return finished
 

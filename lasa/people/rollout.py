@@ -18,7 +18,7 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now, Runner
+from lasa.method.episodes import Now, Runner, check_horizon
 from lasa.method.step import Assist, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
 from lasa.world.goals import GoalTask
@@ -114,8 +114,7 @@ def rollout(
         The trajectories of every user.
     """
     check_decoder(decoder, task)
-    if int(horizon) != horizon or horizon < 1:
-        raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
+    check_horizon(horizon)  # before the noise's shape is checked against it
     n_users, k = len(users), control.n_z**decoder.z_dim
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != k:
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {k}), got {noise.shape}")

@@ -53,10 +53,8 @@ class Workspace(Generic[TaskT]):
         figures_dir: str | os.PathLike[str] = "figures",
     ) -> Workspace[CupTask]:
         """Set torch's threads (``LASA_THREADS``), build the robot's task, resolve the folders."""
-        set_threads()
+        paths = _folders(build_dir, figures_dir)
         arm = load_robot(robot)
-        paths = Paths.of(build_dir, figures_dir)
-        paths.figures.mkdir(parents=True, exist_ok=True)
         return Workspace(arm, make_cup_task(arm), arm.control, paths)
 
     @staticmethod
@@ -71,9 +69,7 @@ class Workspace(Generic[TaskT]):
             ConfigError: ``robot`` is not one of :data:`EATING_ROBOTS`.
         """
         check_choice("robot", robot, EATING_ROBOTS)
-        set_threads()
-        paths = Paths.of(build_dir, figures_dir)
-        paths.figures.mkdir(parents=True, exist_ok=True)
+        paths = _folders(build_dir, figures_dir)
         task = make_eating_task()  # mink IK over every goal's tilts and strokes (once per process)
         return Workspace(task.robot, task, task.robot.control, paths)
 
@@ -110,3 +106,11 @@ class Workspace(Generic[TaskT]):
         noise as the entropy decoder, so the two differ only by the entropy term.
         """
         return {"base": self.decoder("decoder_lambda0")[0], "entropy": self.decoder("decoder_entropy")[0]}
+
+
+def _folders(build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
+    """Set torch's threads (``LASA_THREADS``), and resolve the run's folders (the figures' made)."""
+    set_threads()
+    paths = Paths.of(build_dir, figures_dir)
+    paths.figures.mkdir(parents=True, exist_ok=True)
+    return paths

@@ -25,6 +25,7 @@ __all__ = [
     "tip_motion",
     "waypoint_arrays",
     "waypoint_reached",
+    "next_waypoint",
 ]
 
 
@@ -99,3 +100,14 @@ def waypoint_reached(
     ``angle_tol`` [rad] of the waypoint's, vectorised over leading dimensions."""
     close = np.linalg.norm(tip - target, axis=-1) < position_tol
     return close & (angle_between(direction, target_direction) < angle_tol)
+
+
+def next_waypoint(reached: np.ndarray, w: np.ndarray, n_wp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Past a reached waypoint, the next one; past the last, finished (and ``w`` stays at the last).
+
+    Returns:
+        The waypoint each task works towards now, and whether it has finished (shapes of ``w``).
+    """
+    w = np.where(reached, w + 1, w)
+    finished = reached & (w >= n_wp)
+    return np.minimum(w, n_wp - 1), finished

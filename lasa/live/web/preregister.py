@@ -30,7 +30,6 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.io import require_file
-from lasa.evidence import latent_property
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import DROPPED, LEFT_OUT, SCALES
 from lasa.figures import study, study_analysis, study_power
@@ -74,8 +73,7 @@ def cohort(figures: Path) -> dict[str, pd.DataFrame]:
 def headline_reading(figures: Path, frames: dict[str, pd.DataFrame]) -> Reading:
     """Notebook 11's headline: its first SA member, the property rule's decoder, its model rule's model."""
     config = study.Config()
-    prop = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
-    decoder = study.readings_to_run(latent_property.summary(prop.query("task == 'eating'")), "property")[0]
+    decoder = study.readings_to_run(study.eating_property(figures), "property")[0]
     model = study_analysis.headline_model(frames["time"], config.participant_models)
     return config.session.assistance[0], decoder, model
 
