@@ -26,7 +26,7 @@ from lasa.base import conditions
 from lasa.base.conditions import METHODS
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import assist, members
+from lasa.method.assistance import assist
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
 from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
@@ -106,9 +106,7 @@ class Assist:
                 raise ConfigError(
                     f"assistance must name one member per row, shape {self.alpha.shape}, got {names.shape}"
                 )
-            for name in set(names.tolist()):
-                check_choice("assistance", name, members())
-            object.__setattr__(self, "assistance", names)
+            object.__setattr__(self, "assistance", names)  # each name is checked where it runs (assist)
 
     def rows(self, idx: np.ndarray) -> Assist:
         """The same for rows ``idx`` of the batch."""
