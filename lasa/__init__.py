@@ -39,6 +39,7 @@ _EXPORTS = {
     "CheckpointError": "lasa.base.errors",
     "ConfigError": "lasa.base.errors",
     "DamagedLogError": "lasa.base.errors",
+    "EmptySelectionError": "lasa.base.errors",
     "ContextMap": "lasa.method.newgoals",
     "ControlConfig": "lasa.base.config",
     "CupTask": "lasa.world.task",
@@ -83,6 +84,7 @@ if TYPE_CHECKING:
         CheckpointError,
         ConfigError,
         DamagedLogError,
+        EmptySelectionError,
         IKError,
         LasaError,
     )
@@ -135,6 +137,7 @@ __all__ = [
     "CheckpointError",
     "ConfigError",
     "DamagedLogError",
+    "EmptySelectionError",
     "ContextMap",
     "ControlConfig",
     "CupTask",

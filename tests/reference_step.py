@@ -62,7 +62,22 @@ def belief_update(
             regret[g] += min(control.dt * control.action_scale, before)
     post = b * np.exp(-control.belief_beta * (regret - regret.min()))
     post = post / post.sum()
-    return (1.0 - len(b) * control.belief_floor) * post + control.belief_floor
+    post = (1.0 - len(b) * control.belief_floor) * post + control.belief_floor
+    cap = getattr(control, "belief_cap", None)
+    if cap is not None:
+        post = capped(post, cap)
+    return post
+
+
+def capped(b: np.ndarray, cap: float) -> np.ndarray:
+    """Javdani et al.'s clip in probabilities, goal by goal: the top above ``cap`` is set to it and
+    its excess is shared equally by the others."""
+    out = [float(x) for x in b]
+    top = max(range(len(out)), key=lambda g: out[g])
+    if out[top] > cap:
+        share = (out[top] - cap) / (len(out) - 1)
+        out = [cap if g == top else x + share for g, x in enumerate(out)]
+    return np.array(out)
 
 
 def transition(s: np.ndarray, a: np.ndarray, control, robot) -> np.ndarray:

@@ -6,9 +6,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
+from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import (
     belief,
+    cap_log_belief,
+    confidence_threshold,
+    confident_belief,
     distance_to_sets,
     log_likelihood,
     logsumexp,
@@ -93,3 +97,86 @@ def test_logsumexp_is_scipys(rows):
     with np.errstate(divide="ignore"):
         expected = scipy_logsumexp(x, axis=-1, keepdims=True)
     np.testing.assert_allclose(logsumexp(x), expected, rtol=1e-13, atol=1e-12)
+
+
+# --- the cap (Javdani et al.'s max_prob_any_goal) ---------------------------------------------
+
+
+def test_the_cap_by_hand_four_goals():
+    # b = (0.995, 0.003, 0.001, 0.001), cap 0.99: the top gives up 0.005, a third of it to each other goal
+    b = np.array([0.995, 0.003, 0.001, 0.001])
+    out = belief(cap_log_belief(np.log(b), 0.99))
+    assert_allclose(out, [0.99, 0.003 + 0.005 / 3, 0.001 + 0.005 / 3, 0.001 + 0.005 / 3], rtol=0, atol=1e-15)
+    # the same through the update: a likelihood that pushes goal 2 above the cap, then the cap
+    lik = np.log(np.array([1.0, 1.0, 1000.0, 1.0]))
+    post = belief(update_log_belief(np.log(np.full(4, 0.25)), lik, 0.0, 0.99))
+    raw = np.array([1.0, 1.0, 1000.0, 1.0]) / 1003.0
+    excess = raw[2] - 0.99
+    assert_allclose(post, [raw[0] + excess / 3, raw[1] + excess / 3, 0.99, raw[3] + excess / 3], atol=1e-15)
+
+
+def test_a_capped_belief_near_one_keeps_its_excess_exactly():
+    # b_top = 1 - 3e-12: its excess over the cap is (1 - cap) - rest, not 1 - 3e-12 - cap rounded
+    log_b = np.log(np.array([1.0 - 3e-12, 1e-12, 1e-12, 1e-12]))
+    out = belief(cap_log_belief(log_b, 0.99))
+    assert_allclose(out, [0.99, 0.01 / 3, 0.01 / 3, 0.01 / 3], rtol=1e-12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    raw=st.lists(st.floats(1e-9, 1.0), min_size=2, max_size=6),
+    power=st.floats(0.0, 30.0),
+    cap=st.floats(0.501, 0.9999),
+)
+def test_the_cap_invariants(raw, power, cap):
+    """Sums to one, none above the cap, the order kept, and a no-op (bit for bit) when none is above."""
+    b = np.asarray(raw) ** power
+    log_b = np.log(b / b.sum())
+    out = cap_log_belief(log_b, cap)
+    p = belief(out)
+    assert abs(np.exp(out).sum() - 1.0) < 1e-12
+    assert p.max() <= cap + 1e-12
+    before = belief(log_b)
+    for i in range(len(p)):
+        for j in range(len(p)):
+            if before[i] > before[j]:
+                assert p[i] >= p[j] - 1e-15
+    if before.max() <= cap:
+        assert np.array_equal(out, log_b)
+    else:
+        assert p.max() == pytest.approx(cap, abs=1e-12)
+
+
+def test_the_cap_is_validated_and_none_is_no_cap():
+    with pytest.raises(ConfigError, match="belief_cap"):
+        cap_log_belief(np.log(np.full(4, 0.25)), 0.5)
+    with pytest.raises(ConfigError, match="belief_cap"):
+        ControlConfig(belief_cap=1.0)
+    assert (
+        ControlConfig(belief_cap="none").belief_cap is None
+        and ControlConfig(belief_cap="None").belief_cap is None
+    )
+    log_b = np.log(np.array([0.9999, 1e-4 / 3, 1e-4 / 3, 1e-4 / 3]))
+    assert np.array_equal(
+        update_log_belief(log_b, np.zeros(4), 0.0, None), update_log_belief(log_b, np.zeros(4))
+    )
+
+
+def test_the_confident_belief_and_its_threshold_follow_the_cap():
+    assert_allclose(confident_belief(4, 2, 1e-6, 0.99), [0.01 / 3, 0.01 / 3, 0.99, 0.01 / 3])
+    assert_allclose(confident_belief(4, 0, 1e-6), [1 - 3e-6, 1e-6, 1e-6, 1e-6])
+    assert confidence_threshold(None) == pytest.approx(0.99) and confidence_threshold(0.99) == pytest.approx(
+        0.98
+    )
+    # the confident belief counts as confident under its own cap, always
+    for cap in (None, 0.6, 0.9, 0.99, 0.999):
+        assert confident_belief(4, 1, 1e-6, cap).max() > confidence_threshold(cap)
+
+
+def test_a_long_run_of_evidence_never_takes_a_goal_above_the_cap():
+    log_b = uniform_log_belief(3, 4)
+    lik = np.log(np.array([[50.0, 1.0, 1.0, 1.0], [1.0, 1.0, 1.0, 1e6], [1.0, 1.0, 1.0, 1.0]]))
+    for _ in range(200):
+        log_b = update_log_belief(log_b, lik, 1e-6, 0.99)
+        assert belief(log_b).max() <= 0.99 + 1e-12
+    assert_allclose(belief(log_b)[:2].max(axis=1), 0.99, atol=1e-12)  # the evidence holds them at the cap

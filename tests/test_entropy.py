@@ -240,3 +240,20 @@ def test_candidates_in_blocks_give_the_reference_distance(seed, rows, block):
     with mock.patch.object(belief, "_CANDIDATE_ROWS", block):
         out = belief.nearest_distance(points, sets)
     assert torch.equal(out, belief.distance_to_sets_torch(points, sets))
+
+
+def test_confident_contexts_follow_the_cap_and_an_empty_selection_names_the_setting(demos):
+    """Without a cap a context is confident above 0.99; under the study's 0.99 cap above 0.98 (a capped
+    belief never exceeds 0.99, so '> 0.99' would select nothing); none selected: a named error."""
+    from lasa.base.errors import EmptySelectionError
+    from lasa.figures.entropy_ablation import confident_contexts
+
+    clean = demos.clean()
+    top = clean.beliefs.max(axis=1)
+    states, beliefs = confident_contexts(demos, None, every=1)
+    assert len(states) == int((top > 0.99).sum()) > 0 and (beliefs.max(axis=1) > 0.99).all()
+    capped = dataclasses.replace(demos, beliefs=np.minimum(demos.beliefs, 0.985))  # as if capped below 0.99
+    _, beliefs = confident_contexts(capped, 0.99, every=1)
+    assert len(beliefs) > 0 and (beliefs.max(axis=1) > 0.98).all()
+    with pytest.raises(EmptySelectionError, match="belief_cap 0.999 less 0.01.*belief_cap"):
+        confident_contexts(capped, 0.999)

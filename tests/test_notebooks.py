@@ -324,7 +324,7 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     fig = executed / "figures"
     frame = pd.read_csv(fig / "latent_property.csv")
     assert list(frame.columns) == list(latent_property.COLUMNS)
-    assert set(frame.source) == {"cups-planar5", "cups-panda", "eating"}
+    assert set(frame.source) == {"cups-planar5", "cups-panda", "eating", eating_task.CAP_SOURCE}
     settings = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
     readings = eating_task.reading_names(from_dict(eating_task.Config, settings))
     assert set(frame[frame.task == "eating"].decoder) == set(readings)
@@ -363,11 +363,21 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     for name in readings:
         assert (models / f"eating_decoder_panda_{name}.pt").is_file()
     assert (fig / "latent_property.png").stat().st_size > 10_000
+    # the study's belief: the cap through the demonstrations and the decoders; the cap sweep's
+    # decoders (QUICK: only without the cap) are the headline's recipe at their caps
+    assert saved["extra"]["control"]["belief_cap"] == 0.99
+    demos = np.load(executed / "build" / "data" / "eating_demos_panda.npz")
+    assert demos["beliefs"].max() <= 0.99 + 1e-12
+    caps = frame[frame.source == eating_task.CAP_SOURCE]
+    assert set(caps.decoder) == {eating_task.cap_decoder_name(head, None)}
+    uncapped = torch.load(models / f"eating_decoder_panda_{head}_uncapped.pt", weights_only=True)
+    assert uncapped["extra"]["control"]["belief_cap"] is None
+    assert uncapped["extra"]["train"] == mine["extra"]["train"]  # the same recipe
 
 
 def test_study_outputs(executed):
     from lasa.evidence import latent_property
-    from lasa.figures import eating_task, study, study_plots
+    from lasa.figures import eating_task, study, study_caps, study_plots
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
@@ -430,7 +440,21 @@ def test_study_outputs(executed):
         tail = [p for p in parts if p in assistance or p == "cohort"]
         return f"{base}@" + "+".join([p for p in parts if p not in tail] + [model] + tail)
 
-    assert set(rows.id) == heads(models[0]) | {with_model(i, m) for m in models[1:] for i in heads(m)}
+    uncapped = {i + ("+" if "@" in i else "@") + "uncapped" for i in ids}  # the headline without the cap
+    assert (
+        set(rows.id) == heads(models[0]) | {with_model(i, m) for m in models[1:] for i in heads(m)} | uncapped
+    )
+    sweep = pd.read_csv(fig / "study_belief_cap.csv")
+    assert list(sweep.columns) == list(study_caps.COLUMNS) and list(dict.fromkeys(sweep.cap)) == [
+        "0.99",
+        "uncapped",
+    ]
+    assert set(sweep.kind) == {"completion", "claim", "property"} and (sweep.n == n).all()
+    ours = rows.set_index("id")
+    for cap, suffix in (("0.99", ""), ("uncapped", "@uncapped")):
+        mine = sweep[(sweep.cap == cap) & (sweep.kind == "claim")].set_index("item")
+        assert all(mine.word[h] == ours.reproduced[f"study.{h}{suffix}"] for h in ("h1", "h2", "h3"))
+    assert (fig / "study_belief_cap.png").stat().st_size > 10_000
     time_la = time[time.condition.str.startswith("LA")]
     assert set(time_la.decoder) == set(readings)
     assert set(time[time.condition.str.startswith("R")].decoder) == {"none"}

@@ -113,3 +113,14 @@ def test_peoples_sessions_are_judged_by_the_claims_own_tests():
         assert row.verdict == direct[row.claim][0] and row.measured == direct[row.claim][4]
     assert set(table.claim) >= {"h1", "h2", "h3"}
     assert study_tests.people_claims({n: f[f.participant == "p0"] for n, f in frames.items()}).empty
+
+
+def test_the_belief_is_named_with_its_cap(reading_and_table, text):
+    """The plan states the study's belief: Javdani et al.'s, capped at the study's cap."""
+    from lasa.world.eating import STUDY_BELIEF_CAP, load_eating_robot
+
+    assert load_eating_robot().control.belief_cap == STUDY_BELIEF_CAP
+    assert f"no goal keeps more than {STUDY_BELIEF_CAP:g}" in text and "Javdani" in text
+    reading, table = reading_and_table
+    other = preregister.document(table, reading, practice_s=240.0, trial_s=150.0, belief_cap=0.9)
+    assert "no goal keeps more than 0.9," in other

@@ -15,15 +15,16 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose, assert_array_equal
 from reference_step import latent_step, softmax, step_with
 
+from lasa.base.config import ControlConfig, to_dict
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, DamagedLogError
 from lasa.evidence.sessionlog import read_session
 from lasa.live.devices import KeyboardDevice, ScriptedDevice, StickSample, safe_axes
 from lasa.live.station import SessionConfig, Station
 from lasa.live.teleop import new_session, replay, run_session
-from lasa.method.decoder import save_checkpoint
+from lasa.method.decoder import DecoderConfig, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig, train_decoder
 from lasa.people.demos import DemoConfig, collect_eating_demonstrations
-from lasa.world.eating import make_eating_task
+from lasa.world.eating import STUDY_BELIEF_CAP, make_eating_task
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -798,3 +799,28 @@ def test_a_bad_script_file_is_one_line(build, tmp_path, capsys, content):
     )
     assert code == 2 and len(err.splitlines()) == 1 and "script" in err
     assert not (tmp_path / "s").exists()
+
+
+def test_a_scripted_session_never_shows_a_belief_above_the_studys_cap(build, tmp_path):
+    """The live station's belief is the study's: Javdani et al.'s cap, through a logged session."""
+    st_ = station(build, "LA+SA")
+    assert st_.control.belief_cap == STUDY_BELIEF_CAP == 0.99
+    axes = np.tile([[0.0, -1.0]], (150, 1))  # one direction held: the belief commits to a goal
+    writer = new_session(st_, tmp_path)
+    run_session(st_, ScriptedDevice(axes), writer, 150, realtime=False)
+    frame, meta = read_session(writer.csv)
+    beliefs = frame[[f"b{g}" for g in range(st_.task.n_goals)]].to_numpy()
+    assert np.allclose(beliefs.sum(axis=1), 1.0) and meta["control"]["belief_cap"] == 0.99
+    assert beliefs.max() <= 0.99 + 1e-12
+    assert beliefs.max() > 0.99 - 1e-9  # it got there: the cap held it, not a lack of evidence
+
+
+def test_a_decoder_trained_with_another_belief_is_refused(tmp_path):
+    """A checkpoint that records an uncapped belief is refused by the capped station before a session."""
+    config = DecoderConfig(robot="panda", n_joints=7, n_goals=4, z_dim=2, hidden=8, depth=1)
+    uncapped = ControlConfig(assistance="hindsight")
+    save_checkpoint(
+        LatentActionModel(config), tmp_path / "models" / "eating_decoder_panda.pt", control=to_dict(uncapped)
+    )
+    with pytest.raises(CheckpointError, match="belief_cap None"):
+        station(tmp_path, "LA")

@@ -35,6 +35,8 @@ __all__ = [
     "NonNegative",
     "UnitInterval",
     "Seed",
+    "BeliefCap",
+    "cap_setting",
     "FiniteNonNegative",
     "validate",
     "interval",
@@ -70,6 +72,14 @@ NonNegative = Annotated[Number, at.Ge(0.0)]  # a number >= 0
 UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
 FiniteNonNegative = Annotated[Number, at.Ge(0.0), at.Lt(math.inf)]  # a number in [0, inf) (a finite beta)
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
+# the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None for no cap; a record
+# with such a field passes it through cap_setting first, so that a config file's "none" means None
+BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
+
+
+def cap_setting(value: Any) -> Any:
+    """A belief cap as a record keeps it: the word ``"none"`` (any case) is None, else as given."""
+    return None if isinstance(value, str) and value.strip().lower() == "none" else value
 
 
 def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:
@@ -222,6 +232,10 @@ class ControlConfig:
     belief_floor: Annotated[Number, at.Ge(0.0), at.Lt(0.5)] = (
         1e-6  # smallest belief any goal keeps after an update [-]
     )
+    # the most belief any goal keeps after an update, its excess spread evenly over the others
+    # (Javdani et al.'s implementation, max_prob_any_goal); None (or "none"): no cap, Algorithm 1's
+    # belief, which the sims keep; the eating study's is 0.99 (lasa.world.eating) [-]
+    belief_cap: BeliefCap = None
     alpha: UnitInterval = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: AtLeastTwo = 21  # joystick candidates per latent axis the simulated user weighs [-]
     likelihood: str = "preferences"  # belief model: "preferences" (regret to preference sets) or "goal"
@@ -235,6 +249,7 @@ class ControlConfig:
         return self.dt * self.action_scale if self.likelihood == "preferences" else None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
         validate(self)
         check_choice("likelihood", self.likelihood, LIKELIHOODS)
         check_choice("assistance", self.assistance, (*BUILT_IN_ASSISTANCE, *REGISTERED_ASSISTANCE))

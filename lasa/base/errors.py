@@ -15,6 +15,11 @@ class ConfigError(LasaError, ValueError):
     """A parameter is outside its allowed range, or a name is unknown."""
 
 
+class EmptySelectionError(ConfigError):
+    """A setting left a selection empty (no demonstrated context is confident under the belief's
+    cap, say); the message names the setting and what to change."""
+
+
 class ArtifactError(LasaError, FileNotFoundError):
     """A dataset, checkpoint or figure input is missing, corrupt or for another robot."""
 

@@ -25,6 +25,7 @@ from scipy.spatial import cKDTree
 from lasa.base.config import AtLeastTwo, ControlConfig, NonNegative, Positive, validate
 from lasa.base.errors import ConfigError
 from lasa.evidence.latent_property import COLUMNS, CONDITIONS
+from lasa.method.belief import confident_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.episodes import Runner, held_input
 from lasa.method.step import Assist
@@ -296,7 +297,7 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     names = list(task.goal_names)
     hold = max(1, round(config.hold / dt))
     pset = preference_sets[g]
-    b = _confident(task, g, run.control.belief_floor)
+    b = _confident(task, g, run.control)
     paths = held_input_paths(run.decoder, task, run.control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
     pos, axis = robot.grasp_positions(paths[:, 1:]), robot.grasp_axes(paths[:, 1:])
     dist, _ = _nearest(pset, pos, axis, config.rotation_weight)  # (K, H)
@@ -352,11 +353,9 @@ def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **column
     return frame.reindex(columns=list(COLUMNS))
 
 
-def _confident(task: GoalTask, goal: int, floor: float) -> np.ndarray:
-    """The belief after working at ``goal``: all but the floor of every other goal on it, (G,)."""
-    b = np.full(task.n_goals, floor)
-    b[goal] = 1.0 - (task.n_goals - 1) * floor
-    return b
+def _confident(task: GoalTask, goal: int, control: ControlConfig) -> np.ndarray:
+    """The belief after working at ``goal``: the most confident the update keeps, (G,)."""
+    return confident_belief(task.n_goals, goal, control.belief_floor, control.belief_cap)
 
 
 def _leave_rows(run: _Run) -> pd.DataFrame:
@@ -379,7 +378,7 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     k = len(z)
     starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
     beliefs = np.concatenate(
-        [np.broadcast_to(_confident(task, g, control.belief_floor), (k, task.n_goals)) for g, _, _, _ in runs]
+        [np.broadcast_to(_confident(task, g, control), (k, task.n_goals)) for g, _, _, _ in runs]
     )
     alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
     steps = max(1, round(run.config.leave_hold / control.dt))

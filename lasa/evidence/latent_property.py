@@ -40,6 +40,7 @@ __all__ = [
     "TILT_RANGE",
     "LEAVE_COUNT",
     "CONDITIONS",
+    "SWEEP_TASKS",
     "summary",
     "leave_table",
     "has_property",
@@ -77,6 +78,9 @@ TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 
 LEAVE_COUNT = 7  # inputs of the ring's 64 (about 10%) that must reach each other goal, LA+SA [-]
 CONDITIONS = ("LA", "LA+SA")  # the leave half's conditions: alpha = 0, and the control's alpha
 DPI = 130
+# tasks whose decoders are one recipe at several settings (the eating study's cap sweep, notebook 10),
+# not alternatives to choose among: the figure marks no choice (★) among them
+SWEEP_TASKS = ("eating_caps",)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
@@ -120,7 +124,9 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
                     "leave_la_min": float(least["LA"]),
                 }
             )
-    table = pd.DataFrame(rows)
+    summary_columns = [*keys, "goal", "n_inputs", "stay_share", "theta_min", "theta_max", "theta_range"]
+    summary_columns += ["stroke_range", "from_home", "all_reached", "leave_min", "leave_la_min"]
+    table = pd.DataFrame(rows, columns=summary_columns)  # no rows: the columns all the same
     table["stay_holds"] = stay_holds(table)
     table["leave_holds"] = table.leave_min >= LEAVE_COUNT * table.n_inputs / 64
     table["has_property"] = has_property(table)
@@ -215,7 +221,7 @@ def plot(frame: pd.DataFrame) -> Figure:
     meets = holds(table) if not table.empty else pd.Series(dtype=bool)
     table.loc[table.decoder.map(meets).fillna(False).astype(bool), "row"] += " ✓"
     for name, part in table.groupby("task"):
-        if part.decoder.nunique() > 1:
+        if part.decoder.nunique() > 1 and name not in SWEEP_TASKS:
             star = (table.task == name) & (table.decoder == choose(part))
             table.loc[star, "row"] = table.loc[star, "row"] + " ★"
     tasks = list(dict.fromkeys(table.task))

@@ -304,6 +304,12 @@ _TWO_WORDS = (
     "split into the effect (the rule, the claim's shape) and the number (the paper's sizes) after an "
     "audit had read this version's verdicts: the rule no longer reads the paper's sizes"
 )
+# The study's belief, changed after a probe's results were seen (notebook 11 gives the probe's table).
+_BELIEF_CAP = (
+    "; the study's belief became Javdani et al.'s, no goal above 0.99 (their implementation's "
+    "max_prob_any_goal), after a probe outside the package had seen the study's results with a cap: chosen "
+    "as the cited method's own value, the uncapped belief kept as the reading @uncapped"
+)
 AFTER_RESULTS: dict[str, str] = {
     "sim1.time_ratio": _TWO_WORDS + "; before, yes needed both ratios within 0.15 of the paper's",
     "sim1.gap_narrows": "each part must now narrow in the paper's direction (LA+SA better at beta = 75), "
@@ -320,9 +326,10 @@ AFTER_RESULTS: dict[str, str] = {
     "reading (@mean_distance) after the paper-scale run; H3's completion guard was extended to H1 (a sum "
     "over the task's time, censored like it) after 0.9.0's censored results were seen, before any verdict "
     "of this version; its censored lower bound's no (as H3's) after an audit saw the guard hide a "
-    "significant reversal",
+    "significant reversal" + _BELIEF_CAP,
     "study.h2": "written after pilots of 4 and 10 participants; the completion gate (LA+SA and R+SA must "
-    "each finish 95%) was added after an audit of the paper-scale run saw H2 read yes with 0% LA completion",
+    "each finish 95%) was added after an audit of the paper-scale run saw H2 read yes with 0% LA completion"
+    + _BELIEF_CAP,
     "study.h3": "written after pilots of 4 and 10 participants; the test changed after the previous "
     "version's results were seen, because they were censored (no LA or LA+SA episode of the headline "
     "decoder finished within the 150 s horizon): from paired t-tests on times capped at the horizon to "
@@ -330,7 +337,7 @@ AFTER_RESULTS: dict[str, str] = {
     f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes); the censored lower bound's 'no' (for "
     "H1 too) was added after an audit saw the guard hide a significant reversal, before this version's "
     "verdicts were seen; its extension to a measured LA+SA beside another censored condition after this "
-    "version's first paper-scale run",
+    "version's first paper-scale run" + _BELIEF_CAP,
 }
 
 

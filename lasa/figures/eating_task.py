@@ -36,10 +36,13 @@ import seaborn as sns
 from matplotlib.figure import Figure
 
 from lasa.base.config import (
+    BeliefCap,
     ControlConfig,
     NonNegative,
     Positive,
     PositiveInt,
+    Seed,
+    cap_setting,
     check_choice,
     to_dict,
     validate,
@@ -48,12 +51,13 @@ from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_measure, latent_property
 from lasa.figures import entropy_ablation
-from lasa.method.belief import belief_targets
+from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig
 from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
-from lasa.world.eating import GOALS, EatingTask
+from lasa.pipeline.scaleout import run_jobs
+from lasa.world.eating import GOALS, STUDY_BELIEF_CAP, EatingTask
 from lasa.world.fork import tip_frames
 
 __all__ = [
@@ -64,11 +68,19 @@ __all__ = [
     "Readings",
     "reading_names",
     "train_readings",
+    "CAP_SOURCE",
+    "CapDecoders",
+    "cap_label",
+    "cap_decoder_name",
+    "train_caps",
     "directions",
     "plot",
 ]
 
 NAME = "eating_latent"
+# latent_property.csv's source and task of the cap sweep's decoders (train_caps): apart from the
+# readings the rule chooses among (source and task "eating")
+CAP_SOURCE = "eating_caps"
 COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
 BELIEFS = ("uncertain", "confident")
 
@@ -106,13 +118,30 @@ class Config:
     # the inputs at a bowl), for its lower held-out reconstruction error (0.0085 against 0.0118).
     sector_readings: tuple[str, ...] = ("leaves",)  # demonstration readings trained with sectors [-]
     sector_weight: NonNegative = 0.2  # weight of the sector loss of those readings [-]
+    # The search for a decoder with both halves under the study's cap, by another seed of training
+    # (written before the study ran at the cap): each of these readings' bases is trained again
+    # with each seed, then fine-tuned with lambda = 0 as its reading is (<reading>_seed<seed>).
+    # transfers: the reading that met the rule without the cap, and missed it by one input of 64 at
+    # one bowl with the cap in the probe that found the cap's effect.
+    seed_readings: tuple[str, ...] = ("transfers",)  # readings trained again with other seeds [-]
+    search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the readings' own: train.seed) [-]
+    # The study's belief: Javdani et al.'s cap (lasa.world.eating.STUDY_BELIEF_CAP), through the
+    # demonstrations' beliefs, training, the property; None ("none"): Algorithm 1's uncapped belief
+    belief_cap: BeliefCap = STUDY_BELIEF_CAP
+    # The cap sweep: the headline's recipe (its demonstrations, base and fine-tune) trained again at
+    # each of these caps, its property measured at that cap (train_caps); notebook 11 runs them [-]
+    cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
     # local worker processes the trainings are spread over (entropy_ablation.train_all): the same
     # decoders with any number; configs/paper.yaml asks for two, to put this notebook, the
     # pipeline's longest chain, on both cores [-]
     jobs: PositiveInt = 1
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
+        object.__setattr__(self, "cap_sweep", tuple(cap_setting(c) for c in self.cap_sweep))
         validate(self)
+        if len(set(self.cap_sweep)) != len(self.cap_sweep):
+            raise ConfigError(f"cap_sweep must not repeat a cap, got {self.cap_sweep}")
         check_choice("goal", self.goal, GOALS)
         if self.train.z_dim != 2:
             raise ConfigError(
@@ -130,7 +159,13 @@ class Config:
         object.__setattr__(self, "search_lambdas", tuple(float(x) for x in self.search_lambdas))
         object.__setattr__(self, "search_readings", tuple(self.search_readings))
         object.__setattr__(self, "sector_readings", tuple(self.sector_readings))
-        for field in ("search_readings", "sector_readings"):
+        object.__setattr__(self, "seed_readings", tuple(self.seed_readings))
+        object.__setattr__(self, "search_seeds", tuple(self.search_seeds))
+        if self.train.seed in self.search_seeds:
+            raise ConfigError(
+                f"search_seeds must differ from train.seed ({self.train.seed}), got {self.search_seeds}"
+            )
+        for field in ("search_readings", "sector_readings", "seed_readings"):
             for name in getattr(self, field):
                 if name not in self.readings:
                     raise ConfigError(f"{field} must be among readings {self.readings}, got {name!r}")
@@ -151,7 +186,9 @@ def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | No
     Each demonstration reading gives its base fine-tuned with lambda = 0 (its own name) and
     with the rule's lambda (``<reading>_entropy``, ``chosen``); each reading of the search
     adds one per search lambda (``<reading>_lambda<value>``); each sector reading adds its
-    sector base fine-tuned with lambda = 0 (``<reading>_sectors``, base ``<reading>_sectors``).
+    sector base fine-tuned with lambda = 0 (``<reading>_sectors``, base ``<reading>_sectors``); each
+    seed reading adds, per search seed, its base trained with that seed and fine-tuned with lambda = 0
+    (``<reading>_seed<seed>``).
     """
     out: list[tuple[str, str, float | None]] = []
     for r in config.readings:
@@ -160,14 +197,19 @@ def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | No
             out += [(f"{r}_lambda{w:g}", r, w) for w in config.search_lambdas]
         if r in config.sector_readings:
             out.append((f"{r}_sectors", f"{r}_sectors", 0.0))
+        if r in config.seed_readings:
+            out += [(f"{r}_seed{s}", f"{r}_seed{s}", 0.0) for s in config.search_seeds]
     return out
 
 
 def _bases(config: Config, train: TrainConfig) -> dict[str, tuple[str, TrainConfig]]:
-    """Per base: its demonstration reading and training settings (the sector bases add the loss)."""
+    """Per base: its demonstration reading and training settings (the sector bases add the loss,
+    the seed bases another seed)."""
     out = {r: (r, train) for r in config.readings}
     for r in config.sector_readings:
         out[f"{r}_sectors"] = (r, dataclasses.replace(train, sector_weight=config.sector_weight))
+    for r in config.seed_readings:
+        out.update({f"{r}_seed{s}": (r, dataclasses.replace(train, seed=s)) for s in config.search_seeds})
     return out
 
 
@@ -221,14 +263,9 @@ def train_readings(
         bases["continuous"], train, datasets["continuous"], task, control, sweep_config, progress=progress
     )
     models, fines = _fine_tune(task, control, config, paths, sweep, bases, trained, datasets, progress)
+    jobs = [(m, control, n) for n, m in models.items()]
     frame = pd.concat(
-        [
-            latent_measure.measure(
-                task, m, control, prop, source="eating", task_name="eating", decoder_name=n
-            )
-            for n, m in models.items()
-        ],
-        ignore_index=True,
+        run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, "eating")), ignore_index=True
     )
     headline = latent_property.choose(latent_property.summary(frame))
     path = paths.artifact("eating_decoder", task.robot.name)
@@ -281,7 +318,7 @@ def _fine_tune(
             models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
             continue
         fines[name] = dataclasses.replace(
-            trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=config.train.seed
+            trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=trained[reading].seed
         )
         runs[name] = entropy_ablation.Run(datasets[reading], control, fines[name], goal_sets, bases[reading])
     fitted = entropy_ablation.train_all(list(runs.values()), config.jobs, progress, desc="decoder readings")
@@ -312,12 +349,95 @@ def _save(
     )
 
 
+def cap_label(cap: float | None) -> str:
+    """A belief cap's name in readings and decoder names: ``uncapped``, or ``cap0.99``."""
+    return "uncapped" if cap is None else f"cap{cap:g}"
+
+
+def cap_decoder_name(headline: str, cap: float | None) -> str:
+    """The cap sweep's decoder of ``headline``'s recipe trained at ``cap``: ``transfers_uncapped``."""
+    return f"{headline}_{cap_label(cap)}"
+
+
+@dataclasses.dataclass(frozen=True)
+class CapDecoders:
+    """The cap sweep's decoders (:func:`train_caps`).
+
+    Attributes:
+        models: Decoder per cap of the sweep (None: uncapped), the headline's recipe at that cap.
+        names: Their reading names (:func:`cap_decoder_name`), per cap.
+        property: Their :func:`lasa.evidence.latent_measure.measure` rows, each at its cap
+            (source :data:`CAP_SOURCE`).
+    """
+
+    models: dict[float | None, LatentActionModel]
+    names: dict[float | None, str]
+    property: pd.DataFrame
+
+
+def train_caps(
+    task: EatingTask,
+    control: ControlConfig,
+    config: Config,
+    paths: Paths,
+    readings: Readings,
+    prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
+    progress: bool = True,
+) -> CapDecoders:
+    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's.
+
+    The recipe is the headline reading's: its demonstrations (collected with the belief at that
+    cap, so their belief labels are that cap's), its base's training settings and its fine-tune
+    (steps, lambda, seed). Each decoder's property is measured with the belief at its cap. The
+    decoders are saved as ``eating_reading_decoder`` readings named by :func:`cap_decoder_name`.
+    """
+    caps = [c for c in config.cap_sweep if c != control.belief_cap]
+    lam = readings.chosen_lambda
+    base, weight = {name: (b, w) for name, b, w in fine_tunes(config, lam)}[readings.headline]
+    reading, base_train = _bases(config, config.train)[base]
+    weight = lam if weight is None else weight
+    fine = dataclasses.replace(
+        base_train, steps=config.sweep_steps, entropy_lambda=weight, seed=base_train.seed
+    )
+    controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
+    demos = {c: collect_eating_demonstrations(task, controls[c], config.demos, reading=reading) for c in caps}
+    runs = [entropy_ablation.Run(demos[c], controls[c], base_train) for c in caps]
+    bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
+    goal_sets = belief_targets(task, control.likelihood)
+    runs = [
+        entropy_ablation.Run(demos[c], controls[c], fine, goal_sets, model)
+        for c, (model, _) in zip(caps, bases, strict=True)
+    ]
+    fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
+    models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
+    names = {c: cap_decoder_name(readings.headline, c) for c in caps}
+    for c, model in models.items():
+        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=names[c])
+        _save(model, path, fine, controls[c], config, reading=names[c])
+    jobs = [(models[c], controls[c], names[c]) for c in caps]
+    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, CAP_SOURCE))
+    frame = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
+    return CapDecoders(models, names, frame)
+
+
+def _measure(
+    shared: tuple[EatingTask, latent_measure.PropertyConfig, str],
+    job: tuple[LatentActionModel, ControlConfig, str],
+) -> pd.DataFrame:
+    """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
+    task, prop, source = shared
+    model, control, name = job
+    return latent_measure.measure(
+        task, model, control, prop, source=source, task_name=source, decoder_name=name
+    )
+
+
 def directions(
     task: EatingTask, decoder: ActionDecoder, control: ControlConfig, goal: str, n: int = 8
 ) -> pd.DataFrame:
     """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief.
 
-    For each belief (uniform: ``uncertain``; all but the floor on ``goal``: ``confident``)
+    For each belief (uniform: ``uncertain``; the most confident in ``goal``: ``confident``)
     and each z on the unit circle (at rest, z = 0, the stick commands nothing), the decoded joint
     velocity is mapped through the fork tip's Jacobian: the tip's velocity (m/s) and the
     rate at which the fork's tilt from vertical changes (rad/s). ``toward`` names the goal
@@ -328,9 +448,7 @@ def directions(
     state = task.target(g, 0.5)
     angles = 2 * np.pi * np.arange(n) / n
     z = np.round(np.stack([np.cos(angles), np.sin(angles)], axis=1), 12)  # at rest the stick commands nothing
-    floor = control.belief_floor
-    confident = np.full(task.n_goals, floor)
-    confident[g] = 1.0 - (task.n_goals - 1) * floor
+    confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
     data = mujoco.MjData(task.robot.model)
     pos, axis, jp, jr = tip_frames(task.robot, data, state[None])

@@ -21,9 +21,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, NonNegative, PositiveInt, Seed, validate
-from lasa.base.errors import ConfigError
+from lasa.base.errors import ConfigError, EmptySelectionError
 from lasa.evidence.plots import robot_rows
-from lasa.method.belief import belief_targets
+from lasa.method.belief import CONFIDENT_MARGIN, belief_targets, confidence_threshold
 from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import LatentActionModel
 from lasa.method.entropy import choose_lambda, context_entropy, context_grid
@@ -121,10 +121,27 @@ def train_all(
     return run_jobs(_train, runs, n_jobs=jobs, progress=progress, desc=desc)
 
 
-def confident_contexts(demos: Demonstrations, every: int = 10) -> tuple[np.ndarray, np.ndarray]:
-    """Every ``every``-th clean demonstrated context with max_g b(g) > 0.99: (states, beliefs)."""
+def confident_contexts(
+    demos: Demonstrations, cap: float | None = None, every: int = 10
+) -> tuple[np.ndarray, np.ndarray]:
+    """Every ``every``-th clean demonstrated context with a confident belief: (states, beliefs).
+
+    Confident: max_g b(g) > :func:`lasa.method.belief.confidence_threshold` of ``cap`` (0.99
+    without a cap, 0.98 with the study's 0.99), so the selection follows the belief's cap.
+
+    Raises:
+        EmptySelectionError: no demonstrated context is that confident.
+    """
     clean = demos.clean()
-    confident = clean.beliefs.max(axis=1) > 0.99
+    threshold = confidence_threshold(cap)
+    confident = clean.beliefs.max(axis=1) > threshold
+    if not confident.any():
+        top = float(clean.beliefs.max()) if len(clean) else float("nan")
+        raise EmptySelectionError(
+            f"no demonstrated context is confident (top belief > {threshold:g}, belief_cap {cap} less "
+            f"{CONFIDENT_MARGIN:g}); the demonstrations' highest belief is {top:.6g}. Demonstrations that "
+            "dwell at a goal (more steps at each goal) reach it; the cap sets the threshold (belief_cap)"
+        )
     return clean.states[confident][::every], clean.beliefs[confident][::every]
 
 
@@ -150,7 +167,7 @@ def run_sweep(
         progress: Show a progress bar over the runs.
     """
     goal_sets = belief_targets(task, control.likelihood)
-    probe = confident_contexts(demos)
+    probe = confident_contexts(demos, control.belief_cap)
     clean = demos.clean()
     lambdas = [float(x) for x in config.lambdas]
     configs = {

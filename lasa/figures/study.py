@@ -27,7 +27,7 @@ mode-switch share.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -37,22 +37,25 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.config import (
     NO_ASSISTANCE,
     AtLeastTwo,
+    BeliefCap,
     ControlConfig,
     NonNegativeInt,
     PositiveInt,
     Seed,
+    cap_setting,
     check_choice,
     validate,
 )
-from lasa.base.errors import ConfigError
+from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import require_file
+from lasa.base.paths import Paths
 from lasa.evidence import latent_property
-from lasa.method.decoder import ActionDecoder
+from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.people import participants, planning
 from lasa.people.cohort import Cohort, ParticipantConfig, draw_cohort
 from lasa.people.design import StudyConfig, interface_of
 from lasa.pipeline.scaleout import run_jobs
-from lasa.world.eating import EatingTask
+from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask
 from lasa.world.episodes import Episodes
 from lasa.world.measures import measures
 
@@ -62,6 +65,7 @@ __all__ = [
     "PARTICIPANT_MODELS",
     "DECODER_SELECTIONS",
     "Simulate",
+    "load_decoders",
     "eating_property",
     "participant_table",
     "readings_to_run",
@@ -111,9 +115,22 @@ class Config:
     # give a power of 80% to within 4 points) [-]
     power_sizes: tuple[AtLeastTwo, ...] = (6, 10, 16, 24, 40, 60)
     power_draws: PositiveInt = 100
+    # The study's belief: Javdani et al.'s cap (lasa.world.eating.STUDY_BELIEF_CAP); notebook 10's
+    # decoders must have been trained with it. None ("none"): Algorithm 1's uncapped belief [-]
+    belief_cap: BeliefCap = STUDY_BELIEF_CAP
+    # The cap sweep (lasa.figures.study_caps): notebook 10's decoders of the headline's recipe at these
+    # caps (its cap_sweep, or a part of it), each run with the belief at its cap; without a cap the
+    # whole cohort runs (the reading @uncapped), every other cap its first sweep_participants [-]
+    cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
+    # the paper's 10 (at most the cohort: sweep_n); configs/large.yaml runs the cohort [-]
+    sweep_participants: AtLeastTwo = 10
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
+        object.__setattr__(self, "cap_sweep", tuple(cap_setting(c) for c in self.cap_sweep))
         validate(self)
+        if len(set(self.cap_sweep)) != len(self.cap_sweep):
+            raise ConfigError(f"cap_sweep must not repeat a cap, got {self.cap_sweep}")
         object.__setattr__(self, "participant_models", tuple(self.participant_models))
         models = self.participant_models
         if not models or len(set(models)) != len(models):
@@ -127,6 +144,42 @@ class Config:
             raise ConfigError(
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
             )
+
+    @property
+    def sweep_n(self) -> int:
+        """The participants each other cap of the sweep runs: ``sweep_participants``, at most the cohort."""
+        return min(self.sweep_participants, self.participants)
+
+    @property
+    def other_caps(self) -> tuple[float | None, ...]:
+        """The caps of ``cap_sweep`` other than the study's own (``belief_cap``), which run apart."""
+        return tuple(c for c in self.cap_sweep if c != self.belief_cap)
+
+
+def load_decoders(
+    paths: Paths, robot: str, names: Sequence[str], cap: float | None
+) -> dict[str, ActionDecoder]:
+    """Notebook 10's decoder readings ``names``, each checked to have been trained with the belief
+    capped at ``cap``: a decoder reads b, and one trained with another belief is lost with this one.
+
+    Raises:
+        ArtifactError: A decoder is missing (notebook 10 trains it).
+        CheckpointError: A decoder was trained with another ``belief_cap``.
+    """
+    out: dict[str, ActionDecoder] = {}
+    for name in names:
+        path = paths.artifact("eating_reading_decoder", robot, reading=name)
+        model, meta = load_checkpoint(
+            path, robot=robot, make_hint=Paths.make_hint("eating_reading_decoder", robot)
+        )
+        trained = (meta.get("control") or {}).get("belief_cap", "not recorded")
+        if trained != cap:
+            raise CheckpointError(
+                f"{path} was trained with belief_cap {trained}, the study runs it at {cap}: run notebook 10 "
+                "with the same belief_cap, or set this notebook's belief_cap to the decoder's"
+            )
+        out[name] = model
+    return out
 
 
 def eating_property(figures: Path) -> pd.DataFrame:

@@ -52,6 +52,7 @@ __all__ = [
     "reading_of",
     "readings_table",
     "untestable_reason",
+    "with_flips",
 ]
 
 Analyses = Mapping[tuple, Mapping[str, Any]]  # claims()'s analyses, keyed by reading
@@ -98,19 +99,21 @@ def claim_id(
     cohort: bool,
     decoder: str | None = None,
     model: str | None = None,
+    belief: str | None = None,
 ) -> str:
     """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
 
-    The paper's reading is its measure, the headline decoder, the headline participant model,
-    the headline member (hindsight, index 0) and its 10 participants; every other reading
-    names what differs, joined by ``+`` in that order: ``study.h1@mean_distance+grasp_set+cohort``,
+    The paper's reading is its measure, the study's belief (Javdani et al.'s cap), the headline
+    decoder, the headline participant model, the headline member (hindsight, index 0) and its 10
+    participants; every other reading names what differs, joined by ``+`` in that order:
+    ``study.h1@mean_distance+grasp_set+cohort``, ``study.h1@uncapped+cohort``,
     ``study.h3@home_entropy``, ``study.h3@one_step``, ``study.h2@transfers_entropy+one_step+cohort``
-    (``decoder``: a decoder reading other than the headline; ``model``: a participant model
-    other than the headline).
+    (``belief``: another belief than the study's, e.g. ``uncapped``; ``decoder``: a decoder reading
+    other than the headline; ``model``: a participant model other than the headline).
     """
     base, measure = _KEYS[key]
     named = None if assistance_index == 0 else assistance  # the headline member goes unnamed
-    reading = (measure, decoder, model, named, "cohort" if cohort else None)
+    reading = (measure, belief, decoder, model, named, "cohort" if cohort else None)
     parts = [p for p in reading if p]
     return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
@@ -129,6 +132,8 @@ def claims(
     untestable: str | None = None,
     untestable_decoders: Mapping[str, str] | None = None,
     n_resamples: int = 10_000,
+    belief: str | None = None,
+    flips: bool = True,
 ) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
     """The claims rows under every reading (measure, member, decoder, participant model, 10 or the cohort).
 
@@ -149,6 +154,10 @@ def claims(
             this reason in its note; ``measured`` keeps the numbers.
         untestable_decoders: Decoder reading -> why its rows are not testable, the same way.
         n_resamples: The paired bootstrap's resamples (H3).
+        belief: If given, the frames ran with another belief than the study's (``uncapped``):
+            every id names it (:func:`claim_id`).
+        flips: Lead each headline row's note with the readings whose words differ
+            (:func:`with_flips`); off to join these rows with another call's first.
 
     Returns:
         The rows, and the analyses keyed ``(member, n)`` for the headline decoder and model,
@@ -175,10 +184,10 @@ def claims(
             analyses[key] = result = analyse(frames, sa, n, decoder, model, horizon, n_resamples)
             for name, judged in judge(result).items():
                 if other is None or name in DECODER_KEYS:
-                    cid = claim_id(name, m_i, sa, cohort, other, model if k else None)
+                    cid = claim_id(name, m_i, sa, cohort, other, model if k else None, belief)
                     effect = effect_sentence(name, result, judged)
                     rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason, effect))
-    return _with_flips(rows), analyses
+    return (with_flips(rows) if flips else rows), analyses
 
 
 def reading_of(key: tuple, decoder: str, model: str) -> tuple[str, str, str]:
@@ -404,8 +413,8 @@ def _claim_row(
     )
 
 
-def _with_flips(rows: list[Claim]) -> list[Claim]:
-    """Each headline row's note led by the readings whose effect differs from it.
+def with_flips(rows: list[Claim]) -> list[Claim]:
+    """Each headline row's note led by the readings whose effect differs from it (once per row list).
 
     The paper states no number the study's rules compare, so the effect is the only word that
     can differ (its number is ``n/a``).

@@ -115,10 +115,11 @@ class Station:
             name = "eating_decoder"
         if condition.interface == "LA":
             self.decoder_path = paths.artifact(name, self.robot.name)
-            self.decoder, _ = load_checkpoint(
+            self.decoder, meta = load_checkpoint(
                 self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
             )
             self._check_fit(self.decoder, self.decoder_path)
+            self._check_belief(meta, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self._data = mujoco.MjData(self.robot.model)
@@ -134,6 +135,17 @@ class Station:
                 f"{path} does not fit the {self.config.task} task: it decodes {decoder.z_dim}-D z for "
                 f"{shape[0]} joints and {shape[1]} goals, the task needs at most 2-D z, "
                 f"{self.robot.n_joints} joints and {self.task.n_goals} goals"
+            )
+
+    def _check_belief(self, meta: dict[str, Any], path: Path) -> None:
+        """Refuse a decoder trained with another belief cap than this station's: the decoder reads b,
+        and a belief it never saw (0.99 for one trained without the cap) is a context it does not know.
+        A checkpoint that records no control units is taken as it is."""
+        control = meta.get("control")
+        if isinstance(control, dict) and control.get("belief_cap", None) != self.control.belief_cap:
+            raise CheckpointError(
+                f"{path} was trained with belief_cap {control.get('belief_cap')}, this station's belief is "
+                f"capped at {self.control.belief_cap}: train it with the station's belief (make figures)"
             )
 
     def warm_up(self) -> None:

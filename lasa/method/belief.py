@@ -16,7 +16,10 @@ a Boltzmann model of progress towards g. ``ControlConfig.likelihood`` selects it
   exp(-beta_b * regret), regret = d_g(s') - d_g(s) + min(Delta sigma_h, d_g(s)) >= 0.
 
 A floor keeps every goal's belief at least ``belief_floor`` (a goal-switch prior,
-:func:`update_log_belief`). Why the refinements, as measured: ``docs/method-notes.md``.
+:func:`update_log_belief`). A cap, ``belief_cap``, keeps every goal's belief at most that value, as
+Javdani et al.'s implementation of shared autonomy does after each update (:func:`cap_log_belief`);
+the eating study's belief has it, the sims' (Algorithm 1's) has not. Why the refinements, as
+measured: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -38,9 +41,17 @@ __all__ = [
     "log_likelihood",
     "log_likelihood_torch",
     "logsumexp",
+    "cap_log_belief",
     "update_log_belief",
+    "confident_belief",
+    "confidence_threshold",
+    "CONFIDENT_MARGIN",
     "belief",
 ]
+
+# A context is "confident" when its top belief lies within this of the most a goal can hold: the
+# cap, or one without a cap (so 0.99, the threshold the package used before the cap existed) [-].
+CONFIDENT_MARGIN = 0.01
 
 
 def belief_targets(task: GoalTask, likelihood: str) -> np.ndarray:
@@ -300,13 +311,47 @@ def logsumexp(x: np.ndarray) -> np.ndarray:
     return np.logaddexp.reduce(x, axis=-1, keepdims=True)
 
 
-def update_log_belief(log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0) -> np.ndarray:
-    """One Bayesian update b' ∝ P(a_h | s, g) b(g), in log space.
+def cap_log_belief(log_b: np.ndarray, cap: float) -> np.ndarray:
+    """No goal above ``cap``: a goal's excess is spread evenly over the other goals, in log space.
+
+    Javdani et al.'s rule for the belief of their shared autonomy (its ``max_prob_any_goal``):
+    after an update, a goal whose belief exceeds the cap is set to the cap, and what it loses is
+    added in equal shares to each other goal. With ``cap`` > 1/2 only the top goal can exceed it,
+    the result sums to one, no goal exceeds the cap and the order of the beliefs is kept; rows
+    with no goal above the cap are returned unchanged.
+
+    Args:
+        log_b: Normalised log-beliefs, shape (..., G), G >= 2.
+        cap: The most any goal may hold, in (1/2, 1).
+
+    Returns:
+        Log-beliefs, shape (..., G).
+    """
+    check_range("belief_cap", cap, 0.5, 1.0, low_open=True, high_open=True)
+    n_goals = log_b.shape[-1]
+    top = np.argmax(log_b, axis=-1)[..., None]
+    over = np.take_along_axis(log_b, top, axis=-1) > np.log(cap)  # (..., 1)
+    if not over.any():
+        return log_b
+    is_top = np.arange(n_goals) == top
+    # the top's excess b_top - cap = (1 - cap) - sum of the others: exact when b_top is near one
+    log_rest = logsumexp(np.where(is_top, -np.inf, log_b))
+    excess = np.where(over, (1.0 - cap) - np.exp(log_rest), 1.0)
+    share = np.log(np.maximum(excess, 1e-300) / (n_goals - 1))
+    capped = np.where(is_top, np.log(cap), np.logaddexp(log_b, share))
+    return np.where(over, capped, log_b)
+
+
+def update_log_belief(
+    log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0, cap: float | None = None
+) -> np.ndarray:
+    """One Bayesian update b' ∝ P(a_h | s, g) b(g), in log space; then the floor, then the cap.
 
     Args:
         log_b: Current log-beliefs, shape (..., G).
         log_lik: Log-likelihoods of the observed action under each goal, (..., G).
         floor: Each goal keeps at least this belief after the update, in [0, 1/G).
+        cap: If given, no goal keeps more than this (:func:`cap_log_belief`), in (1/2, 1).
 
     Returns:
         Normalised log-beliefs, shape (..., G).
@@ -319,7 +364,28 @@ def update_log_belief(log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0
         # Mix with the uniform distribution: b <- (1 - G f) b + f. Every goal keeps at
         # least f, the result still sums to one, and the order of beliefs is unchanged.
         post = np.logaddexp(np.log1p(-n_goals * floor) + post, np.log(floor))
+    if cap is not None:
+        post = cap_log_belief(post, cap)
     return post
+
+
+def confident_belief(n_goals: int, goal: int, floor: float = 0.0, cap: float | None = None) -> np.ndarray:
+    """The most confident belief in ``goal`` the update keeps, shape (G,).
+
+    Without a cap: all but the floor of every other goal on ``goal``. With one: the cap on
+    ``goal`` and the rest spread evenly (each other goal at least the floor), the belief the
+    capped update settles at after working at ``goal`` for a while.
+    """
+    rest = floor if cap is None else max(floor, (1.0 - cap) / (n_goals - 1))
+    b = np.full(n_goals, rest)
+    b[goal] = 1.0 - (n_goals - 1) * rest
+    return b
+
+
+def confidence_threshold(cap: float | None) -> float:
+    """The top belief above which a context counts as confident: the cap (or one) less
+    :data:`CONFIDENT_MARGIN`. It follows the cap, so a capped belief can still be confident."""
+    return (1.0 if cap is None else cap) - CONFIDENT_MARGIN
 
 
 def belief(log_b: np.ndarray) -> np.ndarray:

@@ -134,7 +134,7 @@ def advance(
     sets, beta, max_step = assist.goal_sets, control.belief_beta, control.likelihood_step
     assert sets is not None  # filled in by Assist.__post_init__
     lik = log_likelihood(state, a_h, sets, control.dt, beta, max_step)
-    new_log_b = update_log_belief(log_b, lik, control.belief_floor)
+    new_log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
     return StepResult(

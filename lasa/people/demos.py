@@ -41,7 +41,14 @@ from lasa.base.config import (
     check_choice,
     validate,
 )
-from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
+from lasa.method.belief import (
+    belief,
+    belief_targets,
+    confident_belief,
+    log_likelihood,
+    uniform_log_belief,
+    update_log_belief,
+)
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
@@ -222,7 +229,7 @@ def _append_demo(
             lik = log_likelihood(
                 s[k], a[k], goal_sets, control.dt, control.belief_beta, control.likelihood_step
             )
-            log_b = update_log_belief(log_b, lik, control.belief_floor)
+            log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
         rows["s"].append(s)
         rows["a"].append(a)
         rows["demo"].append(np.full(len(s), demo_id))
@@ -345,13 +352,6 @@ def collect_eating_demonstrations(
     return _dataset(robot, rows, beliefs, control, config, rng)
 
 
-def _settled_belief(goal: int, n_goals: int, floor: float) -> np.ndarray:
-    """The belief after working at ``goal`` for a while: all but the floor of every other goal on it."""
-    b = np.full(n_goals, floor)
-    b[goal] = 1.0 - (n_goals - 1) * floor
-    return b
-
-
 def _eating_starts(
     task: EatingTask,
     control: ControlConfig,
@@ -387,7 +387,7 @@ def _eating_starts(
             starts.append(task.pose(other, np.array([tilt]), np.array([1.0]))[0])
         else:
             starts.append(task.target(other, tilt))
-        settled = _settled_belief(other, task.n_goals, control.belief_floor)
+        settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
         beliefs_0.append(settled if reading in ("continuous", "leaves") else None)
         manipulate.append(reading == "continuous")
     return starts, beliefs_0, manipulate

@@ -14,11 +14,11 @@ import os
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
-from lasa.base.config import ControlConfig, check_choice, set_threads
+from lasa.base.config import ControlConfig, cap_setting, check_choice, set_threads
 from lasa.base.paths import Paths
 from lasa.method.dataset import Demonstrations, load_demonstrations
 from lasa.method.decoder import LatentActionModel, load_checkpoint
-from lasa.world.eating import EatingTask, make_eating_task
+from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask, make_eating_task
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import CupTask, make_cup_task
@@ -62,16 +62,21 @@ class Workspace(Generic[TaskT]):
         robot: str = "panda",
         build_dir: str | os.PathLike[str] = "build",
         figures_dir: str | os.PathLike[str] = "figures",
+        belief_cap: float | str | None = STUDY_BELIEF_CAP,
     ) -> Workspace[EatingTask]:
         """:meth:`open` for the eating study: the robot with its fork in the eating scene, its task.
 
+        ``belief_cap`` is the study's belief's cap (``ControlConfig.belief_cap``; Javdani et al.'s
+        0.99 by default, ``None`` or ``"none"`` for Algorithm 1's uncapped belief).
+
         Raises:
-            ConfigError: ``robot`` is not one of :data:`EATING_ROBOTS`.
+            ConfigError: ``robot`` is not one of :data:`EATING_ROBOTS`, or a cap out of range.
         """
         check_choice("robot", robot, EATING_ROBOTS)
         paths = _folders(build_dir, figures_dir)
         task = make_eating_task()  # mink IK over every goal's tilts and strokes (once per process)
-        return Workspace(task.robot, task, task.robot.control, paths)
+        control = dataclasses.replace(task.robot.control, belief_cap=cap_setting(belief_cap))
+        return Workspace(task.robot, task, control, paths)
 
     @property
     def name(self) -> str:

@@ -37,6 +37,7 @@ from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import ASSETS, ROBOTS, Robot, RobotSpec
 
 __all__ = [
+    "STUDY_BELIEF_CAP",
     "EATING",
     "GOALS",
     "TILT_MAX",
@@ -57,6 +58,9 @@ __all__ = [
 ]
 
 GOALS = ("rice", "middle", "icing", "plate")  # goal names, in goal order (left, middle, right bowl; plate)
+# The study's belief cap: Javdani et al.'s implementation of the shared autonomy the paper's study
+# ran (ada_assistance_policy's max_prob_any_goal) keeps every goal at or below 0.99 [-]
+STUDY_BELIEF_CAP = 0.99
 TILT_MAX = np.pi / 3  # psi_max: the tilt of a scoop from pointing straight down [rad]
 STROKE = 0.05  # length of a stroke through the food [m]
 INTO_FOOD = 0.01  # a stroke ends this far below the food's surface [m]
@@ -74,8 +78,9 @@ EATING = RobotSpec(
     side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._sideways)
     ik_guesses=(ROBOTS["panda"].ik_guesses[0],) * 4,
     # The cup sims' units (notebook 04 states why); the study's assistance is hindsight
-    # optimisation, the member the paper's user study used (Javdani et al. 2018).
-    control=ControlConfig(assistance="hindsight"),  # the robots' units; the study's assistance (Sec. VI)
+    # optimisation, the member the paper's user study used (Javdani et al. 2018), and its belief is
+    # theirs as their implementation keeps it: no goal above STUDY_BELIEF_CAP.
+    control=ControlConfig(assistance="hindsight", belief_cap=STUDY_BELIEF_CAP),  # the study's units (Sec. VI)
     mesh_package=ROBOTS["panda"].mesh_package,
     tool=ASSETS / "panda" / "fork.xml",
 )

@@ -36,6 +36,7 @@ from lasa.figures import study, study_analysis, study_power
 from lasa.live.studykit import QUESTIONS
 from lasa.live.web.plan import PRACTICE_TASK
 from lasa.world import measures
+from lasa.world.eating import STUDY_BELIEF_CAP
 
 __all__ = ["HYPOTHESES", "MEASURES", "Reading", "cohort", "headline_reading", "power_table", "document"]
 
@@ -123,8 +124,11 @@ def document(
     practice_s: float,
     trial_s: float,
     conditions: tuple[str, ...] = CONDITIONS,
+    belief_cap: float = STUDY_BELIEF_CAP,
 ) -> str:
-    """The pre-registration, Markdown, from the power ``table`` of ``reading`` and the server's settings."""
+    """The pre-registration, Markdown, from the power ``table`` of ``reading`` and the server's settings.
+
+    ``belief_cap`` is the study's belief's cap (:data:`lasa.world.eating.STUDY_BELIEF_CAP`)."""
     assistance, decoder, model = reading
     bar = f"{100 * COMPLETION_BAR:.0f}%"
     out = [
@@ -153,6 +157,11 @@ def document(
         f"Within subjects, 2 x 2: interface (retargeting R, latent actions LA) x shared autonomy (without, "
         f"with SA): {', '.join(conditions)}. Participants see each condition as a letter in their own "
         "order (A-D), never its name. The robot's belief is not shown.",
+        "",
+        f"The robot's belief over the goals is Javdani et al.'s (2018), whose shared autonomy the paper's study "
+        f"ran, as their implementation keeps it: after each Bayesian update no goal keeps more than "
+        f"{belief_cap:g}, the excess spread evenly over the other goals. The latent-action decoder was "
+        "trained with the same belief.",
         "",
         "## 5. Analyses",
         "",

@@ -1,0 +1,400 @@
+r"""The eating study against the belief's cap (notebook 11): the headline's recipe at each cap.
+
+The study's belief is Javdani et al.'s: no goal above 0.99 (:func:`lasa.method.belief.cap_log_belief`).
+Notebook 10 trains the headline decoder's recipe again at each other cap of its ``cap_sweep``
+(:func:`lasa.figures.eating_task.train_caps`: demonstrations, training and property at that cap).
+Here each of those decoders runs the study with the belief at its cap (:func:`run`): the headline
+participant model, the headline member, every condition (R+SA reads the belief too); the first
+``sweep_participants`` participants, and the whole cohort without a cap, whose rows are the reading
+``@uncapped`` of the claims table (:func:`uncapped_claims`). :func:`sweep` gathers, per cap,
+completion per arm and H1-H3's measured effects (the study's own cap from the headline run), and
+:func:`plot` draws them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+import seaborn as sns
+from matplotlib.figure import Figure
+
+from lasa.base.conditions import CONDITIONS
+from lasa.base.config import ControlConfig
+from lasa.base.io import require_file
+from lasa.base.paths import Paths
+from lasa.evidence import latent_property, stats
+from lasa.evidence.claims import Claim
+from lasa.figures import study, study_analysis, study_claims
+from lasa.figures.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
+from lasa.method.decoder import ActionDecoder
+from lasa.pipeline.scaleout import run_jobs
+from lasa.world.eating import EatingTask
+from lasa.world.episodes import Episodes
+
+__all__ = [
+    "NAME",
+    "COLUMNS",
+    "CapRun",
+    "cap_property",
+    "load_decoders",
+    "run",
+    "stuck",
+    "uncapped_claims",
+    "sweep",
+    "plot",
+]
+
+NAME = "study_belief_cap"
+# one row per (cap, what): completion of a condition, or a claim's measured effect, or the property
+COLUMNS = (
+    "robot",
+    "cap",
+    "order",
+    "decoder",
+    "n",
+    "kind",
+    "item",
+    "value",
+    "low",
+    "high",
+    "p",
+    "word",
+    "text",
+)
+CLAIMS = ("h1", "h2", "h3")  # the claims the sweep shows, under the paper's measures
+
+
+@dataclasses.dataclass(frozen=True)
+class CapRun:
+    """The study at one cap: its decoder's name, its episodes and tables (:func:`lasa.figures.study.run`)."""
+
+    cap: float | None
+    decoder: str
+    episodes: Episodes
+    frames: dict[str, pd.DataFrame]
+
+
+def cap_property(figures: Path) -> pd.DataFrame:
+    """Notebook 10's property of the cap sweep's decoders, :func:`lasa.evidence.latent_property.summary`.
+
+    Raises:
+        ArtifactError: ``latent_property.csv`` is missing (notebook 10 makes it).
+    """
+    frame = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
+    return latent_property.summary(frame[frame.source == CAP_SOURCE])
+
+
+def load_decoders(
+    paths: Paths, robot: str, headline: str, caps: tuple[float | None, ...]
+) -> dict[float | None, tuple[str, ActionDecoder]]:
+    """Notebook 10's decoder of the headline's recipe at each cap: ``(name, decoder)`` per cap.
+
+    Raises:
+        ArtifactError: A decoder is missing (notebook 10 trains it).
+        CheckpointError: A decoder was trained with another belief than its cap's.
+    """
+    out: dict[float | None, tuple[str, ActionDecoder]] = {}
+    for cap in caps:
+        name = cap_decoder_name(headline, cap)
+        out[cap] = (name, study.load_decoders(paths, robot, [name], cap)[name])
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class _Shared:
+    task: EatingTask
+    control: ControlConfig
+    config: study.Config
+    model: str
+
+
+def _run_cap(shared: _Shared, job: tuple[float | None, str, ActionDecoder, int]) -> CapRun:
+    """The study at one cap: the headline model and member, every condition, ``n`` participants."""
+    cap, name, decoder, n = job
+    config = shared.config
+    session = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
+    one = dataclasses.replace(
+        config,
+        participants=n,
+        participant_models=(shared.model,),
+        session=session,
+        video_participant=0,
+        jobs=1,
+    )
+    control = dataclasses.replace(shared.control, belief_cap=cap)
+    episodes, frames = study.run(shared.task, {name: decoder}, control, one, progress=False)
+    return CapRun(cap, name, episodes[shared.model][name], frames)
+
+
+def run(
+    task: EatingTask,
+    control: ControlConfig,
+    decoders: Mapping[float | None, tuple[str, ActionDecoder]],
+    config: study.Config,
+    model: str,
+    progress: bool = True,
+) -> dict[float | None, CapRun]:
+    """The study with each cap's decoder and the belief at that cap, over ``config.jobs`` processes.
+
+    The headline participant model and member run every condition; the first
+    ``config.sweep_n`` participants at each cap, the whole cohort without a cap (the
+    reading ``@uncapped``). Participant i is the same person at every cap (own random streams).
+    """
+    jobs = [
+        (cap, name, decoder, config.participants if cap is None else config.sweep_n)
+        for cap, (name, decoder) in decoders.items()
+    ]
+    ran = run_jobs(
+        _run_cap,
+        jobs,
+        n_jobs=config.jobs,
+        progress=progress,
+        desc="study at each cap",
+        shared=_Shared(task, control, config, model),
+    )
+    return {r.cap: r for r in ran}
+
+
+def stuck(
+    task: EatingTask,
+    runs: Mapping[float | None, CapRun],
+    decoders: Mapping[float | None, tuple[str, ActionDecoder]],
+    config: study.Config,
+    model: str,
+    cap: float | None = None,
+) -> pd.DataFrame:
+    """Where the unfinished LA episodes of the run at ``cap`` stopped (``study_analysis.stuck``)."""
+    r = runs[cap]
+    episodes = {model: {r.decoder: r.episodes}}
+    return study_analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
+
+
+def uncapped_claims(
+    runs: Mapping[float | None, CapRun], prop: pd.DataFrame, config: study.Config, horizon: float
+) -> list[Claim]:
+    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped.
+
+    Judged as the headline is (every measure, 10 participants and the cohort), with its decoder's
+    property (``prop``: :func:`cap_property`) deciding whether the hypotheses are testable.
+    """
+    if None not in runs:
+        return []
+    r = runs[None]
+    head = config.session.assistance[0]
+    reason = study_claims.untestable_reason(prop[prop.decoder == r.decoder])
+    rows, _ = study_claims.claims(
+        r.frames,
+        (head,),
+        config.participants,
+        (r.decoder,),
+        horizon=horizon,
+        untestable=reason,
+        belief=cap_label(None),
+        flips=False,
+    )
+    return rows
+
+
+def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
+    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim.
+
+    H1: SA - no SA Goal Error, the within-subjects main effect [m s]; H2: LA+SA - R+SA scoop
+    alignment, paired t; H3: LA+SA - R restricted mean Total Time, paired bootstrap [s] (no p).
+    """
+    within = result["h1_within"]
+    phases, total = result["h2_phases"], result["h3_total"]
+    assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
+    diff = float(within["mean_sa"] - within["mean_no_sa"])
+    h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))
+    mean, low, high, p, pairs = phases["scoop"]
+    r = total.set_index("b").loc["R"]
+    return {
+        "h1": (*h1, f"SA - no SA = {diff:+.2f} m s, {stats.format_f(within)}"),
+        "h2": (
+            float(mean),
+            float(low),
+            float(high),
+            float(p),
+            f"LA+SA - R+SA = {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}",
+        ),
+        "h3": (
+            float(r["diff"]),
+            float(r.ci_low),
+            float(r.ci_high),
+            np.nan,
+            f"LA+SA - R = {r['diff']:+.1f} s [{r.ci_low:+.1f}, {r.ci_high:+.1f}] (restricted means)",
+        ),
+    }
+
+
+def _cap_rows(
+    cap: float | None,
+    decoder: str,
+    time: pd.DataFrame,
+    rows: list[Claim],
+    result: Mapping[str, object],
+    prop: pd.DataFrame,
+) -> list[dict[str, object]]:
+    """One cap's rows of the sweep: completion per condition, the claims' words and effects, the property."""
+    base = {"robot": "panda", "cap": cap_label(cap).removeprefix("cap"), "order": 0, "decoder": decoder}
+    blank = {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "text": ""}
+    n = int(time.participant.nunique())
+    out: list[dict[str, object]] = []
+    done = time.groupby("condition").completed.mean()
+    for cond in CONDITIONS:
+        out.append(
+            {
+                **base,
+                **blank,
+                "n": n,
+                "kind": "completion",
+                "item": cond,
+                "value": float(done.get(cond, np.nan)),
+            }
+        )
+    words = {row.id.split(".", 1)[1].split("@")[0]: row.reproduced for row in rows}
+    for key, (value, low, high, p, text) in _effects(result).items():
+        out.append(
+            {
+                **base,
+                "n": n,
+                "kind": "claim",
+                "item": key,
+                "value": value,
+                "low": low,
+                "high": high,
+                "p": p,
+                "word": words.get(key, ""),
+                "text": text,
+            }
+        )
+    mine = prop[prop.decoder == decoder]
+    meets = bool(latent_property.holds(mine).any()) if len(mine) else False
+    out.append(
+        {
+            **base,
+            **blank,
+            "n": n,
+            "kind": "property",
+            "item": "goals with both halves",
+            "value": float(mine.has_property.sum()) if len(mine) else np.nan,
+            "word": "meets the rule" if meets else "misses the rule",
+        }
+    )
+    return out
+
+
+def _judged(
+    frames: dict[str, pd.DataFrame], decoder: str, n: int, head: str, reason: str | None, horizon: float
+) -> tuple[list[Claim], Mapping[str, object]]:
+    """One run's claims rows of the paper's measures for its first ``n`` participants, and their analysis."""
+    rows, analyses = study_claims.claims(
+        frames, (head,), n, (decoder,), horizon=horizon, untestable=reason, flips=False
+    )
+    cohort = n > study.PAPER_N
+    keys = {study_claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
+    return [r for r in rows if r.id in keys], analyses[
+        (head, max(n, study.PAPER_N) if cohort else study.PAPER_N)
+    ]
+
+
+def sweep(
+    runs: Mapping[float | None, CapRun],
+    frames: dict[str, pd.DataFrame],
+    headline: str,
+    model: str,
+    prop: pd.DataFrame,
+    caps_prop: pd.DataFrame,
+    config: study.Config,
+    horizon: float,
+) -> pd.DataFrame:
+    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last.
+
+    The study's own cap (``config.belief_cap``) reads the headline run (``frames``: its tables, of
+    which the headline decoder, member and model), judged with ``prop`` (notebook 10's readings);
+    every other cap its run, judged with its decoder's property (``caps_prop``). Each on its first
+    ``config.sweep_n`` participants, as the claims table judges them.
+    """
+    head = config.session.assistance[0]
+    n = config.sweep_n
+    mine = {k: study.for_member(f, head, n, decoder=headline, model=model) for k, f in frames.items()}
+    runs_by_cap = {
+        config.belief_cap: (headline, mine, prop),
+        **{c: (r.decoder, r.frames, caps_prop) for c, r in runs.items()},
+    }
+    parts: dict[float | None, list[dict[str, object]]] = {}
+    for cap, (decoder, tables, table) in runs_by_cap.items():
+        reason = study_claims.untestable_reason(table[table.decoder == decoder])
+        first = {k: f[f.participant < n] for k, f in tables.items()}
+        rows, result = _judged(first, decoder, n, head, reason, horizon)
+        parts[cap] = _cap_rows(cap, decoder, first["time"], rows, result, table)
+    ordered = sorted(parts, key=lambda c: np.inf if c is None else c)
+    out = [dict(row, order=i) for i, c in enumerate(ordered) for row in parts[c]]
+    return pd.DataFrame(out, columns=list(COLUMNS))
+
+
+def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
+    """Completion per arm, and H1-H3's measured effects with their 95% intervals, against the cap.
+
+    A cap's tick is marked ✓ where its decoder meets notebook 10's property rule; the study's own
+    cap is bold. Effects: H1 SA - no SA Goal Error [m s], H2 LA+SA - R+SA scoop alignment, H3 LA+SA
+    minus the fastest other condition's restricted mean time [s]; a marker's fill says whether the
+    claim's verdict is settled (filled) or not (open).
+    """
+    sns.set_theme(style="whitegrid")
+    caps = frame.drop_duplicates("cap").sort_values("order")
+    prop = frame[frame.kind == "property"].set_index("cap")
+    ticks = [f"{c}{' ✓' if prop.loc[c, 'word'] == 'meets the rule' else ''}" for c in caps.cap]
+    x = np.arange(len(caps))
+    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
+    done = frame[frame.kind == "completion"]
+    for cond in CONDITIONS:
+        part = done[done["item"] == cond].set_index("cap").reindex(caps.cap)
+        axes[0].plot(x, 100 * part.value.to_numpy(), marker="o", label=cond)
+    axes[0].set_ylabel("episodes finished [%]")
+    axes[0].set_title("completion per arm")
+    axes[0].legend(fontsize=8)
+    titles = {
+        "h1": "H1: SA - no SA, Goal Error [m s]",
+        "h2": "H2: LA+SA - R+SA, scoop alignment",
+        "h3": "H3: LA+SA - R, restricted mean time [s]",
+    }
+    claims = frame[frame.kind == "claim"]
+    for ax, key in zip(axes[1:], CLAIMS, strict=True):
+        part = claims[claims["item"] == key].set_index("cap").reindex(caps.cap)
+        value, low, high = (part[c].to_numpy(dtype=float) for c in ("value", "low", "high"))
+        ok = np.isfinite(low) & np.isfinite(high)
+        ax.errorbar(
+            x[ok], value[ok], yerr=[value[ok] - low[ok], high[ok] - value[ok]], fmt="none", color="0.4"
+        )
+        settled = part.word.isin(["reproduced", "not reproduced", "partly"]).to_numpy()
+        ax.scatter(x[settled], value[settled], color="C3", zorder=3, label="settled")
+        ax.scatter(
+            x[~settled], value[~settled], facecolor="white", edgecolor="C3", zorder=3, label="not settled"
+        )
+        ax.axhline(0.0, color="0.3", lw=0.8)
+        ax.set_title(titles[key])
+        for i, word in enumerate(part.word.fillna("")):
+            ax.annotate(
+                word, (x[i], value[i]), textcoords="offset points", xytext=(0, 8), fontsize=6.5, ha="center"
+            )
+    axes[1].legend(fontsize=8)
+    fig.supxlabel("belief cap (bold: the study's; ✓: the cap's decoder meets the property rule)", fontsize=10)
+    for ax in axes:
+        ax.set_xticks(x, ticks)
+        for label in ax.get_xticklabels():
+            if label.get_text().split(" ")[0] == study_cap:
+                label.set_fontweight("bold")
+    n = int(frame[frame.kind == "claim"].n.min()) if len(claims) else 0
+    fig.suptitle(
+        f"The eating study against the belief's cap: the headline's recipe trained and run at each cap "
+        f"({n} participants, planning model, hindsight)",
+        fontsize=11,
+    )
+    fig.tight_layout()
+    return fig
