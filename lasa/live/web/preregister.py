@@ -158,8 +158,8 @@ def document(
         f"with SA): {', '.join(conditions)}. Participants see each condition as a letter in their own "
         "order (A-D), never its name. The robot's belief is not shown.",
         "",
-        f"The robot's belief over the goals is Javdani et al.'s (2018), whose shared autonomy the paper's study "
-        f"ran, as their implementation keeps it: after each Bayesian update no goal keeps more than "
+        "The robot's belief over the goals is Javdani et al.'s (2018), whose shared autonomy the paper's "
+        "study ran, as their implementation keeps it: after each Bayesian update no goal keeps more than "
         f"{belief_cap:g}, the excess spread evenly over the other goals. The latent-action decoder was "
         "trained with the same belief.",
         "",
