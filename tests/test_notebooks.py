@@ -445,13 +445,11 @@ def test_study_outputs(executed):
         set(rows.id) == heads(models[0]) | {with_model(i, m) for m in models[1:] for i in heads(m)} | uncapped
     )
     sweep = pd.read_csv(fig / "study_belief_cap.csv")
-    assert list(sweep.columns) == list(study_caps.COLUMNS) and list(dict.fromkeys(sweep.cap)) == [
-        "0.99",
-        "uncapped",
-    ]
+    assert list(sweep.columns) == list(study_caps.COLUMNS)
+    assert list(dict.fromkeys(sweep.cap)) == ["0.99", "none"]
     assert set(sweep.kind) == {"completion", "claim", "property"} and (sweep.n == n).all()
     ours = rows.set_index("id")
-    for cap, suffix in (("0.99", ""), ("uncapped", "@uncapped")):
+    for cap, suffix in (("0.99", ""), ("none", "@uncapped")):
         mine = sweep[(sweep.cap == cap) & (sweep.kind == "claim")].set_index("item")
         assert all(mine.word[h] == ours.reproduced[f"study.{h}{suffix}"] for h in ("h1", "h2", "h3"))
     assert (fig / "study_belief_cap.png").stat().st_size > 10_000

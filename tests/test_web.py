@@ -657,6 +657,8 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
     assert meta["status"] == "complete" and meta["condition"] == "LA+SA" and len(frame) >= 10
     assert (frame.z0 < 0).any()  # the held left arrow reached the step
     assert replay(dessert)["exact"]
+    beliefs = frame[[c for c in frame.columns if c.startswith("b") and c[1:].isdigit()]].to_numpy()
+    assert meta["control"]["belief_cap"] == 0.99 and beliefs.max() <= 0.99 + 1e-12  # the study's belief
     episodes = load_sessions(sessions, make_eating_task())
     with pytest.warns(UserWarning, match="left out participant"):  # one condition of four: no test
         people = analyse_sessions(sessions, make_eating_task())

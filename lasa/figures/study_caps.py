@@ -29,6 +29,7 @@ from lasa.base.io import require_file
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
+from lasa.evidence.decision import effect_word
 from lasa.figures import study, study_analysis, study_claims
 from lasa.figures.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
 from lasa.method.decoder import ActionDecoder
@@ -46,26 +47,16 @@ __all__ = [
     "stuck",
     "uncapped_claims",
     "sweep",
+    "label",
     "plot",
 ]
 
 NAME = "study_belief_cap"
 # one row per (cap, what): completion of a condition, or a claim's measured effect, or the property
-COLUMNS = (
-    "robot",
-    "cap",
-    "order",
-    "decoder",
-    "n",
-    "kind",
-    "item",
-    "value",
-    "low",
-    "high",
-    "p",
-    "word",
-    "text",
-)
+# cap: the cap's value, or "none"; word: a claim's effect word (the claims table's), or whether the
+# decoder meets the property rule; settled: whether a claim's interval settles its verdict
+_KEYS = ("robot", "cap", "order", "decoder", "n", "kind", "item")
+COLUMNS: tuple[str, ...] = (*_KEYS, "value", "low", "high", "p", "word", "settled", "text")
 CLAIMS = ("h1", "h2", "h3")  # the claims the sweep shows, under the paper's measures
 
 
@@ -200,6 +191,11 @@ def uncapped_claims(
     return rows
 
 
+def label(cap: float | None) -> str:
+    """A cap as the sweep's ``cap`` column writes it: ``0.99``, or ``none``."""
+    return "none" if cap is None else f"{cap:g}"
+
+
 def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
     """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim.
 
@@ -241,8 +237,8 @@ def _cap_rows(
     prop: pd.DataFrame,
 ) -> list[dict[str, object]]:
     """One cap's rows of the sweep: completion per condition, the claims' words and effects, the property."""
-    base = {"robot": "panda", "cap": cap_label(cap).removeprefix("cap"), "order": 0, "decoder": decoder}
-    blank = {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "text": ""}
+    base = {"robot": "panda", "cap": label(cap), "order": 0, "decoder": decoder}
+    blank = {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "settled": False, "text": ""}
     n = int(time.participant.nunique())
     out: list[dict[str, object]] = []
     done = time.groupby("condition").completed.mean()
@@ -257,7 +253,7 @@ def _cap_rows(
                 "value": float(done.get(cond, np.nan)),
             }
         )
-    words = {row.id.split(".", 1)[1].split("@")[0]: row.reproduced for row in rows}
+    words = {row.id.split(".", 1)[1].split("@")[0]: row for row in rows}
     for key, (value, low, high, p, text) in _effects(result).items():
         out.append(
             {
@@ -269,7 +265,8 @@ def _cap_rows(
                 "low": low,
                 "high": high,
                 "p": p,
-                "word": words.get(key, ""),
+                "word": effect_word(words[key].reproduced) if key in words else "",
+                "settled": bool(words[key].settled) if key in words else False,
                 "text": text,
             }
         )
@@ -342,23 +339,25 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
     """Completion per arm, and H1-H3's measured effects with their 95% intervals, against the cap.
 
     A cap's tick is marked ✓ where its decoder meets notebook 10's property rule; the study's own
-    cap is bold. Effects: H1 SA - no SA Goal Error [m s], H2 LA+SA - R+SA scoop alignment, H3 LA+SA
-    minus the fastest other condition's restricted mean time [s]; a marker's fill says whether the
-    claim's verdict is settled (filled) or not (open).
+    cap (``study_cap``) is bold. Effects: H1 SA - no SA Goal Error [m s] (the within-subjects main
+    effect), H2 LA+SA - R+SA scoop alignment, H3 LA+SA - R restricted mean Total Time [s]; a
+    marker is filled where the claim's interval settles its verdict, and the claim's word is above it.
     """
     sns.set_theme(style="whitegrid")
     caps = frame.drop_duplicates("cap").sort_values("order")
     prop = frame[frame.kind == "property"].set_index("cap")
-    ticks = [f"{c}{' ✓' if prop.loc[c, 'word'] == 'meets the rule' else ''}" for c in caps.cap]
+    ticks = [f"{c}\n{'✓' if prop.loc[c, 'word'] == 'meets the rule' else ''}" for c in caps.cap]
     x = np.arange(len(caps))
-    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
+    fig, axes = plt.subplots(1, 4, figsize=(17, 4.4))
     done = frame[frame.kind == "completion"]
-    for cond in CONDITIONS:
+    for k, cond in enumerate(CONDITIONS):
         part = done[done["item"] == cond].set_index("cap").reindex(caps.cap)
-        axes[0].plot(x, 100 * part.value.to_numpy(), marker="o", label=cond)
+        style = "--" if cond.endswith("+SA") else "-"
+        axes[0].plot(x, 100 * part.value.to_numpy(), style, marker="os^v"[k], label=cond, alpha=0.85)
     axes[0].set_ylabel("episodes finished [%]")
+    axes[0].set_ylim(-5, 105)
     axes[0].set_title("completion per arm")
-    axes[0].legend(fontsize=8)
+    axes[0].legend(fontsize=8, loc="center left")
     titles = {
         "h1": "H1: SA - no SA, Goal Error [m s]",
         "h2": "H2: LA+SA - R+SA, scoop alignment",
@@ -369,10 +368,9 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         part = claims[claims["item"] == key].set_index("cap").reindex(caps.cap)
         value, low, high = (part[c].to_numpy(dtype=float) for c in ("value", "low", "high"))
         ok = np.isfinite(low) & np.isfinite(high)
-        ax.errorbar(
-            x[ok], value[ok], yerr=[value[ok] - low[ok], high[ok] - value[ok]], fmt="none", color="0.4"
-        )
-        settled = part.word.isin(["reproduced", "not reproduced", "partly"]).to_numpy()
+        err = [value[ok] - low[ok], high[ok] - value[ok]]
+        ax.errorbar(x[ok], value[ok], yerr=err, fmt="none", color="0.4")
+        settled = part.settled.fillna(False).astype(bool).to_numpy()
         ax.scatter(x[settled], value[settled], color="C3", zorder=3, label="settled")
         ax.scatter(
             x[~settled], value[~settled], facecolor="white", edgecolor="C3", zorder=3, label="not settled"
@@ -380,20 +378,20 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         ax.axhline(0.0, color="0.3", lw=0.8)
         ax.set_title(titles[key])
         for i, word in enumerate(part.word.fillna("")):
-            ax.annotate(
-                word, (x[i], value[i]), textcoords="offset points", xytext=(0, 8), fontsize=6.5, ha="center"
-            )
+            if np.isfinite(value[i]):
+                ax.annotate(word, (x[i], value[i]), textcoords="offset points", xytext=(6, 4), fontsize=6.5)
     axes[1].legend(fontsize=8)
     fig.supxlabel("belief cap (bold: the study's; ✓: the cap's decoder meets the property rule)", fontsize=10)
     for ax in axes:
         ax.set_xticks(x, ticks)
+        ax.set_xlim(-0.4, len(x) - 0.4)
         for label in ax.get_xticklabels():
-            if label.get_text().split(" ")[0] == study_cap:
+            if label.get_text().split("\n")[0] == study_cap:
                 label.set_fontweight("bold")
-    n = int(frame[frame.kind == "claim"].n.min()) if len(claims) else 0
+    n = int(claims.n.min()) if len(claims) else 0
     fig.suptitle(
         f"The eating study against the belief's cap: the headline's recipe trained and run at each cap "
-        f"({n} participants, planning model, hindsight)",
+        f"({n} participants, headline participant model and SA)",
         fontsize=11,
     )
     fig.tight_layout()
