@@ -140,6 +140,7 @@ def run(
         (cap, name, decoder, config.participants if cap is None else config.sweep_n)
         for cap, (name, decoder) in decoders.items()
     ]
+    jobs.sort(key=lambda job: -job[3])  # the largest first: the workers finish together
     ran = run_jobs(
         _run_cap,
         jobs,
