@@ -86,7 +86,8 @@ NOTEBOOK_FILES := $(sort $(wildcard notebooks/[0-9]*.ipynb))
 MAKE_DEPS := build/make-deps.mk
 $(MAKE_DEPS): lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) $(shell find lasa -name '*.py')
 	@mkdir -p $(@D)
-	@$(PYTHON) lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) > $@.tmp && mv $@.tmp $@
+	@# a temp file of its own per process: the study and robot sub-makes may remake it at once (-B)
+	@$(PYTHON) lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) > $@.$$$$.tmp && mv $@.$$$$.tmp $@
 include $(MAKE_DEPS)
 PIP_NOISE := is ignored: it is neither a file nor a directory
 RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)

@@ -8,6 +8,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from lasa.base.errors import ConfigError
+from lasa.method.belief import confidence_threshold
 from lasa.method.dataset import REACH
 from lasa.people.demos import DemoConfig, collect_eating_demonstrations
 from lasa.world.eating import (
@@ -142,7 +143,8 @@ def test_a_demonstration_reaches_each_bowl(eating):
     assert reached == set(range(len(GOALS)))
     # a move from another goal starts from the belief held there, not from a uniform one
     starts = np.r_[0, np.flatnonzero(np.diff(demos.demo)) + 1]
-    assert (demos.beliefs[starts].max(axis=1) > 0.99).sum() == len(starts) - len(np.unique(demos.goal)) * 2
+    confident = demos.beliefs[starts].max(axis=1) > confidence_threshold(control.belief_cap)
+    assert confident.sum() == len(starts) - len(np.unique(demos.goal)) * 2
 
 
 def test_poses_of_many_tilts_and_depths_are_each_ones_pose(eating):

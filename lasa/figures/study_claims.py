@@ -381,9 +381,9 @@ def _claim_row(
         why = measured.split(";", 1)[0] + ": every compared condition must finish "
         why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its measure is compared"
     else:
-        why = f"95% interval of the effect [{low:.3g}, {high:.3g}]" + (
-            "" if settled else f", which straddles 0; the tests read {verdict!r}"
-        )
+        # an unsettled row says so as every claims row does ("Undecided: ", lasa.evidence.verdicts)
+        why = ("" if settled else "Undecided: ") + f"95% interval of the effect [{low:.3g}, {high:.3g}]"
+        why += "" if settled else f", which straddles 0; the tests read {verdict!r}"
     note = (
         f"Measured effect: {effect}. "
         + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
