@@ -25,7 +25,10 @@ NOTEBOOK = ROOT / "notebooks" / "10_eating_task.ipynb"
 def uncapped(tmp_path_factory):
     out = tmp_path_factory.mktemp("uncapped")
     config = yaml.safe_load(QUICK.read_text())
-    config["10_eating_task"]["settings"]["belief_cap"] = "none"
+    settings = config["10_eating_task"]["settings"]
+    # the uncapped belief through the notebook's every step, on the one reading its sweep needs
+    settings.update(belief_cap="none", readings=["continuous"], search_readings=[], sector_readings=[])
+    settings.update(seed_readings=[])
     path = out / "uncapped.yaml"
     path.write_text(yaml.safe_dump(config))
     command = [sys.executable, "-m", "lasa.pipeline.runner", str(NOTEBOOK), "--config", str(path),
