@@ -47,8 +47,9 @@ from lasa.evidence.decision import (
     effect_word,
     word,
 )
-from lasa.evidence.findings import effect_of, finding, not_testable_why, stated_numbers
+from lasa.evidence.findings import completion_text, finding, short_arms, study_effect
 from lasa.evidence.rules import RULES
+from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Values, read_values, reading_of
 
 __all__ = [
     "fragile_because",
@@ -69,6 +70,10 @@ __all__ = [
 README_MARKERS = (
     "<!-- verdicts:begin (generated from figures/verdicts.md by make figures) -->",
     "<!-- verdicts:end -->",
+)
+SUMMARY_MARKERS = (
+    "<!-- summary:begin (generated from figures/claims.csv by make figures) -->",
+    "<!-- summary:end -->",
 )
 
 CLAIM_COLUMNS = (
@@ -117,6 +122,10 @@ class Claim:
     values: Mapping[str, float] = dataclasses.field(default_factory=dict)  # the rule's numbers
     # each of the rule's numbers' interval, at the row's level (lasa.evidence.verdicts)
     intervals: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
+    level: float = math.nan  # the intervals' level (0.9875 under the sims' sequential design)
+    # numbers a sentence reads beside the rule's, without an interval: the study's test statistics
+    # and each condition's completion (``completion.LA``), keyed as in ``claim_values.csv``
+    facts: Mapping[str, float] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if not self.id.startswith(f"{self.figure}.") or " " in self.id:
@@ -160,7 +169,7 @@ def criteria(claim: Claim) -> dict[str, str]:
         near a value at which a word changes (:func:`fragile_because`), else ``no``.
     """
     r = RULES.get(claim.id.split("@", 1)[0])
-    paper = r.paper if r is not None else ()
+    paper = paper_numbers_of(claim.id, claim.robot)
     testable = claim.reproduced != NOT_TESTABLE
     nan = (math.nan, math.nan)
     found = [(p, claim.intervals.get(p.quantity, nan)) for p in paper] if testable else []
@@ -194,10 +203,27 @@ def _numbers_word(words: list[str]) -> str:
     return "; ".join(words) if any(w != NOT_APPLICABLE for w in words) else NOT_APPLICABLE
 
 
-def paper_numbers_of(claim_id: str) -> tuple[PaperNumber, ...]:
-    """The numbers the paper states for a claim (its rule's), none if it has no rule."""
+def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
+    """The numbers the paper states for a claim on ``robot`` (its rule's), none if it has no rule
+    or states them for another robot (:attr:`lasa.evidence.decision.PaperNumber.robot`)."""
     r = RULES.get(claim_id.split("@", 1)[0])
-    return r.paper if r is not None else ()
+    return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
+
+
+def stated_elsewhere(claim_id: str, robot: str) -> bool:
+    """Whether the paper states numbers for this claim, but for another robot than ``robot``."""
+    r = RULES.get(claim_id.split("@", 1)[0])
+    return r is not None and bool(r.paper) and not paper_numbers_of(claim_id, robot)
+
+
+def numbers_of(claim: Claim) -> dict[str, Number]:
+    """A claim's numbers as ``claim_values.csv`` holds them (:mod:`lasa.evidence.values`)."""
+    nan = (math.nan, math.nan)
+    out = {
+        k: Number(float(v), *claim.intervals.get(k, nan), level=claim.level, n=claim.n_users)
+        for k, v in claim.values.items()
+    }
+    return out | {k: Number(float(v), n=claim.n_users) for k, v in claim.facts.items()}
 
 
 def words_text(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
@@ -220,10 +246,10 @@ def _row(claim: Claim) -> dict[str, object]:
     Its note begins with the row's two words (:func:`note_lead`).
     """
     row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
-    del row["values"], row["value"], row["intervals"]
+    del row["values"], row["value"], row["intervals"], row["level"], row["facts"]
     row["settled"] = "yes" if claim.settled else "no"
     row.update(criteria(claim))
-    lead = note_lead(str(row["effect"]), str(row["number"]), paper_numbers_of(claim.id))
+    lead = note_lead(str(row["effect"]), str(row["number"]), paper_numbers_of(claim.id, claim.robot))
     note = lead + claim.note
     if row["fragile"] == "yes":  # criteria found it so; the note says why
         why = "; ".join(fragile_because(claim))
@@ -235,6 +261,12 @@ def _row(claim: Claim) -> dict[str, object]:
 
 
 def render_markdown(frame: pd.DataFrame) -> str:
+    """``claims.md``: the readings that flip each headline (:func:`render_flips`), then the claims
+    table as a GitHub-flavoured Markdown table."""
+    return render_flips(frame) + "\n# Every row of claims.csv\n\n" + _markdown_table(frame)
+
+
+def _markdown_table(frame: pd.DataFrame) -> str:
     """The claims table as a GitHub-flavoured Markdown table."""
     cols = list(CLAIM_COLUMNS)
     lines = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
@@ -267,23 +299,58 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
     if new.duplicated(["id", "robot"]).any():
         dup = new.loc[new.duplicated(["id", "robot"]), "id"].tolist()
         raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")
+    numbers = pd.DataFrame([v for c in claims for v in value_rows(c)], columns=list(VALUE_COLUMNS))
     with locked(path.parent):
-        if path.exists():
-            old = pd.read_csv(path, dtype=str, keep_default_na=False)
-            if list(old.columns) != list(CLAIM_COLUMNS):
-                raise ConfigError(
-                    f"{path} has columns {list(old.columns)}, expected {list(CLAIM_COLUMNS)}; "
-                    "delete it and re-run the figure notebooks"
-                )
-            covered = pd.MultiIndex.from_frame(new[["figure", "robot"]].drop_duplicates())
-            keep = ~pd.MultiIndex.from_frame(old[["figure", "robot"]]).isin(covered)
-            table = pd.concat([old.loc[keep], new], ignore_index=True)
-        else:
-            table = new
-        table = table.sort_values(["figure", "robot", "id"], kind="stable").reset_index(drop=True)
+        table = _replace(path, new, CLAIM_COLUMNS)
         write_csv(path, table)
+        write_csv(path.with_name(VALUES_NAME), _replace(path.with_name(VALUES_NAME), numbers, VALUE_COLUMNS))
         write_text(path.with_suffix(".md"), render_markdown(table))
     return table
+
+
+def _replace(path: Path, new: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
+    """The table at ``path`` with the rows of ``new``'s (figure, robot) pairs replaced by ``new``'s.
+
+    Ordered by figure, robot and id (stable: a row's quantities keep their order).
+
+    Raises:
+        ConfigError: if the file has other columns than ``columns``.
+    """
+    if not path.exists():
+        table = new
+    else:
+        old = pd.read_csv(path, dtype=str, keep_default_na=False)
+        if list(old.columns) != list(columns):
+            raise ConfigError(
+                f"{path} has columns {list(old.columns)}, expected {list(columns)}; "
+                "delete it and re-run the figure notebooks"
+            )
+        covered = pd.MultiIndex.from_frame(new[["figure", "robot"]].drop_duplicates())
+        keep = ~pd.MultiIndex.from_frame(old[["figure", "robot"]]).isin(covered)
+        table = pd.concat([old.loc[keep], new], ignore_index=True)
+    return table.sort_values(["figure", "robot", "id"], kind="stable").reset_index(drop=True)
+
+
+def _number_text(x: float) -> str:
+    """A number as claim_values.csv writes it: 6 significant digits, empty if unknown."""
+    return f"{x:.6g}" if math.isfinite(x) else ""
+
+
+def value_rows(claim: Claim) -> list[dict[str, object]]:
+    """The claim's rows of ``claim_values.csv`` (:mod:`lasa.evidence.values`): each rule quantity
+    with its value and interval at the claim's level, then each fact."""
+    head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
+    out = []
+    for name, value in claim.values.items():
+        low, high = claim.intervals.get(name, (math.nan, math.nan))
+        known = math.isfinite(low) and math.isfinite(high)
+        level = _number_text(claim.level) if known else ""
+        cells = {"value": _number_text(value), "low": _number_text(low), "high": _number_text(high)}
+        out.append(head | {"quantity": name} | cells | {"level": level, "n": claim.n_users})
+    for name, value in claim.facts.items():
+        cells = {"value": _number_text(value), "low": "", "high": "", "level": ""}
+        out.append(head | {"quantity": name} | cells | {"n": claim.n_users})
+    return out
 
 
 @dataclasses.dataclass(frozen=True)
@@ -297,7 +364,9 @@ class PaperClaim:
     # writes each result sentence from the rows' numbers: lasa.evidence.findings)
     mechanism: str
     notebook: str  # the notebook (file stem) that measures it
-    section: str  # its section that explains the mechanism
+    short: str  # the claim in a few words, for the README's summary
+    why: str = ""  # why it does not reproduce where it does not, in a few words (the summary's)
+    section: str = "What it shows, against the paper"  # its section that explains the mechanism
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
 
 
@@ -308,7 +377,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "LA+SA below LA at every beta",
         "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "04_fixed_expertise",
-        "What it shows, against the paper",
+        "SA lowers the final error (sim1)",
+        "Eq. M2 pulls towards the mid-preference grasp",
     ),
     PaperClaim(
         "sim1.time_ratio",
@@ -316,7 +386,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "time ratio 1.45 and 1.30",
         "the pull is largest far from the goal",
         "04_fixed_expertise",
-        "What it shows, against the paper",
+        "LA is slower than LA+SA (sim1)",
     ),
     PaperClaim(
         "sim1.gap_narrows",
@@ -324,7 +394,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "45% at beta = 75 -> 30% at beta = 1000",
         "",
         "04_fixed_expertise",
-        "What it shows, against the paper",
+        "the LA/LA+SA gap narrows with rationality (sim1)",
+        "at beta = 75 LA+SA is no better than LA",
     ),
     PaperClaim(
         "sim1.entropy_sa",
@@ -332,17 +403,16 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "LA+SA and LA+SA+Entropy below LA",
         "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "04_fixed_expertise",
-        "What it shows, against the paper",
+        "SA helps with and without entropy (sim1)",
+        "Eq. M2 pulls to the mid grasp",
     ),
     PaperClaim(
         "sim2.sa_trapped",
         "with LA+SA, a user who changes their mind late is stuck at the first goal",
         "final error grows, confidence falls with N",
-        "on the Panda the belief stays on the first cup, where the decoder offers no input towards the "
-        "true one; on planar5 it turns, but Eq. M2 pulls towards the first cup until it does, and late "
-        "changers run out of steps",
+        "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
         "05_changing_goals",
-        "What it shows, against the paper",
+        "a late change of mind is stuck with LA+SA (sim2)",
     ),
     PaperClaim(
         "sim2.entropy_escapes",
@@ -350,7 +420,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "LA+SA+Entropy reaches the new goal",
         "Eq. T6 keeps some input leading to each goal at every belief",
         "05_changing_goals",
-        "What it shows, against the paper",
+        "entropy lets users change their mind (sim2)",
     ),
     PaperClaim(
         "sim3.entropy_learners",
@@ -358,16 +428,16 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "LA+SA+Entropy below LA+SA over time",
         "a learner's early random inputs commit the belief; entropy lets them undo it",
         "06_learning_users",
-        "What it shows, against the paper",
+        "entropy helps learning users (sim3)",
     ),
     PaperClaim(
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "the straight-line map moves the training cup's grasp curve rigidly in joint space, so the mapped "
-        "grasps miss the new cup's by a margin that grows with the distance",
+        "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "07_new_goals",
-        "What it shows, against the paper",
+        "with the map, error grows as 0.11x (sim4)",
+        "the straight-line map misses the new cup's grasps",
     ),
     PaperClaim(
         "sim4.grasp_linear",
@@ -375,18 +445,17 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "y = 0.11x, R^2 = 0.98",
         "the grasp-to-grasp map is exact at every grasp",
         "07_new_goals",
-        "What it shows, against the paper",
+        "our grasp-to-grasp map (sim4)",
         ours=True,
     ),
     PaperClaim(
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "without the map the robot reaches for the training cup, its error about the cup's distance; a "
-        "share of users that grows with the distance ends with the belief on the other training cup, "
-        "farther off",
+        "without the map the robot reaches for the training cup; some users' belief ends on the other one",
         "07_new_goals",
-        "What it shows, against the paper",
+        "without the map, the robot reaches the training goal (sim4)",
+        "some users' belief ends on the other training cup",
     ),
     PaperClaim(
         "study.h1",
@@ -394,7 +463,7 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "F(1,18) = 29.9, p < .001",
         "",
         "11_eating_study",
-        "What it shows, against the paper",
+        "H1, SA keeps the goal (study)",
     ),
     PaperClaim(
         "study.h2",
@@ -402,7 +471,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "LA+SA adjusts to scoop; R+SA stays stabbing",
         "",
         "11_eating_study",
-        "What it shows, against the paper",
+        "H2, LA lets users scoop (study)",
+        "R+SA tilts the fork further into the scoop than LA+SA",
     ),
     PaperClaim(
         "study.h3",
@@ -410,66 +480,100 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "LA+SA fastest, p < .05 vs each",
         "",
         "11_eating_study",
-        "What it shows, against the paper",
+        "H3, LA+SA is fastest (study)",
+        "another condition is faster than LA+SA",
+    ),
+    PaperClaim(
+        "study.likert",
+        "H3, subjective: users rate LA+SA above the other conditions (Fig. dessert, Likert)",
+        "LA+SA higher, t-tests p < .05",
+        "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
+        "11_eating_study",
+        "H3's Likert ratings (study)",
     ),
 )
 
 
-def _cell(row: pd.Series | None) -> str:
-    """A robot's cell: both words, the numbers they rest on, N and whether the effect is settled.
+_PEOPLE = "simulated participants"  # who the study's rows rest on: never people, in this package
 
-    ``effect <word>`` first, then each number the paper states with its word, our value and
-    interval (``0.11 out (0.0131 [0.00828, 0.0177])``), then every other number the rule reads
-    with its value and interval (from the row's note, as :func:`lasa.evidence.verdicts.assess`
-    wrote it). A study row's note states its effect in words with its sign
-    (:func:`lasa.evidence.findings.effect_of`): the cell says it, a not-testable one as "measured,
-    not judged", and an effect that rests on a censored arm's lower bound reads ``not reproduced
-    (censored: lower bound)``. A claim that is not testable reads ``not testable``, N, and why.
+
+def effect_text(row: pd.Series) -> str:
+    """A row's effect word, a study row's saying that its participants are simulated.
+
+    ``not reproduced by simulated participants``: the study's verdicts are not a replication with
+    people, and their word says so; ``(censored: lower bound)`` where the effect rests on one.
+    """
+    said = f"{row.effect} ({CENSORED})" if str(row.measured).startswith(CENSORED) else str(row.effect)
+    if str(row.figure) != "study":
+        return said
+    return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} {_PEOPLE}"
+
+
+def _interval_text(number: Number) -> str:
+    """``0.0358 [0.0296, 0.042]``; the value alone where the interval is unknown."""
+    iv = number.interval
+    return f"{number.value:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv is not None else "")
+
+
+def _cell(row: pd.Series | None, numbers: Numbers) -> str:
+    """A robot's cell: the effect word, the key number with its interval, N, and whether settled.
+
+    Each number the paper states for this robot with its word and our value
+    (``0.11 out: 0.0358 [0.0296, 0.042]``), or, where it states none, the rule's first quantity
+    (the number the verdict rests on); on a robot the paper states no number for, the claim's
+    numbers are not compared (``no paper number for planar5``). A study row gives its effect in
+    words from its numbers (:func:`lasa.evidence.findings.study_effect`), a not-testable one as
+    "measured, not judged" with the completion that stopped it.
     """
     if row is None:
         return "—"
-    if row.effect == NOT_TESTABLE:
-        why, effect = not_testable_why(row), effect_of(row.note)
-        seen = f"; measured, not judged: {effect}" if effect else ""
-        return f"effect not testable, N = {row.n_users}" + (f" ({why})" if why else "") + seen
-    paper = paper_numbers_of(str(row.id))
-    stated = {p.quantity for p in paper}
-    numbers = [_paper_number(text) for text in str(row.paper_numbers).split("; ") if text]
-    numbers += [f"{name} {text}" for name, text in stated_numbers(row.note) if name not in stated]
-    effect = effect_of(row.note)
-    if effect:
-        numbers.append(effect)
-    word = f"{row.effect} ({CENSORED})" if str(row.measured).startswith(CENSORED) else row.effect
-    head = f"**effect {word}**" if row.effect != UNDECIDED else f"effect {UNDECIDED}"
+    head = f"effect {effect_text(row)}"
+    if row.figure == "study":
+        effect = study_effect(str(row.id), numbers)
+        if row.effect == NOT_TESTABLE:
+            short = short_arms(numbers)
+            why = f" (completion: {completion_text(short)})" if short else f" ({_untestable_why(row)})"
+            seen = f"; measured, not judged: {effect}" if effect else ""
+            return f"{head}{why}, N = {row.n_users}{seen}"
+        said = [effect] if effect else []
+    else:
+        paper = paper_numbers_of(str(row.id), str(row.robot))
+        words = str(row.number).split("; ")
+        said = [
+            f"{p.value:g} {w}: {_interval_text(numbers[p.quantity])}"
+            for p, w in zip(paper, words, strict=False)
+            if p.quantity in numbers
+        ]
+        rule_of = RULES.get(str(row.id).split("@", 1)[0])
+        if not said and rule_of is not None and rule_of.quantities[0].name in numbers:
+            first = rule_of.quantities[0].name
+            said = [f"{first} {_interval_text(numbers[first])}"]
+        if stated_elsewhere(str(row.id), str(row.robot)):
+            said.append(f"no paper number for {row.robot}")
+    bold = row.effect not in (UNDECIDED, NOT_TESTABLE)
     settled = ", settled" if str(row.settled) == "yes" else ""
-    return "; ".join([head, *numbers]) + f", N = {row.n_users}{settled}"
+    return "; ".join([f"**{head}**" if bold else head, *said]) + f", N = {row.n_users}{settled}"
 
 
-def _paper_number(text: str) -> str:
-    """``0.11 out (0.0131 [0.00828, 0.0177])`` from ``0.11 (y = 0.11x): out, 0.0131 [0.00828, 0.0177]``."""
-    label, _, rest = text.partition(": ")
-    value = label.split(" (", 1)[0].split(" ±", 1)[0]
-    number_word, _, measured = rest.partition(", ")
-    return f"{value} {number_word} ({measured})"
+def _heads(table: pd.DataFrame) -> list[pd.Series]:
+    """The headline rows of the paper's claims (not our additions), in the verdict table's order."""
+    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    return [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
 
 
 def count_line(table: pd.DataFrame) -> str:
-    """``Of 21 paper claims × robot, the effect: 6 reproduced, ...; of the 12 numbers ...: 3 in, ...``."""
-    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
-    heads = [
-        rows[(pc.id, robot)]
-        for pc in PAPER_CLAIMS
-        if not pc.ours
-        for robot in ROBOTS
-        if (pc.id, robot) in rows
-    ]
+    """``Of 21 paper claims × robot, the effect: 8 reproduced, ...; of the 5 numbers ...: 1 in, ...``.
+
+    The numbers are counted on the robot the paper states them for (the Panda).
+    """
+    heads = _heads(table)
     effects = [str(r.effect) for r in heads]
     numbers = [w for r in heads for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
     counts = ", ".join(f"{effects.count(w)} {w}" for w in WORDS)
     stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
     return (
-        f"Of {len(effects)} paper claims × robot, the effect: {counts}. "
-        f"Of the {len(numbers)} numbers the paper states (× robot), the number: {stated}."
+        f"Of {len(effects)} paper claims × robot, the effect: {counts}. Of the {len(numbers)} numbers "
+        f"the paper states, on the robot it states them for (the Panda), the number: {stated}."
     )
 
 
@@ -488,35 +592,78 @@ def fragile_line(table: pd.DataFrame) -> str:
     return f"{lead}{said}; and {shaky} of the {len(readings)} readings' rows (`fragile` in claims.csv)."
 
 
-def _flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> str:
-    """Every reading (``<id>@<reading>``, compound ones such as ``a+b`` included) whose words differ."""
-    flips: dict[str, list[str]] = {}
+def flips(table: pd.DataFrame, claim_id: str) -> tuple[dict[str, list[str]], int]:
+    """The readings of a claim whose words differ from its headline's, and how many readings it has.
+
+    Returns:
+        ``{reading: ["<robot>: effect <word>; <numbers' words>", ...]}`` (compound readings such as
+        ``a+b`` included), and the number of distinct readings of the claim.
+    """
+    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    out: dict[str, list[str]] = {}
+    readings = set()
     for (cid, robot), r in rows.items():
         if cid.startswith(claim_id + "@"):
+            readings.add(cid.split("@", 1)[1])
             head = rows.get((claim_id, robot))
             if head is not None and (r.effect, r.number) != (head.effect, head.number):
-                said = words_text(str(r.effect), str(r.number), paper_numbers_of(claim_id))
-                flips.setdefault(cid.split("@", 1)[1], []).append(f"{robot}: {said}")
-    return "; ".join(f"`{k}` ({'; '.join(v)})" for k, v in flips.items()) or "none"
+                said = words_text(str(r.effect), str(r.number), paper_numbers_of(claim_id, str(robot)))
+                out.setdefault(cid.split("@", 1)[1], []).append(f"{robot}: {said}")
+    return out, len(readings)
 
 
-def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = None) -> str:
+def _anchor(claim_id: str) -> str:
+    """The GitHub anchor of a claim's heading in claims.md (``### sim1.final_error``)."""
+    return claim_id.replace(".", "").lower()
+
+
+def render_flips(table: pd.DataFrame) -> str:
+    """Claims.md's first section: per paper claim, every reading whose words differ from the headline's."""
+    out = [
+        "# Readings that flip a headline",
+        "",
+        "Other readings of what the paper leaves open, whose words differ from the headline's "
+        "(reading names: the README's *Reading names*).",
+    ]
+    for pc in PAPER_CLAIMS:
+        flipped, n = flips(table, pc.id)
+        if not n:
+            continue
+        out += ["", f"### {pc.id}", "", f"{pc.claim}: {len(flipped)} of {n} readings flip it.", ""]
+        out += [f"- `{k}`: {'; '.join(v)}" for k, v in flipped.items()] or ["- none"]
+    return "\n".join(out) + "\n"
+
+
+def _flips_cell(table: pd.DataFrame, claim_id: str, claims_md: str) -> str:
+    """``3 of 8 ([list](figures/claims.md#sim1final_error))``: the count of readings that flip it."""
+    flipped, n = flips(table, claim_id)
+    if not n:
+        return "none"
+    return f"{len(flipped)} of {n}" + (f" ([list]({claims_md}#{_anchor(claim_id)}))" if flipped else "")
+
+
+def render_verdicts(
+    table: pd.DataFrame,
+    values: Values,
+    link: Callable[[str], str] | None = None,
+    claims_md: str = "figures/claims.md",
+) -> str:
     """The verdict table: one row per paper claim, both robots side by side, our additions apart.
 
     Args:
         table: ``figures/claims.csv`` (as strings).
+        values: Its numbers (``figures/claim_values.csv``, :func:`lasa.evidence.values.read_values`).
         link: Notebook stem -> the link target of its page (default
             ``notebooks/<stem>.ipynb``, from the repository root).
+        claims_md: Where the list of readings that flip a claim is (from the page's folder).
 
     Returns:
         Markdown: a count line of the headline rows' two words, the fragile rows
-        (:func:`fragile_line`); then per claim its paper
-        number, per robot the effect's word with the numbers it rests on (each number the
-        paper states with its own word), the users per point N, the readings whose words
-        differ, and what makes the verdict: the result sentences written from the rows'
-        numbers (:func:`lasa.evidence.findings.finding`), then the mechanism, with a link to the
-        notebook that measures it. Rows that are our additions, not the paper's claims, follow
-        in a table of their own.
+        (:func:`fragile_line`); then per claim its paper number, per robot its cell (:func:`_cell`),
+        how many readings flip it (listed in claims.md), and what makes the verdict: the result
+        sentences written from the rows' numbers (:func:`lasa.evidence.findings.finding`), then
+        the mechanism, with a link to the notebook that measures it. Rows that are our
+        additions, not the paper's claims, follow in a table of their own.
     """
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
@@ -525,14 +672,15 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
     rows = {(r.id, r.robot): r for _, r in table.iterrows()}
     paper, ours = list(head), list(head)
     for pc in PAPER_CLAIMS:
-        cells = [_cell(rows.get((pc.id, robot))) for robot in ROBOTS]
+        cells = [_cell(rows.get((pc.id, r)), values.get((pc.id, r), {})) for r in ROBOTS]
         if cells == ["—", "—"]:
             continue
         anchor = pc.section.lower().replace(",", "").replace(" ", "-")
         target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
-        said = "; ".join(s for s in (finding(pc.id, rows, ROBOTS), pc.mechanism) if s)
+        said = "; ".join(s for s in (finding(pc.id, values, ROBOTS), pc.mechanism) if s)
         mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
-        line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {_flips(rows, pc.id)} | {mech} |"
+        flipped = _flips_cell(table, pc.id, claims_md)
+        line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {flipped} | {mech} |"
         (ours if pc.ours else paper).append(line)
     out = [f"{count_line(table)} {fragile_line(table)}", "", *paper]
     if len(ours) > len(head):
@@ -540,25 +688,85 @@ def render_verdicts(table: pd.DataFrame, link: Callable[[str], str] | None = Non
     return "\n".join(out) + "\n"
 
 
+def _robots_text(robots: list[str]) -> str:
+    return (
+        "both robots"
+        if len(robots) == len(ROBOTS)
+        else " and ".join({"panda": "Panda"}.get(r, r) for r in robots)
+    )
+
+
+def render_summary(table: pd.DataFrame) -> str:
+    """The README's summary under its title, at most 10 lines, from the headline rows.
+
+    One line per effect word that some paper claim reads: each claim by its short name with the
+    robots it reads so on, and for ``not reproduced`` and ``not testable`` the one-line reason
+    (the claim's mechanism; a not-testable study row's completion). Then the count of the paper's
+    numbers on the Panda.
+    """
+    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    by_word: dict[str, list[str]] = {}
+    for pc in PAPER_CLAIMS:
+        if pc.ours:
+            continue
+        words: dict[str, list[str]] = {}
+        for robot in ROBOTS:
+            if (pc.id, robot) in rows:
+                words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
+        for w, robots in words.items():
+            said = f"{pc.short} ({_robots_text(robots)})"
+            if w in ("no", "not reproduced") and pc.why:
+                said += f": {pc.why}"
+            if w == NOT_TESTABLE:
+                said += f": {_untestable_why(rows[(pc.id, robots[0])])}"
+            by_word.setdefault(w, []).append(said)
+    lines = [
+        "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
+        "simulated participants, not a replication with people; words and N: [the verdicts](#the-verdicts)):"
+    ]
+    for w in WORDS:
+        if w in by_word:
+            lines.append(f"- **{w.capitalize()}** ({len(by_word[w])}): " + "; ".join(by_word[w]) + ".")
+    numbers = [w for r in _heads(table) for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
+    stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    lines.append(f"- **The paper's numbers** ({len(numbers)}, stated for the Panda): {stated}.")
+    return "\n".join(lines) + "\n"
+
+
+def _untestable_why(row: pd.Series) -> str:
+    """Why a headline row is not testable, in a line: its ``measured`` when that says why."""
+    if str(row.measured).startswith(f"{NOT_TESTABLE} (") and "completion" not in str(row.measured):
+        return str(row.measured)[len(NOT_TESTABLE) + 2 :].split(")", 1)[0]
+    return "too few episodes finish within the horizon"
+
+
 def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
-    """Render ``claims_csv`` as the verdict table into ``out`` (``figures/verdicts.md``)."""
+    """Render ``claims_csv`` (and its ``claim_values.csv``) as the verdict table into ``out``
+    (``figures/verdicts.md``), its summary beside it (``summary.md``), and claims.md afresh."""
+    claims_csv = Path(claims_csv)
     table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
-    return write_text(out, render_verdicts(table))
+    values = read_values(pd.read_csv(claims_csv.with_name(VALUES_NAME), dtype=str, keep_default_na=False))
+    write_text(claims_csv.with_suffix(".md"), render_markdown(table))
+    write_text(Path(out).with_name("summary.md"), render_summary(table))
+    return write_text(out, render_verdicts(table, values))
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` between the README's verdict markers.
+    """Put the verdict table ``table_md`` between the README's verdict markers, and its summary
+    (``summary.md`` beside it) between the summary markers.
 
-    ``make figures`` runs this after the notebooks, so the README's table is always the
-    last full run's ``figures/verdicts.md``, never a hand-edited copy.
+    ``make figures`` runs this after the notebooks, so the README's table and summary are always
+    the last full run's, never a hand-edited copy.
 
     Returns:
         Whether the README changed.
 
     Raises:
-        ConfigError: if the README lacks either marker (:data:`README_MARKERS`).
+        ConfigError: if the README lacks a marker (:data:`README_MARKERS`, :data:`SUMMARY_MARKERS`).
     """
-    return sync_between(readme, README_MARKERS, Path(table_md).read_text())
+    summary = Path(table_md).with_name("summary.md")
+    changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False
+    return sync_between(readme, README_MARKERS, Path(table_md).read_text()) or changed
 
 
 if __name__ == "__main__":

@@ -96,12 +96,27 @@ class PaperNumber:
     The replication criterion "the paper's value lies inside our interval" (Open Science
     Collaboration, 2015), with the rule's tolerance (:meth:`word`). ``tolerance`` is the one the
     rule applies around this number (0.15 for the time ratios), and 0 where the rule states none.
+    ``max_width`` is the widest interval that may read ``in``: a wider one cannot tell the paper's
+    number from a value that would change the claim, and reads ``undecided`` (the tolerance band's
+    width, 2 x ``tolerance``, where it is left NaN). ``robot`` is the robot the paper states the
+    number for: "the real robot simulations", the Panda; on another robot it is not compared.
     """
 
     quantity: str  # the rule's quantity that measures it
     value: float  # the paper's number
     tolerance: float  # the rule's tolerance around it; 0 where the rule states none
     where: str  # where the paper states it, e.g. "beta = 75"
+    max_width: float = math.nan  # the widest interval that may read "in"; NaN: 2 x tolerance
+    robot: str = "panda"  # the robot the paper states it for
+
+    def __post_init__(self) -> None:
+        if not self.width_limit > 0.0:
+            raise ConfigError(f"{self.quantity}: a paper number needs a tolerance or a max_width > 0")
+
+    @property
+    def width_limit(self) -> float:
+        """The widest interval that may read ``in``: ``max_width``, else the tolerance band's width."""
+        return self.max_width if math.isfinite(self.max_width) else 2.0 * self.tolerance
 
     def inside(self, interval: tuple[float, float]) -> str:
         """``yes`` if ``value +- tolerance`` meets the interval, ``no`` if not, ``n/a`` if unknown."""
@@ -113,16 +128,18 @@ class PaperNumber:
     def word(self, interval: tuple[float, float]) -> str:
         """This number's word (:data:`NUMBER_WORDS`) against our interval.
 
-        ``out`` if the interval misses ``value +- tolerance``. With a tolerance, ``in`` if the
-        interval lies inside that band (every value we cannot exclude is within tolerance),
-        ``undecided`` if it crosses the band's edge. Without one (0: the rule states none), ``in``
-        if the interval contains the value (the Open Science Collaboration's criterion). ``n/a``
-        if the interval is unknown.
+        ``out`` if the interval misses ``value +- tolerance``; ``n/a`` if the interval is unknown.
+        Else ``in`` if the interval is narrow enough to say so (at most :attr:`width_limit`) and,
+        with a tolerance, lies inside the band (every value we cannot exclude is within
+        tolerance); without one (0: the rule states none) if it contains the value (the Open
+        Science Collaboration's criterion). Otherwise ``undecided``.
         """
         low, high = interval
         met = self.inside(interval)
         if met != "yes":
             return OUT if met == "no" else NOT_APPLICABLE
+        if high - low > self.width_limit:
+            return UNDECIDED
         if self.tolerance == 0.0:
             return IN
         inner = self.value - self.tolerance <= low and high <= self.value + self.tolerance

@@ -272,6 +272,7 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
         ci_high=first[1],
         settled=settled,
         intervals=intervals,
+        level=level,
         reproduced=c.reproduced if settled else UNDECIDED,
         n_users=n_users,
         note=lead + f"Rule: {r.text}. " + c.note,
@@ -290,7 +291,7 @@ def with_reading(claim_id: str, reading: str) -> str:
 def _words(c: Claim) -> str:
     """``effect undecided; 1.45 out, 1.3 in``: a claim's two words (:func:`lasa.evidence.claims.criteria`)."""
     said = criteria(c)
-    return words_text(said["effect"], said["number"], paper_numbers_of(c.id))
+    return words_text(said["effect"], said["number"], paper_numbers_of(c.id, c.robot))
 
 
 def member_of(frame: pd.DataFrame) -> str:

@@ -29,11 +29,13 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
-from lasa.evidence import latent_property, stats
-from lasa.evidence.claims import Claim
+from lasa.evidence import latent_property
+from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_word, word
-from lasa.evidence.findings import effect_of
+from lasa.evidence.findings import study_effect
 from lasa.evidence.rules import COMPLETION_BAR, rule
+from lasa.evidence.values import Number
+from lasa.figures import study_tests
 from lasa.figures.study import PAPER_N
 from lasa.figures.study_tests import Judged, analyse, judge
 from lasa.people.design import interface_of
@@ -43,7 +45,6 @@ __all__ = [
     "DECODER_KEYS",
     "claims",
     "claim_id",
-    "effect_sentence",
     "figure_stats",
     "h1_table",
     "h2_table",
@@ -53,6 +54,8 @@ __all__ = [
     "readings_table",
     "untestable_reason",
     "with_flips",
+    "likert_row",
+    "facts",
 ]
 
 Analyses = Mapping[tuple, Mapping[str, Any]]  # claims()'s analyses, keyed by reading
@@ -185,9 +188,28 @@ def claims(
             for name, judged in judge(result).items():
                 if other is None or name in DECODER_KEYS:
                     cid = claim_id(name, m_i, sa, cohort, other, model if k else None, belief)
-                    effect = effect_sentence(name, result, judged)
-                    rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason, effect))
+                    rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason))
+    if belief is None and rows:
+        rows.append(likert_row(min(n_total, PAPER_N), assistance[0]))
     return (with_flips(rows) if flips else rows), analyses
+
+
+def likert_row(n: int, assistance: str) -> Claim:
+    """Fig. dessert's subjective claim (the Likert t-tests): not testable with simulated participants,
+    who answer no questionnaire; notebook 11 judges it from people's sessions when it reads them."""
+    why = "simulated participants answer no questionnaire"
+    return Claim(
+        id="study.likert",
+        claim="H3, subjective: users rate LA+SA above the other conditions (Fig. dessert, Likert)",
+        figure="study",
+        paper="LA+SA higher, t-tests p < .05",
+        measured=f"{NOT_TESTABLE} ({why})",
+        reproduced=NOT_TESTABLE,
+        note=f"{n} simulated participants; {NOT_TESTABLE} ({why}). Rule: {rule('study.likert').text}.",
+        robot="panda",
+        assistance=assistance,
+        n_users=n,
+    )
 
 
 def reading_of(key: tuple, decoder: str, model: str) -> tuple[str, str, str]:
@@ -306,49 +328,38 @@ def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
     return len(rows) > 0
 
 
-def _raises(value: float, up: str, down: str) -> str:
-    return up if value > 0 else down
+def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, float]:
+    """The numbers a row's sentences read beside its effect (``claim_values.csv``'s facts).
 
-
-def effect_sentence(key: str, result: Mapping[str, object], judged: Judged) -> str:
-    """The effect a row rests on, in words with its sign and test: what its verdict cell says.
-
-    E.g. ``SA raises Goal Error by +1.24 m s, F(1,9) = 32.8, p < .001``; a censored arm's
-    ``by at least`` (its measure a lower bound). Never contains ``". "`` (the note's
-    ``Measured effect: <sentence>. `` is read back by :func:`lasa.evidence.findings.effect_of`).
+    ``testable`` (1 or 0) and ``censored`` (1 when the effect rests on a censored arm's lower
+    bound); each condition's completion (``completion.LA``); for H1 the SA - no SA difference in
+    the measure's unit (``difference``: m s, or cm for the mean distance) and its test's ``F``,
+    ``df1``, ``df2``, ``p``; for H2 the scoop-phase difference, ``p`` and ``pairs``; for H3 the
+    compared condition's restricted mean Total Time (``versus.<condition>``, s).
     """
-    verdict, value, low, high, measured = judged
-    bound = "at least " if measured.startswith(CENSORED) else ""
-    if key in ("h1", "h1_mean_distance", "h1_paper_test"):
-        test = result[
-            "h1_between" if key == "h1_paper_test" else "h1_mean_within" if "mean" in key else "h1_within"
-        ]
+    verdict, _, _, _, measured = judged
+    done = result["h3_completion"]
+    assert isinstance(done, pd.Series)
+    out = {"testable": float(verdict != NOT_TESTABLE), "censored": float(measured.startswith(CENSORED))}
+    out |= {f"completion.{c}": float(v) for c, v in done.fillna(0.0).items()}
+    if key.startswith("h1"):
+        tests = {"h1_paper_test": "h1_between", "h1_mean_distance": "h1_mean_within"}
+        test = result[tests.get(key, "h1_within")]
         assert isinstance(test, dict)
-        diff = test["mean_sa"] - test["mean_no_sa"]
-        what, unit, scale = (
-            ("the mean distance", "cm", 100.0) if "mean" in key else ("Goal Error", "m s", 1.0)
-        )
-        change = _raises(diff, "raises", "lowers")
-        return f"SA {change} {what} by {bound}{scale * diff:+.2f} {unit}, {stats.format_f(test)}"
-    if key == "h2":
+        scale = 100.0 if key == "h1_mean_distance" else 1.0
+        out["difference"] = scale * float(test["mean_sa"] - test["mean_no_sa"])
+        out |= {k: float(test[k]) for k in ("F", "df1", "df2", "p")}
+    elif key == "h2":
         phases = result["h2_phases"]
         assert isinstance(phases, dict)
         mean, _, _, p, pairs = phases["scoop"]
-        if not math.isfinite(p):
-            return f"no scoop-phase comparison ({pairs} pairs)"
-        side = _raises(mean, "above", "below")
-        return (
-            f"LA+SA's scoop alignment is {side} R+SA's by {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"
-        )
-    if not math.isfinite(value):
-        return "no contrast (a compared condition finishes too few episodes)"
-    other = (
-        measured.split("LA+SA - ", 1)[1].split(" ", 1)[0] if "LA+SA - " in measured else "the fastest other"
-    )
-    side = _raises(value, "slower", "faster")
-    return (
-        f"LA+SA is {side} than {other} by {bound}{value:+.1f} s [{low:+.1f}, {high:+.1f}] (restricted means)"
-    )
+        out |= {"difference": float(mean), "p": float(p), "pairs": float(pairs)}
+    else:
+        other, means = study_tests.h3_comparator(result), result["means"]
+        assert isinstance(means, pd.DataFrame)
+        if other is not None:
+            out[f"versus.{other}"] = float(means.total_time[other])
+    return out
 
 
 def _claim_row(
@@ -360,12 +371,12 @@ def _claim_row(
     decoder: str | None,
     model: str | None,
     reason: str | None,
-    effect: str,
 ) -> Claim:
     """One claims row: the tests' verdict, settled or undecided, or not testable with its reason.
 
-    Its note starts with ``Measured effect: <effect>.`` (:func:`effect_sentence`); the claims
-    table puts the row's two words before it (:func:`lasa.evidence.claims.note_lead`).
+    Its numbers are its effect with its interval and :func:`facts`; its note starts with
+    ``Measured effect: <effect>.``, written from them (:func:`lasa.evidence.findings.study_effect`);
+    the claims table puts the row's two words before it (:func:`lasa.evidence.claims.note_lead`).
     """
     verdict, value, low, high, measured = judged
     r = rule(cid)
@@ -384,6 +395,10 @@ def _claim_row(
         # an unsettled row says so as every claims row does ("Undecided: ", lasa.evidence.verdicts)
         why = ("" if settled else "Undecided: ") + f"95% interval of the effect [{low:.3g}, {high:.3g}]"
         why += "" if settled else f", which straddles 0; the tests read {verdict!r}"
+    known = facts(key, result, judged) | {"testable": float(testable)}
+    numbers = {"effect": Number(float(value), float(low), float(high))}
+    numbers |= {k: Number(v) for k, v in known.items()}
+    effect = study_effect(cid, numbers) or "none measured"
     note = (
         f"Measured effect: {effect}. "
         + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
@@ -410,6 +425,8 @@ def _claim_row(
         n_users=n,
         values={"effect": float(value)},
         intervals={"effect": (float(low), float(high))},
+        level=0.95,
+        facts=known,
     )
 
 
@@ -533,14 +550,20 @@ def _verdict_cells(
     """H1-H3's verdicts of one reading (:func:`claim_id`'s arguments), ``10 / all``.
 
     Beside each, ``H<k> effect (10)``: the first 10's effect in words with its sign
-    (:func:`effect_sentence`). ``-`` where the study had no such row (no cohort beyond the first 10).
+    (:func:`lasa.evidence.findings.study_effect`). ``-`` where the study had no such row (no
+    cohort beyond the first 10).
     """
     out = {}
     for h in DECODER_KEYS:
         ids = [claim_id(h, assistance_index, assistance, cohort, decoder, model) for cohort in (False, True)]
         out[f"{h.upper()} (10 / all)"] = " / ".join(_word(by_id[i]) if i in by_id else "-" for i in ids)
-        out[f"{h.upper()} effect (10)"] = (effect_of(by_id[ids[0]].note) or "-") if ids[0] in by_id else "-"
+        out[f"{h.upper()} effect (10)"] = (_effect(by_id[ids[0]]) or "-") if ids[0] in by_id else "-"
     return out
+
+
+def _effect(row: Claim) -> str:
+    """A row's effect in words with its sign and test, from its numbers."""
+    return study_effect(row.id, numbers_of(row))
 
 
 def _word(row: Claim) -> str:
@@ -557,7 +580,7 @@ def members_table(
 
     One row per member (the headline first): the assisted conditions' completion (R+SA and
     LA+SA; R and LA do not depend on the member), and H1-H3's verdicts for 10 participants /
-    the cohort, each with its effect for the first 10 in words (:func:`effect_sentence`).
+    the cohort, each with its effect for the first 10 in words (:func:`lasa.evidence.findings.study_effect`).
 
     Args:
         done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
@@ -596,5 +619,5 @@ def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
             row = by_id.get(claim_id(h, 0, "", cohort))
             if row is None or (cohort and n_total <= PAPER_N):
                 continue
-            out[h][panel] = f"ours ({row.n_users}): {_word(row)}; {effect_of(row.note) or '-'}"
+            out[h][panel] = f"ours ({row.n_users}): {_word(row)}; {_effect(row) or '-'}"
     return out

@@ -27,7 +27,16 @@ from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import complete_participants
 from lasa.figures.study import for_member
 
-__all__ = ["Judged", "analyse", "judge", "people_claims", "censored_arms", "censored_contradiction"]
+__all__ = [
+    "Judged",
+    "analyse",
+    "judge",
+    "people_claims",
+    "censored_arms",
+    "censored_contradiction",
+    "h3_comparator",
+    "likert_verdict",
+]
 
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
@@ -154,8 +163,33 @@ def people_claims(
                 {"member": assistance, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
                  "ci_high": high, "measured": measured, "participants": result["n"]}
             )  # fmt: skip
+    likert = frames.get("likert")
+    if likert is not None and len(likert) and len(full) >= 2:
+        verdict, share, n = likert_verdict(likert)
+        measured = (
+            f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
+        )
+        rows.append(
+            {"member": "all", "claim": "likert", "verdict": verdict, "value": share, "ci_low": math.nan,
+             "ci_high": math.nan, "measured": measured, "participants": len(full)}
+        )  # fmt: skip
     columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]
     return pd.DataFrame(rows, columns=columns)
+
+
+def likert_verdict(likert: pd.DataFrame) -> tuple[str, float, int]:
+    """Fig. dessert's subjective claim on people's answers (``study.likert``'s rule).
+
+    Args:
+        likert: :func:`lasa.evidence.sessions.likert_tests`: per scale, LA+SA against each other
+            condition (``diff`` = LA+SA minus the other, Holm-corrected ``p_corr``).
+
+    Returns:
+        (verdict, the share of comparisons with LA+SA rated higher at p < .05, the comparisons).
+    """
+    support = (likert["diff"] > 0.0) & (likert["p_corr"] < 0.05)
+    share = float(support.mean())
+    return rule("study.likert").verdict({"share": share}), share, int(len(likert))
 
 
 def judge(result: Mapping[str, object]) -> dict[str, Judged]:
@@ -332,6 +366,23 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
     )
 
 
+def _censored_comparator(total: pd.DataFrame, censored: list[str]) -> pd.Series | None:
+    """The contrast of LA+SA with the fastest measured comparator clear of 0, None if there is none."""
+    clear = total[(total.ci_low > 0.0) & ~total.b.isin(censored)]  # measured comparators, clear of 0
+    return None if clear.empty else clear.loc[clear.mean_b.idxmin()]
+
+
+def h3_comparator(result: Mapping[str, object]) -> str | None:
+    """The condition H3 compares LA+SA with: the fastest other, or with a censored condition the
+    fastest measured one LA+SA is already slower than (:func:`_h3_verdict`); None if none."""
+    total, done, gap = result["h3_total"], result["h3_completion"], result["h3_gap"]
+    assert isinstance(total, pd.DataFrame) and isinstance(done, pd.Series) and isinstance(gap, tuple)
+    if not result["h3_short"]:
+        return str(gap[0])
+    r = _censored_comparator(total, censored_arms(done))
+    return None if r is None else str(r.b)
+
+
 def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
     """H3 with a censored condition: not reproduced if LA+SA is already slower than a measured one.
 
@@ -344,10 +395,9 @@ def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
     """
     censored = censored_arms(done)
     short = _short_text(done, censored)
-    clear = total[(total.ci_low > 0.0) & ~total.b.isin(censored)]  # measured comparators, clear of 0
-    if clear.empty:
+    r = _censored_comparator(total, censored)
+    if r is None:
         return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
-    r = clear.loc[clear.mean_b.idxmin()]
     bound = "LA+SA" in censored
     lead = CENSORED if bound else "LA+SA measured, the censored conditions not compared"
     return (

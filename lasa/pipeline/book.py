@@ -33,6 +33,7 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import write_text
 from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
+from lasa.evidence.values import VALUES_NAME, Values, read_values
 
 __all__ = [
     "ordered_notebooks",
@@ -58,8 +59,9 @@ def ordered_notebooks(folder: Path) -> list[Path]:
     return sorted(books, key=key)
 
 
-def front_page(claims: pd.DataFrame, pages: set[str]) -> str:
-    """The front page's Markdown: what the book is, then the verdict table (``figures/verdicts.md``)."""
+def front_page(claims: pd.DataFrame, pages: set[str], values: Values | None = None) -> str:
+    """The front page's Markdown: what the book is, then the verdict table (``figures/verdicts.md``)
+    with the claims' numbers ``values`` (``figures/claim_values.csv``)."""
 
     def link(stem: str) -> str:
         for name in (f"{stem}-planar5", stem, f"{stem}-panda"):
@@ -79,7 +81,8 @@ def front_page(claims: pd.DataFrame, pages: set[str]) -> str:
         "measures it. The pages that follow are the notebooks, in the paper's order; the full claims",
         "table, every reading of every claim, is the last page.",
         "",
-        render_verdicts(claims, link),
+        # the front page's links are put under notebooks/ (_write_sources): claims.md is beside it
+        render_verdicts(claims, values or {}, link, claims_md="../claims.md"),
     ]
     return "\n".join(lines)
 
@@ -164,7 +167,11 @@ def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, c
             retitle(src / "notebooks" / book.name, robot)
     shutil.copytree(figures, src / "figures", ignore=shutil.ignore_patterns("*.csv", "*.md"))
     shutil.copytree(mathjax, src / "_extra" / "mathjax")
-    index = front_page(claims, {b.stem for b in books}).replace("](", "](notebooks/")
+    values_csv = figures / VALUES_NAME
+    values = (
+        read_values(pd.read_csv(values_csv, dtype=str, keep_default_na=False)) if values_csv.is_file() else {}
+    )
+    index = front_page(claims, {b.stem for b in books}, values).replace("](", "](notebooks/")
     write_text(src / "index.md", index)
     write_text(src / "claims.md", claims_page(claims))
     toc = ["format: jb-book", "root: index", "chapters:"] + [f"- file: notebooks/{b.stem}" for b in books]

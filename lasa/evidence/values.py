@@ -1,0 +1,87 @@
+"""The claims' numbers as data: ``figures/claim_values.csv``, one row per number a sentence reads.
+
+Each claims row (:class:`lasa.evidence.claims.Claim`) rests on numbers: the quantities its rule
+reads, each with its value and interval at the row's level, and for the study the facts a
+sentence states beside them (the test's F, degrees of freedom and p, each condition's
+completion). The claims table keeps its words and notes; this table keeps the numbers, tidy:
+
+=========  ==================================================================================
+column     meaning
+=========  ==================================================================================
+id         the claims row's id (``sim4.no_map_training_goal@intercept``)
+robot      ``planar5`` or ``panda``
+figure     the figure the row belongs to (``sim4``)
+reading    the reading the id names after ``@``, ``headline`` for the headline row
+quantity   the number's name: a rule quantity (``slope``, ``effect``) or a fact (``p``,
+           ``completion.LA``)
+value      its value on the data
+low, high  its interval, empty for a fact
+level      the interval's level (0.9875 for the sims' sequential looks, 0.95 for the study)
+n          the users (or participants) the number rests on
+=========  ==================================================================================
+
+Every result sentence of the verdict table (:mod:`lasa.evidence.findings`) reads these
+numbers, never a note's prose.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+
+import pandas as pd
+
+__all__ = [
+    "Number",
+    "Numbers",
+    "Values",
+    "VALUE_COLUMNS",
+    "VALUES_NAME",
+    "HEADLINE",
+    "read_values",
+    "reading_of",
+]
+
+VALUES_NAME = "claim_values.csv"  # beside claims.csv
+VALUE_COLUMNS = ("id", "robot", "figure", "reading", "quantity", "value", "low", "high", "level", "n")
+HEADLINE = "headline"  # the reading column of a headline row
+
+
+@dataclasses.dataclass(frozen=True)
+class Number:
+    """One number of a claims row: its value, its interval at ``level`` (NaN for a fact) and N."""
+
+    value: float
+    low: float = math.nan
+    high: float = math.nan
+    level: float = math.nan
+    n: int = 0
+
+    @property
+    def interval(self) -> tuple[float, float] | None:
+        """``(low, high)`` if both ends are known, else None."""
+        known = math.isfinite(self.low) and math.isfinite(self.high)
+        return (self.low, self.high) if known else None
+
+
+Numbers = Mapping[str, Number]  # quantity -> its number, for one claims row
+Values = Mapping[tuple[str, str], Numbers]  # (id, robot) -> that row's numbers
+
+
+def reading_of(claim_id: str) -> str:
+    """The reading a claims id names after ``@``; :data:`HEADLINE` for a headline row."""
+    return claim_id.split("@", 1)[1] if "@" in claim_id else HEADLINE
+
+
+def _float(text: object) -> float:
+    return float(str(text)) if str(text).strip() else math.nan
+
+
+def read_values(frame: pd.DataFrame) -> dict[tuple[str, str], dict[str, Number]]:
+    """``claim_values.csv`` (read as strings) as (id, robot) -> quantity -> :class:`Number`."""
+    out: dict[tuple[str, str], dict[str, Number]] = {}
+    for r in frame.itertuples(index=False):
+        number = Number(_float(r.value), _float(r.low), _float(r.high), _float(r.level), int(float(r.n or 0)))
+        out.setdefault((str(r.id), str(r.robot)), {})[str(r.quantity)] = number
+    return out
