@@ -7,15 +7,24 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import (
     CLAIM_COLUMNS,
     README_MARKERS,
-    ROBOTS,
     SHOWN_COLUMNS,
+    SUMMARY_MARKERS,
     Claim,
     _row,
     claims_frame,
+    numbers_of,
+    render_summary,
     render_verdicts,
     sync_readme,
     update_claims,
 )
+from lasa.evidence.values import VALUES_NAME, read_values
+
+
+def render(claims, **kwargs):
+    """The verdict table of these claims, with their numbers (as claim_values.csv holds them)."""
+    table = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS)).astype(str)
+    return render_verdicts(table, {(c.id, c.robot): numbers_of(c) for c in claims}, **kwargs)
 
 
 def claim(name, text=None, figure="sim1", robot="planar5", verdict="yes"):
@@ -42,7 +51,7 @@ def test_update_replaces_own_rows_and_keeps_others(tmp_path):
     mine = table[(table.figure == "sim1") & (table.robot == "planar5")].set_index("id")
     assert mine.loc["sim1.a", "reproduced"] == "not reproduced"  # the table's word for a settled no
     assert len(pd.read_csv(path)) == 4
-    md = path.with_suffix(".md").read_text()
+    md = path.with_suffix(".md").read_text().split("# Every row of claims.csv\n\n", 1)[1]
     assert md.startswith("| id | claim | figure |") and md.count("\n") == 6
 
 
@@ -110,7 +119,7 @@ def test_readme_gets_the_table_between_its_markers(tmp_path):
         sync_readme(readme, table)
 
 
-def test_the_repository_readme_holds_the_committed_verdict_table():
+def test_the_repository_readme_holds_the_committed_verdict_table_and_summary():
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
@@ -118,15 +127,27 @@ def test_the_repository_readme_holds_the_committed_verdict_table():
     text = (root / "README.md").read_text()
     block = text.split(begin, 1)[1].split(end, 1)[0].strip()
     assert block == (root / "figures" / "verdicts.md").read_text().strip()
-    assert len(text.splitlines()) <= 200 and text[: text.index(end)].count("\n") <= 80
-    # for a newcomer: the prerequisites by the commands, the reading names before the table uses
-    # them, and what does not reproduce (at most 10 lines) right under it
-    assert text.index("**Needs:**") < text.index("make figures") < text.index(begin)
-    assert "**Reading names.**" in text[: text.index(begin)]
-    after = text[text.index(end) :].split("\n\n")[1]
-    assert after.startswith("**What does not reproduce, and why.**") and after.count("\n") < 10
+    summary = text.split(SUMMARY_MARKERS[0], 1)[1].split(SUMMARY_MARKERS[1], 1)[0].strip()
+    assert summary == (root / "figures" / "summary.md").read_text().strip()
+    # findings first: the generated summary (at most 10 lines) within the README's first 30 lines
+    assert text.index(SUMMARY_MARKERS[1]) < len("\n".join(text.splitlines()[:30]))
+    assert 3 <= len(summary.splitlines()) <= 10
+    assert len(text.splitlines()) <= 200
+    # the set-up named by the commands, the prerequisites before them
+    commands = text.split("```bash", 1)[1].split("```", 1)[0]
+    assert [line.split()[1] for line in commands.splitlines() if line.startswith("make ")] == [
+        "figures",
+        "test",
+    ]
+    assert "make setup" in commands and text.index("**Needs:**") < text.index("```bash") < text.index(begin)
+    # every cell of the verdict table short enough to read
+    for line in block.splitlines():
+        if line.startswith("| ") and not line.startswith("| ---"):
+            assert max(len(c.strip()) for c in line.strip("|").split("|")) <= 300, line
     table = pd.read_csv(root / "figures" / "claims.csv", dtype=str, keep_default_na=False)
-    assert (root / "figures" / "verdicts.md").read_text() == render_verdicts(table)  # generated, not edited
+    values = read_values(pd.read_csv(root / "figures" / VALUES_NAME, dtype=str, keep_default_na=False))
+    assert (root / "figures" / "verdicts.md").read_text() == render_verdicts(table, values)  # generated
+    assert (root / "figures" / "summary.md").read_text() == render_summary(table)
 
 
 def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_flips():
@@ -141,60 +162,93 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
         rows.append(row("sim1.time_ratio@grasp_set+one_step", robot, head, 60))  # agrees: not listed
     rows.append(row("sim1.time_ratio@hindsight+one_step", "panda", "no", 60))  # compound, differs
     table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
-    md = render_verdicts(table)
+    md = render(rows)
     lines = md.strip().splitlines()
     # the count line with the fragile rows, a blank line, header, rule, one claim (claims without
     # rows are left out)
     assert len(lines) == 5
     assert lines[0].startswith(
         "Of 2 paper claims × robot, the effect: 0 reproduced, 0 partly, 1 not reproduced, 1 undecided, "
-        "0 not testable. Of the 0 numbers the paper states (× robot), the number: 0 in, 0 out, 0 undecided. "
-        "Fragile (an interval ends within a fifth of its width"
+        "0 not testable. Of the 0 numbers the paper states, on the robot it states them for (the Panda), "
+        "the number: 0 in, 0 out, 0 undecided. Fragile (an interval ends within a fifth of its width"
     )
     cells = [c.strip() for c in lines[4].strip("|").split("|")]
     assert cells[1] == "time ratio 1.45 and 1.30"
     assert cells[2].startswith("**effect not reproduced**")
     assert "N = 150" in cells[2] and "settled" in cells[2]
     assert cells[3].startswith("effect undecided") and "settled" not in cells[3]
-    # the Panda's grasp_set agrees with its headline; a compound reading that differs is listed too
-    assert cells[4] == (
-        "`grasp_set` (planar5: effect partly; number n/a); "
-        "`hindsight+one_step` (panda: effect not reproduced; number n/a)"
-    )
+    # two of the three readings flip it (grasp_set on planar5, the compound one on the Panda)
+    assert cells[4] == "2 of 3 ([list](figures/claims.md#sim1time_ratio))"
     assert "(notebooks/04_fixed_expertise.ipynb#what-it-shows-against-the-paper)" in cells[5]
+    # claims.md lists them, each with its words
+    from lasa.evidence.claims import render_flips
+
+    listed = render_flips(table)
+    assert "### sim1.time_ratio" in listed and "2 of 3 readings flip it" in listed
+    assert "- `grasp_set`: planar5: effect partly; number n/a" in listed
+    assert "- `hindsight+one_step`: panda: effect not reproduced; number n/a" in listed
 
 
-def test_a_claim_that_is_not_testable_is_written_and_rendered_with_its_reason(tmp_path):
+def _study(cid, reproduced, value, low, high, n, **facts):
+    """A study row with its effect and facts, as lasa.figures.study_claims writes them."""
+    base = claim(cid.split("@", 1)[0].split(".", 1)[1], figure="study", robot="panda", verdict="undecided")
+    testable = reproduced != "not testable"
+    known = {"testable": float(testable), "censored": 0.0} | facts
+    return Claim(
+        **{
+            **base.__dict__,
+            "id": cid,
+            "reproduced": reproduced,
+            "settled": reproduced not in ("undecided", "not testable"),
+            "n_users": n,
+            "values": {"effect": value},
+            "intervals": {"effect": (low, high)},
+            "level": 0.95,
+            "facts": known,
+        }
+    )
+
+
+def test_a_claim_that_is_not_testable_is_rendered_with_its_reason_from_its_numbers(tmp_path):
     from lasa.evidence.claims import VERDICTS
     from lasa.evidence.decision import NOT_TESTABLE
 
     assert NOT_TESTABLE == "not testable" and NOT_TESTABLE in VERDICTS
     with pytest.raises(ConfigError, match="never settled"):
         Claim(**{**claim("h3", figure="study").__dict__, "reproduced": NOT_TESTABLE, "settled": True})
-    measured = "not testable (completion: LA 0%, LA+SA 0%); mean total (idle) time ..."
-    guard = Claim(
-        **{
-            **claim("h3", figure="study", robot="panda").__dict__,
-            "id": "study.h3",
-            "reproduced": NOT_TESTABLE,
-            "measured": measured,
-            "n_users": 10,
-        }
-    )
-    reason = "not testable (no decoder with both halves of the property; best reading t). 10 participants"
-    other = Claim(**{**guard.__dict__, "id": "study.h2", "measured": "alignment +0.04", "note": reason})
-    table = update_claims(tmp_path / "claims.csv", [guard, other]).set_index("id")
+    nan = float("nan")
+    done = {"completion.R": 1.0, "completion.R+SA": 1.0, "completion.LA": 0.0, "completion.LA+SA": 0.0}
+    guard = _study("study.h3", NOT_TESTABLE, nan, nan, nan, 10, **done)
+    h1 = _study("study.h1", NOT_TESTABLE, nan, nan, nan, 10, difference=-2.04, F=36.4, df1=1, df2=9, p=1e-4)
+    h1 = Claim(**{**h1.__dict__, "facts": {**h1.facts, **done, "completion.LA": 0.2}})
+    table = update_claims(tmp_path / "claims.csv", [guard, h1]).set_index("id")
     assert table.loc["study.h3", "reproduced"] == NOT_TESTABLE and table.loc["study.h3", "settled"] == "no"
     assert table.loc["study.h3", "ci_low"] == "" and "nan" not in (tmp_path / "claims.md").read_text()
-    cells = {
-        line.split("|")[1].strip(): line.split("|")[4].strip()
-        for line in render_verdicts(table.reset_index().astype(str)).splitlines()[4:]
+    values = pd.read_csv(tmp_path / VALUES_NAME, dtype=str, keep_default_na=False)
+    assert set(values.quantity[values.id == "study.h1"]) >= {
+        "effect",
+        "difference",
+        "F",
+        "p",
+        "completion.LA",
     }
-    h3 = next(v for k, v in cells.items() if k.startswith("H3"))
-    h2 = next(v for k, v in cells.items() if k.startswith("H2"))
-    assert h3 == "effect not testable, N = 10 (completion: LA 0%, LA+SA 0%)"  # the reason from measured
-    assert h2 == "effect not testable, N = 10 (no decoder with both halves of the property; best reading t)"
-    assert table.loc["study.h3", "effect"] == NOT_TESTABLE and table.loc["study.h3", "number"] == "n/a"
+    assert (
+        values.loc[(values.id == "study.h1") & (values.quantity == "completion.LA"), "value"].item() == "0.2"
+    )
+    md = render_verdicts(table.reset_index().astype(str), read_values(values.astype(str)))
+    cells = {
+        line.split("|")[1].strip(): line.split("|")[4].strip() for line in md.splitlines()[4:] if "|" in line
+    }
+    h3 = next(v for k, v in cells.items() if k.startswith("H3: LA+SA"))
+    assert (
+        h3 == "effect not testable with simulated participants (completion: LA 0%, LA+SA 0%), N = 10; "
+        "measured, not judged: no contrast (a compared condition finishes too few episodes)"
+    )
+    h1_cell = next(v for k, v in cells.items() if k.startswith("H1"))
+    assert h1_cell == (
+        "effect not testable with simulated participants (completion: LA 20%, LA+SA 0%), N = 10; "
+        "measured, not judged: SA lowers Goal Error by -2.04 m s, F(1,9) = 36.4, p < .001"
+    )
 
 
 def _time_ratio(robot, low75, high75, low1000, high1000, reading="undecided"):
@@ -204,9 +258,10 @@ def _time_ratio(robot, low75, high75, low1000, high1000, reading="undecided"):
     return Claim(**{**base.__dict__, "n_users": 150, "intervals": intervals, "values": values})
 
 
-def test_each_paper_number_gets_its_own_word_beside_the_effect():
-    # the paper: 1.45 at beta = 75 and 1.30 at beta = 1000, each +- 0.15 by the rule
-    row = _row(_time_ratio("planar5", 0.844, 1.1, 1.34, 1.39))
+def test_each_paper_number_gets_its_own_word_beside_the_effect_on_the_panda():
+    # the paper: 1.45 at beta = 75 and 1.30 at beta = 1000, each +- 0.15 by the rule, for the Panda
+    one = _time_ratio("panda", 0.844, 1.1, 1.34, 1.39)
+    row = _row(one)
     assert row["effect"] == "undecided"  # the rule's reading: ratio_75's interval straddles 1
     assert row["number"] == "out; in"  # [0.844, 1.1] misses [1.30, 1.60]; [1.34, 1.39] inside [1.15, 1.45]
     assert row["reproduced"] == "not reproduced"  # both in one word: a number is out
@@ -216,16 +271,31 @@ def test_each_paper_number_gets_its_own_word_beside_the_effect():
         "1.45 ± 0.15 (beta = 75): out, 0.972 [0.844, 1.1]; 1.3 ± 0.15 (beta = 1000): in, 1.36 [1.34, 1.39]"
     )
     assert str(row["note"]).startswith("Effect undecided; 1.45 out, 1.3 in. ")  # the note's words: the row's
-    both = _row(_time_ratio("panda", 1.35, 1.55, 1.2, 1.5, reading="yes"))
-    assert both["effect"] == "reproduced" and both["number"] == "in; undecided"  # [1.2, 1.5] crosses 1.45
-    assert both["reproduced"] == "undecided" and both["paper_in_ci"] == "yes; yes"
-    assert both["direction"] == "yes"
-    table = pd.DataFrame([row, both], columns=list(CLAIM_COLUMNS)).astype(str)
-    md = render_verdicts(table)
-    assert "effect undecided; 1.45 out (0.972 [0.844, 1.1]); 1.3 in (1.36 [1.34, 1.39])" in md
-    assert "**effect reproduced**; 1.45 in (1.45 [1.35, 1.55]); 1.3 undecided (1.35 [1.2, 1.5])" in md
-    assert "Of the 4 numbers the paper states (× robot), the number: 2 in, 1 out, 1 undecided." in md
+    # planar5: the paper states no number for it; the effect is judged, the numbers are not compared
+    other = _row(_time_ratio("planar5", 1.35, 1.55, 1.2, 1.5, reading="yes"))
+    assert other["effect"] == "reproduced" and other["number"] == "n/a" and other["paper_numbers"] == ""
+    md = render([one, _time_ratio("planar5", 1.35, 1.55, 1.2, 1.5, reading="yes")])
+    assert "effect undecided; 1.45 out: 0.972 [0.844, 1.1]; 1.3 in: 1.36 [1.34, 1.39], N = 150" in md
+    assert "**effect reproduced**; ratio_75 1.45 [1.35, 1.55]; no paper number for planar5, N = 150" in md
+    assert (
+        "Of the 2 numbers the paper states, on the robot it states them for (the Panda), the number: "
+        "1 in, 1 out, 0 undecided." in md
+    )
     assert "nan" not in md
+
+
+def test_a_number_reads_in_only_when_its_interval_is_narrow_enough():
+    from lasa.evidence.decision import PaperNumber
+
+    r2 = PaperNumber("r2", 0.98, 0.0, "R^2 = 0.98", max_width=0.04)
+    assert r2.word((0.975, 1.0)) == "in"  # holds 0.98, 0.025 wide
+    assert r2.word((0.54, 0.983)) == "undecided"  # holds 0.98, but 0.443 wide: cannot tell
+    assert r2.word((0.5, 0.9)) == "out"
+    ratio = PaperNumber("r", 1.45, 0.15, "beta = 75")
+    assert ratio.width_limit == pytest.approx(0.3)  # the tolerance band's width
+    assert ratio.word((1.35, 1.55)) == "in" and ratio.word((1.2, 1.55)) == "undecided"
+    with pytest.raises(ConfigError, match="max_width"):
+        PaperNumber("slope", 0.11, 0.0, "y = 0.11x")  # no tolerance and no width: nothing could read in
 
 
 def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
@@ -241,12 +311,11 @@ def test_a_rule_without_paper_numbers_reads_n_a_and_our_additions_stand_apart():
     assert row["number"] == "n/a" and row["effect"] == "reproduced" == row["reproduced"]
     assert row["direction"] == "yes"  # the final error grows with N
     assert str(row["note"]).startswith("Effect reproduced; number n/a. ")
-    base = claim("grasp_linear", figure="sim4")
-    ours = Claim(**{**base.__dict__, "reproduced": "undecided", "intervals": {"slope": (0.05, 0.2)}})
-    assert _row(ours)["paper_in_ci"] == "yes; n/a"  # 0.11 in [0.05, 0.2]; R^2's interval unknown
-    assert _row(ours)["number"] == "in; n/a"  # no tolerance: in when our interval contains 0.11
-    table = pd.DataFrame([row, _row(ours)], columns=list(CLAIM_COLUMNS)).astype(str)
-    md = render_verdicts(table)
+    base = claim("grasp_linear", figure="sim4", robot="panda")
+    ours = Claim(**{**base.__dict__, "reproduced": "undecided", "intervals": {"slope": (0.05, 0.15)}})
+    assert _row(ours)["paper_in_ci"] == "yes; n/a"  # 0.11 in [0.05, 0.15]; R^2's interval unknown
+    assert _row(ours)["number"] == "in; n/a"  # no tolerance: in when our interval holds 0.11, 0.1 wide
+    md = render([trapped, ours])
     head, apart = md.split("Our additions, not claims of the paper (not counted above):")
     assert "grasp-to-grasp" in apart and "grasp-to-grasp" not in head
     assert head.startswith("Of 1 paper claims × robot, the effect: 1 reproduced,")
@@ -273,137 +342,6 @@ def test_the_word_follows_the_vocabulary():
     assert word("no", {}, ()) == "not reproduced"
     with pytest.raises(ConfigError, match="cannot word"):
         word("maybe", {}, ())
-
-
-def test_the_cell_shows_every_number_the_rule_reads():
-    # the note as lasa.evidence.verdicts.assess writes it; the paper's number first, with its word
-    note = (
-        "150 users per point; 98.75% intervals: slope = 0.0131 [0.00828, 0.0177]; r2 = 0.964 [0.786, 0.997]; "
-    )
-    note += "share_below = 1 [1, 1]. Rule: ..."
-    base = claim("straight_line_linear", figure="sim4")
-    intervals = {"slope": (0.00828, 0.0177), "r2": (0.786, 0.997), "share_below": (1.0, 1.0)}
-    row = Claim(
-        **{
-            **base.__dict__,
-            "reproduced": "undecided",
-            "note": note,
-            "intervals": intervals,
-            "values": {"slope": 0.0131, "r2": 0.964, "share_below": 1.0},
-        }
-    )
-    table = pd.DataFrame([_row(row)], columns=list(CLAIM_COLUMNS)).astype(str)
-    cell = render_verdicts(table).splitlines()[4].split("|")[3].strip()
-    assert cell.startswith("effect undecided; 0.11 out (0.0131 [0.00828, 0.0177])")
-    assert "; 0.98 in (0.964 [0.786, 0.997])" in cell  # no tolerance: in when the interval holds it
-    assert "; share_below 1 [1, 1], N = 0" in cell and "r2 0.964" not in cell  # each number once
-
-
-def _note_row(cid, robot, **intervals):
-    """A claims row whose note states each number's interval as lasa.evidence.verdicts.assess does."""
-    text = "; ".join(f"{k} = {(lo + hi) / 2:.3g} [{lo:.3g}, {hi:.3g}]" for k, (lo, hi) in intervals.items())
-    base = claim(cid.split(".", 1)[1], figure=cid.split(".", 1)[0], robot=robot, verdict="undecided")
-    return Claim(**{**base.__dict__, "note": f"150 users per point; 98.75% intervals: {text}. Rule: ..."})
-
-
-def _mechanism(rows):
-    table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
-    return render_verdicts(table).splitlines()[4].split("|")[6].strip()
-
-
-def test_a_result_sentence_follows_the_numbers_of_its_rows():
-    # the time gap favours LA+SA at beta = 75 and grows on both robots; the error gap narrows on one
-    # robot, and on the other LA+SA is worse at beta = 75: that narrowing is not the paper's gap
-    rows = [
-        _note_row(
-            "sim1.gap_narrows",
-            "planar5",
-            time_narrowing=(-0.4, -0.2),
-            time_gap_75=(0.1, 0.2),
-            error_narrowing=(0.01, 0.02),
-            error_gap_75=(0.02, 0.05),
-        ),
-        _note_row(
-            "sim1.gap_narrows",
-            "panda",
-            time_narrowing=(-0.4, -0.3),
-            time_gap_75=(0.1, 0.3),
-            error_narrowing=(0.01, 0.02),
-            error_gap_75=(-0.05, -0.02),
-        ),
-    ]
-    assert _mechanism(rows).startswith(
-        "the time gap grows (both robots); the error gap narrows (planar5); "
-        "at beta = 75 LA+SA is worse, so the error gap is not the paper's (the Panda) ([04]("
-    )
-    # the same claim with both gaps narrowing: the sentence says so, nothing hand-written is left
-    rows = [
-        _note_row(
-            "sim1.gap_narrows",
-            r,
-            time_narrowing=(0.1, 0.2),
-            time_gap_75=(0.3, 0.4),
-            error_narrowing=(0.1, 0.2),
-            error_gap_75=(0.2, 0.3),
-        )
-        for r in ROBOTS
-    ]
-    narrows = "the time gap narrows (both robots); the error gap narrows (both robots)"
-    assert _mechanism(rows).startswith(narrows)
-    # a row without the numbers (a hand-made table) states no result, only the mechanism
-    rows = [claim("time_ratio", robot=r) for r in ROBOTS]
-    assert _mechanism(rows).startswith("the pull is largest far from the goal ([04](")
-
-
-def _study_row(cid, reproduced, low, high, n, measured="m", note="participant model = planning; n"):
-    base = claim(cid.split("@", 1)[0].split(".", 1)[1], figure="study", robot="panda", verdict="undecided")
-    values = {"id": cid, "reproduced": reproduced, "ci_low": low, "ci_high": high, "n_users": n}
-    return Claim(**{**base.__dict__, **values, "measured": measured, "note": note})
-
-
-def test_the_studys_sentences_say_what_each_n_tells_and_what_was_cut():
-    nan = float("nan")
-    h2 = [
-        _study_row("study.h2", "undecided", -0.01, 0.05, 10),
-        _study_row("study.h2@cohort", "yes", 0.03, 0.06, 40),
-    ]
-    assert _mechanism(h2).startswith(
-        "LA+SA tilts the fork further into the scoop than R+SA; 10 participants cannot tell, 40 tell it"
-    )
-    h2[0] = _study_row("study.h2", "yes", 0.01, 0.05, 10)
-    assert "; 10 and 40 participants alike tell it (" in _mechanism(h2)
-    # H2 gated by the compared conditions' completion: the sentence names it, not what each N tells
-    gated = "not testable (completion: LA+SA 85%, alignment only on the phases reached); alignment ..."
-    h2g = [_study_row("study.h2", "not testable", nan, nan, 10, measured=gated)]
-    assert _mechanism(h2g).startswith(
-        "the planning participants finish 85% of their LA+SA episodes: alignment is measured only on the "
-        "phases they reached ("
-    )
-    # H3 settled on a censored lower bound: the sentence says the bound already decides it
-    low = "censored: lower bound (completion: LA+SA 85%): LA+SA's restricted mean ..."
-    h3c = [_study_row("study.h3", "no", 25.0, 88.0, 10, measured=low)]
-    assert _mechanism(h3c).startswith("another condition is faster than LA+SA even as a lower bound; 10 ")
-    h2 = [
-        _study_row("study.h2", "undecided", -0.01, 0.05, 10),
-        _study_row("study.h2@cohort", "no", -0.06, -0.03, 40),
-    ]
-    assert _mechanism(h2).startswith(
-        "R+SA tilts the fork further into the scoop than LA+SA; 10 participants cannot"
-    )
-    cut = "not testable (completion: LA 90%, LA+SA 45%); SA - no SA = ..."
-    h1 = [_study_row("study.h1", "not testable", nan, nan, 10, measured=cut)]
-    assert _mechanism(h1).startswith(
-        "the planning participants finish 90% of their LA episodes and 45% of their LA+SA episodes "
-        "within the horizon: the rest are cut there, so Goal Error is censored ("
-    )
-    h3 = [_study_row("study.h3", "not testable", nan, nan, 10, measured=cut.replace("LA 90%, ", ""))]
-    assert _mechanism(h3).startswith(
-        "LA+SA finishes 45% of its episodes: the assistance holds planning participants at a bowl ("
-    )
-    h3 = [
-        _study_row("study.h3", "not testable", nan, nan, 10, measured="not testable (completion: R 80%); x")
-    ]
-    assert _mechanism(h3).startswith("R finishes 80% of its episodes ([11](")  # not LA+SA: no bowl
 
 
 def test_the_fragile_line_names_the_headline_rows_and_counts_the_readings():
@@ -433,10 +371,12 @@ def test_the_cli_writes_an_out_runs_verdicts_beside_its_claims(tmp_path):
     import sys
     from pathlib import Path
 
-    shutil.copy(Path(__file__).resolve().parents[1] / "figures" / "claims.csv", tmp_path / "claims.csv")
+    for name in ("claims.csv", VALUES_NAME):
+        shutil.copy(Path(__file__).resolve().parents[1] / "figures" / name, tmp_path / name)
     subprocess.run([sys.executable, "-m", "lasa.evidence.claims", str(tmp_path / "claims.csv")], check=True)
     committed = Path(__file__).resolve().parents[1] / "figures" / "verdicts.md"
     assert (tmp_path / "verdicts.md").read_text() == committed.read_text()
+    assert (tmp_path / "summary.md").read_text() == committed.with_name("summary.md").read_text()
 
 
 def test_claims_frame_shows_a_notebooks_rows_in_order():
