@@ -306,6 +306,9 @@ def fits(frame: pd.DataFrame, measure: str = HEADLINE, form: str = HEADLINE_FORM
         One row per ``h`` (``grasp``, ``straight_line``, ``none``, ...): ``slope``,
         ``intercept`` (0 through the origin), ``r2`` (of the per-cup means) and ``r2_episodes``
         (the same form's R^2 over every episode).
+
+    Raises:
+        ConfigError: if ``form`` is not one of :data:`FORMS`.
     """
     if form not in FORMS:
         raise ConfigError(f"form must be one of {sorted(FORMS)}, got {form!r}")
