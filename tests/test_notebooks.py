@@ -166,8 +166,8 @@ def test_claims_table(executed):
     assert not claims.duplicated(["id", "robot"]).any()
     claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
-    # sim4: 3 claims and the straight line's @ee_line, each also @joint_space
-    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 8}
+    # sim4: 3 claims and the straight line's @ee_line, each also @joint_space, each of them also @intercept
+    per_figure = {"sim1": 4, "sim2": 2, "sim3": 1, "sim4": 16}
     rows = len(ASSISTANCE)  # the headline row (point) and one per other member, no copy of the headline
     assert claims.groupby(["figure", "robot"]).size().to_dict() == {
         (f, r): n * rows for f, n in per_figure.items() for r in ROBOTS
@@ -176,8 +176,11 @@ def test_claims_table(executed):
     head = claims[~claims.id.str.contains("@")]
     # sim4's readings (joint space, the gripper's line) beside its headline: judged with it (its users)
     joint = claims[claims.id.str.contains("@") & (claims.assistance == "point")]
-    assert len(joint) == 5 * len(ROBOTS)
-    assert set(joint.id.str.split("@").str[1]) == {"joint_space", "ee_line", "ee_line+joint_space"}
+    assert len(joint) == 13 * len(ROBOTS)
+    readings = {"joint_space", "ee_line", "ee_line+joint_space"}
+    assert set(joint.id.str.split("@").str[1]) == readings | {"intercept"} | {
+        f"{r}+intercept" for r in readings
+    }
     head_n = head.set_index(["id", "robot"]).n_users
     assert all(
         head_n[(i.split("@")[0], r)] == n

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.figures import sim4
 from lasa.figures.new_cups import map_geometry, new_cup_positions
@@ -84,14 +85,9 @@ def _rows(n_users: dict[str, int], big: float = 4.0) -> pd.DataFrame:
 def test_headline_is_the_table_measure_and_joint_space_a_reading():
     frame = _rows({"panda": 8})
     claims = {c.id: c for c in sim4.claims(frame)}
-    assert set(claims) == {
-        "sim4.straight_line_linear",
-        "sim4.grasp_linear",
-        "sim4.no_map_training_goal",
-        "sim4.straight_line_linear@joint_space",
-        "sim4.grasp_linear@joint_space",
-        "sim4.no_map_training_goal@joint_space",
-    }
+    names = ("sim4.straight_line_linear", "sim4.grasp_linear", "sim4.no_map_training_goal")
+    readings = ("", "@joint_space", "@intercept", "@joint_space+intercept")
+    assert set(claims) == {name + reading for name in names for reading in readings}
     table, joint = sim4.fits(frame), sim4.fits(frame, "joint_space")
     assert claims["sim4.straight_line_linear"].values["slope"] == pytest.approx(
         table.loc["straight_line", "slope"]
@@ -201,7 +197,12 @@ def test_judged_rows_name_the_measure_then_the_member(model, task):
             (f"{reading}grasp_set", "grasp_set"),
             (f"{reading}joint_space+grasp_set", "grasp_set"),
         } <= ids
-    assert len(ids) == 16 and all(c.id.count("@") <= 1 for c in outcome.claims)
+        assert {
+            (f"{reading}intercept", "point"),
+            (f"{reading}joint_space+intercept+grasp_set", "grasp_set"),
+        } <= ids
+    # 4 claims x 2 measures x 2 fits, under each of the 2 members
+    assert len(ids) == 32 and all(c.id.count("@") <= 1 for c in outcome.claims)
     assert {"end_goal", "angle_error_deg", "error_joint"} <= set(frame.columns)
     assert set(frame.end_goal) <= {"new", "reference", "other"}
 
@@ -218,3 +219,122 @@ def test_the_identity_and_map_sentences_state_the_committed_numbers():
         assert f"over the {100 * stayed:.0f}% of episodes" in said and said.startswith(f"{robot}, ")
     bands = sim4.by_preference(frame[(frame.robot == "panda") & (frame.h == "straight_line")])
     assert set(bands.index.get_level_values("band")) == set(sim4.BANDS)  # every band, for the sentence
+
+
+def test_origin_fit_by_hand():
+    """slope = sum(xy) / sum(x^2), R^2 = 1 - SSE / sum(y^2) (uncentred), against the intercept fit."""
+    x = np.array([1.0, 2.0, 3.0])
+    assert sim4.fit_origin(x, 2.0 * x) == pytest.approx((2.0, 1.0))  # on y = 2x exactly
+    # y = (1, 3, 2): sum(xy) = 13, sum(x^2) = 14, sum(y^2) = 14, so slope 13/14 and R^2 = 13^2/14^2;
+    # with an intercept: mean (2, 2), Sxy = 1, Sxx = 2, Syy = 2, so y = 0.5x + 1 and R^2 = 1/(2*2)
+    y = np.array([1.0, 3.0, 2.0])
+    assert sim4.fit_origin(x, y) == pytest.approx((13 / 14, 169 / 196))
+    assert sim4.fit_line(x, y) == pytest.approx((0.5, 1.0, 0.25))
+    frame = pd.DataFrame(
+        {"h": "none", "distance": np.repeat(x, 2), "error": np.repeat(y, 2) + [-0.1, 0.1] * 3}
+    )
+    origin, intercept = sim4.fits(frame), sim4.fits(frame, form="intercept")
+    assert origin.loc["none"].tolist()[:3] == pytest.approx([13 / 14, 0.0, 169 / 196])  # the cups' means
+    assert intercept.loc["none"].tolist()[:3] == pytest.approx([0.5, 1.0, 0.25])
+    with pytest.raises(ConfigError, match="form"):
+        sim4.fits(frame, form="quadratic")
+
+
+def test_headline_goes_through_the_origin_and_intercept_keeps_the_old_fit():
+    frame = _rows({"panda": 8})
+    claims = {c.id: c for c in sim4.claims(frame)}
+    for kind, name in (("straight_line", "straight_line_linear"), ("none", "no_map_training_goal")):
+        means = frame[frame.h == kind].groupby("distance").error.mean()
+        d, m = means.index.to_numpy(), means.to_numpy()
+        head, old = claims[f"sim4.{name}"], claims[f"sim4.{name}@intercept"]
+        assert head.values["slope"] == pytest.approx((d @ m) / (d @ d))
+        assert head.values["r2"] == pytest.approx(1 - ((m - head.values["slope"] * d) ** 2).sum() / (m @ m))
+        slope, intercept = np.polyfit(d, m, 1)  # the old fit, by numpy's polynomial fit
+        r2 = 1 - ((m - slope * d - intercept) ** 2).sum() / ((m - m.mean()) ** 2).sum()
+        assert old.values["slope"] == pytest.approx(slope) and old.values["r2"] == pytest.approx(r2)
+        assert f"y = {slope:.3f}x {intercept:+.3f}" in old.measured
+        assert f"y = {head.values['slope']:.3f}x, R^2 (uncentred)" in head.measured
+
+
+def _cups() -> pd.DataFrame:
+    """Two cups of the no-map case and one of a map, by hand (see the test's numbers)."""
+    rows = [
+        ("none", 0.5, [1.0, 2.0, 6.0], ["reference", "other", "reference"]),
+        ("none", 1.0, [0.5, 0.7, 3.0], ["other", "reference", "reference"]),
+        ("grasp", 0.5, [0.1, 0.3, 0.2], ["new", "new", "other"]),
+    ]
+    return pd.concat(
+        [
+            pd.DataFrame(
+                {
+                    "robot": "panda",
+                    "assistance": "point",
+                    "h": h,
+                    "distance": d,
+                    "seed": range(3),
+                    "error": err,
+                    "end_goal": end,
+                }
+            )
+            for h, d, err, end in rows
+        ],
+        ignore_index=True,
+    )
+
+
+def test_cup_columns_and_end_shares_by_hand():
+    frame = _cups()
+    out = sim4.with_cup_columns(frame)
+    assert list(out.columns) == [*frame.columns, *sim4.CUP_COLUMNS]
+    by_cup = out.groupby(["h", "distance"])[list(sim4.CUP_COLUMNS)].agg(["min", "max"])
+    expected = {  # mean, median, share whose belief ends on the other training cup
+        ("none", 0.5): (3.0, 2.0, 1 / 3),
+        ("none", 1.0): (1.4, 0.7, 1 / 3),
+        ("grasp", 0.5): (0.2, 0.2, 1 / 3),
+    }
+    for key, values in expected.items():
+        for col, v in zip(sim4.CUP_COLUMNS, values, strict=True):
+            assert by_cup.loc[key, (col, "min")] == pytest.approx(v) == by_cup.loc[key, (col, "max")]
+    shares = sim4.end_shares(frame).loc["none"]
+    assert shares.loc[1.0, "mean_left"] == pytest.approx(0.5)
+    assert shares.loc[1.0, "mean_stayed"] == pytest.approx(1.85)
+    assert shares.n.tolist() == [3, 3]
+
+
+def test_medians_sentence_states_the_table():
+    said = sim4.medians_sentence(_cups())
+    assert said.startswith("panda, without the map, new cups at 0.50 and 1.00 D")
+    assert "the median error is 2.00 and 0.70 D, the mean 3.00 and 1.40 D" in said
+    assert "The belief of 33 and 33% of the users ends on the other training cup" in said
+    assert "those users end 0.50 D from the wanted grasp on average, the others 1.85 D." in said
+    # on the committed paper-scale rows, the numbers of end_shares (not typed ones)
+    frame = pd.read_csv(Path(__file__).resolve().parents[1] / "figures" / "sim4_new_goals.csv")
+    for _, part in frame[frame.assistance == "point"].groupby("robot"):
+        table = sim4.end_shares(part).loc["none"]
+        said = sim4.medians_sentence(part)
+        assert f"{table['median'].iloc[-1]:.2f} D, the mean" in said
+        assert f"and {100 * table.other.iloc[-1]:.0f}% of the users" in said
+
+
+def test_every_episode_panel_is_labelled_and_the_medians_and_share_are_drawn():
+    frame = _rows({"panda": 6}).assign(end_goal="reference")
+    frame.loc[(frame.h == "none") & (frame.distance == 1.0) & (frame.seed < 3), "end_goal"] = "other"
+    fig = sim4.plot(frame)
+    main, side = fig.axes
+    assert side.get_title() == "every episode"
+    assert "episode" in side.get_ylabel() and "normalised" in side.get_ylabel()
+    names = [t.get_text() for t in side.get_legend().get_texts()]
+    assert names == ["without the map", "straight-line h (paper)", "grasp-to-grasp h (ours)"]
+    labels = [t.get_text() for t in main.get_legend().get_texts()]
+    assert "median per cup" in labels
+    # the fits' labels are the lines through the origin, no intercept
+    none = sim4.fits(frame).loc["none"]
+    assert any(t.startswith(f"without the map: y = {none.slope:.2f}x, R²") for t in labels)
+    # each cup's median drawn, hollow, at its x (markers moved a little apart per map)
+    medians = frame[frame.h == "none"].groupby("distance").error.median()
+    hollow = [c for c in main.collections if len(c.get_offsets()) == len(medians)]
+    assert any(np.allclose(np.asarray(c.get_offsets())[:, 1], medians.to_numpy()) for c in hollow)
+    texts = [t.get_text() for t in main.texts]
+    assert sim4.other_share_text(frame) in texts
+    assert "0% of users at the nearest cup, 50% at the farthest" in sim4.other_share_text(frame)
+    plt.close(fig)
