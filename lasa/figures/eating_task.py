@@ -579,15 +579,17 @@ def property_sentence(prop: pd.DataFrame) -> str:
     good, bad = list(meets[meets].index), list(meets[~meets].index)
     if good:
         rows = prop[prop.decoder.isin(good)]
+        stay, n, leave = 100 * rows.stay_share.min(), int(rows.n_inputs.max()), rows.leave_min.min()
         head = (
-            f"{len(good)} of {len(meets)} readings meet the rule: {_names(good)}; the rule ranks `{first}` first. "
-            f"At each, at least {100 * rows.stay_share.min():.0f}% of the {int(rows.n_inputs.max())} inputs stay "
-            f"at every goal, and at least {rows.leave_min.min():.0f} reach every other goal from each stroke end."
+            f"{len(good)} of {len(meets)} readings meet the rule: {_names(good)}; "
+            f"the rule ranks `{first}` first. At each, at least {stay:.0f}% of the {n} inputs stay "
+            f"at every goal, and at least {leave:.0f} reach every other goal from each stroke end."
         )
     else:
         head = f"None of the {len(meets)} readings meets the rule; the best reading is `{first}`."
     tails = [
-        f"`{d}` misses {_misses(part)} (at most {100 * part.stay_share.max():.0f}% of the inputs stay at a goal)"
+        f"`{d}` misses {_misses(part)} "
+        f"(at most {100 * part.stay_share.max():.0f}% of the inputs stay at a goal)"
         for d, part in prop[prop.decoder.isin(bad)].groupby("decoder", sort=False)
     ]
     return head + (f" {'; '.join(tails)}." if tails else "")
@@ -600,8 +602,6 @@ def caps_sentence(cap_prop: pd.DataFrame) -> str:
     meets = latent_property.holds(cap_prop)
     good = list(meets[meets].index)
     said = f"the rule is met by {_names(good)}" if good else "no cap's decoder meets the rule"
-    tails = [
-        f"`{d}` misses {_misses(part)}"
-        for d, part in cap_prop[cap_prop.decoder.isin(list(meets[~meets].index))].groupby("decoder", sort=False)
-    ]
+    missing = cap_prop[cap_prop.decoder.isin(list(meets[~meets].index))]
+    tails = [f"`{d}` misses {_misses(part)}" for d, part in missing.groupby("decoder", sort=False)]
     return f"Of the recipe's decoders at other caps, {said}" + (f"; {'; '.join(tails)}." if tails else ".")
