@@ -49,6 +49,9 @@ __all__ = [
     "sweep",
     "label",
     "plot",
+    "cap_sentence",
+    "across_caps",
+    "findings",
 ]
 
 NAME = "study_belief_cap"
