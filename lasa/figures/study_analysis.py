@@ -303,7 +303,7 @@ def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance
     parts = ", ".join(f"{c} {_pct(rows.finished[c])}" for c in rows.index)
     below = [c for c in rows.index if rows.finished[c] < COMPLETION_BAR]
     verdict = (
-        f"{' and '.join(below)} below the {_pct(COMPLETION_BAR)} that H1 and H3 need"
+        f"{', '.join(below)} below the {_pct(COMPLETION_BAR)} that H1 and H3 need"
         if below
         else f"every condition at or above the {_pct(COMPLETION_BAR)} that H1 and H3 need"
     )

@@ -416,6 +416,8 @@ def _pct(x: float) -> str:
 def _effect(row: pd.Series) -> str:
     """A claim's measured effect, 95% interval and word: ``H1 (...) −2.04 m s [−2.80, −1.27]: *word*``."""
     name, unit, fmt = _EFFECTS[str(row["item"])]
+    if not np.isfinite(row.value):
+        return f"{str(row['item']).upper()} ({name}) not measured: *{row.word}*"
     span = f" [{fmt.format(row.low)}, {fmt.format(row.high)}]" if np.isfinite(row.low) else ""
     text = f"{fmt.format(row.value)}{unit}{span}".replace("-", "−")
     return f"{str(row['item']).upper()} ({name}) {text}: *{row.word}*"
