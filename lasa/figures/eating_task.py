@@ -75,6 +75,8 @@ __all__ = [
     "train_caps",
     "directions",
     "plot",
+    "property_sentence",
+    "caps_sentence",
 ]
 
 NAME = "eating_latent"
@@ -544,3 +546,62 @@ def plot(frame: pd.DataFrame) -> Figure:
         "arrows: the fork tip's velocity seen from above, 0.1 m/s = half a radius"
     )
     return fig
+
+
+def _names(items: list[str]) -> str:
+    """```a```, ```a`` and ``b```, ```a``, ``b`` and ``c```."""
+    quoted = [f"`{i}`" for i in items]
+    return quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} and {quoted[-1]}"
+
+
+def _misses(rows: pd.DataFrame) -> str:
+    """Where one decoder's property fails: the half and the goals, e.g. ``the stay half at the plate``."""
+    parts = []
+    for half, column in (("stay", "stay_holds"), ("leave", "leave_holds")):
+        goals = list(rows.goal[~rows[column].astype(bool)])
+        if len(goals) == len(rows):
+            parts.append(f"the {half} half at every goal")
+        elif goals:
+            parts.append(f"the {half} half at {' and '.join(f'the {g}' for g in goals)}")
+    if not rows.all_reached.astype(bool).all():
+        parts.append("a goal from home")
+    return " and ".join(parts) or "the rule"
+
+
+def property_sentence(prop: pd.DataFrame) -> str:
+    """Which readings meet the two-half rule, which the rule ranks first, and how the others fall short.
+
+    Args:
+        prop: One task's :func:`lasa.evidence.latent_property.summary` (the readings the rule chooses among).
+    """
+    meets = latent_property.holds(prop)
+    first = latent_property.choose(prop)
+    good, bad = list(meets[meets].index), list(meets[~meets].index)
+    if good:
+        rows = prop[prop.decoder.isin(good)]
+        stay, n, leave = 100 * rows.stay_share.min(), int(rows.n_inputs.max()), rows.leave_min.min()
+        head = (
+            f"{len(good)} of {len(meets)} readings meet the rule: {_names(good)}; "
+            f"the rule ranks `{first}` first. At each, at least {stay:.0f}% of the {n} inputs stay "
+            f"at every goal, and at least {leave:.0f} reach every other goal from each stroke end."
+        )
+    else:
+        head = f"None of the {len(meets)} readings meets the rule; the best reading is `{first}`."
+    tails = [
+        f"`{d}` misses {_misses(part)} "
+        f"(at most {100 * part.stay_share.max():.0f}% of the inputs stay at a goal)"
+        for d, part in prop[prop.decoder.isin(bad)].groupby("decoder", sort=False)
+    ]
+    return head + (f" {'; '.join(tails)}." if tails else "")
+
+
+def caps_sentence(cap_prop: pd.DataFrame) -> str:
+    """At which caps the headline's recipe meets the rule (:func:`train_caps`' property), in one sentence."""
+    if cap_prop.empty:
+        return "No other cap was trained."
+    meets = latent_property.holds(cap_prop)
+    good = list(meets[meets].index)
+    said = f"the rule is met by {_names(good)}" if good else "no cap's decoder meets the rule"
+    missing = cap_prop[cap_prop.decoder.isin(list(meets[~meets].index))]
+    tails = [f"`{d}` misses {_misses(part)}" for d, part in missing.groupby("decoder", sort=False)]
+    return f"Of the recipe's decoders at other caps, {said}" + (f"; {'; '.join(tails)}." if tails else ".")

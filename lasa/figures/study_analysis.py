@@ -40,6 +40,8 @@ __all__ = [
     "stuck_episodes",
     "stuck_summary",
     "break_even",
+    "completion_sentence",
+    "switch_sentence",
 ]
 
 HERLANT_SHARE = 0.174  # mode switching's share of execution time, JACO + joystick (Herlant et al. 2016) [-]
@@ -278,4 +280,59 @@ def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
     medians = ("distance_cm", "angle_deg", "belief_goal", "best_progress", "inputs_progressing")
     return stuck_rows.groupby(keys).agg(
         episodes=("participant", "size"), **{m: (m, "median") for m in medians}
+    )
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.3g}%"
+
+
+def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance: str) -> str:
+    """The share of episodes each condition finishes under one model, decoder and SA member, in words.
+
+    Args:
+        done: :func:`completion`'s table (its ``episodes`` count the episodes of every participant run).
+        model: The participant model.
+        decoder: The decoder reading of the LA conditions (Retargeting's rows have none).
+        assistance: The SA member of the +SA conditions.
+    """
+    rows = done[(done.model == model) & done.decoder.isin([decoder, "none"])]
+    rows = rows[rows.assistance.isin([assistance, NO_ASSISTANCE])].set_index("condition")
+    if rows.empty:
+        raise ConfigError(f"no completion rows for {model!r}, decoder {decoder!r}, member {assistance!r}")
+    parts = ", ".join(f"{c} {_pct(rows.finished[c])}" for c in rows.index)
+    below = [c for c in rows.index if rows.finished[c] < COMPLETION_BAR]
+    verdict = (
+        f"{', '.join(below)} below the {_pct(COMPLETION_BAR)} that H1 and H3 need"
+        if below
+        else f"every condition at or above the {_pct(COMPLETION_BAR)} that H1 and H3 need"
+    )
+    episodes = int(rows.episodes.max())
+    return f"{model} participants, `{decoder}`, {episodes} episodes per condition: {parts}; {verdict}."
+
+
+def switch_sentence(
+    shares: pd.DataFrame, model: str, assistance: str, participants_of: str = "cohort"
+) -> str:
+    """Retargeting's mode-switch share (:func:`switch_shares`) of a model against Herlant et al.'s, in words.
+
+    R's share, and R+SA's under the SA member ``assistance``; each "below", "above" or "about"
+    Herlant et al.'s 17.4% by whether its 95% interval lies below, above or around it.
+    """
+    rows = shares[(shares.model == model) & (shares.participants_of == participants_of)]
+    rows = rows[rows.assistance.isin([NO_ASSISTANCE, assistance])]
+    if rows.empty:
+        raise ConfigError(f"no mode-switch rows for model {model!r} ({participants_of})")
+    said = " and ".join(
+        f"{_pct(r.switch_share)} [{_pct(r.ci_low)}, {_pct(r.ci_high)}] ({r.condition})"
+        for r in rows.itertuples()
+    )
+    side = [
+        "below" if r.ci_high < HERLANT_SHARE else "above" if r.ci_low > HERLANT_SHARE else "about"
+        for r in rows.itertuples()
+    ]
+    where = side[0] if len(set(side)) == 1 else "partly " + " and partly ".join(dict.fromkeys(side))
+    return (
+        f"{model} participants ({participants_of}) switch modes {said} of their time: {where} "
+        f"Herlant et al.'s {_pct(HERLANT_SHARE)}."
     )

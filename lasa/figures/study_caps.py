@@ -49,6 +49,9 @@ __all__ = [
     "sweep",
     "label",
     "plot",
+    "cap_sentence",
+    "across_caps",
+    "findings",
 ]
 
 NAME = "study_belief_cap"
@@ -397,3 +400,85 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
     )
     fig.tight_layout()
     return fig
+
+
+_EFFECTS = {  # how each claim's measured effect reads, and its unit
+    "h1": ("SA − no SA Goal Error", " m s", "{:+.2f}"),
+    "h2": ("LA+SA − R+SA scoop alignment", "", "{:+.3f}"),
+    "h3": ("LA+SA − R restricted mean time", " s", "{:+.1f}"),
+}
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.3g}%"
+
+
+def _effect(row: pd.Series) -> str:
+    """A claim's measured effect, 95% interval and word: ``H1 (...) −2.04 m s [−2.80, −1.27]: *word*``."""
+    name, unit, fmt = _EFFECTS[str(row["item"])]
+    if not np.isfinite(row.value):
+        return f"{str(row['item']).upper()} ({name}) not measured: *{row.word}*"
+    span = f" [{fmt.format(row.low)}, {fmt.format(row.high)}]" if np.isfinite(row.low) else ""
+    text = f"{fmt.format(row.value)}{unit}{span}".replace("-", "−")
+    return f"{str(row['item']).upper()} ({name}) {text}: *{row.word}*"
+
+
+def cap_sentence(frame: pd.DataFrame, cap: str) -> str:
+    """What the study measured at one cap of the sweep: completion per arm, then H1-H3 with their words."""
+    rows = frame[frame.cap.astype(str) == cap]
+    if rows.empty:
+        raise ValueError(f"the sweep has no cap {cap!r}; it has {sorted(set(frame.cap.astype(str)))}")
+    done = rows[rows.kind == "completion"].set_index("item").value
+    finish = ", ".join(f"{c} {_pct(done[c])}" for c in CONDITIONS if c in done.index)
+    claims = rows[rows.kind == "claim"].set_index("item", drop=False)
+    effects = "; ".join(_effect(claims.loc[c]) for c in CLAIMS if c in claims.index)
+    n, decoder = int(rows.n.iloc[0]), rows.decoder.iloc[0]
+    return f"with `{decoder}` and {n} participants, episodes finished: {finish}. {effects}."
+
+
+def _caps(caps: list[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return caps[0] if len(caps) == 1 else f"{', '.join(caps[:-1])} and {caps[-1]}"
+
+
+def _by_cap(frame: pd.DataFrame, kind: str, column: str, item: str | None = None) -> pd.Series:
+    """One kind's (and item's) ``column`` per cap, indexed by the cap as text."""
+    rows = frame[(frame.kind == kind) & ((frame["item"] == item) if item else True)]
+    return pd.Series(rows[column].to_numpy(), index=rows.cap.astype(str).to_numpy())
+
+
+def across_caps(frame: pd.DataFrame) -> str:
+    """How H1's sign, LA's completion and the property move with the cap, in one sentence."""
+    caps = list(dict.fromkeys(frame.sort_values("order").cap.astype(str)))
+    h1 = _by_cap(frame, "claim", "value", "h1")
+    lower = [c for c in caps if c in h1.index and h1[c] < 0]
+    higher = [c for c in caps if c in h1.index and h1[c] >= 0]
+    parts = []
+    if lower:
+        parts.append(f"SA lowers Goal Error at cap {_caps(lower)}")
+    if higher:
+        parts.append(f"SA raises it at cap {_caps(higher)}")
+    la = _by_cap(frame, "completion", "value", "LA")
+    parts.append("LA finishes " + ", ".join(f"{_pct(la[c])} at {c}" for c in caps if c in la.index))
+    prop = _by_cap(frame, "property", "word")
+    misses = [c for c in caps if c in prop.index and prop[c] != "meets the rule"]
+    meets = "at every cap" if not misses else f"at every cap but {_caps(misses)}"
+    if len(misses) == len(prop):
+        meets = "at no cap"
+    return f"{'; '.join(parts)}. The recipe's decoder meets the property rule {meets}."
+
+
+def findings(frame: pd.DataFrame, study_cap: str) -> str:
+    """The sweep in Markdown bullets: the study's cap, no cap (``@uncapped``), and across the caps.
+
+    Args:
+        frame: The sweep's rows (:func:`sweep`).
+        study_cap: The study's own cap as the ``cap`` column writes it (:func:`label`).
+    """
+    caps = set(frame.cap.astype(str))
+    out = [f"- **At the study's cap ({study_cap})**, {cap_sentence(frame, study_cap)}"]
+    if "none" in caps and study_cap != "none":
+        uncapped = cap_sentence(frame, "none")
+        out.append(f"- **Without the cap** (the recipe trained and run uncapped), {uncapped}")
+    out.append(f"- **Against the cap** (the figure above): {across_caps(frame)}")
+    return "\n".join(out)
