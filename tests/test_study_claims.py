@@ -64,8 +64,12 @@ def test_clear_effects_reproduce_every_hypothesis():
         for extra in ("", "grasp_set", "cohort", "grasp_set+cohort"):
             cid = head + (("+" if "@" in head else "@") + extra if extra else "")
             assert v[cid] == "yes", cid
-    assert len(rows) == len(v) == 5 * 4  # one row per reading, no copy of a headline
+    # one row per reading, no copy of a headline; and Fig. dessert's Likert claim, which simulated
+    # participants cannot test (they answer no questionnaire)
+    assert len(rows) == len(v) == 5 * 4 + 1
     by_id = {c.id: c for c in rows}
+    assert by_id["study.likert"].reproduced == "not testable" and not by_id["study.likert"].settled
+    assert "answer no questionnaire" in by_id["study.likert"].measured
     first = by_id["study.h1"]
     assert first.assistance == "hindsight" and first.n_users == 10 and first.settled
     assert first.ci_high < 0 and by_id["study.h1@cohort"].n_users == 20
@@ -405,9 +409,12 @@ def test_untestable_marks_every_row_and_keeps_the_numbers():
     plain, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20)
     reason = "no decoder with both halves of the property; best reading t: least share staying 0.10"
     marked, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, untestable=reason)
-    assert [c.id for c in marked] == [c.id for c in plain] and len(marked) == 20
+    assert [c.id for c in marked] == [c.id for c in plain] and len(marked) == 20 + 1  # + study.likert
     for before, after in zip(plain, marked, strict=True):
         assert after.reproduced == "not testable" and not after.settled, after.id
+        if after.id == "study.likert":  # not testable for its own reason, marked or not
+            assert after == before
+            continue
         assert f"not testable ({reason})" in after.note and after.measured == before.measured
         assert after.value == before.value
 
@@ -446,7 +453,8 @@ def test_each_participant_model_is_judged_and_named_in_the_ids():
         and v["study.h3@other+b+cohort"] == "yes"
     )
     assert "study.h1@mean_distance+b+grasp_set+cohort" in v
-    assert len(rows) == 2 * (5 * 4 + 3 * 2)  # per model: 5 keys x (2 members x 2 sizes) + 3 x 2 sizes
+    # per model: 5 keys x (2 members x 2 sizes) + 3 x 2 sizes; and Fig. dessert's Likert claim, once
+    assert len(rows) == 2 * (5 * 4 + 3 * 2) + 1
     assert ("hindsight", 10, "head", "b") in analyses and ("hindsight", 10, "other", "b") in analyses
     assert ("hindsight", 10) in analyses and ("hindsight", 20, "other") in analyses
     assert "b (effect not reproduced)" in by_id(rows)["study.h3"].note  # a reading that flips it
@@ -540,10 +548,13 @@ def test_a_reading_without_an_interval_is_not_testable_never_undecided():
         float("nan"),
         "alignment LA+SA - R+SA, Dessert phases: scoop: +0.020",
     )
-    row = study_claims._claim_row(
-        "study.h2@leaves", "h2", judged, {"n": 10}, "hindsight", "leaves", None, None, "no comparison"
-    )
+    done = pd.Series({"R": 1.0, "R+SA": 1.0, "LA": 1.0, "LA+SA": 1.0})
+    nan = float("nan")
+    result = {"n": 10, "h3_completion": done, "h2_phases": {"scoop": (0.02, nan, nan, nan, 1)}}
+    row = study_claims._claim_row("study.h2@leaves", "h2", judged, result, "hindsight", "leaves", None, None)
     assert (row.reproduced, row.settled) == ("not testable", False)
+    assert row.note.startswith("Measured effect: no scoop-phase comparison (1 pairs). ")
+    assert row.facts["pairs"] == 1 and row.facts["testable"] == 0 and row.facts["completion.LA"] == 1
     assert row.measured.startswith("not testable (too few pairs for an interval)")
     assert "fewer than two participants" in row.note and "nan" not in row.note
 
