@@ -63,7 +63,7 @@ def _server_default(capsys) -> str:
 
 
 def _shot_modes() -> dict[str, str]:
-    """Screenshot -> the ``frames`` of the ``WebConfig`` of the test in ``tests/test_web.py`` that takes it."""
+    """Screenshot -> the ``frames`` of the ``WebConfig`` of the ``tests/test_web.py`` test taking it."""
     source = (ROOT / "tests" / "test_web.py").read_text()
     out = {}
     for body in re.split(r"^def ", source, flags=re.MULTILINE):
