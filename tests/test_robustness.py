@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from lasa.base.errors import ConfigError
+from lasa.evidence.decision import WORDS
 from lasa.figures import robustness
 from lasa.pipeline.scaleout import run_jobs, scheduler_address
 
@@ -91,6 +92,7 @@ def test_grid_rows_per_cell_and_reading(local, task):
     assert set(local[local.setting != "default"].assistance) == {"point"}
     assert set(local.reproduced) <= {"reproduced", "partly", "not reproduced", "undecided"}
     assert (local.users == TINY.users).all()
+    assert (local.level == robustness.LEVEL).all()  # the claims table's level, not 95%
     # undecided only while unsettled; an unsettled row whose interval excludes the paper's number
     # reads "not reproduced"
     assert (~local[local.reproduced == "undecided"].settled.astype(bool)).all()
@@ -157,3 +159,98 @@ def test_run_jobs_keeps_the_order_and_checks_its_arguments(monkeypatch):
 def test_an_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(ConfigError, match="cannot reach the Dask scheduler"):
         run_jobs(_square, range(2), scheduler="tcp://127.0.0.1:9", timeout="1s")
+
+
+def _table(effects: list[tuple[str, str, str]], level: float = robustness.LEVEL) -> pd.DataFrame:
+    """Rows of the map's table for one robot: (claim id, reading, effect), the retired one-word
+    ``reproduced`` set to another word wherever it can differ, as 18 of the 140 cells once did."""
+    other = {"reproduced": "not reproduced", "partly": "reproduced", "undecided": "not reproduced"}
+    rows = []
+    for i, (claim, member, effect) in enumerate(effects):
+        rows.append(
+            {
+                **dict.fromkeys(robustness.COLUMNS, 0),
+                "id": claim,
+                "robot": "planar5",
+                "assistance": member,
+                "alpha": 0.2,
+                "action_scale": 0.375,
+                "measured": 0.1 * i,
+                "reproduced": other.get(effect, effect),
+                "settled": effect != "undecided",
+                "pilot": "boltzmann",
+                "setting": "default",
+                "users": 60,
+                "effect": effect,
+                "number": "n/a",
+                "level": level,
+            }
+        )
+    return pd.DataFrame(rows, columns=list(robustness.COLUMNS))
+
+
+EFFECTS = [
+    ("sim1.a", "point", "reproduced"),
+    ("sim1.a", "grasp_set", "not reproduced"),
+    ("sim1.b", "point", "partly"),
+    ("sim1.b", "grasp_set", "undecided"),
+    ("sim2.c", "point", "not testable"),
+    ("sim2.c", "grasp_set", "reproduced"),
+]
+
+
+def test_the_map_colours_every_cell_by_its_effect_word():
+    from matplotlib.colors import to_rgba
+
+    table = _table(EFFECTS)
+    fig = robustness.plot(table)
+    (ax,) = [a for a in fig.axes if a.images]
+    (image,) = ax.images
+    rows = [t.get_text() for t in ax.get_yticklabels()]
+    columns = [t.get_text() for t in ax.get_xticklabels()]
+    assert columns == ["default", "grasp_set"]  # point's default cell, then the other member
+    cells = image.get_array()
+    for claim, member, effect in EFFECTS:
+        r, c = rows.index(claim), columns.index("default" if member == "point" else member)
+        drawn = image.cmap(image.norm(cells[r, c]))
+        assert drawn == pytest.approx(to_rgba(robustness.COLOURS[effect])), (claim, member, effect)
+    # the legend names the five effect words, each in its colour
+    (legend,) = fig.legends
+    assert [t.get_text() for t in legend.get_texts()] == list(WORDS)
+    for patch, word in zip(legend.get_patches(), WORDS, strict=True):
+        assert patch.get_facecolor() == pytest.approx(to_rgba(robustness.COLOURS[word]))
+    # the undecided cell, and only it, is hatched and its number marked
+    hatched = [p for p in ax.patches if p.get_hatch()]
+    assert [(round(p.get_x() + 0.5), round(p.get_y() + 0.5)) for p in hatched] == [
+        (columns.index("grasp_set"), rows.index("sim1.b"))
+    ]
+    assert sorted(t.get_text() for t in ax.texts if t.get_text().endswith("?")) == ["0.3?"]
+
+
+def _title_level(fig) -> float:
+    import re
+
+    match = re.search(r"\(([\d.]+)% intervals", fig.get_suptitle())
+    assert match, fig.get_suptitle()
+    return float(match[1]) / 100
+
+
+def test_the_maps_title_states_the_level_its_cells_were_judged_at():
+    from lasa.evidence.verdicts import ALPHA, Design
+
+    looks = len(Design().sizes)
+    assert robustness.LEVEL == pytest.approx(1 - ALPHA / looks)
+    assert _title_level(robustness.plot(_table(EFFECTS))) == pytest.approx(robustness.LEVEL)
+    # the title reads the table's level: a table judged at another level says so
+    assert _title_level(robustness.plot(_table(EFFECTS, level=0.9))) == pytest.approx(0.9)
+    with pytest.raises(ConfigError, match="`level` column"):
+        robustness.plot(_table(EFFECTS).drop(columns="level"))
+    with pytest.raises(ConfigError, match="one interval level"):
+        robustness.plot(pd.concat([_table(EFFECTS[:2]), _table(EFFECTS[2:], level=0.9)]))
+
+
+def test_the_summary_counts_effect_words():
+    table = _table([("sim1.a", m, e) for m, e in [("point", "reproduced"), ("grasp_set", "partly")]])
+    (row,) = robustness.summary(table).to_dict("records")
+    assert (row["reproduced"], row["partly"], row["not reproduced"]) == (1, 1, 0)
+    assert row["default"] == "reproduced" and row["moves"] == "grasp_set partly" and not row["stable"]

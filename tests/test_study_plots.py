@@ -11,6 +11,7 @@ import io
 
 import matplotlib
 import matplotlib.pyplot as plt
+import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.figure import Figure
@@ -185,6 +186,31 @@ def test_time_hatches_the_censored_bars_only(drawn):
     assert _hatched(fig) == 3  # the Idle Time bars drawn over them are not
     legend = _legend_text(fig)
     assert "some episodes cut at the horizon (a lower bound; censored at the 150 s horizon)" in legend
+
+
+def test_time_dodges_the_total_and_idle_whiskers_apart(drawn):
+    """Each bar's two intervals sit on either side of its centre, inside it, each in its own colour:
+    read off the figure's lines by their height (each group's times are constant: a zero-length
+    whisker at its mean), Total at 10 x the group's value and Idle at 3 x."""
+    fig = drawn["time"]
+    for sub in fig.subfigs:
+        for ax, task in zip(sub.axes, TASKS, strict=True):
+            at: dict[tuple[str, str], tuple[float, str]] = {}
+            for line in ax.lines:
+                y = np.asarray(line.get_ydata(), dtype=float)
+                for cond in CONDITIONS:
+                    for measure, scale in (("total", 10), ("idle", 3)):
+                        if len(y) and np.allclose(y, scale * _value(cond, task)):
+                            assert (cond, measure) not in at
+                            at[cond, measure] = (float(line.get_xdata()[0]), line.get_color())
+            assert len(at) == 2 * len(CONDITIONS)
+            for i, cond in enumerate(CONDITIONS):
+                (x_total, c_total), (x_idle, c_idle) = at[cond, "total"], at[cond, "idle"]
+                assert i - 0.4 < x_total < i < x_idle < i + 0.4  # dodged apart, inside the bar
+                assert c_total != c_idle
+    legend = _legend_text(fig)
+    assert "Total Time's 95% CI: whisker left of the bar's centre" in legend
+    assert "Idle Time's 95% CI: whisker right of the bar's centre" in legend
 
 
 def _alignment_hatches(fig: Figure, given: bool) -> None:

@@ -19,7 +19,7 @@ import seaborn as sns
 from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
-from matplotlib.colors import Normalize
+from matplotlib.colors import Colormap, LinearSegmentedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle
@@ -35,6 +35,9 @@ __all__ = [
     "CUP_COLORS",
     "GOAL_COLORS",
     "goal_colors",
+    "belief_cmap",
+    "TRAIN_COLOR",
+    "VAL_COLOR",
     "draw_scene",
     "frame_around",
     "is_planar",
@@ -66,6 +69,28 @@ GOAL_COLORS = (*CUP_COLORS, "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f
 def goal_colors(n_goals: int) -> tuple[str, ...]:
     """A colour for each of ``n_goals`` goals: :data:`GOAL_COLORS` in turn, repeated past its end."""
     return tuple(GOAL_COLORS[g % len(GOAL_COLORS)] for g in range(n_goals))
+
+
+BELIEF_MID = "#dddddd"  # a belief map's middle, b(g) = 0.5: neither goal's colour
+
+
+def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
+    """The colour map of the belief in goal ``goal_index``: the goals' own colours at its ends.
+
+    At 1 the goal's colour (:func:`goal_colors`); at 0 the colour of the goal the belief is then
+    on when there are two (the other cup), a neutral grey when there are more; light grey
+    halfway. A path drawn in it is in the colour of the cup it is believed to head for.
+
+    Raises:
+        ValueError: if ``goal_index`` is not one of the ``n_goals`` goals.
+    """
+    if not 0 <= goal_index < n_goals:
+        raise ValueError(f"goal_index must be one of the {n_goals} goals, got {goal_index}")
+    colors = goal_colors(n_goals)
+    low = colors[1 - goal_index] if n_goals == 2 else "#7a7a7a"
+    return LinearSegmentedColormap.from_list(
+        f"belief_in_goal_{goal_index}", [low, BELIEF_MID, colors[goal_index]]
+    )
 
 
 def _ax(ax: Axes | None) -> Axes:
@@ -114,7 +139,9 @@ def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def _colored_path(ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str, norm: Normalize, lw: float = 1.2):
+def _colored_path(
+    ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str | Colormap, norm: Normalize, lw: float = 1.2
+) -> LineCollection:
     segs = np.stack([xy[:-1], xy[1:]], axis=1)
     lc = LineCollection(list(segs), cmap=cmap, norm=norm, lw=lw)
     lc.set_array(values[:-1])
@@ -137,6 +164,9 @@ def plot_demonstrations(
 ) -> Axes:
     """Grasp-site paths of the demonstrations, coloured by the belief in one cup.
 
+    The colours are the cups' own (:func:`belief_cmap`): a path is in a cup's colour where the
+    belief is on that cup, as the cups are drawn (:func:`draw_scene`).
+
     Args:
         task: The cup task.
         demos: The dataset; only the clean tuples are drawn.
@@ -146,28 +176,49 @@ def plot_demonstrations(
     ax = draw_scene(task, ax)
     clean = demos.clean()
     norm = Normalize(0.0, 1.0)
+    cmap = belief_cmap(len(task.goal_names), goal_index)
     lc = None
     drawn = []
     for d in np.unique(clean.demo):
         m = clean.demo == d
         xy = project(task, task.robot.grasp_positions(clean.states[m]))
         drawn.append(xy)
-        lc = _colored_path(ax, xy, clean.beliefs[m, goal_index], "coolwarm", norm, 0.9)
+        lc = _colored_path(ax, xy, clean.beliefs[m, goal_index], cmap, norm, 0.9)
     if lc is not None:
         plt.colorbar(lc, ax=ax, label=f"belief in the {task.goal_names[goal_index]} cup", shrink=0.8)
         frame_around(task, ax, np.concatenate(drawn))
     return ax
 
 
-def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """Training loss and held-out reconstruction error against optimiser step."""
+TRAIN_COLOR, VAL_COLOR = "#1f77b4", "#d95f02"  # the training curves: loss (left axis), error (right)
+
+
+def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> tuple[Axes, Axes]:
+    """Training loss and held-out reconstruction error against optimiser step, each on its own axis.
+
+    The two are in different units, so each has a log axis of its own, labelled and coloured as
+    its curve: the loss (left, dimensionless: the action error in units of sigma_h^2, plus the
+    sector term, :mod:`lasa.method.train`) and the held-out error ||e_a||^2 (right, (rad/s)^2).
+
+    Returns:
+        The loss's axes (``ax``) and the error's (its twin).
+    """
     ax = _ax(ax)
-    ax.plot(history["step"], history["train_loss"], label="train loss (units of $\\sigma_h^2$)")
-    ax.plot(history["step"], history["val_error"], label="held-out $\\|e_a\\|^2$ [(rad/s)$^2$]")
-    ax.set_yscale("log")
+    twin = ax.twinx()
+    ax.plot(history["step"], history["train_loss"], color=TRAIN_COLOR, label="training loss")
+    twin.plot(history["step"], history["val_error"], color=VAL_COLOR, ls="--", label="held-out error")
+    labels = (
+        (ax, TRAIN_COLOR, "training loss [-] ($\\|e_a\\|^2 / \\sigma_h^2$ + sector)"),
+        (twin, VAL_COLOR, "held-out $\\|e_a\\|^2$ [(rad/s)$^2$]"),
+    )
+    for axes, color, text in labels:
+        axes.set_yscale("log")
+        axes.set_ylabel(text, color=color)
+        axes.tick_params(axis="y", which="both", colors=color)
     ax.set_xlabel("optimiser step")
-    ax.legend(frameon=False)
-    return ax
+    lines = [*ax.get_lines(), *twin.get_lines()]
+    ax.legend(lines, [str(line.get_label()) for line in lines], frameon=False)
+    return ax, twin
 
 
 def robots_present(table: pd.DataFrame) -> list[str]:

@@ -5,9 +5,10 @@ A verdict rests on conventions the paper leaves open: the member of the shared-a
 simulated user (Eq. S1, or the pilots :data:`lasa.people.users.PILOTS`). This module re-runs the sims
 of Figs. sim1-sim3 in every cell of a grid over those settings (:func:`cells`: one factor at a time
 around the default, or a full factorial) and judges each claim in each cell as the claims table does
-(:mod:`lasa.evidence.verdicts`), per draw of users and pooled. A run-time sigma_h scales the learned
-decoder's output (:class:`ScaledDecoder`, not retrained). Cells run through
-:func:`lasa.pipeline.scaleout.run_jobs`, locally or on a Dask cluster, with identical results.
+(:mod:`lasa.evidence.verdicts`), at the verdicts' interval level (:data:`LEVEL`), per draw of users
+and pooled; the map colours each cell by its effect word (:data:`lasa.evidence.decision.WORDS`). A
+run-time sigma_h scales the learned decoder's output (:class:`ScaledDecoder`, not retrained). Cells
+run through :func:`lasa.pipeline.scaleout.run_jobs`, locally or on a Dask cluster, with identical results.
 The grid's design and what each cell reuses: ``docs/method-notes.md``.
 """
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import math
 from collections.abc import Mapping
 from typing import Annotated, Any
 
@@ -22,6 +24,7 @@ import annotated_types as at
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
@@ -43,7 +46,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, criteria
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
-from lasa.evidence.verdicts import USER, assess, member_frame
+from lasa.evidence.verdicts import N_BOOT, USER, Design, assess, member_frame
 from lasa.figures import sim1, sim2, sim3
 from lasa.figures.common import as_decoders, check_assistance
 from lasa.method.decoder import ActionDecoder
@@ -54,6 +57,8 @@ from lasa.world.goals import GoalTask
 __all__ = [
     "NAME",
     "COLUMNS",
+    "LEVEL",
+    "COLOURS",
     "DESIGNS",
     "Config",
     "Cell",
@@ -65,12 +70,14 @@ __all__ = [
     "default_frames",
     "summary",
     "describe",
+    "level_of",
     "plot",
 ]
 
 NAME = "claims_robustness"
 # the contract's columns first: ``seed`` is the seed of the cell's users and ``measured`` the
-# number the claim's verdict rests on (``lasa.evidence.claims.Claim.value``), with its 95% interval
+# number the claim's verdict rests on (``lasa.evidence.claims.Claim.value``), with its interval at
+# ``level`` (:data:`LEVEL`); ``effect`` is the word the map colours
 COLUMNS = (
     "id",
     "robot",
@@ -88,11 +95,23 @@ COLUMNS = (
     "users",
     "effect",
     "number",
+    "level",
 )
 DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
 SIMS = (("sim1", sim1), ("sim2", sim2), ("sim3", sim3))  # the sims each cell runs
 MIN_USERS = 60  # the fewest users per point a cell may rest on [-]
+# every cell's interval level: the claims table's, each look's 1 - ALPHA / K of the sequential
+# design (lasa.evidence.verdicts.Design), so a cell and its claims-table row read alike [-]
+LEVEL = Design().level
+# each effect word's colour (lasa.evidence.decision.WORDS); an undecided cell is also hatched
+COLOURS = {
+    "reproduced": "#1b9e77",
+    "partly": "#e6ab02",
+    "not reproduced": "#d95f02",
+    UNDECIDED: "#d9d9d9",
+    NOT_TESTABLE: "#ffffff",
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -118,7 +137,7 @@ class Config:
     horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
-    n_boot: PositiveInt = 400  # bootstrap resamples of each cell's 95% intervals [-]
+    n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each cell's intervals: the claims table's [-]
     seed: Seed = 0  # seed of the users (the same users in every cell: paired) [-]
     n_jobs: PositiveInt = 1  # local worker processes for the cells [-]
     scheduler: str | None = None  # Dask scheduler address; None: $LASA_SCHEDULER, else local
@@ -216,7 +235,9 @@ def _pilot_prob(config: Config, pilot: str) -> float:
     return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
 
 
-def _rows(claims: list[Claim], cell: Cell, assistance: str, robot: str, config: Config) -> pd.DataFrame:
+def _rows(
+    claims: list[Claim], cell: Cell, assistance: str, robot: str, config: Config, level: float
+) -> pd.DataFrame:
     rows = [
         {
             "id": c.id,
@@ -235,6 +256,7 @@ def _rows(claims: list[Claim], cell: Cell, assistance: str, robot: str, config: 
             "pilot": cell.pilot,
             "setting": cell.setting,
             "users": c.n_users,
+            "level": level,
         }
         for c in claims
     ]
@@ -252,12 +274,13 @@ def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, 
 
 
 def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Config) -> pd.DataFrame:
-    """Every member's claims of one sim in one cell, each with its 95% intervals."""
+    """Every member's claims of one sim in one cell, each with its intervals at :data:`LEVEL`."""
     parts = []
+    fast = getattr(module, "boot_values", None)
     for assistance in cell.assistance:
-        fast = getattr(module, "boot_values", None)
-        claims = assess(module.claims, member_frame(frame, assistance), config.n_boot, config.seed, fast=fast)
-        parts.append(_rows(claims, cell, assistance, robot, config))
+        frame_m = member_frame(frame, assistance)
+        claims = assess(module.claims, frame_m, config.n_boot, config.seed, level=LEVEL, fast=fast)
+        parts.append(_rows(claims, cell, assistance, robot, config, LEVEL))
     return pd.concat(parts, ignore_index=True)
 
 
@@ -346,7 +369,10 @@ def run(
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per (robot, claim): cells with each verdict, and whether the default verdict holds.
+    """Per (robot, claim): cells with each effect word, and whether the default cell's holds.
+
+    The words are the rows' ``effect`` (:data:`lasa.evidence.decision.WORDS`), the ones the map
+    (:func:`plot`) colours.
 
     Args:
         table: :func:`run`'s rows.
@@ -354,17 +380,17 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
     Returns:
         Columns ``reproduced``, ``partly``, ``not reproduced``, ``undecided``, ``not testable``
         (cell counts over the members' and the settings' cells), ``default`` (the headline
-        member's verdict in the default cell, empty if the grid has none), ``stable`` (every
-        settled cell gives it) and ``moves`` (the cells whose settled verdict differs from it).
+        member's effect in the default cell, empty if the grid has none), ``stable`` (every
+        settled cell gives it) and ``moves`` (the cells whose settled effect differs from it).
     """
     rows = []
     for (robot, claim), part in table.groupby(["robot", "id"], sort=True):
         part = part.assign(column=part.apply(_label, axis=1))
-        counts = part.reproduced.value_counts()
-        default = part.loc[part.column == "default", "reproduced"]
+        counts = part.effect.value_counts()
+        default = part.loc[part.column == "default", "effect"]
         head = str(default.iloc[0]) if len(default) else ""
         settled = part[part.settled.astype(bool) & (part.column != "default")]
-        moves = settled.loc[settled.reproduced != head, ["column", "reproduced"]]
+        moves = settled.loc[settled.effect != head, ["column", "effect"]]
         rows.append(
             {
                 "robot": robot,
@@ -414,14 +440,37 @@ def _label(row: Any) -> str:
     return f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}"
 
 
+def level_of(table: pd.DataFrame) -> float:
+    """The one interval level of ``table``'s cells (its ``level`` column).
+
+    Raises:
+        ConfigError: if the column is missing (a table from before it was written) or holds
+            more than one level.
+    """
+    if "level" not in table.columns:
+        raise ConfigError("the verdict map's table has no `level` column: run notebook 08 again")
+    levels = sorted(set(table.level.astype(float)))
+    if len(levels) != 1:
+        raise ConfigError(f"the verdict map's cells must share one interval level, got {levels}")
+    return levels[0]
+
+
 def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     """The verdict map: claims (rows) x readings and settings (columns), one panel per robot.
 
     The columns are the headline member's default cell, each other member at the default
-    setting, then each alpha, sigma_h and pilot under the headline member. Colour is the
-    verdict; an undecided cell is grey and hatched, with its point estimate's verdict
-    initial (y/p/n) and a "?"; the text of the others is the number the verdict rests on.
+    setting, then each alpha, sigma_h and pilot under the headline member. A cell's colour is
+    its effect word (:data:`COLOURS`, the ``effect`` column); an undecided cell is also hatched,
+    with a "?" after its number. The text is the number the verdict rests on; the title states
+    the cells' interval level (:func:`level_of`).
+
+    Raises:
+        ConfigError: if the table has no single interval level, or a word outside ``WORDS``.
     """
+    level = level_of(table)
+    unknown = sorted(set(table.effect) - set(WORDS))
+    if unknown:
+        raise ConfigError(f"effect words must be among {WORDS}, got {unknown}")
     table = table.assign(
         column=table.apply(
             lambda r: _label(r) if r.assistance != headline or r.setting != "default" else "default", axis=1
@@ -430,14 +479,7 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     robots = robots_present(table)
     order_cols = list(dict.fromkeys(table.column))
     ids = sorted(dict.fromkeys(table.id))
-    colours = {
-        "reproduced": "#1b9e77",
-        "partly": "#e6ab02",
-        "not reproduced": "#d95f02",
-        UNDECIDED: "#d9d9d9",
-        NOT_TESTABLE: "#ffffff",
-    }
-    cmap = ListedColormap([colours[v] for v in WORDS])
+    cmap = ListedColormap([COLOURS[v] for v in WORDS])
     code = {v: i for i, v in enumerate(WORDS)}
     fig, axes = plt.subplots(
         1,
@@ -448,34 +490,31 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     )
     for j, robot in enumerate(robots):
         ax = axes[0, j]
-        part = table[table.robot == robot]
         grid = np.full((len(ids), len(order_cols)), np.nan)
-        for _, row in part.iterrows():
+        for row in table[table.robot == robot].itertuples(index=False):
             r, c = ids.index(row.id), order_cols.index(row.column)
-            grid[r, c] = code[row.reproduced]
-            if row.reproduced == UNDECIDED:
-                ax.add_patch(
-                    plt.Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, hatch="///", lw=0, color="0.5")
-                )
-            ax.text(
-                c,
-                r,
-                f"{row.measured:.2g}" + ("?" if row.reproduced == UNDECIDED else ""),
-                ha="center",
-                va="center",
-                fontsize=6,
-            )
+            grid[r, c] = code[row.effect]
+            _cell_text(ax, r, c, float(row.measured), row.effect == UNDECIDED)
         ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=len(WORDS) - 0.5, aspect="auto")
         ax.set_title(robot, fontsize=9)
         ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
         ax.set_yticks(range(len(ids)), ids, fontsize=7)
-    handles = [plt.Rectangle((0, 0), 1, 1, color=colours[v]) for v in WORDS]
+    handles = [plt.Rectangle((0, 0), 1, 1, facecolor=COLOURS[v], edgecolor="0.6", lw=0.5) for v in WORDS]
     n = int(table.users.min()) if len(table) else 0
+    source = ", the claims table's level" if math.isclose(level, LEVEL) else ""
     fig.suptitle(
-        f"Claims robustness: the verdict per reading and setting, at least {n} users per point\n"
-        "(95% intervals; grey and hatched: undecided; text: the number the verdict rests on)",
+        f"Claims robustness: the effect per reading and setting, at least {n} users per point\n"
+        f"({100 * level:.4g}% intervals{source}; grey and hatched: undecided; "
+        "text: the number the verdict rests on)",
         fontsize=9,
     )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     fig.legend(handles, WORDS, loc="lower center", ncol=len(WORDS), frameon=False, fontsize=8)
     return fig
+
+
+def _cell_text(ax: Axes, r: int, c: int, measured: float, undecided: bool) -> None:
+    """A cell's number (with a "?" and a hatch if it is undecided) at row ``r``, column ``c``."""
+    if undecided:
+        ax.add_patch(plt.Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, hatch="///", lw=0, color="0.5"))
+    ax.text(c, r, f"{measured:.2g}" + ("?" if undecided else ""), ha="center", va="center", fontsize=6)

@@ -37,6 +37,7 @@ import seaborn as sns
 from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure, SubFigure
+from matplotlib.lines import Line2D
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
@@ -72,6 +73,9 @@ PANELS = (HEADLINE, COHORT)
 HATCH = "///"  # a censored bar's hatch
 CUT = "hatched: some episodes cut at the horizon"
 CENSORED = f"{CUT} (a lower bound)"  # the legend's reading of HATCH
+# Fig. time's whiskers, dodged apart so the two intervals of a bar never merge: (offset from the
+# bar's centre [slot widths], colour) of Total Time's and of Idle Time's
+WHISKERS = {"total_time": (-0.15, "0.15"), "idle_time": (0.15, "0.5")}
 Stats = Mapping[str, str] | None  # our result per panel (HEADLINE, COHORT), a short line each
 Bars = dict[Hashable, mpatches.Rectangle]  # a drawn bar by its group (a condition, or a (x level, condition))
 
@@ -86,7 +90,8 @@ class FigureSpec:
 
 
 # every interval the study's figures draw: a 95% bootstrap CI, seeded so the PNG is the same run after run
-CI = {"errorbar": ("ci", 95), "seed": 0}
+CI_LEVEL = 95  # their level [%]
+CI = {"errorbar": ("ci", CI_LEVEL), "seed": 0}
 
 
 # what the paper reports for each hypothesis (Sec. VI), as the figures label their reference
@@ -331,7 +336,8 @@ def plot_time(
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
 
     A bar whose episodes did not all finish within the horizon is hatched (censored: cut at
-    the horizon), and every bar says which share finished.
+    the horizon), and every bar says which share finished. The two measures' whiskers sit on
+    either side of the bar's centre, each in its own colour (:data:`WHISKERS`).
 
     Args:
         frame: The Time table (:data:`TIME`'s columns, ``completed`` among them).
@@ -357,15 +363,22 @@ def plot_time(
             ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
             ax.set_ylabel("time [s]")
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
-    notes = [_hatch_note(data, horizon), (idle, "light: Idle Time; text: share of episodes finished")]
+    notes = [
+        _hatch_note(data, horizon),
+        (idle, "light: Idle Time; text: share of episodes finished"),
+        *_whisker_notes(),
+    ]
     title = wrap_to(f"Total and Idle Time ({_reading(assistance, decoder, model)})", 7.6 * len(panels), 10)
     title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=None)
 
 
 def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
-    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it."""
-    before = len(ax.patches)
+    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it.
+
+    Each measure's whiskers are dodged and coloured as :data:`WHISKERS` says.
+    """
+    before, lines = len(ax.patches), len(ax.lines)
     sns.barplot(
         data=part,
         x="condition",
@@ -383,6 +396,8 @@ def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
     for condition, bar in bars.items():
         if condition in done:
             _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
+    _whiskers(ax.lines[lines:], "total_time")
+    lines = len(ax.lines)
     sns.barplot(
         data=part,
         x="condition",
@@ -393,6 +408,28 @@ def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
         ax=ax,
         alpha=0.6,
     )
+    _whiskers(ax.lines[lines:], "idle_time")
+
+
+def _whiskers(lines: Iterable[Line2D], measure: str) -> None:
+    """Move a measure's whiskers (seaborn's error bars) by its :data:`WHISKERS` offset, in its colour."""
+    dx, colour = WHISKERS[measure]
+    for line in lines:
+        line.set_xdata(np.asarray(line.get_xdata(), dtype=float) + dx)
+        line.set_color(colour)
+        line.set_gid(measure)
+
+
+def _whisker_notes() -> list[tuple[Artist, str]]:
+    """The legend's entries for the whiskers of Fig. time: where each measure's sits, in its colour."""
+    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
+    return [
+        (
+            Line2D([], [], color=colour, lw=2),
+            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
+        )
+        for m, (dx, colour) in WHISKERS.items()
+    ]
 
 
 def _label(ax: Axes, bar: mpatches.Rectangle, text: str, foot: bool = False) -> None:
