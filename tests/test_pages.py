@@ -13,6 +13,7 @@ from lasa.base.errors import ArtifactError
 from lasa.pipeline.pages import (
     BUDGET,
     PageBudgetError,
+    _to_link,
     clean_notebook,
     main,
     page_text,
@@ -201,7 +202,7 @@ def test_budget_links_figures_then_fails(tmp_path, figures, capsys):
     executed = _executed_folder(tmp_path)
     embedded = write_pages(executed, figures)[1]
     linked_total = write_pages(executed, figures, budget=embedded - 1)
-    assert linked_total[2] and linked_total[1] < embedded
+    assert linked_total[2] == {"sim.png"} and linked_total[1] < embedded
     pages = figures / "notebooks"
     assert "![sim.png](../sim.png)" in (pages / "00_x-panda.ipynb").read_text()
     with pytest.raises(PageBudgetError, match="over the"):
@@ -231,3 +232,11 @@ def test_make_figures_writes_the_pages():
     assert lines, out
     assert "--notebooks build/quick/notebooks" in lines[0] and "--figures build/quick/figures" in lines[0]
     assert out.index("lasa.pipeline.pages") > out.rindex("lasa.pipeline.runner")  # after every notebook
+
+
+def test_the_largest_figures_are_linked_first():
+    taken = {"a.png": 300, "b.png": 500, "c.png": 300, "d.png": 100}
+    assert _to_link(taken, 0) == frozenset()
+    assert _to_link(taken, 450) == {"b.png"}
+    assert _to_link(taken, 501) == {"b.png", "a.png"}  # equal sizes: by name
+    assert _to_link(taken, 10_000) == set(taken)

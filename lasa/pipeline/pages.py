@@ -24,8 +24,9 @@ notebook with its figures, tables and "What it shows" on the page without runnin
 The pages are written as nbformat writes notebooks (sorted keys, indent 1, a final newline), so
 the same executed notebooks give the same bytes. All of them together must stay under
 :data:`BUDGET` bytes: when they would not, each image output whose bytes are those of a committed
-``figures/*.png`` is replaced by a Markdown image link to it (``![name](../name.png)``), and if
-they still do not fit, :func:`write_pages` raises :class:`PageBudgetError` (exit status 1).
+``figures/*.png`` is replaced by a Markdown image link to it (``![name](../name.png)``), the
+figures that take the most bytes over all pages first, until they fit; if they still do not fit,
+:func:`write_pages` raises :class:`PageBudgetError` (exit status 1).
 """
 
 from __future__ import annotations
@@ -70,6 +71,9 @@ PROGRESS = re.compile(r"\r|\|\s*\d+/\d+\s*\[")  # tqdm's carriage returns, or it
 LINK = re.compile(r"(!?\[[^\]]*\]\()([^)\s]+)(\))")  # Markdown [text](target) and ![alt](target)
 ROOT = f"{repo_root()}/"  # the clone's path, in a warning's file names: written relative to it
 SRC_ATTR = re.compile(r"""(\bsrc=["'])([^"']+)(["'])""")
+
+
+Link = bool | frozenset[str]  # figures to link: none, all committed ones, or these
 
 
 class PageBudgetError(ArtifactError):
@@ -147,14 +151,15 @@ def _is_video(output: dict[str, Any]) -> bool:
     return "video/mp4" in data or bool(VIDEO_HTML.search(_text(data.get("text/html", ""))))
 
 
-def _image(output: dict[str, Any], figures: FigureIndex, link: bool) -> dict[str, Any]:
-    """An image output: its named figure's final bytes; a link to the committed PNG when ``link``."""
+def _image(output: dict[str, Any], figures: FigureIndex, link: Link) -> dict[str, Any]:
+    """An image output: its named figure's final bytes; a link to the committed PNG when ``link``
+    (True: every committed figure; a set: the figures it names)."""
     png = _text(output["data"]["image/png"]).replace("\n", "")
     named = output.get("metadata", {}).get("image/png", {}).get("figure")
     final = figures.read(named) if isinstance(named, str) else None
     data = base64.b64decode(png) if final is None else final
     name = named if final is not None else figures.name_of(data)
-    if link and name is not None:
+    if name is not None and (link is True or (not isinstance(link, bool) and name in link)):
         return _markdown_output(f"![{name}](../{name})", f"figure: {name}")
     out = copy.deepcopy(output)
     out["data"]["image/png"] = base64.b64encode(data).decode("ascii")
@@ -162,7 +167,7 @@ def _image(output: dict[str, Any], figures: FigureIndex, link: bool) -> dict[str
 
 
 def _clean_output(
-    output: dict[str, Any], figures: FigureIndex, link: bool, count: int, relink: bool = True
+    output: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any] | None:
     """One output as it appears on the page, or None if it is dropped; ``relink``: its Markdown's
     links are still relative to ``notebooks/``."""
@@ -190,7 +195,7 @@ def _clean_output(
 
 
 def _clean_cell(
-    cell: dict[str, Any], figures: FigureIndex, link: bool, count: int, relink: bool = True
+    cell: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any]:
     """One cell without volatile metadata; a code cell's outputs cleaned and numbered ``count``;
     ``relink``: its Markdown's links are still relative to ``notebooks/``."""
@@ -213,14 +218,15 @@ def _clean_cell(
 
 
 def clean_notebook(
-    notebook: dict[str, Any], figures: Path | FigureIndex | None = None, link_figures: bool = False
+    notebook: dict[str, Any], figures: Path | FigureIndex | None = None, link_figures: Link = False
 ) -> dict[str, Any]:
     """The page of an executed notebook: ``notebook`` without its volatile parts (see the module).
 
     Args:
         notebook: The executed notebook, as read from JSON (it is not modified).
         figures: The figures folder (its PNG and MP4 files), or an index of it; None if there is none.
-        link_figures: Replace each image output whose bytes are a committed PNG by a link to it.
+        link_figures: Replace each image output whose bytes are a committed PNG by a link to it
+            (True), or those of the PNGs named in a set.
 
     Returns:
         A new notebook; cleaning it again returns it unchanged.
@@ -271,8 +277,38 @@ def _executed(folder: Path) -> list[Path]:
     return found
 
 
-def _pages(sources: Iterable[Path], figures: FigureIndex, link: bool) -> dict[str, str]:
-    return {p.name: page_text(clean_notebook(_read(p), figures, link)) for p in sources}
+def _pages(sources: Iterable[Path], figures: FigureIndex, link: Link) -> dict[str, dict[str, Any]]:
+    """Each executed notebook's page, by file name."""
+    return {p.name: clean_notebook(_read(p), figures, link) for p in sources}
+
+
+def _texts(pages: dict[str, dict[str, Any]]) -> dict[str, str]:
+    return {name: page_text(page) for name, page in pages.items()}
+
+
+def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
+    """The bytes each committed figure takes, embedded, over all ``pages``."""
+    taken: dict[str, int] = {}
+    for page in pages.values():
+        for cell in page["cells"]:
+            for output in cell.get("outputs", []):
+                png = output.get("data", {}).get("image/png")
+                if png is not None:
+                    name = figures.name_of(base64.b64decode(_text(png)))
+                    if name is not None:
+                        taken[name] = taken.get(name, 0) + len(_text(png))
+    return taken
+
+
+def _to_link(taken: dict[str, int], excess: int) -> frozenset[str]:
+    """The figures to link so that ``excess`` bytes go: the largest first (then by name)."""
+    chosen: list[str] = []
+    for name, size in sorted(taken.items(), key=lambda kv: (-kv[1], kv[0])):
+        if excess <= 0:
+            break
+        chosen.append(name)
+        excess -= size
+    return frozenset(chosen)
 
 
 def _size(pages: dict[str, str]) -> int:
@@ -281,7 +317,7 @@ def _size(pages: dict[str, str]) -> int:
 
 def write_pages(
     executed: str | Path, figures: str | Path, budget: int = BUDGET
-) -> tuple[list[Path], int, bool]:
+) -> tuple[list[Path], int, frozenset[str]]:
     """Write the page of every executed notebook to ``<figures>/notebooks/``.
 
     Args:
@@ -291,8 +327,8 @@ def write_pages(
             regenerated count too).
 
     Returns:
-        The pages written, the bytes of every page in the folder, and whether the committed
-        figures had to be linked rather than embedded to fit.
+        The pages written, the bytes of every page in the folder, and the committed figures
+        linked rather than embedded to fit (the largest first).
 
     Raises:
         ArtifactError: if there are no executed notebooks, or one is not a notebook.
@@ -307,9 +343,12 @@ def write_pages(
         if folder.is_dir()
         else 0
     )
-    pages, linked = _pages(sources, index, link=False), False
+    embedded = _pages(sources, index, link=False)
+    pages = _texts(embedded)
+    linked: frozenset[str] = frozenset()
     if others + _size(pages) > budget:
-        pages, linked = _pages(sources, index, link=True), True
+        linked = _to_link(_figure_bytes(embedded, index), others + _size(pages) - budget)
+        pages = _texts(_pages(sources, index, link=linked))
     total = others + _size(pages)
     if total > budget:
         biggest = sorted(pages, key=lambda n: -len(pages[n].encode()))[:3]
@@ -340,7 +379,7 @@ def main(argv: list[str] | None = None) -> int:
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    how = "figures linked to the committed PNGs to fit" if linked else "figures embedded"
+    how = f"linked to fit: {', '.join(sorted(linked))}" if linked else "figures embedded"
     print(f"{len(written)} notebook pages in {Path(args.figures) / PAGES} ({total / 1e6:.2f} MB, {how})")
     return 0
 
