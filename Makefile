@@ -2,13 +2,14 @@
 #
 #   make                  this list (make help)
 #   make figures          regenerate every figure, CSV, video and the claims table (paper scale),
-#                         the eating study (notebooks 10-11, Panda only) included
+#                         the eating study (notebooks 10-11, Panda only) included, and the executed
+#                         notebooks as pages to read (figures/notebooks/)
 #   make figures QUICK=1  the same pipeline at toy scale, into build/quick/ (figures/ untouched)
 #   make figures LARGE=1  paper scale with the cluster-sized verdict map (configs/large.yaml),
 #                         into build/large/; LASA_SCHEDULER=tcp://host:8786 runs its grid on Dask
 #   make verify           regenerate everything (paper scale) into build/verify/, then compare it with
-#                         figures/: CSV values, bytes of images and videos, and every claim's verdict
-#                         (fails if and only if a verdict differs)
+#                         figures/: CSV values, bytes of images and videos, the notebook pages' outputs
+#                         and every claim's verdict (fails if and only if a verdict differs)
 #   make test             lint + pytest, including every notebook run in QUICK mode
 #   make book             a static site of the executed notebooks, claims table first -> build/book/html
 #   make teleop ARGS=...  drive the robot live in MuJoCo's viewer (gamepad or keyboard), sessions logged
@@ -164,6 +165,8 @@ FIGURE_NBS := 04_fixed_expertise 05_changing_goals 06_learning_users 07_new_goal
 # The paper-scale build and the QUICK one record their wall times in benchmarks/results.json
 # (figures_s, figures_s.quick) from this invocation's timings.jsonl, then the READMEs' wall times
 # from it (lasa.pipeline.timings); a run in which Make skipped up-to-date notebooks records nothing.
+# Then each executed notebook, cleaned and light, becomes a page to read in $(FIGURES_DIR)/notebooks
+# (lasa.pipeline.pages: a second or two).
 TIMED_PART := $(if $(filter build,$(BUILD)),paper,$(if $(filter build/quick,$(BUILD)),quick))
 FIGURES_DIR := $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures)
 figures: setup
@@ -175,6 +178,7 @@ ifeq ($(BUILD),build)
 else
 	@$(BIN)/python -m lasa.evidence.claims $(FIGURES_DIR)/claims.csv
 endif
+	@$(BIN)/python -m lasa.pipeline.pages --notebooks $(EXEC) --figures $(FIGURES_DIR)
 ifneq ($(TIMED_PART),)
 	@$(BIN)/python -m lasa.pipeline.timings $(BUILD)/timings.jsonl --part $(TIMED_PART) \
 	  --command "make figures$(if $(filter quick,$(TIMED_PART)), QUICK=1)" --expect $(RUNS)

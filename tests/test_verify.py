@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 from pathlib import Path
@@ -208,3 +209,62 @@ def test_each_runs_kernels_are_printed_above_the_table(folders, capsys):
     out = capsys.readouterr().out.splitlines()
     assert out[0] == "kernels of the committed run: pinned, torch AVX2; ATEN_CPU_CAPABILITY=avx2"
     assert out[1] == "kernels of the new run: kernels.json missing (its kernels were not recorded)"
+
+
+def _page(folder: Path, build: str, outputs: dict[str, str]) -> Path:
+    """A notebook page under ``folder/notebooks``: the run's injected parameters, then a code cell
+    per ``{id: printed text}``, and an image output."""
+    params = f'robot = "panda"\nbuild_dir = "{build}"\nfigures_dir = "{build}/figures"\n'
+    injected = {"cell_type": "code", "id": "injected-parameters", "execution_count": 1, "outputs": []}
+    cells = [{**injected, "metadata": {"tags": ["injected-parameters"]}, "source": params}]
+    for i, (cell_id, text) in enumerate(outputs.items()):
+        stream = {"name": "stdout", "output_type": "stream", "text": text}
+        cells.append({"cell_type": "code", "execution_count": i + 2, "id": cell_id, "metadata": {}})
+        cells[-1].update(outputs=[stream], source="print(...)")
+    image = {"data": {"image/png": "iVBORw0KGgo=", "text/plain": "<Figure>"}, "metadata": {}}
+    cells[-1]["outputs"].append({**image, "output_type": "display_data"})
+    path = folder / "notebooks" / "04_fixed_expertise-panda.ipynb"
+    path.parent.mkdir(exist_ok=True)
+    path.write_text(json.dumps({"cells": cells, "metadata": {}, "nbformat": 4, "nbformat_minor": 5}))
+    return path
+
+
+SHOWN = {"run": "6 demonstrations -> {}/data/demos_panda.npz\n", "shows": "V rose on 0 of 243 steps.\n"}
+
+
+def _pages(folders: tuple[Path, Path], new_text: dict[str, str] | None = None) -> None:
+    """The same page in both folders, the new one run into ``build/verify`` (its paths differ)."""
+    committed, new = folders
+    _page(committed, "build", {k: v.format("build") for k, v in SHOWN.items()})
+    texts = {k: v.format("build/verify") for k, v in SHOWN.items()}
+    _page(new, "build/verify", {**texts, **(new_text or {})})
+
+
+def test_notebook_pages_with_the_same_outputs_are_identical(folders, capsys):
+    _pages(folders)  # the printed paths differ by the run's folder only
+    assert main([str(f) for f in folders]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "| notebooks/" in x)
+    assert "| outputs " in line and "| identical" in line and "3 code cells" in line
+
+
+def test_a_notebook_output_that_differs_is_listed_and_does_not_fail(folders, capsys):
+    _pages(folders, {"shows": "V rose on 2 of 243 steps.\n", "extra": "new cell\n"})
+    assert main([str(f) for f in folders]) == 0  # never fatal: the verdicts decide
+    lines = [x for x in capsys.readouterr().out.splitlines() if "| notebooks/" in x]
+    shows = next(x for x in lines if "| cell shows" in x)
+    assert "outputs differ" in shows
+    assert "line 1: 'stdout: V rose on 0 of 243 steps.' -> 'stdout: V rose on 2 of 243 steps.'" in shows
+    assert any("| cell extra" in x and "cell only in new" in x for x in lines)
+    assert not any("| cell run" in x for x in lines)  # its path differs by the run's folder alone
+
+
+def test_a_notebook_image_that_differs_is_listed(folders, capsys):
+    committed, new = folders
+    _pages(folders)
+    page = new / "notebooks" / "04_fixed_expertise-panda.ipynb"
+    data = json.loads(page.read_text())
+    data["cells"][-1]["outputs"][-1]["data"]["image/png"] = "iVBORw0KGgp="
+    page.write_text(json.dumps(data))
+    assert main([str(committed), str(new)]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "| cell shows" in x)
+    assert "outputs differ" in line and "image/png: sha256" in line

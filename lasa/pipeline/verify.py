@@ -5,7 +5,9 @@ figures folders file by file (:func:`compare_folders`) and prints one table, the
 every CSV's shape and per-column differences (:func:`compare_csv`, rows matched by
 :func:`key_columns`), every other file's bytes (:func:`compare_bytes`), and every claim whose
 verdict (:data:`VERDICT_COLUMNS`) differs (:func:`compare_verdicts`); above it, each run's
-``kernels.json`` (:mod:`lasa.base.kernels`).
+``kernels.json`` (:mod:`lasa.base.kernels`). The notebook pages (``notebooks/*.ipynb``,
+:mod:`lasa.pipeline.pages`) are compared by their code cells' outputs as text
+(:func:`compare_notebook`), each run's folders written as ``<build_dir>`` and ``<figures_dir>``.
 
 The exit status is 1 if and only if a verdict differs, a claim is in one table only, or
 ``claims.csv`` is missing from either folder; value differences are reported, never fatal. A
@@ -17,8 +19,11 @@ print precision" (why: ``docs/method-notes.md``).
 from __future__ import annotations
 
 import argparse
+import ast
 import dataclasses
+import hashlib
 import json
+import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -37,6 +42,7 @@ __all__ = [
     "key_columns",
     "compare_csv",
     "compare_bytes",
+    "compare_notebook",
     "compare_verdicts",
     "compare_folders",
     "kernels_text",
@@ -108,6 +114,100 @@ def compare_bytes(name: str, old: Path, new: Path) -> Row:
     if a == b:
         return Row(name, "bytes", "identical", f"{len(a)} bytes")
     return Row(name, "bytes", "differs", f"{len(a)} -> {len(b)} bytes")
+
+
+def _run_folders(cells: list[dict]) -> dict[str, str]:
+    """``{value: placeholder}`` of the run's ``figures_dir`` and ``build_dir``, read from papermill's
+    injected-parameters cell (longest first, so that ``build/verify/figures`` goes before ``build``)."""
+    injected = [c for c in cells if "injected-parameters" in c.get("metadata", {}).get("tags", ())]
+    values: dict[str, str] = {}
+    for cell in injected:
+        source = cell["source"] if isinstance(cell["source"], str) else "".join(cell["source"])
+        for node in ast.parse(source).body:
+            if not (isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name)):
+                continue
+            name = node.targets[0].id
+            if name in ("build_dir", "figures_dir") and isinstance(node.value, ast.Constant):
+                if isinstance(node.value.value, str) and node.value.value:
+                    values[node.value.value.rstrip("/")] = f"<{name}>"
+    return dict(sorted(values.items(), key=lambda kv: -len(kv[0])))
+
+
+def _output_lines(output: dict, folders: dict[str, str]) -> list[str]:
+    """One output as lines of text: a stream's text, each MIME type's text, an image's digest."""
+
+    def text(value: str | list[str]) -> str:
+        joined = value if isinstance(value, str) else "".join(value)
+        for value_, placeholder in folders.items():  # a path under the run's folder, not a word
+            joined = re.sub(rf"(?<![\w./-]){re.escape(value_)}(?=/)", placeholder, joined)
+        return joined
+
+    kind = output.get("output_type", "")
+    if kind == "stream":
+        return [f"{output.get('name')}: {line}" for line in text(output.get("text", "")).splitlines()]
+    if kind == "error":
+        return [f"error: {output.get('ename')}: {output.get('evalue')}"]
+    lines = []
+    for mime, value in sorted(output.get("data", {}).items()):
+        if mime.startswith("image/"):
+            digest = hashlib.sha256(str(value).replace("\n", "").encode()).hexdigest()[:12]
+            lines.append(f"{mime}: sha256 {digest}")
+        elif mime.startswith("text/") and mime != "text/html":  # the HTML of a table repeats its text
+            lines += [f"{mime}: {line}" for line in text(value).splitlines()]
+    return lines
+
+
+def _notebook_outputs(path: Path) -> dict[str, list[str]]:
+    """A page's code cells, by id, each as the lines of its outputs (:func:`_output_lines`).
+
+    Raises:
+        ArtifactError: if the file is not a notebook.
+    """
+    try:
+        cells = json.loads(path.read_text())["cells"]
+    except (ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+        raise ArtifactError(f"{path} is not a notebook: {exc}") from None
+    folders = _run_folders(cells)
+    return {
+        c.get("id", str(i)): [line for o in c.get("outputs", []) for line in _output_lines(o, folders)]
+        for i, c in enumerate(cells)
+        if c.get("cell_type") == "code"
+    }
+
+
+def _first_difference(old: list[str], new: list[str]) -> str:
+    """The first line at which two cells' outputs differ, as ``old -> new`` (shortened)."""
+
+    def short(line: str | None) -> str:
+        return "(none)" if line is None else repr(line if len(line) <= 60 else line[:57] + "...")
+
+    for i in range(max(len(old), len(new))):
+        a = old[i] if i < len(old) else None
+        b = new[i] if i < len(new) else None
+        if a != b:
+            return f"line {i + 1}: {short(a)} -> {short(b)}"
+    return ""
+
+
+def compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
+    """A notebook page's lines: each code cell whose outputs differ, or that is in one page only.
+
+    Outputs are compared as text (:func:`_output_lines`): streams, ``text/*`` data but HTML, the
+    digest of each image; the run's ``build_dir`` and ``figures_dir`` (from its injected
+    parameters) read as placeholders, so that a run into ``build/verify`` and one into ``build``
+    print the same paths. Never fatal: a notebook's outputs are listed, the verdicts decide.
+    """
+    try:
+        a, b = _notebook_outputs(old), _notebook_outputs(new)
+    except ArtifactError as exc:
+        return [Row(name, "notebook", "not a notebook", str(exc))]
+    rows = []
+    for cell in [*a, *(c for c in b if c not in a)]:
+        if cell not in a or cell not in b:
+            rows.append(Row(name, f"cell {cell}", f"cell only in {'new' if cell not in a else 'committed'}"))
+        elif a[cell] != b[cell]:
+            rows.append(Row(name, f"cell {cell}", "outputs differ", _first_difference(a[cell], b[cell])))
+    return rows or [Row(name, "outputs", "identical", f"{len(a)} code cells")]
 
 
 def _numeric(frame: pd.DataFrame, column: str) -> bool:
@@ -281,6 +381,8 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
             report.rows.append(Row(name, "file", f"missing in {where}"))
         elif name.endswith(".csv"):
             report.rows += compare_csv(name, old, fresh, tol)
+        elif name.endswith(".ipynb"):
+            report.rows += compare_notebook(name, old, fresh)
         else:
             report.rows.append(compare_bytes(name, old, fresh))
     _compare_claims(report, files)

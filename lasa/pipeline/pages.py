@@ -1,0 +1,388 @@
+"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``.
+
+``make figures`` runs each notebook into ``build/notebooks`` (:mod:`lasa.pipeline.runner`); those
+copies carry timings, kernel ids and progress bars, and are not committed. ``python -m
+lasa.pipeline.pages --notebooks build/notebooks --figures figures`` writes each of them, cleaned
+(:func:`clean_notebook`), to ``figures/notebooks/<same name>``, so that a reader sees every
+notebook with its figures, tables and "What it shows" on the page without running anything:
+
+- **dropped**: papermill's and the kernel's metadata (timings, start and end times, the cell
+  ``execution`` stamps, widget state), progress bars (tqdm's widget outputs and its ``\\r``
+  streams on stderr), empty ``tags`` and the clone's path in printed file names (a warning's);
+  execution counts are renumbered 1..n over the code cells, and papermill's injected-parameters
+  cell, whose id is random, gets the id ``injected-parameters``;
+- **replaced**: an embedded video (``<video>`` HTML or ``video/mp4`` data) by a Markdown link to
+  the committed MP4 of the same bytes, or dropped when none matches; an image output that names
+  its figure (output metadata ``{"figure": "<name>.png"}``, set by the notebook's
+  ``Image(..., metadata={"figure": ...})``) by the final bytes of that figure, so that the page
+  does not depend on which robot's run published it last;
+- **rewritten**: relative links of Markdown, written from ``notebooks/`` (``../figures/x.png``),
+  as seen from ``figures/notebooks/`` (``../x.png``); the page's metadata says so
+  (``lasa.links_from``), so that cleaning a page again changes nothing;
+- **kept**: every other output (tables, printed sentences, Markdown outputs, figures).
+
+The pages are written as nbformat writes notebooks (sorted keys, indent 1, a final newline), so
+the same executed notebooks give the same bytes. All of them together must stay under
+:data:`BUDGET` bytes: when they would not, each image output whose bytes are those of a committed
+``figures/*.png`` is replaced by a Markdown image link to it (``![name](../name.png)``), the
+figures that take the most bytes over all pages first, until they fit; if they still do not fit,
+:func:`write_pages` raises :class:`PageBudgetError` (exit status 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import base64
+import copy
+import hashlib
+import json
+import posixpath
+import re
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from lasa.base.errors import ArtifactError
+from lasa.base.io import write_text
+from lasa.base.paths import repo_root
+
+__all__ = [
+    "BUDGET",
+    "PAGES",
+    "PageBudgetError",
+    "FigureIndex",
+    "clean_notebook",
+    "page_text",
+    "write_pages",
+    "main",
+]
+
+BUDGET = 5_000_000  # bytes of every page together (issue 47: "at most 5 MB in all")
+PAGES = "notebooks"  # the pages' folder inside the figures folder
+SOURCE_DIR = "notebooks"  # where the source notebooks' relative links start from
+PAGE_DIR = "figures/notebooks"  # where the committed pages' relative links start from
+INJECTED = "injected-parameters"  # papermill's tag (and, on the page, the id) of its parameters cell
+WIDGET = "application/vnd.jupyter.widget-view+json"
+VIDEO_HTML = re.compile(r"<video\b", re.IGNORECASE)
+VIDEO_SRC = re.compile(r"""src=["']([^"']+\.mp4)["']""", re.IGNORECASE)
+DATA_MP4 = re.compile(r"data:video/mp4;base64,([A-Za-z0-9+/=\s]+)")
+PROGRESS = re.compile(r"\r|\|\s*\d+/\d+\s*\[")  # tqdm's carriage returns, or its "| 3/40 [" bar
+LINK = re.compile(r"(!?\[[^\]]*\]\()([^)\s]+)(\))")  # Markdown [text](target) and ![alt](target)
+ROOT = f"{repo_root()}/"  # the clone's path, in a warning's file names: written relative to it
+SRC_ATTR = re.compile(r"""(\bsrc=["'])([^"']+)(["'])""")
+
+
+Link = bool | frozenset[str]  # figures to link: none, all committed ones, or these
+
+
+class PageBudgetError(ArtifactError):
+    """The pages together exceed :data:`BUDGET`, even with the committed figures linked."""
+
+
+class FigureIndex:
+    """The committed figures folder's PNG and MP4 files, found by name or by their bytes."""
+
+    def __init__(self, folder: Path | None) -> None:
+        self.folder = folder
+        files = sorted(folder.glob("*.png")) + sorted(folder.glob("*.mp4")) if folder else []
+        self.by_digest = {hashlib.sha256(p.read_bytes()).hexdigest(): p.name for p in files}
+        self.names = {p.name for p in files}
+
+    def name_of(self, data: bytes) -> str | None:
+        """The name of the committed file with exactly these bytes, if any."""
+        return self.by_digest.get(hashlib.sha256(data).hexdigest())
+
+    def read(self, name: str) -> bytes | None:
+        """The bytes of the committed file ``name``, if it is there."""
+        if self.folder is None or name not in self.names:
+            return None
+        return (self.folder / name).read_bytes()
+
+
+def _text(value: str | list[str]) -> str:
+    """A notebook's multi-line string (a string or a list of lines) as one string."""
+    return value if isinstance(value, str) else "".join(value)
+
+
+def _relink(target: str) -> str:
+    """A relative link written from ``notebooks/``, as seen from ``figures/notebooks/``."""
+    if re.match(r"^([a-z][a-z0-9+.-]*:|#|/)", target, re.IGNORECASE):
+        return target  # a URL, an anchor or an absolute path
+    path, sep, anchor = target.partition("#")
+    moved = posixpath.relpath(posixpath.normpath(posixpath.join(SOURCE_DIR, path)), PAGE_DIR)
+    return moved + sep + anchor
+
+
+def relink_markdown(text: str) -> str:
+    """Every relative Markdown link and ``src=`` attribute of ``text``, moved to the pages' folder."""
+    text = LINK.sub(lambda m: m.group(1) + _relink(m.group(2)) + m.group(3), text)
+    return SRC_ATTR.sub(lambda m: m.group(1) + _relink(m.group(2)) + m.group(3), text)
+
+
+def _markdown_output(text: str, plain: str) -> dict[str, Any]:
+    """A display output showing ``text`` as Markdown (``plain`` where Markdown is not rendered)."""
+    return {
+        "data": {"text/markdown": text, "text/plain": plain},
+        "metadata": {},
+        "output_type": "display_data",
+    }
+
+
+def _video(output: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
+    """An embedded video's replacement: a link to the committed MP4 it shows, or None (dropped)."""
+    data = output.get("data", {})
+    html = _text(data.get("text/html", ""))
+    name = None
+    if "video/mp4" in data:
+        name = figures.name_of(base64.b64decode(_text(data["video/mp4"])))
+    elif (match := DATA_MP4.search(html)) is not None:
+        name = figures.name_of(base64.b64decode(re.sub(r"\s", "", match.group(1))))
+    elif (match := VIDEO_SRC.search(html)) is not None:
+        base = posixpath.basename(match.group(1))
+        name = base if base in figures.names else None
+    if name is None:
+        return None
+    return _markdown_output(f"Video: [{name}](../{name})", f"video: {name}")
+
+
+def _is_video(output: dict[str, Any]) -> bool:
+    data = output.get("data", {})
+    return "video/mp4" in data or bool(VIDEO_HTML.search(_text(data.get("text/html", ""))))
+
+
+def _image(output: dict[str, Any], figures: FigureIndex, link: Link) -> dict[str, Any]:
+    """An image output: its named figure's final bytes; a link to the committed PNG when ``link``
+    (True: every committed figure; a set: the figures it names)."""
+    png = _text(output["data"]["image/png"]).replace("\n", "")
+    named = output.get("metadata", {}).get("image/png", {}).get("figure")
+    final = figures.read(named) if isinstance(named, str) else None
+    data = base64.b64decode(png) if final is None else final
+    name = named if final is not None else figures.name_of(data)
+    if name is not None and (link is True or (not isinstance(link, bool) and name in link)):
+        return _markdown_output(f"![{name}](../{name})", f"figure: {name}")
+    out = copy.deepcopy(output)
+    out["data"]["image/png"] = base64.b64encode(data).decode("ascii")
+    return out
+
+
+def _clean_output(
+    output: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
+) -> dict[str, Any] | None:
+    """One output as it appears on the page, or None if it is dropped; ``relink``: its Markdown's
+    links are still relative to ``notebooks/``."""
+    kind = output["output_type"]
+    if kind == "stream":
+        text = _text(output["text"])
+        if output["name"] == "stderr" and PROGRESS.search(text):
+            return None  # a tqdm bar (widgets off: the bar redrawn with carriage returns)
+        return {**copy.deepcopy(output), "text": text.replace(ROOT, "")}  # a warning's file path
+    if kind not in ("display_data", "execute_result"):
+        return copy.deepcopy(output)  # an error's traceback
+    data = output.get("data", {})
+    if WIDGET in data:
+        return None  # a tqdm bar as a widget: no state is saved, so it would show "0%"
+    if _is_video(output):
+        return _video(output, figures)
+    output = copy.deepcopy(output)
+    if relink and "text/markdown" in data:
+        output["data"]["text/markdown"] = relink_markdown(_text(data["text/markdown"]))
+    if "image/png" in data:
+        output = _image(output, figures, link)
+    if output["output_type"] == "execute_result":
+        output["execution_count"] = count
+    return output
+
+
+def _clean_cell(
+    cell: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
+) -> dict[str, Any]:
+    """One cell without volatile metadata; a code cell's outputs cleaned and numbered ``count``;
+    ``relink``: its Markdown's links are still relative to ``notebooks/``."""
+    out = {k: copy.deepcopy(v) for k, v in cell.items() if k != "metadata"}
+    metadata = {k: copy.deepcopy(v) for k, v in cell.get("metadata", {}).items()}
+    for key in ("execution", "papermill", "collapsed", "scrolled"):
+        metadata.pop(key, None)
+    if not metadata.get("tags"):
+        metadata.pop("tags", None)
+    out["metadata"] = metadata
+    if INJECTED in metadata.get("tags", ()):
+        out["id"] = INJECTED  # papermill gives it a random id
+    if cell["cell_type"] == "markdown" and relink:
+        out["source"] = relink_markdown(_text(cell["source"]))
+    if cell["cell_type"] == "code":
+        out["execution_count"] = count
+        outputs = (_clean_output(o, figures, link, count, relink) for o in cell.get("outputs", []))
+        out["outputs"] = [o for o in outputs if o is not None]
+    return out
+
+
+def clean_notebook(
+    notebook: dict[str, Any], figures: Path | FigureIndex | None = None, link_figures: Link = False
+) -> dict[str, Any]:
+    """The page of an executed notebook: ``notebook`` without its volatile parts (see the module).
+
+    Args:
+        notebook: The executed notebook, as read from JSON (it is not modified).
+        figures: The figures folder (its PNG and MP4 files), or an index of it; None if there is none.
+        link_figures: Replace each image output whose bytes are a committed PNG by a link to it
+            (True), or those of the PNGs named in a set.
+
+    Returns:
+        A new notebook; cleaning it again returns it unchanged.
+    """
+    index = figures if isinstance(figures, FigureIndex) else FigureIndex(figures)
+    out = {k: copy.deepcopy(v) for k, v in notebook.items() if k not in ("cells", "metadata")}
+    metadata = notebook.get("metadata", {})
+    out["metadata"] = {k: copy.deepcopy(metadata[k]) for k in ("kernelspec",) if k in metadata}
+    if "language_info" in metadata:  # its name only: the version is the machine's Python
+        out["metadata"]["language_info"] = {"name": metadata["language_info"].get("name", "python")}
+    relink = metadata.get("lasa", {}).get("links_from") != PAGE_DIR  # False for a page: idempotent
+    out["metadata"]["lasa"] = {"links_from": PAGE_DIR}
+    cells, count = [], 0
+    for cell in notebook.get("cells", []):
+        count += cell["cell_type"] == "code"
+        cells.append(_clean_cell(cell, index, link_figures, count, relink))
+    out["cells"] = cells
+    return out
+
+
+def page_text(notebook: dict[str, Any]) -> str:
+    """A notebook as nbformat writes it (sorted keys, indent 1, lines split), with a final newline."""
+    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]  # see lasa.pipeline.runner
+    import nbformat
+
+    text = nbformat.writes(nbformat.from_dict(notebook), version=4)
+    return text if text.endswith("\n") else text + "\n"
+
+
+def _read(path: Path) -> dict[str, Any]:
+    """An executed notebook's JSON."""
+    try:
+        data = json.loads(path.read_text())
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ArtifactError(f"{path} is not a notebook (JSON): {exc}") from None
+    if not isinstance(data, dict) or "cells" not in data:
+        raise ArtifactError(f"{path} is not a notebook: it has no cells")
+    return data
+
+
+def _executed(folder: Path) -> list[Path]:
+    """The executed notebooks of ``folder`` (not the partial runs ``*.failed.ipynb``), by name."""
+    if not folder.is_dir():
+        raise ArtifactError(f"no executed notebooks: {folder} does not exist (run `make figures` first)")
+    found = sorted(p for p in folder.glob("*.ipynb") if not p.name.endswith(".failed.ipynb"))
+    if not found:
+        raise ArtifactError(f"no executed notebooks in {folder} (run `make figures` first)")
+    return found
+
+
+def _pages(sources: Iterable[Path], figures: FigureIndex, link: Link) -> dict[str, dict[str, Any]]:
+    """Each executed notebook's page, by file name."""
+    return {p.name: clean_notebook(_read(p), figures, link) for p in sources}
+
+
+def _texts(pages: dict[str, dict[str, Any]]) -> dict[str, str]:
+    return {name: page_text(page) for name, page in pages.items()}
+
+
+def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
+    """The bytes each committed figure takes, embedded, over all ``pages``."""
+    taken: dict[str, int] = {}
+    for page in pages.values():
+        for cell in page["cells"]:
+            for output in cell.get("outputs", []):
+                png = output.get("data", {}).get("image/png")
+                if png is not None:
+                    name = figures.name_of(base64.b64decode(_text(png)))
+                    if name is not None:
+                        taken[name] = taken.get(name, 0) + len(_text(png))
+    return taken
+
+
+def _to_link(taken: dict[str, int], excess: int) -> frozenset[str]:
+    """The figures to link so that ``excess`` bytes go: the largest first (then by name)."""
+    chosen: list[str] = []
+    for name, size in sorted(taken.items(), key=lambda kv: (-kv[1], kv[0])):
+        if excess <= 0:
+            break
+        chosen.append(name)
+        excess -= size
+    return frozenset(chosen)
+
+
+def _size(pages: dict[str, str]) -> int:
+    return sum(len(t.encode()) for t in pages.values())
+
+
+def write_pages(
+    executed: str | Path, figures: str | Path, budget: int = BUDGET
+) -> tuple[list[Path], int, frozenset[str]]:
+    """Write the page of every executed notebook to ``<figures>/notebooks/``.
+
+    Args:
+        executed: The folder of the executed notebooks (``build/notebooks``).
+        figures: The run's figures folder; the pages go to its ``notebooks`` subfolder.
+        budget: The most bytes the pages may take together (the ones already there and not
+            regenerated count too).
+
+    Returns:
+        The pages written, the bytes of every page in the folder, and the committed figures
+        linked rather than embedded to fit (the largest first).
+
+    Raises:
+        ArtifactError: if there are no executed notebooks, or one is not a notebook.
+        PageBudgetError: if the pages exceed ``budget`` even with the figures linked (they are
+            not written then).
+    """
+    sources, index = _executed(Path(executed)), FigureIndex(Path(figures))
+    folder = Path(figures) / PAGES
+    regenerated = {p.name for p in sources}
+    others = (
+        sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in regenerated)
+        if folder.is_dir()
+        else 0
+    )
+    embedded = _pages(sources, index, link=False)
+    pages = _texts(embedded)
+    linked: frozenset[str] = frozenset()
+    if others + _size(pages) > budget:
+        linked = _to_link(_figure_bytes(embedded, index), others + _size(pages) - budget)
+        pages = _texts(_pages(sources, index, link=linked))
+    total = others + _size(pages)
+    if total > budget:
+        biggest = sorted(pages, key=lambda n: -len(pages[n].encode()))[:3]
+        sizes = ", ".join(f"{n} {len(pages[n].encode()) / 1e6:.2f} MB" for n in biggest)
+        raise PageBudgetError(
+            f"the notebook pages would take {total / 1e6:.2f} MB, over the {budget / 1e6:g} MB budget even "
+            f"with the committed figures linked; the largest: {sizes}. Show fewer or smaller images there."
+        )
+    return [write_text(folder / name, text) for name, text in pages.items()], total, linked
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: ``python -m lasa.pipeline.pages --notebooks build/notebooks --figures figures``."""
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--notebooks", required=True, help="the executed notebooks (e.g. build/notebooks)")
+    parser.add_argument(
+        "--figures", required=True, help="the run's figures folder; pages go to its notebooks/"
+    )
+    parser.add_argument(
+        "--budget", type=int, default=BUDGET, help="bytes of all pages together [%(default)d]"
+    )
+    args = parser.parse_args(argv)
+    try:
+        written, total, linked = write_pages(args.notebooks, args.figures, args.budget)
+    except PageBudgetError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    except ArtifactError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    how = f"linked to fit: {', '.join(sorted(linked))}" if linked else "figures embedded"
+    print(f"{len(written)} notebook pages in {Path(args.figures) / PAGES} ({total / 1e6:.2f} MB, {how})")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
