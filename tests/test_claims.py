@@ -390,3 +390,34 @@ def test_claims_frame_shows_a_notebooks_rows_in_order():
     ]
     empty = claims_frame([])
     assert empty.empty and list(empty.columns) == list(SHOWN_COLUMNS)
+
+
+def test_the_summary_names_each_claim_under_its_word_with_the_reason():
+    def row(cid, robot, verdict, figure="sim1", measured="m"):
+        base = claim(cid.split(".", 1)[1], figure=figure, robot=robot, verdict=verdict)
+        return Claim(**{**base.__dict__, "measured": measured})
+
+    rows = [
+        row("sim1.final_error", "planar5", "no"),
+        row("sim1.final_error", "panda", "no"),
+        row("sim2.entropy_escapes", "planar5", "yes", "sim2"),
+        row("sim2.entropy_escapes", "panda", "undecided", "sim2"),
+        row("study.likert", "panda", "not testable", "study", "not testable (no questionnaire)"),
+    ]
+    table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
+    lines = render_summary(table).splitlines()
+    assert len(lines) <= 10 and lines[0].startswith("**In short.**")
+    said = {line.split("**")[1]: line for line in lines[1:]}
+    assert said["Reproduced"] == "- **Reproduced** (1): entropy lets users change their mind (sim2; planar5)."
+    assert said["Not reproduced"] == (
+        "- **Not reproduced** (1): SA lowers the final error (sim1; both robots): "
+        "Eq. M2 pulls towards the mid-preference grasp."
+    )
+    assert said["Undecided"].startswith(
+        "- **Undecided** (1): entropy lets users change their mind (sim2; Panda)"
+    )
+    assert (
+        said["Not testable"]
+        == "- **Not testable** (1): H3's Likert ratings (study; Panda): no questionnaire."
+    )
+    assert said["The paper's numbers"].startswith("- **The paper's numbers** (0, stated for the Panda)")

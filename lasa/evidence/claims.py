@@ -714,7 +714,8 @@ def render_summary(table: pd.DataFrame) -> str:
             if (pc.id, robot) in rows:
                 words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
         for w, robots in words.items():
-            said = f"{pc.short} ({_robots_text(robots)})"
+            where = _robots_text(robots)
+            said = f"{pc.short[:-1]}; {where})" if pc.short.endswith(")") else f"{pc.short} ({where})"
             if w in ("no", "not reproduced") and pc.why:
                 said += f": {pc.why}"
             if w == NOT_TESTABLE:
