@@ -737,3 +737,22 @@ def test_the_participants_table_lists_every_parameter(tmp_path):
     ]
     with pytest.raises(ArtifactError, match="notebook 10"):
         study.eating_property(tmp_path / "figures")
+
+
+def test_the_likert_claim_reads_the_share_of_significant_comparisons_in_favour():
+    from lasa.figures.study_tests import likert_verdict
+
+    # three comparisons per scale (LA+SA against R, R+SA, LA), two scales: diff = LA+SA - other
+    likert = pd.DataFrame(
+        {
+            "scale": ["Easy"] * 3 + ["Prefer"] * 3,
+            "a": ["LA+SA"] * 6,
+            "b": ["R", "R+SA", "LA"] * 2,
+            "diff": [1.2, 0.8, 2.0, 1.0, -0.5, 1.5],
+            "p_corr": [0.01, 0.2, 0.001, 0.03, 0.01, 0.04],
+        }
+    )
+    # in favour and significant: Easy-R, Easy-LA, Prefer-R, Prefer-LA (Prefer-R+SA is significant against)
+    assert likert_verdict(likert) == ("partly", 4 / 6, 6)
+    assert likert_verdict(likert.assign(diff=1.0, p_corr=0.01))[:2] == ("yes", 1.0)
+    assert likert_verdict(likert.assign(p_corr=0.5))[:2] == ("no", 0.0)

@@ -136,7 +136,8 @@ def people_claims(
 
     Args:
         frames: :func:`lasa.evidence.sessions.analyse_sessions`' ``goal_error``, ``time`` and
-            ``alignment`` tables.
+            ``alignment`` tables, and its ``likert`` tests if people answered the questionnaire
+            (then Fig. dessert's subjective claim gets a row, ``likert``: :func:`likert_verdict`).
         horizon: Where an unfinished trial's time was cut [s] (H3's restricted times); None: the
             longest logged Total Time, the trials' limit when one did not finish.
         n_resamples: H3's paired bootstrap resamples.
@@ -151,6 +152,7 @@ def people_claims(
     # within-subject tests: the participants who did every condition in every task (the rule
     # people's other tests apply, lasa.evidence.sessions.DROPPED; at least two, else no row)
     full = set(complete_participants(time, "claims")[0].participant)
+    likert = frames.get("likert")  # people's answers' tests (lasa.evidence.sessions.likert_tests), if any
     frames = {
         name: frames[name][frames[name].participant.isin(full)]
         for name in ("goal_error", "time", "alignment")
@@ -163,7 +165,6 @@ def people_claims(
                 {"member": assistance, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
                  "ci_high": high, "measured": measured, "participants": result["n"]}
             )  # fmt: skip
-    likert = frames.get("likert")
     if likert is not None and len(likert) and len(full) >= 2:
         verdict, share, n = likert_verdict(likert)
         measured = (
