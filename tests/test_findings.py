@@ -17,8 +17,9 @@ import pytest
 
 import lasa  # noqa: F401  (pins the kernels before numpy loads)
 from lasa.base.errors import ConfigError
+from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim
-from lasa.figures import eating_task, sim1, sim2, study_analysis, study_caps
+from lasa.figures import eating_task, entropy_ablation, latent_map, sim1, sim2, study_analysis, study_caps
 
 ROOT = Path(__file__).resolve().parents[1]
 BUDGET = {"11_eating_study.ipynb": 2000}  # words of Markdown per notebook; the rest 1,200 (issue 47)
@@ -301,3 +302,79 @@ def test_sim2_findings_reads_the_robots_headline_row() -> None:
     assert text.count("\n- **") == 3 and "the claim reads *yes*" in text and "From N = 0 to N = 100" in text
     with pytest.raises(ConfigError, match="one sim2.sa_trapped row for planar5 under 'point', got 0"):
         sim2.findings([other], head, _sim2_after(head), 0.1)
+
+
+def _cup_rows(stay: list[float], leave: list[float], home: list[float]) -> pd.DataFrame:
+    """A latent_property.summary of one cup decoder, two cups, 64 inputs each."""
+    table = pd.DataFrame(
+        dict(
+            source="cups-panda",
+            robot="panda",
+            task="cups",
+            decoder="LA",
+            goal=["left", "right"],
+            n_inputs=64,
+            stay_share=stay,
+            theta_min=0.0,
+            theta_max=[1.0, 0.4],
+            theta_range=[1.0, 0.4],
+            stroke_range=0.0,
+            from_home=home,
+            all_reached=min(home) > 0,
+            leave_min=leave,
+            leave_la_min=leave,
+        )
+    )
+    table["stay_holds"] = latent_property.stay_holds(table)
+    table["leave_holds"] = table.leave_min >= latent_property.LEAVE_COUNT
+    return table.assign(has_property=latent_property.has_property(table))
+
+
+def test_property_findings_say_which_half_holds_at_each_cup() -> None:
+    text = latent_map.property_findings(_cup_rows([1.0, 0.75], [0.0, 9.0], [31 / 64, 28 / 64]))
+    assert (
+        "**At the left cup** (confident belief): 64 of 64 stick deflections stay, reaching θ from 0.00"
+        in text
+    )
+    assert "to 1.00, so the stay half holds; from its mid-preference grasp 0 reach another cup" in text
+    assert "(the leave half asks for 7 of 64), so it does not hold." in text
+    assert (
+        "**At the right cup** (confident belief): 48 of 64" in text
+        and "to 0.40, so the stay half does not" in text
+    )
+    assert "9 reach another cup under LA+SA (the leave half asks for 7 of 64), so it holds." in text
+    assert (
+        "59 of 64 inputs reach a cup (31 at the left cup, 28 at the right cup); every cup is reached." in text
+    )
+    assert "at 0 of 2 cups, so it does not meet the rule." in text
+    good = latent_map.property_findings(_cup_rows([1.0, 0.75], [8.0, 9.0], [0.5, 0.0]))
+    assert "not every cup is reached" in good and "at 0 of 2 cups" in good
+    full = _cup_rows([1.0, 0.75], [8.0, 9.0], [0.5, 0.5]).assign(theta_range=1.0, theta_max=1.0)
+    full = full.assign(stay_holds=True).pipe(lambda t: t.assign(has_property=latent_property.has_property(t)))
+    assert "at 2 of 2 cups, so it meets the rule." in latent_map.property_findings(full)
+    with pytest.raises(ConfigError, match="one decoder's rows"):
+        latent_map.property_findings(full.assign(decoder=["a", "b"]))
+
+
+def _lambdas(recon: float) -> pd.DataFrame:
+    return pd.DataFrame(
+        {
+            "lambda": [0.0, 0.1, 1.0],
+            "entropy_confident": [0.012, 0.676, 0.691],
+            "recon_error": [0.00131, recon, 0.00178],
+            "val_error": [0.0045, 0.00398, 0.0045],
+        }
+    )
+
+
+def test_entropy_findings_compare_the_chosen_lambda_with_the_control() -> None:
+    text = entropy_ablation.findings(_lambdas(0.00119), 0.1, 2)
+    assert (
+        "**The rule chooses λ = 0.1.** At confident contexts its mean entropy of p is 0.676 nats, 98%" in text
+    )
+    assert "the control's is 0.012 (2%)" in text
+    assert "reconstruction error is 0.00119 (rad/s)², 0.91× the control's 0.00131 (below it)" in text
+    assert "held out, 0.00398 against 0.0045." in text
+    assert "1.15× the control's 0.00131 (above it)" in entropy_ablation.findings(_lambdas(0.0015), 0.1, 2)
+    with pytest.raises(ConfigError, match="must hold lambda = 0 and 0.3"):
+        entropy_ablation.findings(_lambdas(0.0015), 0.3, 2)
