@@ -19,7 +19,16 @@ import lasa  # noqa: F401  (pins the kernels before numpy loads)
 from lasa.base.errors import ConfigError
 from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim
-from lasa.figures import eating_task, entropy_ablation, latent_map, sim1, sim2, study_analysis, study_caps
+from lasa.figures import (
+    eating_task,
+    entropy_ablation,
+    latent_map,
+    sim1,
+    sim2,
+    sim3,
+    study_analysis,
+    study_caps,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 BUDGET = {"11_eating_study.ipynb": 2000}  # words of Markdown per notebook; the rest 1,200 (issue 47)
@@ -378,3 +387,51 @@ def test_entropy_findings_compare_the_chosen_lambda_with_the_control() -> None:
     assert "1.15× the control's 0.00131 (above it)" in entropy_ablation.findings(_lambdas(0.0015), 0.1, 2)
     with pytest.raises(ConfigError, match="must hold lambda = 0 and 0.3"):
         entropy_ablation.findings(_lambdas(0.0015), 0.3, 2)
+
+
+def _learners(gain_slow: float, low: float, high: float) -> tuple[Claim, pd.DataFrame]:
+    """A sim3 claims row and its episodes: two users per learner and method, errors by hand."""
+    fast = {"LA": 0.5, "LA+SA": 0.4, "LA+SA+Entropy": 0.3}
+    slow = {"LA": 0.6, "LA+SA": 0.5, "LA+SA+Entropy": 0.5 - gain_slow}
+    errors = {**{("fast", m): e for m, e in fast.items()}, **{("slow", m): e for m, e in slow.items()}}
+    head = pd.DataFrame(
+        [
+            dict(
+                robot="panda",
+                learner=learner,
+                method=method,
+                seed=u,
+                error=error + (0.01 if u else -0.01),
+                assistance="none" if method == "LA" else "point",
+            )
+            for (learner, method), error in errors.items()
+            for u in range(2)
+        ]
+    )
+    claim = Claim(id="sim3.entropy_learners", claim="", figure="sim3", paper="", measured="",
+                  reproduced="partly", note="", robot="panda", n_users=60,
+                  values={"gain_fast": 0.1, "gain_slow": gain_slow},
+                  intervals={"gain_fast": (0.05, 0.15), "gain_slow": (low, high)})  # fmt: skip
+    return claim, head
+
+
+def test_sim3_findings_state_each_learners_gain() -> None:
+    claim, head = _learners(-0.02, -0.05, 0.01)
+    other = dataclasses.replace(claim, assistance="hindsight", reproduced="yes")
+    text = sim3.findings([other, claim], head)
+    assert (
+        "**The fast learner.** Mean error over the episode: LA 0.500, LA+SA 0.400, LA+SA+Entropy 0.300."
+        in text
+    )
+    assert "The entropy term lowers LA+SA's (gain LA+SA − LA+SA+Entropy +0.100 [+0.050, +0.150])." in text
+    assert "LA+SA+Entropy 0.520. The entropy term raises LA+SA's" in text
+    assert "(gain LA+SA − LA+SA+Entropy −0.020 [−0.050, +0.010]; its interval contains 0)." in text
+    assert (
+        "**The claim (panda, 60 users per point)** reads *partly*: the term lowers the mean error for the"
+        in text
+    )
+    assert "for the fast learner only." in text
+    claim, head = _learners(0.04, 0.01, 0.07)
+    assert "lowers the mean error for both learners." in sim3.findings([claim], head)
+    with pytest.raises(ConfigError, match="one sim3.entropy_learners row for panda under 'point', got 0"):
+        sim3.findings([other], head)
