@@ -1,38 +1,25 @@
-"""The hand-written results in notebook 05 and the README agree with the committed figures.
+"""The hand-written results in the README agree with the committed figures.
 
-Notebook 05 ends with "What it shows", and the README's "What does not reproduce, and
-why" follows its generated table: prose written by people from a paper-scale run. (Notebooks
-04, 10 and 11 generate their result sentences from the run's data; tests/test_findings.py
-checks the functions that write them.)
+The README's "What does not reproduce, and why" follows its generated table: prose written by
+people from a paper-scale run. (The notebooks generate their result sentences from the run's data;
+tests/test_findings.py checks the functions that write them.)
 Each number or word there that a result decides is paired here with the committed CSV it comes
 from: a re-run of ``make figures`` that moves it fails this test until the sentence is
-rewritten. Each check first finds its sentence in the notebook, so a rewritten sentence needs
-its check rewritten too.
+rewritten. Each check first finds its sentence, so a rewritten sentence needs its check
+rewritten too.
 """
 
 from __future__ import annotations
 
 import functools
-import json
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
-import pytest
 
 from lasa.evidence.findings import stated_numbers
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = ROOT / "figures"
-DT = 0.1  # the Panda's control period [s] (lasa.world.robot), that of every study session
-
-
-def _shows(notebook: str) -> str:
-    """The "What it shows" section of ``notebook``, as one string of its markdown."""
-    cells = json.loads((ROOT / "notebooks" / notebook).read_text())["cells"]
-    text = ["".join(c["source"]) for c in cells if c["cell_type"] == "markdown"]
-    shows = next(t for t in text if "## What it shows" in t)
-    return " ".join(shows[shows.index("## What it shows") :].split())
 
 
 @functools.cache
@@ -50,10 +37,6 @@ def _number(cid: str, robot: str, name: str) -> tuple[float, float, float]:
     value, interval = text.split(" [")
     low, high = interval.rstrip("]").split(", ")
     return float(value), float(low), float(high)
-
-
-def _pct(x: float) -> str:
-    return f"{100 * x:.0f}%"
 
 
 def _done(cid: str) -> str:
@@ -116,87 +99,3 @@ def test_readme_final_error() -> None:
     for robot in ("planar5", "panda"):
         assert _row("sim1.final_error", robot).reproduced == "not reproduced"
         assert _row("sim1.entropy_sa", robot).reproduced == "not reproduced"
-
-
-@pytest.fixture(scope="module")
-def nb05() -> str:
-    return _shows("05_changing_goals.ipynb")
-
-
-def test_05_both_parts_of_the_claim(nb05: str) -> None:
-    grow = [_number("sim2.sa_trapped", r, "error_growth") for r in ("planar5", "panda")]
-    drop = [_number("sim2.sa_trapped", r, "confidence_drop") for r in ("planar5", "panda")]
-    assert all(low > 0 for _, low, _ in grow + drop)  # both parts hold on both robots
-    assert f"grows by {grow[0][0]:.2f} on planar5 and {grow[1][0]:.2f} on the Panda" in nb05
-    assert f"falls by {drop[0][0]:.2f} and {drop[1][0]:.2f}: both parts hold on both robots" in nb05
-    frame = pd.read_csv(FIGURES / "sim2_change_of_mind.csv")
-    late = frame[(frame.robot == "planar5") & (frame.method == "LA+SA") & (frame.assistance == "point")]
-    late = late[late.change_step == late.change_step.max()]
-    assert f"because {_pct((late.confidence < 0.5).mean())} of the users at $N = 120$" in nb05
-    assert late.confidence.median() > 0.99  # "the median does not" fall
-    for robot in ("planar5", "panda"):
-        assert _row("sim2.sa_trapped", robot).effect == "reproduced"
-
-
-@functools.cache
-def _sim2(robot: str, method: str) -> pd.DataFrame:
-    """The headline member's (``point``) sim2 rows of one robot and method."""
-    from lasa.evidence.verdicts import member_frame
-
-    frame = member_frame(pd.read_csv(FIGURES / "sim2_change_of_mind.csv"), "point")
-    return frame[(frame.robot == robot) & (frame.method == method)]
-
-
-def _success(robot: str, method: str) -> pd.Series:
-    return _sim2(robot, method).groupby("change_step").success.mean()
-
-
-def test_05_planar5_la_sa_runs_out_of_time(nb05: str) -> None:
-    from lasa.figures import sim2
-    from lasa.world.robot import load_robot
-    from lasa.world.task import make_cup_task
-
-    methods = ("LA", "LA+SA", "LA+SA+Entropy")
-    conf = pd.concat([_sim2("planar5", m) for m in methods]).groupby(["method", "change_step"]).confidence
-    assert (conf.median().round(6) >= 0.999997).all() and (conf.median()["LA+SA"].round(6) == 0.999998).all()
-    assert "true cup is 0.999998 at every $N$ under LA+SA (at least 0.999997 under every method)" in nb05
-    rate = _success("planar5", "LA+SA")
-    assert (rate[rate.index <= 40] == 1.0).all() and "from 100% ($N \\le 40$)" in nb05
-    falls = ", ".join(_pct(rate[n]) for n in (60, 80, 100)) + f" and {_pct(rate[120])}"
-    assert f"to {falls} at $N$ = 60, 80, 100 and 120" in nb05
-    # none ends within 0.1 of the wrong cup's grasp: |s - s*(wrong)| >= |s*(g*) - s*(wrong)| - error
-    task = make_cup_task(load_robot("planar5"))
-    rows = _sim2("planar5", "LA+SA")
-    lost = rows[~rows.success.astype(bool)]
-    goal, theta = lost.goal.to_numpy(), lost.theta.to_numpy()
-    apart = np.linalg.norm(task.target(goal, theta) - task.target(1 - goal, theta), axis=-1)
-    assert (apart / task.goal_distance - lost.final_error > 0.1).all()
-    last = lost[lost.change_step == 120].final_error
-    assert f"errors run from {last.min():.2f} to {last.max():.2f} (median {last.median():.2f})" in nb05
-    horizon = sim2.Config().horizon
-    assert horizon == 270 and "(the horizon is 270" in nb05 and "the 170 and 150 left" in nb05
-    assert f"falls to {_pct(_success('planar5', 'LA')[120])} at\n$N = 120$".replace("\n", " ") in nb05
-    entropy = _success("planar5", "LA+SA+Entropy")
-    assert f"LA+SA+Entropy stays at {_pct(entropy.min())[:-1]}–{_pct(entropy.max())}" in nb05
-
-
-def test_05_panda_la_sa_keeps_the_wrong_cup(nb05: str) -> None:
-    conf = _sim2("panda", "LA+SA").groupby("change_step").confidence.median()
-    assert (conf[conf.index >= 20] < 0.001).all() and "in the true cup is below 0.001" in nb05
-    rate = _success("panda", "LA+SA")
-    assert f"success falls from {_pct(rate[20])} to {_pct(rate[120])} at $N = 120$" in nb05
-
-
-def test_05_the_panda_la_spike_at_n_20(nb05: str) -> None:
-    from lasa.figures import sim2
-
-    at20 = _sim2("panda", "LA")
-    at20 = at20[at20.change_step == 20]
-    assert len(at20) == 60 and not at20.success.any() and "(0 of 60; final" in nb05
-    err = at20.final_error
-    assert f"error {err.min():.2f} to {err.max():.2f}, mean {err.mean():.2f})" in nb05
-    rate = _success("panda", "LA")
-    assert f"while {_pct(rate[40])} do at $N = 40$" in nb05
-    assert f"at least {_pct(rate[rate.index >= 60].min())} from $N = 60$ on" in nb05
-    assert sim2.Config().horizon - 20 == 250 and "250 steps are left" in nb05
-    assert at20.confidence.max() <= 0.00045 and "is at most 0.00045" in nb05

@@ -386,3 +386,16 @@ def test_the_vectorized_bootstrap_gives_the_resampled_frames_numbers(model, task
         assert (a.id, a.reproduced, a.settled) == (b.id, b.reproduced, b.settled)
         np.testing.assert_allclose([a.ci_low, a.ci_high], [b.ci_low, b.ci_high], rtol=1e-9, atol=1e-12)
         assert a.note == b.note  # every number's interval, as printed
+
+
+def test_sim2_after_the_change_measures_the_wrong_cup(model, task):
+    cfg = sim2.Config(change_steps=(0, 5), users=2, settle=10, **ONE)
+    frame, traj = sim2.run(both(model), task, task.robot.control, cfg)
+    after = sim2.after_the_change(frame, traj, task, cfg.success)
+    goal, theta = after.goal.to_numpy(), after.theta.to_numpy()
+    wrong = task.target(sim2.wrong_goal(goal, task.n_goals), theta)
+    apart = np.linalg.norm(task.target(goal, theta) - wrong, axis=-1) / task.goal_distance
+    # the triangle through the end state, the user's grasp and the wrong cup's grasp
+    assert (np.abs(after.wrong_error - after.final_error) <= apart + 1e-9).all()
+    assert (apart <= after.wrong_error + after.final_error + 1e-9).all()
+    assert (after.steps_left == cfg.horizon - after.change_step).all()

@@ -43,6 +43,7 @@ __all__ = [
     "plot",
     "plot_entropy_grid",
     "plot_entropy_tradeoff",
+    "findings",
 ]
 
 NAME = "entropy_ablation"
@@ -293,3 +294,30 @@ def plot(table: pd.DataFrame) -> Figure:
         row[2].set_title(f"{name}: reconstruction vs entropy over lambda")
     fig.tight_layout()
     return fig
+
+
+def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
+    """The rule's choice and its cost against the lambda = 0 control, as Markdown bullets from the sweep.
+
+    Args:
+        table: :class:`Sweep`'s ``table`` (one row per lambda, lambda = 0 included).
+        chosen: The lambda the rule picked.
+        n_goals: G: the entropy's maximum is log G.
+    """
+    rows = table.set_index("lambda")
+    if 0.0 not in rows.index or chosen not in rows.index:
+        raise ConfigError(f"the sweep must hold lambda = 0 and {chosen:g}; it has {list(rows.index)}")
+    run, control, top = rows.loc[chosen], rows.loc[0.0], float(np.log(n_goals))
+    spread = f"{run.entropy_confident:.3f} nats, {run.entropy_confident / top:.0%} of the most, log {n_goals}"
+    cost = run.recon_error / control.recon_error
+    side = "below" if cost < 1 else "above" if cost > 1 else "equal to"
+    return "\n".join(
+        [
+            f"- **The rule chooses λ = {chosen:g}.** At confident contexts its mean entropy of p is "
+            f"{spread}; "
+            f"the control's is {control.entropy_confident:.3f} ({control.entropy_confident / top:.0%}).",
+            f"- **Its cost.** Its reconstruction error is {run.recon_error:.3g} (rad/s)², {cost:.2f}× the "
+            f"control's {control.recon_error:.3g} ({side} it); held out, {run.val_error:.3g} against "
+            f"{control.val_error:.3g}.",
+        ]
+    )

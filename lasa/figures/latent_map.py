@@ -23,8 +23,10 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from lasa.base.config import AtLeastTwo, ControlConfig, PositiveInt, validate
+from lasa.base.errors import ConfigError
 from lasa.base.io import load_npz
 from lasa.base.paths import Paths
+from lasa.evidence import latent_property
 from lasa.evidence.latent_measure import held_input_paths
 from lasa.evidence.plots import draw_scene, frame_around, goal_colors, project, robots_present
 from lasa.method.decoder import ActionDecoder
@@ -41,6 +43,7 @@ __all__ = [
     "plot_held_paths",
     "plot_grasp_sweep",
     "plot_latent_meaning",
+    "property_findings",
 ]
 
 NAME = "latent_map"
@@ -242,3 +245,47 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
         row[2].set_title(f"{name}: what z controls, per context")
     fig.tight_layout()
     return fig
+
+
+def property_findings(summary: pd.DataFrame) -> str:
+    """One decoder's latent property at each cup and from home, as Markdown bullets, from its measurement.
+
+    For the cup task, whose one phase end per cup is its mid-preference grasp
+    (:func:`lasa.evidence.latent_measure.phase_ends`).
+
+    Args:
+        summary: One decoder's :func:`lasa.evidence.latent_property.summary` (one row per cup).
+    """
+    if summary.empty or summary.decoder.nunique() != 1:
+        raise ConfigError(f"expected one decoder's rows, got {sorted(set(summary.decoder))}")
+    holds = {True: "holds", False: "does not hold"}
+    need = latent_property.LEAVE_COUNT
+    lines = []
+    for row in summary.itertuples():
+        n, stay = int(row.n_inputs), round(row.stay_share * row.n_inputs)
+        reach = f"θ from {row.theta_min:.2f} to {row.theta_max:.2f}"
+        leave = (
+            "the leave half is not measured"
+            if np.isnan(row.leave_min)
+            else f"from its mid-preference grasp {row.leave_min:.0f} reach another cup under LA+SA "
+            f"(the leave half asks for {need * n / 64:g} of {n}), so it {holds[bool(row.leave_holds)]}"
+        )
+        lines.append(
+            f"- **At the {row.goal} cup** (confident belief): {stay} of {n} stick deflections stay, reaching "
+            f"{reach}, so the stay half {holds[bool(row.stay_holds)]}; {leave}."
+        )
+    home = {r.goal: round(r.from_home * r.n_inputs) for r in summary.itertuples()}
+    each = ", ".join(f"{k} at the {g} cup" for g, k in home.items())
+    reached = "every cup is reached" if bool(summary.all_reached.all()) else "not every cup is reached"
+    lines.append(
+        f"- **From home** (uniform belief, updated online): {sum(home.values())} of "
+        f"{int(summary.n_inputs.max())} inputs reach a cup ({each}); "
+        f"{reached}."
+    )
+    meets = bool(latent_property.holds(summary).iloc[0])
+    at = int(summary.has_property.sum())
+    lines.append(
+        f"- **The rule.** The decoder has the property at {at} of {len(summary)} cups, so it "
+        f"{'meets' if meets else 'does not meet'} the rule."
+    )
+    return "\n".join(lines)

@@ -71,6 +71,11 @@ __all__ = [
     "failures",
     "escape_times",
     "wrong_goal",
+    "findings",
+    "claim_sentence",
+    "success_sentence",
+    "belief_sentence",
+    "dip_sentence",
 ]
 
 NAME = "sim2_change_of_mind"
@@ -360,8 +365,9 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
         ``frame``'s columns plus ``steps_left`` (the horizon minus N), ``away_at_n`` (the
         distance from home at step N), ``belief_at_n`` (b(g*) at step N), ``turn`` (steps after N
         until b(g*) first exceeds 0.5, NaN if never), ``reach`` (steps after N until the error
-        first drops to ``success``, NaN if never) and ``still`` (whether the arm moved less than
-        :data:`STILL` in its last :data:`STILL_STEPS` steps). Distances over the goal distance.
+        first drops to ``success``, NaN if never), ``still`` (whether the arm moved less than
+        :data:`STILL` in its last :data:`STILL_STEPS` steps) and ``wrong_error`` (the final
+        distance to the wrong cup's grasp of the same preference). Distances over the goal distance.
     """
     n_steps, goal = len(traj.states) - 1, frame.goal.to_numpy()
     rows = np.arange(len(frame))
@@ -372,6 +378,7 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
     t = np.arange(n_steps + 1)[:, None]
     after = t >= change[None]
     moved = np.linalg.norm(states[-1] - states[-1 - min(STILL_STEPS, n_steps)], axis=-1)
+    wrong = task.target(wrong_goal(goal, task.n_goals), frame.theta.to_numpy())
     return frame.assign(
         steps_left=n_steps - change,
         away_at_n=np.linalg.norm(states[change, rows] - task.start, axis=-1) / task.goal_distance,
@@ -379,6 +386,7 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
         turn=_first(after & (belief > 0.5)) - change,
         reach=_first(after & (error <= success)) - change,
         still=moved / task.goal_distance < STILL,
+        wrong_error=normalized_error(states[-1], wrong, task.goal_distance),
     )
 
 
@@ -424,3 +432,207 @@ def _median(values: pd.Series, left: int) -> str:
     """The median of ``values`` (NaN: never) as a whole number, or "more than ``left``"."""
     median = values.fillna(np.inf).median()
     return f"more than {left}" if not np.isfinite(median) else f"{median:.0f}"
+
+
+# --- the notebook's result sentences (issue 47: every number in them is read from the run's data) ---
+
+SA, ENTROPY = "LA+SA", "LA+SA+Entropy"
+
+
+def _signed(value: float, low: float, high: float) -> str:
+    """``value [low, high]`` to two decimals, with a typographic minus."""
+    return f"{value:.2f} [{low:.2f}, {high:.2f}]".replace("-", "−")
+
+
+def _prob(p: float) -> str:
+    """A probability with two significant digits of its distance to 0 or 1 (below 1e-4: ``3.4e-06``)."""
+    near = min(p, 1.0 - p)
+    if near <= 0.0:
+        return f"{p:.0f}"
+    if p < 1e-4:
+        return f"{p:.1e}"
+    digits = max(2, int(np.ceil(-np.log10(near))) + 1)
+    return f"{p:.{digits}f}".rstrip("0").rstrip(".")
+
+
+def _trend(first: float, last: float) -> str:
+    """How a share moves from its first value to its last: falls, rises or stays (in whole percent)."""
+    a, b = f"{first:.0%}", f"{last:.0%}"
+    return (
+        f"stays at {a}" if a == b else f"falls from {a} to {b}" if last < first else f"rises from {a} to {b}"
+    )
+
+
+def _part(value: float, low: float, high: float, up: str, down: str) -> str:
+    """One part of sim2.sa_trapped: which way the number moves, by how much, with its interval."""
+    if value <= 0:
+        up, value, low, high = down, -value, -high, -low  # the same interval, said the other way round
+    sure = "" if low > 0 or high < 0 else " (its interval contains 0)"
+    return f"{up} by {_signed(value, low, high)}{sure}"
+
+
+def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
+    """sim2.sa_trapped's two parts as one Markdown bullet: how LA+SA's error and confidence move with N.
+
+    Args:
+        claim: The robot's headline ``sim2.sa_trapped`` row (its ``values`` and ``intervals``).
+        steps: The smallest and the largest N.
+    """
+    if claim.id != "sim2.sa_trapped":
+        raise ConfigError(f"claim_sentence reads sim2.sa_trapped, got {claim.id!r}")
+    parts = []
+    for name, up, down in (("error_growth", "grows", "falls"), ("confidence_drop", "falls", "rises")):
+        if name not in claim.values:
+            raise ConfigError(f"{claim.id} has no number {name!r}; it has {sorted(claim.values)}")
+        value = float(claim.values[name])
+        low, high = claim.intervals.get(name, (np.nan, np.nan))
+        parts.append((value > 0, _part(value, float(low), float(high), up, down)))
+    holds = sum(h for h, _ in parts)
+    count = ("neither part holds", "one part holds", "both parts hold")[holds]
+    return (
+        f"- **The claim, as the paper states it ({claim.robot}, {claim.n_users} users per point).** From "
+        f"N = {steps[0]} to N = {steps[1]} LA+SA's mean final error {parts[0][1]}, and its mean confidence "
+        f"in the true cup {parts[1][1]}: {count}; the claim reads *{claim.reproduced}*."
+    )
+
+
+def _rates(head: pd.DataFrame) -> pd.DataFrame:
+    """Success share per N (rows) and method (columns)."""
+    return head.assign(success=head.success.astype(float)).pivot_table(
+        index="change_step", columns="method", values="success", aggfunc="mean"
+    )
+
+
+def success_sentence(head: pd.DataFrame) -> str:
+    """Each method's success share at every N, and which way it moves from the smallest N to the largest.
+
+    Args:
+        head: One member's rows (:func:`run`'s columns; LA's rows with them), every look.
+    """
+    rates = _rates(head)
+    steps = ", ".join(str(n) for n in rates.index)
+    lines = [
+        f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({_trend(rates[m].iloc[0], rates[m].iloc[-1])})"
+        for m in rates.columns
+    ]
+    return f"- **Success at N = {steps}.** " + "; ".join(lines) + "."
+
+
+def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = SA) -> str:
+    """Where ``method``'s belief ends, and what its users who fail at the largest N do.
+
+    The median end confidence in the true cup at the largest N decides the reading: above one half the
+    belief follows the user, below it stays with the wrong cup. Times are medians over users (an
+    event that never happens counts as later than the horizon).
+
+    Args:
+        head: One member's rows (and LA's), every look: the end confidences.
+        after: :func:`after_the_change`'s rows of the same member (and LA), first look.
+        tolerance: The normalised final error that counts as success (``Config.success``).
+        method: The assisted method read.
+    """
+    conf = head[head.method == method].groupby("change_step").confidence
+    median, n_max = conf.median(), int(head.change_step.max())
+    last = head[(head.method == method) & (head.change_step == n_max)].confidence
+    share = f"{(last < 0.5).mean():.0%} of its users at N = {n_max} end with b(g*) below one half"
+    mean = f"at N = {n_max} the mean end confidence is {_prob(last.mean())}, median {_prob(last.median())}"
+    if median.iloc[-1] > 0.5:
+        head_ = (
+            f"- **{method}'s belief follows the user.** Its median end confidence in the true cup is at "
+            f"least {_prob(median.min())} at every N; {mean} ({share})."
+        )
+    else:
+        above = median[median > 0.5].index
+        since = median.index[median.index > above.max()][0] if len(above) else median.index[0]
+        head_ = (
+            f"- **{method}'s belief stays with the wrong cup.** From N = {since} on its median end "
+            f"confidence in the true cup is at most {_prob(median[median.index >= since].max())}; "
+            f"{mean} ({share})."
+        )
+    return head_ + " " + _lost_sentence(after, method, n_max, tolerance)
+
+
+def _steps(median: float) -> str:
+    return f"in {median:.0f} steps" if np.isfinite(median) else "never"
+
+
+def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: float) -> str:
+    """Where ``method``'s unsuccessful users end at the largest N, and how long the belief takes to turn."""
+    part = after[(after.method == method) & (after.change_step == n_max)]
+    if part.empty:
+        raise ConfigError(f"no {method} episodes at N = {n_max} in the after-the-change rows")
+    lost, left = part[~part.success.astype(bool)], int(part.steps_left.iloc[0])
+    last = after[after.change_step == n_max].fillna({"turn": np.inf})
+    turn = last.groupby("method").turn.median()
+    times = ", ".join(f"{_steps(turn[m])} under {m}" for m in turn.index)
+    won = after[(after.method == method) & after.success.astype(bool)].reach
+    reach = (
+        f"{method}'s successful users reach the true cup a median {won.median():.0f} steps after N "
+        f"(over every N), {'more' if won.median() > left else 'fewer'} than the {left} left at N = {n_max}"
+        if len(won)
+        else f"no {method} user reaches the true cup"
+    )
+    where = f"After N = {n_max} the median user's b(g*) passes 0.5 {times}; {reach}."
+    if lost.empty:
+        return f"{where} Every {method} user succeeds at N = {n_max}."
+    near, err = int((lost.wrong_error <= tolerance).sum()), lost.final_error
+    return (
+        f"{where} Its {len(lost)} unsuccessful users there (of {len(part)}) end at final errors "
+        f"{err.min():.2f} to {err.max():.2f} (median {err.median():.2f}); {near} of them end within "
+        f"{tolerance:g} of the wrong cup's grasp, and {lost.still.mean():.0%} stand still."
+    )
+
+
+def dip_sentence(head: pd.DataFrame, after: pd.DataFrame, method: str = "LA") -> str:
+    """Where ``method``'s success is lowest, and what its unsuccessful users there show.
+
+    Args:
+        head: One member's rows (and LA's), every look: the counts, errors and end confidences.
+        after: :func:`after_the_change`'s rows, first look: the arm at step N and who stands still.
+        method: The method read (LA, whose dip at a small N the notebook explains).
+    """
+    rate = _rates(head)[method]
+    n, n_max = int(rate.idxmin()), int(rate.index.max())
+    part = head[(head.method == method) & (head.change_step == n)]
+    lost = part[~part.success.astype(bool)]
+    first = after[(after.method == method) & (after.change_step == n)]
+    where = "at the largest N" if n == n_max else f"at N = {n}, not at the largest N"
+    said = (
+        f"- **{method}'s success is lowest {where}:** {int(part.success.sum())} of {len(part)} users succeed"
+    )
+    if lost.empty or first.empty:
+        return said + "."
+    err = lost.final_error
+    return (
+        f"{said}, with {int(first.steps_left.iloc[0])} steps left. The unsuccessful end at final errors "
+        f"{err.min():.2f} to {err.max():.2f} (mean {err.mean():.2f}) with an end confidence in the true "
+        f"cup of at most {_prob(lost.confidence.max())}. At step N the arm is a median "
+        f"{first.away_at_n.median():.2f} from home and b(g*) = {_prob(first.belief_at_n.median())}; "
+        f"{first[~first.success.astype(bool)].still.mean():.0%} of the unsuccessful stand still at the end."
+    )
+
+
+def findings(claims: list[Claim], head: pd.DataFrame, after: pd.DataFrame, tolerance: float) -> str:
+    """Fig. sim2's results on one robot and member, as Markdown bullets, every number from the run.
+
+    Args:
+        claims: The claims of :func:`claims` (the headline ``sim2.sa_trapped`` row of ``head``'s member
+            and robot is read).
+        head: One member's rows (and LA's), every look (:func:`lasa.evidence.verdicts.member_frame`).
+        after: :func:`after_the_change`'s rows of the same member and LA, first look.
+        tolerance: The normalised final error that counts as success (``Config.success``).
+    """
+    robot = str(head.robot.iloc[0])
+    member = str(head[head.method != "LA"].assistance.iloc[0])
+    rows = [c for c in claims if c.id == "sim2.sa_trapped" and c.robot == robot and c.assistance == member]
+    if len(rows) != 1:
+        raise ConfigError(f"expected one sim2.sa_trapped row for {robot} under {member!r}, got {len(rows)}")
+    steps = (int(head.change_step.min()), int(head.change_step.max()))
+    return "\n".join(
+        [
+            claim_sentence(rows[0], steps),
+            success_sentence(head),
+            belief_sentence(head, after, tolerance),
+            dip_sentence(head, after),
+        ]
+    )

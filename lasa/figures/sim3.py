@@ -15,6 +15,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, Positive, PositiveInt
+from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import normalized_error
 from lasa.evidence.plots import (
@@ -58,6 +59,7 @@ __all__ = [
     "episode_means",
     "plot",
     "plot_learner",
+    "findings",
 ]
 
 NAME = "sim3_learning_users"
@@ -241,3 +243,48 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     fig.suptitle(wrap_to(f"Fig. sim3: users who learn, {n}, assistance: {assistance}", fig.get_figwidth()))
     fig.tight_layout()
     return fig
+
+
+def findings(claims: list[Claim], head: pd.DataFrame) -> str:
+    """Fig. sim3's result on one robot and member, as Markdown bullets, every number from the run.
+
+    Args:
+        claims: The claims of :func:`claims` (the headline row of ``head``'s robot and member is read).
+        head: One member's rows (and LA's), one per episode or step: the mean errors over the episode.
+    """
+    robot = str(head.robot.iloc[0])
+    member = str(head[head.method != "LA"].assistance.iloc[0])
+    rows = [
+        c for c in claims if c.id == "sim3.entropy_learners" and c.robot == robot and c.assistance == member
+    ]
+    if len(rows) != 1:
+        raise ConfigError(
+            f"expected one sim3.entropy_learners row for {robot} under {member!r}, got {len(rows)}"
+        )
+    claim = rows[0]
+    mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
+    lines, lower, learners = [], [], sorted(set(head.learner))
+    for learner in learners:
+        gain = float(claim.values[f"gain_{learner}"])
+        low, high = claim.intervals.get(f"gain_{learner}", (np.nan, np.nan))
+        word = "lowers" if gain > 0 else "raises"
+        said = f"{gain:+.3f} [{low:+.3f}, {high:+.3f}]".replace("-", "−")
+        sure = "" if low > 0 or high < 0 else "; its interval contains 0"
+        if gain > 0:
+            lower.append(learner)
+        errors = ", ".join(f"{m} {mean[learner, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy"))
+        lines.append(
+            f"- **The {learner} learner.** Mean error over the episode: {errors}. The entropy term {word} "
+            f"LA+SA's (gain LA+SA − LA+SA+Entropy {said}{sure})."
+        )
+    if not lower:
+        which = "neither learner"
+    elif len(lower) == len(learners):
+        which = "every learner" if len(learners) > 2 else "both learners"
+    else:
+        which = f"the {' and '.join(lower)} learner only"
+    lines.append(
+        f"- **The claim ({robot}, {claim.n_users} users per point)** reads *{claim.reproduced}*: the term "
+        f"lowers the mean error for {which}."
+    )
+    return "\n".join(lines)
