@@ -147,7 +147,7 @@ def test_the_repository_readme_holds_the_committed_verdict_table_and_summary():
     table = pd.read_csv(root / "figures" / "claims.csv", dtype=str, keep_default_na=False)
     values = read_values(pd.read_csv(root / "figures" / VALUES_NAME, dtype=str, keep_default_na=False))
     assert (root / "figures" / "verdicts.md").read_text() == render_verdicts(table, values)  # generated
-    assert (root / "figures" / "summary.md").read_text() == render_summary(table)
+    assert (root / "figures" / "summary.md").read_text() == render_summary(table, values)
 
 
 def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_flips():
@@ -405,7 +405,7 @@ def test_the_summary_names_each_claim_under_its_word_with_the_reason():
         row("study.likert", "panda", "not testable", "study", "not testable (no questionnaire)"),
     ]
     table = pd.DataFrame([_row(c) for c in rows], columns=list(CLAIM_COLUMNS)).astype(str)
-    lines = render_summary(table).splitlines()
+    lines = render_summary(table, {}).splitlines()
     assert len(lines) <= 10 and lines[0].startswith("**In short.**")
     said = {line.split("**")[1]: line for line in lines[1:]}
     assert said["Reproduced"] == "- **Reproduced** (1): entropy lets users change their mind (sim2; planar5)."
@@ -421,3 +421,27 @@ def test_the_summary_names_each_claim_under_its_word_with_the_reason():
         == "- **Not testable** (1): H3's Likert ratings (study; Panda): no questionnaire."
     )
     assert said["The paper's numbers"].startswith("- **The paper's numbers** (0, stated for the Panda)")
+
+
+def test_the_summary_gives_a_claims_finding_from_its_numbers_and_a_studys_completion():
+    from lasa.evidence.values import Number
+
+    gap = Claim(**{**claim("gap_narrows", robot="panda", verdict="no").__dict__, "settled": True})
+    h1 = Claim(
+        **{
+            **claim("h1", figure="study", robot="panda", verdict="not testable").__dict__,
+            "measured": "not testable (completion: LA 20%); ...",
+        }
+    )
+    table = pd.DataFrame([_row(gap), _row(h1)], columns=list(CLAIM_COLUMNS)).astype(str)
+    iv = {"time_gap_75": (-0.1, 0.1), "time_narrowing": (-0.5, -0.3)}
+    iv |= {"error_gap_75": (-0.03, -0.01), "error_narrowing": (-0.03, -0.01)}
+    values = {("sim1.gap_narrows", "panda"): {k: Number(sum(v) / 2, *v) for k, v in iv.items()}}
+    done = {f"completion.{c}": Number(v) for c, v in (("R", 1.0), ("LA", 0.2), ("LA+SA", 1.0))}
+    values[("study.h1", "panda")] = done
+    said = render_summary(table, values)
+    assert (
+        "the LA/LA+SA gap narrows with rationality (sim1; Panda): the time gap at beta = 75 is unclear "
+        "(the Panda), LA+SA is worse in error at beta = 75 (the Panda)."
+    ) in said
+    assert "H1, SA keeps the goal (study; Panda): completion LA 20% within the horizon." in said

@@ -184,6 +184,7 @@ def _executed_folder(tmp_path: Path, n: int = 2) -> Path:
     for i in range(n):
         (folder / f"0{i}_x-panda.ipynb").write_text(json.dumps(_executed()))
     (folder / "09_x-panda.failed.ipynb").write_text("{}")  # a partial run: never a page
+    (folder / ".08_x-panda.k2j4.tmp.ipynb").write_text("{}")  # a killed write's temporary file: neither
     return folder
 
 

@@ -22,6 +22,12 @@ readers (:func:`lasa.evidence.decision.word`), and ``settled`` says whether the 
 the effect. Every sentence of a row's ``note`` is generated from the row's own numbers and words
 (:func:`note_lead`), never written by hand; a claim that does not reproduce is a result,
 reported with its measured value.
+
+Beside the table, ``claim_values.csv`` holds the numbers as data (:mod:`lasa.evidence.values`,
+:func:`value_rows`): every quantity a rule reads with its value, interval, level and N, and the
+study's facts. The verdict table (:func:`render_verdicts`, ``figures/verdicts.md``), the README's
+summary (:func:`render_summary`) and the list of readings that flip a claim (:func:`render_flips`,
+the head of ``claims.md``) are written from the two files, never from a note's prose.
 """
 
 from __future__ import annotations
@@ -65,6 +71,15 @@ __all__ = [
     "README_MARKERS",
     "SHOWN_COLUMNS",
     "claims_frame",
+    "SUMMARY_MARKERS",
+    "numbers_of",
+    "value_rows",
+    "paper_numbers_of",
+    "stated_elsewhere",
+    "effect_text",
+    "flips",
+    "render_flips",
+    "render_summary",
 ]
 
 README_MARKERS = (
@@ -395,7 +410,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "",
         "04_fixed_expertise",
         "the LA/LA+SA gap narrows with rationality (sim1)",
-        "at beta = 75 LA+SA is no better than LA",
     ),
     PaperClaim(
         "sim1.entropy_sa",
@@ -436,8 +450,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "y = 0.11x, R^2 = 0.98",
         "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "07_new_goals",
-        "with the map, error grows as 0.11x (sim4)",
-        "the straight-line map misses the new cup's grasps",
+        "with the map, the error grows linearly with distance (sim4)",
+        "the straight-line map misses the new cup's grasps by a margin",
     ),
     PaperClaim(
         "sim4.grasp_linear",
@@ -455,7 +469,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "without the map the robot reaches for the training cup; some users' belief ends on the other one",
         "07_new_goals",
         "without the map, the robot reaches the training goal (sim4)",
-        "some users' belief ends on the other training cup",
     ),
     PaperClaim(
         "study.h1",
@@ -472,7 +485,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "",
         "11_eating_study",
         "H2, LA lets users scoop (study)",
-        "R+SA tilts the fork further into the scoop than LA+SA",
     ),
     PaperClaim(
         "study.h3",
@@ -481,7 +493,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "",
         "11_eating_study",
         "H3, LA+SA is fastest (study)",
-        "another condition is faster than LA+SA",
     ),
     PaperClaim(
         "study.likert",
@@ -696,13 +707,14 @@ def _robots_text(robots: list[str]) -> str:
     )
 
 
-def render_summary(table: pd.DataFrame) -> str:
-    """The README's summary under its title, at most 10 lines, from the headline rows.
+def render_summary(table: pd.DataFrame, values: Values) -> str:
+    """The README's summary under its title, at most 10 lines, from the headline rows and their numbers.
 
     One line per effect word that some paper claim reads: each claim by its short name with the
-    robots it reads so on, and for ``not reproduced`` and ``not testable`` the one-line reason
-    (the claim's mechanism; a not-testable study row's completion). Then the count of the paper's
-    numbers on the Panda.
+    robots it reads so on, and for ``not reproduced`` and ``not testable`` the one-line reason:
+    the claim's finding on those robots, written from its numbers (:func:`lasa.evidence.findings.finding`),
+    else its mechanism (:attr:`PaperClaim.why`); why a row is not testable. Then the count of the
+    paper's numbers on the Panda.
     """
     rows = {(r.id, r.robot): r for _, r in table.iterrows()}
     by_word: dict[str, list[str]] = {}
@@ -716,10 +728,13 @@ def render_summary(table: pd.DataFrame) -> str:
         for w, robots in words.items():
             where = _robots_text(robots)
             said = f"{pc.short[:-1]}; {where})" if pc.short.endswith(")") else f"{pc.short} ({where})"
-            if w in ("no", "not reproduced") and pc.why:
-                said += f": {pc.why}"
+            why = finding(pc.id, values, robots) or pc.why
+            if w == "not reproduced" and why:
+                said += f": {why.replace('; ', ', ')}"
             if w == NOT_TESTABLE:
-                said += f": {_untestable_why(rows[(pc.id, robots[0])])}"
+                short = short_arms(values.get((pc.id, robots[0]), {}))
+                done = f"completion {completion_text(short)} within the horizon" if short else ""
+                said += f": {done or _untestable_why(rows[(pc.id, robots[0])])}"
             by_word.setdefault(w, []).append(said)
     lines = [
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
@@ -748,7 +763,7 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
     table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
     values = read_values(pd.read_csv(claims_csv.with_name(VALUES_NAME), dtype=str, keep_default_na=False))
     write_text(claims_csv.with_suffix(".md"), render_markdown(table))
-    write_text(Path(out).with_name("summary.md"), render_summary(table))
+    write_text(Path(out).with_name("summary.md"), render_summary(table, values))
     return write_text(out, render_verdicts(table, values))
 
 

@@ -267,11 +267,16 @@ def _read(path: Path) -> dict[str, Any]:
     return data
 
 
+# a failed run's copy (``x.failed.ipynb``), or a killed write's temporary file (``.x.1a2b.tmp.ipynb``,
+# lasa.base.io.atomic_path)
+_PARTIAL = re.compile(r"^\.|\.(failed|tmp)\.ipynb$")
+
+
 def _executed(folder: Path) -> list[Path]:
     """The executed notebooks of ``folder`` (not the partial runs ``*.failed.ipynb``), by name."""
     if not folder.is_dir():
         raise ArtifactError(f"no executed notebooks: {folder} does not exist (run `make figures` first)")
-    found = sorted(p for p in folder.glob("*.ipynb") if not p.name.endswith(".failed.ipynb"))
+    found = sorted(p for p in folder.glob("*.ipynb") if not _PARTIAL.search(p.name))
     if not found:
         raise ArtifactError(f"no executed notebooks in {folder} (run `make figures` first)")
     return found
