@@ -756,3 +756,11 @@ def test_the_likert_claim_reads_the_share_of_significant_comparisons_in_favour()
     assert likert_verdict(likert) == ("partly", 4 / 6, 6)
     assert likert_verdict(likert.assign(diff=1.0, p_corr=0.01))[:2] == ("yes", 1.0)
     assert likert_verdict(likert.assign(p_corr=0.5))[:2] == ("no", 0.0)
+
+
+def test_a_headline_without_readings_keeps_its_note():
+    rows, _ = study_claims.claims(
+        frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), STUDY_ASSISTANCE[:1], 10
+    )
+    likert = {c.id: c for c in rows}["study.likert"]
+    assert likert.note == study_claims.likert_row(10, STUDY_ASSISTANCE[0]).note  # no "Every reading ..."

@@ -189,7 +189,7 @@ def claims(
                 if other is None or name in DECODER_KEYS:
                     cid = claim_id(name, m_i, sa, cohort, other, model if k else None, belief)
                     rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason))
-    if belief is None and rows:
+    if belief is None and rows:  # a claim of its own, without readings
         rows.append(likert_row(min(n_total, PAPER_N), assistance[0]))
     return (with_flips(rows) if flips else rows), analyses
 
@@ -434,9 +434,10 @@ def with_flips(rows: list[Claim]) -> list[Claim]:
     """Each headline row's note led by the readings whose effect differs from it (once per row list).
 
     The paper states no number the study's rules compare, so the effect is the only word that
-    can differ (its number is ``n/a``).
+    can differ (its number is ``n/a``). A headline without readings (``study.likert``) is left as it is.
     """
-    heads = {c.id for c in rows if "@" not in c.id}
+    read = {c.id.split("@", 1)[0] for c in rows if "@" in c.id}
+    heads = {c.id for c in rows if "@" not in c.id and c.id in read}
     out = []
     for c in rows:
         if c.id in heads:
