@@ -125,3 +125,17 @@ def test_short_arms_are_those_below_the_completion_bar():
     facts = {"completion.R": Number(1.0), "completion.LA": Number(0.2), "completion.LA+SA": Number(0.95)}
     assert short_arms(facts) == [("LA", 0.2)]
     assert completion_text([("LA", 0.2), ("LA+SA", 0.455)]) == "LA 20%, LA+SA 45.5%"
+
+
+def test_a_censored_effect_says_so_from_its_fact_not_its_text():
+    import pandas as pd
+
+    from lasa.evidence.claims import effect_text
+
+    row = pd.Series({"effect": "not reproduced", "figure": "study", "measured": "anything"})
+    assert effect_text(row, study(36.0, 25.0, 88.0, 10, censored=1.0)) == (
+        "not reproduced (censored: lower bound) by simulated participants"
+    )
+    assert effect_text(row, study(36.0, 25.0, 88.0, 10)) == "not reproduced by simulated participants"
+    sim = pd.Series({"effect": "undecided", "figure": "sim1", "measured": "censored: lower bound"})
+    assert effect_text(sim, {}) == "undecided"

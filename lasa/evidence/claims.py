@@ -508,13 +508,16 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 _PEOPLE = "simulated participants"  # who the study's rows rest on: never people, in this package
 
 
-def effect_text(row: pd.Series) -> str:
+def effect_text(row: pd.Series, numbers: Numbers) -> str:
     """A row's effect word, a study row's saying that its participants are simulated.
 
     ``not reproduced by simulated participants``: the study's verdicts are not a replication with
-    people, and their word says so; ``(censored: lower bound)`` where the effect rests on one.
+    people, and their word says so; ``(censored: lower bound)`` where the effect rests on one (the
+    row's ``censored`` fact).
     """
-    said = f"{row.effect} ({CENSORED})" if str(row.measured).startswith(CENSORED) else str(row.effect)
+    censored = numbers.get("censored")
+    bound = censored is not None and censored.value == 1.0
+    said = f"{row.effect} ({CENSORED})" if bound else str(row.effect)
     if str(row.figure) != "study":
         return said
     return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} {_PEOPLE}"
@@ -538,7 +541,7 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     """
     if row is None:
         return "—"
-    head = f"effect {effect_text(row)}"
+    head = f"effect {effect_text(row, numbers)}"
     if row.figure == "study":
         effect = study_effect(str(row.id), numbers)
         if row.effect == NOT_TESTABLE:

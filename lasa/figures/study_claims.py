@@ -571,7 +571,7 @@ def _word(row: Claim) -> str:
     """A row's word in the claims table's vocabulary, ``(censored: lower bound)`` added where it rests
     on a censored arm."""
     said = word(row.reproduced, {})
-    return f"{said} ({CENSORED})" if row.measured.startswith(CENSORED) else said
+    return f"{said} ({CENSORED})" if row.facts.get("censored") == 1.0 else said
 
 
 def members_table(
