@@ -414,11 +414,11 @@ def test_the_summary_names_each_claim_under_its_word_with_the_reason():
         "Eq. M2 pulls towards the mid-preference grasp."
     )
     assert said["Undecided"].startswith(
-        "- **Undecided** (1): entropy lets users change their mind (sim2; Panda)"
+        "- **Undecided** (1): entropy lets users change their mind (sim2; the Panda)"
     )
     assert (
         said["Not testable"]
-        == "- **Not testable** (1): H3's Likert ratings (study; Panda): no questionnaire."
+        == "- **Not testable** (1): H3's Likert ratings (study; the Panda): no questionnaire."
     )
     assert said["The paper's numbers"].startswith("- **The paper's numbers** (0, stated for the Panda)")
 
@@ -441,7 +441,7 @@ def test_the_summary_gives_a_claims_finding_from_its_numbers_and_a_studys_comple
     values[("study.h1", "panda")] = done
     said = render_summary(table, values)
     assert (
-        "the LA/LA+SA gap narrows with rationality (sim1; Panda): the time gap at beta = 75 is unclear "
+        "the LA/LA+SA gap narrows with rationality (sim1; the Panda): the time gap at beta = 75 is unclear "
         "(the Panda), LA+SA is worse in error at beta = 75 (the Panda)."
     ) in said
-    assert "H1, SA keeps the goal (study; Panda): completion LA 20% within the horizon." in said
+    assert "H1, SA keeps the goal (study; the Panda): completion LA 20% within the horizon." in said

@@ -53,7 +53,7 @@ from lasa.evidence.decision import (
     effect_word,
     word,
 )
-from lasa.evidence.findings import completion_text, finding, short_arms, study_effect
+from lasa.evidence.findings import completion_text, finding, on_robots, short_arms, study_effect
 from lasa.evidence.rules import RULES
 from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Values, read_values, reading_of
 
@@ -78,6 +78,7 @@ __all__ = [
     "stated_elsewhere",
     "effect_text",
     "flips",
+    "by_key",
     "render_flips",
     "render_summary",
 ]
@@ -571,7 +572,7 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
 
 def _heads(table: pd.DataFrame) -> list[pd.Series]:
     """The headline rows of the paper's claims (not our additions), in the verdict table's order."""
-    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    rows = by_key(table)
     return [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
 
 
@@ -606,14 +607,22 @@ def fragile_line(table: pd.DataFrame) -> str:
     return f"{lead}{said}; and {shaky} of the {len(readings)} readings' rows (`fragile` in claims.csv)."
 
 
-def flips(table: pd.DataFrame, claim_id: str) -> tuple[dict[str, list[str]], int]:
+def by_key(table: pd.DataFrame) -> dict[tuple[str, str], pd.Series]:
+    """The claims table's rows by (id, robot)."""
+    return {(r.id, r.robot): r for _, r in table.iterrows()}
+
+
+def flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> tuple[dict[str, list[str]], int]:
     """The readings of a claim whose words differ from its headline's, and how many readings it has.
+
+    Args:
+        rows: The claims table's rows by (id, robot) (:func:`by_key`).
+        claim_id: The headline row's id.
 
     Returns:
         ``{reading: ["<robot>: effect <word>; <numbers' words>", ...]}`` (compound readings such as
         ``a+b`` included), and the number of distinct readings of the claim.
     """
-    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
     out: dict[str, list[str]] = {}
     readings = set()
     for (cid, robot), r in rows.items():
@@ -639,8 +648,9 @@ def render_flips(table: pd.DataFrame) -> str:
         "Other readings of what the paper leaves open, whose words differ from the headline's "
         "(reading names: the README's *Reading names*).",
     ]
+    rows = by_key(table)
     for pc in PAPER_CLAIMS:
-        flipped, n = flips(table, pc.id)
+        flipped, n = flips(rows, pc.id)
         if not n:
             continue
         out += ["", f"### {pc.id}", "", f"{pc.claim}: {len(flipped)} of {n} readings flip it.", ""]
@@ -648,9 +658,9 @@ def render_flips(table: pd.DataFrame) -> str:
     return "\n".join(out) + "\n"
 
 
-def _flips_cell(table: pd.DataFrame, claim_id: str, claims_md: str) -> str:
+def _flips_cell(rows: Mapping[tuple[str, str], pd.Series], claim_id: str, claims_md: str) -> str:
     """``3 of 8 ([list](figures/claims.md#sim1final_error))``: the count of readings that flip it."""
-    flipped, n = flips(table, claim_id)
+    flipped, n = flips(rows, claim_id)
     if not n:
         return "none"
     return f"{len(flipped)} of {n}" + (f" ([list]({claims_md}#{_anchor(claim_id)}))" if flipped else "")
@@ -683,7 +693,7 @@ def render_verdicts(
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
     ]
-    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    rows = by_key(table)
     paper, ours = list(head), list(head)
     for pc in PAPER_CLAIMS:
         cells = [_cell(rows.get((pc.id, r)), values.get((pc.id, r), {})) for r in ROBOTS]
@@ -693,21 +703,13 @@ def render_verdicts(
         target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
         said = "; ".join(s for s in (finding(pc.id, values, ROBOTS), pc.mechanism) if s)
         mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
-        flipped = _flips_cell(table, pc.id, claims_md)
+        flipped = _flips_cell(rows, pc.id, claims_md)
         line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {flipped} | {mech} |"
         (ours if pc.ours else paper).append(line)
     out = [f"{count_line(table)} {fragile_line(table)}", "", *paper]
     if len(ours) > len(head):
         out += ["", "Our additions, not claims of the paper (not counted above):", "", *ours]
     return "\n".join(out) + "\n"
-
-
-def _robots_text(robots: list[str]) -> str:
-    return (
-        "both robots"
-        if len(robots) == len(ROBOTS)
-        else " and ".join({"panda": "Panda"}.get(r, r) for r in robots)
-    )
 
 
 def render_summary(table: pd.DataFrame, values: Values) -> str:
@@ -719,7 +721,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     else its mechanism (:attr:`PaperClaim.why`); why a row is not testable. Then the count of the
     paper's numbers on the Panda.
     """
-    rows = {(r.id, r.robot): r for _, r in table.iterrows()}
+    rows = by_key(table)
     by_word: dict[str, list[str]] = {}
     for pc in PAPER_CLAIMS:
         if pc.ours:
@@ -729,7 +731,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
             if (pc.id, robot) in rows:
                 words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
         for w, robots in words.items():
-            where = _robots_text(robots)
+            where = on_robots(robots)
             said = f"{pc.short[:-1]}; {where})" if pc.short.endswith(")") else f"{pc.short} ({where})"
             why = finding(pc.id, values, robots) or pc.why
             if w == "not reproduced" and why:

@@ -12,7 +12,7 @@ the numbers when a verdict moves; no sentence is parsed for a number. What stays
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import pandas as pd
 
@@ -20,7 +20,17 @@ from lasa.evidence.rules import COMPLETION_BAR
 from lasa.evidence.stats import format_f
 from lasa.evidence.values import Number, Numbers, Values
 
-__all__ = ["Rows", "FINDINGS", "finding", "study_effect", "short_arms", "completion_text"]
+__all__ = [
+    "Rows",
+    "FINDINGS",
+    "finding",
+    "study_effect",
+    "side_of",
+    "on_robots",
+    "below_bar",
+    "short_arms",
+    "completion_text",
+]
 
 Rows = Mapping[tuple[str, str], pd.Series]  # (id, robot) -> a row of claims.csv, read as strings
 _NONE: dict[str, Number] = {}
@@ -32,7 +42,7 @@ def _interval(values: Values, cid: str, robot: str, name: str) -> tuple[float, f
     return number.interval if number is not None else None
 
 
-def _side(interval: tuple[float, float], ref: float) -> str:
+def side_of(interval: tuple[float, float], ref: float) -> str:
     """Where an interval lies against ``ref``: ``above``, ``below``, or ``reaches`` it."""
     low, high = interval
     return "above" if low > ref else "below" if high < ref else "reaches"
@@ -50,8 +60,8 @@ def _across(
     for robot in robots:
         interval = _interval(values, cid, robot, name)
         if interval is not None:
-            groups.setdefault(_side(interval, ref), []).append(robot)
-    return "; ".join(f"{says[side]} ({_on(where)})" for side, where in groups.items())
+            groups.setdefault(side_of(interval, ref), []).append(robot)
+    return "; ".join(f"{says[side]} ({on_robots(where)})" for side, where in groups.items())
 
 
 def _time_ratio(values: Values, robots: Sequence[str]) -> str:
@@ -87,7 +97,7 @@ def _gap_part(values: Values, robots: Sequence[str], what: str) -> str:
         narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
         if gap is None or narrowing is None:
             continue
-        side, change = _side(gap, 0.0), _side(narrowing, 0.0)
+        side, change = side_of(gap, 0.0), side_of(narrowing, 0.0)
         said = (
             f"LA+SA is worse in {what} at beta = 75"
             if side == "below"
@@ -100,10 +110,10 @@ def _gap_part(values: Values, robots: Sequence[str], what: str) -> str:
             else f"the {what} gap's change is unclear"
         )
         groups.setdefault(said, []).append(robot)
-    return "; ".join(f"{said} ({_on(where)})" for said, where in groups.items())
+    return "; ".join(f"{said} ({on_robots(where)})" for said, where in groups.items())
 
 
-def _on(robots: list[str]) -> str:
+def on_robots(robots: list[str]) -> str:
     """``both robots``, ``the Panda``, ``planar5``: where a clause holds."""
     if len(robots) == 2:
         return "both robots"
@@ -120,11 +130,15 @@ def _grows(cid: str) -> Callable[[Values, Sequence[str]], str]:
     return lambda values, robots: _across(values, robots, cid, "slope", 0.0, says)
 
 
+def below_bar(done: Iterable[tuple[str, float]]) -> list[tuple[str, float]]:
+    """(condition, share finished) of each condition below :data:`~lasa.evidence.rules.COMPLETION_BAR`
+    (an unknown share, NaN, counts as below: its measure is a lower bound at best)."""
+    return [(str(c), float(v)) for c, v in done if not v >= COMPLETION_BAR]
+
+
 def short_arms(numbers: Numbers) -> list[tuple[str, float]]:
-    """(condition, share finished) of each condition below :data:`~lasa.evidence.rules.COMPLETION_BAR`,
-    from a study row's ``completion.<condition>`` facts."""
-    done = [(k.split(".", 1)[1], n.value) for k, n in numbers.items() if k.startswith("completion.")]
-    return [(c, v) for c, v in done if not v >= COMPLETION_BAR]
+    """:func:`below_bar` of a study row's ``completion.<condition>`` facts."""
+    return below_bar((k.split(".", 1)[1], n.value) for k, n in numbers.items() if k.startswith("completion."))
 
 
 def completion_text(arms: Sequence[tuple[str, float]]) -> str:
@@ -187,7 +201,7 @@ def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
         effect = numbers.get("effect") if numbers is not None else None
         if effect is not None:
             interval = effect.interval if _testable(numbers or _NONE) else None
-            sides.append((effect.n, _side(interval, 0.0) if interval is not None else "untestable"))
+            sides.append((effect.n, side_of(interval, 0.0) if interval is not None else "untestable"))
     if not sides:
         return ""
     told = [side for _, side in sides if side in ("above", "below")]

@@ -21,7 +21,8 @@ from matplotlib.transforms import blended_transform_factory
 
 from lasa.base.config import ControlConfig, NonNegative, Positive, PositiveInt
 from lasa.base.errors import ConfigError
-from lasa.evidence.claims import Claim
+from lasa.evidence.claims import Claim, numbers_of
+from lasa.evidence.findings import side_of
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
 from lasa.evidence.plots import (
     METHOD_COLORS,
@@ -563,16 +564,17 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
 
 
 def _interval(claim: Claim, name: str) -> tuple[float, float, float]:
-    """(value, low, high) of the number ``name`` a row's rule reads (its ``values`` and ``intervals``)."""
-    if name not in claim.values:
+    """(value, low, high) of the number ``name`` its rule reads (:func:`~lasa.evidence.claims.numbers_of`)."""
+    number = numbers_of(claim).get(name)
+    if number is None:
         raise ConfigError(f"{claim.id} has no number {name!r}; it has {sorted(claim.values)}")
-    low, high = claim.intervals.get(name, (np.nan, np.nan))
-    return float(claim.values[name]), float(low), float(high)
+    return number.value, number.low, number.high
 
 
 def _side(low: float, high: float, at: float, below: str, above: str) -> str:
     """``below`` or ``above`` when the interval lies on one side of ``at``; otherwise that it contains it."""
-    return below if high < at else above if low > at else f"its interval contains {at:g}"
+    said = {"below": below, "above": above}
+    return said.get(side_of((low, high), at), f"its interval contains {at:g}")
 
 
 def _said(value: float, low: float, high: float, fmt: str = "{:.3f}") -> str:

@@ -34,7 +34,6 @@ from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_word, word
 from lasa.evidence.findings import study_effect
 from lasa.evidence.rules import COMPLETION_BAR, rule
-from lasa.evidence.values import Number
 from lasa.figures import study_tests
 from lasa.figures.study import PAPER_N
 from lasa.figures.study_tests import Judged, analyse, judge
@@ -395,27 +394,15 @@ def _claim_row(
         # an unsettled row says so as every claims row does ("Undecided: ", lasa.evidence.verdicts)
         why = ("" if settled else "Undecided: ") + f"95% interval of the effect [{low:.3g}, {high:.3g}]"
         why += "" if settled else f", which straddles 0; the tests read {verdict!r}"
-    known = facts(key, result, judged) | {"testable": float(testable)}
-    numbers = {"effect": Number(float(value), float(low), float(high))}
-    numbers |= {k: Number(v) for k, v in known.items()}
-    effect = study_effect(cid, numbers) or "none measured"
-    note = (
-        f"Measured effect: {effect}. "
-        + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
-        + f"{n} simulated participants; SA = {assistance}; "
-        + (f"decoder = {decoder}; " if decoder else "")
-        + (f"participant model = {model}; " if model else "")
-        + f"{why}. Rule: {r.text}."
-    )
     claim, paper = CLAIM_TEXT[key]
-    return Claim(
+    row = Claim(
         id=cid,
         claim=claim,
         figure="study",
         paper=paper,
         measured=measured,
         reproduced=verdict if settled else NOT_TESTABLE if not testable else UNDECIDED,
-        note=note,
+        note="",
         robot="panda",
         assistance=assistance,
         value=float(value),
@@ -426,8 +413,18 @@ def _claim_row(
         values={"effect": float(value)},
         intervals={"effect": (float(low), float(high))},
         level=0.95,
-        facts=known,
+        facts=facts(key, result, judged) | {"testable": float(testable)},
     )
+    effect = study_effect(cid, numbers_of(row)) or "none measured"
+    note = (
+        f"Measured effect: {effect}. "
+        + (f"{NOT_TESTABLE} ({reason}). " if reason else "")
+        + f"{n} simulated participants; SA = {assistance}; "
+        + (f"decoder = {decoder}; " if decoder else "")
+        + (f"participant model = {model}; " if model else "")
+        + f"{why}. Rule: {r.text}."
+    )
+    return dataclasses.replace(row, note=note)
 
 
 def with_flips(rows: list[Claim]) -> list[Claim]:

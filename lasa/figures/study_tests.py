@@ -23,7 +23,8 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.evidence import stats
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE
-from lasa.evidence.rules import COMPLETION_BAR, rule
+from lasa.evidence.findings import below_bar, completion_text
+from lasa.evidence.rules import rule
 from lasa.evidence.sessions import complete_participants
 from lasa.figures.study import for_member
 
@@ -269,12 +270,12 @@ def censored_arms(done: pd.Series) -> list[str]:
     Their Total Time and Goal Error are lower bounds: an episode cut at the horizon would only
     have added to both. A condition without episodes (NaN) counts as censored too.
     """
-    return [str(c) for c, v in done.items() if not v >= COMPLETION_BAR]
+    return [c for c, _ in below_bar(done.items())]
 
 
 def _short_text(done: pd.Series, arms: list[str]) -> str:
     """``"LA 0%, LA+SA 45%"``: the completion of ``arms``."""
-    return ", ".join(f"{c} {100 * v:.3g}%" for c, v in done.reindex(arms).fillna(0.0).items())
+    return completion_text(list(done.reindex(arms).fillna(0.0).items()))
 
 
 def censored_contradiction(censored: list[str], claimed: set[str], low: float) -> bool:
