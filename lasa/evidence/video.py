@@ -29,7 +29,15 @@ from lasa.base.ffmpeg import pinned_ffmpeg
 from lasa.base.io import atomic_path
 from lasa.world.robot import Robot
 
-__all__ = ["render_states", "label_frames", "side_by_side", "write_video", "read_video", "write_clips"]
+__all__ = [
+    "render_states",
+    "render_many",
+    "label_frames",
+    "side_by_side",
+    "write_video",
+    "read_video",
+    "write_clips",
+]
 
 LAYOUTS = ("side_by_side", "in_turn")  # write_clips: the clips beside each other, or one after another
 
@@ -80,6 +88,28 @@ def render_states(
             renderer.update_scene(data, camera=camera or robot.spec.camera)
             frames[i] = renderer.render()
     return frames
+
+
+def render_many(
+    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
+) -> np.ndarray:
+    """:func:`render_states` of the robot's camera, the states split into ``n_jobs`` contiguous
+    parts rendered by as many worker processes (joblib): a frame is a function of its state alone,
+    so the frames are the same with any number.
+
+    Raises:
+        ConfigError: ``n_jobs`` is not a positive integer, or a frame size is odd.
+    """
+    if int(n_jobs) != n_jobs or n_jobs < 1:
+        raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
+    states = np.atleast_2d(states)
+    if n_jobs == 1 or len(states) < 2:
+        return render_states(robot, states, height, width)
+    from joblib import Parallel, delayed  # noqa: PLC0415 (only when asked for workers)
+
+    parts = np.array_split(states, min(n_jobs, len(states)))
+    rendered = Parallel(n_jobs=len(parts))(delayed(render_states)(robot, p, height, width) for p in parts)
+    return np.concatenate(rendered)
 
 
 def label_frames(frames: np.ndarray, text: str | list[str]) -> np.ndarray:
@@ -148,6 +178,7 @@ def write_clips(
     layout: Literal["side_by_side", "in_turn"] = "side_by_side",
     height: int = 240,
     width: int = 320,
+    n_jobs: int = 1,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Render clips of joint states, caption each frame, lay the clips out and write the MP4.
 
@@ -162,6 +193,8 @@ def write_clips(
         layout: ``"side_by_side"`` (one clip per column) or ``"in_turn"`` (concatenated in time).
         height: Frame height in pixels (even).
         width: Frame width of one clip in pixels (even).
+        n_jobs: Worker processes that render the frames (:func:`render_many`; the same video with
+            any number).
 
     Returns:
         The video (T', height, width', 3) and the captioned clips, (T, height, width, 3) each.
@@ -174,15 +207,18 @@ def write_clips(
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
         raise ConfigError("write_clips needs at least one clip")
-    shown = []
-    for i, (states, caption) in enumerate(clips):
-        states = np.atleast_2d(states)
-        if not len(states):
+    states = [np.atleast_2d(s) for s, _ in clips]
+    for i, (s, (_, caption)) in enumerate(zip(states, clips, strict=True)):
+        if not len(s):
             raise ConfigError(f"clip {i} has no states to render")
-        if not isinstance(caption, str) and len(caption) != len(states):
-            raise ConfigError(f"clip {i}: {len(caption)} captions for {len(states)} frames")
-        text = caption if isinstance(caption, str) else list(caption)
-        shown.append(label_frames(render_states(robot, states, height, width), text))
+        if not isinstance(caption, str) and len(caption) != len(s):
+            raise ConfigError(f"clip {i}: {len(caption)} captions for {len(s)} frames")
+    frames = render_many(robot, np.concatenate(states), height, width, n_jobs=n_jobs)
+    parts = np.split(frames, np.cumsum([len(s) for s in states])[:-1])
+    shown = [
+        label_frames(part, caption if isinstance(caption, str) else list(caption))
+        for part, (_, caption) in zip(parts, clips, strict=True)
+    ]
     video = side_by_side(*shown) if layout == "side_by_side" else np.concatenate(shown)
     write_video(path, video, fps=fps)
     return video, shown

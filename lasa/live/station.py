@@ -158,7 +158,8 @@ class Station:
 
     def reset(self) -> None:
         """Back to the start pose, a uniform belief, mode 0, the first waypoint."""
-        assist = Assist(self.task, self.control, np.array([self.alpha]))
+        # the log records a_r under LA too: what the assistance would have done (Assist.unblended)
+        assist = Assist(self.task, self.control, np.array([self.alpha]), unblended=True)
         self.runner = Runner(assist, self.task.start[None], uniform_log_belief(1, self.task.n_goals))
         self.mode = 0
         self.waypoint = 0

@@ -66,7 +66,8 @@ class StepResult:
         log_belief: log b^{t+1}, shape (U, G).
         human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
         action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
-        robot_action: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s].
+        robot_action: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s]; zero
+            in a row whose alpha is 0 unless its :class:`Assist` asks for it (``unblended``).
     """
 
     state: np.ndarray
@@ -88,6 +89,9 @@ class Assist:
             runs ``control.assistance``.
         goal_sets: The belief's targets (:func:`lasa.method.belief.belief_targets`); ``None``:
             those of ``control.likelihood``.
+        unblended: Compute a_r in the rows whose alpha is 0 as well, which blend none of it in:
+            for a record of what the assistance would have done (the live station's log). Without
+            it those rows skip the assistance, and their ``robot_action`` is zero.
     """
 
     task: GoalTask
@@ -95,6 +99,7 @@ class Assist:
     alpha: np.ndarray
     assistance: np.ndarray | None = None
     goal_sets: np.ndarray | None = None
+    unblended: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha", np.asarray(self.alpha, dtype=float).reshape(-1))
@@ -129,7 +134,13 @@ def advance(
     a_h = sanitize(a_h)
     if b is None:
         b = belief(log_b)
-    a_r, weight = _assistance(task, control, state, b, assist.assistance)
+    a_r, weight = np.zeros_like(state), np.zeros(len(state))
+    helped = (assist.alpha > 0.0) | assist.unblended  # a row with alpha = 0 blends in no assistance
+    if helped.all():
+        a_r, weight = _assistance(task, control, state, b, assist.assistance)
+    elif helped.any():
+        members = None if assist.assistance is None else assist.assistance[helped]
+        a_r[helped], weight[helped] = _assistance(task, control, state[helped], b[helped], members)
     a = blend(a_h, a_r, assist.alpha * weight)
     sets, beta, max_step = assist.goal_sets, control.belief_beta, control.likelihood_step
     assert sets is not None  # filled in by Assist.__post_init__
