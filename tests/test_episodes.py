@@ -153,3 +153,42 @@ def test_the_belief_property_is_the_softmax_of_the_log_belief():
     runner = _runner(1, 0.0)
     runner.log_belief[:] = [[0.3, -1.2]]
     assert_allclose(runner.belief[0], softmax(np.array([0.3, -1.2])), atol=1e-15)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    alphas=st.lists(st.sampled_from([0.0, 0.0, 0.3, 1.0]), min_size=1, max_size=6),
+    member=st.sampled_from(["hindsight", "hindsight_point", "grasp_set", "arbitrated"]),
+    seed=st.integers(0, 2**16),
+)
+def test_rows_without_assistance_skip_it_and_step_the_same(alphas, member, seed):
+    """With Assist.only_blended, advance computes a_r only in the rows whose alpha is above 0: the
+    step (state, belief, blended action) is the one that computes a_r everywhere, to the bit, for
+    every member that computes a row from that row alone (all built-in ones but point, whose matrix
+    product rounds by batch size); the skipped rows' robot_action is zero, and by default it is the
+    would-be assistance a_r w."""
+    from lasa.method.assistance import assist
+    from lasa.method.belief import belief
+    from lasa.method.step import advance
+
+    rng = np.random.default_rng(seed)
+    n, alpha = len(alphas), np.array(alphas)
+    state = TASK.start + rng.normal(0.0, 0.3, (n, 5))
+    log_b = np.log(rng.dirichlet(np.ones(2), n))
+    a_h = rng.normal(0.0, 0.3, (n, 5))
+    members = np.full(n, member)
+    skip = advance(Assist(TASK, TASK.robot.control, alpha, members, only_blended=True), state, log_b, a_h)
+    full = advance(Assist(TASK, TASK.robot.control, alpha, members), state, log_b, a_h)
+    for name in ("state", "log_belief", "human_action", "action"):
+        assert getattr(skip, name).tobytes() == getattr(full, name).tobytes(), name
+    helped = alpha > 0
+    assert (skip.robot_action[~helped] == 0).all()
+    assert skip.robot_action[helped].tobytes() == full.robot_action[helped].tobytes()
+    control = TASK.robot.control
+    a_r, w = assist(
+        member, belief(log_b), state, TASK.goals, TASK.preference_sets, control.dt, control.action_scale
+    )
+    assert_allclose(
+        full.robot_action[~helped], (a_r * w[:, None])[~helped], rtol=0, atol=1e-15
+    )  # would-be a_r
+    assert_allclose(belief(skip.log_belief).sum(-1), 1.0)

@@ -106,7 +106,9 @@ def power(
     ids = _participants(reading)
     rng = np.random.default_rng(seed)
     drawn = [rng.integers(0, len(ids), size=(draws, n)) for n in sizes]
-    jobs = [(k, block[i : i + _CHUNK]) for k, block in enumerate(drawn) for i in range(0, draws, _CHUNK)]
+    # the largest cohorts first: the costliest jobs start early and the workers finish together
+    by_cost = sorted(range(len(sizes)), key=lambda k: -sizes[k])
+    jobs = [(k, drawn[k][i : i + _CHUNK]) for k in by_cost for i in range(0, draws, _CHUNK)]
     results = run_jobs(
         _evaluate, jobs, n_jobs=n_jobs, progress=progress, desc="power", shared=(reading, ids, setting)
     )

@@ -158,8 +158,7 @@ class Station:
 
     def reset(self) -> None:
         """Back to the start pose, a uniform belief, mode 0, the first waypoint."""
-        # the log records a_r under LA too: what the assistance would have done (Assist.unblended)
-        assist = Assist(self.task, self.control, np.array([self.alpha]), unblended=True)
+        assist = Assist(self.task, self.control, np.array([self.alpha]))
         self.runner = Runner(assist, self.task.start[None], uniform_log_belief(1, self.task.n_goals))
         self.mode = 0
         self.waypoint = 0

@@ -67,7 +67,7 @@ class StepResult:
         human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
         action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
         robot_action: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s]; zero
-            in a row whose alpha is 0 unless its :class:`Assist` asks for it (``unblended``).
+            in a row whose alpha is 0 if its :class:`Assist` skips those (``only_blended``).
     """
 
     state: np.ndarray
@@ -89,9 +89,13 @@ class Assist:
             runs ``control.assistance``.
         goal_sets: The belief's targets (:func:`lasa.method.belief.belief_targets`); ``None``:
             those of ``control.likelihood``.
-        unblended: Compute a_r in the rows whose alpha is 0 as well, which blend none of it in:
-            for a record of what the assistance would have done (the live station's log). Without
-            it those rows skip the assistance, and their ``robot_action`` is zero.
+        only_blended: Compute a_r only in the rows that blend it in (alpha > 0), and report a
+            zero ``robot_action`` in the others; by default every row computes it (the live log
+            records what the assistance would have done under LA too). The step is the same to the
+            bit for a member that computes a row's a_r from that row alone, as every built-in one
+            does but ``point``, whose Eq. M2 is one matrix product over the batch and rounds by its
+            size. The study's simulated participants ask for it (:mod:`lasa.people.loop`,
+            :mod:`lasa.people.planning`): many of their rows run without assistance.
     """
 
     task: GoalTask
@@ -99,7 +103,7 @@ class Assist:
     alpha: np.ndarray
     assistance: np.ndarray | None = None
     goal_sets: np.ndarray | None = None
-    unblended: bool = False
+    only_blended: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "alpha", np.asarray(self.alpha, dtype=float).reshape(-1))
@@ -135,7 +139,7 @@ def advance(
     if b is None:
         b = belief(log_b)
     a_r, weight = np.zeros_like(state), np.zeros(len(state))
-    helped = (assist.alpha > 0.0) | assist.unblended  # a row with alpha = 0 blends in no assistance
+    helped = (assist.alpha > 0.0) | (not assist.only_blended)  # alpha = 0 blends in no assistance
     if helped.all():
         a_r, weight = _assistance(task, control, state, b, assist.assistance)
     elif helped.any():

@@ -204,7 +204,10 @@ def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progre
         The study's record.
     """
     lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
-    assist = Assist(task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets)
+    # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
+    assist = Assist(
+        task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets, only_blended=True
+    )
     start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
     runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
     observe = functools.partial(_observe, setting, state)

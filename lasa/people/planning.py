@@ -186,7 +186,8 @@ def _rollout_states(study: _Study, idx: np.ndarray, state: np.ndarray, log_b: np
         control = study.control if j < study.replan_steps else coarse
         b = belief(log_b)
         a_h = human_action(study.decoder.decode_numpy(z, s, b), z, rest="zero")
-        step = advance(Assist(study.task, control, alpha, assistance, study.goal_sets), s, log_b, a_h, b)
+        assist = Assist(study.task, control, alpha, assistance, study.goal_sets, only_blended=True)
+        step = advance(assist, s, log_b, a_h, b)
         s, log_b = step.state, step.log_belief
         j += 1 if j < study.replan_steps else study.coarse
         snaps[:, holds == j] = s[:, None]
