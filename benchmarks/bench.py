@@ -89,7 +89,7 @@ from lasa.evidence.video import render_states  # noqa: E402
 from lasa.method.belief import uniform_log_belief  # noqa: E402
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
 from lasa.method.episodes import Runner, held_input  # noqa: E402
-from lasa.method.step import Assist, latent_grid  # noqa: E402
+from lasa.method.step import Assist, advance, latent_grid  # noqa: E402
 from lasa.people.rollout import rollout  # noqa: E402
 from lasa.people.users import UserPopulation  # noqa: E402
 from lasa.pipeline.timings import git_commit, read_runs, read_timings, summarize  # noqa: E402
@@ -156,6 +156,8 @@ class BenchConfig:
     gemm_users: int = 1024  # users of the decoder-vs-GEMM comparison (x 21 candidates) [-]
     gemm_repeats: int = 7  # interleaved timed runs of each, at gemm_users; the median is reported [-]
     gemm_chunks: tuple[int, ...] = (256, 512, 1024, 2048, 4096)  # GEMM-only chunk sizes tried [rows]
+    study_rows: int = 2048  # rows of the study-like step: half without assistance (LA), half LA+SA [-]
+    study_repeats: int = 9  # interleaved timed steps of each variant; the median is reported [-]
     pinning_rounds: int = 5  # alternated proxy runs with the kernels pinned and free [-]
     pinning_steps: int = 150  # entropy fine-tuning steps of each proxy run [-]
     hidden: int = 128  # decoder width, as in configs/paper.yaml [-]
@@ -179,6 +181,8 @@ class BenchConfig:
             gemm_users=16,
             gemm_repeats=1,
             gemm_chunks=(64, 256),
+            study_rows=8,
+            study_repeats=1,
             pinning_rounds=1,
             pinning_steps=5,
             hidden=16,
@@ -410,6 +414,41 @@ def sweep_throughput(
             "floor": float(np.median(floor)),
         }
     return out
+
+
+def study_step(n_rows: int, repeats: int, seed: int = 0) -> dict[str, float]:
+    """Algorithm 1's step (:func:`lasa.method.step.advance`) on a batch like the study's planning
+    rollouts, with and without ``Assist.only_blended``: the eating task, the hindsight member, half
+    the rows without assistance (LA) and half LA+SA, random states near the start and random beliefs.
+
+    Both give the same step (``tests/test_episodes.py``); the timed steps alternate, and the median
+    of ``repeats`` of each is reported.
+
+    Returns:
+        ``every_row_ms`` and ``only_blended_ms`` (median per step), their ratio ``speedup``, and ``rows``.
+    """
+    from lasa.world.eating import make_eating_task  # noqa: PLC0415 (its scene loads here)
+
+    task = make_eating_task()
+    control = task.robot.control
+    rng = np.random.default_rng(seed)
+    state = task.robot.clip(task.start + rng.normal(0.0, 0.2, (n_rows, task.robot.n_joints)))
+    log_b = np.log(rng.dirichlet(np.ones(task.n_goals), n_rows))
+    a_h = rng.normal(0.0, 0.2, state.shape)
+    alpha = np.where(np.arange(n_rows) % 2 == 0, 0.0, control.alpha)
+    members = np.full(n_rows, "hindsight")
+    variants = {
+        "every_row_ms": Assist(task, control, alpha, members),
+        "only_blended_ms": Assist(task, control, alpha, members, only_blended=True),
+    }
+    times: dict[str, list[float]] = {k: [] for k in variants}
+    for _ in range(repeats + 1):  # the first round warms up
+        for key, assist in variants.items():
+            t0 = time.perf_counter()
+            advance(assist, state, log_b, a_h)
+            times[key].append(time.perf_counter() - t0)
+    out = {k: float(np.median(v[1:])) * 1e3 for k, v in times.items()}
+    return {**out, "speedup": out["every_row_ms"] / out["only_blended_ms"], "rows": n_rows}
 
 
 def render_fps(robot: Robot, n_frames: int) -> float:
@@ -878,11 +917,12 @@ def pinning_cost(rounds: int, steps: int) -> dict[str, Any]:
     }
 
 
-PARTS = ("decoder_vs_gemm", "dask", "pinning")  # what ``--only`` re-measures alone
+PARTS = ("decoder_vs_gemm", "dask", "pinning", "study_step")  # what ``--only`` re-measures alone
 PART_SIZES = {
     "decoder_vs_gemm": ("gemm_", "hidden", "depth", "batches"),
     "dask": ("grid_", "dask_"),
     "pinning": ("pinning_",),
+    "study_step": ("study_",),
 }
 
 
@@ -897,6 +937,9 @@ def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tu
     if part == "pinning":
         results["pinning"] = pinning_cost(config.pinning_rounds, config.pinning_steps)
         return ("pinning",)
+    if part == "study_step":
+        results["study_step"] = study_step(config.study_rows, config.study_repeats, config.seed)
+        return ("study_step",)
     results["decoder_vs_gemm"] = decoder_vs_gemm(model, arm.control, config)
     results["decoder_vs_gemm_fraction"] = results["decoder_vs_gemm"]["fraction"]
     return ("decoder_vs_gemm_fraction",)
@@ -1009,6 +1052,9 @@ def main(argv: list[str] | None = None) -> int:
 
     print("the kernels pinned to AVX2 against each library's own choice (fresh processes)", flush=True)
     results["pinning"] = pinning_cost(config.pinning_rounds, config.pinning_steps)
+
+    print("the study's step with and without the unassisted rows' assistance", flush=True)
+    results["study_step"] = study_step(config.study_rows, config.study_repeats, config.seed)
 
     print("rendering", flush=True)
     results["render_fps"] = {

@@ -76,6 +76,9 @@ def test_results_hold_every_key(tiny_results):
     for row in results["sweep"].values():
         assert set(row) == {"batched", "loop", "floor"} and all(v > 0 for v in row.values())
     assert set(results["render_fps"]) == {"planar5", "panda"}
+    study = results["study_step"]
+    assert study["rows"] == TINY.study_rows and study["every_row_ms"] > 0 and study["only_blended_ms"] > 0
+    assert study["speedup"] == pytest.approx(study["every_row_ms"] / study["only_blended_ms"])
     grid = results["dask_grid"]
     assert grid["cells"] == TINY.grid_cells[0] and grid["local_s"] > 0
     assert set(grid["workers"]) == {"1", "2"} and grid["speedup_2_over_1"] > 0
