@@ -946,7 +946,7 @@ def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tu
 
 
 def remeasure(part: str, config: BenchConfig, path: Path) -> int:
-    """Re-run one part (``decoder_vs_gemm`` or ``dask``) and update its keys in the results at ``path``.
+    """Re-run one part of :data:`PARTS` and update its keys in the results at ``path``.
 
     Every other key is kept as it was. ``remeasured[part]`` records the machine and date
     of the new numbers (``machine`` stays that of the whole run) and the sizes used;
