@@ -164,6 +164,9 @@ def test_claims_table(executed):
     claims = pd.read_csv(fig / "claims.csv", keep_default_na=False)
     assert list(claims.columns) == list(CLAIM_COLUMNS)
     assert not claims.duplicated(["id", "robot"]).any()
+    # QUICK mode rests on too few users and resamples for any verdict to be settled (issue 48)
+    assert set(claims.settled) == {"no"}
+    assert claims[claims.figure != "study"].note.str.contains("Undecided: it rests on ").all()
     claims = claims[claims.figure != "study"]  # the study's rows: test_study_outputs
     assert all(i.startswith(f"{f}.") for i, f in zip(claims.id, claims.figure, strict=True))
     # sim4: 3 claims and the straight line's @ee_line, each also @joint_space, each of them also @intercept

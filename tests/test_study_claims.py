@@ -1,5 +1,8 @@
 """The study's claims rules (lasa.figures.study) on tables whose answers are known."""
 
+import re
+import warnings
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -373,20 +376,36 @@ def h3_frames(total: dict[str, float], idle: dict[str, float], n: int = 6) -> di
 
 def test_h3_by_hand_yes_partly_no_on_restricted_means():
     slow = {"R": 40.0, "R+SA": 45.0, "LA": 50.0}
-    yes = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0})
-    rows, analyses = study_claims.claims(yes, STUDY_ASSISTANCE[:1], 6)
+    yes = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0}, n=10)
+    rows, analyses = study_claims.claims(yes, STUDY_ASSISTANCE[:1], 10)
     h3 = by_id(rows)["study.h3"]
     # every participant's gap is the same: LA+SA - R = 2 x (30 - 40) = -20 s exactly, interval degenerate
     assert (h3.reproduced, h3.value, h3.ci_low, h3.ci_high, h3.settled) == ("yes", -20.0, -20.0, -20.0, True)
     assert analyses[("hindsight", 10)]["h3_gap"][0] == "R"
     # fastest on Total Time, but idle as long as R's: partly, settled (the Total gap excludes 0)
-    partly = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 10.0})
-    h3 = by_id(study_claims.claims(partly, STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
+    partly = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 10.0}, n=10)
+    h3 = by_id(study_claims.claims(partly, STUDY_ASSISTANCE[:1], 10)[0])["study.h3"]
     assert (h3.reproduced, h3.settled) == ("partly", True)
     # slower than R: no, settled; the gap is to R, LA+SA - R = +10 s
-    no = h3_frames({**slow, "LA+SA": 45.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0})
-    h3 = by_id(study_claims.claims(no, STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
+    no = h3_frames({**slow, "LA+SA": 45.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0}, n=10)
+    h3 = by_id(study_claims.claims(no, STUDY_ASSISTANCE[:1], 10)[0])["study.h3"]
     assert (h3.reproduced, h3.value, h3.settled) == ("no", 10.0, True)
+
+
+def test_fewer_participants_than_the_papers_never_settle():
+    """The same clear-cut H3 as above on 6 participants, fewer than the paper's 10: undecided, with why;
+    and on 10 participants but 100 bootstrap resamples, fewer than a 95% interval's 200 (issue 48)."""
+    slow = {"R": 40.0, "R+SA": 45.0, "LA": 50.0, "LA+SA": 30.0}
+    idle = {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0}
+    h3 = by_id(study_claims.claims(h3_frames(slow, idle, n=6), STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
+    assert (h3.reproduced, h3.settled, h3.value) == ("undecided", False, -20.0)
+    assert "it rests on 6 participants, fewer than the 10 a settled verdict needs" in h3.note
+    assert "the tests read 'yes'" in h3.note
+    few = study_claims.claims(h3_frames(slow, idle, n=10), STUDY_ASSISTANCE[:1], 10, n_resamples=100)[0]
+    h3 = by_id(few)["study.h3"]
+    assert (h3.reproduced, h3.settled) == ("undecided", False)
+    assert "on 100 resamples, fewer than the 200 a 95% interval needs" in h3.note
+    assert all(not c.settled for c in few if c.n_users < 10)
 
 
 def test_h3_runs_no_t_test_on_times(monkeypatch):
@@ -764,3 +783,20 @@ def test_a_headline_without_readings_keeps_its_note():
     )
     likert = {c.id: c for c in rows}["study.likert"]
     assert likert.note == study_claims.likert_row(10, STUDY_ASSISTANCE[0]).note  # no "Every reading ..."
+
+
+def test_a_test_that_cannot_be_computed_reads_not_testable_with_no_non_finite_number():
+    """Issue 48, finding 9: a 1-step horizon gave every episode the same Goal Error, and claims.csv got
+    ``F(1,1) = -inf, p = 1.000`` and ``p_holm = nan``. Equal errors everywhere: the H1 row reads not testable,
+    says which statistic is not finite, and carries no non-finite number in its text or facts."""
+    data = frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
+    data["goal_error"]["goal_error"] = 5.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        rows, _ = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
+    h1 = by_id(rows)["study.h1"]
+    assert (h1.reproduced, h1.settled) == ("not testable", False)
+    assert h1.measured == "not testable (its test could not be computed: p_holm is not finite)"
+    assert all(np.isfinite(v) for v in h1.facts.values())
+    for row in rows:
+        assert not re.search(r"(?<![A-Za-z])(nan|-?inf)(?![A-Za-z])", row.measured), row.id

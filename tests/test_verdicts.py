@@ -10,6 +10,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.rules import rule as rule_of
 from lasa.evidence.verdicts import (
+    MIN_USERS,
     Design,
     assess,
     block_seed,
@@ -17,7 +18,9 @@ from lasa.evidence.verdicts import (
     bootstrap_frames,
     member_frame,
     member_of,
+    min_resamples,
     sequential,
+    shortfall,
 )
 
 TOY = "sim3.entropy_learners"  # a real rule: yes if both gains > 0, partly if one
@@ -57,7 +60,7 @@ def users(
 
 
 def test_constant_users_give_a_degenerate_settled_interval():
-    [c] = assess(toy, users([0.5] * 6), n_boot=50)
+    [c] = assess(toy, users([0.5] * 6), n_boot=200, min_users=6)
     assert c.reproduced == "yes" and c.settled and c.value == 0.5
     assert c.ci_low == c.ci_high == 0.5 and c.n_users == 6
     assert "6 users per point" in c.note and "Undecided" not in c.note
@@ -65,7 +68,7 @@ def test_constant_users_give_a_degenerate_settled_interval():
 
 def test_an_interval_across_zero_reads_undecided_with_the_point_verdict():
     # mean x = 0.1 > 0 (point: yes), but users spread widely on both sides of zero
-    [c] = assess(toy, users([-1.0, 1.2, -0.9, 1.1, -1.0, 1.2]), n_boot=200)
+    [c] = assess(toy, users([-1.0, 1.2, -0.9, 1.1, -1.0, 1.2]), n_boot=200, min_users=6)
     assert c.reproduced == "undecided" and not c.settled
     assert c.ci_low < 0 < c.ci_high
     assert "gain_fast" in c.note and "reaches 0" in c.note and "read 'yes'" in c.note
@@ -128,7 +131,13 @@ def _runner(xs_by_look: list[list[float]], log: list):
 def test_sequential_stops_at_the_first_settled_look():
     log: list = []
     out = sequential(
-        _runner([[0.5] * 4, [0.5] * 2], log), toy, ("point", "grasp_set"), "point", Design(4, 2, 6), 20
+        _runner([[0.5] * 4, [0.5] * 2], log),
+        toy,
+        ("point", "grasp_set"),
+        "point",
+        Design(4, 2, 6),
+        800,
+        min_users=4,
     )
     assert log == [(0, ("point", "grasp_set"))]  # settled at once: no more users
     assert [c.id for c in out.claims] == [TOY, f"{TOY}@grasp_set"]  # no copy of the headline
@@ -191,3 +200,42 @@ def test_a_reading_joins_the_readings_an_id_names_already():
 
     assert with_reading("sim1.time_ratio", "grasp_set") == "sim1.time_ratio@grasp_set"
     assert with_reading("sim4.x@joint_space", "grasp_set") == "sim4.x@joint_space+grasp_set"  # one "@"
+
+
+def test_the_least_evidence_a_settled_verdict_rests_on():
+    """Issue 48, findings 1-2: 5 resamples beyond each bound (800 at 98.75%, 200 at 95%) and 60 users."""
+    assert (min_resamples(0.9875), min_resamples(0.95), MIN_USERS) == (800, 200, 60)
+    assert shortfall(60, 1000, 0.9875) == ""
+    assert shortfall(4, 50, 0.9875) == (
+        "it rests on 4 users, fewer than the 60 a settled verdict needs, "
+        "and on 50 resamples, fewer than the 800 a 98.75% interval needs"
+    )
+
+
+def test_one_resample_or_one_user_never_settles():
+    """n_boot = 1 made an interval of the single resample, which left out its own point estimate (issue 48:
+    share_lower = 0.667 [1, 1], settled); one user made a zero-width interval, settled. Both read undecided,
+    with the reason, and the point estimates' word beside it."""
+    frame = users([1.0, 1.0, 0.0] * 20)  # 60 users, mean 0.667
+    [c] = assess(toy, frame, n_boot=1, seed=3)
+    assert (c.reproduced, c.settled) == ("undecided", False)
+    assert "on 1 resamples, fewer than the 200 a 95% interval needs" in c.note and "read 'yes'" in c.note
+    [one] = assess(toy, users([0.5]), n_boot=200)
+    assert (one.reproduced, one.settled, one.ci_low, one.ci_high) == ("undecided", False, 0.5, 0.5)
+    assert "it rests on 1 users, fewer than the 60" in one.note
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    n=st.integers(1, 80),
+    n_boot=st.integers(1, 300),
+    level=st.sampled_from([0.95, 0.9875]),
+    seed=st.integers(0, 5),
+)
+def test_a_settled_verdict_rests_on_enough_users_and_resamples(n, n_boot, level, seed):
+    """Whatever the users' values, a verdict is settled only on MIN_USERS users and min_resamples(level)."""
+    xs = np.random.default_rng(seed).uniform(0.2, 1.0, n)  # clearly > 0: settled whenever allowed
+    [c] = assess(toy, users(list(xs)), n_boot=n_boot, seed=seed, level=level)
+    enough = n >= MIN_USERS and n_boot >= min_resamples(level)
+    assert c.settled == enough
+    assert c.reproduced == ("yes" if enough else "undecided")

@@ -31,6 +31,8 @@ __all__ = [
     "USER",
     "NO_ASSISTANCE",
     "N_BOOT",
+    "MIN_USERS",
+    "MIN_TAIL",
     "Design",
     "Sequential",
     "assess",
@@ -44,9 +46,18 @@ __all__ = [
     "check_design",
     "group_means",
     "resample_counts",
+    "min_resamples",
+    "shortfall",
 ]
 
 N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
+# The least evidence a settled verdict may rest on; with less, a verdict reads undecided whatever its
+# intervals (:func:`shortfall`). Both fixed before any verdict was read against them (issue 48):
+# users per point, the sims' first look and the verdict map's cells (fewer gave zero-width intervals:
+# with 4 users, 1 resample in 64 is one user repeated), and resamples beyond each bound of a
+# percentile interval (5: 800 resamples at 98.75%, 200 at 95%).
+MIN_USERS = 60  # [-]
+MIN_TAIL = 5  # [-]
 ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
 # The column naming a simulated user in the sims' frames and CSVs: the user's index (its cup,
 # preference and random stream), the unit a bootstrap resamples. The file contracts name it
@@ -174,6 +185,28 @@ def group_means(
 BootValues = Callable[[pd.DataFrame, np.ndarray], dict[str, dict[str, np.ndarray]]]
 
 
+def min_resamples(level: float) -> int:
+    """The fewest resamples a settled verdict at interval ``level`` may rest on: :data:`MIN_TAIL`
+    beyond each bound of the percentile interval (800 at 98.75%, 200 at 95%)."""
+    if not 0.0 < level < 1.0:
+        raise ConfigError(f"level must lie in (0, 1), got {level!r}")
+    return math.ceil(round(MIN_TAIL / ((1.0 - level) / 2.0), 6))
+
+
+def shortfall(
+    n_users: int, n_boot: int, level: float, min_users: int = MIN_USERS, unit: str = "users"
+) -> str:
+    """Why a verdict on ``n_users`` (``unit``) and ``n_boot`` resamples at ``level`` cannot be
+    settled, as a clause ("it rests on 4 users, fewer than the 60 a settled verdict needs"); "" if it can."""
+    parts = []
+    if n_users < min_users:
+        parts.append(f"on {n_users} {unit}, fewer than the {min_users} a settled verdict needs")
+    least = min_resamples(level)
+    if n_boot < least:
+        parts.append(f"on {n_boot} resamples, fewer than the {least} a {100 * level:.4g}% interval needs")
+    return ("it rests " + ", and ".join(parts)) if parts else ""
+
+
 def _fmt(x: float) -> str:
     return f"{x:.3g}" if math.isfinite(x) else "nan"
 
@@ -186,6 +219,7 @@ def assess(
     unit: str = USER,
     level: float = 0.95,
     fast: BootValues | None = None,
+    min_users: int = MIN_USERS,
 ) -> list[Claim]:
     """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
 
@@ -199,11 +233,13 @@ def assess(
         fast: The figure's vectorized bootstrap (its module's ``boot_values``): the same
             numbers on the same resamples as evaluating every resample, from group means
             (:func:`group_means`); if None, ``evaluate`` runs on every resample.
+        min_users: The fewest users a settled verdict may rest on (:data:`MIN_USERS`).
 
     Returns:
         ``evaluate(frame)``'s claims with ``ci_low``/``ci_high`` (the interval of the first
         number, ``value``), ``settled``, ``n_users``, and ``reproduced`` set to ``undecided``
-        where an interval straddles a threshold.
+        where an interval straddles a threshold, or where the verdict rests on fewer users than
+        ``min_users`` or fewer resamples than :func:`min_resamples` (:func:`shortfall`).
 
     Raises:
         ConfigError: if a claim's verdict is not its rule's verdict at its values.
@@ -213,7 +249,8 @@ def assess(
     point = evaluate(frame)
     samples = _boot_samples(evaluate, frame, point, n_boot, seed, unit, fast)
     n_users = int(frame[unit].nunique())
-    return [_judged(c, samples[c.id], level, n_users) for c in point]
+    short = shortfall(n_users, n_boot, level, min_users)
+    return [_judged(c, samples[c.id], level, n_users, short) for c in point]
 
 
 def _boot_samples(
@@ -241,8 +278,9 @@ def _boot_samples(
     return samples
 
 
-def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int) -> Claim:
-    """Claim ``c`` with its rule's intervals at ``level`` from its resampled numbers, settled or not."""
+def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int, short: str = "") -> Claim:
+    """Claim ``c`` with its rule's intervals at ``level`` from its resampled numbers, settled or not
+    (never settled with a ``short`` of evidence, :func:`shortfall`)."""
     r = rule(c.id)
     if c.reproduced != r.verdict(c.values):
         raise ConfigError(f"{c.id}: verdict {c.reproduced!r} is not its rule's at {dict(c.values)}")
@@ -253,17 +291,15 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
         boot = boot[np.isfinite(boot)]
         bounds = np.percentile(boot, [tail, 100.0 - tail]) if len(boot) else np.full(2, np.nan)
         intervals[q.name] = (float(bounds[0]), float(bounds[1]))
-    settled = r.settled(intervals)
+    settled = r.settled(intervals) and not short
     text = "; ".join(
         f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
         for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
     )
     lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
     if not settled:
-        lead += (
-            f"Undecided: {'; '.join(r.straddled(intervals)) or 'an interval is unknown'}; "
-            f"the point estimates read {c.reproduced!r}. "
-        )
+        why = short or "; ".join(r.straddled(intervals)) or "an interval is unknown"
+        lead += f"Undecided: {why}; the point estimates read {c.reproduced!r}. "
     first = intervals[r.quantities[0].name]
     return dataclasses.replace(
         c,
@@ -342,6 +378,7 @@ def sequential(
     n_boot: int = N_BOOT,
     seed: int = 0,
     fast: BootValues | None = None,
+    min_users: int = MIN_USERS,
 ) -> Sequential:
     """Add users in blocks until every headline verdict is settled or the cap is reached.
 
@@ -355,6 +392,7 @@ def sequential(
         n_boot: Bootstrap resamples per interval.
         seed: Seed of the resampling.
         fast: The figure's vectorized bootstrap, see :func:`assess`.
+        min_users: The fewest users a settled verdict may rest on, see :func:`assess`.
 
     Raises:
         ConfigError: if ``default`` is not among ``assistance``.
@@ -366,7 +404,15 @@ def sequential(
     for look, size in enumerate(design.sizes):
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
-        head = assess(evaluate, member_frame(frame, default), n_boot, seed, level=design.level, fast=fast)
+        head = assess(
+            evaluate,
+            member_frame(frame, default),
+            n_boot,
+            seed,
+            level=design.level,
+            fast=fast,
+            min_users=min_users,
+        )
         log += [
             {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
             for c in head
@@ -377,7 +423,9 @@ def sequential(
             break
     first = frame[frame.look == 0]
     others = {
-        m: assess(evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast)
+        m: assess(
+            evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast, min_users=min_users
+        )
         for m in assistance
         if m != default
     }

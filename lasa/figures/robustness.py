@@ -46,7 +46,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, criteria
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
-from lasa.evidence.verdicts import N_BOOT, USER, Design, assess, member_frame
+from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Design, assess, member_frame
 from lasa.figures import sim1, sim2, sim3
 from lasa.figures.common import as_decoders, check_assistance
 from lasa.method.decoder import ActionDecoder
@@ -100,7 +100,6 @@ COLUMNS = (
 DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
 SIMS = (("sim1", sim1), ("sim2", sim2), ("sim3", sim3))  # the sims each cell runs
-MIN_USERS = 60  # the fewest users per point a cell may rest on [-]
 # every cell's interval level: the claims table's, each look's 1 - ALPHA / K of the sequential
 # design (lasa.evidence.verdicts.Design), so a cell and its claims-table row read alike [-]
 LEVEL = Design().level

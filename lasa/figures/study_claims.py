@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -34,6 +35,7 @@ from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_word, word
 from lasa.evidence.findings import study_effect
 from lasa.evidence.rules import COMPLETION_BAR, rule
+from lasa.evidence.verdicts import shortfall
 from lasa.figures import study_tests
 from lasa.figures.study import PAPER_N
 from lasa.figures.study_tests import Judged, analyse, judge
@@ -361,6 +363,24 @@ def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, f
     return out
 
 
+def _not_finite(value: float, numbers: Mapping[str, float], measured: str) -> str:
+    """What of a row's test is not a finite number, as a clause ("" if every one is): its effect, a
+    statistic of :func:`facts` (F, p, df, ...), or a statistic its ``measured`` text states as nan
+    or inf (``p_holm = nan``, ``F(1,1) = -inf``)."""
+    lost = [] if math.isfinite(value) else ["the effect"]
+    lost += [k for k, v in numbers.items() if not k.startswith("completion.") and not math.isfinite(v)]
+    lost += re.findall(r"([A-Za-z_]+)(?:\([^)]*\))?\s*=\s*(?:nan|-?inf)(?![A-Za-z])", measured)
+    lost = list(dict.fromkeys(lost))
+    return f"{', '.join(lost)} {'is' if len(lost) == 1 else 'are'} not finite" if lost else ""
+
+
+def _shortfall(key: str, n: int, result: Mapping[str, object]) -> str:
+    """Why the row cannot be settled on its participants (fewer than the paper's :data:`PAPER_N`) or,
+    for H3, its bootstrap's resamples (:func:`lasa.evidence.verdicts.shortfall`); "" if it can."""
+    resamples = int(result.get("n_resamples", 10**9)) if key == "h3" else 10**9  # type: ignore[call-overload]
+    return shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")
+
+
 def _claim_row(
     cid: str,
     key: str,
@@ -379,21 +399,32 @@ def _claim_row(
     """
     verdict, value, low, high, measured = judged
     r = rule(cid)
+    numbers = facts(key, result, judged)
     if verdict != NOT_TESTABLE and not (math.isfinite(low) and math.isfinite(high)):
         verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (too few pairs for an interval); {measured}"
+    elif verdict != NOT_TESTABLE and (lost := _not_finite(value, numbers, measured)):
+        verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (its test could not be computed: {lost})"
+        value = low = high = math.nan
+    numbers = {k: v for k, v in numbers.items() if math.isfinite(v)}
     testable = verdict != NOT_TESTABLE and reason is None
-    settled = testable and r.settled({"effect": (low, high)})
     n = int(result["n"])  # type: ignore[call-overload]
+    short = _shortfall(key, n, result)
+    settled = testable and r.settled({"effect": (low, high)}) and not short
     if verdict == NOT_TESTABLE and "too few pairs" in measured:
         why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
         why += "reached the compared phase under both conditions"
+    elif verdict == NOT_TESTABLE and "could not be computed" in measured:
+        why = measured
     elif verdict == NOT_TESTABLE:
         why = measured.split(";", 1)[0] + ": every compared condition must finish "
         why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its measure is compared"
     else:
         # an unsettled row says so as every claims row does ("Undecided: ", lasa.evidence.verdicts)
         why = ("" if settled else "Undecided: ") + f"95% interval of the effect [{low:.3g}, {high:.3g}]"
-        why += "" if settled else f", which straddles 0; the tests read {verdict!r}"
+        if short:
+            why += f": {short}; the tests read {verdict!r}"
+        elif not settled:
+            why += f", which straddles 0; the tests read {verdict!r}"
     claim, paper = CLAIM_TEXT[key]
     row = Claim(
         id=cid,
@@ -413,7 +444,7 @@ def _claim_row(
         values={"effect": float(value)},
         intervals={"effect": (float(low), float(high))},
         level=0.95,
-        facts=facts(key, result, judged) | {"testable": float(testable)},
+        facts=numbers | {"testable": float(testable)},
     )
     effect = study_effect(cid, numbers_of(row)) or "none measured"
     note = (

@@ -108,6 +108,7 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
         "means": means,
         "h3_gap": (best, float(gap["diff"]), float(gap.ci_low), float(gap.ci_high)),
         "horizon": horizon,
+        "n_resamples": n_resamples,
     }
 
 
