@@ -38,15 +38,18 @@ class IKError(LasaError, RuntimeError):
 
 
 class NotebookError(LasaError, RuntimeError):
-    """A notebook stopped on an exception; the message is its cause and where the partial run is.
+    """A notebook stopped on an exception; the message is its cause, where the partial run is, and
+    what became of the files it had written (the runner undoes them: :mod:`lasa.base.journal`).
 
     Attributes:
         ename: The exception's class name inside the notebook (e.g. ``ConfigError``).
         evalue: Its message.
         partial: The executed notebook up to the failing cell.
+        restored: What the runner restored, in a sentence (empty if it journaled nothing).
     """
 
-    def __init__(self, notebook: str, ename: str, evalue: str, partial: str) -> None:
-        self.ename, self.evalue, self.partial = ename, evalue, partial
+    def __init__(self, notebook: str, ename: str, evalue: str, partial: str, restored: str = "") -> None:
+        self.ename, self.evalue, self.partial, self.restored = ename, evalue, partial, restored
         cause = evalue.strip().splitlines()[-1] if evalue.strip() else "(no message)"
-        super().__init__(f"{notebook} failed: {ename}: {cause} (the partial run is in {partial})")
+        then = f"; {restored}" if restored else ""
+        super().__init__(f"{notebook} failed: {ename}: {cause} (the partial run is in {partial}){then}")

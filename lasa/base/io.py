@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from lasa.base import journal
 from lasa.base.errors import ArtifactError, ConfigError
 
 __all__ = [
@@ -39,7 +40,9 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
 
     The temporary name keeps the final suffix (``x.tmp123.mp4``) so that writers which
     infer the format from the extension (ffmpeg, matplotlib) still work. On any
-    exception the temporary file is removed and ``path`` is left untouched.
+    exception the temporary file is removed and ``path`` is left untouched. Under a notebook
+    run's write journal (:mod:`lasa.base.journal`), the file it replaces is recorded first, so
+    that a failed run can be undone.
 
     Args:
         path: Final destination. Its parent folder is created if needed.
@@ -54,7 +57,9 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the usual permissions
+        journal.before_write(path)  # a notebook run's old file, to undo the run if it fails
         os.replace(tmp, path)
+        journal.after_write(path)
     finally:
         if tmp.exists():
             tmp.unlink()
@@ -115,6 +120,9 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
     figure is then drawn from every robot present. Written atomically, under
     :func:`locked` so that robots running in parallel do not lose each other's rows.
 
+    Under a notebook run's write journal (:mod:`lasa.base.journal`), the key values written are
+    recorded, so that a failed run restores its own rows and keeps a parallel run's.
+
     A file of other columns (an older version's) is replaced when ``frame`` replaces every
     one of its rows, since none of them would be kept; otherwise it is an error.
 
@@ -124,6 +132,7 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
     """
     path = Path(path)
     with locked(path.parent):
+        journal.note_rows(path, frame[[key]], sort=[key])  # undone row by row if the run fails
         if path.exists():
             old = pd.read_csv(path)
             replaced = key in old.columns and old[key].isin(frame[key].unique()).all()

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from lasa.base import journal
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, sync_between, write_csv, write_text
 from lasa.evidence.decision import (
@@ -298,7 +299,8 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
     Every row of a (figure, robot) that ``claims`` covers is dropped first, so a claim
     that a figure no longer makes leaves the table; rows of other figures and robots are
     kept. The ``.md`` twin is rewritten from the result. Runs under the folder lock
-    (robots run in parallel).
+    (robots run in parallel). Under a notebook run's write journal (:mod:`lasa.base.journal`), the
+    (figure, robot) pairs are recorded, so that a failed run restores its own rows of both CSVs.
 
     Args:
         path: The claims CSV, e.g. ``figures/claims.csv``; created if missing.
@@ -317,6 +319,8 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
         raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")
     numbers = pd.DataFrame([v for c in claims for v in value_rows(c)], columns=list(VALUE_COLUMNS))
     with locked(path.parent):
+        for table_path, rows in ((path, new), (path.with_name(VALUES_NAME), numbers)):
+            journal.note_rows(table_path, rows[["figure", "robot"]], sort=["figure", "robot", "id"])
         table = _replace(path, new, CLAIM_COLUMNS)
         write_csv(path, table)
         write_csv(path.with_name(VALUES_NAME), _replace(path.with_name(VALUES_NAME), numbers, VALUE_COLUMNS))

@@ -9,6 +9,15 @@ temporary file and renamed into place, so an interrupted run leaves nothing behi
 that Make could mistake for a finished one. A run that fails in a cell is kept as
 ``<name>.failed.ipynb`` for reading.
 
+A run that fails leaves its figures folder (``figures_dir``) as it was: the kernel writes under a
+write journal (:mod:`lasa.base.journal`, a hidden ``.<name>.journal`` folder beside the executed
+notebook, deleted when the run ends), and on a failed cell, a dead kernel, Ctrl-C or ``SIGTERM``
+the runner puts back every file the run wrote, under the folder's lock. When a notebook running
+beside it (``make figures`` runs two) has rewritten a shared file since, only this run's rows of
+the merged tables (a figure's CSV, ``claims.csv``, ``claim_values.csv``) are restored, and a
+shared file that cannot be split by rows (the figure's PNG, ``claims.md``) is left as the other
+run wrote it; the error message names each file it did not restore.
+
 Usage::
 
     python -m lasa.pipeline.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
@@ -18,10 +27,13 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import os
+import signal
 import sys
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -33,8 +45,10 @@ sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
 import papermill as pm  # noqa: E402
 import yaml  # noqa: E402
 
+from lasa.base import journal  # noqa: E402
 from lasa.base.errors import ArtifactError, ConfigError, NotebookError  # noqa: E402
 from lasa.base.io import atomic_path, require_file  # noqa: E402
+from lasa.base.paths import resolve  # noqa: E402
 from lasa.pipeline.timings import append_run, timing_record  # noqa: E402
 
 __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
@@ -103,12 +117,15 @@ def run_notebook(
 
     Raises:
         NotebookError: if a cell raised; its message is that exception's class and message
-            (the library's own error, for a ``ConfigError``) and the partial run's path,
-            ``<name>.failed.ipynb``, which holds the full traceback.
+            (the library's own error, for a ``ConfigError``), the partial run's path,
+            ``<name>.failed.ipynb``, which holds the full traceback, and what became of the
+            files the run had written in the figures folder: restored as they were, or which
+            one could not be (another notebook rewrote it since).
     """
     params = load_config(config, notebook)
+    defaults = notebook_parameters(notebook)
     if overrides:
-        unknown = sorted(set(overrides) - set(notebook_parameters(notebook)))
+        unknown = sorted(set(overrides) - set(defaults))
         if unknown:
             raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
         params.update(overrides)
@@ -117,22 +134,58 @@ def run_notebook(
         name = f"{Path(notebook).stem}-{overrides['robot']}.ipynb"
     out = Path(out_dir) / name
     failed = out.with_suffix(".failed.ipynb")
+    figures = params.get("figures_dir", defaults.get("figures_dir"))
     with atomic_path(out) as tmp:
-        try:
-            pm.execute_notebook(
-                str(notebook),
-                str(tmp),
-                parameters=params,
-                kernel_name="python3",
-                cwd=str(Path.cwd()),
-                progress_bar=progress,
-            )
-        except pm.PapermillExecutionError as exc:
-            # Keep the partial run for reading, under a name no Make rule will take for done.
-            os.replace(tmp, failed)
-            raise NotebookError(str(notebook), exc.ename, str(exc.evalue), str(failed)) from None
+        with _journaled(out, figures) as undo:
+            try:
+                pm.execute_notebook(
+                    str(notebook),
+                    str(tmp),
+                    parameters=params,
+                    kernel_name="python3",
+                    cwd=str(Path.cwd()),
+                    progress_bar=progress,
+                )
+            except pm.PapermillExecutionError as exc:
+                # Keep the partial run for reading, under a name no Make rule will take for done.
+                os.replace(tmp, failed)
+                restored = undo()
+                raise NotebookError(
+                    str(notebook), exc.ename, str(exc.evalue), str(failed), restored
+                ) from None
     failed.unlink(missing_ok=True)
     return out
+
+
+@contextlib.contextmanager
+def _journaled(out: Path, figures: Any) -> Iterator[Callable[[], str]]:
+    """Journal the run's writes to its figures folder; undo them if the run fails.
+
+    Yields the undo, which the caller calls on a failed cell for the sentence that says what it
+    restored. Any other way out of the block (a dead kernel, Ctrl-C, ``SIGTERM`` through
+    :func:`main`) undoes the writes too and adds that sentence to the exception as a note. On
+    success the journal is deleted. The journal is a hidden folder beside the executed notebook.
+    """
+    if not isinstance(figures, str | os.PathLike):  # a notebook without a figures folder
+        yield lambda: ""
+        return
+    folder = out.with_name(f".{out.stem}.journal")
+    undone: list[str] = []
+
+    def undo() -> str:
+        if not undone:
+            undone.append(f"{journal.restore(folder)}")
+            journal.discard(folder)
+        return undone[0]
+
+    try:
+        with journal.recording(folder, resolve(figures)):
+            yield undo
+    except BaseException as exc:
+        if not undone and folder.exists():
+            exc.add_note(undo())
+        raise
+    journal.discard(folder)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -158,6 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
+    signal.signal(signal.SIGTERM, _terminated)  # a killed run undoes its writes, as Ctrl-C does
     started = datetime.datetime.now(datetime.UTC)
     start = time.perf_counter()
     try:
@@ -175,6 +229,10 @@ def main(argv: list[str] | None = None) -> int:
     ) as exc:  # the notebook's own cause, as the last line (its traceback is in the partial run)
         print(f"error: {exc}", file=sys.stderr)
         return 1
+    except (KeyboardInterrupt, SystemExit) as exc:
+        for note in getattr(exc, "__notes__", []):  # what the undo restored
+            print(f"interrupted: {note}", file=sys.stderr)
+        raise
     seconds = time.perf_counter() - start
     if args.timings:  # lasa.pipeline.timings reads them into benchmarks/results.json
         ended = datetime.datetime.now(datetime.UTC)
@@ -182,6 +240,11 @@ def main(argv: list[str] | None = None) -> int:
         append_run(args.timings, record)
     print(f"{out} ({seconds:.1f} s)")
     return 0
+
+
+def _terminated(signum: int, frame: object) -> None:
+    """``SIGTERM``: leave by an exception, so that the run's writes are undone on the way out."""
+    raise SystemExit(128 + signum)
 
 
 def parse_params(items: list[str]) -> dict[str, Any]:

@@ -1,0 +1,280 @@
+"""A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
+
+The runner (:func:`lasa.pipeline.runner.run_notebook`) opens a journal around a notebook's run with
+:func:`recording`: the journal is a folder, named to the kernel (and to every worker process it
+starts) by the environment variable ``LASA_WRITE_JOURNAL``. Every atomic write
+(:func:`lasa.base.io.atomic_path`) of a file under the journaled folder records, the first time the
+run writes that path, the file's previous state (a hard link to the old file, or a copy where a link
+cannot be made, or "absent"), and after each write the identity of the file it put in place (device,
+inode, size, modification time). A merged table (:func:`lasa.base.io.update_csv`, and the claims
+tables through :func:`note_rows`) also records the key values whose rows the run replaced.
+
+If the run fails, :func:`restore` puts the folder back, under the folder's lock, newest path first:
+
+- a file that is still the one this run wrote gets its old bytes back (or is removed, if it was new);
+- a merged table that another run rewrote meanwhile (``make figures`` runs two notebooks side by
+  side into the same folder) gets back only the rows of the keys this run wrote, as they were
+  before; the other run's rows stay;
+- any other file that another run rewrote meanwhile (the shared figure PNG, ``claims.md``) is left
+  as it is and named in the result, since its old bytes would drop the other run's work.
+
+Limits: the journal sees only writes through :func:`lasa.base.io.atomic_path` (every writer in lasa;
+a notebook that writes a file by other means is not undone), and relies on files being replaced,
+never rewritten in place (the hard link keeps the old bytes only then). A run killed outright
+(``SIGKILL``, a power cut) restores nothing: its journal is discarded by the next run of the same
+notebook, which rewrites the same files.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import hashlib
+import io
+import json
+import os
+import shutil
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # pandas loads with lasa.base.io anyway; imported in the functions that use it
+    import pandas as pd
+
+__all__ = ["ENV", "recording", "before_write", "after_write", "note_rows", "restore", "Restored"]
+
+ENV = "LASA_WRITE_JOURNAL"  # the journal folder of the run in progress, if any
+_META = "journal.json"  # in the journal folder: {"root": the journaled folder}
+_ROOTS: dict[str, Path] = {}  # journal folder -> its root, read once per process
+
+
+@contextlib.contextmanager
+def recording(journal: str | os.PathLike[str], root: str | os.PathLike[str]) -> Iterator[Path]:
+    """Journal the writes under ``root`` made while the block runs, by this process and its children.
+
+    ``journal`` is made afresh (a left-over journal of a killed run is discarded). The variable
+    :data:`ENV` is set for the block and reset after it; the journal itself stays, for
+    :func:`restore` or :func:`discard`.
+    """
+    journal = Path(journal)
+    shutil.rmtree(journal, ignore_errors=True)
+    journal.mkdir(parents=True)
+    (journal / _META).write_text(json.dumps({"root": str(Path(root).resolve())}))
+    previous = os.environ.get(ENV)
+    os.environ[ENV] = str(journal.resolve())
+    _ROOTS.pop(os.environ[ENV], None)  # a journal of the same name may have had another root
+    try:
+        yield journal
+    finally:
+        if previous is None:
+            os.environ.pop(ENV, None)
+        else:
+            os.environ[ENV] = previous
+
+
+def discard(journal: str | os.PathLike[str]) -> None:
+    """Delete a journal (after a run that succeeded, or once restored)."""
+    shutil.rmtree(journal, ignore_errors=True)
+
+
+def _entry(path: str | os.PathLike[str]) -> tuple[Path, Path] | None:
+    """The journal entry (a JSON file) of ``path`` and the path resolved, if ``path`` is journaled."""
+    folder = os.environ.get(ENV)
+    if not folder:
+        return None
+    if folder not in _ROOTS:
+        _ROOTS[folder] = Path(json.loads((Path(folder) / _META).read_text())["root"])
+    target = Path(path).resolve()
+    if not target.is_relative_to(_ROOTS[folder]):
+        return None
+    return _entry_of(Path(folder), target), target
+
+
+def _identity(path: Path) -> list[int] | None:
+    """What tells one file apart from its replacement: device, inode, size, modification time."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        return None
+    return [st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns]
+
+
+def _save(entry: Path, record: dict[str, Any]) -> None:
+    tmp = entry.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(record))
+    os.replace(tmp, entry)
+
+
+def _link_or_copy(src: Path, dst: Path) -> None:
+    try:
+        os.link(src, dst)
+    except OSError:  # another file system, or links not allowed: a copy keeps the bytes too
+        shutil.copy2(src, dst)
+
+
+def before_write(path: str | os.PathLike[str]) -> None:
+    """Record ``path``'s state before this run first replaces it; a no-op without a journal."""
+    found = _entry(path)
+    if found is None or found[0].exists():
+        return
+    entry, target = found
+    existed = target.exists()
+    if existed:
+        _link_or_copy(target, entry.with_suffix(".old"))
+    record = {"path": str(target), "first": time.time_ns(), "existed": existed, "wrote": None, "rows": None}
+    _save(entry, record)
+
+
+def after_write(path: str | os.PathLike[str]) -> None:
+    """Record the identity of the file this run just put at ``path``; a no-op without a journal."""
+    found = _entry(path)
+    if found is None or not found[0].exists():
+        return
+    record = json.loads(found[0].read_text())
+    record["wrote"] = _identity(found[1])
+    _save(found[0], record)
+
+
+def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:
+    """Record that this run replaces the rows of ``path`` whose ``keys`` columns match ``keys``' rows.
+
+    Call it before writing the merged table. The key values are kept as the CSV writer of
+    :func:`lasa.base.io.write_csv` writes them (six significant digits), so that they match the
+    file's text. ``sort`` is the columns the table is ordered by.
+    """
+    found = _entry(path)
+    if found is None:
+        return
+    import pandas as pd
+
+    before_write(path)
+    text = keys.drop_duplicates().to_csv(index=False, float_format="%.6g")
+    written = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False)
+    record = json.loads(found[0].read_text())
+    old = record["rows"]["keys"] if record["rows"] else []
+    values = sorted({tuple(k) for k in old} | set(written.itertuples(index=False, name=None)))
+    record["rows"] = {"columns": list(keys.columns), "sort": list(sort), "keys": values}
+    _save(found[0], record)
+
+
+@dataclasses.dataclass
+class Restored:
+    """What :func:`restore` did: the paths it put back, and the ones it could not.
+
+    Its text says so in a sentence, for the runner's error message.
+
+    Attributes:
+        root: The journaled folder.
+        restored: Paths put back as they were (rows or whole files).
+        left: ``(path, why)`` of each file left as another run wrote it.
+    """
+
+    root: Path
+    restored: list[Path] = dataclasses.field(default_factory=list)
+    left: list[tuple[Path, str]] = dataclasses.field(default_factory=list)
+
+    def __str__(self) -> str:
+        written = len(self.restored) + len(self.left)
+        if not written:
+            return f"it had written nothing in {self.root}"
+        if not self.left:
+            return f"the {written} file(s) it wrote in {self.root} were restored as they were"
+        left = ", ".join(f"{path.name} ({why})" for path, why in self.left)
+        done = len(self.restored)
+        return f"{done} of the {written} file(s) it wrote in {self.root} were restored; not: {left}"
+
+
+def restore(journal: str | os.PathLike[str]) -> Restored:
+    """Undo the journaled writes, newest path first, under the lock of the journaled folder.
+
+    A file still as this run wrote it gets its old bytes back (or goes, if it was new). A merged
+    table that another run rewrote since gets back the old rows of the keys this run wrote and keeps
+    every other row as it is now. Any other file that another run rewrote since is left, and named
+    in the result. The journal is left in place (:func:`discard` deletes it).
+    """
+    from lasa.base.io import locked  # io imports this module
+
+    journal = Path(journal)
+    result = Restored(Path(json.loads((journal / _META).read_text())["root"]))
+    records = [json.loads(p.read_text()) for p in journal.glob("*.json") if p.name != _META]
+    with locked(result.root):
+        for record in sorted(records, key=lambda r: r["first"], reverse=True):
+            path = Path(record["path"])
+            if record["wrote"] is None:  # recorded, but its write never landed
+                continue
+            old = _entry_of(journal, path).with_suffix(".old") if record["existed"] else None
+            if _identity(path) == record["wrote"]:
+                _put_back(path, old)
+            elif record["rows"] is not None:
+                why = _restore_rows(path, old, record["rows"])
+                if why:
+                    result.left.append((path, why))
+                    continue
+            else:
+                result.left.append((path, "another run rewrote it since"))
+                continue
+            result.restored.append(path)
+    return result
+
+
+def _entry_of(journal: Path, path: Path) -> Path:
+    """The journal entry of a resolved path: a file named by the path's hash."""
+    return journal / f"{hashlib.sha1(str(path).encode()).hexdigest()[:20]}.json"
+
+
+def _put_back(path: Path, old: Path | None) -> None:
+    """Replace ``path`` by ``old`` atomically (a link to the old file, or a copy), or remove it."""
+    if old is None:
+        path.unlink(missing_ok=True)
+        return
+    tmp = path.with_name(f".{path.name}.restore{os.getpid()}")
+    tmp.unlink(missing_ok=True)
+    _link_or_copy(old, tmp)
+    os.replace(tmp, path)
+
+
+def _read_text_table(path: Path | None) -> pd.DataFrame | None:
+    """A CSV as text cells (each cell as written), or None if there is none."""
+    import pandas as pd
+
+    if path is None or not path.exists():
+        return None
+    return pd.read_csv(path, dtype=str, keep_default_na=False)
+
+
+def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
+    """Put back the old rows of the journaled keys in the table at ``path``; why not, or ``""``."""
+    import pandas as pd
+
+    columns, sort = rows["columns"], rows["sort"]
+    keys = pd.MultiIndex.from_tuples([tuple(k) for k in rows["keys"]], names=columns)
+    now, before = _read_text_table(path), _read_text_table(old)
+    tables = [t for t in (now, before) if t is not None]
+    if not tables:
+        return ""
+    header = list(tables[0].columns)
+    if any(list(t.columns) != header or not set(columns) <= set(header) for t in tables):
+        return "another run rewrote it since, with other columns"
+    parts = []
+    if now is not None:  # every row of the keys this run did not write, as it is now
+        parts.append(now[~pd.MultiIndex.from_frame(now[columns]).isin(keys)])
+    if before is not None:  # the rows of the keys it wrote, as they were
+        parts.append(before[pd.MultiIndex.from_frame(before[columns]).isin(keys)])
+    table = pd.concat(parts, ignore_index=True)
+    if table.empty and before is None:
+        path.unlink(missing_ok=True)
+        return ""
+    table = table.sort_values(list(sort), kind="stable", key=_sort_key, ignore_index=True)
+    tmp = path.with_name(f".{path.name}.restore{os.getpid()}")
+    table.to_csv(tmp, index=False)
+    os.replace(tmp, path)
+    return ""
+
+
+def _sort_key(column: pd.Series) -> pd.Series:
+    """A text column as the writer sorted it: by number if every cell is one, else as text."""
+    import pandas as pd
+
+    numbers = pd.to_numeric(column, errors="coerce")
+    return numbers if numbers.notna().all() else column
