@@ -236,7 +236,7 @@ def test_single_step_with_the_map_is_safe(model, grown):
 
 
 def test_sim4_frame_and_determinism(model, task):
-    config = sim4.Config(offsets=(0.08, 0.14), users=2, horizon=6, assistance=("point",))
+    config = sim4.Config(offsets=(0.08, 0.11, 0.14), users=2, horizon=6, assistance=("point",))
     frame, runs = sim4.run(model, task, task.robot.control, config)
     again, _ = sim4.run(model, task, task.robot.control, config)
     pd.testing.assert_frame_equal(frame, again)
@@ -245,9 +245,9 @@ def test_sim4_frame_and_determinism(model, task):
     assert list(sim4.with_cup_columns(frame).columns) == list(sim4.COLUMNS)
     assert set(frame.mapping) == {"with", "without"}
     assert set(frame.h) == {"grasp", "straight_line", "straight_line_ee", "none"}
-    assert len(frame) == 2 * 2 * 4
+    assert len(frame) == 2 * 3 * 4
     assert frame.distance.max() == 1.0 and (frame.error >= 0).all()
-    assert len(runs) == 2 and runs[0].task.n_goals == 3
+    assert len(runs) == 3 and runs[0].task.n_goals == 3
 
 
 @pytest.mark.parametrize(
@@ -327,13 +327,13 @@ def test_sim4_refuses_a_method_whose_decoder_is_missing(model, task):
             model,
             task,
             task.robot.control,
-            sim4.Config(offsets=(0.08,), users=1, horizon=2, method="LA+SA+Entropy"),
+            sim4.Config(offsets=(0.08, 0.11, 0.14), users=1, horizon=2, method="LA+SA+Entropy"),
         )
 
 
 def test_sim4_members_share_batches_without_changing_the_headline(model, task):
     """Members run together, paired by seed; the headline member's rows equal a run of it alone."""
-    config = sim4.Config(offsets=(0.08, 0.14), users=2, horizon=6, assistance=("point", "grasp_set"))
+    config = sim4.Config(offsets=(0.08, 0.11, 0.14), users=2, horizon=6, assistance=("point", "grasp_set"))
     frame, runs = sim4.run(model, task, task.robot.control, config)
     alone, alone_runs = sim4.run(
         model, task, task.robot.control, dataclasses.replace(config, assistance=("point",))

@@ -10,22 +10,22 @@ from lasa.base.errors import ConfigError
 from lasa.figures import sim1, sim2, sim3
 
 ONE = {"assistance": ("point",)}  # the headline member only: the bare sweep
-SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), users=3, horizon=20, seed=0, methods=("LA", "LA+SA"), **ONE)
+SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), users=3, horizon=20, seed=0, **ONE)
 
 
 def test_sim1_frame_columns_and_size(model, task):
-    frame, traj = sim1.run(model, task, task.robot.control, SMALL)
+    frame, traj = sim1.run(both(model), task, task.robot.control, SMALL)
     assert set(sim1.COLUMNS) <= set(frame.columns)
-    assert len(frame) == 2 * 3 * 3 == traj.states.shape[1]
-    assert set(frame.method) == {"LA", "LA+SA"}
+    assert len(frame) == 3 * 3 * 3 == traj.states.shape[1]
+    assert set(frame.method) == {"LA", "LA+SA", "LA+SA+Entropy"}
     assert frame.final_error.ge(0).all() and frame.time.between(0, SMALL.horizon).all()
     # paired design: a seed has the same cup and preference under every condition
     assert frame.groupby("seed")[["goal", "theta"]].nunique().eq(1).all().all()
 
 
 def test_same_seed_gives_identical_csv(model, task, tmp_path):
-    a, _ = sim1.run(model, task, task.robot.control, SMALL)
-    b, _ = sim1.run(model, task, task.robot.control, SMALL)
+    a, _ = sim1.run(both(model), task, task.robot.control, SMALL)
+    b, _ = sim1.run(both(model), task, task.robot.control, SMALL)
     a.to_csv(tmp_path / "a.csv", index=False)
     b.to_csv(tmp_path / "b.csv", index=False)
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
@@ -84,8 +84,8 @@ def test_claims_need_the_papers_betas():
 
 def test_same_seed_gives_identical_csv_on_the_panda(panda_model, panda_task, tmp_path):
     ctl = panda_task.robot.control
-    a, traj = sim1.run(panda_model, panda_task, ctl, SMALL)
-    b, _ = sim1.run(panda_model, panda_task, ctl, SMALL)
+    a, traj = sim1.run(both(panda_model), panda_task, ctl, SMALL)
+    b, _ = sim1.run(both(panda_model), panda_task, ctl, SMALL)
     a.to_csv(tmp_path / "a.csv", index=False)
     b.to_csv(tmp_path / "b.csv", index=False)
     assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
@@ -96,7 +96,7 @@ def test_same_seed_gives_identical_csv_on_the_panda(panda_model, panda_task, tmp
 
 def test_a_panda_decoder_is_refused_for_the_planar_task(panda_model, task):
     with pytest.raises(ConfigError, match="trained for 'panda'"):
-        sim1.run(panda_model, task, task.robot.control, SMALL)
+        sim1.run(both(panda_model), task, task.robot.control, SMALL)
 
 
 def both(model):
@@ -134,7 +134,7 @@ def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task, monke
 
 def test_a_missing_decoder_is_a_clear_error(model, task):
     with pytest.raises(ConfigError, match="need the 'entropy' decoder"):
-        sim1.run(model, task, task.robot.control, sim1.Config(betas=(75.0,), users=1, horizon=5))
+        sim1.run(model, task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), users=1, horizon=5))
 
 
 def test_sim2_frame(model, task):
@@ -202,9 +202,10 @@ def test_sims_1_to_3_share_one_sweep_config_and_a_bad_setting_names_its_notebook
     with pytest.raises(ConfigError) as err:
         from_dict(sim1.Config, {"betas": "x"}, where="notebook 04_fixed_expertise")
     assert str(err.value) == (
-        "notebook 04_fixed_expertise settings: betas must be a list, each a number in [0, inf], got 'x'"
+        "notebook 04_fixed_expertise settings: betas must be a list, each a number in (0, inf), got 'x': "
+        "the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"
     )
-    with pytest.raises(ConfigError, match=r"^betas\[1\] must be a number in \[0, inf\], got 'x'$"):
+    with pytest.raises(ConfigError, match=r"^betas\[1\] must be a number in \(0, inf\), got 'x': the "):
         sim1.Config(betas=(1.0, "x"))
     with pytest.raises(ConfigError, match=r"^notebook 06 settings: users must be an integer >= 1, got 0$"):
         from_dict(sim3.Config, {"users": 0}, where="notebook 06")
@@ -311,10 +312,10 @@ def test_members_and_draws_share_la_and_keep_the_headline_bitwise(model, task):
 
 
 def test_a_laggy_pilot_that_always_lags_never_moves_the_stick(model, task):
-    cfg = sim3.Config(users=3, horizon=12, pilot="laggy", pilot_prob=1.0, methods=("LA",), **ONE)
-    _, traj = sim3.run(model, task, task.robot.control, cfg)
+    cfg = sim3.Config(users=3, horizon=10, pilot="laggy", pilot_prob=1.0, **ONE)
+    _, traj = sim3.run(both(model), task, task.robot.control, cfg)
     assert (traj.z == traj.z[:1]).all()  # every later input repeats the first
-    _, boltzmann = sim3.run(model, task, task.robot.control, dataclasses.replace(cfg, pilot_prob=0.0))
+    _, boltzmann = sim3.run(both(model), task, task.robot.control, dataclasses.replace(cfg, pilot_prob=0.0))
     assert not (boltzmann.z == boltzmann.z[:1]).all()
 
 

@@ -22,7 +22,7 @@ REF = 1
 def test_grasp_error_of_the_held_training_grasp_is_the_cup_distance(task):
     """A robot that holds, at the training cup, the grasp the user wants at a new cup is off by the
     cup's distance on the table: y = x by construction (planar5's new cups are translates)."""
-    config = sim4.Config(offsets=(0.08, 0.2))
+    config = sim4.Config(offsets=(0.08, 0.14, 0.2))
     theta = np.linspace(0.0, 1.0, 7)
     for offset, pos in zip(config.offsets, new_cup_positions(task, config), strict=True):
         big = extend_task(task, pos, REF)
@@ -164,7 +164,7 @@ def test_plot_shows_every_point_and_says_its_users():
 
 
 def test_map_geometry_on_planar5(task):
-    config = sim4.Config(offsets=(0.08, 0.2))
+    config = sim4.Config(offsets=(0.08, 0.14, 0.2))
     geo = map_geometry(task, config)
     assert set(geo.index.get_level_values("h")) == {"grasp", "straight_line", "straight_line_ee"}
     # the grasp-to-grasp map is exact at the grasps up to its soft assignment, the gripper's line up
@@ -180,7 +180,13 @@ def test_judged_rows_name_the_measure_then_the_member(model, task):
     from lasa.figures.common import judge
 
     config = sim4.Config(
-        offsets=(0.08, 0.14), users=2, block=2, cap=2, horizon=6, n_boot=10, assistance=("point", "grasp_set")
+        offsets=(0.08, 0.11, 0.14),
+        users=2,
+        block=2,
+        cap=2,
+        horizon=6,
+        n_boot=10,
+        assistance=("point", "grasp_set"),
     )
     frame, outcome, _ = judge(sim4, model, task, task.robot.control, config)
     ids = {(c.id, c.assistance) for c in outcome.claims}

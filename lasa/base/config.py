@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 import os
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Annotated, Any, TypeVar
 
 import annotated_types as at
@@ -38,12 +39,15 @@ __all__ = [
     "BeliefCap",
     "cap_setting",
     "FiniteNonNegative",
+    "Why",
+    "Rationality",
     "validate",
     "interval",
     "expects",
     "ControlConfig",
     "check_range",
     "check_choice",
+    "check_list",
     "from_dict",
     "to_dict",
 ]
@@ -72,6 +76,24 @@ NonNegative = Annotated[Number, at.Ge(0.0)]  # a number >= 0
 UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
 FiniteNonNegative = Annotated[Number, at.Ge(0.0), at.Lt(math.inf)]  # a number in [0, inf) (a finite beta)
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
+
+
+@dataclasses.dataclass(frozen=True)
+class Why:
+    """Why a field's type has its bounds: an item of its ``Annotated`` metadata, which
+    :func:`validate` states after a range error (e.g. :data:`Rationality`)."""
+
+    reason: str
+
+
+# A simulated user's rationality on a swept grid (Eq. S1): a number in (0, inf). Zero and infinity
+# are limits of Eq. S1, not rationalities a figure can draw on its logarithmic beta axis.
+Rationality = Annotated[
+    Number,
+    at.Gt(0.0),
+    at.Lt(math.inf),
+    Why("the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"),
+]
 # the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None for no cap; a record
 # with such a field passes it through cap_setting first, so that a config file's "none" means None
 BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
@@ -158,7 +180,16 @@ def validate(record: Any) -> None:
         expected = expects(annotation)
         if isinstance(err["input"], int | float) and expected.startswith("a number in "):
             expected = expected.removeprefix("a number ")  # it is a number: only the range is wrong
-        raise ConfigError(f"{name} must be {expected}, got {err['input']!r}") from None
+        why = _why(fields[loc[0]])
+        raise ConfigError(f"{name} must be {expected}, got {err['input']!r}{why}") from None
+
+
+def _why(annotation: Any) -> str:
+    """``: <reason>`` of the :class:`Why` in a field's type (or its items'), else empty."""
+    if typing.get_origin(annotation) is tuple:
+        annotation = typing.get_args(annotation)[0]
+    reasons = [m.reason for m in getattr(annotation, "__metadata__", ()) if isinstance(m, Why)]
+    return f": {reasons[0]}" if reasons else ""
 
 
 # The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
@@ -212,6 +243,38 @@ def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) ->
     if value not in choices:
         raise ConfigError(f"unknown {name} {value!r}; choose one of {', '.join(map(repr, choices))}")
     return value
+
+
+def check_list(
+    name: str, values: Sequence[Any], *, at_least: int = 1, ascending: bool = False, why: str = ""
+) -> tuple[Any, ...]:
+    """Return a list setting as a tuple if it holds ``at_least`` values, none twice, else raise.
+
+    A repeated value would run (and write) the same condition twice; a grid of numbers
+    (``ascending``) is also refused out of order, so that its CSV rows, curves and "the largest"
+    read in one order. Values are compared as Python compares them (1 and 1.0 repeat).
+
+    Args:
+        name: The setting's name, used in the message.
+        values: Its values (a list or a tuple).
+        at_least: The fewest distinct values it may hold.
+        ascending: Refuse values that are not in ascending order.
+        why: Why it needs ``at_least`` (e.g. ``"a line needs three points"``), for the message.
+
+    Raises:
+        ConfigError: one line naming the setting, the values given and what is allowed.
+    """
+    given = tuple(values)
+    reason = f" ({why})" if why else ""
+    if len(given) < at_least:
+        what = "a value" if at_least == 1 else f"at least {at_least} distinct values"
+        raise ConfigError(f"{name} must hold {what}{reason}, got {list(given)}")
+    repeated = [v for i, v in enumerate(given) if v in given[:i]]
+    if repeated:
+        raise ConfigError(f"{name} must not repeat a value, got {list(given)} ({repeated[0]!r} twice)")
+    if ascending and any(b < a for a, b in itertools.pairwise(given)):
+        raise ConfigError(f"{name} must be in ascending order, got {list(given)}; sorted: {sorted(given)}")
+    return given
 
 
 @dataclasses.dataclass(frozen=True)

@@ -34,6 +34,7 @@ from lasa.base.config import (
     Seed,
     UnitInterval,
     check_choice,
+    check_list,
     check_range,
     validate,
 )
@@ -55,6 +56,8 @@ __all__ = [
     "pilot_uniforms",
     "as_decoders",
     "check_methods",
+    "check_needed",
+    "check_record_every",
     "check_pilot",
     "sweep_grid",
     "LooksConfig",
@@ -74,20 +77,58 @@ def as_decoders(decoders: Decoders) -> Mapping[str, ActionDecoder]:
 
 
 def check_methods(methods: tuple[str, ...]) -> None:
-    """Every method is one of :data:`lasa.method.step.METHODS`, and there is at least one."""
+    """Every method is one of :data:`lasa.method.step.METHODS`, at least one, none twice."""
     if not methods:
         raise ConfigError("methods must not be empty")
     for method in methods:
         if method not in METHODS:
             raise ConfigError(f"unknown method {method!r}; choose from {METHODS}")
+    check_list("methods", methods)
 
 
 def check_assistance(assistance: tuple[str, ...]) -> None:
-    """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one."""
+    """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one,
+    none twice."""
     if not assistance:
         raise ConfigError("assistance must name at least one member")
     for name in assistance:
         check_choice("assistance", name, BUILT_IN_ASSISTANCE)
+    check_list("assistance", assistance)
+
+
+def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], reader: str) -> None:
+    """``given`` (a list setting) holds every value of ``needed``, which ``reader`` reads.
+
+    A figure's claims read some conditions by name (sim1's compare LA with LA+SA at beta = 75
+    and 1000); a sweep without one would run to the end and fail there, so its config refuses it.
+
+    Raises:
+        ConfigError: one line naming the setting, what is missing and who reads it.
+    """
+    missing = [v for v in needed if v not in given]
+    if missing:
+        listed = ", ".join(f"{v:g}" if isinstance(v, float) else repr(v) for v in missing)
+        raise ConfigError(f"{name} must include {listed} ({reader} read them), got {list(given)}")
+
+
+def check_record_every(record_every: int, horizon: int, divides: bool = True) -> None:
+    """``record_every`` is at most ``horizon`` and, if ``divides``, divides it.
+
+    A sweep that records its error every ``record_every`` steps and averages the recorded steps
+    (sim3) measures only t = 0 when ``record_every`` > ``horizon``, and leaves the last step out
+    when it does not divide ``horizon``. Notebook 09 (:mod:`lasa.figures.convergence`) records the
+    last step itself, and counts its events at every step, so it needs the bound only.
+
+    Raises:
+        ConfigError: one line naming ``record_every``, its value and the values allowed.
+    """
+    if record_every > horizon:
+        raise ConfigError(f"record_every must be at most horizon ({horizon}), got {record_every}")
+    if divides and horizon % record_every:
+        raise ConfigError(
+            f"record_every must divide horizon ({horizon}) so that the last step is recorded, "
+            f"got {record_every}"
+        )
 
 
 def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tuple[str, ...]:
@@ -150,7 +191,8 @@ class LooksConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SweepConfig(LooksConfig):
-    """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods.
+    """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods (each of
+    :data:`lasa.method.step.METHODS`, which their claims compare, in any order).
 
     Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
     slopes) and its episode's length; the verdict map (:mod:`lasa.figures.robustness`) reads the
@@ -165,6 +207,9 @@ class SweepConfig(LooksConfig):
         super().__post_init__()
         check_pilot(self.pilot, self.pilot_prob)
         check_methods(self.methods)
+        # sims 1-3's claims and sentences compare all three (LA+SA+Entropy against LA+SA, both
+        # against LA): a subset would run the whole sweep and fail in its claims
+        check_needed("methods", self.methods, METHODS, "the claims of sims 1-3")
 
 
 def draw_episodes(

@@ -27,19 +27,18 @@ from matplotlib.figure import Figure
 
 from lasa.base.config import (
     ASSISTANCE,
-    BUILT_IN_ASSISTANCE,
     ControlConfig,
-    FiniteNonNegative,
     PositiveInt,
+    Rationality,
     Seed,
-    check_choice,
+    check_list,
     check_range,
     validate,
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
 from lasa.evidence.verdicts import USER
-from lasa.figures.common import draw_episodes
+from lasa.figures.common import check_assistance, check_record_every, draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
 from lasa.people.rollout import Trajectories, rollout
@@ -97,7 +96,7 @@ _COUNTS = ("steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_h
 class Config:
     """The Sec. IV-A ball along LA+SA rollouts of users of fixed rationality."""
 
-    betas: tuple[FiniteNonNegative, ...] = (10.0, 75.0, 1000.0)  # user rationalities, finite [1/rad^2]
+    betas: tuple[Rationality, ...] = (10.0, 75.0, 1000.0)  # user rationalities, distinct, ascending [1/rad^2]
     assistance: tuple[str, ...] = ASSISTANCE  # members of lasa.method.assistance to run LA+SA under
     users: PositiveInt = 20  # simulated users per (member, beta) [-]
     horizon: PositiveInt = 200  # control steps per episode [-]
@@ -106,22 +105,12 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        if not self.betas:
-            raise ConfigError("betas must not be empty")
-        object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
-        if len(set(self.betas)) != len(self.betas):
-            raise ConfigError(f"betas must not repeat, got {self.betas}")
-        if not self.assistance:
-            raise ConfigError("assistance must name at least one member")
+        betas = check_list("betas", self.betas, ascending=True)
+        object.__setattr__(self, "betas", tuple(float(b) for b in betas))
         object.__setattr__(self, "assistance", tuple(self.assistance))
-        for name in self.assistance:
-            check_choice("assistance", name, BUILT_IN_ASSISTANCE)
-        if len(set(self.assistance)) != len(self.assistance):
-            raise ConfigError(f"assistance must not repeat a member, got {self.assistance}")
-        if self.record_every > self.horizon:
-            raise ConfigError(
-                f"record_every must be at most horizon ({self.horizon}), got {self.record_every}"
-            )
+        check_assistance(self.assistance)
+        # the last step is recorded whatever record_every (run appends it): only the bound
+        check_record_every(self.record_every, self.horizon, divides=False)
 
 
 def radius(belief: np.ndarray, sigma_r: np.ndarray, sigma_h: float, alpha: float = 0.5) -> np.ndarray:

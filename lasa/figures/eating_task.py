@@ -44,6 +44,7 @@ from lasa.base.config import (
     Seed,
     cap_setting,
     check_choice,
+    check_list,
     to_dict,
     validate,
 )
@@ -170,6 +171,9 @@ class Config:
         object.__setattr__(self, "sector_readings", tuple(self.sector_readings))
         object.__setattr__(self, "seed_readings", tuple(self.seed_readings))
         object.__setattr__(self, "search_seeds", tuple(self.search_seeds))
+        check_list("search_lambdas", self.search_lambdas, at_least=0, ascending=True)
+        for field in ("readings", "search_readings", "sector_readings", "seed_readings", "search_seeds"):
+            check_list(field, getattr(self, field), at_least=0)
         if self.train.seed in self.search_seeds:
             raise ConfigError(
                 f"search_seeds must differ from train.seed ({self.train.seed}), got {self.search_seeds}"

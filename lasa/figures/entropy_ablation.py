@@ -20,13 +20,13 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import ControlConfig, NonNegative, PositiveInt, Seed, validate
+from lasa.base.config import ControlConfig, NonNegative, PositiveInt, Seed, check_list, validate
 from lasa.base.errors import ConfigError, EmptySelectionError
 from lasa.evidence.plots import robot_rows
 from lasa.method.belief import CONFIDENT_MARGIN, belief_targets, confidence_threshold
 from lasa.method.dataset import Demonstrations
 from lasa.method.decoder import LatentActionModel
-from lasa.method.entropy import choose_lambda, context_entropy, context_grid
+from lasa.method.entropy import LAMBDA_COST, choose_lambda, context_entropy, context_grid
 from lasa.method.train import TrainConfig, reconstruction_error, train_decoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.goals import GoalTask
@@ -57,7 +57,8 @@ DPI = 130
 class Config:
     """The lambda sweep."""
 
-    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # the sweep; must include 0, the control
+    # the sweep: distinct, ascending, 0 (the control) and at least one lambda > 0 [-]
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
     seed: Seed = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
     # local worker processes the runs are spread over (train_all): the same decoders with any
@@ -66,6 +67,7 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
+        check_list("lambdas", self.lambdas, ascending=True)
         if 0.0 not in {float(lam) for lam in self.lambdas}:
             raise ConfigError(f"lambdas must include 0 (the control), got {self.lambdas!r}")
         if len(set(self.lambdas)) < 2:
@@ -83,7 +85,8 @@ class Sweep:
         models: The fine-tuned decoder of each lambda.
         configs: The training config of each lambda.
         histories: The training log of each lambda.
-        chosen: The lambda the rule picked.
+        chosen: The lambda the rule picked (0, the control, if no lambda > 0 was within its
+            cost bound: :func:`lasa.method.entropy.choose_lambda`).
     """
 
     table: pd.DataFrame
@@ -216,7 +219,7 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
                 "val_error": np.nan,
             }
         )
-        for lam in (0.0, sweep.chosen)
+        for lam in dict.fromkeys((0.0, sweep.chosen))  # the control alone if the rule kept it
     ]
     t = sweep.table
     parts.append(
@@ -257,7 +260,7 @@ def plot_entropy_grid(
 
 
 def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = None) -> Axes:
-    """Held-out reconstruction error against entropy at confident contexts, per lambda."""
+    """Reconstruction error on the clean demonstrations against entropy at confident contexts, per lambda."""
     ax = plt.gca() if ax is None else ax
     ax.plot(sweep.entropy_confident, sweep.recon_error, "o-", color="#444")
     for _, row in sweep.iterrows():
@@ -289,6 +292,9 @@ def plot(table: pd.DataFrame) -> Figure:
                 ax=ax,
                 title=f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)"),
             )
+        if len(lams) == 1:  # the rule kept the control: no other decoder to draw
+            row[1].set_axis_off()
+            row[1].set_title(f"{name}: no lambda > 0 within the rule's cost bound")
         sw = part[part.kind == "sweep"].rename(columns={"entropy": "entropy_confident"})
         plot_entropy_tradeoff(sw, max(lams), ax=row[2])
         row[2].set_title(f"{name}: reconstruction vs entropy over lambda")
@@ -296,8 +302,24 @@ def plot(table: pd.DataFrame) -> Figure:
     return fig
 
 
+def _kept_control(rows: pd.DataFrame, control: pd.Series) -> str:
+    """:func:`findings` when the rule kept the control: no lambda > 0 was within its cost bound."""
+    others = rows[rows.index > 0]
+    cheapest = others.recon_error.idxmin()
+    return (
+        f"- **The rule keeps the control, λ = 0.** No λ > 0 of the sweep keeps the reconstruction error "
+        f"within {LAMBDA_COST:g}× the control's {control.recon_error:.3g} (rad/s)²: the least costly, "
+        f"λ = {cheapest:g}, has {others.recon_error[cheapest] / control.recon_error:.2f}× it. The "
+        f"LA+SA+Entropy decoder is then the control's, without the entropy term; a sweep of smaller λ "
+        f"may find one."
+    )
+
+
 def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
     """The rule's choice and its cost against the lambda = 0 control, as Markdown bullets from the sweep.
+
+    When the rule kept the control (no lambda > 0 within its cost bound), one bullet says so, with
+    the least costly lambda's cost.
 
     Args:
         table: :class:`Sweep`'s ``table`` (one row per lambda, lambda = 0 included).
@@ -308,6 +330,8 @@ def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
     if 0.0 not in rows.index or chosen not in rows.index:
         raise ConfigError(f"the sweep must hold lambda = 0 and {chosen:g}; it has {list(rows.index)}")
     run, control, top = rows.loc[chosen], rows.loc[0.0], float(np.log(n_goals))
+    if chosen == 0.0:
+        return _kept_control(rows, control)
     spread = f"{run.entropy_confident:.3f} nats, {run.entropy_confident / top:.0%} of the most, log {n_goals}"
     cost = run.recon_error / control.recon_error
     side = "below" if cost < 1 else "above" if cost > 1 else "equal to"

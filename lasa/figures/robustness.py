@@ -31,14 +31,15 @@ from matplotlib.figure import Figure
 from lasa.base.config import (
     ASSISTANCE,
     ControlConfig,
-    NonNegative,
     NonNegativeInt,
     Number,
     Positive,
     PositiveInt,
+    Rationality,
     Seed,
     UnitInterval,
     check_choice,
+    check_list,
     check_range,
     validate,
 )
@@ -48,7 +49,7 @@ from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Design, assess, member_frame
 from lasa.figures import sim1, sim2, sim3
-from lasa.figures.common import as_decoders, check_assistance
+from lasa.figures.common import as_decoders, check_assistance, check_needed
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
@@ -128,7 +129,7 @@ class Config:
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
     noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
-    betas: tuple[NonNegative, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
+    betas: tuple[Rationality, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
     change_steps: tuple[NonNegativeInt, ...] = (
         0,
         120,
@@ -143,21 +144,25 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        for name in ("alphas", "action_scales", "betas"):
-            values = tuple(float(v) for v in getattr(self, name))
-            if not values:
-                raise ConfigError(f"{name} must not be empty")
-            object.__setattr__(self, name, values)
-        if not {75.0, 1000.0} <= set(self.betas):
-            raise ConfigError("betas must hold 75 and 1000 (the sim1 claims read them)")
+        for name in ("alphas", "action_scales", "betas"):  # grids: distinct, ascending
+            values = check_list(name, getattr(self, name), ascending=True)
+            object.__setattr__(self, name, tuple(float(v) for v in values))
+        check_needed("betas", self.betas, sim1.CLAIM_BETAS, "the sim1 claims")
         check_assistance(self.assistance)
         if not self.pilots:
             raise ConfigError("pilots must not be empty")
         for p in self.pilots:
             check_choice("pilot", p, PILOTS)
+        check_list("pilots", self.pilots)
         check_choice("design", self.design, DESIGNS)
-        if len(self.change_steps) < 2:
-            raise ConfigError("change_steps needs at least two N (the sim2 claims compare the ends)")
+        why = "the sim2 claims compare the smallest N with the largest"
+        check_list("change_steps", self.change_steps, at_least=2, ascending=True, why=why)
+        every = sim3.Config.record_every  # sim3 records its error every this many steps, the last included
+        if self.horizon % every:
+            raise ConfigError(
+                f"horizon must be a multiple of {every} (sim3 records its error every {every} steps, "
+                f"the last included), got {self.horizon}"
+            )
 
 
 @dataclasses.dataclass(frozen=True)

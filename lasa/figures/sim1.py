@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.transforms import blended_transform_factory
 
-from lasa.base.config import ControlConfig, NonNegative, Positive, PositiveInt
+from lasa.base.config import ControlConfig, Positive, PositiveInt, Rationality, check_list
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.findings import side_of
@@ -47,6 +47,7 @@ from lasa.evidence.verdicts import (
 from lasa.figures.common import (
     Decoders,
     SweepConfig,
+    check_needed,
     episodes,
     run_population,
     sweep_grid,
@@ -87,13 +88,19 @@ COLUMNS = (
     "look",
 )
 DPI = 150
+CLAIM_BETAS = (75.0, 1000.0)  # the rationalities the claims compare at (noisy, near optimal) [1/rad^2]
 
 
 @dataclasses.dataclass(frozen=True)
 class Config(SweepConfig):
-    """Fig. sim1: users of fixed expertise."""
+    """Fig. sim1: users of fixed expertise.
 
-    betas: tuple[NonNegative, ...] = (
+    ``betas`` is a grid: distinct, ascending, each in (0, inf) (the figure's beta axis is
+    logarithmic), with 75 and 1000, which the claims read (:data:`CLAIM_BETAS`); ``video_beta``, the
+    user notebook 04's video shows, is one of them.
+    """
+
+    betas: tuple[Rationality, ...] = (
         0.3,
         1,
         3,
@@ -107,12 +114,18 @@ class Config(SweepConfig):
     )  # rationalities [1/rad^2]
     horizon: PositiveInt = 200  # control steps per episode [-]
     tolerance: Positive = 0.05  # normalised error that counts as reaching s* [-]
+    video_beta: Rationality = 75.0  # the noisy user notebook 04's video shows: one of betas [1/rad^2]
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not self.betas:
-            raise ConfigError("betas must not be empty")
-        object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
+        betas = tuple(float(b) for b in check_list("betas", self.betas, ascending=True))
+        object.__setattr__(self, "betas", betas)
+        check_needed("betas", betas, CLAIM_BETAS, "Fig. sim1's claims")
+        if float(self.video_beta) not in betas:
+            raise ConfigError(
+                f"video_beta must be one of betas {list(betas)} (the video shows a user of the sweep), "
+                f"got {self.video_beta!r}"
+            )
 
 
 def run(
@@ -218,7 +231,7 @@ def _sa_claims(
     """
     robot = str(frame.robot.iloc[0])
     betas = set(frame.beta)
-    if not {75.0, 1000.0} <= betas:
+    if not set(CLAIM_BETAS) <= betas:
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
     means = _means(frame) if means is None else means
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]

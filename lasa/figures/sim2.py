@@ -22,6 +22,7 @@ from lasa.base.config import (
     NonNegativeInt,
     Positive,
     PositiveInt,
+    check_list,
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
@@ -97,7 +98,11 @@ DPI = 150
 
 @dataclasses.dataclass(frozen=True)
 class Config(SweepConfig):
-    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one."""
+    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one.
+
+    ``change_steps`` is a grid: at least two distinct N, ascending (the claims compare the
+    smallest N with the largest; with one they would compare an N with itself).
+    """
 
     change_steps: tuple[NonNegativeInt, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
     beta: NonNegative = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
@@ -106,8 +111,8 @@ class Config(SweepConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not self.change_steps:
-            raise ConfigError("change_steps must not be empty")
+        why = "the claims compare the smallest N with the largest"
+        check_list("change_steps", self.change_steps, at_least=2, ascending=True, why=why)
 
     @property
     def horizon(self) -> int:

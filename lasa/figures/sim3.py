@@ -39,6 +39,7 @@ from lasa.evidence.verdicts import (
 from lasa.figures.common import (
     Decoders,
     SweepConfig,
+    check_record_every,
     episodes,
     run_population,
     sweep_grid,
@@ -70,15 +71,25 @@ DPI = 150
 
 @dataclasses.dataclass(frozen=True)
 class Config(SweepConfig):
-    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
+    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0.
+
+    The fast learner's slope is above the slow one's, and ``record_every`` divides ``horizon``:
+    the claim's measure is the mean error over the recorded steps, t = 0 to the horizon.
+    """
 
     fast_slope: Positive = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
-    slow_slope: Positive = 2.0  # m of the slow learner [1/(rad^2 step)]
+    slow_slope: Positive = 2.0  # m of the slow learner: below fast_slope [1/(rad^2 step)]
     horizon: PositiveInt = 200  # control steps per episode [-]
-    record_every: PositiveInt = 5  # keep the error every this many steps in the frame [steps]
+    record_every: PositiveInt = 5  # record the error every this many steps: divides horizon [steps]
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if not self.fast_slope > self.slow_slope:
+            raise ConfigError(
+                f"fast_slope must be above slow_slope ({self.slow_slope!r}): the fast learner learns "
+                f"faster, got {self.fast_slope!r}"
+            )
+        check_record_every(self.record_every, self.horizon)
 
     @property
     def learners(self) -> tuple[tuple[str, float], ...]:

@@ -36,6 +36,7 @@ from lasa.base.config import (
     Positive,
     PositiveInt,
     check_choice,
+    check_list,
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
@@ -43,7 +44,7 @@ from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means, member_frame
-from lasa.figures.common import Decoders, LooksConfig, check_methods
+from lasa.figures.common import Decoders, LooksConfig, check_methods, check_needed
 from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
 from lasa.world.fork import angle_between
@@ -111,6 +112,9 @@ HEADLINE = "table"
 # y = x, go through the origin; the line with an intercept is the reading ``@intercept``
 FORMS: dict[str, str | None] = {"origin": None, "intercept": "intercept"}
 HEADLINE_FORM = "origin"
+# the kinds of map notebook 07 reads by name (map_sentences, and its video's grasp-to-grasp map), so
+# every run holds them; straight_line_ee, the reading @ee_line, may be left out
+CLAIM_MAPS = ("grasp", "straight_line")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -119,6 +123,8 @@ class Config(LooksConfig):
 
     The users per point, the bootstrap, the readings and the users' seed are
     :class:`~lasa.figures.common.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
+    ``offsets`` is a grid of at least three distinct distances, ascending (the claims fit a line);
+    ``maps`` holds :data:`CLAIM_MAPS`, which notebook 07 reads by name.
     """
 
     offsets: tuple[Positive, ...] = (
@@ -141,9 +147,9 @@ class Config(LooksConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not self.offsets:
-            raise ConfigError("offsets must not be empty")
-        object.__setattr__(self, "offsets", tuple(float(o) for o in self.offsets))
+        why = "a line fitted to two points has R^2 = 1 whatever the errors"
+        offsets = check_list("offsets", self.offsets, at_least=3, ascending=True, why=why)
+        object.__setattr__(self, "offsets", tuple(float(o) for o in offsets))
         if self.direction is not None and (
             len(self.direction) != 2
             or not np.isfinite(self.direction).all()
@@ -155,6 +161,8 @@ class Config(LooksConfig):
             raise ConfigError("maps must name at least one kind of context map")
         for kind in self.maps:
             check_choice("map", kind, MAP_KINDS)
+        check_list("maps", self.maps)
+        check_needed("maps", tuple(self.maps), CLAIM_MAPS, "notebook 07's sentences and video")
 
 
 def run(

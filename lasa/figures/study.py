@@ -27,13 +27,14 @@ mode-switch share.
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from lasa.base.conditions import CONDITIONS
+from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.config import (
     NO_ASSISTANCE,
     AtLeastTwo,
@@ -44,6 +45,7 @@ from lasa.base.config import (
     Seed,
     cap_setting,
     check_choice,
+    check_list,
     validate,
 )
 from lasa.base.errors import CheckpointError, ConfigError
@@ -143,6 +145,38 @@ class Config:
         if not 0 <= self.video_participant < self.participants:
             raise ConfigError(
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
+            )
+        check_list("power_sizes", self.power_sizes, ascending=True)
+        self._warn_about_the_cohort()
+
+    def _warn_about_the_cohort(self) -> None:
+        """Warn (one line each) of a cohort the Latin square does not balance, and of power sizes
+        beyond it.
+
+        Participant i runs row i mod 4 of the Williams square (:func:`lasa.people.cohort.draw_cohort`):
+        only a multiple of 4 balances the conditions' order and carry-over. A power size above
+        ``participants`` is not refused: :mod:`lasa.figures.study_power` draws its cohorts with
+        replacement (each drawn participant a new person), which is defined at any size, and the
+        paper scale asks for it (60 drawn from 40) to find where the power reaches 80%. But such a
+        cohort repeats simulated participants, and its power rests on the spread of ``participants``
+        simulated people, not of as many as it draws: the warning says so.
+        """
+        rows = len(williams_square(len(CONDITIONS)))
+        if self.participants % rows:
+            warnings.warn(
+                f"participants = {self.participants} is not a multiple of {rows}: the balanced Latin "
+                f"square's {rows} orders are filled unevenly, so order and carry-over are not balanced",
+                UserWarning,
+                stacklevel=4,
+            )
+        beyond = [n for n in self.power_sizes if n > self.participants]
+        if beyond:
+            warnings.warn(
+                f"power_sizes {beyond} exceed participants ({self.participants}): those cohorts are "
+                f"drawn with replacement from the {self.participants} simulated participants, so their "
+                f"power rests on the spread of {self.participants} people",
+                UserWarning,
+                stacklevel=4,
             )
 
     @property

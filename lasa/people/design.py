@@ -28,6 +28,7 @@ from lasa.base.config import (
     Positive,
     PositiveInt,
     check_choice,
+    check_list,
     validate,
 )
 from lasa.base.errors import ConfigError
@@ -69,6 +70,7 @@ class StudyConfig:
             raise ConfigError("assistance must name at least one member")
         for name in self.assistance:
             check_choice("assistance", name, BUILT_IN_ASSISTANCE)
+        check_list("assistance", self.assistance)
         if self.n_z % 2 == 0:
             raise ConfigError(
                 f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"
