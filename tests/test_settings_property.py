@@ -17,9 +17,11 @@ import pandas as pd
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from lasa.base.config import from_dict
+from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import MIN_USERS, USER, assess, member_frame, min_resamples
+from lasa.evidence.verdicts import MIN_USERS, USER, Design, assess, member_frame, min_resamples
 from lasa.figures import sim1, sim2, sim3, sim4
 
 FIGURES = Path(__file__).resolve().parents[1] / "figures"
@@ -61,3 +63,35 @@ def test_any_users_and_resamples_give_an_honest_verdict(name, robot, users, n_bo
             assert c.reproduced == UNDECIDED and "Undecided: " in c.note, c.id
             if not enough:
                 assert "Undecided: it rests on " in c.note, c.id
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    name=st.sampled_from(sorted(SIMS)),
+    users=st.integers(-2, 90),
+    block=st.integers(-1, 40),
+    cap=st.integers(-1, 120),
+    n_boot=st.integers(-1, 1000),
+    seed=st.integers(0, 3),
+)
+def test_a_sims_looks_settings_are_refused_in_one_line_or_judged_honestly(
+    name, users, block, cap, n_boot, seed
+):
+    """The settings of a sim's looks (users, block, cap, n_boot), drawn across and beyond their
+    validated ranges: the config refuses them in one line naming the setting, or the verdicts of its
+    first look on the figure's committed rows, at its design's level, are honest as above."""
+    module = SIMS[name]
+    drawn = {"users": users, "block": block, "cap": cap, "n_boot": n_boot, "seed": seed}
+    try:
+        config = from_dict(module.Config, drawn, where=f"a drawn {name} setting")
+    except ConfigError as err:
+        assert "\n" not in str(err) and any(k in str(err) for k in drawn), str(err)
+        return
+    frame = _rows(name, "panda")
+    ids = np.sort(frame[USER].unique())[: config.users]
+    level = Design(config.users, config.block, config.cap).level
+    fast = getattr(module, "boot_values", None)
+    claims = assess(module.claims, frame[frame[USER].isin(ids)], config.n_boot, seed, level=level, fast=fast)
+    enough = len(ids) >= MIN_USERS and config.n_boot >= min_resamples(level)
+    assert all(enough for c in claims if c.settled)
+    assert all(c.reproduced == UNDECIDED for c in claims if not c.settled and c.reproduced != NOT_TESTABLE)
