@@ -167,7 +167,7 @@ class Config:
                 f"participants = {self.participants} is not a multiple of {rows}: the balanced Latin "
                 f"square's {rows} orders are filled unevenly, so order and carry-over are not balanced",
                 UserWarning,
-                stacklevel=4,
+                stacklevel=1,  # its own line: a config built twice (a replace) warns once
             )
         beyond = [n for n in self.power_sizes if n > self.participants]
         if beyond:
@@ -176,7 +176,7 @@ class Config:
                 f"drawn with replacement from the {self.participants} simulated participants, so their "
                 f"power rests on the spread of {self.participants} people",
                 UserWarning,
-                stacklevel=4,
+                stacklevel=1,  # its own line: a config built twice (a replace) warns once
             )
 
     @property

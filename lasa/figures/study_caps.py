@@ -14,6 +14,7 @@ completion per arm and H1-H3's measured effects (the study's own cap from the he
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -112,14 +113,16 @@ def _run_cap(shared: _Shared, job: tuple[float | None, str, ActionDecoder, int])
     cap, name, decoder, n = job
     config = shared.config
     session = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
-    one = dataclasses.replace(
-        config,
-        participants=n,
-        participant_models=(shared.model,),
-        session=session,
-        video_participant=0,
-        jobs=1,
-    )
+    with warnings.catch_warnings():  # a derived run's cohort: the notebook's own config has warned
+        warnings.simplefilter("ignore", UserWarning)
+        one = dataclasses.replace(
+            config,
+            participants=n,
+            participant_models=(shared.model,),
+            session=session,
+            video_participant=0,
+            jobs=1,
+        )
     control = dataclasses.replace(shared.control, belief_cap=cap)
     episodes, frames = study.run(shared.task, {name: decoder}, control, one, progress=False)
     return CapRun(cap, name, episodes[shared.model][name], frames)
