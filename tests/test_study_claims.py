@@ -796,7 +796,10 @@ def test_a_test_that_cannot_be_computed_reads_not_testable_with_no_non_finite_nu
         rows, _ = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     h1 = by_id(rows)["study.h1"]
     assert (h1.reproduced, h1.settled) == ("not testable", False)
-    assert h1.measured == "not testable (its test could not be computed: p_holm is not finite)"
+    assert h1.measured == (
+        "not testable (its test could not be computed: p LA+SA - LA, p R+SA - R not finite)"
+    )  # the Holm-corrected p of each pair: zero variance
+    assert np.isnan(h1.value) and np.isnan(h1.ci_low) and np.isnan(h1.ci_high)
     assert all(np.isfinite(v) for v in h1.facts.values())
     for row in rows:
         assert not re.search(r"(?<![A-Za-z])(nan|-?inf)(?![A-Za-z])", row.measured), row.id

@@ -194,15 +194,16 @@ def min_resamples(level: float) -> int:
 
 
 def shortfall(
-    n_users: int, n_boot: int, level: float, min_users: int = MIN_USERS, unit: str = "users"
+    n_users: int, n_boot: int | None, level: float, min_users: int = MIN_USERS, unit: str = "users"
 ) -> str:
     """Why a verdict on ``n_users`` (``unit``) and ``n_boot`` resamples at ``level`` cannot be
-    settled, as a clause ("it rests on 4 users, fewer than the 60 a settled verdict needs"); "" if it can."""
+    settled, as a clause ("it rests on 4 users, fewer than the 60 a settled verdict needs"); "" if it
+    can. ``n_boot`` None: an interval that is not a bootstrap's (a t interval), with no resamples to count."""
     parts = []
     if n_users < min_users:
         parts.append(f"on {n_users} {unit}, fewer than the {min_users} a settled verdict needs")
     least = min_resamples(level)
-    if n_boot < least:
+    if n_boot is not None and n_boot < least:
         parts.append(f"on {n_boot} resamples, fewer than the {least} a {100 * level:.4g}% interval needs")
     return ("it rests " + ", and ".join(parts)) if parts else ""
 

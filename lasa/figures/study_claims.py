@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -363,22 +362,11 @@ def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, f
     return out
 
 
-def _not_finite(value: float, numbers: Mapping[str, float], measured: str) -> str:
-    """What of a row's test is not a finite number, as a clause ("" if every one is): its effect, a
-    statistic of :func:`facts` (F, p, df, ...), or a statistic its ``measured`` text states as nan
-    or inf (``p_holm = nan``, ``F(1,1) = -inf``)."""
-    lost = [] if math.isfinite(value) else ["the effect"]
-    lost += [k for k, v in numbers.items() if not k.startswith("completion.") and not math.isfinite(v)]
-    lost += re.findall(r"([A-Za-z_]+)(?:\([^)]*\))?\s*=\s*(?:nan|-?inf)(?![A-Za-z])", measured)
-    lost = list(dict.fromkeys(lost))
-    return f"{', '.join(lost)} {'is' if len(lost) == 1 else 'are'} not finite" if lost else ""
-
-
 def _shortfall(key: str, n: int, result: Mapping[str, object]) -> str:
     """Why the row cannot be settled on its participants (fewer than the paper's :data:`PAPER_N`) or,
     for H3, its bootstrap's resamples (:func:`lasa.evidence.verdicts.shortfall`); "" if it can."""
-    resamples = int(result.get("n_resamples", 10**9)) if key == "h3" else 10**9  # type: ignore[call-overload]
-    return shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")
+    resamples = result.get("n_resamples") if key == "h3" else None
+    return shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")  # type: ignore[arg-type]
 
 
 def _claim_row(
@@ -402,10 +390,7 @@ def _claim_row(
     numbers = facts(key, result, judged)
     if verdict != NOT_TESTABLE and not (math.isfinite(low) and math.isfinite(high)):
         verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (too few pairs for an interval); {measured}"
-    elif verdict != NOT_TESTABLE and (lost := _not_finite(value, numbers, measured)):
-        verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (its test could not be computed: {lost})"
-        value = low = high = math.nan
-    numbers = {k: v for k, v in numbers.items() if math.isfinite(v)}
+    numbers = {k: v for k, v in numbers.items() if math.isfinite(v)}  # F of an uncomputed test
     testable = verdict != NOT_TESTABLE and reason is None
     n = int(result["n"])  # type: ignore[call-overload]
     short = _shortfall(key, n, result)

@@ -215,6 +215,14 @@ def judge(result: Mapping[str, object]) -> dict[str, Judged]:
     return _censored_goal_error(out, done)
 
 
+def _uncomputed(numbers: Mapping[str, float]) -> str:
+    """``not testable (its test could not be computed: F, p R+SA - R not finite)`` for the numbers a
+    test reads that are not finite (every Goal Error equal gives ``F = -inf``, ``p_holm = nan``);
+    "" if all are: such a test reads not testable, and no non-finite number reaches the claims."""
+    lost = [name for name, v in numbers.items() if not math.isfinite(v)]
+    return f"{NOT_TESTABLE} (its test could not be computed: {', '.join(lost)} not finite)" if lost else ""
+
+
 def _h1(result: Mapping[str, object], suffix: str, unit: str, scale: float) -> Judged:
     """H1 on Goal Error (``suffix`` empty) or the mean distance (``_mean``): main effect and pairs.
 
@@ -226,6 +234,9 @@ def _h1(result: Mapping[str, object], suffix: str, unit: str, scale: float) -> J
     tests = {"effect": diff, "p": within["p"]}
     for r in pairs.itertuples():
         tests |= {f"effect {r.a} - {r.b}": r.diff, f"p {r.a} - {r.b}": r.p_corr}
+    lost = _uncomputed(tests | {"F": within["F"]})
+    if lost:
+        return NOT_TESTABLE, math.nan, math.nan, math.nan, lost
     pair_text = "; ".join(
         f"{r.a} - {r.b} = {scale * r.diff:+.2f} {unit} (p_holm = {r.p_corr:.3g})" for r in pairs.itertuples()
     )
@@ -243,8 +254,12 @@ def _h1_paper_test(result: Mapping[str, object]) -> Judged:
     between = result["h1_between"]
     assert isinstance(between, dict)
     b_diff = between["mean_sa"] - between["mean_no_sa"]
+    tests = {"effect": b_diff, "p": between["p"]}
+    lost = _uncomputed(tests | {"F": between["F"]})
+    if lost:
+        return NOT_TESTABLE, math.nan, math.nan, math.nan, lost
     return (
-        rule("study.h1@paper_test").tested({"effect": b_diff, "p": between["p"]}),
+        rule("study.h1@paper_test").tested(tests),
         b_diff,
         between["ci_low"],
         between["ci_high"],
