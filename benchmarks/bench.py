@@ -33,7 +33,7 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
   ``make figures QUICK=1``, summarized as ``make figures`` itself writes them
   (:mod:`lasa.pipeline.timings`).
 - ``render_fps``: frames per second of the off-screen video renderer.
-- ``dask_overhead_1_worker``: what running the verdict map (:mod:`lasa.figures.robustness`)
+- ``dask_overhead_1_worker``: what running the verdict map (:mod:`lasa.experiments.robustness`)
   through a one-worker ``distributed.LocalCluster`` costs over running it in this process, at
   two grid sizes (the larger at least ``grid_min_s``, 60 s, in-process), split into a fixed
   cost and a per-cell fraction by a straight-line fit (:func:`fit_overhead`);
@@ -753,7 +753,7 @@ def _grid_cells(
     model: LatentActionModel, task: CupTask, control: ControlConfig, config: BenchConfig
 ) -> tuple[list[Any], Any]:
     """The factorial verdict-map grid's cells (every member in each) and what they share."""
-    from lasa.figures import robustness  # noqa: PLC0415
+    from lasa.experiments import robustness  # noqa: PLC0415
 
     grid = robustness.Config(
         users=config.grid_seeds, horizon=60, settle=40, change_steps=(0, 20), design="factorial"
@@ -770,7 +770,7 @@ def _take(cells: list[Any], n: int) -> list[Any]:
 
 def _time_grid(cells: list[Any], shared: Any, scheduler: str | None) -> tuple[float, pd.DataFrame]:
     """Wall time of the cells through :func:`lasa.pipeline.scaleout.run_jobs`, and their rows."""
-    from lasa.figures import robustness  # noqa: PLC0415
+    from lasa.experiments import robustness  # noqa: PLC0415
     from lasa.pipeline.scaleout import run_jobs  # noqa: PLC0415
 
     start = time.perf_counter()
@@ -787,7 +787,7 @@ def _local_cluster(n_workers: int) -> Iterator[str]:
         n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster:
         with Client(cluster) as client:  # imports are start-up, not work: before the clock
-            client.run(importlib.import_module, "lasa.figures.robustness")
+            client.run(importlib.import_module, "lasa.experiments.robustness")
         yield cluster.scheduler_address
 
 

@@ -3,7 +3,7 @@
 A reproducibility package: MuJoCo robots and their goal tasks (the cups, the eating
 scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared autonomy
 (Algorithm 1), Boltzmann-rational simulated users, and one module per figure
-(:mod:`lasa.figures`). Extending it (a robot, an assistance member, a claim, a decoder of
+(:mod:`lasa.experiments`). Extending it (a robot, an assistance member, a claim, a decoder of
 your own) is in ``docs/extending.md``.
 
 Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,

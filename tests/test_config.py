@@ -85,7 +85,7 @@ def test_defaults_are_the_robots_units():
 
 
 def test_from_dict_turns_yaml_lists_into_tuples_and_refuses_non_mappings():
-    from lasa.figures import sim1
+    from lasa.experiments import sim1
 
     cfg = from_dict(sim1.Config, {"betas": [1, 75, 1000], "users": 2})
     assert cfg.betas == (1.0, 75.0, 1000.0) and cfg.users == 2

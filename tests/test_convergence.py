@@ -1,4 +1,4 @@
-"""The Sec. IV-A ball (lasa.figures.convergence): hand-computed radii, measured rates, the sweep."""
+"""The Sec. IV-A ball (lasa.experiments.convergence): hand-computed radii, measured rates, the sweep."""
 
 import dataclasses
 
@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.figures import convergence
+from lasa.experiments import convergence
 
 SMALL = convergence.Config(
     betas=(75.0, 1000.0), assistance=("point", "hindsight"), users=2, horizon=12, record_every=1

@@ -137,7 +137,7 @@ def test_bad_lambda_is_a_clear_error(task):
 def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
     """Every lambda, 0 included, fine-tunes the base decoder with the same steps, schedule and seed."""
     from lasa.base.config import to_dict
-    from lasa.figures import entropy_ablation
+    from lasa.experiments import entropy_ablation
     from lasa.method.decoder import load_checkpoint, save_checkpoint
 
     ctl = task.robot.control
@@ -169,7 +169,7 @@ def test_ablation_runs_differ_only_by_the_term(model, demos, task, tmp_path):
 
 
 def test_ablation_config_needs_the_control():
-    from lasa.figures import entropy_ablation
+    from lasa.experiments import entropy_ablation
 
     with pytest.raises(ConfigError, match="include 0"):
         entropy_ablation.Config(lambdas=(0.1, 0.3))
@@ -203,7 +203,7 @@ def test_nearest_distance_is_distance_to_sets(task, seed):
 
 def test_runs_spread_over_worker_processes_train_the_same_decoders(model, demos, task):
     """train_all: two worker processes give the decoders one process gives, bit for bit."""
-    from lasa.figures import entropy_ablation
+    from lasa.experiments import entropy_ablation
 
     ctl = task.robot.control
     goal_sets = belief_targets(task, ctl.likelihood)
@@ -250,7 +250,7 @@ def test_confident_contexts_follow_the_cap_and_an_empty_selection_names_the_sett
     """Without a cap a context is confident above 0.99; under the study's 0.99 cap above 0.98 (a capped
     belief never exceeds 0.99, so '> 0.99' would select nothing); none selected: a named error."""
     from lasa.base.errors import EmptySelectionError
-    from lasa.figures.entropy_ablation import confident_contexts
+    from lasa.experiments.entropy_ablation import confident_contexts
 
     clean = demos.clean()
     top = clean.beliefs.max(axis=1)

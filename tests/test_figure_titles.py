@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 from matplotlib.path import Path as MplPath
 
 from lasa.evidence.verdicts import USER, member_frame
-from lasa.figures import sim1, sim2, sim3, sim4
+from lasa.experiments import sim1, sim2, sim3, sim4
 
 matplotlib.use("Agg")
 

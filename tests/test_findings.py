@@ -19,7 +19,7 @@ import lasa  # noqa: F401  (pins the kernels before numpy loads)
 from lasa.base.errors import ConfigError
 from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim
-from lasa.figures import (
+from lasa.experiments import (
     eating_task,
     entropy_ablation,
     latent_map,

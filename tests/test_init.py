@@ -86,7 +86,7 @@ def test_the_import_contracts_hold_and_can_fail(tmp_path):
     broken.write_text(
         '[tool.importlinter]\nroot_package = "lasa"\n\n[[tool.importlinter.contracts]]\n'
         'name = "the figures never use the rollout (false: they do)"\ntype = "forbidden"\n'
-        'source_modules = ["lasa.figures"]\nforbidden_modules = ["lasa.people.rollout"]\n'
+        'source_modules = ["lasa.experiments"]\nforbidden_modules = ["lasa.people.rollout"]\n'
     )
     run = subprocess.run(
         [tool, "--no-cache", "--config", str(broken)], cwd=root, capture_output=True, text=True, check=False

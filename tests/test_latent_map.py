@@ -1,4 +1,4 @@
-"""The latent map (lasa.figures.latent_map): held-input sweeps and the rows of the figure."""
+"""The latent map (lasa.experiments.latent_map): held-input sweeps and the rows of the figure."""
 
 import math
 
@@ -9,7 +9,7 @@ from reference_step import latent_step
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.latent_measure import held_input_paths
-from lasa.figures.latent_map import Config, run
+from lasa.experiments.latent_map import Config, run
 
 
 def test_held_paths_shape_and_limits(model, task):

@@ -57,7 +57,7 @@ def test_the_real_notebooks_never_reach_live_use():
         assert not [f for f in files if f.startswith("lasa/live/") or f == "lasa/pipeline/book.py"], nb.name
         assert "lasa/base/config.py" in files and "pyproject.toml" in files
     sim1 = notebook_sources(ROOT / "notebooks" / "04_fixed_expertise.ipynb")
-    assert "lasa/figures/sim1.py" in sim1 and "lasa/figures/sim2.py" not in sim1
+    assert "lasa/experiments/sim1.py" in sim1 and "lasa/experiments/sim2.py" not in sim1
     assert "lasa/world/assets/panda/panda.xml" in sim1  # it reaches the robots, so their models
     demos = notebook_sources(ROOT / "notebooks" / "01_demonstrations.ipynb")
     assert not [f for f in demos if "figures/" in f]
@@ -105,7 +105,7 @@ def test_an_edit_to_live_use_leaves_make_figures_nothing_to_do(tmp_path):
 
     touch("lasa/live/teleop.py", "lasa/live/devices.py", "lasa/live/studykit.py", "lasa/pipeline/book.py")
     assert _runs(tree) == []
-    touch("lasa/figures/sim1.py")  # one figure's module: that figure and the verdict map, which reads it
+    touch("lasa/experiments/sim1.py")  # one figure's module: that figure and the verdict map, which reads it
     assert _runs(tree) == [
         "04_fixed_expertise panda",
         "04_fixed_expertise planar5",

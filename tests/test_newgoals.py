@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from lasa.base.errors import ConfigError, IKError
-from lasa.figures import sim4
+from lasa.experiments import sim4
 from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.blend import assistance
 from lasa.method.newgoals import (

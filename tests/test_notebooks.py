@@ -19,7 +19,7 @@ import pytest
 from lasa.base.config import from_dict
 from lasa.evidence.claims import CLAIM_COLUMNS
 from lasa.evidence.video import read_video
-from lasa.figures import sim1, sim2, sim3, sim4
+from lasa.experiments import sim1, sim2, sim3, sim4
 from lasa.pipeline.runner import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -222,7 +222,7 @@ def test_claims_table(executed):
 
 
 def test_claims_robustness_outputs(executed):
-    from lasa.figures import robustness
+    from lasa.experiments import robustness
 
     fig = executed / "figures"
     frame = pd.read_csv(fig / "claims_robustness.csv")
@@ -325,7 +325,7 @@ def test_sim4_outputs(executed):
 
 def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     from lasa.evidence import latent_measure, latent_property
-    from lasa.figures import eating_task
+    from lasa.experiments import eating_task
 
     fig = executed / "figures"
     frame = pd.read_csv(fig / "latent_property.csv")
@@ -383,7 +383,7 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
 
 def test_study_outputs(executed):
     from lasa.evidence import latent_property
-    from lasa.figures import eating_task, study, study_caps, study_plots
+    from lasa.experiments import eating_task, study, study_caps, study_plots
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]

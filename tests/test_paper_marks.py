@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.figures import sim1, sim2, sim3, sim4, study_plots
+from lasa.experiments import sim1, sim2, sim3, sim4, study_plots
 
 matplotlib.use("Agg")
 

@@ -93,7 +93,7 @@ def test_peoples_sessions_are_judged_by_the_claims_own_tests():
     over the participants who did every condition: here ten simulated ones, relabelled as people."""
     import pandas as pd
 
-    from lasa.figures import study_tests
+    from lasa.experiments import study_tests
 
     frames = {}
     for name in ("goal_error", "time", "alignment"):

@@ -1,4 +1,4 @@
-"""The verdict map (lasa.figures.robustness) and its scale-out (lasa.pipeline.scaleout)."""
+"""The verdict map (lasa.experiments.robustness) and its scale-out (lasa.pipeline.scaleout)."""
 
 import dataclasses
 
@@ -8,7 +8,7 @@ import pytest
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import WORDS
-from lasa.figures import robustness
+from lasa.experiments import robustness
 from lasa.pipeline.scaleout import run_jobs, scheduler_address
 
 TINY = robustness.Config(

@@ -70,7 +70,7 @@ def test_shipped_settings_build_the_named_config(config, notebook):
 
 def test_an_unknown_setting_is_an_error():
     from lasa.base.config import from_dict
-    from lasa.figures import sim1
+    from lasa.experiments import sim1
 
     with pytest.raises(
         ConfigError, match=r"^notebook 04 settings: unknown setting\(s\) \['n_seed'\]; known: .*'users'"

@@ -22,7 +22,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import MIN_USERS, USER, Design, assess, member_frame, min_resamples
-from lasa.figures import sim1, sim2, sim3, sim4
+from lasa.experiments import sim1, sim2, sim3, sim4
 
 FIGURES = Path(__file__).resolve().parents[1] / "figures"
 SIMS = {m.NAME: m for m in (sim1, sim2, sim3, sim4)}

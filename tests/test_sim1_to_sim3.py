@@ -1,4 +1,4 @@
-"""Figs. sim1-sim3 (lasa.figures.sim1, sim2, sim3): columns, determinism, pairing, and the claims' rules."""
+"""Figs. sim1-sim3 (lasa.experiments.sim1-3): columns, determinism, pairing, and the claims' rules."""
 
 import dataclasses
 
@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.figures import sim1, sim2, sim3
+from lasa.experiments import sim1, sim2, sim3
 
 ONE = {"assistance": ("point",)}  # the headline member only: the bare sweep
 SMALL = sim1.Config(betas=(1.0, 75.0, 1000.0), users=3, horizon=20, seed=0, **ONE)
@@ -105,7 +105,7 @@ def both(model):
 
 
 def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task, monkeypatch):
-    from lasa.figures import common
+    from lasa.experiments import common
 
     calls = []
     real = common.rollout
@@ -192,7 +192,7 @@ def test_bad_sim2_config(kw, match):
 
 def test_sims_1_to_3_share_one_sweep_config_and_a_bad_setting_names_its_notebook():
     from lasa.base.config import from_dict
-    from lasa.figures.common import SweepConfig
+    from lasa.experiments.common import SweepConfig
 
     shared = {f.name for f in dataclasses.fields(SweepConfig)}
     for sim in (sim1, sim2, sim3):
@@ -340,7 +340,7 @@ def test_a_later_look_adds_new_users_of_its_own_stream(model, task):
 
 
 def test_judge_runs_looks_until_settled_or_the_cap(model, task):
-    from lasa.figures.common import judge
+    from lasa.experiments.common import judge
 
     cfg = sim1.Config(
         betas=(75.0, 1000.0),

@@ -1,4 +1,4 @@
-"""The study's claims rules (lasa.figures.study) on tables whose answers are known."""
+"""The study's claims rules (lasa.experiments.study) on tables whose answers are known."""
 
 import re
 import warnings
@@ -10,7 +10,7 @@ import pytest
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.figures import study, study_analysis, study_claims, study_tests
+from lasa.experiments import study, study_analysis, study_claims, study_tests
 
 STUDY_ASSISTANCE = ("hindsight", "grasp_set")
 
@@ -759,7 +759,7 @@ def test_the_participants_table_lists_every_parameter(tmp_path):
 
 
 def test_the_likert_claim_reads_the_share_of_significant_comparisons_in_favour():
-    from lasa.figures.study_tests import likert_verdict
+    from lasa.experiments.study_tests import likert_verdict
 
     # three comparisons per scale (LA+SA against R, R+SA, LA), two scales: diff = LA+SA - other
     likert = pd.DataFrame(

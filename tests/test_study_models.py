@@ -6,7 +6,7 @@ import pytest
 from stand_ins import LinearDecoder
 
 from lasa.base.errors import ConfigError
-from lasa.figures import study, study_analysis, study_claims, study_plots
+from lasa.experiments import study, study_analysis, study_claims, study_plots
 from lasa.people import participants
 from lasa.people.design import StudyConfig
 from lasa.world.eating import make_eating_task

@@ -19,7 +19,7 @@ from matplotlib.patches import Rectangle
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
-from lasa.figures import study_plots
+from lasa.experiments import study_plots
 
 matplotlib.use("Agg")
 

@@ -3,7 +3,7 @@
 Each function draws one panel from data it is given (a frame, a dataset, paths), so a
 notebook composes panels freely and the data behind each figure is saved beside it.
 A planar arm is drawn in its x-z plane; the Panda from above (:func:`project`). A
-figure's own panels live in its module of :mod:`lasa.figures`.
+figure's own panels live in its module of :mod:`lasa.experiments`.
 """
 
 from __future__ import annotations

@@ -27,7 +27,7 @@ __all__ = ["FigureModule", "publish", "save_figure"]
 
 
 class FigureModule(Protocol):
-    """What :func:`publish` needs of a figure's module (see :mod:`lasa.figures`); an optional
+    """What :func:`publish` needs of a figure's module (see :mod:`lasa.experiments`); an optional
     ``DPI`` sets the PNG's resolution (150 if absent), an optional ``KEY`` the column whose
     values one run's rows replace (``robot`` if absent)."""
 

@@ -11,7 +11,7 @@ ratios above 1). Whether a number has the paper's size is the *number* word, fro
 :attr:`~lasa.evidence.decision.Rule.paper`: the paper's 1.45 at beta = 75, give or take 0.15.
 
 The study's claims (H1-H3) rest on significance tests: their yes/partly/no is the rule's
-:attr:`~lasa.evidence.decision.Rule.tests` applied to the tests' numbers (:mod:`lasa.figures.study_tests`
+:attr:`~lasa.evidence.decision.Rule.tests` applied to the tests' numbers (:mod:`lasa.experiments.study_tests`
 computes them), and the rule's one quantity, the effect, settles it when its interval is clear of 0.
 
 The rules were written before the results they judge were first seen, with the

@@ -209,7 +209,7 @@ def choose_lambda(sweep: pd.DataFrame, n_goals: int, spread: float = 0.8, cost: 
 
     The rule never picks a lambda whose reconstruction error exceeds ``cost`` times the
     control's: if no lambda > 0 is within the bound, it picks 0, the control, and the
-    notebook says so (:func:`lasa.figures.entropy_ablation.findings`). (Until issue 48 it then
+    notebook says so (:func:`lasa.experiments.entropy_ablation.findings`). (Until issue 48 it then
     took the smallest lambda > 0 whatever its cost: ``lambdas: [0, 1e6]`` gave 1e6, at 8x the
     control's error. The paper-scale sweeps, ``figures/entropy_ablation.csv`` and notebook 10's,
     have lambdas within the bound, and the rule picks 0.1 in each, before and after.)

@@ -1,6 +1,6 @@
 """Independent jobs, run locally or on a Dask cluster, with the same results either way.
 
-A sweep grid (:mod:`lasa.figures.robustness`) is a list of independent cells. :func:`run_jobs`
+A sweep grid (:mod:`lasa.experiments.robustness`) is a list of independent cells. :func:`run_jobs`
 runs them through ``joblib``: in this process by default (``n_jobs`` worker processes if
 asked), or, given a Dask scheduler address, on that cluster through joblib's ``dask``
 backend (``dask.distributed``). The address comes from the caller (a config key) or from

@@ -40,7 +40,7 @@ def _preregister(argv: list[str]) -> int:
     from pathlib import Path
 
     from lasa.base.io import write_text
-    from lasa.figures.study_power import SIZES
+    from lasa.experiments.study_power import SIZES
     from lasa.live.web import preregister
 
     parser = argparse.ArgumentParser(

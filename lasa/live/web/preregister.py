@@ -10,7 +10,7 @@ Every rule in it is the one the analysis applies, taken from where the analysis 
 - the exclusions: :data:`lasa.evidence.sessions.LEFT_OUT` (sessions) and
   :data:`lasa.evidence.sessions.DROPPED` (participants of a within-subject test), and the
   completion bar :data:`lasa.evidence.rules.COMPLETION_BAR`;
-- the sample size: :func:`lasa.figures.study_power.power` on the simulated cohort's committed
+- the sample size: :func:`lasa.experiments.study_power.power` on the simulated cohort's committed
   tables (``figures/study_*.csv``), for the reading notebook 11 calls the headline;
 - the design: the schedule's balanced Latin square (:func:`lasa.live.studykit.write_schedule`),
   the protocol (:mod:`lasa.live.web.plan`) and the server's settings.
@@ -32,7 +32,7 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.io import require_file
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import DROPPED, LEFT_OUT, SCALES
-from lasa.figures import study, study_analysis, study_power
+from lasa.experiments import study, study_analysis, study_power
 from lasa.live.studykit import QUESTIONS
 from lasa.live.web.plan import PRACTICE_TASK
 from lasa.world import measures
@@ -87,7 +87,7 @@ def power_table(
     n_jobs: int = 1,
     progress: bool = False,
 ) -> pd.DataFrame:
-    """:func:`lasa.figures.study_power.power` on the simulated cohort's ``frames``, for ``reading``."""
+    """:func:`lasa.experiments.study_power.power` on the simulated cohort's ``frames``, for ``reading``."""
     from lasa.world.eating import load_eating_robot
 
     assistance, decoder, model = reading
@@ -168,7 +168,7 @@ def document(
         f"Significance level .05, two-sided. H1 and H3 are judged only if every condition finishes at least "
         f"{bar} of its episodes (H2: LA+SA and R+SA), as stated in each rule above; H3's restricted times "
         f"end at the trials' limit ({trial_s:g} s). Notebook 11 applies these tests and rules to the "
-        "sessions (`lasa.figures.study_tests.people_claims`: the simulated cohort's own `analyse` and "
+        "sessions (`lasa.experiments.study_tests.people_claims`: the simulated cohort's own `analyse` and "
         f"`judge`). The planned reading: SA as `{assistance}`, the latent-action decoder `{decoder}`.",
         "",
         "## 6. Outliers and exclusions",

@@ -51,7 +51,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_measure, latent_property
-from lasa.figures import entropy_ablation
+from lasa.experiments import entropy_ablation
 from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint

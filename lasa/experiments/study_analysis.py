@@ -21,7 +21,7 @@ from scipy import stats as sps
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.evidence.rules import COMPLETION_BAR
-from lasa.figures.study import PAPER_N, Config, for_member
+from lasa.experiments.study import PAPER_N, Config, for_member
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people.policy import progress_gain
@@ -85,7 +85,7 @@ def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
     the first of ``models``.
 
     Args:
-        time: The study's time table (:func:`lasa.figures.study.run`), with its ``model`` column.
+        time: The study's time table (:func:`lasa.experiments.study.run`), with its ``model`` column.
         models: The participant models, in order of preference.
     """
     if not models:
@@ -135,7 +135,7 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
 
 
 def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.DataFrame:
-    """:func:`switch_share` of each participant model, for the first :data:`~lasa.figures.study.PAPER_N`
+    """:func:`switch_share` of each participant model, for the first :data:`~lasa.experiments.study.PAPER_N`
     participants and for the cohort; columns ``model`` and ``participants_of`` (``first 10``, ``cohort``)
     added, one block per model in the order of ``models``."""
     parts = [("first 10", time[time.participant < PAPER_N]), ("cohort", time)]
@@ -217,7 +217,7 @@ def stuck_episodes(
 
     Args:
         task: The eating task.
-        episodes: :func:`lasa.figures.study.run`'s episodes, by model, then decoder reading.
+        episodes: :func:`lasa.experiments.study.run`'s episodes, by model, then decoder reading.
         decoders: The decoder of each reading.
         config: The study's configuration.
         models: The participant models, in the order of the rows.
@@ -241,7 +241,7 @@ def break_even(time: pd.DataFrame, assistance: Sequence[str], decoder: str, mode
     ``break-even cost per switch [s]``, the time gap divided by the switches.
 
     Args:
-        time: :func:`lasa.figures.study.run`'s time table.
+        time: :func:`lasa.experiments.study.run`'s time table.
         assistance: The SA members, the headline first.
         decoder: The headline decoder reading (the LA conditions' rows).
         model: The headline participant model.

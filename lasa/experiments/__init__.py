@@ -1,4 +1,4 @@
-"""One module per figure: its config, its tidy columns, ``run``, ``claims`` and ``plot``.
+"""One module per experiment: its config, its tidy columns, ``run``, ``claims`` and ``plot``.
 
 ========================  ================================  ===========================
 module                    figure                            notebook

@@ -2,7 +2,7 @@ r"""The eating study's claims H1-H3 (notebook 11): one row per reading, each wit
 
 The claims follow the paper's own tests and significance level (p < .05), in the direction the
 paper reports (:data:`CLAIM_TEXT`; rules in :mod:`lasa.evidence.rules`, on the numbers of
-:mod:`lasa.figures.study_tests`):
+:mod:`lasa.experiments.study_tests`):
 
 - **H1** (``study.h1``), SA lowers Goal Error: the within-subjects SA main effect of a 2x2
   repeated-measures ANOVA, with both pairwise comparisons; also as mean distance
@@ -35,9 +35,9 @@ from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_wor
 from lasa.evidence.findings import study_effect
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.verdicts import shortfall
-from lasa.figures import study_tests
-from lasa.figures.study import PAPER_N
-from lasa.figures.study_tests import Judged, analyse, judge
+from lasa.experiments import study_tests
+from lasa.experiments.study import PAPER_N
+from lasa.experiments.study_tests import Judged, analyse, judge
 from lasa.people.design import interface_of
 
 __all__ = [
@@ -141,9 +141,9 @@ def claims(
     """The claims rows under every reading (measure, member, decoder, participant model, 10 or the cohort).
 
     Args:
-        frames: :func:`lasa.figures.study.run`'s tables.
+        frames: :func:`lasa.experiments.study.run`'s tables.
         assistance: The SA members, the headline first.
-        n_total: The cohort's size (its first :data:`lasa.figures.study.PAPER_N` are the paper's study).
+        n_total: The cohort's size (its first :data:`lasa.experiments.study.PAPER_N` are the paper's study).
         decoders: The decoder readings in the frames' ``decoder`` column, the headline first
             (empty: the frames hold one reading). The headline decoder is judged under every
             measure and member; each other one under the paper's measures
@@ -309,7 +309,7 @@ def _readings(
     """(member index, member, decoder, participants, cohort) of each reading a participant model is judged in.
 
     Every member under the headline decoder, then every other decoder under the headline member;
-    each for the first :data:`lasa.figures.study.PAPER_N` participants and, if larger, the cohort.
+    each for the first :data:`lasa.experiments.study.PAPER_N` participants and, if larger, the cohort.
     """
     head = decoders[0] if decoders else None
     runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
@@ -510,7 +510,7 @@ def readings_table(
 
     Args:
         prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
-        done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
+        done: :func:`lasa.experiments.study_analysis.completion` of the study's time table.
         rows: The study's claims rows (:func:`claims`).
         decoders: The decoder readings, the headline first.
         assistance: The headline SA member (the assisted conditions' completion is under it).
@@ -597,7 +597,7 @@ def members_table(
     the cohort, each with its effect for the first 10 in words (:func:`lasa.evidence.findings.study_effect`).
 
     Args:
-        done: :func:`lasa.figures.study_analysis.completion` of the study's time table.
+        done: :func:`lasa.experiments.study_analysis.completion` of the study's time table.
         rows: The study's claims rows (:func:`claims`).
         assistance: The SA members, the headline first.
         decoder: The headline decoder reading.
@@ -622,7 +622,7 @@ def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
     """Our result beside the paper's in each study figure: H1, H2, H3's headline rows, 10 and the cohort.
 
     ``{"h1": {"headline": "ours (10): <word>; <effect>", "cohort": ...}, "h2": ..., "h3": ...}``
-    (:func:`lasa.figures.study_plots.plot_goal_error`'s ``stats``); ``cohort`` only when the
+    (:func:`lasa.experiments.study_plots.plot_goal_error`'s ``stats``); ``cohort`` only when the
     study has one.
     """
     by_id = {c.id: c for c in rows}

@@ -36,7 +36,7 @@ from lasa.evidence.verdicts import (
     group_means,
     member_frame,
 )
-from lasa.figures.common import (
+from lasa.experiments.common import (
     Decoders,
     SweepConfig,
     check_record_every,
@@ -111,7 +111,7 @@ def run(
     Args:
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
         assistance: The members the assisted methods run under; default every member of
-            ``config.assistance``. The other arguments are :func:`lasa.figures.sim1.run`'s.
+            ``config.assistance``. The other arguments are :func:`lasa.experiments.sim1.run`'s.
 
     Returns:
         One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and

@@ -47,7 +47,7 @@ from lasa.evidence.verdicts import (
     group_means,
     member_frame,
 )
-from lasa.figures.common import (
+from lasa.experiments.common import (
     Decoders,
     SweepConfig,
     episodes,
@@ -137,7 +137,7 @@ def run(
     Args:
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
         assistance: The members the assisted methods run under; default every member of
-            ``config.assistance``. The other arguments are :func:`lasa.figures.sim1.run`'s.
+            ``config.assistance``. The other arguments are :func:`lasa.experiments.sim1.run`'s.
 
     Returns:
         One row per episode with the columns of :data:`COLUMNS` plus ``goal`` and

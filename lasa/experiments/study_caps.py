@@ -2,7 +2,7 @@ r"""The eating study against the belief's cap (notebook 11): the headline's reci
 
 The study's belief is Javdani et al.'s: no goal above 0.99 (:func:`lasa.method.belief.cap_log_belief`).
 Notebook 10 trains the headline decoder's recipe again at each other cap of its ``cap_sweep``
-(:func:`lasa.figures.eating_task.train_caps`: demonstrations, training and property at that cap).
+(:func:`lasa.experiments.eating_task.train_caps`: demonstrations, training and property at that cap).
 Here each of those decoders runs the study with the belief at its cap (:func:`run`): the headline
 participant model, the headline member, every condition (R+SA reads the belief too); the first
 ``sweep_participants`` participants, and the whole cohort without a cap, whose rows are the reading
@@ -31,8 +31,8 @@ from lasa.base.paths import Paths
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
 from lasa.evidence.decision import effect_word
-from lasa.figures import study, study_analysis, study_claims
-from lasa.figures.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
+from lasa.experiments import study, study_analysis, study_claims
+from lasa.experiments.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
 from lasa.method.decoder import ActionDecoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
@@ -66,7 +66,7 @@ CLAIMS = ("h1", "h2", "h3")  # the claims the sweep shows, under the paper's mea
 
 @dataclasses.dataclass(frozen=True)
 class CapRun:
-    """The study at one cap: its decoder's name, its episodes and tables (:func:`lasa.figures.study.run`)."""
+    """The study at one cap: its decoder's name, its episodes and tables (:func:`.study.run`)."""
 
     cap: float | None
     decoder: str

@@ -1,4 +1,4 @@
-"""Fig. sim4's episodes (:mod:`lasa.figures.sim4`): new cups on the table, and users who reach for them.
+"""Fig. sim4's episodes (:mod:`lasa.experiments.sim4`): new cups on the table, and users who reach for them.
 
 A new cup is put on the table after training (:func:`new_cup_positions`), at a growing distance
 from a training cup, and the task grows by it (:func:`lasa.method.newgoals.extend_task`).
@@ -21,7 +21,7 @@ import pandas as pd
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
-from lasa.figures.common import Decoders, as_decoders, episodes, swept_assistance
+from lasa.experiments.common import Decoders, as_decoders, episodes, swept_assistance
 from lasa.method.decoder import ActionDecoder
 from lasa.method.newgoals import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
@@ -30,7 +30,7 @@ from lasa.people.users import UserPopulation
 from lasa.world.task import CupTask
 
 if TYPE_CHECKING:
-    from lasa.figures.sim4 import Config
+    from lasa.experiments.sim4 import Config
 
 __all__ = ["NewGoalRun", "new_cup_positions", "map_geometry", "Sweep", "CupEpisodes", "episodes_at"]
 
@@ -139,9 +139,9 @@ class Sweep:
 
     Attributes:
         decoder: The method's decoder; task: the training task; control, config, progress and
-            look: as :func:`lasa.figures.sim4.run` has them.
+            look: as :func:`lasa.experiments.sim4.run` has them.
         alpha: The method's blend weight; noise: the users' noise, as
-            :func:`lasa.figures.common.episodes` draws it.
+            :func:`lasa.experiments.common.episodes` draws it.
         assistance: The members the method's assistance runs under (``none`` alone without it).
         n_users: Users per member; first: the look's first user.
         users: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
@@ -185,7 +185,7 @@ class Sweep:
         look: int = 0,
         assistance: tuple[str, ...] | None = None,
     ) -> Sweep:
-        """The sweep of :func:`lasa.figures.sim4.run` (its arguments).
+        """The sweep of :func:`lasa.experiments.sim4.run` (its arguments).
 
         Raises:
             ConfigError: if ``config.ref_goal`` is not a goal of ``task``, or the method's

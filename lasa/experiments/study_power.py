@@ -2,7 +2,7 @@
 
 :func:`power` draws cohorts of ``n`` participants from the simulated ones (with replacement, each
 drawn participant a new person) and applies each claim's own test to every drawn cohort
-(:func:`~lasa.figures.study_tests.analyse`, then :func:`~lasa.figures.study_tests.judge`; H3 with
+(:func:`~lasa.experiments.study_tests.analyse`, then :func:`~lasa.experiments.study_tests.judge`; H3 with
 a reduced bootstrap). A drawn cohort is *significant* when its effect's 95% interval excludes 0
 on the side of the whole cohort's effect; the **power** at ``n`` is the share of drawn cohorts
 that are, a cohort whose test cannot run counting as not significant. :func:`needed` gives the
@@ -29,8 +29,8 @@ from lasa.base.config import NO_ASSISTANCE, check_choice
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE
 from lasa.evidence.rules import rule
-from lasa.figures.study import for_member
-from lasa.figures.study_tests import analyse, judge
+from lasa.experiments.study import for_member
+from lasa.experiments.study_tests import analyse, judge
 from lasa.pipeline.scaleout import run_jobs
 
 __all__ = ["POWER_CLAIMS", "SIZES", "power", "needed", "sentence"]
@@ -76,11 +76,11 @@ def power(
 ) -> pd.DataFrame:
     """The power of H1-H3's tests per cohort size, drawing cohorts from the simulated participants.
 
-    Each drawn cohort runs :func:`~lasa.figures.study_tests.analyse` once; the draws are made up front
+    Each drawn cohort runs :func:`~lasa.experiments.study_tests.analyse` once; the draws are made up front
     from ``seed``, so the table does not depend on ``n_jobs``. Columns and costs: ``docs/method-notes.md``.
 
     Args:
-        frames: :func:`lasa.figures.study.run`'s tables (``goal_error``, ``time``, ``alignment``).
+        frames: :func:`lasa.experiments.study.run`'s tables (``goal_error``, ``time``, ``alignment``).
         assistance: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
         decoder: The decoder reading of the LA rows (None: the frames hold one).
         model: The participant model (None: the frames hold one).
@@ -140,14 +140,14 @@ def _checked(sizes: Sequence[int], draws: int, n_resamples: int, n_jobs: int) ->
 def _reading(
     frames: dict[str, pd.DataFrame], assistance: str, decoder: str | None, model: str | None
 ) -> dict[str, pd.DataFrame]:
-    """The three tables' rows of one reading (:func:`lasa.figures.study.for_member`), checked.
+    """The three tables' rows of one reading (:func:`lasa.experiments.study.for_member`), checked.
 
     Raises:
         ConfigError: A table is missing, or the member, decoder or model is not in the tables.
     """
     missing = [k for k in ("goal_error", "time", "alignment") if k not in frames]
     if missing:
-        raise ConfigError(f"frames lacks {missing}; pass lasa.figures.study.run's three tables")
+        raise ConfigError(f"frames lacks {missing}; pass lasa.experiments.study.run's three tables")
     time = frames["time"]
     for name, value, column in (("assistance", assistance, "assistance"), ("decoder", decoder, "decoder")):
         if value is not None and column in time.columns:

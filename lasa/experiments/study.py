@@ -3,7 +3,7 @@ r"""The eating study (notebook 11): the simulated cohort's run and its :class:`C
 A cohort of simulated participants (:mod:`lasa.people.cohort`) does both eating tasks under R,
 R+SA, LA and LA+SA. The first ten are the paper's study size; the whole cohort is the
 larger one. Three tidy tables come out, one row per participant x condition x task (x
-phase), each with its figure (:mod:`lasa.figures.study_plots`):
+phase), each with its figure (:mod:`lasa.experiments.study_plots`):
 
 - ``study_goal_error``: Goal Error (Fig. error);
 - ``study_time``: Total and Idle Time (Fig. time), with mode switches and completion;
@@ -18,8 +18,8 @@ optimisation, the paper's study, first: the headline), the unassisted ones once
 notebook 10 (:func:`run`; the headline, chosen there by the property alone, first), and the
 tables' ``decoder`` column says which; :func:`for_member` selects one reading's rows.
 
-The claims H1-H3 and their rules are :mod:`lasa.figures.study_claims` (on the tests of
-:mod:`lasa.figures.study_tests`); beside them, :mod:`lasa.figures.study_analysis` gives completion,
+The claims H1-H3 and their rules are :mod:`lasa.experiments.study_claims` (on the tests of
+:mod:`lasa.experiments.study_tests`); beside them, :mod:`lasa.experiments.study_analysis` gives completion,
 the headline participant model, where the unfinished LA episodes stopped and Retargeting's
 mode-switch share.
 """
@@ -112,7 +112,7 @@ class Config:
     # One by default: a participant model registered in this process only
     # (tests, a notebook cell) is unknown to a worker [-]
     jobs: PositiveInt = 1
-    # who a replication needs (lasa.figures.study_power): cohort sizes drawn from the simulated
+    # who a replication needs (lasa.experiments.study_power): cohort sizes drawn from the simulated
     # participants [participants], and cohorts drawn per size (each one analysis, ~0.3 s; 100 draws
     # give a power of 80% to within 4 points) [-]
     power_sizes: tuple[AtLeastTwo, ...] = (6, 10, 16, 24, 40, 60)
@@ -120,7 +120,7 @@ class Config:
     # The study's belief: Javdani et al.'s cap (lasa.world.eating.STUDY_BELIEF_CAP); notebook 10's
     # decoders must have been trained with it. None ("none"): Algorithm 1's uncapped belief [-]
     belief_cap: BeliefCap = STUDY_BELIEF_CAP
-    # The cap sweep (lasa.figures.study_caps): notebook 10's decoders of the headline's recipe at these
+    # The cap sweep (lasa.experiments.study_caps): notebook 10's decoders of the headline's recipe at these
     # caps (its cap_sweep, or a part of it), each run with the belief at its cap; without a cap the
     # whole cohort runs (the reading @uncapped), every other cap its first sweep_participants [-]
     cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
@@ -155,7 +155,7 @@ class Config:
 
         Participant i runs row i mod 4 of the Williams square (:func:`lasa.people.cohort.draw_cohort`):
         only a multiple of 4 balances the conditions' order and carry-over. A power size above
-        ``participants`` is not refused: :mod:`lasa.figures.study_power` draws its cohorts with
+        ``participants`` is not refused: :mod:`lasa.experiments.study_power` draws its cohorts with
         replacement (each drawn participant a new person), which is defined at any size, and the
         paper scale asks for it (60 drawn from 40) to find where the power reaches 80%. But such a
         cohort repeats simulated participants, and its power rests on the spread of ``participants``
@@ -241,7 +241,7 @@ def readings_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str
     ``<headline>_entropy`` (Eq. T6, the paper's remedy for a trapped user) as a contrast, if
     notebook 10 trained it. A reading that fails the rule is reported by its property row and
     not run through the participants. If no decoder meets the rule, the best-ranked one runs as
-    the headline (its rows read "not testable", :func:`lasa.figures.study_claims.untestable_reason`).
+    the headline (its rows read "not testable", :func:`lasa.experiments.study_claims.untestable_reason`).
     ``"all"``: every reading, in the ranking's order (``LARGE=1``).
 
     Args:

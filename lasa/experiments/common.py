@@ -116,7 +116,7 @@ def check_record_every(record_every: int, horizon: int, divides: bool = True) ->
 
     A sweep that records its error every ``record_every`` steps and averages the recorded steps
     (sim3) measures only t = 0 when ``record_every`` > ``horizon``, and leaves the last step out
-    when it does not divide ``horizon``. Notebook 09 (:mod:`lasa.figures.convergence`) records the
+    when it does not divide ``horizon``. Notebook 09 (:mod:`lasa.experiments.convergence`) records the
     last step itself, and counts its events at every step, so it needs the bound only.
 
     Raises:
@@ -171,7 +171,7 @@ def check_pilot(pilot: str, prob: float) -> None:
 class LooksConfig:
     """How a sweep's verdicts get their users: the sequential design, the bootstrap, the readings.
 
-    Sims 1-3 (through :class:`SweepConfig`) and sim 4 (:class:`lasa.figures.sim4.Config`) extend
+    Sims 1-3 (through :class:`SweepConfig`) and sim 4 (:class:`lasa.experiments.sim4.Config`) extend
     it with their own sweep. Every field is validated by its annotated type
     (:func:`lasa.base.config.validate`); the design's sizes are checked together (:class:`Design`).
     """
@@ -195,7 +195,7 @@ class SweepConfig(LooksConfig):
     :data:`lasa.method.step.METHODS`, which their claims compare, in any order).
 
     Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
-    slopes) and its episode's length; the verdict map (:mod:`lasa.figures.robustness`) reads the
+    slopes) and its episode's length; the verdict map (:mod:`lasa.experiments.robustness`) reads the
     same names.
     """
 

@@ -26,7 +26,7 @@ from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 from lasa.evidence.findings import below_bar, completion_text
 from lasa.evidence.rules import rule
 from lasa.evidence.sessions import complete_participants
-from lasa.figures.study import for_member
+from lasa.experiments.study import for_member
 
 __all__ = [
     "Judged",

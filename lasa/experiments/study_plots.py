@@ -2,12 +2,12 @@
 
 Each is a :class:`FigureSpec` (:data:`GOAL_ERROR`, :data:`TIME`, :data:`ALIGNMENT`), the shape
 :func:`lasa.evidence.publish.publish` takes: its file stem, the columns of its CSV (the tidy
-tables of :func:`lasa.figures.study.run`) and its plot, which draws one reading
-(:func:`lasa.figures.study.for_member`) with the paper's result in its title (:data:`PAPER_H`).
+tables of :func:`lasa.experiments.study.run`) and its plot, which draws one reading
+(:func:`lasa.experiments.study.for_member`) with the paper's result in its title (:data:`PAPER_H`).
 
 Every figure has the same shape:
 
-- **Panels.** The main panel (:data:`HEADLINE`) is the first :data:`~lasa.figures.study.PAPER_N`
+- **Panels.** The main panel (:data:`HEADLINE`) is the first :data:`~lasa.experiments.study.PAPER_N`
   participants, the N the verdicts rest on; beside it, the whole table (:data:`COHORT`, "cohort
   of 40 (a reading)"), drawn only when the table holds more participants than the main panel.
   Each panel's title says its N, counted from the rows it draws.
@@ -43,7 +43,7 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import wrap_to
-from lasa.figures.study import PAPER_N, for_member
+from lasa.experiments.study import PAPER_N, for_member
 from lasa.world.episodes import Episodes
 
 __all__ = [
@@ -544,7 +544,7 @@ def video_clips(
     each captioned with its condition and time.
 
     Args:
-        episodes: One decoder reading's episodes (:func:`lasa.figures.study.run`).
+        episodes: One decoder reading's episodes (:func:`lasa.experiments.study.run`).
         participant: Whose episodes.
         assistance: The SA member of the assisted conditions.
         stride: Control steps per frame.

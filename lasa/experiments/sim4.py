@@ -2,7 +2,7 @@
 
 A new cup is put on the table after training, at growing distances from a training
 cup. Near-optimal users reach for it with and without the context map
-(:mod:`lasa.method.newgoals`; the episodes are :mod:`lasa.figures.new_cups`), and the grasp
+(:mod:`lasa.method.newgoals`; the episodes are :mod:`lasa.experiments.new_cups`), and the grasp
 error is fitted against the new cup's distance. Notebook ``07_new_goals``.
 
 Measured as the paper's caption and text measure (the headline rows): the new cup's distance
@@ -44,8 +44,8 @@ from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means, member_frame
-from lasa.figures.common import Decoders, LooksConfig, check_methods, check_needed
-from lasa.figures.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
+from lasa.experiments.common import Decoders, LooksConfig, check_methods, check_needed
+from lasa.experiments.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
 from lasa.method.newgoals import MAP_KINDS
 from lasa.world.fork import angle_between
 from lasa.world.robot import Robot
@@ -122,7 +122,7 @@ class Config(LooksConfig):
     """Fig. sim4: users who reach for new cups, with and without the context map h.
 
     The users per point, the bootstrap, the readings and the users' seed are
-    :class:`~lasa.figures.common.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
+    :class:`~lasa.experiments.common.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
     ``offsets`` is a grid of at least three distinct distances, ascending (the claims fit a line);
     ``maps`` holds :data:`CLAIM_MAPS`, which notebook 07 reads by name.
     """
@@ -631,7 +631,7 @@ def map_sentences(frame: pd.DataFrame, geometry: pd.DataFrame) -> list[str]:
 
     Args:
         frame: One robot's headline rows.
-        geometry: :func:`lasa.figures.new_cups.map_geometry` of its task and config.
+        geometry: :func:`lasa.experiments.new_cups.map_geometry` of its task and config.
 
     Returns:
         The straight-line map's sentence (branch, limits, misfit, errors per band of
