@@ -402,13 +402,13 @@ def test_study_outputs(executed):
     summary = latent_property.summary(prop[prop.task == "eating"])
     # only decoders that meet the property rule run (else the best one), and the headline's entropy
     # version if notebook 10 trained it
-    variants = study.readings_to_run(summary, "property")
+    variants = study.variants_to_run(summary, "property")
     settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
     assert set(variants) <= set(eating_task.reading_names(from_dict(eating_task.Config, settings10)))
     assert len(variants) < len(summary.decoder.unique())
     # the headline: every arm; each other decoder variant: LA and LA+SA under the headline member;
-    # per participant model (the first readings_per_model of the ranking): participants x arms x tasks
-    limits = study.Config().readings_per_model
+    # per participant model (the first variants_per_model of the ranking): participants x arms x tasks
+    limits = study.Config().variants_per_model
     runs = [min(limits.get(m, len(variants)), len(variants)) for m in models]
     episodes = sum(n * (2 + 2 * len(assistance) + 2 * (k - 1)) * 2 for k in runs)
     for spec in (study_plots.GOAL_ERROR, study_plots.TIME, study_plots.ALIGNMENT):

@@ -241,7 +241,7 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
             "stay_share": [0.6, 0.5, 0.1, 0.7],
         }
     )
-    table = claims.readings_table(
+    table = claims.variants_table(
         prop, analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
     )
     head, other = table.set_index("decoder").loc["head"], table.set_index("decoder").loc["other"]
@@ -500,7 +500,7 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
     prop = pd.DataFrame(
         {"decoder": ["head", "other"], "has_property": [True, False], "stay_share": [0.6, 0.1]}
     )
-    table = claims.readings_table(
+    table = claims.variants_table(
         prop, analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
     )
     assert list(zip(table.model, table.decoder, strict=True)) == [
@@ -624,15 +624,15 @@ def _property(meets: dict[str, bool]) -> pd.DataFrame:
 
 def test_only_decoders_with_the_property_and_the_headlines_entropy_version_run():
     prop = _property({"leaves": False, "transfers": True, "transfers_entropy": False, "home": False})
-    assert study.readings_to_run(prop) == ["transfers", "transfers_entropy"]
-    assert set(study.readings_to_run(prop, "all")) == {"leaves", "transfers", "transfers_entropy", "home"}
-    assert study.readings_to_run(prop, "all")[0] == "transfers"  # the ranking's order, the headline first
+    assert study.variants_to_run(prop) == ["transfers", "transfers_entropy"]
+    assert set(study.variants_to_run(prop, "all")) == {"leaves", "transfers", "transfers_entropy", "home"}
+    assert study.variants_to_run(prop, "all")[0] == "transfers"  # the ranking's order, the headline first
     both = _property({"home": True, "transfers": True, "home_entropy": False})
-    assert study.readings_to_run(both) == ["home", "transfers", "home_entropy"]  # every one that meets it
+    assert study.variants_to_run(both) == ["home", "transfers", "home_entropy"]  # every one that meets it
     none = _property({"leaves": False, "home": False})
-    assert len(study.readings_to_run(none)) == 1  # no decoder meets the rule: the best-ranked one alone
+    assert len(study.variants_to_run(none)) == 1  # no decoder meets the rule: the best-ranked one alone
     with pytest.raises(ConfigError, match="decoders"):
-        study.readings_to_run(prop, "some")
+        study.variants_to_run(prop, "some")
     with pytest.raises(ConfigError, match="decoders"):
         study.Config(decoders="some")
 

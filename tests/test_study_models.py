@@ -79,7 +79,7 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
         participants=2,
         session=StudyConfig(horizon=20, assistance=("hindsight",)),
         participant_models=("one_step", "twin"),
-        readings_per_model={"twin": 1},
+        variants_per_model={"twin": 1},
     )
     decoders = {"head": LinearDecoder(0), "other": LinearDecoder(1)}
     episodes, frames = study.run(task, decoders, task.robot.control, config, progress=False)
@@ -89,8 +89,8 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
     rows, _ = claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3@twin", "study.h2@other"} <= ids and not any("other+twin" in i for i in ids)
-    with pytest.raises(ConfigError, match="readings_per_model"):
-        study.Config(readings_per_model={"psychic": 1})
+    with pytest.raises(ConfigError, match="variants_per_model"):
+        study.Config(variants_per_model={"psychic": 1})
 
 
 def test_plot_time_hatches_censored_bars_and_says_how_many_finished():

@@ -37,7 +37,7 @@ __all__ = [
     "h3_tables",
     "members_table",
     "reading_of",
-    "readings_table",
+    "variants_table",
     "untestable_reason",
     "with_flips",
     "likert_row",
@@ -417,7 +417,7 @@ def untestable_reason(prop: pd.DataFrame) -> str | None:
     )
 
 
-def readings_table(
+def variants_table(
     prop: pd.DataFrame,
     done: pd.DataFrame,
     rows: list[Claim],

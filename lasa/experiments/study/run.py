@@ -50,7 +50,7 @@ __all__ = [
     "load_decoders",
     "eating_property",
     "participant_table",
-    "readings_to_run",
+    "variants_to_run",
     "run",
 ]
 
@@ -77,8 +77,8 @@ class Config:
     participant_models: tuple[str, ...] = ("planning", "one_step")  # PARTICIPANT_MODELS, headline first [-]
     # decoder variants a model runs, the headline and the next in notebook 10's ranking (a model not
     # named runs every variant): a planning study costs ~5x a one-step one per variant
-    readings_per_model: dict[str, PositiveInt] = dataclasses.field(default_factory=lambda: {"planning": 4})
-    # which of notebook 10's decoder variants run (readings_to_run): "property" or "all" (LARGE=1) [-]
+    variants_per_model: dict[str, PositiveInt] = dataclasses.field(default_factory=lambda: {"planning": 4})
+    # which of notebook 10's decoder variants run (variants_to_run): "property" or "all" (LARGE=1) [-]
     decoders: str = "property"
     scheduler: str = ""  # a Dask scheduler address for the variants' runs ("" local; $LASA_SCHEDULER) [-]
     # local worker processes of the variants' runs and of the power's drawn cohorts (the same results
@@ -110,8 +110,8 @@ class Config:
         for name in models:
             check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
         check_choice("decoders", self.decoders, DECODER_SELECTIONS)
-        for name in self.readings_per_model:
-            check_choice("readings_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
+        for name in self.variants_per_model:
+            check_choice("variants_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
         if not 0 <= self.video_participant < self.participants:
             raise ConfigError(
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
@@ -199,7 +199,7 @@ def participant_table(participant: ParticipantConfig) -> pd.DataFrame:
     return pd.DataFrame([{"parameter": f.name, "value": getattr(participant, f.name)} for f in fields])
 
 
-def readings_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str]:
+def variants_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str]:
     """The decoder variants the participants run, the headline first (notebook 10's ranking).
 
     ``"property"``: the variants that meet the property rule (:func:`lasa.evidence.latent_property.holds`;
@@ -256,7 +256,7 @@ def run(
 
     The first of ``decoders`` is the headline: every condition under every member. Each other variant
     runs LA and LA+SA only, under the headline member (Retargeting's episodes are the headline run's).
-    A model named in ``config.readings_per_model`` runs only its first that many variants. The runs
+    A model named in ``config.variants_per_model`` runs only its first that many variants. The runs
     are jobs of :func:`lasa.pipeline.scaleout.run_jobs` (local, or the Dask ``config.scheduler``).
 
     Returns:
@@ -270,7 +270,7 @@ def run(
     jobs = [
         (model, i, name)
         for model in config.participant_models
-        for i, name in enumerate(names[: config.readings_per_model.get(model, len(names))])
+        for i, name in enumerate(names[: config.variants_per_model.get(model, len(names))])
     ]
     shared = _Shared(task, dict(decoders), cohort, control, config)
     ran = run_jobs(
