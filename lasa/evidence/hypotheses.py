@@ -36,11 +36,8 @@ def for_member(
     decoder: str | None = None,
     model: str | None = None,
 ) -> pd.DataFrame:
-    """The rows of one SA member (the unassisted conditions included), for the first ``n`` participants.
-
-    With ``decoder``, the LA rows are that decoder variant's; with ``model``, the rows are that
-    participant model's (a frame without the ``decoder`` or ``model`` column holds one).
-    """
+    """The rows of one SA member (the unassisted conditions included), for the first ``n`` participants,
+    with ``decoder`` the LA rows of that decoder variant, with ``model`` of that participant model."""
     rows = frame[(frame.assistance == assistance) | (frame.assistance == NO_ASSISTANCE)]
     if decoder is not None and "decoder" in rows.columns:
         rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
@@ -89,13 +86,8 @@ def analyse(
 
 
 def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
-    """H3's numbers: completion per condition, restricted means, and LA+SA's bootstrap contrasts.
-
-    ``h3_short`` names each condition below the completion bar (``"LA 0%, LA+SA 0%"``; empty if
-    none). ``h3_total`` and ``h3_idle`` are :func:`lasa.evidence.stats.rmst_contrasts` (LA+SA minus
-    each other condition), ``means`` the restricted means per participant over both tasks, and
-    ``h3_gap`` the contrast with the fastest other condition (by restricted mean Total Time).
-    """
+    """H3's numbers: completion per condition (``h3_short``: those below the bar), restricted means, and
+    LA+SA's bootstrap contrasts (``stats.rmst_contrasts``), ``h3_gap`` the one with the fastest other."""
     done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
     contrasts = {
         m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples)
@@ -119,11 +111,8 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
 
 
 def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int]:
-    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used.
-
-    Participants without a value under either condition (a phase never reached) are left out;
-    with fewer than two pairs left, everything but the count is NaN.
-    """
+    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used (participants with
+    both values; with fewer than two pairs, everything but the count is NaN)."""
     keep = a.notna() & b.notna()
     a, b = a[keep], b[keep]
     if len(a) < 2:
@@ -152,8 +141,7 @@ def people_claims(
     """
     time = frames["time"]
     horizon = float(time.total_time.max()) if horizon is None else horizon
-    # within-subject tests: the participants who did every condition in every task
-    # (lasa.evidence.sessions.DROPPED; at least two, else no row)
+    # within-subject tests: those who did every condition in every task (sessions.DROPPED; two or more)
     full = set(complete_participants(time, "claims")[0].participant)
     likert = frames.get("likert")  # people's answers' tests (lasa.evidence.sessions.likert_tests), if any
     frames = {
@@ -164,33 +152,20 @@ def people_claims(
     for assistance in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
         result = analyse(frames, assistance, horizon=horizon, n_resamples=n_resamples)
         for claim, (verdict, value, low, high, measured) in judge(result).items():
-            rows.append(
-                {"member": assistance, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
-                 "ci_high": high, "measured": measured, "participants": result["n"]}
-            )  # fmt: skip
+            rows.append((assistance, claim, verdict, value, low, high, measured, result["n"]))
     if likert is not None and len(likert) and len(full) >= 2:
         verdict, share, n = likert_verdict(likert)
         measured = (
             f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
         )
-        rows.append(
-            {"member": "all", "claim": "likert", "verdict": verdict, "value": share, "ci_low": math.nan,
-             "ci_high": math.nan, "measured": measured, "participants": len(full)}
-        )  # fmt: skip
+        rows.append(("all", "likert", verdict, share, math.nan, math.nan, measured, len(full)))
     columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]
     return pd.DataFrame(rows, columns=columns)
 
 
 def likert_verdict(likert: pd.DataFrame) -> tuple[str, float, int]:
-    """Fig. dessert's subjective claim on people's answers (``study.likert``'s rule).
-
-    Args:
-        likert: :func:`lasa.evidence.sessions.likert_tests`: per scale, LA+SA against each other
-            condition (``diff`` = LA+SA minus the other, Holm-corrected ``p_corr``).
-
-    Returns:
-        (verdict, the share of comparisons with LA+SA rated higher at p < .05, the comparisons).
-    """
+    """Fig. dessert's subjective claim on people's answers (:func:`lasa.evidence.sessions.likert_tests`): the
+    ``study.likert`` verdict, the share of comparisons with LA+SA rated higher at p < .05, the comparisons."""
     support = (likert["diff"] > 0.0) & (likert["p_corr"] < 0.05)
     share = float(support.mean())
     return rule("study.likert").verdict({"share": share}), share, int(len(likert))

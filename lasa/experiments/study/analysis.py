@@ -111,12 +111,7 @@ def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.Da
     )
 
 
-def stuck(
-    task: EatingTask,
-    episodes: Episodes,
-    decoder: ActionDecoder,
-    config: Config,
-) -> pd.DataFrame:
+def stuck(task: EatingTask, episodes: Episodes, decoder: ActionDecoder, config: Config) -> pd.DataFrame:
     """Why the unfinished LA episodes did not finish: where they were, and what the decoder offered there.
 
     One row per unfinished LA episode: its waypoint's phase and goal, the tip's distance [cm] and
@@ -148,12 +143,10 @@ def stuck(
     unit = dt * settings.retarget.linear_speed
     gain = progress_gain(pos, axis, dp, new_dir, p_star, d_star, pc.rotation_weight) / unit
     goal_names = np.asarray(GOALS)
+    who = {c: getattr(episodes, c)[idx] for c in ("participant", "condition", "assistance", "task")}
     return pd.DataFrame(
         {
-            "participant": episodes.participant[idx],
-            "condition": episodes.condition[idx],
-            "assistance": episodes.assistance[idx],
-            "task": episodes.task[idx],
+            **who,
             "phase": [TASKS[str(episodes.task[e])][wp.phase].name for e, wp in zip(idx, wps, strict=True)],
             "goal": [GOALS[wp.goal] for wp in wps],
             "distance_cm": 100 * np.linalg.norm(pos - p_star, axis=1),

@@ -69,15 +69,6 @@ CLAIM_TEXT = {
     ),
 }
 
-# each claim key: the claim it belongs to, and the reading's name (None: the paper's)
-_KEYS = {
-    "h1": ("h1", None),
-    "h1_mean_distance": ("h1", "mean_distance"),
-    "h1_paper_test": ("h1", "paper_test"),
-    "h2": ("h2", None),
-    "h3": ("h3", None),
-}
-
 
 def claim_id(
     key: str,
@@ -95,7 +86,7 @@ def claim_id(
     that order (``belief``, e.g. ``uncapped``; ``decoder``, ``model``: other than the headline's):
     ``study.h1@mean_distance+grasp_set+cohort``, ``study.h2@transfers_entropy+one_step+cohort``.
     """
-    base, measure = _KEYS[key]
+    base, _, measure = key.partition("_")  # h1_mean_distance: claim h1, reading mean_distance
     named = None if assistance_index == 0 else assistance  # the headline member goes unnamed
     reading = (measure, belief, decoder, model, named, "cohort" if cohort else None)
     parts = [p for p in reading if p]
@@ -125,23 +116,19 @@ def claims(
         frames: :func:`lasa.experiments.study.run.run`'s tables.
         assistance: The SA members, the headline first.
         n_total: The cohort's size (its first :data:`PAPER_N` are the paper's study).
-        decoders: The decoder variants in the frames' ``decoder`` column, the headline first (empty:
-            one variant); the headline under every measure and member, each other under
-            :data:`DECODER_KEYS` and the headline member.
-        models: The participant models, the headline first (default: the ``model`` column's, in
-            order of appearance); each judged as the headline is.
+        decoders: The decoder variants, the headline first (empty: one); the headline is judged under
+            every measure and member, each other under :data:`DECODER_KEYS` and the headline member.
+        models: The participant models, the headline first (default: the ``model`` column's).
         horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
-        untestable: Why the study cannot test its hypotheses at all, if it cannot: every row reads
-            ``not testable`` with this reason in its note.
-        untestable_decoders: Decoder variant -> why its rows are not testable, the same way.
+        untestable: Why the study cannot test its hypotheses at all: every row reads not testable.
+        untestable_decoders: Decoder variant -> why its rows are not testable.
         n_resamples: The paired bootstrap's resamples (H3).
         belief: Another belief than the study's the frames ran with (``uncapped``), named in every id.
         flips: Lead each headline row's note with the readings whose words differ (:func:`with_flips`).
 
     Returns:
         The rows, and the analyses keyed ``(member, n)`` for the headline decoder and model,
-        ``(member, n, decoder)`` for another decoder under the headline model, and
-        ``(member, n, decoder, model)`` under every other model.
+        ``(member, n, decoder)`` for another decoder, ``(member, n, decoder, model)`` for another model.
     """
     if not models and "model" in frames["time"].columns:
         models = tuple(dict.fromkeys(frames["time"].model))
@@ -196,14 +183,9 @@ def _each(analyses: Analyses, decoder: str, model: str) -> Iterator[tuple[dict[s
 
 
 def h1_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
-    """H1's tests under every reading, unrounded: Goal Error between and within subjects, and the mean
-    distance within, each with its test, F, df, p and the means with and without SA.
-
-    Args:
-        analyses: :func:`claims`'s analyses.
-        decoder: The headline decoder variant.
-        model: The headline participant model.
-    """
+    """H1's tests under every reading of :func:`claims`'s ``analyses``, unrounded (``decoder`` and ``model``
+    the headline's): Goal Error between and within subjects and the mean distance within, each with its
+    test, F, df, p and the means with and without SA."""
     out = []
     for who, res in _each(analyses, decoder, model):
         for name in ("h1_between", "h1_within", "h1_mean_within"):
@@ -301,12 +283,6 @@ def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, f
     return out
 
 
-def _shortfall(key: str, n: int, result: Mapping[str, object]) -> str:
-    """Why the row cannot be settled on its participants or H3's resamples (``verdicts.shortfall``)."""
-    resamples = result.get("n_resamples") if key == "h3" else None
-    return shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")  # type: ignore[arg-type]
-
-
 def _claim_row(
     cid: str,
     key: str,
@@ -327,7 +303,8 @@ def _claim_row(
     numbers = {k: v for k, v in numbers.items() if math.isfinite(v)}  # F of an uncomputed test
     testable = verdict != NOT_TESTABLE and reason is None
     n = int(result["n"])  # type: ignore[call-overload]
-    short = _shortfall(key, n, result)
+    resamples = result.get("n_resamples") if key == "h3" else None
+    short = shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")  # type: ignore[arg-type]
     settled = testable and r.settled({"effect": (low, high)}) and not short
     if verdict == NOT_TESTABLE and "too few pairs" in measured:
         why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
@@ -425,16 +402,9 @@ def variants_table(
     assistance: str,
     models: tuple[str, ...] = (),
 ) -> pd.DataFrame:
-    """One row per participant model and decoder variant, the headlines first: property, completion, verdicts.
-
-    Args:
-        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
-        done: :func:`lasa.experiments.study.analysis.completion` of the study's time table.
-        rows: The study's claims rows (:func:`claims`).
-        decoders: The decoder variants, the headline first.
-        assistance: The headline SA member.
-        models: The participant models, the headline first; default: ``done``'s ``model`` column.
-    """
+    """One row per participant model and decoder variant, the headlines first: the property (``prop``),
+    completion (``done``: :func:`lasa.experiments.study.analysis.completion`) under the headline member
+    ``assistance``, and the verdicts of the claims ``rows``."""
     if not models and "model" in done.columns:
         models = tuple(dict.fromkeys(done.model))
     by_id = {c.id: c for c in rows}

@@ -55,7 +55,7 @@ COHORT = "cohort"  # the second panel, and its key in ``stats``: every participa
 PANELS = (HEADLINE, COHORT)
 HATCH = "///"  # a censored bar's hatch
 CUT = "hatched: some episodes cut at the horizon"
-CENSORED = f"{CUT} (a lower bound)"  # the legend's reading of HATCH
+CENSORED = f"{CUT} (a lower bound)"  # what the legend says HATCH means
 # Fig. time's whiskers, dodged apart so the two intervals of a bar never merge: (offset from the
 # bar's centre [slot widths], colour) of Total Time's and of Idle Time's
 WHISKERS = {"total_time": (-0.15, "0.15"), "idle_time": (0.15, "0.5")}
@@ -251,13 +251,9 @@ def plot_goal_error(
 ) -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants).
 
-    Args:
-        frame: The Goal Error table (:data:`GOAL_ERROR`'s columns).
-        assistance: The SA member drawn (the unassisted conditions beside it).
-        decoder: The decoder variant of the LA rows (None: every row).
-        model: The participant model (None: every row).
-        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT`.
-        completed: The Time table, whose ``completed`` marks the censored bars (unneeded if ``frame`` has it).
+    ``frame`` (:data:`GOAL_ERROR`'s columns) is drawn for the SA member ``assistance`` (the unassisted
+    conditions beside it), ``decoder`` and ``model`` (None: every row); ``stats`` is our result per
+    panel (:data:`HEADLINE`, :data:`COHORT`); ``completed``, the Time table, marks the censored bars.
     """
     data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), completed)
     panels = _panels(data)

@@ -9,11 +9,10 @@ at the target, :func:`sentence` says it. These rest on simulated participants: `
 
 from __future__ import annotations
 
-import contextlib
 import gc
 import math
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -58,24 +57,10 @@ def power(
 ) -> pd.DataFrame:
     """The power of H1-H3's tests per cohort size, drawing cohorts from the simulated participants.
 
-    The draws are made up front from ``seed``, so the table does not depend on ``n_jobs``.
-
-    Args:
-        frames: :func:`lasa.experiments.study.run.run`'s tables (``goal_error``, ``time``, ``alignment``).
-        assistance: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
-        decoder: The decoder variant of the LA rows (None: the frames hold one).
-        model: The participant model (None: the frames hold one).
-        sizes: Cohort sizes, each at least 2.
-        draws: Drawn cohorts per size, at least 1.
-        seed: Seed of the draws.
-        horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
-        progress: Show a progress bar.
-        n_resamples: H3's bootstrap resamples per drawn cohort, at least 1.
-        n_jobs: Worker processes (:func:`lasa.pipeline.scaleout.run_jobs`; 1: this process).
-
-    Returns:
-        One row per claim and size: ``claim``, ``n``, ``power``, ``opposite_share``,
-        ``untestable_share``, ``yes_share``, ``direction``, ``paper_direction`` and ``draws``.
+    ``frames`` are :func:`lasa.experiments.study.run.run`'s tables; ``assistance``, ``decoder`` and
+    ``model`` choose their rows (None: the frames hold one); ``draws`` cohorts of each of ``sizes``
+    are drawn up front from ``seed`` (the table does not depend on ``n_jobs`` worker processes);
+    ``horizon`` [s] and ``n_resamples`` are H3's. One row per claim and size (:data:`_COLUMNS`).
 
     Raises:
         ConfigError: Bad ``sizes``, ``draws``, ``n_resamples`` or ``n_jobs``, or a member, variant or
@@ -161,17 +146,6 @@ def _drawn(tables: dict[str, pd.DataFrame], ids: np.ndarray, chosen: np.ndarray)
     return out
 
 
-@contextlib.contextmanager
-def _quiet_gc() -> Iterator[None]:
-    """Exempt the objects alive now from collection while the tests run (statsmodels' Holm correction
-    calls ``gc.collect()`` each time: ~3x faster, the same results)."""
-    gc.freeze()
-    try:
-        yield
-    finally:
-        gc.unfreeze()
-
-
 def _outcome(
     tables: dict[str, pd.DataFrame],
     setting: tuple[str, str | None, str | None, float, int],
@@ -183,14 +157,19 @@ def _outcome(
     testable``; runtime warnings of degenerate drawn cohorts are silenced.
     """
     assistance, decoder, model, horizon, n_resamples = setting
-    with warnings.catch_warnings(), _quiet_gc():
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
+        # exempt the objects alive now from collection while the tests run: statsmodels' Holm
+        # correction calls gc.collect() each time (~3x faster, the same results)
+        gc.freeze()
         try:
             judged = judge(analyse(tables, assistance, None, decoder, model, horizon, n_resamples))
         except ConfigError:
             if strict:
                 raise
             return {c: (math.nan, math.nan, math.nan, NOT_TESTABLE) for c in POWER_CLAIMS}
+        finally:
+            gc.unfreeze()
     return {c: (judged[c][1], judged[c][2], judged[c][3], judged[c][0]) for c in POWER_CLAIMS}
 
 
