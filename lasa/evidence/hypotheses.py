@@ -125,19 +125,10 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
 def people_claims(
     frames: dict[str, pd.DataFrame], horizon: float | None = None, n_resamples: int = 10_000
 ) -> pd.DataFrame:
-    """H1-H3 on people's sessions, by the simulated cohort's own tests, completion bar and rules.
-
-    Args:
-        frames: :func:`lasa.evidence.sessions.analyse_sessions`' ``goal_error``, ``time`` and
-            ``alignment`` tables, and its ``likert`` tests if people answered the questionnaire
-            (then Fig. dessert's subjective claim gets a row, ``likert``: :func:`likert_verdict`).
-        horizon: Where an unfinished trial's time was cut [s]; None: the longest logged Total Time.
-        n_resamples: H3's paired bootstrap resamples.
-
-    Returns:
-        One row per SA member and claim key: ``member``, ``claim``, ``verdict``, ``value``,
-        ``ci_low``, ``ci_high``, ``measured``, ``participants`` (none if fewer than two did
-        every condition in every task).
+    """H1-H3 on people's sessions (``frames``: :func:`lasa.evidence.sessions.analyse_sessions`'), by the
+    simulated cohort's own tests, completion bar and rules; with its ``likert`` tests, also Fig. dessert's
+    subjective claim (:func:`likert_verdict`). ``horizon`` [s] defaults to the longest logged Total Time.
+    One row per SA member and claim key (none if fewer than two did every condition in every task).
     """
     time = frames["time"]
     horizon = float(time.total_time.max()) if horizon is None else horizon
@@ -172,12 +163,8 @@ def likert_verdict(likert: pd.DataFrame) -> tuple[str, float, int]:
 
 
 def judge(result: Mapping[str, object]) -> dict[str, Judged]:
-    """(the tests' verdict, value, 95% ci_low, ci_high, measured) per claim key.
-
-    The verdict is the claim's rule applied to its tests' numbers; the value is the effect it rests
-    on, with the t-interval of the same test (paired, or two-sample for the paper's F(1,18)
-    reading), for H3 the percentile interval of the paired bootstrap.
-    """
+    """(the claim's rule on its tests' numbers, the effect, its 95% interval: the test's t-interval or H3's
+    paired bootstrap percentiles, measured) per claim key."""
     out = {
         "h1": _h1(result, "", "m s", 1.0),
         "h1_mean_distance": _h1(result, "_mean", "cm", 100.0),
@@ -292,11 +279,8 @@ def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, J
 
 
 def _h3_verdict(result: Mapping[str, object]) -> Judged:
-    """H3's verdict, the LA+SA gap to the fastest other condition, its bootstrap interval, measured.
-
-    With a censored condition, :func:`_h3_censored`; else the rule's tests on every restricted-mean
-    contrast of LA+SA (Total and Idle Time, against R, R+SA and LA) and the restricted mean Total Times.
-    """
+    """H3's verdict (the rule on every restricted-mean contrast of LA+SA, Total and Idle Time), the LA+SA
+    gap to the fastest other condition, its bootstrap interval, measured; censored: :func:`_h3_censored`."""
     total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
     short, done, horizon = result["h3_short"], result["h3_completion"], result["horizon"]
     assert isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame)

@@ -55,12 +55,9 @@ def completion(time: pd.DataFrame) -> pd.DataFrame:
 
 
 def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
-    """The headline participant model, by a criterion fixed before any H1-H3 verdict was seen.
-
-    The first of ``models`` (in order of preference) whose Retargeting episodes (R, and R+SA under
-    every member), which do not depend on the decoder, each finish at least
-    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time; if none does, the first.
-    """
+    """The headline participant model, by a criterion fixed before any H1-H3 verdict was seen: the first
+    of ``models`` whose Retargeting episodes (R, and R+SA under every member) each finish at least
+    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time; if none does, the first."""
     if not models:
         raise ConfigError("headline_model needs at least one participant model")
     retarget = time[time.condition.isin(["R", "R+SA"])]

@@ -189,11 +189,8 @@ def label(cap: float | None) -> str:
 
 
 def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
-    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim.
-
-    H1: SA - no SA Goal Error within subjects [m s]; H2: LA+SA - R+SA scoop alignment, paired t;
-    H3: LA+SA - R restricted mean Total Time, paired bootstrap [s] (no p).
-    """
+    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim: SA - no SA
+    Goal Error [m s], LA+SA - R+SA scoop alignment, LA+SA - R restricted mean Total Time [s] (no p)."""
     within = result["h1_within"]
     phases, total = result["h2_phases"], result["h3_total"]
     assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
@@ -261,11 +258,8 @@ def sweep(
     config: study.Config,
     horizon: float,
 ) -> pd.DataFrame:
-    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last.
-
-    The study's own cap reads the headline run (``frames``, judged with ``prop``), every other cap its
-    run (judged with ``caps_prop``); each on its first ``config.sweep_n`` participants.
-    """
+    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last: the study's own cap
+    from the headline run (``frames``, ``prop``), every other cap from its run (``caps_prop``)."""
     head = config.session.assistance[0]
     n = config.sweep_n
     mine = {k: for_member(f, head, n, decoder=headline, model=model) for k, f in frames.items()}

@@ -221,19 +221,9 @@ def _row(
 
 
 def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) -> pd.DataFrame:
-    """Per claim, the smallest simulated cohort from which power stays at ``target`` or above.
-
-    A size counts only if every larger simulated size reaches ``target`` too; an earlier size that
-    reached it is named in ``explanation``.
-
-    Args:
-        table: :func:`power`'s table.
-        target: The power wanted, in (0, 1).
-        interpolate: Give the size where power crosses ``target``, linear in n, rounded up.
-
-    Returns:
-        One row per claim: ``claim``, ``target``, ``needed`` (NA if the largest size falls short),
-        ``needed_text``, ``power``, ``direction``, ``paper_direction`` and ``explanation``.
+    """Per claim of :func:`power`'s ``table``, the smallest simulated cohort from which power stays at
+    ``target`` or above (every larger size reaching it too; ``interpolate``: where power crosses it,
+    linear in n, rounded up): ``needed`` (NA if the largest size falls short) and its ``explanation``.
 
     Raises:
         ConfigError: ``target`` outside (0, 1), or ``table`` lacks :func:`power`'s columns.

@@ -252,16 +252,12 @@ def run(
     config: Config,
     progress: bool = True,
 ) -> tuple[dict[str, dict[str, Episodes]], dict[str, pd.DataFrame]]:
-    """Simulate the cohort under each participant model and measure it.
+    """Simulate the cohort under each participant model; the episodes (``episodes[model][decoder]``) and
+    the three tidy tables (``decoder`` ``none`` on Retargeting's rows).
 
     The first of ``decoders`` is the headline: every condition under every member. Each other variant
-    runs LA and LA+SA only, under the headline member (Retargeting's episodes are the headline run's).
-    A model named in ``config.variants_per_model`` runs only its first that many variants. The runs
-    are jobs of :func:`lasa.pipeline.scaleout.run_jobs` (local, or the Dask ``config.scheduler``).
-
-    Returns:
-        The episodes per participant model and variant (``episodes[model][decoder]``), and the three
-        tidy tables (``decoder`` ``none`` on Retargeting's rows).
+    runs LA and LA+SA under the headline member. A model named in ``config.variants_per_model`` runs
+    its first that many variants. The runs are :func:`lasa.pipeline.scaleout.run_jobs` jobs.
     """
     if not decoders:
         raise ConfigError("run needs at least one decoder (the headline first)")
