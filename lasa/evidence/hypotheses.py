@@ -17,13 +17,23 @@ from scipy import stats as sps
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
+from lasa.base.errors import ConfigError
 from lasa.evidence import stats
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 from lasa.evidence.findings import below_bar, completion_text
-from lasa.evidence.rules import rule
+from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import complete_participants
 
-__all__ = ["Judged", "for_member", "analyse", "judge", "h3_comparator", "people_claims", "likert_verdict"]
+__all__ = [
+    "Judged",
+    "for_member",
+    "headline_model",
+    "analyse",
+    "judge",
+    "h3_comparator",
+    "people_claims",
+    "likert_verdict",
+]
 
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
@@ -46,6 +56,20 @@ def for_member(
     if n is not None:
         rows = rows[rows.participant < n]
     return rows.reset_index(drop=True)
+
+
+def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
+    """The headline participant model, by a criterion fixed before any H1-H3 verdict was seen: the first
+    of ``models`` whose Retargeting episodes (R, and R+SA under every member) each finish at least
+    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time; if none does, the first."""
+    if not models:
+        raise ConfigError("headline_model needs at least one participant model")
+    retarget = time[time.condition.isin(["R", "R+SA"])]
+    for model in models:
+        done = retarget[retarget.model == model].groupby(["condition", "assistance"]).completed.mean()
+        if len(done) and (done >= COMPLETION_BAR).all():
+            return model
+    return models[0]
 
 
 def analyse(

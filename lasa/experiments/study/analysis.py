@@ -13,7 +13,7 @@ from scipy import stats as sps
 
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.evidence.hypotheses import for_member
+from lasa.evidence.hypotheses import for_member, headline_model
 from lasa.evidence.rules import COMPLETION_BAR
 from lasa.experiments.study.run import PAPER_N, Config
 from lasa.method.decoder import ActionDecoder
@@ -52,20 +52,6 @@ def completion(time: pd.DataFrame) -> pd.DataFrame:
         )
         .reset_index()
     )
-
-
-def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
-    """The headline participant model, by a criterion fixed before any H1-H3 verdict was seen: the first
-    of ``models`` whose Retargeting episodes (R, and R+SA under every member) each finish at least
-    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time; if none does, the first."""
-    if not models:
-        raise ConfigError("headline_model needs at least one participant model")
-    retarget = time[time.condition.isin(["R", "R+SA"])]
-    for model in models:
-        done = retarget[retarget.model == model].groupby(["condition", "assistance"]).completed.mean()
-        if len(done) and (done >= COMPLETION_BAR).all():
-            return model
-    return models[0]
 
 
 def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.DataFrame:
