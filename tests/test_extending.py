@@ -308,10 +308,13 @@ def _toy_rule() -> decision.Rule:
     )
 
 
+TOY_RULE = _toy_rule()
+
+
 def _toy_claims(frame: pd.DataFrame) -> list[lasa.Claim]:
     means = frame.groupby(["goal", "method"]).final_error.mean().unstack()
     share = float((means["LA+SA"] < means["LA"]).mean())
-    verdict = rules.rule("toy.sa_lower").verdict({"share_lower": share})
+    verdict = TOY_RULE.verdict({"share_lower": share})
     return [
         lasa.Claim(
             id="toy.sa_lower",
@@ -323,6 +326,7 @@ def _toy_claims(frame: pd.DataFrame) -> list[lasa.Claim]:
             note="hand-made numbers",
             robot=str(frame.robot.iloc[0]),
             values={"share_lower": share},
+            rule=TOY_RULE,
         )
     ]
 
@@ -340,34 +344,35 @@ def _plot(table: pd.DataFrame, task: lasa.GoalTask) -> Figure:
 
 def test_a_claim_of_ones_own_is_judged_by_its_rule_and_lands_in_the_claims_table(toy_task, tmp_path):
     task = toy_task
-    saved = dict(rules.RULES)
-    try:
-        rules.register_rule(_toy_rule())
-        with pytest.raises(lasa.ConfigError, match="exists already"):
-            rules.register_rule(dataclasses.replace(_toy_rule(), id="sim1.final_error"))
-        assert rules.rule("toy.sa_lower@point").verdict({"share_lower": 2 / 3}) == "partly"
-        # hand-made numbers: 20 users per cup, LA+SA well below LA at all three
-        rng = np.random.default_rng(0)
-        rows = [
-            {"robot": "toy3", "seed": u, "goal": g, "method": m, "final_error": mean + rng.normal(0, 0.02)}
-            for u in range(60)
-            for g in [u % 3]
-            for m, mean in (("LA", 0.4), ("LA+SA", 0.1))
-        ]
-        frame = pd.DataFrame(rows)
-        claims = verdicts.assess(_toy_claims, frame, n_boot=200, seed=0)
-        figure = types.SimpleNamespace(NAME="toy_sa", COLUMNS=tuple(frame.columns), plot=_plot)
-        paths = lasa.Paths.of(tmp_path / "build", tmp_path / "figures")
-        lasa.publish(figure, frame, paths, claims, task=task)
-        table = pd.read_csv(paths.claims, dtype=str, keep_default_na=False)
-        row = table.set_index("id").loc["toy.sa_lower"]
-        assert (row.robot, row.reproduced, row.settled, row.n_users) == ("toy3", "reproduced", "yes", "60")
-        assert float(row.ci_low) == float(row.ci_high) == 1.0
-        assert paths.figure("toy_sa.png").stat().st_size > 0
-        assert len(pd.read_csv(paths.figure("toy_sa.csv"))) == len(frame)
-    finally:
-        rules.RULES.clear()
-        rules.RULES.update(saved)
+    # the claim carries its rule; none replaces a paper claim's, and the paper's table is read-only
+    paper_id = dataclasses.replace(TOY_RULE, id="sim1.final_error")
+    with pytest.raises(lasa.ConfigError, match="exists already"):
+        lasa.Claim("sim1.final_error", "c", "sim1", "p", "m", "yes", "", "toy3", rule=paper_id)
+    with pytest.raises(TypeError):
+        rules.RULES["toy.sa_lower"] = TOY_RULE  # type: ignore[index]
+    assert "toy.sa_lower" not in rules.RULES
+    assert TOY_RULE.verdict({"share_lower": 2 / 3}) == "partly"
+    reading = lasa.Claim("toy.sa_lower@point", "c", "toy", "p", "m", "yes", "", "toy3", rule=TOY_RULE)
+    assert reading.judged_by is TOY_RULE
+    # hand-made numbers: 20 users per cup, LA+SA well below LA at all three
+    rng = np.random.default_rng(0)
+    rows = [
+        {"robot": "toy3", "seed": u, "goal": g, "method": m, "final_error": mean + rng.normal(0, 0.02)}
+        for u in range(60)
+        for g in [u % 3]
+        for m, mean in (("LA", 0.4), ("LA+SA", 0.1))
+    ]
+    frame = pd.DataFrame(rows)
+    claims = verdicts.assess(_toy_claims, frame, n_boot=200, seed=0)
+    figure = types.SimpleNamespace(NAME="toy_sa", COLUMNS=tuple(frame.columns), plot=_plot)
+    paths = lasa.Paths.of(tmp_path / "build", tmp_path / "figures")
+    lasa.publish(figure, frame, paths, claims, task=task)
+    table = pd.read_csv(paths.claims, dtype=str, keep_default_na=False)
+    row = table.set_index("id").loc["toy.sa_lower"]
+    assert (row.robot, row.reproduced, row.settled, row.n_users) == ("toy3", "reproduced", "yes", "60")
+    assert float(row.ci_low) == float(row.ci_high) == 1.0
+    assert paths.figure("toy_sa.png").stat().st_size > 0
+    assert len(pd.read_csv(paths.figure("toy_sa.csv"))) == len(frame)
 
 
 # --- 4. a decoder ----------------------------------------------------------------------------
