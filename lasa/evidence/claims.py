@@ -68,26 +68,9 @@ SUMMARY_MARKERS = (
     "<!-- summary:end -->",
 )
 
-CLAIM_COLUMNS = (
-    "id",
-    "claim",
-    "figure",
-    "robot",
-    "assistance",
-    "paper",
-    "measured",
-    "ci_low",
-    "ci_high",
-    "reproduced",
-    "settled",
-    "paper_in_ci",
-    "direction",
-    "paper_numbers",
-    "effect",
-    "number",
-    "n_users",
-    "fragile",
-    "note",
+CLAIM_COLUMNS = tuple(
+    "id claim figure robot assistance paper measured ci_low ci_high reproduced settled paper_in_ci "
+    "direction paper_numbers effect number n_users fragile note".split()
 )
 VERDICTS = ("yes", "partly", "no", UNDECIDED, NOT_TESTABLE)  # what Claim.reproduced holds
 ROBOTS = ("planar5", "panda")  # the verdict table's robot columns, in order

@@ -41,25 +41,9 @@ __all__ = [
 
 NAME = "latent_property"
 KEY = "source"  # the CSV's rows are replaced per source (one notebook run's decoders)
-COLUMNS = (
-    "source",
-    "robot",
-    "task",
-    "decoder",
-    "context",
-    "goal",
-    "z1",
-    "z2",
-    "drift",
-    "stays",
-    "theta",
-    "stroke",
-    "reached",
-    "distance",
-    "start",
-    "condition",
-    "target",
-    "exit_time",
+COLUMNS = tuple(
+    "source robot task decoder context goal z1 z2 drift stays theta stroke reached distance start "
+    "condition target exit_time".split()
 )
 STAY_SHARE = 0.5  # share of the ring's inputs that must stay at a goal [-]
 TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 1] [-]

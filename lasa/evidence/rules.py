@@ -111,18 +111,14 @@ _LINEAR_TEXT = (
     "two parts: the error grows linearly with the distance (slope > 0 and R^2 >= 0.9), and it "
     "lies below the no-map error at every cup; yes if both hold, partly if one"
 )
-# sim4's lines are the paper's form, least squares through the origin (y = 0.11x, y = x), with the
-# uncentred R^2 = 1 - SSE / sum(y^2); the @intercept reading fits y = ax + b with the usual R^2
+# sim4's lines: least squares through the origin (the paper's form), uncentred R^2 = 1 - SSE / sum(y^2)
 _LINEAR = (
     _q("slope", (0.0,), "slope of the line through the origin fitted to the mean error per new cup"),
     _q("r2", (0.9,), "uncentred R^2 of that line over the cups' means (@intercept: the centred one)"),
     _q("share_below", (1.0,), "share of new cups where the map's mean error is below the no-map one"),
 )
-# The paper's Fig. sim4 line, y = 0.11x with R^2 = 0.98: the paper states no tolerance, so each
-# is "in" when our interval contains it, narrow enough (both axes are normalised: a slope is unitless).
-# The widest interval that may read "in" (set after the results were seen: AFTER_RESULTS): the
-# slope's own value (a wider interval cannot tell 0.11 from no growth), and R^2's distance to a
-# perfect fit, twice (0.04: an interval within [0.96, 1] when it holds 0.98).
+# The paper's y = 0.11x, R^2 = 0.98 state no tolerance: "in" when our interval holds it and is no wider
+# than the slope itself, or than twice R^2's distance to a perfect fit (set after the results: AFTER_RESULTS)
 _LINEAR_PAPER = (
     PaperNumber("slope", 0.11, 0.0, "y = 0.11x", max_width=0.11),
     PaperNumber("r2", 0.98, 0.0, "R^2 = 0.98", max_width=0.04),
