@@ -35,7 +35,7 @@ from lasa.evidence.decision import (
     effect_word,
     word,
 )
-from lasa.evidence.findings import completion_text, finding, on_robots, short_arms, study_effect
+from lasa.evidence.findings import completion_text, finding, on_robots, short_conditions, study_effect
 from lasa.evidence.rules import RULES
 from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Values, read_values, reading_of
 
@@ -486,7 +486,7 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     if row.figure == "study":
         effect = study_effect(str(row.id), numbers)
         if row.effect == NOT_TESTABLE:
-            short = short_arms(numbers)
+            short = short_conditions(numbers)
             why = f" (completion: {completion_text(short)})" if short else f" ({_untestable_why(row)})"
             seen = f"; measured, not judged: {effect}" if effect else ""
             return f"{head}{why}, N = {row.n_users}{seen}"
@@ -656,7 +656,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
             if w == "not reproduced" and why:
                 said += f": {why.replace('; ', ', ')}"
             if w == NOT_TESTABLE:
-                short = short_arms(values.get((pc.id, robots[0]), {}))
+                short = short_conditions(values.get((pc.id, robots[0]), {}))
                 done = f"completion {completion_text(short)} within the horizon" if short else ""
                 said += f": {done or _untestable_why(rows[(pc.id, robots[0])])}"
             by_word.setdefault(w, []).append(said)

@@ -35,7 +35,7 @@ VERDICTS = ("yes", "partly", "no")  # what a rule can decide
 UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a threshold
 # the claim's test cannot run on the data (a precondition fails); never settled, the reason in its note
 NOT_TESTABLE = "not testable"
-# a settled "not reproduced" resting on a censored arm: its measure a lower bound, already worse
+# a settled "not reproduced" resting on a censored condition: its measure a lower bound, already worse
 CENSORED = "censored: lower bound"
 
 # The effect's words (Open Science Collaboration, 2015): the claim's shape as the rule reads it

@@ -14,7 +14,15 @@ from lasa.evidence.rules import COMPLETION_BAR
 from lasa.evidence.stats import format_f
 from lasa.evidence.values import Number, Numbers, Values
 
-__all__ = ["finding", "study_effect", "side_of", "on_robots", "below_bar", "short_arms", "completion_text"]
+__all__ = [
+    "finding",
+    "study_effect",
+    "side_of",
+    "on_robots",
+    "below_bar",
+    "short_conditions",
+    "completion_text",
+]
 
 _NONE: dict[str, Number] = {}
 
@@ -110,14 +118,14 @@ def below_bar(done: Iterable[tuple[str, float]]) -> list[tuple[str, float]]:
     return [(str(c), float(v)) for c, v in done if not v >= COMPLETION_BAR]
 
 
-def short_arms(numbers: Numbers) -> list[tuple[str, float]]:
+def short_conditions(numbers: Numbers) -> list[tuple[str, float]]:
     """:func:`below_bar` of a study row's ``completion.<condition>`` facts."""
     return below_bar((k.split(".", 1)[1], n.value) for k, n in numbers.items() if k.startswith("completion."))
 
 
-def completion_text(arms: Sequence[tuple[str, float]]) -> str:
+def completion_text(conditions: Sequence[tuple[str, float]]) -> str:
     """``LA 20%, LA+SA 45%``."""
-    return ", ".join(f"{c} {100 * v:.3g}%" for c, v in arms)
+    return ", ".join(f"{c} {100 * v:.3g}%" for c, v in conditions)
 
 
 def _fact(numbers: Numbers, name: str) -> float:
@@ -196,7 +204,7 @@ def _testable(numbers: Numbers) -> bool:
 def _censored(values: Values, cid: str) -> list[tuple[str, float]]:
     """(condition, share finished) of each condition below the bar, if the headline row is untestable."""
     numbers = values.get((cid, "panda"), _NONE)
-    return short_arms(numbers) if not _testable(numbers) else []
+    return short_conditions(numbers) if not _testable(numbers) else []
 
 
 def _finish(short: Sequence[tuple[str, float]]) -> str:

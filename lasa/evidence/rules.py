@@ -281,7 +281,7 @@ _PAPER = (
 )
 RULES: Mapping[str, Rule] = MappingProxyType({r.id: r for r in _PAPER})  # read-only
 
-# Rules (or readings) written after some of the results they judge had been seen.
+# Rules (or their readings) written after some of the results they judge had been seen.
 _TWO_WORDS = (
     "split into the effect (the rule, the claim's shape) and the number (the paper's sizes) after an "
     "audit had read this version's verdicts: the rule no longer reads the paper's sizes"

@@ -79,7 +79,7 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     fit = anova_lm(ols("y ~ C(sa)", data=table).fit())
     row = fit.loc["C(sa)"]
     sa, no_sa = table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
-    # the 95% interval of SA - no SA under the same reading: a pooled-variance two-sample t
+    # the 95% interval of SA - no SA read so: a pooled-variance two-sample t
     ci = scipy.stats.ttest_ind(sa, no_sa).confidence_interval()
     df = (int(round(float(row["df"]))), int(round(float(fit.loc["Residual", "df"]))))
     return _sa_result(BETWEEN_TEST, float(row["F"]), df, float(row["PR(>F)"]), n, sa, no_sa, ci)

@@ -49,7 +49,7 @@ N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval 
 MIN_USERS = 60  # [-]
 MIN_TAIL = 5  # [-]
 ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
-# The column naming a simulated user (its index: cup, preference, random stream), the unit a
+# The column naming a simulated user (its index: cup, preference, random draws), the unit a
 # bootstrap resamples; the file contracts name it "seed".
 USER = "seed"
 
