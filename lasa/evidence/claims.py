@@ -41,7 +41,6 @@ from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Va
 
 __all__ = [
     "Claim",
-    "PaperClaim",
     "PAPER_CLAIMS",
     "update_claims",
     "render_markdown",

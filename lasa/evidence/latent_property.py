@@ -28,7 +28,6 @@ __all__ = [
     "TILT_RANGE",
     "LEAVE_COUNT",
     "CONDITIONS",
-    "SWEEP_TASKS",
     "summary",
     "leave_table",
     "has_property",

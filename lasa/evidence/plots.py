@@ -29,12 +29,9 @@ from lasa.world.task import CupTask
 
 __all__ = [
     "METHOD_COLORS",
-    "CUP_COLORS",
     "GOAL_COLORS",
     "goal_colors",
     "belief_cmap",
-    "TRAIN_COLOR",
-    "VAL_COLOR",
     "draw_scene",
     "frame_around",
     "method_lineplot",

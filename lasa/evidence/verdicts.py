@@ -28,7 +28,6 @@ __all__ = [
     "NO_ASSISTANCE",
     "N_BOOT",
     "MIN_USERS",
-    "MIN_TAIL",
     "Design",
     "Sequential",
     "assess",
