@@ -10,6 +10,7 @@ member a row ``<id>@<member>``. The design and its guard: ``docs/method-notes.md
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -346,20 +347,15 @@ def sequential(
     """
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
+    judge = functools.partial(
+        assess, evaluate, n_boot=n_boot, seed=seed, level=design.level, fast=fast, min_users=min_users
+    )
     frame = run_block(0, assistance).assign(look=0)
     log = []
     for look, size in enumerate(design.sizes):
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
-        head = assess(
-            evaluate,
-            member_frame(frame, default),
-            n_boot,
-            seed,
-            level=design.level,
-            fast=fast,
-            min_users=min_users,
-        )
+        head = judge(member_frame(frame, default))
         log += [
             {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
             for c in head
@@ -369,13 +365,7 @@ def sequential(
         if all(c.settled for c in head if "@" not in c.id):
             break
     first = frame[frame.look == 0]
-    others = {
-        m: assess(
-            evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast, min_users=min_users
-        )
-        for m in assistance
-        if m != default
-    }
+    others = {m: judge(member_frame(first, m)) for m in assistance if m != default}
     rows: list[Claim] = []
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
