@@ -40,7 +40,7 @@ _EXPORTS = {
     "ConfigError": "lasa.base.errors",
     "DamagedLogError": "lasa.base.errors",
     "EmptySelectionError": "lasa.base.errors",
-    "ContextMap": "lasa.method.newgoals",
+    "ContextMap": "lasa.method.context_map",
     "ControlConfig": "lasa.base.config",
     "CupTask": "lasa.world.task",
     "DecoderConfig": "lasa.method.decoder",
@@ -51,7 +51,7 @@ _EXPORTS = {
     "LasaError": "lasa.base.errors",
     "LatentActionModel": "lasa.method.decoder",
     "METHODS": "lasa.method.step",
-    "MappedDecoder": "lasa.method.newgoals",
+    "MappedDecoder": "lasa.method.context_map",
     "Paths": "lasa.base.paths",
     "ROBOTS": "lasa.world.robot",
     "Robot": "lasa.world.robot",
@@ -61,7 +61,7 @@ _EXPORTS = {
     "Trajectories": "lasa.people.rollout",
     "UserPopulation": "lasa.people.users",
     "collect_demonstrations": "lasa.people.demos",
-    "extend_task": "lasa.method.newgoals",
+    "extend_task": "lasa.method.context_map",
     "load_checkpoint": "lasa.method.decoder",
     "load_demonstrations": "lasa.method.dataset",
     "load_robot": "lasa.world.robot",
@@ -92,6 +92,7 @@ if TYPE_CHECKING:
     from lasa.evidence.claims import Claim, update_claims
     from lasa.evidence.publish import publish
     from lasa.method.assistance import register_member
+    from lasa.method.context_map import ContextMap, MappedDecoder, extend_task
     from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
     from lasa.method.decoder import (
         ActionDecoder,
@@ -101,7 +102,6 @@ if TYPE_CHECKING:
         save_checkpoint,
     )
     from lasa.method.episodes import Runner
-    from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
     from lasa.method.step import METHODS, Assist, shared_autonomy_step
     from lasa.method.train import TrainConfig, train_decoder
     from lasa.people.demos import DemoConfig, collect_demonstrations

@@ -68,7 +68,7 @@ class ActionDecoder(Protocol):
     """What Algorithm 1 needs of a decoder: phi(z, s, b) on numpy arrays, and its shape.
 
     :class:`LatentActionModel` is one; an extension that changes what the decoder sees
-    (the context map of :mod:`lasa.method.newgoals`) wraps one, so the rollout never needs to
+    (the context map of :mod:`lasa.method.context_map`) wraps one, so the rollout never needs to
     know about it.
     """
 

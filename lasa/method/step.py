@@ -13,7 +13,7 @@ Every loop of the package advances with :func:`advance`, through the episode run
 
 The decoder is anything that follows :class:`lasa.method.decoder.ActionDecoder`: the trained
 model, or a wrapper of it such as the context map of new goals
-(:class:`lasa.method.newgoals.MappedDecoder`), which this module does not need to know about.
+(:class:`lasa.method.context_map.MappedDecoder`), which this module does not need to know about.
 """
 
 from __future__ import annotations
@@ -251,7 +251,7 @@ def check_decoder(decoder: ActionDecoder, task: GoalTask) -> None:
     if decoder.n_goals != task.n_goals:
         raise ConfigError(
             f"decoder reads a belief over {decoder.n_goals} goals, the task has {task.n_goals}; "
-            "for a task grown by a new goal, wrap the decoder in lasa.method.newgoals.MappedDecoder"
+            "for a task grown by a new goal, wrap the decoder in lasa.method.context_map.MappedDecoder"
         )
 
 

@@ -12,7 +12,7 @@ from lasa.base.errors import ConfigError, IKError
 from lasa.experiments import sim4
 from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.blend import assistance
-from lasa.method.newgoals import (
+from lasa.method.context_map import (
     JOINT_KINDS,
     ContextMap,
     MappedDecoder,
