@@ -55,7 +55,7 @@ _EXPORTS = {
     "Paths": "lasa.base.paths",
     "ROBOTS": "lasa.world.robot",
     "Robot": "lasa.world.robot",
-    "Runner": "lasa.method.episodes",
+    "Runner": "lasa.method.runner",
     "RobotSpec": "lasa.world.robot",
     "TrainConfig": "lasa.method.train",
     "Trajectories": "lasa.people.rollout",
@@ -101,7 +101,7 @@ if TYPE_CHECKING:
         load_checkpoint,
         save_checkpoint,
     )
-    from lasa.method.episodes import Runner
+    from lasa.method.runner import Runner
     from lasa.method.step import METHODS, Assist, shared_autonomy_step
     from lasa.method.train import TrainConfig, train_decoder
     from lasa.people.demos import DemoConfig, collect_demonstrations

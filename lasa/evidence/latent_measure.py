@@ -27,7 +27,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.latent_property import COLUMNS, CONDITIONS
 from lasa.method.belief import confident_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Runner, held_input
+from lasa.method.runner import Runner, held_input
 from lasa.method.step import Assist
 from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
@@ -186,7 +186,7 @@ def leave_paths(
 ) -> np.ndarray:
     """States reached by holding input ``z_values[i]`` from ``starts[i]``, the belief updated online.
 
-    Each row runs the one step of Algorithm 1 (:class:`lasa.method.episodes.Runner`, the stick
+    Each row runs the one step of Algorithm 1 (:class:`lasa.method.runner.Runner`, the stick
     at rest commanding nothing) with its own blend weight ``alphas[i]`` and the control's
     assistance member; all rows advance together, one decoder call per step.
 

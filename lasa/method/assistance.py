@@ -261,7 +261,7 @@ def register_member(name: str, member: Member, *, replace: bool = False) -> None
 
     After it, ``ControlConfig(assistance=name)`` is valid and every assisted step under it
     (:func:`lasa.method.step.shared_autonomy_step`, :func:`lasa.people.rollout.rollout`, the
-    :class:`lasa.method.episodes.Runner`) calls ``member``, as :func:`assist` calls the
+    :class:`lasa.method.runner.Runner`) calls ``member``, as :func:`assist` calls the
     built-in ones: ``member(belief, state, goals, goal_sets, dt, action_scale)`` with the shapes of
     :func:`assist`, returning a_r (U, n) and the blend weight w (U,) in [0, 1]. The figures'
     default members stay the four of :data:`ASSISTANCE`.

@@ -1,7 +1,7 @@
 """The one step of Algorithm 1, batched: joystick input in, commanded state out.
 
 Every loop of the package advances with :func:`advance`, through the episode runner
-(:class:`lasa.method.episodes.Runner`). At each step:
+(:class:`lasa.method.runner.Runner`). At each step:
 
 1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a
    chooser that weighs many candidates decodes them in one call, :func:`decode_candidates`);
@@ -194,7 +194,7 @@ def shared_autonomy_step(
 
     Decode z (a_h = phi(z, s, b)), blend with the assistance (Eqs. M1-M2), update the belief
     (Alg. 1, line 8), take the safe step: the episode runner's step for a held input
-    (:func:`lasa.method.episodes.held_input`). A non-finite input decodes to no human action;
+    (:func:`lasa.method.runner.held_input`). A non-finite input decodes to no human action;
     the assistance still applies. ``rest`` is what the stick at rest (z = 0) commands:
     ``"decode"``, phi(0, s, b) (sims 1-4, Eq. S1); ``"zero"``, no human action (live
     teleoperation, the study's participants, through :func:`human_action`). Why: ``docs/method-notes.md``.
