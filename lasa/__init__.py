@@ -52,6 +52,7 @@ _EXPORTS = {
     "LatentActionModel": "lasa.method.decoder",
     "METHODS": "lasa.method.step",
     "MappedDecoder": "lasa.method.context_map",
+    "Member": "lasa.method.assistance",
     "Paths": "lasa.base.paths",
     "ROBOTS": "lasa.world.robot",
     "Robot": "lasa.world.robot",
@@ -67,7 +68,6 @@ _EXPORTS = {
     "load_robot": "lasa.world.robot",
     "make_cup_task": "lasa.world.task",
     "publish": "lasa.evidence.publish",
-    "register_member": "lasa.method.assistance",
     "register_robot": "lasa.world.robot",
     "rollout": "lasa.people.rollout",
     "save_checkpoint": "lasa.method.decoder",
@@ -91,7 +91,7 @@ if TYPE_CHECKING:
     from lasa.base.paths import Paths
     from lasa.evidence.claims import Claim, update_claims
     from lasa.evidence.publish import publish
-    from lasa.method.assistance import register_member
+    from lasa.method.assistance import Member
     from lasa.method.context_map import ContextMap, MappedDecoder, extend_task
     from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
     from lasa.method.decoder import (
@@ -150,6 +150,7 @@ __all__ = [
     "LatentActionModel",
     "METHODS",
     "MappedDecoder",
+    "Member",
     "Paths",
     "ROBOTS",
     "Robot",
@@ -165,7 +166,6 @@ __all__ = [
     "load_robot",
     "make_cup_task",
     "publish",
-    "register_member",
     "register_robot",
     "rollout",
     "save_checkpoint",

@@ -192,15 +192,11 @@ def _why(annotation: Any) -> str:
     return f": {reasons[0]}" if reasons else ""
 
 
-# The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
-# ASSISTANCE are the figures' default members; hindsight_point (hindsight with one target per goal)
-# is a built-in reading that only the study runs by default.
 LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)
+# The built-in members' names (lasa.method.assistance.MEMBERS): ASSISTANCE are the figures' default
+# members; hindsight_point (hindsight with one target per goal) only the study runs by default.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
-# Members added from outside the package (lasa.method.assistance.register_member, the only writer),
-# which ControlConfig accepts too; the figures' default members stay ASSISTANCE.
-REGISTERED_ASSISTANCE: list[str] = []
 # The assistance label of rows and episodes with none (alpha = 0: LA, R), named once.
 NO_ASSISTANCE = "none"
 
@@ -302,9 +298,8 @@ class ControlConfig:
     alpha: UnitInterval = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: AtLeastTwo = 21  # joystick candidates per latent axis the simulated user weighs [-]
     likelihood: str = "preferences"  # belief model: "preferences" (regret to preference sets) or "goal"
-    assistance: str = (
-        "point"  # the shared-autonomy reading (lasa.method.assistance): Eq. M2 towards g = s*(g, 0.5)
-    )
+    # the built-in shared-autonomy member (lasa.method.assistance.MEMBERS): Eq. M2 towards g = s*(g, 0.5)
+    assistance: str = "point"
 
     @property
     def likelihood_step(self) -> float | None:
@@ -315,7 +310,7 @@ class ControlConfig:
         object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
         validate(self)
         check_choice("likelihood", self.likelihood, LIKELIHOODS)
-        check_choice("assistance", self.assistance, (*BUILT_IN_ASSISTANCE, *REGISTERED_ASSISTANCE))
+        check_choice("assistance", self.assistance, BUILT_IN_ASSISTANCE)
 
 
 def to_dict(config: Any) -> dict[str, Any]:

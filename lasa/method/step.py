@@ -26,7 +26,7 @@ from lasa.base import conditions
 from lasa.base.conditions import METHODS
 from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import assist
+from lasa.method.assistance import Member, assist
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
 from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
@@ -85,8 +85,8 @@ class Assist:
         task: The goal task (goals, preference sets, joint limits).
         control: Control-loop units (dt, speed bound, belief model, the default member).
         alpha: The blend weight of each row, (U,) (0: latent actions alone).
-        assistance: Each row's member of :mod:`lasa.method.assistance`, (U,); ``None``: every row
-            runs ``control.assistance``.
+        assistance: Each row's member, a :class:`lasa.method.assistance.Member` or a built-in one's
+            name, (U,); ``None``: every row runs ``control.assistance``.
         goal_sets: The belief's targets (:func:`lasa.method.belief.belief_targets`); ``None``:
             those of ``control.likelihood``.
         only_blended: Compute a_r only in the rows that blend it in (alpha > 0), and report a
@@ -110,12 +110,12 @@ class Assist:
         if self.goal_sets is None:
             object.__setattr__(self, "goal_sets", belief_targets(self.task, self.control.likelihood))
         if self.assistance is not None:
-            names = np.asarray(self.assistance, dtype=str)
-            if names.shape != self.alpha.shape:
+            members = np.asarray(self.assistance, dtype=object)  # names or Member objects
+            if members.shape != self.alpha.shape:
                 raise ConfigError(
-                    f"assistance must name one member per row, shape {self.alpha.shape}, got {names.shape}"
+                    f"assistance must name one member per row, shape {self.alpha.shape}, got {members.shape}"
                 )
-            object.__setattr__(self, "assistance", names)  # each name is checked where it runs (assist)
+            object.__setattr__(self, "assistance", members)  # each is checked where it runs (assist)
 
     def rows(self, idx: np.ndarray) -> Assist:
         """The same for rows ``idx`` of the batch."""
@@ -189,6 +189,7 @@ def shared_autonomy_step(
     z: np.ndarray,
     alpha: float | np.ndarray,
     rest: str = "decode",
+    assistance: str | Member | None = None,
 ) -> StepResult:
     """One step of Algorithm 1 from joystick input to commanded state, batched over users.
 
@@ -208,6 +209,8 @@ def shared_autonomy_step(
         z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
         alpha: Blend weight, scalar or shape (U,).
         rest: ``"decode"`` or ``"zero"``.
+        assistance: The member for every row (a :class:`lasa.method.assistance.Member` or a
+            built-in one's name); default ``control.assistance``.
     """
     check_decoder(decoder, task)
     check_choice("rest", rest, REST)
@@ -215,7 +218,8 @@ def shared_autonomy_step(
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
-    return advance(Assist(task, control, alpha_arr), state, log_belief, a_h)
+    members = None if assistance is None else np.full(len(state), assistance, dtype=object)
+    return advance(Assist(task, control, alpha_arr, members), state, log_belief, a_h)
 
 
 def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
