@@ -36,14 +36,8 @@ CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x
 
 @dataclasses.dataclass(frozen=True)
 class Condition:
-    """A condition, parsed.
-
-    Attributes:
-        name: Its name, one of :data:`ALL`.
-        interface: ``"R"`` (Retargeting) or ``"LA"`` (latent actions).
-        assisted: Whether shared autonomy blends in (alpha > 0).
-        decoder: ``"base"`` or ``"entropy"`` for latent actions, ``None`` for Retargeting.
-    """
+    """A condition, parsed: its name, interface (``"R"``, ``"LA"``), whether it is assisted
+    (alpha > 0), and its decoder (``"base"``, ``"entropy"``, ``None`` for Retargeting)."""
 
     name: str
     interface: str
@@ -62,16 +56,8 @@ ALL = tuple(_TABLE)  # every condition a person can drive (the table's order)
 
 
 def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
-    """The :class:`Condition` a name stands for.
-
-    Args:
-        name: A condition's or method's name.
-        allowed: The names this caller accepts (:data:`METHODS`, :data:`CONDITIONS` or :data:`ALL`).
-        what: What the name is called in the error (``"condition"`` or ``"method"``).
-
-    Raises:
-        ConfigError: naming the value and the allowed names.
-    """
+    """The :class:`Condition` a name stands for; ConfigError if it is not ``allowed`` (the error
+    calls it ``what``)."""
     if not isinstance(name, str) or name not in allowed:
         raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(map(repr, allowed))}")
     return _TABLE[name]
@@ -83,11 +69,8 @@ def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str 
 
 
 def williams_square(n: int) -> np.ndarray:
-    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n).
-
-    Every condition appears once in every position, and follows every other condition
-    exactly once, so first-order carry-over effects are balanced.
-    """
+    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n): each
+    appears once in every position and follows every other once (carry-over balanced)."""
     if n < 2 or n % 2:
         raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
     first = [0]

@@ -1,11 +1,8 @@
 """The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop.
 
-Every loop of the package runs here: the simulated users of sims 1-4, the study's simulated
-participants, the property's held inputs, teleoperation and the web study. The :class:`Runner`
-owns what every loop shares, the state s, the belief b, the step (:func:`lasa.method.step.advance`:
-assistance, blend, belief update, safe transition), the record and stopping. What differs between
-the loops is a *chooser*: given the running episodes at step t (:class:`Now`), it returns their
-human actions a_h, decoded from a joystick input (a trained decoder, or Retargeting's IK).
+Every loop of the package (sims, study participants, teleoperation, the web study) runs a
+:class:`Runner`, which owns s, b, the step (:func:`lasa.method.step.advance`), the record and
+stopping; a loop differs by its *chooser*: the running episodes' human actions a_h at step t.
 """
 
 from __future__ import annotations
@@ -48,26 +45,14 @@ Observer = Callable[[int, "Runner"], np.ndarray]  # after step t's state: the ep
 
 
 def check_horizon(horizon: int) -> None:
-    """A run's horizon is a positive whole number of steps.
-
-    Raises:
-        ConfigError: naming the value.
-    """
+    """A run's horizon is a positive whole number of steps, else ConfigError."""
     if int(horizon) != horizon or horizon < 1:
         raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
 
 
 def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> Chooser:
-    """The chooser that holds input ``z[row]`` for each episode: a_h = phi(z, s, b).
-
-    ``rest`` is the stick-at-rest convention of :func:`lasa.method.step.human_action`. A live
-    device is this chooser for one episode and one step, with the stick's current input.
-
-    Args:
-        decoder: The decoder phi.
-        z: Each episode's input, (U, d).
-        rest: ``"decode"`` (phi(0, s, b)) or ``"zero"`` (no human action at rest).
-    """
+    """The chooser that holds input ``z[row]`` (U, d) for each episode: a_h = phi(z, s, b), under
+    the stick-at-rest convention ``rest`` (:func:`lasa.method.step.human_action`)."""
     z = np.asarray(z, dtype=float)
 
     def choose(now: Now) -> np.ndarray:
@@ -134,11 +119,8 @@ class Runner:
         return belief(self.log_belief)
 
     def step(self, choose: Chooser) -> StepResult:
-        """One step of the running episodes: their chooser's a_h, then Algorithm 1's step.
-
-        Returns:
-            The step of the running rows (in ``np.flatnonzero(running)`` order).
-        """
+        """One step of the running episodes (in ``np.flatnonzero(running)`` order): their
+        chooser's a_h, then Algorithm 1's step."""
         rows = np.flatnonzero(self.running)
         return self._step(choose, rows, belief(self.log_belief[rows]))
 
