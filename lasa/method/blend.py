@@ -36,12 +36,7 @@ def sanitize(action: np.ndarray) -> np.ndarray:
 
 
 def safe_step(
-    state: np.ndarray,
-    action: np.ndarray,
-    dt: float,
-    lower: np.ndarray,
-    upper: np.ndarray,
-    max_speed: float,
+    state: np.ndarray, action: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray, max_speed: float
 ) -> np.ndarray:
     """The transition s' = s + dt a, safe: a non-finite action row is zero, each joint velocity
     clipped to [-max_speed, max_speed] [rad/s], the next state to the joint limits [lower, upper].

@@ -1,19 +1,8 @@
 """The one step of Algorithm 1, batched: joystick input in, commanded state out.
 
-Every loop of the package advances with :func:`advance`, through the episode runner
-(:class:`lasa.method.runner.Runner`). At each step:
-
-1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a
-   chooser that weighs many candidates decodes them in one call, :func:`decode_candidates`);
-2. the robot's assistance a_r (Eq. M2, or another member of :mod:`lasa.method.assistance`
-   named by ``ControlConfig.assistance``) is blended with a_h (Eq. M1) using each
-   user's alpha: alpha = 0 is the method ``LA``, alpha > 0 is ``LA+SA``;
-3. the belief is updated with a_h (Alg. 1, line 8);
-4. the robot takes the safe step s' = clip(s + dt a).
-
-The decoder is anything that follows :class:`lasa.method.decoder.ActionDecoder`: the trained
-model, or a wrapper of it such as the context map of new goals
-(:class:`lasa.method.context_map.MappedDecoder`), which this module does not need to know about.
+Every loop advances with :func:`advance` (through :class:`lasa.method.runner.Runner`): a_h =
+phi(z, s, b) decoded, the assistance a_r of a member (:mod:`lasa.method.assistance`) blended in by
+Eq. M1 with each row's alpha (0: ``LA``), the belief updated (Alg. 1, line 8), the safe step taken.
 """
 
 from __future__ import annotations
@@ -59,16 +48,9 @@ def method_alpha(method: str, control: ControlConfig) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class StepResult:
-    """One step of Algorithm 1 for a batch of users.
-
-    Attributes:
-        state: s^{t+1}, shape (U, n) [rad].
-        log_belief: log b^{t+1}, shape (U, G).
-        human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
-        action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
-        robot_action: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s]; zero
-            in a row whose alpha is 0 if its :class:`Assist` skips those (``only_blended``).
-    """
+    """One step of Algorithm 1 for a batch of users: s^{t+1} (U, n) [rad], log b^{t+1} (U, G),
+    a_h^t (zero where the input was not finite), the command a^t before the safety clip, and
+    a_r^t times its blend weight (zero where ``only_blended`` skips it) (U, n) [rad/s]."""
 
     state: np.ndarray
     log_belief: np.ndarray
@@ -87,15 +69,10 @@ class Assist:
         alpha: The blend weight of each row, (U,) (0: latent actions alone).
         assistance: Each row's member, a :class:`lasa.method.assistance.Member` or a built-in one's
             name, (U,); ``None``: every row runs ``control.assistance``.
-        goal_sets: The belief's targets (:func:`lasa.method.belief.belief_targets`); ``None``:
-            those of ``control.likelihood``.
-        only_blended: Compute a_r only in the rows that blend it in (alpha > 0), and report a
-            zero ``robot_action`` in the others; by default every row computes it (the live log
-            records what the assistance would have done under LA too). The step is the same to the
-            bit for a member that computes a row's a_r from that row alone, as every built-in one
-            does but ``point``, whose Eq. M2 is one matrix product over the batch and rounds by its
-            size. The study's simulated participants ask for it (:mod:`lasa.people.loop`,
-            :mod:`lasa.people.planning`): many of their rows run without assistance.
+        goal_sets: The belief's targets; ``None``: those of ``control.likelihood``.
+        only_blended: Compute a_r only in the rows with alpha > 0 (else every row, as the live log
+            records); bitwise the same for a member whose rows are independent (all built-in ones
+            but ``point``, one matrix product over the batch).
     """
 
     task: GoalTask
@@ -126,14 +103,9 @@ class Assist:
 def advance(
     assist: Assist, state: np.ndarray, log_b: np.ndarray, a_h: np.ndarray, b: np.ndarray | None = None
 ) -> StepResult:
-    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step.
-
-    Args:
-        assist: The batch's fixed parts (one row per episode).
-        state: s^t, (U, n). log_b: log b^t, (U, G).
-        a_h: The decoded human actions, (U, n) (a row that is not finite commands nothing).
-        b: ``belief(log_b)``, if the caller has it already.
-    """
+    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step,
+    from s^t (U, n), log b^t (U, G) and a_h (U, n) (a non-finite row commands nothing); ``b`` is
+    ``belief(log_b)`` if the caller has it."""
     task, control = assist.task, assist.control
     a_h = sanitize(a_h)
     if b is None:
@@ -160,11 +132,8 @@ def advance(
 def _assistance(
     task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, assistance: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """a_r and the blend weight per row: ``control.assistance``, or each row's member.
-
-    The members' goal sets are the task's preference sets (``task.preference_sets``):
-    the cups' grasp curves, or the eating task's whole stroke surfaces.
-    """
+    """a_r and the blend weight per row: ``control.assistance``, or each row's member, towards the
+    task's preference sets."""
     goal_sets = task.preference_sets
     if assistance is None:
         return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
@@ -191,14 +160,8 @@ def shared_autonomy_step(
     rest: str = "decode",
     assistance: str | Member | None = None,
 ) -> StepResult:
-    """One step of Algorithm 1 from joystick input to commanded state, batched over users.
-
-    Decode z (a_h = phi(z, s, b)), blend with the assistance (Eqs. M1-M2), update the belief
-    (Alg. 1, line 8), take the safe step: the episode runner's step for a held input
-    (:func:`lasa.method.runner.held_input`). A non-finite input decodes to no human action;
-    the assistance still applies. ``rest`` is what the stick at rest (z = 0) commands:
-    ``"decode"``, phi(0, s, b) (sims 1-4, Eq. S1); ``"zero"``, no human action (live
-    teleoperation, the study's participants, through :func:`human_action`). Why: ``docs/method-notes.md``.
+    """One step of Algorithm 1 from joystick input to commanded state, batched over users: the
+    runner's step for a held input (:func:`lasa.method.runner.held_input`).
 
     Args:
         decoder: The decoder phi (a trained model or a wrapper, e.g. a ``MappedDecoder``).
@@ -206,9 +169,9 @@ def shared_autonomy_step(
         control: Control-loop units.
         state: s^t, shape (U, n).
         log_belief: log b^t, shape (U, G).
-        z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
+        z: Joystick inputs, shape (U, d); a non-finite one decodes to no human action.
         alpha: Blend weight, scalar or shape (U,).
-        rest: ``"decode"`` or ``"zero"``.
+        rest: What the stick at rest commands (:func:`human_action`).
         assistance: The member for every row (a :class:`lasa.method.assistance.Member` or a
             built-in one's name); default ``control.assistance``.
     """
@@ -225,16 +188,9 @@ def shared_autonomy_step(
 def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
     """Latent actions' a_h from the decoded phi(z, s, b), under the stick-at-rest convention.
 
-    A row whose input is not finite commands nothing; with ``rest="zero"`` neither does a
-    stick at rest (z = 0); with ``rest="decode"`` the rest position means phi(0, s, b). The
-    one place the convention is applied: :func:`shared_autonomy_step` (sims 1-4's reference
-    step, teleop, the benchmark) and the study's participants, who decode their candidates
-    themselves (:func:`lasa.people.participants.simulate`), both call it.
-
-    Args:
-        decoded: phi(z, s, b) for each row, shape (U, n) [rad/s].
-        z: The inputs, shape (U, d).
-        rest: ``"decode"`` or ``"zero"``.
+    A row whose input z (U, d) is not finite commands nothing; a stick at rest (z = 0) commands
+    phi(0, s, b) under ``rest="decode"`` (sims 1-4, Eq. S1), nothing under ``"zero"`` (teleop, the
+    study). Why: ``docs/method-notes.md``.
     """
     check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
@@ -245,11 +201,7 @@ def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
 
 
 def check_decoder(decoder: ActionDecoder, task: GoalTask) -> None:
-    """The decoder must act in the task's robot and read a belief over the task's goals.
-
-    Raises:
-        ConfigError: naming the mismatch.
-    """
+    """The decoder must act in the task's robot and read a belief over its goals, else ConfigError."""
     if decoder.robot != task.robot.name:
         raise ConfigError(f"decoder was trained for {decoder.robot!r}, the task is for {task.robot.name!r}")
     if decoder.n_goals != task.n_goals:
@@ -262,17 +214,7 @@ def check_decoder(decoder: ActionDecoder, task: GoalTask) -> None:
 def decode_candidates(
     decoder: ActionDecoder, z_grid: np.ndarray, state: np.ndarray, b: np.ndarray
 ) -> np.ndarray:
-    """phi(z, s, b) for every user and every candidate, in one decoder call.
-
-    Args:
-        decoder: The decoder.
-        z_grid: Candidates, shape (K, d).
-        state: States, shape (U, n).
-        b: Beliefs, shape (U, G).
-
-    Returns:
-        Decoded actions, shape (U, K, n), float64.
-    """
+    """phi(z, s, b) for every user (s (U, n), b (U, G)) and candidate z (K, d) in one call, (U, K, n)."""
     return decoder.decode_numpy(z_grid[None], state[:, None], b[:, None])
 
 
