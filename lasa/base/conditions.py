@@ -1,23 +1,9 @@
 """The conditions and methods, named once and parsed in one place.
 
-A condition's name says three things: the **interface** that turns the stick into a human
-action (``R``, Retargeting: a twist in one of three modes, by IK; ``LA``, latent actions:
-a_h = phi(z, s, b)), whether shared autonomy is **assisted** (``+SA``: blended by Eq. M1 with
-the robot's assistance; else alpha = 0), and which **decoder** latent actions use (``base``,
-trained on reconstruction alone; ``entropy``, with the entropy term of Eq. T6: ``+Entropy``).
-
-=================  =========  ========  =======  =====================================
-name               interface  assisted  decoder  used by
-=================  =========  ========  =======  =====================================
-``R``              R          no        --       the study (Sec. VI), teleop
-``R+SA``           R          yes       --       the study, teleop
-``LA``             LA         no        base     sims 1-4 (a method), the study, teleop
-``LA+SA``          LA         yes       base     sims 1-4, the study, teleop
-``LA+SA+Entropy``  LA         yes       entropy  sims 1-4, teleop (the cups)
-=================  =========  ========  =======  =====================================
-
-The simulations call the three latent-action conditions *methods* (:data:`METHODS`), the
-study its 2x2 design *conditions* (:data:`CONDITIONS`); :func:`parse` reads any of them.
+A name gives the **interface** (``R``, Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)),
+whether it is **assisted** (``+SA``, Eq. M1; else alpha = 0) and the **decoder** (``base``, or
+``entropy`` with Eq. T6's term: ``+Entropy``). The sims call the latent-action ones *methods*
+(:data:`METHODS`), the study its 2x2 design *conditions* (:data:`CONDITIONS`).
 """
 
 from __future__ import annotations

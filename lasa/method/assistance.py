@@ -14,6 +14,7 @@ from types import MappingProxyType
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+from numpy import ndarray
 
 from lasa.base.config import ASSISTANCE, BUILT_IN_ASSISTANCE
 from lasa.base.errors import ConfigError
@@ -42,13 +43,13 @@ class Member(Protocol):
 
     def __call__(
         self,
-        belief: np.ndarray,
-        state: np.ndarray,
-        goals: np.ndarray,
-        goal_sets: np.ndarray,
+        belief: ndarray,
+        state: ndarray,
+        goals: ndarray,
+        goal_sets: ndarray,
         dt: float,
         action_scale: float,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[ndarray, ndarray]:
         """a_r (U, n) [rad/s] and the blend weight w (U,) in [0, 1].
 
         Args:
@@ -63,18 +64,13 @@ class Member(Protocol):
 
 
 def point(
-    belief: np.ndarray,
-    state: np.ndarray,
-    goals: np.ndarray,
-    goal_sets: np.ndarray,
-    dt: float,
-    action_scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
+    belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
+) -> tuple[ndarray, ndarray]:
     """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (Sec. III); w = 1."""
     return eq_m2(belief, goals, state), np.ones(len(state))
 
 
-def nearest_grasps(state: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:
+def nearest_grasps(state: ndarray, goal_sets: ndarray) -> ndarray:
     r"""The point of each goal's grasp polyline nearest to each state, shape (U, G, n).
 
     Candidate segments come from the squared distances in expanded form (two matrix products);
@@ -100,7 +96,7 @@ def nearest_grasps(state: np.ndarray, goal_sets: np.ndarray) -> np.ndarray:
     return closest[first].reshape(len(state), a.shape[0], -1)
 
 
-def _candidates(state: np.ndarray, a: np.ndarray, ab: np.ndarray, den: np.ndarray) -> np.ndarray:
+def _candidates(state: ndarray, a: ndarray, ab: ndarray, den: ndarray) -> ndarray:
     """Segments (U, G, K-1) whose squared distance, in expanded form, is within a margin of the
     least; the margin, 1e-12 of the squares' scale, is thousands of times that form's rounding."""
     n_goals, n_seg, n = ab.shape
@@ -115,13 +111,8 @@ def _candidates(state: np.ndarray, a: np.ndarray, ab: np.ndarray, den: np.ndarra
 
 
 def grasp_set(
-    belief: np.ndarray,
-    state: np.ndarray,
-    goals: np.ndarray,
-    goal_sets: np.ndarray,
-    dt: float,
-    action_scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
+    belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
+) -> tuple[ndarray, ndarray]:
     """``grasp_set``: Eq. M2 towards the nearest grasp of each goal, a_r = sum_g b(g) (c_g(s) - s).
 
     c_g(s) is the point of goal g's grasp curve nearest to s (:func:`nearest_grasps`): any grasp
@@ -132,13 +123,8 @@ def grasp_set(
 
 
 def arbitrated(
-    belief: np.ndarray,
-    state: np.ndarray,
-    goals: np.ndarray,
-    goal_sets: np.ndarray,
-    dt: float,
-    action_scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
+    belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
+) -> tuple[ndarray, ndarray]:
     """``arbitrated``: policy blending with confidence-based arbitration (Dragan & Srinivasa 2013).
 
     a_r = g_hat - s towards the likeliest goal g_hat = argmax_g b(g), with the linear arbitration
@@ -150,7 +136,7 @@ def arbitrated(
     return goals[best] - state, weight
 
 
-def hindsight_value(state: np.ndarray, goal_sets: np.ndarray, delta: float) -> np.ndarray:
+def hindsight_value(state: ndarray, goal_sets: ndarray, delta: float) -> ndarray:
     """V_g(s): each goal's hindsight cost-to-go, the Huber distance to its nearest target, (U, G).
 
     V_g(s) = min_k H(||g_k - s||) over the goal's set (:func:`nearest_grasps`), H the Huber cost
@@ -162,8 +148,8 @@ def hindsight_value(state: np.ndarray, goal_sets: np.ndarray, delta: float) -> n
 
 
 def _hindsight_pull(
-    belief: np.ndarray, state: np.ndarray, targets: np.ndarray, delta: float, action_scale: float
-) -> np.ndarray:
+    belief: ndarray, state: ndarray, targets: ndarray, delta: float, action_scale: float
+) -> ndarray:
     """sigma_h sum_g b(g) (t_g - s) / max(||t_g - s||, delta), with t_g each goal's target, (U, G, n)."""
     diff = targets - state[:, None, :]  # (U, G, n)
     dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), delta)
@@ -171,13 +157,8 @@ def _hindsight_pull(
 
 
 def hindsight(
-    belief: np.ndarray,
-    state: np.ndarray,
-    goals: np.ndarray,
-    goal_sets: np.ndarray,
-    dt: float,
-    action_scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
+    belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
+) -> tuple[ndarray, ndarray]:
     """``hindsight``: hindsight optimisation with goals as sets of targets (Javdani et al. 2018).
 
     The first-order hindsight-optimal action at the human's speed bound, with c_g(s) the nearest
@@ -193,13 +174,8 @@ def hindsight(
 
 
 def hindsight_point(
-    belief: np.ndarray,
-    state: np.ndarray,
-    goals: np.ndarray,
-    goal_sets: np.ndarray,
-    dt: float,
-    action_scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
+    belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
+) -> tuple[ndarray, ndarray]:
     """``hindsight_point``: :func:`hindsight` with one target per goal, its pose in ``goals``.
 
     a_r = sigma_h sum_g b(g) (g - s) / max(||g - s||, delta): near a goal it pulls towards that
@@ -237,13 +213,13 @@ def resolve(member: str | Member) -> Member:
 
 def assist(
     assistance: str | Member,
-    belief: np.ndarray,
-    state: np.ndarray,
-    goals: np.ndarray,
-    goal_sets: np.ndarray,
+    belief: ndarray,
+    state: ndarray,
+    goals: ndarray,
+    goal_sets: ndarray,
     dt: float,
     action_scale: float,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[ndarray, ndarray]:
     """The assistance a_r and the blend weight w of member ``assistance`` (:func:`resolve`),
     with the arguments of :class:`Member`."""
     return resolve(assistance)(belief, state, goals, goal_sets, dt, action_scale)

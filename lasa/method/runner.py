@@ -23,15 +23,8 @@ __all__ = ["Now", "Chooser", "Observer", "Record", "Runner", "held_input", "chec
 
 @dataclasses.dataclass(frozen=True)
 class Now:
-    """What a chooser sees of the running episodes at step t.
-
-    Attributes:
-        t: The step, from 0.
-        rows: Indices of the running episodes in the batch, (A,).
-        state: Their states s^t, (A, n) [rad].
-        belief: Their beliefs b^t, (A, G).
-        log_belief: log b^t, (A, G) (a chooser that looks ahead steps from it).
-    """
+    """What a chooser sees of the running episodes at step t (from 0): their indices in the batch
+    (A,), s^t (A, n) [rad], b^t and log b^t (A, G)."""
 
     t: int
     rows: np.ndarray
@@ -64,15 +57,9 @@ def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> C
 
 @dataclasses.dataclass(frozen=True)
 class Record:
-    """A batch of finished episodes.
-
-    Attributes:
-        states: s^t for t = 0..T, (T+1, U, n) [rad]; held at its last value after an episode stops.
-        beliefs: b^t for t = 0..T, (T+1, U, G); held likewise.
-        human_actions: a_h^t, (T, U, n) [rad/s]; zero once an episode has stopped.
-        actions: The blended command a^t before the safety clip, (T, U, n); zero likewise.
-        end: The step each episode stopped at (T if it ran to the horizon), (U,).
-    """
+    """A batch of finished episodes: s^t (T+1, U, n) [rad] and b^t (T+1, U, G), held after an
+    episode stops; a_h^t and the command a^t before the safety clip (T, U, n) [rad/s], zero after
+    it stops; and the step each stopped at (T at the horizon), (U,)."""
 
     states: np.ndarray
     beliefs: np.ndarray
@@ -82,19 +69,9 @@ class Record:
 
 
 class Runner:
-    """Episodes advanced together through Algorithm 1's step; one step or a whole run.
-
-    Args:
-        assist: The step's fixed parts for every episode (:class:`lasa.method.step.Assist`).
-        start: s^0 of every episode, (U, n) [rad].
-        log_belief: log b^0 of every episode, (U, G).
-        update_belief: Update the belief with each human action (Algorithm 1, line 8); ``False``
-            holds it at b^0 (the property's confident hold).
-
-    Attributes:
-        state: s, (U, n). log_belief: log b, (U, G). running: which episodes run, (U,).
-        t: The steps taken.
-    """
+    """Episodes advanced together through Algorithm 1's step, from s^0 (U, n) and log b^0 (U, G);
+    ``update_belief=False`` holds b at b^0 (the property's confident hold). ``running`` (U,) and
+    ``t``, the steps taken, follow the run."""
 
     def __init__(
         self, assist: Assist, start: np.ndarray, log_belief: np.ndarray, update_belief: bool = True
@@ -143,15 +120,10 @@ class Runner:
         progress: bool = False,
         desc: str = "episodes",
     ) -> Record:
-        """Run every episode until it stops or the horizon: record s and b, step, observe.
+        """Run every episode until it stops or the horizon T: record s and b, step, observe.
 
-        Args:
-            choose: The human actions of the running episodes at each step.
-            horizon: The most steps T an episode takes.
-            observe: Called with (t, runner) at every recorded state (t = 0..); returns the
-                episodes that have finished there, which stop (default: none stop).
-            progress: Show a progress bar over the steps.
-            desc: The progress bar's label.
+        ``observe(t, runner)`` at every recorded state returns the episodes that finished there,
+        which stop (default: none stop); ``progress`` shows a bar labelled ``desc``.
         """
         check_horizon(horizon)
         n_users, (n, g) = len(self.state), (self.state.shape[1], self.log_belief.shape[1])
