@@ -36,7 +36,6 @@ __all__ = [
     "Seed",
     "BeliefCap",
     "cap_setting",
-    "FiniteNonNegative",
     "Why",
     "Rationality",
     "validate",
@@ -70,7 +69,6 @@ AtLeastTwo = Annotated[Integer, at.Ge(2)]  # an integer >= 2 (grids that hold bo
 Positive = Annotated[Number, at.Gt(0.0)]  # a number > 0
 NonNegative = Annotated[Number, at.Ge(0.0)]  # a number >= 0
 UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
-FiniteNonNegative = Annotated[Number, at.Ge(0.0), at.Lt(math.inf)]  # a number in [0, inf) (a finite beta)
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
 
 

@@ -29,7 +29,6 @@ __all__ = [
     "MappedDecoder",
     "extend_task",
     "new_goal_frames",
-    "NEW_GOAL_NAME",
     "MAP_KINDS",
     "JOINT_KINDS",
 ]

@@ -134,7 +134,7 @@ class _InferencePlan:
     def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), float64; see :meth:`lasa.method.decoder.LatentActionModel.decode_numpy`."""
         z, s, b = self._checked(z, s, b)
-        shape = _broadcast(_broadcast(z.shape[:-1], s.shape[:-1]), b.shape[:-1])
+        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
         lead = shape or (1,)
         t_z, t_c = self._first_terms(z, s, b)
         rows_total = math.prod(lead)
@@ -222,20 +222,6 @@ class _InferencePlan:
         if self.scale != 1.0:
             factor *= self.scale
         return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (self.n,))
-
-
-def _broadcast(a: tuple[int, ...], b: tuple[int, ...]) -> tuple[int, ...]:
-    """numpy's broadcast of two shapes (a faster ``np.broadcast_shapes`` for two short ones)."""
-    if a == b:
-        return a
-    if len(a) != len(b):
-        return np.broadcast_shapes(a, b)
-    out = []
-    for x, y in zip(a, b, strict=True):
-        if x != y and x != 1 and y != 1:
-            return np.broadcast_shapes(a, b)  # raises numpy's error
-        out.append(y if x == 1 else x)
-    return tuple(out)
 
 
 def _along_first(term: torch.Tensor, start: int, stop: int, full: int) -> torch.Tensor:

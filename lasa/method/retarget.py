@@ -20,7 +20,6 @@ from lasa.world.robot import Robot
 
 __all__ = [
     "MODES",
-    "TWIST_COMPONENTS",
     "RetargetConfig",
     "twist",
     "next_mode",

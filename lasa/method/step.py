@@ -33,7 +33,6 @@ __all__ = [
     "METHODS",
     "METHOD_DECODER",
     "method_alpha",
-    "REST",
 ]
 
 # Which decoder each method uses (:mod:`lasa.base.conditions`): "base" is trained on
