@@ -18,7 +18,6 @@ from numpy import ndarray
 
 from lasa.base.config import ASSISTANCE, BUILT_IN_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.method.blend import assistance as eq_m2
 
 __all__ = [
     "ASSISTANCE",
@@ -66,8 +65,11 @@ class Member(Protocol):
 def point(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
-    """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (Sec. III); w = 1."""
-    return eq_m2(belief, goals, state), np.ones(len(state))
+    """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (Sec. III); w = 1.
+
+    Any leading batch shape of b (..., G) and s (..., n).
+    """
+    return belief @ goals - state * belief.sum(axis=-1, keepdims=True), np.ones(len(state))
 
 
 def nearest_grasps(state: ndarray, goal_sets: ndarray) -> ndarray:

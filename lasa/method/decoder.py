@@ -92,7 +92,7 @@ class LatentActionModel(nn.Module):
     """Encoder psi(s, a, b) -> z and decoder phi(z, s, b) -> a_h, over any leading batch shape.
 
     The decoder clamps z to [-1, 1]; finiteness is the control loop's
-    (:func:`lasa.method.blend.sanitize`).
+    (:func:`lasa.method.step.sanitize`).
     """
 
     config_class: ClassVar[type[DecoderConfig]] = DecoderConfig  # what a checkpoint's config builds

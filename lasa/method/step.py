@@ -2,7 +2,8 @@
 
 Every loop advances with :func:`advance` (through :class:`lasa.method.runner.Runner`): a_h =
 phi(z, s, b) decoded, the assistance a_r of a member (:mod:`lasa.method.assistance`) blended in by
-Eq. M1 with each row's alpha (0: ``LA``), the belief updated (Alg. 1, line 8), the safe step taken.
+Eq. M1 with each row's alpha (0: ``LA``), the belief updated (Alg. 1, line 8), and the safe step
+s' = s + Delta a of Sec. V taken (:func:`safe_step`).
 """
 
 from __future__ import annotations
@@ -13,11 +14,10 @@ import numpy as np
 
 from lasa.base import conditions
 from lasa.base.conditions import METHODS
-from lasa.base.config import ControlConfig, check_choice
+from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ConfigError
 from lasa.method.assistance import Member, assist
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
-from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
 
@@ -28,6 +28,9 @@ __all__ = [
     "decode_candidates",
     "latent_grid",
     "advance",
+    "blend",
+    "sanitize",
+    "safe_step",
     "shared_autonomy_step",
     "human_action",
     "METHODS",
@@ -97,6 +100,38 @@ class Assist:
         """The same for rows ``idx`` of the batch."""
         assistance = None if self.assistance is None else self.assistance[idx]
         return dataclasses.replace(self, alpha=self.alpha[idx], assistance=assistance)
+
+
+def blend(a_h: np.ndarray, a_r: np.ndarray, alpha: float | np.ndarray) -> np.ndarray:
+    """Eq. M1: a = (1 - alpha) a_h + alpha a_r; ``alpha`` in [0, 1], a scalar or one per row (...)."""
+    alpha_arr = np.asarray(alpha, dtype=float)
+    if alpha_arr.ndim == 0:
+        check_range("alpha", float(alpha_arr), 0.0, 1.0)
+    elif not np.all((alpha_arr >= 0.0) & (alpha_arr <= 1.0)):
+        raise ConfigError(f"alpha must be in [0, 1], got values in [{alpha_arr.min()}, {alpha_arr.max()}]")
+    alpha_arr = alpha_arr[..., None]
+    return (1.0 - alpha_arr) * a_h + alpha_arr * a_r
+
+
+def sanitize(action: np.ndarray) -> np.ndarray:
+    """Replace every row that holds a non-finite entry by a zero action."""
+    bad = ~np.all(np.isfinite(action), axis=-1, keepdims=True)
+    return np.where(bad, 0.0, action)
+
+
+def safe_step(
+    state: np.ndarray, action: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray, max_speed: float
+) -> np.ndarray:
+    """The transition s' = s + dt a, safe: a non-finite action row is zero, each joint velocity
+    clipped to [-max_speed, max_speed] [rad/s], the next state to the joint limits [lower, upper].
+
+    Raises:
+        ConfigError: if ``state`` is not finite (a sensor fault is not a command).
+    """
+    if not np.all(np.isfinite(state)):
+        raise ConfigError("state holds NaN or infinite joint positions; refusing to command")
+    velocity = np.clip(sanitize(action), -max_speed, max_speed)
+    return np.clip(state + dt * velocity, lower, upper)
 
 
 def advance(
