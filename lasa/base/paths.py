@@ -45,9 +45,9 @@ ARTIFACTS: dict[str, tuple[str, str]] = {
     "decoder_entropy": ("models/decoder_{robot}_entropy.pt", "03_entropy_ablation"),
     # The eating study's data and 2-D decoder (Sec. VI; the Panda only).
     "eating_demos": ("data/eating_demos_{robot}.npz", "10_eating_task"),
-    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),  # the headline reading
-    "eating_reading_demos": ("data/eating_demos_{robot}_{reading}.npz", "10_eating_task"),
-    "eating_reading_decoder": ("models/eating_decoder_{robot}_{reading}.pt", "10_eating_task"),
+    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),  # the headline segmentation
+    "eating_segmentation_demos": ("data/eating_demos_{robot}_{segmentation}.npz", "10_eating_task"),
+    "eating_segmentation_decoder": ("models/eating_decoder_{robot}_{segmentation}.pt", "10_eating_task"),
 }
 
 
