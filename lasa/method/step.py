@@ -89,7 +89,8 @@ class Assist:
         if self.goal_sets is None:
             object.__setattr__(self, "goal_sets", belief_targets(self.task, self.control.likelihood))
         if self.assistance is not None:
-            members = np.asarray(self.assistance, dtype=object)  # names or Member objects
+            members = np.asarray(self.assistance)  # names (compared fast), or objects among them
+            members = members if members.dtype.kind == "U" else members.astype(object)
             if members.shape != self.alpha.shape:
                 raise ConfigError(
                     f"assistance must name one member per row, shape {self.alpha.shape}, got {members.shape}"
