@@ -42,17 +42,8 @@ def goal_scores(
     control: ControlConfig,
     horizon: int = 10,
 ) -> torch.Tensor:
-    """eta(g, s, b, z) for every context and grid input, shape (B, K, G); rows sum to one.
-
-    Args:
-        model: The decoder.
-        states: Contexts' states, shape (B, n).
-        beliefs: Contexts' beliefs, shape (B, G).
-        z_grid: Joystick inputs, shape (K, d).
-        goal_sets: Goal sets of the likelihood, shape (G, M, n).
-        control: The belief model's units (dt, beta_b, the regret normaliser).
-        horizon: H, the steps over which an input's evidence is read.
-    """
+    """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), shape (B, K, G);
+    rows sum to one. ``goal_sets`` (G, M, n) and ``control`` are the belief's; ``horizon`` is H."""
     n_ctx, n_z = states.shape[0], z_grid.shape[0]
     s = states[:, None, :].expand(n_ctx, n_z, -1)
     b = beliefs[:, None, :].expand(n_ctx, n_z, -1)
@@ -89,14 +80,9 @@ def entropy(p: torch.Tensor) -> torch.Tensor:
 class EntropyRegularizer:
     """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on a training batch.
 
-    Attributes:
-        lam: lambda > 0, the weight of the term.
-        goal_sets: Goal sets of the belief likelihood, shape (G, M, n).
-        control: Units of the belief model.
-        n_z: Joystick inputs on the grid the sum over z runs over.
-        horizon: H, the steps over which an input's evidence is read.
-        contexts: Contexts of each batch the term is evaluated on.
-        seed: Seed of the context subsampling.
+    ``lam`` > 0 weighs it; ``goal_sets`` (G, M, n) and ``control`` are the belief's; the sum over z
+    runs over ``n_z`` inputs per axis, the evidence over ``horizon`` steps, on ``contexts`` contexts
+    of each batch drawn with ``seed``.
     """
 
     lam: float
@@ -183,12 +169,7 @@ def choose_lambda(sweep: pd.DataFrame, n_goals: int, spread: float = 0.8, cost: 
     while its reconstruction error (``recon_error``) stays within ``cost`` times lambda = 0's;
     else, within that bound, the highest entropy; if no lambda > 0 is within it, 0.
 
-    Args:
-        sweep: One row per lambda with columns ``lambda``, ``entropy_confident`` and
-            ``recon_error``; it must include lambda = 0.
-        n_goals: G.
-        spread: Required fraction of the maximal entropy.
-        cost: Allowed factor on the reconstruction error.
+    ``sweep`` has one row per lambda (0 included): ``lambda``, ``entropy_confident``, ``recon_error``.
     """
     if 0.0 not in set(sweep["lambda"]):
         raise ConfigError("the lambda sweep must include 0 (the reference)")
