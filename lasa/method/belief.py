@@ -111,10 +111,6 @@ def _log_likelihood(
     return -beta * progress
 
 
-def _as_sets(goals: np.ndarray) -> np.ndarray:
-    return goals[:, None, :] if goals.ndim == 2 else goals
-
-
 def _segment_distances(
     p: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
 ) -> torch.Tensor:
@@ -226,11 +222,12 @@ def log_likelihood(
 ) -> np.ndarray:
     """:func:`log_likelihood_torch` on numpy arrays (float64), shape (..., G); ``goal_sets`` may
     be goal points (G, n), sets of one pose."""
+    sets = np.asarray(goal_sets, dtype=np.float64)
     with torch.no_grad():
         out = _log_likelihood(
             torch.as_tensor(state, dtype=torch.float64),
             torch.as_tensor(action, dtype=torch.float64),
-            torch.as_tensor(_as_sets(np.asarray(goal_sets, dtype=np.float64))),
+            torch.as_tensor(sets[:, None, :] if sets.ndim == 2 else sets),
             dt,
             beta,
             max_step,
