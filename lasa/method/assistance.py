@@ -67,7 +67,7 @@ def point(
 ) -> tuple[ndarray, ndarray]:
     """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (Sec. III); w = 1.
 
-    Any leading batch shape of b (..., G) and s (..., n).
+    a_r for any leading batch shape of b (..., G) and s (..., n).
     """
     return belief @ goals - state * belief.sum(axis=-1, keepdims=True), np.ones(len(state))
 
