@@ -12,11 +12,12 @@ from __future__ import annotations
 import dataclasses
 import os
 from pathlib import Path
-from typing import Any, ClassVar, Protocol, TypeVar, overload, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 import torch
 from torch import nn
+from typing_extensions import TypeVar
 
 from lasa.base.config import AtLeastTwo, Positive, PositiveInt, validate
 from lasa.base.errors import CheckpointError, ConfigError
@@ -169,7 +170,7 @@ class LatentActionModel(nn.Module):
 
 _DECODE = LatentActionModel.decode  # the decode that the inference plan implements
 
-M = TypeVar("M", bound=nn.Module)
+M = TypeVar("M", bound=nn.Module, default=LatentActionModel)  # a decoder class
 
 
 def _class_name(cls: type) -> str:
@@ -213,35 +214,14 @@ def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any
     return Path(path)
 
 
-@overload
-def load_checkpoint(
-    path: str | os.PathLike[str],
-    robot: str | None = None,
-    make_hint: str = ...,
-    *,
-    n_goals: int | None = None,
-) -> tuple[LatentActionModel, dict[str, Any]]: ...
-
-
-@overload
-def load_checkpoint(
-    path: str | os.PathLike[str],
-    robot: str | None = None,
-    make_hint: str = ...,
-    *,
-    decoder: type[M],
-    n_goals: int | None = None,
-) -> tuple[M, dict[str, Any]]: ...
-
-
 def load_checkpoint(
     path: str | os.PathLike[str],
     robot: str | None = None,
     make_hint: str = "make figures (notebook 02_decoder_training)",
     *,
-    decoder: type[nn.Module] = LatentActionModel,
+    decoder: type[M] = LatentActionModel,  # type: ignore[assignment]  # M's default (PEP 696)
     n_goals: int | None = None,
-) -> tuple[nn.Module, dict[str, Any]]:
+) -> tuple[M, dict[str, Any]]:
     """Load a model saved by :func:`save_checkpoint`.
 
     Args:
