@@ -11,6 +11,7 @@ straight-line map in the gripper's space. The derivation: ``docs/method-notes.md
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
@@ -402,17 +403,10 @@ class TaskSpaceMap:
         _, _, _, w, _, _, p_hat, r_hat = self._poses(flat)
         seeds = self.robot.clip(flat + w[:, None] * (self.ref_goal - self.new_goal))
         out = np.empty_like(flat)
+        solve = functools.partial(solve_grasp_ik, position_tol=1e-5, rotation_tol=1e-4, max_iters=200)
         for i in range(len(flat)):
             try:
-                out[i] = solve_grasp_ik(
-                    self.robot,
-                    p_hat[i],
-                    r_hat[i],
-                    seeds[i],
-                    position_tol=1e-5,
-                    rotation_tol=1e-4,
-                    max_iters=200,
-                )
+                out[i] = solve(self.robot, p_hat[i], r_hat[i], seeds[i])
             except IKError:
                 out[i] = seeds[i]
                 self.fallbacks += 1
