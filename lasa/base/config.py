@@ -249,9 +249,7 @@ class ControlConfig:
     action_scale: Positive = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
     max_joint_speed: Positive = 2.0  # per-joint bound on the commanded velocity [rad/s]
     belief_beta: NonNegative = 20.0  # beta_b, temperature of the goal likelihood [1/rad]
-    belief_floor: Annotated[Number, at.Ge(0.0), at.Lt(0.5)] = (
-        1e-6  # smallest belief any goal keeps after an update [-]
-    )
+    belief_floor: Annotated[Number, at.Ge(0.0), at.Lt(0.5)] = 1e-6  # least belief a goal keeps [-]
     # the most belief any goal keeps after an update (Javdani et al.'s max_prob_any_goal); None: no
     # cap, Algorithm 1's belief, which the sims keep; the eating study's is 0.99 [-]
     belief_cap: BeliefCap = None
