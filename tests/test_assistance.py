@@ -162,7 +162,7 @@ def test_every_member_is_batched_and_names_are_checked():
 def test_the_config_knows_every_member_and_defaults_to_point():
     from lasa.method import assistance
 
-    assert tuple(assistance._MEMBERS) == BUILT_IN_ASSISTANCE  # each named member is implemented, no other
+    assert tuple(assistance.MEMBERS) == BUILT_IN_ASSISTANCE  # each named member is implemented, no other
     assert ControlConfig().assistance == "point"
     for name in BUILT_IN_ASSISTANCE:
         assert dataclasses.replace(ControlConfig(), assistance=name).assistance == name

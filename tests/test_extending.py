@@ -24,7 +24,6 @@ from matplotlib.figure import Figure
 
 import lasa
 from lasa.evidence import decision, plots, rules, verdicts
-from lasa.method.assistance import unregister_member
 
 # --- the user's MJCF: three hinge joints about y (a planar arm), a table, three cups --------
 
@@ -262,35 +261,35 @@ def test_an_assistance_member_of_ones_own_is_called_by_the_step_and_the_rollout(
         norm = np.maximum(np.linalg.norm(diff, axis=1, keepdims=True), 1e-9)
         return action_scale * diff / norm, np.ones(len(state))
 
+    assert isinstance(likeliest, lasa.Member)
     with pytest.raises(lasa.ConfigError, match="unknown assistance 'likeliest'"):
-        lasa.ControlConfig(assistance="likeliest")
-    lasa.register_member("likeliest", likeliest)
-    try:
-        control = lasa.ControlConfig(assistance="likeliest")
-        decoder = pointer_for(task)
-        n = 3
-        state = np.broadcast_to(task.start, (n, 3)).copy()
-        log_b = np.log(np.array([[0.7, 0.2, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8]]))
-        z = np.zeros((n, 1))
-        la = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.0)
-        sa = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.5)
-        assert calls and all(shape == (n, 3) for shape in calls)
-        a_r, _ = likeliest(np.exp(log_b), state, task.goals, task.curves, control.dt, control.action_scale)
-        np.testing.assert_allclose(sa.action, 0.5 * la.human_action + 0.5 * a_r)
-        assert not np.allclose(sa.action, la.action)
-        # per user in a rollout, beside a built-in member
-        users = users_at_each_goal(task, 2)
-        horizon = 5
-        noise = np.random.default_rng(1).random((len(users), horizon, control.n_z))
-        before = len(calls)
-        assistance = np.array(["likeliest", "point"] * 3)
-        traj = lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=assistance)
-        assert len(calls) == before + horizon and all(shape == (3, 3) for shape in calls[before:])
-        assert np.all(np.isfinite(traj.states))
-    finally:
-        unregister_member("likeliest")
-    with pytest.raises(lasa.ConfigError):
-        lasa.ControlConfig(assistance="likeliest")
+        lasa.ControlConfig(assistance="likeliest")  # a config names a built-in member only
+    control = lasa.ControlConfig()
+    decoder = pointer_for(task)
+    n = 3
+    state = np.broadcast_to(task.start, (n, 3)).copy()
+    log_b = np.log(np.array([[0.7, 0.2, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8]]))
+    z = np.zeros((n, 1))
+    la = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.0, assistance=likeliest)
+    sa = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.5, assistance=likeliest)
+    assert calls and all(shape == (n, 3) for shape in calls)
+    a_r, _ = likeliest(np.exp(log_b), state, task.goals, task.curves, control.dt, control.action_scale)
+    np.testing.assert_allclose(sa.action, 0.5 * la.human_action + 0.5 * a_r)
+    assert not np.allclose(sa.action, la.action)
+    # per user in a rollout, beside a built-in member named as configs name it
+    users = users_at_each_goal(task, 2)
+    horizon = 5
+    noise = np.random.default_rng(1).random((len(users), horizon, control.n_z))
+    before = len(calls)
+    assistance = np.array([likeliest, "point"] * 3, dtype=object)
+    traj = lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=assistance)
+    assert len(calls) == before + horizon and all(shape == (3, 3) for shape in calls[before:])
+    assert np.all(np.isfinite(traj.states))
+    with pytest.raises(lasa.ConfigError, match="unknown assistance 'likeliest'"):
+        named = np.array(["likeliest"] * 6)
+        lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=named)
+    with pytest.raises(lasa.ConfigError, match="built-in's name or a function, got 3"):
+        lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.5, assistance=3)
 
 
 # --- 3. a claim ------------------------------------------------------------------------------

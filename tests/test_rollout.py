@@ -198,7 +198,7 @@ def test_the_users_chooser_is_eq_s1_written_out_per_user(model, task):
     import math
 
     from lasa.method.belief import belief, uniform_log_belief
-    from lasa.method.episodes import Now
+    from lasa.method.runner import Now
     from lasa.people.rollout import BoltzmannUsers
 
     control = task.robot.control

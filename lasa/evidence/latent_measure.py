@@ -19,7 +19,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.latent_property import COLUMNS, CONDITIONS
 from lasa.method.belief import confident_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Runner, held_input
+from lasa.method.runner import Runner, held_input
 from lasa.method.step import Assist
 from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
@@ -145,9 +145,9 @@ def leave_paths(
     update_belief: bool = True,
 ) -> np.ndarray:
     """States (R, steps + 1, n) reached by holding input ``z_values[i]`` from ``starts[i]`` and
-    ``beliefs[i]``, the belief updated online: Algorithm 1's step (:class:`lasa.method.episodes.Runner`)
+    ``beliefs[i]``, the belief updated online: Algorithm 1's step (:class:`lasa.method.runner.Runner`)
     with blend weight ``alphas[i]`` and the control's member, one decoder call per step (``rest``:
-    what the stick at rest commands, :func:`~lasa.method.episodes.held_input`)."""
+    what the stick at rest commands, :func:`~lasa.method.runner.held_input`)."""
     if steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
     log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))

@@ -257,8 +257,8 @@ def train_readings(
 ) -> Readings:
     """Train every reading, measure its property, choose the headline by the property alone.
 
-    Saves each reading's demonstrations and decoder (artifacts ``eating_reading_demos``
-    and ``eating_reading_decoder``), and the headline's as ``eating_decoder``, the one
+    Saves each reading's demonstrations and decoder (artifacts ``eating_segmentation_demos``
+    and ``eating_segmentation_decoder``), and the headline's as ``eating_decoder``, the one
     the study's LA conditions and the teleop kit load first.
     """
     train = config.train
@@ -293,7 +293,9 @@ def _demonstrations(
     datasets, rows = {}, []
     for reading in config.readings:
         demos = collect_eating_demonstrations(task, control, config.demos, reading=reading)
-        save_demonstrations(demos, paths.artifact("eating_reading_demos", task.robot.name, reading=reading))
+        save_demonstrations(
+            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=reading)
+        )
         clean = demos.clean()
         rows.append(
             {
@@ -338,7 +340,7 @@ def _fine_tune(
     models.update({name: model for name, (model, _) in zip(runs, fitted, strict=True)})
     models = {name: models[name] for name, _, _ in fine_tunes(config, lam)}  # in training order
     for name, model in models.items():
-        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=name)
+        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=name)
         _save(model, path, fines[name], control, config, reading=name)
     return models, fines
 
@@ -402,7 +404,7 @@ def train_caps(
     The recipe is the headline reading's: its demonstrations (collected with the belief at that
     cap, so their belief labels are that cap's), its base's training settings and its fine-tune
     (steps, lambda, seed). Each decoder's property is measured with the belief at its cap. The
-    decoders are saved as ``eating_reading_decoder`` readings named by :func:`cap_decoder_name`.
+    decoders are saved as ``eating_segmentation_decoder`` readings named by :func:`cap_decoder_name`.
     """
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     lam = readings.chosen_lambda
@@ -425,7 +427,7 @@ def train_caps(
     models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
     names = {c: cap_decoder_name(readings.headline, c) for c in caps}
     for c, model in models.items():
-        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=names[c])
+        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=names[c])
         _save(model, path, fine, controls[c], config, reading=names[c])
     jobs = [(models[c], controls[c], names[c]) for c in caps]
     frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, CAP_SOURCE))

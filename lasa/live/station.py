@@ -13,7 +13,7 @@ server (:mod:`lasa.live.web.loop`) drive the same station and log the same rows.
   cups, ``LA+SA+Entropy``.
 - **The step** is the study's: the stick at rest commands nothing; in Retargeting the mode
   button cycles the modes; the live device is a chooser of the episode runner
-  (:class:`lasa.method.episodes.Runner`), whose step blends, updates the belief and takes the
+  (:class:`lasa.method.runner.Runner`), whose step blends, updates the belief and takes the
   safe transition, so joint limits and the speed bound hold. The stop input holds the robot
   (no human action, no assistance, the belief frozen).
 """
@@ -36,8 +36,8 @@ from lasa.base.paths import Paths
 from lasa.live.devices import StickSample
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
-from lasa.method.episodes import Chooser, Now, Runner, held_input
 from lasa.method.retarget import Retargeting, retarget_action, twist
+from lasa.method.runner import Chooser, Now, Runner, held_input
 from lasa.method.step import Assist
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot

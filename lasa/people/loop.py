@@ -5,7 +5,7 @@ the same study: the same episodes (:func:`lasa.people.design.layout`), each draw
 own random stream ``default_rng([seed, participant, condition, task])`` (shared by the SA
 members: common random numbers, so the members' comparisons are paired), the same waypoints,
 and the same record (:class:`lasa.world.episodes.Episodes`). The episode runner
-(:class:`lasa.method.episodes.Runner`) steps them; at every step :func:`run_steps` observes
+(:class:`lasa.method.runner.Runner`) steps them; at every step :func:`run_steps` observes
 every episode (the fork's frames, the waypoints reached, the episodes that finished), and the
 model is the runner's chooser of the running ones.
 """
@@ -23,8 +23,8 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Chooser, Record, Runner
 from lasa.method.retarget import MODES, Retargeting, twist
+from lasa.method.runner import Chooser, Record, Runner
 from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout

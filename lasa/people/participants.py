@@ -25,8 +25,8 @@ import numpy as np
 
 from lasa.base.config import ControlConfig
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now
 from lasa.method.retarget import MODES, retarget_action
+from lasa.method.runner import Now
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig

@@ -29,8 +29,8 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now
 from lasa.method.retarget import MODES, retarget_action
+from lasa.method.runner import Now
 from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig

@@ -1,6 +1,6 @@
 """Algorithm 1 (LA and LA+SA) for a batch of simulated users choosing among joystick candidates.
 
-The users are a chooser of the episode runner (:class:`lasa.method.episodes.Runner`). At each
+The users are a chooser of the episode runner (:class:`lasa.method.runner.Runner`). At each
 step one decoder call evaluates phi(z, s, b) for every user and every joystick candidate z on the
 grid (U x K rows, :func:`lasa.method.step.decode_candidates`); each user picks a candidate by
 Eq. S1 (:mod:`lasa.people.users`), a laggy or noisy pilot then maybe another, and the runner takes
@@ -18,7 +18,7 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now, Runner, check_horizon
+from lasa.method.runner import Now, Runner, check_horizon
 from lasa.method.step import Assist, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
 from lasa.world.goals import GoalTask

@@ -271,7 +271,7 @@ def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
       points it down, ``spec.top_grasp_rotation`` is that grasp's site rotation);
     - per name of ``spec.goal_sites`` (at least two: the goals, in goal order), a site (a cup's
       grasp centre) and a geom of the same name (the cup: a new cup of
-      :func:`lasa.method.newgoals.extend_task` copies it, its ``size[0]`` is its radius);
+      :func:`lasa.method.context_map.extend_task` copies it, its ``size[0]`` is its radius);
       a name ``cup_<x>`` gives the goal name ``<x>``;
     - a box geom named ``table`` (new cups must stand on it);
     - a camera ``spec.camera`` and a keyframe ``spec.home_key`` (the start pose of every
@@ -477,7 +477,7 @@ class Robot:
         """The same robot in a scene with one more cup, whose grasp centre is at ``position``.
 
         The new cup becomes the last goal (``spec.goal_sites[-1]``). Workspace checks belong to
-        the caller (:func:`lasa.method.newgoals.extend_task`); this only builds the scene.
+        the caller (:func:`lasa.method.context_map.extend_task`); this only builds the scene.
 
         Raises:
             ConfigError: if a cup of that name exists already.

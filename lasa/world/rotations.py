@@ -1,7 +1,7 @@
 """Rotations about the world's vertical axis, as matrices.
 
 One helper, shared by the Panda's Denavit-Hartenberg reference (:mod:`lasa.world.franka`) and
-the grasps of a new cup, turned about the robot's base (:mod:`lasa.method.newgoals`).
+the grasps of a new cup, turned about the robot's base (:mod:`lasa.method.context_map`).
 """
 
 from __future__ import annotations

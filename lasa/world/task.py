@@ -78,7 +78,7 @@ class CupTask(GoalTask):
     names (``goal_names``), the IK grid ``theta_grid``, the grasp curves s*(g, theta)
     (``curves``, shape (G, K, n)), the goals g = s*(g, 0.5) and the start pose. What makes
     it the cup task is how :func:`make_cup_task` solves the curves (:func:`grasp_frame`);
-    new cups are added by :func:`lasa.method.newgoals.extend_task`.
+    new cups are added by :func:`lasa.method.context_map.extend_task`.
     """
 
 
