@@ -27,8 +27,8 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
-from lasa.world.episodes import Episodes
 from lasa.world.fork import tip_frames
+from lasa.world.record import Episodes
 
 __all__ = [
     "SCALES",

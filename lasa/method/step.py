@@ -94,7 +94,7 @@ class Assist:
             records what the assistance would have done under LA too). The step is the same to the
             bit for a member that computes a row's a_r from that row alone, as every built-in one
             does but ``point``, whose Eq. M2 is one matrix product over the batch and rounds by its
-            size. The study's simulated participants ask for it (:mod:`lasa.people.loop`,
+            size. The study's simulated participants ask for it (:mod:`lasa.people.simulation`,
             :mod:`lasa.people.planning`): many of their rows run without assistance.
     """
 

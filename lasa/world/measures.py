@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.world.eating import GOALS, PREFERENCES, TASK_NAMES, TASKS, EatingTask, fork_direction
-from lasa.world.episodes import Episodes
+from lasa.world.record import Episodes
 from lasa.world.robot import Robot
 
 __all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]

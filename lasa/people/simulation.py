@@ -4,7 +4,7 @@ Every model of participant (:mod:`lasa.people.participants`, :mod:`lasa.people.p
 the same study: the same episodes (:func:`lasa.people.design.layout`), each drawing from its
 own random stream ``default_rng([seed, participant, condition, task])`` (shared by the SA
 members: common random numbers, so the members' comparisons are paired), the same waypoints,
-and the same record (:class:`lasa.world.episodes.Episodes`). The episode runner
+and the same record (:class:`lasa.world.record.Episodes`). The episode runner
 (:class:`lasa.method.episodes.Runner`) steps them; at every step :func:`run_steps` observes
 every episode (the fork's frames, the waypoints reached, the episodes that finished), and the
 model is the runner's chooser of the running ones.
@@ -29,8 +29,8 @@ from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
 from lasa.world.eating import TASK_NAMES, EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.fork import next_waypoint, tip_frames, waypoint_arrays, waypoint_reached
+from lasa.world.record import Episodes
 
 __all__ = ["Setting", "State", "prepare", "start", "run_steps"]
 
