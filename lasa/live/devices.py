@@ -256,7 +256,7 @@ class GamepadDevice:
         # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
         os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
         # SDL would turn SIGINT and SIGTERM into a quit event nobody reads: the session's own
-        # handlers stop it instead (lasa.live.interrupts)
+        # handlers stop it instead (lasa.live.session.StopOnSignals)
         os.environ["SDL_NO_SIGNAL_HANDLERS"] = "1"
         import pygame
 

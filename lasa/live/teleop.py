@@ -13,8 +13,6 @@ questionnaire (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``d
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import datetime as dt_
 import json
 import sys
 import time
@@ -29,8 +27,8 @@ from lasa.base.config import check_range
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaError
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live.devices import Device, ScriptedDevice, open_device
-from lasa.live.interrupts import StopOnSignals
-from lasa.live.station import SESSION_TASKS, SessionConfig, Station, log_row
+from lasa.live.session import Session, StopOnSignals, open_log
+from lasa.live.station import SESSION_TASKS, SessionConfig, Station
 from lasa.method.retarget import MODES
 
 __all__ = ["run_session", "replay", "main"]
@@ -86,71 +84,6 @@ class _Overlay:
         viewer.sync()
 
 
-@dataclasses.dataclass
-class _Loop:
-    """A running session's loop: what one step reads and writes, and the counts kept so far.
-
-    Attributes:
-        station: The robot side; device: the input; writer: the log (None: no log).
-        realtime: Hold each step to its deadline; dt: the step [s].
-        overlay: The viewer's extras (None: no viewer), drawn into ``viewer`` with ``data``.
-        on_step: Called as ``on_step(step, record)`` after each step, or None.
-        compute: Each step's compute time [s]; misses: deadline misses; steps: steps logged.
-        status: ``complete``, or ``interrupted`` once a signal or the viewer's closing stopped it.
-    """
-
-    station: Station
-    device: Device
-    writer: SessionWriter | None
-    realtime: bool
-    dt: float
-    overlay: _Overlay | None
-    viewer: Any
-    data: mujoco.MjData
-    on_step: Any
-    compute: list[float] = dataclasses.field(default_factory=list)
-    misses: int = 0
-    steps: int = 0
-    status: str = "complete"
-
-    def step(self, step: int, start: float) -> bool:
-        """Step ``step`` of a loop started at ``start`` [s, perf_counter]; whether the session goes on."""
-        deadline = start + (step + 1) * self.dt
-        t0 = time.perf_counter()
-        rec = self.station.step(self.device.poll())
-        if self.overlay is not None:
-            if not self.viewer.is_running():
-                self.status = "interrupted"
-                return False
-            self.overlay.show(self.viewer, self.data, rec)
-        self.compute.append(time.perf_counter() - t0)
-        late = self.realtime and time.perf_counter() > deadline
-        self.misses += int(late)
-        t = (time.perf_counter() - start) if self.realtime else step * self.dt
-        if self.writer is not None:
-            self.writer.append(log_row(step, t, late, rec))
-        self.steps = step + 1
-        if self.on_step is not None:
-            self.on_step(step, rec)
-        if self.station.done or (isinstance(self.device, ScriptedDevice) and self.device.finished):
-            return False
-        if self.realtime:
-            time.sleep(max(0.0, deadline - time.perf_counter()))
-        return True
-
-    def timing(self, signal: str | None) -> dict[str, Any]:
-        """The session's timing, as :func:`run_session` returns it."""
-        compute = self.compute
-        return {
-            "steps": self.steps,
-            "step_time_median_s": float(np.median(compute)) if compute else 0.0,
-            "step_time_p99_s": float(np.percentile(compute, 99)) if compute else 0.0,
-            "deadline_misses": self.misses,
-            "done": self.station.done,
-            "signal": signal,
-        }
-
-
 def run_session(
     station: Station,
     device: Device,
@@ -162,59 +95,53 @@ def run_session(
     viewer_data: mujoco.MjData | None = None,
     on_step: Any = None,
 ) -> dict[str, Any]:
-    """Run the control loop: one step per Delta of wall-clock time (or as fast as possible).
+    """Run the control loop (:class:`lasa.live.session.Session`): one step per Delta, or as fast as possible.
 
-    The session ends after ``max_steps``, when the task is done, when a scripted device
-    runs out, or when the viewer is closed. SIGINT, SIGTERM or SIGHUP stop it at the next
-    step (:class:`lasa.live.interrupts.StopOnSignals`): the log is closed as ``interrupted``
-    and ``signal`` in the result names the signal. Interrupted by an exception, the log is
-    closed as ``interrupted`` and the exception goes on.
+    The session ends after ``max_steps``, when the task is done, a scripted device runs out or
+    the viewer is closed; a signal stops it at the next step (closed ``interrupted``, its name in
+    ``signal``); an exception closes the log ``interrupted`` and goes on.
 
     Args:
-        station: The robot side.
-        device: The input device.
-        writer: The session's log (None: no log).
+        station: The robot side; device: the input; writer: the log (None: no log).
         max_steps: The longest session, in steps.
         realtime: Hold each step to its deadline (else run as fast as possible).
-        viewer: A passive viewer handle to draw into, and ``viewer_data`` the MjData it shows.
-        viewer_data: See ``viewer``.
+        viewer: A passive viewer to draw into, showing ``viewer_data``.
+        viewer_data: The MjData the viewer was launched with.
         on_step: Called as ``on_step(step, record)`` after each step.
 
     Returns:
-        Timing: steps, the step time's median and 99th percentile [s], deadline misses, whether
-        the task was done, and the signal that stopped the session (or None).
+        :meth:`lasa.live.session.Session.timing`, and the ``signal`` that stopped it (or None).
     """
-    overlay = _Overlay(station) if viewer is not None else None
     if viewer is not None and viewer_data is None:
         raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
-    data = viewer_data if viewer_data is not None else mujoco.MjData(station.robot.model)
-    loop = _Loop(station, device, writer, realtime, station.control.dt, overlay, viewer, data, on_step)
-    try:
-        with StopOnSignals() as stop:
-            station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
-            start = time.perf_counter()
-            for step in range(max_steps):
-                if stop.received is not None:
-                    loop.status = "interrupted"
-                    break
-                if not loop.step(step, start):
-                    break
-    except BaseException:
-        if writer is not None:
-            writer.close("interrupted", deadline_misses=loop.misses)
-        raise
-    timing = loop.timing(stop.received)
-    if writer is not None:
-        writer.close(loop.status, **timing)
-    return timing
+    overlay = _Overlay(station) if viewer is not None else None
 
+    def show(rec: dict[str, Any]) -> bool:
+        if overlay is None:
+            return True
+        if not viewer.is_running():
+            return False
+        overlay.show(viewer, viewer_data, rec)
+        return True
 
-def new_session(station: Station, folder: str | Path, stem: str | None = None) -> SessionWriter:
-    """Open the log of a new session of ``station`` in ``folder``."""
-    c = station.config
-    stamp = dt_.datetime.now(dt_.UTC).strftime("%Y%m%dT%H%M%S")
-    stem = stem or f"{c.participant}_{c.task}_{c.condition}_{stamp}"
-    return SessionWriter(folder, stem, station.meta(), station.robot.xml(), station.columns())
+    session = Session(station, writer, max_steps, realtime)
+    status = "complete"
+    with StopOnSignals() as stop:
+        station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
+        with session.guard():
+            while session.steps < max_steps:
+                rec = None if stop.received is not None else session.step(device.poll(), show)
+                if rec is None:
+                    status = "interrupted"
+                    break
+                if on_step is not None:
+                    on_step(session.steps - 1, rec)
+                if station.done or (isinstance(device, ScriptedDevice) and device.finished):
+                    break
+                if realtime:
+                    time.sleep(max(0.0, session.pause()))
+    session.close(status, signal=stop.received)
+    return {**session.timing(), "signal": stop.received}
 
 
 def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) -> None:
@@ -414,7 +341,7 @@ def _run(args: argparse.Namespace) -> int:
         _check_display()
     station = Station(config)
     device = _open_input(args.device)
-    writer = new_session(station, args.sessions)
+    writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
     try:
         if args.no_viewer:
