@@ -39,6 +39,8 @@ from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.method.episodes import Chooser, Now, Runner, held_input
 from lasa.method.retarget import Retargeting, retarget_action, twist
 from lasa.method.step import Assist
+from lasa.world.eating import TASK_NAMES, instruction, make_eating_task
+from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
@@ -98,7 +100,7 @@ class Station:
         paths = Paths.of(config.build_dir, "figures")
         self.decoder: ActionDecoder | None = None
         self.decoder_path: Path | None = None
-        self.waypoints: list[Any] = []
+        self.tracker: WaypointTracker | None = None  # the eating tasks' waypoints (cups: none)
         condition = parse_condition(config.condition)
         if config.task == "cups":
             self.robot: Robot = load_robot(config.robot)
@@ -106,12 +108,10 @@ class Station:
             self.control: ControlConfig = self.robot.control
             name = "decoder_entropy" if condition.decoder == "entropy" else "decoder_lambda0"
         else:
-            from lasa.world.eating import make_eating_task, waypoints
-
             self.task = make_eating_task()
             self.robot = self.task.robot
             self.control = self.robot.control
-            self.waypoints = waypoints(config.task)
+            self.tracker = WaypointTracker.of(self.robot)
             name = "eating_decoder"
         if condition.interface == "LA":
             self.decoder_path = paths.artifact(name, self.robot.name)
@@ -123,7 +123,6 @@ class Station:
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self._data = mujoco.MjData(self.robot.model)
-        self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
         self.reset()
 
     def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
@@ -205,40 +204,27 @@ class Station:
             cols += [f"{name}{i}" for i in range(size)]
         return cols
 
+    @property
+    def phase(self) -> int:
+        """The current phase of an eating task (-1: the cups)."""
+        if self.tracker is None:
+            return -1
+        return int(self.tracker.phase[TASK_NAMES.index(self.config.task), self.waypoint])
+
     def phase_text(self) -> str:
         """The instruction of the current phase."""
-        if self.config.task == "cups":
+        if self.tracker is None:
             return "Reach the cup you want, with the grasp you want"
-        if self.done:
-            return f"{self.config.task}: done"
-        from lasa.world.eating import TASKS as EATING_TASKS
+        return instruction(self.config.task, None if self.done else self.phase)
 
-        wp = self.waypoints[self.waypoint]
-        phases = EATING_TASKS[self.config.task]
-        phase = phases[wp.phase]
-        where = {
-            "rice": "the rice (left bowl)",
-            "middle": "the middle bowl",
-            "icing": "the icing (right bowl)",
-        }
-        target = where.get(phase.goal, "the plate")
-        verb = "reach" if phase.preference is None else phase.preference
-        return f"{self.config.task} {wp.phase + 1}/{len(phases)}: {verb} at {target}"
-
-    def _check_waypoint(self) -> None:
-        if not self.waypoints or self.done:
+    def track(self) -> None:
+        """Move on past the waypoint the fork reached (:class:`lasa.world.fork.WaypointTracker`)."""
+        if self.tracker is None or self.done:
             return
-        from lasa.world.eating import fork_frame
-        from lasa.world.fork import next_waypoint, tip_frames, waypoint_reached
-
-        if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once
-            wp = self.waypoints[self.waypoint]
-            self._frames[self.waypoint] = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
-        position, rotation = self._frames[self.waypoint]
         tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
-        reached = waypoint_reached(tip[0], axis[0], position, rotation[:, 2])
-        waypoint, done = next_waypoint(reached, np.array(self.waypoint), np.array(len(self.waypoints)))
-        self.waypoint, self.done = int(waypoint), bool(done)
+        task = np.array([TASK_NAMES.index(self.config.task)])
+        waypoint, done = self.tracker.advance(task, np.array([self.waypoint]), tip, axis)
+        self.waypoint, self.done = int(waypoint[0]), bool(done[0])
 
     def step(self, sample: StickSample) -> dict[str, Any]:
         """One control step from one sample; returns what the log records of it."""
@@ -253,8 +239,7 @@ class Station:
             a_h = result.human_action[0]
             a_r = result.robot_action[0] if result.robot_action is not None else np.zeros(n)
             a = result.action[0]
-            self._check_waypoint()
-        wp = self.waypoints[self.waypoint] if self.waypoints else None
+            self.track()
         return {
             "raw": np.asarray(sample.raw, float),
             "connected": sample.connected,
@@ -262,7 +247,7 @@ class Station:
             "stop": bool(sample.stop),
             "z": z,
             "mode": self.mode,
-            "phase": -1 if wp is None else wp.phase,
+            "phase": self.phase,
             "waypoint": self.waypoint,
             "s": self.state.copy(),
             "b": self.belief,

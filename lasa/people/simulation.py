@@ -29,7 +29,7 @@ from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
 from lasa.world.eating import TASK_NAMES, EatingTask
-from lasa.world.fork import next_waypoint, tip_frames, waypoint_arrays, waypoint_reached
+from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.record import Episodes
 
 __all__ = ["Setting", "State", "prepare", "start", "run_steps"]
@@ -45,10 +45,7 @@ class Setting:
     config: StudyConfig
     layout: Layout
     streams: list[np.random.Generator]  # each episode's own random stream
-    wp_pos: np.ndarray  # every task's waypoints (lasa.world.fork.waypoint_arrays)
-    wp_dir: np.ndarray
-    wp_phase: np.ndarray
-    n_wp: np.ndarray
+    waypoints: WaypointTracker  # every task's waypoints, with the study's tolerances
     grid: np.ndarray  # the stick's grid (K, 2), rest in the middle
     rest: int  # index of the rest position in grid
     unit: float  # the best translation one step of Retargeting makes [m]
@@ -56,6 +53,16 @@ class Setting:
     r_twist: np.ndarray  # the fork twist of every (Retargeting mode, grid input) at full scale (M, K, 6)
     goal_sets: np.ndarray  # the belief's targets
     data: mujoco.MjData
+
+    @property
+    def wp_pos(self) -> np.ndarray:
+        """Every task's waypoint positions, (T, W, 3) [m]."""
+        return self.waypoints.position
+
+    @property
+    def wp_dir(self) -> np.ndarray:
+        """Every task's waypoint fork directions, (T, W, 3)."""
+        return self.waypoints.direction
 
 
 @dataclasses.dataclass
@@ -106,7 +113,6 @@ def prepare(
         for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
     ]
     robot = task.robot
-    wp_pos, wp_dir, wp_phase, n_wp = waypoint_arrays(robot)  # padded per task
     grid = latent_grid(config.n_z, 2)
     return Setting(
         task=task,
@@ -115,10 +121,7 @@ def prepare(
         config=config,
         layout=episodes,
         streams=streams,
-        wp_pos=wp_pos,
-        wp_dir=wp_dir,
-        wp_phase=wp_phase,
-        n_wp=n_wp,
+        waypoints=WaypointTracker.of(robot, config.position_tol, config.angle_tol),
         grid=grid,
         rest=int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0]),
         unit=control.dt * config.retarget.linear_speed,
@@ -156,12 +159,8 @@ def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarr
     pos, axis, jp, jr = tip_frames(setting.task.robot, setting.data, runner.state)
     state.pos, state.axis, state.jp, state.jr = pos, axis, jp, jr
     state.tip[t], state.direction[t] = pos, axis
-    # a waypoint reached: on to the next one, or the task is done
-    here, there = setting.wp_pos[tsk, state.w], setting.wp_dir[tsk, state.w]
-    tol = setting.config.position_tol, setting.config.angle_tol
-    reached = runner.running & waypoint_reached(pos, axis, here, there, *tol)
-    state.w, finished = next_waypoint(reached, state.w, setting.n_wp[tsk])
-    state.phase[t] = setting.wp_phase[tsk, state.w]
+    state.w, finished = setting.waypoints.advance(tsk, state.w, pos, axis, runner.running)
+    state.phase[t] = setting.waypoints.phase[tsk, state.w]
     return finished
 
 

@@ -47,6 +47,8 @@ __all__ = [
     "Phase",
     "TASKS",
     "TASK_NAMES",
+    "PLACES",
+    "instruction",
     "Waypoint",
     "EatingTask",
     "load_eating_robot",
@@ -130,6 +132,21 @@ TASKS: dict[str, tuple[Phase, ...]] = {
     ),
 }
 TASK_NAMES = tuple(TASKS)  # the study's tasks, in their order
+PLACES = {  # how a participant is told where each goal is
+    "rice": "the rice (left bowl)",
+    "middle": "the middle bowl",
+    "icing": "the icing (right bowl)",
+    "plate": "the plate",
+}
+
+
+def instruction(task: str, phase: int | None) -> str:
+    """What a participant is asked to do in ``phase`` of ``task`` (None: the task is done)."""
+    if phase is None:
+        return f"{task}: done"
+    phases = TASKS[task]
+    verb = phases[phase].preference or "reach"
+    return f"{task} {phase + 1}/{len(phases)}: {verb} at {PLACES[phases[phase].goal]}"
 
 
 @dataclasses.dataclass(frozen=True)
