@@ -31,7 +31,9 @@ from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
 
 __all__ = [
+    "QUESTIONS",
     "SCALES",
+    "PRACTICE_TASK",
     "LEFT_OUT",
     "DROPPED",
     "complete_participants",
@@ -43,7 +45,15 @@ __all__ = [
     "write_session_tables",
 ]
 
-SCALES = ("Easy", "Helpful", "Precise", "Intuitive", "Prefer")
+QUESTIONS = {  # the 7-point Likert questionnaire after each condition: scale -> statement
+    "Easy": "It was easy to complete the tasks with this robot.",
+    "Helpful": "The robot was helpful.",
+    "Precise": "I could make precise motions.",
+    "Intuitive": "The robot was intuitive to control.",
+    "Prefer": "I would use this condition again.",
+}
+SCALES = tuple(QUESTIONS)
+PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessions>/practice/, never analysed
 
 
 def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib.metadata
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +76,14 @@ class SessionConfig:
             raise ConfigError(
                 f"participant must be a short id without spaces or slashes, got {self.participant!r}"
             )
+
+
+def _lasa_version() -> str:
+    """``lasa.__version__``, read as it reads it (without importing the package's exports)."""
+    try:
+        return importlib.metadata.version("lasa")
+    except Exception:  # a source tree that was never installed
+        return "0.0.0+unknown"
 
 
 def _sha256(path: Path) -> str:
@@ -180,8 +189,6 @@ class Station:
 
     def meta(self) -> dict[str, Any]:
         """The sidecar's description of this station."""
-        import lasa
-
         return {
             **dataclasses.asdict(self.config),
             "goals": list(self.task.goal_names),
@@ -192,7 +199,7 @@ class Station:
             "decoder": None if self.decoder_path is None else self.decoder_path.name,
             "decoder_sha256": None if self.decoder_path is None else _sha256(self.decoder_path),
             "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
-            "lasa_version": lasa.__version__,
+            "lasa_version": _lasa_version(),
         }
 
     def columns(self) -> list[str]:

@@ -25,7 +25,7 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
-from lasa.evidence.sessions import SCALES
+from lasa.evidence.sessions import QUESTIONS, SCALES
 
 __all__ = [
     "MAX_PARTICIPANTS",
@@ -35,14 +35,6 @@ __all__ = [
     "ask",
     "survey",
 ]
-
-QUESTIONS = {
-    "Easy": "It was easy to complete the tasks with this robot.",
-    "Helpful": "The robot was helpful.",
-    "Precise": "I could make precise motions.",
-    "Intuitive": "The robot was intuitive to control.",
-    "Prefer": "I would use this condition again.",
-}
 
 
 MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the kit runs

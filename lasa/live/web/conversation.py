@@ -163,8 +163,8 @@ class Conversation:
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        from lasa.evidence.sessions import SCALES
-        from lasa.live.studykit import QUESTIONS, survey
+        from lasa.evidence.sessions import QUESTIONS, SCALES
+        from lasa.live.studykit import survey
 
         questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
         await self.send(header | {"questions": questions})

@@ -19,11 +19,10 @@ from typing import Any
 import pandas as pd
 
 from lasa.base.io import write_text
+from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.web.tokens import check_participant, study_dir
 
-__all__ = ["Step", "plan_of", "Progress", "session_folder", "PRACTICE_TASK"]
-
-PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessions>/practice/
+__all__ = ["Step", "plan_of", "Progress", "session_folder"]
 
 
 @dataclasses.dataclass(frozen=True)

@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.station import SessionConfig, Station
-from lasa.live.web.plan import PRACTICE_TASK
 from lasa.live.web.tokens import study_dir
 
 if TYPE_CHECKING:
