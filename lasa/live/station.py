@@ -1,21 +1,9 @@
-r"""The robot side of a live session: its settings, and one control step per input sample.
+"""The robot side of a live session: its settings (:class:`SessionConfig`) and one control step per sample.
 
-A :class:`SessionConfig` names the robot, the task, the condition and the participant; a
-:class:`Station` builds what it runs (the robot and its scene, the cup task or the eating task,
-the decoder ``make figures`` trained for it) and runs one control step per sample of an input
-device (:meth:`Station.step`); :func:`log_row` is a step's row of the session log, in
-:meth:`Station.columns` order. ``teleop run`` (:mod:`lasa.live.teleop`) and the web study's
-server (:mod:`lasa.live.web.loop`) drive the same station and log the same rows.
-
-- **Tasks** (:data:`SESSION_TASKS`): ``cups`` (the cup task of the simulations, either robot) and
-  ``Entree`` / ``Dessert`` (the eating study, the Panda). **Conditions** (:data:`lasa.base.conditions.ALL`):
-  ``R``, ``R+SA`` (Retargeting, :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the
-  cups, ``LA+SA+Entropy``.
-- **The step** is the study's: the stick at rest commands nothing; in Retargeting the mode
-  button cycles the modes; the live device is a chooser of the episode runner
-  (:class:`lasa.method.episodes.Runner`), whose step blends, updates the belief and takes the
-  safe transition, so joint limits and the speed bound hold. The stop input holds the robot
-  (no human action, no assistance, the belief frozen).
+A :class:`Station` builds the robot, the cup or eating task and the decoder ``make figures`` trained,
+and steps the episode runner (:class:`lasa.method.episodes.Runner`) with the device as its chooser:
+the stick at rest commands nothing, the mode button cycles Retargeting's modes, and the stop input
+holds the robot (no action, the belief frozen). ``teleop run`` and the web study drive it alike.
 """
 
 from __future__ import annotations
@@ -48,7 +36,7 @@ from lasa.world.task import make_cup_task
 
 __all__ = ["SESSION_TASKS", "SessionConfig", "Station", "log_row"]
 
-SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs: the cups, and the eating tasks
+SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,18 +79,8 @@ def _sha256(path: Path) -> str:
 
 
 class Station:
-    """The robot side of a session: task, decoder, control, and one control step per sample.
-
-    Attributes:
-        config: The session's settings.
-        robot: The robot and scene.
-        task: The cup task or the eating task.
-        control: Control-loop units.
-        decoder: phi (None for Retargeting).
-        state: s, shape (n,); log_belief: log b, shape (G,); mode: Retargeting's mode.
-        waypoint: Index of the next waypoint (eating tasks), or 0.
-        done: Whether the task's last waypoint was reached.
-    """
+    """The robot side of a session: ``robot``, ``task``, ``control``, ``decoder`` (None: Retargeting),
+    the ``mode`` of Retargeting, the ``waypoint`` worked towards and whether the task is ``done``."""
 
     def __init__(self, config: SessionConfig) -> None:
         self.config = config
@@ -146,9 +124,8 @@ class Station:
             )
 
     def _check_belief(self, meta: dict[str, Any], path: Path) -> None:
-        """Refuse a decoder trained with another belief cap than this station's: the decoder reads b,
-        and a belief it never saw (0.99 for one trained without the cap) is a context it does not know.
-        A checkpoint that records no control units is taken as it is."""
+        """Refuse a decoder trained with another belief cap (a belief it never saw is an unknown context);
+        a checkpoint that records no control units is taken as it is."""
         control = meta.get("control")
         if isinstance(control, dict) and control.get("belief_cap", None) != self.control.belief_cap:
             raise CheckpointError(
@@ -239,9 +216,7 @@ class Station:
         n = self.robot.n_joints
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
         pressed = bool(sample.mode) and self.retarget is not None
-        if sample.stop:
-            pass  # hold: no human action, no assistance, the belief frozen
-        else:
+        if not sample.stop:  # stop holds: no human action, no assistance, the belief frozen
             result = self.runner.step(self._chooser(z, pressed))
             a_h = result.human_action[0]
             a_r = result.robot_action[0] if result.robot_action is not None else np.zeros(n)
@@ -264,11 +239,8 @@ class Station:
         }
 
     def _chooser(self, z: np.ndarray, pressed: bool) -> Chooser:
-        """The live device as the runner's chooser: stick ``z`` (and a mode press, in Retargeting).
-
-        Latent actions decode the stick, the stick at rest commanding nothing; Retargeting turns
-        a press, the stick at rest, or a twist in the mode into a human action by mink's IK.
-        """
+        """The device as the runner's chooser: latent actions decode ``z`` (rest: nothing); Retargeting
+        turns a press, rest or a twist in the mode into a human action by mink's IK."""
         if self.decoder is not None:
             return held_input(self.decoder, z[: self.decoder.z_dim][None], rest="zero")
         retarget = self.retarget
@@ -286,16 +258,8 @@ class Station:
 
 def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
     """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    row = [
-        step,
-        t,
-        float(late),
-        *rec["raw"],
-        float(rec["connected"]),
-        float(rec["mode_press"]),
-        float(rec["stop"]),
-    ]
-    row += [*rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
+    flags = [float(rec["connected"]), float(rec["mode_press"]), float(rec["stop"])]
+    row = [step, t, float(late), *rec["raw"], *flags, *rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
     for key in ("s", "b", "a_h", "a_r", "a"):
         row += list(rec[key])
     return row

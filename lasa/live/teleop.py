@@ -1,13 +1,9 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
-``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` (or ``make
-teleop ARGS="..."``) runs the simulations' control step (Algorithm 1, :mod:`lasa.live.station`) at a
-fixed rate in MuJoCo's passive viewer, from a gamepad or the keyboard (:mod:`lasa.live.devices`), on
-``cups``, ``Entree`` or ``Dessert`` under ``R``, ``R+SA``, ``LA``, ``LA+SA`` (and, for the cups,
-``LA+SA+Entropy``), and logs every step (:mod:`lasa.evidence.sessionlog`). ``replay <session>``
-re-runs a log and checks it reproduces the logged states exactly (``--mp4`` renders it);
-``schedule`` writes the counterbalanced order of conditions; ``survey`` records the 7-point Likert
-questionnaire (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
+``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` runs the
+control step (:mod:`lasa.live.station`) at a fixed rate from a gamepad or the keyboard; ``replay``
+re-runs a log and checks its states bit for bit (``--mp4`` renders it); ``schedule`` and ``survey``
+are the study kit (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -35,14 +31,13 @@ __all__ = ["run_session", "replay", "main"]
 
 
 class _Overlay:
-    """The viewer's extras: belief spheres over the goals and the instruction text."""
+    """The viewer's extras: belief spheres over the goals (1 to 5 cm) and the instruction text."""
 
     def __init__(self, station: Station) -> None:
         self.station = station
         self.goals = station.robot.goal_positions()
 
     def draw_goals(self, viewer: Any, rec: dict[str, Any]) -> None:
-        """A sphere over each goal, its radius growing with the belief in it (1 cm to 5 cm)."""
         scn = viewer.user_scn
         scn.ngeom = 0
         for g, (pos, p) in enumerate(zip(self.goals, rec["b"], strict=True)):
@@ -60,7 +55,6 @@ class _Overlay:
             scn.ngeom += 1
 
     def draw_text(self, viewer: Any, rec: dict[str, Any]) -> None:
-        """The instruction of the phase, the condition (or STOPPED), the mode, z and the belief."""
         station = self.station
         mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
         status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
@@ -145,7 +139,7 @@ def run_session(
 
 
 def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) -> None:
-    """Refuse a replay whose decoder on disk is not the one the session logged (checksum, config)."""
+    """Refuse a replay whose decoder on disk is not the logged one (checksum, config)."""
     logged, here = meta["decoder_sha256"], station.meta()
     if logged is None and station.decoder_path is not None:
         raise ArtifactError(
@@ -170,14 +164,12 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
     """Re-run a logged session from its inputs and compare its states with the log.
 
     Returns:
-        ``{"steps", "max_state_difference", "exact", "status"}``; the MP4's path if rendered;
-        ``damaged`` (the reason) when a damaged log was replayed with ``allow_damaged``.
+        ``{"steps", "max_state_difference", "exact", "status"}``, ``mp4`` if rendered, ``damaged``
+        (the reason) for a damaged log replayed with ``allow_damaged``.
 
     Raises:
-        ArtifactError: if the sidecar does not record the decoder (its checksum, its config),
-            the decoder on disk is not the one the session used, the scene XML is missing or
-            another (:func:`lasa.evidence.sessionlog.check_scene`), or the log is damaged
-            (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
+        ArtifactError: the sidecar lacks the decoder's checksum or config, the decoder or scene is
+            not the logged one, or the log is damaged (without ``allow_damaged``).
     """
     frame, meta = read_session(session, allow_damaged=allow_damaged)
     check_scene(session, meta)
@@ -190,12 +182,8 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
     station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
     _check_decoder(station, meta, session)
     device = ScriptedDevice.from_table(frame, mode="mode_press")
-    n = station.robot.n_joints
-    logged = frame[[f"s{i}" for i in range(n)]].to_numpy()
-    states = []
-    for _ in range(len(frame)):
-        states.append(station.step(device.poll())["s"])
-    replayed = np.asarray(states)
+    logged = frame[[f"s{i}" for i in range(station.robot.n_joints)]].to_numpy()
+    replayed = np.asarray([station.step(device.poll())["s"] for _ in range(len(frame))])
     diff = float(np.abs(replayed - logged).max()) if len(logged) else 0.0
     out: dict[str, Any] = {
         "steps": len(frame),
@@ -215,12 +203,7 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
 
 
 def _screenshot(path: str, timeout_s: float = 30.0) -> None:
-    """Save a screenshot of the X display (the viewer's window) once it shows a drawn scene.
-
-    Software rendering on a busy machine may take seconds to draw the viewer's first
-    frames; the display is grabbed every half second until it is no longer flat (or until
-    ``timeout_s``), and the last grab is saved either way.
-    """
+    """Save a screenshot of the X display once it is not flat (grabbed every 0.5 s, up to ``timeout_s``)."""
     from PIL import ImageGrab
 
     start = time.perf_counter()
@@ -234,7 +217,7 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
 
 
 def _check_display() -> None:
-    """Refuse, with what to do, to open the viewer where there is no display to open it on."""
+    """Refuse, with what to do, to open the viewer without a display."""
     import os
 
     if sys.platform.startswith("linux") and not (

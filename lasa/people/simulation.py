@@ -1,13 +1,9 @@
-"""The eating study's loop, whichever participant model runs it: set up, observe, record.
+"""The simulated eating study's driver, whichever participant model runs it: set up, observe, record.
 
-Every model of participant (:mod:`lasa.people.participants`, :mod:`lasa.people.planning`) runs
-the same study: the same episodes (:func:`lasa.people.design.layout`), each drawing from its
-own random stream ``default_rng([seed, participant, condition, task])`` (shared by the SA
-members: common random numbers, so the members' comparisons are paired), the same waypoints,
-and the same record (:class:`lasa.world.record.Episodes`). The episode runner
-(:class:`lasa.method.episodes.Runner`) steps them; at every step :func:`run_steps` observes
-every episode (the fork's frames, the waypoints reached, the episodes that finished), and the
-model is the runner's chooser of the running ones.
+Every model runs the same episodes (:func:`lasa.people.design.layout`), each with its own stream
+``default_rng([seed, participant, condition, task])`` (shared by the SA members: paired), tracks
+waypoints with :class:`lasa.world.fork.WaypointTracker` and records :class:`lasa.world.record.Episodes`;
+the episode runner steps them with the model as its chooser.
 """
 
 from __future__ import annotations
@@ -67,11 +63,8 @@ class Setting:
 
 @dataclasses.dataclass
 class State:
-    """The participants' side of a running study, (E, ...) each, and the fork's record.
-
-    ``pos``, ``axis``, ``jp`` and ``jr`` are the fork's frames at the current joints
-    (:func:`lasa.world.fork.tip_frames`), read when the step is observed.
-    """
+    """The participants' side of a running study, (E, ...) each, and the fork's record; ``pos``, ``axis``,
+    ``jp`` and ``jr`` are the fork's frames now (:func:`lasa.world.fork.tip_frames`)."""
 
     mode: np.ndarray  # Retargeting mode (E,)
     w: np.ndarray  # current waypoint (E,)
@@ -99,8 +92,8 @@ def prepare(
     """Check the inputs and build the study's fixed parts.
 
     Raises:
-        ConfigError: on a decoder that does not fit the task or the 2-axis stick, or
-            interfaces that are not a non-empty subset of ``("R", "LA")``.
+        ConfigError: a decoder that does not fit the task or the 2-axis stick, or interfaces that
+            are not a non-empty subset of ``("R", "LA")``.
     """
     check_decoder(decoder, task)
     if not interfaces or not set(interfaces) <= {"R", "LA"}:
@@ -190,18 +183,8 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
 
 
 def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
-    """Run the study to its end: the runner steps the running episodes by ``choose``.
-
-    Args:
-        setting: The study's fixed parts (:func:`prepare`).
-        state: The participants' side at the start (:func:`start`), advanced in place.
-        choose: The participant model, the runner's chooser.
-        desc: The progress bar's label.
-        progress: Show a progress bar.
-
-    Returns:
-        The study's record.
-    """
+    """The study's record, run to its end: the runner steps the running episodes by ``choose`` (the
+    participant model) from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
     lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
     # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
     assist = Assist(

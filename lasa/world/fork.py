@@ -32,15 +32,9 @@ __all__ = [
 def tip_frames(
     robot: Robot, data: mujoco.MjData, qs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The grasp site's position, direction (+z) and Jacobians at joint vectors ``qs`` (B, n).
-
-    :meth:`lasa.world.robot.Robot.grasp_jacobians`, split: ``data`` is the MjData it writes where
-    the arm is not a chain of hinges (a chain's batch needs none).
-
-    Returns:
-        position (B, 3), direction (B, 3), translational Jacobian (B, 3, n) and rotational
-        Jacobian (B, 3, n) with respect to the arm joints.
-    """
+    """The grasp site's position (B, 3), direction (+z, (B, 3)) and translational and rotational Jacobians
+    (B, 3, n) at joints ``qs`` (B, n): :meth:`lasa.world.robot.Robot.grasp_jacobians` (writing ``data``
+    where the arm is not a chain of hinges), split."""
     pos, rot, jac = robot.grasp_jacobians(qs, data)
     return pos, rot[:, :, 2], jac[:, :3], jac[:, 3:]
 
@@ -58,15 +52,8 @@ def normalise(v: np.ndarray) -> np.ndarray:
 def tip_motion(
     jp: np.ndarray, jr: np.ndarray, axis: np.ndarray, dq: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The tip's displacement and new direction for joint steps ``dq`` (A, K, n), to first order.
-
-    Args:
-        jp, jr: Translational and rotational Jacobians, (A, 3, n).
-        axis: The fork's direction now, (A, 3).
-        dq: Candidate joint steps, (A, K, n) [rad].
-
-    Returns:
-        Displacements (A, K, 3) [m] and unit directions (A, K, 3).
+    """The tip's displacements (A, K, 3) [m] and new unit directions (A, K, 3) for joint steps ``dq``
+    (A, K, n) [rad], to first order, from Jacobians ``jp``, ``jr`` (A, 3, n) and direction ``axis`` (A, 3).
     """
     dp = np.einsum("aij,akj->aki", jp, dq)
     rot = np.einsum("aij,akj->aki", jr, dq)
