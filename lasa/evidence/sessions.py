@@ -124,16 +124,18 @@ def load_sessions(
     Raises:
         ArtifactError: if the folder holds no sound eating-task session, or a duplicate.
     """
-    from lasa.world.eating import EatingTask
-
-    if not isinstance(task, EatingTask):
-        raise ConfigError(
-            "load_sessions reads eating-task sessions; pass lasa.world.eating.make_eating_task()"
-        )
+    _check_task(task, "load_sessions")
     logs, left_out = scan_sessions(folder, include_interrupted, include_damaged)
     for row in left_out.itertuples():
         warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=2)
     return _episodes(logs, left_out, folder, task)
+
+
+def _check_task(task: object, caller: str) -> None:
+    from lasa.world.eating import EatingTask
+
+    if not isinstance(task, EatingTask):
+        raise ConfigError(f"{caller} reads eating-task sessions; pass lasa.world.eating.make_eating_task()")
 
 
 def _episodes(
@@ -241,13 +243,9 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
         (:func:`likert_tests`); ``left_out`` and ``dropped``, each with the reason (also warned).
     """
     from lasa.evidence import stats
-    from lasa.world.eating import EatingTask
     from lasa.world.measures import measures
 
-    if not isinstance(task, EatingTask):
-        raise ConfigError(
-            "analyse_sessions reads eating-task sessions; pass lasa.world.eating.make_eating_task()"
-        )
+    _check_task(task, "analyse_sessions")
     logs, left_out = scan_sessions(folder)
     frames = measures(task, _episodes(logs, left_out, folder, task))
     out = dict(frames)

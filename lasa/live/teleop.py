@@ -30,52 +30,38 @@ from lasa.method.retarget import MODES
 __all__ = ["run_session", "replay", "main"]
 
 
-class _Overlay:
-    """The viewer's extras: belief spheres over the goals (1 to 5 cm) and the instruction text."""
-
-    def __init__(self, station: Station) -> None:
-        self.station = station
-        self.goals = station.robot.goal_positions()
-
-    def draw_goals(self, viewer: Any, rec: dict[str, Any]) -> None:
+def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
+    """Pose the viewer's robot at this step's state, draw a belief sphere over each goal (1 to 5 cm)
+    and the instruction text, and sync the window."""
+    with viewer.lock():
+        data.qpos[station.robot.qpos_adr] = rec["s"]
+        mujoco.mj_forward(station.robot.model, data)
         scn = viewer.user_scn
         scn.ngeom = 0
-        for g, (pos, p) in enumerate(zip(self.goals, rec["b"], strict=True)):
+        for g, (pos, p) in enumerate(zip(goals, rec["b"], strict=True)):
             if scn.ngeom >= scn.maxgeom:
                 break
-            radius = 0.01 + 0.04 * float(p)
             mujoco.mjv_initGeom(
                 scn.geoms[scn.ngeom],
                 mujoco.mjtGeom.mjGEOM_SPHERE,
-                np.array([radius, 0.0, 0.0]),
+                np.array([0.01 + 0.04 * float(p), 0.0, 0.0]),
                 pos + np.array([0.0, 0.0, 0.18]),
                 np.eye(3).ravel(),
                 np.array([0.95, 0.6 * (g % 2), 0.2, 0.55], dtype=np.float32),
             )
             scn.ngeom += 1
-
-    def draw_text(self, viewer: Any, rec: dict[str, Any]) -> None:
-        station = self.station
-        mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
-        status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
-        text = (
-            f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
-            + "belief: "
-            + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
-        )
-        try:
-            viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
-        except (AttributeError, TypeError):  # an older viewer without text overlays
-            pass
-
-    def show(self, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
-        """Pose the viewer's robot at this step's state, draw the extras, and sync the window."""
-        with viewer.lock():
-            data.qpos[self.station.robot.qpos_adr] = rec["s"]
-            mujoco.mj_forward(self.station.robot.model, data)
-            self.draw_goals(viewer, rec)
-        self.draw_text(viewer, rec)  # takes the viewer's own lock: outside ours
-        viewer.sync()
+    mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
+    status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
+    text = (
+        f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
+        + "belief: "
+        + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
+    )
+    try:  # takes the viewer's own lock: outside ours
+        viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
+    except (AttributeError, TypeError):  # an older viewer without text overlays
+        pass
+    viewer.sync()
 
 
 def run_session(
@@ -108,14 +94,14 @@ def run_session(
     """
     if viewer is not None and viewer_data is None:
         raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
-    overlay = _Overlay(station) if viewer is not None else None
+    goals = station.robot.goal_positions() if viewer is not None else None
 
     def show(rec: dict[str, Any]) -> bool:
-        if overlay is None:
+        if goals is None:
             return True
         if not viewer.is_running():
             return False
-        overlay.show(viewer, viewer_data, rec)
+        _draw(station, goals, viewer, viewer_data, rec)
         return True
 
     session = Session(station, writer, max_steps, realtime)
