@@ -58,8 +58,8 @@ from lasa.people.cohort import Cohort, ParticipantConfig, draw_cohort
 from lasa.people.design import StudyConfig, interface_of
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.measures import measures
+from lasa.world.record import Episodes
 
 __all__ = [
     "Config",

@@ -30,11 +30,11 @@ from lasa.method.runner import Now
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.loop import Setting, State, prepare, run_steps, start
 from lasa.people.policy import choose, progress_gain, rationality
+from lasa.people.simulation import Setting, State, prepare, run_steps, start
 from lasa.world.eating import EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.fork import normalise, tip_motion
+from lasa.world.record import Episodes
 
 __all__ = ["simulate"]
 

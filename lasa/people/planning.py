@@ -3,7 +3,7 @@ r"""Planning participants: the eating study's simulated people who plan over hel
 The participants of :mod:`lasa.people.participants` look one step ahead, and with a decoder
 whose good inputs only pay off when held (the study's headline decoder at the end of a stroke)
 they never finish. The participant here plans over held inputs instead; it is the same person
-otherwise (:mod:`lasa.people.policy`; the same loop: :mod:`lasa.people.loop`), and
+otherwise (:mod:`lasa.people.policy`; the same driver: :mod:`lasa.people.simulation`), and
 :func:`simulate` has the signature and the record of :func:`lasa.people.participants.simulate`.
 
 Every ``replan`` seconds the participant chooses a stick input z and a hold h from ``holds``
@@ -34,11 +34,11 @@ from lasa.method.runner import Now
 from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.loop import Setting, State, prepare, run_steps, start
 from lasa.people.policy import choose, progress_gain, rationality
+from lasa.people.simulation import Setting, State, prepare, run_steps, start
 from lasa.world.eating import EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.fork import tip_frames
+from lasa.world.record import Episodes
 
 __all__ = ["PlanConfig", "simulate"]
 
