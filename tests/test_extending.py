@@ -172,7 +172,7 @@ def users_at_each_goal(task: lasa.GoalTask, per_goal: int) -> lasa.UserPopulatio
         target=task.target(goal, theta),
         beta0=np.full(n, 1000.0),
         slope=np.zeros(n),
-        stream=np.arange(n),
+        user=np.arange(n),
     )
 
 

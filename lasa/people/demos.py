@@ -60,7 +60,7 @@ __all__ = [
     "demonstration_summary",
     "collect_eating_demonstrations",
     "EATING_DEMOS",
-    "EATING_READINGS",
+    "SEGMENTATIONS",
 ]
 
 
@@ -287,11 +287,14 @@ def _dataset(
 EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
 
 
-EATING_READINGS = ("continuous", "home", "transfers", "leaves")  # how the eating demonstrations are cut
+SEGMENTATIONS = ("continuous", "home", "transfers", "leaves")  # how the eating demonstrations are cut
 
 
 def collect_eating_demonstrations(
-    task: EatingTask, control: ControlConfig, config: DemoConfig = EATING_DEMOS, reading: str = "continuous"
+    task: EatingTask,
+    control: ControlConfig,
+    config: DemoConfig = EATING_DEMOS,
+    segmentation: str = "continuous",
 ) -> Demonstrations:
     """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
 
@@ -299,7 +302,7 @@ def collect_eating_demonstrations(
     entry s*(g, theta, 0) along a straight joint-space line, **stroke** through the food to
     s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there. Motions
     follow the cup demonstrations' speed law, with holds; beliefs are computed online over the task's
-    goals, with the same noisy copies (:func:`collect_demonstrations`). ``reading`` is how a teacher
+    goals, with the same noisy copies (:func:`collect_demonstrations`). ``segmentation`` is how a teacher
     cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start from the
     belief held after working there), ``home`` (all from (perturbed) home, uniform belief),
     ``transfers`` (from home, plus separate moves between goals' entries, uniform belief) or ``leaves``
@@ -310,7 +313,7 @@ def collect_eating_demonstrations(
         task: The eating task (:func:`lasa.world.eating.make_eating_task`).
         control: Control-loop units.
         config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
-        reading: How the demonstrations are cut, one of :data:`EATING_READINGS`.
+        segmentation: How the demonstrations are cut, one of :data:`SEGMENTATIONS`.
     """
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
@@ -324,10 +327,10 @@ def collect_eating_demonstrations(
         down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
-    check_choice("reading", reading, EATING_READINGS)
+    check_choice("segmentation", segmentation, SEGMENTATIONS)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
-            starts, beliefs_0, manipulate = _eating_starts(task, control, config, reading, g, rng)
+            starts, beliefs_0, manipulate = _eating_starts(task, control, config, segmentation, g, rng)
             for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
                 target = task.target(g, theta)
                 segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
@@ -356,11 +359,11 @@ def _eating_starts(
     task: EatingTask,
     control: ControlConfig,
     config: DemoConfig,
-    reading: str,
+    segmentation: str,
     g: int,
     rng: np.random.Generator,
 ) -> tuple[list[np.ndarray], list[np.ndarray | None], list[bool]]:
-    """The starts of goal ``g``'s demonstrations under ``reading``: (pose, start belief, manipulates).
+    """The starts of goal ``g``'s demonstrations under ``segmentation``: (pose, start belief, manipulates).
 
     Home and ``n_starts - 1`` perturbed homes (``n_starts + G - 2`` for ``home``), each from a
     uniform belief (None) and manipulating; then, unless ``home``, one start per other goal:
@@ -369,7 +372,7 @@ def _eating_starts(
     ``continuous`` only. Draws from ``rng`` in that order.
     """
     robot = task.robot
-    n_home = config.n_starts + (task.n_goals - 1 if reading == "home" else 0)
+    n_home = config.n_starts + (task.n_goals - 1 if segmentation == "home" else 0)
     starts = [task.start.copy()]
     starts += [
         robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
@@ -377,17 +380,17 @@ def _eating_starts(
     ]
     beliefs_0: list[np.ndarray | None] = [None] * len(starts)
     manipulate = [True] * len(starts)
-    if reading == "home":
+    if segmentation == "home":
         return starts, beliefs_0, manipulate
     for other in range(task.n_goals):
         if other == g:
             continue
         tilt = float(rng.uniform())
-        if reading == "leaves":
+        if segmentation == "leaves":
             starts.append(task.pose(other, np.array([tilt]), np.array([1.0]))[0])
         else:
             starts.append(task.target(other, tilt))
         settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
-        beliefs_0.append(settled if reading in ("continuous", "leaves") else None)
-        manipulate.append(reading == "continuous")
+        beliefs_0.append(settled if segmentation in ("continuous", "leaves") else None)
+        manipulate.append(segmentation == "continuous")
     return starts, beliefs_0, manipulate

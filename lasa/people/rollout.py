@@ -72,9 +72,9 @@ class BoltzmannUsers:
         t, users = now.t, self.users
         phi = decode_candidates(self.decoder, self.grid, now.state, now.belief)  # (U, K, n): one call
         costs = user_costs(users.target_at(t), now.state, phi, self.dt)
-        k = choose_latent(costs, users.beta(t), gumbel_noise(self.noise[users.stream, t]))
+        k = choose_latent(costs, users.beta(t), gumbel_noise(self.noise[users.user, t]))
         if self.pilot_noise is not None:
-            k = pilot_choice(users, k, self._k_prev, self.pilot_noise[users.stream, t], len(self.grid))
+            k = pilot_choice(users, k, self._k_prev, self.pilot_noise[users.user, t], len(self.grid))
             self._k_prev = k
         self.z[t] = self.grid[k]
         return phi[np.arange(len(k)), k]
@@ -102,11 +102,11 @@ def rollout(
         control: Control-loop units (dt, speed bound, belief model, n_z).
         horizon: Number of control steps T.
         noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
-            ``noise[users.stream[u]]``. K must equal the number of joystick candidates.
+            ``noise[users.user[u]]``. K must equal the number of joystick candidates.
         progress: Show a tqdm progress bar over the steps.
         pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
             (``users.pilot``, :func:`lasa.people.users.pilot_choice`); user u draws from
-            ``pilot_noise[users.stream[u]]``. Needed only by those pilots.
+            ``pilot_noise[users.user[u]]``. Needed only by those pilots.
         assistance: Each user's member of :mod:`lasa.method.assistance`, shape (U,), so that
             users of several readings share one batch; default ``control.assistance`` for everyone.
 

@@ -46,8 +46,8 @@ class UserPopulation:
         target: Each user's desired final pose s*, shape (U, n) [rad].
         beta0: Rationality at t = 0, shape (U,) [1/rad^2].
         slope: Growth of the rationality per step, m in beta(t) = beta0 + m t, (U,).
-        stream: The random stream each user draws from (an index into the noise), (U,): users
-            that share it share their draws (the figures' CSVs call it ``seed``, the user's index).
+        user: Each user's index, which picks their random draws from the noise, (U,): users
+            that share it share their draws (the figures' CSVs call it ``seed``).
         first_target: The pose each user aims at before changing their mind, (U, n);
             ``None`` for users who never do.
         change_step: N, the first step at which each user aims at ``target``, (U,).
@@ -60,7 +60,7 @@ class UserPopulation:
     target: np.ndarray
     beta0: np.ndarray
     slope: np.ndarray
-    stream: np.ndarray
+    user: np.ndarray
     first_target: np.ndarray | None = None
     change_step: np.ndarray | None = None
     pilot: str = "boltzmann"
