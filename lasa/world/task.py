@@ -1,7 +1,7 @@
 r"""The cup task: cups as the goals, and a preference from a top grasp to a side grasp.
 
 Cups stand on a table (the goals G: two in the paper's scenes, as many as a registered
-robot's scene has, :func:`lasa.world.robot.register_robot`). At any cup the user may want any grasp on
+robot's scene has, :func:`lasa.world.robot.load_robot`). At any cup the user may want any grasp on
 a continuum theta in [0, 1]: theta = 0 approaches from the top (fingers pointing
 down), theta = 1 from the side (fingers horizontal). The side direction is the
 horizontal direction from the robot's base to the cup, turned towards the midline by
