@@ -29,8 +29,8 @@ import numpy as np
 import pandas as pd
 
 from lasa.base.errors import ConfigError
+from lasa.world.chain import rot_z
 from lasa.world.robot import Robot, mesh_dir
-from lasa.world.rotations import rot_z
 
 __all__ = [
     "DH",
