@@ -1,22 +1,10 @@
-r"""Demonstrations D = {(s, a, b)}: reaches to each cup, then grasp adjustments there.
+r"""Demonstrations D = {(s, a, b)}: reaches to each goal, then adjustments of the preference there.
 
-Each demonstration is one continuous motion, as a kinesthetic teacher would give it:
-
-1. **Reach** from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)`,
-   at a constant joint-space speed that slows exponentially near the target (a
-   saturated proportional law, :math:`a = \min(k, v/\|e\|)\, e` with :math:`e = s^* - s`).
-   Unlike a minimum-jerk profile it moves off the start pose at full speed, so the
-   decoder learns that z moves the arm there too, and it slows down near the grasp,
-   so the decoder learns the small actions that precise grasping needs.
-2. **Adjust** the grasp at that cup: move along the preference curve
-   :math:`\theta \mapsto s^*(g, \theta)` to a few random new preferences, with the
-   same speed law in theta, holding still for a few steps after each.
-
-The belief of each tuple is the one the robot would have computed online along the
-demonstration (:mod:`lasa.method.belief`, starting uniform), so the decoder sees the
-contexts it will meet. Finally every tuple gets noisy copies: the state is perturbed
-and the action gains a correction back towards the demonstrated state, which teaches
-the decoder to return to the demonstrated manifold.
+A reach runs from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)` under a
+saturated proportional speed law, :math:`a = \min(k, v/\|e\|)\, e` (full speed off the start, slow
+near the grasp), then a few moves along :math:`\theta \mapsto s^*(g, \theta)` to random new
+preferences, each followed by a hold. Each tuple's belief is the robot's online one
+(:mod:`lasa.method.belief`); noisy copies teach the decoder to return to the demonstrations.
 """
 
 from __future__ import annotations
@@ -72,9 +60,7 @@ class DemoConfig:
     n_starts: PositiveInt = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
     start_noise: NonNegative = 0.3  # std of the start-pose perturbation [rad]
     n_adjust: NonNegativeInt = 3  # grasp adjustments (moves along the preference curve) per demo
-    speed: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = (
-        0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
-    )
+    speed: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = 0.8  # cruise speed, a fraction of sigma_h [-]
     gain: Positive = 2.0  # proportional gain of the slow-down near each target [1/s]
     tolerance: Positive = 0.01  # a motion ends this close to its target [rad]
     hold_steps: NonNegativeInt = 3  # steps held still after each motion [-]
@@ -89,11 +75,8 @@ class DemoConfig:
 
 
 def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame:
-    """One row per (demonstration, phase): its length and the belief in the demonstrated goal.
-
-    Columns: ``robot``, ``demo``, ``goal`` (the goal's name: a cup's, on the cup task), ``phase`` (``reach``,
-    ``adjust``, ``hold``), ``steps``, ``belief_min`` and ``belief_end``.
-    """
+    """One row per (demonstration, phase): ``robot``, ``demo``, ``goal`` (its name), ``phase``,
+    ``steps``, and the belief in the goal, ``belief_min`` and ``belief_end``."""
     clean = demos.clean()
     return (
         pd.DataFrame(
@@ -115,11 +98,7 @@ def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame
 
 
 def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max_steps: int) -> np.ndarray:
-    """Distance travelled along a path of length ``span`` at each step, under the speed law.
-
-    The law runs on the scalar distance left, u' = min(gain * (span - u), speed), so
-    straight reaches and moves along the preference curve share it.
-    """
+    """Distance travelled along a path of length ``span`` at each step: u' = min(gain (span - u), speed)."""
     u = [0.0]
     while span - u[-1] > tol and len(u) <= max_steps:
         u.append(u[-1] + dt * min(gain * (span - u[-1]), speed))
@@ -129,16 +108,8 @@ def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max
 def collect_demonstrations(
     task: GoalTask, control: ControlConfig, config: DemoConfig = DemoConfig()
 ) -> Demonstrations:
-    """Generate the demonstration dataset for ``task``.
-
-    Args:
-        task: The goal task (robot, goals, preference curves, start pose).
-        control: Control-loop units: dt, sigma_h (the speed scale) and the belief model.
-        config: Sizes and motion parameters of the demonstrations.
-
-    Returns:
-        The dataset, noisy copies included (see :meth:`Demonstrations.clean`).
-    """
+    """The demonstrations of ``task``, noisy copies included (:meth:`Demonstrations.clean`), under
+    ``control``'s dt, sigma_h (the speed scale) and belief model."""
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
     demo_id = 0
@@ -150,10 +121,7 @@ def collect_demonstrations(
                 start = task.start.copy()
                 if j > 0:
                     start = robot.clip(start + rng.normal(0.0, config.start_noise, start.shape))
-                segments: list[tuple[np.ndarray, float, int]] = []
-                # 1. reach: straight line in joint space under the speed law
-                segments.append((_line_path(start, task.target(g, theta), cruise, config, dt), theta, REACH))
-                # 2. adjustments along the preference curve, moving in theta
+                segments = [(_line_path(start, task.target(g, theta), cruise, config, dt), theta, REACH)]
                 current = theta
                 for _ in range(config.n_adjust):
                     new = float(rng.uniform(0.0, 1.0))
@@ -174,7 +142,7 @@ def _start(config: DemoConfig) -> tuple[np.random.Generator, dict[str, list[np.n
 def _line_path(
     start: np.ndarray, target: np.ndarray, cruise: float, config: DemoConfig, dt: float
 ) -> np.ndarray:
-    """States along the straight joint-space line from ``start`` to ``target`` under the speed law."""
+    """States along the joint-space line from ``start`` to ``target`` under the speed law."""
     span = float(np.linalg.norm(target - start))
     u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
     return start + (u / max(span, 1e-12))[:, None] * (target - start)
@@ -208,12 +176,8 @@ def _append_demo(
     n_joints: int,
     start_belief: np.ndarray | None = None,
 ) -> None:
-    """Append one demonstration's tuples: each segment's finite differences, then a hold.
-
-    ``segments`` are (path of states, preference, phase label); the belief is the one the
-    robot computes online along the demonstration, starting from ``start_belief``
-    (default uniform).
-    """
+    """Append one demonstration's tuples: each segment's (path, preference, phase) finite
+    differences, then a hold; the online belief from ``start_belief`` (default uniform)."""
     log_b = uniform_log_belief(1, len(goal_sets))[0] if start_belief is None else np.log(start_belief)
     for path, th, phase in segments:
         s = path[:-1]
@@ -223,7 +187,6 @@ def _append_demo(
             a = np.concatenate([a, np.zeros((config.hold_steps, n_joints))])
         ph = np.full(len(s), phase)
         ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
-        # online belief along the demonstration
         for k in range(len(s)):
             beliefs.append(belief(log_b))
             lik = log_likelihood(
@@ -246,11 +209,8 @@ def _dataset(
     config: DemoConfig,
     rng: np.random.Generator,
 ) -> Demonstrations:
-    """The dataset from the demonstrations' tuples, with ``config.n_perturb`` noisy copies of each.
-
-    A copy's state is perturbed and its action corrected back towards the demonstrated
-    state (clipped below sigma_h), which teaches the decoder to return to the manifold.
-    """
+    """The dataset of the tuples and ``config.n_perturb`` noisy copies of each: the state perturbed,
+    the action corrected back towards the demonstrated state (clipped below sigma_h)."""
     states = np.concatenate(rows["s"])
     actions = np.concatenate(rows["a"])
     b = np.stack(beliefs)
@@ -281,12 +241,8 @@ def _dataset(
     )
 
 
-# The eating task's demonstrations: five tilts per goal, each reached from home and from
-# the entries of the three other goals, then stroked, adjusted once and stroked again:
-# about 20 minutes of motion, the paper's amount (notebook 10 measures it).
+# Five tilts per goal, stroked, adjusted once and stroked again: about the paper's 20 minutes.
 EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
-
-
 SEGMENTATIONS = ("continuous", "home", "transfers", "leaves")  # how the eating demonstrations are cut
 
 
@@ -298,22 +254,13 @@ def collect_eating_demonstrations(
 ) -> Demonstrations:
     """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
 
-    For every goal and each of ``config.n_theta`` tilts, from each start: **reach** the stroke's
-    entry s*(g, theta, 0) along a straight joint-space line, **stroke** through the food to
-    s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there. Motions
-    follow the cup demonstrations' speed law, with holds; beliefs are computed online over the task's
-    goals, with the same noisy copies (:func:`collect_demonstrations`). ``segmentation`` is how a teacher
-    cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start from the
-    belief held after working there), ``home`` (all from (perturbed) home, uniform belief),
-    ``transfers`` (from home, plus separate moves between goals' entries, uniform belief) or ``leaves``
-    (those moves leave a stroke's end, confident: the leave half of Sec. IV-B). In full:
-    ``docs/method-notes.md``.
-
-    Args:
-        task: The eating task (:func:`lasa.world.eating.make_eating_task`).
-        control: Control-loop units.
-        config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
-        segmentation: How the demonstrations are cut, one of :data:`SEGMENTATIONS`.
+    Per goal, tilt and start: **reach** the stroke's entry s*(g, theta, 0), **stroke** to
+    s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there, as
+    :func:`collect_demonstrations` moves. ``segmentation`` (one of :data:`SEGMENTATIONS`) is how a
+    teacher cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start
+    from the belief settled there), ``home`` (all from (perturbed) home, uniform), ``transfers``
+    (plus separate moves between goals' entries, uniform) or ``leaves`` (those moves leave a
+    stroke's end, confident: Sec. IV-B). In full: ``docs/method-notes.md``.
     """
     rng, rows, beliefs = _start(config)
     robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
@@ -363,12 +310,11 @@ def _eating_starts(
     g: int,
     rng: np.random.Generator,
 ) -> tuple[list[np.ndarray], list[np.ndarray | None], list[bool]]:
-    """The starts of goal ``g``'s demonstrations under ``segmentation``: (pose, start belief, manipulates).
+    """The starts of goal ``g``'s demonstrations: (pose, start belief, manipulates) each.
 
-    Home and ``n_starts - 1`` perturbed homes (``n_starts + G - 2`` for ``home``), each from a
-    uniform belief (None) and manipulating; then, unless ``home``, one start per other goal:
-    its entry at a random tilt (``leaves``: its stroke's end), from the belief settled there
-    (``continuous``, ``leaves``) or a uniform one (``transfers``), manipulating for
+    Home and perturbed homes (``n_starts``, ``+ G - 1`` for ``home``), uniform (None) and
+    manipulating; then, unless ``home``, each other goal's entry at a random tilt (``leaves``: its
+    stroke's end), from the belief settled there (uniform for ``transfers``), manipulating for
     ``continuous`` only. Draws from ``rng`` in that order.
     """
     robot = task.robot

@@ -70,11 +70,9 @@ ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
             grasp_standoff=0.10,
             side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
             ik_guesses=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
-            # Units chosen so the paper's regimes exist (notebook 04 explains): one step moves
-            # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
-            # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
-            # mid-preference goal small enough for users to hold other grasps (Eq. T4).
-            control=ControlConfig(),  # the defaults are the values both robots use
+            # Units so the paper's regimes exist (notebook 04): a step moves <= dt * sigma_h = 0.0375 rad,
+            # beta = 75 is noisy, beta = 1000 nearly optimal; alpha = 0.2 lets users hold other grasps.
+            control=ControlConfig(),
         ),
         "panda": RobotSpec(
             name="panda",
@@ -87,13 +85,11 @@ ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
             # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
             top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
             grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
-            # A horizontal hand pointing radially away from the base is out of the Panda's reach at
-            # table height without flipping its wrist (joint 6 hits its limit); approaching each cup
-            # from its outer side, fingers towards the midline, is a natural posture (notebook 01).
+            # pointing radially outward at table height would flip the wrist (joint 6 at its limit):
+            # each cup is approached from its outer side, fingers towards the midline (notebook 01)
             side_azimuth=1.5707963267948966,  # pi/2
             ik_guesses=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
-            # The same units as planar5, for the same reasons (notebook 04).
-            control=ControlConfig(),  # the defaults are the values both robots use
+            control=ControlConfig(),  # planar5's units, for the same reasons
             mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
         ),
     }
@@ -275,7 +271,7 @@ def load_robot(robot: str | RobotSpec) -> Robot:
 
 
 class Robot:
-    """A compiled MuJoCo scene with named, task-level quantities.
+    """A compiled MuJoCo scene answering in the task's terms.
 
     Attributes:
         spec: The :class:`RobotSpec` it was built from.
