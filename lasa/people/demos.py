@@ -40,7 +40,6 @@ from lasa.method.belief import (
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
-from lasa.world.robot import Robot
 
 __all__ = [
     "DemoConfig",
@@ -50,6 +49,9 @@ __all__ = [
     "EATING_DEMOS",
     "SEGMENTATIONS",
 ]
+
+Segment = tuple[np.ndarray, float, int]  # a motion of a demonstration: its states, preference and phase
+Stroke = Callable[[int, float], list[Segment]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,12 +99,112 @@ def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame
     )
 
 
-def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max_steps: int) -> np.ndarray:
-    """Distance travelled along a path of length ``span`` at each step: u' = min(gain (span - u), speed)."""
-    u = [0.0]
-    while span - u[-1] > tol and len(u) <= max_steps:
-        u.append(u[-1] + dt * min(gain * (span - u[-1]), speed))
-    return np.asarray(u)
+class _Collector:
+    """A collection under way: its random stream, its tuples so far, and the demonstrator's motions."""
+
+    def __init__(self, task: GoalTask, control: ControlConfig, config: DemoConfig) -> None:
+        self.task, self.control, self.config = task, control, config
+        self.rng = np.random.default_rng(config.seed)
+        self.rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+        self.beliefs: list[np.ndarray] = []
+        self.cruise = config.speed * control.action_scale
+        self.goal_sets = belief_targets(task, control.likelihood)
+        self.n_demos = 0
+
+    def _progress(self, span: float) -> np.ndarray:
+        """Distance travelled along a path of length ``span`` at each step: u' = min(gain (span - u), v)."""
+        config, dt = self.config, self.control.dt
+        u = [0.0]
+        while span - u[-1] > config.tolerance and len(u) <= config.max_steps:
+            u.append(u[-1] + dt * min(config.gain * (span - u[-1]), self.cruise))
+        return np.asarray(u)
+
+    def line(self, start: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """States along the joint-space line from ``start`` to ``target`` under the speed law."""
+        span = float(np.linalg.norm(target - start))
+        return start + (self._progress(span) / max(span, 1e-12))[:, None] * (target - start)
+
+    def curve(self, curve: Callable[[np.ndarray], np.ndarray], start: float, end: float) -> np.ndarray:
+        """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
+        grid = np.linspace(start, end, 64)
+        pts = curve(grid)
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        return curve(np.interp(self._progress(float(arc[-1])), arc, grid))
+
+    def adjust(
+        self, g: int, theta: float, segments: list[Segment], stroke: Stroke | None = None
+    ) -> list[Segment]:
+        """``segments`` and ``n_adjust`` moves along goal g's curve to random preferences (each stroked)."""
+        current = theta
+        for _ in range(self.config.n_adjust):
+            new = float(self.rng.uniform(0.0, 1.0))
+            segments.append((self.curve(functools.partial(self.task.target, g), current, new), new, ADJUST))
+            if stroke is not None:
+                segments += stroke(g, new)
+            current = new
+        return segments
+
+    def append(self, segments: list[Segment], goal: int, start_belief: np.ndarray | None = None) -> None:
+        """Append one demonstration: each (path, preference, phase)'s finite differences, then a hold,
+        with the online belief from ``start_belief`` (default uniform)."""
+        control, config, rows = self.control, self.config, self.rows
+        log_b = (
+            uniform_log_belief(1, len(self.goal_sets))[0] if start_belief is None else np.log(start_belief)
+        )
+        for path, th, phase in segments:
+            s = path[:-1]
+            a = np.diff(path, axis=0) / control.dt
+            if config.hold_steps:
+                s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
+                a = np.concatenate([a, np.zeros((config.hold_steps, self.task.robot.n_joints))])
+            ph = np.full(len(s), phase)
+            ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
+            for k in range(len(s)):
+                self.beliefs.append(belief(log_b))
+                lik = log_likelihood(
+                    s[k], a[k], self.goal_sets, control.dt, control.belief_beta, control.likelihood_step
+                )
+                log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
+            rows["s"].append(s)
+            rows["a"].append(a)
+            rows["demo"].append(np.full(len(s), self.n_demos))
+            rows["goal"].append(np.full(len(s), goal))
+            rows["theta"].append(np.full(len(s), th))
+            rows["phase"].append(ph)
+        self.n_demos += 1
+
+    def dataset(self) -> Demonstrations:
+        """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
+        back towards the demonstrated state (clipped below sigma_h)."""
+        robot, config, rows = self.task.robot, self.config, self.rows
+        states = np.concatenate(rows["s"])
+        actions = np.concatenate(rows["a"])
+        b = np.stack(self.beliefs)
+        meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
+        copies_s, copies_a = [states], [actions]
+        for _ in range(config.n_perturb):
+            noise = self.rng.normal(0.0, config.perturb_std, states.shape)
+            s_new = robot.clip(states + noise)
+            a_new = actions + config.perturb_gain * (states - s_new)
+            norm = np.linalg.norm(a_new, axis=1, keepdims=True)
+            limit = 0.99 * self.control.action_scale
+            a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
+            copies_s.append(s_new)
+            copies_a.append(a_new)
+        reps = config.n_perturb + 1
+        perturbed = np.zeros(len(states) * reps, dtype=bool)
+        perturbed[len(states) :] = True
+        return Demonstrations(
+            robot=robot.name,
+            states=np.concatenate(copies_s),
+            actions=np.concatenate(copies_a),
+            beliefs=np.tile(b, (reps, 1)),
+            demo=np.tile(meta["demo"], reps),
+            goal=np.tile(meta["goal"], reps),
+            theta=np.tile(meta["theta"], reps),
+            phase=np.tile(meta["phase"], reps),
+            perturbed=perturbed,
+        )
 
 
 def collect_demonstrations(
@@ -110,135 +212,15 @@ def collect_demonstrations(
 ) -> Demonstrations:
     """The demonstrations of ``task``, noisy copies included (:meth:`Demonstrations.clean`), under
     ``control``'s dt, sigma_h (the speed scale) and belief model."""
-    rng, rows, beliefs = _start(config)
-    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
-    demo_id = 0
-    goal_sets = belief_targets(task, control.likelihood)
-    thetas = np.linspace(0.0, 1.0, config.n_theta)
+    c = _Collector(task, control, config)
     for g in range(task.n_goals):
-        for theta in thetas:
+        for theta in np.linspace(0.0, 1.0, config.n_theta):
             for j in range(config.n_starts):
                 start = task.start.copy()
                 if j > 0:
-                    start = robot.clip(start + rng.normal(0.0, config.start_noise, start.shape))
-                segments = [(_line_path(start, task.target(g, theta), cruise, config, dt), theta, REACH)]
-                current = theta
-                for _ in range(config.n_adjust):
-                    new = float(rng.uniform(0.0, 1.0))
-                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
-                    segments.append((path, new, ADJUST))
-                    current = new
-                _append_demo(rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints)
-                demo_id += 1
-    return _dataset(robot, rows, beliefs, control, config, rng)
-
-
-def _start(config: DemoConfig) -> tuple[np.random.Generator, dict[str, list[np.ndarray]], list[np.ndarray]]:
-    """A collection's random stream, its empty columns and its empty list of beliefs."""
-    columns: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
-    return np.random.default_rng(config.seed), columns, []
-
-
-def _line_path(
-    start: np.ndarray, target: np.ndarray, cruise: float, config: DemoConfig, dt: float
-) -> np.ndarray:
-    """States along the joint-space line from ``start`` to ``target`` under the speed law."""
-    span = float(np.linalg.norm(target - start))
-    u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
-    return start + (u / max(span, 1e-12))[:, None] * (target - start)
-
-
-def _curve_path(
-    curve: Callable[[np.ndarray], np.ndarray],
-    start: float,
-    end: float,
-    cruise: float,
-    config: DemoConfig,
-    dt: float,
-) -> np.ndarray:
-    """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
-    grid = np.linspace(start, end, 64)
-    pts = curve(grid)
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-    u = _progress(float(arc[-1]), cruise, config.gain, config.tolerance, dt, config.max_steps)
-    return curve(np.interp(u, arc, grid))
-
-
-def _append_demo(
-    rows: dict[str, list[np.ndarray]],
-    beliefs: list[np.ndarray],
-    segments: list[tuple[np.ndarray, float, int]],
-    demo_id: int,
-    goal: int,
-    goal_sets: np.ndarray,
-    control: ControlConfig,
-    config: DemoConfig,
-    n_joints: int,
-    start_belief: np.ndarray | None = None,
-) -> None:
-    """Append one demonstration's tuples: each segment's (path, preference, phase) finite
-    differences, then a hold; the online belief from ``start_belief`` (default uniform)."""
-    log_b = uniform_log_belief(1, len(goal_sets))[0] if start_belief is None else np.log(start_belief)
-    for path, th, phase in segments:
-        s = path[:-1]
-        a = np.diff(path, axis=0) / control.dt
-        if config.hold_steps:
-            s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
-            a = np.concatenate([a, np.zeros((config.hold_steps, n_joints))])
-        ph = np.full(len(s), phase)
-        ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
-        for k in range(len(s)):
-            beliefs.append(belief(log_b))
-            lik = log_likelihood(
-                s[k], a[k], goal_sets, control.dt, control.belief_beta, control.likelihood_step
-            )
-            log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
-        rows["s"].append(s)
-        rows["a"].append(a)
-        rows["demo"].append(np.full(len(s), demo_id))
-        rows["goal"].append(np.full(len(s), goal))
-        rows["theta"].append(np.full(len(s), th))
-        rows["phase"].append(ph)
-
-
-def _dataset(
-    robot: Robot,
-    rows: dict[str, list[np.ndarray]],
-    beliefs: list[np.ndarray],
-    control: ControlConfig,
-    config: DemoConfig,
-    rng: np.random.Generator,
-) -> Demonstrations:
-    """The dataset of the tuples and ``config.n_perturb`` noisy copies of each: the state perturbed,
-    the action corrected back towards the demonstrated state (clipped below sigma_h)."""
-    states = np.concatenate(rows["s"])
-    actions = np.concatenate(rows["a"])
-    b = np.stack(beliefs)
-    meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
-    copies_s, copies_a = [states], [actions]
-    for _ in range(config.n_perturb):
-        noise = rng.normal(0.0, config.perturb_std, states.shape)
-        s_new = robot.clip(states + noise)
-        a_new = actions + config.perturb_gain * (states - s_new)
-        norm = np.linalg.norm(a_new, axis=1, keepdims=True)
-        limit = 0.99 * control.action_scale
-        a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
-        copies_s.append(s_new)
-        copies_a.append(a_new)
-    reps = config.n_perturb + 1
-    perturbed = np.zeros(len(states) * reps, dtype=bool)
-    perturbed[len(states) :] = True
-    return Demonstrations(
-        robot=robot.name,
-        states=np.concatenate(copies_s),
-        actions=np.concatenate(copies_a),
-        beliefs=np.tile(b, (reps, 1)),
-        demo=np.tile(meta["demo"], reps),
-        goal=np.tile(meta["goal"], reps),
-        theta=np.tile(meta["theta"], reps),
-        phase=np.tile(meta["phase"], reps),
-        perturbed=perturbed,
-    )
+                    start = task.robot.clip(start + c.rng.normal(0.0, config.start_noise, start.shape))
+                c.append(c.adjust(g, theta, [(c.line(start, task.target(g, theta)), theta, REACH)]), g)
+    return c.dataset()
 
 
 # Five tilts per goal, stroked, adjusted once and stroked again: about the paper's 20 minutes.
@@ -262,44 +244,25 @@ def collect_eating_demonstrations(
     (plus separate moves between goals' entries, uniform) or ``leaves`` (those moves leave a
     stroke's end, confident: Sec. IV-B). In full: ``docs/method-notes.md``.
     """
-    rng, rows, beliefs = _start(config)
-    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
-    goal_sets = belief_targets(task, control.likelihood)
-    demo_id = 0
+    check_choice("segmentation", segmentation, SEGMENTATIONS)
+    c = _Collector(task, control, config)
 
-    def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:
+    def stroke(g: int, theta: float) -> list[Segment]:
         def along(depths: np.ndarray) -> np.ndarray:
             return task.pose(g, theta, np.atleast_1d(depths))
 
-        down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
+        down = c.curve(along, 0.0, 1.0)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
-    check_choice("segmentation", segmentation, SEGMENTATIONS)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
-            starts, beliefs_0, manipulate = _eating_starts(task, control, config, segmentation, g, rng)
-            for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
-                target = task.target(g, theta)
-                segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
-                if not work:  # a separate transfer: the reach, and its hold, only
-                    _append_demo(
-                        rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints, b0
-                    )
-                    demo_id += 1
-                    continue
-                segments += stroke(g, float(theta))
-                current = float(theta)
-                for _ in range(config.n_adjust):
-                    new = float(rng.uniform(0.0, 1.0))
-                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
-                    segments.append((path, new, ADJUST))
-                    segments += stroke(g, new)
-                    current = new
-                _append_demo(
-                    rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints, b0
-                )
-                demo_id += 1
-    return _dataset(robot, rows, beliefs, control, config, rng)
+            starts = _eating_starts(task, control, config, segmentation, g, c.rng)
+            for start, b0, work in zip(*starts, strict=True):
+                segments = [(c.line(start, task.target(g, theta)), float(theta), REACH)]
+                if work:  # else a separate transfer: the reach, and its hold, only
+                    segments = c.adjust(g, float(theta), segments + stroke(g, float(theta)), stroke)
+                c.append(segments, g, b0)
+    return c.dataset()
 
 
 def _eating_starts(

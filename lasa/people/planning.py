@@ -113,19 +113,9 @@ class _Run(State):
     hold_left: np.ndarray  # steps of the hold left (E,)
 
 
-def _prepare(
-    task: EatingTask,
-    decoder: ActionDecoder,
-    cohort: Cohort,
-    control: ControlConfig,
-    config: StudyConfig,
-    seed: int,
-    interfaces: tuple[str, ...],
-    plan: PlanConfig,
-) -> _Study:
-    """Check the inputs and build the study's fixed parts."""
-    setting = prepare(task, decoder, cohort, control, config, seed, interfaces)
-    replan_steps, hold_steps = plan.steps(control.dt)
+def _prepare(setting: Setting, plan: PlanConfig) -> _Study:
+    """The study's fixed parts: the loop's (:func:`lasa.people.loop.prepare`) and the plans'."""
+    replan_steps, hold_steps = plan.steps(setting.control.dt)
     moves = np.flatnonzero(np.arange(len(setting.grid)) != setting.rest)
     return _Study(
         **vars(setting), moves=moves, replan_steps=replan_steps, coarse=plan.coarse, hold_steps=hold_steps
@@ -269,7 +259,7 @@ def simulate(
         ConfigError: as :func:`lasa.people.participants.simulate`, and on a re-plan period or hold
             that is not a whole number of control steps (:meth:`PlanConfig.steps`).
     """
-    study = _prepare(task, decoder, cohort, control, config, seed, interfaces, plan)
+    study = _prepare(prepare(task, decoder, cohort, control, config, seed, interfaces), plan)
     zeros = np.zeros(len(study.layout.part), dtype=int)
     run = _Run(
         **vars(start(study)),

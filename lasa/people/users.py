@@ -14,18 +14,9 @@ import numpy as np
 
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "PILOTS",
-    "UserPopulation",
-    "user_costs",
-    "choose_latent",
-    "gumbel_noise",
-    "pilot_choice",
-]
+__all__ = ["PILOTS", "UserPopulation", "user_costs", "choose_latent", "gumbel_noise", "pilot_choice"]
 
 PILOTS = ("boltzmann", "laggy", "noisy")
-
-
 _SCALARS = ("pilot", "pilot_prob")  # UserPopulation fields shared by every user
 
 
@@ -91,8 +82,7 @@ class UserPopulation:
             for f in dataclasses.fields(self)
             if f.name not in _SCALARS
         }
-        picked.update(pilot=self.pilot, pilot_prob=self.pilot_prob)
-        return UserPopulation(**picked)  # type: ignore[arg-type]
+        return dataclasses.replace(self, **picked)  # type: ignore[arg-type]
 
     def target_at(self, t: int) -> np.ndarray:
         """The pose each user aims at during step t, shape (U, n)."""

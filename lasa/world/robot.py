@@ -193,38 +193,34 @@ def scene_problems(spec: RobotSpec) -> list[str]:
         )
     obj = mujoco.mjtObj
 
-    def has(kind: mujoco.mjtObj, name: str) -> bool:
-        return mujoco.mj_name2id(model, kind, name) >= 0
+    def missing(kind: mujoco.mjtObj, word: str, name: str, why: str) -> bool:
+        if mujoco.mj_name2id(model, kind, name) >= 0:
+            return False
+        out.append(f"no {word} {name!r} ({why})")
+        return True
 
     for joint in spec.joints:
+        if missing(obj.mjOBJ_JOINT, "joint", joint, "an arm joint of the state, RobotSpec.joints"):
+            continue
         j = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, joint)
-        if j < 0:
-            out.append(f"no joint {joint!r} (an arm joint of the state, RobotSpec.joints)")
-        elif int(model.jnt_type[j]) not in (
-            int(mujoco.mjtJoint.mjJNT_HINGE),
-            int(mujoco.mjtJoint.mjJNT_SLIDE),
-        ):
+        if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
             out.append(f"joint {joint!r} must be a hinge or a slide joint (one coordinate of the state)")
         elif not model.jnt_limited[j]:
             out.append(f"joint {joint!r} needs a range (its limits clip every step)")
-    if not has(obj.mjOBJ_SITE, spec.grasp_site):
-        out.append(
-            f"no site {spec.grasp_site!r} (the grasp site, RobotSpec.grasp_site; its +z is the approach)"
-        )
+    missing(
+        obj.mjOBJ_SITE,
+        "site",
+        spec.grasp_site,
+        "the grasp site, RobotSpec.grasp_site; its +z is the approach",
+    )
     for site in spec.goal_sites:
-        if not has(obj.mjOBJ_SITE, site):
-            out.append(f"no site {site!r} (a goal's site, RobotSpec.goal_sites)")
-        if not has(obj.mjOBJ_GEOM, site):
-            out.append(f"no geom {site!r} (the goal's body, beside its site: new cups copy it)")
-    table = mujoco.mj_name2id(model, obj.mjOBJ_GEOM, "table")
-    if table < 0:
-        out.append("no geom 'table' (a box: the table new cups must stand on)")
-    elif int(model.geom_type[table]) != int(mujoco.mjtGeom.mjGEOM_BOX):
-        out.append("geom 'table' must be a box (new cups must stand within its extent)")
-    if not has(obj.mjOBJ_CAMERA, spec.camera):
-        out.append(f"no camera {spec.camera!r} (the videos' camera, RobotSpec.camera)")
-    if not has(obj.mjOBJ_KEY, spec.home_key):
-        out.append(f"no keyframe {spec.home_key!r} (the start pose, RobotSpec.home_key)")
+        missing(obj.mjOBJ_SITE, "site", site, "a goal's site, RobotSpec.goal_sites")
+        missing(obj.mjOBJ_GEOM, "geom", site, "the goal's body, beside its site: new cups copy it")
+    if not missing(obj.mjOBJ_GEOM, "geom", "table", "a box: the table new cups must stand on"):
+        if int(model.geom_type[model.geom("table").id]) != int(mujoco.mjtGeom.mjGEOM_BOX):
+            out.append("geom 'table' must be a box (new cups must stand within its extent)")
+    missing(obj.mjOBJ_CAMERA, "camera", spec.camera, "the videos' camera, RobotSpec.camera")
+    missing(obj.mjOBJ_KEY, "keyframe", spec.home_key, "the start pose, RobotSpec.home_key")
     return out
 
 
