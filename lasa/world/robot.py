@@ -145,11 +145,8 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         # Mesh paths in the MJCF are relative to the package's mesh folder.
         root = mesh_dir(*spec.mesh_package)
         for mesh in mj_spec.meshes:
-            rel = (
-                Path(mesh.file).relative_to(spec.scene.parent)
-                if Path(mesh.file).is_absolute()
-                else Path(mesh.file)
-            )
+            file = Path(mesh.file)
+            rel = file.relative_to(spec.scene.parent) if file.is_absolute() else file
             if not (root / rel).is_file():
                 raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
             mesh.file = str(root / rel)
