@@ -337,7 +337,7 @@ def _users(task: CupTask, n_users: int, rng: np.random.Generator) -> UserPopulat
         target=task.target(goal, theta),
         beta0=np.full(n_users, 1000.0),
         slope=np.zeros(n_users),
-        stream=np.arange(n_users),
+        user=np.arange(n_users),
     )
 
 

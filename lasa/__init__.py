@@ -68,7 +68,6 @@ _EXPORTS = {
     "load_robot": "lasa.world.robot",
     "make_cup_task": "lasa.world.task",
     "publish": "lasa.evidence.publish",
-    "register_robot": "lasa.world.robot",
     "rollout": "lasa.people.rollout",
     "save_checkpoint": "lasa.method.decoder",
     "save_demonstrations": "lasa.method.dataset",
@@ -108,7 +107,7 @@ if TYPE_CHECKING:
     from lasa.people.rollout import Trajectories, rollout
     from lasa.people.users import UserPopulation
     from lasa.world.goals import GoalTask
-    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot, register_robot
+    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot
     from lasa.world.task import CupTask, make_cup_task
 
 
@@ -166,7 +165,6 @@ __all__ = [
     "load_robot",
     "make_cup_task",
     "publish",
-    "register_robot",
     "rollout",
     "save_checkpoint",
     "save_demonstrations",

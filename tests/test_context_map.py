@@ -212,7 +212,7 @@ def test_rollout_needs_the_map_for_a_grown_task(model, grown):
         target=grown.goals[-1:],
         beta0=np.array([1000.0]),
         slope=np.zeros(1),
-        stream=np.zeros(1, dtype=int),
+        user=np.zeros(1, dtype=int),
     )
     noise = np.random.default_rng(0).random((1, 5, grown.robot.control.n_z))
     with pytest.raises(ConfigError, match="MappedDecoder"):

@@ -7,7 +7,7 @@ verdict in the claims table, a checkpoint's round trip. Each test goes through t
 only (``import lasa`` names and the documented functions of lasa.evidence), on the page's toy
 3-joint planar arm with three cups, whose MJCF the test writes: what a user would write in
 their own files, and nothing in the package. The fixtures put the registries back afterwards,
-so that the other tests see the package's own.
+so that the other tests see the package's own (a robot is an object, in no registry).
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ def write_scene(
 
 
 def toy_spec(scene: Path) -> lasa.RobotSpec:
-    """The user's registration of the toy arm (docs/extending.md, "A robot")."""
+    """The user's spec of the toy arm (docs/extending.md, "A robot")."""
     return lasa.RobotSpec(
         name="toy3",
         scene=scene,
@@ -149,16 +149,14 @@ def pointer_for(task: lasa.GoalTask) -> GoalPointer:
     return GoalPointer(PointerConfig(task.robot.name, tuple(tuple(map(float, g)) for g in task.goals)))
 
 
-# --- fixtures: the registries as the package has them, before and after each test ----------
+# --- fixtures: the toy task; the registries as the package has them, before and after each test
 
 
 @pytest.fixture(scope="module")
 def toy_task(tmp_path_factory: pytest.TempPathFactory):
-    saved = dict(lasa.ROBOTS)
-    lasa.register_robot(toy_spec(write_scene(tmp_path_factory.mktemp("toy"))))
-    yield lasa.make_cup_task(lasa.load_robot("toy3"), n_grid=9)
-    lasa.ROBOTS.clear()
-    lasa.ROBOTS.update(saved)
+    return lasa.make_cup_task(
+        lasa.load_robot(toy_spec(write_scene(tmp_path_factory.mktemp("toy")))), n_grid=9
+    )
 
 
 def users_at_each_goal(task: lasa.GoalTask, per_goal: int) -> lasa.UserPopulation:
@@ -171,16 +169,16 @@ def users_at_each_goal(task: lasa.GoalTask, per_goal: int) -> lasa.UserPopulatio
         target=task.target(goal, theta),
         beta0=np.full(n, 1000.0),
         slope=np.zeros(n),
-        stream=np.arange(n),
+        user=np.arange(n),
     )
 
 
 # --- 1. a robot ------------------------------------------------------------------------------
 
 
-def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(toy_task, tmp_path):
+def test_a_robot_of_ones_own_builds_a_three_goal_task_and_runs_la_sa(toy_task, tmp_path):
     task = toy_task
-    assert "toy3" in lasa.ROBOTS and task.robot.n_joints == 3
+    assert task.robot.name == "toy3" and "toy3" not in lasa.ROBOTS and task.robot.n_joints == 3
     assert task.n_goals == 3 and task.goal_names == ("left", "mid", "right")
     # s*(g, theta) puts the grasp site at each cup, from a top grasp to a side grasp
     robot = task.robot
@@ -204,32 +202,26 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
     # a scene that breaks the naming contract is refused, naming each missing element
     broken = write_scene(tmp_path, table=False, cup_geoms=False, home=False)
     with pytest.raises(lasa.ConfigError) as info:
-        lasa.register_robot(dataclasses.replace(toy_spec(broken), name="toy3_broken"))
+        lasa.load_robot(dataclasses.replace(toy_spec(broken), name="toy3_broken"))
     message = str(info.value)
     for missing in ("geom 'table'", "geom 'cup_left'", "geom 'cup_right'", "keyframe 'home'"):
         assert missing in message, message
-    assert "toy3_broken" not in lasa.ROBOTS
     with pytest.raises(lasa.ConfigError, match="one guess of 3 joint values per goal site"):
-        lasa.register_robot(
-            dataclasses.replace(toy_spec(broken), name="toy3_guesses", ik_guesses=((0.0,) * 3,))
-        )
-    with pytest.raises(lasa.ConfigError, match="registered already"):
-        lasa.register_robot(toy_spec(broken))
+        lasa.load_robot(dataclasses.replace(toy_spec(broken), name="toy3_guesses", ik_guesses=((0.0,) * 3,)))
     with pytest.raises(lasa.ConfigError, match="one of the package's robots"):
-        lasa.register_robot(dataclasses.replace(toy_spec(broken), name="planar5"), replace=True)
+        lasa.load_robot(dataclasses.replace(toy_spec(broken), name="planar5"))
 
 
 def test_a_scene_in_degrees_is_refused_in_one_line_that_says_how_to_fix_it(tmp_path):
     """MJCF's default unit is the degree: the page's ranges (-2.9, 2.9) would compile to +-0.05 rad,
-    where no grasp can be reached. register_robot refuses the scene rather than guess."""
+    where no grasp can be reached. load_robot refuses the scene rather than guess."""
     for compiler in ("", '<compiler autolimits="true"/>', '<compiler angle="degree" autolimits="true"/>'):
         scene = write_scene(tmp_path, compiler=compiler)
         with pytest.raises(lasa.ConfigError) as info:
-            lasa.register_robot(dataclasses.replace(toy_spec(scene), name="toy3_degrees"))
+            lasa.load_robot(dataclasses.replace(toy_spec(scene), name="toy3_degrees"))
         message = str(info.value)
         assert "\n" not in message and "angles are in degrees" in message, message
         assert '<compiler angle="radian"/>' in message, message
-        assert "toy3_degrees" not in lasa.ROBOTS
 
 
 def test_a_cup_out_of_reach_is_an_ik_error_naming_the_cup_and_theta(tmp_path):
@@ -237,14 +229,8 @@ def test_a_cup_out_of_reach_is_an_ik_error_naming_the_cup_and_theta(tmp_path):
     is beyond it. The error says which cup, and at which preference, the solve gave up."""
     far = {"cup_left": -0.45, "cup_mid": 0.30, "cup_right": 0.78}
     spec = dataclasses.replace(toy_spec(write_scene(tmp_path, cups_at=far)), name="toy3_far")
-    robot = lasa.register_robot(spec)
-    try:
-        with pytest.raises(
-            lasa.IKError, match=r"toy3_far \(cup 'cup_right', theta = 0\.000\) did not converge"
-        ):
-            lasa.make_cup_task(robot, n_grid=5)
-    finally:
-        lasa.ROBOTS.pop("toy3_far")
+    with pytest.raises(lasa.IKError, match=r"toy3_far \(cup 'cup_right', theta = 0\.000\) did not converge"):
+        lasa.make_cup_task(lasa.load_robot(spec), n_grid=5)
 
 
 # --- 2. an assistance member -----------------------------------------------------------------

@@ -233,7 +233,7 @@ def complete_participants(
     return frame[~frame.participant.isin(table.participant)], table
 
 
-def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, pd.DataFrame]:
+def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.DataFrame]:
     """People's sessions through the simulated cohort's measures and statistics.
 
     Returns:

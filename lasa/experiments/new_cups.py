@@ -269,7 +269,7 @@ def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, 
         target=big.target(np.full(n, new), sweep.theta),
         beta0=np.full(n, config.beta),
         slope=np.zeros(n),
-        stream=sweep.users,
+        user=sweep.users,
     )
     with_map = {}
     for kind in config.maps:

@@ -18,9 +18,9 @@ import numpy as np
 from lasa.base.config import check_choice, check_range
 from lasa.base.errors import ConfigError, IKError
 from lasa.method.decoder import ActionDecoder
+from lasa.world.chain import rot_z
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import Robot
-from lasa.world.rotations import rot_z
 from lasa.world.task import CupTask, grasp_frame
 
 __all__ = [
