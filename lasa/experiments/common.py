@@ -3,7 +3,7 @@
 A sweep builds one population of simulated users covering every condition (method x
 rationality x user, or method x change step x user, ...) and runs it batched, one
 rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
-User i has the same cup, preference and random stream (``UserPopulation.stream``) in every
+User i has the same cup, preference and random stream (``UserPopulation.user``) in every
 condition, so methods are compared on paired episodes. The figures' CSVs keep the column
 name ``seed`` for that user index (their contract); the code names the column
 :data:`lasa.evidence.verdicts.USER` and the index ``user``, and ``seed`` is only ever the seed
@@ -290,7 +290,7 @@ def run_population(
     keys = np.array([METHOD_DECODER[m] for m in methods])
     pilot_noise = None
     if users.pilot_prob > 0:
-        pilot_noise = pilot_uniforms(int(np.max(users.stream)) + 1, horizon, pilot_seed)
+        pilot_noise = pilot_uniforms(int(np.max(users.user)) + 1, horizon, pilot_seed)
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
         if key not in decoders:

@@ -252,7 +252,7 @@ def run(
         target=target,
         beta0=beta,
         slope=np.zeros(len(user)),
-        stream=user,
+        user=user,
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []

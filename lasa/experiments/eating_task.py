@@ -14,7 +14,7 @@ is the paper's central picture: near the goal, the same input changes meaning, f
 
 **Readings of the study's decoder.** The paper does not say how its demonstrations were
 cut or whether the study's decoder had the entropy term. Each reading of the
-demonstrations (:data:`lasa.people.demos.EATING_READINGS`) trains a base decoder; each base is
+demonstrations (:data:`lasa.people.demos.SEGMENTATIONS`) trains a base decoder; each base is
 then fine-tuned for the same steps with lambda = 0 and with the lambda that notebook 03's
 rule (:func:`lasa.method.entropy.choose_lambda`) picks from a sweep on the ``continuous``
 reading's base (one sweep, not three: each lambda > 0 run costs about a minute here), so
@@ -56,7 +56,7 @@ from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig
-from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
+from lasa.people.demos import EATING_DEMOS, SEGMENTATIONS, DemoConfig, collect_eating_demonstrations
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import GOALS, STUDY_BELIEF_CAP, EatingTask
 from lasa.world.fork import tip_frames
@@ -101,7 +101,7 @@ class Config:
     train: TrainConfig = TrainConfig(z_dim=2)
     goal: str = "middle"  # the bowl the figure looks at [-]
     # demonstration readings trained: at paper scale the two whose decoders have the property under the
-    # study's cap; all of EATING_READINGS under LARGE=1 (configs/large.yaml). home and leaves moved there
+    # study's cap; all of SEGMENTATIONS under LARGE=1 (configs/large.yaml). home and leaves moved there
     # for cost, after this version's first paper-scale run had measured them under the cap: each failed
     # the stay half at every goal [-]
     readings: tuple[str, ...] = ("continuous", "transfers")
@@ -160,9 +160,9 @@ class Config:
         object.__setattr__(self, "readings", tuple(self.readings))
         object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
         if not self.readings:
-            raise ConfigError("readings must name at least one of " + ", ".join(EATING_READINGS))
+            raise ConfigError("readings must name at least one of " + ", ".join(SEGMENTATIONS))
         for name in self.readings:
-            check_choice("reading", name, EATING_READINGS)
+            check_choice("reading", name, SEGMENTATIONS)
         if "continuous" not in self.readings:
             raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
@@ -257,8 +257,8 @@ def train_readings(
 ) -> Readings:
     """Train every reading, measure its property, choose the headline by the property alone.
 
-    Saves each reading's demonstrations and decoder (artifacts ``eating_reading_demos``
-    and ``eating_reading_decoder``), and the headline's as ``eating_decoder``, the one
+    Saves each reading's demonstrations and decoder (artifacts ``eating_segmentation_demos``
+    and ``eating_segmentation_decoder``), and the headline's as ``eating_decoder``, the one
     the study's LA conditions and the teleop kit load first.
     """
     train = config.train
@@ -292,8 +292,10 @@ def _demonstrations(
     """Each demonstration reading's tuples (saved), and a row of its sizes."""
     datasets, rows = {}, []
     for reading in config.readings:
-        demos = collect_eating_demonstrations(task, control, config.demos, reading=reading)
-        save_demonstrations(demos, paths.artifact("eating_reading_demos", task.robot.name, reading=reading))
+        demos = collect_eating_demonstrations(task, control, config.demos, segmentation=reading)
+        save_demonstrations(
+            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=reading)
+        )
         clean = demos.clean()
         rows.append(
             {
@@ -338,7 +340,7 @@ def _fine_tune(
     models.update({name: model for name, (model, _) in zip(runs, fitted, strict=True)})
     models = {name: models[name] for name, _, _ in fine_tunes(config, lam)}  # in training order
     for name, model in models.items():
-        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=name)
+        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=name)
         _save(model, path, fines[name], control, config, reading=name)
     return models, fines
 
@@ -402,7 +404,7 @@ def train_caps(
     The recipe is the headline reading's: its demonstrations (collected with the belief at that
     cap, so their belief labels are that cap's), its base's training settings and its fine-tune
     (steps, lambda, seed). Each decoder's property is measured with the belief at its cap. The
-    decoders are saved as ``eating_reading_decoder`` readings named by :func:`cap_decoder_name`.
+    decoders are saved as ``eating_segmentation_decoder`` readings named by :func:`cap_decoder_name`.
     """
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     lam = readings.chosen_lambda
@@ -413,7 +415,9 @@ def train_caps(
         base_train, steps=config.sweep_steps, entropy_lambda=weight, seed=base_train.seed
     )
     controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
-    demos = {c: collect_eating_demonstrations(task, controls[c], config.demos, reading=reading) for c in caps}
+    demos = {
+        c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=reading) for c in caps
+    }
     runs = [entropy_ablation.Run(demos[c], controls[c], base_train) for c in caps]
     bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
     goal_sets = belief_targets(task, control.likelihood)
@@ -425,7 +429,7 @@ def train_caps(
     models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
     names = {c: cap_decoder_name(readings.headline, c) for c in caps}
     for c, model in models.items():
-        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=names[c])
+        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=names[c])
         _save(model, path, fine, controls[c], config, reading=names[c])
     jobs = [(models[c], controls[c], names[c]) for c in caps]
     frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, CAP_SOURCE))

@@ -1,10 +1,10 @@
 """Fig. sim4's episodes (:mod:`lasa.experiments.sim4`): new cups on the table, and users who reach for them.
 
 A new cup is put on the table after training (:func:`new_cup_positions`), at a growing distance
-from a training cup, and the task grows by it (:func:`lasa.method.newgoals.extend_task`).
+from a training cup, and the task grows by it (:func:`lasa.method.context_map.extend_task`).
 Near-optimal users who want a grasp there run the method twice (:func:`episodes_at`): ``with``
 the context map, the task grown by the cup and the method's decoder run through the map
-(:class:`lasa.method.newgoals.MappedDecoder`, one rollout per kind of map), and ``without``
+(:class:`lasa.method.context_map.MappedDecoder`, one rollout per kind of map), and ``without``
 it, the method unchanged and knowing the training cups only. The users' preferences are drawn
 per user and shared by every cup and mapping; every member's users share one batch per (cup,
 map) (:class:`Sweep`).
@@ -22,8 +22,8 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
 from lasa.experiments.common import Decoders, as_decoders, episodes, swept_assistance
+from lasa.method.context_map import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.decoder import ActionDecoder
-from lasa.method.newgoals import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
@@ -269,7 +269,7 @@ def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, 
         target=big.target(np.full(n, new), sweep.theta),
         beta0=np.full(n, config.beta),
         slope=np.zeros(n),
-        stream=sweep.users,
+        user=sweep.users,
     )
     with_map = {}
     for kind in config.maps:

@@ -198,7 +198,7 @@ def _users(
         target=task.target(goal, theta),
         beta0=beta,
         slope=np.zeros(len(user)),
-        stream=user,
+        user=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )

@@ -158,7 +158,7 @@ def run(
         target=task.target(goal[user], theta[user]),
         beta0=np.full(len(user), config.beta),
         slope=np.zeros(len(user)),
-        stream=user,
+        user=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
         first_target=task.target(wrong, theta[user]),

@@ -132,7 +132,7 @@ def run(
         target=task.target(goal[user], theta[user]),
         beta0=np.zeros(len(user)),
         slope=slope,
-        stream=user,
+        user=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
     )

@@ -2,7 +2,7 @@
 
 A new cup is put on the table after training, at growing distances from a training
 cup. Near-optimal users reach for it with and without the context map
-(:mod:`lasa.method.newgoals`; the episodes are :mod:`lasa.experiments.new_cups`), and the grasp
+(:mod:`lasa.method.context_map`; the episodes are :mod:`lasa.experiments.new_cups`), and the grasp
 error is fitted against the new cup's distance. Notebook ``07_new_goals``.
 
 Measured as the paper's caption and text measure (the headline rows): the new cup's distance
@@ -46,7 +46,7 @@ from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.experiments.common import Decoders, LooksConfig, check_methods, check_needed
 from lasa.experiments.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
-from lasa.method.newgoals import MAP_KINDS
+from lasa.method.context_map import MAP_KINDS
 from lasa.world.fork import angle_between
 from lasa.world.robot import Robot
 from lasa.world.task import CupTask
@@ -141,7 +141,7 @@ class Config(LooksConfig):
     beta: NonNegative = 1000.0  # near-optimal users [1/rad^2]
     horizon: PositiveInt = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
-    # kinds of h run "with" the map (lasa.method.newgoals); straight_line_ee, the paper's line read in
+    # kinds of h run "with" the map (lasa.method.context_map); straight_line_ee, the paper's line read in
     # the gripper's space, is the reading @ee_line of the straight-line claim (one IK per user and step)
     maps: tuple[str, ...] = ("grasp", "straight_line", "straight_line_ee")
 
@@ -178,7 +178,7 @@ def run(
 
     One batched rollout per new cup and mapping: near-optimal users want a grasp at the new cup
     (preferences drawn per user, shared by every cup and mapping); ``with`` runs the method's decoder
-    through the context map (:class:`lasa.method.newgoals.MappedDecoder`) on the grown task,
+    through the context map (:class:`lasa.method.context_map.MappedDecoder`) on the grown task,
     ``without`` knows the training cups only. Distance and error are over the farthest new cup's
     distance, on the table and at the gripper (the headline) or in joint space (``@joint_space``).
 

@@ -32,7 +32,7 @@ from lasa.experiments.study import run as study
 from lasa.method.decoder import ActionDecoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
-from lasa.world.episodes import Episodes
+from lasa.world.record import Episodes
 
 __all__ = [
     "NAME",

@@ -30,7 +30,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.hypotheses import for_member
 from lasa.evidence.plots import wrap_to
 from lasa.experiments.study.run import PAPER_N
-from lasa.world.episodes import Episodes
+from lasa.world.record import Episodes
 
 __all__ = [
     "FigureSpec",

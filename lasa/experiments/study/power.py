@@ -232,7 +232,7 @@ def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) 
         raise ConfigError(f"target must be a power in (0, 1), got {target!r}")
     lacking = [c for c in _COLUMNS if c not in table.columns]
     if lacking:
-        raise ConfigError(f"table lacks {lacking}; pass study_power.power's table")
+        raise ConfigError(f"table lacks {lacking}; pass lasa.experiments.study.power.power's table")
     rows = [
         _needed_row(claim, part.sort_values("n"), target, interpolate)
         for claim, part in table.groupby("claim", sort=False)
