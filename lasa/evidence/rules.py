@@ -2,7 +2,7 @@
 
 A rule judges the claim's shape only (the *effect*); the paper's sizes are its
 :attr:`~lasa.evidence.decision.Rule.paper` numbers. The study's claims (H1-H3) rest on significance
-tests (:attr:`~lasa.evidence.decision.Rule.tests`, computed by :mod:`lasa.experiments.study_tests`),
+tests (:attr:`~lasa.evidence.decision.Rule.tests`, computed by :mod:`lasa.evidence.hypotheses`),
 their one quantity settling them. The rules were written before the results they judge were first
 seen, except where :data:`AFTER_RESULTS` says. A claim of your own carries its rule (``Claim.rule``).
 """
