@@ -177,7 +177,7 @@ def test_map_geometry_on_planar5(task):
 
 
 def test_judged_rows_name_the_measure_then_the_member(model, task):
-    from lasa.experiments.common import judge
+    from lasa.experiments.sweep import judge
 
     config = sim4.Config(
         offsets=(0.08, 0.11, 0.14),

@@ -38,7 +38,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
 from lasa.evidence.verdicts import USER
-from lasa.experiments.common import check_assistance, check_record_every, draw_episodes
+from lasa.experiments.sweep import check_assistance, check_record_every, draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
 from lasa.people.rollout import Trajectories, rollout

@@ -21,7 +21,7 @@ import pandas as pd
 from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import NO_ASSISTANCE, Design, block_seed, block_users
-from lasa.experiments.common import Decoders, as_decoders, episodes, swept_assistance
+from lasa.experiments.sweep import Decoders, as_decoders, episodes, swept_assistance
 from lasa.method.decoder import ActionDecoder
 from lasa.method.newgoals import ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
@@ -141,7 +141,7 @@ class Sweep:
         decoder: The method's decoder; task: the training task; control, config, progress and
             look: as :func:`lasa.experiments.sim4.run` has them.
         alpha: The method's blend weight; noise: the users' noise, as
-            :func:`lasa.experiments.common.episodes` draws it.
+            :func:`lasa.experiments.sweep.episodes` draws it.
         assistance: The members the method's assistance runs under (``none`` alone without it).
         n_users: Users per member; first: the look's first user.
         users: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;

@@ -49,7 +49,7 @@ from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Design, assess, member_frame
 from lasa.experiments import sim1, sim2, sim3
-from lasa.experiments.common import as_decoders, check_assistance, check_needed
+from lasa.experiments.sweep import as_decoders, check_assistance, check_needed
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs

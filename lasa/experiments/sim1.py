@@ -44,7 +44,7 @@ from lasa.evidence.verdicts import (
     group_means,
     member_frame,
 )
-from lasa.experiments.common import (
+from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     check_needed,
@@ -141,7 +141,7 @@ def run(
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one base model): see
-            :func:`lasa.experiments.common.run_population`.
+            :func:`lasa.experiments.sweep.run_population`.
         task: The goal task.
         control: Control-loop units.
         config: The sweep.

@@ -47,7 +47,7 @@ from lasa.evidence.verdicts import (
     group_means,
     member_frame,
 )
-from lasa.experiments.common import (
+from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     episodes,

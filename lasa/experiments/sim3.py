@@ -36,7 +36,7 @@ from lasa.evidence.verdicts import (
     group_means,
     member_frame,
 )
-from lasa.experiments.common import (
+from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     check_record_every,

@@ -44,8 +44,8 @@ from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means, member_frame
-from lasa.experiments.common import Decoders, LooksConfig, check_methods, check_needed
 from lasa.experiments.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
+from lasa.experiments.sweep import Decoders, LooksConfig, check_methods, check_needed
 from lasa.method.newgoals import MAP_KINDS
 from lasa.world.fork import angle_between
 from lasa.world.robot import Robot
@@ -122,7 +122,7 @@ class Config(LooksConfig):
     """Fig. sim4: users who reach for new cups, with and without the context map h.
 
     The users per point, the bootstrap, the readings and the users' seed are
-    :class:`~lasa.experiments.common.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
+    :class:`~lasa.experiments.sweep.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
     ``offsets`` is a grid of at least three distinct distances, ascending (the claims fit a line);
     ``maps`` holds :data:`CLAIM_MAPS`, which notebook 07 reads by name.
     """

@@ -10,7 +10,7 @@ name ``seed`` for that user index (their contract); the code names the column
 of a random generator.
 
 A sweep runs its assisted methods under every member of the shared-autonomy family it
-is given (:func:`arms`); LA, which no assistance touches, runs once. :func:`judge` runs a
+is given (:func:`pairs`); LA, which no assistance touches, runs once. :func:`judge` runs a
 figure's sweep in looks (:func:`lasa.evidence.verdicts.sequential`): every member at the first look,
 then blocks of new users for the headline member until its verdicts are settled.
 """
@@ -50,7 +50,7 @@ T = TypeVar("T")
 
 __all__ = [
     "Decoders",
-    "arms",
+    "pairs",
     "check_assistance",
     "swept_assistance",
     "pilot_uniforms",
@@ -136,7 +136,7 @@ def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tup
     return tuple(dict.fromkeys((control.assistance, *assistance)))
 
 
-def arms(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
+def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
     """(method, assistance) pairs of a sweep: LA once, every assisted method under every member.
 
     LA has alpha = 0, so no member changes it (Eq. M1 gives a = a_h exactly); its rows
@@ -152,10 +152,10 @@ def sweep_grid(
     """Every user of a sweep: (method, assistance) arm x condition x user, in that order.
 
     Returns:
-        Each user's method, assistance member (``none`` for LA, :func:`arms`), condition
+        Each user's method, assistance member (``none`` for LA, :func:`pairs`), condition
         (e.g. its beta) and user, the index of its cup, preference and random stream.
     """
-    grid = list(itertools.product(arms(methods, assistance), conditions, range(n_users)))
+    grid = list(itertools.product(pairs(methods, assistance), conditions, range(n_users)))
     method = np.array([m for (m, _), _, _ in grid])
     assistance_rows = np.array([a for (_, a), _, _ in grid])
     return method, assistance_rows, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
