@@ -45,17 +45,7 @@ from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "MEMBER_COLORS",
-    "Config",
-    "radius",
-    "measure",
-    "run",
-    "summary",
-    "plot",
-]
+__all__ = ["NAME", "COLUMNS", "MEMBER_COLORS", "Config", "radius", "measure", "run", "summary", "plot"]
 
 NAME = "convergence"
 # the contract's columns first, then what summary and plot read
@@ -247,12 +237,7 @@ def run(
     user = np.tile(np.arange(config.users), len(config.betas))
     target = task.target(goal[user], theta[user])
     users = UserPopulation(
-        goal=goal[user],
-        theta=theta[user],
-        target=target,
-        beta0=beta,
-        slope=np.zeros(len(user)),
-        stream=user,
+        goal=goal[user], theta=theta[user], target=target, beta0=beta, slope=np.zeros(len(user)), stream=user
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []

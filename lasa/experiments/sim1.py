@@ -36,14 +36,7 @@ from lasa.evidence.plots import (
     wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    USER,
-    Design,
-    block_seed,
-    block_users,
-    group_means,
-    member_frame,
-)
+from lasa.evidence.verdicts import USER, Design, block_seed, block_users, group_means, member_frame
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,

@@ -16,14 +16,7 @@ from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import (
-    ControlConfig,
-    NonNegative,
-    NonNegativeInt,
-    Positive,
-    PositiveInt,
-    check_list,
-)
+from lasa.base.config import ControlConfig, NonNegative, NonNegativeInt, Positive, PositiveInt, check_list
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
@@ -39,14 +32,7 @@ from lasa.evidence.plots import (
     wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    USER,
-    Design,
-    block_seed,
-    block_users,
-    group_means,
-    member_frame,
-)
+from lasa.evidence.verdicts import USER, Design, block_seed, block_users, group_means, member_frame
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
