@@ -1,12 +1,7 @@
 """What a joystick input means, per context: the latent map (Sec. III-A, Fig. 1).
 
-The heart of the paper is that the meaning of a joystick input changes with the
-robot's confidence: when the belief is uniform, z chooses *which cup*; once it is
-confident, the same z chooses *how to grasp*. This figure makes that visible by
-holding a joystick input constant and letting the robot move under it (latent actions
-alone, alpha = 0): from home with the belief updated online as in Algorithm 1, and at
-the right cup's mid-preference grasp with the belief held confident. Notebook
-``02_decoder_training``.
+A constant z under latent actions alone (alpha = 0): from home with the belief updated online
+(Algorithm 1), and at the right cup's grasp with a confident belief. Notebook ``02_decoder_training``.
 """
 
 from __future__ import annotations
@@ -141,12 +136,7 @@ def plot_grasp_sweep(
     ax: Axes | None = None,
     title: str | None = None,
 ) -> Axes:
-    """Gripper directions at the end of each held input, in the cup's grasp plane.
-
-    The plane is vertical and contains the cup's side-grasp direction, so a top grasp
-    points down and a side grasp points sideways. Each input draws the gripper's last
-    6 cm as a thick segment, and the grasp site's path as a thin line.
-    """
+    """Gripper directions at the end of each held input, in the cup's grasp plane."""
     ax = plt.gca() if ax is None else ax
     robot = task.robot
     cup = robot.goal_positions()[goal]
@@ -249,9 +239,6 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
 
 def property_findings(summary: pd.DataFrame) -> str:
     """One decoder's latent property at each cup and from home, as Markdown bullets, from its measurement.
-
-    For the cup task, whose one phase end per cup is its mid-preference grasp
-    (:func:`lasa.evidence.latent_measure.phase_ends`).
 
     Args:
         summary: One decoder's :func:`lasa.evidence.latent_property.summary` (one row per cup).

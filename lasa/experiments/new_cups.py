@@ -1,14 +1,4 @@
-"""Fig. sim4's episodes (:mod:`lasa.experiments.sim4`): new cups on the table, and users who reach for them.
-
-A new cup is put on the table after training (:func:`new_cup_positions`), at a growing distance
-from a training cup, and the task grows by it (:func:`lasa.method.newgoals.extend_task`).
-Near-optimal users who want a grasp there run the method twice (:func:`episodes_at`): ``with``
-the context map, the task grown by the cup and the method's decoder run through the map
-(:class:`lasa.method.newgoals.MappedDecoder`, one rollout per kind of map), and ``without``
-it, the method unchanged and knowing the training cups only. The users' preferences are drawn
-per user and shared by every cup and mapping; every member's users share one batch per (cup,
-map) (:class:`Sweep`).
-"""
+"""Fig. sim4's episodes (:mod:`lasa.experiments.sim4`): new cups, and users who reach for them."""
 
 from __future__ import annotations
 
@@ -68,24 +58,6 @@ def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
 def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
     """Where each kind of context map sends the new cups' grasps, and how their IK compares.
 
-    For every new cup and kind of map (``config.maps``), from the grasps alone (no users):
-
-    - ``misfit_rad``: the largest ``||h(s*(g, theta)) - s*(g_hat, theta)||`` over the preference
-      grid, how far the map sends a grasp of the new cup from the same grasp of the training
-      cup [rad]; ``misfit_m`` and ``misfit_deg``: the same at the gripper, position [m] and
-      approach axis [deg] (0 for an exact map);
-    - ``margin_rad``: the least distance of the mapped grasps to a joint limit [rad] (negative:
-      outside, where the robot would clip);
-    - ``stretch``: ``1 + <g - s_0, g_hat - g> / (|g - s_0|^2 lambda_1)``, the factor by which the
-      joint-space maps scale progress along the straight line (1: none; NaN for the gripper's
-      line, ``straight_line_ee``);
-
-    and per new cup (the same for every kind): ``joint1_rad`` and ``joint_last_rad``, the largest
-    difference of the first and the last joint between the new cup's and the training cup's
-    grasps; ``branch_rad``, the largest change of that difference between neighbouring
-    preferences (an IK branch switch, a wrist flip, shows as a jump); and ``grasp_margin_rad``,
-    the new grasps' least distance to a joint limit.
-
     Returns:
         One row per (``offset_m``, ``h``), with ``distance`` (on the table, over the farthest).
     """
@@ -133,9 +105,6 @@ def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
 @dataclasses.dataclass(frozen=True)
 class Sweep:
     """What the episodes at every new cup share: the method, one look's users, the new cups.
-
-    Every member's users share one batch per (cup, map): member i's users are rows
-    i * n_users ... (i + 1) * n_users - 1, the same users in each (paired across members).
 
     Attributes:
         decoder: The method's decoder; task: the training task; control, config, progress and

@@ -1,15 +1,7 @@
-"""The verdict map: every sim1-sim3 claim under each reading and setting (notebook ``08_claims_robustness``).
+"""The verdict map: every sim1-sim3 claim under each reading and setting (notebook 08).
 
-A verdict rests on conventions the paper leaves open: the member of the shared-autonomy family
-(:mod:`lasa.method.assistance`), alpha (Eq. M1), sigma_h (the bound on ||phi||, Eq. T4) and the
-simulated user (Eq. S1, or the pilots :data:`lasa.people.users.PILOTS`). This module re-runs the sims
-of Figs. sim1-sim3 in every cell of a grid over those settings (:func:`cells`: one factor at a time
-around the default, or a full factorial) and judges each claim in each cell as the claims table does
-(:mod:`lasa.evidence.verdicts`), at the verdicts' interval level (:data:`LEVEL`), per draw of users
-and pooled; the map colours each cell by its effect word (:data:`lasa.evidence.decision.WORDS`). A
-run-time sigma_h scales the learned decoder's output (:class:`ScaledDecoder`, not retrained). Cells
-run through :func:`lasa.pipeline.scaleout.run_jobs`, locally or on a Dask cluster, with identical results.
-The grid's design and what each cell reuses: ``docs/method-notes.md``.
+The sims re-run in every cell of a grid over the member, alpha, sigma_h and the pilot (:func:`cells`),
+each claim judged as the claims table does; design and reuse: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -177,11 +169,7 @@ class Cell:
 
 
 class ScaledDecoder:
-    """A decoder whose actions are scaled by ``factor``: the same directions at another speed.
-
-    ``ScaledDecoder(model, new_sigma_h / trained_sigma_h)`` runs a decoder trained with
-    one action scale at another, keeping the bound ||phi|| <= sigma_h of Eq. T4.
-    """
+    """A decoder whose actions are scaled by ``factor``: the same directions at another speed."""
 
     def __init__(self, model: ActionDecoder, factor: float) -> None:
         self.model = model
@@ -196,9 +184,6 @@ class ScaledDecoder:
 
 def cells(config: Config, control: ControlConfig) -> list[Cell]:
     """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
-
-    The default cell judges every member of ``config.assistance``, the others the headline
-    member (``control.assistance``) only; a factorial grid judges every member in every cell.
 
     Raises:
         ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
@@ -309,9 +294,6 @@ def default_frames(
 ) -> dict[str, pd.DataFrame]:
     """The default cell's rows from notebooks 04-06: their first look, at the map's sizes.
 
-    Keeps the users ``0 .. config.users - 1`` (the first look's, the same users every cell
-    runs), sim1's rows at the map's betas, sim2's at its change steps; sim3's as episode means.
-
     Raises:
         ConfigError: if a frame lacks a beta or change step of the map, or holds fewer users.
     """
@@ -374,9 +356,6 @@ def run(
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
     """Per (robot, claim): cells with each effect word, and whether the default cell's holds.
-
-    The words are the rows' ``effect`` (:data:`lasa.evidence.decision.WORDS`), the ones the map
-    (:func:`plot`) colours.
 
     Args:
         table: :func:`run`'s rows.
@@ -461,12 +440,6 @@ def level_of(table: pd.DataFrame) -> float:
 
 def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     """The verdict map: claims (rows) x readings and settings (columns), one panel per robot.
-
-    The columns are the headline member's default cell, each other member at the default
-    setting, then each alpha, sigma_h and pilot under the headline member. A cell's colour is
-    its effect word (:data:`COLOURS`, the ``effect`` column); an undecided cell is also hatched,
-    with a "?" after its number. The text is the number the verdict rests on; the title states
-    the cells' interval level (:func:`level_of`).
 
     Raises:
         ConfigError: if the table has no single interval level, or a word outside ``WORDS``.

@@ -1,7 +1,7 @@
 """Fig. sim1: users of fixed expertise (Sec. V-A).
 
-Every method against simulated users of fixed rationality beta (Eq. S1): the final
-state error and the time to reach s*, per beta. Notebook ``04_fixed_expertise``.
+Every method against users of fixed rationality beta (Eq. S1): final state error and time to
+reach s*, per beta. Notebook ``04_fixed_expertise``; the claims' rules: :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -86,12 +86,7 @@ CLAIM_BETAS = (75.0, 1000.0)  # the rationalities the claims compare at (noisy, 
 
 @dataclasses.dataclass(frozen=True)
 class Config(SweepConfig):
-    """Fig. sim1: users of fixed expertise.
-
-    ``betas`` is a grid: distinct, ascending, each in (0, inf) (the figure's beta axis is
-    logarithmic), with 75 and 1000, which the claims read (:data:`CLAIM_BETAS`); ``video_beta``, the
-    user notebook 04's video shows, is one of them.
-    """
+    """Fig. sim1: users of fixed expertise."""
 
     betas: tuple[Rationality, ...] = (
         0.3,
@@ -208,17 +203,6 @@ def _sa_claims(
 ) -> list[Claim]:
     """Evaluate the paper's Fig. sim1 claims on a sim1 frame, comparing ``a`` with ``b``.
 
-    The decision rules (written before the results were first seen):
-
-    - *SA lowers the final error at every beta*: ``yes`` if b's mean final error is
-      below a's at every beta, ``partly`` if at more than half of them, else ``no``.
-    - *a takes 45% more time than b at beta = 75 and 30% more at beta = 1000*: the
-      effect is ``yes`` if a is slower than b at both betas (time ratios a/b above 1),
-      ``partly`` if at one; the paper's 1.45 and 1.30 (give or take 0.15) are its numbers.
-    - *the gap narrows as beta grows*: each of the time gap (ratio - 1) and the
-      final-error gap (a - b) holds if it has the paper's sign at beta = 75 (b better)
-      and is smaller in size at beta = 1000; ``yes`` if both hold, ``partly`` if one.
-
     Raises:
         ConfigError: if beta = 75 or beta = 1000 is missing from the frame.
     """
@@ -238,10 +222,7 @@ def _sa_claims(
 
 
 def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, robot: str) -> Claim:
-    """sim1.final_error: b's mean final error below a's at every beta (``err``: per beta, a and b).
-
-    Its note, when the verdict is not ``yes``, names the beta where b exceeds a most.
-    """
+    """sim1.final_error: b's mean final error below a's at every beta (``err``: per beta, a and b)."""
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
     values = {"share_lower": n_lower / n_total}
@@ -311,11 +292,7 @@ def _gap_claim(err: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robo
 
 
 def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
-    """sim1.gap_narrows' numbers from the time ratios and final-error gaps (floats or arrays).
-
-    A gap narrows in the paper's direction when it favours LA+SA at beta = 75 (> 0) and is
-    smaller in size at beta = 1000: ``g75 - |g1000| > 0``.
-    """
+    """sim1.gap_narrows' numbers from the time ratios and final-error gaps (floats or arrays)."""
     g75, g1000 = r75 - 1.0, r1000 - 1.0
     return {
         "time_narrowing": g75 - abs(g1000),
@@ -326,12 +303,7 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
 
 
 def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Claim:
-    """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy.
-
-    Rule: for each of LA+SA and LA+SA+Entropy, count the betas at which its mean final
-    error is below LA's. ``yes`` if both are below at every beta, ``partly`` if both are
-    below at more than half of them, else ``no``.
-    """
+    """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
     robot = str(frame.robot.iloc[0])
     err = (_means(frame) if means is None else means)["final_error"]
     counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
@@ -362,20 +334,13 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy.
-
-    The rules are in :func:`_sa_claims` and :func:`_entropy_claim`.
-    """
+    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy."""
     means = _means(frame)
     return [*_sa_claims(frame, means=means), _entropy_claim(frame, means)]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`).
-
-    The same numbers as :func:`claims` on each resample, computed from the group means
-    (:func:`lasa.evidence.verdicts.group_means`) instead of a frame per resample.
-    """
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     err = group_means(frame, ["beta", "method"], "final_error", counts)
     tim = group_means(frame, ["beta", "method"], "time", counts)
     betas = sorted({b for b, _ in err})
@@ -409,11 +374,6 @@ OPEN: dict[str, Any] = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "z
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
     """One panel: a metric against beta per method, with bootstrap bands at the verdicts' level.
-
-    Faint vertical lines mark the betas of the paper's time ratios (75 and 1000). The
-    final-error panel states the paper's ordering and marks the betas where LA+SA's mean is
-    below LA's (the verdict's share); the time panel draws a point open where episodes were
-    cut at the horizon (:func:`_mark_censored`). The legend is below the axes.
 
     Args:
         frame: One robot's rows (columns ``beta``, ``method`` and ``metric``; ``completed``
@@ -451,10 +411,7 @@ def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
 
 
 def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
-    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry.
-
-    A cut episode counts the horizon as its time, so such a mean is a lower bound.
-    """
+    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry."""
     stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
     cut = stats[stats.done < 1.0]
     for method, part in cut.groupby(level="method"):
@@ -479,11 +436,6 @@ def time_ratio_band(
 ) -> pd.DataFrame:
     """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at ``level``.
 
-    ``ratio`` is the claims' number (each method's mean over its rows, :func:`_means`); the
-    interval resamples the users (column ``seed``) present under both methods, with replacement,
-    ``n_boot`` times from a generator seeded by ``seed`` (the same band run after run). The
-    default level is the verdicts' (:data:`LEVEL`).
-
     Returns:
         One row per beta with both methods: ``beta``, ``ratio``, ``low``, ``high``.
     """
@@ -506,13 +458,7 @@ def time_ratio_band(
 
 
 def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars.
-
-    The paper's 1.45 (beta = 75) and 1.30 (beta = 1000) are labelled stars, each with the
-    +-0.15 that rule ``sim1.time_ratio`` accepts drawn faintly; the dashed line is ratio 1
-    (no difference). Our curve and its band at the verdicts' level are :func:`time_ratio_band`'s;
-    a ratio is drawn open where episodes of LA or LA+SA were cut at the horizon.
-    """
+    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars."""
     ax = plt.gca() if ax is None else ax
     band = time_ratio_band(frame)
     color = METHOD_COLORS["LA+SA"]

@@ -1,8 +1,7 @@
 """Fig. sim2: users who change their mind (Sec. V-B).
 
-Near-optimal users aim at the wrong cup for the first N steps, then at the right one.
-Without the entropy term (LA+SA) the paper finds them trapped as N grows; with it
-(LA+SA+Entropy) they escape. Notebook ``05_changing_goals``.
+Near-optimal users aim at the wrong cup for the first N steps, then at the right one. Notebook
+``05_changing_goals``; the claims' rules: :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -84,11 +83,7 @@ DPI = 150
 
 @dataclasses.dataclass(frozen=True)
 class Config(SweepConfig):
-    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one.
-
-    ``change_steps`` is a grid: at least two distinct N, ascending (the claims compare the
-    smallest N with the largest; with one they would compare an N with itself).
-    """
+    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one."""
 
     change_steps: tuple[NonNegativeInt, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
     beta: NonNegative = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
@@ -116,9 +111,6 @@ def run(
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim2: final error and confidence in the true cup against the change step N.
-
-    Each user wants cup g* with preference theta. For the steps t < N they aim at the
-    *other* cup with the same preference, from step N on at g*; both near-optimally.
 
     Args:
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
@@ -173,17 +165,7 @@ def run(
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not.
-
-    Success is a final error within the frame's ``success`` criterion (the config's
-    tolerance, 0.1 of the goal distance by default), measured at the largest N.
-
-    - *LA+SA cannot escape the wrong goal as N grows*, in the paper's two parts: LA+SA's
-      mean final error grows from the smallest N to the largest, and its mean confidence
-      in the true cup falls; ``yes`` if both hold, ``partly`` if one, else ``no``.
-    - *LA+SA+Entropy can*: ``yes`` if its success rate at the largest N is at least 80%
-      and at least 20 points above LA+SA's; ``partly`` if it is above LA+SA's; else ``no``.
-    """
+    """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not."""
     robot = str(frame.robot.iloc[0])
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
     rate = frame.groupby(["method", "change_step"]).success.mean()
@@ -271,15 +253,7 @@ SUCCESS_RULES = (("sim2.entropy_escapes", "success_entropy", "LA+SA+Entropy"),)
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: final error, success share or confidence in the true cup against the change step N.
-
-    Bands are bootstrap intervals over users at the verdicts' level (:data:`LEVEL`). The
-    success share is sim2.entropy_escapes' number (``success``: the final error within the
-    config's tolerance of s*); sim2.sa_trapped's are the growth of the final error and the drop of
-    the confidence from the smallest N to the largest. The success panel marks the rule's thresholds
-    (:func:`_mark_thresholds`). A share or probability is drawn on [0, 1]. The paper's shape
-    (:data:`PAPER_SHAPES`) is a legend entry; the legend is below the axes.
-    """
+    """One panel: final error, success share or confidence in the true cup against the change step N."""
     if metric == "success":
         frame = frame.assign(success=frame.success.astype(float))
     ax = method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
@@ -335,7 +309,8 @@ STILL_STEPS = 50  # [steps]
 
 def wrong_goal(goal: int | np.ndarray, n_goals: int) -> int | np.ndarray:
     """The cup a user who wants ``goal`` aims at before the change step: the next one,
-    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them."""
+    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them.
+    """
     goals = np.asarray(goal)
     if goals.size and (goals.min() < 0 or goals.max() >= n_goals):
         raise ConfigError(f"goal must be in [0, {n_goals}), got {goal}")
@@ -387,11 +362,7 @@ def _first(mask: np.ndarray) -> np.ndarray:
 
 
 def failures(after: pd.DataFrame) -> list[str]:
-    """One line per (method, N) where under half the users succeed: what the episodes show.
-
-    ``after`` is :func:`after_the_change`'s; medians over the users of the point, an event that
-    never happens counting as later than the horizon.
-    """
+    """One line per (method, N) where under half the users succeed: what the episodes show."""
     lines = []
     for (method, n), part in after.groupby(["method", "change_step"]):
         if part.success.mean() >= 0.5:
@@ -409,11 +380,7 @@ def failures(after: pd.DataFrame) -> list[str]:
 
 
 def escape_times(after: pd.DataFrame) -> pd.DataFrame:
-    """Median steps after N until b(g*) > 0.5 (``turn``) and until success (``reach``), per method and N.
-
-    ``after`` is :func:`after_the_change`'s; an event that never happens counts as later than
-    the horizon (``inf`` where it is the median).
-    """
+    """Median steps after N until b(g*) > 0.5 (``turn``) and until success (``reach``), per method and N."""
     times = after.fillna({"turn": np.inf, "reach": np.inf})
     out = times.groupby(["method", "change_step"])[["turn", "reach"]].median()
     return out.join(after.groupby(["method", "change_step"])[["steps_left", "success"]].mean())
@@ -511,10 +478,6 @@ def success_sentence(head: pd.DataFrame) -> str:
 
 def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = SA) -> str:
     """Where ``method``'s belief ends, and what its users who fail at the largest N do.
-
-    The median end confidence in the true cup at the largest N decides the reading: above one half the
-    belief follows the user, below it stays with the wrong cup. Times are medians over users (an
-    event that never happens counts as later than the horizon).
 
     Args:
         head: One member's rows (and LA's), every look: the end confidences.

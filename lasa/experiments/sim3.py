@@ -1,8 +1,7 @@
 """Fig. sim3: users who learn within the task (Sec. V-C).
 
-Rationality grows from random, beta(t) = m t: fast learners (m = 20) and slow ones
-(m = 2). The paper finds the entropy term improves in-task performance for both.
-Notebook ``06_learning_users``.
+Rationality grows from random, beta(t) = m t, for a fast and a slow learner. Notebook
+``06_learning_users``; the claim's rule: :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -64,11 +63,7 @@ DPI = 150
 
 @dataclasses.dataclass(frozen=True)
 class Config(SweepConfig):
-    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0.
-
-    The fast learner's slope is above the slow one's, and ``record_every`` divides ``horizon``:
-    the claim's measure is the mean error over the recorded steps, t = 0 to the horizon.
-    """
+    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
 
     fast_slope: Positive = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
     slow_slope: Positive = 2.0  # m of the slow learner: below fast_slope [1/(rad^2 step)]
@@ -158,14 +153,7 @@ def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users.
-
-    In-task performance is each episode's mean normalised error over the recorded
-    steps. ``frame`` may hold every recorded step or one row per episode
-    (:func:`episode_means`, which makes the bootstrap of :mod:`lasa.evidence.verdicts` fast).
-    Rule: ``yes`` if LA+SA+Entropy's mean is below LA+SA's for both the fast and the
-    slow learner, ``partly`` for one, else ``no``.
-    """
+    """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users."""
     robot = str(frame.robot.iloc[0])
     per_episode = frame.groupby(["learner", "method", USER]).error.mean()
     mean = per_episode.groupby(["learner", "method"]).mean()
@@ -196,10 +184,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`).
-
-    ``frame`` holds one row per episode (:func:`episode_means`), as the bootstrap does.
-    """
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     mean = group_means(frame, ["learner", "method"], "error", counts)
     learners = sorted({name for name, _ in mean})
     gains = {f"gain_{n}": mean[(n, "LA+SA")] - mean[(n, "LA+SA+Entropy")] for n in learners}
@@ -211,11 +196,7 @@ LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
-    """One panel: the error over time of one kind of learner, per method, with bands at the verdicts' level.
-
-    The paper's ordering (:data:`PAPER_SHAPE`) is a legend entry; the legend, below the axes,
-    gives each method's mean error over the episode, the number the verdict compares.
-    """
+    """One panel: one learner's error over time per method, with bands at the verdicts' level."""
     part = frame[frame.learner == learner]
     ax = method_lineplot(part, "t", "error", ax, level=LEVEL)
     ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")

@@ -1,19 +1,9 @@
 """Fig. sim4: goals never seen in training, through the context map h (Secs. IV-C, V-D).
 
-A new cup is put on the table after training, at growing distances from a training
-cup. Near-optimal users reach for it with and without the context map
-(:mod:`lasa.method.newgoals`; the episodes are :mod:`lasa.experiments.new_cups`), and the grasp
-error is fitted against the new cup's distance. Notebook ``07_new_goals``.
-
-Measured as the paper's caption and text measure (the headline rows): the new cup's distance
-on the table and the grasp error at the gripper, both over the farthest new cup's distance.
-The joint-space measure is the reading ``@joint_space``; the paper's straight line drawn in the
-gripper's space (map kind ``straight_line_ee``) is the reading ``@ee_line`` of its claim.
-
-The lines are the paper's form, least squares through the origin (y = 0.11x, y = x), with the
-uncentred R^2 (:func:`fit_origin`); the line with an intercept is the reading ``@intercept``.
-Medians and the share of users whose belief ends on the other training cup stand beside the
-means (:func:`end_shares`, :func:`with_cup_columns`, :func:`medians_sentence`).
+Users reach for a new cup with and without the map; the grasp error is fitted against the cup's
+distance (both over the farthest cup's, on the table and at the gripper), through the origin with
+the uncentred R^2 as the paper does. Readings: ``@joint_space``, ``@intercept``, ``@ee_line``.
+Notebook ``07_new_goals``.
 """
 
 from __future__ import annotations
@@ -119,13 +109,7 @@ CLAIM_MAPS = ("grasp", "straight_line")
 
 @dataclasses.dataclass(frozen=True)
 class Config(LooksConfig):
-    """Fig. sim4: users who reach for new cups, with and without the context map h.
-
-    The users per point, the bootstrap, the readings and the users' seed are
-    :class:`~lasa.experiments.sweep.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
-    ``offsets`` is a grid of at least three distinct distances, ascending (the claims fit a line);
-    ``maps`` holds :data:`CLAIM_MAPS`, which notebook 07 reads by name.
-    """
+    """Fig. sim4: users who reach for new cups, with and without the context map h."""
 
     offsets: tuple[Positive, ...] = (
         0.08,
@@ -175,12 +159,6 @@ def run(
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
     """Fig. sim4: grasp error at new cups against their distance from the training cup (Sec. V-D).
-
-    One batched rollout per new cup and mapping: near-optimal users want a grasp at the new cup
-    (preferences drawn per user, shared by every cup and mapping); ``with`` runs the method's decoder
-    through the context map (:class:`lasa.method.newgoals.MappedDecoder`) on the grown task,
-    ``without`` knows the training cups only. Distance and error are over the farthest new cup's
-    distance, on the table and at the gripper (the headline) or in joint space (``@joint_space``).
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one model), ``METHOD_DECODER`` among them.
@@ -282,11 +260,8 @@ def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
 def fit_origin(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     """Least-squares line through the origin, y = slope x, the paper's form; returns (slope, R^2).
 
-    slope = sum(x y) / sum(x^2). R^2 is the uncentred one, 1 - SSE / sum(y^2), which numpy's
-    ``lstsq`` residuals and statsmodels report for a model without a constant: it measures the
-    line through the origin against y = 0, not against y's mean, so it can be high for a flat y
-    far from 0. Chosen for fidelity to the paper's form before the verdicts were seen
-    (``docs/method-notes.md``).
+    R^2 is the uncentred one, 1 - SSE / sum(y^2) (against y = 0, not y's mean), as numpy's ``lstsq``
+    and statsmodels report for a model without a constant (``docs/method-notes.md``).
     """
     slope, r2 = _origin_lines(np.asarray(x, dtype=float), np.asarray(y, dtype=float)[None])
     return float(slope[0]), float(r2[0])
@@ -361,14 +336,7 @@ def _reading(measure: str) -> str | None:
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds and both fits.
-
-    The headline rows read the paper caption's measure (``distance``, ``error``) and the paper's form
-    of line, least squares through the origin over each new cup's mean error (:func:`fits`); the
-    joint-space measure gives the ``@joint_space`` rows and the line with an intercept the
-    ``@intercept`` rows (joined as ``@joint_space+intercept``), by the same rules
-    (:mod:`lasa.evidence.rules`: ``sim4.*``). The first rule judges every kind of map in the frame.
-    """
+    """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds and both fits."""
     out: list[Claim] = []
     for measure in _measures(frame):
         for form in FORMS:
@@ -432,7 +400,8 @@ def _map_claim(
     angles: pd.Series | None,
 ) -> Claim:
     """sim4.<claim>_linear[@readings], from the map's fit ``f`` and the mean error per (h, distance);
-    ``readings``: the measure's and the form's (None for the headline's)."""
+    ``readings``: the measure's and the form's (None for the headline's).
+    """
     name, kind_reading = _KIND_CLAIMS[kind]
     below = means[kind] < means["none"]
     values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
@@ -460,15 +429,6 @@ def _map_claim(
 
 def no_map_check(frame: pd.DataFrame, form: str = HEADLINE_FORM) -> pd.DataFrame:
     """The paper's "without the map ... y = x", taken apart (the headline measure, lines of ``form``).
-
-    y = x needs two things: the wanted grasp at a new cup is the training grasp moved with
-    the cup (then a robot holding the training grasp is off by the cup's distance: the
-    ``reference`` column), and the robot does reach the training cup. One row per line:
-
-    - ``held at the training cup``: the ``reference`` error;
-    - ``without the map``: every episode (the claim's line);
-    - ``... belief ends on the training cup`` / ``... on another cup``: the episodes by the goal
-      their belief ends on (``end_goal``).
 
     Returns:
         ``slope``, ``intercept`` (0 through the origin), ``r2`` (over the cups' means, :func:`fits`'
@@ -528,13 +488,7 @@ _CUP_KEYS = ["robot", "assistance", "h", "distance"]
 
 
 def with_cup_columns(frame: pd.DataFrame) -> pd.DataFrame:
-    """``frame`` with :data:`CUP_COLUMNS`, each cup's numbers on every one of its episodes' rows.
-
-    Per (robot, assistance, h, distance), over every look's users: ``cup_mean_error`` and
-    ``cup_median_error`` (the headline measure's ``error``), and ``cup_other_share``, the share of
-    episodes whose belief ends on another training cup (``end_goal == "other"``; NaN without
-    ``end_goal``).
-    """
+    """``frame`` with :data:`CUP_COLUMNS`, each cup's numbers on every one of its episodes' rows."""
     keys = [k for k in _CUP_KEYS if k in frame]
     other = (frame.end_goal == "other").astype(float) if "end_goal" in frame else np.nan
     groups = frame.assign(other_=other).groupby(keys, sort=False)
@@ -606,7 +560,8 @@ def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
 
 def identity_sentence(frame: pd.DataFrame) -> str:
     """What :func:`no_map_check` and :func:`end_shares` say of y = x on one robot's headline rows
-    (the lines through the origin, R² uncentred)."""
+    (the lines through the origin, R² uncentred).
+    """
     check, share = no_map_check(frame), end_shares(frame).loc["none", "other"]
     held, every = check.loc["held at the training cup"], check.loc["without the map"]
     stay = check.loc["without the map, belief ends on the training cup"]
@@ -695,7 +650,8 @@ def _lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _origin_lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Slope and uncentred R^2 of the least-squares line through the origin of each row of ``ys``
     (R, K) against ``x`` (K,): slope = sum(x y) / sum(x^2), and 1 - SSE / sum(y^2), which is
-    sum(x y)^2 / (sum(x^2) sum(y^2)) since SSE = sum(y^2) - sum(x y)^2 / sum(x^2)."""
+    sum(x y)^2 / (sum(x^2) sum(y^2)) since SSE = sum(y^2) - sum(x y)^2 / sum(x^2).
+    """
     sxy, sxx, syy = ys @ x, float(x @ x), (ys**2).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return sxy / sxx, sxy**2 / (sxx * syy)
@@ -706,7 +662,8 @@ _BATCHED = {"origin": _origin_lines, "intercept": _lines}
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
     """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`),
-    under the same ids (every measure's and both forms' of fit)."""
+    under the same ids (every measure's and both forms' of fit).
+    """
     out: dict[str, dict[str, np.ndarray]] = {}
     for measure in _measures(frame):
         x, y = MEASURES[measure]
@@ -765,18 +722,7 @@ def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
 
 
 def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """One robot's panel: grasp error at new cups against their distance, per kind of map.
-
-    The main axes show each cup's mean error with its bootstrap interval at the verdicts' level
-    (users resampled; :data:`CI_LEVEL`) and its median (a hollow marker), each map's markers a
-    little apart and its line dashed its own way (:data:`H_MARKS`) so that no map hides another,
-    and the least-squares line through the origin fitted to the means (its equation and uncentred
-    R^2 in the legend, from :func:`fits`; with the mean approach-axis error at the nearest and the
-    farthest cup when the frame has it). A note gives the share of users whose belief ends on the
-    other training cup without the map, at the nearest and the farthest cup. The paper's two lines
-    (:data:`PAPER_LINES`) are drawn above ours, in black. A narrow panel beside it shows every
-    episode. Neither axis is cut: each one's y-limits lie around everything drawn in it.
-    """
+    """One robot's panel: grasp error at new cups against their distance, per kind of map."""
     ax = plt.gca() if ax is None else ax
     table = fits(frame)
     xs = np.array([float(frame.distance.min()), 1.0])  # the fits over the cups measured
@@ -848,7 +794,8 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
 def other_share_text(frame: pd.DataFrame) -> str:
     """The figure's note: the share of no-map users whose belief ends on the other training cup, at
-    the nearest and the farthest cup (:func:`end_shares`); empty without ``end_goal`` or no-map rows."""
+    the nearest and the farthest cup (:func:`end_shares`); empty without ``end_goal`` or no-map rows.
+    """
     if "end_goal" not in frame or not (frame.h == "none").any():
         return ""
     other = end_shares(frame).loc["none", "other"]
@@ -880,10 +827,7 @@ def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member.
-
-    The title gives the users per point of the rows drawn (per robot when they differ).
-    """
+    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member."""
     table = member_frame(table, assistance)
     present = robots_present(table)
     fig, axes = plt.subplots(1, len(present), figsize=(7.6 * len(present), 6.6), squeeze=False)

@@ -1,18 +1,8 @@
 """What the simulated-user sweeps share: drawing episodes, and rolling out mixed methods.
 
-A sweep builds one population of simulated users covering every condition (method x
-rationality x user, or method x change step x user, ...) and runs it batched, one
-rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
-User i has the same cup, preference and random stream (``UserPopulation.stream``) in every
-condition, so methods are compared on paired episodes. The figures' CSVs keep the column
-name ``seed`` for that user index (their contract); the code names the column
-:data:`lasa.evidence.verdicts.USER` and the index ``user``, and ``seed`` is only ever the seed
-of a random generator.
-
-A sweep runs its assisted methods under every member of the shared-autonomy family it
-is given (:func:`pairs`); LA, which no assistance touches, runs once. :func:`judge` runs a
-figure's sweep in looks (:func:`lasa.evidence.verdicts.sequential`): every member at the first look,
-then blocks of new users for the headline member until its verdicts are settled.
+One population of users covers every condition and runs batched, one rollout per decoder. User i
+has the same cup, preference and random stream in every condition (paired episodes); the CSVs keep
+the column name ``seed`` for that index (:data:`lasa.evidence.verdicts.USER`), the code says ``user``.
 """
 
 from __future__ import annotations
@@ -88,7 +78,8 @@ def check_methods(methods: tuple[str, ...]) -> None:
 
 def check_assistance(assistance: tuple[str, ...]) -> None:
     """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one,
-    none twice."""
+    none twice.
+    """
     if not assistance:
         raise ConfigError("assistance must name at least one member")
     for name in assistance:
@@ -98,9 +89,6 @@ def check_assistance(assistance: tuple[str, ...]) -> None:
 
 def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], reader: str) -> None:
     """``given`` (a list setting) holds every value of ``needed``, which ``reader`` reads.
-
-    A figure's claims read some conditions by name (sim1's compare LA with LA+SA at beta = 75
-    and 1000); a sweep without one would run to the end and fail there, so its config refuses it.
 
     Raises:
         ConfigError: one line naming the setting, what is missing and who reads it.
@@ -113,11 +101,6 @@ def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], rea
 
 def check_record_every(record_every: int, horizon: int, divides: bool = True) -> None:
     """``record_every`` is at most ``horizon`` and, if ``divides``, divides it.
-
-    A sweep that records its error every ``record_every`` steps and averages the recorded steps
-    (sim3) measures only t = 0 when ``record_every`` > ``horizon``, and leaves the last step out
-    when it does not divide ``horizon``. Notebook 09 (:mod:`lasa.experiments.convergence`) records the
-    last step itself, and counts its events at every step, so it needs the bound only.
 
     Raises:
         ConfigError: one line naming ``record_every``, its value and the values allowed.
@@ -137,10 +120,8 @@ def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tup
 
 
 def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
-    """(method, assistance) pairs of a sweep: LA once, every assisted method under every member.
-
-    LA has alpha = 0, so no member changes it (Eq. M1 gives a = a_h exactly); its rows
-    carry the assistance ``none`` and every member's comparison shares them.
+    """(method, member) pairs of a sweep: LA once (alpha = 0, member ``none``), every assisted method
+    under every member.
     """
     out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
     return out + [(m, a) for a in assistance for m in methods if m != "LA"]
@@ -169,12 +150,7 @@ def check_pilot(pilot: str, prob: float) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class LooksConfig:
-    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the readings.
-
-    Sims 1-3 (through :class:`SweepConfig`) and sim 4 (:class:`lasa.experiments.sim4.Config`) extend
-    it with their own sweep. Every field is validated by its annotated type
-    (:func:`lasa.base.config.validate`); the design's sizes are checked together (:class:`Design`).
-    """
+    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the readings."""
 
     users: PositiveInt = Design.first  # users per point at the first look, every reading (Design) [-]
     block: PositiveInt = Design.block  # users added per later look, the headline reading only [-]
@@ -193,10 +169,6 @@ class LooksConfig:
 class SweepConfig(LooksConfig):
     """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods (each of
     :data:`lasa.method.step.METHODS`, which their claims compare, in any order).
-
-    Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
-    slopes) and its episode's length; the verdict map (:mod:`lasa.experiments.robustness`) reads the
-    same names.
     """
 
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
@@ -229,10 +201,8 @@ def draw_episodes(
 
 
 def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
-    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own stream.
-
-    Drawn from a generator of its own (``[seed, 1]``), so adding pilots leaves the users'
-    cups, preferences and Eq. S1 streams (:func:`draw_episodes`) unchanged.
+    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own generator
+    (``[seed, 1]``), so adding pilots leaves :func:`draw_episodes`' draws unchanged.
     """
     return np.random.default_rng([seed, 1]).random((n_users, horizon, 2))
 
@@ -259,10 +229,6 @@ def run_population(
     pilot_seed: int = 0,
 ) -> Trajectories:
     """Roll out a population whose users may use different methods, decoders and assistance.
-
-    Users are grouped by the decoder their method uses (``METHOD_DECODER``); each group
-    runs as one batched rollout (users of every assistance member together), and the
-    trajectories come back in the users' order.
 
     Args:
         decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
