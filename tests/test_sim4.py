@@ -13,7 +13,7 @@ import pytest
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.experiments import sim4
-from lasa.experiments.new_cups import map_geometry, new_cup_positions
+from lasa.experiments.sim4 import map_geometry, new_cup_positions
 from lasa.method.newgoals import extend_task, new_goal_frames
 
 REF = 1

@@ -20,8 +20,7 @@ module                    figure                            notebook
 ========================  ================================  ===========================
 
 Each figure module defines ``NAME``, ``COLUMNS``, a frozen ``Config`` (from its notebook's
-``settings``) and ``plot``; those with claims define ``claims``, each verdict's rule in its
-docstring; those that simulate define ``run``. :mod:`.sweep` holds what several figures share,
-:mod:`.new_cups` the episodes sim4 tabulates. What a new figure needs, and when the decision
-rules were written: ``docs/method-notes.md``.
+``settings``) and ``plot``; those with claims define ``claims`` (rules: :mod:`lasa.evidence.rules`);
+those that simulate define ``run``. :mod:`.sweep` holds what the sweeps share. What a new figure
+needs: ``docs/method-notes.md``.
 """
