@@ -36,18 +36,14 @@ from lasa.evidence.plots import (
     wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, block_seed, block_users, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     check_needed,
-    episodes,
-    run_population,
-    sweep_grid,
-    swept_assistance,
+    run_look,
 )
 from lasa.people.rollout import Trajectories
-from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -130,66 +126,39 @@ def run(
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one base model): see
             :func:`lasa.experiments.sweep.run_population`.
-        task: The goal task.
-        control: Control-loop units.
-        config: The sweep.
-        progress: Show progress bars.
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`): 0 is the first
-            ``config.users``, each later look ``config.block`` more from its own stream.
-        assistance: The assistance members the assisted methods run under; default every
-            member of ``config.assistance`` (the headline one first).
+        look, assistance: Which look's users, under which members (:func:`~lasa.experiments.sweep.run_look`).
 
     Returns:
-        One row per episode with the columns of :data:`COLUMNS` (``assistance`` is
-        ``none`` for LA, the column ``seed`` (:data:`~lasa.evidence.verdicts.USER`) is the user's
-        index over all looks); and the trajectories of all episodes (users in the frame's row
-        order).
+        One row per episode with the columns of :data:`COLUMNS` (``assistance`` is ``none`` for LA,
+        the column ``seed`` is the user's index over all looks); and the trajectories of all
+        episodes (users in the frame's row order).
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed_ = block_seed(config.seed, look)
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, assistance_rows, conditions, user = sweep_grid(config.methods, assistance, config.betas, n_users)
-    beta = np.array(conditions, dtype=float)
-    users = _users(task, config, goal[user], theta[user], beta, user)
-    traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
-    )
+    ran = run_look(decoders, task, control, config, config.betas, _fixed, progress, look, assistance)
+    users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
-            "method": method,
-            "beta": beta,
-            USER: start + user,
+            "method": ran.method,
+            "beta": users.beta0,
+            USER: ran.user,
             "final_error": errors[-1],
             "time": steps,
             "completed": completed,
             "goal": users.goal,
             "theta": users.theta,
             "confidence": confidence(traj.beliefs[-1], users.goal),
-            "assistance": assistance_rows,
+            "assistance": ran.member,
             "look": look,
         }
     )
     return frame, traj
 
 
-def _users(
-    task: GoalTask, config: Config, goal: np.ndarray, theta: np.ndarray, beta: np.ndarray, user: np.ndarray
-) -> UserPopulation:
-    """The sweep's users: one per row of the grid, of fixed rationality ``beta`` (no learning)."""
-    return UserPopulation(
-        goal=goal,
-        theta=theta,
-        target=task.target(goal, theta),
-        beta0=beta,
-        slope=np.zeros(len(user)),
-        stream=user,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-    )
+def _fixed(beta: list[float], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
+    """Users of fixed rationality ``beta`` (no learning)."""
+    return {"beta0": np.array(beta, dtype=float), "slope": np.zeros(len(goal))}
 
 
 def _means(frame: pd.DataFrame) -> pd.DataFrame:

@@ -31,17 +31,13 @@ from lasa.evidence.plots import (
     wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, block_seed, block_users, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
-    episodes,
-    run_population,
-    sweep_grid,
-    swept_assistance,
+    run_look,
 )
 from lasa.people.rollout import Trajectories
-from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -112,52 +108,35 @@ def run(
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim2: final error and confidence in the true cup against the change step N.
 
-    Args:
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        assistance: The members the assisted methods run under; default every member of
-            ``config.assistance``. The other arguments are :func:`lasa.experiments.sim1.run`'s.
-
     Returns:
-        One row per episode with the columns of :data:`COLUMNS` plus ``goal`` and
-        ``theta`` (for the video); and the trajectories.
+        One row per episode with the columns of :data:`COLUMNS`; and the trajectories.
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed_ = block_seed(config.seed, look)
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, assistance_rows, conditions, user = sweep_grid(
-        config.methods, assistance, config.change_steps, n_users
-    )
-    change = np.array(conditions, dtype=int)
-    wrong = wrong_goal(goal[user], task.n_goals)
-    users = UserPopulation(
-        goal=goal[user],
-        theta=theta[user],
-        target=task.target(goal[user], theta[user]),
-        beta0=np.full(len(user), config.beta),
-        slope=np.zeros(len(user)),
-        stream=user,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-        first_target=task.target(wrong, theta[user]),
-        change_step=change,
-    )
-    traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
-    )
+
+    def changing(change: list[int], goal: np.ndarray, theta: np.ndarray) -> dict[str, np.ndarray]:
+        first = task.target(wrong_goal(goal, task.n_goals), theta)
+        n = len(goal)
+        return {
+            "beta0": np.full(n, config.beta),
+            "slope": np.zeros(n),
+            "first_target": first,
+            "change_step": np.array(change, dtype=int),
+        }
+
+    ran = run_look(decoders, task, control, config, config.change_steps, changing, progress, look, assistance)
+    users, traj = ran.users, ran.traj
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
-            "method": method,
-            "change_step": change,
-            USER: start + user,
+            "method": ran.method,
+            "change_step": users.change_step,
+            USER: ran.user,
             "final_error": final,
             "confidence": confidence(traj.beliefs[-1], users.goal),
             "goal": users.goal,
             "theta": users.theta,
             "success": final <= config.success,
-            "assistance": assistance_rows,
+            "assistance": ran.member,
             "look": look,
         }
     )

@@ -27,18 +27,14 @@ from lasa.evidence.plots import (
     wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, block_seed, block_users, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means, member_frame
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     check_record_every,
-    episodes,
-    run_population,
-    sweep_grid,
-    swept_assistance,
+    run_look,
 )
 from lasa.people.rollout import Trajectories
-from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -96,54 +92,38 @@ def run(
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
 
-    Args:
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        assistance: The members the assisted methods run under; default every member of
-            ``config.assistance``. The other arguments are :func:`lasa.experiments.sim1.run`'s.
-
     Returns:
         One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
         the trajectories (users in the order method x learner x user).
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed_ = block_seed(config.seed, look)
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, assistance_rows, conditions, user = sweep_grid(
-        config.methods, assistance, config.learners, n_users
-    )
-    learner = np.array([name for name, _ in conditions])
-    slope = np.array([m for _, m in conditions], dtype=float)
-    users = UserPopulation(
-        goal=goal[user],
-        theta=theta[user],
-        target=task.target(goal[user], theta[user]),
-        beta0=np.zeros(len(user)),
-        slope=slope,
-        stream=user,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-    )
-    traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
-    )
+    ran = run_look(decoders, task, control, config, config.learners, _learning, progress, look, assistance)
+    users, traj, method = ran.users, ran.traj, ran.method
+    learner = np.array([name for name, _ in ran.condition])
+    slope = users.slope
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
-    n_users = len(user)
+    n_users = len(ran.user)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": np.repeat(method, len(steps)),
             "learner": np.repeat(learner, len(steps)),
             "slope": np.repeat(slope, len(steps)),
-            USER: np.repeat(start + user, len(steps)),
+            USER: np.repeat(ran.user, len(steps)),
             "t": np.tile(steps, n_users),
             "error": errors[steps].T.ravel(),
-            "assistance": np.repeat(assistance_rows, len(steps)),
+            "assistance": np.repeat(ran.member, len(steps)),
             "look": look,
         }
     )
     return frame, traj
+
+
+def _learning(
+    learners: list[tuple[str, float]], goal: np.ndarray, theta: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Users who learn from random, beta(t) = m t."""
+    return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
 
 
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:

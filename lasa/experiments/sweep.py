@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
 import numpy as np
@@ -29,7 +29,15 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.evidence.verdicts import N_BOOT, Design, Sequential, check_design, sequential
+from lasa.evidence.verdicts import (
+    N_BOOT,
+    Design,
+    Sequential,
+    block_seed,
+    block_users,
+    check_design,
+    sequential,
+)
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import METHOD_DECODER, METHODS, latent_grid, method_alpha
 from lasa.people.rollout import Trajectories, rollout
@@ -55,6 +63,8 @@ __all__ = [
     "draw_episodes",
     "episodes",
     "run_population",
+    "Look",
+    "run_look",
     "judge",
 ]
 
@@ -291,6 +301,67 @@ def run_population(
             out[:, idx] = getattr(traj, field.name)
         merged[field.name] = out
     return Trajectories(**merged)
+
+
+@dataclasses.dataclass(frozen=True)
+class Look:
+    """One look's episodes of a sims 1-3 sweep, one per (pair, condition, user) in that order.
+
+    Attributes:
+        method: Each episode's method; member: its member (``none`` for LA); condition: its
+            condition; user: its user's index over all looks (the CSVs' ``seed``).
+        users: The episodes' simulated users; traj: their trajectories.
+    """
+
+    method: np.ndarray
+    member: np.ndarray
+    condition: list[Any]
+    user: np.ndarray
+    users: UserPopulation
+    traj: Trajectories
+
+
+def run_look(
+    decoders: Decoders,
+    task: GoalTask,
+    control: ControlConfig,
+    config: Any,
+    conditions: Sequence[Any],
+    population: Callable[[list[Any], np.ndarray, np.ndarray], dict[str, Any]],
+    progress: bool = False,
+    look: int = 0,
+    assistance: tuple[str, ...] | None = None,
+) -> Look:
+    """Roll out one look's new users of a sims 1-3 sweep (a :class:`SweepConfig` with a ``horizon``).
+
+    Args:
+        conditions: The sweep's conditions (betas, change steps, learners).
+        population: Maps the grid's conditions, goals and preferences to the users' other
+            :class:`~lasa.people.users.UserPopulation` fields (``beta0``, ``slope``, ...).
+        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`): 0 is the first
+            ``config.users``, each later look ``config.block`` more from its own stream.
+        assistance: The members the assisted methods run under; default every member of
+            ``config.assistance`` (the headline one first).
+    """
+    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    seed = block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
+    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
+    method, member, condition, user = sweep_grid(config.methods, assistance, conditions, n_users)
+    goal, theta = goal[user], theta[user]
+    users = UserPopulation(
+        goal=goal,
+        theta=theta,
+        target=task.target(goal, theta),
+        stream=user,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
+        **population(condition, goal, theta),
+    )
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed
+    )
+    return Look(method, member, condition, start + user, users, traj)
 
 
 def judge(
