@@ -9,6 +9,7 @@ Notebook ``07_new_goals``.
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -248,177 +249,6 @@ def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index(["offset_m", "h"])
 
 
-@dataclasses.dataclass(frozen=True)
-class Sweep:
-    """What the episodes at every new cup share: the method, one look's users, the new cups.
-
-    Attributes:
-        decoder: The method's decoder; task: the training task; control, config, progress and
-            look: as :func:`lasa.experiments.sim4.run` has them.
-        alpha: The method's blend weight; noise: the users' noise, as
-            :func:`lasa.experiments.sweep.episodes` draws it.
-        assistance: The members the method's assistance runs under (``none`` alone without it).
-        n_users: Users per member; first: the look's first user.
-        users: Each row's user (0 ... n_users - 1), (members x users,); theta: its preference;
-            assistance_rows: its member; assisted: ``assistance_rows``, or None when the method has
-            no assistance.
-        grown: The task grown by each new cup; distances: each new cup's distance from the
-            reference goal (joint space, between mid-preference goals) [rad]; scale: the
-            largest of them; cup_distances: each new cup's distance from the reference cup on
-            the table [m]; cup_scale: D, the largest of them (the farthest new cup's).
-    """
-
-    decoder: ActionDecoder
-    task: CupTask
-    control: ControlConfig
-    config: Config
-    progress: bool
-    look: int
-    alpha: float
-    noise: np.ndarray
-    assistance: tuple[str, ...]
-    n_users: int
-    first: int
-    users: np.ndarray
-    theta: np.ndarray
-    assistance_rows: np.ndarray
-    assisted: np.ndarray | None
-    grown: list[CupTask]
-    distances: np.ndarray
-    scale: float
-    cup_distances: np.ndarray
-    cup_scale: float
-
-    @classmethod
-    def of(
-        cls,
-        decoders: Decoders,
-        task: CupTask,
-        control: ControlConfig,
-        config: Config,
-        progress: bool = False,
-        look: int = 0,
-        assistance: tuple[str, ...] | None = None,
-    ) -> Sweep:
-        """The sweep of :func:`lasa.experiments.sim4.run` (its arguments).
-
-        Raises:
-            ConfigError: if ``config.ref_goal`` is not a goal of ``task``, or the method's
-                decoder is not among ``decoders``.
-        """
-        decoder = _method_decoder(decoders, task, config)
-        first, n_users = block_users(Design(config.users, config.block, config.cap), look)
-        _, theta, noise = episodes(
-            decoder, task, control, n_users, config.horizon, block_seed(config.seed, look)
-        )
-        alpha = method_alpha(config.method, control)
-        if assistance is None:
-            assistance = swept_assistance(control, config.assistance)
-        assistance = assistance if alpha > 0 else (NO_ASSISTANCE,)
-        cups = new_cup_positions(task, config)
-        grown = [extend_task(task, p, config.ref_goal) for p in cups]
-        dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[config.ref_goal]) for t in grown])
-        on_table = np.linalg.norm(cups - task.robot.goal_positions()[config.ref_goal], axis=1)
-        assistance_rows = np.repeat(assistance, n_users)
-        return cls(
-            decoder,
-            task,
-            control,
-            config,
-            progress,
-            look,
-            alpha,
-            noise,
-            assistance,
-            n_users,
-            first,
-            users=np.tile(np.arange(n_users), len(assistance)),
-            theta=np.tile(theta, len(assistance)),
-            assistance_rows=assistance_rows,
-            assisted=None if assistance == (NO_ASSISTANCE,) else assistance_rows,
-            grown=grown,
-            distances=dist,
-            scale=float(dist.max()),
-            cup_distances=on_table,
-            cup_scale=float(on_table.max()),
-        )
-
-
-def _method_decoder(decoders: Decoders, task: CupTask, config: Config) -> ActionDecoder:
-    """The decoder of ``config.method`` among ``decoders``, after checking ``config.ref_goal``."""
-    if not 0 <= config.ref_goal < task.n_goals:
-        raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {config.ref_goal}")
-    key = METHOD_DECODER[config.method]
-    decoder = as_decoders(decoders).get(key)
-    if decoder is None:
-        raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
-    return decoder
-
-
-@dataclasses.dataclass(frozen=True)
-class CupEpisodes:
-    """Every user's episodes at one new cup.
-
-    Attributes:
-        users: The users, who want a grasp at the new cup (goal G, the grown task's last).
-        with_map: Their trajectories with each kind of context map.
-        without: Their trajectories of the unchanged method.
-    """
-
-    users: UserPopulation
-    with_map: dict[str, Trajectories]
-    without: Trajectories
-
-
-def episodes_at(sweep: Sweep, offset: float, big: CupTask) -> tuple[NewGoalRun, CupEpisodes]:
-    """The episodes at the new cup ``offset`` [m] from the reference cup (``big``'s last goal).
-
-    Returns:
-        The headline member's run (its users alone), and every user's episodes.
-    """
-    config, task, n = sweep.config, sweep.task, len(sweep.users)
-    new = big.n_goals - 1
-    users = UserPopulation(
-        goal=np.full(n, new),
-        theta=sweep.theta,
-        target=big.target(np.full(n, new), sweep.theta),
-        beta0=np.full(n, config.beta),
-        slope=np.zeros(n),
-        stream=sweep.users,
-    )
-    with_map = {}
-    for kind in config.maps:
-        mapped = MappedDecoder(sweep.decoder, context_map(big, task.n_goals, config.ref_goal, kind))
-        with_map[kind] = _rollout(sweep, mapped, big, users)
-    plain = dataclasses.replace(users, goal=np.full(n, config.ref_goal))
-    without = _rollout(sweep, sweep.decoder, task, plain)
-    head = slice(0, sweep.n_users)
-    at_cup = NewGoalRun(
-        offset, big, {k: _users_of(t, head) for k, t in with_map.items()}, _users_of(without, head)
-    )
-    return at_cup, CupEpisodes(users, with_map, without)
-
-
-def _rollout(sweep: Sweep, decoder: ActionDecoder, task: CupTask, users: UserPopulation) -> Trajectories:
-    """The method's rollout of ``users`` on ``task`` through ``decoder``, every member in one batch."""
-    return rollout(
-        decoder,
-        task,
-        users,
-        sweep.alpha,
-        sweep.control,
-        sweep.config.horizon,
-        sweep.noise,
-        sweep.progress,
-        assistance=sweep.assisted,
-    )
-
-
-def _users_of(traj: Trajectories, users: slice) -> Trajectories:
-    """The trajectories of some users (axis 1 of every field)."""
-    return Trajectories(**{f.name: getattr(traj, f.name)[:, users] for f in dataclasses.fields(traj)})
-
-
 def run(
     decoders: Decoders,
     task: CupTask,
@@ -429,6 +259,11 @@ def run(
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
     """Fig. sim4: grasp error at new cups against their distance from the training cup (Sec. V-D).
+
+    Near-optimal users (preferences per user, shared by every cup and mapping) want a grasp at each
+    new cup; ``with`` runs the method's decoder through each kind of context map on the task grown
+    by the cup, ``without`` knows the training cups only. Every member's users share one batch per
+    (cup, map) and are the same users (paired across members).
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one model), ``METHOD_DECODER`` among them.
@@ -443,19 +278,68 @@ def run(
         One row per episode in the columns of :data:`EPISODE_COLUMNS` (each explained in
         ``docs/method-notes.md``; :func:`with_cup_columns` adds the CSV's :data:`CUP_COLUMNS`), and
         the runs per new cup under ``control.assistance``.
+
+    Raises:
+        ConfigError: if ``config.ref_goal`` is not a goal of ``task``, or the method's decoder is
+            not among ``decoders``.
     """
-    sweep = Sweep.of(decoders, task, control, config, progress, look, assistance)
+    ref = config.ref_goal
+    if not 0 <= ref < task.n_goals:
+        raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {ref}")
+    key = METHOD_DECODER[config.method]
+    decoder = as_decoders(decoders).get(key)
+    if decoder is None:
+        raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
+    first, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    _, theta, noise = episodes(decoder, task, control, n_users, config.horizon, block_seed(config.seed, look))
+    alpha = method_alpha(config.method, control)
+    if assistance is None:
+        assistance = swept_assistance(control, config.assistance)
+    assistance = assistance if alpha > 0 else (NO_ASSISTANCE,)
+    cups = new_cup_positions(task, config)
+    grown = [extend_task(task, p, ref) for p in cups]
+    dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[ref]) for t in grown])  # joint space [rad]
+    on_table = np.linalg.norm(cups - task.robot.goal_positions()[ref], axis=1)  # [m]
+    member = np.repeat(assistance, n_users)  # member i's users are rows i * n_users ... (i + 1) * n_users - 1
+    assisted = None if assistance == (NO_ASSISTANCE,) else member
+    user, theta = np.tile(np.arange(n_users), len(assistance)), np.tile(theta, len(assistance))
+    n, head = len(user), slice(0, n_users)
+    shared = {USER: first + user, "theta": theta, "assistance": member, "look": look}
+    scales = (float(on_table.max()), float(dist.max()))
+
+    def roll(dec: ActionDecoder, on: CupTask, users: UserPopulation) -> Trajectories:
+        return rollout(dec, on, users, alpha, control, config.horizon, noise, progress, assistance=assisted)
+
     runs, rows = [], []
-    for i, (offset, big) in enumerate(zip(config.offsets, sweep.grown, strict=True)):
-        at_cup, cup = episodes_at(sweep, float(offset), big)
-        runs.append(at_cup)
-        rows += _rows(sweep, cup, float(offset), i)
+    for i, (offset, big) in enumerate(zip(config.offsets, grown, strict=True)):
+        new = np.full(n, big.n_goals - 1)
+        users = UserPopulation(
+            goal=new,
+            theta=theta,
+            target=big.target(new, theta),
+            beta0=np.full(n, config.beta),
+            slope=np.zeros(n),
+            stream=user,
+        )
+        with_map = {}
+        for kind in config.maps:
+            with_map[kind] = roll(
+                MappedDecoder(decoder, context_map(big, task.n_goals, ref, kind)), big, users
+            )
+        without = roll(decoder, task, dataclasses.replace(users, goal=np.full(n, ref)))
+        mine = {k: _users_of(t, head) for k, t in with_map.items()}
+        runs.append(NewGoalRun(float(offset), big, mine, _users_of(without, head)))
+        at = {"offset_m": float(offset), "distance": float(on_table[i]), "distance_joint": float(dist[i])}
+        rows += _rows(task, config, users, with_map, without, {**shared, **at}, scales)
     frame = pd.concat(rows, ignore_index=True)
     # rows by member, then cup and map, as the members' runs came out before they shared batches
-    order = np.argsort(
-        pd.Categorical(frame.assistance, categories=list(sweep.assistance)).codes, kind="stable"
-    )
+    order = np.argsort(pd.Categorical(frame.assistance, categories=list(assistance)).codes, kind="stable")
     return frame.iloc[order].reset_index(drop=True), runs
+
+
+def _users_of(traj: Trajectories, users: slice) -> Trajectories:
+    """The trajectories of some users (axis 1 of every field)."""
+    return Trajectories(**{f.name: getattr(traj, f.name)[:, users] for f in dataclasses.fields(traj)})
 
 
 def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -477,16 +361,23 @@ def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[
     return np.linalg.norm(pos[0] - pos[1], axis=-1), np.degrees(angle)
 
 
-def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, i: int) -> list[pd.DataFrame]:
-    """The rows of every case at the ``i``-th new cup (each kind of map, and none), ``offset`` [m] away."""
-    config, task, users = sweep.config, sweep.task, cup.users
-    robot = task.robot
+def _rows(
+    task: CupTask,
+    config: Config,
+    users: UserPopulation,
+    with_map: dict[str, Trajectories],
+    without: Trajectories,
+    at: dict[str, Any],
+    scales: tuple[float, float],
+) -> list[pd.DataFrame]:
+    """The rows of every case at one new cup (each kind of map, and none); ``scales``: the farthest
+    cup's distance on the table [m] and in joint space [rad]."""
+    robot, (cup_scale, scale) = task.robot, scales
     cases = [
-        ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in cup.with_map.items()
+        ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
     ]
-    cases.append(("without", "none", cup.without, np.full(len(sweep.users), np.nan)))
-    held = task.target(config.ref_goal, sweep.theta)  # the wanted grasp, held at the training cup
-    d_cup, d_joint = float(sweep.cup_distances[i]), float(sweep.distances[i])
+    cases.append(("without", "none", without, np.full(len(users.goal), np.nan)))
+    held = task.target(config.ref_goal, users.theta)  # the wanted grasp, held at the training cup
     ref_m, _ = grasp_error(robot, held, users.target)
     frames = []
     for mapping, kind, traj, conf in cases:
@@ -495,29 +386,26 @@ def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, i: int) -> list[pd.Data
         end_goal = np.where(
             end == task.n_goals, "new", np.where(end == config.ref_goal, "reference", "other")
         )
-        frames.append(
-            pd.DataFrame(
-                {
-                    "robot": robot.name,
-                    "mapping": mapping,
-                    "distance": d_cup / sweep.cup_scale,
-                    USER: sweep.first + sweep.users,
-                    "error": err_m / sweep.cup_scale,
-                    "h": kind,
-                    "offset_m": offset,
-                    "theta": sweep.theta,
-                    "confidence": conf,
-                    "reference": ref_m / sweep.cup_scale,
-                    "assistance": sweep.assistance_rows,
-                    "look": sweep.look,
-                    "angle_error_deg": angle,
-                    "distance_joint": d_joint / sweep.scale,
-                    "error_joint": normalized_error(traj.states[-1], users.target, sweep.scale),
-                    "reference_joint": normalized_error(held, users.target, sweep.scale),
-                    "end_goal": end_goal,
-                }
-            )
-        )
+        row = {
+            "robot": robot.name,
+            "mapping": mapping,
+            "distance": at["distance"] / cup_scale,
+            USER: at[USER],
+            "error": err_m / cup_scale,
+            "h": kind,
+            "offset_m": at["offset_m"],
+            "theta": at["theta"],
+            "confidence": conf,
+            "reference": ref_m / cup_scale,
+            "assistance": at["assistance"],
+            "look": at["look"],
+            "angle_error_deg": angle,
+            "distance_joint": at["distance_joint"] / scale,
+            "error_joint": normalized_error(traj.states[-1], users.target, scale),
+            "reference_joint": normalized_error(held, users.target, scale),
+            "end_goal": end_goal,
+        }
+        frames.append(pd.DataFrame(row))
     return frames
 
 
