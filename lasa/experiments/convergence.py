@@ -35,7 +35,7 @@ from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
-__all__ = ["NAME", "COLUMNS", "MEMBER_COLORS", "Config", "radius", "measure", "run", "summary", "plot"]
+__all__ = ["NAME", "COLUMNS", "Config", "radius", "measure", "run", "summary", "plot"]
 
 NAME = "convergence"
 # the contract's columns first, then what summary and plot read

@@ -35,8 +35,6 @@ __all__ = [
     "run_sweep",
     "grid_rows",
     "plot",
-    "plot_entropy_grid",
-    "plot_entropy_tradeoff",
     "findings",
 ]
 

@@ -35,9 +35,6 @@ __all__ = [
     "Config",
     "run",
     "plot",
-    "plot_held_paths",
-    "plot_grasp_sweep",
-    "plot_latent_meaning",
     "property_findings",
 ]
 

@@ -52,7 +52,6 @@ __all__ = [
     "COLUMNS",
     "LEVEL",
     "COLOURS",
-    "DESIGNS",
     "Config",
     "Cell",
     "Grid",
@@ -63,7 +62,6 @@ __all__ = [
     "default_frames",
     "summary",
     "describe",
-    "level_of",
     "plot",
 ]
 

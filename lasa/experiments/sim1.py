@@ -54,8 +54,6 @@ __all__ = [
     "claims",
     "boot_values",
     "plot",
-    "plot_metric",
-    "plot_time_ratio",
     "time_ratio_band",
     "findings",
 ]

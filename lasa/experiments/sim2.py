@@ -48,7 +48,6 @@ __all__ = [
     "claims",
     "boot_values",
     "plot",
-    "plot_metric",
     "after_the_change",
     "failures",
     "escape_times",

@@ -40,14 +40,12 @@ from lasa.world.goals import GoalTask
 __all__ = [
     "NAME",
     "COLUMNS",
-    "LEARNERS",
     "Config",
     "run",
     "claims",
     "boot_values",
     "episode_means",
     "plot",
-    "plot_learner",
     "findings",
 ]
 

@@ -87,7 +87,6 @@ __all__ = [
     "identity_sentence",
     "map_sentences",
     "plot",
-    "plot_robot",
     "other_share_text",
 ]
 

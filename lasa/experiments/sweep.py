@@ -48,22 +48,17 @@ T = TypeVar("T")
 
 __all__ = [
     "Decoders",
-    "pairs",
     "check_assistance",
     "swept_assistance",
-    "pilot_uniforms",
     "as_decoders",
     "check_methods",
     "check_needed",
     "check_record_every",
-    "check_pilot",
-    "sweep_grid",
     "LooksConfig",
     "SweepConfig",
     "draw_episodes",
     "episodes",
     "run_population",
-    "Look",
     "run_look",
     "judge",
 ]
