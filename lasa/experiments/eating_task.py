@@ -87,13 +87,8 @@ class Config:
     # for cost, after this version's first paper-scale run had measured them under the cap: each failed
     # the stay half at every goal [-]
     readings: tuple[str, ...] = ("continuous", "transfers")
-    lambdas: tuple[NonNegative, ...] = (
-        0.0,
-        0.1,
-        0.3,
-        1.0,
-        3.0,
-    )  # notebook 03's sweep, on the continuous base [-]
+    # notebook 03's sweep, on the continuous base [-]
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
     # The search for a decoder with both halves of the property: small entropy weights, which
     # trade the leave half against the stay half less than notebook 03's rule's lambda does,

@@ -109,21 +109,16 @@ class Config:
     """The robustness grid of notebook 08, and the sweep run in each of its cells."""
 
     assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
-    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (
-        0.1,
-        0.2,
-        0.5,
-    )  # blend weights of Eq. M1 [-]
+    # blend weights of Eq. M1 [-]
+    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (0.1, 0.2, 0.5)
     action_scales: tuple[Positive, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
     noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
     betas: tuple[Rationality, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
-    change_steps: tuple[NonNegativeInt, ...] = (
-        0,
-        120,
-    )  # sim2 change steps N (its claims read the ends) [steps]
+    # sim2 change steps N (its claims read the ends) [steps]
+    change_steps: tuple[NonNegativeInt, ...] = (0, 120)
     horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]

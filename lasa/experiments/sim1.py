@@ -82,18 +82,8 @@ CLAIM_BETAS = (75.0, 1000.0)  # the rationalities the claims compare at (noisy, 
 class Config(SweepConfig):
     """Fig. sim1: users of fixed expertise."""
 
-    betas: tuple[Rationality, ...] = (
-        0.3,
-        1,
-        3,
-        10,
-        30,
-        75,
-        200,
-        1000,
-        3000,
-        10000,
-    )  # rationalities [1/rad^2]
+    # rationalities [1/rad^2]
+    betas: tuple[Rationality, ...] = (0.3, 1, 3, 10, 30, 75, 200, 1000, 3000, 10000)
     horizon: PositiveInt = 200  # control steps per episode [-]
     tolerance: Positive = 0.05  # normalised error that counts as reaching s* [-]
     video_beta: Rationality = 75.0  # the noisy user notebook 04's video shows: one of betas [1/rad^2]

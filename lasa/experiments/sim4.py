@@ -133,13 +133,8 @@ CLAIM_MAPS = ("grasp", "straight_line")
 class Config(LooksConfig):
     """Fig. sim4: users who reach for new cups, with and without the context map h."""
 
-    offsets: tuple[Positive, ...] = (
-        0.08,
-        0.11,
-        0.14,
-        0.17,
-        0.20,
-    )  # new cups' distances from the reference cup [m]
+    # new cups' distances from the reference cup [m]
+    offsets: tuple[Positive, ...] = (0.08, 0.11, 0.14, 0.17, 0.20)
     direction: tuple[Number, Number] | None = (
         None  # on the table; None: from the other training cup to the reference
     )
