@@ -31,17 +31,15 @@ from lasa.evidence.plots import (
     method_lineplot,
     paper_handle,
     paper_point,
-    robot_rows,
-    users_text,
-    wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     check_needed,
     run_look,
+    sim_figure,
 )
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -453,9 +451,8 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         table: Rows of every robot and member.
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
-    table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 3, (16, 6.4))
-    for name, part, row in rows:
+
+    def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
         plot_time_ratio(part, ax=row[2])
@@ -464,12 +461,9 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         row[1].set_title(f"{name}: time to reach s*")
         paper = "\n(the paper's numbers are its 7-DoF Panda's)" if name != "panda" else ""
         row[2].set_title(f"{name}: time ratio LA / LA+SA{paper}")
-    n = users_text(table, ["method", "beta"])
-    fig.suptitle(
-        wrap_to(f"Fig. sim1: users of fixed expertise, {n}, assistance: {assistance}", fig.get_figwidth())
-    )
-    fig.tight_layout()
-    return fig
+
+    title = "Fig. sim1: users of fixed expertise"
+    return sim_figure(table, assistance, title, (3, (16, 6.4), draw), ["method", "beta"])
 
 
 def _interval(claim: Claim, name: str) -> tuple[float, float, float]:

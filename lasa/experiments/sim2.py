@@ -26,16 +26,15 @@ from lasa.evidence.plots import (
     method_lineplot,
     paper_handle,
     probability_axis,
-    robot_rows,
-    users_text,
-    wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
+    headline_claim,
     run_look,
+    sim_figure,
 )
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -265,20 +264,16 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         table: Rows of every robot and member.
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
-    table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 3, (16, 5.6))
-    for name, part, row in rows:
+
+    def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):
             plot_metric(part, metric, ax=ax)
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: success (sim2.entropy_escapes' number)")
         row[2].set_title(f"{name}: confidence in the true cup")
-    n = users_text(table, ["method", "change_step"])
-    fig.suptitle(
-        wrap_to(f"Fig. sim2: users who change their mind, {n}, assistance: {assistance}", fig.get_figwidth())
-    )
-    fig.tight_layout()
-    return fig
+
+    title = "Fig. sim2: users who change their mind"
+    return sim_figure(table, assistance, title, (3, (16, 5.6), draw), ["method", "change_step"])
 
 
 STILL = 0.01  # an arm that moves less than this (normalised) in its last STILL_STEPS steps stands still [-]
@@ -554,15 +549,10 @@ def findings(claims: list[Claim], head: pd.DataFrame, after: pd.DataFrame, toler
         after: :func:`after_the_change`'s rows of the same member and LA, first look.
         tolerance: The normalised final error that counts as success (``Config.success``).
     """
-    robot = str(head.robot.iloc[0])
-    member = str(head[head.method != "LA"].assistance.iloc[0])
-    rows = [c for c in claims if c.id == "sim2.sa_trapped" and c.robot == robot and c.assistance == member]
-    if len(rows) != 1:
-        raise ConfigError(f"expected one sim2.sa_trapped row for {robot} under {member!r}, got {len(rows)}")
     steps = (int(head.change_step.min()), int(head.change_step.max()))
     return "\n".join(
         [
-            claim_sentence(rows[0], steps),
+            claim_sentence(headline_claim(claims, "sim2.sa_trapped", head), steps),
             success_sentence(head),
             belief_sentence(head, after, tolerance),
             dip_sentence(head, after),

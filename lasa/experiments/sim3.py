@@ -22,17 +22,16 @@ from lasa.evidence.plots import (
     legend_below,
     method_lineplot,
     paper_handle,
-    robot_rows,
-    users_text,
-    wrap_to,
 )
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, group_means, member_frame
+from lasa.evidence.verdicts import USER, Design, group_means
 from lasa.experiments.sweep import (
     Decoders,
     SweepConfig,
     check_record_every,
+    headline_claim,
     run_look,
+    sim_figure,
 )
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -196,16 +195,14 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         table: Rows of every robot and member.
         assistance: The member drawn (the headline one); LA's rows are shared.
     """
-    table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 2, (11, 5.2))
-    for name, part, row in rows:
+
+    def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, learner in zip(row, LEARNERS, strict=True):
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
-    n = users_text(table, ["method", "learner", "t"], per="curve")
-    fig.suptitle(wrap_to(f"Fig. sim3: users who learn, {n}, assistance: {assistance}", fig.get_figwidth()))
-    fig.tight_layout()
-    return fig
+
+    keys = ["method", "learner", "t"]
+    return sim_figure(table, assistance, "Fig. sim3: users who learn", (2, (11, 5.2), draw), keys, "curve")
 
 
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
@@ -215,16 +212,8 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
         claims: The claims of :func:`claims` (the headline row of ``head``'s robot and member is read).
         head: One member's rows (and LA's), one per episode or step: the mean errors over the episode.
     """
-    robot = str(head.robot.iloc[0])
-    member = str(head[head.method != "LA"].assistance.iloc[0])
-    rows = [
-        c for c in claims if c.id == "sim3.entropy_learners" and c.robot == robot and c.assistance == member
-    ]
-    if len(rows) != 1:
-        raise ConfigError(
-            f"expected one sim3.entropy_learners row for {robot} under {member!r}, got {len(rows)}"
-        )
-    claim = rows[0]
+    claim = headline_claim(claims, "sim3.entropy_learners", head)
+    robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     lines, lower, learners = [], [], sorted(set(head.learner))
     for learner in learners:

@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 
 from lasa.base.config import (
     ASSISTANCE,
@@ -29,6 +30,8 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
+from lasa.evidence.claims import Claim
+from lasa.evidence.plots import robot_rows, users_text, wrap_to
 from lasa.evidence.verdicts import (
     N_BOOT,
     Design,
@@ -36,6 +39,7 @@ from lasa.evidence.verdicts import (
     block_seed,
     block_users,
     check_design,
+    member_frame,
     sequential,
 )
 from lasa.method.decoder import ActionDecoder
@@ -402,3 +406,44 @@ def judge(
         block, module.claims, assistance, control.assistance, design, config.n_boot, fast=fast
     )
     return pd.concat(full, ignore_index=True), outcome, first[0]
+
+
+def sim_figure(
+    table: pd.DataFrame,
+    assistance: str,
+    title: str,
+    panels: tuple[int, tuple[float, float], Callable[[str, pd.DataFrame, np.ndarray], None]],
+    keys: list[str],
+    per: str = "point",
+) -> Figure:
+    """A sims 1-3 figure under one member: one row of panels per robot present, titled with its users.
+
+    Args:
+        table: Rows of every robot and member; LA's rows are shared by every member.
+        assistance: The member drawn (the headline one).
+        title: The figure's title, before its users per ``per`` (over ``keys``) and the member.
+        panels: Panels per row, the size of a row, and what draws a robot's row (name, rows, axes).
+    """
+    table = member_frame(table, assistance)
+    n_cols, size, draw = panels
+    fig, rows = robot_rows(table, n_cols, size)
+    for name, part, row in rows:
+        draw(name, part, row)
+    n = users_text(table, keys, per=per)
+    fig.suptitle(wrap_to(f"{title}, {n}, assistance: {assistance}", fig.get_figwidth()))
+    fig.tight_layout()
+    return fig
+
+
+def headline_claim(claims: list[Claim], claim_id: str, head: pd.DataFrame) -> Claim:
+    """The ``claim_id`` row of ``head``'s robot and member (the member of its assisted rows).
+
+    Raises:
+        ConfigError: unless exactly one row matches.
+    """
+    robot = str(head.robot.iloc[0])
+    member = str(head[head.method != "LA"].assistance.iloc[0])
+    rows = [c for c in claims if c.id == claim_id and c.robot == robot and c.assistance == member]
+    if len(rows) != 1:
+        raise ConfigError(f"expected one {claim_id} row for {robot} under {member!r}, got {len(rows)}")
+    return rows[0]
