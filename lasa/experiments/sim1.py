@@ -39,6 +39,7 @@ from lasa.experiments.sweep import (
     SweepConfig,
     check_needed,
     run_look,
+    sim_claim,
     sim_figure,
 )
 from lasa.people.rollout import Trajectories
@@ -183,45 +184,33 @@ def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, r
     values = {"share_lower": n_lower / n_total}
     verdict = rule("sim1.final_error").verdict(values)
     worst = (err[b] - err[a]).idxmax()
-    return Claim(
-        id="sim1.final_error",
+    return sim_claim(
+        "sim1.final_error",
+        robot,
+        values,
         claim=f"SA lowers the final state error at every beta ({b} vs {a})",
-        figure="sim1",
         paper="LA+SA below LA at every beta",
-        values=values,
-        measured=(
-            f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
-            f"mean final error {a} vs {b}: "
-            f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
-            f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000"
-        ),
-        reproduced=verdict,
-        note=(
-            ""
-            if verdict == "yes"
-            else f"Largest excess of {b} at beta={worst:g} "
-            f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f})."
-        ),
-        robot=robot,
+        measured=f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
+        f"mean final error {a} vs {b}: "
+        f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
+        f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000",
+        note=""
+        if verdict == "yes"
+        else f"Largest excess of {b} at beta={worst:g} ({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}).",
     )
 
 
 def _time_ratio_claim(tim: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
     """sim1.time_ratio: a's mean time over b's at beta = 75 and 1000 (``tim``: per beta, a and b)."""
     values = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
-    return Claim(
-        id="sim1.time_ratio",
+    return sim_claim(
+        "sim1.time_ratio",
+        robot,
+        values,
         claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
-        figure="sim1",
         paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
-        values=values,
-        measured=(
-            f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
-            f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)"
-        ),
-        reproduced=rule("sim1.time_ratio").verdict(values),
-        note="",
-        robot=robot,
+        measured=f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
+        f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)",
     )
 
 
@@ -229,20 +218,15 @@ def _gap_claim(err: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robo
     """sim1.gap_narrows: the time ratio and the final-error gap from beta = 75 to 1000."""
     d75, d1000 = err.loc[75.0, a] - err.loc[75.0, b], err.loc[1000.0, a] - err.loc[1000.0, b]
     values = _gap_values(r75, r1000, d75, d1000)
-    return Claim(
-        id="sim1.gap_narrows",
+    return sim_claim(
+        "sim1.gap_narrows",
+        robot,
+        values,
         claim=f"the gap between {a} and {b} narrows as beta grows",
-        figure="sim1",
         paper="time gap 45% at beta=75 -> 30% at beta=1000",
-        values=values,
-        measured=(
-            f"time gap (ratio - 1) {r75 - 1:+.2f} -> {r1000 - 1:+.2f}, "
-            f"narrowing {values['time_narrowing']:+.2f} (g75 - |g1000|); final-error gap {a}-{b} "
-            f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)"
-        ),
-        reproduced=rule("sim1.gap_narrows").verdict(values),
-        note="",
-        robot=robot,
+        measured=f"time gap (ratio - 1) {r75 - 1:+.2f} -> {r1000 - 1:+.2f}, "
+        f"narrowing {values['time_narrowing']:+.2f} (g75 - |g1000|); final-error gap {a}-{b} "
+        f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)",
     )
 
 
@@ -264,27 +248,19 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
     counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
     total = len(err)
     values = {"share_weaker": min(counts.values()) / total}
-    verdict = rule("sim1.entropy_sa").verdict(values)
-    return Claim(
-        id="sim1.entropy_sa",
+    return sim_claim(
+        "sim1.entropy_sa",
+        robot,
+        values,
         claim="SA improves on LA whether or not the decoder was trained with entropy",
-        figure="sim1",
         paper="LA+SA and LA+SA+Entropy both below LA (final error)",
-        values=values,
-        measured=(
-            f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
-            "(the interval is for this share); "
-            f"final error below LA's at {counts['LA+SA']}/{total} betas (LA+SA) and "
-            f"{counts['LA+SA+Entropy']}/{total} (LA+SA+Entropy); at beta=1000: "
-            + ", ".join(
-                f"{m} {err.loc[1000.0, m]:.3f}"
-                for m in ("LA", "LA+SA", "LA+SA+Entropy")
-                if 1000.0 in err.index
-            )
+        measured=f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
+        "(the interval is for this share); "
+        f"final error below LA's at {counts['LA+SA']}/{total} betas (LA+SA) and "
+        f"{counts['LA+SA+Entropy']}/{total} (LA+SA+Entropy); at beta=1000: "
+        + ", ".join(
+            f"{m} {err.loc[1000.0, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy") if 1000.0 in err.index
         ),
-        reproduced=verdict,
-        note="",
-        robot=robot,
     )
 
 

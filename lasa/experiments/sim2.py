@@ -34,6 +34,7 @@ from lasa.experiments.sweep import (
     SweepConfig,
     headline_claim,
     run_look,
+    sim_claim,
     sim_figure,
 )
 from lasa.people.rollout import Trajectories
@@ -155,38 +156,26 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),
     }
     values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
-    v1 = rule("sim2.sa_trapped").verdict(values1)
-    v2 = rule("sim2.entropy_escapes").verdict(values2)
     return [
-        Claim(
-            id="sim2.sa_trapped",
+        sim_claim(
+            "sim2.sa_trapped",
+            robot,
+            values1,
             claim="LA+SA cannot escape the wrong goal as N grows",
-            figure="sim2",
             paper="LA+SA's final error grows and its confidence falls as N grows",
-            values=values1,
-            measured=(
-                f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
-                f"at N={hi} (the interval is for this growth); mean confidence in the true cup "
-                f"{conf['LA+SA', lo]:.3f} -> {conf['LA+SA', hi]:.3f}; it reaches the right cup in "
-                f"{sa_lo:.0%} -> {sa_hi:.0%} of episodes"
-            ),
-            reproduced=v1,
-            note="",
-            robot=robot,
+            measured=f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
+            f"at N={hi} (the interval is for this growth); mean confidence in the true cup "
+            f"{conf['LA+SA', lo]:.3f} -> {conf['LA+SA', hi]:.3f}; it reaches the right cup in "
+            f"{sa_lo:.0%} -> {sa_hi:.0%} of episodes",
         ),
-        Claim(
-            id="sim2.entropy_escapes",
+        sim_claim(
+            "sim2.entropy_escapes",
+            robot,
+            values2,
             claim="LA+SA+Entropy can escape the wrong goal",
-            figure="sim2",
             paper="LA+SA+Entropy users switch goals",
-            values=values2,
-            measured=(
-                f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
-                f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}"
-            ),
-            reproduced=v2,
-            note="",
-            robot=robot,
+            measured=f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
+            f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}",
         ),
     ]
 

@@ -23,7 +23,6 @@ from lasa.evidence.plots import (
     method_lineplot,
     paper_handle,
 )
-from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means
 from lasa.experiments.sweep import (
     Decoders,
@@ -31,6 +30,7 @@ from lasa.experiments.sweep import (
     check_record_every,
     headline_claim,
     run_look,
+    sim_claim,
     sim_figure,
 )
 from lasa.people.rollout import Trajectories
@@ -137,14 +137,13 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
     values = {f"gain_{name}": float(gain[name]) for name in learners}
-    verdict = rule("sim3.entropy_learners").verdict(values)
     return [
-        Claim(
-            id="sim3.entropy_learners",
+        sim_claim(
+            "sim3.entropy_learners",
+            robot,
+            values,
             claim="entropy improves in-task performance for both fast and slow learners",
-            figure="sim3",
             paper="LA+SA+Entropy below LA+SA in error over time, fast and slow",
-            values=values,
             measured="gain of entropy, LA+SA minus LA+SA+Entropy (the interval is for the fast learner's): "
             + ", ".join(f"{name} {gain[name]:+.3f}" for name in learners)
             + "; "
@@ -153,9 +152,6 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
                 f"LA+SA+Entropy {mean[name, 'LA+SA+Entropy']:.3f}, LA {mean[name, 'LA']:.3f}"
                 for name in learners
             ),
-            reproduced=verdict,
-            note="",
-            robot=robot,
         )
     ]
 

@@ -33,7 +33,6 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
-from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     NO_ASSISTANCE,
     USER,
@@ -50,6 +49,7 @@ from lasa.experiments.sweep import (
     check_methods,
     check_needed,
     episodes,
+    sim_claim,
     swept_assistance,
 )
 from lasa.method.decoder import ActionDecoder
@@ -516,16 +516,14 @@ def _claims_under(frame: pd.DataFrame, measure: str, form: str) -> list[Claim]:
     values = {"slope": float(wo.slope), "r2": float(wo.r2)}
     cid = _claim_id("no_map_training_goal", *readings)
     out.append(
-        Claim(
-            id=cid,
+        sim_claim(
+            cid,
+            robot,
+            values,
             claim="without the map, the robot only reaches for the training goal",
-            figure="sim4",
             paper="y = x",
-            values=values,
             measured=_line(wo, n_cups) + " (the interval is for the slope)",
-            reproduced=rule(cid).verdict(values),
             note=_angle_note(angles, "none"),
-            robot=robot,
         )
     )
     return out
@@ -559,14 +557,13 @@ def _map_claim(
     values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
     cid = _claim_id(f"{name}_linear", kind_reading, *readings)
     above = int((~below).sum())
-    return Claim(
-        id=cid,
+    return sim_claim(
+        cid,
+        robot,
+        values,
         claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
-        figure="sim4",
         paper="y = 0.11x, R^2 = 0.98",
-        values=values,
         measured=_line(f, n_cups) + " (the interval is for the slope)",
-        reproduced=rule(cid).verdict(values),
         note=" ".join(
             t
             for t in (
@@ -575,7 +572,6 @@ def _map_claim(
             )
             if t
         ),
-        robot=robot,
     )
 
 

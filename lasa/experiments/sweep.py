@@ -32,6 +32,7 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.plots import robot_rows, users_text, wrap_to
+from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import (
     N_BOOT,
     Design,
@@ -447,3 +448,20 @@ def headline_claim(claims: list[Claim], claim_id: str, head: pd.DataFrame) -> Cl
     if len(rows) != 1:
         raise ConfigError(f"expected one {claim_id} row for {robot} under {member!r}, got {len(rows)}")
     return rows[0]
+
+
+def sim_claim(
+    claim_id: str, robot: str, values: dict[str, Any], claim: str, paper: str, measured: str, note: str = ""
+) -> Claim:
+    """A sim's claim row on ``robot``: its figure from its id, its verdict by its rule on ``values``."""
+    return Claim(
+        id=claim_id,
+        claim=claim,
+        figure=claim_id.split(".")[0],
+        paper=paper,
+        values=values,
+        measured=measured,
+        reproduced=rule(claim_id).verdict(values),
+        note=note,
+        robot=robot,
+    )
