@@ -1,4 +1,4 @@
-"""The verdict map: every sim1-sim3 claim under each reading and setting (notebook 08).
+"""The verdict map: every sim1-sim3 claim under each member and setting (notebook 08).
 
 The sims re-run in every cell of a grid over the member, alpha, sigma_h and the pilot (:func:`cells`),
 each claim judged as the claims table does; design and reuse: ``docs/method-notes.md``.
@@ -432,7 +432,7 @@ def level_of(table: pd.DataFrame) -> float:
 
 
 def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
-    """The verdict map: claims (rows) x readings and settings (columns), one panel per robot.
+    """The verdict map: claims (rows) x members and settings (columns), one panel per robot.
 
     Raises:
         ConfigError: if the table has no single interval level, or a word outside ``WORDS``.

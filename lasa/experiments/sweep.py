@@ -160,10 +160,10 @@ def check_pilot(pilot: str, prob: float) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class LooksConfig:
-    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the readings."""
+    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the members."""
 
-    users: PositiveInt = Design.first  # users per point at the first look, every reading (Design) [-]
-    block: PositiveInt = Design.block  # users added per later look, the headline reading only [-]
+    users: PositiveInt = Design.first  # users per point at the first look, every member (Design) [-]
+    block: PositiveInt = Design.block  # users added per later look, the headline member only [-]
     cap: PositiveInt = Design.cap  # most users per point [-]
     n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
