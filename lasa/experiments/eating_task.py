@@ -74,53 +74,31 @@ BELIEFS = ("uncertain", "confident")
 class Config:
     """The eating decoder's data and training (notebook 10)."""
 
-    # the demonstrations (lasa.people.demos.DemoConfig, its own seed included): tilts per goal
-    # (n_theta), reaches from home per (goal, tilt) (n_starts), tilt adjustments (n_adjust), ...
-    demos: DemoConfig = EATING_DEMOS
-    # training (lasa.method.train.TrainConfig, its own seed included, which every fine-tune uses):
-    # the cup decoders' recipe, 2000 steps of a 3 x 128 network, with a 2-D latent (z_dim must
-    # stay 2: two stick axes)
+    demos: DemoConfig = EATING_DEMOS  # the demonstrations (lasa.people.demos.DemoConfig, its own seed)
+    # training (lasa.method.train.TrainConfig, its seed every fine-tune's): z_dim stays 2, two stick axes
     train: TrainConfig = TrainConfig(z_dim=2)
     goal: str = "middle"  # the bowl the figure looks at [-]
-    # demonstration readings trained: at paper scale the two whose decoders have the property under the
-    # study's cap; all of EATING_READINGS under LARGE=1 (configs/large.yaml). home and leaves moved there
-    # for cost, after this version's first paper-scale run had measured them under the cap: each failed
-    # the stay half at every goal [-]
+    # demonstration readings trained: at paper scale the two with the property under the study's cap;
+    # all of EATING_READINGS under LARGE=1 (configs/large.yaml) [-]
     readings: tuple[str, ...] = ("continuous", "transfers")
     # notebook 03's sweep, on the continuous base [-]
     lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
-    # The search for a decoder with both halves of the property: small entropy weights, which
-    # trade the leave half against the stay half less than notebook 03's rule's lambda does,
-    # on the bases whose demonstrations show departures (transfers; leaves, from a confident
-    # belief). Each run costs one fine-tune of sweep_steps.
-    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)  # entropy weights of the search [-]
-    # bases the entropy-weight search fine-tunes: none at paper scale (transfers and leaves under
-    # LARGE=1), moved there for cost as home and leaves were: under the cap no weight kept the stay
-    # half at every goal [-]
-    search_readings: tuple[str, ...] = ()
-    # A latent whose ring keeps departures and manipulation apart (lasa.method.sectors): these
-    # readings' bases are trained with the sector loss too (<reading>_sectors, lambda = 0). The
-    # weight was set after two probe trainings of the leaves base (1.0 and 0.2: neither kept half
-    # the inputs at a bowl), for its lower held-out reconstruction error (0.0085 against 0.0118).
+    # small entropy weights searched for both halves of the property, one fine-tune each [-]
+    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)
+    search_readings: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
+    # bases trained with the sector loss too (lasa.method.sectors; <reading>_sectors, lambda = 0); the
+    # weight had the lower held-out reconstruction error of two probes (0.2: 0.0085, 1.0: 0.0118)
     sector_readings: tuple[str, ...] = ()  # demonstration readings trained with sectors (LARGE=1: leaves) [-]
     sector_weight: NonNegative = 0.2  # weight of the sector loss of those readings [-]
-    # The search for a decoder with both halves under the study's cap, by another seed of training
-    # (written before the study ran at the cap): each of these readings' bases is trained again
-    # with each seed, then fine-tuned with lambda = 0 as its reading is (<reading>_seed<seed>).
-    # transfers: the reading that met the rule without the cap, and missed it by one input of 64 at
-    # one bowl with the cap in the probe that found the cap's effect.
-    seed_readings: tuple[str, ...] = ("transfers",)  # readings trained again with other seeds [-]
+    # bases trained again with each search seed, fine-tuned with lambda = 0 (<reading>_seed<seed>) [-]
+    seed_readings: tuple[str, ...] = ("transfers",)
     search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the readings' own: train.seed) [-]
-    # The study's belief: Javdani et al.'s cap (lasa.world.eating.STUDY_BELIEF_CAP), through the
-    # demonstrations' beliefs, training, the property; None ("none"): Algorithm 1's uncapped belief
+    # the study's belief cap (lasa.world.eating.STUDY_BELIEF_CAP); None ("none"): Algorithm 1's uncapped
     belief_cap: BeliefCap = STUDY_BELIEF_CAP
-    # The cap sweep: the headline's recipe (its demonstrations, base and fine-tune) trained again at
-    # each of these caps, its property measured at that cap (train_caps); notebook 11 runs them [-]
+    # the headline's recipe trained again at each of these caps (train_caps); notebook 11 runs them [-]
     cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
-    # local worker processes the trainings are spread over (entropy_ablation.train_all): the same
-    # decoders with any number; configs/paper.yaml asks for two, to put this notebook, the
-    # pipeline's longest chain, on both cores [-]
+    # local worker processes for the trainings (entropy_ablation.train_all): the same decoders with any [-]
     jobs: PositiveInt = 1
 
     def __post_init__(self) -> None:
