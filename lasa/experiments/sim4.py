@@ -854,6 +854,8 @@ PAPER_UNITS = (
 )
 CI_LEVEL = Design().level  # the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
 N_BOOT_PLOT = 1000
+MEAN_STYLE: dict[str, Any] = {"ms": 4, "capsize": 2}  # a cup's mean and its interval
+MEDIAN_STYLE: dict[str, Any] = {"s": 22, "facecolors": "none", "lw": 0.9}  # a cup's median, hollow
 
 
 def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
@@ -881,51 +883,27 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
             continue
         cups = _cup_means(frame[frame.h == kind])
         marker, dashes, dx = H_MARKS[kind]
+        bars = [cups["mean"] - cups.low, cups.high - cups["mean"]]
         ax.errorbar(
-            cups.distance + dx,
-            cups["mean"],
-            yerr=[cups["mean"] - cups.low, cups.high - cups["mean"]],
-            fmt=marker,
-            color=color,
-            ms=4,
-            capsize=2,
-            zorder=3,
+            cups.distance + dx, cups["mean"], yerr=bars, fmt=marker, color=color, zorder=3, **MEAN_STYLE
         )
         ax.scatter(
-            cups.distance + dx,
-            cups["median"],
-            marker=marker,
-            s=22,
-            facecolors="none",
-            edgecolors=color,
-            lw=0.9,
-            zorder=4,
+            cups.distance + dx, cups["median"], marker=marker, edgecolors=color, zorder=4, **MEDIAN_STYLE
         )
         f = table.loc[kind]
         label = f"{name}: {_equation(f, 2)}, R² = {f.r2:.2f}"
         if angles is not None:
             per_cup = angles[kind]
             label += f"; approach error {per_cup.iloc[0]:.1f}° → {per_cup.iloc[-1]:.1f}°"
-        line = ax.plot(xs, f.slope * xs + f.intercept, color=color, lw=1.5, label=label, zorder=2)[0]
+        fitted = f.slope * xs + f.intercept
+        line = ax.plot(xs, fitted, color=color, lw=1.5, label=label, zorder=2)[0]
         if dashes:  # () keeps the solid line
             line.set_dashes(dashes)
-        tops += [float(cups.high.max()), float(cups["median"].max()), float(max(f.slope * xs + f.intercept))]
-        bottoms += [
-            float(cups.low.min()),
-            float(cups["median"].min()),
-            float(min(f.slope * xs + f.intercept)),
-        ]
-    ax.errorbar(
-        [],
-        [],
-        yerr=[],
-        fmt="o",
-        color="0.4",
-        ms=4,
-        capsize=2,
-        label=f"mean per cup, bars: {100 * CI_LEVEL:.4g}% bootstrap interval (the verdicts' level)",
-    )
-    ax.scatter([], [], marker="o", s=22, facecolors="none", edgecolors="0.4", lw=0.9, label="median per cup")
+        tops += [float(cups.high.max()), float(cups["median"].max()), float(max(fitted))]
+        bottoms += [float(cups.low.min()), float(cups["median"].min()), float(min(fitted))]
+    label = f"mean per cup, bars: {100 * CI_LEVEL:.4g}% bootstrap interval (the verdicts' level)"
+    ax.errorbar([], [], yerr=[], fmt="o", color="0.4", label=label, **MEAN_STYLE)
+    ax.scatter([], [], marker="o", edgecolors="0.4", label="median per cup", **MEDIAN_STYLE)
     share = other_share_text(frame)
     if share:
         ax.text(0.02, 0.98, share, transform=ax.transAxes, va="top", fontsize=7, wrap=True)
