@@ -21,27 +21,13 @@ from matplotlib.transforms import blended_transform_factory
 
 from lasa.base.config import ControlConfig, Positive, PositiveInt, Rationality, check_list
 from lasa.base.errors import ConfigError
+from lasa.evidence import plots
 from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.findings import side_of
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
-from lasa.evidence.plots import (
-    METHOD_COLORS,
-    band_handle,
-    legend_below,
-    method_lineplot,
-    paper_handle,
-    paper_point,
-)
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means
-from lasa.experiments.sweep import (
-    Decoders,
-    SweepConfig,
-    check_needed,
-    run_look,
-    sim_claim,
-    sim_figure,
-)
+from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
@@ -78,7 +64,7 @@ CLAIM_BETAS = (75.0, 1000.0)  # the rationalities the claims compare at (noisy, 
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(SweepConfig):
+class Config(sweep.SweepConfig):
     """Fig. sim1: users of fixed expertise."""
 
     # rationalities [1/rad^2]
@@ -91,7 +77,7 @@ class Config(SweepConfig):
         super().__post_init__()
         betas = tuple(float(b) for b in check_list("betas", self.betas, ascending=True))
         object.__setattr__(self, "betas", betas)
-        check_needed("betas", betas, CLAIM_BETAS, "Fig. sim1's claims")
+        sweep.check_needed("betas", betas, CLAIM_BETAS, "Fig. sim1's claims")
         if float(self.video_beta) not in betas:
             raise ConfigError(
                 f"video_beta must be one of betas {list(betas)} (the video shows a user of the sweep), "
@@ -100,7 +86,7 @@ class Config(SweepConfig):
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -120,7 +106,7 @@ def run(
         the column ``seed`` is the user's index over all looks); and the trajectories of all
         episodes (users in the frame's row order).
     """
-    ran = run_look(decoders, task, control, config, config.betas, _fixed, progress, look, assistance)
+    ran = sweep.run_look(decoders, task, control, config, config.betas, _fixed, progress, look, assistance)
     users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
@@ -184,7 +170,7 @@ def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, r
     values = {"share_lower": n_lower / n_total}
     verdict = rule("sim1.final_error").verdict(values)
     worst = (err[b] - err[a]).idxmax()
-    return sim_claim(
+    return sweep.sim_claim(
         "sim1.final_error",
         robot,
         values,
@@ -203,7 +189,7 @@ def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, r
 def _time_ratio_claim(tim: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
     """sim1.time_ratio: a's mean time over b's at beta = 75 and 1000 (``tim``: per beta, a and b)."""
     values = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
-    return sim_claim(
+    return sweep.sim_claim(
         "sim1.time_ratio",
         robot,
         values,
@@ -218,7 +204,7 @@ def _gap_claim(err: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robo
     """sim1.gap_narrows: the time ratio and the final-error gap from beta = 75 to 1000."""
     d75, d1000 = err.loc[75.0, a] - err.loc[75.0, b], err.loc[1000.0, a] - err.loc[1000.0, b]
     values = _gap_values(r75, r1000, d75, d1000)
-    return sim_claim(
+    return sweep.sim_claim(
         "sim1.gap_narrows",
         robot,
         values,
@@ -248,7 +234,7 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
     counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
     total = len(err)
     values = {"share_weaker": min(counts.values()) / total}
-    return sim_claim(
+    return sweep.sim_claim(
         "sim1.entropy_sa",
         robot,
         values,
@@ -312,20 +298,20 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         metric: ``final_error`` or ``time``.
         ax: Axes to draw on.
     """
-    ax = method_lineplot(frame, "beta", metric, ax, level=LEVEL)
+    ax = plots.method_lineplot(frame, "beta", metric, ax, level=LEVEL)
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     for i, beta in enumerate(PAPER_RATIOS):
         label = "β = 75, 1000: the paper's time ratios" if i == 0 else None
         ax.axvline(beta, color="0.8", lw=0.8, zorder=0, label=label)
-    extra: list[Artist] = [band_handle(LEVEL)]
+    extra: list[Artist] = [plots.band_handle(LEVEL)]
     if metric == "final_error" and {"LA", "LA+SA"} <= set(frame.method):
         _mark_lower(frame, ax)
-        extra.append(paper_handle(PAPER_FINAL_ERROR))
+        extra.append(plots.paper_handle(PAPER_FINAL_ERROR))
     if metric == "time" and "completed" in frame:
         extra += _mark_censored(frame, ax)
-    legend_below(ax, extra)
+    plots.legend_below(ax, extra)
     return ax
 
 
@@ -336,7 +322,13 @@ def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
     top = blended_transform_factory(ax.transData, ax.transAxes)
     label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
     (line,) = ax.plot(
-        lower, np.full(len(lower), 0.97), "v", color=METHOD_COLORS["LA+SA"], ms=6, transform=top, label=label
+        lower,
+        np.full(len(lower), 0.97),
+        "v",
+        color=plots.METHOD_COLORS["LA+SA"],
+        ms=6,
+        transform=top,
+        label=label,
     )
     return line
 
@@ -346,7 +338,7 @@ def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
     stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
     cut = stats[stats.done < 1.0]
     for method, part in cut.groupby(level="method"):
-        ax.plot(part.index.get_level_values("beta"), part.time, mec=METHOD_COLORS[str(method)], **OPEN)
+        ax.plot(part.index.get_level_values("beta"), part.time, mec=plots.METHOD_COLORS[str(method)], **OPEN)
     if cut.empty:
         return []
     horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
@@ -392,7 +384,7 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars."""
     ax = plt.gca() if ax is None else ax
     band = time_ratio_band(frame)
-    color = METHOD_COLORS["LA+SA"]
+    color = plots.METHOD_COLORS["LA+SA"]
     ax.fill_between(
         band.beta,
         band.low,
@@ -412,11 +404,11 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
     for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
         tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
-        paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
+        plots.paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel("time ratio LA / LA+SA [-]")
-    legend_below(ax)
+    plots.legend_below(ax)
     return ax
 
 
@@ -439,7 +431,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         row[2].set_title(f"{name}: time ratio LA / LA+SA{paper}")
 
     title = "Fig. sim1: users of fixed expertise"
-    return sim_figure(table, assistance, title, (3, (16, 6.4), draw), ["method", "beta"])
+    return sweep.sim_figure(table, assistance, title, (3, (16, 6.4), draw), ["method", "beta"])
 
 
 def _interval(claim: Claim, name: str) -> tuple[float, float, float]:

@@ -17,26 +17,12 @@ from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, NonNegative, NonNegativeInt, Positive, PositiveInt, check_list
 from lasa.base.errors import ConfigError
+from lasa.evidence import plots
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
-from lasa.evidence.plots import (
-    METHOD_COLORS,
-    band_handle,
-    legend_below,
-    method_lineplot,
-    paper_handle,
-    probability_axis,
-)
 from lasa.evidence.rules import rule
 from lasa.evidence.verdicts import USER, Design, group_means
-from lasa.experiments.sweep import (
-    Decoders,
-    SweepConfig,
-    headline_claim,
-    run_look,
-    sim_claim,
-    sim_figure,
-)
+from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
@@ -77,7 +63,7 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(SweepConfig):
+class Config(sweep.SweepConfig):
     """Fig. sim2: users who aim at the wrong cup until step N, then at the right one."""
 
     change_steps: tuple[NonNegativeInt, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
@@ -97,7 +83,7 @@ class Config(SweepConfig):
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -121,7 +107,9 @@ def run(
             "change_step": np.array(change, dtype=int),
         }
 
-    ran = run_look(decoders, task, control, config, config.change_steps, changing, progress, look, assistance)
+    ran = sweep.run_look(
+        decoders, task, control, config, config.change_steps, changing, progress, look, assistance
+    )
     users, traj = ran.users, ran.traj
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
@@ -157,7 +145,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     }
     values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
     return [
-        sim_claim(
+        sweep.sim_claim(
             "sim2.sa_trapped",
             robot,
             values1,
@@ -168,7 +156,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
             f"{conf['LA+SA', lo]:.3f} -> {conf['LA+SA', hi]:.3f}; it reaches the right cup in "
             f"{sa_lo:.0%} -> {sa_hi:.0%} of episodes",
         ),
-        sim_claim(
+        sweep.sim_claim(
             "sim2.entropy_escapes",
             robot,
             values2,
@@ -222,17 +210,17 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
     """One panel: final error, success share or confidence in the true cup against the change step N."""
     if metric == "success":
         frame = frame.assign(success=frame.success.astype(float))
-    ax = method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
+    ax = plots.method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     if metric == "success":
         _mark_thresholds(ax, int(frame.change_step.max()))
     if metric in PROBABILITIES:
-        probability_axis(ax)
-    extra: list[Artist] = [band_handle(LEVEL)]
+        plots.probability_axis(ax)
+    extra: list[Artist] = [plots.band_handle(LEVEL)]
     if metric in PAPER_SHAPES:
-        extra.append(paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
-    legend_below(ax, extra)
+        extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
+    plots.legend_below(ax, extra)
     return ax
 
 
@@ -243,7 +231,7 @@ def _mark_thresholds(ax: Axes, n_max: int) -> None:
         for i, level in enumerate(limits):
             label = f"{rule_id}: {method}'s threshold at N = {n_max}" if i == 0 else None
             xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
-            ax.plot(xs, [level, level], "--", color=METHOD_COLORS[method], lw=1.5, label=label)
+            ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS[method], lw=1.5, label=label)
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
@@ -262,7 +250,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         row[2].set_title(f"{name}: confidence in the true cup")
 
     title = "Fig. sim2: users who change their mind"
-    return sim_figure(table, assistance, title, (3, (16, 5.6), draw), ["method", "change_step"])
+    return sweep.sim_figure(table, assistance, title, (3, (16, 5.6), draw), ["method", "change_step"])
 
 
 STILL = 0.01  # an arm that moves less than this (normalised) in its last STILL_STEPS steps stands still [-]
@@ -541,7 +529,7 @@ def findings(claims: list[Claim], head: pd.DataFrame, after: pd.DataFrame, toler
     steps = (int(head.change_step.min()), int(head.change_step.max()))
     return "\n".join(
         [
-            claim_sentence(headline_claim(claims, "sim2.sa_trapped", head), steps),
+            claim_sentence(sweep.headline_claim(claims, "sim2.sa_trapped", head), steps),
             success_sentence(head),
             belief_sentence(head, after, tolerance),
             dip_sentence(head, after),

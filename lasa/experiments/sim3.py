@@ -24,15 +24,7 @@ from lasa.evidence.plots import (
     paper_handle,
 )
 from lasa.evidence.verdicts import USER, Design, group_means
-from lasa.experiments.sweep import (
-    Decoders,
-    SweepConfig,
-    check_record_every,
-    headline_claim,
-    run_look,
-    sim_claim,
-    sim_figure,
-)
+from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
@@ -55,7 +47,7 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(SweepConfig):
+class Config(sweep.SweepConfig):
     """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
 
     fast_slope: Positive = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
@@ -70,7 +62,7 @@ class Config(SweepConfig):
                 f"fast_slope must be above slow_slope ({self.slow_slope!r}): the fast learner learns "
                 f"faster, got {self.fast_slope!r}"
             )
-        check_record_every(self.record_every, self.horizon)
+        sweep.check_record_every(self.record_every, self.horizon)
 
     @property
     def learners(self) -> tuple[tuple[str, float], ...]:
@@ -79,7 +71,7 @@ class Config(SweepConfig):
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -93,7 +85,9 @@ def run(
         One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
         the trajectories (users in the order method x learner x user).
     """
-    ran = run_look(decoders, task, control, config, config.learners, _learning, progress, look, assistance)
+    ran = sweep.run_look(
+        decoders, task, control, config, config.learners, _learning, progress, look, assistance
+    )
     users, traj, method = ran.users, ran.traj, ran.method
     learner = np.array([name for name, _ in ran.condition])
     slope = users.slope
@@ -138,7 +132,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
     values = {f"gain_{name}": float(gain[name]) for name in learners}
     return [
-        sim_claim(
+        sweep.sim_claim(
             "sim3.entropy_learners",
             robot,
             values,
@@ -198,7 +192,9 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
             ax.set_title(f"{name}: {ax.get_title()}")
 
     keys = ["method", "learner", "t"]
-    return sim_figure(table, assistance, "Fig. sim3: users who learn", (2, (11, 5.2), draw), keys, "curve")
+    return sweep.sim_figure(
+        table, assistance, "Fig. sim3: users who learn", (2, (11, 5.2), draw), keys, "curve"
+    )
 
 
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
@@ -208,7 +204,7 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
         claims: The claims of :func:`claims` (the headline row of ``head``'s robot and member is read).
         head: One member's rows (and LA's), one per episode or step: the mean errors over the episode.
     """
-    claim = headline_claim(claims, "sim3.entropy_learners", head)
+    claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
     robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     lines, lower, learners = [], [], sorted(set(head.learner))

@@ -42,16 +42,7 @@ from lasa.evidence.verdicts import (
     group_means,
     member_frame,
 )
-from lasa.experiments.sweep import (
-    Decoders,
-    LooksConfig,
-    as_decoders,
-    check_methods,
-    check_needed,
-    episodes,
-    sim_claim,
-    swept_assistance,
-)
+from lasa.experiments import sweep
 from lasa.method.decoder import ActionDecoder
 from lasa.method.newgoals import MAP_KINDS, ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
@@ -130,7 +121,7 @@ CLAIM_MAPS = ("grasp", "straight_line")
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(LooksConfig):
+class Config(sweep.LooksConfig):
     """Fig. sim4: users who reach for new cups, with and without the context map h."""
 
     # new cups' distances from the reference cup [m]
@@ -157,13 +148,13 @@ class Config(LooksConfig):
             or np.hypot(*self.direction) < 1e-9
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
-        check_methods((self.method,))
+        sweep.check_methods((self.method,))
         if not self.maps:
             raise ConfigError("maps must name at least one kind of context map")
         for kind in self.maps:
             check_choice("map", kind, MAP_KINDS)
         check_list("maps", self.maps)
-        check_needed("maps", tuple(self.maps), CLAIM_MAPS, "notebook 07's sentences and video")
+        sweep.check_needed("maps", tuple(self.maps), CLAIM_MAPS, "notebook 07's sentences and video")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -244,7 +235,7 @@ def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: CupTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -281,14 +272,16 @@ def run(
     if not 0 <= ref < task.n_goals:
         raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {ref}")
     key = METHOD_DECODER[config.method]
-    decoder = as_decoders(decoders).get(key)
+    decoder = sweep.as_decoders(decoders).get(key)
     if decoder is None:
         raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
     first, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    _, theta, noise = episodes(decoder, task, control, n_users, config.horizon, block_seed(config.seed, look))
+    _, theta, noise = sweep.episodes(
+        decoder, task, control, n_users, config.horizon, block_seed(config.seed, look)
+    )
     alpha = method_alpha(config.method, control)
     if assistance is None:
-        assistance = swept_assistance(control, config.assistance)
+        assistance = sweep.swept_assistance(control, config.assistance)
     assistance = assistance if alpha > 0 else (NO_ASSISTANCE,)
     cups = new_cup_positions(task, config)
     grown = [extend_task(task, p, ref) for p in cups]
@@ -516,7 +509,7 @@ def _claims_under(frame: pd.DataFrame, measure: str, form: str) -> list[Claim]:
     values = {"slope": float(wo.slope), "r2": float(wo.r2)}
     cid = _claim_id("no_map_training_goal", *readings)
     out.append(
-        sim_claim(
+        sweep.sim_claim(
             cid,
             robot,
             values,
@@ -557,7 +550,7 @@ def _map_claim(
     values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
     cid = _claim_id(f"{name}_linear", kind_reading, *readings)
     above = int((~below).sum())
-    return sim_claim(
+    return sweep.sim_claim(
         cid,
         robot,
         values,
