@@ -30,18 +30,10 @@ from lasa.base.config import (
     check_list,
 )
 from lasa.base.errors import ConfigError
+from lasa.evidence import verdicts
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
-from lasa.evidence.verdicts import (
-    NO_ASSISTANCE,
-    USER,
-    Design,
-    block_seed,
-    block_users,
-    group_means,
-    member_frame,
-)
 from lasa.experiments import sweep
 from lasa.method.decoder import ActionDecoder
 from lasa.method.newgoals import MAP_KINDS, ContextMap, MappedDecoder, context_map, extend_task
@@ -86,7 +78,7 @@ EPISODE_COLUMNS = (  # what :func:`run` returns, one row per episode
     "robot",
     "mapping",
     "distance",
-    USER,
+    verdicts.USER,
     "error",
     "h",
     "offset_m",
@@ -275,23 +267,23 @@ def run(
     decoder = sweep.as_decoders(decoders).get(key)
     if decoder is None:
         raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
-    first, n_users = block_users(Design(config.users, config.block, config.cap), look)
+    first, n_users = verdicts.block_users(verdicts.Design(config.users, config.block, config.cap), look)
     _, theta, noise = sweep.episodes(
-        decoder, task, control, n_users, config.horizon, block_seed(config.seed, look)
+        decoder, task, control, n_users, config.horizon, verdicts.block_seed(config.seed, look)
     )
     alpha = method_alpha(config.method, control)
     if assistance is None:
         assistance = sweep.swept_assistance(control, config.assistance)
-    assistance = assistance if alpha > 0 else (NO_ASSISTANCE,)
+    assistance = assistance if alpha > 0 else (verdicts.NO_ASSISTANCE,)
     cups = new_cup_positions(task, config)
     grown = [extend_task(task, p, ref) for p in cups]
     dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[ref]) for t in grown])  # joint space [rad]
     on_table = np.linalg.norm(cups - task.robot.goal_positions()[ref], axis=1)  # [m]
     member = np.repeat(assistance, n_users)  # member i's users are rows i * n_users ... (i + 1) * n_users - 1
-    assisted = None if assistance == (NO_ASSISTANCE,) else member
+    assisted = None if assistance == (verdicts.NO_ASSISTANCE,) else member
     user, theta = np.tile(np.arange(n_users), len(assistance)), np.tile(theta, len(assistance))
     n, head = len(user), slice(0, n_users)
-    shared = {USER: first + user, "theta": theta, "assistance": member, "look": look}
+    shared = {verdicts.USER: first + user, "theta": theta, "assistance": member, "look": look}
     scales = (float(on_table.max()), float(dist.max()))
 
     def roll(dec: ActionDecoder, on: CupTask, users: UserPopulation) -> Trajectories:
@@ -377,7 +369,7 @@ def _rows(
             "robot": robot.name,
             "mapping": mapping,
             "distance": at["distance"] / cup_scale,
-            USER: at[USER],
+            verdicts.USER: at[verdicts.USER],
             "error": err_m / cup_scale,
             "h": kind,
             "offset_m": at["offset_m"],
@@ -708,7 +700,8 @@ def identity_sentence(frame: pd.DataFrame) -> str:
     stay = check.loc["without the map, belief ends on the training cup"]
     left = check.loc["without the map, belief ends on another cup"]
     text = (
-        f"{frame.robot.iloc[0]}, {frame[USER].nunique()} users per cup, lines through the origin: held at "
+        f"{frame.robot.iloc[0]}, {frame[verdicts.USER].nunique()} users per cup, "
+        "lines through the origin: held at "
         f"the training cup, the error is {_equation(held)} (R² = {held.r2:.3f}). Without the map it "
         f"is {_equation(every, 2)} (R² = {every.r2:.2f}); over the {100 * stay.share:.0f}% of episodes "
         f"whose belief ends on the training cup, {_equation(stay, 2)} (R² = {stay.r2:.2f}). "
@@ -808,7 +801,7 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     out: dict[str, dict[str, np.ndarray]] = {}
     for measure in _measures(frame):
         x, y = MEASURES[measure]
-        means = group_means(frame, ["h", x], y, counts)
+        means = verdicts.group_means(frame, ["h", x], y, counts)
         dist = np.array(sorted({d for _, d in means}))
         curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
         for form, form_reading in FORMS.items():
@@ -845,7 +838,8 @@ PAPER_LINES = {0.11: ("paper, with the map: y = 0.11x", ":"), 1.0: ("paper, with
 PAPER_UNITS = (
     "(both axes ÷ D, the farthest new cup's distance, as the paper's; the grasp error at the gripper)"
 )
-CI_LEVEL = Design().level  # the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
+# the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
+CI_LEVEL = verdicts.Design().level
 N_BOOT_PLOT = 1000
 MEAN_STYLE: dict[str, Any] = {"ms": 4, "capsize": 2}  # a cup's mean and its interval
 MEDIAN_STYLE: dict[str, Any] = {"s": 22, "facecolors": "none", "lw": 0.9}  # a cup's median, hollow
@@ -947,7 +941,7 @@ def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member."""
-    table = member_frame(table, assistance)
+    table = verdicts.member_frame(table, assistance)
     present = robots_present(table)
     fig, axes = plt.subplots(1, len(present), figsize=(7.6 * len(present), 6.6), squeeze=False)
     for name, ax in zip(present, axes[0], strict=True):

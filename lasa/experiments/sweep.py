@@ -30,19 +30,10 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
+from lasa.evidence import verdicts
 from lasa.evidence.claims import Claim
 from lasa.evidence.plots import robot_rows, users_text, wrap_to
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    N_BOOT,
-    Design,
-    Sequential,
-    block_seed,
-    block_users,
-    check_design,
-    member_frame,
-    sequential,
-)
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import METHOD_DECODER, METHODS, latent_grid, method_alpha
 from lasa.people.rollout import Trajectories, rollout
@@ -162,16 +153,16 @@ def check_pilot(pilot: str, prob: float) -> None:
 class LooksConfig:
     """How a sweep's verdicts get their users: the sequential design, the bootstrap, the members."""
 
-    users: PositiveInt = Design.first  # users per point at the first look, every member (Design) [-]
-    block: PositiveInt = Design.block  # users added per later look, the headline member only [-]
-    cap: PositiveInt = Design.cap  # most users per point [-]
-    n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
+    users: PositiveInt = verdicts.Design.first  # users per point at the first look, every member (Design) [-]
+    block: PositiveInt = verdicts.Design.block  # users added per later look, the headline member only [-]
+    cap: PositiveInt = verdicts.Design.cap  # most users per point [-]
+    n_boot: PositiveInt = verdicts.N_BOOT  # bootstrap resamples of each claim's intervals [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)
-        check_design(self.users, self.block, self.cap)
+        verdicts.check_design(self.users, self.block, self.cap)
         check_assistance(self.assistance)
 
 
@@ -343,8 +334,8 @@ def run_look(
         assistance: The members the assisted methods run under; default every member of
             ``config.assistance`` (the headline one first).
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed = block_seed(config.seed, look)
+    start, n_users = verdicts.block_users(verdicts.Design(config.users, config.block, config.cap), look)
+    seed = verdicts.block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
     assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
     method, member, condition, user = sweep_grid(config.methods, assistance, conditions, n_users)
@@ -372,7 +363,7 @@ def judge(
     config: Any,
     progress: bool = False,
     reduce: Any = None,
-) -> tuple[Any, Sequential, Any]:
+) -> tuple[Any, verdicts.Sequential, Any]:
     """Run a figure's sweep in looks until its headline verdicts are settled (or the cap).
 
     Args:
@@ -400,10 +391,10 @@ def judge(
             first.append(extra)
         return frame if reduce is None else reduce(frame)
 
-    design = Design(config.users, config.block, config.cap)
+    design = verdicts.Design(config.users, config.block, config.cap)
     assistance = swept_assistance(control, config.assistance)
     fast = getattr(module, "boot_values", None)
-    outcome = sequential(
+    outcome = verdicts.sequential(
         block, module.claims, assistance, control.assistance, design, config.n_boot, fast=fast
     )
     return pd.concat(full, ignore_index=True), outcome, first[0]
@@ -425,7 +416,7 @@ def sim_figure(
         title: The figure's title, before its users per ``per`` (over ``keys``) and the member.
         panels: Panels per row, the size of a row, and what draws a robot's row (name, rows, axes).
     """
-    table = member_frame(table, assistance)
+    table = verdicts.member_frame(table, assistance)
     n_cols, size, draw = panels
     fig, rows = robot_rows(table, n_cols, size)
     for name, part, row in rows:
