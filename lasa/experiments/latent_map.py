@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -117,9 +118,7 @@ def plot_held_paths(
     start = drawn[0][0]
     ax.plot(start[0], start[1], "ko", ms=4)
     frame_around(task, ax, np.concatenate(drawn))
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
+    _z_colorbar(ax, norm, cmap)
     if title:
         ax.set_title(title)
     return ax
@@ -162,12 +161,16 @@ def plot_grasp_sweep(
     ax.set_aspect("equal")
     ax.set_xlabel("along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
+    _z_colorbar(ax, norm, cmap)
     if title:
         ax.set_title(title)
     return ax
+
+
+def _z_colorbar(ax: Axes, norm: Normalize, cmap: Any) -> None:
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
 
 
 def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
@@ -203,31 +206,15 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
         tasks: Tasks already built, by robot name (the others are built here).
     """
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
-    fig, axes = plt.subplots(
-        len(rows),
-        3,
-        figsize=(15, 4.3 * len(rows)),
-        squeeze=False,
-        gridspec_kw={"width_ratios": [1.1, 1.1, 1]},
-    )
+    size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
+    fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
     for name, row in zip(rows, axes, strict=True):
         task = (tasks or {}).get(name) or make_cup_task(load_robot(name))
         saved = load_npz(run_paths.artifact("latent_paths", name), Paths.make_hint("latent_paths", name))
-        plot_held_paths(
-            task,
-            saved["uniform"],
-            saved["z"],
-            ax=row[0],
-            title=f"{name}: from home (belief uniform at first):\nz picks the cup",
-        )
-        plot_grasp_sweep(
-            task,
-            saved["confident"],
-            saved["z"],
-            goal=1,
-            ax=row[1],
-            title=f"{name}: confident in the right cup:\nz picks the grasp",
-        )
+        home = f"{name}: from home (belief uniform at first):\nz picks the cup"
+        plot_held_paths(task, saved["uniform"], saved["z"], ax=row[0], title=home)
+        cup = f"{name}: confident in the right cup:\nz picks the grasp"
+        plot_grasp_sweep(task, saved["confident"], saved["z"], goal=1, ax=row[1], title=cup)
         plot_latent_meaning(table[table.robot == name], ax=row[2])
         row[2].set_title(f"{name}: what z controls, per context")
     fig.tight_layout()
