@@ -232,17 +232,8 @@ def run(
         traj: Trajectories = rollout(
             decoder, task, users, control.alpha, ctl, config.horizon, noise, progress
         )
-        m = measure(
-            traj.states,
-            traj.beliefs,
-            traj.actions,
-            users.goal,
-            task.goals,
-            target,
-            control.dt,
-            control.action_scale,
-            control.alpha,
-        )
+        bound = (control.dt, control.action_scale, control.alpha)
+        m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
         counts = _window_counts(m, times)
         n_users, n_rows = len(user), len(times)
         cols: dict[str, object] = {

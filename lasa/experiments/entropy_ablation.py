@@ -266,13 +266,9 @@ def plot(table: pd.DataFrame) -> Figure:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
         for ax, lam in zip(row, lams, strict=False):
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]
-            plot_entropy_grid(
-                g.progress.to_numpy(),
-                g.confidence.to_numpy(),
-                g.entropy.to_numpy(),
-                ax=ax,
-                title=f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)"),
-            )
+            title = f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)")
+            grid = (g.progress.to_numpy(), g.confidence.to_numpy(), g.entropy.to_numpy())
+            plot_entropy_grid(*grid, ax=ax, title=title)
         if len(lams) == 1:  # the rule kept the control: no other decoder to draw
             row[1].set_axis_off()
             row[1].set_title(f"{name}: no lambda > 0 within the rule's cost bound")

@@ -321,15 +321,8 @@ def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
     lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
     top = blended_transform_factory(ax.transData, ax.transAxes)
     label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
-    (line,) = ax.plot(
-        lower,
-        np.full(len(lower), 0.97),
-        "v",
-        color=plots.METHOD_COLORS["LA+SA"],
-        ms=6,
-        transform=top,
-        label=label,
-    )
+    color = plots.METHOD_COLORS["LA+SA"]
+    (line,) = ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
     return line
 
 
@@ -385,15 +378,8 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     ax = plt.gca() if ax is None else ax
     band = time_ratio_band(frame)
     color = plots.METHOD_COLORS["LA+SA"]
-    ax.fill_between(
-        band.beta,
-        band.low,
-        band.high,
-        color=color,
-        alpha=0.25,
-        lw=0,
-        label=f"ours: {100 * LEVEL:.4g}% bootstrap CI (the verdicts' level)",
-    )
+    label = f"ours: {100 * LEVEL:.4g}% bootstrap CI (the verdicts' level)"
+    ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
     ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
     if "completed" in frame:
         done = frame[frame.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()

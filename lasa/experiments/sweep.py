@@ -264,24 +264,11 @@ def run_population(
             needing = sorted({str(m) for m in methods[keys == key]})
             raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
         idx = np.flatnonzero(keys == key)
-        group = users.subset(idx)
-        parts.append(
-            (
-                idx,
-                rollout(
-                    decoders[key],
-                    task,
-                    group,
-                    alpha[idx],
-                    control,
-                    horizon,
-                    noise,
-                    progress,
-                    pilot_noise,
-                    assistance[idx],
-                ),
-            )
+        group, member = users.subset(idx), assistance[idx]
+        traj = rollout(
+            decoders[key], task, group, alpha[idx], control, horizon, noise, progress, pilot_noise, member
         )
+        parts.append((idx, traj))
     if len(parts) == 1:
         return parts[0][1]
     merged = {}
