@@ -399,12 +399,7 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim1: one row per robot present: final error (log scale), time and time ratio against beta.
-
-    Args:
-        table: Rows of every robot and member.
-        assistance: The member drawn (the headline one); LA's rows are shared.
-    """
+    """Fig. sim1 under member ``assistance``: per robot, final error (log), time, time ratio against beta."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         plot_metric(part, "final_error", ax=row[0])

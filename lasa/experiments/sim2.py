@@ -235,12 +235,7 @@ def _mark_thresholds(ax: Axes, n_max: int) -> None:
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim2: one row per robot present: final error, success share and confidence against N.
-
-    Args:
-        table: Rows of every robot and member.
-        assistance: The member drawn (the headline one); LA's rows are shared.
-    """
+    """Fig. sim2 under member ``assistance``: per robot, final error, success and confidence against N."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):

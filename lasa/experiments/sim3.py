@@ -179,12 +179,7 @@ def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> A
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim3: one row per robot present, the fast and the slow learner.
-
-    Args:
-        table: Rows of every robot and member.
-        assistance: The member drawn (the headline one); LA's rows are shared.
-    """
+    """Fig. sim3 under member ``assistance``: per robot, the fast and the slow learner."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, learner in zip(row, LEARNERS, strict=True):
