@@ -131,7 +131,7 @@ def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[s
 def sweep_grid(
     methods: tuple[str, ...], assistance: tuple[str, ...], conditions: Sequence[T], n_users: int
 ) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
-    """Every user of a sweep: (method, assistance) arm x condition x user, in that order.
+    """Every user of a sweep: (method, member) pair x condition x user, in that order.
 
     Returns:
         Each user's method, assistance member (``none`` for LA, :func:`pairs`), condition
@@ -141,12 +141,6 @@ def sweep_grid(
     method = np.array([m for (m, _), _, _ in grid])
     assistance_rows = np.array([a for (_, a), _, _ in grid])
     return method, assistance_rows, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
-
-
-def check_pilot(pilot: str, prob: float) -> None:
-    """``pilot`` is one of :data:`lasa.people.users.PILOTS` and ``prob`` a probability."""
-    check_choice("pilot", pilot, PILOTS)
-    check_range("pilot_prob", prob, 0.0, 1.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -178,7 +172,8 @@ class SweepConfig(LooksConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_pilot(self.pilot, self.pilot_prob)
+        check_choice("pilot", self.pilot, PILOTS)
+        check_range("pilot_prob", self.pilot_prob, 0.0, 1.0)
         check_methods(self.methods)
         # sims 1-3's claims and sentences compare all three (LA+SA+Entropy against LA+SA, both
         # against LA): a subset would run the whole sweep and fail in its claims
