@@ -429,10 +429,6 @@ def _side(low: float, high: float, at: float, below: str, above: str) -> str:
     return said.get(side_of((low, high), at), f"its interval contains {at:g}")
 
 
-def _said(value: float, low: float, high: float, fmt: str = "{:.3f}") -> str:
-    return f"{fmt.format(value)} [{fmt.format(low)}, {fmt.format(high)}]".replace("-", "−")
-
-
 def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:
     """Fig. sim1's time ratios and gaps on one robot, from its headline claims' numbers, as Markdown bullets.
 
@@ -446,15 +442,16 @@ def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:
     r75, r1000 = _interval(ratio, "ratio_75"), _interval(ratio, "ratio_1000")
     e75, t75 = _interval(gap, "error_gap_75"), _interval(gap, "time_gap_75")
     slower, faster = "LA is slower than LA+SA", "LA is faster than LA+SA"
+    said = sweep.interval_text
     return "\n".join(
         [
             f"- **Time ({robot}, {ratio.n_users} users per point).** LA's time over LA+SA's is "
-            f"{_said(*r75, '{:.2f}')} at β = 75 ({_side(r75[1], r75[2], 1.0, faster, slower)}) and "
-            f"{_said(*r1000, '{:.2f}')} at β = 1000 ({_side(r1000[1], r1000[2], 1.0, faster, slower)}); "
+            f"{said(*r75, '{:.2f}')} at β = 75 ({_side(r75[1], r75[2], 1.0, faster, slower)}) and "
+            f"{said(*r1000, '{:.2f}')} at β = 1000 ({_side(r1000[1], r1000[2], 1.0, faster, slower)}); "
             f"the claim reads *{ratio.reproduced}*.",
-            f"- **The gap at β = 75.** The final-error gap LA − LA+SA is {_said(*e75)} "
+            f"- **The gap at β = 75.** The final-error gap LA − LA+SA is {said(*e75)} "
             f"({_side(e75[1], e75[2], 0.0, 'LA+SA ends farther from s*', 'LA+SA ends closer to s*')}); "
-            f"the time gap (ratio − 1) is {_said(*t75, '{:.2f}')} "
+            f"the time gap (ratio − 1) is {said(*t75, '{:.2f}')} "
             f"({_side(t75[1], t75[2], 0.0, 'LA+SA is slower', 'LA+SA is faster')}); "
             f"the claim reads *{gap.reproduced}*.",
         ]

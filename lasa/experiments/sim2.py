@@ -342,11 +342,6 @@ def _median(values: pd.Series, left: int) -> str:
 SA, ENTROPY = "LA+SA", "LA+SA+Entropy"
 
 
-def _signed(value: float, low: float, high: float) -> str:
-    """``value [low, high]`` to two decimals, with a typographic minus."""
-    return f"{value:.2f} [{low:.2f}, {high:.2f}]".replace("-", "−")
-
-
 def _prob(p: float) -> str:
     """A probability with two significant digits of its distance to 0 or 1 (below 1e-4: ``3.4e-06``)."""
     near = min(p, 1.0 - p)
@@ -371,7 +366,7 @@ def _part(value: float, low: float, high: float, up: str, down: str) -> str:
     if value <= 0:
         up, value, low, high = down, -value, -high, -low  # the same interval, said the other way round
     sure = "" if low > 0 or high < 0 else " (its interval contains 0)"
-    return f"{up} by {_signed(value, low, high)}{sure}"
+    return f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"
 
 
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:

@@ -207,7 +207,7 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
         gain = float(claim.values[f"gain_{learner}"])
         low, high = claim.intervals.get(f"gain_{learner}", (np.nan, np.nan))
         word = "lowers" if gain > 0 else "raises"
-        said = f"{gain:+.3f} [{low:+.3f}, {high:+.3f}]".replace("-", "−")
+        said = sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"
         if gain > 0:
             lower.append(learner)

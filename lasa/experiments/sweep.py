@@ -438,3 +438,8 @@ def sim_claim(
         note=note,
         robot=robot,
     )
+
+
+def interval_text(value: float, low: float, high: float, fmt: str = "{:.3f}") -> str:
+    """``value [low, high]`` in ``fmt``, with a typographic minus."""
+    return f"{fmt.format(value)} [{fmt.format(low)}, {fmt.format(high)}]".replace("-", "−")
