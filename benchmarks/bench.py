@@ -5,7 +5,7 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 
 - ``step_latency_us``: one user's full LA+SA step on the Panda, from joystick input to
   commanded state (decode, assistance, blend, belief update, safe step), with
-  :class:`lasa.method.episodes.Runner` stepping one user, i.e. the reference step
+  :class:`lasa.method.runner.Runner` stepping one user, i.e. the reference step
   :func:`lasa.method.step.shared_autonomy_step` run for a batch of one; median and 99th
   percentile over 10,000 steps. ``step_deadline`` is what that step has to meet: one
   control period ``dt`` of the robot (0.1 s, a 10 Hz loop), and the fraction of it that
@@ -88,7 +88,7 @@ from lasa.base.kernels import PINNED  # noqa: E402
 from lasa.evidence.video import render_states  # noqa: E402
 from lasa.method.belief import uniform_log_belief  # noqa: E402
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
-from lasa.method.episodes import Runner, held_input  # noqa: E402
+from lasa.method.runner import Runner, held_input  # noqa: E402
 from lasa.method.step import Assist, advance, latent_grid  # noqa: E402
 from lasa.people.rollout import rollout  # noqa: E402
 from lasa.people.users import UserPopulation  # noqa: E402
@@ -220,7 +220,7 @@ def _decoder(task: CupTask, control: ControlConfig, config: BenchConfig) -> Late
 def step_latency(
     model: LatentActionModel, task: CupTask, control: ControlConfig, n_steps: int, seed: int = 0
 ) -> tuple[dict[str, float], np.ndarray]:
-    """Latency of one LA+SA control step for one user (:meth:`lasa.method.episodes.Runner.step`).
+    """Latency of one LA+SA control step for one user (:meth:`lasa.method.runner.Runner.step`).
 
     The joystick input is a random walk in [-1, 1]; the episode restarts from the start
     pose every 200 steps so the arm stays in the task's region. The first 10% are warm-up.
@@ -337,7 +337,7 @@ def _users(task: CupTask, n_users: int, rng: np.random.Generator) -> UserPopulat
         target=task.target(goal, theta),
         beta0=np.full(n_users, 1000.0),
         slope=np.zeros(n_users),
-        stream=np.arange(n_users),
+        user=np.arange(n_users),
     )
 
 
@@ -421,7 +421,7 @@ def study_step(n_rows: int, repeats: int, seed: int = 0) -> dict[str, float]:
     rollouts, with and without ``Assist.only_blended``: the eating task, the hindsight member, half
     the rows without assistance (LA) and half LA+SA, random states near the start and random beliefs.
 
-    Both give the same step (``tests/test_episodes.py``); the timed steps alternate, and the median
+    Both give the same step (``tests/test_episode_runner.py``); the timed steps alternate, and the median
     of ``repeats`` of each is reported.
 
     Returns:

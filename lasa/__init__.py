@@ -40,7 +40,7 @@ _EXPORTS = {
     "ConfigError": "lasa.base.errors",
     "DamagedLogError": "lasa.base.errors",
     "EmptySelectionError": "lasa.base.errors",
-    "ContextMap": "lasa.method.newgoals",
+    "ContextMap": "lasa.method.context_map",
     "ControlConfig": "lasa.base.config",
     "CupTask": "lasa.world.task",
     "DecoderConfig": "lasa.method.decoder",
@@ -51,24 +51,23 @@ _EXPORTS = {
     "LasaError": "lasa.base.errors",
     "LatentActionModel": "lasa.method.decoder",
     "METHODS": "lasa.method.step",
-    "MappedDecoder": "lasa.method.newgoals",
+    "MappedDecoder": "lasa.method.context_map",
+    "Member": "lasa.method.assistance",
     "Paths": "lasa.base.paths",
     "ROBOTS": "lasa.world.robot",
     "Robot": "lasa.world.robot",
-    "Runner": "lasa.method.episodes",
+    "Runner": "lasa.method.runner",
     "RobotSpec": "lasa.world.robot",
     "TrainConfig": "lasa.method.train",
     "Trajectories": "lasa.people.rollout",
     "UserPopulation": "lasa.people.users",
     "collect_demonstrations": "lasa.people.demos",
-    "extend_task": "lasa.method.newgoals",
+    "extend_task": "lasa.method.context_map",
     "load_checkpoint": "lasa.method.decoder",
     "load_demonstrations": "lasa.method.dataset",
     "load_robot": "lasa.world.robot",
     "make_cup_task": "lasa.world.task",
     "publish": "lasa.evidence.publish",
-    "register_member": "lasa.method.assistance",
-    "register_robot": "lasa.world.robot",
     "rollout": "lasa.people.rollout",
     "save_checkpoint": "lasa.method.decoder",
     "save_demonstrations": "lasa.method.dataset",
@@ -91,7 +90,8 @@ if TYPE_CHECKING:
     from lasa.base.paths import Paths
     from lasa.evidence.claims import Claim, update_claims
     from lasa.evidence.publish import publish
-    from lasa.method.assistance import register_member
+    from lasa.method.assistance import Member
+    from lasa.method.context_map import ContextMap, MappedDecoder, extend_task
     from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
     from lasa.method.decoder import (
         ActionDecoder,
@@ -100,15 +100,14 @@ if TYPE_CHECKING:
         load_checkpoint,
         save_checkpoint,
     )
-    from lasa.method.episodes import Runner
-    from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
+    from lasa.method.runner import Runner
     from lasa.method.step import METHODS, Assist, shared_autonomy_step
     from lasa.method.train import TrainConfig, train_decoder
     from lasa.people.demos import DemoConfig, collect_demonstrations
     from lasa.people.rollout import Trajectories, rollout
     from lasa.people.users import UserPopulation
     from lasa.world.goals import GoalTask
-    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot, register_robot
+    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot
     from lasa.world.task import CupTask, make_cup_task
 
 
@@ -150,6 +149,7 @@ __all__ = [
     "LatentActionModel",
     "METHODS",
     "MappedDecoder",
+    "Member",
     "Paths",
     "ROBOTS",
     "Robot",
@@ -165,8 +165,6 @@ __all__ = [
     "load_robot",
     "make_cup_task",
     "publish",
-    "register_member",
-    "register_robot",
     "rollout",
     "save_checkpoint",
     "save_demonstrations",

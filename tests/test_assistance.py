@@ -162,7 +162,7 @@ def test_every_member_is_batched_and_names_are_checked():
 def test_the_config_knows_every_member_and_defaults_to_point():
     from lasa.method import assistance
 
-    assert tuple(assistance._MEMBERS) == BUILT_IN_ASSISTANCE  # each named member is implemented, no other
+    assert tuple(assistance.MEMBERS) == BUILT_IN_ASSISTANCE  # each named member is implemented, no other
     assert ControlConfig().assistance == "point"
     for name in BUILT_IN_ASSISTANCE:
         assert dataclasses.replace(ControlConfig(), assistance=name).assistance == name
@@ -182,7 +182,7 @@ def test_each_member_drives_the_rollout_safely(name, model, task):
         target=task.target(np.arange(n) % 2, np.linspace(0, 1, n)),
         beta0=np.full(n, 300.0),
         slope=np.zeros(n),
-        stream=np.arange(n),
+        user=np.arange(n),
     )
     noise = np.random.default_rng(0).random((n, 15, control.n_z))
     traj = rollout(model, task, users, np.array([0.0, 0.2, 0.5, 1.0]), control, 15, noise)

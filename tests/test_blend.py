@@ -1,21 +1,22 @@
-"""Eqs. M1 and M2 against hand-computed cases, and the safety invariants of a step."""
+"""Eqs. M1 and M2 (the member ``point``) against hand-computed cases, and the safety invariants of a step."""
 
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
 from lasa.base.errors import ConfigError
-from lasa.method.blend import assistance, blend, safe_step, sanitize
+from lasa.method.assistance import point
+from lasa.method.step import blend, safe_step, sanitize
 
 GOALS = np.array([[1.0, 0.0], [-1.0, 2.0]])
 
 
 def test_assistance_m2_by_hand():
     # a_r = 0.75 (g1 - s) + 0.25 (g2 - s) with s = (0, 1): 0.75 (1, -1) + 0.25 (-1, 1) = (0.5, -0.5)
-    a_r = assistance(np.array([0.75, 0.25]), GOALS, np.array([0.0, 1.0]))
+    a_r = point(np.array([0.75, 0.25]), np.array([0.0, 1.0]), GOALS, None, 0.0, 0.0)[0]
     assert_allclose(a_r, [0.5, -0.5])
     # a confident belief points straight at that goal
-    assert_allclose(assistance(np.array([0.0, 1.0]), GOALS, np.zeros(2)), GOALS[1])
+    assert_allclose(point(np.array([0.0, 1.0]), np.zeros(2), GOALS, None, 0.0, 0.0)[0], GOALS[1])
 
 
 def test_assistance_is_batched():
@@ -23,7 +24,7 @@ def test_assistance_is_batched():
     b = rng.dirichlet([1, 1], size=(4, 3))
     s = rng.normal(size=(4, 3, 2))
     expected = np.einsum("...g,gn->...n", b, GOALS) - s
-    assert_allclose(assistance(b, GOALS, s), expected)
+    assert_allclose(point(b, s, GOALS, None, 0.0, 0.0)[0], expected)
 
 
 def test_blend_m1_by_hand():

@@ -50,7 +50,7 @@ def test_mujocos_loop_is_the_fallback_and_writes_the_data_it_is_given():
 
 
 def test_rot_z_of_many_angles_is_each_angles_rotation():
-    from lasa.world.rotations import rot_z
+    from lasa.world.chain import rot_z
 
     angles = np.random.default_rng(2).uniform(-np.pi, np.pi, 50)
     many = rot_z(angles)

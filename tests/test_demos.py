@@ -76,44 +76,44 @@ def test_bad_config_is_a_clear_error(field, value):
 
 
 @pytest.fixture(scope="module")
-def eating_readings():
-    from lasa.people.demos import EATING_READINGS, collect_eating_demonstrations
+def eating_segmentations():
+    from lasa.people.demos import SEGMENTATIONS, collect_eating_demonstrations
     from lasa.world.eating import make_eating_task
 
     task = make_eating_task()
     config = DemoConfig(n_theta=2, n_starts=1, n_adjust=1, n_perturb=0)
     control = task.robot.control
-    return task, {r: collect_eating_demonstrations(task, control, config, r) for r in EATING_READINGS}
+    return task, {r: collect_eating_demonstrations(task, control, config, r) for r in SEGMENTATIONS}
 
 
 def _firsts(demos):
     return np.r_[0, np.flatnonzero(np.diff(demos.demo)) + 1]
 
 
-def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readings):
+def test_eating_segmentations_cut_the_demonstrations_as_their_names_say(eating_segmentations):
     from lasa.method.dataset import ADJUST, REACH, STROKE
 
-    task, readings = eating_readings
+    task, segmentations = eating_segmentations
     g = task.n_goals
     uniform = np.full(g, 1.0 / g)
-    counts = {r: int(d.demo.max() + 1) for r, d in readings.items()}
-    # 4 goals x 2 tilts x (home + 3 other goals) demonstrations, in every reading
+    counts = {r: int(d.demo.max() + 1) for r, d in segmentations.items()}
+    # 4 goals x 2 tilts x (home + 3 other goals) demonstrations, in every segmentation
     assert counts == {"continuous": 32, "home": 32, "transfers": 32, "leaves": 32}
-    for reading, demos in readings.items():
+    for segmentation, demos in segmentations.items():
         first = _firsts(demos)
         starts, beliefs = demos.states[first], demos.beliefs[first]
         from_home = np.all(np.isclose(starts, task.start), axis=1)
-        if reading == "home":  # home or a perturbed home (never another goal's pose), uniform belief
+        if segmentation == "home":  # home or a perturbed home (never another goal's pose), uniform belief
             assert np.allclose(beliefs, uniform)
             entries = [task.target(o, t) for o in range(g) for t in (0.0, 1.0)]
             assert not any(np.allclose(s, e) for s in starts for e in entries)
-        elif reading == "continuous":  # a move from another goal starts confident in it
+        elif segmentation == "continuous":  # a move from another goal starts confident in it
             assert np.allclose(beliefs[from_home], uniform) and beliefs[~from_home].max(axis=1).min() > 0.9
         else:  # transfers, leaves: those from another goal only reach
             for d in np.unique(demos.demo[~np.isin(demos.demo, demos.demo[first][from_home])]):
                 phases = set(demos.phase[demos.demo == d])
                 assert REACH in phases and not phases & {ADJUST, STROKE}
-            if reading == "transfers":  # every demonstration starts uniform, a transfer at an entry
+            if segmentation == "transfers":  # every demonstration starts uniform, a transfer at an entry
                 assert np.allclose(beliefs, uniform)
             else:  # leaves: a transfer starts confident in the goal it leaves, at a stroke's end
                 assert np.allclose(beliefs[from_home], uniform)
@@ -123,7 +123,7 @@ def test_eating_readings_cut_the_demonstrations_as_their_names_say(eating_readin
                 for s, b in zip(starts[~from_home], confident, strict=True):
                     # on the stroke's end curve of the goal the belief is confident in
                     assert np.linalg.norm(ends[int(b.argmax())] - s, axis=1).min() < 0.02
-    with pytest.raises(ConfigError, match="reading"):
+    with pytest.raises(ConfigError, match="segmentation"):
         from lasa.people.demos import collect_eating_demonstrations
 
         collect_eating_demonstrations(task, task.robot.control, DemoConfig(n_theta=2), "sideways")

@@ -7,7 +7,7 @@ verdict in the claims table, a checkpoint's round trip. Each test goes through t
 only (``import lasa`` names and the documented functions of lasa.evidence), on the page's toy
 3-joint planar arm with three cups, whose MJCF the test writes: what a user would write in
 their own files, and nothing in the package. The fixtures put the registries back afterwards,
-so that the other tests see the package's own.
+so that the other tests see the package's own (a robot is an object, in no registry).
 """
 
 from __future__ import annotations
@@ -24,7 +24,6 @@ from matplotlib.figure import Figure
 
 import lasa
 from lasa.evidence import decision, plots, rules, verdicts
-from lasa.method.assistance import unregister_member
 
 # --- the user's MJCF: three hinge joints about y (a planar arm), a table, three cups --------
 
@@ -84,7 +83,7 @@ def write_scene(
 
 
 def toy_spec(scene: Path) -> lasa.RobotSpec:
-    """The user's registration of the toy arm (docs/extending.md, "A robot")."""
+    """The user's spec of the toy arm (docs/extending.md, "A robot")."""
     return lasa.RobotSpec(
         name="toy3",
         scene=scene,
@@ -150,16 +149,14 @@ def pointer_for(task: lasa.GoalTask) -> GoalPointer:
     return GoalPointer(PointerConfig(task.robot.name, tuple(tuple(map(float, g)) for g in task.goals)))
 
 
-# --- fixtures: the registries as the package has them, before and after each test ----------
+# --- fixtures: the toy task; the registries as the package has them, before and after each test
 
 
 @pytest.fixture(scope="module")
 def toy_task(tmp_path_factory: pytest.TempPathFactory):
-    saved = dict(lasa.ROBOTS)
-    lasa.register_robot(toy_spec(write_scene(tmp_path_factory.mktemp("toy"))))
-    yield lasa.make_cup_task(lasa.load_robot("toy3"), n_grid=9)
-    lasa.ROBOTS.clear()
-    lasa.ROBOTS.update(saved)
+    return lasa.make_cup_task(
+        lasa.load_robot(toy_spec(write_scene(tmp_path_factory.mktemp("toy")))), n_grid=9
+    )
 
 
 def users_at_each_goal(task: lasa.GoalTask, per_goal: int) -> lasa.UserPopulation:
@@ -172,16 +169,16 @@ def users_at_each_goal(task: lasa.GoalTask, per_goal: int) -> lasa.UserPopulatio
         target=task.target(goal, theta),
         beta0=np.full(n, 1000.0),
         slope=np.zeros(n),
-        stream=np.arange(n),
+        user=np.arange(n),
     )
 
 
 # --- 1. a robot ------------------------------------------------------------------------------
 
 
-def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(toy_task, tmp_path):
+def test_a_robot_of_ones_own_builds_a_three_goal_task_and_runs_la_sa(toy_task, tmp_path):
     task = toy_task
-    assert "toy3" in lasa.ROBOTS and task.robot.n_joints == 3
+    assert task.robot.name == "toy3" and "toy3" not in lasa.ROBOTS and task.robot.n_joints == 3
     assert task.n_goals == 3 and task.goal_names == ("left", "mid", "right")
     # s*(g, theta) puts the grasp site at each cup, from a top grasp to a side grasp
     robot = task.robot
@@ -205,32 +202,26 @@ def test_a_robot_of_ones_own_registers_builds_a_three_goal_task_and_runs_la_sa(t
     # a scene that breaks the naming contract is refused, naming each missing element
     broken = write_scene(tmp_path, table=False, cup_geoms=False, home=False)
     with pytest.raises(lasa.ConfigError) as info:
-        lasa.register_robot(dataclasses.replace(toy_spec(broken), name="toy3_broken"))
+        lasa.load_robot(dataclasses.replace(toy_spec(broken), name="toy3_broken"))
     message = str(info.value)
     for missing in ("geom 'table'", "geom 'cup_left'", "geom 'cup_right'", "keyframe 'home'"):
         assert missing in message, message
-    assert "toy3_broken" not in lasa.ROBOTS
     with pytest.raises(lasa.ConfigError, match="one guess of 3 joint values per goal site"):
-        lasa.register_robot(
-            dataclasses.replace(toy_spec(broken), name="toy3_guesses", ik_guesses=((0.0,) * 3,))
-        )
-    with pytest.raises(lasa.ConfigError, match="registered already"):
-        lasa.register_robot(toy_spec(broken))
+        lasa.load_robot(dataclasses.replace(toy_spec(broken), name="toy3_guesses", ik_guesses=((0.0,) * 3,)))
     with pytest.raises(lasa.ConfigError, match="one of the package's robots"):
-        lasa.register_robot(dataclasses.replace(toy_spec(broken), name="planar5"), replace=True)
+        lasa.load_robot(dataclasses.replace(toy_spec(broken), name="planar5"))
 
 
 def test_a_scene_in_degrees_is_refused_in_one_line_that_says_how_to_fix_it(tmp_path):
     """MJCF's default unit is the degree: the page's ranges (-2.9, 2.9) would compile to +-0.05 rad,
-    where no grasp can be reached. register_robot refuses the scene rather than guess."""
+    where no grasp can be reached. load_robot refuses the scene rather than guess."""
     for compiler in ("", '<compiler autolimits="true"/>', '<compiler angle="degree" autolimits="true"/>'):
         scene = write_scene(tmp_path, compiler=compiler)
         with pytest.raises(lasa.ConfigError) as info:
-            lasa.register_robot(dataclasses.replace(toy_spec(scene), name="toy3_degrees"))
+            lasa.load_robot(dataclasses.replace(toy_spec(scene), name="toy3_degrees"))
         message = str(info.value)
         assert "\n" not in message and "angles are in degrees" in message, message
         assert '<compiler angle="radian"/>' in message, message
-        assert "toy3_degrees" not in lasa.ROBOTS
 
 
 def test_a_cup_out_of_reach_is_an_ik_error_naming_the_cup_and_theta(tmp_path):
@@ -238,14 +229,8 @@ def test_a_cup_out_of_reach_is_an_ik_error_naming_the_cup_and_theta(tmp_path):
     is beyond it. The error says which cup, and at which preference, the solve gave up."""
     far = {"cup_left": -0.45, "cup_mid": 0.30, "cup_right": 0.78}
     spec = dataclasses.replace(toy_spec(write_scene(tmp_path, cups_at=far)), name="toy3_far")
-    robot = lasa.register_robot(spec)
-    try:
-        with pytest.raises(
-            lasa.IKError, match=r"toy3_far \(cup 'cup_right', theta = 0\.000\) did not converge"
-        ):
-            lasa.make_cup_task(robot, n_grid=5)
-    finally:
-        lasa.ROBOTS.pop("toy3_far")
+    with pytest.raises(lasa.IKError, match=r"toy3_far \(cup 'cup_right', theta = 0\.000\) did not converge"):
+        lasa.make_cup_task(lasa.load_robot(spec), n_grid=5)
 
 
 # --- 2. an assistance member -----------------------------------------------------------------
@@ -262,35 +247,35 @@ def test_an_assistance_member_of_ones_own_is_called_by_the_step_and_the_rollout(
         norm = np.maximum(np.linalg.norm(diff, axis=1, keepdims=True), 1e-9)
         return action_scale * diff / norm, np.ones(len(state))
 
+    assert isinstance(likeliest, lasa.Member)
     with pytest.raises(lasa.ConfigError, match="unknown assistance 'likeliest'"):
-        lasa.ControlConfig(assistance="likeliest")
-    lasa.register_member("likeliest", likeliest)
-    try:
-        control = lasa.ControlConfig(assistance="likeliest")
-        decoder = pointer_for(task)
-        n = 3
-        state = np.broadcast_to(task.start, (n, 3)).copy()
-        log_b = np.log(np.array([[0.7, 0.2, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8]]))
-        z = np.zeros((n, 1))
-        la = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.0)
-        sa = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.5)
-        assert calls and all(shape == (n, 3) for shape in calls)
-        a_r, _ = likeliest(np.exp(log_b), state, task.goals, task.curves, control.dt, control.action_scale)
-        np.testing.assert_allclose(sa.action, 0.5 * la.human_action + 0.5 * a_r)
-        assert not np.allclose(sa.action, la.action)
-        # per user in a rollout, beside a built-in member
-        users = users_at_each_goal(task, 2)
-        horizon = 5
-        noise = np.random.default_rng(1).random((len(users), horizon, control.n_z))
-        before = len(calls)
-        assistance = np.array(["likeliest", "point"] * 3)
-        traj = lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=assistance)
-        assert len(calls) == before + horizon and all(shape == (3, 3) for shape in calls[before:])
-        assert np.all(np.isfinite(traj.states))
-    finally:
-        unregister_member("likeliest")
-    with pytest.raises(lasa.ConfigError):
-        lasa.ControlConfig(assistance="likeliest")
+        lasa.ControlConfig(assistance="likeliest")  # a config names a built-in member only
+    control = lasa.ControlConfig()
+    decoder = pointer_for(task)
+    n = 3
+    state = np.broadcast_to(task.start, (n, 3)).copy()
+    log_b = np.log(np.array([[0.7, 0.2, 0.1], [0.1, 0.8, 0.1], [0.1, 0.1, 0.8]]))
+    z = np.zeros((n, 1))
+    la = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.0, assistance=likeliest)
+    sa = lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.5, assistance=likeliest)
+    assert calls and all(shape == (n, 3) for shape in calls)
+    a_r, _ = likeliest(np.exp(log_b), state, task.goals, task.curves, control.dt, control.action_scale)
+    np.testing.assert_allclose(sa.action, 0.5 * la.human_action + 0.5 * a_r)
+    assert not np.allclose(sa.action, la.action)
+    # per user in a rollout, beside a built-in member named as configs name it
+    users = users_at_each_goal(task, 2)
+    horizon = 5
+    noise = np.random.default_rng(1).random((len(users), horizon, control.n_z))
+    before = len(calls)
+    assistance = np.array([likeliest, "point"] * 3, dtype=object)
+    traj = lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=assistance)
+    assert len(calls) == before + horizon and all(shape == (3, 3) for shape in calls[before:])
+    assert np.all(np.isfinite(traj.states))
+    with pytest.raises(lasa.ConfigError, match="unknown assistance 'likeliest'"):
+        named = np.array(["likeliest"] * 6)
+        lasa.rollout(decoder, task, users, 0.2, control, horizon, noise, assistance=named)
+    with pytest.raises(lasa.ConfigError, match="built-in's name or a function, got 3"):
+        lasa.shared_autonomy_step(decoder, task, control, state, log_b, z, 0.5, assistance=3)
 
 
 # --- 3. a claim ------------------------------------------------------------------------------
@@ -308,10 +293,13 @@ def _toy_rule() -> decision.Rule:
     )
 
 
+TOY_RULE = _toy_rule()
+
+
 def _toy_claims(frame: pd.DataFrame) -> list[lasa.Claim]:
     means = frame.groupby(["goal", "method"]).final_error.mean().unstack()
     share = float((means["LA+SA"] < means["LA"]).mean())
-    verdict = rules.rule("toy.sa_lower").verdict({"share_lower": share})
+    verdict = TOY_RULE.verdict({"share_lower": share})
     return [
         lasa.Claim(
             id="toy.sa_lower",
@@ -323,6 +311,7 @@ def _toy_claims(frame: pd.DataFrame) -> list[lasa.Claim]:
             note="hand-made numbers",
             robot=str(frame.robot.iloc[0]),
             values={"share_lower": share},
+            rule=TOY_RULE,
         )
     ]
 
@@ -340,34 +329,35 @@ def _plot(table: pd.DataFrame, task: lasa.GoalTask) -> Figure:
 
 def test_a_claim_of_ones_own_is_judged_by_its_rule_and_lands_in_the_claims_table(toy_task, tmp_path):
     task = toy_task
-    saved = dict(rules.RULES)
-    try:
-        rules.register_rule(_toy_rule())
-        with pytest.raises(lasa.ConfigError, match="exists already"):
-            rules.register_rule(dataclasses.replace(_toy_rule(), id="sim1.final_error"))
-        assert rules.rule("toy.sa_lower@point").verdict({"share_lower": 2 / 3}) == "partly"
-        # hand-made numbers: 20 users per cup, LA+SA well below LA at all three
-        rng = np.random.default_rng(0)
-        rows = [
-            {"robot": "toy3", "seed": u, "goal": g, "method": m, "final_error": mean + rng.normal(0, 0.02)}
-            for u in range(60)
-            for g in [u % 3]
-            for m, mean in (("LA", 0.4), ("LA+SA", 0.1))
-        ]
-        frame = pd.DataFrame(rows)
-        claims = verdicts.assess(_toy_claims, frame, n_boot=200, seed=0)
-        figure = types.SimpleNamespace(NAME="toy_sa", COLUMNS=tuple(frame.columns), plot=_plot)
-        paths = lasa.Paths.of(tmp_path / "build", tmp_path / "figures")
-        lasa.publish(figure, frame, paths, claims, task=task)
-        table = pd.read_csv(paths.claims, dtype=str, keep_default_na=False)
-        row = table.set_index("id").loc["toy.sa_lower"]
-        assert (row.robot, row.reproduced, row.settled, row.n_users) == ("toy3", "reproduced", "yes", "60")
-        assert float(row.ci_low) == float(row.ci_high) == 1.0
-        assert paths.figure("toy_sa.png").stat().st_size > 0
-        assert len(pd.read_csv(paths.figure("toy_sa.csv"))) == len(frame)
-    finally:
-        rules.RULES.clear()
-        rules.RULES.update(saved)
+    # the claim carries its rule; none replaces a paper claim's, and the paper's table is read-only
+    paper_id = dataclasses.replace(TOY_RULE, id="sim1.final_error")
+    with pytest.raises(lasa.ConfigError, match="exists already"):
+        lasa.Claim("sim1.final_error", "c", "sim1", "p", "m", "yes", "", "toy3", rule=paper_id)
+    with pytest.raises(TypeError):
+        rules.RULES["toy.sa_lower"] = TOY_RULE  # type: ignore[index]
+    assert "toy.sa_lower" not in rules.RULES
+    assert TOY_RULE.verdict({"share_lower": 2 / 3}) == "partly"
+    reading = lasa.Claim("toy.sa_lower@point", "c", "toy", "p", "m", "yes", "", "toy3", rule=TOY_RULE)
+    assert reading.judged_by is TOY_RULE
+    # hand-made numbers: 20 users per cup, LA+SA well below LA at all three
+    rng = np.random.default_rng(0)
+    rows = [
+        {"robot": "toy3", "seed": u, "goal": g, "method": m, "final_error": mean + rng.normal(0, 0.02)}
+        for u in range(60)
+        for g in [u % 3]
+        for m, mean in (("LA", 0.4), ("LA+SA", 0.1))
+    ]
+    frame = pd.DataFrame(rows)
+    claims = verdicts.assess(_toy_claims, frame, n_boot=200, seed=0)
+    figure = types.SimpleNamespace(NAME="toy_sa", COLUMNS=tuple(frame.columns), plot=_plot)
+    paths = lasa.Paths.of(tmp_path / "build", tmp_path / "figures")
+    lasa.publish(figure, frame, paths, claims, task=task)
+    table = pd.read_csv(paths.claims, dtype=str, keep_default_na=False)
+    row = table.set_index("id").loc["toy.sa_lower"]
+    assert (row.robot, row.reproduced, row.settled, row.n_users) == ("toy3", "reproduced", "yes", "60")
+    assert float(row.ci_low) == float(row.ci_high) == 1.0
+    assert paths.figure("toy_sa.png").stat().st_size > 0
+    assert len(pd.read_csv(paths.figure("toy_sa.csv"))) == len(frame)
 
 
 # --- 4. a decoder ----------------------------------------------------------------------------

@@ -43,9 +43,10 @@ def _sessions(out: Path) -> Path:
     """Teleoperation sessions as the kit logs them: 2 participants x 4 conditions, scripted
     Dessert inputs, and their questionnaires; with notebook 10's decoder."""
     from lasa.live.devices import ScriptedDevice
+    from lasa.live.session import open_log
     from lasa.live.station import SessionConfig, Station
     from lasa.live.studykit import survey
-    from lasa.live.teleop import new_session, run_session
+    from lasa.live.teleop import run_session
 
     folder = out / "sessions"
     for i, participant in enumerate(("s01", "s02")):
@@ -56,7 +57,7 @@ def _sessions(out: Path) -> Path:
             station = Station(config)
             axes = np.random.default_rng([i, k]).uniform(-1, 1, (30, 2))
             device = ScriptedDevice(axes, mode=np.arange(30) % 7 == 3)
-            run_session(station, device, new_session(station, folder), 30, realtime=False)
+            run_session(station, device, open_log(station, folder), 30, realtime=False)
             survey(
                 folder,
                 participant,

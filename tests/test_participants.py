@@ -263,7 +263,7 @@ def test_the_one_step_chooser_is_the_jacobian_foresight_argmax_by_hand(eating):
     from reference_step import site_frame
 
     from lasa.world.eating import waypoints
-    from lasa.world.fork import waypoint_arrays
+    from lasa.world.fork import WaypointTracker
 
     participant = ParticipantConfig(beta_median=1e7, beta_spread=0.0)
     config = StudyConfig(horizon=1, participant=participant)
@@ -274,7 +274,8 @@ def test_the_one_step_chooser_is_the_jacobian_foresight_argmax_by_hand(eating):
     robot, s0 = eating.robot, eating.start
     pos, rot, jac = site_frame(robot, s0)
     jp, jr, axis = jac[:3], jac[3:], rot[:, 2]
-    wp_pos, wp_dir, _, _ = waypoint_arrays(robot)
+    tracker = WaypointTracker.of(robot)
+    wp_pos, wp_dir = tracker.position, tracker.direction
     axis_grid = np.linspace(-1.0, 1.0, config.n_z)
     grid = [np.array([a, b]) for a in axis_grid for b in axis_grid]
     unit, weight = control.dt * config.retarget.linear_speed, participant.rotation_weight

@@ -76,13 +76,15 @@ def small(eating):
 def test_the_planned_roll_of_a_latent_input_is_the_reference_step_held(eating):
     """The plan foresees a latent input by holding it through Algorithm 1's step: with every rolled
     step exact (``coarse = 1``), each hold's end is the independent reference step applied h times."""
+    from lasa.people.loop import prepare
     from reference_step import latent_step, softmax
 
     plan = PlanConfig(replan=0.5, holds=(0.1, 0.5, 1.0), coarse=1)
     config = StudyConfig(horizon=30)
-    study = planning._prepare(
-        eating, LinearDecoder(), draw_cohort(1, seed=1), eating.robot.control, config, 2, ("LA",), plan
+    setting = prepare(
+        eating, LinearDecoder(), draw_cohort(1, seed=1), eating.robot.control, config, 2, ("LA",)
     )
+    study = planning._prepare(setting, plan)
     idx = np.flatnonzero(study.layout.alpha > 0)[:1]  # one LA+SA episode: assistance in the roll
     n, g = eating.robot.n_joints, eating.n_goals
     state = eating.start[None] + 0.01

@@ -62,12 +62,12 @@ def test_clip_respects_limits(robot):
 
 
 @pytest.mark.parametrize("name", ["planar5", "panda", "eating"])
-def test_the_package_scenes_meet_the_naming_contract_register_robot_checks(name):
-    from lasa.world.eating import EATING, load_eating_robot
-    from lasa.world.robot import angle_problem, scene_problems
+def test_the_package_scenes_meet_the_naming_contract_load_robot_checks(name):
+    from lasa.world.eating import EATING
+    from lasa.world.robot import scene_problems
 
-    robot = load_eating_robot() if name == "eating" else load_robot(name)
     spec = EATING if name == "eating" else ROBOTS[name]
-    assert scene_problems(spec, robot.model) == []
-    assert angle_problem(spec) is None  # the scene's angles are radians
+    assert scene_problems(spec) == []  # angles in radians too
+    if name != "eating":
+        assert load_robot(spec).name == name  # the package's own spec, passed as an object
     assert len(spec.ik_guesses) == len(spec.goal_sites)

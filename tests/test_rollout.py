@@ -23,7 +23,7 @@ def make_users(task, n=6, beta=50.0):
         target=task.target(goal, theta),
         beta0=np.full(n, beta),
         slope=np.zeros(n),
-        stream=np.arange(n),
+        user=np.arange(n),
     )
 
 
@@ -198,7 +198,7 @@ def test_the_users_chooser_is_eq_s1_written_out_per_user(model, task):
     import math
 
     from lasa.method.belief import belief, uniform_log_belief
-    from lasa.method.episodes import Now
+    from lasa.method.runner import Now
     from lasa.people.rollout import BoltzmannUsers
 
     control = task.robot.control
@@ -216,9 +216,9 @@ def test_the_users_chooser_is_eq_s1_written_out_per_user(model, task):
             s, target, beta = state[u], users.target_at(t)[u], users.beta(t)[u]
             phis = [model.decode_numpy(np.array([[z]]), s[None], belief(log_b[u : u + 1]))[0] for z in grid]
             costs = [float(np.sum((target - (s + control.dt * phi)) ** 2)) for phi in phis]
-            gumbel = [-math.log(-math.log(x)) for x in noise[users.stream[u], t]]
+            gumbel = [-math.log(-math.log(x)) for x in noise[users.user[u], t]]
             k = int(np.argmax([-beta * c + g for c, g in zip(costs, gumbel, strict=True)]))
-            event = pilot[users.stream[u], t, 0] < 0.5
+            event = pilot[users.user[u], t, 0] < 0.5
             k = previous[u] if (event and previous[u] is not None) else k
             previous[u] = k
             assert chooser.z[t, u, 0] == grid[k], (t, u)

@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 from lasa.base.config import ASSISTANCE, check_list, from_dict
 from lasa.base.errors import ConfigError
 from lasa.experiments import convergence, entropy_ablation, robustness, sim1, sim2, sim3, sim4, study
+from lasa.method.context_map import MAP_KINDS
 from lasa.method.entropy import LAMBDA_COST, choose_lambda
-from lasa.method.newgoals import MAP_KINDS
 from lasa.method.step import METHODS
 from lasa.pipeline.runner import load_config
 

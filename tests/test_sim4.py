@@ -14,7 +14,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.experiments import sim4
 from lasa.experiments.sim4 import map_geometry, new_cup_positions
-from lasa.method.newgoals import extend_task, new_goal_frames
+from lasa.method.context_map import extend_task, new_goal_frames
 
 REF = 1
 

@@ -19,8 +19,9 @@ from lasa.base.config import ControlConfig, to_dict
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, DamagedLogError
 from lasa.evidence.sessionlog import read_session
 from lasa.live.devices import KeyboardDevice, ScriptedDevice, StickSample, safe_axes
+from lasa.live.session import open_log
 from lasa.live.station import SessionConfig, Station
-from lasa.live.teleop import new_session, replay, run_session
+from lasa.live.teleop import replay, run_session
 from lasa.method.decoder import DecoderConfig, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig, train_decoder
 from lasa.people.demos import DemoConfig, collect_eating_demonstrations
@@ -61,7 +62,7 @@ def test_a_scripted_session_round_trips_and_replays_exactly(build, tmp_path, con
     axes = script(60)
     axes[5] = np.nan  # a faulty axis
     device = ScriptedDevice(axes, mode=np.arange(60) % 17 == 3, connected=np.arange(60) != 9)
-    writer = new_session(st, tmp_path)
+    writer = open_log(st, tmp_path)
     timing = run_session(st, device, writer, 200, realtime=False)
     frame, meta = read_session(writer.csv)
     assert meta["status"] == "complete" and meta["steps"] == len(frame) == timing["steps"] == 60
@@ -80,7 +81,7 @@ def test_the_scene_xml_beside_a_session_compiles(build, tmp_path):
     import mujoco
 
     st = station(build, "LA")
-    writer = new_session(st, tmp_path)
+    writer = open_log(st, tmp_path)
     run_session(st, ScriptedDevice(script(3)), writer, 10, realtime=False)
     model = mujoco.MjModel.from_xml_path(str(tmp_path / f"{writer.stem}.xml"))
     assert model.nq == st.robot.model.nq and model.site("fork_tip")
@@ -138,7 +139,7 @@ def test_an_interrupted_session_is_marked_and_keeps_its_rows(build, tmp_path):
         if step == 24:
             raise KeyboardInterrupt
 
-    writer = new_session(st, tmp_path)
+    writer = open_log(st, tmp_path)
     with pytest.raises(KeyboardInterrupt):
         run_session(st, ScriptedDevice(script(100)), writer, 200, realtime=False, on_step=crash)
     frame, meta = read_session(writer.csv)
@@ -148,7 +149,7 @@ def test_an_interrupted_session_is_marked_and_keeps_its_rows(build, tmp_path):
 def test_a_crash_loses_at_most_a_second(build, tmp_path):
     """Rows reach the disk every 10 steps (1 s at 10 Hz): a process that dies keeps them."""
     st = station(build, "LA")
-    writer = new_session(st, tmp_path)
+    writer = open_log(st, tmp_path)
     run_session(st, ScriptedDevice(script(25)), None, 25, realtime=False, on_step=lambda i, rec: None)
     for i in range(25):
         writer.append([float(i)] * len(writer.columns))
@@ -240,7 +241,7 @@ def test_a_cups_session_with_the_simulations_decoder_replays_to_an_mp4(model, tm
         robot="planar5", task="cups", condition="LA+SA", participant="c01", build_dir=str(tmp_path / "build")
     )
     st = Station(config)
-    writer = new_session(st, tmp_path / "sessions")
+    writer = open_log(st, tmp_path / "sessions")
     run_session(st, ScriptedDevice(script(20, seed=5)), writer, 40, realtime=False)
     frame, meta = read_session(writer.csv)
     assert meta["decoder"] == "decoder_planar5_lambda0.pt" and len(frame) == 20 and (frame.phase == -1).all()
@@ -253,7 +254,7 @@ def test_a_cups_session_with_the_simulations_decoder_replays_to_an_mp4(model, tm
 def test_replay_refuses_another_decoder(build, tmp_path):
 
     st = station(build, "LA")
-    writer = new_session(st, tmp_path)
+    writer = open_log(st, tmp_path)
     run_session(st, ScriptedDevice(script(5)), writer, 5, realtime=False)
     sidecar = tmp_path / f"{writer.stem}.json"
     meta = json.loads(sidecar.read_text())
@@ -287,7 +288,7 @@ def test_no_display_is_a_clear_error_and_leaves_no_session(build, tmp_path, monk
 def logged(build, tmp_path):
     """A complete 40-step session on disk."""
     st = station(build, "LA")
-    writer = new_session(st, tmp_path)
+    writer = open_log(st, tmp_path)
     run_session(st, ScriptedDevice(script(40)), writer, 40, realtime=False)
     return writer
 
@@ -541,7 +542,7 @@ def cohort(build, tmp_path_factory):
             )
             st_ = Station(config)
             device = ScriptedDevice(np.random.default_rng([i, k]).uniform(-1, 1, (12, 2)))
-            run_session(st_, device, new_session(st_, folder), 12, realtime=False)
+            run_session(st_, device, open_log(st_, folder), 12, realtime=False)
     return folder
 
 
@@ -806,7 +807,7 @@ def test_a_scripted_session_never_shows_a_belief_above_the_studys_cap(build, tmp
     st_ = station(build, "LA+SA")
     assert st_.control.belief_cap == STUDY_BELIEF_CAP == 0.99
     axes = np.tile([[0.0, -1.0]], (150, 1))  # one direction held: the belief commits to a goal
-    writer = new_session(st_, tmp_path)
+    writer = open_log(st_, tmp_path)
     run_session(st_, ScriptedDevice(axes), writer, 150, realtime=False)
     frame, meta = read_session(writer.csv)
     beliefs = frame[[f"b{g}" for g in range(st_.task.n_goals)]].to_numpy()

@@ -57,7 +57,7 @@ def _population(**kw):
         target=np.zeros((2, 3)),
         beta0=np.ones(2),
         slope=np.zeros(2),
-        stream=np.arange(2),
+        user=np.arange(2),
     )
     base.update(kw)
     return UserPopulation(**base)
@@ -75,7 +75,7 @@ def test_beta_schedule():
         ("beta0", np.array([1.0, -1.0]), "beta"),
         ("beta0", np.array([1.0, np.nan]), "beta"),
         ("slope", np.array([-1.0, 0.0]), "slope"),
-        ("stream", np.arange(3), "stream"),
+        ("user", np.arange(3), "user"),
     ],
 )
 def test_bad_users_are_a_clear_error(field, value, match):
@@ -106,7 +106,7 @@ def test_bad_change_step_is_a_clear_error(steps, match):
 def test_subset_keeps_every_field():
     users = _population(first_target=np.ones((2, 3)), change_step=np.array([1, 2]))
     one = users.subset(np.array([1]))
-    assert len(one) == 1 and one.change_step.tolist() == [2] and one.stream.tolist() == [1]
+    assert len(one) == 1 and one.change_step.tolist() == [2] and one.user.tolist() == [1]
 
 
 def test_pilot_choice_hand_computed():
@@ -120,7 +120,7 @@ def test_pilot_choice_hand_computed():
             target=np.zeros((n, 2)),
             beta0=np.ones(n),
             slope=np.zeros(n),
-            stream=np.arange(n),
+            user=np.arange(n),
             pilot=pilot,
             pilot_prob=p,
         )

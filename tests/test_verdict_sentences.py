@@ -2,7 +2,7 @@
 
 import math
 
-from lasa.evidence.findings import completion_text, finding, short_arms, study_effect
+from lasa.evidence.findings import completion_text, finding, short_conditions, study_effect
 from lasa.evidence.values import Number
 
 ROBOTS = ("planar5", "panda")
@@ -123,7 +123,7 @@ def test_the_study_sentences_say_what_each_n_tells_and_what_was_cut():
 
 def test_short_arms_are_those_below_the_completion_bar():
     facts = {"completion.R": Number(1.0), "completion.LA": Number(0.2), "completion.LA+SA": Number(0.95)}
-    assert short_arms(facts) == [("LA", 0.2)]
+    assert short_conditions(facts) == [("LA", 0.2)]
     assert completion_text([("LA", 0.2), ("LA+SA", 0.455)]) == "LA 20%, LA+SA 45.5%"
 
 

@@ -17,7 +17,6 @@ from lasa.evidence.verdicts import (
     block_users,
     bootstrap_frames,
     member_frame,
-    member_of,
     min_resamples,
     sequential,
     shortfall,
@@ -172,10 +171,7 @@ def test_member_frames_share_the_unassisted_rows_of_their_own_users():
     frame = pd.concat([la, users([0.5] * 6, assistance="point"), users([-0.5] * 3, assistance="grasp_set")])
     assert len(member_frame(frame, "point")) == 12
     assert len(member_frame(frame, "grasp_set")) == 6  # LA rows of users 0-2 only (paired)
-    assert member_of(member_frame(frame, "point")) == "point"
-    mixed = pd.concat([users([0.5], assistance="point"), users([0.5], assistance="hindsight")])
-    with pytest.raises(ConfigError, match="mixes assistance members"):
-        member_of(mixed)
+    assert set(member_frame(frame, "point").assistance) == {"none", "point"}
 
 
 def test_no_finite_values_leave_the_interval_unknown_and_undecided():

@@ -12,10 +12,10 @@ def test_the_eating_workspace_loads_the_eating_scene_and_names_its_artifacts(tmp
     ws = Workspace.eating("panda", tmp_path / "build", tmp_path / "figures")
     assert isinstance(ws.task, EatingTask) and ws.robot is ws.task.robot and ws.name == "panda"
     assert ws.control == ws.task.robot.control and (tmp_path / "figures").is_dir()
-    path = ws.artifact("eating_reading_decoder", reading="transfers")
+    path = ws.artifact("eating_segmentation_decoder", segmentation="transfers")
     assert path == tmp_path / "build" / "models" / "eating_decoder_panda_transfers.pt"
     with pytest.raises(ArtifactError, match="10_eating_task"):
-        ws.decoder("eating_reading_decoder", reading="transfers")
+        ws.decoder("eating_segmentation_decoder", segmentation="transfers")
     with pytest.raises(ConfigError, match="robot"):
         Workspace.eating("planar5", tmp_path / "build", tmp_path / "figures")
 

@@ -1,23 +1,9 @@
 """The conditions and methods, named once and parsed in one place.
 
-A condition's name says three things: the **interface** that turns the stick into a human
-action (``R``, Retargeting: a twist in one of three modes, by IK; ``LA``, latent actions:
-a_h = phi(z, s, b)), whether shared autonomy is **assisted** (``+SA``: blended by Eq. M1 with
-the robot's assistance; else alpha = 0), and which **decoder** latent actions use (``base``,
-trained on reconstruction alone; ``entropy``, with the entropy term of Eq. T6: ``+Entropy``).
-
-=================  =========  ========  =======  =====================================
-name               interface  assisted  decoder  used by
-=================  =========  ========  =======  =====================================
-``R``              R          no        --       the study (Sec. VI), teleop
-``R+SA``           R          yes       --       the study, teleop
-``LA``             LA         no        base     sims 1-4 (a method), the study, teleop
-``LA+SA``          LA         yes       base     sims 1-4, the study, teleop
-``LA+SA+Entropy``  LA         yes       entropy  sims 1-4, teleop (the cups)
-=================  =========  ========  =======  =====================================
-
-The simulations call the three latent-action conditions *methods* (:data:`METHODS`), the
-study its 2x2 design *conditions* (:data:`CONDITIONS`); :func:`parse` reads any of them.
+A name gives the **interface** (``R``, Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)),
+whether it is **assisted** (``+SA``, Eq. M1; else alpha = 0) and the **decoder** (``base``, or
+``entropy`` with Eq. T6's term: ``+Entropy``). The sims call the latent-action ones *methods*
+(:data:`METHODS`), the study its 2x2 design *conditions* (:data:`CONDITIONS`).
 """
 
 from __future__ import annotations
@@ -36,14 +22,8 @@ CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x
 
 @dataclasses.dataclass(frozen=True)
 class Condition:
-    """A condition, parsed.
-
-    Attributes:
-        name: Its name, one of :data:`ALL`.
-        interface: ``"R"`` (Retargeting) or ``"LA"`` (latent actions).
-        assisted: Whether shared autonomy blends in (alpha > 0).
-        decoder: ``"base"`` or ``"entropy"`` for latent actions, ``None`` for Retargeting.
-    """
+    """A condition, parsed: its name, interface (``"R"``, ``"LA"``), whether it is assisted
+    (alpha > 0), and its decoder (``"base"``, ``"entropy"``, ``None`` for Retargeting)."""
 
     name: str
     interface: str
@@ -62,16 +42,8 @@ ALL = tuple(_TABLE)  # every condition a person can drive (the table's order)
 
 
 def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
-    """The :class:`Condition` a name stands for.
-
-    Args:
-        name: A condition's or method's name.
-        allowed: The names this caller accepts (:data:`METHODS`, :data:`CONDITIONS` or :data:`ALL`).
-        what: What the name is called in the error (``"condition"`` or ``"method"``).
-
-    Raises:
-        ConfigError: naming the value and the allowed names.
-    """
+    """The :class:`Condition` a name stands for; ConfigError if it is not ``allowed`` (the error
+    calls it ``what``)."""
     if not isinstance(name, str) or name not in allowed:
         raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(map(repr, allowed))}")
     return _TABLE[name]
@@ -83,11 +55,8 @@ def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str 
 
 
 def williams_square(n: int) -> np.ndarray:
-    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n).
-
-    Every condition appears once in every position, and follows every other condition
-    exactly once, so first-order carry-over effects are balanced.
-    """
+    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n): each
+    appears once in every position and follows every other once (carry-over balanced)."""
     if n < 2 or n % 2:
         raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
     first = [0]

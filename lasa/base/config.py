@@ -1,9 +1,7 @@
 """Frozen configuration records and their validation.
 
-A config is a frozen dataclass whose every field has a comment with its unit. Values are
-checked when the record is built, so a bad parameter fails at once with a message that
-names it and its allowed range, not deep inside a rollout. :func:`from_dict` refuses
-unknown keys: a misspelt knob must not silently fall back to its default.
+A config is a frozen dataclass, each field commented with its unit, checked when built: a bad
+parameter fails at once, naming its allowed range. :func:`from_dict` refuses unknown keys.
 """
 
 from __future__ import annotations
@@ -38,7 +36,6 @@ __all__ = [
     "Seed",
     "BeliefCap",
     "cap_setting",
-    "FiniteNonNegative",
     "Why",
     "Rationality",
     "validate",
@@ -55,11 +52,9 @@ __all__ = [
 T = TypeVar("T")
 
 
-# Field types with their bounds, written once: a config record states a field's allowed values in
-# its annotation, and validate() (pydantic) checks them when the record is built.
+# Field types with their bounds, written once, checked by validate() (pydantic).
 def _not_text(value: Any) -> Any:
-    """A number field never takes text: pydantic's lax mode would parse '3', and the record keeps
-    the value as given (:func:`validate` converts nothing), so '3' would stay a string."""
+    """A number field never takes text (pydantic's lax mode would parse '3', kept as a string)."""
     if isinstance(value, str | bytes):
         raise ConfigError("text is not a number")
     return value
@@ -74,28 +69,24 @@ AtLeastTwo = Annotated[Integer, at.Ge(2)]  # an integer >= 2 (grids that hold bo
 Positive = Annotated[Number, at.Gt(0.0)]  # a number > 0
 NonNegative = Annotated[Number, at.Ge(0.0)]  # a number >= 0
 UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (a probability, a weight)
-FiniteNonNegative = Annotated[Number, at.Ge(0.0), at.Lt(math.inf)]  # a number in [0, inf) (a finite beta)
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
 
 
 @dataclasses.dataclass(frozen=True)
 class Why:
-    """Why a field's type has its bounds: an item of its ``Annotated`` metadata, which
-    :func:`validate` states after a range error (e.g. :data:`Rationality`)."""
+    """Why a field's type has its bounds, stated after a range error (e.g. :data:`Rationality`)."""
 
     reason: str
 
 
-# A simulated user's rationality on a swept grid (Eq. S1): a number in (0, inf). Zero and infinity
-# are limits of Eq. S1, not rationalities a figure can draw on its logarithmic beta axis.
+# a simulated user's rationality on a swept grid (Eq. S1), in (0, inf)
 Rationality = Annotated[
     Number,
     at.Gt(0.0),
     at.Lt(math.inf),
     Why("the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"),
 ]
-# the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None for no cap; a record
-# with such a field passes it through cap_setting first, so that a config file's "none" means None
+# the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None (cap_setting: "none")
 BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
 
 
@@ -157,10 +148,7 @@ def _schema(cls: type) -> tuple[pydantic.TypeAdapter[Any], dict[str, Any]]:
 
 
 def validate(record: Any) -> None:
-    """Check every field of a config record against its annotated type (pydantic).
-
-    Called first by each record's ``__post_init__``; the record keeps the values it was given
-    (nothing is converted here), so a setting means the same number it did before validation.
+    """Check every field of a config record against its annotated type (pydantic), converting none.
 
     Raises:
         ConfigError: one line naming the field (and the item, in a list), what it expects and
@@ -192,15 +180,11 @@ def _why(annotation: Any) -> str:
     return f": {reasons[0]}" if reasons else ""
 
 
-# The members of the shared-autonomy family, named once; lasa.method.assistance implements them.
-# ASSISTANCE are the figures' default members; hindsight_point (hindsight with one target per goal)
-# is a built-in reading that only the study runs by default.
 LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)
+# The built-in members' names (lasa.method.assistance.MEMBERS): ASSISTANCE are the figures' default
+# members; hindsight_point (hindsight with one target per goal) only the study runs by default.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
-# Members added from outside the package (lasa.method.assistance.register_member, the only writer),
-# which ControlConfig accepts too; the figures' default members stay ASSISTANCE.
-REGISTERED_ASSISTANCE: list[str] = []
 # The assistance label of rows and episodes with none (alpha = 0: LA, R), named once.
 NO_ASSISTANCE = "none"
 
@@ -214,18 +198,8 @@ def check_range(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """Return ``value`` as a float if it lies within [low, high], else raise ConfigError.
-
-    NaN is always refused; infinity only passes where the bound on that side is infinite.
-
-    Args:
-        name: Parameter name, used in the message.
-        value: The value to check.
-        low: Lower bound.
-        high: Upper bound.
-        low_open: Exclude ``low`` itself.
-        high_open: Exclude ``high`` itself.
-    """
+    """Return ``value`` as a float if it lies within [low, high] (``low_open``, ``high_open``
+    exclude the bounds), else raise ConfigError naming ``name``; NaN is always refused."""
     allowed = interval(low, high, low_open, high_open)
     try:
         v = float(value)
@@ -248,21 +222,9 @@ def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) ->
 def check_list(
     name: str, values: Sequence[Any], *, at_least: int = 1, ascending: bool = False, why: str = ""
 ) -> tuple[Any, ...]:
-    """Return a list setting as a tuple if it holds ``at_least`` values, none twice, else raise.
-
-    A repeated value would run (and write) the same condition twice; a grid of numbers
-    (``ascending``) is also refused out of order, so that its CSV rows, curves and "the largest"
-    read in one order. Values are compared as Python compares them (1 and 1.0 repeat).
-
-    Args:
-        name: The setting's name, used in the message.
-        values: Its values (a list or a tuple).
-        at_least: The fewest distinct values it may hold.
-        ascending: Refuse values that are not in ascending order.
-        why: Why it needs ``at_least`` (e.g. ``"a line needs three points"``), for the message.
-
-    Raises:
-        ConfigError: one line naming the setting, the values given and what is allowed.
+    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0
+    repeat), in ascending order if ``ascending``; else raise ConfigError naming ``name`` and
+    ``why`` it needs ``at_least``.
     """
     given = tuple(values)
     reason = f" ({why})" if why else ""
@@ -279,32 +241,23 @@ def check_list(
 
 @dataclasses.dataclass(frozen=True)
 class ControlConfig:
-    """The units of the control loop: the free parameters that give beta its meaning.
-
-    The paper's transition is s' = s + dt * a with a a joint velocity (Sec. V). These
-    values set how far one step moves, how hard the user can push (sigma_h, Eq. T4),
-    and how quickly the belief commits. The defaults are the values both robots use
-    (``lasa.world.robot.ROBOTS``), chosen so that the paper's regimes exist (beta = 75 noisy,
-    beta = 1000 near optimal); notebook 04 states them and why.
+    """The units of the control loop (s' = s + dt a, Sec. V): the free parameters that give beta
+    its meaning. The defaults are both robots', chosen so that the paper's regimes exist (notebook 04).
     """
 
     dt: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = 0.1  # control period Delta [s]
     action_scale: Positive = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
     max_joint_speed: Positive = 2.0  # per-joint bound on the commanded velocity [rad/s]
     belief_beta: NonNegative = 20.0  # beta_b, temperature of the goal likelihood [1/rad]
-    belief_floor: Annotated[Number, at.Ge(0.0), at.Lt(0.5)] = (
-        1e-6  # smallest belief any goal keeps after an update [-]
-    )
-    # the most belief any goal keeps after an update, its excess spread evenly over the others
-    # (Javdani et al.'s implementation, max_prob_any_goal); None (or "none"): no cap, Algorithm 1's
-    # belief, which the sims keep; the eating study's is 0.99 (lasa.world.eating) [-]
+    belief_floor: Annotated[Number, at.Ge(0.0), at.Lt(0.5)] = 1e-6  # least belief a goal keeps [-]
+    # the most belief any goal keeps after an update (Javdani et al.'s max_prob_any_goal); None: no
+    # cap, Algorithm 1's belief, which the sims keep; the eating study's is 0.99 [-]
     belief_cap: BeliefCap = None
     alpha: UnitInterval = 0.2  # blend weight of the assistance in LA+SA (Eq. M1) [-]
     n_z: AtLeastTwo = 21  # joystick candidates per latent axis the simulated user weighs [-]
     likelihood: str = "preferences"  # belief model: "preferences" (regret to preference sets) or "goal"
-    assistance: str = (
-        "point"  # the shared-autonomy reading (lasa.method.assistance): Eq. M2 towards g = s*(g, 0.5)
-    )
+    # the built-in shared-autonomy member (lasa.method.assistance.MEMBERS): Eq. M2 towards g = s*(g, 0.5)
+    assistance: str = "point"
 
     @property
     def likelihood_step(self) -> float | None:
@@ -315,7 +268,7 @@ class ControlConfig:
         object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
         validate(self)
         check_choice("likelihood", self.likelihood, LIKELIHOODS)
-        check_choice("assistance", self.assistance, (*BUILT_IN_ASSISTANCE, *REGISTERED_ASSISTANCE))
+        check_choice("assistance", self.assistance, BUILT_IN_ASSISTANCE)
 
 
 def to_dict(config: Any) -> dict[str, Any]:
@@ -326,17 +279,9 @@ def to_dict(config: Any) -> dict[str, Any]:
 def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
     """Build ``cls`` from a mapping, refusing keys that ``cls`` does not have.
 
-    This is the one place where a YAML section (``configs/*.yaml``, passed to a notebook
-    as its ``settings`` parameter) becomes a config: a missing key keeps the dataclass
-    default, a list becomes a tuple where the field is a tuple, and a mapping given for a
-    nested record (e.g. ``train: {steps: 200}``) changes those fields of its default. The
-    record validates its fields (:func:`validate`).
-
-    Args:
-        cls: The config record's class.
-        values: Setting name -> value.
-        where: Whose settings these are, for the error (a notebook passes its name, e.g.
-            ``"notebook 04_fixed_expertise"``); default the class's name.
+    A YAML section becomes a config here: a missing key keeps the default, a list becomes a tuple,
+    a mapping for a nested record (``train: {steps: 200}``) changes those fields of its default.
+    ``where`` names whose settings these are in the error (default the class's name).
 
     Raises:
         ConfigError: one line, ``<where> settings: <setting> must be <expected>, got <value>``;
@@ -361,8 +306,8 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
 
 
 def _setting(path: str, field: dataclasses.Field[Any], default: Any, value: Any) -> Any:
-    """One setting's value as its record takes it: a mapping given for a nested record becomes
-    that record (:func:`_nested`), a list given for a tuple field a tuple; anything else as given."""
+    """One setting's value as its record takes it: a mapping for a nested record that record, a
+    list for a tuple field a tuple."""
     if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
         return _nested(path, default, value)
     if isinstance(value, list) and "tuple" in str(field.type):
@@ -371,8 +316,7 @@ def _setting(path: str, field: dataclasses.Field[Any], default: Any, value: Any)
 
 
 def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
-    """A nested record: ``default`` with ``values`` changed, a record inside it the same way; its
-    errors name the setting's whole path (``session.participant.beta_median``)."""
+    """``default`` with ``values`` changed, recursively; errors name the setting's whole path."""
     known = {f.name: f for f in dataclasses.fields(default)}
     unknown = sorted(set(values) - set(known))
     if unknown:
@@ -388,17 +332,10 @@ def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
 
 
 def set_threads(default: int = 1) -> int:
-    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one).
+    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one); return it.
 
-    One thread by default, everywhere: a float reduction split over more threads rounds
-    differently in the last bits, and training amplifies that into other decoders and
-    other figures. With one thread, a notebook run by hand, ``make figures`` and CI give
-    the same numbers on any machine, and the committed figures are reproduced byte for
-    byte. ``make figures`` gets its parallelism from running the robots' notebooks side
-    by side instead. Set ``LASA_THREADS`` for speed when exactness does not matter.
-
-    Returns:
-        The number of threads set.
+    One thread, everywhere: a reduction split over threads rounds differently, and training
+    amplifies that; set ``LASA_THREADS`` for speed when exactness does not matter.
     """
     import torch  # noqa: PLC0415 (config stays importable without torch's start-up cost)
 

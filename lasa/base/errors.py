@@ -1,8 +1,4 @@
-"""Exceptions raised by lasa.
-
-Every error names what was wrong and, where it can, what to do about it: the allowed
-range of a parameter, or the command that makes a missing artifact.
-"""
+"""Exceptions raised by lasa: each names what was wrong and, where it can, what to do about it."""
 
 from __future__ import annotations
 

@@ -1,9 +1,8 @@
 """Atomic file writes and artifact loading with actionable errors.
 
-An interrupted run must never leave a half-written artifact behind: every writer here
-writes to a temporary file in the destination folder and renames it into place, which
-is atomic on POSIX file systems. Readers turn a missing or unreadable file into an
-:class:`~lasa.base.errors.ArtifactError` that names the command that makes it.
+Every writer renames a temporary file in the destination folder into place (atomic on POSIX);
+readers turn a missing or unreadable file into an :class:`~lasa.base.errors.ArtifactError` that
+names the command that makes it.
 """
 
 from __future__ import annotations
@@ -36,16 +35,11 @@ __all__ = [
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; rename it onto ``path`` on success.
+    """Yield a temporary path beside ``path`` (its parent made if needed); rename it onto ``path``
+    on success, remove it on any exception.
 
-    The temporary name keeps the final suffix (``x.tmp123.mp4``) so that writers which
-    infer the format from the extension (ffmpeg, matplotlib) still work. On any
-    exception the temporary file is removed and ``path`` is left untouched. Under a notebook
-    run's write journal (:mod:`lasa.base.journal`), the file it replaces is recorded first, so
-    that a failed run can be undone.
-
-    Args:
-        path: Final destination. Its parent folder is created if needed.
+    The temporary name keeps the final suffix (``x.tmp123.mp4``) for writers that infer the format
+    from it. The write is journaled (:mod:`lasa.base.journal`).
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -72,12 +66,8 @@ _HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting d
 def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
     """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write.
 
-    ``make figures`` runs the two robots' notebooks in parallel, and both merge their
-    rows into the same CSVs (a figure's data, the claims table) and redraw the shared
-    figure from them. The lock is an advisory ``flock`` on the folder itself, so it
-    leaves no lock file behind and is released even if the process dies. It is
-    re-entrant within a process: a notebook may hold it around a merge and a redraw,
-    and :func:`update_csv` inside takes it again without blocking.
+    An advisory ``flock`` on the folder itself (no lock file; released if the process dies),
+    re-entrant within a process: parallel notebooks merge rows into the same CSVs.
     """
     folder = Path(folder).resolve()
     if _HELD.get(folder):
@@ -114,21 +104,10 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
 
 
 def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> Path:
-    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others.
+    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others (under
+    :func:`locked`, journaled row by row); return ``path``, to read back for the whole table.
 
-    Each robot's notebook run writes its own rows into a figure's shared CSV; the
-    figure is then drawn from every robot present. Written atomically, under
-    :func:`locked` so that robots running in parallel do not lose each other's rows.
-
-    Under a notebook run's write journal (:mod:`lasa.base.journal`), the key values written are
-    recorded, so that a failed run restores its own rows and keeps a parallel run's.
-
-    A file of other columns (an older version's) is replaced when ``frame`` replaces every
-    one of its rows, since none of them would be kept; otherwise it is an error.
-
-    Returns:
-        ``path``. Read it back for the whole table: the file holds the rows as rounded
-        on writing, the same whichever robot wrote last.
+    A file of other columns is replaced when ``frame`` replaces all its rows, else an error.
     """
     path = Path(path)
     with locked(path.parent):
@@ -159,12 +138,8 @@ def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:
 
 
 def require_file(path: str | os.PathLike[str], make_hint: str) -> Path:
-    """Return ``path`` if it exists, else raise an :class:`ArtifactError`.
-
-    Args:
-        path: The artifact that a step needs.
-        make_hint: The command that produces it, shown to the user.
-    """
+    """Return ``path`` if it exists, else raise an :class:`ArtifactError` naming ``make_hint``, the
+    command that makes it."""
     path = Path(path)
     if not path.is_file():
         raise ArtifactError(f"{path} does not exist. Make it with: {make_hint}")
@@ -186,16 +161,8 @@ def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarr
 def sync_between(
     path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
 ) -> bool:
-    """Put ``text`` between ``markers`` in the file ``path``.
-
-    Args:
-        path: The markdown file.
-        markers: Its begin and end markers.
-        text: What goes between them.
-        inline: Within a line (a sentence), else on the lines between the markers' lines.
-
-    Returns:
-        Whether the file changed.
+    """Put ``text`` between the (begin, end) ``markers`` in the file ``path``: ``inline`` within a
+    line, else on the lines between; return whether the file changed.
 
     Raises:
         ConfigError: if the file lacks either marker, or holds them out of order.

@@ -1,28 +1,12 @@
 """A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
 
-The runner (:func:`lasa.pipeline.runner.run_notebook`) opens a journal around a notebook's run with
-:func:`recording`: the journal is a folder, named to the kernel (and to every worker process it
-starts) by the environment variable ``LASA_WRITE_JOURNAL``. Every atomic write
-(:func:`lasa.base.io.atomic_path`) of a file under the journaled folder records, the first time the
-run writes that path, the file's previous state (a hard link to the old file, or a copy where a link
-cannot be made, or "absent"), and after each write the identity of the file it put in place (device,
-inode, size, modification time). A merged table (:func:`lasa.base.io.update_csv`, and the claims
-tables through :func:`note_rows`) also records the key values whose rows the run replaced.
-
-If the run fails, :func:`restore` puts the folder back, under the folder's lock, newest path first:
-
-- a file that is still the one this run wrote gets its old bytes back (or is removed, if it was new);
-- a merged table that another run rewrote meanwhile (``make figures`` runs two notebooks side by
-  side into the same folder) gets back only the rows of the keys this run wrote, as they were
-  before; the other run's rows stay;
-- any other file that another run rewrote meanwhile (the shared figure PNG, ``claims.md``) is left
-  as it is and named in the result, since its old bytes would drop the other run's work.
-
-Limits: the journal sees only writes through :func:`lasa.base.io.atomic_path` (every writer in lasa;
-a notebook that writes a file by other means is not undone), and relies on files being replaced,
-never rewritten in place (the hard link keeps the old bytes only then). A run killed outright
-(``SIGKILL``, a power cut) restores nothing: its journal is discarded by the next run of the same
-notebook, which rewrites the same files.
+:func:`recording` names the journal folder to the run's processes (``LASA_WRITE_JOURNAL``). Each
+atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
+state (a hard link or copy, or absent) and the identity of the file put in place; a merged table
+(:func:`note_rows`) also the keys whose rows the run replaced. :func:`restore` puts back a file
+still as the run wrote it, the old rows of a merged table another run rewrote since, and names any
+other file another run rewrote. Only writes through ``atomic_path`` are seen; a killed run's
+journal is discarded by the next run of that notebook.
 """
 
 from __future__ import annotations
@@ -53,8 +37,7 @@ _ROOTS: dict[str, Path] = {}  # journal folder -> its root, read once per proces
 def recording(journal: str | os.PathLike[str], root: str | os.PathLike[str]) -> Iterator[Path]:
     """Journal the writes under ``root`` made while the block runs, by this process and its children.
 
-    ``journal`` is made afresh (a left-over journal of a killed run is discarded). The variable
-    :data:`ENV` is set for the block and reset after it; the journal itself stays, for
+    ``journal`` is made afresh; :data:`ENV` is set for the block only; the journal stays, for
     :func:`restore` or :func:`discard`.
     """
     journal = Path(journal)
@@ -137,12 +120,8 @@ def after_write(path: str | os.PathLike[str]) -> None:
 
 
 def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:
-    """Record that this run replaces the rows of ``path`` whose ``keys`` columns match ``keys``' rows.
-
-    Call it before writing the merged table. The key values are kept as the CSV writer of
-    :func:`lasa.base.io.write_csv` writes them (six significant digits), so that they match the
-    file's text. ``sort`` is the columns the table is ordered by.
-    """
+    """Record, before writing the merged table, that this run replaces the rows of ``path`` whose
+    ``keys`` columns match ``keys``' rows (kept as the CSV writer writes them); ``sort``: its order."""
     found = _entry(path)
     if found is None:
         return
@@ -160,9 +139,7 @@ def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[s
 
 @dataclasses.dataclass
 class Restored:
-    """What :func:`restore` did: the paths it put back, and the ones it could not.
-
-    Its text says so in a sentence, for the runner's error message.
+    """What :func:`restore` did, its text a sentence for the runner's error message.
 
     Attributes:
         root: The journaled folder.
@@ -186,13 +163,8 @@ class Restored:
 
 
 def restore(journal: str | os.PathLike[str]) -> Restored:
-    """Undo the journaled writes, newest path first, under the lock of the journaled folder.
-
-    A file still as this run wrote it gets its old bytes back (or goes, if it was new). A merged
-    table that another run rewrote since gets back the old rows of the keys this run wrote and keeps
-    every other row as it is now. Any other file that another run rewrote since is left, and named
-    in the result. The journal is left in place (:func:`discard` deletes it).
-    """
+    """Undo the journaled writes, newest path first, under the lock of the journaled folder (the
+    journal is left in place)."""
     from lasa.base.io import locked  # io imports this module
 
     journal = Path(journal)

@@ -1,12 +1,7 @@
 """Where things live: the repository root, and every artifact's path with its make hint.
 
-A notebook runs from Make and papermill (working directory: the repository root), and
-from Jupyter (working directory: ``notebooks/``). Relative folders such as ``build`` and
-``figures`` therefore resolve against the repository root, never the working directory,
-so the three behave the same.
-
-Each artifact that one notebook writes and another reads is named once here, with the
-notebook that makes it, so that a missing file's error says how to make it.
+Relative folders resolve against the repository root, never the working directory, so Make,
+papermill and Jupyter agree. Each artifact is named once, with the notebook that makes it.
 """
 
 from __future__ import annotations
@@ -23,14 +18,8 @@ _PACKAGE = Path(__file__).resolve().parents[1]  # lasa/ (this module is lasa/bas
 
 
 def repo_root() -> Path:
-    """The repository root: ``LASA_ROOT`` if set, else the folder holding this package.
-
-    The package is installed in editable mode (``make setup``), so the folder above
-    ``lasa/`` is the clone. For a non-editable install, set ``LASA_ROOT``.
-
-    Raises:
-        ConfigError: if ``LASA_ROOT`` names a folder that does not exist.
-    """
+    """The repository root: ``LASA_ROOT`` if set (a non-editable install), else the folder above
+    ``lasa/``. ConfigError if ``LASA_ROOT`` is not a folder."""
     env = os.environ.get("LASA_ROOT")
     if env:
         root = Path(env).expanduser().resolve()
@@ -51,45 +40,34 @@ ARTIFACTS: dict[str, tuple[str, str]] = {
     "demos": ("data/demos_{robot}.npz", "01_demonstrations"),
     "decoder": ("models/decoder_{robot}.pt", "02_decoder_training"),
     "latent_paths": ("analysis/latent_{robot}.npz", "02_decoder_training"),
-    # The entropy ablation's pair (notebook 03): the base decoder fine-tuned for the same
-    # steps and schedule, without the term (lambda = 0) and with it (the chosen lambda).
+    # the entropy ablation's pair: the base decoder fine-tuned without the term and with it
     "decoder_lambda0": ("models/decoder_{robot}_lambda0.pt", "03_entropy_ablation"),
     "decoder_entropy": ("models/decoder_{robot}_entropy.pt", "03_entropy_ablation"),
     # The eating study's data and 2-D decoder (Sec. VI; the Panda only).
     "eating_demos": ("data/eating_demos_{robot}.npz", "10_eating_task"),
-    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),  # the headline reading
-    "eating_reading_demos": ("data/eating_demos_{robot}_{reading}.npz", "10_eating_task"),
-    "eating_reading_decoder": ("models/eating_decoder_{robot}_{reading}.pt", "10_eating_task"),
+    "eating_decoder": ("models/eating_decoder_{robot}.pt", "10_eating_task"),  # the headline segmentation
+    "eating_segmentation_demos": ("data/eating_demos_{robot}_{segmentation}.npz", "10_eating_task"),
+    "eating_segmentation_decoder": ("models/eating_decoder_{robot}_{segmentation}.pt", "10_eating_task"),
 }
 
 
 @dataclasses.dataclass(frozen=True)
 class Paths:
-    """The build and figures folders of one run, resolved against the repository root.
-
-    Attributes:
-        build: Datasets, checkpoints and analysis files (``build`` by default).
-        figures: Figures, the CSV behind each, videos and the claims table.
-    """
+    """The build folder (datasets, checkpoints, analysis) and figures folder (figures, their CSVs,
+    videos, the claims table) of one run."""
 
     build: Path
     figures: Path
 
     @classmethod
     def of(cls, build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
-        """The run's folders; relative ones are under the repository root, not the working directory.
-
-        That is what the notebooks need (the same files from Jupyter, papermill and Make). Code of
-        your own that should write where it runs passes absolute folders, or builds
-        ``Paths(build, figures)`` itself (``docs/extending.md``).
-        """
+        """The run's folders; relative ones are under the repository root, not the working
+        directory (to write where it runs, pass absolute folders or build ``Paths`` itself)."""
         return cls(resolve(build_dir), resolve(figures_dir))
 
     def artifact(self, name: str, robot: str, **fields: str) -> Path:
-        """The path of artifact ``name`` (a key of :data:`ARTIFACTS`) for ``robot``.
-
-        ``fields`` fill the rest of its pattern (``reading`` for the eating readings).
-        """
+        """The path of artifact ``name`` (:data:`ARTIFACTS`) for ``robot``, ``fields`` filling the
+        rest of its pattern."""
         if name not in ARTIFACTS:
             raise ConfigError(f"unknown artifact {name!r}; known: {sorted(ARTIFACTS)}")
         try:

@@ -1,33 +1,13 @@
 """The claims table: for each claim of the paper, did it reproduce?
 
-Each figure notebook evaluates its claims from the data behind its figure and writes
-its rows into ``figures/claims.csv`` (and the same table as ``figures/claims.md``, which
-the README's table is generated from). Each row has a stable ``id`` (``sim1.final_error``),
-so a claim can be reworded without leaving its old row behind: a figure's run replaces
-every row of that (figure, robot) and leaves the others. Rows are unique by (id, robot).
-``assistance`` names the reading of shared autonomy the row was measured under
-(``point``: Eq. M2 towards one pose per goal). Each claim has a headline row, ``<figure>.<name>``,
-measured under the default reading, and one row per member of the family,
-``<figure>.<name>@<member>`` (:mod:`lasa.evidence.verdicts`). ``ci_low`` and ``ci_high`` bound the
-number the verdict rests on (a 95% interval over users or participants: a bootstrap, or for the
-study's H1 and H2 a paired t interval), and ``n_users`` says how many users or participants it rests on. A
-:class:`Claim` holds its rule's reading, ``yes``, ``partly`` or ``no`` (``undecided`` when an
-interval straddles a threshold; ``not testable`` when the claim's test cannot run on the data,
-with the reason in ``measured`` or ``note``). Each row carries two words (Open Science
-Collaboration, 2015): ``effect``, the claim's shape as the rule reads it
-(:data:`lasa.evidence.decision.WORDS`), and ``number``, for each number the paper states whether
-it lies in our interval give or take the rule's tolerance (``in``/``out``/``undecided``, joined
-by ``; ``; ``n/a`` where the paper states none). ``reproduced`` keeps both in one word for older
-readers (:func:`lasa.evidence.decision.word`), and ``settled`` says whether the intervals decide
-the effect. Every sentence of a row's ``note`` is generated from the row's own numbers and words
-(:func:`note_lead`), never written by hand; a claim that does not reproduce is a result,
-reported with its measured value.
-
-Beside the table, ``claim_values.csv`` holds the numbers as data (:mod:`lasa.evidence.values`,
-:func:`value_rows`): every quantity a rule reads with its value, interval, level and N, and the
-study's facts. The verdict table (:func:`render_verdicts`, ``figures/verdicts.md``), the README's
-summary (:func:`render_summary`) and the list of readings that flip a claim (:func:`render_flips`,
-the head of ``claims.md``) are written from the two files, never from a note's prose.
+Each figure writes its rows into ``figures/claims.csv`` (its twin ``claims.md``) and their numbers
+into ``claim_values.csv`` (:mod:`lasa.evidence.values`); a row is keyed by (id, robot), the id
+``<figure>.<name>`` for the headline and ``<figure>.<name>@<reading>`` per reading. A row carries
+two words (Open Science Collaboration, 2015): ``effect``, the claim's shape as its rule reads it,
+and ``number``, whether each number the paper states lies in our interval; every sentence of its
+note is written from its own numbers (:func:`note_lead`). The verdict table (:func:`render_verdicts`),
+the README's summary and the readings that flip a claim (:func:`render_flips`) are written from the
+two files, never from a note's prose.
 """
 
 from __future__ import annotations
@@ -51,18 +31,16 @@ from lasa.evidence.decision import (
     UNDECIDED,
     WORDS,
     PaperNumber,
+    Rule,
     effect_word,
     word,
 )
-from lasa.evidence.findings import completion_text, finding, on_robots, short_arms, study_effect
+from lasa.evidence.findings import completion_text, finding, on_robots, short_conditions, study_effect
 from lasa.evidence.rules import RULES
 from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Values, read_values, reading_of
 
 __all__ = [
-    "fragile_because",
-    "fragile_line",
     "Claim",
-    "PaperClaim",
     "PAPER_CLAIMS",
     "update_claims",
     "render_markdown",
@@ -72,16 +50,12 @@ __all__ = [
     "README_MARKERS",
     "SHOWN_COLUMNS",
     "claims_frame",
-    "SUMMARY_MARKERS",
     "numbers_of",
-    "value_rows",
     "paper_numbers_of",
-    "stated_elsewhere",
-    "effect_text",
+    "criteria",
+    "words_text",
+    "note_lead",
     "flips",
-    "by_key",
-    "render_flips",
-    "render_summary",
 ]
 
 README_MARKERS = (
@@ -93,34 +67,26 @@ SUMMARY_MARKERS = (
     "<!-- summary:end -->",
 )
 
-CLAIM_COLUMNS = (
-    "id",
-    "claim",
-    "figure",
-    "robot",
-    "assistance",
-    "paper",
-    "measured",
-    "ci_low",
-    "ci_high",
-    "reproduced",
-    "settled",
-    "paper_in_ci",
-    "direction",
-    "paper_numbers",
-    "effect",
-    "number",
-    "n_users",
-    "fragile",
-    "note",
+CLAIM_COLUMNS = tuple(
+    "id claim figure robot assistance paper measured ci_low ci_high reproduced settled paper_in_ci "
+    "direction paper_numbers effect number n_users fragile note".split()
 )
 VERDICTS = ("yes", "partly", "no", UNDECIDED, NOT_TESTABLE)  # what Claim.reproduced holds
 ROBOTS = ("planar5", "panda")  # the verdict table's robot columns, in order
+_NAN = (math.nan, math.nan)
 
 
 @dataclasses.dataclass(frozen=True)
 class Claim:
-    """One row of the claims table."""
+    """One row of the claims table.
+
+    A paper claim's rule is :data:`lasa.evidence.rules.RULES`'s under its id; a claim of your own
+    carries its :class:`~lasa.evidence.decision.Rule` in ``rule``.
+
+    Raises:
+        ConfigError: if the id is not ``<figure>.<name>``, ``reproduced`` is no verdict, a not
+            testable claim is settled, or ``rule`` is not the claim's (a paper claim's is its own).
+    """
 
     id: str  # stable key, "<figure>.<name>": survives a rewording of ``claim``
     claim: str  # the paper's claim, in a sentence
@@ -130,9 +96,9 @@ class Claim:
     reproduced: str  # "yes", "partly", "no"; "undecided" (an interval straddles a threshold); "not testable"
     note: str  # how the verdict was decided, and the likely reason if not "yes"
     robot: str  # the robot it was measured on
-    assistance: str = "point"  # the shared-autonomy reading: Eq. M2 towards one pose per goal
+    assistance: str = "point"  # the shared-autonomy member: Eq. M2 towards one pose per goal
     value: float = math.nan  # the number the verdict rests on (``measured`` names it first)
-    ci_low: float = math.nan  # bootstrap 95% interval of ``value`` (lasa.evidence.verdicts)
+    ci_low: float = math.nan  # its interval (lasa.evidence.verdicts)
     ci_high: float = math.nan
     settled: bool = False  # every interval clear of its rule's thresholds (lasa.evidence.verdicts)
     n_users: int = 0  # simulated users (or participants) per point the verdict rests on
@@ -143,6 +109,7 @@ class Claim:
     # numbers a sentence reads beside the rule's, without an interval: the study's test statistics
     # and each condition's completion (``completion.LA``), keyed as in ``claim_values.csv``
     facts: Mapping[str, float] = dataclasses.field(default_factory=dict)
+    rule: Rule | None = None  # a claim of your own's rule; None: the paper's, by id
 
     def __post_init__(self) -> None:
         if not self.id.startswith(f"{self.figure}.") or " " in self.id:
@@ -151,93 +118,87 @@ class Claim:
             raise ConfigError(f"reproduced must be one of {VERDICTS}, got {self.reproduced!r}")
         if self.reproduced == NOT_TESTABLE and self.settled:
             raise ConfigError(f"{self.id}: a claim that is not testable is never settled")
+        base = self.id.split("@", 1)[0]
+        if self.rule is not None and (self.rule.id != base or RULES.get(base, self.rule) is not self.rule):
+            raise ConfigError(
+                f"{self.id}: its rule is {self.rule.id!r}, or a paper rule for {base!r} exists already"
+            )
+
+    @property
+    def judged_by(self) -> Rule | None:
+        """The claim's rule: its own, else the paper's for its id (None if neither)."""
+        return self.rule if self.rule is not None else RULES.get(self.id.split("@", 1)[0])
+
+    @property
+    def stated(self) -> tuple[PaperNumber, ...]:
+        """The numbers the paper states for this claim on its robot (its rule's)."""
+        return _stated(self.judged_by, self.robot)
 
 
-# what a notebook shows of its claims (claims_frame): the row, its reading, its evidence, its verdict
+# what a notebook shows of its claims (claims_frame): the row, its member, its evidence, its verdict
 SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high", "reproduced", "settled")
 
 
 def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFrame:
-    """A notebook's claims, one row each, in the columns of :data:`SHOWN_COLUMNS`.
-
-    Args:
-        claims: The claims, in the order to show them.
-        assistance: Show the ``assistance`` column (the study's ids name their reading already).
-    """
+    """A notebook's claims in the columns of :data:`SHOWN_COLUMNS` (``assistance`` False: without
+    that column; the study's ids name their member already)."""
     columns = [c for c in SHOWN_COLUMNS if assistance or c != "assistance"]
     if not claims:
         return pd.DataFrame(columns=columns)
     return pd.DataFrame([c.__dict__ for c in claims])[columns]
 
 
+def _stated(r: Rule | None, robot: str) -> tuple[PaperNumber, ...]:
+    return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
+
+
+def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
+    """The numbers the paper states for a paper claim on ``robot`` (none for another robot)."""
+    return _stated(RULES.get(claim_id.split("@", 1)[0]), robot)
+
+
 def criteria(claim: Claim) -> dict[str, str]:
     """The row's two words and its replication criteria (Open Science Collaboration, 2015).
 
     Returns:
-        ``effect``: the rule's reading in words (:func:`lasa.evidence.decision.effect_word`);
-        ``number``: per number the paper states its word (:meth:`PaperNumber.word`), joined by
-        ``; ``, ``n/a`` where it states none or the claim is not testable; ``reproduced``: both in
-        one word (:func:`lasa.evidence.decision.word`); ``paper_in_ci``: per number
-        the paper states, ``yes``/``no`` (its value, give or take the rule's tolerance, inside our
-        interval), joined by ``; ``, or ``n/a`` where it states none; ``direction``: ``yes`` if our
-        effect's interval lies on the paper's side of no effect, ``no`` if not, ``n/a`` where the
-        paper gives no sign or the claim is not testable; ``paper_numbers``: each paper number
-        with its own verdict and our value and interval; ``fragile``: ``yes`` if an interval ends
-        near a value at which a word changes (:func:`fragile_because`), else ``no``.
+        ``effect`` (:func:`~lasa.evidence.decision.effect_word`); ``number``, each paper number's
+        word joined by ``; `` (``n/a`` where none or not testable); ``reproduced``, both in one word
+        (:func:`~lasa.evidence.decision.word`); ``paper_in_ci``, per paper number ``yes``/``no``;
+        ``direction``, whether our effect's interval lies on the paper's side of no effect
+        (``n/a`` without a sign or not testable); ``paper_numbers``, each with its verdict and our
+        value and interval; ``fragile``, ``yes`` if an interval ends near a value at which a word
+        changes (:meth:`~lasa.evidence.decision.Rule.fragile`).
     """
-    r = RULES.get(claim.id.split("@", 1)[0])
-    paper = paper_numbers_of(claim.id, claim.robot)
+    r, paper = claim.judged_by, claim.stated
     testable = claim.reproduced != NOT_TESTABLE
-    nan = (math.nan, math.nan)
-    found = [(p, claim.intervals.get(p.quantity, nan)) for p in paper] if testable else []
+    found = [(p, claim.intervals.get(p.quantity, _NAN)) for p in paper] if testable else []
     direction = r.direction if r is not None else None
+    numbers = [p.word(iv) for p, iv in found]
     return {
         "effect": effect_word(claim.reproduced),
-        "number": _numbers_word([p.word(iv) for p, iv in found]),
+        "number": "; ".join(numbers) if any(w != NOT_APPLICABLE for w in numbers) else NOT_APPLICABLE,
         "reproduced": word(claim.reproduced, claim.intervals, paper),
         "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
-        "direction": direction.judge(claim.intervals.get(direction.quantity, nan))
+        "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN))
         if direction is not None and testable
         else "n/a",
         "paper_numbers": "; ".join(
             p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found
         ),
-        "fragile": "yes" if fragile_because(claim) else "no",
+        "fragile": "yes" if _fragile(claim) else "no",
     }
 
 
-def fragile_because(claim: Claim) -> list[str]:
-    """Why the row's words are fragile (:meth:`lasa.evidence.decision.Rule.fragile`); none if they
-    are not, or if the claim has no rule or is not testable."""
-    r = RULES.get(claim.id.split("@", 1)[0])
-    if r is None or claim.reproduced == NOT_TESTABLE:
-        return []
-    return r.fragile(claim.intervals)
-
-
-def _numbers_word(words: list[str]) -> str:
-    """The ``number`` column: each paper number's word joined by ``; ``; ``n/a`` if none is known."""
-    return "; ".join(words) if any(w != NOT_APPLICABLE for w in words) else NOT_APPLICABLE
-
-
-def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
-    """The numbers the paper states for a claim on ``robot`` (its rule's), none if it has no rule
-    or states them for another robot (:attr:`lasa.evidence.decision.PaperNumber.robot`)."""
-    r = RULES.get(claim_id.split("@", 1)[0])
-    return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
-
-
-def stated_elsewhere(claim_id: str, robot: str) -> bool:
-    """Whether the paper states numbers for this claim, but for another robot than ``robot``."""
-    r = RULES.get(claim_id.split("@", 1)[0])
-    return r is not None and bool(r.paper) and not paper_numbers_of(claim_id, robot)
+def _fragile(claim: Claim) -> list[str]:
+    """Why the row's words are fragile; none if not, or if it has no rule or is not testable."""
+    r = claim.judged_by
+    return [] if r is None or claim.reproduced == NOT_TESTABLE else r.fragile(claim.intervals)
 
 
 def numbers_of(claim: Claim) -> dict[str, Number]:
     """A claim's numbers as ``claim_values.csv`` holds them (:mod:`lasa.evidence.values`)."""
-    nan = (math.nan, math.nan)
     out = {
-        k: Number(float(v), *claim.intervals.get(k, nan), level=claim.level, n=claim.n_users)
+        k: Number(float(v), *claim.intervals.get(k, _NAN), level=claim.level, n=claim.n_users)
         for k, v in claim.values.items()
     }
     return out | {k: Number(float(v), n=claim.n_users) for k, v in claim.facts.items()}
@@ -258,18 +219,15 @@ def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
 
 
 def _row(claim: Claim) -> dict[str, object]:
-    """A claim as a table row: the interval to 4 significant digits, empty where unknown.
-
-    Its note begins with the row's two words (:func:`note_lead`).
-    """
+    """A claim as a table row: the interval to 4 significant digits, empty where unknown; its note
+    begins with the row's two words (:func:`note_lead`) and ends with why it is fragile."""
     row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
-    del row["values"], row["value"], row["intervals"], row["level"], row["facts"]
+    del row["values"], row["value"], row["intervals"], row["level"], row["facts"], row["rule"]
     row["settled"] = "yes" if claim.settled else "no"
     row.update(criteria(claim))
-    lead = note_lead(str(row["effect"]), str(row["number"]), paper_numbers_of(claim.id, claim.robot))
-    note = lead + claim.note
-    if row["fragile"] == "yes":  # criteria found it so; the note says why
-        why = "; ".join(fragile_because(claim))
+    note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
+    if row["fragile"] == "yes":
+        why = "; ".join(_fragile(claim))
         note = f"{note.rstrip()} Fragile: {why} (within a fifth of its width)."
     row["note"] = note
     for key in ("ci_low", "ci_high"):
@@ -278,33 +236,22 @@ def _row(claim: Claim) -> dict[str, object]:
 
 
 def render_markdown(frame: pd.DataFrame) -> str:
-    """``claims.md``: the readings that flip each headline (:func:`render_flips`), then the claims
-    table as a GitHub-flavoured Markdown table."""
-    return render_flips(frame) + "\n# Every row of claims.csv\n\n" + _markdown_table(frame)
-
-
-def _markdown_table(frame: pd.DataFrame) -> str:
-    """The claims table as a GitHub-flavoured Markdown table."""
+    """``claims.md``: the readings that flip each headline (:func:`render_flips`), then every row."""
     cols = list(CLAIM_COLUMNS)
     lines = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
     for _, row in frame.iterrows():
         cells = [str(row[c]).replace("|", "\\|").replace("\n", " ") for c in cols]
         lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    return render_flips(frame) + "\n# Every row of claims.csv\n\n" + "\n".join(lines) + "\n"
 
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
     """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``.
 
-    Every row of a (figure, robot) that ``claims`` covers is dropped first, so a claim
-    that a figure no longer makes leaves the table; rows of other figures and robots are
-    kept. The ``.md`` twin is rewritten from the result. Runs under the folder lock
-    (robots run in parallel). Under a notebook run's write journal (:mod:`lasa.base.journal`), the
-    (figure, robot) pairs are recorded, so that a failed run restores its own rows of both CSVs.
-
-    Args:
-        path: The claims CSV, e.g. ``figures/claims.csv``; created if missing.
-        claims: The rows to write; (id, robot) must be unique among them.
+    A (figure, robot) that ``claims`` covers loses every old row first (a claim no longer made
+    leaves); other rows are kept. ``claim_values.csv`` and the ``.md`` twin follow. Runs under the
+    folder lock; under a run's write journal (:mod:`lasa.base.journal`) the pairs are recorded, so a
+    failed run restores its own rows of both CSVs.
 
     Returns:
         The whole table after the update, ordered by figure, robot and id.
@@ -317,7 +264,7 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
     if new.duplicated(["id", "robot"]).any():
         dup = new.loc[new.duplicated(["id", "robot"]), "id"].tolist()
         raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")
-    numbers = pd.DataFrame([v for c in claims for v in value_rows(c)], columns=list(VALUE_COLUMNS))
+    numbers = pd.DataFrame([v for c in claims for v in _value_rows(c)], columns=list(VALUE_COLUMNS))
     with locked(path.parent):
         for table_path, rows in ((path, new), (path.with_name(VALUES_NAME), numbers)):
             journal.note_rows(table_path, rows[["figure", "robot"]], sort=["figure", "robot", "id"])
@@ -329,13 +276,8 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
 
 
 def _replace(path: Path, new: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
-    """The table at ``path`` with the rows of ``new``'s (figure, robot) pairs replaced by ``new``'s.
-
-    Ordered by figure, robot and id (stable: a row's quantities keep their order).
-
-    Raises:
-        ConfigError: if the file has other columns than ``columns``.
-    """
+    """The table at ``path`` with its rows of ``new``'s (figure, robot) pairs replaced by ``new``'s,
+    ordered by figure, robot and id (stable); a ConfigError if the file has other columns."""
     if not path.exists():
         table = new
     else:
@@ -356,15 +298,14 @@ def _number_text(x: float) -> str:
     return f"{x:.6g}" if math.isfinite(x) else ""
 
 
-def value_rows(claim: Claim) -> list[dict[str, object]]:
-    """The claim's rows of ``claim_values.csv`` (:mod:`lasa.evidence.values`): each rule quantity
-    with its value and interval at the claim's level, then each fact."""
+def _value_rows(claim: Claim) -> list[dict[str, object]]:
+    """The claim's rows of ``claim_values.csv``: each rule quantity with its value and interval at the
+    claim's level, then each fact."""
     head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
     out = []
     for name, value in claim.values.items():
-        low, high = claim.intervals.get(name, (math.nan, math.nan))
-        known = math.isfinite(low) and math.isfinite(high)
-        level = _number_text(claim.level) if known else ""
+        low, high = claim.intervals.get(name, _NAN)
+        level = _number_text(claim.level) if math.isfinite(low) and math.isfinite(high) else ""
         cells = {"value": _number_text(value), "low": _number_text(low), "high": _number_text(high)}
         out.append(head | {"quantity": name} | cells | {"level": level, "n": claim.n_users})
     for name, value in claim.facts.items():
@@ -514,12 +455,8 @@ _PEOPLE = "simulated participants"  # who the study's rows rest on: never people
 
 
 def effect_text(row: pd.Series, numbers: Numbers) -> str:
-    """A row's effect word, a study row's saying that its participants are simulated.
-
-    ``not reproduced by simulated participants``: the study's verdicts are not a replication with
-    people, and their word says so; ``(censored: lower bound)`` where the effect rests on one (the
-    row's ``censored`` fact).
-    """
+    """A row's effect word, ``(censored: lower bound)`` where it rests on one, and a study row's
+    saying that its participants are simulated (``not reproduced by simulated participants``)."""
     censored = numbers.get("censored")
     bound = censored is not None and censored.value == 1.0
     said = f"{row.effect} ({CENSORED})" if bound else str(row.effect)
@@ -535,14 +472,12 @@ def _interval_text(number: Number) -> str:
 
 
 def _cell(row: pd.Series | None, numbers: Numbers) -> str:
-    """A robot's cell: the effect word, the key number with its interval, N, and whether settled.
+    """A robot's cell: the effect word, the key numbers with their intervals, N, and whether settled.
 
-    Each number the paper states for this robot with its word and our value
-    (``0.11 out: 0.0358 [0.0296, 0.042]``), or, where it states none, the rule's first quantity
-    (the number the verdict rests on); on a robot the paper states no number for, the claim's
-    numbers are not compared (``no paper number for planar5``). A study row gives its effect in
-    words from its numbers (:func:`lasa.evidence.findings.study_effect`), a not-testable one as
-    "measured, not judged" with the completion that stopped it.
+    Each paper number for this robot with its word and our value (``0.11 out: 0.0358 [0.0296,
+    0.042]``), else the rule's first quantity; ``no paper number for planar5`` where the paper
+    states them for another robot. A study row gives its effect in words
+    (:func:`lasa.evidence.findings.study_effect`), a not-testable one as "measured, not judged".
     """
     if row is None:
         return "—"
@@ -550,24 +485,23 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     if row.figure == "study":
         effect = study_effect(str(row.id), numbers)
         if row.effect == NOT_TESTABLE:
-            short = short_arms(numbers)
+            short = short_conditions(numbers)
             why = f" (completion: {completion_text(short)})" if short else f" ({_untestable_why(row)})"
             seen = f"; measured, not judged: {effect}" if effect else ""
             return f"{head}{why}, N = {row.n_users}{seen}"
         said = [effect] if effect else []
     else:
-        paper = paper_numbers_of(str(row.id), str(row.robot))
-        words = str(row.number).split("; ")
+        r = RULES.get(str(row.id).split("@", 1)[0])
+        paper = _stated(r, str(row.robot))
         said = [
             f"{p.value:g} {w}: {_interval_text(numbers[p.quantity])}"
-            for p, w in zip(paper, words, strict=False)
+            for p, w in zip(paper, str(row.number).split("; "), strict=False)
             if p.quantity in numbers
         ]
-        rule_of = RULES.get(str(row.id).split("@", 1)[0])
-        if not said and rule_of is not None and rule_of.quantities[0].name in numbers:
-            first = rule_of.quantities[0].name
+        if not said and r is not None and r.quantities[0].name in numbers:
+            first = r.quantities[0].name
             said = [f"{first} {_interval_text(numbers[first])}"]
-        if stated_elsewhere(str(row.id), str(row.robot)):
+        if r is not None and r.paper and not paper:
             said.append(f"no paper number for {row.robot}")
     bold = row.effect not in (UNDECIDED, NOT_TESTABLE)
     settled = ", settled" if str(row.settled) == "yes" else ""
@@ -576,22 +510,23 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
 
 def _heads(table: pd.DataFrame) -> list[pd.Series]:
     """The headline rows of the paper's claims (not our additions), in the verdict table's order."""
-    rows = by_key(table)
+    rows = _by_key(table)
     return [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
 
 
-def count_line(table: pd.DataFrame) -> str:
-    """``Of 21 paper claims × robot, the effect: 8 reproduced, ...; of the 5 numbers ...: 1 in, ...``.
+def _numbers_said(table: pd.DataFrame) -> tuple[int, str]:
+    """How many numbers the headline rows state, and ``1 in, 3 out, 1 undecided``."""
+    numbers = [w for r in _heads(table) for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
+    return len(numbers), ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
 
-    The numbers are counted on the robot the paper states them for (the Panda).
-    """
-    heads = _heads(table)
-    effects = [str(r.effect) for r in heads]
-    numbers = [w for r in heads for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
+
+def count_line(table: pd.DataFrame) -> str:
+    """``Of 21 paper claims × robot, the effect: 8 reproduced, ...; of the 5 numbers ...: 1 in, ...``."""
+    effects = [str(r.effect) for r in _heads(table)]
     counts = ", ".join(f"{effects.count(w)} {w}" for w in WORDS)
-    stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    n, stated = _numbers_said(table)
     return (
-        f"Of {len(effects)} paper claims × robot, the effect: {counts}. Of the {len(numbers)} numbers "
+        f"Of {len(effects)} paper claims × robot, the effect: {counts}. Of the {n} numbers "
         f"the paper states, on the robot it states them for (the Panda), the number: {stated}."
     )
 
@@ -611,8 +546,7 @@ def fragile_line(table: pd.DataFrame) -> str:
     return f"{lead}{said}; and {shaky} of the {len(readings)} readings' rows (`fragile` in claims.csv)."
 
 
-def by_key(table: pd.DataFrame) -> dict[tuple[str, str], pd.Series]:
-    """The claims table's rows by (id, robot)."""
+def _by_key(table: pd.DataFrame) -> dict[tuple[str, str], pd.Series]:
     return {(r.id, r.robot): r for _, r in table.iterrows()}
 
 
@@ -620,7 +554,7 @@ def flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> tuple[dic
     """The readings of a claim whose words differ from its headline's, and how many readings it has.
 
     Args:
-        rows: The claims table's rows by (id, robot) (:func:`by_key`).
+        rows: The claims table's rows by (id, robot).
         claim_id: The headline row's id.
 
     Returns:
@@ -639,11 +573,6 @@ def flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> tuple[dic
     return out, len(readings)
 
 
-def _anchor(claim_id: str) -> str:
-    """The GitHub anchor of a claim's heading in claims.md (``### sim1.final_error``)."""
-    return claim_id.replace(".", "").lower()
-
-
 def render_flips(table: pd.DataFrame) -> str:
     """Claims.md's first section: per paper claim, every reading whose words differ from the headline's."""
     out = [
@@ -652,7 +581,7 @@ def render_flips(table: pd.DataFrame) -> str:
         "Other readings of what the paper leaves open, whose words differ from the headline's "
         "(reading names: the README's *Reading names*).",
     ]
-    rows = by_key(table)
+    rows = _by_key(table)
     for pc in PAPER_CLAIMS:
         flipped, n = flips(rows, pc.id)
         if not n:
@@ -660,14 +589,6 @@ def render_flips(table: pd.DataFrame) -> str:
         out += ["", f"### {pc.id}", "", f"{pc.claim}: {len(flipped)} of {n} readings flip it.", ""]
         out += [f"- `{k}`: {'; '.join(v)}" for k, v in flipped.items()] or ["- none"]
     return "\n".join(out) + "\n"
-
-
-def _flips_cell(rows: Mapping[tuple[str, str], pd.Series], claim_id: str, claims_md: str) -> str:
-    """``3 of 8 ([list](figures/claims.md#sim1final_error))``: the count of readings that flip it."""
-    flipped, n = flips(rows, claim_id)
-    if not n:
-        return "none"
-    return f"{len(flipped)} of {n}" + (f" ([list]({claims_md}#{_anchor(claim_id)}))" if flipped else "")
 
 
 def render_verdicts(
@@ -680,24 +601,20 @@ def render_verdicts(
 
     Args:
         table: ``figures/claims.csv`` (as strings).
-        values: Its numbers (``figures/claim_values.csv``, :func:`lasa.evidence.values.read_values`).
-        link: Notebook stem -> the link target of its page (default
-            ``notebooks/<stem>.ipynb``, from the repository root).
+        values: Its numbers (``claim_values.csv``, :func:`lasa.evidence.values.read_values`).
+        link: Notebook stem -> the link target of its page (default ``notebooks/<stem>.ipynb``).
         claims_md: Where the list of readings that flip a claim is (from the page's folder).
 
     Returns:
-        Markdown: a count line of the headline rows' two words, the fragile rows
-        (:func:`fragile_line`); then per claim its paper number, per robot its cell (:func:`_cell`),
-        how many readings flip it (listed in claims.md), and what makes the verdict: the result
-        sentences written from the rows' numbers (:func:`lasa.evidence.findings.finding`), then
-        the mechanism, with a link to the notebook that measures it. Rows that are our
-        additions, not the paper's claims, follow in a table of their own.
+        Markdown: the count of the headline rows' words and the fragile rows; per claim its paper
+        number, per robot its cell (:func:`_cell`), how many readings flip it, and the result
+        sentences (:func:`lasa.evidence.findings.finding`) and mechanism, linked to its notebook.
     """
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
     ]
-    rows = by_key(table)
+    rows = _by_key(table)
     paper, ours = list(head), list(head)
     for pc in PAPER_CLAIMS:
         cells = [_cell(rows.get((pc.id, r)), values.get((pc.id, r), {})) for r in ROBOTS]
@@ -707,8 +624,10 @@ def render_verdicts(
         target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
         said = "; ".join(s for s in (finding(pc.id, values, ROBOTS), pc.mechanism) if s)
         mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
-        flipped = _flips_cell(rows, pc.id, claims_md)
-        line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {flipped} | {mech} |"
+        flipped, n = flips(rows, pc.id)
+        listed = f" ([list]({claims_md}#{pc.id.replace('.', '').lower()}))" if flipped else ""
+        count = f"{len(flipped)} of {n}{listed}" if n else "none"
+        line = f"| {pc.claim} | {pc.paper} | {cells[0]} | {cells[1]} | {count} | {mech} |"
         (ours if pc.ours else paper).append(line)
     out = [f"{count_line(table)} {fragile_line(table)}", "", *paper]
     if len(ours) > len(head):
@@ -717,15 +636,10 @@ def render_verdicts(
 
 
 def render_summary(table: pd.DataFrame, values: Values) -> str:
-    """The README's summary under its title, at most 10 lines, from the headline rows and their numbers.
-
-    One line per effect word that some paper claim reads: each claim by its short name with the
-    robots it reads so on, and for ``not reproduced`` and ``not testable`` the one-line reason:
-    the claim's finding on those robots, written from its numbers (:func:`lasa.evidence.findings.finding`),
-    else its mechanism (:attr:`PaperClaim.why`); why a row is not testable. Then the count of the
-    paper's numbers on the Panda.
-    """
-    rows = by_key(table)
+    """The README's summary, at most 10 lines: per effect word the paper claims that read it, with
+    the robots; for ``not reproduced`` its finding (:func:`lasa.evidence.findings.finding`) or
+    :attr:`PaperClaim.why`, for ``not testable`` why; then the count of the paper's numbers."""
+    rows = _by_key(table)
     by_word: dict[str, list[str]] = {}
     for pc in PAPER_CLAIMS:
         if pc.ours:
@@ -741,7 +655,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
             if w == "not reproduced" and why:
                 said += f": {why.replace('; ', ', ')}"
             if w == NOT_TESTABLE:
-                short = short_arms(values.get((pc.id, robots[0]), {}))
+                short = short_conditions(values.get((pc.id, robots[0]), {}))
                 done = f"completion {completion_text(short)} within the horizon" if short else ""
                 said += f": {done or _untestable_why(rows[(pc.id, robots[0])])}"
             by_word.setdefault(w, []).append(said)
@@ -752,9 +666,8 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     for w in WORDS:
         if w in by_word:
             lines.append(f"- **{w.capitalize()}** ({len(by_word[w])}): " + "; ".join(by_word[w]) + ".")
-    numbers = [w for r in _heads(table) for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
-    stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
-    lines.append(f"- **The paper's numbers** ({len(numbers)}, stated for the Panda): {stated}.")
+    n, stated = _numbers_said(table)
+    lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"
 
 
@@ -766,8 +679,8 @@ def _untestable_why(row: pd.Series) -> str:
 
 
 def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
-    """Render ``claims_csv`` (and its ``claim_values.csv``) as the verdict table into ``out``
-    (``figures/verdicts.md``), its summary beside it (``summary.md``), and claims.md afresh."""
+    """Render ``claims_csv`` (and its ``claim_values.csv``) as the verdict table into ``out``, its
+    summary beside it (``summary.md``), and claims.md afresh."""
     claims_csv = Path(claims_csv)
     table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
     values = read_values(pd.read_csv(claims_csv.with_name(VALUES_NAME), dtype=str, keep_default_na=False))
@@ -777,11 +690,8 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` between the README's verdict markers, and its summary
-    (``summary.md`` beside it) between the summary markers.
-
-    ``make figures`` runs this after the notebooks, so the README's table and summary are always
-    the last full run's, never a hand-edited copy.
+    """Put the verdict table ``table_md`` and its summary (``summary.md`` beside it) between the
+    README's markers (``make figures`` runs it after the notebooks).
 
     Returns:
         Whether the README changed.

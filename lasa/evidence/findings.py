@@ -1,12 +1,8 @@
 """The verdict table's findings: each result sentence written from the numbers of its own rows.
 
-The verdict table (:func:`lasa.evidence.claims.render_verdicts`) says per claim of the paper what
-makes our verdict. A sentence there that states a result (the time gap grows, 10 participants
-cannot tell) is written here, by :func:`finding`, from the claims' numbers
-(``figures/claim_values.csv``, :mod:`lasa.evidence.values`): the interval of each number a rule
-reads, the study's effect with its test and N, and each condition's completion. So it follows
-the numbers when a verdict moves; no sentence is parsed for a number. What stays hand-written
-(:data:`lasa.evidence.claims.PAPER_CLAIMS`) is the mechanism, which no result changes.
+:func:`finding` writes what a claim's rows show from ``claim_values.csv`` (:mod:`lasa.evidence.values`),
+never from a note's prose, so it follows the numbers when a verdict moves; the mechanism stays
+hand-written (:data:`lasa.evidence.claims.PAPER_CLAIMS`).
 """
 
 from __future__ import annotations
@@ -14,25 +10,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 
-import pandas as pd
-
 from lasa.evidence.rules import COMPLETION_BAR
 from lasa.evidence.stats import format_f
 from lasa.evidence.values import Number, Numbers, Values
 
 __all__ = [
-    "Rows",
-    "FINDINGS",
     "finding",
     "study_effect",
     "side_of",
     "on_robots",
     "below_bar",
-    "short_arms",
+    "short_conditions",
     "completion_text",
 ]
 
-Rows = Mapping[tuple[str, str], pd.Series]  # (id, robot) -> a row of claims.csv, read as strings
 _NONE: dict[str, Number] = {}
 
 
@@ -51,11 +42,8 @@ def side_of(interval: tuple[float, float], ref: float) -> str:
 def _across(
     values: Values, robots: Sequence[str], cid: str, name: str, ref: float, says: Mapping[str, str]
 ) -> str:
-    """What the robots' intervals of ``name`` say against ``ref``: ``says[side]``, where each lies.
-
-    Robots whose intervals lie on the same side share one clause; a robot without the number is
-    left out, and so is the clause when none has it.
-    """
+    """``says[side]`` per side of ``ref`` where the robots' intervals of ``name`` lie, robots on one
+    side sharing a clause (a robot without the number left out)."""
     groups: dict[str, list[str]] = {}
     for robot in robots:
         interval = _interval(values, cid, robot, name)
@@ -66,31 +54,25 @@ def _across(
 
 def _time_ratio(values: Values, robots: Sequence[str]) -> str:
     """sim1.time_ratio: who reaches sooner with the pull, near-optimal (beta = 1000) and noisy (75) users."""
-    near = {
-        "above": "at beta = 1000 LA+SA is faster",
-        "below": "at beta = 1000 LA+SA is slower",
-        "reaches": "at beta = 1000 no clear gain",
-    }
-    noisy = {
-        "above": "at beta = 75 LA+SA is faster",
-        "below": "at beta = 75 LA+SA is slower",
-        "reaches": "at beta = 75 no clear gain",
-    }
-    parts = (
-        _across(values, robots, "sim1.time_ratio", "ratio_1000", 1.0, near),
-        _across(values, robots, "sim1.time_ratio", "ratio_75", 1.0, noisy),
-    )
+    parts = []
+    for beta in ("1000", "75"):
+        says = {"above": "LA+SA is faster", "below": "LA+SA is slower", "reaches": "no clear gain"}
+        at = {side: f"at beta = {beta} {said}" for side, said in says.items()}
+        parts.append(_across(values, robots, "sim1.time_ratio", f"ratio_{beta}", 1.0, at))
     return "; ".join(p for p in parts if p)
 
 
 def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
     """sim1.gap_narrows: per gap (time, final error), whether it narrows in the paper's direction."""
-    parts = (_gap_part(values, robots, "time"), _gap_part(values, robots, "error"))
+    parts = []
+    for what in ("time", "error"):
+        groups = _gap_groups(values, robots, what)
+        parts.append("; ".join(f"{said} ({on_robots(where)})" for said, where in groups.items()))
     return "; ".join(p for p in parts if p)
 
 
-def _gap_part(values: Values, robots: Sequence[str], what: str) -> str:
-    """What each robot's ``<what>_gap_75`` and ``<what>_narrowing`` say; robots that agree together."""
+def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, list[str]]:
+    """What each robot's ``<what>_gap_75`` and ``<what>_narrowing`` say -> the robots that say it."""
     groups: dict[str, list[str]] = {}
     for robot in robots:
         gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
@@ -110,7 +92,7 @@ def _gap_part(values: Values, robots: Sequence[str], what: str) -> str:
             else f"the {what} gap's change is unclear"
         )
         groups.setdefault(said, []).append(robot)
-    return "; ".join(f"{said} ({on_robots(where)})" for said, where in groups.items())
+    return groups
 
 
 def on_robots(robots: list[str]) -> str:
@@ -136,14 +118,14 @@ def below_bar(done: Iterable[tuple[str, float]]) -> list[tuple[str, float]]:
     return [(str(c), float(v)) for c, v in done if not v >= COMPLETION_BAR]
 
 
-def short_arms(numbers: Numbers) -> list[tuple[str, float]]:
+def short_conditions(numbers: Numbers) -> list[tuple[str, float]]:
     """:func:`below_bar` of a study row's ``completion.<condition>`` facts."""
     return below_bar((k.split(".", 1)[1], n.value) for k, n in numbers.items() if k.startswith("completion."))
 
 
-def completion_text(arms: Sequence[tuple[str, float]]) -> str:
+def completion_text(conditions: Sequence[tuple[str, float]]) -> str:
     """``LA 20%, LA+SA 45%``."""
-    return ", ".join(f"{c} {100 * v:.3g}%" for c, v in arms)
+    return ", ".join(f"{c} {100 * v:.3g}%" for c, v in conditions)
 
 
 def _fact(numbers: Numbers, name: str) -> float:
@@ -154,10 +136,9 @@ def _fact(numbers: Numbers, name: str) -> float:
 def study_effect(claim_id: str, numbers: Numbers) -> str:
     """The effect a study row rests on, in words with its sign and test, from its numbers.
 
-    E.g. ``SA lowers Goal Error by -2.04 m s, F(1,9) = 36.4, p < .001`` (H1; ``by at least``
-    when the arm is censored, its measure a lower bound), ``LA+SA's scoop alignment is below
-    R+SA's by -0.062, paired t, 10 pairs, p = 0.0336`` (H2), ``LA+SA is slower than R by +36.6 s
-    [+29.8, +44.9] (restricted means)`` (H3); ``""`` for a row without the numbers.
+    ``SA lowers Goal Error by -2.04 m s, F(1,9) = 36.4, p < .001`` (H1; ``by at least`` when
+    censored), ``LA+SA's scoop alignment is below R+SA's by -0.062, paired t, 10 pairs, p = 0.0336``
+    (H2), ``LA+SA is slower than R by +36.6 s [+29.8, +44.9] (restricted means)`` (H3); else ``""``.
     """
     base, _, reading = claim_id.partition("@")
     diff, bound = _fact(numbers, "difference"), "at least " if _fact(numbers, "censored") == 1 else ""
@@ -190,12 +171,8 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
 
 
 def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
-    """What the headline row and its ``@cohort`` row tell: ``lead; 10 ... cannot tell, 40 can``.
-
-    The lead is ``says`` at the side of 0 where the larger N's interval lies, if any excludes
-    0 (else ``says["reaches"]``); then per N whether its interval tells that side, none, or the
-    other side (an untestable row: cannot test it). The study runs on the Panda only.
-    """
+    """What the headline row and its ``@cohort`` row tell (Panda): ``says`` at the side of 0 of the
+    larger N's interval that excludes 0 (else ``reaches``), then per N whether it tells it."""
     sides = []
     for numbers in (values.get((cid, "panda")), values.get((f"{cid}@cohort", "panda"))):
         effect = numbers.get("effect") if numbers is not None else None
@@ -227,61 +204,32 @@ def _testable(numbers: Numbers) -> bool:
 def _censored(values: Values, cid: str) -> list[tuple[str, float]]:
     """(condition, share finished) of each condition below the bar, if the headline row is untestable."""
     numbers = values.get((cid, "panda"), _NONE)
-    return short_arms(numbers) if not _testable(numbers) else []
+    return short_conditions(numbers) if not _testable(numbers) else []
 
 
 def _finish(short: Sequence[tuple[str, float]]) -> str:
     return " and ".join(f"{100 * v:.3g}% of their {c} episodes" for c, v in short)
 
 
-def _h1(values: Values, robots: Sequence[str]) -> str:
-    """study.h1: the episodes cut at the horizon (censoring Goal Error), or what each N tells."""
-    short = _censored(values, "study.h1")
-    if short:
-        return f"simulated participants finish {_finish(short)}: the rest are cut, Goal Error censored"
-    return _study(
-        values,
-        "study.h1",
-        {
-            "below": "SA lowers Goal Error",
-            "above": "SA raises Goal Error",
-            "reaches": "SA's effect on Goal Error is unclear",
-        },
-    )
+def _h3_short(short: Sequence[tuple[str, float]]) -> str:
+    done = ", ".join(f"{c} finishes {100 * v:.3g}% of its episodes" for c, v in short)
+    held = ": the assistance holds simulated participants at a bowl"
+    return done + (held if any(c == "LA+SA" for c, _ in short) else "")
 
 
-def _h2(values: Values, robots: Sequence[str]) -> str:
-    """study.h2: the compared conditions' completion when it gates H2, or which N tells what."""
-    short = _censored(values, "study.h2")
-    if short:
-        return f"simulated participants finish {_finish(short)}: alignment only on the phases reached"
-    return _study(
-        values,
-        "study.h2",
-        {
-            "above": "LA+SA tilts the fork further into the scoop than R+SA",
-            "below": "R+SA tilts the fork further into the scoop than LA+SA",
-            "reaches": "LA+SA's scoop alignment is not told from R+SA's",
-        },
-    )
+def _hypothesis(
+    cid: str, short_text: Callable[[Sequence[tuple[str, float]]], str], *says: str
+) -> Callable[[Values, Sequence[str]], str]:
+    """A study claim's finding: ``short_text`` of the conditions short of the bar if any, else what
+    each N tells (:func:`_study`), ``says`` for a side of 0 below, above, or reaching it."""
 
+    sides = dict(zip(("below", "above", "reaches"), says, strict=True))
 
-def _h3(values: Values, robots: Sequence[str]) -> str:
-    """study.h3: which condition finishes too few episodes, or what each N tells."""
-    short = _censored(values, "study.h3")
-    if short:
-        done = ", ".join(f"{c} finishes {100 * v:.3g}% of its episodes" for c, v in short)
-        held = ": the assistance holds simulated participants at a bowl"
-        return done + (held if any(c == "LA+SA" for c, _ in short) else "")
-    return _study(
-        values,
-        "study.h3",
-        {
-            "below": "LA+SA is faster than the fastest other condition",
-            "above": "another condition is faster than LA+SA",
-            "reaches": "LA+SA's gap to the fastest other condition is unclear",
-        },
-    )
+    def find(values: Values, robots: Sequence[str]) -> str:
+        short = _censored(values, cid)
+        return short_text(short) if short else _study(values, cid, sides)
+
+    return find
 
 
 # claim id -> its finding: (values, robots) -> the result sentence ("" when the rows state no number for it)
@@ -290,19 +238,34 @@ FINDINGS: dict[str, Callable[[Values, Sequence[str]], str]] = {
     "sim1.gap_narrows": _gap_narrows,
     "sim4.straight_line_linear": _grows("sim4.straight_line_linear"),
     "sim4.grasp_linear": _grows("sim4.grasp_linear"),
-    "study.h1": _h1,
-    "study.h2": _h2,
-    "study.h3": _h3,
+    "study.h1": _hypothesis(
+        "study.h1",
+        lambda short: (
+            f"simulated participants finish {_finish(short)}: the rest are cut, Goal Error censored"
+        ),
+        "SA lowers Goal Error",
+        "SA raises Goal Error",
+        "SA's effect on Goal Error is unclear",
+    ),
+    "study.h2": _hypothesis(
+        "study.h2",
+        lambda short: f"simulated participants finish {_finish(short)}: alignment only on the phases reached",
+        "R+SA tilts the fork further into the scoop than LA+SA",
+        "LA+SA tilts the fork further into the scoop than R+SA",
+        "LA+SA's scoop alignment is not told from R+SA's",
+    ),
+    "study.h3": _hypothesis(
+        "study.h3",
+        _h3_short,
+        "LA+SA is faster than the fastest other condition",
+        "another condition is faster than LA+SA",
+        "LA+SA's gap to the fastest other condition is unclear",
+    ),
 }
 
 
 def finding(claim_id: str, values: Values, robots: Sequence[str]) -> str:
-    """The result sentence of a claim (:data:`FINDINGS`), from its rows' numbers; empty if it has none.
-
-    Args:
-        claim_id: The headline row's id, e.g. ``sim1.time_ratio``.
-        values: The claims' numbers by (id, robot) (:func:`lasa.evidence.values.read_values`).
-        robots: The robots whose rows to read, in the order to name them.
-    """
+    """The result sentence of headline claim ``claim_id`` (:data:`FINDINGS`) from the rows of
+    ``robots`` (named in that order) in ``values``; empty if it has none."""
     make = FINDINGS.get(claim_id)
     return make(values, robots) if make is not None else ""

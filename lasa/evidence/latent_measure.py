@@ -1,17 +1,9 @@
 r"""Measuring the latent-action property (:mod:`lasa.evidence.latent_property`) of any decoder.
 
-Each input of a ring of full stick deflections (:func:`ring`) is held from a pose and a belief, and
-where the tool tip goes says whether it stays at a goal, reaches one, or leaves one (Secs. III,
-IV-B). Three contexts:
-
-- **confident at goal g** (LA): does the input *stay* near g's preference set (its tip's distance
-  grows more slowly than ``drift_speed``), and what range of preference do the staying inputs reach;
-- **uncertain** at home (LA, belief updated online): which goal does each input *reach*;
-- **leaving** from each phase end at g (:func:`phase_ends`), under ``LA`` and ``LA+SA``: which
-  other goals does each input reach within ``leave_hold``, and how soon.
-
-:func:`measure` returns one row per (context, goal, input), in the columns of
-:data:`lasa.evidence.latent_property.COLUMNS`. Each context in full: ``docs/method-notes.md``.
+Each input of a ring of full stick deflections (:func:`ring`) is held from a pose and a belief
+(Secs. III, IV-B): confident at goal g (LA), does it *stay* near g's preference set; uncertain at
+home (LA, belief updated online), which goal does it *reach*; from each phase end at g, under LA and
+LA+SA, which other goal does it *leave* for, and how soon. Each context: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -27,16 +19,13 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.latent_property import COLUMNS, CONDITIONS
 from lasa.method.belief import confident_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Runner, held_input
+from lasa.method.runner import Runner, held_input
 from lasa.method.step import Assist
 from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
 
 __all__ = [
     "PropertyConfig",
-    "PreferenceSet",
-    "preference_set",
-    "ring",
     "held_input_paths",
     "phase_ends",
     "leave_paths",
@@ -48,15 +37,9 @@ __all__ = [
 class PropertyConfig:
     """How the property is measured; every value is set from what it means, not from a result.
 
-    The hold at a goal (4 s) is the time a decoder moving at the demonstrators' cruise speed
-    (0.8 sigma_h = 0.3 rad/s) needs to sweep half of the longest preference curve of our
-    tasks in joint space (1.1 rad, from theta = 1/2 to an end of the Panda's cup curve; the
-    bowls' tilt curves are 0.85-1.06 rad from the middle to an end), so a decoder that conveys
-    the preference can reach either end of it from the middle. A drift of 2 cm/s is a
-    slow creep, 8 cm over the hold; with ``d(t) <= v t`` at every step it is a bound on the tip's mean speed
-    away from the goal's preferences over every stretch of the hold from its start. From
-    home, 10 s at sigma_h covers the 2-3 rad to the farthest goal; leaving a confident goal
-    gets the same 10 s, and the same 5 cm to count as arriving.
+    The 4 s hold lets a decoder at the demonstrators' cruise speed (0.3 rad/s) sweep half of the
+    longest preference curve (1.1 rad); 2 cm/s is a slow creep, 8 cm over the hold; from home, 10 s
+    at sigma_h covers the 2-3 rad to the farthest goal, and leaving a goal gets the same 10 s and 5 cm.
     """
 
     n_inputs: AtLeastTwo = 64  # stick inputs on the ring [-]
@@ -74,19 +57,12 @@ class PropertyConfig:
 
 @dataclasses.dataclass(frozen=True)
 class PreferenceSet:
-    """The preferences at one goal, sampled: coordinates and the tool tip's pose at each.
+    """The preferences at one goal, sampled: coordinates and the tool tip's pose at each."""
 
-    Attributes:
-        theta: Tilt (cups: top 0 to side 1; bowls: straight down 0 to a scoop's 60 deg 1), (P,).
-        stroke: Depth u along the stroke (bowls), 0 where the task has no strokes, (P,).
-        positions: Tip positions, (P, 3) [m].
-        axes: Tip directions (unit), (P, 3).
-    """
-
-    theta: np.ndarray
-    stroke: np.ndarray
-    positions: np.ndarray
-    axes: np.ndarray
+    theta: np.ndarray  # tilt (cups: top 0 to side 1; bowls: straight down 0 to a scoop's 60 deg 1), (P,)
+    stroke: np.ndarray  # depth u along the stroke (bowls), 0 where the task has no strokes, (P,)
+    positions: np.ndarray  # tip positions, (P, 3) [m]
+    axes: np.ndarray  # tip directions (unit), (P, 3)
 
 
 def preference_set(task: GoalTask, goal: int, n_grid: int = 41) -> PreferenceSet:
@@ -125,43 +101,25 @@ def held_input_paths(
     steps: int,
     update_belief: bool = False,
 ) -> np.ndarray:
-    """States reached by holding each joystick input for ``steps`` steps (LA, alpha = 0).
-
-    All inputs advance together in one batch: each step makes one decoder call.
-
-    Args:
-        decoder: The decoder.
-        task: The task (for the joint limits).
-        control: Control-loop units.
-        start: Start state, shape (n,).
-        belief: The initial belief, shape (G,).
-        z_values: Joystick inputs, shape (K,) or (K, d).
-        steps: Number of steps each input is held.
-        update_belief: Update the belief online with each decoded action (Algorithm 1);
-            otherwise hold it fixed (alpha = 0 either way: latent actions alone).
-
-    Returns:
-        States, shape (K, steps + 1, n).
-    """
+    """States (K, steps + 1, n) reached by holding each input of ``z_values`` (K,) or (K, d) for
+    ``steps`` steps from ``start`` (n,) and ``belief`` (G,), with latent actions alone (alpha = 0),
+    one decoder call per step; ``update_belief``: update it online (Algorithm 1), else hold it."""
     belief = np.asarray(belief, dtype=float)
     if belief.shape != (task.n_goals,) or not np.isclose(belief.sum(), 1.0) or belief.min() < 0:
         raise ConfigError(f"belief must be a distribution over {task.n_goals} goals, got {belief}")
     z = np.asarray(z_values, dtype=float).reshape(len(z_values), -1)
     starts = np.broadcast_to(start, (len(z), task.robot.n_joints))
     beliefs = np.broadcast_to(belief, (len(z), task.n_goals))
-    return _hold(decoder, task, control, starts, beliefs, z, np.zeros(len(z)), steps, "decode", update_belief)
+    return leave_paths(
+        decoder, task, control, starts, beliefs, z, np.zeros(len(z)), steps, "decode", update_belief
+    )
 
 
 def phase_ends(task: GoalTask, goal: int) -> list[tuple[str, np.ndarray]]:
-    """The poses where a task's phases at ``goal`` end: where a user leaves that goal from.
+    """(label, joint positions (n,)) where each of a task's phases at ``goal`` ends, in order.
 
-    For the eating task, the end of every stroke its tasks carry out at the goal (the
-    waypoints at depth 1 of :data:`lasa.world.eating.TASKS`: the middle bowl's cut and stab,
-    the icing's scoop, the rice's dip, the plate's place), labelled by the preference; for a
-    task without strokes (the cups), the mid-preference grasp s*(g, 1/2), labelled ``grasp``.
-
-    Returns:
-        (label, joint positions (n,)) per phase end, in the tasks' order.
+    For the eating task, each stroke's end (its waypoints at depth 1 of
+    :data:`lasa.world.eating.TASKS`), labelled by the preference; for the cups, s*(g, 1/2), ``grasp``.
     """
     if not isinstance(task, EatingTask):
         return [("grasp", task.target(goal, 0.5))]
@@ -183,47 +141,18 @@ def leave_paths(
     z_values: np.ndarray,
     alphas: np.ndarray,
     steps: int,
-) -> np.ndarray:
-    """States reached by holding input ``z_values[i]`` from ``starts[i]``, the belief updated online.
-
-    Each row runs the one step of Algorithm 1 (:class:`lasa.method.episodes.Runner`, the stick
-    at rest commanding nothing) with its own blend weight ``alphas[i]`` and the control's
-    assistance member; all rows advance together, one decoder call per step.
-
-    Args:
-        decoder: The decoder.
-        task: The task.
-        control: Control-loop units (dt, the assistance member, the belief model).
-        starts: Start states, (R, n).
-        beliefs: Initial beliefs, (R, G).
-        z_values: Held inputs, (R, d).
-        alphas: Blend weights, (R,) (0: latent actions alone).
-        steps: Steps each input is held.
-
-    Returns:
-        States, (R, steps + 1, n).
-    """
-    return _hold(decoder, task, control, starts, beliefs, np.asarray(z_values, dtype=float), alphas, steps)
-
-
-def _hold(
-    decoder: ActionDecoder,
-    task: GoalTask,
-    control: ControlConfig,
-    starts: np.ndarray,
-    beliefs: np.ndarray,
-    z: np.ndarray,
-    alphas: np.ndarray,
-    steps: int,
     rest: str = "zero",
     update_belief: bool = True,
 ) -> np.ndarray:
-    """Row i holds ``z[i]`` from ``starts[i]`` and ``beliefs[i]`` with blend weight ``alphas[i]``,
-    through the episode runner; the states, (R, steps + 1, n)."""
+    """States (R, steps + 1, n) reached by holding input ``z_values[i]`` from ``starts[i]`` and
+    ``beliefs[i]``, the belief updated online: Algorithm 1's step (:class:`lasa.method.runner.Runner`)
+    with blend weight ``alphas[i]`` and the control's member, one decoder call per step (``rest``:
+    what the stick at rest commands, :func:`~lasa.method.runner.held_input`)."""
     if steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
     log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))
     runner = Runner(Assist(task, control, np.asarray(alphas, dtype=float)), starts, log_b, update_belief)
+    z = np.asarray(z_values, dtype=float)
     return runner.run(held_input(decoder, z, rest), steps).states.swapaxes(0, 1)
 
 
@@ -248,12 +177,10 @@ def measure(
 ) -> pd.DataFrame:
     """The property of ``decoder`` on ``task``, one row per (context, goal, input) (``COLUMNS``).
 
-    ``confident`` rows: ``drift`` is the largest d(t)/t over the hold [m/s], ``stays``
-    whether it is at most ``drift_speed``, ``theta``/``stroke`` the preference reached,
-    ``reached`` the goal whose set the tip ends nearest (this goal's name when it stays).
-    ``uncertain`` rows (goal ``home``): ``reached`` the goal reached (``-`` for none) and
-    ``distance`` the tip's distance to that goal's set at the end [m]. ``leave`` rows: see
-    :func:`_leave_rows`.
+    ``confident``: ``drift``, the largest d(t)/t over the hold [m/s]; ``stays``, whether at most
+    ``drift_speed``; ``theta``/``stroke``, the preference reached; ``reached``, the goal whose set
+    the tip ends nearest. ``uncertain`` (goal ``home``): ``reached`` (``-`` for none) and
+    ``distance``, the tip's distance to its set at the end [m]. ``leave``: :func:`_leave_rows`.
     """
     run = _Run(
         task,
@@ -272,22 +199,15 @@ def measure(
 
 @dataclasses.dataclass(frozen=True)
 class _Run:
-    """One decoder's measurement: what it measures, the ring's inputs, the goals' preference sets.
-
-    Attributes:
-        task, decoder, control, config: As :func:`measure` takes them.
-        z: The ring's inputs, (K, d).
-        preference_sets: Each goal's :class:`PreferenceSet`.
-        base: The rows' source, robot, task and decoder columns.
-    """
+    """One decoder's measurement: :func:`measure`'s arguments, the ring's inputs, the preference sets."""
 
     task: GoalTask
     decoder: ActionDecoder
     control: ControlConfig
     config: PropertyConfig
-    z: np.ndarray
-    preference_sets: list[PreferenceSet]
-    base: dict[str, str]
+    z: np.ndarray  # the ring's inputs, (K, d)
+    preference_sets: list[PreferenceSet]  # each goal's
+    base: dict[str, str]  # the rows' source, robot, task and decoder columns
 
 
 def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
@@ -359,13 +279,9 @@ def _confident(task: GoalTask, goal: int, control: ControlConfig) -> np.ndarray:
 
 
 def _leave_rows(run: _Run) -> pd.DataFrame:
-    """The leave half's rows: one per (goal, phase end, condition, input, other goal).
-
-    Every goal's phase ends, both conditions and all inputs run in one batch. ``reached`` is
-    the other goal when the tip came within ``reach_distance`` of its set during the hold
-    (``-`` if not), ``distance`` the closest it came [m], ``exit_time`` the first step within
-    reach [s].
-    """
+    """The leave rows, one per (goal, phase end, condition, input, other goal), all in one batch:
+    ``reached``, the other goal if the tip came within ``reach_distance`` of its set (``-`` if not),
+    ``distance``, the closest it came [m], ``exit_time``, the first time within reach [s]."""
     task, control, z = run.task, run.control, run.z
     names = list(task.goal_names)
     alphas = {"LA": 0.0, "LA+SA": control.alpha}

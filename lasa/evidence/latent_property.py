@@ -1,24 +1,12 @@
 r"""The property latent actions rest on (Sec. III): the rule that judges it, its tables and figure.
 
-Sec. III: while the robot is unsure of the goal, the input z chooses *which goal*; once it is
-confident, z conveys *how* to act there. :func:`lasa.evidence.latent_measure.measure` measures
-this for any decoder (rows in :data:`COLUMNS`): does an input *stay* at a goal, *reach* a goal
-from home, *leave* a phase's end for each other goal.
-
-**The rule** (:func:`has_property`, :func:`holds`, :func:`choose`). The property holds at goal g
-when
-
-- **stay**: at least :data:`STAY_SHARE` of the inputs stay at g with a confident belief,
-  and the staying inputs reach a range of tilt (theta) of at least :data:`TILT_RANGE`;
-- **leave**: from every phase end at g, for every other goal, at least
-  :data:`LEAVE_COUNT` of the 64 inputs reach it within ``leave_hold`` under ``LA+SA``;
-- and every goal of the task is reached from home by some input.
-
-A decoder meets the rule when the property holds at every goal (:func:`holds`). :func:`choose`
-ranks several decoders of one task by, in order: meeting the rule; every goal reached from
-home; the number of goals with the property; the number with the stay half; the smallest leave
-count; the smallest share that stays at any goal; the smallest tilt range at any goal.
-:func:`stay_holds` is the stay-only rule of 0.9.0. When each half was written:
+While the robot is unsure of the goal, the input z chooses *which goal*; once it is confident, z
+conveys *how* to act there (measured by :func:`lasa.evidence.latent_measure.measure`). The property
+holds at goal g when (**stay**) at least :data:`STAY_SHARE` of the inputs stay at g with a confident
+belief, reaching a tilt range of at least :data:`TILT_RANGE`; (**leave**) from every phase end at g,
+for every other goal, at least :data:`LEAVE_COUNT` of 64 inputs reach it within ``leave_hold`` under
+LA+SA; and every goal is reached from home by some input. A decoder meets the rule when it holds at
+every goal (:func:`holds`); :func:`ranking` orders decoders. When each half was written:
 ``docs/method-notes.md``.
 """
 
@@ -40,7 +28,6 @@ __all__ = [
     "TILT_RANGE",
     "LEAVE_COUNT",
     "CONDITIONS",
-    "SWEEP_TASKS",
     "summary",
     "leave_table",
     "has_property",
@@ -53,25 +40,9 @@ __all__ = [
 
 NAME = "latent_property"
 KEY = "source"  # the CSV's rows are replaced per source (one notebook run's decoders)
-COLUMNS = (
-    "source",
-    "robot",
-    "task",
-    "decoder",
-    "context",
-    "goal",
-    "z1",
-    "z2",
-    "drift",
-    "stays",
-    "theta",
-    "stroke",
-    "reached",
-    "distance",
-    "start",
-    "condition",
-    "target",
-    "exit_time",
+COLUMNS = tuple(
+    "source robot task decoder context goal z1 z2 drift stays theta stroke reached distance start "
+    "condition target exit_time".split()
 )
 STAY_SHARE = 0.5  # share of the ring's inputs that must stay at a goal [-]
 TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 1] [-]
@@ -86,14 +57,11 @@ SWEEP_TASKS = ("eating_caps",)
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
     """One row per (source, robot, task, decoder, goal) of :func:`measure`'s rows.
 
-    Columns: ``stay_share``; the tilt and stroke the staying inputs reach (``theta_min``,
-    ``theta_max``, ``theta_range``, ``stroke_range``; the range is 0 when none stays);
-    ``from_home``, the share of the ring's inputs that reach this goal from home under the
-    uncertain belief; ``all_reached``, whether every goal of the decoder's task is reached
-    from home by some input; ``n_inputs``; ``leave_min`` and ``leave_la_min``, the fewest
-    inputs that reach another goal from one of this goal's phase ends, under ``LA+SA`` and
-    ``LA`` (the least over phase ends and other goals; NaN without leave rows);
-    ``stay_holds``, ``leave_holds`` and ``has_property`` (:func:`has_property`).
+    Columns: ``stay_share``; the staying inputs' ``theta_min``, ``theta_max``, ``theta_range`` and
+    ``stroke_range`` (0 when none stays); ``from_home``, the share reaching this goal from home;
+    ``all_reached``, every goal reached from home; ``n_inputs``; ``leave_min`` and ``leave_la_min``,
+    the fewest inputs that reach another goal from a phase end here, under LA+SA and LA (NaN without
+    leave rows); ``stay_holds``, ``leave_holds`` and ``has_property``.
     """
     keys = ["source", "robot", "task", "decoder"]
     rows = []
@@ -147,12 +115,8 @@ def _leave_counts(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def leave_table(frame: pd.DataFrame) -> pd.DataFrame:
-    """The leave half per decoder: one row per (decoder, goal, phase end, condition, other goal).
-
-    Columns: the keys, ``inputs`` (of the ring's) that come within reach of the other goal's
-    preference set within the hold, and ``exit_time``, their median first arrival [s] (NaN
-    when none arrives).
-    """
+    """The leave half, one row per (decoder, goal, phase end, condition, other goal): ``inputs`` that
+    reach the other goal's set within the hold, ``exit_time`` their median first arrival [s]."""
     keys = ["source", "robot", "task", "decoder"]
     parts = [
         _leave_counts(part).assign(**dict(zip(keys, key, strict=True)))
@@ -178,7 +142,9 @@ def holds(table: pd.DataFrame) -> pd.Series:
 
 
 def ranking(table: pd.DataFrame) -> pd.DataFrame:
-    """The decoders of one task's :func:`summary`, best first by the rule's order (module docstring)."""
+    """The decoders of one task's :func:`summary`, best first: meeting the rule, every goal reached
+    from home, goals with the property, goals with the stay half, the least leave count, the least
+    share that stays, the least tilt range."""
     if table.empty:
         raise ConfigError("no decoders to choose from")
     if table.task.nunique() != 1:
@@ -197,25 +163,15 @@ def ranking(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def choose(table: pd.DataFrame) -> str:
-    """The decoder the rule ranks first among ``table``'s (one task's :func:`summary`), by name.
-
-    It meets the rule only if :func:`holds` says so; otherwise it is the best reading, whose
-    numbers a study that cannot test the paper shows. A tie keeps the decoder listed first.
-    """
+    """The decoder :func:`ranking` puts first (a tie: the one listed first); it meets the rule only
+    if :func:`holds` says so."""
     return str(ranking(table).index[0])
 
 
 def plot(frame: pd.DataFrame) -> Figure:
-    """Per decoder (rows) and goal (columns): the property's two halves, and reaching from home.
-
-    Panels, left to right: the share of inputs that stay at each goal with a confident
-    belief; the tilt range the staying inputs reach; the fewest inputs (of the ring's) that
-    leave the confident goal for another goal under LA+SA (the least over phase ends and
-    other goals); the share of inputs that reach the goal from home with an uncertain belief.
-    A cell is framed in red where its half holds (stay: first two panels; leave: third) and
-    a decoder's row is starred where :func:`choose` picks it; "✓" marks a decoder that
-    meets the rule at every goal.
-    """
+    """Per decoder (rows) and goal (columns) four heatmaps: the share that stays, the staying tilt
+    range, the fewest inputs that leave (LA+SA), the share reaching the goal from home. Red frames
+    where a half holds, ★ the rule's choice among a task's decoders, ✓ a decoder meeting the rule."""
     table = summary(frame)
     table["row"] = table.task + " · " + table.robot + " · " + table.decoder
     meets = holds(table) if not table.empty else pd.Series(dtype=bool)
@@ -253,32 +209,13 @@ def _plot_task(row_axes: np.ndarray, part: pd.DataFrame, name: str) -> None:
     rows = list(dict.fromkeys(part.row))
     goals = list(dict.fromkeys(part.goal))
     n = int(part.n_inputs.max())
+    stay, leave = "share of inputs that stay\n(confident belief)", f"fewest of {n} inputs that leave\n"
+    tilt, home = "tilt range the staying inputs\nreach (confident belief)", "share of inputs that reach\n"
     panels = (
-        ("stay_share", "share of inputs that stay\n(confident belief)", "viridis", 1.0, ".2f", "stay_holds"),
-        (
-            "theta_range",
-            "tilt range the staying inputs\nreach (confident belief)",
-            "magma",
-            1.0,
-            ".2f",
-            "stay_holds",
-        ),
-        (
-            "leave_min",
-            f"fewest of {n} inputs that leave\nfor another goal (LA+SA, 10 s)",
-            "crest",
-            n,
-            ".0f",
-            "leave_holds",
-        ),
-        (
-            "from_home",
-            "share of inputs that reach\nthe goal from home (uncertain)",
-            "cividis",
-            1.0,
-            ".2f",
-            None,
-        ),
+        ("stay_share", stay, "viridis", 1.0, ".2f", "stay_holds"),
+        ("theta_range", tilt, "magma", 1.0, ".2f", "stay_holds"),
+        ("leave_min", leave + "for another goal (LA+SA, 10 s)", "crest", n, ".0f", "leave_holds"),
+        ("from_home", home + "the goal from home (uncertain)", "cividis", 1.0, ".2f", None),
     )
     for ax, (column, title, cmap, vmax, fmt, frame_by) in zip(row_axes, panels, strict=True):
         grid = part.pivot(index="row", columns="goal", values=column).reindex(index=rows, columns=goals)

@@ -1,9 +1,5 @@
-"""Episode metrics: final state error, time to reach, and confidence.
-
-Errors are normalised as in the paper: the joint-space distance to the user's desired
-pose s*, divided by the distance between the goals. Time counts control steps until
-the normalised error first drops to a stated tolerance (the horizon if it never does).
-"""
+"""Episode metrics: the error normalised as in the paper (the joint-space distance to s* over the
+distance between the goals), the time to reach a tolerance, and the confidence b(g*)."""
 
 from __future__ import annotations
 
@@ -21,16 +17,8 @@ def normalized_error(states: np.ndarray, target: np.ndarray, goal_distance: floa
 
 
 def time_to_reach(errors: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-    """First step at which each episode's error is within ``tolerance``.
-
-    Args:
-        errors: Normalised errors over time, shape (T+1, U) (row 0 is the start).
-        tolerance: Completion threshold on the normalised error.
-
-    Returns:
-        (time, completed): steps to completion, or T where never completed, shape (U,);
-        and whether each episode completed, shape (U,).
-    """
+    """Per episode of ``errors`` (T+1, U), the first step within ``tolerance`` (T if never), and
+    whether it completed, each (U,)."""
     check_range("tolerance", tolerance, 0.0, low_open=True)
     reached = errors <= tolerance
     completed = reached.any(axis=0)

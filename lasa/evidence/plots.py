@@ -1,9 +1,7 @@
 """Panels that several figures share: data and ``ax=None`` in, axes out.
 
-Each function draws one panel from data it is given (a frame, a dataset, paths), so a
-notebook composes panels freely and the data behind each figure is saved beside it.
-A planar arm is drawn in its x-z plane; the Panda from above (:func:`project`). A
-figure's own panels live in its module of :mod:`lasa.experiments`.
+A planar arm is drawn in its x-z plane, the Panda from above (:func:`project`); a figure's own
+panels live in its module of :mod:`lasa.experiments`.
 """
 
 from __future__ import annotations
@@ -23,7 +21,6 @@ from matplotlib.colors import Colormap, LinearSegmentedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle
-from matplotlib.text import Text
 
 from lasa.method.dataset import Demonstrations
 from lasa.world.goals import GoalTask
@@ -32,23 +29,17 @@ from lasa.world.task import CupTask
 
 __all__ = [
     "METHOD_COLORS",
-    "CUP_COLORS",
     "GOAL_COLORS",
     "goal_colors",
     "belief_cmap",
-    "TRAIN_COLOR",
-    "VAL_COLOR",
     "draw_scene",
     "frame_around",
-    "is_planar",
     "method_lineplot",
     "band_handle",
     "legend_below",
     "paper_handle",
     "probability_axis",
-    "users_per_point",
     "users_text",
-    "paper_note",
     "paper_point",
     "paper_slope",
     "wrap_to",
@@ -75,11 +66,8 @@ BELIEF_MID = "#dddddd"  # a belief map's middle, b(g) = 0.5: neither goal's colo
 
 
 def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
-    """The colour map of the belief in goal ``goal_index``: the goals' own colours at its ends.
-
-    At 1 the goal's colour (:func:`goal_colors`); at 0 the colour of the goal the belief is then
-    on when there are two (the other cup), a neutral grey when there are more; light grey
-    halfway. A path drawn in it is in the colour of the cup it is believed to head for.
+    """The colour map of the belief in goal ``goal_index``: at 1 the goal's colour, at 0 the other
+    cup's (a neutral grey with more than two goals), light grey halfway.
 
     Raises:
         ValueError: if ``goal_index`` is not one of the ``n_goals`` goals.
@@ -103,11 +91,8 @@ def is_planar(task: GoalTask) -> bool:
 
 
 def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
-    """World points (..., 3) onto the plane a figure draws the task in, (..., 2).
-
-    A planar arm is drawn in its own x-z plane. Any other robot is drawn from above,
-    with the robot's left on the left: (-y, x).
-    """
+    """World points (..., 3) onto the task's drawing plane, (..., 2): a planar arm's x-z plane, any
+    other robot from above with its left on the left, (-y, x)."""
     points = np.asarray(points)
     if is_planar(task):
         return points[..., [0, 2]]
@@ -115,10 +100,7 @@ def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
 
 
 def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
-    """The goals (cups) and the robot's base in the task's drawing plane (:func:`project`).
-
-    Each goal in its colour (:func:`goal_colors`), for any number of goals.
-    """
+    """The goals (cups), each in its colour, and the robot's base in the task's drawing plane."""
     ax = _ax(ax)
     cups = task.robot.goal_positions()
     colors = goal_colors(len(cups))
@@ -162,17 +144,8 @@ def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08
 def plot_demonstrations(
     task: CupTask, demos: Demonstrations, ax: Axes | None = None, goal_index: int = 1
 ) -> Axes:
-    """Grasp-site paths of the demonstrations, coloured by the belief in one cup.
-
-    The colours are the cups' own (:func:`belief_cmap`): a path is in a cup's colour where the
-    belief is on that cup, as the cups are drawn (:func:`draw_scene`).
-
-    Args:
-        task: The cup task.
-        demos: The dataset; only the clean tuples are drawn.
-        ax: Axes to draw on.
-        goal_index: Whose belief colours the paths (default: the right cup).
-    """
+    """Grasp-site paths of the clean demonstrations, coloured by the belief in cup ``goal_index``
+    (:func:`belief_cmap`: in a cup's colour where the belief is on it)."""
     ax = draw_scene(task, ax)
     clean = demos.clean()
     norm = Normalize(0.0, 1.0)
@@ -194,15 +167,8 @@ TRAIN_COLOR, VAL_COLOR = "#1f77b4", "#d95f02"  # the training curves: loss (left
 
 
 def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> tuple[Axes, Axes]:
-    """Training loss and held-out reconstruction error against optimiser step, each on its own axis.
-
-    The two are in different units, so each has a log axis of its own, labelled and coloured as
-    its curve: the loss (left, dimensionless: the action error in units of sigma_h^2, plus the
-    sector term, :mod:`lasa.method.train`) and the held-out error ||e_a||^2 (right, (rad/s)^2).
-
-    Returns:
-        The loss's axes (``ax``) and the error's (its twin).
-    """
+    """Training loss (left, in sigma_h^2 plus the sector term) and held-out error ||e_a||^2 (right,
+    (rad/s)^2) against optimiser step, each on a log axis of its own; returns both axes."""
     ax = _ax(ax)
     twin = ax.twinx()
     ax.plot(history["step"], history["train_loss"], color=TRAIN_COLOR, label="training loss")
@@ -230,16 +196,8 @@ def robots_present(table: pd.DataFrame) -> list[str]:
 def robot_rows(
     table: pd.DataFrame, n_cols: int, figsize_per_row: tuple[float, float]
 ) -> tuple[Figure, list[tuple[str, pd.DataFrame, np.ndarray]]]:
-    """A figure with one row of ``n_cols`` panels per robot present in ``table``.
-
-    Args:
-        table: Rows of every robot (a ``robot`` column).
-        n_cols: Panels per robot.
-        figsize_per_row: (width, height) of one row [inches].
-
-    Returns:
-        The figure, and for each robot its name, its rows and its row of axes.
-    """
+    """A figure with one row of ``n_cols`` panels per robot in ``table`` (``figsize_per_row`` in
+    inches), and for each robot its name, its rows and its row of axes."""
     present = robots_present(table)
     width, height = figsize_per_row
     fig, axes = plt.subplots(len(present), n_cols, figsize=(width, height * len(present)), squeeze=False)
@@ -247,11 +205,8 @@ def robot_rows(
 
 
 def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None, level: float = 0.95) -> Axes:
-    """``y`` against ``x`` per method, in the methods' colours, with bootstrap bands at ``level``.
-
-    Each band is the percentile interval of the mean over the rows at that ``x`` (one row per
-    user in the sims), 1000 resamples from a fixed seed.
-    """
+    """``y`` against ``x`` per method, in the methods' colours, with bootstrap bands at ``level`` of
+    the mean over the rows (users) at that ``x``, 1000 resamples from a fixed seed."""
     ax = _ax(ax)
     methods = [m for m in METHOD_COLORS if m in set(frame.method)]
     sns.lineplot(
@@ -277,10 +232,7 @@ def band_handle(level: float) -> Patch:
 
 
 def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize: float = 7.5) -> None:
-    """The axes' legend, plus ``extra`` entries, below the axes: it covers no data.
-
-    ``tight_layout`` makes room for it (a legend counts in the axes' extent).
-    """
+    """The axes' legend, plus ``extra`` entries, below the axes, where it covers no data."""
     handles, labels = ax.get_legend_handles_labels()
     handles += list(extra)
     labels += [h.get_label() for h in extra]
@@ -303,22 +255,12 @@ def probability_axis(ax: Axes) -> None:
     ax.set_ylim(*PROBABILITY_LIMITS)
 
 
-def users_per_point(
-    table: pd.DataFrame, keys: Sequence[str], unit: str = "seed"
-) -> dict[str, tuple[int, int]]:
-    """Per robot, the fewest and the most distinct users (``unit``) over the groups of ``keys``."""
-    counts = table.groupby(["robot", *keys])[unit].nunique()
-    return {r: (int(counts[r].min()), int(counts[r].max())) for r in robots_present(table)}
-
-
 def users_text(table: pd.DataFrame, keys: Sequence[str], per: str = "point") -> str:
-    """A title's N: ``"150 users per point"``, or per robot ``"users per point: planar5 60, panda 150"``.
-
-    The N is that of the rows drawn (:func:`users_per_point` over ``keys``); a range ``60–150``
-    where a robot's groups differ.
-    """
-    counts = users_per_point(table, keys)
-    text = {r: f"{lo}" if lo == hi else f"{lo}–{hi}" for r, (lo, hi) in counts.items()}
+    """A title's N, distinct users over the groups of ``keys``: ``"150 users per point"``, or per
+    robot ``"users per point: planar5 60, panda 150"``; a range ``60–150`` where groups differ."""
+    counts = table.groupby(["robot", *keys])["seed"].nunique()
+    spans = {r: (int(counts[r].min()), int(counts[r].max())) for r in robots_present(table)}
+    text = {r: f"{lo}" if lo == hi else f"{lo}–{hi}" for r, (lo, hi) in spans.items()}
     if len(set(text.values())) == 1:
         return f"{next(iter(text.values()))} users per {per}"
     return f"users per {per}: " + ", ".join(f"{r} {n}" for r, n in text.items())
@@ -343,17 +285,8 @@ def paper_slope(ax: Axes, slope: float, label: str, x_max: float = 1.0, **style:
 def paper_point(
     ax: Axes, x: float, y: float, label: str, tolerance: float | None = None, tol_label: str | None = None
 ) -> Line2D:
-    """The paper's value ``y`` at ``x``: a star, labelled in the legend and beside it.
-
-    ``tolerance`` draws y +- it faintly.
-
-    Args:
-        ax: Axes to draw on.
-        x, y: Where the paper's number is.
-        label: The legend's text, e.g. ``"paper: 1.45 (β = 75)"``.
-        tolerance: Half-width of the band a rule accepts around ``y`` (none if ``None``).
-        tol_label: The band's legend text (unlabelled if ``None``).
-    """
+    """The paper's value ``y`` at ``x``: a star, labelled (``label``) in the legend and beside it;
+    ``tolerance`` draws y +- it faintly, labelled ``tol_label``."""
     if tolerance is not None:
         ax.errorbar(
             [x],
@@ -372,37 +305,7 @@ def paper_point(
     return point
 
 
-def paper_note(ax: Axes, text: str, loc: str = "upper center", width: int = 48) -> Text:
-    """A short statement of what the paper reports, in a box inside the axes, wrapped to ``width``.
-
-    ``loc`` is ``"upper|lower left|center|right"``.
-    """
-    vert, horiz = loc.split()
-    x = {"left": 0.02, "center": 0.5, "right": 0.98}[horiz]
-    y = {"upper": 0.97, "lower": 0.03}[vert]
-    return ax.text(
-        x,
-        y,
-        textwrap.fill(text, width),
-        transform=ax.transAxes,
-        ha=horiz,
-        va="top" if vert == "upper" else "bottom",
-        fontsize=7.5,
-        style="italic",
-        zorder=6,
-        bbox={
-            "boxstyle": "round,pad=0.3",
-            "facecolor": "white",
-            "edgecolor": "0.1",
-            "ls": ":",
-            "alpha": 0.85,
-        },
-    )
-
-
 def wrap_to(text: str, inches: float, fontsize: float = 12.0) -> str:
-    """``text`` wrapped into lines that fit ``inches`` at ``fontsize`` [pt] (a title that is not clipped).
-
-    A character is taken as 0.55 of the font size wide, a little more than most are.
-    """
+    """``text`` wrapped into lines that fit ``inches`` at ``fontsize`` [pt], a character taken as
+    0.55 of the font size wide (a little more than most are)."""
     return textwrap.fill(text, max(20, int(inches * 72 / (0.55 * fontsize))))

@@ -1,11 +1,7 @@
 """Publish one robot's run of a figure: merge its rows, redraw the figure, update the claims.
 
-``make figures`` runs the two robots' notebooks side by side, and both write the same
-shared figures. :func:`publish` does the read-modify-write of a figure as one step
-under the figures folder's lock (:func:`lasa.base.io.locked`): this robot's rows replace its
-old ones in ``<NAME>.csv`` (rows ordered by robot, so the file is the same whichever
-robot finishes first), the figure is redrawn from every robot present, and the robot's
-claims replace its old rows of that figure in ``claims.csv``.
+Both robots' notebooks run side by side and write the same figures, so :func:`publish` does the
+read-modify-write as one step under the figures folder's lock (:func:`lasa.base.io.locked`).
 """
 
 from __future__ import annotations
@@ -53,12 +49,9 @@ def publish(
 ) -> pd.DataFrame:
     """Merge ``frame`` into the figure's CSV, redraw its PNG, and write ``claims``.
 
-    Args:
-        module: The figure's module (``NAME``, ``COLUMNS``, ``plot``).
-        frame: One robot's rows; the CSV keeps the columns of ``module.COLUMNS``.
-        paths: The run's folders.
-        claims: This robot's claims of the figure (none for figures without claims).
-        **plot_args: Passed to ``module.plot`` after the merged table.
+    This robot's rows replace its old ones (the CSV ordered by robot, the same whichever finishes
+    first); the figure is drawn from the file, every robot's rows as saved; ``plot_args`` go to
+    ``module.plot`` after the table; ``claims`` replace the robot's old rows of ``claims.csv``.
 
     Returns:
         The merged table of every robot present.
@@ -72,10 +65,7 @@ def publish(
     with locked(paths.figures):
         key = str(getattr(module, "KEY", "robot"))  # the column whose values a run replaces
         csv = update_csv(paths.figure(f"{module.NAME}.csv"), frame[list(module.COLUMNS)], key=key)
-        # Draw from the file, not from the merged frame: the robot that publishes last has
-        # its rows in full precision in memory and the other's as rounded in the CSV, so
-        # the figure would depend on which robot finished first. From the file, it is a
-        # function of the data saved beside it.
+        # draw from the file: in memory, the last robot's rows would be in full precision
         table = pd.read_csv(csv)
         dpi = int(getattr(module, "DPI", 150))
         save_figure(module.plot(table, **plot_args), paths.figure(f"{module.NAME}.png"), dpi)

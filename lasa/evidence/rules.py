@@ -1,49 +1,29 @@
-"""Every claim's decision rule, with its thresholds, in one place: the paper's rules per figure.
+"""The paper's decision rules, each a :class:`lasa.evidence.decision.Rule`, by claim id.
 
-Each rule is a :class:`lasa.evidence.decision.Rule`: the numbers it reads, their thresholds and
-the verdict it decides from them (what a rule is, and the words a verdict reads, are
-:mod:`lasa.evidence.decision`'s). A claim of your own gets its rule with :func:`register_rule`:
-then :func:`lasa.evidence.verdicts.assess` judges it like the paper's (``docs/extending.md``).
-
-A rule judges the claim's shape only, its direction and significance (the *effect*): for
-example Fig. sim1's time ratio reads yes when LA is slower than LA+SA at both betas (both
-ratios above 1). Whether a number has the paper's size is the *number* word, from the rule's
-:attr:`~lasa.evidence.decision.Rule.paper`: the paper's 1.45 at beta = 75, give or take 0.15.
-
-The study's claims (H1-H3) rest on significance tests: their yes/partly/no is the rule's
-:attr:`~lasa.evidence.decision.Rule.tests` applied to the tests' numbers (:mod:`lasa.experiments.study_tests`
-computes them), and the rule's one quantity, the effect, settles it when its interval is clear of 0.
-
-The rules were written before the results they judge were first seen, with the
-exceptions that :data:`AFTER_RESULTS` names. Putting them here changed none of them;
-it only made their thresholds explicit.
+A rule judges the claim's shape only (the *effect*); the paper's sizes are its
+:attr:`~lasa.evidence.decision.Rule.paper` numbers. The study's claims (H1-H3) rest on significance
+tests (:attr:`~lasa.evidence.decision.Rule.tests`, computed by :mod:`lasa.experiments.study_tests`),
+their one quantity settling them. The rules were written before the results they judge were first
+seen, except where :data:`AFTER_RESULTS` says. A claim of your own carries its rule (``Claim.rule``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
+from types import MappingProxyType
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import Direction, PaperNumber, Quantity, Rule
 
-__all__ = [
-    "COMPLETION_BAR",
-    "RULES",
-    "AFTER_RESULTS",
-    "rule",
-    "register_rule",
-]
+__all__ = ["COMPLETION_BAR", "RULES", "AFTER_RESULTS", "rule"]
 
 _SIGNIFICANCE = 0.05  # the paper's significance level, the study's tests' [-]
 COMPLETION_BAR = 0.95  # H1 and H3 are judged only if every condition finishes this share of its episodes [-]
+Decide = Callable[[Mapping[str, float]], str]
 
 
 def _q(name: str, thresholds: tuple[float, ...], meaning: str) -> Quantity:
     return Quantity(name, tuple(float(t) for t in thresholds), meaning)
-
-
-def _sim1_final_error(v: Mapping[str, float]) -> str:
-    return "yes" if v["share_lower"] >= 1.0 else "partly" if v["share_lower"] > 0.5 else "no"
 
 
 def _parts(*held: bool) -> str:
@@ -51,13 +31,18 @@ def _parts(*held: bool) -> str:
     return "yes" if all(held) else "partly" if any(held) else "no"
 
 
-def _sim1_time_ratio(v: Mapping[str, float]) -> str:
-    return _parts(v["ratio_75"] > 1.0, v["ratio_1000"] > 1.0)
+def _share(name: str, partly_above: float) -> Decide:
+    """``yes`` if the share ``name`` is 1 (or more), ``partly`` if above ``partly_above``, else ``no``."""
 
-
-def _both_or_one(a: str, b: str) -> Callable[[Mapping[str, float]], str]:
     def decide(v: Mapping[str, float]) -> str:
-        return _parts(v[a] > 0.0, v[b] > 0.0)
+        return "yes" if v[name] >= 1.0 else "partly" if v[name] > partly_above else "no"
+
+    return decide
+
+
+def _both_or_one(a: str, b: str, ref: float = 0.0) -> Decide:
+    def decide(v: Mapping[str, float]) -> str:
+        return _parts(v[a] > ref, v[b] > ref)
 
     return decide
 
@@ -68,14 +53,6 @@ def _sim1_gap_narrows(v: Mapping[str, float]) -> str:
     time = v["time_gap_75"] > 0.0 and v["time_narrowing"] > 0.0
     error = v["error_gap_75"] > 0.0 and v["error_narrowing"] > 0.0
     return _parts(time, error)
-
-
-def _sim1_entropy_sa(v: Mapping[str, float]) -> str:
-    return "yes" if v["share_weaker"] >= 1.0 else "partly" if v["share_weaker"] > 0.5 else "no"
-
-
-def _sim2_trapped(v: Mapping[str, float]) -> str:
-    return _parts(v["error_growth"] > 0.0, v["confidence_drop"] > 0.0)
 
 
 def _sim2_escapes(v: Mapping[str, float]) -> str:
@@ -94,24 +71,19 @@ def _sim4_no_map(v: Mapping[str, float]) -> str:
     return "yes" if v["slope"] > 0.0 and v["r2"] >= 0.9 else "no"
 
 
-def _effect_below_zero(v: Mapping[str, float]) -> str:
-    # the study's settling: a settled effect below zero is the paper's direction; the
-    # yes/partly/no comes from its tests (Rule.tests)
-    return "yes" if v["effect"] < 0.0 else "no"
+def _effect(sign: int) -> Decide:
+    """The study's settling: a settled effect on the paper's side of 0 (yes/partly/no: its tests)."""
 
+    def decide(v: Mapping[str, float]) -> str:
+        return "yes" if sign * v["effect"] > 0.0 else "no"
 
-def _effect_above_zero(v: Mapping[str, float]) -> str:
-    return "yes" if v["effect"] > 0.0 else "no"
+    return decide
 
 
 def _sa_lowers(v: Mapping[str, float]) -> str:
-    """H1's tests: the SA main effect, and each pairwise comparison given.
-
-    Reads ``effect`` (SA - no SA) and its ``p``, and for each comparison ``<a> - <b>`` given,
-    ``effect <a> - <b>`` and its Holm-corrected ``p <a> - <b>``. Yes if the main effect is below 0
-    with p < .05 and so is every comparison; partly if the main effect is but not every
-    comparison; no otherwise. A reading without comparisons (the paper's F(1,18)) reads yes or no.
-    """
+    """H1's tests: ``effect`` (SA - no SA) and ``p``, and per comparison given ``effect <a> - <b>`` and
+    its Holm-corrected ``p <a> - <b>``. Yes if all are below 0 with p < .05; partly if the main effect
+    is; no otherwise (without comparisons, as the paper's F(1,18), yes or no)."""
     main = v["effect"] < 0.0 and v["p"] < _SIGNIFICANCE
     pairs = [k.removeprefix("effect ") for k in v if k.startswith("effect ")]
     every = all(v[f"effect {k}"] < 0.0 and v[f"p {k}"] < _SIGNIFICANCE for k in pairs)
@@ -119,22 +91,16 @@ def _sa_lowers(v: Mapping[str, float]) -> str:
 
 
 def _la_aligns(v: Mapping[str, float]) -> str:
-    """H2's test: ``effect`` (scoop alignment LA+SA - R+SA) and its paired t-test's ``p``.
-
-    Yes if above 0 with p < .05, partly if above 0, no otherwise (also when NaN: too few pairs).
-    """
+    """H2's test: ``effect`` (scoop alignment LA+SA - R+SA) and its paired t-test's ``p``: yes if above
+    0 with p < .05, partly if above 0, no otherwise (also when NaN: too few pairs)."""
     above = v["effect"] > 0.0
     return "yes" if above and v["p"] < _SIGNIFICANCE else "partly" if above else "no"
 
 
 def _la_sa_fastest(v: Mapping[str, float]) -> str:
-    """H3's tests: LA+SA's restricted-mean contrasts and the restricted means.
-
-    Reads ``high <measure> LA+SA - <b>``, the upper end of the 95% bootstrap interval of each
-    contrast of LA+SA with another condition (Total and Idle Time), and ``mean <condition>``,
-    each condition's restricted mean Total Time. Yes if every contrast's interval lies below 0;
-    partly if LA+SA's mean is below every other condition's; no otherwise.
-    """
+    """H3's tests: yes if every ``high <measure> LA+SA - <b>`` (the upper end of a contrast's 95%
+    bootstrap interval) is below 0; partly if ``mean LA+SA`` (restricted mean Total Time) is below
+    every other ``mean <condition>``; no otherwise."""
     if all(x < 0.0 for k, x in v.items() if k.startswith("high ")):
         return "yes"
     others = [x for k, x in v.items() if k.startswith("mean ") and k != "mean LA+SA"]
@@ -145,18 +111,14 @@ _LINEAR_TEXT = (
     "two parts: the error grows linearly with the distance (slope > 0 and R^2 >= 0.9), and it "
     "lies below the no-map error at every cup; yes if both hold, partly if one"
 )
-# sim4's lines are the paper's form, least squares through the origin (y = 0.11x, y = x), with the
-# uncentred R^2 = 1 - SSE / sum(y^2); the @intercept reading fits y = ax + b with the usual R^2
+# sim4's lines: least squares through the origin (the paper's form), uncentred R^2 = 1 - SSE / sum(y^2)
 _LINEAR = (
     _q("slope", (0.0,), "slope of the line through the origin fitted to the mean error per new cup"),
     _q("r2", (0.9,), "uncentred R^2 of that line over the cups' means (@intercept: the centred one)"),
     _q("share_below", (1.0,), "share of new cups where the map's mean error is below the no-map one"),
 )
-# The paper's Fig. sim4 line, y = 0.11x with R^2 = 0.98: the paper states no tolerance, so each
-# is "in" when our interval contains it, narrow enough (both axes are normalised: a slope is unitless).
-# The widest interval that may read "in" (set after the results were seen: AFTER_RESULTS): the
-# slope's own value (a wider interval cannot tell 0.11 from no growth), and R^2's distance to a
-# perfect fit, twice (0.04: an interval within [0.96, 1] when it holds 0.98).
+# The paper's y = 0.11x, R^2 = 0.98 state no tolerance: "in" when our interval holds it and is no wider
+# than the slope itself, or than twice R^2's distance to a perfect fit (set after the results: AFTER_RESULTS)
 _LINEAR_PAPER = (
     PaperNumber("slope", 0.11, 0.0, "y = 0.11x", max_width=0.11),
     PaperNumber("r2", 0.98, 0.0, "R^2 = 0.98", max_width=0.04),
@@ -168,166 +130,158 @@ _WIDTH_NOTE = (
 )
 _GROWS = Direction("slope", +1)  # the error grows with the new cup's distance
 
-RULES: dict[str, Rule] = {
-    r.id: r
-    for r in (
-        Rule(
-            "sim1.final_error",
-            "yes if LA+SA's mean final error is below LA's at every beta, partly if at more than half",
-            (_q("share_lower", (0.5, 1.0), "share of betas where LA+SA's mean final error is below LA's"),),
-            _sim1_final_error,
-            direction=Direction("share_lower", +1, 0.5),
+_PAPER = (
+    Rule(
+        "sim1.final_error",
+        "yes if LA+SA's mean final error is below LA's at every beta, partly if at more than half",
+        (_q("share_lower", (0.5, 1.0), "share of betas where LA+SA's mean final error is below LA's"),),
+        _share("share_lower", 0.5),
+        direction=Direction("share_lower", +1, 0.5),
+    ),
+    Rule(
+        "sim1.time_ratio",
+        "two parts, LA slower than LA+SA at beta=75 and at beta=1000 (time ratio LA/LA+SA above 1): "
+        "yes if both hold, partly if one; the paper's sizes, 1.45 and 1.30 give or take 0.15, are "
+        "the numbers",
+        (
+            _q("ratio_75", (1.0,), "mean time LA / LA+SA at beta = 75"),
+            _q("ratio_1000", (1.0,), "mean time LA / LA+SA at beta = 1000"),
         ),
-        Rule(
-            "sim1.time_ratio",
-            "two parts, LA slower than LA+SA at beta=75 and at beta=1000 (time ratio LA/LA+SA above 1): "
-            "yes if both hold, partly if one; the paper's sizes, 1.45 and 1.30 give or take 0.15, are "
-            "the numbers",
-            (
-                _q("ratio_75", (1.0,), "mean time LA / LA+SA at beta = 75"),
-                _q("ratio_1000", (1.0,), "mean time LA / LA+SA at beta = 1000"),
+        _both_or_one("ratio_75", "ratio_1000", 1.0),
+        paper=(
+            PaperNumber("ratio_75", 1.45, 0.15, "beta = 75"),
+            PaperNumber("ratio_1000", 1.30, 0.15, "beta = 1000"),
+        ),
+        direction=Direction("ratio_75", +1, 1.0),
+    ),
+    Rule(
+        "sim1.gap_narrows",
+        "two parts, the time gap (ratio LA/LA+SA - 1) and the final-error gap (LA - LA+SA): each "
+        "holds if the gap has the paper's sign at beta=75 (LA+SA better, > 0) and is smaller in "
+        "size at beta=1000; yes if both hold, partly if one",
+        (
+            _q("time_narrowing", (0.0,), "g75 - |g1000| of the time gap g = ratio - 1: > 0 narrows"),
+            _q("time_gap_75", (0.0,), "the time gap at beta = 75, ratio - 1: > 0 if LA+SA is faster"),
+            _q("error_narrowing", (0.0,), "d75 - |d1000| of the final-error gap d = LA - LA+SA"),
+            _q("error_gap_75", (0.0,), "the final-error gap at beta = 75: > 0 if LA+SA ends closer"),
+        ),
+        _sim1_gap_narrows,
+        direction=Direction("time_narrowing", +1),  # its paper numbers are sim1.time_ratio's
+    ),
+    Rule(
+        "sim1.entropy_sa",
+        "yes if LA+SA and LA+SA+Entropy are both below LA's final error at every beta, partly if "
+        "both at more than half",
+        (_q("share_weaker", (0.5, 1.0), "the smaller of the two shares of betas below LA"),),
+        _share("share_weaker", 0.5),
+        direction=Direction("share_weaker", +1, 0.5),
+    ),
+    Rule(
+        "sim2.sa_trapped",
+        "the paper's two parts: LA+SA's mean final error grows from the smallest N to the largest, "
+        "and its mean confidence in the true cup falls; yes if both hold, partly if one",
+        (
+            _q("error_growth", (0.0,), "LA+SA's mean final error at the largest N minus at the smallest"),
+            _q(
+                "confidence_drop",
+                (0.0,),
+                "LA+SA's mean confidence b(g*) at the smallest N minus at the largest",
             ),
-            _sim1_time_ratio,
-            paper=(
-                PaperNumber("ratio_75", 1.45, 0.15, "beta = 75"),
-                PaperNumber("ratio_1000", 1.30, 0.15, "beta = 1000"),
+        ),
+        _both_or_one("error_growth", "confidence_drop"),
+        direction=Direction("error_growth", +1),
+    ),
+    Rule(
+        "sim2.entropy_escapes",
+        "yes if LA+SA+Entropy's success at the largest N is at least 80% and at least 20 points "
+        "above LA+SA's, partly if above",
+        (
+            _q("success_entropy", (0.8,), "LA+SA+Entropy's success rate at the largest N"),
+            _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
+        ),
+        _sim2_escapes,
+        direction=Direction("margin", +1),
+    ),
+    Rule(
+        "sim3.entropy_learners",
+        "yes if LA+SA+Entropy's mean error over the episode is below LA+SA's for both learners, "
+        "partly if for one",
+        (
+            _q("gain_fast", (0.0,), "fast learner: LA+SA minus LA+SA+Entropy mean error"),
+            _q("gain_slow", (0.0,), "slow learner: LA+SA minus LA+SA+Entropy mean error"),
+        ),
+        _both_or_one("gain_fast", "gain_slow"),
+        direction=Direction("gain_fast", +1),
+    ),
+    Rule("sim4.straight_line_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
+    Rule("sim4.grasp_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
+    Rule(
+        "sim4.no_map_training_goal",
+        "yes if the no-map error grows linearly with the distance (slope > 0 and R^2 >= 0.9); the "
+        "paper's size, y = x (slope 1 give or take 0.15), is the number",
+        (
+            _q("slope", (0.0,), "slope of the line through the origin of the no-map mean error"),
+            _q("r2", (0.9,), "uncentred R^2 of that line over the cups' means (@intercept: centred)"),
+        ),
+        _sim4_no_map,
+        paper=(PaperNumber("slope", 1.0, 0.15, "y = x"),),
+        direction=_GROWS,
+    ),
+    Rule(
+        "study.h1",
+        "the SA main effect on Goal Error (SA - no SA) must be below 0 with p < .05; yes if both "
+        "pairwise comparisons are significant too, partly if not; not testable unless every condition "
+        f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes (Goal Error is summed over the "
+        "task's time), except no (censored: lower bound) when only SA conditions finish fewer and SA's "
+        "Goal Error, a lower bound, is already significantly higher",
+        (_q("effect", (0.0,), "SA - no SA, the within-subjects main effect"),),
+        _effect(-1),
+        direction=Direction("effect", -1),
+        tests=_sa_lowers,
+    ),
+    Rule(
+        "study.h2",
+        "Dessert scoop alignment LA+SA - R+SA must be above 0: yes if significant (p < .05); not "
+        f"testable unless LA+SA and R+SA each finish at least {100 * COMPLETION_BAR:.0f}% of their "
+        "episodes (alignment is measured only on the phases reached)",
+        (_q("effect", (0.0,), "alignment LA+SA - R+SA in the scoop phase"),),
+        _effect(+1),
+        direction=Direction("effect", +1),
+        tests=_la_aligns,
+    ),
+    Rule(
+        "study.h3",
+        f"not testable if any condition finishes fewer than {100 * COMPLETION_BAR:.0f}% of its episodes; "
+        "else restricted mean "
+        "times to the horizon (min(T, horizon) summed over both tasks), LA+SA minus each other "
+        "condition, paired bootstrap 95% intervals over participants: yes if all six (Total and "
+        "Idle Time) lie below 0, partly if LA+SA has the lowest restricted mean Total Time, else no; "
+        "when a condition is short of the bar, no if LA+SA's restricted mean (a lower bound if LA+SA is "
+        "the one short: censored) is already above a measured condition's with the interval clear of 0",
+        (
+            _q(
+                "effect",
+                (0.0,),
+                "LA+SA's restricted mean Total Time minus the fastest other condition's [s]",
             ),
-            direction=Direction("ratio_75", +1, 1.0),
         ),
-        Rule(
-            "sim1.gap_narrows",
-            "two parts, the time gap (ratio LA/LA+SA - 1) and the final-error gap (LA - LA+SA): each "
-            "holds if the gap has the paper's sign at beta=75 (LA+SA better, > 0) and is smaller in "
-            "size at beta=1000; yes if both hold, partly if one",
-            (
-                _q("time_narrowing", (0.0,), "g75 - |g1000| of the time gap g = ratio - 1: > 0 narrows"),
-                _q("time_gap_75", (0.0,), "the time gap at beta = 75, ratio - 1: > 0 if LA+SA is faster"),
-                _q("error_narrowing", (0.0,), "d75 - |d1000| of the final-error gap d = LA - LA+SA"),
-                _q("error_gap_75", (0.0,), "the final-error gap at beta = 75: > 0 if LA+SA ends closer"),
-            ),
-            _sim1_gap_narrows,
-            direction=Direction("time_narrowing", +1),  # its paper numbers are sim1.time_ratio's
-        ),
-        Rule(
-            "sim1.entropy_sa",
-            "yes if LA+SA and LA+SA+Entropy are both below LA's final error at every beta, partly if "
-            "both at more than half",
-            (_q("share_weaker", (0.5, 1.0), "the smaller of the two shares of betas below LA"),),
-            _sim1_entropy_sa,
-            direction=Direction("share_weaker", +1, 0.5),
-        ),
-        Rule(
-            "sim2.sa_trapped",
-            "the paper's two parts: LA+SA's mean final error grows from the smallest N to the largest, "
-            "and its mean confidence in the true cup falls; yes if both hold, partly if one",
-            (
-                _q("error_growth", (0.0,), "LA+SA's mean final error at the largest N minus at the smallest"),
-                _q(
-                    "confidence_drop",
-                    (0.0,),
-                    "LA+SA's mean confidence b(g*) at the smallest N minus at the largest",
-                ),
-            ),
-            _sim2_trapped,
-            direction=Direction("error_growth", +1),
-        ),
-        Rule(
-            "sim2.entropy_escapes",
-            "yes if LA+SA+Entropy's success at the largest N is at least 80% and at least 20 points "
-            "above LA+SA's, partly if above",
-            (
-                _q("success_entropy", (0.8,), "LA+SA+Entropy's success rate at the largest N"),
-                _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
-            ),
-            _sim2_escapes,
-            direction=Direction("margin", +1),
-        ),
-        Rule(
-            "sim3.entropy_learners",
-            "yes if LA+SA+Entropy's mean error over the episode is below LA+SA's for both learners, "
-            "partly if for one",
-            (
-                _q("gain_fast", (0.0,), "fast learner: LA+SA minus LA+SA+Entropy mean error"),
-                _q("gain_slow", (0.0,), "slow learner: LA+SA minus LA+SA+Entropy mean error"),
-            ),
-            _both_or_one("gain_fast", "gain_slow"),
-            direction=Direction("gain_fast", +1),
-        ),
-        Rule("sim4.straight_line_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
-        Rule("sim4.grasp_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
-        Rule(
-            "sim4.no_map_training_goal",
-            "yes if the no-map error grows linearly with the distance (slope > 0 and R^2 >= 0.9); the "
-            "paper's size, y = x (slope 1 give or take 0.15), is the number",
-            (
-                _q("slope", (0.0,), "slope of the line through the origin of the no-map mean error"),
-                _q("r2", (0.9,), "uncentred R^2 of that line over the cups' means (@intercept: centred)"),
-            ),
-            _sim4_no_map,
-            paper=(PaperNumber("slope", 1.0, 0.15, "y = x"),),
-            direction=_GROWS,
-        ),
-        Rule(
-            "study.h1",
-            "the SA main effect on Goal Error (SA - no SA) must be below 0 with p < .05; yes if both "
-            "pairwise comparisons are significant too, partly if not; not testable unless every condition "
-            f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes (Goal Error is summed over the "
-            "task's time), except no (censored: lower bound) when only SA conditions finish fewer and SA's "
-            "Goal Error, a lower bound, is already significantly higher",
-            (_q("effect", (0.0,), "SA - no SA, the within-subjects main effect"),),
-            _effect_below_zero,
-            direction=Direction("effect", -1),
-            tests=_sa_lowers,
-        ),
-        Rule(
-            "study.h2",
-            "Dessert scoop alignment LA+SA - R+SA must be above 0: yes if significant (p < .05); not "
-            f"testable unless LA+SA and R+SA each finish at least {100 * COMPLETION_BAR:.0f}% of their "
-            "episodes (alignment is measured only on the phases reached)",
-            (_q("effect", (0.0,), "alignment LA+SA - R+SA in the scoop phase"),),
-            _effect_above_zero,
-            direction=Direction("effect", +1),
-            tests=_la_aligns,
-        ),
-        Rule(
-            "study.h3",
-            f"not testable if any condition finishes fewer than {100 * COMPLETION_BAR:.0f}% of its episodes; "
-            "else restricted mean "
-            "times to the horizon (min(T, horizon) summed over both tasks), LA+SA minus each other "
-            "condition, paired bootstrap 95% intervals over participants: yes if all six (Total and "
-            "Idle Time) lie below 0, partly if LA+SA has the lowest restricted mean Total Time, else no; "
-            "when a condition is short of the bar, no if LA+SA's restricted mean (a lower bound if LA+SA is "
-            "the one short: censored) is already above a measured condition's with the interval clear of 0",
-            (
-                _q(
-                    "effect",
-                    (0.0,),
-                    "LA+SA's restricted mean Total Time minus the fastest other condition's [s]",
-                ),
-            ),
-            _effect_below_zero,
-            direction=Direction("effect", -1),
-            tests=_la_sa_fastest,
-        ),
-    )
-}
-
-
-def _likert(v: Mapping[str, float]) -> str:
-    return "yes" if v["share"] >= 1.0 else "partly" if v["share"] > 0.0 else "no"
-
-
-RULES["study.likert"] = Rule(
-    "study.likert",
-    "Fig. dessert's Likert scales (Easy, Helpful, Precise, Intuitive, Prefer), LA+SA against each other "
-    "condition, paired t with Holm's correction: yes if LA+SA is rated higher with p < .05 in every "
-    "comparison, partly if in some, no if in none; not testable without people's answers (simulated "
-    "participants answer no questionnaire)",
-    (_q("share", (0.0, 1.0), "share of scale x condition comparisons with LA+SA rated higher, p < .05"),),
-    _likert,
+        _effect(-1),
+        direction=Direction("effect", -1),
+        tests=_la_sa_fastest,
+    ),
+    Rule(
+        "study.likert",
+        "Fig. dessert's Likert scales (Easy, Helpful, Precise, Intuitive, Prefer), LA+SA against each other "
+        "condition, paired t with Holm's correction: yes if LA+SA is rated higher with p < .05 in every "
+        "comparison, partly if in some, no if in none; not testable without people's answers (simulated "
+        "participants answer no questionnaire)",
+        (_q("share", (0.0, 1.0), "share of scale x condition comparisons with LA+SA rated higher, p < .05"),),
+        _share("share", 0.0),
+    ),
 )
+RULES: Mapping[str, Rule] = MappingProxyType({r.id: r for r in _PAPER})  # read-only
 
-# Rules (or readings) written after some of the results they judge had been seen.
+# Rules (or their readings) written after some of the results they judge had been seen.
 _TWO_WORDS = (
     "split into the effect (the rule, the claim's shape) and the number (the paper's sizes) after an "
     "audit had read this version's verdicts: the rule no longer reads the paper's sizes"
@@ -388,7 +342,7 @@ AFTER_RESULTS: dict[str, str] = {
 
 
 def rule(claim_id: str) -> Rule:
-    """The rule of a claim id, ``<figure>.<name>`` or ``<figure>.<name>@<reading>``.
+    """The paper's rule of a claim id, ``<figure>.<name>`` or ``<figure>.<name>@<reading>``.
 
     Raises:
         ConfigError: if the claim has no rule here.
@@ -397,37 +351,3 @@ def rule(claim_id: str) -> Rule:
     if base not in RULES:
         raise ConfigError(f"no rule for claim {claim_id!r}; rules exist for {sorted(RULES)}")
     return RULES[base]
-
-
-_PAPER_RULES = frozenset(RULES)  # the paper's claims' rules, which register_rule never replaces
-
-
-def register_rule(new: Rule, *, replace: bool = False) -> Rule:
-    """Add the rule of a claim of your own to :data:`RULES`, from outside the package.
-
-    Then :func:`rule` finds it, for ``<id>`` and every ``<id>@<reading>``, and
-    :func:`lasa.evidence.verdicts.assess` gives its claims intervals and settles them.
-
-    Args:
-        new: The rule; its id is ``<figure>.<name>``, as its claims' ids.
-        replace: Replace a rule registered under that id before (never a paper claim's).
-
-    Returns:
-        The rule.
-
-    Raises:
-        ConfigError: if the id is not ``<figure>.<name>``, has no quantity, or is taken
-            (a paper claim's always, another only unless ``replace``).
-    """
-    figure, _, name = new.id.partition(".")
-    if not figure or not name or " " in new.id or "@" in new.id:
-        raise ConfigError(f"a rule's id must be '<figure>.<name>' without spaces or '@', got {new.id!r}")
-    if not new.quantities:
-        raise ConfigError(f"{new.id}: a rule reads at least one quantity")
-    if new.id in RULES and (new.id in _PAPER_RULES or not replace):
-        raise ConfigError(
-            f"a rule for {new.id!r} exists already"
-            + ("" if new.id in _PAPER_RULES else "; pass replace=True")
-        )
-    RULES[new.id] = new
-    return new

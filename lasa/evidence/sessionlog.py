@@ -1,21 +1,8 @@
-"""Session logs of live teleoperation: one CSV of steps, a JSON sidecar and the scene's XML.
-
-A session ``<dir>/<stem>`` is three files:
-
-- ``<stem>.csv``: one row per control step: time, raw input, z, mode, stop, s, b, a_h, a_r,
-  a, the phase, whether the step ran late. Floats are written with 17 significant digits,
-  so a replay can compare states bit for bit.
-- ``<stem>.json``: robot, task, condition, participant, the decoder's SHA-256 and config,
-  the lasa version, the control units, and ``status``: ``running`` while the session
-  runs, ``complete`` or ``interrupted`` when it ends. A crash leaves ``running``:
-  readers treat it as interrupted, never as complete.
-- ``<stem>.xml``: the compiled scene, so the session replays without the code that made it;
-  the sidecar's ``scene_sha256`` is its checksum (:func:`check_scene`).
-
-While a session runs its rows go to ``<stem>.csv.part``, flushed and synced to disk every
-``flush_every`` steps (10 steps = 1 s at 10 Hz: a crash loses at most about a second). The
-part file becomes ``<stem>.csv`` by an atomic rename when the session ends; the sidecar is
-rewritten atomically at start and end.
+"""Session logs of live use: ``<stem>.csv`` (one row per step, floats to 17 digits, so a replay
+compares states bit for bit), the ``<stem>.json`` sidecar (what ran, ``status``: ``running``, then
+``complete`` or ``interrupted``; a crash's ``running`` reads interrupted) and ``<stem>.xml`` (the scene,
+checked by its ``scene_sha256``). Rows go to ``<stem>.csv.part``, synced every ``flush_every`` steps,
+renamed atomically at the end.
 """
 
 from __future__ import annotations
@@ -38,16 +25,8 @@ STATUS = ("running", "complete", "interrupted")
 
 
 class SessionWriter:
-    """Write one session's steps as they happen (see the module docstring).
-
-    Args:
-        folder: The sessions folder (created if missing).
-        stem: The session's file stem, e.g. ``p01_Dessert_LA+SA_20261201T120000``.
-        meta: The sidecar's fields (plain JSON data).
-        scene_xml: The compiled scene's MJCF.
-        columns: The step columns, in order.
-        flush_every: Steps between flushes to disk.
-    """
+    """Write one session's steps as they happen: in ``folder`` (created), as ``stem``, the sidecar
+    ``meta`` (plain JSON), the scene's MJCF and the step ``columns``; flushed every ``flush_every`` steps."""
 
     def __init__(
         self,
@@ -108,18 +87,13 @@ class SessionWriter:
 def read_session(
     path: str | os.PathLike[str], allow_damaged: bool = False
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """A session's steps and sidecar, from any of its files or its stem.
+    """A session's steps and sidecar, from any of its files or its stem (a crashed one's ``.csv.part``
+    reads ``interrupted``).
 
-    A session whose rows are still in ``.csv.part`` (it crashed) is read from there and
-    reported with status ``interrupted``, never as complete.
-
-    A log is **damaged** when its sidecar is not JSON, when the log is empty, when a cell
-    does not parse as a number, when a cell other than the raw axes is NaN or infinite,
-    when the steps or times do not increase, when a row has the wrong number of fields,
-    or when a session that ended (``complete`` or ``interrupted``) holds another number of
-    rows than its sidecar's ``steps``. A damaged log is an error, in one line that says what
-    is wrong; with ``allow_damaged`` it is read anyway (the rows that parse; an empty log or
-    an unreadable sidecar never) and the sidecar gains ``damaged``, the reason.
+    A log is **damaged** when its sidecar is not JSON, the log is empty, a cell is not a number, a
+    cell other than the raw axes is not finite, steps or times do not increase, a row has the wrong
+    number of fields, or an ended session holds another number of rows than its ``steps``. With
+    ``allow_damaged`` the rows that parse are read anyway, the reason in the sidecar's ``damaged``.
 
     Raises:
         ArtifactError: if the session's sidecar or rows are missing (DamagedLogError: damaged).
@@ -146,12 +120,8 @@ def read_session(
 
 
 def check_scene(path: str | os.PathLike[str], meta: dict[str, Any]) -> Path:
-    """The session's scene XML, checked: it exists and, if the sidecar holds its checksum, matches it.
-
-    Raises:
-        ArtifactError: if the scene is missing.
-        DamagedLogError: if it is not the one the session logged.
-    """
+    """The session's scene XML, checked: it exists (else ArtifactError) and matches the sidecar's
+    checksum (else DamagedLogError)."""
     folder, stem = _locate(path)
     scene = folder / f"{stem}.xml"
     if not scene.is_file():
@@ -211,8 +181,8 @@ def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
 
 
 def _unsound(numbers: pd.DataFrame) -> str | None:
-    """Rows that parse but cannot have been logged: a non-finite value where only the raw axes
-    may hold one (a faulty stick), or steps and times that do not increase."""
+    """Rows that cannot have been logged: a non-finite value outside the raw axes, or steps and times
+    that do not increase."""
     checked = [c for c in numbers.columns if not str(c).startswith("raw")]
     finite = np.isfinite(numbers[checked].to_numpy())
     if not finite.all():

@@ -1,13 +1,8 @@
 """People's sessions of the eating study, read back for analysis: the logs and the questionnaire.
 
-- :func:`load_sessions`: logged sessions (:mod:`lasa.evidence.sessionlog`, written live by
-  :mod:`lasa.live.teleop`) as the :class:`lasa.people.design.Episodes` that the simulated
-  cohort produces, so people's sessions go through the same measures
-  (:func:`lasa.world.measures.measures`) and statistics.
-- :func:`read_likert`: the answers :func:`lasa.live.studykit.survey` saved (``likert.csv``).
-- :func:`likert_tests`: the paired t-tests of Fig. dessert's right panel, LA+SA against each
-  other condition on each scale (Holm's correction over the three comparisons of a scale).
-- :func:`analyse_sessions`: all of it for one folder, as notebook 11 calls it.
+:func:`load_sessions` reads logged sessions as the simulated cohort's record
+(:class:`lasa.world.record.Episodes`), so people's sessions go through the same measures and
+statistics; :func:`analyse_sessions` runs it all for one folder, as notebook 11 calls it.
 """
 
 from __future__ import annotations
@@ -27,11 +22,13 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
-from lasa.world.episodes import Episodes
 from lasa.world.fork import tip_frames
+from lasa.world.record import Episodes
 
 __all__ = [
+    "QUESTIONS",
     "SCALES",
+    "PRACTICE_TASK",
     "LEFT_OUT",
     "DROPPED",
     "complete_participants",
@@ -43,7 +40,15 @@ __all__ = [
     "write_session_tables",
 ]
 
-SCALES = ("Easy", "Helpful", "Precise", "Intuitive", "Prefer")
+QUESTIONS = {  # the 7-point Likert questionnaire after each condition: scale -> statement
+    "Easy": "It was easy to complete the tasks with this robot.",
+    "Helpful": "The robot was helpful.",
+    "Precise": "I could make precise motions.",
+    "Intuitive": "The robot was intuitive to control.",
+    "Prefer": "I would use this condition again.",
+}
+SCALES = tuple(QUESTIONS)
+PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessions>/practice/, never analysed
 
 
 def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
@@ -65,25 +70,18 @@ DROPPED = "a participant who did not do every condition (in every task the test 
 def scan_sessions(
     folder: str | os.PathLike[str], include_interrupted: bool = False, include_damaged: bool = False
 ) -> tuple[list[tuple[pd.DataFrame, dict[str, Any]]], pd.DataFrame]:
-    """The eating-task sessions in ``folder`` that can be analysed, and those left out, by name.
+    """The eating-task sessions in ``folder`` that can be analysed, and those left out by name.
 
-    A damaged session (:func:`lasa.evidence.sessionlog.read_session`: an unreadable sidecar, a
-    torn or non-finite row, rows out of time order, ...) or one that did not end normally is
-    left out, with the reason; sessions of the cup task are left out too. One bad session never
-    stops the others from being analysed.
-
-    Args:
-        folder: The sessions folder.
-        include_interrupted: Keep sessions that did not end normally.
-        include_damaged: Keep a damaged log's rows that parse.
+    A damaged session, one that did not end normally (unless ``include_interrupted``) or one of
+    another task is left out, with the reason (:data:`LEFT_OUT`); ``include_damaged`` keeps a
+    damaged log's rows that parse. One bad session never stops the others.
 
     Returns:
-        The kept ``(rows, sidecar)`` pairs, in the order of their names, and a table of the
-        sessions left out (``session``, ``reason``).
+        The kept ``(rows, sidecar)`` pairs, by name, and the table ``session``, ``reason`` of those
+        left out.
 
     Raises:
-        ArtifactError: if two kept sessions log the same participant, condition and task
-            (both files named).
+        ArtifactError: if two kept sessions log the same participant, condition and task.
     """
     logs, left_out = [], []
     for sidecar in sorted(Path(folder).glob("*.json")):
@@ -120,33 +118,24 @@ def load_sessions(
     include_interrupted: bool = False,
     include_damaged: bool = False,
 ) -> Episodes:
-    """The eating-task sessions in ``folder`` as :class:`lasa.people.design.Episodes`.
-
-    Sessions are chosen by :func:`scan_sessions`; each one left out is named in a warning,
-    with the reason.
-
-    Args:
-        folder: The sessions folder.
-        task: The eating task (:func:`lasa.world.eating.make_eating_task`): its robot gives the
-            fork's pose from the logged states.
-        include_interrupted: Keep sessions that did not end normally (they count as not
-            completed); by default they are left out.
-        include_damaged: Analyse a damaged log's rows anyway (a cell that does not parse,
-            or fewer or more rows than its sidecar records); by default it is left out.
+    """The eating-task sessions in ``folder`` (:func:`scan_sessions`, each left out named in a
+    warning) as :class:`lasa.world.record.Episodes`; ``task`` (the eating task) gives the fork's pose.
 
     Raises:
         ArtifactError: if the folder holds no sound eating-task session, or a duplicate.
     """
-    from lasa.world.eating import EatingTask
-
-    if not isinstance(task, EatingTask):
-        raise ConfigError(
-            "load_sessions reads eating-task sessions; pass lasa.world.eating.make_eating_task()"
-        )
+    _check_task(task, "load_sessions")
     logs, left_out = scan_sessions(folder, include_interrupted, include_damaged)
     for row in left_out.itertuples():
         warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=2)
     return _episodes(logs, left_out, folder, task)
+
+
+def _check_task(task: object, caller: str) -> None:
+    from lasa.world.eating import EatingTask
+
+    if not isinstance(task, EatingTask):
+        raise ConfigError(f"{caller} reads eating-task sessions; pass lasa.world.eating.make_eating_task()")
 
 
 def _episodes(
@@ -228,19 +217,8 @@ def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
 def complete_participants(
     frame: pd.DataFrame, test: str, by_task: bool = True
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """The rows of the participants who did every condition (in every task present), and who was dropped.
-
-    A within-subject test compares each participant with themselves: one who missed a
-    condition cannot take part, and is named instead of silently falling out.
-
-    Args:
-        frame: Tidy data with ``participant``, ``condition`` (and ``task`` if ``by_task``).
-        test: The test's name, for the table of dropped participants.
-        by_task: Require every condition in every task of ``frame`` (else every condition once).
-
-    Returns:
-        The kept rows, and a table ``participant``, ``test``, ``reason`` of those dropped.
-    """
+    """The rows of the participants who did every condition (in every task, if ``by_task``), and the
+    table ``participant``, ``test``, ``reason`` of those dropped: named, never silently lost."""
     tasks = sorted(set(frame.task)) if by_task else [None]
     dropped = []
     for participant, part in frame.groupby("participant", sort=True):
@@ -255,28 +233,19 @@ def complete_participants(
     return frame[~frame.participant.isin(table.participant)], table
 
 
-def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, pd.DataFrame]:
+def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.DataFrame]:
     """People's sessions through the simulated cohort's measures and statistics.
 
     Returns:
-        The tidy ``goal_error``, ``time`` and ``alignment`` tables of the sessions
-        (:func:`lasa.world.measures.measures`), ``means`` per condition; over the
-        participants who did every condition in every task (at least two), ``sa_effect``
-        (the within-subjects SA test on Goal Error and on the mean distance) and
-        ``time_tests`` (LA+SA against each condition, times summed over tasks, Holm); with
-        questionnaire answers, ``likert`` (:func:`likert_tests`, over the participants who
-        answered for every condition). ``left_out`` names the sessions not analysed
-        (:func:`scan_sessions`) and ``dropped`` the participants left out of a
-        within-subject test, each with the reason (also given as warnings).
+        The tidy ``goal_error``, ``time`` and ``alignment`` tables, ``means`` per condition; over the
+        participants who did every condition (at least two) ``sa_effect`` (on Goal Error and the mean
+        distance) and ``time_tests`` (LA+SA against each, summed over tasks, Holm); ``likert``
+        (:func:`likert_tests`); ``left_out`` and ``dropped``, each with the reason (also warned).
     """
     from lasa.evidence import stats
-    from lasa.world.eating import EatingTask
     from lasa.world.measures import measures
 
-    if not isinstance(task, EatingTask):
-        raise ConfigError(
-            "analyse_sessions reads eating-task sessions; pass lasa.world.eating.make_eating_task()"
-        )
+    _check_task(task, "analyse_sessions")
     logs, left_out = scan_sessions(folder)
     frames = measures(task, _episodes(logs, left_out, folder, task))
     out = dict(frames)
@@ -319,16 +288,8 @@ def analyse_sessions(folder: str | os.PathLike[str], task: object) -> dict[str, 
 
 
 def write_session_tables(tables: dict[str, pd.DataFrame], folder: str | os.PathLike[str]) -> list[Path]:
-    """Write one analysis's tables as ``<folder>/sessions_<name>.csv``, replacing the previous set whole.
-
-    Every table is written to a staging folder first; only when all are written are the
-    previous ``sessions_*.csv`` removed and the new ones renamed into place, so the folder
-    never holds tables of two analyses (a test the new analysis did not run leaves no file
-    of the old one behind), and a failure leaves the previous set untouched.
-
-    Returns:
-        The paths written, in the order of ``tables``.
-    """
+    """Write one analysis's tables as ``<folder>/sessions_<name>.csv`` (the paths, in order), replacing the
+    previous set whole: staged first, so the folder never mixes two analyses and a failure keeps the old."""
     from lasa.base.io import locked
 
     folder = Path(folder)

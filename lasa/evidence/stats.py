@@ -1,24 +1,10 @@
-"""Statistics for the user study: its tests on a 2x2 within-subjects design.
+"""The user study's statistical tests, on the 2x2 design of :mod:`lasa.evidence.study_design`.
 
-The design (two factors, interface and assistance; four conditions; two tasks each) and its data,
-validated and reduced to one value per participant and cell over tasks, are
-:mod:`lasa.evidence.study_design`; every test here first makes that reduction.
-
-The paper reports the SA effect on goal error as F(1,18). A within-subjects test of SA with N = 10
-participants has F(1, N-1) = F(1,9); F(1,18) fits 2N = 20 observations treated as independent. We read
-it as each participant's mean with SA and mean without SA (over interface and task) compared by a
-between-subjects one-way ANOVA (:func:`sa_effect_between`), and report it next to the
-repeated-measures ANOVA that the design calls for (:func:`sa_effect_within`, from :func:`rm_anova`);
-each result's ``"test"`` entry says which it is. Pairwise comparisons of conditions are paired t-tests
-with a Holm correction across the pairs tested (:func:`pairwise`).
-
-Times cut at a horizon (an episode not finished counts the horizon) are censored: a t-test on them
-compares the horizon with itself. :func:`rmst_contrasts` compares restricted mean times instead, each
-episode's time ``min(T, horizon)`` summed over tasks, with a paired bootstrap over participants
-(:func:`paired_bootstrap`, percentile intervals, every resample in one numpy batch).
-
-F and p values come from statsmodels (``AnovaRM``, ``ols`` + ``anova_lm``, ``multipletests``) and
-scipy (``ttest_rel``); nothing here computes them by hand.
+The paper's F(1,18) for SA fits 2N = 20 observations as independent (:func:`sa_effect_between`); the
+design calls for the repeated-measures ANOVA's F(1, N-1) (:func:`sa_effect_within`). Pairwise
+comparisons are paired t-tests, Holm-corrected (:func:`pairwise`); times cut at a horizon are
+compared by restricted means with a paired bootstrap (:func:`rmst_contrasts`). F and p come from
+statsmodels and scipy, never by hand.
 """
 
 from __future__ import annotations
@@ -57,8 +43,7 @@ __all__ = [
     "format_f",
 ]
 
-EFFECTS: tuple[str, ...] = ("interface", "assistance", "interface:assistance")
-"""Effect names of :func:`rm_anova`, in row order."""
+EFFECTS: tuple[str, ...] = ("interface", "assistance", "interface:assistance")  # rm_anova's rows, in order
 
 BETWEEN_TEST = "between-subjects one-way ANOVA on 2N participant means (the paper's F(1,18) reading)"
 WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
@@ -67,19 +52,12 @@ WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     """The SA effect read as the paper's F(1,18): a one-way ANOVA on 2N participant means.
 
-    Each participant contributes two observations, the mean of ``measure`` over their rows with SA
-    and over their rows without SA (so over interface and task), and the 2N values are compared as
-    two independent groups: F has df (1, 2N-2). This ignores the pairing; see
-    :func:`sa_effect_within` for the test that the within-subjects design calls for.
-
-    Args:
-        frame: Tidy study data.
-        measure: Name of the numeric column to test.
+    Each participant's mean of ``measure`` with SA and without (over interface and task), compared
+    as two independent groups, df (1, 2N-2): the pairing ignored (see :func:`sa_effect_within`).
 
     Returns:
-        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``, where
-        ``n`` is the number of participants, the means are over participants' means, and ``ci_*``
-        bound SA - no SA (95%, two-sample t with pooled variance, the same reading).
+        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``:
+        ``n`` participants, the means over their means, ``ci_*`` bounding SA - no SA (95%, pooled t).
 
     Raises:
         ConfigError: Invalid data, fewer than 2 participants, or a participant without rows both
@@ -100,34 +78,34 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     table = pd.DataFrame({"y": means[measure].to_numpy(), "sa": means["assistance"].to_numpy()})
     fit = anova_lm(ols("y ~ C(sa)", data=table).fit())
     row = fit.loc["C(sa)"]
-    # the 95% interval of SA - no SA under the same reading: a pooled-variance two-sample t
-    ci = scipy.stats.ttest_ind(
-        table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
-    ).confidence_interval()
+    sa, no_sa = table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
+    # the 95% interval of SA - no SA read so: a pooled-variance two-sample t
+    ci = scipy.stats.ttest_ind(sa, no_sa).confidence_interval()
+    df = (int(round(float(row["df"]))), int(round(float(fit.loc["Residual", "df"]))))
+    return _sa_result(BETWEEN_TEST, float(row["F"]), df, float(row["PR(>F)"]), n, sa, no_sa, ci)
+
+
+def _sa_result(
+    test: str, f: float, df: tuple[int, int], p: float, n: int, sa: pd.Series, no_sa: pd.Series, ci: Any
+) -> dict[str, Any]:
+    """The dict of an SA effect (see :func:`sa_effect_between`)."""
     return {
-        "test": BETWEEN_TEST,
-        "F": float(row["F"]),
-        "df1": int(round(float(row["df"]))),
-        "df2": int(round(float(fit.loc["Residual", "df"]))),
-        "p": float(row["PR(>F)"]),
+        "test": test,
+        "F": f,
+        "df1": df[0],
+        "df2": df[1],
+        "p": p,
         "n": n,
-        "mean_sa": float(table.loc[table["sa"] == "SA", "y"].mean()),
-        "mean_no_sa": float(table.loc[table["sa"] == "none", "y"].mean()),
+        "mean_sa": float(sa.mean()),
+        "mean_no_sa": float(no_sa.mean()),
         "ci_low": float(ci.low),
         "ci_high": float(ci.high),
     }
 
 
 def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFrame:
-    """Two-way (interface x assistance) repeated-measures ANOVA with participants as subjects.
-
-    Tasks are first aggregated per participant and condition with ``agg``; ``AnovaRM`` then tests
-    both main effects and the interaction, each with df (1, N-1).
-
-    Args:
-        frame: Tidy study data; every participant must have every condition and every task in each.
-        measure: Name of the numeric column to test.
-        agg: ``"mean"`` or ``"sum"`` over tasks.
+    """Two-way (interface x assistance) repeated-measures ANOVA, participants as subjects, on tasks
+    aggregated by ``agg`` (``"mean"`` or ``"sum"``); each effect has df (1, N-1).
 
     Returns:
         One row per effect in :data:`EFFECTS` order, columns ``effect``, ``F``, ``df1``, ``df2``, ``p``.
@@ -138,33 +116,23 @@ def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFra
     """
     cells = condition_cells(frame, measure, agg, CONDITIONS)
     table = AnovaRM(cells, depvar=measure, subject="participant", within=["interface", "assistance"]).fit()
-    result = table.anova_table
-    rows = []
-    for effect in EFFECTS:
-        row = result.loc[effect]
-        rows.append(
-            {
-                "effect": effect,
-                "F": float(row["F Value"]),
-                "df1": int(round(float(row["Num DF"]))),
-                "df2": int(round(float(row["Den DF"]))),
-                "p": float(row["Pr > F"]),
-            }
-        )
-    return pd.DataFrame(rows, columns=["effect", "F", "df1", "df2", "p"])
+    rows = [table.anova_table.loc[effect] for effect in EFFECTS]
+    return pd.DataFrame(
+        {
+            "effect": list(EFFECTS),
+            "F": [float(r["F Value"]) for r in rows],
+            "df1": [int(round(float(r["Num DF"]))) for r in rows],
+            "df2": [int(round(float(r["Den DF"]))) for r in rows],
+            "p": [float(r["Pr > F"]) for r in rows],
+        }
+    )
 
 
 def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means).
 
-    Args:
-        frame: Tidy study data; every participant must have every condition.
-        measure: Name of the numeric column to test.
-
     Returns:
-        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``: df
-        are (1, N-1); the means are over participants of each participant's mean with / without SA;
-        ``ci_*`` bound SA - no SA (95%, paired t over participants).
+        As :func:`sa_effect_between`, with df (1, N-1) and ``ci_*`` a paired t over participants.
 
     Raises:
         ConfigError: As :func:`rm_anova`.
@@ -174,19 +142,12 @@ def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     cells = condition_cells(frame, measure, "mean", CONDITIONS)
     per_participant = cells.groupby(["participant", "assistance"])[measure].mean().unstack("assistance")
     # the 95% interval of SA - no SA: a paired t over participants (its t^2 is the main effect's F)
-    ci = scipy.stats.ttest_rel(per_participant["SA"], per_participant["none"]).confidence_interval()
-    return {
-        "test": WITHIN_TEST,
-        "F": float(row["F"]),
-        "df1": int(row["df1"]),
-        "df2": int(row["df2"]),
-        "p": float(row["p"]),
-        "n": int(len(per_participant)),
-        "mean_sa": float(per_participant["SA"].mean()),
-        "mean_no_sa": float(per_participant["none"].mean()),
-        "ci_low": float(ci.low),
-        "ci_high": float(ci.high),
-    }
+    sa, no_sa = per_participant["SA"], per_participant["none"]
+    ci = scipy.stats.ttest_rel(sa, no_sa).confidence_interval()
+    df = (int(row["df1"]), int(row["df2"]))
+    return _sa_result(
+        WITHIN_TEST, float(row["F"]), df, float(row["p"]), int(len(per_participant)), sa, no_sa, ci
+    )
 
 
 def pairwise(
@@ -203,9 +164,7 @@ def pairwise(
         measure: Name of the numeric column to compare.
         agg: ``"mean"`` or ``"sum"`` over tasks (the paper sums times across both tasks).
         pairs: ``(a, b)`` condition pairs; default all 6 pairs of :data:`CONDITIONS`, in order.
-        correction: A ``statsmodels.stats.multitest.multipletests`` method (default ``"holm"``), or
-            ``"none"`` for no correction. Pairs whose p is not finite (no variance in the
-            differences) are left out of the correction.
+        correction: A ``multipletests`` method, or ``"none"``; pairs whose p is not finite are left out.
 
     Returns:
         One row per pair: ``a``, ``b``, ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t``
@@ -244,11 +203,7 @@ def pairwise(
 
 
 def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
-    """The pairs :func:`pairwise` tests: ``pairs``, or every pair of :data:`CONDITIONS` in order.
-
-    Raises:
-        ConfigError: No pair, a pair not of two conditions, or a condition compared with itself.
-    """
+    """The pairs :func:`pairwise` tests; a ConfigError for none, or a pair not of two conditions."""
     chosen: list[tuple[str, ...]] = (
         list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
     )
@@ -265,11 +220,7 @@ def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ..
 
 
 def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
-    """The p values corrected by ``correction`` across the finite ones (``"none"``: as they are).
-
-    Raises:
-        ConfigError: ``correction`` is not a ``multipletests`` method.
-    """
+    """The p values corrected by ``correction`` across the finite ones (``"none"``: as they are)."""
     p_corr = p_unc.copy()
     if correction != "none":
         finite = np.isfinite(p_unc)
@@ -286,16 +237,8 @@ def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
 def paired_bootstrap(
     diffs: np.ndarray, n_resamples: int = 10_000, seed: int = 0, level: float = 0.95
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean of paired differences and its percentile bootstrap interval, resampling participants.
-
-    Every column is resampled with the same participants (rows), so the intervals of several
-    contrasts come from one set of resamples; all resamples are drawn and averaged in one batch.
-
-    Args:
-        diffs: ``(participants,)`` or ``(participants, contrasts)`` paired differences.
-        n_resamples: Bootstrap resamples of the participants, with replacement.
-        seed: Seed of the resampling (the same seed, the same interval).
-        level: Coverage of the percentile interval, in (0, 1).
+    """Mean of paired differences ``(participants[, contrasts])`` and its percentile bootstrap
+    interval at ``level``, every contrast resampled with the same participants, in one batch.
 
     Returns:
         ``(mean, low, high)``, each of shape ``diffs.shape[1:]``.
@@ -320,19 +263,8 @@ def paired_bootstrap(
 
 
 def restricted_times(frame: pd.DataFrame, measure: str, horizon: float = np.inf) -> pd.DataFrame:
-    """Each participant's restricted time per condition: ``min(T, horizon)`` summed over tasks.
-
-    Args:
-        frame: Tidy study data; every participant must have every condition and every task in each.
-        measure: The time column (``total_time``, ``idle_time``) [s].
-        horizon: The time an episode is cut at [s]; ``inf``: the times are used as they are.
-
-    Returns:
-        Participants x :data:`CONDITIONS`, the restricted times summed over tasks.
-
-    Raises:
-        ConfigError: Invalid data, or a participant missing a condition or a task in one.
-    """
+    """Each participant's restricted time ``measure`` per condition, ``min(T, horizon)`` [s] summed
+    over tasks: participants x :data:`CONDITIONS` (a ConfigError if one lacks a condition or task)."""
     clipped = frame.assign(**{measure: np.minimum(frame[measure].astype(float), horizon)})
     cells = condition_cells(clipped, measure, "sum", CONDITIONS)
     return cells.pivot(index="participant", columns="condition", values=measure)[list(CONDITIONS)]
@@ -347,14 +279,6 @@ def rmst_contrasts(
     seed: int = 0,
 ) -> pd.DataFrame:
     """Restricted mean time of ``reference`` minus each other condition, paired bootstrap intervals.
-
-    Args:
-        frame: Tidy study data (see :func:`restricted_times`).
-        measure: The time column [s].
-        horizon: The time an episode is cut at [s].
-        reference: The condition compared with each other one.
-        n_resamples: Bootstrap resamples of the participants (:func:`paired_bootstrap`).
-        seed: Seed of the resampling.
 
     Returns:
         One row per other condition, in :data:`CONDITIONS` order: ``a`` (``reference``), ``b``,
@@ -386,14 +310,8 @@ def _format_df(value: Any) -> str:
 
 
 def format_f(result: dict[str, Any]) -> str:
-    """APA-style F report, e.g. ``"F(1,9) = 12.3, p = .004"``.
-
-    F has three significant figures at most (one decimal from 10 up, two below); p has three
-    decimals without the leading zero, and ``"p < .001"`` below .001.
-
-    Args:
-        result: A dict with ``F``, ``df1``, ``df2`` and ``p`` (from :func:`sa_effect_between`,
-            :func:`sa_effect_within`, or a row of :func:`rm_anova` as a dict).
+    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``
+    (F to one decimal from 10 up, two below; ``"p < .001"`` below .001).
 
     Raises:
         ConfigError: A key is missing.

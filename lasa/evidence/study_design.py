@@ -1,13 +1,8 @@
-"""The user study's 2x2 within-subjects design: its factors, and its data reduced to cells.
+"""The user study's 2x2 within-subjects design: interface (R, LA) x assistance (none, SA).
 
-Every participant uses each of four conditions, the crossing of two factors: the *interface*
-(Retargeting ``R`` or Latent Actions ``LA``) and the *assistance* (none, or Shared Autonomy ``SA``),
-named ``R``, ``R+SA``, ``LA`` and ``LA+SA``, and does two tasks (``Entree``, ``Dessert``) under each.
-Data arrive as a tidy frame, one row per participant x condition x task, with columns ``participant``,
-``condition``, ``task`` and a numeric measure. :func:`prepare` validates it; :func:`aggregate`,
-:func:`participant_means` and :func:`condition_cells` reduce it to one value per participant and cell,
-over tasks, by their mean or (for times "summed across both tasks") their sum. The tests on those
-values are :mod:`lasa.evidence.stats`.
+Data arrive as a tidy frame, one row per participant x condition x task with a numeric measure;
+:func:`prepare` validates it, :func:`aggregate`, :func:`participant_means` and :func:`condition_cells`
+reduce it to one value per participant and cell (mean, or sum for times). Tests: :mod:`lasa.evidence.stats`.
 """
 
 from __future__ import annotations
@@ -21,11 +16,8 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
 
 __all__ = [
-    "INTERFACES",
     "SA_LEVELS",
-    "AGGS",
     "factors",
-    "check_agg",
     "prepare",
     "check_participants",
     "aggregate",
@@ -33,29 +25,16 @@ __all__ = [
     "condition_cells",
 ]
 
-INTERFACES: tuple[str, ...] = ("R", "LA")
-"""Levels of the interface factor."""
-
-SA_LEVELS: tuple[str, ...] = ("none", "SA")
-"""Levels of the assistance factor."""
-
-AGGS: tuple[str, ...] = ("mean", "sum")
-"""How the rows of a participant's cell (its tasks) reduce to one value."""
-
-# Columns every frame needs besides the measure; "interface" and "assistance" are derived from
-# "condition" (they overwrite any columns of those names).
+INTERFACES: tuple[str, ...] = ("R", "LA")  # levels of the interface factor
+SA_LEVELS: tuple[str, ...] = ("none", "SA")  # levels of the assistance factor
+AGGS: tuple[str, ...] = ("mean", "sum")  # how a participant's cell (its tasks) reduces to one value
+# Columns every frame needs besides the measure; interface and assistance derive from condition
 _KEYS: tuple[str, ...] = ("participant", "condition", "task")
 _DERIVED: tuple[str, ...] = ("interface", "assistance")
 
 
 def factors(condition: str) -> tuple[str, str]:
-    """Split a condition name into its (interface, assistance) levels.
-
-    Args:
-        condition: One of :data:`CONDITIONS`.
-
-    Returns:
-        ``(interface, assistance)``, e.g. ``"LA+SA"`` -> ``("LA", "SA")``, ``"R"`` -> ``("R", "none")``.
+    """A condition's (interface, assistance) levels, e.g. ``"LA+SA"`` -> ``("LA", "SA")``.
 
     Raises:
         ConfigError: ``condition`` is not one of :data:`CONDITIONS`.
@@ -66,7 +45,7 @@ def factors(condition: str) -> tuple[str, str]:
     return interface, assistance or "none"
 
 
-def check_agg(agg: str) -> None:
+def _check_agg(agg: str) -> None:
     """Refuse an ``agg`` other than those of :data:`AGGS`."""
     if agg not in AGGS:
         raise ConfigError(f"agg must be one of {', '.join(map(repr, AGGS))}, got {agg!r}")
@@ -166,24 +145,15 @@ def aggregate(data: pd.DataFrame, measure: str, by: Sequence[str], agg: str) -> 
 def participant_means(
     frame: pd.DataFrame, measure: str, by: Sequence[str] = ("condition",), agg: str = "mean"
 ) -> pd.DataFrame:
-    """One value of ``measure`` per participant and ``by`` level, aggregated over everything else.
-
-    Args:
-        frame: Tidy study data (columns ``participant``, ``condition``, ``task`` and ``measure``).
-        measure: Name of the numeric column to aggregate.
-        by: Columns to keep besides ``participant``; ``"interface"`` and ``"assistance"`` may be used
-            (they are derived from ``condition``). ``()`` aggregates each participant over everything.
-        agg: ``"mean"`` or ``"sum"`` over the rows (tasks, by default) in each group.
-
-    Returns:
-        Columns ``participant``, ``*by``, ``measure``; rows sorted by participant and then by level in
-        the study's order (:data:`CONDITIONS`, :data:`INTERFACES`, :data:`SA_LEVELS`).
+    """One value of ``measure`` per participant and ``by`` level (``condition``, ``task``, ``interface``,
+    ``assistance``; ``()``: everything), the ``agg`` (``"mean"``/``"sum"``) of the rest, sorted by
+    participant and level in the study's order.
 
     Raises:
         ConfigError: A column is missing or unknown, a condition is unknown, a value is not finite,
-            or ``agg`` is not ``"mean"`` / ``"sum"``.
+            or ``agg`` is unknown.
     """
-    check_agg(agg)
+    _check_agg(agg)
     by = list(by)
     data = prepare(frame, measure)
     unknown = [name for name in by if name not in data.columns or name == "participant" or name == measure]
@@ -195,7 +165,7 @@ def participant_means(
 
 def condition_cells(frame: pd.DataFrame, measure: str, agg: str, conditions: Sequence[str]) -> pd.DataFrame:
     """Validated per participant x condition values for ``conditions``, complete and balanced."""
-    check_agg(agg)
+    _check_agg(agg)
     data = prepare(frame, measure)
     check_participants(data)
     _check_complete(data, conditions)

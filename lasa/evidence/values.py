@@ -1,27 +1,9 @@
 """The claims' numbers as data: ``figures/claim_values.csv``, one row per number a sentence reads.
 
-Each claims row (:class:`lasa.evidence.claims.Claim`) rests on numbers: the quantities its rule
-reads, each with its value and interval at the row's level, and for the study the facts a
-sentence states beside them (the test's F, degrees of freedom and p, each condition's
-completion). The claims table keeps its words and notes; this table keeps the numbers, tidy:
-
-=========  ==================================================================================
-column     meaning
-=========  ==================================================================================
-id         the claims row's id (``sim4.no_map_training_goal@intercept``)
-robot      ``planar5`` or ``panda``
-figure     the figure the row belongs to (``sim4``)
-reading    the reading the id names after ``@``, ``headline`` for the headline row
-quantity   the number's name: a rule quantity (``slope``, ``effect``) or a fact (``p``,
-           ``completion.LA``)
-value      its value on the data
-low, high  its interval, empty for a fact
-level      the interval's level (0.9875 for the sims' sequential looks, 0.95 for the study)
-n          the users (or participants) the number rests on
-=========  ==================================================================================
-
-Every result sentence of the verdict table (:mod:`lasa.evidence.findings`) reads these
-numbers, never a note's prose.
+Per claims row (:class:`lasa.evidence.claims.Claim`) each quantity its rule reads, with its value and
+interval at the row's level, and each fact a sentence states beside them (a test's F and p, each
+condition's completion), without an interval. The columns (:data:`VALUE_COLUMNS`): the README's data
+contract. Every result sentence of the verdict table (:mod:`lasa.evidence.findings`) reads them.
 """
 
 from __future__ import annotations

@@ -1,18 +1,16 @@
 """Verdicts decided by their intervals, with users added where a verdict is still open.
 
-A claim's verdict is a rule (:mod:`lasa.evidence.rules`) applied to numbers measured on simulated
-users. :func:`assess` resamples users (all rows of a user together) for a percentile interval per
-number; a verdict is **settled** when every interval lies on one side of each of its rule's
-thresholds, else ``undecided``. :func:`sequential` adds users where a headline verdict is open, by
-a group-sequential :class:`Design` fixed in advance, each look's level 1 - 0.05 / K over K looks
-(98.75% with the defaults). Each member of :mod:`lasa.method.assistance` gets a row,
-``<id>@<member>`` beside the headline ``<id>``; ``LA`` rows carry ``assistance == "none"``.
-The design, the guard against optional stopping and the rows: ``docs/method-notes.md``.
+:func:`assess` resamples users (all rows of a user together) for a percentile interval per number of
+a claim's rule; a verdict is **settled** when every interval lies on one side of each threshold, else
+``undecided``. :func:`sequential` adds users where a headline verdict is open, by a group-sequential
+:class:`Design` fixed in advance (each look's level 1 - 0.05 / K over K looks), and gives each other
+member a row ``<id>@<member>``. The design and its guard: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -22,9 +20,8 @@ import pandas as pd
 
 from lasa.base.config import NO_ASSISTANCE  # defined once, in the base; re-exported here
 from lasa.base.errors import ConfigError
-from lasa.evidence.claims import Claim, criteria, paper_numbers_of, words_text
+from lasa.evidence.claims import Claim, criteria, words_text
 from lasa.evidence.decision import UNDECIDED
-from lasa.evidence.rules import rule
 
 __all__ = [
     "ALPHA",
@@ -32,36 +29,28 @@ __all__ = [
     "NO_ASSISTANCE",
     "N_BOOT",
     "MIN_USERS",
-    "MIN_TAIL",
     "Design",
     "Sequential",
     "assess",
     "block_seed",
     "block_users",
     "sequential",
-    "with_reading",
     "member_frame",
-    "member_of",
-    "bootstrap_frames",
     "check_design",
     "group_means",
-    "resample_counts",
     "min_resamples",
     "shortfall",
 ]
 
 N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
-# The least evidence a settled verdict may rest on; with less, a verdict reads undecided whatever its
-# intervals (:func:`shortfall`). Both fixed before any verdict was read against them (issue 48):
-# users per point, the sims' first look and the verdict map's cells (fewer gave zero-width intervals:
-# with 4 users, 1 resample in 64 is one user repeated), and resamples beyond each bound of a
-# percentile interval (5: 800 resamples at 98.75%, 200 at 95%).
+# The least evidence a settled verdict may rest on (:func:`shortfall`), fixed before any verdict was
+# read against it: users per point (fewer gave zero-width intervals), and resamples beyond each
+# bound of a percentile interval (5: 800 resamples at 98.75%, 200 at 95%).
 MIN_USERS = 60  # [-]
 MIN_TAIL = 5  # [-]
 ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
-# The column naming a simulated user in the sims' frames and CSVs: the user's index (its cup,
-# preference and random stream), the unit a bootstrap resamples. The file contracts name it
-# "seed", so the CSVs keep that name; the code says USER, and seed is a generator's seed.
+# The column naming a simulated user (its index: cup, preference, random draws), the unit a
+# bootstrap resamples; the file contracts name it "seed".
 USER = "seed"
 
 Evaluate = Callable[[pd.DataFrame], list[Claim]]
@@ -71,14 +60,12 @@ Evaluate = Callable[[pd.DataFrame], list[Claim]]
 class Design:
     """Users per point: a first look, blocks after it, a cap (fixed before the results).
 
-    Why these values: 60 is the verdict map's smallest cell (each of its cells must rest on
-    at least 60 users), and the first look serves both; blocks of 30 are the old fixed
-    size, so each later look costs what a whole sweep used to; the cap of 150 is the size
-    at which an earlier version re-ran the headline reading by hand (5x the old 30).
+    60 is the verdict map's smallest cell; blocks of 30, the old fixed size; the cap of 150, where an
+    earlier version re-ran the headline by hand.
     """
 
-    first: int = 60  # users per point at the first look, every arm and reading [-]
-    block: int = 30  # users added per later look, the headline reading's arms only [-]
+    first: int = 60  # users per point at the first look, every pair and member [-]
+    block: int = 30  # users added per later look, the headline member's pairs only [-]
     cap: int = 150  # most users per point [-]
 
     def __post_init__(self) -> None:
@@ -108,11 +95,8 @@ def check_design(first: int, block: int, cap: int) -> None:
 
 
 def block_seed(seed: int, block: int) -> int:
-    """The seed of look ``block``'s new users: ``seed`` itself for the first look.
-
-    Later blocks draw from their own stream (``SeedSequence([seed, block])``), so adding a
-    block leaves the users of the earlier ones unchanged.
-    """
+    """The seed of look ``block``'s new users: ``seed`` for the first, else ``SeedSequence([seed,
+    block])``'s, so adding a block leaves the earlier users unchanged."""
     if block == 0:
         return int(seed)
     return int(np.random.SeedSequence([int(seed), int(block)]).generate_state(1)[0])
@@ -127,11 +111,8 @@ def block_users(design: Design, block: int) -> tuple[int, int]:
 
 
 def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> Iterator[pd.DataFrame]:
-    """``n_boot`` resamples of ``frame``, drawing its users (``unit``) with replacement.
-
-    A user drawn twice appears twice, under two new ids, so rules that average per user
-    (``groupby(unit)``) count it twice instead of merging it.
-    """
+    """``n_boot`` resamples of ``frame``, drawing its users (``unit``) with replacement; a user drawn
+    twice appears under two new ids, so a rule averaging per user counts it twice."""
     codes, units = pd.factorize(frame[unit], sort=True)
     order = np.argsort(codes, kind="stable")
     starts = np.searchsorted(codes[order], np.arange(len(units) + 1))
@@ -146,11 +127,8 @@ def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = US
 
 
 def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> np.ndarray:
-    """How often each user is drawn in each of ``n_boot`` resamples, shape (n_boot, users).
-
-    Users are ordered as ``pd.factorize(frame[unit], sort=True)`` orders them, and drawn from
-    the same stream as :func:`bootstrap_frames`: resample r of both is the same set of users.
-    """
+    """How often each user (in ``pd.factorize(sort=True)`` order) is drawn in each of ``n_boot``
+    resamples, (n_boot, users): the same users as :func:`bootstrap_frames`'s resample r."""
     n = int(frame[unit].nunique())
     rng = np.random.default_rng(seed)
     return np.stack([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)])
@@ -159,12 +137,8 @@ def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USE
 def group_means(
     frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = USER
 ) -> dict[tuple[Any, ...], np.ndarray]:
-    """The mean of ``metric`` per group of ``keys`` in every resample, without building them.
-
-    A resample repeats each user's rows as often as ``counts`` says, so a group's mean in it
-    is sum_u c_u S_ug / sum_u c_u N_ug, with S and N each user's sum and count in the group:
-    one matrix product for all resamples (the same numbers as :func:`bootstrap_frames`'s
-    resamples give, up to float rounding).
+    """The mean of ``metric`` per group of ``keys`` in every resample, without building them:
+    sum_u c_u S_ug / sum_u c_u N_ug (S, N: each user's sum and count in the group), one matrix product.
 
     Returns:
         Group label (a tuple of the keys' values) -> its mean in each resample, shape (R,).
@@ -196,9 +170,8 @@ def min_resamples(level: float) -> int:
 def shortfall(
     n_users: int, n_boot: int | None, level: float, min_users: int = MIN_USERS, unit: str = "users"
 ) -> str:
-    """Why a verdict on ``n_users`` (``unit``) and ``n_boot`` resamples at ``level`` cannot be
-    settled, as a clause ("it rests on 4 users, fewer than the 60 a settled verdict needs"); "" if it
-    can. ``n_boot`` None: an interval that is not a bootstrap's (a t interval), with no resamples to count."""
+    """Why a verdict on ``n_users`` (``unit``) and ``n_boot`` resamples (None: a t interval) at
+    ``level`` cannot be settled ("it rests on 4 users, fewer than the 60 ..."); "" if it can."""
     parts = []
     if n_users < min_users:
         parts.append(f"on {n_users} {unit}, fewer than the {min_users} a settled verdict needs")
@@ -225,25 +198,23 @@ def assess(
     """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
 
     Args:
-        evaluate: A figure's rules: frame -> claims, each with the ``values`` its rule reads.
+        evaluate: A figure's claims: frame -> claims, each with the ``values`` its rule reads.
         frame: The users' rows.
         n_boot: Bootstrap resamples.
         seed: Seed of the resampling.
         unit: The column naming a user: the resampled unit.
         level: The intervals' level (1 - ALPHA / K under a sequential design).
-        fast: The figure's vectorized bootstrap (its module's ``boot_values``): the same
-            numbers on the same resamples as evaluating every resample, from group means
-            (:func:`group_means`); if None, ``evaluate`` runs on every resample.
+        fast: The figure's vectorized bootstrap (its ``boot_values``, from :func:`group_means`): the
+            same numbers on the same resamples; if None, ``evaluate`` runs on every resample.
         min_users: The fewest users a settled verdict may rest on (:data:`MIN_USERS`).
 
     Returns:
-        ``evaluate(frame)``'s claims with ``ci_low``/``ci_high`` (the interval of the first
-        number, ``value``), ``settled``, ``n_users``, and ``reproduced`` set to ``undecided``
-        where an interval straddles a threshold, or where the verdict rests on fewer users than
-        ``min_users`` or fewer resamples than :func:`min_resamples` (:func:`shortfall`).
+        The claims with their intervals (``ci_low``/``ci_high``: the first number's), ``settled``,
+        ``n_users``, and ``reproduced`` ``undecided`` where an interval straddles a threshold or
+        the evidence falls short (:func:`shortfall`).
 
     Raises:
-        ConfigError: if a claim's verdict is not its rule's verdict at its values.
+        ConfigError: if a claim has no rule, or its verdict is not its rule's at its values.
     """
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
@@ -280,9 +251,10 @@ def _boot_samples(
 
 
 def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int, short: str = "") -> Claim:
-    """Claim ``c`` with its rule's intervals at ``level`` from its resampled numbers, settled or not
-    (never settled with a ``short`` of evidence, :func:`shortfall`)."""
-    r = rule(c.id)
+    """Claim ``c`` with its rule's intervals at ``level``, settled or not (never with a ``short``)."""
+    r = c.judged_by
+    if r is None:
+        raise ConfigError(f"no rule for claim {c.id!r}; give it one (Claim.rule)")
     if c.reproduced != r.verdict(c.values):
         raise ConfigError(f"{c.id}: verdict {c.reproduced!r} is not its rule's at {dict(c.values)}")
     tail = 100.0 * (1.0 - level) / 2.0
@@ -317,36 +289,20 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
 
 
 def with_reading(claim_id: str, reading: str) -> str:
-    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already.
-
-    One ``@`` per id, its readings joined by ``+`` (as the study's): a figure's own reading (sim4's
-    ``@joint_space``) under another member reads ``sim4.x@joint_space+grasp_set``.
-    """
+    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already
+    (sim4's ``@joint_space`` under another member: ``sim4.x@joint_space+grasp_set``)."""
     return f"{claim_id}{'+' if '@' in claim_id else '@'}{reading}"
 
 
 def _words(c: Claim) -> str:
-    """``effect undecided; 1.45 out, 1.3 in``: a claim's two words (:func:`lasa.evidence.claims.criteria`)."""
+    """``effect undecided; 1.45 out, 1.3 in``: a claim's two words."""
     said = criteria(c)
-    return words_text(said["effect"], said["number"], paper_numbers_of(c.id, c.robot))
-
-
-def member_of(frame: pd.DataFrame) -> str:
-    """The assistance member of a one-member frame (``none`` if it holds unassisted rows only)."""
-    names = (
-        [m for m in dict.fromkeys(frame["assistance"]) if m != NO_ASSISTANCE] if "assistance" in frame else []
-    )
-    if len(names) > 1:
-        raise ConfigError(f"the frame mixes assistance members {names}; select one (member_frame)")
-    return names[0] if names else NO_ASSISTANCE
+    return words_text(said["effect"], said["number"], c.stated)
 
 
 def member_frame(frame: pd.DataFrame, assistance: str) -> pd.DataFrame:
-    """The rows of member ``assistance``, with the unassisted rows (LA) every member shares.
-
-    LA rows of users the member's arms never ran (later blocks of a sequential sweep run the
-    headline arms only) are left out, so the member is compared on paired users.
-    """
+    """The rows of member ``assistance``, with the unassisted (LA) rows of the users it ran (later
+    looks run the headline member only), so the member is compared on paired users."""
     own = frame["assistance"] == assistance
     shared = frame["assistance"] == NO_ASSISTANCE
     if own.any() and USER in frame:
@@ -356,14 +312,9 @@ def member_frame(frame: pd.DataFrame, assistance: str) -> pd.DataFrame:
 
 @dataclasses.dataclass(frozen=True)
 class Sequential:
-    """The outcome of :func:`sequential`.
-
-    Attributes:
-        frame: Every look's rows (``look`` numbers them; the first look holds every arm).
-        claims: The headline row of each claim, then each other member's.
-        looks: One row per (look, claim) of the headline reading: users per point, the
-            verdict, whether it was settled.
-    """
+    """The outcome of :func:`sequential`: every look's rows (``look`` numbers them), the headline
+    row of each claim then each other member's, and per (look, claim) of the headline member its
+    users per point, verdict and whether settled."""
 
     frame: pd.DataFrame
     claims: list[Claim]
@@ -384,36 +335,27 @@ def sequential(
     """Add users in blocks until every headline verdict is settled or the cap is reached.
 
     Args:
-        run_block: ``(look, assistance) -> rows`` of that look's new users
-            (:func:`block_users`), under those members (LA rows labelled ``none``).
-        evaluate: The figure's rules (see :func:`assess`).
+        run_block: ``(look, members) -> rows`` of that look's new users (:func:`block_users`), LA
+            rows labelled ``none``.
+        evaluate, n_boot, seed, fast, min_users: As :func:`assess` takes them.
         assistance: Every member to judge; the first look runs all of them.
-        default: The headline member (the paper's reading); later looks run only it.
+        default: The headline member (the paper's); later looks run only it.
         design: Users per look and the cap (:class:`Design`).
-        n_boot: Bootstrap resamples per interval.
-        seed: Seed of the resampling.
-        fast: The figure's vectorized bootstrap, see :func:`assess`.
-        min_users: The fewest users a settled verdict may rest on, see :func:`assess`.
 
     Raises:
         ConfigError: if ``default`` is not among ``assistance``.
     """
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
+    judge = functools.partial(
+        assess, evaluate, n_boot=n_boot, seed=seed, level=design.level, fast=fast, min_users=min_users
+    )
     frame = run_block(0, assistance).assign(look=0)
     log = []
     for look, size in enumerate(design.sizes):
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
-        head = assess(
-            evaluate,
-            member_frame(frame, default),
-            n_boot,
-            seed,
-            level=design.level,
-            fast=fast,
-            min_users=min_users,
-        )
+        head = judge(member_frame(frame, default))
         log += [
             {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
             for c in head
@@ -423,13 +365,7 @@ def sequential(
         if all(c.settled for c in head if "@" not in c.id):
             break
     first = frame[frame.look == 0]
-    others = {
-        m: assess(
-            evaluate, member_frame(first, m), n_boot, seed, level=design.level, fast=fast, min_users=min_users
-        )
-        for m in assistance
-        if m != default
-    }
+    others = {m: judge(member_frame(first, m)) for m in assistance if m != default}
     rows: list[Claim] = []
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]

@@ -1,14 +1,8 @@
 """Off-screen MuJoCo video: render joint trajectories and write bit-exact MP4s with mediapy.
 
-Rendering is software-only (OSMesa; ``lasa`` sets ``MUJOCO_GL`` on import) and slow, so
-keep frames small (even sizes such as 320x240) and render only the frames a video
-shows. The scenes turn shadows and reflections off.
-
-Videos are written bit-exactly: the same frames give the same MP4 bytes on every run
-and machine with the pinned environment. mediapy always runs the ``ffmpeg`` binary
-that the pinned ``imageio-ffmpeg`` wheel ships (never one found on the PATH; see
-:mod:`lasa.base.ffmpeg`), with one thread, CPU-independent kernels and ffmpeg's bitexact
-flags; see :func:`write_video`. :func:`read_video` is mediapy's reader with the same binary.
+Rendering is software-only and slow: keep frames small (even sizes such as 320x240). An MP4 is a
+function of its frames alone (:func:`write_video`), encoded by the pinned ffmpeg
+(:mod:`lasa.base.ffmpeg`), which :func:`read_video` decodes with too.
 """
 
 from __future__ import annotations
@@ -42,9 +36,7 @@ __all__ = [
 LAYOUTS = ("side_by_side", "in_turn")  # write_clips: the clips beside each other, or one after another
 
 
-# x264 picks its assembly by the CPU it runs on, and the SSSE3/AVX2/AVX-512 kernels do
-# not give the same bitstream as the plain C code. Pin the instruction set to the
-# x86-64 baseline (every x86-64 CPU has SSE2; costs ~10% speed), elsewhere use plain C.
+# x264's SSSE3/AVX kernels differ in bits from plain C: pin the x86-64 baseline, elsewhere plain C.
 _X264_ASM = "MMX2,SSE2" if platform.machine().lower() in {"x86_64", "amd64"} else "0"
 
 # Output options that make the MP4 a function of the frames alone (see write_video).
@@ -62,18 +54,8 @@ _BITEXACT_ARGS = (
 def render_states(
     robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, camera: str | None = None
 ) -> np.ndarray:
-    """Render one frame per joint configuration from the robot's fixed camera.
-
-    Args:
-        robot: The robot (its scene and camera).
-        states: Joint positions, shape (T, n).
-        height: Frame height in pixels (even).
-        width: Frame width in pixels (even).
-        camera: Camera name (default: the robot's video camera).
-
-    Returns:
-        Frames, shape (T, height, width, 3), uint8.
-    """
+    """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from
+    ``camera`` (default the robot's video camera); height and width even."""
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
     states = np.atleast_2d(states)
@@ -93,13 +75,8 @@ def render_states(
 def render_many(
     robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
 ) -> np.ndarray:
-    """:func:`render_states` of the robot's camera, the states split into ``n_jobs`` contiguous
-    parts rendered by as many worker processes (joblib): a frame is a function of its state alone,
-    so the frames are the same with any number.
-
-    Raises:
-        ConfigError: ``n_jobs`` is not a positive integer, or a frame size is odd.
-    """
+    """:func:`render_states`, the states split into ``n_jobs`` contiguous parts rendered by as many
+    worker processes (joblib): the same frames with any number (a ConfigError unless positive)."""
     if int(n_jobs) != n_jobs or n_jobs < 1:
         raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
     states = np.atleast_2d(states)
@@ -131,20 +108,11 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 
 
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
-    """Atomically write frames to an H.264 (yuv420p) MP4, bit-exactly.
+    """Atomically write frames (T, H, W, 3), uint8, even H and W, to an H.264 (yuv420p) MP4.
 
-    The same frames give the same bytes whatever the machine: the pinned ``imageio-ffmpeg`` binary,
-    one thread, x264 at the x86-64 baseline (``asm=MMX2,SSE2``), swscale's bitexact paths, no version
-    or time metadata; constant quantiser 20 up to 640x480 pixels, 28 above (mediapy's default).
-    Why each is pinned: ``docs/method-notes.md``.
-
-    Args:
-        path: Destination ``.mp4``; written to a temporary file beside it and renamed.
-        frames: Frames, shape (T, H, W, 3), uint8, with even H and W.
-        fps: Frame rate.
-
-    Returns:
-        ``path`` as a :class:`~pathlib.Path`.
+    The same frames give the same bytes on every machine: the pinned ``imageio-ffmpeg`` binary, one
+    thread, x264 at the x86-64 baseline, swscale's bitexact paths, no version or time metadata;
+    quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``).
 
     Raises:
         ConfigError: The frames are not (T, H, W, 3) or H or W is odd.
@@ -182,19 +150,14 @@ def write_clips(
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Render clips of joint states, caption each frame, lay the clips out and write the MP4.
 
-    One clip per method, condition or demonstration (an episode's states, thinned), of any task, side
-    by side (shorter clips hold their last frame) or one after another (``docs/method-notes.md``).
-
     Args:
         robot: The robot whose scene renders the states.
         clips: ``(states, caption)`` per clip: states (T, n); one caption, or one per frame.
         path: Destination ``.mp4`` (bit-exact, :func:`write_video`).
         fps: Frame rate.
-        layout: ``"side_by_side"`` (one clip per column) or ``"in_turn"`` (concatenated in time).
-        height: Frame height in pixels (even).
-        width: Frame width of one clip in pixels (even).
-        n_jobs: Worker processes that render the frames (:func:`render_many`; the same video with
-            any number).
+        layout: ``"side_by_side"`` (shorter clips hold their last frame) or ``"in_turn"``.
+        height, width: One clip's frame size in pixels (even).
+        n_jobs: Worker processes that render the frames (:func:`render_many`).
 
     Returns:
         The video (T', height, width', 3) and the captioned clips, (T, height, width, 3) each.

@@ -223,7 +223,7 @@ def run(
     user = np.tile(np.arange(config.users), len(config.betas))
     target = task.target(goal[user], theta[user])
     users = UserPopulation(
-        goal=goal[user], theta=theta[user], target=target, beta0=beta, slope=np.zeros(len(user)), stream=user
+        goal=goal[user], theta=theta[user], target=target, beta0=beta, slope=np.zeros(len(user)), user=user
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []

@@ -38,7 +38,7 @@ from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
 from lasa.method.train import TrainConfig
-from lasa.people.demos import EATING_DEMOS, EATING_READINGS, DemoConfig, collect_eating_demonstrations
+from lasa.people.demos import EATING_DEMOS, SEGMENTATIONS, DemoConfig, collect_eating_demonstrations
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import GOALS, STUDY_BELIEF_CAP, EatingTask
 from lasa.world.fork import tip_frames
@@ -79,7 +79,7 @@ class Config:
     train: TrainConfig = TrainConfig(z_dim=2)
     goal: str = "middle"  # the bowl the figure looks at [-]
     # demonstration readings trained: at paper scale the two with the property under the study's cap;
-    # all of EATING_READINGS under LARGE=1 (configs/large.yaml) [-]
+    # all of SEGMENTATIONS under LARGE=1 (configs/large.yaml) [-]
     readings: tuple[str, ...] = ("continuous", "transfers")
     # notebook 03's sweep, on the continuous base [-]
     lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
@@ -115,9 +115,9 @@ class Config:
         object.__setattr__(self, "readings", tuple(self.readings))
         object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
         if not self.readings:
-            raise ConfigError("readings must name at least one of " + ", ".join(EATING_READINGS))
+            raise ConfigError("readings must name at least one of " + ", ".join(SEGMENTATIONS))
         for name in self.readings:
-            check_choice("reading", name, EATING_READINGS)
+            check_choice("reading", name, SEGMENTATIONS)
         if "continuous" not in self.readings:
             raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
@@ -235,8 +235,10 @@ def _demonstrations(
     """Each demonstration reading's tuples (saved), and a row of its sizes."""
     datasets, rows = {}, []
     for reading in config.readings:
-        demos = collect_eating_demonstrations(task, control, config.demos, reading=reading)
-        save_demonstrations(demos, paths.artifact("eating_reading_demos", task.robot.name, reading=reading))
+        demos = collect_eating_demonstrations(task, control, config.demos, segmentation=reading)
+        save_demonstrations(
+            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=reading)
+        )
         clean = demos.clean()
         rows.append(
             {
@@ -281,7 +283,7 @@ def _fine_tune(
     models.update({name: model for name, (model, _) in zip(runs, fitted, strict=True)})
     models = {name: models[name] for name, _, _ in fine_tunes(config, lam)}  # in training order
     for name, model in models.items():
-        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=name)
+        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=name)
         _save(model, path, fines[name], control, config, reading=name)
     return models, fines
 
@@ -350,7 +352,9 @@ def train_caps(
         base_train, steps=config.sweep_steps, entropy_lambda=weight, seed=base_train.seed
     )
     controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
-    demos = {c: collect_eating_demonstrations(task, controls[c], config.demos, reading=reading) for c in caps}
+    demos = {
+        c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=reading) for c in caps
+    }
     runs = [entropy_ablation.Run(demos[c], controls[c], base_train) for c in caps]
     bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
     goal_sets = belief_targets(task, control.likelihood)
@@ -362,7 +366,7 @@ def train_caps(
     models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
     names = {c: cap_decoder_name(readings.headline, c) for c in caps}
     for c, model in models.items():
-        path = paths.artifact("eating_reading_decoder", task.robot.name, reading=names[c])
+        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=names[c])
         _save(model, path, fine, controls[c], config, reading=names[c])
     jobs = [(models[c], controls[c], names[c]) for c in caps]
     frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, CAP_SOURCE))

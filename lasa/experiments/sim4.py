@@ -35,8 +35,8 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.experiments import sweep
+from lasa.method.context_map import MAP_KINDS, ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.decoder import ActionDecoder
-from lasa.method.newgoals import MAP_KINDS, ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.step import METHOD_DECODER, method_alpha
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
@@ -125,7 +125,7 @@ class Config(sweep.LooksConfig):
     beta: NonNegative = 1000.0  # near-optimal users [1/rad^2]
     horizon: PositiveInt = 200  # control steps per episode [-]
     method: str = "LA+SA"  # the method compared with and without the map (its decoder is given)
-    # kinds of h run "with" the map (lasa.method.newgoals); straight_line_ee, the paper's line read in
+    # kinds of h run "with" the map (lasa.method.context_map); straight_line_ee, the paper's line read in
     # the gripper's space, is the reading @ee_line of the straight-line claim (one IK per user and step)
     maps: tuple[str, ...] = ("grasp", "straight_line", "straight_line_ee")
 
@@ -298,7 +298,7 @@ def run(
             target=big.target(new, theta),
             beta0=np.full(n, config.beta),
             slope=np.zeros(n),
-            stream=user,
+            user=user,
         )
         with_map = {}
         for kind in config.maps:

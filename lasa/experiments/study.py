@@ -58,8 +58,8 @@ from lasa.people.cohort import Cohort, ParticipantConfig, draw_cohort
 from lasa.people.design import StudyConfig, interface_of
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.measures import measures
+from lasa.world.record import Episodes
 
 __all__ = [
     "Config",
@@ -202,9 +202,9 @@ def load_decoders(
     """
     out: dict[str, ActionDecoder] = {}
     for name in names:
-        path = paths.artifact("eating_reading_decoder", robot, reading=name)
+        path = paths.artifact("eating_segmentation_decoder", robot, segmentation=name)
         model, meta = load_checkpoint(
-            path, robot=robot, make_hint=Paths.make_hint("eating_reading_decoder", robot)
+            path, robot=robot, make_hint=Paths.make_hint("eating_segmentation_decoder", robot)
         )
         trained = (meta.get("control") or {}).get("belief_cap", "not recorded")
         if trained != cap:

@@ -26,8 +26,8 @@ from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people.policy import progress_gain
 from lasa.world.eating import GOALS, TASK_NAMES, TASKS, EatingTask, fork_frame, waypoints
-from lasa.world.episodes import Episodes
 from lasa.world.fork import tip_frames, tip_motion
+from lasa.world.record import Episodes
 
 __all__ = [
     "HERLANT_SHARE",

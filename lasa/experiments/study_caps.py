@@ -36,7 +36,7 @@ from lasa.experiments.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
 from lasa.method.decoder import ActionDecoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
-from lasa.world.episodes import Episodes
+from lasa.world.record import Episodes
 
 __all__ = [
     "NAME",

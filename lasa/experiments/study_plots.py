@@ -44,7 +44,7 @@ from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import wrap_to
 from lasa.experiments.study import PAPER_N, for_member
-from lasa.world.episodes import Episodes
+from lasa.world.record import Episodes
 
 __all__ = [
     "FigureSpec",

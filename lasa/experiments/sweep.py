@@ -252,7 +252,7 @@ def run_population(
     keys = np.array([METHOD_DECODER[m] for m in methods])
     pilot_noise = None
     if users.pilot_prob > 0:
-        pilot_noise = pilot_uniforms(int(np.max(users.stream)) + 1, horizon, pilot_seed)
+        pilot_noise = pilot_uniforms(int(np.max(users.user)) + 1, horizon, pilot_seed)
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
         if key not in decoders:
@@ -326,7 +326,7 @@ def run_look(
         goal=goal,
         theta=theta,
         target=task.target(goal, theta),
-        stream=user,
+        user=user,
         pilot=config.pilot,
         pilot_prob=config.pilot_prob,
         **population(condition, goal, theta),

@@ -1,24 +1,9 @@
 r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script.
 
-Every device answers :meth:`Device.poll` with one :class:`StickSample` per control step: the
-two stick axes, whether the mode button was pressed (Retargeting cycles its modes) and
-whether the stop input is held. What reaches the control loop is made safe here, once
-(:func:`safe_axes`): a disconnected device or a non-finite axis gives zero input, never a
-command, and every axis is clipped to [-1, 1].
-
-- :class:`GamepadDevice`: pygame's SDL joystick API (axes 0 and 1, button 0 = mode,
-  button 1 = stop). A gamepad that goes away mid-session reads as disconnected: zero
-  input until it returns.
-- :class:`KeyboardDevice`: MuJoCo's viewer reports key *presses* only, never releases, so
-  a held key cannot be told from a tapped one. The keyboard therefore works by
-  press-to-set: each arrow press moves that axis one notch (a quarter of full deflection)
-  and the axis *stays* there, as a gamepad stick held still would; space recentres both
-  axes, ``M`` presses the mode button, ``S`` toggles stop. We chose this over a
-  key-state library such as ``pynput``: it needs no second connection to the display,
-  works wherever the viewer works (Xvfb included), and what the participant sees in the
-  viewer's overlay is exactly the axis value in force.
-- :class:`ScriptedDevice`: a recorded or synthetic sequence of samples, for tests,
-  demonstrations of the kit and :func:`lasa.live.teleop.replay`.
+Every device answers :meth:`Device.poll` with one :class:`StickSample` per step (two axes, a mode
+press, stop held), made safe once (:func:`safe_axes`: disconnected or non-finite reads zero, clipped
+to [-1, 1]). The keyboard works by press-to-set (MuJoCo's viewer reports presses, never releases):
+each arrow press moves an axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop.
 """
 
 from __future__ import annotations
@@ -33,15 +18,7 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "StickSample",
-    "Device",
-    "safe_axes",
-    "ScriptedDevice",
-    "KeyboardDevice",
-    "GamepadDevice",
-    "open_device",
-]
+__all__ = ["StickSample", "Device", "safe_axes", "ScriptedDevice", "KeyboardDevice", "open_device"]
 
 NOTCH = 0.25  # keyboard: one arrow press moves an axis by this much [-]
 DEADZONE = 0.05  # gamepad: |axis| below this reads as zero (stick drift) [-]
@@ -49,19 +26,12 @@ DEADZONE = 0.05  # gamepad: |axis| below this reads as zero (stick drift) [-]
 
 @dataclasses.dataclass(frozen=True)
 class StickSample:
-    """One control step's input.
+    """One control step's input."""
 
-    Attributes:
-        raw: The device's axes as read, before any check, shape (2,) (NaN if absent).
-        mode: Whether the mode button was pressed since the last poll.
-        stop: Whether the stop input is held.
-        connected: Whether the device answered.
-    """
-
-    raw: np.ndarray
-    mode: bool = False
-    stop: bool = False
-    connected: bool = True
+    raw: np.ndarray  # the axes as read, (2,) (NaN if absent)
+    mode: bool = False  # the mode button pressed since the last poll
+    stop: bool = False  # the stop input held
+    connected: bool = True  # the device answered
 
     @property
     def z(self) -> np.ndarray:
@@ -70,16 +40,8 @@ class StickSample:
 
 
 def safe_axes(raw: np.ndarray, connected: bool = True, deadzone: float = 0.0) -> np.ndarray:
-    """Stick axes made safe: zero if disconnected, non-finite axes zero, clipped to [-1, 1].
-
-    Args:
-        raw: Axes as read, shape (2,).
-        connected: Whether the device answered this step.
-        deadzone: |axis| below this becomes zero.
-
-    Returns:
-        z, shape (2,), finite and within [-1, 1].
-    """
+    """z, (2,): ``raw`` made safe: zero if disconnected, non-finite axes zero, |axis| below ``deadzone``
+    zero, clipped to [-1, 1]."""
     axes = np.asarray(raw, dtype=float).reshape(-1)
     if axes.shape != (2,):
         raise ConfigError(f"a stick sample has 2 axes, got shape {np.shape(raw)}")
@@ -105,14 +67,8 @@ class Device(Protocol):
 
 
 class ScriptedDevice:
-    """Readings from a script: one per step, then rest (zero axes) once it runs out.
-
-    Args:
-        axes: Raw axes per step, shape (T, 2) (NaN allowed: it reads as zero input).
-        mode: Mode presses per step, shape (T,) (default none).
-        stop: Stop held per step, shape (T,) (default never).
-        connected: Connection per step, shape (T,) (default always).
-    """
+    """Samples from a script, one per step (``axes`` (T, 2), NaN reads zero; ``mode``, ``stop`` and
+    ``connected`` (T,), default none, never, always), then rest (zero axes)."""
 
     name = "scripted"
 
@@ -148,11 +104,8 @@ class ScriptedDevice:
 
     @classmethod
     def from_file(cls, path: str) -> ScriptedDevice:
-        """A script from a CSV file (columns as :meth:`from_table`).
-
-        Raises:
-            ConfigError: if the file is missing, empty, or lacks ``raw0`` and ``raw1``, in one line.
-        """
+        """A script from a CSV file (columns as :meth:`from_table`); a missing, empty or column-less file
+        is a ConfigError in one line."""
         try:
             table = pd.read_csv(path)
         except FileNotFoundError:
@@ -193,11 +146,8 @@ _KEY_SPACE, _KEY_M, _KEY_S = 32, 77, 83
 
 
 class KeyboardDevice:
-    """The keyboard through MuJoCo's viewer key callback, press-to-set (see the module docstring).
-
-    Pass :meth:`key_callback` to ``mujoco.viewer.launch_passive(..., key_callback=...)``.
-    The callback runs on the viewer's thread; a lock guards the state.
-    """
+    """The keyboard, press-to-set, through :meth:`key_callback` (``launch_passive(key_callback=...)``, run on
+    the viewer's thread under a lock)."""
 
     name = "keyboard"
 
@@ -238,13 +188,8 @@ class KeyboardDevice:
 
 
 class GamepadDevice:
-    """A gamepad through pygame's SDL joystick API: axes 0 and 1, button 0 mode, button 1 stop.
-
-    The stick's y axis points down in SDL; it is flipped so that pushing forward is +z2.
-
-    Raises:
-        ConfigError: if no gamepad is connected (use the keyboard instead).
-    """
+    """A gamepad through pygame's SDL joystick API: axes 0 and 1 (y flipped: forward is +z2), button 0
+    mode, button 1 stop; one gone away reads disconnected. ConfigError if none is connected."""
 
     name = "gamepad"
 
@@ -256,7 +201,7 @@ class GamepadDevice:
         # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
         os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
         # SDL would turn SIGINT and SIGTERM into a quit event nobody reads: the session's own
-        # handlers stop it instead (lasa.live.interrupts)
+        # handlers stop it instead (lasa.live.session.StopOnSignals)
         os.environ["SDL_NO_SIGNAL_HANDLERS"] = "1"
         import pygame
 
@@ -295,11 +240,7 @@ class GamepadDevice:
 
 
 def open_device(kind: str = "auto") -> tuple[Device, str]:
-    """Open an input device: ``gamepad``, ``keyboard`` or ``auto`` (a gamepad if one is connected).
-
-    Returns:
-        The device and a sentence saying which one it is, to show the user.
-    """
+    """The device ``gamepad``, ``keyboard`` or ``auto`` (a gamepad if connected), and a sentence naming it."""
     if kind not in ("auto", "gamepad", "keyboard"):
         raise ConfigError(f"unknown device {kind!r}; choose 'auto', 'gamepad' or 'keyboard'")
     if kind in ("auto", "gamepad"):

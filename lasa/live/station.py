@@ -1,27 +1,16 @@
-r"""The robot side of a live session: its settings, and one control step per input sample.
+"""The robot side of a live session: its settings (:class:`SessionConfig`) and one control step per sample.
 
-A :class:`SessionConfig` names the robot, the task, the condition and the participant; a
-:class:`Station` builds what it runs (the robot and its scene, the cup task or the eating task,
-the decoder ``make figures`` trained for it) and runs one control step per sample of an input
-device (:meth:`Station.step`); :func:`log_row` is a step's row of the session log, in
-:meth:`Station.columns` order. ``teleop run`` (:mod:`lasa.live.teleop`) and the web study's
-server (:mod:`lasa.live.web.loop`) drive the same station and log the same rows.
-
-- **Tasks** (:data:`SESSION_TASKS`): ``cups`` (the cup task of the simulations, either robot) and
-  ``Entree`` / ``Dessert`` (the eating study, the Panda). **Conditions** (:data:`lasa.base.conditions.ALL`):
-  ``R``, ``R+SA`` (Retargeting, :mod:`lasa.method.retarget`), ``LA``, ``LA+SA`` and, for the
-  cups, ``LA+SA+Entropy``.
-- **The step** is the study's: the stick at rest commands nothing; in Retargeting the mode
-  button cycles the modes; the live device is a chooser of the episode runner
-  (:class:`lasa.method.episodes.Runner`), whose step blends, updates the belief and takes the
-  safe transition, so joint limits and the speed bound hold. The stop input holds the robot
-  (no human action, no assistance, the belief frozen).
+A :class:`Station` builds the robot, the cup or eating task and the decoder ``make figures`` trained,
+and steps the episode runner (:class:`lasa.method.runner.Runner`) with the device as its chooser:
+the stick at rest commands nothing, the mode button cycles Retargeting's modes, and the stop input
+holds the robot (no action, the belief frozen). ``teleop run`` and the web study drive it alike.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import hashlib
+import importlib.metadata
 from pathlib import Path
 from typing import Any
 
@@ -36,16 +25,18 @@ from lasa.base.paths import Paths
 from lasa.live.devices import StickSample
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
-from lasa.method.episodes import Chooser, Now, Runner, held_input
 from lasa.method.retarget import Retargeting, retarget_action, twist
+from lasa.method.runner import Chooser, Now, Runner, held_input
 from lasa.method.step import Assist
+from lasa.world.eating import TASK_NAMES, instruction, make_eating_task
+from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
 
 __all__ = ["SESSION_TASKS", "SessionConfig", "Station", "log_row"]
 
-SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs: the cups, and the eating tasks
+SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,30 +66,28 @@ class SessionConfig:
             )
 
 
+def _lasa_version() -> str:
+    """``lasa.__version__``, read as it reads it (without importing the package's exports)."""
+    try:
+        return importlib.metadata.version("lasa")
+    except Exception:  # a source tree that was never installed
+        return "0.0.0+unknown"
+
+
 def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 class Station:
-    """The robot side of a session: task, decoder, control, and one control step per sample.
-
-    Attributes:
-        config: The session's settings.
-        robot: The robot and scene.
-        task: The cup task or the eating task.
-        control: Control-loop units.
-        decoder: phi (None for Retargeting).
-        state: s, shape (n,); log_belief: log b, shape (G,); mode: Retargeting's mode.
-        waypoint: Index of the next waypoint (eating tasks), or 0.
-        done: Whether the task's last waypoint was reached.
-    """
+    """The robot side of a session: ``robot``, ``task``, ``control``, ``decoder`` (None: Retargeting),
+    the ``mode`` of Retargeting, the ``waypoint`` worked towards and whether the task is ``done``."""
 
     def __init__(self, config: SessionConfig) -> None:
         self.config = config
         paths = Paths.of(config.build_dir, "figures")
         self.decoder: ActionDecoder | None = None
         self.decoder_path: Path | None = None
-        self.waypoints: list[Any] = []
+        self.tracker: WaypointTracker | None = None  # the eating tasks' waypoints (cups: none)
         condition = parse_condition(config.condition)
         if config.task == "cups":
             self.robot: Robot = load_robot(config.robot)
@@ -106,12 +95,10 @@ class Station:
             self.control: ControlConfig = self.robot.control
             name = "decoder_entropy" if condition.decoder == "entropy" else "decoder_lambda0"
         else:
-            from lasa.world.eating import make_eating_task, waypoints
-
             self.task = make_eating_task()
             self.robot = self.task.robot
             self.control = self.robot.control
-            self.waypoints = waypoints(config.task)
+            self.tracker = WaypointTracker.of(self.robot)
             name = "eating_decoder"
         if condition.interface == "LA":
             self.decoder_path = paths.artifact(name, self.robot.name)
@@ -123,7 +110,6 @@ class Station:
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self._data = mujoco.MjData(self.robot.model)
-        self._frames: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # waypoint -> fork position, rotation
         self.reset()
 
     def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
@@ -138,9 +124,8 @@ class Station:
             )
 
     def _check_belief(self, meta: dict[str, Any], path: Path) -> None:
-        """Refuse a decoder trained with another belief cap than this station's: the decoder reads b,
-        and a belief it never saw (0.99 for one trained without the cap) is a context it does not know.
-        A checkpoint that records no control units is taken as it is."""
+        """Refuse a decoder trained with another belief cap (a belief it never saw is an unknown context);
+        a checkpoint that records no control units is taken as it is."""
         control = meta.get("control")
         if isinstance(control, dict) and control.get("belief_cap", None) != self.control.belief_cap:
             raise CheckpointError(
@@ -181,8 +166,6 @@ class Station:
 
     def meta(self) -> dict[str, Any]:
         """The sidecar's description of this station."""
-        import lasa
-
         return {
             **dataclasses.asdict(self.config),
             "goals": list(self.task.goal_names),
@@ -193,7 +176,7 @@ class Station:
             "decoder": None if self.decoder_path is None else self.decoder_path.name,
             "decoder_sha256": None if self.decoder_path is None else _sha256(self.decoder_path),
             "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
-            "lasa_version": lasa.__version__,
+            "lasa_version": _lasa_version(),
         }
 
     def columns(self) -> list[str]:
@@ -205,40 +188,27 @@ class Station:
             cols += [f"{name}{i}" for i in range(size)]
         return cols
 
+    @property
+    def phase(self) -> int:
+        """The current phase of an eating task (-1: the cups)."""
+        if self.tracker is None:
+            return -1
+        return int(self.tracker.phase[TASK_NAMES.index(self.config.task), self.waypoint])
+
     def phase_text(self) -> str:
         """The instruction of the current phase."""
-        if self.config.task == "cups":
+        if self.tracker is None:
             return "Reach the cup you want, with the grasp you want"
-        if self.done:
-            return f"{self.config.task}: done"
-        from lasa.world.eating import TASKS as EATING_TASKS
+        return instruction(self.config.task, None if self.done else self.phase)
 
-        wp = self.waypoints[self.waypoint]
-        phases = EATING_TASKS[self.config.task]
-        phase = phases[wp.phase]
-        where = {
-            "rice": "the rice (left bowl)",
-            "middle": "the middle bowl",
-            "icing": "the icing (right bowl)",
-        }
-        target = where.get(phase.goal, "the plate")
-        verb = "reach" if phase.preference is None else phase.preference
-        return f"{self.config.task} {wp.phase + 1}/{len(phases)}: {verb} at {target}"
-
-    def _check_waypoint(self) -> None:
-        if not self.waypoints or self.done:
+    def track(self) -> None:
+        """Move on past the waypoint the fork reached (:class:`lasa.world.fork.WaypointTracker`)."""
+        if self.tracker is None or self.done:
             return
-        from lasa.world.eating import fork_frame
-        from lasa.world.fork import next_waypoint, tip_frames, waypoint_reached
-
-        if self.waypoint not in self._frames:  # a waypoint's fork frame is fixed: work it out once
-            wp = self.waypoints[self.waypoint]
-            self._frames[self.waypoint] = fork_frame(self.robot, wp.goal, wp.theta, wp.depth)
-        position, rotation = self._frames[self.waypoint]
         tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
-        reached = waypoint_reached(tip[0], axis[0], position, rotation[:, 2])
-        waypoint, done = next_waypoint(reached, np.array(self.waypoint), np.array(len(self.waypoints)))
-        self.waypoint, self.done = int(waypoint), bool(done)
+        task = np.array([TASK_NAMES.index(self.config.task)])
+        waypoint, done = self.tracker.advance(task, np.array([self.waypoint]), tip, axis)
+        self.waypoint, self.done = int(waypoint[0]), bool(done[0])
 
     def step(self, sample: StickSample) -> dict[str, Any]:
         """One control step from one sample; returns what the log records of it."""
@@ -246,15 +216,12 @@ class Station:
         n = self.robot.n_joints
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
         pressed = bool(sample.mode) and self.retarget is not None
-        if sample.stop:
-            pass  # hold: no human action, no assistance, the belief frozen
-        else:
+        if not sample.stop:  # stop holds: no human action, no assistance, the belief frozen
             result = self.runner.step(self._chooser(z, pressed))
             a_h = result.human_action[0]
             a_r = result.robot_action[0] if result.robot_action is not None else np.zeros(n)
             a = result.action[0]
-            self._check_waypoint()
-        wp = self.waypoints[self.waypoint] if self.waypoints else None
+            self.track()
         return {
             "raw": np.asarray(sample.raw, float),
             "connected": sample.connected,
@@ -262,7 +229,7 @@ class Station:
             "stop": bool(sample.stop),
             "z": z,
             "mode": self.mode,
-            "phase": -1 if wp is None else wp.phase,
+            "phase": self.phase,
             "waypoint": self.waypoint,
             "s": self.state.copy(),
             "b": self.belief,
@@ -272,11 +239,8 @@ class Station:
         }
 
     def _chooser(self, z: np.ndarray, pressed: bool) -> Chooser:
-        """The live device as the runner's chooser: stick ``z`` (and a mode press, in Retargeting).
-
-        Latent actions decode the stick, the stick at rest commanding nothing; Retargeting turns
-        a press, the stick at rest, or a twist in the mode into a human action by mink's IK.
-        """
+        """The device as the runner's chooser: latent actions decode ``z`` (rest: nothing); Retargeting
+        turns a press, rest or a twist in the mode into a human action by mink's IK."""
         if self.decoder is not None:
             return held_input(self.decoder, z[: self.decoder.z_dim][None], rest="zero")
         retarget = self.retarget
@@ -294,16 +258,8 @@ class Station:
 
 def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
     """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    row = [
-        step,
-        t,
-        float(late),
-        *rec["raw"],
-        float(rec["connected"]),
-        float(rec["mode_press"]),
-        float(rec["stop"]),
-    ]
-    row += [*rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
+    flags = [float(rec["connected"]), float(rec["mode_press"]), float(rec["stop"])]
+    row = [step, t, float(late), *rec["raw"], *flags, *rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
     for key in ("s", "b", "a_h", "a_r", "a"):
         row += list(rec[key])
     return row

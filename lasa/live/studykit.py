@@ -1,17 +1,8 @@
 """The kit for running the eating study with people: the schedule and the questionnaire.
 
-- :func:`write_schedule`: the order of the four conditions for N participants (at most
-  :data:`MAX_PARTICIPANTS`), a balanced Latin square (Williams design,
-  :func:`lasa.base.conditions.williams_square`), participant i on row i mod 4, as the
-  simulated cohort. An existing schedule is replaced only when asked (``overwrite``).
-- :func:`survey`: the paper's 7-point Likert questionnaire after each condition, on five
-  scales (Easy, Helpful, Precise, Intuitive, Prefer), saved beside the sessions in
-  ``likert.csv`` (one row per participant x condition x scale). An answer is a whole number
-  in 1..7; on the terminal a bad one is asked again, the answers given kept. A participant's
-  answers for a condition are replaced only when asked (``overwrite``).
-
-Reading the logged sessions and the answers back for analysis is :mod:`lasa.evidence.sessions`
-(notebook 11 uses it; no notebook imports this module).
+:func:`write_schedule` orders the four conditions for N participants by a balanced Latin square
+(Williams), participant i on row i mod 4; :func:`survey` records the 7-point Likert questionnaire
+in ``likert.csv``. Neither replaces what exists unless asked (``overwrite``).
 """
 
 from __future__ import annotations
@@ -25,24 +16,9 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
-from lasa.evidence.sessions import SCALES
+from lasa.evidence.sessions import QUESTIONS, SCALES
 
-__all__ = [
-    "MAX_PARTICIPANTS",
-    "write_schedule",
-    "parse_answer",
-    "parse_answers",
-    "ask",
-    "survey",
-]
-
-QUESTIONS = {
-    "Easy": "It was easy to complete the tasks with this robot.",
-    "Helpful": "The robot was helpful.",
-    "Precise": "I could make precise motions.",
-    "Intuitive": "The robot was intuitive to control.",
-    "Prefer": "I would use this condition again.",
-}
+__all__ = ["MAX_PARTICIPANTS", "write_schedule", "parse_answer", "parse_answers", "ask", "survey"]
 
 
 MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the kit runs
@@ -52,8 +28,7 @@ def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False)
     """Write the order of conditions for ``n`` participants (CSV: participant, position, condition).
 
     Raises:
-        ConfigError: if ``n`` is not a whole number in 1..:data:`MAX_PARTICIPANTS`, or ``out``
-            exists and ``overwrite`` is not set.
+        ConfigError: ``n`` is not a whole number in 1..:data:`MAX_PARTICIPANTS`, or ``out`` exists.
     """
     if isinstance(n, bool) or int(n) != n or not 1 <= n <= MAX_PARTICIPANTS:
         raise ConfigError(
@@ -79,11 +54,7 @@ def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False)
 
 
 def parse_answer(answer: object) -> int:
-    """One Likert answer as an int: a whole number in 1..7 (``6``, ``"6"``, ``6.0``).
-
-    Raises:
-        ConfigError: for anything else (``4.5``, ``""``, ``"five"``, ``8``), in one line.
-    """
+    """One Likert answer as an int: a whole number in 1..7 (``6``, ``"6"``, ``6.0``), else a ConfigError."""
     text = str(answer).strip()
     try:
         value = float(text)
@@ -129,19 +100,10 @@ def survey(
     answers: list[int] | None = None,
     overwrite: bool = False,
 ) -> Path:
-    """Record one participant's questionnaire after one condition in ``<folder>/likert.csv``.
+    """Record ``participant``'s questionnaire after ``condition`` in ``<folder>/likert.csv``.
 
-    Args:
-        folder: The sessions folder.
-        participant: The participant's id.
-        condition: The condition just done.
-        answers: One answer in 1..7 per scale of :data:`SCALES`; asked on the terminal if None.
-        overwrite: Replace this participant's answers for this condition if there are some.
-
-    Raises:
-        ConfigError: for an answer that is not a whole number in 1..7, the wrong number of
-            answers, or answers already recorded for this participant and condition (without
-            ``overwrite``).
+    ``answers``: one in 1..7 per scale (asked on the terminal if None); ``overwrite`` replaces
+    answers recorded before (else they are a ConfigError, as a bad answer or count is).
     """
     if condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; choose one of {CONDITIONS}")

@@ -1,20 +1,14 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
-``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` (or ``make
-teleop ARGS="..."``) runs the simulations' control step (Algorithm 1, :mod:`lasa.live.station`) at a
-fixed rate in MuJoCo's passive viewer, from a gamepad or the keyboard (:mod:`lasa.live.devices`), on
-``cups``, ``Entree`` or ``Dessert`` under ``R``, ``R+SA``, ``LA``, ``LA+SA`` (and, for the cups,
-``LA+SA+Entropy``), and logs every step (:mod:`lasa.evidence.sessionlog`). ``replay <session>``
-re-runs a log and checks it reproduces the logged states exactly (``--mp4`` renders it);
-``schedule`` writes the counterbalanced order of conditions; ``survey`` records the 7-point Likert
-questionnaire (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
+``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` runs the
+control step (:mod:`lasa.live.station`) at a fixed rate from a gamepad or the keyboard; ``replay``
+re-runs a log and checks its states bit for bit (``--mp4`` renders it); ``schedule`` and ``survey``
+are the study kit (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import datetime as dt_
 import json
 import sys
 import time
@@ -29,126 +23,45 @@ from lasa.base.config import check_range
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaError
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live.devices import Device, ScriptedDevice, open_device
-from lasa.live.interrupts import StopOnSignals
-from lasa.live.station import SESSION_TASKS, SessionConfig, Station, log_row
+from lasa.live.session import Session, StopOnSignals, open_log
+from lasa.live.station import SESSION_TASKS, SessionConfig, Station
 from lasa.method.retarget import MODES
 
 __all__ = ["run_session", "replay", "main"]
 
 
-class _Overlay:
-    """The viewer's extras: belief spheres over the goals and the instruction text."""
-
-    def __init__(self, station: Station) -> None:
-        self.station = station
-        self.goals = station.robot.goal_positions()
-
-    def draw_goals(self, viewer: Any, rec: dict[str, Any]) -> None:
-        """A sphere over each goal, its radius growing with the belief in it (1 cm to 5 cm)."""
+def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
+    """Pose the viewer's robot at this step's state, draw a belief sphere over each goal (1 to 5 cm)
+    and the instruction text, and sync the window."""
+    with viewer.lock():
+        data.qpos[station.robot.qpos_adr] = rec["s"]
+        mujoco.mj_forward(station.robot.model, data)
         scn = viewer.user_scn
         scn.ngeom = 0
-        for g, (pos, p) in enumerate(zip(self.goals, rec["b"], strict=True)):
+        for g, (pos, p) in enumerate(zip(goals, rec["b"], strict=True)):
             if scn.ngeom >= scn.maxgeom:
                 break
-            radius = 0.01 + 0.04 * float(p)
             mujoco.mjv_initGeom(
                 scn.geoms[scn.ngeom],
                 mujoco.mjtGeom.mjGEOM_SPHERE,
-                np.array([radius, 0.0, 0.0]),
+                np.array([0.01 + 0.04 * float(p), 0.0, 0.0]),
                 pos + np.array([0.0, 0.0, 0.18]),
                 np.eye(3).ravel(),
                 np.array([0.95, 0.6 * (g % 2), 0.2, 0.55], dtype=np.float32),
             )
             scn.ngeom += 1
-
-    def draw_text(self, viewer: Any, rec: dict[str, Any]) -> None:
-        """The instruction of the phase, the condition (or STOPPED), the mode, z and the belief."""
-        station = self.station
-        mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
-        status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
-        text = (
-            f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
-            + "belief: "
-            + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
-        )
-        try:
-            viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
-        except (AttributeError, TypeError):  # an older viewer without text overlays
-            pass
-
-    def show(self, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
-        """Pose the viewer's robot at this step's state, draw the extras, and sync the window."""
-        with viewer.lock():
-            data.qpos[self.station.robot.qpos_adr] = rec["s"]
-            mujoco.mj_forward(self.station.robot.model, data)
-            self.draw_goals(viewer, rec)
-        self.draw_text(viewer, rec)  # takes the viewer's own lock: outside ours
-        viewer.sync()
-
-
-@dataclasses.dataclass
-class _Loop:
-    """A running session's loop: what one step reads and writes, and the counts kept so far.
-
-    Attributes:
-        station: The robot side; device: the input; writer: the log (None: no log).
-        realtime: Hold each step to its deadline; dt: the step [s].
-        overlay: The viewer's extras (None: no viewer), drawn into ``viewer`` with ``data``.
-        on_step: Called as ``on_step(step, record)`` after each step, or None.
-        compute: Each step's compute time [s]; misses: deadline misses; steps: steps logged.
-        status: ``complete``, or ``interrupted`` once a signal or the viewer's closing stopped it.
-    """
-
-    station: Station
-    device: Device
-    writer: SessionWriter | None
-    realtime: bool
-    dt: float
-    overlay: _Overlay | None
-    viewer: Any
-    data: mujoco.MjData
-    on_step: Any
-    compute: list[float] = dataclasses.field(default_factory=list)
-    misses: int = 0
-    steps: int = 0
-    status: str = "complete"
-
-    def step(self, step: int, start: float) -> bool:
-        """Step ``step`` of a loop started at ``start`` [s, perf_counter]; whether the session goes on."""
-        deadline = start + (step + 1) * self.dt
-        t0 = time.perf_counter()
-        rec = self.station.step(self.device.poll())
-        if self.overlay is not None:
-            if not self.viewer.is_running():
-                self.status = "interrupted"
-                return False
-            self.overlay.show(self.viewer, self.data, rec)
-        self.compute.append(time.perf_counter() - t0)
-        late = self.realtime and time.perf_counter() > deadline
-        self.misses += int(late)
-        t = (time.perf_counter() - start) if self.realtime else step * self.dt
-        if self.writer is not None:
-            self.writer.append(log_row(step, t, late, rec))
-        self.steps = step + 1
-        if self.on_step is not None:
-            self.on_step(step, rec)
-        if self.station.done or (isinstance(self.device, ScriptedDevice) and self.device.finished):
-            return False
-        if self.realtime:
-            time.sleep(max(0.0, deadline - time.perf_counter()))
-        return True
-
-    def timing(self, signal: str | None) -> dict[str, Any]:
-        """The session's timing, as :func:`run_session` returns it."""
-        compute = self.compute
-        return {
-            "steps": self.steps,
-            "step_time_median_s": float(np.median(compute)) if compute else 0.0,
-            "step_time_p99_s": float(np.percentile(compute, 99)) if compute else 0.0,
-            "deadline_misses": self.misses,
-            "done": self.station.done,
-            "signal": signal,
-        }
+    mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
+    status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
+    text = (
+        f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
+        + "belief: "
+        + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
+    )
+    try:  # takes the viewer's own lock: outside ours
+        viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
+    except (AttributeError, TypeError):  # an older viewer without text overlays
+        pass
+    viewer.sync()
 
 
 def run_session(
@@ -162,63 +75,57 @@ def run_session(
     viewer_data: mujoco.MjData | None = None,
     on_step: Any = None,
 ) -> dict[str, Any]:
-    """Run the control loop: one step per Delta of wall-clock time (or as fast as possible).
+    """Run the control loop (:class:`lasa.live.session.Session`): one step per Delta, or as fast as possible.
 
-    The session ends after ``max_steps``, when the task is done, when a scripted device
-    runs out, or when the viewer is closed. SIGINT, SIGTERM or SIGHUP stop it at the next
-    step (:class:`lasa.live.interrupts.StopOnSignals`): the log is closed as ``interrupted``
-    and ``signal`` in the result names the signal. Interrupted by an exception, the log is
-    closed as ``interrupted`` and the exception goes on.
+    The session ends after ``max_steps``, when the task is done, a scripted device runs out or
+    the viewer is closed; a signal stops it at the next step (closed ``interrupted``, its name in
+    ``signal``); an exception closes the log ``interrupted`` and goes on.
 
     Args:
-        station: The robot side.
-        device: The input device.
-        writer: The session's log (None: no log).
+        station: The robot side; device: the input; writer: the log (None: no log).
         max_steps: The longest session, in steps.
         realtime: Hold each step to its deadline (else run as fast as possible).
-        viewer: A passive viewer handle to draw into, and ``viewer_data`` the MjData it shows.
-        viewer_data: See ``viewer``.
+        viewer: A passive viewer to draw into, showing ``viewer_data``.
+        viewer_data: The MjData the viewer was launched with.
         on_step: Called as ``on_step(step, record)`` after each step.
 
     Returns:
-        Timing: steps, the step time's median and 99th percentile [s], deadline misses, whether
-        the task was done, and the signal that stopped the session (or None).
+        :meth:`lasa.live.session.Session.timing`, and the ``signal`` that stopped it (or None).
     """
-    overlay = _Overlay(station) if viewer is not None else None
     if viewer is not None and viewer_data is None:
         raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
-    data = viewer_data if viewer_data is not None else mujoco.MjData(station.robot.model)
-    loop = _Loop(station, device, writer, realtime, station.control.dt, overlay, viewer, data, on_step)
-    try:
-        with StopOnSignals() as stop:
-            station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
-            start = time.perf_counter()
-            for step in range(max_steps):
-                if stop.received is not None:
-                    loop.status = "interrupted"
-                    break
-                if not loop.step(step, start):
-                    break
-    except BaseException:
-        if writer is not None:
-            writer.close("interrupted", deadline_misses=loop.misses)
-        raise
-    timing = loop.timing(stop.received)
-    if writer is not None:
-        writer.close(loop.status, **timing)
-    return timing
+    goals = station.robot.goal_positions() if viewer is not None else None
 
+    def show(rec: dict[str, Any]) -> bool:
+        if goals is None:
+            return True
+        if not viewer.is_running():
+            return False
+        _draw(station, goals, viewer, viewer_data, rec)
+        return True
 
-def new_session(station: Station, folder: str | Path, stem: str | None = None) -> SessionWriter:
-    """Open the log of a new session of ``station`` in ``folder``."""
-    c = station.config
-    stamp = dt_.datetime.now(dt_.UTC).strftime("%Y%m%dT%H%M%S")
-    stem = stem or f"{c.participant}_{c.task}_{c.condition}_{stamp}"
-    return SessionWriter(folder, stem, station.meta(), station.robot.xml(), station.columns())
+    session = Session(station, writer, max_steps, realtime)
+    status = "complete"
+    with StopOnSignals() as stop:
+        station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
+        with session.guard():
+            while session.steps < max_steps:
+                rec = None if stop.received is not None else session.step(device.poll(), show)
+                if rec is None:
+                    status = "interrupted"
+                    break
+                if on_step is not None:
+                    on_step(session.steps - 1, rec)
+                if station.done or (isinstance(device, ScriptedDevice) and device.finished):
+                    break
+                if realtime:
+                    time.sleep(max(0.0, session.pause()))
+    session.close(status, signal=stop.received)
+    return {**session.timing(), "signal": stop.received}
 
 
 def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) -> None:
-    """Refuse a replay whose decoder on disk is not the one the session logged (checksum, config)."""
+    """Refuse a replay whose decoder on disk is not the logged one (checksum, config)."""
     logged, here = meta["decoder_sha256"], station.meta()
     if logged is None and station.decoder_path is not None:
         raise ArtifactError(
@@ -243,14 +150,12 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
     """Re-run a logged session from its inputs and compare its states with the log.
 
     Returns:
-        ``{"steps", "max_state_difference", "exact", "status"}``; the MP4's path if rendered;
-        ``damaged`` (the reason) when a damaged log was replayed with ``allow_damaged``.
+        ``{"steps", "max_state_difference", "exact", "status"}``, ``mp4`` if rendered, ``damaged``
+        (the reason) for a damaged log replayed with ``allow_damaged``.
 
     Raises:
-        ArtifactError: if the sidecar does not record the decoder (its checksum, its config),
-            the decoder on disk is not the one the session used, the scene XML is missing or
-            another (:func:`lasa.evidence.sessionlog.check_scene`), or the log is damaged
-            (:func:`lasa.evidence.sessionlog.read_session`) and ``allow_damaged`` is not set.
+        ArtifactError: the sidecar lacks the decoder's checksum or config, the decoder or scene is
+            not the logged one, or the log is damaged (without ``allow_damaged``).
     """
     frame, meta = read_session(session, allow_damaged=allow_damaged)
     check_scene(session, meta)
@@ -263,12 +168,8 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
     station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
     _check_decoder(station, meta, session)
     device = ScriptedDevice.from_table(frame, mode="mode_press")
-    n = station.robot.n_joints
-    logged = frame[[f"s{i}" for i in range(n)]].to_numpy()
-    states = []
-    for _ in range(len(frame)):
-        states.append(station.step(device.poll())["s"])
-    replayed = np.asarray(states)
+    logged = frame[[f"s{i}" for i in range(station.robot.n_joints)]].to_numpy()
+    replayed = np.asarray([station.step(device.poll())["s"] for _ in range(len(frame))])
     diff = float(np.abs(replayed - logged).max()) if len(logged) else 0.0
     out: dict[str, Any] = {
         "steps": len(frame),
@@ -288,12 +189,7 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
 
 
 def _screenshot(path: str, timeout_s: float = 30.0) -> None:
-    """Save a screenshot of the X display (the viewer's window) once it shows a drawn scene.
-
-    Software rendering on a busy machine may take seconds to draw the viewer's first
-    frames; the display is grabbed every half second until it is no longer flat (or until
-    ``timeout_s``), and the last grab is saved either way.
-    """
+    """Save a screenshot of the X display once it is not flat (grabbed every 0.5 s, up to ``timeout_s``)."""
     from PIL import ImageGrab
 
     start = time.perf_counter()
@@ -307,7 +203,7 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
 
 
 def _check_display() -> None:
-    """Refuse, with what to do, to open the viewer where there is no display to open it on."""
+    """Refuse, with what to do, to open the viewer without a display."""
     import os
 
     if sys.platform.startswith("linux") and not (
@@ -414,7 +310,7 @@ def _run(args: argparse.Namespace) -> int:
         _check_display()
     station = Station(config)
     device = _open_input(args.device)
-    writer = new_session(station, args.sessions)
+    writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
     try:
         if args.no_viewer:

@@ -1,25 +1,10 @@
-r"""The robot's belief over goals, updated in log space (Algorithm 1, line 8).
+r"""The robot's belief over goals, updated in log space (Algorithm 1, line 8):
+:math:`b'(g) \propto P(a_h \mid s, g)\, b(g)`, a Boltzmann model of progress towards g.
 
-After the human's decoded action :math:`a_h` at state s, each goal's belief is
-multiplied by the likelihood of that action and renormalised:
-
-.. math::
-
-    b'(g) \propto P(a_h \mid s, g)\, b(g), \qquad
-    P(a_h \mid s, g) \propto \exp\!\big(-\beta_b \,(\|g - (s + \Delta a_h)\| - \|g - s\|)\big),
-
-a Boltzmann model of progress towards g. ``ControlConfig.likelihood`` selects it:
-
-- ``"goal"``, the plain progress model exactly as above: distances to the points g.
-- ``"preferences"``: distances to each goal's set of preferred poses (:func:`belief_targets`,
-  shape (G, K, n)), each goal's normaliser approximated by its best action: the likelihood is
-  exp(-beta_b * regret), regret = d_g(s') - d_g(s) + min(Delta sigma_h, d_g(s)) >= 0.
-
-A floor keeps every goal's belief at least ``belief_floor`` (a goal-switch prior,
-:func:`update_log_belief`). A cap, ``belief_cap``, keeps every goal's belief at most that value, as
-Javdani et al.'s implementation of shared autonomy does after each update (:func:`cap_log_belief`);
-the eating study's belief has it, the sims' (Algorithm 1's) has not. Why the refinements, as
-measured: ``docs/method-notes.md``.
+``ControlConfig.likelihood``: ``"goal"``, distances to the points g; ``"preferences"``, to each
+goal's preference set, normalised by its best action (regret = d_g(s') - d_g(s) + min(Delta
+sigma_h, d_g(s)) >= 0). A floor (:func:`update_log_belief`) and an optional cap
+(:func:`cap_log_belief`, Javdani et al.'s) bound each goal's belief. Why: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -49,17 +34,13 @@ __all__ = [
     "belief",
 ]
 
-# A context is "confident" when its top belief lies within this of the most a goal can hold: the
-# cap, or one without a cap (so 0.99, the threshold the package used before the cap existed) [-].
+# a context is "confident" when its top belief lies within this of the cap (or of one) [-]
 CONFIDENT_MARGIN = 0.01
 
 
 def belief_targets(task: GoalTask, likelihood: str) -> np.ndarray:
-    """What the belief measures progress towards under ``likelihood``, shape (G, K, n).
-
-    ``"goal"``: the goal points g (K = 1). ``"preferences"``: each goal's preference set,
-    a polyline (:attr:`lasa.world.goals.GoalTask.preference_sets`).
-    """
+    """What the belief measures progress towards, (G, K, n): the goals g (K = 1) under ``"goal"``,
+    the preference sets (:attr:`lasa.world.goals.GoalTask.preference_sets`) under ``"preferences"``."""
     check_choice("likelihood", likelihood, LIKELIHOODS)
     return task.goals[:, None, :] if likelihood == "goal" else task.preference_sets
 
@@ -70,9 +51,7 @@ def uniform_log_belief(batch: int, n_goals: int) -> np.ndarray:
 
 
 def distance_to_sets_torch(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
-    """Euclidean distance from each point to each goal's polyline, shape (..., G).
-
-    Differentiable in ``points`` (the entropy regulariser backpropagates through it).
+    """Euclidean distance from each point to each goal's polyline, shape (..., G); differentiable.
 
     Args:
         points: Points, shape (..., n).
@@ -103,9 +82,8 @@ def log_likelihood_torch(
         goal_sets: Goal sets (polylines), shape (G, K, n); K = 1 for point goals.
         dt: Control period Delta [s].
         beta: Belief temperature beta_b >= 0.
-        max_step: If given, the longest step the user can make, Delta sigma_h [rad]:
-            each goal's likelihood is then normalised by its best action (the regret
-            form, see the module docstring). ``None`` is the plain progress model.
+        max_step: Delta sigma_h [rad]: normalise each goal's likelihood by its best action (the
+            regret form); ``None``: the plain progress model.
     """
     return _log_likelihood(state, action, goal_sets, dt, beta, max_step, distance_to_sets_torch)
 
@@ -133,44 +111,24 @@ def _log_likelihood(
     return -beta * progress
 
 
-def _as_sets(goals: np.ndarray) -> np.ndarray:
-    return goals[:, None, :] if goals.ndim == 2 else goals
-
-
 def _segment_distances(
     p: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
 ) -> torch.Tensor:
-    """Distances from points to segments, row by row: distance_to_sets_torch's operations.
-
-    Args:
-        p: Points, shape (..., n).
-        a: Segment starts, broadcast to ``p``.
-        ab: Segment vectors, broadcast to ``p``.
-        denom: ``||ab||^2`` clamped to at least 1e-12, broadcast to ``p``'s leading shape.
-    """
+    """Distances from points p to segments a + t ab (``denom`` = ||ab||^2 >= 1e-12), row by row,
+    by distance_to_sets_torch's operations."""
     t = ((p - a) * ab).sum(-1) / denom
     closest = a + t.clamp(0.0, 1.0)[..., None] * ab
     return torch.linalg.vector_norm(p - closest, dim=-1)
 
 
-# Rows per block of :func:`_candidates`: its (rows, G (K-1)) float64 work arrays stay in a core's
-# L2 cache (1024 x 68 x 8 B = 0.56 MB for the eating task's 4 x 17 segments), where the whole
-# batch's (8,000 rows: 4.3 MB each) would stream through memory at every elementwise pass.
-_CANDIDATE_ROWS = 1024
+_CANDIDATE_ROWS = 1024  # rows per block of _candidates: its work arrays stay in a core's L2 cache
 
 
 def _candidates(points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor) -> torch.Tensor:
     r"""The segments that can be a point's nearest, shape (rows, G, K-1), bool; no gradient.
 
-    Each squared distance is computed in float64 from (rows, G (K-1)) matrices, not
-    (rows, G, K-1, n) arrays: with :math:`u = (p - a) \cdot ab` and
-    :math:`t = \mathrm{clamp}(u / \|ab\|^2, 0, 1)`,
-    :math:`d^2 = \|p - a\|^2 + t (t \|ab\|^2 - 2 u)`, where :math:`p \cdot a` and
-    :math:`p \cdot ab` are two small matrix products. Its error is far below float32's, so a
-    segment more than a margin :math:`m` (about 170 float32 rounding units of the coordinates)
-    farther than the nearest cannot be float32's minimum: a segment is kept when
-    :math:`d^2 \le (d_{\min} + m)^2`, one square root per goal instead of one per segment.
-    The rows go in blocks of ``_CANDIDATE_ROWS``, each block's work arrays in cache.
+    :math:`d^2 = \|p - a\|^2 + t (t \|ab\|^2 - 2 u)` in float64 from two small matrix products;
+    a segment is kept when :math:`d^2 \le (d_{\min} + m)^2`, m about 170 float32 rounding units.
     """
     n_goals, n_seg, n = ab.shape
     a64, ab64 = a.double().reshape(-1, n), ab.double().reshape(-1, n)
@@ -196,16 +154,8 @@ def _nearest_segment(
 ) -> torch.Tensor:
     """The segment distance_to_sets_torch takes each goal's minimum at, shape (rows, G); no gradient.
 
-    The segments that can be nearest come from :func:`_candidates`; where a goal has more
-    than one (most often the two segments at a vertex), their float32 distances are
-    computed as there and the first of the least is taken, as ``min`` takes it. So the
-    index is the original's, bit for bit, at a fraction of the cost.
-
-    Args:
-        points: Finite points, shape (rows, n).
-        a: Segment starts, shape (G, K-1, n).
-        ab: Segment vectors, shape (G, K-1, n).
-        denom: ``||ab||^2`` clamped to at least 1e-12, shape (G, K-1).
+    Among :func:`_candidates`, ties are settled by the reference arithmetic, the first of the
+    least taken as ``min`` takes it: the index is the original's, bit for bit.
     """
     n_goals, n_seg, _ = ab.shape
     with torch.no_grad():
@@ -229,17 +179,8 @@ def _nearest_segment(
 def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
     """:func:`lasa.method.belief.distance_to_sets_torch`, differentiated through the nearest segment only.
 
-    The same value and gradient: the minimum over a goal's segments passes its gradient to
-    the segment it picks alone, so the segment is found first without autograd
-    (:func:`_nearest_segment`), and only that segment's distance, (..., G, n) instead of
-    (..., G, K-1, n), is computed on the autograd graph, by the same operations.
-
-    Args:
-        points: Points, shape (..., n).
-        goal_sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
-
-    Returns:
-        Distances, shape (..., G).
+    The same value and gradient: the segment is found first without autograd
+    (:func:`_nearest_segment`), and only its distance is computed on the graph, (..., G).
     """
     if goal_sets.shape[1] == 1 or not bool(torch.isfinite(points).all()):
         return distance_to_sets_torch(points, goal_sets)
@@ -254,13 +195,8 @@ def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Ten
 
 
 def _distance_no_grad(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
-    """:func:`distance_to_sets_torch` without autograd, bitwise equal to it, in less time.
-
-    Each goal's nearest segment is found first (:func:`nearest_distance`: a superset of the
-    candidates from two small matrix products, ties settled by the reference arithmetic), and
-    only that segment's distance is computed, by the reference's operations on the same values;
-    so the result is the same to the bit, without the (rows, G, K-1, n) temporaries.
-    """
+    """:func:`distance_to_sets_torch` without autograd, bitwise equal to it, in less time
+    (:func:`nearest_distance` for float64)."""
     if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad:
         return distance_to_sets_torch(points, goal_sets)
     dtype = torch.promote_types(points.dtype, goal_sets.dtype)
@@ -284,15 +220,14 @@ def log_likelihood(
     beta: float,
     max_step: float | None = None,
 ) -> np.ndarray:
-    """:func:`log_likelihood_torch` on numpy arrays (float64), shape (..., G).
-
-    ``goal_sets`` may also be goal points, shape (G, n), read as sets of one pose (K = 1).
-    """
+    """:func:`log_likelihood_torch` on numpy arrays (float64), shape (..., G); ``goal_sets`` may
+    be goal points (G, n), sets of one pose."""
+    sets = np.asarray(goal_sets, dtype=np.float64)
     with torch.no_grad():
         out = _log_likelihood(
             torch.as_tensor(state, dtype=torch.float64),
             torch.as_tensor(action, dtype=torch.float64),
-            torch.as_tensor(_as_sets(np.asarray(goal_sets, dtype=np.float64))),
+            torch.as_tensor(sets[:, None, :] if sets.ndim == 2 else sets),
             dt,
             beta,
             max_step,
@@ -302,30 +237,16 @@ def log_likelihood(
 
 
 def logsumexp(x: np.ndarray) -> np.ndarray:
-    """log sum exp along the last axis, kept as a length-1 axis: numpy's ``logaddexp`` reduced.
-
-    scipy's ``logsumexp`` gives the same to the last bits or two, with array-API dispatch around
-    it that cost a third of a planning participant's belief update at the study's batches; the
-    ufunc's reduction skips it. A row of only -inf gives -inf, as scipy's does.
-    """
+    """log sum exp along the last axis, kept as a length-1 axis (numpy's ``logaddexp`` reduced,
+    without scipy's dispatch cost); a row of only -inf gives -inf."""
     return np.logaddexp.reduce(x, axis=-1, keepdims=True)
 
 
 def cap_log_belief(log_b: np.ndarray, cap: float) -> np.ndarray:
     """No goal above ``cap``: a goal's excess is spread evenly over the other goals, in log space.
 
-    Javdani et al.'s rule for the belief of their shared autonomy (its ``max_prob_any_goal``):
-    after an update, a goal whose belief exceeds the cap is set to the cap, and what it loses is
-    added in equal shares to each other goal. With ``cap`` > 1/2 only the top goal can exceed it,
-    the result sums to one, no goal exceeds the cap and the order of the beliefs is kept; rows
-    with no goal above the cap are returned unchanged.
-
-    Args:
-        log_b: Normalised log-beliefs, shape (..., G), G >= 2.
-        cap: The most any goal may hold, in (1/2, 1).
-
-    Returns:
-        Log-beliefs, shape (..., G).
+    Javdani et al.'s ``max_prob_any_goal``. With ``cap`` in (1/2, 1) only the top goal can exceed
+    it; the result sums to one and keeps the beliefs' order. ``log_b``: normalised, (..., G), G >= 2.
     """
     check_range("belief_cap", cap, 0.5, 1.0, low_open=True, high_open=True)
     n_goals = log_b.shape[-1]
@@ -350,11 +271,8 @@ def update_log_belief(
     Args:
         log_b: Current log-beliefs, shape (..., G).
         log_lik: Log-likelihoods of the observed action under each goal, (..., G).
-        floor: Each goal keeps at least this belief after the update, in [0, 1/G).
+        floor: Each goal keeps at least this belief, in [0, 1/G).
         cap: If given, no goal keeps more than this (:func:`cap_log_belief`), in (1/2, 1).
-
-    Returns:
-        Normalised log-beliefs, shape (..., G).
     """
     n_goals = log_b.shape[-1]
     check_range("belief_floor", floor, 0.0, 1.0 / n_goals, high_open=True)
@@ -370,12 +288,8 @@ def update_log_belief(
 
 
 def confident_belief(n_goals: int, goal: int, floor: float = 0.0, cap: float | None = None) -> np.ndarray:
-    """The most confident belief in ``goal`` the update keeps, shape (G,).
-
-    Without a cap: all but the floor of every other goal on ``goal``. With one: the cap on
-    ``goal`` and the rest spread evenly (each other goal at least the floor), the belief the
-    capped update settles at after working at ``goal`` for a while.
-    """
+    """The most confident belief in ``goal`` the update keeps, shape (G,): all but the others'
+    floor on it, or (with a cap) the cap and the rest spread evenly, each at least the floor."""
     rest = floor if cap is None else max(floor, (1.0 - cap) / (n_goals - 1))
     b = np.full(n_goals, rest)
     b[goal] = 1.0 - (n_goals - 1) * rest
@@ -384,7 +298,7 @@ def confident_belief(n_goals: int, goal: int, floor: float = 0.0, cap: float | N
 
 def confidence_threshold(cap: float | None) -> float:
     """The top belief above which a context counts as confident: the cap (or one) less
-    :data:`CONFIDENT_MARGIN`. It follows the cap, so a capped belief can still be confident."""
+    :data:`CONFIDENT_MARGIN`."""
     return (1.0 if cap is None else cap) - CONFIDENT_MARGIN
 
 

@@ -1,8 +1,5 @@
-"""The dataset D of demonstrations: (s, a, b) tuples, each labelled by its demonstration.
-
-Training (:mod:`lasa.method.train`) reads this type; :mod:`lasa.people.demos` collects it from a
-simulated demonstrator. Saved as ``.npz`` atomically, loaded with a check of its robot.
-"""
+"""The dataset D of demonstrations: (s, a, b) tuples, each labelled by its demonstration
+(collected by :mod:`lasa.people.demos`, saved as ``.npz``)."""
 
 from __future__ import annotations
 
@@ -69,11 +66,8 @@ class Demonstrations:
         )
 
     def showcase(self, task: CupTask) -> list[tuple[int, str]]:
-        """Four clean demonstrations from the start pose: a top and a side grasp at each cup.
-
-        Returns:
-            (demonstration index, caption) for each, cup by cup, top grasp first.
-        """
+        """(index, caption) of clean demonstrations from the start pose: a top and a side grasp at
+        each cup, cup by cup, top grasp first."""
         clean = self.clean()
         first = np.r_[0, np.flatnonzero(np.diff(clean.demo)) + 1]
         starts = dict(zip(clean.demo[first].tolist(), clean.states[first], strict=True))

@@ -1,17 +1,10 @@
 r"""The latent-action model: a conditional autoencoder over (state, belief) contexts.
 
-The encoder maps a demonstrated action in its context to a latent action,
-:math:`z = \psi(s, a, b) \in [-1, 1]^d`, and the decoder maps it back, :math:`a_h = \phi(z, s, b)`
-(Sec. III-A). z is squashed by ``tanh`` into [-1, 1]^d, and the decoder's output radially,
-:math:`\phi = \sigma_h \tanh(\|v\|)\, v / \|v\|`, so :math:`\|\phi\| < \sigma_h` (the bound of Eq. T4).
-Training uses :meth:`LatentActionModel.decode` (torch); the simulations use
-:meth:`LatentActionModel.decode_numpy`, the same function on numpy arrays, to float32 rounding.
-
-:func:`save_checkpoint` stores the state dict and the config; :func:`load_checkpoint` loads it
-(``weights_only=True``) and checks the robot (and, if asked, the goals). A decoder of your own
-(:class:`ActionDecoder`, built from one frozen config dataclass) saves and loads the same way, if
-its class is defined in an importable module, not ``__main__`` (``docs/extending.md``). Why the
-bounds, and how checkpoints record the class: ``docs/method-notes.md``.
+:math:`z = \psi(s, a, b) \in [-1, 1]^d` (tanh) and :math:`a_h = \phi(z, s, b)` (Sec. III-A), the
+output squashed radially, :math:`\phi = \sigma_h \tanh(\|v\|)\, v / \|v\|`, so
+:math:`\|\phi\| < \sigma_h` (Eq. T4). Checkpoints hold the state dict and the config, and load with
+``weights_only=True``; a decoder of one's own (:class:`ActionDecoder`) saves and loads the same
+way (``docs/extending.md``). Why the bounds: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -19,24 +12,19 @@ from __future__ import annotations
 import dataclasses
 import os
 from pathlib import Path
-from typing import Any, ClassVar, Protocol, TypeVar, overload, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 import torch
 from torch import nn
+from typing_extensions import TypeVar
 
 from lasa.base.config import AtLeastTwo, Positive, PositiveInt, validate
 from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import atomic_path, require_file
 from lasa.method.inference import inference_plan
 
-__all__ = [
-    "ActionDecoder",
-    "DecoderConfig",
-    "LatentActionModel",
-    "save_checkpoint",
-    "load_checkpoint",
-]
+__all__ = ["ActionDecoder", "DecoderConfig", "LatentActionModel", "save_checkpoint", "load_checkpoint"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,9 +55,8 @@ class DecoderConfig:
 class ActionDecoder(Protocol):
     """What Algorithm 1 needs of a decoder: phi(z, s, b) on numpy arrays, and its shape.
 
-    :class:`LatentActionModel` is one; an extension that changes what the decoder sees
-    (the context map of :mod:`lasa.method.newgoals`) wraps one, so the rollout never needs to
-    know about it.
+    :class:`LatentActionModel` is one; a wrapper such as
+    :class:`lasa.method.context_map.MappedDecoder` is another.
     """
 
     @property
@@ -103,11 +90,10 @@ def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
 
 
 class LatentActionModel(nn.Module):
-    """Encoder psi(s, a, b) -> z and decoder phi(z, s, b) -> a_h.
+    """Encoder psi(s, a, b) -> z and decoder phi(z, s, b) -> a_h, over any leading batch shape.
 
-    Inputs are float tensors with any leading batch shape: s and a of size n, b of size
-    G, z of size d. The decoder clamps z to [-1, 1]; it does not check finiteness
-    (the control loop does, see :func:`lasa.method.blend.sanitize`).
+    The decoder clamps z to [-1, 1]; finiteness is the control loop's
+    (:func:`lasa.method.step.sanitize`).
     """
 
     config_class: ClassVar[type[DecoderConfig]] = DecoderConfig  # what a checkpoint's config builds
@@ -161,23 +147,11 @@ class LatentActionModel(nn.Module):
         return z, self.decode(z, s, b)
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
-        r"""phi(z, s, b) on numpy arrays (broadcast over leading dims), as float64.
+        r"""phi(z, s, b) on numpy arrays (broadcast over leading dims), float64, C-contiguous.
 
-        The same function as :meth:`decode` (z clamped to [-1, 1], ``||phi|| < sigma_h``, Eq. T4),
-        by an inference-only forward for the simulations' batches (:mod:`lasa.method.inference`):
-        the first layer split into a z term and an (s, b) term, the radial squash in float64, rows in
-        chunks through reused buffers. It agrees with :meth:`decode` to float32 rounding (below 1e-6
-        at sigma_h = 1), not bit for bit. A subclass's (or a patched) ``decode`` runs on the expanded
-        inputs instead. The refolded weights are cached per model and rebuilt when a weight changes
-        (a write through ``param.data`` goes unseen). The forward in detail: ``docs/method-notes.md``.
-
-        Args:
-            z: Latent actions, shape (..., d); clamped to [-1, 1].
-            s: States, shape (..., n).
-            b: Beliefs, shape (..., G).
-
-        Returns:
-            phi, float64, C-contiguous, shape ``broadcast(z, s, b leading shapes) + (n,)``.
+        :meth:`decode` by an inference-only forward (:mod:`lasa.method.inference`), equal to it to
+        float32 rounding; a subclass's (or a patched) ``decode`` runs itself on the expanded inputs.
+        The forward in detail: ``docs/method-notes.md``.
         """
         if getattr(self.decode, "__func__", None) is not _DECODE:
             return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode
@@ -196,7 +170,7 @@ class LatentActionModel(nn.Module):
 
 _DECODE = LatentActionModel.decode  # the decode that the inference plan implements
 
-M = TypeVar("M", bound=nn.Module)
+M = TypeVar("M", bound=nn.Module, default=LatentActionModel)  # a decoder class
 
 
 def _class_name(cls: type) -> str:
@@ -204,19 +178,11 @@ def _class_name(cls: type) -> str:
 
 
 def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any) -> Path:
-    """Atomically save the model's state dict, its config and ``extra`` metadata.
+    """Atomically save the model's state dict, its dataclass ``config`` and ``extra`` metadata.
 
-    ``model`` is a :class:`LatentActionModel` or any decoder module built from a dataclass
-    ``model.config`` of plain values. A checkpoint of another class than
-    :class:`LatentActionModel` also records the class's name, so that loading it with the
-    wrong class is an error that names the right one.
-
-    ``extra`` values must be plain Python data (numbers, strings, lists, dicts) so the
-    checkpoint loads with ``weights_only=True``; the training config goes here.
-
-    The class is recorded as ``module.Class``, so it must live in a module that another process
-    can import: a class defined in the script being run (or a notebook) is ``__main__.Class``,
-    which loads nowhere else.
+    ``extra`` holds plain Python data (it loads with ``weights_only=True``). A class other than
+    :class:`LatentActionModel` is recorded as ``module.Class``, so loading with the wrong class
+    names the right one; it must be importable by another process (not ``__main__``).
 
     Raises:
         ConfigError: if ``model.config`` is not a dataclass instance, or the model's class (other
@@ -248,46 +214,23 @@ def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any
     return Path(path)
 
 
-@overload
-def load_checkpoint(
-    path: str | os.PathLike[str],
-    robot: str | None = None,
-    make_hint: str = ...,
-    *,
-    n_goals: int | None = None,
-) -> tuple[LatentActionModel, dict[str, Any]]: ...
-
-
-@overload
-def load_checkpoint(
-    path: str | os.PathLike[str],
-    robot: str | None = None,
-    make_hint: str = ...,
-    *,
-    decoder: type[M],
-    n_goals: int | None = None,
-) -> tuple[M, dict[str, Any]]: ...
-
-
 def load_checkpoint(
     path: str | os.PathLike[str],
     robot: str | None = None,
     make_hint: str = "make figures (notebook 02_decoder_training)",
     *,
-    decoder: type[nn.Module] = LatentActionModel,
+    decoder: type[M] = LatentActionModel,  # type: ignore[assignment]  # M's default (PEP 696)
     n_goals: int | None = None,
-) -> tuple[nn.Module, dict[str, Any]]:
+) -> tuple[M, dict[str, Any]]:
     """Load a model saved by :func:`save_checkpoint`.
 
     Args:
         path: Checkpoint file.
         robot: If given, the robot the caller expects; a mismatch is an error.
         make_hint: Command that makes the checkpoint, for the error message.
-        decoder: The decoder's class (default :class:`LatentActionModel`): a
-            ``torch.nn.Module`` that follows :class:`ActionDecoder`, built as
+        decoder: The decoder's class, an :class:`ActionDecoder` module built as
             ``decoder(decoder.config_class(**config))``.
-        n_goals: If given, the number of goals G the caller's task has; a decoder that
-            reads a belief over another number is an error.
+        n_goals: If given, the number of goals G the caller expects.
 
     Returns:
         The model in eval mode, and the checkpoint's ``extra`` metadata.
@@ -318,11 +261,8 @@ def load_checkpoint(
 
 
 def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[str, Any], dict[str, Any]]:
-    """A checkpoint's payload and its config's values (lists as tuples), saved from ``decoder``.
-
-    Raises:
-        CheckpointError: if the file does not load, or holds another decoder class.
-    """
+    """A checkpoint's payload and its config's values (lists as tuples); CheckpointError if it does
+    not load or holds another decoder class."""
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
         saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
@@ -347,12 +287,8 @@ def _check_loaded(
     n_goals: int | None,
     make_hint: str,
 ) -> None:
-    """Refuse a loaded model that does not follow :class:`ActionDecoder`, or not the caller's robot or G.
-
-    Raises:
-        ConfigError: if ``model`` does not follow :class:`ActionDecoder`.
-        CheckpointError: if it was trained for another robot or number of goals.
-    """
+    """Refuse a model that is no :class:`ActionDecoder` (ConfigError), or for another robot or G
+    (CheckpointError)."""
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
@@ -370,11 +306,7 @@ def _check_loaded(
 
 
 def _invalid(path: Path, exc: Exception, make_hint: str) -> CheckpointError:
-    """The error of a checkpoint that does not load: it names the failure, not torch's message.
-
-    For a file it cannot unpickle safely, torch suggests loading with weights_only=False,
-    which would run arbitrary code from the file.
-    """
+    """The error of a checkpoint that does not load, without torch's advice to load it unsafely."""
     return CheckpointError(
         f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
         f"Delete it and re-make it with: {make_hint}"

@@ -1,20 +1,10 @@
 r"""The entropy regulariser of Eqs. T5-T6: latent actions that can still change goals.
 
-Shared autonomy constrains the robot near the likely goal (Sec. IV-A), so the paper rewards
-latent spaces in which, at every context (s, b), some z move towards *each* goal. With a score
-:math:`\eta(g, s, b, z)` of how well z conveys "goal g",
-
-.. math::
-
-    p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z), \qquad
-    \mathcal{L} = \|e_a\|^2 + \lambda \sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g).
-
-Our eta (:func:`goal_scores`) is the posterior over goals that the belief's likelihood
-(:mod:`lasa.method.belief`) gives to the decoded action held for H control steps, under a
-uniform prior: :math:`\eta = P_H(\phi \mid s, g) / \sum_{g'} P_H(\phi \mid s, g')`, with
-:math:`P_H` the likelihood at step :math:`H\Delta`. The sum over z runs over an even grid of
-joystick inputs, and :class:`EntropyRegularizer` averages the term over a random subset of each
-batch's contexts. Why a horizon (H = 10) and a uniform prior: ``docs/method-notes.md``.
+At every context (s, b) some z should move towards *each* goal (Sec. IV-A):
+:math:`p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z)`,
+:math:`\mathcal{L} = \|e_a\|^2 + \lambda \sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g)`. Our eta
+(:func:`goal_scores`) is the posterior over goals, under a uniform prior, of the decoded action
+held for H steps; z runs over an even grid. Why: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -52,17 +42,8 @@ def goal_scores(
     control: ControlConfig,
     horizon: int = 10,
 ) -> torch.Tensor:
-    """eta(g, s, b, z) for every context and grid input, shape (B, K, G); rows sum to one.
-
-    Args:
-        model: The decoder.
-        states: Contexts' states, shape (B, n).
-        beliefs: Contexts' beliefs, shape (B, G).
-        z_grid: Joystick inputs, shape (K, d).
-        goal_sets: Goal sets of the likelihood, shape (G, M, n).
-        control: The belief model's units (dt, beta_b, the regret normaliser).
-        horizon: H, the steps over which an input's evidence is read.
-    """
+    """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), shape (B, K, G);
+    rows sum to one. ``goal_sets`` (G, M, n) and ``control`` are the belief's; ``horizon`` is H."""
     n_ctx, n_z = states.shape[0], z_grid.shape[0]
     s = states[:, None, :].expand(n_ctx, n_z, -1)
     b = beliefs[:, None, :].expand(n_ctx, n_z, -1)
@@ -70,10 +51,8 @@ def goal_scores(
     actions = model.decode(z, s, b)
     step = control.likelihood_step
     max_step = None if step is None else horizon * step
-    # The state's own distance to each set is shared by all K inputs: pass it unexpanded
-    # (B, 1, n) so it is computed once per context, not once per (context, input).
-    # lasa.method.belief.log_likelihood_torch, with the distance differentiated through
-    # each goal's nearest segment only (the same value and gradient, in less time)
+    # log_likelihood_torch with the state unexpanded (B, 1, n), its distance once per context,
+    # differentiated through each goal's nearest segment only (the same value and gradient)
     loglik = _log_likelihood(
         states[:, None, :],
         actions,
@@ -99,19 +78,11 @@ def entropy(p: torch.Tensor) -> torch.Tensor:
 
 @dataclasses.dataclass
 class EntropyRegularizer:
-    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6).
+    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on a training batch.
 
-    Call it as ``regularizer(model, states, beliefs)`` on a training batch; pass it to
-    :func:`lasa.method.train.train_decoder` as ``extra_loss``.
-
-    Attributes:
-        lam: lambda > 0, the weight of the term.
-        goal_sets: Goal sets of the belief likelihood, shape (G, M, n).
-        control: Units of the belief model.
-        n_z: Joystick inputs on the grid the sum over z runs over.
-        horizon: H, the steps over which an input's evidence is read.
-        contexts: Contexts of each batch the term is evaluated on.
-        seed: Seed of the context subsampling.
+    ``lam`` > 0 weighs it; ``goal_sets`` (G, M, n) and ``control`` are the belief's; the sum over z
+    runs over ``n_z`` inputs per axis, the evidence over ``horizon`` steps, on ``contexts`` contexts
+    of each batch drawn with ``seed``.
     """
 
     lam: float
@@ -171,19 +142,11 @@ def context_entropy(
 def context_grid(
     start: np.ndarray, goal: np.ndarray, goal_index: int, n_goals: int, n_pos: int = 9, n_belief: int = 9
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Contexts along the way to a goal and across confidences in it.
+    """Contexts along the way to a goal and across confidences in it, progress-major.
 
-    Args:
-        start: The start pose, shape (n,).
-        goal: The goal pose, shape (n,).
-        goal_index: Which goal the belief grows towards.
-        n_goals: G.
-        n_pos: Positions on the straight joint-space line from start (0) to goal (1).
-        n_belief: Beliefs in the goal, from uniform to 0.999.
-
-    Returns:
-        (progress, confidence, states, beliefs): the grid's coordinates, shapes (P*C,),
-        and the contexts, shapes (P*C, n) and (P*C, G), progress-major.
+    ``n_pos`` positions on the joint-space line from ``start`` (0) to ``goal`` (1), ``n_belief``
+    beliefs in goal ``goal_index`` from uniform to 0.999. Returns (progress, confidence) (P*C,),
+    states (P*C, n) and beliefs (P*C, G).
     """
     progress = np.linspace(0.0, 1.0, n_pos)
     conf = np.linspace(1.0 / n_goals, 0.999, n_belief)
@@ -202,24 +165,11 @@ LAMBDA_COST = 1.5
 def choose_lambda(sweep: pd.DataFrame, n_goals: int, spread: float = 0.8, cost: float = LAMBDA_COST) -> float:
     """The lambda the pipeline trains with, by a rule fixed before looking at results.
 
-    The smallest lambda > 0 of the sweep whose mean entropy at confident contexts reaches
-    ``spread`` of the maximum (log G), while its reconstruction error on the clean
-    demonstrations (``recon_error``) stays within ``cost`` times that of lambda = 0. If none
-    does, the one with the highest entropy among those within the cost bound.
+    The smallest lambda > 0 whose mean entropy at confident contexts reaches ``spread`` of log G
+    while its reconstruction error (``recon_error``) stays within ``cost`` times lambda = 0's;
+    else, within that bound, the highest entropy; if no lambda > 0 is within it, 0.
 
-    The rule never picks a lambda whose reconstruction error exceeds ``cost`` times the
-    control's: if no lambda > 0 is within the bound, it picks 0, the control, and the
-    notebook says so (:func:`lasa.experiments.entropy_ablation.findings`). (Until issue 48 it then
-    took the smallest lambda > 0 whatever its cost: ``lambdas: [0, 1e6]`` gave 1e6, at 8x the
-    control's error. The paper-scale sweeps, ``figures/entropy_ablation.csv`` and notebook 10's,
-    have lambdas within the bound, and the rule picks 0.1 in each, before and after.)
-
-    Args:
-        sweep: One row per lambda with columns ``lambda``, ``entropy_confident`` and
-            ``recon_error``; it must include lambda = 0.
-        n_goals: G.
-        spread: Required fraction of the maximal entropy.
-        cost: Allowed factor on the reconstruction error.
+    ``sweep`` has one row per lambda (0 included): ``lambda``, ``entropy_confident``, ``recon_error``.
     """
     if 0.0 not in set(sweep["lambda"]):
         raise ConfigError("the lambda sweep must include 0 (the reference)")

@@ -1,11 +1,8 @@
 """The decoder's inference forward: phi(z, s, b) on numpy arrays, written for throughput.
 
-:meth:`lasa.method.decoder.LatentActionModel.decode_numpy` runs the model's decoder through an
-inference plan: its weights refolded once (the state normalisation folded into a first layer
-split into a z term and a context term), cached per model and rebuilt when a weight changes, and
-a chunked forward into per-thread buffers reused across calls. What it computes and why it is
-laid out this way (the rounding it changes, the chunk size, the output layer's layout) is in
-that method's docstring.
+An inference plan refolds the weights once (the state normalisation folded into a first layer
+split into a z term and a context term), is cached per model and rebuilt when a weight changes,
+and runs a chunked forward into per-thread buffers reused across calls.
 """
 
 from __future__ import annotations
@@ -26,10 +23,7 @@ if TYPE_CHECKING:
 
 __all__ = ["inference_plan"]
 
-# Rows (users x candidates) per chunk of the inference forward: two 1024 x 128 float32
-# buffers stay in a core's L2 cache (1 MB on the AMD EPYC, 2 MB on the Xeon); measured best
-# (with 2048) of 256-2048 and no chunking there, and 512-2048 equal within noise here.
-_CHUNK_ROWS = 1024
+_CHUNK_ROWS = 1024  # rows per chunk: two 1024 x 128 float32 buffers stay in a core's L2 cache
 
 
 def _weight_tensors(model: LatentActionModel) -> list[torch.Tensor]:
@@ -60,11 +54,8 @@ class _Buffers(threading.local):
         self.out64 = np.empty((0, 0))
 
     def output(self, n: int, rows: int) -> tuple[torch.Tensor, np.ndarray]:
-        """The (n x rows) output layer's buffer, float32, and one of float64 for its squash.
-
-        Kept between calls up to ``_KEEP_ROWS`` x 8 rows (the squash's fresh result is the
-        only array a call allocates at full size); larger ones are made for the call.
-        """
+        """The (n x rows) output layer's buffer, float32, and one of float64 for its squash (kept
+        between calls up to ``_KEEP_ROWS`` x 8 rows)."""
         if rows > 8 * _KEEP_ROWS:
             return torch.empty(n, rows), np.empty((n, rows))
         if self.out.shape[0] != n or self.out.shape[1] < rows:
@@ -73,12 +64,8 @@ class _Buffers(threading.local):
         return self.out[:, :rows], self.out64[:, :rows]
 
     def get(self, shape: tuple[int, ...], width: int) -> tuple[Any, ...]:
-        """Views of the two (rows x width) buffers for a chunk of leading shape ``shape``.
-
-        Returns:
-            (a as numpy of shape ``shape + (width,)``, a as torch of the same shape,
-            a, b, a.T, b.T), where a and b are (rows x width), rows = prod(shape).
-        """
+        """Views of the two (rows x width) buffers a, b for a chunk of leading shape ``shape``:
+        (a as numpy of shape ``shape + (width,)``, a as torch of that shape, a, b, a.T, b.T)."""
         view = self.views.get(shape)
         if view is None:
             rows = math.prod(shape)
@@ -147,7 +134,7 @@ class _InferencePlan:
     def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), float64; see :meth:`lasa.method.decoder.LatentActionModel.decode_numpy`."""
         z, s, b = self._checked(z, s, b)
-        shape = _broadcast(_broadcast(z.shape[:-1], s.shape[:-1]), b.shape[:-1])
+        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
         lead = shape or (1,)
         t_z, t_c = self._first_terms(z, s, b)
         rows_total = math.prod(lead)
@@ -159,11 +146,7 @@ class _InferencePlan:
         return self._squash(v, shape)
 
     def _checked(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
-        """z clamped to [-1, 1], s and b, as float64 arrays of the model's trailing sizes.
-
-        Raises:
-            ConfigError: if a trailing size is not d, n or G.
-        """
+        """z clamped to [-1, 1], s and b, as float64; ConfigError if a trailing size is not d, n, G."""
         z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)
         s = np.asarray(s, dtype=np.float64)
         b = np.asarray(b, dtype=np.float64)
@@ -175,11 +158,7 @@ class _InferencePlan:
         return z, s, b
 
     def _first_terms(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The first layer's z term (with its bias) and context term, float64, each unexpanded.
-
-        Each keeps its own leading shape (the bias goes with z: the rollouts' z term has K
-        rows, their context term U).
-        """
+        """The first layer's z term (with its bias) and context term, float64, each unexpanded."""
         z_lead, s_lead, b_lead = z.shape[:-1], s.shape[:-1], b.shape[:-1]
         width = self.width
         if self.d == 1:
@@ -197,11 +176,8 @@ class _InferencePlan:
     def _forward(
         self, t_z32: np.ndarray, t_c32: np.ndarray, lead: tuple[int, ...], rows_total: int
     ) -> np.ndarray:
-        """The MLP from the first layer's float32 terms, in chunks along the first broadcast axis.
-
-        Returns:
-            The output layer transposed (n x rows), copied to float64 (a reused buffer).
-        """
+        """The MLP from the first layer's float32 terms, in chunks along the first broadcast axis;
+        the output layer transposed (n x rows), copied to float64 (a reused buffer)."""
         width, buffers = self.width, self.buffers
         inner = math.prod(lead[1:])
         chunks = -(-lead[0] // max(1, _CHUNK_ROWS // max(inner, 1)))
@@ -227,15 +203,8 @@ class _InferencePlan:
     def _layers(
         self, h: torch.Tensor, g: torch.Tensor, a_t: torch.Tensor, b_t: torch.Tensor, out: torch.Tensor
     ) -> None:
-        """The first layer's tanh on h, the hidden layers (h and g in turn), the output into ``out``.
-
-        Args:
-            h: The first layer's pre-activation (buffer a, rows x width), in place.
-            g: The other buffer (b).
-            a_t: a transposed, the output layer's input when the hidden layers are even.
-            b_t: b transposed, its input when they are odd.
-            out: The output layer's (n x rows) destination.
-        """
+        """The first layer's tanh on h (buffer a), the hidden layers (h and g in turn), the output
+        (from a_t or b_t, as the count of hidden layers is even or odd) into ``out`` (n x rows)."""
         h.tanh_()
         for w, c in self.hidden:
             torch.addmm(c, h, w, out=g)
@@ -255,20 +224,6 @@ class _InferencePlan:
         return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (self.n,))
 
 
-def _broadcast(a: tuple[int, ...], b: tuple[int, ...]) -> tuple[int, ...]:
-    """numpy's broadcast of two shapes (a faster ``np.broadcast_shapes`` for two short ones)."""
-    if a == b:
-        return a
-    if len(a) != len(b):
-        return np.broadcast_shapes(a, b)
-    out = []
-    for x, y in zip(a, b, strict=True):
-        if x != y and x != 1 and y != 1:
-            return np.broadcast_shapes(a, b)  # raises numpy's error
-        out.append(y if x == 1 else x)
-    return tuple(out)
-
-
 def _along_first(term: torch.Tensor, start: int, stop: int, full: int) -> torch.Tensor:
     """Indices ``start:stop`` of the first broadcast axis of a first-layer term (itself if broadcast)."""
     if term.dim() == full and term.shape[0] != 1:
@@ -280,14 +235,8 @@ _PLANS: weakref.WeakKeyDictionary[LatentActionModel, _InferencePlan] = weakref.W
 
 
 def inference_plan(model: LatentActionModel) -> _InferencePlan:
-    """The model's cached inference plan, rebuilt when its weights have changed.
-
-    Args:
-        model: A :class:`lasa.method.decoder.LatentActionModel` whose ``decode`` is the class's own.
-
-    Returns:
-        Its plan; ``plan.decode(z, s, b)`` is ``model.decode_numpy(z, s, b)``.
-    """
+    """The model's cached inference plan (``plan.decode`` is ``model.decode_numpy``), rebuilt when
+    its weights have changed."""
     plan = _PLANS.get(model)
     if plan is None or not plan.fits(model):
         plan = _InferencePlan(model)

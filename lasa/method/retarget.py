@@ -1,23 +1,10 @@
 """Retargeting: direct teleoperation of the end effector, the baseline R of the user study.
 
-The paper's user study compares learned latent actions to *Retargeting* (Rakita et al.
-2017): the user's joystick commands the end effector directly, and the robot's joint
-velocities follow from inverse kinematics. Rakita et al. solve a weighted, "RelaxedIK"
-style optimisation for each step; here it is reduced to mink's differential IK, which is
-the same idea with the smoothness and self-collision terms left out.
-
-A 2-axis joystick cannot command the six components of an end-effector twist at once, so
-the user switches between *modes* (:data:`MODES`) with a button: each mode maps the two
-stick axes onto two twist components (translation in the table plane, height and yaw,
-roll and pitch). The extra effort of switching modes is part of what the latent actions
-are compared against.
-
-Each control step is one quadratic program (:class:`Retargeting`): a frame task asks the
-grasp site to move, within one control period ``dt``, to its current pose displaced by the
-commanded twist; a light posture task towards the current joints picks one solution out of
-the arm's redundancy; mink's configuration limit keeps the next state within the joint
-ranges. The QP's displacement divided by ``dt`` is the joint velocity, the action ``a`` of
-the control loop (Sec. V).
+The joystick commands the end effector (Rakita et al. 2017), its joint velocities from mink's
+differential IK (RelaxedIK without the smoothness and self-collision terms). A 2-axis stick
+switches between *modes* (:data:`MODES`) with a button, each mapping the two axes onto two twist
+components. Each control step is one QP (:class:`Retargeting`): a frame task towards the site's
+pose moved by the twist over ``dt``, a light posture task, and mink's configuration limit.
 """
 
 from __future__ import annotations
@@ -33,7 +20,6 @@ from lasa.world.robot import Robot
 
 __all__ = [
     "MODES",
-    "TWIST_COMPONENTS",
     "RetargetConfig",
     "twist",
     "next_mode",
@@ -41,8 +27,7 @@ __all__ = [
     "retarget_action",
 ]
 
-# The six twist components, in the order of a twist vector (vx, vy, vz, wx, wy, wz):
-# linear velocity of the site in the world frame, then angular velocity about the world axes.
+# The twist components in order (vx, vy, vz, wx, wy, wz), world frame, the site's
 TWIST_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
 
 # Joystick modes: stick axis 0 drives the first component, axis 1 the second.
@@ -53,10 +38,8 @@ MODES: tuple[tuple[str, str], ...] = (("x", "y"), ("z", "yaw"), ("roll", "pitch"
 class RetargetConfig:
     """Units of the Retargeting baseline: how fast a full stick deflection moves the hand."""
 
-    # A full deflection carries the hand from the home pose to a cup (~0.54 m on the Panda) in
-    # under 4 s, and one control period (dt = 0.1 s) moves it 1.5 cm: fast enough to be usable,
-    # fine enough to stop at a grasp. The joint speed sigma_h = 0.375 rad/s of the latent actions
-    # moves the hand at a similar speed, so neither interface wins by being faster.
+    # home to a cup (~0.54 m on the Panda) in under 4 s, 1.5 cm per 0.1 s: about the hand speed
+    # of the latent actions' sigma_h = 0.375 rad/s, so neither interface wins by being faster
     linear_speed: Positive = 0.15  # speed of the site at full stick deflection [m/s]
     angular_speed: Positive = 0.6  # at full deflection: a quarter turn in ~2.6 s, 3.4 deg per 0.1 s [rad/s]
     damping: Positive = 1e-3  # Levenberg-Marquardt damping of mink's QP [-]
@@ -88,21 +71,15 @@ def _mode_table(config: RetargetConfig) -> np.ndarray:
 
 
 def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = RetargetConfig()) -> np.ndarray:
-    """The end-effector twist that a joystick input commands in a mode.
+    """The end-effector twist (..., 6) [m/s, rad/s] that a joystick input commands in a mode.
 
     Args:
         mode: Mode index into :data:`MODES`, an int or an integer array of shape (...,).
-        z: Stick deflections, shape (..., 2), clipped to [-1, 1]; broadcast against ``mode``.
+        z: Stick deflections, shape (..., 2), clipped to [-1, 1] (not finite: a zero twist).
         config: Speeds at full deflection.
 
-    Returns:
-        Twists (vx, vy, vz, wx, wy, wz), shape (..., 6) [m/s, rad/s]; world-frame linear
-        velocity of the site and angular velocity about the world axes. A row whose ``z`` is
-        not finite gets a zero twist.
-
     Raises:
-        ConfigError: if a mode is not an integer in [0, len(MODES)).
-        ConfigError: if ``z``'s last axis is not of size 2.
+        ConfigError: if a mode is not an integer in [0, len(MODES)), or ``z`` is not (..., 2).
     """
     modes = _modes(mode)
     zs = np.asarray(z, dtype=float)
@@ -117,14 +94,8 @@ def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = Retarg
 
 
 def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np.ndarray:
-    """The mode after ``presses`` presses of the mode button (cyclic; negative goes back).
-
-    Returns:
-        An int if both arguments are scalars, else an integer array of their broadcast shape.
-
-    Raises:
-        ConfigError: if a mode is not valid or ``presses`` is not an integer.
-    """
+    """The mode after ``presses`` presses of the mode button (cyclic; negative goes back); an int
+    for scalars. ConfigError if a mode is not valid or ``presses`` not an integer."""
     modes = _modes(mode)
     steps = np.asarray(presses)
     if not np.issubdtype(steps.dtype, np.integer) or steps.dtype == bool:
@@ -138,16 +109,8 @@ def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np
 class Retargeting:
     """Joystick twist -> joint velocity by mink differential IK at ``robot``'s grasp site.
 
-    One QP per configuration: a frame task on the grasp site whose target is the site's
-    current pose moved by the twist over one control period, a posture task towards the
-    current joints (it resolves the redundancy of a 7-DoF arm), and mink's configuration
-    limit, so that ``q + dt * qdot`` stays within the joint ranges. The mink configuration and
-    tasks are built once and reused; the object is therefore not thread safe.
-
-    Attributes:
-        robot: The robot whose grasp site is commanded.
-        dt: Control period: the twist is realised over this time [s].
-        config: Speeds, damping and posture cost.
+    One QP per configuration over ``dt`` [s]; the mink configuration and tasks are built once and
+    reused, so the object is not thread safe.
     """
 
     def __init__(self, robot: Robot, dt: float, config: RetargetConfig = RetargetConfig()) -> None:
@@ -206,17 +169,10 @@ class Retargeting:
         return out
 
     def joint_velocity(self, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
-        """Joint velocities that move the grasp site with ``twist`` for one control period.
+        """Joint velocities [rad/s] that move the grasp site with ``twist`` for one control period.
 
-        Args:
-            q: Arm joint positions, shape (n,) or (B, n) [rad].
-            twist: Twists (vx, vy, vz, wx, wy, wz), shape (6,) or (B, 6) [m/s, rad/s]; world-frame
-                linear velocity of the site and angular velocity about the world axes.
-                Broadcast against ``q``'s leading shape.
-
-        Returns:
-            Joint velocities, shape (n,) or (B, n) (the broadcast leading shape) [rad/s]. Exactly
-            zero for a zero twist and for a twist row that is not finite.
+        ``q`` (n,) or (B, n) [rad] and ``twist`` (6,) or (B, 6) broadcast; a zero or non-finite
+        twist row gives exactly zero.
 
         Raises:
             ConfigError: if ``q`` is not finite or a shape is wrong.
@@ -235,11 +191,7 @@ class Retargeting:
         return out.reshape(*lead, self.n_joints)
 
     def site_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World position (3,) and rotation (3, 3) of the grasp site at arm joints ``q`` (n,).
-
-        Raises:
-            ConfigError: if ``q`` is not finite or not of shape (n,).
-        """
+        """World position (3,) and rotation (3, 3) of the grasp site at arm joints ``q`` (n,)."""
         qs = self._check_q(q)
         if qs.ndim != 1:
             raise ConfigError(f"q must have shape ({self.n_joints},), got {qs.shape}")
@@ -253,22 +205,9 @@ def retarget_action(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Retargeting's human action a_h for a batch, and each row's mode after the step.
 
-    A press of the mode button cycles the mode (:func:`next_mode`) and moves nothing; a stick
-    at rest (z = 0) commands nothing; otherwise the stick is a twist in the current mode
-    (:func:`twist`, at ``retarget.config``'s speeds), realised by mink's IK
-    (:meth:`Retargeting.joint_velocity`). Live teleoperation (:class:`lasa.live.station.Station`)
-    and the study's simulated participants (:func:`lasa.people.participants.simulate`) both
-    take their Retargeting action here, and pass it to :func:`lasa.method.step.advance`.
-
-    Args:
-        retarget: The IK solver.
-        state: Joint positions, shape (U, n) [rad].
-        mode: Each row's mode, shape (U,).
-        z: Stick deflections, shape (U, 2).
-        press: Whether each row presses the mode button this step, shape (U,).
-
-    Returns:
-        a_h, shape (U, n) [rad/s], and the modes after the step, shape (U,).
+    A press (U,) cycles the mode and moves nothing; a stick at rest commands nothing; otherwise
+    the stick z (U, 2) is a twist in the row's mode (U,), realised by mink's IK from the state
+    (U, n). Live teleoperation and the study's simulated participants both act through it.
     """
     state = np.asarray(state, dtype=float)
     z = np.asarray(z, dtype=float)

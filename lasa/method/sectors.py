@@ -28,12 +28,8 @@ FREE, DEPARTURE, MANIPULATION = 0, 1, 2  # a tuple's role on the ring
 
 
 def sector_roles(demos: Demonstrations, confident: float = 0.9) -> np.ndarray:
-    """Each tuple's role on the ring: :data:`DEPARTURE`, :data:`MANIPULATION` or :data:`FREE`, (N,).
-
-    Args:
-        demos: The dataset (its phases, goals and beliefs).
-        confident: The belief's largest entry from which a tuple is a departure or manipulation.
-    """
+    """Each tuple's role on the ring, (N,): :data:`DEPARTURE`, :data:`MANIPULATION` (both from a
+    top belief of ``confident``) or :data:`FREE`."""
     if not 0.0 < confident <= 1.0:
         raise ConfigError(f"confident must be in (0, 1], got {confident}")
     believed = demos.beliefs.argmax(axis=1)
@@ -46,16 +42,8 @@ def sector_roles(demos: Demonstrations, confident: float = 0.9) -> np.ndarray:
 
 
 def sector_loss(z: torch.Tensor, roles: torch.Tensor, share: float) -> torch.Tensor:
-    """The hinge on each tuple's angle outside its sector, averaged over the batch (module docstring).
-
-    Args:
-        z: The encoder's codes, (B, 2).
-        roles: Each tuple's role, (B,) (:func:`sector_roles`).
-        share: s, the departure sector's share of the ring, in (0, 1).
-
-    Returns:
-        The loss, a scalar tensor [rad].
-    """
+    """The hinge on each tuple's angle outside its sector, averaged over the batch [rad]; z (B, 2),
+    roles (B,), ``share`` s in (0, 1)."""
     if z.shape[-1] != 2:
         raise ConfigError(f"the sector loss needs a 2-D latent (a 2-axis stick), got z_dim={z.shape[-1]}")
     if not 0.0 < share < 1.0:

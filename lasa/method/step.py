@@ -1,19 +1,9 @@
 """The one step of Algorithm 1, batched: joystick input in, commanded state out.
 
-Every loop of the package advances with :func:`advance`, through the episode runner
-(:class:`lasa.method.episodes.Runner`). At each step:
-
-1. the joystick input z is decoded, a_h = phi(z, s, b) (:func:`shared_autonomy_step`; a
-   chooser that weighs many candidates decodes them in one call, :func:`decode_candidates`);
-2. the robot's assistance a_r (Eq. M2, or another member of :mod:`lasa.method.assistance`
-   named by ``ControlConfig.assistance``) is blended with a_h (Eq. M1) using each
-   user's alpha: alpha = 0 is the method ``LA``, alpha > 0 is ``LA+SA``;
-3. the belief is updated with a_h (Alg. 1, line 8);
-4. the robot takes the safe step s' = clip(s + dt a).
-
-The decoder is anything that follows :class:`lasa.method.decoder.ActionDecoder`: the trained
-model, or a wrapper of it such as the context map of new goals
-(:class:`lasa.method.newgoals.MappedDecoder`), which this module does not need to know about.
+Every loop advances with :func:`advance` (through :class:`lasa.method.runner.Runner`): a_h =
+phi(z, s, b) decoded, the assistance a_r of a member (:mod:`lasa.method.assistance`) blended in by
+Eq. M1 with each row's alpha (0: ``LA``), the belief updated (Alg. 1, line 8), and the safe step
+s' = s + Delta a of Sec. V taken (:func:`safe_step`).
 """
 
 from __future__ import annotations
@@ -24,11 +14,10 @@ import numpy as np
 
 from lasa.base import conditions
 from lasa.base.conditions import METHODS
-from lasa.base.config import ControlConfig, check_choice
+from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import assist
+from lasa.method.assistance import Member, assist
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
-from lasa.method.blend import blend, safe_step, sanitize
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
 
@@ -39,12 +28,14 @@ __all__ = [
     "decode_candidates",
     "latent_grid",
     "advance",
+    "blend",
+    "sanitize",
+    "safe_step",
     "shared_autonomy_step",
     "human_action",
     "METHODS",
     "METHOD_DECODER",
     "method_alpha",
-    "REST",
 ]
 
 # Which decoder each method uses (:mod:`lasa.base.conditions`): "base" is trained on
@@ -59,16 +50,9 @@ def method_alpha(method: str, control: ControlConfig) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class StepResult:
-    """One step of Algorithm 1 for a batch of users.
-
-    Attributes:
-        state: s^{t+1}, shape (U, n) [rad].
-        log_belief: log b^{t+1}, shape (U, G).
-        human_action: a_h^t, shape (U, n) [rad/s] (zero where the input was not finite).
-        action: the blended command a^t before the safety clip, shape (U, n) [rad/s].
-        robot_action: the robot's assistance a_r^t, times its blend weight, shape (U, n) [rad/s]; zero
-            in a row whose alpha is 0 if its :class:`Assist` skips those (``only_blended``).
-    """
+    """One step of Algorithm 1 for a batch of users: s^{t+1} (U, n) [rad], log b^{t+1} (U, G),
+    a_h^t (zero where the input was not finite), the command a^t before the safety clip, and
+    a_r^t times its blend weight (zero where ``only_blended`` skips it) (U, n) [rad/s]."""
 
     state: np.ndarray
     log_belief: np.ndarray
@@ -85,17 +69,12 @@ class Assist:
         task: The goal task (goals, preference sets, joint limits).
         control: Control-loop units (dt, speed bound, belief model, the default member).
         alpha: The blend weight of each row, (U,) (0: latent actions alone).
-        assistance: Each row's member of :mod:`lasa.method.assistance`, (U,); ``None``: every row
-            runs ``control.assistance``.
-        goal_sets: The belief's targets (:func:`lasa.method.belief.belief_targets`); ``None``:
-            those of ``control.likelihood``.
-        only_blended: Compute a_r only in the rows that blend it in (alpha > 0), and report a
-            zero ``robot_action`` in the others; by default every row computes it (the live log
-            records what the assistance would have done under LA too). The step is the same to the
-            bit for a member that computes a row's a_r from that row alone, as every built-in one
-            does but ``point``, whose Eq. M2 is one matrix product over the batch and rounds by its
-            size. The study's simulated participants ask for it (:mod:`lasa.people.loop`,
-            :mod:`lasa.people.planning`): many of their rows run without assistance.
+        assistance: Each row's member, a :class:`lasa.method.assistance.Member` or a built-in one's
+            name, (U,); ``None``: every row runs ``control.assistance``.
+        goal_sets: The belief's targets; ``None``: those of ``control.likelihood``.
+        only_blended: Compute a_r only in the rows with alpha > 0 (else every row, as the live log
+            records); bitwise the same for a member whose rows are independent (all built-in ones
+            but ``point``, one matrix product over the batch).
     """
 
     task: GoalTask
@@ -110,12 +89,13 @@ class Assist:
         if self.goal_sets is None:
             object.__setattr__(self, "goal_sets", belief_targets(self.task, self.control.likelihood))
         if self.assistance is not None:
-            names = np.asarray(self.assistance, dtype=str)
-            if names.shape != self.alpha.shape:
+            members = np.asarray(self.assistance)  # names (compared fast), or objects among them
+            members = members if members.dtype.kind == "U" else members.astype(object)
+            if members.shape != self.alpha.shape:
                 raise ConfigError(
-                    f"assistance must name one member per row, shape {self.alpha.shape}, got {names.shape}"
+                    f"assistance must name one member per row, shape {self.alpha.shape}, got {members.shape}"
                 )
-            object.__setattr__(self, "assistance", names)  # each name is checked where it runs (assist)
+            object.__setattr__(self, "assistance", members)  # each is checked where it runs (assist)
 
     def rows(self, idx: np.ndarray) -> Assist:
         """The same for rows ``idx`` of the batch."""
@@ -123,17 +103,44 @@ class Assist:
         return dataclasses.replace(self, alpha=self.alpha[idx], assistance=assistance)
 
 
+def blend(a_h: np.ndarray, a_r: np.ndarray, alpha: float | np.ndarray) -> np.ndarray:
+    """Eq. M1: a = (1 - alpha) a_h + alpha a_r; ``alpha`` in [0, 1], a scalar or one per row (...)."""
+    alpha_arr = np.asarray(alpha, dtype=float)
+    if alpha_arr.ndim == 0:
+        check_range("alpha", float(alpha_arr), 0.0, 1.0)
+    elif not np.all((alpha_arr >= 0.0) & (alpha_arr <= 1.0)):
+        raise ConfigError(f"alpha must be in [0, 1], got values in [{alpha_arr.min()}, {alpha_arr.max()}]")
+    alpha_arr = alpha_arr[..., None]
+    return (1.0 - alpha_arr) * a_h + alpha_arr * a_r
+
+
+def sanitize(action: np.ndarray) -> np.ndarray:
+    """Replace every row that holds a non-finite entry by a zero action."""
+    bad = ~np.all(np.isfinite(action), axis=-1, keepdims=True)
+    return np.where(bad, 0.0, action)
+
+
+def safe_step(
+    state: np.ndarray, action: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray, max_speed: float
+) -> np.ndarray:
+    """The transition s' = s + dt a, safe: a non-finite action row is zero, each joint velocity
+    clipped to [-max_speed, max_speed] [rad/s], the next state to the joint limits [lower, upper].
+
+    Raises:
+        ConfigError: if ``state`` is not finite (a sensor fault is not a command).
+    """
+    if not np.all(np.isfinite(state)):
+        raise ConfigError("state holds NaN or infinite joint positions; refusing to command")
+    velocity = np.clip(sanitize(action), -max_speed, max_speed)
+    return np.clip(state + dt * velocity, lower, upper)
+
+
 def advance(
     assist: Assist, state: np.ndarray, log_b: np.ndarray, a_h: np.ndarray, b: np.ndarray | None = None
 ) -> StepResult:
-    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step.
-
-    Args:
-        assist: The batch's fixed parts (one row per episode).
-        state: s^t, (U, n). log_b: log b^t, (U, G).
-        a_h: The decoded human actions, (U, n) (a row that is not finite commands nothing).
-        b: ``belief(log_b)``, if the caller has it already.
-    """
+    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step,
+    from s^t (U, n), log b^t (U, G) and a_h (U, n) (a non-finite row commands nothing); ``b`` is
+    ``belief(log_b)`` if the caller has it."""
     task, control = assist.task, assist.control
     a_h = sanitize(a_h)
     if b is None:
@@ -160,11 +167,8 @@ def advance(
 def _assistance(
     task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, assistance: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """a_r and the blend weight per row: ``control.assistance``, or each row's member.
-
-    The members' goal sets are the task's preference sets (``task.preference_sets``):
-    the cups' grasp curves, or the eating task's whole stroke surfaces.
-    """
+    """a_r and the blend weight per row: ``control.assistance``, or each row's member, towards the
+    task's preference sets."""
     goal_sets = task.preference_sets
     if assistance is None:
         return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
@@ -189,15 +193,10 @@ def shared_autonomy_step(
     z: np.ndarray,
     alpha: float | np.ndarray,
     rest: str = "decode",
+    assistance: str | Member | None = None,
 ) -> StepResult:
-    """One step of Algorithm 1 from joystick input to commanded state, batched over users.
-
-    Decode z (a_h = phi(z, s, b)), blend with the assistance (Eqs. M1-M2), update the belief
-    (Alg. 1, line 8), take the safe step: the episode runner's step for a held input
-    (:func:`lasa.method.episodes.held_input`). A non-finite input decodes to no human action;
-    the assistance still applies. ``rest`` is what the stick at rest (z = 0) commands:
-    ``"decode"``, phi(0, s, b) (sims 1-4, Eq. S1); ``"zero"``, no human action (live
-    teleoperation, the study's participants, through :func:`human_action`). Why: ``docs/method-notes.md``.
+    """One step of Algorithm 1 from joystick input to commanded state, batched over users: the
+    runner's step for a held input (:func:`lasa.method.runner.held_input`).
 
     Args:
         decoder: The decoder phi (a trained model or a wrapper, e.g. a ``MappedDecoder``).
@@ -205,9 +204,11 @@ def shared_autonomy_step(
         control: Control-loop units.
         state: s^t, shape (U, n).
         log_belief: log b^t, shape (U, G).
-        z: Joystick inputs, shape (U, d); clamped to [-1, 1] by the decoder.
+        z: Joystick inputs, shape (U, d); a non-finite one decodes to no human action.
         alpha: Blend weight, scalar or shape (U,).
-        rest: ``"decode"`` or ``"zero"``.
+        rest: What the stick at rest commands (:func:`human_action`).
+        assistance: The member for every row (a :class:`lasa.method.assistance.Member` or a
+            built-in one's name); default ``control.assistance``.
     """
     check_decoder(decoder, task)
     check_choice("rest", rest, REST)
@@ -215,22 +216,16 @@ def shared_autonomy_step(
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
     alpha_arr = np.broadcast_to(np.asarray(alpha, dtype=float), state.shape[:1])
-    return advance(Assist(task, control, alpha_arr), state, log_belief, a_h)
+    members = None if assistance is None else np.full(len(state), assistance, dtype=object)
+    return advance(Assist(task, control, alpha_arr, members), state, log_belief, a_h)
 
 
 def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
     """Latent actions' a_h from the decoded phi(z, s, b), under the stick-at-rest convention.
 
-    A row whose input is not finite commands nothing; with ``rest="zero"`` neither does a
-    stick at rest (z = 0); with ``rest="decode"`` the rest position means phi(0, s, b). The
-    one place the convention is applied: :func:`shared_autonomy_step` (sims 1-4's reference
-    step, teleop, the benchmark) and the study's participants, who decode their candidates
-    themselves (:func:`lasa.people.participants.simulate`), both call it.
-
-    Args:
-        decoded: phi(z, s, b) for each row, shape (U, n) [rad/s].
-        z: The inputs, shape (U, d).
-        rest: ``"decode"`` or ``"zero"``.
+    A row whose input z (U, d) is not finite commands nothing; a stick at rest (z = 0) commands
+    phi(0, s, b) under ``rest="decode"`` (sims 1-4, Eq. S1), nothing under ``"zero"`` (teleop, the
+    study). Why: ``docs/method-notes.md``.
     """
     check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
@@ -241,34 +236,20 @@ def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
 
 
 def check_decoder(decoder: ActionDecoder, task: GoalTask) -> None:
-    """The decoder must act in the task's robot and read a belief over the task's goals.
-
-    Raises:
-        ConfigError: naming the mismatch.
-    """
+    """The decoder must act in the task's robot and read a belief over its goals, else ConfigError."""
     if decoder.robot != task.robot.name:
         raise ConfigError(f"decoder was trained for {decoder.robot!r}, the task is for {task.robot.name!r}")
     if decoder.n_goals != task.n_goals:
         raise ConfigError(
             f"decoder reads a belief over {decoder.n_goals} goals, the task has {task.n_goals}; "
-            "for a task grown by a new goal, wrap the decoder in lasa.method.newgoals.MappedDecoder"
+            "for a task grown by a new goal, wrap the decoder in lasa.method.context_map.MappedDecoder"
         )
 
 
 def decode_candidates(
     decoder: ActionDecoder, z_grid: np.ndarray, state: np.ndarray, b: np.ndarray
 ) -> np.ndarray:
-    """phi(z, s, b) for every user and every candidate, in one decoder call.
-
-    Args:
-        decoder: The decoder.
-        z_grid: Candidates, shape (K, d).
-        state: States, shape (U, n).
-        b: Beliefs, shape (U, G).
-
-    Returns:
-        Decoded actions, shape (U, K, n), float64.
-    """
+    """phi(z, s, b) for every user (s (U, n), b (U, G)) and candidate z (K, d) in one call, (U, K, n)."""
     return decoder.decode_numpy(z_grid[None], state[:, None], b[:, None])
 
 

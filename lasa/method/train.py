@@ -1,13 +1,8 @@
 r"""Training the latent-action model on demonstrations.
 
-The loss is the reconstruction error of Sec. III-A, :math:`\|e_a\|^2 = \|\phi(z, s, b) - a\|^2`
-with :math:`z = \psi(s, a, b)`, measured in units of sigma_h so that robots with
-different speed scales train alike. While training, Gaussian noise is added to z
-before it is decoded (and z is clipped back to [-1, 1]). A noisy channel forces the
-encoder to spread different actions apart over the whole joystick range and makes
-the decoder smooth in z, so that neighbouring joystick positions mean neighbouring
-actions: both are what a person (or a simulated user picking from a grid of z)
-needs. The noise scale is a stated free parameter of the method.
+The loss is the reconstruction error of Sec. III-A, :math:`\|\phi(z, s, b) - a\|^2` with
+:math:`z = \psi(s, a, b)`, in units of sigma_h. Gaussian noise on z while training (clipped back
+to [-1, 1]) spreads actions over the joystick's range and makes the decoder smooth in z.
 """
 
 from __future__ import annotations
@@ -48,9 +43,7 @@ ExtraLoss = Callable[[LatentActionModel, torch.Tensor, torch.Tensor], torch.Tens
 class TrainConfig:
     """Optimisation of the conditional autoencoder."""
 
-    steps: PositiveInt = (
-        2000  # optimiser steps; the held-out error is lowest at step 1200 (planar5), 600 (Panda) [-]
-    )
+    steps: PositiveInt = 2000  # optimiser steps; held-out error lowest at 1200 (planar5), 600 (Panda) [-]
     batch_size: PositiveInt = 512  # tuples per step [-]
     lr: Positive = 2e-3  # Adam learning rate, cosine-decayed to 5% [-]
     weight_decay: NonNegative = 0.0  # AdamW weight decay [-]
@@ -58,9 +51,7 @@ class TrainConfig:
     hidden: PositiveInt = 128  # width of the hidden layers [-]
     depth: PositiveInt = 3  # hidden layers in encoder and decoder [-]
     z_dim: PositiveInt = 1  # latent dimension d [-]
-    holdout: Annotated[Number, at.Ge(0.0), at.Le(0.5)] = (
-        0.1  # fraction of demonstrations held out for validation [-]
-    )
+    holdout: Annotated[Number, at.Ge(0.0), at.Le(0.5)] = 0.1  # demonstrations held out [-]
     log_every: PositiveInt = 100  # steps between logged losses [-]
     entropy_lambda: NonNegative = 0.0  # lambda of the entropy term (Eq. T6); 0 trains plain LA [-]
     entropy_n_z: AtLeastTwo = 11  # joystick inputs the entropy term's sum over z runs over [-]
@@ -69,9 +60,7 @@ class TrainConfig:
     # the latent's sectors (lasa.method.sectors; 2-D latents): departures from a confident goal
     # in a share of the ring, manipulation outside it; 0 trains without
     sector_weight: NonNegative = 0.0  # weight of the sector loss [1/rad] [-]
-    sector_share: Annotated[Number, at.Gt(0.0), at.Lt(1.0)] = (
-        0.375  # the departure sector's share of the ring [-]
-    )
+    sector_share: Annotated[Number, at.Gt(0.0), at.Lt(1.0)] = 0.375  # departure sector's share [-]
     seed: Seed = 0  # seed of initialisation, batches and noise [-]
 
     def __post_init__(self) -> None:
@@ -128,11 +117,8 @@ def _with_entropy(
 def _initial_model(
     demos: Demonstrations, control: ControlConfig, config: TrainConfig, init: LatentActionModel | None
 ) -> LatentActionModel:
-    """A fresh model with the demonstrations' state normalisation, or a trainable copy of ``init``.
-
-    Raises:
-        ConfigError: if ``init``'s architecture differs from what ``demos`` and ``config`` give.
-    """
+    """A fresh model with the demonstrations' state normalisation, or a trainable copy of ``init``
+    (ConfigError if its architecture differs from what ``demos`` and ``config`` give)."""
     clean_states = demos.states[~demos.perturbed]
     std = np.maximum(clean_states.std(axis=0), 1e-3)
     model = LatentActionModel(
@@ -177,21 +163,14 @@ def train_decoder(
     Args:
         demos: The dataset D (noisy copies included).
         control: Control-loop units; its ``action_scale`` is the decoder's bound sigma_h.
-        config: Optimisation settings; ``entropy_lambda > 0`` adds the entropy term of
-            Eq. T6 (:class:`lasa.method.entropy.EntropyRegularizer`).
-        goal_sets: The belief likelihood's goal sets, shape (G, K, n)
-            (``belief_targets(task, control.likelihood)``); needed when
-            ``entropy_lambda > 0``.
-        extra_loss: Optional further term added to the loss, called as
-            ``extra_loss(model, states, beliefs)`` on each batch.
-        init: Start from a copy of this trained model (a warm start, its architecture
-            and state normalisation kept) instead of a fresh initialisation; ``config``'s
-            ``hidden``, ``depth`` and ``z_dim`` must match it.
+        config: Optimisation settings; ``entropy_lambda > 0`` adds Eq. T6's entropy term.
+        goal_sets: The belief's goal sets (G, K, n), needed when ``entropy_lambda > 0``.
+        extra_loss: A further term, ``extra_loss(model, states, beliefs)`` on each batch.
+        init: Warm-start from a copy of this model (architecture and normalisation kept).
         progress: Show a tqdm progress bar.
 
     Returns:
-        The trained model (eval mode) and a frame of logged losses with columns
-        ``step``, ``train_loss``, ``val_error``, ``seconds``.
+        The trained model (eval mode) and the log: ``step``, ``train_loss``, ``val_error``, ``seconds``.
     """
     extra_loss = _with_entropy(config, control, goal_sets, extra_loss)
     rng = np.random.default_rng(config.seed)
@@ -212,8 +191,7 @@ def train_decoder(
     )
     val = (demos.states[val_mask], demos.actions[val_mask], demos.beliefs[val_mask])
 
-    # fused: one kernel per parameter for the whole update (the same AdamW, about 3x faster
-    # than the per-tensor loop torch uses on CPU by default; float rounding aside)
+    # fused: one kernel per parameter for the whole update, about 3x faster on CPU
     optim = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay, fused=True)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(optim, config.steps, eta_min=0.05 * config.lr)
     log: list[dict[str, float]] = []
@@ -244,11 +222,8 @@ def _batch_loss(
     scale: float,
     extra_loss: ExtraLoss | None,
 ) -> torch.Tensor:
-    """One batch's loss: reconstruction (in sigma_h units), the sector loss and any extra term.
-
-    ``data`` holds the training states, actions, beliefs and sector roles (None: no sector
-    loss); the batch and the noise on z are drawn from ``gen``, in that order.
-    """
+    """One batch's loss: reconstruction (in sigma_h units), the sector loss (roles None: none) and
+    any extra term; the batch, then the noise on z, are drawn from ``gen``."""
     s_all, a_all, b_all, roles = data
     idx = torch.randint(len(s_all), (config.batch_size,), generator=gen)
     s, a, b = s_all[idx], a_all[idx], b_all[idx]

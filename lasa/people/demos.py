@@ -1,22 +1,10 @@
-r"""Demonstrations D = {(s, a, b)}: reaches to each cup, then grasp adjustments there.
+r"""Demonstrations D = {(s, a, b)}: reaches to each goal, then adjustments of the preference there.
 
-Each demonstration is one continuous motion, as a kinesthetic teacher would give it:
-
-1. **Reach** from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)`,
-   at a constant joint-space speed that slows exponentially near the target (a
-   saturated proportional law, :math:`a = \min(k, v/\|e\|)\, e` with :math:`e = s^* - s`).
-   Unlike a minimum-jerk profile it moves off the start pose at full speed, so the
-   decoder learns that z moves the arm there too, and it slows down near the grasp,
-   so the decoder learns the small actions that precise grasping needs.
-2. **Adjust** the grasp at that cup: move along the preference curve
-   :math:`\theta \mapsto s^*(g, \theta)` to a few random new preferences, with the
-   same speed law in theta, holding still for a few steps after each.
-
-The belief of each tuple is the one the robot would have computed online along the
-demonstration (:mod:`lasa.method.belief`, starting uniform), so the decoder sees the
-contexts it will meet. Finally every tuple gets noisy copies: the state is perturbed
-and the action gains a correction back towards the demonstrated state, which teaches
-the decoder to return to the demonstrated manifold.
+A reach runs from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)` under a
+saturated proportional speed law, :math:`a = \min(k, v/\|e\|)\, e` (full speed off the start, slow
+near the grasp), then a few moves along :math:`\theta \mapsto s^*(g, \theta)` to random new
+preferences, each followed by a hold. Each tuple's belief is the robot's online one
+(:mod:`lasa.method.belief`); noisy copies teach the decoder to return to the demonstrations.
 """
 
 from __future__ import annotations
@@ -52,7 +40,6 @@ from lasa.method.belief import (
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
-from lasa.world.robot import Robot
 
 __all__ = [
     "DemoConfig",
@@ -60,8 +47,11 @@ __all__ = [
     "demonstration_summary",
     "collect_eating_demonstrations",
     "EATING_DEMOS",
-    "EATING_READINGS",
+    "SEGMENTATIONS",
 ]
+
+Segment = tuple[np.ndarray, float, int]  # a motion of a demonstration: its states, preference and phase
+Stroke = Callable[[int, float], list[Segment]]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -72,9 +62,7 @@ class DemoConfig:
     n_starts: PositiveInt = 3  # reaches per (cup, theta): one from home, the rest from perturbed homes
     start_noise: NonNegative = 0.3  # std of the start-pose perturbation [rad]
     n_adjust: NonNegativeInt = 3  # grasp adjustments (moves along the preference curve) per demo
-    speed: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = (
-        0.8  # cruise speed of the demonstrator, as a fraction of sigma_h [-]
-    )
+    speed: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = 0.8  # cruise speed, a fraction of sigma_h [-]
     gain: Positive = 2.0  # proportional gain of the slow-down near each target [1/s]
     tolerance: Positive = 0.01  # a motion ends this close to its target [rad]
     hold_steps: NonNegativeInt = 3  # steps held still after each motion [-]
@@ -89,11 +77,8 @@ class DemoConfig:
 
 
 def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame:
-    """One row per (demonstration, phase): its length and the belief in the demonstrated goal.
-
-    Columns: ``robot``, ``demo``, ``goal`` (the goal's name: a cup's, on the cup task), ``phase`` (``reach``,
-    ``adjust``, ``hold``), ``steps``, ``belief_min`` and ``belief_end``.
-    """
+    """One row per (demonstration, phase): ``robot``, ``demo``, ``goal`` (its name), ``phase``,
+    ``steps``, and the belief in the goal, ``belief_min`` and ``belief_end``."""
     clean = demos.clean()
     return (
         pd.DataFrame(
@@ -114,262 +99,189 @@ def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame
     )
 
 
-def _progress(span: float, speed: float, gain: float, tol: float, dt: float, max_steps: int) -> np.ndarray:
-    """Distance travelled along a path of length ``span`` at each step, under the speed law.
+class _Collector:
+    """A collection under way: its random stream, its tuples so far, and the demonstrator's motions."""
 
-    The law runs on the scalar distance left, u' = min(gain * (span - u), speed), so
-    straight reaches and moves along the preference curve share it.
-    """
-    u = [0.0]
-    while span - u[-1] > tol and len(u) <= max_steps:
-        u.append(u[-1] + dt * min(gain * (span - u[-1]), speed))
-    return np.asarray(u)
+    def __init__(self, task: GoalTask, control: ControlConfig, config: DemoConfig) -> None:
+        self.task, self.control, self.config = task, control, config
+        self.rng = np.random.default_rng(config.seed)
+        self.rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+        self.beliefs: list[np.ndarray] = []
+        self.cruise = config.speed * control.action_scale
+        self.goal_sets = belief_targets(task, control.likelihood)
+        self.n_demos = 0
+
+    def _progress(self, span: float) -> np.ndarray:
+        """Distance travelled along a path of length ``span`` at each step: u' = min(gain (span - u), v)."""
+        config, dt = self.config, self.control.dt
+        u = [0.0]
+        while span - u[-1] > config.tolerance and len(u) <= config.max_steps:
+            u.append(u[-1] + dt * min(config.gain * (span - u[-1]), self.cruise))
+        return np.asarray(u)
+
+    def line(self, start: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """States along the joint-space line from ``start`` to ``target`` under the speed law."""
+        span = float(np.linalg.norm(target - start))
+        return start + (self._progress(span) / max(span, 1e-12))[:, None] * (target - start)
+
+    def curve(self, curve: Callable[[np.ndarray], np.ndarray], start: float, end: float) -> np.ndarray:
+        """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
+        grid = np.linspace(start, end, 64)
+        pts = curve(grid)
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        return curve(np.interp(self._progress(float(arc[-1])), arc, grid))
+
+    def adjust(
+        self, g: int, theta: float, segments: list[Segment], stroke: Stroke | None = None
+    ) -> list[Segment]:
+        """``segments`` and ``n_adjust`` moves along goal g's curve to random preferences (each stroked)."""
+        current = theta
+        for _ in range(self.config.n_adjust):
+            new = float(self.rng.uniform(0.0, 1.0))
+            segments.append((self.curve(functools.partial(self.task.target, g), current, new), new, ADJUST))
+            if stroke is not None:
+                segments += stroke(g, new)
+            current = new
+        return segments
+
+    def append(self, segments: list[Segment], goal: int, start_belief: np.ndarray | None = None) -> None:
+        """Append one demonstration: each (path, preference, phase)'s finite differences, then a hold,
+        with the online belief from ``start_belief`` (default uniform)."""
+        control, config, rows = self.control, self.config, self.rows
+        log_b = (
+            uniform_log_belief(1, len(self.goal_sets))[0] if start_belief is None else np.log(start_belief)
+        )
+        for path, th, phase in segments:
+            s = path[:-1]
+            a = np.diff(path, axis=0) / control.dt
+            if config.hold_steps:
+                s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
+                a = np.concatenate([a, np.zeros((config.hold_steps, self.task.robot.n_joints))])
+            ph = np.full(len(s), phase)
+            ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
+            for k in range(len(s)):
+                self.beliefs.append(belief(log_b))
+                lik = log_likelihood(
+                    s[k], a[k], self.goal_sets, control.dt, control.belief_beta, control.likelihood_step
+                )
+                log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
+            rows["s"].append(s)
+            rows["a"].append(a)
+            rows["demo"].append(np.full(len(s), self.n_demos))
+            rows["goal"].append(np.full(len(s), goal))
+            rows["theta"].append(np.full(len(s), th))
+            rows["phase"].append(ph)
+        self.n_demos += 1
+
+    def dataset(self) -> Demonstrations:
+        """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
+        back towards the demonstrated state (clipped below sigma_h)."""
+        robot, config, rows = self.task.robot, self.config, self.rows
+        states = np.concatenate(rows["s"])
+        actions = np.concatenate(rows["a"])
+        b = np.stack(self.beliefs)
+        meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
+        copies_s, copies_a = [states], [actions]
+        for _ in range(config.n_perturb):
+            noise = self.rng.normal(0.0, config.perturb_std, states.shape)
+            s_new = robot.clip(states + noise)
+            a_new = actions + config.perturb_gain * (states - s_new)
+            norm = np.linalg.norm(a_new, axis=1, keepdims=True)
+            limit = 0.99 * self.control.action_scale
+            a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
+            copies_s.append(s_new)
+            copies_a.append(a_new)
+        reps = config.n_perturb + 1
+        perturbed = np.zeros(len(states) * reps, dtype=bool)
+        perturbed[len(states) :] = True
+        return Demonstrations(
+            robot=robot.name,
+            states=np.concatenate(copies_s),
+            actions=np.concatenate(copies_a),
+            beliefs=np.tile(b, (reps, 1)),
+            demo=np.tile(meta["demo"], reps),
+            goal=np.tile(meta["goal"], reps),
+            theta=np.tile(meta["theta"], reps),
+            phase=np.tile(meta["phase"], reps),
+            perturbed=perturbed,
+        )
 
 
 def collect_demonstrations(
     task: GoalTask, control: ControlConfig, config: DemoConfig = DemoConfig()
 ) -> Demonstrations:
-    """Generate the demonstration dataset for ``task``.
-
-    Args:
-        task: The goal task (robot, goals, preference curves, start pose).
-        control: Control-loop units: dt, sigma_h (the speed scale) and the belief model.
-        config: Sizes and motion parameters of the demonstrations.
-
-    Returns:
-        The dataset, noisy copies included (see :meth:`Demonstrations.clean`).
-    """
-    rng, rows, beliefs = _start(config)
-    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
-    demo_id = 0
-    goal_sets = belief_targets(task, control.likelihood)
-    thetas = np.linspace(0.0, 1.0, config.n_theta)
+    """The demonstrations of ``task``, noisy copies included (:meth:`Demonstrations.clean`), under
+    ``control``'s dt, sigma_h (the speed scale) and belief model."""
+    c = _Collector(task, control, config)
     for g in range(task.n_goals):
-        for theta in thetas:
+        for theta in np.linspace(0.0, 1.0, config.n_theta):
             for j in range(config.n_starts):
                 start = task.start.copy()
                 if j > 0:
-                    start = robot.clip(start + rng.normal(0.0, config.start_noise, start.shape))
-                segments: list[tuple[np.ndarray, float, int]] = []
-                # 1. reach: straight line in joint space under the speed law
-                segments.append((_line_path(start, task.target(g, theta), cruise, config, dt), theta, REACH))
-                # 2. adjustments along the preference curve, moving in theta
-                current = theta
-                for _ in range(config.n_adjust):
-                    new = float(rng.uniform(0.0, 1.0))
-                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
-                    segments.append((path, new, ADJUST))
-                    current = new
-                _append_demo(rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints)
-                demo_id += 1
-    return _dataset(robot, rows, beliefs, control, config, rng)
+                    start = task.robot.clip(start + c.rng.normal(0.0, config.start_noise, start.shape))
+                c.append(c.adjust(g, theta, [(c.line(start, task.target(g, theta)), theta, REACH)]), g)
+    return c.dataset()
 
 
-def _start(config: DemoConfig) -> tuple[np.random.Generator, dict[str, list[np.ndarray]], list[np.ndarray]]:
-    """A collection's random stream, its empty columns and its empty list of beliefs."""
-    columns: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
-    return np.random.default_rng(config.seed), columns, []
-
-
-def _line_path(
-    start: np.ndarray, target: np.ndarray, cruise: float, config: DemoConfig, dt: float
-) -> np.ndarray:
-    """States along the straight joint-space line from ``start`` to ``target`` under the speed law."""
-    span = float(np.linalg.norm(target - start))
-    u = _progress(span, cruise, config.gain, config.tolerance, dt, config.max_steps)
-    return start + (u / max(span, 1e-12))[:, None] * (target - start)
-
-
-def _curve_path(
-    curve: Callable[[np.ndarray], np.ndarray],
-    start: float,
-    end: float,
-    cruise: float,
-    config: DemoConfig,
-    dt: float,
-) -> np.ndarray:
-    """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
-    grid = np.linspace(start, end, 64)
-    pts = curve(grid)
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-    u = _progress(float(arc[-1]), cruise, config.gain, config.tolerance, dt, config.max_steps)
-    return curve(np.interp(u, arc, grid))
-
-
-def _append_demo(
-    rows: dict[str, list[np.ndarray]],
-    beliefs: list[np.ndarray],
-    segments: list[tuple[np.ndarray, float, int]],
-    demo_id: int,
-    goal: int,
-    goal_sets: np.ndarray,
-    control: ControlConfig,
-    config: DemoConfig,
-    n_joints: int,
-    start_belief: np.ndarray | None = None,
-) -> None:
-    """Append one demonstration's tuples: each segment's finite differences, then a hold.
-
-    ``segments`` are (path of states, preference, phase label); the belief is the one the
-    robot computes online along the demonstration, starting from ``start_belief``
-    (default uniform).
-    """
-    log_b = uniform_log_belief(1, len(goal_sets))[0] if start_belief is None else np.log(start_belief)
-    for path, th, phase in segments:
-        s = path[:-1]
-        a = np.diff(path, axis=0) / control.dt
-        if config.hold_steps:
-            s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
-            a = np.concatenate([a, np.zeros((config.hold_steps, n_joints))])
-        ph = np.full(len(s), phase)
-        ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
-        # online belief along the demonstration
-        for k in range(len(s)):
-            beliefs.append(belief(log_b))
-            lik = log_likelihood(
-                s[k], a[k], goal_sets, control.dt, control.belief_beta, control.likelihood_step
-            )
-            log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
-        rows["s"].append(s)
-        rows["a"].append(a)
-        rows["demo"].append(np.full(len(s), demo_id))
-        rows["goal"].append(np.full(len(s), goal))
-        rows["theta"].append(np.full(len(s), th))
-        rows["phase"].append(ph)
-
-
-def _dataset(
-    robot: Robot,
-    rows: dict[str, list[np.ndarray]],
-    beliefs: list[np.ndarray],
-    control: ControlConfig,
-    config: DemoConfig,
-    rng: np.random.Generator,
-) -> Demonstrations:
-    """The dataset from the demonstrations' tuples, with ``config.n_perturb`` noisy copies of each.
-
-    A copy's state is perturbed and its action corrected back towards the demonstrated
-    state (clipped below sigma_h), which teaches the decoder to return to the manifold.
-    """
-    states = np.concatenate(rows["s"])
-    actions = np.concatenate(rows["a"])
-    b = np.stack(beliefs)
-    meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
-    copies_s, copies_a = [states], [actions]
-    for _ in range(config.n_perturb):
-        noise = rng.normal(0.0, config.perturb_std, states.shape)
-        s_new = robot.clip(states + noise)
-        a_new = actions + config.perturb_gain * (states - s_new)
-        norm = np.linalg.norm(a_new, axis=1, keepdims=True)
-        limit = 0.99 * control.action_scale
-        a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
-        copies_s.append(s_new)
-        copies_a.append(a_new)
-    reps = config.n_perturb + 1
-    perturbed = np.zeros(len(states) * reps, dtype=bool)
-    perturbed[len(states) :] = True
-    return Demonstrations(
-        robot=robot.name,
-        states=np.concatenate(copies_s),
-        actions=np.concatenate(copies_a),
-        beliefs=np.tile(b, (reps, 1)),
-        demo=np.tile(meta["demo"], reps),
-        goal=np.tile(meta["goal"], reps),
-        theta=np.tile(meta["theta"], reps),
-        phase=np.tile(meta["phase"], reps),
-        perturbed=perturbed,
-    )
-
-
-# The eating task's demonstrations: five tilts per goal, each reached from home and from
-# the entries of the three other goals, then stroked, adjusted once and stroked again:
-# about 20 minutes of motion, the paper's amount (notebook 10 measures it).
+# Five tilts per goal, stroked, adjusted once and stroked again: about the paper's 20 minutes.
 EATING_DEMOS = DemoConfig(n_theta=5, n_starts=1, n_adjust=1)
-
-
-EATING_READINGS = ("continuous", "home", "transfers", "leaves")  # how the eating demonstrations are cut
+SEGMENTATIONS = ("continuous", "home", "transfers", "leaves")  # how the eating demonstrations are cut
 
 
 def collect_eating_demonstrations(
-    task: EatingTask, control: ControlConfig, config: DemoConfig = EATING_DEMOS, reading: str = "continuous"
+    task: EatingTask,
+    control: ControlConfig,
+    config: DemoConfig = EATING_DEMOS,
+    segmentation: str = "continuous",
 ) -> Demonstrations:
     """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
 
-    For every goal and each of ``config.n_theta`` tilts, from each start: **reach** the stroke's
-    entry s*(g, theta, 0) along a straight joint-space line, **stroke** through the food to
-    s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there. Motions
-    follow the cup demonstrations' speed law, with holds; beliefs are computed online over the task's
-    goals, with the same noisy copies (:func:`collect_demonstrations`). ``reading`` is how a teacher
-    cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start from the
-    belief held after working there), ``home`` (all from (perturbed) home, uniform belief),
-    ``transfers`` (from home, plus separate moves between goals' entries, uniform belief) or ``leaves``
-    (those moves leave a stroke's end, confident: the leave half of Sec. IV-B). In full:
-    ``docs/method-notes.md``.
-
-    Args:
-        task: The eating task (:func:`lasa.world.eating.make_eating_task`).
-        control: Control-loop units.
-        config: Sizes and motion parameters (default :data:`EATING_DEMOS`).
-        reading: How the demonstrations are cut, one of :data:`EATING_READINGS`.
+    Per goal, tilt and start: **reach** the stroke's entry s*(g, theta, 0), **stroke** to
+    s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there, as
+    :func:`collect_demonstrations` moves. ``segmentation`` (one of :data:`SEGMENTATIONS`) is how a
+    teacher cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start
+    from the belief settled there), ``home`` (all from (perturbed) home, uniform), ``transfers``
+    (plus separate moves between goals' entries, uniform) or ``leaves`` (those moves leave a
+    stroke's end, confident: Sec. IV-B). In full: ``docs/method-notes.md``.
     """
-    rng, rows, beliefs = _start(config)
-    robot, dt, cruise = task.robot, control.dt, config.speed * control.action_scale
-    goal_sets = belief_targets(task, control.likelihood)
-    demo_id = 0
+    check_choice("segmentation", segmentation, SEGMENTATIONS)
+    c = _Collector(task, control, config)
 
-    def stroke(g: int, theta: float) -> list[tuple[np.ndarray, float, int]]:
+    def stroke(g: int, theta: float) -> list[Segment]:
         def along(depths: np.ndarray) -> np.ndarray:
             return task.pose(g, theta, np.atleast_1d(depths))
 
-        down = _curve_path(along, 0.0, 1.0, cruise, config, dt)
+        down = c.curve(along, 0.0, 1.0)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
-    check_choice("reading", reading, EATING_READINGS)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
-            starts, beliefs_0, manipulate = _eating_starts(task, control, config, reading, g, rng)
-            for start, b0, work in zip(starts, beliefs_0, manipulate, strict=True):
-                target = task.target(g, theta)
-                segments = [(_line_path(start, target, cruise, config, dt), float(theta), REACH)]
-                if not work:  # a separate transfer: the reach, and its hold, only
-                    _append_demo(
-                        rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints, b0
-                    )
-                    demo_id += 1
-                    continue
-                segments += stroke(g, float(theta))
-                current = float(theta)
-                for _ in range(config.n_adjust):
-                    new = float(rng.uniform(0.0, 1.0))
-                    path = _curve_path(functools.partial(task.target, g), current, new, cruise, config, dt)
-                    segments.append((path, new, ADJUST))
-                    segments += stroke(g, new)
-                    current = new
-                _append_demo(
-                    rows, beliefs, segments, demo_id, g, goal_sets, control, config, robot.n_joints, b0
-                )
-                demo_id += 1
-    return _dataset(robot, rows, beliefs, control, config, rng)
+            starts = _eating_starts(task, control, config, segmentation, g, c.rng)
+            for start, b0, work in zip(*starts, strict=True):
+                segments = [(c.line(start, task.target(g, theta)), float(theta), REACH)]
+                if work:  # else a separate transfer: the reach, and its hold, only
+                    segments = c.adjust(g, float(theta), segments + stroke(g, float(theta)), stroke)
+                c.append(segments, g, b0)
+    return c.dataset()
 
 
 def _eating_starts(
     task: EatingTask,
     control: ControlConfig,
     config: DemoConfig,
-    reading: str,
+    segmentation: str,
     g: int,
     rng: np.random.Generator,
 ) -> tuple[list[np.ndarray], list[np.ndarray | None], list[bool]]:
-    """The starts of goal ``g``'s demonstrations under ``reading``: (pose, start belief, manipulates).
+    """The starts of goal ``g``'s demonstrations: (pose, start belief, manipulates) each.
 
-    Home and ``n_starts - 1`` perturbed homes (``n_starts + G - 2`` for ``home``), each from a
-    uniform belief (None) and manipulating; then, unless ``home``, one start per other goal:
-    its entry at a random tilt (``leaves``: its stroke's end), from the belief settled there
-    (``continuous``, ``leaves``) or a uniform one (``transfers``), manipulating for
+    Home and perturbed homes (``n_starts``, ``+ G - 1`` for ``home``), uniform (None) and
+    manipulating; then, unless ``home``, each other goal's entry at a random tilt (``leaves``: its
+    stroke's end), from the belief settled there (uniform for ``transfers``), manipulating for
     ``continuous`` only. Draws from ``rng`` in that order.
     """
     robot = task.robot
-    n_home = config.n_starts + (task.n_goals - 1 if reading == "home" else 0)
+    n_home = config.n_starts + (task.n_goals - 1 if segmentation == "home" else 0)
     starts = [task.start.copy()]
     starts += [
         robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
@@ -377,17 +289,17 @@ def _eating_starts(
     ]
     beliefs_0: list[np.ndarray | None] = [None] * len(starts)
     manipulate = [True] * len(starts)
-    if reading == "home":
+    if segmentation == "home":
         return starts, beliefs_0, manipulate
     for other in range(task.n_goals):
         if other == g:
             continue
         tilt = float(rng.uniform())
-        if reading == "leaves":
+        if segmentation == "leaves":
             starts.append(task.pose(other, np.array([tilt]), np.array([1.0]))[0])
         else:
             starts.append(task.target(other, tilt))
         settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
-        beliefs_0.append(settled if reading in ("continuous", "leaves") else None)
-        manipulate.append(reading == "continuous")
+        beliefs_0.append(settled if segmentation in ("continuous", "leaves") else None)
+        manipulate.append(segmentation == "continuous")
     return starts, beliefs_0, manipulate

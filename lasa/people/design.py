@@ -1,11 +1,6 @@
-"""The eating study's design: its settings, its episodes, and what each episode records.
-
-Every simulated participant (:mod:`lasa.people.cohort`) does both tasks
-(:data:`lasa.world.eating.TASKS`) under the four conditions of the 2x2 design
-(:data:`lasa.base.conditions.CONDITIONS`), each assisted condition under every SA member of
-:class:`StudyConfig`: one episode per participant x arm x task (:func:`layout`). A study's
-record (:class:`Episodes`) is the same whichever participant model ran it, and the same for
-logged sessions of real people (:mod:`lasa.evidence.sessions`).
+"""The eating study's design: its settings (:class:`StudyConfig`) and its episodes (:func:`layout`):
+every simulated participant does both tasks under the 2x2 conditions, each assisted one under every
+SA member of the config.
 """
 
 from __future__ import annotations
@@ -51,16 +46,13 @@ class StudyConfig:
 
     # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
     horizon: PositiveInt = 1500
-    position_tol: Positive = POSITION_TOL  # a waypoint is reached this close to it (the tines' width) [m]
-    angle_tol: Annotated[Number, at.Gt(0.0), at.Le(math.pi)] = (
-        ANGLE_TOL  # ... with the direction this close [rad]
-    )
+    # a waypoint is reached this close [m] with the fork's direction this close [rad] (WaypointTracker)
+    position_tol: Positive = POSITION_TOL
+    angle_tol: Annotated[Number, at.Gt(0.0), at.Le(math.pi)] = ANGLE_TOL
     # The SA members the assisted conditions run under (lasa.method.assistance); the first is the
     # headline. The paper's study used hindsight optimisation.
     assistance: tuple[str, ...] = ("hindsight",)
-    n_z: Annotated[Integer, at.Ge(3)] = (
-        5  # stick positions per axis the participant weighs (25 incl. rest) [-]
-    )
+    n_z: Annotated[Integer, at.Ge(3)] = 5  # stick positions per axis the participant weighs (odd) [-]
     participant: ParticipantConfig = ParticipantConfig()
     retarget: RetargetConfig = RetargetConfig()
 
@@ -97,15 +89,15 @@ class Layout:
 def layout(
     cohort: Cohort, control: ControlConfig, assistance: tuple[str, ...], interfaces: tuple[str, ...]
 ) -> Layout:
-    """The study's episodes, participant-major, then arm (the unassisted conditions once, each
-    assisted one under every member), then task; every model of participant runs this order."""
-    arms: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
-    arms += [(c, m) for m in assistance for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
-    n_a, n_t = len(arms), len(TASK_NAMES)
+    """The study's episodes, participant-major, then pair (the unassisted conditions once, each
+    assisted one under every member), then task; every participant model runs this order."""
+    pairs: list[tuple[str, str]] = [(c, NO_ASSISTANCE) for c in ("R", "LA") if c in interfaces]
+    pairs += [(c, m) for m in assistance for c in ("R+SA", "LA+SA") if interface_of(c) in interfaces]
+    n_a, n_t = len(pairs), len(TASK_NAMES)
     part = np.repeat(np.arange(len(cohort)), n_a * n_t)
-    arm = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
-    cond = np.array([CONDITIONS.index(arms[a][0]) for a in arm])
-    assistance_rows = np.array([arms[a][1] for a in arm])
+    pair = np.tile(np.repeat(np.arange(n_a), n_t), len(cohort))
+    cond = np.array([CONDITIONS.index(pairs[a][0]) for a in pair])
+    assistance_rows = np.array([pairs[a][1] for a in pair])
     return Layout(
         part=part,
         tsk=np.tile(np.arange(n_t), len(cohort) * n_a),

@@ -1,20 +1,9 @@
-r"""The eating study with simulated participants who look one step ahead (Sec. VI).
+"""The eating study (Sec. VI) with simulated participants who look one step ahead.
 
-A cohort of simulated participants (:mod:`lasa.people.cohort`) stands in for the paper's ten
-people. Each does both tasks (:data:`lasa.world.eating.TASKS`) under the four conditions of the
-2x2 design, in a counterbalanced order (:mod:`lasa.people.design`): ``R`` (Retargeting: a fork
-twist in one of three modes, by mink's IK, :mod:`lasa.method.retarget`), ``R+SA`` (the same
-a_h blended with the assistance by Eq. M1), ``LA`` (a_h = phi(z, s, b), the 2-D decoder;
-alpha = 0) and ``LA+SA`` (Algorithm 1). The assistance is a member of
-:mod:`lasa.method.assistance` (``hindsight``, the paper's study, by default); the robot infers
-its belief from a_h in every condition.
-
-A one-step participant predicts each candidate input's motion of the fork's tip, a latent
-action's through the arm's Jacobian (:func:`lasa.world.fork.tip_motion`), a Retargeting
-input's as the twist it commands, and chooses as every participant does
-(:mod:`lasa.people.policy`); an input of another mode first presses the mode button. The
-planning participants of :mod:`lasa.people.planning` differ only in how far they look. What a
-simulated participant cannot stand in for: ``docs/method-notes.md``.
+Every participant does both tasks under the four conditions of the 2x2 design
+(:mod:`lasa.people.design`), foreseeing each candidate input's motion of the fork's tip (a latent
+action's through the arm's Jacobian, a Retargeting input's as its twist; another mode first takes a
+press) and choosing by :mod:`lasa.people.policy`. Its limits: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -25,16 +14,16 @@ import numpy as np
 
 from lasa.base.config import ControlConfig
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now
 from lasa.method.retarget import MODES, retarget_action
+from lasa.method.runner import Now
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.loop import Setting, State, prepare, run_steps, start
 from lasa.people.policy import choose, progress_gain, rationality
+from lasa.people.simulation import Setting, State, prepare, run_steps, start
 from lasa.world.eating import EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.fork import normalise, tip_motion
+from lasa.world.record import Episodes
 
 __all__ = ["simulate"]
 
@@ -42,12 +31,8 @@ __all__ = ["simulate"]
 def _foresee(
     study: Setting, run: State, now: Now, la: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """What every candidate of the running episodes would do, as the participant sees it.
-
-    Returns:
-        phi of the stick positions (A, K, n) (zero for Retargeting), and the predicted tip
-        motion of every (mode, z) candidate: displacements and new directions, (A, M K, 3) each.
-    """
+    """phi of the stick positions (A, K, n) (zero for Retargeting), and the foreseen tip motion of
+    every (mode, z) candidate: displacements and new directions, (A, M K, 3) each."""
     n_k, n_m, dt, idx = len(study.grid), len(MODES), study.control.dt, now.rows
     a_i = run.axis[idx]
     dp = np.zeros((len(idx), n_m * n_k, 3))
@@ -74,7 +59,7 @@ def _values(
     p_star, d_star = study.wp_pos[tsk, w], study.wp_dir[tsk, w]
     weight = study.config.participant.rotation_weight
     gain = progress_gain(run.pos[idx], run.axis[idx], dp, new_dir, p_star, d_star, weight) / study.unit
-    # which candidates exist: LA the K stick positions; R every (mode, z) except other modes' rest
+    # LA's candidates are the K stick positions; R's every (mode, z) but other modes' rest
     valid = np.zeros_like(gain, dtype=bool)
     valid[la, :n_k] = True
     r_rows = np.flatnonzero(~la)
@@ -82,8 +67,7 @@ def _values(
     other_rest = np.arange(n_m)[None, :] != run.mode[idx[r_rows], None]  # (R, M)
     valid[r_rows[:, None], np.arange(n_m)[None, :] * n_k + rest] = ~other_rest
     rest_col = np.where(la, rest, run.mode[idx] * n_k + rest)
-    # another mode's input takes a press (or two) of the mode button first: its progress
-    # is spread over the steps it takes, the presses and the move
+    # another mode's input is spread over its presses of the mode button and the move
     presses_needed = (np.arange(n_m)[None, :] - run.mode[idx[r_rows], None]) % n_m  # (R, M)
     gain[r_rows] /= np.repeat(1.0 + presses_needed, n_k, axis=1)
     gain = np.where(valid, gain, -np.inf)
@@ -94,11 +78,7 @@ def _values(
 def _act(
     study: Setting, run: State, now: Now, choice: np.ndarray, is_rest: np.ndarray, phi: np.ndarray
 ) -> np.ndarray:
-    """The chosen inputs of the running episodes, recorded, and their human actions (A, n).
-
-    The human action is the one the live step makes from the same input: latent actions with
-    the stick at rest commanding nothing; Retargeting's press, rest or twist by IK.
-    """
+    """Record the chosen inputs; their human actions (A, n), as the live step makes them."""
     t, idx = now.t, now.rows
     n_k, la = len(study.grid), study.layout.is_la[idx]
     chosen_mode, chosen_z = choice // n_k, choice % n_k
@@ -118,8 +98,7 @@ def _act(
 
 
 def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
-    """The chooser: each running participant weighs every candidate input one step ahead and
-    chooses one (or rests); their human actions, (A, n)."""
+    """The chooser: every running participant's input, one step ahead (or rest); a_h (A, n)."""
     t, idx = now.t, now.rows
     la = study.layout.is_la[idx]
     phi, dp, new_dir = _foresee(study, run, now, la)
@@ -127,8 +106,6 @@ def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
     pc, dt = study.config.participant, study.control.dt
     beta = rationality(study.layout, idx, t, dt, pc)
     choice, wants = choose(gain, beta, study.streams, idx, run.waited, dt, pc)
-    # nothing worth a push: rest, unless the participant has waited out their patience
-    # (then they try the input their Boltzmann choice gives, as a person tries things)
     choice = np.where(wants, choice, rest_col)
     return _act(study, run, now, choice, choice == rest_col, phi)
 
@@ -147,16 +124,13 @@ def simulate(
 
     Args:
         task: The eating task.
-        decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
-        cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
-        control: Control-loop units (dt, sigma_h, belief model, alpha); the assisted
-            conditions run under each of ``config.assistance``.
+        decoder: The 2-D decoder phi(z, s, b) trained on the eating demonstrations.
+        cohort: The participants (:func:`lasa.people.cohort.draw_cohort`).
+        control: Control-loop units; the assisted conditions run under each of ``config.assistance``.
         config: Session settings and the participants' free parameters.
-        seed: Seed of the participants' choices; episode (i, condition, task) draws from its
-            own stream, so participant i's episodes do not depend on the cohort's size.
+        seed: Seed of the choices; episode (i, condition, task) draws from its own stream.
         progress: Show a progress bar.
-        interfaces: The control interfaces whose conditions run (``("LA",)``: only LA and
-            LA+SA, for another reading of the decoder; Retargeting does not use it).
+        interfaces: The interfaces whose conditions run (``("LA",)`` for another decoder variant).
 
     Raises:
         ConfigError: on a decoder that does not fit the task or the 2-axis stick, or unknown

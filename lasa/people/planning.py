@@ -1,21 +1,14 @@
-r"""Planning participants: the eating study's simulated people who plan over held inputs.
+r"""Planning participants of the eating study: they plan over held inputs.
 
-The participants of :mod:`lasa.people.participants` look one step ahead, and with a decoder
-whose good inputs only pay off when held (the study's headline decoder at the end of a stroke)
-they never finish. The participant here plans over held inputs instead; it is the same person
-otherwise (:mod:`lasa.people.policy`; the same loop: :mod:`lasa.people.loop`), and
-:func:`simulate` has the signature and the record of :func:`lasa.people.participants.simulate`.
-
-Every ``replan`` seconds the participant chooses a stick input z and a hold h from ``holds``
-(:class:`PlanConfig`) by the Boltzmann rule on the plan's progress rate under their cost,
+One-step participants (:mod:`lasa.people.participants`) never finish with a decoder whose good
+inputs pay off only when held. These are the same people otherwise (:mod:`lasa.people.policy`),
+but every ``replan`` seconds choose an input z and a hold h by the Boltzmann rule on the progress rate
 
 .. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
     \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
 
-and rests when the best plan is worth less than ``idle_threshold``. Latent-action plans are
-foreseen by rolling the real step forward (coarser beyond the re-plan period); Retargeting plans
-by the twist the interface promises. Why the rate, the asymmetry, the parameters, and what the
-model cannot stand in for: ``docs/method-notes.md``.
+latent plans foreseen by rolling the real step, Retargeting plans by the promised twist
+(``docs/method-notes.md``).
 """
 
 from __future__ import annotations
@@ -29,38 +22,30 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now
 from lasa.method.retarget import MODES, retarget_action
+from lasa.method.runner import Now
 from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.loop import Setting, State, prepare, run_steps, start
 from lasa.people.policy import choose, progress_gain, rationality
+from lasa.people.simulation import Setting, State, prepare, run_steps, start
 from lasa.world.eating import EatingTask
-from lasa.world.episodes import Episodes
 from lasa.world.fork import tip_frames
+from lasa.world.record import Episodes
 
 __all__ = ["PlanConfig", "simulate"]
 
 
 @dataclasses.dataclass(frozen=True)
 class PlanConfig:
-    """How a planning participant plans, each setting with its reason.
+    """How a planning participant plans, each setting from what it means, before any run."""
 
-    Set before any planning study was run, from what they mean.
-    """
-
-    # A person re-decides about twice a second: a choice reaction time (~0.3-0.5 s) plus
-    # the time to see the fork respond; faster re-planning would be a second one-step model.
+    # a choice reaction time (~0.3-0.5 s) plus the time to see the fork respond
     replan: Positive = 0.5  # time between re-plans [s]
-    # A tap (one control step: the one-step model's candidate), a re-plan's worth, a short
-    # push and a long one: 6 s at 1.5 cm per step covers the ~0.5 m from a bowl to the plate.
+    # a tap, a re-plan's worth, a short push and a long one (6 s: from a bowl to the plate)
     holds: tuple[Positive, ...] = (0.1, 0.5, 2.0, 6.0)  # hold times a plan chooses from [s]
-    # Cost: rolling every candidate 60 exact steps at every re-plan costs >10x the one-step
-    # study. Up to the re-plan the roll is exact (the holds the participant will execute);
-    # beyond it, one rolled step spans `coarse` control steps (the held input's action over
-    # coarse * dt, through the same advance), a person's foresight being no finer than that.
-    # 1: every rolled step is the executed one.
+    # the roll is exact up to the re-plan; beyond it one rolled step spans `coarse` control steps
+    # (a person's foresight is no finer; 1 rolls every step exactly, at >10x the cost)
     coarse: PositiveInt = 5  # control steps per rolled step beyond the re-plan period [-]
 
     def __post_init__(self) -> None:
@@ -75,7 +60,8 @@ class PlanConfig:
         """The re-plan period and the holds in control steps of ``dt``.
 
         Raises:
-            ConfigError: if one of them is not a whole number (>= 1) of steps.
+            ConfigError: if one is not a whole number (>= 1) of steps, or a long hold's excess not
+                a multiple of ``coarse``.
         """
         out = []
         for name, value in [("replan", self.replan)] + [("holds", h) for h in self.holds]:
@@ -127,52 +113,19 @@ class _Run(State):
     hold_left: np.ndarray  # steps of the hold left (E,)
 
 
-def _prepare(
-    task: EatingTask,
-    decoder: ActionDecoder,
-    cohort: Cohort,
-    control: ControlConfig,
-    config: StudyConfig,
-    seed: int,
-    interfaces: tuple[str, ...],
-    plan: PlanConfig,
-) -> _Study:
-    """Check the inputs and build the study's fixed parts."""
-    setting = prepare(task, decoder, cohort, control, config, seed, interfaces)
-    replan_steps, hold_steps = plan.steps(control.dt)
+def _prepare(setting: Setting, plan: PlanConfig) -> _Study:
+    """The study's fixed parts: the loop's (:func:`lasa.people.loop.prepare`) and the plans'."""
+    replan_steps, hold_steps = plan.steps(setting.control.dt)
     moves = np.flatnonzero(np.arange(len(setting.grid)) != setting.rest)
     return _Study(
-        **vars(setting),
-        moves=moves,
-        replan_steps=replan_steps,
-        coarse=plan.coarse,
-        hold_steps=hold_steps,
-    )
-
-
-def _start(study: _Study) -> _Run:
-    """Every episode at the task's start with no plan, nothing recorded yet."""
-    zeros = np.zeros(len(study.layout.part), dtype=int)
-    return _Run(
-        **vars(start(study)),
-        z_plan=np.full(len(zeros), study.rest),
-        presses_left=zeros.copy(),
-        hold_left=zeros.copy(),
+        **vars(setting), moves=moves, replan_steps=replan_steps, coarse=plan.coarse, hold_steps=hold_steps
     )
 
 
 def _rollout_states(study: _Study, idx: np.ndarray, state: np.ndarray, log_b: np.ndarray) -> np.ndarray:
-    """Hold every move from every latent-action episode ``idx`` (at ``state``, ``log_b``) for the
-    longest hold, in one batch.
-
-    Each rolled step is the executed step: decode phi(z, s, b) (every row its own z, state and
-    belief: the call :func:`lasa.method.step.decode_candidates` makes, with per-row states),
-    the stick-at-rest convention, then :func:`lasa.method.step.advance` with the episode's alpha
-    and SA member, the belief updating.
-
-    Returns:
-        The joints at the end of each hold, (A, K', H, n).
-    """
+    """The joints (A, K', H, n) at the end of each hold of every move from latent-action episodes
+    ``idx`` (at ``state``, ``log_b``), each rolled step the executed one (decode, stick at rest,
+    :func:`lasa.method.step.advance` with the episode's alpha and member), in one batch."""
     lay, moves, holds = study.layout, study.moves, study.hold_steps
     k = len(moves)
     s = np.repeat(state, k, axis=0)
@@ -206,11 +159,8 @@ def _latent_values(
 
 
 def _retarget_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
-    """Progress rate of every (mode, move, hold) plan of Retargeting episodes ``idx``, (A, M K' H).
-
-    The interface's promise: the twist held for h translates the tip by h v and turns the
-    fork by exp(h omega); a plan in another mode takes its presses first, one step each.
-    """
+    """Progress rate of every (mode, move, hold) plan of Retargeting episodes ``idx``, (A, M K' H):
+    the twist held for h moves the tip by h v and turns it by exp(h omega), after a step per press."""
     h = study.hold_steps * study.control.dt  # (H,)
     tw = study.r_twist[:, study.moves, None, :] * h[None, None, :, None]  # (M, K', H, 6)
     dp = tw[..., :3].reshape(1, -1, 3)
@@ -302,29 +252,20 @@ def simulate(
     *,
     plan: PlanConfig = PlanConfig(),
 ) -> Episodes:
-    """Run every planning participant through both tasks under every condition, in one batch.
-
-    The same study, record and random streams as :func:`lasa.people.participants.simulate`
-    (episode (i, condition, task) draws from ``default_rng([seed, i, condition, task])``, so
-    participant i's episodes do not depend on the cohort's size); only the participants
-    differ: they plan over held inputs (module docstring).
-
-    Args:
-        task: The eating task.
-        decoder: The 2-D latent-action decoder phi(z, s, b) trained on the eating demonstrations.
-        cohort: The simulated participants (:func:`lasa.people.cohort.draw_cohort`).
-        control: Control-loop units; the assisted conditions run under each of ``config.assistance``.
-        config: Session settings and the participants' free parameters.
-        seed: Seed of the participants' choices.
-        progress: Show a progress bar.
-        interfaces: The control interfaces whose conditions run.
-        plan: How the participants plan (re-plan period, holds).
+    """:func:`lasa.people.participants.simulate` (the same study, record and random streams) with
+    planning participants, who plan as ``plan`` says.
 
     Raises:
-        ConfigError: on a decoder that does not fit the task, unknown interfaces, or a
-            re-plan period or hold that is not a whole number of control steps.
+        ConfigError: as :func:`lasa.people.participants.simulate`, and on a re-plan period or hold
+            that is not a whole number of control steps (:meth:`PlanConfig.steps`).
     """
-    study = _prepare(task, decoder, cohort, control, config, seed, interfaces, plan)
-    run = _start(study)
+    study = _prepare(prepare(task, decoder, cohort, control, config, seed, interfaces), plan)
+    zeros = np.zeros(len(study.layout.part), dtype=int)
+    run = _Run(
+        **vars(start(study)),
+        z_plan=np.full(len(zeros), study.rest),
+        presses_left=zeros.copy(),
+        hold_left=zeros.copy(),
+    )
     desc = f"planning study: {len(cohort)} participants, {len(study.layout.part)} episodes"
     return run_steps(study, run, functools.partial(_choose, study, run), desc, progress)

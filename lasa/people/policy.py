@@ -1,23 +1,9 @@
-r"""How a simulated participant of the eating study chooses an input, whichever way they foresee it.
+r"""How a simulated participant of the eating study chooses an input, however they foresee it.
 
-A participant values each candidate input (a stick position, in Retargeting also a mode; for a
-planning participant also a hold) by the progress it makes towards the current waypoint
-(:func:`lasa.world.eating.waypoints`) under the cost
-
-.. math::  C = \|p - p^*\| + \ell\, \angle(d, d^*)
-
-(:func:`progress_gain`), in units of the best translation one step of Retargeting makes
-(``dt * linear_speed``). How the candidates' effects are foreseen is the participant model's:
-one step ahead (:mod:`lasa.people.participants`) or over held inputs
-(:mod:`lasa.people.planning`). They pick an input by a Boltzmann choice with their own
-rationality beta (Gumbel-max, on their episode's own random stream), and give no input at all
-(idle) when no candidate would make at least ``idle_threshold`` of that unit of progress,
-until their ``patience`` runs out: then they try their Boltzmann choice anyway
-(:func:`choose`). Rationality improves with experience,
-
-.. math::  \beta(t) = \beta_\infty \big(1 - (1 - \rho)\, e^{-(E_0 + t\,\Delta)/\tau}\big),
-
-where E_0 is the practice before the condition (:meth:`lasa.people.cohort.Cohort.experience`).
+A candidate's value is how far it lowers the cost :math:`C = \|p - p^*\| + \ell\, \angle(d, d^*)` to
+the current waypoint (:func:`progress_gain`), in best Retargeting steps; the choice is Boltzmann
+(Gumbel-max, on the episode's own stream) with :math:`\beta(t) = \beta_\infty (1 - (1 - \rho)
+e^{-(E_0 + t\Delta)/\tau})`, or rest when nothing is worth ``idle_threshold`` until ``patience`` ends.
 """
 
 from __future__ import annotations
@@ -41,12 +27,7 @@ def progress_gain(
     d_star: np.ndarray,
     rotation_weight: float,
 ) -> np.ndarray:
-    """How much each candidate lowers a participant's cost to the waypoint, (A, K) [m].
-
-    The cost of a tip pose is its distance to the waypoint plus ``rotation_weight`` times
-    the angle between its direction and the waypoint's
-    (:class:`lasa.people.cohort.ParticipantConfig`).
-    """
+    """How much each candidate (tip motion ``dp``, new direction) lowers the cost C, (A, K) [m]."""
     c_now = np.linalg.norm(pos - p_star, axis=1) + rotation_weight * angle_between(axis, d_star)
     c_new = np.linalg.norm(pos[:, None, :] + dp - p_star[:, None, :], axis=2)
     c_new = c_new + rotation_weight * angle_between(new_dir, d_star[:, None, :])
@@ -72,17 +53,9 @@ def choose(
     dt: float,
     participant: ParticipantConfig,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The Boltzmann choice of episodes ``idx`` among candidates worth ``values`` (A, P), and
-    whether they want to give it.
-
-    Each episode draws P uniforms from its own stream (``streams[e]``) for the Gumbel-max
-    choice. An episode wants to give an input when its best candidate makes at least
-    ``idle_threshold`` of progress, or when it has rested (``waited``, (E,) steps) for its
-    ``patience``.
-
-    Returns:
-        The chosen candidate (A,) and whether to give it rather than rest (A,).
-    """
+    """The Boltzmann choice (A,) of episodes ``idx`` among candidates worth ``values`` (A, P), each
+    drawing P uniforms from ``streams[e]``, and whether to give it rather than rest (A,): when the
+    best is worth ``idle_threshold``, or after resting (``waited``, (E,) steps) for ``patience``."""
     uniforms = np.stack([streams[e].random(values.shape[1]) for e in idx])
     choice = choose_latent(-values, beta, gumbel_noise(uniforms))
     patience_steps = max(1, round(participant.patience / dt))

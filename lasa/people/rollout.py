@@ -1,11 +1,8 @@
 """Algorithm 1 (LA and LA+SA) for a batch of simulated users choosing among joystick candidates.
 
-The users are a chooser of the episode runner (:class:`lasa.method.episodes.Runner`). At each
-step one decoder call evaluates phi(z, s, b) for every user and every joystick candidate z on the
-grid (U x K rows, :func:`lasa.method.step.decode_candidates`); each user picks a candidate by
-Eq. S1 (:mod:`lasa.people.users`), a laggy or noisy pilot then maybe another, and the runner takes
-Algorithm 1's step. Users of different methods, rationalities and streams share a batch, and so
-share each decoder call.
+At each step one decoder call evaluates phi(z, s, b) for every user and candidate z (U x K rows);
+each user picks one by Eq. S1 (:mod:`lasa.people.users`), a pilot maybe another, and the episode
+runner (:class:`lasa.method.runner.Runner`) takes Algorithm 1's step.
 """
 
 from __future__ import annotations
@@ -18,7 +15,7 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Now, Runner, check_horizon
+from lasa.method.runner import Now, Runner, check_horizon
 from lasa.method.step import Assist, check_decoder, decode_candidates, latent_grid
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
 from lasa.world.goals import GoalTask
@@ -46,11 +43,7 @@ class Trajectories:
 
 
 class BoltzmannUsers:
-    """The chooser of simulated users (Eq. S1), and of laggy or noisy pilots among them.
-
-    Attributes:
-        z: The joystick input each user chose at each step, (T, U, d).
-    """
+    """The chooser of simulated users (Eq. S1) and pilots; ``z`` records their inputs (T, U, d)."""
 
     def __init__(
         self,
@@ -72,9 +65,9 @@ class BoltzmannUsers:
         t, users = now.t, self.users
         phi = decode_candidates(self.decoder, self.grid, now.state, now.belief)  # (U, K, n): one call
         costs = user_costs(users.target_at(t), now.state, phi, self.dt)
-        k = choose_latent(costs, users.beta(t), gumbel_noise(self.noise[users.stream, t]))
+        k = choose_latent(costs, users.beta(t), gumbel_noise(self.noise[users.user, t]))
         if self.pilot_noise is not None:
-            k = pilot_choice(users, k, self._k_prev, self.pilot_noise[users.stream, t], len(self.grid))
+            k = pilot_choice(users, k, self._k_prev, self.pilot_noise[users.user, t], len(self.grid))
             self._k_prev = k
         self.z[t] = self.grid[k]
         return phi[np.arange(len(k)), k]
@@ -96,25 +89,21 @@ def rollout(
 
     Args:
         decoder: The decoder phi(z, s, b); its robot and goals must be the task's.
-        task: The goal task (goals, start pose, joint limits via its robot).
-        users: The simulated users (targets, rationality, random streams).
+        task: The goal task.
+        users: The simulated users.
         alpha: Blend weight per user, shape (U,), or one for all.
         control: Control-loop units (dt, speed bound, belief model, n_z).
         horizon: Number of control steps T.
-        noise: Uniforms in (0, 1) of shape (n_streams, T, K); user u draws from
-            ``noise[users.stream[u]]``. K must equal the number of joystick candidates.
+        noise: Uniforms in (0, 1), (N, T, K) (K joystick candidates); user u draws from
+            ``noise[users.user[u]]``.
         progress: Show a tqdm progress bar over the steps.
-        pilot_noise: Uniforms of shape (n_streams, T, 2) for laggy and noisy pilots
-            (``users.pilot``, :func:`lasa.people.users.pilot_choice`); user u draws from
-            ``pilot_noise[users.stream[u]]``. Needed only by those pilots.
-        assistance: Each user's member of :mod:`lasa.method.assistance`, shape (U,), so that
-            users of several readings share one batch; default ``control.assistance`` for everyone.
-
-    Returns:
-        The trajectories of every user.
+        pilot_noise: Uniforms (N, T, 2) for laggy and noisy pilots
+            (:func:`lasa.people.users.pilot_choice`), drawn as ``noise``.
+        assistance: Each user's member of :mod:`lasa.method.assistance`, (U,); default
+            ``control.assistance``.
     """
     check_decoder(decoder, task)
-    check_horizon(horizon)  # before the noise's shape is checked against it
+    check_horizon(horizon)
     n_users, k = len(users), control.n_z**decoder.z_dim
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != k:
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {k}), got {noise.shape}")

@@ -1,16 +1,9 @@
 r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1).
 
-A simulated user wants the robot at :math:`s^*` (their goal cup and preferred grasp) and weighs
-each joystick input z by where it would move the robot,
-
-.. math::
-
-    p(z) \propto \exp\big\{-\beta(t)\, \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\big\},
-
-with :math:`\beta(t) = \beta_0 + m t` (Fig. sim3) and a goal that may change at step N (Fig. sim2).
-Choices use the Gumbel-max trick on each user's own random stream, so the same user draws the same
-under every method. :data:`PILOTS` adds the ``laggy`` and ``noisy`` pilots of the shared-autonomy
-literature (:func:`pilot_choice`). The reading of Delta and the pilots: ``docs/method-notes.md``.
+A user wanting the robot at :math:`s^*` chooses z with
+:math:`p(z) \propto \exp\{-\beta(t) \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\}`, :math:`\beta(t) =
+\beta_0 + m t` (Fig. sim3), their goal maybe changing at step N (Fig. sim2), by Gumbel-max on their
+own draws; :data:`PILOTS` adds the laggy and noisy pilots (``docs/method-notes.md``).
 """
 
 from __future__ import annotations
@@ -21,18 +14,9 @@ import numpy as np
 
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "PILOTS",
-    "UserPopulation",
-    "user_costs",
-    "choose_latent",
-    "gumbel_noise",
-    "pilot_choice",
-]
+__all__ = ["PILOTS", "UserPopulation", "user_costs", "choose_latent", "gumbel_noise", "pilot_choice"]
 
 PILOTS = ("boltzmann", "laggy", "noisy")
-
-
 _SCALARS = ("pilot", "pilot_prob")  # UserPopulation fields shared by every user
 
 
@@ -46,8 +30,7 @@ class UserPopulation:
         target: Each user's desired final pose s*, shape (U, n) [rad].
         beta0: Rationality at t = 0, shape (U,) [1/rad^2].
         slope: Growth of the rationality per step, m in beta(t) = beta0 + m t, (U,).
-        stream: The random stream each user draws from (an index into the noise), (U,): users
-            that share it share their draws (the figures' CSVs call it ``seed``, the user's index).
+        user: Each user's index, which picks their draws from the noise, (U,) (the CSVs' ``seed``).
         first_target: The pose each user aims at before changing their mind, (U, n);
             ``None`` for users who never do.
         change_step: N, the first step at which each user aims at ``target``, (U,).
@@ -60,7 +43,7 @@ class UserPopulation:
     target: np.ndarray
     beta0: np.ndarray
     slope: np.ndarray
-    stream: np.ndarray
+    user: np.ndarray
     first_target: np.ndarray | None = None
     change_step: np.ndarray | None = None
     pilot: str = "boltzmann"
@@ -99,8 +82,7 @@ class UserPopulation:
             for f in dataclasses.fields(self)
             if f.name not in _SCALARS
         }
-        picked.update(pilot=self.pilot, pilot_prob=self.pilot_prob)
-        return UserPopulation(**picked)  # type: ignore[arg-type]
+        return dataclasses.replace(self, **picked)  # type: ignore[arg-type]
 
     def target_at(self, t: int) -> np.ndarray:
         """The pose each user aims at during step t, shape (U, n)."""
@@ -114,14 +96,7 @@ class UserPopulation:
 
 
 def user_costs(target: np.ndarray, state: np.ndarray, phi: np.ndarray, dt: float) -> np.ndarray:
-    """||s* - (s + dt phi(z))||^2 for every user and candidate, shape (U, K).
-
-    Args:
-        target: s* per user, shape (U, n).
-        state: s per user, shape (U, n).
-        phi: Decoded action of every candidate, shape (U, K, n).
-        dt: Control period.
-    """
+    """||s* - (s + dt phi(z))||^2, (U, K), for targets and states (U, n) and candidates' phi (U, K, n)."""
     offset = (target - state)[:, None, :]
     diff = dt * phi
     if diff.shape == np.broadcast_shapes(offset.shape, diff.shape) and diff.dtype == np.result_type(
@@ -143,23 +118,15 @@ def gumbel_noise(uniform: np.ndarray) -> np.ndarray:
 
 
 def choose_latent(costs: np.ndarray, beta: np.ndarray, gumbel: np.ndarray) -> np.ndarray:
-    """Sample a candidate index per user from p(z) ∝ exp(-beta cost) (Gumbel-max).
+    """A candidate index per user (U,) from p(z) ∝ exp(-beta cost) by Gumbel-max, for ``costs`` and
+    ``gumbel`` (U, K) and ``beta`` (U,).
 
-    An infinite beta picks the best candidate (ties broken by the noise). Non-finite
-    costs (a decoder fault) are never chosen over a finite one.
-
-    Args:
-        costs: Cost of every candidate, shape (U, K).
-        beta: Rationality per user, shape (U,).
-        gumbel: Gumbel noise, shape (U, K).
-
-    Returns:
-        Chosen candidate indices, shape (U,).
+    An infinite beta picks the best candidate (the noise breaks ties); a non-finite cost (a decoder
+    fault) is never chosen over a finite one.
     """
     beta = np.asarray(beta, dtype=float)[:, None]
     if np.all(np.isfinite(costs)) and np.all(np.isfinite(beta)) and np.all(beta >= 0.0):
-        # The common case, in fewer passes: every masked branch below is inactive, and a
-        # zero beta gives logits of -0.0 instead of 0.0 (the same sums with the noise).
+        # the common case in fewer passes (a zero beta gives -0.0 for 0.0: the same sums)
         logits = np.multiply(beta, costs)
         np.negative(logits, out=logits)
         return np.argmax(logits + gumbel, axis=1)
@@ -181,20 +148,9 @@ def pilot_choice(
     uniforms: np.ndarray,
     n_candidates: int,
 ) -> np.ndarray:
-    """The input a pilot gives, from the one Eq. S1 would choose.
-
-    Args:
-        users: The population (its ``pilot`` and ``pilot_prob``).
-        choice: Eq. S1's candidate index per user, shape (U,).
-        previous: Each user's input at the previous step, (U,); None at the first step
-            (a laggy pilot has nothing to repeat yet).
-        uniforms: Two uniforms in [0, 1) per user, shape (U, 2): the event, and the random
-            input of the noisy pilot.
-        n_candidates: K, the number of joystick candidates.
-
-    Returns:
-        Candidate indices, shape (U,): ``choice`` itself for Boltzmann users.
-    """
+    """The inputs (U,) pilots give instead of Eq. S1's ``choice`` (U,): with probability
+    ``pilot_prob`` (``uniforms[:, 0]``), a laggy pilot repeats ``previous`` (None at the first step),
+    a noisy one gives a random input of ``n_candidates`` (``uniforms[:, 1]``)."""
     if users.pilot == "boltzmann" or users.pilot_prob == 0.0:
         return choice
     event = uniforms[:, 0] < users.pilot_prob

@@ -86,7 +86,7 @@ class Workspace(Generic[TaskT]):
     def artifact(self, name: str, **fields: str) -> Path:
         """The path of artifact ``name`` (see :data:`lasa.base.paths.ARTIFACTS`) for this robot.
 
-        ``fields`` fill the rest of its pattern (``reading`` for the eating readings).
+        ``fields`` fill the rest of its pattern (``segmentation`` for the eating segmentations).
         """
         return self.paths.artifact(name, self.name, **fields)
 
@@ -98,7 +98,7 @@ class Workspace(Generic[TaskT]):
 
     def decoder(self, name: str = "decoder", **fields: str) -> tuple[LatentActionModel, dict[str, Any]]:
         """A checkpoint (``decoder``, ``decoder_lambda0``, ``decoder_entropy``, ``eating_decoder``, or
-        ``eating_reading_decoder`` with its ``reading``) and its metadata."""
+        ``eating_segmentation_decoder`` with its ``segmentation``) and its metadata."""
         return load_checkpoint(
             self.artifact(name, **fields), robot=self.name, make_hint=Paths.make_hint(name, self.name)
         )

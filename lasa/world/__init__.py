@@ -1,5 +1,1 @@
-"""The world: the robots (MuJoCo models, kinematics), IK (mink) and the goal tasks.
-
-The tasks are goal tasks (:mod:`lasa.world.goals`): the cups of sims 1-4 and the eating
-scene of the study.
-"""
+"""The world: the robots, their kinematics and IK, and the goal tasks (the cups, the eating scene)."""

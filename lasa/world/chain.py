@@ -1,18 +1,11 @@
-"""The grasp site's forward kinematics and Jacobian for many configurations at once.
+r"""The grasp site's kinematics for many configurations at once, and rotations about z.
 
-MuJoCo's kinematics (``mj_kinematics``, ``mj_jacSite``) take one configuration per call, so a
-batch of B configurations costs B Python round trips. For an arm whose grasp site hangs from a
-serial chain of hinge joints (the Panda, planar5), the same quantities are a product of B x 3 x 3
-rotations per body, here computed for the whole batch in numpy, from the compiled model's own
-numbers: each body's offset (``body_pos``, ``body_quat``), each hinge's anchor and axis
-(``jnt_pos``, ``jnt_axis``, turned by ``qpos - qpos0`` as MuJoCo turns it), and the site's offset.
-The Jacobian is the geometric one MuJoCo's ``mj_jacSite`` returns: a hinge with world axis
-:math:`a` and anchor :math:`p_j` moves the site at :math:`p` by :math:`a \\times (p - p_j)` per
-radian and turns it by :math:`a`. Rounding differs from MuJoCo's quaternion arithmetic in the last
-bits only (``tests/test_chain.py`` checks 1e-12 against ``mj_kinematics`` on both robots).
-
-:meth:`SerialChain.of` returns None for a model it does not cover (another joint type on the
-chain, a joint of the chain that is not an arm joint); the callers then keep MuJoCo's loop.
+For a grasp site that hangs from a serial chain of hinges (the Panda, planar5), MuJoCo's
+per-configuration ``mj_kinematics`` and ``mj_jacSite`` become a batch of 3 x 3 products in numpy,
+from the compiled model's own numbers (``body_pos``, ``body_quat``, ``jnt_pos``, ``jnt_axis``,
+``qpos0``). A hinge with world axis :math:`a` and anchor :math:`p_j` moves the site at :math:`p` by
+:math:`a \times (p - p_j)` per radian. Rounding differs from MuJoCo's in the last bits only
+(``tests/test_chain.py``: 1e-12).
 """
 
 from __future__ import annotations
@@ -22,7 +15,15 @@ import dataclasses
 import mujoco
 import numpy as np
 
-__all__ = ["SerialChain"]
+__all__ = ["SerialChain", "rot_z"]
+
+
+def rot_z(angle: float | np.ndarray) -> np.ndarray:
+    """The rotation by ``angle`` [rad] about z, (3, 3); for angles of shape (...,), (..., 3, 3)."""
+    c, s = np.cos(angle), np.sin(angle)
+    zero, one = np.zeros_like(c), np.ones_like(c)
+    rows = [np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)]
+    return np.stack(rows, -2)
 
 
 def _quat_to_mat(quat: np.ndarray) -> np.ndarray:
@@ -63,7 +64,8 @@ class SerialChain:
 
     @classmethod
     def of(cls, model: mujoco.MjModel, site: int, qpos_adr: np.ndarray) -> SerialChain | None:
-        """The chain of ``site`` in ``model``, or None if it holds anything but hinges of the arm."""
+        """The chain of ``site`` in ``model``, or None if it holds anything but hinges of the arm
+        (the callers then keep MuJoCo's loop)."""
         arm = {int(a): i for i, a in enumerate(qpos_adr)}
         bodies, body = [], int(model.site_bodyid[site])
         while body != 0:

@@ -1,24 +1,9 @@
 r"""The eating task of the paper's user study (Sec. VI): bowls, a plate, a fork and preferences.
 
-The Panda holds a fork (``assets/panda/fork.xml``) over a table with three bowls and the
-user's plate (``assets/panda/eating.xml``). The goals G are, in order (:data:`GOALS`), the left
-bowl (rice), the middle bowl (marshmallows, and the tofu of the Entree), the right bowl (icing)
-and the plate. The study controls and measures the fork's tip (site ``fork_tip``).
-
-**Preferences** (:data:`PREFERENCES`: *stab*, *cut*, *scoop*, *dip*, *place*) are a tilt
-:math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}` from pointing
-straight down towards a horizontal direction r at the goal, and the tines move along
-
-.. math::
-
-    d(\theta) = \cos\psi\, d_{down} + \sin\psi\, r, \qquad
-    m(\theta) = \frac{(1 - \theta)\, d_{down} + \theta\, r}{\|(1 - \theta)\, d_{down} + \theta\, r\|}.
-
-**Strokes** run 5 cm along m(theta) and end 1 cm into the food:
-:math:`p(g, \theta, u) = c_g - 0.01\, d_{up} + (u - 1)\, 0.05\, m(\theta)`, solved by mink IK
-on a grid of theta and u (:func:`make_eating_task`). **Tasks** (:data:`TASKS`, Entree and
-Dessert) are phases, each with its waypoints (:func:`waypoints`). Why r, each preference's
-tilt, and the phases: ``docs/method-notes.md``.
+The Panda holds a fork over three bowls (rice, middle, icing) and the plate (:data:`GOALS`). A
+preference is a tilt :math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}`
+from pointing down towards a sideways r; strokes run 5 cm along m(theta), ending 1 cm into the food
+(:func:`fork_frame`). Tasks are phases, each with its waypoints. Why: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -38,29 +23,21 @@ from lasa.world.robot import ASSETS, ROBOTS, Robot, RobotSpec
 
 __all__ = [
     "STUDY_BELIEF_CAP",
-    "EATING",
     "GOALS",
-    "TILT_MAX",
-    "STROKE",
-    "Preference",
     "PREFERENCES",
-    "Phase",
     "TASKS",
     "TASK_NAMES",
-    "Waypoint",
     "EatingTask",
     "load_eating_robot",
     "fork_direction",
-    "stroke_direction",
     "fork_frame",
+    "instruction",
     "make_eating_task",
     "waypoints",
 ]
 
 GOALS = ("rice", "middle", "icing", "plate")  # goal names, in goal order (left, middle, right bowl; plate)
-# The study's belief cap: Javdani et al.'s implementation of the shared autonomy the paper's study
-# ran (ada_assistance_policy's max_prob_any_goal) keeps every goal at or below 0.99 [-]
-STUDY_BELIEF_CAP = 0.99
+STUDY_BELIEF_CAP = 0.99  # Javdani et al.'s cap on any goal's belief (max_prob_any_goal) [-]
 TILT_MAX = np.pi / 3  # psi_max: the tilt of a scoop from pointing straight down [rad]
 STROKE = 0.05  # length of a stroke through the food [m]
 INTO_FOOD = 0.01  # a stroke ends this far below the food's surface [m]
@@ -77,10 +54,8 @@ EATING = RobotSpec(
     grasp_standoff=0.0,
     side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._sideways)
     ik_guesses=(ROBOTS["panda"].ik_guesses[0],) * 4,
-    # The cup sims' units (notebook 04 states why); the study's assistance is hindsight
-    # optimisation, the member the paper's user study used (Javdani et al. 2018), and its belief is
-    # theirs as their implementation keeps it: no goal above STUDY_BELIEF_CAP.
-    control=ControlConfig(assistance="hindsight", belief_cap=STUDY_BELIEF_CAP),  # the study's units (Sec. VI)
+    # the cup sims' units, with the paper's study's hindsight optimisation and Javdani et al.'s belief cap
+    control=ControlConfig(assistance="hindsight", belief_cap=STUDY_BELIEF_CAP),
     mesh_package=ROBOTS["panda"].mesh_package,
     tool=ASSETS / "panda" / "fork.xml",
 )
@@ -88,7 +63,7 @@ EATING = RobotSpec(
 
 @dataclasses.dataclass(frozen=True)
 class Preference:
-    """A fine-grained motion at a goal: the fork's tilt theta in [0, 1] (see the module docstring)."""
+    """A fine-grained motion at a goal: the fork's tilt theta in [0, 1]."""
 
     name: str  # "stab", "cut", "scoop", "dip" or "place"
     theta: float  # tilt as a fraction of TILT_MAX [-]
@@ -130,6 +105,21 @@ TASKS: dict[str, tuple[Phase, ...]] = {
     ),
 }
 TASK_NAMES = tuple(TASKS)  # the study's tasks, in their order
+_PLACES = {  # how a participant is told where each goal is
+    "rice": "the rice (left bowl)",
+    "middle": "the middle bowl",
+    "icing": "the icing (right bowl)",
+    "plate": "the plate",
+}
+
+
+def instruction(task: str, phase: int | None) -> str:
+    """What a participant is asked to do in ``phase`` of ``task`` (None: the task is done)."""
+    if phase is None:
+        return f"{task}: done"
+    phases = TASKS[task]
+    verb = phases[phase].preference or "reach"
+    return f"{task} {phase + 1}/{len(phases)}: {verb} at {_PLACES[phases[phase].goal]}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -149,13 +139,8 @@ def load_eating_robot() -> Robot:
 
 
 def _sideways(robot: Robot, goal: int) -> np.ndarray:
-    """The horizontal direction r a preference tilts the fork towards at ``goal``, unit (3,).
-
-    Sideways: the direction from the robot's base to the goal turned a quarter turn
-    counter-clockwise (to the robot's left). At table height the Panda's wrist cannot tilt
-    the fork's tines more than about 40 degrees outward (away from the base) or inward:
-    mink's IK fails there; sideways it reaches the scoop's 60 degrees at every goal.
-    """
+    """r at ``goal``, unit (3,): base-to-goal turned a quarter turn to the robot's left (the Panda's
+    wrist tilts the fork ~40 degrees at most outward or inward, 60 sideways)."""
     outward = robot.goal_positions()[goal] - robot.base_position()
     outward[2] = 0.0
     norm = np.linalg.norm(outward)
@@ -178,14 +163,8 @@ def stroke_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.n
 
 
 def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.ndarray, np.ndarray]:
-    """Fork-tip position (3,) and rotation (3, 3) at preference ``theta``, stroke depth ``depth``.
-
-    Args:
-        robot: The eating robot (:func:`load_eating_robot`).
-        goal: Goal index (:data:`GOALS`).
-        theta: Tilt in [0, 1].
-        depth: u in [0, 1] along the stroke.
-    """
+    """Fork-tip position (3,) and rotation (3, 3) at ``goal``, tilt ``theta`` and stroke depth u in [0, 1]:
+    p(g, theta, u) = c_g - 0.01 d_up + (u - 1) 0.05 m(theta)."""
     check_range("theta", theta, 0.0, 1.0)
     check_range("depth", depth, 0.0, 1.0)
     sideways = _sideways(robot, goal)
@@ -200,26 +179,16 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
 
 @dataclasses.dataclass(frozen=True)
 class EatingTask(GoalTask):
-    """The eating task: a goal task (bowls and the plate, a tilt at each), plus strokes.
-
-    ``curves`` (G, K, n) are the stroke entries s*(g, theta, 0) on ``theta_grid`` and
-    ``goals`` the mid-preference entries; ``target(g, theta)`` interpolates the entries.
-
-    Attributes:
-        depth_grid: Stroke depths u at which IK was solved, shape (D,).
-        strokes: s*(g, theta, u) on both grids, shape (G, K, D, n) [rad].
-    """
+    """The eating task: a goal task whose ``curves`` (G, K, n) are the stroke entries s*(g, theta, 0)
+    and ``goals`` the mid-tilt ones, plus ``strokes`` s*(g, theta, u), (G, K, D, n) [rad], on
+    ``theta_grid`` and ``depth_grid`` (D,)."""
 
     depth_grid: np.ndarray
     strokes: np.ndarray
 
     def pose(self, goal: int, theta: float | np.ndarray, depth: float | np.ndarray) -> np.ndarray:
-        """s*(g, theta, u): the joint configuration of stroke poses, shape (..., n).
-
-        Cubic in theta (as :meth:`target`), linear in depth between the solved depths;
-        ``theta`` and ``depth`` broadcast (scalars give one pose, shape (n,)), and each
-        stretch between two solved depths is evaluated in one call for all its poses.
-        """
+        """s*(g, theta, u), shape (..., n): cubic in theta (as :meth:`target`), linear in depth
+        between the solved depths; ``theta`` and ``depth`` broadcast."""
         theta_arr, depth_arr = np.broadcast_arrays(
             np.asarray(theta, dtype=float), np.asarray(depth, dtype=float)
         )
@@ -253,24 +222,15 @@ class EatingTask(GoalTask):
 
     @property
     def preference_sets(self) -> np.ndarray:
-        """Each goal's whole stroke surface as one polyline, shape (G, K', n).
-
-        The polyline runs along the entries (theta from 0 to 1) and back along the stroke
-        ends, so that carrying out a stroke is not evidence against the goal it happens at.
-        """
+        """Each goal's stroke surface as one polyline (G, K', n): along the entries and back along the
+        ends, so that carrying out a stroke is not evidence against its goal."""
         return np.concatenate([self.strokes[:, :, 0], self.strokes[:, ::-1, -1]], axis=1)
 
 
 def make_eating_task(robot: Robot | None = None, n_theta: int = 9, depths: int = 3) -> EatingTask:
-    """Solve IK over every goal's preferences and strokes and build the task.
+    """Solve mink IK over every goal's ``n_theta`` tilts (odd) and ``depths`` stroke depths (>= 2).
 
-    The default task (the default robot and grids) is solved once per process and shared:
-    it is immutable, and its 108 IK solves take seconds.
-
-    Args:
-        robot: The eating robot (default :func:`load_eating_robot`).
-        n_theta: Tilts solved per goal (odd, so theta = 1/2 is on the grid).
-        depths: Stroke depths solved per tilt (>= 2, evenly spaced on [0, 1]).
+    The default task (robot and grids) is solved once per process and shared (it is immutable).
     """
     if robot is None:
         return _default_task(n_theta, depths)
@@ -283,7 +243,6 @@ def _default_task(n_theta: int, depths: int) -> EatingTask:
 
 
 def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
-    """The IK of :func:`make_eating_task`."""
     if n_theta < 3 or n_theta % 2 == 0:
         raise ConfigError(f"n_theta must be an odd integer >= 3, got {n_theta}")
     if depths < 2:

@@ -1,11 +1,13 @@
 """The fork's tip in the eating tasks: its frames, how a joint step moves it, and its waypoints.
 
 Simulated participants (:mod:`lasa.people`) and real ones (:mod:`lasa.live`) read the fork's pose
-through :func:`tip_frames` and test a waypoint with :func:`waypoint_reached`, so both finish a
+through :func:`tip_frames` and track its waypoints with :class:`WaypointTracker`, so both finish a
 phase by the same rule.
 """
 
 from __future__ import annotations
+
+import dataclasses
 
 import mujoco
 import numpy as np
@@ -23,24 +25,16 @@ __all__ = [
     "angle_between",
     "normalise",
     "tip_motion",
-    "waypoint_arrays",
-    "waypoint_reached",
-    "next_waypoint",
+    "WaypointTracker",
 ]
 
 
 def tip_frames(
     robot: Robot, data: mujoco.MjData, qs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The grasp site's position, direction (+z) and Jacobians at joint vectors ``qs`` (B, n).
-
-    :meth:`lasa.world.robot.Robot.grasp_jacobians`, split: ``data`` is the MjData it writes where
-    the arm is not a chain of hinges (a chain's batch needs none).
-
-    Returns:
-        position (B, 3), direction (B, 3), translational Jacobian (B, 3, n) and rotational
-        Jacobian (B, 3, n) with respect to the arm joints.
-    """
+    """The grasp site's position (B, 3), direction (+z, (B, 3)) and translational and rotational Jacobians
+    (B, 3, n) at joints ``qs`` (B, n): :meth:`lasa.world.robot.Robot.grasp_jacobians` (writing ``data``
+    where the arm is not a chain of hinges), split."""
     pos, rot, jac = robot.grasp_jacobians(qs, data)
     return pos, rot[:, :, 2], jac[:, :3], jac[:, 3:]
 
@@ -58,56 +52,70 @@ def normalise(v: np.ndarray) -> np.ndarray:
 def tip_motion(
     jp: np.ndarray, jr: np.ndarray, axis: np.ndarray, dq: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The tip's displacement and new direction for joint steps ``dq`` (A, K, n), to first order.
-
-    Args:
-        jp, jr: Translational and rotational Jacobians, (A, 3, n).
-        axis: The fork's direction now, (A, 3).
-        dq: Candidate joint steps, (A, K, n) [rad].
-
-    Returns:
-        Displacements (A, K, 3) [m] and unit directions (A, K, 3).
+    """The tip's displacements (A, K, 3) [m] and new unit directions (A, K, 3) for joint steps ``dq``
+    (A, K, n) [rad], to first order, from Jacobians ``jp``, ``jr`` (A, 3, n) and direction ``axis`` (A, 3).
     """
     dp = np.einsum("aij,akj->aki", jp, dq)
     rot = np.einsum("aij,akj->aki", jr, dq)
     return dp, normalise(axis[:, None, :] + np.cross(rot, axis[:, None, :]))
 
 
-def waypoint_arrays(robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Every task's waypoints, padded: positions (T, W, 3), directions (T, W, 3), phases (T, W),
-    counts (T,)."""
-    plans = [waypoints(name) for name in TASK_NAMES]
-    n_wp = np.array([len(p) for p in plans])
-    w_max, n_t = int(n_wp.max()), len(plans)
-    wp_pos, wp_dir = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
-    wp_phase = np.zeros((n_t, w_max), dtype=int)
-    for k, plan in enumerate(plans):
-        for j, wp in enumerate(plan):
-            pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
-            wp_pos[k, j], wp_dir[k, j], wp_phase[k, j] = pos, rot[:, 2], wp.phase
-    return wp_pos, wp_dir, wp_phase, n_wp
+@dataclasses.dataclass(frozen=True)
+class WaypointTracker:
+    """Every task's waypoints (padded) and when one counts as reached: the one tracker of a phase's
+    progress, for simulated participants (:mod:`lasa.people.simulation`) and real ones
+    (:class:`lasa.live.station.Station`).
 
-
-def waypoint_reached(
-    tip: np.ndarray,
-    direction: np.ndarray,
-    target: np.ndarray,
-    target_direction: np.ndarray,
-    position_tol: float = POSITION_TOL,
-    angle_tol: float = ANGLE_TOL,
-) -> np.ndarray:
-    """Whether the fork tip is within ``position_tol`` [m] of its waypoint and its direction within
-    ``angle_tol`` [rad] of the waypoint's, vectorised over leading dimensions."""
-    close = np.linalg.norm(tip - target, axis=-1) < position_tol
-    return close & (angle_between(direction, target_direction) < angle_tol)
-
-
-def next_waypoint(reached: np.ndarray, w: np.ndarray, n_wp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Past a reached waypoint, the next one; past the last, finished (and ``w`` stays at the last).
-
-    Returns:
-        The waypoint each task works towards now, and whether it has finished (shapes of ``w``).
+    Attributes:
+        position, direction: The waypoints' tip positions [m] and fork directions, (T, W, 3) each.
+        phase: Each waypoint's phase, (T, W); count: each task's waypoints, (T,).
+        position_tol: A waypoint is reached this close to it (the tines' width) [m] ...
+        angle_tol: ... with the fork's direction this close (~11 degrees) [rad].
     """
-    w = np.where(reached, w + 1, w)
-    finished = reached & (w >= n_wp)
-    return np.minimum(w, n_wp - 1), finished
+
+    position: np.ndarray
+    direction: np.ndarray
+    phase: np.ndarray
+    count: np.ndarray
+    position_tol: float = POSITION_TOL
+    angle_tol: float = ANGLE_TOL
+
+    @classmethod
+    def of(
+        cls, robot: Robot, position_tol: float = POSITION_TOL, angle_tol: float = ANGLE_TOL
+    ) -> WaypointTracker:
+        """The tracker of every task of :data:`lasa.world.eating.TASK_NAMES` on ``robot``."""
+        plans = [waypoints(name) for name in TASK_NAMES]
+        count = np.array([len(p) for p in plans])
+        w_max, n_t = int(count.max()), len(plans)
+        position, direction = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
+        phase = np.zeros((n_t, w_max), dtype=int)
+        for k, plan in enumerate(plans):
+            for j, wp in enumerate(plan):
+                pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
+                position[k, j], direction[k, j], phase[k, j] = pos, rot[:, 2], wp.phase
+        return cls(position, direction, phase, count, position_tol, angle_tol)
+
+    def advance(
+        self,
+        task: np.ndarray,
+        w: np.ndarray,
+        tip: np.ndarray,
+        axis: np.ndarray,
+        running: np.ndarray | bool = True,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Past a reached waypoint, the next one; past the last, finished (``w`` stays at the last).
+
+        Args:
+            task: Task indices, (E,); w: the waypoints worked towards, (E,).
+            tip, axis: The fork's tip positions and directions, (E, 3) each (:func:`tip_frames`).
+            running: Which episodes may still reach a waypoint.
+
+        Returns:
+            The waypoint each episode works towards now, and whether it has finished, (E,) each.
+        """
+        close = np.linalg.norm(tip - self.position[task, w], axis=-1) < self.position_tol
+        reached = running & close & (angle_between(axis, self.direction[task, w]) < self.angle_tol)
+        w = np.where(reached, w + 1, w)
+        finished = reached & (w >= self.count[task])
+        return np.minimum(w, self.count[task] - 1), finished

@@ -1,23 +1,10 @@
-r"""Franka's official Panda conventions, as a reference to check models against.
+r"""Franka's official Panda conventions, the yardstick our ``panda`` is checked against.
 
-A decoder trained on our ``panda`` must speak a real arm's joint space, so joint angles
-must mean what Franka's documentation says they mean. This module holds that
-documentation's numbers: the modified (Craig) Denavit-Hartenberg table, the flange and
-TCP offsets, the joint limits and the "ready" pose. It also holds a kinematics-only
-compile of the Panda that the ``gymnasium-robotics`` package ships, so that the
-departure of the packaged model from the table can be *measured*.
-
-Nothing here drives the robot. lasa's kinematics come from MuJoCo; this module is
-the yardstick in ``tests/test_panda.py`` and notebook 01.
-
-With the modified DH convention each frame i follows from frame i-1 by
-
-.. math::
-
-    T_i = R_x(\alpha_{i-1})\, T_x(a_{i-1})\, R_z(\theta_i)\, T_z(d_i),
-
-and the flange is ``d = 0.107`` m beyond frame 7. The hand is turned -pi/4 about the
-flange's z axis, and the TCP lies 0.1034 m further along z.
+Franka's modified (Craig) Denavit-Hartenberg table, flange and TCP offsets, joint limits and
+"ready" pose, and a kinematics-only compile of the ``gymnasium-robotics`` Panda to measure its
+departure from the table (``tests/test_panda.py``, notebook 01). Frame i follows frame i-1 by
+:math:`T_i = R_x(\alpha_{i-1}) T_x(a_{i-1}) R_z(\theta_i) T_z(d_i)`; the flange is 0.107 m beyond
+frame 7, the hand turned -pi/4 about its z, the TCP 0.1034 m further along z.
 """
 
 from __future__ import annotations
@@ -29,22 +16,10 @@ import numpy as np
 import pandas as pd
 
 from lasa.base.errors import ConfigError
+from lasa.world.chain import rot_z
 from lasa.world.robot import Robot, mesh_dir
-from lasa.world.rotations import rot_z
 
-__all__ = [
-    "DH",
-    "FLANGE_D",
-    "TCP_D",
-    "HAND_YAW",
-    "LOWER",
-    "UPPER",
-    "READY",
-    "dh_frames",
-    "packaged_chain",
-    "PACKAGED_OFFSETS",
-    "check_against_dh",
-]
+__all__ = ["LOWER", "UPPER", "READY", "PACKAGED_OFFSETS", "dh_frames", "packaged_chain", "check_against_dh"]
 
 # (a_{i-1} [m], d_i [m], alpha_{i-1} [rad]) for joints 1..7, from Franka's documentation.
 DH: tuple[tuple[float, float, float], ...] = (
@@ -86,14 +61,7 @@ def _trans(x: float = 0.0, z: float = 0.0) -> np.ndarray:
 
 
 def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
-    """World transforms (4x4) of frames 1..7, the flange and the TCP for joints ``q``.
-
-    Args:
-        q: Joint angles in Franka's convention, shape (7,) [rad].
-
-    Returns:
-        ``{"link1": T1, ..., "link7": T7, "flange": T_F, "tcp": T_TCP}``.
-    """
+    """World transforms (4x4) ``link1`` .. ``link7``, ``flange`` and ``tcp`` at Franka's joints ``q`` (7,)."""
     q = np.asarray(q, dtype=float)
     if q.shape != (7,):
         raise ConfigError(f"q must have 7 entries, got shape {q.shape}")
@@ -111,10 +79,8 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
 def packaged_chain() -> mujoco.MjModel:
     """The Panda chain that ``gymnasium-robotics`` ships, compiled for kinematics only.
 
-    Geoms, inertias and classes are stripped from its ``chain.xml`` (which needs the
-    package's defaults and meshes otherwise); bodies, joints and sites are kept
-    exactly, so its forward kinematics are the packaged model's. Its site
-    ``end_effector`` is the packaged TCP.
+    Geoms, inertias and classes are stripped (they need the package's defaults and meshes);
+    bodies, joints and sites are kept exactly. Its site ``end_effector`` is the packaged TCP.
     """
     root = mesh_dir("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets")
     chain = ET.parse(root / "chain.xml").getroot()
@@ -135,15 +101,12 @@ def packaged_chain() -> mujoco.MjModel:
 
 
 def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
-    """How far models' forward kinematics are from Franka's DH table.
-
-    Draws ``n`` joint vectors uniformly within Franka's limits and compares, at each,
-    the TCP pose of (a) ``robot`` (our ``panda``), (b) the packaged chain at the same
-    joint vector, and (c) the packaged chain with its joint-6/7 offsets undone.
+    """How far models' forward kinematics are from Franka's DH table, at ``n`` uniform joint vectors.
 
     Returns:
-        One row per model: the largest TCP position error [m] and orientation error
-        [rad], and the largest position error over frames 1..7 [m] (our model only).
+        One row per model (``robot``; the packaged chain at the same q; the packaged chain with its
+        joint-6/7 offsets undone): the largest TCP position [m] and orientation [rad] errors, and
+        the largest position error over frames 1..7 [m] (``robot`` only).
     """
     rng = np.random.default_rng(seed)
     qs = rng.uniform(LOWER, UPPER, size=(n, 7))
@@ -175,14 +138,5 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
             row[0] = max(row[0], float(np.linalg.norm(pos - tcp[:3, 3])))
             row[1] = max(row[1], rot_err(mat.reshape(3, 3), tcp[:3, :3]))
             row[2] = fr if np.isnan(fr) else max(row[2], fr)
-    return pd.DataFrame(
-        [
-            {
-                "model": k,
-                "max_tcp_position_error_m": v[0],
-                "max_tcp_rotation_error_rad": v[1],
-                "max_frame_position_error_m": v[2],
-            }
-            for k, v in rows.items()
-        ]
-    )
+    columns = ("max_tcp_position_error_m", "max_tcp_rotation_error_rad", "max_frame_position_error_m")
+    return pd.DataFrame([{"model": k, **dict(zip(columns, v, strict=True))} for k, v in rows.items()])

@@ -1,25 +1,15 @@
-r"""The goal task: what every task of the package has, whatever its goals are.
+r"""The goal task: a robot, G >= 2 goals, and at each goal a family of desired final poses.
 
-A goal task is a robot, G >= 2 goals, and at each goal a one-parameter family of desired
-final poses :math:`s^*(g, \theta)`, :math:`\theta \in [0, 1]` (the user's preference
-there), solved by IK on a grid of theta and interpolated between grid points with a
-cubic spline. A goal g in joint space is its mid-preference pose, which is what Eq. M2
-pulls towards; every episode starts from one start pose.
-
-Everything the method (:mod:`lasa.method`), the simulated users (:mod:`lasa.people`) and
-the shared plots need of a task is here, for any number of goals. The tasks themselves
-are its subclasses, equals of one another:
-
-- :class:`lasa.world.task.CupTask`: cups on a table, from a top to a side grasp;
-- :class:`lasa.world.eating.EatingTask`: the study's bowls and plate, from stabbing to
-  scooping, with a stroke at each preference.
-
-A new task subclasses :class:`GoalTask` and builds its curves however it likes.
+:math:`s^*(g, \theta)`, :math:`\theta \in [0, 1]` the user's preference there, is solved by IK on a
+grid of theta and interpolated by a cubic spline; goal g in joint space is its mid-preference pose
+(what Eq. M2 pulls towards). Its subclasses are :class:`lasa.world.task.CupTask` and
+:class:`lasa.world.eating.EatingTask`; a new task subclasses :class:`GoalTask`.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -81,15 +71,11 @@ class GoalTask:
         ):
             raise ConfigError(f"theta must be in [0, 1], got {theta}")
         out = np.empty((*goal_arr.shape, self.robot.n_joints))
-        for g in range(self.n_goals):  # G is a handful: a loop over goals, not over users
+        for g in range(self.n_goals):
             mask = goal_arr == g
             out[mask] = self._splines[g](theta_arr[mask])
         return out
 
-    @property
+    @functools.cached_property
     def _splines(self) -> list[CubicSpline]:
-        cache = self.__dict__.get("_spline_cache")
-        if cache is None:
-            cache = [CubicSpline(self.theta_grid, c, axis=0) for c in self.curves]
-            object.__setattr__(self, "_spline_cache", cache)
-        return cache
+        return [CubicSpline(self.theta_grid, c, axis=0) for c in self.curves]

@@ -1,11 +1,8 @@
-"""Inverse kinematics of grasp poses, solved with mink.
+"""Inverse kinematics of grasp poses with mink's differential IK.
 
-A grasp pose is a position and an orientation of the robot's grasp site. We solve
-for the arm's joint positions with mink's differential IK: a frame task on the grasp
-site (position and orientation), a light posture task that picks one solution out of
-the arm's redundancy, and mink's configuration limits so the answer stays inside the
-joint ranges. Iterating the QP from a seed converges to a nearby solution, so solving
-a sequence of poses warm-started from the previous answer gives a smooth curve.
+A frame task on the grasp site, a light posture task that picks one solution out of the arm's
+redundancy, and the joint ranges as limits; solves warm-started from their neighbour give a
+smooth curve.
 """
 
 from __future__ import annotations
@@ -24,12 +21,9 @@ __all__ = ["solve_grasp_ik", "pose_error"]
 
 @dataclasses.dataclass(frozen=True)
 class _Solver:
-    """mink's objects for one robot and posture cost, made once and reused by every solve.
+    """mink's objects for one robot and posture cost, made once (they cost more than a solve).
 
-    Making them costs more than a solve (``mink.Configuration`` allocates an ``MjData``; measured:
-    a third of notebook 07's time at paper scale). Reusing them changes no result: a solve sets
-    the configuration's every joint (from ``qpos0``, the state a new one starts in) and each task's
-    target before its first step, and their kinematics read nothing else.
+    Reuse changes no result: a solve sets every joint (from ``qpos0``) and each task's target first.
     """
 
     configuration: mink.Configuration
@@ -42,7 +36,6 @@ _SOLVERS: weakref.WeakKeyDictionary[Robot, dict[float, _Solver]] = weakref.WeakK
 
 
 def _solver(robot: Robot, posture_cost: float) -> _Solver:
-    """The reused mink objects of ``robot`` at ``posture_cost`` (made on first use)."""
     by_cost = _SOLVERS.setdefault(robot, {})
     if posture_cost not in by_cost:
         model = robot.model
@@ -90,13 +83,11 @@ def solve_grasp_ik(
         seed: Initial joint positions, shape (n,) [rad].
         posture: Joint positions the posture task pulls towards (default: ``seed``).
         posture_cost: Weight of the posture task relative to the frame task.
-        position_tol: Accept when the position error is below this [m].
+        position_tol: Accept when the position error is below this [m] ...
         rotation_tol: ... and the orientation error below this [rad].
-        max_iters: Iteration budget of the differential IK.
-        dt: Integration step of each IK iteration [s].
-        damping: Levenberg-Marquardt damping of the QP.
-        label: What the pose is, for the error message: the goal and the preference
-            (``"cup 'cup_left', theta = 0.250"``).
+        max_iters: Iteration budget; ``dt`` [s] and ``damping`` are each iteration's step and
+            Levenberg-Marquardt damping.
+        label: The pose, for the error message (``"cup 'cup_left', theta = 0.250"``).
 
     Returns:
         Joint positions within the joint limits, shape (n,).
@@ -106,7 +97,7 @@ def solve_grasp_ik(
     """
     solver = _solver(robot, posture_cost)
     configuration, frame, posture_task = solver.configuration, solver.frame, solver.posture
-    q_full = robot.model.qpos0.copy()  # what a fresh configuration holds: no state of the last solve
+    q_full = robot.model.qpos0.copy()  # no state of the last solve
     adr = robot.qpos_adr
     q_full[adr] = robot.clip(np.asarray(seed, dtype=float))
     configuration.update(q_full)
@@ -119,12 +110,10 @@ def solve_grasp_ik(
     target = q_full.copy()
     target[adr] = seed if posture is None else posture
     posture_task.set_target(target)
-    limits = solver.limits
-
     q = configuration.q[adr]
     for _ in range(max_iters):
         velocity = mink.solve_ik(
-            configuration, [frame, posture_task], dt, "daqp", damping=damping, limits=limits
+            configuration, [frame, posture_task], dt, "daqp", damping=damping, limits=solver.limits
         )
         configuration.integrate_inplace(velocity, dt)
         q = configuration.q[adr].copy()

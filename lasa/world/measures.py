@@ -1,10 +1,6 @@
-"""The eating study's measures (Sec. VI), from the record of a simulated or logged session.
-
-*Total Time* to finish the task, *Idle Time* without stick input, *Goal Error* the tip's
-distance to the closest goal summed over the task (times dt: metre-seconds), *Preference
-Alignment* the dot product between the fork's direction and the direction the phase's
-preference needs, averaged over the phase. The Likert questionnaire is not among them: people
-answer it (the teleoperation kit), simulated participants do not.
+"""The eating study's measures (Sec. VI) from the record of a simulated or logged session: Total
+Time, Idle Time, Goal Error (metre-seconds) and Preference Alignment. People answer the Likert
+questionnaire; simulated participants do not.
 """
 
 from __future__ import annotations
@@ -13,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.world.eating import GOALS, PREFERENCES, TASK_NAMES, TASKS, EatingTask, fork_direction
-from lasa.world.episodes import Episodes
+from lasa.world.record import Episodes
 from lasa.world.robot import Robot
 
 __all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]
@@ -23,10 +19,8 @@ def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float
     """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.
 
     Args:
-        tip: Tip positions, (T, E, 3) [m].
-        goals: Goal positions, (G, 3) [m].
-        active: Which steps count (the episode was running), (T, E).
-        dt: Control period [s].
+        tip: Tip positions, (T, E, 3) [m]; goals: goal positions, (G, 3) [m].
+        active: Which steps count (the episode was running), (T, E); dt: control period [s].
 
     Returns:
         Per episode [m s], shape (E,).
@@ -36,12 +30,7 @@ def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float
 
 
 def total_time(end: np.ndarray, dt: float) -> np.ndarray:
-    """Total Time: the steps until the task was done (or to the limit, if never) times dt, per episode [s].
-
-    Args:
-        end: Steps each episode ran, (E,).
-        dt: Control period [s].
-    """
+    """Total Time: the steps until the task was done (or to the limit, if never) times dt, per episode [s]."""
     return end * dt
 
 
@@ -53,10 +42,8 @@ def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
 def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,).
 
-    Args:
-        direction: The fork's direction (unit), (T, E, 3).
-        desired: The preference's direction d(theta) (unit), (E, 3) or (T, E, 3).
-        mask: The steps of the phase, (T, E).
+    ``direction`` (T, E, 3) is the fork's, ``desired`` d(theta) (E, 3) or (T, E, 3), ``mask`` (T, E) the
+    phase's steps.
     """
     dots = np.einsum("tei,tei->te", direction, np.broadcast_to(desired, direction.shape))
     count = mask.sum(axis=0)

@@ -1,16 +1,8 @@
 """Robots: a MuJoCo scene plus the named quantities the goal tasks need.
 
-A :class:`Robot` wraps one compiled scene (arm, table, the cups, a camera) and answers
-questions in the task's own terms: the joint limits, the home pose, where the grasp
-site is and which way it points, where each cup stands. Callers never index MuJoCo
-arrays by hand.
-
-The robots are :data:`ROBOTS`, a registry keyed by name: the package's two, and any that
-:func:`register_robot` adds from outside it (a :class:`RobotSpec` naming an MJCF file).
-:func:`register_robot` states the names a scene must have and the unit of its angles, and checks them.
-
-The state ``s`` of every robot is its vector of arm joint positions (radians); the
-action ``a`` is a joint velocity (radians per second), as in Sec. V of the paper.
+A :class:`RobotSpec` names what lasa reads from an MJCF scene (its naming contract:
+:func:`load_robot`); a :class:`Robot` is that scene compiled, answering in the task's terms. The
+state ``s`` is the arm's joint positions [rad]; the action ``a`` a joint velocity [rad/s] (Sec. V).
 """
 
 from __future__ import annotations
@@ -19,6 +11,7 @@ import dataclasses
 import functools
 import importlib.util
 from pathlib import Path
+from types import MappingProxyType
 
 import mujoco
 import numpy as np
@@ -27,25 +20,16 @@ from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.world.chain import SerialChain
 
-__all__ = [
-    "RobotSpec",
-    "Robot",
-    "ROBOTS",
-    "load_robot",
-    "register_robot",
-    "scene_problems",
-    "angle_problem",
-]
+__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot", "scene_problems"]
 
 ASSETS = Path(__file__).parent / "assets"
 
 
 @dataclasses.dataclass(frozen=True)
 class RobotSpec:
-    """What lasa needs to know about a robot beyond its MJCF file (whose names it refers to:
-    :func:`register_robot` states the contract)."""
+    """What lasa needs to know about a robot beyond its MJCF file, whose names it refers to."""
 
-    name: str  # registry key, e.g. "planar5"
+    name: str  # e.g. "planar5"; decoders and checkpoints are made for a robot of this name
     scene: Path  # MJCF scene: the arm, a table, the goals (cups, bowls) and a camera
     joints: tuple[str, ...]  # arm joints, in state order
     grasp_site: str  # site between the finger tips; local +z is the approach direction
@@ -70,55 +54,50 @@ class RobotSpec:
     tool_prefix: str = "fork_"
 
 
-# The registry, by name: the package's robots, and those register_robot adds.
-ROBOTS: dict[str, RobotSpec] = {
-    "planar5": RobotSpec(
-        name="planar5",
-        scene=ASSETS / "planar5" / "scene.xml",
-        joints=("joint1", "joint2", "joint3", "joint4", "joint5"),
-        grasp_site="grasp",
-        goal_sites=("cup_left", "cup_right"),
-        camera="front",
-        home_key="home",
-        # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
-        top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
-        grasp_standoff=0.10,
-        side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
-        ik_guesses=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
-        # Units chosen so the paper's regimes exist (notebook 04 explains): one step moves
-        # at most dt * sigma_h = 0.0375 rad, so near the grasp beta = 75 is noisy and
-        # beta = 1000 nearly optimal; alpha = 0.2 keeps the pull towards the
-        # mid-preference goal small enough for users to hold other grasps (Eq. T4).
-        control=ControlConfig(),  # the defaults are the values both robots use
-    ),
-    "panda": RobotSpec(
-        name="panda",
-        scene=ASSETS / "panda" / "scene.xml",
-        joints=tuple(f"joint{i}" for i in range(1, 8)),
-        grasp_site="grasp",
-        goal_sites=("cup_left", "cup_right"),
-        camera="front",
-        home_key="home",
-        # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
-        top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
-        grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
-        # A horizontal hand pointing radially away from the base is out of the Panda's reach at
-        # table height without flipping its wrist (joint 6 hits its limit); approaching each cup
-        # from its outer side, fingers towards the midline, is a natural posture (notebook 01).
-        side_azimuth=1.5707963267948966,  # pi/2
-        ik_guesses=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
-        # The same units as planar5, for the same reasons (notebook 04).
-        control=ControlConfig(),  # the defaults are the values both robots use
-        mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
-    ),
-}
-
-
-_PACKAGE_ROBOTS = frozenset(ROBOTS)  # the package's own, which register_robot never replaces
+# The package's robots, by name.
+ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
+    {
+        "planar5": RobotSpec(
+            name="planar5",
+            scene=ASSETS / "planar5" / "scene.xml",
+            joints=("joint1", "joint2", "joint3", "joint4", "joint5"),
+            grasp_site="grasp",
+            goal_sites=("cup_left", "cup_right"),
+            camera="front",
+            home_key="home",
+            # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
+            top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
+            grasp_standoff=0.10,
+            side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
+            ik_guesses=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
+            # Units so the paper's regimes exist (notebook 04): a step moves <= dt * sigma_h = 0.0375 rad,
+            # beta = 75 is noisy, beta = 1000 nearly optimal; alpha = 0.2 lets users hold other grasps.
+            control=ControlConfig(),
+        ),
+        "panda": RobotSpec(
+            name="panda",
+            scene=ASSETS / "panda" / "scene.xml",
+            joints=tuple(f"joint{i}" for i in range(1, 8)),
+            grasp_site="grasp",
+            goal_sites=("cup_left", "cup_right"),
+            camera="front",
+            home_key="home",
+            # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
+            top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
+            grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
+            # pointing radially outward at table height would flip the wrist (joint 6 at its limit):
+            # each cup is approached from its outer side, fingers towards the midline (notebook 01)
+            side_azimuth=1.5707963267948966,  # pi/2
+            ik_guesses=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
+            control=ControlConfig(),  # planar5's units, for the same reasons
+            mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
+        ),
+    }
+)
 
 
 def mesh_dir(package: str, folder: str) -> Path:
-    """The folder of meshes that an installed registry package ships, found without importing it.
+    """The folder of meshes that an installed package ships, found without importing it.
 
     Raises:
         ArtifactError: if the package is not installed or lacks the folder.
@@ -155,26 +134,19 @@ def _add_cup(mj_spec: mujoco.MjSpec, name: str, site_position: np.ndarray, templ
 
 @functools.lru_cache(maxsize=16)
 def _scene_xml(spec: RobotSpec) -> str:
-    """:func:`_scene_spec`'s MJCF text, written once per spec (MuJoCo takes tens of ms to write it,
-    and the web study's server opens a session log, scene included, for every trial)."""
+    """:func:`_scene_spec`'s MJCF text, written once per spec (the web study logs it every trial)."""
     return _scene_spec(spec).to_xml()
 
 
 def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
-    """The robot's scene as an MjSpec: its MJCF, meshes found in their package, the tool, new cups.
-
-    Built anew on each call (an MjSpec cannot be pickled, and a Robot travels to Dask workers).
-    """
+    """The robot's scene as a new MjSpec (it cannot be pickled): meshes found, tool, new cups."""
     mj_spec = mujoco.MjSpec.from_file(str(spec.scene))
     if spec.mesh_package is not None:
         # Mesh paths in the MJCF are relative to the package's mesh folder.
         root = mesh_dir(*spec.mesh_package)
         for mesh in mj_spec.meshes:
-            rel = (
-                Path(mesh.file).relative_to(spec.scene.parent)
-                if Path(mesh.file).is_absolute()
-                else Path(mesh.file)
-            )
+            file = Path(mesh.file)
+            rel = file.relative_to(spec.scene.parent) if file.is_absolute() else file
             if not (root / rel).is_file():
                 raise ArtifactError(f"{root} lacks mesh {rel}; reinstall its package with: make setup")
             mesh.file = str(root / rel)
@@ -188,159 +160,111 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
     return mj_spec
 
 
-def _compile(spec: RobotSpec) -> mujoco.MjModel:
-    """The spec's compiled scene, or a ConfigError naming the file and MuJoCo's complaint."""
-    try:
-        return _scene_spec(spec).compile()
-    except ValueError as err:  # MuJoCo's parse and compile errors
-        raise ConfigError(f"robot {spec.name!r}: MuJoCo cannot load {spec.scene}: {err}") from None
-
-
-def scene_problems(spec: RobotSpec, model: mujoco.MjModel) -> list[str]:
-    """What the compiled scene ``model`` lacks of the naming contract of ``spec``: one entry per
-    missing or unfit element, empty if none.
-
-    Each entry names the element and what the package reads it for (see
-    :func:`register_robot`).
-    """
-
-    def has(kind: mujoco.mjtObj, name: str) -> bool:
-        return mujoco.mj_name2id(model, kind, name) >= 0
-
-    obj = mujoco.mjtObj
-    out = []
-    for joint in spec.joints:
-        j = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, joint)
-        if j < 0:
-            out.append(f"no joint {joint!r} (an arm joint of the state, RobotSpec.joints)")
-        elif int(model.jnt_type[j]) not in (
-            int(mujoco.mjtJoint.mjJNT_HINGE),
-            int(mujoco.mjtJoint.mjJNT_SLIDE),
-        ):
-            out.append(f"joint {joint!r} must be a hinge or a slide joint (one coordinate of the state)")
-        elif not model.jnt_limited[j]:
-            out.append(f"joint {joint!r} needs a range (its limits clip every step)")
-    if not has(obj.mjOBJ_SITE, spec.grasp_site):
-        out.append(
-            f"no site {spec.grasp_site!r} (the grasp site, RobotSpec.grasp_site; its +z is the approach)"
-        )
-    for site in spec.goal_sites:
-        if not has(obj.mjOBJ_SITE, site):
-            out.append(f"no site {site!r} (a goal's site, RobotSpec.goal_sites)")
-        if not has(obj.mjOBJ_GEOM, site):
-            out.append(f"no geom {site!r} (the goal's body, beside its site: new cups copy it)")
-    table = mujoco.mj_name2id(model, obj.mjOBJ_GEOM, "table")
-    if table < 0:
-        out.append("no geom 'table' (a box: the table new cups must stand on)")
-    elif int(model.geom_type[table]) != int(mujoco.mjtGeom.mjGEOM_BOX):
-        out.append("geom 'table' must be a box (new cups must stand within its extent)")
-    if not has(obj.mjOBJ_CAMERA, spec.camera):
-        out.append(f"no camera {spec.camera!r} (the videos' camera, RobotSpec.camera)")
-    if not has(obj.mjOBJ_KEY, spec.home_key):
-        out.append(f"no keyframe {spec.home_key!r} (the start pose, RobotSpec.home_key)")
-    return out
-
-
-def angle_problem(spec: RobotSpec) -> str | None:
-    """Why the scene's angle unit breaks the naming contract, or None if it is radians.
-
-    MJCF reads the angles it is given (joint ranges, ``euler``, ``axisangle``) in degrees
-    unless the scene says ``<compiler angle="radian"/>``; lasa's are radians throughout.
-    """
-    if not mujoco.MjSpec.from_file(str(spec.scene)).compiler.degree:
-        return None
-    return (
-        'its angles are in degrees (MJCF\'s default: the scene has no <compiler angle="radian"/>), '
-        "while lasa's are radians (the state, the keyframe, RobotSpec.ik_guesses); add "
-        '<compiler angle="radian"/> and write the joint ranges in radians'
-    )
-
-
-def register_robot(spec: RobotSpec, *, replace: bool = False) -> Robot:
-    """Add a robot to :data:`ROBOTS` from outside the package, after checking its scene.
-
-    Then :func:`load_robot` builds it by name, and :func:`lasa.world.task.make_cup_task`
-    gives its cup task, with as many goals as the spec names cups.
-
-    **The naming contract.** The MJCF file ``spec.scene`` (the arm, its table, the cups and a
-    camera, in one scene) must hold:
-
-    - a joint per name of ``spec.joints``, each a hinge (or slide) with a ``range``: the state
-      is those joints' positions, in that order, clipped to their ranges;
-    - a site ``spec.grasp_site``, whose local +z axis is the approach direction (a top grasp
-      points it down, ``spec.top_grasp_rotation`` is that grasp's site rotation);
-    - per name of ``spec.goal_sites`` (at least two: the goals, in goal order), a site (a cup's
-      grasp centre) and a geom of the same name (the cup: a new cup of
-      :func:`lasa.method.newgoals.extend_task` copies it, its ``size[0]`` is its radius);
-      a name ``cup_<x>`` gives the goal name ``<x>``;
-    - a box geom named ``table`` (new cups must stand on it);
-    - a camera ``spec.camera`` and a keyframe ``spec.home_key`` (the start pose of every
-      episode, within the joint ranges);
-    - its angles in radians: ``<compiler angle="radian"/>``. MJCF reads the angles of a scene
-      that does not say so (joint ranges, ``euler``, ``axisangle``) in degrees, while a
-      keyframe's ``qpos``, the state and every angle of the spec are radians. A scene in
-      degrees is refused rather than accepted: ranges written in degrees would compile right,
-      ranges written in radians would compile 57 times too narrow (and the IK fail), and
-      nothing in the file tells the two apart (:func:`angle_problem`).
-
-    And the spec gives one IK guess per cup (``spec.ik_guesses``, each of ``len(spec.joints)``
-    values), a 9-value ``top_grasp_rotation``, and the control units (``spec.control``).
-
-    Args:
-        spec: The robot.
-        replace: Replace a robot registered under ``spec.name`` before (never the package's own).
-
-    Returns:
-        The robot, built.
+def scene_problems(spec: RobotSpec) -> list[str]:
+    """What ``spec`` and its scene lack of the naming contract (:func:`load_robot`), one entry per
+    missing or unfit element, each naming what lasa reads it for; empty if none.
 
     Raises:
-        ConfigError: if the name is one of the package's robots, or taken (and ``replace``
-            is false), the scene file is missing or does not compile, its angles are in
-            degrees, the scene lacks a name of the contract (the message names each), or the
-            spec's guesses or rotation do not fit.
+        ConfigError: if the scene file is missing or MuJoCo cannot compile it.
     """
-    if spec.name in _PACKAGE_ROBOTS:
-        raise ConfigError(f"{spec.name!r} is one of the package's robots; register yours under another name")
-    if spec.name in ROBOTS and not replace:
-        raise ConfigError(f"a robot named {spec.name!r} is registered already; pass replace=True")
     if not Path(spec.scene).is_file():
         raise ConfigError(f"robot {spec.name!r}: its scene {spec.scene} is not a file")
-    problems = []
+    out = []
     if len(spec.goal_sites) < 2:
-        problems.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
+        out.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
     if len(spec.ik_guesses) != len(spec.goal_sites) or any(
         len(q) != len(spec.joints) for q in spec.ik_guesses
     ):
-        problems.append(f"ik_guesses must hold one guess of {len(spec.joints)} joint values per goal site")
+        out.append(f"ik_guesses must hold one guess of {len(spec.joints)} joint values per goal site")
     if len(spec.top_grasp_rotation) != 9:
-        problems.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
-    model = _compile(spec)
-    unit = angle_problem(spec)
-    problems += ([unit] if unit else []) + scene_problems(spec, model)
-    if problems:
-        raise ConfigError(
-            f"robot {spec.name!r} ({spec.scene}) breaks the naming contract of register_robot: "
-            + "; ".join(problems)
+        out.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
+    try:
+        model = _scene_spec(spec).compile()
+    except ValueError as err:  # MuJoCo's parse and compile errors
+        raise ConfigError(f"robot {spec.name!r}: MuJoCo cannot load {spec.scene}: {err}") from None
+    if mujoco.MjSpec.from_file(str(spec.scene)).compiler.degree:
+        out.append(
+            'its angles are in degrees (MJCF\'s default: the scene has no <compiler angle="radian"/>), '
+            "while lasa's are radians (the state, the keyframe, RobotSpec.ik_guesses); add "
+            '<compiler angle="radian"/> and write the joint ranges in radians'
         )
-    robot = Robot(spec)
-    if np.any(robot.home < robot.lower) or np.any(robot.home > robot.upper):
-        raise ConfigError(f"robot {spec.name!r}: keyframe {spec.home_key!r} lies outside the joint ranges")
-    ROBOTS[spec.name] = spec
-    return robot
+    obj = mujoco.mjtObj
+
+    def missing(kind: mujoco.mjtObj, word: str, name: str, why: str) -> bool:
+        if mujoco.mj_name2id(model, kind, name) >= 0:
+            return False
+        out.append(f"no {word} {name!r} ({why})")
+        return True
+
+    for joint in spec.joints:
+        if missing(obj.mjOBJ_JOINT, "joint", joint, "an arm joint of the state, RobotSpec.joints"):
+            continue
+        j = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, joint)
+        if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
+            out.append(f"joint {joint!r} must be a hinge or a slide joint (one coordinate of the state)")
+        elif not model.jnt_limited[j]:
+            out.append(f"joint {joint!r} needs a range (its limits clip every step)")
+    missing(
+        obj.mjOBJ_SITE,
+        "site",
+        spec.grasp_site,
+        "the grasp site, RobotSpec.grasp_site; its +z is the approach",
+    )
+    for site in spec.goal_sites:
+        missing(obj.mjOBJ_SITE, "site", site, "a goal's site, RobotSpec.goal_sites")
+        missing(obj.mjOBJ_GEOM, "geom", site, "the goal's body, beside its site: new cups copy it")
+    if not missing(obj.mjOBJ_GEOM, "geom", "table", "a box: the table new cups must stand on"):
+        if int(model.geom_type[model.geom("table").id]) != int(mujoco.mjtGeom.mjGEOM_BOX):
+            out.append("geom 'table' must be a box (new cups must stand within its extent)")
+    missing(obj.mjOBJ_CAMERA, "camera", spec.camera, "the videos' camera, RobotSpec.camera")
+    missing(obj.mjOBJ_KEY, "keyframe", spec.home_key, "the start pose, RobotSpec.home_key")
+    return out
 
 
-def load_robot(name: str) -> Robot:
-    """Build the robot registered under ``name`` (in :data:`ROBOTS`; see :func:`register_robot`).
+def load_robot(robot: str | RobotSpec) -> Robot:
+    """Build one of the package's robots by name (:data:`ROBOTS`), or yours from its spec, checked.
+
+    **The naming contract** of ``spec.scene`` (the arm, its table, the cups and a camera):
+
+    - a hinge (or slide) joint with a ``range`` per name of ``spec.joints``: the state is their
+      positions, in that order, clipped to their ranges;
+    - a site ``spec.grasp_site`` whose local +z axis is the approach direction
+      (``spec.top_grasp_rotation``, 9 values, is its rotation in a top grasp, pointing down);
+    - per name of ``spec.goal_sites`` (at least two, in goal order), a site (a cup's grasp
+      centre) and a geom of that name (the cup, ``size[0]`` its radius; new cups copy it); a
+      name ``cup_<x>`` gives the goal name ``<x>``;
+    - a box geom ``table`` (new cups stand on it), a camera ``spec.camera`` and a keyframe
+      ``spec.home_key`` (every episode's start, within the joint ranges);
+    - ``<compiler angle="radian"/>``: without it MJCF reads ranges, ``euler`` and ``axisangle`` in
+      degrees, a keyframe's ``qpos`` in radians, and nothing in the file tells the two apart.
+
+    The spec also gives one IK guess of ``len(spec.joints)`` values per cup and the control units.
 
     Raises:
-        ConfigError: if ``name`` is not a registered robot.
+        ConfigError: on an unknown name, a spec named like one of the package's robots, or a scene
+            that is missing, does not compile or breaks the contract (the message names each).
     """
-    check_choice("robot", name, tuple(ROBOTS))
-    return Robot(ROBOTS[name])
+    if isinstance(robot, str):
+        check_choice("robot", robot, tuple(ROBOTS))
+        return Robot(ROBOTS[robot])
+    if robot == ROBOTS.get(robot.name):
+        return Robot(robot)
+    if robot.name in ROBOTS:
+        raise ConfigError(f"{robot.name!r} is one of the package's robots; name yours otherwise")
+    problems = scene_problems(robot)
+    if problems:
+        raise ConfigError(
+            f"robot {robot.name!r} ({robot.scene}) breaks the naming contract of load_robot: "
+            + "; ".join(problems)
+        )
+    built = Robot(robot)
+    if np.any(built.home < built.lower) or np.any(built.home > built.upper):
+        raise ConfigError(f"robot {robot.name!r}: keyframe {robot.home_key!r} lies outside the joint ranges")
+    return built
 
 
 class Robot:
-    """A compiled MuJoCo scene with named, task-level quantities.
+    """A compiled MuJoCo scene answering in the task's terms.
 
     Attributes:
         spec: The :class:`RobotSpec` it was built from.
@@ -362,18 +286,12 @@ class Robot:
         self._site = self.model.site(spec.grasp_site).id
         key = self.model.key(spec.home_key).id
         self._home = self.model.key_qpos[key][self.qpos_adr].copy()
-        # the site's kinematics for a whole batch at once, where the arm is a chain of hinges
+        # the site's kinematics for a whole batch at once; None unless the arm is a chain of hinges
         self._chain = SerialChain.of(self.model, self._site, self.qpos_adr)
 
     @property
-    def chain(self) -> SerialChain | None:
-        """The grasp site's batched kinematics (:mod:`lasa.world.chain`); None if the arm is not a
-        chain of hinges, where MuJoCo's one-configuration-at-a-time loop runs instead."""
-        return self._chain
-
-    @property
     def name(self) -> str:
-        """Registry name of the robot."""
+        """The robot's name (its spec's)."""
         return self.spec.name
 
     @property
@@ -407,7 +325,7 @@ class Robot:
         rot = self.data.site_xmat[self._site].reshape(3, 3).copy()
         return pos, rot
 
-    def _site_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors."""
         qs = np.asarray(qs, dtype=float)
         flat = qs.reshape(-1, self.n_joints)
@@ -422,22 +340,14 @@ class Robot:
             rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
         return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
 
-    def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors.
-
-        Meant for measures at the episodes' ends, not for the control loop (see :meth:`_site_frames`).
-        """
-        return self._site_frames(qs)
-
     def grasp_jacobians(
         self, qs: np.ndarray, data: mujoco.MjData | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Grasp-site positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n) at joints ``qs`` (B, n).
 
-        The Jacobian stacks the translational rows over the rotational ones (world frame), with
-        respect to the arm joints. A chain of hinges computes the batch at once (:attr:`chain`);
-        any other arm goes through MuJoCo one configuration at a time, writing ``data`` (default:
-        this robot's own).
+        The Jacobian stacks the translational rows over the rotational ones (world frame). An arm
+        that is not a chain of hinges goes through MuJoCo one configuration at a time, writing
+        ``data`` (default: this robot's own).
         """
         qs = np.asarray(qs, dtype=float).reshape(-1, self.n_joints)
         if self._chain is not None:  # the batch at once (lasa.world.chain)
@@ -458,15 +368,12 @@ class Robot:
         return pos, rot, jac
 
     def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
-        """Grasp-site positions for a batch of joint vectors, shape (..., 3).
-
-        Meant for plots and tests, not for the control loop (see :meth:`_site_frames`).
-        """
-        return self._site_frames(qs)[0]
+        """Grasp-site positions for a batch of joint vectors, shape (..., 3)."""
+        return self.grasp_frames(qs)[0]
 
     def grasp_axes(self, qs: np.ndarray) -> np.ndarray:
         """Approach direction (the site's +z axis) for a batch of joint vectors, (..., 3)."""
-        return self._site_frames(qs)[1][..., :, 2]
+        return self.grasp_frames(qs)[1][..., :, 2]
 
     def goal_positions(self) -> np.ndarray:
         """World positions of the goals' sites, shape (G, 3), in goal order."""
@@ -476,8 +383,8 @@ class Robot:
     def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
         """The same robot in a scene with one more cup, whose grasp centre is at ``position``.
 
-        The new cup becomes the last goal (``spec.goal_sites[-1]``). Workspace checks belong to
-        the caller (:func:`lasa.method.newgoals.extend_task`); this only builds the scene.
+        The new cup becomes the last goal. Workspace checks are the caller's
+        (:func:`lasa.method.context_map.extend_task`).
 
         Raises:
             ConfigError: if a cup of that name exists already.
@@ -485,17 +392,15 @@ class Robot:
         if name in self.spec.goal_sites:
             raise ConfigError(f"the scene already has a cup named {name!r}")
         x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
-        pos = (x, y, z)
         spec = dataclasses.replace(
             self.spec,
             goal_sites=(*self.spec.goal_sites, name),
-            extra_cups=(*self.spec.extra_cups, (name, pos)),
+            extra_cups=(*self.spec.extra_cups, (name, (x, y, z))),
         )
         return Robot(spec)
 
     def xml(self) -> str:
-        """The compiled scene as one MJCF document (meshes by absolute path): a session log keeps
-        it beside its steps, so that the session replays without the code that made it."""
+        """The scene as one MJCF document (meshes by absolute path), for a session log to replay."""
         return _scene_xml(self.spec)
 
     def table_extent(self) -> tuple[np.ndarray, np.ndarray]:

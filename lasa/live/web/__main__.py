@@ -1,9 +1,9 @@
-"""Command line of the web study: ``serve`` (the default), ``schedule`` and ``preregister``.
+"""Command line of the web study: ``serve`` (the default) and ``schedule``.
 
 ``python -m lasa.live.web --port 8000 --sessions build/sessions [--host H]`` serves the study;
 ``python -m lasa.live.web schedule --participants 12 --sessions build/sessions --url http://...``
-writes the schedule and one link per participant; ``python -m lasa.live.web preregister`` writes
-the study's pre-registration (:mod:`lasa.live.web.preregister`).
+writes the schedule and one link per participant. The pre-registration is the simulated study's
+(``python -m lasa.experiments.preregister``).
 """
 
 from __future__ import annotations
@@ -33,38 +33,6 @@ def _schedule(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     links = issue_links(args.participants, args.sessions, args.url)
     print(f"links (the only copy of the tokens; send each to its participant): {links}")
-    return 0
-
-
-def _preregister(argv: list[str]) -> int:
-    from pathlib import Path
-
-    from lasa.base.io import write_text
-    from lasa.experiments.study_power import SIZES
-    from lasa.live.web import preregister
-
-    parser = argparse.ArgumentParser(
-        prog="python -m lasa.live.web preregister",
-        description="write the study's pre-registration (Markdown), generated from the package",
-    )
-    parser.add_argument("--out", default="build/preregistration.md", help="the document [%(default)s]")
-    parser.add_argument("--figures", default="figures", help="make figures' folder [%(default)s]")
-    parser.add_argument(
-        "--practice-s", type=float, default=300.0, help="the server's --practice-s [%(default)s]"
-    )
-    parser.add_argument("--trial-s", type=float, default=300.0, help="the server's --trial-s [%(default)s]")
-    parser.add_argument("--draws", type=int, default=100, help="drawn cohorts per n [%(default)s]")
-    parser.add_argument(
-        "--sizes", type=int, nargs="+", default=list(SIZES), help="cohort sizes [%(default)s]"
-    )
-    parser.add_argument("--jobs", type=int, default=1, help="worker processes of the power [%(default)s]")
-    args = parser.parse_args(argv)
-    figures = Path(args.figures)
-    frames = preregister.cohort(figures)
-    reading = preregister.headline_reading(figures, frames)
-    table = preregister.power_table(frames, reading, args.draws, tuple(args.sizes), args.jobs, progress=True)
-    text = preregister.document(table, reading, args.practice_s, args.trial_s)
-    print(f"pre-registration: {write_text(args.out, text)}")
     return 0
 
 
@@ -135,11 +103,10 @@ def _serve(argv: list[str]) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``schedule ...`` writes the links, ``preregister ...`` the pre-registration; anything else serves."""
+    """``schedule ...`` writes the links; anything else serves."""
     argv = sys.argv[1:] if argv is None else argv
-    commands = {"schedule": _schedule, "preregister": _preregister}
     try:
-        return commands[argv[0]](argv[1:]) if argv[:1] and argv[0] in commands else _serve(argv)
+        return _schedule(argv[1:]) if argv[:1] == ["schedule"] else _serve(argv)
     except (ConfigError, ArtifactError) as exc:  # a bad setting; npm files missing (make setup)
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -1,23 +1,8 @@
-"""The study's web application (Starlette): the page, its files and the participants' WebSocket.
-
-No URL carries a secret, so none reaches a server's or a proxy's log: a participant's link is
-``/study#token=...``, whose fragment the browser never sends; the page sends the token once, as
-the WebSocket's first message.
-
-- ``GET /study``: the study page (the same for everyone; it holds nothing secret).
-- ``GET /static/...``: the page's script and style (served from this package: no CDN).
-- ``GET /npm/mujoco/...``, ``GET /npm/three/...``: MuJoCo's WebAssembly bindings and three.js, with
-  ``--frames browser`` only (:mod:`lasa.live.web.scene`; read-only, installed by ``make setup``).
-- ``GET /scene``: the scene of the participant's current trial as the page loads it (its MJCF, the
-  names of its mesh files); ``GET /scene/<name>``: one of those files. Each needs the header
-  ``X-Scene-Key``: a random key the server sends with the trial's ``scene`` message, valid while
-  that trial runs; else 403 or 404.
-- ``WS /ws``: the participant's connection (:class:`lasa.live.web.conversation.Conversation`).
-  Refused before it opens (HTTP 403) from another site's page (the ``Origin`` must be this
-  server's own, or one given with ``--origin``). Its first message is ``{"type": "hello",
-  "token": ...}`` within :data:`HELLO_S`; a token that is not valid, whose schedule is done or
-  that is connected elsewhere is answered ``{"type": "refused", "reason": ...}`` (one of
-  :data:`REFUSALS`) and the connection closed (1008), with nothing written.
+"""The study's web application (Starlette): ``/study`` (the page), ``/static``, ``/npm`` and ``/scene``
+(``--frames browser``: MuJoCo's WebAssembly and the trial's scene, behind the trial's ``X-Scene-Key``)
+and ``WS /ws`` (:class:`lasa.live.web.conversation.Conversation`). No URL carries a secret: the token
+is in the link's fragment and the page sends it once, as the WebSocket's first message; another
+site's page is refused (``Origin``), and so is a token invalid, done or connected elsewhere.
 """
 
 from __future__ import annotations
@@ -50,18 +35,13 @@ from lasa.live.web.tokens import TokenStore
 
 __all__ = ["FRAMES", "HELLO_S", "PING_S", "PING_TIMEOUT_S", "REFUSALS", "WebConfig", "Study", "create_app"]
 
-# How the page shows the robot: drawn by the server (JPEG), by the browser (MuJoCo in WebAssembly
-# and three.js, from the joint positions), or not at all.
+# How the page shows the robot: server-drawn JPEG, drawn by the browser (MuJoCo WebAssembly), or not.
 FRAMES = ("server", "browser", "none")
 
-# How long a connection may take to send its token [s].
-HELLO_S = 10.0
-# The heartbeat (uvicorn's WebSocket pings): one every PING_S, answered within PING_TIMEOUT_S, else
-# the connection is closed and its link is free again: a laptop gone to sleep holds a link for at
-# most PING_S + PING_TIMEOUT_S [s]. The page reconnects by itself (static/study.js).
+HELLO_S = 10.0  # how long a connection may take to send its token [s]
+# uvicorn's WebSocket pings: a sleeping laptop holds its link at most PING_S + PING_TIMEOUT_S [s]
 PING_S = 3.0
 PING_TIMEOUT_S = 5.0
-# Why a connection was refused, as the page is told (it shows each its own message).
 REFUSALS = ("invalid", "finished", "elsewhere", "no_hello")
 
 STATIC = Path(__file__).parent / "static"
@@ -74,8 +54,7 @@ HEADERS = {
         "default-src 'self'; img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
     ),
 }
-# MuJoCo's bindings (Emscripten's embind) build their wrappers with `new Function`, and compile the
-# .wasm: the page that draws the robot itself may evaluate code, its own origin's only.
+# MuJoCo's bindings build wrappers with `new Function` and compile the .wasm: its own origin's only
 BROWSER_CSP = (
     "default-src 'self'; script-src 'self' 'unsafe-eval' 'wasm-unsafe-eval'; img-src 'self' blob:; "
     "connect-src 'self'; frame-ancestors 'none'"
@@ -84,29 +63,15 @@ BROWSER_CSP = (
 
 @dataclasses.dataclass(frozen=True)
 class WebConfig:
-    """The server's settings.
+    """The server's settings; ``show_belief`` is off as in the paper (seeing the belief changes how
+    people steer): turn it on for pilots, and report it."""
 
-    Attributes:
-        sessions: The sessions folder (its ``study/`` subfolder holds the schedule and tokens).
-        build_dir: Where ``make figures`` left the decoders.
-        practice_s: The longest practice per condition [s] (the paper: 5 minutes).
-        trial_s: The longest trial [s].
-        frames: How the page shows the robot (one of :data:`FRAMES`): ``server`` sends JPEG frames
-            rendered here, ``browser`` sends the state only and the page draws it.
-        origins: Page origins allowed besides the server's own (e.g. ``https://study.example.org``
-            behind a reverse proxy).
-        show_belief: Show the participant the robot's belief over the goals while driving. Off by
-            default: the paper describes no such display, and seeing what the robot infers
-            changes how people steer (under R and LA too, which have no shared autonomy); turn
-            it on for pilots or demonstrations, and report it.
-    """
-
-    sessions: str
-    build_dir: str = "build"
-    practice_s: Positive = 300.0
-    trial_s: Positive = 300.0
-    frames: str = "browser"
-    origins: tuple[str, ...] = ()
+    sessions: str  # the sessions folder (its study/ holds the schedule and the tokens)
+    build_dir: str = "build"  # where `make figures` left the decoders
+    practice_s: Positive = 300.0  # the longest practice per condition [s] (the paper: 5 minutes)
+    trial_s: Positive = 300.0  # the longest trial [s]
+    frames: str = "browser"  # how the page shows the robot (FRAMES)
+    origins: tuple[str, ...] = ()  # page origins allowed besides the server's own (behind a proxy)
     show_belief: bool = False
 
     def __post_init__(self) -> None:
@@ -115,9 +80,8 @@ class WebConfig:
             raise ConfigError(f"frames is one of {FRAMES}, got {self.frames!r}")
 
     def durations(self, conditions: int) -> dict[str, float]:
-        """What the consent page states, from these settings: the longest practice and trial [s],
-        the conditions, and the longest the study can take [min] (a practice, two trials and
-        the questions, about 2 minutes, per condition)."""
+        """What the consent page states: the longest practice and trial [s], the conditions, and the
+        longest the study takes [min] (a practice, two trials and ~2 minutes of questions each)."""
         per_condition = self.practice_s + 2 * self.trial_s + 120.0
         return {
             "practice_s": self.practice_s,
@@ -156,8 +120,7 @@ class Study:
         return participant, ""
 
     def labels(self, station: Station) -> list[dict[str, Any]]:
-        """The goals' names and places on the picture (:func:`lasa.live.web.labels.goal_labels`),
-        computed for the first trial: every trial has the eating scene and its camera."""
+        """The goals' names and places on the picture, computed once (every trial: one scene, one camera)."""
         if self._labels is None:
             robot = station.robot
             self._labels = goal_labels(station.task, robot.model.camera(robot.spec.camera).id)

@@ -163,8 +163,8 @@ class Conversation:
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        from lasa.evidence.sessions import SCALES
-        from lasa.live.studykit import QUESTIONS, survey
+        from lasa.evidence.sessions import QUESTIONS, SCALES
+        from lasa.live.studykit import survey
 
         questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
         await self.send(header | {"questions": questions})
@@ -202,7 +202,9 @@ class Conversation:
         if self.study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
-            key = self.study.scene_key(trial.writer.folder / f"{trial.writer.stem}.xml")
+            writer = trial.writer
+            assert writer is not None  # open_trial always logs
+            key = self.study.scene_key(writer.folder / f"{writer.stem}.xml")
             robot = trial.station.robot
             camera = robot.model.camera(robot.spec.camera).id
             scene = {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}

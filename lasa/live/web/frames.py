@@ -1,9 +1,7 @@
-"""The robot drawn on the server: MuJoCo's off-screen renderer, small JPEG frames for the page.
+"""The robot drawn on the server (``--frames server``): MuJoCo's off-screen renderer, small JPEG frames.
 
-The page shows the scene as the videos do (the scene's own camera). Software rendering is slow
-(about 0.1-0.2 s a frame on a busy machine), so frames are best effort: one worker thread
-renders the newest state it is given and a request that arrives while it is busy is dropped;
-the control loop never waits for a frame.
+Rendering is slow, so frames are best effort: one worker renders the newest state, a request that
+arrives while it is busy is dropped, and the control loop never waits for a frame.
 """
 
 from __future__ import annotations

@@ -1,10 +1,5 @@
-"""The goals' names where the page shows them: each goal's place in the camera's image.
-
-The page draws the scene from its own camera (server frames or the browser's drawing, both 4:3),
-and labels each goal (rice, middle, icing, plate) over the picture. The camera and the goals do
-not move, so the labels are placed once per trial: each goal's fork-tip position at its goal
-pose, projected through the scene's camera (MuJoCo's: looking along its -z axis, y up, vertical
-field of view ``cam_fovy``) into image coordinates in [0, 1], from the top left.
+"""The goals' names where the page shows them: each goal's fork-tip position at its goal pose, projected
+through the scene's fixed camera (MuJoCo's: along -z, y up, ``cam_fovy``) into [0, 1] from the top left.
 """
 
 from __future__ import annotations

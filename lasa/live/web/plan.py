@@ -1,11 +1,8 @@
 """A participant's protocol and their progress through it, kept on the server.
 
-The protocol follows the paper's eating study: consent; then, for each of the four conditions
-in the participant's counterbalanced order (``study/schedule.csv``), a practice of up to 5
-minutes, the Entree and the Dessert tasks, and the 7-point questionnaire; then thanks.
-Progress (``study/progress.json``) records consent, the next step and the attempts made, so a
-participant who disconnects comes back where they left off, and a finished participant's
-link stops working.
+Consent; per condition in the participant's order (``study/schedule.csv``) a practice, the Entree,
+the Dessert and the questionnaire; thanks. Progress (``study/progress.json``) lets a participant who
+disconnects come back where they left off, and ends a finished participant's link.
 """
 
 from __future__ import annotations
@@ -19,21 +16,16 @@ from typing import Any
 import pandas as pd
 
 from lasa.base.io import write_text
+from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.web.tokens import check_participant, study_dir
 
-__all__ = ["Step", "plan_of", "Progress", "session_folder", "PRACTICE_TASK"]
-
-PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessions>/practice/
+__all__ = ["Step", "plan_of", "Progress", "session_folder"]
 
 
 @dataclasses.dataclass(frozen=True)
 class Step:
-    """One step of the protocol: ``practice``, ``trial`` or ``survey`` under a condition.
-
-    ``order`` is the condition's position in the participant's schedule (0 for the first), which
-    the session's sidecar records for the analysis; :attr:`label` is the name the participant sees
-    for the condition.
-    """
+    """One step of the protocol, ``practice``, ``trial`` or ``survey``, under a condition at position
+    ``order`` of the participant's schedule (0 first; the sidecar records it)."""
 
     kind: str
     condition: str
@@ -42,8 +34,7 @@ class Step:
 
     @property
     def label(self) -> str:
-        """The condition's letter in the participant's own order (A for the first, ...): the page never
-        shows a condition's code (a blind protocol, as the paper's); the logs and analysis keep it."""
+        """The condition's letter in the participant's own order (A first): the page never shows its code."""
         return chr(ord("A") + self.order)
 
 

@@ -1,12 +1,6 @@
-"""Before the server listens: everything the study's schedule needs is there.
-
-A missing decoder would otherwise show up mid-study, in the page of the first participant who
-reaches an LA condition (after their R and R+SA ones, for half the schedule). :func:`preflight`
-builds the step of every condition in the schedule, on every task the protocol runs, as a trial
-would (:class:`lasa.live.station.Station`: the scene, its meshes, the decoder of the LA
-conditions and its fit to the task); the npm files of ``--frames browser`` are checked when the
-app's :class:`lasa.live.web.app.Study` is made, before it listens too. The first missing piece is
-one line: what is missing and the command that makes it.
+"""Before the server listens: everything the schedule needs is there (a missing decoder would otherwise
+show up mid-study). :func:`preflight` builds every scheduled condition's station on every task, as a
+trial would; the first missing piece is one line naming the command that makes it.
 """
 
 from __future__ import annotations
@@ -16,8 +10,8 @@ from typing import TYPE_CHECKING
 import pandas as pd
 
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.station import SessionConfig, Station
-from lasa.live.web.plan import PRACTICE_TASK
 from lasa.live.web.tokens import study_dir
 
 if TYPE_CHECKING:

@@ -1,24 +1,9 @@
 """The messages between the page and the server, and the limits on what a page may send.
 
-The page sends JSON text messages, each at most :data:`MAX_MESSAGE_BYTES`:
-
-- ``{"type": "hello", "token": "..."}``: the connection's first message, the participant's token
-  (from the link's fragment: a token never travels in a URL);
-- ``{"type": "consent"}``, ``{"type": "start"}`` (begin the practice or trial shown),
-  ``{"type": "finish"}`` (end the practice early);
-- ``{"type": "input", "axes": [x, y], "mode": bool, "stop": bool}``: the stick (keyboard or the
-  browser's Gamepad API), a mode press since the last message, and whether stop is held;
-- ``{"type": "survey", "answers": [1..7 x 5]}``.
-
-Anything else, a message too large, or more than :data:`MAX_RATE` messages a second ends the
-connection (:class:`ProtocolError`). The server sends ``phase`` messages (what the page shows),
-``tick`` messages (the robot's joint positions, the belief, the instruction, the late-tick
-counter) and, with ``--frames server``, JPEG images as binary messages; with ``--frames browser``
-a ``scene`` message when a trial starts (the arm's ``qpos`` addresses, the camera's index and the
-trial's scene key: the page then fetches the scene, :mod:`lasa.live.web.scene`, and draws each
-tick's state); with either, a ``labels`` message when a trial starts (each goal's name and its
-place on the picture, :mod:`lasa.live.web.labels`). A refused connection is told why,
-``{"type": "refused", "reason": ...}``.
+The page sends JSON (at most :data:`MAX_MESSAGE_BYTES`): ``hello`` (the token, first), ``consent``,
+``start``, ``finish``, ``input`` (``axes``, ``mode``, ``stop``) and ``survey`` (``answers``); anything
+else, a larger message or more than :data:`MAX_RATE` a second ends the connection. The server sends
+``phase``, ``tick``, ``scene``, ``labels`` and ``refused`` messages, and JPEG frames (``--frames server``).
 """
 
 from __future__ import annotations

@@ -1,17 +1,8 @@
-"""The robot drawn in the browser: MuJoCo's WebAssembly bindings and three.js, and the scene they draw.
+"""The robot drawn in the browser (``--frames browser``): MuJoCo's WebAssembly build and three.js.
 
-With ``--frames browser`` the page draws the robot itself: the server sends only the state (the
-joint positions, 10 times a second) and the page sets ``qpos``, runs ``mj_kinematics`` in MuJoCo's
-official WebAssembly build (the ``@mujoco/mujoco`` npm package) and draws each geom with three.js.
-Both packages are pinned in the Makefile and installed by ``make setup`` into ``.venv/mujoco-js``
-and ``.venv/three``; the server serves them itself (:class:`NpmFiles`: no CDN at run time, the
-``.wasm`` as ``application/wasm``).
-
-The page needs the scene of the participant's current trial: the MJCF that
-:class:`lasa.evidence.sessionlog.SessionWriter` wrote beside the session's rows. That file names
-its meshes by absolute path on the server; :func:`browser_scene` rewrites each ``file`` attribute
-to a safe name of the server's choosing (``asset<k>.<suffix>``), and the asset route serves those
-names only, looked up in the map it returns: no string from a client ever reaches a path.
+The server serves both npm packages itself (:class:`NpmFiles`, installed by ``make setup``) and the
+trial's scene XML, whose mesh paths :func:`browser_scene` rewrites to safe names of its own
+choosing: no string from a client ever reaches a path.
 """
 
 from __future__ import annotations

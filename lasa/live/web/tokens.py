@@ -1,12 +1,8 @@
-"""The study's links: one secret token per participant, kept on the server only as its hash.
+"""The study's links: one secret token per participant, kept on the server only as its SHA-256.
 
-:func:`issue_links` writes the counterbalanced schedule (:func:`lasa.live.studykit.write_schedule`) into
-``<sessions>/study/``, draws one token per participant with :func:`secrets.token_urlsafe`, stores its
-SHA-256 in ``tokens.json`` and writes the links (the only copy of the tokens) to ``links.csv``.
-:class:`TokenStore` answers which participant a presented token belongs to, or None.
-
-Participant ids come from the schedule only and must match :data:`PARTICIPANT_ID` (``p`` and digits):
-no string a browser sends ever becomes part of a path.
+:func:`issue_links` writes the schedule, ``tokens.json`` (hashes) and ``links.csv`` (the only copy of
+the tokens) into ``<sessions>/study/``; :class:`TokenStore` maps a token to its participant. Ids
+come from the schedule only (:data:`PARTICIPANT_ID`): no string a browser sends becomes a path.
 """
 
 from __future__ import annotations
@@ -49,15 +45,8 @@ def _hash(token: str) -> str:
 
 
 def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path:
-    """Schedule ``n`` participants and write one link each; returns the links' CSV.
-
-    Refuses to overwrite an existing study (its tokens, progress and sessions belong together).
-
-    Args:
-        n: Participants to schedule.
-        sessions: The sessions folder the server will write to.
-        base_url: The server's address as participants reach it, e.g. ``http://127.0.0.1:8000``.
-    """
+    """Schedule ``n`` participants in ``sessions`` and write one link each to the server at ``base_url``;
+    returns the links' CSV. An existing study (tokens, progress and sessions together) is never replaced."""
     from lasa.live.studykit import write_schedule
 
     folder = study_dir(sessions)
@@ -88,11 +77,8 @@ def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path
 
 
 class TokenStore:
-    """The tokens' hashes of one study (``<sessions>/study/tokens.json``), read once at start.
-
-    Entries whose participant id is not strict are dropped, so a hand-edited file cannot put a
-    path into a session's name.
-    """
+    """The tokens' hashes of one study (``<sessions>/study/tokens.json``), read once; entries whose id is
+    not strict are dropped (a hand-edited file cannot put a path into a session's name)."""
 
     def __init__(self, sessions: str | os.PathLike[str]) -> None:
         path = study_dir(sessions) / "tokens.json"

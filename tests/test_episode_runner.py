@@ -17,7 +17,7 @@ from reference_step import softmax, step_with
 from lasa.base.errors import ConfigError
 from lasa.method.belief import uniform_log_belief
 from lasa.method.decoder import DecoderConfig, LatentActionModel
-from lasa.method.episodes import Now, Runner
+from lasa.method.runner import Now, Runner
 from lasa.method.step import Assist
 from lasa.world.robot import load_robot
 from lasa.world.task import make_cup_task

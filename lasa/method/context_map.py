@@ -1,37 +1,26 @@
 r"""Goals never seen in training: the context map h(s, b) of Sec. IV-C.
 
-A new cup is put on the table after the decoder was trained; phi(z, s, b) has no latent action
-that reaches its grasps. Without retraining, the robot maps its context onto an *equivalent*
-one at a training cup :math:`\hat g` (the reference), decodes there, and maps the action back:
-
-.. math::
-
-    (\hat s, \hat b) = h(s, b), \qquad \hat a_h = \phi(z, \hat s, \hat b), \qquad
-    a_h = J_h(s)^{-1} \hat a_h, \quad J_h = \partial \hat s / \partial s .
-
-The state map is :math:`\hat s = s + w(s)\,u(s)`, w the progress along the straight line from
-the start to g, clipped to 1 at the new cup's grasps. :class:`ContextMap` has two offsets u:
-``"straight_line"`` (the paper's example, :math:`u = \hat g - g`) and ``"grasp"`` (ours, the
-default: each grasp of the new cup onto the same grasp of the reference cup), with the exact
-Jacobian; :class:`TaskSpaceMap` reads the straight-line map in the gripper's space. The belief
-map gives :math:`\hat g` the pair's confidence, :math:`\hat b(\hat g) = b(g) + b(\hat g)`
-(:func:`merged_belief`). :func:`extend_task` adds the new cup, :class:`MappedDecoder` decodes
-through the map. The derivation, exactness per robot and why this belief map:
-``docs/method-notes.md``.
+For a cup put on the table after training, the context maps onto an equivalent one at a training
+cup :math:`\hat g`: :math:`(\hat s, \hat b) = h(s, b)`, :math:`a_h = J_h(s)^{-1} \phi(z, \hat s,
+\hat b)`, with :math:`\hat s = s + w(s)\,u(s)` (w the progress towards g, clipped to 1) and
+:math:`\hat b(\hat g) = b(g) + b(\hat g)`. :class:`ContextMap`'s offsets u: ``"straight_line"``
+(the paper's) or ``"grasp"`` (grasp onto grasp, the default); :class:`TaskSpaceMap` reads the
+straight-line map in the gripper's space. The derivation: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
 from lasa.base.config import check_choice, check_range
 from lasa.base.errors import ConfigError, IKError
 from lasa.method.decoder import ActionDecoder
+from lasa.world.chain import rot_z
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import Robot
-from lasa.world.rotations import rot_z
 from lasa.world.task import CupTask, grasp_frame
 
 __all__ = [
@@ -41,7 +30,6 @@ __all__ = [
     "MappedDecoder",
     "extend_task",
     "new_goal_frames",
-    "NEW_GOAL_NAME",
     "MAP_KINDS",
     "JOINT_KINDS",
 ]
@@ -53,12 +41,25 @@ NEW_GOAL_NAME = "new"
 _MAX_JUMP = 0.5  # largest joint-space step between neighbouring grasps of a smooth curve [rad]
 
 
-def _bearing(point: np.ndarray, base: np.ndarray) -> float:
-    return float(np.arctan2(point[1] - base[1], point[0] - base[0]))
+def _turn(robot: Robot, new: np.ndarray, ref: np.ndarray) -> float:
+    """The bearing of cup ``new`` less that of ``ref`` about the robot's base, in [-pi, pi) [rad]."""
+    base = robot.base_position()
+    delta = np.arctan2(new[1] - base[1], new[0] - base[0]) - np.arctan2(ref[1] - base[1], ref[0] - base[0])
+    return float((float(delta) + np.pi) % (2 * np.pi) - np.pi)
+
+
+def _check_grown(task: CupTask, n_train: int, ref_index: int) -> None:
+    """A task of the training goals plus one new goal, and a training goal to refer it to."""
+    if task.n_goals != n_train + 1:
+        raise ConfigError(
+            f"the task must have the {n_train} training goals plus one new goal, has {task.n_goals}"
+        )
+    if not 0 <= ref_index < n_train:
+        raise ConfigError(f"ref_index must be in [0, {n_train}), got {ref_index}")
 
 
 def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tuple[np.ndarray, float]:
-    """Check that a new cup stands on the table, apart from the others; return it (3,) and its
+    """The new cup's position (3,), checked on the table and apart from the others, and its
     bearing offset from the reference cup about the base [rad]."""
     robot = task.robot
     cups = robot.goal_positions()
@@ -87,9 +88,7 @@ def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tupl
             f"{robot.spec.goal_sites[int(gaps.argmin())]!r} "
             f"(centres {gaps.min():.3f} m apart, at least {2 * radius:.3f} m needed)"
         )
-    base = robot.base_position()
-    delta = _bearing(pos, base) - _bearing(cups[ref_goal], base)
-    delta = float((delta + np.pi) % (2 * np.pi) - np.pi)
+    delta = _turn(robot, pos, cups[ref_goal])
     if _yaw_axis(robot) == 0.0 and (abs(delta) > 1e-6 or abs(pos[1] - cups[ref_goal, 1]) > 1e-6):
         raise ConfigError(
             f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}) is outside {robot.name}'s workspace: the arm moves "
@@ -106,15 +105,8 @@ def _yaw_axis(robot: Robot) -> float:
 
 
 def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The grasps of a new cup: the reference cup's grasps, turned to the new cup's bearing.
-
-    For each preference theta on the task's grid, the reference grasp frame is rotated
-    about the vertical axis through the robot's base by the bearing difference, and
-    moved to stand at the new cup as it stood at the reference one.
-
-    Returns:
-        Positions (K, 3) and rotations (K, 3, 3) of the grasp site.
-    """
+    """The grasps of a new cup, positions (K, 3) and rotations (K, 3, 3): the reference cup's,
+    turned about the vertical by the bearing difference and moved to the new cup."""
     return _frames(task, ref_goal, *_check_placement(task, position, ref_goal))
 
 
@@ -133,10 +125,8 @@ def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tupl
 def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTask:
     """The task with a new cup at ``position``: its grasps solved by IK, added as the last goal.
 
-    The robot of the returned task has the new cup in its scene (for videos). The IK of
-    each grasp is warm-started from the reference grasp with the arm turned about the
-    base by the bearing difference, when the first joint is vertical (the Panda), so
-    that the two grasp curves are as alike as the geometry allows.
+    Its robot has the cup in its scene. Each grasp's IK starts from the reference grasp, turned
+    about the base when the first joint is vertical, so the two grasp curves are alike.
 
     Args:
         task: The training task (G goals).
@@ -183,11 +173,7 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
 
 
 def merged_belief(belief: np.ndarray, n_train: int, ref_index: int) -> np.ndarray:
-    """b_hat over the ``n_train`` training goals: the new goal's (the last) joins ``ref_index``'s.
-
-    Raises:
-        ConfigError: if ``belief`` is not over ``n_train + 1`` goals.
-    """
+    """b_hat over the ``n_train`` training goals: the new goal's (the last) joins ``ref_index``'s."""
     belief = np.asarray(belief, dtype=float)
     if belief.shape[-1] != n_train + 1:
         raise ConfigError(f"belief must be over {n_train + 1} goals, got shape {belief.shape}")
@@ -198,23 +184,20 @@ def merged_belief(belief: np.ndarray, n_train: int, ref_index: int) -> np.ndarra
 
 @dataclasses.dataclass(frozen=True)
 class ContextMap:
-    """h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's.
+    """h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's (:meth:`for_task`).
 
-    Build it with :meth:`for_task`. States are (..., n) arrays, beliefs (..., G + 1)
-    over the grown task's goals (the new goal last); the decoder reads (..., G).
+    States are (..., n), beliefs (..., G + 1) with the new goal last.
 
     Attributes:
         start: The start pose s_0, shape (n,) [rad].
         new_curve: The new cup's grasps s*(g, theta) on the theta grid, shape (K, n) [rad].
-        ref_curve: Where each of those grasps maps: the reference cup's grasps on the same
-            grid (``kind="grasp"``), or the new ones shifted by g_hat - g, shape (K, n) [rad].
+        ref_curve: Where each maps: the reference cup's grasps (``"grasp"``), or the new ones
+            shifted by g_hat - g (``"straight_line"``), shape (K, n) [rad].
         ref_index: Index of the reference goal among the training goals.
         n_train: Number of training goals G.
         saturation: lambda_1 in (0, 1], the progress from which w = 1.
         width: tau, the joint-space width of the soft assignment to grasps [rad].
-        kind: ``"grasp"``: each grasp of the new cup maps onto the same grasp of the
-            reference cup. ``"straight_line"``: one offset, g_hat - g, for every grasp
-            (the paper's straight-line map, with the off-line residual kept).
+        kind: One of :data:`JOINT_KINDS`.
     """
 
     start: np.ndarray
@@ -233,15 +216,9 @@ class ContextMap:
         """The map for the last goal of ``task`` (the new one) onto training goal ``ref_index``.
 
         Raises:
-            ConfigError: if the task has no new goal, or the new goal's grasps do not lie
-                ahead of the start (the map would not be invertible).
+            ConfigError: if the task has no new goal, or the map would not be invertible.
         """
-        if task.n_goals != n_train + 1:
-            raise ConfigError(
-                f"the task must have the {n_train} training goals plus one new goal, has {task.n_goals}"
-            )
-        if not 0 <= ref_index < n_train:
-            raise ConfigError(f"ref_index must be in [0, {n_train}), got {ref_index}")
+        _check_grown(task, n_train, ref_index)
         check_range("width", width, 0.0, low_open=True)
         check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
@@ -305,10 +282,8 @@ class ContextMap:
         return self.state(state), self.belief(belief)
 
     def jacobian(self, state: np.ndarray) -> np.ndarray:
-        """J_h(s) = d(s_hat)/ds = I + u grad(w)^T + w du/ds, shape (..., n, n).
-
-        With offsets u_k and grasps c_k: du/ds = sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2.
-        """
+        """J_h(s) = I + u grad(w)^T + w du/ds, du/ds = sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2,
+        shape (..., n, n)."""
         state = np.asarray(state, dtype=float)
         lam, grad = self._progress(state)
         w = np.clip(lam, 0.0, 1.0)
@@ -327,19 +302,13 @@ class ContextMap:
         )
 
     def action_to_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """a_hat = J_h(s) a: a real action seen in the equivalent context, shape (..., n).
-
-        ``state`` must broadcast against ``action`` without its last axis (pass
-        ``s[:, None]`` for (U, K, n) candidates).
-        """
+        """a_hat = J_h(s) a: a real action seen in the equivalent context, shape (..., n) (pass
+        ``s[:, None]`` for (U, K, n) candidates)."""
         return np.einsum("...ij,...j->...i", self.jacobian(state), action)
 
     def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """a = J_h(s)^{-1} a_hat: a decoded action mapped back to the real context, (..., n).
-
-        One Jacobian per state (so pass ``s[:, None]`` for (U, K, n) candidates: the K
-        candidates of a user share its factorisation).
-        """
+        """a = J_h(s)^{-1} a_hat: a decoded action mapped back to the real context, (..., n); one
+        Jacobian per state (pass ``s[:, None]`` for (U, K, n) candidates)."""
         jac = self.jacobian(state)
         action = np.asarray(action, dtype=float)
         shape = np.broadcast_shapes(jac.shape[:-2], action.shape[:-1])
@@ -352,18 +321,10 @@ class ContextMap:
 class TaskSpaceMap:
     r"""The paper's straight-line map read in the gripper's space (kind ``"straight_line_ee"``).
 
-    Sec. IV-C's straight-line map along the grasp site's path: with the site's pose
-    :math:`X(s) = (p, R)`, w its progress from the start towards the new goal's site (clipped
-    as in :class:`ContextMap`), and T the turn of the table by the bearing difference
-    :math:`\delta` that takes the training cup to the new one (:func:`new_goal_frames`), the
-    equivalent pose moves w of the way by :math:`T^{-1}`:
-
-    .. math::  \hat p = p + w\,(T^{-1} p - p), \qquad \hat R = R_z(-w\delta)\,R,
-
-    and :math:`\hat s` is its IK (:func:`lasa.world.ik.solve_grasp_ik`), seeded at
-    :math:`s + w(\hat g - g)`, the seed kept where the IK fails (``fallbacks``). Actions are mapped
-    back through the task space, in least squares, keeping the decoded motion in the arm's null
-    space. One IK per user and step (~2 ms on one core). The derivation: ``docs/method-notes.md``.
+    The site's pose moves w of the way by the table's turn T back to the training cup,
+    :math:`\hat p = p + w\,(T^{-1} p - p)`, :math:`\hat R = R_z(-w\delta)\,R`; :math:`\hat s` is
+    its IK, seeded at :math:`s + w(\hat g - g)` (the seed kept where it fails: ``fallbacks``).
+    Actions map back through the task space in least squares, keeping the null-space motion.
     """
 
     robot: Robot
@@ -384,17 +345,10 @@ class TaskSpaceMap:
     @classmethod
     def for_task(cls, task: CupTask, n_train: int, ref_index: int) -> TaskSpaceMap:
         """The map for the last goal of ``task`` (the new cup) onto training goal ``ref_index``."""
-        if task.n_goals != n_train + 1:
-            raise ConfigError(
-                f"the task must have the {n_train} training goals plus one new goal, has {task.n_goals}"
-            )
-        if not 0 <= ref_index < n_train:
-            raise ConfigError(f"ref_index must be in [0, {n_train}), got {ref_index}")
+        _check_grown(task, n_train, ref_index)
         robot = task.robot
         cups = robot.goal_positions()
-        base = robot.base_position()
-        delta = _bearing(cups[-1], base) - _bearing(cups[ref_index], base)
-        delta = float((delta + np.pi) % (2 * np.pi) - np.pi) * abs(_yaw_axis(robot))
+        delta = _turn(robot, cups[-1], cups[ref_index]) * abs(_yaw_axis(robot))
         sites = robot.grasp_positions(
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )
@@ -449,17 +403,10 @@ class TaskSpaceMap:
         _, _, _, w, _, _, p_hat, r_hat = self._poses(flat)
         seeds = self.robot.clip(flat + w[:, None] * (self.ref_goal - self.new_goal))
         out = np.empty_like(flat)
+        solve = functools.partial(solve_grasp_ik, position_tol=1e-5, rotation_tol=1e-4, max_iters=200)
         for i in range(len(flat)):
             try:
-                out[i] = solve_grasp_ik(
-                    self.robot,
-                    p_hat[i],
-                    r_hat[i],
-                    seeds[i],
-                    position_tol=1e-5,
-                    rotation_tol=1e-4,
-                    max_iters=200,
-                )
+                out[i] = solve(self.robot, p_hat[i], r_hat[i], seeds[i])
             except IKError:
                 out[i] = seeds[i]
                 self.fallbacks += 1
@@ -491,10 +438,8 @@ class TaskSpaceMap:
         return np.concatenate([top, bottom], axis=1)
 
     def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """a from a decoded a_hat: the same motion of the equivalent site pose, (..., n).
-
-        ``state`` is (U, n) or (U, 1, n) for (U, K, n) candidates, as :class:`ContextMap` takes it.
-        """
+        """a from a decoded a_hat: the same motion of the equivalent site pose, (..., n); ``state``
+        (U, n), or (U, 1, n) for (U, K, n) candidates."""
         state = np.asarray(state, dtype=float)
         action = np.asarray(action, dtype=float)
         n = state.shape[-1]
@@ -526,18 +471,8 @@ def context_map(
 
 @dataclasses.dataclass(frozen=True)
 class MappedDecoder:
-    """The decoder seen through a context map: phi over the grown task's G + 1 goals.
-
-    .. math::  a_h = J_h(s)^{-1}\\, \\phi(z, \\hat s, \\hat b), \\qquad (\\hat s, \\hat b) = h(s, b)
-
-    It follows :class:`lasa.method.decoder.ActionDecoder`, so Algorithm 1
-    (:func:`lasa.people.rollout.rollout`, :func:`lasa.method.step.shared_autonomy_step`) runs a task
-    grown by a new goal without knowing that a map is involved.
-
-    Attributes:
-        model: The trained decoder, over the G training goals.
-        context_map: The map h onto a training goal's context.
-    """
+    """The decoder seen through a context map h: an :class:`lasa.method.decoder.ActionDecoder` over
+    the grown task's G + 1 goals, a_h = J_h(s)^-1 phi(z, h(s, b)), from ``model`` over the G."""
 
     model: ActionDecoder
     context_map: ContextMap | TaskSpaceMap
@@ -565,11 +500,8 @@ class MappedDecoder:
         return self.model.z_dim
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """phi(z, h(s, b)) mapped back to the real context, shape (..., n).
-
-        Broadcast like the wrapped decoder; the Jacobian is factorised once per state, so
-        pass ``s`` as (U, 1, n) for (U, K) candidates, as the rollout does.
-        """
+        """phi(z, h(s, b)) mapped back to the real context, shape (..., n); pass ``s`` as (U, 1, n)
+        for (U, K) candidates (one factorisation per state)."""
         s = np.asarray(s, dtype=float)
         s_hat, b_hat = self.context_map(s, b)
         return self.context_map.action_from_training(self.model.decode_numpy(z, s_hat, b_hat), s)

@@ -1,6 +1,5 @@
-"""The record of eating-task episodes, simulated (:mod:`lasa.people`) or real
-(:mod:`lasa.evidence.sessions`).
-"""
+"""The study's record of eating-task episodes, simulated (:mod:`lasa.people`) or real
+(:mod:`lasa.evidence.sessions`)."""
 
 from __future__ import annotations
 

@@ -10,9 +10,9 @@ import pytest
 
 from lasa.base.errors import ConfigError, IKError
 from lasa.experiments import sim4
+from lasa.method.assistance import point
 from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
-from lasa.method.blend import assistance
-from lasa.method.newgoals import (
+from lasa.method.context_map import (
     JOINT_KINDS,
     ContextMap,
     MappedDecoder,
@@ -165,9 +165,9 @@ def test_new_goal_belief_update_and_assistance(grown):
     # Eq. M2 with three goals, by hand: sum_g b(g) (g - s)
     b3 = np.array([[0.1, 0.2, 0.7]])
     expected = sum(b3[0, g] * (grown.goals[g] - s[0]) for g in range(3))
-    np.testing.assert_allclose(assistance(b3, grown.goals, s)[0], expected)
+    np.testing.assert_allclose(point(b3, s, grown.goals, None, 0.0, 0.0)[0][0], expected)
     np.testing.assert_allclose(
-        assistance(np.array([[0.0, 0.0, 1.0]]), grown.goals, s)[0], grown.goals[-1] - s[0]
+        point(np.array([[0.0, 0.0, 1.0]]), s, grown.goals, None, 0.0, 0.0)[0][0], grown.goals[-1] - s[0]
     )
 
 
@@ -212,7 +212,7 @@ def test_rollout_needs_the_map_for_a_grown_task(model, grown):
         target=grown.goals[-1:],
         beta0=np.array([1000.0]),
         slope=np.zeros(1),
-        stream=np.zeros(1, dtype=int),
+        user=np.zeros(1, dtype=int),
     )
     noise = np.random.default_rng(0).random((1, 5, grown.robot.control.n_z))
     with pytest.raises(ConfigError, match="MappedDecoder"):

@@ -1,13 +1,9 @@
-"""The eating study's loop, whichever participant model runs it: set up, observe, record.
+"""The simulated eating study's driver, whichever participant model runs it: set up, observe, record.
 
-Every model of participant (:mod:`lasa.people.participants`, :mod:`lasa.people.planning`) runs
-the same study: the same episodes (:func:`lasa.people.design.layout`), each drawing from its
-own random stream ``default_rng([seed, participant, condition, task])`` (shared by the SA
-members: common random numbers, so the members' comparisons are paired), the same waypoints,
-and the same record (:class:`lasa.world.episodes.Episodes`). The episode runner
-(:class:`lasa.method.episodes.Runner`) steps them; at every step :func:`run_steps` observes
-every episode (the fork's frames, the waypoints reached, the episodes that finished), and the
-model is the runner's chooser of the running ones.
+Every model runs the same episodes (:func:`lasa.people.design.layout`), each with its own stream
+``default_rng([seed, participant, condition, task])`` (shared by the SA members: paired), tracks
+waypoints with :class:`lasa.world.fork.WaypointTracker` and records :class:`lasa.world.record.Episodes`;
+the episode runner steps them with the model as its chooser.
 """
 
 from __future__ import annotations
@@ -23,14 +19,14 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.episodes import Chooser, Record, Runner
 from lasa.method.retarget import MODES, Retargeting, twist
+from lasa.method.runner import Chooser, Record, Runner
 from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
 from lasa.world.eating import TASK_NAMES, EatingTask
-from lasa.world.episodes import Episodes
-from lasa.world.fork import next_waypoint, tip_frames, waypoint_arrays, waypoint_reached
+from lasa.world.fork import WaypointTracker, tip_frames
+from lasa.world.record import Episodes
 
 __all__ = ["Setting", "State", "prepare", "start", "run_steps"]
 
@@ -45,10 +41,7 @@ class Setting:
     config: StudyConfig
     layout: Layout
     streams: list[np.random.Generator]  # each episode's own random stream
-    wp_pos: np.ndarray  # every task's waypoints (lasa.world.fork.waypoint_arrays)
-    wp_dir: np.ndarray
-    wp_phase: np.ndarray
-    n_wp: np.ndarray
+    waypoints: WaypointTracker  # every task's waypoints, with the study's tolerances
     grid: np.ndarray  # the stick's grid (K, 2), rest in the middle
     rest: int  # index of the rest position in grid
     unit: float  # the best translation one step of Retargeting makes [m]
@@ -57,14 +50,21 @@ class Setting:
     goal_sets: np.ndarray  # the belief's targets
     data: mujoco.MjData
 
+    @property
+    def wp_pos(self) -> np.ndarray:
+        """Every task's waypoint positions, (T, W, 3) [m]."""
+        return self.waypoints.position
+
+    @property
+    def wp_dir(self) -> np.ndarray:
+        """Every task's waypoint fork directions, (T, W, 3)."""
+        return self.waypoints.direction
+
 
 @dataclasses.dataclass
 class State:
-    """The participants' side of a running study, (E, ...) each, and the fork's record.
-
-    ``pos``, ``axis``, ``jp`` and ``jr`` are the fork's frames at the current joints
-    (:func:`lasa.world.fork.tip_frames`), read when the step is observed.
-    """
+    """The participants' side of a running study, (E, ...) each, and the fork's record; ``pos``, ``axis``,
+    ``jp`` and ``jr`` are the fork's frames now (:func:`lasa.world.fork.tip_frames`)."""
 
     mode: np.ndarray  # Retargeting mode (E,)
     w: np.ndarray  # current waypoint (E,)
@@ -92,8 +92,8 @@ def prepare(
     """Check the inputs and build the study's fixed parts.
 
     Raises:
-        ConfigError: on a decoder that does not fit the task or the 2-axis stick, or
-            interfaces that are not a non-empty subset of ``("R", "LA")``.
+        ConfigError: a decoder that does not fit the task or the 2-axis stick, or interfaces that
+            are not a non-empty subset of ``("R", "LA")``.
     """
     check_decoder(decoder, task)
     if not interfaces or not set(interfaces) <= {"R", "LA"}:
@@ -106,7 +106,6 @@ def prepare(
         for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
     ]
     robot = task.robot
-    wp_pos, wp_dir, wp_phase, n_wp = waypoint_arrays(robot)  # padded per task
     grid = latent_grid(config.n_z, 2)
     return Setting(
         task=task,
@@ -115,10 +114,7 @@ def prepare(
         config=config,
         layout=episodes,
         streams=streams,
-        wp_pos=wp_pos,
-        wp_dir=wp_dir,
-        wp_phase=wp_phase,
-        n_wp=n_wp,
+        waypoints=WaypointTracker.of(robot, config.position_tol, config.angle_tol),
         grid=grid,
         rest=int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0]),
         unit=control.dt * config.retarget.linear_speed,
@@ -156,12 +152,8 @@ def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarr
     pos, axis, jp, jr = tip_frames(setting.task.robot, setting.data, runner.state)
     state.pos, state.axis, state.jp, state.jr = pos, axis, jp, jr
     state.tip[t], state.direction[t] = pos, axis
-    # a waypoint reached: on to the next one, or the task is done
-    here, there = setting.wp_pos[tsk, state.w], setting.wp_dir[tsk, state.w]
-    tol = setting.config.position_tol, setting.config.angle_tol
-    reached = runner.running & waypoint_reached(pos, axis, here, there, *tol)
-    state.w, finished = next_waypoint(reached, state.w, setting.n_wp[tsk])
-    state.phase[t] = setting.wp_phase[tsk, state.w]
+    state.w, finished = setting.waypoints.advance(tsk, state.w, pos, axis, runner.running)
+    state.phase[t] = setting.waypoints.phase[tsk, state.w]
     return finished
 
 
@@ -191,18 +183,8 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
 
 
 def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
-    """Run the study to its end: the runner steps the running episodes by ``choose``.
-
-    Args:
-        setting: The study's fixed parts (:func:`prepare`).
-        state: The participants' side at the start (:func:`start`), advanced in place.
-        choose: The participant model, the runner's chooser.
-        desc: The progress bar's label.
-        progress: Show a progress bar.
-
-    Returns:
-        The study's record.
-    """
+    """The study's record, run to its end: the runner steps the running episodes by ``choose`` (the
+    participant model) from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
     lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
     # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
     assist = Assist(

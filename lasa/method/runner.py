@@ -1,11 +1,8 @@
 """The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop.
 
-Every loop of the package runs here: the simulated users of sims 1-4, the study's simulated
-participants, the property's held inputs, teleoperation and the web study. The :class:`Runner`
-owns what every loop shares, the state s, the belief b, the step (:func:`lasa.method.step.advance`:
-assistance, blend, belief update, safe transition), the record and stopping. What differs between
-the loops is a *chooser*: given the running episodes at step t (:class:`Now`), it returns their
-human actions a_h, decoded from a joystick input (a trained decoder, or Retargeting's IK).
+Every loop of the package (sims, study participants, teleoperation, the web study) runs a
+:class:`Runner`, which owns s, b, the step (:func:`lasa.method.step.advance`), the record and
+stopping; a loop differs by its *chooser*: the running episodes' human actions a_h at step t.
 """
 
 from __future__ import annotations
@@ -26,15 +23,8 @@ __all__ = ["Now", "Chooser", "Observer", "Record", "Runner", "held_input", "chec
 
 @dataclasses.dataclass(frozen=True)
 class Now:
-    """What a chooser sees of the running episodes at step t.
-
-    Attributes:
-        t: The step, from 0.
-        rows: Indices of the running episodes in the batch, (A,).
-        state: Their states s^t, (A, n) [rad].
-        belief: Their beliefs b^t, (A, G).
-        log_belief: log b^t, (A, G) (a chooser that looks ahead steps from it).
-    """
+    """What a chooser sees of the running episodes at step t (from 0): their indices in the batch
+    (A,), s^t (A, n) [rad], b^t and log b^t (A, G)."""
 
     t: int
     rows: np.ndarray
@@ -48,26 +38,14 @@ Observer = Callable[[int, "Runner"], np.ndarray]  # after step t's state: the ep
 
 
 def check_horizon(horizon: int) -> None:
-    """A run's horizon is a positive whole number of steps.
-
-    Raises:
-        ConfigError: naming the value.
-    """
+    """A run's horizon is a positive whole number of steps, else ConfigError."""
     if int(horizon) != horizon or horizon < 1:
         raise ConfigError(f"horizon must be a positive integer, got {horizon!r}")
 
 
 def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> Chooser:
-    """The chooser that holds input ``z[row]`` for each episode: a_h = phi(z, s, b).
-
-    ``rest`` is the stick-at-rest convention of :func:`lasa.method.step.human_action`. A live
-    device is this chooser for one episode and one step, with the stick's current input.
-
-    Args:
-        decoder: The decoder phi.
-        z: Each episode's input, (U, d).
-        rest: ``"decode"`` (phi(0, s, b)) or ``"zero"`` (no human action at rest).
-    """
+    """The chooser that holds input ``z[row]`` (U, d) for each episode: a_h = phi(z, s, b), under
+    the stick-at-rest convention ``rest`` (:func:`lasa.method.step.human_action`)."""
     z = np.asarray(z, dtype=float)
 
     def choose(now: Now) -> np.ndarray:
@@ -79,15 +57,9 @@ def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> C
 
 @dataclasses.dataclass(frozen=True)
 class Record:
-    """A batch of finished episodes.
-
-    Attributes:
-        states: s^t for t = 0..T, (T+1, U, n) [rad]; held at its last value after an episode stops.
-        beliefs: b^t for t = 0..T, (T+1, U, G); held likewise.
-        human_actions: a_h^t, (T, U, n) [rad/s]; zero once an episode has stopped.
-        actions: The blended command a^t before the safety clip, (T, U, n); zero likewise.
-        end: The step each episode stopped at (T if it ran to the horizon), (U,).
-    """
+    """A batch of finished episodes: s^t (T+1, U, n) [rad] and b^t (T+1, U, G), held after an
+    episode stops; a_h^t and the command a^t before the safety clip (T, U, n) [rad/s], zero after
+    it stops; and the step each stopped at (T at the horizon), (U,)."""
 
     states: np.ndarray
     beliefs: np.ndarray
@@ -97,19 +69,9 @@ class Record:
 
 
 class Runner:
-    """Episodes advanced together through Algorithm 1's step; one step or a whole run.
-
-    Args:
-        assist: The step's fixed parts for every episode (:class:`lasa.method.step.Assist`).
-        start: s^0 of every episode, (U, n) [rad].
-        log_belief: log b^0 of every episode, (U, G).
-        update_belief: Update the belief with each human action (Algorithm 1, line 8); ``False``
-            holds it at b^0 (the property's confident hold).
-
-    Attributes:
-        state: s, (U, n). log_belief: log b, (U, G). running: which episodes run, (U,).
-        t: The steps taken.
-    """
+    """Episodes advanced together through Algorithm 1's step, from s^0 (U, n) and log b^0 (U, G);
+    ``update_belief=False`` holds b at b^0 (the property's confident hold). ``running`` (U,) and
+    ``t``, the steps taken, follow the run."""
 
     def __init__(
         self, assist: Assist, start: np.ndarray, log_belief: np.ndarray, update_belief: bool = True
@@ -134,11 +96,8 @@ class Runner:
         return belief(self.log_belief)
 
     def step(self, choose: Chooser) -> StepResult:
-        """One step of the running episodes: their chooser's a_h, then Algorithm 1's step.
-
-        Returns:
-            The step of the running rows (in ``np.flatnonzero(running)`` order).
-        """
+        """One step of the running episodes (in ``np.flatnonzero(running)`` order): their
+        chooser's a_h, then Algorithm 1's step."""
         rows = np.flatnonzero(self.running)
         return self._step(choose, rows, belief(self.log_belief[rows]))
 
@@ -161,15 +120,10 @@ class Runner:
         progress: bool = False,
         desc: str = "episodes",
     ) -> Record:
-        """Run every episode until it stops or the horizon: record s and b, step, observe.
+        """Run every episode until it stops or the horizon T: record s and b, step, observe.
 
-        Args:
-            choose: The human actions of the running episodes at each step.
-            horizon: The most steps T an episode takes.
-            observe: Called with (t, runner) at every recorded state (t = 0..); returns the
-                episodes that have finished there, which stop (default: none stop).
-            progress: Show a progress bar over the steps.
-            desc: The progress bar's label.
+        ``observe(t, runner)`` at every recorded state returns the episodes that finished there,
+        which stop (default: none stop); ``progress`` shows a bar labelled ``desc``.
         """
         check_horizon(horizon)
         n_users, (n, g) = len(self.state), (self.state.shape[1], self.log_belief.shape[1])
