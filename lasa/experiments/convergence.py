@@ -203,10 +203,7 @@ def run(
 
     Args:
         decoder: The base decoder (LA+SA's, ``Workspace.sim_decoders()["base"]``).
-        task: The goal task.
         control: Control-loop units; ``assistance`` is replaced by each member in turn.
-        config: The sweep.
-        progress: Show progress bars.
 
     Returns:
         One row per (member, beta, user, recorded step), columns :data:`COLUMNS`, ordered

@@ -150,8 +150,6 @@ def run_sweep(
             only ``steps``, ``entropy_lambda`` and ``seed``.
         demos: The demonstrations.
         task: The goal task (the belief's goal sets).
-        control: Control-loop units.
-        config: The sweep.
         progress: Show a progress bar over the runs.
     """
     goal_sets = belief_targets(task, control.likelihood)

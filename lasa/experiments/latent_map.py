@@ -101,10 +101,8 @@ def plot_held_paths(
     """Grasp-site paths when each joystick input is held, coloured by z.
 
     Args:
-        task: The task.
         paths: States of each held input, shape (K, steps + 1, n).
         z_values: The held inputs, shape (K,).
-        ax: Axes to draw on.
         title: Panel title.
     """
     ax = draw_scene(task, ax)

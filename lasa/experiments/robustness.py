@@ -323,7 +323,6 @@ def run(
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
-        task: The goal task.
         control: The default control units (alpha, sigma_h) the grid is centred on.
         config: The grid.
         progress: A progress bar over finished cells.

@@ -296,7 +296,6 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         frame: One robot's rows (columns ``beta``, ``method`` and ``metric``; ``completed``
             for the time).
         metric: ``final_error`` or ``time``.
-        ax: Axes to draw on.
     """
     ax = plots.method_lineplot(frame, "beta", metric, ax, level=LEVEL)
     ax.set_xscale("log")

@@ -269,7 +269,6 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
     Args:
         frame: :func:`run`'s rows of the episodes in ``traj`` (the first look), in its order.
         traj: Their trajectories.
-        task: The goal task.
         success: The normalised final error that counts as success (``Config.success``).
 
     Returns:

@@ -245,9 +245,6 @@ def run(
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one model), ``METHOD_DECODER`` among them.
         task: The training task.
-        control: Control-loop units.
-        config: The sweep.
-        progress: Show progress bars.
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
         assistance: The members the method's assistance runs under (default ``config.assistance``).
 

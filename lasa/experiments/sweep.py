@@ -228,13 +228,10 @@ def run_population(
 
     Args:
         decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
-        task: The goal task.
-        control: Control-loop units.
         users: The simulated users.
         methods: Each user's method, shape (U,).
         horizon: Control steps.
         noise: The users' random streams, see :func:`lasa.people.rollout.rollout`.
-        progress: Show progress bars.
         assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
             ``control.assistance`` for everyone.
         pilot_seed: Seed of the laggy and noisy pilots' own random stream
@@ -351,10 +348,8 @@ def judge(
     Args:
         module: The figure's module (``run(..., look=, assistance=)`` and ``claims``).
         decoders: Passed to ``module.run``.
-        task: The task.
         control: Control-loop units; ``control.assistance`` is the headline member.
         config: The figure's config (``users``, ``block``, ``cap``, ``n_boot``, ``assistance``).
-        progress: Show progress bars.
         reduce: Maps a look's rows to the rows the claims read (sim3: one row per episode),
             so the bootstrap resamples the smaller frame; identity if None.
 
