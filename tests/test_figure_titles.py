@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 from matplotlib.path import Path as MplPath
 
 from lasa.evidence.verdicts import USER, member_frame
-from lasa.experiments import sim1, sim2, sim3, sim4
+from lasa.experiments import sim1, sim2, sim3, sim4, sweep
 
 matplotlib.use("Agg")
 
@@ -89,9 +89,10 @@ def test_the_titles_n_is_the_users_per_point_shown(name: str) -> None:
 
 
 def test_the_check_fails_on_a_wrong_n(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The committed sim3 CSV has 60 planar5 and 150 Panda users: one N for both is wrong."""
+    """The committed sim3 CSV has 60 planar5 and 150 Panda users: one N for both is wrong (sims 1-3 title
+    through :func:`lasa.experiments.sweep.sim_figure`)."""
     assert shown_ns(_table("sim3"), FIGURES["sim3"][2]) == {"planar5": (60, 60), "panda": (150, 150)}
-    monkeypatch.setattr(sim3, "users_text", lambda *args, **kwargs: "150 users per curve")
+    monkeypatch.setattr(sweep, "users_text", lambda *args, **kwargs: "150 users per curve")
     with pytest.raises(AssertionError):
         check_title(sim3.plot(_table("sim3")), _table("sim3"), FIGURES["sim3"][2])
 

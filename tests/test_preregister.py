@@ -9,7 +9,7 @@ import pytest
 
 from lasa.evidence import sessions
 from lasa.evidence.rules import COMPLETION_BAR, rule
-from lasa.experiments import preregister
+from lasa.experiments.study import preregister
 from lasa.world import measures
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -70,7 +70,7 @@ def test_the_command_writes_the_document(tmp_path):
         [
             sys.executable,
             "-m",
-            "lasa.experiments.preregister",
+            "lasa.experiments.study.preregister",
             "--draws",
             "2",
             "--sizes",

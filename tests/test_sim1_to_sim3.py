@@ -105,16 +105,16 @@ def both(model):
 
 
 def test_sim1_with_three_methods_runs_one_rollout_per_decoder(model, task, monkeypatch):
-    from lasa.experiments import common
+    from lasa.experiments import sweep
 
     calls = []
-    real = common.rollout
+    real = sweep.rollout
 
     def counted(decoder, task_, users, alpha, *args, **kwargs):
         calls.append((id(decoder), len(alpha), sorted(set(np.round(alpha, 6)))))
         return real(decoder, task_, users, alpha, *args, **kwargs)
 
-    monkeypatch.setattr(common, "rollout", counted)
+    monkeypatch.setattr(sweep, "rollout", counted)
     decoders = both(model)
     frame, traj = sim1.run(
         decoders, task, task.robot.control, sim1.Config(betas=(75.0, 1000.0), users=2, horizon=10, **ONE)
@@ -192,7 +192,7 @@ def test_bad_sim2_config(kw, match):
 
 def test_sims_1_to_3_share_one_sweep_config_and_a_bad_setting_names_its_notebook():
     from lasa.base.config import from_dict
-    from lasa.experiments.common import SweepConfig
+    from lasa.experiments.sweep import SweepConfig
 
     shared = {f.name for f in dataclasses.fields(SweepConfig)}
     for sim in (sim1, sim2, sim3):
@@ -340,7 +340,7 @@ def test_a_later_look_adds_new_users_of_its_own_stream(model, task):
 
 
 def test_judge_runs_looks_until_settled_or_the_cap(model, task):
-    from lasa.experiments.common import judge
+    from lasa.experiments.sweep import judge
 
     cfg = sim1.Config(
         betas=(75.0, 1000.0),

@@ -13,7 +13,7 @@ import pytest
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.experiments import sim4
-from lasa.experiments.new_cups import map_geometry, new_cup_positions
+from lasa.experiments.sim4 import map_geometry, new_cup_positions
 from lasa.method.context_map import extend_task, new_goal_frames
 
 REF = 1
@@ -177,7 +177,7 @@ def test_map_geometry_on_planar5(task):
 
 
 def test_judged_rows_name_the_measure_then_the_member(model, task):
-    from lasa.experiments.common import judge
+    from lasa.experiments.sweep import judge
 
     config = sim4.Config(
         offsets=(0.08, 0.11, 0.14),

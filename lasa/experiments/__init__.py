@@ -12,16 +12,11 @@ module                    figure                            notebook
 :mod:`.robustness`        the verdict map                   08_claims_robustness
 :mod:`.convergence`       Sec. IV-A, the T1-T4 ball         09_convergence
 :mod:`.eating_task`       the eating task's 2-D latent      10_eating_task
-:mod:`.study`             the study's run (its Config)      11_eating_study
-:mod:`.study_tests`       the study's tests                 11_eating_study
-:mod:`.study_claims`      claims H1-H3                      11_eating_study
-:mod:`.study_analysis`    completion, stuck, mode switches  11_eating_study
-:mod:`.study_plots`       Figs. error, time, dessert        11_eating_study
+:mod:`.study`             the eating study (a package)      11_eating_study
 ========================  ================================  ===========================
 
 Each figure module defines ``NAME``, ``COLUMNS``, a frozen ``Config`` (from its notebook's
-``settings``) and ``plot``; those with claims define ``claims``, each verdict's rule in its
-docstring; those that simulate define ``run``. :mod:`.common` holds what several figures share,
-:mod:`.new_cups` the episodes sim4 tabulates. What a new figure needs, and when the decision
-rules were written: ``docs/method-notes.md``.
+``settings``) and ``plot``; those with claims define ``claims`` (rules: :mod:`lasa.evidence.rules`);
+those that simulate define ``run``. :mod:`.sweep` holds what the sweeps share. What a new figure
+needs: ``docs/method-notes.md``.
 """

@@ -1,18 +1,8 @@
 r"""Sec. IV-A measured: the Lyapunov ball of LA+SA along simulated rollouts (notebook ``09_convergence``).
 
-The paper's convergence argument takes :math:`V = \tfrac12 \|e\|^2`, :math:`e = g^* - s` (T1),
-and at :math:`\alpha = 0.5` finds :math:`\dot V < 0` whenever
-:math:`b(g^*)\|e\| > \delta := \sigma_h + (1 - b(g^*))\,\sigma_r` (T4). For a general blend the
-same steps give :math:`\dot V < 0` if
-
-.. math::  b^*\|e\| > \delta_\alpha := \frac{1-\alpha}{\alpha}\sigma_h + (1 - b^*)\sigma_r
-
-(:func:`radius`), which is :math:`\delta` at :math:`\alpha = 0.5`. Our LA+SA runs at
-``ControlConfig.alpha`` (0.2), where the paper's :math:`\delta` is *not* a sufficient radius:
-this module measures both (:func:`run`, :func:`measure`, :func:`summary`). g* is the cup's goal
-pose ``task.goals[goal]`` (column ``error``; the user's own grasp: ``error_target``), and the
-discrete step's rate exceeds the continuous one by the slack dt ||a||^2 / 2 (``slack``). The
-derivation and both choices: ``docs/method-notes.md``.
+:math:`V = \tfrac12 \|e\|^2` falls if :math:`b^*\|e\| > \delta_\alpha := \frac{1-\alpha}{\alpha}\sigma_h
++ (1 - b^*)\sigma_r` (:func:`radius`), the paper's :math:`\delta` (T4) at :math:`\alpha = 0.5`; LA+SA runs at
+``ControlConfig.alpha``, so both are measured. Derivation: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -38,24 +28,14 @@ from lasa.base.config import (
 from lasa.base.errors import ConfigError
 from lasa.evidence.plots import robot_rows
 from lasa.evidence.verdicts import USER
-from lasa.experiments.common import check_assistance, check_record_every, draw_episodes
+from lasa.experiments.sweep import check_assistance, check_record_every, draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "MEMBER_COLORS",
-    "Config",
-    "radius",
-    "measure",
-    "run",
-    "summary",
-    "plot",
-]
+__all__ = ["NAME", "COLUMNS", "Config", "radius", "measure", "run", "summary", "plot"]
 
 NAME = "convergence"
 # the contract's columns first, then what summary and plot read
@@ -221,16 +201,9 @@ def run(
 ) -> pd.DataFrame:
     """LA+SA users of fixed rationality under each assistance member, with the T4 quantities.
 
-    Every member runs the same users (cup, grasp, random stream per user; Eq. S1 with a
-    constant beta) with the base decoder and alpha = ``control.alpha``, one batched
-    rollout per member.
-
     Args:
         decoder: The base decoder (LA+SA's, ``Workspace.sim_decoders()["base"]``).
-        task: The goal task.
         control: Control-loop units; ``assistance`` is replaced by each member in turn.
-        config: The sweep.
-        progress: Show progress bars.
 
     Returns:
         One row per (member, beta, user, recorded step), columns :data:`COLUMNS`, ordered
@@ -247,12 +220,7 @@ def run(
     user = np.tile(np.arange(config.users), len(config.betas))
     target = task.target(goal[user], theta[user])
     users = UserPopulation(
-        goal=goal[user],
-        theta=theta[user],
-        target=target,
-        beta0=beta,
-        slope=np.zeros(len(user)),
-        user=user,
+        goal=goal[user], theta=theta[user], target=target, beta0=beta, slope=np.zeros(len(user)), user=user
     )
     times = np.unique(np.append(np.arange(0, config.horizon + 1, config.record_every), config.horizon))
     parts = []
@@ -261,17 +229,8 @@ def run(
         traj: Trajectories = rollout(
             decoder, task, users, control.alpha, ctl, config.horizon, noise, progress
         )
-        m = measure(
-            traj.states,
-            traj.beliefs,
-            traj.actions,
-            users.goal,
-            task.goals,
-            target,
-            control.dt,
-            control.action_scale,
-            control.alpha,
-        )
+        bound = (control.dt, control.action_scale, control.alpha)
+        m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
         counts = _window_counts(m, times)
         n_users, n_rows = len(user), len(times)
         cols: dict[str, object] = {
@@ -291,18 +250,6 @@ def run(
 
 def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -> pd.DataFrame:
     """Per (robot, assistance, beta): how often V rose where T4 held, and the settled ball.
-
-    Columns (each in full: ``docs/method-notes.md``):
-
-    - ``users``, ``steps``: users and control steps measured;
-    - ``bound_steps``, ``bound_share``: the steps where b*||e|| > delta_alpha (the run's alpha), their share;
-    - ``rose_given_bound``, ``beyond_slack_given_bound``: share of those where V rose, by over dt||a||^2/2;
-    - ``bound_share_half``, ``rose_given_bound_half``: the same for the paper's delta (alpha = 0.5);
-    - ``ball``, ``ball_target``: the ``quantile`` of ||e|| (||s* - s||) over the last ``settle`` share;
-    - ``radius_alpha``, ``radius_half``: median over users of delta_alpha / b* (delta / b*) at the end;
-    - ``tightness_alpha``, ``tightness_half``: ``quantile`` of b*||e|| / delta_alpha (delta), row by row;
-    - ``late_outside_alpha``, ``late_outside_half``: share of the late rows still outside that ball;
-    - ``belief_final``: median b(g*) at the last step.
 
     Args:
         frame: Rows of :func:`run` (or the figure's CSV).
@@ -364,11 +311,7 @@ def _band(ax: Axes, part: pd.DataFrame, column: str, color: str, **line: object)
 
 
 def _bars(ax: Axes, table: pd.DataFrame, column: str, hatched: bool = False) -> None:
-    """``column`` of a summary as bars per beta (x) and member (colour).
-
-    Filled bars carry a dot at their top, so a value of zero still shows; hatched bars
-    are outlines in the member's colour, drawn over the filled ones.
-    """
+    """``column`` of a summary as bars per beta (x) and member (colour)."""
     assistance = _assistance_present(table)
     betas = sorted(table.beta.unique())
     width = 0.8 / len(assistance)
@@ -386,12 +329,7 @@ def _bars(ax: Axes, table: pd.DataFrame, column: str, hatched: bool = False) -> 
 
 
 def plot(table: pd.DataFrame) -> Figure:
-    """The Sec. IV-A ball: one row per robot present, four panels.
-
-    V(t) and ||e(t)|| against the paper's delta(t) (median and 25-75% band over users,
-    at the largest beta present); the settled ball over the theory's radius per beta and
-    member; and how often V rose where the alpha-general T4 held.
-    """
+    """The Sec. IV-A ball: one row per robot present, four panels."""
     fig, rows = robot_rows(table, 4, (18, 3.8))
     stats = summary(table)
     for name, part, row in rows:

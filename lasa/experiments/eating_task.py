@@ -1,26 +1,8 @@
 r"""The eating task's 2-D latent actions (notebook 10): demonstrations, training, what z does.
 
-The study's decoder phi(z, s, b) reads a belief over the four goals of the eating task
-(:mod:`lasa.world.eating`) and maps a 2-axis stick z in [-1, 1]^2 to a joint velocity of the
-Panda. It is trained by the same pipeline as the cup decoders (:func:`lasa.method.train.train_decoder`)
-on synthetic kinesthetic-style demonstrations (:func:`lasa.people.demos.collect_eating_demonstrations`).
-
-The figure shows what each stick direction does at a bowl, in the fork's terms: the
-tip's velocity in the table plane (arrows), its vertical velocity and the rate at which
-the fork tilts, for the eight full deflections of the stick, when the robot is unsure
-which goal the user wants (uniform belief) and when it is confident in that bowl. That
-is the paper's central picture: near the goal, the same input changes meaning, from
-"which bowl" to "how to eat from it".
-
-**Readings of the study's decoder.** The paper does not say how its demonstrations were
-cut or whether the study's decoder had the entropy term. Each reading of the
-demonstrations (:data:`lasa.people.demos.SEGMENTATIONS`) trains a base decoder; each base is
-then fine-tuned for the same steps with lambda = 0 and with the lambda that notebook 03's
-rule (:func:`lasa.method.entropy.choose_lambda`) picks from a sweep on the ``continuous``
-reading's base (one sweep, not three: each lambda > 0 run costs about a minute here), so
-that the two entropy readings of a base differ in the term only. The study's headline is
-the reading that :func:`lasa.evidence.latent_property.choose` picks, by the property alone, before
-any participant runs (:func:`train_readings`).
+Each reading of the demonstrations trains a base decoder, fine-tuned with lambda = 0 and with
+notebook 03's rule's lambda; the study's headline is chosen by the latent property alone
+(:func:`train_readings`), before any participant runs.
 """
 
 from __future__ import annotations
@@ -92,58 +74,31 @@ BELIEFS = ("uncertain", "confident")
 class Config:
     """The eating decoder's data and training (notebook 10)."""
 
-    # the demonstrations (lasa.people.demos.DemoConfig, its own seed included): tilts per goal
-    # (n_theta), reaches from home per (goal, tilt) (n_starts), tilt adjustments (n_adjust), ...
-    demos: DemoConfig = EATING_DEMOS
-    # training (lasa.method.train.TrainConfig, its own seed included, which every fine-tune uses):
-    # the cup decoders' recipe, 2000 steps of a 3 x 128 network, with a 2-D latent (z_dim must
-    # stay 2: two stick axes)
+    demos: DemoConfig = EATING_DEMOS  # the demonstrations (lasa.people.demos.DemoConfig, its own seed)
+    # training (lasa.method.train.TrainConfig, its seed every fine-tune's): z_dim stays 2, two stick axes
     train: TrainConfig = TrainConfig(z_dim=2)
     goal: str = "middle"  # the bowl the figure looks at [-]
-    # demonstration readings trained: at paper scale the two whose decoders have the property under the
-    # study's cap; all of SEGMENTATIONS under LARGE=1 (configs/large.yaml). home and leaves moved there
-    # for cost, after this version's first paper-scale run had measured them under the cap: each failed
-    # the stay half at every goal [-]
+    # demonstration readings trained: at paper scale the two with the property under the study's cap;
+    # all of SEGMENTATIONS under LARGE=1 (configs/large.yaml) [-]
     readings: tuple[str, ...] = ("continuous", "transfers")
-    lambdas: tuple[NonNegative, ...] = (
-        0.0,
-        0.1,
-        0.3,
-        1.0,
-        3.0,
-    )  # notebook 03's sweep, on the continuous base [-]
+    # notebook 03's sweep, on the continuous base [-]
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
-    # The search for a decoder with both halves of the property: small entropy weights, which
-    # trade the leave half against the stay half less than notebook 03's rule's lambda does,
-    # on the bases whose demonstrations show departures (transfers; leaves, from a confident
-    # belief). Each run costs one fine-tune of sweep_steps.
-    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)  # entropy weights of the search [-]
-    # bases the entropy-weight search fine-tunes: none at paper scale (transfers and leaves under
-    # LARGE=1), moved there for cost as home and leaves were: under the cap no weight kept the stay
-    # half at every goal [-]
-    search_readings: tuple[str, ...] = ()
-    # A latent whose ring keeps departures and manipulation apart (lasa.method.sectors): these
-    # readings' bases are trained with the sector loss too (<reading>_sectors, lambda = 0). The
-    # weight was set after two probe trainings of the leaves base (1.0 and 0.2: neither kept half
-    # the inputs at a bowl), for its lower held-out reconstruction error (0.0085 against 0.0118).
+    # small entropy weights searched for both halves of the property, one fine-tune each [-]
+    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)
+    search_readings: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
+    # bases trained with the sector loss too (lasa.method.sectors; <reading>_sectors, lambda = 0); the
+    # weight had the lower held-out reconstruction error of two probes (0.2: 0.0085, 1.0: 0.0118)
     sector_readings: tuple[str, ...] = ()  # demonstration readings trained with sectors (LARGE=1: leaves) [-]
     sector_weight: NonNegative = 0.2  # weight of the sector loss of those readings [-]
-    # The search for a decoder with both halves under the study's cap, by another seed of training
-    # (written before the study ran at the cap): each of these readings' bases is trained again
-    # with each seed, then fine-tuned with lambda = 0 as its reading is (<reading>_seed<seed>).
-    # transfers: the reading that met the rule without the cap, and missed it by one input of 64 at
-    # one bowl with the cap in the probe that found the cap's effect.
-    seed_readings: tuple[str, ...] = ("transfers",)  # readings trained again with other seeds [-]
+    # bases trained again with each search seed, fine-tuned with lambda = 0 (<reading>_seed<seed>) [-]
+    seed_readings: tuple[str, ...] = ("transfers",)
     search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the readings' own: train.seed) [-]
-    # The study's belief: Javdani et al.'s cap (lasa.world.eating.STUDY_BELIEF_CAP), through the
-    # demonstrations' beliefs, training, the property; None ("none"): Algorithm 1's uncapped belief
+    # the study's belief cap (lasa.world.eating.STUDY_BELIEF_CAP); None ("none"): Algorithm 1's uncapped
     belief_cap: BeliefCap = STUDY_BELIEF_CAP
-    # The cap sweep: the headline's recipe (its demonstrations, base and fine-tune) trained again at
-    # each of these caps, its property measured at that cap (train_caps); notebook 11 runs them [-]
+    # the headline's recipe trained again at each of these caps (train_caps); notebook 11 runs them [-]
     cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
-    # local worker processes the trainings are spread over (entropy_ablation.train_all): the same
-    # decoders with any number; configs/paper.yaml asks for two, to put this notebook, the
-    # pipeline's longest chain, on both cores [-]
+    # local worker processes for the trainings (entropy_ablation.train_all): the same decoders with any [-]
     jobs: PositiveInt = 1
 
     def __post_init__(self) -> None:
@@ -194,15 +149,7 @@ def reading_names(config: Config) -> list[str]:
 
 
 def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | None]]:
-    """(name, base, lambda) of every decoder reading; lambda None: notebook 03's rule's.
-
-    Each demonstration reading gives its base fine-tuned with lambda = 0 (its own name) and
-    with the rule's lambda (``<reading>_entropy``, ``chosen``); each reading of the search
-    adds one per search lambda (``<reading>_lambda<value>``); each sector reading adds its
-    sector base fine-tuned with lambda = 0 (``<reading>_sectors``, base ``<reading>_sectors``); each
-    seed reading adds, per search seed, its base trained with that seed and fine-tuned with lambda = 0
-    (``<reading>_seed<seed>``).
-    """
+    """(name, base, lambda) of every decoder reading; lambda None: notebook 03's rule's."""
     out: list[tuple[str, str, float | None]] = []
     for r in config.readings:
         out += [(r, r, 0.0), (f"{r}_entropy", r, None)]
@@ -217,7 +164,8 @@ def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | No
 
 def _bases(config: Config, train: TrainConfig) -> dict[str, tuple[str, TrainConfig]]:
     """Per base: its demonstration reading and training settings (the sector bases add the loss,
-    the seed bases another seed)."""
+    the seed bases another seed).
+    """
     out = {r: (r, train) for r in config.readings}
     for r in config.sector_readings:
         out[f"{r}_sectors"] = (r, dataclasses.replace(train, sector_weight=config.sector_weight))
@@ -255,12 +203,7 @@ def train_readings(
     prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
 ) -> Readings:
-    """Train every reading, measure its property, choose the headline by the property alone.
-
-    Saves each reading's demonstrations and decoder (artifacts ``eating_segmentation_demos``
-    and ``eating_segmentation_decoder``), and the headline's as ``eating_decoder``, the one
-    the study's LA conditions and the teleop kit load first.
-    """
+    """Train every reading, measure its property, choose the headline by the property alone."""
     train = config.train
     datasets, demo_rows = _demonstrations(task, control, config, paths)
     plan = _bases(config, train)
@@ -399,13 +342,7 @@ def train_caps(
     prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
 ) -> CapDecoders:
-    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's.
-
-    The recipe is the headline reading's: its demonstrations (collected with the belief at that
-    cap, so their belief labels are that cap's), its base's training settings and its fine-tune
-    (steps, lambda, seed). Each decoder's property is measured with the belief at its cap. The
-    decoders are saved as ``eating_segmentation_decoder`` readings named by :func:`cap_decoder_name`.
-    """
+    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     lam = readings.chosen_lambda
     base, weight = {name: (b, w) for name, b, w in fine_tunes(config, lam)}[readings.headline]
@@ -452,15 +389,7 @@ def _measure(
 def directions(
     task: EatingTask, decoder: ActionDecoder, control: ControlConfig, goal: str, n: int = 8
 ) -> pd.DataFrame:
-    """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief.
-
-    For each belief (uniform: ``uncertain``; the most confident in ``goal``: ``confident``)
-    and each z on the unit circle (at rest, z = 0, the stick commands nothing), the decoded joint
-    velocity is mapped through the fork tip's Jacobian: the tip's velocity (m/s) and the
-    rate at which the fork's tilt from vertical changes (rad/s). ``toward`` names the goal
-    whose direction the tip's velocity points most closely at (``-`` when it moves less
-    than 1 cm/s).
-    """
+    """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief."""
     g = GOALS.index(check_choice("goal", goal, GOALS))
     state = task.target(g, 0.5)
     angles = 2 * np.pi * np.arange(n) / n
@@ -508,15 +437,7 @@ def directions(
 
 
 def plot(frame: pd.DataFrame) -> Figure:
-    """Two panels (uncertain, confident belief), each the stick seen from above.
-
-    Each full deflection of the stick sits at its place on the unit circle (z1 right, z2
-    up); the arrow from it is the fork tip's horizontal velocity in a top view of the
-    table (up: away from the robot's base, +x; right: the robot's right, -y), 0.1 m/s to
-    half the circle's radius. The marker's colour is the rate at which the fork tilts, and
-    the label names the goal the tip heads for (``here``: it stays at this bowl) with its
-    vertical speed.
-    """
+    """Two panels (uncertain, confident belief), each the stick seen from above."""
     sns.set_theme(style="white")
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
     tilt = np.degrees(frame.tilt_rate.to_numpy())

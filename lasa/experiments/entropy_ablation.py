@@ -1,13 +1,7 @@
 """The entropy term's ablation: a sweep over lambda, its rule, and what it does (Sec. IV-B).
 
-Every lambda of the sweep, lambda = 0 included, fine-tunes the base decoder of notebook
-02 for the same steps, with the same schedule, batches and noise: the runs differ only
-by the term of Eq. T6. The lambda = 0 run is the control. It gives the sims the
-decoder that ``LA`` and ``LA+SA`` use, so every comparison with ``LA+SA+Entropy``
-(the chosen lambda's run) changes one thing, the term, and not the amount of training.
-The rule :func:`lasa.method.entropy.choose_lambda` then compares each lambda with that control.
-
-Notebook ``03_entropy_ablation``.
+Every lambda, 0 included (the control, and the decoder of LA and LA+SA), fine-tunes notebook 02's
+base decoder with the same schedule, batches and noise. Notebook ``03_entropy_ablation``.
 """
 
 from __future__ import annotations
@@ -41,8 +35,6 @@ __all__ = [
     "run_sweep",
     "grid_rows",
     "plot",
-    "plot_entropy_grid",
-    "plot_entropy_tradeoff",
     "findings",
 ]
 
@@ -116,12 +108,7 @@ def _train(run: Run) -> tuple[LatentActionModel, pd.DataFrame]:
 def train_all(
     runs: list[Run], jobs: int = 1, progress: bool = False, desc: str = "training runs"
 ) -> list[tuple[LatentActionModel, pd.DataFrame]]:
-    """Each run's decoder and loss history, in order, over ``jobs`` local worker processes.
-
-    Every run seeds its own initialisation, batches and noise and trains on one thread, so the
-    decoders are the same, bit for bit, whichever process trains them (``tests/test_entropy.py``);
-    only the histories' ``seconds`` differ.
-    """
+    """Each run's decoder and loss history, in order, over ``jobs`` local worker processes."""
     return run_jobs(_train, runs, n_jobs=jobs, progress=progress, desc=desc)
 
 
@@ -129,9 +116,6 @@ def confident_contexts(
     demos: Demonstrations, cap: float | None = None, every: int = 10
 ) -> tuple[np.ndarray, np.ndarray]:
     """Every ``every``-th clean demonstrated context with a confident belief: (states, beliefs).
-
-    Confident: max_g b(g) > :func:`lasa.method.belief.confidence_threshold` of ``cap`` (0.99
-    without a cap, 0.98 with the study's 0.99), so the selection follows the belief's cap.
 
     Raises:
         EmptySelectionError: no demonstrated context is that confident.
@@ -166,8 +150,6 @@ def run_sweep(
             only ``steps``, ``entropy_lambda`` and ``seed``.
         demos: The demonstrations.
         task: The goal task (the belief's goal sets).
-        control: Control-loop units.
-        config: The sweep.
         progress: Show a progress bar over the runs.
     """
     goal_sets = belief_targets(task, control.likelihood)
@@ -198,11 +180,7 @@ def run_sweep(
 
 
 def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFrame:
-    """This robot's rows of the figure (:data:`COLUMNS`): the sweep, and the entropy over a grid.
-
-    The grid runs along the straight joint-space line from home to the right cup's goal,
-    and from a uniform belief in that cup to 0.999, for lambda = 0 and the chosen lambda.
-    """
+    """This robot's rows of the figure (:data:`COLUMNS`): the sweep, and the entropy over a grid."""
     goal_sets = belief_targets(task, control.likelihood)
     progress, conf, states, beliefs = context_grid(task.start, task.goals[1], 1, task.n_goals)
     robot = task.robot.name
@@ -279,19 +257,16 @@ def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = 
 
 def plot(table: pd.DataFrame) -> Figure:
     """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda,
-    and the sweep's trade-off."""
+    and the sweep's trade-off.
+    """
     fig, rows = robot_rows(table, 3, (16, 4.2))
     for name, part, row in rows:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
         for ax, lam in zip(row, lams, strict=False):
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]
-            plot_entropy_grid(
-                g.progress.to_numpy(),
-                g.confidence.to_numpy(),
-                g.entropy.to_numpy(),
-                ax=ax,
-                title=f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)"),
-            )
+            title = f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)")
+            grid = (g.progress.to_numpy(), g.confidence.to_numpy(), g.entropy.to_numpy())
+            plot_entropy_grid(*grid, ax=ax, title=title)
         if len(lams) == 1:  # the rule kept the control: no other decoder to draw
             row[1].set_axis_off()
             row[1].set_title(f"{name}: no lambda > 0 within the rule's cost bound")
@@ -317,9 +292,6 @@ def _kept_control(rows: pd.DataFrame, control: pd.Series) -> str:
 
 def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
     """The rule's choice and its cost against the lambda = 0 control, as Markdown bullets from the sweep.
-
-    When the rule kept the control (no lambda > 0 within its cost bound), one bullet says so, with
-    the least costly lambda's cost.
 
     Args:
         table: :class:`Sweep`'s ``table`` (one row per lambda, lambda = 0 included).

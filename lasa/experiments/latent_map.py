@@ -1,18 +1,14 @@
 """What a joystick input means, per context: the latent map (Sec. III-A, Fig. 1).
 
-The heart of the paper is that the meaning of a joystick input changes with the
-robot's confidence: when the belief is uniform, z chooses *which cup*; once it is
-confident, the same z chooses *how to grasp*. This figure makes that visible by
-holding a joystick input constant and letting the robot move under it (latent actions
-alone, alpha = 0): from home with the belief updated online as in Algorithm 1, and at
-the right cup's mid-preference grasp with the belief held confident. Notebook
-``02_decoder_training``.
+A constant z under latent actions alone (alpha = 0): from home with the belief updated online
+(Algorithm 1), and at the right cup's grasp with a confident belief. Notebook ``02_decoder_training``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -40,9 +36,6 @@ __all__ = [
     "Config",
     "run",
     "plot",
-    "plot_held_paths",
-    "plot_grasp_sweep",
-    "plot_latent_meaning",
     "property_findings",
 ]
 
@@ -108,10 +101,8 @@ def plot_held_paths(
     """Grasp-site paths when each joystick input is held, coloured by z.
 
     Args:
-        task: The task.
         paths: States of each held input, shape (K, steps + 1, n).
         z_values: The held inputs, shape (K,).
-        ax: Axes to draw on.
         title: Panel title.
     """
     ax = draw_scene(task, ax)
@@ -125,9 +116,7 @@ def plot_held_paths(
     start = drawn[0][0]
     ax.plot(start[0], start[1], "ko", ms=4)
     frame_around(task, ax, np.concatenate(drawn))
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
+    _z_colorbar(ax, norm, cmap)
     if title:
         ax.set_title(title)
     return ax
@@ -141,12 +130,7 @@ def plot_grasp_sweep(
     ax: Axes | None = None,
     title: str | None = None,
 ) -> Axes:
-    """Gripper directions at the end of each held input, in the cup's grasp plane.
-
-    The plane is vertical and contains the cup's side-grasp direction, so a top grasp
-    points down and a side grasp points sideways. Each input draws the gripper's last
-    6 cm as a thick segment, and the grasp site's path as a thin line.
-    """
+    """Gripper directions at the end of each held input, in the cup's grasp plane."""
     ax = plt.gca() if ax is None else ax
     robot = task.robot
     cup = robot.goal_positions()[goal]
@@ -175,12 +159,16 @@ def plot_grasp_sweep(
     ax.set_aspect("equal")
     ax.set_xlabel("along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
+    _z_colorbar(ax, norm, cmap)
     if title:
         ax.set_title(title)
     return ax
+
+
+def _z_colorbar(ax: Axes, norm: Normalize, cmap: Any) -> None:
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
 
 
 def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
@@ -216,31 +204,15 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
         tasks: Tasks already built, by robot name (the others are built here).
     """
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
-    fig, axes = plt.subplots(
-        len(rows),
-        3,
-        figsize=(15, 4.3 * len(rows)),
-        squeeze=False,
-        gridspec_kw={"width_ratios": [1.1, 1.1, 1]},
-    )
+    size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
+    fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
     for name, row in zip(rows, axes, strict=True):
         task = (tasks or {}).get(name) or make_cup_task(load_robot(name))
         saved = load_npz(run_paths.artifact("latent_paths", name), Paths.make_hint("latent_paths", name))
-        plot_held_paths(
-            task,
-            saved["uniform"],
-            saved["z"],
-            ax=row[0],
-            title=f"{name}: from home (belief uniform at first):\nz picks the cup",
-        )
-        plot_grasp_sweep(
-            task,
-            saved["confident"],
-            saved["z"],
-            goal=1,
-            ax=row[1],
-            title=f"{name}: confident in the right cup:\nz picks the grasp",
-        )
+        home = f"{name}: from home (belief uniform at first):\nz picks the cup"
+        plot_held_paths(task, saved["uniform"], saved["z"], ax=row[0], title=home)
+        cup = f"{name}: confident in the right cup:\nz picks the grasp"
+        plot_grasp_sweep(task, saved["confident"], saved["z"], goal=1, ax=row[1], title=cup)
         plot_latent_meaning(table[table.robot == name], ax=row[2])
         row[2].set_title(f"{name}: what z controls, per context")
     fig.tight_layout()
@@ -249,9 +221,6 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
 
 def property_findings(summary: pd.DataFrame) -> str:
     """One decoder's latent property at each cup and from home, as Markdown bullets, from its measurement.
-
-    For the cup task, whose one phase end per cup is its mid-preference grasp
-    (:func:`lasa.evidence.latent_measure.phase_ends`).
 
     Args:
         summary: One decoder's :func:`lasa.evidence.latent_property.summary` (one row per cup).

@@ -1,15 +1,7 @@
-"""The verdict map: every sim1-sim3 claim under each reading and setting (notebook ``08_claims_robustness``).
+"""The verdict map: every sim1-sim3 claim under each member and setting (notebook 08).
 
-A verdict rests on conventions the paper leaves open: the member of the shared-autonomy family
-(:mod:`lasa.method.assistance`), alpha (Eq. M1), sigma_h (the bound on ||phi||, Eq. T4) and the
-simulated user (Eq. S1, or the pilots :data:`lasa.people.users.PILOTS`). This module re-runs the sims
-of Figs. sim1-sim3 in every cell of a grid over those settings (:func:`cells`: one factor at a time
-around the default, or a full factorial) and judges each claim in each cell as the claims table does
-(:mod:`lasa.evidence.verdicts`), at the verdicts' interval level (:data:`LEVEL`), per draw of users
-and pooled; the map colours each cell by its effect word (:data:`lasa.evidence.decision.WORDS`). A
-run-time sigma_h scales the learned decoder's output (:class:`ScaledDecoder`, not retrained). Cells
-run through :func:`lasa.pipeline.scaleout.run_jobs`, locally or on a Dask cluster, with identical results.
-The grid's design and what each cell reuses: ``docs/method-notes.md``.
+The sims re-run in every cell of a grid over the member, alpha, sigma_h and the pilot (:func:`cells`),
+each claim judged as the claims table does; design and reuse: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -49,7 +41,7 @@ from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Design, assess, member_frame
 from lasa.experiments import sim1, sim2, sim3
-from lasa.experiments.common import as_decoders, check_assistance, check_needed
+from lasa.experiments.sweep import as_decoders, check_assistance, check_needed
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
@@ -60,7 +52,6 @@ __all__ = [
     "COLUMNS",
     "LEVEL",
     "COLOURS",
-    "DESIGNS",
     "Config",
     "Cell",
     "Grid",
@@ -71,7 +62,6 @@ __all__ = [
     "default_frames",
     "summary",
     "describe",
-    "level_of",
     "plot",
 ]
 
@@ -119,21 +109,16 @@ class Config:
     """The robustness grid of notebook 08, and the sweep run in each of its cells."""
 
     assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
-    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (
-        0.1,
-        0.2,
-        0.5,
-    )  # blend weights of Eq. M1 [-]
+    # blend weights of Eq. M1 [-]
+    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (0.1, 0.2, 0.5)
     action_scales: tuple[Positive, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
     noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
     betas: tuple[Rationality, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
-    change_steps: tuple[NonNegativeInt, ...] = (
-        0,
-        120,
-    )  # sim2 change steps N (its claims read the ends) [steps]
+    # sim2 change steps N (its claims read the ends) [steps]
+    change_steps: tuple[NonNegativeInt, ...] = (0, 120)
     horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
@@ -177,11 +162,7 @@ class Cell:
 
 
 class ScaledDecoder:
-    """A decoder whose actions are scaled by ``factor``: the same directions at another speed.
-
-    ``ScaledDecoder(model, new_sigma_h / trained_sigma_h)`` runs a decoder trained with
-    one action scale at another, keeping the bound ||phi|| <= sigma_h of Eq. T4.
-    """
+    """A decoder whose actions are scaled by ``factor``: the same directions at another speed."""
 
     def __init__(self, model: ActionDecoder, factor: float) -> None:
         self.model = model
@@ -196,9 +177,6 @@ class ScaledDecoder:
 
 def cells(config: Config, control: ControlConfig) -> list[Cell]:
     """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
-
-    The default cell judges every member of ``config.assistance``, the others the headline
-    member (``control.assistance``) only; a factorial grid judges every member in every cell.
 
     Raises:
         ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
@@ -309,9 +287,6 @@ def default_frames(
 ) -> dict[str, pd.DataFrame]:
     """The default cell's rows from notebooks 04-06: their first look, at the map's sizes.
 
-    Keeps the users ``0 .. config.users - 1`` (the first look's, the same users every cell
-    runs), sim1's rows at the map's betas, sim2's at its change steps; sim3's as episode means.
-
     Raises:
         ConfigError: if a frame lacks a beta or change step of the map, or holds fewer users.
     """
@@ -348,7 +323,6 @@ def run(
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
-        task: The goal task.
         control: The default control units (alpha, sigma_h) the grid is centred on.
         config: The grid.
         progress: A progress bar over finished cells.
@@ -374,9 +348,6 @@ def run(
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
     """Per (robot, claim): cells with each effect word, and whether the default cell's holds.
-
-    The words are the rows' ``effect`` (:data:`lasa.evidence.decision.WORDS`), the ones the map
-    (:func:`plot`) colours.
 
     Args:
         table: :func:`run`'s rows.
@@ -460,13 +431,7 @@ def level_of(table: pd.DataFrame) -> float:
 
 
 def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
-    """The verdict map: claims (rows) x readings and settings (columns), one panel per robot.
-
-    The columns are the headline member's default cell, each other member at the default
-    setting, then each alpha, sigma_h and pilot under the headline member. A cell's colour is
-    its effect word (:data:`COLOURS`, the ``effect`` column); an undecided cell is also hatched,
-    with a "?" after its number. The text is the number the verdict rests on; the title states
-    the cells' interval level (:func:`level_of`).
+    """The verdict map: claims (rows) x members and settings (columns), one panel per robot.
 
     Raises:
         ConfigError: if the table has no single interval level, or a word outside ``WORDS``.

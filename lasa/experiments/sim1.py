@@ -1,7 +1,7 @@
 """Fig. sim1: users of fixed expertise (Sec. V-A).
 
-Every method against simulated users of fixed rationality beta (Eq. S1): the final
-state error and the time to reach s*, per beta. Notebook ``04_fixed_expertise``.
+Every method against users of fixed rationality beta (Eq. S1): final state error and time to
+reach s*, per beta. Notebook ``04_fixed_expertise``; the claims' rules: :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -21,40 +21,14 @@ from matplotlib.transforms import blended_transform_factory
 
 from lasa.base.config import ControlConfig, Positive, PositiveInt, Rationality, check_list
 from lasa.base.errors import ConfigError
+from lasa.evidence import plots
 from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.findings import side_of
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
-from lasa.evidence.plots import (
-    METHOD_COLORS,
-    band_handle,
-    legend_below,
-    method_lineplot,
-    paper_handle,
-    paper_point,
-    robot_rows,
-    users_text,
-    wrap_to,
-)
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    USER,
-    Design,
-    block_seed,
-    block_users,
-    group_means,
-    member_frame,
-)
-from lasa.experiments.common import (
-    Decoders,
-    SweepConfig,
-    check_needed,
-    episodes,
-    run_population,
-    sweep_grid,
-    swept_assistance,
-)
+from lasa.evidence.verdicts import USER, Design, group_means
+from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
-from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -65,8 +39,6 @@ __all__ = [
     "claims",
     "boot_values",
     "plot",
-    "plot_metric",
-    "plot_time_ratio",
     "time_ratio_band",
     "findings",
 ]
@@ -92,26 +64,11 @@ CLAIM_BETAS = (75.0, 1000.0)  # the rationalities the claims compare at (noisy, 
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(SweepConfig):
-    """Fig. sim1: users of fixed expertise.
+class Config(sweep.SweepConfig):
+    """Fig. sim1: users of fixed expertise."""
 
-    ``betas`` is a grid: distinct, ascending, each in (0, inf) (the figure's beta axis is
-    logarithmic), with 75 and 1000, which the claims read (:data:`CLAIM_BETAS`); ``video_beta``, the
-    user notebook 04's video shows, is one of them.
-    """
-
-    betas: tuple[Rationality, ...] = (
-        0.3,
-        1,
-        3,
-        10,
-        30,
-        75,
-        200,
-        1000,
-        3000,
-        10000,
-    )  # rationalities [1/rad^2]
+    # rationalities [1/rad^2]
+    betas: tuple[Rationality, ...] = (0.3, 1, 3, 10, 30, 75, 200, 1000, 3000, 10000)
     horizon: PositiveInt = 200  # control steps per episode [-]
     tolerance: Positive = 0.05  # normalised error that counts as reaching s* [-]
     video_beta: Rationality = 75.0  # the noisy user notebook 04's video shows: one of betas [1/rad^2]
@@ -120,7 +77,7 @@ class Config(SweepConfig):
         super().__post_init__()
         betas = tuple(float(b) for b in check_list("betas", self.betas, ascending=True))
         object.__setattr__(self, "betas", betas)
-        check_needed("betas", betas, CLAIM_BETAS, "Fig. sim1's claims")
+        sweep.check_needed("betas", betas, CLAIM_BETAS, "Fig. sim1's claims")
         if float(self.video_beta) not in betas:
             raise ConfigError(
                 f"video_beta must be one of betas {list(betas)} (the video shows a user of the sweep), "
@@ -129,7 +86,7 @@ class Config(SweepConfig):
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -141,67 +98,40 @@ def run(
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one base model): see
-            :func:`lasa.experiments.common.run_population`.
-        task: The goal task.
-        control: Control-loop units.
-        config: The sweep.
-        progress: Show progress bars.
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`): 0 is the first
-            ``config.users``, each later look ``config.block`` more from its own stream.
-        assistance: The assistance members the assisted methods run under; default every
-            member of ``config.assistance`` (the headline one first).
+            :func:`lasa.experiments.sweep.run_population`.
+        look, assistance: Which look's users, under which members (:func:`~lasa.experiments.sweep.run_look`).
 
     Returns:
-        One row per episode with the columns of :data:`COLUMNS` (``assistance`` is
-        ``none`` for LA, the column ``seed`` (:data:`~lasa.evidence.verdicts.USER`) is the user's
-        index over all looks); and the trajectories of all episodes (users in the frame's row
-        order).
+        One row per episode with the columns of :data:`COLUMNS` (``assistance`` is ``none`` for LA,
+        the column ``seed`` is the user's index over all looks); and the trajectories of all
+        episodes (users in the frame's row order).
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed_ = block_seed(config.seed, look)
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, assistance_rows, conditions, user = sweep_grid(config.methods, assistance, config.betas, n_users)
-    beta = np.array(conditions, dtype=float)
-    users = _users(task, config, goal[user], theta[user], beta, user)
-    traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
-    )
+    ran = sweep.run_look(decoders, task, control, config, config.betas, _fixed, progress, look, assistance)
+    users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
-            "method": method,
-            "beta": beta,
-            USER: start + user,
+            "method": ran.method,
+            "beta": users.beta0,
+            USER: ran.user,
             "final_error": errors[-1],
             "time": steps,
             "completed": completed,
             "goal": users.goal,
             "theta": users.theta,
             "confidence": confidence(traj.beliefs[-1], users.goal),
-            "assistance": assistance_rows,
+            "assistance": ran.member,
             "look": look,
         }
     )
     return frame, traj
 
 
-def _users(
-    task: GoalTask, config: Config, goal: np.ndarray, theta: np.ndarray, beta: np.ndarray, user: np.ndarray
-) -> UserPopulation:
-    """The sweep's users: one per row of the grid, of fixed rationality ``beta`` (no learning)."""
-    return UserPopulation(
-        goal=goal,
-        theta=theta,
-        target=task.target(goal, theta),
-        beta0=beta,
-        slope=np.zeros(len(user)),
-        user=user,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-    )
+def _fixed(beta: list[float], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
+    """Users of fixed rationality ``beta`` (no learning)."""
+    return {"beta0": np.array(beta, dtype=float), "slope": np.zeros(len(goal))}
 
 
 def _means(frame: pd.DataFrame) -> pd.DataFrame:
@@ -214,17 +144,6 @@ def _sa_claims(
     frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", means: pd.DataFrame | None = None
 ) -> list[Claim]:
     """Evaluate the paper's Fig. sim1 claims on a sim1 frame, comparing ``a`` with ``b``.
-
-    The decision rules (written before the results were first seen):
-
-    - *SA lowers the final error at every beta*: ``yes`` if b's mean final error is
-      below a's at every beta, ``partly`` if at more than half of them, else ``no``.
-    - *a takes 45% more time than b at beta = 75 and 30% more at beta = 1000*: the
-      effect is ``yes`` if a is slower than b at both betas (time ratios a/b above 1),
-      ``partly`` if at one; the paper's 1.45 and 1.30 (give or take 0.15) are its numbers.
-    - *the gap narrows as beta grows*: each of the time gap (ratio - 1) and the
-      final-error gap (a - b) holds if it has the paper's sign at beta = 75 (b better)
-      and is smaller in size at beta = 1000; ``yes`` if both hold, ``partly`` if one.
 
     Raises:
         ConfigError: if beta = 75 or beta = 1000 is missing from the frame.
@@ -245,54 +164,39 @@ def _sa_claims(
 
 
 def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, robot: str) -> Claim:
-    """sim1.final_error: b's mean final error below a's at every beta (``err``: per beta, a and b).
-
-    Its note, when the verdict is not ``yes``, names the beta where b exceeds a most.
-    """
+    """sim1.final_error: b's mean final error below a's at every beta (``err``: per beta, a and b)."""
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
     values = {"share_lower": n_lower / n_total}
     verdict = rule("sim1.final_error").verdict(values)
     worst = (err[b] - err[a]).idxmax()
-    return Claim(
-        id="sim1.final_error",
+    return sweep.sim_claim(
+        "sim1.final_error",
+        robot,
+        values,
         claim=f"SA lowers the final state error at every beta ({b} vs {a})",
-        figure="sim1",
         paper="LA+SA below LA at every beta",
-        values=values,
-        measured=(
-            f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
-            f"mean final error {a} vs {b}: "
-            f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
-            f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000"
-        ),
-        reproduced=verdict,
-        note=(
-            ""
-            if verdict == "yes"
-            else f"Largest excess of {b} at beta={worst:g} "
-            f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f})."
-        ),
-        robot=robot,
+        measured=f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
+        f"mean final error {a} vs {b}: "
+        f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
+        f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000",
+        note=""
+        if verdict == "yes"
+        else f"Largest excess of {b} at beta={worst:g} ({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}).",
     )
 
 
 def _time_ratio_claim(tim: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
     """sim1.time_ratio: a's mean time over b's at beta = 75 and 1000 (``tim``: per beta, a and b)."""
     values = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
-    return Claim(
-        id="sim1.time_ratio",
+    return sweep.sim_claim(
+        "sim1.time_ratio",
+        robot,
+        values,
         claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
-        figure="sim1",
         paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
-        values=values,
-        measured=(
-            f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
-            f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)"
-        ),
-        reproduced=rule("sim1.time_ratio").verdict(values),
-        note="",
-        robot=robot,
+        measured=f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
+        f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)",
     )
 
 
@@ -300,29 +204,20 @@ def _gap_claim(err: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robo
     """sim1.gap_narrows: the time ratio and the final-error gap from beta = 75 to 1000."""
     d75, d1000 = err.loc[75.0, a] - err.loc[75.0, b], err.loc[1000.0, a] - err.loc[1000.0, b]
     values = _gap_values(r75, r1000, d75, d1000)
-    return Claim(
-        id="sim1.gap_narrows",
+    return sweep.sim_claim(
+        "sim1.gap_narrows",
+        robot,
+        values,
         claim=f"the gap between {a} and {b} narrows as beta grows",
-        figure="sim1",
         paper="time gap 45% at beta=75 -> 30% at beta=1000",
-        values=values,
-        measured=(
-            f"time gap (ratio - 1) {r75 - 1:+.2f} -> {r1000 - 1:+.2f}, "
-            f"narrowing {values['time_narrowing']:+.2f} (g75 - |g1000|); final-error gap {a}-{b} "
-            f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)"
-        ),
-        reproduced=rule("sim1.gap_narrows").verdict(values),
-        note="",
-        robot=robot,
+        measured=f"time gap (ratio - 1) {r75 - 1:+.2f} -> {r1000 - 1:+.2f}, "
+        f"narrowing {values['time_narrowing']:+.2f} (g75 - |g1000|); final-error gap {a}-{b} "
+        f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)",
     )
 
 
 def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
-    """sim1.gap_narrows' numbers from the time ratios and final-error gaps (floats or arrays).
-
-    A gap narrows in the paper's direction when it favours LA+SA at beta = 75 (> 0) and is
-    smaller in size at beta = 1000: ``g75 - |g1000| > 0``.
-    """
+    """sim1.gap_narrows' numbers from the time ratios and final-error gaps (floats or arrays)."""
     g75, g1000 = r75 - 1.0, r1000 - 1.0
     return {
         "time_narrowing": g75 - abs(g1000),
@@ -333,56 +228,36 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
 
 
 def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Claim:
-    """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy.
-
-    Rule: for each of LA+SA and LA+SA+Entropy, count the betas at which its mean final
-    error is below LA's. ``yes`` if both are below at every beta, ``partly`` if both are
-    below at more than half of them, else ``no``.
-    """
+    """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
     robot = str(frame.robot.iloc[0])
     err = (_means(frame) if means is None else means)["final_error"]
     counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
     total = len(err)
     values = {"share_weaker": min(counts.values()) / total}
-    verdict = rule("sim1.entropy_sa").verdict(values)
-    return Claim(
-        id="sim1.entropy_sa",
+    return sweep.sim_claim(
+        "sim1.entropy_sa",
+        robot,
+        values,
         claim="SA improves on LA whether or not the decoder was trained with entropy",
-        figure="sim1",
         paper="LA+SA and LA+SA+Entropy both below LA (final error)",
-        values=values,
-        measured=(
-            f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
-            "(the interval is for this share); "
-            f"final error below LA's at {counts['LA+SA']}/{total} betas (LA+SA) and "
-            f"{counts['LA+SA+Entropy']}/{total} (LA+SA+Entropy); at beta=1000: "
-            + ", ".join(
-                f"{m} {err.loc[1000.0, m]:.3f}"
-                for m in ("LA", "LA+SA", "LA+SA+Entropy")
-                if 1000.0 in err.index
-            )
+        measured=f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
+        "(the interval is for this share); "
+        f"final error below LA's at {counts['LA+SA']}/{total} betas (LA+SA) and "
+        f"{counts['LA+SA+Entropy']}/{total} (LA+SA+Entropy); at beta=1000: "
+        + ", ".join(
+            f"{m} {err.loc[1000.0, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy") if 1000.0 in err.index
         ),
-        reproduced=verdict,
-        note="",
-        robot=robot,
     )
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy.
-
-    The rules are in :func:`_sa_claims` and :func:`_entropy_claim`.
-    """
+    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy."""
     means = _means(frame)
     return [*_sa_claims(frame, means=means), _entropy_claim(frame, means)]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`).
-
-    The same numbers as :func:`claims` on each resample, computed from the group means
-    (:func:`lasa.evidence.verdicts.group_means`) instead of a frame per resample.
-    """
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     err = group_means(frame, ["beta", "method"], "final_error", counts)
     tim = group_means(frame, ["beta", "method"], "time", counts)
     betas = sorted({b for b, _ in err})
@@ -417,31 +292,25 @@ OPEN: dict[str, Any] = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "z
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
     """One panel: a metric against beta per method, with bootstrap bands at the verdicts' level.
 
-    Faint vertical lines mark the betas of the paper's time ratios (75 and 1000). The
-    final-error panel states the paper's ordering and marks the betas where LA+SA's mean is
-    below LA's (the verdict's share); the time panel draws a point open where episodes were
-    cut at the horizon (:func:`_mark_censored`). The legend is below the axes.
-
     Args:
         frame: One robot's rows (columns ``beta``, ``method`` and ``metric``; ``completed``
             for the time).
         metric: ``final_error`` or ``time``.
-        ax: Axes to draw on.
     """
-    ax = method_lineplot(frame, "beta", metric, ax, level=LEVEL)
+    ax = plots.method_lineplot(frame, "beta", metric, ax, level=LEVEL)
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     for i, beta in enumerate(PAPER_RATIOS):
         label = "β = 75, 1000: the paper's time ratios" if i == 0 else None
         ax.axvline(beta, color="0.8", lw=0.8, zorder=0, label=label)
-    extra: list[Artist] = [band_handle(LEVEL)]
+    extra: list[Artist] = [plots.band_handle(LEVEL)]
     if metric == "final_error" and {"LA", "LA+SA"} <= set(frame.method):
         _mark_lower(frame, ax)
-        extra.append(paper_handle(PAPER_FINAL_ERROR))
+        extra.append(plots.paper_handle(PAPER_FINAL_ERROR))
     if metric == "time" and "completed" in frame:
         extra += _mark_censored(frame, ax)
-    legend_below(ax, extra)
+    plots.legend_below(ax, extra)
     return ax
 
 
@@ -451,21 +320,17 @@ def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
     lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
     top = blended_transform_factory(ax.transData, ax.transAxes)
     label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
-    (line,) = ax.plot(
-        lower, np.full(len(lower), 0.97), "v", color=METHOD_COLORS["LA+SA"], ms=6, transform=top, label=label
-    )
+    color = plots.METHOD_COLORS["LA+SA"]
+    (line,) = ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
     return line
 
 
 def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
-    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry.
-
-    A cut episode counts the horizon as its time, so such a mean is a lower bound.
-    """
+    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry."""
     stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
     cut = stats[stats.done < 1.0]
     for method, part in cut.groupby(level="method"):
-        ax.plot(part.index.get_level_values("beta"), part.time, mec=METHOD_COLORS[str(method)], **OPEN)
+        ax.plot(part.index.get_level_values("beta"), part.time, mec=plots.METHOD_COLORS[str(method)], **OPEN)
     if cut.empty:
         return []
     horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
@@ -485,11 +350,6 @@ def time_ratio_band(
     level: float = LEVEL,
 ) -> pd.DataFrame:
     """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at ``level``.
-
-    ``ratio`` is the claims' number (each method's mean over its rows, :func:`_means`); the
-    interval resamples the users (column ``seed``) present under both methods, with replacement,
-    ``n_boot`` times from a generator seeded by ``seed`` (the same band run after run). The
-    default level is the verdicts' (:data:`LEVEL`).
 
     Returns:
         One row per beta with both methods: ``beta``, ``ratio``, ``low``, ``high``.
@@ -513,25 +373,12 @@ def time_ratio_band(
 
 
 def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars.
-
-    The paper's 1.45 (beta = 75) and 1.30 (beta = 1000) are labelled stars, each with the
-    +-0.15 that rule ``sim1.time_ratio`` accepts drawn faintly; the dashed line is ratio 1
-    (no difference). Our curve and its band at the verdicts' level are :func:`time_ratio_band`'s;
-    a ratio is drawn open where episodes of LA or LA+SA were cut at the horizon.
-    """
+    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars."""
     ax = plt.gca() if ax is None else ax
     band = time_ratio_band(frame)
-    color = METHOD_COLORS["LA+SA"]
-    ax.fill_between(
-        band.beta,
-        band.low,
-        band.high,
-        color=color,
-        alpha=0.25,
-        lw=0,
-        label=f"ours: {100 * LEVEL:.4g}% bootstrap CI (the verdicts' level)",
-    )
+    color = plots.METHOD_COLORS["LA+SA"]
+    label = f"ours: {100 * LEVEL:.4g}% bootstrap CI (the verdicts' level)"
+    ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
     ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
     if "completed" in frame:
         done = frame[frame.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()
@@ -542,24 +389,18 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
     for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
         tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
-        paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
+        plots.paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel("time ratio LA / LA+SA [-]")
-    legend_below(ax)
+    plots.legend_below(ax)
     return ax
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim1: one row per robot present: final error (log scale), time and time ratio against beta.
+    """Fig. sim1 under member ``assistance``: per robot, final error (log), time, time ratio against beta."""
 
-    Args:
-        table: Rows of every robot and member.
-        assistance: The member drawn (the headline one); LA's rows are shared.
-    """
-    table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 3, (16, 6.4))
-    for name, part, row in rows:
+    def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
         plot_time_ratio(part, ax=row[2])
@@ -568,12 +409,9 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
         row[1].set_title(f"{name}: time to reach s*")
         paper = "\n(the paper's numbers are its 7-DoF Panda's)" if name != "panda" else ""
         row[2].set_title(f"{name}: time ratio LA / LA+SA{paper}")
-    n = users_text(table, ["method", "beta"])
-    fig.suptitle(
-        wrap_to(f"Fig. sim1: users of fixed expertise, {n}, assistance: {assistance}", fig.get_figwidth())
-    )
-    fig.tight_layout()
-    return fig
+
+    title = "Fig. sim1: users of fixed expertise"
+    return sweep.sim_figure(table, assistance, title, (3, (16, 6.4), draw), ["method", "beta"])
 
 
 def _interval(claim: Claim, name: str) -> tuple[float, float, float]:
@@ -590,10 +428,6 @@ def _side(low: float, high: float, at: float, below: str, above: str) -> str:
     return said.get(side_of((low, high), at), f"its interval contains {at:g}")
 
 
-def _said(value: float, low: float, high: float, fmt: str = "{:.3f}") -> str:
-    return f"{fmt.format(value)} [{fmt.format(low)}, {fmt.format(high)}]".replace("-", "−")
-
-
 def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:
     """Fig. sim1's time ratios and gaps on one robot, from its headline claims' numbers, as Markdown bullets.
 
@@ -607,15 +441,16 @@ def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:
     r75, r1000 = _interval(ratio, "ratio_75"), _interval(ratio, "ratio_1000")
     e75, t75 = _interval(gap, "error_gap_75"), _interval(gap, "time_gap_75")
     slower, faster = "LA is slower than LA+SA", "LA is faster than LA+SA"
+    said = sweep.interval_text
     return "\n".join(
         [
             f"- **Time ({robot}, {ratio.n_users} users per point).** LA's time over LA+SA's is "
-            f"{_said(*r75, '{:.2f}')} at β = 75 ({_side(r75[1], r75[2], 1.0, faster, slower)}) and "
-            f"{_said(*r1000, '{:.2f}')} at β = 1000 ({_side(r1000[1], r1000[2], 1.0, faster, slower)}); "
+            f"{said(*r75, '{:.2f}')} at β = 75 ({_side(r75[1], r75[2], 1.0, faster, slower)}) and "
+            f"{said(*r1000, '{:.2f}')} at β = 1000 ({_side(r1000[1], r1000[2], 1.0, faster, slower)}); "
             f"the claim reads *{ratio.reproduced}*.",
-            f"- **The gap at β = 75.** The final-error gap LA − LA+SA is {_said(*e75)} "
+            f"- **The gap at β = 75.** The final-error gap LA − LA+SA is {said(*e75)} "
             f"({_side(e75[1], e75[2], 0.0, 'LA+SA ends farther from s*', 'LA+SA ends closer to s*')}); "
-            f"the time gap (ratio − 1) is {_said(*t75, '{:.2f}')} "
+            f"the time gap (ratio − 1) is {said(*t75, '{:.2f}')} "
             f"({_side(t75[1], t75[2], 0.0, 'LA+SA is slower', 'LA+SA is faster')}); "
             f"the claim reads *{gap.reproduced}*.",
         ]

@@ -1,8 +1,7 @@
 """Fig. sim2: users who change their mind (Sec. V-B).
 
-Near-optimal users aim at the wrong cup for the first N steps, then at the right one.
-Without the entropy term (LA+SA) the paper finds them trapped as N grows; with it
-(LA+SA+Entropy) they escape. Notebook ``05_changing_goals``.
+Near-optimal users aim at the wrong cup for the first N steps, then at the right one. Notebook
+``05_changing_goals``; the claims' rules: :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -16,47 +15,15 @@ from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from lasa.base.config import (
-    ControlConfig,
-    NonNegative,
-    NonNegativeInt,
-    Positive,
-    PositiveInt,
-    check_list,
-)
+from lasa.base.config import ControlConfig, NonNegative, NonNegativeInt, Positive, PositiveInt, check_list
 from lasa.base.errors import ConfigError
+from lasa.evidence import plots
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
-from lasa.evidence.plots import (
-    METHOD_COLORS,
-    band_handle,
-    legend_below,
-    method_lineplot,
-    paper_handle,
-    probability_axis,
-    robot_rows,
-    users_text,
-    wrap_to,
-)
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    USER,
-    Design,
-    block_seed,
-    block_users,
-    group_means,
-    member_frame,
-)
-from lasa.experiments.common import (
-    Decoders,
-    SweepConfig,
-    episodes,
-    run_population,
-    sweep_grid,
-    swept_assistance,
-)
+from lasa.evidence.verdicts import USER, Design, group_means
+from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
-from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
 __all__ = [
@@ -67,7 +34,6 @@ __all__ = [
     "claims",
     "boot_values",
     "plot",
-    "plot_metric",
     "after_the_change",
     "failures",
     "escape_times",
@@ -97,12 +63,8 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(SweepConfig):
-    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one.
-
-    ``change_steps`` is a grid: at least two distinct N, ascending (the claims compare the
-    smallest N with the largest; with one they would compare an N with itself).
-    """
+class Config(sweep.SweepConfig):
+    """Fig. sim2: users who aim at the wrong cup until step N, then at the right one."""
 
     change_steps: tuple[NonNegativeInt, ...] = (0, 20, 40, 60, 80, 100, 120)  # N values [steps]
     beta: NonNegative = 1000.0  # rationality before and after the change (near optimal) [1/rad^2]
@@ -121,7 +83,7 @@ class Config(SweepConfig):
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -131,55 +93,37 @@ def run(
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim2: final error and confidence in the true cup against the change step N.
 
-    Each user wants cup g* with preference theta. For the steps t < N they aim at the
-    *other* cup with the same preference, from step N on at g*; both near-optimally.
-
-    Args:
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        assistance: The members the assisted methods run under; default every member of
-            ``config.assistance``. The other arguments are :func:`lasa.experiments.sim1.run`'s.
-
     Returns:
-        One row per episode with the columns of :data:`COLUMNS` plus ``goal`` and
-        ``theta`` (for the video); and the trajectories.
+        One row per episode with the columns of :data:`COLUMNS`; and the trajectories.
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed_ = block_seed(config.seed, look)
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, assistance_rows, conditions, user = sweep_grid(
-        config.methods, assistance, config.change_steps, n_users
+
+    def changing(change: list[int], goal: np.ndarray, theta: np.ndarray) -> dict[str, np.ndarray]:
+        first = task.target(wrong_goal(goal, task.n_goals), theta)
+        n = len(goal)
+        return {
+            "beta0": np.full(n, config.beta),
+            "slope": np.zeros(n),
+            "first_target": first,
+            "change_step": np.array(change, dtype=int),
+        }
+
+    ran = sweep.run_look(
+        decoders, task, control, config, config.change_steps, changing, progress, look, assistance
     )
-    change = np.array(conditions, dtype=int)
-    wrong = wrong_goal(goal[user], task.n_goals)
-    users = UserPopulation(
-        goal=goal[user],
-        theta=theta[user],
-        target=task.target(goal[user], theta[user]),
-        beta0=np.full(len(user), config.beta),
-        slope=np.zeros(len(user)),
-        user=user,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-        first_target=task.target(wrong, theta[user]),
-        change_step=change,
-    )
-    traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
-    )
+    users, traj = ran.users, ran.traj
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
-            "method": method,
-            "change_step": change,
-            USER: start + user,
+            "method": ran.method,
+            "change_step": users.change_step,
+            USER: ran.user,
             "final_error": final,
             "confidence": confidence(traj.beliefs[-1], users.goal),
             "goal": users.goal,
             "theta": users.theta,
             "success": final <= config.success,
-            "assistance": assistance_rows,
+            "assistance": ran.member,
             "look": look,
         }
     )
@@ -187,17 +131,7 @@ def run(
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not.
-
-    Success is a final error within the frame's ``success`` criterion (the config's
-    tolerance, 0.1 of the goal distance by default), measured at the largest N.
-
-    - *LA+SA cannot escape the wrong goal as N grows*, in the paper's two parts: LA+SA's
-      mean final error grows from the smallest N to the largest, and its mean confidence
-      in the true cup falls; ``yes`` if both hold, ``partly`` if one, else ``no``.
-    - *LA+SA+Entropy can*: ``yes`` if its success rate at the largest N is at least 80%
-      and at least 20 points above LA+SA's; ``partly`` if it is above LA+SA's; else ``no``.
-    """
+    """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not."""
     robot = str(frame.robot.iloc[0])
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
     rate = frame.groupby(["method", "change_step"]).success.mean()
@@ -210,38 +144,26 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),
     }
     values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
-    v1 = rule("sim2.sa_trapped").verdict(values1)
-    v2 = rule("sim2.entropy_escapes").verdict(values2)
     return [
-        Claim(
-            id="sim2.sa_trapped",
+        sweep.sim_claim(
+            "sim2.sa_trapped",
+            robot,
+            values1,
             claim="LA+SA cannot escape the wrong goal as N grows",
-            figure="sim2",
             paper="LA+SA's final error grows and its confidence falls as N grows",
-            values=values1,
-            measured=(
-                f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
-                f"at N={hi} (the interval is for this growth); mean confidence in the true cup "
-                f"{conf['LA+SA', lo]:.3f} -> {conf['LA+SA', hi]:.3f}; it reaches the right cup in "
-                f"{sa_lo:.0%} -> {sa_hi:.0%} of episodes"
-            ),
-            reproduced=v1,
-            note="",
-            robot=robot,
+            measured=f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
+            f"at N={hi} (the interval is for this growth); mean confidence in the true cup "
+            f"{conf['LA+SA', lo]:.3f} -> {conf['LA+SA', hi]:.3f}; it reaches the right cup in "
+            f"{sa_lo:.0%} -> {sa_hi:.0%} of episodes",
         ),
-        Claim(
-            id="sim2.entropy_escapes",
+        sweep.sim_claim(
+            "sim2.entropy_escapes",
+            robot,
+            values2,
             claim="LA+SA+Entropy can escape the wrong goal",
-            figure="sim2",
             paper="LA+SA+Entropy users switch goals",
-            values=values2,
-            measured=(
-                f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
-                f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}"
-            ),
-            reproduced=v2,
-            note="",
-            robot=robot,
+            measured=f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
+            f"mean final error {err['LA+SA+Entropy', hi]:.3f} vs {err['LA+SA', hi]:.3f}",
         ),
     ]
 
@@ -285,28 +207,20 @@ SUCCESS_RULES = (("sim2.entropy_escapes", "success_entropy", "LA+SA+Entropy"),)
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: final error, success share or confidence in the true cup against the change step N.
-
-    Bands are bootstrap intervals over users at the verdicts' level (:data:`LEVEL`). The
-    success share is sim2.entropy_escapes' number (``success``: the final error within the
-    config's tolerance of s*); sim2.sa_trapped's are the growth of the final error and the drop of
-    the confidence from the smallest N to the largest. The success panel marks the rule's thresholds
-    (:func:`_mark_thresholds`). A share or probability is drawn on [0, 1]. The paper's shape
-    (:data:`PAPER_SHAPES`) is a legend entry; the legend is below the axes.
-    """
+    """One panel: final error, success share or confidence in the true cup against the change step N."""
     if metric == "success":
         frame = frame.assign(success=frame.success.astype(float))
-    ax = method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
+    ax = plots.method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     if metric == "success":
         _mark_thresholds(ax, int(frame.change_step.max()))
     if metric in PROBABILITIES:
-        probability_axis(ax)
-    extra: list[Artist] = [band_handle(LEVEL)]
+        plots.probability_axis(ax)
+    extra: list[Artist] = [plots.band_handle(LEVEL)]
     if metric in PAPER_SHAPES:
-        extra.append(paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
-    legend_below(ax, extra)
+        extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
+    plots.legend_below(ax, extra)
     return ax
 
 
@@ -317,30 +231,21 @@ def _mark_thresholds(ax: Axes, n_max: int) -> None:
         for i, level in enumerate(limits):
             label = f"{rule_id}: {method}'s threshold at N = {n_max}" if i == 0 else None
             xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
-            ax.plot(xs, [level, level], "--", color=METHOD_COLORS[method], lw=1.5, label=label)
+            ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS[method], lw=1.5, label=label)
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim2: one row per robot present: final error, success share and confidence against N.
+    """Fig. sim2 under member ``assistance``: per robot, final error, success and confidence against N."""
 
-    Args:
-        table: Rows of every robot and member.
-        assistance: The member drawn (the headline one); LA's rows are shared.
-    """
-    table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 3, (16, 5.6))
-    for name, part, row in rows:
+    def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):
             plot_metric(part, metric, ax=ax)
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: success (sim2.entropy_escapes' number)")
         row[2].set_title(f"{name}: confidence in the true cup")
-    n = users_text(table, ["method", "change_step"])
-    fig.suptitle(
-        wrap_to(f"Fig. sim2: users who change their mind, {n}, assistance: {assistance}", fig.get_figwidth())
-    )
-    fig.tight_layout()
-    return fig
+
+    title = "Fig. sim2: users who change their mind"
+    return sweep.sim_figure(table, assistance, title, (3, (16, 5.6), draw), ["method", "change_step"])
 
 
 STILL = 0.01  # an arm that moves less than this (normalised) in its last STILL_STEPS steps stands still [-]
@@ -349,7 +254,8 @@ STILL_STEPS = 50  # [steps]
 
 def wrong_goal(goal: int | np.ndarray, n_goals: int) -> int | np.ndarray:
     """The cup a user who wants ``goal`` aims at before the change step: the next one,
-    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them."""
+    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them.
+    """
     goals = np.asarray(goal)
     if goals.size and (goals.min() < 0 or goals.max() >= n_goals):
         raise ConfigError(f"goal must be in [0, {n_goals}), got {goal}")
@@ -363,7 +269,6 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
     Args:
         frame: :func:`run`'s rows of the episodes in ``traj`` (the first look), in its order.
         traj: Their trajectories.
-        task: The goal task.
         success: The normalised final error that counts as success (``Config.success``).
 
     Returns:
@@ -401,11 +306,7 @@ def _first(mask: np.ndarray) -> np.ndarray:
 
 
 def failures(after: pd.DataFrame) -> list[str]:
-    """One line per (method, N) where under half the users succeed: what the episodes show.
-
-    ``after`` is :func:`after_the_change`'s; medians over the users of the point, an event that
-    never happens counting as later than the horizon.
-    """
+    """One line per (method, N) where under half the users succeed: what the episodes show."""
     lines = []
     for (method, n), part in after.groupby(["method", "change_step"]):
         if part.success.mean() >= 0.5:
@@ -423,11 +324,7 @@ def failures(after: pd.DataFrame) -> list[str]:
 
 
 def escape_times(after: pd.DataFrame) -> pd.DataFrame:
-    """Median steps after N until b(g*) > 0.5 (``turn``) and until success (``reach``), per method and N.
-
-    ``after`` is :func:`after_the_change`'s; an event that never happens counts as later than
-    the horizon (``inf`` where it is the median).
-    """
+    """Median steps after N until b(g*) > 0.5 (``turn``) and until success (``reach``), per method and N."""
     times = after.fillna({"turn": np.inf, "reach": np.inf})
     out = times.groupby(["method", "change_step"])[["turn", "reach"]].median()
     return out.join(after.groupby(["method", "change_step"])[["steps_left", "success"]].mean())
@@ -442,11 +339,6 @@ def _median(values: pd.Series, left: int) -> str:
 # --- the notebook's result sentences (issue 47: every number in them is read from the run's data) ---
 
 SA, ENTROPY = "LA+SA", "LA+SA+Entropy"
-
-
-def _signed(value: float, low: float, high: float) -> str:
-    """``value [low, high]`` to two decimals, with a typographic minus."""
-    return f"{value:.2f} [{low:.2f}, {high:.2f}]".replace("-", "−")
 
 
 def _prob(p: float) -> str:
@@ -473,7 +365,7 @@ def _part(value: float, low: float, high: float, up: str, down: str) -> str:
     if value <= 0:
         up, value, low, high = down, -value, -high, -low  # the same interval, said the other way round
     sure = "" if low > 0 or high < 0 else " (its interval contains 0)"
-    return f"{up} by {_signed(value, low, high)}{sure}"
+    return f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"
 
 
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
@@ -525,10 +417,6 @@ def success_sentence(head: pd.DataFrame) -> str:
 
 def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = SA) -> str:
     """Where ``method``'s belief ends, and what its users who fail at the largest N do.
-
-    The median end confidence in the true cup at the largest N decides the reading: above one half the
-    belief follows the user, below it stays with the wrong cup. Times are medians over users (an
-    event that never happens counts as later than the horizon).
 
     Args:
         head: One member's rows (and LA's), every look: the end confidences.
@@ -627,15 +515,10 @@ def findings(claims: list[Claim], head: pd.DataFrame, after: pd.DataFrame, toler
         after: :func:`after_the_change`'s rows of the same member and LA, first look.
         tolerance: The normalised final error that counts as success (``Config.success``).
     """
-    robot = str(head.robot.iloc[0])
-    member = str(head[head.method != "LA"].assistance.iloc[0])
-    rows = [c for c in claims if c.id == "sim2.sa_trapped" and c.robot == robot and c.assistance == member]
-    if len(rows) != 1:
-        raise ConfigError(f"expected one sim2.sa_trapped row for {robot} under {member!r}, got {len(rows)}")
     steps = (int(head.change_step.min()), int(head.change_step.max()))
     return "\n".join(
         [
-            claim_sentence(rows[0], steps),
+            claim_sentence(sweep.headline_claim(claims, "sim2.sa_trapped", head), steps),
             success_sentence(head),
             belief_sentence(head, after, tolerance),
             dip_sentence(head, after),

@@ -1,8 +1,7 @@
 """Fig. sim3: users who learn within the task (Sec. V-C).
 
-Rationality grows from random, beta(t) = m t: fast learners (m = 20) and slow ones
-(m = 2). The paper finds the entropy term improves in-task performance for both.
-Notebook ``06_learning_users``.
+Rationality grows from random, beta(t) = m t, for a fast and a slow learner. Notebook
+``06_learning_users``; the claim's rule: :mod:`lasa.evidence.rules`.
 """
 
 from __future__ import annotations
@@ -23,43 +22,21 @@ from lasa.evidence.plots import (
     legend_below,
     method_lineplot,
     paper_handle,
-    robot_rows,
-    users_text,
-    wrap_to,
 )
-from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import (
-    USER,
-    Design,
-    block_seed,
-    block_users,
-    group_means,
-    member_frame,
-)
-from lasa.experiments.common import (
-    Decoders,
-    SweepConfig,
-    check_record_every,
-    episodes,
-    run_population,
-    sweep_grid,
-    swept_assistance,
-)
+from lasa.evidence.verdicts import USER, Design, group_means
+from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
-from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
 __all__ = [
     "NAME",
     "COLUMNS",
-    "LEARNERS",
     "Config",
     "run",
     "claims",
     "boot_values",
     "episode_means",
     "plot",
-    "plot_learner",
     "findings",
 ]
 
@@ -70,12 +47,8 @@ DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(SweepConfig):
-    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0.
-
-    The fast learner's slope is above the slow one's, and ``record_every`` divides ``horizon``:
-    the claim's measure is the mean error over the recorded steps, t = 0 to the horizon.
-    """
+class Config(sweep.SweepConfig):
+    """Fig. sim3: users who learn within the task, beta(t) = m t from beta = 0."""
 
     fast_slope: Positive = 20.0  # m of the fast learner, beta(t) = m t [1/(rad^2 step)]
     slow_slope: Positive = 2.0  # m of the slow learner: below fast_slope [1/(rad^2 step)]
@@ -89,7 +62,7 @@ class Config(SweepConfig):
                 f"fast_slope must be above slow_slope ({self.slow_slope!r}): the fast learner learns "
                 f"faster, got {self.fast_slope!r}"
             )
-        check_record_every(self.record_every, self.horizon)
+        sweep.check_record_every(self.record_every, self.horizon)
 
     @property
     def learners(self) -> tuple[tuple[str, float], ...]:
@@ -98,7 +71,7 @@ class Config(SweepConfig):
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: GoalTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -108,54 +81,40 @@ def run(
 ) -> tuple[pd.DataFrame, Trajectories]:
     """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
 
-    Args:
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        assistance: The members the assisted methods run under; default every member of
-            ``config.assistance``. The other arguments are :func:`lasa.experiments.sim1.run`'s.
-
     Returns:
         One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
         the trajectories (users in the order method x learner x user).
     """
-    start, n_users = block_users(Design(config.users, config.block, config.cap), look)
-    seed_ = block_seed(config.seed, look)
-    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed_)
-    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, assistance_rows, conditions, user = sweep_grid(
-        config.methods, assistance, config.learners, n_users
+    ran = sweep.run_look(
+        decoders, task, control, config, config.learners, _learning, progress, look, assistance
     )
-    learner = np.array([name for name, _ in conditions])
-    slope = np.array([m for _, m in conditions], dtype=float)
-    users = UserPopulation(
-        goal=goal[user],
-        theta=theta[user],
-        target=task.target(goal[user], theta[user]),
-        beta0=np.zeros(len(user)),
-        slope=slope,
-        user=user,
-        pilot=config.pilot,
-        pilot_prob=config.pilot_prob,
-    )
-    traj = run_population(
-        decoders, task, control, users, method, config.horizon, noise, progress, assistance_rows, seed_
-    )
+    users, traj, method = ran.users, ran.traj, ran.method
+    learner = np.array([name for name, _ in ran.condition])
+    slope = users.slope
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
-    n_users = len(user)
+    n_users = len(ran.user)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": np.repeat(method, len(steps)),
             "learner": np.repeat(learner, len(steps)),
             "slope": np.repeat(slope, len(steps)),
-            USER: np.repeat(start + user, len(steps)),
+            USER: np.repeat(ran.user, len(steps)),
             "t": np.tile(steps, n_users),
             "error": errors[steps].T.ravel(),
-            "assistance": np.repeat(assistance_rows, len(steps)),
+            "assistance": np.repeat(ran.member, len(steps)),
             "look": look,
         }
     )
     return frame, traj
+
+
+def _learning(
+    learners: list[tuple[str, float]], goal: np.ndarray, theta: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Users who learn from random, beta(t) = m t."""
+    return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
 
 
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
@@ -165,28 +124,20 @@ def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users.
-
-    In-task performance is each episode's mean normalised error over the recorded
-    steps. ``frame`` may hold every recorded step or one row per episode
-    (:func:`episode_means`, which makes the bootstrap of :mod:`lasa.evidence.verdicts` fast).
-    Rule: ``yes`` if LA+SA+Entropy's mean is below LA+SA's for both the fast and the
-    slow learner, ``partly`` for one, else ``no``.
-    """
+    """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users."""
     robot = str(frame.robot.iloc[0])
     per_episode = frame.groupby(["learner", "method", USER]).error.mean()
     mean = per_episode.groupby(["learner", "method"]).mean()
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
     values = {f"gain_{name}": float(gain[name]) for name in learners}
-    verdict = rule("sim3.entropy_learners").verdict(values)
     return [
-        Claim(
-            id="sim3.entropy_learners",
+        sweep.sim_claim(
+            "sim3.entropy_learners",
+            robot,
+            values,
             claim="entropy improves in-task performance for both fast and slow learners",
-            figure="sim3",
             paper="LA+SA+Entropy below LA+SA in error over time, fast and slow",
-            values=values,
             measured="gain of entropy, LA+SA minus LA+SA+Entropy (the interval is for the fast learner's): "
             + ", ".join(f"{name} {gain[name]:+.3f}" for name in learners)
             + "; "
@@ -195,18 +146,12 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
                 f"LA+SA+Entropy {mean[name, 'LA+SA+Entropy']:.3f}, LA {mean[name, 'LA']:.3f}"
                 for name in learners
             ),
-            reproduced=verdict,
-            note="",
-            robot=robot,
         )
     ]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`).
-
-    ``frame`` holds one row per episode (:func:`episode_means`), as the bootstrap does.
-    """
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     mean = group_means(frame, ["learner", "method"], "error", counts)
     learners = sorted({name for name, _ in mean})
     gains = {f"gain_{n}": mean[(n, "LA+SA")] - mean[(n, "LA+SA+Entropy")] for n in learners}
@@ -218,11 +163,7 @@ LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
-    """One panel: the error over time of one kind of learner, per method, with bands at the verdicts' level.
-
-    The paper's ordering (:data:`PAPER_SHAPE`) is a legend entry; the legend, below the axes,
-    gives each method's mean error over the episode, the number the verdict compares.
-    """
+    """One panel: one learner's error over time per method, with bands at the verdicts' level."""
     part = frame[frame.learner == learner]
     ax = method_lineplot(part, "t", "error", ax, level=LEVEL)
     ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
@@ -238,22 +179,17 @@ def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> A
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim3: one row per robot present, the fast and the slow learner.
+    """Fig. sim3 under member ``assistance``: per robot, the fast and the slow learner."""
 
-    Args:
-        table: Rows of every robot and member.
-        assistance: The member drawn (the headline one); LA's rows are shared.
-    """
-    table = member_frame(table, assistance)
-    fig, rows = robot_rows(table, 2, (11, 5.2))
-    for name, part, row in rows:
+    def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, learner in zip(row, LEARNERS, strict=True):
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
-    n = users_text(table, ["method", "learner", "t"], per="curve")
-    fig.suptitle(wrap_to(f"Fig. sim3: users who learn, {n}, assistance: {assistance}", fig.get_figwidth()))
-    fig.tight_layout()
-    return fig
+
+    keys = ["method", "learner", "t"]
+    return sweep.sim_figure(
+        table, assistance, "Fig. sim3: users who learn", (2, (11, 5.2), draw), keys, "curve"
+    )
 
 
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
@@ -263,23 +199,15 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
         claims: The claims of :func:`claims` (the headline row of ``head``'s robot and member is read).
         head: One member's rows (and LA's), one per episode or step: the mean errors over the episode.
     """
-    robot = str(head.robot.iloc[0])
-    member = str(head[head.method != "LA"].assistance.iloc[0])
-    rows = [
-        c for c in claims if c.id == "sim3.entropy_learners" and c.robot == robot and c.assistance == member
-    ]
-    if len(rows) != 1:
-        raise ConfigError(
-            f"expected one sim3.entropy_learners row for {robot} under {member!r}, got {len(rows)}"
-        )
-    claim = rows[0]
+    claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
+    robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     lines, lower, learners = [], [], sorted(set(head.learner))
     for learner in learners:
         gain = float(claim.values[f"gain_{learner}"])
         low, high = claim.intervals.get(f"gain_{learner}", (np.nan, np.nan))
         word = "lowers" if gain > 0 else "raises"
-        said = f"{gain:+.3f} [{low:+.3f}, {high:+.3f}]".replace("-", "−")
+        said = sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"
         if gain > 0:
             lower.append(learner)

@@ -1,24 +1,15 @@
 """Fig. sim4: goals never seen in training, through the context map h (Secs. IV-C, V-D).
 
-A new cup is put on the table after training, at growing distances from a training
-cup. Near-optimal users reach for it with and without the context map
-(:mod:`lasa.method.context_map`; the episodes are :mod:`lasa.experiments.new_cups`), and the grasp
-error is fitted against the new cup's distance. Notebook ``07_new_goals``.
-
-Measured as the paper's caption and text measure (the headline rows): the new cup's distance
-on the table and the grasp error at the gripper, both over the farthest new cup's distance.
-The joint-space measure is the reading ``@joint_space``; the paper's straight line drawn in the
-gripper's space (map kind ``straight_line_ee``) is the reading ``@ee_line`` of its claim.
-
-The lines are the paper's form, least squares through the origin (y = 0.11x, y = x), with the
-uncentred R^2 (:func:`fit_origin`); the line with an intercept is the reading ``@intercept``.
-Medians and the share of users whose belief ends on the other training cup stand beside the
-means (:func:`end_shares`, :func:`with_cup_columns`, :func:`medians_sentence`).
+Users reach for a new cup with and without the map; the grasp error is fitted against the cup's
+distance (both over the farthest cup's, on the table and at the gripper), through the origin with
+the uncentred R^2 as the paper does. Readings: ``@joint_space``, ``@intercept``, ``@ee_line``.
+Notebook ``07_new_goals``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -39,14 +30,16 @@ from lasa.base.config import (
     check_list,
 )
 from lasa.base.errors import ConfigError
+from lasa.evidence import verdicts
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
-from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, group_means, member_frame
-from lasa.experiments.common import Decoders, LooksConfig, check_methods, check_needed
-from lasa.experiments.new_cups import CupEpisodes, NewGoalRun, Sweep, episodes_at
-from lasa.method.context_map import MAP_KINDS
+from lasa.experiments import sweep
+from lasa.method.context_map import MAP_KINDS, ContextMap, MappedDecoder, context_map, extend_task
+from lasa.method.decoder import ActionDecoder
+from lasa.method.step import METHOD_DECODER, method_alpha
+from lasa.people.rollout import Trajectories, rollout
+from lasa.people.users import UserPopulation
 from lasa.world.fork import angle_between
 from lasa.world.robot import Robot
 from lasa.world.task import CupTask
@@ -55,6 +48,9 @@ __all__ = [
     "NAME",
     "COLUMNS",
     "EPISODE_COLUMNS",
+    "NewGoalRun",
+    "new_cup_positions",
+    "map_geometry",
     "CUP_COLUMNS",
     "Config",
     "run",
@@ -74,7 +70,6 @@ __all__ = [
     "identity_sentence",
     "map_sentences",
     "plot",
-    "plot_robot",
     "other_share_text",
 ]
 
@@ -83,7 +78,7 @@ EPISODE_COLUMNS = (  # what :func:`run` returns, one row per episode
     "robot",
     "mapping",
     "distance",
-    USER,
+    verdicts.USER,
     "error",
     "h",
     "offset_m",
@@ -118,22 +113,11 @@ CLAIM_MAPS = ("grasp", "straight_line")
 
 
 @dataclasses.dataclass(frozen=True)
-class Config(LooksConfig):
-    """Fig. sim4: users who reach for new cups, with and without the context map h.
+class Config(sweep.LooksConfig):
+    """Fig. sim4: users who reach for new cups, with and without the context map h."""
 
-    The users per point, the bootstrap, the readings and the users' seed are
-    :class:`~lasa.experiments.common.LooksConfig`'s (``users`` counts users per (mapping, new cup)).
-    ``offsets`` is a grid of at least three distinct distances, ascending (the claims fit a line);
-    ``maps`` holds :data:`CLAIM_MAPS`, which notebook 07 reads by name.
-    """
-
-    offsets: tuple[Positive, ...] = (
-        0.08,
-        0.11,
-        0.14,
-        0.17,
-        0.20,
-    )  # new cups' distances from the reference cup [m]
+    # new cups' distances from the reference cup [m]
+    offsets: tuple[Positive, ...] = (0.08, 0.11, 0.14, 0.17, 0.20)
     direction: tuple[Number, Number] | None = (
         None  # on the table; None: from the other training cup to the reference
     )
@@ -156,17 +140,94 @@ class Config(LooksConfig):
             or np.hypot(*self.direction) < 1e-9
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
-        check_methods((self.method,))
+        sweep.check_methods((self.method,))
         if not self.maps:
             raise ConfigError("maps must name at least one kind of context map")
         for kind in self.maps:
             check_choice("map", kind, MAP_KINDS)
         check_list("maps", self.maps)
-        check_needed("maps", tuple(self.maps), CLAIM_MAPS, "notebook 07's sentences and video")
+        sweep.check_needed("maps", tuple(self.maps), CLAIM_MAPS, "notebook 07's sentences and video")
+
+
+@dataclasses.dataclass(frozen=True)
+class NewGoalRun:
+    """The episodes at one new cup.
+
+    Attributes:
+        offset: Distance of the new cup from the reference cup on the table [m].
+        task: The task grown by the new cup (its robot's scene shows it).
+        with_map: Trajectories with each kind of context map (belief over G + 1 goals).
+        without_map: Trajectories of the unchanged method (training goals only).
+    """
+
+    offset: float
+    task: CupTask
+    with_map: dict[str, Trajectories]
+    without_map: Trajectories
+
+
+def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
+    """Grasp centres of the new cups, shape (len(offsets), 3) [m]."""
+    cups = task.robot.goal_positions()
+    ref = cups[config.ref_goal]
+    if config.direction is None:
+        other = cups[(config.ref_goal + 1) % task.n_goals]
+        direction = (ref - other)[:2]
+    else:
+        direction = np.asarray(config.direction, dtype=float)
+    direction = np.r_[direction / np.linalg.norm(direction), 0.0]
+    return ref + np.asarray(config.offsets)[:, None] * direction
+
+
+def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
+    """Where each kind of context map sends the new cups' grasps, and how their IK compares.
+
+    Returns:
+        One row per (``offset_m``, ``h``), with ``distance`` (on the table, over the farthest).
+    """
+    robot, ref = task.robot, config.ref_goal
+    cups = new_cup_positions(task, config)
+    scale = float(np.linalg.norm(cups - robot.goal_positions()[ref], axis=1).max())
+    rows = []
+    for offset, pos in zip(config.offsets, cups, strict=True):
+        big = extend_task(task, pos, ref)
+        new, old = big.curves[-1], task.curves[ref]
+        diff = new - old
+        per_cup = {
+            "offset_m": float(offset),
+            "distance": float(np.linalg.norm(pos - robot.goal_positions()[ref])) / scale,
+            "joint1_rad": float(np.abs(diff[:, 0]).max()),
+            "joint_last_rad": float(np.abs(diff[:, -1]).max()),
+            "branch_rad": float(np.linalg.norm(np.diff(diff, axis=0), axis=1).max()),
+            "grasp_margin_rad": float(np.minimum(new - robot.lower, robot.upper - new).min()),
+        }
+        for kind in config.maps:
+            cmap = context_map(big, task.n_goals, ref, kind)
+            mapped = cmap.state(new)
+            pos_m, rot_m = robot.grasp_frames(np.stack([mapped, old]))
+            cosine = np.clip(np.einsum("ki,ki->k", rot_m[0][:, :, 2], rot_m[1][:, :, 2]), -1.0, 1.0)
+            line = cmap.new_goal - cmap.start
+            shift = np.nan  # the joint-space line's stretch; the gripper's line (TaskSpaceMap) has none here
+            if isinstance(cmap, ContextMap):
+                shift = float(line @ (task.goals[ref] - cmap.new_goal)) / (
+                    float(line @ line) * cmap.saturation
+                )
+            rows.append(
+                {
+                    **per_cup,
+                    "h": kind,
+                    "misfit_rad": float(np.linalg.norm(mapped - old, axis=1).max()),
+                    "misfit_m": float(np.linalg.norm(pos_m[0] - pos_m[1], axis=1).max()),
+                    "misfit_deg": float(np.degrees(np.arccos(cosine)).max()),
+                    "margin_rad": float(np.minimum(mapped - robot.lower, robot.upper - mapped).min()),
+                    "stretch": 1.0 + shift,
+                }
+            )
+    return pd.DataFrame(rows).set_index(["offset_m", "h"])
 
 
 def run(
-    decoders: Decoders,
+    decoders: sweep.Decoders,
     task: CupTask,
     control: ControlConfig,
     config: Config = Config(),
@@ -176,18 +237,14 @@ def run(
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
     """Fig. sim4: grasp error at new cups against their distance from the training cup (Sec. V-D).
 
-    One batched rollout per new cup and mapping: near-optimal users want a grasp at the new cup
-    (preferences drawn per user, shared by every cup and mapping); ``with`` runs the method's decoder
-    through the context map (:class:`lasa.method.context_map.MappedDecoder`) on the grown task,
-    ``without`` knows the training cups only. Distance and error are over the farthest new cup's
-    distance, on the table and at the gripper (the headline) or in joint space (``@joint_space``).
+    Near-optimal users (preferences per user, shared by every cup and mapping) want a grasp at each
+    new cup; ``with`` runs the method's decoder through each kind of context map on the task grown
+    by the cup, ``without`` knows the training cups only. Every member's users share one batch per
+    (cup, map) and are the same users (paired across members).
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}`` (or one model), ``METHOD_DECODER`` among them.
         task: The training task.
-        control: Control-loop units.
-        config: The sweep.
-        progress: Show progress bars.
         look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
         assistance: The members the method's assistance runs under (default ``config.assistance``).
 
@@ -195,19 +252,70 @@ def run(
         One row per episode in the columns of :data:`EPISODE_COLUMNS` (each explained in
         ``docs/method-notes.md``; :func:`with_cup_columns` adds the CSV's :data:`CUP_COLUMNS`), and
         the runs per new cup under ``control.assistance``.
+
+    Raises:
+        ConfigError: if ``config.ref_goal`` is not a goal of ``task``, or the method's decoder is
+            not among ``decoders``.
     """
-    sweep = Sweep.of(decoders, task, control, config, progress, look, assistance)
+    ref = config.ref_goal
+    if not 0 <= ref < task.n_goals:
+        raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {ref}")
+    key = METHOD_DECODER[config.method]
+    decoder = sweep.as_decoders(decoders).get(key)
+    if decoder is None:
+        raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
+    first, n_users = verdicts.block_users(verdicts.Design(config.users, config.block, config.cap), look)
+    _, theta, noise = sweep.episodes(
+        decoder, task, control, n_users, config.horizon, verdicts.block_seed(config.seed, look)
+    )
+    alpha = method_alpha(config.method, control)
+    if assistance is None:
+        assistance = sweep.swept_assistance(control, config.assistance)
+    assistance = assistance if alpha > 0 else (verdicts.NO_ASSISTANCE,)
+    cups = new_cup_positions(task, config)
+    grown = [extend_task(task, p, ref) for p in cups]
+    dist = np.array([np.linalg.norm(t.goals[-1] - task.goals[ref]) for t in grown])  # joint space [rad]
+    on_table = np.linalg.norm(cups - task.robot.goal_positions()[ref], axis=1)  # [m]
+    member = np.repeat(assistance, n_users)  # member i's users are rows i * n_users ... (i + 1) * n_users - 1
+    assisted = None if assistance == (verdicts.NO_ASSISTANCE,) else member
+    user, theta = np.tile(np.arange(n_users), len(assistance)), np.tile(theta, len(assistance))
+    n, head = len(user), slice(0, n_users)
+    shared = {verdicts.USER: first + user, "theta": theta, "assistance": member, "look": look}
+    scales = (float(on_table.max()), float(dist.max()))
+
+    def roll(dec: ActionDecoder, on: CupTask, users: UserPopulation) -> Trajectories:
+        return rollout(dec, on, users, alpha, control, config.horizon, noise, progress, assistance=assisted)
+
     runs, rows = [], []
-    for i, (offset, big) in enumerate(zip(config.offsets, sweep.grown, strict=True)):
-        at_cup, cup = episodes_at(sweep, float(offset), big)
-        runs.append(at_cup)
-        rows += _rows(sweep, cup, float(offset), i)
+    for i, (offset, big) in enumerate(zip(config.offsets, grown, strict=True)):
+        new = np.full(n, big.n_goals - 1)
+        users = UserPopulation(
+            goal=new,
+            theta=theta,
+            target=big.target(new, theta),
+            beta0=np.full(n, config.beta),
+            slope=np.zeros(n),
+            user=user,
+        )
+        with_map = {}
+        for kind in config.maps:
+            with_map[kind] = roll(
+                MappedDecoder(decoder, context_map(big, task.n_goals, ref, kind)), big, users
+            )
+        without = roll(decoder, task, dataclasses.replace(users, goal=np.full(n, ref)))
+        mine = {k: _users_of(t, head) for k, t in with_map.items()}
+        runs.append(NewGoalRun(float(offset), big, mine, _users_of(without, head)))
+        at = {"offset_m": float(offset), "distance": float(on_table[i]), "distance_joint": float(dist[i])}
+        rows += _rows(task, config, users, with_map, without, {**shared, **at}, scales)
     frame = pd.concat(rows, ignore_index=True)
     # rows by member, then cup and map, as the members' runs came out before they shared batches
-    order = np.argsort(
-        pd.Categorical(frame.assistance, categories=list(sweep.assistance)).codes, kind="stable"
-    )
+    order = np.argsort(pd.Categorical(frame.assistance, categories=list(assistance)).codes, kind="stable")
     return frame.iloc[order].reset_index(drop=True), runs
+
+
+def _users_of(traj: Trajectories, users: slice) -> Trajectories:
+    """The trajectories of some users (axis 1 of every field)."""
+    return Trajectories(**{f.name: getattr(traj, f.name)[:, users] for f in dataclasses.fields(traj)})
 
 
 def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -229,16 +337,23 @@ def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[
     return np.linalg.norm(pos[0] - pos[1], axis=-1), np.degrees(angle)
 
 
-def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, i: int) -> list[pd.DataFrame]:
-    """The rows of every case at the ``i``-th new cup (each kind of map, and none), ``offset`` [m] away."""
-    config, task, users = sweep.config, sweep.task, cup.users
-    robot = task.robot
+def _rows(
+    task: CupTask,
+    config: Config,
+    users: UserPopulation,
+    with_map: dict[str, Trajectories],
+    without: Trajectories,
+    at: dict[str, Any],
+    scales: tuple[float, float],
+) -> list[pd.DataFrame]:
+    """The rows of every case at one new cup (each kind of map, and none); ``scales``: the farthest
+    cup's distance on the table [m] and in joint space [rad]."""
+    robot, (cup_scale, scale) = task.robot, scales
     cases = [
-        ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in cup.with_map.items()
+        ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
     ]
-    cases.append(("without", "none", cup.without, np.full(len(sweep.users), np.nan)))
-    held = task.target(config.ref_goal, sweep.theta)  # the wanted grasp, held at the training cup
-    d_cup, d_joint = float(sweep.cup_distances[i]), float(sweep.distances[i])
+    cases.append(("without", "none", without, np.full(len(users.goal), np.nan)))
+    held = task.target(config.ref_goal, users.theta)  # the wanted grasp, held at the training cup
     ref_m, _ = grasp_error(robot, held, users.target)
     frames = []
     for mapping, kind, traj, conf in cases:
@@ -247,29 +362,26 @@ def _rows(sweep: Sweep, cup: CupEpisodes, offset: float, i: int) -> list[pd.Data
         end_goal = np.where(
             end == task.n_goals, "new", np.where(end == config.ref_goal, "reference", "other")
         )
-        frames.append(
-            pd.DataFrame(
-                {
-                    "robot": robot.name,
-                    "mapping": mapping,
-                    "distance": d_cup / sweep.cup_scale,
-                    USER: sweep.first + sweep.users,
-                    "error": err_m / sweep.cup_scale,
-                    "h": kind,
-                    "offset_m": offset,
-                    "theta": sweep.theta,
-                    "confidence": conf,
-                    "reference": ref_m / sweep.cup_scale,
-                    "assistance": sweep.assistance_rows,
-                    "look": sweep.look,
-                    "angle_error_deg": angle,
-                    "distance_joint": d_joint / sweep.scale,
-                    "error_joint": normalized_error(traj.states[-1], users.target, sweep.scale),
-                    "reference_joint": normalized_error(held, users.target, sweep.scale),
-                    "end_goal": end_goal,
-                }
-            )
-        )
+        row = {
+            "robot": robot.name,
+            "mapping": mapping,
+            "distance": at["distance"] / cup_scale,
+            verdicts.USER: at[verdicts.USER],
+            "error": err_m / cup_scale,
+            "h": kind,
+            "offset_m": at["offset_m"],
+            "theta": at["theta"],
+            "confidence": conf,
+            "reference": ref_m / cup_scale,
+            "assistance": at["assistance"],
+            "look": at["look"],
+            "angle_error_deg": angle,
+            "distance_joint": at["distance_joint"] / scale,
+            "error_joint": normalized_error(traj.states[-1], users.target, scale),
+            "reference_joint": normalized_error(held, users.target, scale),
+            "end_goal": end_goal,
+        }
+        frames.append(pd.DataFrame(row))
     return frames
 
 
@@ -282,11 +394,8 @@ def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
 def fit_origin(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
     """Least-squares line through the origin, y = slope x, the paper's form; returns (slope, R^2).
 
-    slope = sum(x y) / sum(x^2). R^2 is the uncentred one, 1 - SSE / sum(y^2), which numpy's
-    ``lstsq`` residuals and statsmodels report for a model without a constant: it measures the
-    line through the origin against y = 0, not against y's mean, so it can be high for a flat y
-    far from 0. Chosen for fidelity to the paper's form before the verdicts were seen
-    (``docs/method-notes.md``).
+    R^2 is the uncentred one, 1 - SSE / sum(y^2) (against y = 0, not y's mean), as numpy's ``lstsq``
+    and statsmodels report for a model without a constant (``docs/method-notes.md``).
     """
     slope, r2 = _origin_lines(np.asarray(x, dtype=float), np.asarray(y, dtype=float)[None])
     return float(slope[0]), float(r2[0])
@@ -361,14 +470,7 @@ def _reading(measure: str) -> str | None:
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds and both fits.
-
-    The headline rows read the paper caption's measure (``distance``, ``error``) and the paper's form
-    of line, least squares through the origin over each new cup's mean error (:func:`fits`); the
-    joint-space measure gives the ``@joint_space`` rows and the line with an intercept the
-    ``@intercept`` rows (joined as ``@joint_space+intercept``), by the same rules
-    (:mod:`lasa.evidence.rules`: ``sim4.*``). The first rule judges every kind of map in the frame.
-    """
+    """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds and both fits."""
     out: list[Claim] = []
     for measure in _measures(frame):
         for form in FORMS:
@@ -396,16 +498,14 @@ def _claims_under(frame: pd.DataFrame, measure: str, form: str) -> list[Claim]:
     values = {"slope": float(wo.slope), "r2": float(wo.r2)}
     cid = _claim_id("no_map_training_goal", *readings)
     out.append(
-        Claim(
-            id=cid,
+        sweep.sim_claim(
+            cid,
+            robot,
+            values,
             claim="without the map, the robot only reaches for the training goal",
-            figure="sim4",
             paper="y = x",
-            values=values,
             measured=_line(wo, n_cups) + " (the interval is for the slope)",
-            reproduced=rule(cid).verdict(values),
             note=_angle_note(angles, "none"),
-            robot=robot,
         )
     )
     return out
@@ -432,20 +532,20 @@ def _map_claim(
     angles: pd.Series | None,
 ) -> Claim:
     """sim4.<claim>_linear[@readings], from the map's fit ``f`` and the mean error per (h, distance);
-    ``readings``: the measure's and the form's (None for the headline's)."""
+    ``readings``: the measure's and the form's (None for the headline's).
+    """
     name, kind_reading = _KIND_CLAIMS[kind]
     below = means[kind] < means["none"]
     values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
     cid = _claim_id(f"{name}_linear", kind_reading, *readings)
     above = int((~below).sum())
-    return Claim(
-        id=cid,
+    return sweep.sim_claim(
+        cid,
+        robot,
+        values,
         claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
-        figure="sim4",
         paper="y = 0.11x, R^2 = 0.98",
-        values=values,
         measured=_line(f, n_cups) + " (the interval is for the slope)",
-        reproduced=rule(cid).verdict(values),
         note=" ".join(
             t
             for t in (
@@ -454,21 +554,11 @@ def _map_claim(
             )
             if t
         ),
-        robot=robot,
     )
 
 
 def no_map_check(frame: pd.DataFrame, form: str = HEADLINE_FORM) -> pd.DataFrame:
     """The paper's "without the map ... y = x", taken apart (the headline measure, lines of ``form``).
-
-    y = x needs two things: the wanted grasp at a new cup is the training grasp moved with
-    the cup (then a robot holding the training grasp is off by the cup's distance: the
-    ``reference`` column), and the robot does reach the training cup. One row per line:
-
-    - ``held at the training cup``: the ``reference`` error;
-    - ``without the map``: every episode (the claim's line);
-    - ``... belief ends on the training cup`` / ``... on another cup``: the episodes by the goal
-      their belief ends on (``end_goal``).
 
     Returns:
         ``slope``, ``intercept`` (0 through the origin), ``r2`` (over the cups' means, :func:`fits`'
@@ -528,13 +618,7 @@ _CUP_KEYS = ["robot", "assistance", "h", "distance"]
 
 
 def with_cup_columns(frame: pd.DataFrame) -> pd.DataFrame:
-    """``frame`` with :data:`CUP_COLUMNS`, each cup's numbers on every one of its episodes' rows.
-
-    Per (robot, assistance, h, distance), over every look's users: ``cup_mean_error`` and
-    ``cup_median_error`` (the headline measure's ``error``), and ``cup_other_share``, the share of
-    episodes whose belief ends on another training cup (``end_goal == "other"``; NaN without
-    ``end_goal``).
-    """
+    """``frame`` with :data:`CUP_COLUMNS`, each cup's numbers on every one of its episodes' rows."""
     keys = [k for k in _CUP_KEYS if k in frame]
     other = (frame.end_goal == "other").astype(float) if "end_goal" in frame else np.nan
     groups = frame.assign(other_=other).groupby(keys, sort=False)
@@ -606,13 +690,15 @@ def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
 
 def identity_sentence(frame: pd.DataFrame) -> str:
     """What :func:`no_map_check` and :func:`end_shares` say of y = x on one robot's headline rows
-    (the lines through the origin, R² uncentred)."""
+    (the lines through the origin, R² uncentred).
+    """
     check, share = no_map_check(frame), end_shares(frame).loc["none", "other"]
     held, every = check.loc["held at the training cup"], check.loc["without the map"]
     stay = check.loc["without the map, belief ends on the training cup"]
     left = check.loc["without the map, belief ends on another cup"]
     text = (
-        f"{frame.robot.iloc[0]}, {frame[USER].nunique()} users per cup, lines through the origin: held at "
+        f"{frame.robot.iloc[0]}, {frame[verdicts.USER].nunique()} users per cup, "
+        "lines through the origin: held at "
         f"the training cup, the error is {_equation(held)} (R² = {held.r2:.3f}). Without the map it "
         f"is {_equation(every, 2)} (R² = {every.r2:.2f}); over the {100 * stay.share:.0f}% of episodes "
         f"whose belief ends on the training cup, {_equation(stay, 2)} (R² = {stay.r2:.2f}). "
@@ -631,7 +717,7 @@ def map_sentences(frame: pd.DataFrame, geometry: pd.DataFrame) -> list[str]:
 
     Args:
         frame: One robot's headline rows.
-        geometry: :func:`lasa.experiments.new_cups.map_geometry` of its task and config.
+        geometry: :func:`map_geometry` of its task and config.
 
     Returns:
         The straight-line map's sentence (branch, limits, misfit, errors per band of
@@ -695,7 +781,8 @@ def _lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _origin_lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Slope and uncentred R^2 of the least-squares line through the origin of each row of ``ys``
     (R, K) against ``x`` (K,): slope = sum(x y) / sum(x^2), and 1 - SSE / sum(y^2), which is
-    sum(x y)^2 / (sum(x^2) sum(y^2)) since SSE = sum(y^2) - sum(x y)^2 / sum(x^2)."""
+    sum(x y)^2 / (sum(x^2) sum(y^2)) since SSE = sum(y^2) - sum(x y)^2 / sum(x^2).
+    """
     sxy, sxx, syy = ys @ x, float(x @ x), (ys**2).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return sxy / sxx, sxy**2 / (sxx * syy)
@@ -706,11 +793,12 @@ _BATCHED = {"origin": _origin_lines, "intercept": _lines}
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
     """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`),
-    under the same ids (every measure's and both forms' of fit)."""
+    under the same ids (every measure's and both forms' of fit).
+    """
     out: dict[str, dict[str, np.ndarray]] = {}
     for measure in _measures(frame):
         x, y = MEASURES[measure]
-        means = group_means(frame, ["h", x], y, counts)
+        means = verdicts.group_means(frame, ["h", x], y, counts)
         dist = np.array(sorted({d for _, d in means}))
         curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
         for form, form_reading in FORMS.items():
@@ -747,8 +835,11 @@ PAPER_LINES = {0.11: ("paper, with the map: y = 0.11x", ":"), 1.0: ("paper, with
 PAPER_UNITS = (
     "(both axes ÷ D, the farthest new cup's distance, as the paper's; the grasp error at the gripper)"
 )
-CI_LEVEL = Design().level  # the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
+# the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
+CI_LEVEL = verdicts.Design().level
 N_BOOT_PLOT = 1000
+MEAN_STYLE: dict[str, Any] = {"ms": 4, "capsize": 2}  # a cup's mean and its interval
+MEDIAN_STYLE: dict[str, Any] = {"s": 22, "facecolors": "none", "lw": 0.9}  # a cup's median, hollow
 
 
 def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
@@ -765,18 +856,7 @@ def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
 
 
 def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """One robot's panel: grasp error at new cups against their distance, per kind of map.
-
-    The main axes show each cup's mean error with its bootstrap interval at the verdicts' level
-    (users resampled; :data:`CI_LEVEL`) and its median (a hollow marker), each map's markers a
-    little apart and its line dashed its own way (:data:`H_MARKS`) so that no map hides another,
-    and the least-squares line through the origin fitted to the means (its equation and uncentred
-    R^2 in the legend, from :func:`fits`; with the mean approach-axis error at the nearest and the
-    farthest cup when the frame has it). A note gives the share of users whose belief ends on the
-    other training cup without the map, at the nearest and the farthest cup. The paper's two lines
-    (:data:`PAPER_LINES`) are drawn above ours, in black. A narrow panel beside it shows every
-    episode. Neither axis is cut: each one's y-limits lie around everything drawn in it.
-    """
+    """One robot's panel: grasp error at new cups against their distance, per kind of map."""
     ax = plt.gca() if ax is None else ax
     table = fits(frame)
     xs = np.array([float(frame.distance.min()), 1.0])  # the fits over the cups measured
@@ -787,51 +867,27 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
             continue
         cups = _cup_means(frame[frame.h == kind])
         marker, dashes, dx = H_MARKS[kind]
+        bars = [cups["mean"] - cups.low, cups.high - cups["mean"]]
         ax.errorbar(
-            cups.distance + dx,
-            cups["mean"],
-            yerr=[cups["mean"] - cups.low, cups.high - cups["mean"]],
-            fmt=marker,
-            color=color,
-            ms=4,
-            capsize=2,
-            zorder=3,
+            cups.distance + dx, cups["mean"], yerr=bars, fmt=marker, color=color, zorder=3, **MEAN_STYLE
         )
         ax.scatter(
-            cups.distance + dx,
-            cups["median"],
-            marker=marker,
-            s=22,
-            facecolors="none",
-            edgecolors=color,
-            lw=0.9,
-            zorder=4,
+            cups.distance + dx, cups["median"], marker=marker, edgecolors=color, zorder=4, **MEDIAN_STYLE
         )
         f = table.loc[kind]
         label = f"{name}: {_equation(f, 2)}, R² = {f.r2:.2f}"
         if angles is not None:
             per_cup = angles[kind]
             label += f"; approach error {per_cup.iloc[0]:.1f}° → {per_cup.iloc[-1]:.1f}°"
-        line = ax.plot(xs, f.slope * xs + f.intercept, color=color, lw=1.5, label=label, zorder=2)[0]
+        fitted = f.slope * xs + f.intercept
+        line = ax.plot(xs, fitted, color=color, lw=1.5, label=label, zorder=2)[0]
         if dashes:  # () keeps the solid line
             line.set_dashes(dashes)
-        tops += [float(cups.high.max()), float(cups["median"].max()), float(max(f.slope * xs + f.intercept))]
-        bottoms += [
-            float(cups.low.min()),
-            float(cups["median"].min()),
-            float(min(f.slope * xs + f.intercept)),
-        ]
-    ax.errorbar(
-        [],
-        [],
-        yerr=[],
-        fmt="o",
-        color="0.4",
-        ms=4,
-        capsize=2,
-        label=f"mean per cup, bars: {100 * CI_LEVEL:.4g}% bootstrap interval (the verdicts' level)",
-    )
-    ax.scatter([], [], marker="o", s=22, facecolors="none", edgecolors="0.4", lw=0.9, label="median per cup")
+        tops += [float(cups.high.max()), float(cups["median"].max()), float(max(fitted))]
+        bottoms += [float(cups.low.min()), float(cups["median"].min()), float(min(fitted))]
+    label = f"mean per cup, bars: {100 * CI_LEVEL:.4g}% bootstrap interval (the verdicts' level)"
+    ax.errorbar([], [], yerr=[], fmt="o", color="0.4", label=label, **MEAN_STYLE)
+    ax.scatter([], [], marker="o", edgecolors="0.4", label="median per cup", **MEDIAN_STYLE)
     share = other_share_text(frame)
     if share:
         ax.text(0.02, 0.98, share, transform=ax.transAxes, va="top", fontsize=7, wrap=True)
@@ -848,7 +904,8 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
 def other_share_text(frame: pd.DataFrame) -> str:
     """The figure's note: the share of no-map users whose belief ends on the other training cup, at
-    the nearest and the farthest cup (:func:`end_shares`); empty without ``end_goal`` or no-map rows."""
+    the nearest and the farthest cup (:func:`end_shares`); empty without ``end_goal`` or no-map rows.
+    """
     if "end_goal" not in frame or not (frame.h == "none").any():
         return ""
     other = end_shares(frame).loc["none", "other"]
@@ -880,11 +937,8 @@ def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member.
-
-    The title gives the users per point of the rows drawn (per robot when they differ).
-    """
-    table = member_frame(table, assistance)
+    """Fig. sim4: one panel per robot present (:func:`plot_robot`), under one assistance member."""
+    table = verdicts.member_frame(table, assistance)
     present = robots_present(table)
     fig, axes = plt.subplots(1, len(present), figsize=(7.6 * len(present), 6.6), squeeze=False)
     for name, ax in zip(present, axes[0], strict=True):

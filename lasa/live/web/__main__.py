@@ -3,7 +3,7 @@
 ``python -m lasa.live.web --port 8000 --sessions build/sessions [--host H]`` serves the study;
 ``python -m lasa.live.web schedule --participants 12 --sessions build/sessions --url http://...``
 writes the schedule and one link per participant. The pre-registration is the simulated study's
-(``python -m lasa.experiments.preregister``).
+(``python -m lasa.experiments.study.preregister``).
 """
 
 from __future__ import annotations

@@ -1,29 +1,20 @@
 """What the simulated-user sweeps share: drawing episodes, and rolling out mixed methods.
 
-A sweep builds one population of simulated users covering every condition (method x
-rationality x user, or method x change step x user, ...) and runs it batched, one
-rollout per decoder: LA and LA+SA share the base decoder, LA+SA+Entropy has its own.
-User i has the same cup, preference and random stream (``UserPopulation.user``) in every
-condition, so methods are compared on paired episodes. The figures' CSVs keep the column
-name ``seed`` for that user index (their contract); the code names the column
-:data:`lasa.evidence.verdicts.USER` and the index ``user``, and ``seed`` is only ever the seed
-of a random generator.
-
-A sweep runs its assisted methods under every member of the shared-autonomy family it
-is given (:func:`arms`); LA, which no assistance touches, runs once. :func:`judge` runs a
-figure's sweep in looks (:func:`lasa.evidence.verdicts.sequential`): every member at the first look,
-then blocks of new users for the headline member until its verdicts are settled.
+One population of users covers every condition and runs batched, one rollout per decoder. User i
+has the same cup, preference and random stream in every condition (paired episodes); the CSVs keep
+the column name ``seed`` for that index (:data:`lasa.evidence.verdicts.USER`), the code says ``user``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, TypeVar
 
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 
 from lasa.base.config import (
     ASSISTANCE,
@@ -39,7 +30,10 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.evidence.verdicts import N_BOOT, Design, Sequential, check_design, sequential
+from lasa.evidence import verdicts
+from lasa.evidence.claims import Claim
+from lasa.evidence.plots import robot_rows, users_text, wrap_to
+from lasa.evidence.rules import rule
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import METHOD_DECODER, METHODS, latent_grid, method_alpha
 from lasa.people.rollout import Trajectories, rollout
@@ -50,21 +44,18 @@ T = TypeVar("T")
 
 __all__ = [
     "Decoders",
-    "arms",
     "check_assistance",
     "swept_assistance",
-    "pilot_uniforms",
     "as_decoders",
     "check_methods",
     "check_needed",
     "check_record_every",
-    "check_pilot",
-    "sweep_grid",
     "LooksConfig",
     "SweepConfig",
     "draw_episodes",
     "episodes",
     "run_population",
+    "run_look",
     "judge",
 ]
 
@@ -88,7 +79,8 @@ def check_methods(methods: tuple[str, ...]) -> None:
 
 def check_assistance(assistance: tuple[str, ...]) -> None:
     """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one,
-    none twice."""
+    none twice.
+    """
     if not assistance:
         raise ConfigError("assistance must name at least one member")
     for name in assistance:
@@ -98,9 +90,6 @@ def check_assistance(assistance: tuple[str, ...]) -> None:
 
 def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], reader: str) -> None:
     """``given`` (a list setting) holds every value of ``needed``, which ``reader`` reads.
-
-    A figure's claims read some conditions by name (sim1's compare LA with LA+SA at beta = 75
-    and 1000); a sweep without one would run to the end and fail there, so its config refuses it.
 
     Raises:
         ConfigError: one line naming the setting, what is missing and who reads it.
@@ -113,11 +102,6 @@ def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], rea
 
 def check_record_every(record_every: int, horizon: int, divides: bool = True) -> None:
     """``record_every`` is at most ``horizon`` and, if ``divides``, divides it.
-
-    A sweep that records its error every ``record_every`` steps and averages the recorded steps
-    (sim3) measures only t = 0 when ``record_every`` > ``horizon``, and leaves the last step out
-    when it does not divide ``horizon``. Notebook 09 (:mod:`lasa.experiments.convergence`) records the
-    last step itself, and counts its events at every step, so it needs the bound only.
 
     Raises:
         ConfigError: one line naming ``record_every``, its value and the values allowed.
@@ -136,11 +120,9 @@ def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tup
     return tuple(dict.fromkeys((control.assistance, *assistance)))
 
 
-def arms(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
-    """(method, assistance) pairs of a sweep: LA once, every assisted method under every member.
-
-    LA has alpha = 0, so no member changes it (Eq. M1 gives a = a_h exactly); its rows
-    carry the assistance ``none`` and every member's comparison shares them.
+def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(method, member) pairs of a sweep: LA once (alpha = 0, member ``none``), every assisted method
+    under every member.
     """
     out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
     return out + [(m, a) for a in assistance for m in methods if m != "LA"]
@@ -149,43 +131,32 @@ def arms(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[st
 def sweep_grid(
     methods: tuple[str, ...], assistance: tuple[str, ...], conditions: Sequence[T], n_users: int
 ) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
-    """Every user of a sweep: (method, assistance) arm x condition x user, in that order.
+    """Every user of a sweep: (method, member) pair x condition x user, in that order.
 
     Returns:
-        Each user's method, assistance member (``none`` for LA, :func:`arms`), condition
+        Each user's method, assistance member (``none`` for LA, :func:`pairs`), condition
         (e.g. its beta) and user, the index of its cup, preference and random stream.
     """
-    grid = list(itertools.product(arms(methods, assistance), conditions, range(n_users)))
+    grid = list(itertools.product(pairs(methods, assistance), conditions, range(n_users)))
     method = np.array([m for (m, _), _, _ in grid])
     assistance_rows = np.array([a for (_, a), _, _ in grid])
     return method, assistance_rows, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
 
 
-def check_pilot(pilot: str, prob: float) -> None:
-    """``pilot`` is one of :data:`lasa.people.users.PILOTS` and ``prob`` a probability."""
-    check_choice("pilot", pilot, PILOTS)
-    check_range("pilot_prob", prob, 0.0, 1.0)
-
-
 @dataclasses.dataclass(frozen=True)
 class LooksConfig:
-    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the readings.
+    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the members."""
 
-    Sims 1-3 (through :class:`SweepConfig`) and sim 4 (:class:`lasa.experiments.sim4.Config`) extend
-    it with their own sweep. Every field is validated by its annotated type
-    (:func:`lasa.base.config.validate`); the design's sizes are checked together (:class:`Design`).
-    """
-
-    users: PositiveInt = Design.first  # users per point at the first look, every reading (Design) [-]
-    block: PositiveInt = Design.block  # users added per later look, the headline reading only [-]
-    cap: PositiveInt = Design.cap  # most users per point [-]
-    n_boot: PositiveInt = N_BOOT  # bootstrap resamples of each claim's intervals (lasa.evidence.verdicts) [-]
+    users: PositiveInt = verdicts.Design.first  # users per point at the first look, every member (Design) [-]
+    block: PositiveInt = verdicts.Design.block  # users added per later look, the headline member only [-]
+    cap: PositiveInt = verdicts.Design.cap  # most users per point [-]
+    n_boot: PositiveInt = verdicts.N_BOOT  # bootstrap resamples of each claim's intervals [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)
-        check_design(self.users, self.block, self.cap)
+        verdicts.check_design(self.users, self.block, self.cap)
         check_assistance(self.assistance)
 
 
@@ -193,10 +164,6 @@ class LooksConfig:
 class SweepConfig(LooksConfig):
     """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods (each of
     :data:`lasa.method.step.METHODS`, which their claims compare, in any order).
-
-    Each of sims 1-3 extends it with its own sweep (``betas``, ``change_steps`` or the learners'
-    slopes) and its episode's length; the verdict map (:mod:`lasa.experiments.robustness`) reads the
-    same names.
     """
 
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
@@ -205,7 +172,8 @@ class SweepConfig(LooksConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_pilot(self.pilot, self.pilot_prob)
+        check_choice("pilot", self.pilot, PILOTS)
+        check_range("pilot_prob", self.pilot_prob, 0.0, 1.0)
         check_methods(self.methods)
         # sims 1-3's claims and sentences compare all three (LA+SA+Entropy against LA+SA, both
         # against LA): a subset would run the whole sweep and fail in its claims
@@ -229,10 +197,8 @@ def draw_episodes(
 
 
 def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
-    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own stream.
-
-    Drawn from a generator of its own (``[seed, 1]``), so adding pilots leaves the users'
-    cups, preferences and Eq. S1 streams (:func:`draw_episodes`) unchanged.
+    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own generator
+    (``[seed, 1]``), so adding pilots leaves :func:`draw_episodes`' draws unchanged.
     """
     return np.random.default_rng([seed, 1]).random((n_users, horizon, 2))
 
@@ -260,19 +226,12 @@ def run_population(
 ) -> Trajectories:
     """Roll out a population whose users may use different methods, decoders and assistance.
 
-    Users are grouped by the decoder their method uses (``METHOD_DECODER``); each group
-    runs as one batched rollout (users of every assistance member together), and the
-    trajectories come back in the users' order.
-
     Args:
         decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
-        task: The goal task.
-        control: Control-loop units.
         users: The simulated users.
         methods: Each user's method, shape (U,).
         horizon: Control steps.
         noise: The users' random streams, see :func:`lasa.people.rollout.rollout`.
-        progress: Show progress bars.
         assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
             ``control.assistance`` for everyone.
         pilot_seed: Seed of the laggy and noisy pilots' own random stream
@@ -297,24 +256,11 @@ def run_population(
             needing = sorted({str(m) for m in methods[keys == key]})
             raise ConfigError(f"methods {needing} need the {key!r} decoder; pass decoders[{key!r}]")
         idx = np.flatnonzero(keys == key)
-        group = users.subset(idx)
-        parts.append(
-            (
-                idx,
-                rollout(
-                    decoders[key],
-                    task,
-                    group,
-                    alpha[idx],
-                    control,
-                    horizon,
-                    noise,
-                    progress,
-                    pilot_noise,
-                    assistance[idx],
-                ),
-            )
+        group, member = users.subset(idx), assistance[idx]
+        traj = rollout(
+            decoders[key], task, group, alpha[idx], control, horizon, noise, progress, pilot_noise, member
         )
+        parts.append((idx, traj))
     if len(parts) == 1:
         return parts[0][1]
     merged = {}
@@ -327,6 +273,67 @@ def run_population(
     return Trajectories(**merged)
 
 
+@dataclasses.dataclass(frozen=True)
+class Look:
+    """One look's episodes of a sims 1-3 sweep, one per (pair, condition, user) in that order.
+
+    Attributes:
+        method: Each episode's method; member: its member (``none`` for LA); condition: its
+            condition; user: its user's index over all looks (the CSVs' ``seed``).
+        users: The episodes' simulated users; traj: their trajectories.
+    """
+
+    method: np.ndarray
+    member: np.ndarray
+    condition: list[Any]
+    user: np.ndarray
+    users: UserPopulation
+    traj: Trajectories
+
+
+def run_look(
+    decoders: Decoders,
+    task: GoalTask,
+    control: ControlConfig,
+    config: Any,
+    conditions: Sequence[Any],
+    population: Callable[[list[Any], np.ndarray, np.ndarray], dict[str, Any]],
+    progress: bool = False,
+    look: int = 0,
+    assistance: tuple[str, ...] | None = None,
+) -> Look:
+    """Roll out one look's new users of a sims 1-3 sweep (a :class:`SweepConfig` with a ``horizon``).
+
+    Args:
+        conditions: The sweep's conditions (betas, change steps, learners).
+        population: Maps the grid's conditions, goals and preferences to the users' other
+            :class:`~lasa.people.users.UserPopulation` fields (``beta0``, ``slope``, ...).
+        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`): 0 is the first
+            ``config.users``, each later look ``config.block`` more from its own stream.
+        assistance: The members the assisted methods run under; default every member of
+            ``config.assistance`` (the headline one first).
+    """
+    start, n_users = verdicts.block_users(verdicts.Design(config.users, config.block, config.cap), look)
+    seed = verdicts.block_seed(config.seed, look)
+    goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
+    assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
+    method, member, condition, user = sweep_grid(config.methods, assistance, conditions, n_users)
+    goal, theta = goal[user], theta[user]
+    users = UserPopulation(
+        goal=goal,
+        theta=theta,
+        target=task.target(goal, theta),
+        user=user,
+        pilot=config.pilot,
+        pilot_prob=config.pilot_prob,
+        **population(condition, goal, theta),
+    )
+    traj = run_population(
+        decoders, task, control, users, method, config.horizon, noise, progress, member, seed
+    )
+    return Look(method, member, condition, start + user, users, traj)
+
+
 def judge(
     module: Any,
     decoders: Decoders,
@@ -335,16 +342,14 @@ def judge(
     config: Any,
     progress: bool = False,
     reduce: Any = None,
-) -> tuple[Any, Sequential, Any]:
+) -> tuple[Any, verdicts.Sequential, Any]:
     """Run a figure's sweep in looks until its headline verdicts are settled (or the cap).
 
     Args:
         module: The figure's module (``run(..., look=, assistance=)`` and ``claims``).
         decoders: Passed to ``module.run``.
-        task: The task.
         control: Control-loop units; ``control.assistance`` is the headline member.
         config: The figure's config (``users``, ``block``, ``cap``, ``n_boot``, ``assistance``).
-        progress: Show progress bars.
         reduce: Maps a look's rows to the rows the claims read (sim3: one row per episode),
             so the bootstrap resamples the smaller frame; identity if None.
 
@@ -363,10 +368,73 @@ def judge(
             first.append(extra)
         return frame if reduce is None else reduce(frame)
 
-    design = Design(config.users, config.block, config.cap)
+    design = verdicts.Design(config.users, config.block, config.cap)
     assistance = swept_assistance(control, config.assistance)
     fast = getattr(module, "boot_values", None)
-    outcome = sequential(
+    outcome = verdicts.sequential(
         block, module.claims, assistance, control.assistance, design, config.n_boot, fast=fast
     )
     return pd.concat(full, ignore_index=True), outcome, first[0]
+
+
+def sim_figure(
+    table: pd.DataFrame,
+    assistance: str,
+    title: str,
+    panels: tuple[int, tuple[float, float], Callable[[str, pd.DataFrame, np.ndarray], None]],
+    keys: list[str],
+    per: str = "point",
+) -> Figure:
+    """A sims 1-3 figure under one member: one row of panels per robot present, titled with its users.
+
+    Args:
+        table: Rows of every robot and member; LA's rows are shared by every member.
+        assistance: The member drawn (the headline one).
+        title: The figure's title, before its users per ``per`` (over ``keys``) and the member.
+        panels: Panels per row, the size of a row, and what draws a robot's row (name, rows, axes).
+    """
+    table = verdicts.member_frame(table, assistance)
+    n_cols, size, draw = panels
+    fig, rows = robot_rows(table, n_cols, size)
+    for name, part, row in rows:
+        draw(name, part, row)
+    n = users_text(table, keys, per=per)
+    fig.suptitle(wrap_to(f"{title}, {n}, assistance: {assistance}", fig.get_figwidth()))
+    fig.tight_layout()
+    return fig
+
+
+def headline_claim(claims: list[Claim], claim_id: str, head: pd.DataFrame) -> Claim:
+    """The ``claim_id`` row of ``head``'s robot and member (the member of its assisted rows).
+
+    Raises:
+        ConfigError: unless exactly one row matches.
+    """
+    robot = str(head.robot.iloc[0])
+    member = str(head[head.method != "LA"].assistance.iloc[0])
+    rows = [c for c in claims if c.id == claim_id and c.robot == robot and c.assistance == member]
+    if len(rows) != 1:
+        raise ConfigError(f"expected one {claim_id} row for {robot} under {member!r}, got {len(rows)}")
+    return rows[0]
+
+
+def sim_claim(
+    claim_id: str, robot: str, values: dict[str, Any], claim: str, paper: str, measured: str, note: str = ""
+) -> Claim:
+    """A sim's claim row on ``robot``: its figure from its id, its verdict by its rule on ``values``."""
+    return Claim(
+        id=claim_id,
+        claim=claim,
+        figure=claim_id.split(".")[0],
+        paper=paper,
+        values=values,
+        measured=measured,
+        reproduced=rule(claim_id).verdict(values),
+        note=note,
+        robot=robot,
+    )
+
+
+def interval_text(value: float, low: float, high: float, fmt: str = "{:.3f}") -> str:
+    """``value [low, high]`` in ``fmt``, with a typographic minus."""
+    return f"{fmt.format(value)} [{fmt.format(low)}, {fmt.format(high)}]".replace("-", "−")
