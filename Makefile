@@ -66,8 +66,8 @@ NPROC := $(shell nproc 2>/dev/null || echo 2)
 export LASA_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 # The numerical kernels on their AVX2 paths on every x86 CPU, for the same bytes everywhere: the
-# values of lasa/base/kernels.py (PINNED), which lasa also sets on import; exported here so that
-# a process importing numpy or torch before lasa (pytest, a notebook's first cell) gets them too.
+# values of lasa/runtime.py (PINNED), which lasa.runtime.pin() sets too; exported here so that
+# every process Make starts has them before numpy or torch loads.
 # One you set yourself is kept. make figures records those in effect in figures/kernels.json.
 export ATEN_CPU_CAPABILITY ?= avx2
 export ONEDNN_MAX_CPU_ISA ?= AVX2
@@ -171,7 +171,7 @@ TIMED_PART := $(if $(filter build,$(BUILD)),paper,$(if $(filter build/quick,$(BU
 FIGURES_DIR := $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures)
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
-	@$(BIN)/python -m lasa.pipeline.kernels --out $(FIGURES_DIR)/kernels.json
+	@$(BIN)/python -m lasa.runtime --out $(FIGURES_DIR)/kernels.json
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
 	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv

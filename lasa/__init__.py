@@ -6,30 +6,16 @@ scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared
 (:mod:`lasa.experiments`). Extending it (a robot, an assistance member, a claim, a decoder of
 your own) is in ``docs/extending.md``.
 
-Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
-before anything imports mujoco (it is read once, at import). Set it yourself first
-to override (``egl``, ``glfw``, or ``disable`` when nothing renders). The numerical kernels
-are pinned to AVX2 here too, for the same bytes on any x86 CPU (:mod:`lasa.base.kernels`).
+``import lasa`` only re-exports: it sets no environment variable and installs no import hook. Call
+:func:`lasa.runtime.pin` first, before numpy, torch or mujoco loads, for off-screen rendering and
+the numerical kernels that compute the same bytes on any x86 CPU.
 
-The public API is re-exported here, imported lazily; each concept lives in its own module.
+The public API is imported lazily (PEP 562), so ``import lasa.pipeline.execute`` stays light.
 """
 
 import importlib
-import os
 from typing import TYPE_CHECKING, Any
 
-os.environ.setdefault("MUJOCO_GL", "osmesa")
-
-from lasa.base.kernels import pin_kernels  # noqa: E402 (stdlib only: it imports neither torch nor numpy)
-
-pin_kernels()  # torch, MKL, oneDNN, numpy, OpenBLAS on their AVX2 paths, before any of them loads
-
-from lasa.base.ffmpeg import pin_mediapy  # noqa: E402 (after MUJOCO_GL, which it does not touch)
-
-pin_mediapy()  # mediapy reads and writes with the pinned wheel's ffmpeg, once it is imported
-
-# The public API, imported on first use (PEP 562): `import lasa.pipeline.runner` or `lasa.base.errors`
-# stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
 # name -> module that defines it; `__all__` lists the same names (tests/test_init.py checks).
 _EXPORTS = {
     "ActionDecoder": "lasa.method.decoder",

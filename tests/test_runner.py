@@ -20,11 +20,15 @@ def test_there_are_notebooks():
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda p: p.stem)
-def test_parameters_cell_is_first_code_cell_of_literals(notebook):
+def test_the_first_cell_pins_and_the_parameters_cell_of_literals_is_next(notebook):
+    """The first cell pins the runtime before anything loads numpy, torch or MuJoCo (a notebook opened
+    in Jupyter too); the next code cell is the parameters, literals only."""
     cells = json.loads(notebook.read_text())["cells"]
+    assert cells[0]["id"] == "pin-runtime"
+    assert "".join(cells[0]["source"]).endswith("import lasa.runtime\n\nlasa.runtime.pin()")
     code = [c for c in cells if c["cell_type"] == "code"]
-    assert "parameters" in code[0]["metadata"].get("tags", [])
-    tree = ast.parse("".join(code[0]["source"]))
+    assert "parameters" in code[1]["metadata"].get("tags", [])
+    tree = ast.parse("".join(code[1]["source"]))
     for node in tree.body:
         assert isinstance(node, ast.Assign), ast.dump(node)
         ast.literal_eval(node.value)  # literals only: derived values belong in the next cell
@@ -44,7 +48,8 @@ def settings_class(notebook):
     import importlib
     import re
 
-    source = "".join(json.loads(notebook.read_text())["cells"][1]["source"])
+    cells = json.loads(notebook.read_text())["cells"]
+    (source,) = ["".join(c["source"]) for c in cells if "parameters" in c["metadata"].get("tags", ())]
     match = re.search(r"^settings = \{\}  # fields of (lasa[\w.]*)\.(\w+) that differ", source, re.M)
     assert match, f"{notebook.name}: the settings comment must name its config class"
     return getattr(importlib.import_module(match.group(1)), match.group(2))

@@ -1,6 +1,6 @@
 """Off-screen MuJoCo video: render joint trajectories and write bit-exact MP4s with mediapy.
 
-Rendering is software-only (OSMesa; ``lasa`` sets ``MUJOCO_GL`` on import) and slow, so
+Rendering is software-only (OSMesa; :func:`lasa.runtime.pin` sets ``MUJOCO_GL``) and slow, so
 keep frames small (even sizes such as 320x240) and render only the frames a video
 shows. The scenes turn shadows and reflections off.
 

@@ -12,6 +12,11 @@ questionnaire (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``d
 
 from __future__ import annotations
 
+if __name__ == "__main__":  # the CLI: renderer and kernels pinned before mujoco, numpy and torch load
+    from lasa.runtime import pin
+
+    pin()
+
 import argparse
 import dataclasses
 import datetime as dt_

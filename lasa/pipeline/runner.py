@@ -26,6 +26,11 @@ Usage::
 
 from __future__ import annotations
 
+if __name__ == "__main__":  # the CLI: renderer and kernels pinned before the notebooks start
+    from lasa.runtime import pin
+
+    pin()
+
 import argparse
 import contextlib
 import datetime

@@ -5,7 +5,7 @@ figures folders file by file (:func:`compare_folders`) and prints one table, the
 every CSV's shape and per-column differences (:func:`compare_csv`, rows matched by
 :func:`key_columns`), every other file's bytes (:func:`compare_bytes`), and every claim whose
 verdict (:data:`VERDICT_COLUMNS`) differs (:func:`compare_verdicts`); above it, each run's
-``kernels.json`` (:mod:`lasa.base.kernels`). The notebook pages (``notebooks/*.ipynb``,
+``kernels.json`` (:mod:`lasa.runtime`). The notebook pages (``notebooks/*.ipynb``,
 :mod:`lasa.pipeline.pages`) are compared by their code cells' outputs as text
 (:func:`compare_notebook`), each run's folders written as ``<build_dir>`` and ``<figures_dir>``.
 
@@ -51,7 +51,7 @@ __all__ = [
 ]
 
 CLAIMS = "claims.csv"
-KERNELS = "kernels.json"  # the run's kernel settings (lasa.base.kernels), printed for both runs
+KERNELS = "kernels.json"  # the run's kernel settings (lasa.runtime), printed for both runs
 VERDICT_COLUMNS = ("effect", "number", "reproduced", "settled")  # a claim's words, per (id, robot)
 CLAIM_KEY = ("id", "robot")
 
@@ -391,7 +391,7 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
 
 def kernels_text(committed: str | Path, new: str | Path) -> str:
     """What each run's numerical kernels ran with (its ``kernels.json``, written by ``make figures``
-    from :func:`lasa.base.kernels.kernel_settings`), one line per folder: the pinned variables and
+    from :func:`lasa.runtime.record`), one line per folder: the pinned variables and
     torch's CPU capability, or that the file is missing (a run from before the kernels were pinned)."""
     lines = []
     for label, folder in (("committed", committed), ("new", new)):

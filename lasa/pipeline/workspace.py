@@ -18,6 +18,7 @@ from lasa.base.config import ControlConfig, cap_setting, check_choice, set_threa
 from lasa.base.paths import Paths
 from lasa.method.dataset import Demonstrations, load_demonstrations
 from lasa.method.decoder import LatentActionModel, load_checkpoint
+from lasa.runtime import pin
 from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask, make_eating_task
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
@@ -114,7 +115,9 @@ class Workspace(Generic[TaskT]):
 
 
 def _folders(build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
-    """Set torch's threads (``LASA_THREADS``), and resolve the run's folders (the figures' made)."""
+    """Pin the runtime (:func:`lasa.runtime.pin`), set torch's threads (``LASA_THREADS``), and resolve
+    the run's folders (the figures' made)."""
+    pin()
     set_threads()
     paths = Paths.of(build_dir, figures_dir)
     paths.figures.mkdir(parents=True, exist_ok=True)

@@ -12,6 +12,7 @@ import argparse
 import sys
 
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.runtime import pin
 
 DEFAULT_HOST = "127.0.0.1"
 TLS_HINT = (
@@ -137,6 +138,7 @@ def _serve(argv: list[str]) -> int:
 def main(argv: list[str] | None = None) -> int:
     """``schedule ...`` writes the links, ``preregister ...`` the pre-registration; anything else serves."""
     argv = sys.argv[1:] if argv is None else argv
+    pin()  # the renderer and kernels, before the server imports mujoco, numpy and torch
     commands = {"schedule": _schedule, "preregister": _preregister}
     try:
         return commands[argv[0]](argv[1:]) if argv[:1] and argv[0] in commands else _serve(argv)
