@@ -91,7 +91,7 @@ $(MAKE_DEPS): lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) $(shell find lasa -nam
 	@$(PYTHON) lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) > $@.$$$$.tmp && mv $@.$$$$.tmp $@
 include $(MAKE_DEPS)
 PIP_NOISE := is ignored: it is neither a file nor a directory
-RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
+RUN = $(BIN)/python -m lasa.pipeline.execute $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
 .PHONY: help setup sysdeps figures notebooks study-notebooks robot-notebooks verify test lint bench clean teleop \
   study-server book

@@ -561,7 +561,7 @@ def _tiny_pipeline(build: Path) -> dict[str, Any]:
     command = [
         sys.executable,
         "-m",
-        "lasa.pipeline.runner",
+        "lasa.pipeline.execute",
         str(ROOT / "notebooks" / "01_demonstrations.ipynb"),
         "--config",
         str(ROOT / "configs" / "quick.yaml"),

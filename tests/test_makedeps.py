@@ -74,9 +74,9 @@ def _runs(tree: Path) -> list[str]:
     ).stdout
     runs = []
     for line in out.splitlines():
-        if "lasa.pipeline.runner" in line:
+        if "lasa.pipeline.execute" in line:
             words = line.split()
-            stem = Path(words[words.index("lasa.pipeline.runner") + 1]).stem
+            stem = Path(words[words.index("lasa.pipeline.execute") + 1]).stem
             robot = words[words.index("--robot") + 1] if "--robot" in words else "-"
             runs.append(f"{stem} {robot}")
     return sorted(runs)

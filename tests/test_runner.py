@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.pipeline.runner import load_config, notebook_parameters
+from lasa.pipeline.execute import load_config, notebook_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
@@ -150,7 +150,7 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
         [
             sys.executable,
             "-m",
-            "lasa.pipeline.runner",
+            "lasa.pipeline.execute",
             str(notebook),
             "--config",
             str(config),
@@ -179,7 +179,7 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
     ],
 )
 def test_a_missing_or_non_yaml_config_is_one_line(tmp_path, capsys, text, message):
-    from lasa.pipeline.runner import main
+    from lasa.pipeline.execute import main
 
     config = tmp_path / ("missing.yaml" if text is None else "bad.yaml")
     if text is not None:

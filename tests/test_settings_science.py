@@ -21,7 +21,7 @@ from lasa.experiments import convergence, entropy_ablation, robustness, sim1, si
 from lasa.method.entropy import LAMBDA_COST, choose_lambda
 from lasa.method.newgoals import MAP_KINDS
 from lasa.method.step import METHODS
-from lasa.pipeline.runner import load_config
+from lasa.pipeline.execute import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 

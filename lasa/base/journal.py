@@ -1,6 +1,6 @@
 """A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
 
-The runner (:func:`lasa.pipeline.runner.run_notebook`) opens a journal around a notebook's run with
+The runner (:func:`lasa.pipeline.execute.run_notebook`) opens a journal around a notebook's run with
 :func:`recording`: the journal is a folder, named to the kernel (and to every worker process it
 starts) by the environment variable ``LASA_WRITE_JOURNAL``. Every atomic write
 (:func:`lasa.base.io.atomic_path`) of a file under the journaled folder records, the first time the

@@ -1,6 +1,6 @@
 """The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``.
 
-``make figures`` runs each notebook into ``build/notebooks`` (:mod:`lasa.pipeline.runner`); those
+``make figures`` runs each notebook into ``build/notebooks`` (:mod:`lasa.pipeline.execute`); those
 copies carry timings, kernel ids and progress bars, and are not committed. ``python -m
 lasa.pipeline.pages --notebooks build/notebooks --figures figures`` writes each of them, cleaned
 (:func:`clean_notebook`), to ``figures/notebooks/<same name>``, so that a reader sees every
@@ -249,7 +249,7 @@ def clean_notebook(
 
 def page_text(notebook: dict[str, Any]) -> str:
     """A notebook as nbformat writes it (sorted keys, indent 1, lines split), with a final newline."""
-    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]  # see lasa.pipeline.runner
+    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]  # see lasa.pipeline.execute
     import nbformat
 
     text = nbformat.writes(nbformat.from_dict(notebook), version=4)

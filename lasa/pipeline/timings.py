@@ -1,6 +1,6 @@
 """The pipeline's wall times, from the run that measured them.
 
-Every notebook run by :mod:`lasa.pipeline.runner` with ``--timings`` appends one JSON line,
+Every notebook run by :mod:`lasa.pipeline.execute` with ``--timings`` appends one JSON line,
 ``{notebook, robot, seconds, start, end}`` (``start`` and ``end`` in ISO 8601, UTC), to
 ``<build>/timings.jsonl``; ``make figures`` removes the file first, so after a run it holds that
 invocation's notebooks. :func:`record_figures` turns it into ``figures_s`` of

@@ -20,7 +20,7 @@ run wrote it; the error message names each file it did not restore.
 
 Usage::
 
-    python -m lasa.pipeline.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
+    python -m lasa.pipeline.execute notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
         --out build/notebooks --robot panda [--param build_dir=build/x] [--timings t.jsonl]
 """
 
