@@ -44,7 +44,7 @@ EXPECTED = [
 def _write(path: Path, runs: list[tuple[str, str | None, float, float]]) -> Path:
     for notebook, robot, start, end in runs:
         at = [T0 + datetime.timedelta(seconds=s) for s in (start, end)]
-        timings.append_run(path, timings.timing_record(notebook, robot, end - start, *at))
+        timings.append_run(path, notebook, robot, end - start, *at)
     return path
 
 
