@@ -1,15 +1,11 @@
 """The process's renderer and numerical kernels, pinned by one explicit call: :func:`pin`.
 
-torch, oneDNN, MKL, numpy and OpenBLAS pick their kernels by what the CPU offers, and an AVX-512
-path sums in another order than an AVX2 one: the last bits differ, training amplifies them
-(measured: an AMD run against Intel figures moved 37 of 47 files and 3 verdicts). Pinned to AVX2,
-which every x86-64 CPU of the last decade has, each runs the same code everywhere. MuJoCo renders
-off-screen with OSMesa unless ``MUJOCO_GL`` says otherwise. ``import lasa`` sets nothing.
-
-Each library reads its variables once, when it loads, so :func:`pin` must run before numpy, torch
-or mujoco is imported: the CLIs, the notebooks' first cell and :class:`lasa.pipeline.workspace.
-Workspace` call it, and ``make`` exports the same values. ``python -m lasa.runtime --out FILE``
-records what is in effect (:func:`record`; ``figures/kernels.json``, printed by ``make verify``).
+torch, oneDNN, MKL, numpy and OpenBLAS pick their kernels by the CPU, and an AVX-512 path sums in
+another order than an AVX2 one: training amplifies the last bits (measured: an AMD run against Intel
+figures moved 37 of 47 files and 3 verdicts). Pinned to AVX2, which every x86-64 CPU of the last
+decade has, each runs the same code everywhere. ``import lasa`` sets nothing: the CLIs, the notebooks'
+first cell and :class:`~lasa.pipeline.workspace.Workspace` call :func:`pin`, and ``make`` exports the
+same values. ``python -m lasa.runtime --out FILE`` records them (``figures/kernels.json``).
 """
 
 from __future__ import annotations

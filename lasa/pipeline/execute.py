@@ -177,9 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     """Command-line entry point: run one notebook and report its wall time."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("notebook", help="the notebook to run, e.g. notebooks/04_fixed_expertise.ipynb")
-    parser.add_argument(
-        "--config", required=True, help="the YAML config: configs/paper.yaml, quick.yaml or large.yaml"
-    )
+    parser.add_argument("--config", required=True, help="the YAML config: configs/paper.yaml, quick.yaml ...")
     parser.add_argument("--out", required=True, help="folder of the executed copy")
     parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
     parser.add_argument(
@@ -190,10 +188,7 @@ def main(argv: list[str] | None = None) -> int:
         metavar="NAME=VALUE",
         help="override one parameter (VALUE is read as YAML); repeatable",
     )
-    parser.add_argument(
-        "--timings",
-        help="append {notebook, robot, seconds, start, end} as a JSON line to this file (start, end: UTC)",
-    )
+    parser.add_argument("--timings", help="append {notebook, robot, seconds, start, end} (UTC) to this file")
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
     signal.signal(signal.SIGTERM, _terminated)  # a killed run undoes its writes, as Ctrl-C does
@@ -206,12 +201,9 @@ def main(argv: list[str] | None = None) -> int:
         out = run_notebook(
             args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
         )
-    except (ConfigError, ArtifactError) as exc:
+    except (ConfigError, ArtifactError, NotebookError) as exc:  # a cell's cause: traceback in the partial run
         print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except NotebookError as exc:  # the notebook's own cause (its traceback is in the partial run)
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(exc, NotebookError) else 2
     except (KeyboardInterrupt, SystemExit) as exc:
         for note in getattr(exc, "__notes__", []):  # what the undo restored
             print(f"interrupted: {note}", file=sys.stderr)

@@ -337,9 +337,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--command", required=True, help="the command that ran them, for the record")
     parser.add_argument("--results", default="benchmarks/results.json", help="the file of figures_s")
     parser.add_argument("--readme", default="README.md", help="the README with the figures-time markers")
-    parser.add_argument(
-        "--bench-readme", default="benchmarks/README.md", help="the README with the figures-table markers"
-    )
+    parser.add_argument("--bench-readme", default="benchmarks/README.md", help="the figures-table's README")
     args = parser.parse_args(argv)
     try:
         record_figures(args.timings, args.results, args.part, args.expect, args.command)
