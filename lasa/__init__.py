@@ -16,7 +16,7 @@ The public API is imported lazily (PEP 562), so ``import lasa.pipeline.execute``
 import importlib
 from typing import TYPE_CHECKING, Any
 
-_HOMES = {  # module -> the public names it defines; `__all__` lists the same names (tests/test_init.py)
+_HOMES = {  # module -> the public names it defines, imported on first use (`__getattr__`)
     "lasa.base.config": "ControlConfig",
     "lasa.base.errors": "ArtifactError CheckpointError ConfigError DamagedLogError EmptySelectionError"
     " IKError LasaError",
@@ -39,9 +39,9 @@ _HOMES = {  # module -> the public names it defines; `__all__` lists the same na
 }
 _EXPORTS = {name: module for module, names in _HOMES.items() for name in names.split()}
 
-if TYPE_CHECKING:
-    from lasa.base.config import ControlConfig
-    from lasa.base.errors import (
+if TYPE_CHECKING:  # the lazy names, for type checkers
+    from lasa.base.config import ControlConfig  # noqa: F401
+    from lasa.base.errors import (  # noqa: F401
         ArtifactError,
         CheckpointError,
         ConfigError,
@@ -50,28 +50,28 @@ if TYPE_CHECKING:
         IKError,
         LasaError,
     )
-    from lasa.base.paths import Paths
-    from lasa.evidence.claims import Claim, update_claims
-    from lasa.evidence.publish import publish
-    from lasa.method.assistance import register_member
-    from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
-    from lasa.method.decoder import (
+    from lasa.base.paths import Paths  # noqa: F401
+    from lasa.evidence.claims import Claim, update_claims  # noqa: F401
+    from lasa.evidence.publish import publish  # noqa: F401
+    from lasa.method.assistance import register_member  # noqa: F401
+    from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations  # noqa: F401
+    from lasa.method.decoder import (  # noqa: F401
         ActionDecoder,
         DecoderConfig,
         LatentActionModel,
         load_checkpoint,
         save_checkpoint,
     )
-    from lasa.method.episodes import Runner
-    from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task
-    from lasa.method.step import METHODS, Assist, shared_autonomy_step
-    from lasa.method.train import TrainConfig, train_decoder
-    from lasa.people.demos import DemoConfig, collect_demonstrations
-    from lasa.people.rollout import Trajectories, rollout
-    from lasa.people.users import UserPopulation
-    from lasa.world.goals import GoalTask
-    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot, register_robot
-    from lasa.world.task import CupTask, make_cup_task
+    from lasa.method.episodes import Runner  # noqa: F401
+    from lasa.method.newgoals import ContextMap, MappedDecoder, extend_task  # noqa: F401
+    from lasa.method.step import METHODS, Assist, shared_autonomy_step  # noqa: F401
+    from lasa.method.train import TrainConfig, train_decoder  # noqa: F401
+    from lasa.people.demos import DemoConfig, collect_demonstrations  # noqa: F401
+    from lasa.people.rollout import Trajectories, rollout  # noqa: F401
+    from lasa.people.users import UserPopulation  # noqa: F401
+    from lasa.world.goals import GoalTask  # noqa: F401
+    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot, register_robot  # noqa: F401
+    from lasa.world.task import CupTask, make_cup_task  # noqa: F401
 
 
 def __getattr__(name: str) -> Any:
@@ -91,48 +91,4 @@ try:  # the installed package's version (pyproject.toml), so that it cannot drif
 except Exception:  # running from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
-__all__ = [
-    "ActionDecoder",
-    "ArtifactError",
-    "Assist",
-    "Claim",
-    "CheckpointError",
-    "ConfigError",
-    "DamagedLogError",
-    "EmptySelectionError",
-    "ContextMap",
-    "ControlConfig",
-    "CupTask",
-    "DecoderConfig",
-    "DemoConfig",
-    "Demonstrations",
-    "GoalTask",
-    "IKError",
-    "LasaError",
-    "LatentActionModel",
-    "METHODS",
-    "MappedDecoder",
-    "Paths",
-    "ROBOTS",
-    "Robot",
-    "Runner",
-    "RobotSpec",
-    "TrainConfig",
-    "Trajectories",
-    "UserPopulation",
-    "collect_demonstrations",
-    "extend_task",
-    "load_checkpoint",
-    "load_demonstrations",
-    "load_robot",
-    "make_cup_task",
-    "publish",
-    "register_member",
-    "register_robot",
-    "rollout",
-    "save_checkpoint",
-    "save_demonstrations",
-    "shared_autonomy_step",
-    "train_decoder",
-    "update_claims",
-]
+__all__ = [*_EXPORTS]

@@ -18,9 +18,14 @@ def test_star_import_works_in_a_fresh_interpreter():
 
 def test_all_and_the_lazy_table_agree():
     """Each exported name is the object of that name in the module the lazy table names for it."""
+    import ast
     import importlib
 
     assert sorted(lasa.__all__) == sorted(lasa._EXPORTS)
+    tree = ast.parse((ROOT / "lasa" / "__init__.py").read_text())
+    (block,) = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"]
+    typed = {a.name: n.module for n in block.body if isinstance(n, ast.ImportFrom) for a in n.names}
+    assert typed == lasa._EXPORTS  # what type checkers see is what __getattr__ imports
     for name in lasa.__all__:
         home = importlib.import_module(lasa._EXPORTS[name])
         assert getattr(lasa, name) is getattr(home, name), name

@@ -48,8 +48,10 @@ BENCH_MARKERS = (
     "<!-- figures-table:end -->",
 )
 PARTS = ("paper", "quick")  # figures_s's top level, or its "quick" part
-_TARGETS = {"paper": "figures_total_s", "quick": "figures_quick_total_s"}
-_ROWS = {"paper": "`make figures`, paper scale, fresh", "quick": "`make figures QUICK=1`, fresh"}
+_ROWS = {  # each part's row in benchmarks/README.md's table and its target in results.json
+    "paper": ("`make figures`, paper scale, fresh", "figures_total_s"),
+    "quick": ("`make figures QUICK=1`, fresh", "figures_quick_total_s"),
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -277,17 +279,18 @@ def _sentence(figures_s: Mapping[str, Any]) -> str:
     )
 
 
-def _row(part: str, figures: Mapping[str, Any] | None, target: float | None) -> str:
+def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, float]) -> str:
     """One row of the pipeline's table: a part's time, its run, its target and whether it is met."""
+    label, target = _ROWS[part][0], targets.get(_ROWS[part][1])
     bound = f"≤ {target:,.0f} s" if target is not None else "(none)"
     if not figures:
-        return f"| {_ROWS[part]} | not measured | | | {bound} | |"
+        return f"| {label} | not measured | | | {bound} | |"
     m, total = figures["machine"], figures["total"]
     verdict = "" if target is None else ("met" if total <= target else "**missed**")
     at = "commit unknown" if figures["commit"] == "unknown" else f"at {figures['commit']}"
     run = f"{m['cpu']}, {m['cores']} cores, {figures['date']}, {at}: `{figures['command']}`"
     return (
-        f"| {_ROWS[part]} | **{total:,.0f} s** ({_duration(total)}) | "
+        f"| {label} | **{total:,.0f} s** ({_duration(total)}) | "
         f"{figures['sum_of_notebooks']:,.0f} s | {run} | {bound} | {verdict} |"
     )
 
@@ -298,8 +301,8 @@ def _table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> str:
     lines = [
         "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |",
         "| --- | ---: | ---: | --- | --- | --- |",
-        _row("paper", paper, targets.get(_TARGETS["paper"])),
-        _row("quick", figures_s.get("quick"), targets.get(_TARGETS["quick"])),
+        _row("paper", paper, targets),
+        _row("quick", figures_s.get("quick"), targets),
     ]
     return "\n".join(lines)
 

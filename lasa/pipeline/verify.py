@@ -305,10 +305,14 @@ def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
     }
 
 
-def _compare_verdicts(old_path: Path, new_path: Path) -> list[str]:
-    """Every ``(id, robot)`` whose verdict differs (or that is in one table only), with why."""
+def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
+    """Add the claims table's verdict lines to ``report``: every ``(id, robot)`` whose verdict differs
+    (or that is in one table only), with why; or mark the table missing."""
+    old_path, new_path = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
+    if old_path is None or new_path is None:
+        report.claims_missing = True
+        return
     old, new = _verdicts(old_path), _verdicts(new_path)
-    differ = []
     for key in sorted(old.keys() | new.keys()):
         a, b = old.get(key), new.get(key)
         if a == b:
@@ -316,24 +320,13 @@ def _compare_verdicts(old_path: Path, new_path: Path) -> list[str]:
         if a is None or b is None:
             why = "only in the new table" if a is None else "missing from the new table"
         else:
-            pairs = zip(VERDICT_COLUMNS, a, b, strict=True)
-            why = "; ".join(f"{c} {x} -> {y}" for c, x, y in pairs if x != y)
-        differ.append(f"{key[0]} / {key[1]}: {why}")
-    return differ
-
-
-def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
-    """Add the claims table's verdict lines to ``report`` (or mark it missing)."""
-    old, new = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
-    if old is None or new is None:
-        report.claims_missing = True
-        return
-    report.verdicts_differ = _compare_verdicts(old, new)
-    for line in report.verdicts_differ:
-        part, _, why = line.partition(": ")
-        report.rows.append(Row(CLAIMS, f"verdict {part}", "verdict differs", why))
+            why = "; ".join(
+                f"{c} {x} -> {y}" for c, x, y in zip(VERDICT_COLUMNS, a, b, strict=True) if x != y
+            )
+        report.verdicts_differ.append(f"{key[0]} / {key[1]}: {why}")
+        report.rows.append(Row(CLAIMS, f"verdict {key[0]} / {key[1]}", "verdict differs", why))
     if not report.verdicts_differ:
-        report.rows.append(Row(CLAIMS, "verdicts", "identical", f"{len(_verdicts(old))} (id, robot)"))
+        report.rows.append(Row(CLAIMS, "verdicts", "identical", f"{len(old)} (id, robot)"))
 
 
 def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | None = None) -> Report:
