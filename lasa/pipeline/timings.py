@@ -9,6 +9,7 @@ notebooks, is refused); :func:`sync_readmes` writes the READMEs' sentence and ta
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import datetime
 import importlib.metadata
@@ -125,18 +126,17 @@ def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
     """Why ``runs`` are not one whole run (every ``expected`` notebook once, nothing else, each
     with its start and end), or ``None``."""
     names = [run.name for run in runs]
-    missing = sorted(set(expected) - set(names))
-    extra = sorted(set(names) - set(expected))
-    twice = sorted({name for name in names if names.count(name) > 1})
-    if missing:
-        return f"{len(names)} of {len(set(expected))} notebooks ran; not run: {', '.join(missing)}"
-    if extra:
-        return f"notebooks outside the expected set ran: {', '.join(extra)}"
-    if twice:
-        return f"notebooks recorded more than once: {', '.join(twice)}"
-    undated = [run.name for run in runs if run.start is None or run.end is None]
-    if undated:
-        return f"runs without start and end times (an older runner): {', '.join(undated)}"
+    for found, why in (
+        (sorted(set(expected) - set(names)), f"{len(names)} of {len(set(expected))} notebooks ran; not run"),
+        (sorted(set(names) - set(expected)), "notebooks outside the expected set ran"),
+        (sorted({name for name in names if names.count(name) > 1}), "notebooks recorded more than once"),
+        (
+            [r.name for r in runs if r.start is None or r.end is None],
+            "runs without start and end times (an older runner)",
+        ),
+    ):
+        if found:
+            return f"{why}: {', '.join(found)}"
     return None
 
 
@@ -144,13 +144,11 @@ def machine() -> dict[str, Any]:
     """What this process runs on: CPU model, cores, and the Python, torch, numpy, MuJoCo versions
     (read from the installed distributions, so nothing heavy is imported)."""
     cpu = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    with contextlib.suppress(OSError):
+        models = [
+            line for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")
+        ]
+        cpu = models[0].split(":", 1)[1].strip() if models else cpu
     out: dict[str, Any] = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version()}
     for package in ("torch", "numpy", "mujoco"):
         try:
