@@ -58,7 +58,7 @@ _ROWS = {  # each part's row in benchmarks/README.md's table and its target in r
 @dataclasses.dataclass(frozen=True)
 class Run:
     """One notebook run, a line of ``timings.jsonl``: ``<notebook>[-<robot>]``, its wall time [s],
-    its start and end (UTC; ``None`` in a line of an older runner)."""
+    its start and end (UTC; ``None`` in a line of an older version)."""
 
     name: str
     seconds: float
@@ -99,7 +99,7 @@ def read_runs(path: str | os.PathLike[str]) -> list[Run]:
 
     Raises:
         ArtifactError: if the file is missing.
-        ConfigError: if a line is not a runner's record.
+        ConfigError: if a line is not a timing record.
     """
     path = Path(path)
     if not path.is_file():
@@ -118,7 +118,7 @@ def read_runs(path: str | os.PathLike[str]) -> list[Run]:
 
 
 def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
-    """``{"<notebook>-<robot>": seconds}`` from a runner ``--timings`` file (JSON lines)."""
+    """``{"<notebook>-<robot>": seconds}`` from a ``--timings`` file (JSON lines)."""
     return {run.name: run.seconds for run in read_runs(path)}
 
 
