@@ -93,14 +93,10 @@ def build_book(
     mathjax: str | Path | None = None,
     progress: bool = True,
 ) -> Path:
-    """Assemble the book's sources under ``out/src`` and build the site into ``out/html``.
-
-    Args:
-        notebooks: The executed notebooks (``build/notebooks``).
-        figures: The figures folder (its ``claims.csv`` makes the front page).
-        out: The book's folder; ``out/html/index.html`` is the front page.
-        mathjax: MathJax's ``es5`` folder (default ``.venv/mathjax/es5``, made by ``make setup``).
-        progress: Show Jupyter Book's output.
+    """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
+    folder (its ``claims.csv`` makes the front page), and build the site into ``out/html``; returns
+    ``out/html/index.html``. ``mathjax``: MathJax's ``es5`` folder (``.venv/mathjax/es5`` by default,
+    made by ``make setup``); ``progress``: show Jupyter Book's output.
 
     Raises:
         ArtifactError: if there are no executed notebooks, no claims table or no MathJax.

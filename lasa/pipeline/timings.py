@@ -232,9 +232,8 @@ def record_figures(
     ``"quick"`` replaces ``figures_s.quick``; every other key of ``results`` is kept. ``expected``
     are the notebooks of a whole run; ``summary``: ``host`` and ``commit`` for :func:`summarize`.
 
-    Returns:
-        The part written, or ``None`` when the run was not whole (no timings file, or not every
-        expected notebook ran once in it): then ``results`` is left untouched and the reason printed.
+    Returns the part written, or ``None`` (the reason printed, ``results`` untouched) when the run was
+    not whole: no timings file, or not every expected notebook ran once in it.
 
     Raises:
         ConfigError: for an unknown ``part``, or a ``results`` that is not a JSON object.
