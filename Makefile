@@ -201,7 +201,7 @@ notebooks:
 	study_rc=0; wait $$study || study_rc=$$?; exit $$(( robots || study_rc ))
 study-notebooks: $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb)
 robot-notebooks: $(FIRST_NBS) $(foreach r,panda planar5,$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
-# Every notebook run of a whole `make figures`, as the runner names them in timings.jsonl.
+# Every notebook run of a whole `make figures`, as lasa.pipeline.execute names them in timings.jsonl.
 RUNS := $(STUDY_NBS) $(foreach r,$(ROBOTS),$(foreach n,01_demonstrations 02_decoder_training 03_entropy_ablation $(FIGURE_NBS),$(n)-$(r)))
 
 # The robots' chains run side by side. Notebooks that share a figure merge their rows

@@ -1,4 +1,4 @@
-"""A failed notebook leaves the figures folder as it was (the runner's write journal, lasa.base.journal)."""
+"""A failed notebook leaves the figures folder as it was (execution's write journal, lasa.base.journal)."""
 
 from __future__ import annotations
 

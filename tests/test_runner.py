@@ -112,7 +112,7 @@ def test_malformed_config_is_an_error(tmp_path):
 
 
 def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
-    """The runner's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
+    """The CLI's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
     import subprocess
     import sys
 

@@ -103,7 +103,7 @@ def read_runs(path: str | os.PathLike[str]) -> list[Run]:
     """
     path = Path(path)
     if not path.is_file():
-        raise ArtifactError(f"{path} does not exist: `make figures` writes it (the runner's --timings)")
+        raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
     runs = []
     for number, line in enumerate(path.read_text().splitlines(), 1):
         if not line.strip():
