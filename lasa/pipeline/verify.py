@@ -215,31 +215,30 @@ def _non_finite_changed(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     return ~(np.isfinite(old) & np.isfinite(new)) & ~same
 
 
-def _numeric_diff(a: pd.Series, b: pd.Series, tol: Tolerance) -> tuple[np.ndarray, str]:
-    """Cells beyond the tolerance (a mask) and ``max abs .., max rel ..`` over the cells finite on
-    both sides (:func:`_non_finite` reports the others)."""
-    old, new = a.to_numpy(dtype=float), b.to_numpy(dtype=float)
-    finite = np.isfinite(old) & np.isfinite(new)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        diff = np.where(finite, np.abs(new - old), 0.0)
-        rel = np.where(diff == 0, 0.0, diff / np.abs(old))
-    beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, old, 0.0))) | _non_finite_changed(old, new)
-    detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
-    return beyond, detail
-
-
-def _non_finite(name: str, column: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
-    """A line naming the rows of ``column`` whose non-finite value (NaN, ±inf) is not the same on
-    both sides, with both values; None when there is none."""
+def _numeric_rows(
+    name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
+) -> tuple[np.ndarray, list[Row]]:
+    """A numeric column's cells beyond the tolerance (a mask) and its lines: the rows whose non-finite
+    value (NaN, ±inf) is not the same on both sides, with both values; ``max abs .., max rel ..`` over
+    the cells finite on both sides."""
     a, b = old[column].to_numpy(dtype=float), new[column].to_numpy(dtype=float)
-    where = np.flatnonzero(_non_finite_changed(a, b))
-    if not len(where):
-        return None
-    keys = [k for k in key_columns(old) if k in new.columns]
-    label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
-    shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
-    more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
-    return Row(name, column, "non-finite", f"{len(where)} rows: {shown}{more}")
+    changed = _non_finite_changed(a, b)
+    finite = np.isfinite(a) & np.isfinite(b)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        diff = np.where(finite, np.abs(b - a), 0.0)
+        rel = np.where(diff == 0, 0.0, diff / np.abs(a))
+    beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, a, 0.0))) | changed
+    rows = []
+    if (where := np.flatnonzero(changed)).size:
+        keys = [k for k in key_columns(old) if k in new.columns]
+        label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
+        shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
+        more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
+        rows.append(Row(name, column, "non-finite", f"{len(where)} rows: {shown}{more}"))
+    if beyond.any():
+        detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
+        rows.append(Row(name, column, "beyond tolerance", f"{detail}, {beyond.sum()} rows"))
+    return beyond, rows
 
 
 def _rows_match(name: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
@@ -260,12 +259,8 @@ def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
     rows, beyond_any = [], np.zeros(len(old), dtype=bool)
     for column in [c for c in old.columns if c in new.columns]:
         if _numeric(old, column) and _numeric(new, column):
-            beyond, detail = _numeric_diff(old[column], new[column], tol)
-            non_finite = _non_finite(name, column, old, new)
-            if non_finite is not None:
-                rows.append(non_finite)
-            if beyond.any():
-                rows.append(Row(name, column, "beyond tolerance", f"{detail}, {beyond.sum()} rows"))
+            beyond, lines = _numeric_rows(name, column, old, new, tol)
+            rows += lines
             beyond_any |= beyond
         else:
             cells = int((_text(old[column]) != _text(new[column])).sum())
