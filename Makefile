@@ -66,8 +66,8 @@ NPROC := $(shell nproc 2>/dev/null || echo 2)
 export LASA_THREADS ?= 1
 export OMP_NUM_THREADS ?= 1
 # The numerical kernels on their AVX2 paths on every x86 CPU, for the same bytes everywhere: the
-# values of lasa/base/kernels.py (PINNED), which lasa also sets on import; exported here so that
-# a process importing numpy or torch before lasa (pytest, a notebook's first cell) gets them too.
+# values of lasa/runtime.py (PINNED), which lasa.runtime.pin() sets too; exported here so that
+# every process Make starts has them before numpy or torch loads.
 # One you set yourself is kept. make figures records those in effect in figures/kernels.json.
 export ATEN_CPU_CAPABILITY ?= avx2
 export ONEDNN_MAX_CPU_ISA ?= AVX2
@@ -91,7 +91,7 @@ $(MAKE_DEPS): lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) $(shell find lasa -nam
 	@$(PYTHON) lasa/pipeline/makedeps.py $(NOTEBOOK_FILES) > $@.$$$$.tmp && mv $@.$$$$.tmp $@
 include $(MAKE_DEPS)
 PIP_NOISE := is ignored: it is neither a file nor a directory
-RUN = $(BIN)/python -m lasa.pipeline.runner $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
+RUN = $(BIN)/python -m lasa.pipeline.execute $< --config $(CONFIG) --out $(EXEC) --timings $(BUILD)/timings.jsonl $(OUT_PARAMS)
 
 .PHONY: help setup sysdeps figures notebooks study-notebooks robot-notebooks verify test lint bench clean teleop \
   study-server book
@@ -171,7 +171,7 @@ TIMED_PART := $(if $(filter build,$(BUILD)),paper,$(if $(filter build/quick,$(BU
 FIGURES_DIR := $(if $(filter build,$(BUILD)),figures,$(BUILD)/figures)
 figures: setup
 	@rm -f $(BUILD)/timings.jsonl
-	@$(BIN)/python -m lasa.pipeline.kernels --out $(FIGURES_DIR)/kernels.json
+	@$(BIN)/python -m lasa.runtime --out $(FIGURES_DIR)/kernels.json
 	@$(MAKE) --no-print-directory -j$(JOBS) notebooks
 ifeq ($(BUILD),build)
 	@$(BIN)/python -m lasa.evidence.claims README.md figures/claims.csv
@@ -201,7 +201,7 @@ notebooks:
 	study_rc=0; wait $$study || study_rc=$$?; exit $$(( robots || study_rc ))
 study-notebooks: $(foreach n,$(STUDY_NBS),$(EXEC)/$(n).ipynb)
 robot-notebooks: $(FIRST_NBS) $(foreach r,panda planar5,$(foreach n,$(FIGURE_NBS),$(EXEC)/$(n)-$(r).ipynb))
-# Every notebook run of a whole `make figures`, as the runner names them in timings.jsonl.
+# Every notebook run of a whole `make figures`, as lasa.pipeline.execute names them in timings.jsonl.
 RUNS := $(STUDY_NBS) $(foreach r,$(ROBOTS),$(foreach n,01_demonstrations 02_decoder_training 03_entropy_ablation $(FIGURE_NBS),$(n)-$(r)))
 
 # The robots' chains run side by side. Notebooks that share a figure merge their rows

@@ -52,9 +52,9 @@ from __future__ import annotations
 
 import os
 
-# Off-screen rendering: mujoco reads MUJOCO_GL once, on import (lasa sets the same default).
-os.environ.setdefault("MUJOCO_GL", "osmesa")
-__import__("lasa")  # first: lasa pins the numerical kernels before numpy and torch load
+from lasa.runtime import PINNED, pin
+
+pin()  # first: off-screen rendering and the numerical kernels, before numpy, torch and mujoco load
 
 import argparse  # noqa: E402
 import contextlib  # noqa: E402
@@ -84,7 +84,6 @@ import torch  # noqa: E402
 from lasa.base.config import ControlConfig, set_threads  # noqa: E402
 from lasa.base.errors import ArtifactError, ConfigError  # noqa: E402
 from lasa.base.io import write_text  # noqa: E402
-from lasa.base.kernels import PINNED  # noqa: E402
 from lasa.evidence.video import render_states  # noqa: E402
 from lasa.method.belief import uniform_log_belief  # noqa: E402
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint  # noqa: E402
@@ -562,7 +561,7 @@ def _tiny_pipeline(build: Path) -> dict[str, Any]:
     command = [
         sys.executable,
         "-m",
-        "lasa.pipeline.runner",
+        "lasa.pipeline.execute",
         str(ROOT / "notebooks" / "01_demonstrations.ipynb"),
         "--config",
         str(ROOT / "configs" / "quick.yaml"),
@@ -872,7 +871,7 @@ def dask_grid(
 
 
 def _free_kernels() -> dict[str, str]:
-    """Each library left to pick its own kernels on this CPU (lasa pins only what is unset)."""
+    """Each library left to pick its own kernels on this CPU (lasa.runtime.pin sets only what is unset)."""
     avx512 = "avx512f" in Path("/proc/cpuinfo").read_text() if Path("/proc/cpuinfo").exists() else False
     return {
         "ATEN_CPU_CAPABILITY": "avx512" if avx512 else "avx2",

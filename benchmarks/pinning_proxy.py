@@ -1,7 +1,7 @@
 """The pipeline's kinds of work, timed in one process: what pinning the kernels to AVX2 costs.
 
 Run by ``benchmarks/bench.py`` (part ``pinning``) twice per round, once with the kernels pinned
-(lasa's defaults, :mod:`lasa.base.kernels`) and once with each library free to pick its own
+(lasa's defaults, :mod:`lasa.runtime`) and once with each library free to pick its own
 (``ATEN_CPU_CAPABILITY=default`` and so on). Prints one JSON line: the thread CPU time [s] of
 
 - ``training``: entropy-regularised decoder fine-tuning steps (Eq. T6; notebooks 03 and 10);
@@ -15,7 +15,9 @@ import json
 import sys
 import time
 
-__import__("lasa")  # first: it pins the kernels (unless the caller set them) before numpy loads
+from lasa.runtime import pin
+
+pin()  # first: the kernels pinned (unless the caller set them) before numpy loads
 
 import numpy as np  # noqa: E402
 import torch  # noqa: E402

@@ -7,7 +7,7 @@ Record (py-spy is pinned in ``environment.lock``), then read::
 
 py-spy's raw format is one line per distinct stack, ``frame;frame;... count``, and with
 ``--subprocesses`` each stack starts with its processes' command lines: a notebook's kernel hangs
-below the ``lasa.pipeline.runner`` process that names the notebook and the robot. Per notebook this
+below the ``lasa.pipeline.execute`` process that names the notebook and the robot. Per notebook this
 prints its samples' share of the run, and the functions with the largest share of its samples:
 *inclusive* (the function or anything it calls; ``lasa`` functions only, the places to act on) and
 *self* (where the CPU is, any library's).

@@ -6,79 +6,42 @@ scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared
 (:mod:`lasa.experiments`). Extending it (a robot, an assistance member, a claim, a decoder of
 your own) is in ``docs/extending.md``.
 
-Rendering is software-only by default: ``MUJOCO_GL`` is set to ``osmesa`` here,
-before anything imports mujoco (it is read once, at import). Set it yourself first
-to override (``egl``, ``glfw``, or ``disable`` when nothing renders). The numerical kernels
-are pinned to AVX2 here too, for the same bytes on any x86 CPU (:mod:`lasa.base.kernels`).
+``import lasa`` only re-exports: it sets no environment variable and installs no import hook. Call
+:func:`lasa.runtime.pin` first, before numpy, torch or mujoco loads, for off-screen rendering and
+the numerical kernels that compute the same bytes on any x86 CPU.
 
-The public API is re-exported here, imported lazily; each concept lives in its own module.
+The public API is imported lazily (PEP 562), so ``import lasa.pipeline.execute`` stays light.
 """
 
 import importlib
-import os
 from typing import TYPE_CHECKING, Any
 
-os.environ.setdefault("MUJOCO_GL", "osmesa")
-
-from lasa.base.kernels import pin_kernels  # noqa: E402 (stdlib only: it imports neither torch nor numpy)
-
-pin_kernels()  # torch, MKL, oneDNN, numpy, OpenBLAS on their AVX2 paths, before any of them loads
-
-from lasa.base.ffmpeg import pin_mediapy  # noqa: E402 (after MUJOCO_GL, which it does not touch)
-
-pin_mediapy()  # mediapy reads and writes with the pinned wheel's ffmpeg, once it is imported
-
-# The public API, imported on first use (PEP 562): `import lasa.pipeline.runner` or `lasa.base.errors`
-# stays light (no torch, no MuJoCo), which the notebook runner pays for on every run.
-# name -> module that defines it; `__all__` lists the same names (tests/test_init.py checks).
-_EXPORTS = {
-    "ActionDecoder": "lasa.method.decoder",
-    "ArtifactError": "lasa.base.errors",
-    "Assist": "lasa.method.step",
-    "Claim": "lasa.evidence.claims",
-    "CheckpointError": "lasa.base.errors",
-    "ConfigError": "lasa.base.errors",
-    "DamagedLogError": "lasa.base.errors",
-    "EmptySelectionError": "lasa.base.errors",
-    "ContextMap": "lasa.method.context_map",
-    "ControlConfig": "lasa.base.config",
-    "CupTask": "lasa.world.task",
-    "DecoderConfig": "lasa.method.decoder",
-    "DemoConfig": "lasa.people.demos",
-    "Demonstrations": "lasa.method.dataset",
-    "GoalTask": "lasa.world.goals",
-    "IKError": "lasa.base.errors",
-    "LasaError": "lasa.base.errors",
-    "LatentActionModel": "lasa.method.decoder",
-    "METHODS": "lasa.method.step",
-    "MappedDecoder": "lasa.method.context_map",
-    "Member": "lasa.method.assistance",
-    "Paths": "lasa.base.paths",
-    "ROBOTS": "lasa.world.robot",
-    "Robot": "lasa.world.robot",
-    "Runner": "lasa.method.runner",
-    "RobotSpec": "lasa.world.robot",
-    "TrainConfig": "lasa.method.train",
-    "Trajectories": "lasa.people.rollout",
-    "UserPopulation": "lasa.people.users",
-    "collect_demonstrations": "lasa.people.demos",
-    "extend_task": "lasa.method.context_map",
-    "load_checkpoint": "lasa.method.decoder",
-    "load_demonstrations": "lasa.method.dataset",
-    "load_robot": "lasa.world.robot",
-    "make_cup_task": "lasa.world.task",
-    "publish": "lasa.evidence.publish",
-    "rollout": "lasa.people.rollout",
-    "save_checkpoint": "lasa.method.decoder",
-    "save_demonstrations": "lasa.method.dataset",
-    "shared_autonomy_step": "lasa.method.step",
-    "train_decoder": "lasa.method.train",
-    "update_claims": "lasa.evidence.claims",
+_HOMES = {  # module -> the public names it defines, imported on first use (`__getattr__`)
+    "lasa.base.config": "ControlConfig",
+    "lasa.base.errors": "ArtifactError CheckpointError ConfigError DamagedLogError EmptySelectionError"
+    " IKError LasaError",
+    "lasa.base.paths": "Paths",
+    "lasa.evidence.claims": "Claim update_claims",
+    "lasa.evidence.publish": "publish",
+    "lasa.method.assistance": "Member",
+    "lasa.method.dataset": "Demonstrations load_demonstrations save_demonstrations",
+    "lasa.method.decoder": "ActionDecoder DecoderConfig LatentActionModel load_checkpoint save_checkpoint",
+    "lasa.method.runner": "Runner",
+    "lasa.method.context_map": "ContextMap MappedDecoder extend_task",
+    "lasa.method.step": "Assist METHODS shared_autonomy_step",
+    "lasa.method.train": "TrainConfig train_decoder",
+    "lasa.people.demos": "DemoConfig collect_demonstrations",
+    "lasa.people.rollout": "Trajectories rollout",
+    "lasa.people.users": "UserPopulation",
+    "lasa.world.goals": "GoalTask",
+    "lasa.world.robot": "ROBOTS Robot RobotSpec load_robot",
+    "lasa.world.task": "CupTask make_cup_task",
 }
+_EXPORTS = {name: module for module, names in _HOMES.items() for name in names.split()}
 
-if TYPE_CHECKING:
-    from lasa.base.config import ControlConfig
-    from lasa.base.errors import (
+if TYPE_CHECKING:  # the lazy names, for type checkers
+    from lasa.base.config import ControlConfig  # noqa: F401
+    from lasa.base.errors import (  # noqa: F401
         ArtifactError,
         CheckpointError,
         ConfigError,
@@ -87,28 +50,28 @@ if TYPE_CHECKING:
         IKError,
         LasaError,
     )
-    from lasa.base.paths import Paths
-    from lasa.evidence.claims import Claim, update_claims
-    from lasa.evidence.publish import publish
-    from lasa.method.assistance import Member
-    from lasa.method.context_map import ContextMap, MappedDecoder, extend_task
-    from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations
-    from lasa.method.decoder import (
+    from lasa.base.paths import Paths  # noqa: F401
+    from lasa.evidence.claims import Claim, update_claims  # noqa: F401
+    from lasa.evidence.publish import publish  # noqa: F401
+    from lasa.method.assistance import Member  # noqa: F401
+    from lasa.method.context_map import ContextMap, MappedDecoder, extend_task  # noqa: F401
+    from lasa.method.dataset import Demonstrations, load_demonstrations, save_demonstrations  # noqa: F401
+    from lasa.method.decoder import (  # noqa: F401
         ActionDecoder,
         DecoderConfig,
         LatentActionModel,
         load_checkpoint,
         save_checkpoint,
     )
-    from lasa.method.runner import Runner
-    from lasa.method.step import METHODS, Assist, shared_autonomy_step
-    from lasa.method.train import TrainConfig, train_decoder
-    from lasa.people.demos import DemoConfig, collect_demonstrations
-    from lasa.people.rollout import Trajectories, rollout
-    from lasa.people.users import UserPopulation
-    from lasa.world.goals import GoalTask
-    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot
-    from lasa.world.task import CupTask, make_cup_task
+    from lasa.method.runner import Runner  # noqa: F401
+    from lasa.method.step import METHODS, Assist, shared_autonomy_step  # noqa: F401
+    from lasa.method.train import TrainConfig, train_decoder  # noqa: F401
+    from lasa.people.demos import DemoConfig, collect_demonstrations  # noqa: F401
+    from lasa.people.rollout import Trajectories, rollout  # noqa: F401
+    from lasa.people.users import UserPopulation  # noqa: F401
+    from lasa.world.goals import GoalTask  # noqa: F401
+    from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot  # noqa: F401
+    from lasa.world.task import CupTask, make_cup_task  # noqa: F401
 
 
 def __getattr__(name: str) -> Any:
@@ -128,47 +91,4 @@ try:  # the installed package's version (pyproject.toml), so that it cannot drif
 except Exception:  # running from a source tree that was never installed
     __version__ = "0.0.0+unknown"
 
-__all__ = [
-    "ActionDecoder",
-    "ArtifactError",
-    "Assist",
-    "Claim",
-    "CheckpointError",
-    "ConfigError",
-    "DamagedLogError",
-    "EmptySelectionError",
-    "ContextMap",
-    "ControlConfig",
-    "CupTask",
-    "DecoderConfig",
-    "DemoConfig",
-    "Demonstrations",
-    "GoalTask",
-    "IKError",
-    "LasaError",
-    "LatentActionModel",
-    "METHODS",
-    "MappedDecoder",
-    "Member",
-    "Paths",
-    "ROBOTS",
-    "Robot",
-    "Runner",
-    "RobotSpec",
-    "TrainConfig",
-    "Trajectories",
-    "UserPopulation",
-    "collect_demonstrations",
-    "extend_task",
-    "load_checkpoint",
-    "load_demonstrations",
-    "load_robot",
-    "make_cup_task",
-    "publish",
-    "rollout",
-    "save_checkpoint",
-    "save_demonstrations",
-    "shared_autonomy_step",
-    "train_decoder",
-    "update_claims",
-]
+__all__ = [*_EXPORTS]

@@ -1,17 +1,16 @@
 """Shared fixtures: the planar5 task, a small dataset and a briefly trained decoder.
 
-MUJOCO_GL stays ``osmesa`` (set by lasa on import) for the whole test process: the
-render test and the notebooks that the notebook tests start need it, and MuJoCo only
-touches OpenGL when a Renderer is created, so the other tests are unaffected.
+The runtime is pinned first (:func:`lasa.runtime.pin`, as make's exports do): MUJOCO_GL stays
+``osmesa`` for the whole test process (the render test and the notebooks the notebook tests start
+need it; MuJoCo touches OpenGL only when a Renderer is created) and the kernels are pinned before
+numpy and torch load.
 """
 
 from __future__ import annotations
 
-import os
+from lasa.runtime import pin
 
-os.environ.setdefault("MUJOCO_GL", "osmesa")
-
-__import__("lasa")  # first: lasa pins the numerical kernels before numpy and torch load, as make does
+pin()
 
 import pytest  # noqa: E402
 import torch  # noqa: E402

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.pipeline.runner import parse_params
+from lasa.pipeline.execute import parse_params
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -15,7 +15,6 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import lasa  # noqa: F401  (pins the kernels before numpy loads)
 from lasa.base.errors import ConfigError
 from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim

@@ -2,8 +2,11 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import lasa
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_star_import_works_in_a_fresh_interpreter():
@@ -15,12 +18,32 @@ def test_star_import_works_in_a_fresh_interpreter():
 
 def test_all_and_the_lazy_table_agree():
     """Each exported name is the object of that name in the module the lazy table names for it."""
+    import ast
     import importlib
 
     assert sorted(lasa.__all__) == sorted(lasa._EXPORTS)
+    tree = ast.parse((ROOT / "lasa" / "__init__.py").read_text())
+    (block,) = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"]
+    typed = {a.name: n.module for n in block.body if isinstance(n, ast.ImportFrom) for a in n.names}
+    assert typed == lasa._EXPORTS  # what type checkers see is what __getattr__ imports
     for name in lasa.__all__:
         home = importlib.import_module(lasa._EXPORTS[name])
         assert getattr(lasa, name) is getattr(home, name), name
+
+
+def test_import_lasa_changes_no_environment_variable_and_adds_no_import_hook():
+    """In a fresh process with a bare environment: ``import lasa`` and the lazy exports it resolves
+    leave ``os.environ`` and ``sys.meta_path`` as they were, and load neither numpy nor mujoco."""
+    code = (
+        "import os, sys; env = dict(os.environ); hooks = list(sys.meta_path); import lasa;"
+        "light = not {'numpy', 'torch', 'mujoco'} & set(sys.modules); lasa.Paths; lasa.Runner; lasa.publish;"
+        "print(light, dict(os.environ) == env, sys.meta_path == hooks)"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False, env={"PATH": ""}, cwd=ROOT
+    )
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.split() == ["True", "True", "True"]
 
 
 def test_unknown_name_is_an_attribute_error():

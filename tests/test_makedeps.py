@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def _package(root: Path) -> None:
     """A toy ``lasa``: a lazy export, an import inside a function, one for typing only."""
     (root / "lasa" / "a").mkdir(parents=True)
-    (root / "lasa" / "__init__.py").write_text('_EXPORTS = {"Thing": "lasa.a.one"}\n')
+    (root / "lasa" / "__init__.py").write_text('_HOMES = {"lasa.a.one": "Thing"}\n')
     (root / "lasa" / "a" / "__init__.py").write_text("")
     (root / "lasa" / "a" / "one.py").write_text(
         "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from lasa.a import three\n"
@@ -74,9 +74,9 @@ def _runs(tree: Path) -> list[str]:
     ).stdout
     runs = []
     for line in out.splitlines():
-        if "lasa.pipeline.runner" in line:
+        if "lasa.pipeline.execute" in line:
             words = line.split()
-            stem = Path(words[words.index("lasa.pipeline.runner") + 1]).stem
+            stem = Path(words[words.index("lasa.pipeline.execute") + 1]).stem
             robot = words[words.index("--robot") + 1] if "--robot" in words else "-"
             runs.append(f"{stem} {robot}")
     return sorted(runs)

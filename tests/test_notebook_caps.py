@@ -31,7 +31,7 @@ def uncapped(tmp_path_factory):
     settings.update(seed_readings=[])
     path = out / "uncapped.yaml"
     path.write_text(yaml.safe_dump(config))
-    command = [sys.executable, "-m", "lasa.pipeline.runner", str(NOTEBOOK), "--config", str(path),
+    command = [sys.executable, "-m", "lasa.pipeline.execute", str(NOTEBOOK), "--config", str(path),
                "--out", str(out / "notebooks"), "--param", f"build_dir={out / 'build'}",
                "--param", f"figures_dir={out / 'figures'}"]  # fmt: skip
     result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)

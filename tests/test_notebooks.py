@@ -20,7 +20,7 @@ from lasa.base.config import from_dict
 from lasa.evidence.claims import CLAIM_COLUMNS
 from lasa.evidence.video import read_video
 from lasa.experiments import sim1, sim2, sim3, sim4
-from lasa.pipeline.runner import load_config
+from lasa.pipeline.execute import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "quick.yaml"
@@ -75,7 +75,7 @@ def _chain(robot: str | None, out: Path) -> None:
         command = [
             sys.executable,
             "-m",
-            "lasa.pipeline.runner",
+            "lasa.pipeline.execute",
             str(ROOT / "notebooks" / f"{stem}.ipynb"),
             "--config",
             str(QUICK),

@@ -232,7 +232,7 @@ def test_make_figures_writes_the_pages():
     lines = [line for line in out.splitlines() if "lasa.pipeline.pages" in line]
     assert lines, out
     assert "--notebooks build/quick/notebooks" in lines[0] and "--figures build/quick/figures" in lines[0]
-    assert out.index("lasa.pipeline.pages") > out.rindex("lasa.pipeline.runner")  # after every notebook
+    assert out.index("lasa.pipeline.pages") > out.rindex("lasa.pipeline.execute")  # after every notebook
 
 
 def test_the_largest_figures_are_linked_first():

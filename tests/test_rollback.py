@@ -1,4 +1,4 @@
-"""A failed notebook leaves the figures folder as it was (the runner's write journal, lasa.base.journal)."""
+"""A failed notebook leaves the figures folder as it was (execution's write journal, lasa.base.journal)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import pytest
 from lasa.base import journal
 from lasa.base.errors import NotebookError
 from lasa.base.io import update_csv
-from lasa.pipeline.runner import run_notebook
+from lasa.pipeline.execute import run_notebook
 
 # One robot's run of a toy figure, as a figure notebook publishes it: its rows merged into toy.csv,
 # the PNG redrawn, its claim's rows in claims.csv and claim_values.csv (and claims.md), and a

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.pipeline.runner import load_config, notebook_parameters
+from lasa.pipeline.execute import load_config, notebook_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("*.ipynb"))
@@ -20,11 +20,15 @@ def test_there_are_notebooks():
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS, ids=lambda p: p.stem)
-def test_parameters_cell_is_first_code_cell_of_literals(notebook):
+def test_the_first_cell_pins_and_the_parameters_cell_of_literals_is_next(notebook):
+    """The first cell pins the runtime before anything loads numpy, torch or MuJoCo (a notebook opened
+    in Jupyter too); the next code cell is the parameters, literals only."""
     cells = json.loads(notebook.read_text())["cells"]
+    assert cells[0]["id"] == "pin-runtime"
+    assert "".join(cells[0]["source"]).endswith("import lasa.runtime\n\nlasa.runtime.pin()")
     code = [c for c in cells if c["cell_type"] == "code"]
-    assert "parameters" in code[0]["metadata"].get("tags", [])
-    tree = ast.parse("".join(code[0]["source"]))
+    assert "parameters" in code[1]["metadata"].get("tags", [])
+    tree = ast.parse("".join(code[1]["source"]))
     for node in tree.body:
         assert isinstance(node, ast.Assign), ast.dump(node)
         ast.literal_eval(node.value)  # literals only: derived values belong in the next cell
@@ -44,7 +48,8 @@ def settings_class(notebook):
     import importlib
     import re
 
-    source = "".join(json.loads(notebook.read_text())["cells"][1]["source"])
+    cells = json.loads(notebook.read_text())["cells"]
+    (source,) = ["".join(c["source"]) for c in cells if "parameters" in c["metadata"].get("tags", ())]
     match = re.search(r"^settings = \{\}  # fields of (lasa[\w.]*)\.(\w+) that differ", source, re.M)
     assert match, f"{notebook.name}: the settings comment must name its config class"
     return getattr(importlib.import_module(match.group(1)), match.group(2))
@@ -107,7 +112,7 @@ def test_malformed_config_is_an_error(tmp_path):
 
 
 def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
-    """The runner's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
+    """The CLI's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
     import subprocess
     import sys
 
@@ -145,7 +150,7 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
         [
             sys.executable,
             "-m",
-            "lasa.pipeline.runner",
+            "lasa.pipeline.execute",
             str(notebook),
             "--config",
             str(config),
@@ -174,7 +179,7 @@ def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
     ],
 )
 def test_a_missing_or_non_yaml_config_is_one_line(tmp_path, capsys, text, message):
-    from lasa.pipeline.runner import main
+    from lasa.pipeline.execute import main
 
     config = tmp_path / ("missing.yaml" if text is None else "bad.yaml")
     if text is not None:

@@ -22,7 +22,7 @@ from lasa.experiments.study import run as study
 from lasa.method.context_map import MAP_KINDS
 from lasa.method.entropy import LAMBDA_COST, choose_lambda
 from lasa.method.step import METHODS
-from lasa.pipeline.runner import load_config
+from lasa.pipeline.execute import load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 

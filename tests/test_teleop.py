@@ -341,7 +341,7 @@ def test_load_sessions_analyses_nothing_from_a_damaged_log(logged):
     assert int(episodes.end[0]) == 37
 
 
-@pytest.mark.parametrize("module", ["lasa.live.teleop", "lasa.pipeline.runner", "lasa.pipeline.book"])
+@pytest.mark.parametrize("module", ["lasa.live.teleop", "lasa.pipeline.execute", "lasa.pipeline.book"])
 def test_every_cli_option_has_help_text(module, monkeypatch, capsys):
     """Every option and argument of each command says what it is (argparse's --help)."""
     import argparse

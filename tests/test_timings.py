@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.pipeline import runner, timings
+from lasa.pipeline import execute, timings
 
 ROOT = Path(__file__).resolve().parents[1]
 T0 = datetime.datetime(2026, 12, 4, 23, 59, 0, tzinfo=datetime.UTC)
@@ -44,7 +44,7 @@ EXPECTED = [
 def _write(path: Path, runs: list[tuple[str, str | None, float, float]]) -> Path:
     for notebook, robot, start, end in runs:
         at = [T0 + datetime.timedelta(seconds=s) for s in (start, end)]
-        timings.append_run(path, timings.timing_record(notebook, robot, end - start, *at))
+        timings.append_run(path, notebook, robot, end - start, *at)
     return path
 
 
@@ -158,11 +158,11 @@ def test_a_malformed_line_names_its_file_and_line(tmp_path):
 
 
 def test_the_runner_records_start_and_end(tmp_path, monkeypatch):
-    """``runner.main --timings`` appends one line with the run's seconds, start and end (UTC)."""
-    monkeypatch.setattr(runner, "run_notebook", lambda *args, **kwargs: tmp_path / "x.ipynb")
+    """``execute.main --timings`` appends one line with the run's seconds, start and end (UTC)."""
+    monkeypatch.setattr(execute, "run_notebook", lambda *args, **kwargs: tmp_path / "x.ipynb")
     jsonl = tmp_path / "t" / "timings.jsonl"
     args = ["notebooks/04_fixed_expertise.ipynb", "--config", "c.yaml", "--out", str(tmp_path)]
-    assert runner.main([*args, "--robot", "panda", "--timings", str(jsonl)]) == 0
+    assert execute.main([*args, "--robot", "panda", "--timings", str(jsonl)]) == 0
     (run,) = timings.read_runs(jsonl)
     assert run.name == "04_fixed_expertise-panda" and run.start is not None and run.end is not None
     assert run.start <= run.end and run.start.utcoffset() == datetime.timedelta(0)
@@ -253,7 +253,7 @@ def test_the_makefile_expects_every_notebook_it_runs():
     )
     ran = set()
     for line in dry.stdout.splitlines():
-        if "lasa.pipeline.runner" in line:
+        if "lasa.pipeline.execute" in line:
             words = line.split()
             stem = Path(next(w for w in words if w.endswith(".ipynb"))).stem
             ran.add(f"{stem}-{words[words.index('--robot') + 1]}" if "--robot" in words else stem)

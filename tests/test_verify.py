@@ -172,7 +172,7 @@ def test_make_verify_runs_the_pipeline_into_its_own_folder_then_compares(tree):
     out = _make(tree, "-n", "verify")
     assert "figures OUT=build/verify" in out
     assert ".venv/bin/python -m lasa.pipeline.verify figures build/verify/figures" in out
-    runs = [line for line in out.splitlines() if "lasa.pipeline.runner" in line]
+    runs = [line for line in out.splitlines() if "lasa.pipeline.execute" in line]
     assert runs and all("--param figures_dir=build/verify/figures" in line for line in runs)
     assert "lasa.evidence.claims README.md" not in out  # figures/ and README.md untouched
 

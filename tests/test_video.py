@@ -105,15 +105,16 @@ def test_write_video_refuses_bad_shapes(tmp_path, shape):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_mediapy_reads_our_videos_after_import_lasa(tmp_path):
-    """In a fresh process with no ffmpeg on the PATH: `import lasa`, then mediapy reads an MP4 back."""
+def test_read_video_reads_our_videos_with_no_ffmpeg_on_the_path(tmp_path):
+    """In a fresh process with no ffmpeg on the PATH, read_video (mediapy with the pinned ffmpeg, set
+    where the video is read: `import lasa` installs no hook) reads an MP4 back."""
     import subprocess
     import sys
 
     clip = _clip(7)
     path = write_video(tmp_path / "v.mp4", clip)
     code = (
-        "import lasa, mediapy, sys; v = mediapy.read_video(sys.argv[1]); "
+        "import sys; from lasa.evidence.video import read_video; v = read_video(sys.argv[1]); "
         "print(v.shape[0], v.shape[1], v.shape[2])"
     )
     env = {**os.environ, "PATH": str(tmp_path / "no-ffmpeg-here")}

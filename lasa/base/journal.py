@@ -1,6 +1,7 @@
 """A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
 
-:func:`recording` names the journal folder to the run's processes (``LASA_WRITE_JOURNAL``). Each
+Notebook execution (:func:`lasa.pipeline.execute.run_notebook`) opens a journal with
+:func:`recording`, which names the journal folder to the run's processes (``LASA_WRITE_JOURNAL``). Each
 atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
 state (a hard link or copy, or absent) and the identity of the file put in place; a merged table
 (:func:`note_rows`) also the keys whose rows the run replaced. :func:`restore` puts back a file

@@ -2,7 +2,8 @@
 
 Rendering is software-only and slow: keep frames small (even sizes such as 320x240). An MP4 is a
 function of its frames alone (:func:`write_video`), encoded by the pinned ffmpeg
-(:mod:`lasa.base.ffmpeg`), which :func:`read_video` decodes with too.
+(:mod:`lasa.base.ffmpeg`), which :func:`read_video` decodes with too; :func:`lasa.runtime.pin`
+sets ``MUJOCO_GL``.
 """
 
 from __future__ import annotations

@@ -8,6 +8,11 @@ are the study kit (:mod:`lasa.live.studykit`). Safety, the display and the logs:
 
 from __future__ import annotations
 
+if __name__ == "__main__":  # the CLI: renderer and kernels pinned before mujoco, numpy and torch load
+    from lasa.runtime import pin
+
+    pin()
+
 import argparse
 import json
 import sys

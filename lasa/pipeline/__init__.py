@@ -1,3 +1,2 @@
-"""The pipeline: the notebook runner, a robot's workspace of artifacts, the scale-out of grids
-(joblib, Dask) and the book.
-"""
+"""The pipeline: notebook execution, a robot's workspace of artifacts, the scale-out of grids (joblib,
+Dask), the committed pages, the book, the wall times and ``make verify``."""

@@ -1,21 +1,9 @@
 """A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
 
-``python -m lasa.pipeline.book`` takes the executed notebooks of the last ``make figures``
-(``build/notebooks``) and the figures folder, and writes a static site to ``build/book``:
-
-- the **front page** is the verdict table (``figures/verdicts.md``), each row linking to the
-  notebook behind it; the full claims table is a page of its own, the last;
-- then **one page per notebook**, in the order of the paper (01 to 11; the per-robot
-  notebooks for planar5, then the Panda, each titled with its robot), with their figures,
-  tables and outputs; the figures folder is copied beside them (the notebooks' Markdown
-  shows ``../figures/*.png`` and links the videos);
-- **nothing is executed again** (``execute_notebooks: off``);
-- **it works offline**: Jupyter Book 1 is Sphinx with a theme installed from the registry;
-  MathJax is served from the site itself (``mathjax/``, from the ``mathjax`` npm package that
-  ``make setup`` fetches into ``.venv/mathjax``), and the widget scripts that myst-nb would load
-  from a CDN are switched off (progress bars show as text).
-
-Publish it by copying ``build/book/html`` to any static host (it is plain files).
+``python -m lasa.pipeline.book`` writes a static site to ``build/book/html`` from ``build/notebooks``
+and the figures folder: the verdict table as front page, one page per notebook in the paper's order
+(planar5, then the Panda), the claims table last. Nothing is executed again; it works offline
+(MathJax served from the site, myst-nb's CDN widget scripts off).
 """
 
 from __future__ import annotations
@@ -35,14 +23,7 @@ from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
 
-__all__ = [
-    "ordered_notebooks",
-    "front_page",
-    "claims_page",
-    "retitle",
-    "build_book",
-    "main",
-]
+__all__ = ["ordered_notebooks", "front_page", "claims_page", "retitle", "build_book", "main"]
 
 ROBOT_ORDER = ("planar5", "panda")
 ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
@@ -112,14 +93,10 @@ def build_book(
     mathjax: str | Path | None = None,
     progress: bool = True,
 ) -> Path:
-    """Assemble the book's sources under ``out/src`` and build the site into ``out/html``.
-
-    Args:
-        notebooks: The executed notebooks (``build/notebooks``).
-        figures: The figures folder (its ``claims.csv`` makes the front page).
-        out: The book's folder; ``out/html/index.html`` is the front page.
-        mathjax: MathJax's ``es5`` folder (default ``.venv/mathjax/es5``, made by ``make setup``).
-        progress: Show Jupyter Book's output.
+    """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
+    folder (its ``claims.csv`` makes the front page), and build the site into ``out/html``; returns
+    ``out/html/index.html``. ``mathjax``: MathJax's ``es5`` folder (``.venv/mathjax/es5`` by default,
+    made by ``make setup``); ``progress``: show Jupyter Book's output.
 
     Raises:
         ArtifactError: if there are no executed notebooks, no claims table or no MathJax.

@@ -1,21 +1,10 @@
 """Which of lasa's files each notebook runs: the Make prerequisites of the figure targets.
 
-A notebook's executed copy must be re-made when a module it imports changes, directly or
-through other modules, and only then: an edit to live use (:mod:`lasa.live`), which no
-notebook reaches, leaves ``make figures`` with nothing to do, and an edit to one figure's
-module re-runs that figure's notebooks alone.
-
-The closure is read from the source, never by importing it (Make runs this with the system
-Python, before the environment exists): every ``import`` and ``from ... import`` of the
-notebook's code cells, then of each lasa module they reach, anywhere in the file (imports
-inside functions included, those under ``if TYPE_CHECKING:`` left out), with
-``from lasa import X`` resolved through the package's lazy exports (``lasa._EXPORTS``) or to
-the submodule ``X``. A module that reaches the robots
-(:mod:`lasa.world.robot`) also depends on their MJCF assets. Every notebook depends on
-``lasa/__init__.py`` (imported first) and ``pyproject.toml`` (the version it records).
-
-Run as a script: ``python lasa/pipeline/makedeps.py notebooks/*.ipynb`` prints one Make
-variable per notebook, ``NB_SRC_<stem> := <files>``. Standard library only.
+Read from the source, never imported (Make runs it with the system Python; standard library only):
+the imports of a notebook's code cells and, transitively, of each lasa module they reach (in
+functions too, not under ``if TYPE_CHECKING:``; ``from lasa import X`` through ``lasa._EXPORTS``),
+plus the robots' MJCF assets and :data:`ALWAYS`. ``python lasa/pipeline/makedeps.py
+notebooks/*.ipynb`` prints ``NB_SRC_<stem> := <files>`` per notebook.
 """
 
 from __future__ import annotations
@@ -45,12 +34,13 @@ def module_file(name: str, root: Path = ROOT) -> Path | None:
 
 @functools.cache
 def _exports(root: Path) -> dict[str, str]:
-    """``lasa._EXPORTS``: name -> defining module, read from the package's source (once)."""
+    """``lasa._EXPORTS``: name -> defining module, read from the package's ``_HOMES`` (once)."""
     for node in ast.walk(ast.parse((root / "lasa" / "__init__.py").read_text())):
         if isinstance(node, ast.Assign) and any(
-            isinstance(t, ast.Name) and t.id == "_EXPORTS" for t in node.targets
+            isinstance(t, ast.Name) and t.id == "_HOMES" for t in node.targets
         ):
-            return dict(ast.literal_eval(node.value))
+            homes = ast.literal_eval(node.value)
+            return {name: module for module, names in homes.items() for name in names.split()}
     return {}
 
 

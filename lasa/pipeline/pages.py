@@ -1,32 +1,11 @@
 """The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``.
 
-``make figures`` runs each notebook into ``build/notebooks`` (:mod:`lasa.pipeline.runner`); those
-copies carry timings, kernel ids and progress bars, and are not committed. ``python -m
-lasa.pipeline.pages --notebooks build/notebooks --figures figures`` writes each of them, cleaned
-(:func:`clean_notebook`), to ``figures/notebooks/<same name>``, so that a reader sees every
-notebook with its figures, tables and "What it shows" on the page without running anything:
-
-- **dropped**: papermill's and the kernel's metadata (timings, start and end times, the cell
-  ``execution`` stamps, widget state), progress bars (tqdm's widget outputs and its ``\\r``
-  streams on stderr), empty ``tags`` and the clone's path in printed file names (a warning's);
-  execution counts are renumbered 1..n over the code cells, and papermill's injected-parameters
-  cell, whose id is random, gets the id ``injected-parameters``;
-- **replaced**: an embedded video (``<video>`` HTML or ``video/mp4`` data) by a Markdown link to
-  the committed MP4 of the same bytes, or dropped when none matches; an image output that names
-  its figure (output metadata ``{"figure": "<name>.png"}``, set by the notebook's
-  ``Image(..., metadata={"figure": ...})``) by the final bytes of that figure, so that the page
-  does not depend on which robot's run published it last;
-- **rewritten**: relative links of Markdown, written from ``notebooks/`` (``../figures/x.png``),
-  as seen from ``figures/notebooks/`` (``../x.png``); the page's metadata says so
-  (``lasa.links_from``), so that cleaning a page again changes nothing;
-- **kept**: every other output (tables, printed sentences, Markdown outputs, figures).
-
-The pages are written as nbformat writes notebooks (sorted keys, indent 1, a final newline), so
-the same executed notebooks give the same bytes. All of them together must stay under
-:data:`BUDGET` bytes: when they would not, each image output whose bytes are those of a committed
-``figures/*.png`` is replaced by a Markdown image link to it (``![name](../name.png)``), the
-figures that take the most bytes over all pages first, until they fit; if they still do not fit,
-:func:`write_pages` raises :class:`PageBudgetError` (exit status 1).
+``python -m lasa.pipeline.pages --notebooks build/notebooks --figures figures`` writes each executed
+notebook cleaned (:func:`clean_notebook`: no volatile metadata or progress bars, videos as links to
+the committed MP4s, named figures as their final bytes, links as seen from the pages' folder) as
+nbformat writes it, so the same runs give the same bytes. All pages together stay under
+:data:`BUDGET`: committed figures are linked instead of embedded, the largest first, until they fit;
+else :class:`PageBudgetError` (exit status 1).
 """
 
 from __future__ import annotations
@@ -47,16 +26,7 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import write_text
 from lasa.base.paths import repo_root
 
-__all__ = [
-    "BUDGET",
-    "PAGES",
-    "PageBudgetError",
-    "FigureIndex",
-    "clean_notebook",
-    "page_text",
-    "write_pages",
-    "main",
-]
+__all__ = ["BUDGET", "PageBudgetError", "FigureIndex", "clean_notebook", "page_text", "write_pages", "main"]
 
 BUDGET = 5_000_000  # bytes of every page together (issue 47: "at most 5 MB in all")
 PAGES = "notebooks"  # the pages' folder inside the figures folder
@@ -169,8 +139,8 @@ def _image(output: dict[str, Any], figures: FigureIndex, link: Link) -> dict[str
 def _clean_output(
     output: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any] | None:
-    """One output as it appears on the page, or None if it is dropped; ``relink``: its Markdown's
-    links are still relative to ``notebooks/``."""
+    """One output as it appears on the page, or None if it is dropped (``relink``: as in
+    :func:`_clean_cell`)."""
     kind = output["output_type"]
     if kind == "stream":
         text = _text(output["text"])
@@ -220,16 +190,20 @@ def _clean_cell(
 def clean_notebook(
     notebook: dict[str, Any], figures: Path | FigureIndex | None = None, link_figures: Link = False
 ) -> dict[str, Any]:
-    """The page of an executed notebook: ``notebook`` without its volatile parts (see the module).
+    """The page of an executed notebook (not modified), a new notebook that cleaning again leaves as it is.
+
+    Dropped: papermill's and the kernel's metadata, progress bars (tqdm's widgets and ``\\r`` streams),
+    empty ``tags``, the clone's path in printed file names; execution counts renumbered 1..n;
+    papermill's injected-parameters cell gets that id. Replaced: an embedded video by a link to the
+    committed MP4 of the same bytes (or dropped); an image output naming its figure (output metadata
+    ``{"figure": "<name>.png"}``) by that figure's final bytes. Rewritten: Markdown's relative links,
+    written from ``notebooks/``, as seen from ``figures/notebooks/`` (``lasa.links_from`` says so).
 
     Args:
-        notebook: The executed notebook, as read from JSON (it is not modified).
+        notebook: The executed notebook, as read from JSON.
         figures: The figures folder (its PNG and MP4 files), or an index of it; None if there is none.
         link_figures: Replace each image output whose bytes are a committed PNG by a link to it
             (True), or those of the PNGs named in a set.
-
-    Returns:
-        A new notebook; cleaning it again returns it unchanged.
     """
     index = figures if isinstance(figures, FigureIndex) else FigureIndex(figures)
     out = {k: copy.deepcopy(v) for k, v in notebook.items() if k not in ("cells", "metadata")}
@@ -249,7 +223,7 @@ def clean_notebook(
 
 def page_text(notebook: dict[str, Any]) -> str:
     """A notebook as nbformat writes it (sorted keys, indent 1, lines split), with a final newline."""
-    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]  # see lasa.pipeline.runner
+    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]  # see lasa.pipeline.execute
     import nbformat
 
     text = nbformat.writes(nbformat.from_dict(notebook), version=4)
@@ -287,10 +261,6 @@ def _pages(sources: Iterable[Path], figures: FigureIndex, link: Link) -> dict[st
     return {p.name: clean_notebook(_read(p), figures, link) for p in sources}
 
 
-def _texts(pages: dict[str, dict[str, Any]]) -> dict[str, str]:
-    return {name: page_text(page) for name, page in pages.items()}
-
-
 def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
     """The bytes each committed figure takes, embedded, over all ``pages``."""
     taken: dict[str, int] = {}
@@ -323,17 +293,11 @@ def _size(pages: dict[str, str]) -> int:
 def write_pages(
     executed: str | Path, figures: str | Path, budget: int = BUDGET
 ) -> tuple[list[Path], int, frozenset[str]]:
-    """Write the page of every executed notebook to ``<figures>/notebooks/``.
-
-    Args:
-        executed: The folder of the executed notebooks (``build/notebooks``).
-        figures: The run's figures folder; the pages go to its ``notebooks`` subfolder.
-        budget: The most bytes the pages may take together (the ones already there and not
-            regenerated count too).
+    """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``.
 
     Returns:
-        The pages written, the bytes of every page in the folder, and the committed figures
-        linked rather than embedded to fit (the largest first).
+        The pages written, the bytes of every page in the folder (within ``budget``, the pages
+        already there counted too), and the committed figures linked rather than embedded to fit.
 
     Raises:
         ArtifactError: if there are no executed notebooks, or one is not a notebook.
@@ -349,11 +313,11 @@ def write_pages(
         else 0
     )
     embedded = _pages(sources, index, link=False)
-    pages = _texts(embedded)
+    pages = {name: page_text(page) for name, page in embedded.items()}
     linked: frozenset[str] = frozenset()
     if others + _size(pages) > budget:
         linked = _to_link(_figure_bytes(embedded, index), others + _size(pages) - budget)
-        pages = _texts(_pages(sources, index, link=linked))
+        pages = {name: page_text(page) for name, page in _pages(sources, index, link=linked).items()}
     total = others + _size(pages)
     if total > budget:
         biggest = sorted(pages, key=lambda n: -len(pages[n].encode()))[:3]

@@ -1,15 +1,8 @@
-"""Independent jobs, run locally or on a Dask cluster, with the same results either way.
+"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way.
 
-A sweep grid (:mod:`lasa.experiments.robustness`) is a list of independent cells. :func:`run_jobs`
-runs them through ``joblib``: in this process by default (``n_jobs`` worker processes if
-asked), or, given a Dask scheduler address, on that cluster through joblib's ``dask``
-backend (``dask.distributed``). The address comes from the caller (a config key) or from
-the environment variable ``LASA_SCHEDULER`` (``tcp://host:8786``); with neither, nothing
-needs a cluster.
-
-Each job is a pure function of its arguments, seeded, and runs with one torch thread
-(:func:`lasa.base.config.set_threads`), and results come back in the jobs' order: the CSV a
-grid writes is the same wherever its cells ran.
+Each job is a pure, seeded function of its arguments, run with one torch thread, and the results
+come back in the jobs' order: a grid's CSV is the same wherever its cells ran. The scheduler address
+comes from the caller or ``$LASA_SCHEDULER``; with neither, nothing needs a cluster.
 """
 
 from __future__ import annotations
@@ -67,19 +60,12 @@ def run_jobs(
     Args:
         fn: A picklable (module-level) function of one item, or of ``(shared, item)``.
         items: The jobs' arguments (picklable).
-        scheduler: A Dask scheduler address; None uses ``$LASA_SCHEDULER`` if set, else
-            runs locally.
-        n_jobs: Local worker processes (1: in this process). Ignored on a cluster, which
-            uses all its workers.
-        progress: Show a progress bar over finished jobs.
-        desc: The progress bar's label.
+        scheduler: A Dask scheduler address (:func:`scheduler_address`); None: local, unless set.
+        n_jobs: Local worker processes (1: in this process); a cluster uses all its workers.
+        progress: Show a progress bar (labelled ``desc``) over finished jobs.
         timeout: How long to wait for the scheduler to answer (a Dask duration).
-        shared: An object every job reads (decoders, task, ...), passed as ``fn``'s first
-            argument when not None. On a cluster it is scattered to the workers once instead of being
-            sent with every job.
-
-    Returns:
-        The results, in the order of ``items``.
+        shared: What every job reads (decoders, task, ...), ``fn``'s first argument when not None;
+            scattered to a cluster's workers once.
 
     Raises:
         ConfigError: for a bad address, or a scheduler that cannot be reached.

@@ -1,29 +1,15 @@
-"""The pipeline's wall times, from the run that measured them.
+"""The pipeline's wall times, from the run that measured them (``make figures``).
 
-Every notebook run by :mod:`lasa.pipeline.runner` with ``--timings`` appends one JSON line,
-``{notebook, robot, seconds, start, end}`` (``start`` and ``end`` in ISO 8601, UTC), to
-``<build>/timings.jsonl``; ``make figures`` removes the file first, so after a run it holds that
-invocation's notebooks. :func:`record_figures` turns it into ``figures_s`` of
-``benchmarks/results.json``: ``total`` (the wall time, from the first notebook's start to the last
-one's end: not the sum, since notebooks run side by side), ``per_notebook``, ``sum_of_notebooks``
-and ``measured`` (the machine, the date, the commit, the command and how the total was taken).
-A paper-scale run writes the top level of ``figures_s``, a QUICK run its ``quick`` part. A run in
-which Make skipped up-to-date notebooks is partial: its span is not the pipeline's time, so it is
-refused and ``results.json`` is left as it was.
-
-:func:`sync_readmes` then writes the README's sentence on ``make figures``'s time and the table of
-``benchmarks/README.md`` from ``results.json``, between markers (:data:`README_MARKERS`,
-:data:`BENCH_MARKERS`), as :func:`lasa.evidence.claims.sync_readme` does for the verdict table.
-
-Usage (``make figures`` runs it after the notebooks, for ``build`` and ``build/quick``)::
-
-    python -m lasa.pipeline.timings build/timings.jsonl --part paper --command "make figures" \\
-        --expect 01_demonstrations-planar5 ... 11_eating_study
+Each notebook run with ``--timings`` (:mod:`lasa.pipeline.execute`) appends ``{notebook, robot,
+seconds, start, end}`` (UTC) to ``<build>/timings.jsonl``. :func:`record_figures` turns a whole
+run's file into ``figures_s`` of ``benchmarks/results.json`` (a partial run, where Make skipped
+notebooks, is refused); :func:`sync_readmes` writes the READMEs' sentence and table from it.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import datetime
 import importlib.metadata
@@ -42,20 +28,14 @@ from lasa.base.io import locked, sync_between, write_text
 __all__ = [
     "README_MARKERS",
     "BENCH_MARKERS",
-    "PARTS",
     "Run",
-    "timing_record",
     "append_run",
     "read_runs",
     "read_timings",
-    "incomplete",
     "machine",
     "git_commit",
     "summarize",
     "record_figures",
-    "duration",
-    "render_sentence",
-    "render_table",
     "sync_readmes",
     "main",
 ]
@@ -68,23 +48,17 @@ BENCH_MARKERS = (
     "<!-- figures-table:begin (generated from results.json by make figures) -->",
     "<!-- figures-table:end -->",
 )
-# A part of figures_s: the paper-scale run (the top level) or the QUICK one (under "quick"),
-# with the results.json target each is held to.
-PARTS = ("paper", "quick")
-_TARGETS = {"paper": "figures_total_s", "quick": "figures_quick_total_s"}
-_ROWS = {"paper": "`make figures`, paper scale, fresh", "quick": "`make figures QUICK=1`, fresh"}
+PARTS = ("paper", "quick")  # figures_s's top level, or its "quick" part
+_ROWS = {  # each part's row in benchmarks/README.md's table and its target in results.json
+    "paper": ("`make figures`, paper scale, fresh", "figures_total_s"),
+    "quick": ("`make figures QUICK=1`, fresh", "figures_quick_total_s"),
+}
 
 
 @dataclasses.dataclass(frozen=True)
 class Run:
-    """One notebook run, a line of ``timings.jsonl``.
-
-    Attributes:
-        name: ``<notebook>-<robot>``, or ``<notebook>`` for a notebook run without a robot.
-        seconds: Its wall time as the runner measured it [s].
-        start: When it started (UTC); ``None`` in a line of a runner before start and end.
-        end: When it ended (UTC); ``None`` likewise.
-    """
+    """One notebook run, a line of ``timings.jsonl``: ``<notebook>[-<robot>]``, its wall time [s],
+    its start and end (UTC; ``None`` in a line of an older version)."""
 
     name: str
     seconds: float
@@ -92,23 +66,22 @@ class Run:
     end: datetime.datetime | None = None
 
 
-def timing_record(
-    notebook: str, robot: str | None, seconds: float, start: datetime.datetime, end: datetime.datetime
-) -> dict[str, Any]:
-    """The JSON line of one notebook run: ``{notebook, robot, seconds, start, end}``."""
-    return {
-        "notebook": notebook,
-        "robot": robot,
-        "seconds": round(seconds, 2),
-        "start": start.astimezone(datetime.UTC).isoformat(timespec="milliseconds"),
-        "end": end.astimezone(datetime.UTC).isoformat(timespec="milliseconds"),
+def append_run(
+    path: str | os.PathLike[str],
+    notebook: str,
+    robot: str | None,
+    seconds: float,
+    start: datetime.datetime,
+    end: datetime.datetime,
+) -> None:
+    """Append one run's ``{notebook, robot, seconds, start, end}`` to ``path`` as one JSON line (a
+    short line: parallel appends do not interleave)."""
+    utc = {
+        k: t.astimezone(datetime.UTC).isoformat(timespec="milliseconds")
+        for k, t in (("start", start), ("end", end))
     }
-
-
-def append_run(path: str | os.PathLike[str], record: Mapping[str, Any]) -> None:
-    """Append ``record`` to ``path`` as one line (a short line: parallel appends do not interleave)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    record = {"notebook": notebook, "robot": robot, "seconds": round(seconds, 2), **utc}
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     with open(path, "a") as fh:
         fh.write(json.dumps(record) + "\n")
 
@@ -118,9 +91,7 @@ def _when(value: str | None) -> datetime.datetime | None:
     if value is None:
         return None
     when = datetime.datetime.fromisoformat(value)
-    if when.tzinfo is None:
-        when = when.replace(tzinfo=datetime.UTC)
-    return when.astimezone(datetime.UTC)
+    return (when if when.tzinfo else when.replace(tzinfo=datetime.UTC)).astimezone(datetime.UTC)
 
 
 def read_runs(path: str | os.PathLike[str]) -> list[Run]:
@@ -128,11 +99,11 @@ def read_runs(path: str | os.PathLike[str]) -> list[Run]:
 
     Raises:
         ArtifactError: if the file is missing.
-        ConfigError: if a line is not a runner's record.
+        ConfigError: if a line is not a timing record.
     """
     path = Path(path)
     if not path.is_file():
-        raise ArtifactError(f"{path} does not exist: `make figures` writes it (the runner's --timings)")
+        raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
     runs = []
     for number, line in enumerate(path.read_text().splitlines(), 1):
         if not line.strip():
@@ -147,44 +118,37 @@ def read_runs(path: str | os.PathLike[str]) -> list[Run]:
 
 
 def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
-    """``{"<notebook>-<robot>": seconds}`` from a runner ``--timings`` file (JSON lines)."""
+    """``{"<notebook>-<robot>": seconds}`` from a ``--timings`` file (JSON lines)."""
     return {run.name: run.seconds for run in read_runs(path)}
 
 
-def incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
-    """Why ``runs`` are not one whole run of the ``expected`` notebooks, or ``None`` if they are.
-
-    A whole run holds every expected notebook once and nothing else, each with its start and end.
-    """
+def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
+    """Why ``runs`` are not one whole run (every ``expected`` notebook once, nothing else, each
+    with its start and end), or ``None``."""
     names = [run.name for run in runs]
-    missing = sorted(set(expected) - set(names))
-    extra = sorted(set(names) - set(expected))
-    twice = sorted({name for name in names if names.count(name) > 1})
-    if missing:
-        return f"{len(names)} of {len(set(expected))} notebooks ran; not run: {', '.join(missing)}"
-    if extra:
-        return f"notebooks outside the expected set ran: {', '.join(extra)}"
-    if twice:
-        return f"notebooks recorded more than once: {', '.join(twice)}"
-    undated = [run.name for run in runs if run.start is None or run.end is None]
-    if undated:
-        return f"runs without start and end times (an older runner): {', '.join(undated)}"
+    for found, why in (
+        (sorted(set(expected) - set(names)), f"{len(names)} of {len(set(expected))} notebooks ran; not run"),
+        (sorted(set(names) - set(expected)), "notebooks outside the expected set ran"),
+        (sorted({name for name in names if names.count(name) > 1}), "notebooks recorded more than once"),
+        (
+            [r.name for r in runs if r.start is None or r.end is None],
+            "runs without start and end times (an older runner)",
+        ),
+    ):
+        if found:
+            return f"{why}: {', '.join(found)}"
     return None
 
 
 def machine() -> dict[str, Any]:
-    """What this process runs on: CPU model, cores, and the Python, torch, numpy, MuJoCo versions.
-
-    The versions are read from the installed distributions, so nothing heavy is imported.
-    """
+    """What this process runs on: CPU model, cores, and the Python, torch, numpy, MuJoCo versions
+    (read from the installed distributions, so nothing heavy is imported)."""
     cpu = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    with contextlib.suppress(OSError):
+        models = [
+            line for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")
+        ]
+        cpu = models[0].split(":", 1)[1].strip() if models else cpu
     out: dict[str, Any] = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version()}
     for package in ("torch", "numpy", "mujoco"):
         try:
@@ -212,20 +176,11 @@ def summarize(
     host: Mapping[str, Any] | None = None,
     commit: str | None = None,
 ) -> dict[str, Any]:
-    """One part of ``figures_s`` from a whole run's ``runs``.
+    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``.
 
-    Args:
-        runs: Every notebook of the run, each with its start and end.
-        command: The command that ran them (``make figures``).
-        source: Where the times were read (the timings file).
-        host: The machine (:func:`machine`); this one's by default.
-        commit: The code's commit (:func:`git_commit`); this checkout's ``HEAD`` by default.
-
-    Returns:
-        ``{total, per_notebook, sum_of_notebooks, date, machine, commit, command, source}``: the
-        wall time from the first start to the last end [s], each notebook's seconds, their sum, the
-        ``date`` (UTC) of the first start, the ``machine`` (:func:`machine`), the code's commit, the
-        command and where the times were read (``source``): the run that measured them.
+    ``host`` and ``commit`` default to :func:`machine` and :func:`git_commit`'s. Returns ``{total,
+    per_notebook, sum_of_notebooks, date, machine, commit, command, source}``: ``total`` is the wall
+    time from the first start to the last end (notebooks run side by side), ``date`` the first start's.
 
     Raises:
         ConfigError: if there are no runs, or a run lacks its start or end.
@@ -274,19 +229,11 @@ def record_figures(
     """Write a whole run's times from ``timings`` into ``results``' ``figures_s``, atomically.
 
     ``part`` ``"paper"`` replaces the top level of ``figures_s`` (its ``quick`` part is kept),
-    ``"quick"`` replaces ``figures_s.quick``; every other key of ``results`` is kept.
+    ``"quick"`` replaces ``figures_s.quick``; every other key of ``results`` is kept. ``expected``
+    are the notebooks of a whole run; ``summary``: ``host`` and ``commit`` for :func:`summarize`.
 
-    Args:
-        timings: The run's ``timings.jsonl``.
-        results: ``benchmarks/results.json``.
-        part: ``"paper"`` or ``"quick"`` (:data:`PARTS`).
-        expected: The notebooks a whole run runs (``<notebook>-<robot>`` or ``<notebook>``).
-        command: The command that ran them, recorded beside the times.
-        **summary: ``host`` and ``commit`` for :func:`summarize`.
-
-    Returns:
-        The part written, or ``None`` when the run was not whole (no timings file, or not every
-        expected notebook ran once in it): then ``results`` is left untouched and the reason printed.
+    Returns the part written, or ``None`` (the reason printed, ``results`` untouched) when the run was
+    not whole: no timings file, or not every expected notebook ran once in it.
 
     Raises:
         ConfigError: for an unknown ``part``, or a ``results`` that is not a JSON object.
@@ -298,7 +245,7 @@ def record_figures(
         print(f"{results} left as it was: no notebook ran in this invocation ({timings} does not exist)")
         return None
     runs = read_runs(timings)
-    why = incomplete(runs, expected)
+    why = _incomplete(runs, expected)
     if why is not None:
         print(f"{results} left as it was: not a whole run ({why}); a whole run needs `make clean` first")
         return None
@@ -315,43 +262,44 @@ def record_figures(
     return written
 
 
-def duration(seconds: float) -> str:
+def _duration(seconds: float) -> str:
     """A wall time in words: seconds below two minutes, else whole minutes (``50 min``)."""
     return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
 
 
-def render_sentence(figures_s: Mapping[str, Any]) -> str:
+def _sentence(figures_s: Mapping[str, Any]) -> str:
     """The README's words on the paper-scale ``make figures`` time, from ``figures_s``."""
     m, f = figures_s["machine"], figures_s
     return (
-        f"on {m['cores']} cores `make figures` took {duration(f['total'])} "
+        f"on {m['cores']} cores `make figures` took {_duration(f['total'])} "
         f"({m['cpu']}, {f['date']}, at {f['commit']}: `figures_s` in benchmarks/results.json)"
     )
 
 
-def _row(part: str, figures: Mapping[str, Any] | None, target: float | None) -> str:
+def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, float]) -> str:
     """One row of the pipeline's table: a part's time, its run, its target and whether it is met."""
+    label, target = _ROWS[part][0], targets.get(_ROWS[part][1])
     bound = f"≤ {target:,.0f} s" if target is not None else "(none)"
     if not figures:
-        return f"| {_ROWS[part]} | not measured | | | {bound} | |"
+        return f"| {label} | not measured | | | {bound} | |"
     m, total = figures["machine"], figures["total"]
     verdict = "" if target is None else ("met" if total <= target else "**missed**")
     at = "commit unknown" if figures["commit"] == "unknown" else f"at {figures['commit']}"
     run = f"{m['cpu']}, {m['cores']} cores, {figures['date']}, {at}: `{figures['command']}`"
     return (
-        f"| {_ROWS[part]} | **{total:,.0f} s** ({duration(total)}) | "
+        f"| {label} | **{total:,.0f} s** ({_duration(total)}) | "
         f"{figures['sum_of_notebooks']:,.0f} s | {run} | {bound} | {verdict} |"
     )
 
 
-def render_table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> str:
+def _table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> str:
     """``benchmarks/README.md``'s table of the pipeline's wall times, from ``figures_s``."""
     paper = figures_s if "total" in figures_s else None
     lines = [
         "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |",
         "| --- | ---: | ---: | --- | --- | --- |",
-        _row("paper", paper, targets.get(_TARGETS["paper"])),
-        _row("quick", figures_s.get("quick"), targets.get(_TARGETS["quick"])),
+        _row("paper", paper, targets),
+        _row("quick", figures_s.get("quick"), targets),
     ]
     return "\n".join(lines)
 
@@ -361,15 +309,8 @@ def sync_readmes(
     readme: str | os.PathLike[str] | None = "README.md",
     bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
 ) -> list[Path]:
-    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results``.
-
-    Args:
-        results: ``benchmarks/results.json``.
-        readme: The README with :data:`README_MARKERS` (``None``: leave it).
-        bench_readme: The benchmarks' README with :data:`BENCH_MARKERS` (``None``: leave it).
-
-    Returns:
-        The files that changed.
+    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results``, between
+    :data:`README_MARKERS` and :data:`BENCH_MARKERS` (a README ``None``: left alone); the files changed.
 
     Raises:
         ConfigError: if ``results`` has no paper-scale ``figures_s``, or a file lacks its markers.
@@ -379,9 +320,9 @@ def sync_readmes(
     if "total" not in figures:
         raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
     changed = []
-    if readme is not None and sync_between(readme, README_MARKERS, render_sentence(figures), inline=True):
+    if readme is not None and sync_between(readme, README_MARKERS, _sentence(figures), inline=True):
         changed.append(Path(readme))
-    table = render_table(figures, data.get("targets", {}))
+    table = _table(figures, data.get("targets", {}))
     if bench_readme is not None and sync_between(bench_readme, BENCH_MARKERS, table):
         changed.append(Path(bench_readme))
     return changed
@@ -396,9 +337,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--command", required=True, help="the command that ran them, for the record")
     parser.add_argument("--results", default="benchmarks/results.json", help="the file of figures_s")
     parser.add_argument("--readme", default="README.md", help="the README with the figures-time markers")
-    parser.add_argument(
-        "--bench-readme", default="benchmarks/README.md", help="the README with the figures-table markers"
-    )
+    parser.add_argument("--bench-readme", default="benchmarks/README.md", help="the figures-table's README")
     args = parser.parse_args(argv)
     try:
         record_figures(args.timings, args.results, args.part, args.expect, args.command)

@@ -1,19 +1,11 @@
 """Did a regenerated figures folder reproduce the committed one? (``make verify``)
 
-``python -m lasa.pipeline.verify <committed_dir> <new_dir> [--rtol R] [--atol A]`` compares two
-figures folders file by file (:func:`compare_folders`) and prints one table, then a summary line:
-every CSV's shape and per-column differences (:func:`compare_csv`, rows matched by
-:func:`key_columns`), every other file's bytes (:func:`compare_bytes`), and every claim whose
-verdict (:data:`VERDICT_COLUMNS`) differs (:func:`compare_verdicts`); above it, each run's
-``kernels.json`` (:mod:`lasa.base.kernels`). The notebook pages (``notebooks/*.ipynb``,
-:mod:`lasa.pipeline.pages`) are compared by their code cells' outputs as text
-(:func:`compare_notebook`), each run's folders written as ``<build_dir>`` and ``<figures_dir>``.
-
-The exit status is 1 if and only if a verdict differs, a claim is in one table only, or
-``claims.csv`` is missing from either folder; value differences are reported, never fatal. A
-missing folder is an error (status 2). A numeric cell differs when ``|new - committed| > atol +
-rtol * |committed|``; the defaults, ``rtol = 1e-6`` and ``atol = 1e-9``, mean "identical to
-print precision" (why: ``docs/method-notes.md``).
+``python -m lasa.pipeline.verify COMMITTED NEW [--rtol R] [--atol A]`` prints each run's
+``kernels.json`` (:mod:`lasa.runtime`), one table of every file (CSV values by column, rows matched
+by :func:`key_columns`; notebook pages by their outputs; other files by bytes) and a summary. It
+fails (status 1) only if a verdict differs, a claim is in one table only, or ``claims.csv`` is
+missing; a missing folder is status 2. The tolerances' defaults mean "identical to print precision"
+(``docs/method-notes.md``).
 """
 
 from __future__ import annotations
@@ -22,6 +14,7 @@ import argparse
 import ast
 import dataclasses
 import hashlib
+import itertools
 import json
 import re
 import sys
@@ -33,25 +26,10 @@ import pandas as pd
 
 from lasa.base.errors import ArtifactError
 
-__all__ = [
-    "CLAIMS",
-    "VERDICT_COLUMNS",
-    "Tolerance",
-    "Row",
-    "Report",
-    "key_columns",
-    "compare_csv",
-    "compare_bytes",
-    "compare_notebook",
-    "compare_verdicts",
-    "compare_folders",
-    "kernels_text",
-    "format_table",
-    "main",
-]
+__all__ = ["Tolerance", "Row", "Report", "key_columns", "compare_folders", "main"]
 
 CLAIMS = "claims.csv"
-KERNELS = "kernels.json"  # the run's kernel settings (lasa.base.kernels), printed for both runs
+KERNELS = "kernels.json"  # the run's kernel settings (lasa.runtime), printed for both runs
 VERDICT_COLUMNS = ("effect", "number", "reproduced", "settled")  # a claim's words, per (id, robot)
 CLAIM_KEY = ("id", "robot")
 
@@ -89,16 +67,17 @@ class Report:
 
     def summary(self) -> str:
         """One line: files compared, what differs, and whether the verdicts are the same."""
-        files = {r.file for r in self.rows}
         differing = {r.file for r in self.rows if r.result != "identical"}
+        verdicts = (
+            f"{len(self.verdicts_differ)} verdict(s) differ"
+            if self.verdicts_differ
+            else "every verdict identical"
+        )
         if self.claims_missing:
             verdicts = f"{CLAIMS} missing: verdicts not compared"
-        elif self.verdicts_differ:
-            verdicts = f"{len(self.verdicts_differ)} verdict(s) differ"
-        else:
-            verdicts = "every verdict identical"
+        files = len({r.file for r in self.rows})
         status = "FAILED" if self.failed else "OK"
-        return f"{status}: {len(files)} files compared, {len(differing)} with differences; {verdicts}"
+        return f"{status}: {files} files compared, {len(differing)} with differences; {verdicts}"
 
 
 def _files(folder: Path) -> dict[str, Path]:
@@ -108,7 +87,7 @@ def _files(folder: Path) -> dict[str, Path]:
     return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def compare_bytes(name: str, old: Path, new: Path) -> Row:
+def _compare_bytes(name: str, old: Path, new: Path) -> Row:
     """A file that is not a CSV (PNG, MP4, Markdown): identical bytes or not."""
     a, b = old.read_bytes(), new.read_bytes()
     if a == b:
@@ -158,11 +137,7 @@ def _output_lines(output: dict, folders: dict[str, str]) -> list[str]:
 
 
 def _notebook_outputs(path: Path) -> dict[str, list[str]]:
-    """A page's code cells, by id, each as the lines of its outputs (:func:`_output_lines`).
-
-    Raises:
-        ArtifactError: if the file is not a notebook.
-    """
+    """A page's code cells, by id, each as the lines of its outputs; ArtifactError if not a notebook."""
     try:
         cells = json.loads(path.read_text())["cells"]
     except (ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
@@ -181,21 +156,18 @@ def _first_difference(old: list[str], new: list[str]) -> str:
     def short(line: str | None) -> str:
         return "(none)" if line is None else repr(line if len(line) <= 60 else line[:57] + "...")
 
-    for i in range(max(len(old), len(new))):
-        a = old[i] if i < len(old) else None
-        b = new[i] if i < len(new) else None
+    for i, (a, b) in enumerate(itertools.zip_longest(old, new)):
         if a != b:
             return f"line {i + 1}: {short(a)} -> {short(b)}"
     return ""
 
 
-def compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
+def _compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
     """A notebook page's lines: each code cell whose outputs differ, or that is in one page only.
 
-    Outputs are compared as text (:func:`_output_lines`): streams, ``text/*`` data but HTML, the
-    digest of each image; the run's ``build_dir`` and ``figures_dir`` (from its injected
-    parameters) read as placeholders, so that a run into ``build/verify`` and one into ``build``
-    print the same paths. Never fatal: a notebook's outputs are listed, the verdicts decide.
+    Outputs are compared as text: streams, ``text/*`` data but HTML, each image's digest; the run's
+    ``build_dir`` and ``figures_dir`` read as placeholders, so that runs into ``build/verify`` and
+    ``build`` print the same paths. Never fatal: the verdicts decide.
     """
     try:
         a, b = _notebook_outputs(old), _notebook_outputs(new)
@@ -224,9 +196,8 @@ def _text(column: pd.Series) -> np.ndarray:
 def key_columns(frame: pd.DataFrame) -> list[str]:
     """The columns that say what a row is: the leading label columns, before the first number.
 
-    A label column is a text column whose every value is one token (no whitespace): ``robot``,
-    ``method``, ``id``; free text (a claim, a note) is not a key. E.g. ``robot, method`` of a
-    simulation's rows, ``id`` and ``figure, robot, assistance`` of the claims table.
+    A label column is a text column whose every value is one token (``robot``, ``method``, ``id``);
+    free text (a claim, a note) is not a key.
     """
     keys = []
     for column in frame.columns:
@@ -244,31 +215,30 @@ def _non_finite_changed(old: np.ndarray, new: np.ndarray) -> np.ndarray:
     return ~(np.isfinite(old) & np.isfinite(new)) & ~same
 
 
-def _numeric_diff(a: pd.Series, b: pd.Series, tol: Tolerance) -> tuple[np.ndarray, str]:
-    """Cells beyond the tolerance (a mask) and ``max abs .., max rel ..`` of numeric columns, over
-    the cells that are finite on both sides (:func:`_non_finite` reports the others)."""
-    old, new = a.to_numpy(dtype=float), b.to_numpy(dtype=float)
-    finite = np.isfinite(old) & np.isfinite(new)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        diff = np.where(finite, np.abs(new - old), 0.0)
-        rel = np.where(diff == 0, 0.0, diff / np.abs(old))
-    beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, old, 0.0))) | _non_finite_changed(old, new)
-    detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
-    return beyond, detail
-
-
-def _non_finite(name: str, column: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
-    """A line naming the rows of ``column`` whose value is non-finite (NaN, ±inf) on one side
-    only, or became another non-finite value, with both values; None when there is none."""
+def _numeric_rows(
+    name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
+) -> tuple[np.ndarray, list[Row]]:
+    """A numeric column's cells beyond the tolerance (a mask) and its lines: the rows whose non-finite
+    value (NaN, ±inf) is not the same on both sides, with both values; ``max abs .., max rel ..`` over
+    the cells finite on both sides."""
     a, b = old[column].to_numpy(dtype=float), new[column].to_numpy(dtype=float)
-    where = np.flatnonzero(_non_finite_changed(a, b))
-    if not len(where):
-        return None
-    keys = [k for k in key_columns(old) if k in new.columns]
-    label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
-    shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
-    more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
-    return Row(name, column, "non-finite", f"{len(where)} rows: {shown}{more}")
+    changed = _non_finite_changed(a, b)
+    finite = np.isfinite(a) & np.isfinite(b)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        diff = np.where(finite, np.abs(b - a), 0.0)
+        rel = np.where(diff == 0, 0.0, diff / np.abs(a))
+    beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, a, 0.0))) | changed
+    rows = []
+    if (where := np.flatnonzero(changed)).size:
+        keys = [k for k in key_columns(old) if k in new.columns]
+        label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
+        shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
+        more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
+        rows.append(Row(name, column, "non-finite", f"{len(where)} rows: {shown}{more}"))
+    if beyond.any():
+        detail = f"max abs {diff.max(initial=0.0):.3g}, max rel {rel.max(initial=0.0):.3g}"
+        rows.append(Row(name, column, "beyond tolerance", f"{detail}, {beyond.sum()} rows"))
+    return beyond, rows
 
 
 def _rows_match(name: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
@@ -289,12 +259,8 @@ def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
     rows, beyond_any = [], np.zeros(len(old), dtype=bool)
     for column in [c for c in old.columns if c in new.columns]:
         if _numeric(old, column) and _numeric(new, column):
-            beyond, detail = _numeric_diff(old[column], new[column], tol)
-            non_finite = _non_finite(name, column, old, new)
-            if non_finite is not None:
-                rows.append(non_finite)
-            if beyond.any():
-                rows.append(Row(name, column, "beyond tolerance", f"{detail}, {beyond.sum()} rows"))
+            beyond, lines = _numeric_rows(name, column, old, new, tol)
+            rows += lines
             beyond_any |= beyond
         else:
             cells = int((_text(old[column]) != _text(new[column])).sum())
@@ -305,7 +271,7 @@ def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
     return rows
 
 
-def compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> list[Row]:
+def _compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> list[Row]:
     """The table's lines for one CSV: identical, or its shape, columns and values that differ."""
     old, new = pd.read_csv(old_path), pd.read_csv(new_path)
     rows = []
@@ -334,10 +300,14 @@ def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
     }
 
 
-def compare_verdicts(old_path: Path, new_path: Path) -> list[str]:
-    """Every ``(id, robot)`` whose verdict differs (or that is in one table only), with why."""
+def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
+    """Add the claims table's verdict lines to ``report``: every ``(id, robot)`` whose verdict differs
+    (or that is in one table only), with why; or mark the table missing."""
+    old_path, new_path = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
+    if old_path is None or new_path is None:
+        report.claims_missing = True
+        return
     old, new = _verdicts(old_path), _verdicts(new_path)
-    differ = []
     for key in sorted(old.keys() | new.keys()):
         a, b = old.get(key), new.get(key)
         if a == b:
@@ -345,24 +315,13 @@ def compare_verdicts(old_path: Path, new_path: Path) -> list[str]:
         if a is None or b is None:
             why = "only in the new table" if a is None else "missing from the new table"
         else:
-            pairs = zip(VERDICT_COLUMNS, a, b, strict=True)
-            why = "; ".join(f"{c} {x} -> {y}" for c, x, y in pairs if x != y)
-        differ.append(f"{key[0]} / {key[1]}: {why}")
-    return differ
-
-
-def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
-    """Add the claims table's verdict lines to ``report`` (or mark it missing)."""
-    old, new = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
-    if old is None or new is None:
-        report.claims_missing = True
-        return
-    report.verdicts_differ = compare_verdicts(old, new)
-    for line in report.verdicts_differ:
-        part, _, why = line.partition(": ")
-        report.rows.append(Row(CLAIMS, f"verdict {part}", "verdict differs", why))
+            why = "; ".join(
+                f"{c} {x} -> {y}" for c, x, y in zip(VERDICT_COLUMNS, a, b, strict=True) if x != y
+            )
+        report.verdicts_differ.append(f"{key[0]} / {key[1]}: {why}")
+        report.rows.append(Row(CLAIMS, f"verdict {key[0]} / {key[1]}", "verdict differs", why))
     if not report.verdicts_differ:
-        report.rows.append(Row(CLAIMS, "verdicts", "identical", f"{len(_verdicts(old))} (id, robot)"))
+        report.rows.append(Row(CLAIMS, "verdicts", "identical", f"{len(old)} (id, robot)"))
 
 
 def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | None = None) -> Report:
@@ -380,19 +339,18 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
             where = "new" if fresh is None else "committed"
             report.rows.append(Row(name, "file", f"missing in {where}"))
         elif name.endswith(".csv"):
-            report.rows += compare_csv(name, old, fresh, tol)
+            report.rows += _compare_csv(name, old, fresh, tol)
         elif name.endswith(".ipynb"):
-            report.rows += compare_notebook(name, old, fresh)
+            report.rows += _compare_notebook(name, old, fresh)
         else:
-            report.rows.append(compare_bytes(name, old, fresh))
+            report.rows.append(_compare_bytes(name, old, fresh))
     _compare_claims(report, files)
     return report
 
 
-def kernels_text(committed: str | Path, new: str | Path) -> str:
-    """What each run's numerical kernels ran with (its ``kernels.json``, written by ``make figures``
-    from :func:`lasa.base.kernels.kernel_settings`), one line per folder: the pinned variables and
-    torch's CPU capability, or that the file is missing (a run from before the kernels were pinned)."""
+def _kernels_text(committed: str | Path, new: str | Path) -> str:
+    """Each run's ``kernels.json`` (:func:`lasa.runtime.record`) as one line: the pinned variables
+    and torch's CPU capability, or that the file is missing."""
     lines = []
     for label, folder in (("committed", committed), ("new", new)):
         path = Path(folder) / KERNELS
@@ -407,7 +365,7 @@ def kernels_text(committed: str | Path, new: str | Path) -> str:
     return "\n".join(lines)
 
 
-def format_table(rows: Sequence[Row]) -> str:
+def _format_table(rows: Sequence[Row]) -> str:
     """The rows as a Markdown table (readable as plain text too)."""
     header = [f.name for f in dataclasses.fields(Row)]
     cells = [header] + [[str(getattr(r, h)) for h in header] for r in rows]
@@ -433,8 +391,8 @@ def main(argv: list[str] | None = None) -> int:
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(kernels_text(args.committed, args.new))
-    print(format_table(report.rows))
+    print(_kernels_text(args.committed, args.new))
+    print(_format_table(report.rows))
     if report.claims_missing:
         print(f"error: {CLAIMS} is missing from {args.committed} or {args.new}", file=sys.stderr)
     print(report.summary())

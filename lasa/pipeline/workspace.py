@@ -1,10 +1,8 @@
 """A notebook's workspace: one robot's task and units, the run's folders, its artifacts.
 
-Every notebook starts the same way: set the threads, load the robot, build the cup
-task, resolve the folders against the repository root (so Jupyter, papermill and Make
-agree), and load what earlier notebooks made. :meth:`Workspace.open` does all of it,
-and the loaders name the notebook that makes a missing artifact. The eating study
-(notebooks 10 and 11) starts the same way in the eating scene: :meth:`Workspace.eating`.
+:meth:`Workspace.open` (the cup task) and :meth:`Workspace.eating` (the eating scene) pin the runtime,
+set the threads, load the robot and its task, and resolve the folders against the repository root
+(so Jupyter, papermill and Make agree); the loaders name the notebook that makes a missing artifact.
 """
 
 from __future__ import annotations
@@ -18,6 +16,7 @@ from lasa.base.config import ControlConfig, cap_setting, check_choice, set_threa
 from lasa.base.paths import Paths
 from lasa.method.dataset import Demonstrations, load_demonstrations
 from lasa.method.decoder import LatentActionModel, load_checkpoint
+from lasa.runtime import pin
 from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask, make_eating_task
 from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
@@ -31,15 +30,7 @@ TaskT = TypeVar("TaskT", bound=GoalTask)
 
 @dataclasses.dataclass(frozen=True)
 class Workspace(Generic[TaskT]):
-    """One robot's task and control units, and the run's folders.
-
-    Attributes:
-        robot: The robot (its MuJoCo scene).
-        task: The cup task (goals, preference curves, start pose), or the eating task
-            (:meth:`eating`).
-        control: The robot's control-loop units.
-        paths: The run's build and figures folders.
-    """
+    """One robot (its MuJoCo scene), its cup or eating task, its control-loop units, the run's folders."""
 
     robot: Robot
     task: TaskT
@@ -52,7 +43,7 @@ class Workspace(Generic[TaskT]):
         build_dir: str | os.PathLike[str] = "build",
         figures_dir: str | os.PathLike[str] = "figures",
     ) -> Workspace[CupTask]:
-        """Set torch's threads (``LASA_THREADS``), build the robot's task, resolve the folders."""
+        """The cup task's workspace of ``robot``, its folders resolved (the figures' made)."""
         paths = _folders(build_dir, figures_dir)
         arm = load_robot(robot)
         return Workspace(arm, make_cup_task(arm), arm.control, paths)
@@ -64,10 +55,9 @@ class Workspace(Generic[TaskT]):
         figures_dir: str | os.PathLike[str] = "figures",
         belief_cap: float | str | None = STUDY_BELIEF_CAP,
     ) -> Workspace[EatingTask]:
-        """:meth:`open` for the eating study: the robot with its fork in the eating scene, its task.
-
-        ``belief_cap`` is the study's belief's cap (``ControlConfig.belief_cap``; Javdani et al.'s
-        0.99 by default, ``None`` or ``"none"`` for Algorithm 1's uncapped belief).
+        """:meth:`open` for the eating study: the robot with its fork in the eating scene, its task, and
+        the belief's cap (``ControlConfig.belief_cap``: Javdani et al.'s 0.99 by default, ``None`` or
+        ``"none"`` for Algorithm 1's uncapped belief).
 
         Raises:
             ConfigError: ``robot`` is not one of :data:`EATING_ROBOTS`, or a cap out of range.
@@ -106,15 +96,16 @@ class Workspace(Generic[TaskT]):
     def sim_decoders(self) -> dict[str, LatentActionModel]:
         """The pair the sims compare (notebook 03): ``base`` for LA and LA+SA, ``entropy``.
 
-        ``base`` is the lambda = 0 run of the entropy ablation, the control: it was
-        fine-tuned from notebook 02's decoder for the same steps, schedule, batches and
-        noise as the entropy decoder, so the two differ only by the entropy term.
+        ``base`` is the entropy ablation's lambda = 0 run, fine-tuned from notebook 02's decoder like
+        the entropy decoder (steps, schedule, batches, noise): the two differ only by the entropy term.
         """
         return {"base": self.decoder("decoder_lambda0")[0], "entropy": self.decoder("decoder_entropy")[0]}
 
 
 def _folders(build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
-    """Set torch's threads (``LASA_THREADS``), and resolve the run's folders (the figures' made)."""
+    """Pin the runtime (:func:`lasa.runtime.pin`), set torch's threads (``LASA_THREADS``), resolve
+    the run's folders (the figures' made)."""
+    pin()
     set_threads()
     paths = Paths.of(build_dir, figures_dir)
     paths.figures.mkdir(parents=True, exist_ok=True)

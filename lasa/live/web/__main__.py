@@ -12,6 +12,7 @@ import argparse
 import sys
 
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.runtime import pin
 
 DEFAULT_HOST = "127.0.0.1"
 TLS_HINT = (
@@ -105,6 +106,7 @@ def _serve(argv: list[str]) -> int:
 def main(argv: list[str] | None = None) -> int:
     """``schedule ...`` writes the links; anything else serves."""
     argv = sys.argv[1:] if argv is None else argv
+    pin()  # the renderer and kernels, before the server imports mujoco, numpy and torch
     try:
         return _schedule(argv[1:]) if argv[:1] == ["schedule"] else _serve(argv)
     except (ConfigError, ArtifactError) as exc:  # a bad setting; npm files missing (make setup)

@@ -1,30 +1,22 @@
-"""Run the figure notebooks headless with papermill, with checked parameters.
+"""Run a figure notebook headless with papermill, with checked parameters (``make figures``).
 
-A config file (``configs/paper.yaml`` or ``configs/quick.yaml``) holds a ``common``
-section passed to every notebook and one section per notebook, named by its file stem
-(``04_fixed_expertise``). Papermill only *warns* about a parameter that the notebook's
-``parameters`` cell does not define; here it is an error, because a misspelt knob
-would silently leave its default in place. The executed notebook is written to a
-temporary file and renamed into place, so an interrupted run leaves nothing behind
-that Make could mistake for a finished one. A run that fails in a cell is kept as
-``<name>.failed.ipynb`` for reading.
-
-A run that fails leaves its figures folder (``figures_dir``) as it was: the kernel writes under a
-write journal (:mod:`lasa.base.journal`, a hidden ``.<name>.journal`` folder beside the executed
-notebook, deleted when the run ends), and on a failed cell, a dead kernel, Ctrl-C or ``SIGTERM``
-the runner puts back every file the run wrote, under the folder's lock. When a notebook running
-beside it (``make figures`` runs two) has rewritten a shared file since, only this run's rows of
-the merged tables (a figure's CSV, ``claims.csv``, ``claim_values.csv``) are restored, and a
-shared file that cannot be split by rows (the figure's PNG, ``claims.md``) is left as the other
-run wrote it; the error message names each file it did not restore.
+A config file (``configs/*.yaml``) holds a ``common`` section for every notebook and one per notebook
+stem; a parameter the notebook's ``parameters`` cell does not define is an error (papermill only
+warns). The executed copy is written atomically; a failed run is kept as ``<name>.failed.ipynb``,
+and its writes to the figures folder are undone (:mod:`lasa.base.journal`).
 
 Usage::
 
-    python -m lasa.pipeline.runner notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
+    python -m lasa.pipeline.execute notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
         --out build/notebooks --robot panda [--param build_dir=build/x] [--timings t.jsonl]
 """
 
 from __future__ import annotations
+
+if __name__ == "__main__":  # the CLI: renderer and kernels pinned before the notebooks start
+    from lasa.runtime import pin
+
+    pin()
 
 import argparse
 import contextlib
@@ -49,7 +41,7 @@ from lasa.base import journal  # noqa: E402
 from lasa.base.errors import ArtifactError, ConfigError, NotebookError  # noqa: E402
 from lasa.base.io import atomic_path, require_file  # noqa: E402
 from lasa.base.paths import resolve  # noqa: E402
-from lasa.pipeline.timings import append_run, timing_record  # noqa: E402
+from lasa.pipeline.timings import append_run  # noqa: E402
 
 __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
 
@@ -102,25 +94,20 @@ def run_notebook(
     overrides: dict[str, Any] | None = None,
     progress: bool = True,
 ) -> Path:
-    """Execute ``notebook`` with the parameters of ``config`` into ``out_dir``.
+    """Execute ``notebook`` with the parameters of ``config`` and ``overrides`` into ``out_dir``.
 
-    Args:
-        notebook: The source notebook (committed without outputs).
-        config: The YAML config file.
-        out_dir: Folder of the executed copy, named ``<stem>-<robot>.ipynb`` when a
-            ``robot`` override is given, else after the notebook.
-        overrides: Extra parameters, checked like the config's.
-        progress: Show papermill's cell progress bar.
+    The executed copy is ``<stem>-<robot>.ipynb`` when a ``robot`` override is given, else named
+    after the notebook; returns its path.
 
-    Returns:
-        The path of the executed notebook.
+    A failed run leaves the figures folder as it was: the kernel writes under a journal (a hidden
+    ``.<name>.journal`` folder beside the executed copy), and on a failed cell, a dead kernel,
+    Ctrl-C or ``SIGTERM`` every file the run wrote is put back, under the folder's lock. When a
+    notebook running beside it has rewritten a shared file since, only this run's rows of the merged
+    tables are restored, and a file that cannot be split by rows is left as the other run wrote it.
 
     Raises:
-        NotebookError: if a cell raised; its message is that exception's class and message
-            (the library's own error, for a ``ConfigError``), the partial run's path,
-            ``<name>.failed.ipynb``, which holds the full traceback, and what became of the
-            files the run had written in the figures folder: restored as they were, or which
-            one could not be (another notebook rewrote it since).
+        NotebookError: if a cell raised: that exception's class and message, the partial run's path
+            (``<name>.failed.ipynb``, with the traceback), and which written files were not restored.
     """
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
@@ -159,12 +146,10 @@ def run_notebook(
 
 @contextlib.contextmanager
 def _journaled(out: Path, figures: Any) -> Iterator[Callable[[], str]]:
-    """Journal the run's writes to its figures folder; undo them if the run fails.
+    """Journal the run's writes to its figures folder; yield the undo, which returns what it restored.
 
-    Yields the undo, which the caller calls on a failed cell for the sentence that says what it
-    restored. Any other way out of the block (a dead kernel, Ctrl-C, ``SIGTERM`` through
-    :func:`main`) undoes the writes too and adds that sentence to the exception as a note. On
-    success the journal is deleted. The journal is a hidden folder beside the executed notebook.
+    Any other way out of the block (a dead kernel, Ctrl-C, ``SIGTERM``) undoes the writes too and
+    adds that sentence to the exception as a note. On success the journal is deleted.
     """
     if not isinstance(figures, str | os.PathLike):  # a notebook without a figures folder
         yield lambda: ""
@@ -192,9 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     """Command-line entry point: run one notebook and report its wall time."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("notebook", help="the notebook to run, e.g. notebooks/04_fixed_expertise.ipynb")
-    parser.add_argument(
-        "--config", required=True, help="the YAML config: configs/paper.yaml, quick.yaml or large.yaml"
-    )
+    parser.add_argument("--config", required=True, help="the YAML config: configs/paper.yaml, quick.yaml ...")
     parser.add_argument("--out", required=True, help="folder of the executed copy")
     parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
     parser.add_argument(
@@ -205,10 +188,7 @@ def main(argv: list[str] | None = None) -> int:
         metavar="NAME=VALUE",
         help="override one parameter (VALUE is read as YAML); repeatable",
     )
-    parser.add_argument(
-        "--timings",
-        help="append {notebook, robot, seconds, start, end} as a JSON line to this file (start, end: UTC)",
-    )
+    parser.add_argument("--timings", help="append {notebook, robot, seconds, start, end} (UTC) to this file")
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
     signal.signal(signal.SIGTERM, _terminated)  # a killed run undoes its writes, as Ctrl-C does
@@ -221,14 +201,9 @@ def main(argv: list[str] | None = None) -> int:
         out = run_notebook(
             args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
         )
-    except (ConfigError, ArtifactError) as exc:
+    except (ConfigError, ArtifactError, NotebookError) as exc:  # a cell's cause: traceback in the partial run
         print(f"error: {exc}", file=sys.stderr)
-        return 2
-    except (
-        NotebookError
-    ) as exc:  # the notebook's own cause, as the last line (its traceback is in the partial run)
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(exc, NotebookError) else 2
     except (KeyboardInterrupt, SystemExit) as exc:
         for note in getattr(exc, "__notes__", []):  # what the undo restored
             print(f"interrupted: {note}", file=sys.stderr)
@@ -236,8 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     seconds = time.perf_counter() - start
     if args.timings:  # lasa.pipeline.timings reads them into benchmarks/results.json
         ended = datetime.datetime.now(datetime.UTC)
-        record = timing_record(Path(args.notebook).stem, args.robot, seconds, started, ended)
-        append_run(args.timings, record)
+        append_run(args.timings, Path(args.notebook).stem, args.robot, seconds, started, ended)
     print(f"{out} ({seconds:.1f} s)")
     return 0
 
