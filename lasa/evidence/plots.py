@@ -1,8 +1,5 @@
-"""Panels that several figures share: data and ``ax=None`` in, axes out.
-
-A planar arm is drawn in its x-z plane, the Panda from above (:func:`project`); a figure's own
-panels live in its module of :mod:`lasa.experiments`.
-"""
+"""Panels that several figures share: data and ``ax=None`` in, axes out (a planar arm in its x-z
+plane, the Panda from above)."""
 
 from __future__ import annotations
 
@@ -52,8 +49,7 @@ __all__ = [
 
 METHOD_COLORS = {"LA": "#d95f02", "LA+SA": "#1b9e77", "LA+SA+Entropy": "#7570b3"}
 CUP_COLORS = ("#e6553f", "#3f9959")  # the first two goals: the paper's two cups, left and right
-# Every goal's colour, in goal order: the two cups', then a third in the blue of a new cup's
-# render (lasa.world.robot.NEW_CUP_RGBA), then more for tasks with more goals.
+# Every goal's colour, in goal order: the two cups', the blue of a new cup's render, then more.
 GOAL_COLORS = (*CUP_COLORS, "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")
 
 
@@ -66,12 +62,8 @@ BELIEF_MID = "#dddddd"  # a belief map's middle, b(g) = 0.5: neither goal's colo
 
 
 def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
-    """The colour map of the belief in goal ``goal_index``: at 1 the goal's colour, at 0 the other
-    cup's (a neutral grey with more than two goals), light grey halfway.
-
-    Raises:
-        ValueError: if ``goal_index`` is not one of the ``n_goals`` goals.
-    """
+    """The colour map of the belief in goal ``goal_index``: the goal's colour at 1, the other cup's
+    (grey with more than two goals) at 0; a ValueError if ``goal_index`` is not a goal."""
     if not 0 <= goal_index < n_goals:
         raise ValueError(f"goal_index must be one of the {n_goals} goals, got {goal_index}")
     colors = goal_colors(n_goals)
