@@ -14,7 +14,7 @@ import seaborn as sns
 from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
-from matplotlib.colors import Colormap, LinearSegmentedColormap, Normalize
+from matplotlib.colors import LinearSegmentedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle
@@ -48,17 +48,13 @@ __all__ = [
 ]
 
 METHOD_COLORS = {"LA": "#d95f02", "LA+SA": "#1b9e77", "LA+SA+Entropy": "#7570b3"}
-CUP_COLORS = ("#e6553f", "#3f9959")  # the first two goals: the paper's two cups, left and right
 # Every goal's colour, in goal order: the two cups', the blue of a new cup's render, then more.
-GOAL_COLORS = (*CUP_COLORS, "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")
+GOAL_COLORS = ("#e6553f", "#3f9959", "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")
 
 
 def goal_colors(n_goals: int) -> tuple[str, ...]:
     """A colour for each of ``n_goals`` goals: :data:`GOAL_COLORS` in turn, repeated past its end."""
     return tuple(GOAL_COLORS[g % len(GOAL_COLORS)] for g in range(n_goals))
-
-
-BELIEF_MID = "#dddddd"  # a belief map's middle, b(g) = 0.5: neither goal's colour
 
 
 def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
@@ -69,7 +65,7 @@ def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
     colors = goal_colors(n_goals)
     low = colors[1 - goal_index] if n_goals == 2 else "#7a7a7a"
     return LinearSegmentedColormap.from_list(
-        f"belief_in_goal_{goal_index}", [low, BELIEF_MID, colors[goal_index]]
+        f"belief_in_goal_{goal_index}", [low, "#dddddd", colors[goal_index]]
     )
 
 
@@ -113,16 +109,6 @@ def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def _colored_path(
-    ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str | Colormap, norm: Normalize, lw: float = 1.2
-) -> LineCollection:
-    segs = np.stack([xy[:-1], xy[1:]], axis=1)
-    lc = LineCollection(list(segs), cmap=cmap, norm=norm, lw=lw)
-    lc.set_array(values[:-1])
-    ax.add_collection(lc)
-    return lc
-
-
 def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
     """Limit the axes to the drawn points, the goals and the base, with some padding."""
     cups = project(task, task.robot.goal_positions())
@@ -148,7 +134,9 @@ def plot_demonstrations(
         m = clean.demo == d
         xy = project(task, task.robot.grasp_positions(clean.states[m]))
         drawn.append(xy)
-        lc = _colored_path(ax, xy, clean.beliefs[m, goal_index], cmap, norm, 0.9)
+        lc = LineCollection(list(np.stack([xy[:-1], xy[1:]], axis=1)), cmap=cmap, norm=norm, lw=0.9)
+        lc.set_array(clean.beliefs[m, goal_index][:-1])
+        ax.add_collection(lc)
     if lc is not None:
         plt.colorbar(lc, ax=ax, label=f"belief in the {task.goal_names[goal_index]} cup", shrink=0.8)
         frame_around(task, ax, np.concatenate(drawn))
@@ -239,12 +227,9 @@ def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize
     )
 
 
-PROBABILITY_LIMITS = (-0.02, 1.02)  # a probability axis: [0, 1] and a margin for the markers [-]
-
-
 def probability_axis(ax: Axes) -> None:
-    """Limit ``ax``'s y axis to :data:`PROBABILITY_LIMITS`."""
-    ax.set_ylim(*PROBABILITY_LIMITS)
+    """Limit ``ax``'s y axis to [0, 1] and a margin for the markers."""
+    ax.set_ylim(-0.02, 1.02)
 
 
 def users_text(table: pd.DataFrame, keys: Sequence[str], per: str = "point") -> str:

@@ -1,8 +1,6 @@
-"""Session logs of live use: ``<stem>.csv`` (one row per step, floats to 17 digits, so a replay
-compares states bit for bit), the ``<stem>.json`` sidecar (what ran, ``status``: ``running``, then
-``complete`` or ``interrupted``; a crash's ``running`` reads interrupted) and ``<stem>.xml`` (the scene,
-checked by its ``scene_sha256``). Rows go to ``<stem>.csv.part``, synced every ``flush_every`` steps,
-renamed atomically at the end.
+"""Session logs of live use: ``<stem>.csv`` (a row per step, floats to 17 digits for bit-exact replay;
+written as ``.csv.part``, renamed at the end), the ``<stem>.json`` sidecar (what ran, its ``status``)
+and ``<stem>.xml`` (the scene, checked by its ``scene_sha256``).
 """
 
 from __future__ import annotations

@@ -112,11 +112,7 @@ def load_sessions(
     include_damaged: bool = False,
 ) -> Episodes:
     """The eating-task sessions in ``folder`` (:func:`scan_sessions`, each left out named in a
-    warning) as :class:`lasa.world.record.Episodes`; ``task`` (the eating task) gives the fork's pose.
-
-    Raises:
-        ArtifactError: if the folder holds no sound eating-task session, or a duplicate.
-    """
+    warning) as :class:`lasa.world.record.Episodes`; an ArtifactError if none is sound."""
     _check_task(task, "load_sessions")
     logs, left_out = scan_sessions(folder, include_interrupted, include_damaged)
     for row in left_out.itertuples():

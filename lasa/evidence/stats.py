@@ -121,14 +121,8 @@ def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFra
 
 
 def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means).
-
-    Returns:
-        As :func:`sa_effect_between`, with df (1, N-1) and ``ci_*`` a paired t over participants.
-
-    Raises:
-        ConfigError: As :func:`rm_anova`.
-    """
+    """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means), as
+    :func:`sa_effect_between` returns it, with df (1, N-1) and ``ci_*`` a paired t over participants."""
     table = rm_anova(frame, measure, agg="mean")
     row = table.set_index("effect").loc["assistance"]
     cells = condition_cells(frame, measure, "mean", CONDITIONS)
@@ -230,10 +224,6 @@ def paired_bootstrap(
 
     Returns:
         ``(mean, low, high)``, each of shape ``diffs.shape[1:]``.
-
-    Raises:
-        ConfigError: Fewer than 2 participants, a non-finite difference, ``n_resamples`` < 1 or
-            ``level`` outside (0, 1).
     """
     x = np.asarray(diffs, dtype=float)
     if x.ndim not in (1, 2) or len(x) < 2:
