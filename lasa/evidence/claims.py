@@ -36,7 +36,6 @@ from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Va
 
 __all__ = [
     "Claim",
-    "PAPER_CLAIMS",
     "update_claims",
     "render_markdown",
     "render_verdicts",
@@ -50,7 +49,6 @@ __all__ = [
     "criteria",
     "words_text",
     "note_lead",
-    "flips",
 ]
 
 README_MARKERS = (

@@ -16,11 +16,7 @@ from matplotlib.figure import Figure
 from lasa.base.errors import ConfigError
 
 __all__ = [
-    "NAME",
     "COLUMNS",
-    "KEY",
-    "STAY_SHARE",
-    "TILT_RANGE",
     "LEAVE_COUNT",
     "CONDITIONS",
     "summary",
@@ -30,7 +26,6 @@ __all__ = [
     "holds",
     "ranking",
     "choose",
-    "plot",
 ]
 
 NAME = "latent_property"

@@ -16,7 +16,7 @@ from lasa.base.io import atomic_path, locked, update_csv
 from lasa.base.paths import Paths
 from lasa.evidence.claims import Claim, update_claims
 
-__all__ = ["FigureModule", "publish", "save_figure"]
+__all__ = ["publish", "save_figure"]
 
 
 class FigureModule(Protocol):

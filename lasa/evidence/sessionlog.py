@@ -17,7 +17,7 @@ import pandas as pd
 from lasa.base.errors import ArtifactError, ConfigError, DamagedLogError
 from lasa.base.io import write_text
 
-__all__ = ["SessionWriter", "read_session", "check_scene", "STATUS"]
+__all__ = ["SessionWriter", "read_session", "check_scene"]
 
 STATUS = ("running", "complete", "interrupted")
 

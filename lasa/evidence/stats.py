@@ -28,7 +28,6 @@ from lasa.evidence.study_design import (
 )
 
 __all__ = [
-    "EFFECTS",
     "sa_effect_between",
     "rm_anova",
     "sa_effect_within",

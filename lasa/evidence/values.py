@@ -11,16 +11,7 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-__all__ = [
-    "Number",
-    "Numbers",
-    "Values",
-    "VALUE_COLUMNS",
-    "VALUES_NAME",
-    "HEADLINE",
-    "read_values",
-    "reading_of",
-]
+__all__ = ["Number", "Numbers", "Values", "VALUE_COLUMNS", "VALUES_NAME", "read_values", "reading_of"]
 
 VALUES_NAME = "claim_values.csv"  # beside claims.csv
 VALUE_COLUMNS = ("id", "robot", "figure", "reading", "quantity", "value", "low", "high", "level", "n")
