@@ -190,7 +190,7 @@ def test_the_verdict_table_has_a_row_per_paper_claim_with_both_robots_and_the_fl
 
 
 def _study(cid, reproduced, value, low, high, n, **facts):
-    """A study row with its effect and facts, as lasa.experiments.study_claims writes them."""
+    """A study row with its effect and facts, as lasa.experiments.study.claims writes them."""
     base = claim(cid.split("@", 1)[0].split(".", 1)[1], figure="study", robot="panda", verdict="undecided")
     testable = reproduced != "not testable"
     known = {"testable": float(testable), "censored": 0.0} | facts

@@ -26,9 +26,9 @@ from lasa.experiments import (
     sim1,
     sim2,
     sim3,
-    study_analysis,
-    study_caps,
 )
+from lasa.experiments.study import analysis as study_analysis
+from lasa.experiments.study import caps as study_caps
 
 ROOT = Path(__file__).resolve().parents[1]
 BUDGET = {"11_eating_study.ipynb": 2000}  # words of Markdown per notebook; the rest 1,200 (issue 47)

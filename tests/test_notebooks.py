@@ -384,7 +384,10 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
 
 def test_study_outputs(executed):
     from lasa.evidence import latent_property
-    from lasa.experiments import eating_task, study, study_caps, study_plots
+    from lasa.experiments import eating_task
+    from lasa.experiments.study import caps as study_caps
+    from lasa.experiments.study import plots as study_plots
+    from lasa.experiments.study import run as study
 
     fig = executed / "figures"
     settings = load_config(QUICK, ROOT / "notebooks" / "11_eating_study.ipynb")["settings"]
@@ -400,14 +403,14 @@ def test_study_outputs(executed):
     summary = latent_property.summary(prop[prop.task == "eating"])
     # only decoders that meet the property rule run (else the best one), and the headline's entropy
     # version if notebook 10 trained it
-    readings = study.readings_to_run(summary, "property")
+    variants = study.variants_to_run(summary, "property")
     settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
-    assert set(readings) <= set(eating_task.reading_names(from_dict(eating_task.Config, settings10)))
-    assert len(readings) < len(summary.decoder.unique())
-    # the headline: every arm; each other decoder reading: LA and LA+SA under the headline member;
-    # per participant model (the first readings_per_model of the ranking): participants x arms x tasks
-    limits = study.Config().readings_per_model
-    runs = [min(limits.get(m, len(readings)), len(readings)) for m in models]
+    assert set(variants) <= set(eating_task.reading_names(from_dict(eating_task.Config, settings10)))
+    assert len(variants) < len(summary.decoder.unique())
+    # the headline: every arm; each other decoder variant: LA and LA+SA under the headline member;
+    # per participant model (the first variants_per_model of the ranking): participants x arms x tasks
+    limits = study.Config().variants_per_model
+    runs = [min(limits.get(m, len(variants)), len(variants)) for m in models]
     episodes = sum(n * (2 + 2 * len(assistance) + 2 * (k - 1)) * 2 for k in runs)
     for spec in (study_plots.GOAL_ERROR, study_plots.TIME, study_plots.ALIGNMENT):
         frame = pd.read_csv(fig / f"{spec.NAME}.csv")
@@ -433,10 +436,10 @@ def test_study_outputs(executed):
         "study.h3",
     }  # < 10: no cohort
     others = {i + ("+" if "@" in i else "@") + m for i in ids for m in assistance[1:]}
-    ranked = readings
+    ranked = variants
 
     def heads(model: str) -> set[str]:
-        """The headline model's ids for the readings ``model`` ran (the first of the ranking)."""
+        """The headline model's ids for the variants ``model`` ran (the first of the ranking)."""
         k = min(limits.get(model, len(ranked)), len(ranked))
         return ids | others | {f"study.{h}@{d}" for h in ("h1", "h2", "h3") for d in ranked[1:k]}
 
@@ -463,7 +466,7 @@ def test_study_outputs(executed):
         assert all(mine.word[h] == ours.reproduced[f"study.{h}{suffix}"] for h in ("h1", "h2", "h3"))
     assert (fig / "study_belief_cap.png").stat().st_size > 10_000
     time_la = time[time.condition.str.startswith("LA")]
-    assert set(time_la.decoder) == set(readings)
+    assert set(time_la.decoder) == set(variants)
     assert set(time[time.condition.str.startswith("R")].decoder) == {"none"}
     assert set(time.model) == set(models)
     verdicts = {"reproduced", "partly", "not reproduced", "undecided", "not testable"}
@@ -480,7 +483,7 @@ def test_study_outputs(executed):
     assert tested.note.str.contains(r"Measured effect: (?:SA (?:raises|lowers)|LA\+SA|no )").all()  # in words
     assert {f"study.h1@{m}" for m in assistance[1:]} <= set(rows.id)  # hindsight_point and grasp_set
     book = (executed / "notebooks" / "11_eating_study.ipynb").read_text()
-    assert "LA+SA finished" in book and "H1 effect (10)" in book  # the SA readings side by side
+    assert "LA+SA finished" in book and "H1 effect (10)" in book  # the SA variants side by side
     assert book.count("rests on simulated participants") >= 3  # the power sentence of H1, H2 and H3
     video = read_video(fig / "study_dessert.mp4")
     assert video.shape[1:] == (240, 4 * 320, 3)  # the four conditions side by side

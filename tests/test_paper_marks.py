@@ -5,7 +5,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from lasa.experiments import sim1, sim2, sim3, sim4, study_plots
+from lasa.experiments import sim1, sim2, sim3, sim4
+from lasa.experiments.study import plots
 
 matplotlib.use("Agg")
 
@@ -147,16 +148,14 @@ def _study_rows() -> list[dict[str, object]]:
 
 def test_study_figures_label_the_papers_hypotheses():
     frame = pd.DataFrame(_study_rows())
-    text = _texts(study_plots.plot_goal_error(frame)).replace("\n", " ")
+    text = _texts(plots.plot_goal_error(frame)).replace("\n", " ")
     assert "paper: F(1,18) = 29.9, p < .001" in text and "H1" in text
-    assert "H2" in _texts(study_plots.plot_alignment(frame)) and "LA+SA" in _texts(
-        study_plots.plot_alignment(frame)
-    )
-    assert "paper (H3): LA+SA fastest" in _texts(study_plots.plot_time(frame)).replace("\n", " ")
+    assert "H2" in _texts(plots.plot_alignment(frame)) and "LA+SA" in _texts(plots.plot_alignment(frame))
+    assert "paper (H3): LA+SA fastest" in _texts(plots.plot_time(frame)).replace("\n", " ")
 
 
 def test_study_time_hatches_every_censored_bar_and_prints_its_completion():
-    fig = study_plots.plot_time(pd.DataFrame(_study_rows()))
+    fig = plots.plot_time(pd.DataFrame(_study_rows()))
     for ax in fig.axes:
         hatched = [p for p in ax.patches if p.get_hatch() and p.get_height() > 100]  # LA and LA+SA
         assert len(hatched) == 2

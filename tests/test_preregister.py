@@ -88,11 +88,11 @@ def test_the_command_writes_the_document(tmp_path):
 
 
 def test_peoples_sessions_are_judged_by_the_claims_own_tests():
-    """study_tests.people_claims, which notebook 11 applies to people's sessions, is analyse + judge
+    """hypotheses.people_claims, which notebook 11 applies to people's sessions, is analyse + judge
     over the participants who did every condition: here ten simulated ones, relabelled as people."""
     import pandas as pd
 
-    from lasa.experiments import study_tests
+    from lasa.evidence import hypotheses
 
     frames = {}
     for name in ("goal_error", "time", "alignment"):
@@ -103,20 +103,20 @@ def test_peoples_sessions_are_judged_by_the_claims_own_tests():
             participant=lambda d: "p" + d.participant.astype(str)
         )
     one_short = {n: f[~((f.participant == "p9") & (f.condition == "LA"))] for n, f in frames.items()}
-    table = study_tests.people_claims(one_short, n_resamples=200)
+    table = hypotheses.people_claims(one_short, n_resamples=200)
     kept = {n: f[f.participant != "p9"] for n, f in frames.items()}
     horizon = float(frames["time"].total_time.max())
-    direct = study_tests.judge(study_tests.analyse(kept, "hindsight", horizon=horizon, n_resamples=200))
+    direct = hypotheses.judge(hypotheses.analyse(kept, "hindsight", horizon=horizon, n_resamples=200))
     assert list(table.member.unique()) == ["hindsight"] and set(table.participants) == {9}
     for row in table.itertuples():
         assert row.verdict == direct[row.claim][0] and row.measured == direct[row.claim][4]
     assert set(table.claim) >= {"h1", "h2", "h3"} and "likert" not in set(table.claim)  # no answers given
-    assert study_tests.people_claims({n: f[f.participant == "p0"] for n, f in frames.items()}).empty
+    assert hypotheses.people_claims({n: f[f.participant == "p0"] for n, f in frames.items()}).empty
     # with people's Likert answers (lasa.evidence.sessions.likert_tests' table), Fig. dessert's
     # subjective claim gets a row, judged by its rule
     likert = pd.DataFrame({"scale": ["Easy"] * 3, "a": "LA+SA", "b": ["R", "R+SA", "LA"]})
     likert = likert.assign(diff=[1.0, 1.0, -1.0], p_corr=[0.01, 0.2, 0.01])
-    judged = study_tests.people_claims({**one_short, "likert": likert}, n_resamples=200)
+    judged = hypotheses.people_claims({**one_short, "likert": likert}, n_resamples=200)
     row = judged[judged.claim == "likert"].iloc[0]
     assert (row.verdict, row.value, row.participants) == ("partly", 1 / 3, 9)
     assert row.measured == "LA+SA rated higher with p < .05 in 1 of 3 comparisons (scale x condition)"

@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 
 from lasa.base.config import ASSISTANCE, check_list, from_dict
 from lasa.base.errors import ConfigError
-from lasa.experiments import convergence, entropy_ablation, robustness, sim1, sim2, sim3, sim4, study
+from lasa.experiments import convergence, entropy_ablation, robustness, sim1, sim2, sim3, sim4
+from lasa.experiments.study import run as study
 from lasa.method.context_map import MAP_KINDS
 from lasa.method.entropy import LAMBDA_COST, choose_lambda
 from lasa.method.step import METHODS

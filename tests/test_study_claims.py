@@ -10,7 +10,9 @@ import pytest
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.experiments import study, study_analysis, study_claims, study_tests
+from lasa.evidence import hypotheses
+from lasa.experiments.study import analysis, claims
+from lasa.experiments.study import run as study
 
 STUDY_ASSISTANCE = ("hindsight", "grasp_set")
 
@@ -58,7 +60,7 @@ def verdicts(rows):
 
 
 def test_clear_effects_reproduce_every_hypothesis():
-    rows, analyses = study_claims.claims(
+    rows, analyses = claims.claims(
         frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), STUDY_ASSISTANCE, 20
     )
     v = verdicts(rows)
@@ -88,7 +90,7 @@ def test_clear_effects_reproduce_every_hypothesis():
 
 
 def test_effects_in_the_wrong_direction_do_not_reproduce():
-    rows, _ = study_claims.claims(
+    rows, _ = claims.claims(
         frames(10, sa_error=+2.0, la_sa_time=+20.0, scoop_gain=-0.15), STUDY_ASSISTANCE[:1], 10
     )
     v = verdicts(rows)
@@ -103,7 +105,7 @@ def test_a_small_effect_of_the_right_sign_is_partly():
     rng = np.random.default_rng(0)
     noisy = (a.phase == "scoop") & (a.condition == "LA+SA")
     a.loc[noisy, "alignment"] = 0.8 + 0.002 + rng.normal(0, 0.05, noisy.sum())
-    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
+    rows, analyses = claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     mean, low, high, p, pairs = analyses[("hindsight", 10)]["h2_phases"]["scoop"]
     assert pairs == 10 and low < 0 < high and p >= 0.05  # the interval straddles zero: cannot tell
     h2 = {c.id: c for c in rows}["study.h2"]
@@ -115,7 +117,7 @@ def test_a_phase_nobody_reached_is_not_evidence():
     data = frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
     a = data["alignment"]
     a.loc[a.phase == "scoop", "alignment"] = np.nan
-    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
+    rows, analyses = claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     assert np.isnan(analyses[("hindsight", 10)]["h2_phases"]["scoop"][0])
     assert verdicts(rows)["study.h2"] == "not testable"  # no interval: the test cannot run
     h2 = by_id(rows)["study.h2"]
@@ -148,7 +150,7 @@ def test_a_slower_condition_with_the_same_distance_is_told_apart():
     err = data["goal_error"]
     sa = err.condition.str.endswith("+SA")
     err.loc[sa, "goal_error"] *= 2
-    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
+    rows, _ = claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     v = verdicts(rows)
     assert v["study.h1"] == "no" and v["study.h1@mean_distance"] == "undecided"
     res = {c.id: c for c in rows}
@@ -172,7 +174,7 @@ def test_another_decoder_reading_is_judged_on_its_own_la_rows():
     good = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
     bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
     data = with_decoders(good, bad)
-    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    rows, analyses = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     v = verdicts(rows)
     # the headline decoder keeps every reading; the other reading gets the paper's measures only
     assert v["study.h3"] == "yes" and v["study.h2"] == "yes"
@@ -191,7 +193,7 @@ def test_another_decoder_reading_is_judged_on_its_own_la_rows():
         == analyses[("hindsight", 10)]["means"].total_time["R"]
     )
     assert (
-        len(study.for_member(data["time"], "hindsight", 10, "other")) == 10 * 4 * 2
+        len(hypotheses.for_member(data["time"], "hindsight", 10, "other")) == 10 * 4 * 2
     )  # 4 conditions x 2 tasks
 
 
@@ -217,11 +219,11 @@ def test_switch_share_and_completion_by_hand():
             )
         ]
     )
-    share = study_analysis.switch_share(time, dt=0.1).set_index("condition")
+    share = analysis.switch_share(time, dt=0.1).set_index("condition")
     # participant 0: 40 switches x 0.1 s / 40 s = 0.1; participant 1: 2 s / 20 s = 0.1
     assert list(share.index) == ["R"] and share.loc["R", "switch_share"] == pytest.approx(0.1)
     assert share.loc["R", "herlant_2016"] == 0.174
-    done = study_analysis.completion(time).set_index("condition")
+    done = analysis.completion(time).set_index("condition")
     assert done.loc["R", "finished"] == 0.75 and done.loc["LA", "finished"] == 0.5
     assert done.loc["R", "episodes"] == 4
 
@@ -231,7 +233,7 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
     bad = frames(20, sa_error=-2.0, la_sa_time=+20.0, scoop_gain=-0.15, seed=1)
     data = with_decoders(good, bad)
     data["time"].loc[(data["time"].decoder == "other") & (data["time"].participant < 5), "completed"] = False
-    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    rows, _ = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     prop = pd.DataFrame(
         {
             "decoder": ["head", "head", "other", "other"],
@@ -239,8 +241,8 @@ def test_the_readings_table_joins_property_completion_and_verdicts():
             "stay_share": [0.6, 0.5, 0.1, 0.7],
         }
     )
-    table = study_claims.readings_table(
-        prop, study_analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
+    table = claims.variants_table(
+        prop, analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
     )
     head, other = table.set_index("decoder").loc["head"], table.set_index("decoder").loc["other"]
     assert bool(head.headline) and not bool(other.headline)
@@ -279,7 +281,7 @@ def test_h3_is_not_testable_when_an_arm_misses_95_percent_completion():
     cut = time.condition.isin(["LA", "LA+SA"])
     time.loc[cut, "completed"] = False
     time.loc[cut, ["total_time", "idle_time"]] = 150.0  # every LA episode cut at the horizon
-    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)
+    rows, _ = claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)
     h3 = by_id(rows)["study.h3"]
     # LA+SA's times, cut at 150 s, are a lower bound already above R's: no, censored
     assert h3.reproduced == "no" and h3.settled
@@ -316,7 +318,7 @@ def censored(data, conditions, share=0.5):
 )
 def test_h1_reads_not_reproduced_when_its_censored_lower_bound_contradicts_it(sa_error, cut, word):
     data = censored(frames(10, sa_error=sa_error, la_sa_time=0.0, scoop_gain=0.15), cut)
-    rows = by_id(study_claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)[0])
+    rows = by_id(claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)[0])
     for cid in ("study.h1", "study.h1@paper_test"):
         assert rows[cid].reproduced == word and rows[cid].settled == (word == "no")
         assert rows[cid].measured.startswith("censored: lower bound" if word == "no" else word)
@@ -338,7 +340,7 @@ def test_h1_reads_not_reproduced_when_its_censored_lower_bound_contradicts_it(sa
 )
 def test_h3_reads_not_reproduced_when_la_sa_lower_bound_is_already_slower(la_sa_time, cut, word):
     data = censored(frames(10, sa_error=-2.0, la_sa_time=la_sa_time, scoop_gain=0.15), cut)
-    h3 = by_id(study_claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)[0])["study.h3"]
+    h3 = by_id(claims.claims(data, STUDY_ASSISTANCE, 10, horizon=150.0)[0])["study.h3"]
     assert h3.reproduced == word
     if word == "no":
         bound = "LA+SA" in cut  # its time a lower bound only when LA+SA itself is censored
@@ -356,12 +358,12 @@ def test_the_completion_guard_is_95_percent_of_the_episodes_analysed(unfinished,
         (time.condition == "R+SA") & (time.assistance == "hindsight") & (time.participant >= 10)
     ]
     time.loc[late[:unfinished], "completed"] = False
-    cohort = by_id(study_claims.claims(data, STUDY_ASSISTANCE[:1], 20)[0])["study.h3@cohort"]
+    cohort = by_id(claims.claims(data, STUDY_ASSISTANCE[:1], 20)[0])["study.h3@cohort"]
     assert (cohort.reproduced == "yes") is testable
     if not testable:
         assert cohort.measured.startswith("not testable (completion: R+SA 92.5%)")
     assert (
-        by_id(study_claims.claims(data, STUDY_ASSISTANCE[:1], 20)[0])["study.h3"].reproduced == "yes"
+        by_id(claims.claims(data, STUDY_ASSISTANCE[:1], 20)[0])["study.h3"].reproduced == "yes"
     )  # first 10: all
 
 
@@ -377,18 +379,18 @@ def h3_frames(total: dict[str, float], idle: dict[str, float], n: int = 6) -> di
 def test_h3_by_hand_yes_partly_no_on_restricted_means():
     slow = {"R": 40.0, "R+SA": 45.0, "LA": 50.0}
     yes = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0}, n=10)
-    rows, analyses = study_claims.claims(yes, STUDY_ASSISTANCE[:1], 10)
+    rows, analyses = claims.claims(yes, STUDY_ASSISTANCE[:1], 10)
     h3 = by_id(rows)["study.h3"]
     # every participant's gap is the same: LA+SA - R = 2 x (30 - 40) = -20 s exactly, interval degenerate
     assert (h3.reproduced, h3.value, h3.ci_low, h3.ci_high, h3.settled) == ("yes", -20.0, -20.0, -20.0, True)
     assert analyses[("hindsight", 10)]["h3_gap"][0] == "R"
     # fastest on Total Time, but idle as long as R's: partly, settled (the Total gap excludes 0)
     partly = h3_frames({**slow, "LA+SA": 30.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 10.0}, n=10)
-    h3 = by_id(study_claims.claims(partly, STUDY_ASSISTANCE[:1], 10)[0])["study.h3"]
+    h3 = by_id(claims.claims(partly, STUDY_ASSISTANCE[:1], 10)[0])["study.h3"]
     assert (h3.reproduced, h3.settled) == ("partly", True)
     # slower than R: no, settled; the gap is to R, LA+SA - R = +10 s
     no = h3_frames({**slow, "LA+SA": 45.0}, {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0}, n=10)
-    h3 = by_id(study_claims.claims(no, STUDY_ASSISTANCE[:1], 10)[0])["study.h3"]
+    h3 = by_id(claims.claims(no, STUDY_ASSISTANCE[:1], 10)[0])["study.h3"]
     assert (h3.reproduced, h3.value, h3.settled) == ("no", 10.0, True)
 
 
@@ -397,11 +399,11 @@ def test_fewer_participants_than_the_papers_never_settle():
     and on 10 participants but 100 bootstrap resamples, fewer than a 95% interval's 200 (issue 48)."""
     slow = {"R": 40.0, "R+SA": 45.0, "LA": 50.0, "LA+SA": 30.0}
     idle = {"R": 10.0, "R+SA": 10.0, "LA": 12.0, "LA+SA": 5.0}
-    h3 = by_id(study_claims.claims(h3_frames(slow, idle, n=6), STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
+    h3 = by_id(claims.claims(h3_frames(slow, idle, n=6), STUDY_ASSISTANCE[:1], 6)[0])["study.h3"]
     assert (h3.reproduced, h3.settled, h3.value) == ("undecided", False, -20.0)
     assert "it rests on 6 participants, fewer than the 10 a settled verdict needs" in h3.note
     assert "the tests read 'yes'" in h3.note
-    few = study_claims.claims(h3_frames(slow, idle, n=10), STUDY_ASSISTANCE[:1], 10, n_resamples=100)[0]
+    few = claims.claims(h3_frames(slow, idle, n=10), STUDY_ASSISTANCE[:1], 10, n_resamples=100)[0]
     h3 = by_id(few)["study.h3"]
     assert (h3.reproduced, h3.settled) == ("undecided", False)
     assert "on 100 resamples, fewer than the 200 a 95% interval needs" in h3.note
@@ -409,14 +411,14 @@ def test_fewer_participants_than_the_papers_never_settle():
 
 
 def test_h3_runs_no_t_test_on_times(monkeypatch):
-    real = study_tests.stats.pairwise
+    real = hypotheses.stats.pairwise
 
     def guarded(frame, measure, *args, **kwargs):
         assert measure not in ("total_time", "idle_time"), "H3 must not t-test (capped) times"
         return real(frame, measure, *args, **kwargs)
 
-    monkeypatch.setattr(study_tests.stats, "pairwise", guarded)
-    rows, analyses = study_claims.claims(
+    monkeypatch.setattr(hypotheses.stats, "pairwise", guarded)
+    rows, analyses = claims.claims(
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), STUDY_ASSISTANCE, 10
     )
     assert by_id(rows)["study.h3"].reproduced == "yes"
@@ -425,9 +427,9 @@ def test_h3_runs_no_t_test_on_times(monkeypatch):
 
 def test_untestable_marks_every_row_and_keeps_the_numbers():
     data = frames(20, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15)
-    plain, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20)
+    plain, _ = claims.claims(data, STUDY_ASSISTANCE, 20)
     reason = "no decoder with both halves of the property; best reading t: least share staying 0.10"
-    marked, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, untestable=reason)
+    marked, _ = claims.claims(data, STUDY_ASSISTANCE, 20, untestable=reason)
     assert [c.id for c in marked] == [c.id for c in plain] and len(marked) == 20 + 1  # + study.likert
     for before, after in zip(plain, marked, strict=True):
         assert after.reproduced == "not testable" and not after.settled, after.id
@@ -451,7 +453,7 @@ def test_untestable_decoders_marks_that_readings_rows_only():
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15),
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15, seed=1),
     )
-    rows, _ = study_claims.claims(
+    rows, _ = claims.claims(
         data, STUDY_ASSISTANCE, 10, decoders=("head", "other"), untestable_decoders={"other": "why"}
     )
     v = verdicts(rows)
@@ -462,7 +464,7 @@ def test_untestable_decoders_marks_that_readings_rows_only():
 
 def test_each_participant_model_is_judged_and_named_in_the_ids():
     data = with_decoders_and_models()
-    rows, analyses = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    rows, analyses = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     v = verdicts(rows)
     # model a (the first, the headline) keeps the paper's ids; model b names itself, after the decoder
     assert v["study.h3"] == "yes" and v["study.h3@b"] == "no" and v["study.h1@b+cohort"] == "yes"
@@ -477,13 +479,13 @@ def test_each_participant_model_is_judged_and_named_in_the_ids():
     assert ("hindsight", 10, "head", "b") in analyses and ("hindsight", 10, "other", "b") in analyses
     assert ("hindsight", 10) in analyses and ("hindsight", 20, "other") in analyses
     assert "b (effect not reproduced)" in by_id(rows)["study.h3"].note  # a reading that flips it
-    assert study_claims.claim_id("h3", 0, "hindsight", False, None, "one_step") == "study.h3@one_step"
-    assert study_claims.claim_id("h1", 0, "hindsight", True, None, "one_step") == "study.h1@one_step+cohort"
+    assert claims.claim_id("h3", 0, "hindsight", False, None, "one_step") == "study.h3@one_step"
+    assert claims.claim_id("h1", 0, "hindsight", True, None, "one_step") == "study.h1@one_step+cohort"
     assert (
-        study_claims.claim_id("h2", 0, "hindsight", False, "transfers_entropy", "one_step")
+        claims.claim_id("h2", 0, "hindsight", False, "transfers_entropy", "one_step")
         == "study.h2@transfers_entropy+one_step"
     )
-    done = study_analysis.completion(data["time"])
+    done = analysis.completion(data["time"])
     assert list(done.columns[:4]) == ["model", "decoder", "assistance", "condition"]
     assert len(done) == 2 * (2 + 2 * 2 + 2)  # per model: R, R+SA x 2, LA, LA+SA x 2 (head), LA, LA+SA (other)
 
@@ -494,12 +496,12 @@ def test_the_readings_table_has_a_row_per_model_and_decoder():
         (data["time"].model == "b") & (data["time"].condition == "R") & (data["time"].participant == 0),
         "completed",
     ] = False
-    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    rows, _ = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
     prop = pd.DataFrame(
         {"decoder": ["head", "other"], "has_property": [True, False], "stay_share": [0.6, 0.1]}
     )
-    table = study_claims.readings_table(
-        prop, study_analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
+    table = claims.variants_table(
+        prop, analysis.completion(data["time"]), rows, ["head", "other"], "hindsight"
     )
     assert list(zip(table.model, table.decoder, strict=True)) == [
         ("a", "head"),
@@ -542,12 +544,9 @@ def test_untestable_reason_needs_a_decoder_that_meets_the_rule():
         return frame
 
     # "leaves" has both halves at every goal and reaches every goal: testable
-    assert (
-        study_claims.untestable_reason(table([[0.6] * 4, [0.5] * 4], [[0] * 4, [7] * 4], [True, True]))
-        is None
-    )
+    assert claims.untestable_reason(table([[0.6] * 4, [0.5] * 4], [[0] * 4, [7] * 4], [True, True])) is None
     # "stays" stays everywhere but never leaves; "leaves" leaves everywhere but stays at one goal only
-    why = study_claims.untestable_reason(
+    why = claims.untestable_reason(
         table([[0.6] * 4, [0.5, 0.2, 0.1, 0.3]], [[0, 2, 0, 1], [30] * 4], [True, True])
     )
     assert why == (
@@ -570,7 +569,7 @@ def test_a_reading_without_an_interval_is_not_testable_never_undecided():
     done = pd.Series({"R": 1.0, "R+SA": 1.0, "LA": 1.0, "LA+SA": 1.0})
     nan = float("nan")
     result = {"n": 10, "h3_completion": done, "h2_phases": {"scoop": (0.02, nan, nan, nan, 1)}}
-    row = study_claims._claim_row("study.h2@leaves", "h2", judged, result, "hindsight", "leaves", None, None)
+    row = claims._claim_row("study.h2@leaves", "h2", judged, result, "hindsight", "leaves", None, None)
     assert (row.reproduced, row.settled) == ("not testable", False)
     assert row.note.startswith("Measured effect: no scoop-phase comparison (1 pairs). ")
     assert row.facts["pairs"] == 1 and row.facts["testable"] == 0 and row.facts["completion.LA"] == 1
@@ -588,10 +587,8 @@ def test_the_members_table_sets_the_sa_readings_side_by_side():
         (time.assistance == STUDY_ASSISTANCE[1]) & (time.condition == "LA+SA") & (time.participant < 4),
         "completed",
     ] = False
-    rows, _ = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
-    table = study_claims.members_table(
-        study_analysis.completion(time), rows, STUDY_ASSISTANCE, "head", "planning"
-    )
+    rows, _ = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    table = claims.members_table(analysis.completion(time), rows, STUDY_ASSISTANCE, "head", "planning")
     assert list(table.SA) == list(STUDY_ASSISTANCE) and list(table.headline) == [True, False]
     head, other = table.iloc[0], table.iloc[1]
     assert head["LA+SA finished"] == 1.0 and other["LA+SA finished"] == 0.8  # 8 of 40 episodes cut
@@ -627,24 +624,24 @@ def _property(meets: dict[str, bool]) -> pd.DataFrame:
 
 def test_only_decoders_with_the_property_and_the_headlines_entropy_version_run():
     prop = _property({"leaves": False, "transfers": True, "transfers_entropy": False, "home": False})
-    assert study.readings_to_run(prop) == ["transfers", "transfers_entropy"]
-    assert set(study.readings_to_run(prop, "all")) == {"leaves", "transfers", "transfers_entropy", "home"}
-    assert study.readings_to_run(prop, "all")[0] == "transfers"  # the ranking's order, the headline first
+    assert study.variants_to_run(prop) == ["transfers", "transfers_entropy"]
+    assert set(study.variants_to_run(prop, "all")) == {"leaves", "transfers", "transfers_entropy", "home"}
+    assert study.variants_to_run(prop, "all")[0] == "transfers"  # the ranking's order, the headline first
     both = _property({"home": True, "transfers": True, "home_entropy": False})
-    assert study.readings_to_run(both) == ["home", "transfers", "home_entropy"]  # every one that meets it
+    assert study.variants_to_run(both) == ["home", "transfers", "home_entropy"]  # every one that meets it
     none = _property({"leaves": False, "home": False})
-    assert len(study.readings_to_run(none)) == 1  # no decoder meets the rule: the best-ranked one alone
+    assert len(study.variants_to_run(none)) == 1  # no decoder meets the rule: the best-ranked one alone
     with pytest.raises(ConfigError, match="decoders"):
-        study.readings_to_run(prop, "some")
+        study.variants_to_run(prop, "some")
     with pytest.raises(ConfigError, match="decoders"):
         study.Config(decoders="some")
 
 
 def test_reading_of_fills_in_what_the_headlines_keys_leave_out():
-    assert study_claims.reading_of(("hindsight", 10), "head", "a") == ("hindsight", "head", "a")
-    assert study_claims.reading_of(("hindsight", 10, "other"), "head", "a") == ("hindsight", "other", "a")
-    assert study_claims.reading_of(("hindsight", 40, None, "b"), "head", "a") == ("hindsight", "head", "b")
-    assert study_claims.reading_of(("grasp_set", 10, "other", "b"), "head", "a") == (
+    assert claims.reading_of(("hindsight", 10), "head", "a") == ("hindsight", "head", "a")
+    assert claims.reading_of(("hindsight", 10, "other"), "head", "a") == ("hindsight", "other", "a")
+    assert claims.reading_of(("hindsight", 40, None, "b"), "head", "a") == ("hindsight", "head", "b")
+    assert claims.reading_of(("grasp_set", 10, "other", "b"), "head", "a") == (
         "grasp_set",
         "other",
         "b",
@@ -653,19 +650,19 @@ def test_reading_of_fills_in_what_the_headlines_keys_leave_out():
 
 def test_the_h1_h2_h3_tables_have_a_block_per_analysis_named_by_its_reading():
     data = with_decoders_and_models()
-    _, analyses = study_claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
-    h1 = study_claims.h1_table(analyses, "head", "a")
+    _, analyses = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    h1 = claims.h1_table(analyses, "head", "a")
     assert len(h1) == 3 * len(analyses)
     assert set(h1.measure) == {"Goal Error [m s]", "mean distance [m]"} and set(h1.model) == {"a", "b"}
     assert set(h1.decoder) == {"head", "other"} and set(h1.SA) == set(STUDY_ASSISTANCE)
     first = analyses[("hindsight", 10)]["h1_within"]
     row = h1[(h1.model == "a") & (h1.decoder == "head") & (h1.SA == "hindsight") & (h1.participants == 10)]
     assert row.iloc[1].F == first["F"] and row.iloc[1].df == f"({first['df1']},{first['df2']})"
-    h2 = study_claims.h2_table(analyses, "head", "a")
+    h2 = claims.h2_table(analyses, "head", "a")
     assert len(h2) == 3 * len(analyses) and list(h2.phase[:3]) == ["stab", "scoop", "dip"]
     scoop = analyses[("hindsight", 10)]["h2_phases"]["scoop"]
     assert h2.iloc[1]["LA+SA - R+SA"] == scoop[0] and h2.iloc[1].pairs == scoop[4]
-    h3 = study_claims.h3_tables(analyses, "head", "a")
+    h3 = claims.h3_tables(analyses, "head", "a")
     assert len(h3) == len(analyses)
     title, means, times = h3[0]
     assert title.startswith("model = a, decoder = head, SA = hindsight, 10 participants:")
@@ -682,12 +679,12 @@ def test_switch_shares_split_each_model_into_the_first_10_and_the_cohort():
         for m in ("a", "b") for p in range(12) for t in ("Entree", "Dessert")
     ]  # fmt: skip
     time = pd.DataFrame(rows)
-    out = study_analysis.switch_shares(time, 0.1, ("b", "a"))
+    out = analysis.switch_shares(time, 0.1, ("b", "a"))
     assert list(zip(out.model, out.participants_of, strict=True)) == [
         ("b", "first 10"), ("b", "cohort"), ("a", "first 10"), ("a", "cohort")
     ]  # fmt: skip
     assert list(out.participants) == [10, 12, 10, 12]
-    first = study_analysis.switch_share(time[time.model == "a"], 0.1, n=study.PAPER_N)
+    first = analysis.switch_share(time[time.model == "a"], 0.1, n=study.PAPER_N)
     assert out.switch_share.iloc[2] == pytest.approx(first.switch_share.iloc[0])
 
 
@@ -710,7 +707,7 @@ def test_break_even_is_the_time_gap_per_mode_switch_by_hand():
                 rows.append(
                     {**key, "decoder": "other", "model": "a", "total_time": 999.0, "mode_switches": 0}
                 )
-    gap = study_analysis.break_even(pd.DataFrame(rows), STUDY_ASSISTANCE, "head", "a")
+    gap = analysis.break_even(pd.DataFrame(rows), STUDY_ASSISTANCE, "head", "a")
     cost = gap["break-even cost per switch [s]"]
     assert list(gap.index) == [(m, c) for m in STUDY_ASSISTANCE for c in ("R", "R+SA")]
     assert cost.to_dict() == pytest.approx(
@@ -732,10 +729,10 @@ def test_stuck_episodes_runs_stuck_over_every_model_and_reading(monkeypatch):
         seen.append((episodes, decoder))
         return pd.DataFrame({"participant": [episodes]})
 
-    monkeypatch.setattr(study_analysis, "stuck", fake)
+    monkeypatch.setattr(analysis, "stuck", fake)
     episodes = {"a": {"head": "a-head", "other": "a-other"}, "b": {"head": "b-head"}}
     decoders = {"head": "phi-head", "other": "phi-other"}
-    out = study_analysis.stuck_episodes(None, episodes, decoders, None, ("b", "a"))
+    out = analysis.stuck_episodes(None, episodes, decoders, None, ("b", "a"))
     assert seen == [("b-head", "phi-head"), ("a-head", "phi-head"), ("a-other", "phi-other")]
     assert list(out.participant) == ["b-head", "a-head", "a-other"]
     assert list(out.model) == ["b", "a", "a"] and list(out.decoder) == ["head", "head", "other"]
@@ -759,7 +756,7 @@ def test_the_participants_table_lists_every_parameter(tmp_path):
 
 
 def test_the_likert_claim_reads_the_share_of_significant_comparisons_in_favour():
-    from lasa.experiments.study_tests import likert_verdict
+    from lasa.evidence.hypotheses import likert_verdict
 
     # three comparisons per scale (LA+SA against R, R+SA, LA), two scales: diff = LA+SA - other
     likert = pd.DataFrame(
@@ -778,11 +775,11 @@ def test_the_likert_claim_reads_the_share_of_significant_comparisons_in_favour()
 
 
 def test_a_headline_without_readings_keeps_its_note():
-    rows, _ = study_claims.claims(
+    rows, _ = claims.claims(
         frames(10, sa_error=-2.0, la_sa_time=-20.0, scoop_gain=0.15), STUDY_ASSISTANCE[:1], 10
     )
     likert = {c.id: c for c in rows}["study.likert"]
-    assert likert.note == study_claims.likert_row(10, STUDY_ASSISTANCE[0]).note  # no "Every reading ..."
+    assert likert.note == claims.likert_row(10, STUDY_ASSISTANCE[0]).note  # no "Every reading ..."
 
 
 def test_a_test_that_cannot_be_computed_reads_not_testable_with_no_non_finite_number():
@@ -793,7 +790,7 @@ def test_a_test_that_cannot_be_computed_reads_not_testable_with_no_non_finite_nu
     data["goal_error"]["goal_error"] = 5.0
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        rows, _ = study_claims.claims(data, STUDY_ASSISTANCE[:1], 10)
+        rows, _ = claims.claims(data, STUDY_ASSISTANCE[:1], 10)
     h1 = by_id(rows)["study.h1"]
     assert (h1.reproduced, h1.settled) == ("not testable", False)
     assert h1.measured == (

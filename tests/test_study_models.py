@@ -6,7 +6,8 @@ import pytest
 from stand_ins import LinearDecoder
 
 from lasa.base.errors import ConfigError
-from lasa.experiments import study, study_analysis, study_claims, study_plots
+from lasa.experiments.study import analysis, claims, plots
+from lasa.experiments.study import run as study
 from lasa.people import participants
 from lasa.people.design import StudyConfig
 from lasa.world.eating import make_eating_task
@@ -54,8 +55,8 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
     assert list(episodes) == ["one_step", "twin"] and list(episodes["twin"]) == ["head", "other"]
     time = frames["time"]
     assert list(dict.fromkeys(time.model)) == ["one_step", "twin"]
-    assert set(study_plots.ROW_KEYS) <= set(time.columns) and "model" in study_plots.ROW_KEYS
-    for spec in (study_plots.GOAL_ERROR, study_plots.TIME, study_plots.ALIGNMENT):
+    assert set(plots.ROW_KEYS) <= set(time.columns) and "model" in plots.ROW_KEYS
+    for spec in (plots.GOAL_ERROR, plots.TIME, plots.ALIGNMENT):
         assert set(spec.COLUMNS) <= set(frames[spec.NAME.removeprefix("study_")].columns)
     per_model = 2 * (4 + 2) * 2  # participants x (4 arms of the headline + LA, LA+SA of the other) x tasks
     assert len(time) == 2 * per_model
@@ -63,12 +64,12 @@ def test_run_simulates_each_model_and_labels_its_rows(twin):
         time[time.model == m].drop(columns="model").reset_index(drop=True) for m in ("one_step", "twin")
     )
     pd.testing.assert_frame_equal(one, two)  # the same simulate, seed and cohort: the same episodes
-    rows, analyses = study_claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
+    rows, analyses = claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3", "study.h3@twin", "study.h2@other+twin", "study.h1@mean_distance+twin"} <= ids
     # 20 steps of 0.1 s: nobody finishes, so H3 is not testable under each model
     assert {c.reproduced for c in rows if c.id.startswith("study.h3")} == {"not testable"}
-    done = study_analysis.completion(time)
+    done = analysis.completion(time)
     assert set(done.model) == {"one_step", "twin"} and (done.finished == 0).all()
 
 
@@ -78,18 +79,18 @@ def test_a_model_limited_to_the_first_readings_runs_and_is_judged_on_those_only(
         participants=2,
         session=StudyConfig(horizon=20, assistance=("hindsight",)),
         participant_models=("one_step", "twin"),
-        readings_per_model={"twin": 1},
+        variants_per_model={"twin": 1},
     )
     decoders = {"head": LinearDecoder(0), "other": LinearDecoder(1)}
     episodes, frames = study.run(task, decoders, task.robot.control, config, progress=False)
     assert twin == [("R", "LA")] and list(episodes["twin"]) == ["head"]
     time = frames["time"]
     assert set(time[time.model == "twin"].decoder) == {"head", "none"}
-    rows, _ = study_claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
+    rows, _ = claims.claims(frames, config.session.assistance, 2, ("head", "other"), horizon=2.0)
     ids = {c.id for c in rows}
     assert {"study.h3@twin", "study.h2@other"} <= ids and not any("other+twin" in i for i in ids)
-    with pytest.raises(ConfigError, match="readings_per_model"):
-        study.Config(readings_per_model={"psychic": 1})
+    with pytest.raises(ConfigError, match="variants_per_model"):
+        study.Config(variants_per_model={"psychic": 1})
 
 
 def test_plot_time_hatches_censored_bars_and_says_how_many_finished():
@@ -112,7 +113,7 @@ def test_plot_time_hatches_censored_bars_and_says_how_many_finished():
                         "completed": done,
                     }
                 )
-    fig = study_plots.plot_time(pd.DataFrame(rows))
+    fig = plots.plot_time(pd.DataFrame(rows))
     for ax in fig.axes:
         labels = sorted(t.get_text() for t in ax.texts)
         assert labels == ["0% done", "100% done", "100% done", "50% done"]
@@ -138,12 +139,10 @@ def test_headline_model_is_the_first_whose_retargeting_episodes_finish() -> None
     ok = {"R": [True] * 20, "R+SA": [True] * 19 + [False], "LA": [False] * 20}  # LA plays no part
     short = {"R": [True] * 18 + [False] * 2, "R+SA": [True] * 20}  # R: 90%
     time = pd.DataFrame(rows("planning", short) + rows("one_step", ok))
-    assert study_analysis.headline_model(time, ("planning", "one_step")) == "one_step"
+    assert analysis.headline_model(time, ("planning", "one_step")) == "one_step"
     time = pd.DataFrame(rows("planning", ok) + rows("one_step", ok))
-    assert study_analysis.headline_model(time, ("planning", "one_step")) == "planning"
+    assert analysis.headline_model(time, ("planning", "one_step")) == "planning"
     time = pd.DataFrame(rows("planning", short) + rows("one_step", short))
-    assert (
-        study_analysis.headline_model(time, ("planning", "one_step")) == "planning"
-    )  # none qualifies: the first
+    assert analysis.headline_model(time, ("planning", "one_step")) == "planning"  # none qualifies: the first
     with pytest.raises(ConfigError, match="at least one"):
-        study_analysis.headline_model(time, ())
+        analysis.headline_model(time, ())

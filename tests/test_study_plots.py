@@ -19,7 +19,7 @@ from matplotlib.patches import Rectangle
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
-from lasa.experiments import study_plots
+from lasa.experiments.study import plots
 
 matplotlib.use("Agg")
 
@@ -35,7 +35,7 @@ NOT_REACHED = {(0, "LA+SA", "scoop"), (0, "LA+SA", "dip"), (1, "LA+SA", "dip"), 
 def _fast_and_closed():
     """Fewer bootstrap resamples than the figures' 1000 (seaborn's bootstrap is most of a figure's time)."""
     with pytest.MonkeyPatch.context() as patch:
-        patch.setitem(study_plots.CI, "n_boot", 100)
+        patch.setitem(plots.CI, "n_boot", 100)
         yield
     plt.close("all")
 
@@ -119,11 +119,9 @@ STATS = {"headline": "ours (10): SA − no SA = +1.24 m s, F(1,9) = 32.8, p < .0
 def drawn(goal_error, time, alignment) -> dict[str, Figure]:
     """The three figures of the 12 participants, with our statistic per panel (drawn once: they are slow)."""
     return {
-        "goal_error": study_plots.plot_goal_error(
-            goal_error, decoder="transfers", stats=STATS, completed=time
-        ),
-        "time": study_plots.plot_time(time, decoder="transfers", horizon=150.0, stats=STATS),
-        "alignment": study_plots.plot_alignment(alignment, decoder="transfers", stats=STATS, completed=time),
+        "goal_error": plots.plot_goal_error(goal_error, decoder="transfers", stats=STATS, completed=time),
+        "time": plots.plot_time(time, decoder="transfers", horizon=150.0, stats=STATS),
+        "alignment": plots.plot_alignment(alignment, decoder="transfers", stats=STATS, completed=time),
     }
 
 
@@ -150,9 +148,9 @@ def test_the_headline_is_the_first_ten_and_the_cohort_a_second_panel(goal_error,
         assert "first 10 simulated participants" in head and "cohort" not in head
         assert cohort.startswith(f"cohort of {N} (a reading)")
     few = [
-        study_plots.plot_goal_error(goal_error[goal_error.participant < 10], completed=time),
-        study_plots.plot_time(time[time.participant < 10]),
-        study_plots.plot_alignment(alignment[alignment.participant < 3], completed=time),
+        plots.plot_goal_error(goal_error[goal_error.participant < 10], completed=time),
+        plots.plot_time(time[time.participant < 10]),
+        plots.plot_alignment(alignment[alignment.participant < 3], completed=time),
     ]
     for fig, n in zip(few, (10, 10, 3), strict=True):
         assert len(fig.subfigs) == 1
@@ -165,16 +163,16 @@ def test_goal_error_hatches_the_censored_bars_only(drawn):
     assert {g for g, bar in head.items() if bar.get_hatch()} == {("Dessert", "LA+SA")}
     assert {g for g, bar in cohort.items() if bar.get_hatch()} == {("Dessert", "LA+SA"), ("Entree", "LA")}
     assert _hatched(fig) == 3  # no other patch (dots, legend) is hatched
-    assert study_plots.CENSORED in _legend_text(fig)
+    assert plots.CENSORED in _legend_text(fig)
 
 
 def test_goal_error_takes_completion_from_its_own_column_and_needs_every_episode(goal_error, time):
-    own = goal_error.merge(time[[*study_plots.ROW_KEYS, "completed"]], on=list(study_plots.ROW_KEYS))
-    assert _hatched(study_plots.plot_goal_error(own[own.participant < 10], decoder="transfers")) == 1
-    unmarked = study_plots.plot_goal_error(goal_error[goal_error.participant < 10], decoder="transfers")
+    own = goal_error.merge(time[[*plots.ROW_KEYS, "completed"]], on=list(plots.ROW_KEYS))
+    assert _hatched(plots.plot_goal_error(own[own.participant < 10], decoder="transfers")) == 1
+    unmarked = plots.plot_goal_error(goal_error[goal_error.participant < 10], decoder="transfers")
     assert _hatched(unmarked) == 0 and "completion not given" in _legend_text(unmarked)
     with pytest.raises(ConfigError, match="completed has no row"):
-        study_plots.plot_goal_error(goal_error, decoder="transfers", completed=time[time.participant != 4])
+        plots.plot_goal_error(goal_error, decoder="transfers", completed=time[time.participant != 4])
 
 
 def test_time_hatches_the_censored_bars_only(drawn):
@@ -226,7 +224,7 @@ def _alignment_hatches(fig: Figure, given: bool) -> None:
 
 def test_alignment_hatches_unfinished_or_unreached_bars(alignment, drawn):
     _alignment_hatches(drawn["alignment"], given=True)  # LA+SA's Dessert unfinished: all its phases
-    _alignment_hatches(study_plots.plot_alignment(alignment, decoder="transfers"), given=False)
+    _alignment_hatches(plots.plot_alignment(alignment, decoder="transfers"), given=False)
 
 
 def test_alignment_says_the_n_of_every_bar(drawn):
@@ -246,35 +244,35 @@ def test_alignment_says_the_n_of_every_bar(drawn):
 def test_our_statistic_is_printed_per_panel_beside_the_papers(time, drawn):
     for name, h in (("goal_error", "h1"), ("time", "h3"), ("alignment", "h2")):
         fig = drawn[name]
-        assert study_plots.PAPER_H[h] in fig.get_suptitle().replace("\n", " ")
+        assert plots.PAPER_H[h] in fig.get_suptitle().replace("\n", " ")
         for sub, key in zip(fig.subfigs, ("headline", "cohort"), strict=True):
             assert STATS[key] in sub.get_suptitle().replace("\n", " ")
-    only_head = study_plots.plot_time(time, stats={"headline": "ours (10): y"})
+    only_head = plots.plot_time(time, stats={"headline": "ours (10): y"})
     assert "ours (10): y" in only_head.subfigs[0].get_suptitle()
     assert "ours" not in only_head.subfigs[1].get_suptitle()
-    bare = study_plots.plot_time(time[time.participant < 10])
+    bare = plots.plot_time(time[time.participant < 10])
     assert bare.subfigs[0].get_suptitle().count("\n") == 0  # no stats: nothing extra
     with pytest.raises(ConfigError, match="stats keys"):
-        study_plots.plot_time(time, stats={"main": "ours"})
+        plots.plot_time(time, stats={"main": "ours"})
 
 
 def test_the_figures_are_the_same_run_after_run(goal_error, time):
     def png() -> bytes:
         buf = io.BytesIO()
         part = goal_error[goal_error.participant < 10]
-        study_plots.plot_goal_error(part, completed=time).savefig(buf, format="png", dpi=40)
+        plots.plot_goal_error(part, completed=time).savefig(buf, format="png", dpi=40)
         return buf.getvalue()
 
     assert png() == png()
 
 
 def test_specs_keep_their_names_and_columns():
-    assert [s.NAME for s in (study_plots.GOAL_ERROR, study_plots.TIME, study_plots.ALIGNMENT)] == [
+    assert [s.NAME for s in (plots.GOAL_ERROR, plots.TIME, plots.ALIGNMENT)] == [
         "study_goal_error",
         "study_time",
         "study_alignment",
     ]
-    assert "completed" in study_plots.TIME.COLUMNS and "completed" not in study_plots.GOAL_ERROR.COLUMNS
+    assert "completed" in plots.TIME.COLUMNS and "completed" not in plots.GOAL_ERROR.COLUMNS
 
 
 def test_video_clips_take_one_participants_episode_under_each_condition():
@@ -299,7 +297,7 @@ def test_video_clips_take_one_participants_episode_under_each_condition():
         end=np.array([5 + CONDITIONS.index(k[1]) for k in keys]),
         states=states,
     )
-    clips = study_plots.video_clips(episodes, 1, "grasp_set", stride=2, dt=0.1)
+    clips = plots.video_clips(episodes, 1, "grasp_set", stride=2, dt=0.1)
     assert len(clips) == len(CONDITIONS)
     for cond, (frames, captions) in zip(CONDITIONS, clips, strict=True):
         e = keys.index((1, cond, "grasp_set" if cond.endswith("+SA") else NO_ASSISTANCE, "Dessert"))
@@ -307,4 +305,4 @@ def test_video_clips_take_one_participants_episode_under_each_condition():
         assert (frames == states[steps, e]).all()
         assert captions == [f"{cond}  t = {s * 0.1:.1f} s" for s in steps]
     with pytest.raises(ConfigError, match="participant 2"):
-        study_plots.video_clips(episodes, 2, "grasp_set", stride=2, dt=0.1)
+        plots.video_clips(episodes, 2, "grasp_set", stride=2, dt=0.1)

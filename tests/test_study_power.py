@@ -1,4 +1,4 @@
-"""Power by simulation (lasa.experiments.study_power): drawn cohorts through the claims' own tests.
+"""Power by simulation (lasa.experiments.study.power): drawn cohorts through the claims' own tests.
 
 The synthetic studies keep the committed tables' rows and columns (the headline reading) and
 replace the measures the claims test: a large effect is found in every drawn cohort, in the
@@ -15,9 +15,9 @@ import pandas as pd
 import pytest
 
 from lasa.base.errors import ConfigError
-from lasa.experiments import study_power
-from lasa.experiments.study import for_member
-from lasa.experiments.study_power import needed, power, sentence
+from lasa.evidence.hypotheses import for_member
+from lasa.experiments.study import power as study_power
+from lasa.experiments.study.power import needed, power, sentence
 
 FIGURES = Path(__file__).resolve().parents[1] / "figures"
 READING = {"assistance": "hindsight", "decoder": "transfers", "model": "planning"}

@@ -23,7 +23,9 @@ from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import require_file, write_text
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import DROPPED, LEFT_OUT, PRACTICE_TASK, QUESTIONS, SCALES
-from lasa.experiments import study, study_analysis, study_power
+from lasa.experiments.study import analysis as study_analysis
+from lasa.experiments.study import power as study_power
+from lasa.experiments.study import run as study
 from lasa.world import measures
 from lasa.world.eating import STUDY_BELIEF_CAP
 
@@ -72,7 +74,7 @@ def cohort(figures: Path) -> dict[str, pd.DataFrame]:
 def headline_reading(figures: Path, frames: dict[str, pd.DataFrame]) -> Reading:
     """Notebook 11's headline: its first SA member, the property rule's decoder, its model rule's model."""
     config = study.Config()
-    decoder = study.readings_to_run(study.eating_property(figures), "property")[0]
+    decoder = study.variants_to_run(study.eating_property(figures), "property")[0]
     model = study_analysis.headline_model(frames["time"], config.participant_models)
     return config.session.assistance[0], decoder, model
 
@@ -85,7 +87,7 @@ def power_table(
     n_jobs: int = 1,
     progress: bool = False,
 ) -> pd.DataFrame:
-    """:func:`lasa.experiments.study_power.power` on the simulated cohort's ``frames``, for ``reading``."""
+    """:func:`lasa.experiments.study.power.power` on the simulated cohort's ``frames``, for ``reading``."""
     from lasa.world.eating import load_eating_robot
 
     assistance, decoder, model = reading
@@ -166,7 +168,7 @@ def document(
         f"Significance level .05, two-sided. H1 and H3 are judged only if every condition finishes at least "
         f"{bar} of its episodes (H2: LA+SA and R+SA), as stated in each rule above; H3's restricted times "
         f"end at the trials' limit ({trial_s:g} s). Notebook 11 applies these tests and rules to the "
-        "sessions (`lasa.experiments.study_tests.people_claims`: the simulated cohort's own `analyse` and "
+        "sessions (`lasa.evidence.hypotheses.people_claims`: the simulated cohort's own `analyse` and "
         f"`judge`). The planned reading: SA as `{assistance}`, the latent-action decoder `{decoder}`.",
         "",
         "## 6. Outliers and exclusions",

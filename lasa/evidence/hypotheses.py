@@ -1,13 +1,9 @@
-"""The tests the study's claims rest on, and each claim's verdict from them.
+"""The eating study's hypotheses H1-H3: their tests on the study's tables, and each claim's verdict.
 
-:func:`analyse` runs every test for one reading (SA member, decoder reading, participant model,
-first ``n`` participants): H1's ANOVAs and pairwise t-tests on Goal Error and on the mean
-distance, H2's paired t-tests of Preference Alignment per Dessert phase, and H3's restricted
-mean times with their paired bootstrap. :func:`judge` hands each claim's numbers to its rule
-(:attr:`lasa.evidence.decision.Rule.tests` of :mod:`lasa.evidence.rules`, where the yes / partly
-/ no is decided) and writes what was measured; H1 and H3 are not testable when a condition
-finishes fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes (their measures are
-censored at the horizon). The statistics are :mod:`lasa.evidence.stats`'s.
+:func:`analyse` runs every test for one member, decoder variant, participant model and first ``n``
+participants (the statistics of :mod:`lasa.evidence.stats`); :func:`judge` hands each claim's numbers to
+its rule (:mod:`lasa.evidence.rules`). H1 and H3 are not testable when a condition finishes fewer than
+:data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes (their measures are censored at the horizon).
 """
 
 from __future__ import annotations
@@ -21,26 +17,59 @@ from scipy import stats as sps
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
+from lasa.base.errors import ConfigError
 from lasa.evidence import stats
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE
 from lasa.evidence.findings import below_bar, completion_text
-from lasa.evidence.rules import rule
+from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import complete_participants
-from lasa.experiments.study import for_member
 
 __all__ = [
     "Judged",
+    "for_member",
+    "headline_model",
     "analyse",
     "judge",
-    "people_claims",
-    "censored_arms",
-    "censored_contradiction",
     "h3_comparator",
+    "people_claims",
     "likert_verdict",
 ]
 
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
+
+
+def for_member(
+    frame: pd.DataFrame,
+    assistance: str,
+    n: int | None = None,
+    decoder: str | None = None,
+    model: str | None = None,
+) -> pd.DataFrame:
+    """The rows of one SA member (the unassisted conditions included), for the first ``n`` participants,
+    with ``decoder`` the LA rows of that decoder variant, with ``model`` of that participant model."""
+    rows = frame[(frame.assistance == assistance) | (frame.assistance == NO_ASSISTANCE)]
+    if decoder is not None and "decoder" in rows.columns:
+        rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
+    if model is not None and "model" in rows.columns:
+        rows = rows[rows.model == model]
+    if n is not None:
+        rows = rows[rows.participant < n]
+    return rows.reset_index(drop=True)
+
+
+def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
+    """The headline participant model, by a criterion fixed before any H1-H3 verdict was seen: the first
+    of ``models`` whose Retargeting episodes (R, and R+SA under every member) each finish at least
+    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time; if none does, the first."""
+    if not models:
+        raise ConfigError("headline_model needs at least one participant model")
+    retarget = time[time.condition.isin(["R", "R+SA"])]
+    for model in models:
+        done = retarget[retarget.model == model].groupby(["condition", "assistance"]).completed.mean()
+        if len(done) and (done >= COMPLETION_BAR).all():
+            return model
+    return models[0]
 
 
 def analyse(
@@ -52,7 +81,7 @@ def analyse(
     horizon: float = math.inf,
     n_resamples: int = 10_000,
 ) -> dict[str, object]:
-    """Every test the claims rest on, for one SA reading, decoder reading, participant model and first ``n``.
+    """Every test the claims rest on, for one SA member, decoder variant, participant model and first ``n``.
 
     ``horizon`` [s] is where an unfinished episode's time was cut (H3's restricted times);
     ``n_resamples`` the paired bootstrap's resamples for H3.
@@ -81,15 +110,8 @@ def analyse(
 
 
 def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
-    """H3's numbers: completion per condition, restricted means, and LA+SA's bootstrap contrasts.
-
-    ``h3_short`` names each condition that finishes fewer than
-    :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes (``"LA 0%, LA+SA 0%"``; empty if
-    none): then H3 is not testable. ``h3_total`` and ``h3_idle`` are
-    :func:`lasa.evidence.stats.rmst_contrasts` (LA+SA minus each other condition), ``means`` the
-    restricted means per participant over both tasks, and ``h3_gap`` the contrast with the
-    fastest other condition (by restricted mean Total Time).
-    """
+    """H3's numbers: completion per condition (``h3_short``: those below the bar), restricted means, and
+    LA+SA's bootstrap contrasts (``stats.rmst_contrasts``), ``h3_gap`` the one with the fastest other."""
     done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
     contrasts = {
         m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples)
@@ -102,7 +124,7 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
     gap = contrasts["total_time"].set_index("b").loc[best]
     return {
         "h3_completion": done,
-        "h3_short": _short_text(done, censored_arms(done)),
+        "h3_short": _short_text(done, _censored(done)),
         "h3_total": contrasts["total_time"],
         "h3_idle": contrasts["idle_time"],
         "means": means,
@@ -113,11 +135,8 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
 
 
 def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int]:
-    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used.
-
-    Participants without a value under either condition (a phase never reached) are left
-    out; with fewer than two pairs left, everything but the count is NaN.
-    """
+    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used (participants with
+    both values; with fewer than two pairs, everything but the count is NaN)."""
     keep = a.notna() & b.notna()
     a, b = a[keep], b[keep]
     if len(a) < 2:
@@ -130,29 +149,14 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
 def people_claims(
     frames: dict[str, pd.DataFrame], horizon: float | None = None, n_resamples: int = 10_000
 ) -> pd.DataFrame:
-    """H1-H3 on people's sessions, by the claims' own tests and rules (:func:`analyse`, :func:`judge`).
-
-    What a pre-registration (``python -m lasa.live.web preregister``) names is what this applies:
-    the same tests, completion bar and rules as the simulated cohort's claims, per SA member the
-    sessions used.
-
-    Args:
-        frames: :func:`lasa.evidence.sessions.analyse_sessions`' ``goal_error``, ``time`` and
-            ``alignment`` tables, and its ``likert`` tests if people answered the questionnaire
-            (then Fig. dessert's subjective claim gets a row, ``likert``: :func:`likert_verdict`).
-        horizon: Where an unfinished trial's time was cut [s] (H3's restricted times); None: the
-            longest logged Total Time, the trials' limit when one did not finish.
-        n_resamples: H3's paired bootstrap resamples.
-
-    Returns:
-        One row per SA member and claim key: ``member``, ``claim``, ``verdict``, ``value``,
-        ``ci_low``, ``ci_high``, ``measured``, ``participants`` (none if fewer than two did
-        every condition in every task).
+    """H1-H3 on people's sessions (``frames``: :func:`lasa.evidence.sessions.analyse_sessions`'), by the
+    simulated cohort's own tests, completion bar and rules; with its ``likert`` tests, also Fig. dessert's
+    subjective claim (:func:`likert_verdict`). ``horizon`` [s] defaults to the longest logged Total Time.
+    One row per SA member and claim key (none if fewer than two did every condition in every task).
     """
     time = frames["time"]
     horizon = float(time.total_time.max()) if horizon is None else horizon
-    # within-subject tests: the participants who did every condition in every task (the rule
-    # people's other tests apply, lasa.evidence.sessions.DROPPED; at least two, else no row)
+    # within-subject tests: those who did every condition in every task (sessions.DROPPED; two or more)
     full = set(complete_participants(time, "claims")[0].participant)
     likert = frames.get("likert")  # people's answers' tests (lasa.evidence.sessions.likert_tests), if any
     frames = {
@@ -163,46 +167,28 @@ def people_claims(
     for assistance in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
         result = analyse(frames, assistance, horizon=horizon, n_resamples=n_resamples)
         for claim, (verdict, value, low, high, measured) in judge(result).items():
-            rows.append(
-                {"member": assistance, "claim": claim, "verdict": verdict, "value": value, "ci_low": low,
-                 "ci_high": high, "measured": measured, "participants": result["n"]}
-            )  # fmt: skip
+            rows.append((assistance, claim, verdict, value, low, high, measured, result["n"]))
     if likert is not None and len(likert) and len(full) >= 2:
         verdict, share, n = likert_verdict(likert)
         measured = (
             f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
         )
-        rows.append(
-            {"member": "all", "claim": "likert", "verdict": verdict, "value": share, "ci_low": math.nan,
-             "ci_high": math.nan, "measured": measured, "participants": len(full)}
-        )  # fmt: skip
+        rows.append(("all", "likert", verdict, share, math.nan, math.nan, measured, len(full)))
     columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]
     return pd.DataFrame(rows, columns=columns)
 
 
 def likert_verdict(likert: pd.DataFrame) -> tuple[str, float, int]:
-    """Fig. dessert's subjective claim on people's answers (``study.likert``'s rule).
-
-    Args:
-        likert: :func:`lasa.evidence.sessions.likert_tests`: per scale, LA+SA against each other
-            condition (``diff`` = LA+SA minus the other, Holm-corrected ``p_corr``).
-
-    Returns:
-        (verdict, the share of comparisons with LA+SA rated higher at p < .05, the comparisons).
-    """
+    """Fig. dessert's subjective claim on people's answers (:func:`lasa.evidence.sessions.likert_tests`): the
+    ``study.likert`` verdict, the share of comparisons with LA+SA rated higher at p < .05, the comparisons."""
     support = (likert["diff"] > 0.0) & (likert["p_corr"] < 0.05)
     share = float(support.mean())
     return rule("study.likert").verdict({"share": share}), share, int(len(likert))
 
 
 def judge(result: Mapping[str, object]) -> dict[str, Judged]:
-    """(the tests' verdict, value, 95% ci_low, ci_high, measured) per claim key.
-
-    The verdict is the claim's rule applied to its tests' numbers (:func:`lasa.evidence.rules.rule`,
-    its ``tested``). The value is the effect the verdict rests on, and its interval is the
-    t-interval of the same test (paired over participants, or two-sample for the paper's F(1,18)
-    reading); for H3 the percentile interval of the paired bootstrap (:func:`_h3_verdict`).
-    """
+    """(the claim's rule on its tests' numbers, the effect, its 95% interval: the test's t-interval or H3's
+    paired bootstrap percentiles, measured) per claim key."""
     out = {
         "h1": _h1(result, "", "m s", 1.0),
         "h1_mean_distance": _h1(result, "_mean", "cm", 100.0),
@@ -216,18 +202,14 @@ def judge(result: Mapping[str, object]) -> dict[str, Judged]:
 
 
 def _uncomputed(numbers: Mapping[str, float]) -> str:
-    """``not testable (its test could not be computed: F, p R+SA - R not finite)`` for the numbers a
-    test reads that are not finite (every Goal Error equal gives ``F = -inf``, ``p_holm = nan``);
-    "" if all are: such a test reads not testable, and no non-finite number reaches the claims."""
+    """Why a test whose numbers are not all finite is not testable (every Goal Error equal gives
+    ``F = -inf``); "" if they are."""
     lost = [name for name, v in numbers.items() if not math.isfinite(v)]
     return f"{NOT_TESTABLE} (its test could not be computed: {', '.join(lost)} not finite)" if lost else ""
 
 
 def _h1(result: Mapping[str, object], suffix: str, unit: str, scale: float) -> Judged:
-    """H1 on Goal Error (``suffix`` empty) or the mean distance (``_mean``): main effect and pairs.
-
-    ``unit`` and ``scale`` are how ``measured`` writes the differences (``cm``, 100 for the mean distance).
-    """
+    """H1 on Goal Error (``suffix`` empty) or the mean distance (``_mean``, in ``unit`` cm by ``scale``)."""
     within, pairs = result[f"h1{suffix}_within"], result[f"h1{suffix}_pairs"]
     assert isinstance(within, dict) and isinstance(pairs, pd.DataFrame)
     diff = within["mean_sa"] - within["mean_no_sa"]
@@ -280,12 +262,8 @@ def _h2(result: Mapping[str, object]) -> Judged:
     return verdict, mean, low, high, f"alignment LA+SA - R+SA, Dessert phases: {text}"
 
 
-def censored_arms(done: pd.Series) -> list[str]:
-    """The conditions that finish fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of their episodes.
-
-    Their Total Time and Goal Error are lower bounds: an episode cut at the horizon would only
-    have added to both. A condition without episodes (NaN) counts as censored too.
-    """
+def _censored(done: pd.Series) -> list[str]:
+    """The conditions below the completion bar (NaN too): their Total Time and Goal Error are lower bounds."""
     return [c for c, _ in below_bar(done.items())]
 
 
@@ -294,47 +272,27 @@ def _short_text(done: pd.Series, arms: list[str]) -> str:
     return completion_text(list(done.reindex(arms).fillna(0.0).items()))
 
 
-def censored_contradiction(censored: list[str], claimed: set[str], low: float) -> bool:
-    """Whether a censored comparison already contradicts a claim that ``claimed`` arms are better.
-
-    The claimed-better arms' measure is at most a lower bound (censored), the comparators' is
-    measured (every comparator finishes at least the bar): if the lower bound is already worse
-    with the interval of the difference (claimed minus comparator, higher is worse) clear of 0
-    (``low > 0``), finishing the censored episodes could only widen the gap. Otherwise the
-    censored numbers are consistent with the claim, and it is not testable.
-    """
-    return bool(censored) and set(censored) <= claimed and math.isfinite(low) and low > 0.0
-
-
 def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, Judged]:
-    """H1 and H2 when some condition finishes too few episodes (:func:`censored_arms`).
+    """H1 and H2 when some condition finishes too few episodes.
 
-    Goal Error is summed over the task's steps: an episode cut at the horizon has its sum cut
-    there too, a lower bound like its time. When only SA arms are censored and SA's Goal Error
-    is already significantly higher, H1 reads ``not reproduced`` (censored: lower bound), with
-    both means; otherwise H1 is not testable. The mean distance (that sum over a censored time)
-    is no bound, so ``h1_mean_distance`` is not testable whenever a condition is censored. H2
-    compares alignment in phases that a censored episode may never have reached: not testable
-    when LA+SA or R+SA finishes fewer than the bar.
+    Goal Error is summed over the steps, so a censored episode's is a lower bound. When only SA
+    conditions are censored and SA's Goal Error is already higher with its interval clear of 0,
+    H1 reads ``no`` (censored: lower bound); otherwise H1 is not testable. The mean distance is no
+    bound: not testable whenever a condition is censored. H2 is not testable when LA+SA or R+SA is.
     """
-    censored = censored_arms(done)
+    censored = _censored(done)
     if not censored:
         return out
     short = _short_text(done, censored)
     sa = {c for c in done.index if str(c).endswith("+SA")}
     for key in ("h1", "h1_mean_distance", "h1_paper_test"):
         verdict, value, low, high, measured = out[key]
-        if key != "h1_mean_distance" and censored_contradiction(censored, sa, low):
+        if key != "h1_mean_distance" and set(censored) <= sa and math.isfinite(low) and low > 0.0:
             lead = f"{CENSORED} (completion: {short}): SA's Goal Error, a lower bound, is already higher"
             out[key] = ("no", value, low, high, f"{lead}; {measured}")
         else:
-            out[key] = (
-                NOT_TESTABLE,
-                math.nan,
-                math.nan,
-                math.nan,
-                f"{NOT_TESTABLE} (completion: {short}); {measured}",
-            )
+            text = f"{NOT_TESTABLE} (completion: {short}); {measured}"
+            out[key] = (NOT_TESTABLE, math.nan, math.nan, math.nan, text)
     compared = [c for c in censored if c in ("LA+SA", "R+SA")]
     if compared:
         measured = out["h2"][4]
@@ -345,14 +303,8 @@ def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, J
 
 
 def _h3_verdict(result: Mapping[str, object]) -> Judged:
-    """H3's verdict, the LA+SA gap to the fastest other condition, its bootstrap interval, measured.
-
-    Not testable (the value and interval NaN) when a condition finishes fewer than
-    :data:`lasa.evidence.rules.COMPLETION_BAR` of its episodes; else the rule's tests on every restricted-mean
-    contrast of LA+SA (Total and Idle Time, against R, R+SA and LA) and the restricted mean
-    Total Times: yes if every contrast's 95% interval lies below 0, partly if LA+SA has the
-    lowest restricted mean Total Time, no otherwise.
-    """
+    """H3's verdict (the rule on every restricted-mean contrast of LA+SA, Total and Idle Time), the LA+SA
+    gap to the fastest other condition, its bootstrap interval, measured; censored: :func:`_h3_censored`."""
     total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
     short, done, horizon = result["h3_short"], result["h3_completion"], result["horizon"]
     assert isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame)
@@ -386,32 +338,28 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
 
 def _censored_comparator(total: pd.DataFrame, censored: list[str]) -> pd.Series | None:
     """The contrast of LA+SA with the fastest measured comparator clear of 0, None if there is none."""
-    clear = total[(total.ci_low > 0.0) & ~total.b.isin(censored)]  # measured comparators, clear of 0
+    clear = total[(total.ci_low > 0.0) & ~total.b.isin(censored)]
     return None if clear.empty else clear.loc[clear.mean_b.idxmin()]
 
 
 def h3_comparator(result: Mapping[str, object]) -> str | None:
-    """The condition H3 compares LA+SA with: the fastest other, or with a censored condition the
-    fastest measured one LA+SA is already slower than (:func:`_h3_verdict`); None if none."""
+    """The condition H3 compares LA+SA with (:func:`_h3_verdict`), None if none."""
     total, done, gap = result["h3_total"], result["h3_completion"], result["h3_gap"]
     assert isinstance(total, pd.DataFrame) and isinstance(done, pd.Series) and isinstance(gap, tuple)
     if not result["h3_short"]:
         return str(gap[0])
-    r = _censored_comparator(total, censored_arms(done))
+    r = _censored_comparator(total, _censored(done))
     return None if r is None else str(r.b)
 
 
 def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
-    """H3 with a censored condition: not reproduced if LA+SA is already slower than a measured one.
+    """H3 with a censored condition: ``no`` if LA+SA is already slower than a measured comparator.
 
-    A measured comparator finishes at least the bar. If LA+SA's restricted mean Total Time is
-    above such a comparator's, with the bootstrap interval clear of 0, LA+SA cannot be the
-    fastest: when LA+SA is censored its time is a lower bound (``censored: lower bound``), and
-    when it is measured the censored conditions are others, not compared. The contrast reported
-    is the one with the fastest such comparator, both means named; a censored comparator is
-    never compared. Otherwise H3 is not testable.
+    A measured comparator finishes at least the bar; if LA+SA's restricted mean Total Time is above
+    one's with the interval clear of 0, LA+SA cannot be the fastest (the fastest such comparator is
+    reported; LA+SA's time a lower bound if it is censored). Otherwise H3 is not testable.
     """
-    censored = censored_arms(done)
+    censored = _censored(done)
     short = _short_text(done, censored)
     r = _censored_comparator(total, censored)
     if r is None:

@@ -1,28 +1,17 @@
 r"""The eating study's claims H1-H3 (notebook 11): one row per reading, each with its verdict.
 
-The claims follow the paper's own tests and significance level (p < .05), in the direction the
-paper reports (:data:`CLAIM_TEXT`; rules in :mod:`lasa.evidence.rules`, on the numbers of
-:mod:`lasa.experiments.study_tests`):
-
-- **H1** (``study.h1``), SA lowers Goal Error: the within-subjects SA main effect of a 2x2
-  repeated-measures ANOVA, with both pairwise comparisons; also as mean distance
-  (``study.h1_mean_distance``) and as the paper's between-subjects F (``study.h1_paper_test``);
-- **H2** (``study.h2``), LA lets users execute their preferences: Dessert scoop alignment,
-  LA+SA against R+SA (paired t-test);
-- **H3** (``study.h3``), LA+SA is the most efficient: restricted times, paired bootstrap;
-  *not testable* when a condition finishes fewer than 95% of its episodes.
-
-:func:`claims` writes one row per reading, ``study.<claim>`` the paper's and
-``study.<claim>@<reading>`` each other (:func:`claim_id`); a verdict is settled when the 95%
-interval of its effect excludes zero, else ``undecided``. Each rule in full, and when it was
-written: ``docs/method-notes.md``.
+The claims follow the paper's tests, level (p < .05) and direction (:data:`CLAIM_TEXT`; rules in
+:mod:`lasa.evidence.rules`, on the tests of :mod:`lasa.evidence.hypotheses`). :func:`claims` writes
+``study.<claim>`` for the paper's reading and ``study.<claim>@<reading>`` for each other
+(:func:`claim_id`); a verdict is settled when the 95% interval of its effect excludes zero, else
+``undecided``. Each rule in full: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import pandas as pd
@@ -33,16 +22,13 @@ from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_word, word
 from lasa.evidence.findings import study_effect
+from lasa.evidence.hypotheses import Judged, analyse, h3_comparator, judge
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.verdicts import shortfall
-from lasa.experiments import study_tests
-from lasa.experiments.study import PAPER_N
-from lasa.experiments.study_tests import Judged, analyse, judge
+from lasa.experiments.study.run import PAPER_N
 from lasa.people.design import interface_of
 
 __all__ = [
-    "CLAIM_TEXT",
-    "DECODER_KEYS",
     "claims",
     "claim_id",
     "figure_stats",
@@ -51,7 +37,7 @@ __all__ = [
     "h3_tables",
     "members_table",
     "reading_of",
-    "readings_table",
+    "variants_table",
     "untestable_reason",
     "with_flips",
     "likert_row",
@@ -59,7 +45,6 @@ __all__ = [
 ]
 
 Analyses = Mapping[tuple, Mapping[str, Any]]  # claims()'s analyses, keyed by reading
-
 
 CLAIM_TEXT = {
     "h1": (
@@ -85,16 +70,6 @@ CLAIM_TEXT = {
 }
 
 
-# readings of each claim key: the claim it belongs to, and the reading's name (None: the paper's)
-_KEYS = {
-    "h1": ("h1", None),
-    "h1_mean_distance": ("h1", "mean_distance"),
-    "h1_paper_test": ("h1", "paper_test"),
-    "h2": ("h2", None),
-    "h3": ("h3", None),
-}
-
-
 def claim_id(
     key: str,
     assistance_index: int,
@@ -106,22 +81,19 @@ def claim_id(
 ) -> str:
     """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
 
-    The paper's reading is its measure, the study's belief (Javdani et al.'s cap), the headline
-    decoder, the headline participant model, the headline member (hindsight, index 0) and its 10
-    participants; every other reading names what differs, joined by ``+`` in that order:
-    ``study.h1@mean_distance+grasp_set+cohort``, ``study.h1@uncapped+cohort``,
-    ``study.h3@home_entropy``, ``study.h3@one_step``, ``study.h2@transfers_entropy+one_step+cohort``
-    (``belief``: another belief than the study's, e.g. ``uncapped``; ``decoder``: a decoder reading
-    other than the headline; ``model``: a participant model other than the headline).
+    The paper's reading is its measure, the study's belief, the headline decoder variant, participant
+    model and member (index 0) and 10 participants; another names what differs, joined by ``+`` in
+    that order (``belief``, e.g. ``uncapped``; ``decoder``, ``model``: other than the headline's):
+    ``study.h1@mean_distance+grasp_set+cohort``, ``study.h2@transfers_entropy+one_step+cohort``.
     """
-    base, measure = _KEYS[key]
+    base, _, measure = key.partition("_")  # h1_mean_distance: claim h1, reading mean_distance
     named = None if assistance_index == 0 else assistance  # the headline member goes unnamed
     reading = (measure, belief, decoder, model, named, "cohort" if cohort else None)
     parts = [p for p in reading if p]
     return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
 
-DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder reading (the paper's measures)
+DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder variant (the paper's measures)
 
 
 def claims(
@@ -138,39 +110,25 @@ def claims(
     belief: str | None = None,
     flips: bool = True,
 ) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
-    """The claims rows under every reading (measure, member, decoder, participant model, 10 or the cohort).
+    """The claims rows under every reading (measure, member, decoder variant, participant model, n).
 
     Args:
-        frames: :func:`lasa.experiments.study.run`'s tables.
+        frames: :func:`lasa.experiments.study.run.run`'s tables.
         assistance: The SA members, the headline first.
-        n_total: The cohort's size (its first :data:`lasa.experiments.study.PAPER_N` are the paper's study).
-        decoders: The decoder readings in the frames' ``decoder`` column, the headline first
-            (empty: the frames hold one reading). The headline decoder is judged under every
-            measure and member; each other one under the paper's measures
-            (:data:`DECODER_KEYS`) and the headline member.
-        models: The participant models in the frames' ``model`` column, the headline first
-            (default: that column's, in order of appearance; none: one model). Each is judged
-            as the headline is, its ids naming it (:func:`claim_id`).
+        n_total: The cohort's size (its first :data:`PAPER_N` are the paper's study).
+        decoders: The decoder variants, the headline first (empty: one); the headline is judged under
+            every measure and member, each other under :data:`DECODER_KEYS` and the headline member.
+        models: The participant models, the headline first (default: the ``model`` column's).
         horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
-        untestable: If given, why the study cannot test its hypotheses at all (e.g. no
-            decoder has both halves of the property): every row reads ``not testable`` with
-            this reason in its note; ``measured`` keeps the numbers.
-        untestable_decoders: Decoder reading -> why its rows are not testable, the same way.
+        untestable: Why the study cannot test its hypotheses at all: every row reads not testable.
+        untestable_decoders: Decoder variant -> why its rows are not testable.
         n_resamples: The paired bootstrap's resamples (H3).
-        belief: If given, the frames ran with another belief than the study's (``uncapped``):
-            every id names it (:func:`claim_id`).
-        flips: Lead each headline row's note with the readings whose words differ
-            (:func:`with_flips`); off to join these rows with another call's first.
+        belief: Another belief than the study's the frames ran with (``uncapped``), named in every id.
+        flips: Lead each headline row's note with the readings whose words differ (:func:`with_flips`).
 
     Returns:
         The rows, and the analyses keyed ``(member, n)`` for the headline decoder and model,
-        ``(member, n, decoder)`` for another decoder under the headline model, and
-        ``(member, n, decoder, model)`` under every other model (``decoder`` None when the
-        frames hold one reading).
-
-    A verdict is settled when its effect's 95% interval lies on one side of zero: then it is the
-    tests' verdict (the rules: the module docstring, in full ``docs/method-notes.md``), else ``undecided``
-    (never ``not testable``).
+        ``(member, n, decoder)`` for another decoder, ``(member, n, decoder, model)`` for another model.
     """
     if not models and "model" in frames["time"].columns:
         models = tuple(dict.fromkeys(frames["time"].model))
@@ -195,8 +153,7 @@ def claims(
 
 
 def likert_row(n: int, assistance: str) -> Claim:
-    """Fig. dessert's subjective claim (the Likert t-tests): not testable with simulated participants,
-    who answer no questionnaire; notebook 11 judges it from people's sessions when it reads them."""
+    """Fig. dessert's subjective claim (the Likert t-tests): not testable with simulated participants."""
     why = "simulated participants answer no questionnaire"
     return Claim(
         id="study.likert",
@@ -213,46 +170,30 @@ def likert_row(n: int, assistance: str) -> Claim:
 
 
 def reading_of(key: tuple, decoder: str, model: str) -> tuple[str, str, str]:
-    """(member, decoder reading, participant model) of an analyses key of :func:`claims`.
-
-    The headline's keys do not name its decoder or model: ``decoder`` and ``model`` are the
-    headline's, filled in where the key leaves them out.
-    """
+    """(member, decoder variant, participant model) of an analyses key of :func:`claims`, the headline's
+    ``decoder`` and ``model`` filled in where the key leaves them out."""
     return key[0], key[2] if len(key) > 2 and key[2] else decoder, key[3] if len(key) > 3 else model
 
 
-def h1_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
-    """H1's tests under every reading: three rows per analysis, unrounded.
-
-    Goal Error by the paper's between-subjects ANOVA and the within-subjects SA effect, and the
-    mean distance within subjects; each with its test, F, degrees of freedom, p and the means
-    with and without SA.
-
-    Args:
-        analyses: :func:`claims`'s analyses.
-        decoder: The headline decoder reading.
-        model: The headline participant model.
-    """
-    out = []
+def _each(analyses: Analyses, decoder: str, model: str) -> Iterator[tuple[dict[str, Any], Mapping[str, Any]]]:
+    """Each analysis with its reading's leading columns (``model``, ``decoder``, ``SA``, ``participants``)."""
     for key, res in analyses.items():
-        member, reading, m = reading_of(key, decoder, model)
+        member, variant, m = reading_of(key, decoder, model)
+        yield {"model": m, "decoder": variant, "SA": member, "participants": res["n"]}, res
+
+
+def h1_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
+    """H1's tests under every reading of :func:`claims`'s ``analyses``, unrounded (``decoder`` and ``model``
+    the headline's): Goal Error between and within subjects and the mean distance within, each with its
+    test, F, df, p and the means with and without SA."""
+    out = []
+    for who, res in _each(analyses, decoder, model):
         for name in ("h1_between", "h1_within", "h1_mean_within"):
             r = res[name]
             measure = "mean distance [m]" if name == "h1_mean_within" else "Goal Error [m s]"
+            test = {"measure": measure, "test": r["test"], "F": r["F"], "df": f"({r['df1']},{r['df2']})"}
             out.append(
-                {
-                    "model": m,
-                    "decoder": reading,
-                    "SA": member,
-                    "participants": res["n"],
-                    "measure": measure,
-                    "test": r["test"],
-                    "F": r["F"],
-                    "df": f"({r['df1']},{r['df2']})",
-                    "p": r["p"],
-                    "mean with SA": r["mean_sa"],
-                    "mean without": r["mean_no_sa"],
-                }
+                who | test | {"p": r["p"], "mean with SA": r["mean_sa"], "mean without": r["mean_no_sa"]}
             )
     return pd.DataFrame(out)
 
@@ -260,43 +201,28 @@ def h1_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
 def h2_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
     """H2's paired comparison per reading and Dessert phase, unrounded: LA+SA - R+SA's alignment,
     its interval, p and the participants paired (the arguments are :func:`h1_table`'s)."""
+    names = ("LA+SA - R+SA", "ci_low", "ci_high", "p", "pairs")
     return pd.DataFrame(
         [
-            {
-                "model": m,
-                "decoder": reading,
-                "SA": member,
-                "participants": res["n"],
-                "phase": ph,
-                "LA+SA - R+SA": v[0],
-                "ci_low": v[1],
-                "ci_high": v[2],
-                "p": v[3],
-                "pairs": v[4],
-            }
-            for key, res in analyses.items()
-            for member, reading, m in [reading_of(key, decoder, model)]
+            who | {"phase": ph} | dict(zip(names, v, strict=True))
+            for who, res in _each(analyses, decoder, model)
             for ph, v in res["h2_phases"].items()
         ]
     )
 
 
 def h3_tables(analyses: Analyses, decoder: str, model: str) -> list[tuple[str, pd.DataFrame, pd.DataFrame]]:
-    """H3's times per reading, unrounded: ``(title, means, times)`` per analysis.
+    """H3's times per reading, unrounded: ``(title, means, times)`` per analysis (``h1_table``'s arguments).
 
-    ``title`` names the reading, its participants and, where a condition finishes too few
-    episodes, why H3 is not testable; ``means`` is the restricted mean time per participant
-    over both tasks [s] with its completion (``finished``), one row per condition; ``times``
-    stacks the bootstrap comparisons of LA+SA with each other condition, ``total`` then
-    ``idle`` (the arguments are :func:`h1_table`'s).
+    ``means``: the restricted mean time per condition [s] with its completion (``finished``);
+    ``times``: the bootstrap comparisons of LA+SA with each other condition, ``total`` then ``idle``.
     """
     out = []
-    for key, res in analyses.items():
-        member, reading, m = reading_of(key, decoder, model)
+    for who, res in _each(analyses, decoder, model):
         short = f"; H3 not testable (completion: {res['h3_short']})" if res["h3_short"] else ""
         title = (
-            f"model = {m}, decoder = {reading}, SA = {member}, {res['n']} participants: restricted mean "
-            f"time per participant over both tasks [s], completion{short}"
+            f"model = {who['model']}, decoder = {who['decoder']}, SA = {who['SA']}, {res['n']} participants: "
+            f"restricted mean time per participant over both tasks [s], completion{short}"
         )
         means = res["means"].assign(finished=res["h3_completion"])
         out.append((title, means, pd.concat({"total": res["h3_total"], "idle": res["h3_idle"]})))
@@ -306,11 +232,8 @@ def h3_tables(analyses: Analyses, decoder: str, model: str) -> list[tuple[str, p
 def _readings(
     assistance: tuple[str, ...], decoders: tuple[str, ...], n_total: int
 ) -> list[tuple[int, str, str | None, int, bool]]:
-    """(member index, member, decoder, participants, cohort) of each reading a participant model is judged in.
-
-    Every member under the headline decoder, then every other decoder under the headline member;
-    each for the first :data:`lasa.experiments.study.PAPER_N` participants and, if larger, the cohort.
-    """
+    """(member index, member, decoder, participants, cohort) of each reading a participant model is judged in:
+    every member under the headline decoder, then every other under the headline member; 10 and the cohort."""
     head = decoders[0] if decoders else None
     runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
     runs += [(0, assistance[0], d) for d in decoders[1:]]
@@ -319,7 +242,7 @@ def _readings(
 
 
 def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
-    """Whether the time table holds LA episodes of this participant model and decoder reading."""
+    """Whether the time table holds LA episodes of this participant model and decoder variant."""
     rows = time
     if model is not None and "model" in time.columns:
         rows = rows[rows.model == model]
@@ -331,11 +254,9 @@ def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
 def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, float]:
     """The numbers a row's sentences read beside its effect (``claim_values.csv``'s facts).
 
-    ``testable`` (1 or 0) and ``censored`` (1 when the effect rests on a censored arm's lower
-    bound); each condition's completion (``completion.LA``); for H1 the SA - no SA difference in
-    the measure's unit (``difference``: m s, or cm for the mean distance) and its test's ``F``,
-    ``df1``, ``df2``, ``p``; for H2 the scoop-phase difference, ``p`` and ``pairs``; for H3 the
-    compared condition's restricted mean Total Time (``versus.<condition>``, s).
+    ``testable``, ``censored`` (1 when the effect rests on a lower bound), ``completion.<condition>``;
+    H1's ``difference`` (m s, or cm) and ``F``, ``df1``, ``df2``, ``p``; H2's scoop ``difference``,
+    ``p`` and ``pairs``; H3's ``versus.<condition>``, the compared restricted mean Total Time [s].
     """
     verdict, _, _, _, measured = judged
     done = result["h3_completion"]
@@ -355,18 +276,11 @@ def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, f
         mean, _, _, p, pairs = phases["scoop"]
         out |= {"difference": float(mean), "p": float(p), "pairs": float(pairs)}
     else:
-        other, means = study_tests.h3_comparator(result), result["means"]
+        other, means = h3_comparator(result), result["means"]
         assert isinstance(means, pd.DataFrame)
         if other is not None:
             out[f"versus.{other}"] = float(means.total_time[other])
     return out
-
-
-def _shortfall(key: str, n: int, result: Mapping[str, object]) -> str:
-    """Why the row cannot be settled on its participants (fewer than the paper's :data:`PAPER_N`) or,
-    for H3, its bootstrap's resamples (:func:`lasa.evidence.verdicts.shortfall`); "" if it can."""
-    resamples = result.get("n_resamples") if key == "h3" else None
-    return shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")  # type: ignore[arg-type]
 
 
 def _claim_row(
@@ -379,12 +293,8 @@ def _claim_row(
     model: str | None,
     reason: str | None,
 ) -> Claim:
-    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason.
-
-    Its numbers are its effect with its interval and :func:`facts`; its note starts with
-    ``Measured effect: <effect>.``, written from them (:func:`lasa.evidence.findings.study_effect`);
-    the claims table puts the row's two words before it (:func:`lasa.evidence.claims.note_lead`).
-    """
+    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason; its
+    note starts with ``Measured effect: <effect>.`` (:func:`lasa.evidence.findings.study_effect`)."""
     verdict, value, low, high, measured = judged
     r = rule(cid)
     numbers = facts(key, result, judged)
@@ -393,7 +303,8 @@ def _claim_row(
     numbers = {k: v for k, v in numbers.items() if math.isfinite(v)}  # F of an uncomputed test
     testable = verdict != NOT_TESTABLE and reason is None
     n = int(result["n"])  # type: ignore[call-overload]
-    short = _shortfall(key, n, result)
+    resamples = result.get("n_resamples") if key == "h3" else None
+    short = shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")  # type: ignore[arg-type]
     settled = testable and r.settled({"effect": (low, high)}) and not short
     if verdict == NOT_TESTABLE and "too few pairs" in measured:
         why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
@@ -404,7 +315,6 @@ def _claim_row(
         why = measured.split(";", 1)[0] + ": every compared condition must finish "
         why += f"{100 * COMPLETION_BAR:.0f}% of its episodes before its measure is compared"
     else:
-        # an unsettled row says so as every claims row does ("Undecided: ", lasa.evidence.verdicts)
         why = ("" if settled else "Undecided: ") + f"95% interval of the effect [{low:.3g}, {high:.3g}]"
         if short:
             why += f": {short}; the tests read {verdict!r}"
@@ -444,11 +354,7 @@ def _claim_row(
 
 
 def with_flips(rows: list[Claim]) -> list[Claim]:
-    """Each headline row's note led by the readings whose effect differs from it (once per row list).
-
-    The paper states no number the study's rules compare, so the effect is the only word that
-    can differ (its number is ``n/a``). A headline without readings (``study.likert``) is left as it is.
-    """
+    """Each headline row's note led by the readings whose effect word differs from it (once per row list)."""
     read = {c.id.split("@", 1)[0] for c in rows if "@" in c.id}
     heads = {c.id for c in rows if "@" not in c.id and c.id in read}
     out = []
@@ -472,18 +378,8 @@ def with_flips(rows: list[Claim]) -> list[Claim]:
 
 
 def untestable_reason(prop: pd.DataFrame) -> str | None:
-    """Why the study cannot test H1-H3, or None: does a decoder meet the property's rule?
-
-    Args:
-        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
-
-    Returns:
-        None if some decoder has both halves of the property at every goal and reaches every
-        goal from home (:func:`lasa.evidence.latent_property.holds`); else a reason naming the
-        best reading (:func:`lasa.evidence.latent_property.choose`) and its numbers: the goals
-        with both halves and with the stay half, whether every goal is reached from home, its
-        least share staying and the fewest inputs that leave a goal for another (LA+SA).
-    """
+    """Why the study cannot test H1-H3, or None if a decoder meets the property rule
+    (:func:`lasa.evidence.latent_property.holds`); the reason gives the best variant's numbers."""
     if latent_property.holds(prop).any():
         return None
     best = latent_property.choose(prop)
@@ -498,7 +394,7 @@ def untestable_reason(prop: pd.DataFrame) -> str | None:
     )
 
 
-def readings_table(
+def variants_table(
     prop: pd.DataFrame,
     done: pd.DataFrame,
     rows: list[Claim],
@@ -506,23 +402,9 @@ def readings_table(
     assistance: str,
     models: tuple[str, ...] = (),
 ) -> pd.DataFrame:
-    """One row per participant model and decoder reading, the headlines first: property, completion, verdicts.
-
-    Args:
-        prop: :func:`lasa.evidence.latent_property.summary` of the eating decoders.
-        done: :func:`lasa.experiments.study_analysis.completion` of the study's time table.
-        rows: The study's claims rows (:func:`claims`).
-        decoders: The decoder readings, the headline first.
-        assistance: The headline SA member (the assisted conditions' completion is under it).
-        models: The participant models, the headline first; default: ``done``'s ``model``
-            column in order of appearance (none: one model, and no ``model`` column).
-
-    Columns: ``model`` (with models), ``decoder``, ``headline`` (the headline decoder),
-    ``goals with the property``, ``least share staying``, ``R finished``, ``R+SA finished``,
-    ``LA finished``, ``LA+SA finished`` (that model's; Retargeting's do not depend on the
-    decoder), H1-H3's verdicts for 10 participants / the cohort (``-`` where the study
-    had no cohort), and each one's effect for the first 10 in words (``H1 effect (10)``, ...).
-    """
+    """One row per participant model and decoder variant, the headlines first: the property (``prop``),
+    completion (``done``: :func:`lasa.experiments.study.analysis.completion`) under the headline member
+    ``assistance``, and the verdicts of the claims ``rows``."""
     if not models and "model" in done.columns:
         models = tuple(dict.fromkeys(done.model))
     by_id = {c.id: c for c in rows}
@@ -561,12 +443,8 @@ def _verdict_cells(
     model: str | None,
     assistance_index: int = 0,
 ) -> dict[str, str]:
-    """H1-H3's verdicts of one reading (:func:`claim_id`'s arguments), ``10 / all``.
-
-    Beside each, ``H<k> effect (10)``: the first 10's effect in words with its sign
-    (:func:`lasa.evidence.findings.study_effect`). ``-`` where the study had no such row (no
-    cohort beyond the first 10).
-    """
+    """H1-H3's verdicts of one reading (:func:`claim_id`'s arguments), ``10 / all``, and the first 10's
+    effect in words (``H<k> effect (10)``); ``-`` where the study had no such row."""
     out = {}
     for h in DECODER_KEYS:
         ids = [claim_id(h, assistance_index, assistance, cohort, decoder, model) for cohort in (False, True)]
@@ -581,8 +459,7 @@ def _effect(row: Claim) -> str:
 
 
 def _word(row: Claim) -> str:
-    """A row's word in the claims table's vocabulary, ``(censored: lower bound)`` added where it rests
-    on a censored arm."""
+    """A row's word in the claims table's vocabulary, ``(censored: lower bound)`` added where censored."""
     said = word(row.reproduced, {})
     return f"{said} ({CENSORED})" if row.facts.get("censored") == 1.0 else said
 
@@ -590,19 +467,9 @@ def _word(row: Claim) -> str:
 def members_table(
     done: pd.DataFrame, rows: list[Claim], assistance: tuple[str, ...], decoder: str, model: str
 ) -> pd.DataFrame:
-    """The SA readings side by side, under the headline decoder and participant model.
-
-    One row per member (the headline first): the assisted conditions' completion (R+SA and
-    LA+SA; R and LA do not depend on the member), and H1-H3's verdicts for 10 participants /
-    the cohort, each with its effect for the first 10 in words (:func:`lasa.evidence.findings.study_effect`).
-
-    Args:
-        done: :func:`lasa.experiments.study_analysis.completion` of the study's time table.
-        rows: The study's claims rows (:func:`claims`).
-        assistance: The SA members, the headline first.
-        decoder: The headline decoder reading.
-        model: The headline participant model.
-    """
+    """The SA members side by side, under the headline ``decoder`` and ``model``: one row per member of
+    ``assistance`` (the headline first), R+SA's and LA+SA's completion (``done``:
+    :func:`lasa.experiments.study.analysis.completion`) and H1-H3's verdicts (:func:`_verdict_cells`)."""
     keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
     finished = done.set_index(keys).finished
     by_id = {c.id: c for c in rows}
@@ -619,12 +486,8 @@ def members_table(
 
 
 def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
-    """Our result beside the paper's in each study figure: H1, H2, H3's headline rows, 10 and the cohort.
-
-    ``{"h1": {"headline": "ours (10): <word>; <effect>", "cohort": ...}, "h2": ..., "h3": ...}``
-    (:func:`lasa.experiments.study_plots.plot_goal_error`'s ``stats``); ``cohort`` only when the
-    study has one.
-    """
+    """Our result beside the paper's in each study figure (the plots' ``stats``): per claim,
+    ``{"headline": "ours (10): <word>; <effect>", "cohort": ...}``, ``cohort`` only when there is one."""
     by_id = {c.id: c for c in rows}
     out: dict[str, dict[str, str]] = {}
     for h in DECODER_KEYS:

@@ -1,14 +1,9 @@
 r"""The eating study against the belief's cap (notebook 11): the headline's recipe at each cap.
 
-The study's belief is Javdani et al.'s: no goal above 0.99 (:func:`lasa.method.belief.cap_log_belief`).
-Notebook 10 trains the headline decoder's recipe again at each other cap of its ``cap_sweep``
-(:func:`lasa.experiments.eating_task.train_caps`: demonstrations, training and property at that cap).
-Here each of those decoders runs the study with the belief at its cap (:func:`run`): the headline
-participant model, the headline member, every condition (R+SA reads the belief too); the first
-``sweep_participants`` participants, and the whole cohort without a cap, whose rows are the reading
-``@uncapped`` of the claims table (:func:`uncapped_claims`). :func:`sweep` gathers, per cap,
-completion per arm and H1-H3's measured effects (the study's own cap from the headline run), and
-:func:`plot` draws them.
+Notebook 10 trains the headline decoder's recipe again at each other cap of its ``cap_sweep``; here each
+runs the study with the belief at its cap (:func:`run`: the headline participant model and member, every
+condition, the first ``sweep_participants``; without a cap the whole cohort, the reading ``@uncapped``,
+:func:`uncapped_claims`). :func:`sweep` gathers completion and H1-H3's effects per cap; :func:`plot`.
 """
 
 from __future__ import annotations
@@ -26,13 +21,14 @@ from matplotlib.figure import Figure
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import ControlConfig
-from lasa.base.io import require_file
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
 from lasa.evidence.decision import effect_word
-from lasa.experiments import study, study_analysis, study_claims
+from lasa.evidence.hypotheses import for_member
 from lasa.experiments.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
+from lasa.experiments.study import analysis, claims
+from lasa.experiments.study import run as study
 from lasa.method.decoder import ActionDecoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
@@ -41,7 +37,6 @@ from lasa.world.record import Episodes
 __all__ = [
     "NAME",
     "COLUMNS",
-    "CapRun",
     "cap_property",
     "load_decoders",
     "run",
@@ -56,9 +51,8 @@ __all__ = [
 ]
 
 NAME = "study_belief_cap"
-# one row per (cap, what): completion of a condition, or a claim's measured effect, or the property
-# cap: the cap's value, or "none"; word: a claim's effect word (the claims table's), or whether the
-# decoder meets the property rule; settled: whether a claim's interval settles its verdict
+# one row per (cap, what): a condition's completion, a claim's measured effect, or the property; cap: its
+# value or "none"; word: a claim's effect word, or whether the decoder meets the property rule
 _KEYS = ("robot", "cap", "order", "decoder", "n", "kind", "item")
 COLUMNS: tuple[str, ...] = (*_KEYS, "value", "low", "high", "p", "word", "settled", "text")
 CLAIMS = ("h1", "h2", "h3")  # the claims the sweep shows, under the paper's measures
@@ -66,7 +60,7 @@ CLAIMS = ("h1", "h2", "h3")  # the claims the sweep shows, under the paper's mea
 
 @dataclasses.dataclass(frozen=True)
 class CapRun:
-    """The study at one cap: its decoder's name, its episodes and tables (:func:`.study.run`)."""
+    """The study at one cap: its decoder's name, its episodes and tables (:func:`.run.run`)."""
 
     cap: float | None
     decoder: str
@@ -75,13 +69,8 @@ class CapRun:
 
 
 def cap_property(figures: Path) -> pd.DataFrame:
-    """Notebook 10's property of the cap sweep's decoders, :func:`lasa.evidence.latent_property.summary`.
-
-    Raises:
-        ArtifactError: ``latent_property.csv`` is missing (notebook 10 makes it).
-    """
-    frame = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
-    return latent_property.summary(frame[frame.source == CAP_SOURCE])
+    """Notebook 10's property of the cap sweep's decoders (:func:`.run.eating_property`)."""
+    return study.eating_property(figures, CAP_SOURCE)
 
 
 def load_decoders(
@@ -138,9 +127,8 @@ def run(
 ) -> dict[float | None, CapRun]:
     """The study with each cap's decoder and the belief at that cap, over ``config.jobs`` processes.
 
-    The headline participant model and member run every condition; the first
-    ``config.sweep_n`` participants at each cap, the whole cohort without a cap (the
-    reading ``@uncapped``). Participant i is the same person at every cap (own random streams).
+    The headline participant model and member, every condition; ``config.sweep_n`` participants at
+    each cap, the whole cohort without one. Participant i is the same person at every cap.
     """
     jobs = [
         (cap, name, decoder, config.participants if cap is None else config.sweep_n)
@@ -166,26 +154,23 @@ def stuck(
     model: str,
     cap: float | None = None,
 ) -> pd.DataFrame:
-    """Where the unfinished LA episodes of the run at ``cap`` stopped (``study_analysis.stuck``)."""
+    """Where the unfinished LA episodes of the run at ``cap`` stopped (:func:`.analysis.stuck_episodes`)."""
     r = runs[cap]
     episodes = {model: {r.decoder: r.episodes}}
-    return study_analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
+    return analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
 
 
 def uncapped_claims(
     runs: Mapping[float | None, CapRun], prop: pd.DataFrame, config: study.Config, horizon: float
 ) -> list[Claim]:
-    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped.
-
-    Judged as the headline is (every measure, 10 participants and the cohort), with its decoder's
-    property (``prop``: :func:`cap_property`) deciding whether the hypotheses are testable.
-    """
+    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped:
+    judged as the headline is, its decoder's property (``prop``) deciding whether they are testable."""
     if None not in runs:
         return []
     r = runs[None]
     head = config.session.assistance[0]
-    reason = study_claims.untestable_reason(prop[prop.decoder == r.decoder])
-    rows, _ = study_claims.claims(
+    reason = claims.untestable_reason(prop[prop.decoder == r.decoder])
+    rows, _ = claims.claims(
         r.frames,
         (head,),
         config.participants,
@@ -204,11 +189,8 @@ def label(cap: float | None) -> str:
 
 
 def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
-    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim.
-
-    H1: SA - no SA Goal Error, the within-subjects main effect [m s]; H2: LA+SA - R+SA scoop
-    alignment, paired t; H3: LA+SA - R restricted mean Total Time, paired bootstrap [s] (no p).
-    """
+    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim: SA - no SA
+    Goal Error [m s], LA+SA - R+SA scoop alignment, LA+SA - R restricted mean Total Time [s] (no p)."""
     within = result["h1_within"]
     phases, total = result["h2_phases"], result["h3_total"]
     assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
@@ -216,22 +198,12 @@ def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, floa
     h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))
     mean, low, high, p, pairs = phases["scoop"]
     r = total.set_index("b").loc["R"]
+    h2 = f"LA+SA - R+SA = {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"
+    h3 = f"LA+SA - R = {r['diff']:+.1f} s [{r.ci_low:+.1f}, {r.ci_high:+.1f}] (restricted means)"
     return {
         "h1": (*h1, f"SA - no SA = {diff:+.2f} m s, {stats.format_f(within)}"),
-        "h2": (
-            float(mean),
-            float(low),
-            float(high),
-            float(p),
-            f"LA+SA - R+SA = {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}",
-        ),
-        "h3": (
-            float(r["diff"]),
-            float(r.ci_low),
-            float(r.ci_high),
-            np.nan,
-            f"LA+SA - R = {r['diff']:+.1f} s [{r.ci_low:+.1f}, {r.ci_high:+.1f}] (restricted means)",
-        ),
+        "h2": (float(mean), float(low), float(high), float(p), h2),
+        "h3": (float(r["diff"]), float(r.ci_low), float(r.ci_high), np.nan, h3),
     }
 
 
@@ -244,52 +216,23 @@ def _cap_rows(
     prop: pd.DataFrame,
 ) -> list[dict[str, object]]:
     """One cap's rows of the sweep: completion per condition, the claims' words and effects, the property."""
-    base = {"robot": "panda", "cap": label(cap), "order": 0, "decoder": decoder}
-    blank = {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "settled": False, "text": ""}
     n = int(time.participant.nunique())
-    out: list[dict[str, object]] = []
+    base = {"robot": "panda", "cap": label(cap), "order": 0, "decoder": decoder, "n": n}
+    blank = base | {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "settled": False, "text": ""}
     done = time.groupby("condition").completed.mean()
-    for cond in CONDITIONS:
-        out.append(
-            {
-                **base,
-                **blank,
-                "n": n,
-                "kind": "completion",
-                "item": cond,
-                "value": float(done.get(cond, np.nan)),
-            }
-        )
+    out = [blank | {"kind": "completion", "item": c, "value": float(done.get(c, np.nan))} for c in CONDITIONS]
     words = {row.id.split(".", 1)[1].split("@")[0]: row for row in rows}
     for key, (value, low, high, p, text) in _effects(result).items():
-        out.append(
-            {
-                **base,
-                "n": n,
-                "kind": "claim",
-                "item": key,
-                "value": value,
-                "low": low,
-                "high": high,
-                "p": p,
-                "word": effect_word(words[key].reproduced) if key in words else "",
-                "settled": bool(words[key].settled) if key in words else False,
-                "text": text,
-            }
-        )
+        row = words.get(key)
+        word = "" if row is None else effect_word(row.reproduced)
+        said = {"word": word, "settled": row is not None and bool(row.settled)}
+        effect = {"value": value, "low": low, "high": high, "p": p, "text": text}
+        out.append(base | {"kind": "claim", "item": key} | effect | said)
     mine = prop[prop.decoder == decoder]
     meets = bool(latent_property.holds(mine).any()) if len(mine) else False
-    out.append(
-        {
-            **base,
-            **blank,
-            "n": n,
-            "kind": "property",
-            "item": "goals with both halves",
-            "value": float(mine.has_property.sum()) if len(mine) else np.nan,
-            "word": "meets the rule" if meets else "misses the rule",
-        }
-    )
+    value = float(mine.has_property.sum()) if len(mine) else np.nan
+    word = "meets the rule" if meets else "misses the rule"
+    out.append(blank | {"kind": "property", "item": "goals with both halves", "value": value, "word": word})
     return out
 
 
@@ -297,14 +240,12 @@ def _judged(
     frames: dict[str, pd.DataFrame], decoder: str, n: int, head: str, reason: str | None, horizon: float
 ) -> tuple[list[Claim], Mapping[str, object]]:
     """One run's claims rows of the paper's measures for its first ``n`` participants, and their analysis."""
-    rows, analyses = study_claims.claims(
+    rows, analyses = claims.claims(
         frames, (head,), n, (decoder,), horizon=horizon, untestable=reason, flips=False
     )
     cohort = n > study.PAPER_N
-    keys = {study_claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
-    return [r for r in rows if r.id in keys], analyses[
-        (head, max(n, study.PAPER_N) if cohort else study.PAPER_N)
-    ]
+    keys = {claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
+    return [r for r in rows if r.id in keys], analyses[(head, n if cohort else study.PAPER_N)]
 
 
 def sweep(
@@ -317,23 +258,18 @@ def sweep(
     config: study.Config,
     horizon: float,
 ) -> pd.DataFrame:
-    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last.
-
-    The study's own cap (``config.belief_cap``) reads the headline run (``frames``: its tables, of
-    which the headline decoder, member and model), judged with ``prop`` (notebook 10's readings);
-    every other cap its run, judged with its decoder's property (``caps_prop``). Each on its first
-    ``config.sweep_n`` participants, as the claims table judges them.
-    """
+    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last: the study's own cap
+    from the headline run (``frames``, ``prop``), every other cap from its run (``caps_prop``)."""
     head = config.session.assistance[0]
     n = config.sweep_n
-    mine = {k: study.for_member(f, head, n, decoder=headline, model=model) for k, f in frames.items()}
+    mine = {k: for_member(f, head, n, decoder=headline, model=model) for k, f in frames.items()}
     runs_by_cap = {
         config.belief_cap: (headline, mine, prop),
         **{c: (r.decoder, r.frames, caps_prop) for c, r in runs.items()},
     }
     parts: dict[float | None, list[dict[str, object]]] = {}
     for cap, (decoder, tables, table) in runs_by_cap.items():
-        reason = study_claims.untestable_reason(table[table.decoder == decoder])
+        reason = claims.untestable_reason(table[table.decoder == decoder])
         first = {k: f[f.participant < n] for k, f in tables.items()}
         rows, result = _judged(first, decoder, n, head, reason, horizon)
         parts[cap] = _cap_rows(cap, decoder, first["time"], rows, result, table)
@@ -343,13 +279,9 @@ def sweep(
 
 
 def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
-    """Completion per arm, and H1-H3's measured effects with their 95% intervals, against the cap.
-
-    A cap's tick is marked ✓ where its decoder meets notebook 10's property rule; the study's own
-    cap (``study_cap``) is bold. Effects: H1 SA - no SA Goal Error [m s] (the within-subjects main
-    effect), H2 LA+SA - R+SA scoop alignment, H3 LA+SA - R restricted mean Total Time [s]; a
-    marker is filled where the claim's interval settles its verdict, and the claim's word is above it.
-    """
+    """Completion per arm, and H1-H3's measured effects (:func:`_effects`) with their 95% intervals,
+    against the cap: ✓ where the cap's decoder meets the property rule, the study's own cap bold, a
+    marker filled where the claim is settled, with its word."""
     sns.set_theme(style="whitegrid")
     caps = frame.drop_duplicates("cap").sort_values("order")
     prop = frame[frame.kind == "property"].set_index("cap")
@@ -370,9 +302,9 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         "h2": "H2: LA+SA - R+SA, scoop alignment",
         "h3": "H3: LA+SA - R, restricted mean time [s]",
     }
-    claims = frame[frame.kind == "claim"]
+    said = frame[frame.kind == "claim"]
     for ax, key in zip(axes[1:], CLAIMS, strict=True):
-        part = claims[claims["item"] == key].set_index("cap").reindex(caps.cap)
+        part = said[said["item"] == key].set_index("cap").reindex(caps.cap)
         value, low, high = (part[c].to_numpy(dtype=float) for c in ("value", "low", "high"))
         ok = np.isfinite(low) & np.isfinite(high)
         err = [value[ok] - low[ok], high[ok] - value[ok]]
@@ -395,7 +327,7 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         for label in ax.get_xticklabels():
             if label.get_text().split("\n")[0] == study_cap:
                 label.set_fontweight("bold")
-    n = int(claims.n.min()) if len(claims) else 0
+    n = int(said.n.min()) if len(said) else 0
     fig.suptitle(
         f"The eating study against the belief's cap: the headline's recipe trained and run at each cap "
         f"({n} participants, headline participant model and SA)",
@@ -433,8 +365,8 @@ def cap_sentence(frame: pd.DataFrame, cap: str) -> str:
         raise ValueError(f"the sweep has no cap {cap!r}; it has {sorted(set(frame.cap.astype(str)))}")
     done = rows[rows.kind == "completion"].set_index("item").value
     finish = ", ".join(f"{c} {_pct(done[c])}" for c in CONDITIONS if c in done.index)
-    claims = rows[rows.kind == "claim"].set_index("item", drop=False)
-    effects = "; ".join(_effect(claims.loc[c]) for c in CLAIMS if c in claims.index)
+    said = rows[rows.kind == "claim"].set_index("item", drop=False)
+    effects = "; ".join(_effect(said.loc[c]) for c in CLAIMS if c in said.index)
     n, decoder = int(rows.n.iloc[0]), rows.decoder.iloc[0]
     return f"with `{decoder}` and {n} participants, episodes finished: {finish}. {effects}."
 
@@ -472,12 +404,8 @@ def across_caps(frame: pd.DataFrame) -> str:
 
 
 def findings(frame: pd.DataFrame, study_cap: str) -> str:
-    """The sweep in Markdown bullets: the study's cap, no cap (``@uncapped``), and across the caps.
-
-    Args:
-        frame: The sweep's rows (:func:`sweep`).
-        study_cap: The study's own cap as the ``cap`` column writes it (:func:`label`).
-    """
+    """The sweep (:func:`sweep`) in Markdown bullets: the study's cap (``study_cap``, as :func:`label`
+    writes it), no cap (``@uncapped``), and across the caps."""
     caps = set(frame.cap.astype(str))
     out = [f"- **At the study's cap ({study_cap})**, {cap_sentence(frame, study_cap)}"]
     if "none" in caps and study_cap != "none":

@@ -1,12 +1,5 @@
-"""Beside the study's claims: completion, the headline participant model, mode switches, stuck episodes.
-
-:func:`completion` gives the share of episodes finished within the horizon per reading, and
-:func:`headline_model` picks the headline participant model by it (a criterion fixed before any
-verdict). :func:`switch_share` is Retargeting's mode-switch share of time, against Herlant et
-al. 2016's 17.4% (:data:`HERLANT_SHARE`); :func:`stuck` says where the unfinished LA episodes
-were and what the decoder offered there, :func:`stuck_summary` groups them;
-:func:`stuck_episodes` and :func:`switch_shares` run them over every reading, and
-:func:`break_even` is the cost per mode switch that would make Retargeting as slow as LA+SA.
+"""Beside the study's claims: completion, the headline participant model, mode switches, stuck episodes,
+and the cost per mode switch at which Retargeting would be as slow as LA+SA.
 """
 
 from __future__ import annotations
@@ -20,8 +13,9 @@ from scipy import stats as sps
 
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
+from lasa.evidence.hypotheses import for_member, headline_model
 from lasa.evidence.rules import COMPLETION_BAR
-from lasa.experiments.study import PAPER_N, Config, for_member
+from lasa.experiments.study.run import PAPER_N, Config
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import decode_candidates, latent_grid
 from lasa.people.policy import progress_gain
@@ -30,13 +24,10 @@ from lasa.world.fork import tip_frames, tip_motion
 from lasa.world.record import Episodes
 
 __all__ = [
-    "HERLANT_SHARE",
-    "STUCK_COLUMNS",
     "completion",
     "headline_model",
     "switch_share",
     "switch_shares",
-    "stuck",
     "stuck_episodes",
     "stuck_summary",
     "break_even",
@@ -45,24 +36,14 @@ __all__ = [
 ]
 
 HERLANT_SHARE = 0.174  # mode switching's share of execution time, JACO + joystick (Herlant et al. 2016) [-]
-STUCK_COLUMNS = (
-    "participant",
-    "condition",
-    "assistance",
-    "task",
-    "phase",
-    "goal",
-    "distance_cm",
-    "angle_deg",
-    "belief_goal",
-    "believed",
-    "best_progress",
-    "inputs_progressing",
+STUCK_COLUMNS = tuple(
+    "participant condition assistance task phase goal distance_cm angle_deg belief_goal believed "
+    "best_progress inputs_progressing".split()
 )
 
 
 def completion(time: pd.DataFrame) -> pd.DataFrame:
-    """Share of episodes finished within the horizon, per model, decoder reading, SA member and condition."""
+    """Share of episodes finished within the horizon, per model, decoder variant, SA member and condition."""
     keys = [k for k in ("model", "decoder", "assistance", "condition") if k in time.columns]
     return (
         time.groupby(keys, sort=False)
@@ -73,38 +54,11 @@ def completion(time: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
-    """The headline participant model, by a criterion fixed before any H1-H3 verdict of 0.10 was seen.
-
-    The paper's people "practised up to 5 minutes per condition" and held the stick, which
-    the planning model does and the one-step model does not: ``models`` lists them in that
-    order of preference. A model stands in for people only if it can do what the paper's
-    people did with the interface that does not depend on the decoder: the first model whose
-    Retargeting episodes (R, and R+SA under every member) each finish at least
-    :data:`lasa.evidence.rules.COMPLETION_BAR` of the time is the headline; if none does,
-    the first of ``models``.
-
-    Args:
-        time: The study's time table (:func:`lasa.experiments.study.run`), with its ``model`` column.
-        models: The participant models, in order of preference.
-    """
-    if not models:
-        raise ConfigError("headline_model needs at least one participant model")
-    retarget = time[time.condition.isin(["R", "R+SA"])]
-    for model in models:
-        done = retarget[retarget.model == model].groupby(["condition", "assistance"]).completed.mean()
-        if len(done) and (done >= COMPLETION_BAR).all():
-            return model
-    return models[0]
-
-
 def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.DataFrame:
     """Retargeting's mode-switch share of execution time, per condition and SA member.
 
-    Each participant's time spent pressing the mode button (one control step, ``dt``, per
-    switch) over their Total Time, summed over both tasks; the mean over participants and
-    its 95% t-interval. Herlant, Holladay & Srinivasa (HRI 2016) measured 17.4% for
-    able-bodied users of a JACO arm with a joystick.
+    Each participant's switches (one control step, ``dt``, each) over their Total Time, both tasks;
+    the mean over participants with its 95% t-interval, beside Herlant et al.'s (HRI 2016) 17.4%.
     """
     rows = time[time.condition.isin(["R", "R+SA"])]
     if n is not None:
@@ -114,30 +68,21 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
         per = part.groupby("participant")[["mode_switches", "total_time"]].sum()
         share = per.mode_switches * dt / per.total_time
         sem = float(sps.sem(share)) if len(share) > 1 else np.nan
-        ci = (
-            (share.mean(),) * 2
-            if sem == 0
-            else sps.t.interval(0.95, len(share) - 1, loc=share.mean(), scale=sem)
-        )
+        mean = share.mean()
+        ci = (mean,) * 2 if sem == 0 else sps.t.interval(0.95, len(share) - 1, loc=mean, scale=sem)
+        who = {"condition": cond, "assistance": assistance, "participants": len(share)}
+        shares = {"switch_share": float(mean), "ci_low": float(ci[0]), "ci_high": float(ci[1])}
         out.append(
-            {
-                "condition": cond,
-                "assistance": assistance,
-                "participants": len(share),
-                "switch_share": float(share.mean()),
-                "ci_low": float(ci[0]),
-                "ci_high": float(ci[1]),
-                "switches_per_task": float(part.mode_switches.mean()),
-                "herlant_2016": HERLANT_SHARE,
-            }
+            who
+            | shares
+            | {"switches_per_task": float(part.mode_switches.mean()), "herlant_2016": HERLANT_SHARE}
         )
     return pd.DataFrame(out)
 
 
 def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.DataFrame:
-    """:func:`switch_share` of each participant model, for the first :data:`~lasa.experiments.study.PAPER_N`
-    participants and for the cohort; columns ``model`` and ``participants_of`` (``first 10``, ``cohort``)
-    added, one block per model in the order of ``models``."""
+    """:func:`switch_share` of each model for the first :data:`PAPER_N` participants and the cohort
+    (columns ``model`` and ``participants_of``: ``first 10``, ``cohort``)."""
     parts = [("first 10", time[time.participant < PAPER_N]), ("cohort", time)]
     return pd.concat(
         [
@@ -149,20 +94,13 @@ def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.Da
     )
 
 
-def stuck(
-    task: EatingTask,
-    episodes: Episodes,
-    decoder: ActionDecoder,
-    config: Config,
-) -> pd.DataFrame:
+def stuck(task: EatingTask, episodes: Episodes, decoder: ActionDecoder, config: Config) -> pd.DataFrame:
     """Why the unfinished LA episodes did not finish: where they were, and what the decoder offered there.
 
-    One row per unfinished LA episode: the phase and goal of the waypoint it was working
-    towards, the tip's distance to it [cm] and the angle to its direction [deg] at the
-    horizon, the belief in that goal, the goal the belief favoured, and, at that final
-    state and belief, the best progress any of the participant's stick inputs makes towards
-    the waypoint (in best-step units; the participant rests below the idle threshold, 0.1)
-    and the share of inputs that make any progress.
+    One row per unfinished LA episode: its waypoint's phase and goal, the tip's distance [cm] and
+    angle [deg] to it at the horizon, the belief in that goal and the goal believed, and at that state
+    and belief the best progress any stick input makes (in best-step units; the participant rests
+    below 0.1) and the share of inputs that make any.
     """
     if episodes.belief is None or episodes.waypoint is None:
         raise ConfigError("stuck needs simulated episodes (with beliefs and waypoints logged)")
@@ -188,12 +126,10 @@ def stuck(
     unit = dt * settings.retarget.linear_speed
     gain = progress_gain(pos, axis, dp, new_dir, p_star, d_star, pc.rotation_weight) / unit
     goal_names = np.asarray(GOALS)
+    who = {c: getattr(episodes, c)[idx] for c in ("participant", "condition", "assistance", "task")}
     return pd.DataFrame(
         {
-            "participant": episodes.participant[idx],
-            "condition": episodes.condition[idx],
-            "assistance": episodes.assistance[idx],
-            "task": episodes.task[idx],
+            **who,
             "phase": [TASKS[str(episodes.task[e])][wp.phase].name for e, wp in zip(idx, wps, strict=True)],
             "goal": [GOALS[wp.goal] for wp in wps],
             "distance_cm": 100 * np.linalg.norm(pos - p_star, axis=1),
@@ -213,15 +149,8 @@ def stuck_episodes(
     config: Config,
     models: Sequence[str],
 ) -> pd.DataFrame:
-    """:func:`stuck` over every participant model and decoder reading, with ``decoder`` and ``model`` columns.
-
-    Args:
-        task: The eating task.
-        episodes: :func:`lasa.experiments.study.run`'s episodes, by model, then decoder reading.
-        decoders: The decoder of each reading.
-        config: The study's configuration.
-        models: The participant models, in the order of the rows.
-    """
+    """:func:`stuck` over every participant model (in the order of ``models``) and decoder variant of
+    ``episodes`` (:func:`~lasa.experiments.study.run.run`'s), with ``decoder`` and ``model`` columns."""
     return pd.concat(
         [
             stuck(task, episodes[m][n], decoders[n], config).assign(decoder=n, model=m)
@@ -235,16 +164,9 @@ def stuck_episodes(
 def break_even(time: pd.DataFrame, assistance: Sequence[str], decoder: str, model: str) -> pd.DataFrame:
     """The time per mode switch at which Retargeting would be as slow as LA+SA, per SA member.
 
-    One row per member and Retargeting condition (R, and R+SA under that member), indexed
-    ``(member, condition)``, for the headline decoder and participant model: the mean total
-    time per task of R or R+SA and of LA+SA under the member [s], R's mode switches per task, and
-    ``break-even cost per switch [s]``, the time gap divided by the switches.
-
-    Args:
-        time: :func:`lasa.experiments.study.run`'s time table.
-        assistance: The SA members, the headline first.
-        decoder: The headline decoder reading (the LA conditions' rows).
-        model: The headline participant model.
+    One row per ``(member, condition)`` (R, and R+SA under the member; ``assistance`` the headline
+    first) for ``decoder`` and ``model``: mean times per task [s] of it and of LA+SA, its switches per
+    task, and ``break-even cost per switch [s]``, the time gap over the switches.
     """
     head = for_member(time, assistance[0], decoder=decoder, model=model)
     others = time.assistance.isin(assistance[1:]) & time.decoder.isin([decoder, NO_ASSISTANCE])
@@ -265,18 +187,9 @@ def break_even(time: pd.DataFrame, assistance: Sequence[str], decoder: str, mode
 
 
 def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
-    """:func:`stuck`'s rows (with ``decoder``, and ``model`` if any) grouped by where they stopped.
-
-    Medians per group.
-    """
-    keys = ["model"] * ("model" in stuck_rows.columns) + [
-        "decoder",
-        "condition",
-        "assistance",
-        "task",
-        "phase",
-        "goal",
-    ]
+    """:func:`stuck`'s rows (with ``decoder``, and ``model`` if any) by where they stopped: medians."""
+    where = ["decoder", "condition", "assistance", "task", "phase", "goal"]
+    keys = ["model"] * ("model" in stuck_rows.columns) + where
     medians = ("distance_cm", "angle_deg", "belief_goal", "best_progress", "inputs_progressing")
     return stuck_rows.groupby(keys).agg(
         episodes=("participant", "size"), **{m: (m, "median") for m in medians}
@@ -288,14 +201,8 @@ def _pct(x: float) -> str:
 
 
 def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance: str) -> str:
-    """The share of episodes each condition finishes under one model, decoder and SA member, in words.
-
-    Args:
-        done: :func:`completion`'s table (its ``episodes`` count the episodes of every participant run).
-        model: The participant model.
-        decoder: The decoder reading of the LA conditions (Retargeting's rows have none).
-        assistance: The SA member of the +SA conditions.
-    """
+    """The share of episodes each condition finishes (``done``: :func:`completion`) under one model,
+    decoder variant (of the LA conditions) and SA member, in words."""
     rows = done[(done.model == model) & done.decoder.isin([decoder, "none"])]
     rows = rows[rows.assistance.isin([assistance, NO_ASSISTANCE])].set_index("condition")
     if rows.empty:
@@ -314,11 +221,8 @@ def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance
 def switch_sentence(
     shares: pd.DataFrame, model: str, assistance: str, participants_of: str = "cohort"
 ) -> str:
-    """Retargeting's mode-switch share (:func:`switch_shares`) of a model against Herlant et al.'s, in words.
-
-    R's share, and R+SA's under the SA member ``assistance``; each "below", "above" or "about"
-    Herlant et al.'s 17.4% by whether its 95% interval lies below, above or around it.
-    """
+    """R's and R+SA's (under ``assistance``) mode-switch share (:func:`switch_shares`) in words: "below",
+    "above" or "about" Herlant et al.'s 17.4% by where its 95% interval lies."""
     rows = shares[(shares.model == model) & (shares.participants_of == participants_of)]
     rows = rows[rows.assistance.isin([NO_ASSISTANCE, assistance])]
     if rows.empty:

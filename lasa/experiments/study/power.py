@@ -1,26 +1,18 @@
 """Who a human replication of the eating study needs: the power of H1-H3's tests, by simulation.
 
-:func:`power` draws cohorts of ``n`` participants from the simulated ones (with replacement, each
-drawn participant a new person) and applies each claim's own test to every drawn cohort
-(:func:`~lasa.experiments.study_tests.analyse`, then :func:`~lasa.experiments.study_tests.judge`; H3 with
-a reduced bootstrap). A drawn cohort is *significant* when its effect's 95% interval excludes 0
-on the side of the whole cohort's effect; the **power** at ``n`` is the share of drawn cohorts
-that are, a cohort whose test cannot run counting as not significant. :func:`needed` gives the
-smallest simulated cohort from which power stays at the target (80%), :func:`sentence` says it
-in one line. Run with one BLAS thread (``OMP_NUM_THREADS=1``, as ``make`` sets).
-
-These numbers rest on simulated participants: they say what a replication needs if people
-differed as the simulated ones do, not what people do. Each test, and the cost measured:
-``docs/method-notes.md``.
+:func:`power` draws cohorts of ``n`` from the simulated participants (with replacement, each drawn
+participant a new person) and applies each claim's own test (:func:`lasa.evidence.hypotheses.analyse`,
+``judge``); the power at ``n`` is the share of drawn cohorts whose effect's 95% interval excludes 0 on
+the side of the whole cohort's effect. :func:`needed` gives the smallest cohort from which power stays
+at the target, :func:`sentence` says it. These rest on simulated participants: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
 
-import contextlib
 import gc
 import math
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -28,9 +20,8 @@ import pandas as pd
 from lasa.base.config import NO_ASSISTANCE, check_choice
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE
+from lasa.evidence.hypotheses import analyse, for_member, judge
 from lasa.evidence.rules import rule
-from lasa.experiments.study import for_member
-from lasa.experiments.study_tests import analyse, judge
 from lasa.pipeline.scaleout import run_jobs
 
 __all__ = ["POWER_CLAIMS", "SIZES", "power", "needed", "sentence"]
@@ -48,17 +39,7 @@ _SAYS: dict[str, tuple[str, str]] = {
     ),
     "h3": ("LA+SA slower than the fastest other condition", "LA+SA faster than the fastest other condition"),
 }
-_COLUMNS = [
-    "claim",
-    "n",
-    "power",
-    "opposite_share",
-    "untestable_share",
-    "yes_share",
-    "direction",
-    "paper_direction",
-    "draws",
-]
+_COLUMNS = "claim n power opposite_share untestable_share yes_share direction paper_direction draws".split()
 
 
 def power(
@@ -76,41 +57,27 @@ def power(
 ) -> pd.DataFrame:
     """The power of H1-H3's tests per cohort size, drawing cohorts from the simulated participants.
 
-    Each drawn cohort runs :func:`~lasa.experiments.study_tests.analyse` once; the draws are made up front
-    from ``seed``, so the table does not depend on ``n_jobs``. Columns and costs: ``docs/method-notes.md``.
-
-    Args:
-        frames: :func:`lasa.experiments.study.run`'s tables (``goal_error``, ``time``, ``alignment``).
-        assistance: The SA member whose assisted conditions are compared (e.g. ``hindsight``).
-        decoder: The decoder reading of the LA rows (None: the frames hold one).
-        model: The participant model (None: the frames hold one).
-        sizes: Cohort sizes, each at least 2.
-        draws: Drawn cohorts per size, at least 1.
-        seed: Seed of the draws.
-        horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
-        progress: Show a progress bar.
-        n_resamples: H3's bootstrap resamples per drawn cohort, at least 1.
-        n_jobs: Worker processes (:func:`lasa.pipeline.scaleout.run_jobs`; 1: this process).
-
-    Returns:
-        One row per claim and size: ``claim``, ``n``, ``power``, ``opposite_share``,
-        ``untestable_share``, ``yes_share``, ``direction``, ``paper_direction`` and ``draws``.
+    ``frames`` are :func:`lasa.experiments.study.run.run`'s tables; ``assistance``, ``decoder`` and
+    ``model`` choose their rows (None: the frames hold one); ``draws`` cohorts of each of ``sizes``
+    are drawn up front from ``seed`` (the table does not depend on ``n_jobs`` worker processes);
+    ``horizon`` [s] and ``n_resamples`` are H3's. One row per claim and size (:data:`_COLUMNS`).
 
     Raises:
-        ConfigError: Bad ``sizes``, ``draws``, ``n_resamples`` or ``n_jobs``, or a reading not in ``frames``.
+        ConfigError: Bad ``sizes``, ``draws``, ``n_resamples`` or ``n_jobs``, or a member, variant or
+            model not in ``frames``.
     """
     sizes = _checked(sizes, draws, n_resamples, n_jobs)
-    reading = _reading(frames, assistance, decoder, model)
+    tables = _rows_of(frames, assistance, decoder, model)
     setting = (assistance, decoder, model, float(horizon), int(n_resamples))
-    full = _outcome(reading, setting, strict=True)
-    ids = _participants(reading)
+    full = _outcome(tables, setting, strict=True)
+    ids = np.sort(tables["time"].participant.unique())  # the participants drawn from
     rng = np.random.default_rng(seed)
     drawn = [rng.integers(0, len(ids), size=(draws, n)) for n in sizes]
     # the largest cohorts first: the costliest jobs start early and the workers finish together
     by_cost = sorted(range(len(sizes)), key=lambda k: -sizes[k])
     jobs = [(k, drawn[k][i : i + _CHUNK]) for k in by_cost for i in range(0, draws, _CHUNK)]
     results = run_jobs(
-        _evaluate, jobs, n_jobs=n_jobs, progress=progress, desc="power", shared=(reading, ids, setting)
+        _evaluate, jobs, n_jobs=n_jobs, progress=progress, desc="power", shared=(tables, ids, setting)
     )
     per_size: list[list[dict[str, tuple[int, bool, bool]]]] = [[] for _ in sizes]
     for (k, _), outcomes in zip(jobs, results, strict=True):
@@ -128,26 +95,27 @@ def _checked(sizes: Sequence[int], draws: int, n_resamples: int, n_jobs: int) ->
     sizes = list(sizes)
     if not sizes or any(int(n) != n or n < 2 for n in sizes) or len(set(sizes)) != len(sizes):
         raise ConfigError(f"sizes must be distinct whole numbers >= 2 (participants), got {sizes}")
-    if int(draws) != draws or draws < 1:
-        raise ConfigError(f"draws must be a whole number >= 1, got {draws!r}")
-    if int(n_resamples) != n_resamples or n_resamples < 1:
-        raise ConfigError(f"n_resamples must be a whole number >= 1, got {n_resamples!r}")
-    if int(n_jobs) != n_jobs or n_jobs < 1:
-        raise ConfigError(f"n_jobs must be a whole number >= 1 (worker processes), got {n_jobs!r}")
+    for name, v, unit in (
+        ("draws", draws, ""),
+        ("n_resamples", n_resamples, ""),
+        ("n_jobs", n_jobs, " (worker processes)"),
+    ):
+        if int(v) != v or v < 1:
+            raise ConfigError(f"{name} must be a whole number >= 1{unit}, got {v!r}")
     return [int(n) for n in sizes]
 
 
-def _reading(
+def _rows_of(
     frames: dict[str, pd.DataFrame], assistance: str, decoder: str | None, model: str | None
 ) -> dict[str, pd.DataFrame]:
-    """The three tables' rows of one reading (:func:`lasa.experiments.study.for_member`), checked.
+    """The three tables' rows of one member, decoder variant and model (``for_member``), checked.
 
     Raises:
         ConfigError: A table is missing, or the member, decoder or model is not in the tables.
     """
     missing = [k for k in ("goal_error", "time", "alignment") if k not in frames]
     if missing:
-        raise ConfigError(f"frames lacks {missing}; pass lasa.experiments.study.run's three tables")
+        raise ConfigError(f"frames lacks {missing}; pass lasa.experiments.study.run.run's three tables")
     time = frames["time"]
     for name, value, column in (("assistance", assistance, "assistance"), ("decoder", decoder, "decoder")):
         if value is not None and column in time.columns:
@@ -159,19 +127,14 @@ def _reading(
         for k in ("goal_error", "time", "alignment")
     }
     if out["time"].participant.nunique() < 2:
-        raise ConfigError(f"the reading ({assistance}, {decoder}, {model}) has fewer than 2 participants")
+        raise ConfigError(f"the rows of ({assistance}, {decoder}, {model}) have fewer than 2 participants")
     return out
 
 
-def _participants(reading: dict[str, pd.DataFrame]) -> np.ndarray:
-    """The simulated participants' ids that cohorts are drawn from, sorted."""
-    return np.sort(reading["time"].participant.unique())
-
-
-def _drawn(reading: dict[str, pd.DataFrame], ids: np.ndarray, chosen: np.ndarray) -> dict[str, pd.DataFrame]:
+def _drawn(tables: dict[str, pd.DataFrame], ids: np.ndarray, chosen: np.ndarray) -> dict[str, pd.DataFrame]:
     """The tables of a drawn cohort: participant ``ids[chosen[j]]``'s rows as new participant ``j``."""
     out = {}
-    for key, frame in reading.items():
+    for key, frame in tables.items():
         codes = np.searchsorted(ids, frame.participant.to_numpy())
         order = np.argsort(codes, kind="stable")
         starts = np.searchsorted(codes[order], np.arange(len(ids) + 1))
@@ -183,55 +146,41 @@ def _drawn(reading: dict[str, pd.DataFrame], ids: np.ndarray, chosen: np.ndarray
     return out
 
 
-@contextlib.contextmanager
-def _quiet_gc() -> Iterator[None]:
-    """Exempt the objects alive now from collection while the tests run, then restore them.
-
-    statsmodels' Holm correction calls ``gc.collect()`` on every call; with the modules a
-    study session has loaded that costs ~0.15 s per drawn cohort. Freezing them first
-    leaves only the tests' own objects to collect (the same results, ~3x faster).
-    """
-    gc.freeze()
-    try:
-        yield
-    finally:
-        gc.unfreeze()
-
-
 def _outcome(
-    reading: dict[str, pd.DataFrame],
+    tables: dict[str, pd.DataFrame],
     setting: tuple[str, str | None, str | None, float, int],
     strict: bool = False,
 ) -> dict[str, tuple[float, float, float, str]]:
     """Per claim of :data:`POWER_CLAIMS`: the (value, ci_low, ci_high, verdict) ``judge`` gives a cohort.
 
-    Unless ``strict`` (the whole cohort: its errors are the caller's), a drawn cohort whose tests
-    raise :class:`~lasa.base.errors.ConfigError` (its data do not admit them) reads ``not
-    testable``. Runtime warnings of degenerate drawn cohorts are silenced.
+    Unless ``strict`` (the whole cohort), a cohort whose tests raise ``ConfigError`` reads ``not
+    testable``; runtime warnings of degenerate drawn cohorts are silenced.
     """
     assistance, decoder, model, horizon, n_resamples = setting
-    with warnings.catch_warnings(), _quiet_gc():
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
+        # exempt the objects alive now from collection while the tests run: statsmodels' Holm
+        # correction calls gc.collect() each time (~3x faster, the same results)
+        gc.freeze()
         try:
-            judged = judge(analyse(reading, assistance, None, decoder, model, horizon, n_resamples))
+            judged = judge(analyse(tables, assistance, None, decoder, model, horizon, n_resamples))
         except ConfigError:
             if strict:
                 raise
             return {c: (math.nan, math.nan, math.nan, NOT_TESTABLE) for c in POWER_CLAIMS}
+        finally:
+            gc.unfreeze()
     return {c: (judged[c][1], judged[c][2], judged[c][3], judged[c][0]) for c in POWER_CLAIMS}
 
 
 def _evaluate(
     shared: tuple[dict[str, pd.DataFrame], np.ndarray, tuple], job: tuple[int, np.ndarray]
 ) -> list[dict[str, tuple[int, bool, bool]]]:
-    """Per drawn cohort of the job, per claim: (side of 0 it is significant on, untestable, settled yes).
-
-    The side is +1 or -1 when the 95% interval lies above or below 0, else 0.
-    """
-    reading, ids, setting = shared
+    """Per drawn cohort of the job, per claim: :func:`_side`."""
+    tables, ids, setting = shared
     out = []
     for chosen in job[1]:
-        judged = _outcome(_drawn(reading, ids, chosen), setting)
+        judged = _outcome(_drawn(tables, ids, chosen), setting)
         out.append({claim: _side(claim, *v) for claim, v in judged.items()})
     return out
 
@@ -272,19 +221,9 @@ def _row(
 
 
 def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) -> pd.DataFrame:
-    """Per claim, the smallest simulated cohort from which power stays at ``target`` or above.
-
-    A size counts only if it and every larger simulated size reach ``target`` (power need not grow
-    with n: ``docs/method-notes.md``); an earlier size that reached it is named in ``explanation``.
-
-    Args:
-        table: :func:`power`'s table.
-        target: The power wanted, in (0, 1).
-        interpolate: Give the size where power crosses ``target``, linear in n, rounded up.
-
-    Returns:
-        One row per claim: ``claim``, ``target``, ``needed`` (NA if the largest size falls short),
-        ``needed_text``, ``power``, ``direction``, ``paper_direction`` and ``explanation``.
+    """Per claim of :func:`power`'s ``table``, the smallest simulated cohort from which power stays at
+    ``target`` or above (every larger size reaching it too; ``interpolate``: where power crosses it,
+    linear in n, rounded up): ``needed`` (NA if the largest size falls short) and its ``explanation``.
 
     Raises:
         ConfigError: ``target`` outside (0, 1), or ``table`` lacks :func:`power`'s columns.
@@ -293,7 +232,7 @@ def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) 
         raise ConfigError(f"target must be a power in (0, 1), got {target!r}")
     lacking = [c for c in _COLUMNS if c not in table.columns]
     if lacking:
-        raise ConfigError(f"table lacks {lacking}; pass study_power.power's table")
+        raise ConfigError(f"table lacks {lacking}; pass lasa.experiments.study.power.power's table")
     rows = [
         _needed_row(claim, part.sort_values("n"), target, interpolate)
         for claim, part in table.groupby("claim", sort=False)
@@ -342,11 +281,7 @@ def _needed_row(claim: str, part: pd.DataFrame, target: float, interpolate: bool
 
 
 def sentence(table: pd.DataFrame, claim: str) -> str:
-    """One line for the guide or a notebook: whom a replication of ``claim`` should recruit.
-
-    Args:
-        table: :func:`needed`'s table.
-        claim: A claim key of it (``h1``, ``h2``, ``h3``).
+    """One line: whom a replication of ``claim`` (``h1``-``h3``) should recruit (:func:`needed`'s ``table``).
 
     Raises:
         ConfigError: ``claim`` is not in ``table``.

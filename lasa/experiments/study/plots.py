@@ -1,26 +1,10 @@
 """The eating study's three figures (notebook 11): Goal Error, Total and Idle Time, Preference Alignment.
 
-Each is a :class:`FigureSpec` (:data:`GOAL_ERROR`, :data:`TIME`, :data:`ALIGNMENT`), the shape
-:func:`lasa.evidence.publish.publish` takes: its file stem, the columns of its CSV (the tidy
-tables of :func:`lasa.experiments.study.run`) and its plot, which draws one reading
-(:func:`lasa.experiments.study.for_member`) with the paper's result in its title (:data:`PAPER_H`).
-
-Every figure has the same shape:
-
-- **Panels.** The main panel (:data:`HEADLINE`) is the first :data:`~lasa.experiments.study.PAPER_N`
-  participants, the N the verdicts rest on; beside it, the whole table (:data:`COHORT`, "cohort
-  of 40 (a reading)"), drawn only when the table holds more participants than the main panel.
-  Each panel's title says its N, counted from the rows it draws.
-- **Our statistic beside the paper's.** The figure's title ends with the paper's result; the
-  optional ``stats`` of each plot (``{HEADLINE: "ours (10): ...", COHORT: "ours (40): ..."}``,
-  built by the caller from its analyses) puts our result in each panel's title, under its N. A panel
-  without an entry prints nothing extra.
-- **Censored bars.** A bar whose episodes did not all finish within the horizon is hatched
-  (:data:`HATCH`): its value is a lower bound. The Time table has a ``completed`` column; the
-  Goal Error and Alignment tables do not, so their plots take the Time table (or any table of
-  :data:`ROW_KEYS` and ``completed``) as ``completed`` and join it on the row keys. Alignment
-  hatches a bar also where some participant did not reach the phase (``steps == 0``), and says
-  how many participants each bar rests on (``n=9``).
+Each is a :class:`FigureSpec` (:data:`GOAL_ERROR`, :data:`TIME`, :data:`ALIGNMENT`) for
+:func:`lasa.evidence.publish.publish`. A plot draws one member, decoder variant and participant model:
+the first :data:`PAPER_N` participants (:data:`HEADLINE`) and, beside them if the table holds more, the
+cohort (:data:`COHORT`), each panel titled with its N and our result (``stats``), the figure with the
+paper's (:data:`PAPER_H`). A bar whose episodes did not all finish is hatched (:data:`HATCH`): a lower bound.
 """
 
 from __future__ import annotations
@@ -28,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Hashable, Iterable, Mapping, Sequence
+from typing import Any
 
 import matplotlib.patches as mpatches
 import matplotlib.pyplot as plt
@@ -42,8 +27,9 @@ from matplotlib.lines import Line2D
 from lasa.base.conditions import CONDITIONS
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
+from lasa.evidence.hypotheses import for_member
 from lasa.evidence.plots import wrap_to
-from lasa.experiments.study import PAPER_N, for_member
+from lasa.experiments.study.run import PAPER_N
 from lasa.world.record import Episodes
 
 __all__ = [
@@ -53,9 +39,6 @@ __all__ = [
     "TIME",
     "ALIGNMENT",
     "PAPER_H",
-    "HEADLINE",
-    "COHORT",
-    "HATCH",
     "CENSORED",
     "plot_goal_error",
     "plot_time",
@@ -72,7 +55,7 @@ COHORT = "cohort"  # the second panel, and its key in ``stats``: every participa
 PANELS = (HEADLINE, COHORT)
 HATCH = "///"  # a censored bar's hatch
 CUT = "hatched: some episodes cut at the horizon"
-CENSORED = f"{CUT} (a lower bound)"  # the legend's reading of HATCH
+CENSORED = f"{CUT} (a lower bound)"  # what the legend says HATCH means
 # Fig. time's whiskers, dodged apart so the two intervals of a bar never merge: (offset from the
 # bar's centre [slot widths], colour) of Total Time's and of Idle Time's
 WHISKERS = {"total_time": (-0.15, "0.15"), "idle_time": (0.15, "0.5")}
@@ -102,8 +85,8 @@ PAPER_H = {
 }
 
 
-def _reading(assistance: str, decoder: str | None, model: str | None) -> str:
-    """The figures' caption of what they show: the SA member, the decoder and participant model if named."""
+def _caption(assistance: str, decoder: str | None, model: str | None) -> str:
+    """What a figure shows: the SA member, the decoder variant and participant model if named."""
     return (
         f"SA = {assistance}"
         + (f"; decoder = {decoder}" if decoder else "")
@@ -121,10 +104,7 @@ def _panels(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
 
 
 def _panel_titles(panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, inches: float) -> list[str]:
-    """Each panel's title: its N (counted from its rows) and, if ``stats`` has one, our result there.
-
-    The titles are padded to the same number of lines, so the panels' axes line up.
-    """
+    """Each panel's title: its N and, if ``stats`` has one, our result; padded to the same line count."""
     titles = []
     for panel, part in panels:
         n = part.participant.nunique()
@@ -142,7 +122,7 @@ def _panel_titles(panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, inch
 def _layout(
     panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, size: tuple[float, float], n_axes: int = 1
 ) -> tuple[Figure, list[list[Axes]]]:
-    """A figure of one subfigure per panel (side by side), each titled and holding ``n_axes`` axes.
+    """A figure of one titled subfigure per panel, side by side, each holding ``n_axes`` axes.
 
     Raises:
         ConfigError: if ``stats`` names a panel other than :data:`HEADLINE` and :data:`COHORT`.
@@ -169,15 +149,8 @@ def _finish(
     notes: Sequence[tuple[Artist, str]],
     keys: Sequence[Artist] | None = (),
 ) -> Figure:
-    """Share the y range of every axes, title the figure, and add its legends.
-
-    Args:
-        fig: The figure.
-        axes: Its axes, every panel's.
-        title: The figure's title (what it shows; the paper's result).
-        notes: The legend below the panels: what the hatch, a shade or a label means.
-        keys: Entries after the conditions' colours in the legend on the right (None: no such legend).
-    """
+    """Share the y range of every axes, title the figure, and add its legends: ``notes`` below the
+    panels, and on the right the conditions' colours and ``keys`` (None: no such legend)."""
     top = max(ax.get_ylim()[1] for ax in axes)
     bottom = min(0.0, *(ax.get_ylim()[0] for ax in axes))
     for ax in axes:
@@ -206,10 +179,8 @@ def _hatch_note(data: pd.DataFrame, horizon: float | None = None, also: str = ""
 
 
 def _with_completion(data: pd.DataFrame, completed: pd.DataFrame | None) -> pd.DataFrame:
-    """``data`` with its episodes' ``completed`` (bool): its own column, else joined from ``completed``.
-
-    The join is on the :data:`ROW_KEYS` both tables hold (one episode per key in ``completed``).
-    Without either, ``data`` is returned as it is (no column: nothing can be marked censored).
+    """``data`` with its episodes' ``completed`` (bool): its own column, else joined from ``completed``
+    on the :data:`ROW_KEYS` both hold; without either, ``data`` as it is.
 
     Raises:
         ConfigError: if an episode of ``data`` has no row in ``completed``.
@@ -230,7 +201,7 @@ def _with_completion(data: pd.DataFrame, completed: pd.DataFrame | None) -> pd.D
 
 
 def _censored(part: pd.DataFrame, by: Sequence[str]) -> dict[Hashable, bool]:
-    """Per group of ``by`` (its key a tuple when ``by`` has two columns): whether an episode is unfinished."""
+    """Per group of ``by``: whether an episode is unfinished."""
     if "completed" not in part.columns:
         return {}
     done = part.groupby(list(by)).completed.all()
@@ -280,19 +251,9 @@ def plot_goal_error(
 ) -> Figure:
     """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants).
 
-    Args:
-        frame: The Goal Error table (:data:`GOAL_ERROR`'s columns).
-        assistance: The SA member drawn (the unassisted conditions beside it).
-        decoder: The decoder reading of the LA rows (None: every row).
-        model: The participant model (None: every row).
-        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT` (e.g.
-            ``"ours (10): SA − no SA = +1.24 m s, F(1,9) = 32.8, p < .001"``); printed in
-            the panel's title under its N, beside the paper's H1 (:data:`PAPER_H`) in the figure's title.
-        completed: A table of the episodes' ``completed`` (the Time table), joined on the row
-            keys, to hatch the bars of unfinished episodes (unneeded if ``frame`` has the column).
-
-    Returns:
-        The figure: one panel per :func:`_panels`, each a bar per task x condition.
+    ``frame`` (:data:`GOAL_ERROR`'s columns) is drawn for the SA member ``assistance`` (the unassisted
+    conditions beside it), ``decoder`` and ``model`` (None: every row); ``stats`` is our result per
+    panel (:data:`HEADLINE`, :data:`COHORT`); ``completed``, the Time table, marks the censored bars.
     """
     data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), completed)
     panels = _panels(data)
@@ -300,7 +261,7 @@ def plot_goal_error(
     for (_, part), (ax,) in zip(panels, grid, strict=True):
         _goal_error_axes(ax, part)
     paper = wrap_to(PAPER_H["h1"], 5.6 * len(panels), 10)
-    title = f"Goal Error ({_reading(assistance, decoder, model)})\n{paper}"
+    title = f"Goal Error ({_caption(assistance, decoder, model)})\n{paper}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, [_hatch_note(data)])
 
 
@@ -310,17 +271,9 @@ def _goal_error_axes(ax: Axes, part: pd.DataFrame) -> None:
     kwargs = {"x": "task", "y": "goal_error", "order": TASKS, "hue": "condition", "hue_order": CONDITIONS}
     sns.barplot(data=part, **kwargs, palette=PALETTE, **CI, ax=ax, alpha=0.85, legend=False)
     _hatch(_bars_at(ax.patches[before:], _slots(TASKS, CONDITIONS)), _censored(part, ("task", "condition")))
-    sns.stripplot(
-        data=part,
-        **kwargs,
-        palette=PALETTE,
-        dodge=True,
-        size=2.5,
-        jitter=False,  # seaborn jitters with an unseeded generator: the PNG would change run to run
-        ax=ax,
-        legend=False,
-        alpha=0.5,
-    )
+    # no jitter: seaborn jitters with an unseeded generator, and the PNG would change run to run
+    dots = {"dodge": True, "size": 2.5, "jitter": False, "legend": False, "alpha": 0.5}
+    sns.stripplot(data=part, **kwargs, palette=PALETTE, **dots, ax=ax)
     ax.set_xlabel("task")
     ax.set_ylabel("Goal Error [m s]")
 
@@ -335,21 +288,9 @@ def plot_time(
 ) -> Figure:
     """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
 
-    A bar whose episodes did not all finish within the horizon is hatched (censored: cut at
-    the horizon), and every bar says which share finished. The two measures' whiskers sit on
-    either side of the bar's centre, each in its own colour (:data:`WHISKERS`).
-
-    Args:
-        frame: The Time table (:data:`TIME`'s columns, ``completed`` among them).
-        assistance: The SA member drawn (the unassisted conditions beside it).
-        decoder: The decoder reading of the LA rows (None: every row).
-        model: The participant model (None: every row).
-        horizon: The horizon [s] the legend names (default: the longest unfinished episode's time).
-        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT`; printed in the
-            panel's title under its N, beside the paper's H3 (:data:`PAPER_H`) in the figure's title.
-
-    Returns:
-        The figure: one panel per :func:`_panels`, each an axes per task.
+    Every bar says which share finished; the measures' whiskers sit either side of its centre
+    (:data:`WHISKERS`). The arguments are :func:`plot_goal_error`'s, and ``horizon`` [s], which the
+    legend names (default: the longest unfinished episode's time).
     """
     data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), None)
     if horizon is None:
@@ -363,33 +304,18 @@ def plot_time(
             ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
             ax.set_ylabel("time [s]")
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
-    notes = [
-        _hatch_note(data, horizon),
-        (idle, "light: Idle Time; text: share of episodes finished"),
-        *_whisker_notes(),
-    ]
-    title = wrap_to(f"Total and Idle Time ({_reading(assistance, decoder, model)})", 7.6 * len(panels), 10)
+    idle_note = (idle, "light: Idle Time; text: share of episodes finished")
+    notes = [_hatch_note(data, horizon), idle_note, *_whisker_notes()]
+    title = wrap_to(f"Total and Idle Time ({_caption(assistance, decoder, model)})", 7.6 * len(panels), 10)
     title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=None)
 
 
 def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
-    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it.
-
-    Each measure's whiskers are dodged and coloured as :data:`WHISKERS` says.
-    """
+    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it."""
     before, lines = len(ax.patches), len(ax.lines)
-    sns.barplot(
-        data=part,
-        x="condition",
-        y="total_time",
-        order=CONDITIONS,
-        palette=PALETTE,
-        hue="condition",
-        **CI,
-        ax=ax,
-        legend=False,
-    )
+    common = {"data": part, "x": "condition", "order": CONDITIONS, **CI, "ax": ax}
+    sns.barplot(**common, y="total_time", palette=PALETTE, hue="condition", legend=False)
     bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
     _hatch(bars, _censored(part, ("condition",)))
     done = part.groupby("condition").completed.mean()
@@ -398,16 +324,7 @@ def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
             _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
     _whiskers(ax.lines[lines:], "total_time")
     lines = len(ax.lines)
-    sns.barplot(
-        data=part,
-        x="condition",
-        y="idle_time",
-        order=CONDITIONS,
-        color="white",
-        **CI,
-        ax=ax,
-        alpha=0.6,
-    )
+    sns.barplot(**common, y="idle_time", color="white", alpha=0.6)
     _whiskers(ax.lines[lines:], "idle_time")
 
 
@@ -434,19 +351,11 @@ def _whisker_notes() -> list[tuple[Artist, str]]:
 
 def _label(ax: Axes, bar: mpatches.Rectangle, text: str, foot: bool = False) -> None:
     """A small label at a bar's centre: just above its top, or (``foot``) upright, boxed, at its foot."""
-    ax.annotate(
-        text,
-        (bar.get_x() + bar.get_width() / 2, 0.0 if foot else bar.get_height()),
-        xytext=(0, 3 if foot else 2),
-        textcoords="offset points",
-        ha="center",
-        va="bottom",
-        rotation=90 if foot else 0,
-        fontsize=7,
-        bbox={"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.8}
-        if foot
-        else None,
-    )
+    at = (bar.get_x() + bar.get_width() / 2, 0.0 if foot else bar.get_height())
+    box = {"boxstyle": "round,pad=0.15", "facecolor": "white", "edgecolor": "none", "alpha": 0.8}
+    style: dict[str, Any] = {"textcoords": "offset points", "ha": "center", "va": "bottom", "fontsize": 7}
+    style |= {"rotation": 90 if foot else 0, "bbox": box if foot else None}
+    ax.annotate(text, at, xytext=(0, 3 if foot else 2), **style)
 
 
 def plot_alignment(
@@ -457,25 +366,11 @@ def plot_alignment(
     stats: Stats = None,
     completed: pd.DataFrame | None = None,
 ) -> Figure:
-    """Fig. dessert (left): Preference Alignment per Dessert phase, every condition (the paper: 2 of them).
+    """Fig. dessert (left): Preference Alignment per Dessert phase and condition, scoop shaded.
 
-    Each bar (mean over the participants who reached the phase, 95% CI) says its n, and is
-    hatched where some participant did not reach the phase or did not finish Dessert. The
-    scoop phase is shaded (the paper's H2, :data:`PAPER_H`, in the figure's title).
-
-    Args:
-        frame: The Alignment table (:data:`ALIGNMENT`'s columns; a phase is reached where
-            ``steps > 0``, or where ``alignment`` is not NaN if the table lacks ``steps``).
-        assistance: The SA member drawn (the unassisted conditions beside it).
-        decoder: The decoder reading of the LA rows (None: every row).
-        model: The participant model (None: every row).
-        stats: Our result per panel, keyed :data:`HEADLINE` / :data:`COHORT`; printed in the
-            panel's title under its N, beside the paper's H2 in the figure's title.
-        completed: A table of the episodes' ``completed`` (the Time table), joined on the row
-            keys; without it, only the phases not reached mark a bar.
-
-    Returns:
-        The figure: one panel per :func:`_panels`, each a bar per phase x condition.
+    Each bar (mean over the participants who reached the phase, 95% CI) says its n and is hatched
+    where some participant did not reach the phase (``steps > 0``, or a non-NaN ``alignment``) or
+    did not finish. The arguments are :func:`plot_goal_error`'s.
     """
     data = for_member(frame, assistance, decoder=decoder, model=model)
     data = data[(data.task == "Dessert") & data.phase.isin(PHASES)]
@@ -487,7 +382,7 @@ def plot_alignment(
     scoop = mpatches.Patch(facecolor="0.92", label="shaded: the scoop phase (H2)")
     count = (mpatches.Patch(visible=False), "n (at a bar's foot): participants who reached the phase")
     notes = [_hatch_note(data, also="some participant did not reach the phase"), count]
-    title = f"Dessert: alignment with each phase's preference ({_reading(assistance, decoder, model)})"
+    title = f"Dessert: alignment with each phase's preference ({_caption(assistance, decoder, model)})"
     title = f"{wrap_to(title, 6.6 * len(panels), 10)}\n{PAPER_H['h2']}"
     return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=[scoop])
 
@@ -496,21 +391,10 @@ def _alignment_axes(ax: Axes, part: pd.DataFrame) -> None:
     """One panel of alignment: bars per phase x condition, hatched where censored, each with its n."""
     ax.axvspan(0.5, 1.5, color="0.92", zorder=0)  # the scoop phase
     before = len(ax.patches)
-    sns.barplot(
-        data=part,
-        x="phase",
-        y="alignment",
-        order=PHASES,
-        hue="condition",
-        hue_order=CONDITIONS,
-        palette=PALETTE,
-        **CI,
-        ax=ax,
-        legend=False,
-    )
-    slots = _slots(PHASES, CONDITIONS)
+    hues = {"hue": "condition", "hue_order": CONDITIONS, "palette": PALETTE, **CI}
+    sns.barplot(data=part, x="phase", y="alignment", order=PHASES, **hues, ax=ax, legend=False)
     counts = _reached(part)
-    bars = _bars_at(ax.patches[before:], slots)
+    bars = _bars_at(ax.patches[before:], _slots(PHASES, CONDITIONS))
     _hatch(bars, {key: bool(row.censored) for key, row in counts.iterrows()})
     for key, bar in bars.items():
         n = int(counts.n[key]) if key in counts.index else 0
@@ -519,10 +403,8 @@ def _alignment_axes(ax: Axes, part: pd.DataFrame) -> None:
 
 
 def _reached(part: pd.DataFrame) -> pd.DataFrame:
-    """Per (phase, condition): ``n`` who reached the phase, ``of`` participants, and whether ``censored``.
-
-    Censored: someone did not reach the phase, or (where ``completed`` is known) did not finish.
-    """
+    """Per (phase, condition): ``n`` who reached the phase, ``of`` participants, and whether ``censored``
+    (someone did not reach it, or did not finish)."""
     reached = part.steps > 0 if "steps" in part.columns else part.alignment.notna()
     groups = part.groupby(["phase", "condition"])
     of = groups.participant.nunique()
@@ -533,23 +415,11 @@ def _reached(part: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame({"n": n, "of": of, "censored": censored})
 
 
-# every table's keys: who, under which condition, SA member, decoder reading and participant model, which task
 def video_clips(
     episodes: Episodes, participant: int, assistance: str, stride: int, dt: float, task: str = "Dessert"
 ) -> list[tuple[np.ndarray, list[str]]]:
-    """One participant's episode of ``task`` under each condition, as clips for a video.
-
-    The ``(states, captions)`` of :func:`lasa.evidence.video.write_clips`, in the order of
-    :data:`~lasa.base.conditions.CONDITIONS`: every ``stride``-th state up to the episode's end,
-    each captioned with its condition and time.
-
-    Args:
-        episodes: One decoder reading's episodes (:func:`lasa.experiments.study.run`).
-        participant: Whose episodes.
-        assistance: The SA member of the assisted conditions.
-        stride: Control steps per frame.
-        dt: The control period [s].
-        task: The eating task.
+    """One participant's episode of ``task`` under each condition, as the ``(states, captions)`` clips of
+    :func:`lasa.evidence.video.write_clips`: every ``stride``-th state, captioned with condition and time.
 
     Raises:
         ConfigError: The episodes hold no such episode under some condition.
@@ -571,6 +441,7 @@ def video_clips(
     return clips
 
 
+# every table's keys: who, under which condition, SA member, decoder variant and participant model, which task
 ROW_KEYS = ("robot", "participant", "condition", "assistance", "decoder", "model", "task")
 GOAL_ERROR = FigureSpec(
     "study_goal_error",
