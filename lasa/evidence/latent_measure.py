@@ -129,9 +129,7 @@ def leave_paths(
     update_belief: bool = True,
 ) -> np.ndarray:
     """States (R, steps + 1, n) reached by holding input ``z_values[i]`` from ``starts[i]`` and
-    ``beliefs[i]``, the belief updated online: Algorithm 1's step (:class:`lasa.method.runner.Runner`)
-    with blend weight ``alphas[i]`` and the control's member, one decoder call per step (``rest``:
-    what the stick at rest commands, :func:`~lasa.method.runner.held_input`)."""
+    ``beliefs[i]`` under Algorithm 1's step with blend weight ``alphas[i]``, one decoder call per step."""
     if steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
     log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))

@@ -146,8 +146,7 @@ def ranking(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def choose(table: pd.DataFrame) -> str:
-    """The decoder :func:`ranking` puts first (a tie: the one listed first); it meets the rule only
-    if :func:`holds` says so."""
+    """The decoder :func:`ranking` puts first (a tie: the one listed first), meeting the rule or not."""
     return str(ranking(table).index[0])
 
 

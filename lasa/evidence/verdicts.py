@@ -99,8 +99,7 @@ def block_users(design: Design, block: int) -> tuple[int, int]:
 
 
 def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> Iterator[pd.DataFrame]:
-    """``n_boot`` resamples of ``frame``, drawing its users (``unit``) with replacement; a user drawn
-    twice appears under two new ids, so a rule averaging per user counts it twice."""
+    """``n_boot`` resamples of ``frame``'s users (``unit``) with replacement, each draw a new id."""
     codes, units = pd.factorize(frame[unit], sort=True)
     order = np.argsort(codes, kind="stable")
     starts = np.searchsorted(codes[order], np.arange(len(units) + 1))
@@ -115,8 +114,7 @@ def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = US
 
 
 def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> np.ndarray:
-    """How often each user (in ``pd.factorize(sort=True)`` order) is drawn in each of ``n_boot``
-    resamples, (n_boot, users): the same users as :func:`bootstrap_frames`'s resample r."""
+    """(n_boot, users): how often each user is drawn in :func:`bootstrap_frames`'s resample r."""
     n = int(frame[unit].nunique())
     rng = np.random.default_rng(seed)
     return np.stack([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)])
@@ -266,8 +264,7 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
 
 
 def with_reading(claim_id: str, reading: str) -> str:
-    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already
-    (sim4's ``@joint_space`` under another member: ``sim4.x@joint_space+grasp_set``)."""
+    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already."""
     return f"{claim_id}{'+' if '@' in claim_id else '@'}{reading}"
 
 
