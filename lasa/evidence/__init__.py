@@ -1,3 +1,1 @@
-"""The evidence: decision rules, claims and verdicts, statistics, metrics, plots, videos, the
-latent-action property, and publishing a figure's rows.
-"""
+"""The evidence: rules, claims, verdicts, statistics, metrics, plots, videos, the latent property."""

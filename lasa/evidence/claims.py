@@ -1,13 +1,8 @@
-"""The claims table: for each claim of the paper, did it reproduce?
+"""The claims table (``figures/claims.csv``, numbers in ``claim_values.csv``): did each claim reproduce?
 
-Each figure writes its rows into ``figures/claims.csv`` (its twin ``claims.md``) and their numbers
-into ``claim_values.csv`` (:mod:`lasa.evidence.values`); a row is keyed by (id, robot), the id
-``<figure>.<name>`` for the headline and ``<figure>.<name>@<reading>`` per reading. A row carries
-two words (Open Science Collaboration, 2015): ``effect``, the claim's shape as its rule reads it,
-and ``number``, whether each number the paper states lies in our interval; every sentence of its
-note is written from its own numbers (:func:`note_lead`). The verdict table (:func:`render_verdicts`),
-the README's summary and the readings that flip a claim (:func:`render_flips`) are written from the
-two files, never from a note's prose.
+A row, keyed by (id, robot) with id ``<figure>.<name>[@<reading>]``, carries two words (Open Science
+Collaboration, 2015): ``effect``, the claim's shape by its rule, and ``number``, whether each paper
+number lies in our interval. The verdict table and README summary are written from the two files.
 """
 
 from __future__ import annotations
@@ -41,7 +36,6 @@ from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Va
 
 __all__ = [
     "Claim",
-    "PAPER_CLAIMS",
     "update_claims",
     "render_markdown",
     "render_verdicts",
@@ -55,7 +49,6 @@ __all__ = [
     "criteria",
     "words_text",
     "note_lead",
-    "flips",
 ]
 
 README_MARKERS = (
@@ -78,10 +71,7 @@ _NAN = (math.nan, math.nan)
 
 @dataclasses.dataclass(frozen=True)
 class Claim:
-    """One row of the claims table.
-
-    A paper claim's rule is :data:`lasa.evidence.rules.RULES`'s under its id; a claim of your own
-    carries its :class:`~lasa.evidence.decision.Rule` in ``rule``.
+    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule``.
 
     Raises:
         ConfigError: if the id is not ``<figure>.<name>``, ``reproduced`` is no verdict, a not
@@ -140,8 +130,7 @@ SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high",
 
 
 def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFrame:
-    """A notebook's claims in the columns of :data:`SHOWN_COLUMNS` (``assistance`` False: without
-    that column; the study's ids name their member already)."""
+    """A notebook's claims in the columns of :data:`SHOWN_COLUMNS` (``assistance`` False: without it)."""
     columns = [c for c in SHOWN_COLUMNS if assistance or c != "assistance"]
     if not claims:
         return pd.DataFrame(columns=columns)
@@ -158,17 +147,8 @@ def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
 
 
 def criteria(claim: Claim) -> dict[str, str]:
-    """The row's two words and its replication criteria (Open Science Collaboration, 2015).
-
-    Returns:
-        ``effect`` (:func:`~lasa.evidence.decision.effect_word`); ``number``, each paper number's
-        word joined by ``; `` (``n/a`` where none or not testable); ``reproduced``, both in one word
-        (:func:`~lasa.evidence.decision.word`); ``paper_in_ci``, per paper number ``yes``/``no``;
-        ``direction``, whether our effect's interval lies on the paper's side of no effect
-        (``n/a`` without a sign or not testable); ``paper_numbers``, each with its verdict and our
-        value and interval; ``fragile``, ``yes`` if an interval ends near a value at which a word
-        changes (:meth:`~lasa.evidence.decision.Rule.fragile`).
-    """
+    """The row's two words and replication criteria: ``effect``, ``number``, ``reproduced``,
+    ``paper_in_ci``, ``direction``, ``paper_numbers`` and ``fragile`` (``n/a`` where not testable)."""
     r, paper = claim.judged_by, claim.stated
     testable = claim.reproduced != NOT_TESTABLE
     found = [(p, claim.intervals.get(p.quantity, _NAN)) for p in paper] if testable else []
@@ -190,13 +170,12 @@ def criteria(claim: Claim) -> dict[str, str]:
 
 
 def _fragile(claim: Claim) -> list[str]:
-    """Why the row's words are fragile; none if not, or if it has no rule or is not testable."""
     r = claim.judged_by
     return [] if r is None or claim.reproduced == NOT_TESTABLE else r.fragile(claim.intervals)
 
 
 def numbers_of(claim: Claim) -> dict[str, Number]:
-    """A claim's numbers as ``claim_values.csv`` holds them (:mod:`lasa.evidence.values`)."""
+    """A claim's numbers as ``claim_values.csv`` holds them."""
     out = {
         k: Number(float(v), *claim.intervals.get(k, _NAN), level=claim.level, n=claim.n_users)
         for k, v in claim.values.items()
@@ -219,8 +198,6 @@ def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
 
 
 def _row(claim: Claim) -> dict[str, object]:
-    """A claim as a table row: the interval to 4 significant digits, empty where unknown; its note
-    begins with the row's two words (:func:`note_lead`) and ends with why it is fragile."""
     row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
     del row["values"], row["value"], row["intervals"], row["level"], row["facts"], row["rule"]
     row["settled"] = "yes" if claim.settled else "no"
@@ -246,12 +223,8 @@ def render_markdown(frame: pd.DataFrame) -> str:
 
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
-    """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``.
-
-    A (figure, robot) that ``claims`` covers loses every old row first (a claim no longer made
-    leaves); other rows are kept. ``claim_values.csv`` and the ``.md`` twin follow. Runs under the
-    folder lock; under a run's write journal (:mod:`lasa.base.journal`) the pairs are recorded, so a
-    failed run restores its own rows of both CSVs.
+    """Replace every row of these claims' (figure, robot) pairs in the CSV at ``path`` (and in
+    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal.
 
     Returns:
         The whole table after the update, ordered by figure, robot and id.
@@ -276,8 +249,6 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
 
 
 def _replace(path: Path, new: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
-    """The table at ``path`` with its rows of ``new``'s (figure, robot) pairs replaced by ``new``'s,
-    ordered by figure, robot and id (stable); a ConfigError if the file has other columns."""
     if not path.exists():
         table = new
     else:
@@ -294,13 +265,10 @@ def _replace(path: Path, new: pd.DataFrame, columns: Sequence[str]) -> pd.DataFr
 
 
 def _number_text(x: float) -> str:
-    """A number as claim_values.csv writes it: 6 significant digits, empty if unknown."""
     return f"{x:.6g}" if math.isfinite(x) else ""
 
 
 def _value_rows(claim: Claim) -> list[dict[str, object]]:
-    """The claim's rows of ``claim_values.csv``: each rule quantity with its value and interval at the
-    claim's level, then each fact."""
     head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
     out = []
     for name, value in claim.values.items():
@@ -466,19 +434,12 @@ def effect_text(row: pd.Series, numbers: Numbers) -> str:
 
 
 def _interval_text(number: Number) -> str:
-    """``0.0358 [0.0296, 0.042]``; the value alone where the interval is unknown."""
     iv = number.interval
     return f"{number.value:.3g}" + (f" [{iv[0]:.3g}, {iv[1]:.3g}]" if iv is not None else "")
 
 
 def _cell(row: pd.Series | None, numbers: Numbers) -> str:
-    """A robot's cell: the effect word, the key numbers with their intervals, N, and whether settled.
-
-    Each paper number for this robot with its word and our value (``0.11 out: 0.0358 [0.0296,
-    0.042]``), else the rule's first quantity; ``no paper number for planar5`` where the paper
-    states them for another robot. A study row gives its effect in words
-    (:func:`lasa.evidence.findings.study_effect`), a not-testable one as "measured, not judged".
-    """
+    """A robot's cell: the effect word, each paper number's word and our interval, N, settled."""
     if row is None:
         return "—"
     head = f"effect {effect_text(row, numbers)}"
@@ -509,13 +470,11 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
 
 
 def _heads(table: pd.DataFrame) -> list[pd.Series]:
-    """The headline rows of the paper's claims (not our additions), in the verdict table's order."""
     rows = _by_key(table)
     return [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
 
 
 def _numbers_said(table: pd.DataFrame) -> tuple[int, str]:
-    """How many numbers the headline rows state, and ``1 in, 3 out, 1 undecided``."""
     numbers = [w for r in _heads(table) for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
     return len(numbers), ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
 
@@ -551,16 +510,8 @@ def _by_key(table: pd.DataFrame) -> dict[tuple[str, str], pd.Series]:
 
 
 def flips(rows: Mapping[tuple[str, str], pd.Series], claim_id: str) -> tuple[dict[str, list[str]], int]:
-    """The readings of a claim whose words differ from its headline's, and how many readings it has.
-
-    Args:
-        rows: The claims table's rows by (id, robot).
-        claim_id: The headline row's id.
-
-    Returns:
-        ``{reading: ["<robot>: effect <word>; <numbers' words>", ...]}`` (compound readings such as
-        ``a+b`` included), and the number of distinct readings of the claim.
-    """
+    """The readings of ``claim_id`` (rows by (id, robot)) whose words differ from its headline's,
+    as ``{reading: ["<robot>: effect <word>; <numbers' words>", ...]}``, and how many readings it has."""
     out: dict[str, list[str]] = {}
     readings = set()
     for (cid, robot), r in rows.items():
@@ -601,14 +552,9 @@ def render_verdicts(
 
     Args:
         table: ``figures/claims.csv`` (as strings).
-        values: Its numbers (``claim_values.csv``, :func:`lasa.evidence.values.read_values`).
+        values: Its numbers (``claim_values.csv``).
         link: Notebook stem -> the link target of its page (default ``notebooks/<stem>.ipynb``).
         claims_md: Where the list of readings that flip a claim is (from the page's folder).
-
-    Returns:
-        Markdown: the count of the headline rows' words and the fragile rows; per claim its paper
-        number, per robot its cell (:func:`_cell`), how many readings flip it, and the result
-        sentences (:func:`lasa.evidence.findings.finding`) and mechanism, linked to its notebook.
     """
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
@@ -636,9 +582,8 @@ def render_verdicts(
 
 
 def render_summary(table: pd.DataFrame, values: Values) -> str:
-    """The README's summary, at most 10 lines: per effect word the paper claims that read it, with
-    the robots; for ``not reproduced`` its finding (:func:`lasa.evidence.findings.finding`) or
-    :attr:`PaperClaim.why`, for ``not testable`` why; then the count of the paper's numbers."""
+    """The README's summary: per effect word the paper claims that read it, why where not
+    reproduced or not testable, then the count of the paper's numbers."""
     rows = _by_key(table)
     by_word: dict[str, list[str]] = {}
     for pc in PAPER_CLAIMS:
@@ -690,14 +635,13 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` and its summary (``summary.md`` beside it) between the
-    README's markers (``make figures`` runs it after the notebooks).
+    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers.
 
     Returns:
         Whether the README changed.
 
     Raises:
-        ConfigError: if the README lacks a marker (:data:`README_MARKERS`, :data:`SUMMARY_MARKERS`).
+        ConfigError: if the README lacks a marker.
     """
     summary = Path(table_md).with_name("summary.md")
     changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False

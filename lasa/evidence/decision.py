@@ -1,10 +1,6 @@
-"""What a decision rule is, and the words its verdicts read.
-
-A rule maps a few numbers measured on simulated users (:class:`Quantity`) to ``yes``, ``partly`` or
-``no``; it is piecewise constant between each number's thresholds, so :meth:`Rule.settled` can tell
-whether a box of intervals decides it. A rule judges the claim's shape (the *effect*,
-:func:`effect_word`), never a number's size (the *number*, :meth:`PaperNumber.word`). The paper's
-rules are :mod:`lasa.evidence.rules`; a claim of your own carries its own (``Claim.rule``).
+"""Decision rules and the words their verdicts read: a :class:`Rule` maps a few numbers to ``yes``,
+``partly`` or ``no``, piecewise constant between thresholds, so a box of intervals can settle it. It
+judges the claim's shape (the *effect*), never a number's size (the *number*, :meth:`PaperNumber.word`).
 """
 
 from __future__ import annotations
@@ -49,9 +45,7 @@ IN = "in"  # the paper's number lies in our interval, give or take the rule's to
 OUT = "out"  # our interval is clear of the paper's number and its tolerance
 NOT_APPLICABLE = "n/a"  # the paper states no number for the claim, or the claim is not testable
 NUMBER_WORDS = (IN, OUT, UNDECIDED, NOT_APPLICABLE)
-# A verdict is fragile when an interval ends within this fraction of its width of a value at which a
-# word changes: one standard error at the 98.75% level (width 2 x 2.5 SE), about what another draw of
-# the users moves an interval's end. Fixed before any verdict was marked with it. [-]
+# fragile: an interval ends within this fraction of its width (one SE at 98.75%) of a word's change [-]
 FRAGILE_FRACTION = 0.2
 
 
@@ -70,11 +64,7 @@ class Quantity:
 
 @dataclasses.dataclass(frozen=True)
 class PaperNumber:
-    """A number the paper states, the quantity that measures it, and the rule's tolerance.
-
-    ``max_width`` is the widest interval that may read ``in`` (NaN: the tolerance band's width,
-    2 x ``tolerance``); ``robot`` the robot the paper states it for (on another it is not compared).
-    """
+    """A number the paper states, the quantity that measures it, and the rule's tolerance."""
 
     quantity: str  # the rule's quantity that measures it
     value: float  # the paper's number
@@ -100,12 +90,9 @@ class PaperNumber:
         return "yes" if low <= self.value + self.tolerance and high >= self.value - self.tolerance else "no"
 
     def word(self, interval: tuple[float, float]) -> str:
-        """This number's word (:data:`NUMBER_WORDS`) against our interval.
-
-        ``out`` if the interval misses ``value +- tolerance``, ``n/a`` if it is unknown; ``in`` if it
-        is at most :attr:`width_limit` wide and lies inside the band (without a tolerance: contains
-        the value); otherwise ``undecided``.
-        """
+        """``out`` if the interval misses ``value +- tolerance``, ``n/a`` if unknown; ``in`` if at most
+        :attr:`width_limit` wide and inside the band (without a tolerance: contains the value); else
+        ``undecided``."""
         low, high = interval
         met = self.inside(interval)
         if met != "yes":
@@ -154,9 +141,6 @@ class Direction:
 class Rule:
     """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds.
 
-    A claim whose verdict rests on significance tests (the study's) has :attr:`tests`; its
-    quantities then only settle it.
-
     Raises:
         ConfigError: if the id is not ``<figure>.<name>``, there is no quantity, or a paper number
             or the direction names something else than a quantity.
@@ -192,31 +176,20 @@ class Rule:
         return out
 
     def verdict(self, values: Mapping[str, float]) -> str:
-        """The rule's verdict at these values.
-
-        Raises:
-            ConfigError: if a quantity is missing, or the rule returns something else.
-        """
+        """The rule's verdict at these values (a ConfigError if a quantity is missing)."""
         missing = [q.name for q in self.quantities if q.name not in values]
         if missing:
             raise ConfigError(f"{self.id}: the rule needs {missing}, got {sorted(values)}")
         return self._checked(self.decide(values), "rule")
 
     def tested(self, results: Mapping[str, float]) -> str:
-        """The verdict of the claim's significance tests at ``results`` (:attr:`tests`).
-
-        Raises:
-            ConfigError: if the rule has no tests, or they return something else.
-        """
+        """The verdict of the claim's significance tests at ``results`` (a ConfigError without tests)."""
         if self.tests is None:
             raise ConfigError(f"{self.id}: the rule rests on no tests; its verdict is Rule.verdict")
         return self._checked(self.tests(results), "tests")
 
     def verdicts_in(self, intervals: Mapping[str, tuple[float, float]]) -> set[str]:
-        """Every verdict the rule gives inside the box of ``intervals`` (name -> (low, high)).
-
-        One point per cell between consecutive thresholds (and the thresholds) covers the box.
-        """
+        """Every verdict the rule gives inside the box of ``intervals``: one point per cell and threshold."""
         axes = []
         for q in self.quantities:
             low, high = intervals[q.name]
@@ -265,12 +238,7 @@ class Rule:
 
 
 def effect_word(verdict: str) -> str:
-    """The effect's word (:data:`WORDS`): ``reproduced``, ``partly`` or ``not reproduced`` for a
-    settled ``yes``, ``partly`` or ``no``; ``undecided`` and ``not testable`` as they are.
-
-    Raises:
-        ConfigError: if ``verdict`` is none of these.
-    """
+    """The effect's word (:data:`WORDS`) for a verdict; a ConfigError for none of them."""
     if verdict not in (*VERDICTS, UNDECIDED, NOT_TESTABLE):
         raise ConfigError(
             f"cannot word the verdict {verdict!r}: not one of {(*VERDICTS, UNDECIDED, NOT_TESTABLE)}"
@@ -281,13 +249,8 @@ def effect_word(verdict: str) -> str:
 def word(
     verdict: str, intervals: Mapping[str, tuple[float, float]], paper: tuple[PaperNumber, ...] = ()
 ) -> str:
-    """Both words in one (the claims table's ``reproduced`` column, kept for its older readers).
-
-    Returns:
-        ``not testable`` as it is; ``not reproduced`` if a paper number (:attr:`Rule.paper`) is
-        ``out``; ``undecided`` if the effect reads ``reproduced`` while a number is ``undecided``;
-        else the effect's word.
-    """
+    """Both words in one (the ``reproduced`` column): ``not reproduced`` if a paper number is ``out``,
+    ``undecided`` if the effect is ``reproduced`` while a number is ``undecided``, else the effect's."""
     effect = effect_word(verdict)
     if effect == NOT_TESTABLE:
         return NOT_TESTABLE

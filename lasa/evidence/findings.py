@@ -1,9 +1,5 @@
-"""The verdict table's findings: each result sentence written from the numbers of its own rows.
-
-:func:`finding` writes what a claim's rows show from ``claim_values.csv`` (:mod:`lasa.evidence.values`),
-never from a note's prose, so it follows the numbers when a verdict moves; the mechanism stays
-hand-written (:data:`lasa.evidence.claims.PAPER_CLAIMS`).
-"""
+"""The verdict table's result sentences, each written from its rows' numbers in ``claim_values.csv``
+(never from a note's prose), so it follows the numbers when a verdict moves."""
 
 from __future__ import annotations
 
@@ -28,7 +24,6 @@ _NONE: dict[str, Number] = {}
 
 
 def _interval(values: Values, cid: str, robot: str, name: str) -> tuple[float, float] | None:
-    """The interval of the number ``name`` of row (``cid``, ``robot``), None if unknown."""
     number = values.get((cid, robot), _NONE).get(name)
     return number.interval if number is not None else None
 
@@ -42,8 +37,6 @@ def side_of(interval: tuple[float, float], ref: float) -> str:
 def _across(
     values: Values, robots: Sequence[str], cid: str, name: str, ref: float, says: Mapping[str, str]
 ) -> str:
-    """``says[side]`` per side of ``ref`` where the robots' intervals of ``name`` lie, robots on one
-    side sharing a clause (a robot without the number left out)."""
     groups: dict[str, list[str]] = {}
     for robot in robots:
         interval = _interval(values, cid, robot, name)
@@ -53,7 +46,6 @@ def _across(
 
 
 def _time_ratio(values: Values, robots: Sequence[str]) -> str:
-    """sim1.time_ratio: who reaches sooner with the pull, near-optimal (beta = 1000) and noisy (75) users."""
     parts = []
     for beta in ("1000", "75"):
         says = {"above": "LA+SA is faster", "below": "LA+SA is slower", "reaches": "no clear gain"}
@@ -63,7 +55,6 @@ def _time_ratio(values: Values, robots: Sequence[str]) -> str:
 
 
 def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
-    """sim1.gap_narrows: per gap (time, final error), whether it narrows in the paper's direction."""
     parts = []
     for what in ("time", "error"):
         groups = _gap_groups(values, robots, what)
@@ -72,7 +63,6 @@ def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
 
 
 def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, list[str]]:
-    """What each robot's ``<what>_gap_75`` and ``<what>_narrowing`` say -> the robots that say it."""
     groups: dict[str, list[str]] = {}
     for robot in robots:
         gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
@@ -103,7 +93,6 @@ def on_robots(robots: list[str]) -> str:
 
 
 def _grows(cid: str) -> Callable[[Values, Sequence[str]], str]:
-    """sim4's linear claims: whether the error at a new cup grows with its distance (the slope against 0)."""
     says = {
         "above": "the error grows with the distance",
         "below": "the error falls with the distance",
@@ -134,12 +123,8 @@ def _fact(numbers: Numbers, name: str) -> float:
 
 
 def study_effect(claim_id: str, numbers: Numbers) -> str:
-    """The effect a study row rests on, in words with its sign and test, from its numbers.
-
-    ``SA lowers Goal Error by -2.04 m s, F(1,9) = 36.4, p < .001`` (H1; ``by at least`` when
-    censored), ``LA+SA's scoop alignment is below R+SA's by -0.062, paired t, 10 pairs, p = 0.0336``
-    (H2), ``LA+SA is slower than R by +36.6 s [+29.8, +44.9] (restricted means)`` (H3); else ``""``.
-    """
+    """The effect a study row rests on, in words with its sign and test (``SA lowers Goal Error by
+    -2.04 m s, F(1,9) = 36.4, p < .001``), from its numbers; ``""`` for another row."""
     base, _, reading = claim_id.partition("@")
     diff, bound = _fact(numbers, "difference"), "at least " if _fact(numbers, "censored") == 1 else ""
     if base == "study.h1" and math.isfinite(diff):
@@ -171,8 +156,6 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
 
 
 def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
-    """What the headline row and its ``@cohort`` row tell (Panda): ``says`` at the side of 0 of the
-    larger N's interval that excludes 0 (else ``reaches``), then per N whether it tells it."""
     sides = []
     for numbers in (values.get((cid, "panda")), values.get((f"{cid}@cohort", "panda"))):
         effect = numbers.get("effect") if numbers is not None else None
@@ -196,13 +179,11 @@ def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
 
 
 def _testable(numbers: Numbers) -> bool:
-    """Whether a study row was judged (its ``testable`` fact), with an interval of its effect."""
     effect = numbers.get("effect")
     return _fact(numbers, "testable") == 1 and effect is not None and effect.interval is not None
 
 
 def _censored(values: Values, cid: str) -> list[tuple[str, float]]:
-    """(condition, share finished) of each condition below the bar, if the headline row is untestable."""
     numbers = values.get((cid, "panda"), _NONE)
     return short_conditions(numbers) if not _testable(numbers) else []
 
@@ -220,9 +201,6 @@ def _h3_short(short: Sequence[tuple[str, float]]) -> str:
 def _hypothesis(
     cid: str, short_text: Callable[[Sequence[tuple[str, float]]], str], *says: str
 ) -> Callable[[Values, Sequence[str]], str]:
-    """A study claim's finding: ``short_text`` of the conditions short of the bar if any, else what
-    each N tells (:func:`_study`), ``says`` for a side of 0 below, above, or reaching it."""
-
     sides = dict(zip(("below", "above", "reaches"), says, strict=True))
 
     def find(values: Values, robots: Sequence[str]) -> str:

@@ -1,9 +1,6 @@
-r"""Measuring the latent-action property (:mod:`lasa.evidence.latent_property`) of any decoder.
-
-Each input of a ring of full stick deflections (:func:`ring`) is held from a pose and a belief
-(Secs. III, IV-B): confident at goal g (LA), does it *stay* near g's preference set; uncertain at
-home (LA, belief updated online), which goal does it *reach*; from each phase end at g, under LA and
-LA+SA, which other goal does it *leave* for, and how soon. Each context: ``docs/method-notes.md``.
+r"""Measuring the latent-action property of a decoder (Secs. III, IV-B): each input of a ring of
+full stick deflections is held confident at goal g (does it *stay*), uncertain at home (which goal
+does it *reach*), and from each phase end at g (which other goal does it *leave* for, how soon).
 """
 
 from __future__ import annotations
@@ -24,23 +21,13 @@ from lasa.method.step import Assist
 from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "PropertyConfig",
-    "held_input_paths",
-    "phase_ends",
-    "leave_paths",
-    "measure",
-]
+__all__ = ["PropertyConfig", "held_input_paths", "phase_ends", "leave_paths", "measure"]
 
 
 @dataclasses.dataclass(frozen=True)
 class PropertyConfig:
-    """How the property is measured; every value is set from what it means, not from a result.
-
-    The 4 s hold lets a decoder at the demonstrators' cruise speed (0.3 rad/s) sweep half of the
-    longest preference curve (1.1 rad); 2 cm/s is a slow creep, 8 cm over the hold; from home, 10 s
-    at sigma_h covers the 2-3 rad to the farthest goal, and leaving a goal gets the same 10 s and 5 cm.
-    """
+    """How the property is measured; every value is set from what it means (a 4 s hold sweeps half
+    the longest preference curve at cruise speed), not from a result."""
 
     n_inputs: AtLeastTwo = 64  # stick inputs on the ring [-]
     hold: Positive = 4.0  # seconds each input is held at a goal, the belief held confident [s]
@@ -116,11 +103,8 @@ def held_input_paths(
 
 
 def phase_ends(task: GoalTask, goal: int) -> list[tuple[str, np.ndarray]]:
-    """(label, joint positions (n,)) where each of a task's phases at ``goal`` ends, in order.
-
-    For the eating task, each stroke's end (its waypoints at depth 1 of
-    :data:`lasa.world.eating.TASKS`), labelled by the preference; for the cups, s*(g, 1/2), ``grasp``.
-    """
+    """(label, joint positions (n,)) where each phase at ``goal`` ends: each eating stroke's end at
+    depth 1, labelled by its preference; for the cups, s*(g, 1/2) labelled ``grasp``."""
     if not isinstance(task, EatingTask):
         return [("grasp", task.target(goal, 0.5))]
     ends: dict[str, float] = {}
@@ -145,9 +129,7 @@ def leave_paths(
     update_belief: bool = True,
 ) -> np.ndarray:
     """States (R, steps + 1, n) reached by holding input ``z_values[i]`` from ``starts[i]`` and
-    ``beliefs[i]``, the belief updated online: Algorithm 1's step (:class:`lasa.method.runner.Runner`)
-    with blend weight ``alphas[i]`` and the control's member, one decoder call per step (``rest``:
-    what the stick at rest commands, :func:`~lasa.method.runner.held_input`)."""
+    ``beliefs[i]`` under Algorithm 1's step with blend weight ``alphas[i]``, one decoder call per step."""
     if steps < 1:
         raise ConfigError(f"steps must be >= 1, got {steps}")
     log_b = np.log(np.maximum(np.asarray(beliefs, dtype=float), 1e-300))
@@ -175,13 +157,9 @@ def measure(
     task_name: str,
     decoder_name: str,
 ) -> pd.DataFrame:
-    """The property of ``decoder`` on ``task``, one row per (context, goal, input) (``COLUMNS``).
-
-    ``confident``: ``drift``, the largest d(t)/t over the hold [m/s]; ``stays``, whether at most
-    ``drift_speed``; ``theta``/``stroke``, the preference reached; ``reached``, the goal whose set
-    the tip ends nearest. ``uncertain`` (goal ``home``): ``reached`` (``-`` for none) and
-    ``distance``, the tip's distance to its set at the end [m]. ``leave``: :func:`_leave_rows`.
-    """
+    """The property of ``decoder`` on ``task``, one row per (context, goal, input) (``COLUMNS``):
+    ``confident`` rows with ``drift`` (largest d(t)/t [m/s]) and ``stays``, ``uncertain`` (goal
+    ``home``) and ``leave`` rows with the goal ``reached`` (``-`` for none) and ``distance`` [m]."""
     run = _Run(
         task,
         decoder,
@@ -199,8 +177,6 @@ def measure(
 
 @dataclasses.dataclass(frozen=True)
 class _Run:
-    """One decoder's measurement: :func:`measure`'s arguments, the ring's inputs, the preference sets."""
-
     task: GoalTask
     decoder: ActionDecoder
     control: ControlConfig
@@ -211,7 +187,6 @@ class _Run:
 
 
 def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
-    """Goal ``g``'s confident rows: each input held from s*(g, 1/2), the belief held on g."""
     task, config, z, preference_sets = run.task, run.config, run.z, run.preference_sets
     robot, dt = task.robot, run.control.dt
     names = list(task.goal_names)
@@ -240,7 +215,6 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
 
 
 def _uncertain_rows(run: _Run) -> pd.DataFrame:
-    """The uncertain rows (goal ``home``): each input held from home, a uniform belief updated online."""
     task, z = run.task, run.z
     robot = task.robot
     steps = max(1, round(run.config.uncertain_hold / run.control.dt))
@@ -264,7 +238,6 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
 
 
 def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **columns: object) -> pd.DataFrame:
-    """Rows of :data:`COLUMNS` for the ring's inputs ``z``, the columns not given left empty."""
     empty = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
     z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
     frame = pd.DataFrame(
@@ -279,9 +252,7 @@ def _confident(task: GoalTask, goal: int, control: ControlConfig) -> np.ndarray:
 
 
 def _leave_rows(run: _Run) -> pd.DataFrame:
-    """The leave rows, one per (goal, phase end, condition, input, other goal), all in one batch:
-    ``reached``, the other goal if the tip came within ``reach_distance`` of its set (``-`` if not),
-    ``distance``, the closest it came [m], ``exit_time``, the first time within reach [s]."""
+    """The leave rows, per (goal, phase end, condition, input, other goal), in one batch."""
     task, control, z = run.task, run.control, run.z
     names = list(task.goal_names)
     alphas = {"LA": 0.0, "LA+SA": control.alpha}

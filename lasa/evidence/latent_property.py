@@ -1,13 +1,8 @@
-r"""The property latent actions rest on (Sec. III): the rule that judges it, its tables and figure.
+r"""The latent-action property (Sec. III): unsure, z chooses *which goal*; confident, *how* to act.
 
-While the robot is unsure of the goal, the input z chooses *which goal*; once it is confident, z
-conveys *how* to act there (measured by :func:`lasa.evidence.latent_measure.measure`). The property
-holds at goal g when (**stay**) at least :data:`STAY_SHARE` of the inputs stay at g with a confident
-belief, reaching a tilt range of at least :data:`TILT_RANGE`; (**leave**) from every phase end at g,
-for every other goal, at least :data:`LEAVE_COUNT` of 64 inputs reach it within ``leave_hold`` under
-LA+SA; and every goal is reached from home by some input. A decoder meets the rule when it holds at
-every goal (:func:`holds`); :func:`ranking` orders decoders. When each half was written:
-``docs/method-notes.md``.
+It holds at goal g when (**stay**) :data:`STAY_SHARE` of the inputs stay at g reaching a tilt range of
+:data:`TILT_RANGE`, (**leave**) :data:`LEAVE_COUNT` of 64 inputs reach every other goal from each phase
+end under LA+SA, and every goal is reached from home; a decoder meets the rule at every goal.
 """
 
 from __future__ import annotations
@@ -21,11 +16,7 @@ from matplotlib.figure import Figure
 from lasa.base.errors import ConfigError
 
 __all__ = [
-    "NAME",
     "COLUMNS",
-    "KEY",
-    "STAY_SHARE",
-    "TILT_RANGE",
     "LEAVE_COUNT",
     "CONDITIONS",
     "summary",
@@ -35,7 +26,6 @@ __all__ = [
     "holds",
     "ranking",
     "choose",
-    "plot",
 ]
 
 NAME = "latent_property"
@@ -49,20 +39,14 @@ TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 
 LEAVE_COUNT = 7  # inputs of the ring's 64 (about 10%) that must reach each other goal, LA+SA [-]
 CONDITIONS = ("LA", "LA+SA")  # the leave half's conditions: alpha = 0, and the control's alpha
 DPI = 130
-# tasks whose decoders are one recipe at several settings (the eating study's cap sweep, notebook 10),
-# not alternatives to choose among: the figure marks no choice (★) among them
+# tasks whose decoders are one recipe at several settings, not alternatives: no choice (★) marked
 SWEEP_TASKS = ("eating_caps",)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
-    """One row per (source, robot, task, decoder, goal) of :func:`measure`'s rows.
-
-    Columns: ``stay_share``; the staying inputs' ``theta_min``, ``theta_max``, ``theta_range`` and
-    ``stroke_range`` (0 when none stays); ``from_home``, the share reaching this goal from home;
-    ``all_reached``, every goal reached from home; ``n_inputs``; ``leave_min`` and ``leave_la_min``,
-    the fewest inputs that reach another goal from a phase end here, under LA+SA and LA (NaN without
-    leave rows); ``stay_holds``, ``leave_holds`` and ``has_property``.
-    """
+    """One row per (source, robot, task, decoder, goal) of the measured rows: the share that stays,
+    the staying inputs' tilt and stroke ranges, the share reached from home, the fewest inputs that
+    leave (``leave_min`` under LA+SA, ``leave_la_min`` under LA), and whether each half holds."""
     keys = ["source", "robot", "task", "decoder"]
     rows = []
     for key, part in frame.groupby(keys, sort=False):
@@ -102,7 +86,6 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
 
 
 def _leave_counts(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per (goal, start, condition, target) of the leave rows: the inputs that reach the target."""
     leave = frame[frame.context == "leave"]
     if leave.empty:
         return pd.DataFrame(columns=["goal", "start", "condition", "target", "inputs", "exit_time"])
@@ -163,8 +146,7 @@ def ranking(table: pd.DataFrame) -> pd.DataFrame:
 
 
 def choose(table: pd.DataFrame) -> str:
-    """The decoder :func:`ranking` puts first (a tie: the one listed first); it meets the rule only
-    if :func:`holds` says so."""
+    """The decoder :func:`ranking` puts first (a tie: the one listed first), meeting the rule or not."""
     return str(ranking(table).index[0])
 
 
@@ -205,7 +187,6 @@ def plot(frame: pd.DataFrame) -> Figure:
 
 
 def _plot_task(row_axes: np.ndarray, part: pd.DataFrame, name: str) -> None:
-    """One task's four heatmaps (see :func:`plot`)."""
     rows = list(dict.fromkeys(part.row))
     goals = list(dict.fromkeys(part.goal))
     n = int(part.n_inputs.max())

@@ -1,8 +1,5 @@
-"""Panels that several figures share: data and ``ax=None`` in, axes out.
-
-A planar arm is drawn in its x-z plane, the Panda from above (:func:`project`); a figure's own
-panels live in its module of :mod:`lasa.experiments`.
-"""
+"""Panels that several figures share: data and ``ax=None`` in, axes out (a planar arm in its x-z
+plane, the Panda from above)."""
 
 from __future__ import annotations
 
@@ -17,7 +14,7 @@ import seaborn as sns
 from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection
-from matplotlib.colors import Colormap, LinearSegmentedColormap, Normalize
+from matplotlib.colors import LinearSegmentedColormap, Normalize
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Rectangle
@@ -51,10 +48,8 @@ __all__ = [
 ]
 
 METHOD_COLORS = {"LA": "#d95f02", "LA+SA": "#1b9e77", "LA+SA+Entropy": "#7570b3"}
-CUP_COLORS = ("#e6553f", "#3f9959")  # the first two goals: the paper's two cups, left and right
-# Every goal's colour, in goal order: the two cups', then a third in the blue of a new cup's
-# render (lasa.world.robot.NEW_CUP_RGBA), then more for tasks with more goals.
-GOAL_COLORS = (*CUP_COLORS, "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")
+# Every goal's colour, in goal order: the two cups', the blue of a new cup's render, then more.
+GOAL_COLORS = ("#e6553f", "#3f9959", "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")
 
 
 def goal_colors(n_goals: int) -> tuple[str, ...]:
@@ -62,22 +57,15 @@ def goal_colors(n_goals: int) -> tuple[str, ...]:
     return tuple(GOAL_COLORS[g % len(GOAL_COLORS)] for g in range(n_goals))
 
 
-BELIEF_MID = "#dddddd"  # a belief map's middle, b(g) = 0.5: neither goal's colour
-
-
 def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
-    """The colour map of the belief in goal ``goal_index``: at 1 the goal's colour, at 0 the other
-    cup's (a neutral grey with more than two goals), light grey halfway.
-
-    Raises:
-        ValueError: if ``goal_index`` is not one of the ``n_goals`` goals.
-    """
+    """The colour map of the belief in goal ``goal_index``: the goal's colour at 1, the other cup's
+    (grey with more than two goals) at 0; a ValueError if ``goal_index`` is not a goal."""
     if not 0 <= goal_index < n_goals:
         raise ValueError(f"goal_index must be one of the {n_goals} goals, got {goal_index}")
     colors = goal_colors(n_goals)
     low = colors[1 - goal_index] if n_goals == 2 else "#7a7a7a"
     return LinearSegmentedColormap.from_list(
-        f"belief_in_goal_{goal_index}", [low, BELIEF_MID, colors[goal_index]]
+        f"belief_in_goal_{goal_index}", [low, "#dddddd", colors[goal_index]]
     )
 
 
@@ -121,16 +109,6 @@ def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def _colored_path(
-    ax: Axes, xy: np.ndarray, values: np.ndarray, cmap: str | Colormap, norm: Normalize, lw: float = 1.2
-) -> LineCollection:
-    segs = np.stack([xy[:-1], xy[1:]], axis=1)
-    lc = LineCollection(list(segs), cmap=cmap, norm=norm, lw=lw)
-    lc.set_array(values[:-1])
-    ax.add_collection(lc)
-    return lc
-
-
 def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08) -> None:
     """Limit the axes to the drawn points, the goals and the base, with some padding."""
     cups = project(task, task.robot.goal_positions())
@@ -156,7 +134,9 @@ def plot_demonstrations(
         m = clean.demo == d
         xy = project(task, task.robot.grasp_positions(clean.states[m]))
         drawn.append(xy)
-        lc = _colored_path(ax, xy, clean.beliefs[m, goal_index], cmap, norm, 0.9)
+        lc = LineCollection(list(np.stack([xy[:-1], xy[1:]], axis=1)), cmap=cmap, norm=norm, lw=0.9)
+        lc.set_array(clean.beliefs[m, goal_index][:-1])
+        ax.add_collection(lc)
     if lc is not None:
         plt.colorbar(lc, ax=ax, label=f"belief in the {task.goal_names[goal_index]} cup", shrink=0.8)
         frame_around(task, ax, np.concatenate(drawn))
@@ -247,12 +227,9 @@ def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize
     )
 
 
-PROBABILITY_LIMITS = (-0.02, 1.02)  # a probability axis: [0, 1] and a margin for the markers [-]
-
-
 def probability_axis(ax: Axes) -> None:
-    """Limit ``ax``'s y axis to :data:`PROBABILITY_LIMITS`."""
-    ax.set_ylim(*PROBABILITY_LIMITS)
+    """Limit ``ax``'s y axis to [0, 1] and a margin for the markers."""
+    ax.set_ylim(-0.02, 1.02)
 
 
 def users_text(table: pd.DataFrame, keys: Sequence[str], per: str = "point") -> str:

@@ -1,8 +1,5 @@
-"""Publish one robot's run of a figure: merge its rows, redraw the figure, update the claims.
-
-Both robots' notebooks run side by side and write the same figures, so :func:`publish` does the
-read-modify-write as one step under the figures folder's lock (:func:`lasa.base.io.locked`).
-"""
+"""Publish one robot's run of a figure: merge its rows, redraw the figure, update the claims, all
+under the figures folder's lock (both robots' notebooks write the same figures side by side)."""
 
 from __future__ import annotations
 
@@ -19,13 +16,11 @@ from lasa.base.io import atomic_path, locked, update_csv
 from lasa.base.paths import Paths
 from lasa.evidence.claims import Claim, update_claims
 
-__all__ = ["FigureModule", "publish", "save_figure"]
+__all__ = ["publish", "save_figure"]
 
 
 class FigureModule(Protocol):
-    """What :func:`publish` needs of a figure's module (see :mod:`lasa.experiments`); an optional
-    ``DPI`` sets the PNG's resolution (150 if absent), an optional ``KEY`` the column whose
-    values one run's rows replace (``robot`` if absent)."""
+    """What :func:`publish` needs of a figure's module; optional ``DPI`` (150) and ``KEY`` (``robot``)."""
 
     NAME: str
     COLUMNS: tuple[str, ...]
@@ -47,11 +42,8 @@ def publish(
     claims: Sequence[Claim] = (),
     **plot_args: Any,
 ) -> pd.DataFrame:
-    """Merge ``frame`` into the figure's CSV, redraw its PNG, and write ``claims``.
-
-    This robot's rows replace its old ones (the CSV ordered by robot, the same whichever finishes
-    first); the figure is drawn from the file, every robot's rows as saved; ``plot_args`` go to
-    ``module.plot`` after the table; ``claims`` replace the robot's old rows of ``claims.csv``.
+    """Merge ``frame`` into the figure's CSV (replacing this robot's rows), redraw its PNG from the
+    file (``plot_args`` to ``module.plot``), and write ``claims``.
 
     Returns:
         The merged table of every robot present.

@@ -1,10 +1,6 @@
-"""The paper's decision rules, each a :class:`lasa.evidence.decision.Rule`, by claim id.
-
-A rule judges the claim's shape only (the *effect*); the paper's sizes are its
-:attr:`~lasa.evidence.decision.Rule.paper` numbers. The study's claims (H1-H3) rest on significance
-tests (:attr:`~lasa.evidence.decision.Rule.tests`, computed by :mod:`lasa.evidence.hypotheses`),
-their one quantity settling them. The rules were written before the results they judge were first
-seen, except where :data:`AFTER_RESULTS` says. A claim of your own carries its rule (``Claim.rule``).
+"""The paper's decision rules (:class:`lasa.evidence.decision.Rule`) by claim id: each judges the
+claim's shape; the study's (H1-H3) rest on significance tests (:mod:`lasa.evidence.hypotheses`).
+Each was written before the results it judges were seen, except where :data:`AFTER_RESULTS` says.
 """
 
 from __future__ import annotations
@@ -342,11 +338,7 @@ AFTER_RESULTS: dict[str, str] = {
 
 
 def rule(claim_id: str) -> Rule:
-    """The paper's rule of a claim id, ``<figure>.<name>`` or ``<figure>.<name>@<reading>``.
-
-    Raises:
-        ConfigError: if the claim has no rule here.
-    """
+    """The paper's rule of a claim id, ``<figure>.<name>[@<reading>]`` (a ConfigError if none)."""
     base = claim_id.split("@", 1)[0]
     if base not in RULES:
         raise ConfigError(f"no rule for claim {claim_id!r}; rules exist for {sorted(RULES)}")

@@ -1,8 +1,6 @@
-"""Session logs of live use: ``<stem>.csv`` (one row per step, floats to 17 digits, so a replay
-compares states bit for bit), the ``<stem>.json`` sidecar (what ran, ``status``: ``running``, then
-``complete`` or ``interrupted``; a crash's ``running`` reads interrupted) and ``<stem>.xml`` (the scene,
-checked by its ``scene_sha256``). Rows go to ``<stem>.csv.part``, synced every ``flush_every`` steps,
-renamed atomically at the end.
+"""Session logs of live use: ``<stem>.csv`` (a row per step, floats to 17 digits for bit-exact replay;
+written as ``.csv.part``, renamed at the end), the ``<stem>.json`` sidecar (what ran, its ``status``)
+and ``<stem>.xml`` (the scene, checked by its ``scene_sha256``).
 """
 
 from __future__ import annotations
@@ -19,7 +17,7 @@ import pandas as pd
 from lasa.base.errors import ArtifactError, ConfigError, DamagedLogError
 from lasa.base.io import write_text
 
-__all__ = ["SessionWriter", "read_session", "check_scene", "STATUS"]
+__all__ = ["SessionWriter", "read_session", "check_scene"]
 
 STATUS = ("running", "complete", "interrupted")
 
@@ -88,12 +86,8 @@ def read_session(
     path: str | os.PathLike[str], allow_damaged: bool = False
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
     """A session's steps and sidecar, from any of its files or its stem (a crashed one's ``.csv.part``
-    reads ``interrupted``).
-
-    A log is **damaged** when its sidecar is not JSON, the log is empty, a cell is not a number, a
-    cell other than the raw axes is not finite, steps or times do not increase, a row has the wrong
-    number of fields, or an ended session holds another number of rows than its ``steps``. With
-    ``allow_damaged`` the rows that parse are read anyway, the reason in the sidecar's ``damaged``.
+    reads ``interrupted``); ``allow_damaged``: read the rows that parse of a damaged log (unparsable,
+    non-finite outside the raw axes, out of time order, or not its ``steps``), the reason in ``damaged``.
 
     Raises:
         ArtifactError: if the session's sidecar or rows are missing (DamagedLogError: damaged).
@@ -139,7 +133,6 @@ def _text_sha256(text: str) -> str:
 
 
 def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
-    """A session's folder and stem, from any of its files or its stem."""
     p = Path(path)
     stem = p.name
     for suffix in (".csv.part", ".csv", ".json", ".xml"):
@@ -149,7 +142,6 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
 
 
 def _read_sidecar(sidecar: Path) -> dict[str, Any]:
-    """The sidecar's fields; a missing or unreadable sidecar is an error in one line."""
     if not sidecar.is_file():
         raise ArtifactError(f"no session sidecar {sidecar}")
     try:
@@ -162,7 +154,6 @@ def _read_sidecar(sidecar: Path) -> dict[str, Any]:
 
 
 def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
-    """The rows as floats, and the first problem found (None for a sound log)."""
     try:
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False)
     except pd.errors.EmptyDataError:
@@ -181,8 +172,6 @@ def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
 
 
 def _unsound(numbers: pd.DataFrame) -> str | None:
-    """Rows that cannot have been logged: a non-finite value outside the raw axes, or steps and times
-    that do not increase."""
     checked = [c for c in numbers.columns if not str(c).startswith("raw")]
     finite = np.isfinite(numbers[checked].to_numpy())
     if not finite.all():

@@ -1,9 +1,5 @@
-"""People's sessions of the eating study, read back for analysis: the logs and the questionnaire.
-
-:func:`load_sessions` reads logged sessions as the simulated cohort's record
-(:class:`lasa.world.record.Episodes`), so people's sessions go through the same measures and
-statistics; :func:`analyse_sessions` runs it all for one folder, as notebook 11 calls it.
-"""
+"""People's sessions of the eating study, read back as the simulated cohort's record
+(:class:`lasa.world.record.Episodes`) so they go through the same measures and statistics."""
 
 from __future__ import annotations
 
@@ -70,11 +66,8 @@ DROPPED = "a participant who did not do every condition (in every task the test 
 def scan_sessions(
     folder: str | os.PathLike[str], include_interrupted: bool = False, include_damaged: bool = False
 ) -> tuple[list[tuple[pd.DataFrame, dict[str, Any]]], pd.DataFrame]:
-    """The eating-task sessions in ``folder`` that can be analysed, and those left out by name.
-
-    A damaged session, one that did not end normally (unless ``include_interrupted``) or one of
-    another task is left out, with the reason (:data:`LEFT_OUT`); ``include_damaged`` keeps a
-    damaged log's rows that parse. One bad session never stops the others.
+    """The eating-task sessions in ``folder`` that can be analysed, and those left out with the reason
+    (:data:`LEFT_OUT`); ``include_damaged`` keeps a damaged log's rows that parse.
 
     Returns:
         The kept ``(rows, sidecar)`` pairs, by name, and the table ``session``, ``reason`` of those
@@ -119,11 +112,7 @@ def load_sessions(
     include_damaged: bool = False,
 ) -> Episodes:
     """The eating-task sessions in ``folder`` (:func:`scan_sessions`, each left out named in a
-    warning) as :class:`lasa.world.record.Episodes`; ``task`` (the eating task) gives the fork's pose.
-
-    Raises:
-        ArtifactError: if the folder holds no sound eating-task session, or a duplicate.
-    """
+    warning) as :class:`lasa.world.record.Episodes`; an ArtifactError if none is sound."""
     _check_task(task, "load_sessions")
     logs, left_out = scan_sessions(folder, include_interrupted, include_damaged)
     for row in left_out.itertuples():
@@ -141,7 +130,6 @@ def _check_task(task: object, caller: str) -> None:
 def _episodes(
     logs: list[tuple[pd.DataFrame, dict[str, Any]]], left_out: pd.DataFrame, folder: object, task: Any
 ) -> Episodes:
-    """Logged sessions as the simulated cohort's record; none is an error naming those left out."""
     import mujoco
 
     if not logs:
@@ -237,10 +225,8 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
     """People's sessions through the simulated cohort's measures and statistics.
 
     Returns:
-        The tidy ``goal_error``, ``time`` and ``alignment`` tables, ``means`` per condition; over the
-        participants who did every condition (at least two) ``sa_effect`` (on Goal Error and the mean
-        distance) and ``time_tests`` (LA+SA against each, summed over tasks, Holm); ``likert``
-        (:func:`likert_tests`); ``left_out`` and ``dropped``, each with the reason (also warned).
+        The tidy measure tables, ``means`` per condition, ``sa_effect``, ``time_tests`` and
+        ``likert`` (over participants who did every condition), ``left_out`` and ``dropped``.
     """
     from lasa.evidence import stats
     from lasa.world.measures import measures

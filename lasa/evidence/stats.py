@@ -1,10 +1,6 @@
-"""The user study's statistical tests, on the 2x2 design of :mod:`lasa.evidence.study_design`.
-
-The paper's F(1,18) for SA fits 2N = 20 observations as independent (:func:`sa_effect_between`); the
-design calls for the repeated-measures ANOVA's F(1, N-1) (:func:`sa_effect_within`). Pairwise
-comparisons are paired t-tests, Holm-corrected (:func:`pairwise`); times cut at a horizon are
-compared by restricted means with a paired bootstrap (:func:`rmst_contrasts`). F and p come from
-statsmodels and scipy, never by hand.
+"""The user study's statistical tests on its 2x2 design: the SA effect as the paper's F(1,18) (2N
+observations as independent) and as the design's repeated-measures F(1, N-1), Holm-corrected paired
+t-tests, and restricted mean times with a paired bootstrap. F and p come from statsmodels and scipy.
 """
 
 from __future__ import annotations
@@ -32,7 +28,6 @@ from lasa.evidence.study_design import (
 )
 
 __all__ = [
-    "EFFECTS",
     "sa_effect_between",
     "rm_anova",
     "sa_effect_within",
@@ -50,10 +45,7 @@ WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
 
 
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA effect read as the paper's F(1,18): a one-way ANOVA on 2N participant means.
-
-    Each participant's mean of ``measure`` with SA and without (over interface and task), compared
-    as two independent groups, df (1, 2N-2): the pairing ignored (see :func:`sa_effect_within`).
+    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2).
 
     Returns:
         ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``:
@@ -88,7 +80,6 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
 def _sa_result(
     test: str, f: float, df: tuple[int, int], p: float, n: int, sa: pd.Series, no_sa: pd.Series, ci: Any
 ) -> dict[str, Any]:
-    """The dict of an SA effect (see :func:`sa_effect_between`)."""
     return {
         "test": test,
         "F": f,
@@ -129,14 +120,8 @@ def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFra
 
 
 def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means).
-
-    Returns:
-        As :func:`sa_effect_between`, with df (1, N-1) and ``ci_*`` a paired t over participants.
-
-    Raises:
-        ConfigError: As :func:`rm_anova`.
-    """
+    """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means), as
+    :func:`sa_effect_between` returns it, with df (1, N-1) and ``ci_*`` a paired t over participants."""
     table = rm_anova(frame, measure, agg="mean")
     row = table.set_index("effect").loc["assistance"]
     cells = condition_cells(frame, measure, "mean", CONDITIONS)
@@ -160,8 +145,6 @@ def pairwise(
     """Paired t-tests between conditions on per-participant values, corrected across the pairs.
 
     Args:
-        frame: Tidy study data; every participant must have both conditions of every pair tested.
-        measure: Name of the numeric column to compare.
         agg: ``"mean"`` or ``"sum"`` over tasks (the paper sums times across both tasks).
         pairs: ``(a, b)`` condition pairs; default all 6 pairs of :data:`CONDITIONS`, in order.
         correction: A ``multipletests`` method, or ``"none"``; pairs whose p is not finite are left out.
@@ -203,7 +186,6 @@ def pairwise(
 
 
 def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
-    """The pairs :func:`pairwise` tests; a ConfigError for none, or a pair not of two conditions."""
     chosen: list[tuple[str, ...]] = (
         list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
     )
@@ -220,7 +202,6 @@ def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ..
 
 
 def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
-    """The p values corrected by ``correction`` across the finite ones (``"none"``: as they are)."""
     p_corr = p_unc.copy()
     if correction != "none":
         finite = np.isfinite(p_unc)
@@ -242,10 +223,6 @@ def paired_bootstrap(
 
     Returns:
         ``(mean, low, high)``, each of shape ``diffs.shape[1:]``.
-
-    Raises:
-        ConfigError: Fewer than 2 participants, a non-finite difference, ``n_resamples`` < 1 or
-            ``level`` outside (0, 1).
     """
     x = np.asarray(diffs, dtype=float)
     if x.ndim not in (1, 2) or len(x) < 2:
@@ -310,12 +287,8 @@ def _format_df(value: Any) -> str:
 
 
 def format_f(result: dict[str, Any]) -> str:
-    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``
-    (F to one decimal from 10 up, two below; ``"p < .001"`` below .001).
-
-    Raises:
-        ConfigError: A key is missing.
-    """
+    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``;
+    a ConfigError if a key is missing."""
     missing = [key for key in ("F", "df1", "df2", "p") if key not in result]
     if missing:
         raise ConfigError(f"result is missing {', '.join(map(repr, missing))}; got keys {sorted(result)}")

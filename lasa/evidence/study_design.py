@@ -1,8 +1,5 @@
-"""The user study's 2x2 within-subjects design: interface (R, LA) x assistance (none, SA).
-
-Data arrive as a tidy frame, one row per participant x condition x task with a numeric measure;
-:func:`prepare` validates it, :func:`aggregate`, :func:`participant_means` and :func:`condition_cells`
-reduce it to one value per participant and cell (mean, or sum for times). Tests: :mod:`lasa.evidence.stats`.
+"""The user study's 2x2 within-subjects design, interface (R, LA) x assistance (none, SA): a tidy
+frame (one row per participant x condition x task), validated and reduced per participant and cell.
 """
 
 from __future__ import annotations
@@ -34,11 +31,7 @@ _DERIVED: tuple[str, ...] = ("interface", "assistance")
 
 
 def factors(condition: str) -> tuple[str, str]:
-    """A condition's (interface, assistance) levels, e.g. ``"LA+SA"`` -> ``("LA", "SA")``.
-
-    Raises:
-        ConfigError: ``condition`` is not one of :data:`CONDITIONS`.
-    """
+    """A condition's (interface, assistance) levels, ``"LA+SA"`` -> ``("LA", "SA")``; ConfigError: unknown."""
     if not isinstance(condition, str) or condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; allowed: {', '.join(CONDITIONS)}")
     interface, _, assistance = condition.partition("+")
@@ -46,7 +39,6 @@ def factors(condition: str) -> tuple[str, str]:
 
 
 def _check_agg(agg: str) -> None:
-    """Refuse an ``agg`` other than those of :data:`AGGS`."""
     if agg not in AGGS:
         raise ConfigError(f"agg must be one of {', '.join(map(repr, AGGS))}, got {agg!r}")
 
@@ -106,7 +98,6 @@ def check_participants(data: pd.DataFrame) -> int:
 
 
 def _check_complete(data: pd.DataFrame, conditions: Sequence[str]) -> None:
-    """Every participant has every one of ``conditions``, and the same tasks in each of them."""
     have = data.groupby("participant", sort=True)["condition"].agg(set)
     for participant, present in have.items():
         lacking = [c for c in conditions if c not in present]
@@ -145,14 +136,8 @@ def aggregate(data: pd.DataFrame, measure: str, by: Sequence[str], agg: str) -> 
 def participant_means(
     frame: pd.DataFrame, measure: str, by: Sequence[str] = ("condition",), agg: str = "mean"
 ) -> pd.DataFrame:
-    """One value of ``measure`` per participant and ``by`` level (``condition``, ``task``, ``interface``,
-    ``assistance``; ``()``: everything), the ``agg`` (``"mean"``/``"sum"``) of the rest, sorted by
-    participant and level in the study's order.
-
-    Raises:
-        ConfigError: A column is missing or unknown, a condition is unknown, a value is not finite,
-            or ``agg`` is unknown.
-    """
+    """One value of ``measure`` per participant and ``by`` level (``()``: everything), the ``agg``
+    (``"mean"``/``"sum"``) of the rest, in the study's order; a ConfigError for invalid data."""
     _check_agg(agg)
     by = list(by)
     data = prepare(frame, measure)

@@ -1,9 +1,6 @@
-"""The claims' numbers as data: ``figures/claim_values.csv``, one row per number a sentence reads.
-
-Per claims row (:class:`lasa.evidence.claims.Claim`) each quantity its rule reads, with its value and
-interval at the row's level, and each fact a sentence states beside them (a test's F and p, each
-condition's completion), without an interval. The columns (:data:`VALUE_COLUMNS`): the README's data
-contract. Every result sentence of the verdict table (:mod:`lasa.evidence.findings`) reads them.
+"""The claims' numbers as data, ``figures/claim_values.csv``: per claims row each quantity its rule
+reads (value and interval) and each fact a sentence states (without an interval). The columns
+(:data:`VALUE_COLUMNS`) are the README's data contract.
 """
 
 from __future__ import annotations
@@ -14,16 +11,7 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-__all__ = [
-    "Number",
-    "Numbers",
-    "Values",
-    "VALUE_COLUMNS",
-    "VALUES_NAME",
-    "HEADLINE",
-    "read_values",
-    "reading_of",
-]
+__all__ = ["Number", "Numbers", "Values", "VALUE_COLUMNS", "VALUES_NAME", "read_values", "reading_of"]
 
 VALUES_NAME = "claim_values.csv"  # beside claims.csv
 VALUE_COLUMNS = ("id", "robot", "figure", "reading", "quantity", "value", "low", "high", "level", "n")

@@ -1,10 +1,6 @@
-"""Verdicts decided by their intervals, with users added where a verdict is still open.
-
-:func:`assess` resamples users (all rows of a user together) for a percentile interval per number of
-a claim's rule; a verdict is **settled** when every interval lies on one side of each threshold, else
-``undecided``. :func:`sequential` adds users where a headline verdict is open, by a group-sequential
-:class:`Design` fixed in advance (each look's level 1 - 0.05 / K over K looks), and gives each other
-member a row ``<id>@<member>``. The design and its guard: ``docs/method-notes.md``.
+"""Verdicts decided by user-bootstrap intervals (:func:`assess`: **settled** when every interval
+clears each threshold, else ``undecided``), with users added by a group-sequential :class:`Design`
+where a headline verdict is open (:func:`sequential`). The design: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -43,26 +39,18 @@ __all__ = [
 ]
 
 N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
-# The least evidence a settled verdict may rest on (:func:`shortfall`), fixed before any verdict was
-# read against it: users per point (fewer gave zero-width intervals), and resamples beyond each
-# bound of a percentile interval (5: 800 resamples at 98.75%, 200 at 95%).
-MIN_USERS = 60  # [-]
-MIN_TAIL = 5  # [-]
+# The least evidence a settled verdict may rest on (:func:`shortfall`), fixed in advance.
+MIN_USERS = 60  # users per point (fewer gave zero-width intervals) [-]
+MIN_TAIL = 5  # resamples beyond each bound of a percentile interval [-]
 ALPHA = 0.05  # family-wise error of a verdict over all its looks [-]
-# The column naming a simulated user (its index: cup, preference, random draws), the unit a
-# bootstrap resamples; the file contracts name it "seed".
-USER = "seed"
+USER = "seed"  # the column naming a simulated user, the unit a bootstrap resamples
 
 Evaluate = Callable[[pd.DataFrame], list[Claim]]
 
 
 @dataclasses.dataclass(frozen=True)
 class Design:
-    """Users per point: a first look, blocks after it, a cap (fixed before the results).
-
-    60 is the verdict map's smallest cell; blocks of 30, the old fixed size; the cap of 150, where an
-    earlier version re-ran the headline by hand.
-    """
+    """Users per point: a first look, blocks after it, a cap (fixed before the results)."""
 
     first: int = 60  # users per point at the first look, every pair and member [-]
     block: int = 30  # users added per later look, the headline member's pairs only [-]
@@ -111,8 +99,7 @@ def block_users(design: Design, block: int) -> tuple[int, int]:
 
 
 def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> Iterator[pd.DataFrame]:
-    """``n_boot`` resamples of ``frame``, drawing its users (``unit``) with replacement; a user drawn
-    twice appears under two new ids, so a rule averaging per user counts it twice."""
+    """``n_boot`` resamples of ``frame``'s users (``unit``) with replacement, each draw a new id."""
     codes, units = pd.factorize(frame[unit], sort=True)
     order = np.argsort(codes, kind="stable")
     starts = np.searchsorted(codes[order], np.arange(len(units) + 1))
@@ -127,8 +114,7 @@ def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = US
 
 
 def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> np.ndarray:
-    """How often each user (in ``pd.factorize(sort=True)`` order) is drawn in each of ``n_boot``
-    resamples, (n_boot, users): the same users as :func:`bootstrap_frames`'s resample r."""
+    """(n_boot, users): how often each user is drawn in :func:`bootstrap_frames`'s resample r."""
     n = int(frame[unit].nunique())
     rng = np.random.default_rng(seed)
     return np.stack([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)])
@@ -137,12 +123,8 @@ def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USE
 def group_means(
     frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = USER
 ) -> dict[tuple[Any, ...], np.ndarray]:
-    """The mean of ``metric`` per group of ``keys`` in every resample, without building them:
-    sum_u c_u S_ug / sum_u c_u N_ug (S, N: each user's sum and count in the group), one matrix product.
-
-    Returns:
-        Group label (a tuple of the keys' values) -> its mean in each resample, shape (R,).
-    """
+    """Group label (tuple of ``keys``' values) -> mean of ``metric`` in each resample (R,), without
+    building them: sum_u c_u S_ug / sum_u c_u N_ug (S, N: each user's sum and count in the group)."""
     users = pd.factorize(frame[unit], sort=True)[0]
     groups = frame.groupby(keys, sort=True).ngroup().to_numpy()
     labels = list(frame.groupby(keys, sort=True).groups)
@@ -199,19 +181,14 @@ def assess(
 
     Args:
         evaluate: A figure's claims: frame -> claims, each with the ``values`` its rule reads.
-        frame: The users' rows.
-        n_boot: Bootstrap resamples.
-        seed: Seed of the resampling.
         unit: The column naming a user: the resampled unit.
         level: The intervals' level (1 - ALPHA / K under a sequential design).
-        fast: The figure's vectorized bootstrap (its ``boot_values``, from :func:`group_means`): the
-            same numbers on the same resamples; if None, ``evaluate`` runs on every resample.
-        min_users: The fewest users a settled verdict may rest on (:data:`MIN_USERS`).
+        fast: The figure's vectorized bootstrap (from :func:`group_means`): the same numbers on the
+            same resamples; if None, ``evaluate`` runs on every resample.
 
     Returns:
-        The claims with their intervals (``ci_low``/``ci_high``: the first number's), ``settled``,
-        ``n_users``, and ``reproduced`` ``undecided`` where an interval straddles a threshold or
-        the evidence falls short (:func:`shortfall`).
+        The claims with their intervals, ``settled``, ``n_users``, and ``reproduced`` ``undecided``
+        where an interval straddles a threshold or the evidence falls short (:func:`shortfall`).
 
     Raises:
         ConfigError: if a claim has no rule, or its verdict is not its rule's at its values.
@@ -234,7 +211,6 @@ def _boot_samples(
     unit: str,
     fast: BootValues | None,
 ) -> dict[str, dict[str, list[float]]]:
-    """Claim id -> number name -> its values over the resamples (:func:`assess`'s arguments)."""
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
     if fast is not None:
         for cid, arrays in fast(frame, resample_counts(frame, n_boot, seed, unit)).items():
@@ -251,7 +227,6 @@ def _boot_samples(
 
 
 def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int, short: str = "") -> Claim:
-    """Claim ``c`` with its rule's intervals at ``level``, settled or not (never with a ``short``)."""
     r = c.judged_by
     if r is None:
         raise ConfigError(f"no rule for claim {c.id!r}; give it one (Claim.rule)")
@@ -289,13 +264,11 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
 
 
 def with_reading(claim_id: str, reading: str) -> str:
-    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already
-    (sim4's ``@joint_space`` under another member: ``sim4.x@joint_space+grasp_set``)."""
+    """``<id>@<reading>``, or ``<id>@<readings>+<reading>`` for an id that names a reading already."""
     return f"{claim_id}{'+' if '@' in claim_id else '@'}{reading}"
 
 
 def _words(c: Claim) -> str:
-    """``effect undecided; 1.45 out, 1.3 in``: a claim's two words."""
     said = criteria(c)
     return words_text(said["effect"], said["number"], c.stated)
 
@@ -312,9 +285,8 @@ def member_frame(frame: pd.DataFrame, assistance: str) -> pd.DataFrame:
 
 @dataclasses.dataclass(frozen=True)
 class Sequential:
-    """The outcome of :func:`sequential`: every look's rows (``look`` numbers them), the headline
-    row of each claim then each other member's, and per (look, claim) of the headline member its
-    users per point, verdict and whether settled."""
+    """The outcome of :func:`sequential`: every look's rows, the claims, and per (look, claim) of the
+    headline member its users per point, verdict and whether settled."""
 
     frame: pd.DataFrame
     claims: list[Claim]
@@ -360,8 +332,7 @@ def sequential(
             {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
             for c in head
         ]
-        # the design's stopping rule reads the headline claims only, never a figure's own readings
-        # (sim4's ``@joint_space``), which are judged at whatever look the headline stops
+        # the stopping rule reads the headline claims only, never a figure's own readings
         if all(c.settled for c in head if "@" not in c.id):
             break
     first = frame[frame.look == 0]

@@ -1,10 +1,5 @@
-"""Off-screen MuJoCo video: render joint trajectories and write bit-exact MP4s with mediapy.
-
-Rendering is software-only and slow: keep frames small (even sizes such as 320x240). An MP4 is a
-function of its frames alone (:func:`write_video`), encoded by the pinned ffmpeg
-(:mod:`lasa.base.ffmpeg`), which :func:`read_video` decodes with too; :func:`lasa.runtime.pin`
-sets ``MUJOCO_GL``.
-"""
+"""Off-screen MuJoCo video: render joint trajectories (software, slow: keep frames small and even)
+and write MP4s that are a function of their frames alone, with mediapy and the pinned ffmpeg."""
 
 from __future__ import annotations
 
@@ -109,11 +104,8 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 
 
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
-    """Atomically write frames (T, H, W, 3), uint8, even H and W, to an H.264 (yuv420p) MP4.
-
-    The same frames give the same bytes on every machine: the pinned ``imageio-ffmpeg`` binary, one
-    thread, x264 at the x86-64 baseline, swscale's bitexact paths, no version or time metadata;
-    quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``).
+    """Atomically write frames (T, H, W, 3), uint8, to an H.264 (yuv420p) MP4, the same bytes on
+    every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``).
 
     Raises:
         ConfigError: The frames are not (T, H, W, 3) or H or W is odd.
@@ -152,12 +144,8 @@ def write_clips(
     """Render clips of joint states, caption each frame, lay the clips out and write the MP4.
 
     Args:
-        robot: The robot whose scene renders the states.
         clips: ``(states, caption)`` per clip: states (T, n); one caption, or one per frame.
-        path: Destination ``.mp4`` (bit-exact, :func:`write_video`).
-        fps: Frame rate.
         layout: ``"side_by_side"`` (shorter clips hold their last frame) or ``"in_turn"``.
-        height, width: One clip's frame size in pixels (even).
         n_jobs: Worker processes that render the frames (:func:`render_many`).
 
     Returns:
