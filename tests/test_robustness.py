@@ -236,9 +236,9 @@ def _title_level(fig) -> float:
 
 
 def test_the_maps_title_states_the_level_its_cells_were_judged_at():
-    from lasa.evidence.verdicts import ALPHA, Design
+    from lasa.evidence.verdicts import ALPHA, Looks
 
-    looks = len(Design().sizes)
+    looks = len(Looks().sizes)
     assert robustness.LEVEL == pytest.approx(1 - ALPHA / looks)
     assert _title_level(robustness.plot(_table(EFFECTS))) == pytest.approx(robustness.LEVEL)
     # the title reads the table's level: a table judged at another level says so

@@ -21,7 +21,7 @@ from lasa.base.config import from_dict
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import MIN_USERS, USER, Design, assess, member_frame, min_resamples
+from lasa.evidence.verdicts import MIN_USERS, USER, Looks, assess, member_frame, min_resamples
 from lasa.experiments import sim1, sim2, sim3, sim4
 
 FIGURES = Path(__file__).resolve().parents[1] / "figures"
@@ -89,7 +89,7 @@ def test_a_sims_looks_settings_are_refused_in_one_line_or_judged_honestly(
         return
     frame = _rows(name, "panda")
     ids = np.sort(frame[USER].unique())[: config.users]
-    level = Design(config.users, config.block, config.cap).level
+    level = Looks(config.users, config.block, config.cap).level
     fast = getattr(module, "boot_values", None)
     claims = assess(module.claims, frame[frame[USER].isin(ids)], config.n_boot, seed, level=level, fast=fast)
     enough = len(ids) >= MIN_USERS and config.n_boot >= min_resamples(level)

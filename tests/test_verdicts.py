@@ -11,7 +11,7 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.rules import rule as rule_of
 from lasa.evidence.verdicts import (
     MIN_USERS,
-    Design,
+    Looks,
     assess,
     block_seed,
     block_users,
@@ -103,15 +103,15 @@ def test_interval_brackets_the_resampled_range_and_is_seeded(xs, seed):
 
 
 def test_the_design_fixes_its_looks_and_guard():
-    d = Design()
+    d = Looks()
     assert d.sizes == (60, 90, 120, 150) and d.level == pytest.approx(1 - 0.05 / 4)
     assert block_users(d, 0) == (0, 60) and block_users(d, 1) == (60, 30) and block_users(d, 3) == (120, 30)
-    assert Design(10, 30, 25).sizes == (10, 25)  # the last block is cut at the cap
+    assert Looks(10, 30, 25).sizes == (10, 25)  # the last block is cut at the cap
     assert block_seed(7, 0) == 7 and block_seed(7, 1) != block_seed(7, 2) != 7
     with pytest.raises(ConfigError, match="must not exceed cap"):
-        Design(200, 30, 150)
+        Looks(200, 30, 150)
     with pytest.raises(ConfigError, match="block must be a positive integer"):
-        Design(60, 0, 150)
+        Looks(60, 0, 150)
 
 
 def _runner(xs_by_look: list[list[float]], log: list):
@@ -134,7 +134,7 @@ def test_sequential_stops_at_the_first_settled_look():
         toy,
         ("point", "grasp_set"),
         "point",
-        Design(4, 2, 6),
+        Looks(4, 2, 6),
         800,
         min_users=4,
     )
@@ -148,7 +148,7 @@ def test_sequential_stops_at_the_first_settled_look():
 def test_sequential_adds_headline_users_until_the_cap_and_says_undecided():
     log: list = []
     looks = [[-1.0, 1.2, -0.9, 1.1], [-1.0, 1.2], [-0.9, 1.0]]
-    out = sequential(_runner(looks, log), toy, ("point", "hindsight"), "point", Design(4, 2, 8), 50)
+    out = sequential(_runner(looks, log), toy, ("point", "hindsight"), "point", Looks(4, 2, 8), 50)
     assert log == [
         (0, ("point", "hindsight")),
         (1, ("point",)),
@@ -163,7 +163,7 @@ def test_sequential_adds_headline_users_until_the_cap_and_says_undecided():
 
 def test_a_headline_member_outside_the_members_is_an_error():
     with pytest.raises(ConfigError, match="is not among the members"):
-        sequential(_runner([[0.5]], []), toy, ("hindsight",), "point", Design(1, 1, 1))
+        sequential(_runner([[0.5]], []), toy, ("hindsight",), "point", Looks(1, 1, 1))
 
 
 def test_member_frames_share_the_unassisted_rows_of_their_own_users():

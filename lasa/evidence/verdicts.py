@@ -1,5 +1,5 @@
 """Verdicts decided by user-bootstrap intervals (:func:`assess`: **settled** when every interval
-clears each threshold, else ``undecided``), with users added by a group-sequential :class:`Design`
+clears each threshold, else ``undecided``), with users added by a group-sequential :class:`Looks`
 where a headline verdict is open (:func:`sequential`). The design: ``docs/method-notes.md``.
 """
 
@@ -25,14 +25,14 @@ __all__ = [
     "NO_ASSISTANCE",
     "N_BOOT",
     "MIN_USERS",
-    "Design",
+    "Looks",
     "Sequential",
     "assess",
     "block_seed",
     "block_users",
     "sequential",
     "member_frame",
-    "check_design",
+    "check_looks",
     "group_means",
     "min_resamples",
     "shortfall",
@@ -49,7 +49,7 @@ Evaluate = Callable[[pd.DataFrame], list[Claim]]
 
 
 @dataclasses.dataclass(frozen=True)
-class Design:
+class Looks:
     """Users per point: a first look, blocks after it, a cap (fixed before the results)."""
 
     first: int = 60  # users per point at the first look, every pair and member [-]
@@ -57,7 +57,7 @@ class Design:
     cap: int = 150  # most users per point [-]
 
     def __post_init__(self) -> None:
-        check_design(self.first, self.block, self.cap)
+        check_looks(self.first, self.block, self.cap)
 
     @property
     def sizes(self) -> tuple[int, ...]:
@@ -73,7 +73,7 @@ class Design:
         return 1.0 - ALPHA / len(self.sizes)
 
 
-def check_design(first: int, block: int, cap: int) -> None:
+def check_looks(first: int, block: int, cap: int) -> None:
     """Positive integers with ``first <= cap``, else a ConfigError naming the setting."""
     for name, value in (("users", first), ("block", block), ("cap", cap)):
         if int(value) != value or value < 1:
@@ -90,12 +90,12 @@ def block_seed(seed: int, block: int) -> int:
     return int(np.random.SeedSequence([int(seed), int(block)]).generate_state(1)[0])
 
 
-def block_users(design: Design, block: int) -> tuple[int, int]:
+def block_users(looks: Looks, block: int) -> tuple[int, int]:
     """(first user index, number of users) of look ``block``'s new users."""
     if block == 0:
-        return 0, design.first
-    start = design.sizes[block - 1]
-    return start, design.sizes[block] - start
+        return 0, looks.first
+    start = looks.sizes[block - 1]
+    return start, looks.sizes[block] - start
 
 
 def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> Iterator[pd.DataFrame]:
@@ -298,7 +298,7 @@ def sequential(
     evaluate: Evaluate,
     assistance: tuple[str, ...],
     default: str,
-    design: Design = Design(),
+    looks: Looks = Looks(),
     n_boot: int = N_BOOT,
     seed: int = 0,
     fast: BootValues | None = None,
@@ -312,7 +312,7 @@ def sequential(
         evaluate, n_boot, seed, fast, min_users: As :func:`assess` takes them.
         assistance: Every member to judge; the first look runs all of them.
         default: The headline member (the paper's); later looks run only it.
-        design: Users per look and the cap (:class:`Design`).
+        looks: Users per look and the cap (:class:`Looks`).
 
     Raises:
         ConfigError: if ``default`` is not among ``assistance``.
@@ -320,11 +320,11 @@ def sequential(
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
     judge = functools.partial(
-        assess, evaluate, n_boot=n_boot, seed=seed, level=design.level, fast=fast, min_users=min_users
+        assess, evaluate, n_boot=n_boot, seed=seed, level=looks.level, fast=fast, min_users=min_users
     )
     frame = run_block(0, assistance).assign(look=0)
     log = []
-    for look, size in enumerate(design.sizes):
+    for look, size in enumerate(looks.sizes):
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
         head = judge(member_frame(frame, default))
@@ -341,14 +341,14 @@ def sequential(
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
         where = (
-            f"Members with other words (at {design.first} users): {'; '.join(flips)}. "
+            f"Members with other words (at {looks.first} users): {'; '.join(flips)}. "
             if flips
             else "Every other member gives the same words. "
             if others
             else ""
         )
-        at = f"look {look + 1} of {len(design.sizes)}"
-        cap = f", the cap ({design.cap} users)" if look + 1 == len(design.sizes) else ""
+        at = f"look {look + 1} of {len(looks.sizes)}"
+        cap = f", the cap ({looks.cap} users)" if look + 1 == len(looks.sizes) else ""
         stop = f"The effect is settled at {at}. " if c.settled else f"The effect is undecided at {at}{cap}. "
         rows.append(dataclasses.replace(c, assistance=default, note=stop + where + c.note))
     for m, claims in others.items():

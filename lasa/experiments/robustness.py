@@ -39,7 +39,7 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, criteria
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
-from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Design, assess, member_frame
+from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Looks, assess, member_frame
 from lasa.experiments import sim1, sim2, sim3
 from lasa.experiments.sweep import as_decoders, check_assistance, check_needed
 from lasa.method.decoder import ActionDecoder
@@ -92,8 +92,8 @@ DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
 SIMS = (("sim1", sim1), ("sim2", sim2), ("sim3", sim3))  # the sims each cell runs
 # every cell's interval level: the claims table's, each look's 1 - ALPHA / K of the sequential
-# design (lasa.evidence.verdicts.Design), so a cell and its claims-table row read alike [-]
-LEVEL = Design().level
+# design (lasa.evidence.verdicts.Looks), so a cell and its claims-table row read alike [-]
+LEVEL = Looks().level
 # each effect word's colour (lasa.evidence.decision.WORDS); an undecided cell is also hatched
 COLOURS = {
     "reproduced": "#1b9e77",

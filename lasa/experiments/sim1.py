@@ -26,7 +26,7 @@ from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.findings import side_of
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, group_means
+from lasa.evidence.verdicts import USER, Looks, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -284,7 +284,7 @@ METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time 
 # the paper's time ratio LA / LA+SA at these betas (Panda) and the rule's tolerance, from its rule [-]
 PAPER_RATIOS = {float(p.where.split("=")[1]): p.value for p in rule("sim1.time_ratio").paper}
 RATIO_TOLERANCE = rule("sim1.time_ratio").paper[0].tolerance
-LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
+LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 PAPER_FINAL_ERROR = "paper: LA+SA below LA at every β"  # Fig. sim1 (Sec. V-A), rule sim1.final_error
 OPEN: dict[str, Any] = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "zorder": 6}  # a censored point
 

@@ -21,7 +21,7 @@ from lasa.evidence import plots
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Design, group_means
+from lasa.evidence.verdicts import USER, Looks, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -186,7 +186,7 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     }
 
 
-LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
+LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 METRIC_LABELS = {
     "final_error": "final state error (normalised)",
     "success": "success: share that reach the true cup",

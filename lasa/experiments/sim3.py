@@ -23,7 +23,7 @@ from lasa.evidence.plots import (
     method_lineplot,
     paper_handle,
 )
-from lasa.evidence.verdicts import USER, Design, group_means
+from lasa.evidence.verdicts import USER, Looks, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -159,7 +159,7 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 
 
 PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
-LEVEL = Design().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
+LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:

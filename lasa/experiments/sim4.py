@@ -264,7 +264,7 @@ def run(
     decoder = sweep.as_decoders(decoders).get(key)
     if decoder is None:
         raise ConfigError(f"method {config.method!r} needs the {key!r} decoder; pass decoders[{key!r}]")
-    first, n_users = verdicts.block_users(verdicts.Design(config.users, config.block, config.cap), look)
+    first, n_users = verdicts.block_users(verdicts.Looks(config.users, config.block, config.cap), look)
     _, theta, noise = sweep.episodes(
         decoder, task, control, n_users, config.horizon, verdicts.block_seed(config.seed, look)
     )
@@ -836,7 +836,7 @@ PAPER_UNITS = (
     "(both axes ÷ D, the farthest new cup's distance, as the paper's; the grasp error at the gripper)"
 )
 # the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
-CI_LEVEL = verdicts.Design().level
+CI_LEVEL = verdicts.Looks().level
 N_BOOT_PLOT = 1000
 MEAN_STYLE: dict[str, Any] = {"ms": 4, "capsize": 2}  # a cup's mean and its interval
 MEDIAN_STYLE: dict[str, Any] = {"s": 22, "facecolors": "none", "lw": 0.9}  # a cup's median, hollow

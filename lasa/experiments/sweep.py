@@ -145,18 +145,18 @@ def sweep_grid(
 
 @dataclasses.dataclass(frozen=True)
 class LooksConfig:
-    """How a sweep's verdicts get their users: the sequential design, the bootstrap, the members."""
+    """How a sweep's verdicts get their users: the sequential looks, the bootstrap, the members."""
 
-    users: PositiveInt = verdicts.Design.first  # users per point at the first look, every member (Design) [-]
-    block: PositiveInt = verdicts.Design.block  # users added per later look, the headline member only [-]
-    cap: PositiveInt = verdicts.Design.cap  # most users per point [-]
+    users: PositiveInt = verdicts.Looks.first  # users per point at the first look, every member (Looks) [-]
+    block: PositiveInt = verdicts.Looks.block  # users added per later look, the headline member only [-]
+    cap: PositiveInt = verdicts.Looks.cap  # most users per point [-]
     n_boot: PositiveInt = verdicts.N_BOOT  # bootstrap resamples of each claim's intervals [-]
     assistance: tuple[str, ...] = ASSISTANCE  # members the assisted methods run under
     seed: Seed = 0  # seed of the users' cups, preferences and random streams [-]
 
     def __post_init__(self) -> None:
         validate(self)
-        verdicts.check_design(self.users, self.block, self.cap)
+        verdicts.check_looks(self.users, self.block, self.cap)
         check_assistance(self.assistance)
 
 
@@ -313,7 +313,7 @@ def run_look(
         assistance: The members the assisted methods run under; default every member of
             ``config.assistance`` (the headline one first).
     """
-    start, n_users = verdicts.block_users(verdicts.Design(config.users, config.block, config.cap), look)
+    start, n_users = verdicts.block_users(verdicts.Looks(config.users, config.block, config.cap), look)
     seed = verdicts.block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
     assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
@@ -368,11 +368,11 @@ def judge(
             first.append(extra)
         return frame if reduce is None else reduce(frame)
 
-    design = verdicts.Design(config.users, config.block, config.cap)
+    looks = verdicts.Looks(config.users, config.block, config.cap)
     assistance = swept_assistance(control, config.assistance)
     fast = getattr(module, "boot_values", None)
     outcome = verdicts.sequential(
-        block, module.claims, assistance, control.assistance, design, config.n_boot, fast=fast
+        block, module.claims, assistance, control.assistance, looks, config.n_boot, fast=fast
     )
     return pd.concat(full, ignore_index=True), outcome, first[0]
 
