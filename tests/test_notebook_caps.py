@@ -26,9 +26,11 @@ def uncapped(tmp_path_factory):
     out = tmp_path_factory.mktemp("uncapped")
     config = yaml.safe_load(QUICK.read_text())
     settings = config["10_eating_task"]["settings"]
-    # the uncapped belief through the notebook's every step, on the one reading its sweep needs
-    settings.update(belief_cap="none", readings=["continuous"], search_readings=[], sector_readings=[])
-    settings.update(seed_readings=[])
+    # the uncapped belief through the notebook's every step, on the one segmentation its sweep needs
+    settings.update(
+        belief_cap="none", segmentations=["continuous"], search_segmentations=[], sector_segmentations=[]
+    )
+    settings.update(seed_segmentations=[])
     path = out / "uncapped.yaml"
     path.write_text(yaml.safe_dump(config))
     command = [sys.executable, "-m", "lasa.pipeline.execute", str(NOTEBOOK), "--config", str(path),

@@ -333,7 +333,7 @@ def test_latent_property_holds_the_cups_and_the_eating_readings(executed):
     assert list(frame.columns) == list(latent_property.COLUMNS)
     assert set(frame.source) == {"cups-planar5", "cups-panda", "eating", eating_task.CAP_SOURCE}
     settings = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
-    readings = eating_task.reading_names(from_dict(eating_task.Config, settings))
+    readings = eating_task.variant_names(from_dict(eating_task.Config, settings))
     assert set(frame[frame.task == "eating"].decoder) == set(readings)
     table = latent_property.summary(frame)
     n_inputs = latent_measure.PropertyConfig().n_inputs
@@ -405,7 +405,7 @@ def test_study_outputs(executed):
     # version if notebook 10 trained it
     variants = study.variants_to_run(summary, "property")
     settings10 = load_config(QUICK, ROOT / "notebooks" / "10_eating_task.ipynb")["settings"]
-    assert set(variants) <= set(eating_task.reading_names(from_dict(eating_task.Config, settings10)))
+    assert set(variants) <= set(eating_task.variant_names(from_dict(eating_task.Config, settings10)))
     assert len(variants) < len(summary.decoder.unique())
     # the headline: every arm; each other decoder variant: LA and LA+SA under the headline member;
     # per participant model (the first variants_per_model of the ranking): participants x arms x tasks

@@ -267,9 +267,9 @@ def _censored(done: pd.Series) -> list[str]:
     return [c for c, _ in below_bar(done.items())]
 
 
-def _short_text(done: pd.Series, arms: list[str]) -> str:
-    """``"LA 0%, LA+SA 45%"``: the completion of ``arms``."""
-    return completion_text(list(done.reindex(arms).fillna(0.0).items()))
+def _short_text(done: pd.Series, conditions: list[str]) -> str:
+    """``"LA 0%, LA+SA 45%"``: the completion of ``conditions``."""
+    return completion_text(list(done.reindex(conditions).fillna(0.0).items()))
 
 
 def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, Judged]:

@@ -1,8 +1,8 @@
 r"""The eating task's 2-D latent actions (notebook 10): demonstrations, training, what z does.
 
-Each reading of the demonstrations trains a base decoder, fine-tuned with lambda = 0 and with
+Each segmentation of the demonstrations trains a base decoder, fine-tuned with lambda = 0 and with
 notebook 03's rule's lambda; the study's headline is chosen by the latent property alone
-(:func:`train_readings`), before any participant runs.
+(:func:`train_variants`), before any participant runs.
 """
 
 from __future__ import annotations
@@ -48,9 +48,9 @@ __all__ = [
     "COLUMNS",
     "Config",
     "BELIEFS",
-    "Readings",
-    "reading_names",
-    "train_readings",
+    "Variants",
+    "variant_names",
+    "train_variants",
     "CAP_SOURCE",
     "CapDecoders",
     "cap_label",
@@ -64,7 +64,7 @@ __all__ = [
 
 NAME = "eating_latent"
 # latent_property.csv's source and task of the cap sweep's decoders (train_caps): apart from the
-# readings the rule chooses among (source and task "eating")
+# decoder variants the rule chooses among (source and task "eating")
 CAP_SOURCE = "eating_caps"
 COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
 BELIEFS = ("uncertain", "confident")
@@ -78,22 +78,22 @@ class Config:
     # training (lasa.method.train.TrainConfig, its seed every fine-tune's): z_dim stays 2, two stick axes
     train: TrainConfig = TrainConfig(z_dim=2)
     goal: str = "middle"  # the bowl the figure looks at [-]
-    # demonstration readings trained: at paper scale the two with the property under the study's cap;
+    # segmentations trained: at paper scale the two with the property under the study's cap;
     # all of SEGMENTATIONS under LARGE=1 (configs/large.yaml) [-]
-    readings: tuple[str, ...] = ("continuous", "transfers")
+    segmentations: tuple[str, ...] = ("continuous", "transfers")
     # notebook 03's sweep, on the continuous base [-]
     lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
     # small entropy weights searched for both halves of the property, one fine-tune each [-]
     search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)
-    search_readings: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
-    # bases trained with the sector loss too (lasa.method.sectors; <reading>_sectors, lambda = 0); the
+    search_segmentations: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
+    # bases trained with the sector loss too (lasa.method.sectors; <segmentation>_sectors, lambda = 0); the
     # weight had the lower held-out reconstruction error of two probes (0.2: 0.0085, 1.0: 0.0118)
-    sector_readings: tuple[str, ...] = ()  # demonstration readings trained with sectors (LARGE=1: leaves) [-]
-    sector_weight: NonNegative = 0.2  # weight of the sector loss of those readings [-]
-    # bases trained again with each search seed, fine-tuned with lambda = 0 (<reading>_seed<seed>) [-]
-    seed_readings: tuple[str, ...] = ("transfers",)
-    search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the readings' own: train.seed) [-]
+    sector_segmentations: tuple[str, ...] = ()  # segmentations trained with sectors (LARGE=1: leaves) [-]
+    sector_weight: NonNegative = 0.2  # weight of the sector loss of those segmentations [-]
+    # bases trained again with each search seed, fine-tuned with lambda = 0 (<segmentation>_seed<seed>) [-]
+    seed_segmentations: tuple[str, ...] = ("transfers",)
+    search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the variants' own: train.seed) [-]
     # the study's belief cap (lasa.world.eating.STUDY_BELIEF_CAP); None ("none"): Algorithm 1's uncapped
     belief_cap: BeliefCap = STUDY_BELIEF_CAP
     # the headline's recipe trained again at each of these caps (train_caps); notebook 11 runs them [-]
@@ -112,79 +112,87 @@ class Config:
             raise ConfigError(
                 f"train.z_dim must be 2 (the study's stick has two axes), got {self.train.z_dim}"
             )
-        object.__setattr__(self, "readings", tuple(self.readings))
+        object.__setattr__(self, "segmentations", tuple(self.segmentations))
         object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
-        if not self.readings:
-            raise ConfigError("readings must name at least one of " + ", ".join(SEGMENTATIONS))
-        for name in self.readings:
-            check_choice("reading", name, SEGMENTATIONS)
-        if "continuous" not in self.readings:
-            raise ConfigError("readings must include 'continuous': the lambda sweep runs on its base")
+        if not self.segmentations:
+            raise ConfigError("segmentations must name at least one of " + ", ".join(SEGMENTATIONS))
+        for name in self.segmentations:
+            check_choice("segmentation", name, SEGMENTATIONS)
+        if "continuous" not in self.segmentations:
+            raise ConfigError("segmentations must include 'continuous': the lambda sweep runs on its base")
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
         object.__setattr__(self, "search_lambdas", tuple(float(x) for x in self.search_lambdas))
-        object.__setattr__(self, "search_readings", tuple(self.search_readings))
-        object.__setattr__(self, "sector_readings", tuple(self.sector_readings))
-        object.__setattr__(self, "seed_readings", tuple(self.seed_readings))
+        object.__setattr__(self, "search_segmentations", tuple(self.search_segmentations))
+        object.__setattr__(self, "sector_segmentations", tuple(self.sector_segmentations))
+        object.__setattr__(self, "seed_segmentations", tuple(self.seed_segmentations))
         object.__setattr__(self, "search_seeds", tuple(self.search_seeds))
         check_list("search_lambdas", self.search_lambdas, at_least=0, ascending=True)
-        for field in ("readings", "search_readings", "sector_readings", "seed_readings", "search_seeds"):
+        for field in (
+            "segmentations",
+            "search_segmentations",
+            "sector_segmentations",
+            "seed_segmentations",
+            "search_seeds",
+        ):
             check_list(field, getattr(self, field), at_least=0)
         if self.train.seed in self.search_seeds:
             raise ConfigError(
                 f"search_seeds must differ from train.seed ({self.train.seed}), got {self.search_seeds}"
             )
-        for field in ("search_readings", "sector_readings", "seed_readings"):
+        for field in ("search_segmentations", "sector_segmentations", "seed_segmentations"):
             for name in getattr(self, field):
-                if name not in self.readings:
-                    raise ConfigError(f"{field} must be among readings {self.readings}, got {name!r}")
-        if self.sector_readings and not self.sector_weight > 0:
+                if name not in self.segmentations:
+                    raise ConfigError(
+                        f"{field} must be among segmentations {self.segmentations}, got {name!r}"
+                    )
+        if self.sector_segmentations and not self.sector_weight > 0:
             raise ConfigError(
-                f"sector_weight must be > 0 when sector_readings are trained, got {self.sector_weight}"
+                f"sector_weight must be > 0 when sector_segmentations are trained, got {self.sector_weight}"
             )
 
 
-def reading_names(config: Config) -> list[str]:
-    """The decoder readings, in training order (:func:`fine_tunes`)."""
+def variant_names(config: Config) -> list[str]:
+    """The decoder variants, in training order (:func:`fine_tunes`)."""
     return [name for name, _, _ in fine_tunes(config, 0.0)]
 
 
 def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | None]]:
-    """(name, base, lambda) of every decoder reading; lambda None: notebook 03's rule's."""
+    """(name, base, lambda) of every decoder variant; lambda None: notebook 03's rule's."""
     out: list[tuple[str, str, float | None]] = []
-    for r in config.readings:
+    for r in config.segmentations:
         out += [(r, r, 0.0), (f"{r}_entropy", r, None)]
-        if r in config.search_readings:
+        if r in config.search_segmentations:
             out += [(f"{r}_lambda{w:g}", r, w) for w in config.search_lambdas]
-        if r in config.sector_readings:
+        if r in config.sector_segmentations:
             out.append((f"{r}_sectors", f"{r}_sectors", 0.0))
-        if r in config.seed_readings:
+        if r in config.seed_segmentations:
             out += [(f"{r}_seed{s}", f"{r}_seed{s}", 0.0) for s in config.search_seeds]
     return out
 
 
 def _bases(config: Config, train: TrainConfig) -> dict[str, tuple[str, TrainConfig]]:
-    """Per base: its demonstration reading and training settings (the sector bases add the loss,
+    """Per base: its segmentation and training settings (the sector bases add the loss,
     the seed bases another seed).
     """
-    out = {r: (r, train) for r in config.readings}
-    for r in config.sector_readings:
+    out = {r: (r, train) for r in config.segmentations}
+    for r in config.sector_segmentations:
         out[f"{r}_sectors"] = (r, dataclasses.replace(train, sector_weight=config.sector_weight))
-    for r in config.seed_readings:
+    for r in config.seed_segmentations:
         out.update({f"{r}_seed{s}": (r, dataclasses.replace(train, seed=s)) for s in config.search_seeds})
     return out
 
 
 @dataclasses.dataclass(frozen=True)
-class Readings:
-    """The trained readings of the study's decoder and the choice among them.
+class Variants:
+    """The trained variants of the study's decoder and the choice among them.
 
     Attributes:
-        models: Decoder per reading name (:func:`reading_names`).
+        models: Decoder per variant name (:func:`variant_names`).
         sweep: Notebook 03's sweep on the continuous base (one row per lambda).
         chosen_lambda: The lambda its rule picked.
-        demos: Demonstration tuples (clean, noisy copies) and minutes of motion per demo reading.
-        property: :func:`lasa.evidence.latent_measure.measure` rows of every reading.
-        headline: The reading the property's rule picks.
+        demos: Demonstration tuples (clean, noisy copies) and minutes of motion per segmentation.
+        property: :func:`lasa.evidence.latent_measure.measure` rows of every variant.
+        headline: The variant the property's rule picks.
     """
 
     models: dict[str, LatentActionModel]
@@ -195,23 +203,26 @@ class Readings:
     headline: str
 
 
-def train_readings(
+def train_variants(
     task: EatingTask,
     control: ControlConfig,
     config: Config,
     paths: Paths,
     prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
-) -> Readings:
-    """Train every reading, measure its property, choose the headline by the property alone."""
+) -> Variants:
+    """Train every decoder variant, measure its property, choose the headline by the property alone."""
     train = config.train
     datasets, demo_rows = _demonstrations(task, control, config, paths)
     plan = _bases(config, train)
-    runs = [entropy_ablation.Run(datasets[reading], control, settings) for reading, settings in plan.values()]
+    runs = [
+        entropy_ablation.Run(datasets[segmentation], control, settings)
+        for segmentation, settings in plan.values()
+    ]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="base decoders")
     bases = {base: model for base, (model, _) in zip(plan, fitted, strict=True)}
     trained = {base: settings for base, (_, settings) in plan.items()}
-    datasets.update({base: datasets[reading] for base, (reading, _) in plan.items()})
+    datasets.update({base: datasets[segmentation] for base, (segmentation, _) in plan.items()})
     sweep_config = entropy_ablation.Config(
         lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed, jobs=config.jobs
     )
@@ -225,31 +236,31 @@ def train_readings(
     )
     headline = latent_property.choose(latent_property.summary(frame))
     path = paths.artifact("eating_decoder", task.robot.name)
-    _save(models[headline], path, fines[headline], control, config, reading=headline)
-    return Readings(models, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
+    _save(models[headline], path, fines[headline], control, config, variant=headline)
+    return Variants(models, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
 
 
 def _demonstrations(
     task: EatingTask, control: ControlConfig, config: Config, paths: Paths
 ) -> tuple[dict[str, Demonstrations], list[dict[str, object]]]:
-    """Each demonstration reading's tuples (saved), and a row of its sizes."""
+    """Each segmentation's tuples (saved), and a row of its sizes."""
     datasets, rows = {}, []
-    for reading in config.readings:
-        demos = collect_eating_demonstrations(task, control, config.demos, segmentation=reading)
+    for segmentation in config.segmentations:
+        demos = collect_eating_demonstrations(task, control, config.demos, segmentation=segmentation)
         save_demonstrations(
-            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=reading)
+            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=segmentation)
         )
         clean = demos.clean()
         rows.append(
             {
-                "reading": reading,
+                "reading": segmentation,
                 "demonstrations": int(clean.demo.max() + 1),
                 "steps": len(clean),
                 "minutes": len(clean) * control.dt / 60,
                 "tuples": len(demos),
             }
         )
-        datasets[reading] = demos
+        datasets[segmentation] = demos
     return datasets, rows
 
 
@@ -264,27 +275,27 @@ def _fine_tune(
     datasets: dict[str, Demonstrations],
     progress: bool,
 ) -> tuple[dict[str, LatentActionModel], dict[str, TrainConfig]]:
-    """Every reading's decoder (:func:`fine_tunes`; the sweep's own where it trained it), saved."""
+    """Every variant's decoder (:func:`fine_tunes`; the sweep's own where it trained it), saved."""
     goal_sets = belief_targets(task, control.likelihood)
     lam = sweep.chosen
     models: dict[str, LatentActionModel] = {}
     fines: dict[str, TrainConfig] = {}
     runs: dict[str, entropy_ablation.Run] = {}
-    for name, reading, weight in fine_tunes(config, lam):
+    for name, base, weight in fine_tunes(config, lam):
         weight = lam if weight is None else weight
-        if reading == "continuous" and weight in sweep.models:
+        if base == "continuous" and weight in sweep.models:
             models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
             continue
         fines[name] = dataclasses.replace(
-            trained[reading], steps=config.sweep_steps, entropy_lambda=weight, seed=trained[reading].seed
+            trained[base], steps=config.sweep_steps, entropy_lambda=weight, seed=trained[base].seed
         )
-        runs[name] = entropy_ablation.Run(datasets[reading], control, fines[name], goal_sets, bases[reading])
+        runs[name] = entropy_ablation.Run(datasets[base], control, fines[name], goal_sets, bases[base])
     fitted = entropy_ablation.train_all(list(runs.values()), config.jobs, progress, desc="decoder readings")
     models.update({name: model for name, (model, _) in zip(runs, fitted, strict=True)})
     models = {name: models[name] for name, _, _ in fine_tunes(config, lam)}  # in training order
     for name, model in models.items():
         path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=name)
-        _save(model, path, fines[name], control, config, reading=name)
+        _save(model, path, fines[name], control, config, variant=name)
     return models, fines
 
 
@@ -294,21 +305,21 @@ def _save(
     fine: TrainConfig,
     control: ControlConfig,
     config: Config,
-    reading: str,
+    variant: str,
 ) -> None:
-    """A reading's decoder, saved with the settings that made it and its reading's name."""
+    """A variant's decoder, saved with the settings that made it and the variant's name."""
     save_checkpoint(
         model,
         path,
         train=to_dict(fine),
         control=to_dict(control),
         demos=to_dict(config.demos),
-        reading=reading,
+        reading=variant,
     )
 
 
 def cap_label(cap: float | None) -> str:
-    """A belief cap's name in readings and decoder names: ``uncapped``, or ``cap0.99``."""
+    """A belief cap's name in decoder variant names: ``uncapped``, or ``cap0.99``."""
     return "uncapped" if cap is None else f"cap{cap:g}"
 
 
@@ -323,7 +334,7 @@ class CapDecoders:
 
     Attributes:
         models: Decoder per cap of the sweep (None: uncapped), the headline's recipe at that cap.
-        names: Their reading names (:func:`cap_decoder_name`), per cap.
+        names: Their variant names (:func:`cap_decoder_name`), per cap.
         property: Their :func:`lasa.evidence.latent_measure.measure` rows, each at its cap
             (source :data:`CAP_SOURCE`).
     """
@@ -338,22 +349,23 @@ def train_caps(
     control: ControlConfig,
     config: Config,
     paths: Paths,
-    readings: Readings,
+    variants: Variants,
     prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
 ) -> CapDecoders:
     """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
-    lam = readings.chosen_lambda
-    base, weight = {name: (b, w) for name, b, w in fine_tunes(config, lam)}[readings.headline]
-    reading, base_train = _bases(config, config.train)[base]
+    lam = variants.chosen_lambda
+    base, weight = {name: (b, w) for name, b, w in fine_tunes(config, lam)}[variants.headline]
+    segmentation, base_train = _bases(config, config.train)[base]
     weight = lam if weight is None else weight
     fine = dataclasses.replace(
         base_train, steps=config.sweep_steps, entropy_lambda=weight, seed=base_train.seed
     )
     controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
     demos = {
-        c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=reading) for c in caps
+        c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=segmentation)
+        for c in caps
     }
     runs = [entropy_ablation.Run(demos[c], controls[c], base_train) for c in caps]
     bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
@@ -364,10 +376,10 @@ def train_caps(
     ]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
     models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
-    names = {c: cap_decoder_name(readings.headline, c) for c in caps}
+    names = {c: cap_decoder_name(variants.headline, c) for c in caps}
     for c, model in models.items():
         path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=names[c])
-        _save(model, path, fine, controls[c], config, reading=names[c])
+        _save(model, path, fine, controls[c], config, variant=names[c])
     jobs = [(models[c], controls[c], names[c]) for c in caps]
     frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, CAP_SOURCE))
     frame = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
@@ -498,10 +510,10 @@ def _misses(rows: pd.DataFrame) -> str:
 
 
 def property_sentence(prop: pd.DataFrame) -> str:
-    """Which readings meet the two-half rule, which the rule ranks first, and how the others fall short.
+    """Which decoder variants meet the two-half rule, which the rule ranks first, how the others fall short.
 
     Args:
-        prop: One task's :func:`lasa.evidence.latent_property.summary` (the readings the rule chooses among).
+        prop: One task's :func:`lasa.evidence.latent_property.summary` (the variants the rule chooses among).
     """
     meets = latent_property.holds(prop)
     first = latent_property.choose(prop)

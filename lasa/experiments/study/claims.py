@@ -418,7 +418,7 @@ def variants_table(
                 continue
             other = None if d == decoders[0] else d
             mine = prop[prop.decoder == d]
-            arms = {
+            runs_as = {
                 c: (NO_ASSISTANCE if interface_of(c) == "R" else d, assistance if "+" in c else NO_ASSISTANCE)
                 for c in CONDITIONS
             }
@@ -429,7 +429,7 @@ def variants_table(
                     "headline": other is None,
                     "goals with the property": int(mine.has_property.sum()),
                     "least share staying": mine.stay_share.min(),
-                    **{f"{c} finished": finished.get((*lead, *arms[c], c)) for c in CONDITIONS},
+                    **{f"{c} finished": finished.get((*lead, *runs_as[c], c)) for c in CONDITIONS},
                     **_verdict_cells(by_id, assistance, other, model if k else None),
                 }
             )
