@@ -114,7 +114,7 @@ class _Run(State):
 
 
 def _prepare(setting: Setting, plan: PlanConfig) -> _Study:
-    """The study's fixed parts: the loop's (:func:`lasa.people.loop.prepare`) and the plans'."""
+    """The study's fixed parts: the loop's (:func:`lasa.people.simulation.prepare`) and the plans'."""
     replan_steps, hold_steps = plan.steps(setting.control.dt)
     moves = np.flatnonzero(np.arange(len(setting.grid)) != setting.rest)
     return _Study(
