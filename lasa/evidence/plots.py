@@ -168,7 +168,7 @@ def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> tuple
 
 
 def robots_present(table: pd.DataFrame) -> list[str]:
-    """The robots with rows in ``table``, in the registry's order (``lasa.world.robot.ROBOTS``)."""
+    """The robots with rows in ``table``, in the built-in robots' order (``lasa.world.robot.ROBOTS``)."""
     have = set(table.robot)
     return [name for name in ROBOTS if name in have]
 
