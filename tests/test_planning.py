@@ -76,8 +76,9 @@ def small(eating):
 def test_the_planned_roll_of_a_latent_input_is_the_reference_step_held(eating):
     """The plan foresees a latent input by holding it through Algorithm 1's step: with every rolled
     step exact (``coarse = 1``), each hold's end is the independent reference step applied h times."""
-    from lasa.people.simulation import prepare
     from reference_step import latent_step, softmax
+
+    from lasa.people.simulation import prepare
 
     plan = PlanConfig(replan=0.5, holds=(0.1, 0.5, 1.0), coarse=1)
     config = StudyConfig(horizon=30)
