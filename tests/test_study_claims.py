@@ -462,9 +462,16 @@ def test_untestable_decoders_marks_that_readings_rows_only():
     assert v["study.h3"] == v["study.h2"] == "yes" and "not testable (" not in by_id(rows)["study.h3"].note
 
 
-def test_each_participant_model_is_judged_and_named_in_the_ids():
+@pytest.fixture(scope="module")
+def judged() -> tuple[dict[str, pd.DataFrame], list, dict]:
+    """:func:`with_decoders_and_models` judged once for the tests that only read it (data, rows, analyses)."""
     data = with_decoders_and_models()
     rows, analyses = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+    return data, rows, analyses
+
+
+def test_each_participant_model_is_judged_and_named_in_the_ids(judged):
+    data, rows, analyses = judged
     v = verdicts(rows)
     # model a (the first, the headline) keeps the paper's ids; model b names itself, after the decoder
     assert v["study.h3"] == "yes" and v["study.h3@b"] == "no" and v["study.h1@b+cohort"] == "yes"
@@ -648,9 +655,8 @@ def test_reading_of_fills_in_what_the_headlines_keys_leave_out():
     )
 
 
-def test_the_h1_h2_h3_tables_have_a_block_per_analysis_named_by_its_reading():
-    data = with_decoders_and_models()
-    _, analyses = claims.claims(data, STUDY_ASSISTANCE, 20, decoders=("head", "other"))
+def test_the_h1_h2_h3_tables_have_a_block_per_analysis_named_by_its_reading(judged):
+    _, _, analyses = judged
     h1 = claims.h1_table(analyses, "head", "a")
     assert len(h1) == 3 * len(analyses)
     assert set(h1.measure) == {"Goal Error [m s]", "mean distance [m]"} and set(h1.model) == {"a", "b"}
