@@ -56,7 +56,7 @@ def _values(
     episode's rest position among them, (A,)."""
     n_k, n_m, rest = len(study.grid), len(MODES), study.rest
     tsk, w = study.layout.tsk[idx], run.w[idx]
-    p_star, d_star = study.wp_pos[tsk, w], study.wp_dir[tsk, w]
+    p_star, d_star = study.waypoints.position[tsk, w], study.waypoints.direction[tsk, w]
     weight = study.config.participant.rotation_weight
     gain = progress_gain(run.pos[idx], run.axis[idx], dp, new_dir, p_star, d_star, weight) / study.unit
     # LA's candidates are the K stick positions; R's every (mode, z) but other modes' rest

@@ -183,8 +183,8 @@ def _rate(
         run.axis[idx],
         dp,
         new_dir,
-        study.wp_pos[tsk, w],
-        study.wp_dir[tsk, w],
+        study.waypoints.position[tsk, w],
+        study.waypoints.direction[tsk, w],
         study.config.participant.rotation_weight,
     )
     return gain / (steps * study.unit)

@@ -50,16 +50,6 @@ class Setting:
     goal_sets: np.ndarray  # the belief's targets
     data: mujoco.MjData
 
-    @property
-    def wp_pos(self) -> np.ndarray:
-        """Every task's waypoint positions, (T, W, 3) [m]."""
-        return self.waypoints.position
-
-    @property
-    def wp_dir(self) -> np.ndarray:
-        """Every task's waypoint fork directions, (T, W, 3)."""
-        return self.waypoints.direction
-
 
 @dataclasses.dataclass
 class State:
