@@ -21,7 +21,7 @@ def test_the_chain_is_mujocos_kinematics(name, seed):
     rng = np.random.default_rng(seed)
     qs = rng.uniform(robot.lower, robot.upper, (4, robot.n_joints))
     pos, rot, jac = chain.site_jacobians(qs)
-    frames = chain.site_frames(qs)
+    frames = robot.grasp_frames(qs)
     for i, q in enumerate(qs):
         p, r, j = site_frame(robot, q)
         np.testing.assert_allclose(pos[i], p, atol=1e-12)
@@ -47,6 +47,8 @@ def test_mujocos_loop_is_the_fallback_and_writes_the_data_it_is_given():
     for a, b in zip(batched, looped, strict=True):
         np.testing.assert_allclose(a, b, atol=1e-12)
     np.testing.assert_array_equal(data.qpos[loop.qpos_adr], qs[-1])  # the given data, not the robot's
+    for a, b in zip(robot.grasp_frames(qs), loop.grasp_frames(qs), strict=True):
+        np.testing.assert_allclose(a, b, atol=1e-12)
 
 
 def test_rot_z_of_many_angles_is_each_angles_rotation():

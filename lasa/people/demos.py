@@ -1,10 +1,8 @@
 r"""Demonstrations D = {(s, a, b)}: reaches to each goal, then adjustments of the preference there.
 
-A reach runs from the start pose (home, or home perturbed) to :math:`s^*(g, \theta)` under a
-saturated proportional speed law, :math:`a = \min(k, v/\|e\|)\, e` (full speed off the start, slow
-near the grasp), then a few moves along :math:`\theta \mapsto s^*(g, \theta)` to random new
-preferences, each followed by a hold. Each tuple's belief is the robot's online one
-(:mod:`lasa.method.belief`); noisy copies teach the decoder to return to the demonstrations.
+Motions (from home, or home perturbed, to :math:`s^*(g, \theta)`, then along the preference curve) run
+under a saturated proportional speed law :math:`a = \min(k, v/\|e\|)\, e`, each followed by a hold;
+beliefs are the robot's online ones; noisy copies teach the decoder to return to the demonstrations.
 """
 
 from __future__ import annotations
@@ -105,7 +103,7 @@ class _Collector:
     def __init__(self, task: GoalTask, control: ControlConfig, config: DemoConfig) -> None:
         self.task, self.control, self.config = task, control, config
         self.rng = np.random.default_rng(config.seed)
-        self.rows: dict[str, list[np.ndarray]] = {k: [] for k in ("s", "a", "demo", "goal", "theta", "phase")}
+        self.rows: list[tuple[np.ndarray, ...]] = []  # (s, a, demo, goal, theta, phase) of each segment
         self.beliefs: list[np.ndarray] = []
         self.cruise = config.speed * control.action_scale
         self.goal_sets = belief_targets(task, control.likelihood)
@@ -147,40 +145,35 @@ class _Collector:
     def append(self, segments: list[Segment], goal: int, start_belief: np.ndarray | None = None) -> None:
         """Append one demonstration: each (path, preference, phase)'s finite differences, then a hold,
         with the online belief from ``start_belief`` (default uniform)."""
-        control, config, rows = self.control, self.config, self.rows
+        control, hold = self.control, self.config.hold_steps
         log_b = (
             uniform_log_belief(1, len(self.goal_sets))[0] if start_belief is None else np.log(start_belief)
         )
         for path, th, phase in segments:
-            s = path[:-1]
-            a = np.diff(path, axis=0) / control.dt
-            if config.hold_steps:
-                s = np.concatenate([s, np.repeat(path[-1:], config.hold_steps, 0)])
-                a = np.concatenate([a, np.zeros((config.hold_steps, self.task.robot.n_joints))])
+            s = np.concatenate([path[:-1], np.repeat(path[-1:], hold, 0)])
+            a = np.concatenate(
+                [np.diff(path, axis=0) / control.dt, np.zeros((hold, self.task.robot.n_joints))]
+            )
             ph = np.full(len(s), phase)
-            ph[len(path) - 1 :] = HOLD if config.hold_steps else phase
+            ph[len(path) - 1 :] = HOLD
             for k in range(len(s)):
                 self.beliefs.append(belief(log_b))
                 lik = log_likelihood(
                     s[k], a[k], self.goal_sets, control.dt, control.belief_beta, control.likelihood_step
                 )
                 log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
-            rows["s"].append(s)
-            rows["a"].append(a)
-            rows["demo"].append(np.full(len(s), self.n_demos))
-            rows["goal"].append(np.full(len(s), goal))
-            rows["theta"].append(np.full(len(s), th))
-            rows["phase"].append(ph)
+            self.rows.append(
+                (s, a, np.full(len(s), self.n_demos), np.full(len(s), goal), np.full(len(s), th), ph)
+            )
         self.n_demos += 1
 
     def dataset(self) -> Demonstrations:
         """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
         back towards the demonstrated state (clipped below sigma_h)."""
-        robot, config, rows = self.task.robot, self.config, self.rows
-        states = np.concatenate(rows["s"])
-        actions = np.concatenate(rows["a"])
-        b = np.stack(self.beliefs)
-        meta = {k: np.concatenate(rows[k]) for k in ("demo", "goal", "theta", "phase")}
+        robot, config = self.task.robot, self.config
+        states, actions, demo, goal, theta, phase = (
+            np.concatenate(column) for column in zip(*self.rows, strict=True)
+        )
         copies_s, copies_a = [states], [actions]
         for _ in range(config.n_perturb):
             noise = self.rng.normal(0.0, config.perturb_std, states.shape)
@@ -192,18 +185,16 @@ class _Collector:
             copies_s.append(s_new)
             copies_a.append(a_new)
         reps = config.n_perturb + 1
-        perturbed = np.zeros(len(states) * reps, dtype=bool)
-        perturbed[len(states) :] = True
         return Demonstrations(
-            robot=robot.name,
-            states=np.concatenate(copies_s),
-            actions=np.concatenate(copies_a),
-            beliefs=np.tile(b, (reps, 1)),
-            demo=np.tile(meta["demo"], reps),
-            goal=np.tile(meta["goal"], reps),
-            theta=np.tile(meta["theta"], reps),
-            phase=np.tile(meta["phase"], reps),
-            perturbed=perturbed,
+            robot.name,
+            np.concatenate(copies_s),
+            np.concatenate(copies_a),
+            np.tile(np.stack(self.beliefs), (reps, 1)),
+            np.tile(demo, reps),
+            np.tile(goal, reps),
+            np.tile(theta, reps),
+            np.tile(phase, reps),
+            np.arange(len(states) * reps) >= len(states),  # perturbed
         )
 
 
@@ -234,24 +225,20 @@ def collect_eating_demonstrations(
     config: DemoConfig = EATING_DEMOS,
     segmentation: str = "continuous",
 ) -> Demonstrations:
-    """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI).
+    """Kinesthetic-style demonstrations of the eating task (the paper's D of Sec. VI): per goal, tilt and
+    start, **reach** the stroke's entry s*(g, theta, 0), **stroke** to s*(g, theta, 1) and back, then
+    ``n_adjust`` times **adjust** the tilt and stroke there.
 
-    Per goal, tilt and start: **reach** the stroke's entry s*(g, theta, 0), **stroke** to
-    s*(g, theta, 1) and back, then ``n_adjust`` times **adjust** the tilt and stroke there, as
-    :func:`collect_demonstrations` moves. ``segmentation`` (one of :data:`SEGMENTATIONS`) is how a
-    teacher cuts them, which decides each tuple's belief: ``continuous`` (moves between goals start
-    from the belief settled there), ``home`` (all from (perturbed) home, uniform), ``transfers``
-    (plus separate moves between goals' entries, uniform) or ``leaves`` (those moves leave a
-    stroke's end, confident: Sec. IV-B). In full: ``docs/method-notes.md``.
+    ``segmentation`` (:data:`SEGMENTATIONS`), how a teacher cuts them, decides each tuple's belief:
+    ``continuous`` (moves between goals start from the belief settled there), ``home`` (all from
+    (perturbed) home, uniform), ``transfers`` (plus separate moves between goals' entries, uniform)
+    or ``leaves`` (those moves leave a stroke's end, confident: Sec. IV-B; ``docs/method-notes.md``).
     """
     check_choice("segmentation", segmentation, SEGMENTATIONS)
     c = _Collector(task, control, config)
 
     def stroke(g: int, theta: float) -> list[Segment]:
-        def along(depths: np.ndarray) -> np.ndarray:
-            return task.pose(g, theta, np.atleast_1d(depths))
-
-        down = c.curve(along, 0.0, 1.0)
+        down = c.curve(functools.partial(task.pose, g, theta), 0.0, 1.0)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
     for g in range(task.n_goals):
@@ -273,13 +260,10 @@ def _eating_starts(
     g: int,
     rng: np.random.Generator,
 ) -> tuple[list[np.ndarray], list[np.ndarray | None], list[bool]]:
-    """The starts of goal ``g``'s demonstrations: (pose, start belief, manipulates) each.
-
-    Home and perturbed homes (``n_starts``, ``+ G - 1`` for ``home``), uniform (None) and
-    manipulating; then, unless ``home``, each other goal's entry at a random tilt (``leaves``: its
-    stroke's end), from the belief settled there (uniform for ``transfers``), manipulating for
-    ``continuous`` only. Draws from ``rng`` in that order.
-    """
+    """The starts of goal ``g``'s demonstrations, (pose, start belief, manipulates) each, drawn in order:
+    home and perturbed homes (``n_starts``, ``+ G - 1`` for ``home``), uniform (None) and manipulating;
+    then, unless ``home``, each other goal's entry at a random tilt (``leaves``: its stroke's end), from
+    the belief settled there (uniform for ``transfers``), manipulating for ``continuous`` only."""
     robot = task.robot
     n_home = config.n_starts + (task.n_goals - 1 if segmentation == "home" else 0)
     starts = [task.start.copy()]

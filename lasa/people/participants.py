@@ -120,22 +120,10 @@ def simulate(
     progress: bool = True,
     interfaces: tuple[str, ...] = ("R", "LA"),
 ) -> Episodes:
-    """Run every participant through both tasks under every condition, all episodes in one batch.
-
-    Args:
-        task: The eating task.
-        decoder: The 2-D decoder phi(z, s, b) trained on the eating demonstrations.
-        cohort: The participants (:func:`lasa.people.cohort.draw_cohort`).
-        control: Control-loop units; the assisted conditions run under each of ``config.assistance``.
-        config: Session settings and the participants' free parameters.
-        seed: Seed of the choices; episode (i, condition, task) draws from its own stream.
-        progress: Show a progress bar.
-        interfaces: The interfaces whose conditions run (``("LA",)`` for another decoder variant).
-
-    Raises:
-        ConfigError: on a decoder that does not fit the task or the 2-axis stick, or unknown
-            interfaces.
-    """
+    """Run every participant of ``cohort`` through both tasks under every condition of ``interfaces``
+    (``("LA",)`` for another decoder variant), all episodes in one batch, with the 2-D ``decoder``;
+    episode (i, condition, task) draws from its own stream of ``seed`` (ConfigError: as
+    :func:`lasa.people.simulation.prepare`)."""
     study = prepare(task, decoder, cohort, control, config, seed, interfaces)
     run = start(study)
     desc = f"study: {len(cohort)} participants, {len(study.layout.part)} episodes"

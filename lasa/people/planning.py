@@ -1,8 +1,6 @@
-r"""Planning participants of the eating study: they plan over held inputs.
-
-One-step participants (:mod:`lasa.people.participants`) never finish with a decoder whose good
-inputs pay off only when held. These are the same people otherwise (:mod:`lasa.people.policy`),
-but every ``replan`` seconds choose an input z and a hold h by the Boltzmann rule on the progress rate
+r"""Planning participants of the eating study: the one-step participants' people
+(:mod:`lasa.people.participants`), who every ``replan`` seconds choose an input z and a hold h (a
+decoder's good inputs may pay off only when held) by the Boltzmann rule on the progress rate
 
 .. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
     \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
@@ -57,12 +55,8 @@ class PlanConfig:
             raise ConfigError(f"holds must be strictly increasing, got {self.holds!r}")
 
     def steps(self, dt: float) -> tuple[int, np.ndarray]:
-        """The re-plan period and the holds in control steps of ``dt``.
-
-        Raises:
-            ConfigError: if one is not a whole number (>= 1) of steps, or a long hold's excess not
-                a multiple of ``coarse``.
-        """
+        """The re-plan period and the holds in control steps of ``dt``; ConfigError unless each is a whole
+        number (>= 1) of steps and a long hold's excess a multiple of ``coarse``."""
         out = []
         for name, value in [("replan", self.replan)] + [("holds", h) for h in self.holds]:
             n = round(value / dt)
@@ -252,13 +246,8 @@ def simulate(
     *,
     plan: PlanConfig = PlanConfig(),
 ) -> Episodes:
-    """:func:`lasa.people.participants.simulate` (the same study, record and random streams) with
-    planning participants, who plan as ``plan`` says.
-
-    Raises:
-        ConfigError: as :func:`lasa.people.participants.simulate`, and on a re-plan period or hold
-            that is not a whole number of control steps (:meth:`PlanConfig.steps`).
-    """
+    """:func:`lasa.people.participants.simulate` (the same study, record, random streams and errors)
+    with planning participants, who plan as ``plan`` says (:meth:`PlanConfig.steps`)."""
     study = _prepare(prepare(task, decoder, cohort, control, config, seed, interfaces), plan)
     zeros = np.zeros(len(study.layout.part), dtype=int)
     run = _Run(

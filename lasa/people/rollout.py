@@ -25,15 +25,8 @@ __all__ = ["Trajectories", "rollout"]
 
 @dataclasses.dataclass(frozen=True)
 class Trajectories:
-    """The record of a batched rollout.
-
-    Attributes:
-        states: s^t for t = 0..T, shape (T+1, U, n) [rad].
-        beliefs: b^t for t = 0..T, shape (T+1, U, G).
-        z: The joystick input chosen at each step, shape (T, U, d).
-        human_actions: a_h^t, shape (T, U, n) [rad/s].
-        actions: The blended command a^t before the safety clip, shape (T, U, n).
-    """
+    """The record of a batched rollout: s^t and b^t for t = 0..T, (T+1, U, .), and at each step the
+    joystick input z (T, U, d), a_h^t and the blended command a^t before the safety clip, (T, U, n)."""
 
     states: np.ndarray
     beliefs: np.ndarray
@@ -85,22 +78,10 @@ def rollout(
     pilot_noise: np.ndarray | None = None,
     assistance: np.ndarray | None = None,
 ) -> Trajectories:
-    """Run Algorithm 1 for a batch of simulated users.
-
-    Args:
-        decoder: The decoder phi(z, s, b); its robot and goals must be the task's.
-        task: The goal task.
-        users: The simulated users.
-        alpha: Blend weight per user, shape (U,), or one for all.
-        control: Control-loop units (dt, speed bound, belief model, n_z).
-        horizon: Number of control steps T.
-        noise: Uniforms in (0, 1), (N, T, K) (K joystick candidates); user u draws from
-            ``noise[users.user[u]]``.
-        progress: Show a tqdm progress bar over the steps.
-        pilot_noise: Uniforms (N, T, 2) for laggy and noisy pilots
-            (:func:`lasa.people.users.pilot_choice`), drawn as ``noise``.
-        assistance: Each user's member of :mod:`lasa.method.assistance`, (U,); default
-            ``control.assistance``.
+    """Run Algorithm 1 for ``horizon`` steps of a batch of simulated users, blended by ``alpha`` (per
+    user (U,) or one), each user u drawing from uniforms ``noise[users.user[u]]`` in (0, 1), (N, T, K)
+    for K joystick candidates, and as pilots from ``pilot_noise`` (N, T, 2)
+    (:func:`lasa.people.users.pilot_choice`); ``assistance``: each user's member (default the control's).
     """
     check_decoder(decoder, task)
     check_horizon(horizon)

@@ -12,6 +12,7 @@ import dataclasses
 
 import numpy as np
 
+from lasa.base.config import check_choice
 from lasa.base.errors import ConfigError
 
 __all__ = ["PILOTS", "UserPopulation", "user_costs", "choose_latent", "gumbel_noise", "pilot_choice"]
@@ -25,17 +26,12 @@ class UserPopulation:
     """A batch of U simulated users, as arrays.
 
     Attributes:
-        goal: Index of each user's cup, shape (U,).
-        theta: Each user's preferred grasp in [0, 1], shape (U,).
-        target: Each user's desired final pose s*, shape (U, n) [rad].
-        beta0: Rationality at t = 0, shape (U,) [1/rad^2].
-        slope: Growth of the rationality per step, m in beta(t) = beta0 + m t, (U,).
+        goal, theta, target: Each user's cup and preferred grasp in [0, 1], (U,), and final pose s*, (U, n).
+        beta0, slope: Rationality at t = 0 [1/rad^2] and its growth m per step (beta0 + m t), (U,).
         user: Each user's index, which picks their draws from the noise, (U,) (the CSVs' ``seed``).
-        first_target: The pose each user aims at before changing their mind, (U, n);
-            ``None`` for users who never do.
-        change_step: N, the first step at which each user aims at ``target``, (U,).
-        pilot: The kind of user, one of :data:`PILOTS` (all users of a population).
-        pilot_prob: p of the laggy or noisy pilot [-]; unused by ``boltzmann``.
+        first_target, change_step: The pose each user aims at before step N, and N, (U, n) and (U,)
+            (``None``: users who never change their mind).
+        pilot, pilot_prob: The kind of all users (:data:`PILOTS`) and p of a laggy or noisy pilot [-].
     """
 
     goal: np.ndarray
@@ -51,8 +47,7 @@ class UserPopulation:
 
     def __post_init__(self) -> None:
         n = len(self.goal)
-        if self.pilot not in PILOTS:
-            raise ConfigError(f"unknown pilot {self.pilot!r}; choose one of {', '.join(map(repr, PILOTS))}")
+        check_choice("pilot", self.pilot, PILOTS)
         if not 0.0 <= self.pilot_prob <= 1.0:
             raise ConfigError(f"pilot_prob must be in [0, 1], got {self.pilot_prob!r}")
         for f in dataclasses.fields(self):

@@ -1,12 +1,7 @@
-r"""The grasp site's kinematics for many configurations at once, and rotations about z.
-
-For a grasp site that hangs from a serial chain of hinges (the Panda, planar5), MuJoCo's
-per-configuration ``mj_kinematics`` and ``mj_jacSite`` become a batch of 3 x 3 products in numpy,
-from the compiled model's own numbers (``body_pos``, ``body_quat``, ``jnt_pos``, ``jnt_axis``,
-``qpos0``). A hinge with world axis :math:`a` and anchor :math:`p_j` moves the site at :math:`p` by
-:math:`a \times (p - p_j)` per radian. Rounding differs from MuJoCo's in the last bits only
-(``tests/test_chain.py``: 1e-12).
-"""
+r"""The grasp site's kinematics for many configurations at once, and rotations about z: for a serial
+chain of hinges, MuJoCo's ``mj_kinematics`` and ``mj_jacSite`` as batched numpy products of the model's
+numbers (a hinge with axis :math:`a` at :math:`p_j` moves the site at :math:`p` by :math:`a \times (p - p_j)`
+per radian), equal to MuJoCo's up to the last bits (``tests/test_chain.py``)."""
 
 from __future__ import annotations
 
@@ -111,11 +106,6 @@ class SerialChain:
             rot = rot @ _axis_angle(link.axis, qs[:, link.arm] - link.zero)
             pos = anchor - rot @ link.anchor  # the body turns about the anchor, not its origin
         return anchors, axes, pos, rot
-
-    def site_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The site's positions (B, 3) and rotations (B, 3, 3) at joint vectors ``qs`` (B, n)."""
-        _, _, pos, rot = self._walk(np.asarray(qs, dtype=float))
-        return pos + rot @ self.site_pos, rot @ self.site_rot
 
     def site_jacobians(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n): translation over rotation."""

@@ -1,7 +1,6 @@
-r"""The eating task of the paper's user study (Sec. VI): bowls, a plate, a fork and preferences.
+r"""The eating task of the paper's user study (Sec. VI): the Panda's fork over three bowls and a plate.
 
-The Panda holds a fork over three bowls (rice, middle, icing) and the plate (:data:`GOALS`). A
-preference is a tilt :math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}`
+A preference is a tilt :math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}`
 from pointing down towards a sideways r; strokes run 5 cm along m(theta), ending 1 cm into the food
 (:func:`fork_frame`). Tasks are phases, each with its waypoints. Why: ``docs/method-notes.md``.
 """
@@ -69,16 +68,8 @@ class Preference:
     theta: float  # tilt as a fraction of TILT_MAX [-]
 
 
-PREFERENCES: dict[str, Preference] = {
-    p.name: p
-    for p in (
-        Preference("stab", 0.0),
-        Preference("cut", 0.5),
-        Preference("scoop", 1.0),
-        Preference("dip", 0.0),
-        Preference("place", 0.0),
-    )
-}
+_TILTS = {"stab": 0.0, "cut": 0.5, "scoop": 1.0, "dip": 0.0, "place": 0.0}
+PREFERENCES: dict[str, Preference] = {name: Preference(name, theta) for name, theta in _TILTS.items()}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -206,19 +197,12 @@ class EatingTask(GoalTask):
             out[m] = (1.0 - w[m])[:, None] * splines[seg](th[m]) + w[m][:, None] * splines[seg + 1](th[m])
         return out.reshape(*theta_arr.shape, -1)
 
-    @property
+    @functools.cached_property
     def _stroke_splines(self) -> list[list[CubicSpline]]:
-        cache = self.__dict__.get("_stroke_cache")
-        if cache is None:
-            cache = [
-                [
-                    CubicSpline(self.theta_grid, self.strokes[g, :, d], axis=0)
-                    for d in range(len(self.depth_grid))
-                ]
-                for g in range(self.n_goals)
-            ]
-            object.__setattr__(self, "_stroke_cache", cache)
-        return cache
+        return [
+            [CubicSpline(self.theta_grid, s, axis=0) for s in goal.transpose(1, 0, 2)]
+            for goal in self.strokes
+        ]
 
     @property
     def preference_sets(self) -> np.ndarray:
@@ -250,16 +234,15 @@ def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
     thetas, us = np.linspace(0.0, 1.0, n_theta), np.linspace(0.0, 1.0, depths)
     strokes = np.empty((len(GOALS), n_theta, depths, robot.n_joints))
     for g, guess in enumerate(robot.spec.ik_guesses):
-        q = np.asarray(guess, dtype=float)
+        q = np.asarray(guess, dtype=float)  # each solve starts from its neighbour's (theta, then depth)
         for k, theta in enumerate(thetas):
             label = f"goal {GOALS[g]!r}, theta = {theta:.3f}"
-            q = solve_grasp_ik(robot, *fork_frame(robot, g, theta, 0.0), q, label=label)
-            strokes[g, k, 0] = q
-            q_depth = q
-            for d in range(1, depths):
-                where = f"{label}, depth u = {us[d]:.3f}"
-                q_depth = solve_grasp_ik(robot, *fork_frame(robot, g, theta, us[d]), q_depth, label=where)
-                strokes[g, k, d] = q_depth
+            for d, u in enumerate(us):
+                where = f"{label}, depth u = {u:.3f}" if d else label
+                strokes[g, k, d] = solve_grasp_ik(
+                    robot, *fork_frame(robot, g, theta, u), strokes[g, k, d - 1] if d else q, label=where
+                )
+            q = strokes[g, k, 0]
     curves = strokes[:, :, 0].copy()
     return EatingTask(
         robot=robot,

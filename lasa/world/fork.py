@@ -1,9 +1,5 @@
-"""The fork's tip in the eating tasks: its frames, how a joint step moves it, and its waypoints.
-
-Simulated participants (:mod:`lasa.people`) and real ones (:mod:`lasa.live`) read the fork's pose
-through :func:`tip_frames` and track its waypoints with :class:`WaypointTracker`, so both finish a
-phase by the same rule.
-"""
+"""The fork's tip in the eating tasks: its frames, how a joint step moves it, and its waypoints,
+tracked for simulated participants (:mod:`lasa.people`) and real ones (:mod:`lasa.live`) alike."""
 
 from __future__ import annotations
 
@@ -32,9 +28,8 @@ __all__ = [
 def tip_frames(
     robot: Robot, data: mujoco.MjData, qs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The grasp site's position (B, 3), direction (+z, (B, 3)) and translational and rotational Jacobians
-    (B, 3, n) at joints ``qs`` (B, n): :meth:`lasa.world.robot.Robot.grasp_jacobians` (writing ``data``
-    where the arm is not a chain of hinges), split."""
+    """The grasp site's position and direction (+z), (B, 3) each, and translational and rotational
+    Jacobians (B, 3, n) at joints ``qs`` (B, n) (:meth:`lasa.world.robot.Robot.grasp_jacobians`)."""
     pos, rot, jac = robot.grasp_jacobians(qs, data)
     return pos, rot[:, :, 2], jac[:, :3], jac[:, 3:]
 
@@ -63,14 +58,12 @@ def tip_motion(
 @dataclasses.dataclass(frozen=True)
 class WaypointTracker:
     """Every task's waypoints (padded) and when one counts as reached: the one tracker of a phase's
-    progress, for simulated participants (:mod:`lasa.people.simulation`) and real ones
-    (:class:`lasa.live.station.Station`).
+    progress, for simulated participants and real ones (:class:`lasa.live.station.Station`).
 
     Attributes:
         position, direction: The waypoints' tip positions [m] and fork directions, (T, W, 3) each.
         phase: Each waypoint's phase, (T, W); count: each task's waypoints, (T,).
-        position_tol: A waypoint is reached this close to it (the tines' width) [m] ...
-        angle_tol: ... with the fork's direction this close (~11 degrees) [rad].
+        position_tol, angle_tol: Reached this close [m] with the fork's direction this close [rad].
     """
 
     position: np.ndarray
@@ -87,9 +80,8 @@ class WaypointTracker:
         """The tracker of every task of :data:`lasa.world.eating.TASK_NAMES` on ``robot``."""
         plans = [waypoints(name) for name in TASK_NAMES]
         count = np.array([len(p) for p in plans])
-        w_max, n_t = int(count.max()), len(plans)
-        position, direction = np.zeros((n_t, w_max, 3)), np.zeros((n_t, w_max, 3))
-        phase = np.zeros((n_t, w_max), dtype=int)
+        position, direction = np.zeros((2, len(plans), count.max(), 3))
+        phase = np.zeros((len(plans), count.max()), dtype=int)
         for k, plan in enumerate(plans):
             for j, wp in enumerate(plan):
                 pos, rot = fork_frame(robot, wp.goal, wp.theta, wp.depth)
@@ -104,16 +96,9 @@ class WaypointTracker:
         axis: np.ndarray,
         running: np.ndarray | bool = True,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Past a reached waypoint, the next one; past the last, finished (``w`` stays at the last).
-
-        Args:
-            task: Task indices, (E,); w: the waypoints worked towards, (E,).
-            tip, axis: The fork's tip positions and directions, (E, 3) each (:func:`tip_frames`).
-            running: Which episodes may still reach a waypoint.
-
-        Returns:
-            The waypoint each episode works towards now, and whether it has finished, (E,) each.
-        """
+        """The waypoint each episode of tasks ``task`` works towards now and whether it has finished,
+        (E,) each, from waypoints ``w`` (E,) and the fork's ``tip`` and ``axis`` (E, 3) (:func:`tip_frames`):
+        past a reached waypoint the next one, past the last finished (``w`` stays at the last)."""
         close = np.linalg.norm(tip - self.position[task, w], axis=-1) < self.position_tol
         reached = running & close & (angle_between(axis, self.direction[task, w]) < self.angle_tol)
         w = np.where(reached, w + 1, w)

@@ -1,10 +1,6 @@
-r"""Franka's official Panda conventions, the yardstick our ``panda`` is checked against.
-
-Franka's modified (Craig) Denavit-Hartenberg table, flange and TCP offsets, joint limits and
-"ready" pose, and a kinematics-only compile of the ``gymnasium-robotics`` Panda to measure its
-departure from the table (``tests/test_panda.py``, notebook 01). Frame i follows frame i-1 by
-:math:`T_i = R_x(\alpha_{i-1}) T_x(a_{i-1}) R_z(\theta_i) T_z(d_i)`; the flange is 0.107 m beyond
-frame 7, the hand turned -pi/4 about its z, the TCP 0.1034 m further along z.
+r"""Franka's official Panda conventions, the yardstick our ``panda`` is checked against: the modified
+(Craig) Denavit-Hartenberg table, :math:`T_i = R_x(\alpha_{i-1}) T_x(a_{i-1}) R_z(\theta_i) T_z(d_i)`,
+flange and TCP offsets, joint limits, "ready" pose, and the ``gymnasium-robotics`` Panda's chain.
 """
 
 from __future__ import annotations

@@ -1,9 +1,6 @@
-r"""The goal task: a robot, G >= 2 goals, and at each goal a family of desired final poses.
-
-:math:`s^*(g, \theta)`, :math:`\theta \in [0, 1]` the user's preference there, is solved by IK on a
-grid of theta and interpolated by a cubic spline; goal g in joint space is its mid-preference pose
-(what Eq. M2 pulls towards). Its subclasses are :class:`lasa.world.task.CupTask` and
-:class:`lasa.world.eating.EatingTask`; a new task subclasses :class:`GoalTask`.
+r"""The goal task: a robot, G >= 2 goals, and at each goal the desired final poses :math:`s^*(g, \theta)`,
+solved by IK on a grid of preferences theta in [0, 1] and interpolated by cubic splines. Subclasses:
+:class:`lasa.world.task.CupTask`, :class:`lasa.world.eating.EatingTask`, a new task's.
 """
 
 from __future__ import annotations
@@ -25,11 +22,9 @@ class GoalTask:
     """Goals, preference curves and the start pose of a task for one robot.
 
     Attributes:
-        robot: The robot.
         goal_names: Names of the goals, in goal order.
-        theta_grid: Preferences at which IK was solved, shape (K,).
-        curves: s*(g, theta) on the grid, shape (G, K, n) [rad].
-        goals: The goals g in joint space, the mid-preference poses, shape (G, n) [rad].
+        theta_grid: Preferences at which IK was solved, shape (K,); ``curves`` s*(g, theta) on it, (G, K, n).
+        goals: The goals g in joint space, the mid-preference poses (what Eq. M2 pulls towards), (G, n).
         start: Start pose of every episode, shape (n,) [rad].
     """
 
@@ -57,12 +52,8 @@ class GoalTask:
         return self.curves
 
     def target(self, goal: np.ndarray | int, theta: np.ndarray | float) -> np.ndarray:
-        """Desired final poses s*(g, theta), shape (..., n), vectorised over both arguments.
-
-        Args:
-            goal: Goal indices (integers in [0, G)).
-            theta: Preferences in [0, 1], broadcastable against ``goal``.
-        """
+        """Desired final poses s*(g, theta), shape (..., n), for goal indices and preferences in [0, 1]
+        that broadcast."""
         goal_arr, theta_arr = np.broadcast_arrays(np.asarray(goal), np.asarray(theta, float))
         if goal_arr.size and (goal_arr.min() < 0 or goal_arr.max() >= self.n_goals):
             raise ConfigError(f"goal index must be in [0, {self.n_goals}), got {goal}")

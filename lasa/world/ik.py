@@ -1,9 +1,5 @@
-"""Inverse kinematics of grasp poses with mink's differential IK.
-
-A frame task on the grasp site, a light posture task that picks one solution out of the arm's
-redundancy, and the joint ranges as limits; solves warm-started from their neighbour give a
-smooth curve.
-"""
+"""Inverse kinematics of grasp poses with mink's differential IK: a frame task on the grasp site, a
+light posture task that picks one solution out of the arm's redundancy, the joint ranges as limits."""
 
 from __future__ import annotations
 
@@ -21,10 +17,8 @@ __all__ = ["solve_grasp_ik", "pose_error"]
 
 @dataclasses.dataclass(frozen=True)
 class _Solver:
-    """mink's objects for one robot and posture cost, made once (they cost more than a solve).
-
-    Reuse changes no result: a solve sets every joint (from ``qpos0``) and each task's target first.
-    """
+    """mink's objects for one robot and posture cost, made once (they cost more than a solve); reuse
+    changes no result: a solve sets every joint (from ``qpos0``) and each task's target first."""
 
     configuration: mink.Configuration
     frame: mink.FrameTask
@@ -53,10 +47,8 @@ def pose_error(
 ) -> tuple[float, float]:
     """Position error [m] and orientation error [rad] of the grasp site at ``q``."""
     pos, rot = robot.grasp_pose(q)
-    pos_err = float(np.linalg.norm(pos - position))
     cos = (np.trace(rotation.T @ rot) - 1.0) / 2.0
-    rot_err = float(np.arccos(np.clip(cos, -1.0, 1.0)))
-    return pos_err, rot_err
+    return float(np.linalg.norm(pos - position)), float(np.arccos(np.clip(cos, -1.0, 1.0)))
 
 
 def solve_grasp_ik(
@@ -74,26 +66,13 @@ def solve_grasp_ik(
     damping: float = 1e-4,
     label: str = "",
 ) -> np.ndarray:
-    """Joint positions that put the grasp site at ``position`` with ``rotation``.
+    """Joint positions (n,), within the limits, that put the grasp site at ``position`` (3,) [m] with
+    ``rotation`` (3, 3), from ``seed`` (n,) [rad].
 
-    Args:
-        robot: The robot whose grasp site is placed.
-        position: Target site position in the world, shape (3,) [m].
-        rotation: Target site rotation matrix, shape (3, 3).
-        seed: Initial joint positions, shape (n,) [rad].
-        posture: Joint positions the posture task pulls towards (default: ``seed``).
-        posture_cost: Weight of the posture task relative to the frame task.
-        position_tol: Accept when the position error is below this [m] ...
-        rotation_tol: ... and the orientation error below this [rad].
-        max_iters: Iteration budget; ``dt`` [s] and ``damping`` are each iteration's step and
-            Levenberg-Marquardt damping.
-        label: The pose, for the error message (``"cup 'cup_left', theta = 0.250"``).
-
-    Returns:
-        Joint positions within the joint limits, shape (n,).
-
-    Raises:
-        IKError: if the tolerances are not met within ``max_iters`` iterations.
+    The posture task (weight ``posture_cost`` relative to the frame task) pulls towards ``posture``
+    (default ``seed``); a solve is accepted within ``position_tol`` [m] and ``rotation_tol`` [rad],
+    after at most ``max_iters`` steps of ``dt`` [s] with Levenberg-Marquardt ``damping``, else IKError,
+    its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``).
     """
     solver = _solver(robot, posture_cost)
     configuration, frame, posture_task = solver.configuration, solver.frame, solver.posture

@@ -1,7 +1,5 @@
 """The eating study's measures (Sec. VI) from the record of a simulated or logged session: Total
-Time, Idle Time, Goal Error (metre-seconds) and Preference Alignment. People answer the Likert
-questionnaire; simulated participants do not.
-"""
+Time, Idle Time, Goal Error (metre-seconds) and Preference Alignment (not the Likert questionnaire)."""
 
 from __future__ import annotations
 
@@ -16,15 +14,8 @@ __all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]
 
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
-    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.
-
-    Args:
-        tip: Tip positions, (T, E, 3) [m]; goals: goal positions, (G, 3) [m].
-        active: Which steps count (the episode was running), (T, E); dt: control period [s].
-
-    Returns:
-        Per episode [m s], shape (E,).
-    """
+    """Goal Error per episode [m s], (E,): the distance of ``tip`` (T, E, 3) to the closest of ``goals``
+    (G, 3), summed over the ``active`` steps (T, E), times dt."""
     dist = np.linalg.norm(tip[:, :, None, :] - goals[None, None], axis=-1).min(axis=-1)
     return (dist * active).sum(axis=0) * dt
 
@@ -40,11 +31,8 @@ def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
 
 
 def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,).
-
-    ``direction`` (T, E, 3) is the fork's, ``desired`` d(theta) (E, 3) or (T, E, 3), ``mask`` (T, E) the
-    phase's steps.
-    """
+    """Preference Alignment: mean of d . d* over the ``mask``ed steps (T, E), per episode (NaN if none),
+    (E,), for the fork's ``direction`` d (T, E, 3) and ``desired`` d(theta) (E, 3) or (T, E, 3)."""
     dots = np.einsum("tei,tei->te", direction, np.broadcast_to(desired, direction.shape))
     count = mask.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -52,15 +40,9 @@ def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> n
 
 
 def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
-    """The study's tidy tables from a simulated (or logged) session.
-
-    Returns:
-        ``{"goal_error": ..., "time": ..., "alignment": ...}``: one row per participant x
-        condition x task (x phase for alignment). Goal Error is given under two readings of
-        "the closest goal": all four goals, the three bowls and the plate, whichever the task
-        visits (``goal_error``), and the three bowls only (``goal_error_bowls``);
-        ``mean_distance`` is Goal Error divided by the task's time [m].
-    """
+    """The study's tidy tables ``goal_error``, ``time`` and ``alignment``: one row per participant x
+    condition x task (x phase for alignment). Goal Error is to the closest of all four goals
+    (``goal_error``) or of the three bowls (``goal_error_bowls``); ``mean_distance`` is it over the time."""
     robot = task.robot
     goals = robot.goal_positions()
     active = episodes.active()

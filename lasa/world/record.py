@@ -15,20 +15,14 @@ class Episodes:
     """The record of a study: one episode per participant x condition x task.
 
     Attributes:
-        participant, condition, task: Who, under which condition (name), which task (name), (E,).
-        assistance: The SA member of each episode (``"none"`` for R and LA), (E,).
-        order: The position of the condition in the participant's session (0-3), (E,).
-        states: Joint positions, (T+1, E, n) [rad] (held after an episode ends).
-        tip: Fork-tip positions, (T+1, E, 3) [m].
-        direction: Fork directions (unit), (T+1, E, 3).
-        phase: Index of the phase each step belongs to, (T+1, E).
-        idle: Whether the participant gave no stick input at each step, (T, E).
-        switch: Whether the step was a mode switch (Retargeting), (T, E).
-        end: The step each episode ended (its Total Time in steps; the horizon if unfinished), (E,).
-        completed: Whether it finished within the horizon, (E,).
-        dt: The control period [s].
-        belief: The robot's belief over the goals at each step, (T+1, E, G) (None: not logged).
-        waypoint: The waypoint each episode was working towards when it ended, (E,) (None: not logged).
+        participant, condition, task, assistance: Who, under which condition, which task, which SA
+            member (``"none"`` for R and LA), (E,); ``order``: the condition's place in the session (0-3).
+        states, tip, direction: Joint positions, fork-tip positions [m] and fork directions (unit),
+            (T+1, E, .) (held after an episode ends); ``phase``: each step's phase index, (T+1, E).
+        idle, switch: Whether the participant gave no stick input, or switched mode (R), (T, E).
+        end: The step each episode ended (the horizon if unfinished), (E,); ``completed`` within it.
+        belief: The robot's belief over the goals, (T+1, E, G); waypoint: the one worked towards at
+            the end, (E,) (None: not logged).
     """
 
     participant: np.ndarray

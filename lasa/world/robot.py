@@ -1,8 +1,7 @@
 """Robots: a MuJoCo scene plus the named quantities the goal tasks need.
 
-A :class:`RobotSpec` names what lasa reads from an MJCF scene (its naming contract:
-:func:`load_robot`); a :class:`Robot` is that scene compiled, answering in the task's terms. The
-state ``s`` is the arm's joint positions [rad]; the action ``a`` a joint velocity [rad/s] (Sec. V).
+A :class:`RobotSpec` names what lasa reads from an MJCF scene (:func:`load_robot`); a :class:`Robot`
+is that scene compiled. The state ``s`` is the arm's joint positions [rad]; the action a joint velocity.
 """
 
 from __future__ import annotations
@@ -42,12 +41,10 @@ class RobotSpec:
     ik_guesses: tuple[tuple[float, ...], ...]  # one joint-space IK guess per cup [rad]
     control: ControlConfig  # default units of the control loop for this robot
     mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
-    # Cups added after training (Sec. IV-C): (site name, grasp-centre position [m]); their
-    # names end ``cups``. Built like the last cup of the scene, in their own colour.
+    # cups added after training (Sec. IV-C), built like the first cup: (site name, grasp centre [m])
     extra_cups: tuple[tuple[str, tuple[float, float, float]], ...] = ()
-    # A tool held in the hand (the eating study's fork): an MJCF file whose first body is
-    # attached to body ``tool_mount`` at the frame of site ``tool_site`` (axes aligned), its
-    # element names prefixed with ``tool_prefix`` (the fork's site ``tip`` becomes ``fork_tip``).
+    # a tool in the hand (the fork): an MJCF file whose first body is attached to body `tool_mount` at
+    # site `tool_site` (axes aligned), its names prefixed with `tool_prefix` (site `tip`: `fork_tip`)
     tool: Path | None = None
     tool_mount: str = "hand"
     tool_site: str = "grasp"
@@ -70,8 +67,7 @@ ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
             grasp_standoff=0.10,
             side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
             ik_guesses=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
-            # Units so the paper's regimes exist (notebook 04): a step moves <= dt * sigma_h = 0.0375 rad,
-            # beta = 75 is noisy, beta = 1000 nearly optimal; alpha = 0.2 lets users hold other grasps.
+            # a step moves <= dt * sigma_h = 0.0375 rad, beta = 75 is noisy, 1000 nearly optimal (notebook 04)
             control=ControlConfig(),
         ),
         "panda": RobotSpec(
@@ -85,11 +81,10 @@ ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
             # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
             top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
             grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
-            # pointing radially outward at table height would flip the wrist (joint 6 at its limit):
-            # each cup is approached from its outer side, fingers towards the midline (notebook 01)
+            # each cup approached from its outer side (radially outward flips the wrist; notebook 01)
             side_azimuth=1.5707963267948966,  # pi/2
             ik_guesses=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
-            control=ControlConfig(),  # planar5's units, for the same reasons
+            control=ControlConfig(),
             mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
         ),
     }
@@ -97,11 +92,7 @@ ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
 
 
 def mesh_dir(package: str, folder: str) -> Path:
-    """The folder of meshes that an installed package ships, found without importing it.
-
-    Raises:
-        ArtifactError: if the package is not installed or lacks the folder.
-    """
+    """The folder of meshes that an installed package ships, found without importing it."""
     spec = importlib.util.find_spec(package)
     if spec is None or not spec.submodule_search_locations:
         raise ArtifactError(
@@ -116,22 +107,6 @@ def mesh_dir(package: str, folder: str) -> Path:
 NEW_CUP_RGBA = (0.25, 0.45, 0.85, 1.0)  # new cups are blue
 
 
-def _add_cup(mj_spec: mujoco.MjSpec, name: str, site_position: np.ndarray, template: str) -> None:
-    """Add a cup whose grasp centre (site) is at ``site_position``, shaped like ``template``."""
-    site, geom = mj_spec.site(template), mj_spec.geom(template)
-    body = mj_spec.worldbody.add_body(name=name, pos=site_position - np.asarray(site.pos))
-    body.add_geom(
-        name=name,
-        type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-        size=geom.size,
-        pos=geom.pos,
-        rgba=NEW_CUP_RGBA,
-        contype=0,
-        conaffinity=0,
-    )
-    body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
-
-
 @functools.lru_cache(maxsize=16)
 def _scene_xml(spec: RobotSpec) -> str:
     """:func:`_scene_spec`'s MJCF text, written once per spec (the web study logs it every trial)."""
@@ -141,8 +116,7 @@ def _scene_xml(spec: RobotSpec) -> str:
 def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
     """The robot's scene as a new MjSpec (it cannot be pickled): meshes found, tool, new cups."""
     mj_spec = mujoco.MjSpec.from_file(str(spec.scene))
-    if spec.mesh_package is not None:
-        # Mesh paths in the MJCF are relative to the package's mesh folder.
+    if spec.mesh_package is not None:  # mesh paths in the MJCF are relative to the package's folder
         root = mesh_dir(*spec.mesh_package)
         for mesh in mj_spec.meshes:
             file = Path(mesh.file)
@@ -155,8 +129,15 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         site = mj_spec.site(spec.tool_site)
         frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
         frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
-    for name, position in spec.extra_cups:
-        _add_cup(mj_spec, name, np.asarray(position, dtype=float), template=spec.goal_sites[0])
+    for name, position in spec.extra_cups:  # shaped like the first cup, its site at `position`
+        site, geom = mj_spec.site(spec.goal_sites[0]), mj_spec.geom(spec.goal_sites[0])
+        body = mj_spec.worldbody.add_body(
+            name=name, pos=np.asarray(position, dtype=float) - np.asarray(site.pos)
+        )
+        cylinder = mujoco.mjtGeom.mjGEOM_CYLINDER
+        kw = {"size": geom.size, "pos": geom.pos, "rgba": NEW_CUP_RGBA, "contype": 0, "conaffinity": 0}
+        body.add_geom(name=name, type=cylinder, **kw)
+        body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
     return mj_spec
 
 
@@ -199,7 +180,7 @@ def scene_problems(spec: RobotSpec) -> list[str]:
     for joint in spec.joints:
         if missing(obj.mjOBJ_JOINT, "joint", joint, "an arm joint of the state, RobotSpec.joints"):
             continue
-        j = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, joint)
+        j = model.joint(joint).id
         if int(model.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)):
             out.append(f"joint {joint!r} must be a hinge or a slide joint (one coordinate of the state)")
         elif not model.jnt_limited[j]:
@@ -267,47 +248,30 @@ class Robot:
     """A compiled MuJoCo scene answering in the task's terms.
 
     Attributes:
-        spec: The :class:`RobotSpec` it was built from.
-        model: The compiled ``mujoco.MjModel`` of the scene.
-        data: A ``mujoco.MjData`` used for kinematics queries (not thread safe).
+        spec: The :class:`RobotSpec` it was built from; ``name`` and ``control`` (default control-loop
+            units) are its; ``n_joints``: dimension n of the state and of the action.
+        model, data: The compiled ``mujoco.MjModel`` and an ``MjData`` for kinematics (not thread safe).
         qpos_adr: Index of each arm joint in ``data.qpos``, shape (n,).
-        lower: Lower joint limits, shape (n,) [rad].
-        upper: Upper joint limits, shape (n,) [rad].
+        lower, upper: Joint limits, shape (n,) [rad].
     """
 
     def __init__(self, spec: RobotSpec) -> None:
-        self.spec = spec
+        self.spec, self.name, self.n_joints, self.control = spec, spec.name, len(spec.joints), spec.control
         self.model = _scene_spec(spec).compile()
         self.data = mujoco.MjData(self.model)
         joint_ids = [self.model.joint(name).id for name in spec.joints]
-        self.qpos_adr = np.array([self.model.jnt_qposadr[j] for j in joint_ids])
-        self.lower = np.array([self.model.jnt_range[j, 0] for j in joint_ids])
-        self.upper = np.array([self.model.jnt_range[j, 1] for j in joint_ids])
+        self.qpos_adr = self.model.jnt_qposadr[joint_ids]
+        self._dofs = self.model.jnt_dofadr[joint_ids]
+        self.lower, self.upper = self.model.jnt_range[joint_ids].T.copy()
         self._site = self.model.site(spec.grasp_site).id
-        key = self.model.key(spec.home_key).id
-        self._home = self.model.key_qpos[key][self.qpos_adr].copy()
+        self._home = self.model.key(spec.home_key).qpos[self.qpos_adr].copy()
         # the site's kinematics for a whole batch at once; None unless the arm is a chain of hinges
         self._chain = SerialChain.of(self.model, self._site, self.qpos_adr)
-
-    @property
-    def name(self) -> str:
-        """The robot's name (its spec's)."""
-        return self.spec.name
-
-    @property
-    def n_joints(self) -> int:
-        """Dimension n of the state and of the action."""
-        return len(self.spec.joints)
 
     @property
     def home(self) -> np.ndarray:
         """The start pose of every episode (keyframe ``spec.home_key``), shape (n,) [rad]."""
         return self._home.copy()
-
-    @property
-    def control(self) -> ControlConfig:
-        """Default control-loop units for this robot."""
-        return self.spec.control
 
     def clip(self, q: np.ndarray) -> np.ndarray:
         """Clip joint positions of any leading shape to the joint limits."""
@@ -321,24 +285,13 @@ class Robot:
     def grasp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World position (3,) and rotation (3, 3) of the grasp site at joints ``q``."""
         self.set_state(q)
-        pos = self.data.site_xpos[self._site].copy()
-        rot = self.data.site_xmat[self._site].reshape(3, 3).copy()
-        return pos, rot
+        return self.data.site_xpos[self._site].copy(), self.data.site_xmat[self._site].reshape(3, 3).copy()
 
     def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors."""
         qs = np.asarray(qs, dtype=float)
-        flat = qs.reshape(-1, self.n_joints)
-        lead = qs.shape[:-1]
-        if self._chain is not None:  # the batch at once (lasa.world.chain)
-            pos, rot = self._chain.site_frames(flat)
-            return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
-        pos, rot = np.empty((len(flat), 3)), np.empty((len(flat), 3, 3))
-        for i, q in enumerate(flat):  # MuJoCo's kinematics takes one configuration at a time
-            self.set_state(q)
-            pos[i] = self.data.site_xpos[self._site]
-            rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
-        return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
+        pos, rot, _ = self.grasp_jacobians(qs)
+        return pos.reshape(*qs.shape[:-1], 3), rot.reshape(*qs.shape[:-1], 3, 3)
 
     def grasp_jacobians(
         self, qs: np.ndarray, data: mujoco.MjData | None = None
@@ -353,7 +306,6 @@ class Robot:
         if self._chain is not None:  # the batch at once (lasa.world.chain)
             return self._chain.site_jacobians(qs)
         data = self.data if data is None else data
-        dofs = np.array([self.model.jnt_dofadr[self.model.joint(j).id] for j in self.spec.joints])
         jacp, jacr = np.zeros((3, self.model.nv)), np.zeros((3, self.model.nv))
         pos, rot = np.empty((len(qs), 3)), np.empty((len(qs), 3, 3))
         jac = np.empty((len(qs), 6, self.n_joints))
@@ -364,7 +316,7 @@ class Robot:
             mujoco.mj_jacSite(self.model, data, jacp, jacr, self._site)
             pos[i] = data.site_xpos[self._site]
             rot[i] = data.site_xmat[self._site].reshape(3, 3)
-            jac[i, :3], jac[i, 3:] = jacp[:, dofs], jacr[:, dofs]
+            jac[i, :3], jac[i, 3:] = jacp[:, self._dofs], jacr[:, self._dofs]
         return pos, rot, jac
 
     def grasp_positions(self, qs: np.ndarray) -> np.ndarray:
@@ -381,23 +333,15 @@ class Robot:
         return np.stack([self.data.site(name).xpos.copy() for name in self.spec.goal_sites])
 
     def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
-        """The same robot in a scene with one more cup, whose grasp centre is at ``position``.
-
-        The new cup becomes the last goal. Workspace checks are the caller's
-        (:func:`lasa.method.context_map.extend_task`).
-
-        Raises:
-            ConfigError: if a cup of that name exists already.
-        """
+        """The same robot in a scene with one more cup, the last goal, its grasp centre at ``position``
+        (workspace checks: :func:`lasa.method.context_map.extend_task`); ConfigError if the name is taken."""
         if name in self.spec.goal_sites:
             raise ConfigError(f"the scene already has a cup named {name!r}")
         x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
-        spec = dataclasses.replace(
-            self.spec,
-            goal_sites=(*self.spec.goal_sites, name),
-            extra_cups=(*self.spec.extra_cups, (name, (x, y, z))),
+        cups = (*self.spec.extra_cups, (name, (x, y, z)))
+        return Robot(
+            dataclasses.replace(self.spec, goal_sites=(*self.spec.goal_sites, name), extra_cups=cups)
         )
-        return Robot(spec)
 
     def xml(self) -> str:
         """The scene as one MJCF document (meshes by absolute path), for a session log to replay."""
@@ -416,5 +360,4 @@ class Robot:
     def base_position(self) -> np.ndarray:
         """World position of the arm's base (the first joint's anchor), shape (3,)."""
         self.set_state(self.home)
-        first = self.model.joint(self.spec.joints[0]).id
-        return self.data.xanchor[first].copy()
+        return self.data.xanchor[self.model.joint(self.spec.joints[0]).id].copy()

@@ -54,15 +54,9 @@ class CupTask(GoalTask):
 
 
 def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
-    """Solve IK along each cup's preference curve on ``n_grid`` (odd) preferences and build the task.
-
-    From the robot's IK guess at the top grasp, each solve is warm-started (and posture-regularised)
-    by the previous one, so neighbouring grasps get neighbouring joint configurations.
-
-    Raises:
-        ConfigError: if ``n_grid`` is not an odd integer >= 5, or there is not one IK guess per cup.
-        IKError: if a grasp is out of reach from its guess; the message names the cup and theta.
-    """
+    """Solve IK along each cup's preference curve on ``n_grid`` (odd, >= 5) preferences, each solve
+    warm-started by the previous one from the robot's IK guess at the top grasp (so neighbouring grasps
+    get neighbouring joint configurations); IKError names a grasp out of reach."""
     if n_grid < 5 or n_grid % 2 == 0:
         raise ConfigError(f"n_grid must be an odd integer >= 5, got {n_grid}")
     if len(robot.spec.ik_guesses) != len(robot.spec.goal_sites):
@@ -71,23 +65,14 @@ def make_cup_task(robot: Robot, n_grid: int = 41) -> CupTask:
             f"{len(robot.spec.ik_guesses)} IK guesses (RobotSpec.ik_guesses): one guess per goal site"
         )
     grid = np.linspace(0.0, 1.0, n_grid)
-    mid = n_grid // 2
     curves = np.empty((len(robot.spec.goal_sites), n_grid, robot.n_joints))
     for g, guess in enumerate(robot.spec.ik_guesses):
         q = np.asarray(guess, dtype=float)
-        for k in range(n_grid):
-            label = f"cup {robot.spec.goal_sites[g]!r}, theta = {grid[k]:.3f}"
-            q = solve_grasp_ik(robot, *grasp_frame(robot, g, grid[k]), q, label=label)
-            curves[g, k] = q
+        for k, theta in enumerate(grid):
+            label = f"cup {robot.spec.goal_sites[g]!r}, theta = {theta:.3f}"
+            q = curves[g, k] = solve_grasp_ik(robot, *grasp_frame(robot, g, theta), q, label=label)
     names = tuple(name.removeprefix("cup_") for name in robot.spec.goal_sites)
-    return CupTask(
-        robot=robot,
-        goal_names=names,
-        theta_grid=grid,
-        curves=curves,
-        goals=curves[:, mid].copy(),
-        start=robot.home,
-    )
+    return CupTask(robot, names, grid, curves, curves[:, n_grid // 2].copy(), robot.home)
 
 
 def cup_axis(task: CupTask, points: np.ndarray) -> np.ndarray:
