@@ -1,9 +1,5 @@
-r"""The eating study's simulated participants: their free parameters and their cohort.
-
-Each does the four conditions in a counterbalanced order (Williams 1949), with experience
-:math:`E_0 = \text{practice with the condition} + \text{transfer} \times \text{practice before it}`
-(:meth:`Cohort.experience`); how they choose an input is :mod:`lasa.people.policy`.
-"""
+"""The eating study's simulated participants: their free parameters and their cohort, each doing the
+four conditions in a counterbalanced order (Williams 1949); how they choose: :mod:`lasa.people.policy`."""
 
 from __future__ import annotations
 
@@ -50,15 +46,8 @@ class ParticipantConfig:
 
 @dataclasses.dataclass(frozen=True)
 class Cohort:
-    """Simulated participants: each one's rationality, learning and order of conditions.
-
-    Attributes:
-        beta: beta_inf per participant, shape (N,).
-        learning_time: tau per participant, shape (N,) [s].
-        practice: Practice before each condition (in :data:`CONDITIONS` order), (N, 4) [s].
-        order: The conditions each participant does, in order (indices), (N, 4).
-        config: The parameters they were drawn with.
-    """
+    """Simulated participants drawn with ``config``: each one's beta_inf and learning time tau [s], (N,),
+    practice before each condition (:data:`CONDITIONS` order) [s] and conditions in order, (N, 4)."""
 
     beta: np.ndarray
     learning_time: np.ndarray
@@ -70,7 +59,7 @@ class Cohort:
         return len(self.beta)
 
     def experience(self) -> np.ndarray:
-        """E_0: practice with each condition plus the carried-over practice of earlier ones, (N, 4) [s]."""
+        """E_0: practice with each condition plus ``transfer`` x the practice before it, (N, 4) [s]."""
         out = self.practice.copy()
         for i, order in enumerate(self.order):
             carried = 0.0

@@ -1,7 +1,5 @@
-"""The eating study's design: its settings (:class:`StudyConfig`) and its episodes (:func:`layout`):
-every simulated participant does both tasks under the 2x2 conditions, each assisted one under every
-SA member of the config.
-"""
+"""The eating study's design: its settings (:class:`StudyConfig`) and its episodes (:func:`layout`),
+both tasks under the 2x2 conditions for every participant, each assisted one under every SA member."""
 
 from __future__ import annotations
 

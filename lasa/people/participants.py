@@ -1,10 +1,6 @@
-"""The eating study (Sec. VI) with simulated participants who look one step ahead.
-
-Every participant does both tasks under the four conditions of the 2x2 design
-(:mod:`lasa.people.design`), foreseeing each candidate input's motion of the fork's tip (a latent
-action's through the arm's Jacobian, a Retargeting input's as its twist; another mode first takes a
-press) and choosing by :mod:`lasa.people.policy`. Its limits: ``docs/method-notes.md``.
-"""
+"""The eating study (Sec. VI) with simulated participants who look one step ahead: each foresees every
+input's motion of the fork's tip (a latent action's through the arm's Jacobian, a Retargeting input's
+as its twist, after a press for another mode) and chooses by :mod:`lasa.people.policy`."""
 
 from __future__ import annotations
 

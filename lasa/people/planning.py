@@ -92,11 +92,6 @@ class _Study(Setting):
     coarse: int  # control steps per rolled step beyond the re-plan period
     hold_steps: np.ndarray  # (H,)
 
-    @property
-    def n_plans(self) -> int:
-        """Plans per episode, Retargeting's (every mode); latent actions use the first K' H."""
-        return len(MODES) * len(self.moves) * len(self.hold_steps)
-
 
 @dataclasses.dataclass
 class _Run(State):
@@ -188,8 +183,8 @@ def _plan(study: _Study, run: _Run, now: Now) -> None:
     """Every running episode chooses its next plan (or to rest until the next re-plan)."""
     t, idx = now.t, now.rows
     lay, pc, n_h = study.layout, study.config.participant, len(study.hold_steps)
-    n_la = len(study.moves) * n_h
-    values = np.full((len(idx), study.n_plans), -np.inf)
+    n_la = len(study.moves) * n_h  # latent actions' plans: the first of Retargeting's, every mode's
+    values = np.full((len(idx), len(MODES) * n_la), -np.inf)
     la = lay.is_la[idx]
     if la.any():
         values[la, :n_la] = _latent_values(study, run, idx[la], now.state[la], now.log_belief[la])

@@ -1,9 +1,6 @@
-r"""How a simulated participant of the eating study chooses an input, however they foresee it.
-
-A candidate's value is how far it lowers the cost :math:`C = \|p - p^*\| + \ell\, \angle(d, d^*)` to
-the current waypoint (:func:`progress_gain`), in best Retargeting steps; the choice is Boltzmann
-(Gumbel-max, on the episode's own stream) with :math:`\beta(t) = \beta_\infty (1 - (1 - \rho)
-e^{-(E_0 + t\Delta)/\tau})`, or rest when nothing is worth ``idle_threshold`` until ``patience`` ends.
+r"""How a simulated participant of the eating study chooses an input, however they foresee it: by how
+far it lowers the cost :math:`C = \|p - p^*\| + \ell\, \angle(d, d^*)` to the waypoint, Boltzmann with
+:math:`\beta(t) = \beta_\infty (1 - (1 - \rho) e^{-(E_0 + t\Delta)/\tau})`, or rest.
 """
 
 from __future__ import annotations

@@ -1,9 +1,6 @@
-"""Algorithm 1 (LA and LA+SA) for a batch of simulated users choosing among joystick candidates.
-
-At each step one decoder call evaluates phi(z, s, b) for every user and candidate z (U x K rows);
-each user picks one by Eq. S1 (:mod:`lasa.people.users`), a pilot maybe another, and the episode
-runner (:class:`lasa.method.runner.Runner`) takes Algorithm 1's step.
-"""
+"""Algorithm 1 (LA and LA+SA) for a batch of simulated users: at each step one decoder call evaluates
+phi(z, s, b) for every user and joystick candidate z, each user picks one by Eq. S1 (a pilot maybe
+another), and the episode runner takes Algorithm 1's step."""
 
 from __future__ import annotations
 
@@ -88,7 +85,12 @@ def rollout(
     n_users, k = len(users), control.n_z**decoder.z_dim
     if noise.ndim != 3 or noise.shape[1] < horizon or noise.shape[2] != k:
         raise ConfigError(f"noise must have shape (streams, >= {horizon}, {k}), got {noise.shape}")
-    piloted = _piloted(users, pilot_noise, horizon)
+    piloted = bool(users.pilot != "boltzmann" and users.pilot_prob > 0)
+    got = None if pilot_noise is None else pilot_noise.shape
+    if piloted and (got is None or len(got) != 3 or got[1] < horizon or got[2] != 2):
+        raise ConfigError(
+            f"a {users.pilot} pilot needs pilot_noise of shape (streams, >= {horizon}, 2), got {got}"
+        )
     chooser = BoltzmannUsers(decoder, users, control, horizon, noise, pilot_noise if piloted else None)
     alphas = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
     start = np.broadcast_to(task.start, (n_users, task.robot.n_joints))
@@ -97,14 +99,3 @@ def rollout(
     )
     record = runner.run(chooser, horizon, progress=progress, desc=f"rollout {n_users} users")
     return Trajectories(record.states, record.beliefs, chooser.z, record.human_actions, record.actions)
-
-
-def _piloted(users: UserPopulation, pilot_noise: np.ndarray | None, horizon: int) -> bool:
-    """Whether the users are laggy or noisy pilots; if so, their uniforms must cover the horizon."""
-    piloted = bool(users.pilot != "boltzmann" and users.pilot_prob > 0)
-    got = None if pilot_noise is None else pilot_noise.shape
-    if piloted and (got is None or len(got) != 3 or got[1] < horizon or got[2] != 2):
-        raise ConfigError(
-            f"a {users.pilot} pilot needs pilot_noise of shape (streams, >= {horizon}, 2), got {got}"
-        )
-    return piloted

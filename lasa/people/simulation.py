@@ -1,9 +1,6 @@
-"""The simulated eating study's driver, whichever participant model runs it: set up, observe, record.
-
-Every model runs the same episodes (:func:`lasa.people.design.layout`), each with its own stream
-``default_rng([seed, participant, condition, task])`` (shared by the SA members: paired), tracks
-waypoints with :class:`lasa.world.fork.WaypointTracker` and records :class:`lasa.world.record.Episodes`;
-the episode runner steps them with the model as its chooser.
+"""The simulated eating study's driver, whichever participant model chooses: the same episodes
+(:func:`lasa.people.design.layout`), each with its stream ``default_rng([seed, participant, condition,
+task])`` (the SA members' paired), waypoints tracked, the record kept, the episode runner stepping them.
 """
 
 from __future__ import annotations
@@ -53,8 +50,8 @@ class Setting:
 
 @dataclasses.dataclass
 class State:
-    """The participants' side of a running study, (E, ...) each, and the fork's record; ``pos``, ``axis``,
-    ``jp`` and ``jr`` are the fork's frames now (:func:`lasa.world.fork.tip_frames`)."""
+    """The participants' side of a running study, (E, ...) each, the fork's frames now (:func:`tip_frames`)
+    and its record."""
 
     mode: np.ndarray  # Retargeting mode (E,)
     w: np.ndarray  # current waypoint (E,)
@@ -79,12 +76,8 @@ def prepare(
     seed: int,
     interfaces: tuple[str, ...],
 ) -> Setting:
-    """Check the inputs and build the study's fixed parts.
-
-    Raises:
-        ConfigError: a decoder that does not fit the task or the 2-axis stick, or interfaces that
-            are not a non-empty subset of ``("R", "LA")``.
-    """
+    """The study's fixed parts; ConfigError on a decoder that does not fit the task or the 2-axis stick,
+    or interfaces that are not a non-empty subset of ``("R", "LA")``."""
     check_decoder(decoder, task)
     if not interfaces or not set(interfaces) <= {"R", "LA"}:
         raise ConfigError(f"interfaces must be a non-empty subset of ('R', 'LA'), got {interfaces!r}")
@@ -173,8 +166,8 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
 
 
 def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
-    """The study's record, run to its end: the runner steps the running episodes by ``choose`` (the
-    participant model) from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
+    """The study's record, the runner stepping the running episodes by ``choose`` (the participant model)
+    from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
     lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
     # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
     assist = Assist(

@@ -1,9 +1,6 @@
-r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1).
-
-A user wanting the robot at :math:`s^*` chooses z with
+r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1), by Gumbel-max on their own draws,
 :math:`p(z) \propto \exp\{-\beta(t) \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\}`, :math:`\beta(t) =
-\beta_0 + m t` (Fig. sim3), their goal maybe changing at step N (Fig. sim2), by Gumbel-max on their
-own draws; :data:`PILOTS` adds the laggy and noisy pilots (``docs/method-notes.md``).
+\beta_0 + m t`, their goal maybe changing at step N; :data:`PILOTS` adds laggy and noisy pilots.
 """
 
 from __future__ import annotations
@@ -114,11 +111,8 @@ def gumbel_noise(uniform: np.ndarray) -> np.ndarray:
 
 def choose_latent(costs: np.ndarray, beta: np.ndarray, gumbel: np.ndarray) -> np.ndarray:
     """A candidate index per user (U,) from p(z) ∝ exp(-beta cost) by Gumbel-max, for ``costs`` and
-    ``gumbel`` (U, K) and ``beta`` (U,).
-
-    An infinite beta picks the best candidate (the noise breaks ties); a non-finite cost (a decoder
-    fault) is never chosen over a finite one.
-    """
+    ``gumbel`` (U, K) and ``beta`` (U,); an infinite beta picks the best candidate (the noise breaks
+    ties); a non-finite cost (a decoder fault) is never chosen over a finite one."""
     beta = np.asarray(beta, dtype=float)[:, None]
     if np.all(np.isfinite(costs)) and np.all(np.isfinite(beta)) and np.all(beta >= 0.0):
         # the common case in fewer passes (a zero beta gives -0.0 for 0.0: the same sums)

@@ -18,7 +18,7 @@ from lasa.base.config import ControlConfig, check_choice, check_range
 from lasa.base.errors import ConfigError
 from lasa.world.goals import GoalTask
 from lasa.world.ik import solve_grasp_ik
-from lasa.world.robot import ASSETS, ROBOTS, Robot, RobotSpec
+from lasa.world.robot import ASSETS, ROBOTS, Robot
 
 __all__ = [
     "STUDY_BELIEF_CAP",
@@ -41,21 +41,16 @@ TILT_MAX = np.pi / 3  # psi_max: the tilt of a scoop from pointing straight down
 STROKE = 0.05  # length of a stroke through the food [m]
 INTO_FOOD = 0.01  # a stroke ends this far below the food's surface [m]
 
-EATING = RobotSpec(
-    name="panda",  # the Panda's joint space: the same robot as the cup task's
+EATING = dataclasses.replace(  # the cup task's Panda (its name, joints, home; hand, so fork, pointing down)
+    ROBOTS["panda"],
     scene=ASSETS / "panda" / "eating.xml",
-    joints=ROBOTS["panda"].joints,
     grasp_site="fork_tip",
     goal_sites=("bowl_left", "bowl_middle", "bowl_right", "plate"),
     camera="table",
-    home_key="home",
-    top_grasp_rotation=ROBOTS["panda"].top_grasp_rotation,  # hand, so fork, pointing down
-    grasp_standoff=0.0,
     side_azimuth=0.0,  # unused: the eating task tilts the fork sideways (lasa.world.eating._sideways)
     ik_guesses=(ROBOTS["panda"].ik_guesses[0],) * 4,
     # the cup sims' units, with the paper's study's hindsight optimisation and Javdani et al.'s belief cap
     control=ControlConfig(assistance="hindsight", belief_cap=STUDY_BELIEF_CAP),
-    mesh_package=ROBOTS["panda"].mesh_package,
     tool=ASSETS / "panda" / "fork.xml",
 )
 
@@ -211,22 +206,11 @@ class EatingTask(GoalTask):
         return np.concatenate([self.strokes[:, :, 0], self.strokes[:, ::-1, -1]], axis=1)
 
 
-def make_eating_task(robot: Robot | None = None, n_theta: int = 9, depths: int = 3) -> EatingTask:
-    """Solve mink IK over every goal's ``n_theta`` tilts (odd) and ``depths`` stroke depths (>= 2).
-
-    The default task (robot and grids) is solved once per process and shared (it is immutable).
-    """
-    if robot is None:
-        return _default_task(n_theta, depths)
-    return _solve_task(robot, n_theta, depths)
-
-
 @functools.cache
-def _default_task(n_theta: int, depths: int) -> EatingTask:
-    return _solve_task(load_eating_robot(), n_theta, depths)
-
-
-def _solve_task(robot: Robot, n_theta: int, depths: int) -> EatingTask:
+def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
+    """Solve mink IK over every goal's ``n_theta`` tilts (odd) and ``depths`` stroke depths (>= 2), once
+    per process (the task is immutable and shared)."""
+    robot = load_eating_robot()
     if n_theta < 3 or n_theta % 2 == 0:
         raise ConfigError(f"n_theta must be an odd integer >= 3, got {n_theta}")
     if depths < 2:

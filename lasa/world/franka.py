@@ -97,13 +97,9 @@ def packaged_chain() -> mujoco.MjModel:
 
 
 def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
-    """How far models' forward kinematics are from Franka's DH table, at ``n`` uniform joint vectors.
-
-    Returns:
-        One row per model (``robot``; the packaged chain at the same q; the packaged chain with its
-        joint-6/7 offsets undone): the largest TCP position [m] and orientation [rad] errors, and
-        the largest position error over frames 1..7 [m] (``robot`` only).
-    """
+    """How far models' forward kinematics are from Franka's DH table at ``n`` uniform joint vectors: per
+    model (``robot``; the packaged chain at the same q; with its joint-6/7 offsets undone), the largest
+    TCP position [m] and orientation [rad] errors, and over frames 1..7 [m] (``robot`` only)."""
     rng = np.random.default_rng(seed)
     qs = rng.uniform(LOWER, UPPER, size=(n, 7))
     ours = mujoco.MjData(robot.model)

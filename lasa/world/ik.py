@@ -17,8 +17,8 @@ __all__ = ["solve_grasp_ik", "pose_error"]
 
 @dataclasses.dataclass(frozen=True)
 class _Solver:
-    """mink's objects for one robot and posture cost, made once (they cost more than a solve); reuse
-    changes no result: a solve sets every joint (from ``qpos0``) and each task's target first."""
+    """mink's objects for one robot, made once (they cost more than a solve); reuse changes no result:
+    a solve sets every joint (from ``qpos0``) and each task's target first."""
 
     configuration: mink.Configuration
     frame: mink.FrameTask
@@ -26,20 +26,19 @@ class _Solver:
     limits: list[mink.ConfigurationLimit]
 
 
-_SOLVERS: weakref.WeakKeyDictionary[Robot, dict[float, _Solver]] = weakref.WeakKeyDictionary()
+_SOLVERS: weakref.WeakKeyDictionary[Robot, _Solver] = weakref.WeakKeyDictionary()
+DT, DAMPING = 0.05, 1e-4  # each iteration's step [s] and Levenberg-Marquardt damping
 
 
-def _solver(robot: Robot, posture_cost: float) -> _Solver:
-    by_cost = _SOLVERS.setdefault(robot, {})
-    if posture_cost not in by_cost:
-        model = robot.model
-        by_cost[posture_cost] = _Solver(
-            mink.Configuration(model),
+def _solver(robot: Robot) -> _Solver:
+    if robot not in _SOLVERS:
+        _SOLVERS[robot] = _Solver(
+            mink.Configuration(robot.model),
             mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0),
-            mink.PostureTask(model, cost=posture_cost),
-            [mink.ConfigurationLimit(model)],
+            mink.PostureTask(robot.model, cost=1e-3),  # light, relative to the frame task
+            [mink.ConfigurationLimit(robot.model)],
         )
-    return by_cost[posture_cost]
+    return _SOLVERS[robot]
 
 
 def pose_error(
@@ -57,24 +56,17 @@ def solve_grasp_ik(
     rotation: np.ndarray,
     seed: np.ndarray,
     *,
-    posture: np.ndarray | None = None,
-    posture_cost: float = 1e-3,
     position_tol: float = 5e-4,
     rotation_tol: float = 5e-3,
     max_iters: int = 400,
-    dt: float = 0.05,
-    damping: float = 1e-4,
     label: str = "",
 ) -> np.ndarray:
     """Joint positions (n,), within the limits, that put the grasp site at ``position`` (3,) [m] with
-    ``rotation`` (3, 3), from ``seed`` (n,) [rad].
-
-    The posture task (weight ``posture_cost`` relative to the frame task) pulls towards ``posture``
-    (default ``seed``); a solve is accepted within ``position_tol`` [m] and ``rotation_tol`` [rad],
-    after at most ``max_iters`` steps of ``dt`` [s] with Levenberg-Marquardt ``damping``, else IKError,
+    ``rotation`` (3, 3), the posture task pulling towards ``seed`` (n,) [rad]: accepted within
+    ``position_tol`` [m] and ``rotation_tol`` [rad] after at most ``max_iters`` iterations, else IKError,
     its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``).
     """
-    solver = _solver(robot, posture_cost)
+    solver = _solver(robot)
     configuration, frame, posture_task = solver.configuration, solver.frame, solver.posture
     q_full = robot.model.qpos0.copy()  # no state of the last solve
     adr = robot.qpos_adr
@@ -87,14 +79,13 @@ def solve_grasp_ik(
         )
     )
     target = q_full.copy()
-    target[adr] = seed if posture is None else posture
+    target[adr] = seed
     posture_task.set_target(target)
-    q = configuration.q[adr]
     for _ in range(max_iters):
         velocity = mink.solve_ik(
-            configuration, [frame, posture_task], dt, "daqp", damping=damping, limits=solver.limits
+            configuration, [frame, posture_task], DT, "daqp", damping=DAMPING, limits=solver.limits
         )
-        configuration.integrate_inplace(velocity, dt)
+        configuration.integrate_inplace(velocity, DT)
         q = configuration.q[adr].copy()
         pos_err, rot_err = pose_error(robot, q, position, rotation)
         if pos_err < position_tol and rot_err < rotation_tol:

@@ -14,8 +14,10 @@ __all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]
 
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
-    """Goal Error per episode [m s], (E,): the distance of ``tip`` (T, E, 3) to the closest of ``goals``
-    (G, 3), summed over the ``active`` steps (T, E), times dt."""
+    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.
+
+    Per episode [m s], (E,), from ``tip`` (T, E, 3), ``goals`` (G, 3) and the ``active`` steps (T, E).
+    """
     dist = np.linalg.norm(tip[:, :, None, :] - goals[None, None], axis=-1).min(axis=-1)
     return (dist * active).sum(axis=0) * dt
 
@@ -31,8 +33,11 @@ def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
 
 
 def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Preference Alignment: mean of d . d* over the ``mask``ed steps (T, E), per episode (NaN if none),
-    (E,), for the fork's ``direction`` d (T, E, 3) and ``desired`` d(theta) (E, 3) or (T, E, 3)."""
+    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,).
+
+    ``direction`` (T, E, 3) is the fork's, ``desired`` d(theta) (E, 3) or (T, E, 3), ``mask`` (T, E) the
+    phase's steps.
+    """
     dots = np.einsum("tei,tei->te", direction, np.broadcast_to(desired, direction.shape))
     count = mask.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -43,12 +43,9 @@ class RobotSpec:
     mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
     # cups added after training (Sec. IV-C), built like the first cup: (site name, grasp centre [m])
     extra_cups: tuple[tuple[str, tuple[float, float, float]], ...] = ()
-    # a tool in the hand (the fork): an MJCF file whose first body is attached to body `tool_mount` at
-    # site `tool_site` (axes aligned), its names prefixed with `tool_prefix` (site `tip`: `fork_tip`)
+    # a tool in the hand (the fork): an MJCF file whose first body is attached to body "hand" at site
+    # "grasp" (axes aligned), its names prefixed with "fork_" (its site "tip" becomes "fork_tip")
     tool: Path | None = None
-    tool_mount: str = "hand"
-    tool_site: str = "grasp"
-    tool_prefix: str = "fork_"
 
 
 # The package's robots, by name.
@@ -126,9 +123,9 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
             mesh.file = str(root / rel)
     if spec.tool is not None:
         tool = mujoco.MjSpec.from_file(str(spec.tool))
-        site = mj_spec.site(spec.tool_site)
-        frame = mj_spec.body(spec.tool_mount).add_frame(pos=site.pos, quat=site.quat)
-        frame.attach_body(tool.worldbody.first_body(), spec.tool_prefix, "")
+        site = mj_spec.site("grasp")
+        frame = mj_spec.body("hand").add_frame(pos=site.pos, quat=site.quat)
+        frame.attach_body(tool.worldbody.first_body(), "fork_", "")
     for name, position in spec.extra_cups:  # shaped like the first cup, its site at `position`
         site, geom = mj_spec.site(spec.goal_sites[0]), mj_spec.geom(spec.goal_sites[0])
         body = mj_spec.worldbody.add_body(
@@ -143,11 +140,7 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
 
 def scene_problems(spec: RobotSpec) -> list[str]:
     """What ``spec`` and its scene lack of the naming contract (:func:`load_robot`), one entry per
-    missing or unfit element, each naming what lasa reads it for; empty if none.
-
-    Raises:
-        ConfigError: if the scene file is missing or MuJoCo cannot compile it.
-    """
+    missing or unfit element naming what lasa reads it for; ConfigError if the scene does not compile."""
     if not Path(spec.scene).is_file():
         raise ConfigError(f"robot {spec.name!r}: its scene {spec.scene} is not a file")
     out = []
@@ -203,27 +196,17 @@ def scene_problems(spec: RobotSpec) -> list[str]:
 
 
 def load_robot(robot: str | RobotSpec) -> Robot:
-    """Build one of the package's robots by name (:data:`ROBOTS`), or yours from its spec, checked.
+    """Build one of the package's robots by name (:data:`ROBOTS`), or yours from its spec, checked
+    (ConfigError names what an unknown name, a spec named like one of ours, or its scene gets wrong).
 
-    **The naming contract** of ``spec.scene`` (the arm, its table, the cups and a camera):
-
-    - a hinge (or slide) joint with a ``range`` per name of ``spec.joints``: the state is their
-      positions, in that order, clipped to their ranges;
-    - a site ``spec.grasp_site`` whose local +z axis is the approach direction
-      (``spec.top_grasp_rotation``, 9 values, is its rotation in a top grasp, pointing down);
-    - per name of ``spec.goal_sites`` (at least two, in goal order), a site (a cup's grasp
-      centre) and a geom of that name (the cup, ``size[0]`` its radius; new cups copy it); a
-      name ``cup_<x>`` gives the goal name ``<x>``;
-    - a box geom ``table`` (new cups stand on it), a camera ``spec.camera`` and a keyframe
-      ``spec.home_key`` (every episode's start, within the joint ranges);
-    - ``<compiler angle="radian"/>``: without it MJCF reads ranges, ``euler`` and ``axisangle`` in
-      degrees, a keyframe's ``qpos`` in radians, and nothing in the file tells the two apart.
-
-    The spec also gives one IK guess of ``len(spec.joints)`` values per cup and the control units.
-
-    Raises:
-        ConfigError: on an unknown name, a spec named like one of the package's robots, or a scene
-            that is missing, does not compile or breaks the contract (the message names each).
+    **The naming contract** of ``spec.scene``: a hinge (or slide) joint with a ``range`` per name of
+    ``spec.joints`` (the state, in that order, clipped to the ranges); a site ``spec.grasp_site``, its
+    +z the approach (``spec.top_grasp_rotation``, 9 values, its rotation in a top grasp, pointing down);
+    per name of ``spec.goal_sites`` (two or more, in goal order) a site (a cup's grasp centre) and a geom
+    (the cup, ``size[0]`` its radius; new cups copy it; ``cup_<x>`` names goal ``<x>``); a box geom
+    ``table``, a camera ``spec.camera``, a keyframe ``spec.home_key`` (every episode's start, within the
+    ranges); ``<compiler angle="radian"/>`` (else MJCF reads ranges, ``euler`` and ``axisangle`` in
+    degrees, a keyframe's ``qpos`` in radians). The spec gives one IK guess per cup and control units.
     """
     if isinstance(robot, str):
         check_choice("robot", robot, tuple(ROBOTS))
