@@ -10,13 +10,13 @@ import numpy as np
 
 from lasa.base.config import ControlConfig
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, retarget_action
+from lasa.method.retarget import MODES
 from lasa.method.runner import Now
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
 from lasa.people.policy import choose, progress_gain, rationality
-from lasa.people.simulation import Setting, State, prepare, run_steps, start
+from lasa.people.simulation import Setting, State, act, prepare, run_steps, start
 from lasa.world.eating import EatingTask
 from lasa.world.fork import normalise, tip_motion
 from lasa.world.record import Episodes
@@ -71,28 +71,6 @@ def _values(
     return gain, rest_col
 
 
-def _act(
-    study: Setting, run: State, now: Now, choice: np.ndarray, is_rest: np.ndarray, phi: np.ndarray
-) -> np.ndarray:
-    """Record the chosen inputs; their human actions (A, n), as the live step makes them."""
-    t, idx = now.t, now.rows
-    n_k, la = len(study.grid), study.layout.is_la[idx]
-    chosen_mode, chosen_z = choice // n_k, choice % n_k
-    a_h = np.zeros((len(idx), study.task.robot.n_joints))
-    a_h[la] = human_action(phi[la, chosen_z[la]], study.grid[chosen_z[la]], rest="zero")
-    presses = ~la & (chosen_mode != run.mode[idx])
-    r = ~la
-    if r.any():
-        rows = idx[r]
-        a_h[r], run.mode[rows] = retarget_action(
-            study.retarget, now.state[r], run.mode[rows], study.grid[chosen_z[r]], presses[r]
-        )
-    run.idle[t, idx] = is_rest
-    run.waited[idx] = np.where(is_rest, run.waited[idx] + 1, 0)
-    run.switch[t, idx] = presses
-    return a_h
-
-
 def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
     """The chooser: every running participant's input, one step ahead (or rest); a_h (A, n)."""
     t, idx = now.t, now.rows
@@ -103,7 +81,12 @@ def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
     beta = rationality(study.layout, idx, t, dt, pc)
     choice, wants = choose(gain, beta, study.streams, idx, run.waited, dt, pc)
     choice = np.where(wants, choice, rest_col)
-    return _act(study, run, now, choice, choice == rest_col, phi)
+    mode, k = choice // len(study.grid), choice % len(study.grid)
+    z = study.grid[k]
+    a_h = np.zeros((len(idx), study.task.robot.n_joints))
+    a_h[la] = human_action(phi[la, k[la]], z[la], rest="zero")
+    act(study, run, now, a_h, z, ~la & (mode != run.mode[idx]), choice == rest_col)
+    return a_h
 
 
 def simulate(

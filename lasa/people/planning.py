@@ -20,13 +20,13 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, retarget_action
+from lasa.method.retarget import MODES
 from lasa.method.runner import Now
 from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
 from lasa.people.policy import choose, progress_gain, rationality
-from lasa.people.simulation import Setting, State, prepare, run_steps, start
+from lasa.people.simulation import Setting, State, act, prepare, run_steps, start
 from lasa.world.eating import EatingTask
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
@@ -201,22 +201,16 @@ def _plan(study: _Study, run: _Run, now: Now) -> None:
 
 def _execute(study: _Study, run: _Run, now: Now) -> np.ndarray:
     """One real step of the running episodes: a press, the held input, or rest; their a_h (A, n)."""
-    t, idx, b = now.t, now.rows, now.belief
-    lay = study.layout
-    la = lay.is_la[idx]
+    idx, la = now.rows, study.layout.is_la[now.rows]
     press = run.presses_left[idx] > 0
     moving = ~press & (run.hold_left[idx] > 0)
     z = study.grid[np.where(moving, run.z_plan[idx], study.rest)]
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
     if la.any():
-        a_h[la] = human_action(study.decoder.decode_numpy(z[la], now.state[la], b[la]), z[la], rest="zero")
-    r = ~la
-    if r.any():
-        rows = idx[r]
-        a_h[r], run.mode[rows] = retarget_action(study.retarget, now.state[r], run.mode[rows], z[r], press[r])
-    resting = ~press & ~moving
-    run.idle[t, idx], run.switch[t, idx] = resting, press
-    run.waited[idx] = np.where(resting, run.waited[idx] + 1, 0)
+        a_h[la] = human_action(
+            study.decoder.decode_numpy(z[la], now.state[la], now.belief[la]), z[la], rest="zero"
+        )
+    act(study, run, now, a_h, z, press, ~press & ~moving)
     run.presses_left[idx] -= press
     run.hold_left[idx] -= moving
     return a_h

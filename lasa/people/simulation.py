@@ -16,8 +16,8 @@ from lasa.base.config import ControlConfig
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
-from lasa.method.retarget import MODES, Retargeting, twist
-from lasa.method.runner import Chooser, Record, Runner
+from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
+from lasa.method.runner import Chooser, Now, Record, Runner
 from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
@@ -25,7 +25,7 @@ from lasa.world.eating import TASK_NAMES, EatingTask
 from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.record import Episodes
 
-__all__ = ["Setting", "State", "prepare", "start", "run_steps"]
+__all__ = ["Setting", "State", "prepare", "start", "act", "run_steps"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,12 +132,26 @@ def start(setting: Setting) -> State:
 def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarray:
     """Record the fork at step t, move on past reached waypoints; the episodes that finished."""
     tsk = setting.layout.tsk
-    pos, axis, jp, jr = tip_frames(setting.task.robot, setting.data, runner.state)
-    state.pos, state.axis, state.jp, state.jr = pos, axis, jp, jr
-    state.tip[t], state.direction[t] = pos, axis
-    state.w, finished = setting.waypoints.advance(tsk, state.w, pos, axis, runner.running)
+    state.pos, state.axis, state.jp, state.jr = tip_frames(setting.task.robot, setting.data, runner.state)
+    state.tip[t], state.direction[t] = state.pos, state.axis
+    state.w, finished = setting.waypoints.advance(tsk, state.w, state.pos, state.axis, runner.running)
     state.phase[t] = setting.waypoints.phase[tsk, state.w]
     return finished
+
+
+def act(
+    study: Setting, run: State, now: Now, a_h: np.ndarray, z: np.ndarray, press: np.ndarray, rest: np.ndarray
+) -> None:
+    """Fill in the Retargeting rows of the human actions ``a_h`` (A, n) from stick inputs ``z`` (A, 2) and
+    mode ``press``es (the latent actions' are the caller's), and record the idle and switch steps."""
+    t, idx = now.t, now.rows
+    r = ~study.layout.is_la[idx]
+    if r.any():
+        a_h[r], run.mode[idx[r]] = retarget_action(
+            study.retarget, now.state[r], run.mode[idx[r]], z[r], press[r]
+        )
+    run.idle[t, idx], run.switch[t, idx] = rest, press
+    run.waited[idx] = np.where(rest, run.waited[idx] + 1, 0)
 
 
 def _episodes(setting: Setting, state: State, record: Record) -> Episodes:

@@ -66,8 +66,7 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
     for i, ((a, d, alpha), theta) in enumerate(zip(DH, q, strict=True), start=1):
         t = t @ _rot_x(alpha) @ _trans(x=a) @ _about_z(theta) @ _trans(z=d)
         frames[f"link{i}"] = t
-    flange = t @ _trans(z=FLANGE_D)
-    frames["flange"] = flange
+    frames["flange"] = flange = t @ _trans(z=FLANGE_D)
     frames["tcp"] = flange @ _about_z(HAND_YAW) @ _trans(z=TCP_D)
     return frames
 

@@ -146,9 +146,8 @@ def scene_problems(spec: RobotSpec) -> list[str]:
     out = []
     if len(spec.goal_sites) < 2:
         out.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
-    if len(spec.ik_guesses) != len(spec.goal_sites) or any(
-        len(q) != len(spec.joints) for q in spec.ik_guesses
-    ):
+    guesses = [len(q) for q in spec.ik_guesses]
+    if guesses != [len(spec.joints)] * len(spec.goal_sites):
         out.append(f"ik_guesses must hold one guess of {len(spec.joints)} joint values per goal site")
     if len(spec.top_grasp_rotation) != 9:
         out.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
@@ -178,12 +177,8 @@ def scene_problems(spec: RobotSpec) -> list[str]:
             out.append(f"joint {joint!r} must be a hinge or a slide joint (one coordinate of the state)")
         elif not model.jnt_limited[j]:
             out.append(f"joint {joint!r} needs a range (its limits clip every step)")
-    missing(
-        obj.mjOBJ_SITE,
-        "site",
-        spec.grasp_site,
-        "the grasp site, RobotSpec.grasp_site; its +z is the approach",
-    )
+    why_grasp = "the grasp site, RobotSpec.grasp_site; its +z is the approach"
+    missing(obj.mjOBJ_SITE, "site", spec.grasp_site, why_grasp)
     for site in spec.goal_sites:
         missing(obj.mjOBJ_SITE, "site", site, "a goal's site, RobotSpec.goal_sites")
         missing(obj.mjOBJ_GEOM, "geom", site, "the goal's body, beside its site: new cups copy it")
