@@ -1,3 +1,1 @@
-"""Simulated people: Boltzmann users and their rollout (sims 1-4), the demonstrator, and the
-study's simulated participants.
-"""
+"""Simulated people: Boltzmann users and their rollout (sims 1-4), the demonstrator, the participants."""

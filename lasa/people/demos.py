@@ -264,25 +264,19 @@ def _eating_starts(
     home and perturbed homes (``n_starts``, ``+ G - 1`` for ``home``), uniform (None) and manipulating;
     then, unless ``home``, each other goal's entry at a random tilt (``leaves``: its stroke's end), from
     the belief settled there (uniform for ``transfers``), manipulating for ``continuous`` only."""
-    robot = task.robot
-    n_home = config.n_starts + (task.n_goals - 1 if segmentation == "home" else 0)
+    home, leave = segmentation == "home", segmentation == "leaves"
     starts = [task.start.copy()]
     starts += [
-        robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
-        for _ in range(n_home - 1)
+        task.robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
+        for _ in range(config.n_starts + (task.n_goals - 1 if home else 0) - 1)
     ]
     beliefs_0: list[np.ndarray | None] = [None] * len(starts)
     manipulate = [True] * len(starts)
-    if segmentation == "home":
-        return starts, beliefs_0, manipulate
-    for other in range(task.n_goals):
-        if other == g:
-            continue
+    for other in [] if home else [o for o in range(task.n_goals) if o != g]:
         tilt = float(rng.uniform())
-        if segmentation == "leaves":
-            starts.append(task.pose(other, np.array([tilt]), np.array([1.0]))[0])
-        else:
-            starts.append(task.target(other, tilt))
+        starts.append(
+            task.pose(other, np.array([tilt]), np.array([1.0]))[0] if leave else task.target(other, tilt)
+        )
         settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
         beliefs_0.append(settled if segmentation in ("continuous", "leaves") else None)
         manipulate.append(segmentation == "continuous")

@@ -1,12 +1,9 @@
 r"""Planning participants of the eating study: the one-step participants' people
 (:mod:`lasa.people.participants`), who every ``replan`` seconds choose an input z and a hold h (a
 decoder's good inputs may pay off only when held) by the Boltzmann rule on the progress rate
-
-.. math::  V(z, h) = \frac{C_\text{now} - C_\text{after}(z, h)}{n\ \Delta t\, v_\text{lin}},
-    \qquad n = \max(\text{presses} + h/\Delta t,\ \text{replan}/\Delta t),
-
-latent plans foreseen by rolling the real step, Retargeting plans by the promised twist
-(``docs/method-notes.md``).
+:math:`V(z, h) = (C_\text{now} - C_\text{after}(z, h)) / (n\, \Delta t\, v_\text{lin})`, :math:`n =
+\max(\text{presses} + h/\Delta t, \text{replan}/\Delta t)`, latent plans foreseen by rolling the real
+step, Retargeting plans by the promised twist (``docs/method-notes.md``).
 """
 
 from __future__ import annotations

@@ -43,16 +43,12 @@ class UserPopulation:
     pilot_prob: float = 0.0
 
     def __post_init__(self) -> None:
-        n = len(self.goal)
         check_choice("pilot", self.pilot, PILOTS)
         if not 0.0 <= self.pilot_prob <= 1.0:
             raise ConfigError(f"pilot_prob must be in [0, 1], got {self.pilot_prob!r}")
-        for f in dataclasses.fields(self):
-            if f.name in _SCALARS:
-                continue
-            value = getattr(self, f.name)
-            if value is not None and len(value) != n:
-                raise ConfigError(f"UserPopulation.{f.name} has {len(value)} rows, expected {n}")
+        for name, value in self._rows().items():
+            if value is not None and len(value) != len(self.goal):
+                raise ConfigError(f"UserPopulation.{name} has {len(value)} rows, expected {len(self.goal)}")
         if np.any(~np.isfinite(self.beta0) & ~np.isposinf(self.beta0)) or np.any(self.beta0 < 0):
             raise ConfigError(f"beta must be >= 0, got min {np.min(self.beta0)}")
         if np.any(~np.isfinite(self.slope)) or np.any(self.slope < 0):
@@ -67,13 +63,13 @@ class UserPopulation:
     def __len__(self) -> int:
         return len(self.goal)
 
+    def _rows(self) -> dict[str, np.ndarray | None]:
+        """The fields with one row per user."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name not in _SCALARS}
+
     def subset(self, index: np.ndarray) -> UserPopulation:
         """The users at ``index`` (an integer or boolean index array), as a new population."""
-        picked = {
-            f.name: None if getattr(self, f.name) is None else np.asarray(getattr(self, f.name))[index]
-            for f in dataclasses.fields(self)
-            if f.name not in _SCALARS
-        }
+        picked = {name: None if v is None else np.asarray(v)[index] for name, v in self._rows().items()}
         return dataclasses.replace(self, **picked)  # type: ignore[arg-type]
 
     def target_at(self, t: int) -> np.ndarray:

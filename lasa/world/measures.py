@@ -52,14 +52,8 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
     goals = robot.goal_positions()
     active = episodes.active()
     tip = episodes.tip[:-1]
-    keys = {
-        "robot": robot.name,
-        "participant": episodes.participant,
-        "condition": episodes.condition,
-        "assistance": episodes.assistance,
-        "task": episodes.task,
-        "order": episodes.order,
-    }
+    who = ("participant", "condition", "assistance", "task", "order")
+    keys = {"robot": robot.name, **{k: getattr(episodes, k) for k in who}}
     bowls = [i for i, g in enumerate(GOALS) if g != "plate"]
     error = pd.DataFrame(
         {
@@ -95,9 +89,7 @@ def _alignment_table(robot: Robot, episodes: Episodes, active: np.ndarray) -> pd
                 pd.DataFrame(
                     {
                         "robot": robot.name,
-                        "participant": episodes.participant[cols],
-                        "condition": episodes.condition[cols],
-                        "assistance": episodes.assistance[cols],
+                        **{k: getattr(episodes, k)[cols] for k in ("participant", "condition", "assistance")},
                         "task": name,
                         "phase": ph.name,
                         "preference": pref.name,
