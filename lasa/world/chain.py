@@ -68,22 +68,21 @@ class SerialChain:
             body = int(model.body_parentid[body])
         links = []
         for b in reversed(bodies):
-            n = int(model.body_jntnum[b])
-            if n > 1:
+            n, j = int(model.body_jntnum[b]), int(model.body_jntadr[b])
+            offset = (model.body_pos[b].copy(), _quat_to_mat(model.body_quat[b]))
+            if n == 0:
+                links.append(_Link(*offset, -1, np.zeros(3), np.zeros(3), 0.0))
+                continue
+            if n > 1 or model.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE or model.jnt_qposadr[j] not in arm:
                 return None
-            j = int(model.body_jntadr[b]) if n else -1
-            if j >= 0 and (
-                model.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE or model.jnt_qposadr[j] not in arm
-            ):
-                return None
+            adr, axis = int(model.jnt_qposadr[j]), model.jnt_axis[j]
             links.append(
                 _Link(
-                    model.body_pos[b].copy(),
-                    _quat_to_mat(model.body_quat[b]),
-                    arm[int(model.jnt_qposadr[j])] if j >= 0 else -1,
-                    model.jnt_pos[j].copy() if j >= 0 else np.zeros(3),
-                    model.jnt_axis[j] / np.linalg.norm(model.jnt_axis[j]) if j >= 0 else np.zeros(3),
-                    float(model.qpos0[model.jnt_qposadr[j]]) if j >= 0 else 0.0,
+                    *offset,
+                    arm[adr],
+                    model.jnt_pos[j].copy(),
+                    axis / np.linalg.norm(axis),
+                    float(model.qpos0[adr]),
                 )
             )
         covered = sorted(link.arm for link in links if link.arm >= 0)
