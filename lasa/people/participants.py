@@ -15,8 +15,8 @@ from lasa.method.runner import Now
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.policy import choose, progress_gain, rationality
-from lasa.people.simulation import Setting, State, act, prepare, run_steps, start
+from lasa.people.policy import choose, rationality
+from lasa.people.simulation import Setting, State, act, prepare, progress, run_steps, start
 from lasa.world.eating import EatingTask
 from lasa.world.fork import normalise, tip_motion
 from lasa.world.record import Episodes
@@ -51,10 +51,7 @@ def _values(
     """Each candidate's progress in best-step units (-inf: no such input), (A, M K), and each
     episode's rest position among them, (A,)."""
     n_k, n_m, rest = len(study.grid), len(MODES), study.rest
-    tsk, w = study.layout.tsk[idx], run.w[idx]
-    p_star, d_star = study.waypoints.position[tsk, w], study.waypoints.direction[tsk, w]
-    weight = study.config.participant.rotation_weight
-    gain = progress_gain(run.pos[idx], run.axis[idx], dp, new_dir, p_star, d_star, weight) / study.unit
+    gain = progress(study, run, idx, dp, new_dir) / study.unit
     # LA's candidates are the K stick positions; R's every (mode, z) but other modes' rest
     valid = np.zeros_like(gain, dtype=bool)
     valid[la, :n_k] = True

@@ -22,8 +22,8 @@ from lasa.method.runner import Now
 from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.policy import choose, progress_gain, rationality
-from lasa.people.simulation import Setting, State, act, prepare, run_steps, start
+from lasa.people.policy import choose, rationality
+from lasa.people.simulation import Setting, State, act, prepare, progress, run_steps, start
 from lasa.world.eating import EatingTask
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
@@ -141,7 +141,7 @@ def _latent_values(
     pos, axis, _, _ = tip_frames(study.task.robot, study.data, q.reshape(-1, q.shape[-1]))
     pos, axis = pos.reshape(len(idx), -1, 3), axis.reshape(len(idx), -1, 3)
     steps = np.maximum(np.tile(study.hold_steps, len(study.moves)), study.replan_steps)
-    return _rate(study, run, idx, pos - run.pos[idx, None], axis, steps)
+    return progress(study, run, idx, pos - run.pos[idx, None], axis) / (steps * study.unit)
 
 
 def _retarget_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
@@ -155,25 +155,7 @@ def _retarget_values(study: _Study, run: _Run, idx: np.ndarray) -> np.ndarray:
     presses = (np.arange(n_m)[None, :] - run.mode[idx, None]) % n_m  # (A, M)
     steps = np.maximum(presses[:, :, None, None] + study.hold_steps, study.replan_steps)  # (A, M, 1, H)
     steps = np.broadcast_to(steps, (len(idx), n_m, n_k, n_h)).reshape(len(idx), -1)
-    return _rate(study, run, idx, np.broadcast_to(dp, new_dir.shape), new_dir, steps)
-
-
-def _rate(
-    study: _Study, run: _Run, idx: np.ndarray, dp: np.ndarray, new_dir: np.ndarray, steps: np.ndarray
-) -> np.ndarray:
-    """Progress per step, in best-step units, of tip motions ``dp`` and directions ``new_dir`` (A, P, 3)
-    taking ``steps`` steps each ((P,) or (A, P))."""
-    w, tsk = run.w[idx], study.layout.tsk[idx]
-    gain = progress_gain(
-        run.pos[idx],
-        run.axis[idx],
-        dp,
-        new_dir,
-        study.waypoints.position[tsk, w],
-        study.waypoints.direction[tsk, w],
-        study.config.participant.rotation_weight,
-    )
-    return gain / (steps * study.unit)
+    return progress(study, run, idx, np.broadcast_to(dp, new_dir.shape), new_dir) / (steps * study.unit)
 
 
 def _plan(study: _Study, run: _Run, now: Now) -> None:

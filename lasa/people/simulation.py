@@ -21,11 +21,12 @@ from lasa.method.runner import Chooser, Now, Record, Runner
 from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
+from lasa.people.policy import progress_gain
 from lasa.world.eating import TASK_NAMES, EatingTask
 from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.record import Episodes
 
-__all__ = ["Setting", "State", "prepare", "start", "act", "run_steps"]
+__all__ = ["Setting", "State", "prepare", "start", "progress", "act", "run_steps"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -137,6 +138,15 @@ def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarr
     state.w, finished = setting.waypoints.advance(tsk, state.w, state.pos, state.axis, runner.running)
     state.phase[t] = setting.waypoints.phase[tsk, state.w]
     return finished
+
+
+def progress(study: Setting, run: State, idx: np.ndarray, dp: np.ndarray, new_dir: np.ndarray) -> np.ndarray:
+    """How far tip motions ``dp`` to directions ``new_dir`` (A, P, 3) of episodes ``idx`` lower the cost to
+    their waypoints (:func:`lasa.people.policy.progress_gain`), (A, P) [m]."""
+    tsk, w = study.layout.tsk[idx], run.w[idx]
+    p_star, d_star = study.waypoints.position[tsk, w], study.waypoints.direction[tsk, w]
+    weight = study.config.participant.rotation_weight
+    return progress_gain(run.pos[idx], run.axis[idx], dp, new_dir, p_star, d_star, weight)
 
 
 def act(
