@@ -21,7 +21,7 @@ def test_the_chain_is_mujocos_kinematics(name, seed):
     rng = np.random.default_rng(seed)
     qs = rng.uniform(robot.lower, robot.upper, (4, robot.n_joints))
     pos, rot, jac = chain.site_jacobians(qs)
-    frames = robot.grasp_frames(qs)
+    frames = chain.site_frames(qs)
     for i, q in enumerate(qs):
         p, r, j = site_frame(robot, q)
         np.testing.assert_allclose(pos[i], p, atol=1e-12)

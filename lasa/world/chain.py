@@ -106,6 +106,11 @@ class SerialChain:
             pos = anchor - rot @ link.anchor  # the body turns about the anchor, not its origin
         return anchors, axes, pos, rot
 
+    def site_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The site's positions (B, 3) and rotations (B, 3, 3) at joint vectors ``qs`` (B, n)."""
+        _, _, pos, rot = self._walk(np.asarray(qs, dtype=float))
+        return pos + rot @ self.site_pos, rot @ self.site_rot
+
     def site_jacobians(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n): translation over rotation."""
         anchors, axes, pos, rot = self._walk(np.asarray(qs, dtype=float))

@@ -268,8 +268,16 @@ class Robot:
     def grasp_frames(self, qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Grasp-site positions (..., 3) and rotations (..., 3, 3) for a batch of joint vectors."""
         qs = np.asarray(qs, dtype=float)
-        pos, rot, _ = self.grasp_jacobians(qs)
-        return pos.reshape(*qs.shape[:-1], 3), rot.reshape(*qs.shape[:-1], 3, 3)
+        flat, lead = qs.reshape(-1, self.n_joints), qs.shape[:-1]
+        if self._chain is not None:  # the batch at once (lasa.world.chain)
+            pos, rot = self._chain.site_frames(flat)
+            return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
+        pos, rot = np.empty((len(flat), 3)), np.empty((len(flat), 3, 3))
+        for i, q in enumerate(flat):  # MuJoCo's kinematics takes one configuration at a time
+            self.set_state(q)
+            pos[i] = self.data.site_xpos[self._site]
+            rot[i] = self.data.site_xmat[self._site].reshape(3, 3)
+        return pos.reshape(*lead, 3), rot.reshape(*lead, 3, 3)
 
     def grasp_jacobians(
         self, qs: np.ndarray, data: mujoco.MjData | None = None
