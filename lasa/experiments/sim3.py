@@ -17,33 +17,17 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import normalized_error
-from lasa.evidence.plots import (
-    band_handle,
-    legend_below,
-    method_lineplot,
-    paper_handle,
-)
-from lasa.evidence.verdicts import USER, Looks, group_means
+from lasa.evidence.plots import band_handle, legend_below, method_lineplot, paper_handle
+from lasa.evidence.verdicts import USER, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "run",
-    "claims",
-    "boot_values",
-    "episode_means",
-    "plot",
-    "findings",
-]
+__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "episode_means", "plot", "findings"]
 
 NAME = "sim3_learning_users"
 COLUMNS = ("robot", "method", "learner", "slope", USER, "t", "error", "assistance", "look")
 LEARNERS = ("fast", "slow")
-DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,11 +63,8 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
-
-    Returns:
-        One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
-        the trajectories (users in the order method x learner x user).
+    """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t, one row per
+    (episode, recorded step); and the trajectories (users in the order method x learner x user).
     """
     ran = sweep.run_look(
         decoders, task, control, config, config.learners, _learning, progress, look, assistance
@@ -159,13 +140,12 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 
 
 PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
-LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
     """One panel: one learner's error over time per method, with bands at the verdicts' level."""
     part = frame[frame.learner == learner]
-    ax = method_lineplot(part, "t", "error", ax, level=LEVEL)
+    ax = method_lineplot(part, "t", "error", ax, level=sweep.LEVEL)
     ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
     ax.set_xlabel("time step t")
     ax.set_ylabel("state error (normalised)")
@@ -174,7 +154,7 @@ def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> A
     for handle in handles:
         if handle.get_label() in mean:
             handle.set_label(f"{handle.get_label()}: mean over the episode {mean[handle.get_label()]:.3f}")
-    legend_below(ax, [band_handle(LEVEL), paper_handle(PAPER_SHAPE)])
+    legend_below(ax, [band_handle(sweep.LEVEL), paper_handle(PAPER_SHAPE)])
     return ax
 
 
@@ -193,19 +173,15 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
 
 
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
-    """Fig. sim3's result on one robot and member, as Markdown bullets, every number from the run.
-
-    Args:
-        claims: The claims of :func:`claims` (the headline row of ``head``'s robot and member is read).
-        head: One member's rows (and LA's), one per episode or step: the mean errors over the episode.
+    """Fig. sim3's result on ``head``'s robot and member (its rows and LA's, one per episode or step), as
+    Markdown bullets, every number from the run.
     """
     claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
     robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     lines, lower, learners = [], [], sorted(set(head.learner))
     for learner in learners:
-        gain = float(claim.values[f"gain_{learner}"])
-        low, high = claim.intervals.get(f"gain_{learner}", (np.nan, np.nan))
+        gain, low, high = sweep.number(claim, f"gain_{learner}")
         word = "lowers" if gain > 0 else "raises"
         said = sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"

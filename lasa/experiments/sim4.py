@@ -1,14 +1,14 @@
 """Fig. sim4: goals never seen in training, through the context map h (Secs. IV-C, V-D).
 
-Users reach for a new cup with and without the map; the grasp error is fitted against the cup's
-distance (both over the farthest cup's, on the table and at the gripper), through the origin with
-the uncentred R^2 as the paper does. Readings: ``@joint_space``, ``@intercept``, ``@ee_line``.
-Notebook ``07_new_goals``.
+Users reach for a new cup with and without the map; the grasp error is fitted against the cup's distance
+(both over the farthest cup's) through the origin, uncentred R^2, as the paper does. Readings:
+``@joint_space``, ``@intercept``, ``@ee_line``. Notebook ``07_new_goals``.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from typing import Any
 
 import matplotlib.pyplot as plt
@@ -37,7 +37,7 @@ from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.experiments import sweep
 from lasa.method.context_map import MAP_KINDS, ContextMap, MappedDecoder, context_map, extend_task
 from lasa.method.decoder import ActionDecoder
-from lasa.method.step import METHOD_DECODER, method_alpha
+from lasa.method.step import METHOD_DECODER, METHODS, method_alpha
 from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
 from lasa.world.fork import angle_between
@@ -48,7 +48,6 @@ __all__ = [
     "NAME",
     "COLUMNS",
     "EPISODE_COLUMNS",
-    "NewGoalRun",
     "new_cup_positions",
     "map_geometry",
     "CUP_COLUMNS",
@@ -97,7 +96,6 @@ EPISODE_COLUMNS = (  # what :func:`run` returns, one row per episode
 # mean and the median error, and the share of episodes whose belief ends on another training cup
 CUP_COLUMNS = ("cup_mean_error", "cup_median_error", "cup_other_share")
 COLUMNS = EPISODE_COLUMNS + CUP_COLUMNS  # the CSV's
-DPI = 150
 
 # the measures: (distance column, error column); "table" is the headline, the others are
 # readings whose claims carry ``@<measure>`` ids
@@ -118,9 +116,7 @@ class Config(sweep.LooksConfig):
 
     # new cups' distances from the reference cup [m]
     offsets: tuple[Positive, ...] = (0.08, 0.11, 0.14, 0.17, 0.20)
-    direction: tuple[Number, Number] | None = (
-        None  # on the table; None: from the other training cup to the reference
-    )
+    direction: tuple[Number, Number] | None = None  # on the table; None: from the other training cup to ref
     ref_goal: NonNegativeInt = 1  # the training cup the new ones are referred to [-]
     beta: NonNegative = 1000.0  # near-optimal users [1/rad^2]
     horizon: PositiveInt = 200  # control steps per episode [-]
@@ -140,24 +136,15 @@ class Config(sweep.LooksConfig):
             or np.hypot(*self.direction) < 1e-9
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
-        sweep.check_methods((self.method,))
-        if not self.maps:
-            raise ConfigError("maps must name at least one kind of context map")
-        for kind in self.maps:
-            check_choice("map", kind, MAP_KINDS)
-        check_list("maps", self.maps)
+        check_choice("method", self.method, METHODS)
+        sweep.check_names("maps", self.maps, MAP_KINDS)
         sweep.check_needed("maps", tuple(self.maps), CLAIM_MAPS, "notebook 07's sentences and video")
 
 
 @dataclasses.dataclass(frozen=True)
 class NewGoalRun:
-    """The episodes at one new cup.
-
-    Attributes:
-        offset: Distance of the new cup from the reference cup on the table [m].
-        task: The task grown by the new cup (its robot's scene shows it).
-        with_map: Trajectories with each kind of context map (belief over G + 1 goals).
-        without_map: Trajectories of the unchanged method (training goals only).
+    """The episodes at one new cup: its distance from the reference cup [m], the task grown by it, and the
+    trajectories with each kind of map (belief over G + 1 goals) and without (training goals only).
     """
 
     offset: float
@@ -180,11 +167,7 @@ def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
 
 
 def map_geometry(task: CupTask, config: Config) -> pd.DataFrame:
-    """Where each kind of context map sends the new cups' grasps, and how their IK compares.
-
-    Returns:
-        One row per (``offset_m``, ``h``), with ``distance`` (on the table, over the farthest).
-    """
+    """Where each kind of context map sends the new cups' grasps, one row per (``offset_m``, ``h``)."""
     robot, ref = task.robot, config.ref_goal
     cups = new_cup_positions(task, config)
     scale = float(np.linalg.norm(cups - robot.goal_positions()[ref], axis=1).max())
@@ -235,27 +218,10 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
-    """Fig. sim4: grasp error at new cups against their distance from the training cup (Sec. V-D).
+    """Fig. sim4: near-optimal users want a grasp at each new cup, through each kind of map and without.
 
-    Near-optimal users (preferences per user, shared by every cup and mapping) want a grasp at each
-    new cup; ``with`` runs the method's decoder through each kind of context map on the task grown
-    by the cup, ``without`` knows the training cups only. Every member's users share one batch per
-    (cup, map) and are the same users (paired across members).
-
-    Args:
-        decoders: ``{"base": ..., "entropy": ...}`` (or one model), ``METHOD_DECODER`` among them.
-        task: The training task.
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`).
-        assistance: The members the method's assistance runs under (default ``config.assistance``).
-
-    Returns:
-        One row per episode in the columns of :data:`EPISODE_COLUMNS` (each explained in
-        ``docs/method-notes.md``; :func:`with_cup_columns` adds the CSV's :data:`CUP_COLUMNS`), and
-        the runs per new cup under ``control.assistance``.
-
-    Raises:
-        ConfigError: if ``config.ref_goal`` is not a goal of ``task``, or the method's decoder is
-            not among ``decoders``.
+    Every member's users share one batch per (cup, map) and are the same users (paired). Returns one
+    row per episode (:data:`EPISODE_COLUMNS`) and the runs per new cup under ``control.assistance``.
     """
     ref = config.ref_goal
     if not 0 <= ref < task.n_goals:
@@ -297,16 +263,15 @@ def run(
             slope=np.zeros(n),
             user=user,
         )
-        with_map = {}
-        for kind in config.maps:
-            with_map[kind] = roll(
-                MappedDecoder(decoder, context_map(big, task.n_goals, ref, kind)), big, users
-            )
+        with_map = {
+            kind: roll(MappedDecoder(decoder, context_map(big, task.n_goals, ref, kind)), big, users)
+            for kind in config.maps
+        }
         without = roll(decoder, task, dataclasses.replace(users, goal=np.full(n, ref)))
         mine = {k: _users_of(t, head) for k, t in with_map.items()}
         runs.append(NewGoalRun(float(offset), big, mine, _users_of(without, head)))
         at = {"offset_m": float(offset), "distance": float(on_table[i]), "distance_joint": float(dist[i])}
-        rows += _rows(task, config, users, with_map, without, {**shared, **at}, scales)
+        rows += _rows(task, config, users, {**with_map, "none": without}, {**shared, **at}, scales)
     frame = pd.concat(rows, ignore_index=True)
     # rows by member, then cup and map, as the members' runs came out before they shared batches
     order = np.argsort(pd.Categorical(frame.assistance, categories=list(assistance)).codes, kind="stable")
@@ -319,16 +284,8 @@ def _users_of(traj: Trajectories, users: slice) -> Trajectories:
 
 
 def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The grasp error at the gripper: where the grasp site is at ``states`` against ``targets``.
-
-    Args:
-        robot: The robot (its grasp site, by MuJoCo's forward kinematics).
-        states: Joint vectors, shape (..., n) [rad].
-        targets: The wanted grasps' joint vectors, broadcastable to ``states``.
-
-    Returns:
-        The distance between the two grasp sites [m] and the angle between their approach
-        axes (the site's +z) [deg], each of shape (...).
+    """The distance [m] between the grasp sites at ``states`` and ``targets`` (joint vectors, (..., n)),
+    and the angle between their approach axes (the site's +z) [deg].
     """
     states = np.asarray(states, dtype=float)
     targets = np.broadcast_to(np.asarray(targets, dtype=float), states.shape)
@@ -341,22 +298,19 @@ def _rows(
     task: CupTask,
     config: Config,
     users: UserPopulation,
-    with_map: dict[str, Trajectories],
-    without: Trajectories,
+    runs: dict[str, Trajectories],
     at: dict[str, Any],
     scales: tuple[float, float],
 ) -> list[pd.DataFrame]:
-    """The rows of every case at one new cup (each kind of map, and none); ``scales``: the farthest
-    cup's distance on the table [m] and in joint space [rad]."""
+    """The rows at one new cup of each kind of map's episodes and the no-map ones (``none``); ``scales``:
+    the farthest cup's distance on the table [m] and in joint space [rad]."""
     robot, (cup_scale, scale) = task.robot, scales
-    cases = [
-        ("with", kind, traj, confidence(traj.beliefs[-1], users.goal)) for kind, traj in with_map.items()
-    ]
-    cases.append(("without", "none", without, np.full(len(users.goal), np.nan)))
     held = task.target(config.ref_goal, users.theta)  # the wanted grasp, held at the training cup
     ref_m, _ = grasp_error(robot, held, users.target)
     frames = []
-    for mapping, kind, traj, conf in cases:
+    for kind, traj in runs.items():
+        mapped = kind != "none"
+        conf = confidence(traj.beliefs[-1], users.goal) if mapped else np.full(len(users.goal), np.nan)
         err_m, angle = grasp_error(robot, traj.states[-1], users.target)
         end = traj.beliefs[-1].argmax(axis=-1)
         end_goal = np.where(
@@ -364,7 +318,7 @@ def _rows(
         )
         row = {
             "robot": robot.name,
-            "mapping": mapping,
+            "mapping": "with" if mapped else "without",
             "distance": at["distance"] / cup_scale,
             verdicts.USER: at[verdicts.USER],
             "error": err_m / cup_scale,
@@ -392,12 +346,10 @@ def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
 
 
 def fit_origin(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
-    """Least-squares line through the origin, y = slope x, the paper's form; returns (slope, R^2).
-
-    R^2 is the uncentred one, 1 - SSE / sum(y^2) (against y = 0, not y's mean), as numpy's ``lstsq``
-    and statsmodels report for a model without a constant (``docs/method-notes.md``).
+    """Least-squares line through the origin, y = slope x, the paper's form; returns (slope, R^2), the
+    uncentred R^2 as numpy's ``lstsq`` and statsmodels report without a constant (``docs/method-notes.md``).
     """
-    slope, r2 = _origin_lines(np.asarray(x, dtype=float), np.asarray(y, dtype=float)[None])
+    slope, r2 = _lines(np.asarray(x, dtype=float), np.asarray(y, dtype=float)[None], "origin")
     return float(slope[0]), float(r2[0])
 
 
@@ -410,22 +362,10 @@ def _fit(x: np.ndarray, y: np.ndarray, form: str) -> tuple[float, float, float]:
 
 
 def fits(frame: pd.DataFrame, measure: str = HEADLINE, form: str = HEADLINE_FORM) -> pd.DataFrame:
-    """Least-squares lines of the mean error per new cup against its distance, per kind of map.
+    """Least-squares lines of the mean error per new cup against its distance, per kind of map ``h``.
 
-    Args:
-        frame: sim4 rows.
-        measure: Which distance and error (:data:`MEASURES`): ``table`` (the headline: the cup
-            on the table, the grasp at the gripper) or ``joint_space``.
-        form: ``origin`` (the headline, the paper's y = slope x, :func:`fit_origin`) or
-            ``intercept`` (y = slope x + intercept, :func:`fit_line`).
-
-    Returns:
-        One row per ``h`` (``grasp``, ``straight_line``, ``none``, ...): ``slope``,
-        ``intercept`` (0 through the origin), ``r2`` (of the per-cup means) and ``r2_episodes``
-        (the same form's R^2 over every episode).
-
-    Raises:
-        ConfigError: if ``form`` is not one of :data:`FORMS`.
+    ``measure`` picks the distance and error (:data:`MEASURES`), ``form`` the line (:data:`FORMS`). Returns
+    ``slope``, ``intercept`` (0 through the origin), ``r2`` (of the cups' means) and ``r2_episodes``.
     """
     if form not in FORMS:
         raise ConfigError(f"form must be one of {sorted(FORMS)}, got {form!r}")
@@ -439,18 +379,13 @@ def fits(frame: pd.DataFrame, measure: str = HEADLINE, form: str = HEADLINE_FORM
     return pd.DataFrame(out).set_index("h")
 
 
-_H_NAMES = {
-    "straight_line": "the paper's straight-line context map",
-    "grasp": "the grasp-to-grasp context map (ours)",
-    "straight_line_ee": "the paper's straight-line context map, the line in the gripper's space",
-}
-# the claim each kind of map is judged under, and the reading it is (None: the claim's own map):
-# the paper's straight line "between the start and g", read in the gripper's space, is the
-# reading ``@ee_line`` of its claim
+# per kind of map: the claim it is judged under, the reading it is (None: the claim's own map) and its
+# name; the paper's straight line "between the start and g", in the gripper's space, is ``@ee_line``
+_LINE = "the paper's straight-line context map"
 _KIND_CLAIMS = {
-    "straight_line": ("straight_line", None),
-    "grasp": ("grasp", None),
-    "straight_line_ee": ("straight_line", "ee_line"),
+    "straight_line": ("straight_line", None, _LINE),
+    "grasp": ("grasp", None, "the grasp-to-grasp context map (ours)"),
+    "straight_line_ee": ("straight_line", "ee_line", f"{_LINE}, the line in the gripper's space"),
 }
 
 
@@ -470,44 +405,44 @@ def _reading(measure: str) -> str | None:
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Evaluate Fig. sim4's claims from a sim4 frame, under every measure it holds and both fits."""
-    out: list[Claim] = []
-    for measure in _measures(frame):
-        for form in FORMS:
-            out += _claims_under(frame, measure, form)
-    return out
-
-
-def _claims_under(frame: pd.DataFrame, measure: str, form: str) -> list[Claim]:
-    """:func:`claims` under one measure and one form of fit."""
-    robot = str(frame.robot.iloc[0])
-    x, y = MEASURES[measure]
-    table = fits(frame, measure, form)
-    n_cups = frame[x].nunique()
-    means = frame.groupby(["h", x])[y].mean()
-    angles = None
-    if measure == HEADLINE and "angle_error_deg" in frame:
-        angles = frame.groupby(["h", x]).angle_error_deg.mean()
-    readings = (_reading(measure), FORMS[form])
-    out = [
-        _map_claim(kind, readings, table.loc[kind], means, n_cups, robot, angles)
-        for kind in _KIND_CLAIMS
-        if kind in table.index
-    ]
-    wo = table.loc["none"]
-    values = {"slope": float(wo.slope), "r2": float(wo.r2)}
-    cid = _claim_id("no_map_training_goal", *readings)
-    out.append(
-        sweep.sim_claim(
-            cid,
-            robot,
-            values,
-            claim="without the map, the robot only reaches for the training goal",
-            paper="y = x",
-            measured=_line(wo, n_cups) + " (the interval is for the slope)",
-            note=_angle_note(angles, "none"),
+    """Fig. sim4's claims on one robot's frame, under every measure it holds and both forms of fit."""
+    robot, out = str(frame.robot.iloc[0]), []
+    for measure, form in itertools.product(_measures(frame), FORMS):
+        x, y = MEASURES[measure]
+        table, n_cups = fits(frame, measure, form), frame[x].nunique()
+        means = frame.groupby(["h", x])[y].mean()
+        angles = None
+        if measure == HEADLINE and "angle_error_deg" in frame:
+            angles = frame.groupby(["h", x]).angle_error_deg.mean()
+        readings = (_reading(measure), FORMS[form])
+        for kind in [k for k in _KIND_CLAIMS if k in table.index]:
+            name, kind_reading, words = _KIND_CLAIMS[kind]
+            f, below = table.loc[kind], means[kind] < means["none"]
+            above = int((~below).sum())
+            note = f"Above the no-map error at {above} of {n_cups} cups." if above else ""
+            out.append(
+                sweep.sim_claim(
+                    _claim_id(f"{name}_linear", kind_reading, *readings),
+                    robot,
+                    {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())},
+                    claim=f"with {words}, the error at a new goal grows linearly with its distance",
+                    paper="y = 0.11x, R^2 = 0.98",
+                    measured=_line(f, n_cups) + " (the interval is for the slope)",
+                    note=" ".join(t for t in (note, _angle_note(angles, kind)) if t),
+                )
+            )
+        wo = table.loc["none"]
+        out.append(
+            sweep.sim_claim(
+                _claim_id("no_map_training_goal", *readings),
+                robot,
+                {"slope": float(wo.slope), "r2": float(wo.r2)},
+                claim="without the map, the robot only reaches for the training goal",
+                paper="y = x",
+                measured=_line(wo, n_cups) + " (the interval is for the slope)",
+                note=_angle_note(angles, "none"),
+            )
         )
-    )
     return out
 
 
@@ -522,48 +457,9 @@ def _angle_note(angles: pd.Series | None, kind: str) -> str:
     )
 
 
-def _map_claim(
-    kind: str,
-    readings: tuple[str | None, ...],
-    f: pd.Series,
-    means: pd.Series,
-    n_cups: int,
-    robot: str,
-    angles: pd.Series | None,
-) -> Claim:
-    """sim4.<claim>_linear[@readings], from the map's fit ``f`` and the mean error per (h, distance);
-    ``readings``: the measure's and the form's (None for the headline's).
-    """
-    name, kind_reading = _KIND_CLAIMS[kind]
-    below = means[kind] < means["none"]
-    values = {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())}
-    cid = _claim_id(f"{name}_linear", kind_reading, *readings)
-    above = int((~below).sum())
-    return sweep.sim_claim(
-        cid,
-        robot,
-        values,
-        claim=f"with {_H_NAMES[kind]}, the error at a new goal grows linearly with its distance",
-        paper="y = 0.11x, R^2 = 0.98",
-        measured=_line(f, n_cups) + " (the interval is for the slope)",
-        note=" ".join(
-            t
-            for t in (
-                f"Above the no-map error at {above} of {n_cups} cups." if above else "",
-                _angle_note(angles, kind),
-            )
-            if t
-        ),
-    )
-
-
 def no_map_check(frame: pd.DataFrame, form: str = HEADLINE_FORM) -> pd.DataFrame:
-    """The paper's "without the map ... y = x", taken apart (the headline measure, lines of ``form``).
-
-    Returns:
-        ``slope``, ``intercept`` (0 through the origin), ``r2`` (over the cups' means, :func:`fits`'
-        form; NaN with fewer than two cups), ``mean_error`` and ``share`` (of the no-map episodes)
-        per row.
+    """The paper's "without the map ... y = x", taken apart: per part of the no-map episodes, the line
+    of ``form`` through the cups' means (NaN with fewer than two cups), ``mean_error`` and ``share``.
     """
     none = frame[frame.h == "none"]
     parts = {"held at the training cup": none.assign(error=none.reference), "without the map": none}
@@ -589,12 +485,9 @@ def no_map_check(frame: pd.DataFrame, form: str = HEADLINE_FORM) -> pd.DataFrame
 
 
 def end_shares(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per map and new cup: where the beliefs end, and the error with and without the episodes that left.
-
-    Returns:
-        One row per (``h``, ``distance``): ``other`` (share of episodes whose belief ends on
-        another training cup), ``mean`` and ``median`` error, ``mean_left`` (the mean error of
-        those episodes), ``mean_stayed`` (of the rest) and ``n`` (episodes).
+    """Per (``h``, ``distance``): the share of episodes whose belief ends on another training cup
+    (``other``), the ``mean`` and ``median`` error, the mean of those episodes (``mean_left``) and of
+    the rest (``mean_stayed``), and ``n``.
     """
     rows = []
     for (kind, d), part in frame.groupby(["h", "distance"]):
@@ -636,15 +529,8 @@ def _listed(values: np.ndarray, fmt: str) -> str:
 
 
 def medians_sentence(frame: pd.DataFrame) -> str:
-    """What the medians and the share of beliefs on the other cup say of y = x, from :func:`end_shares`.
-
-    Args:
-        frame: One robot's headline rows (one member), with ``end_goal``.
-
-    Returns:
-        A Markdown sentence: per new cup, nearest to farthest, the no-map median and mean error
-        (over D; y = x gives the distance itself) and the share of users whose belief ends on the
-        other training cup, and those users' mean error at the farthest cup against the rest's.
+    """What the no-map medians and the share of beliefs on the other cup say of y = x, from
+    :func:`end_shares` of one robot's headline rows (with ``end_goal``).
     """
     table = end_shares(frame).loc["none"]
     far = table.iloc[-1]
@@ -667,12 +553,8 @@ BANDS = {"top (θ < 1/3)": (0.0, 1 / 3), "middle": (1 / 3, 2 / 3), "side (θ ≥
 
 
 def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
-    """Mean error, approach-axis error and the share of beliefs that end on another cup, per band of
-    the wanted grasp (:data:`BANDS`), map and new cup.
-
-    Returns:
-        One row per (``h``, ``band``, ``distance``): ``error``, ``angle_error_deg``, ``other``, ``n``
-        (every band, an empty one with NaN numbers and ``n`` 0).
+    """Mean error, approach-axis error and the share of beliefs that end on another cup (``other``),
+    and ``n``, per (``h``, ``band`` of the wanted grasp, :data:`BANDS`, ``distance``).
     """
     edges = [lo for lo, _ in BANDS.values()] + [1.0 + 1e-9]
     band = pd.cut(frame.theta, edges, right=False, labels=list(BANDS))
@@ -713,15 +595,8 @@ def identity_sentence(frame: pd.DataFrame) -> str:
 
 
 def map_sentences(frame: pd.DataFrame, geometry: pd.DataFrame) -> list[str]:
-    """Why the straight-line map errs, from the maps' geometry and the episodes by wanted grasp.
-
-    Args:
-        frame: One robot's headline rows.
-        geometry: :func:`map_geometry` of its task and config.
-
-    Returns:
-        The straight-line map's sentence (branch, limits, misfit, errors per band of
-        :data:`BANDS`), then the gripper's-space map's if the frame has it.
+    """Why the straight-line map errs, from one robot's headline rows and its :func:`map_geometry`: its
+    sentence, then the gripper's-space map's if the frame has it.
     """
     g, bands = geometry, by_preference(frame[frame.h != "none"])
     far = g.xs(g.index.get_level_values("offset_m").max(), level="offset_m")
@@ -769,26 +644,17 @@ def _line(f: pd.Series, n_cups: int) -> str:
     )
 
 
-def _lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares slope and R^2 of each row of ``ys`` (R, K) against ``x`` (K,), with an intercept."""
-    dx = x - x.mean()
-    dy = ys - ys.mean(axis=1, keepdims=True)
-    sxy, sxx, syy = dy @ dx, float(dx @ dx), (dy**2).sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return sxy / sxx, sxy**2 / (sxx * syy)
+def _lines(x: np.ndarray, ys: np.ndarray, form: str) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares slope and R^2 of each row of ``ys`` (R, K) against ``x`` (K,), lines of ``form``.
 
-
-def _origin_lines(x: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Slope and uncentred R^2 of the least-squares line through the origin of each row of ``ys``
-    (R, K) against ``x`` (K,): slope = sum(x y) / sum(x^2), and 1 - SSE / sum(y^2), which is
-    sum(x y)^2 / (sum(x^2) sum(y^2)) since SSE = sum(y^2) - sum(x y)^2 / sum(x^2).
+    Through the origin: slope = sum(x y) / sum(x^2) and the uncentred R^2, 1 - SSE / sum(y^2), which is
+    sum(x y)^2 / (sum(x^2) sum(y^2)); with an intercept, the same of x and y less their means.
     """
+    if form == "intercept":
+        x, ys = x - x.mean(), ys - ys.mean(axis=1, keepdims=True)
     sxy, sxx, syy = ys @ x, float(x @ x), (ys**2).sum(axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return sxy / sxx, sxy**2 / (sxx * syy)
-
-
-_BATCHED = {"origin": _origin_lines, "intercept": _lines}
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
@@ -804,52 +670,43 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
         for form, form_reading in FORMS.items():
             readings = (_reading(measure), form_reading)
             for kind in [k for k in _KIND_CLAIMS if k in curve]:
-                name, kind_reading = _KIND_CLAIMS[kind]
-                slope, r2 = _BATCHED[form](dist, curve[kind])
+                name, kind_reading, _ = _KIND_CLAIMS[kind]
+                slope, r2 = _lines(dist, curve[kind], form)
                 share = (curve[kind] < curve["none"]).mean(axis=1)
                 cid = _claim_id(f"{name}_linear", kind_reading, *readings)
                 out[cid] = {"slope": slope, "r2": r2, "share_below": share}
-            slope, r2 = _BATCHED[form](dist, curve["none"])
+            slope, r2 = _lines(dist, curve["none"], form)
             out[_claim_id("no_map_training_goal", *readings)] = {"slope": slope, "r2": r2}
     return out
 
 
-H_STYLES = {
-    "none": ("#d95f02", "without the map"),
-    "straight_line": ("#7570b3", "straight-line h (paper)"),
-    "grasp": ("#1b9e77", "grasp-to-grasp h (ours)"),
-    "straight_line_ee": ("#e7298a", "straight-line h, gripper's space"),
+# per kind of map: colour, name, marker, line dashes and x offset of its markers: near-equal lines and
+# means of two maps (the grasp-to-grasp and the gripper's-space maps, within 0.01 D) stay visible
+H_STYLES: dict[str, tuple[str, str, str, tuple[float, ...], float]] = {
+    "none": ("#d95f02", "without the map", "o", (), -0.015),
+    "straight_line": ("#7570b3", "straight-line h (paper)", "s", (), -0.005),
+    "grasp": ("#1b9e77", "grasp-to-grasp h (ours)", "^", (5.0, 2.0), 0.005),
+    "straight_line_ee": ("#e7298a", "straight-line h, gripper's space", "D", (1.5, 1.5), 0.015),
 }
-# per kind of map: (marker, line dashes, x offset of its markers): near-equal lines and means of two
-# maps (the grasp-to-grasp and the gripper's-space maps lie within 0.01 D) stay visible side by side
-H_MARKS: dict[str, tuple[str, tuple[float, ...], float]] = {
-    "none": ("o", (), -0.015),
-    "straight_line": ("s", (), -0.005),
-    "grasp": ("^", (5.0, 2.0), 0.005),
-    "straight_line_ee": ("D", (1.5, 1.5), 0.015),
-}
-
 
 # the paper's lines (Sec. V-D): slope -> (legend label, line style); drawn above ours
 PAPER_LINES = {0.11: ("paper, with the map: y = 0.11x", ":"), 1.0: ("paper, without the map: y = x", "--")}
 PAPER_UNITS = (
     "(both axes ÷ D, the farthest new cup's distance, as the paper's; the grasp error at the gripper)"
 )
-# the error bars: the verdicts' level (98.75%), each cup's mean, users resampled
-CI_LEVEL = verdicts.Looks().level
-N_BOOT_PLOT = 1000
+N_BOOT_PLOT = 1000  # resamples of users of each cup's mean's error bar, at the verdicts' level
 MEAN_STYLE: dict[str, Any] = {"ms": 4, "capsize": 2}  # a cup's mean and its interval
 MEDIAN_STYLE: dict[str, Any] = {"s": 22, "facecolors": "none", "lw": 0.9}  # a cup's median, hollow
 
 
 def _cup_means(part: pd.DataFrame, y: str = "error") -> pd.DataFrame:
-    """Each cup's mean of ``y``, its :data:`CI_LEVEL` bootstrap interval (users resampled) and median."""
+    """Each cup's mean of ``y``, its bootstrap interval at the verdicts' level (users resampled), median."""
     rng = np.random.default_rng(0)
     rows = []
     for d, cup in part.groupby("distance"):
         v = cup[y].to_numpy(dtype=float)
         boot = v[rng.integers(0, len(v), (N_BOOT_PLOT, len(v)))].mean(axis=1)
-        tail = 50.0 * (1.0 - CI_LEVEL)
+        tail = 50.0 * (1.0 - sweep.LEVEL)
         lo, hi = np.percentile(boot, [tail, 100.0 - tail])
         rows.append({"distance": d, "mean": v.mean(), "low": lo, "high": hi, "median": np.median(v)})
     return pd.DataFrame(rows)
@@ -862,11 +719,10 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     xs = np.array([float(frame.distance.min()), 1.0])  # the fits over the cups measured
     tops, bottoms = [1.05], [0.0]  # the paper's y = x, drawn to x = 1.05
     angles = frame.groupby(["h", "distance"]).angle_error_deg.mean() if "angle_error_deg" in frame else None
-    for kind, (color, name) in H_STYLES.items():
+    for kind, (color, name, marker, dashes, dx) in H_STYLES.items():
         if kind not in table.index:
             continue
         cups = _cup_means(frame[frame.h == kind])
-        marker, dashes, dx = H_MARKS[kind]
         bars = [cups["mean"] - cups.low, cups.high - cups["mean"]]
         ax.errorbar(
             cups.distance + dx, cups["mean"], yerr=bars, fmt=marker, color=color, zorder=3, **MEAN_STYLE
@@ -885,7 +741,7 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
             line.set_dashes(dashes)
         tops += [float(cups.high.max()), float(cups["median"].max()), float(max(fitted))]
         bottoms += [float(cups.low.min()), float(cups["median"].min()), float(min(fitted))]
-    label = f"mean per cup, bars: {100 * CI_LEVEL:.4g}% bootstrap interval (the verdicts' level)"
+    label = f"mean per cup, bars: {100 * sweep.LEVEL:.4g}% bootstrap interval (the verdicts' level)"
     ax.errorbar([], [], yerr=[], fmt="o", color="0.4", label=label, **MEAN_STYLE)
     ax.scatter([], [], marker="o", edgecolors="0.4", label="median per cup", **MEDIAN_STYLE)
     share = other_share_text(frame)
@@ -918,7 +774,7 @@ def other_share_text(frame: pd.DataFrame) -> str:
 def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
     """Every episode's error, in a panel beside ``ax`` whose y-axis reaches the largest of them."""
     side = make_axes_locatable(ax).append_axes("right", size="38%", pad=0.6)
-    for kind, (color, name) in H_STYLES.items():
+    for kind, (color, name, *_) in H_STYLES.items():
         if kind in table.index:
             part = frame[frame.h == kind]
             side.scatter(part.distance, part.error, s=5, color=color, alpha=0.35, lw=0, label=name)
