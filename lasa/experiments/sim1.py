@@ -260,23 +260,18 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         ax.axvline(beta, color="0.8", lw=0.8, zorder=0, label=label)
     extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
     if metric == "final_error" and {"LA", "LA+SA"} <= set(frame.method):
-        _mark_lower(frame, ax)
+        # mark, at the top, each beta where LA+SA's mean final error is below LA's
+        err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
+        lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
+        top = blended_transform_factory(ax.transData, ax.transAxes)
+        label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
+        color = plots.METHOD_COLORS["LA+SA"]
+        ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
         extra.append(plots.paper_handle(PAPER_FINAL_ERROR))
     if metric == "time" and "completed" in frame:
         extra += _mark_censored(frame, ax)
     plots.legend_below(ax, extra)
     return ax
-
-
-def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
-    """Mark, at the top of ``ax``, each beta where LA+SA's mean final error is below LA's (labelled)."""
-    err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
-    lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
-    top = blended_transform_factory(ax.transData, ax.transAxes)
-    label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
-    color = plots.METHOD_COLORS["LA+SA"]
-    (line,) = ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
-    return line
 
 
 def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
@@ -295,19 +290,12 @@ def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
     return [Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN)]
 
 
-def time_ratio_band(
-    frame: pd.DataFrame,
-    a: str = "LA",
-    b: str = "LA+SA",
-    n_boot: int = 1000,
-    seed: int = 0,
-    level: float = sweep.LEVEL,
-) -> pd.DataFrame:
-    """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at ``level``:
-    ``beta``, ``ratio``, ``low``, ``high``.
+def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000) -> pd.DataFrame:
+    """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at the
+    verdicts' level (users resampled, seed 0): ``beta``, ``ratio``, ``low``, ``high``.
     """
-    rng = np.random.default_rng(seed)
-    tail = 50.0 * (1.0 - level)
+    rng = np.random.default_rng(0)
+    tail = 50.0 * (1.0 - sweep.LEVEL)
     times = frame.pivot_table(index=["beta", USER], columns="method", values="time", aggfunc="mean")
     means = frame.groupby(["beta", "method"]).time.mean()
     rows = []

@@ -322,7 +322,7 @@ def _median(values: pd.Series, left: int) -> str:
 
 # --- the notebook's result sentences (issue 47: every number in them is read from the run's data) ---
 
-SA, ENTROPY = "LA+SA", "LA+SA+Entropy"
+SA = "LA+SA"
 
 
 def _prob(p: float) -> str:

@@ -69,31 +69,26 @@ def run(
     ran = sweep.run_look(
         decoders, task, control, config, config.learners, _learning, progress, look, assistance
     )
-    users, traj, method = ran.users, ran.traj, ran.method
-    learner = np.array([name for name, _ in ran.condition])
-    slope = users.slope
-    errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
+    errors = normalized_error(ran.traj.states, ran.users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
-    n_users = len(ran.user)
+    k = len(steps)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
-            "method": np.repeat(method, len(steps)),
-            "learner": np.repeat(learner, len(steps)),
-            "slope": np.repeat(slope, len(steps)),
-            USER: np.repeat(ran.user, len(steps)),
-            "t": np.tile(steps, n_users),
+            "method": np.repeat(ran.method, k),
+            "learner": np.repeat(np.array([name for name, _ in ran.condition]), k),
+            "slope": np.repeat(ran.users.slope, k),
+            USER: np.repeat(ran.user, k),
+            "t": np.tile(steps, len(ran.user)),
             "error": errors[steps].T.ravel(),
-            "assistance": np.repeat(ran.member, len(steps)),
+            "assistance": np.repeat(ran.member, k),
             "look": look,
         }
     )
-    return frame, traj
+    return frame, ran.traj
 
 
-def _learning(
-    learners: list[tuple[str, float]], goal: np.ndarray, theta: np.ndarray
-) -> dict[str, np.ndarray]:
+def _learning(learners: list[tuple[str, float]], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
     """Users who learn from random, beta(t) = m t."""
     return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -39,7 +39,6 @@ from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import PILOTS, UserPopulation
 from lasa.world.goals import GoalTask
 
-T = TypeVar("T")
 LEVEL = verdicts.Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
 __all__ = [
@@ -108,16 +107,6 @@ def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[s
     """(method, member) pairs of a sweep: LA once (member ``none``), each assisted method under each one."""
     out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
     return out + [(m, a) for a in assistance for m in methods if m != "LA"]
-
-
-def sweep_grid(
-    methods: tuple[str, ...], assistance: tuple[str, ...], conditions: Sequence[T], n_users: int
-) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
-    """Each episode's method, member, condition and user, over (method, member) pair x condition x user."""
-    grid = list(itertools.product(pairs(methods, assistance), conditions, range(n_users)))
-    method = np.array([m for (m, _), _, _ in grid])
-    assistance_rows = np.array([a for (_, a), _, _ in grid])
-    return method, assistance_rows, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -259,7 +248,9 @@ def run_look(
     seed = verdicts.block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
     assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, member, condition, user = sweep_grid(config.methods, assistance, conditions, n_users)
+    grid = list(itertools.product(pairs(config.methods, assistance), conditions, range(n_users)))
+    method, member = np.array([m for (m, _), _, _ in grid]), np.array([a for (_, a), _, _ in grid])
+    condition, user = [c for _, c, _ in grid], np.array([u for _, _, u in grid])
     goal, theta = goal[user], theta[user]
     users = UserPopulation(
         goal=goal,
