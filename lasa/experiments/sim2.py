@@ -132,8 +132,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     rate = frame.groupby(["method", "change_step"]).success.mean()
     err = frame.groupby(["method", "change_step"]).final_error.mean()
     conf = frame.groupby(["method", "change_step"]).confidence.mean()
-    sa_lo, sa_hi = rate["LA+SA", lo], rate["LA+SA", hi]
-    en_hi = rate["LA+SA+Entropy", hi]
+    sa_lo, sa_hi, en_hi = rate["LA+SA", lo], rate["LA+SA", hi], rate["LA+SA+Entropy", hi]
     values1 = {
         "error_growth": float(err["LA+SA", hi] - err["LA+SA", lo]),
         "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),

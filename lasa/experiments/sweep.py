@@ -52,7 +52,6 @@ __all__ = [
     "SweepConfig",
     "draw_episodes",
     "episodes",
-    "run_population",
     "run_look",
     "judge",
 ]

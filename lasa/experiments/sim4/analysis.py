@@ -107,10 +107,6 @@ def _measures(frame: pd.DataFrame) -> list[str]:
     return [m for m, cols in MEASURES.items() if set(cols) <= set(frame.columns)]
 
 
-def _reading(measure: str) -> str | None:
-    return None if measure == HEADLINE else measure
-
-
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Fig. sim4's claims on one robot's frame, under every measure it holds and both forms of fit."""
     robot, out = str(frame.robot.iloc[0]), []
@@ -121,7 +117,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         angles = None
         if measure == HEADLINE and "angle_error_deg" in frame:
             angles = frame.groupby(["h", x]).angle_error_deg.mean()
-        readings = (_reading(measure), FORMS[form])
+        readings = (None if measure == HEADLINE else measure, FORMS[form])
         for kind in [k for k in _KIND_CLAIMS if k in table.index]:
             name, kind_reading, words = _KIND_CLAIMS[kind]
             f, below = table.loc[kind], means[kind] < means["none"]
@@ -197,7 +193,7 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
         dist = np.array(sorted({d for _, d in means}))
         curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
         for form, form_reading in FORMS.items():
-            readings = (_reading(measure), form_reading)
+            readings = (None if measure == HEADLINE else measure, form_reading)
             for kind in [k for k in _KIND_CLAIMS if k in curve]:
                 name, kind_reading, _ = _KIND_CLAIMS[kind]
                 slope, r2 = _lines(dist, curve[kind], form)
@@ -232,12 +228,9 @@ def end_shares(frame: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index(["h", "distance"])
 
 
-_CUP_KEYS = ["robot", "assistance", "h", "distance"]
-
-
 def with_cup_columns(frame: pd.DataFrame) -> pd.DataFrame:
     """``frame`` with :data:`CUP_COLUMNS`, each cup's numbers on every one of its episodes' rows."""
-    keys = [k for k in _CUP_KEYS if k in frame]
+    keys = [k for k in ("robot", "assistance", "h", "distance") if k in frame]
     other = (frame.end_goal == "other").astype(float) if "end_goal" in frame else np.nan
     groups = frame.assign(other_=other).groupby(keys, sort=False)
     return frame.assign(

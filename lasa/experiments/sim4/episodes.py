@@ -281,23 +281,19 @@ def _rows(
             end == task.n_goals, "new", np.where(end == config.ref_goal, "reference", "other")
         )
         row = {
+            **at,
             "robot": robot.name,
             "mapping": "with" if mapped else "without",
             "distance": at["distance"] / cup_scale,
-            verdicts.USER: at[verdicts.USER],
             "error": err_m / cup_scale,
             "h": kind,
-            "offset_m": at["offset_m"],
-            "theta": at["theta"],
             "confidence": conf,
             "reference": ref_m / cup_scale,
-            "assistance": at["assistance"],
-            "look": at["look"],
             "angle_error_deg": angle,
             "distance_joint": at["distance_joint"] / scale,
             "error_joint": normalized_error(traj.states[-1], users.target, scale),
             "reference_joint": normalized_error(held, users.target, scale),
             "end_goal": end_goal,
         }
-        frames.append(pd.DataFrame(row))
+        frames.append(pd.DataFrame(row)[list(EPISODE_COLUMNS)])
     return frames

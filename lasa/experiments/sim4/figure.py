@@ -108,7 +108,7 @@ def other_share_text(frame: pd.DataFrame) -> str:
     )
 
 
-def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
+def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> None:
     """Every episode's error, in a panel beside ``ax`` whose y-axis reaches the largest of them."""
     side = make_axes_locatable(ax).append_axes("right", size="38%", pad=0.6)
     for kind, (color, name, *_) in H_STYLES.items():
@@ -126,7 +126,6 @@ def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> Axes:
         if handle is not None:
             handle.set_alpha(1.0)
     side.tick_params(labelsize=7)
-    return side
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
