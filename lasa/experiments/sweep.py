@@ -171,19 +171,17 @@ def run_population(
     methods: np.ndarray,
     horizon: int,
     noise: np.ndarray,
-    progress: bool = False,
-    assistance: np.ndarray | None = None,
-    pilot_seed: int = 0,
+    progress: bool,
+    assistance: np.ndarray,
+    pilot_seed: int,
 ) -> Trajectories:
     """Roll out a population whose users may use different methods (``methods``, (U,)), decoders and
-    members (``assistance``, (U,), ``none`` for LA; default ``control.assistance``); ``pilot_seed``
-    seeds the laggy and noisy pilots' own stream (``[pilot_seed, 1]``: :func:`draw_episodes`' draws stay).
+    members (``assistance``, (U,), ``none`` for LA); ``pilot_seed`` seeds the laggy and noisy pilots'
+    own stream (``[pilot_seed, 1]``: :func:`draw_episodes`' draws stay).
     """
     decoders = as_decoders(decoders)
     methods = np.asarray(methods)
     alpha = np.array([method_alpha(m, control) for m in methods])
-    if assistance is None:
-        assistance = np.full(len(methods), control.assistance)
     assistance = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
     keys = np.array([METHOD_DECODER[m] for m in methods])
     pilot_noise = None
