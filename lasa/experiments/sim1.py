@@ -1,7 +1,5 @@
-"""Fig. sim1: users of fixed expertise (Sec. V-A).
-
-Every method against users of fixed rationality beta (Eq. S1): final state error and time to
-reach s*, per beta. Notebook ``04_fixed_expertise``; the claims' rules: :mod:`lasa.evidence.rules`.
+"""Fig. sim1: users of fixed expertise (Sec. V-A): every method against users of fixed rationality beta
+(Eq. S1), final state error and time to reach s* per beta. Notebook ``04_fixed_expertise``.
 """
 
 from __future__ import annotations
@@ -83,10 +81,12 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim1: every method against users of fixed rationality beta, for one look's users
-    (:func:`~lasa.experiments.sweep.run_look`): one row per episode, and the trajectories in that order.
-    """
-    ran = sweep.run_look(decoders, task, control, config, config.betas, _fixed, progress, look, assistance)
+    """Fig. sim1 for one look's users: one row per episode, and the trajectories in that order."""
+
+    def fixed(beta: list[float], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
+        return {"beta0": np.array(beta, dtype=float), "slope": np.zeros(len(goal))}
+
+    ran = sweep.run_look(decoders, task, control, config, config.betas, fixed, progress, look, assistance)
     users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
@@ -109,22 +109,15 @@ def run(
     return frame, traj
 
 
-def _fixed(beta: list[float], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
-    """Users of fixed rationality ``beta`` (no learning)."""
-    return {"beta0": np.array(beta, dtype=float), "slope": np.zeros(len(goal))}
-
-
 def _means(frame: pd.DataFrame) -> pd.DataFrame:
     """Mean final error and time per (beta, method), methods as columns."""
     metrics = [m for m in ("final_error", "time") if m in frame]
     return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
 
 
-def _sa_claims(
-    frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", means: pd.DataFrame | None = None
-) -> list[Claim]:
-    """The paper's Fig. sim1 claims on a sim1 frame, comparing ``a`` with ``b`` (at beta = 75 and 1000)."""
-    robot = str(frame.robot.iloc[0])
+def _sa_claims(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> list[Claim]:
+    """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
+    robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
     betas = set(frame.beta)
     if not set(CLAIM_BETAS) <= betas:
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
@@ -291,9 +284,8 @@ def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
 
 
 def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000) -> pd.DataFrame:
-    """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at the
-    verdicts' level (users resampled, seed 0): ``beta``, ``ratio``, ``low``, ``high``.
-    """
+    """Mean time of ``a`` over ``b``'s per beta (``ratio``), with a percentile bootstrap interval at the
+    verdicts' level (users resampled, seed 0; ``low``, ``high``)."""
     rng = np.random.default_rng(0)
     tail = 50.0 * (1.0 - sweep.LEVEL)
     times = frame.pivot_table(index=["beta", USER], columns="method", values="time", aggfunc="mean")

@@ -1,7 +1,5 @@
-"""Fig. sim2: users who change their mind (Sec. V-B).
-
-Near-optimal users aim at the wrong cup for the first N steps, then at the right one. Notebook
-``05_changing_goals``; the claims' rules: :mod:`lasa.evidence.rules`.
+"""Fig. sim2: users who change their mind (Sec. V-B): near-optimal users aim at the wrong cup for the
+first N steps, then at the right one. Notebook ``05_changing_goals``.
 """
 
 from __future__ import annotations
@@ -129,9 +127,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not."""
     robot = str(frame.robot.iloc[0])
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
-    rate = frame.groupby(["method", "change_step"]).success.mean()
-    err = frame.groupby(["method", "change_step"]).final_error.mean()
-    conf = frame.groupby(["method", "change_step"]).confidence.mean()
+    by = ["method", "change_step"]
+    rate, err, conf = (frame.groupby(by)[c].mean() for c in ("success", "final_error", "confidence"))
     sa_lo, sa_hi, en_hi = rate["LA+SA", lo], rate["LA+SA", hi], rate["LA+SA+Entropy", hi]
     values1 = {
         "error_growth": float(err["LA+SA", hi] - err["LA+SA", lo]),
@@ -165,11 +162,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
     """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
-    rate = group_means(
-        frame.assign(success=frame.success.astype(float)), ["method", "change_step"], "success", counts
-    )
-    err = group_means(frame, ["method", "change_step"], "final_error", counts)
-    conf = group_means(frame, ["method", "change_step"], "confidence", counts)
+    by = ["method", "change_step"]
+    rate, err, conf = (group_means(frame, by, c, counts) for c in ("success", "final_error", "confidence"))
     sa_hi, en_hi = rate[("LA+SA", hi)], rate[("LA+SA+Entropy", hi)]
     return {
         "sim2.sa_trapped": {
@@ -186,8 +180,6 @@ METRIC_LABELS = {
     "confidence": "confidence b(g*) at the end",
 }
 PROBABILITIES = ("success", "confidence")  # panels of a share or a probability: a [0, 1] axis
-
-
 # what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled legend entry
 PAPER_SHAPES = {
     "final_error": "paper: LA+SA's error grows with N; LA+SA+Entropy stays low",
@@ -215,9 +207,7 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
 
 
 def _mark_thresholds(ax: Axes, n_max: int, rule_id: str = "sim2.entropy_escapes") -> None:
-    """Short dashed marks at the largest N: the success thresholds of LA+SA+Entropy's verdict, labelled
-    (sim2.sa_trapped rests on the final error and the confidence, the other two panels).
-    """
+    """Short dashed marks at the largest N: the success thresholds of LA+SA+Entropy's verdict, labelled."""
     limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
     for i, level in enumerate(limits):
         label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
@@ -244,9 +234,7 @@ STILL_STEPS = 50  # [steps]
 
 
 def wrong_goal(goal: int | np.ndarray, n_goals: int) -> int | np.ndarray:
-    """The cup a user who wants ``goal`` aims at before the change step: the next one,
-    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them.
-    """
+    """The cup a user who wants ``goal`` (one or many) aims at before the change: ``(goal + 1) % n_goals``."""
     goals = np.asarray(goal)
     if goals.size and (goals.min() < 0 or goals.max() >= n_goals):
         raise ConfigError(f"goal must be in [0, {n_goals}), got {goal}")
@@ -260,8 +248,7 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
     Adds ``steps_left``, ``away_at_n`` (from home), ``belief_at_n`` (b(g*)), ``turn`` and ``reach`` (steps
     after N until b(g*) > 0.5 and until the error is at most ``success``, NaN if never), ``still`` (moved
     less than :data:`STILL` in the last :data:`STILL_STEPS` steps) and ``wrong_error`` (to the wrong cup's
-    grasp of the same preference); distances over the goal distance.
-    """
+    grasp of the same preference); distances over the goal distance."""
     n_steps, goal = len(traj.states) - 1, frame.goal.to_numpy()
     rows = np.arange(len(frame))
     states, change = traj.states, frame.change_step.to_numpy()
@@ -319,11 +306,6 @@ def _median(values: pd.Series, left: int) -> str:
     return f"more than {left}" if not np.isfinite(median) else f"{median:.0f}"
 
 
-# --- the notebook's result sentences (issue 47: every number in them is read from the run's data) ---
-
-SA = "LA+SA"
-
-
 def _prob(p: float) -> str:
     """A probability with two significant digits of its distance to 0 or 1 (below 1e-4: ``3.4e-06``)."""
     near = min(p, 1.0 - p)
@@ -352,9 +334,7 @@ def _part(value: float, low: float, high: float, up: str, down: str) -> str:
 
 
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
-    """sim2.sa_trapped's two parts as one Markdown bullet: how LA+SA's error and confidence move from the
-    smallest N to the largest (``steps``).
-    """
+    """sim2.sa_trapped's two parts as a Markdown bullet: LA+SA's error and confidence from N = ``steps``."""
     if claim.id != "sim2.sa_trapped":
         raise ConfigError(f"claim_sentence reads sim2.sa_trapped, got {claim.id!r}")
     parts = []
@@ -388,10 +368,9 @@ def success_sentence(head: pd.DataFrame) -> str:
     return f"- **Success at N = {steps}.** " + "; ".join(lines) + "."
 
 
-def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = SA) -> str:
+def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = "LA+SA") -> str:
     """Where ``method``'s belief ends (``head``: one member's rows and LA's, every look), and what its
-    users who fail at the largest N do (``after``: :func:`after_the_change`'s, first look).
-    """
+    users who fail at the largest N do (``after``: :func:`after_the_change`'s, first look)."""
     conf = head[head.method == method].groupby("change_step").confidence
     median, n_max = conf.median(), int(head.change_step.max())
     last = head[(head.method == method) & (head.change_step == n_max)].confidence
@@ -446,8 +425,7 @@ def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: floa
 
 def dip_sentence(head: pd.DataFrame, after: pd.DataFrame, method: str = "LA") -> str:
     """Where ``method``'s success is lowest (LA's dip at a small N, by default), and what its unsuccessful
-    users there show (``head`` and ``after`` as in :func:`belief_sentence`).
-    """
+    users there show (``head`` and ``after`` as in :func:`belief_sentence`)."""
     rate = _rates(head)[method]
     n, n_max = int(rate.idxmin()), int(rate.index.max())
     part = head[(head.method == method) & (head.change_step == n)]
@@ -470,9 +448,8 @@ def dip_sentence(head: pd.DataFrame, after: pd.DataFrame, method: str = "LA") ->
 
 
 def findings(claims: list[Claim], head: pd.DataFrame, after: pd.DataFrame, tolerance: float) -> str:
-    """Fig. sim2's results on one robot and member, as Markdown bullets, every number from the run
-    (``head`` and ``after`` as in :func:`belief_sentence`; ``tolerance``: ``Config.success``).
-    """
+    """Fig. sim2's results on one robot and member as Markdown bullets (``head``, ``after`` as in
+    :func:`belief_sentence`; ``tolerance``: ``Config.success``)."""
     steps = (int(head.change_step.min()), int(head.change_step.max()))
     return "\n".join(
         [

@@ -1,7 +1,5 @@
-"""Fig. sim3: users who learn within the task (Sec. V-C).
-
-Rationality grows from random, beta(t) = m t, for a fast and a slow learner. Notebook
-``06_learning_users``; the claim's rule: :mod:`lasa.evidence.rules`.
+"""Fig. sim3: users who learn within the task (Sec. V-C): rationality grows from random, beta(t) = m t,
+for a fast and a slow learner. Notebook ``06_learning_users``.
 """
 
 from __future__ import annotations
@@ -63,11 +61,13 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t, one row per
-    (episode, recorded step); and the trajectories (users in the order method x learner x user).
-    """
+    """Fig. sim3 for one look's users: one row per (episode, recorded step), and the trajectories."""
+
+    def learning(learners: list[tuple[str, float]], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
+        return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
+
     ran = sweep.run_look(
-        decoders, task, control, config, config.learners, _learning, progress, look, assistance
+        decoders, task, control, config, config.learners, learning, progress, look, assistance
     )
     errors = normalized_error(ran.traj.states, ran.users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
@@ -88,11 +88,6 @@ def run(
     return frame, ran.traj
 
 
-def _learning(learners: list[tuple[str, float]], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
-    """Users who learn from random, beta(t) = m t."""
-    return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
-
-
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
     """One row per episode: its mean error over the recorded steps (the claim's measure)."""
     keys = ["robot", "method", "learner", USER, "assistance", "look"]
@@ -102,8 +97,7 @@ def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users."""
     robot = str(frame.robot.iloc[0])
-    per_episode = frame.groupby(["learner", "method", USER]).error.mean()
-    mean = per_episode.groupby(["learner", "method"]).mean()
+    mean = frame.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
     values = {f"gain_{name}": float(gain[name]) for name in learners}
@@ -161,16 +155,12 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
 
-    keys = ["method", "learner", "t"]
-    return sweep.sim_figure(
-        table, assistance, "Fig. sim3: users who learn", (2, (11, 5.2), draw), keys, "curve"
-    )
+    title, keys = "Fig. sim3: users who learn", ["method", "learner", "t"]
+    return sweep.sim_figure(table, assistance, title, (2, (11, 5.2), draw), keys, "curve")
 
 
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
-    """Fig. sim3's result on ``head``'s robot and member (its rows and LA's, one per episode or step), as
-    Markdown bullets, every number from the run.
-    """
+    """Fig. sim3's result on ``head``'s robot and member (its rows and LA's) as Markdown bullets."""
     claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
     robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()

@@ -1,7 +1,6 @@
 """What the simulated-user sweeps share: drawing episodes, rolling out mixed methods, claim rows, figures.
 
-One population of users covers every condition and runs batched, one rollout per decoder. User i has the
-same cup, preference and random stream in every condition (paired); the CSVs call that index ``seed``.
+One batched population covers every condition; user i (the CSVs' ``seed``) is the same in each (paired).
 """
 
 from __future__ import annotations
@@ -41,20 +40,6 @@ from lasa.world.goals import GoalTask
 
 LEVEL = verdicts.Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
-__all__ = [
-    "Decoders",
-    "check_assistance",
-    "swept_assistance",
-    "as_decoders",
-    "check_needed",
-    "check_record_every",
-    "LooksConfig",
-    "SweepConfig",
-    "draw_episodes",
-    "episodes",
-    "run_look",
-    "judge",
-]
 
 Decoders = Mapping[str, ActionDecoder] | ActionDecoder
 
@@ -175,10 +160,8 @@ def run_population(
     assistance: np.ndarray,
     pilot_seed: int,
 ) -> Trajectories:
-    """Roll out a population whose users may use different methods (``methods``, (U,)), decoders and
-    members (``assistance``, (U,), ``none`` for LA); ``pilot_seed`` seeds the laggy and noisy pilots'
-    own stream (``[pilot_seed, 1]``: :func:`draw_episodes`' draws stay).
-    """
+    """Roll out users of different methods and members (``methods``, ``assistance``: (U,), ``none`` for LA);
+    ``pilot_seed`` seeds the laggy and noisy pilots' own stream (``[pilot_seed, 1]``)."""
     decoders = as_decoders(decoders)
     methods = np.asarray(methods)
     alpha = np.array([method_alpha(m, control) for m in methods])
@@ -200,21 +183,16 @@ def run_population(
         parts.append((idx, traj))
     if len(parts) == 1:
         return parts[0][1]
-    merged = {}
-    for field in dataclasses.fields(Trajectories):
-        first = getattr(parts[0][1], field.name)
-        out = np.empty((first.shape[0], len(methods), *first.shape[2:]), dtype=first.dtype)
-        for idx, traj in parts:
-            out[:, idx] = getattr(traj, field.name)
-        merged[field.name] = out
-    return Trajectories(**merged)
+    order = np.argsort(np.concatenate([idx for idx, _ in parts]))  # the users' rows back in their order
+    fields = [f.name for f in dataclasses.fields(Trajectories)]
+    return Trajectories(
+        **{f: np.concatenate([getattr(t, f) for _, t in parts], axis=1)[:, order] for f in fields}
+    )
 
 
 @dataclasses.dataclass(frozen=True)
 class Look:
-    """One look's episodes of a sims 1-3 sweep, one per (pair, condition, user), in that order; ``user``
-    is the index over all looks (the CSVs' ``seed``).
-    """
+    """One look's episodes of a sims 1-3 sweep, one per (pair, condition, user); ``user`` spans all looks."""
 
     method: np.ndarray
     member: np.ndarray
@@ -237,10 +215,8 @@ def run_look(
 ) -> Look:
     """Roll out one look's new users (:func:`lasa.evidence.verdicts.block_users`) of a sims 1-3 sweep.
 
-    ``population`` maps the grid's conditions (betas, change steps, learners), goals and preferences to
-    the users' other fields (``beta0``, ``slope``, ...); ``assistance``: default every member of
-    ``config.assistance``, the headline one first.
-    """
+    ``population`` maps the conditions, goals and preferences to the users' other fields (``beta0``, ...);
+    ``assistance``: default every member of ``config.assistance``, the headline one first."""
     start, n_users = verdicts.block_users(verdicts.Looks(config.users, config.block, config.cap), look)
     seed = verdicts.block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
@@ -275,10 +251,8 @@ def judge(
 ) -> tuple[Any, verdicts.Sequential, Any]:
     """Run a figure's sweep (``module.run``) in looks until its headline verdicts are settled (or the cap).
 
-    ``reduce`` maps a look's rows to the rows the claims read (sim3: one per episode). Returns every
-    look's rows, the :class:`lasa.evidence.verdicts.Sequential` outcome, and the first look's second
-    output of ``module.run`` (trajectories or runs, for the videos).
-    """
+    ``reduce`` maps a look's rows to the claims' rows (sim3: one per episode). Returns every look's rows,
+    the :class:`lasa.evidence.verdicts.Sequential` outcome and the first look's trajectories or runs."""
     full: list[Any] = []
     first: list[Any] = []
 
@@ -306,10 +280,8 @@ def sim_figure(
     keys: list[str],
     per: str = "point",
 ) -> Figure:
-    """A sims 1-3 figure under one member: one row of panels per robot present, titled with its users.
-
-    ``panels``: panels per row, the size of a row, and what draws a robot's row (name, rows, axes).
-    """
+    """A sims 1-3 figure under one member: one row of panels per robot, ``panels`` = (panels per row, a
+    row's size, what draws a robot's row from (name, rows, axes))."""
     table = verdicts.member_frame(table, assistance)
     n_cols, size, draw = panels
     fig, rows = robot_rows(table, n_cols, size)

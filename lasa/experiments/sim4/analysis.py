@@ -5,6 +5,7 @@ paper's form), the claims on them, and notebook 07's tables and sentences of wha
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterable, Iterator
 
 import numpy as np
 import pandas as pd
@@ -51,9 +52,7 @@ def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
 
 
 def fit_origin(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
-    """Least-squares line through the origin, y = slope x, the paper's form; returns (slope, R^2), the
-    uncentred R^2 as numpy's ``lstsq`` and statsmodels report without a constant (``docs/method-notes.md``).
-    """
+    """Least-squares line through the origin, y = slope x, the paper's form: (slope, uncentred R^2)."""
     slope, r2 = _lines(np.asarray(x, dtype=float), np.asarray(y, dtype=float)[None], "origin")
     return float(slope[0]), float(r2[0])
 
@@ -67,11 +66,8 @@ def fit_form(x: np.ndarray, y: np.ndarray, form: str) -> tuple[float, float, flo
 
 
 def fits(frame: pd.DataFrame, measure: str = HEADLINE, form: str = HEADLINE_FORM) -> pd.DataFrame:
-    """Least-squares lines of the mean error per new cup against its distance, per kind of map ``h``.
-
-    ``measure`` picks the distance and error (:data:`MEASURES`), ``form`` the line (:data:`FORMS`). Returns
-    ``slope``, ``intercept`` (0 through the origin), ``r2`` (of the cups' means) and ``r2_episodes``.
-    """
+    """Least-squares lines (``form``: :data:`FORMS`) of the mean error per new cup against its distance
+    (``measure``: :data:`MEASURES`) per kind of map ``h``: ``r2`` of the cups' means, ``r2_episodes``."""
     if form not in FORMS:
         raise ConfigError(f"form must be one of {sorted(FORMS)}, got {form!r}")
     x, y = MEASURES[measure]
@@ -87,8 +83,6 @@ def fits(frame: pd.DataFrame, measure: str = HEADLINE, form: str = HEADLINE_FORM
 # per kind of map: the claim it is judged under, the reading it is (None: the claim's own map) and its
 # name; the paper's straight line "between the start and g", in the gripper's space, is ``@ee_line``
 _LINE = "the paper's straight-line context map"
-
-
 _KIND_CLAIMS = {
     "straight_line": ("straight_line", None, _LINE),
     "grasp": ("grasp", None, "the grasp-to-grasp context map (ours)"),
@@ -107,6 +101,15 @@ def _measures(frame: pd.DataFrame) -> list[str]:
     return [m for m, cols in MEASURES.items() if set(cols) <= set(frame.columns)]
 
 
+def _ids(measure: str, form: str, kinds: Iterable[str]) -> Iterator[tuple[str | None, str]]:
+    """(kind of map, id) of each linear claim of ``measure`` and ``form``, then (None, the no-map claim's)."""
+    readings = (None if measure == HEADLINE else measure, FORMS[form])
+    for kind in [k for k in _KIND_CLAIMS if k in kinds]:
+        name, reading, _ = _KIND_CLAIMS[kind]
+        yield kind, _claim_id(f"{name}_linear", reading, *readings)
+    yield None, _claim_id("no_map_training_goal", *readings)
+
+
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Fig. sim4's claims on one robot's frame, under every measure it holds and both forms of fit."""
     robot, out = str(frame.robot.iloc[0]), []
@@ -117,35 +120,23 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         angles = None
         if measure == HEADLINE and "angle_error_deg" in frame:
             angles = frame.groupby(["h", x]).angle_error_deg.mean()
-        readings = (None if measure == HEADLINE else measure, FORMS[form])
-        for kind in [k for k in _KIND_CLAIMS if k in table.index]:
-            name, kind_reading, words = _KIND_CLAIMS[kind]
-            f, below = table.loc[kind], means[kind] < means["none"]
-            above = int((~below).sum())
-            note = f"Above the no-map error at {above} of {n_cups} cups." if above else ""
-            out.append(
-                sweep.sim_claim(
-                    _claim_id(f"{name}_linear", kind_reading, *readings),
-                    robot,
-                    {"slope": float(f.slope), "r2": float(f.r2), "share_below": float(below.mean())},
-                    claim=f"with {words}, the error at a new goal grows linearly with its distance",
-                    paper="y = 0.11x, R^2 = 0.98",
-                    measured=_line(f, n_cups) + " (the interval is for the slope)",
-                    note=" ".join(t for t in (note, _angle_note(angles, kind)) if t),
+        for kind, cid in _ids(measure, form, table.index):
+            f = table.loc[kind or "none"]
+            values = {"slope": float(f.slope), "r2": float(f.r2)}
+            note = _angle_note(angles, kind or "none")
+            claim = "without the map, the robot only reaches for the training goal"
+            if kind:
+                below = means[kind] < means["none"]
+                above = int((~below).sum())
+                values["share_below"] = float(below.mean())
+                above_note = f"Above the no-map error at {above} of {n_cups} cups." if above else ""
+                note = " ".join(t for t in (above_note, note) if t)
+                claim = (
+                    f"with {_KIND_CLAIMS[kind][2]}, the error at a new goal grows linearly with its distance"
                 )
-            )
-        wo = table.loc["none"]
-        out.append(
-            sweep.sim_claim(
-                _claim_id("no_map_training_goal", *readings),
-                robot,
-                {"slope": float(wo.slope), "r2": float(wo.r2)},
-                claim="without the map, the robot only reaches for the training goal",
-                paper="y = x",
-                measured=_line(wo, n_cups) + " (the interval is for the slope)",
-                note=_angle_note(angles, "none"),
-            )
-        )
+            paper = "y = 0.11x, R^2 = 0.98" if kind else "y = x"
+            measured = _line(f, n_cups) + " (the interval is for the slope)"
+            out.append(sweep.sim_claim(cid, robot, values, claim, paper, measured, note))
     return out
 
 
@@ -170,11 +161,8 @@ def _line(f: pd.Series, n_cups: int) -> str:
 
 
 def _lines(x: np.ndarray, ys: np.ndarray, form: str) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares slope and R^2 of each row of ``ys`` (R, K) against ``x`` (K,), lines of ``form``.
-
-    Through the origin: slope = sum(x y) / sum(x^2) and the uncentred R^2, 1 - SSE / sum(y^2), which is
-    sum(x y)^2 / (sum(x^2) sum(y^2)); with an intercept, the same of x and y less their means.
-    """
+    """Least-squares slope and R^2 of each row of ``ys`` (R, K) against ``x`` (K,), lines of ``form``:
+    through the origin sum(x y) / sum(x^2) and sum(x y)^2 / (sum(x^2) sum(y^2)), else of x, y less means."""
     if form == "intercept":
         x, ys = x - x.mean(), ys - ys.mean(axis=1, keepdims=True)
     sxy, sxx, syy = ys @ x, float(x @ x), (ys**2).sum(axis=1)
@@ -183,33 +171,25 @@ def _lines(x: np.ndarray, ys: np.ndarray, form: str) -> tuple[np.ndarray, np.nda
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
-    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`),
-    under the same ids (every measure's and both forms' of fit).
-    """
+    """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     out: dict[str, dict[str, np.ndarray]] = {}
     for measure in _measures(frame):
         x, y = MEASURES[measure]
         means = verdicts.group_means(frame, ["h", x], y, counts)
         dist = np.array(sorted({d for _, d in means}))
         curve = {k: np.stack([means[(k, d)] for d in dist], axis=1) for k in {h for h, _ in means}}
-        for form, form_reading in FORMS.items():
-            readings = (None if measure == HEADLINE else measure, form_reading)
-            for kind in [k for k in _KIND_CLAIMS if k in curve]:
-                name, kind_reading, _ = _KIND_CLAIMS[kind]
-                slope, r2 = _lines(dist, curve[kind], form)
-                share = (curve[kind] < curve["none"]).mean(axis=1)
-                cid = _claim_id(f"{name}_linear", kind_reading, *readings)
-                out[cid] = {"slope": slope, "r2": r2, "share_below": share}
-            slope, r2 = _lines(dist, curve["none"], form)
-            out[_claim_id("no_map_training_goal", *readings)] = {"slope": slope, "r2": r2}
+        for form in FORMS:
+            for kind, cid in _ids(measure, form, curve):
+                slope, r2 = _lines(dist, curve[kind or "none"], form)
+                out[cid] = {"slope": slope, "r2": r2}
+                if kind:
+                    out[cid]["share_below"] = (curve[kind] < curve["none"]).mean(axis=1)
     return out
 
 
 def end_shares(frame: pd.DataFrame) -> pd.DataFrame:
-    """Per (``h``, ``distance``): the share of episodes whose belief ends on another training cup
-    (``other``), the ``mean`` and ``median`` error, the mean of those episodes (``mean_left``) and of
-    the rest (``mean_stayed``), and ``n``.
-    """
+    """Per (``h``, ``distance``): the share of beliefs that end on another training cup (``other``), the
+    ``mean`` and ``median`` error, the mean of those episodes (``mean_left``) and the rest's, and ``n``."""
     rows = []
     for (kind, d), part in frame.groupby(["h", "distance"]):
         left = part.end_goal == "other"
@@ -242,8 +222,7 @@ def with_cup_columns(frame: pd.DataFrame) -> pd.DataFrame:
 
 def no_map_check(frame: pd.DataFrame, form: str = HEADLINE_FORM) -> pd.DataFrame:
     """The paper's "without the map ... y = x", taken apart: per part of the no-map episodes, the line
-    of ``form`` through the cups' means (NaN with fewer than two cups), ``mean_error`` and ``share``.
-    """
+    of ``form`` through the cups' means (NaN with fewer than two cups), ``mean_error`` and ``share``."""
     none = frame[frame.h == "none"]
     parts = {"held at the training cup": none.assign(error=none.reference), "without the map": none}
     if "end_goal" in none:
@@ -265,8 +244,7 @@ BANDS = {"top (θ < 1/3)": (0.0, 1 / 3), "middle": (1 / 3, 2 / 3), "side (θ ≥
 
 def by_preference(frame: pd.DataFrame) -> pd.DataFrame:
     """Mean error, approach-axis error and the share of beliefs that end on another cup (``other``),
-    and ``n``, per (``h``, ``band`` of the wanted grasp, :data:`BANDS`, ``distance``).
-    """
+    and ``n``, per (``h``, ``band`` of the wanted grasp, :data:`BANDS`, ``distance``)."""
     edges = [lo for lo, _ in BANDS.values()] + [1.0 + 1e-9]
     band = pd.cut(frame.theta, edges, right=False, labels=list(BANDS))
     # every band appears, empty ones with NaN numbers and n = 0 (a small run may draw no middle grasp)
@@ -294,9 +272,7 @@ def _listed(values: np.ndarray, fmt: str) -> str:
 
 
 def identity_sentence(frame: pd.DataFrame) -> str:
-    """What :func:`no_map_check` and :func:`end_shares` say of y = x on one robot's headline rows
-    (the lines through the origin, R² uncentred).
-    """
+    """What :func:`no_map_check` and :func:`end_shares` say of y = x on one robot's headline rows."""
     check, share = no_map_check(frame), end_shares(frame).loc["none", "other"]
     held, every = check.loc["held at the training cup"], check.loc["without the map"]
     stay = check.loc["without the map, belief ends on the training cup"]
@@ -319,8 +295,7 @@ def identity_sentence(frame: pd.DataFrame) -> str:
 
 def map_sentences(frame: pd.DataFrame, geometry: pd.DataFrame) -> list[str]:
     """Why the straight-line map errs, from one robot's headline rows and its :func:`map_geometry`: its
-    sentence, then the gripper's-space map's if the frame has it.
-    """
+    sentence, then the gripper's-space map's if the frame has it."""
     g, bands = geometry, by_preference(frame[frame.h != "none"])
     far = g.xs(g.index.get_level_values("offset_m").max(), level="offset_m")
     line = far.loc["straight_line"]
@@ -353,9 +328,7 @@ def map_sentences(frame: pd.DataFrame, geometry: pd.DataFrame) -> list[str]:
 
 
 def medians_sentence(frame: pd.DataFrame) -> str:
-    """What the no-map medians and the share of beliefs on the other cup say of y = x, from
-    :func:`end_shares` of one robot's headline rows (with ``end_goal``).
-    """
+    """What :func:`end_shares`' no-map medians and beliefs on the other cup say of y = x (one robot)."""
     table = end_shares(frame).loc["none"]
     far = table.iloc[-1]
     text = (

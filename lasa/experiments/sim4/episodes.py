@@ -108,9 +108,7 @@ class Config(sweep.LooksConfig):
 
 @dataclasses.dataclass(frozen=True)
 class NewGoalRun:
-    """The episodes at one new cup: its distance from the reference cup [m], the task grown by it, and the
-    trajectories with each kind of map (belief over G + 1 goals) and without (training goals only).
-    """
+    """The episodes at one new cup (``offset`` [m] from the reference cup), with each kind of map and not."""
 
     offset: float
     task: CupTask
@@ -184,9 +182,8 @@ def run(
 ) -> tuple[pd.DataFrame, list[NewGoalRun]]:
     """Fig. sim4: near-optimal users want a grasp at each new cup, through each kind of map and without.
 
-    Every member's users share one batch per (cup, map) and are the same users (paired). Returns one
-    row per episode (:data:`EPISODE_COLUMNS`) and the runs per new cup under ``control.assistance``.
-    """
+    Every member's users (the same, paired) share one batch per (cup, map). Returns one row per episode
+    (:data:`EPISODE_COLUMNS`) and the runs per new cup under ``control.assistance``."""
     ref = config.ref_goal
     if not 0 <= ref < task.n_goals:
         raise ConfigError(f"ref_goal must be in [0, {task.n_goals}), got {ref}")
@@ -249,8 +246,7 @@ def _users_of(traj: Trajectories, users: slice) -> Trajectories:
 
 def grasp_error(robot: Robot, states: np.ndarray, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distance [m] between the grasp sites at ``states`` and ``targets`` (joint vectors, (..., n)),
-    and the angle between their approach axes (the site's +z) [deg].
-    """
+    and the angle between their approach axes (the site's +z) [deg]."""
     states = np.asarray(states, dtype=float)
     targets = np.broadcast_to(np.asarray(targets, dtype=float), states.shape)
     pos, rot = robot.grasp_frames(np.stack([states, targets]))

@@ -96,9 +96,8 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
 
 def other_share_text(frame: pd.DataFrame) -> str:
-    """The figure's note: the share of no-map users whose belief ends on the other training cup, at
-    the nearest and the farthest cup (:func:`end_shares`); empty without ``end_goal`` or no-map rows.
-    """
+    """The share of no-map users whose belief ends on the other training cup, at the nearest and the
+    farthest cup (:func:`end_shares`); empty without ``end_goal`` or no-map rows."""
     if "end_goal" not in frame or not (frame.h == "none").any():
         return ""
     other = end_shares(frame).loc["none", "other"]
