@@ -232,12 +232,12 @@ def test_the_identity_and_map_sentences_state_the_committed_numbers():
 def test_origin_fit_by_hand():
     """slope = sum(xy) / sum(x^2), R^2 = 1 - SSE / sum(y^2) (uncentred), against the intercept fit."""
     x = np.array([1.0, 2.0, 3.0])
-    assert analysis.fit_origin(x, 2.0 * x) == pytest.approx((2.0, 1.0))  # on y = 2x exactly
+    assert analysis.fit_form(x, 2.0 * x, "origin") == pytest.approx((2.0, 0.0, 1.0))  # on y = 2x exactly
     # y = (1, 3, 2): sum(xy) = 13, sum(x^2) = 14, sum(y^2) = 14, so slope 13/14 and R^2 = 13^2/14^2;
     # with an intercept: mean (2, 2), Sxy = 1, Sxx = 2, Syy = 2, so y = 0.5x + 1 and R^2 = 1/(2*2)
     y = np.array([1.0, 3.0, 2.0])
-    assert analysis.fit_origin(x, y) == pytest.approx((13 / 14, 169 / 196))
-    assert analysis.fit_line(x, y) == pytest.approx((0.5, 1.0, 0.25))
+    assert analysis.fit_form(x, y, "origin") == pytest.approx((13 / 14, 0.0, 169 / 196))
+    assert analysis.fit_form(x, y, "intercept") == pytest.approx((0.5, 1.0, 0.25))
     frame = pd.DataFrame(
         {"h": "none", "distance": np.repeat(x, 2), "error": np.repeat(y, 2) + [-0.1, 0.1] * 3}
     )

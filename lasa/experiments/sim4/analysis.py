@@ -20,8 +20,7 @@ __all__ = [
     "MEASURES",
     "FORMS",
     "BANDS",
-    "fit_line",
-    "fit_origin",
+    "fit_form",
     "fits",
     "claims",
     "boot_values",
@@ -45,24 +44,15 @@ FORMS: dict[str, str | None] = {"origin": None, "intercept": "intercept"}
 HEADLINE_FORM = "origin"
 
 
-def fit_line(x: np.ndarray, y: np.ndarray) -> tuple[float, float, float]:
-    """Least-squares line y = slope x + intercept; returns (slope, intercept, R^2)."""
-    res = stats.linregress(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
-    return float(res.slope), float(res.intercept), float(res.rvalue**2)
-
-
-def fit_origin(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
-    """Least-squares line through the origin, y = slope x, the paper's form: (slope, uncentred R^2)."""
-    slope, r2 = _lines(np.asarray(x, dtype=float), np.asarray(y, dtype=float)[None], "origin")
-    return float(slope[0]), float(r2[0])
-
-
 def fit_form(x: np.ndarray, y: np.ndarray, form: str) -> tuple[float, float, float]:
-    """(slope, intercept, R^2) of the fit of ``form`` (:data:`FORMS`); the origin's intercept is 0."""
+    """(slope, intercept, R^2) of the least-squares line of ``form`` (:data:`FORMS`): through the origin,
+    y = slope x (the paper's form, intercept 0, R^2 uncentred), or y = slope x + intercept."""
+    x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
     if form == "intercept":
-        return fit_line(x, y)
-    slope, r2 = fit_origin(x, y)
-    return slope, 0.0, r2
+        res = stats.linregress(x, y)
+        return float(res.slope), float(res.intercept), float(res.rvalue**2)
+    slope, r2 = _lines(x, y[None], "origin")
+    return float(slope[0]), 0.0, float(r2[0])
 
 
 def fits(frame: pd.DataFrame, measure: str = HEADLINE, form: str = HEADLINE_FORM) -> pd.DataFrame:
