@@ -10,6 +10,7 @@ import pytest
 
 from lasa.base.errors import ConfigError, IKError
 from lasa.experiments import sim4
+from lasa.experiments.sim4 import analysis, episodes
 from lasa.method.assistance import point
 from lasa.method.belief import belief, belief_targets, log_likelihood, uniform_log_belief, update_log_belief
 from lasa.method.context_map import (
@@ -240,9 +241,9 @@ def test_sim4_frame_and_determinism(model, task):
     frame, runs = sim4.run(model, task, task.robot.control, config)
     again, _ = sim4.run(model, task, task.robot.control, config)
     pd.testing.assert_frame_equal(frame, again)
-    assert list(frame.columns) == list(sim4.EPISODE_COLUMNS)
+    assert list(frame.columns) == list(episodes.EPISODE_COLUMNS)
     # the CSV's columns: the episodes', then each cup's mean, median and share on the other cup
-    assert list(sim4.with_cup_columns(frame).columns) == list(sim4.COLUMNS)
+    assert list(analysis.with_cup_columns(frame).columns) == list(sim4.COLUMNS)
     assert set(frame.mapping) == {"with", "without"}
     assert set(frame.h) == {"grasp", "straight_line", "straight_line_ee", "none"}
     assert len(frame) == 2 * 3 * 4
@@ -301,7 +302,7 @@ def test_sim4_claim_rules():
     flat_high = _synthetic({"grasp": 0.0, "none": 1.0})
     flat_high.loc[flat_high.h == "grasp", "error"] = 0.5
     assert headline(flat_high)[0].reproduced == "no"
-    fits = sim4.fits(_synthetic({"straight_line": 0.3, "none": 1.3}))
+    fits = analysis.fits(_synthetic({"straight_line": 0.3, "none": 1.3}))
     assert fits.loc["straight_line", "slope"] == pytest.approx(0.3)
     assert fits.loc["none", "r2"] == pytest.approx(1.0)
 
@@ -386,7 +387,7 @@ def test_gripper_line_map_sends_each_new_grasp_to_the_same_training_grasp(panda_
     cmap = context_map(panda_rotated, 2, REF, "straight_line_ee")
     assert cmap.delta == pytest.approx(-0.3, abs=1e-6)
     mapped = cmap.state(panda_rotated.curves[-1])
-    metres, degrees = sim4.grasp_error(panda_task.robot, mapped, panda_task.curves[REF])
+    metres, degrees = episodes.grasp_error(panda_task.robot, mapped, panda_task.curves[REF])
     assert metres.max() < 1e-3 and degrees.max() < 0.2 and cmap.fallbacks == 0
 
 

@@ -96,7 +96,7 @@ CLAIM_MODULES = {
     "lasa/evidence/findings.py",
     "lasa/evidence/values.py",
     "lasa/evidence/verdicts.py",
-    "lasa/experiments/sim4.py",
+    "lasa/experiments/sim4/analysis.py",
     "lasa/experiments/study/claims.py",
     "lasa/experiments/study/preregister.py",
 }

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from lasa.base.config import ASSISTANCE, check_list, from_dict
 from lasa.base.errors import ConfigError
 from lasa.experiments import convergence, entropy_ablation, robustness, sim1, sim2, sim3, sim4
+from lasa.experiments.sim4.episodes import CLAIM_MAPS
 from lasa.experiments.study import run as study
 from lasa.method.context_map import MAP_KINDS
 from lasa.method.entropy import LAMBDA_COST, choose_lambda
@@ -233,7 +234,7 @@ LISTS = [
     (sim1.Config, "assistance", _names(ASSISTANCE), False),
     (sim2.Config, "change_steps", _integers(0, 150, at_least=2), True),
     (sim4.Config, "offsets", _numbers(0.01, 0.3, at_least=3), True),
-    (sim4.Config, "maps", _names(MAP_KINDS, sim4.CLAIM_MAPS), False),
+    (sim4.Config, "maps", _names(MAP_KINDS, CLAIM_MAPS), False),
     (robustness.Config, "alphas", _numbers(0.01, 1.0), True),
     (robustness.Config, "action_scales", _numbers(0.01, 2.0), True),
     (robustness.Config, "betas", _numbers(0.01, 1e4, sim1.CLAIM_BETAS), True),

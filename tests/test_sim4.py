@@ -13,7 +13,9 @@ import pytest
 from lasa.base.errors import ConfigError
 from lasa.evidence.verdicts import assess, member_frame
 from lasa.experiments import sim4
-from lasa.experiments.sim4 import map_geometry, new_cup_positions
+from lasa.experiments.sim4 import analysis, episodes
+from lasa.experiments.sim4.episodes import map_geometry, new_cup_positions
+from lasa.experiments.sim4.figure import other_share_text
 from lasa.method.context_map import extend_task, new_goal_frames
 
 REF = 1
@@ -27,12 +29,12 @@ def test_grasp_error_of_the_held_training_grasp_is_the_cup_distance(task):
     for offset, pos in zip(config.offsets, new_cup_positions(task, config), strict=True):
         big = extend_task(task, pos, REF)
         held, wanted = task.target(REF, theta), big.target(np.full(7, 2), theta)
-        metres, degrees = sim4.grasp_error(task.robot, held, wanted)
+        metres, degrees = episodes.grasp_error(task.robot, held, wanted)
         np.testing.assert_allclose(metres, offset, rtol=5e-3)  # IK tolerance and the spline
         np.testing.assert_allclose(degrees, 0.0, atol=0.5)  # the same approach direction
         # the wanted grasp's site is the new cup's grasp frame (by hand: the reference frame moved)
         frames, _ = new_goal_frames(task, REF, pos)
-        at_grid, _ = sim4.grasp_error(task.robot, big.curves[-1], big.curves[-1])
+        at_grid, _ = episodes.grasp_error(task.robot, big.curves[-1], big.curves[-1])
         assert np.all(at_grid == 0.0)
         np.testing.assert_allclose(task.robot.grasp_positions(big.curves[-1]), frames, atol=2e-3)
 
@@ -43,7 +45,7 @@ def test_grasp_error_against_forward_kinematics_by_hand(task):
     p, r = arm.grasp_pose(q)
     q2 = q + np.array([0.0, 0.0, 0.0, 0.0, 0.3])  # the last joint alone: the site turns about the wrist
     p2, r2 = arm.grasp_pose(q2)
-    metres, degrees = sim4.grasp_error(arm, q2[None], q[None])
+    metres, degrees = episodes.grasp_error(arm, q2[None], q[None])
     assert metres[0] == pytest.approx(np.linalg.norm(p2 - p))
     assert degrees[0] == pytest.approx(np.degrees(np.arccos(np.clip(r[:, 2] @ r2[:, 2], -1, 1))))
     assert degrees[0] > 1.0  # the wrist's turn shows
@@ -88,7 +90,7 @@ def test_headline_is_the_table_measure_and_joint_space_a_reading():
     names = ("sim4.straight_line_linear", "sim4.grasp_linear", "sim4.no_map_training_goal")
     readings = ("", "@joint_space", "@intercept", "@joint_space+intercept")
     assert set(claims) == {name + reading for name in names for reading in readings}
-    table, joint = sim4.fits(frame), sim4.fits(frame, "joint_space")
+    table, joint = analysis.fits(frame), analysis.fits(frame, "joint_space")
     assert claims["sim4.straight_line_linear"].values["slope"] == pytest.approx(
         table.loc["straight_line", "slope"]
     )
@@ -217,33 +219,33 @@ def test_the_identity_and_map_sentences_state_the_committed_numbers():
     """Notebook 07's two result sentences come from lasa, and say what the committed rows hold."""
     frame = pd.read_csv(Path(__file__).resolve().parents[1] / "figures" / "sim4_new_goals.csv")
     for robot, part in frame[frame.assistance == "point"].groupby("robot"):
-        said = sim4.identity_sentence(part)
+        said = analysis.identity_sentence(part)
         held = float(re.search(r"held at the training cup, the error is y = ([\d.]+)x", said).group(1))
         assert held == pytest.approx(1.0, abs=0.005)  # y = x by construction
-        check = sim4.no_map_check(part)
+        check = analysis.no_map_check(part)
         stayed = check.loc["without the map, belief ends on the training cup", "share"]
         assert f"over the {100 * stayed:.0f}% of episodes" in said and said.startswith(f"{robot}, ")
-    bands = sim4.by_preference(frame[(frame.robot == "panda") & (frame.h == "straight_line")])
-    assert set(bands.index.get_level_values("band")) == set(sim4.BANDS)  # every band, for the sentence
+    bands = analysis.by_preference(frame[(frame.robot == "panda") & (frame.h == "straight_line")])
+    assert set(bands.index.get_level_values("band")) == set(analysis.BANDS)  # every band, for the sentence
 
 
 def test_origin_fit_by_hand():
     """slope = sum(xy) / sum(x^2), R^2 = 1 - SSE / sum(y^2) (uncentred), against the intercept fit."""
     x = np.array([1.0, 2.0, 3.0])
-    assert sim4.fit_origin(x, 2.0 * x) == pytest.approx((2.0, 1.0))  # on y = 2x exactly
+    assert analysis.fit_form(x, 2.0 * x, "origin") == pytest.approx((2.0, 0.0, 1.0))  # on y = 2x exactly
     # y = (1, 3, 2): sum(xy) = 13, sum(x^2) = 14, sum(y^2) = 14, so slope 13/14 and R^2 = 13^2/14^2;
     # with an intercept: mean (2, 2), Sxy = 1, Sxx = 2, Syy = 2, so y = 0.5x + 1 and R^2 = 1/(2*2)
     y = np.array([1.0, 3.0, 2.0])
-    assert sim4.fit_origin(x, y) == pytest.approx((13 / 14, 169 / 196))
-    assert sim4.fit_line(x, y) == pytest.approx((0.5, 1.0, 0.25))
+    assert analysis.fit_form(x, y, "origin") == pytest.approx((13 / 14, 0.0, 169 / 196))
+    assert analysis.fit_form(x, y, "intercept") == pytest.approx((0.5, 1.0, 0.25))
     frame = pd.DataFrame(
         {"h": "none", "distance": np.repeat(x, 2), "error": np.repeat(y, 2) + [-0.1, 0.1] * 3}
     )
-    origin, intercept = sim4.fits(frame), sim4.fits(frame, form="intercept")
+    origin, intercept = analysis.fits(frame), analysis.fits(frame, form="intercept")
     assert origin.loc["none"].tolist()[:3] == pytest.approx([13 / 14, 0.0, 169 / 196])  # the cups' means
     assert intercept.loc["none"].tolist()[:3] == pytest.approx([0.5, 1.0, 0.25])
     with pytest.raises(ConfigError, match="form"):
-        sim4.fits(frame, form="quadratic")
+        analysis.fits(frame, form="quadratic")
 
 
 def test_headline_goes_through_the_origin_and_intercept_keeps_the_old_fit():
@@ -290,25 +292,25 @@ def _cups() -> pd.DataFrame:
 
 def test_cup_columns_and_end_shares_by_hand():
     frame = _cups()
-    out = sim4.with_cup_columns(frame)
-    assert list(out.columns) == [*frame.columns, *sim4.CUP_COLUMNS]
-    by_cup = out.groupby(["h", "distance"])[list(sim4.CUP_COLUMNS)].agg(["min", "max"])
+    out = analysis.with_cup_columns(frame)
+    assert list(out.columns) == [*frame.columns, *episodes.CUP_COLUMNS]
+    by_cup = out.groupby(["h", "distance"])[list(episodes.CUP_COLUMNS)].agg(["min", "max"])
     expected = {  # mean, median, share whose belief ends on the other training cup
         ("none", 0.5): (3.0, 2.0, 1 / 3),
         ("none", 1.0): (1.4, 0.7, 1 / 3),
         ("grasp", 0.5): (0.2, 0.2, 1 / 3),
     }
     for key, values in expected.items():
-        for col, v in zip(sim4.CUP_COLUMNS, values, strict=True):
+        for col, v in zip(episodes.CUP_COLUMNS, values, strict=True):
             assert by_cup.loc[key, (col, "min")] == pytest.approx(v) == by_cup.loc[key, (col, "max")]
-    shares = sim4.end_shares(frame).loc["none"]
+    shares = analysis.end_shares(frame).loc["none"]
     assert shares.loc[1.0, "mean_left"] == pytest.approx(0.5)
     assert shares.loc[1.0, "mean_stayed"] == pytest.approx(1.85)
     assert shares.n.tolist() == [3, 3]
 
 
 def test_medians_sentence_states_the_table():
-    said = sim4.medians_sentence(_cups())
+    said = analysis.medians_sentence(_cups())
     assert said.startswith("panda, without the map, new cups at 0.50 and 1.00 D")
     assert "the median error is 2.00 and 0.70 D, the mean 3.00 and 1.40 D" in said
     assert "The belief of 33 and 33% of the users ends on the other training cup" in said
@@ -316,8 +318,8 @@ def test_medians_sentence_states_the_table():
     # on the committed paper-scale rows, the numbers of end_shares (not typed ones)
     frame = pd.read_csv(Path(__file__).resolve().parents[1] / "figures" / "sim4_new_goals.csv")
     for _, part in frame[frame.assistance == "point"].groupby("robot"):
-        table = sim4.end_shares(part).loc["none"]
-        said = sim4.medians_sentence(part)
+        table = analysis.end_shares(part).loc["none"]
+        said = analysis.medians_sentence(part)
         assert f"{table['median'].iloc[-1]:.2f} D, the mean" in said
         assert f"and {100 * table.other.iloc[-1]:.0f}% of the users" in said
 
@@ -334,13 +336,13 @@ def test_every_episode_panel_is_labelled_and_the_medians_and_share_are_drawn():
     labels = [t.get_text() for t in main.get_legend().get_texts()]
     assert "median per cup" in labels
     # the fits' labels are the lines through the origin, no intercept
-    none = sim4.fits(frame).loc["none"]
+    none = analysis.fits(frame).loc["none"]
     assert any(t.startswith(f"without the map: y = {none.slope:.2f}x, R²") for t in labels)
     # each cup's median drawn, hollow, at its x (markers moved a little apart per map)
     medians = frame[frame.h == "none"].groupby("distance").error.median()
     hollow = [c for c in main.collections if len(c.get_offsets()) == len(medians)]
     assert any(np.allclose(np.asarray(c.get_offsets())[:, 1], medians.to_numpy()) for c in hollow)
     texts = [t.get_text() for t in main.texts]
-    assert sim4.other_share_text(frame) in texts
-    assert "0% of users at the nearest cup, 50% at the farthest" in sim4.other_share_text(frame)
+    assert other_share_text(frame) in texts
+    assert "0% of users at the nearest cup, 50% at the farthest" in other_share_text(frame)
     plt.close(fig)

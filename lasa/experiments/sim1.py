@@ -1,7 +1,5 @@
-"""Fig. sim1: users of fixed expertise (Sec. V-A).
-
-Every method against users of fixed rationality beta (Eq. S1): final state error and time to
-reach s*, per beta. Notebook ``04_fixed_expertise``; the claims' rules: :mod:`lasa.evidence.rules`.
+"""Fig. sim1: users of fixed expertise (Sec. V-A): every method against users of fixed rationality beta
+(Eq. S1), final state error and time to reach s* per beta. Notebook ``04_fixed_expertise``.
 """
 
 from __future__ import annotations
@@ -22,26 +20,16 @@ from matplotlib.transforms import blended_transform_factory
 from lasa.base.config import ControlConfig, Positive, PositiveInt, Rationality, check_list
 from lasa.base.errors import ConfigError
 from lasa.evidence import plots
-from lasa.evidence.claims import Claim, numbers_of
+from lasa.evidence.claims import Claim
 from lasa.evidence.findings import side_of
 from lasa.evidence.metrics import confidence, normalized_error, time_to_reach
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Looks, group_means
+from lasa.evidence.verdicts import USER, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "run",
-    "claims",
-    "boot_values",
-    "plot",
-    "time_ratio_band",
-    "findings",
-]
+__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "time_ratio_band", "findings"]
 
 NAME = "sim1_fixed_expertise"
 # the contract's columns first, then what the notebook and the claims read
@@ -59,7 +47,6 @@ COLUMNS = (
     "assistance",
     "look",
 )
-DPI = 150
 CLAIM_BETAS = (75.0, 1000.0)  # the rationalities the claims compare at (noisy, near optimal) [1/rad^2]
 
 
@@ -94,19 +81,12 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim1: every method against users of fixed rationality beta, for one look's users.
+    """Fig. sim1 for one look's users: one row per episode, and the trajectories in that order."""
 
-    Args:
-        decoders: ``{"base": ..., "entropy": ...}`` (or one base model): see
-            :func:`lasa.experiments.sweep.run_population`.
-        look, assistance: Which look's users, under which members (:func:`~lasa.experiments.sweep.run_look`).
+    def fixed(beta: list[float], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
+        return {"beta0": np.array(beta, dtype=float), "slope": np.zeros(len(goal))}
 
-    Returns:
-        One row per episode with the columns of :data:`COLUMNS` (``assistance`` is ``none`` for LA,
-        the column ``seed`` is the user's index over all looks); and the trajectories of all
-        episodes (users in the frame's row order).
-    """
-    ran = sweep.run_look(decoders, task, control, config, config.betas, _fixed, progress, look, assistance)
+    ran = sweep.run_look(decoders, task, control, config, config.betas, fixed, progress, look, assistance)
     users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
@@ -129,26 +109,15 @@ def run(
     return frame, traj
 
 
-def _fixed(beta: list[float], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
-    """Users of fixed rationality ``beta`` (no learning)."""
-    return {"beta0": np.array(beta, dtype=float), "slope": np.zeros(len(goal))}
-
-
 def _means(frame: pd.DataFrame) -> pd.DataFrame:
     """Mean final error and time per (beta, method), methods as columns."""
     metrics = [m for m in ("final_error", "time") if m in frame]
     return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
 
 
-def _sa_claims(
-    frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", means: pd.DataFrame | None = None
-) -> list[Claim]:
-    """Evaluate the paper's Fig. sim1 claims on a sim1 frame, comparing ``a`` with ``b``.
-
-    Raises:
-        ConfigError: if beta = 75 or beta = 1000 is missing from the frame.
-    """
-    robot = str(frame.robot.iloc[0])
+def _sa_claims(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> list[Claim]:
+    """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
+    robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
     betas = set(frame.beta)
     if not set(CLAIM_BETAS) <= betas:
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
@@ -156,64 +125,49 @@ def _sa_claims(
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
     r75 = tim.loc[75.0, a] / tim.loc[75.0, b]
     r1000 = tim.loc[1000.0, a] / tim.loc[1000.0, b]
-    return [
-        _final_error_claim(frame, err, a, b, robot),
-        _time_ratio_claim(tim, r75, r1000, a, b, robot),
-        _gap_claim(err, r75, r1000, a, b, robot),
-    ]
-
-
-def _final_error_claim(frame: pd.DataFrame, err: pd.DataFrame, a: str, b: str, robot: str) -> Claim:
-    """sim1.final_error: b's mean final error below a's at every beta (``err``: per beta, a and b)."""
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
-    values = {"share_lower": n_lower / n_total}
-    verdict = rule("sim1.final_error").verdict(values)
+    share = {"share_lower": n_lower / n_total}
     worst = (err[b] - err[a]).idxmax()
-    return sweep.sim_claim(
-        "sim1.final_error",
-        robot,
-        values,
-        claim=f"SA lowers the final state error at every beta ({b} vs {a})",
-        paper="LA+SA below LA at every beta",
-        measured=f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
-        f"mean final error {a} vs {b}: "
-        f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
-        f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000",
-        note=""
-        if verdict == "yes"
-        else f"Largest excess of {b} at beta={worst:g} ({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}).",
-    )
-
-
-def _time_ratio_claim(tim: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
-    """sim1.time_ratio: a's mean time over b's at beta = 75 and 1000 (``tim``: per beta, a and b)."""
-    values = {"ratio_75": float(r75), "ratio_1000": float(r1000)}
-    return sweep.sim_claim(
-        "sim1.time_ratio",
-        robot,
-        values,
-        claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
-        paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
-        measured=f"time ratio {r75:.2f} at beta=75 ({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), "
-        f"{r1000:.2f} at beta=1000 ({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)",
-    )
-
-
-def _gap_claim(err: pd.DataFrame, r75: float, r1000: float, a: str, b: str, robot: str) -> Claim:
-    """sim1.gap_narrows: the time ratio and the final-error gap from beta = 75 to 1000."""
     d75, d1000 = err.loc[75.0, a] - err.loc[75.0, b], err.loc[1000.0, a] - err.loc[1000.0, b]
-    values = _gap_values(r75, r1000, d75, d1000)
-    return sweep.sim_claim(
-        "sim1.gap_narrows",
-        robot,
-        values,
-        claim=f"the gap between {a} and {b} narrows as beta grows",
-        paper="time gap 45% at beta=75 -> 30% at beta=1000",
-        measured=f"time gap (ratio - 1) {r75 - 1:+.2f} -> {r1000 - 1:+.2f}, "
-        f"narrowing {values['time_narrowing']:+.2f} (g75 - |g1000|); final-error gap {a}-{b} "
-        f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)",
-    )
+    gap = _gap_values(r75, r1000, d75, d1000)
+    return [
+        sweep.sim_claim(
+            "sim1.final_error",
+            robot,
+            share,
+            claim=f"SA lowers the final state error at every beta ({b} vs {a})",
+            paper="LA+SA below LA at every beta",
+            measured=f"{b} lower at {n_lower}/{n_total} betas (the interval is for this share); "
+            f"mean final error {a} vs {b}: "
+            f"{err.loc[75.0, a]:.3f} vs {err.loc[75.0, b]:.3f} at beta=75, "
+            f"{err.loc[1000.0, a]:.3f} vs {err.loc[1000.0, b]:.3f} at beta=1000",
+            note=""
+            if rule("sim1.final_error").verdict(share) == "yes"
+            else f"Largest excess of {b} at beta={worst:g} "
+            f"({err.loc[worst, b]:.3f} vs {err.loc[worst, a]:.3f}).",
+        ),
+        sweep.sim_claim(
+            "sim1.time_ratio",
+            robot,
+            {"ratio_75": float(r75), "ratio_1000": float(r1000)},
+            claim=f"{a} takes 45% more time than {b} at beta=75 and 30% more at beta=1000",
+            paper="time ratio 1.45 at beta=75, 1.30 at beta=1000 (7-DoF Panda)",
+            measured=f"time ratio {r75:.2f} at beta=75 "
+            f"({tim.loc[75.0, a]:.1f} vs {tim.loc[75.0, b]:.1f} steps), {r1000:.2f} at beta=1000 "
+            f"({tim.loc[1000.0, a]:.1f} vs {tim.loc[1000.0, b]:.1f} steps)",
+        ),
+        sweep.sim_claim(
+            "sim1.gap_narrows",
+            robot,
+            gap,
+            claim=f"the gap between {a} and {b} narrows as beta grows",
+            paper="time gap 45% at beta=75 -> 30% at beta=1000",
+            measured=f"time gap (ratio - 1) {r75 - 1:+.2f} -> {r1000 - 1:+.2f}, "
+            f"narrowing {gap['time_narrowing']:+.2f} (g75 - |g1000|); final-error gap {a}-{b} "
+            f"{d75:+.3f} -> {d1000:+.3f} (beta 75 -> 1000)",
+        ),
+    ]
 
 
 def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
@@ -284,45 +238,33 @@ METRIC_LABELS = {"final_error": "final state error (normalised)", "time": "time 
 # the paper's time ratio LA / LA+SA at these betas (Panda) and the rule's tolerance, from its rule [-]
 PAPER_RATIOS = {float(p.where.split("=")[1]): p.value for p in rule("sim1.time_ratio").paper}
 RATIO_TOLERANCE = rule("sim1.time_ratio").paper[0].tolerance
-LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 PAPER_FINAL_ERROR = "paper: LA+SA below LA at every β"  # Fig. sim1 (Sec. V-A), rule sim1.final_error
 OPEN: dict[str, Any] = {"marker": "o", "ms": 6, "mfc": "white", "ls": "none", "zorder": 6}  # a censored point
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: a metric against beta per method, with bootstrap bands at the verdicts' level.
-
-    Args:
-        frame: One robot's rows (columns ``beta``, ``method`` and ``metric``; ``completed``
-            for the time).
-        metric: ``final_error`` or ``time``.
-    """
-    ax = plots.method_lineplot(frame, "beta", metric, ax, level=LEVEL)
+    """One panel: ``final_error`` or ``time`` against beta per method, with bands at the verdicts' level."""
+    ax = plots.method_lineplot(frame, "beta", metric, ax, level=sweep.LEVEL)
     ax.set_xscale("log")
     ax.set_xlabel(r"user rationality $\beta$")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     for i, beta in enumerate(PAPER_RATIOS):
         label = "β = 75, 1000: the paper's time ratios" if i == 0 else None
         ax.axvline(beta, color="0.8", lw=0.8, zorder=0, label=label)
-    extra: list[Artist] = [plots.band_handle(LEVEL)]
+    extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
     if metric == "final_error" and {"LA", "LA+SA"} <= set(frame.method):
-        _mark_lower(frame, ax)
+        # mark, at the top, each beta where LA+SA's mean final error is below LA's
+        err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
+        lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
+        top = blended_transform_factory(ax.transData, ax.transAxes)
+        label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
+        color = plots.METHOD_COLORS["LA+SA"]
+        ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
         extra.append(plots.paper_handle(PAPER_FINAL_ERROR))
     if metric == "time" and "completed" in frame:
         extra += _mark_censored(frame, ax)
     plots.legend_below(ax, extra)
     return ax
-
-
-def _mark_lower(frame: pd.DataFrame, ax: Axes) -> Line2D:
-    """Mark, at the top of ``ax``, each beta where LA+SA's mean final error is below LA's (labelled)."""
-    err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
-    lower = err.index[err["LA+SA"] < err["LA"]].to_numpy(dtype=float)
-    top = blended_transform_factory(ax.transData, ax.transAxes)
-    label = f"ours: LA+SA below LA at {len(lower)} of {len(err)} β (marked ▼)"
-    color = plots.METHOD_COLORS["LA+SA"]
-    (line,) = ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
-    return line
 
 
 def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
@@ -341,21 +283,11 @@ def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
     return [Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN)]
 
 
-def time_ratio_band(
-    frame: pd.DataFrame,
-    a: str = "LA",
-    b: str = "LA+SA",
-    n_boot: int = 1000,
-    seed: int = 0,
-    level: float = LEVEL,
-) -> pd.DataFrame:
-    """Mean time of ``a`` over mean time of ``b`` per beta, with a percentile bootstrap interval at ``level``.
-
-    Returns:
-        One row per beta with both methods: ``beta``, ``ratio``, ``low``, ``high``.
-    """
-    rng = np.random.default_rng(seed)
-    tail = 50.0 * (1.0 - level)
+def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000) -> pd.DataFrame:
+    """Mean time of ``a`` over ``b``'s per beta (``ratio``), with a percentile bootstrap interval at the
+    verdicts' level (users resampled, seed 0; ``low``, ``high``)."""
+    rng = np.random.default_rng(0)
+    tail = 50.0 * (1.0 - sweep.LEVEL)
     times = frame.pivot_table(index=["beta", USER], columns="method", values="time", aggfunc="mean")
     means = frame.groupby(["beta", "method"]).time.mean()
     rows = []
@@ -377,7 +309,7 @@ def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     ax = plt.gca() if ax is None else ax
     band = time_ratio_band(frame)
     color = plots.METHOD_COLORS["LA+SA"]
-    label = f"ours: {100 * LEVEL:.4g}% bootstrap CI (the verdicts' level)"
+    label = f"ours: {100 * sweep.LEVEL:.4g}% bootstrap CI (the verdicts' level)"
     ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
     ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
     if "completed" in frame:
@@ -414,14 +346,6 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     return sweep.sim_figure(table, assistance, title, (3, (16, 6.4), draw), ["method", "beta"])
 
 
-def _interval(claim: Claim, name: str) -> tuple[float, float, float]:
-    """(value, low, high) of the number ``name`` its rule reads (:func:`~lasa.evidence.claims.numbers_of`)."""
-    number = numbers_of(claim).get(name)
-    if number is None:
-        raise ConfigError(f"{claim.id} has no number {name!r}; it has {sorted(claim.values)}")
-    return number.value, number.low, number.high
-
-
 def _side(low: float, high: float, at: float, below: str, above: str) -> str:
     """``below`` or ``above`` when the interval lies on one side of ``at``; otherwise that it contains it."""
     said = {"below": below, "above": above}
@@ -429,17 +353,11 @@ def _side(low: float, high: float, at: float, below: str, above: str) -> str:
 
 
 def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:
-    """Fig. sim1's time ratios and gaps on one robot, from its headline claims' numbers, as Markdown bullets.
-
-    Args:
-        claims: The claims of :func:`claims` (rows of every member; the headline's are read).
-        robot: The robot whose rows to read.
-        assistance: The headline member.
-    """
+    """Fig. sim1's time ratios and gaps on ``robot``, from its claims under ``assistance``, in Markdown."""
     rows = {c.id: c for c in claims if c.robot == robot and c.assistance == assistance}
     ratio, gap = rows["sim1.time_ratio"], rows["sim1.gap_narrows"]
-    r75, r1000 = _interval(ratio, "ratio_75"), _interval(ratio, "ratio_1000")
-    e75, t75 = _interval(gap, "error_gap_75"), _interval(gap, "time_gap_75")
+    r75, r1000 = sweep.number(ratio, "ratio_75"), sweep.number(ratio, "ratio_1000")
+    e75, t75 = sweep.number(gap, "error_gap_75"), sweep.number(gap, "time_gap_75")
     slower, faster = "LA is slower than LA+SA", "LA is faster than LA+SA"
     said = sweep.interval_text
     return "\n".join(

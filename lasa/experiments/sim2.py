@@ -1,7 +1,5 @@
-"""Fig. sim2: users who change their mind (Sec. V-B).
-
-Near-optimal users aim at the wrong cup for the first N steps, then at the right one. Notebook
-``05_changing_goals``; the claims' rules: :mod:`lasa.evidence.rules`.
+"""Fig. sim2: users who change their mind (Sec. V-B): near-optimal users aim at the wrong cup for the
+first N steps, then at the right one. Notebook ``05_changing_goals``.
 """
 
 from __future__ import annotations
@@ -21,7 +19,7 @@ from lasa.evidence import plots
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import confidence, normalized_error
 from lasa.evidence.rules import rule
-from lasa.evidence.verdicts import USER, Looks, group_means
+from lasa.evidence.verdicts import USER, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
@@ -59,7 +57,6 @@ COLUMNS = (
     "assistance",
     "look",
 )
-DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
@@ -91,11 +88,7 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim2: final error and confidence in the true cup against the change step N.
-
-    Returns:
-        One row per episode with the columns of :data:`COLUMNS`; and the trajectories.
-    """
+    """Fig. sim2: final error and confidence in the true cup against the change step N, per episode."""
 
     def changing(change: list[int], goal: np.ndarray, theta: np.ndarray) -> dict[str, np.ndarray]:
         first = task.target(wrong_goal(goal, task.n_goals), theta)
@@ -134,11 +127,9 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     """Evaluate Fig. sim2's claims: LA+SA is trapped at the wrong cup, LA+SA+Entropy is not."""
     robot = str(frame.robot.iloc[0])
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
-    rate = frame.groupby(["method", "change_step"]).success.mean()
-    err = frame.groupby(["method", "change_step"]).final_error.mean()
-    conf = frame.groupby(["method", "change_step"]).confidence.mean()
-    sa_lo, sa_hi = rate["LA+SA", lo], rate["LA+SA", hi]
-    en_hi = rate["LA+SA+Entropy", hi]
+    by = ["method", "change_step"]
+    rate, err, conf = (frame.groupby(by)[c].mean() for c in ("success", "final_error", "confidence"))
+    sa_lo, sa_hi, en_hi = rate["LA+SA", lo], rate["LA+SA", hi], rate["LA+SA+Entropy", hi]
     values1 = {
         "error_growth": float(err["LA+SA", hi] - err["LA+SA", lo]),
         "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),
@@ -171,11 +162,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
     """:func:`claims`' numbers in every resample of users (``counts``, :mod:`lasa.evidence.verdicts`)."""
     lo, hi = int(frame.change_step.min()), int(frame.change_step.max())
-    rate = group_means(
-        frame.assign(success=frame.success.astype(float)), ["method", "change_step"], "success", counts
-    )
-    err = group_means(frame, ["method", "change_step"], "final_error", counts)
-    conf = group_means(frame, ["method", "change_step"], "confidence", counts)
+    by = ["method", "change_step"]
+    rate, err, conf = (group_means(frame, by, c, counts) for c in ("success", "final_error", "confidence"))
     sa_hi, en_hi = rate[("LA+SA", hi)], rate[("LA+SA+Entropy", hi)]
     return {
         "sim2.sa_trapped": {
@@ -186,52 +174,45 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     }
 
 
-LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 METRIC_LABELS = {
     "final_error": "final state error (normalised)",
     "success": "success: share that reach the true cup",
     "confidence": "confidence b(g*) at the end",
 }
 PROBABILITIES = ("success", "confidence")  # panels of a share or a probability: a [0, 1] axis
-
-
 # what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled legend entry
 PAPER_SHAPES = {
     "final_error": "paper: LA+SA's error grows with N; LA+SA+Entropy stays low",
     "success": "paper: LA+SA users cannot escape the wrong cup as N grows; LA+SA+Entropy users switch",
     "confidence": "paper: LA+SA's confidence in the true cup falls with N; LA+SA+Entropy's stays high",
 }
-# the success thresholds of the verdicts at the largest N: (rule, its number, the method it reads);
-# sim2.sa_trapped rests on the final error and the confidence, the other two panels
-SUCCESS_RULES = (("sim2.entropy_escapes", "success_entropy", "LA+SA+Entropy"),)
 
 
 def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
     """One panel: final error, success share or confidence in the true cup against the change step N."""
     if metric == "success":
         frame = frame.assign(success=frame.success.astype(float))
-    ax = plots.method_lineplot(frame, "change_step", metric, ax, level=LEVEL)
+    ax = plots.method_lineplot(frame, "change_step", metric, ax, level=sweep.LEVEL)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
     if metric == "success":
         _mark_thresholds(ax, int(frame.change_step.max()))
     if metric in PROBABILITIES:
         plots.probability_axis(ax)
-    extra: list[Artist] = [plots.band_handle(LEVEL)]
+    extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
     if metric in PAPER_SHAPES:
         extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
     plots.legend_below(ax, extra)
     return ax
 
 
-def _mark_thresholds(ax: Axes, n_max: int) -> None:
-    """Short dashed marks at the largest N: each success threshold of :data:`SUCCESS_RULES`, labelled."""
-    for rule_id, name, method in SUCCESS_RULES:
-        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}[name]
-        for i, level in enumerate(limits):
-            label = f"{rule_id}: {method}'s threshold at N = {n_max}" if i == 0 else None
-            xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
-            ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS[method], lw=1.5, label=label)
+def _mark_thresholds(ax: Axes, n_max: int, rule_id: str = "sim2.entropy_escapes") -> None:
+    """Short dashed marks at the largest N: the success thresholds of LA+SA+Entropy's verdict, labelled."""
+    limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
+    for i, level in enumerate(limits):
+        label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
+        xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
+        ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
@@ -253,9 +234,7 @@ STILL_STEPS = 50  # [steps]
 
 
 def wrong_goal(goal: int | np.ndarray, n_goals: int) -> int | np.ndarray:
-    """The cup a user who wants ``goal`` aims at before the change step: the next one,
-    ``(goal + 1) % n_goals`` (with two cups, the other one); for one goal or an array of them.
-    """
+    """The cup a user who wants ``goal`` (one or many) aims at before the change: ``(goal + 1) % n_goals``."""
     goals = np.asarray(goal)
     if goals.size and (goals.min() < 0 or goals.max() >= n_goals):
         raise ConfigError(f"goal must be in [0, {n_goals}), got {goal}")
@@ -264,21 +243,12 @@ def wrong_goal(goal: int | np.ndarray, n_goals: int) -> int | np.ndarray:
 
 
 def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, success: float) -> pd.DataFrame:
-    """Per episode, what happens after the change of mind at step N: why a user does or does not succeed.
+    """Per episode of ``frame`` (the rows of ``traj``), what happens after the change of mind at step N.
 
-    Args:
-        frame: :func:`run`'s rows of the episodes in ``traj`` (the first look), in its order.
-        traj: Their trajectories.
-        success: The normalised final error that counts as success (``Config.success``).
-
-    Returns:
-        ``frame``'s columns plus ``steps_left`` (the horizon minus N), ``away_at_n`` (the
-        distance from home at step N), ``belief_at_n`` (b(g*) at step N), ``turn`` (steps after N
-        until b(g*) first exceeds 0.5, NaN if never), ``reach`` (steps after N until the error
-        first drops to ``success``, NaN if never), ``still`` (whether the arm moved less than
-        :data:`STILL` in its last :data:`STILL_STEPS` steps) and ``wrong_error`` (the final
-        distance to the wrong cup's grasp of the same preference). Distances over the goal distance.
-    """
+    Adds ``steps_left``, ``away_at_n`` (from home), ``belief_at_n`` (b(g*)), ``turn`` and ``reach`` (steps
+    after N until b(g*) > 0.5 and until the error is at most ``success``, NaN if never), ``still`` (moved
+    less than :data:`STILL` in the last :data:`STILL_STEPS` steps) and ``wrong_error`` (to the wrong cup's
+    grasp of the same preference); distances over the goal distance."""
     n_steps, goal = len(traj.states) - 1, frame.goal.to_numpy()
     rows = np.arange(len(frame))
     states, change = traj.states, frame.change_step.to_numpy()
@@ -336,11 +306,6 @@ def _median(values: pd.Series, left: int) -> str:
     return f"more than {left}" if not np.isfinite(median) else f"{median:.0f}"
 
 
-# --- the notebook's result sentences (issue 47: every number in them is read from the run's data) ---
-
-SA, ENTROPY = "LA+SA", "LA+SA+Entropy"
-
-
 def _prob(p: float) -> str:
     """A probability with two significant digits of its distance to 0 or 1 (below 1e-4: ``3.4e-06``)."""
     near = min(p, 1.0 - p)
@@ -369,20 +334,12 @@ def _part(value: float, low: float, high: float, up: str, down: str) -> str:
 
 
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
-    """sim2.sa_trapped's two parts as one Markdown bullet: how LA+SA's error and confidence move with N.
-
-    Args:
-        claim: The robot's headline ``sim2.sa_trapped`` row (its ``values`` and ``intervals``).
-        steps: The smallest and the largest N.
-    """
+    """sim2.sa_trapped's two parts as a Markdown bullet: LA+SA's error and confidence from N = ``steps``."""
     if claim.id != "sim2.sa_trapped":
         raise ConfigError(f"claim_sentence reads sim2.sa_trapped, got {claim.id!r}")
     parts = []
     for name, up, down in (("error_growth", "grows", "falls"), ("confidence_drop", "falls", "rises")):
-        if name not in claim.values:
-            raise ConfigError(f"{claim.id} has no number {name!r}; it has {sorted(claim.values)}")
-        value = float(claim.values[name])
-        low, high = claim.intervals.get(name, (np.nan, np.nan))
+        value, low, high = sweep.number(claim, name)
         parts.append((value > 0, _part(value, float(low), float(high), up, down)))
     holds = sum(h for h, _ in parts)
     count = ("neither part holds", "one part holds", "both parts hold")[holds]
@@ -401,11 +358,7 @@ def _rates(head: pd.DataFrame) -> pd.DataFrame:
 
 
 def success_sentence(head: pd.DataFrame) -> str:
-    """Each method's success share at every N, and which way it moves from the smallest N to the largest.
-
-    Args:
-        head: One member's rows (:func:`run`'s columns; LA's rows with them), every look.
-    """
+    """Each method's success share at every N in ``head`` (one member's rows and LA's), and its trend."""
     rates = _rates(head)
     steps = ", ".join(str(n) for n in rates.index)
     lines = [
@@ -415,15 +368,9 @@ def success_sentence(head: pd.DataFrame) -> str:
     return f"- **Success at N = {steps}.** " + "; ".join(lines) + "."
 
 
-def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = SA) -> str:
-    """Where ``method``'s belief ends, and what its users who fail at the largest N do.
-
-    Args:
-        head: One member's rows (and LA's), every look: the end confidences.
-        after: :func:`after_the_change`'s rows of the same member (and LA), first look.
-        tolerance: The normalised final error that counts as success (``Config.success``).
-        method: The assisted method read.
-    """
+def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = "LA+SA") -> str:
+    """Where ``method``'s belief ends (``head``: one member's rows and LA's, every look), and what its
+    users who fail at the largest N do (``after``: :func:`after_the_change`'s, first look)."""
     conf = head[head.method == method].groupby("change_step").confidence
     median, n_max = conf.median(), int(head.change_step.max())
     last = head[(head.method == method) & (head.change_step == n_max)].confidence
@@ -477,13 +424,8 @@ def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: floa
 
 
 def dip_sentence(head: pd.DataFrame, after: pd.DataFrame, method: str = "LA") -> str:
-    """Where ``method``'s success is lowest, and what its unsuccessful users there show.
-
-    Args:
-        head: One member's rows (and LA's), every look: the counts, errors and end confidences.
-        after: :func:`after_the_change`'s rows, first look: the arm at step N and who stands still.
-        method: The method read (LA, whose dip at a small N the notebook explains).
-    """
+    """Where ``method``'s success is lowest (LA's dip at a small N, by default), and what its unsuccessful
+    users there show (``head`` and ``after`` as in :func:`belief_sentence`)."""
     rate = _rates(head)[method]
     n, n_max = int(rate.idxmin()), int(rate.index.max())
     part = head[(head.method == method) & (head.change_step == n)]
@@ -506,15 +448,8 @@ def dip_sentence(head: pd.DataFrame, after: pd.DataFrame, method: str = "LA") ->
 
 
 def findings(claims: list[Claim], head: pd.DataFrame, after: pd.DataFrame, tolerance: float) -> str:
-    """Fig. sim2's results on one robot and member, as Markdown bullets, every number from the run.
-
-    Args:
-        claims: The claims of :func:`claims` (the headline ``sim2.sa_trapped`` row of ``head``'s member
-            and robot is read).
-        head: One member's rows (and LA's), every look (:func:`lasa.evidence.verdicts.member_frame`).
-        after: :func:`after_the_change`'s rows of the same member and LA, first look.
-        tolerance: The normalised final error that counts as success (``Config.success``).
-    """
+    """Fig. sim2's results on one robot and member as Markdown bullets (``head``, ``after`` as in
+    :func:`belief_sentence`; ``tolerance``: ``Config.success``)."""
     steps = (int(head.change_step.min()), int(head.change_step.max()))
     return "\n".join(
         [

@@ -1,7 +1,5 @@
-"""Fig. sim3: users who learn within the task (Sec. V-C).
-
-Rationality grows from random, beta(t) = m t, for a fast and a slow learner. Notebook
-``06_learning_users``; the claim's rule: :mod:`lasa.evidence.rules`.
+"""Fig. sim3: users who learn within the task (Sec. V-C): rationality grows from random, beta(t) = m t,
+for a fast and a slow learner. Notebook ``06_learning_users``.
 """
 
 from __future__ import annotations
@@ -17,33 +15,17 @@ from lasa.base.config import ControlConfig, Positive, PositiveInt
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim
 from lasa.evidence.metrics import normalized_error
-from lasa.evidence.plots import (
-    band_handle,
-    legend_below,
-    method_lineplot,
-    paper_handle,
-)
-from lasa.evidence.verdicts import USER, Looks, group_means
+from lasa.evidence.plots import band_handle, legend_below, method_lineplot, paper_handle
+from lasa.evidence.verdicts import USER, group_means
 from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "run",
-    "claims",
-    "boot_values",
-    "episode_means",
-    "plot",
-    "findings",
-]
+__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "episode_means", "plot", "findings"]
 
 NAME = "sim3_learning_users"
 COLUMNS = ("robot", "method", "learner", "slope", USER, "t", "error", "assistance", "look")
 LEARNERS = ("fast", "slow")
-DPI = 150
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,42 +61,31 @@ def run(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> tuple[pd.DataFrame, Trajectories]:
-    """Fig. sim3: the error over time of users whose rationality grows as beta(t) = m t.
+    """Fig. sim3 for one look's users: one row per (episode, recorded step), and the trajectories."""
 
-    Returns:
-        One row per (episode, recorded step) with the columns of :data:`COLUMNS`; and
-        the trajectories (users in the order method x learner x user).
-    """
+    def learning(learners: list[tuple[str, float]], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
+        return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
+
     ran = sweep.run_look(
-        decoders, task, control, config, config.learners, _learning, progress, look, assistance
+        decoders, task, control, config, config.learners, learning, progress, look, assistance
     )
-    users, traj, method = ran.users, ran.traj, ran.method
-    learner = np.array([name for name, _ in ran.condition])
-    slope = users.slope
-    errors = normalized_error(traj.states, users.target[None], task.goal_distance)  # (T+1, U)
+    errors = normalized_error(ran.traj.states, ran.users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
-    n_users = len(ran.user)
+    k = len(steps)
     frame = pd.DataFrame(
         {
             "robot": task.robot.name,
-            "method": np.repeat(method, len(steps)),
-            "learner": np.repeat(learner, len(steps)),
-            "slope": np.repeat(slope, len(steps)),
-            USER: np.repeat(ran.user, len(steps)),
-            "t": np.tile(steps, n_users),
+            "method": np.repeat(ran.method, k),
+            "learner": np.repeat(np.array([name for name, _ in ran.condition]), k),
+            "slope": np.repeat(ran.users.slope, k),
+            USER: np.repeat(ran.user, k),
+            "t": np.tile(steps, len(ran.user)),
             "error": errors[steps].T.ravel(),
-            "assistance": np.repeat(ran.member, len(steps)),
+            "assistance": np.repeat(ran.member, k),
             "look": look,
         }
     )
-    return frame, traj
-
-
-def _learning(
-    learners: list[tuple[str, float]], goal: np.ndarray, theta: np.ndarray
-) -> dict[str, np.ndarray]:
-    """Users who learn from random, beta(t) = m t."""
-    return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
+    return frame, ran.traj
 
 
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
@@ -126,8 +97,7 @@ def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users."""
     robot = str(frame.robot.iloc[0])
-    per_episode = frame.groupby(["learner", "method", USER]).error.mean()
-    mean = per_episode.groupby(["learner", "method"]).mean()
+    mean = frame.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
     values = {f"gain_{name}": float(gain[name]) for name in learners}
@@ -159,13 +129,12 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 
 
 PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
-LEVEL = Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
 
 def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
     """One panel: one learner's error over time per method, with bands at the verdicts' level."""
     part = frame[frame.learner == learner]
-    ax = method_lineplot(part, "t", "error", ax, level=LEVEL)
+    ax = method_lineplot(part, "t", "error", ax, level=sweep.LEVEL)
     ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
     ax.set_xlabel("time step t")
     ax.set_ylabel("state error (normalised)")
@@ -174,7 +143,7 @@ def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> A
     for handle in handles:
         if handle.get_label() in mean:
             handle.set_label(f"{handle.get_label()}: mean over the episode {mean[handle.get_label()]:.3f}")
-    legend_below(ax, [band_handle(LEVEL), paper_handle(PAPER_SHAPE)])
+    legend_below(ax, [band_handle(sweep.LEVEL), paper_handle(PAPER_SHAPE)])
     return ax
 
 
@@ -186,26 +155,18 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
             plot_learner(part, learner, ax=ax)
             ax.set_title(f"{name}: {ax.get_title()}")
 
-    keys = ["method", "learner", "t"]
-    return sweep.sim_figure(
-        table, assistance, "Fig. sim3: users who learn", (2, (11, 5.2), draw), keys, "curve"
-    )
+    title, keys = "Fig. sim3: users who learn", ["method", "learner", "t"]
+    return sweep.sim_figure(table, assistance, title, (2, (11, 5.2), draw), keys, "curve")
 
 
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
-    """Fig. sim3's result on one robot and member, as Markdown bullets, every number from the run.
-
-    Args:
-        claims: The claims of :func:`claims` (the headline row of ``head``'s robot and member is read).
-        head: One member's rows (and LA's), one per episode or step: the mean errors over the episode.
-    """
+    """Fig. sim3's result on ``head``'s robot and member (its rows and LA's) as Markdown bullets."""
     claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
     robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     lines, lower, learners = [], [], sorted(set(head.learner))
     for learner in learners:
-        gain = float(claim.values[f"gain_{learner}"])
-        low, high = claim.intervals.get(f"gain_{learner}", (np.nan, np.nan))
+        gain, low, high = sweep.number(claim, f"gain_{learner}")
         word = "lowers" if gain > 0 else "raises"
         said = sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"

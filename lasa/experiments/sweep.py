@@ -1,8 +1,6 @@
-"""What the simulated-user sweeps share: drawing episodes, and rolling out mixed methods.
+"""What the simulated-user sweeps share: drawing episodes, rolling out mixed methods, claim rows, figures.
 
-One population of users covers every condition and runs batched, one rollout per decoder. User i
-has the same cup, preference and random stream in every condition (paired episodes); the CSVs keep
-the column name ``seed`` for that index (:data:`lasa.evidence.verdicts.USER`), the code says ``user``.
+One batched population covers every condition; user i (the CSVs' ``seed``) is the same in each (paired).
 """
 
 from __future__ import annotations
@@ -10,7 +8,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, TypeVar
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -31,7 +29,7 @@ from lasa.base.config import (
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence import verdicts
-from lasa.evidence.claims import Claim
+from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.plots import robot_rows, users_text, wrap_to
 from lasa.evidence.rules import rule
 from lasa.method.decoder import ActionDecoder
@@ -40,24 +38,8 @@ from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import PILOTS, UserPopulation
 from lasa.world.goals import GoalTask
 
-T = TypeVar("T")
+LEVEL = verdicts.Looks().level  # the verdicts' interval level (1 - 0.05 / looks: 98.75%), of every band [-]
 
-__all__ = [
-    "Decoders",
-    "check_assistance",
-    "swept_assistance",
-    "as_decoders",
-    "check_methods",
-    "check_needed",
-    "check_record_every",
-    "LooksConfig",
-    "SweepConfig",
-    "draw_episodes",
-    "episodes",
-    "run_population",
-    "run_look",
-    "judge",
-]
 
 Decoders = Mapping[str, ActionDecoder] | ActionDecoder
 
@@ -67,33 +49,22 @@ def as_decoders(decoders: Decoders) -> Mapping[str, ActionDecoder]:
     return {"base": decoders} if isinstance(decoders, ActionDecoder) else decoders
 
 
-def check_methods(methods: tuple[str, ...]) -> None:
-    """Every method is one of :data:`lasa.method.step.METHODS`, at least one, none twice."""
-    if not methods:
-        raise ConfigError("methods must not be empty")
-    for method in methods:
-        if method not in METHODS:
-            raise ConfigError(f"unknown method {method!r}; choose from {METHODS}")
-    check_list("methods", methods)
+def check_names(name: str, values: tuple[str, ...], choices: tuple[str, ...]) -> None:
+    """A list setting of names: at least one, each one of ``choices``, none twice."""
+    if not values:
+        raise ConfigError(f"{name} must name at least one of {', '.join(map(repr, choices))}")
+    for value in values:
+        check_choice(name, value, choices)
+    check_list(name, values)
 
 
 def check_assistance(assistance: tuple[str, ...]) -> None:
-    """Every name is a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`); at least one,
-    none twice.
-    """
-    if not assistance:
-        raise ConfigError("assistance must name at least one member")
-    for name in assistance:
-        check_choice("assistance", name, BUILT_IN_ASSISTANCE)
-    check_list("assistance", assistance)
+    """Every name a built-in member (:data:`lasa.base.config.BUILT_IN_ASSISTANCE`), at least one."""
+    check_names("assistance", assistance, BUILT_IN_ASSISTANCE)
 
 
 def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], reader: str) -> None:
-    """``given`` (a list setting) holds every value of ``needed``, which ``reader`` reads.
-
-    Raises:
-        ConfigError: one line naming the setting, what is missing and who reads it.
-    """
+    """``given`` (a list setting) holds every value of ``needed``, which ``reader`` reads."""
     missing = [v for v in needed if v not in given]
     if missing:
         listed = ", ".join(f"{v:g}" if isinstance(v, float) else repr(v) for v in missing)
@@ -101,11 +72,7 @@ def check_needed(name: str, given: tuple[Any, ...], needed: tuple[Any, ...], rea
 
 
 def check_record_every(record_every: int, horizon: int, divides: bool = True) -> None:
-    """``record_every`` is at most ``horizon`` and, if ``divides``, divides it.
-
-    Raises:
-        ConfigError: one line naming ``record_every``, its value and the values allowed.
-    """
+    """``record_every`` is at most ``horizon`` and, if ``divides``, divides it."""
     if record_every > horizon:
         raise ConfigError(f"record_every must be at most horizon ({horizon}), got {record_every}")
     if divides and horizon % record_every:
@@ -121,26 +88,9 @@ def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tup
 
 
 def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
-    """(method, member) pairs of a sweep: LA once (alpha = 0, member ``none``), every assisted method
-    under every member.
-    """
+    """(method, member) pairs of a sweep: LA once (member ``none``), each assisted method under each one."""
     out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
     return out + [(m, a) for a in assistance for m in methods if m != "LA"]
-
-
-def sweep_grid(
-    methods: tuple[str, ...], assistance: tuple[str, ...], conditions: Sequence[T], n_users: int
-) -> tuple[np.ndarray, np.ndarray, list[T], np.ndarray]:
-    """Every user of a sweep: (method, member) pair x condition x user, in that order.
-
-    Returns:
-        Each user's method, assistance member (``none`` for LA, :func:`pairs`), condition
-        (e.g. its beta) and user, the index of its cup, preference and random stream.
-    """
-    grid = list(itertools.product(pairs(methods, assistance), conditions, range(n_users)))
-    method = np.array([m for (m, _), _, _ in grid])
-    assistance_rows = np.array([a for (_, a), _, _ in grid])
-    return method, assistance_rows, [c for _, c, _ in grid], np.array([u for _, _, u in grid])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,9 +112,7 @@ class LooksConfig:
 
 @dataclasses.dataclass(frozen=True)
 class SweepConfig(LooksConfig):
-    """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods (each of
-    :data:`lasa.method.step.METHODS`, which their claims compare, in any order).
-    """
+    """The settings sims 1-3 share: :class:`LooksConfig`'s, the pilot and the methods their claims compare."""
 
     pilot: str = "boltzmann"  # the simulated user: Eq. S1, or a laggy or noisy pilot (lasa.people.users)
     pilot_prob: UnitInterval = 0.0  # p of the laggy or noisy pilot [-]
@@ -174,7 +122,7 @@ class SweepConfig(LooksConfig):
         super().__post_init__()
         check_choice("pilot", self.pilot, PILOTS)
         check_range("pilot_prob", self.pilot_prob, 0.0, 1.0)
-        check_methods(self.methods)
+        check_names("methods", self.methods, METHODS)
         # sims 1-3's claims and sentences compare all three (LA+SA+Entropy against LA+SA, both
         # against LA): a subset would run the whole sweep and fail in its claims
         check_needed("methods", self.methods, METHODS, "the claims of sims 1-3")
@@ -183,24 +131,12 @@ class SweepConfig(LooksConfig):
 def draw_episodes(
     task: GoalTask, n_users: int, horizon: int, n_candidates: int, seed: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each user's cup, preference and random stream (users 0..n_users-1).
-
-    Returns:
-        goal (n_users,), theta (n_users,) uniform on [0, 1], and uniforms of shape
-        (n_users, horizon, n_candidates) for the users' choices.
-    """
+    """Each user's cup, preference theta (uniform on [0, 1]) and uniforms (n_users, horizon, n_candidates)."""
     rng = np.random.default_rng(seed)
     goal = rng.integers(0, task.n_goals, n_users)
     theta = rng.uniform(0.0, 1.0, n_users)
     noise = rng.random((n_users, horizon, n_candidates))
     return goal, theta, noise
-
-
-def pilot_uniforms(n_users: int, horizon: int, seed: int) -> np.ndarray:
-    """The laggy and noisy pilots' uniforms, (n_users, horizon, 2), from their own generator
-    (``[seed, 1]``), so adding pilots leaves :func:`draw_episodes`' draws unchanged.
-    """
-    return np.random.default_rng([seed, 1]).random((n_users, horizon, 2))
 
 
 def episodes(
@@ -220,36 +156,20 @@ def run_population(
     methods: np.ndarray,
     horizon: int,
     noise: np.ndarray,
-    progress: bool = False,
-    assistance: np.ndarray | None = None,
-    pilot_seed: int = 0,
+    progress: bool,
+    assistance: np.ndarray,
+    pilot_seed: int,
 ) -> Trajectories:
-    """Roll out a population whose users may use different methods, decoders and assistance.
-
-    Args:
-        decoders: ``{"base": model, "entropy": model}``, or one model for ``base``.
-        users: The simulated users.
-        methods: Each user's method, shape (U,).
-        horizon: Control steps.
-        noise: The users' random streams, see :func:`lasa.people.rollout.rollout`.
-        assistance: Each user's assistance member, shape (U,); ``none`` for LA. Default:
-            ``control.assistance`` for everyone.
-        pilot_seed: Seed of the laggy and noisy pilots' own random stream
-            (:func:`pilot_uniforms`); unused for Eq. S1 users.
-
-    Raises:
-        ConfigError: if a method's decoder is missing.
-    """
+    """Roll out users of different methods and members (``methods``, ``assistance``: (U,), ``none`` for LA);
+    ``pilot_seed`` seeds the laggy and noisy pilots' own stream (``[pilot_seed, 1]``)."""
     decoders = as_decoders(decoders)
     methods = np.asarray(methods)
     alpha = np.array([method_alpha(m, control) for m in methods])
-    if assistance is None:
-        assistance = np.full(len(methods), control.assistance)
     assistance = np.where(np.asarray(assistance) == NO_ASSISTANCE, control.assistance, assistance)
     keys = np.array([METHOD_DECODER[m] for m in methods])
     pilot_noise = None
     if users.pilot_prob > 0:
-        pilot_noise = pilot_uniforms(int(np.max(users.user)) + 1, horizon, pilot_seed)
+        pilot_noise = np.random.default_rng([pilot_seed, 1]).random((int(np.max(users.user)) + 1, horizon, 2))
     parts: list[tuple[np.ndarray, Trajectories]] = []
     for key in dict.fromkeys(keys.tolist()):  # plain str, first-seen order: deterministic
         if key not in decoders:
@@ -263,25 +183,16 @@ def run_population(
         parts.append((idx, traj))
     if len(parts) == 1:
         return parts[0][1]
-    merged = {}
-    for field in dataclasses.fields(Trajectories):
-        first = getattr(parts[0][1], field.name)
-        out = np.empty((first.shape[0], len(methods), *first.shape[2:]), dtype=first.dtype)
-        for idx, traj in parts:
-            out[:, idx] = getattr(traj, field.name)
-        merged[field.name] = out
-    return Trajectories(**merged)
+    order = np.argsort(np.concatenate([idx for idx, _ in parts]))  # the users' rows back in their order
+    fields = [f.name for f in dataclasses.fields(Trajectories)]
+    return Trajectories(
+        **{f: np.concatenate([getattr(t, f) for _, t in parts], axis=1)[:, order] for f in fields}
+    )
 
 
 @dataclasses.dataclass(frozen=True)
 class Look:
-    """One look's episodes of a sims 1-3 sweep, one per (pair, condition, user) in that order.
-
-    Attributes:
-        method: Each episode's method; member: its member (``none`` for LA); condition: its
-            condition; user: its user's index over all looks (the CSVs' ``seed``).
-        users: The episodes' simulated users; traj: their trajectories.
-    """
+    """One look's episodes of a sims 1-3 sweep, one per (pair, condition, user); ``user`` spans all looks."""
 
     method: np.ndarray
     member: np.ndarray
@@ -302,22 +213,17 @@ def run_look(
     look: int = 0,
     assistance: tuple[str, ...] | None = None,
 ) -> Look:
-    """Roll out one look's new users of a sims 1-3 sweep (a :class:`SweepConfig` with a ``horizon``).
+    """Roll out one look's new users (:func:`lasa.evidence.verdicts.block_users`) of a sims 1-3 sweep.
 
-    Args:
-        conditions: The sweep's conditions (betas, change steps, learners).
-        population: Maps the grid's conditions, goals and preferences to the users' other
-            :class:`~lasa.people.users.UserPopulation` fields (``beta0``, ``slope``, ...).
-        look: Which look's new users (:func:`lasa.evidence.verdicts.block_users`): 0 is the first
-            ``config.users``, each later look ``config.block`` more from its own stream.
-        assistance: The members the assisted methods run under; default every member of
-            ``config.assistance`` (the headline one first).
-    """
+    ``population`` maps the conditions, goals and preferences to the users' other fields (``beta0``, ...);
+    ``assistance``: default every member of ``config.assistance``, the headline one first."""
     start, n_users = verdicts.block_users(verdicts.Looks(config.users, config.block, config.cap), look)
     seed = verdicts.block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
     assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    method, member, condition, user = sweep_grid(config.methods, assistance, conditions, n_users)
+    grid = list(itertools.product(pairs(config.methods, assistance), conditions, range(n_users)))
+    method, member = np.array([m for (m, _), _, _ in grid]), np.array([a for (_, a), _, _ in grid])
+    condition, user = [c for _, c, _ in grid], np.array([u for _, _, u in grid])
     goal, theta = goal[user], theta[user]
     users = UserPopulation(
         goal=goal,
@@ -343,21 +249,10 @@ def judge(
     progress: bool = False,
     reduce: Any = None,
 ) -> tuple[Any, verdicts.Sequential, Any]:
-    """Run a figure's sweep in looks until its headline verdicts are settled (or the cap).
+    """Run a figure's sweep (``module.run``) in looks until its headline verdicts are settled (or the cap).
 
-    Args:
-        module: The figure's module (``run(..., look=, assistance=)`` and ``claims``).
-        decoders: Passed to ``module.run``.
-        control: Control-loop units; ``control.assistance`` is the headline member.
-        config: The figure's config (``users``, ``block``, ``cap``, ``n_boot``, ``assistance``).
-        reduce: Maps a look's rows to the rows the claims read (sim3: one row per episode),
-            so the bootstrap resamples the smaller frame; identity if None.
-
-    Returns:
-        Every look's rows as ``module.run`` returns them (with a ``look`` column), the
-        :class:`lasa.evidence.verdicts.Sequential` outcome, and the first look's second output of
-        ``module.run`` (trajectories or runs, for the videos).
-    """
+    ``reduce`` maps a look's rows to the claims' rows (sim3: one per episode). Returns every look's rows,
+    the :class:`lasa.evidence.verdicts.Sequential` outcome and the first look's trajectories or runs."""
     full: list[Any] = []
     first: list[Any] = []
 
@@ -385,14 +280,8 @@ def sim_figure(
     keys: list[str],
     per: str = "point",
 ) -> Figure:
-    """A sims 1-3 figure under one member: one row of panels per robot present, titled with its users.
-
-    Args:
-        table: Rows of every robot and member; LA's rows are shared by every member.
-        assistance: The member drawn (the headline one).
-        title: The figure's title, before its users per ``per`` (over ``keys``) and the member.
-        panels: Panels per row, the size of a row, and what draws a robot's row (name, rows, axes).
-    """
+    """A sims 1-3 figure under one member: one row of panels per robot, ``panels`` = (panels per row, a
+    row's size, what draws a robot's row from (name, rows, axes))."""
     table = verdicts.member_frame(table, assistance)
     n_cols, size, draw = panels
     fig, rows = robot_rows(table, n_cols, size)
@@ -405,11 +294,7 @@ def sim_figure(
 
 
 def headline_claim(claims: list[Claim], claim_id: str, head: pd.DataFrame) -> Claim:
-    """The ``claim_id`` row of ``head``'s robot and member (the member of its assisted rows).
-
-    Raises:
-        ConfigError: unless exactly one row matches.
-    """
+    """The ``claim_id`` row of ``head``'s robot and member (the member of its assisted rows)."""
     robot = str(head.robot.iloc[0])
     member = str(head[head.method != "LA"].assistance.iloc[0])
     rows = [c for c in claims if c.id == claim_id and c.robot == robot and c.assistance == member]
@@ -433,6 +318,14 @@ def sim_claim(
         note=note,
         robot=robot,
     )
+
+
+def number(claim: Claim, name: str) -> tuple[float, float, float]:
+    """(value, low, high) of the number ``name`` of a claim row (:func:`~lasa.evidence.claims.numbers_of`)."""
+    found = numbers_of(claim).get(name)
+    if found is None:
+        raise ConfigError(f"{claim.id} has no number {name!r}; it has {sorted(claim.values)}")
+    return found.value, found.low, found.high
 
 
 def interval_text(value: float, low: float, high: float, fmt: str = "{:.3f}") -> str:
