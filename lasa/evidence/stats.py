@@ -136,7 +136,7 @@ def pairwise(
         test = scipy.stats.ttest_rel(x, y)
         means = {"mean_a": float(x.mean()), "mean_b": float(y.mean()), "diff": float(x.mean() - y.mean())}
         tested = {"t": float(test.statistic), "df": len(x) - 1, "p_unc": float(test.pvalue)}
-        rows.append({"a": a, "b": b} | means | tested)
+        rows.append({"a": a, "b": b, **means, **tested})
     out = pd.DataFrame(rows)
     out["p_corr"] = _corrected(out["p_unc"].to_numpy(dtype=float), correction)
     out["correction"] = correction
