@@ -177,22 +177,12 @@ def assess(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> list[Claim]:
-    """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
-
-    Args:
-        evaluate: A figure's claims: frame -> claims, each with the ``values`` its rule reads.
-        unit: The column naming a user: the resampled unit.
-        level: The intervals' level (1 - ALPHA / K under a sequential design).
-        fast: The figure's vectorized bootstrap (from :func:`group_means`): the same numbers on the
-            same resamples; if None, ``evaluate`` runs on every resample.
-
-    Returns:
-        The claims with their intervals, ``settled``, ``n_users``, and ``reproduced`` ``undecided``
-        where an interval straddles a threshold or the evidence falls short (:func:`shortfall`).
-
-    Raises:
-        ConfigError: if a claim has no rule, or its verdict is not its rule's at its values.
-    """
+    """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``,
+    with their intervals at ``level`` over resamples of ``unit``, ``settled``, ``n_users``, and
+    ``reproduced`` ``undecided`` where an interval straddles a threshold or the evidence falls short
+    (:func:`shortfall`). ``fast``, the figure's vectorized bootstrap (:func:`group_means`), gives the
+    same numbers on the same resamples; if None, ``evaluate`` runs on every resample. A ConfigError if
+    a claim has no rule, or its verdict is not its rule's at its values."""
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     point = evaluate(frame)
@@ -213,11 +203,11 @@ def _boot_samples(
 ) -> dict[str, dict[str, list[float]]]:
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
     if fast is not None:
-        for cid, arrays in fast(frame, resample_counts(frame, n_boot, seed, unit)).items():
-            for k, arr in arrays.items():
-                if cid in samples and k in samples[cid]:
-                    samples[cid][k] = [float(x) for x in arr]
-        return samples
+        boot = fast(frame, resample_counts(frame, n_boot, seed, unit))
+        return {
+            cid: {k: [float(x) for x in boot.get(cid, {}).get(k, [])] for k in s}
+            for cid, s in samples.items()
+        }
     for sample in bootstrap_frames(frame, n_boot, seed, unit):
         for c in evaluate(sample):
             for k, v in c.values.items():
@@ -304,19 +294,10 @@ def sequential(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> Sequential:
-    """Add users in blocks until every headline verdict is settled or the cap is reached.
-
-    Args:
-        run_block: ``(look, members) -> rows`` of that look's new users (:func:`block_users`), LA
-            rows labelled ``none``.
-        evaluate, n_boot, seed, fast, min_users: As :func:`assess` takes them.
-        assistance: Every member to judge; the first look runs all of them.
-        default: The headline member (the paper's); later looks run only it.
-        looks: Users per look and the cap (:class:`Looks`).
-
-    Raises:
-        ConfigError: if ``default`` is not among ``assistance``.
-    """
+    """Add users in blocks until every headline verdict is settled or the cap is reached: the first
+    look runs every member of ``assistance``, later ones only ``default`` (the headline member, a
+    ConfigError if not among them); ``run_block(look, members)`` returns the rows of that look's new
+    users (:func:`block_users`), LA rows labelled ``none``; the rest as :func:`assess` takes them."""
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
     judge = functools.partial(
@@ -340,13 +321,9 @@ def sequential(
     rows: list[Claim] = []
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
-        where = (
-            f"Members with other words (at {looks.first} users): {'; '.join(flips)}. "
-            if flips
-            else "Every other member gives the same words. "
-            if others
-            else ""
-        )
+        same = "Every other member gives the same words. " if others else ""
+        where = f"Members with other words (at {looks.first} users): {'; '.join(flips)}. " if flips else same
+
         at = f"look {look + 1} of {len(looks.sizes)}"
         cap = f", the cap ({looks.cap} users)" if look + 1 == len(looks.sizes) else ""
         stop = f"The effect is settled at {at}. " if c.settled else f"The effect is undecided at {at}{cap}. "
