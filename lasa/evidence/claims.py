@@ -71,12 +71,9 @@ _NAN = (math.nan, math.nan)
 
 @dataclasses.dataclass(frozen=True)
 class Claim:
-    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule``.
-
-    Raises:
-        ConfigError: if the id is not ``<figure>.<name>``, ``reproduced`` is no verdict, a not
-            testable claim is settled, or ``rule`` is not the claim's (a paper claim's is its own).
-    """
+    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule`` (a
+    ConfigError if the id is not ``<figure>.<name>``, ``reproduced`` no verdict, a not testable claim
+    settled, or ``rule`` not the claim's: a paper claim's is its own)."""
 
     id: str  # stable key, "<figure>.<name>": survives a rewording of ``claim``
     claim: str  # the paper's claim, in a sentence
@@ -198,8 +195,7 @@ def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
 
 
 def _row(claim: Claim) -> dict[str, object]:
-    row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
-    del row["values"], row["value"], row["intervals"], row["level"], row["facts"], row["rule"]
+    row: dict[str, object] = {c: getattr(claim, c) for c in CLAIM_COLUMNS if hasattr(claim, c)}
     row["settled"] = "yes" if claim.settled else "no"
     row.update(criteria(claim))
     note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
@@ -207,9 +203,9 @@ def _row(claim: Claim) -> dict[str, object]:
         why = "; ".join(_fragile(claim))
         note = f"{note.rstrip()} Fragile: {why} (within a fifth of its width)."
     row["note"] = note
-    for key in ("ci_low", "ci_high"):
-        row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
-    return row
+    return row | {
+        k: "" if math.isnan(getattr(claim, k)) else f"{getattr(claim, k):.4g}" for k in ("ci_low", "ci_high")
+    }
 
 
 def render_markdown(frame: pd.DataFrame) -> str:
@@ -224,14 +220,9 @@ def render_markdown(frame: pd.DataFrame) -> str:
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
     """Replace every row of these claims' (figure, robot) pairs in the CSV at ``path`` (and in
-    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal.
-
-    Returns:
-        The whole table after the update, ordered by figure, robot and id.
-
-    Raises:
-        ConfigError: if two claims share an (id, robot), or the file has other columns.
-    """
+    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal, and
+    return the whole table, ordered by figure, robot and id (a ConfigError if two claims share an (id,
+    robot), or the file has other columns)."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
     if new.duplicated(["id", "robot"]).any():
@@ -269,16 +260,14 @@ def _number_text(x: float) -> str:
 
 
 def _value_rows(claim: Claim) -> list[dict[str, object]]:
+    """The claim's rows of ``claim_values.csv``: its rule's numbers with their intervals, then its facts."""
     head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
+    numbers = [(k, v, claim.intervals.get(k, _NAN)) for k, v in claim.values.items()]
     out = []
-    for name, value in claim.values.items():
-        low, high = claim.intervals.get(name, _NAN)
+    for name, value, (low, high) in numbers + [(k, v, _NAN) for k, v in claim.facts.items()]:
         level = _number_text(claim.level) if math.isfinite(low) and math.isfinite(high) else ""
         cells = {"value": _number_text(value), "low": _number_text(low), "high": _number_text(high)}
         out.append(head | {"quantity": name} | cells | {"level": level, "n": claim.n_users})
-    for name, value in claim.facts.items():
-        cells = {"value": _number_text(value), "low": "", "high": "", "level": ""}
-        out.append(head | {"quantity": name} | cells | {"n": claim.n_users})
     return out
 
 
@@ -548,14 +537,9 @@ def render_verdicts(
     link: Callable[[str], str] | None = None,
     claims_md: str = "figures/claims.md",
 ) -> str:
-    """The verdict table: one row per paper claim, both robots side by side, our additions apart.
-
-    Args:
-        table: ``figures/claims.csv`` (as strings).
-        values: Its numbers (``claim_values.csv``).
-        link: Notebook stem -> the link target of its page (default ``notebooks/<stem>.ipynb``).
-        claims_md: Where the list of readings that flip a claim is (from the page's folder).
-    """
+    """The verdict table of ``table`` (``claims.csv`` as strings) and its ``values``: one row per paper
+    claim, both robots side by side, our additions apart; ``link`` maps a notebook stem to its page
+    (default ``notebooks/<stem>.ipynb``), ``claims_md`` is where the readings that flip a claim are."""
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
@@ -635,14 +619,9 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers.
+    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers; whether
+    the README changed (a ConfigError if it lacks a marker)."""
 
-    Returns:
-        Whether the README changed.
-
-    Raises:
-        ConfigError: if the README lacks a marker.
-    """
     summary = Path(table_md).with_name("summary.md")
     changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False
     return sync_between(readme, README_MARKERS, Path(table_md).read_text()) or changed

@@ -189,18 +189,10 @@ def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None,
     the mean over the rows (users) at that ``x``, 1000 resamples from a fixed seed."""
     ax = _ax(ax)
     methods = [m for m in METHOD_COLORS if m in set(frame.method)]
+    hue: dict[str, Any] = {"hue": "method", "hue_order": methods, "palette": METHOD_COLORS}
+    marker = "o" if frame[x].nunique() < 30 else None
     sns.lineplot(
-        data=frame,
-        x=x,
-        y=y,
-        hue="method",
-        hue_order=methods,
-        palette=METHOD_COLORS,
-        errorbar=("ci", 100.0 * level),
-        n_boot=1000,
-        seed=0,
-        ax=ax,
-        marker="o" if frame[x].nunique() < 30 else None,
+        data=frame, x=x, y=y, errorbar=("ci", 100.0 * level), n_boot=1000, seed=0, ax=ax, marker=marker, **hue
     )
     ax.legend(frameon=False, title=None)
     return ax
@@ -216,15 +208,8 @@ def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize
     handles, labels = ax.get_legend_handles_labels()
     handles += list(extra)
     labels += [h.get_label() for h in extra]
-    ax.legend(
-        handles,
-        labels,
-        loc="upper center",
-        bbox_to_anchor=(0.5, -0.17),
-        ncol=ncol,
-        frameon=False,
-        fontsize=fontsize,
-    )
+    below: dict[str, Any] = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.17)}
+    ax.legend(handles, labels, ncol=ncol, frameon=False, fontsize=fontsize, **below)
 
 
 def probability_axis(ax: Axes) -> None:
@@ -265,18 +250,9 @@ def paper_point(
     """The paper's value ``y`` at ``x``: a star, labelled (``label``) in the legend and beside it;
     ``tolerance`` draws y +- it faintly, labelled ``tol_label``."""
     if tolerance is not None:
-        ax.errorbar(
-            [x],
-            [y],
-            yerr=tolerance,
-            fmt="none",
-            ecolor="0.1",
-            alpha=0.3,
-            elinewidth=6,
-            capsize=0,
-            label=tol_label,
-            zorder=3,
-        )
+        band: dict[str, Any] = {"fmt": "none", "ecolor": "0.1", "alpha": 0.3, "elinewidth": 6, "capsize": 0}
+        ax.errorbar([x], [y], yerr=tolerance, label=tol_label, zorder=3, **band)
+
     (point,) = ax.plot([x], [y], marker="*", ms=11, ls="none", color="0.1", label=label, zorder=5)
     ax.annotate(f"paper {y:g}", (x, y), xytext=(7, 0), textcoords="offset points", fontsize=7, va="center")
     return point
