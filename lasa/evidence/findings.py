@@ -62,26 +62,23 @@ def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
     return "; ".join(p for p in parts if p)
 
 
+# sim1.gap_narrows' clause for a gap at beta = 75 below 0 or reaching it, else for its narrowing's side
+_GAP_SAYS = {"below": "LA+SA is worse in {} at beta = 75", "reaches": "the {} gap at beta = 75 is unclear"}
+_CHANGE_SAYS = {
+    "above": "the {} gap narrows",
+    "below": "the {} gap grows",
+    "reaches": "the {} gap's change is unclear",
+}
+
+
 def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, list[str]]:
     groups: dict[str, list[str]] = {}
     for robot in robots:
         gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
         narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
-        if gap is None or narrowing is None:
-            continue
-        side, change = side_of(gap, 0.0), side_of(narrowing, 0.0)
-        said = (
-            f"LA+SA is worse in {what} at beta = 75"
-            if side == "below"
-            else f"the {what} gap at beta = 75 is unclear"
-            if side == "reaches"
-            else f"the {what} gap narrows"
-            if change == "above"
-            else f"the {what} gap grows"
-            if change == "below"
-            else f"the {what} gap's change is unclear"
-        )
-        groups.setdefault(said, []).append(robot)
+        if gap is not None and narrowing is not None:
+            said = _GAP_SAYS.get(side_of(gap, 0.0)) or _CHANGE_SAYS[side_of(narrowing, 0.0)]
+            groups.setdefault(said.format(what), []).append(robot)
     return groups
 
 
