@@ -2,8 +2,7 @@
 
 A row, keyed by (id, robot) with id ``<figure>.<name>[@<reading>]``, carries two words (Open Science
 Collaboration, 2015): ``effect``, the claim's shape by its rule, and ``number``, whether each paper
-number lies in our interval. The verdict table and README summary are written from the two files.
-"""
+number lies in our interval. The verdict table and README summary are written from the two files."""
 
 from __future__ import annotations
 

@@ -139,12 +139,9 @@ class Direction:
 
 @dataclasses.dataclass(frozen=True)
 class Rule:
-    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds.
-
-    Raises:
-        ConfigError: if the id is not ``<figure>.<name>``, there is no quantity, or a paper number
-            or the direction names something else than a quantity.
-    """
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds (a ConfigError
+    if the id is not ``<figure>.<name>``, it has no quantity, or a paper number or the direction names no
+    quantity)."""
 
     id: str  # the claim id, "<figure>.<name>"
     text: str  # the rule in words, as the claims table states it
