@@ -97,12 +97,12 @@ class PaperNumber:
         met = self.inside(interval)
         if met != "yes":
             return OUT if met == "no" else NOT_APPLICABLE
-        if high - low > self.width_limit:
-            return UNDECIDED
-        if self.tolerance == 0.0:
-            return IN
-        inner = self.value - self.tolerance <= low and high <= self.value + self.tolerance
-        return IN if inner else UNDECIDED
+        inner = (
+            self.tolerance == 0.0
+            or self.value - self.tolerance <= low
+            and high <= self.value + self.tolerance
+        )
+        return IN if high - low <= self.width_limit and inner else UNDECIDED
 
     def describe(self, interval: tuple[float, float], measured: float) -> str:
         """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``."""
@@ -158,11 +158,9 @@ class Rule:
             raise ConfigError(f"a rule's id must be '<figure>.<name>' without spaces or '@', got {self.id!r}")
         if not self.quantities:
             raise ConfigError(f"{self.id}: a rule reads at least one quantity")
+        named = [p.quantity for p in self.paper] + ([self.direction.quantity] if self.direction else [])
         names = {q.name for q in self.quantities}
-        extra = [p.quantity for p in self.paper if p.quantity not in names]
-        if self.direction is not None and self.direction.quantity not in names:
-            extra.append(self.direction.quantity)
-        if extra:
+        if extra := [n for n in named if n not in names]:
             raise ConfigError(
                 f"{self.id}: paper numbers or direction name {extra}, not quantities {sorted(names)}"
             )
@@ -174,8 +172,7 @@ class Rule:
 
     def verdict(self, values: Mapping[str, float]) -> str:
         """The rule's verdict at these values (a ConfigError if a quantity is missing)."""
-        missing = [q.name for q in self.quantities if q.name not in values]
-        if missing:
+        if missing := [q.name for q in self.quantities if q.name not in values]:
             raise ConfigError(f"{self.id}: the rule needs {missing}, got {sorted(values)}")
         return self._checked(self.decide(values), "rule")
 
@@ -212,14 +209,12 @@ class Rule:
         for name, values in edges.items():
             low, high = intervals.get(name, (math.nan, math.nan))
             margin = FRAGILE_FRACTION * (high - low)
-            if not _known((low, high)) or margin <= 0.0:
-                continue
-            gaps = {t: min(abs(low - t), abs(high - t)) for t in sorted(set(values))}
-            out += [
-                f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}"
-                for t, gap in gaps.items()
-                if gap < margin
-            ]
+            if _known((low, high)) and margin > 0.0:
+                gaps = {t: min(abs(low - t), abs(high - t)) for t in sorted(set(values))}
+                said = [
+                    f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}" for t, gap in gaps.items()
+                ]
+                out += [s for s, gap in zip(said, gaps.values(), strict=True) if gap < margin]
         return out
 
     def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
@@ -227,19 +222,16 @@ class Rule:
         out = []
         for q in self.quantities:
             low, high = intervals[q.name]
-            inner = [t for t in q.thresholds if low <= t <= high and low < high]
-            if inner:
-                ts = ", ".join(f"{t:g}" for t in inner)
-                out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {ts}")
+            if inner := [f"{t:g}" for t in q.thresholds if low <= t <= high and low < high]:
+                out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {', '.join(inner)}")
         return out
 
 
 def effect_word(verdict: str) -> str:
     """The effect's word (:data:`WORDS`) for a verdict; a ConfigError for none of them."""
-    if verdict not in (*VERDICTS, UNDECIDED, NOT_TESTABLE):
-        raise ConfigError(
-            f"cannot word the verdict {verdict!r}: not one of {(*VERDICTS, UNDECIDED, NOT_TESTABLE)}"
-        )
+    if verdict not in (known := (*VERDICTS, UNDECIDED, NOT_TESTABLE)):
+        raise ConfigError(f"cannot word the verdict {verdict!r}: not one of {known}")
+
     return _SETTLED_WORD.get(verdict, verdict)
 
 
