@@ -148,19 +148,16 @@ def criteria(claim: Claim) -> dict[str, str]:
     r, paper = claim.judged_by, claim.stated
     testable = claim.reproduced != NOT_TESTABLE
     found = [(p, claim.intervals.get(p.quantity, _NAN)) for p in paper] if testable else []
-    direction = r.direction if r is not None else None
+    direction = r.direction if r is not None and testable else None
     numbers = [p.word(iv) for p, iv in found]
+    said = [p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found]
     return {
         "effect": effect_word(claim.reproduced),
         "number": "; ".join(numbers) if any(w != NOT_APPLICABLE for w in numbers) else NOT_APPLICABLE,
         "reproduced": word(claim.reproduced, claim.intervals, paper),
         "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
-        "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN))
-        if direction is not None and testable
-        else "n/a",
-        "paper_numbers": "; ".join(
-            p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found
-        ),
+        "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN)) if direction else "n/a",
+        "paper_numbers": "; ".join(said),
         "fragile": "yes" if _fragile(claim) else "no",
     }
 
@@ -199,12 +196,11 @@ def _row(claim: Claim) -> dict[str, object]:
     row.update(criteria(claim))
     note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
     if row["fragile"] == "yes":
-        why = "; ".join(_fragile(claim))
-        note = f"{note.rstrip()} Fragile: {why} (within a fifth of its width)."
+        note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
     row["note"] = note
-    return row | {
-        k: "" if math.isnan(getattr(claim, k)) else f"{getattr(claim, k):.4g}" for k in ("ci_low", "ci_high")
-    }
+    for key in ("ci_low", "ci_high"):
+        row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
+    return row
 
 
 def render_markdown(frame: pd.DataFrame) -> str:
