@@ -140,16 +140,13 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
         )
     effect = numbers.get("effect")
     versus = [k.split(".", 1)[1] for k in numbers if k.startswith("versus.")]
-    if base == "study.h3" and (effect is None or effect.interval is None or not versus):
+    if base != "study.h3":
+        return ""
+    if effect is None or effect.interval is None or not versus:
         return "no contrast (a compared condition finishes too few episodes)"
-    if base == "study.h3" and effect is not None and effect.interval is not None:
-        low, high = effect.interval
-        side = "slower" if effect.value > 0 else "faster"
-        return (
-            f"LA+SA is {side} than {versus[0]} by {bound}{effect.value:+.1f} s [{low:+.1f}, {high:+.1f}] "
-            "(restricted means)"
-        )
-    return ""
+    (low, high), side = effect.interval, "slower" if effect.value > 0 else "faster"
+    by = f"{bound}{effect.value:+.1f} s [{low:+.1f}, {high:+.1f}]"
+    return f"LA+SA is {side} than {versus[0]} by {by} (restricted means)"
 
 
 def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
