@@ -238,18 +238,12 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
     if not settled:
         why = short or "; ".join(r.straddled(intervals)) or "an interval is unknown"
         lead += f"Undecided: {why}; the point estimates read {c.reproduced!r}. "
-    first = intervals[r.quantities[0].name]
+    head = r.quantities[0].name  # the headline number: Claim.value and its interval
+    (low, high), verdict = intervals[head], c.reproduced if settled else UNDECIDED
+    out = dataclasses.replace(c, value=float(c.values[head]), ci_low=low, ci_high=high, n_users=n_users)
+    note = lead + f"Rule: {r.text}. " + c.note
     return dataclasses.replace(
-        c,
-        value=float(c.values[r.quantities[0].name]),
-        ci_low=first[0],
-        ci_high=first[1],
-        settled=settled,
-        intervals=intervals,
-        level=level,
-        reproduced=c.reproduced if settled else UNDECIDED,
-        n_users=n_users,
-        note=lead + f"Rule: {r.text}. " + c.note,
+        out, settled=settled, intervals=intervals, level=level, reproduced=verdict, note=note
     )
 
 
