@@ -565,9 +565,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     reproduced or not testable, then the count of the paper's numbers."""
     rows = _by_key(table)
     by_word: dict[str, list[str]] = {}
-    for pc in PAPER_CLAIMS:
-        if pc.ours:
-            continue
+    for pc in [pc for pc in PAPER_CLAIMS if not pc.ours]:
         words: dict[str, list[str]] = {}
         for robot in ROBOTS:
             if (pc.id, robot) in rows:
@@ -587,9 +585,9 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
         "simulated participants, not a replication with people; words and N: [the verdicts](#the-verdicts)):"
     ]
-    for w in WORDS:
-        if w in by_word:
-            lines.append(f"- **{w.capitalize()}** ({len(by_word[w])}): " + "; ".join(by_word[w]) + ".")
+    listed = [(w, by_word[w]) for w in WORDS if w in by_word]
+    lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
+
     n, stated = _numbers_said(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"
