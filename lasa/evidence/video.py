@@ -55,14 +55,12 @@ def render_states(
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
     states = np.atleast_2d(states)
-    model = robot.model
-    data = mujoco.MjData(model)
-    adr = robot.qpos_adr
+    data = mujoco.MjData(robot.model)
     frames = np.empty((len(states), height, width, 3), dtype=np.uint8)
-    with mujoco.Renderer(model, height, width) as renderer:
+    with mujoco.Renderer(robot.model, height, width) as renderer:
         for i, q in enumerate(states):
-            data.qpos[adr] = q
-            mujoco.mj_forward(model, data)
+            data.qpos[robot.qpos_adr] = q
+            mujoco.mj_forward(robot.model, data)
             renderer.update_scene(data, camera=camera or robot.spec.camera)
             frames[i] = renderer.render()
     return frames
@@ -139,7 +137,6 @@ def write_clips(
     ConfigError for no clips, a clip without states, a caption list of the wrong length, an unknown
     ``layout`` or an odd frame size.
     """
-
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
