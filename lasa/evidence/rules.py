@@ -36,13 +36,6 @@ def _share(name: str, partly_above: float) -> Decide:
     return decide
 
 
-def _both_or_one(a: str, b: str, ref: float = 0.0) -> Decide:
-    def decide(v: Mapping[str, float]) -> str:
-        return _parts(v[a] > ref, v[b] > ref)
-
-    return decide
-
-
 def _sim1_gap_narrows(v: Mapping[str, float]) -> str:
     # a part holds when its gap has the paper's sign at beta = 75 (LA+SA better) and is smaller
     # in size at beta = 1000; a gap that narrows in the other direction does not count
@@ -65,15 +58,6 @@ def _sim4_linear(v: Mapping[str, float]) -> str:
 def _sim4_no_map(v: Mapping[str, float]) -> str:
     # the shape of y = x: the error grows linearly with the distance (its size is the number)
     return "yes" if v["slope"] > 0.0 and v["r2"] >= 0.9 else "no"
-
-
-def _effect(sign: int) -> Decide:
-    """The study's settling: a settled effect on the paper's side of 0 (yes/partly/no: its tests)."""
-
-    def decide(v: Mapping[str, float]) -> str:
-        return "yes" if sign * v["effect"] > 0.0 else "no"
-
-    return decide
 
 
 def _sa_lowers(v: Mapping[str, float]) -> str:
@@ -107,7 +91,11 @@ def _two_parts(
     rule_id: str, text: str, a: Quantity, b: Quantity, ref: float = 0.0, paper: tuple[PaperNumber, ...] = ()
 ) -> Rule:
     """Two parts, each holding when its quantity is above ``ref``; the paper's sign is the first's."""
-    return Rule(rule_id, text, (a, b), _both_or_one(a.name, b.name, ref), paper, Direction(a.name, +1, ref))
+
+    def decide(v: Mapping[str, float]) -> str:
+        return _parts(v[a.name] > ref, v[b.name] > ref)
+
+    return Rule(rule_id, text, (a, b), decide, paper, Direction(a.name, +1, ref))
 
 
 def _every_beta(rule_id: str, text: str, name: str, meaning: str) -> Rule:
@@ -118,9 +106,14 @@ def _every_beta(rule_id: str, text: str, name: str, meaning: str) -> Rule:
 
 
 def _study(rule_id: str, text: str, sign: int, meaning: str, tests: Decide) -> Rule:
-    """A hypothesis of the study: an ``effect`` on the paper's side (``sign``) of 0, judged by ``tests``."""
+    """A hypothesis of the study: a settled ``effect`` on the paper's side (``sign``) of 0 (yes or no;
+    partly: its ``tests``)."""
+
+    def decide(v: Mapping[str, float]) -> str:
+        return "yes" if sign * v["effect"] > 0.0 else "no"
+
     effect = (_q("effect", (0.0,), meaning),)
-    return Rule(rule_id, text, effect, _effect(sign), direction=Direction("effect", sign), tests=tests)
+    return Rule(rule_id, text, effect, decide, direction=Direction("effect", sign), tests=tests)
 
 
 _LINEAR_TEXT = (
