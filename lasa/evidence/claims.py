@@ -273,11 +273,11 @@ class PaperClaim:
     id: str  # the headline row's id in claims.csv
     claim: str  # the claim, in the paper's words
     paper: str  # the paper's number
-    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
-    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
-    mechanism: str
     notebook: str  # the notebook (file stem) that measures it
     short: str  # the claim in a few words, for the README's summary
+    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
+    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
+    mechanism: str = ""
     why: str = ""  # why it does not reproduce where it does not, in a few words (the summary's)
     section: str = "What it shows, against the paper"  # its section that explains the mechanism
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
@@ -288,24 +288,23 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.final_error",
         "shared autonomy reduces the final state error (Fig. sim1)",
         "LA+SA below LA at every beta",
-        "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "04_fixed_expertise",
         "SA lowers the final error (sim1)",
+        "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "Eq. M2 pulls towards the mid-preference grasp",
     ),
     PaperClaim(
         "sim1.time_ratio",
         "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
         "time ratio 1.45 and 1.30",
-        "the pull is largest far from the goal",
         "04_fixed_expertise",
         "LA is slower than LA+SA (sim1)",
+        "the pull is largest far from the goal",
     ),
     PaperClaim(
         "sim1.gap_narrows",
         "the gap between LA and LA+SA narrows as the user becomes more rational",
         "45% at beta = 75 -> 30% at beta = 1000",
-        "",
         "04_fixed_expertise",
         "the LA/LA+SA gap narrows with rationality (sim1)",
     ),
@@ -313,66 +312,65 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.entropy_sa",
         "shared autonomy helps with or without the entropy term",
         "LA+SA and LA+SA+Entropy below LA",
-        "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "04_fixed_expertise",
         "SA helps with and without entropy (sim1)",
+        "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "Eq. M2 pulls to the mid grasp",
     ),
     PaperClaim(
         "sim2.sa_trapped",
         "with LA+SA, a user who changes their mind late is stuck at the first goal",
         "final error grows, confidence falls with N",
-        "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
         "05_changing_goals",
         "a late change of mind is stuck with LA+SA (sim2)",
+        "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
     ),
     PaperClaim(
         "sim2.entropy_escapes",
         "the entropy term lets users change their mind",
         "LA+SA+Entropy reaches the new goal",
-        "Eq. T6 keeps some input leading to each goal at every belief",
         "05_changing_goals",
         "entropy lets users change their mind (sim2)",
+        "Eq. T6 keeps some input leading to each goal at every belief",
     ),
     PaperClaim(
         "sim3.entropy_learners",
         "entropy improves in-task performance for fast and slow learners",
         "LA+SA+Entropy below LA+SA over time",
-        "a learner's early random inputs commit the belief; entropy lets them undo it",
         "06_learning_users",
         "entropy helps learning users (sim3)",
+        "a learner's early random inputs commit the belief; entropy lets them undo it",
     ),
     PaperClaim(
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "07_new_goals",
         "with the map, the error grows linearly with distance (sim4)",
+        "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "the straight-line map misses the new cup's grasps by a margin",
     ),
     PaperClaim(
         "sim4.grasp_linear",
         "the same, with our grasp-to-grasp context map (not the paper's)",
         "y = 0.11x, R^2 = 0.98",
-        "the grasp-to-grasp map is exact at every grasp",
         "07_new_goals",
         "our grasp-to-grasp map (sim4)",
+        "the grasp-to-grasp map is exact at every grasp",
         ours=True,
     ),
     PaperClaim(
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "without the map the robot reaches for the training cup; some users' belief ends on the other one",
         "07_new_goals",
         "without the map, the robot reaches the training goal (sim4)",
+        "without the map the robot reaches for the training cup; some users' belief ends on the other one",
     ),
     PaperClaim(
         "study.h1",
         "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
         "F(1,18) = 29.9, p < .001",
-        "",
         "11_eating_study",
         "H1, SA keeps the goal (study)",
     ),
@@ -380,7 +378,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h2",
         "H2: latent actions let users execute their preferences (Dessert, scoop)",
         "LA+SA adjusts to scoop; R+SA stays stabbing",
-        "",
         "11_eating_study",
         "H2, LA lets users scoop (study)",
     ),
@@ -388,7 +385,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h3",
         "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
         "LA+SA fastest, p < .05 vs each",
-        "",
         "11_eating_study",
         "H3, LA+SA is fastest (study)",
     ),
@@ -396,9 +392,9 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.likert",
         "H3, subjective: users rate LA+SA above the other conditions (Fig. dessert, Likert)",
         "LA+SA higher, t-tests p < .05",
-        "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
         "11_eating_study",
         "H3's Likert ratings (study)",
+        "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
     ),
 )
 
