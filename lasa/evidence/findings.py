@@ -135,9 +135,8 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
         if not math.isfinite(p):
             return f"no scoop-phase comparison ({pairs} pairs)"
         side = "above" if diff > 0 else "below"
-        return (
-            f"LA+SA's scoop alignment is {side} R+SA's by {diff:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"  # noqa: E501
-        )
+        said = f"LA+SA's scoop alignment is {side} R+SA's by {diff:+.3f}"
+        return f"{said}, paired t, {pairs} pairs, p = {p:.3g}"
     effect = numbers.get("effect")
     versus = [k.split(".", 1)[1] for k in numbers if k.startswith("versus.")]
     if base != "study.h3":

@@ -58,8 +58,7 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     means = aggregate(data, measure, ["assistance"], "mean")
     counts = means.groupby("participant")["assistance"].agg(set)
     for participant, present in counts.items():
-        lacking = [level for level in SA_LEVELS if level not in present]
-        if lacking:
+        if lacking := [level for level in SA_LEVELS if level not in present]:
             conditions = [c for c in CONDITIONS if factors(c)[1] in lacking]
             raise ConfigError(
                 f"participant {participant!r} has no rows with assistance {lacking[0]!r} "
