@@ -97,12 +97,8 @@ class PaperNumber:
         met = self.inside(interval)
         if met != "yes":
             return OUT if met == "no" else NOT_APPLICABLE
-        inner = (
-            self.tolerance == 0.0
-            or self.value - self.tolerance <= low
-            and high <= self.value + self.tolerance
-        )
-        return IN if high - low <= self.width_limit and inner else UNDECIDED
+        band = self.value - self.tolerance <= low and high <= self.value + self.tolerance
+        return IN if high - low <= self.width_limit and (self.tolerance == 0.0 or band) else UNDECIDED
 
     def describe(self, interval: tuple[float, float], measured: float) -> str:
         """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``."""
@@ -211,10 +207,8 @@ class Rule:
             margin = FRAGILE_FRACTION * (high - low)
             if _known((low, high)) and margin > 0.0:
                 gaps = {t: min(abs(low - t), abs(high - t)) for t in sorted(set(values))}
-                said = [
-                    f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}" for t, gap in gaps.items()
-                ]
-                out += [s for s, gap in zip(said, gaps.values(), strict=True) if gap < margin]
+                near = [(t, gap) for t, gap in gaps.items() if gap < margin]
+                out += [f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}" for t, gap in near]
         return out
 
     def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:

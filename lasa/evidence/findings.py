@@ -64,11 +64,7 @@ def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
 
 # sim1.gap_narrows' clause for a gap at beta = 75 below 0 or reaching it, else for its narrowing's side
 _GAP_SAYS = {"below": "LA+SA is worse in {} at beta = 75", "reaches": "the {} gap at beta = 75 is unclear"}
-_CHANGE_SAYS = {
-    "above": "the {} gap narrows",
-    "below": "the {} gap grows",
-    "reaches": "the {} gap's change is unclear",
-}
+_CHANGE_SAYS = {"above": "the {} gap narrows", "below": "the {} gap grows"}  # else: its change is unclear
 
 
 def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, list[str]]:
@@ -77,7 +73,8 @@ def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, l
         gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
         narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
         if gap is not None and narrowing is not None:
-            said = _GAP_SAYS.get(side_of(gap, 0.0)) or _CHANGE_SAYS[side_of(narrowing, 0.0)]
+            change = _CHANGE_SAYS.get(side_of(narrowing, 0.0), "the {} gap's change is unclear")
+            said = _GAP_SAYS.get(side_of(gap, 0.0)) or change
             groups.setdefault(said.format(what), []).append(robot)
     return groups
 
