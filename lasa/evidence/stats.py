@@ -143,9 +143,7 @@ def pairwise(
 
 
 def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
-    chosen: list[tuple[str, ...]] = (
-        list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
-    )
+    chosen = [tuple(pair) for pair in (combinations(CONDITIONS, 2) if pairs is None else pairs)]
     if not chosen:
         raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
     for pair in chosen:
