@@ -92,9 +92,7 @@ def block_seed(seed: int, block: int) -> int:
 
 def block_users(looks: Looks, block: int) -> tuple[int, int]:
     """(first user index, number of users) of look ``block``'s new users."""
-    if block == 0:
-        return 0, looks.first
-    start = looks.sizes[block - 1]
+    start = looks.sizes[block - 1] if block else 0
     return start, looks.sizes[block] - start
 
 
