@@ -235,9 +235,8 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
 
 
 def _replace(path: Path, new: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
-    if not path.exists():
-        table = new
-    else:
+    table = new
+    if path.exists():
         old = pd.read_csv(path, dtype=str, keep_default_na=False)
         if list(old.columns) != list(columns):
             raise ConfigError(
