@@ -62,11 +62,9 @@ def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
     (grey with more than two goals) at 0; a ValueError if ``goal_index`` is not a goal."""
     if not 0 <= goal_index < n_goals:
         raise ValueError(f"goal_index must be one of the {n_goals} goals, got {goal_index}")
-    colors = goal_colors(n_goals)
+    colors, name = goal_colors(n_goals), f"belief_in_goal_{goal_index}"
     low = colors[1 - goal_index] if n_goals == 2 else "#7a7a7a"
-    return LinearSegmentedColormap.from_list(
-        f"belief_in_goal_{goal_index}", [low, "#dddddd", colors[goal_index]]
-    )
+    return LinearSegmentedColormap.from_list(name, [low, "#dddddd", colors[goal_index]])
 
 
 def _ax(ax: Axes | None) -> Axes:

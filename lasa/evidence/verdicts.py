@@ -301,10 +301,8 @@ def sequential(
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
         head = judge(member_frame(frame, default))
-        log += [
-            {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
-            for c in head
-        ]
+        when = {"look": look, "users": size}
+        log += [when | {"id": c.id, "reproduced": c.reproduced, "settled": c.settled} for c in head]
         # the stopping rule reads the headline claims only, never a figure's own readings
         if all(c.settled for c in head if "@" not in c.id):
             break
