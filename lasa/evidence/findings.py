@@ -161,11 +161,8 @@ def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
     if len(set(verbs)) == 1 and len(sides) > 1:
         ns = " and ".join(str(n) for n, _ in sides)
         return f"{says[lead]}; {ns} simulated participants alike {verbs[0]}"
-    clauses = [
-        f"{n}{' simulated participants' if i == 0 else ''} {verb}"
-        for i, ((n, _), verb) in enumerate(zip(sides, verbs, strict=True))
-    ]
-    return f"{says[lead]}; {', '.join(clauses)}"
+    named = [f"{n} simulated participants" if i == 0 else str(n) for i, (n, _) in enumerate(sides)]
+    return f"{says[lead]}; {', '.join(f'{who} {verb}' for who, verb in zip(named, verbs, strict=True))}"
 
 
 def _testable(numbers: Numbers) -> bool:
