@@ -1,8 +1,7 @@
-"""The claims table (``figures/claims.csv``, numbers in ``claim_values.csv``): did each claim reproduce?
-
-A row, keyed by (id, robot) with id ``<figure>.<name>[@<reading>]``, carries two words (Open Science
-Collaboration, 2015): ``effect``, the claim's shape by its rule, and ``number``, whether each paper
-number lies in our interval. The verdict table and README summary are written from the two files."""
+"""The claims table (``figures/claims.csv``, numbers in ``claim_values.csv``): did each claim reproduce? A
+row, keyed by (id, robot) with id ``<figure>.<name>[@<reading>]``, carries two words (Open Science
+Collaboration, 2015): ``effect``, the claim's shape by its rule, and ``number``, whether each paper number
+lies in our interval. The verdict table and README summary are written from the two files."""
 
 from __future__ import annotations
 
@@ -128,9 +127,7 @@ SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high",
 def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFrame:
     """A notebook's claims in the columns of :data:`SHOWN_COLUMNS` (``assistance`` False: without it)."""
     columns = [c for c in SHOWN_COLUMNS if assistance or c != "assistance"]
-    if not claims:
-        return pd.DataFrame(columns=columns)
-    return pd.DataFrame([c.__dict__ for c in claims])[columns]
+    return pd.DataFrame([c.__dict__ for c in claims], columns=columns)
 
 
 def _stated(r: Rule | None, robot: str) -> tuple[PaperNumber, ...]:
@@ -220,8 +217,7 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
     robot), or the file has other columns)."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
-    if new.duplicated(["id", "robot"]).any():
-        dup = new.loc[new.duplicated(["id", "robot"]), "id"].tolist()
+    if dup := new.loc[new.duplicated(["id", "robot"]), "id"].tolist():
         raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")
     numbers = pd.DataFrame([v for c in claims for v in _value_rows(c)], columns=list(VALUE_COLUMNS))
     with locked(path.parent):
@@ -582,7 +578,6 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     ]
     listed = [(w, by_word[w]) for w in WORDS if w in by_word]
     lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
-
     n, stated = _numbers_said(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"
@@ -609,7 +604,6 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
     """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers; whether
     the README changed (a ConfigError if it lacks a marker)."""
-
     summary = Path(table_md).with_name("summary.md")
     changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False
     return sync_between(readme, README_MARKERS, Path(table_md).read_text()) or changed

@@ -1,7 +1,6 @@
-"""Decision rules and the words their verdicts read: a :class:`Rule` maps a few numbers to ``yes``,
-``partly`` or ``no``, piecewise constant between thresholds, so a box of intervals can settle it. It
-judges the claim's shape (the *effect*), never a number's size (the *number*, :meth:`PaperNumber.word`).
-"""
+"""Decision rules and the words their verdicts read: a :class:`Rule` maps a few numbers to ``yes``, ``partly``
+or ``no``, piecewise constant between thresholds, so a box of intervals can settle it. It judges the claim's
+shape (the *effect*), never a number's size (the *number*, :meth:`PaperNumber.word`)."""
 
 from __future__ import annotations
 
@@ -225,7 +224,6 @@ def effect_word(verdict: str) -> str:
     """The effect's word (:data:`WORDS`) for a verdict; a ConfigError for none of them."""
     if verdict not in (known := (*VERDICTS, UNDECIDED, NOT_TESTABLE)):
         raise ConfigError(f"cannot word the verdict {verdict!r}: not one of {known}")
-
     return _SETTLED_WORD.get(verdict, verdict)
 
 

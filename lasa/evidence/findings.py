@@ -57,7 +57,14 @@ def _time_ratio(values: Values, robots: Sequence[str]) -> str:
 def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
     parts = []
     for what in ("time", "error"):
-        groups = _gap_groups(values, robots, what)
+        groups: dict[str, list[str]] = {}
+        for robot in robots:
+            gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
+            narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
+            if gap is not None and narrowing is not None:
+                change = _CHANGE_SAYS.get(side_of(narrowing, 0.0), "the {} gap's change is unclear")
+                said = _GAP_SAYS.get(side_of(gap, 0.0)) or change
+                groups.setdefault(said.format(what), []).append(robot)
         parts.append("; ".join(f"{said} ({on_robots(where)})" for said, where in groups.items()))
     return "; ".join(p for p in parts if p)
 
@@ -65,18 +72,6 @@ def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
 # sim1.gap_narrows' clause for a gap at beta = 75 below 0 or reaching it, else for its narrowing's side
 _GAP_SAYS = {"below": "LA+SA is worse in {} at beta = 75", "reaches": "the {} gap at beta = 75 is unclear"}
 _CHANGE_SAYS = {"above": "the {} gap narrows", "below": "the {} gap grows"}  # else: its change is unclear
-
-
-def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, list[str]]:
-    groups: dict[str, list[str]] = {}
-    for robot in robots:
-        gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
-        narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
-        if gap is not None and narrowing is not None:
-            change = _CHANGE_SAYS.get(side_of(narrowing, 0.0), "the {} gap's change is unclear")
-            said = _GAP_SAYS.get(side_of(gap, 0.0)) or change
-            groups.setdefault(said.format(what), []).append(robot)
-    return groups
 
 
 def on_robots(robots: list[str]) -> str:

@@ -67,10 +67,6 @@ def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
     return LinearSegmentedColormap.from_list(name, [low, "#dddddd", colors[goal_index]])
 
 
-def _ax(ax: Axes | None) -> Axes:
-    return plt.gca() if ax is None else ax
-
-
 def is_planar(task: GoalTask) -> bool:
     """Whether the robot moves in the world's x-z plane (every cup at y = 0)."""
     return bool(np.allclose(task.robot.goal_positions()[:, 1], 0.0))
@@ -87,7 +83,7 @@ def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
 
 def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
     """The goals (cups), each in its colour, and the robot's base in the task's drawing plane."""
-    ax = _ax(ax)
+    ax = plt.gca() if ax is None else ax
     cups = task.robot.goal_positions()
     colors = goal_colors(len(cups))
     if is_planar(task):
@@ -147,7 +143,7 @@ TRAIN_COLOR, VAL_COLOR = "#1f77b4", "#d95f02"  # the training curves: loss (left
 def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> tuple[Axes, Axes]:
     """Training loss (left, in sigma_h^2 plus the sector term) and held-out error ||e_a||^2 (right,
     (rad/s)^2) against optimiser step, each on a log axis of its own; returns both axes."""
-    ax = _ax(ax)
+    ax = plt.gca() if ax is None else ax
     twin = ax.twinx()
     ax.plot(history["step"], history["train_loss"], color=TRAIN_COLOR, label="training loss")
     twin.plot(history["step"], history["val_error"], color=VAL_COLOR, ls="--", label="held-out error")
@@ -185,7 +181,7 @@ def robot_rows(
 def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None, level: float = 0.95) -> Axes:
     """``y`` against ``x`` per method, in the methods' colours, with bootstrap bands at ``level`` of
     the mean over the rows (users) at that ``x``, 1000 resamples from a fixed seed."""
-    ax = _ax(ax)
+    ax = plt.gca() if ax is None else ax
     methods = [m for m in METHOD_COLORS if m in set(frame.method)]
     hue: dict[str, Any] = {"hue": "method", "hue_order": methods, "palette": METHOD_COLORS}
     marker = "o" if frame[x].nunique() < 30 else None
@@ -250,7 +246,6 @@ def paper_point(
     if tolerance is not None:
         band: dict[str, Any] = {"fmt": "none", "ecolor": "0.1", "alpha": 0.3, "elinewidth": 6, "capsize": 0}
         ax.errorbar([x], [y], yerr=tolerance, label=tol_label, zorder=3, **band)
-
     (point,) = ax.plot([x], [y], marker="*", ms=11, ls="none", color="0.1", label=label, zorder=5)
     ax.annotate(f"paper {y:g}", (x, y), xytext=(7, 0), textcoords="offset points", fontsize=7, va="center")
     return point

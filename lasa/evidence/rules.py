@@ -1,7 +1,6 @@
-"""The paper's decision rules (:class:`lasa.evidence.decision.Rule`) by claim id: each judges the
-claim's shape; the study's (H1-H3) rest on significance tests (:mod:`lasa.evidence.hypotheses`).
-Each was written before the results it judges were seen, except where :data:`AFTER_RESULTS` says.
-"""
+"""The paper's decision rules (:class:`lasa.evidence.decision.Rule`) by claim id: each judges the claim's
+shape; the study's (H1-H3) rest on significance tests (:mod:`lasa.evidence.hypotheses`). Each was written
+before the results it judges were seen, except where :data:`AFTER_RESULTS` says."""
 
 from __future__ import annotations
 

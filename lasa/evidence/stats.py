@@ -1,7 +1,6 @@
-"""The user study's statistical tests on its 2x2 design: the SA effect as the paper's F(1,18) (2N
-observations as independent) and as the design's repeated-measures F(1, N-1), Holm-corrected paired
-t-tests, and restricted mean times with a paired bootstrap. F and p come from statsmodels and scipy.
-"""
+"""The user study's statistical tests on its 2x2 design: the SA effect as the paper's F(1,18) (2N observations
+as independent) and as the design's repeated-measures F(1, N-1), Holm-corrected paired t-tests, and restricted
+mean times with a paired bootstrap. F and p come from statsmodels and scipy."""
 
 from __future__ import annotations
 
@@ -47,12 +46,10 @@ WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
 
 
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2).
-
-    Returns :data:`RESULT_KEYS`: ``n`` participants, the means over their means, ``ci_*`` bounding
-    SA - no SA (95%, pooled t); a ConfigError for invalid data, fewer than 2 participants, or a
-    participant without rows both with and without SA.
-    """
+    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2). Returns
+    :data:`RESULT_KEYS`: ``n`` participants, the means over their means, ``ci_*`` bounding SA - no SA (95%,
+    pooled t); a ConfigError for invalid data, fewer than 2 participants, or a participant without rows both
+    with and without SA."""
     data = prepare(frame, measure)
     n = check_participants(data)
     means = aggregate(data, measure, ["assistance"], "mean")
@@ -116,14 +113,12 @@ def pairwise(
     pairs: Sequence[tuple[str, str]] | None = None,
     correction: str = "holm",
 ) -> pd.DataFrame:
-    """Paired t-tests between conditions on per-participant values (``agg``: ``"mean"`` or ``"sum"``
-    over tasks), corrected across the ``pairs`` (default all 6 of :data:`CONDITIONS`) by a
-    ``multipletests`` method or ``"none"`` (pairs whose p is not finite are left out).
-
-    Returns one row per pair: ``a``, ``b``, ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t``
-    (positive when ``a`` is larger), ``df`` (N-1), ``p_unc``, ``p_corr``, ``correction``; a ConfigError
-    for invalid data, ``agg``, pair or correction, or a participant missing a compared condition.
-    """
+    """Paired t-tests between conditions on per-participant values (``agg``: ``"mean"`` or ``"sum"`` over
+    tasks), corrected across the ``pairs`` (default all 6 of :data:`CONDITIONS`) by a ``multipletests`` method
+    or ``"none"`` (pairs whose p is not finite are left out). Returns one row per pair: ``a``, ``b``,
+    ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t`` (positive when ``a`` is larger), ``df``
+    (N-1), ``p_unc``, ``p_corr``, ``correction``; a ConfigError for invalid data, ``agg``, pair or correction,
+    or a participant missing a compared condition."""
     chosen = _chosen_pairs(pairs)
     used = [c for c in CONDITIONS if any(c in pair for pair in chosen)]
     cells = condition_cells(frame, measure, agg, used)
@@ -227,8 +222,7 @@ def _format_df(value: Any) -> str:
 def format_f(result: dict[str, Any]) -> str:
     """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``;
     a ConfigError if a key is missing."""
-    missing = [key for key in ("F", "df1", "df2", "p") if key not in result]
-    if missing:
+    if missing := [key for key in ("F", "df1", "df2", "p") if key not in result]:
         raise ConfigError(f"result is missing {', '.join(map(repr, missing))}; got keys {sorted(result)}")
     f_value, p_value = float(result["F"]), float(result["p"])
     f_text = f"{f_value:.1f}" if abs(f_value) >= 10 else f"{f_value:.2f}"

@@ -1,7 +1,6 @@
-"""Verdicts decided by user-bootstrap intervals (:func:`assess`: **settled** when every interval
-clears each threshold, else ``undecided``), with users added by a group-sequential :class:`Looks`
-where a headline verdict is open (:func:`sequential`). The design: ``docs/method-notes.md``.
-"""
+"""Verdicts decided by user-bootstrap intervals (:func:`assess`: **settled** when every interval clears each
+threshold, else ``undecided``), with users added by a group-sequential :class:`Looks` where a headline verdict
+is open (:func:`sequential`). The design: ``docs/method-notes.md``."""
 
 from __future__ import annotations
 
@@ -184,34 +183,22 @@ def assess(
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     point = evaluate(frame)
-    samples = _boot_samples(evaluate, frame, point, n_boot, seed, unit, fast)
-    n_users = int(frame[unit].nunique())
-    short = shortfall(n_users, n_boot, level, min_users)
-    return [_judged(c, samples[c.id], level, n_users, short) for c in point]
-
-
-def _boot_samples(
-    evaluate: Evaluate,
-    frame: pd.DataFrame,
-    point: list[Claim],
-    n_boot: int,
-    seed: int,
-    unit: str,
-    fast: BootValues | None,
-) -> dict[str, dict[str, list[float]]]:
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
     if fast is not None:
         boot = fast(frame, resample_counts(frame, n_boot, seed, unit))
-        return {
+        samples = {
             cid: {k: [float(x) for x in boot.get(cid, {}).get(k, [])] for k in s}
             for cid, s in samples.items()
         }
-    for sample in bootstrap_frames(frame, n_boot, seed, unit):
-        for c in evaluate(sample):
-            for k, v in c.values.items():
-                if c.id in samples and k in samples[c.id]:
-                    samples[c.id][k].append(v)
-    return samples
+    else:
+        for sample in bootstrap_frames(frame, n_boot, seed, unit):
+            for c in evaluate(sample):
+                for k, v in c.values.items():
+                    if c.id in samples and k in samples[c.id]:
+                        samples[c.id][k].append(v)
+    n_users = int(frame[unit].nunique())
+    short = shortfall(n_users, n_boot, level, min_users)
+    return [_judged(c, samples[c.id], level, n_users, short) for c in point]
 
 
 def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int, short: str = "") -> Claim:

@@ -129,14 +129,11 @@ def write_clips(
     width: int = 320,
     n_jobs: int = 1,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, caption
-    each frame, lay the clips out (``layout``: see :data:`LAYOUTS`; beside each other, shorter clips
-    hold their last frame) and write the MP4; render with ``n_jobs`` workers (:func:`render_many`).
-
-    Returns the video (T', height, width', 3) and the captioned clips, (T, height, width, 3) each; a
-    ConfigError for no clips, a clip without states, a caption list of the wrong length, an unknown
-    ``layout`` or an odd frame size.
-    """
+    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, caption each
+    frame, lay the clips out (``layout``: see :data:`LAYOUTS`; beside each other, shorter clips hold their
+    last frame) and write the MP4; render with ``n_jobs`` workers (:func:`render_many`). Returns the video
+    (T', height, width', 3) and the captioned clips, (T, height, width, 3) each; a ConfigError for no clips, a
+    clip without states, a caption list of the wrong length, an unknown ``layout`` or an odd frame size."""
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
