@@ -394,9 +394,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 )
 
 
-_PEOPLE = "simulated participants"  # who the study's rows rest on: never people, in this package
-
-
 def effect_text(row: pd.Series, numbers: Numbers) -> str:
     """A row's effect word, ``(censored: lower bound)`` where it rests on one, and a study row's
     saying that its participants are simulated (``not reproduced by simulated participants``)."""
@@ -405,7 +402,7 @@ def effect_text(row: pd.Series, numbers: Numbers) -> str:
     said = f"{row.effect} ({CENSORED})" if bound else str(row.effect)
     if str(row.figure) != "study":
         return said
-    return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} {_PEOPLE}"
+    return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} simulated participants"
 
 
 def _interval_text(number: Number) -> str:

@@ -165,11 +165,6 @@ def _testable(numbers: Numbers) -> bool:
     return _fact(numbers, "testable") == 1 and effect is not None and effect.interval is not None
 
 
-def _censored(values: Values, cid: str) -> list[tuple[str, float]]:
-    numbers = values.get((cid, "panda"), _NONE)
-    return short_conditions(numbers) if not _testable(numbers) else []
-
-
 def _finish(short: Sequence[tuple[str, float]]) -> str:
     return " and ".join(f"{100 * v:.3g}% of their {c} episodes" for c, v in short)
 
@@ -186,7 +181,8 @@ def _hypothesis(
     sides = dict(zip(("below", "above", "reaches"), says, strict=True))
 
     def find(values: Values, robots: Sequence[str]) -> str:
-        short = _censored(values, cid)
+        numbers = values.get((cid, "panda"), _NONE)
+        short = short_conditions(numbers) if not _testable(numbers) else []
         return short_text(short) if short else _study(values, cid, sides)
 
     return find

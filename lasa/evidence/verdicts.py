@@ -300,7 +300,6 @@ def sequential(
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
         same = "Every other member gives the same words. " if others else ""
         where = f"Members with other words (at {looks.first} users): {'; '.join(flips)}. " if flips else same
-
         at = f"look {look + 1} of {len(looks.sizes)}"
         cap = f", the cap ({looks.cap} users)" if look + 1 == len(looks.sizes) else ""
         stop = f"The effect is settled at {at}. " if c.settled else f"The effect is undecided at {at}{cap}. "
