@@ -1,9 +1,7 @@
-"""The claims table (``figures/claims.csv``, numbers in ``claim_values.csv``): did each claim reproduce?
-
-A row, keyed by (id, robot) with id ``<figure>.<name>[@<reading>]``, carries two words (Open Science
-Collaboration, 2015): ``effect``, the claim's shape by its rule, and ``number``, whether each paper
-number lies in our interval. The verdict table and README summary are written from the two files.
-"""
+"""The claims table (``figures/claims.csv``, numbers in ``claim_values.csv``): did each claim reproduce? A
+row, keyed by (id, robot) with id ``<figure>.<name>[@<reading>]``, carries two words (Open Science
+Collaboration, 2015): ``effect``, the claim's shape by its rule, and ``number``, whether each paper number
+lies in our interval. The verdict table and README summary are written from the two files."""
 
 from __future__ import annotations
 
@@ -71,12 +69,9 @@ _NAN = (math.nan, math.nan)
 
 @dataclasses.dataclass(frozen=True)
 class Claim:
-    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule``.
-
-    Raises:
-        ConfigError: if the id is not ``<figure>.<name>``, ``reproduced`` is no verdict, a not
-            testable claim is settled, or ``rule`` is not the claim's (a paper claim's is its own).
-    """
+    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule`` (a
+    ConfigError if the id is not ``<figure>.<name>``, ``reproduced`` no verdict, a not testable claim
+    settled, or ``rule`` not the claim's: a paper claim's is its own)."""
 
     id: str  # stable key, "<figure>.<name>": survives a rewording of ``claim``
     claim: str  # the paper's claim, in a sentence
@@ -132,9 +127,7 @@ SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high",
 def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFrame:
     """A notebook's claims in the columns of :data:`SHOWN_COLUMNS` (``assistance`` False: without it)."""
     columns = [c for c in SHOWN_COLUMNS if assistance or c != "assistance"]
-    if not claims:
-        return pd.DataFrame(columns=columns)
-    return pd.DataFrame([c.__dict__ for c in claims])[columns]
+    return pd.DataFrame([c.__dict__ for c in claims], columns=columns)
 
 
 def _stated(r: Rule | None, robot: str) -> tuple[PaperNumber, ...]:
@@ -152,19 +145,16 @@ def criteria(claim: Claim) -> dict[str, str]:
     r, paper = claim.judged_by, claim.stated
     testable = claim.reproduced != NOT_TESTABLE
     found = [(p, claim.intervals.get(p.quantity, _NAN)) for p in paper] if testable else []
-    direction = r.direction if r is not None else None
+    direction = r.direction if r is not None and testable else None
     numbers = [p.word(iv) for p, iv in found]
+    said = [p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found]
     return {
         "effect": effect_word(claim.reproduced),
         "number": "; ".join(numbers) if any(w != NOT_APPLICABLE for w in numbers) else NOT_APPLICABLE,
         "reproduced": word(claim.reproduced, claim.intervals, paper),
         "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
-        "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN))
-        if direction is not None and testable
-        else "n/a",
-        "paper_numbers": "; ".join(
-            p.describe(iv, float(claim.values.get(p.quantity, math.nan))) for p, iv in found
-        ),
+        "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN)) if direction else "n/a",
+        "paper_numbers": "; ".join(said),
         "fragile": "yes" if _fragile(claim) else "no",
     }
 
@@ -198,14 +188,12 @@ def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
 
 
 def _row(claim: Claim) -> dict[str, object]:
-    row: dict[str, object] = {f.name: getattr(claim, f.name) for f in dataclasses.fields(claim)}
-    del row["values"], row["value"], row["intervals"], row["level"], row["facts"], row["rule"]
+    row: dict[str, object] = {c: getattr(claim, c) for c in CLAIM_COLUMNS if hasattr(claim, c)}
     row["settled"] = "yes" if claim.settled else "no"
     row.update(criteria(claim))
     note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
     if row["fragile"] == "yes":
-        why = "; ".join(_fragile(claim))
-        note = f"{note.rstrip()} Fragile: {why} (within a fifth of its width)."
+        note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
     row["note"] = note
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
@@ -224,18 +212,12 @@ def render_markdown(frame: pd.DataFrame) -> str:
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
     """Replace every row of these claims' (figure, robot) pairs in the CSV at ``path`` (and in
-    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal.
-
-    Returns:
-        The whole table after the update, ordered by figure, robot and id.
-
-    Raises:
-        ConfigError: if two claims share an (id, robot), or the file has other columns.
-    """
+    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal, and
+    return the whole table, ordered by figure, robot and id (a ConfigError if two claims share an (id,
+    robot), or the file has other columns)."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
-    if new.duplicated(["id", "robot"]).any():
-        dup = new.loc[new.duplicated(["id", "robot"]), "id"].tolist()
+    if dup := new.loc[new.duplicated(["id", "robot"]), "id"].tolist():
         raise ConfigError(f"claim ids must be unique per robot, repeated: {dup}")
     numbers = pd.DataFrame([v for c in claims for v in _value_rows(c)], columns=list(VALUE_COLUMNS))
     with locked(path.parent):
@@ -249,9 +231,8 @@ def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataF
 
 
 def _replace(path: Path, new: pd.DataFrame, columns: Sequence[str]) -> pd.DataFrame:
-    if not path.exists():
-        table = new
-    else:
+    table = new
+    if path.exists():
         old = pd.read_csv(path, dtype=str, keep_default_na=False)
         if list(old.columns) != list(columns):
             raise ConfigError(
@@ -269,16 +250,14 @@ def _number_text(x: float) -> str:
 
 
 def _value_rows(claim: Claim) -> list[dict[str, object]]:
+    """The claim's rows of ``claim_values.csv``: its rule's numbers with their intervals, then its facts."""
     head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
+    numbers = [(k, v, claim.intervals.get(k, _NAN)) for k, v in claim.values.items()]
     out = []
-    for name, value in claim.values.items():
-        low, high = claim.intervals.get(name, _NAN)
+    for name, value, (low, high) in numbers + [(k, v, _NAN) for k, v in claim.facts.items()]:
         level = _number_text(claim.level) if math.isfinite(low) and math.isfinite(high) else ""
         cells = {"value": _number_text(value), "low": _number_text(low), "high": _number_text(high)}
         out.append(head | {"quantity": name} | cells | {"level": level, "n": claim.n_users})
-    for name, value in claim.facts.items():
-        cells = {"value": _number_text(value), "low": "", "high": "", "level": ""}
-        out.append(head | {"quantity": name} | cells | {"n": claim.n_users})
     return out
 
 
@@ -289,11 +268,11 @@ class PaperClaim:
     id: str  # the headline row's id in claims.csv
     claim: str  # the claim, in the paper's words
     paper: str  # the paper's number
-    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
-    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
-    mechanism: str
     notebook: str  # the notebook (file stem) that measures it
     short: str  # the claim in a few words, for the README's summary
+    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
+    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
+    mechanism: str = ""
     why: str = ""  # why it does not reproduce where it does not, in a few words (the summary's)
     section: str = "What it shows, against the paper"  # its section that explains the mechanism
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
@@ -304,24 +283,23 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.final_error",
         "shared autonomy reduces the final state error (Fig. sim1)",
         "LA+SA below LA at every beta",
-        "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "04_fixed_expertise",
         "SA lowers the final error (sim1)",
+        "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "Eq. M2 pulls towards the mid-preference grasp",
     ),
     PaperClaim(
         "sim1.time_ratio",
         "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
         "time ratio 1.45 and 1.30",
-        "the pull is largest far from the goal",
         "04_fixed_expertise",
         "LA is slower than LA+SA (sim1)",
+        "the pull is largest far from the goal",
     ),
     PaperClaim(
         "sim1.gap_narrows",
         "the gap between LA and LA+SA narrows as the user becomes more rational",
         "45% at beta = 75 -> 30% at beta = 1000",
-        "",
         "04_fixed_expertise",
         "the LA/LA+SA gap narrows with rationality (sim1)",
     ),
@@ -329,66 +307,65 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.entropy_sa",
         "shared autonomy helps with or without the entropy term",
         "LA+SA and LA+SA+Entropy below LA",
-        "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "04_fixed_expertise",
         "SA helps with and without entropy (sim1)",
+        "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "Eq. M2 pulls to the mid grasp",
     ),
     PaperClaim(
         "sim2.sa_trapped",
         "with LA+SA, a user who changes their mind late is stuck at the first goal",
         "final error grows, confidence falls with N",
-        "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
         "05_changing_goals",
         "a late change of mind is stuck with LA+SA (sim2)",
+        "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
     ),
     PaperClaim(
         "sim2.entropy_escapes",
         "the entropy term lets users change their mind",
         "LA+SA+Entropy reaches the new goal",
-        "Eq. T6 keeps some input leading to each goal at every belief",
         "05_changing_goals",
         "entropy lets users change their mind (sim2)",
+        "Eq. T6 keeps some input leading to each goal at every belief",
     ),
     PaperClaim(
         "sim3.entropy_learners",
         "entropy improves in-task performance for fast and slow learners",
         "LA+SA+Entropy below LA+SA over time",
-        "a learner's early random inputs commit the belief; entropy lets them undo it",
         "06_learning_users",
         "entropy helps learning users (sim3)",
+        "a learner's early random inputs commit the belief; entropy lets them undo it",
     ),
     PaperClaim(
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "07_new_goals",
         "with the map, the error grows linearly with distance (sim4)",
+        "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "the straight-line map misses the new cup's grasps by a margin",
     ),
     PaperClaim(
         "sim4.grasp_linear",
         "the same, with our grasp-to-grasp context map (not the paper's)",
         "y = 0.11x, R^2 = 0.98",
-        "the grasp-to-grasp map is exact at every grasp",
         "07_new_goals",
         "our grasp-to-grasp map (sim4)",
+        "the grasp-to-grasp map is exact at every grasp",
         ours=True,
     ),
     PaperClaim(
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "without the map the robot reaches for the training cup; some users' belief ends on the other one",
         "07_new_goals",
         "without the map, the robot reaches the training goal (sim4)",
+        "without the map the robot reaches for the training cup; some users' belief ends on the other one",
     ),
     PaperClaim(
         "study.h1",
         "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
         "F(1,18) = 29.9, p < .001",
-        "",
         "11_eating_study",
         "H1, SA keeps the goal (study)",
     ),
@@ -396,7 +373,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h2",
         "H2: latent actions let users execute their preferences (Dessert, scoop)",
         "LA+SA adjusts to scoop; R+SA stays stabbing",
-        "",
         "11_eating_study",
         "H2, LA lets users scoop (study)",
     ),
@@ -404,7 +380,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h3",
         "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
         "LA+SA fastest, p < .05 vs each",
-        "",
         "11_eating_study",
         "H3, LA+SA is fastest (study)",
     ),
@@ -412,14 +387,11 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.likert",
         "H3, subjective: users rate LA+SA above the other conditions (Fig. dessert, Likert)",
         "LA+SA higher, t-tests p < .05",
-        "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
         "11_eating_study",
         "H3's Likert ratings (study)",
+        "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
     ),
 )
-
-
-_PEOPLE = "simulated participants"  # who the study's rows rest on: never people, in this package
 
 
 def effect_text(row: pd.Series, numbers: Numbers) -> str:
@@ -430,7 +402,7 @@ def effect_text(row: pd.Series, numbers: Numbers) -> str:
     said = f"{row.effect} ({CENSORED})" if bound else str(row.effect)
     if str(row.figure) != "study":
         return said
-    return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} {_PEOPLE}"
+    return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} simulated participants"
 
 
 def _interval_text(number: Number) -> str:
@@ -548,14 +520,9 @@ def render_verdicts(
     link: Callable[[str], str] | None = None,
     claims_md: str = "figures/claims.md",
 ) -> str:
-    """The verdict table: one row per paper claim, both robots side by side, our additions apart.
-
-    Args:
-        table: ``figures/claims.csv`` (as strings).
-        values: Its numbers (``claim_values.csv``).
-        link: Notebook stem -> the link target of its page (default ``notebooks/<stem>.ipynb``).
-        claims_md: Where the list of readings that flip a claim is (from the page's folder).
-    """
+    """The verdict table of ``table`` (``claims.csv`` as strings) and its ``values``: one row per paper
+    claim, both robots side by side, our additions apart; ``link`` maps a notebook stem to its page
+    (default ``notebooks/<stem>.ipynb``), ``claims_md`` is where the readings that flip a claim are."""
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
@@ -586,9 +553,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     reproduced or not testable, then the count of the paper's numbers."""
     rows = _by_key(table)
     by_word: dict[str, list[str]] = {}
-    for pc in PAPER_CLAIMS:
-        if pc.ours:
-            continue
+    for pc in [pc for pc in PAPER_CLAIMS if not pc.ours]:
         words: dict[str, list[str]] = {}
         for robot in ROBOTS:
             if (pc.id, robot) in rows:
@@ -608,9 +573,8 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
         "simulated participants, not a replication with people; words and N: [the verdicts](#the-verdicts)):"
     ]
-    for w in WORDS:
-        if w in by_word:
-            lines.append(f"- **{w.capitalize()}** ({len(by_word[w])}): " + "; ".join(by_word[w]) + ".")
+    listed = [(w, by_word[w]) for w in WORDS if w in by_word]
+    lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
     n, stated = _numbers_said(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"
@@ -635,14 +599,8 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers.
-
-    Returns:
-        Whether the README changed.
-
-    Raises:
-        ConfigError: if the README lacks a marker.
-    """
+    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers; whether
+    the README changed (a ConfigError if it lacks a marker)."""
     summary = Path(table_md).with_name("summary.md")
     changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False
     return sync_between(readme, README_MARKERS, Path(table_md).read_text()) or changed

@@ -1,7 +1,6 @@
-"""Decision rules and the words their verdicts read: a :class:`Rule` maps a few numbers to ``yes``,
-``partly`` or ``no``, piecewise constant between thresholds, so a box of intervals can settle it. It
-judges the claim's shape (the *effect*), never a number's size (the *number*, :meth:`PaperNumber.word`).
-"""
+"""Decision rules and the words their verdicts read: a :class:`Rule` maps a few numbers to ``yes``, ``partly``
+or ``no``, piecewise constant between thresholds, so a box of intervals can settle it. It judges the claim's
+shape (the *effect*), never a number's size (the *number*, :meth:`PaperNumber.word`)."""
 
 from __future__ import annotations
 
@@ -97,12 +96,8 @@ class PaperNumber:
         met = self.inside(interval)
         if met != "yes":
             return OUT if met == "no" else NOT_APPLICABLE
-        if high - low > self.width_limit:
-            return UNDECIDED
-        if self.tolerance == 0.0:
-            return IN
-        inner = self.value - self.tolerance <= low and high <= self.value + self.tolerance
-        return IN if inner else UNDECIDED
+        band = self.value - self.tolerance <= low and high <= self.value + self.tolerance
+        return IN if high - low <= self.width_limit and (self.tolerance == 0.0 or band) else UNDECIDED
 
     def describe(self, interval: tuple[float, float], measured: float) -> str:
         """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``."""
@@ -139,12 +134,9 @@ class Direction:
 
 @dataclasses.dataclass(frozen=True)
 class Rule:
-    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds.
-
-    Raises:
-        ConfigError: if the id is not ``<figure>.<name>``, there is no quantity, or a paper number
-            or the direction names something else than a quantity.
-    """
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds (a ConfigError
+    if the id is not ``<figure>.<name>``, it has no quantity, or a paper number or the direction names no
+    quantity)."""
 
     id: str  # the claim id, "<figure>.<name>"
     text: str  # the rule in words, as the claims table states it
@@ -161,11 +153,9 @@ class Rule:
             raise ConfigError(f"a rule's id must be '<figure>.<name>' without spaces or '@', got {self.id!r}")
         if not self.quantities:
             raise ConfigError(f"{self.id}: a rule reads at least one quantity")
+        named = [p.quantity for p in self.paper] + ([self.direction.quantity] if self.direction else [])
         names = {q.name for q in self.quantities}
-        extra = [p.quantity for p in self.paper if p.quantity not in names]
-        if self.direction is not None and self.direction.quantity not in names:
-            extra.append(self.direction.quantity)
-        if extra:
+        if extra := [n for n in named if n not in names]:
             raise ConfigError(
                 f"{self.id}: paper numbers or direction name {extra}, not quantities {sorted(names)}"
             )
@@ -177,8 +167,7 @@ class Rule:
 
     def verdict(self, values: Mapping[str, float]) -> str:
         """The rule's verdict at these values (a ConfigError if a quantity is missing)."""
-        missing = [q.name for q in self.quantities if q.name not in values]
-        if missing:
+        if missing := [q.name for q in self.quantities if q.name not in values]:
             raise ConfigError(f"{self.id}: the rule needs {missing}, got {sorted(values)}")
         return self._checked(self.decide(values), "rule")
 
@@ -215,14 +204,10 @@ class Rule:
         for name, values in edges.items():
             low, high = intervals.get(name, (math.nan, math.nan))
             margin = FRAGILE_FRACTION * (high - low)
-            if not _known((low, high)) or margin <= 0.0:
-                continue
-            gaps = {t: min(abs(low - t), abs(high - t)) for t in sorted(set(values))}
-            out += [
-                f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}"
-                for t, gap in gaps.items()
-                if gap < margin
-            ]
+            if _known((low, high)) and margin > 0.0:
+                gaps = {t: min(abs(low - t), abs(high - t)) for t in sorted(set(values))}
+                near = [(t, gap) for t, gap in gaps.items() if gap < margin]
+                out += [f"{name} [{low:.3g}, {high:.3g}] ends {gap:.2g} from {t:g}" for t, gap in near]
         return out
 
     def straddled(self, intervals: Mapping[str, tuple[float, float]]) -> list[str]:
@@ -230,19 +215,15 @@ class Rule:
         out = []
         for q in self.quantities:
             low, high = intervals[q.name]
-            inner = [t for t in q.thresholds if low <= t <= high and low < high]
-            if inner:
-                ts = ", ".join(f"{t:g}" for t in inner)
-                out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {ts}")
+            if inner := [f"{t:g}" for t in q.thresholds if low <= t <= high and low < high]:
+                out.append(f"{q.name} [{low:.3g}, {high:.3g}] reaches {', '.join(inner)}")
         return out
 
 
 def effect_word(verdict: str) -> str:
     """The effect's word (:data:`WORDS`) for a verdict; a ConfigError for none of them."""
-    if verdict not in (*VERDICTS, UNDECIDED, NOT_TESTABLE):
-        raise ConfigError(
-            f"cannot word the verdict {verdict!r}: not one of {(*VERDICTS, UNDECIDED, NOT_TESTABLE)}"
-        )
+    if verdict not in (known := (*VERDICTS, UNDECIDED, NOT_TESTABLE)):
+        raise ConfigError(f"cannot word the verdict {verdict!r}: not one of {known}")
     return _SETTLED_WORD.get(verdict, verdict)
 
 

@@ -57,32 +57,21 @@ def _time_ratio(values: Values, robots: Sequence[str]) -> str:
 def _gap_narrows(values: Values, robots: Sequence[str]) -> str:
     parts = []
     for what in ("time", "error"):
-        groups = _gap_groups(values, robots, what)
+        groups: dict[str, list[str]] = {}
+        for robot in robots:
+            gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
+            narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
+            if gap is not None and narrowing is not None:
+                change = _CHANGE_SAYS.get(side_of(narrowing, 0.0), "the {} gap's change is unclear")
+                said = _GAP_SAYS.get(side_of(gap, 0.0)) or change
+                groups.setdefault(said.format(what), []).append(robot)
         parts.append("; ".join(f"{said} ({on_robots(where)})" for said, where in groups.items()))
     return "; ".join(p for p in parts if p)
 
 
-def _gap_groups(values: Values, robots: Sequence[str], what: str) -> dict[str, list[str]]:
-    groups: dict[str, list[str]] = {}
-    for robot in robots:
-        gap = _interval(values, "sim1.gap_narrows", robot, f"{what}_gap_75")
-        narrowing = _interval(values, "sim1.gap_narrows", robot, f"{what}_narrowing")
-        if gap is None or narrowing is None:
-            continue
-        side, change = side_of(gap, 0.0), side_of(narrowing, 0.0)
-        said = (
-            f"LA+SA is worse in {what} at beta = 75"
-            if side == "below"
-            else f"the {what} gap at beta = 75 is unclear"
-            if side == "reaches"
-            else f"the {what} gap narrows"
-            if change == "above"
-            else f"the {what} gap grows"
-            if change == "below"
-            else f"the {what} gap's change is unclear"
-        )
-        groups.setdefault(said, []).append(robot)
-    return groups
+# sim1.gap_narrows' clause for a gap at beta = 75 below 0 or reaching it, else for its narrowing's side
+_GAP_SAYS = {"below": "LA+SA is worse in {} at beta = 75", "reaches": "the {} gap at beta = 75 is unclear"}
+_CHANGE_SAYS = {"above": "the {} gap narrows", "below": "the {} gap grows"}  # else: its change is unclear
 
 
 def on_robots(robots: list[str]) -> str:
@@ -138,21 +127,17 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
         if not math.isfinite(p):
             return f"no scoop-phase comparison ({pairs} pairs)"
         side = "above" if diff > 0 else "below"
-        return (
-            f"LA+SA's scoop alignment is {side} R+SA's by {diff:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"  # noqa: E501
-        )
+        said = f"LA+SA's scoop alignment is {side} R+SA's by {diff:+.3f}"
+        return f"{said}, paired t, {pairs} pairs, p = {p:.3g}"
     effect = numbers.get("effect")
     versus = [k.split(".", 1)[1] for k in numbers if k.startswith("versus.")]
-    if base == "study.h3" and (effect is None or effect.interval is None or not versus):
+    if base != "study.h3":
+        return ""
+    if effect is None or effect.interval is None or not versus:
         return "no contrast (a compared condition finishes too few episodes)"
-    if base == "study.h3" and effect is not None and effect.interval is not None:
-        low, high = effect.interval
-        side = "slower" if effect.value > 0 else "faster"
-        return (
-            f"LA+SA is {side} than {versus[0]} by {bound}{effect.value:+.1f} s [{low:+.1f}, {high:+.1f}] "
-            "(restricted means)"
-        )
-    return ""
+    (low, high), side = effect.interval, "slower" if effect.value > 0 else "faster"
+    by = f"{bound}{effect.value:+.1f} s [{low:+.1f}, {high:+.1f}]"
+    return f"LA+SA is {side} than {versus[0]} by {by} (restricted means)"
 
 
 def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
@@ -171,21 +156,13 @@ def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
     if len(set(verbs)) == 1 and len(sides) > 1:
         ns = " and ".join(str(n) for n, _ in sides)
         return f"{says[lead]}; {ns} simulated participants alike {verbs[0]}"
-    clauses = [
-        f"{n}{' simulated participants' if i == 0 else ''} {verb}"
-        for i, ((n, _), verb) in enumerate(zip(sides, verbs, strict=True))
-    ]
-    return f"{says[lead]}; {', '.join(clauses)}"
+    named = [f"{n} simulated participants" if i == 0 else str(n) for i, (n, _) in enumerate(sides)]
+    return f"{says[lead]}; {', '.join(f'{who} {verb}' for who, verb in zip(named, verbs, strict=True))}"
 
 
 def _testable(numbers: Numbers) -> bool:
     effect = numbers.get("effect")
     return _fact(numbers, "testable") == 1 and effect is not None and effect.interval is not None
-
-
-def _censored(values: Values, cid: str) -> list[tuple[str, float]]:
-    numbers = values.get((cid, "panda"), _NONE)
-    return short_conditions(numbers) if not _testable(numbers) else []
 
 
 def _finish(short: Sequence[tuple[str, float]]) -> str:
@@ -204,7 +181,8 @@ def _hypothesis(
     sides = dict(zip(("below", "above", "reaches"), says, strict=True))
 
     def find(values: Values, robots: Sequence[str]) -> str:
-        short = _censored(values, cid)
+        numbers = values.get((cid, "panda"), _NONE)
+        short = short_conditions(numbers) if not _testable(numbers) else []
         return short_text(short) if short else _study(values, cid, sides)
 
     return find

@@ -62,15 +62,9 @@ def belief_cmap(n_goals: int, goal_index: int) -> LinearSegmentedColormap:
     (grey with more than two goals) at 0; a ValueError if ``goal_index`` is not a goal."""
     if not 0 <= goal_index < n_goals:
         raise ValueError(f"goal_index must be one of the {n_goals} goals, got {goal_index}")
-    colors = goal_colors(n_goals)
+    colors, name = goal_colors(n_goals), f"belief_in_goal_{goal_index}"
     low = colors[1 - goal_index] if n_goals == 2 else "#7a7a7a"
-    return LinearSegmentedColormap.from_list(
-        f"belief_in_goal_{goal_index}", [low, "#dddddd", colors[goal_index]]
-    )
-
-
-def _ax(ax: Axes | None) -> Axes:
-    return plt.gca() if ax is None else ax
+    return LinearSegmentedColormap.from_list(name, [low, "#dddddd", colors[goal_index]])
 
 
 def is_planar(task: GoalTask) -> bool:
@@ -89,7 +83,7 @@ def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
 
 def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
     """The goals (cups), each in its colour, and the robot's base in the task's drawing plane."""
-    ax = _ax(ax)
+    ax = plt.gca() if ax is None else ax
     cups = task.robot.goal_positions()
     colors = goal_colors(len(cups))
     if is_planar(task):
@@ -149,7 +143,7 @@ TRAIN_COLOR, VAL_COLOR = "#1f77b4", "#d95f02"  # the training curves: loss (left
 def plot_training_curves(history: pd.DataFrame, ax: Axes | None = None) -> tuple[Axes, Axes]:
     """Training loss (left, in sigma_h^2 plus the sector term) and held-out error ||e_a||^2 (right,
     (rad/s)^2) against optimiser step, each on a log axis of its own; returns both axes."""
-    ax = _ax(ax)
+    ax = plt.gca() if ax is None else ax
     twin = ax.twinx()
     ax.plot(history["step"], history["train_loss"], color=TRAIN_COLOR, label="training loss")
     twin.plot(history["step"], history["val_error"], color=VAL_COLOR, ls="--", label="held-out error")
@@ -187,20 +181,12 @@ def robot_rows(
 def method_lineplot(frame: pd.DataFrame, x: str, y: str, ax: Axes | None = None, level: float = 0.95) -> Axes:
     """``y`` against ``x`` per method, in the methods' colours, with bootstrap bands at ``level`` of
     the mean over the rows (users) at that ``x``, 1000 resamples from a fixed seed."""
-    ax = _ax(ax)
+    ax = plt.gca() if ax is None else ax
     methods = [m for m in METHOD_COLORS if m in set(frame.method)]
+    hue: dict[str, Any] = {"hue": "method", "hue_order": methods, "palette": METHOD_COLORS}
+    marker = "o" if frame[x].nunique() < 30 else None
     sns.lineplot(
-        data=frame,
-        x=x,
-        y=y,
-        hue="method",
-        hue_order=methods,
-        palette=METHOD_COLORS,
-        errorbar=("ci", 100.0 * level),
-        n_boot=1000,
-        seed=0,
-        ax=ax,
-        marker="o" if frame[x].nunique() < 30 else None,
+        data=frame, x=x, y=y, errorbar=("ci", 100.0 * level), n_boot=1000, seed=0, ax=ax, marker=marker, **hue
     )
     ax.legend(frameon=False, title=None)
     return ax
@@ -216,15 +202,8 @@ def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize
     handles, labels = ax.get_legend_handles_labels()
     handles += list(extra)
     labels += [h.get_label() for h in extra]
-    ax.legend(
-        handles,
-        labels,
-        loc="upper center",
-        bbox_to_anchor=(0.5, -0.17),
-        ncol=ncol,
-        frameon=False,
-        fontsize=fontsize,
-    )
+    below: dict[str, Any] = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.17)}
+    ax.legend(handles, labels, ncol=ncol, frameon=False, fontsize=fontsize, **below)
 
 
 def probability_axis(ax: Axes) -> None:
@@ -265,18 +244,8 @@ def paper_point(
     """The paper's value ``y`` at ``x``: a star, labelled (``label``) in the legend and beside it;
     ``tolerance`` draws y +- it faintly, labelled ``tol_label``."""
     if tolerance is not None:
-        ax.errorbar(
-            [x],
-            [y],
-            yerr=tolerance,
-            fmt="none",
-            ecolor="0.1",
-            alpha=0.3,
-            elinewidth=6,
-            capsize=0,
-            label=tol_label,
-            zorder=3,
-        )
+        band: dict[str, Any] = {"fmt": "none", "ecolor": "0.1", "alpha": 0.3, "elinewidth": 6, "capsize": 0}
+        ax.errorbar([x], [y], yerr=tolerance, label=tol_label, zorder=3, **band)
     (point,) = ax.plot([x], [y], marker="*", ms=11, ls="none", color="0.1", label=label, zorder=5)
     ax.annotate(f"paper {y:g}", (x, y), xytext=(7, 0), textcoords="offset points", fontsize=7, va="center")
     return point

@@ -43,16 +43,9 @@ def publish(
     **plot_args: Any,
 ) -> pd.DataFrame:
     """Merge ``frame`` into the figure's CSV (replacing this robot's rows), redraw its PNG from the
-    file (``plot_args`` to ``module.plot``), and write ``claims``.
-
-    Returns:
-        The merged table of every robot present.
-
-    Raises:
-        ConfigError: if ``frame`` lacks a column of ``module.COLUMNS``.
-    """
-    missing = [c for c in module.COLUMNS if c not in frame.columns]
-    if missing:
+    file (``plot_args`` to ``module.plot``), write ``claims``, and return the merged table of every robot
+    present (a ConfigError if ``frame`` lacks a column of ``module.COLUMNS``)."""
+    if missing := [c for c in module.COLUMNS if c not in frame.columns]:
         raise ConfigError(f"{module.NAME} rows lack column(s) {missing}")
     with locked(paths.figures):
         key = str(getattr(module, "KEY", "robot"))  # the column whose values a run replaces

@@ -1,7 +1,6 @@
-"""The paper's decision rules (:class:`lasa.evidence.decision.Rule`) by claim id: each judges the
-claim's shape; the study's (H1-H3) rest on significance tests (:mod:`lasa.evidence.hypotheses`).
-Each was written before the results it judges were seen, except where :data:`AFTER_RESULTS` says.
-"""
+"""The paper's decision rules (:class:`lasa.evidence.decision.Rule`) by claim id: each judges the claim's
+shape; the study's (H1-H3) rest on significance tests (:mod:`lasa.evidence.hypotheses`). Each was written
+before the results it judges were seen, except where :data:`AFTER_RESULTS` says."""
 
 from __future__ import annotations
 
@@ -36,13 +35,6 @@ def _share(name: str, partly_above: float) -> Decide:
     return decide
 
 
-def _both_or_one(a: str, b: str, ref: float = 0.0) -> Decide:
-    def decide(v: Mapping[str, float]) -> str:
-        return _parts(v[a] > ref, v[b] > ref)
-
-    return decide
-
-
 def _sim1_gap_narrows(v: Mapping[str, float]) -> str:
     # a part holds when its gap has the paper's sign at beta = 75 (LA+SA better) and is smaller
     # in size at beta = 1000; a gap that narrows in the other direction does not count
@@ -65,15 +57,6 @@ def _sim4_linear(v: Mapping[str, float]) -> str:
 def _sim4_no_map(v: Mapping[str, float]) -> str:
     # the shape of y = x: the error grows linearly with the distance (its size is the number)
     return "yes" if v["slope"] > 0.0 and v["r2"] >= 0.9 else "no"
-
-
-def _effect(sign: int) -> Decide:
-    """The study's settling: a settled effect on the paper's side of 0 (yes/partly/no: its tests)."""
-
-    def decide(v: Mapping[str, float]) -> str:
-        return "yes" if sign * v["effect"] > 0.0 else "no"
-
-    return decide
 
 
 def _sa_lowers(v: Mapping[str, float]) -> str:
@@ -103,9 +86,38 @@ def _la_sa_fastest(v: Mapping[str, float]) -> str:
     return "partly" if all(v["mean LA+SA"] < x for x in others) else "no"
 
 
+def _two_parts(
+    rule_id: str, text: str, a: Quantity, b: Quantity, ref: float = 0.0, paper: tuple[PaperNumber, ...] = ()
+) -> Rule:
+    """Two parts, each holding when its quantity is above ``ref``; the paper's sign is the first's."""
+
+    def decide(v: Mapping[str, float]) -> str:
+        return _parts(v[a.name] > ref, v[b.name] > ref)
+
+    return Rule(rule_id, text, (a, b), decide, paper, Direction(a.name, +1, ref))
+
+
+def _every_beta(rule_id: str, text: str, name: str, meaning: str) -> Rule:
+    """Yes if the share of betas ``name`` is 1, partly if above one half (:func:`_share`)."""
+    return Rule(
+        rule_id, text, (_q(name, (0.5, 1.0), meaning),), _share(name, 0.5), (), Direction(name, +1, 0.5)
+    )
+
+
+def _study(rule_id: str, text: str, sign: int, meaning: str, tests: Decide) -> Rule:
+    """A hypothesis of the study: a settled ``effect`` on the paper's side (``sign``) of 0 (yes or no;
+    partly: its ``tests``)."""
+
+    def decide(v: Mapping[str, float]) -> str:
+        return "yes" if sign * v["effect"] > 0.0 else "no"
+
+    effect = (_q("effect", (0.0,), meaning),)
+    return Rule(rule_id, text, effect, decide, direction=Direction("effect", sign), tests=tests)
+
+
 _LINEAR_TEXT = (
-    "two parts: the error grows linearly with the distance (slope > 0 and R^2 >= 0.9), and it "
-    "lies below the no-map error at every cup; yes if both hold, partly if one"
+    "two parts: the error grows linearly with the distance (slope > 0 and R^2 >= 0.9), and it lies below "
+    "the no-map error at every cup; yes if both hold, partly if one"
 )
 # sim4's lines: least squares through the origin (the paper's form), uncentred R^2 = 1 - SSE / sum(y^2)
 _LINEAR = (
@@ -121,40 +133,36 @@ _LINEAR_PAPER = (
 )
 _WIDTH_NOTE = (
     "the widest interval that may read 'in' (0.11 for the slope 0.11, 0.04 for R^2 = 0.98; the tolerance "
-    "band's width for the others) was set after the results were seen, when a review found the Panda's "
-    "R^2 read 'in' with an interval 0.44 wide; the paper's numbers are compared on the Panda only"
+    "band's width for the others) was set after the results were seen, when a review found the Panda's R^2 "
+    "read 'in' with an interval 0.44 wide; the paper's numbers are compared on the Panda only"
 )
 _GROWS = Direction("slope", +1)  # the error grows with the new cup's distance
+_BAR = f"{100 * COMPLETION_BAR:.0f}%"  # the completion bar, in the rules' words
 
 _PAPER = (
-    Rule(
+    _every_beta(
         "sim1.final_error",
         "yes if LA+SA's mean final error is below LA's at every beta, partly if at more than half",
-        (_q("share_lower", (0.5, 1.0), "share of betas where LA+SA's mean final error is below LA's"),),
-        _share("share_lower", 0.5),
-        direction=Direction("share_lower", +1, 0.5),
+        "share_lower",
+        "share of betas where LA+SA's mean final error is below LA's",
     ),
-    Rule(
+    _two_parts(
         "sim1.time_ratio",
-        "two parts, LA slower than LA+SA at beta=75 and at beta=1000 (time ratio LA/LA+SA above 1): "
-        "yes if both hold, partly if one; the paper's sizes, 1.45 and 1.30 give or take 0.15, are "
-        "the numbers",
+        "two parts, LA slower than LA+SA at beta=75 and at beta=1000 (time ratio LA/LA+SA above 1): yes if "
+        "both hold, partly if one; the paper's sizes, 1.45 and 1.30 give or take 0.15, are the numbers",
+        _q("ratio_75", (1.0,), "mean time LA / LA+SA at beta = 75"),
+        _q("ratio_1000", (1.0,), "mean time LA / LA+SA at beta = 1000"),
+        1.0,
         (
-            _q("ratio_75", (1.0,), "mean time LA / LA+SA at beta = 75"),
-            _q("ratio_1000", (1.0,), "mean time LA / LA+SA at beta = 1000"),
-        ),
-        _both_or_one("ratio_75", "ratio_1000", 1.0),
-        paper=(
             PaperNumber("ratio_75", 1.45, 0.15, "beta = 75"),
             PaperNumber("ratio_1000", 1.30, 0.15, "beta = 1000"),
         ),
-        direction=Direction("ratio_75", +1, 1.0),
     ),
     Rule(
         "sim1.gap_narrows",
-        "two parts, the time gap (ratio LA/LA+SA - 1) and the final-error gap (LA - LA+SA): each "
-        "holds if the gap has the paper's sign at beta=75 (LA+SA better, > 0) and is smaller in "
-        "size at beta=1000; yes if both hold, partly if one",
+        "two parts, the time gap (ratio LA/LA+SA - 1) and the final-error gap (LA - LA+SA): each holds if "
+        "the gap has the paper's sign at beta=75 (LA+SA better, > 0) and is smaller in size at beta=1000; "
+        "yes if both hold, partly if one",
         (
             _q("time_narrowing", (0.0,), "g75 - |g1000| of the time gap g = ratio - 1: > 0 narrows"),
             _q("time_gap_75", (0.0,), "the time gap at beta = 75, ratio - 1: > 0 if LA+SA is faster"),
@@ -164,33 +172,24 @@ _PAPER = (
         _sim1_gap_narrows,
         direction=Direction("time_narrowing", +1),  # its paper numbers are sim1.time_ratio's
     ),
-    Rule(
+    _every_beta(
         "sim1.entropy_sa",
-        "yes if LA+SA and LA+SA+Entropy are both below LA's final error at every beta, partly if "
-        "both at more than half",
-        (_q("share_weaker", (0.5, 1.0), "the smaller of the two shares of betas below LA"),),
-        _share("share_weaker", 0.5),
-        direction=Direction("share_weaker", +1, 0.5),
+        "yes if LA+SA and LA+SA+Entropy are both below LA's final error at every beta, partly if both at "
+        "more than half",
+        "share_weaker",
+        "the smaller of the two shares of betas below LA",
     ),
-    Rule(
+    _two_parts(
         "sim2.sa_trapped",
-        "the paper's two parts: LA+SA's mean final error grows from the smallest N to the largest, "
-        "and its mean confidence in the true cup falls; yes if both hold, partly if one",
-        (
-            _q("error_growth", (0.0,), "LA+SA's mean final error at the largest N minus at the smallest"),
-            _q(
-                "confidence_drop",
-                (0.0,),
-                "LA+SA's mean confidence b(g*) at the smallest N minus at the largest",
-            ),
-        ),
-        _both_or_one("error_growth", "confidence_drop"),
-        direction=Direction("error_growth", +1),
+        "the paper's two parts: LA+SA's mean final error grows from the smallest N to the largest, and its "
+        "mean confidence in the true cup falls; yes if both hold, partly if one",
+        _q("error_growth", (0.0,), "LA+SA's mean final error at the largest N minus at the smallest"),
+        _q("confidence_drop", (0.0,), "LA+SA's mean confidence b(g*) at the smallest N minus at the largest"),
     ),
     Rule(
         "sim2.entropy_escapes",
-        "yes if LA+SA+Entropy's success at the largest N is at least 80% and at least 20 points "
-        "above LA+SA's, partly if above",
+        "yes if LA+SA+Entropy's success at the largest N is at least 80% and at least 20 points above "
+        "LA+SA's, partly if above",
         (
             _q("success_entropy", (0.8,), "LA+SA+Entropy's success rate at the largest N"),
             _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
@@ -198,23 +197,19 @@ _PAPER = (
         _sim2_escapes,
         direction=Direction("margin", +1),
     ),
-    Rule(
+    _two_parts(
         "sim3.entropy_learners",
-        "yes if LA+SA+Entropy's mean error over the episode is below LA+SA's for both learners, "
-        "partly if for one",
-        (
-            _q("gain_fast", (0.0,), "fast learner: LA+SA minus LA+SA+Entropy mean error"),
-            _q("gain_slow", (0.0,), "slow learner: LA+SA minus LA+SA+Entropy mean error"),
-        ),
-        _both_or_one("gain_fast", "gain_slow"),
-        direction=Direction("gain_fast", +1),
+        "yes if LA+SA+Entropy's mean error over the episode is below LA+SA's for both learners, partly if "
+        "for one",
+        _q("gain_fast", (0.0,), "fast learner: LA+SA minus LA+SA+Entropy mean error"),
+        _q("gain_slow", (0.0,), "slow learner: LA+SA minus LA+SA+Entropy mean error"),
     ),
     Rule("sim4.straight_line_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
     Rule("sim4.grasp_linear", _LINEAR_TEXT, _LINEAR, _sim4_linear, _LINEAR_PAPER, _GROWS),
     Rule(
         "sim4.no_map_training_goal",
-        "yes if the no-map error grows linearly with the distance (slope > 0 and R^2 >= 0.9); the "
-        "paper's size, y = x (slope 1 give or take 0.15), is the number",
+        "yes if the no-map error grows linearly with the distance (slope > 0 and R^2 >= 0.9); the paper's "
+        "size, y = x (slope 1 give or take 0.15), is the number",
         (
             _q("slope", (0.0,), "slope of the line through the origin of the no-map mean error"),
             _q("r2", (0.9,), "uncentred R^2 of that line over the cups' means (@intercept: centred)"),
@@ -223,54 +218,44 @@ _PAPER = (
         paper=(PaperNumber("slope", 1.0, 0.15, "y = x"),),
         direction=_GROWS,
     ),
-    Rule(
+    _study(
         "study.h1",
-        "the SA main effect on Goal Error (SA - no SA) must be below 0 with p < .05; yes if both "
-        "pairwise comparisons are significant too, partly if not; not testable unless every condition "
-        f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes (Goal Error is summed over the "
-        "task's time), except no (censored: lower bound) when only SA conditions finish fewer and SA's "
-        "Goal Error, a lower bound, is already significantly higher",
-        (_q("effect", (0.0,), "SA - no SA, the within-subjects main effect"),),
-        _effect(-1),
-        direction=Direction("effect", -1),
-        tests=_sa_lowers,
+        "the SA main effect on Goal Error (SA - no SA) must be below 0 with p < .05; yes if both pairwise "
+        "comparisons are significant too, partly if not; not testable unless every condition finishes at "
+        f"least {_BAR} of its episodes (Goal Error is summed over the task's time), except no (censored: "
+        "lower bound) when only SA conditions finish fewer and SA's Goal Error, a lower bound, is already "
+        "significantly higher",
+        -1,
+        "SA - no SA, the within-subjects main effect",
+        _sa_lowers,
     ),
-    Rule(
+    _study(
         "study.h2",
-        "Dessert scoop alignment LA+SA - R+SA must be above 0: yes if significant (p < .05); not "
-        f"testable unless LA+SA and R+SA each finish at least {100 * COMPLETION_BAR:.0f}% of their "
-        "episodes (alignment is measured only on the phases reached)",
-        (_q("effect", (0.0,), "alignment LA+SA - R+SA in the scoop phase"),),
-        _effect(+1),
-        direction=Direction("effect", +1),
-        tests=_la_aligns,
+        "Dessert scoop alignment LA+SA - R+SA must be above 0: yes if significant (p < .05); not testable "
+        f"unless LA+SA and R+SA each finish at least {_BAR} of their episodes (alignment is measured only on "
+        "the phases reached)",
+        +1,
+        "alignment LA+SA - R+SA in the scoop phase",
+        _la_aligns,
     ),
-    Rule(
+    _study(
         "study.h3",
-        f"not testable if any condition finishes fewer than {100 * COMPLETION_BAR:.0f}% of its episodes; "
-        "else restricted mean "
-        "times to the horizon (min(T, horizon) summed over both tasks), LA+SA minus each other "
-        "condition, paired bootstrap 95% intervals over participants: yes if all six (Total and "
-        "Idle Time) lie below 0, partly if LA+SA has the lowest restricted mean Total Time, else no; "
-        "when a condition is short of the bar, no if LA+SA's restricted mean (a lower bound if LA+SA is "
-        "the one short: censored) is already above a measured condition's with the interval clear of 0",
-        (
-            _q(
-                "effect",
-                (0.0,),
-                "LA+SA's restricted mean Total Time minus the fastest other condition's [s]",
-            ),
-        ),
-        _effect(-1),
-        direction=Direction("effect", -1),
-        tests=_la_sa_fastest,
+        f"not testable if any condition finishes fewer than {_BAR} of its episodes; else restricted mean "
+        "times to the horizon (min(T, horizon) summed over both tasks), LA+SA minus each other condition, "
+        "paired bootstrap 95% intervals over participants: yes if all six (Total and Idle Time) lie below 0, "
+        "partly if LA+SA has the lowest restricted mean Total Time, else no; when a condition is short of "
+        "the bar, no if LA+SA's restricted mean (a lower bound if LA+SA is the one short: censored) is "
+        "already above a measured condition's with the interval clear of 0",
+        -1,
+        "LA+SA's restricted mean Total Time minus the fastest other condition's [s]",
+        _la_sa_fastest,
     ),
     Rule(
         "study.likert",
-        "Fig. dessert's Likert scales (Easy, Helpful, Precise, Intuitive, Prefer), LA+SA against each other "
-        "condition, paired t with Holm's correction: yes if LA+SA is rated higher with p < .05 in every "
-        "comparison, partly if in some, no if in none; not testable without people's answers (simulated "
-        "participants answer no questionnaire)",
+        "Fig. dessert's Likert scales (Easy, Helpful, Precise, Intuitive, Prefer), LA+SA against each "
+        "other condition, paired t with Holm's correction: yes if LA+SA is rated higher with p < .05 in "
+        "every comparison, partly if in some, no if in none; not testable without people's answers "
+        "(simulated participants answer no questionnaire)",
         (_q("share", (0.0, 1.0), "share of scale x condition comparisons with LA+SA rated higher, p < .05"),),
         _share("share", 0.0),
     ),
@@ -279,8 +264,8 @@ RULES: Mapping[str, Rule] = MappingProxyType({r.id: r for r in _PAPER})  # read-
 
 # Rules (or their readings) written after some of the results they judge had been seen.
 _TWO_WORDS = (
-    "split into the effect (the rule, the claim's shape) and the number (the paper's sizes) after an "
-    "audit had read this version's verdicts: the rule no longer reads the paper's sizes"
+    "split into the effect (the rule, the claim's shape) and the number (the paper's sizes) after an audit "
+    "had read this version's verdicts: the rule no longer reads the paper's sizes"
 )
 # The study's belief, changed after a probe's results were seen (notebook 11 gives the probe's table).
 _BELIEF_CAP = (
@@ -300,23 +285,18 @@ _SIM4_ORIGIN = (
     "@intercept"
 )
 AFTER_RESULTS: dict[str, str] = {
-    "sim1.time_ratio": _TWO_WORDS
-    + "; before, yes needed both ratios within 0.15 of the paper's; "
+    "sim1.time_ratio": f"{_TWO_WORDS}; before, yes needed both ratios within 0.15 of the paper's; "
     + _PANDA_NOTE,
     "sim1.gap_narrows": "each part must now narrow in the paper's direction (LA+SA better at beta = 75), "
     "written after an audit saw 'partly' rest on an error gap in which LA+SA is worse",
-    "sim2.sa_trapped": "the paper's two parts (final error grows, confidence falls with N) replaced LA+SA's "
-    "success rate after an audit had seen that rule's verdicts and the end confidence in the true cup",
+    "sim2.sa_trapped": "the paper's two parts (final error grows, confidence falls with N) replaced "
+    "LA+SA's success rate after an audit had seen that rule's verdicts and the end confidence in the true "
+    "cup",
     "sim4.straight_line_linear": "the partly rule was made stricter (the map must help at every cup) after "
     "the first sim4 results: the earlier 'slope <= 0.5' labelled a map worse than none at near cups partly; "
-    + _TWO_WORDS
-    + " (the slope's (0, 0.25] became 0.11's number word); "
-    + _WIDTH_NOTE
-    + _SIM4_ORIGIN,
+    f"{_TWO_WORDS} (the slope's (0, 0.25] became 0.11's number word); {_WIDTH_NOTE}{_SIM4_ORIGIN}",
     "sim4.grasp_linear": "as sim4.straight_line_linear" + _SIM4_ORIGIN,
-    "sim4.no_map_training_goal": _TWO_WORDS
-    + "; before, yes needed |slope - 1| <= 0.15; "
-    + _PANDA_NOTE
+    "sim4.no_map_training_goal": f"{_TWO_WORDS}; before, yes needed |slope - 1| <= 0.15; {_PANDA_NOTE}"
     + _SIM4_ORIGIN,
     "study.h1": "the study's rules were written after pilots of 4 and 10 participants; the mean-distance "
     "reading (@mean_distance) after the paper-scale run; H3's completion guard was extended to H1 (a sum "
@@ -330,10 +310,10 @@ AFTER_RESULTS: dict[str, str] = {
     "version's results were seen, because they were censored (no LA or LA+SA episode of the headline "
     "decoder finished within the 150 s horizon): from paired t-tests on times capped at the horizon to "
     "restricted mean times with a paired bootstrap, behind a guard (not testable unless every condition "
-    f"finishes at least {100 * COMPLETION_BAR:.0f}% of its episodes); the censored lower bound's 'no' (for "
-    "H1 too) was added after an audit saw the guard hide a significant reversal, before this version's "
-    "verdicts were seen; its extension to a measured LA+SA beside another censored condition after this "
-    "version's first paper-scale run" + _BELIEF_CAP,
+    f"finishes at least {_BAR} of its episodes); the censored lower bound's 'no' (for H1 too) was added "
+    "after an audit saw the guard hide a significant reversal, before this version's verdicts were seen; its "
+    "extension to a measured LA+SA beside another censored condition after this version's first paper-scale "
+    "run" + _BELIEF_CAP,
 }
 
 

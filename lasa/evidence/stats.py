@@ -1,7 +1,6 @@
-"""The user study's statistical tests on its 2x2 design: the SA effect as the paper's F(1,18) (2N
-observations as independent) and as the design's repeated-measures F(1, N-1), Holm-corrected paired
-t-tests, and restricted mean times with a paired bootstrap. F and p come from statsmodels and scipy.
-"""
+"""The user study's statistical tests on its 2x2 design: the SA effect as the paper's F(1,18) (2N observations
+as independent) and as the design's repeated-measures F(1, N-1), Holm-corrected paired t-tests, and restricted
+mean times with a paired bootstrap. F and p come from statsmodels and scipy."""
 
 from __future__ import annotations
 
@@ -40,28 +39,23 @@ __all__ = [
 
 EFFECTS: tuple[str, ...] = ("interface", "assistance", "interface:assistance")  # rm_anova's rows, in order
 
+# what sa_effect_between and sa_effect_within return, in order
+RESULT_KEYS = ("test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high")
 BETWEEN_TEST = "between-subjects one-way ANOVA on 2N participant means (the paper's F(1,18) reading)"
 WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
 
 
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2).
-
-    Returns:
-        ``{"test", "F", "df1", "df2", "p", "n", "mean_sa", "mean_no_sa", "ci_low", "ci_high"}``:
-        ``n`` participants, the means over their means, ``ci_*`` bounding SA - no SA (95%, pooled t).
-
-    Raises:
-        ConfigError: Invalid data, fewer than 2 participants, or a participant without rows both
-            with and without SA.
-    """
+    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2). Returns
+    :data:`RESULT_KEYS`: ``n`` participants, the means over their means, ``ci_*`` bounding SA - no SA (95%,
+    pooled t); a ConfigError for invalid data, fewer than 2 participants, or a participant without rows both
+    with and without SA."""
     data = prepare(frame, measure)
     n = check_participants(data)
     means = aggregate(data, measure, ["assistance"], "mean")
     counts = means.groupby("participant")["assistance"].agg(set)
     for participant, present in counts.items():
-        lacking = [level for level in SA_LEVELS if level not in present]
-        if lacking:
+        if lacking := [level for level in SA_LEVELS if level not in present]:
             conditions = [c for c in CONDITIONS if factors(c)[1] in lacking]
             raise ConfigError(
                 f"participant {participant!r} has no rows with assistance {lacking[0]!r} "
@@ -80,43 +74,22 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
 def _sa_result(
     test: str, f: float, df: tuple[int, int], p: float, n: int, sa: pd.Series, no_sa: pd.Series, ci: Any
 ) -> dict[str, Any]:
-    return {
-        "test": test,
-        "F": f,
-        "df1": df[0],
-        "df2": df[1],
-        "p": p,
-        "n": n,
-        "mean_sa": float(sa.mean()),
-        "mean_no_sa": float(no_sa.mean()),
-        "ci_low": float(ci.low),
-        "ci_high": float(ci.high),
-    }
+    cells = (test, f, *df, p, n, float(sa.mean()), float(no_sa.mean()), float(ci.low), float(ci.high))
+    return dict(zip(RESULT_KEYS, cells, strict=True))
 
 
 def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFrame:
     """Two-way (interface x assistance) repeated-measures ANOVA, participants as subjects, on tasks
-    aggregated by ``agg`` (``"mean"`` or ``"sum"``); each effect has df (1, N-1).
-
-    Returns:
-        One row per effect in :data:`EFFECTS` order, columns ``effect``, ``F``, ``df1``, ``df2``, ``p``.
-
-    Raises:
-        ConfigError: Invalid data or ``agg``, fewer than 2 participants, or a participant missing a
-            condition (or a task within one).
-    """
+    aggregated by ``agg`` (``"mean"`` or ``"sum"``): per effect of :data:`EFFECTS` its ``F``, ``df1``,
+    ``df2`` (1, N-1) and ``p``; a ConfigError for invalid data or ``agg``, fewer than 2 participants, or
+    a participant missing a condition (or a task within one)."""
     cells = condition_cells(frame, measure, agg, CONDITIONS)
     table = AnovaRM(cells, depvar=measure, subject="participant", within=["interface", "assistance"]).fit()
     rows = [table.anova_table.loc[effect] for effect in EFFECTS]
-    return pd.DataFrame(
-        {
-            "effect": list(EFFECTS),
-            "F": [float(r["F Value"]) for r in rows],
-            "df1": [int(round(float(r["Num DF"]))) for r in rows],
-            "df2": [int(round(float(r["Den DF"]))) for r in rows],
-            "p": [float(r["Pr > F"]) for r in rows],
-        }
-    )
+    column = {"F": "F Value", "df1": "Num DF", "df2": "Den DF", "p": "Pr > F"}
+    out = {key: [float(r[name]) for r in rows] for key, name in column.items()}
+    degrees = {key: [int(round(x)) for x in out[key]] for key in ("df1", "df2")}
+    return pd.DataFrame({"effect": list(EFFECTS)} | out | degrees)
 
 
 def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
@@ -129,10 +102,8 @@ def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     # the 95% interval of SA - no SA: a paired t over participants (its t^2 is the main effect's F)
     sa, no_sa = per_participant["SA"], per_participant["none"]
     ci = scipy.stats.ttest_rel(sa, no_sa).confidence_interval()
-    df = (int(row["df1"]), int(row["df2"]))
-    return _sa_result(
-        WITHIN_TEST, float(row["F"]), df, float(row["p"]), int(len(per_participant)), sa, no_sa, ci
-    )
+    df, n = (int(row["df1"]), int(row["df2"])), int(len(per_participant))
+    return _sa_result(WITHIN_TEST, float(row["F"]), df, float(row["p"]), n, sa, no_sa, ci)
 
 
 def pairwise(
@@ -142,21 +113,12 @@ def pairwise(
     pairs: Sequence[tuple[str, str]] | None = None,
     correction: str = "holm",
 ) -> pd.DataFrame:
-    """Paired t-tests between conditions on per-participant values, corrected across the pairs.
-
-    Args:
-        agg: ``"mean"`` or ``"sum"`` over tasks (the paper sums times across both tasks).
-        pairs: ``(a, b)`` condition pairs; default all 6 pairs of :data:`CONDITIONS`, in order.
-        correction: A ``multipletests`` method, or ``"none"``; pairs whose p is not finite are left out.
-
-    Returns:
-        One row per pair: ``a``, ``b``, ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t``
-        (positive when ``a`` is larger), ``df`` (N-1), ``p_unc``, ``p_corr``, ``correction``.
-
-    Raises:
-        ConfigError: Invalid data, ``agg``, pair or correction, fewer than 2 participants, or a
-            participant missing a condition that is compared.
-    """
+    """Paired t-tests between conditions on per-participant values (``agg``: ``"mean"`` or ``"sum"`` over
+    tasks), corrected across the ``pairs`` (default all 6 of :data:`CONDITIONS`) by a ``multipletests`` method
+    or ``"none"`` (pairs whose p is not finite are left out). Returns one row per pair: ``a``, ``b``,
+    ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t`` (positive when ``a`` is larger), ``df``
+    (N-1), ``p_unc``, ``p_corr``, ``correction``; a ConfigError for invalid data, ``agg``, pair or correction,
+    or a participant missing a compared condition."""
     chosen = _chosen_pairs(pairs)
     used = [c for c in CONDITIONS if any(c in pair for pair in chosen)]
     cells = condition_cells(frame, measure, agg, used)
@@ -164,21 +126,11 @@ def pairwise(
 
     rows = []
     for a, b in chosen:
-        x = wide[a].to_numpy(dtype=float)
-        y = wide[b].to_numpy(dtype=float)
+        x, y = wide[a].to_numpy(dtype=float), wide[b].to_numpy(dtype=float)
         test = scipy.stats.ttest_rel(x, y)
-        rows.append(
-            {
-                "a": a,
-                "b": b,
-                "mean_a": float(x.mean()),
-                "mean_b": float(y.mean()),
-                "diff": float(x.mean() - y.mean()),
-                "t": float(test.statistic),
-                "df": len(x) - 1,
-                "p_unc": float(test.pvalue),
-            }
-        )
+        means = {"mean_a": float(x.mean()), "mean_b": float(y.mean()), "diff": float(x.mean() - y.mean())}
+        tested = {"t": float(test.statistic), "df": len(x) - 1, "p_unc": float(test.pvalue)}
+        rows.append({"a": a, "b": b, **means, **tested})
     out = pd.DataFrame(rows)
     out["p_corr"] = _corrected(out["p_unc"].to_numpy(dtype=float), correction)
     out["correction"] = correction
@@ -186,9 +138,7 @@ def pairwise(
 
 
 def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
-    chosen: list[tuple[str, ...]] = (
-        list(combinations(CONDITIONS, 2)) if pairs is None else [tuple(pair) for pair in pairs]
-    )
+    chosen = [tuple(pair) for pair in (combinations(CONDITIONS, 2) if pairs is None else pairs)]
     if not chosen:
         raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
     for pair in chosen:
@@ -219,11 +169,7 @@ def paired_bootstrap(
     diffs: np.ndarray, n_resamples: int = 10_000, seed: int = 0, level: float = 0.95
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mean of paired differences ``(participants[, contrasts])`` and its percentile bootstrap
-    interval at ``level``, every contrast resampled with the same participants, in one batch.
-
-    Returns:
-        ``(mean, low, high)``, each of shape ``diffs.shape[1:]``.
-    """
+    interval at ``level``, every contrast resampled with the same participants: ``(mean, low, high)``."""
     x = np.asarray(diffs, dtype=float)
     if x.ndim not in (1, 2) or len(x) < 2:
         raise ConfigError(f"diffs must be (participants[, contrasts]) with >= 2 participants, got {x.shape}")
@@ -255,30 +201,17 @@ def rmst_contrasts(
     n_resamples: int = 10_000,
     seed: int = 0,
 ) -> pd.DataFrame:
-    """Restricted mean time of ``reference`` minus each other condition, paired bootstrap intervals.
-
-    Returns:
-        One row per other condition, in :data:`CONDITIONS` order: ``a`` (``reference``), ``b``,
-        ``mean_a``, ``mean_b`` (restricted means over participants), ``diff`` (``mean_a - mean_b``),
-        ``ci_low``, ``ci_high`` (95% percentile interval of ``diff``), ``n`` (participants).
-    """
+    """Restricted mean time of ``reference`` minus each other condition (rows in :data:`CONDITIONS`
+    order): ``a``, ``b``, their restricted means over participants ``mean_a``, ``mean_b``, ``diff``
+    (``mean_a - mean_b``), its paired-bootstrap 95% interval ``ci_low``, ``ci_high``, and ``n``."""
     factors(reference)
     wide = restricted_times(frame, measure, horizon)
     others = [c for c in CONDITIONS if c != reference]
     diffs = wide[reference].to_numpy()[:, None] - wide[others].to_numpy()
     mean, low, high = paired_bootstrap(diffs, n_resamples, seed)
-    return pd.DataFrame(
-        {
-            "a": reference,
-            "b": others,
-            "mean_a": float(wide[reference].mean()),
-            "mean_b": wide[others].mean().to_numpy(),
-            "diff": mean,
-            "ci_low": low,
-            "ci_high": high,
-            "n": len(wide),
-        }
-    )
+    means = {"mean_a": float(wide[reference].mean()), "mean_b": wide[others].mean().to_numpy()}
+    bounds = {"diff": mean, "ci_low": low, "ci_high": high, "n": len(wide)}
+    return pd.DataFrame({"a": reference, "b": others} | means | bounds)
 
 
 def _format_df(value: Any) -> str:
@@ -289,15 +222,9 @@ def _format_df(value: Any) -> str:
 def format_f(result: dict[str, Any]) -> str:
     """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``;
     a ConfigError if a key is missing."""
-    missing = [key for key in ("F", "df1", "df2", "p") if key not in result]
-    if missing:
+    if missing := [key for key in ("F", "df1", "df2", "p") if key not in result]:
         raise ConfigError(f"result is missing {', '.join(map(repr, missing))}; got keys {sorted(result)}")
-    f_value = float(result["F"])
-    p_value = float(result["p"])
+    f_value, p_value = float(result["F"]), float(result["p"])
     f_text = f"{f_value:.1f}" if abs(f_value) >= 10 else f"{f_value:.2f}"
-    if p_value < 0.001:
-        p_text = "p < .001"
-    else:
-        text = f"{p_value:.3f}"
-        p_text = f"p = {text[1:] if text.startswith('0') else text}"
+    p_text = "p < .001" if p_value < 0.001 else f"p = {f'{p_value:.3f}'.removeprefix('0')}"
     return f"F({_format_df(result['df1'])},{_format_df(result['df2'])}) = {f_text}, {p_text}"

@@ -1,7 +1,6 @@
 """The claims' numbers as data, ``figures/claim_values.csv``: per claims row each quantity its rule
 reads (value and interval) and each fact a sentence states (without an interval). The columns
-(:data:`VALUE_COLUMNS`) are the README's data contract.
-"""
+(:data:`VALUE_COLUMNS`) are the README's data contract."""
 
 from __future__ import annotations
 

@@ -1,7 +1,6 @@
-"""Verdicts decided by user-bootstrap intervals (:func:`assess`: **settled** when every interval
-clears each threshold, else ``undecided``), with users added by a group-sequential :class:`Looks`
-where a headline verdict is open (:func:`sequential`). The design: ``docs/method-notes.md``.
-"""
+"""Verdicts decided by user-bootstrap intervals (:func:`assess`: **settled** when every interval clears each
+threshold, else ``undecided``), with users added by a group-sequential :class:`Looks` where a headline verdict
+is open (:func:`sequential`). The design: ``docs/method-notes.md``."""
 
 from __future__ import annotations
 
@@ -92,9 +91,7 @@ def block_seed(seed: int, block: int) -> int:
 
 def block_users(looks: Looks, block: int) -> tuple[int, int]:
     """(first user index, number of users) of look ``block``'s new users."""
-    if block == 0:
-        return 0, looks.first
-    start = looks.sizes[block - 1]
+    start = looks.sizes[block - 1] if block else 0
     return start, looks.sizes[block] - start
 
 
@@ -177,53 +174,31 @@ def assess(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> list[Claim]:
-    """Claims of ``evaluate`` on ``frame``, each with its intervals and settled or undecided.
-
-    Args:
-        evaluate: A figure's claims: frame -> claims, each with the ``values`` its rule reads.
-        unit: The column naming a user: the resampled unit.
-        level: The intervals' level (1 - ALPHA / K under a sequential design).
-        fast: The figure's vectorized bootstrap (from :func:`group_means`): the same numbers on the
-            same resamples; if None, ``evaluate`` runs on every resample.
-
-    Returns:
-        The claims with their intervals, ``settled``, ``n_users``, and ``reproduced`` ``undecided``
-        where an interval straddles a threshold or the evidence falls short (:func:`shortfall`).
-
-    Raises:
-        ConfigError: if a claim has no rule, or its verdict is not its rule's at its values.
-    """
+    """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``,
+    with their intervals at ``level`` over resamples of ``unit``, ``settled``, ``n_users``, and
+    ``reproduced`` ``undecided`` where an interval straddles a threshold or the evidence falls short
+    (:func:`shortfall`). ``fast``, the figure's vectorized bootstrap (:func:`group_means`), gives the
+    same numbers on the same resamples; if None, ``evaluate`` runs on every resample. A ConfigError if
+    a claim has no rule, or its verdict is not its rule's at its values."""
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     point = evaluate(frame)
-    samples = _boot_samples(evaluate, frame, point, n_boot, seed, unit, fast)
+    samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
+    if fast is not None:
+        boot = fast(frame, resample_counts(frame, n_boot, seed, unit))
+        samples = {
+            cid: {k: [float(x) for x in boot.get(cid, {}).get(k, [])] for k in s}
+            for cid, s in samples.items()
+        }
+    else:
+        for sample in bootstrap_frames(frame, n_boot, seed, unit):
+            for c in evaluate(sample):
+                for k, v in c.values.items():
+                    if c.id in samples and k in samples[c.id]:
+                        samples[c.id][k].append(v)
     n_users = int(frame[unit].nunique())
     short = shortfall(n_users, n_boot, level, min_users)
     return [_judged(c, samples[c.id], level, n_users, short) for c in point]
-
-
-def _boot_samples(
-    evaluate: Evaluate,
-    frame: pd.DataFrame,
-    point: list[Claim],
-    n_boot: int,
-    seed: int,
-    unit: str,
-    fast: BootValues | None,
-) -> dict[str, dict[str, list[float]]]:
-    samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
-    if fast is not None:
-        for cid, arrays in fast(frame, resample_counts(frame, n_boot, seed, unit)).items():
-            for k, arr in arrays.items():
-                if cid in samples and k in samples[cid]:
-                    samples[cid][k] = [float(x) for x in arr]
-        return samples
-    for sample in bootstrap_frames(frame, n_boot, seed, unit):
-        for c in evaluate(sample):
-            for k, v in c.values.items():
-                if c.id in samples and k in samples[c.id]:
-                    samples[c.id][k].append(v)
-    return samples
 
 
 def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: int, short: str = "") -> Claim:
@@ -248,18 +223,12 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
     if not settled:
         why = short or "; ".join(r.straddled(intervals)) or "an interval is unknown"
         lead += f"Undecided: {why}; the point estimates read {c.reproduced!r}. "
-    first = intervals[r.quantities[0].name]
+    head = r.quantities[0].name  # the headline number: Claim.value and its interval
+    (low, high), verdict = intervals[head], c.reproduced if settled else UNDECIDED
+    out = dataclasses.replace(c, value=float(c.values[head]), ci_low=low, ci_high=high, n_users=n_users)
+    note = lead + f"Rule: {r.text}. " + c.note
     return dataclasses.replace(
-        c,
-        value=float(c.values[r.quantities[0].name]),
-        ci_low=first[0],
-        ci_high=first[1],
-        settled=settled,
-        intervals=intervals,
-        level=level,
-        reproduced=c.reproduced if settled else UNDECIDED,
-        n_users=n_users,
-        note=lead + f"Rule: {r.text}. " + c.note,
+        out, settled=settled, intervals=intervals, level=level, reproduced=verdict, note=note
     )
 
 
@@ -304,19 +273,10 @@ def sequential(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> Sequential:
-    """Add users in blocks until every headline verdict is settled or the cap is reached.
-
-    Args:
-        run_block: ``(look, members) -> rows`` of that look's new users (:func:`block_users`), LA
-            rows labelled ``none``.
-        evaluate, n_boot, seed, fast, min_users: As :func:`assess` takes them.
-        assistance: Every member to judge; the first look runs all of them.
-        default: The headline member (the paper's); later looks run only it.
-        looks: Users per look and the cap (:class:`Looks`).
-
-    Raises:
-        ConfigError: if ``default`` is not among ``assistance``.
-    """
+    """Add users in blocks until every headline verdict is settled or the cap is reached: the first
+    look runs every member of ``assistance``, later ones only ``default`` (the headline member, a
+    ConfigError if not among them); ``run_block(look, members)`` returns the rows of that look's new
+    users (:func:`block_users`), LA rows labelled ``none``; the rest as :func:`assess` takes them."""
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
     judge = functools.partial(
@@ -328,10 +288,8 @@ def sequential(
         if look > 0:
             frame = pd.concat([frame, run_block(look, (default,)).assign(look=look)], ignore_index=True)
         head = judge(member_frame(frame, default))
-        log += [
-            {"look": look, "users": size, "id": c.id, "reproduced": c.reproduced, "settled": c.settled}
-            for c in head
-        ]
+        when = {"look": look, "users": size}
+        log += [when | {"id": c.id, "reproduced": c.reproduced, "settled": c.settled} for c in head]
         # the stopping rule reads the headline claims only, never a figure's own readings
         if all(c.settled for c in head if "@" not in c.id):
             break
@@ -340,13 +298,8 @@ def sequential(
     rows: list[Claim] = []
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
-        where = (
-            f"Members with other words (at {looks.first} users): {'; '.join(flips)}. "
-            if flips
-            else "Every other member gives the same words. "
-            if others
-            else ""
-        )
+        same = "Every other member gives the same words. " if others else ""
+        where = f"Members with other words (at {looks.first} users): {'; '.join(flips)}. " if flips else same
         at = f"look {look + 1} of {len(looks.sizes)}"
         cap = f", the cap ({looks.cap} users)" if look + 1 == len(looks.sizes) else ""
         stop = f"The effect is settled at {at}. " if c.settled else f"The effect is undecided at {at}{cap}. "

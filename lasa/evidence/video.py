@@ -55,14 +55,12 @@ def render_states(
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
     states = np.atleast_2d(states)
-    model = robot.model
-    data = mujoco.MjData(model)
-    adr = robot.qpos_adr
+    data = mujoco.MjData(robot.model)
     frames = np.empty((len(states), height, width, 3), dtype=np.uint8)
-    with mujoco.Renderer(model, height, width) as renderer:
+    with mujoco.Renderer(robot.model, height, width) as renderer:
         for i, q in enumerate(states):
-            data.qpos[adr] = q
-            mujoco.mj_forward(model, data)
+            data.qpos[robot.qpos_adr] = q
+            mujoco.mj_forward(robot.model, data)
             renderer.update_scene(data, camera=camera or robot.spec.camera)
             frames[i] = renderer.render()
     return frames
@@ -105,11 +103,8 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
     """Atomically write frames (T, H, W, 3), uint8, to an H.264 (yuv420p) MP4, the same bytes on
-    every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``).
-
-    Raises:
-        ConfigError: The frames are not (T, H, W, 3) or H or W is odd.
-    """
+    every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``); a
+    ConfigError if the frames are not (T, H, W, 3) or H or W is odd."""
     frames = np.asarray(frames)
     if frames.ndim != 4 or frames.shape[-1] != 3:
         raise ConfigError(f"frames must have shape (T, H, W, 3), got {frames.shape}")
@@ -118,16 +113,9 @@ def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 1
         raise ConfigError(f"frame size must be even for H.264 (yuv420p), got {width}x{height}")
     mediapy.set_ffmpeg(pinned_ffmpeg())
     qp = 20 if height * width <= 640 * 480 else 28
+    h264 = {"codec": "h264", "encoded_format": "yuv420p", "ffmpeg_args": list(_BITEXACT_ARGS)}
     with atomic_path(path) as tmp:
-        mediapy.write_video(
-            tmp,
-            frames,
-            fps=fps,
-            codec="h264",
-            encoded_format="yuv420p",
-            qp=qp,
-            ffmpeg_args=list(_BITEXACT_ARGS),
-        )
+        mediapy.write_video(tmp, frames, fps=fps, qp=qp, **h264)
     return Path(path)
 
 
@@ -141,20 +129,11 @@ def write_clips(
     width: int = 320,
     n_jobs: int = 1,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Render clips of joint states, caption each frame, lay the clips out and write the MP4.
-
-    Args:
-        clips: ``(states, caption)`` per clip: states (T, n); one caption, or one per frame.
-        layout: ``"side_by_side"`` (shorter clips hold their last frame) or ``"in_turn"``.
-        n_jobs: Worker processes that render the frames (:func:`render_many`).
-
-    Returns:
-        The video (T', height, width', 3) and the captioned clips, (T, height, width, 3) each.
-
-    Raises:
-        ConfigError: No clips, a clip without states, a caption list of the wrong length, an
-            unknown ``layout`` or an odd frame size.
-    """
+    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, caption each
+    frame, lay the clips out (``layout``: see :data:`LAYOUTS`; beside each other, shorter clips hold their
+    last frame) and write the MP4; render with ``n_jobs`` workers (:func:`render_many`). Returns the video
+    (T', height, width', 3) and the captioned clips, (T, height, width, 3) each; a ConfigError for no clips, a
+    clip without states, a caption list of the wrong length, an unknown ``layout`` or an odd frame size."""
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
