@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import warnings
 from collections.abc import Sequence
 
@@ -192,6 +193,20 @@ PAIR_CELLS = np.array(
 )
 PAIRS = [("LA", "LA+SA"), ("R", "R+SA"), ("R", "LA")]
 PAIR_T2 = np.array([12.0, 75.0 / 13.0, 3.0 / 7.0])
+
+
+def test_holm_leaves_the_garbage_collector_as_it_found_it():
+    """statsmodels' Holm calls gc.collect(); pairwise freezes the live objects for it, then thaws them."""
+    cells = from_cells(PAIR_CELLS)
+    assert gc.get_freeze_count() == 0
+    thawed = pairwise(cells, "y", pairs=PAIRS)
+    assert gc.get_freeze_count() == 0
+    gc.freeze()  # a caller's own frozen objects stay frozen
+    try:
+        pd.testing.assert_frame_equal(pairwise(cells, "y", pairs=PAIRS), thawed)
+        assert gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()
 
 
 def test_pairwise_known_p_values_and_holm():

@@ -4,6 +4,7 @@ mean times with a paired bootstrap. F and p come from statsmodels and scipy."""
 
 from __future__ import annotations
 
+import gc
 from collections.abc import Sequence
 from itertools import combinations
 from typing import Any
@@ -157,12 +158,25 @@ def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
         finite = np.isfinite(p_unc)
         if finite.any():
             try:
-                p_corr[finite] = multipletests(p_unc[finite], method=correction)[1]
+                p_corr[finite] = _multipletests(p_unc[finite], correction)
             except ValueError as error:
                 raise ConfigError(
                     f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
                 ) from error
     return p_corr
+
+
+def _multipletests(p: np.ndarray, method: str) -> np.ndarray:
+    """statsmodels' corrected p-values with the objects alive here frozen (and thawed after): its Holm
+    branch calls ``gc.collect()`` each time, which scans every object of a large process."""
+    already = gc.get_freeze_count() > 0
+    if not already:
+        gc.freeze()
+    try:
+        return np.asarray(multipletests(p, method=method)[1])
+    finally:
+        if not already:
+            gc.unfreeze()
 
 
 def paired_bootstrap(
