@@ -13,16 +13,8 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import load_npz, save_npz
 from lasa.world.task import CupTask
 
-__all__ = [
-    "Demonstrations",
-    "save_demonstrations",
-    "load_demonstrations",
-    "REACH",
-    "ADJUST",
-    "HOLD",
-    "STROKE",
-    "PHASE_NAMES",
-]
+__all__ = ["Demonstrations", "save_demonstrations", "load_demonstrations", "REACH", "ADJUST", "HOLD"]
+__all__ += ["STROKE", "PHASE_NAMES"]
 
 REACH, ADJUST, HOLD, STROKE = 0, 1, 2, 3  # phase labels of a tuple (strokes: the eating task)
 PHASE_NAMES = ("reach", "adjust", "hold", "stroke")
@@ -30,29 +22,17 @@ PHASE_NAMES = ("reach", "adjust", "hold", "stroke")
 
 @dataclasses.dataclass(frozen=True)
 class Demonstrations:
-    """The dataset D, one row per (s, a, b) tuple.
-
-    Attributes:
-        robot: Robot name.
-        states: s, shape (N, n) [rad].
-        actions: a, shape (N, n) [rad/s].
-        beliefs: b, shape (N, G).
-        demo: Index of the demonstration each tuple belongs to, shape (N,).
-        goal: The demonstrated cup, shape (N,).
-        theta: The preference being moved towards, shape (N,).
-        phase: 0 reach, 1 adjust, 2 hold, shape (N,).
-        perturbed: Whether the tuple is a noisy copy, shape (N,).
-    """
+    """The dataset D, one row per (s, a, b) tuple."""
 
     robot: str
-    states: np.ndarray
-    actions: np.ndarray
-    beliefs: np.ndarray
-    demo: np.ndarray
-    goal: np.ndarray
-    theta: np.ndarray
-    phase: np.ndarray
-    perturbed: np.ndarray
+    states: np.ndarray  # s, (N, n) [rad]
+    actions: np.ndarray  # a, (N, n) [rad/s]
+    beliefs: np.ndarray  # b, (N, G)
+    demo: np.ndarray  # the demonstration each tuple belongs to, (N,)
+    goal: np.ndarray  # the demonstrated cup, (N,)
+    theta: np.ndarray  # the preference moved towards, (N,)
+    phase: np.ndarray  # REACH, ADJUST, HOLD or STROKE, (N,)
+    perturbed: np.ndarray  # whether the tuple is a noisy copy, (N,)
 
     def __len__(self) -> int:
         return len(self.states)

@@ -1,10 +1,6 @@
-r"""The entropy regulariser of Eqs. T5-T6: latent actions that can still change goals.
-
-At every context (s, b) some z should move towards *each* goal (Sec. IV-A):
-:math:`p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z)`,
-:math:`\mathcal{L} = \|e_a\|^2 + \lambda \sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g)`. Our eta
-(:func:`goal_scores`) is the posterior over goals, under a uniform prior, of the decoded action
-held for H steps; z runs over an even grid. Why: ``docs/method-notes.md``.
+r"""The entropy regulariser of Eqs. T5-T6: at every context some z moves towards *each* goal (Sec.
+IV-A), :math:`p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z)`, :math:`\mathcal{L} = \|e_a\|^2 + \lambda
+\sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g)`, eta the goal posterior of the decoded action held H steps.
 """
 
 from __future__ import annotations
@@ -21,16 +17,8 @@ from lasa.method.belief import _log_likelihood, nearest_distance
 from lasa.method.decoder import LatentActionModel
 from lasa.method.step import latent_grid
 
-__all__ = [
-    "EntropyRegularizer",
-    "goal_scores",
-    "goal_distribution",
-    "entropy",
-    "context_entropy",
-    "context_grid",
-    "LAMBDA_COST",
-    "choose_lambda",
-]
+__all__ = ["EntropyRegularizer", "goal_scores", "goal_distribution", "entropy", "context_entropy"]
+__all__ += ["context_grid", "LAMBDA_COST", "choose_lambda"]
 
 
 def goal_scores(
@@ -42,8 +30,8 @@ def goal_scores(
     control: ControlConfig,
     horizon: int = 10,
 ) -> torch.Tensor:
-    """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), shape (B, K, G);
-    rows sum to one. ``goal_sets`` (G, M, n) and ``control`` are the belief's; ``horizon`` is H."""
+    """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), (B, K, G), rows
+    summing to one; ``goal_sets`` and ``control`` are the belief's, ``horizon`` H."""
     n_ctx, n_z = states.shape[0], z_grid.shape[0]
     s = states[:, None, :].expand(n_ctx, n_z, -1)
     b = beliefs[:, None, :].expand(n_ctx, n_z, -1)
@@ -51,8 +39,7 @@ def goal_scores(
     actions = model.decode(z, s, b)
     step = control.likelihood_step
     max_step = None if step is None else horizon * step
-    # log_likelihood_torch with the state unexpanded (B, 1, n), its distance once per context,
-    # differentiated through each goal's nearest segment only (the same value and gradient)
+    # log_likelihood_torch, the state unexpanded, through each goal's nearest segment only
     loglik = _log_likelihood(
         states[:, None, :],
         actions,
@@ -78,12 +65,8 @@ def entropy(p: torch.Tensor) -> torch.Tensor:
 
 @dataclasses.dataclass
 class EntropyRegularizer:
-    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on a training batch.
-
-    ``lam`` > 0 weighs it; ``goal_sets`` (G, M, n) and ``control`` are the belief's; the sum over z
-    runs over ``n_z`` inputs per axis, the evidence over ``horizon`` steps, on ``contexts`` contexts
-    of each batch drawn with ``seed``.
-    """
+    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on ``contexts`` contexts
+    of each batch drawn with ``seed``, z over ``n_z`` inputs per axis, evidence over ``horizon`` steps."""
 
     lam: float
     goal_sets: np.ndarray
@@ -142,12 +125,8 @@ def context_entropy(
 def context_grid(
     start: np.ndarray, goal: np.ndarray, goal_index: int, n_goals: int, n_pos: int = 9, n_belief: int = 9
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Contexts along the way to a goal and across confidences in it, progress-major.
-
-    ``n_pos`` positions on the joint-space line from ``start`` (0) to ``goal`` (1), ``n_belief``
-    beliefs in goal ``goal_index`` from uniform to 0.999. Returns (progress, confidence) (P*C,),
-    states (P*C, n) and beliefs (P*C, G).
-    """
+    """Contexts along the line from ``start`` to ``goal`` (``n_pos``) and across confidences in it from
+    uniform to 0.999 (``n_belief``), progress-major: progress, confidence, states, beliefs."""
     progress = np.linspace(0.0, 1.0, n_pos)
     conf = np.linspace(1.0 / n_goals, 0.999, n_belief)
     pp, cc = np.meshgrid(progress, conf, indexing="ij")
@@ -163,14 +142,9 @@ LAMBDA_COST = 1.5
 
 
 def choose_lambda(sweep: pd.DataFrame, n_goals: int, spread: float = 0.8, cost: float = LAMBDA_COST) -> float:
-    """The lambda the pipeline trains with, by a rule fixed before looking at results.
-
-    The smallest lambda > 0 whose mean entropy at confident contexts reaches ``spread`` of log G
-    while its reconstruction error (``recon_error``) stays within ``cost`` times lambda = 0's;
-    else, within that bound, the highest entropy; if no lambda > 0 is within it, 0.
-
-    ``sweep`` has one row per lambda (0 included): ``lambda``, ``entropy_confident``, ``recon_error``.
-    """
+    """The lambda the pipeline trains with, by a rule fixed before looking at results: the smallest
+    lambda > 0 whose ``entropy_confident`` reaches ``spread`` of log G with ``recon_error`` within
+    ``cost`` times lambda = 0's; else, within that bound, the highest entropy; else 0."""
     if 0.0 not in set(sweep["lambda"]):
         raise ConfigError("the lambda sweep must include 0 (the reference)")
     ref = float(sweep.loc[sweep["lambda"] == 0.0, "recon_error"].iloc[0])

@@ -1,8 +1,5 @@
-"""The decoder's inference forward: phi(z, s, b) on numpy arrays, written for throughput.
-
-An inference plan refolds the weights once (the state normalisation folded into a first layer
-split into a z term and a context term), is cached per model and rebuilt when a weight changes,
-and runs a chunked forward into per-thread buffers reused across calls.
+"""The decoder's inference forward phi(z, s, b) on numpy arrays, for throughput: weights refolded
+once per model (rebuilt when one changes), a chunked forward into reused per-thread buffers.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""Retargeting: direct teleoperation of the end effector, the baseline R of the user study.
+"""Retargeting: direct teleoperation of the end effector (Rakita et al. 2017), the study's baseline R.
 
-The joystick commands the end effector (Rakita et al. 2017), its joint velocities from mink's
-differential IK (RelaxedIK without the smoothness and self-collision terms). A 2-axis stick
-switches between *modes* (:data:`MODES`) with a button, each mapping the two axes onto two twist
-components. Each control step is one QP (:class:`Retargeting`): a frame task towards the site's
-pose moved by the twist over ``dt``, a light posture task, and mink's configuration limit.
+A 2-axis stick, its *modes* (:data:`MODES`) switched by a button, commands a twist; each step is one
+QP of mink's differential IK (:class:`Retargeting`): a frame task, a light posture task, the limits.
 """
 
 from __future__ import annotations
@@ -18,14 +15,7 @@ from lasa.base.config import NonNegative, Positive, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot
 
-__all__ = [
-    "MODES",
-    "RetargetConfig",
-    "twist",
-    "next_mode",
-    "Retargeting",
-    "retarget_action",
-]
+__all__ = ["MODES", "RetargetConfig", "twist", "next_mode", "Retargeting", "retarget_action"]
 
 # The twist components in order (vx, vy, vz, wx, wy, wz), world frame, the site's
 TWIST_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -71,16 +61,8 @@ def _mode_table(config: RetargetConfig) -> np.ndarray:
 
 
 def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = RetargetConfig()) -> np.ndarray:
-    """The end-effector twist (..., 6) [m/s, rad/s] that a joystick input commands in a mode.
-
-    Args:
-        mode: Mode index into :data:`MODES`, an int or an integer array of shape (...,).
-        z: Stick deflections, shape (..., 2), clipped to [-1, 1] (not finite: a zero twist).
-        config: Speeds at full deflection.
-
-    Raises:
-        ConfigError: if a mode is not an integer in [0, len(MODES)), or ``z`` is not (..., 2).
-    """
+    """The end-effector twist (..., 6) [m/s, rad/s] that stick deflections z (..., 2), clipped to
+    [-1, 1] (not finite: zero), command in ``mode`` (...,); ConfigError for a bad mode or shape."""
     modes = _modes(mode)
     zs = np.asarray(z, dtype=float)
     if zs.ndim == 0 or zs.shape[-1] != 2:
@@ -107,11 +89,8 @@ def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np
 
 
 class Retargeting:
-    """Joystick twist -> joint velocity by mink differential IK at ``robot``'s grasp site.
-
-    One QP per configuration over ``dt`` [s]; the mink configuration and tasks are built once and
-    reused, so the object is not thread safe.
-    """
+    """Joystick twist -> joint velocity by mink differential IK at ``robot``'s grasp site, one QP per
+    configuration over ``dt`` [s] (its mink objects reused: not thread safe)."""
 
     def __init__(self, robot: Robot, dt: float, config: RetargetConfig = RetargetConfig()) -> None:
         self.robot = robot
@@ -169,15 +148,9 @@ class Retargeting:
         return out
 
     def joint_velocity(self, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
-        """Joint velocities [rad/s] that move the grasp site with ``twist`` for one control period.
-
-        ``q`` (n,) or (B, n) [rad] and ``twist`` (6,) or (B, 6) broadcast; a zero or non-finite
-        twist row gives exactly zero.
-
-        Raises:
-            ConfigError: if ``q`` is not finite or a shape is wrong.
-            mink.NoSolutionFound: if the QP solver fails.
-        """
+        """Joint velocities [rad/s] moving the grasp site with ``twist`` ((6,) or (B, 6)) from ``q``
+        ((n,) or (B, n)) for one period; zero for a zero or non-finite twist row. ConfigError for
+        a non-finite ``q`` or a bad shape; mink.NoSolutionFound if the QP fails."""
         qs = self._check_q(q)
         xis = np.asarray(twist, dtype=float)
         if xis.ndim == 0 or xis.shape[-1] != 6:
@@ -203,12 +176,8 @@ class Retargeting:
 def retarget_action(
     retarget: Retargeting, state: np.ndarray, mode: np.ndarray, z: np.ndarray, press: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Retargeting's human action a_h for a batch, and each row's mode after the step.
-
-    A press (U,) cycles the mode and moves nothing; a stick at rest commands nothing; otherwise
-    the stick z (U, 2) is a twist in the row's mode (U,), realised by mink's IK from the state
-    (U, n). Live teleoperation and the study's simulated participants both act through it.
-    """
+    """Retargeting's a_h for a batch, and each row's mode after the step: a press cycles the mode and
+    moves nothing, a stick at rest nothing, else z (U, 2) is a twist in the row's mode."""
     state = np.asarray(state, dtype=float)
     z = np.asarray(z, dtype=float)
     mode = np.asarray(mode, dtype=int)

@@ -1,8 +1,5 @@
-"""The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop.
-
-Every loop of the package (sims, study participants, teleoperation, the web study) runs a
-:class:`Runner`, which owns s, b, the step (:func:`lasa.method.step.advance`), the record and
-stopping; a loop differs by its *chooser*: the running episodes' human actions a_h at step t.
+"""The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop; every
+loop differs only by its *chooser*, the running episodes' human actions a_h at step t.
 """
 
 from __future__ import annotations
@@ -57,9 +54,8 @@ def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> C
 
 @dataclasses.dataclass(frozen=True)
 class Record:
-    """A batch of finished episodes: s^t (T+1, U, n) [rad] and b^t (T+1, U, G), held after an
-    episode stops; a_h^t and the command a^t before the safety clip (T, U, n) [rad/s], zero after
-    it stops; and the step each stopped at (T at the horizon), (U,)."""
+    """A batch of finished episodes: s^t, b^t (T+1, U, .) held after an episode stops; a_h^t and the
+    command a^t (T, U, n), zero after it stops; the step each stopped at (T at the horizon), (U,)."""
 
     states: np.ndarray
     beliefs: np.ndarray
@@ -120,11 +116,8 @@ class Runner:
         progress: bool = False,
         desc: str = "episodes",
     ) -> Record:
-        """Run every episode until it stops or the horizon T: record s and b, step, observe.
-
-        ``observe(t, runner)`` at every recorded state returns the episodes that finished there,
-        which stop (default: none stop); ``progress`` shows a bar labelled ``desc``.
-        """
+        """Run every episode until it stops or the horizon T: record s and b, step, observe
+        (``observe(t, runner)`` returns the episodes that finished at step t)."""
         check_horizon(horizon)
         n_users, (n, g) = len(self.state), (self.state.shape[1], self.log_belief.shape[1])
         states, beliefs = np.empty((horizon + 1, n_users, n)), np.empty((horizon + 1, n_users, g))
