@@ -50,22 +50,12 @@ def log_likelihood_torch(
     dt: float,
     beta: float,
     max_step: float | None = None,
+    distance: Callable[[torch.Tensor, torch.Tensor], torch.Tensor] | None = None,
 ) -> torch.Tensor:
     """Log P(a_h | s, g) up to a constant shared by all goals, (..., G); differentiable. ``beta`` is
-    beta_b; ``max_step`` Delta sigma_h [rad] normalises by each goal's best action (``None``: not)."""
-    return _log_likelihood(state, action, goal_sets, dt, beta, max_step, distance_to_sets_torch)
-
-
-def _log_likelihood(
-    state: torch.Tensor,
-    action: torch.Tensor,
-    goal_sets: torch.Tensor,
-    dt: float,
-    beta: float,
-    max_step: float | None,
-    distance: Callable[[torch.Tensor, torch.Tensor], torch.Tensor],
-) -> torch.Tensor:
-    """:func:`log_likelihood_torch` with the distance function ``distance(points, goal_sets)``."""
+    beta_b; ``max_step`` Delta sigma_h [rad] normalises by each goal's best action (``None``: not);
+    ``distance(points, goal_sets)`` is :func:`distance_to_sets_torch` or one equal to it."""
+    distance = distance_to_sets_torch if distance is None else distance
     check_range("belief_beta", beta, 0.0)
     moved = state + dt * action
     if distance is _distance_no_grad and moved.shape == state.shape:
@@ -157,10 +147,8 @@ def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Ten
 
 def _distance_no_grad(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
     """:func:`distance_to_sets_torch` without autograd, bitwise equal, faster (float64)."""
-    if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad:
-        return distance_to_sets_torch(points, goal_sets)
     dtype = torch.promote_types(points.dtype, goal_sets.dtype)
-    if dtype != torch.float64:
+    if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad or dtype != torch.float64:
         return distance_to_sets_torch(points, goal_sets)
     return nearest_distance(points.to(dtype), goal_sets.to(dtype))
 
@@ -182,17 +170,10 @@ def log_likelihood(
 ) -> np.ndarray:
     """:func:`log_likelihood_torch` on numpy arrays (float64), (..., G); goal_sets may be points (G, n)."""
     sets = np.asarray(goal_sets, dtype=np.float64)
+    s, a = torch.as_tensor(state, dtype=torch.float64), torch.as_tensor(action, dtype=torch.float64)
+    g = torch.as_tensor(sets[:, None, :] if sets.ndim == 2 else sets)
     with torch.no_grad():
-        out = _log_likelihood(
-            torch.as_tensor(state, dtype=torch.float64),
-            torch.as_tensor(action, dtype=torch.float64),
-            torch.as_tensor(sets[:, None, :] if sets.ndim == 2 else sets),
-            dt,
-            beta,
-            max_step,
-            _distance_no_grad,
-        )
-    return out.numpy()
+        return log_likelihood_torch(s, a, g, dt, beta, max_step, _distance_no_grad).numpy()
 
 
 def logsumexp(x: np.ndarray) -> np.ndarray:

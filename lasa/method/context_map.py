@@ -93,19 +93,10 @@ def _yaw_axis(robot: Robot) -> float:
 
 def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A new cup's grasps (K, 3), (K, 3, 3): the reference cup's, turned and moved to it."""
-    return _frames(task, ref_goal, *_check_placement(task, position, ref_goal))
-
-
-def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`new_goal_frames` for a checked position and its bearing offset ``delta``."""
-    ref_cup = task.robot.goal_positions()[ref_goal]
-    turn = rot_z(delta)
-    positions, rotations = [], []
-    for theta in task.theta_grid:
-        p, r = grasp_frame(task.robot, ref_goal, float(theta))
-        positions.append(pos + turn @ (p - ref_cup))
-        rotations.append(turn @ r)
-    return np.array(positions), np.array(rotations)
+    pos, delta = _check_placement(task, position, ref_goal)
+    ref_cup, turn = task.robot.goal_positions()[ref_goal], rot_z(delta)
+    frames = [grasp_frame(task.robot, ref_goal, float(theta)) for theta in task.theta_grid]
+    return np.array([pos + turn @ (p - ref_cup) for p, _ in frames]), np.array([turn @ r for _, r in frames])
 
 
 def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTask:
@@ -115,7 +106,7 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     if not 0 <= ref_goal < task.n_goals:
         raise ConfigError(f"ref_goal must be a training goal in [0, {task.n_goals}), got {ref_goal}")
     pos, delta = _check_placement(task, position, ref_goal)
-    positions, rotations = _frames(task, ref_goal, pos, delta)
+    positions, rotations = new_goal_frames(task, ref_goal, pos)
     robot = task.robot.with_cup(pos)
     guesses = task.curves[ref_goal].copy()
     guesses[:, 0] += delta * _yaw_axis(robot)  # turn the arm to the new bearing (no-op for a planar arm)

@@ -170,11 +170,9 @@ def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any
             f"{type(model).__name__} has no dataclass `config`: a checkpoint saves the config "
             "the decoder is built from"
         )
-    payload: dict[str, Any] = {
-        "state_dict": model.state_dict(),
-        "config": dataclasses.asdict(config),
-        "extra": extra,
-    }
+    payload: dict[str, Any] = dict(
+        state_dict=model.state_dict(), config=dataclasses.asdict(config), extra=extra
+    )
     if type(model) is not LatentActionModel:
         cls = type(model)
         if cls.__module__ == "__main__":
@@ -213,44 +211,7 @@ def load_checkpoint(
             "constructor takes"
         )
     path = require_file(path, make_hint)
-    payload, values = _read(path, decoder, make_hint)
-    try:
-        model = decoder(config_class(**values))
-        model.load_state_dict(payload["state_dict"])
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
-    _check_loaded(model, path, decoder, robot, n_goals, make_hint)
-    model.eval()
-    return model, dict(payload.get("extra", {}))
-
-
-def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[str, Any], dict[str, Any]]:
-    """A checkpoint's payload and its config's values (lists as tuples), or CheckpointError."""
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-        saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
-        values: dict[str, Any] = {
-            k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()
-        }
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
-    if saved_as != _class_name(decoder):
-        raise CheckpointError(
-            f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
-            f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
-        )
-    return payload, values
-
-
-def _check_loaded(
-    model: nn.Module,
-    path: Path,
-    decoder: type[nn.Module],
-    robot: str | None,
-    n_goals: int | None,
-    make_hint: str,
-) -> None:
-    """Refuse a model that is no :class:`ActionDecoder`, or for another robot or G."""
+    model, extra = _load(path, decoder, config_class, make_hint)
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
@@ -265,6 +226,29 @@ def _check_loaded(
             f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
             f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
+    model.eval()
+    return model, extra
+
+
+def _load(path: Path, decoder: type[M], config_class: type, make_hint: str) -> tuple[M, dict[str, Any]]:
+    """A checkpoint's model and ``extra``; CheckpointError if it does not load or holds another class."""
+    try:
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+        saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()}
+    except Exception as exc:
+        raise _invalid(path, exc, make_hint) from None
+    if saved_as != _class_name(decoder):
+        raise CheckpointError(
+            f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
+            f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
+        )
+    try:
+        model = decoder(config_class(**values))
+        model.load_state_dict(payload["state_dict"])
+    except Exception as exc:
+        raise _invalid(path, exc, make_hint) from None
+    return model, dict(payload.get("extra", {}))
 
 
 def _invalid(path: Path, exc: Exception, make_hint: str) -> CheckpointError:

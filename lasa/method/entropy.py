@@ -13,7 +13,7 @@ import torch
 
 from lasa.base.config import ControlConfig, check_range
 from lasa.base.errors import ConfigError
-from lasa.method.belief import _log_likelihood, nearest_distance
+from lasa.method.belief import log_likelihood_torch, nearest_distance
 from lasa.method.decoder import LatentActionModel
 from lasa.method.step import latent_grid
 
@@ -39,15 +39,10 @@ def goal_scores(
     actions = model.decode(z, s, b)
     step = control.likelihood_step
     max_step = None if step is None else horizon * step
-    # log_likelihood_torch, the state unexpanded, through each goal's nearest segment only
-    loglik = _log_likelihood(
-        states[:, None, :],
-        actions,
-        goal_sets,
-        horizon * control.dt,
-        control.belief_beta,
-        max_step,
-        nearest_distance,
+    # the state unexpanded, the distance through each goal's nearest segment only
+    dt, beta = horizon * control.dt, control.belief_beta
+    loglik = log_likelihood_torch(
+        states[:, None, :], actions, goal_sets, dt, beta, max_step, nearest_distance
     )
     return torch.softmax(loglik, dim=-1)
 
@@ -109,16 +104,9 @@ def context_entropy(
 ) -> np.ndarray:
     """Entropy of p_(s,b) [nats] at each context, shape (B,), without gradients."""
     grid = torch.as_tensor(latent_grid(n_z, model.config.z_dim), dtype=torch.float32)
+    s, b, sets = (torch.as_tensor(x, dtype=torch.float32) for x in (states, beliefs, goal_sets))
     with torch.no_grad():
-        scores = goal_scores(
-            model,
-            torch.as_tensor(states, dtype=torch.float32),
-            torch.as_tensor(beliefs, dtype=torch.float32),
-            grid,
-            torch.as_tensor(goal_sets, dtype=torch.float32),
-            control,
-            horizon,
-        )
+        scores = goal_scores(model, s, b, grid, sets, control, horizon)
         return entropy(goal_distribution(scores)).double().numpy()
 
 

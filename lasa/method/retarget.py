@@ -42,10 +42,8 @@ class RetargetConfig:
 def _modes(mode: int | np.ndarray) -> np.ndarray:
     """``mode`` as an integer array, or ConfigError if any entry is not a valid mode."""
     arr = np.asarray(mode)
-    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-        raise ConfigError(f"mode must be an integer in [0, {len(MODES)}), got {mode!r}")
-    ints = arr.astype(np.int64)
-    if np.any((ints < 0) | (ints >= len(MODES))):
+    ints = arr.astype(np.int64) if arr.dtype != bool and np.issubdtype(arr.dtype, np.integer) else None
+    if ints is None or np.any((ints < 0) | (ints >= len(MODES))):
         raise ConfigError(f"mode must be an integer in [0, {len(MODES)}), got {mode!r}")
     return ints
 
@@ -136,16 +134,9 @@ class Retargeting:
         target = mink.SE3.from_rotation_and_translation(rotation, pose.translation() + xi[:3] * self.dt)
         self._frame.set_target(target)
         self._posture.set_target(self._q_full)
-        velocity = mink.solve_ik(
-            self._configuration,
-            self._tasks,
-            self.dt,
-            "daqp",
-            damping=self.config.damping,
-            limits=self._limits,
-        )
-        out: np.ndarray = velocity[self._dof_adr]
-        return out
+        problem = (self._configuration, self._tasks, self.dt, "daqp")
+        velocity = mink.solve_ik(*problem, damping=self.config.damping, limits=self._limits)
+        return np.asarray(velocity[self._dof_adr])
 
     def joint_velocity(self, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
         """Joint velocities [rad/s] moving the grasp site with ``twist`` ((6,) or (B, 6)) from ``q``

@@ -126,9 +126,7 @@ def advance(
     new_log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
-    return StepResult(
-        state=new_state, log_belief=new_log_b, human_action=a_h, action=a, robot_action=a_r * weight[:, None]
-    )
+    return StepResult(new_state, new_log_b, a_h, a, a_r * weight[:, None])
 
 
 def _assistance(

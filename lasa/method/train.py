@@ -191,8 +191,12 @@ def train_decoder(
         running += loss.item()
         if step % config.log_every == 0 or step == config.steps:
             n = config.log_every if step % config.log_every == 0 else step % config.log_every
-            log.append(_logged(model, val, step, running / n, start))
-            bar.set_postfix(loss=f"{running / n:.4f}", val=f"{log[-1]['val_error']:.4f}")
+            model.eval()  # the log's row: the mean loss since the last row, the held-out error
+            val_err = reconstruction_error(model, *val) if len(val[0]) else float("nan")
+            model.train()
+            seconds = time.perf_counter() - start
+            log.append(dict(step=step, train_loss=running / n, val_error=val_err, seconds=seconds))
+            bar.set_postfix(loss=f"{running / n:.4f}", val=f"{val_err:.4f}")
             running = 0.0
     model.eval()
     return model, pd.DataFrame(log)
@@ -221,22 +225,3 @@ def _batch_loss(
     if extra_loss is not None:
         loss = loss + extra_loss(model, s, b)
     return loss
-
-
-def _logged(
-    model: LatentActionModel,
-    val: tuple[np.ndarray, np.ndarray, np.ndarray],
-    step: int,
-    train_loss: float,
-    start: float,
-) -> dict[str, float]:
-    """A row of the training log: the mean training loss since the last row, the held-out error."""
-    model.eval()
-    val_err = reconstruction_error(model, *val) if len(val[0]) else float("nan")
-    model.train()
-    return {
-        "step": step,
-        "train_loss": train_loss,
-        "val_error": val_err,
-        "seconds": time.perf_counter() - start,
-    }
