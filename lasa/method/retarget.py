@@ -69,8 +69,7 @@ def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = Retarg
     zs = np.where(finite, np.clip(np.nan_to_num(zs), -1.0, 1.0), 0.0)
     lead = np.broadcast_shapes(modes.shape, zs.shape[:-1])
     table = _mode_table(config)[np.broadcast_to(modes, lead)]  # (..., 2, 6)
-    out: np.ndarray = np.einsum("...a,...ak->...k", np.broadcast_to(zs, (*lead, 2)), table)
-    return out
+    return np.asarray(np.einsum("...a,...ak->...k", np.broadcast_to(zs, (*lead, 2)), table))
 
 
 def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np.ndarray:
