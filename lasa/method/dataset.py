@@ -40,10 +40,8 @@ class Demonstrations:
     def clean(self) -> Demonstrations:
         """The tuples that are not noisy copies (the demonstrations themselves)."""
         keep = ~self.perturbed
-        return dataclasses.replace(
-            self,
-            **{f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"},
-        )
+        rows = {f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"}
+        return dataclasses.replace(self, **rows)
 
     def showcase(self, task: CupTask) -> list[tuple[int, str]]:
         """(index, caption) of clean demonstrations from the start pose: a top and a side grasp at

@@ -89,8 +89,7 @@ class EntropyRegularizer:
         scores = goal_scores(
             model, states[pick], beliefs[pick], self._grid, self._goal_sets, self.control, self.horizon
         )
-        p = goal_distribution(scores)
-        return -self.lam * entropy(p).mean()
+        return -self.lam * entropy(goal_distribution(scores)).mean()
 
 
 def context_entropy(

@@ -92,28 +92,22 @@ class _InferencePlan:
         d, n = cfg.z_dim, cfg.n_joints
         layers = [m for m in model.decoder if isinstance(m, nn.Linear)]
         with torch.no_grad():
-            weights = [layer.weight.detach().double() for layer in layers]
-            biases = [layer.bias.detach().double() for layer in layers]
-            mean = model.state_mean.detach().double()
-            std = model.state_std.detach().double()
-            w1, c1 = weights[0], biases[0]
+            w1, c1 = layers[0].weight.detach().double(), layers[0].bias.detach().double()
+            mean, std = model.state_mean.detach().double(), model.state_std.detach().double()
             w_s = w1[:, d : d + n] / std
             # h1 = W_z z + [W_s / std, W_b] [s, b] + (c1 - W_s mean / std), in float64
             self.w_z = w1[:, :d].T.numpy().copy()  # (d, H)
             self.w_sb = torch.cat([w_s, w1[:, d + n :]], dim=1).T.numpy().copy()  # (n + G, H)
             self.c1 = (c1 - w_s @ mean).numpy()  # (H,)
-            self.hidden = [
-                (layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]
-            ]  # float32 views of the weights, as decode's nn.Linear reads them
+            # float32 views of the hidden weights, as decode's nn.Linear reads them
+            self.hidden = [(layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]]
             self.w_o = layers[-1].weight.detach().contiguous()  # (n, H): V^T = W_o U^T + c_o
             self.c_o = layers[-1].bias.detach()[:, None].contiguous()  # (n, 1)
         self.tensors = _weight_tensors(model)  # held, so that identity checks are exact
         self.versions = [t._version for t in self.tensors]
         self.scale = float(cfg.action_scale)
         self.width = int(w1.shape[0])
-        self.d = d
-        self.n = n
-        self.g = cfg.n_goals
+        self.d, self.n, self.g = d, n, cfg.n_goals
         self.buffers = _Buffers()
 
     def fits(self, model: LatentActionModel) -> bool:
