@@ -14,11 +14,18 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy import ndarray
 
-from lasa.base.config import ASSISTANCE, BUILT_IN_ASSISTANCE
+from lasa.base.config import BUILT_IN_ASSISTANCE
 from lasa.base.errors import ConfigError
 
-__all__ = ["ASSISTANCE", "BUILT_IN_ASSISTANCE", "MEMBERS", "Member", "assist", "hindsight_value"]
-__all__ += ["nearest_grasps", "resolve"]
+__all__ = [
+    "BUILT_IN_ASSISTANCE",
+    "MEMBERS",
+    "Member",
+    "assist",
+    "hindsight_value",
+    "nearest_grasps",
+    "resolve",
+]
 
 
 @runtime_checkable
