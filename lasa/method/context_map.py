@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 
 import numpy as np
 
-from lasa.base.config import check_choice, check_range
+from lasa.base.config import check_choice
 from lasa.base.errors import ConfigError, IKError
 from lasa.method.decoder import ActionDecoder
 from lasa.world.chain import rot_z
@@ -33,7 +34,6 @@ __all__ = [
 JOINT_KINDS = ("grasp", "straight_line")  # the maps of :class:`ContextMap`, in joint space
 MAP_KINDS = (*JOINT_KINDS, "straight_line_ee")  # and :class:`TaskSpaceMap`'s, in the gripper's space
 
-NEW_GOAL_NAME = "new"
 _MAX_JUMP = 0.5  # largest joint-space step between neighbouring grasps of a smooth curve [rad]
 
 
@@ -136,7 +136,7 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     mid = len(task.theta_grid) // 2
     return CupTask(
         robot=robot,
-        goal_names=(*task.goal_names, NEW_GOAL_NAME),
+        goal_names=(*task.goal_names, "new"),
         theta_grid=task.theta_grid,
         curves=np.concatenate([task.curves, curve[None]]),
         goals=np.concatenate([task.goals, curve[None, mid]]),
@@ -154,38 +154,46 @@ def _saturation(start: np.ndarray, goal: np.ndarray, points: np.ndarray, same: s
     return float(min(progress.min(), 1.0))
 
 
-def merged_belief(belief: np.ndarray, n_train: int, ref_index: int) -> np.ndarray:
-    """b_hat over the ``n_train`` training goals: the new goal's (the last) joins ``ref_index``'s."""
-    belief = np.asarray(belief, dtype=float)
-    if belief.shape[-1] != n_train + 1:
-        raise ConfigError(f"belief must be over {n_train + 1} goals, got shape {belief.shape}")
-    out = belief[..., :n_train].copy()
-    out[..., ref_index] += belief[..., n_train]
-    return out
+class _MergedBelief:
+    """What both maps share: b_hat, and h(s, b) = (s_hat, b_hat)."""
+
+    n_train: int  # G
+    ref_index: int  # the reference goal among the G training goals
+    state: Callable[[np.ndarray], np.ndarray]  # s_hat
+
+    def belief(self, belief: np.ndarray) -> np.ndarray:
+        """b_hat over the training goals: the new goal's belief (the last) joins the reference's, (..., G)."""
+        belief = np.asarray(belief, dtype=float)
+        if belief.shape[-1] != self.n_train + 1:
+            raise ConfigError(f"belief must be over {self.n_train + 1} goals, got shape {belief.shape}")
+        out = belief[..., : self.n_train].copy()
+        out[..., self.ref_index] += belief[..., self.n_train]
+        return out
+
+    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """h(s, b) = (s_hat, b_hat)."""
+        return self.state(state), self.belief(belief)
 
 
 @dataclasses.dataclass(frozen=True)
-class ContextMap:
+class ContextMap(_MergedBelief):
     """The context map h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's
     (:meth:`for_task`); states (..., n), beliefs (..., G + 1) with the new goal last."""
 
     start: np.ndarray  # s_0, (n,) [rad]
     new_curve: np.ndarray  # the new cup's grasps s*(g, theta) on the theta grid, (K, n) [rad]
     ref_curve: np.ndarray  # where each maps: the reference cup's grasps, or ("straight_line") shifted
-    ref_index: int  # the reference goal among the G training goals
-    n_train: int  # G
+    ref_index: int
+    n_train: int
     saturation: float  # lambda_1 in (0, 1], the progress from which w = 1
     width: float = 0.1  # tau, the joint-space width of the soft assignment to grasps [rad]
     kind: str = "grasp"  # one of JOINT_KINDS
 
     @classmethod
-    def for_task(
-        cls, task: CupTask, n_train: int, ref_index: int, kind: str = "grasp", width: float = 0.1
-    ) -> ContextMap:
+    def for_task(cls, task: CupTask, n_train: int, ref_index: int, kind: str = "grasp") -> ContextMap:
         """The map for the last goal of ``task`` (the new one) onto training goal ``ref_index``;
         ConfigError if the task has no new goal or the map would not be invertible."""
         _check_grown(task, n_train, ref_index)
-        check_range("width", width, 0.0, low_open=True)
         check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
         line = g - start
@@ -198,12 +206,11 @@ class ContextMap:
                 f"(least progress {saturation:.2f}), or the new cup is too far from the reference "
                 "one for the map to be invertible; put it nearer the reference cup"
             )
-        ref_curve = task.curves[ref_index].copy()
-        if kind == "straight_line":
-            ref_curve = task.curves[-1] + (task.goals[ref_index] - g)
-        return cls(
-            start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, width, kind
+        shifted = kind == "straight_line"
+        ref_curve = (
+            task.curves[-1] + (task.goals[ref_index] - g) if shifted else task.curves[ref_index].copy()
         )
+        return cls(start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, kind=kind)
 
     @property
     def new_goal(self) -> np.ndarray:
@@ -234,14 +241,6 @@ class ContextMap:
     def state(self, state: np.ndarray) -> np.ndarray:
         """s_hat = s + w(s) u(s), shape (..., n)."""
         return state + self.weight(state)[..., None] * self.offset(state)
-
-    def belief(self, belief: np.ndarray) -> np.ndarray:
-        """b_hat over the training goals: the new goal's belief joins the reference's, (..., G)."""
-        return merged_belief(belief, self.n_train, self.ref_index)
-
-    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """h(s, b) = (s_hat, b_hat)."""
-        return self.state(state), self.belief(belief)
 
     def jacobian(self, state: np.ndarray) -> np.ndarray:
         """J_h(s) = I + u grad(w)^T + w sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2, (..., n, n)."""
@@ -277,7 +276,7 @@ class ContextMap:
 
 
 @dataclasses.dataclass
-class TaskSpaceMap:
+class TaskSpaceMap(_MergedBelief):
     r"""The paper's straight-line map in the gripper's space (kind ``"straight_line_ee"``).
 
     :math:`\hat p = p + w\,(T^{-1} p - p)`, :math:`\hat R = R_z(-w\delta)\,R` (T the table's turn
@@ -367,14 +366,6 @@ class TaskSpaceMap:
         out = out.reshape(state.shape)
         self._cache = (key, out)
         return out
-
-    def belief(self, belief: np.ndarray) -> np.ndarray:
-        """b_hat over the training goals, as :meth:`ContextMap.belief`."""
-        return merged_belief(belief, self.n_train, self.ref_index)
-
-    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """h(s, b) = (s_hat, b_hat)."""
-        return self.state(state), self.belief(belief)
 
     def differential(self, state: np.ndarray) -> np.ndarray:
         """M(s) = d X_hat / ds, the equivalent site pose's (translation over rotation), (B, 6, n)."""

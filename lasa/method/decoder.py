@@ -74,13 +74,9 @@ class ActionDecoder(Protocol):
 
 
 def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
-    layers: list[nn.Module] = []
-    width = n_in
-    for _ in range(depth):
-        layers += [nn.Linear(width, hidden), nn.Tanh()]
-        width = hidden
-    layers.append(nn.Linear(width, n_out))
-    return nn.Sequential(*layers)
+    widths = [n_in] + [hidden] * depth
+    layers = [m for w in widths[:-1] for m in (nn.Linear(w, hidden), nn.Tanh())]
+    return nn.Sequential(*layers, nn.Linear(widths[-1], n_out))
 
 
 class LatentActionModel(nn.Module):
@@ -93,6 +89,9 @@ class LatentActionModel(nn.Module):
     def __init__(self, config: DecoderConfig) -> None:
         super().__init__()
         self.config = config
+        self.robot: str = config.robot  # the robot the model was trained for
+        self.n_goals: int = config.n_goals  # G, the length of the belief it reads
+        self.z_dim: int = config.z_dim  # d, the latent (joystick) dimension
         n, g, d = config.n_joints, config.n_goals, config.z_dim
         mean = torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32)
         std = torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32)
@@ -100,21 +99,6 @@ class LatentActionModel(nn.Module):
         self.register_buffer("state_std", std)
         self.encoder = _mlp(2 * n + g, d, config.hidden, config.depth)
         self.decoder = _mlp(d + n + g, n, config.hidden, config.depth)
-
-    @property
-    def robot(self) -> str:
-        """The robot the model was trained for."""
-        return self.config.robot
-
-    @property
-    def n_goals(self) -> int:
-        """G: the length of the belief the model reads."""
-        return self.config.n_goals
-
-    @property
-    def z_dim(self) -> int:
-        """d: the latent (joystick) dimension."""
-        return self.config.z_dim
 
     def _context(self, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         return torch.cat([(s - self.state_mean) / self.state_std, b], dim=-1)

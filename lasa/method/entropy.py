@@ -41,9 +41,7 @@ def goal_scores(
     """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), (B, K, G), rows
     summing to one; ``goal_sets`` and ``control`` are the belief's, ``horizon`` H."""
     n_ctx, n_z = states.shape[0], z_grid.shape[0]
-    s = states[:, None, :].expand(n_ctx, n_z, -1)
-    b = beliefs[:, None, :].expand(n_ctx, n_z, -1)
-    z = z_grid[None].expand(n_ctx, n_z, -1)
+    s, b, z = (x.expand(n_ctx, n_z, -1) for x in (states[:, None, :], beliefs[:, None, :], z_grid[None]))
     actions = model.decode(z, s, b)
     step = control.likelihood_step
     max_step = None if step is None else horizon * step
@@ -87,15 +85,13 @@ class EntropyRegularizer:
                 f"got {self.n_z}, {self.horizon}, {self.contexts}"
             )
         self._goal_sets = torch.as_tensor(np.asarray(self.goal_sets), dtype=torch.float32)
-        self._grid = torch.as_tensor(latent_grid(self.n_z), dtype=torch.float32)
         self._gen = torch.Generator().manual_seed(self.seed)
 
     def __call__(self, model: LatentActionModel, states: torch.Tensor, beliefs: torch.Tensor) -> torch.Tensor:
-        if self._grid.shape[1] != model.config.z_dim:
-            self._grid = torch.as_tensor(latent_grid(self.n_z, model.config.z_dim), dtype=torch.float32)
+        grid = torch.as_tensor(latent_grid(self.n_z, model.z_dim), dtype=torch.float32)
         pick = torch.randperm(states.shape[0], generator=self._gen)[: self.contexts]
         scores = goal_scores(
-            model, states[pick], beliefs[pick], self._grid, self._goal_sets, self.control, self.horizon
+            model, states[pick], beliefs[pick], grid, self._goal_sets, self.control, self.horizon
         )
         return -self.lam * entropy(goal_distribution(scores)).mean()
 

@@ -80,9 +80,7 @@ def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np
     if not np.issubdtype(steps.dtype, np.integer) or steps.dtype == bool:
         raise ConfigError(f"presses must be an integer, got {presses!r}")
     out = (modes + steps) % len(MODES)
-    if out.ndim == 0:
-        return int(out)
-    return out
+    return int(out) if out.ndim == 0 else out
 
 
 class Retargeting:

@@ -11,7 +11,7 @@ import numpy as np
 
 from lasa.base import conditions
 from lasa.base.conditions import METHODS
-from lasa.base.config import ControlConfig, check_choice, check_range
+from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
 from lasa.method.assistance import Member, assist
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
@@ -91,9 +91,7 @@ class Assist:
 def blend(a_h: np.ndarray, a_r: np.ndarray, alpha: float | np.ndarray) -> np.ndarray:
     """Eq. M1: a = (1 - alpha) a_h + alpha a_r; ``alpha`` in [0, 1], a scalar or one per row (...)."""
     alpha_arr = np.asarray(alpha, dtype=float)
-    if alpha_arr.ndim == 0:
-        check_range("alpha", float(alpha_arr), 0.0, 1.0)
-    elif not np.all((alpha_arr >= 0.0) & (alpha_arr <= 1.0)):
+    if not np.all((alpha_arr >= 0.0) & (alpha_arr <= 1.0)):
         raise ConfigError(f"alpha must be in [0, 1], got values in [{alpha_arr.min()}, {alpha_arr.max()}]")
     alpha_arr = alpha_arr[..., None]
     return (1.0 - alpha_arr) * a_h + alpha_arr * a_r
@@ -176,7 +174,6 @@ def shared_autonomy_step(
     step for a held input; ``alpha`` scalar or (U,), ``assistance`` every row's member (default
     ``control.assistance``), ``rest`` as :func:`human_action`."""
     check_decoder(decoder, task)
-    check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
