@@ -234,13 +234,11 @@ class ContextMap(_MergedBelief):
         p = np.exp(logits - logits.max(axis=-1, keepdims=True))
         return p / p.sum(axis=-1, keepdims=True)
 
-    def offset(self, state: np.ndarray) -> np.ndarray:
-        """u(s) = sum_k p_k(s) (s*(g_hat, theta_k) - s*(g, theta_k)), shape (..., n)."""
-        return self._assignment(state) @ (self.ref_curve - self.new_curve)
-
     def state(self, state: np.ndarray) -> np.ndarray:
-        """s_hat = s + w(s) u(s), shape (..., n)."""
-        return state + self.weight(state)[..., None] * self.offset(state)
+        """s_hat = s + w(s) u(s), u(s) = sum_k p_k(s) (s*(g_hat, theta_k) - s*(g, theta_k)), (..., n)."""
+        return state + self.weight(state)[..., None] * (
+            self._assignment(state) @ (self.ref_curve - self.new_curve)
+        )
 
     def jacobian(self, state: np.ndarray) -> np.ndarray:
         """J_h(s) = I + u grad(w)^T + w sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2, (..., n, n)."""

@@ -93,9 +93,9 @@ class Retargeting:
         self.config = config
         model = robot.model
         self._site = robot.spec.grasp_site
+        self.n_joints = robot.n_joints  # n, the arm joints
         self._qpos_adr = np.asarray(robot.qpos_adr, dtype=int)
-        joints = [model.joint(name).id for name in robot.spec.joints]
-        self._dof_adr = np.array([model.jnt_dofadr[j] for j in joints], dtype=int)
+        self._dof_adr = np.array([model.jnt_dofadr[model.joint(name).id] for name in robot.spec.joints])
         self._q_full = model.qpos0.copy()
         self._configuration = mink.Configuration(model)
         self._frame = mink.FrameTask(self._site, "site", position_cost=1.0, orientation_cost=1.0)
@@ -103,23 +103,10 @@ class Retargeting:
         self._tasks = [self._frame, self._posture]
         self._limits = [mink.ConfigurationLimit(model)]
 
-    @property
-    def n_joints(self) -> int:
-        """Number of arm joints n."""
-        return len(self._qpos_adr)
-
     def _set(self, q: np.ndarray) -> None:
         """Put the mink configuration at arm joints ``q`` (the rest from the model's qpos0)."""
         self._q_full[self._qpos_adr] = q
         self._configuration.update(self._q_full)
-
-    def _check_q(self, q: np.ndarray) -> np.ndarray:
-        qs = np.asarray(q, dtype=float)
-        if qs.ndim == 0 or qs.shape[-1] != self.n_joints:
-            raise ConfigError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
-        if not np.all(np.isfinite(qs)):
-            raise ConfigError("q must be finite; got NaN or infinite joint positions")
-        return qs
 
     def _solve(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
         """Joint velocity (n,) realising twist ``xi`` (6,) from ``q`` (n,): one QP."""
@@ -139,7 +126,11 @@ class Retargeting:
         """Joint velocities [rad/s] moving the grasp site with ``twist`` ((6,) or (B, 6)) from ``q``
         ((n,) or (B, n)) for one period; zero for a zero or non-finite twist row. ConfigError for
         a non-finite ``q`` or a bad shape; mink.NoSolutionFound if the QP fails."""
-        qs = self._check_q(q)
+        qs = np.asarray(q, dtype=float)
+        if qs.ndim == 0 or qs.shape[-1] != self.n_joints:
+            raise ConfigError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
+        if not np.all(np.isfinite(qs)):
+            raise ConfigError("q must be finite; got NaN or infinite joint positions")
         xis = np.asarray(twist, dtype=float)
         if xis.ndim == 0 or xis.shape[-1] != 6:
             raise ConfigError(f"twist must have shape (..., 6), got {xis.shape}")
@@ -150,15 +141,6 @@ class Retargeting:
         for i in range(len(q_rows)):  # mink solves one configuration at a time
             out[i] = self._solve(q_rows[i], xi_rows[i])
         return out.reshape(*lead, self.n_joints)
-
-    def site_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World position (3,) and rotation (3, 3) of the grasp site at arm joints ``q`` (n,)."""
-        qs = self._check_q(q)
-        if qs.ndim != 1:
-            raise ConfigError(f"q must have shape ({self.n_joints},), got {qs.shape}")
-        self._set(qs)
-        pose = self._configuration.get_transform_frame_to_world(self._site, "site")
-        return pose.translation().copy(), pose.rotation().as_matrix()
 
 
 def retarget_action(

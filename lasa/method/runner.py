@@ -91,14 +91,11 @@ class Runner:
         """b of every episode, (U, G)."""
         return belief(self.log_belief)
 
-    def step(self, choose: Chooser) -> StepResult:
+    def step(self, choose: Chooser, b: np.ndarray | None = None) -> StepResult:
         """One step of the running episodes (in ``np.flatnonzero(running)`` order): their
-        chooser's a_h, then Algorithm 1's step."""
+        chooser's a_h, then Algorithm 1's step; ``b`` is every episode's belief if the caller has it."""
         rows = np.flatnonzero(self.running)
-        return self._step(choose, rows, belief(self.log_belief[rows]))
-
-    def _step(self, choose: Chooser, rows: np.ndarray, b: np.ndarray) -> StepResult:
-        """:meth:`step` of the running ``rows``, whose beliefs ``b`` the caller has."""
+        b = belief(self.log_belief[rows]) if b is None else b[rows]
         state, log_b = self.state[rows], self.log_belief[rows]
         a_h = choose(Now(self.t, rows, state, b, log_b))
         result = advance(self.assist.rows(rows), state, log_b, a_h, b)
@@ -133,7 +130,7 @@ class Runner:
                 if t == horizon or not self.running.any():
                     break
                 rows = np.flatnonzero(self.running)
-                result = self._step(choose, rows, b[rows])
+                result = self.step(choose, b)
                 a_hs[t, rows], acts[t, rows] = result.human_action, result.action
                 bar.update(1)
         states[t + 1 :], beliefs[t + 1 :] = states[t], beliefs[t]
