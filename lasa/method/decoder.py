@@ -195,7 +195,23 @@ def load_checkpoint(
             "constructor takes"
         )
     path = require_file(path, make_hint)
-    model, extra = _load(path, decoder, config_class, make_hint)
+    try:  # one error for whatever fails, without torch's advice to load the file unsafely
+        payload = torch.load(path, map_location="cpu", weights_only=True)
+        saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()}
+        if saved_as == _class_name(decoder):
+            model = decoder(config_class(**values))
+            model.load_state_dict(payload["state_dict"])
+    except Exception as exc:
+        raise CheckpointError(
+            f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
+            f"Delete it and re-make it with: {make_hint}"
+        ) from None
+    if saved_as != _class_name(decoder):
+        raise CheckpointError(
+            f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
+            f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
+        )
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
@@ -211,33 +227,4 @@ def load_checkpoint(
             f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
     model.eval()
-    return model, extra
-
-
-def _load(path: Path, decoder: type[M], config_class: type, make_hint: str) -> tuple[M, dict[str, Any]]:
-    """A checkpoint's model and ``extra``; CheckpointError if it does not load or holds another class."""
-    try:
-        payload = torch.load(path, map_location="cpu", weights_only=True)
-        saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
-        values = {k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()}
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
-    if saved_as != _class_name(decoder):
-        raise CheckpointError(
-            f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
-            f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
-        )
-    try:
-        model = decoder(config_class(**values))
-        model.load_state_dict(payload["state_dict"])
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
     return model, dict(payload.get("extra", {}))
-
-
-def _invalid(path: Path, exc: Exception, make_hint: str) -> CheckpointError:
-    """The error of a checkpoint that does not load, without torch's advice to load it unsafely."""
-    return CheckpointError(
-        f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
-        f"Delete it and re-make it with: {make_hint}"
-    )

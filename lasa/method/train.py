@@ -136,7 +136,6 @@ def _initial_model(
                 )
         model = LatentActionModel(theirs)
         model.load_state_dict(init.state_dict())
-        model.train()
     return model
 
 
