@@ -412,34 +412,19 @@ def context_map(
     return ContextMap.for_task(task, n_train, ref_index, kind)
 
 
-@dataclasses.dataclass(frozen=True)
 class MappedDecoder:
     """The decoder through a context map: a_h = J_h(s)^-1 phi(z, h(s, b)) over the grown task's G + 1."""
 
-    model: ActionDecoder
-    context_map: ContextMap | TaskSpaceMap
-
-    def __post_init__(self) -> None:
-        if self.model.n_goals != self.context_map.n_train:
+    def __init__(self, model: ActionDecoder, context_map: ContextMap | TaskSpaceMap) -> None:
+        if model.n_goals != context_map.n_train:
             raise ConfigError(
-                f"the decoder reads {self.model.n_goals} goals, the context map maps onto "
-                f"{self.context_map.n_train} training goals"
+                f"the decoder reads {model.n_goals} goals, the context map maps onto "
+                f"{context_map.n_train} training goals"
             )
-
-    @property
-    def robot(self) -> str:
-        """The robot of the wrapped decoder."""
-        return self.model.robot
-
-    @property
-    def n_goals(self) -> int:
-        """G + 1: the training goals and the new one."""
-        return self.context_map.n_train + 1
-
-    @property
-    def z_dim(self) -> int:
-        """d, as the wrapped decoder's."""
-        return self.model.z_dim
+        self.model, self.context_map = model, context_map
+        self.robot: str = model.robot  # the wrapped decoder's
+        self.n_goals: int = context_map.n_train + 1  # the training goals and the new one
+        self.z_dim: int = model.z_dim  # d, the wrapped decoder's
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, h(s, b)) mapped back to the real context, (..., n); ``s`` (U, 1, n) for (U, K) z."""

@@ -25,15 +25,8 @@ _CHUNK_ROWS = 1024  # rows per chunk: two 1024 x 128 float32 buffers stay in a c
 
 def _weight_tensors(model: LatentActionModel) -> list[torch.Tensor]:
     """The decoder's parameters and the state normalisation, without nn.Module's (slow) traversal."""
-    tensors: list[torch.Tensor] = [
-        t
-        for layer in model.decoder._modules.values()
-        if layer is not None
-        for t in layer._parameters.values()
-        if t is not None
-    ]
-    tensors += [model.state_mean, model.state_std]
-    return tensors
+    params = [layer._parameters.values() for layer in model.decoder._modules.values() if layer is not None]
+    return [t for values in params for t in values if t is not None] + [model.state_mean, model.state_std]
 
 
 _KEEP_ROWS = 4 * _CHUNK_ROWS  # largest chunk whose buffers a thread keeps between calls
@@ -124,7 +117,14 @@ class _InferencePlan:
 
     def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), float64; see :meth:`lasa.method.decoder.LatentActionModel.decode_numpy`."""
-        z, s, b = self._checked(z, s, b)
+        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)  # z clamped to [-1, 1]
+        s = np.asarray(s, dtype=np.float64)
+        b = np.asarray(b, dtype=np.float64)
+        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
+            raise ConfigError(
+                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
+                f"got {z.shape}, {s.shape} and {b.shape}"
+            )
         shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
         lead = shape or (1,)
         t_z, t_c = self._first_terms(z, s, b)
@@ -135,18 +135,6 @@ class _InferencePlan:
         # the same whichever chunk, batch or branch of _forward computes it
         v = self._forward(t_z.astype(np.float32), t_c.astype(np.float32), lead, rows_total)
         return self._squash(v, shape)
-
-    def _checked(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
-        """z clamped to [-1, 1], s and b, as float64; ConfigError if a trailing size is not d, n, G."""
-        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)
-        s = np.asarray(s, dtype=np.float64)
-        b = np.asarray(b, dtype=np.float64)
-        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
-            raise ConfigError(
-                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
-                f"got {z.shape}, {s.shape} and {b.shape}"
-            )
-        return z, s, b
 
     def _first_terms(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The first layer's z term (with its bias) and context term, float64, each unexpanded."""
