@@ -84,8 +84,7 @@ def load_demonstrations(
     arrays = load_npz(path, make_hint)
     try:
         fields = {f.name: arrays[f.name] for f in dataclasses.fields(Demonstrations)}
-        demos = Demonstrations(**fields)  # type: ignore[arg-type]
-        demos = dataclasses.replace(demos, robot=str(demos.robot))
+        demos = Demonstrations(**{**fields, "robot": str(fields["robot"])})  # type: ignore[arg-type]
     except KeyError as exc:
         raise ArtifactError(f"{path} lacks field {exc}; re-make it with: {make_hint}") from exc
     if robot is not None and demos.robot != robot:

@@ -50,12 +50,8 @@ def _modes(mode: int | np.ndarray) -> np.ndarray:
 
 def _mode_table(config: RetargetConfig) -> np.ndarray:
     """Twist per unit stick deflection, shape (len(MODES), 2, 6): [mode, axis] -> twist."""
-    table = np.zeros((len(MODES), 2, 6))
-    for m, names in enumerate(MODES):
-        for axis, name in enumerate(names):
-            k = TWIST_COMPONENTS.index(name)
-            table[m, axis, k] = config.linear_speed if k < 3 else config.angular_speed
-    return table
+    components = [[TWIST_COMPONENTS.index(name) for name in names] for names in MODES]
+    return np.eye(6)[components] * np.repeat([config.linear_speed, config.angular_speed], 3)
 
 
 def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = RetargetConfig()) -> np.ndarray:
