@@ -329,16 +329,12 @@ class TaskSpaceMap(_MergedBelief):
             n_train,
         )
 
-    def _weight(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """w (B,) at site positions p (B, 3), and whether it lies strictly inside (0, 1)."""
-        line = self.site_goal - self.site_start
-        lam = (p - self.site_start) @ line / (float(line @ line) * self.saturation)
-        return np.clip(lam, 0.0, 1.0), (lam > 0.0) & (lam < 1.0)
-
     def _poses(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
         """Site positions, rotations and Jacobians at s (B, n); w, inside; p_hat and R_hat."""
         p, rot, jac = self.robot.grasp_jacobians(s)
-        w, inside = self._weight(p)
+        line = self.site_goal - self.site_start
+        lam = (p - self.site_start) @ line / (float(line @ line) * self.saturation)
+        w, inside = np.clip(lam, 0.0, 1.0), (lam > 0.0) & (lam < 1.0)  # and whether strictly inside (0, 1)
         back = self.ref_cup + (p - self.new_cup) @ rot_z(-self.delta).T  # T^-1 p
         p_hat = p + w[:, None] * (back - p)
         r_hat = np.einsum("bij,bjk->bik", rot_z(-w * self.delta), rot)
