@@ -22,6 +22,7 @@ TWIST_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
 
 # Joystick modes: stick axis 0 drives the first component, axis 1 the second.
 MODES: tuple[tuple[str, str], ...] = (("x", "y"), ("z", "yaw"), ("roll", "pitch"))
+_MODE_COMPONENTS = [[TWIST_COMPONENTS.index(name) for name in names] for names in MODES]  # their indices
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,12 +49,6 @@ def _modes(mode: int | np.ndarray) -> np.ndarray:
     return ints
 
 
-def _mode_table(config: RetargetConfig) -> np.ndarray:
-    """Twist per unit stick deflection, shape (len(MODES), 2, 6): [mode, axis] -> twist."""
-    components = [[TWIST_COMPONENTS.index(name) for name in names] for names in MODES]
-    return np.eye(6)[components] * np.repeat([config.linear_speed, config.angular_speed], 3)
-
-
 def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = RetargetConfig()) -> np.ndarray:
     """The end-effector twist (..., 6) [m/s, rad/s] that stick deflections z (..., 2), clipped to
     [-1, 1] (not finite: zero), command in ``mode`` (...,); ConfigError for a bad mode or shape."""
@@ -64,7 +59,8 @@ def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = Retarg
     finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
     zs = np.where(finite, np.clip(np.nan_to_num(zs), -1.0, 1.0), 0.0)
     lead = np.broadcast_shapes(modes.shape, zs.shape[:-1])
-    table = _mode_table(config)[np.broadcast_to(modes, lead)]  # (..., 2, 6)
+    per_unit = np.eye(6)[_MODE_COMPONENTS] * np.repeat([config.linear_speed, config.angular_speed], 3)
+    table = per_unit[np.broadcast_to(modes, lead)]  # twist per unit deflection: [..., axis] -> twist
     return np.asarray(np.einsum("...a,...ak->...k", np.broadcast_to(zs, (*lead, 2)), table))
 
 
