@@ -1,10 +1,8 @@
-r"""Shared autonomy as a family: the members, each a way of computing the robot's assistance a_r.
+r"""Shared autonomy as a family of members, each a way of computing the robot's assistance a_r.
 
-Eq. M2, :math:`a_r = \sum_g b(g)(g - s)`, is the paper's; its footnote 1 allows others. A member
-returns a_r and a weight w in [0, 1] on the blend, :math:`a = (1 - \alpha w) a_h + \alpha w a_r`
-(w = 1 but for ``arbitrated``, Eq. M1 exactly). A member is any :class:`Member`; configs name
-the built-in ones (:data:`MEMBERS`). Each is vectorised over users: b (U, G), s (U, n), G goals.
-What each member means and the derivation of ``hindsight``: ``docs/method-notes.md``.
+Eq. M2, :math:`a_r = \sum_g b(g)(g - s)`, is the paper's (its footnote 1 allows others). A member
+returns a_r and a weight w in [0, 1] on the blend :math:`a = (1 - \alpha w) a_h + \alpha w a_r` (w = 1
+but for ``arbitrated``), vectorised over users. Each member: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -16,11 +14,10 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy import ndarray
 
-from lasa.base.config import ASSISTANCE, BUILT_IN_ASSISTANCE
+from lasa.base.config import BUILT_IN_ASSISTANCE
 from lasa.base.errors import ConfigError
 
 __all__ = [
-    "ASSISTANCE",
     "BUILT_IN_ASSISTANCE",
     "MEMBERS",
     "Member",
@@ -33,12 +30,8 @@ __all__ = [
 
 @runtime_checkable
 class Member(Protocol):
-    """A member of the shared-autonomy family: any function of this signature is one.
-
-    A config names a built-in member (:data:`MEMBERS`); a member of one's own is passed where it
-    runs: :func:`lasa.method.step.shared_autonomy_step`'s ``assistance``, or a per-row
-    ``assistance`` of :class:`lasa.method.step.Assist` and the rollout (``docs/extending.md``).
-    """
+    """A member of the shared-autonomy family: any function of this signature is one
+    (``docs/extending.md``); configs name the built-in ones, :data:`MEMBERS`."""
 
     def __call__(
         self,
@@ -49,39 +42,23 @@ class Member(Protocol):
         dt: float,
         action_scale: float,
     ) -> tuple[ndarray, ndarray]:
-        """a_r (U, n) [rad/s] and the blend weight w (U,) in [0, 1].
-
-        Args:
-            belief: b, shape (U, G).
-            state: s, shape (U, n).
-            goals: One pose per goal, shape (G, n).
-            goal_sets: Each goal's grasps, shape (G, K, n).
-            dt: The control period Delta [s].
-            action_scale: sigma_h, the human's speed bound [rad/s].
-        """
+        """a_r (U, n) [rad/s] and w (U,) from b (U, G), s (U, n), one pose per goal (G, n), each
+        goal's grasps (G, K, n), the period Delta [s] and the human's speed bound sigma_h [rad/s]."""
         ...
 
 
 def point(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
-    """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (Sec. III); w = 1.
-
-    a_r for any leading batch shape of b (..., G) and s (..., n).
-    """
+    """``point``: Eq. M2, a_r = sum_g b(g) (g - s), towards one pose per goal (Sec. III); w = 1."""
     return belief @ goals - state * belief.sum(axis=-1, keepdims=True), np.ones(len(state))
 
 
 def nearest_grasps(state: ndarray, goal_sets: ndarray) -> ndarray:
-    r"""The point of each goal's grasp polyline nearest to each state, shape (U, G, n).
+    r"""The point of each goal's grasp polyline (G, K, n) nearest to each state s (U, n), (U, G, n).
 
-    Candidate segments come from the squared distances in expanded form (two matrix products);
-    those within a margin of the least get the direct arithmetic, :math:`a + t\,ab`, and the
-    first nearest is taken, as an argmin over every segment takes it.
-
-    Args:
-        state: s, shape (U, n).
-        goal_sets: Each goal's grasps s*(g, theta) on a grid of theta, a polyline, shape (G, K, n).
+    Segments within a margin of the least expanded-form distance get the direct arithmetic,
+    :math:`a + t\,ab`; the first nearest is taken, as an argmin over every segment takes it.
     """
     if goal_sets.shape[1] == 1:
         return np.broadcast_to(goal_sets[None, :, 0], (len(state), *goal_sets[:, 0].shape)).copy()
@@ -99,8 +76,8 @@ def nearest_grasps(state: ndarray, goal_sets: ndarray) -> ndarray:
 
 
 def _candidates(state: ndarray, a: ndarray, ab: ndarray, den: ndarray) -> ndarray:
-    """Segments (U, G, K-1) whose squared distance, in expanded form, is within a margin of the
-    least; the margin, 1e-12 of the squares' scale, is thousands of times that form's rounding."""
+    """Segments (U, G, K-1) whose expanded-form squared distance is within 1e-12 of the squares'
+    scale (thousands of times that form's rounding) of the least."""
     n_goals, n_seg, n = ab.shape
     a2, ab2 = a.reshape(-1, n), ab.reshape(-1, n)
     u = state @ ab2.T - np.einsum("kn,kn->k", a2, ab2)  # (s - a) . ab, (U, G (K-1))
@@ -115,11 +92,8 @@ def _candidates(state: ndarray, a: ndarray, ab: ndarray, den: ndarray) -> ndarra
 def grasp_set(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
-    """``grasp_set``: Eq. M2 towards the nearest grasp of each goal, a_r = sum_g b(g) (c_g(s) - s).
-
-    c_g(s) is the point of goal g's grasp curve nearest to s (:func:`nearest_grasps`): any grasp
-    the user holds on the curve is a fixed point of the pull. w = 1.
-    """
+    """``grasp_set``: Eq. M2 towards each goal's nearest grasp c_g(s), a_r = sum_g b(g) (c_g(s) - s);
+    w = 1."""
     nearest = nearest_grasps(state, goal_sets)
     return np.einsum("ug,ugn->un", belief, nearest - state[:, None, :]), np.ones(len(state))
 
@@ -127,11 +101,8 @@ def grasp_set(
 def arbitrated(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
-    """``arbitrated``: policy blending with confidence-based arbitration (Dragan & Srinivasa 2013).
-
-    a_r = g_hat - s towards the likeliest goal g_hat = argmax_g b(g), with the linear arbitration
-    w = (max_g b(g) - 1/G) / (1 - 1/G): none while the belief is uniform, alpha at full confidence.
-    """
+    """``arbitrated``: policy blending (Dragan & Srinivasa 2013), a_r = g_hat - s towards the
+    likeliest goal, w = (max_g b(g) - 1/G) / (1 - 1/G)."""
     n_goals = belief.shape[-1]
     best = belief.argmax(axis=-1)
     weight = np.clip((belief.max(axis=-1) - 1.0 / n_goals) / (1.0 - 1.0 / n_goals), 0.0, 1.0)
@@ -139,11 +110,8 @@ def arbitrated(
 
 
 def hindsight_value(state: ndarray, goal_sets: ndarray, delta: float) -> ndarray:
-    """V_g(s): each goal's hindsight cost-to-go, the Huber distance to its nearest target, (U, G).
-
-    V_g(s) = min_k H(||g_k - s||) over the goal's set (:func:`nearest_grasps`), H the Huber cost
-    of radius ``delta``: H(d) = d for d >= delta, d^2 / (2 delta) + delta / 2 within it.
-    """
+    """V_g(s) = min_k H(||g_k - s||), each goal's hindsight cost-to-go, (U, G); H the Huber cost of
+    radius ``delta``: d for d >= delta, d^2 / (2 delta) + delta / 2 within it."""
     nearest = nearest_grasps(state, goal_sets)
     dist = np.linalg.norm(nearest - state[:, None, :], axis=-1)
     return np.where(dist >= delta, dist, dist**2 / (2.0 * delta) + delta / 2.0)
@@ -161,49 +129,31 @@ def _hindsight_pull(
 def hindsight(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
-    """``hindsight``: hindsight optimisation with goals as sets of targets (Javdani et al. 2018).
-
-    The first-order hindsight-optimal action at the human's speed bound, with c_g(s) the nearest
-    target and V_g of radius delta = Delta sigma_h (:func:`hindsight_value`); w = 1:
+    """``hindsight``: hindsight optimisation, goals as sets of targets (Javdani et al. 2018); w = 1,
+    delta = Delta sigma_h (:func:`hindsight_value`):
 
     .. math::  a_r = -\\sigma_h \\nabla_s \\sum_g b(g) V_g(s)
                = \\sigma_h \\sum_g b(g) \\frac{c_g(s) - s}{\\max(\\|c_g(s) - s\\|, \\delta)} .
     """
-    delta = dt * action_scale
-    return _hindsight_pull(belief, state, nearest_grasps(state, goal_sets), delta, action_scale), np.ones(
-        len(state)
-    )
+    pull = _hindsight_pull(belief, state, nearest_grasps(state, goal_sets), dt * action_scale, action_scale)
+    return pull, np.ones(len(state))
 
 
 def hindsight_point(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
-    """``hindsight_point``: :func:`hindsight` with one target per goal, its pose in ``goals``.
-
-    a_r = sigma_h sum_g b(g) (g - s) / max(||g - s||, delta): near a goal it pulls towards that
-    one pose, resisting every preference elsewhere in the goal's set. w = 1.
-    """
+    """``hindsight_point``: :func:`hindsight` with one target per goal, its pose in ``goals``; w = 1."""
     targets = np.broadcast_to(goals[None], (len(state), *goals.shape))
     return _hindsight_pull(belief, state, targets, dt * action_scale, action_scale), np.ones(len(state))
 
 
 MEMBERS: Mapping[str, Member] = MappingProxyType(
-    {
-        "point": point,
-        "grasp_set": grasp_set,
-        "arbitrated": arbitrated,
-        "hindsight": hindsight,
-        "hindsight_point": hindsight_point,
-    }
+    {m.__name__: m for m in (point, grasp_set, arbitrated, hindsight, hindsight_point)}
 )  # the built-in members by the names configs use, :data:`BUILT_IN_ASSISTANCE`
 
 
 def resolve(member: str | Member) -> Member:
-    """The member a config gives: a built-in one by its name, or the member itself.
-
-    Raises:
-        ConfigError: for a name that no built-in member has, or an object that is not a member.
-    """
+    """The member a config gives: a built-in one by its name, or the member itself (else ConfigError)."""
     if isinstance(member, str):
         if member not in MEMBERS:
             raise ConfigError(f"unknown assistance {member!r}; choose one of {', '.join(map(repr, MEMBERS))}")
@@ -222,6 +172,5 @@ def assist(
     dt: float,
     action_scale: float,
 ) -> tuple[ndarray, ndarray]:
-    """The assistance a_r and the blend weight w of member ``assistance`` (:func:`resolve`),
-    with the arguments of :class:`Member`."""
+    """a_r and w of member ``assistance`` (:func:`resolve`), with the arguments of :class:`Member`."""
     return resolve(assistance)(belief, state, goals, goal_sets, dt, action_scale)

@@ -1,10 +1,7 @@
-r"""The robot's belief over goals, updated in log space (Algorithm 1, line 8):
-:math:`b'(g) \propto P(a_h \mid s, g)\, b(g)`, a Boltzmann model of progress towards g.
-
-``ControlConfig.likelihood``: ``"goal"``, distances to the points g; ``"preferences"``, to each
-goal's preference set, normalised by its best action (regret = d_g(s') - d_g(s) + min(Delta
-sigma_h, d_g(s)) >= 0). A floor (:func:`update_log_belief`) and an optional cap
-(:func:`cap_log_belief`, Javdani et al.'s) bound each goal's belief. Why: ``docs/method-notes.md``.
+r"""The robot's belief over goals in log space (Algorithm 1, line 8): :math:`b'(g) \propto
+P(a_h \mid s, g)\, b(g)`, a Boltzmann model of progress towards g (the points g, or each goal's
+preference set with the regret form), bounded by a floor and an optional cap. Why:
+``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -39,8 +36,7 @@ CONFIDENT_MARGIN = 0.01
 
 
 def belief_targets(task: GoalTask, likelihood: str) -> np.ndarray:
-    """What the belief measures progress towards, (G, K, n): the goals g (K = 1) under ``"goal"``,
-    the preference sets (:attr:`lasa.world.goals.GoalTask.preference_sets`) under ``"preferences"``."""
+    """What the belief measures progress towards, (G, K, n): the goals (K = 1) or preference sets."""
     check_choice("likelihood", likelihood, LIKELIHOODS)
     return task.goals[:, None, :] if likelihood == "goal" else task.preference_sets
 
@@ -51,19 +47,13 @@ def uniform_log_belief(batch: int, n_goals: int) -> np.ndarray:
 
 
 def distance_to_sets_torch(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
-    """Euclidean distance from each point to each goal's polyline, shape (..., G); differentiable.
-
-    Args:
-        points: Points, shape (..., n).
-        goal_sets: One polyline of K vertices per goal, shape (G, K, n); K = 1 is a point.
-    """
+    """Euclidean distance from points (..., n) to each goal's polyline (G, K, n), (..., G);
+    differentiable."""
     p = points[..., None, None, :]  # (..., 1, 1, n)
     if goal_sets.shape[1] == 1:
         return torch.linalg.vector_norm(p[..., 0, :] - goal_sets[:, 0], dim=-1)
     a, ab = goal_sets[:, :-1], torch.diff(goal_sets, dim=1)  # (G, K-1, n)
-    t = ((p - a) * ab).sum(-1) / (ab * ab).sum(-1).clamp_min(1e-12)
-    closest = a + t.clamp(0.0, 1.0)[..., None] * ab
-    return torch.linalg.vector_norm(p - closest, dim=-1).min(dim=-1).values
+    return _segment_distances(p, a, ab, (ab * ab).sum(-1).clamp_min(1e-12)).min(dim=-1).values
 
 
 def log_likelihood_torch(
@@ -73,31 +63,12 @@ def log_likelihood_torch(
     dt: float,
     beta: float,
     max_step: float | None = None,
+    distance: Callable[[torch.Tensor, torch.Tensor], torch.Tensor] | None = None,
 ) -> torch.Tensor:
-    """Log P(a_h | s, g) up to a constant shared by all goals, shape (..., G); differentiable.
-
-    Args:
-        state: States s, shape (..., n).
-        action: Human actions a_h, shape (..., n).
-        goal_sets: Goal sets (polylines), shape (G, K, n); K = 1 for point goals.
-        dt: Control period Delta [s].
-        beta: Belief temperature beta_b >= 0.
-        max_step: Delta sigma_h [rad]: normalise each goal's likelihood by its best action (the
-            regret form); ``None``: the plain progress model.
-    """
-    return _log_likelihood(state, action, goal_sets, dt, beta, max_step, distance_to_sets_torch)
-
-
-def _log_likelihood(
-    state: torch.Tensor,
-    action: torch.Tensor,
-    goal_sets: torch.Tensor,
-    dt: float,
-    beta: float,
-    max_step: float | None,
-    distance: Callable[[torch.Tensor, torch.Tensor], torch.Tensor],
-) -> torch.Tensor:
-    """:func:`log_likelihood_torch` with the distance function ``distance(points, goal_sets)``."""
+    """Log P(a_h | s, g) up to a constant shared by all goals, (..., G); differentiable. ``beta`` is
+    beta_b; ``max_step`` Delta sigma_h [rad] normalises by each goal's best action (``None``: not);
+    ``distance(points, goal_sets)`` is :func:`distance_to_sets_torch` or one equal to it."""
+    distance = distance_to_sets_torch if distance is None else distance
     check_range("belief_beta", beta, 0.0)
     moved = state + dt * action
     if distance is _distance_no_grad and moved.shape == state.shape:
@@ -114,8 +85,7 @@ def _log_likelihood(
 def _segment_distances(
     p: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
 ) -> torch.Tensor:
-    """Distances from points p to segments a + t ab (``denom`` = ||ab||^2 >= 1e-12), row by row,
-    by distance_to_sets_torch's operations."""
+    """Distances from points p to segments a + t ab (``denom`` = ||ab||^2 >= 1e-12)."""
     t = ((p - a) * ab).sum(-1) / denom
     closest = a + t.clamp(0.0, 1.0)[..., None] * ab
     return torch.linalg.vector_norm(p - closest, dim=-1)
@@ -152,11 +122,8 @@ def _candidates(points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: 
 def _nearest_segment(
     points: torch.Tensor, a: torch.Tensor, ab: torch.Tensor, denom: torch.Tensor
 ) -> torch.Tensor:
-    """The segment distance_to_sets_torch takes each goal's minimum at, shape (rows, G); no gradient.
-
-    Among :func:`_candidates`, ties are settled by the reference arithmetic, the first of the
-    least taken as ``min`` takes it: the index is the original's, bit for bit.
-    """
+    """The segment distance_to_sets_torch takes each goal's minimum at, (rows, G); no gradient. Ties
+    among :func:`_candidates` are settled by the reference arithmetic, the first least as ``min``."""
     n_goals, n_seg, _ = ab.shape
     with torch.no_grad():
         points = points.detach()
@@ -177,11 +144,8 @@ def _nearest_segment(
 
 
 def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
-    """:func:`lasa.method.belief.distance_to_sets_torch`, differentiated through the nearest segment only.
-
-    The same value and gradient: the segment is found first without autograd
-    (:func:`_nearest_segment`), and only its distance is computed on the graph, (..., G).
-    """
+    """:func:`distance_to_sets_torch`, the same value and gradient, differentiated through the nearest
+    segment only (found without autograd), (..., G)."""
     if goal_sets.shape[1] == 1 or not bool(torch.isfinite(points).all()):
         return distance_to_sets_torch(points, goal_sets)
     lead, n, n_goals = points.shape[:-1], points.shape[-1], goal_sets.shape[0]
@@ -195,12 +159,9 @@ def nearest_distance(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Ten
 
 
 def _distance_no_grad(points: torch.Tensor, goal_sets: torch.Tensor) -> torch.Tensor:
-    """:func:`distance_to_sets_torch` without autograd, bitwise equal to it, in less time
-    (:func:`nearest_distance` for float64)."""
-    if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad:
-        return distance_to_sets_torch(points, goal_sets)
+    """:func:`distance_to_sets_torch` without autograd, bitwise equal, faster (float64)."""
     dtype = torch.promote_types(points.dtype, goal_sets.dtype)
-    if dtype != torch.float64:
+    if goal_sets.shape[1] == 1 or points.requires_grad or goal_sets.requires_grad or dtype != torch.float64:
         return distance_to_sets_torch(points, goal_sets)
     return nearest_distance(points.to(dtype), goal_sets.to(dtype))
 
@@ -220,34 +181,22 @@ def log_likelihood(
     beta: float,
     max_step: float | None = None,
 ) -> np.ndarray:
-    """:func:`log_likelihood_torch` on numpy arrays (float64), shape (..., G); ``goal_sets`` may
-    be goal points (G, n), sets of one pose."""
+    """:func:`log_likelihood_torch` on numpy arrays (float64), (..., G); goal_sets may be points (G, n)."""
     sets = np.asarray(goal_sets, dtype=np.float64)
+    s, a = torch.as_tensor(state, dtype=torch.float64), torch.as_tensor(action, dtype=torch.float64)
+    g = torch.as_tensor(sets[:, None, :] if sets.ndim == 2 else sets)
     with torch.no_grad():
-        out = _log_likelihood(
-            torch.as_tensor(state, dtype=torch.float64),
-            torch.as_tensor(action, dtype=torch.float64),
-            torch.as_tensor(sets[:, None, :] if sets.ndim == 2 else sets),
-            dt,
-            beta,
-            max_step,
-            _distance_no_grad,
-        )
-    return out.numpy()
+        return log_likelihood_torch(s, a, g, dt, beta, max_step, _distance_no_grad).numpy()
 
 
 def logsumexp(x: np.ndarray) -> np.ndarray:
-    """log sum exp along the last axis, kept as a length-1 axis (numpy's ``logaddexp`` reduced,
-    without scipy's dispatch cost); a row of only -inf gives -inf."""
+    """log sum exp along the last axis, kept as a length-1 axis (a row of only -inf gives -inf)."""
     return np.logaddexp.reduce(x, axis=-1, keepdims=True)
 
 
 def cap_log_belief(log_b: np.ndarray, cap: float) -> np.ndarray:
-    """No goal above ``cap``: a goal's excess is spread evenly over the other goals, in log space.
-
-    Javdani et al.'s ``max_prob_any_goal``. With ``cap`` in (1/2, 1) only the top goal can exceed
-    it; the result sums to one and keeps the beliefs' order. ``log_b``: normalised, (..., G), G >= 2.
-    """
+    """No goal above ``cap`` in (1/2, 1) (Javdani et al.'s ``max_prob_any_goal``): the top goal's
+    excess is spread evenly over the others, in log space; ``log_b`` normalised, (..., G)."""
     check_range("belief_cap", cap, 0.5, 1.0, low_open=True, high_open=True)
     n_goals = log_b.shape[-1]
     top = np.argmax(log_b, axis=-1)[..., None]
@@ -266,21 +215,14 @@ def cap_log_belief(log_b: np.ndarray, cap: float) -> np.ndarray:
 def update_log_belief(
     log_b: np.ndarray, log_lik: np.ndarray, floor: float = 0.0, cap: float | None = None
 ) -> np.ndarray:
-    """One Bayesian update b' ∝ P(a_h | s, g) b(g), in log space; then the floor, then the cap.
-
-    Args:
-        log_b: Current log-beliefs, shape (..., G).
-        log_lik: Log-likelihoods of the observed action under each goal, (..., G).
-        floor: Each goal keeps at least this belief, in [0, 1/G).
-        cap: If given, no goal keeps more than this (:func:`cap_log_belief`), in (1/2, 1).
-    """
+    """One Bayesian update b' ∝ P(a_h | s, g) b(g) in log space, (..., G); then each goal keeps at
+    least ``floor`` in [0, 1/G), and at most ``cap`` (:func:`cap_log_belief`) if given."""
     n_goals = log_b.shape[-1]
     check_range("belief_floor", floor, 0.0, 1.0 / n_goals, high_open=True)
     post = log_b + log_lik
     post = post - logsumexp(post)
     if floor > 0.0:
-        # Mix with the uniform distribution: b <- (1 - G f) b + f. Every goal keeps at
-        # least f, the result still sums to one, and the order of beliefs is unchanged.
+        # b <- (1 - G f) b + f: at least f each, still summing to one, the order kept
         post = np.logaddexp(np.log1p(-n_goals * floor) + post, np.log(floor))
     if cap is not None:
         post = cap_log_belief(post, cap)
@@ -288,8 +230,7 @@ def update_log_belief(
 
 
 def confident_belief(n_goals: int, goal: int, floor: float = 0.0, cap: float | None = None) -> np.ndarray:
-    """The most confident belief in ``goal`` the update keeps, shape (G,): all but the others'
-    floor on it, or (with a cap) the cap and the rest spread evenly, each at least the floor."""
+    """The most confident belief in ``goal`` the update keeps (the rest at the floor or cap), (G,)."""
     rest = floor if cap is None else max(floor, (1.0 - cap) / (n_goals - 1))
     b = np.full(n_goals, rest)
     b[goal] = 1.0 - (n_goals - 1) * rest
@@ -297,8 +238,7 @@ def confident_belief(n_goals: int, goal: int, floor: float = 0.0, cap: float | N
 
 
 def confidence_threshold(cap: float | None) -> float:
-    """The top belief above which a context counts as confident: the cap (or one) less
-    :data:`CONFIDENT_MARGIN`."""
+    """The top belief above which a context is confident: the cap (or one) less :data:`CONFIDENT_MARGIN`."""
     return (1.0 if cap is None else cap) - CONFIDENT_MARGIN
 
 

@@ -1,21 +1,18 @@
-r"""Goals never seen in training: the context map h(s, b) of Sec. IV-C.
-
-For a cup put on the table after training, the context maps onto an equivalent one at a training
-cup :math:`\hat g`: :math:`(\hat s, \hat b) = h(s, b)`, :math:`a_h = J_h(s)^{-1} \phi(z, \hat s,
-\hat b)`, with :math:`\hat s = s + w(s)\,u(s)` (w the progress towards g, clipped to 1) and
-:math:`\hat b(\hat g) = b(g) + b(\hat g)`. :class:`ContextMap`'s offsets u: ``"straight_line"``
-(the paper's) or ``"grasp"`` (grasp onto grasp, the default); :class:`TaskSpaceMap` reads the
-straight-line map in the gripper's space. The derivation: ``docs/method-notes.md``.
+r"""Goals never seen in training: the context map h(s, b) of Sec. IV-C, :math:`a_h = J_h(s)^{-1}
+\phi(z, \hat s, \hat b)`, :math:`\hat s = s + w(s)\,u(s)`, :math:`\hat b(\hat g) = b(g) + b(\hat g)`.
+Offsets u: ``"straight_line"`` (the paper's), ``"grasp"`` (the default), or the straight line in the
+gripper's space (:class:`TaskSpaceMap`). The derivation: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 
 import numpy as np
 
-from lasa.base.config import check_choice, check_range
+from lasa.base.config import check_choice
 from lasa.base.errors import ConfigError, IKError
 from lasa.method.decoder import ActionDecoder
 from lasa.world.chain import rot_z
@@ -37,7 +34,6 @@ __all__ = [
 JOINT_KINDS = ("grasp", "straight_line")  # the maps of :class:`ContextMap`, in joint space
 MAP_KINDS = (*JOINT_KINDS, "straight_line_ee")  # and :class:`TaskSpaceMap`'s, in the gripper's space
 
-NEW_GOAL_NAME = "new"
 _MAX_JUMP = 0.5  # largest joint-space step between neighbouring grasps of a smooth curve [rad]
 
 
@@ -59,8 +55,7 @@ def _check_grown(task: CupTask, n_train: int, ref_index: int) -> None:
 
 
 def _check_placement(task: CupTask, position: np.ndarray, ref_goal: int) -> tuple[np.ndarray, float]:
-    """The new cup's position (3,), checked on the table and apart from the others, and its
-    bearing offset from the reference cup about the base [rad]."""
+    """The new cup's position (3,), checked, and its bearing offset from the reference cup [rad]."""
     robot = task.robot
     cups = robot.goal_positions()
     pos = np.asarray(position, dtype=float).reshape(-1)
@@ -105,44 +100,21 @@ def _yaw_axis(robot: Robot) -> float:
 
 
 def new_goal_frames(task: CupTask, ref_goal: int, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The grasps of a new cup, positions (K, 3) and rotations (K, 3, 3): the reference cup's,
-    turned about the vertical by the bearing difference and moved to the new cup."""
-    return _frames(task, ref_goal, *_check_placement(task, position, ref_goal))
-
-
-def _frames(task: CupTask, ref_goal: int, pos: np.ndarray, delta: float) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`new_goal_frames` for a checked position and its bearing offset ``delta``."""
-    ref_cup = task.robot.goal_positions()[ref_goal]
-    turn = rot_z(delta)
-    positions, rotations = [], []
-    for theta in task.theta_grid:
-        p, r = grasp_frame(task.robot, ref_goal, float(theta))
-        positions.append(pos + turn @ (p - ref_cup))
-        rotations.append(turn @ r)
-    return np.array(positions), np.array(rotations)
+    """A new cup's grasps (K, 3), (K, 3, 3): the reference cup's, turned and moved to it."""
+    pos, delta = _check_placement(task, position, ref_goal)
+    ref_cup, turn = task.robot.goal_positions()[ref_goal], rot_z(delta)
+    frames = [grasp_frame(task.robot, ref_goal, float(theta)) for theta in task.theta_grid]
+    return np.array([pos + turn @ (p - ref_cup) for p, _ in frames]), np.array([turn @ r for _, r in frames])
 
 
 def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTask:
-    """The task with a new cup at ``position``: its grasps solved by IK, added as the last goal.
-
-    Its robot has the cup in its scene. Each grasp's IK starts from the reference grasp, turned
-    about the base when the first joint is vertical, so the two grasp curves are alike.
-
-    Args:
-        task: The training task (G goals).
-        position: Grasp centre of the new cup, (x, y) or (x, y, z) [m]; z is the table's.
-        ref_goal: Index of the training cup the new one is referred to.
-
-    Raises:
-        ConfigError: if ``ref_goal`` is not a training goal, or the cup is off the table,
-            overlaps another cup, or (planar arm) stands outside the arm's plane.
-        IKError: if a grasp of the new cup is out of reach or the grasps do not form a
-            smooth curve in joint space.
-    """
+    """The task with a new cup at ``position`` ((x, y) or (x, y, z) [m]) as its last goal, its
+    grasps solved by IK from ``ref_goal``'s (turned about the base); ConfigError if misplaced,
+    IKError if out of reach or not a smooth curve."""
     if not 0 <= ref_goal < task.n_goals:
         raise ConfigError(f"ref_goal must be a training goal in [0, {task.n_goals}), got {ref_goal}")
     pos, delta = _check_placement(task, position, ref_goal)
-    positions, rotations = _frames(task, ref_goal, pos, delta)
+    positions, rotations = new_goal_frames(task, ref_goal, pos)
     robot = task.robot.with_cup(pos)
     guesses = task.curves[ref_goal].copy()
     guesses[:, 0] += delta * _yaw_axis(robot)  # turn the arm to the new bearing (no-op for a planar arm)
@@ -164,7 +136,7 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     mid = len(task.theta_grid) // 2
     return CupTask(
         robot=robot,
-        goal_names=(*task.goal_names, NEW_GOAL_NAME),
+        goal_names=(*task.goal_names, "new"),
         theta_grid=task.theta_grid,
         curves=np.concatenate([task.curves, curve[None]]),
         goals=np.concatenate([task.goals, curve[None, mid]]),
@@ -172,67 +144,60 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
     )
 
 
-def merged_belief(belief: np.ndarray, n_train: int, ref_index: int) -> np.ndarray:
-    """b_hat over the ``n_train`` training goals: the new goal's (the last) joins ``ref_index``'s."""
-    belief = np.asarray(belief, dtype=float)
-    if belief.shape[-1] != n_train + 1:
-        raise ConfigError(f"belief must be over {n_train + 1} goals, got shape {belief.shape}")
-    out = belief[..., :n_train].copy()
-    out[..., ref_index] += belief[..., n_train]
-    return out
+def _saturation(start: np.ndarray, goal: np.ndarray, points: np.ndarray, same: str) -> float:
+    """lambda_1: the least progress of ``points`` along start -> goal, at most 1; ConfigError (``same``)
+    if goal is start."""
+    line = goal - start
+    if np.linalg.norm(line) < 1e-6:
+        raise ConfigError(f"{same}: no path to map")
+    progress = (points - start) @ line / (line @ line)
+    return float(min(progress.min(), 1.0))
+
+
+class _MergedBelief:
+    """What both maps share: b_hat, and h(s, b) = (s_hat, b_hat)."""
+
+    n_train: int  # G
+    ref_index: int  # the reference goal among the G training goals
+    state: Callable[[np.ndarray], np.ndarray]  # s_hat
+
+    def belief(self, belief: np.ndarray) -> np.ndarray:
+        """b_hat over the training goals: the new goal's belief (the last) joins the reference's, (..., G)."""
+        belief = np.asarray(belief, dtype=float)
+        if belief.shape[-1] != self.n_train + 1:
+            raise ConfigError(f"belief must be over {self.n_train + 1} goals, got shape {belief.shape}")
+        out = belief[..., : self.n_train].copy()
+        out[..., self.ref_index] += belief[..., self.n_train]
+        return out
+
+    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """h(s, b) = (s_hat, b_hat)."""
+        return self.state(state), self.belief(belief)
 
 
 @dataclasses.dataclass(frozen=True)
-class ContextMap:
-    """h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's (:meth:`for_task`).
+class ContextMap(_MergedBelief):
+    """The context map h(s, b) -> (s_hat, b_hat) from a new goal's context onto a training goal's
+    (:meth:`for_task`); states (..., n), beliefs (..., G + 1) with the new goal last."""
 
-    States are (..., n), beliefs (..., G + 1) with the new goal last.
-
-    Attributes:
-        start: The start pose s_0, shape (n,) [rad].
-        new_curve: The new cup's grasps s*(g, theta) on the theta grid, shape (K, n) [rad].
-        ref_curve: Where each maps: the reference cup's grasps (``"grasp"``), or the new ones
-            shifted by g_hat - g (``"straight_line"``), shape (K, n) [rad].
-        ref_index: Index of the reference goal among the training goals.
-        n_train: Number of training goals G.
-        saturation: lambda_1 in (0, 1], the progress from which w = 1.
-        width: tau, the joint-space width of the soft assignment to grasps [rad].
-        kind: One of :data:`JOINT_KINDS`.
-    """
-
-    start: np.ndarray
-    new_curve: np.ndarray
-    ref_curve: np.ndarray
+    start: np.ndarray  # s_0, (n,) [rad]
+    new_curve: np.ndarray  # the new cup's grasps s*(g, theta) on the theta grid, (K, n) [rad]
+    ref_curve: np.ndarray  # where each maps: the reference cup's grasps, or ("straight_line") shifted
     ref_index: int
     n_train: int
-    saturation: float
-    width: float = 0.1
-    kind: str = "grasp"
+    saturation: float  # lambda_1 in (0, 1], the progress from which w = 1
+    width: float = 0.1  # tau, the joint-space width of the soft assignment to grasps [rad]
+    kind: str = "grasp"  # one of JOINT_KINDS
 
     @classmethod
-    def for_task(
-        cls, task: CupTask, n_train: int, ref_index: int, kind: str = "grasp", width: float = 0.1
-    ) -> ContextMap:
-        """The map for the last goal of ``task`` (the new one) onto training goal ``ref_index``.
-
-        Raises:
-            ConfigError: if the task has no new goal, or the map would not be invertible.
-        """
+    def for_task(cls, task: CupTask, n_train: int, ref_index: int, kind: str = "grasp") -> ContextMap:
+        """The map for the last goal of ``task`` (the new one) onto training goal ``ref_index``;
+        ConfigError if the task has no new goal or the map would not be invertible."""
         _check_grown(task, n_train, ref_index)
-        check_range("width", width, 0.0, low_open=True)
         check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
         line = g - start
-        if np.linalg.norm(line) < 1e-6:
-            raise ConfigError("the new goal coincides with the start pose: no path to map")
-        progress = (task.curves[-1] - start) @ line / (line @ line)
-        saturation = float(min(progress.min(), 1.0))
-        ref_curve = task.curves[ref_index].copy()
-        if kind == "straight_line":
-            ref_curve = task.curves[-1] + (task.goals[ref_index] - g)
-        cmap = cls(
-            start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, width, kind
-        )
+        saturation = _saturation(start, g, task.curves[-1], "the new goal coincides with the start pose")
         # along the straight line to g, d(s_hat)/d(lambda) must keep pointing forwards
         shift = float(line @ (task.goals[ref_index] - g)) / (float(line @ line) * saturation)
         if saturation < 0.2 or 1.0 + shift < 0.2:
@@ -241,7 +206,11 @@ class ContextMap:
                 f"(least progress {saturation:.2f}), or the new cup is too far from the reference "
                 "one for the map to be invertible; put it nearer the reference cup"
             )
-        return cmap
+        shifted = kind == "straight_line"
+        ref_curve = (
+            task.curves[-1] + (task.goals[ref_index] - g) if shifted else task.curves[ref_index].copy()
+        )
+        return cls(start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, kind=kind)
 
     @property
     def new_goal(self) -> np.ndarray:
@@ -265,25 +234,14 @@ class ContextMap:
         p = np.exp(logits - logits.max(axis=-1, keepdims=True))
         return p / p.sum(axis=-1, keepdims=True)
 
-    def offset(self, state: np.ndarray) -> np.ndarray:
-        """u(s) = sum_k p_k(s) (s*(g_hat, theta_k) - s*(g, theta_k)), shape (..., n)."""
-        return self._assignment(state) @ (self.ref_curve - self.new_curve)
-
     def state(self, state: np.ndarray) -> np.ndarray:
-        """s_hat = s + w(s) u(s), shape (..., n)."""
-        return state + self.weight(state)[..., None] * self.offset(state)
-
-    def belief(self, belief: np.ndarray) -> np.ndarray:
-        """b_hat over the training goals: the new goal's belief joins the reference's, (..., G)."""
-        return merged_belief(belief, self.n_train, self.ref_index)
-
-    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """h(s, b) = (s_hat, b_hat)."""
-        return self.state(state), self.belief(belief)
+        """s_hat = s + w(s) u(s), u(s) = sum_k p_k(s) (s*(g_hat, theta_k) - s*(g, theta_k)), (..., n)."""
+        return state + self.weight(state)[..., None] * (
+            self._assignment(state) @ (self.ref_curve - self.new_curve)
+        )
 
     def jacobian(self, state: np.ndarray) -> np.ndarray:
-        """J_h(s) = I + u grad(w)^T + w du/ds, du/ds = sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2,
-        shape (..., n, n)."""
+        """J_h(s) = I + u grad(w)^T + w sum_k p_k (u_k - u)(c_k - c_bar)^T / tau^2, (..., n, n)."""
         state = np.asarray(state, dtype=float)
         lam, grad = self._progress(state)
         w = np.clip(lam, 0.0, 1.0)
@@ -302,13 +260,11 @@ class ContextMap:
         )
 
     def action_to_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """a_hat = J_h(s) a: a real action seen in the equivalent context, shape (..., n) (pass
-        ``s[:, None]`` for (U, K, n) candidates)."""
+        """a_hat = J_h(s) a, (..., n) (``s[:, None]`` for (U, K, n) candidates)."""
         return np.einsum("...ij,...j->...i", self.jacobian(state), action)
 
     def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """a = J_h(s)^{-1} a_hat: a decoded action mapped back to the real context, (..., n); one
-        Jacobian per state (pass ``s[:, None]`` for (U, K, n) candidates)."""
+        """a = J_h(s)^{-1} a_hat, (..., n) (``s[:, None]`` for (U, K, n) candidates)."""
         jac = self.jacobian(state)
         action = np.asarray(action, dtype=float)
         shape = np.broadcast_shapes(jac.shape[:-2], action.shape[:-1])
@@ -318,13 +274,12 @@ class ContextMap:
 
 
 @dataclasses.dataclass
-class TaskSpaceMap:
-    r"""The paper's straight-line map read in the gripper's space (kind ``"straight_line_ee"``).
+class TaskSpaceMap(_MergedBelief):
+    r"""The paper's straight-line map in the gripper's space (kind ``"straight_line_ee"``).
 
-    The site's pose moves w of the way by the table's turn T back to the training cup,
-    :math:`\hat p = p + w\,(T^{-1} p - p)`, :math:`\hat R = R_z(-w\delta)\,R`; :math:`\hat s` is
-    its IK, seeded at :math:`s + w(\hat g - g)` (the seed kept where it fails: ``fallbacks``).
-    Actions map back through the task space in least squares, keeping the null-space motion.
+    :math:`\hat p = p + w\,(T^{-1} p - p)`, :math:`\hat R = R_z(-w\delta)\,R` (T the table's turn
+    back to the training cup); :math:`\hat s` is their IK seeded at :math:`s + w(\hat g - g)` (kept
+    where IK fails: ``fallbacks``); actions map back in least squares, keeping null-space motion.
     """
 
     robot: Robot
@@ -353,11 +308,7 @@ class TaskSpaceMap:
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )
         p0, pg = sites[0], sites[1]
-        line = pg - p0
-        if np.linalg.norm(line) < 1e-6:
-            raise ConfigError("the new goal's grasp site coincides with the start's: no path to map")
-        progress = (sites[2:] - p0) @ line / (line @ line)
-        saturation = float(min(progress.min(), 1.0))
+        saturation = _saturation(p0, pg, sites[2:], "the new goal's grasp site coincides with the start's")
         if saturation < 0.2:
             raise ConfigError(
                 "the new cup's grasps do not lie far enough ahead of the start "
@@ -378,16 +329,12 @@ class TaskSpaceMap:
             n_train,
         )
 
-    def _weight(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """w (B,) at site positions p (B, 3), and whether it lies strictly inside (0, 1)."""
-        line = self.site_goal - self.site_start
-        lam = (p - self.site_start) @ line / (float(line @ line) * self.saturation)
-        return np.clip(lam, 0.0, 1.0), (lam > 0.0) & (lam < 1.0)
-
     def _poses(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
         """Site positions, rotations and Jacobians at s (B, n); w, inside; p_hat and R_hat."""
         p, rot, jac = self.robot.grasp_jacobians(s)
-        w, inside = self._weight(p)
+        line = self.site_goal - self.site_start
+        lam = (p - self.site_start) @ line / (float(line @ line) * self.saturation)
+        w, inside = np.clip(lam, 0.0, 1.0), (lam > 0.0) & (lam < 1.0)  # and whether strictly inside (0, 1)
         back = self.ref_cup + (p - self.new_cup) @ rot_z(-self.delta).T  # T^-1 p
         p_hat = p + w[:, None] * (back - p)
         r_hat = np.einsum("bij,bjk->bik", rot_z(-w * self.delta), rot)
@@ -413,14 +360,6 @@ class TaskSpaceMap:
         out = out.reshape(state.shape)
         self._cache = (key, out)
         return out
-
-    def belief(self, belief: np.ndarray) -> np.ndarray:
-        """b_hat over the training goals, as :meth:`ContextMap.belief`."""
-        return merged_belief(belief, self.n_train, self.ref_index)
-
-    def __call__(self, state: np.ndarray, belief: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """h(s, b) = (s_hat, b_hat)."""
-        return self.state(state), self.belief(belief)
 
     def differential(self, state: np.ndarray) -> np.ndarray:
         """M(s) = d X_hat / ds, the equivalent site pose's (translation over rotation), (B, 6, n)."""
@@ -469,39 +408,22 @@ def context_map(
     return ContextMap.for_task(task, n_train, ref_index, kind)
 
 
-@dataclasses.dataclass(frozen=True)
 class MappedDecoder:
-    """The decoder seen through a context map h: an :class:`lasa.method.decoder.ActionDecoder` over
-    the grown task's G + 1 goals, a_h = J_h(s)^-1 phi(z, h(s, b)), from ``model`` over the G."""
+    """The decoder through a context map: a_h = J_h(s)^-1 phi(z, h(s, b)) over the grown task's G + 1."""
 
-    model: ActionDecoder
-    context_map: ContextMap | TaskSpaceMap
-
-    def __post_init__(self) -> None:
-        if self.model.n_goals != self.context_map.n_train:
+    def __init__(self, model: ActionDecoder, context_map: ContextMap | TaskSpaceMap) -> None:
+        if model.n_goals != context_map.n_train:
             raise ConfigError(
-                f"the decoder reads {self.model.n_goals} goals, the context map maps onto "
-                f"{self.context_map.n_train} training goals"
+                f"the decoder reads {model.n_goals} goals, the context map maps onto "
+                f"{context_map.n_train} training goals"
             )
-
-    @property
-    def robot(self) -> str:
-        """The robot of the wrapped decoder."""
-        return self.model.robot
-
-    @property
-    def n_goals(self) -> int:
-        """G + 1: the training goals and the new one."""
-        return self.context_map.n_train + 1
-
-    @property
-    def z_dim(self) -> int:
-        """d, as the wrapped decoder's."""
-        return self.model.z_dim
+        self.model, self.context_map = model, context_map
+        self.robot: str = model.robot  # the wrapped decoder's
+        self.n_goals: int = context_map.n_train + 1  # the training goals and the new one
+        self.z_dim: int = model.z_dim  # d, the wrapped decoder's
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """phi(z, h(s, b)) mapped back to the real context, shape (..., n); pass ``s`` as (U, 1, n)
-        for (U, K) candidates (one factorisation per state)."""
+        """phi(z, h(s, b)) mapped back to the real context, (..., n); ``s`` (U, 1, n) for (U, K) z."""
         s = np.asarray(s, dtype=float)
         s_hat, b_hat = self.context_map(s, b)
         return self.context_map.action_from_training(self.model.decode_numpy(z, s_hat, b_hat), s)

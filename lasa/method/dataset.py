@@ -30,29 +30,17 @@ PHASE_NAMES = ("reach", "adjust", "hold", "stroke")
 
 @dataclasses.dataclass(frozen=True)
 class Demonstrations:
-    """The dataset D, one row per (s, a, b) tuple.
-
-    Attributes:
-        robot: Robot name.
-        states: s, shape (N, n) [rad].
-        actions: a, shape (N, n) [rad/s].
-        beliefs: b, shape (N, G).
-        demo: Index of the demonstration each tuple belongs to, shape (N,).
-        goal: The demonstrated cup, shape (N,).
-        theta: The preference being moved towards, shape (N,).
-        phase: 0 reach, 1 adjust, 2 hold, shape (N,).
-        perturbed: Whether the tuple is a noisy copy, shape (N,).
-    """
+    """The dataset D, one row per (s, a, b) tuple."""
 
     robot: str
-    states: np.ndarray
-    actions: np.ndarray
-    beliefs: np.ndarray
-    demo: np.ndarray
-    goal: np.ndarray
-    theta: np.ndarray
-    phase: np.ndarray
-    perturbed: np.ndarray
+    states: np.ndarray  # s, (N, n) [rad]
+    actions: np.ndarray  # a, (N, n) [rad/s]
+    beliefs: np.ndarray  # b, (N, G)
+    demo: np.ndarray  # the demonstration each tuple belongs to, (N,)
+    goal: np.ndarray  # the demonstrated cup, (N,)
+    theta: np.ndarray  # the preference moved towards, (N,)
+    phase: np.ndarray  # REACH, ADJUST, HOLD or STROKE, (N,)
+    perturbed: np.ndarray  # whether the tuple is a noisy copy, (N,)
 
     def __len__(self) -> int:
         return len(self.states)
@@ -60,10 +48,8 @@ class Demonstrations:
     def clean(self) -> Demonstrations:
         """The tuples that are not noisy copies (the demonstrations themselves)."""
         keep = ~self.perturbed
-        return dataclasses.replace(
-            self,
-            **{f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"},
-        )
+        rows = {f.name: getattr(self, f.name)[keep] for f in dataclasses.fields(self) if f.name != "robot"}
+        return dataclasses.replace(self, **rows)
 
     def showcase(self, task: CupTask) -> list[tuple[int, str]]:
         """(index, caption) of clean demonstrations from the start pose: a top and a side grasp at
@@ -98,8 +84,7 @@ def load_demonstrations(
     arrays = load_npz(path, make_hint)
     try:
         fields = {f.name: arrays[f.name] for f in dataclasses.fields(Demonstrations)}
-        demos = Demonstrations(**fields)  # type: ignore[arg-type]
-        demos = dataclasses.replace(demos, robot=str(demos.robot))
+        demos = Demonstrations(**{**fields, "robot": str(fields["robot"])})  # type: ignore[arg-type]
     except KeyError as exc:
         raise ArtifactError(f"{path} lacks field {exc}; re-make it with: {make_hint}") from exc
     if robot is not None and demos.robot != robot:

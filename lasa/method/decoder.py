@@ -1,10 +1,8 @@
-r"""The latent-action model: a conditional autoencoder over (state, belief) contexts.
+r"""The latent-action model: a conditional autoencoder over (state, belief) contexts (Sec. III-A).
 
-:math:`z = \psi(s, a, b) \in [-1, 1]^d` (tanh) and :math:`a_h = \phi(z, s, b)` (Sec. III-A), the
-output squashed radially, :math:`\phi = \sigma_h \tanh(\|v\|)\, v / \|v\|`, so
-:math:`\|\phi\| < \sigma_h` (Eq. T4). Checkpoints hold the state dict and the config, and load with
-``weights_only=True``; a decoder of one's own (:class:`ActionDecoder`) saves and loads the same
-way (``docs/extending.md``). Why the bounds: ``docs/method-notes.md``.
+:math:`z = \psi(s, a, b) \in [-1, 1]^d`, :math:`a_h = \phi(z, s, b) = \sigma_h \tanh(\|v\|)\, v /
+\|v\|`, so :math:`\|\phi\| < \sigma_h` (Eq. T4). Checkpoints (state dict and config) load with
+``weights_only=True``. Why the bounds: ``docs/method-notes.md``.
 """
 
 from __future__ import annotations
@@ -53,11 +51,7 @@ class DecoderConfig:
 
 @runtime_checkable
 class ActionDecoder(Protocol):
-    """What Algorithm 1 needs of a decoder: phi(z, s, b) on numpy arrays, and its shape.
-
-    :class:`LatentActionModel` is one; a wrapper such as
-    :class:`lasa.method.context_map.MappedDecoder` is another.
-    """
+    """What Algorithm 1 needs of a decoder (e.g. :class:`LatentActionModel`): phi(z, s, b) on numpy."""
 
     @property
     def robot(self) -> str:
@@ -80,21 +74,13 @@ class ActionDecoder(Protocol):
 
 
 def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
-    layers: list[nn.Module] = []
-    width = n_in
-    for _ in range(depth):
-        layers += [nn.Linear(width, hidden), nn.Tanh()]
-        width = hidden
-    layers.append(nn.Linear(width, n_out))
-    return nn.Sequential(*layers)
+    widths = [n_in] + [hidden] * depth
+    layers = [m for w in widths[:-1] for m in (nn.Linear(w, hidden), nn.Tanh())]
+    return nn.Sequential(*layers, nn.Linear(widths[-1], n_out))
 
 
 class LatentActionModel(nn.Module):
-    """Encoder psi(s, a, b) -> z and decoder phi(z, s, b) -> a_h, over any leading batch shape.
-
-    The decoder clamps z to [-1, 1]; finiteness is the control loop's
-    (:func:`lasa.method.step.sanitize`).
-    """
+    """Encoder psi(s, a, b) -> z and decoder phi(z, s, b) -> a_h (z clamped to [-1, 1]), batched."""
 
     config_class: ClassVar[type[DecoderConfig]] = DecoderConfig  # what a checkpoint's config builds
     state_mean: torch.Tensor
@@ -103,6 +89,9 @@ class LatentActionModel(nn.Module):
     def __init__(self, config: DecoderConfig) -> None:
         super().__init__()
         self.config = config
+        self.robot: str = config.robot  # the robot the model was trained for
+        self.n_goals: int = config.n_goals  # G, the length of the belief it reads
+        self.z_dim: int = config.z_dim  # d, the latent (joystick) dimension
         n, g, d = config.n_joints, config.n_goals, config.z_dim
         mean = torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32)
         std = torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32)
@@ -110,21 +99,6 @@ class LatentActionModel(nn.Module):
         self.register_buffer("state_std", std)
         self.encoder = _mlp(2 * n + g, d, config.hidden, config.depth)
         self.decoder = _mlp(d + n + g, n, config.hidden, config.depth)
-
-    @property
-    def robot(self) -> str:
-        """The robot the model was trained for."""
-        return self.config.robot
-
-    @property
-    def n_goals(self) -> int:
-        """G: the length of the belief the model reads."""
-        return self.config.n_goals
-
-    @property
-    def z_dim(self) -> int:
-        """d: the latent (joystick) dimension."""
-        return self.config.z_dim
 
     def _context(self, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         return torch.cat([(s - self.state_mean) / self.state_std, b], dim=-1)
@@ -147,12 +121,8 @@ class LatentActionModel(nn.Module):
         return z, self.decode(z, s, b)
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
-        r"""phi(z, s, b) on numpy arrays (broadcast over leading dims), float64, C-contiguous.
-
-        :meth:`decode` by an inference-only forward (:mod:`lasa.method.inference`), equal to it to
-        float32 rounding; a subclass's (or a patched) ``decode`` runs itself on the expanded inputs.
-        The forward in detail: ``docs/method-notes.md``.
-        """
+        """phi(z, s, b) on numpy arrays (broadcast), float64: :meth:`decode` to float32 rounding by
+        :mod:`lasa.method.inference` (a subclass's or patched ``decode`` runs itself)."""
         if getattr(self.decode, "__func__", None) is not _DECODE:
             return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode
         return inference_plan(self).decode(z, s, b)
@@ -162,9 +132,7 @@ class LatentActionModel(nn.Module):
         """decode_numpy through :meth:`decode` itself: float32 inputs expanded to the batch."""
         zt, st, bt = (torch.as_tensor(x, dtype=torch.float32) for x in (z, s, b))
         shape = torch.broadcast_shapes(zt.shape[:-1], st.shape[:-1], bt.shape[:-1])
-        zt = zt.expand(*shape, zt.shape[-1])
-        st = st.expand(*shape, st.shape[-1])
-        bt = bt.expand(*shape, bt.shape[-1])
+        zt, st, bt = (x.expand(*shape, x.shape[-1]) for x in (zt, st, bt))
         return self.decode(zt, st, bt).double().numpy()
 
 
@@ -178,27 +146,17 @@ def _class_name(cls: type) -> str:
 
 
 def save_checkpoint(model: nn.Module, path: str | os.PathLike[str], **extra: Any) -> Path:
-    """Atomically save the model's state dict, its dataclass ``config`` and ``extra`` metadata.
-
-    ``extra`` holds plain Python data (it loads with ``weights_only=True``). A class other than
-    :class:`LatentActionModel` is recorded as ``module.Class``, so loading with the wrong class
-    names the right one; it must be importable by another process (not ``__main__``).
-
-    Raises:
-        ConfigError: if ``model.config`` is not a dataclass instance, or the model's class (other
-            than :class:`LatentActionModel`) is defined in ``__main__``.
-    """
+    """Atomically save the model's state dict, its dataclass ``config`` and plain-data ``extra``;
+    another class than :class:`LatentActionModel` is recorded as ``module.Class`` (not ``__main__``)."""
     config = getattr(model, "config", None)
     if not dataclasses.is_dataclass(config) or isinstance(config, type):
         raise ConfigError(
             f"{type(model).__name__} has no dataclass `config`: a checkpoint saves the config "
             "the decoder is built from"
         )
-    payload: dict[str, Any] = {
-        "state_dict": model.state_dict(),
-        "config": dataclasses.asdict(config),
-        "extra": extra,
-    }
+    payload: dict[str, Any] = dict(
+        state_dict=model.state_dict(), config=dataclasses.asdict(config), extra=extra
+    )
     if type(model) is not LatentActionModel:
         cls = type(model)
         if cls.__module__ == "__main__":
@@ -222,25 +180,13 @@ def load_checkpoint(
     decoder: type[M] = LatentActionModel,  # type: ignore[assignment]  # M's default (PEP 696)
     n_goals: int | None = None,
 ) -> tuple[M, dict[str, Any]]:
-    """Load a model saved by :func:`save_checkpoint`.
-
-    Args:
-        path: Checkpoint file.
-        robot: If given, the robot the caller expects; a mismatch is an error.
-        make_hint: Command that makes the checkpoint, for the error message.
-        decoder: The decoder's class, an :class:`ActionDecoder` module built as
-            ``decoder(decoder.config_class(**config))``.
-        n_goals: If given, the number of goals G the caller expects.
-
-    Returns:
-        The model in eval mode, and the checkpoint's ``extra`` metadata.
+    """A model saved by :func:`save_checkpoint` (eval mode) and its ``extra``, built as
+    ``decoder(decoder.config_class(**config))`` and checked against ``robot`` and ``n_goals`` if given.
 
     Raises:
         ArtifactError: if the file is missing.
-        CheckpointError: if it is corrupt, saved from another decoder class, or for another
-            robot or number of goals.
-        ConfigError: if ``decoder`` has no ``config_class`` or does not follow
-            :class:`ActionDecoder`.
+        CheckpointError: if it is corrupt, of another decoder class, robot or number of goals.
+        ConfigError: if ``decoder`` has no ``config_class`` or is no :class:`ActionDecoder`.
     """
     config_class = getattr(decoder, "config_class", None)
     if not isinstance(config_class, type) or not dataclasses.is_dataclass(config_class):
@@ -249,46 +195,23 @@ def load_checkpoint(
             "constructor takes"
         )
     path = require_file(path, make_hint)
-    payload, values = _read(path, decoder, make_hint)
-    try:
-        model = decoder(config_class(**values))
-        model.load_state_dict(payload["state_dict"])
-    except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
-    _check_loaded(model, path, decoder, robot, n_goals, make_hint)
-    model.eval()
-    return model, dict(payload.get("extra", {}))
-
-
-def _read(path: Path, decoder: type[nn.Module], make_hint: str) -> tuple[dict[str, Any], dict[str, Any]]:
-    """A checkpoint's payload and its config's values (lists as tuples); CheckpointError if it does
-    not load or holds another decoder class."""
-    try:
+    try:  # one error for whatever fails, without torch's advice to load the file unsafely
         payload = torch.load(path, map_location="cpu", weights_only=True)
         saved_as = str(payload.get("decoder", _class_name(LatentActionModel)))
-        values: dict[str, Any] = {
-            k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()
-        }
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in payload["config"].items()}
+        if saved_as == _class_name(decoder):
+            model = decoder(config_class(**values))
+            model.load_state_dict(payload["state_dict"])
     except Exception as exc:
-        raise _invalid(path, exc, make_hint) from None
+        raise CheckpointError(
+            f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
+            f"Delete it and re-make it with: {make_hint}"
+        ) from None
     if saved_as != _class_name(decoder):
         raise CheckpointError(
             f"{path} holds a {saved_as} decoder, not a {_class_name(decoder)}: load it with "
             f"load_checkpoint(..., decoder={saved_as.rsplit('.', 1)[-1]})"
         )
-    return payload, values
-
-
-def _check_loaded(
-    model: nn.Module,
-    path: Path,
-    decoder: type[nn.Module],
-    robot: str | None,
-    n_goals: int | None,
-    make_hint: str,
-) -> None:
-    """Refuse a model that is no :class:`ActionDecoder` (ConfigError), or for another robot or G
-    (CheckpointError)."""
     if not isinstance(model, ActionDecoder):
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
@@ -303,11 +226,5 @@ def _check_loaded(
             f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
             f"Use the checkpoint for that task or re-make it with: {make_hint}"
         )
-
-
-def _invalid(path: Path, exc: Exception, make_hint: str) -> CheckpointError:
-    """The error of a checkpoint that does not load, without torch's advice to load it unsafely."""
-    return CheckpointError(
-        f"{path} is not a valid lasa checkpoint (loading it raised {type(exc).__name__}). "
-        f"Delete it and re-make it with: {make_hint}"
-    )
+    model.eval()
+    return model, dict(payload.get("extra", {}))

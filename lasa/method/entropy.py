@@ -1,10 +1,6 @@
-r"""The entropy regulariser of Eqs. T5-T6: latent actions that can still change goals.
-
-At every context (s, b) some z should move towards *each* goal (Sec. IV-A):
-:math:`p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z)`,
-:math:`\mathcal{L} = \|e_a\|^2 + \lambda \sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g)`. Our eta
-(:func:`goal_scores`) is the posterior over goals, under a uniform prior, of the decoded action
-held for H steps; z runs over an even grid. Why: ``docs/method-notes.md``.
+r"""The entropy regulariser of Eqs. T5-T6: at every context some z moves towards *each* goal (Sec.
+IV-A), :math:`p_{(s,b)}(g) \propto \sum_{z} \eta(g, s, b, z)`, :math:`\mathcal{L} = \|e_a\|^2 + \lambda
+\sum_{g} p_{(s,b)}(g) \log p_{(s,b)}(g)`, eta the goal posterior of the decoded action held H steps.
 """
 
 from __future__ import annotations
@@ -17,7 +13,7 @@ import torch
 
 from lasa.base.config import ControlConfig, check_range
 from lasa.base.errors import ConfigError
-from lasa.method.belief import _log_likelihood, nearest_distance
+from lasa.method.belief import log_likelihood_torch, nearest_distance
 from lasa.method.decoder import LatentActionModel
 from lasa.method.step import latent_grid
 
@@ -42,25 +38,17 @@ def goal_scores(
     control: ControlConfig,
     horizon: int = 10,
 ) -> torch.Tensor:
-    """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), shape (B, K, G);
-    rows sum to one. ``goal_sets`` (G, M, n) and ``control`` are the belief's; ``horizon`` is H."""
+    """eta(g, s, b, z) for every context (s (B, n), b (B, G)) and input (K, d), (B, K, G), rows
+    summing to one; ``goal_sets`` and ``control`` are the belief's, ``horizon`` H."""
     n_ctx, n_z = states.shape[0], z_grid.shape[0]
-    s = states[:, None, :].expand(n_ctx, n_z, -1)
-    b = beliefs[:, None, :].expand(n_ctx, n_z, -1)
-    z = z_grid[None].expand(n_ctx, n_z, -1)
+    s, b, z = (x.expand(n_ctx, n_z, -1) for x in (states[:, None, :], beliefs[:, None, :], z_grid[None]))
     actions = model.decode(z, s, b)
     step = control.likelihood_step
     max_step = None if step is None else horizon * step
-    # log_likelihood_torch with the state unexpanded (B, 1, n), its distance once per context,
-    # differentiated through each goal's nearest segment only (the same value and gradient)
-    loglik = _log_likelihood(
-        states[:, None, :],
-        actions,
-        goal_sets,
-        horizon * control.dt,
-        control.belief_beta,
-        max_step,
-        nearest_distance,
+    # the state unexpanded, the distance through each goal's nearest segment only
+    dt, beta = horizon * control.dt, control.belief_beta
+    loglik = log_likelihood_torch(
+        states[:, None, :], actions, goal_sets, dt, beta, max_step, nearest_distance
     )
     return torch.softmax(loglik, dim=-1)
 
@@ -78,12 +66,8 @@ def entropy(p: torch.Tensor) -> torch.Tensor:
 
 @dataclasses.dataclass
 class EntropyRegularizer:
-    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on a training batch.
-
-    ``lam`` > 0 weighs it; ``goal_sets`` (G, M, n) and ``control`` are the belief's; the sum over z
-    runs over ``n_z`` inputs per axis, the evidence over ``horizon`` steps, on ``contexts`` contexts
-    of each batch drawn with ``seed``.
-    """
+    """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on ``contexts`` contexts
+    of each batch drawn with ``seed``, z over ``n_z`` inputs per axis, evidence over ``horizon`` steps."""
 
     lam: float
     goal_sets: np.ndarray
@@ -101,18 +85,15 @@ class EntropyRegularizer:
                 f"got {self.n_z}, {self.horizon}, {self.contexts}"
             )
         self._goal_sets = torch.as_tensor(np.asarray(self.goal_sets), dtype=torch.float32)
-        self._grid = torch.as_tensor(latent_grid(self.n_z), dtype=torch.float32)
         self._gen = torch.Generator().manual_seed(self.seed)
 
     def __call__(self, model: LatentActionModel, states: torch.Tensor, beliefs: torch.Tensor) -> torch.Tensor:
-        if self._grid.shape[1] != model.config.z_dim:
-            self._grid = torch.as_tensor(latent_grid(self.n_z, model.config.z_dim), dtype=torch.float32)
+        grid = torch.as_tensor(latent_grid(self.n_z, model.z_dim), dtype=torch.float32)
         pick = torch.randperm(states.shape[0], generator=self._gen)[: self.contexts]
         scores = goal_scores(
-            model, states[pick], beliefs[pick], self._grid, self._goal_sets, self.control, self.horizon
+            model, states[pick], beliefs[pick], grid, self._goal_sets, self.control, self.horizon
         )
-        p = goal_distribution(scores)
-        return -self.lam * entropy(p).mean()
+        return -self.lam * entropy(goal_distribution(scores)).mean()
 
 
 def context_entropy(
@@ -126,28 +107,17 @@ def context_entropy(
 ) -> np.ndarray:
     """Entropy of p_(s,b) [nats] at each context, shape (B,), without gradients."""
     grid = torch.as_tensor(latent_grid(n_z, model.config.z_dim), dtype=torch.float32)
+    s, b, sets = (torch.as_tensor(x, dtype=torch.float32) for x in (states, beliefs, goal_sets))
     with torch.no_grad():
-        scores = goal_scores(
-            model,
-            torch.as_tensor(states, dtype=torch.float32),
-            torch.as_tensor(beliefs, dtype=torch.float32),
-            grid,
-            torch.as_tensor(goal_sets, dtype=torch.float32),
-            control,
-            horizon,
-        )
+        scores = goal_scores(model, s, b, grid, sets, control, horizon)
         return entropy(goal_distribution(scores)).double().numpy()
 
 
 def context_grid(
     start: np.ndarray, goal: np.ndarray, goal_index: int, n_goals: int, n_pos: int = 9, n_belief: int = 9
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Contexts along the way to a goal and across confidences in it, progress-major.
-
-    ``n_pos`` positions on the joint-space line from ``start`` (0) to ``goal`` (1), ``n_belief``
-    beliefs in goal ``goal_index`` from uniform to 0.999. Returns (progress, confidence) (P*C,),
-    states (P*C, n) and beliefs (P*C, G).
-    """
+    """Contexts along the line from ``start`` to ``goal`` (``n_pos``) and across confidences in it from
+    uniform to 0.999 (``n_belief``), progress-major: progress, confidence, states, beliefs."""
     progress = np.linspace(0.0, 1.0, n_pos)
     conf = np.linspace(1.0 / n_goals, 0.999, n_belief)
     pp, cc = np.meshgrid(progress, conf, indexing="ij")
@@ -163,14 +133,9 @@ LAMBDA_COST = 1.5
 
 
 def choose_lambda(sweep: pd.DataFrame, n_goals: int, spread: float = 0.8, cost: float = LAMBDA_COST) -> float:
-    """The lambda the pipeline trains with, by a rule fixed before looking at results.
-
-    The smallest lambda > 0 whose mean entropy at confident contexts reaches ``spread`` of log G
-    while its reconstruction error (``recon_error``) stays within ``cost`` times lambda = 0's;
-    else, within that bound, the highest entropy; if no lambda > 0 is within it, 0.
-
-    ``sweep`` has one row per lambda (0 included): ``lambda``, ``entropy_confident``, ``recon_error``.
-    """
+    """The lambda the pipeline trains with, by a rule fixed before looking at results: the smallest
+    lambda > 0 whose ``entropy_confident`` reaches ``spread`` of log G with ``recon_error`` within
+    ``cost`` times lambda = 0's; else, within that bound, the highest entropy; else 0."""
     if 0.0 not in set(sweep["lambda"]):
         raise ConfigError("the lambda sweep must include 0 (the reference)")
     ref = float(sweep.loc[sweep["lambda"] == 0.0, "recon_error"].iloc[0])

@@ -1,8 +1,5 @@
-"""The decoder's inference forward: phi(z, s, b) on numpy arrays, written for throughput.
-
-An inference plan refolds the weights once (the state normalisation folded into a first layer
-split into a z term and a context term), is cached per model and rebuilt when a weight changes,
-and runs a chunked forward into per-thread buffers reused across calls.
+"""The decoder's inference forward phi(z, s, b) on numpy arrays, for throughput: weights refolded
+once per model (rebuilt when one changes), a chunked forward into reused per-thread buffers.
 """
 
 from __future__ import annotations
@@ -28,15 +25,8 @@ _CHUNK_ROWS = 1024  # rows per chunk: two 1024 x 128 float32 buffers stay in a c
 
 def _weight_tensors(model: LatentActionModel) -> list[torch.Tensor]:
     """The decoder's parameters and the state normalisation, without nn.Module's (slow) traversal."""
-    tensors: list[torch.Tensor] = [
-        t
-        for layer in model.decoder._modules.values()
-        if layer is not None
-        for t in layer._parameters.values()
-        if t is not None
-    ]
-    tensors += [model.state_mean, model.state_std]
-    return tensors
+    params = [layer._parameters.values() for layer in model.decoder._modules.values() if layer is not None]
+    return [t for values in params for t in values if t is not None] + [model.state_mean, model.state_std]
 
 
 _KEEP_ROWS = 4 * _CHUNK_ROWS  # largest chunk whose buffers a thread keeps between calls
@@ -95,28 +85,22 @@ class _InferencePlan:
         d, n = cfg.z_dim, cfg.n_joints
         layers = [m for m in model.decoder if isinstance(m, nn.Linear)]
         with torch.no_grad():
-            weights = [layer.weight.detach().double() for layer in layers]
-            biases = [layer.bias.detach().double() for layer in layers]
-            mean = model.state_mean.detach().double()
-            std = model.state_std.detach().double()
-            w1, c1 = weights[0], biases[0]
+            w1, c1 = layers[0].weight.detach().double(), layers[0].bias.detach().double()
+            mean, std = model.state_mean.detach().double(), model.state_std.detach().double()
             w_s = w1[:, d : d + n] / std
             # h1 = W_z z + [W_s / std, W_b] [s, b] + (c1 - W_s mean / std), in float64
             self.w_z = w1[:, :d].T.numpy().copy()  # (d, H)
             self.w_sb = torch.cat([w_s, w1[:, d + n :]], dim=1).T.numpy().copy()  # (n + G, H)
             self.c1 = (c1 - w_s @ mean).numpy()  # (H,)
-            self.hidden = [
-                (layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]
-            ]  # float32 views of the weights, as decode's nn.Linear reads them
+            # float32 views of the hidden weights, as decode's nn.Linear reads them
+            self.hidden = [(layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]]
             self.w_o = layers[-1].weight.detach().contiguous()  # (n, H): V^T = W_o U^T + c_o
             self.c_o = layers[-1].bias.detach()[:, None].contiguous()  # (n, 1)
         self.tensors = _weight_tensors(model)  # held, so that identity checks are exact
         self.versions = [t._version for t in self.tensors]
         self.scale = float(cfg.action_scale)
         self.width = int(w1.shape[0])
-        self.d = d
-        self.n = n
-        self.g = cfg.n_goals
+        self.d, self.n, self.g = d, n, cfg.n_goals
         self.buffers = _Buffers()
 
     def fits(self, model: LatentActionModel) -> bool:
@@ -133,7 +117,14 @@ class _InferencePlan:
 
     def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), float64; see :meth:`lasa.method.decoder.LatentActionModel.decode_numpy`."""
-        z, s, b = self._checked(z, s, b)
+        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)  # z clamped to [-1, 1]
+        s = np.asarray(s, dtype=np.float64)
+        b = np.asarray(b, dtype=np.float64)
+        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
+            raise ConfigError(
+                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
+                f"got {z.shape}, {s.shape} and {b.shape}"
+            )
         shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
         lead = shape or (1,)
         t_z, t_c = self._first_terms(z, s, b)
@@ -144,18 +135,6 @@ class _InferencePlan:
         # the same whichever chunk, batch or branch of _forward computes it
         v = self._forward(t_z.astype(np.float32), t_c.astype(np.float32), lead, rows_total)
         return self._squash(v, shape)
-
-    def _checked(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, ...]:
-        """z clamped to [-1, 1], s and b, as float64; ConfigError if a trailing size is not d, n, G."""
-        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)
-        s = np.asarray(s, dtype=np.float64)
-        b = np.asarray(b, dtype=np.float64)
-        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
-            raise ConfigError(
-                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
-                f"got {z.shape}, {s.shape} and {b.shape}"
-            )
-        return z, s, b
 
     def _first_terms(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The first layer's z term (with its bias) and context term, float64, each unexpanded."""

@@ -1,10 +1,7 @@
-"""Retargeting: direct teleoperation of the end effector, the baseline R of the user study.
+"""Retargeting: direct teleoperation of the end effector (Rakita et al. 2017), the study's baseline R.
 
-The joystick commands the end effector (Rakita et al. 2017), its joint velocities from mink's
-differential IK (RelaxedIK without the smoothness and self-collision terms). A 2-axis stick
-switches between *modes* (:data:`MODES`) with a button, each mapping the two axes onto two twist
-components. Each control step is one QP (:class:`Retargeting`): a frame task towards the site's
-pose moved by the twist over ``dt``, a light posture task, and mink's configuration limit.
+A 2-axis stick, its *modes* (:data:`MODES`) switched by a button, commands a twist; each step is one
+QP of mink's differential IK (:class:`Retargeting`): a frame task, a light posture task, the limits.
 """
 
 from __future__ import annotations
@@ -18,20 +15,14 @@ from lasa.base.config import NonNegative, Positive, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot
 
-__all__ = [
-    "MODES",
-    "RetargetConfig",
-    "twist",
-    "next_mode",
-    "Retargeting",
-    "retarget_action",
-]
+__all__ = ["MODES", "RetargetConfig", "twist", "next_mode", "Retargeting", "retarget_action"]
 
 # The twist components in order (vx, vy, vz, wx, wy, wz), world frame, the site's
 TWIST_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
 
 # Joystick modes: stick axis 0 drives the first component, axis 1 the second.
 MODES: tuple[tuple[str, str], ...] = (("x", "y"), ("z", "yaw"), ("roll", "pitch"))
+_MODE_COMPONENTS = [[TWIST_COMPONENTS.index(name) for name in names] for names in MODES]  # their indices
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,35 +43,15 @@ class RetargetConfig:
 def _modes(mode: int | np.ndarray) -> np.ndarray:
     """``mode`` as an integer array, or ConfigError if any entry is not a valid mode."""
     arr = np.asarray(mode)
-    if arr.dtype == bool or not np.issubdtype(arr.dtype, np.integer):
-        raise ConfigError(f"mode must be an integer in [0, {len(MODES)}), got {mode!r}")
-    ints = arr.astype(np.int64)
-    if np.any((ints < 0) | (ints >= len(MODES))):
+    ints = arr.astype(np.int64) if arr.dtype != bool and np.issubdtype(arr.dtype, np.integer) else None
+    if ints is None or np.any((ints < 0) | (ints >= len(MODES))):
         raise ConfigError(f"mode must be an integer in [0, {len(MODES)}), got {mode!r}")
     return ints
 
 
-def _mode_table(config: RetargetConfig) -> np.ndarray:
-    """Twist per unit stick deflection, shape (len(MODES), 2, 6): [mode, axis] -> twist."""
-    table = np.zeros((len(MODES), 2, 6))
-    for m, names in enumerate(MODES):
-        for axis, name in enumerate(names):
-            k = TWIST_COMPONENTS.index(name)
-            table[m, axis, k] = config.linear_speed if k < 3 else config.angular_speed
-    return table
-
-
 def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = RetargetConfig()) -> np.ndarray:
-    """The end-effector twist (..., 6) [m/s, rad/s] that a joystick input commands in a mode.
-
-    Args:
-        mode: Mode index into :data:`MODES`, an int or an integer array of shape (...,).
-        z: Stick deflections, shape (..., 2), clipped to [-1, 1] (not finite: a zero twist).
-        config: Speeds at full deflection.
-
-    Raises:
-        ConfigError: if a mode is not an integer in [0, len(MODES)), or ``z`` is not (..., 2).
-    """
+    """The end-effector twist (..., 6) [m/s, rad/s] that stick deflections z (..., 2), clipped to
+    [-1, 1] (not finite: zero), command in ``mode`` (...,); ConfigError for a bad mode or shape."""
     modes = _modes(mode)
     zs = np.asarray(z, dtype=float)
     if zs.ndim == 0 or zs.shape[-1] != 2:
@@ -88,9 +59,9 @@ def twist(mode: int | np.ndarray, z: np.ndarray, config: RetargetConfig = Retarg
     finite = np.all(np.isfinite(zs), axis=-1, keepdims=True)
     zs = np.where(finite, np.clip(np.nan_to_num(zs), -1.0, 1.0), 0.0)
     lead = np.broadcast_shapes(modes.shape, zs.shape[:-1])
-    table = _mode_table(config)[np.broadcast_to(modes, lead)]  # (..., 2, 6)
-    out: np.ndarray = np.einsum("...a,...ak->...k", np.broadcast_to(zs, (*lead, 2)), table)
-    return out
+    per_unit = np.eye(6)[_MODE_COMPONENTS] * np.repeat([config.linear_speed, config.angular_speed], 3)
+    table = per_unit[np.broadcast_to(modes, lead)]  # twist per unit deflection: [..., axis] -> twist
+    return np.asarray(np.einsum("...a,...ak->...k", np.broadcast_to(zs, (*lead, 2)), table))
 
 
 def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np.ndarray:
@@ -101,17 +72,12 @@ def next_mode(mode: int | np.ndarray, presses: int | np.ndarray = 1) -> int | np
     if not np.issubdtype(steps.dtype, np.integer) or steps.dtype == bool:
         raise ConfigError(f"presses must be an integer, got {presses!r}")
     out = (modes + steps) % len(MODES)
-    if out.ndim == 0:
-        return int(out)
-    return out
+    return int(out) if out.ndim == 0 else out
 
 
 class Retargeting:
-    """Joystick twist -> joint velocity by mink differential IK at ``robot``'s grasp site.
-
-    One QP per configuration over ``dt`` [s]; the mink configuration and tasks are built once and
-    reused, so the object is not thread safe.
-    """
+    """Joystick twist -> joint velocity by mink differential IK at ``robot``'s grasp site, one QP per
+    configuration over ``dt`` [s] (its mink objects reused: not thread safe)."""
 
     def __init__(self, robot: Robot, dt: float, config: RetargetConfig = RetargetConfig()) -> None:
         self.robot = robot
@@ -119,9 +85,9 @@ class Retargeting:
         self.config = config
         model = robot.model
         self._site = robot.spec.grasp_site
+        self.n_joints = robot.n_joints  # n, the arm joints
         self._qpos_adr = np.asarray(robot.qpos_adr, dtype=int)
-        joints = [model.joint(name).id for name in robot.spec.joints]
-        self._dof_adr = np.array([model.jnt_dofadr[j] for j in joints], dtype=int)
+        self._dof_adr = np.array([model.jnt_dofadr[model.joint(name).id] for name in robot.spec.joints])
         self._q_full = model.qpos0.copy()
         self._configuration = mink.Configuration(model)
         self._frame = mink.FrameTask(self._site, "site", position_cost=1.0, orientation_cost=1.0)
@@ -129,23 +95,10 @@ class Retargeting:
         self._tasks = [self._frame, self._posture]
         self._limits = [mink.ConfigurationLimit(model)]
 
-    @property
-    def n_joints(self) -> int:
-        """Number of arm joints n."""
-        return len(self._qpos_adr)
-
     def _set(self, q: np.ndarray) -> None:
         """Put the mink configuration at arm joints ``q`` (the rest from the model's qpos0)."""
         self._q_full[self._qpos_adr] = q
         self._configuration.update(self._q_full)
-
-    def _check_q(self, q: np.ndarray) -> np.ndarray:
-        qs = np.asarray(q, dtype=float)
-        if qs.ndim == 0 or qs.shape[-1] != self.n_joints:
-            raise ConfigError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
-        if not np.all(np.isfinite(qs)):
-            raise ConfigError("q must be finite; got NaN or infinite joint positions")
-        return qs
 
     def _solve(self, q: np.ndarray, xi: np.ndarray) -> np.ndarray:
         """Joint velocity (n,) realising twist ``xi`` (6,) from ``q`` (n,): one QP."""
@@ -157,28 +110,19 @@ class Retargeting:
         target = mink.SE3.from_rotation_and_translation(rotation, pose.translation() + xi[:3] * self.dt)
         self._frame.set_target(target)
         self._posture.set_target(self._q_full)
-        velocity = mink.solve_ik(
-            self._configuration,
-            self._tasks,
-            self.dt,
-            "daqp",
-            damping=self.config.damping,
-            limits=self._limits,
-        )
-        out: np.ndarray = velocity[self._dof_adr]
-        return out
+        problem = (self._configuration, self._tasks, self.dt, "daqp")
+        velocity = mink.solve_ik(*problem, damping=self.config.damping, limits=self._limits)
+        return np.asarray(velocity[self._dof_adr])
 
     def joint_velocity(self, q: np.ndarray, twist: np.ndarray) -> np.ndarray:
-        """Joint velocities [rad/s] that move the grasp site with ``twist`` for one control period.
-
-        ``q`` (n,) or (B, n) [rad] and ``twist`` (6,) or (B, 6) broadcast; a zero or non-finite
-        twist row gives exactly zero.
-
-        Raises:
-            ConfigError: if ``q`` is not finite or a shape is wrong.
-            mink.NoSolutionFound: if the QP solver fails.
-        """
-        qs = self._check_q(q)
+        """Joint velocities [rad/s] moving the grasp site with ``twist`` ((6,) or (B, 6)) from ``q``
+        ((n,) or (B, n)) for one period; zero for a zero or non-finite twist row. ConfigError for
+        a non-finite ``q`` or a bad shape; mink.NoSolutionFound if the QP fails."""
+        qs = np.asarray(q, dtype=float)
+        if qs.ndim == 0 or qs.shape[-1] != self.n_joints:
+            raise ConfigError(f"q must have shape (..., {self.n_joints}), got {qs.shape}")
+        if not np.all(np.isfinite(qs)):
+            raise ConfigError("q must be finite; got NaN or infinite joint positions")
         xis = np.asarray(twist, dtype=float)
         if xis.ndim == 0 or xis.shape[-1] != 6:
             raise ConfigError(f"twist must have shape (..., 6), got {xis.shape}")
@@ -190,25 +134,12 @@ class Retargeting:
             out[i] = self._solve(q_rows[i], xi_rows[i])
         return out.reshape(*lead, self.n_joints)
 
-    def site_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """World position (3,) and rotation (3, 3) of the grasp site at arm joints ``q`` (n,)."""
-        qs = self._check_q(q)
-        if qs.ndim != 1:
-            raise ConfigError(f"q must have shape ({self.n_joints},), got {qs.shape}")
-        self._set(qs)
-        pose = self._configuration.get_transform_frame_to_world(self._site, "site")
-        return pose.translation().copy(), pose.rotation().as_matrix()
-
 
 def retarget_action(
     retarget: Retargeting, state: np.ndarray, mode: np.ndarray, z: np.ndarray, press: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Retargeting's human action a_h for a batch, and each row's mode after the step.
-
-    A press (U,) cycles the mode and moves nothing; a stick at rest commands nothing; otherwise
-    the stick z (U, 2) is a twist in the row's mode (U,), realised by mink's IK from the state
-    (U, n). Live teleoperation and the study's simulated participants both act through it.
-    """
+    """Retargeting's a_h for a batch, and each row's mode after the step: a press cycles the mode and
+    moves nothing, a stick at rest nothing, else z (U, 2) is a twist in the row's mode."""
     state = np.asarray(state, dtype=float)
     z = np.asarray(z, dtype=float)
     mode = np.asarray(mode, dtype=int)

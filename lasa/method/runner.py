@@ -1,8 +1,5 @@
-"""The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop.
-
-Every loop of the package (sims, study participants, teleoperation, the web study) runs a
-:class:`Runner`, which owns s, b, the step (:func:`lasa.method.step.advance`), the record and
-stopping; a loop differs by its *chooser*: the running episodes' human actions a_h at step t.
+"""The one episode runner: a batch of episodes advanced by Algorithm 1's step until they stop; every
+loop differs only by its *chooser*, the running episodes' human actions a_h at step t.
 """
 
 from __future__ import annotations
@@ -18,7 +15,7 @@ from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import Assist, StepResult, advance, human_action
 
-__all__ = ["Now", "Chooser", "Observer", "Record", "Runner", "held_input", "check_horizon"]
+__all__ = ["Now", "Chooser", "Record", "Runner", "held_input", "check_horizon"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -57,9 +54,8 @@ def held_input(decoder: ActionDecoder, z: np.ndarray, rest: str = "decode") -> C
 
 @dataclasses.dataclass(frozen=True)
 class Record:
-    """A batch of finished episodes: s^t (T+1, U, n) [rad] and b^t (T+1, U, G), held after an
-    episode stops; a_h^t and the command a^t before the safety clip (T, U, n) [rad/s], zero after
-    it stops; and the step each stopped at (T at the horizon), (U,)."""
+    """A batch of finished episodes: s^t, b^t (T+1, U, .) held after an episode stops; a_h^t and the
+    command a^t (T, U, n), zero after it stops; the step each stopped at (T at the horizon), (U,)."""
 
     states: np.ndarray
     beliefs: np.ndarray
@@ -95,14 +91,11 @@ class Runner:
         """b of every episode, (U, G)."""
         return belief(self.log_belief)
 
-    def step(self, choose: Chooser) -> StepResult:
+    def step(self, choose: Chooser, b: np.ndarray | None = None) -> StepResult:
         """One step of the running episodes (in ``np.flatnonzero(running)`` order): their
-        chooser's a_h, then Algorithm 1's step."""
+        chooser's a_h, then Algorithm 1's step; ``b`` is every episode's belief if the caller has it."""
         rows = np.flatnonzero(self.running)
-        return self._step(choose, rows, belief(self.log_belief[rows]))
-
-    def _step(self, choose: Chooser, rows: np.ndarray, b: np.ndarray) -> StepResult:
-        """:meth:`step` of the running ``rows``, whose beliefs ``b`` the caller has."""
+        b = belief(self.log_belief[rows]) if b is None else b[rows]
         state, log_b = self.state[rows], self.log_belief[rows]
         a_h = choose(Now(self.t, rows, state, b, log_b))
         result = advance(self.assist.rows(rows), state, log_b, a_h, b)
@@ -120,11 +113,8 @@ class Runner:
         progress: bool = False,
         desc: str = "episodes",
     ) -> Record:
-        """Run every episode until it stops or the horizon T: record s and b, step, observe.
-
-        ``observe(t, runner)`` at every recorded state returns the episodes that finished there,
-        which stop (default: none stop); ``progress`` shows a bar labelled ``desc``.
-        """
+        """Run every episode until it stops or the horizon T: record s and b, step, observe
+        (``observe(t, runner)`` returns the episodes that finished at step t)."""
         check_horizon(horizon)
         n_users, (n, g) = len(self.state), (self.state.shape[1], self.log_belief.shape[1])
         states, beliefs = np.empty((horizon + 1, n_users, n)), np.empty((horizon + 1, n_users, g))
@@ -140,7 +130,7 @@ class Runner:
                 if t == horizon or not self.running.any():
                     break
                 rows = np.flatnonzero(self.running)
-                result = self._step(choose, rows, b[rows])
+                result = self.step(choose, b)
                 a_hs[t, rows], acts[t, rows] = result.human_action, result.action
                 bar.update(1)
         states[t + 1 :], beliefs[t + 1 :] = states[t], beliefs[t]

@@ -1,17 +1,11 @@
 r"""A 2-D latent whose ring keeps departures and manipulation apart (an optional training loss).
 
-With a 2-axis stick, the angle of z, :math:`\vartheta = \operatorname{atan2}(z_2, z_1)`, is split
-into a *departure sector* :math:`|\vartheta| \le \pi s` (a share s of the ring, centred on +z1) and
-the rest. :func:`sector_roles` labels each tuple a **departure** (a reach confident in another goal
-than the one reached), **manipulation** (a stroke, adjustment or hold with a confident belief) or
-free; :func:`sector_loss` is the hinge on the angle outside a tuple's sector (Secs. III, IV-B: stay
-and leave at a confident goal),
+The angle :math:`\vartheta = \operatorname{atan2}(z_2, z_1)` of a departure (a reach confident in
+another goal) stays in :math:`|\vartheta| \le \pi s`, of manipulation (a confident stroke,
+adjustment or hold) outside it (Secs. III, IV-B); weighted by ``sector_weight``:
 
 .. math::  L_\text{sector} = \frac{1}{B}\Big(\sum_{\text{departures}} [\,|\vartheta| - \pi s\,]_+
-    + \sum_{\text{manipulation}} [\,\pi s - |\vartheta|\,]_+\Big),
-
-added to the reconstruction loss with weight ``sector_weight`` (:class:`lasa.method.train.TrainConfig`).
-It touches the encoder's codes only. Why, and what each role is: ``docs/method-notes.md``.
+    + \sum_{\text{manipulation}} [\,\pi s - |\vartheta|\,]_+\Big).
 """
 
 from __future__ import annotations

@@ -1,9 +1,6 @@
-"""The one step of Algorithm 1, batched: joystick input in, commanded state out.
-
-Every loop advances with :func:`advance` (through :class:`lasa.method.runner.Runner`): a_h =
-phi(z, s, b) decoded, the assistance a_r of a member (:mod:`lasa.method.assistance`) blended in by
-Eq. M1 with each row's alpha (0: ``LA``), the belief updated (Alg. 1, line 8), and the safe step
-s' = s + Delta a of Sec. V taken (:func:`safe_step`).
+"""The one step of Algorithm 1, batched (:func:`advance`): a_h = phi(z, s, b), a member's a_r blended
+in by Eq. M1 with each row's alpha (0: ``LA``), the belief updated (Alg. 1, line 8), and the safe step
+s' = s + Delta a of Sec. V (:func:`safe_step`).
 """
 
 from __future__ import annotations
@@ -14,7 +11,7 @@ import numpy as np
 
 from lasa.base import conditions
 from lasa.base.conditions import METHODS
-from lasa.base.config import ControlConfig, check_choice, check_range
+from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ConfigError
 from lasa.method.assistance import Member, assist
 from lasa.method.belief import belief, belief_targets, log_likelihood, update_log_belief
@@ -38,8 +35,7 @@ __all__ = [
     "method_alpha",
 ]
 
-# Which decoder each method uses (:mod:`lasa.base.conditions`): "base" is trained on
-# reconstruction alone (Sec. III-A), "entropy" with the entropy term of Eq. T6 (lasa.method.entropy).
+# Each method's decoder: "base" (reconstruction alone, Sec. III-A) or "entropy" (Eq. T6)
 METHOD_DECODER: dict[str, str] = {m: str(conditions.parse(m, METHODS).decoder) for m in METHODS}
 
 
@@ -50,9 +46,8 @@ def method_alpha(method: str, control: ControlConfig) -> float:
 
 @dataclasses.dataclass(frozen=True)
 class StepResult:
-    """One step of Algorithm 1 for a batch of users: s^{t+1} (U, n) [rad], log b^{t+1} (U, G),
-    a_h^t (zero where the input was not finite), the command a^t before the safety clip, and
-    a_r^t times its blend weight (zero where ``only_blended`` skips it) (U, n) [rad/s]."""
+    """One step of Algorithm 1 for a batch: s^{t+1} [rad], log b^{t+1}, a_h^t, the command a^t before
+    the safety clip, and a_r^t times its blend weight (zero where ``only_blended`` skips it)."""
 
     state: np.ndarray
     log_belief: np.ndarray
@@ -63,25 +58,15 @@ class StepResult:
 
 @dataclasses.dataclass(frozen=True)
 class Assist:
-    """What the step's assistance, blend and belief update read for a batch, and never change.
-
-    Attributes:
-        task: The goal task (goals, preference sets, joint limits).
-        control: Control-loop units (dt, speed bound, belief model, the default member).
-        alpha: The blend weight of each row, (U,) (0: latent actions alone).
-        assistance: Each row's member, a :class:`lasa.method.assistance.Member` or a built-in one's
-            name, (U,); ``None``: every row runs ``control.assistance``.
-        goal_sets: The belief's targets; ``None``: those of ``control.likelihood``.
-        only_blended: Compute a_r only in the rows with alpha > 0 (else every row, as the live log
-            records); bitwise the same for a member whose rows are independent (all built-in ones
-            but ``point``, one matrix product over the batch).
-    """
+    """What the step's assistance, blend and belief update read for a batch, and never change."""
 
     task: GoalTask
     control: ControlConfig
-    alpha: np.ndarray
-    assistance: np.ndarray | None = None
-    goal_sets: np.ndarray | None = None
+    alpha: np.ndarray  # each row's blend weight, (U,) (0: latent actions alone)
+    assistance: np.ndarray | None = None  # each row's member or built-in name (None: control's)
+    goal_sets: np.ndarray | None = None  # the belief's targets (None: control.likelihood's)
+    # a_r only in rows with alpha > 0 (else every row, as the live log records): bitwise the same
+    # for a member whose rows are independent (all built-in ones but ``point``)
     only_blended: bool = False
 
     def __post_init__(self) -> None:
@@ -106,9 +91,7 @@ class Assist:
 def blend(a_h: np.ndarray, a_r: np.ndarray, alpha: float | np.ndarray) -> np.ndarray:
     """Eq. M1: a = (1 - alpha) a_h + alpha a_r; ``alpha`` in [0, 1], a scalar or one per row (...)."""
     alpha_arr = np.asarray(alpha, dtype=float)
-    if alpha_arr.ndim == 0:
-        check_range("alpha", float(alpha_arr), 0.0, 1.0)
-    elif not np.all((alpha_arr >= 0.0) & (alpha_arr <= 1.0)):
+    if not np.all((alpha_arr >= 0.0) & (alpha_arr <= 1.0)):
         raise ConfigError(f"alpha must be in [0, 1], got values in [{alpha_arr.min()}, {alpha_arr.max()}]")
     alpha_arr = alpha_arr[..., None]
     return (1.0 - alpha_arr) * a_h + alpha_arr * a_r
@@ -123,12 +106,8 @@ def sanitize(action: np.ndarray) -> np.ndarray:
 def safe_step(
     state: np.ndarray, action: np.ndarray, dt: float, lower: np.ndarray, upper: np.ndarray, max_speed: float
 ) -> np.ndarray:
-    """The transition s' = s + dt a, safe: a non-finite action row is zero, each joint velocity
-    clipped to [-max_speed, max_speed] [rad/s], the next state to the joint limits [lower, upper].
-
-    Raises:
-        ConfigError: if ``state`` is not finite (a sensor fault is not a command).
-    """
+    """s' = s + dt a, safe: a non-finite action row zero, velocities clipped to +-max_speed, s' to
+    [lower, upper]; ConfigError if ``state`` is not finite (a sensor fault is not a command)."""
     if not np.all(np.isfinite(state)):
         raise ConfigError("state holds NaN or infinite joint positions; refusing to command")
     velocity = np.clip(sanitize(action), -max_speed, max_speed)
@@ -138,9 +117,8 @@ def safe_step(
 def advance(
     assist: Assist, state: np.ndarray, log_b: np.ndarray, a_h: np.ndarray, b: np.ndarray | None = None
 ) -> StepResult:
-    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step,
-    from s^t (U, n), log b^t (U, G) and a_h (U, n) (a non-finite row commands nothing); ``b`` is
-    ``belief(log_b)`` if the caller has it."""
+    """Lines 6-9 of Algorithm 1 for a batch: assistance, blend (Eq. M1), belief update, safe step;
+    ``b`` is ``belief(log_b)`` if the caller has it."""
     task, control = assist.task, assist.control
     a_h = sanitize(a_h)
     if b is None:
@@ -159,16 +137,13 @@ def advance(
     new_log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
     robot = task.robot
     new_state = safe_step(state, a, control.dt, robot.lower, robot.upper, control.max_joint_speed)
-    return StepResult(
-        state=new_state, log_belief=new_log_b, human_action=a_h, action=a, robot_action=a_r * weight[:, None]
-    )
+    return StepResult(new_state, new_log_b, a_h, a, a_r * weight[:, None])
 
 
 def _assistance(
     task: GoalTask, control: ControlConfig, state: np.ndarray, b: np.ndarray, assistance: np.ndarray | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """a_r and the blend weight per row: ``control.assistance``, or each row's member, towards the
-    task's preference sets."""
+    """a_r and the blend weight per row: ``control.assistance``, or each row's member."""
     goal_sets = task.preference_sets
     if assistance is None:
         return assist(control.assistance, b, state, task.goals, goal_sets, control.dt, control.action_scale)
@@ -195,23 +170,10 @@ def shared_autonomy_step(
     rest: str = "decode",
     assistance: str | Member | None = None,
 ) -> StepResult:
-    """One step of Algorithm 1 from joystick input to commanded state, batched over users: the
-    runner's step for a held input (:func:`lasa.method.runner.held_input`).
-
-    Args:
-        decoder: The decoder phi (a trained model or a wrapper, e.g. a ``MappedDecoder``).
-        task: The goal task (cups or eating).
-        control: Control-loop units.
-        state: s^t, shape (U, n).
-        log_belief: log b^t, shape (U, G).
-        z: Joystick inputs, shape (U, d); a non-finite one decodes to no human action.
-        alpha: Blend weight, scalar or shape (U,).
-        rest: What the stick at rest commands (:func:`human_action`).
-        assistance: The member for every row (a :class:`lasa.method.assistance.Member` or a
-            built-in one's name); default ``control.assistance``.
-    """
+    """One step of Algorithm 1 from joystick input z (U, d) to commanded state, batched: the runner's
+    step for a held input; ``alpha`` scalar or (U,), ``assistance`` every row's member (default
+    ``control.assistance``), ``rest`` as :func:`human_action`."""
     check_decoder(decoder, task)
-    check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
     finite = np.all(np.isfinite(z), axis=-1, keepdims=True)
     a_h = human_action(decoder.decode_numpy(np.where(finite, z, 0.0), state, belief(log_belief)), z, rest)
@@ -221,12 +183,8 @@ def shared_autonomy_step(
 
 
 def human_action(decoded: np.ndarray, z: np.ndarray, rest: str) -> np.ndarray:
-    """Latent actions' a_h from the decoded phi(z, s, b), under the stick-at-rest convention.
-
-    A row whose input z (U, d) is not finite commands nothing; a stick at rest (z = 0) commands
-    phi(0, s, b) under ``rest="decode"`` (sims 1-4, Eq. S1), nothing under ``"zero"`` (teleop, the
-    study). Why: ``docs/method-notes.md``.
-    """
+    """a_h from the decoded phi(z, s, b): nothing for a non-finite z; at rest (z = 0), phi(0, s, b)
+    under ``rest="decode"`` (sims 1-4, Eq. S1), nothing under ``"zero"`` (teleop, the study)."""
     check_choice("rest", rest, REST)
     z = np.asarray(z, dtype=float)
     ok = np.all(np.isfinite(z), axis=-1, keepdims=True)

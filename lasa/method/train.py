@@ -1,8 +1,6 @@
-r"""Training the latent-action model on demonstrations.
-
-The loss is the reconstruction error of Sec. III-A, :math:`\|\phi(z, s, b) - a\|^2` with
-:math:`z = \psi(s, a, b)`, in units of sigma_h. Gaussian noise on z while training (clipped back
-to [-1, 1]) spreads actions over the joystick's range and makes the decoder smooth in z.
+r"""Training the latent-action model on demonstrations: the reconstruction error of Sec. III-A,
+:math:`\|\phi(z, s, b) - a\|^2`, :math:`z = \psi(s, a, b)`, in units of sigma_h, with Gaussian noise
+on z (clipped to [-1, 1]) to spread actions over the stick's range and smooth the decoder in z.
 """
 
 from __future__ import annotations
@@ -92,33 +90,27 @@ def _with_entropy(
     config: TrainConfig, control: ControlConfig, goal_sets: np.ndarray | None, extra_loss: ExtraLoss | None
 ) -> ExtraLoss | None:
     """``extra_loss`` plus the entropy term of Eq. T6 when ``config.entropy_lambda > 0``."""
-    if config.entropy_lambda > 0:
-        if goal_sets is None:
-            raise ConfigError("entropy_lambda > 0 needs goal_sets (belief_targets(task, control.likelihood))")
-        regularizer = EntropyRegularizer(
-            config.entropy_lambda,
-            goal_sets,
-            control,
-            n_z=config.entropy_n_z,
-            horizon=config.entropy_horizon,
-            contexts=config.entropy_contexts,
-            seed=config.seed,
-        )
-        user_loss = extra_loss
+    if config.entropy_lambda <= 0:
+        return extra_loss
+    if goal_sets is None:
+        raise ConfigError("entropy_lambda > 0 needs goal_sets (belief_targets(task, control.likelihood))")
+    c = config
+    regularizer = EntropyRegularizer(
+        c.entropy_lambda, goal_sets, control, c.entropy_n_z, c.entropy_horizon, c.entropy_contexts, c.seed
+    )
 
-        def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-            term = regularizer(model, s, b)
-            return term if user_loss is None else term + user_loss(model, s, b)
+    def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+        term = regularizer(model, s, b)
+        return term if extra_loss is None else term + extra_loss(model, s, b)
 
-        return combined
-    return extra_loss
+    return combined
 
 
 def _initial_model(
     demos: Demonstrations, control: ControlConfig, config: TrainConfig, init: LatentActionModel | None
 ) -> LatentActionModel:
     """A fresh model with the demonstrations' state normalisation, or a trainable copy of ``init``
-    (ConfigError if its architecture differs from what ``demos`` and ``config`` give)."""
+    (ConfigError if its architecture differs)."""
     clean_states = demos.states[~demos.perturbed]
     std = np.maximum(clean_states.std(axis=0), 1e-3)
     model = LatentActionModel(
@@ -144,7 +136,6 @@ def _initial_model(
                 )
         model = LatentActionModel(theirs)
         model.load_state_dict(init.state_dict())
-        model.train()
     return model
 
 
@@ -158,19 +149,11 @@ def train_decoder(
     init: LatentActionModel | None = None,
     progress: bool = True,
 ) -> tuple[LatentActionModel, pd.DataFrame]:
-    """Train phi(z, s, b) on ``demos``.
+    """Train phi(z, s, b) on ``demos`` with the bound sigma_h = ``control.action_scale``.
 
-    Args:
-        demos: The dataset D (noisy copies included).
-        control: Control-loop units; its ``action_scale`` is the decoder's bound sigma_h.
-        config: Optimisation settings; ``entropy_lambda > 0`` adds Eq. T6's entropy term.
-        goal_sets: The belief's goal sets (G, K, n), needed when ``entropy_lambda > 0``.
-        extra_loss: A further term, ``extra_loss(model, states, beliefs)`` on each batch.
-        init: Warm-start from a copy of this model (architecture and normalisation kept).
-        progress: Show a tqdm progress bar.
-
-    Returns:
-        The trained model (eval mode) and the log: ``step``, ``train_loss``, ``val_error``, ``seconds``.
+    ``goal_sets`` (G, K, n), the belief's, are needed for Eq. T6's term (``entropy_lambda > 0``);
+    ``extra_loss(model, states, beliefs)`` is added on each batch; ``init`` warm-starts from a copy.
+    Returns the model (eval mode) and the log: ``step``, ``train_loss``, ``val_error``, ``seconds``.
     """
     extra_loss = _with_entropy(config, control, goal_sets, extra_loss)
     rng = np.random.default_rng(config.seed)
@@ -207,8 +190,12 @@ def train_decoder(
         running += loss.item()
         if step % config.log_every == 0 or step == config.steps:
             n = config.log_every if step % config.log_every == 0 else step % config.log_every
-            log.append(_logged(model, val, step, running / n, start))
-            bar.set_postfix(loss=f"{running / n:.4f}", val=f"{log[-1]['val_error']:.4f}")
+            model.eval()  # the log's row: the mean loss since the last row, the held-out error
+            val_err = reconstruction_error(model, *val) if len(val[0]) else float("nan")
+            model.train()
+            seconds = time.perf_counter() - start
+            log.append(dict(step=step, train_loss=running / n, val_error=val_err, seconds=seconds))
+            bar.set_postfix(loss=f"{running / n:.4f}", val=f"{val_err:.4f}")
             running = 0.0
     model.eval()
     return model, pd.DataFrame(log)
@@ -222,8 +209,8 @@ def _batch_loss(
     scale: float,
     extra_loss: ExtraLoss | None,
 ) -> torch.Tensor:
-    """One batch's loss: reconstruction (in sigma_h units), the sector loss (roles None: none) and
-    any extra term; the batch, then the noise on z, are drawn from ``gen``."""
+    """One batch's loss: reconstruction (in sigma_h units), the sector loss (if roles) and any extra
+    term; the batch, then the noise on z, drawn from ``gen``."""
     s_all, a_all, b_all, roles = data
     idx = torch.randint(len(s_all), (config.batch_size,), generator=gen)
     s, a, b = s_all[idx], a_all[idx], b_all[idx]
@@ -237,22 +224,3 @@ def _batch_loss(
     if extra_loss is not None:
         loss = loss + extra_loss(model, s, b)
     return loss
-
-
-def _logged(
-    model: LatentActionModel,
-    val: tuple[np.ndarray, np.ndarray, np.ndarray],
-    step: int,
-    train_loss: float,
-    start: float,
-) -> dict[str, float]:
-    """A row of the training log: the mean training loss since the last row, the held-out error."""
-    model.eval()
-    val_err = reconstruction_error(model, *val) if len(val[0]) else float("nan")
-    model.train()
-    return {
-        "step": step,
-        "train_loss": train_loss,
-        "val_error": val_err,
-        "seconds": time.perf_counter() - start,
-    }
