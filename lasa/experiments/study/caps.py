@@ -1,10 +1,6 @@
-r"""The eating study against the belief's cap (notebook 11): the headline's recipe at each cap.
-
-Notebook 10 trains the headline decoder's recipe again at each other cap of its ``cap_sweep``; here each
-runs the study with the belief at its cap (:func:`run`: the headline participant model and member, every
-condition, the first ``sweep_participants``; without a cap the whole cohort, the reading ``@uncapped``,
-:func:`uncapped_claims`). :func:`sweep` gathers completion and H1-H3's effects per cap; :func:`plot`.
-"""
+"""The eating study against the belief's cap (notebook 11): notebook 10's headline recipe at each cap of
+``cap_sweep`` run with the belief at that cap (:func:`run`; without a cap, ``@uncapped``:
+:func:`uncapped_claims`); :func:`sweep` gathers completion and H1-H3's effects per cap; :func:`plot`."""
 
 from __future__ import annotations
 
@@ -76,45 +72,26 @@ def cap_property(figures: Path) -> pd.DataFrame:
 def load_decoders(
     paths: Paths, robot: str, headline: str, caps: tuple[float | None, ...]
 ) -> dict[float | None, tuple[str, ActionDecoder]]:
-    """Notebook 10's decoder of the headline's recipe at each cap: ``(name, decoder)`` per cap.
-
-    Raises:
-        ArtifactError: A decoder is missing (notebook 10 trains it).
-        CheckpointError: A decoder was trained with another belief than its cap's.
-    """
-    out: dict[float | None, tuple[str, ActionDecoder]] = {}
-    for cap in caps:
-        name = cap_decoder_name(headline, cap)
-        out[cap] = (name, study.load_decoders(paths, robot, [name], cap)[name])
-    return out
+    """Notebook 10's decoder of the headline's recipe at each cap: ``(name, decoder)`` per cap."""
+    names = {cap: cap_decoder_name(headline, cap) for cap in caps}
+    return {cap: (name, study.load_decoders(paths, robot, [name], cap)[name]) for cap, name in names.items()}
 
 
-@dataclasses.dataclass(frozen=True)
-class _Shared:
-    task: EatingTask
-    control: ControlConfig
-    config: study.Config
-    model: str
+_Shared = tuple[EatingTask, ControlConfig, study.Config, str]  # and the headline participant model
 
 
 def _run_cap(shared: _Shared, job: tuple[float | None, str, ActionDecoder, int]) -> CapRun:
     """The study at one cap: the headline model and member, every condition, ``n`` participants."""
-    cap, name, decoder, n = job
-    config = shared.config
+    (task, control, config, model), (cap, name, decoder, n) = shared, job
     session = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
     with warnings.catch_warnings():  # a derived run's cohort: the notebook's own config has warned
         warnings.simplefilter("ignore", UserWarning)
         one = dataclasses.replace(
-            config,
-            participants=n,
-            participant_models=(shared.model,),
-            session=session,
-            video_participant=0,
-            jobs=1,
+            config, participants=n, participant_models=(model,), session=session, video_participant=0, jobs=1
         )
-    control = dataclasses.replace(shared.control, belief_cap=cap)
-    episodes, frames = study.run(shared.task, {name: decoder}, control, one, progress=False)
-    return CapRun(cap, name, episodes[shared.model][name], frames)
+    control = dataclasses.replace(control, belief_cap=cap)
+    episodes, frames = study.run(task, {name: decoder}, control, one, progress=False)
+    return CapRun(cap, name, episodes[model][name], frames)
 
 
 def run(
@@ -125,11 +102,7 @@ def run(
     model: str,
     progress: bool = True,
 ) -> dict[float | None, CapRun]:
-    """The study with each cap's decoder and the belief at that cap, over ``config.jobs`` processes.
-
-    The headline participant model and member, every condition; ``config.sweep_n`` participants at
-    each cap, the whole cohort without one. Participant i is the same person at every cap.
-    """
+    """The study with each cap's decoder and belief: ``config.sweep_n`` participants, without a cap all."""
     jobs = [
         (cap, name, decoder, config.participants if cap is None else config.sweep_n)
         for cap, (name, decoder) in decoders.items()
@@ -141,7 +114,7 @@ def run(
         n_jobs=config.jobs,
         progress=progress,
         desc="study at each cap",
-        shared=_Shared(task, control, config, model),
+        shared=(task, control, config, model),
     )
     return {r.cap: r for r in ran}
 
@@ -163,14 +136,13 @@ def stuck(
 def uncapped_claims(
     runs: Mapping[float | None, CapRun], prop: pd.DataFrame, config: study.Config, horizon: float
 ) -> list[Claim]:
-    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped:
-    judged as the headline is, its decoder's property (``prop``) deciding whether they are testable."""
+    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped."""
     if None not in runs:
         return []
     r = runs[None]
     head = config.session.assistance[0]
     reason = claims.untestable_reason(prop[prop.decoder == r.decoder])
-    rows, _ = claims.claims(
+    return claims.claims(
         r.frames,
         (head,),
         config.participants,
@@ -179,8 +151,7 @@ def uncapped_claims(
         untestable=reason,
         belief=cap_label(None),
         flips=False,
-    )
-    return rows
+    )[0]
 
 
 def label(cap: float | None) -> str:
@@ -189,8 +160,7 @@ def label(cap: float | None) -> str:
 
 
 def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
-    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim: SA - no SA
-    Goal Error [m s], LA+SA - R+SA scoop alignment, LA+SA - R restricted mean Total Time [s] (no p)."""
+    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim."""
     within = result["h1_within"]
     phases, total = result["h2_phases"], result["h3_total"]
     assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
@@ -258,10 +228,9 @@ def sweep(
     config: study.Config,
     horizon: float,
 ) -> pd.DataFrame:
-    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last: the study's own cap
-    from the headline run (``frames``, ``prop``), every other cap from its run (``caps_prop``)."""
-    head = config.session.assistance[0]
-    n = config.sweep_n
+    """The sweep's rows (:data:`COLUMNS`), caps in increasing order, no cap last: the study's own from the
+    headline run (``frames``, ``prop``), every other from its run (``caps_prop``)."""
+    head, n = config.session.assistance[0], config.sweep_n
     mine = {k: for_member(f, head, n, decoder=headline, model=model) for k, f in frames.items()}
     runs_by_cap = {
         config.belief_cap: (headline, mine, prop),
@@ -279,9 +248,7 @@ def sweep(
 
 
 def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
-    """Completion per arm, and H1-H3's measured effects (:func:`_effects`) with their 95% intervals,
-    against the cap: ✓ where the cap's decoder meets the property rule, the study's own cap bold, a
-    marker filled where the claim is settled, with its word."""
+    """Completion per arm, and H1-H3's measured effects with their 95% intervals and words, per cap."""
     sns.set_theme(style="whitegrid")
     caps = frame.drop_duplicates("cap").sort_values("order")
     prop = frame[frame.kind == "property"].set_index("cap")
@@ -293,9 +260,7 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         part = done[done["item"] == cond].set_index("cap").reindex(caps.cap)
         style = "--" if cond.endswith("+SA") else "-"
         axes[0].plot(x, 100 * part.value.to_numpy(), style, marker="os^v"[k], label=cond, alpha=0.85)
-    axes[0].set_ylabel("episodes finished [%]")
-    axes[0].set_ylim(-5, 105)
-    axes[0].set_title("completion per arm")
+    axes[0].set(ylabel="episodes finished [%]", ylim=(-5, 105), title="completion per arm")
     axes[0].legend(fontsize=8, loc="center left")
     titles = {
         "h1": "H1: SA - no SA, Goal Error [m s]",
@@ -404,8 +369,7 @@ def across_caps(frame: pd.DataFrame) -> str:
 
 
 def findings(frame: pd.DataFrame, study_cap: str) -> str:
-    """The sweep (:func:`sweep`) in Markdown bullets: the study's cap (``study_cap``, as :func:`label`
-    writes it), no cap (``@uncapped``), and across the caps."""
+    """The sweep in Markdown bullets: the study's cap (``study_cap``: :func:`label`'s), no cap, every cap."""
     caps = set(frame.cap.astype(str))
     out = [f"- **At the study's cap ({study_cap})**, {cap_sentence(frame, study_cap)}"]
     if "none" in caps and study_cap != "none":
