@@ -145,8 +145,7 @@ def people_claims(
     rows = []
     for assistance in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
         result = analyse(frames, assistance, horizon=horizon, n_resamples=n_resamples)
-        for claim, (verdict, value, low, high, measured) in judge(result).items():
-            rows.append((assistance, claim, verdict, value, low, high, measured, result["n"]))
+        rows += [(assistance, claim, *judged, result["n"]) for claim, judged in judge(result).items()]
     if likert is not None and len(likert) and len(full) >= 2:
         verdict, share, n = likert_verdict(likert)
         measured = (

@@ -161,8 +161,7 @@ def label(cap: float | None) -> str:
 
 def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
     """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim."""
-    within = result["h1_within"]
-    phases, total = result["h2_phases"], result["h3_total"]
+    within, phases, total = result["h1_within"], result["h2_phases"], result["h3_total"]
     assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
     diff = float(within["mean_sa"] - within["mean_no_sa"])
     h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))

@@ -217,8 +217,7 @@ def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
 
 def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, float]:
     """The numbers a row's sentences read beside its effect (``claim_values.csv``'s facts): ``testable``,
-    ``censored`` (a lower bound), ``completion.<condition>``; H1's ``difference``, ``F``, ``df1``, ``df2``,
-    ``p``; H2's ``difference``, ``p``, ``pairs``; H3's ``versus.<condition>`` restricted mean Total Time."""
+    ``censored``, ``completion.<condition>``, ``difference``, ``F``, ``p`` and so on, H3's ``versus.<c>``."""
     verdict, _, _, _, measured = judged
     done = result["h3_completion"]
     assert isinstance(done, pd.Series)

@@ -51,8 +51,7 @@ PANELS = (HEADLINE, COHORT)
 HATCH = "///"  # a censored bar's hatch
 CUT = "hatched: some episodes cut at the horizon"
 CENSORED = f"{CUT} (a lower bound)"  # what the legend says HATCH means
-# Fig. time's whiskers, dodged apart so the two intervals of a bar never merge: (offset from the
-# bar's centre [slot widths], colour) of Total Time's and of Idle Time's
+# Fig. time's whiskers, dodged so a bar's two intervals never merge: (offset [slot widths], colour)
 WHISKERS = {"total_time": (-0.15, "0.15"), "idle_time": (0.15, "0.5")}
 Stats = Mapping[str, str] | None  # our result per panel (HEADLINE, COHORT), a short line each
 Panels = Sequence[tuple[str, pd.DataFrame]]  # each panel's name (HEADLINE, COHORT) and rows
