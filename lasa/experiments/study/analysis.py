@@ -171,7 +171,8 @@ def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def _pct(x: float) -> str:
+def pct(x: float) -> str:
+    """A share as a percentage to 3 significant digits: ``0.25`` -> ``25%``."""
     return f"{100 * x:.3g}%"
 
 
@@ -181,13 +182,10 @@ def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance
     rows = rows[rows.assistance.isin([assistance, NO_ASSISTANCE])].set_index("condition")
     if rows.empty:
         raise ConfigError(f"no completion rows for {model!r}, decoder {decoder!r}, member {assistance!r}")
-    parts = ", ".join(f"{c} {_pct(rows.finished[c])}" for c in rows.index)
+    parts = ", ".join(f"{c} {pct(rows.finished[c])}" for c in rows.index)
     below = [c for c in rows.index if rows.finished[c] < COMPLETION_BAR]
-    verdict = (
-        f"{', '.join(below)} below the {_pct(COMPLETION_BAR)} that H1 and H3 need"
-        if below
-        else f"every condition at or above the {_pct(COMPLETION_BAR)} that H1 and H3 need"
-    )
+    where = f"{', '.join(below)} below" if below else "every condition at or above"
+    verdict = f"{where} the {pct(COMPLETION_BAR)} that H1 and H3 need"
     episodes = int(rows.episodes.max())
     return f"{model} participants, `{decoder}`, {episodes} episodes per condition: {parts}; {verdict}."
 
@@ -201,7 +199,7 @@ def switch_sentence(
     if rows.empty:
         raise ConfigError(f"no mode-switch rows for model {model!r} ({participants_of})")
     said = " and ".join(
-        f"{_pct(r.switch_share)} [{_pct(r.ci_low)}, {_pct(r.ci_high)}] ({r.condition})"
+        f"{pct(r.switch_share)} [{pct(r.ci_low)}, {pct(r.ci_high)}] ({r.condition})"
         for r in rows.itertuples()
     )
     side = [
@@ -211,5 +209,5 @@ def switch_sentence(
     where = side[0] if len(set(side)) == 1 else "partly " + " and partly ".join(dict.fromkeys(side))
     return (
         f"{model} participants ({participants_of}) switch modes {said} of their time: {where} "
-        f"Herlant et al.'s {_pct(HERLANT_SHARE)}."
+        f"Herlant et al.'s {pct(HERLANT_SHARE)}."
     )

@@ -7,7 +7,6 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Mapping
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -22,9 +21,10 @@ from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
 from lasa.evidence.decision import effect_word
 from lasa.evidence.hypotheses import for_member
-from lasa.experiments.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
-from lasa.experiments.study import analysis, claims
+from lasa.experiments.eating_task import cap_decoder_name, cap_label
+from lasa.experiments.study import claims
 from lasa.experiments.study import run as study
+from lasa.experiments.study.analysis import pct
 from lasa.method.decoder import ActionDecoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
@@ -33,10 +33,8 @@ from lasa.world.record import Episodes
 __all__ = [
     "NAME",
     "COLUMNS",
-    "cap_property",
     "load_decoders",
     "run",
-    "stuck",
     "uncapped_claims",
     "sweep",
     "label",
@@ -62,11 +60,6 @@ class CapRun:
     decoder: str
     episodes: Episodes
     frames: dict[str, pd.DataFrame]
-
-
-def cap_property(figures: Path) -> pd.DataFrame:
-    """Notebook 10's property of the cap sweep's decoders (:func:`.run.eating_property`)."""
-    return study.eating_property(figures, CAP_SOURCE)
 
 
 def load_decoders(
@@ -119,20 +112,6 @@ def run(
     return {r.cap: r for r in ran}
 
 
-def stuck(
-    task: EatingTask,
-    runs: Mapping[float | None, CapRun],
-    decoders: Mapping[float | None, tuple[str, ActionDecoder]],
-    config: study.Config,
-    model: str,
-    cap: float | None = None,
-) -> pd.DataFrame:
-    """Where the unfinished LA episodes of the run at ``cap`` stopped (:func:`.analysis.stuck_episodes`)."""
-    r = runs[cap]
-    episodes = {model: {r.decoder: r.episodes}}
-    return analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
-
-
 def uncapped_claims(
     runs: Mapping[float | None, CapRun], prop: pd.DataFrame, config: study.Config, horizon: float
 ) -> list[Claim]:
@@ -140,18 +119,24 @@ def uncapped_claims(
     if None not in runs:
         return []
     r = runs[None]
-    head = config.session.assistance[0]
-    reason = claims.untestable_reason(prop[prop.decoder == r.decoder])
+    return _claims(r.frames, r.decoder, config.participants, config, prop, horizon, cap_label(None))[0]
+
+
+def _claims(
+    frames: dict[str, pd.DataFrame],
+    decoder: str,
+    n: int,
+    config: study.Config,
+    prop: pd.DataFrame,
+    horizon: float,
+    belief: str | None = None,
+) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+    """One run's :func:`.claims.claims` (unflipped), not testable where its decoder misses the property."""
+    reason = claims.untestable_reason(prop[prop.decoder == decoder])
+    head = config.session.assistance[:1]
     return claims.claims(
-        r.frames,
-        (head,),
-        config.participants,
-        (r.decoder,),
-        horizon=horizon,
-        untestable=reason,
-        belief=cap_label(None),
-        flips=False,
-    )[0]
+        frames, head, n, (decoder,), horizon=horizon, untestable=reason, belief=belief, flips=False
+    )
 
 
 def label(cap: float | None) -> str:
@@ -205,18 +190,6 @@ def _cap_rows(
     return out
 
 
-def _judged(
-    frames: dict[str, pd.DataFrame], decoder: str, n: int, head: str, reason: str | None, horizon: float
-) -> tuple[list[Claim], Mapping[str, object]]:
-    """One run's claims rows of the paper's measures for its first ``n`` participants, and their analysis."""
-    rows, analyses = claims.claims(
-        frames, (head,), n, (decoder,), horizon=horizon, untestable=reason, flips=False
-    )
-    cohort = n > study.PAPER_N
-    keys = {claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
-    return [r for r in rows if r.id in keys], analyses[(head, n if cohort else study.PAPER_N)]
-
-
 def sweep(
     runs: Mapping[float | None, CapRun],
     frames: dict[str, pd.DataFrame],
@@ -235,12 +208,15 @@ def sweep(
         config.belief_cap: (headline, mine, prop),
         **{c: (r.decoder, r.frames, caps_prop) for c, r in runs.items()},
     }
+    cohort = n > study.PAPER_N
+    keys = {claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
+    paper_n = n if cohort else study.PAPER_N
     parts: dict[float | None, list[dict[str, object]]] = {}
     for cap, (decoder, tables, table) in runs_by_cap.items():
-        reason = claims.untestable_reason(table[table.decoder == decoder])
         first = {k: f[f.participant < n] for k, f in tables.items()}
-        rows, result = _judged(first, decoder, n, head, reason, horizon)
-        parts[cap] = _cap_rows(cap, decoder, first["time"], rows, result, table)
+        rows, analyses = _claims(first, decoder, n, config, table, horizon)
+        mine_rows = [r for r in rows if r.id in keys]
+        parts[cap] = _cap_rows(cap, decoder, first["time"], mine_rows, analyses[(head, paper_n)], table)
     ordered = sorted(parts, key=lambda c: np.inf if c is None else c)
     out = [dict(row, order=i) for i, c in enumerate(ordered) for row in parts[c]]
     return pd.DataFrame(out, columns=list(COLUMNS))
@@ -308,10 +284,6 @@ _EFFECTS = {  # how each claim's measured effect reads, and its unit
 }
 
 
-def _pct(x: float) -> str:
-    return f"{100 * x:.3g}%"
-
-
 def _effect(row: pd.Series) -> str:
     """A claim's measured effect, 95% interval and word: ``H1 (...) −2.04 m s [−2.80, −1.27]: *word*``."""
     name, unit, fmt = _EFFECTS[str(row["item"])]
@@ -328,7 +300,7 @@ def cap_sentence(frame: pd.DataFrame, cap: str) -> str:
     if rows.empty:
         raise ValueError(f"the sweep has no cap {cap!r}; it has {sorted(set(frame.cap.astype(str)))}")
     done = rows[rows.kind == "completion"].set_index("item").value
-    finish = ", ".join(f"{c} {_pct(done[c])}" for c in CONDITIONS if c in done.index)
+    finish = ", ".join(f"{c} {pct(done[c])}" for c in CONDITIONS if c in done.index)
     said = rows[rows.kind == "claim"].set_index("item", drop=False)
     effects = "; ".join(_effect(said.loc[c]) for c in CLAIMS if c in said.index)
     n, decoder = int(rows.n.iloc[0]), rows.decoder.iloc[0]
@@ -350,20 +322,17 @@ def across_caps(frame: pd.DataFrame) -> str:
     """How H1's sign, LA's completion and the property move with the cap, in one sentence."""
     caps = list(dict.fromkeys(frame.sort_values("order").cap.astype(str)))
     h1 = _by_cap(frame, "claim", "value", "h1")
-    lower = [c for c in caps if c in h1.index and h1[c] < 0]
-    higher = [c for c in caps if c in h1.index and h1[c] >= 0]
-    parts = []
-    if lower:
-        parts.append(f"SA lowers Goal Error at cap {_caps(lower)}")
-    if higher:
-        parts.append(f"SA raises it at cap {_caps(higher)}")
+    signs = {
+        "lowers Goal Error": [c for c in caps if c in h1.index and h1[c] < 0],
+        "raises it": [c for c in caps if c in h1.index and h1[c] >= 0],
+    }
+    parts = [f"SA {what} at cap {_caps(at)}" for what, at in signs.items() if at]
     la = _by_cap(frame, "completion", "value", "LA")
-    parts.append("LA finishes " + ", ".join(f"{_pct(la[c])} at {c}" for c in caps if c in la.index))
+    parts.append("LA finishes " + ", ".join(f"{pct(la[c])} at {c}" for c in caps if c in la.index))
     prop = _by_cap(frame, "property", "word")
     misses = [c for c in caps if c in prop.index and prop[c] != "meets the rule"]
-    meets = "at every cap" if not misses else f"at every cap but {_caps(misses)}"
-    if len(misses) == len(prop):
-        meets = "at no cap"
+    meets = f"at every cap but {_caps(misses)}" if misses else "at every cap"
+    meets = "at no cap" if len(misses) == len(prop) else meets
     return f"{'; '.join(parts)}. The recipe's decoder meets the property rule {meets}."
 
 

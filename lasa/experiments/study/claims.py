@@ -5,6 +5,7 @@ interval of its effect excludes zero, else ``undecided``. Each rule in full: ``d
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections.abc import Iterator, Mapping
 from typing import Any
@@ -107,10 +108,13 @@ def claims(
     if not models and "model" in frames["time"].columns:
         models = tuple(dict.fromkeys(frames["time"].model))
     head = decoders[0] if decoders else None
+    runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
+    runs += [(0, assistance[0], d) for d in decoders[1:]]
+    sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
     analyses: dict[tuple, dict[str, object]] = {}
     rows: list[Claim] = []
     for k, model in enumerate(models or (None,)):
-        for m_i, sa, decoder, n, cohort in _readings(assistance, decoders, n_total):
+        for (m_i, sa, decoder), (n, cohort) in itertools.product(runs, sizes):
             if not _ran(frames["time"], model, decoder):
                 continue
             other = decoder if decoder != head else None
@@ -194,17 +198,6 @@ def h3_tables(analyses: Analyses, decoder: str, model: str) -> list[tuple[str, p
         means = res["means"].assign(finished=res["h3_completion"])
         out.append((title, means, pd.concat({"total": res["h3_total"], "idle": res["h3_idle"]})))
     return out
-
-
-def _readings(
-    assistance: tuple[str, ...], decoders: tuple[str, ...], n_total: int
-) -> list[tuple[int, str, str | None, int, bool]]:
-    """(member index, member, decoder, participants, cohort) of each reading of a participant model."""
-    head = decoders[0] if decoders else None
-    runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
-    runs += [(0, assistance[0], d) for d in decoders[1:]]
-    sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
-    return [(m_i, sa, decoder, n, cohort) for m_i, sa, decoder in runs for n, cohort in sizes]
 
 
 def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
@@ -403,9 +396,13 @@ def _verdict_cells(
     for h in DECODER_KEYS:
         ids = [claim_id(h, assistance_index, assistance, cohort, decoder, model) for cohort in (False, True)]
         out[f"{h.upper()} (10 / all)"] = " / ".join(_word(by_id[i]) if i in by_id else "-" for i in ids)
-        first = by_id.get(ids[0])
-        out[f"{h.upper()} effect (10)"] = (study_effect(first.id, numbers_of(first)) or "-") if first else "-"
+        out[f"{h.upper()} effect (10)"] = _effect(by_id[ids[0]]) if ids[0] in by_id else "-"
     return out
+
+
+def _effect(row: Claim) -> str:
+    """A row's measured effect in words, ``-`` if none."""
+    return study_effect(row.id, numbers_of(row)) or "-"
 
 
 def _word(row: Claim) -> str:
@@ -443,14 +440,9 @@ def _finished(done: pd.DataFrame) -> pd.Series:
 def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
     """Our result per claim and figure panel (the plots' ``stats``): ``"ours (10): <word>; <effect>"``."""
     by_id = {c.id: c for c in rows}
-    out: dict[str, dict[str, str]] = {}
-    for h in DECODER_KEYS:
-        out[h] = {}
-        for panel, cohort in (("headline", False), ("cohort", True)):
-            row = by_id.get(claim_id(h, 0, "", cohort))
-            if row is None or (cohort and n_total <= PAPER_N):
-                continue
-            out[h][panel] = (
-                f"ours ({row.n_users}): {_word(row)}; {study_effect(row.id, numbers_of(row)) or '-'}"
-            )
-    return out
+    panels = (("headline", False), ("cohort", True))[: 2 if n_total > PAPER_N else 1]
+    found = {h: {p: by_id.get(claim_id(h, 0, "", cohort)) for p, cohort in panels} for h in DECODER_KEYS}
+    return {
+        h: {p: f"ours ({r.n_users}): {_word(r)}; {_effect(r)}" for p, r in mine.items() if r is not None}
+        for h, mine in found.items()
+    }

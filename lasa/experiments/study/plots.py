@@ -81,11 +81,8 @@ PAPER_H = {
 
 
 def _caption(assistance: str, decoder: str | None, model: str | None) -> str:
-    return (
-        f"SA = {assistance}"
-        + (f"; decoder = {decoder}" if decoder else "")
-        + (f"; participant model = {model}" if model else "")
-    )
+    said = {"SA": assistance, "decoder": decoder, "participant model": model}
+    return "; ".join(f"{what} = {name}" for what, name in said.items() if name)
 
 
 def _panels(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
@@ -277,35 +274,40 @@ def plot_time(
     fig, axes = _layout(panels, stats, (7.6, 4.8), _time_axes, n_axes=len(TASKS))
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
     idle_note = (idle, "light: Idle Time; text: share of episodes finished")
-    notes = [_hatch_note(data, horizon), idle_note, *_whisker_notes()]
+    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
+    whiskers = [
+        (
+            Line2D([], [], color=colour, lw=2),
+            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
+        )
+        for m, (dx, colour) in WHISKERS.items()
+    ]
+    notes = [_hatch_note(data, horizon), idle_note, *whiskers]
     title = wrap_to(f"Total and Idle Time ({_caption(assistance, decoder, model)})", 7.6 * len(panels), 10)
     title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
     return _finish(fig, axes, title, notes, keys=None)
 
 
 def _time_axes(part: pd.DataFrame, *axes: Axes) -> None:
-    """One panel of Fig. time: an axes per task."""
+    """One panel of Fig. time, an axes per task: Total Time per condition (hatched if censored; its share
+    finished), Idle over it."""
     for ax, task in zip(axes, TASKS, strict=True):
-        _time_bars(ax, part[part.task == task])
+        rows = part[part.task == task]
+        before, lines = len(ax.patches), len(ax.lines)
+        common = {"data": rows, "x": "condition", "order": CONDITIONS, **CI, "ax": ax}
+        sns.barplot(**common, y="total_time", palette=PALETTE, hue="condition", legend=False)
+        bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
+        _hatch(bars, _censored(rows, ("condition",)))
+        done = rows.groupby("condition").completed.mean()
+        for condition, bar in bars.items():
+            if condition in done:
+                _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
+        _whiskers(ax.lines[lines:], "total_time")
+        lines = len(ax.lines)
+        sns.barplot(**common, y="idle_time", color="white", alpha=0.6)
+        _whiskers(ax.lines[lines:], "idle_time")
         ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
         ax.set_ylabel("time [s]")
-
-
-def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
-    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it."""
-    before, lines = len(ax.patches), len(ax.lines)
-    common = {"data": part, "x": "condition", "order": CONDITIONS, **CI, "ax": ax}
-    sns.barplot(**common, y="total_time", palette=PALETTE, hue="condition", legend=False)
-    bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
-    _hatch(bars, _censored(part, ("condition",)))
-    done = part.groupby("condition").completed.mean()
-    for condition, bar in bars.items():
-        if condition in done:
-            _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
-    _whiskers(ax.lines[lines:], "total_time")
-    lines = len(ax.lines)
-    sns.barplot(**common, y="idle_time", color="white", alpha=0.6)
-    _whiskers(ax.lines[lines:], "idle_time")
 
 
 def _whiskers(lines: Iterable[Line2D], measure: str) -> None:
@@ -315,18 +317,6 @@ def _whiskers(lines: Iterable[Line2D], measure: str) -> None:
         line.set_xdata(np.asarray(line.get_xdata(), dtype=float) + dx)
         line.set_color(colour)
         line.set_gid(measure)
-
-
-def _whisker_notes() -> list[tuple[Artist, str]]:
-    """The legend's entries for the whiskers of Fig. time: where each measure's sits, in its colour."""
-    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
-    return [
-        (
-            Line2D([], [], color=colour, lw=2),
-            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
-        )
-        for m, (dx, colour) in WHISKERS.items()
-    ]
 
 
 def _label(ax: Axes, bar: mpatches.Rectangle, text: str, foot: bool = False) -> None:
@@ -367,17 +357,7 @@ def _alignment_axes(part: pd.DataFrame, ax: Axes) -> None:
     before = len(ax.patches)
     hues = {"hue": "condition", "hue_order": CONDITIONS, "palette": PALETTE, **CI}
     sns.barplot(data=part, x="phase", y="alignment", order=PHASES, **hues, ax=ax, legend=False)
-    counts = _reached(part)
-    bars = _bars_at(ax.patches[before:], _slots(PHASES, CONDITIONS))
-    _hatch(bars, {key: bool(row.censored) for key, row in counts.iterrows()})
-    for key, bar in bars.items():
-        n = int(counts.n[key]) if key in counts.index else 0
-        _label(ax, bar, f"n={n}", foot=True)
-    ax.set_ylabel("Preference Alignment (d · d*)")
-
-
-def _reached(part: pd.DataFrame) -> pd.DataFrame:
-    """Per (phase, condition): ``n`` who reached the phase (``steps > 0``), ``of`` them, ``censored``."""
+    # per (phase, condition): n who reached the phase (steps > 0), censored where not all or unfinished
     reached = part.steps > 0 if "steps" in part.columns else part.alignment.notna()
     groups = part.groupby(["phase", "condition"])
     of = groups.participant.nunique()
@@ -385,7 +365,11 @@ def _reached(part: pd.DataFrame) -> pd.DataFrame:
     censored = n < of
     if "completed" in part.columns:
         censored |= ~groups.completed.all()
-    return pd.DataFrame({"n": n, "of": of, "censored": censored})
+    bars = _bars_at(ax.patches[before:], _slots(PHASES, CONDITIONS))
+    _hatch(bars, {key: bool(c) for key, c in censored.items()})
+    for key, bar in bars.items():
+        _label(ax, bar, f"n={int(n[key]) if key in n.index else 0}", foot=True)
+    ax.set_ylabel("Preference Alignment (d · d*)")
 
 
 def video_clips(

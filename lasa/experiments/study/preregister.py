@@ -84,21 +84,10 @@ def power_table(
     """:func:`lasa.experiments.study.power.power` on the simulated cohort's ``frames``, for ``reading``."""
     from lasa.world.eating import load_eating_robot
 
-    assistance, decoder, model = reading
     config = study.Config()
     horizon = config.session.horizon * load_eating_robot().control.dt  # notebook 11's [s]
-    return study_power.power(
-        frames,
-        assistance,
-        decoder=decoder,
-        model=model,
-        sizes=sizes,
-        draws=draws,
-        seed=config.seed,
-        horizon=horizon,
-        n_jobs=n_jobs,
-        progress=progress,
-    )
+    seed = config.seed
+    return study_power.power(frames, *reading, sizes, draws, seed, horizon, progress=progress, n_jobs=n_jobs)
 
 
 def _power_lines(table: pd.DataFrame) -> list[str]:

@@ -191,27 +191,18 @@ def variants_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str
     return keep + ([contrast] if contrast in ranked and contrast not in keep else [])
 
 
-@dataclasses.dataclass(frozen=True)
-class _Shared:
-    """What every (participant model, decoder variant) run reads: sent to each worker once."""
-
-    task: EatingTask
-    decoders: dict[str, ActionDecoder]
-    cohort: Cohort
-    control: ControlConfig
-    config: Config
+_Shared = tuple[EatingTask, dict[str, ActionDecoder], Cohort, ControlConfig, Config]
 
 
 def _run_variant(shared: _Shared, job: tuple[str, int, str]) -> Episodes:
     """One participant model's study with one decoder variant (the headline, index 0, runs R too)."""
-    model, i, name = job
-    config = shared.config
+    (task, decoders, cohort, control, config), (model, i, name) = shared, job
     headline_only = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
     return PARTICIPANT_MODELS[model](
-        shared.task,
-        shared.decoders[name],
-        shared.cohort,
-        shared.control,
+        task,
+        decoders[name],
+        cohort,
+        control,
         config.session if i == 0 else headline_only,
         seed=config.seed,
         progress=False,
@@ -238,7 +229,6 @@ def run(
         for model in config.participant_models
         for i, name in enumerate(names[: config.variants_per_model.get(model, len(names))])
     ]
-    shared = _Shared(task, dict(decoders), cohort, control, config)
     ran = run_jobs(
         _run_variant,
         jobs,
@@ -246,7 +236,7 @@ def run(
         n_jobs=config.jobs,
         progress=progress,
         desc="study runs",
-        shared=shared,
+        shared=(task, dict(decoders), cohort, control, config),
     )
     episodes: dict[str, dict[str, Episodes]] = {}
     parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
