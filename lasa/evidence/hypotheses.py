@@ -148,10 +148,8 @@ def people_claims(
         rows += [(assistance, claim, *judged, result["n"]) for claim, judged in judge(result).items()]
     if likert is not None and len(likert) and len(full) >= 2:
         verdict, share, n = likert_verdict(likert)
-        measured = (
-            f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
-        )
-        rows.append(("all", "likert", verdict, share, math.nan, math.nan, measured, len(full)))
+        said = f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
+        rows.append(("all", "likert", verdict, share, math.nan, math.nan, said, len(full)))
     columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]
     return pd.DataFrame(rows, columns=columns)
 

@@ -317,11 +317,8 @@ def with_flips(rows: list[Claim]) -> list[Claim]:
                 for o in rows
                 if o.id.startswith(c.id + "@") and o.reproduced != c.reproduced
             ]
-            lead = (
-                f"Readings with other words: {'; '.join(flips)}. "
-                if flips
-                else "Every reading gives the same words. "
-            )
+            same = "Every reading gives the same words. "
+            lead = f"Readings with other words: {'; '.join(flips)}. " if flips else same
             effect, rest = c.note.split(". ", 1) if c.note.startswith("Measured effect: ") else ("", c.note)
             c = dataclasses.replace(c, note=(f"{effect}. " if effect else "") + lead + rest)
         out.append(c)
