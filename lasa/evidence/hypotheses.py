@@ -1,10 +1,6 @@
-"""The eating study's hypotheses H1-H3: their tests on the study's tables, and each claim's verdict.
-
-:func:`analyse` runs every test for one member, decoder variant, participant model and first ``n``
-participants (the statistics of :mod:`lasa.evidence.stats`); :func:`judge` hands each claim's numbers to
-its rule (:mod:`lasa.evidence.rules`). H1 and H3 are not testable when a condition finishes fewer than
-:data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes (their measures are censored at the horizon).
-"""
+"""The eating study's hypotheses H1-H3: :func:`analyse` runs their tests (:mod:`lasa.evidence.stats`),
+:func:`judge` hands each claim's numbers to its rule (:mod:`lasa.evidence.rules`). H1 and H3 are not
+testable when a condition finishes fewer than :data:`~lasa.evidence.rules.COMPLETION_BAR` of its episodes."""
 
 from __future__ import annotations
 
@@ -35,6 +31,7 @@ __all__ = [
     "likert_verdict",
 ]
 
+_TIMES = ("total_time", "idle_time")  # H3's measures
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
 
@@ -46,8 +43,7 @@ def for_member(
     decoder: str | None = None,
     model: str | None = None,
 ) -> pd.DataFrame:
-    """The rows of one SA member (the unassisted conditions included), for the first ``n`` participants,
-    with ``decoder`` the LA rows of that decoder variant, with ``model`` of that participant model."""
+    """The rows of one SA member (and the unassisted ones), decoder, participant model and first ``n``."""
     rows = frame[(frame.assistance == assistance) | (frame.assistance == NO_ASSISTANCE)]
     if decoder is not None and "decoder" in rows.columns:
         rows = rows[(rows.decoder == decoder) | (rows.decoder == NO_ASSISTANCE)]
@@ -59,9 +55,8 @@ def for_member(
 
 
 def headline_model(time: pd.DataFrame, models: tuple[str, ...]) -> str:
-    """The headline participant model, by a criterion fixed before any H1-H3 verdict was seen: the first
-    of ``models`` whose Retargeting episodes (R, and R+SA under every member) each finish at least
-    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time; if none does, the first."""
+    """The first of ``models`` whose R and R+SA episodes (every member) each finish at least
+    :data:`~lasa.evidence.rules.COMPLETION_BAR` of the time, else the first (fixed before any verdict)."""
     if not models:
         raise ConfigError("headline_model needs at least one participant model")
     retarget = time[time.condition.isin(["R", "R+SA"])]
@@ -81,11 +76,8 @@ def analyse(
     horizon: float = math.inf,
     n_resamples: int = 10_000,
 ) -> dict[str, object]:
-    """Every test the claims rest on, for one SA member, decoder variant, participant model and first ``n``.
-
-    ``horizon`` [s] is where an unfinished episode's time was cut (H3's restricted times);
-    ``n_resamples`` the paired bootstrap's resamples for H3.
-    """
+    """Every test the claims rest on, for one SA member, decoder variant, participant model and first ``n``;
+    ``horizon`` [s] cuts H3's restricted times, ``n_resamples`` is its paired bootstrap's."""
     err = for_member(frames["goal_error"], assistance, n, decoder, model)
     time = for_member(frames["time"], assistance, n, decoder, model)
     align = for_member(frames["alignment"], assistance, n, decoder, model)
@@ -110,16 +102,10 @@ def analyse(
 
 
 def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
-    """H3's numbers: completion per condition (``h3_short``: those below the bar), restricted means, and
-    LA+SA's bootstrap contrasts (``stats.rmst_contrasts``), ``h3_gap`` the one with the fastest other."""
+    """H3's numbers: completion (``h3_short``: below the bar), restricted means, LA+SA's contrasts."""
     done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
-    contrasts = {
-        m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples)
-        for m in ("total_time", "idle_time")
-    }
-    means = pd.DataFrame(
-        {m: stats.restricted_times(time, m, horizon).mean() for m in ("total_time", "idle_time")}
-    )
+    contrasts = {m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples) for m in _TIMES}
+    means = pd.DataFrame({m: stats.restricted_times(time, m, horizon).mean() for m in _TIMES})
     best = str(means.total_time.drop("LA+SA").idxmin())
     gap = contrasts["total_time"].set_index("b").loc[best]
     return {
@@ -135,8 +121,7 @@ def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, objec
 
 
 def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int]:
-    """Mean of a - b, its 95% t interval, the paired t-test's p, and the pairs used (participants with
-    both values; with fewer than two pairs, everything but the count is NaN)."""
+    """Mean of a - b, its 95% t interval, the paired t-test's p, the pairs (< 2 pairs: NaN but the count)."""
     keep = a.notna() & b.notna()
     a, b = a[keep], b[keep]
     if len(a) < 2:
@@ -149,50 +134,39 @@ def _paired(a: pd.Series, b: pd.Series) -> tuple[float, float, float, float, int
 def people_claims(
     frames: dict[str, pd.DataFrame], horizon: float | None = None, n_resamples: int = 10_000
 ) -> pd.DataFrame:
-    """H1-H3 on people's sessions (``frames``: :func:`lasa.evidence.sessions.analyse_sessions`'), by the
-    simulated cohort's own tests, completion bar and rules; with its ``likert`` tests, also Fig. dessert's
-    subjective claim (:func:`likert_verdict`). ``horizon`` [s] defaults to the longest logged Total Time.
-    One row per SA member and claim key (none if fewer than two did every condition in every task).
-    """
+    """H1-H3 (and with ``likert`` tests, :func:`likert_verdict`) on people's sessions by the cohort's own
+    tests and rules: a row per SA member and claim; ``horizon`` [s] defaults to the longest Total Time."""
     time = frames["time"]
     horizon = float(time.total_time.max()) if horizon is None else horizon
     # within-subject tests: those who did every condition in every task (sessions.DROPPED; two or more)
     full = set(complete_participants(time, "claims")[0].participant)
     likert = frames.get("likert")  # people's answers' tests (lasa.evidence.sessions.likert_tests), if any
-    frames = {
-        name: frames[name][frames[name].participant.isin(full)]
-        for name in ("goal_error", "time", "alignment")
-    }
+    frames = {k: frames[k][frames[k].participant.isin(full)] for k in ("goal_error", "time", "alignment")}
     rows = []
     for assistance in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
         result = analyse(frames, assistance, horizon=horizon, n_resamples=n_resamples)
-        for claim, (verdict, value, low, high, measured) in judge(result).items():
-            rows.append((assistance, claim, verdict, value, low, high, measured, result["n"]))
+        rows += [(assistance, claim, *judged, result["n"]) for claim, judged in judge(result).items()]
     if likert is not None and len(likert) and len(full) >= 2:
         verdict, share, n = likert_verdict(likert)
-        measured = (
-            f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
-        )
-        rows.append(("all", "likert", verdict, share, math.nan, math.nan, measured, len(full)))
+        said = f"LA+SA rated higher with p < .05 in {round(share * n)} of {n} comparisons (scale x condition)"
+        rows.append(("all", "likert", verdict, share, math.nan, math.nan, said, len(full)))
     columns = ["member", "claim", "verdict", "value", "ci_low", "ci_high", "measured", "participants"]
     return pd.DataFrame(rows, columns=columns)
 
 
 def likert_verdict(likert: pd.DataFrame) -> tuple[str, float, int]:
-    """Fig. dessert's subjective claim on people's answers (:func:`lasa.evidence.sessions.likert_tests`): the
-    ``study.likert`` verdict, the share of comparisons with LA+SA rated higher at p < .05, the comparisons."""
+    """``study.likert``'s verdict on people's answers, the share rating LA+SA higher at p < .05, the count."""
     support = (likert["diff"] > 0.0) & (likert["p_corr"] < 0.05)
     share = float(support.mean())
     return rule("study.likert").verdict({"share": share}), share, int(len(likert))
 
 
 def judge(result: Mapping[str, object]) -> dict[str, Judged]:
-    """(the claim's rule on its tests' numbers, the effect, its 95% interval: the test's t-interval or H3's
-    paired bootstrap percentiles, measured) per claim key."""
+    """(the claim's rule on its tests' numbers, the effect, its 95% interval, measured) per claim key."""
     out = {
-        "h1": _h1(result, "", "m s", 1.0),
-        "h1_mean_distance": _h1(result, "_mean", "cm", 100.0),
-        "h1_paper_test": _h1_paper_test(result),
+        "h1": _h1(result, "h1_within"),
+        "h1_mean_distance": _h1(result, "h1_mean_within", "cm", 100.0),
+        "h1_paper_test": _h1(result, "h1_between"),
         "h2": _h2(result),
         "h3": _h3_verdict(result),
     }
@@ -202,51 +176,33 @@ def judge(result: Mapping[str, object]) -> dict[str, Judged]:
 
 
 def _uncomputed(numbers: Mapping[str, float]) -> str:
-    """Why a test whose numbers are not all finite is not testable (every Goal Error equal gives
-    ``F = -inf``); "" if they are."""
+    """Why a test with a non-finite number (e.g. ``F = -inf``) is not testable; "" if none is."""
     lost = [name for name, v in numbers.items() if not math.isfinite(v)]
     return f"{NOT_TESTABLE} (its test could not be computed: {', '.join(lost)} not finite)" if lost else ""
 
 
-def _h1(result: Mapping[str, object], suffix: str, unit: str, scale: float) -> Judged:
-    """H1 on Goal Error (``suffix`` empty) or the mean distance (``_mean``, in ``unit`` cm by ``scale``)."""
-    within, pairs = result[f"h1{suffix}_within"], result[f"h1{suffix}_pairs"]
-    assert isinstance(within, dict) and isinstance(pairs, pd.DataFrame)
-    diff = within["mean_sa"] - within["mean_no_sa"]
-    tests = {"effect": diff, "p": within["p"]}
-    for r in pairs.itertuples():
+def _h1(result: Mapping[str, object], name: str, unit: str = "m s", scale: float = 1.0) -> Judged:
+    """H1 on the test ``name``: within subjects with its pairwise comparisons (values in ``unit`` by
+    ``scale``), or ``h1_between``, the paper's F(1,18) reading (no pairwise comparisons)."""
+    between = name == "h1_between"
+    test, table = result[name], None if between else result[name.replace("within", "pairs")]
+    assert isinstance(test, dict) and (table is None or isinstance(table, pd.DataFrame))
+    pairs = [] if table is None else list(table.itertuples())
+    diff = test["mean_sa"] - test["mean_no_sa"]
+    tests = {"effect": diff, "p": test["p"]}
+    for r in pairs:
         tests |= {f"effect {r.a} - {r.b}": r.diff, f"p {r.a} - {r.b}": r.p_corr}
-    lost = _uncomputed(tests | {"F": within["F"]})
+    lost = _uncomputed(tests | {"F": test["F"]})
     if lost:
         return NOT_TESTABLE, math.nan, math.nan, math.nan, lost
-    pair_text = "; ".join(
-        f"{r.a} - {r.b} = {scale * r.diff:+.2f} {unit} (p_holm = {r.p_corr:.3g})" for r in pairs.itertuples()
-    )
-    return (
-        rule("study.h1").tested(tests),
-        diff,
-        within["ci_low"],
-        within["ci_high"],
-        f"SA - no SA = {scale * diff:+.2f} {unit}; {stats.format_f(within)} (within); {pair_text}",
-    )
-
-
-def _h1_paper_test(result: Mapping[str, object]) -> Judged:
-    """H1 under the paper's F(1,18) reading: the between-subjects main effect, no pairwise comparisons."""
-    between = result["h1_between"]
-    assert isinstance(between, dict)
-    b_diff = between["mean_sa"] - between["mean_no_sa"]
-    tests = {"effect": b_diff, "p": between["p"]}
-    lost = _uncomputed(tests | {"F": between["F"]})
-    if lost:
-        return NOT_TESTABLE, math.nan, math.nan, math.nan, lost
-    return (
-        rule("study.h1@paper_test").tested(tests),
-        b_diff,
-        between["ci_low"],
-        between["ci_high"],
-        f"SA - no SA = {b_diff:+.2f} m s; {stats.format_f(between)} (between, the paper's df)",
-    )
+    how = "between, the paper's df" if between else "within"
+    said = f"SA - no SA = {scale * diff:+.2f} {unit}; {stats.format_f(test)} ({how})"
+    if not between:
+        said += "; " + "; ".join(
+            f"{r.a} - {r.b} = {scale * r.diff:+.2f} {unit} (p_holm = {r.p_corr:.3g})" for r in pairs
+        )
+    verdict = rule("study.h1@paper_test" if between else "study.h1").tested(tests)
+    return verdict, diff, test["ci_low"], test["ci_high"], said
 
 
 def _h2(result: Mapping[str, object]) -> Judged:
@@ -263,7 +219,7 @@ def _h2(result: Mapping[str, object]) -> Judged:
 
 
 def _censored(done: pd.Series) -> list[str]:
-    """The conditions below the completion bar (NaN too): their Total Time and Goal Error are lower bounds."""
+    """The conditions below the completion bar (NaN too): their measures are lower bounds."""
     return [c for c, _ in below_bar(done.items())]
 
 
@@ -273,13 +229,9 @@ def _short_text(done: pd.Series, conditions: list[str]) -> str:
 
 
 def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, Judged]:
-    """H1 and H2 when some condition finishes too few episodes.
-
-    Goal Error is summed over the steps, so a censored episode's is a lower bound. When only SA
-    conditions are censored and SA's Goal Error is already higher with its interval clear of 0,
-    H1 reads ``no`` (censored: lower bound); otherwise H1 is not testable. The mean distance is no
-    bound: not testable whenever a condition is censored. H2 is not testable when LA+SA or R+SA is.
-    """
+    """H1 and H2 when some condition finishes too few episodes: H1 ``no`` if only SA conditions are
+    censored and SA's Goal Error, a lower bound, is already higher (its interval clear of 0), else (and the
+    mean distance always) not testable; H2 not testable when LA+SA or R+SA is censored."""
     censored = _censored(done)
     if not censored:
         return out
@@ -295,16 +247,13 @@ def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, J
             out[key] = (NOT_TESTABLE, math.nan, math.nan, math.nan, text)
     compared = [c for c in censored if c in ("LA+SA", "R+SA")]
     if compared:
-        measured = out["h2"][4]
         gate = f"completion: {_short_text(done, compared)}, alignment only on the phases reached"
-        text = f"{NOT_TESTABLE} ({gate})"
-        out["h2"] = (NOT_TESTABLE, math.nan, math.nan, math.nan, f"{text}; {measured}")
+        out["h2"] = (NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} ({gate}); {out['h2'][4]}")
     return out
 
 
 def _h3_verdict(result: Mapping[str, object]) -> Judged:
-    """H3's verdict (the rule on every restricted-mean contrast of LA+SA, Total and Idle Time), the LA+SA
-    gap to the fastest other condition, its bootstrap interval, measured; censored: :func:`_h3_censored`."""
+    """H3: the rule on LA+SA's restricted-mean contrasts, its gap to the fastest other condition."""
     total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
     short, done, horizon = result["h3_short"], result["h3_completion"], result["horizon"]
     assert isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame)
@@ -324,16 +273,10 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
         for r in contrasts.itertuples()
     }
     tests |= {f"mean {c}": means.total_time[c] for c in means.index}
-    verdict = rule("study.h3").tested(tests)
     best, g_mean, g_low, g_high = gap
-    return (
-        verdict,
-        float(g_mean),
-        float(g_low),
-        float(g_high),
-        f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s [{g_low:+.1f}, {g_high:+.1f}] (restricted "
-        f"means, paired bootstrap); {tail}",
-    )
+    said = f"LA+SA - {best} (the fastest other) = {g_mean:+.1f} s [{g_low:+.1f}, {g_high:+.1f}] (restricted "
+    said += f"means, paired bootstrap); {tail}"
+    return rule("study.h3").tested(tests), float(g_mean), float(g_low), float(g_high), said
 
 
 def _censored_comparator(total: pd.DataFrame, censored: list[str]) -> pd.Series | None:
@@ -353,12 +296,8 @@ def h3_comparator(result: Mapping[str, object]) -> str | None:
 
 
 def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
-    """H3 with a censored condition: ``no`` if LA+SA is already slower than a measured comparator.
-
-    A measured comparator finishes at least the bar; if LA+SA's restricted mean Total Time is above
-    one's with the interval clear of 0, LA+SA cannot be the fastest (the fastest such comparator is
-    reported; LA+SA's time a lower bound if it is censored). Otherwise H3 is not testable.
-    """
+    """H3 with a censored condition: ``no`` if LA+SA's restricted mean Total Time is above a measured
+    comparator's (the fastest, interval clear of 0; LA+SA's a lower bound if censored), else not testable."""
     censored = _censored(done)
     short = _short_text(done, censored)
     r = _censored_comparator(total, censored)
@@ -366,13 +305,10 @@ def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
         return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
     bound = "LA+SA" in censored
     lead = CENSORED if bound else "LA+SA measured, the censored conditions not compared"
-    return (
-        "no",
-        float(r["diff"]),
-        float(r.ci_low),
-        float(r.ci_high),
+    said = (
         f"{lead} (completion: {short}): LA+SA's restricted mean Total Time {r.mean_a:.0f} s"
         + (", a lower bound," if bound else "")
         + f" against {r.b}'s {r.mean_b:.0f} s: LA+SA - {r.b} = {r['diff']:+.1f} s "
-        f"[{r.ci_low:+.1f}, {r.ci_high:+.1f}] (paired bootstrap); {tail}",
+        f"[{r.ci_low:+.1f}, {r.ci_high:+.1f}] (paired bootstrap); {tail}"
     )
+    return "no", float(r["diff"]), float(r.ci_low), float(r.ci_high), said

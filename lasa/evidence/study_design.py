@@ -1,6 +1,5 @@
-"""The user study's 2x2 within-subjects design, interface (R, LA) x assistance (none, SA): a tidy
-frame (one row per participant x condition x task), validated and reduced per participant and cell.
-"""
+"""The user study's 2x2 within-subjects design, interface (R, LA) x assistance (none, SA): a tidy frame
+(one row per participant x condition x task), validated and reduced per participant and cell."""
 
 from __future__ import annotations
 
@@ -69,11 +68,11 @@ def prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
         raise ConfigError(f"measure {measure!r} must be numeric, got dtype {values.dtype}")
     values = values.astype(float)
     bad = ~np.isfinite(values.to_numpy())
+    keys = list(_KEYS)
     if bad.any():
-        rows = frame.loc[bad, ["participant", "condition", "task"]].head(3).to_dict("records")
+        rows = frame.loc[bad, keys].head(3).to_dict("records")
         raise ConfigError(f"measure {measure!r} has {int(bad.sum())} non-finite value(s), e.g. at {rows}")
 
-    keys = ["participant", "condition", "task"]
     duplicated = frame.duplicated(subset=keys, keep=False)
     if duplicated.any():
         row = frame.loc[duplicated, keys].iloc[0].to_dict()
@@ -120,17 +119,13 @@ def _check_complete(data: pd.DataFrame, conditions: Sequence[str]) -> None:
 
 def aggregate(data: pd.DataFrame, measure: str, by: Sequence[str], agg: str) -> pd.DataFrame:
     """One value of ``measure`` per participant x ``by`` levels (``data`` already prepared)."""
-    keys = ["participant", *by]
-    grouped = data.copy()
     order = {"condition": CONDITIONS, "interface": INTERFACES, "assistance": SA_LEVELS}
-    for name in by:
-        if name in order:
-            grouped[name] = pd.Categorical(grouped[name], categories=list(order[name]), ordered=True)
-    out = grouped.groupby(keys, sort=True, observed=True)[measure].agg(agg).reset_index()
-    for name in by:
-        if name in order:
-            out[name] = out[name].astype(str)
-    return out
+    ordered = {name: list(order[name]) for name in by if name in order}
+    grouped = data.assign(
+        **{k: pd.Categorical(data[k], categories=v, ordered=True) for k, v in ordered.items()}
+    )
+    out = grouped.groupby(["participant", *by], sort=True, observed=True)[measure].agg(agg).reset_index()
+    return out.astype({name: str for name in ordered})
 
 
 def participant_means(

@@ -1,6 +1,5 @@
 """Beside the study's claims: completion, the headline participant model, mode switches, stuck episodes,
-and the cost per mode switch at which Retargeting would be as slow as LA+SA.
-"""
+and the cost per mode switch at which Retargeting would be as slow as LA+SA."""
 
 from __future__ import annotations
 
@@ -55,11 +54,8 @@ def completion(time: pd.DataFrame) -> pd.DataFrame:
 
 
 def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.DataFrame:
-    """Retargeting's mode-switch share of execution time, per condition and SA member.
-
-    Each participant's switches (one control step, ``dt``, each) over their Total Time, both tasks;
-    the mean over participants with its 95% t-interval, beside Herlant et al.'s (HRI 2016) 17.4%.
-    """
+    """Retargeting's mode-switch share of execution time (a switch a step, ``dt``) per condition and SA
+    member: the participants' mean with its 95% t-interval, beside Herlant et al.'s (HRI 2016) 17.4%."""
     rows = time[time.condition.isin(["R", "R+SA"])]
     if n is not None:
         rows = rows[rows.participant < n]
@@ -72,40 +68,29 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
         ci = (mean,) * 2 if sem == 0 else sps.t.interval(0.95, len(share) - 1, loc=mean, scale=sem)
         who = {"condition": cond, "assistance": assistance, "participants": len(share)}
         shares = {"switch_share": float(mean), "ci_low": float(ci[0]), "ci_high": float(ci[1])}
-        out.append(
-            who
-            | shares
-            | {"switches_per_task": float(part.mode_switches.mean()), "herlant_2016": HERLANT_SHARE}
-        )
+        extra = {"switches_per_task": float(part.mode_switches.mean()), "herlant_2016": HERLANT_SHARE}
+        out.append(who | shares | extra)
     return pd.DataFrame(out)
 
 
 def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.DataFrame:
-    """:func:`switch_share` of each model for the first :data:`PAPER_N` participants and the cohort
-    (columns ``model`` and ``participants_of``: ``first 10``, ``cohort``)."""
+    """:func:`switch_share` of each model (``model``), first 10 and cohort (``participants_of``)."""
     parts = [("first 10", time[time.participant < PAPER_N]), ("cohort", time)]
-    return pd.concat(
-        [
-            switch_share(for_n[for_n.model == m], dt).assign(model=m, participants_of=label)
-            for m in models
-            for label, for_n in parts
-        ],
-        ignore_index=True,
+    shares = (
+        switch_share(for_n[for_n.model == m], dt).assign(model=m, participants_of=label)
+        for m in models
+        for label, for_n in parts
     )
+    return pd.concat(shares, ignore_index=True)
 
 
 def stuck(task: EatingTask, episodes: Episodes, decoder: ActionDecoder, config: Config) -> pd.DataFrame:
-    """Why the unfinished LA episodes did not finish: where they were, and what the decoder offered there.
-
-    One row per unfinished LA episode: its waypoint's phase and goal, the tip's distance [cm] and
-    angle [deg] to it at the horizon, the belief in that goal and the goal believed, and at that state
-    and belief the best progress any stick input makes (in best-step units; the participant rests
-    below 0.1) and the share of inputs that make any.
-    """
+    """Per unfinished LA episode: its waypoint, the tip's distance [cm] and angle [deg] to it at the horizon,
+    the belief, and there the best progress any stick input makes (in best-step units; the participant
+    rests below 0.1) and the share of inputs that make any."""
     if episodes.belief is None or episodes.waypoint is None:
         raise ConfigError("stuck needs simulated episodes (with beliefs and waypoints logged)")
     settings = config.session
-    pc = settings.participant
     la = np.char.startswith(episodes.condition.astype(str), "LA") & ~episodes.completed
     idx = np.flatnonzero(la)
     if not len(idx):
@@ -114,17 +99,15 @@ def stuck(task: EatingTask, episodes: Episodes, decoder: ActionDecoder, config: 
     plans = {name: waypoints(name) for name in TASK_NAMES}
     wps = [plans[str(episodes.task[e])][int(episodes.waypoint[e])] for e in idx]
     frames = [fork_frame(robot, wp.goal, wp.theta, wp.depth) for wp in wps]
-    p_star = np.stack([f[0] for f in frames])
-    d_star = np.stack([f[1][:, 2] for f in frames])
-    s = episodes.states[-1, idx]
-    b = episodes.belief[-1, idx]
+    p_star, d_star = np.stack([f[0] for f in frames]), np.stack([f[1][:, 2] for f in frames])
+    s, b = episodes.states[-1, idx], episodes.belief[-1, idx]
     data = mujoco.MjData(robot.model)
     pos, axis, jp, jr = tip_frames(robot, data, s)
     grid = latent_grid(settings.n_z, 2)
     phi = decode_candidates(decoder, grid, s, b)
     dp, new_dir = tip_motion(jp, jr, axis, dt * phi)
     unit = dt * settings.retarget.linear_speed
-    gain = progress_gain(pos, axis, dp, new_dir, p_star, d_star, pc.rotation_weight) / unit
+    gain = progress_gain(pos, axis, dp, new_dir, p_star, d_star, settings.participant.rotation_weight) / unit
     goal_names = np.asarray(GOALS)
     who = {c: getattr(episodes, c)[idx] for c in ("participant", "condition", "assistance", "task")}
     return pd.DataFrame(
@@ -149,25 +132,17 @@ def stuck_episodes(
     config: Config,
     models: Sequence[str],
 ) -> pd.DataFrame:
-    """:func:`stuck` over every participant model (in the order of ``models``) and decoder variant of
-    ``episodes`` (:func:`~lasa.experiments.study.run.run`'s), with ``decoder`` and ``model`` columns."""
-    return pd.concat(
-        [
-            stuck(task, episodes[m][n], decoders[n], config).assign(decoder=n, model=m)
-            for m in models
-            for n in episodes[m]
-        ],
-        ignore_index=True,
+    """:func:`stuck` over every participant model of ``models`` and decoder variant of ``episodes``."""
+    rows = (
+        stuck(task, episodes[m][n], decoders[n], config).assign(decoder=n, model=m)
+        for m in models
+        for n in episodes[m]
     )
+    return pd.concat(rows, ignore_index=True)
 
 
 def break_even(time: pd.DataFrame, assistance: Sequence[str], decoder: str, model: str) -> pd.DataFrame:
-    """The time per mode switch at which Retargeting would be as slow as LA+SA, per SA member.
-
-    One row per ``(member, condition)`` (R, and R+SA under the member; ``assistance`` the headline
-    first) for ``decoder`` and ``model``: mean times per task [s] of it and of LA+SA, its switches per
-    task, and ``break-even cost per switch [s]``, the time gap over the switches.
-    """
+    """Per SA member, R's and R+SA's time per mode switch at which they would be as slow as LA+SA."""
     head = for_member(time, assistance[0], decoder=decoder, model=model)
     others = time.assistance.isin(assistance[1:]) & time.decoder.isin([decoder, NO_ASSISTANCE])
     rows = pd.concat([head, time[others & (time.model == model)]])
@@ -196,24 +171,21 @@ def stuck_summary(stuck_rows: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def _pct(x: float) -> str:
+def pct(x: float) -> str:
+    """A share as a percentage to 3 significant digits: ``0.25`` -> ``25%``."""
     return f"{100 * x:.3g}%"
 
 
 def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance: str) -> str:
-    """The share of episodes each condition finishes (``done``: :func:`completion`) under one model,
-    decoder variant (of the LA conditions) and SA member, in words."""
+    """The share of episodes each condition finishes (:func:`completion`) for a model, decoder and member."""
     rows = done[(done.model == model) & done.decoder.isin([decoder, "none"])]
     rows = rows[rows.assistance.isin([assistance, NO_ASSISTANCE])].set_index("condition")
     if rows.empty:
         raise ConfigError(f"no completion rows for {model!r}, decoder {decoder!r}, member {assistance!r}")
-    parts = ", ".join(f"{c} {_pct(rows.finished[c])}" for c in rows.index)
+    parts = ", ".join(f"{c} {pct(rows.finished[c])}" for c in rows.index)
     below = [c for c in rows.index if rows.finished[c] < COMPLETION_BAR]
-    verdict = (
-        f"{', '.join(below)} below the {_pct(COMPLETION_BAR)} that H1 and H3 need"
-        if below
-        else f"every condition at or above the {_pct(COMPLETION_BAR)} that H1 and H3 need"
-    )
+    where = f"{', '.join(below)} below" if below else "every condition at or above"
+    verdict = f"{where} the {pct(COMPLETION_BAR)} that H1 and H3 need"
     episodes = int(rows.episodes.max())
     return f"{model} participants, `{decoder}`, {episodes} episodes per condition: {parts}; {verdict}."
 
@@ -221,14 +193,13 @@ def completion_sentence(done: pd.DataFrame, model: str, decoder: str, assistance
 def switch_sentence(
     shares: pd.DataFrame, model: str, assistance: str, participants_of: str = "cohort"
 ) -> str:
-    """R's and R+SA's (under ``assistance``) mode-switch share (:func:`switch_shares`) in words: "below",
-    "above" or "about" Herlant et al.'s 17.4% by where its 95% interval lies."""
+    """R's and R+SA's mode-switch share (:func:`switch_shares`) against Herlant et al.'s 17.4%, in words."""
     rows = shares[(shares.model == model) & (shares.participants_of == participants_of)]
     rows = rows[rows.assistance.isin([NO_ASSISTANCE, assistance])]
     if rows.empty:
         raise ConfigError(f"no mode-switch rows for model {model!r} ({participants_of})")
     said = " and ".join(
-        f"{_pct(r.switch_share)} [{_pct(r.ci_low)}, {_pct(r.ci_high)}] ({r.condition})"
+        f"{pct(r.switch_share)} [{pct(r.ci_low)}, {pct(r.ci_high)}] ({r.condition})"
         for r in rows.itertuples()
     )
     side = [
@@ -238,5 +209,5 @@ def switch_sentence(
     where = side[0] if len(set(side)) == 1 else "partly " + " and partly ".join(dict.fromkeys(side))
     return (
         f"{model} participants ({participants_of}) switch modes {said} of their time: {where} "
-        f"Herlant et al.'s {_pct(HERLANT_SHARE)}."
+        f"Herlant et al.'s {pct(HERLANT_SHARE)}."
     )

@@ -1,17 +1,12 @@
-r"""The eating study against the belief's cap (notebook 11): the headline's recipe at each cap.
-
-Notebook 10 trains the headline decoder's recipe again at each other cap of its ``cap_sweep``; here each
-runs the study with the belief at its cap (:func:`run`: the headline participant model and member, every
-condition, the first ``sweep_participants``; without a cap the whole cohort, the reading ``@uncapped``,
-:func:`uncapped_claims`). :func:`sweep` gathers completion and H1-H3's effects per cap; :func:`plot`.
-"""
+"""The eating study against the belief's cap (notebook 11): notebook 10's headline recipe at each cap of
+``cap_sweep`` run with the belief at that cap (:func:`run`; without a cap, ``@uncapped``:
+:func:`uncapped_claims`); :func:`sweep` gathers completion and H1-H3's effects per cap; :func:`plot`."""
 
 from __future__ import annotations
 
 import dataclasses
 import warnings
 from collections.abc import Mapping
-from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -26,9 +21,10 @@ from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
 from lasa.evidence.decision import effect_word
 from lasa.evidence.hypotheses import for_member
-from lasa.experiments.eating_task import CAP_SOURCE, cap_decoder_name, cap_label
-from lasa.experiments.study import analysis, claims
+from lasa.experiments.eating_task import cap_decoder_name, cap_label
+from lasa.experiments.study import claims
 from lasa.experiments.study import run as study
+from lasa.experiments.study.analysis import pct
 from lasa.method.decoder import ActionDecoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
@@ -37,10 +33,8 @@ from lasa.world.record import Episodes
 __all__ = [
     "NAME",
     "COLUMNS",
-    "cap_property",
     "load_decoders",
     "run",
-    "stuck",
     "uncapped_claims",
     "sweep",
     "label",
@@ -68,53 +62,29 @@ class CapRun:
     frames: dict[str, pd.DataFrame]
 
 
-def cap_property(figures: Path) -> pd.DataFrame:
-    """Notebook 10's property of the cap sweep's decoders (:func:`.run.eating_property`)."""
-    return study.eating_property(figures, CAP_SOURCE)
-
-
 def load_decoders(
     paths: Paths, robot: str, headline: str, caps: tuple[float | None, ...]
 ) -> dict[float | None, tuple[str, ActionDecoder]]:
-    """Notebook 10's decoder of the headline's recipe at each cap: ``(name, decoder)`` per cap.
-
-    Raises:
-        ArtifactError: A decoder is missing (notebook 10 trains it).
-        CheckpointError: A decoder was trained with another belief than its cap's.
-    """
-    out: dict[float | None, tuple[str, ActionDecoder]] = {}
-    for cap in caps:
-        name = cap_decoder_name(headline, cap)
-        out[cap] = (name, study.load_decoders(paths, robot, [name], cap)[name])
-    return out
+    """Notebook 10's decoder of the headline's recipe at each cap: ``(name, decoder)`` per cap."""
+    names = {cap: cap_decoder_name(headline, cap) for cap in caps}
+    return {cap: (name, study.load_decoders(paths, robot, [name], cap)[name]) for cap, name in names.items()}
 
 
-@dataclasses.dataclass(frozen=True)
-class _Shared:
-    task: EatingTask
-    control: ControlConfig
-    config: study.Config
-    model: str
+_Shared = tuple[EatingTask, ControlConfig, study.Config, str]  # and the headline participant model
 
 
 def _run_cap(shared: _Shared, job: tuple[float | None, str, ActionDecoder, int]) -> CapRun:
     """The study at one cap: the headline model and member, every condition, ``n`` participants."""
-    cap, name, decoder, n = job
-    config = shared.config
+    (task, control, config, model), (cap, name, decoder, n) = shared, job
     session = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
     with warnings.catch_warnings():  # a derived run's cohort: the notebook's own config has warned
         warnings.simplefilter("ignore", UserWarning)
         one = dataclasses.replace(
-            config,
-            participants=n,
-            participant_models=(shared.model,),
-            session=session,
-            video_participant=0,
-            jobs=1,
+            config, participants=n, participant_models=(model,), session=session, video_participant=0, jobs=1
         )
-    control = dataclasses.replace(shared.control, belief_cap=cap)
-    episodes, frames = study.run(shared.task, {name: decoder}, control, one, progress=False)
-    return CapRun(cap, name, episodes[shared.model][name], frames)
+    control = dataclasses.replace(control, belief_cap=cap)
+    episodes, frames = study.run(task, {name: decoder}, control, one, progress=False)
+    return CapRun(cap, name, episodes[model][name], frames)
 
 
 def run(
@@ -125,11 +95,7 @@ def run(
     model: str,
     progress: bool = True,
 ) -> dict[float | None, CapRun]:
-    """The study with each cap's decoder and the belief at that cap, over ``config.jobs`` processes.
-
-    The headline participant model and member, every condition; ``config.sweep_n`` participants at
-    each cap, the whole cohort without one. Participant i is the same person at every cap.
-    """
+    """The study with each cap's decoder and belief: ``config.sweep_n`` participants, without a cap all."""
     jobs = [
         (cap, name, decoder, config.participants if cap is None else config.sweep_n)
         for cap, (name, decoder) in decoders.items()
@@ -141,46 +107,36 @@ def run(
         n_jobs=config.jobs,
         progress=progress,
         desc="study at each cap",
-        shared=_Shared(task, control, config, model),
+        shared=(task, control, config, model),
     )
     return {r.cap: r for r in ran}
-
-
-def stuck(
-    task: EatingTask,
-    runs: Mapping[float | None, CapRun],
-    decoders: Mapping[float | None, tuple[str, ActionDecoder]],
-    config: study.Config,
-    model: str,
-    cap: float | None = None,
-) -> pd.DataFrame:
-    """Where the unfinished LA episodes of the run at ``cap`` stopped (:func:`.analysis.stuck_episodes`)."""
-    r = runs[cap]
-    episodes = {model: {r.decoder: r.episodes}}
-    return analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
 
 
 def uncapped_claims(
     runs: Mapping[float | None, CapRun], prop: pd.DataFrame, config: study.Config, horizon: float
 ) -> list[Claim]:
-    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped:
-    judged as the headline is, its decoder's property (``prop``) deciding whether they are testable."""
+    """The claims rows of the study without the cap, ``study.<claim>@uncapped[+...]``, unflipped."""
     if None not in runs:
         return []
     r = runs[None]
-    head = config.session.assistance[0]
-    reason = claims.untestable_reason(prop[prop.decoder == r.decoder])
-    rows, _ = claims.claims(
-        r.frames,
-        (head,),
-        config.participants,
-        (r.decoder,),
-        horizon=horizon,
-        untestable=reason,
-        belief=cap_label(None),
-        flips=False,
+    return _claims(r.frames, r.decoder, config.participants, config, prop, horizon, cap_label(None))[0]
+
+
+def _claims(
+    frames: dict[str, pd.DataFrame],
+    decoder: str,
+    n: int,
+    config: study.Config,
+    prop: pd.DataFrame,
+    horizon: float,
+    belief: str | None = None,
+) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+    """One run's :func:`.claims.claims` (unflipped), not testable where its decoder misses the property."""
+    reason = claims.untestable_reason(prop[prop.decoder == decoder])
+    head = config.session.assistance[:1]
+    return claims.claims(
+        frames, head, n, (decoder,), horizon=horizon, untestable=reason, belief=belief, flips=False
     )
-    return rows
 
 
 def label(cap: float | None) -> str:
@@ -189,10 +145,8 @@ def label(cap: float | None) -> str:
 
 
 def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
-    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim: SA - no SA
-    Goal Error [m s], LA+SA - R+SA scoop alignment, LA+SA - R restricted mean Total Time [s] (no p)."""
-    within = result["h1_within"]
-    phases, total = result["h2_phases"], result["h3_total"]
+    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim."""
+    within, phases, total = result["h1_within"], result["h2_phases"], result["h3_total"]
     assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
     diff = float(within["mean_sa"] - within["mean_no_sa"])
     h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))
@@ -236,18 +190,6 @@ def _cap_rows(
     return out
 
 
-def _judged(
-    frames: dict[str, pd.DataFrame], decoder: str, n: int, head: str, reason: str | None, horizon: float
-) -> tuple[list[Claim], Mapping[str, object]]:
-    """One run's claims rows of the paper's measures for its first ``n`` participants, and their analysis."""
-    rows, analyses = claims.claims(
-        frames, (head,), n, (decoder,), horizon=horizon, untestable=reason, flips=False
-    )
-    cohort = n > study.PAPER_N
-    keys = {claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
-    return [r for r in rows if r.id in keys], analyses[(head, n if cohort else study.PAPER_N)]
-
-
 def sweep(
     runs: Mapping[float | None, CapRun],
     frames: dict[str, pd.DataFrame],
@@ -258,30 +200,30 @@ def sweep(
     config: study.Config,
     horizon: float,
 ) -> pd.DataFrame:
-    """The sweep's tidy rows (:data:`COLUMNS`), caps in increasing order, no cap last: the study's own cap
-    from the headline run (``frames``, ``prop``), every other cap from its run (``caps_prop``)."""
-    head = config.session.assistance[0]
-    n = config.sweep_n
+    """The sweep's rows (:data:`COLUMNS`), caps in increasing order, no cap last: the study's own from the
+    headline run (``frames``, ``prop``), every other from its run (``caps_prop``)."""
+    head, n = config.session.assistance[0], config.sweep_n
     mine = {k: for_member(f, head, n, decoder=headline, model=model) for k, f in frames.items()}
     runs_by_cap = {
         config.belief_cap: (headline, mine, prop),
         **{c: (r.decoder, r.frames, caps_prop) for c, r in runs.items()},
     }
+    cohort = n > study.PAPER_N
+    keys = {claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
+    paper_n = n if cohort else study.PAPER_N
     parts: dict[float | None, list[dict[str, object]]] = {}
     for cap, (decoder, tables, table) in runs_by_cap.items():
-        reason = claims.untestable_reason(table[table.decoder == decoder])
         first = {k: f[f.participant < n] for k, f in tables.items()}
-        rows, result = _judged(first, decoder, n, head, reason, horizon)
-        parts[cap] = _cap_rows(cap, decoder, first["time"], rows, result, table)
+        rows, analyses = _claims(first, decoder, n, config, table, horizon)
+        mine_rows = [r for r in rows if r.id in keys]
+        parts[cap] = _cap_rows(cap, decoder, first["time"], mine_rows, analyses[(head, paper_n)], table)
     ordered = sorted(parts, key=lambda c: np.inf if c is None else c)
     out = [dict(row, order=i) for i, c in enumerate(ordered) for row in parts[c]]
     return pd.DataFrame(out, columns=list(COLUMNS))
 
 
 def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
-    """Completion per arm, and H1-H3's measured effects (:func:`_effects`) with their 95% intervals,
-    against the cap: ✓ where the cap's decoder meets the property rule, the study's own cap bold, a
-    marker filled where the claim is settled, with its word."""
+    """Completion per arm, and H1-H3's measured effects with their 95% intervals and words, per cap."""
     sns.set_theme(style="whitegrid")
     caps = frame.drop_duplicates("cap").sort_values("order")
     prop = frame[frame.kind == "property"].set_index("cap")
@@ -293,9 +235,7 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         part = done[done["item"] == cond].set_index("cap").reindex(caps.cap)
         style = "--" if cond.endswith("+SA") else "-"
         axes[0].plot(x, 100 * part.value.to_numpy(), style, marker="os^v"[k], label=cond, alpha=0.85)
-    axes[0].set_ylabel("episodes finished [%]")
-    axes[0].set_ylim(-5, 105)
-    axes[0].set_title("completion per arm")
+    axes[0].set(ylabel="episodes finished [%]", ylim=(-5, 105), title="completion per arm")
     axes[0].legend(fontsize=8, loc="center left")
     titles = {
         "h1": "H1: SA - no SA, Goal Error [m s]",
@@ -344,10 +284,6 @@ _EFFECTS = {  # how each claim's measured effect reads, and its unit
 }
 
 
-def _pct(x: float) -> str:
-    return f"{100 * x:.3g}%"
-
-
 def _effect(row: pd.Series) -> str:
     """A claim's measured effect, 95% interval and word: ``H1 (...) −2.04 m s [−2.80, −1.27]: *word*``."""
     name, unit, fmt = _EFFECTS[str(row["item"])]
@@ -364,7 +300,7 @@ def cap_sentence(frame: pd.DataFrame, cap: str) -> str:
     if rows.empty:
         raise ValueError(f"the sweep has no cap {cap!r}; it has {sorted(set(frame.cap.astype(str)))}")
     done = rows[rows.kind == "completion"].set_index("item").value
-    finish = ", ".join(f"{c} {_pct(done[c])}" for c in CONDITIONS if c in done.index)
+    finish = ", ".join(f"{c} {pct(done[c])}" for c in CONDITIONS if c in done.index)
     said = rows[rows.kind == "claim"].set_index("item", drop=False)
     effects = "; ".join(_effect(said.loc[c]) for c in CLAIMS if c in said.index)
     n, decoder = int(rows.n.iloc[0]), rows.decoder.iloc[0]
@@ -386,26 +322,22 @@ def across_caps(frame: pd.DataFrame) -> str:
     """How H1's sign, LA's completion and the property move with the cap, in one sentence."""
     caps = list(dict.fromkeys(frame.sort_values("order").cap.astype(str)))
     h1 = _by_cap(frame, "claim", "value", "h1")
-    lower = [c for c in caps if c in h1.index and h1[c] < 0]
-    higher = [c for c in caps if c in h1.index and h1[c] >= 0]
-    parts = []
-    if lower:
-        parts.append(f"SA lowers Goal Error at cap {_caps(lower)}")
-    if higher:
-        parts.append(f"SA raises it at cap {_caps(higher)}")
+    signs = {
+        "lowers Goal Error": [c for c in caps if c in h1.index and h1[c] < 0],
+        "raises it": [c for c in caps if c in h1.index and h1[c] >= 0],
+    }
+    parts = [f"SA {what} at cap {_caps(at)}" for what, at in signs.items() if at]
     la = _by_cap(frame, "completion", "value", "LA")
-    parts.append("LA finishes " + ", ".join(f"{_pct(la[c])} at {c}" for c in caps if c in la.index))
+    parts.append("LA finishes " + ", ".join(f"{pct(la[c])} at {c}" for c in caps if c in la.index))
     prop = _by_cap(frame, "property", "word")
     misses = [c for c in caps if c in prop.index and prop[c] != "meets the rule"]
-    meets = "at every cap" if not misses else f"at every cap but {_caps(misses)}"
-    if len(misses) == len(prop):
-        meets = "at no cap"
+    meets = f"at every cap but {_caps(misses)}" if misses else "at every cap"
+    meets = "at no cap" if len(misses) == len(prop) else meets
     return f"{'; '.join(parts)}. The recipe's decoder meets the property rule {meets}."
 
 
 def findings(frame: pd.DataFrame, study_cap: str) -> str:
-    """The sweep (:func:`sweep`) in Markdown bullets: the study's cap (``study_cap``, as :func:`label`
-    writes it), no cap (``@uncapped``), and across the caps."""
+    """The sweep in Markdown bullets: the study's cap (``study_cap``: :func:`label`'s), no cap, every cap."""
     caps = set(frame.cap.astype(str))
     out = [f"- **At the study's cap ({study_cap})**, {cap_sentence(frame, study_cap)}"]
     if "none" in caps and study_cap != "none":

@@ -1,15 +1,11 @@
-r"""The eating study's claims H1-H3 (notebook 11): one row per reading, each with its verdict.
-
-The claims follow the paper's tests, level (p < .05) and direction (:data:`CLAIM_TEXT`; rules in
-:mod:`lasa.evidence.rules`, on the tests of :mod:`lasa.evidence.hypotheses`). :func:`claims` writes
-``study.<claim>`` for the paper's reading and ``study.<claim>@<reading>`` for each other
-(:func:`claim_id`); a verdict is settled when the 95% interval of its effect excludes zero, else
-``undecided``. Each rule in full: ``docs/method-notes.md``.
-"""
+"""The eating study's claims H1-H3 (notebook 11): a row per reading (:func:`claim_id`), judged by the paper's
+tests and direction (:mod:`lasa.evidence.hypotheses`, :mod:`lasa.evidence.rules`), settled when the 95%
+interval of its effect excludes zero, else ``undecided``. Each rule in full: ``docs/method-notes.md``."""
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from collections.abc import Iterator, Mapping
 from typing import Any
@@ -79,13 +75,9 @@ def claim_id(
     model: str | None = None,
     belief: str | None = None,
 ) -> str:
-    """``study.<claim>`` for the paper's reading, ``study.<claim>@<reading>`` for the others.
-
-    The paper's reading is its measure, the study's belief, the headline decoder variant, participant
-    model and member (index 0) and 10 participants; another names what differs, joined by ``+`` in
-    that order (``belief``, e.g. ``uncapped``; ``decoder``, ``model``: other than the headline's):
-    ``study.h1@mean_distance+grasp_set+cohort``, ``study.h2@transfers_entropy+one_step+cohort``.
-    """
+    """``study.<claim>`` for the paper's reading (its measure, the study's belief, the headline decoder,
+    model and member, 10 participants), else ``study.<claim>@<reading>``, what differs joined by ``+`` in
+    that order: ``study.h1@mean_distance+grasp_set+cohort``, ``study.h2@transfers_entropy+cohort``."""
     base, _, measure = key.partition("_")  # h1_mean_distance: claim h1, reading mean_distance
     named = None if assistance_index == 0 else assistance  # the headline member goes unnamed
     reading = (measure, belief, decoder, model, named, "cohort" if cohort else None)
@@ -110,33 +102,19 @@ def claims(
     belief: str | None = None,
     flips: bool = True,
 ) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
-    """The claims rows under every reading (measure, member, decoder variant, participant model, n).
-
-    Args:
-        frames: :func:`lasa.experiments.study.run.run`'s tables.
-        assistance: The SA members, the headline first.
-        n_total: The cohort's size (its first :data:`PAPER_N` are the paper's study).
-        decoders: The decoder variants, the headline first (empty: one); the headline is judged under
-            every measure and member, each other under :data:`DECODER_KEYS` and the headline member.
-        models: The participant models, the headline first (default: the ``model`` column's).
-        horizon: Where an unfinished episode's time was cut [s] (H3's restricted times).
-        untestable: Why the study cannot test its hypotheses at all: every row reads not testable.
-        untestable_decoders: Decoder variant -> why its rows are not testable.
-        n_resamples: The paired bootstrap's resamples (H3).
-        belief: Another belief than the study's the frames ran with (``uncapped``), named in every id.
-        flips: Lead each headline row's note with the readings whose words differ (:func:`with_flips`).
-
-    Returns:
-        The rows, and the analyses keyed ``(member, n)`` for the headline decoder and model,
-        ``(member, n, decoder)`` for another decoder, ``(member, n, decoder, model)`` for another model.
-    """
+    """The claims rows under every reading (measure, member, decoder, model, n; the headlines first) and
+    the analyses keyed ``(member, n)``, ``(member, n, decoder)``, ``(member, n, decoder, model)``;
+    ``untestable`` (every row's) and ``untestable_decoders`` say why rows are not testable."""
     if not models and "model" in frames["time"].columns:
         models = tuple(dict.fromkeys(frames["time"].model))
     head = decoders[0] if decoders else None
+    runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
+    runs += [(0, assistance[0], d) for d in decoders[1:]]
+    sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
     analyses: dict[tuple, dict[str, object]] = {}
     rows: list[Claim] = []
     for k, model in enumerate(models or (None,)):
-        for m_i, sa, decoder, n, cohort in _readings(assistance, decoders, n_total):
+        for (m_i, sa, decoder), (n, cohort) in itertools.product(runs, sizes):
             if not _ran(frames["time"], model, decoder):
                 continue
             other = decoder if decoder != head else None
@@ -170,8 +148,8 @@ def likert_row(n: int, assistance: str) -> Claim:
 
 
 def reading_of(key: tuple, decoder: str, model: str) -> tuple[str, str, str]:
-    """(member, decoder variant, participant model) of an analyses key of :func:`claims`, the headline's
-    ``decoder`` and ``model`` filled in where the key leaves them out."""
+    """(member, decoder variant, participant model) of a :func:`claims` analyses key, ``decoder`` and
+    ``model`` (the headline's) where it leaves them out."""
     return key[0], key[2] if len(key) > 2 and key[2] else decoder, key[3] if len(key) > 3 else model
 
 
@@ -183,24 +161,20 @@ def _each(analyses: Analyses, decoder: str, model: str) -> Iterator[tuple[dict[s
 
 
 def h1_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
-    """H1's tests under every reading of :func:`claims`'s ``analyses``, unrounded (``decoder`` and ``model``
-    the headline's): Goal Error between and within subjects and the mean distance within, each with its
-    test, F, df, p and the means with and without SA."""
+    """H1's tests (test, F, df, p, means with and without SA) per reading of :func:`claims`'s ``analyses``."""
     out = []
     for who, res in _each(analyses, decoder, model):
         for name in ("h1_between", "h1_within", "h1_mean_within"):
             r = res[name]
             measure = "mean distance [m]" if name == "h1_mean_within" else "Goal Error [m s]"
             test = {"measure": measure, "test": r["test"], "F": r["F"], "df": f"({r['df1']},{r['df2']})"}
-            out.append(
-                who | test | {"p": r["p"], "mean with SA": r["mean_sa"], "mean without": r["mean_no_sa"]}
-            )
+            means = {"p": r["p"], "mean with SA": r["mean_sa"], "mean without": r["mean_no_sa"]}
+            out.append(who | test | means)
     return pd.DataFrame(out)
 
 
 def h2_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
-    """H2's paired comparison per reading and Dessert phase, unrounded: LA+SA - R+SA's alignment,
-    its interval, p and the participants paired (the arguments are :func:`h1_table`'s)."""
+    """H2's LA+SA - R+SA alignment per reading and Dessert phase: interval, p, pairs (``h1_table``'s args)."""
     names = ("LA+SA - R+SA", "ci_low", "ci_high", "p", "pairs")
     return pd.DataFrame(
         [
@@ -212,11 +186,8 @@ def h2_table(analyses: Analyses, decoder: str, model: str) -> pd.DataFrame:
 
 
 def h3_tables(analyses: Analyses, decoder: str, model: str) -> list[tuple[str, pd.DataFrame, pd.DataFrame]]:
-    """H3's times per reading, unrounded: ``(title, means, times)`` per analysis (``h1_table``'s arguments).
-
-    ``means``: the restricted mean time per condition [s] with its completion (``finished``);
-    ``times``: the bootstrap comparisons of LA+SA with each other condition, ``total`` then ``idle``.
-    """
+    """H3's ``(title, means, times)`` per reading (``h1_table``'s args): the restricted mean time per
+    condition [s] with its completion (``finished``); LA+SA's bootstrap comparisons, total then idle."""
     out = []
     for who, res in _each(analyses, decoder, model):
         short = f"; H3 not testable (completion: {res['h3_short']})" if res["h3_short"] else ""
@@ -229,35 +200,17 @@ def h3_tables(analyses: Analyses, decoder: str, model: str) -> list[tuple[str, p
     return out
 
 
-def _readings(
-    assistance: tuple[str, ...], decoders: tuple[str, ...], n_total: int
-) -> list[tuple[int, str, str | None, int, bool]]:
-    """(member index, member, decoder, participants, cohort) of each reading a participant model is judged in:
-    every member under the headline decoder, then every other under the headline member; 10 and the cohort."""
-    head = decoders[0] if decoders else None
-    runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
-    runs += [(0, assistance[0], d) for d in decoders[1:]]
-    sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
-    return [(m_i, sa, decoder, n, cohort) for m_i, sa, decoder in runs for n, cohort in sizes]
-
-
 def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
     """Whether the time table holds LA episodes of this participant model and decoder variant."""
-    rows = time
-    if model is not None and "model" in time.columns:
-        rows = rows[rows.model == model]
-    if decoder is not None and "decoder" in time.columns:
-        rows = rows[rows.decoder == decoder]
-    return len(rows) > 0
+    for column, value in (("model", model), ("decoder", decoder)):
+        if value is not None and column in time.columns:
+            time = time[time[column] == value]
+    return len(time) > 0
 
 
 def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, float]:
-    """The numbers a row's sentences read beside its effect (``claim_values.csv``'s facts).
-
-    ``testable``, ``censored`` (1 when the effect rests on a lower bound), ``completion.<condition>``;
-    H1's ``difference`` (m s, or cm) and ``F``, ``df1``, ``df2``, ``p``; H2's scoop ``difference``,
-    ``p`` and ``pairs``; H3's ``versus.<condition>``, the compared restricted mean Total Time [s].
-    """
+    """The numbers a row's sentences read beside its effect (``claim_values.csv``'s facts): ``testable``,
+    ``censored``, ``completion.<condition>``, ``difference``, ``F``, ``p`` and so on, H3's ``versus.<c>``."""
     verdict, _, _, _, measured = judged
     done = result["h3_completion"]
     assert isinstance(done, pd.Series)
@@ -293,8 +246,7 @@ def _claim_row(
     model: str | None,
     reason: str | None,
 ) -> Claim:
-    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason; its
-    note starts with ``Measured effect: <effect>.`` (:func:`lasa.evidence.findings.study_effect`)."""
+    """One claims row: the tests' verdict, settled or undecided, or not testable with its reason."""
     verdict, value, low, high, measured = judged
     r = rule(cid)
     numbers = facts(key, result, judged)
@@ -365,21 +317,16 @@ def with_flips(rows: list[Claim]) -> list[Claim]:
                 for o in rows
                 if o.id.startswith(c.id + "@") and o.reproduced != c.reproduced
             ]
-            lead = (
-                f"Readings with other words: {'; '.join(flips)}. "
-                if flips
-                else "Every reading gives the same words. "
-            )
-            measured = "Measured effect: "
-            effect, rest = c.note.split(". ", 1) if c.note.startswith(measured) else ("", c.note)
+            same = "Every reading gives the same words. "
+            lead = f"Readings with other words: {'; '.join(flips)}. " if flips else same
+            effect, rest = c.note.split(". ", 1) if c.note.startswith("Measured effect: ") else ("", c.note)
             c = dataclasses.replace(c, note=(f"{effect}. " if effect else "") + lead + rest)
         out.append(c)
     return out
 
 
 def untestable_reason(prop: pd.DataFrame) -> str | None:
-    """Why the study cannot test H1-H3, or None if a decoder meets the property rule
-    (:func:`lasa.evidence.latent_property.holds`); the reason gives the best variant's numbers."""
+    """Why the study cannot test H1-H3 (the best variant's numbers), None if a decoder meets the rule."""
     if latent_property.holds(prop).any():
         return None
     best = latent_property.choose(prop)
@@ -402,14 +349,12 @@ def variants_table(
     assistance: str,
     models: tuple[str, ...] = (),
 ) -> pd.DataFrame:
-    """One row per participant model and decoder variant, the headlines first: the property (``prop``),
-    completion (``done``: :func:`lasa.experiments.study.analysis.completion`) under the headline member
-    ``assistance``, and the verdicts of the claims ``rows``."""
+    """Per participant model and decoder variant, the headlines first: the property (``prop``), completion
+    (``done``: :func:`.analysis.completion`) under the headline member, the claims ``rows``' verdicts."""
     if not models and "model" in done.columns:
         models = tuple(dict.fromkeys(done.model))
     by_id = {c.id: c for c in rows}
-    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
-    finished = done.set_index(keys).finished
+    finished = _finished(done)
     out = []
     for k, model in enumerate(models or (None,)):
         lead = () if model is None else (model,)
@@ -443,19 +388,18 @@ def _verdict_cells(
     model: str | None,
     assistance_index: int = 0,
 ) -> dict[str, str]:
-    """H1-H3's verdicts of one reading (:func:`claim_id`'s arguments), ``10 / all``, and the first 10's
-    effect in words (``H<k> effect (10)``); ``-`` where the study had no such row."""
+    """H1-H3's verdicts of one reading (:func:`claim_id`'s args), ``10 / all``, and the first 10's effect."""
     out = {}
     for h in DECODER_KEYS:
         ids = [claim_id(h, assistance_index, assistance, cohort, decoder, model) for cohort in (False, True)]
         out[f"{h.upper()} (10 / all)"] = " / ".join(_word(by_id[i]) if i in by_id else "-" for i in ids)
-        out[f"{h.upper()} effect (10)"] = (_effect(by_id[ids[0]]) or "-") if ids[0] in by_id else "-"
+        out[f"{h.upper()} effect (10)"] = _effect(by_id[ids[0]]) if ids[0] in by_id else "-"
     return out
 
 
 def _effect(row: Claim) -> str:
-    """A row's effect in words with its sign and test, from its numbers."""
-    return study_effect(row.id, numbers_of(row))
+    """A row's measured effect in words, ``-`` if none."""
+    return study_effect(row.id, numbers_of(row)) or "-"
 
 
 def _word(row: Claim) -> str:
@@ -467,11 +411,10 @@ def _word(row: Claim) -> str:
 def members_table(
     done: pd.DataFrame, rows: list[Claim], assistance: tuple[str, ...], decoder: str, model: str
 ) -> pd.DataFrame:
-    """The SA members side by side, under the headline ``decoder`` and ``model``: one row per member of
-    ``assistance`` (the headline first), R+SA's and LA+SA's completion (``done``:
-    :func:`lasa.experiments.study.analysis.completion`) and H1-H3's verdicts (:func:`_verdict_cells`)."""
-    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
-    finished = done.set_index(keys).finished
+    """The SA members side by side under the headline ``decoder`` and ``model``: R+SA's and LA+SA's
+    completion (``done``: :func:`.analysis.completion`) and H1-H3's verdicts (:func:`_verdict_cells`)."""
+    finished = _finished(done)
+    keys = finished.index.names
     by_id = {c.id: c for c in rows}
     out = []
     for m_i, sa in enumerate(assistance):
@@ -485,16 +428,18 @@ def members_table(
     return pd.DataFrame(out)
 
 
+def _finished(done: pd.DataFrame) -> pd.Series:
+    """:func:`.analysis.completion`'s share finished, indexed by its keys."""
+    keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
+    return done.set_index(keys).finished
+
+
 def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
-    """Our result beside the paper's in each study figure (the plots' ``stats``): per claim,
-    ``{"headline": "ours (10): <word>; <effect>", "cohort": ...}``, ``cohort`` only when there is one."""
+    """Our result per claim and figure panel (the plots' ``stats``): ``"ours (10): <word>; <effect>"``."""
     by_id = {c.id: c for c in rows}
-    out: dict[str, dict[str, str]] = {}
-    for h in DECODER_KEYS:
-        out[h] = {}
-        for panel, cohort in (("headline", False), ("cohort", True)):
-            row = by_id.get(claim_id(h, 0, "", cohort))
-            if row is None or (cohort and n_total <= PAPER_N):
-                continue
-            out[h][panel] = f"ours ({row.n_users}): {_word(row)}; {_effect(row) or '-'}"
-    return out
+    panels = (("headline", False), ("cohort", True))[: 2 if n_total > PAPER_N else 1]
+    found = {h: {p: by_id.get(claim_id(h, 0, "", cohort)) for p, cohort in panels} for h in DECODER_KEYS}
+    return {
+        h: {p: f"ours ({r.n_users}): {_word(r)}; {_effect(r)}" for p, r in mine.items() if r is not None}
+        for h, mine in found.items()
+    }

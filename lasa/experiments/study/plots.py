@@ -1,11 +1,6 @@
-"""The eating study's three figures (notebook 11): Goal Error, Total and Idle Time, Preference Alignment.
-
-Each is a :class:`FigureSpec` (:data:`GOAL_ERROR`, :data:`TIME`, :data:`ALIGNMENT`) for
-:func:`lasa.evidence.publish.publish`. A plot draws one member, decoder variant and participant model:
-the first :data:`PAPER_N` participants (:data:`HEADLINE`) and, beside them if the table holds more, the
-cohort (:data:`COHORT`), each panel titled with its N and our result (``stats``), the figure with the
-paper's (:data:`PAPER_H`). A bar whose episodes did not all finish is hatched (:data:`HATCH`): a lower bound.
-"""
+"""The eating study's figures (notebook 11) for :func:`lasa.evidence.publish.publish`: Goal Error, Total and
+Idle Time, Preference Alignment of one member, decoder and model; the first :data:`PAPER_N` participants and
+the cohort beside them, each panel with our result (``stats``); a censored bar hatched (a lower bound)."""
 
 from __future__ import annotations
 
@@ -56,10 +51,10 @@ PANELS = (HEADLINE, COHORT)
 HATCH = "///"  # a censored bar's hatch
 CUT = "hatched: some episodes cut at the horizon"
 CENSORED = f"{CUT} (a lower bound)"  # what the legend says HATCH means
-# Fig. time's whiskers, dodged apart so the two intervals of a bar never merge: (offset from the
-# bar's centre [slot widths], colour) of Total Time's and of Idle Time's
+# Fig. time's whiskers, dodged so a bar's two intervals never merge: (offset [slot widths], colour)
 WHISKERS = {"total_time": (-0.15, "0.15"), "idle_time": (0.15, "0.5")}
 Stats = Mapping[str, str] | None  # our result per panel (HEADLINE, COHORT), a short line each
+Panels = Sequence[tuple[str, pd.DataFrame]]  # each panel's name (HEADLINE, COHORT) and rows
 Bars = dict[Hashable, mpatches.Rectangle]  # a drawn bar by its group (a condition, or a (x level, condition))
 
 
@@ -86,16 +81,12 @@ PAPER_H = {
 
 
 def _caption(assistance: str, decoder: str | None, model: str | None) -> str:
-    """What a figure shows: the SA member, the decoder variant and participant model if named."""
-    return (
-        f"SA = {assistance}"
-        + (f"; decoder = {decoder}" if decoder else "")
-        + (f"; participant model = {model}" if model else "")
-    )
+    said = {"SA": assistance, "decoder": decoder, "participant model": model}
+    return "; ".join(f"{what} = {name}" for what, name in said.items() if name)
 
 
 def _panels(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
-    """The panels' names and rows: the first PAPER_N participants; the whole table if it holds more."""
+    """The panels' names and rows: the first PAPER_N participants, and the whole table if it holds more."""
     head = data[data.participant < PAPER_N]
     panels = [(HEADLINE, head)]
     if data.participant.nunique() > head.participant.nunique():
@@ -103,7 +94,7 @@ def _panels(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
     return panels
 
 
-def _panel_titles(panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, inches: float) -> list[str]:
+def _panel_titles(panels: Panels, stats: Stats, inches: float) -> list[str]:
     """Each panel's title: its N and, if ``stats`` has one, our result; padded to the same line count."""
     titles = []
     for panel, part in panels:
@@ -120,13 +111,9 @@ def _panel_titles(panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, inch
 
 
 def _layout(
-    panels: Sequence[tuple[str, pd.DataFrame]], stats: Stats, size: tuple[float, float], n_axes: int = 1
-) -> tuple[Figure, list[list[Axes]]]:
-    """A figure of one titled subfigure per panel, side by side, each holding ``n_axes`` axes.
-
-    Raises:
-        ConfigError: if ``stats`` names a panel other than :data:`HEADLINE` and :data:`COHORT`.
-    """
+    panels: Panels, stats: Stats, size: tuple[float, float], draw: Callable[..., None], n_axes: int = 1
+) -> tuple[Figure, list[Axes]]:
+    """A figure of a titled subfigure per panel, each of ``n_axes`` axes drawn by ``draw(rows, *axes)``."""
     unknown = sorted(set(stats or {}) - set(PANELS))
     if unknown:
         raise ConfigError(f"stats keys must be among {PANELS}, got {unknown}")
@@ -139,7 +126,9 @@ def _layout(
     for sub, title in zip(subs, _panel_titles(panels, stats, width - 1.6), strict=True):
         sub.suptitle(title, fontsize=10)
         grid.append(list(np.atleast_1d(sub.subplots(1, n_axes, sharey=True))))
-    return fig, grid
+    for (_, part), axes in zip(panels, grid, strict=True):
+        draw(part, *axes)
+    return fig, [ax for axes in grid for ax in axes]
 
 
 def _finish(
@@ -149,8 +138,7 @@ def _finish(
     notes: Sequence[tuple[Artist, str]],
     keys: Sequence[Artist] | None = (),
 ) -> Figure:
-    """Share the y range of every axes, title the figure, and add its legends: ``notes`` below the
-    panels, and on the right the conditions' colours and ``keys`` (None: no such legend)."""
+    """Share the y range, title the figure, add the legends: ``notes`` below, colours and ``keys`` right."""
     top = max(ax.get_ylim()[1] for ax in axes)
     bottom = min(0.0, *(ax.get_ylim()[0] for ax in axes))
     for ax in axes:
@@ -179,19 +167,14 @@ def _hatch_note(data: pd.DataFrame, horizon: float | None = None, also: str = ""
 
 
 def _with_completion(data: pd.DataFrame, completed: pd.DataFrame | None) -> pd.DataFrame:
-    """``data`` with its episodes' ``completed`` (bool): its own column, else joined from ``completed``
-    on the :data:`ROW_KEYS` both hold; without either, ``data`` as it is.
-
-    Raises:
-        ConfigError: if an episode of ``data`` has no row in ``completed``.
-    """
+    """``data`` with its episodes' ``completed`` (bool): its own, else joined from ``completed`` on the
+    :data:`ROW_KEYS` both hold (a ConfigError if one has no row); without either, ``data`` as it is."""
     if "completed" in data.columns:
         return data.assign(completed=data.completed.astype(bool))
     if completed is None:
         return data
     keys = [k for k in ROW_KEYS if k in data.columns and k in completed.columns]
-    table = completed[[*keys, "completed"]]
-    joined = data.merge(table, on=keys, how="left", validate="many_to_one")
+    joined = data.merge(completed[[*keys, "completed"]], on=keys, how="left", validate="many_to_one")
     missing = joined.completed.isna()
     if missing.any():
         raise ConfigError(
@@ -249,23 +232,18 @@ def plot_goal_error(
     stats: Stats = None,
     completed: pd.DataFrame | None = None,
 ) -> Figure:
-    """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants).
-
-    ``frame`` (:data:`GOAL_ERROR`'s columns) is drawn for the SA member ``assistance`` (the unassisted
-    conditions beside it), ``decoder`` and ``model`` (None: every row); ``stats`` is our result per
-    panel (:data:`HEADLINE`, :data:`COHORT`); ``completed``, the Time table, marks the censored bars.
-    """
+    """Fig. error: Goal Error per condition and task (bars: mean, 95% CI; dots: participants) of the SA
+    member ``assistance``, ``decoder`` and ``model`` (None: every row); ``stats``: our result per panel;
+    ``completed``, the Time table, marks the censored bars."""
     data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), completed)
     panels = _panels(data)
-    fig, grid = _layout(panels, stats, (5.6, 4.4))
-    for (_, part), (ax,) in zip(panels, grid, strict=True):
-        _goal_error_axes(ax, part)
+    fig, axes = _layout(panels, stats, (5.6, 4.4), _goal_error_axes)
     paper = wrap_to(PAPER_H["h1"], 5.6 * len(panels), 10)
     title = f"Goal Error ({_caption(assistance, decoder, model)})\n{paper}"
-    return _finish(fig, [ax for axes in grid for ax in axes], title, [_hatch_note(data)])
+    return _finish(fig, axes, title, [_hatch_note(data)])
 
 
-def _goal_error_axes(ax: Axes, part: pd.DataFrame) -> None:
+def _goal_error_axes(part: pd.DataFrame, ax: Axes) -> None:
     """One panel of Goal Error: bars per task x condition (censored ones hatched), a dot per participant."""
     before = len(ax.patches)
     kwargs = {"x": "task", "y": "goal_error", "order": TASKS, "hue": "condition", "hue_order": CONDITIONS}
@@ -286,46 +264,50 @@ def plot_time(
     horizon: float | None = None,
     stats: Stats = None,
 ) -> Figure:
-    """Fig. time: Total Time (solid) and Idle Time (light) per condition and task, means with 95% CI.
-
-    Every bar says which share finished; the measures' whiskers sit either side of its centre
-    (:data:`WHISKERS`). The arguments are :func:`plot_goal_error`'s, and ``horizon`` [s], which the
-    legend names (default: the longest unfinished episode's time).
-    """
+    """Fig. time: Total (solid) and Idle Time (light) per condition and task, means with 95% CI, each
+    bar's share finished; ``horizon`` [s] defaults to the longest unfinished episode's time."""
     data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), None)
     if horizon is None:
         cut = data.total_time[~data.completed]
         horizon = float(cut.max()) if len(cut) else math.nan
     panels = _panels(data)
-    fig, grid = _layout(panels, stats, (7.6, 4.8), n_axes=len(TASKS))
-    for (_, part), axes in zip(panels, grid, strict=True):
-        for ax, task in zip(axes, TASKS, strict=True):
-            _time_bars(ax, part[part.task == task])
-            ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
-            ax.set_ylabel("time [s]")
+    fig, axes = _layout(panels, stats, (7.6, 4.8), _time_axes, n_axes=len(TASKS))
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
     idle_note = (idle, "light: Idle Time; text: share of episodes finished")
-    notes = [_hatch_note(data, horizon), idle_note, *_whisker_notes()]
+    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
+    whiskers = [
+        (
+            Line2D([], [], color=colour, lw=2),
+            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
+        )
+        for m, (dx, colour) in WHISKERS.items()
+    ]
+    notes = [_hatch_note(data, horizon), idle_note, *whiskers]
     title = wrap_to(f"Total and Idle Time ({_caption(assistance, decoder, model)})", 7.6 * len(panels), 10)
     title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
-    return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=None)
+    return _finish(fig, axes, title, notes, keys=None)
 
 
-def _time_bars(ax: Axes, part: pd.DataFrame) -> None:
-    """One task's bars: Total Time per condition (hatched if censored; its share finished), Idle over it."""
-    before, lines = len(ax.patches), len(ax.lines)
-    common = {"data": part, "x": "condition", "order": CONDITIONS, **CI, "ax": ax}
-    sns.barplot(**common, y="total_time", palette=PALETTE, hue="condition", legend=False)
-    bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
-    _hatch(bars, _censored(part, ("condition",)))
-    done = part.groupby("condition").completed.mean()
-    for condition, bar in bars.items():
-        if condition in done:
-            _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
-    _whiskers(ax.lines[lines:], "total_time")
-    lines = len(ax.lines)
-    sns.barplot(**common, y="idle_time", color="white", alpha=0.6)
-    _whiskers(ax.lines[lines:], "idle_time")
+def _time_axes(part: pd.DataFrame, *axes: Axes) -> None:
+    """One panel of Fig. time, an axes per task: Total Time per condition (hatched if censored; its share
+    finished), Idle over it."""
+    for ax, task in zip(axes, TASKS, strict=True):
+        rows = part[part.task == task]
+        before, lines = len(ax.patches), len(ax.lines)
+        common = {"data": rows, "x": "condition", "order": CONDITIONS, **CI, "ax": ax}
+        sns.barplot(**common, y="total_time", palette=PALETTE, hue="condition", legend=False)
+        bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
+        _hatch(bars, _censored(rows, ("condition",)))
+        done = rows.groupby("condition").completed.mean()
+        for condition, bar in bars.items():
+            if condition in done:
+                _label(ax, bar, f"{100 * float(done[condition]):.0f}% done")
+        _whiskers(ax.lines[lines:], "total_time")
+        lines = len(ax.lines)
+        sns.barplot(**common, y="idle_time", color="white", alpha=0.6)
+        _whiskers(ax.lines[lines:], "idle_time")
+        ax.set_title(f"{task}: total (solid) and idle (light)", fontsize=10)
+        ax.set_ylabel("time [s]")
 
 
 def _whiskers(lines: Iterable[Line2D], measure: str) -> None:
@@ -335,18 +317,6 @@ def _whiskers(lines: Iterable[Line2D], measure: str) -> None:
         line.set_xdata(np.asarray(line.get_xdata(), dtype=float) + dx)
         line.set_color(colour)
         line.set_gid(measure)
-
-
-def _whisker_notes() -> list[tuple[Artist, str]]:
-    """The legend's entries for the whiskers of Fig. time: where each measure's sits, in its colour."""
-    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
-    return [
-        (
-            Line2D([], [], color=colour, lw=2),
-            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
-        )
-        for m, (dx, colour) in WHISKERS.items()
-    ]
 
 
 def _label(ax: Axes, bar: mpatches.Rectangle, text: str, foot: bool = False) -> None:
@@ -366,45 +336,28 @@ def plot_alignment(
     stats: Stats = None,
     completed: pd.DataFrame | None = None,
 ) -> Figure:
-    """Fig. dessert (left): Preference Alignment per Dessert phase and condition, scoop shaded.
-
-    Each bar (mean over the participants who reached the phase, 95% CI) says its n and is hatched
-    where some participant did not reach the phase (``steps > 0``, or a non-NaN ``alignment``) or
-    did not finish. The arguments are :func:`plot_goal_error`'s.
-    """
+    """Fig. dessert (left): Preference Alignment per Dessert phase and condition, scoop shaded; each bar
+    says its n and is hatched where someone did not reach the phase or finish."""
     data = for_member(frame, assistance, decoder=decoder, model=model)
     data = data[(data.task == "Dessert") & data.phase.isin(PHASES)]
     data = _with_completion(data, completed)
     panels = _panels(data)
-    fig, grid = _layout(panels, stats, (6.6, 4.4))
-    for (_, part), (ax,) in zip(panels, grid, strict=True):
-        _alignment_axes(ax, part)
+    fig, axes = _layout(panels, stats, (6.6, 4.4), _alignment_axes)
     scoop = mpatches.Patch(facecolor="0.92", label="shaded: the scoop phase (H2)")
     count = (mpatches.Patch(visible=False), "n (at a bar's foot): participants who reached the phase")
     notes = [_hatch_note(data, also="some participant did not reach the phase"), count]
     title = f"Dessert: alignment with each phase's preference ({_caption(assistance, decoder, model)})"
     title = f"{wrap_to(title, 6.6 * len(panels), 10)}\n{PAPER_H['h2']}"
-    return _finish(fig, [ax for axes in grid for ax in axes], title, notes, keys=[scoop])
+    return _finish(fig, axes, title, notes, keys=[scoop])
 
 
-def _alignment_axes(ax: Axes, part: pd.DataFrame) -> None:
+def _alignment_axes(part: pd.DataFrame, ax: Axes) -> None:
     """One panel of alignment: bars per phase x condition, hatched where censored, each with its n."""
     ax.axvspan(0.5, 1.5, color="0.92", zorder=0)  # the scoop phase
     before = len(ax.patches)
     hues = {"hue": "condition", "hue_order": CONDITIONS, "palette": PALETTE, **CI}
     sns.barplot(data=part, x="phase", y="alignment", order=PHASES, **hues, ax=ax, legend=False)
-    counts = _reached(part)
-    bars = _bars_at(ax.patches[before:], _slots(PHASES, CONDITIONS))
-    _hatch(bars, {key: bool(row.censored) for key, row in counts.iterrows()})
-    for key, bar in bars.items():
-        n = int(counts.n[key]) if key in counts.index else 0
-        _label(ax, bar, f"n={n}", foot=True)
-    ax.set_ylabel("Preference Alignment (d · d*)")
-
-
-def _reached(part: pd.DataFrame) -> pd.DataFrame:
-    """Per (phase, condition): ``n`` who reached the phase, ``of`` participants, and whether ``censored``
-    (someone did not reach it, or did not finish)."""
+    # per (phase, condition): n who reached the phase (steps > 0), censored where not all or unfinished
     reached = part.steps > 0 if "steps" in part.columns else part.alignment.notna()
     groups = part.groupby(["phase", "condition"])
     of = groups.participant.nunique()
@@ -412,18 +365,18 @@ def _reached(part: pd.DataFrame) -> pd.DataFrame:
     censored = n < of
     if "completed" in part.columns:
         censored |= ~groups.completed.all()
-    return pd.DataFrame({"n": n, "of": of, "censored": censored})
+    bars = _bars_at(ax.patches[before:], _slots(PHASES, CONDITIONS))
+    _hatch(bars, {key: bool(c) for key, c in censored.items()})
+    for key, bar in bars.items():
+        _label(ax, bar, f"n={int(n[key]) if key in n.index else 0}", foot=True)
+    ax.set_ylabel("Preference Alignment (d · d*)")
 
 
 def video_clips(
     episodes: Episodes, participant: int, assistance: str, stride: int, dt: float, task: str = "Dessert"
 ) -> list[tuple[np.ndarray, list[str]]]:
-    """One participant's episode of ``task`` under each condition, as the ``(states, captions)`` clips of
-    :func:`lasa.evidence.video.write_clips`: every ``stride``-th state, captioned with condition and time.
-
-    Raises:
-        ConfigError: The episodes hold no such episode under some condition.
-    """
+    """One participant's episode of ``task`` under each condition, every ``stride``-th state captioned with
+    condition and time: :func:`lasa.evidence.video.write_clips`' clips."""
     clips = []
     for cond in CONDITIONS:
         asst = assistance if cond.endswith("+SA") else NO_ASSISTANCE

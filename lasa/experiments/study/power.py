@@ -1,11 +1,6 @@
-"""Who a human replication of the eating study needs: the power of H1-H3's tests, by simulation.
-
-:func:`power` draws cohorts of ``n`` from the simulated participants (with replacement, each drawn
-participant a new person) and applies each claim's own test (:func:`lasa.evidence.hypotheses.analyse`,
-``judge``); the power at ``n`` is the share of drawn cohorts whose effect's 95% interval excludes 0 on
-the side of the whole cohort's effect. :func:`needed` gives the smallest cohort from which power stays
-at the target, :func:`sentence` says it. These rest on simulated participants: ``docs/method-notes.md``.
-"""
+"""Who a human replication of the eating study needs: the power of H1-H3's own tests at each cohort size,
+the share of cohorts drawn from the simulated participants whose effect's 95% interval excludes 0 on the
+whole cohort's side (:func:`power`); :func:`needed`, :func:`sentence`. See ``docs/method-notes.md``."""
 
 from __future__ import annotations
 
@@ -28,6 +23,7 @@ __all__ = ["POWER_CLAIMS", "SIZES", "power", "needed", "sentence"]
 
 POWER_CLAIMS: tuple[str, ...] = ("h1", "h2", "h3")  # the claim keys of judge whose power is simulated
 SIZES: tuple[int, ...] = (6, 10, 16, 24, 40, 60)  # cohort sizes simulated by default [participants]
+_TABLES = ("goal_error", "time", "alignment")  # lasa.experiments.study.run.run's tables
 _CHUNK = 10  # drawn cohorts per job (the progress bar steps by a job) [-]
 
 # what each claim's effect says, by its sign: (above 0, below 0)
@@ -55,17 +51,10 @@ def power(
     n_resamples: int = 500,
     n_jobs: int = 1,
 ) -> pd.DataFrame:
-    """The power of H1-H3's tests per cohort size, drawing cohorts from the simulated participants.
-
-    ``frames`` are :func:`lasa.experiments.study.run.run`'s tables; ``assistance``, ``decoder`` and
-    ``model`` choose their rows (None: the frames hold one); ``draws`` cohorts of each of ``sizes``
-    are drawn up front from ``seed`` (the table does not depend on ``n_jobs`` worker processes);
-    ``horizon`` [s] and ``n_resamples`` are H3's. One row per claim and size (:data:`_COLUMNS`).
-
-    Raises:
-        ConfigError: Bad ``sizes``, ``draws``, ``n_resamples`` or ``n_jobs``, or a member, variant or
-            model not in ``frames``.
-    """
+    """The power of H1-H3's tests per claim and cohort size (:data:`_COLUMNS`) on
+    :func:`lasa.experiments.study.run.run`'s ``frames`` of one member, decoder and model (None: the only
+    one): ``draws`` cohorts of each of ``sizes`` drawn with replacement from ``seed`` (whatever ``n_jobs``);
+    ``horizon`` [s] and ``n_resamples`` are H3's."""
     sizes = _checked(sizes, draws, n_resamples, n_jobs)
     tables = _rows_of(frames, assistance, decoder, model)
     setting = (assistance, decoder, model, float(horizon), int(n_resamples))
@@ -108,12 +97,8 @@ def _checked(sizes: Sequence[int], draws: int, n_resamples: int, n_jobs: int) ->
 def _rows_of(
     frames: dict[str, pd.DataFrame], assistance: str, decoder: str | None, model: str | None
 ) -> dict[str, pd.DataFrame]:
-    """The three tables' rows of one member, decoder variant and model (``for_member``), checked.
-
-    Raises:
-        ConfigError: A table is missing, or the member, decoder or model is not in the tables.
-    """
-    missing = [k for k in ("goal_error", "time", "alignment") if k not in frames]
+    """The three tables' rows of one member, decoder variant and model (``for_member``), checked."""
+    missing = [k for k in _TABLES if k not in frames]
     if missing:
         raise ConfigError(f"frames lacks {missing}; pass lasa.experiments.study.run.run's three tables")
     time = frames["time"]
@@ -122,10 +107,7 @@ def _rows_of(
             check_choice(name, value, sorted(set(time[column]) - {NO_ASSISTANCE}))
     if model is not None and "model" in time.columns:
         check_choice("participant model", model, sorted(set(time.model)))
-    out = {
-        k: for_member(frames[k], assistance, None, decoder, model)
-        for k in ("goal_error", "time", "alignment")
-    }
+    out = {k: for_member(frames[k], assistance, None, decoder, model) for k in _TABLES}
     if out["time"].participant.nunique() < 2:
         raise ConfigError(f"the rows of ({assistance}, {decoder}, {model}) have fewer than 2 participants")
     return out
@@ -151,11 +133,7 @@ def _outcome(
     setting: tuple[str, str | None, str | None, float, int],
     strict: bool = False,
 ) -> dict[str, tuple[float, float, float, str]]:
-    """Per claim of :data:`POWER_CLAIMS`: the (value, ci_low, ci_high, verdict) ``judge`` gives a cohort.
-
-    Unless ``strict`` (the whole cohort), a cohort whose tests raise ``ConfigError`` reads ``not
-    testable``; runtime warnings of degenerate drawn cohorts are silenced.
-    """
+    """Per claim: a cohort's (value, ci_low, ci_high, verdict); unless ``strict``, errors: not testable."""
     assistance, decoder, model, horizon, n_resamples = setting
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -178,11 +156,8 @@ def _evaluate(
 ) -> list[dict[str, tuple[int, bool, bool]]]:
     """Per drawn cohort of the job, per claim: :func:`_side`."""
     tables, ids, setting = shared
-    out = []
-    for chosen in job[1]:
-        judged = _outcome(_drawn(tables, ids, chosen), setting)
-        out.append({claim: _side(claim, *v) for claim, v in judged.items()})
-    return out
+    judged = (_outcome(_drawn(tables, ids, chosen), setting) for chosen in job[1])
+    return [{claim: _side(claim, *v) for claim, v in one.items()} for one in judged]
 
 
 def _side(claim: str, value: float, low: float, high: float, verdict: str) -> tuple[int, bool, bool]:
@@ -221,13 +196,8 @@ def _row(
 
 
 def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) -> pd.DataFrame:
-    """Per claim of :func:`power`'s ``table``, the smallest simulated cohort from which power stays at
-    ``target`` or above (every larger size reaching it too; ``interpolate``: where power crosses it,
-    linear in n, rounded up): ``needed`` (NA if the largest size falls short) and its ``explanation``.
-
-    Raises:
-        ConfigError: ``target`` outside (0, 1), or ``table`` lacks :func:`power`'s columns.
-    """
+    """Per claim of :func:`power`'s ``table``, the smallest cohort from which every size reaches ``target``
+    power (``interpolate``: linearly where it crosses, rounded up): ``needed`` (NA if none) and why."""
     if not 0.0 < target < 1.0:
         raise ConfigError(f"target must be a power in (0, 1), got {target!r}")
     lacking = [c for c in _COLUMNS if c not in table.columns]
@@ -281,11 +251,7 @@ def _needed_row(claim: str, part: pd.DataFrame, target: float, interpolate: bool
 
 
 def sentence(table: pd.DataFrame, claim: str) -> str:
-    """One line: whom a replication of ``claim`` (``h1``-``h3``) should recruit (:func:`needed`'s ``table``).
-
-    Raises:
-        ConfigError: ``claim`` is not in ``table``.
-    """
+    """Whom a replication of ``claim`` (``h1``-``h3``) should recruit, from :func:`needed`'s ``table``."""
     check_choice("claim", claim, list(table.claim))
     row = table.set_index("claim").loc[claim]
     pct = f"{100 * row.target:.0f}%"

@@ -1,10 +1,5 @@
-"""The eating study (notebook 11): the simulated cohort's run and its :class:`Config`.
-
-A cohort of simulated participants does both eating tasks under R, R+SA, LA and LA+SA, under each
-participant model, SA member and decoder variant. Three tidy tables come out (``goal_error``,
-``time``, ``alignment``), one row per participant x condition x task (x phase), with the columns
-``decoder`` (the variant of an LA row) and ``model``.
-"""
+"""The eating study (notebook 11): its :class:`Config` and the simulated cohort's :func:`run` of both eating
+tasks under R, R+SA, LA and LA+SA, each participant model, SA member and decoder variant."""
 
 from __future__ import annotations
 
@@ -68,9 +63,8 @@ class Config:
     """The simulated study (notebook 11); the participants' parameters are ``session.participant``."""
 
     participants: AtLeastTwo = 40  # the larger cohort; its first 10 are the paper-sized study [-]
-    # how a session runs (horizon, tolerances, stick grid), the participants' parameters and the SA
-    # members, the first the headline: hindsight optimisation with goals as sets (the paper's
-    # study), its one-target member, grasp_set [-]
+    # how a session runs, the participants' parameters and the SA members, the headline first: hindsight
+    # optimisation with goals as sets (the paper's study), its one-target member, grasp_set [-]
     session: StudyConfig = StudyConfig(assistance=("hindsight", "hindsight_point", "grasp_set"))
     seed: Seed = 0  # seed of the cohort and of the participants' choices [-]
     video_participant: NonNegativeInt = 0  # whose Dessert the video shows [-]
@@ -81,9 +75,8 @@ class Config:
     # which of notebook 10's decoder variants run (variants_to_run): "property" or "all" (LARGE=1) [-]
     decoders: str = "property"
     scheduler: str = ""  # a Dask scheduler address for the variants' runs ("" local; $LASA_SCHEDULER) [-]
-    # local worker processes of the variants' runs and of the power's drawn cohorts (the same results
-    # with any number). One by default: a participant model registered in this process only is
-    # unknown to a worker [-]
+    # local worker processes of the variants' runs and of the power (the same results with any number);
+    # one by default: a participant model registered in this process only is unknown to a worker [-]
     jobs: PositiveInt = 1
     # who a replication needs (lasa.experiments.study.power): cohort sizes drawn [participants], and
     # cohorts drawn per size (100 draws give a power of 80% to within 4 points) [-]
@@ -120,12 +113,7 @@ class Config:
         self._warn_about_the_cohort()
 
     def _warn_about_the_cohort(self) -> None:
-        """Warn of a cohort the Williams square does not balance, and of power sizes beyond it.
-
-        Participant i runs row i mod 4 of the square: only a multiple of 4 balances order and
-        carry-over. A larger power size is drawn with replacement, so its power rests on the spread
-        of ``participants`` simulated people, not of as many as it draws.
-        """
+        """Warn of a cohort the Williams square does not balance, and of power sizes beyond it."""
         rows = len(williams_square(len(CONDITIONS)))
         if self.participants % rows:
             warnings.warn(
@@ -158,12 +146,7 @@ class Config:
 def load_decoders(
     paths: Paths, robot: str, names: Sequence[str], cap: float | None
 ) -> dict[str, ActionDecoder]:
-    """Notebook 10's decoder variants ``names``, each checked to have been trained with the belief at ``cap``.
-
-    Raises:
-        ArtifactError: A decoder is missing (notebook 10 trains it).
-        CheckpointError: A decoder was trained with another ``belief_cap``.
-    """
+    """Notebook 10's decoder variants ``names``; a CheckpointError if one was trained with another cap."""
     out: dict[str, ActionDecoder] = {}
     for name in names:
         path = paths.artifact("eating_segmentation_decoder", robot, segmentation=name)
@@ -182,11 +165,7 @@ def load_decoders(
 
 def eating_property(figures: Path, source: str | None = None) -> pd.DataFrame:
     """Notebook 10's property (:func:`lasa.evidence.latent_property.summary`) of the eating decoders,
-    or with ``source`` of that source's rows (the cap sweep's).
-
-    Raises:
-        ArtifactError: ``latent_property.csv`` is missing (notebook 10 makes it).
-    """
+    or with ``source`` of that source's rows (the cap sweep's)."""
     frame = pd.read_csv(require_file(figures / "latent_property.csv", "make figures (notebook 10)"))
     return latent_property.summary(
         frame.query("task == 'eating'") if source is None else frame[frame.source == source]
@@ -200,13 +179,8 @@ def participant_table(participant: ParticipantConfig) -> pd.DataFrame:
 
 
 def variants_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str]:
-    """The decoder variants the participants run, the headline first (notebook 10's ranking).
-
-    ``"property"``: the variants that meet the property rule (:func:`lasa.evidence.latent_property.holds`;
-    if none does, the best-ranked one, whose rows read not testable), and the headline's entropy
-    version ``<headline>_entropy`` (Eq. T6) as a contrast, if notebook 10 trained it. ``"all"``: every
-    variant (``LARGE=1``).
-    """
+    """The decoder variants the participants run in notebook 10's ranking: ``"all"``, or ``"property"``:
+    those that meet the property rule (none: the best), and ``<headline>_entropy`` if trained."""
     check_choice("decoders", selection, DECODER_SELECTIONS)
     ranked = list(latent_property.ranking(prop).index)
     if selection == "all":
@@ -217,27 +191,18 @@ def variants_to_run(prop: pd.DataFrame, selection: str = "property") -> list[str
     return keep + ([contrast] if contrast in ranked and contrast not in keep else [])
 
 
-@dataclasses.dataclass(frozen=True)
-class _Shared:
-    """What every (participant model, decoder variant) run reads: sent to each worker once."""
-
-    task: EatingTask
-    decoders: dict[str, ActionDecoder]
-    cohort: Cohort
-    control: ControlConfig
-    config: Config
+_Shared = tuple[EatingTask, dict[str, ActionDecoder], Cohort, ControlConfig, Config]
 
 
 def _run_variant(shared: _Shared, job: tuple[str, int, str]) -> Episodes:
     """One participant model's study with one decoder variant (the headline, index 0, runs R too)."""
-    model, i, name = job
-    config = shared.config
+    (task, decoders, cohort, control, config), (model, i, name) = shared, job
     headline_only = dataclasses.replace(config.session, assistance=config.session.assistance[:1])
     return PARTICIPANT_MODELS[model](
-        shared.task,
-        shared.decoders[name],
-        shared.cohort,
-        shared.control,
+        task,
+        decoders[name],
+        cohort,
+        control,
         config.session if i == 0 else headline_only,
         seed=config.seed,
         progress=False,
@@ -252,13 +217,9 @@ def run(
     config: Config,
     progress: bool = True,
 ) -> tuple[dict[str, dict[str, Episodes]], dict[str, pd.DataFrame]]:
-    """Simulate the cohort under each participant model; the episodes (``episodes[model][decoder]``) and
-    the three tidy tables (``decoder`` ``none`` on Retargeting's rows).
-
-    The first of ``decoders`` is the headline: every condition under every member. Each other variant
-    runs LA and LA+SA under the headline member. A model named in ``config.variants_per_model`` runs
-    its first that many variants. The runs are :func:`lasa.pipeline.scaleout.run_jobs` jobs.
-    """
+    """Simulate the cohort under each participant model: ``episodes[model][decoder]`` and the tidy tables
+    ``goal_error``, ``time``, ``alignment`` (``decoder`` ``none`` on R's rows). The headline decoder (the
+    first) runs every condition and member, the others LA and LA+SA under the headline member."""
     if not decoders:
         raise ConfigError("run needs at least one decoder (the headline first)")
     cohort = draw_cohort(config.participants, config.session.participant, config.seed)
@@ -268,7 +229,6 @@ def run(
         for model in config.participant_models
         for i, name in enumerate(names[: config.variants_per_model.get(model, len(names))])
     ]
-    shared = _Shared(task, dict(decoders), cohort, control, config)
     ran = run_jobs(
         _run_variant,
         jobs,
@@ -276,7 +236,7 @@ def run(
         n_jobs=config.jobs,
         progress=progress,
         desc="study runs",
-        shared=shared,
+        shared=(task, dict(decoders), cohort, control, config),
     )
     episodes: dict[str, dict[str, Episodes]] = {}
     parts: dict[str, list[pd.DataFrame]] = {"goal_error": [], "time": [], "alignment": []}
