@@ -53,7 +53,6 @@ __all__ = [
     "LEVEL",
     "COLOURS",
     "Config",
-    "Cell",
     "Grid",
     "ScaledDecoder",
     "cells",
@@ -69,24 +68,9 @@ NAME = "claims_robustness"
 # the contract's columns first: ``seed`` is the seed of the cell's users and ``measured`` the
 # number the claim's verdict rests on (``lasa.evidence.claims.Claim.value``), with its interval at
 # ``level`` (:data:`LEVEL`); ``effect`` is the word the map colours
-COLUMNS = (
-    "id",
-    "robot",
-    "assistance",
-    "alpha",
-    "action_scale",
-    "seed",
-    "measured",
-    "reproduced",
-    "settled",
-    "ci_low",
-    "ci_high",
-    "pilot",
-    "setting",
-    "users",
-    "effect",
-    "number",
-    "level",
+COLUMNS = tuple(
+    "id robot assistance alpha action_scale seed measured reproduced settled ci_low ci_high pilot setting "
+    "users effect number level".split()
 )
 DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
@@ -220,27 +204,12 @@ def _pilot_prob(config: Config, pilot: str) -> float:
 def _rows(
     claims: list[Claim], cell: Cell, assistance: str, robot: str, config: Config, level: float
 ) -> pd.DataFrame:
+    words = [criteria(c) for c in claims]  # the claims table's one word, and its two
     rows = [
-        {
-            "id": c.id,
-            "robot": robot,
-            "assistance": assistance,
-            "alpha": cell.alpha,
-            "action_scale": cell.action_scale,
-            "seed": config.seed,
-            "measured": c.value,
-            "reproduced": criteria(c)["reproduced"],  # the claims table's one word
-            "effect": criteria(c)["effect"],  # and its two: the claim's shape, each paper number's word
-            "number": criteria(c)["number"],
-            "settled": c.settled,
-            "ci_low": c.ci_low,
-            "ci_high": c.ci_high,
-            "pilot": cell.pilot,
-            "setting": cell.setting,
-            "users": c.n_users,
-            "level": level,
-        }
-        for c in claims
+        (c.id, robot, assistance, cell.alpha, cell.action_scale, config.seed, c.value, w["reproduced"])
+        + (c.settled, c.ci_low, c.ci_high, cell.pilot, cell.setting, c.n_users)
+        + (w["effect"], w["number"], level)
+        for c, w in zip(claims, words, strict=True)
     ]
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
@@ -319,19 +288,14 @@ def run(
     progress: bool = False,
     defaults: Mapping[str, pd.DataFrame] | None = None,
 ) -> pd.DataFrame:
-    """Every cell of the grid (:func:`cells`), locally or on a Dask cluster.
+    """Every cell of the grid (:func:`cells`), locally or on a Dask cluster: one row per (claim, cell,
+    member), cells in :func:`cells` order.
 
     Args:
         decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
         control: The default control units (alpha, sigma_h) the grid is centred on.
-        config: The grid.
-        progress: A progress bar over finished cells.
         defaults: The default cell's rows (:func:`default_frames`, from notebooks 04-06),
             judged instead of run again; if None, the default cell runs like the others.
-
-    Returns:
-        One row per (claim, cell, member) with the columns of :data:`COLUMNS`, cells in
-        :func:`cells` order.
     """
     decoders = as_decoders(decoders)
     grid = Grid(decoders, task, control, config)
@@ -347,17 +311,9 @@ def run(
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per (robot, claim): cells with each effect word, and whether the default cell's holds.
-
-    Args:
-        table: :func:`run`'s rows.
-
-    Returns:
-        Columns ``reproduced``, ``partly``, ``not reproduced``, ``undecided``, ``not testable``
-        (cell counts over the members' and the settings' cells), ``default`` (the headline
-        member's effect in the default cell, empty if the grid has none), ``stable`` (every
-        settled cell gives it) and ``moves`` (the cells whose settled effect differs from it).
-    """
+    """Per (robot, claim) of :func:`run`'s rows: cells with each effect word (over the members' and the
+    settings' cells), ``default`` (the headline member's effect in the default cell, empty if the grid
+    has none), ``stable`` (every settled cell gives it) and ``moves`` (the settled cells that differ)."""
     rows = []
     for (robot, claim), part in table.groupby(["robot", "id"], sort=True):
         part = part.assign(column=part.apply(_label, axis=1))
@@ -386,20 +342,14 @@ def describe(table: pd.DataFrame) -> list[str]:
         undecided = int(row.undecided)
         tail = f" ({undecided} undecided cell{'s' if undecided != 1 else ''})" if undecided else ""
         if row.default == UNDECIDED:
-            lines.append(
-                f"{row.robot} {row.id}: undecided in the default cell"
-                + (f"; settled elsewhere: {row.moves}" if row.moves else "")
-                + tail
-                + "."
+            said = "undecided in the default cell" + (
+                f"; settled elsewhere: {row.moves}" if row.moves else ""
             )
         elif row.stable:
-            lines.append(f"{row.robot} {row.id}: '{row.default}' in every settled cell" + tail + ".")
+            said = f"'{row.default}' in every settled cell"
         else:
-            lines.append(
-                f"{row.robot} {row.id}: '{row.default}' by default; settled otherwise in {row.moves}"
-                + tail
-                + "."
-            )
+            said = f"'{row.default}' by default; settled otherwise in {row.moves}"
+        lines.append(f"{row.robot} {row.id}: {said}{tail}.")
     return lines
 
 
@@ -416,12 +366,8 @@ def _label(row: Any) -> str:
 
 
 def level_of(table: pd.DataFrame) -> float:
-    """The one interval level of ``table``'s cells (its ``level`` column).
-
-    Raises:
-        ConfigError: if the column is missing (a table from before it was written) or holds
-            more than one level.
-    """
+    """The one interval level of ``table``'s cells (its ``level`` column); ConfigError if the column is
+    missing (a table from before it was written) or holds more than one level."""
     if "level" not in table.columns:
         raise ConfigError("the verdict map's table has no `level` column: run notebook 08 again")
     levels = sorted(set(table.level.astype(float)))
@@ -450,13 +396,8 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     ids = sorted(dict.fromkeys(table.id))
     cmap = ListedColormap([COLOURS[v] for v in WORDS])
     code = {v: i for i, v in enumerate(WORDS)}
-    fig, axes = plt.subplots(
-        1,
-        len(robots),
-        figsize=(2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids)),
-        squeeze=False,
-        sharey=True,
-    )
+    size = (2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids))
+    fig, axes = plt.subplots(1, len(robots), figsize=size, squeeze=False, sharey=True)
     for j, robot in enumerate(robots):
         ax = axes[0, j]
         grid = np.full((len(ids), len(order_cols)), np.nan)
