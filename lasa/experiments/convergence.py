@@ -56,6 +56,7 @@ COLUMNS = (
     "rises_half",
 )
 MEMBER_COLORS = {"point": "#1b9e77", "grasp_set": "#d95f02", "arbitrated": "#7570b3", "hindsight": "#e7298a"}
+_STEP = COLUMNS[COLUMNS.index("error") : COLUMNS.index("goal")]  # measure's: error ... error_target
 _COUNTS = ("steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_half", "rises_half")
 
 
@@ -128,21 +129,9 @@ def measure(
     slack = np.concatenate([0.5 * dt * np.einsum("tun,tun->tu", actions, actions), pad])
     moved = states[1:] - states[:-1] - dt * actions
     clipped = np.concatenate([np.linalg.norm(moved, axis=-1) > 1e-9, np.zeros((1, len(goal)), bool)])
-    return {
-        "error": error,
-        "delta": delta,
-        "v_dot": v_dot,
-        "v": v,
-        "belief": b_star,
-        "sigma_r": sigma_r,
-        "delta_alpha": delta_alpha,
-        "bound_holds": b_star * error > delta_alpha,
-        "bound_holds_half": b_star * error > delta,
-        "v_rose": v_dot > 0,
-        "slack": slack,
-        "clipped": clipped,
-        "error_target": np.linalg.norm(target[None] - states, axis=-1),
-    }
+    holds = (b_star * error > delta_alpha, b_star * error > delta, v_dot > 0)
+    values = (error, delta, v_dot, v, b_star, sigma_r, delta_alpha, *holds, slack, clipped)
+    return dict(zip(_STEP, (*values, np.linalg.norm(target[None] - states, axis=-1)), strict=True))
 
 
 def _window_counts(m: dict[str, np.ndarray], times: np.ndarray) -> dict[str, np.ndarray]:

@@ -48,11 +48,9 @@ __all__ = [
     "COLUMNS",
     "Config",
     "BELIEFS",
-    "Variants",
     "variant_names",
     "train_variants",
     "CAP_SOURCE",
-    "CapDecoders",
     "cap_label",
     "cap_decoder_name",
     "train_caps",
@@ -76,17 +74,14 @@ class Config:
     """The eating decoder's data and training (notebook 10)."""
 
     demos: DemoConfig = EATING_DEMOS  # the demonstrations (lasa.people.demos.DemoConfig, its own seed)
-    # training (lasa.method.train.TrainConfig, its seed every fine-tune's): z_dim stays 2, two stick axes
-    train: TrainConfig = TrainConfig(z_dim=2)
+    train: TrainConfig = TrainConfig(z_dim=2)  # its seed every fine-tune's; z_dim 2: two stick axes
     goal: str = "middle"  # the bowl the figure looks at [-]
     # segmentations trained: at paper scale the two with the property under the study's cap;
     # all of SEGMENTATIONS under LARGE=1 (configs/large.yaml) [-]
     segmentations: tuple[str, ...] = ("continuous", "transfers")
-    # notebook 03's sweep, on the continuous base [-]
-    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, continuous base
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
-    # small entropy weights searched for both halves of the property, one fine-tune each [-]
-    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)
+    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)  # small weights searched for both halves [-]
     search_segmentations: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
     # bases trained with the sector loss too (lasa.method.sectors; <segmentation>_sectors, lambda = 0); the
     # weight had the lower held-out reconstruction error of two probes (0.2: 0.0085, 1.0: 0.0118)
@@ -95,10 +90,8 @@ class Config:
     # bases trained again with each search seed, fine-tuned with lambda = 0 (<segmentation>_seed<seed>) [-]
     seed_segmentations: tuple[str, ...] = ("transfers",)
     search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the variants' own: train.seed) [-]
-    # the study's belief cap (lasa.world.eating.STUDY_BELIEF_CAP); None ("none"): Algorithm 1's uncapped
-    belief_cap: BeliefCap = STUDY_BELIEF_CAP
-    # the headline's recipe trained again at each of these caps (train_caps); notebook 11 runs them [-]
-    cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
+    belief_cap: BeliefCap = STUDY_BELIEF_CAP  # the study's; None ("none"): Algorithm 1's uncapped
+    cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)  # the headline's recipe again (train_caps)
     # local worker processes for the trainings (entropy_ablation.train_all): the same decoders with any [-]
     jobs: PositiveInt = 1
 

@@ -93,16 +93,18 @@ class Config:
     """The robustness grid of notebook 08, and the sweep run in each of its cells."""
 
     assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
-    # blend weights of Eq. M1 [-]
-    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (0.1, 0.2, 0.5)
+    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (
+        0.1,
+        0.2,
+        0.5,
+    )  # Eq. M1's blend weights [-]
     action_scales: tuple[Positive, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
     noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
     betas: tuple[Rationality, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
-    # sim2 change steps N (its claims read the ends) [steps]
-    change_steps: tuple[NonNegativeInt, ...] = (0, 120)
+    change_steps: tuple[NonNegativeInt, ...] = (0, 120)  # sim2 change steps N (its claims read the ends)
     horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
@@ -160,12 +162,8 @@ class ScaledDecoder:
 
 
 def cells(config: Config, control: ControlConfig) -> list[Cell]:
-    """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
-
-    Raises:
-        ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
-            Boltzmann users) are not on the grid's axes (one-at-a-time needs them).
-    """
+    """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot; ConfigError
+    if the defaults (``control``'s alpha and sigma_h, Boltzmann users) are off a one-at-a-time grid's axes."""
     alpha0, scale0, pilot0 = float(control.alpha), float(control.action_scale), "boltzmann"
     head = (control.assistance,)
     if control.assistance not in config.assistance:
@@ -254,11 +252,8 @@ def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
 def default_frames(
     config: Config, sim1_rows: pd.DataFrame, sim2_rows: pd.DataFrame, sim3_rows: pd.DataFrame
 ) -> dict[str, pd.DataFrame]:
-    """The default cell's rows from notebooks 04-06: their first look, at the map's sizes.
-
-    Raises:
-        ConfigError: if a frame lacks a beta or change step of the map, or holds fewer users.
-    """
+    """The default cell's rows from notebooks 04-06: their first look, at the map's sizes; ConfigError
+    if a frame lacks a beta or change step of the map, or holds fewer users."""
     out = {}
     for name, rows, column, values in (
         ("sim1", sim1_rows, "beta", config.betas),
@@ -377,11 +372,8 @@ def level_of(table: pd.DataFrame) -> float:
 
 
 def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
-    """The verdict map: claims (rows) x members and settings (columns), one panel per robot.
-
-    Raises:
-        ConfigError: if the table has no single interval level, or a word outside ``WORDS``.
-    """
+    """The verdict map: claims (rows) x members and settings (columns), one panel per robot; ConfigError
+    if the table has no single interval level, or a word outside ``WORDS``."""
     level = level_of(table)
     unknown = sorted(set(table.effect) - set(WORDS))
     if unknown:
