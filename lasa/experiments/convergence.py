@@ -188,18 +188,11 @@ def run(
         bound = (control.dt, control.action_scale, control.alpha)
         m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
         counts = _window_counts(m, times)
-        n_users, n_rows = len(user), len(times)
-        cols: dict[str, object] = {
-            "robot": task.robot.name,
-            "assistance": assistance,
-            "beta": np.repeat(beta, n_rows),
-            USER: np.repeat(user, n_rows),
-            "t": np.tile(times, n_users),
-        }
-        for name, values in {**m, **counts}.items():
-            cols[name] = values[times].T.ravel() if name in m else values.T.ravel()
-        cols["goal"] = np.repeat(users.goal, n_rows)
-        cols["theta"] = np.repeat(users.theta, n_rows)
+        per_user = {"beta": beta, USER: user, "goal": users.goal, "theta": users.theta}
+        cols = {"robot": task.robot.name, "assistance": assistance, "t": np.tile(times, len(user))}
+        cols |= {name: np.repeat(values, len(times)) for name, values in per_user.items()}
+        cols |= {name: values[times].T.ravel() for name, values in m.items()}
+        cols |= {name: values.T.ravel() for name, values in counts.items()}
         parts.append(pd.DataFrame(cols))
     return pd.concat(parts, ignore_index=True)[list(COLUMNS)]
 

@@ -1,8 +1,7 @@
 r"""The eating task's 2-D latent actions (notebook 10): demonstrations, training, what z does.
 
-Each segmentation of the demonstrations trains a base decoder, fine-tuned with lambda = 0 and with
-notebook 03's rule's lambda; the study's headline is chosen by the latent property alone
-(:func:`train_variants`), before any participant runs.
+Each segmentation trains a base decoder, fine-tuned with lambda = 0 and with notebook 03's rule's lambda;
+the headline is chosen by the latent property alone (:func:`train_variants`), before any participant runs.
 """
 
 from __future__ import annotations
@@ -66,6 +65,8 @@ NAME = "eating_latent"
 CAP_SOURCE = "eating_caps"
 COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
 BELIEFS = ("uncertain", "confident")
+_Shared = tuple[EatingTask, latent_measure.PropertyConfig, str]  # run_jobs' shared: task, measure, source
+_Variant = tuple[str, LatentActionModel, TrainConfig, ControlConfig]  # name, decoder, fine-tune, control
 _SUBSETS = ("search_segmentations", "sector_segmentations", "seed_segmentations")  # of segmentations
 
 
@@ -172,14 +173,8 @@ def _fine(config: Config, base: str, weight: float) -> TrainConfig:
 
 @dataclasses.dataclass(frozen=True)
 class Variants:
-    """The trained variants of the study's decoder and the choice among them.
-
-    Attributes:
-        sweep: Notebook 03's sweep on the continuous base (one row per lambda).
-        demos: Demonstration tuples (clean, noisy copies) and minutes of motion per segmentation.
-        property: :func:`lasa.evidence.latent_measure.measure` rows of every variant.
-        headline: The variant the property's rule picks.
-    """
+    """The trained variants of the study's decoder, notebook 03's sweep on the continuous base, the
+    demonstrations' sizes per segmentation, every variant's property rows and the rule's ``headline``."""
 
     models: dict[str, LatentActionModel]
     sweep: pd.DataFrame
@@ -220,18 +215,12 @@ def train_variants(
     fitted = entropy_ablation.train_all(list(runs_of.values()), config.jobs, progress, "decoder readings")
     models.update({name: model for name, (model, _) in zip(runs_of, fitted, strict=True)})
     variants = [(name, models[name], fines[name], control) for name, _, _ in fine_tunes(config, sweep.chosen)]
-    frame = _keep(task, config, paths, prop, "eating", variants)
+    frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
     path = paths.artifact("eating_decoder", task.robot.name)
     _save(models[headline], path, fines[headline], control, config, headline)
-    return Variants(
-        {name: model for name, model, _, _ in variants},
-        sweep.table,
-        float(sweep.chosen),
-        pd.DataFrame(demo_rows),
-        frame,
-        headline,
-    )
+    kept = {name: model for name, model, _, _ in variants}
+    return Variants(kept, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
 
 
 def _demonstrations(
@@ -255,32 +244,21 @@ def _demonstrations(
 
 
 def _save(
-    model: LatentActionModel,
-    path: Path,
-    fine: TrainConfig,
-    control: ControlConfig,
-    config: Config,
-    variant: str,
+    model: LatentActionModel, path: Path, fine: TrainConfig, control: ControlConfig, config: Config, name: str
 ) -> None:
     """A variant's decoder, saved with the settings that made it and the variant's name."""
     extra = {"train": to_dict(fine), "control": to_dict(control), "demos": to_dict(config.demos)}
-    save_checkpoint(model, path, **extra, reading=variant)
+    save_checkpoint(model, path, **extra, reading=name)
 
 
-def _keep(
-    task: EatingTask,
-    config: Config,
-    paths: Paths,
-    prop: latent_measure.PropertyConfig,
-    source: str,
-    variants: list[tuple[str, LatentActionModel, TrainConfig, ControlConfig]],
-) -> pd.DataFrame:
-    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows."""
+def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant]) -> pd.DataFrame:
+    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows
+    (``shared``: the task, how to measure, the rows' source)."""
     for name, model, fine, control in variants:
-        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=name)
+        path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=name)
         _save(model, path, fine, control, config, name)
     jobs = [(model, control, name) for name, model, _, control in variants]
-    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, source))
+    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=shared)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
 
 
@@ -333,16 +311,12 @@ def train_caps(
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
     models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
     names = {c: cap_decoder_name(variants.headline, c) for c in caps}
-    frame = _keep(
-        task, config, paths, prop, CAP_SOURCE, [(names[c], models[c], fine, controls[c]) for c in caps]
-    )
+    kept = [(names[c], models[c], fine, controls[c]) for c in caps]
+    frame = _keep(config, paths, (task, prop, CAP_SOURCE), kept)
     return CapDecoders(models, names, frame)
 
 
-def _measure(
-    shared: tuple[EatingTask, latent_measure.PropertyConfig, str],
-    job: tuple[LatentActionModel, ControlConfig, str],
-) -> pd.DataFrame:
+def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
     """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
     task, prop, source = shared
     model, control, name = job
@@ -357,8 +331,8 @@ def directions(
     """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief."""
     g = GOALS.index(check_choice("goal", goal, GOALS))
     state = task.target(g, 0.5)
-    angles = 2 * np.pi * np.arange(n) / n
-    z = np.round(np.stack([np.cos(angles), np.sin(angles)], axis=1), 12)  # at rest the stick commands nothing
+    z = latent_measure.ring(n, 2)  # at rest the stick commands nothing
+    states = np.broadcast_to(state, (len(z), len(state)))
     confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
     data = mujoco.MjData(task.robot.model)
@@ -366,9 +340,7 @@ def directions(
     goals = task.robot.goal_positions()
     rows = []
     for name, b in beliefs.items():
-        qdot = decoder.decode_numpy(
-            z, np.broadcast_to(state, (len(z), len(state))), np.broadcast_to(b, (len(z), len(b)))
-        )
+        qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
         v = qdot @ jp[0].T  # (Z, 3)
         w = qdot @ jr[0].T
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction

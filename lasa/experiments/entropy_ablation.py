@@ -109,11 +109,8 @@ def train_all(
 def confident_contexts(
     demos: Demonstrations, cap: float | None = None, every: int = 10
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Every ``every``-th clean demonstrated context with a confident belief: (states, beliefs).
-
-    Raises:
-        EmptySelectionError: no demonstrated context is that confident.
-    """
+    """Every ``every``-th clean demonstrated context with a confident belief: (states, beliefs);
+    EmptySelectionError if no demonstrated context is that confident."""
     clean = demos.clean()
     threshold = confidence_threshold(cap)
     confident = clean.beliefs.max(axis=1) > threshold
@@ -183,27 +180,19 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
 
 
 def plot_entropy_grid(
-    progress: np.ndarray,
-    conf: np.ndarray,
-    values: np.ndarray,
-    ax: Axes | None = None,
-    title: str | None = None,
-) -> Axes:
+    progress: np.ndarray, conf: np.ndarray, values: np.ndarray, ax: Axes, title: str
+) -> None:
     """Entropy of p_(s,b) over a grid of contexts: progress to the goal x confidence in it."""
-    ax = plt.gca() if ax is None else ax
     ps, cs = np.unique(progress), np.unique(conf)
     grid = values.reshape(len(ps), len(cs)).T
     mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
     plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")
     ax.set(xlabel="state: from home (0) to the right cup's goal (1)", ylabel="belief in the right cup")
-    if title:
-        ax.set_title(title)
-    return ax
+    ax.set_title(title)
 
 
-def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = None) -> Axes:
+def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes) -> None:
     """Reconstruction error on the clean demonstrations against entropy at confident contexts, per lambda."""
-    ax = plt.gca() if ax is None else ax
     ax.plot(sweep.entropy_confident, sweep.recon_error, "o-", color="#444")
     for _, row in sweep.iterrows():
         mark = " (chosen)" if np.isclose(row["lambda"], chosen) else ""
@@ -218,13 +207,11 @@ def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = 
         xlabel="mean entropy of p(s,b) at confident contexts [nats]",
         ylabel="reconstruction error on the demonstrations [(rad/s)$^2$]",
     )
-    return ax
 
 
 def plot(table: pd.DataFrame) -> Figure:
-    """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda,
-    and the sweep's trade-off.
-    """
+    """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda, and the
+    sweep's trade-off."""
     fig, rows = robot_rows(table, 3, (16, 4.2))
     for name, part, row in rows:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
@@ -232,12 +219,12 @@ def plot(table: pd.DataFrame) -> Figure:
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]
             title = f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)")
             grid = (g.progress.to_numpy(), g.confidence.to_numpy(), g.entropy.to_numpy())
-            plot_entropy_grid(*grid, ax=ax, title=title)
+            plot_entropy_grid(*grid, ax, title)
         if len(lams) == 1:  # the rule kept the control: no other decoder to draw
             row[1].set_axis_off()
             row[1].set_title(f"{name}: no lambda > 0 within the rule's cost bound")
         sw = part[part.kind == "sweep"].rename(columns={"entropy": "entropy_confident"})
-        plot_entropy_tradeoff(sw, max(lams), ax=row[2])
+        plot_entropy_tradeoff(sw, max(lams), row[2])
         row[2].set_title(f"{name}: reconstruction vs entropy over lambda")
     fig.tight_layout()
     return fig

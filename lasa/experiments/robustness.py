@@ -36,7 +36,7 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.evidence.claims import Claim, criteria
+from lasa.evidence.claims import criteria
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Looks, assess, member_frame
@@ -199,19 +199,6 @@ def _pilot_prob(config: Config, pilot: str) -> float:
     return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
 
 
-def _rows(
-    claims: list[Claim], cell: Cell, assistance: str, robot: str, config: Config, level: float
-) -> pd.DataFrame:
-    words = [criteria(c) for c in claims]  # the claims table's one word, and its two
-    rows = [
-        (c.id, robot, assistance, cell.alpha, cell.action_scale, config.seed, c.value, w["reproduced"])
-        + (c.settled, c.ci_low, c.ci_high, cell.pilot, cell.setting, c.n_users)
-        + (w["effect"], w["number"], level)
-        for c, w in zip(claims, words, strict=True)
-    ]
-    return pd.DataFrame(rows, columns=list(COLUMNS))
-
-
 def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, Any]]:
     """(module, config, reduce) of sims 1-3 at the map's sizes: one look of ``users`` users."""
     common: dict[str, Any] = {"users": config.users, "cap": config.users, "seed": config.seed}
@@ -225,11 +212,17 @@ def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, 
 def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Config) -> pd.DataFrame:
     """Every member's claims of one sim in one cell, each with its intervals at :data:`LEVEL`."""
     parts = []
-    fast = getattr(module, "boot_values", None)
     for assistance in cell.assistance:
         frame_m = member_frame(frame, assistance)
+        fast = getattr(module, "boot_values", None)
         claims = assess(module.claims, frame_m, config.n_boot, config.seed, level=LEVEL, fast=fast)
-        parts.append(_rows(claims, cell, assistance, robot, config, LEVEL))
+        rows = [
+            (c.id, robot, assistance, cell.alpha, cell.action_scale, config.seed, c.value, w["reproduced"])
+            + (c.settled, c.ci_low, c.ci_high, cell.pilot, cell.setting, c.n_users)
+            + (w["effect"], w["number"], LEVEL)  # the claims table's one word, and its two
+            for c, w in zip(claims, [criteria(c) for c in claims], strict=True)
+        ]
+        parts.append(pd.DataFrame(rows, columns=list(COLUMNS)))
     return pd.concat(parts, ignore_index=True)
 
 
