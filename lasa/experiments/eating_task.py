@@ -373,11 +373,9 @@ def plot(frame: pd.DataFrame) -> Figure:
         ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.8", lw=1))
         for _, row in part.iterrows():
             x0, y0 = row.z1, row.z2
+            xy = (x0 - row.vy * scale, y0 + row.vx * scale)
             ax.annotate(
-                "",
-                xy=(x0 - row.vy * scale, y0 + row.vx * scale),
-                xytext=(x0, y0),
-                arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6},
+                "", xy=xy, xytext=(x0, y0), arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
             )
             ax.scatter([x0], [y0], s=90, color=cmap(norm(np.degrees(row.tilt_rate))), edgecolor="k", zorder=3)
             label = f"{row.toward}\n{100 * row.vz:+.0f} cm/s up"

@@ -342,15 +342,12 @@ def describe(table: pd.DataFrame) -> list[str]:
 
 
 def _label(row: Any) -> str:
-    if row.setting == "default":
-        return "default" if row.assistance == "point" else f"{row.assistance}"
-    if row.setting == "alpha":
-        return f"alpha={row.alpha:g}"
-    if row.setting == "action_scale":
-        return f"sigma_h={row.action_scale:g}"
-    if row.setting == "pilot":
-        return f"{row.pilot} pilot"
-    return f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}"
+    return {
+        "default": "default" if row.assistance == "point" else f"{row.assistance}",
+        "alpha": f"alpha={row.alpha:g}",
+        "action_scale": f"sigma_h={row.action_scale:g}",
+        "pilot": f"{row.pilot} pilot",
+    }.get(row.setting, f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}")
 
 
 def level_of(table: pd.DataFrame) -> float:
