@@ -107,10 +107,8 @@ def measure(
     ``states`` s(t) (T+1, U, n), ``beliefs`` b(t) (T+1, U, G), ``actions`` the commanded a(t) before
     the safety clip (T, U, n), ``goal`` each user's cup (U,) into ``goals`` (G, n), ``target`` each
     user's s* (U, n), ``sigma_h`` the bound on ||phi||, ``alpha`` the run's blend weight in (0, 1].
-
-    Returns:
-        Arrays keyed by the per-step columns of :data:`COLUMNS` (``error`` ... ``error_target``).
-        Quantities of a step (``v_dot``, ``slack``) are NaN at t = T, its flags False.
+    Returns the per-step columns of :data:`COLUMNS` (``error`` ... ``error_target``); quantities of
+    a step (``v_dot``, ``slack``) are NaN at t = T, its flags False.
     """
     goal = np.asarray(goal)
     users = np.arange(len(goal))

@@ -276,15 +276,9 @@ def run(
     progress: bool = False,
     defaults: Mapping[str, pd.DataFrame] | None = None,
 ) -> pd.DataFrame:
-    """Every cell of the grid (:func:`cells`), locally or on a Dask cluster: one row per (claim, cell,
-    member), cells in :func:`cells` order.
-
-    Args:
-        decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
-        control: The default control units (alpha, sigma_h) the grid is centred on.
-        defaults: The default cell's rows (:func:`default_frames`, from notebooks 04-06),
-            judged instead of run again; if None, the default cell runs like the others.
-    """
+    """Every cell of the grid (:func:`cells`) around ``control``, locally or on a Dask cluster, with
+    notebook 03's pair: one row per (claim, cell, member), cells in order; ``defaults``
+    (:func:`default_frames`) are judged as the default cell instead of running it again."""
     decoders = as_decoders(decoders)
     grid = Grid(decoders, task, control, config)
     todo = cells(config, control)
