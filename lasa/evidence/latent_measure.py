@@ -160,19 +160,11 @@ def measure(
     """The property of ``decoder`` on ``task``, one row per (context, goal, input) (``COLUMNS``):
     ``confident`` rows with ``drift`` (largest d(t)/t [m/s]) and ``stays``, ``uncertain`` (goal
     ``home``) and ``leave`` rows with the goal ``reached`` (``-`` for none) and ``distance`` [m]."""
-    run = _Run(
-        task,
-        decoder,
-        control,
-        config,
-        z=ring(config.n_inputs, decoder.z_dim),
-        preference_sets=[preference_set(task, g, config.n_grid) for g in range(task.n_goals)],
-        base={"source": source, "robot": task.robot.name, "task": task_name, "decoder": decoder_name},
-    )
+    base = {"source": source, "robot": task.robot.name, "task": task_name, "decoder": decoder_name}
+    psets = [preference_set(task, g, config.n_grid) for g in range(task.n_goals)]
+    run = _Run(task, decoder, control, config, ring(config.n_inputs, decoder.z_dim), psets, base)
     rows = [_confident_rows(run, g) for g in range(task.n_goals)]
-    rows.append(_uncertain_rows(run))
-    rows.append(_leave_rows(run))
-    return pd.concat(rows, ignore_index=True)
+    return pd.concat([*rows, _uncertain_rows(run), _leave_rows(run)], ignore_index=True)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -200,18 +192,9 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     _, idx = _nearest(pset, pos[:, -1], axis[:, -1], config.rotation_weight)
     ends = np.stack([_nearest(s, pos[:, -1], axis[:, -1], 0.0)[0] for s in preference_sets], axis=1)  # (K, G)
     stays = drift <= config.drift_speed
-    return _rows(
-        run.base,
-        "confident",
-        names[g],
-        z,
-        drift=drift,
-        stays=stays,
-        theta=pset.theta[idx],
-        stroke=pset.stroke[idx],
-        reached=np.where(stays, names[g], np.asarray(names)[ends.argmin(axis=1)]),
-        distance=ends[:, g],
-    )
+    reached = np.where(stays, names[g], np.asarray(names)[ends.argmin(axis=1)])
+    columns = dict(drift=drift, stays=stays, theta=pset.theta[idx], stroke=pset.stroke[idx], reached=reached)
+    return _rows(run.base, "confident", names[g], z, **columns, distance=ends[:, g])
 
 
 def _uncertain_rows(run: _Run) -> pd.DataFrame:
@@ -227,14 +210,8 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
     dist = np.stack([_nearest(s, pos, axis, 0.0)[0] for s in run.preference_sets], axis=1)  # (K, G)
     near = dist.argmin(axis=1)
     best = dist[np.arange(len(z)), near]
-    return _rows(
-        run.base,
-        "uncertain",
-        "home",
-        z,
-        reached=np.where(best <= run.config.reach_distance, np.asarray(task.goal_names)[near], "-"),
-        distance=best,
-    )
+    reached = np.where(best <= run.config.reach_distance, np.asarray(task.goal_names)[near], "-")
+    return _rows(run.base, "uncertain", "home", z, reached=reached, distance=best)
 
 
 def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **columns: object) -> pd.DataFrame:
@@ -287,18 +264,8 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
             if h == g:
                 continue
             arrived = first[rows, h] > 0
-            frames.append(
-                _rows(
-                    run.base,
-                    "leave",
-                    names[g],
-                    z,
-                    reached=np.where(arrived, names[h], "-"),
-                    distance=dist[rows, h].min(axis=1),
-                    start=label,
-                    condition=cond,
-                    target=names[h],
-                    exit_time=np.where(arrived, first[rows, h] * control.dt, np.nan),
-                )
-            )
+            exit_time = np.where(arrived, first[rows, h] * control.dt, np.nan)
+            leave = dict(start=label, condition=cond, target=names[h], exit_time=exit_time)
+            reached, distance = np.where(arrived, names[h], "-"), dist[rows, h].min(axis=1)
+            frames.append(_rows(run.base, "leave", names[g], z, reached=reached, distance=distance, **leave))
     return pd.concat(frames, ignore_index=True)

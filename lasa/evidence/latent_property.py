@@ -39,17 +39,24 @@ TILT_RANGE = 0.5  # tilt range the staying inputs must reach, as a share of [0, 
 LEAVE_COUNT = 7  # inputs of the ring's 64 (about 10%) that must reach each other goal, LA+SA [-]
 CONDITIONS = ("LA", "LA+SA")  # the leave half's conditions: alpha = 0, and the control's alpha
 DPI = 130
+_KEYS = ("source", "robot", "task", "decoder")  # a decoder's rows
+_SUMMARY = _KEYS + tuple(  # summary's columns but the three it derives from them
+    "goal n_inputs stay_share theta_min theta_max theta_range stroke_range from_home all_reached "
+    "leave_min leave_la_min".split()
+)
+_LEAVE = ("goal", "start", "condition", "target", "inputs", "exit_time")  # leave_table's, after _KEYS
 # tasks whose decoders are one recipe at several settings, not alternatives: no choice (★) marked
 SWEEP_TASKS = ("eating_caps",)
+_HEATMAP = {"annot": True, "cbar": True, "cbar_kws": {"shrink": 0.8}, "linewidths": 0.5, "linecolor": "white"}
+_HEATMAP |= {"annot_kws": {"fontsize": 8}}
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
     """One row per (source, robot, task, decoder, goal) of the measured rows: the share that stays,
     the staying inputs' tilt and stroke ranges, the share reached from home, the fewest inputs that
     leave (``leave_min`` under LA+SA, ``leave_la_min`` under LA), and whether each half holds."""
-    keys = ["source", "robot", "task", "decoder"]
     rows = []
-    for key, part in frame.groupby(keys, sort=False):
+    for key, part in frame.groupby(list(_KEYS), sort=False):
         conf = part[part.context == "confident"]
         home = part[part.context == "uncertain"]
         counts = _leave_counts(part)
@@ -59,26 +66,15 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
             at = conf[conf.goal == goal]
             stay = at[at.stays.astype(bool)]
             mine = counts[counts.goal == goal] if len(counts) else counts
-            least = {c: mine[mine.condition == c].inputs.min() if len(mine) else np.nan for c in CONDITIONS}
-            rows.append(
-                {
-                    **dict(zip(keys, key, strict=True)),
-                    "goal": goal,
-                    "n_inputs": len(at),
-                    "stay_share": float(at.stays.astype(bool).mean()),
-                    "theta_min": float(stay.theta.min()) if len(stay) else np.nan,
-                    "theta_max": float(stay.theta.max()) if len(stay) else np.nan,
-                    "theta_range": float(np.ptp(stay.theta)) if len(stay) else 0.0,
-                    "stroke_range": float(np.ptp(stay.stroke)) if len(stay) else 0.0,
-                    "from_home": float((home.reached == goal).mean()) if len(home) else np.nan,
-                    "all_reached": bool(all_reached),
-                    "leave_min": float(least["LA+SA"]),
-                    "leave_la_min": float(least["LA"]),
-                }
-            )
-    summary_columns = [*keys, "goal", "n_inputs", "stay_share", "theta_min", "theta_max", "theta_range"]
-    summary_columns += ["stroke_range", "from_home", "all_reached", "leave_min", "leave_la_min"]
-    table = pd.DataFrame(rows, columns=summary_columns)  # no rows: the columns all the same
+            least = [
+                float(mine[mine.condition == c].inputs.min()) if len(mine) else np.nan for c in CONDITIONS
+            ]
+            theta = [float(stay.theta.min()), float(stay.theta.max())] if len(stay) else [np.nan, np.nan]
+            ranges = [float(np.ptp(stay.theta)), float(np.ptp(stay.stroke))] if len(stay) else [0.0, 0.0]
+            home_share = float((home.reached == goal).mean()) if len(home) else np.nan
+            stays = [len(at), float(at.stays.astype(bool).mean()), *theta, *ranges]
+            rows.append([*key, goal, *stays, home_share, bool(all_reached), *least[::-1]])
+    table = pd.DataFrame(rows, columns=list(_SUMMARY))  # no rows: the columns all the same
     table["stay_holds"] = stay_holds(table)
     table["leave_holds"] = table.leave_min >= LEAVE_COUNT * table.n_inputs / 64
     table["has_property"] = has_property(table)
@@ -88,7 +84,7 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
 def _leave_counts(frame: pd.DataFrame) -> pd.DataFrame:
     leave = frame[frame.context == "leave"]
     if leave.empty:
-        return pd.DataFrame(columns=["goal", "start", "condition", "target", "inputs", "exit_time"])
+        return pd.DataFrame(columns=list(_LEAVE))
     arrived = leave.assign(arrived=leave.reached == leave.target)
     return (
         arrived.groupby(["goal", "start", "condition", "target"], sort=False)
@@ -100,13 +96,12 @@ def _leave_counts(frame: pd.DataFrame) -> pd.DataFrame:
 def leave_table(frame: pd.DataFrame) -> pd.DataFrame:
     """The leave half, one row per (decoder, goal, phase end, condition, other goal): ``inputs`` that
     reach the other goal's set within the hold, ``exit_time`` their median first arrival [s]."""
-    keys = ["source", "robot", "task", "decoder"]
     parts = [
-        _leave_counts(part).assign(**dict(zip(keys, key, strict=True)))
-        for key, part in frame.groupby(keys, sort=False)
+        _leave_counts(part).assign(**dict(zip(_KEYS, key, strict=True)))
+        for key, part in frame.groupby(list(_KEYS), sort=False)
     ]
     out = pd.concat(parts, ignore_index=True) if parts else _leave_counts(frame)
-    return out[[*keys, "goal", "start", "condition", "target", "inputs", "exit_time"]]
+    return out[[*_KEYS, *_LEAVE]]
 
 
 def stay_holds(table: pd.DataFrame) -> pd.Series:
@@ -166,12 +161,9 @@ def plot(frame: pd.DataFrame) -> Figure:
     heights = [table[table.task == t].row.nunique() + 1.4 for t in tasks]
     n_goals = max(table[table.task == t].goal.nunique() for t in tasks)
     sns.set_theme(style="white")
+    size = (5.0 + 4 * 0.9 * n_goals, 1.3 + 0.38 * sum(heights))
     fig, axes = plt.subplots(
-        len(tasks),
-        4,
-        figsize=(5.0 + 4 * 0.9 * n_goals, 1.3 + 0.38 * sum(heights)),
-        gridspec_kw={"height_ratios": heights},
-        squeeze=False,
+        len(tasks), 4, figsize=size, gridspec_kw={"height_ratios": heights}, squeeze=False
     )
     for row_axes, name in zip(axes, tasks, strict=True):
         _plot_task(row_axes, table[table.task == name], name)
@@ -200,28 +192,12 @@ def _plot_task(row_axes: np.ndarray, part: pd.DataFrame, name: str) -> None:
     )
     for ax, (column, title, cmap, vmax, fmt, frame_by) in zip(row_axes, panels, strict=True):
         grid = part.pivot(index="row", columns="goal", values=column).reindex(index=rows, columns=goals)
-        sns.heatmap(
-            grid.astype(float),
-            ax=ax,
-            vmin=0.0,
-            vmax=vmax,
-            cmap=cmap,
-            annot=True,
-            fmt=fmt,
-            cbar=True,
-            cbar_kws={"shrink": 0.8},
-            linewidths=0.5,
-            linecolor="white",
-            annot_kws={"fontsize": 8},
-        )
+        sns.heatmap(grid.astype(float), ax=ax, vmin=0.0, vmax=vmax, cmap=cmap, fmt=fmt, **_HEATMAP)
         ax.set_title(title, fontsize=9)
-        ax.set_xlabel(f"goal ({name})")
-        ax.set_ylabel("")
+        ax.set(xlabel=f"goal ({name})", ylabel="")
         if frame_by is not None:
             ok = part.pivot(index="row", columns="goal", values=frame_by).reindex(index=rows, columns=goals)
-            for i, r in enumerate(rows):
-                for j, g in enumerate(goals):
-                    if ok.loc[r, g] is True or ok.loc[r, g] == 1:
-                        ax.add_patch(plt.Rectangle((j, i), 1, 1, fill=False, edgecolor="red", lw=2))
+            for i, j in np.argwhere(ok.to_numpy() == 1):
+                ax.add_patch(plt.Rectangle((int(j), int(i)), 1, 1, fill=False, edgecolor="red", lw=2))
         if column != "stay_share":
             ax.set_yticklabels([])

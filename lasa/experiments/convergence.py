@@ -38,37 +38,25 @@ from lasa.world.goals import GoalTask
 __all__ = ["NAME", "COLUMNS", "Config", "radius", "measure", "run", "summary", "plot"]
 
 NAME = "convergence"
-# the contract's columns first, then what summary and plot read
+# the contract's columns first, then what summary and plot read: ``error`` ||e(t)|| = ||g* - s(t)||
+# [rad]; ``delta`` the paper's radius (alpha = 0.5), sigma_h + (1 - b*) sigma_r, and ``delta_alpha``
+# the radius at the run's alpha, (1 - alpha)/alpha sigma_h + (1 - b*) sigma_r [rad/s]; ``v_dot`` the
+# measured (V(t+1) - V(t)) / dt [rad^2/s], empty at t = T; ``v`` V(t) = ||e||^2 / 2 [rad^2]; ``belief``
+# b(g*); ``sigma_r`` the largest distance to another goal [rad]; ``bound_holds`` b* ||e|| > delta_alpha
+# (continuous-time V must fall) and ``bound_holds_half`` b* ||e|| > delta (the paper's condition, only
+# sufficient at alpha = 0.5); ``v_rose`` v_dot > 0; ``slack`` the discretisation slack dt ||a||^2 / 2 of
+# the commanded a [rad^2/s]; ``clipped`` the safety clip changed the step; ``error_target`` ||s* - s(t)||
+# [rad]; ``goal``, ``theta`` the user's cup and grasp; then counts of steps in the row's window [t, next
+# recorded t): all, with bound_holds, of those with V rising, rising beyond the slack, with
+# bound_holds_half, of those with V rising
 COLUMNS = (
-    "robot",
-    "assistance",
-    "beta",
-    USER,
-    "t",
-    "error",  # ||e(t)|| = ||g* - s(t)|| with g* = task.goals[goal] [rad]
-    "delta",  # paper's radius (alpha = 0.5): sigma_h + (1 - b*) sigma_r [rad/s]
-    "v_dot",  # measured (V(t+1) - V(t)) / dt [rad^2/s]; empty at t = T
-    "v",  # V(t) = ||e||^2 / 2 [rad^2]
-    "belief",  # b(g*) [-]
-    "sigma_r",  # max over the other goals of ||g - s|| [rad]
-    "delta_alpha",  # radius at the run's alpha: (1 - alpha)/alpha sigma_h + (1 - b*) sigma_r
-    "bound_holds",  # b* ||e|| > delta_alpha: continuous-time V must fall [-]
-    "bound_holds_half",  # b* ||e|| > delta: the paper's condition, sufficient only at alpha = 0.5 [-]
-    "v_rose",  # v_dot > 0 [-]
-    "slack",  # discretisation slack dt ||a||^2 / 2 of the commanded a [rad^2/s]
-    "clipped",  # the safety clip changed the step s' - s from dt a [-]
-    "error_target",  # ||s* - s(t)||, the error to the user's own grasp [rad]
-    "goal",  # the user's cup [-]
-    "theta",  # the user's preferred grasp [-]
-    "steps",  # steps in this row's window [t, next recorded t) [-]
-    "bound_steps",  # ... of which bound_holds [-]
-    "rises",  # ... of which bound_holds and V rose [-]
-    "rises_beyond_slack",  # ... of which bound_holds and v_dot > slack [-]
-    "bound_steps_half",  # steps with bound_holds_half [-]
-    "rises_half",  # ... of which V rose [-]
+    *("robot", "assistance", "beta", USER, "t", "error", "delta", "v_dot", "v", "belief", "sigma_r"),
+    *("delta_alpha", "bound_holds", "bound_holds_half", "v_rose", "slack", "clipped", "error_target"),
+    *("goal", "theta", "steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_half"),
+    "rises_half",
 )
-DPI = 150
 MEMBER_COLORS = {"point": "#1b9e77", "grasp_set": "#d95f02", "arbitrated": "#7570b3", "hindsight": "#e7298a"}
+_STEP = COLUMNS[COLUMNS.index("error") : COLUMNS.index("goal")]  # measure's: error ... error_target
 _COUNTS = ("steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_half", "rises_half")
 
 
@@ -96,14 +84,8 @@ class Config:
 def radius(belief: np.ndarray, sigma_r: np.ndarray, sigma_h: float, alpha: float = 0.5) -> np.ndarray:
     """delta_alpha = (1 - alpha)/alpha sigma_h + (1 - b*) sigma_r; Eq. T4's delta at alpha = 0.5.
 
-    Args:
-        belief: b(g*), any shape.
-        sigma_r: Distance to the furthest other goal, broadcastable against ``belief`` [rad].
-        sigma_h: Bound on ||phi|| [rad/s].
-        alpha: Blend weight of the assistance, in (0, 1].
-
-    Raises:
-        ConfigError: if alpha is not in (0, 1] (alpha = 0 gives no bound at all).
+    ``belief`` b(g*) and ``sigma_r`` (the distance to the furthest other goal [rad]) broadcast;
+    ``sigma_h`` bounds ||phi|| [rad/s]; ConfigError unless alpha is in (0, 1] (0 gives no bound).
     """
     check_range("alpha", alpha, 0.0, 1.0, low_open=True)
     return (1.0 - alpha) / alpha * sigma_h + (1.0 - np.asarray(belief)) * np.asarray(sigma_r)
@@ -122,20 +104,11 @@ def measure(
 ) -> dict[str, np.ndarray]:
     """The Lyapunov quantities of a batch of trajectories, every step, shape (T+1, U).
 
-    Args:
-        states: s(t), shape (T+1, U, n) [rad].
-        beliefs: b(t), shape (T+1, U, G).
-        actions: The commanded a(t) before the safety clip, shape (T, U, n) [rad/s].
-        goal: Each user's cup g*, shape (U,).
-        goals: The goal poses, shape (G, n) [rad]; g* = goals[goal].
-        target: Each user's s*, shape (U, n) [rad].
-        dt: Control period [s].
-        sigma_h: Bound on ||phi|| [rad/s].
-        alpha: Blend weight of the run, in (0, 1].
-
-    Returns:
-        Arrays keyed by the per-step columns of :data:`COLUMNS` (``error`` ... ``error_target``).
-        Quantities of a step (``v_dot``, ``slack``) are NaN at t = T, its flags False.
+    ``states`` s(t) (T+1, U, n), ``beliefs`` b(t) (T+1, U, G), ``actions`` the commanded a(t) before
+    the safety clip (T, U, n), ``goal`` each user's cup (U,) into ``goals`` (G, n), ``target`` each
+    user's s* (U, n), ``sigma_h`` the bound on ||phi||, ``alpha`` the run's blend weight in (0, 1].
+    Returns the per-step columns of :data:`COLUMNS` (``error`` ... ``error_target``); quantities of
+    a step (``v_dot``, ``slack``) are NaN at t = T, its flags False.
     """
     goal = np.asarray(goal)
     users = np.arange(len(goal))
@@ -154,21 +127,9 @@ def measure(
     slack = np.concatenate([0.5 * dt * np.einsum("tun,tun->tu", actions, actions), pad])
     moved = states[1:] - states[:-1] - dt * actions
     clipped = np.concatenate([np.linalg.norm(moved, axis=-1) > 1e-9, np.zeros((1, len(goal)), bool)])
-    return {
-        "error": error,
-        "delta": delta,
-        "v_dot": v_dot,
-        "v": v,
-        "belief": b_star,
-        "sigma_r": sigma_r,
-        "delta_alpha": delta_alpha,
-        "bound_holds": b_star * error > delta_alpha,
-        "bound_holds_half": b_star * error > delta,
-        "v_rose": v_dot > 0,
-        "slack": slack,
-        "clipped": clipped,
-        "error_target": np.linalg.norm(target[None] - states, axis=-1),
-    }
+    holds = (b_star * error > delta_alpha, b_star * error > delta, v_dot > 0)
+    values = (error, delta, v_dot, v, b_star, sigma_r, delta_alpha, *holds, slack, clipped)
+    return dict(zip(_STEP, (*values, np.linalg.norm(target[None] - states, axis=-1)), strict=True))
 
 
 def _window_counts(m: dict[str, np.ndarray], times: np.ndarray) -> dict[str, np.ndarray]:
@@ -199,18 +160,11 @@ def run(
     config: Config = Config(),
     progress: bool = False,
 ) -> pd.DataFrame:
-    """LA+SA users of fixed rationality under each assistance member, with the T4 quantities.
+    """LA+SA users of fixed rationality under each assistance member (replacing ``control.assistance``),
+    with the T4 quantities: one row per (member, beta, user, recorded step), columns :data:`COLUMNS`.
 
-    Args:
-        decoder: The base decoder (LA+SA's, ``Workspace.sim_decoders()["base"]``).
-        control: Control-loop units; ``assistance`` is replaced by each member in turn.
-
-    Returns:
-        One row per (member, beta, user, recorded step), columns :data:`COLUMNS`, ordered
-        by member (config order), beta, user and t.
-
-    Raises:
-        ConfigError: if ``control.alpha`` is 0 (LA alone: no assistance, no ball).
+    ``decoder`` is LA+SA's (``Workspace.sim_decoders()["base"]``); ConfigError if ``control.alpha``
+    is 0 (LA alone: no assistance, no ball).
     """
     if control.alpha <= 0:
         raise ConfigError("the Sec. IV-A bound needs alpha > 0 (LA+SA); control.alpha is 0")
@@ -232,30 +186,18 @@ def run(
         bound = (control.dt, control.action_scale, control.alpha)
         m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
         counts = _window_counts(m, times)
-        n_users, n_rows = len(user), len(times)
-        cols: dict[str, object] = {
-            "robot": task.robot.name,
-            "assistance": assistance,
-            "beta": np.repeat(beta, n_rows),
-            USER: np.repeat(user, n_rows),
-            "t": np.tile(times, n_users),
-        }
-        for name, values in {**m, **counts}.items():
-            cols[name] = values[times].T.ravel() if name in m else values.T.ravel()
-        cols["goal"] = np.repeat(users.goal, n_rows)
-        cols["theta"] = np.repeat(users.theta, n_rows)
+        per_user = {"beta": beta, USER: user, "goal": users.goal, "theta": users.theta}
+        cols = {"robot": task.robot.name, "assistance": assistance, "t": np.tile(times, len(user))}
+        cols |= {name: np.repeat(values, len(times)) for name, values in per_user.items()}
+        cols |= {name: values[times].T.ravel() for name, values in m.items()}
+        cols |= {name: values.T.ravel() for name, values in counts.items()}
         parts.append(pd.DataFrame(cols))
     return pd.concat(parts, ignore_index=True)[list(COLUMNS)]
 
 
 def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -> pd.DataFrame:
-    """Per (robot, assistance, beta): how often V rose where T4 held, and the settled ball.
-
-    Args:
-        frame: Rows of :func:`run` (or the figure's CSV).
-        settle: Share of the horizon at its end over which the ball is measured.
-        quantile: Quantile of the error that defines the ball.
-    """
+    """Per (robot, assistance, beta) of :func:`run`'s rows: how often V rose where T4 held, and the
+    ball: the ``quantile`` of the error over the last ``settle`` share of the horizon."""
     check_range("settle", settle, 0.0, 1.0, low_open=True)
     check_range("quantile", quantile, 0.0, 1.0)
     rows = []
@@ -348,34 +290,23 @@ def plot(table: pd.DataFrame) -> Figure:
             med = top.groupby("t")[column].median()
             row[1].plot(med.index, med.to_numpy(), color="0.2", ls=ls, lw=1.2, label=label)
         row[1].legend(frameon=False, fontsize=8)
-        row[0].set_yscale("log")
-        row[0].set_title(rf"{name}: $V(t) = \|e\|^2/2$, $\beta$ = {beta:g}")
-        row[0].set_xlabel("time step t")
-        row[0].set_ylabel(r"$V$ [rad$^2$]")
+        v_title = rf"{name}: $V(t) = \|e\|^2/2$, $\beta$ = {beta:g}"
+        row[0].set(yscale="log", title=v_title, xlabel="time step t", ylabel=r"$V$ [rad$^2$]")
         row[0].legend(frameon=False, fontsize=8)
-        row[1].set_title(rf"{name}: $\|e(t)\|$ and the radii, $\beta$ = {beta:g}")
-        row[1].set_xlabel("time step t")
-        row[1].set_ylabel("[rad]")
+        e_title = rf"{name}: $\|e(t)\|$ and the radii, $\beta$ = {beta:g}"
+        row[1].set(title=e_title, xlabel="time step t", ylabel="[rad]")
         s = stats[stats.robot == name]
         _bars(row[2], s, "tightness_alpha")
         _bars(row[2], s, "tightness_half", hatched=True)
         row[2].axhline(1.0, color="0.3", lw=0.8)
-        row[2].set_yscale("log")
-        row[2].set_title(
-            f"{name}: settled ball, 95th pct of"
-            + "\n"
-            + r"$b^*\|e\|/\delta_\alpha$ (solid), $b^*\|e\|/\delta$ (hatched)"
-        )
-        row[2].set_ylabel("last 25% of steps [-]")
+        ratios = r"$b^*\|e\|/\delta_\alpha$ (solid), $b^*\|e\|/\delta$ (hatched)"
+        ball = f"{name}: settled ball, 95th pct of\n" + ratios
+        row[2].set(yscale="log", title=ball, ylabel="last 25% of steps [-]")
         _bars(row[3], s, "rose_given_bound")
         _bars(row[3], s, "rose_given_bound_half", hatched=True)
-        row[3].set_ylim(0, 1)
-        row[3].set_title(
-            f"{name}: V rose, of steps with"
-            + "\n"
-            + r"$b^*\|e\| > \delta_\alpha$ (solid), $> \delta$ (hatched)"
-        )
-        row[3].set_ylabel("V rose [share of steps]")
+        bounds = r"$b^*\|e\| > \delta_\alpha$ (solid), $> \delta$ (hatched)"
+        rose = f"{name}: V rose, of steps with\n" + bounds
+        row[3].set(ylim=(0, 1), title=rose, ylabel="V rose [share of steps]")
     n = int(table.groupby(["robot", "assistance", "beta"])[USER].nunique().max())
     fig.suptitle(f"Sec. IV-A: the Lyapunov ball of LA+SA, {n} users per (member, beta)")
     fig.tight_layout()

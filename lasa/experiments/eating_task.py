@@ -1,8 +1,7 @@
 r"""The eating task's 2-D latent actions (notebook 10): demonstrations, training, what z does.
 
-Each segmentation of the demonstrations trains a base decoder, fine-tuned with lambda = 0 and with
-notebook 03's rule's lambda; the study's headline is chosen by the latent property alone
-(:func:`train_variants`), before any participant runs.
+Each segmentation trains a base decoder, fine-tuned with lambda = 0 and with notebook 03's rule's lambda;
+the headline is chosen by the latent property alone (:func:`train_variants`), before any participant runs.
 """
 
 from __future__ import annotations
@@ -48,11 +47,9 @@ __all__ = [
     "COLUMNS",
     "Config",
     "BELIEFS",
-    "Variants",
     "variant_names",
     "train_variants",
     "CAP_SOURCE",
-    "CapDecoders",
     "cap_label",
     "cap_decoder_name",
     "train_caps",
@@ -68,6 +65,9 @@ NAME = "eating_latent"
 CAP_SOURCE = "eating_caps"
 COLUMNS = ("robot", "goal", "belief", "z1", "z2", "vx", "vy", "vz", "tilt_rate", "toward")
 BELIEFS = ("uncertain", "confident")
+_Shared = tuple[EatingTask, latent_measure.PropertyConfig, str]  # run_jobs' shared: task, measure, source
+_Variant = tuple[str, LatentActionModel, TrainConfig, ControlConfig]  # name, decoder, fine-tune, control
+_SUBSETS = ("search_segmentations", "sector_segmentations", "seed_segmentations")  # of segmentations
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,17 +75,14 @@ class Config:
     """The eating decoder's data and training (notebook 10)."""
 
     demos: DemoConfig = EATING_DEMOS  # the demonstrations (lasa.people.demos.DemoConfig, its own seed)
-    # training (lasa.method.train.TrainConfig, its seed every fine-tune's): z_dim stays 2, two stick axes
-    train: TrainConfig = TrainConfig(z_dim=2)
+    train: TrainConfig = TrainConfig(z_dim=2)  # its seed every fine-tune's; z_dim 2: two stick axes
     goal: str = "middle"  # the bowl the figure looks at [-]
     # segmentations trained: at paper scale the two with the property under the study's cap;
     # all of SEGMENTATIONS under LARGE=1 (configs/large.yaml) [-]
     segmentations: tuple[str, ...] = ("continuous", "transfers")
-    # notebook 03's sweep, on the continuous base [-]
-    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # notebook 03's sweep, continuous base
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
-    # small entropy weights searched for both halves of the property, one fine-tune each [-]
-    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)
+    search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)  # small weights searched for both halves [-]
     search_segmentations: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
     # bases trained with the sector loss too (lasa.method.sectors; <segmentation>_sectors, lambda = 0); the
     # weight had the lower held-out reconstruction error of two probes (0.2: 0.0085, 1.0: 0.0118)
@@ -94,10 +91,8 @@ class Config:
     # bases trained again with each search seed, fine-tuned with lambda = 0 (<segmentation>_seed<seed>) [-]
     seed_segmentations: tuple[str, ...] = ("transfers",)
     search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the variants' own: train.seed) [-]
-    # the study's belief cap (lasa.world.eating.STUDY_BELIEF_CAP); None ("none"): Algorithm 1's uncapped
-    belief_cap: BeliefCap = STUDY_BELIEF_CAP
-    # the headline's recipe trained again at each of these caps (train_caps); notebook 11 runs them [-]
-    cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)
+    belief_cap: BeliefCap = STUDY_BELIEF_CAP  # the study's; None ("none"): Algorithm 1's uncapped
+    cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)  # the headline's recipe again (train_caps)
     # local worker processes for the trainings (entropy_ablation.train_all): the same decoders with any [-]
     jobs: PositiveInt = 1
 
@@ -112,34 +107,23 @@ class Config:
             raise ConfigError(
                 f"train.z_dim must be 2 (the study's stick has two axes), got {self.train.z_dim}"
             )
-        object.__setattr__(self, "segmentations", tuple(self.segmentations))
-        object.__setattr__(self, "lambdas", tuple(float(x) for x in self.lambdas))
         if not self.segmentations:
             raise ConfigError("segmentations must name at least one of " + ", ".join(SEGMENTATIONS))
         for name in self.segmentations:
             check_choice("segmentation", name, SEGMENTATIONS)
         if "continuous" not in self.segmentations:
             raise ConfigError("segmentations must include 'continuous': the lambda sweep runs on its base")
+        for field in ("lambdas", "search_lambdas"):
+            object.__setattr__(self, field, tuple(float(x) for x in getattr(self, field)))
         entropy_ablation.Config(lambdas=self.lambdas, sweep_steps=self.sweep_steps)  # its checks
-        object.__setattr__(self, "search_lambdas", tuple(float(x) for x in self.search_lambdas))
-        object.__setattr__(self, "search_segmentations", tuple(self.search_segmentations))
-        object.__setattr__(self, "sector_segmentations", tuple(self.sector_segmentations))
-        object.__setattr__(self, "seed_segmentations", tuple(self.seed_segmentations))
-        object.__setattr__(self, "search_seeds", tuple(self.search_seeds))
         check_list("search_lambdas", self.search_lambdas, at_least=0, ascending=True)
-        for field in (
-            "segmentations",
-            "search_segmentations",
-            "sector_segmentations",
-            "seed_segmentations",
-            "search_seeds",
-        ):
-            check_list(field, getattr(self, field), at_least=0)
+        for field in ("segmentations", *_SUBSETS, "search_seeds"):
+            object.__setattr__(self, field, check_list(field, getattr(self, field), at_least=0))
         if self.train.seed in self.search_seeds:
             raise ConfigError(
                 f"search_seeds must differ from train.seed ({self.train.seed}), got {self.search_seeds}"
             )
-        for field in ("search_segmentations", "sector_segmentations", "seed_segmentations"):
+        for field in _SUBSETS:
             for name in getattr(self, field):
                 if name not in self.segmentations:
                     raise ConfigError(
@@ -156,11 +140,11 @@ def variant_names(config: Config) -> list[str]:
     return [name for name, _, _ in fine_tunes(config, 0.0)]
 
 
-def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | None]]:
-    """(name, base, lambda) of every decoder variant; lambda None: notebook 03's rule's."""
-    out: list[tuple[str, str, float | None]] = []
+def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float]]:
+    """(name, base, lambda) of every decoder variant; ``chosen``: notebook 03's rule's lambda."""
+    out: list[tuple[str, str, float]] = []
     for r in config.segmentations:
-        out += [(r, r, 0.0), (f"{r}_entropy", r, None)]
+        out += [(r, r, 0.0), (f"{r}_entropy", r, chosen)]
         if r in config.search_segmentations:
             out += [(f"{r}_lambda{w:g}", r, w) for w in config.search_lambdas]
         if r in config.sector_segmentations:
@@ -170,10 +154,10 @@ def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float | No
     return out
 
 
-def _bases(config: Config, train: TrainConfig) -> dict[str, tuple[str, TrainConfig]]:
-    """Per base: its segmentation and training settings (the sector bases add the loss,
-    the seed bases another seed).
-    """
+def _bases(config: Config) -> dict[str, tuple[str, TrainConfig]]:
+    """Per base: its segmentation and training settings (the sector bases add the loss, the seed
+    bases another seed)."""
+    train = config.train
     out = {r: (r, train) for r in config.segmentations}
     for r in config.sector_segmentations:
         out[f"{r}_sectors"] = (r, dataclasses.replace(train, sector_weight=config.sector_weight))
@@ -182,18 +166,15 @@ def _bases(config: Config, train: TrainConfig) -> dict[str, tuple[str, TrainConf
     return out
 
 
+def _fine(config: Config, base: str, weight: float) -> TrainConfig:
+    """The fine-tune of ``base`` (:func:`_bases`) with entropy weight ``weight``."""
+    return dataclasses.replace(_bases(config)[base][1], steps=config.sweep_steps, entropy_lambda=weight)
+
+
 @dataclasses.dataclass(frozen=True)
 class Variants:
-    """The trained variants of the study's decoder and the choice among them.
-
-    Attributes:
-        models: Decoder per variant name (:func:`variant_names`).
-        sweep: Notebook 03's sweep on the continuous base (one row per lambda).
-        chosen_lambda: The lambda its rule picked.
-        demos: Demonstration tuples (clean, noisy copies) and minutes of motion per segmentation.
-        property: :func:`lasa.evidence.latent_measure.measure` rows of every variant.
-        headline: The variant the property's rule picks.
-    """
+    """The trained variants of the study's decoder, notebook 03's sweep on the continuous base, the
+    demonstrations' sizes per segmentation, every variant's property rows and the rule's ``headline``."""
 
     models: dict[str, LatentActionModel]
     sweep: pd.DataFrame
@@ -212,32 +193,34 @@ def train_variants(
     progress: bool = True,
 ) -> Variants:
     """Train every decoder variant, measure its property, choose the headline by the property alone."""
-    train = config.train
     datasets, demo_rows = _demonstrations(task, control, config, paths)
-    plan = _bases(config, train)
-    runs = [
-        entropy_ablation.Run(datasets[segmentation], control, settings)
-        for segmentation, settings in plan.values()
-    ]
+    plan = _bases(config)
+    runs = [entropy_ablation.Run(datasets[r], control, settings) for r, settings in plan.values()]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="base decoders")
     bases = {base: model for base, (model, _) in zip(plan, fitted, strict=True)}
-    trained = {base: settings for base, (_, settings) in plan.items()}
     datasets.update({base: datasets[segmentation] for base, (segmentation, _) in plan.items()})
     sweep_config = entropy_ablation.Config(
-        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=train.seed, jobs=config.jobs
+        lambdas=config.lambdas, sweep_steps=config.sweep_steps, seed=config.train.seed, jobs=config.jobs
     )
-    sweep = entropy_ablation.run_sweep(
-        bases["continuous"], train, datasets["continuous"], task, control, sweep_config, progress=progress
-    )
-    models, fines = _fine_tune(task, control, config, paths, sweep, bases, trained, datasets, progress)
-    jobs = [(m, control, n) for n, m in models.items()]
-    frame = pd.concat(
-        run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, "eating")), ignore_index=True
-    )
+    continuous = (bases["continuous"], config.train, datasets["continuous"])
+    sweep = entropy_ablation.run_sweep(*continuous, task, control, sweep_config, progress)
+    goal_sets = belief_targets(task, control.likelihood)
+    models, fines, runs_of = {}, {}, {}
+    for name, base, weight in fine_tunes(config, sweep.chosen):
+        if base == "continuous" and weight in sweep.models:  # the sweep's own
+            models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
+        else:
+            fines[name] = _fine(config, base, weight)
+            runs_of[name] = entropy_ablation.Run(datasets[base], control, fines[name], goal_sets, bases[base])
+    fitted = entropy_ablation.train_all(list(runs_of.values()), config.jobs, progress, "decoder readings")
+    models.update({name: model for name, (model, _) in zip(runs_of, fitted, strict=True)})
+    variants = [(name, models[name], fines[name], control) for name, _, _ in fine_tunes(config, sweep.chosen)]
+    frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
     path = paths.artifact("eating_decoder", task.robot.name)
-    _save(models[headline], path, fines[headline], control, config, variant=headline)
-    return Variants(models, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
+    _save(models[headline], path, fines[headline], control, config, headline)
+    kept = {name: model for name, model, _, _ in variants}
+    return Variants(kept, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
 
 
 def _demonstrations(
@@ -251,71 +234,32 @@ def _demonstrations(
             demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=segmentation)
         )
         clean = demos.clean()
+        steps, minutes = len(clean), len(clean) * control.dt / 60
+        sizes = (segmentation, int(clean.demo.max() + 1), steps, minutes, len(demos))
         rows.append(
-            {
-                "reading": segmentation,
-                "demonstrations": int(clean.demo.max() + 1),
-                "steps": len(clean),
-                "minutes": len(clean) * control.dt / 60,
-                "tuples": len(demos),
-            }
+            dict(zip(("reading", "demonstrations", "steps", "minutes", "tuples"), sizes, strict=True))
         )
         datasets[segmentation] = demos
     return datasets, rows
 
 
-def _fine_tune(
-    task: EatingTask,
-    control: ControlConfig,
-    config: Config,
-    paths: Paths,
-    sweep: entropy_ablation.Sweep,
-    bases: dict[str, LatentActionModel],
-    trained: dict[str, TrainConfig],
-    datasets: dict[str, Demonstrations],
-    progress: bool,
-) -> tuple[dict[str, LatentActionModel], dict[str, TrainConfig]]:
-    """Every variant's decoder (:func:`fine_tunes`; the sweep's own where it trained it), saved."""
-    goal_sets = belief_targets(task, control.likelihood)
-    lam = sweep.chosen
-    models: dict[str, LatentActionModel] = {}
-    fines: dict[str, TrainConfig] = {}
-    runs: dict[str, entropy_ablation.Run] = {}
-    for name, base, weight in fine_tunes(config, lam):
-        weight = lam if weight is None else weight
-        if base == "continuous" and weight in sweep.models:
-            models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
-            continue
-        fines[name] = dataclasses.replace(
-            trained[base], steps=config.sweep_steps, entropy_lambda=weight, seed=trained[base].seed
-        )
-        runs[name] = entropy_ablation.Run(datasets[base], control, fines[name], goal_sets, bases[base])
-    fitted = entropy_ablation.train_all(list(runs.values()), config.jobs, progress, desc="decoder readings")
-    models.update({name: model for name, (model, _) in zip(runs, fitted, strict=True)})
-    models = {name: models[name] for name, _, _ in fine_tunes(config, lam)}  # in training order
-    for name, model in models.items():
-        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=name)
-        _save(model, path, fines[name], control, config, variant=name)
-    return models, fines
-
-
 def _save(
-    model: LatentActionModel,
-    path: Path,
-    fine: TrainConfig,
-    control: ControlConfig,
-    config: Config,
-    variant: str,
+    model: LatentActionModel, path: Path, fine: TrainConfig, control: ControlConfig, config: Config, name: str
 ) -> None:
     """A variant's decoder, saved with the settings that made it and the variant's name."""
-    save_checkpoint(
-        model,
-        path,
-        train=to_dict(fine),
-        control=to_dict(control),
-        demos=to_dict(config.demos),
-        reading=variant,
-    )
+    extra = {"train": to_dict(fine), "control": to_dict(control), "demos": to_dict(config.demos)}
+    save_checkpoint(model, path, **extra, reading=name)
+
+
+def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant]) -> pd.DataFrame:
+    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows
+    (``shared``: the task, how to measure, the rows' source)."""
+    for name, model, fine, control in variants:
+        path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=name)
+        _save(model, path, fine, control, config, name)
+    jobs = [(model, control, name) for name, model, _, control in variants]
+    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=shared)
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
 
 
 def cap_label(cap: float | None) -> str:
@@ -330,14 +274,8 @@ def cap_decoder_name(headline: str, cap: float | None) -> str:
 
 @dataclasses.dataclass(frozen=True)
 class CapDecoders:
-    """The cap sweep's decoders (:func:`train_caps`).
-
-    Attributes:
-        models: Decoder per cap of the sweep (None: uncapped), the headline's recipe at that cap.
-        names: Their variant names (:func:`cap_decoder_name`), per cap.
-        property: Their :func:`lasa.evidence.latent_measure.measure` rows, each at its cap
-            (source :data:`CAP_SOURCE`).
-    """
+    """The cap sweep's decoders (:func:`train_caps`), per cap (None: uncapped), the headline's recipe
+    at that cap; their names (:func:`cap_decoder_name`) and property rows (source :data:`CAP_SOURCE`)."""
 
     models: dict[float | None, LatentActionModel]
     names: dict[float | None, str]
@@ -355,13 +293,9 @@ def train_caps(
 ) -> CapDecoders:
     """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
-    lam = variants.chosen_lambda
-    base, weight = {name: (b, w) for name, b, w in fine_tunes(config, lam)}[variants.headline]
-    segmentation, base_train = _bases(config, config.train)[base]
-    weight = lam if weight is None else weight
-    fine = dataclasses.replace(
-        base_train, steps=config.sweep_steps, entropy_lambda=weight, seed=base_train.seed
-    )
+    base, weight = {n: (b, w) for n, b, w in fine_tunes(config, variants.chosen_lambda)}[variants.headline]
+    segmentation, base_train = _bases(config)[base]
+    fine = _fine(config, base, weight)
     controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
     demos = {
         c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=segmentation)
@@ -377,19 +311,12 @@ def train_caps(
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
     models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
     names = {c: cap_decoder_name(variants.headline, c) for c in caps}
-    for c, model in models.items():
-        path = paths.artifact("eating_segmentation_decoder", task.robot.name, segmentation=names[c])
-        _save(model, path, fine, controls[c], config, variant=names[c])
-    jobs = [(models[c], controls[c], names[c]) for c in caps]
-    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=(task, prop, CAP_SOURCE))
-    frame = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
+    kept = [(names[c], models[c], fine, controls[c]) for c in caps]
+    frame = _keep(config, paths, (task, prop, CAP_SOURCE), kept)
     return CapDecoders(models, names, frame)
 
 
-def _measure(
-    shared: tuple[EatingTask, latent_measure.PropertyConfig, str],
-    job: tuple[LatentActionModel, ControlConfig, str],
-) -> pd.DataFrame:
+def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
     """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
     task, prop, source = shared
     model, control, name = job
@@ -404,8 +331,8 @@ def directions(
     """What the ``n`` full stick deflections do at ``goal``'s mid-preference entry, per belief."""
     g = GOALS.index(check_choice("goal", goal, GOALS))
     state = task.target(g, 0.5)
-    angles = 2 * np.pi * np.arange(n) / n
-    z = np.round(np.stack([np.cos(angles), np.sin(angles)], axis=1), 12)  # at rest the stick commands nothing
+    z = latent_measure.ring(n, 2)  # at rest the stick commands nothing
+    states = np.broadcast_to(state, (len(z), len(state)))
     confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
     data = mujoco.MjData(task.robot.model)
@@ -413,9 +340,7 @@ def directions(
     goals = task.robot.goal_positions()
     rows = []
     for name, b in beliefs.items():
-        qdot = decoder.decode_numpy(
-            z, np.broadcast_to(state, (len(z), len(state))), np.broadcast_to(b, (len(z), len(b)))
-        )
+        qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
         v = qdot @ jp[0].T  # (Z, 3)
         w = qdot @ jr[0].T
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
@@ -429,22 +354,8 @@ def directions(
         toward = np.where(
             speed < 0.01, "-", np.where(cos[np.arange(len(z)), best] > 0.7, np.asarray(GOALS)[best], "here")
         )
-        rows.append(
-            pd.DataFrame(
-                {
-                    "robot": task.robot.name,
-                    "goal": goal,
-                    "belief": name,
-                    "z1": z[:, 0],
-                    "z2": z[:, 1],
-                    "vx": v[:, 0],
-                    "vy": v[:, 1],
-                    "vz": v[:, 2],
-                    "tilt_rate": tilt_rate,
-                    "toward": toward,
-                }
-            )
-        )
+        values = [task.robot.name, goal, name, *z.T, *v.T, tilt_rate, toward]
+        rows.append(pd.DataFrame(dict(zip(COLUMNS, values, strict=True))))
     return pd.concat(rows, ignore_index=True)
 
 
@@ -462,21 +373,15 @@ def plot(frame: pd.DataFrame) -> Figure:
         ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.8", lw=1))
         for _, row in part.iterrows():
             x0, y0 = row.z1, row.z2
+            xy = (x0 - row.vy * scale, y0 + row.vx * scale)
             ax.annotate(
-                "",
-                xy=(x0 - row.vy * scale, y0 + row.vx * scale),
-                xytext=(x0, y0),
-                arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6},
+                "", xy=xy, xytext=(x0, y0), arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
             )
             ax.scatter([x0], [y0], s=90, color=cmap(norm(np.degrees(row.tilt_rate))), edgecolor="k", zorder=3)
             label = f"{row.toward}\n{100 * row.vz:+.0f} cm/s up"
             ax.text(x0 * 1.3, y0 * 1.3 - 0.12, label, fontsize=7, ha="center", va="center")
-        ax.set_xlim(-1.9, 1.9)
-        ax.set_ylim(-1.9, 1.9)
-        ax.set_aspect("equal")
-        ax.set_xticks([-1, 0, 1])
-        ax.set_yticks([-1, 0, 1])
-        ax.set_xlabel("stick axis z1")
+        ticks, lim = [-1, 0, 1], (-1.9, 1.9)
+        ax.set(xlim=lim, ylim=lim, aspect="equal", xticks=ticks, yticks=ticks, xlabel="stick axis z1")
         ax.set_title(f"belief {name}")
     axes[0].set_ylabel("stick axis z2")
     sm = plt.cm.ScalarMappable(cmap=cmap, norm=norm)
@@ -510,14 +415,11 @@ def _misses(rows: pd.DataFrame) -> str:
 
 
 def property_sentence(prop: pd.DataFrame) -> str:
-    """Which decoder variants meet the two-half rule, which the rule ranks first, how the others fall short.
-
-    Args:
-        prop: One task's :func:`lasa.evidence.latent_property.summary` (the variants the rule chooses among).
-    """
+    """Which decoder variants meet the two-half rule, which the rule ranks first, how the others fall
+    short; ``prop``: one task's :func:`lasa.evidence.latent_property.summary`."""
     meets = latent_property.holds(prop)
     first = latent_property.choose(prop)
-    good, bad = list(meets[meets].index), list(meets[~meets].index)
+    good = list(meets[meets].index)
     if good:
         rows = prop[prop.decoder.isin(good)]
         stay, n, leave = 100 * rows.stay_share.min(), int(rows.n_inputs.max()), rows.leave_min.min()
@@ -528,12 +430,8 @@ def property_sentence(prop: pd.DataFrame) -> str:
         )
     else:
         head = f"None of the {len(meets)} readings meets the rule; the best reading is `{first}`."
-    tails = [
-        f"`{d}` misses {_misses(part)} "
-        f"(at most {100 * part.stay_share.max():.0f}% of the inputs stay at a goal)"
-        for d, part in prop[prop.decoder.isin(bad)].groupby("decoder", sort=False)
-    ]
-    return head + (f" {'; '.join(tails)}." if tails else "")
+    tails = _shortfalls(prop, meets, " (at most {:.0f}% of the inputs stay at a goal)")
+    return head + (f" {tails}." if tails else "")
 
 
 def caps_sentence(cap_prop: pd.DataFrame) -> str:
@@ -543,6 +441,13 @@ def caps_sentence(cap_prop: pd.DataFrame) -> str:
     meets = latent_property.holds(cap_prop)
     good = list(meets[meets].index)
     said = f"the rule is met by {_names(good)}" if good else "no cap's decoder meets the rule"
-    missing = cap_prop[cap_prop.decoder.isin(list(meets[~meets].index))]
-    tails = [f"`{d}` misses {_misses(part)}" for d, part in missing.groupby("decoder", sort=False)]
-    return f"Of the recipe's decoders at other caps, {said}" + (f"; {'; '.join(tails)}." if tails else ".")
+    tails = _shortfalls(cap_prop, meets, "")
+    return f"Of the recipe's decoders at other caps, {said}" + (f"; {tails}." if tails else ".")
+
+
+def _shortfalls(prop: pd.DataFrame, meets: pd.Series, share: str) -> str:
+    """```d`` misses ...`` of each decoder that misses the rule, ``share`` formatting its top stay share."""
+    missing = prop[prop.decoder.isin(list(meets[~meets].index))].groupby("decoder", sort=False)
+    return "; ".join(
+        f"`{d}` misses {_misses(p)}" + share.format(100 * p.stay_share.max()) for d, p in missing
+    )

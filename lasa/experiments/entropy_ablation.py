@@ -68,17 +68,11 @@ class Config:
 
 @dataclasses.dataclass(frozen=True)
 class Sweep:
-    """The sweep's results.
-
-    Attributes:
-        table: One row per lambda: ``lambda``, ``entropy_confident`` (mean entropy of
-            p_(s,b) at confident demonstrated contexts [nats]), ``recon_error`` (on the
-            clean demonstrations) and ``val_error`` (on the held-out ones) [(rad/s)^2].
-        models: The fine-tuned decoder of each lambda.
-        configs: The training config of each lambda.
-        histories: The training log of each lambda.
-        chosen: The lambda the rule picked (0, the control, if no lambda > 0 was within its
-            cost bound: :func:`lasa.method.entropy.choose_lambda`).
+    """The sweep's results: per lambda its decoder, training config and log, and ``table``, one row per
+    lambda: ``entropy_confident`` (mean entropy of p_(s,b) at confident demonstrated contexts [nats]),
+    ``recon_error`` (on the clean demonstrations) and ``val_error`` (held out) [(rad/s)^2]; ``chosen``
+    the rule's lambda (0 if no lambda > 0 was within its cost bound:
+    :func:`lasa.method.entropy.choose_lambda`).
     """
 
     table: pd.DataFrame
@@ -115,11 +109,8 @@ def train_all(
 def confident_contexts(
     demos: Demonstrations, cap: float | None = None, every: int = 10
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Every ``every``-th clean demonstrated context with a confident belief: (states, beliefs).
-
-    Raises:
-        EmptySelectionError: no demonstrated context is that confident.
-    """
+    """Every ``every``-th clean demonstrated context with a confident belief: (states, beliefs);
+    EmptySelectionError if no demonstrated context is that confident."""
     clean = demos.clean()
     threshold = confidence_threshold(cap)
     confident = clean.beliefs.max(axis=1) > threshold
@@ -142,16 +133,8 @@ def run_sweep(
     config: Config = Config(),
     progress: bool = True,
 ) -> Sweep:
-    """Fine-tune ``base`` once per lambda (0 included) and pick lambda by the fixed rule.
-
-    Args:
-        base: The base decoder (notebook 02).
-        base_train: The config that trained it; each run keeps its settings and changes
-            only ``steps``, ``entropy_lambda`` and ``seed``.
-        demos: The demonstrations.
-        task: The goal task (the belief's goal sets).
-        progress: Show a progress bar over the runs.
-    """
+    """Fine-tune ``base`` (notebook 02's decoder) once per lambda (0 included) and pick lambda by the
+    fixed rule; each run keeps ``base_train``'s settings but ``steps``, ``entropy_lambda`` and ``seed``."""
     goal_sets = belief_targets(task, control.likelihood)
     probe = confident_contexts(demos, control.belief_cap)
     clean = demos.clean()
@@ -164,16 +147,15 @@ def run_sweep(
     trained = train_all(runs, config.jobs, progress, desc="lambda sweep")
     models = {lam: model for lam, (model, _) in zip(lambdas, trained, strict=True)}
     histories = {lam: history for lam, (_, history) in zip(lambdas, trained, strict=True)}
-    rows = []
-    for lam in lambdas:
-        rows.append(
-            {
-                "lambda": lam,
-                "entropy_confident": float(context_entropy(models[lam], *probe, goal_sets, control).mean()),
-                "recon_error": reconstruction_error(models[lam], clean.states, clean.actions, clean.beliefs),
-                "val_error": float(histories[lam].val_error.iloc[-1]),
-            }
-        )
+    rows = [
+        {
+            "lambda": lam,
+            "entropy_confident": float(context_entropy(models[lam], *probe, goal_sets, control).mean()),
+            "recon_error": reconstruction_error(models[lam], clean.states, clean.actions, clean.beliefs),
+            "val_error": float(histories[lam].val_error.iloc[-1]),
+        }
+        for lam in lambdas
+    ]
     table = pd.DataFrame(rows)
     chosen = choose_lambda(table, task.n_goals)
     return Sweep(table, models, configs, histories, chosen)
@@ -184,62 +166,33 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
     goal_sets = belief_targets(task, control.likelihood)
     progress, conf, states, beliefs = context_grid(task.start, task.goals[1], 1, task.n_goals)
     robot = task.robot.name
-    parts = [
-        pd.DataFrame(
-            {
-                "robot": robot,
-                "kind": "grid",
-                "lambda": lam,
-                "progress": progress,
-                "confidence": conf,
-                "entropy": context_entropy(sweep.models[lam], states, beliefs, goal_sets, control),
-                "recon_error": np.nan,
-                "val_error": np.nan,
-            }
-        )
-        for lam in dict.fromkeys((0.0, sweep.chosen))  # the control alone if the rule kept it
+    lams = dict.fromkeys((0.0, sweep.chosen))  # the control alone if the rule kept it
+    grid = {lam: context_entropy(sweep.models[lam], states, beliefs, goal_sets, control) for lam in lams}
+    parts: list[tuple[object, ...]] = [
+        (robot, "grid", lam, progress, conf, e, np.nan, np.nan) for lam, e in grid.items()
     ]
     t = sweep.table
     parts.append(
-        pd.DataFrame(
-            {
-                "robot": robot,
-                "kind": "sweep",
-                "lambda": t["lambda"],
-                "progress": np.nan,
-                "confidence": np.nan,
-                "entropy": t.entropy_confident,
-                "recon_error": t.recon_error,
-                "val_error": t.val_error,
-            }
-        )
+        (robot, "sweep", t["lambda"], np.nan, np.nan, t.entropy_confident, t.recon_error, t.val_error)
     )
-    return pd.concat(parts, ignore_index=True)
+    frames = [pd.DataFrame(dict(zip(COLUMNS, part, strict=True))) for part in parts]
+    return pd.concat(frames, ignore_index=True)
 
 
 def plot_entropy_grid(
-    progress: np.ndarray,
-    conf: np.ndarray,
-    values: np.ndarray,
-    ax: Axes | None = None,
-    title: str | None = None,
-) -> Axes:
+    progress: np.ndarray, conf: np.ndarray, values: np.ndarray, ax: Axes, title: str
+) -> None:
     """Entropy of p_(s,b) over a grid of contexts: progress to the goal x confidence in it."""
-    ax = plt.gca() if ax is None else ax
     ps, cs = np.unique(progress), np.unique(conf)
     grid = values.reshape(len(ps), len(cs)).T
     mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
     plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")
-    ax.set_xlabel("state: from home (0) to the right cup's goal (1)")
-    ax.set_ylabel("belief in the right cup")
-    if title:
-        ax.set_title(title)
-    return ax
+    ax.set(xlabel="state: from home (0) to the right cup's goal (1)", ylabel="belief in the right cup")
+    ax.set_title(title)
 
 
-def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = None) -> Axes:
+def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes) -> None:
     """Reconstruction error on the clean demonstrations against entropy at confident contexts, per lambda."""
-    ax = plt.gca() if ax is None else ax
     ax.plot(sweep.entropy_confident, sweep.recon_error, "o-", color="#444")
     for _, row in sweep.iterrows():
         mark = " (chosen)" if np.isclose(row["lambda"], chosen) else ""
@@ -250,15 +203,15 @@ def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes | None = 
             xytext=(5, 5),
             fontsize=8,
         )
-    ax.set_xlabel("mean entropy of p(s,b) at confident contexts [nats]")
-    ax.set_ylabel("reconstruction error on the demonstrations [(rad/s)$^2$]")
-    return ax
+    ax.set(
+        xlabel="mean entropy of p(s,b) at confident contexts [nats]",
+        ylabel="reconstruction error on the demonstrations [(rad/s)$^2$]",
+    )
 
 
 def plot(table: pd.DataFrame) -> Figure:
-    """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda,
-    and the sweep's trade-off.
-    """
+    """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda, and the
+    sweep's trade-off."""
     fig, rows = robot_rows(table, 3, (16, 4.2))
     for name, part, row in rows:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
@@ -266,12 +219,12 @@ def plot(table: pd.DataFrame) -> Figure:
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]
             title = f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)")
             grid = (g.progress.to_numpy(), g.confidence.to_numpy(), g.entropy.to_numpy())
-            plot_entropy_grid(*grid, ax=ax, title=title)
+            plot_entropy_grid(*grid, ax, title)
         if len(lams) == 1:  # the rule kept the control: no other decoder to draw
             row[1].set_axis_off()
             row[1].set_title(f"{name}: no lambda > 0 within the rule's cost bound")
         sw = part[part.kind == "sweep"].rename(columns={"entropy": "entropy_confident"})
-        plot_entropy_tradeoff(sw, max(lams), ax=row[2])
+        plot_entropy_tradeoff(sw, max(lams), row[2])
         row[2].set_title(f"{name}: reconstruction vs entropy over lambda")
     fig.tight_layout()
     return fig
@@ -291,13 +244,8 @@ def _kept_control(rows: pd.DataFrame, control: pd.Series) -> str:
 
 
 def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
-    """The rule's choice and its cost against the lambda = 0 control, as Markdown bullets from the sweep.
-
-    Args:
-        table: :class:`Sweep`'s ``table`` (one row per lambda, lambda = 0 included).
-        chosen: The lambda the rule picked.
-        n_goals: G: the entropy's maximum is log G.
-    """
+    """The rule's choice and its cost against the lambda = 0 control, as Markdown bullets from the sweep
+    (:class:`Sweep`'s ``table``, lambda = 0 included); ``n_goals`` G: the entropy's maximum is log G."""
     rows = table.set_index("lambda")
     if 0.0 not in rows.index or chosen not in rows.index:
         raise ConfigError(f"the sweep must hold lambda = 0 and {chosen:g}; it has {list(rows.index)}")

@@ -30,14 +30,7 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import load_robot
 from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, make_cup_task
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "run",
-    "plot",
-    "property_findings",
-]
+__all__ = ["NAME", "COLUMNS", "Config", "run", "plot", "property_findings"]
 
 NAME = "latent_map"
 COLUMNS = ("robot", "context", "z", "cup_axis", "grasp_theta", "steps")
@@ -59,13 +52,9 @@ class Config:
 def run(
     decoder: ActionDecoder, task: CupTask, control: ControlConfig, config: Config = Config()
 ) -> tuple[pd.DataFrame, dict[str, np.ndarray]]:
-    """Hold each input in both contexts; one row per (context, z).
-
-    Returns:
-        The rows (:data:`COLUMNS`): where the grasp site ends up along the left-to-right
-        cup axis [m], and the grasp preference the gripper shows; and the arrays to save
-        for the figure: ``z`` (K,) and the states of each context, (K, steps + 1, n).
-    """
+    """Hold each input in both contexts: one row per (context, z) (:data:`COLUMNS`: where the grasp
+    site ends up along the left-to-right cup axis [m], the grasp preference the gripper shows), and the
+    arrays to save for the figure: ``z`` (K,) and the states of each context, (K, steps + 1, n)."""
     z = np.linspace(-1.0, 1.0, config.n_z)
     steps = {"uniform": config.uniform_steps, "confident": config.confident_steps}
     contexts = {  # start state, initial belief, whether the belief updates online
@@ -76,35 +65,17 @@ def run(
         name: held_input_paths(decoder, task, control, s0, b0, z, steps[name], update_belief=online)
         for name, (s0, b0, online) in contexts.items()
     }
-    frame = pd.concat(
-        [
-            pd.DataFrame(
-                {
-                    "robot": task.robot.name,
-                    "context": name,
-                    "z": z,
-                    "cup_axis": cup_axis(task, task.robot.grasp_positions(p[:, -1])),
-                    "grasp_theta": grasp_preference(task, p[:, -1]),
-                    "steps": steps[name],
-                }
-            )
-            for name, p in paths.items()
-        ],
-        ignore_index=True,
-    )
-    return frame, {"z": z, **paths}
+    parts = []
+    for name, p in paths.items():
+        ends = (cup_axis(task, task.robot.grasp_positions(p[:, -1])), grasp_preference(task, p[:, -1]))
+        values = (task.robot.name, name, z, *ends, steps[name])
+        parts.append(pd.DataFrame(dict(zip(COLUMNS, values, strict=True))))
+    return pd.concat(parts, ignore_index=True), {"z": z, **paths}
 
 
-def plot_held_paths(
-    task: GoalTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes | None = None, title: str | None = None
-) -> Axes:
-    """Grasp-site paths when each joystick input is held, coloured by z.
-
-    Args:
-        paths: States of each held input, shape (K, steps + 1, n).
-        z_values: The held inputs, shape (K,).
-        title: Panel title.
-    """
+def plot_held_paths(task: GoalTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes, title: str) -> Axes:
+    """Grasp-site paths (``paths``: states (K, steps + 1, n)) when each input of ``z_values`` (K,) is
+    held, coloured by z."""
     ax = draw_scene(task, ax)
     norm = Normalize(-1.0, 1.0)
     cmap = plt.get_cmap("coolwarm")
@@ -117,21 +88,14 @@ def plot_held_paths(
     ax.plot(start[0], start[1], "ko", ms=4)
     frame_around(task, ax, np.concatenate(drawn))
     _z_colorbar(ax, norm, cmap)
-    if title:
-        ax.set_title(title)
+    ax.set_title(title)
     return ax
 
 
 def plot_grasp_sweep(
-    task: CupTask,
-    paths: np.ndarray,
-    z_values: np.ndarray,
-    goal: int,
-    ax: Axes | None = None,
-    title: str | None = None,
+    task: CupTask, paths: np.ndarray, z_values: np.ndarray, goal: int, ax: Axes, title: str
 ) -> Axes:
     """Gripper directions at the end of each held input, in the cup's grasp plane."""
-    ax = plt.gca() if ax is None else ax
     robot = task.robot
     cup = robot.goal_positions()[goal]
     _, r_side = grasp_frame(robot, goal, 1.0)
@@ -156,12 +120,10 @@ def plot_grasp_sweep(
         ax.plot([back[0], tip[0]], [back[1], tip[1]], color=cmap(norm(z)), lw=3, solid_capstyle="round")
     start = plane(robot.grasp_positions(paths[0, 0]))
     ax.plot(start[0], start[1], "ko", ms=4)
-    ax.set_aspect("equal")
-    ax.set_xlabel("along the side-grasp direction [m]")
+    ax.set(aspect="equal", xlabel="along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
     _z_colorbar(ax, norm, cmap)
-    if title:
-        ax.set_title(title)
+    ax.set_title(title)
     return ax
 
 
@@ -171,20 +133,12 @@ def _z_colorbar(ax: Axes, norm: Normalize, cmap: Any) -> None:
     )
 
 
-def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """What z controls in each context: the cup reached, or the grasp.
-
-    Args:
-        frame: Rows with columns ``context``, ``z``, ``cup_axis`` (grasp-site position
-            along the left-to-right cup axis after holding z, metres) and
-            ``grasp_theta`` (the grasp preference shown).
-    """
-    ax = plt.gca() if ax is None else ax
+def plot_latent_meaning(frame: pd.DataFrame, ax: Axes) -> Axes:
+    """What z controls in each context (:func:`run`'s rows): the cup reached, or the grasp."""
     uni = frame[frame.context == "uniform"]
     conf = frame[frame.context == "confident"]
     ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
-    ax.set_xlabel("held joystick input z")
-    ax.set_ylabel("grasp site: left cup (-) ... right cup (+) [m]")
+    ax.set(xlabel="held joystick input z", ylabel="grasp site: left cup (-) ... right cup (+) [m]")
     ax.axhline(0, color="0.8", lw=0.8)
     twin = ax.twinx()
     twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")
@@ -196,13 +150,8 @@ def plot_latent_meaning(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
 
 
 def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | None = None) -> Figure:
-    """The latent map: one row per robot present whose held-input paths are saved.
-
-    Args:
-        table: The merged rows of every robot.
-        run_paths: The run's folders (the held-input paths are artifact ``latent_paths``).
-        tasks: Tasks already built, by robot name (the others are built here).
-    """
+    """The latent map: one row per robot present whose held-input paths are saved (artifact
+    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name."""
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
     size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
     fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
@@ -210,9 +159,9 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
         task = (tasks or {}).get(name) or make_cup_task(load_robot(name))
         saved = load_npz(run_paths.artifact("latent_paths", name), Paths.make_hint("latent_paths", name))
         home = f"{name}: from home (belief uniform at first):\nz picks the cup"
-        plot_held_paths(task, saved["uniform"], saved["z"], ax=row[0], title=home)
+        plot_held_paths(task, saved["uniform"], saved["z"], row[0], home)
         cup = f"{name}: confident in the right cup:\nz picks the grasp"
-        plot_grasp_sweep(task, saved["confident"], saved["z"], goal=1, ax=row[1], title=cup)
+        plot_grasp_sweep(task, saved["confident"], saved["z"], 1, row[1], cup)
         plot_latent_meaning(table[table.robot == name], ax=row[2])
         row[2].set_title(f"{name}: what z controls, per context")
     fig.tight_layout()
@@ -220,11 +169,8 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
 
 
 def property_findings(summary: pd.DataFrame) -> str:
-    """One decoder's latent property at each cup and from home, as Markdown bullets, from its measurement.
-
-    Args:
-        summary: One decoder's :func:`lasa.evidence.latent_property.summary` (one row per cup).
-    """
+    """One decoder's latent property at each cup and from home, as Markdown bullets, from its
+    :func:`lasa.evidence.latent_property.summary` (one row per cup)."""
     if summary.empty or summary.decoder.nunique() != 1:
         raise ConfigError(f"expected one decoder's rows, got {sorted(set(summary.decoder))}")
     holds = {True: "holds", False: "does not hold"}
@@ -248,8 +194,7 @@ def property_findings(summary: pd.DataFrame) -> str:
     reached = "every cup is reached" if bool(summary.all_reached.all()) else "not every cup is reached"
     lines.append(
         f"- **From home** (uniform belief, updated online): {sum(home.values())} of "
-        f"{int(summary.n_inputs.max())} inputs reach a cup ({each}); "
-        f"{reached}."
+        f"{int(summary.n_inputs.max())} inputs reach a cup ({each}); {reached}."
     )
     meets = bool(latent_property.holds(summary).iloc[0])
     at = int(summary.has_property.sum())

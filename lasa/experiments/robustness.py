@@ -36,7 +36,7 @@ from lasa.base.config import (
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.evidence.claims import Claim, criteria
+from lasa.evidence.claims import criteria
 from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Looks, assess, member_frame
@@ -53,7 +53,6 @@ __all__ = [
     "LEVEL",
     "COLOURS",
     "Config",
-    "Cell",
     "Grid",
     "ScaledDecoder",
     "cells",
@@ -69,24 +68,9 @@ NAME = "claims_robustness"
 # the contract's columns first: ``seed`` is the seed of the cell's users and ``measured`` the
 # number the claim's verdict rests on (``lasa.evidence.claims.Claim.value``), with its interval at
 # ``level`` (:data:`LEVEL`); ``effect`` is the word the map colours
-COLUMNS = (
-    "id",
-    "robot",
-    "assistance",
-    "alpha",
-    "action_scale",
-    "seed",
-    "measured",
-    "reproduced",
-    "settled",
-    "ci_low",
-    "ci_high",
-    "pilot",
-    "setting",
-    "users",
-    "effect",
-    "number",
-    "level",
+COLUMNS = tuple(
+    "id robot assistance alpha action_scale seed measured reproduced settled ci_low ci_high pilot setting "
+    "users effect number level".split()
 )
 DPI = 130
 DESIGNS = ("one_at_a_time", "factorial")
@@ -109,16 +93,18 @@ class Config:
     """The robustness grid of notebook 08, and the sweep run in each of its cells."""
 
     assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
-    # blend weights of Eq. M1 [-]
-    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (0.1, 0.2, 0.5)
+    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (
+        0.1,
+        0.2,
+        0.5,
+    )  # Eq. M1's blend weights [-]
     action_scales: tuple[Positive, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
     noise_prob: UnitInterval = 0.3  # noisy pilot: probability of a uniformly random input [-]
     design: str = "one_at_a_time"  # "one_at_a_time" around the defaults, or "factorial"
     betas: tuple[Rationality, ...] = (1.0, 10.0, 75.0, 1000.0)  # sim1 rationalities [1/rad^2]
-    # sim2 change steps N (its claims read the ends) [steps]
-    change_steps: tuple[NonNegativeInt, ...] = (0, 120)
+    change_steps: tuple[NonNegativeInt, ...] = (0, 120)  # sim2 change steps N (its claims read the ends)
     horizon: PositiveInt = 200  # control steps of the sim1 and sim3 episodes: notebook 04's and 06's [-]
     settle: PositiveInt = 150  # sim2: steps after the largest N: notebook 05's [-]
     users: PositiveInt = MIN_USERS  # users per point in every cell: the first look of notebooks 04-06 [-]
@@ -176,12 +162,8 @@ class ScaledDecoder:
 
 
 def cells(config: Config, control: ControlConfig) -> list[Cell]:
-    """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot.
-
-    Raises:
-        ConfigError: if the defaults (``control.alpha``, ``control.action_scale``,
-            Boltzmann users) are not on the grid's axes (one-at-a-time needs them).
-    """
+    """The grid's settings, in a fixed order: the default, then each alpha, sigma_h, pilot; ConfigError
+    if the defaults (``control``'s alpha and sigma_h, Boltzmann users) are off a one-at-a-time grid's axes."""
     alpha0, scale0, pilot0 = float(control.alpha), float(control.action_scale), "boltzmann"
     head = (control.assistance,)
     if control.assistance not in config.assistance:
@@ -217,34 +199,6 @@ def _pilot_prob(config: Config, pilot: str) -> float:
     return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
 
 
-def _rows(
-    claims: list[Claim], cell: Cell, assistance: str, robot: str, config: Config, level: float
-) -> pd.DataFrame:
-    rows = [
-        {
-            "id": c.id,
-            "robot": robot,
-            "assistance": assistance,
-            "alpha": cell.alpha,
-            "action_scale": cell.action_scale,
-            "seed": config.seed,
-            "measured": c.value,
-            "reproduced": criteria(c)["reproduced"],  # the claims table's one word
-            "effect": criteria(c)["effect"],  # and its two: the claim's shape, each paper number's word
-            "number": criteria(c)["number"],
-            "settled": c.settled,
-            "ci_low": c.ci_low,
-            "ci_high": c.ci_high,
-            "pilot": cell.pilot,
-            "setting": cell.setting,
-            "users": c.n_users,
-            "level": level,
-        }
-        for c in claims
-    ]
-    return pd.DataFrame(rows, columns=list(COLUMNS))
-
-
 def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, Any]]:
     """(module, config, reduce) of sims 1-3 at the map's sizes: one look of ``users`` users."""
     common: dict[str, Any] = {"users": config.users, "cap": config.users, "seed": config.seed}
@@ -258,11 +212,17 @@ def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, 
 def _judge(module: Any, frame: pd.DataFrame, cell: Cell, robot: str, config: Config) -> pd.DataFrame:
     """Every member's claims of one sim in one cell, each with its intervals at :data:`LEVEL`."""
     parts = []
-    fast = getattr(module, "boot_values", None)
     for assistance in cell.assistance:
         frame_m = member_frame(frame, assistance)
+        fast = getattr(module, "boot_values", None)
         claims = assess(module.claims, frame_m, config.n_boot, config.seed, level=LEVEL, fast=fast)
-        parts.append(_rows(claims, cell, assistance, robot, config, LEVEL))
+        rows = [
+            (c.id, robot, assistance, cell.alpha, cell.action_scale, config.seed, c.value, w["reproduced"])
+            + (c.settled, c.ci_low, c.ci_high, cell.pilot, cell.setting, c.n_users)
+            + (w["effect"], w["number"], LEVEL)  # the claims table's one word, and its two
+            for c, w in zip(claims, [criteria(c) for c in claims], strict=True)
+        ]
+        parts.append(pd.DataFrame(rows, columns=list(COLUMNS)))
     return pd.concat(parts, ignore_index=True)
 
 
@@ -285,11 +245,8 @@ def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
 def default_frames(
     config: Config, sim1_rows: pd.DataFrame, sim2_rows: pd.DataFrame, sim3_rows: pd.DataFrame
 ) -> dict[str, pd.DataFrame]:
-    """The default cell's rows from notebooks 04-06: their first look, at the map's sizes.
-
-    Raises:
-        ConfigError: if a frame lacks a beta or change step of the map, or holds fewer users.
-    """
+    """The default cell's rows from notebooks 04-06: their first look, at the map's sizes; ConfigError
+    if a frame lacks a beta or change step of the map, or holds fewer users."""
     out = {}
     for name, rows, column, values in (
         ("sim1", sim1_rows, "beta", config.betas),
@@ -319,20 +276,9 @@ def run(
     progress: bool = False,
     defaults: Mapping[str, pd.DataFrame] | None = None,
 ) -> pd.DataFrame:
-    """Every cell of the grid (:func:`cells`), locally or on a Dask cluster.
-
-    Args:
-        decoders: ``{"base": ..., "entropy": ...}``: notebook 03's pair.
-        control: The default control units (alpha, sigma_h) the grid is centred on.
-        config: The grid.
-        progress: A progress bar over finished cells.
-        defaults: The default cell's rows (:func:`default_frames`, from notebooks 04-06),
-            judged instead of run again; if None, the default cell runs like the others.
-
-    Returns:
-        One row per (claim, cell, member) with the columns of :data:`COLUMNS`, cells in
-        :func:`cells` order.
-    """
+    """Every cell of the grid (:func:`cells`) around ``control``, locally or on a Dask cluster, with
+    notebook 03's pair: one row per (claim, cell, member), cells in order; ``defaults``
+    (:func:`default_frames`) are judged as the default cell instead of running it again."""
     decoders = as_decoders(decoders)
     grid = Grid(decoders, task, control, config)
     todo = cells(config, control)
@@ -347,17 +293,9 @@ def run(
 
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per (robot, claim): cells with each effect word, and whether the default cell's holds.
-
-    Args:
-        table: :func:`run`'s rows.
-
-    Returns:
-        Columns ``reproduced``, ``partly``, ``not reproduced``, ``undecided``, ``not testable``
-        (cell counts over the members' and the settings' cells), ``default`` (the headline
-        member's effect in the default cell, empty if the grid has none), ``stable`` (every
-        settled cell gives it) and ``moves`` (the cells whose settled effect differs from it).
-    """
+    """Per (robot, claim) of :func:`run`'s rows: cells with each effect word (over the members' and the
+    settings' cells), ``default`` (the headline member's effect in the default cell, empty if the grid
+    has none), ``stable`` (every settled cell gives it) and ``moves`` (the settled cells that differ)."""
     rows = []
     for (robot, claim), part in table.groupby(["robot", "id"], sort=True):
         part = part.assign(column=part.apply(_label, axis=1))
@@ -386,42 +324,29 @@ def describe(table: pd.DataFrame) -> list[str]:
         undecided = int(row.undecided)
         tail = f" ({undecided} undecided cell{'s' if undecided != 1 else ''})" if undecided else ""
         if row.default == UNDECIDED:
-            lines.append(
-                f"{row.robot} {row.id}: undecided in the default cell"
-                + (f"; settled elsewhere: {row.moves}" if row.moves else "")
-                + tail
-                + "."
+            said = "undecided in the default cell" + (
+                f"; settled elsewhere: {row.moves}" if row.moves else ""
             )
         elif row.stable:
-            lines.append(f"{row.robot} {row.id}: '{row.default}' in every settled cell" + tail + ".")
+            said = f"'{row.default}' in every settled cell"
         else:
-            lines.append(
-                f"{row.robot} {row.id}: '{row.default}' by default; settled otherwise in {row.moves}"
-                + tail
-                + "."
-            )
+            said = f"'{row.default}' by default; settled otherwise in {row.moves}"
+        lines.append(f"{row.robot} {row.id}: {said}{tail}.")
     return lines
 
 
 def _label(row: Any) -> str:
-    if row.setting == "default":
-        return "default" if row.assistance == "point" else f"{row.assistance}"
-    if row.setting == "alpha":
-        return f"alpha={row.alpha:g}"
-    if row.setting == "action_scale":
-        return f"sigma_h={row.action_scale:g}"
-    if row.setting == "pilot":
-        return f"{row.pilot} pilot"
-    return f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}"
+    return {
+        "default": "default" if row.assistance == "point" else f"{row.assistance}",
+        "alpha": f"alpha={row.alpha:g}",
+        "action_scale": f"sigma_h={row.action_scale:g}",
+        "pilot": f"{row.pilot} pilot",
+    }.get(row.setting, f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}")
 
 
 def level_of(table: pd.DataFrame) -> float:
-    """The one interval level of ``table``'s cells (its ``level`` column).
-
-    Raises:
-        ConfigError: if the column is missing (a table from before it was written) or holds
-            more than one level.
-    """
+    """The one interval level of ``table``'s cells (its ``level`` column); ConfigError if the column is
+    missing (a table from before it was written) or holds more than one level."""
     if "level" not in table.columns:
         raise ConfigError("the verdict map's table has no `level` column: run notebook 08 again")
     levels = sorted(set(table.level.astype(float)))
@@ -431,11 +356,8 @@ def level_of(table: pd.DataFrame) -> float:
 
 
 def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
-    """The verdict map: claims (rows) x members and settings (columns), one panel per robot.
-
-    Raises:
-        ConfigError: if the table has no single interval level, or a word outside ``WORDS``.
-    """
+    """The verdict map: claims (rows) x members and settings (columns), one panel per robot; ConfigError
+    if the table has no single interval level, or a word outside ``WORDS``."""
     level = level_of(table)
     unknown = sorted(set(table.effect) - set(WORDS))
     if unknown:
@@ -450,13 +372,8 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     ids = sorted(dict.fromkeys(table.id))
     cmap = ListedColormap([COLOURS[v] for v in WORDS])
     code = {v: i for i, v in enumerate(WORDS)}
-    fig, axes = plt.subplots(
-        1,
-        len(robots),
-        figsize=(2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids)),
-        squeeze=False,
-        sharey=True,
-    )
+    size = (2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids))
+    fig, axes = plt.subplots(1, len(robots), figsize=size, squeeze=False, sharey=True)
     for j, robot in enumerate(robots):
         ax = axes[0, j]
         grid = np.full((len(ids), len(order_cols)), np.nan)
