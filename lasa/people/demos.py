@@ -241,43 +241,30 @@ def collect_eating_demonstrations(
         down = c.curve(functools.partial(task.pose, g, theta), 0.0, 1.0)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
+    home, leave = segmentation == "home", segmentation == "leaves"
+    n_home = config.n_starts + (task.n_goals - 1 if home else 0)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
-            starts = _eating_starts(task, control, config, segmentation, g, c.rng)
-            for start, b0, work in zip(*starts, strict=True):
+            # home and perturbed homes, uniform (None) and manipulating; then, unless ``home``, each other
+            # goal's entry at a random tilt (``leaves``: its stroke's end), from the belief settled there
+            # (uniform for ``transfers``), manipulating for ``continuous`` only; all drawn before the moves
+            homes = [task.start.copy()] + [
+                task.robot.clip(task.start + c.rng.normal(0.0, config.start_noise, task.start.shape))
+                for _ in range(n_home - 1)
+            ]
+            starts: list[tuple[np.ndarray, np.ndarray | None, bool]] = [(q, None, True) for q in homes]
+            for other in [] if home else [o for o in range(task.n_goals) if o != g]:
+                tilt = float(c.rng.uniform())
+                entry = task.target(other, tilt)
+                if leave:
+                    entry = task.pose(other, np.array([tilt]), np.array([1.0]))[0]
+                settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
+                starts.append(
+                    (entry, None if segmentation == "transfers" else settled, segmentation == "continuous")
+                )
+            for start, b0, work in starts:
                 segments = [(c.line(start, task.target(g, theta)), float(theta), REACH)]
                 if work:  # else a separate transfer: the reach, and its hold, only
                     segments = c.adjust(g, float(theta), segments + stroke(g, float(theta)), stroke)
                 c.append(segments, g, b0)
     return c.dataset()
-
-
-def _eating_starts(
-    task: EatingTask,
-    control: ControlConfig,
-    config: DemoConfig,
-    segmentation: str,
-    g: int,
-    rng: np.random.Generator,
-) -> tuple[list[np.ndarray], list[np.ndarray | None], list[bool]]:
-    """The starts of goal ``g``'s demonstrations, (pose, start belief, manipulates) each, drawn in order:
-    home and perturbed homes (``n_starts``, ``+ G - 1`` for ``home``), uniform (None) and manipulating;
-    then, unless ``home``, each other goal's entry at a random tilt (``leaves``: its stroke's end), from
-    the belief settled there (uniform for ``transfers``), manipulating for ``continuous`` only."""
-    home, leave = segmentation == "home", segmentation == "leaves"
-    starts = [task.start.copy()]
-    starts += [
-        task.robot.clip(task.start + rng.normal(0.0, config.start_noise, task.start.shape))
-        for _ in range(config.n_starts + (task.n_goals - 1 if home else 0) - 1)
-    ]
-    beliefs_0: list[np.ndarray | None] = [None] * len(starts)
-    manipulate = [True] * len(starts)
-    for other in [] if home else [o for o in range(task.n_goals) if o != g]:
-        tilt = float(rng.uniform())
-        starts.append(
-            task.pose(other, np.array([tilt]), np.array([1.0]))[0] if leave else task.target(other, tilt)
-        )
-        settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
-        beliefs_0.append(settled if segmentation in ("continuous", "leaves") else None)
-        manipulate.append(segmentation == "continuous")
-    return starts, beliefs_0, manipulate

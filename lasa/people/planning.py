@@ -178,8 +178,11 @@ def _plan(study: _Study, run: _Run, now: Now) -> None:
     run.presses_left[idx] = np.where(wants & ~la, (plan_mode - run.mode[idx]) % len(MODES), 0)
 
 
-def _execute(study: _Study, run: _Run, now: Now) -> np.ndarray:
-    """One real step of the running episodes: a press, the held input, or rest; their a_h (A, n)."""
+def _choose(study: _Study, run: _Run, now: Now) -> np.ndarray:
+    """The chooser: a re-plan when one is due, then one real step of the running episodes (a press, the
+    held input, or rest); their human actions a_h (A, n)."""
+    if now.t % study.replan_steps == 0:
+        _plan(study, run, now)
     idx, la = now.rows, study.layout.is_la[now.rows]
     press = run.presses_left[idx] > 0
     moving = ~press & (run.hold_left[idx] > 0)
@@ -193,13 +196,6 @@ def _execute(study: _Study, run: _Run, now: Now) -> np.ndarray:
     run.presses_left[idx] -= press
     run.hold_left[idx] -= moving
     return a_h
-
-
-def _choose(study: _Study, run: _Run, now: Now) -> np.ndarray:
-    """The chooser: a re-plan when one is due, then the plan's step; the human actions (A, n)."""
-    if now.t % study.replan_steps == 0:
-        _plan(study, run, now)
-    return _execute(study, run, now)
 
 
 def simulate(

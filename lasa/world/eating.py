@@ -243,12 +243,8 @@ def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
 def waypoints(task: str) -> list[Waypoint]:
     """The poses a user reaches, in order, to complete ``task`` ("Entree" or "Dessert")."""
     check_choice("task", task, tuple(TASKS))
-    out: list[Waypoint] = []
-    for i, phase in enumerate(TASKS[task]):
-        goal = GOALS.index(phase.goal)
-        if phase.preference is None:
-            out.append(Waypoint(i, goal, PREFERENCES["stab"].theta, 0.0))
-            continue
-        theta = PREFERENCES[phase.preference].theta
-        out += [Waypoint(i, goal, theta, 0.0), Waypoint(i, goal, theta, 1.0)]
-    return out
+    return [
+        Waypoint(i, GOALS.index(phase.goal), PREFERENCES[phase.preference or "stab"].theta, depth)
+        for i, phase in enumerate(TASKS[task])
+        for depth in ((0.0,) if phase.preference is None else (0.0, 1.0))
+    ]

@@ -223,15 +223,10 @@ def load_robot(robot: str | RobotSpec) -> Robot:
 
 
 class Robot:
-    """A compiled MuJoCo scene answering in the task's terms.
-
-    Attributes:
-        spec: The :class:`RobotSpec` it was built from; ``name`` and ``control`` (default control-loop
-            units) are its; ``n_joints``: dimension n of the state and of the action.
-        model, data: The compiled ``mujoco.MjModel`` and an ``MjData`` for kinematics (not thread safe).
-        qpos_adr: Index of each arm joint in ``data.qpos``, shape (n,).
-        lower, upper: Joint limits, shape (n,) [rad].
-    """
+    """A compiled MuJoCo scene answering in the task's terms: ``spec`` (its ``name``, default ``control``),
+    ``model`` and an ``MjData`` ``data`` for kinematics (not thread safe), ``n_joints`` n (of the state and
+    the action), and per arm joint its index in ``data.qpos``, ``qpos_adr``, and limits ``lower``, ``upper``
+    [rad]."""
 
     def __init__(self, spec: RobotSpec) -> None:
         self.spec, self.name, self.n_joints, self.control = spec, spec.name, len(spec.joints), spec.control
