@@ -1,16 +1,7 @@
 """lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020).
 
-A reproducibility package: MuJoCo robots and their goal tasks (the cups, the eating
-scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared autonomy
-(Algorithm 1), Boltzmann-rational simulated users, and one module per figure
-(:mod:`lasa.experiments`). Extending it (a robot, an assistance member, a claim, a decoder of
-your own) is in ``docs/extending.md``.
-
-``import lasa`` only re-exports: it sets no environment variable and installs no import hook. Call
-:func:`lasa.runtime.pin` first, before numpy, torch or mujoco loads, for off-screen rendering and
-the numerical kernels that compute the same bytes on any x86 CPU.
-
-The public API is imported lazily (PEP 562), so ``import lasa.pipeline.execute`` stays light.
+A reproducibility package (extending it: ``docs/extending.md``). ``import lasa`` only re-exports,
+lazily (PEP 562), and sets nothing: call :func:`lasa.runtime.pin` first, before numpy, torch or mujoco.
 """
 
 import importlib

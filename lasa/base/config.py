@@ -1,8 +1,5 @@
-"""Frozen configuration records and their validation.
-
-A config is a frozen dataclass, each field commented with its unit, checked when built: a bad
-parameter fails at once, naming its allowed range. :func:`from_dict` refuses unknown keys.
-"""
+"""Frozen configuration records, each field commented with its unit, validated when built: a bad
+parameter fails at once, naming its allowed range; :func:`from_dict` refuses unknown keys."""
 
 from __future__ import annotations
 
@@ -52,7 +49,6 @@ __all__ = [
 T = TypeVar("T")
 
 
-# Field types with their bounds, written once, checked by validate() (pydantic).
 def _not_text(value: Any) -> Any:
     """A number field never takes text (pydantic's lax mode would parse '3', kept as a string)."""
     if isinstance(value, str | bytes):
@@ -128,13 +124,10 @@ def expects(annotation: Any) -> str:
         return f"a list, each {expects(typing.get_args(annotation)[0])}"
     if origin in (typing.Union, types.UnionType):
         return " or ".join(expects(a) for a in typing.get_args(annotation))
-    return {
-        int: "an integer",
-        float: "a number",
-        str: "a string",
-        bool: "true or false",
-        type(None): "null",
-    }.get(annotation, f"a {getattr(annotation, '__name__', annotation)}")
+    return _WORDS.get(annotation, f"a {getattr(annotation, '__name__', annotation)}")
+
+
+_WORDS = {int: "an integer", float: "a number", str: "a string", bool: "true or false", type(None): "null"}
 
 
 @functools.cache
@@ -148,12 +141,8 @@ def _schema(cls: type) -> tuple[pydantic.TypeAdapter[Any], dict[str, Any]]:
 
 
 def validate(record: Any) -> None:
-    """Check every field of a config record against its annotated type (pydantic), converting none.
-
-    Raises:
-        ConfigError: one line naming the field (and the item, in a list), what it expects and
-            what it got, e.g. ``betas[0] must be a number >= 0, got 'x'``.
-    """
+    """Check every field of a config record against its annotated type (pydantic), converting none;
+    ConfigError names the field (and item), what it expects and got: ``betas[0] must be ..., got 'x'``."""
     adapter, fields = _schema(type(record))  # type: ignore[arg-type]
     values = {name: getattr(record, name) for name in fields}
     try:
@@ -222,10 +211,8 @@ def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) ->
 def check_list(
     name: str, values: Sequence[Any], *, at_least: int = 1, ascending: bool = False, why: str = ""
 ) -> tuple[Any, ...]:
-    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0
-    repeat), in ascending order if ``ascending``; else raise ConfigError naming ``name`` and
-    ``why`` it needs ``at_least``.
-    """
+    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0 repeat),
+    ascending if ``ascending``; else raise ConfigError naming ``name`` and ``why`` it needs ``at_least``."""
     given = tuple(values)
     reason = f" ({why})" if why else ""
     if len(given) < at_least:
@@ -277,30 +264,25 @@ def to_dict(config: Any) -> dict[str, Any]:
 
 
 def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
-    """Build ``cls`` from a mapping, refusing keys that ``cls`` does not have.
-
-    A YAML section becomes a config here: a missing key keeps the default, a list becomes a tuple,
-    a mapping for a nested record (``train: {steps: 200}``) changes those fields of its default.
-    ``where`` names whose settings these are in the error (default the class's name).
+    """Build ``cls`` from a YAML section: a missing key keeps the default, a list becomes a tuple, a
+    mapping for a nested record (``train: {steps: 200}``) changes those fields of its default.
 
     Raises:
-        ConfigError: one line, ``<where> settings: <setting> must be <expected>, got <value>``;
-            an unknown key names the known ones.
+        ConfigError: ``<where> settings: <setting> must be <expected>, got <value>`` (``where``: the
+            class's name by default); an unknown key names the known ones.
     """
     owner = where or cls.__name__
-    if values is None:
-        values = {}
+    values = {} if values is None else values
     if not isinstance(values, Mapping):
         raise ConfigError(f"{owner} settings must be a mapping of names to values, got {values!r}")
     fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
     unknown = sorted(set(values) - set(fields))
     if unknown:
         raise ConfigError(f"{owner} settings: unknown setting(s) {unknown}; known: {sorted(fields)}")
-    kwargs: dict[str, Any] = {}
     try:
-        for name, value in values.items():
-            kwargs[name] = _setting(name, fields[name], fields[name].default, value)
-        return cls(**kwargs)
+        return cls(
+            **{name: _setting(name, fields[name], fields[name].default, v) for name, v in values.items()}
+        )
     except ConfigError as exc:
         raise ConfigError(f"{owner} settings: {exc}") from None
 
@@ -332,11 +314,9 @@ def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
 
 
 def set_threads(default: int = 1) -> int:
-    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one); return it.
+    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one: a reduction split over
+    threads rounds differently, and training amplifies that); return it."""
 
-    One thread, everywhere: a reduction split over threads rounds differently, and training
-    amplifies that; set ``LASA_THREADS`` for speed when exactness does not matter.
-    """
     import torch  # noqa: PLC0415 (config stays importable without torch's start-up cost)
 
     value = os.environ.get("LASA_THREADS")

@@ -23,7 +23,7 @@ from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
 
-__all__ = ["ordered_notebooks", "front_page", "claims_page", "retitle", "build_book", "main"]
+__all__ = ["build_book", "main"]
 
 ROBOT_ORDER = ("planar5", "panda")
 ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
@@ -94,13 +94,8 @@ def build_book(
     progress: bool = True,
 ) -> Path:
     """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
-    folder (its ``claims.csv`` makes the front page), and build the site into ``out/html``; returns
-    ``out/html/index.html``. ``mathjax``: MathJax's ``es5`` folder (``.venv/mathjax/es5`` by default,
-    made by ``make setup``); ``progress``: show Jupyter Book's output.
-
-    Raises:
-        ArtifactError: if there are no executed notebooks, no claims table or no MathJax.
-    """
+    folder and build the site into ``out/html``; return its ``index.html``. ``mathjax``: MathJax's ``es5``
+    folder (``make setup``'s by default). ArtifactError without notebooks, claims table or MathJax."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
     if not books:
@@ -133,8 +128,8 @@ sphinx:
 
 
 def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, claims: pd.DataFrame) -> None:
-    """The book's sources in ``src``: the notebooks (retitled per robot), figures, MathJax, the
-    front page and the claims page, the table of contents and the configuration."""
+    """The book's sources in ``src``: notebooks (retitled per robot), figures, MathJax, pages, contents."""
+
     shutil.rmtree(src, ignore_errors=True)
     (src / "notebooks").mkdir(parents=True)
     for book in books:
@@ -161,15 +156,11 @@ def _jupyter_book(src: Path, out: Path, progress: bool) -> Path:
     """Build the site from ``src`` with Jupyter Book into ``out/html``; returns its front page."""
     build = out / "_build"
     shutil.rmtree(build, ignore_errors=True)
-    command = [
-        str(Path(sys.executable).parent / "jupyter-book"),
-        "build",
-        str(src),
-        "--path-output",
-        str(out),
-    ]
+    jupyter_book = str(Path(sys.executable).parent / "jupyter-book")
+    command = [jupyter_book, "build", str(src), "--path-output", str(out)]
     result = subprocess.run(command, capture_output=not progress, text=True)
-    html = out / "_build" / "html"
+    html = build / "html"
+
     if result.returncode != 0 or not (html / "index.html").is_file():
         detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
         raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")

@@ -1,14 +1,7 @@
 """Run a figure notebook headless with papermill, with checked parameters (``make figures``).
 
-A config file (``configs/*.yaml``) holds a ``common`` section for every notebook and one per notebook
-stem; a parameter the notebook's ``parameters`` cell does not define is an error (papermill only
-warns). The executed copy is written atomically; a failed run is kept as ``<name>.failed.ipynb``,
-and its writes to the figures folder are undone (:mod:`lasa.base.journal`).
-
-Usage::
-
-    python -m lasa.pipeline.execute notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
-        --out build/notebooks --robot panda [--param build_dir=build/x] [--timings t.jsonl]
+A config's ``common`` section and the notebook stem's section are its parameters (an unknown one is
+an error); a failed run is kept as ``<name>.failed.ipynb`` and its writes to the figures are undone.
 """
 
 from __future__ import annotations
@@ -29,9 +22,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-# nbformat validates notebooks with jsonschema, whose optional IRI format checker
-# (rfc3987_syntax) builds a parser grammar on import: 1.3 s of every notebook run, for a
-# format that notebook schemas never use. Without the module, jsonschema skips it.
+# jsonschema's optional IRI format checker costs 1.3 s of import per run, for a format notebooks never use
 sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
 
 import papermill as pm  # noqa: E402
@@ -47,11 +38,7 @@ __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params",
 
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """Names and default values of a notebook's ``parameters`` cell.
-
-    Raises:
-        ConfigError: if the notebook has no cell tagged ``parameters``.
-    """
+    """Names and default values of a notebook's ``parameters`` cell (ConfigError if it has none)."""
     params = pm.inspect_notebook(str(notebook))
     if not params:
         raise ConfigError(f"{notebook} has no cell tagged 'parameters'")
@@ -59,13 +46,8 @@ def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """The parameters a config file passes to ``notebook``: ``common`` plus its section.
-
-    Raises:
-        ArtifactError: if the config file is missing.
-        ConfigError: if the file is not YAML, not a mapping of sections, or if it passes a
-            name that the notebook's ``parameters`` cell does not define.
-    """
+    """The parameters a config file passes to ``notebook``: ``common`` plus its section; ConfigError if
+    the file is not a YAML mapping of sections or passes a name the ``parameters`` cell lacks."""
     path = require_file(config, "it ships with the repository under configs/")
     try:
         data = yaml.safe_load(path.read_text()) or {}
@@ -94,32 +76,22 @@ def run_notebook(
     overrides: dict[str, Any] | None = None,
     progress: bool = True,
 ) -> Path:
-    """Execute ``notebook`` with the parameters of ``config`` and ``overrides`` into ``out_dir``.
+    """Execute ``notebook`` with the parameters of ``config`` and ``overrides`` into ``out_dir``, as
+    ``<stem>-<robot>.ipynb`` with a ``robot`` override; return its path.
 
-    The executed copy is ``<stem>-<robot>.ipynb`` when a ``robot`` override is given, else named
-    after the notebook; returns its path.
-
-    A failed run leaves the figures folder as it was: the kernel writes under a journal (a hidden
-    ``.<name>.journal`` folder beside the executed copy), and on a failed cell, a dead kernel,
-    Ctrl-C or ``SIGTERM`` every file the run wrote is put back, under the folder's lock. When a
-    notebook running beside it has rewritten a shared file since, only this run's rows of the merged
-    tables are restored, and a file that cannot be split by rows is left as the other run wrote it.
-
-    Raises:
-        NotebookError: if a cell raised: that exception's class and message, the partial run's path
-            (``<name>.failed.ipynb``, with the traceback), and which written files were not restored.
+    A failed run (a failed cell, a dead kernel, Ctrl-C, ``SIGTERM``) leaves the figures folder as it
+    was: its writes are journaled (``.<name>.journal`` beside the copy) and undone
+    (:func:`lasa.base.journal.restore`); NotebookError for a failed cell, naming the partial run.
     """
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
-    if overrides:
-        unknown = sorted(set(overrides) - set(defaults))
-        if unknown:
-            raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
-        params.update(overrides)
-    name = Path(notebook).name
-    if overrides and "robot" in overrides:
-        name = f"{Path(notebook).stem}-{overrides['robot']}.ipynb"
-    out = Path(out_dir) / name
+    overrides = overrides or {}
+    unknown = sorted(set(overrides) - set(defaults))
+    if unknown:
+        raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
+    params.update(overrides)
+    robot = f"-{overrides['robot']}" if "robot" in overrides else ""
+    out = Path(out_dir) / f"{Path(notebook).stem}{robot}.ipynb"
     failed = out.with_suffix(".failed.ipynb")
     figures = params.get("figures_dir", defaults.get("figures_dir"))
     with atomic_path(out) as tmp:
@@ -147,10 +119,7 @@ def run_notebook(
 @contextlib.contextmanager
 def _journaled(out: Path, figures: Any) -> Iterator[Callable[[], str]]:
     """Journal the run's writes to its figures folder; yield the undo, which returns what it restored.
-
-    Any other way out of the block (a dead kernel, Ctrl-C, ``SIGTERM``) undoes the writes too and
-    adds that sentence to the exception as a note. On success the journal is deleted.
-    """
+    Any other way out of the block undoes them too (the sentence a note of the exception)."""
     if not isinstance(figures, str | os.PathLike):  # a notebook without a figures folder
         yield lambda: ""
         return
@@ -195,12 +164,8 @@ def main(argv: list[str] | None = None) -> int:
     started = datetime.datetime.now(datetime.UTC)
     start = time.perf_counter()
     try:
-        overrides = parse_params(args.param)
-        if args.robot:
-            overrides["robot"] = args.robot
-        out = run_notebook(
-            args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
-        )
+        overrides = {**parse_params(args.param), **({"robot": args.robot} if args.robot else {})}
+        out = run_notebook(args.notebook, args.config, args.out, overrides, progress=not args.no_progress)
     except (ConfigError, ArtifactError, NotebookError) as exc:  # a cell's cause: traceback in the partial run
         print(f"error: {exc}", file=sys.stderr)
         return 1 if isinstance(exc, NotebookError) else 2
@@ -222,11 +187,8 @@ def _terminated(signum: int, frame: object) -> None:
 
 
 def parse_params(items: list[str]) -> dict[str, Any]:
-    """``["name=value", ...]`` -> ``{name: yaml(value)}``.
+    """``["name=value", ...]`` -> ``{name: yaml(value)}``; ConfigError for an item without a name."""
 
-    Raises:
-        ConfigError: for an item without ``=`` or with an empty name.
-    """
     out: dict[str, Any] = {}
     for item in items:
         name, sep, value = item.partition("=")

@@ -1,10 +1,7 @@
 """Which of lasa's files each notebook runs: the Make prerequisites of the figure targets.
 
-Read from the source, never imported (Make runs it with the system Python; standard library only):
-the imports of a notebook's code cells and, transitively, of each lasa module they reach (in
-functions too, not under ``if TYPE_CHECKING:``; ``from lasa import X`` through ``lasa._EXPORTS``),
-plus the robots' MJCF assets and :data:`ALWAYS`. ``python lasa/pipeline/makedeps.py
-notebooks/*.ipynb`` prints ``NB_SRC_<stem> := <files>`` per notebook.
+Read from the source with the standard library only (Make runs it with the system Python): the lasa
+modules a notebook imports, transitively (not under ``if TYPE_CHECKING:``), the MJCF assets, :data:`ALWAYS`.
 """
 
 from __future__ import annotations
@@ -15,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-__all__ = ["module_file", "imports_of", "closure", "notebook_sources", "main"]
+__all__ = ["imports_of", "closure", "notebook_sources", "main"]
 
 ROOT = Path(__file__).resolve().parents[2]
 ALWAYS = ("lasa/__init__.py", "pyproject.toml")
@@ -64,18 +61,16 @@ def imports_of(source: str, root: Path = ROOT) -> set[str]:
     exports = _exports(root)
     for node in _run_nodes(ast.parse(source)):
         if isinstance(node, ast.Import):
-            for alias in node.names:
-                parts = alias.name.split(".")
-                found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
+            modules = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            parts = node.module.split(".")
+            modules = [node.module, *(f"{node.module}.{alias.name}" for alias in node.names)]
+            if node.module == "lasa":
+                found.update(exports[alias.name] for alias in node.names if alias.name in exports)
+        else:
+            continue
+        for name in modules:
+            parts = name.split(".")
             found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
-            for alias in node.names:
-                sub = f"{node.module}.{alias.name}"
-                if module_file(sub, root) is not None:
-                    found.add(sub)
-                elif node.module == "lasa" and alias.name in exports:
-                    found.add(exports[alias.name])
     return {m for m in found if module_file(m, root) is not None}
 
 

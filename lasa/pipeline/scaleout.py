@@ -1,9 +1,5 @@
-"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way.
-
-Each job is a pure, seeded function of its arguments, run with one torch thread, and the results
-come back in the jobs' order: a grid's CSV is the same wherever its cells ran. The scheduler address
-comes from the caller or ``$LASA_SCHEDULER``; with neither, nothing needs a cluster.
-"""
+"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way:
+each a pure, seeded function run with one torch thread, the results in the jobs' order."""
 
 from __future__ import annotations
 
@@ -23,11 +19,8 @@ R = TypeVar("R")
 
 
 def scheduler_address(configured: str | None = None) -> str | None:
-    """The Dask scheduler to use: ``configured``, else ``$LASA_SCHEDULER``, else None (local).
-
-    Raises:
-        ConfigError: if the address is not of the form ``scheme://host:port``.
-    """
+    """The Dask scheduler to use: ``configured``, else ``$LASA_SCHEDULER``, else None (local);
+    ConfigError unless it reads ``scheme://host:port``."""
     address = configured or os.environ.get(SCHEDULER_ENV) or None
     if address is not None and "://" not in address:
         raise ConfigError(
@@ -55,21 +48,10 @@ def run_jobs(
     timeout: str = "20s",
     shared: Any = None,
 ) -> list[R]:
-    """``[fn(item) for item in items]``, through joblib, locally or on a Dask cluster.
+    """``[fn(item) for item in items]`` (``fn(shared, item)`` if ``shared`` is not None, scattered to a
+    cluster's workers once), through joblib: ``n_jobs`` local processes, or every worker of the Dask
+    ``scheduler`` (:func:`scheduler_address`, answering within ``timeout``); ConfigError if unreachable."""
 
-    Args:
-        fn: A picklable (module-level) function of one item, or of ``(shared, item)``.
-        items: The jobs' arguments (picklable).
-        scheduler: A Dask scheduler address (:func:`scheduler_address`); None: local, unless set.
-        n_jobs: Local worker processes (1: in this process); a cluster uses all its workers.
-        progress: Show a progress bar (labelled ``desc``) over finished jobs.
-        timeout: How long to wait for the scheduler to answer (a Dask duration).
-        shared: What every job reads (decoders, task, ...), ``fn``'s first argument when not None;
-            scattered to a cluster's workers once.
-
-    Raises:
-        ConfigError: for a bad address, or a scheduler that cannot be reached.
-    """
     from joblib import Parallel, delayed, parallel_config  # noqa: PLC0415
 
     items = list(items)

@@ -1,9 +1,7 @@
 """The pipeline's wall times, from the run that measured them (``make figures``).
 
-Each notebook run with ``--timings`` (:mod:`lasa.pipeline.execute`) appends ``{notebook, robot,
-seconds, start, end}`` (UTC) to ``<build>/timings.jsonl``. :func:`record_figures` turns a whole
-run's file into ``figures_s`` of ``benchmarks/results.json`` (a partial run, where Make skipped
-notebooks, is refused); :func:`sync_readmes` writes the READMEs' sentence and table from it.
+Each notebook run appends a line to ``<build>/timings.jsonl``; :func:`record_figures` turns a whole
+run's file into ``figures_s`` of ``benchmarks/results.json``, :func:`sync_readmes` the READMEs' words.
 """
 
 from __future__ import annotations
@@ -25,20 +23,8 @@ from typing import Any
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked, sync_between, write_text
 
-__all__ = [
-    "README_MARKERS",
-    "BENCH_MARKERS",
-    "Run",
-    "append_run",
-    "read_runs",
-    "read_timings",
-    "machine",
-    "git_commit",
-    "summarize",
-    "record_figures",
-    "sync_readmes",
-    "main",
-]
+__all__ = ["append_run", "read_runs", "summarize", "record_figures", "sync_readmes", "main"]
+
 
 README_MARKERS = (
     "<!-- figures-time:begin (generated from benchmarks/results.json by make figures) -->",
@@ -57,8 +43,7 @@ _ROWS = {  # each part's row in benchmarks/README.md's table and its target in r
 
 @dataclasses.dataclass(frozen=True)
 class Run:
-    """One notebook run, a line of ``timings.jsonl``: ``<notebook>[-<robot>]``, its wall time [s],
-    its start and end (UTC; ``None`` in a line of an older version)."""
+    """One notebook run: ``<notebook>[-<robot>]``, its wall time [s], its start and end (UTC, or None)."""
 
     name: str
     seconds: float
@@ -76,11 +61,9 @@ def append_run(
 ) -> None:
     """Append one run's ``{notebook, robot, seconds, start, end}`` to ``path`` as one JSON line (a
     short line: parallel appends do not interleave)."""
-    utc = {
-        k: t.astimezone(datetime.UTC).isoformat(timespec="milliseconds")
-        for k, t in (("start", start), ("end", end))
-    }
-    record = {"notebook": notebook, "robot": robot, "seconds": round(seconds, 2), **utc}
+    record: dict[str, Any] = {"notebook": notebook, "robot": robot, "seconds": round(seconds, 2)}
+    for key, when in (("start", start), ("end", end)):
+        record[key] = when.astimezone(datetime.UTC).isoformat(timespec="milliseconds")
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     with open(path, "a") as fh:
         fh.write(json.dumps(record) + "\n")
@@ -95,12 +78,8 @@ def _when(value: str | None) -> datetime.datetime | None:
 
 
 def read_runs(path: str | os.PathLike[str]) -> list[Run]:
-    """The runs of a ``timings.jsonl``, in the order they finished.
-
-    Raises:
-        ArtifactError: if the file is missing.
-        ConfigError: if a line is not a timing record.
-    """
+    """The runs of a ``timings.jsonl``, in the order they finished; ArtifactError if it is missing,
+    ConfigError if a line is not a timing record."""
     path = Path(path)
     if not path.is_file():
         raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
@@ -145,28 +124,24 @@ def machine() -> dict[str, Any]:
     (read from the installed distributions, so nothing heavy is imported)."""
     cpu = platform.processor() or ""
     with contextlib.suppress(OSError):
-        models = [
-            line for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")
-        ]
-        cpu = models[0].split(":", 1)[1].strip() if models else cpu
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+        cpu = next((line.split(":", 1)[1].strip() for line in lines if line.startswith("model name")), cpu)
     out: dict[str, Any] = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version()}
     for package in ("torch", "numpy", "mujoco"):
-        try:
-            out[package] = importlib.metadata.version(package)
-        except importlib.metadata.PackageNotFoundError:
+        with contextlib.suppress(importlib.metadata.PackageNotFoundError):
             out[package] = None
+            out[package] = importlib.metadata.version(package)
     return out
 
 
 def git_commit(cwd: str | os.PathLike[str] | None = None) -> str:
     """The short hash of ``HEAD`` in ``cwd``, or ``"unknown"`` outside a git checkout."""
-    try:
+    with contextlib.suppress(OSError):
         head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=cwd, check=False
+            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=cwd
         )
-    except OSError:
-        return "unknown"
-    return head.stdout.strip() or "unknown"
+        return head.stdout.strip() or "unknown"
+    return "unknown"
 
 
 def summarize(
@@ -176,15 +151,9 @@ def summarize(
     host: Mapping[str, Any] | None = None,
     commit: str | None = None,
 ) -> dict[str, Any]:
-    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``.
-
-    ``host`` and ``commit`` default to :func:`machine` and :func:`git_commit`'s. Returns ``{total,
-    per_notebook, sum_of_notebooks, date, machine, commit, command, source}``: ``total`` is the wall
-    time from the first start to the last end (notebooks run side by side), ``date`` the first start's.
-
-    Raises:
-        ConfigError: if there are no runs, or a run lacks its start or end.
-    """
+    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``
+    (``host``, ``commit``: :func:`machine`'s and :func:`git_commit`'s by default): ``total`` is the wall
+    time from the first start to the last end; ConfigError without runs, or a run's start or end."""
     if not runs:
         raise ConfigError("no notebook runs to summarize")
     if any(run.start is None or run.end is None for run in runs):
@@ -226,14 +195,9 @@ def record_figures(
     command: str,
     **summary: Any,
 ) -> dict[str, Any] | None:
-    """Write a whole run's times from ``timings`` into ``results``' ``figures_s``, atomically.
-
-    ``part`` ``"paper"`` replaces the top level of ``figures_s`` (its ``quick`` part is kept),
-    ``"quick"`` replaces ``figures_s.quick``; every other key of ``results`` is kept. ``expected``
-    are the notebooks of a whole run; ``summary``: ``host`` and ``commit`` for :func:`summarize`.
-
-    Returns the part written, or ``None`` (the reason printed, ``results`` untouched) when the run was
-    not whole: no timings file, or not every expected notebook ran once in it.
+    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (``part`` "paper": its
+    top level, "quick": its ``quick``), atomically; return them, or None (``results`` untouched, the
+    reason printed) unless every ``expected`` notebook ran once. ``summary``: for :func:`summarize`.
 
     Raises:
         ConfigError: for an unknown ``part``, or a ``results`` that is not a JSON object.
@@ -309,12 +273,9 @@ def sync_readmes(
     readme: str | os.PathLike[str] | None = "README.md",
     bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
 ) -> list[Path]:
-    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results``, between
-    :data:`README_MARKERS` and :data:`BENCH_MARKERS` (a README ``None``: left alone); the files changed.
-
-    Raises:
-        ConfigError: if ``results`` has no paper-scale ``figures_s``, or a file lacks its markers.
-    """
+    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results`` between their
+    markers (a README ``None``: left alone); return the files changed. ConfigError without a paper-scale
+    ``figures_s`` or a file's markers."""
     data = _read_results(Path(results))
     figures = data.get("figures_s") or {}
     if "total" not in figures:
@@ -330,7 +291,7 @@ def sync_readmes(
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry point: record a whole run's times, then sync the READMEs from them."""
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("timings", help="the run's timings.jsonl (build/timings.jsonl)")
     parser.add_argument("--part", choices=PARTS, required=True, help="paper scale, or QUICK=1")
     parser.add_argument("--expect", nargs="+", required=True, help="the notebooks of a whole run")
