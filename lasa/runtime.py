@@ -55,7 +55,6 @@ def pin() -> None:
 def record() -> dict[str, object]:
     """The variables of :data:`PINNED` as set, whether all hold their pinned value, and torch's CPU
     capability (torch imported here)."""
-
     import torch  # noqa: PLC0415 (reading the capability needs torch; pinning must not import it)
 
     env = {name: os.environ.get(name) for name in PINNED}

@@ -316,7 +316,6 @@ def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
 def set_threads(default: int = 1) -> int:
     """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one: a reduction split over
     threads rounds differently, and training amplifies that); return it."""
-
     import torch  # noqa: PLC0415 (config stays importable without torch's start-up cost)
 
     value = os.environ.get("LASA_THREADS")

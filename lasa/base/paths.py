@@ -62,7 +62,6 @@ class Paths:
 
     def artifact(self, name: str, robot: str, **fields: str) -> Path:
         """The path of artifact ``name`` (:data:`ARTIFACTS`) for ``robot``, ``fields`` filling its pattern."""
-
         if name not in ARTIFACTS:
             raise ConfigError(f"unknown artifact {name!r}; known: {sorted(ARTIFACTS)}")
         try:

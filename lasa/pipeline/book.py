@@ -1,9 +1,5 @@
-"""A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
-
-``python -m lasa.pipeline.book`` writes a static site to ``build/book/html`` from ``build/notebooks``
-and the figures folder: the verdict table as front page, one page per notebook in the paper's order
-(planar5, then the Panda), the claims table last. Nothing is executed again; it works offline
-(MathJax served from the site, myst-nb's CDN widget scripts off).
+"""A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``): the
+verdict table as front page, the notebooks in the paper's order, the claims table last; nothing runs again.
 """
 
 from __future__ import annotations
@@ -45,10 +41,8 @@ def front_page(claims: pd.DataFrame, pages: set[str], values: Values | None = No
     with the claims' numbers ``values`` (``figures/claim_values.csv``)."""
 
     def link(stem: str) -> str:
-        for name in (f"{stem}-planar5", stem, f"{stem}-panda"):
-            if name in pages:
-                return f"{name}.ipynb"
-        return f"{stem}.ipynb"
+        found = (name for name in (f"{stem}-planar5", stem, f"{stem}-panda") if name in pages)
+        return f"{next(found, stem)}.ipynb"
 
     lines = [
         "# lasa: Shared Autonomy with Learned Latent Actions",
@@ -79,9 +73,8 @@ def retitle(notebook: Path, robot: str) -> None:
     for cell in nb["cells"]:
         text = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
         if cell["cell_type"] == "markdown" and text.startswith("# "):
-            first, _, rest = text.partition("\n")
-            name = ROBOT_TITLES.get(robot, robot)
-            cell["source"] = f"{first} — {name}" + (f"\n{rest}" if rest else "")
+            first, newline, rest = text.partition("\n")
+            cell["source"] = f"{first} — {ROBOT_TITLES.get(robot, robot)}" + (newline + rest if rest else "")
             break
     write_text(notebook, json.dumps(nb, indent=1, ensure_ascii=False) + "\n")
 
@@ -129,7 +122,6 @@ sphinx:
 
 def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, claims: pd.DataFrame) -> None:
     """The book's sources in ``src``: notebooks (retitled per robot), figures, MathJax, pages, contents."""
-
     shutil.rmtree(src, ignore_errors=True)
     (src / "notebooks").mkdir(parents=True)
     for book in books:
@@ -160,7 +152,6 @@ def _jupyter_book(src: Path, out: Path, progress: bool) -> Path:
     command = [jupyter_book, "build", str(src), "--path-output", str(out)]
     result = subprocess.run(command, capture_output=not progress, text=True)
     html = build / "html"
-
     if result.returncode != 0 or not (html / "index.html").is_file():
         detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
         raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")

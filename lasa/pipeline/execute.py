@@ -94,24 +94,19 @@ def run_notebook(
     out = Path(out_dir) / f"{Path(notebook).stem}{robot}.ipynb"
     failed = out.with_suffix(".failed.ipynb")
     figures = params.get("figures_dir", defaults.get("figures_dir"))
-    with atomic_path(out) as tmp:
-        with _journaled(out, figures) as undo:
-            try:
-                pm.execute_notebook(
-                    str(notebook),
-                    str(tmp),
-                    parameters=params,
-                    kernel_name="python3",
-                    cwd=str(Path.cwd()),
-                    progress_bar=progress,
-                )
-            except pm.PapermillExecutionError as exc:
-                # Keep the partial run for reading, under a name no Make rule will take for done.
-                os.replace(tmp, failed)
-                restored = undo()
-                raise NotebookError(
-                    str(notebook), exc.ename, str(exc.evalue), str(failed), restored
-                ) from None
+    with atomic_path(out) as tmp, _journaled(out, figures) as undo:
+        try:
+            pm.execute_notebook(
+                str(notebook),
+                str(tmp),
+                parameters=params,
+                kernel_name="python3",
+                cwd=str(Path.cwd()),
+                progress_bar=progress,
+            )
+        except pm.PapermillExecutionError as exc:
+            os.replace(tmp, failed)  # the partial run, under a name no Make rule takes for done
+            raise NotebookError(str(notebook), exc.ename, str(exc.evalue), str(failed), undo()) from None
     failed.unlink(missing_ok=True)
     return out
 
@@ -188,7 +183,6 @@ def _terminated(signum: int, frame: object) -> None:
 
 def parse_params(items: list[str]) -> dict[str, Any]:
     """``["name=value", ...]`` -> ``{name: yaml(value)}``; ConfigError for an item without a name."""
-
     out: dict[str, Any] = {}
     for item in items:
         name, sep, value = item.partition("=")

@@ -91,11 +91,8 @@ def relink_markdown(text: str) -> str:
 
 def _markdown_output(text: str, plain: str) -> dict[str, Any]:
     """A display output showing ``text`` as Markdown (``plain`` where Markdown is not rendered)."""
-    return {
-        "data": {"text/markdown": text, "text/plain": plain},
-        "metadata": {},
-        "output_type": "display_data",
-    }
+    data = {"text/markdown": text, "text/plain": plain}
+    return {"data": data, "metadata": {}, "output_type": "display_data"}
 
 
 def _video(data: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
@@ -221,8 +218,7 @@ def _read(path: Path) -> dict[str, Any]:
     return data
 
 
-# a failed run's copy (``x.failed.ipynb``), or a killed write's temporary file (``.x.1a2b.tmp.ipynb``,
-# lasa.base.io.atomic_path)
+# a failed run's copy (``x.failed.ipynb``), or a killed write's temporary file (``.x.1a2b.tmp.ipynb``)
 _PARTIAL = re.compile(r"^\.|\.(failed|tmp)\.ipynb$")
 
 
@@ -253,13 +249,9 @@ def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dic
 
 def _to_link(taken: dict[str, int], excess: int) -> frozenset[str]:
     """The figures to link so that ``excess`` bytes go: the largest first (then by name)."""
-    chosen: list[str] = []
-    for name, size in sorted(taken.items(), key=lambda kv: (-kv[1], kv[0])):
-        if excess <= 0:
-            break
-        chosen.append(name)
-        excess -= size
-    return frozenset(chosen)
+    ranked = sorted(taken.items(), key=lambda kv: (-kv[1], kv[0]))
+    freed = itertools.accumulate((size for _, size in ranked), initial=0)  # by the figures before each
+    return frozenset(name for (name, _), before in zip(ranked, freed, strict=False) if before < excess)
 
 
 def _size(pages: dict[str, str]) -> int:
@@ -313,7 +305,6 @@ def main(argv: list[str] | None = None) -> int:
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1 if isinstance(exc, PageBudgetError) else 2
-
     how = f"linked to fit: {', '.join(sorted(linked))}" if linked else "figures embedded"
     print(f"{len(written)} notebook pages in {Path(args.figures) / PAGES} ({total / 1e6:.2f} MB, {how})")
     return 0

@@ -51,7 +51,6 @@ def run_jobs(
     """``[fn(item) for item in items]`` (``fn(shared, item)`` if ``shared`` is not None, scattered to a
     cluster's workers once), through joblib: ``n_jobs`` local processes, or every worker of the Dask
     ``scheduler`` (:func:`scheduler_address`, answering within ``timeout``); ConfigError if unreachable."""
-
     from joblib import Parallel, delayed, parallel_config  # noqa: PLC0415
 
     items = list(items)

@@ -99,7 +99,6 @@ def _run_folders(cells: list[dict]) -> dict[str, str]:
                 name, value = ast.unparse(node.targets[0]), node.value.value
                 if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
                     values[value.rstrip("/")] = f"<{name}>"
-
     return dict(sorted(values.items(), key=lambda kv: -len(kv[0])))
 
 
@@ -341,14 +340,11 @@ def _kernels_text(committed: str | Path, new: str | Path) -> str:
 def _format_table(rows: Sequence[Row]) -> str:
     """The rows as a Markdown table (readable as plain text too)."""
     header = [f.name for f in dataclasses.fields(Row)]
-    cells = [header] + [[str(getattr(r, h)) for h in header] for r in rows]
+    cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in rows)]
     widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
-
-    def line(values: list[str]) -> str:
-        return "| " + " | ".join(v.ljust(w) for v, w in zip(values, widths, strict=True)) + " |"
-
-    rule = "| " + " | ".join("-" * w for w in widths) + " |"
-    return "\n".join([line(cells[0]), rule, *(line(c) for c in cells[1:])])
+    cells.insert(1, ["-" * w for w in widths])
+    lines = (" | ".join(v.ljust(w) for v, w in zip(c, widths, strict=True)) for c in cells)
+    return "\n".join(f"| {line} |" for line in lines)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -90,7 +90,6 @@ class Workspace(Generic[TaskT]):
 
 def _folders(build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
     """Pin the runtime, set torch's threads, resolve the run's folders (the figures' made)."""
-
     pin()
     set_threads()
     paths = Paths.of(build_dir, figures_dir)
