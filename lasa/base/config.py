@@ -152,21 +152,13 @@ def validate(record: Any) -> None:
         loc = [str(x) for x in err["loc"]]
         name = loc[0] + "".join(f"[{x}]" for x in loc[1:])
         annotation = fields[loc[0]]
-        if len(loc) > 1 and typing.get_origin(annotation) is tuple:
-            annotation = typing.get_args(annotation)[0]
-        expected = expects(annotation)
+        item = typing.get_args(annotation)[0] if typing.get_origin(annotation) is tuple else annotation
+        expected = expects(item if len(loc) > 1 else annotation)
         if isinstance(err["input"], int | float) and expected.startswith("a number in "):
             expected = expected.removeprefix("a number ")  # it is a number: only the range is wrong
-        why = _why(fields[loc[0]])
+        reasons = [m.reason for m in getattr(item, "__metadata__", ()) if isinstance(m, Why)]  # its Why
+        why = f": {reasons[0]}" if reasons else ""
         raise ConfigError(f"{name} must be {expected}, got {err['input']!r}{why}") from None
-
-
-def _why(annotation: Any) -> str:
-    """``: <reason>`` of the :class:`Why` in a field's type (or its items'), else empty."""
-    if typing.get_origin(annotation) is tuple:
-        annotation = typing.get_args(annotation)[0]
-    reasons = [m.reason for m in getattr(annotation, "__metadata__", ()) if isinstance(m, Why)]
-    return f": {reasons[0]}" if reasons else ""
 
 
 LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)

@@ -17,11 +17,8 @@ def pinned_ffmpeg() -> str:
     another one (``IMAGEIO_FFMPEG_EXE``, the PATH); RuntimeError if the wheel ships none."""
 
     folder = importlib.resources.files("imageio_ffmpeg.binaries")
-    found = [
-        Path(str(f))
-        for f in folder.iterdir()
-        if f.name.startswith("ffmpeg") and not f.name.endswith((".py", ".md", ".txt"))
-    ]
+    found = [Path(str(f)) for f in folder.iterdir() if f.name.startswith("ffmpeg")]
+    found = [f for f in found if not f.name.endswith((".py", ".md", ".txt"))]
     if len(found) != 1 or not os.access(found[0], os.X_OK):
         raise RuntimeError(
             f"expected one ffmpeg binary in the imageio-ffmpeg wheel, found {[f.name for f in found]} "

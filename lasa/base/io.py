@@ -47,8 +47,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         os.replace(tmp, path)
         journal.after_write(path)
     finally:
-        if tmp.exists():
-            tmp.unlink()
+        tmp.unlink(missing_ok=True)
 
 
 _HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting depth

@@ -23,10 +23,7 @@ def module_file(name: str, root: Path = ROOT) -> Path | None:
     if name != "lasa" and not name.startswith("lasa."):
         return None
     base = root.joinpath(*name.split("."))
-    for path in (base.with_suffix(".py"), base / "__init__.py"):
-        if path.is_file():
-            return path
-    return None
+    return next((path for path in (base.with_suffix(".py"), base / "__init__.py") if path.is_file()), None)
 
 
 @functools.cache

@@ -105,14 +105,12 @@ def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
     """Why ``runs`` are not one whole run (every ``expected`` notebook once, nothing else, each
     with its start and end), or ``None``."""
     names = [run.name for run in runs]
+    undated = [r.name for r in runs if r.start is None or r.end is None]
     for found, why in (
         (sorted(set(expected) - set(names)), f"{len(names)} of {len(set(expected))} notebooks ran; not run"),
         (sorted(set(names) - set(expected)), "notebooks outside the expected set ran"),
         (sorted({name for name in names if names.count(name) > 1}), "notebooks recorded more than once"),
-        (
-            [r.name for r in runs if r.start is None or r.end is None],
-            "runs without start and end times (an older runner)",
-        ),
+        (undated, "runs without start and end times (an older runner)"),
     ):
         if found:
             return f"{why}: {', '.join(found)}"
@@ -198,10 +196,7 @@ def record_figures(
     """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (``part`` "paper": its
     top level, "quick": its ``quick``), atomically; return them, or None (``results`` untouched, the
     reason printed) unless every ``expected`` notebook ran once. ``summary``: for :func:`summarize`.
-
-    Raises:
-        ConfigError: for an unknown ``part``, or a ``results`` that is not a JSON object.
-    """
+    ConfigError for an unknown ``part``, or a ``results`` that is not a JSON object."""
     if part not in PARTS:
         raise ConfigError(f"part must be one of {PARTS}, got {part!r}")
     timings, results = Path(timings), Path(results)
@@ -217,10 +212,8 @@ def record_figures(
     with locked(results.parent):  # a paper and a QUICK run may finish at once
         data = _read_results(results)
         figures = data.get("figures_s") or {}
-        if part == "paper":
-            data["figures_s"] = {**written, **({"quick": figures["quick"]} if "quick" in figures else {})}
-        else:
-            data["figures_s"] = {**figures, "quick": written}
+        quick = {"quick": figures["quick"]} if "quick" in figures else {}
+        data["figures_s"] = {**written, **quick} if part == "paper" else {**figures, "quick": written}
         write_text(results, json.dumps(data, indent=2) + "\n")
     print(f"{results}: figures_s{'.quick' if part == 'quick' else ''} = {written['total']:.0f} s ({timings})")
     return written

@@ -185,14 +185,8 @@ def _cells(column: pd.Series) -> np.ndarray:
 def key_columns(frame: pd.DataFrame) -> list[str]:
     """The columns that say what a row is: the leading one-token text columns (``robot``, ``id``, not
     free text), before the first number."""
-    keys = []
-    for column in frame.columns:
-        if _numeric(frame, column):
-            break
-        values = frame[column].dropna().astype(str)
-        if not values.str.contains(r"\s").any():
-            keys.append(column)
-    return keys
+    leading = itertools.takewhile(lambda column: not _numeric(frame, column), frame.columns)
+    return [c for c in leading if not frame[c].dropna().astype(str).str.contains(r"\s").any()]
 
 
 def _numeric_rows(
