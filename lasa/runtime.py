@@ -53,8 +53,8 @@ def pin() -> None:
 
 
 def record() -> dict[str, object]:
-    """The variables of :data:`PINNED` as set, whether all hold their pinned value, and torch's CPU
-    capability (torch imported here)."""
+    """What the numerical kernels run with: the variables of :data:`PINNED` as set, whether all hold
+    their pinned value, and torch's CPU capability (torch imported here)."""
     import torch  # noqa: PLC0415 (reading the capability needs torch; pinning must not import it)
 
     env = {name: os.environ.get(name) for name in PINNED}

@@ -1,7 +1,8 @@
 """Run a figure notebook headless with papermill, with checked parameters (``make figures``).
 
 A config's ``common`` section and the notebook stem's section are its parameters (an unknown one is
-an error); a failed run is kept as ``<name>.failed.ipynb`` and its writes to the figures are undone.
+an error); the executed copy is written atomically, a failed execution kept as ``<name>.failed.ipynb``
+and its writes to the figures undone.
 """
 
 from __future__ import annotations

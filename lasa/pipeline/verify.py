@@ -249,13 +249,10 @@ def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
 def _compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> list[Row]:
     """The table's lines for one CSV: identical, or its shape, columns and values that differ."""
     old, new = pd.read_csv(old_path), pd.read_csv(new_path)
-    missing = ", ".join(c for c in old.columns if c not in new.columns)
-    extra = ", ".join(c for c in new.columns if c not in old.columns)
-    rows = (
-        [Row(name, "columns", "columns differ", f"missing: {missing or '-'}; extra: {extra or '-'}")]
-        if missing or extra
-        else []
-    )
+    missing = [c for c in old.columns if c not in new.columns]
+    extra = [c for c in new.columns if c not in old.columns]
+    detail = f"missing: {', '.join(missing) or '-'}; extra: {', '.join(extra) or '-'}"
+    rows = [Row(name, "columns", "columns differ", detail)] if missing or extra else []
     mismatch = _rows_match(name, old, new)
     rows += [mismatch] if mismatch is not None else _column_rows(name, old, new, tol)
     return rows or [Row(name, "all", "identical", f"{old.shape[0]} rows x {old.shape[1]} columns")]
@@ -285,9 +282,8 @@ def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
         if a is None or b is None:
             why = "only in the new table" if a is None else "missing from the new table"
         else:
-            why = "; ".join(
-                f"{c} {x} -> {y}" for c, x, y in zip(VERDICT_COLUMNS, a, b, strict=True) if x != y
-            )
+            changes = (f"{c} {x} -> {y}" for c, x, y in zip(VERDICT_COLUMNS, a, b, strict=True) if x != y)
+            why = "; ".join(changes)
         report.verdicts_differ.append(f"{key[0]} / {key[1]}: {why}")
         report.rows.append(Row(CLAIMS, f"verdict {key[0]} / {key[1]}", "verdict differs", why))
     if not report.verdicts_differ:
