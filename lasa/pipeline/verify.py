@@ -322,8 +322,7 @@ def _kernels_text(committed: str | Path, new: str | Path) -> str:
         data = json.loads(path.read_text())
         env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
         state = "pinned" if data.get("pinned") else "NOT pinned"
-        capability = data.get("torch_cpu_capability")
-        lines.append(f"kernels of the {label} run: {state}, torch {capability}; {env}")
+        lines.append(f"kernels of the {label} run: {state}, torch {data.get('torch_cpu_capability')}; {env}")
     return "\n".join(lines)
 
 
