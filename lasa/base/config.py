@@ -267,42 +267,32 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
     values = {} if values is None else values
     if not isinstance(values, Mapping):
         raise ConfigError(f"{owner} settings must be a mapping of names to values, got {values!r}")
-    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    unknown = sorted(set(values) - set(fields))
-    if unknown:
-        raise ConfigError(f"{owner} settings: unknown setting(s) {unknown}; known: {sorted(fields)}")
     try:
-        return cls(
-            **{name: _setting(name, fields[name], fields[name].default, v) for name, v in values.items()}
-        )
+        return cls(**_changes("", cls, values))
     except ConfigError as exc:
         raise ConfigError(f"{owner} settings: {exc}") from None
 
 
-def _setting(path: str, field: dataclasses.Field[Any], default: Any, value: Any) -> Any:
-    """One setting's value as its record takes it: a mapping for a nested record that record, a
-    list for a tuple field a tuple."""
-    if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
-        return _nested(path, default, value)
-    if isinstance(value, list) and "tuple" in str(field.type):
-        return tuple(value)
-    return value
-
-
-def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
-    """``default`` with ``values`` changed, recursively; errors name the setting's whole path."""
-    known = {f.name: f for f in dataclasses.fields(default)}
+def _changes(prefix: str, record: Any, values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` as ``record``'s fields take them (a mapping for a nested record: its default with those
+    changed, a list for a tuple field: a tuple); errors name the setting's whole path."""
+    known = {f.name: f for f in dataclasses.fields(record)}
     unknown = sorted(set(values) - set(known))
     if unknown:
-        raise ConfigError(f"unknown setting(s) {[f'{name}.{u}' for u in unknown]}; known: {sorted(known)}")
-    changes = {
-        key: _setting(f"{name}.{key}", known[key], getattr(default, key), value)
-        for key, value in values.items()
-    }
-    try:
-        return dataclasses.replace(default, **changes)
-    except ConfigError as exc:
-        raise ConfigError(f"{name}.{exc}") from None
+        raise ConfigError(f"unknown setting(s) {[prefix + u for u in unknown]}; known: {sorted(known)}")
+    changes = {}
+    for key, value in values.items():
+        default = getattr(record, key, known[key].default)
+        if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
+            nested = _changes(f"{prefix}{key}.", default, value)
+            try:
+                value = dataclasses.replace(default, **nested)  # type: ignore[type-var]
+            except ConfigError as exc:
+                raise ConfigError(f"{prefix}{key}.{exc}") from None
+        elif isinstance(value, list) and "tuple" in str(known[key].type):
+            value = tuple(value)
+        changes[key] = value
+    return changes
 
 
 def set_threads(default: int = 1) -> int:

@@ -20,6 +20,7 @@ from lasa.base.io import write_text
 from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
+from lasa.pipeline.pages import cell_text
 
 __all__ = ["build_book", "main"]
 
@@ -73,7 +74,7 @@ def retitle(notebook: Path, robot: str) -> None:
     """Append the robot to a notebook's first heading, so its two robots' pages differ."""
     nb = json.loads(notebook.read_text())
     for cell in nb["cells"]:
-        text = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        text = cell_text(cell["source"])
         if cell["cell_type"] == "markdown" and text.startswith("# "):
             first, newline, rest = text.partition("\n")
             cell["source"] = f"{first} — {ROBOT_TITLES.get(robot, robot)}" + (newline + rest if rest else "")

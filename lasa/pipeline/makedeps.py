@@ -28,14 +28,12 @@ def module_file(name: str, root: Path = ROOT) -> Path | None:
 
 @functools.cache
 def _exports(root: Path) -> dict[str, str]:
-    """``lasa._EXPORTS``: name -> defining module, read from the package's ``_HOMES`` (once)."""
-    for node in ast.walk(ast.parse((root / "lasa" / "__init__.py").read_text())):
-        if isinstance(node, ast.Assign) and any(
-            isinstance(t, ast.Name) and t.id == "_HOMES" for t in node.targets
-        ):
-            homes = ast.literal_eval(node.value)
-            return {name: module for module, names in homes.items() for name in names.split()}
-    return {}
+    """``lasa._EXPORTS``: name -> defining module, read from the package's ``if TYPE_CHECKING:`` imports."""
+    tree = ast.parse((root / "lasa" / "__init__.py").read_text())
+    typed = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"]
+    return {
+        a.name: str(n.module) for b in typed for n in b.body if isinstance(n, ast.ImportFrom) for a in n.names
+    }
 
 
 def _run_nodes(tree: ast.AST) -> list[ast.AST]:

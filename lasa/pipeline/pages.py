@@ -24,7 +24,7 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import write_text
 from lasa.base.paths import repo_root
 
-__all__ = ["BUDGET", "PageBudgetError", "clean_notebook", "page_text", "write_pages", "main"]
+__all__ = ["BUDGET", "PageBudgetError", "cell_text", "clean_notebook", "page_text", "write_pages", "main"]
 
 
 BUDGET = 5_000_000  # bytes of every page together (issue 47: "at most 5 MB in all")
@@ -69,7 +69,7 @@ class FigureIndex:
         return (self.folder / name).read_bytes()
 
 
-def _text(value: str | list[str]) -> str:
+def cell_text(value: str | list[str]) -> str:
     """A notebook's multi-line string (a string or a list of lines) as one string."""
     return value if isinstance(value, str) else "".join(value)
 
@@ -97,10 +97,10 @@ def _markdown_output(text: str, plain: str) -> dict[str, Any]:
 
 def _video(data: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
     """An embedded video's replacement: a link to the committed MP4 it shows, or None (dropped)."""
-    html = _text(data.get("text/html", ""))
+    html = cell_text(data.get("text/html", ""))
     name = None
     if "video/mp4" in data:
-        name = figures.name_of(base64.b64decode(_text(data["video/mp4"])))
+        name = figures.name_of(base64.b64decode(cell_text(data["video/mp4"])))
     elif (match := DATA_MP4.search(html)) is not None:
         name = figures.name_of(base64.b64decode(re.sub(r"\s", "", match.group(1))))
     elif (match := VIDEO_SRC.search(html)) is not None:
@@ -111,7 +111,7 @@ def _video(data: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
 
 def _image(output: dict[str, Any], figures: FigureIndex, link: Link) -> dict[str, Any]:
     """An image output: its named figure's final bytes, or a link to the committed PNG ``link`` names."""
-    png = _text(output["data"]["image/png"]).replace("\n", "")
+    png = cell_text(output["data"]["image/png"]).replace("\n", "")
     named = output.get("metadata", {}).get("image/png", {}).get("figure")
     final = figures.read(named) if isinstance(named, str) else None
     data = base64.b64decode(png) if final is None else final
@@ -129,7 +129,7 @@ def _clean_output(
     """One output as it appears on the page, or None if it is dropped."""
     kind = output["output_type"]
     if kind == "stream":
-        text = _text(output["text"])
+        text = cell_text(output["text"])
         if output["name"] == "stderr" and PROGRESS.search(text):
             return None  # a tqdm bar (widgets off: the bar redrawn with carriage returns)
         return {**copy.deepcopy(output), "text": text.replace(ROOT, "")}  # a warning's file path
@@ -138,11 +138,11 @@ def _clean_output(
     data = output.get("data", {})
     if WIDGET in data:
         return None  # a tqdm bar as a widget: no state is saved, so it would show "0%"
-    if "video/mp4" in data or VIDEO_HTML.search(_text(data.get("text/html", ""))):
+    if "video/mp4" in data or VIDEO_HTML.search(cell_text(data.get("text/html", ""))):
         return _video(data, figures)
     output = copy.deepcopy(output)
     if relink and "text/markdown" in data:
-        output["data"]["text/markdown"] = relink_markdown(_text(data["text/markdown"]))
+        output["data"]["text/markdown"] = relink_markdown(cell_text(data["text/markdown"]))
     if "image/png" in data:
         output = _image(output, figures, link)
     if output["output_type"] == "execute_result":
@@ -164,7 +164,7 @@ def _clean_cell(
     if INJECTED in metadata.get("tags", ()):
         out["id"] = INJECTED  # papermill gives it a random id
     if cell["cell_type"] == "markdown" and relink:
-        out["source"] = relink_markdown(_text(cell["source"]))
+        out["source"] = relink_markdown(cell_text(cell["source"]))
     if cell["cell_type"] == "code":
         out["execution_count"] = count
         outputs = (_clean_output(o, figures, link, count, relink) for o in cell.get("outputs", []))
@@ -241,7 +241,7 @@ def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dic
     """The bytes each committed figure takes, embedded, over all ``pages``."""
     taken: dict[str, int] = {}
     outputs = (o for page in pages.values() for cell in page["cells"] for o in cell.get("outputs", []))
-    for png in (_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
+    for png in (cell_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
         if (name := figures.name_of(base64.b64decode(png))) is not None:
             taken[name] = taken.get(name, 0) + len(png)
     return taken

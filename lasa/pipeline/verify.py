@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.base.errors import ArtifactError
+from lasa.pipeline.pages import cell_text
 
 __all__ = ["Tolerance", "key_columns", "compare_folders", "main"]
 
@@ -94,7 +95,7 @@ def _run_folders(cells: list[dict]) -> dict[str, str]:
     for cell in cells:
         if "injected-parameters" not in cell.get("metadata", {}).get("tags", ()):
             continue
-        for node in ast.parse(_text(cell["source"])).body:
+        for node in ast.parse(cell_text(cell["source"])).body:
             if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
                 name, value = ast.unparse(node.targets[0]), node.value.value
                 if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
@@ -102,16 +103,11 @@ def _run_folders(cells: list[dict]) -> dict[str, str]:
     return dict(sorted(values.items(), key=lambda kv: -len(kv[0])))
 
 
-def _text(value: str | list[str]) -> str:
-    """A notebook's multi-line string (a string or a list of lines) as one string."""
-    return value if isinstance(value, str) else "".join(value)
-
-
 def _output_lines(output: dict, folders: dict[str, str]) -> list[str]:
     """One output as lines of text: a stream's text, each MIME type's text, an image's digest."""
 
     def text(value: str | list[str]) -> str:
-        joined = _text(value)
+        joined = cell_text(value)
         for value_, placeholder in folders.items():  # a path under the run's folder, not a word
             joined = re.sub(rf"(?<![\w./-]){re.escape(value_)}(?=/)", placeholder, joined)
         return joined
