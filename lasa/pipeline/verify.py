@@ -80,14 +80,6 @@ def _files(folder: Path) -> dict[str, Path]:
     return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def _compare_bytes(name: str, old: Path, new: Path) -> Row:
-    """A file that is not a CSV (PNG, MP4, Markdown): identical bytes or not."""
-    a, b = old.read_bytes(), new.read_bytes()
-    if a == b:
-        return Row(name, "bytes", "identical", f"{len(a)} bytes")
-    return Row(name, "bytes", "differs", f"{len(a)} -> {len(b)} bytes")
-
-
 def _run_folders(cells: list[dict]) -> dict[str, str]:
     """``{value: placeholder}`` of the run's ``figures_dir`` and ``build_dir``, read from papermill's
     injected-parameters cell (longest first, so that ``build/verify/figures`` goes before ``build``)."""
@@ -186,7 +178,7 @@ def key_columns(frame: pd.DataFrame) -> list[str]:
 
 
 def _numeric_rows(
-    name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
+    name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance, keys: list[str]
 ) -> tuple[np.ndarray, list[Row]]:
     """A numeric column's cells beyond the tolerance (a mask) and its lines: the rows whose non-finite
     value is not the same on both sides; ``max abs .., max rel ..`` over the cells finite on both."""
@@ -199,7 +191,6 @@ def _numeric_rows(
     beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, a, 0.0))) | changed
     rows = []
     if (where := np.flatnonzero(changed)).size:
-        keys = _keys(old, new)
         label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
         shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
         more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
@@ -210,27 +201,14 @@ def _numeric_rows(
     return beyond, rows
 
 
-def _keys(old: pd.DataFrame, new: pd.DataFrame) -> list[str]:
-    return [k for k in key_columns(old) if k in new.columns]
-
-
-def _rows_match(name: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
-    """None if rows can be matched by position; else the table's ``rows differ`` line."""
-    if len(old) != len(new):
-        return Row(name, "rows", "rows differ", f"{len(old)} -> {len(new)} rows")
-    keys = _keys(old, new)
-    moved = np.any([_cells(old[k]) != _cells(new[k]) for k in keys], axis=0) if keys else np.zeros(1, bool)
-    if moved.any():
-        return Row(name, "rows", "rows differ", f"key columns {', '.join(keys)} differ at {moved.sum()} rows")
-    return None
-
-
-def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance) -> list[Row]:
+def _column_rows(
+    name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance, keys: list[str]
+) -> list[Row]:
     """One line per common column that differs, and one for the rows beyond the tolerance."""
     rows, beyond_any = [], np.zeros(len(old), dtype=bool)
     for column in [c for c in old.columns if c in new.columns]:
         if _numeric(old, column) and _numeric(new, column):
-            beyond, lines = _numeric_rows(name, column, old, new, tol)
+            beyond, lines = _numeric_rows(name, column, old, new, tol, keys)
             rows += lines
             beyond_any |= beyond
         else:
@@ -249,8 +227,15 @@ def _compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> l
     extra = [c for c in new.columns if c not in old.columns]
     detail = f"missing: {', '.join(missing) or '-'}; extra: {', '.join(extra) or '-'}"
     rows = [Row(name, "columns", "columns differ", detail)] if missing or extra else []
-    mismatch = _rows_match(name, old, new)
-    rows += [mismatch] if mismatch is not None else _column_rows(name, old, new, tol)
+    keys = [k for k in key_columns(old) if k in new.columns]
+    if len(old) != len(new):
+        rows.append(Row(name, "rows", "rows differ", f"{len(old)} -> {len(new)} rows"))
+    elif keys and (moved := np.any([_cells(old[k]) != _cells(new[k]) for k in keys], axis=0)).any():
+        rows.append(
+            Row(name, "rows", "rows differ", f"key columns {', '.join(keys)} differ at {moved.sum()} rows")
+        )
+    else:
+        rows += _column_rows(name, old, new, tol, keys)
     return rows or [Row(name, "all", "identical", f"{old.shape[0]} rows x {old.shape[1]} columns")]
 
 
@@ -301,8 +286,10 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
             report.rows += _compare_csv(name, old, fresh, tol)
         elif name.endswith(".ipynb"):
             report.rows += _compare_notebook(name, old, fresh)
-        else:
-            report.rows.append(_compare_bytes(name, old, fresh))
+        else:  # PNG, MP4, Markdown: identical bytes or not
+            a, b = old.read_bytes(), fresh.read_bytes()
+            same = ("identical", f"{len(a)} bytes") if a == b else ("differs", f"{len(a)} -> {len(b)} bytes")
+            report.rows.append(Row(name, "bytes", *same))
     _compare_claims(report, files)
     return report
 
