@@ -256,13 +256,8 @@ def to_dict(config: Any) -> dict[str, Any]:
 
 
 def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
-    """Build ``cls`` from a YAML section: a missing key keeps the default, a list becomes a tuple, a
-    mapping for a nested record (``train: {steps: 200}``) changes those fields of its default.
-
-    Raises:
-        ConfigError: ``<where> settings: <setting> must be <expected>, got <value>`` (``where``: the
-            class's name by default); an unknown key names the known ones.
-    """
+    """Build ``cls`` from a YAML section (missing keys keep their defaults, ``train: {steps: 200}``
+    changes a nested record's field); ConfigError ``<where> settings: <setting> must be ..., got ...``."""
     owner = where or cls.__name__
     values = {} if values is None else values
     if not isinstance(values, Mapping):

@@ -1,9 +1,6 @@
-"""Run a figure notebook headless with papermill, with checked parameters (``make figures``).
-
-A config's ``common`` section and the notebook stem's section are its parameters (an unknown one is
-an error); the executed copy is written atomically, a failed execution kept as ``<name>.failed.ipynb``
-and its writes to the figures undone.
-"""
+"""Run a figure notebook headless with papermill (``make figures``): a config's ``common`` and stem
+sections are its checked parameters; the copy is written atomically, a failed one kept as
+``<name>.failed.ipynb`` and its writes to the figures undone."""
 
 from __future__ import annotations
 
@@ -77,13 +74,9 @@ def run_notebook(
     overrides: dict[str, Any] | None = None,
     progress: bool = True,
 ) -> Path:
-    """Execute ``notebook`` with the parameters of ``config`` and ``overrides`` into ``out_dir``, as
-    ``<stem>-<robot>.ipynb`` with a ``robot`` override; return its path.
-
-    A failed run (a failed cell, a dead kernel, Ctrl-C, ``SIGTERM``) leaves the figures folder as it
-    was: its writes are journaled (``.<name>.journal`` beside the copy) and undone
-    (:func:`lasa.base.journal.restore`); NotebookError for a failed cell, naming the partial run.
-    """
+    """Execute ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (as
+    ``<stem>-<robot>.ipynb`` with a ``robot`` override); return its path. A failed run's writes to the
+    figures are undone (:mod:`lasa.base.journal`); NotebookError for a failed cell, naming the partial run."""
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
     overrides = overrides or {}

@@ -1,9 +1,6 @@
-"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``.
-
-``python -m lasa.pipeline.pages --notebooks build/notebooks --figures figures``: each page cleaned
-(:func:`clean_notebook`), all together under :data:`BUDGET` (committed figures linked, the largest
-first, until they fit; else :class:`PageBudgetError`, exit status 1).
-"""
+"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``, each
+cleaned (:func:`clean_notebook`), all under :data:`BUDGET` (the largest committed figures linked until
+they fit; else :class:`PageBudgetError`, exit status 1)."""
 
 from __future__ import annotations
 
@@ -153,8 +150,7 @@ def _clean_output(
 def _clean_cell(
     cell: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any]:
-    """One cell without volatile metadata; a code cell's outputs cleaned and numbered ``count``;
-    ``relink``: its Markdown's links are still relative to ``notebooks/``."""
+    """One cell without volatile metadata, its outputs cleaned and numbered ``count``; links moved."""
     out = {k: copy.deepcopy(v) for k, v in cell.items() if k != "metadata"}
     volatile = ("execution", "papermill", "collapsed", "scrolled")
     metadata = {k: copy.deepcopy(v) for k, v in cell.get("metadata", {}).items() if k not in volatile}
@@ -175,13 +171,9 @@ def _clean_cell(
 def clean_notebook(
     notebook: dict[str, Any], figures: Path | FigureIndex | None = None, link_figures: Link = False
 ) -> dict[str, Any]:
-    """The page of an executed notebook (a new one, that cleaning again leaves as it is).
-
-    Dropped: volatile metadata, progress bars, empty ``tags``, the clone's path; counts renumbered
-    1..n; embedded videos linked to the committed MP4 of the same bytes (or dropped); an image naming
-    its figure (output metadata ``{"figure": "<name>.png"}``) given its final bytes, or linked when
-    ``link_figures`` (True, or a set of names) says so; Markdown links moved to ``figures/notebooks/``.
-    """
+    """The page of an executed notebook (cleaning it again leaves it as it is): no volatile metadata,
+    progress bars or clone's path; counts 1..n; videos linked to the committed MP4 of their bytes; an
+    image naming its figure given its final bytes, or linked per ``link_figures``; links moved."""
     index = figures if isinstance(figures, FigureIndex) else FigureIndex(figures)
     out = {k: copy.deepcopy(v) for k, v in notebook.items() if k not in ("cells", "metadata")}
     metadata = notebook.get("metadata", {})
@@ -262,12 +254,8 @@ def write_pages(
     executed: str | Path, figures: str | Path, budget: int = BUDGET
 ) -> tuple[list[Path], int, frozenset[str]]:
     """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``; return
-    the pages, the bytes of all pages in the folder (others counted too) and the figures linked to fit.
-
-    Raises:
-        ArtifactError: no executed notebooks, or one is not a notebook.
-        PageBudgetError: the pages exceed ``budget`` even with the figures linked (nothing written).
-    """
+    the pages, the bytes of all pages in the folder and the figures linked to fit. PageBudgetError (and
+    nothing written) if they exceed ``budget`` even so; ArtifactError without notebooks."""
     sources, index = _executed(Path(executed)), FigureIndex(Path(figures))
     folder = Path(figures) / PAGES
     regenerated = {p.name for p in sources}
@@ -293,12 +281,8 @@ def main(argv: list[str] | None = None) -> int:
     """Command line: ``python -m lasa.pipeline.pages --notebooks build/notebooks --figures figures``."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--notebooks", required=True, help="the executed notebooks (e.g. build/notebooks)")
-    parser.add_argument(
-        "--figures", required=True, help="the run's figures folder; pages go to its notebooks/"
-    )
-    parser.add_argument(
-        "--budget", type=int, default=BUDGET, help="bytes of all pages together [%(default)d]"
-    )
+    parser.add_argument("--figures", required=True, help="the figures folder; pages go to its notebooks/")
+    parser.add_argument("--budget", type=int, default=BUDGET, help="bytes of all pages [%(default)d]")
     args = parser.parse_args(argv)
     try:
         written, total, linked = write_pages(args.notebooks, args.figures, args.budget)
