@@ -269,8 +269,7 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
 
 
 def _changes(prefix: str, record: Any, values: Mapping[str, Any]) -> dict[str, Any]:
-    """``values`` as ``record``'s fields take them (a mapping for a nested record: its default with those
-    changed, a list for a tuple field: a tuple); errors name the setting's whole path."""
+    """``values`` as ``record``'s fields take them (nested records, tuples); errors name the whole path."""
     known = {f.name: f for f in dataclasses.fields(record)}
     unknown = sorted(set(values) - set(known))
     if unknown:

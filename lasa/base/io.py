@@ -122,8 +122,7 @@ def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:
 
 
 def require_file(path: str | os.PathLike[str], make_hint: str) -> Path:
-    """Return ``path`` if it exists, else raise an :class:`ArtifactError` naming ``make_hint``, the
-    command that makes it."""
+    """``path`` if it exists, else ArtifactError naming ``make_hint``, the command that makes it."""
     path = Path(path)
     if not path.is_file():
         raise ArtifactError(f"{path} does not exist. Make it with: {make_hint}")

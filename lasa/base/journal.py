@@ -151,8 +151,7 @@ class Restored:
 
 
 def restore(journal: str | os.PathLike[str]) -> Restored:
-    """Undo the journaled writes, newest path first, under the lock of the journaled folder (the
-    journal is left in place)."""
+    """Undo the journaled writes, newest first, under the journaled folder's lock (the journal stays)."""
     from lasa.base.io import locked  # io imports this module
 
     journal = Path(journal)

@@ -15,8 +15,7 @@ _PACKAGE = Path(__file__).resolve().parents[1]  # lasa/ (this module is lasa/bas
 
 
 def repo_root() -> Path:
-    """``LASA_ROOT`` if set (a non-editable install; ConfigError unless a folder), else the folder above
-    ``lasa/``."""
+    """``LASA_ROOT`` if set (ConfigError unless a folder), else the folder above ``lasa/``."""
     env = os.environ.get("LASA_ROOT")
     if env:
         root = Path(env).expanduser().resolve()

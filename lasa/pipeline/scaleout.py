@@ -19,8 +19,7 @@ R = TypeVar("R")
 
 
 def scheduler_address(configured: str | None = None) -> str | None:
-    """The Dask scheduler to use: ``configured``, else ``$LASA_SCHEDULER``, else None (local);
-    ConfigError unless it reads ``scheme://host:port``."""
+    """``configured``, else ``$LASA_SCHEDULER``, else None; ConfigError unless ``scheme://host:port``."""
     address = configured or os.environ.get(SCHEDULER_ENV) or None
     if address is not None and "://" not in address:
         raise ConfigError(

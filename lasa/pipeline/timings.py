@@ -59,8 +59,7 @@ def append_run(
     start: datetime.datetime,
     end: datetime.datetime,
 ) -> None:
-    """Append one run's ``{notebook, robot, seconds, start, end}`` to ``path`` as one JSON line (a
-    short line: parallel appends do not interleave)."""
+    """Append one run to ``path`` as one short JSON line (parallel appends do not interleave)."""
     record: dict[str, Any] = {"notebook": notebook, "robot": robot, "seconds": round(seconds, 2)}
     for key, when in (("start", start), ("end", end)):
         record[key] = when.astimezone(datetime.UTC).isoformat(timespec="milliseconds")
@@ -78,8 +77,7 @@ def _when(value: str | None) -> datetime.datetime | None:
 
 
 def read_runs(path: str | os.PathLike[str]) -> list[Run]:
-    """The runs of a ``timings.jsonl``, in the order they finished; ArtifactError if it is missing,
-    ConfigError if a line is not a timing record."""
+    """A ``timings.jsonl``'s runs in finishing order; ArtifactError if missing, ConfigError if malformed."""
     path = Path(path)
     if not path.is_file():
         raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
@@ -102,8 +100,7 @@ def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
 
 
 def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
-    """Why ``runs`` are not one whole run (every ``expected`` notebook once, nothing else, each
-    with its start and end), or ``None``."""
+    """Why ``runs`` are not each ``expected`` notebook once, dated, and nothing else; or ``None``."""
     names = [run.name for run in runs]
     undated = [r.name for r in runs if r.start is None or r.end is None]
     for found, why in (
@@ -118,8 +115,7 @@ def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
 
 
 def machine() -> dict[str, Any]:
-    """What this process runs on: CPU model, cores, and the Python, torch, numpy, MuJoCo versions
-    (read from the installed distributions, so nothing heavy is imported)."""
+    """CPU model, cores, and the Python, torch, numpy, MuJoCo versions (from installed metadata)."""
     cpu = platform.processor() or ""
     with contextlib.suppress(OSError):
         lines = Path("/proc/cpuinfo").read_text().splitlines()

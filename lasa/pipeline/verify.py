@@ -81,8 +81,7 @@ def _files(folder: Path) -> dict[str, Path]:
 
 
 def _run_folders(cells: list[dict]) -> dict[str, str]:
-    """``{value: placeholder}`` of the run's ``figures_dir`` and ``build_dir``, read from papermill's
-    injected-parameters cell (longest first, so that ``build/verify/figures`` goes before ``build``)."""
+    """``{value: placeholder}`` of the injected cell's ``figures_dir`` and ``build_dir``, longest first."""
     values: dict[str, str] = {}
     for cell in cells:
         if "injected-parameters" not in cell.get("metadata", {}).get("tags", ()):
@@ -144,8 +143,7 @@ def _first_difference(old: list[str], new: list[str]) -> str:
 
 
 def _compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
-    """A page's code cells whose outputs (as text, with the run's folders as placeholders) differ, or
-    that are in one page only; never fatal."""
+    """A page's code cells whose outputs differ (folders as placeholders) or in one page only."""
     try:
         a, b = _notebook_outputs(old), _notebook_outputs(new)
     except ArtifactError as exc:
@@ -171,8 +169,7 @@ def _cells(column: pd.Series) -> np.ndarray:
 
 
 def key_columns(frame: pd.DataFrame) -> list[str]:
-    """The columns that say what a row is: the leading one-token text columns (``robot``, ``id``, not
-    free text), before the first number."""
+    """What a row is: the leading one-token text columns (``robot``, ``id``) before the first number."""
     leading = itertools.takewhile(lambda column: not _numeric(frame, column), frame.columns)
     return [c for c in leading if not frame[c].dropna().astype(str).str.contains(r"\s").any()]
 
@@ -249,8 +246,7 @@ def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
 
 
 def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
-    """Add the claims table's verdict lines to ``report``: every ``(id, robot)`` whose verdict differs
-    (or that is in one table only), with why; or mark the table missing."""
+    """Add each ``(id, robot)`` whose verdict differs, with why, to ``report``; or mark claims missing."""
     old_path, new_path = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
     if old_path is None or new_path is None:
         report.claims_missing = True
@@ -272,8 +268,7 @@ def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
 
 
 def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | None = None) -> Report:
-    """Compare every file of the two folders and the claims' verdicts; ArtifactError if a folder does
-    not exist or a claims table lacks its key or verdict columns."""
+    """Compare the files and verdicts; ArtifactError for a missing folder or a malformed claims table."""
     tol = tol or Tolerance()
     files = {"old": _files(Path(committed)), "new": _files(Path(new))}
     report = Report()

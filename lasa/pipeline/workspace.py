@@ -65,8 +65,7 @@ class Workspace(Generic[TaskT]):
         return self.robot.name
 
     def artifact(self, name: str, **fields: str) -> Path:
-        """The path of artifact ``name`` (:data:`lasa.base.paths.ARTIFACTS`) for this robot, ``fields``
-        filling the rest of its pattern (``segmentation``)."""
+        """This robot's artifact ``name`` (:data:`lasa.base.paths.ARTIFACTS`), ``fields`` filling the rest."""
         return self.paths.artifact(name, self.name, **fields)
 
     def demonstrations(self) -> Demonstrations:
