@@ -1,6 +1,6 @@
-"""Run a figure notebook headless with papermill (``make figures``): a config's ``common`` and stem
-sections are its checked parameters; the copy is written atomically, a failed one kept as
-``<name>.failed.ipynb`` and its writes to the figures undone."""
+"""Execution: run a figure notebook headless with papermill, with checked parameters (``make figures``).
+A config's ``common`` and stem sections are its parameters; the copy is written atomically, a failed
+one kept as ``<name>.failed.ipynb`` and its writes to the figures undone."""
 
 from __future__ import annotations
 
