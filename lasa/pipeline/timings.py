@@ -220,15 +220,6 @@ def _duration(seconds: float) -> str:
     return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
 
 
-def _sentence(figures_s: Mapping[str, Any]) -> str:
-    """The README's words on the paper-scale ``make figures`` time, from ``figures_s``."""
-    m, f = figures_s["machine"], figures_s
-    return (
-        f"on {m['cores']} cores `make figures` took {_duration(f['total'])} "
-        f"({m['cpu']}, {f['date']}, at {f['commit']}: `figures_s` in benchmarks/results.json)"
-    )
-
-
 def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, float]) -> str:
     """One row of the pipeline's table: a part's time, its run, its target and whether it is met."""
     label, target = _ROWS[part][0], targets.get(_ROWS[part][1])
@@ -245,18 +236,6 @@ def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, flo
     )
 
 
-def _table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> str:
-    """``benchmarks/README.md``'s table of the pipeline's wall times, from ``figures_s``."""
-    paper = figures_s if "total" in figures_s else None
-    lines = [
-        "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |",
-        "| --- | ---: | ---: | --- | --- | --- |",
-        _row("paper", paper, targets),
-        _row("quick", figures_s.get("quick"), targets),
-    ]
-    return "\n".join(lines)
-
-
 def sync_readmes(
     results: str | os.PathLike[str],
     readme: str | os.PathLike[str] | None = "README.md",
@@ -269,10 +248,17 @@ def sync_readmes(
     figures = data.get("figures_s") or {}
     if "total" not in figures:
         raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
-    changed = []
-    if readme is not None and sync_between(readme, README_MARKERS, _sentence(figures), inline=True):
+    m, changed = figures["machine"], []
+    sentence = (
+        f"on {m['cores']} cores `make figures` took {_duration(figures['total'])} "
+        f"({m['cpu']}, {figures['date']}, at {figures['commit']}: `figures_s` in benchmarks/results.json)"
+    )
+    if readme is not None and sync_between(readme, README_MARKERS, sentence, inline=True):
         changed.append(Path(readme))
-    table = _table(figures, data.get("targets", {}))
+    head = "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |"
+    targets = data.get("targets", {})
+    rows = [_row("paper", figures, targets), _row("quick", figures.get("quick"), targets)]
+    table = "\n".join([head, "| --- | ---: | ---: | --- | --- | --- |", *rows])
     if bench_readme is not None and sync_between(bench_readme, BENCH_MARKERS, table):
         changed.append(Path(bench_readme))
     return changed
