@@ -186,9 +186,7 @@ def check_range(
         v = float(value)
     except (TypeError, ValueError):
         raise ConfigError(f"{name} must be a number in {allowed}, got {value!r}") from None
-    bad = math.isnan(v) or v < low or v > high
-    bad = bad or (low_open and v == low) or (high_open and v == high)
-    if bad:
+    if not ((low < v if low_open else low <= v) and (v < high if high_open else v <= high)):  # NaN too
         raise ConfigError(f"{name} must be in {allowed}, got {value!r}")
     return v
 

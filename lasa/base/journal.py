@@ -193,22 +193,16 @@ def _put_back(path: Path, old: Path | None) -> None:
     os.replace(tmp, path)
 
 
-def _read_text_table(path: Path | None) -> pd.DataFrame | None:
-    """A CSV as text cells (each cell as written), or None if there is none."""
-    import pandas as pd
-
-    if path is None or not path.exists():
-        return None
-    return pd.read_csv(path, dtype=str, keep_default_na=False)
-
-
 def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
     """Put back the old rows of the journaled keys in the table at ``path``; why not, or ``""``."""
     import pandas as pd
 
     columns, sort = rows["columns"], rows["sort"]
     keys = pd.MultiIndex.from_tuples([tuple(k) for k in rows["keys"]], names=columns)
-    now, before = _read_text_table(path), _read_text_table(old)
+    now, before = (
+        pd.read_csv(p, dtype=str, keep_default_na=False) if p is not None and p.exists() else None
+        for p in (path, old)
+    )  # each cell as written
     tables = [t for t in (now, before) if t is not None]
     if not tables:
         return ""

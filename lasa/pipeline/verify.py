@@ -63,14 +63,12 @@ class Report:
 
     def summary(self) -> str:
         """One line: files compared, what differs, and whether the verdicts are the same."""
-        differing = {r.file for r in self.rows if r.result != "identical"}
-        n = len(self.verdicts_differ)
+        n, files = len(self.verdicts_differ), len({r.file for r in self.rows})
         verdicts = f"{n} verdict(s) differ" if n else "every verdict identical"
-        if self.claims_missing:
-            verdicts = f"{CLAIMS} missing: verdicts not compared"
-        files = len({r.file for r in self.rows})
+        verdicts = f"{CLAIMS} missing: verdicts not compared" if self.claims_missing else verdicts
+        differing = len({r.file for r in self.rows if r.result != "identical"})
         status = "FAILED" if self.failed else "OK"
-        return f"{status}: {files} files compared, {len(differing)} with differences; {verdicts}"
+        return f"{status}: {files} files compared, {differing} with differences; {verdicts}"
 
 
 def _files(folder: Path) -> dict[str, Path]:
