@@ -36,18 +36,11 @@ def _exports(root: Path) -> dict[str, str]:
     }
 
 
-def _run_nodes(tree: ast.AST) -> list[ast.AST]:
-    """Every node of ``tree`` except those under ``if TYPE_CHECKING:`` (imports for typing only)."""
-    out: list[ast.AST] = []
-    todo = [tree]
-    while todo:
-        node = todo.pop()
-        out.append(node)
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            todo.extend(node.orelse)
-            continue
-        todo.extend(ast.iter_child_nodes(node))
-    return out
+def _run_nodes(node: ast.AST) -> list[ast.AST]:
+    """``node`` and every node under it except those under ``if TYPE_CHECKING:`` (imports for typing only)."""
+    typing_only = isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+    children = node.orelse if typing_only else ast.iter_child_nodes(node)  # type: ignore[attr-defined]
+    return [node, *(found for child in children for found in _run_nodes(child))]
 
 
 def imports_of(source: str, root: Path = ROOT) -> set[str]:
