@@ -61,9 +61,7 @@ class FigureIndex:
 
     def read(self, name: str) -> bytes | None:
         """The bytes of the committed file ``name``, if it is there."""
-        if self.folder is None or name not in self.names:
-            return None
-        return (self.folder / name).read_bytes()
+        return (self.folder / name).read_bytes() if self.folder is not None and name in self.names else None
 
 
 def cell_text(value: str | list[str]) -> str:

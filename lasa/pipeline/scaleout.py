@@ -52,7 +52,6 @@ def run_jobs(
     ``scheduler`` (:func:`scheduler_address`, answering within ``timeout``); ConfigError if unreachable."""
     from joblib import Parallel, delayed, parallel_config  # noqa: PLC0415
 
-    items = list(items)
     if int(n_jobs) != n_jobs or n_jobs < 1:
         raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
     jobs = [delayed(_threaded)(fn, item, shared) for item in items]
