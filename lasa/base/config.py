@@ -219,8 +219,7 @@ def check_list(
 @dataclasses.dataclass(frozen=True)
 class ControlConfig:
     """The units of the control loop (s' = s + dt a, Sec. V): the free parameters that give beta
-    its meaning. The defaults are both robots', chosen so that the paper's regimes exist (notebook 04).
-    """
+    its meaning. The defaults are both robots', chosen so that the paper's regimes exist (notebook 04)."""
 
     dt: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = 0.1  # control period Delta [s]
     action_scale: Positive = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]

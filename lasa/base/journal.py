@@ -2,8 +2,7 @@
 
 Each atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
 state and the identity of the file put in place, a merged table (:func:`note_rows`) also the keys of
-its rows; :func:`restore` puts back what no other run rewrote since (a merged table's rows).
-"""
+its rows; :func:`restore` puts back what no other run rewrote since (a merged table's rows)."""
 
 from __future__ import annotations
 

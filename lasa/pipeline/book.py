@@ -1,8 +1,7 @@
 """A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
 
 The verdict table as front page, the notebooks in the paper's order, the claims table last; nothing
-runs again.
-"""
+runs again."""
 
 from __future__ import annotations
 
