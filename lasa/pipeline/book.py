@@ -81,16 +81,10 @@ def retitle(notebook: Path, robot: str) -> None:
     write_text(notebook, json.dumps(nb, indent=1, ensure_ascii=False) + "\n")
 
 
-def build_book(
-    notebooks: str | Path,
-    figures: str | Path,
-    out: str | Path,
-    mathjax: str | Path | None = None,
-    progress: bool = True,
-) -> Path:
+def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, progress: bool = True) -> Path:
     """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
-    folder and build the site into ``out/html``; return its ``index.html``. ``mathjax``: MathJax's ``es5``
-    folder (``make setup``'s by default). ArtifactError without notebooks, claims table or MathJax."""
+    folder and build the site into ``out/html``; return its ``index.html``. ArtifactError without
+    notebooks, claims table or MathJax (``make setup`` installs it)."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
     if not books:
@@ -98,7 +92,7 @@ def build_book(
     claims_csv = figures / "claims.csv"
     if not claims_csv.is_file():
         raise ArtifactError(f"no claims table {claims_csv}; run: make figures")
-    mathjax = Path(mathjax) if mathjax else repo_root() / ".venv" / "mathjax" / "es5"
+    mathjax = repo_root() / ".venv" / "mathjax" / "es5"
     if not (mathjax / "tex-chtml.js").is_file():
         raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
     src = out / "src"
