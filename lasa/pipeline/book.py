@@ -39,8 +39,7 @@ def ordered_notebooks(folder: Path) -> list[Path]:
 
 
 def front_page(claims: pd.DataFrame, pages: set[str], values: Values | None = None) -> str:
-    """The front page's Markdown: what the book is, then the verdict table (``figures/verdicts.md``)
-    with the claims' numbers ``values`` (``figures/claim_values.csv``)."""
+    """The front page's Markdown: what the book is, then the verdict table with the claims' ``values``."""
 
     def link(stem: str) -> str:
         found = (name for name in (f"{stem}-planar5", stem, f"{stem}-panda") if name in pages)

@@ -107,8 +107,7 @@ def run_notebook(
 
 @contextlib.contextmanager
 def _journaled(out: Path, figures: Any) -> Iterator[Callable[[], str]]:
-    """Journal the run's writes to its figures folder; yield the undo, which returns what it restored.
-    Any other way out of the block undoes them too (the sentence a note of the exception)."""
+    """Journal the run's writes to its figures; yield their undo (what it restored); any exception runs it."""
     if not isinstance(figures, str | os.PathLike):  # a notebook without a figures folder
         yield lambda: ""
         return

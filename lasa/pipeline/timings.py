@@ -188,10 +188,9 @@ def record_figures(
     command: str,
     **summary: Any,
 ) -> dict[str, Any] | None:
-    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (``part`` "paper": its
-    top level, "quick": its ``quick``), atomically; return them, or None (``results`` untouched, the
-    reason printed) unless every ``expected`` notebook ran once. ``summary``: for :func:`summarize`.
-    ConfigError for an unknown ``part``, or a ``results`` that is not a JSON object."""
+    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (its top level, or its
+    ``quick`` for ``part`` "quick") and return them; None (nothing written, why printed) unless every
+    ``expected`` notebook ran once. ConfigError for an unknown ``part`` or a non-object ``results``."""
     if part not in PARTS:
         raise ConfigError(f"part must be one of {PARTS}, got {part!r}")
     timings, results = Path(timings), Path(results)

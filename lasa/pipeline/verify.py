@@ -174,8 +174,7 @@ def key_columns(frame: pd.DataFrame) -> list[str]:
 def _numeric_rows(
     name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance, keys: list[str]
 ) -> tuple[np.ndarray, list[Row]]:
-    """A numeric column's cells beyond the tolerance (a mask) and its lines: the rows whose non-finite
-    value is not the same on both sides; ``max abs .., max rel ..`` over the cells finite on both."""
+    """A numeric column's cells beyond the tolerance (a mask) and its lines: non-finite changes, max diffs."""
     a, b = old[column].to_numpy(dtype=float), new[column].to_numpy(dtype=float)
     finite = np.isfinite(a) & np.isfinite(b)
     changed = ~finite & ~((a == b) | (np.isnan(a) & np.isnan(b)))  # inf == inf; two NaN are equal
