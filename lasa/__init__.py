@@ -45,7 +45,7 @@ def _lazy_table() -> dict[str, str]:
     """Each public name -> its module, read from the ``if TYPE_CHECKING:`` imports above."""
     import ast
 
-    with open(__file__) as source:
+    with open(__file__, encoding="utf-8") as source:
         tree = ast.parse(source.read())
     (block,) = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"]
     return {a.name: str(n.module) for n in block.body if isinstance(n, ast.ImportFrom) for a in n.names}

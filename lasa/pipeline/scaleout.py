@@ -58,8 +58,7 @@ def run_jobs(
     address = scheduler_address(scheduler)
 
     def collect(parallel: Any) -> list[R]:
-        out = parallel(jobs)
-        return list(tqdm(out, total=len(jobs), desc=desc, disable=not progress))
+        return list(tqdm(parallel(jobs), total=len(jobs), desc=desc, disable=not progress))
 
     if address is None:
         return collect(Parallel(n_jobs=n_jobs, return_as="generator"))
