@@ -273,7 +273,7 @@ def _changes(prefix: str, record: Any, values: Mapping[str, Any]) -> dict[str, A
         raise ConfigError(f"unknown setting(s) {[prefix + u for u in unknown]}; known: {sorted(known)}")
     changes = {}
     for key, value in values.items():
-        default = getattr(record, key, known[key].default)
+        default = known[key].default if isinstance(record, type) else getattr(record, key)
         if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
             nested = _changes(f"{prefix}{key}.", default, value)
             try:
