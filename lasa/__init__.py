@@ -1,45 +1,12 @@
 """lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020).
 
-A reproducibility package: MuJoCo robots and their goal tasks (the cups, the eating
-scene), demonstrations, the conditional-autoencoder decoder phi(z, s, b), shared autonomy
-(Algorithm 1), Boltzmann-rational simulated users, and one module per figure
-(:mod:`lasa.experiments`). Extending it (a robot, an assistance member, a claim, a decoder of
-your own) is in ``docs/extending.md``.
-
-``import lasa`` only re-exports: it sets no environment variable and installs no import hook. Call
-:func:`lasa.runtime.pin` first, before numpy, torch or mujoco loads, for off-screen rendering and
-the numerical kernels that compute the same bytes on any x86 CPU.
-
-The public API is imported lazily (PEP 562), so ``import lasa.pipeline.execute`` stays light.
-"""
+A reproducibility package (extending it: ``docs/extending.md``). ``import lasa`` only re-exports,
+lazily (PEP 562), and sets nothing: call :func:`lasa.runtime.pin` first, before numpy, torch or mujoco."""
 
 import importlib
 from typing import TYPE_CHECKING, Any
 
-_HOMES = {  # module -> the public names it defines, imported on first use (`__getattr__`)
-    "lasa.base.config": "ControlConfig",
-    "lasa.base.errors": "ArtifactError CheckpointError ConfigError DamagedLogError EmptySelectionError"
-    " IKError LasaError",
-    "lasa.base.paths": "Paths",
-    "lasa.evidence.claims": "Claim update_claims",
-    "lasa.evidence.publish": "publish",
-    "lasa.method.assistance": "Member",
-    "lasa.method.dataset": "Demonstrations load_demonstrations save_demonstrations",
-    "lasa.method.decoder": "ActionDecoder DecoderConfig LatentActionModel load_checkpoint save_checkpoint",
-    "lasa.method.runner": "Runner",
-    "lasa.method.context_map": "ContextMap MappedDecoder extend_task",
-    "lasa.method.step": "Assist METHODS shared_autonomy_step",
-    "lasa.method.train": "TrainConfig train_decoder",
-    "lasa.people.demos": "DemoConfig collect_demonstrations",
-    "lasa.people.rollout": "Trajectories rollout",
-    "lasa.people.users": "UserPopulation",
-    "lasa.world.goals": "GoalTask",
-    "lasa.world.robot": "ROBOTS Robot RobotSpec load_robot",
-    "lasa.world.task": "CupTask make_cup_task",
-}
-_EXPORTS = {name: module for module, names in _HOMES.items() for name in names.split()}
-
-if TYPE_CHECKING:  # the lazy names, for type checkers
+if TYPE_CHECKING:  # the lazy names for type checkers, and (_lazy_table) what __getattr__ imports
     from lasa.base.config import ControlConfig  # noqa: F401
     from lasa.base.errors import (  # noqa: F401
         ArtifactError,
@@ -72,6 +39,19 @@ if TYPE_CHECKING:  # the lazy names, for type checkers
     from lasa.world.goals import GoalTask  # noqa: F401
     from lasa.world.robot import ROBOTS, Robot, RobotSpec, load_robot  # noqa: F401
     from lasa.world.task import CupTask, make_cup_task  # noqa: F401
+
+
+def _lazy_table() -> dict[str, str]:
+    """Each public name -> its module, read from the ``if TYPE_CHECKING:`` imports above."""
+    import ast
+
+    with open(__file__, encoding="utf-8") as source:
+        tree = ast.parse(source.read())
+    (block,) = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"]
+    return {a.name: str(n.module) for n in block.body if isinstance(n, ast.ImportFrom) for a in n.names}
+
+
+_EXPORTS = _lazy_table()
 
 
 def __getattr__(name: str) -> Any:

@@ -1,12 +1,8 @@
 """The process's renderer and numerical kernels, pinned by one explicit call: :func:`pin`.
 
-torch, oneDNN, MKL, numpy and OpenBLAS pick their kernels by the CPU, and an AVX-512 path sums in
-another order than an AVX2 one: training amplifies the last bits (measured: an AMD run against Intel
-figures moved 37 of 47 files and 3 verdicts). Pinned to AVX2, which every x86-64 CPU of the last
-decade has, each runs the same code everywhere. ``import lasa`` sets nothing: the CLIs, the notebooks'
-first cell and :class:`~lasa.pipeline.workspace.Workspace` call :func:`pin`, and ``make`` exports the
-same values. ``python -m lasa.runtime --out FILE`` records them (``figures/kernels.json``).
-"""
+An AVX-512 kernel sums in another order than an AVX2 one and training amplifies the last bits (an AMD
+run moved 37 of 47 Intel files and 3 verdicts): pinned to AVX2, every x86-64 CPU runs the same code.
+``python -m lasa.runtime --out FILE`` records them (``figures/kernels.json``)."""
 
 from __future__ import annotations
 
@@ -37,14 +33,8 @@ _READ_BY = {"MUJOCO_GL": "mujoco", "NPY_DISABLE_CPU_FEATURES": "numpy", "OPENBLA
 
 
 def pin() -> None:
-    """Set each variable of :data:`RENDERER` and :data:`PINNED` in ``os.environ`` unless already set.
-
-    A value you set yourself wins (``ATEN_CPU_CAPABILITY=avx512`` for speed when sameness across CPUs
-    does not matter). A variable set here after the library that reads it was imported (mujoco;
-    numpy; torch for the others) cannot take effect in this process, only in the processes it starts:
-    that is warned about (``RuntimeWarning``), not an error, since the results stay valid, only
-    their last bits may differ from another CPU's.
-    """
+    """Set each variable of :data:`RENDERER` and :data:`PINNED` in ``os.environ`` unless already set
+    (yours wins); one set after the library that reads it was imported is a ``RuntimeWarning``."""
     late = []
     for name, value in {**RENDERER, **PINNED}.items():
         if name not in os.environ:
@@ -62,8 +52,8 @@ def pin() -> None:
 
 
 def record() -> dict[str, object]:
-    """What the numerical kernels run with: the variables of :data:`PINNED` as set, whether each
-    holds its pinned value, and torch's CPU capability as torch reports it (imported here)."""
+    """What the numerical kernels run with: the variables of :data:`PINNED` as set, whether all hold
+    their pinned value, and torch's CPU capability (torch imported here)."""
     import torch  # noqa: PLC0415 (reading the capability needs torch; pinning must not import it)
 
     env = {name: os.environ.get(name) for name in PINNED}

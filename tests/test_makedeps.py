@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def _package(root: Path) -> None:
     """A toy ``lasa``: a lazy export, an import inside a function, one for typing only."""
     (root / "lasa" / "a").mkdir(parents=True)
-    (root / "lasa" / "__init__.py").write_text('_HOMES = {"lasa.a.one": "Thing"}\n')
+    (root / "lasa" / "__init__.py").write_text("if TYPE_CHECKING:\n    from lasa.a.one import Thing\n")
     (root / "lasa" / "a" / "__init__.py").write_text("")
     (root / "lasa" / "a" / "one.py").write_text(
         "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from lasa.a import three\n"

@@ -1,14 +1,12 @@
 """The conditions and methods, named once and parsed in one place.
 
 A name gives the **interface** (``R``, Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)),
-whether it is **assisted** (``+SA``, Eq. M1; else alpha = 0) and the **decoder** (``base``, or
-``entropy`` with Eq. T6's term: ``+Entropy``). The sims call the latent-action ones *methods*
-(:data:`METHODS`), the study its 2x2 design *conditions* (:data:`CONDITIONS`).
-"""
+whether it is **assisted** (``+SA``, Eq. M1; else alpha = 0) and the **decoder** (``+Entropy``: Eq. T6)."""
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import numpy as np
 
@@ -22,8 +20,7 @@ CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x
 
 @dataclasses.dataclass(frozen=True)
 class Condition:
-    """A condition, parsed: its name, interface (``"R"``, ``"LA"``), whether it is assisted
-    (alpha > 0), and its decoder (``"base"``, ``"entropy"``, ``None`` for Retargeting)."""
+    """A condition, parsed: its name, interface, whether it is assisted, and its decoder (or None)."""
 
     name: str
     interface: str
@@ -42,8 +39,7 @@ ALL = tuple(_TABLE)  # every condition a person can drive (the table's order)
 
 
 def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
-    """The :class:`Condition` a name stands for; ConfigError if it is not ``allowed`` (the error
-    calls it ``what``)."""
+    """The :class:`Condition` a name stands for; ConfigError (calling it ``what``) unless ``allowed``."""
     if not isinstance(name, str) or name not in allowed:
         raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(map(repr, allowed))}")
     return _TABLE[name]
@@ -59,12 +55,5 @@ def williams_square(n: int) -> np.ndarray:
     appears once in every position and follows every other once (carry-over balanced)."""
     if n < 2 or n % 2:
         raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
-    first = [0]
-    low, high = 1, n - 1
-    while len(first) < n:
-        first.append(low)
-        low += 1
-        if len(first) < n:
-            first.append(high)
-            high -= 1
+    first = [0, *itertools.chain.from_iterable((k, n - k) for k in range(1, n // 2)), n // 2]
     return (np.asarray(first)[None, :] + np.arange(n)[:, None]) % n

@@ -1,8 +1,5 @@
-"""Frozen configuration records and their validation.
-
-A config is a frozen dataclass, each field commented with its unit, checked when built: a bad
-parameter fails at once, naming its allowed range. :func:`from_dict` refuses unknown keys.
-"""
+"""Frozen configuration records, each field commented with its unit, validated when built: a bad
+parameter fails at once, naming its allowed range; :func:`from_dict` refuses unknown keys."""
 
 from __future__ import annotations
 
@@ -52,7 +49,6 @@ __all__ = [
 T = TypeVar("T")
 
 
-# Field types with their bounds, written once, checked by validate() (pydantic).
 def _not_text(value: Any) -> Any:
     """A number field never takes text (pydantic's lax mode would parse '3', kept as a string)."""
     if isinstance(value, str | bytes):
@@ -128,13 +124,10 @@ def expects(annotation: Any) -> str:
         return f"a list, each {expects(typing.get_args(annotation)[0])}"
     if origin in (typing.Union, types.UnionType):
         return " or ".join(expects(a) for a in typing.get_args(annotation))
-    return {
-        int: "an integer",
-        float: "a number",
-        str: "a string",
-        bool: "true or false",
-        type(None): "null",
-    }.get(annotation, f"a {getattr(annotation, '__name__', annotation)}")
+    return _WORDS.get(annotation, f"a {getattr(annotation, '__name__', annotation)}")
+
+
+_WORDS = {int: "an integer", float: "a number", str: "a string", bool: "true or false", type(None): "null"}
 
 
 @functools.cache
@@ -148,12 +141,8 @@ def _schema(cls: type) -> tuple[pydantic.TypeAdapter[Any], dict[str, Any]]:
 
 
 def validate(record: Any) -> None:
-    """Check every field of a config record against its annotated type (pydantic), converting none.
-
-    Raises:
-        ConfigError: one line naming the field (and the item, in a list), what it expects and
-            what it got, e.g. ``betas[0] must be a number >= 0, got 'x'``.
-    """
+    """Check every field of a config record against its annotated type (pydantic), converting none;
+    ConfigError names the field (and item), what it expects and got: ``betas[0] must be ..., got 'x'``."""
     adapter, fields = _schema(type(record))  # type: ignore[arg-type]
     values = {name: getattr(record, name) for name in fields}
     try:
@@ -163,21 +152,13 @@ def validate(record: Any) -> None:
         loc = [str(x) for x in err["loc"]]
         name = loc[0] + "".join(f"[{x}]" for x in loc[1:])
         annotation = fields[loc[0]]
-        if len(loc) > 1 and typing.get_origin(annotation) is tuple:
-            annotation = typing.get_args(annotation)[0]
-        expected = expects(annotation)
+        item = typing.get_args(annotation)[0] if typing.get_origin(annotation) is tuple else annotation
+        expected = expects(item if len(loc) > 1 else annotation)
         if isinstance(err["input"], int | float) and expected.startswith("a number in "):
             expected = expected.removeprefix("a number ")  # it is a number: only the range is wrong
-        why = _why(fields[loc[0]])
+        reasons = [m.reason for m in getattr(item, "__metadata__", ()) if isinstance(m, Why)]  # its Why
+        why = f": {reasons[0]}" if reasons else ""
         raise ConfigError(f"{name} must be {expected}, got {err['input']!r}{why}") from None
-
-
-def _why(annotation: Any) -> str:
-    """``: <reason>`` of the :class:`Why` in a field's type (or its items'), else empty."""
-    if typing.get_origin(annotation) is tuple:
-        annotation = typing.get_args(annotation)[0]
-    reasons = [m.reason for m in getattr(annotation, "__metadata__", ()) if isinstance(m, Why)]
-    return f": {reasons[0]}" if reasons else ""
 
 
 LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)
@@ -205,9 +186,7 @@ def check_range(
         v = float(value)
     except (TypeError, ValueError):
         raise ConfigError(f"{name} must be a number in {allowed}, got {value!r}") from None
-    bad = math.isnan(v) or v < low or v > high
-    bad = bad or (low_open and v == low) or (high_open and v == high)
-    if bad:
+    if not ((low < v if low_open else low <= v) and (v < high if high_open else v <= high)):  # NaN too
         raise ConfigError(f"{name} must be in {allowed}, got {value!r}")
     return v
 
@@ -222,10 +201,8 @@ def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) ->
 def check_list(
     name: str, values: Sequence[Any], *, at_least: int = 1, ascending: bool = False, why: str = ""
 ) -> tuple[Any, ...]:
-    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0
-    repeat), in ascending order if ``ascending``; else raise ConfigError naming ``name`` and
-    ``why`` it needs ``at_least``.
-    """
+    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0 repeat),
+    ascending if ``ascending``; else raise ConfigError naming ``name`` and ``why`` it needs ``at_least``."""
     given = tuple(values)
     reason = f" ({why})" if why else ""
     if len(given) < at_least:
@@ -242,8 +219,7 @@ def check_list(
 @dataclasses.dataclass(frozen=True)
 class ControlConfig:
     """The units of the control loop (s' = s + dt a, Sec. V): the free parameters that give beta
-    its meaning. The defaults are both robots', chosen so that the paper's regimes exist (notebook 04).
-    """
+    its meaning. The defaults are both robots', chosen so that the paper's regimes exist (notebook 04)."""
 
     dt: Annotated[Number, at.Gt(0.0), at.Le(1.0)] = 0.1  # control period Delta [s]
     action_scale: Positive = 0.375  # sigma_h: the decoder's bound on ||phi(z, s, b)|| [rad/s]
@@ -277,66 +253,42 @@ def to_dict(config: Any) -> dict[str, Any]:
 
 
 def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
-    """Build ``cls`` from a mapping, refusing keys that ``cls`` does not have.
-
-    A YAML section becomes a config here: a missing key keeps the default, a list becomes a tuple,
-    a mapping for a nested record (``train: {steps: 200}``) changes those fields of its default.
-    ``where`` names whose settings these are in the error (default the class's name).
-
-    Raises:
-        ConfigError: one line, ``<where> settings: <setting> must be <expected>, got <value>``;
-            an unknown key names the known ones.
-    """
+    """Build ``cls`` from a YAML section (missing keys keep their defaults, ``train: {steps: 200}``
+    changes a nested record's field); ConfigError ``<where> settings: <setting> must be ..., got ...``."""
     owner = where or cls.__name__
-    if values is None:
-        values = {}
+    values = {} if values is None else values
     if not isinstance(values, Mapping):
         raise ConfigError(f"{owner} settings must be a mapping of names to values, got {values!r}")
-    fields = {f.name: f for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
-    unknown = sorted(set(values) - set(fields))
-    if unknown:
-        raise ConfigError(f"{owner} settings: unknown setting(s) {unknown}; known: {sorted(fields)}")
-    kwargs: dict[str, Any] = {}
     try:
-        for name, value in values.items():
-            kwargs[name] = _setting(name, fields[name], fields[name].default, value)
-        return cls(**kwargs)
+        return cls(**_changes("", cls, values))
     except ConfigError as exc:
         raise ConfigError(f"{owner} settings: {exc}") from None
 
 
-def _setting(path: str, field: dataclasses.Field[Any], default: Any, value: Any) -> Any:
-    """One setting's value as its record takes it: a mapping for a nested record that record, a
-    list for a tuple field a tuple."""
-    if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
-        return _nested(path, default, value)
-    if isinstance(value, list) and "tuple" in str(field.type):
-        return tuple(value)
-    return value
-
-
-def _nested(name: str, default: Any, values: Mapping[str, Any]) -> Any:
-    """``default`` with ``values`` changed, recursively; errors name the setting's whole path."""
-    known = {f.name: f for f in dataclasses.fields(default)}
+def _changes(prefix: str, record: Any, values: Mapping[str, Any]) -> dict[str, Any]:
+    """``values`` as ``record``'s fields take them (nested records, tuples); errors name the whole path."""
+    known = {f.name: f for f in dataclasses.fields(record)}
     unknown = sorted(set(values) - set(known))
     if unknown:
-        raise ConfigError(f"unknown setting(s) {[f'{name}.{u}' for u in unknown]}; known: {sorted(known)}")
-    changes = {
-        key: _setting(f"{name}.{key}", known[key], getattr(default, key), value)
-        for key, value in values.items()
-    }
-    try:
-        return dataclasses.replace(default, **changes)
-    except ConfigError as exc:
-        raise ConfigError(f"{name}.{exc}") from None
+        raise ConfigError(f"unknown setting(s) {[prefix + u for u in unknown]}; known: {sorted(known)}")
+    changes = {}
+    for key, value in values.items():
+        default = known[key].default if isinstance(record, type) else getattr(record, key)
+        if isinstance(value, Mapping) and dataclasses.is_dataclass(default):
+            nested = _changes(f"{prefix}{key}.", default, value)
+            try:
+                value = dataclasses.replace(default, **nested)  # type: ignore[type-var]
+            except ConfigError as exc:
+                raise ConfigError(f"{prefix}{key}.{exc}") from None
+        elif isinstance(value, list) and "tuple" in str(known[key].type):
+            value = tuple(value)
+        changes[key] = value
+    return changes
 
 
 def set_threads(default: int = 1) -> int:
-    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one); return it.
-
-    One thread, everywhere: a reduction split over threads rounds differently, and training
-    amplifies that; set ``LASA_THREADS`` for speed when exactness does not matter.
-    """
+    """Set torch's intra-op threads from ``LASA_THREADS``, else ``default`` (one: a reduction split over
+    threads rounds differently, and training amplifies that); return it."""
     import torch  # noqa: PLC0415 (config stays importable without torch's start-up cost)
 
     value = os.environ.get("LASA_THREADS")

@@ -12,8 +12,7 @@ class ConfigError(LasaError, ValueError):
 
 
 class EmptySelectionError(ConfigError):
-    """A setting left a selection empty (no demonstrated context is confident under the belief's
-    cap, say); the message names the setting and what to change."""
+    """A setting left a selection empty; the message names the setting and what to change."""
 
 
 class ArtifactError(LasaError, FileNotFoundError):
@@ -21,8 +20,7 @@ class ArtifactError(LasaError, FileNotFoundError):
 
 
 class CheckpointError(ArtifactError):
-    """A checkpoint that does not fit: it does not load, or holds another decoder class, or was
-    made for another robot, number of goals or task."""
+    """A checkpoint that does not load, or holds another decoder, robot, number of goals or task."""
 
 
 class DamagedLogError(ArtifactError):
@@ -34,15 +32,8 @@ class IKError(LasaError, RuntimeError):
 
 
 class NotebookError(LasaError, RuntimeError):
-    """A notebook stopped on an exception; the message is its cause, where the partial run is, and
-    what became of the files it had written (the runner undoes them: :mod:`lasa.base.journal`).
-
-    Attributes:
-        ename: The exception's class name inside the notebook (e.g. ``ConfigError``).
-        evalue: Its message.
-        partial: The executed notebook up to the failing cell.
-        restored: What the runner restored, in a sentence (empty if it journaled nothing).
-    """
+    """A notebook stopped on an exception ``ename: evalue``: the message is its cause, the ``partial``
+    run's path, and what the runner ``restored`` of the files it had written (a sentence)."""
 
     def __init__(self, notebook: str, ename: str, evalue: str, partial: str, restored: str = "") -> None:
         self.ename, self.evalue, self.partial, self.restored = ename, evalue, partial, restored

@@ -1,9 +1,5 @@
-"""Atomic file writes and artifact loading with actionable errors.
-
-Every writer renames a temporary file in the destination folder into place (atomic on POSIX);
-readers turn a missing or unreadable file into an :class:`~lasa.base.errors.ArtifactError` that
-names the command that makes it.
-"""
+"""Atomic file writes (a temporary file renamed into place) and artifact loading whose errors name
+the command that makes a missing or unreadable file."""
 
 from __future__ import annotations
 
@@ -35,12 +31,8 @@ __all__ = [
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside ``path`` (its parent made if needed); rename it onto ``path``
-    on success, remove it on any exception.
-
-    The temporary name keeps the final suffix (``x.tmp123.mp4``) for writers that infer the format
-    from it. The write is journaled (:mod:`lasa.base.journal`).
-    """
+    """Yield a temporary path beside ``path`` (same suffix, for writers that infer the format); rename
+    it onto ``path`` on success (journaled: :mod:`lasa.base.journal`), remove it on any exception."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
@@ -55,8 +47,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
         os.replace(tmp, path)
         journal.after_write(path)
     finally:
-        if tmp.exists():
-            tmp.unlink()
+        tmp.unlink(missing_ok=True)
 
 
 _HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting depth
@@ -64,11 +55,8 @@ _HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting d
 
 @contextlib.contextmanager
 def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
-    """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write.
-
-    An advisory ``flock`` on the folder itself (no lock file; released if the process dies),
-    re-entrant within a process: parallel notebooks merge rows into the same CSVs.
-    """
+    """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write: an advisory
+    ``flock`` on the folder itself (released if the process dies), re-entrant within a process."""
     folder = Path(folder).resolve()
     if _HELD.get(folder):
         _HELD[folder] += 1
@@ -105,10 +93,7 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
 
 def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> Path:
     """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others (under
-    :func:`locked`, journaled row by row); return ``path``, to read back for the whole table.
-
-    A file of other columns is replaced when ``frame`` replaces all its rows, else an error.
-    """
+    :func:`locked`, journaled row by row); a file of other columns only if all its rows go."""
     path = Path(path)
     with locked(path.parent):
         journal.note_rows(path, frame[[key]], sort=[key])  # undone row by row if the run fails
@@ -131,15 +116,13 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
 
 def save_npz(path: str | os.PathLike[str], **arrays: np.ndarray) -> Path:
     """Atomically save arrays to a compressed ``.npz`` file."""
-    with atomic_path(path) as tmp:
-        with open(tmp, "wb") as f:
-            np.savez_compressed(f, **arrays)  # type: ignore[arg-type]
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        np.savez_compressed(f, **arrays)  # type: ignore[arg-type]
     return Path(path)
 
 
 def require_file(path: str | os.PathLike[str], make_hint: str) -> Path:
-    """Return ``path`` if it exists, else raise an :class:`ArtifactError` naming ``make_hint``, the
-    command that makes it."""
+    """``path`` if it exists, else ArtifactError naming ``make_hint``, the command that makes it."""
     path = Path(path)
     if not path.is_file():
         raise ArtifactError(f"{path} does not exist. Make it with: {make_hint}")
@@ -161,12 +144,9 @@ def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarr
 def sync_between(
     path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
 ) -> bool:
-    """Put ``text`` between the (begin, end) ``markers`` in the file ``path``: ``inline`` within a
-    line, else on the lines between; return whether the file changed.
+    """Put ``text`` between the (begin, end) ``markers`` in the file ``path`` (``inline``: within a
+    line); return whether the file changed. ConfigError if the markers are missing or out of order."""
 
-    Raises:
-        ConfigError: if the file lacks either marker, or holds them out of order.
-    """
     path = Path(path)
     content = path.read_text()
     begin, end = markers

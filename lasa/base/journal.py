@@ -1,14 +1,8 @@
 """A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
 
-Notebook execution (:func:`lasa.pipeline.execute.run_notebook`) opens a journal with
-:func:`recording`, which names the journal folder to the run's processes (``LASA_WRITE_JOURNAL``). Each
-atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
-state (a hard link or copy, or absent) and the identity of the file put in place; a merged table
-(:func:`note_rows`) also the keys whose rows the run replaced. :func:`restore` puts back a file
-still as the run wrote it, the old rows of a merged table another run rewrote since, and names any
-other file another run rewrote. Only writes through ``atomic_path`` are seen; a killed run's
-journal is discarded by the next run of that notebook.
-"""
+Each atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
+state and the identity of the file put in place, a merged table (:func:`note_rows`) also the keys of
+its rows; :func:`restore` puts back what no other run rewrote since (a merged table's rows)."""
 
 from __future__ import annotations
 
@@ -27,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # pandas loads with lasa.base.io anyway; imported in the functions that use it
     import pandas as pd
 
-__all__ = ["ENV", "recording", "before_write", "after_write", "note_rows", "restore", "Restored"]
+__all__ = ["ENV", "recording", "discard", "before_write", "after_write", "note_rows", "restore"]
 
 ENV = "LASA_WRITE_JOURNAL"  # the journal folder of the run in progress, if any
 _META = "journal.json"  # in the journal folder: {"root": the journaled folder}
@@ -36,11 +30,8 @@ _ROOTS: dict[str, Path] = {}  # journal folder -> its root, read once per proces
 
 @contextlib.contextmanager
 def recording(journal: str | os.PathLike[str], root: str | os.PathLike[str]) -> Iterator[Path]:
-    """Journal the writes under ``root`` made while the block runs, by this process and its children.
-
-    ``journal`` is made afresh; :data:`ENV` is set for the block only; the journal stays, for
-    :func:`restore` or :func:`discard`.
-    """
+    """Journal the writes under ``root`` made while the block runs, by this process and its children
+    (:data:`ENV` names ``journal``, made afresh, for the block only; the journal stays)."""
     journal = Path(journal)
     shutil.rmtree(journal, ignore_errors=True)
     journal.mkdir(parents=True)
@@ -122,7 +113,7 @@ def after_write(path: str | os.PathLike[str]) -> None:
 
 def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:
     """Record, before writing the merged table, that this run replaces the rows of ``path`` whose
-    ``keys`` columns match ``keys``' rows (kept as the CSV writer writes them); ``sort``: its order."""
+    ``keys`` columns match ``keys``' rows (as the CSV writer writes them); ``sort``: its order."""
     found = _entry(path)
     if found is None:
         return
@@ -140,13 +131,8 @@ def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[s
 
 @dataclasses.dataclass
 class Restored:
-    """What :func:`restore` did, its text a sentence for the runner's error message.
-
-    Attributes:
-        root: The journaled folder.
-        restored: Paths put back as they were (rows or whole files).
-        left: ``(path, why)`` of each file left as another run wrote it.
-    """
+    """What :func:`restore` did (the paths put back, the ``(path, why)`` left as another run wrote
+    them), its text a sentence for the runner's error message."""
 
     root: Path
     restored: list[Path] = dataclasses.field(default_factory=list)
@@ -164,8 +150,7 @@ class Restored:
 
 
 def restore(journal: str | os.PathLike[str]) -> Restored:
-    """Undo the journaled writes, newest path first, under the lock of the journaled folder (the
-    journal is left in place)."""
+    """Undo the journaled writes, newest first, under the journaled folder's lock (the journal stays)."""
     from lasa.base.io import locked  # io imports this module
 
     journal = Path(journal)
@@ -177,17 +162,17 @@ def restore(journal: str | os.PathLike[str]) -> Restored:
             if record["wrote"] is None:  # recorded, but its write never landed
                 continue
             old = _entry_of(journal, path).with_suffix(".old") if record["existed"] else None
+            why = ""
             if _identity(path) == record["wrote"]:
                 _put_back(path, old)
             elif record["rows"] is not None:
                 why = _restore_rows(path, old, record["rows"])
-                if why:
-                    result.left.append((path, why))
-                    continue
             else:
-                result.left.append((path, "another run rewrote it since"))
-                continue
-            result.restored.append(path)
+                why = "another run rewrote it since"
+            if why:
+                result.left.append((path, why))
+            else:
+                result.restored.append(path)
     return result
 
 
@@ -207,22 +192,16 @@ def _put_back(path: Path, old: Path | None) -> None:
     os.replace(tmp, path)
 
 
-def _read_text_table(path: Path | None) -> pd.DataFrame | None:
-    """A CSV as text cells (each cell as written), or None if there is none."""
-    import pandas as pd
-
-    if path is None or not path.exists():
-        return None
-    return pd.read_csv(path, dtype=str, keep_default_na=False)
-
-
 def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
     """Put back the old rows of the journaled keys in the table at ``path``; why not, or ``""``."""
     import pandas as pd
 
     columns, sort = rows["columns"], rows["sort"]
     keys = pd.MultiIndex.from_tuples([tuple(k) for k in rows["keys"]], names=columns)
-    now, before = _read_text_table(path), _read_text_table(old)
+    now, before = (
+        pd.read_csv(p, dtype=str, keep_default_na=False) if p is not None and p.exists() else None
+        for p in (path, old)
+    )  # each cell as written
     tables = [t for t in (now, before) if t is not None]
     if not tables:
         return ""

@@ -1,8 +1,5 @@
-"""Where things live: the repository root, and every artifact's path with its make hint.
-
-Relative folders resolve against the repository root, never the working directory, so Make,
-papermill and Jupyter agree. Each artifact is named once, with the notebook that makes it.
-"""
+"""Where things live: the repository root (relative folders resolve against it, never the working
+directory), and every artifact's path, named once with the notebook that makes it."""
 
 from __future__ import annotations
 
@@ -18,8 +15,7 @@ _PACKAGE = Path(__file__).resolve().parents[1]  # lasa/ (this module is lasa/bas
 
 
 def repo_root() -> Path:
-    """The repository root: ``LASA_ROOT`` if set (a non-editable install), else the folder above
-    ``lasa/``. ConfigError if ``LASA_ROOT`` is not a folder."""
+    """``LASA_ROOT`` if set (ConfigError unless a folder), else the folder above ``lasa/``."""
     env = os.environ.get("LASA_ROOT")
     if env:
         root = Path(env).expanduser().resolve()
@@ -53,21 +49,18 @@ ARTIFACTS: dict[str, tuple[str, str]] = {
 
 @dataclasses.dataclass(frozen=True)
 class Paths:
-    """The build folder (datasets, checkpoints, analysis) and figures folder (figures, their CSVs,
-    videos, the claims table) of one run."""
+    """The build folder (datasets, checkpoints, analysis) and figures folder of one run."""
 
     build: Path
     figures: Path
 
     @classmethod
     def of(cls, build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
-        """The run's folders; relative ones are under the repository root, not the working
-        directory (to write where it runs, pass absolute folders or build ``Paths`` itself)."""
+        """The run's folders, relative ones under the repository root (not the working directory)."""
         return cls(resolve(build_dir), resolve(figures_dir))
 
     def artifact(self, name: str, robot: str, **fields: str) -> Path:
-        """The path of artifact ``name`` (:data:`ARTIFACTS`) for ``robot``, ``fields`` filling the
-        rest of its pattern."""
+        """The path of artifact ``name`` (:data:`ARTIFACTS`) for ``robot``, ``fields`` filling its pattern."""
         if name not in ARTIFACTS:
             raise ConfigError(f"unknown artifact {name!r}; known: {sorted(ARTIFACTS)}")
         try:

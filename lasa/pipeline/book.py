@@ -1,10 +1,7 @@
 """A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
 
-``python -m lasa.pipeline.book`` writes a static site to ``build/book/html`` from ``build/notebooks``
-and the figures folder: the verdict table as front page, one page per notebook in the paper's order
-(planar5, then the Panda), the claims table last. Nothing is executed again; it works offline
-(MathJax served from the site, myst-nb's CDN widget scripts off).
-"""
+The verdict table as front page, the notebooks in the paper's order, the claims table last; nothing
+runs again."""
 
 from __future__ import annotations
 
@@ -22,8 +19,9 @@ from lasa.base.io import write_text
 from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
+from lasa.pipeline.pages import cell_text
 
-__all__ = ["ordered_notebooks", "front_page", "claims_page", "retitle", "build_book", "main"]
+__all__ = ["build_book", "main"]
 
 ROBOT_ORDER = ("planar5", "panda")
 ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
@@ -41,14 +39,11 @@ def ordered_notebooks(folder: Path) -> list[Path]:
 
 
 def front_page(claims: pd.DataFrame, pages: set[str], values: Values | None = None) -> str:
-    """The front page's Markdown: what the book is, then the verdict table (``figures/verdicts.md``)
-    with the claims' numbers ``values`` (``figures/claim_values.csv``)."""
+    """The front page's Markdown: what the book is, then the verdict table with the claims' ``values``."""
 
     def link(stem: str) -> str:
-        for name in (f"{stem}-planar5", stem, f"{stem}-panda"):
-            if name in pages:
-                return f"{name}.ipynb"
-        return f"{stem}.ipynb"
+        found = (name for name in (f"{stem}-planar5", stem, f"{stem}-panda") if name in pages)
+        return f"{next(found, stem)}.ipynb"
 
     lines = [
         "# lasa: Shared Autonomy with Learned Latent Actions",
@@ -77,30 +72,18 @@ def retitle(notebook: Path, robot: str) -> None:
     """Append the robot to a notebook's first heading, so its two robots' pages differ."""
     nb = json.loads(notebook.read_text())
     for cell in nb["cells"]:
-        text = "".join(cell["source"]) if isinstance(cell["source"], list) else cell["source"]
+        text = cell_text(cell["source"])
         if cell["cell_type"] == "markdown" and text.startswith("# "):
-            first, _, rest = text.partition("\n")
-            name = ROBOT_TITLES.get(robot, robot)
-            cell["source"] = f"{first} — {name}" + (f"\n{rest}" if rest else "")
+            first, newline, rest = text.partition("\n")
+            cell["source"] = f"{first} — {ROBOT_TITLES.get(robot, robot)}" + (newline + rest if rest else "")
             break
     write_text(notebook, json.dumps(nb, indent=1, ensure_ascii=False) + "\n")
 
 
-def build_book(
-    notebooks: str | Path,
-    figures: str | Path,
-    out: str | Path,
-    mathjax: str | Path | None = None,
-    progress: bool = True,
-) -> Path:
+def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, progress: bool = True) -> Path:
     """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
-    folder (its ``claims.csv`` makes the front page), and build the site into ``out/html``; returns
-    ``out/html/index.html``. ``mathjax``: MathJax's ``es5`` folder (``.venv/mathjax/es5`` by default,
-    made by ``make setup``); ``progress``: show Jupyter Book's output.
-
-    Raises:
-        ArtifactError: if there are no executed notebooks, no claims table or no MathJax.
-    """
+    folder and build the site into ``out/html``; return its ``index.html``. ArtifactError without
+    notebooks, claims table or MathJax (``make setup`` installs it)."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
     if not books:
@@ -108,7 +91,7 @@ def build_book(
     claims_csv = figures / "claims.csv"
     if not claims_csv.is_file():
         raise ArtifactError(f"no claims table {claims_csv}; run: make figures")
-    mathjax = Path(mathjax) if mathjax else repo_root() / ".venv" / "mathjax" / "es5"
+    mathjax = repo_root() / ".venv" / "mathjax" / "es5"
     if not (mathjax / "tex-chtml.js").is_file():
         raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
     src = out / "src"
@@ -133,8 +116,7 @@ sphinx:
 
 
 def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, claims: pd.DataFrame) -> None:
-    """The book's sources in ``src``: the notebooks (retitled per robot), figures, MathJax, the
-    front page and the claims page, the table of contents and the configuration."""
+    """The book's sources in ``src``: notebooks (retitled per robot), figures, MathJax, pages, contents."""
     shutil.rmtree(src, ignore_errors=True)
     (src / "notebooks").mkdir(parents=True)
     for book in books:
@@ -161,15 +143,10 @@ def _jupyter_book(src: Path, out: Path, progress: bool) -> Path:
     """Build the site from ``src`` with Jupyter Book into ``out/html``; returns its front page."""
     build = out / "_build"
     shutil.rmtree(build, ignore_errors=True)
-    command = [
-        str(Path(sys.executable).parent / "jupyter-book"),
-        "build",
-        str(src),
-        "--path-output",
-        str(out),
-    ]
+    jupyter_book = str(Path(sys.executable).parent / "jupyter-book")
+    command = [jupyter_book, "build", str(src), "--path-output", str(out)]
     result = subprocess.run(command, capture_output=not progress, text=True)
-    html = out / "_build" / "html"
+    html = build / "html"
     if result.returncode != 0 or not (html / "index.html").is_file():
         detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
         raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")

@@ -1,15 +1,6 @@
-"""Run a figure notebook headless with papermill, with checked parameters (``make figures``).
-
-A config file (``configs/*.yaml``) holds a ``common`` section for every notebook and one per notebook
-stem; a parameter the notebook's ``parameters`` cell does not define is an error (papermill only
-warns). The executed copy is written atomically; a failed run is kept as ``<name>.failed.ipynb``,
-and its writes to the figures folder are undone (:mod:`lasa.base.journal`).
-
-Usage::
-
-    python -m lasa.pipeline.execute notebooks/04_fixed_expertise.ipynb --config configs/paper.yaml \\
-        --out build/notebooks --robot panda [--param build_dir=build/x] [--timings t.jsonl]
-"""
+"""Execution: run a figure notebook headless with papermill, with checked parameters (``make figures``).
+A config's ``common`` and stem sections are its parameters; the copy is written atomically, a failed
+one kept as ``<name>.failed.ipynb`` and its writes to the figures undone."""
 
 from __future__ import annotations
 
@@ -29,9 +20,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
-# nbformat validates notebooks with jsonschema, whose optional IRI format checker
-# (rfc3987_syntax) builds a parser grammar on import: 1.3 s of every notebook run, for a
-# format that notebook schemas never use. Without the module, jsonschema skips it.
+# jsonschema's optional IRI format checker costs 1.3 s of import per run, for a format notebooks never use
 sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
 
 import papermill as pm  # noqa: E402
@@ -47,11 +36,7 @@ __all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params",
 
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """Names and default values of a notebook's ``parameters`` cell.
-
-    Raises:
-        ConfigError: if the notebook has no cell tagged ``parameters``.
-    """
+    """Names and default values of a notebook's ``parameters`` cell (ConfigError if it has none)."""
     params = pm.inspect_notebook(str(notebook))
     if not params:
         raise ConfigError(f"{notebook} has no cell tagged 'parameters'")
@@ -59,13 +44,8 @@ def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """The parameters a config file passes to ``notebook``: ``common`` plus its section.
-
-    Raises:
-        ArtifactError: if the config file is missing.
-        ConfigError: if the file is not YAML, not a mapping of sections, or if it passes a
-            name that the notebook's ``parameters`` cell does not define.
-    """
+    """The parameters a config file passes to ``notebook``: ``common`` plus its section; ConfigError if
+    the file is not a YAML mapping of sections or passes a name the ``parameters`` cell lacks."""
     path = require_file(config, "it ships with the repository under configs/")
     try:
         data = yaml.safe_load(path.read_text()) or {}
@@ -94,63 +74,40 @@ def run_notebook(
     overrides: dict[str, Any] | None = None,
     progress: bool = True,
 ) -> Path:
-    """Execute ``notebook`` with the parameters of ``config`` and ``overrides`` into ``out_dir``.
-
-    The executed copy is ``<stem>-<robot>.ipynb`` when a ``robot`` override is given, else named
-    after the notebook; returns its path.
-
-    A failed run leaves the figures folder as it was: the kernel writes under a journal (a hidden
-    ``.<name>.journal`` folder beside the executed copy), and on a failed cell, a dead kernel,
-    Ctrl-C or ``SIGTERM`` every file the run wrote is put back, under the folder's lock. When a
-    notebook running beside it has rewritten a shared file since, only this run's rows of the merged
-    tables are restored, and a file that cannot be split by rows is left as the other run wrote it.
-
-    Raises:
-        NotebookError: if a cell raised: that exception's class and message, the partial run's path
-            (``<name>.failed.ipynb``, with the traceback), and which written files were not restored.
-    """
+    """Execute ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (as
+    ``<stem>-<robot>.ipynb`` with a ``robot`` override); return its path. A failed run's writes to the
+    figures are undone (:mod:`lasa.base.journal`); NotebookError for a failed cell, naming the partial run."""
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
-    if overrides:
-        unknown = sorted(set(overrides) - set(defaults))
-        if unknown:
-            raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
-        params.update(overrides)
-    name = Path(notebook).name
-    if overrides and "robot" in overrides:
-        name = f"{Path(notebook).stem}-{overrides['robot']}.ipynb"
-    out = Path(out_dir) / name
+    overrides = overrides or {}
+    unknown = sorted(set(overrides) - set(defaults))
+    if unknown:
+        raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
+    params.update(overrides)
+    robot = f"-{overrides['robot']}" if "robot" in overrides else ""
+    out = Path(out_dir) / f"{Path(notebook).stem}{robot}.ipynb"
     failed = out.with_suffix(".failed.ipynb")
     figures = params.get("figures_dir", defaults.get("figures_dir"))
-    with atomic_path(out) as tmp:
-        with _journaled(out, figures) as undo:
-            try:
-                pm.execute_notebook(
-                    str(notebook),
-                    str(tmp),
-                    parameters=params,
-                    kernel_name="python3",
-                    cwd=str(Path.cwd()),
-                    progress_bar=progress,
-                )
-            except pm.PapermillExecutionError as exc:
-                # Keep the partial run for reading, under a name no Make rule will take for done.
-                os.replace(tmp, failed)
-                restored = undo()
-                raise NotebookError(
-                    str(notebook), exc.ename, str(exc.evalue), str(failed), restored
-                ) from None
+    with atomic_path(out) as tmp, _journaled(out, figures) as undo:
+        try:
+            pm.execute_notebook(
+                str(notebook),
+                str(tmp),
+                parameters=params,
+                kernel_name="python3",
+                cwd=str(Path.cwd()),
+                progress_bar=progress,
+            )
+        except pm.PapermillExecutionError as exc:
+            os.replace(tmp, failed)  # the partial run, under a name no Make rule takes for done
+            raise NotebookError(str(notebook), exc.ename, str(exc.evalue), str(failed), undo()) from None
     failed.unlink(missing_ok=True)
     return out
 
 
 @contextlib.contextmanager
 def _journaled(out: Path, figures: Any) -> Iterator[Callable[[], str]]:
-    """Journal the run's writes to its figures folder; yield the undo, which returns what it restored.
-
-    Any other way out of the block (a dead kernel, Ctrl-C, ``SIGTERM``) undoes the writes too and
-    adds that sentence to the exception as a note. On success the journal is deleted.
-    """
+    """Journal the run's writes to its figures; yield their undo (what it restored); any exception runs it."""
     if not isinstance(figures, str | os.PathLike):  # a notebook without a figures folder
         yield lambda: ""
         return
@@ -181,12 +138,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", required=True, help="folder of the executed copy")
     parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
     parser.add_argument(
-        "--param",
-        "-p",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override one parameter (VALUE is read as YAML); repeatable",
+        "--param", "-p", action="append", default=[], metavar="NAME=VALUE", help="a parameter, VALUE as YAML"
     )
     parser.add_argument("--timings", help="append {notebook, robot, seconds, start, end} (UTC) to this file")
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
@@ -195,12 +147,8 @@ def main(argv: list[str] | None = None) -> int:
     started = datetime.datetime.now(datetime.UTC)
     start = time.perf_counter()
     try:
-        overrides = parse_params(args.param)
-        if args.robot:
-            overrides["robot"] = args.robot
-        out = run_notebook(
-            args.notebook, args.config, args.out, overrides or None, progress=not args.no_progress
-        )
+        overrides = {**parse_params(args.param), **({"robot": args.robot} if args.robot else {})}
+        out = run_notebook(args.notebook, args.config, args.out, overrides, progress=not args.no_progress)
     except (ConfigError, ArtifactError, NotebookError) as exc:  # a cell's cause: traceback in the partial run
         print(f"error: {exc}", file=sys.stderr)
         return 1 if isinstance(exc, NotebookError) else 2
@@ -222,11 +170,7 @@ def _terminated(signum: int, frame: object) -> None:
 
 
 def parse_params(items: list[str]) -> dict[str, Any]:
-    """``["name=value", ...]`` -> ``{name: yaml(value)}``.
-
-    Raises:
-        ConfigError: for an item without ``=`` or with an empty name.
-    """
+    """``["name=value", ...]`` -> ``{name: yaml(value)}``; ConfigError for an item without a name."""
     out: dict[str, Any] = {}
     for item in items:
         name, sep, value = item.partition("=")

@@ -1,10 +1,7 @@
 """Which of lasa's files each notebook runs: the Make prerequisites of the figure targets.
 
-Read from the source, never imported (Make runs it with the system Python; standard library only):
-the imports of a notebook's code cells and, transitively, of each lasa module they reach (in
-functions too, not under ``if TYPE_CHECKING:``; ``from lasa import X`` through ``lasa._EXPORTS``),
-plus the robots' MJCF assets and :data:`ALWAYS`. ``python lasa/pipeline/makedeps.py
-notebooks/*.ipynb`` prints ``NB_SRC_<stem> := <files>`` per notebook.
+Read from the source with the standard library only (Make runs it with the system Python): the lasa
+modules a notebook imports, transitively (not under ``if TYPE_CHECKING:``), the MJCF assets, :data:`ALWAYS`.
 """
 
 from __future__ import annotations
@@ -15,7 +12,7 @@ import json
 import sys
 from pathlib import Path
 
-__all__ = ["module_file", "imports_of", "closure", "notebook_sources", "main"]
+__all__ = ["imports_of", "closure", "notebook_sources", "main"]
 
 ROOT = Path(__file__).resolve().parents[2]
 ALWAYS = ("lasa/__init__.py", "pyproject.toml")
@@ -26,36 +23,24 @@ def module_file(name: str, root: Path = ROOT) -> Path | None:
     if name != "lasa" and not name.startswith("lasa."):
         return None
     base = root.joinpath(*name.split("."))
-    for path in (base.with_suffix(".py"), base / "__init__.py"):
-        if path.is_file():
-            return path
-    return None
+    return next((path for path in (base.with_suffix(".py"), base / "__init__.py") if path.is_file()), None)
 
 
 @functools.cache
 def _exports(root: Path) -> dict[str, str]:
-    """``lasa._EXPORTS``: name -> defining module, read from the package's ``_HOMES`` (once)."""
-    for node in ast.walk(ast.parse((root / "lasa" / "__init__.py").read_text())):
-        if isinstance(node, ast.Assign) and any(
-            isinstance(t, ast.Name) and t.id == "_HOMES" for t in node.targets
-        ):
-            homes = ast.literal_eval(node.value)
-            return {name: module for module, names in homes.items() for name in names.split()}
-    return {}
+    """``lasa._EXPORTS``: name -> defining module, read from the package's ``if TYPE_CHECKING:`` imports."""
+    tree = ast.parse((root / "lasa" / "__init__.py").read_text())
+    typed = [n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING"]
+    return {
+        a.name: str(n.module) for b in typed for n in b.body if isinstance(n, ast.ImportFrom) for a in n.names
+    }
 
 
-def _run_nodes(tree: ast.AST) -> list[ast.AST]:
-    """Every node of ``tree`` except those under ``if TYPE_CHECKING:`` (imports for typing only)."""
-    out: list[ast.AST] = []
-    todo = [tree]
-    while todo:
-        node = todo.pop()
-        out.append(node)
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            todo.extend(node.orelse)
-            continue
-        todo.extend(ast.iter_child_nodes(node))
-    return out
+def _run_nodes(node: ast.AST) -> list[ast.AST]:
+    """``node`` and every node under it except those under ``if TYPE_CHECKING:`` (imports for typing only)."""
+    typing_only = isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+    children = node.orelse if typing_only else ast.iter_child_nodes(node)  # type: ignore[attr-defined]
+    return [node, *(found for child in children for found in _run_nodes(child))]
 
 
 def imports_of(source: str, root: Path = ROOT) -> set[str]:
@@ -64,18 +49,16 @@ def imports_of(source: str, root: Path = ROOT) -> set[str]:
     exports = _exports(root)
     for node in _run_nodes(ast.parse(source)):
         if isinstance(node, ast.Import):
-            for alias in node.names:
-                parts = alias.name.split(".")
-                found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
+            modules = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
-            parts = node.module.split(".")
+            modules = [node.module, *(f"{node.module}.{alias.name}" for alias in node.names)]
+            if node.module == "lasa":
+                found.update(exports[alias.name] for alias in node.names if alias.name in exports)
+        else:
+            continue
+        for name in modules:
+            parts = name.split(".")
             found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
-            for alias in node.names:
-                sub = f"{node.module}.{alias.name}"
-                if module_file(sub, root) is not None:
-                    found.add(sub)
-                elif node.module == "lasa" and alias.name in exports:
-                    found.add(exports[alias.name])
     return {m for m in found if module_file(m, root) is not None}
 
 

@@ -1,12 +1,6 @@
-"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``.
-
-``python -m lasa.pipeline.pages --notebooks build/notebooks --figures figures`` writes each executed
-notebook cleaned (:func:`clean_notebook`: no volatile metadata or progress bars, videos as links to
-the committed MP4s, named figures as their final bytes, links as seen from the pages' folder) as
-nbformat writes it, so the same runs give the same bytes. All pages together stay under
-:data:`BUDGET`: committed figures are linked instead of embedded, the largest first, until they fit;
-else :class:`PageBudgetError` (exit status 1).
-"""
+"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``, each
+cleaned (:func:`clean_notebook`), all under :data:`BUDGET` (the largest committed figures linked until
+they fit; else :class:`PageBudgetError`, exit status 1)."""
 
 from __future__ import annotations
 
@@ -14,6 +8,7 @@ import argparse
 import base64
 import copy
 import hashlib
+import itertools
 import json
 import posixpath
 import re
@@ -26,7 +21,8 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import write_text
 from lasa.base.paths import repo_root
 
-__all__ = ["BUDGET", "PageBudgetError", "FigureIndex", "clean_notebook", "page_text", "write_pages", "main"]
+__all__ = ["BUDGET", "PageBudgetError", "cell_text", "clean_notebook", "page_text", "write_pages", "main"]
+
 
 BUDGET = 5_000_000  # bytes of every page together (issue 47: "at most 5 MB in all")
 PAGES = "notebooks"  # the pages' folder inside the figures folder
@@ -65,12 +61,10 @@ class FigureIndex:
 
     def read(self, name: str) -> bytes | None:
         """The bytes of the committed file ``name``, if it is there."""
-        if self.folder is None or name not in self.names:
-            return None
-        return (self.folder / name).read_bytes()
+        return (self.folder / name).read_bytes() if self.folder is not None and name in self.names else None
 
 
-def _text(value: str | list[str]) -> str:
+def cell_text(value: str | list[str]) -> str:
     """A notebook's multi-line string (a string or a list of lines) as one string."""
     return value if isinstance(value, str) else "".join(value)
 
@@ -92,39 +86,27 @@ def relink_markdown(text: str) -> str:
 
 def _markdown_output(text: str, plain: str) -> dict[str, Any]:
     """A display output showing ``text`` as Markdown (``plain`` where Markdown is not rendered)."""
-    return {
-        "data": {"text/markdown": text, "text/plain": plain},
-        "metadata": {},
-        "output_type": "display_data",
-    }
+    data = {"text/markdown": text, "text/plain": plain}
+    return {"data": data, "metadata": {}, "output_type": "display_data"}
 
 
-def _video(output: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
+def _video(data: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
     """An embedded video's replacement: a link to the committed MP4 it shows, or None (dropped)."""
-    data = output.get("data", {})
-    html = _text(data.get("text/html", ""))
+    html = cell_text(data.get("text/html", ""))
     name = None
     if "video/mp4" in data:
-        name = figures.name_of(base64.b64decode(_text(data["video/mp4"])))
+        name = figures.name_of(base64.b64decode(cell_text(data["video/mp4"])))
     elif (match := DATA_MP4.search(html)) is not None:
         name = figures.name_of(base64.b64decode(re.sub(r"\s", "", match.group(1))))
     elif (match := VIDEO_SRC.search(html)) is not None:
         base = posixpath.basename(match.group(1))
         name = base if base in figures.names else None
-    if name is None:
-        return None
-    return _markdown_output(f"Video: [{name}](../{name})", f"video: {name}")
-
-
-def _is_video(output: dict[str, Any]) -> bool:
-    data = output.get("data", {})
-    return "video/mp4" in data or bool(VIDEO_HTML.search(_text(data.get("text/html", ""))))
+    return None if name is None else _markdown_output(f"Video: [{name}](../{name})", f"video: {name}")
 
 
 def _image(output: dict[str, Any], figures: FigureIndex, link: Link) -> dict[str, Any]:
-    """An image output: its named figure's final bytes; a link to the committed PNG when ``link``
-    (True: every committed figure; a set: the figures it names)."""
-    png = _text(output["data"]["image/png"]).replace("\n", "")
+    """An image output: its named figure's final bytes, or a link to the committed PNG ``link`` names."""
+    png = cell_text(output["data"]["image/png"]).replace("\n", "")
     named = output.get("metadata", {}).get("image/png", {}).get("figure")
     final = figures.read(named) if isinstance(named, str) else None
     data = base64.b64decode(png) if final is None else final
@@ -139,11 +121,10 @@ def _image(output: dict[str, Any], figures: FigureIndex, link: Link) -> dict[str
 def _clean_output(
     output: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any] | None:
-    """One output as it appears on the page, or None if it is dropped (``relink``: as in
-    :func:`_clean_cell`)."""
+    """One output as it appears on the page, or None if it is dropped."""
     kind = output["output_type"]
     if kind == "stream":
-        text = _text(output["text"])
+        text = cell_text(output["text"])
         if output["name"] == "stderr" and PROGRESS.search(text):
             return None  # a tqdm bar (widgets off: the bar redrawn with carriage returns)
         return {**copy.deepcopy(output), "text": text.replace(ROOT, "")}  # a warning's file path
@@ -152,11 +133,11 @@ def _clean_output(
     data = output.get("data", {})
     if WIDGET in data:
         return None  # a tqdm bar as a widget: no state is saved, so it would show "0%"
-    if _is_video(output):
-        return _video(output, figures)
+    if "video/mp4" in data or VIDEO_HTML.search(cell_text(data.get("text/html", ""))):
+        return _video(data, figures)
     output = copy.deepcopy(output)
     if relink and "text/markdown" in data:
-        output["data"]["text/markdown"] = relink_markdown(_text(data["text/markdown"]))
+        output["data"]["text/markdown"] = relink_markdown(cell_text(data["text/markdown"]))
     if "image/png" in data:
         output = _image(output, figures, link)
     if output["output_type"] == "execute_result":
@@ -167,19 +148,17 @@ def _clean_output(
 def _clean_cell(
     cell: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any]:
-    """One cell without volatile metadata; a code cell's outputs cleaned and numbered ``count``;
-    ``relink``: its Markdown's links are still relative to ``notebooks/``."""
+    """One cell without volatile metadata, its outputs cleaned and numbered ``count``; links moved."""
     out = {k: copy.deepcopy(v) for k, v in cell.items() if k != "metadata"}
-    metadata = {k: copy.deepcopy(v) for k, v in cell.get("metadata", {}).items()}
-    for key in ("execution", "papermill", "collapsed", "scrolled"):
-        metadata.pop(key, None)
+    volatile = ("execution", "papermill", "collapsed", "scrolled")
+    metadata = {k: copy.deepcopy(v) for k, v in cell.get("metadata", {}).items() if k not in volatile}
     if not metadata.get("tags"):
         metadata.pop("tags", None)
     out["metadata"] = metadata
     if INJECTED in metadata.get("tags", ()):
         out["id"] = INJECTED  # papermill gives it a random id
     if cell["cell_type"] == "markdown" and relink:
-        out["source"] = relink_markdown(_text(cell["source"]))
+        out["source"] = relink_markdown(cell_text(cell["source"]))
     if cell["cell_type"] == "code":
         out["execution_count"] = count
         outputs = (_clean_output(o, figures, link, count, relink) for o in cell.get("outputs", []))
@@ -190,21 +169,9 @@ def _clean_cell(
 def clean_notebook(
     notebook: dict[str, Any], figures: Path | FigureIndex | None = None, link_figures: Link = False
 ) -> dict[str, Any]:
-    """The page of an executed notebook (not modified), a new notebook that cleaning again leaves as it is.
-
-    Dropped: papermill's and the kernel's metadata, progress bars (tqdm's widgets and ``\\r`` streams),
-    empty ``tags``, the clone's path in printed file names; execution counts renumbered 1..n;
-    papermill's injected-parameters cell gets that id. Replaced: an embedded video by a link to the
-    committed MP4 of the same bytes (or dropped); an image output naming its figure (output metadata
-    ``{"figure": "<name>.png"}``) by that figure's final bytes. Rewritten: Markdown's relative links,
-    written from ``notebooks/``, as seen from ``figures/notebooks/`` (``lasa.links_from`` says so).
-
-    Args:
-        notebook: The executed notebook, as read from JSON.
-        figures: The figures folder (its PNG and MP4 files), or an index of it; None if there is none.
-        link_figures: Replace each image output whose bytes are a committed PNG by a link to it
-            (True), or those of the PNGs named in a set.
-    """
+    """The page of an executed notebook (cleaning it again leaves it as it is): no volatile metadata,
+    progress bars or clone's path; counts 1..n; videos linked to the committed MP4 of their bytes; an
+    image naming its figure given its final bytes, or linked per ``link_figures``; links moved."""
     index = figures if isinstance(figures, FigureIndex) else FigureIndex(figures)
     out = {k: copy.deepcopy(v) for k, v in notebook.items() if k not in ("cells", "metadata")}
     metadata = notebook.get("metadata", {})
@@ -213,11 +180,11 @@ def clean_notebook(
         out["metadata"]["language_info"] = {"name": metadata["language_info"].get("name", "python")}
     relink = metadata.get("lasa", {}).get("links_from") != PAGE_DIR  # False for a page: idempotent
     out["metadata"]["lasa"] = {"links_from": PAGE_DIR}
-    cells, count = [], 0
-    for cell in notebook.get("cells", []):
-        count += cell["cell_type"] == "code"
-        cells.append(_clean_cell(cell, index, link_figures, count, relink))
-    out["cells"] = cells
+    codes = itertools.accumulate(int(c["cell_type"] == "code") for c in notebook.get("cells", []))
+    out["cells"] = [
+        _clean_cell(c, index, link_figures, n, relink)
+        for c, n in zip(notebook.get("cells", []), codes, strict=True)
+    ]
     return out
 
 
@@ -241,8 +208,7 @@ def _read(path: Path) -> dict[str, Any]:
     return data
 
 
-# a failed run's copy (``x.failed.ipynb``), or a killed write's temporary file (``.x.1a2b.tmp.ipynb``,
-# lasa.base.io.atomic_path)
+# a failed run's copy (``x.failed.ipynb``), or a killed write's temporary file (``.x.1a2b.tmp.ipynb``)
 _PARTIAL = re.compile(r"^\.|\.(failed|tmp)\.ipynb$")
 
 
@@ -264,26 +230,18 @@ def _pages(sources: Iterable[Path], figures: FigureIndex, link: Link) -> dict[st
 def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
     """The bytes each committed figure takes, embedded, over all ``pages``."""
     taken: dict[str, int] = {}
-    for page in pages.values():
-        for cell in page["cells"]:
-            for output in cell.get("outputs", []):
-                png = output.get("data", {}).get("image/png")
-                if png is not None:
-                    name = figures.name_of(base64.b64decode(_text(png)))
-                    if name is not None:
-                        taken[name] = taken.get(name, 0) + len(_text(png))
+    outputs = (o for page in pages.values() for cell in page["cells"] for o in cell.get("outputs", []))
+    for png in (cell_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
+        if (name := figures.name_of(base64.b64decode(png))) is not None:
+            taken[name] = taken.get(name, 0) + len(png)
     return taken
 
 
 def _to_link(taken: dict[str, int], excess: int) -> frozenset[str]:
     """The figures to link so that ``excess`` bytes go: the largest first (then by name)."""
-    chosen: list[str] = []
-    for name, size in sorted(taken.items(), key=lambda kv: (-kv[1], kv[0])):
-        if excess <= 0:
-            break
-        chosen.append(name)
-        excess -= size
-    return frozenset(chosen)
+    ranked = sorted(taken.items(), key=lambda kv: (-kv[1], kv[0]))
+    freed = itertools.accumulate((size for _, size in ranked), initial=0)  # by the figures before each
+    return frozenset(name for (name, _), before in zip(ranked, freed, strict=False) if before < excess)
 
 
 def _size(pages: dict[str, str]) -> int:
@@ -293,25 +251,13 @@ def _size(pages: dict[str, str]) -> int:
 def write_pages(
     executed: str | Path, figures: str | Path, budget: int = BUDGET
 ) -> tuple[list[Path], int, frozenset[str]]:
-    """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``.
-
-    Returns:
-        The pages written, the bytes of every page in the folder (within ``budget``, the pages
-        already there counted too), and the committed figures linked rather than embedded to fit.
-
-    Raises:
-        ArtifactError: if there are no executed notebooks, or one is not a notebook.
-        PageBudgetError: if the pages exceed ``budget`` even with the figures linked (they are
-            not written then).
-    """
+    """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``; return
+    the pages, the bytes of all pages in the folder and the figures linked to fit. PageBudgetError (and
+    nothing written) if they exceed ``budget`` even so; ArtifactError without notebooks."""
     sources, index = _executed(Path(executed)), FigureIndex(Path(figures))
     folder = Path(figures) / PAGES
     regenerated = {p.name for p in sources}
-    others = (
-        sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in regenerated)
-        if folder.is_dir()
-        else 0
-    )
+    others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in regenerated)
     embedded = _pages(sources, index, link=False)
     pages = {name: page_text(page) for name, page in embedded.items()}
     linked: frozenset[str] = frozenset()
@@ -333,21 +279,14 @@ def main(argv: list[str] | None = None) -> int:
     """Command line: ``python -m lasa.pipeline.pages --notebooks build/notebooks --figures figures``."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--notebooks", required=True, help="the executed notebooks (e.g. build/notebooks)")
-    parser.add_argument(
-        "--figures", required=True, help="the run's figures folder; pages go to its notebooks/"
-    )
-    parser.add_argument(
-        "--budget", type=int, default=BUDGET, help="bytes of all pages together [%(default)d]"
-    )
+    parser.add_argument("--figures", required=True, help="the figures folder; pages go to its notebooks/")
+    parser.add_argument("--budget", type=int, default=BUDGET, help="bytes of all pages [%(default)d]")
     args = parser.parse_args(argv)
     try:
         written, total, linked = write_pages(args.notebooks, args.figures, args.budget)
-    except PageBudgetError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return 1 if isinstance(exc, PageBudgetError) else 2
     how = f"linked to fit: {', '.join(sorted(linked))}" if linked else "figures embedded"
     print(f"{len(written)} notebook pages in {Path(args.figures) / PAGES} ({total / 1e6:.2f} MB, {how})")
     return 0

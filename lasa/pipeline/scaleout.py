@@ -1,9 +1,5 @@
-"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way.
-
-Each job is a pure, seeded function of its arguments, run with one torch thread, and the results
-come back in the jobs' order: a grid's CSV is the same wherever its cells ran. The scheduler address
-comes from the caller or ``$LASA_SCHEDULER``; with neither, nothing needs a cluster.
-"""
+"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way:
+each a pure, seeded function run with one torch thread, the results in the jobs' order."""
 
 from __future__ import annotations
 
@@ -23,11 +19,7 @@ R = TypeVar("R")
 
 
 def scheduler_address(configured: str | None = None) -> str | None:
-    """The Dask scheduler to use: ``configured``, else ``$LASA_SCHEDULER``, else None (local).
-
-    Raises:
-        ConfigError: if the address is not of the form ``scheme://host:port``.
-    """
+    """``configured``, else ``$LASA_SCHEDULER``, else None; ConfigError unless ``scheme://host:port``."""
     address = configured or os.environ.get(SCHEDULER_ENV) or None
     if address is not None and "://" not in address:
         raise ConfigError(
@@ -55,32 +47,18 @@ def run_jobs(
     timeout: str = "20s",
     shared: Any = None,
 ) -> list[R]:
-    """``[fn(item) for item in items]``, through joblib, locally or on a Dask cluster.
-
-    Args:
-        fn: A picklable (module-level) function of one item, or of ``(shared, item)``.
-        items: The jobs' arguments (picklable).
-        scheduler: A Dask scheduler address (:func:`scheduler_address`); None: local, unless set.
-        n_jobs: Local worker processes (1: in this process); a cluster uses all its workers.
-        progress: Show a progress bar (labelled ``desc``) over finished jobs.
-        timeout: How long to wait for the scheduler to answer (a Dask duration).
-        shared: What every job reads (decoders, task, ...), ``fn``'s first argument when not None;
-            scattered to a cluster's workers once.
-
-    Raises:
-        ConfigError: for a bad address, or a scheduler that cannot be reached.
-    """
+    """``[fn(item) for item in items]`` (``fn(shared, item)`` if ``shared`` is not None, scattered to a
+    cluster's workers once), through joblib: ``n_jobs`` local processes, or every worker of the Dask
+    ``scheduler`` (:func:`scheduler_address`, answering within ``timeout``); ConfigError if unreachable."""
     from joblib import Parallel, delayed, parallel_config  # noqa: PLC0415
 
-    items = list(items)
     if int(n_jobs) != n_jobs or n_jobs < 1:
         raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
     jobs = [delayed(_threaded)(fn, item, shared) for item in items]
     address = scheduler_address(scheduler)
 
     def collect(parallel: Any) -> list[R]:
-        out = parallel(jobs)
-        return list(tqdm(out, total=len(jobs), desc=desc, disable=not progress))
+        return list(tqdm(parallel(jobs), total=len(jobs), desc=desc, disable=not progress))
 
     if address is None:
         return collect(Parallel(n_jobs=n_jobs, return_as="generator"))

@@ -1,10 +1,7 @@
 """The pipeline's wall times, from the run that measured them (``make figures``).
 
-Each notebook run with ``--timings`` (:mod:`lasa.pipeline.execute`) appends ``{notebook, robot,
-seconds, start, end}`` (UTC) to ``<build>/timings.jsonl``. :func:`record_figures` turns a whole
-run's file into ``figures_s`` of ``benchmarks/results.json`` (a partial run, where Make skipped
-notebooks, is refused); :func:`sync_readmes` writes the READMEs' sentence and table from it.
-"""
+Each notebook run appends a line to ``<build>/timings.jsonl``; :func:`record_figures` turns a whole
+run's file into ``figures_s`` of ``benchmarks/results.json``, :func:`sync_readmes` the READMEs' words."""
 
 from __future__ import annotations
 
@@ -25,20 +22,8 @@ from typing import Any
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked, sync_between, write_text
 
-__all__ = [
-    "README_MARKERS",
-    "BENCH_MARKERS",
-    "Run",
-    "append_run",
-    "read_runs",
-    "read_timings",
-    "machine",
-    "git_commit",
-    "summarize",
-    "record_figures",
-    "sync_readmes",
-    "main",
-]
+__all__ = ["append_run", "read_runs", "summarize", "record_figures", "sync_readmes", "main"]
+
 
 README_MARKERS = (
     "<!-- figures-time:begin (generated from benchmarks/results.json by make figures) -->",
@@ -57,8 +42,7 @@ _ROWS = {  # each part's row in benchmarks/README.md's table and its target in r
 
 @dataclasses.dataclass(frozen=True)
 class Run:
-    """One notebook run, a line of ``timings.jsonl``: ``<notebook>[-<robot>]``, its wall time [s],
-    its start and end (UTC; ``None`` in a line of an older version)."""
+    """One notebook run: ``<notebook>[-<robot>]``, its wall time [s], its start and end (UTC, or None)."""
 
     name: str
     seconds: float
@@ -74,13 +58,10 @@ def append_run(
     start: datetime.datetime,
     end: datetime.datetime,
 ) -> None:
-    """Append one run's ``{notebook, robot, seconds, start, end}`` to ``path`` as one JSON line (a
-    short line: parallel appends do not interleave)."""
-    utc = {
-        k: t.astimezone(datetime.UTC).isoformat(timespec="milliseconds")
-        for k, t in (("start", start), ("end", end))
-    }
-    record = {"notebook": notebook, "robot": robot, "seconds": round(seconds, 2), **utc}
+    """Append one run to ``path`` as one short JSON line (parallel appends do not interleave)."""
+    record: dict[str, Any] = {"notebook": notebook, "robot": robot, "seconds": round(seconds, 2)}
+    for key, when in (("start", start), ("end", end)):
+        record[key] = when.astimezone(datetime.UTC).isoformat(timespec="milliseconds")
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     with open(path, "a") as fh:
         fh.write(json.dumps(record) + "\n")
@@ -95,12 +76,7 @@ def _when(value: str | None) -> datetime.datetime | None:
 
 
 def read_runs(path: str | os.PathLike[str]) -> list[Run]:
-    """The runs of a ``timings.jsonl``, in the order they finished.
-
-    Raises:
-        ArtifactError: if the file is missing.
-        ConfigError: if a line is not a timing record.
-    """
+    """A ``timings.jsonl``'s runs in finishing order; ArtifactError if missing, ConfigError if malformed."""
     path = Path(path)
     if not path.is_file():
         raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
@@ -123,17 +99,14 @@ def read_timings(path: str | os.PathLike[str]) -> dict[str, float]:
 
 
 def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
-    """Why ``runs`` are not one whole run (every ``expected`` notebook once, nothing else, each
-    with its start and end), or ``None``."""
+    """Why ``runs`` are not each ``expected`` notebook once, dated, and nothing else; or ``None``."""
     names = [run.name for run in runs]
+    undated = [r.name for r in runs if r.start is None or r.end is None]
     for found, why in (
         (sorted(set(expected) - set(names)), f"{len(names)} of {len(set(expected))} notebooks ran; not run"),
         (sorted(set(names) - set(expected)), "notebooks outside the expected set ran"),
         (sorted({name for name in names if names.count(name) > 1}), "notebooks recorded more than once"),
-        (
-            [r.name for r in runs if r.start is None or r.end is None],
-            "runs without start and end times (an older runner)",
-        ),
+        (undated, "runs without start and end times (an older runner)"),
     ):
         if found:
             return f"{why}: {', '.join(found)}"
@@ -141,32 +114,27 @@ def _incomplete(runs: list[Run], expected: Collection[str]) -> str | None:
 
 
 def machine() -> dict[str, Any]:
-    """What this process runs on: CPU model, cores, and the Python, torch, numpy, MuJoCo versions
-    (read from the installed distributions, so nothing heavy is imported)."""
+    """CPU model, cores, and the Python, torch, numpy, MuJoCo versions (from installed metadata)."""
     cpu = platform.processor() or ""
     with contextlib.suppress(OSError):
-        models = [
-            line for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")
-        ]
-        cpu = models[0].split(":", 1)[1].strip() if models else cpu
+        lines = Path("/proc/cpuinfo").read_text().splitlines()
+        cpu = next((line.split(":", 1)[1].strip() for line in lines if line.startswith("model name")), cpu)
     out: dict[str, Any] = {"cpu": cpu, "cores": os.cpu_count(), "python": platform.python_version()}
     for package in ("torch", "numpy", "mujoco"):
-        try:
-            out[package] = importlib.metadata.version(package)
-        except importlib.metadata.PackageNotFoundError:
+        with contextlib.suppress(importlib.metadata.PackageNotFoundError):
             out[package] = None
+            out[package] = importlib.metadata.version(package)
     return out
 
 
 def git_commit(cwd: str | os.PathLike[str] | None = None) -> str:
     """The short hash of ``HEAD`` in ``cwd``, or ``"unknown"`` outside a git checkout."""
-    try:
+    with contextlib.suppress(OSError):
         head = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=cwd, check=False
+            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=cwd
         )
-    except OSError:
-        return "unknown"
-    return head.stdout.strip() or "unknown"
+        return head.stdout.strip() or "unknown"
+    return "unknown"
 
 
 def summarize(
@@ -176,15 +144,9 @@ def summarize(
     host: Mapping[str, Any] | None = None,
     commit: str | None = None,
 ) -> dict[str, Any]:
-    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``.
-
-    ``host`` and ``commit`` default to :func:`machine` and :func:`git_commit`'s. Returns ``{total,
-    per_notebook, sum_of_notebooks, date, machine, commit, command, source}``: ``total`` is the wall
-    time from the first start to the last end (notebooks run side by side), ``date`` the first start's.
-
-    Raises:
-        ConfigError: if there are no runs, or a run lacks its start or end.
-    """
+    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``
+    (``host``, ``commit``: :func:`machine`'s and :func:`git_commit`'s by default): ``total`` is the wall
+    time from the first start to the last end; ConfigError without runs, or a run's start or end."""
     if not runs:
         raise ConfigError("no notebook runs to summarize")
     if any(run.start is None or run.end is None for run in runs):
@@ -226,18 +188,9 @@ def record_figures(
     command: str,
     **summary: Any,
 ) -> dict[str, Any] | None:
-    """Write a whole run's times from ``timings`` into ``results``' ``figures_s``, atomically.
-
-    ``part`` ``"paper"`` replaces the top level of ``figures_s`` (its ``quick`` part is kept),
-    ``"quick"`` replaces ``figures_s.quick``; every other key of ``results`` is kept. ``expected``
-    are the notebooks of a whole run; ``summary``: ``host`` and ``commit`` for :func:`summarize`.
-
-    Returns the part written, or ``None`` (the reason printed, ``results`` untouched) when the run was
-    not whole: no timings file, or not every expected notebook ran once in it.
-
-    Raises:
-        ConfigError: for an unknown ``part``, or a ``results`` that is not a JSON object.
-    """
+    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (its top level, or its
+    ``quick`` for ``part`` "quick") and return them; None (nothing written, why printed) unless every
+    ``expected`` notebook ran once. ConfigError for an unknown ``part`` or a non-object ``results``."""
     if part not in PARTS:
         raise ConfigError(f"part must be one of {PARTS}, got {part!r}")
     timings, results = Path(timings), Path(results)
@@ -253,10 +206,8 @@ def record_figures(
     with locked(results.parent):  # a paper and a QUICK run may finish at once
         data = _read_results(results)
         figures = data.get("figures_s") or {}
-        if part == "paper":
-            data["figures_s"] = {**written, **({"quick": figures["quick"]} if "quick" in figures else {})}
-        else:
-            data["figures_s"] = {**figures, "quick": written}
+        quick = {"quick": figures["quick"]} if "quick" in figures else {}
+        data["figures_s"] = {**written, **quick} if part == "paper" else {**figures, "quick": written}
         write_text(results, json.dumps(data, indent=2) + "\n")
     print(f"{results}: figures_s{'.quick' if part == 'quick' else ''} = {written['total']:.0f} s ({timings})")
     return written
@@ -265,15 +216,6 @@ def record_figures(
 def _duration(seconds: float) -> str:
     """A wall time in words: seconds below two minutes, else whole minutes (``50 min``)."""
     return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
-
-
-def _sentence(figures_s: Mapping[str, Any]) -> str:
-    """The README's words on the paper-scale ``make figures`` time, from ``figures_s``."""
-    m, f = figures_s["machine"], figures_s
-    return (
-        f"on {m['cores']} cores `make figures` took {_duration(f['total'])} "
-        f"({m['cpu']}, {f['date']}, at {f['commit']}: `figures_s` in benchmarks/results.json)"
-    )
 
 
 def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, float]) -> str:
@@ -292,37 +234,29 @@ def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, flo
     )
 
 
-def _table(figures_s: Mapping[str, Any], targets: Mapping[str, float]) -> str:
-    """``benchmarks/README.md``'s table of the pipeline's wall times, from ``figures_s``."""
-    paper = figures_s if "total" in figures_s else None
-    lines = [
-        "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |",
-        "| --- | ---: | ---: | --- | --- | --- |",
-        _row("paper", paper, targets),
-        _row("quick", figures_s.get("quick"), targets),
-    ]
-    return "\n".join(lines)
-
-
 def sync_readmes(
     results: str | os.PathLike[str],
     readme: str | os.PathLike[str] | None = "README.md",
     bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
 ) -> list[Path]:
-    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results``, between
-    :data:`README_MARKERS` and :data:`BENCH_MARKERS` (a README ``None``: left alone); the files changed.
-
-    Raises:
-        ConfigError: if ``results`` has no paper-scale ``figures_s``, or a file lacks its markers.
-    """
+    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results`` between their
+    markers (a README ``None``: left alone); return the files changed. ConfigError without a paper-scale
+    ``figures_s`` or a file's markers."""
     data = _read_results(Path(results))
     figures = data.get("figures_s") or {}
     if "total" not in figures:
         raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
-    changed = []
-    if readme is not None and sync_between(readme, README_MARKERS, _sentence(figures), inline=True):
+    m, changed = figures["machine"], []
+    sentence = (
+        f"on {m['cores']} cores `make figures` took {_duration(figures['total'])} "
+        f"({m['cpu']}, {figures['date']}, at {figures['commit']}: `figures_s` in benchmarks/results.json)"
+    )
+    if readme is not None and sync_between(readme, README_MARKERS, sentence, inline=True):
         changed.append(Path(readme))
-    table = _table(figures, data.get("targets", {}))
+    head = "| run | wall time | sum of its notebooks | the run that measured it (`figures_s`) | target | |"
+    targets = data.get("targets", {})
+    rows = [_row("paper", figures, targets), _row("quick", figures.get("quick"), targets)]
+    table = "\n".join([head, "| --- | ---: | ---: | --- | --- | --- |", *rows])
     if bench_readme is not None and sync_between(bench_readme, BENCH_MARKERS, table):
         changed.append(Path(bench_readme))
     return changed
@@ -330,7 +264,7 @@ def sync_readmes(
 
 def main(argv: list[str] | None = None) -> int:
     """Command-line entry point: record a whole run's times, then sync the READMEs from them."""
-    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("timings", help="the run's timings.jsonl (build/timings.jsonl)")
     parser.add_argument("--part", choices=PARTS, required=True, help="paper scale, or QUICK=1")
     parser.add_argument("--expect", nargs="+", required=True, help="the notebooks of a whole run")

@@ -1,12 +1,7 @@
 """Did a regenerated figures folder reproduce the committed one? (``make verify``)
 
-``python -m lasa.pipeline.verify COMMITTED NEW [--rtol R] [--atol A]`` prints each run's
-``kernels.json`` (:mod:`lasa.runtime`), one table of every file (CSV values by column, rows matched
-by :func:`key_columns`; notebook pages by their outputs; other files by bytes) and a summary. It
-fails (status 1) only if a verdict differs, a claim is in one table only, or ``claims.csv`` is
-missing; a missing folder is status 2. The tolerances' defaults mean "identical to print precision"
-(``docs/method-notes.md``).
-"""
+Prints each run's ``kernels.json``, a table of every file (CSVs by column, pages by outputs, others by
+bytes) and a summary; status 1 only if a verdict differs or a claims table is missing, 2 if a folder is."""
 
 from __future__ import annotations
 
@@ -25,13 +20,13 @@ import numpy as np
 import pandas as pd
 
 from lasa.base.errors import ArtifactError
+from lasa.pipeline.pages import cell_text
 
-__all__ = ["Tolerance", "Row", "Report", "key_columns", "compare_folders", "main"]
+__all__ = ["Tolerance", "key_columns", "compare_folders", "main"]
 
 CLAIMS = "claims.csv"
 KERNELS = "kernels.json"  # the run's kernel settings (lasa.runtime), printed for both runs
 VERDICT_COLUMNS = ("effect", "number", "reproduced", "settled")  # a claim's words, per (id, robot)
-CLAIM_KEY = ("id", "robot")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -67,17 +62,12 @@ class Report:
 
     def summary(self) -> str:
         """One line: files compared, what differs, and whether the verdicts are the same."""
-        differing = {r.file for r in self.rows if r.result != "identical"}
-        verdicts = (
-            f"{len(self.verdicts_differ)} verdict(s) differ"
-            if self.verdicts_differ
-            else "every verdict identical"
-        )
-        if self.claims_missing:
-            verdicts = f"{CLAIMS} missing: verdicts not compared"
-        files = len({r.file for r in self.rows})
+        n, files = len(self.verdicts_differ), len({r.file for r in self.rows})
+        verdicts = f"{n} verdict(s) differ" if n else "every verdict identical"
+        verdicts = f"{CLAIMS} missing: verdicts not compared" if self.claims_missing else verdicts
+        differing = len({r.file for r in self.rows if r.result != "identical"})
         status = "FAILED" if self.failed else "OK"
-        return f"{status}: {files} files compared, {len(differing)} with differences; {verdicts}"
+        return f"{status}: {files} files compared, {differing} with differences; {verdicts}"
 
 
 def _files(folder: Path) -> dict[str, Path]:
@@ -87,28 +77,17 @@ def _files(folder: Path) -> dict[str, Path]:
     return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
-def _compare_bytes(name: str, old: Path, new: Path) -> Row:
-    """A file that is not a CSV (PNG, MP4, Markdown): identical bytes or not."""
-    a, b = old.read_bytes(), new.read_bytes()
-    if a == b:
-        return Row(name, "bytes", "identical", f"{len(a)} bytes")
-    return Row(name, "bytes", "differs", f"{len(a)} -> {len(b)} bytes")
-
-
 def _run_folders(cells: list[dict]) -> dict[str, str]:
-    """``{value: placeholder}`` of the run's ``figures_dir`` and ``build_dir``, read from papermill's
-    injected-parameters cell (longest first, so that ``build/verify/figures`` goes before ``build``)."""
-    injected = [c for c in cells if "injected-parameters" in c.get("metadata", {}).get("tags", ())]
+    """``{value: placeholder}`` of the injected cell's ``figures_dir`` and ``build_dir``, longest first."""
     values: dict[str, str] = {}
-    for cell in injected:
-        source = cell["source"] if isinstance(cell["source"], str) else "".join(cell["source"])
-        for node in ast.parse(source).body:
-            if not (isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Name)):
-                continue
-            name = node.targets[0].id
-            if name in ("build_dir", "figures_dir") and isinstance(node.value, ast.Constant):
-                if isinstance(node.value.value, str) and node.value.value:
-                    values[node.value.value.rstrip("/")] = f"<{name}>"
+    for cell in cells:
+        if "injected-parameters" not in cell.get("metadata", {}).get("tags", ()):
+            continue
+        for node in ast.parse(cell_text(cell["source"])).body:
+            if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
+                name, value = ast.unparse(node.targets[0]), node.value.value
+                if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
+                    values[value.rstrip("/")] = f"<{name}>"
     return dict(sorted(values.items(), key=lambda kv: -len(kv[0])))
 
 
@@ -116,7 +95,7 @@ def _output_lines(output: dict, folders: dict[str, str]) -> list[str]:
     """One output as lines of text: a stream's text, each MIME type's text, an image's digest."""
 
     def text(value: str | list[str]) -> str:
-        joined = value if isinstance(value, str) else "".join(value)
+        joined = cell_text(value)
         for value_, placeholder in folders.items():  # a path under the run's folder, not a word
             joined = re.sub(rf"(?<![\w./-]){re.escape(value_)}(?=/)", placeholder, joined)
         return joined
@@ -156,19 +135,12 @@ def _first_difference(old: list[str], new: list[str]) -> str:
     def short(line: str | None) -> str:
         return "(none)" if line is None else repr(line if len(line) <= 60 else line[:57] + "...")
 
-    for i, (a, b) in enumerate(itertools.zip_longest(old, new)):
-        if a != b:
-            return f"line {i + 1}: {short(a)} -> {short(b)}"
-    return ""
+    i, a, b = next((i, a, b) for i, (a, b) in enumerate(itertools.zip_longest(old, new)) if a != b)
+    return f"line {i + 1}: {short(a)} -> {short(b)}"
 
 
 def _compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
-    """A notebook page's lines: each code cell whose outputs differ, or that is in one page only.
-
-    Outputs are compared as text: streams, ``text/*`` data but HTML, each image's digest; the run's
-    ``build_dir`` and ``figures_dir`` read as placeholders, so that runs into ``build/verify`` and
-    ``build`` print the same paths. Never fatal: the verdicts decide.
-    """
+    """A page's code cells whose outputs differ (folders as placeholders) or in one page only."""
     try:
         a, b = _notebook_outputs(old), _notebook_outputs(new)
     except ArtifactError as exc:
@@ -188,49 +160,30 @@ def _numeric(frame: pd.DataFrame, column: str) -> bool:
     return bool(pd.api.types.is_numeric_dtype(dtype) and not pd.api.types.is_bool_dtype(dtype))
 
 
-def _text(column: pd.Series) -> np.ndarray:
+def _cells(column: pd.Series) -> np.ndarray:
     """A column's cells as strings, missing ones as ``<NA>`` (so that two missing cells agree)."""
     return column.astype(object).where(column.notna(), "<NA>").astype(str).to_numpy()
 
 
 def key_columns(frame: pd.DataFrame) -> list[str]:
-    """The columns that say what a row is: the leading label columns, before the first number.
-
-    A label column is a text column whose every value is one token (``robot``, ``method``, ``id``);
-    free text (a claim, a note) is not a key.
-    """
-    keys = []
-    for column in frame.columns:
-        if _numeric(frame, column):
-            break
-        values = frame[column].dropna().astype(str)
-        if not values.str.contains(r"\s").any():
-            keys.append(column)
-    return keys
-
-
-def _non_finite_changed(old: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """Cells non-finite (NaN, ±inf) on at least one side that are not the same on both (a mask)."""
-    same = (old == new) | (np.isnan(old) & np.isnan(new))  # inf == inf; two NaN are equal
-    return ~(np.isfinite(old) & np.isfinite(new)) & ~same
+    """What a row is: the leading one-token text columns (``robot``, ``id``) before the first number."""
+    leading = itertools.takewhile(lambda column: not _numeric(frame, column), frame.columns)
+    return [c for c in leading if not frame[c].dropna().astype(str).str.contains(r"\s").any()]
 
 
 def _numeric_rows(
-    name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
+    name: str, column: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance, keys: list[str]
 ) -> tuple[np.ndarray, list[Row]]:
-    """A numeric column's cells beyond the tolerance (a mask) and its lines: the rows whose non-finite
-    value (NaN, ±inf) is not the same on both sides, with both values; ``max abs .., max rel ..`` over
-    the cells finite on both sides."""
+    """A numeric column's cells beyond the tolerance (a mask) and its lines: non-finite changes, max diffs."""
     a, b = old[column].to_numpy(dtype=float), new[column].to_numpy(dtype=float)
-    changed = _non_finite_changed(a, b)
     finite = np.isfinite(a) & np.isfinite(b)
+    changed = ~finite & ~((a == b) | (np.isnan(a) & np.isnan(b)))  # inf == inf; two NaN are equal
     with np.errstate(invalid="ignore", divide="ignore"):
         diff = np.where(finite, np.abs(b - a), 0.0)
         rel = np.where(diff == 0, 0.0, diff / np.abs(a))
     beyond = (diff > tol.atol + tol.rtol * np.abs(np.where(finite, a, 0.0))) | changed
     rows = []
     if (where := np.flatnonzero(changed)).size:
-        keys = [k for k in key_columns(old) if k in new.columns]
         label = (lambda i: " ".join(str(old[k].iloc[i]) for k in keys)) if keys else str
         shown = "; ".join(f"row {i} ({label(i)}): {a[i]:.6g} -> {b[i]:.6g}" for i in where[:5])
         more = f"; and {len(where) - 5} more" if len(where) > 5 else ""
@@ -241,29 +194,18 @@ def _numeric_rows(
     return beyond, rows
 
 
-def _rows_match(name: str, old: pd.DataFrame, new: pd.DataFrame) -> Row | None:
-    """None if rows can be matched by position; else the table's ``rows differ`` line."""
-    if len(old) != len(new):
-        return Row(name, "rows", "rows differ", f"{len(old)} -> {len(new)} rows")
-    keys = [k for k in key_columns(old) if k in new.columns]
-    if keys:
-        moved = np.any([_text(old[k]) != _text(new[k]) for k in keys], axis=0)
-        if moved.any():
-            where = f"key columns {', '.join(keys)} differ at {moved.sum()} rows"
-            return Row(name, "rows", "rows differ", where)
-    return None
-
-
-def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance) -> list[Row]:
+def _column_rows(
+    name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance, keys: list[str]
+) -> list[Row]:
     """One line per common column that differs, and one for the rows beyond the tolerance."""
     rows, beyond_any = [], np.zeros(len(old), dtype=bool)
     for column in [c for c in old.columns if c in new.columns]:
         if _numeric(old, column) and _numeric(new, column):
-            beyond, lines = _numeric_rows(name, column, old, new, tol)
+            beyond, lines = _numeric_rows(name, column, old, new, tol, keys)
             rows += lines
             beyond_any |= beyond
         else:
-            cells = int((_text(old[column]) != _text(new[column])).sum())
+            cells = int((_cells(old[column]) != _cells(new[column])).sum())
             if cells:
                 rows.append(Row(name, column, "text differs", f"{cells} cells"))
     if beyond_any.any():
@@ -274,35 +216,33 @@ def _column_rows(name: str, old: pd.DataFrame, new: pd.DataFrame, tol: Tolerance
 def _compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> list[Row]:
     """The table's lines for one CSV: identical, or its shape, columns and values that differ."""
     old, new = pd.read_csv(old_path), pd.read_csv(new_path)
-    rows = []
     missing = [c for c in old.columns if c not in new.columns]
     extra = [c for c in new.columns if c not in old.columns]
-    if missing or extra:
-        detail = f"missing: {', '.join(missing) or '-'}; extra: {', '.join(extra) or '-'}"
-        rows.append(Row(name, "columns", "columns differ", detail))
-    mismatch = _rows_match(name, old, new)
-    if mismatch is not None:
-        return [*rows, mismatch]
-    rows += _column_rows(name, old, new, tol)
+    detail = f"missing: {', '.join(missing) or '-'}; extra: {', '.join(extra) or '-'}"
+    rows = [Row(name, "columns", "columns differ", detail)] if missing or extra else []
+    keys = [k for k in key_columns(old) if k in new.columns]
+    if len(old) != len(new):
+        rows.append(Row(name, "rows", "rows differ", f"{len(old)} -> {len(new)} rows"))
+    elif keys and (moved := np.any([_cells(old[k]) != _cells(new[k]) for k in keys], axis=0)).any():
+        rows.append(
+            Row(name, "rows", "rows differ", f"key columns {', '.join(keys)} differ at {moved.sum()} rows")
+        )
+    else:
+        rows += _column_rows(name, old, new, tol, keys)
     return rows or [Row(name, "all", "identical", f"{old.shape[0]} rows x {old.shape[1]} columns")]
 
 
 def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
     """``(id, robot) -> (effect, number, reproduced, settled)`` of a claims table, every cell as written."""
     frame = pd.read_csv(path, dtype=str, keep_default_na=False)
-    needed = [*CLAIM_KEY, *VERDICT_COLUMNS]
-    absent = [c for c in needed if c not in frame.columns]
+    absent = [c for c in ("id", "robot", *VERDICT_COLUMNS) if c not in frame.columns]
     if absent:
         raise ArtifactError(f"{path} has no column(s) {', '.join(absent)}: not a claims table")
-    return {
-        (r[CLAIM_KEY[0]], r[CLAIM_KEY[1]]): tuple(r[c] for c in VERDICT_COLUMNS)
-        for r in frame[needed].to_dict("records")
-    }
+    return {(r["id"], r["robot"]): tuple(r[c] for c in VERDICT_COLUMNS) for r in frame.to_dict("records")}
 
 
 def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
-    """Add the claims table's verdict lines to ``report``: every ``(id, robot)`` whose verdict differs
-    (or that is in one table only), with why; or mark the table missing."""
+    """Add each ``(id, robot)`` whose verdict differs, with why, to ``report``; or mark claims missing."""
     old_path, new_path = files["old"].get(CLAIMS), files["new"].get(CLAIMS)
     if old_path is None or new_path is None:
         report.claims_missing = True
@@ -315,9 +255,8 @@ def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
         if a is None or b is None:
             why = "only in the new table" if a is None else "missing from the new table"
         else:
-            why = "; ".join(
-                f"{c} {x} -> {y}" for c, x, y in zip(VERDICT_COLUMNS, a, b, strict=True) if x != y
-            )
+            changes = (f"{c} {x} -> {y}" for c, x, y in zip(VERDICT_COLUMNS, a, b, strict=True) if x != y)
+            why = "; ".join(changes)
         report.verdicts_differ.append(f"{key[0]} / {key[1]}: {why}")
         report.rows.append(Row(CLAIMS, f"verdict {key[0]} / {key[1]}", "verdict differs", why))
     if not report.verdicts_differ:
@@ -325,11 +264,7 @@ def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
 
 
 def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | None = None) -> Report:
-    """Compare every file of the two folders and the claims' verdicts.
-
-    Raises:
-        ArtifactError: if either folder does not exist, or a claims table lacks its key or verdict columns.
-    """
+    """Compare the files and verdicts; ArtifactError for a missing folder or a malformed claims table."""
     tol = tol or Tolerance()
     files = {"old": _files(Path(committed)), "new": _files(Path(new))}
     report = Report()
@@ -342,15 +277,16 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
             report.rows += _compare_csv(name, old, fresh, tol)
         elif name.endswith(".ipynb"):
             report.rows += _compare_notebook(name, old, fresh)
-        else:
-            report.rows.append(_compare_bytes(name, old, fresh))
+        else:  # PNG, MP4, Markdown: identical bytes or not
+            a, b = old.read_bytes(), fresh.read_bytes()
+            same = ("identical", f"{len(a)} bytes") if a == b else ("differs", f"{len(a)} -> {len(b)} bytes")
+            report.rows.append(Row(name, "bytes", *same))
     _compare_claims(report, files)
     return report
 
 
 def _kernels_text(committed: str | Path, new: str | Path) -> str:
-    """Each run's ``kernels.json`` (:func:`lasa.runtime.record`) as one line: the pinned variables
-    and torch's CPU capability, or that the file is missing."""
+    """Each run's ``kernels.json`` (:func:`lasa.runtime.record`) as one line, or that it is missing."""
     lines = []
     for label, folder in (("committed", committed), ("new", new)):
         path = Path(folder) / KERNELS
@@ -360,22 +296,18 @@ def _kernels_text(committed: str | Path, new: str | Path) -> str:
         data = json.loads(path.read_text())
         env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
         state = "pinned" if data.get("pinned") else "NOT pinned"
-        capability = data.get("torch_cpu_capability")
-        lines.append(f"kernels of the {label} run: {state}, torch {capability}; {env}")
+        lines.append(f"kernels of the {label} run: {state}, torch {data.get('torch_cpu_capability')}; {env}")
     return "\n".join(lines)
 
 
 def _format_table(rows: Sequence[Row]) -> str:
     """The rows as a Markdown table (readable as plain text too)."""
     header = [f.name for f in dataclasses.fields(Row)]
-    cells = [header] + [[str(getattr(r, h)) for h in header] for r in rows]
+    cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in rows)]
     widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
-
-    def line(values: list[str]) -> str:
-        return "| " + " | ".join(v.ljust(w) for v, w in zip(values, widths, strict=True)) + " |"
-
-    rule = "| " + " | ".join("-" * w for w in widths) + " |"
-    return "\n".join([line(cells[0]), rule, *(line(c) for c in cells[1:])])
+    cells.insert(1, ["-" * w for w in widths])
+    lines = (" | ".join(v.ljust(w) for v, w in zip(c, widths, strict=True)) for c in cells)
+    return "\n".join(f"| {line} |" for line in lines)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,9 +1,5 @@
-"""A notebook's workspace: one robot's task and units, the run's folders, its artifacts.
-
-:meth:`Workspace.open` (the cup task) and :meth:`Workspace.eating` (the eating scene) pin the runtime,
-set the threads, load the robot and its task, and resolve the folders against the repository root
-(so Jupyter, papermill and Make agree); the loaders name the notebook that makes a missing artifact.
-"""
+"""A notebook's workspace: one robot's task and units, the run's folders (resolved against the
+repository root), its artifacts (a missing one names the notebook that makes it)."""
 
 from __future__ import annotations
 
@@ -56,12 +52,7 @@ class Workspace(Generic[TaskT]):
         belief_cap: float | str | None = STUDY_BELIEF_CAP,
     ) -> Workspace[EatingTask]:
         """:meth:`open` for the eating study: the robot with its fork in the eating scene, its task, and
-        the belief's cap (``ControlConfig.belief_cap``: Javdani et al.'s 0.99 by default, ``None`` or
-        ``"none"`` for Algorithm 1's uncapped belief).
-
-        Raises:
-            ConfigError: ``robot`` is not one of :data:`EATING_ROBOTS`, or a cap out of range.
-        """
+        the belief's cap (``ControlConfig.belief_cap``: 0.99 by default, ``"none"`` for Algorithm 1's)."""
         check_choice("robot", robot, EATING_ROBOTS)
         paths = _folders(build_dir, figures_dir)
         task = make_eating_task()  # mink IK over every goal's tilts and strokes (once per process)
@@ -74,10 +65,7 @@ class Workspace(Generic[TaskT]):
         return self.robot.name
 
     def artifact(self, name: str, **fields: str) -> Path:
-        """The path of artifact ``name`` (see :data:`lasa.base.paths.ARTIFACTS`) for this robot.
-
-        ``fields`` fill the rest of its pattern (``segmentation`` for the eating segmentations).
-        """
+        """This robot's artifact ``name`` (:data:`lasa.base.paths.ARTIFACTS`), ``fields`` filling the rest."""
         return self.paths.artifact(name, self.name, **fields)
 
     def demonstrations(self) -> Demonstrations:
@@ -94,17 +82,13 @@ class Workspace(Generic[TaskT]):
         )
 
     def sim_decoders(self) -> dict[str, LatentActionModel]:
-        """The pair the sims compare (notebook 03): ``base`` for LA and LA+SA, ``entropy``.
-
-        ``base`` is the entropy ablation's lambda = 0 run, fine-tuned from notebook 02's decoder like
-        the entropy decoder (steps, schedule, batches, noise): the two differ only by the entropy term.
-        """
+        """The pair the sims compare (notebook 03): ``base`` (lambda = 0, fine-tuned like the other) for
+        LA and LA+SA, ``entropy``: the two differ only by the entropy term."""
         return {"base": self.decoder("decoder_lambda0")[0], "entropy": self.decoder("decoder_entropy")[0]}
 
 
 def _folders(build_dir: str | os.PathLike[str], figures_dir: str | os.PathLike[str]) -> Paths:
-    """Pin the runtime (:func:`lasa.runtime.pin`), set torch's threads (``LASA_THREADS``), resolve
-    the run's folders (the figures' made)."""
+    """Pin the runtime, set torch's threads, resolve the run's folders (the figures' made)."""
     pin()
     set_threads()
     paths = Paths.of(build_dir, figures_dir)
