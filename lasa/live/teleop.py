@@ -1,9 +1,7 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
-``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` runs the
-control step (:mod:`lasa.live.station`) at a fixed rate from a gamepad or the keyboard; ``replay``
-re-runs a log and checks its states bit for bit (``--mp4`` renders it); ``schedule`` and ``survey``
-are the study kit (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
+``run`` steps :mod:`lasa.live.station` at a fixed rate from a gamepad or keyboard; ``replay`` re-runs a log
+and checks its states bit for bit (``--mp4`` renders it); ``schedule``, ``survey``: :mod:`lasa.live.studykit`.
 """
 
 from __future__ import annotations
@@ -14,7 +12,10 @@ if __name__ == "__main__":  # the CLI: renderer and kernels pinned before mujoco
     pin()
 
 import argparse
+import dataclasses
 import json
+import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -36,8 +37,7 @@ __all__ = ["run_session", "replay", "main"]
 
 
 def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
-    """Pose the viewer's robot at this step's state, draw a belief sphere over each goal (1 to 5 cm)
-    and the instruction text, and sync the window."""
+    """Pose the viewer's robot, draw a belief sphere (1 to 5 cm) over each goal and the text, and sync."""
     with viewer.lock():
         data.qpos[station.robot.qpos_adr] = rec["s"]
         mujoco.mj_forward(station.robot.model, data)
@@ -80,22 +80,13 @@ def run_session(
     viewer_data: mujoco.MjData | None = None,
     on_step: Any = None,
 ) -> dict[str, Any]:
-    """Run the control loop (:class:`lasa.live.session.Session`): one step per Delta, or as fast as possible.
+    """Run :class:`lasa.live.session.Session`, one step per Delta (or as fast as possible, not ``realtime``)
+    into ``writer`` (None: no log), drawing into ``viewer`` (launched with ``viewer_data``), calling
+    ``on_step(step, record)``; returns :meth:`~lasa.live.session.Session.timing` and the stopping ``signal``.
 
-    The session ends after ``max_steps``, when the task is done, a scripted device runs out or
-    the viewer is closed; a signal stops it at the next step (closed ``interrupted``, its name in
-    ``signal``); an exception closes the log ``interrupted`` and goes on.
-
-    Args:
-        station: The robot side; device: the input; writer: the log (None: no log).
-        max_steps: The longest session, in steps.
-        realtime: Hold each step to its deadline (else run as fast as possible).
-        viewer: A passive viewer to draw into, showing ``viewer_data``.
-        viewer_data: The MjData the viewer was launched with.
-        on_step: Called as ``on_step(step, record)`` after each step.
-
-    Returns:
-        :meth:`lasa.live.session.Session.timing`, and the ``signal`` that stopped it (or None).
+    It ends after ``max_steps``, when the task is done, a scripted device runs out or the viewer is
+    closed; a signal stops it at the next step (closed ``interrupted``); an exception closes the log
+    ``interrupted`` and goes on.
     """
     if viewer is not None and viewer_data is None:
         raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
@@ -152,16 +143,10 @@ def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) 
 
 
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
-    """Re-run a logged session from its inputs and compare its states with the log.
-
-    Returns:
-        ``{"steps", "max_state_difference", "exact", "status"}``, ``mp4`` if rendered, ``damaged``
-        (the reason) for a damaged log replayed with ``allow_damaged``.
-
-    Raises:
-        ArtifactError: the sidecar lacks the decoder's checksum or config, the decoder or scene is
-            not the logged one, or the log is damaged (without ``allow_damaged``).
-    """
+    """Re-run a logged session from its inputs: ``{"steps", "max_state_difference", "exact", "status"}``,
+    ``mp4`` if rendered, ``damaged`` (the reason) for a damaged log replayed with ``allow_damaged``.
+    ArtifactError if the sidecar cannot tell what ran, the decoder or scene is not the logged one,
+    or the log is damaged."""
     frame, meta = read_session(session, allow_damaged=allow_damaged)
     check_scene(session, meta)
     fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
@@ -209,8 +194,6 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
 
 def _check_display() -> None:
     """Refuse, with what to do, to open the viewer without a display."""
-    import os
-
     if sys.platform.startswith("linux") and not (
         os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
     ):
@@ -301,16 +284,8 @@ def _in_viewer(
 
 def _run(args: argparse.Namespace) -> int:
     """``run``: one live session; 128 + the signal's number when a signal stopped it."""
-    import signal
-
     check_range("duration", args.duration, 0.0, low_open=True)
-    config = SessionConfig(
-        robot=args.robot,
-        task=args.task,
-        condition=args.condition,
-        participant=args.participant,
-        build_dir=args.build_dir,
-    )
+    config = SessionConfig(**{f.name: getattr(args, f.name) for f in dataclasses.fields(SessionConfig)})
     if not args.no_viewer:
         _check_display()
     station = Station(config)
