@@ -298,7 +298,7 @@ def test_a_server_shutdown_mid_step_logs_that_step_before_closing_interrupted(tm
             errors.append(exc)
             raise
 
-    monkeypatch.setattr(loop, "tick", slow_tick)
+    monkeypatch.setattr(conversation, "tick", slow_tick)
 
     async def main():
         async def send(message):
