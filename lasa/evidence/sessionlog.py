@@ -76,8 +76,7 @@ class SessionWriter:
         self.flush()
         self._fh.close()
         os.replace(self.part, self.csv)
-        self.meta.update(extra)
-        self.meta.update(status=status, steps=self._rows)
+        self.meta.update(extra, status=status, steps=self._rows)
         self._write_meta()
         return self.csv
 
@@ -85,13 +84,10 @@ class SessionWriter:
 def read_session(
     path: str | os.PathLike[str], allow_damaged: bool = False
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """A session's steps and sidecar, from any of its files or its stem (a crashed one's ``.csv.part``
-    reads ``interrupted``); ``allow_damaged``: read the rows that parse of a damaged log (unparsable,
-    non-finite outside the raw axes, out of time order, or not its ``steps``), the reason in ``damaged``.
-
-    Raises:
-        ArtifactError: if the session's sidecar or rows are missing (DamagedLogError: damaged).
-    """
+    """A session's steps and sidecar, from any of its files or its stem (a crashed one's ``.csv.part`` reads
+    ``interrupted``); ArtifactError if its sidecar or rows are missing, DamagedLogError if damaged
+    (unparsable, non-finite outside the raw axes, out of time order, or not its ``steps``), unless
+    ``allow_damaged``: then the rows that parse, the reason in ``damaged``."""
     folder, stem = _locate(path)
     meta = _read_sidecar(folder / f"{stem}.json")
     ended = meta.get("status") in STATUS[1:]

@@ -1,10 +1,5 @@
-r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script.
-
-Every device answers :meth:`Device.poll` with one :class:`StickSample` per step (two axes, a mode
-press, stop held), made safe once (:func:`safe_axes`: disconnected or non-finite reads zero, clipped
-to [-1, 1]). The keyboard works by press-to-set (MuJoCo's viewer reports presses, never releases):
-each arrow press moves an axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop.
-"""
+r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script, each polled for one
+:class:`StickSample` per step (two axes, a mode press, stop held), made safe once (:func:`safe_axes`)."""
 
 from __future__ import annotations
 
@@ -39,17 +34,14 @@ class StickSample:
         return safe_axes(self.raw, self.connected)
 
 
-def safe_axes(raw: np.ndarray, connected: bool = True, deadzone: float = 0.0) -> np.ndarray:
-    """z, (2,): ``raw`` made safe: zero if disconnected, non-finite axes zero, |axis| below ``deadzone``
-    zero, clipped to [-1, 1]."""
+def safe_axes(raw: np.ndarray, connected: bool = True) -> np.ndarray:
+    """z, (2,): ``raw`` made safe: zero if disconnected, non-finite axes zero, clipped to [-1, 1]."""
     axes = np.asarray(raw, dtype=float).reshape(-1)
     if axes.shape != (2,):
         raise ConfigError(f"a stick sample has 2 axes, got shape {np.shape(raw)}")
     if not connected:
         return np.zeros(2)
-    axes = np.where(np.isfinite(axes), axes, 0.0)
-    axes = np.where(np.abs(axes) < deadzone, 0.0, axes)
-    return np.clip(axes, -1.0, 1.0)
+    return np.clip(np.where(np.isfinite(axes), axes, 0.0), -1.0, 1.0)
 
 
 class Device(Protocol):
@@ -59,11 +51,9 @@ class Device(Protocol):
 
     def poll(self) -> StickSample:
         """This step's input."""
-        ...
 
     def close(self) -> None:
         """Release the device."""
-        ...
 
 
 class ScriptedDevice:
@@ -81,14 +71,13 @@ class ScriptedDevice:
     ) -> None:
         self.axes = np.asarray(axes, dtype=float).reshape(-1, 2)
         n = len(self.axes)
-        self.mode = np.zeros(n, bool) if mode is None else np.asarray(mode, bool)
-        self.stop = np.zeros(n, bool) if stop is None else np.asarray(stop, bool)
-        self.connected = np.ones(n, bool) if connected is None else np.asarray(connected, bool)
+        self.mode, self.stop, self.connected = (
+            np.full(n, default) if flags is None else np.asarray(flags, bool)
+            for flags, default in ((mode, False), (stop, False), (connected, True))
+        )
         for name in ("mode", "stop", "connected"):
-            if getattr(self, name).shape != (n,):
-                raise ConfigError(
-                    f"{name} must have one entry per step ({n}), got {getattr(self, name).shape}"
-                )
+            if (shape := getattr(self, name).shape) != (n,):
+                raise ConfigError(f"{name} must have one entry per step ({n}), got {shape}")
         self.step = 0
 
     @classmethod
@@ -104,8 +93,7 @@ class ScriptedDevice:
 
     @classmethod
     def from_file(cls, path: str) -> ScriptedDevice:
-        """A script from a CSV file (columns as :meth:`from_table`); a missing, empty or column-less file
-        is a ConfigError in one line."""
+        """A script from a CSV file (columns as :meth:`from_table`); else a ConfigError in one line."""
         try:
             table = pd.read_csv(path)
         except FileNotFoundError:
@@ -140,14 +128,14 @@ class ScriptedDevice:
         """Nothing to release."""
 
 
-# GLFW key codes, as MuJoCo's viewer reports them to its key callback
-_KEY_RIGHT, _KEY_LEFT, _KEY_DOWN, _KEY_UP = 262, 263, 264, 265
+# GLFW key codes, as MuJoCo's viewer reports them to its key callback: the arrows' axis and direction
+_ARROWS = {262: (0, 1.0), 263: (0, -1.0), 264: (1, -1.0), 265: (1, 1.0)}
 _KEY_SPACE, _KEY_M, _KEY_S = 32, 77, 83
 
 
 class KeyboardDevice:
-    """The keyboard, press-to-set, through :meth:`key_callback` (``launch_passive(key_callback=...)``, run on
-    the viewer's thread under a lock)."""
+    """The keyboard, press-to-set through :meth:`key_callback` (MuJoCo's viewer reports presses, never
+    releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
     name = "keyboard"
 
@@ -161,14 +149,9 @@ class KeyboardDevice:
     def key_callback(self, key: int) -> None:
         """Update the held axes, the mode press or the stop toggle from one key press."""
         with self._lock:
-            if key == _KEY_RIGHT:
-                self._axes[0] = min(1.0, self._axes[0] + self.notch)
-            elif key == _KEY_LEFT:
-                self._axes[0] = max(-1.0, self._axes[0] - self.notch)
-            elif key == _KEY_UP:
-                self._axes[1] = min(1.0, self._axes[1] + self.notch)
-            elif key == _KEY_DOWN:
-                self._axes[1] = max(-1.0, self._axes[1] - self.notch)
+            if key in _ARROWS:
+                axis, sign = _ARROWS[key]
+                self._axes[axis] = min(1.0, max(-1.0, self._axes[axis] + sign * self.notch))
             elif key == _KEY_SPACE:
                 self._axes[:] = 0.0
             elif key == _KEY_M:

@@ -1,8 +1,5 @@
-"""The robot drawn on the server (``--frames server``): MuJoCo's off-screen renderer, small JPEG frames.
-
-Rendering is slow, so frames are best effort: one worker renders the newest state, a request that
-arrives while it is busy is dropped, and the control loop never waits for a frame.
-"""
+"""The robot drawn on the server (``--frames server``): MuJoCo's off-screen renderer, small JPEG frames, best
+effort: one worker renders the newest state, a request while it is busy is dropped, the loop never waits."""
 
 from __future__ import annotations
 
@@ -18,13 +15,8 @@ __all__ = ["FrameRenderer"]
 
 
 class FrameRenderer:
-    """JPEG frames of the eating scene at given joint positions, from one rendering thread.
-
-    Args:
-        width: Frame width [px].
-        height: Frame height [px].
-        quality: JPEG quality (1-95).
-    """
+    """JPEG frames (``width`` x ``height`` px, ``quality`` 1-95) of the eating scene at given joint positions,
+    from one rendering thread."""
 
     def __init__(self, width: int = 320, height: int = 240, quality: int = 70) -> None:
         self.size = (height, width)

@@ -1,9 +1,6 @@
-"""A participant's protocol and their progress through it, kept on the server.
-
-Consent; per condition in the participant's order (``study/schedule.csv``) a practice, the Entree,
-the Dessert and the questionnaire; thanks. Progress (``study/progress.json``) lets a participant who
-disconnects come back where they left off, and ends a finished participant's link.
-"""
+"""A participant's protocol (consent; per condition in their ``study/schedule.csv`` order a practice, the
+Entree, the Dessert and the questionnaire; thanks) and their progress through it (``study/progress.json``:
+one who disconnects comes back where they left off; a finished participant's link ends)."""
 
 from __future__ import annotations
 
@@ -42,15 +39,8 @@ def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
     """The participant's steps, from the study's schedule (empty if they are not in it)."""
     schedule = pd.read_csv(study_dir(sessions) / "schedule.csv", dtype={"participant": str})
     rows = schedule[schedule.participant == check_participant(participant)].sort_values("position")
-    steps: list[Step] = []
-    for order, condition in enumerate(rows.condition):
-        steps += [
-            Step("practice", condition, PRACTICE_TASK, order),
-            Step("trial", condition, "Entree", order),
-            Step("trial", condition, "Dessert", order),
-            Step("survey", condition, "", order),
-        ]
-    return steps
+    kinds = (("practice", PRACTICE_TASK), ("trial", "Entree"), ("trial", "Dessert"), ("survey", ""))
+    return [Step(kind, c, task, order) for order, c in enumerate(rows.condition) for kind, task in kinds]
 
 
 class Progress:

@@ -1,9 +1,6 @@
-"""The robot drawn in the browser (``--frames browser``): MuJoCo's WebAssembly build and three.js.
-
-The server serves both npm packages itself (:class:`NpmFiles`, installed by ``make setup``) and the
-trial's scene XML, whose mesh paths :func:`browser_scene` rewrites to safe names of its own
-choosing: no string from a client ever reaches a path.
-"""
+"""The robot drawn in the browser (``--frames browser``): MuJoCo's WebAssembly build and three.js, served by
+the server itself (:class:`NpmFiles`), and the trial's scene, its files renamed by :func:`browser_scene`: no
+string from a client ever reaches a path."""
 
 from __future__ import annotations
 
@@ -35,11 +32,7 @@ ASSET_TYPES = {
 
 
 def npm_folder(name: str) -> Path:
-    """Where ``make setup`` put npm package ``name`` (a key of :data:`NPM_PACKAGES`).
-
-    Raises:
-        ArtifactError: if it is not there.
-    """
+    """Where ``make setup`` put npm package ``name`` (a key of :data:`NPM_PACKAGES`); else ArtifactError."""
     folder, marker = NPM_PACKAGES[name]
     path = repo_root() / ".venv" / folder
     if not (path / marker).is_file():
@@ -70,12 +63,8 @@ class NpmFiles(StaticFiles):
 
 
 def browser_scene(xml_path: Path) -> tuple[str, dict[str, Path]]:
-    """The scene ``xml_path`` as the page loads it: its MJCF with every ``file`` renamed, and the map
-    from those names to the files on the server.
-
-    Raises:
-        ArtifactError: if the scene names a file of a kind the page does not load, or one that is missing.
-    """
+    """The scene ``xml_path`` as the page loads it: its MJCF with every ``file`` renamed, and the map from
+    those names to the files on the server; ArtifactError for a missing file or one the page cannot load."""
     root = ET.fromstring(xml_path.read_text())
     for compiler in root.iter("compiler"):
         for attr in ("meshdir", "texturedir", "assetdir"):

@@ -118,7 +118,7 @@ function tick(msg) {
   });
 }
 
-// The goals' names over the picture, where the server's camera sees each goal (lasa.live.web.labels).
+// The goals' names over the picture, where the server's camera sees each goal (lasa.live.web.app.goal_labels).
 function labels(msg) {
   $("labels").replaceChildren(...msg.labels.map((g) => {
     const span = Object.assign(document.createElement("span"), { textContent: g.name });
