@@ -89,7 +89,15 @@ def read_session(
     (unparsable, non-finite outside the raw axes, out of time order, or not its ``steps``), unless
     ``allow_damaged``: then the rows that parse, the reason in ``damaged``."""
     folder, stem = _locate(path)
-    meta = _read_sidecar(folder / f"{stem}.json")
+    sidecar = folder / f"{stem}.json"
+    if not sidecar.is_file():
+        raise ArtifactError(f"no session sidecar {sidecar}")
+    try:
+        meta = json.loads(sidecar.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not a JSON object")
     ended = meta.get("status") in STATUS[1:]
     rows = folder / f"{stem}.csv"
     if not rows.is_file():
@@ -135,18 +143,6 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
         if stem.endswith(suffix):
             stem = stem[: -len(suffix)]
     return p.parent, stem
-
-
-def _read_sidecar(sidecar: Path) -> dict[str, Any]:
-    if not sidecar.is_file():
-        raise ArtifactError(f"no session sidecar {sidecar}")
-    try:
-        meta = json.loads(sidecar.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
-    if not isinstance(meta, dict):
-        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not a JSON object")
-    return meta
 
 
 def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:

@@ -83,13 +83,8 @@ def scan_sessions(
             left_out.append((sidecar.stem, f"{LEFT_OUT['status']} ({meta['status']})"))
         else:
             logs.append((frame, {**meta, "session": sidecar.name}))
-    _refuse_duplicates([m for _, m in logs], folder)
-    return logs, pd.DataFrame(left_out, columns=["session", "reason"])
-
-
-def _refuse_duplicates(metas: list[dict[str, Any]], folder: str | os.PathLike[str]) -> None:
     seen: dict[tuple[str, str, str], str] = {}
-    for meta in metas:
+    for _, meta in logs:
         key = (str(meta.get("participant")), str(meta["condition"]), str(meta["task"]))
         if key in seen:
             raise ArtifactError(
@@ -97,6 +92,7 @@ def _refuse_duplicates(metas: list[dict[str, Any]], folder: str | os.PathLike[st
                 f"condition {key[1]}, task {key[2]}: move one of them out of the folder"
             )
         seen[key] = meta["session"]
+    return logs, pd.DataFrame(left_out, columns=["session", "reason"])
 
 
 def load_sessions(

@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import threading
 from collections.abc import Sequence
-from typing import Protocol
 
 import numpy as np
 import pandas as pd
@@ -42,18 +41,6 @@ def safe_axes(raw: np.ndarray, connected: bool = True) -> np.ndarray:
     if not connected:
         return np.zeros(2)
     return np.clip(np.where(np.isfinite(axes), axes, 0.0), -1.0, 1.0)
-
-
-class Device(Protocol):
-    """What the teleoperation loop reads from."""
-
-    name: str
-
-    def poll(self) -> StickSample:
-        """This step's input."""
-
-    def close(self) -> None:
-        """Release the device."""
 
 
 class ScriptedDevice:
@@ -205,21 +192,23 @@ class GamepadDevice:
         pg = self._pg
         try:
             pg.event.pump()
-            if not self._stick.get_init() or pg.joystick.get_count() == 0:
-                return StickSample(raw=np.full(2, np.nan), connected=False)
-            raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
-            pressed = bool(self._stick.get_button(0))
-            mode = pressed and not self._was_pressed  # one press, however long held
-            self._was_pressed = pressed
-            stop = bool(self._stick.get_button(1))
+            if self._stick.get_init() and pg.joystick.get_count() > 0:
+                raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
+                pressed = bool(self._stick.get_button(0))
+                mode = pressed and not self._was_pressed  # one press, however long held
+                self._was_pressed = pressed
+                stop = bool(self._stick.get_button(1))
+                return StickSample(raw=np.where(np.abs(raw) < DEADZONE, 0.0, raw), mode=mode, stop=stop)
         except pg.error:
-            return StickSample(raw=np.full(2, np.nan), connected=False)
-        raw = np.where(np.abs(raw) < DEADZONE, 0.0, raw)
-        return StickSample(raw=raw, mode=mode, stop=stop)
+            pass
+        return StickSample(raw=np.full(2, np.nan), connected=False)
 
     def close(self) -> None:
         """Release SDL's joystick subsystem."""
         self._pg.joystick.quit()
+
+
+Device = ScriptedDevice | KeyboardDevice | GamepadDevice  # what the teleoperation loop reads from
 
 
 def open_device(kind: str = "auto") -> tuple[Device, str]:
@@ -228,8 +217,7 @@ def open_device(kind: str = "auto") -> tuple[Device, str]:
         raise ConfigError(f"unknown device {kind!r}; choose 'auto', 'gamepad' or 'keyboard'")
     if kind in ("auto", "gamepad"):
         try:
-            pad = GamepadDevice()
-            return pad, "input: gamepad (stick = z, button 0 = mode, button 1 = stop)"
+            return GamepadDevice(), "input: gamepad (stick = z, button 0 = mode, button 1 = stop)"
         except (ConfigError, ImportError) as exc:
             if kind == "gamepad":
                 raise ConfigError(f"no gamepad: {exc}") from exc

@@ -28,6 +28,7 @@ from lasa.base.conditions import ALL
 from lasa.base.config import check_range
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaError
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
+from lasa.live import studykit
 from lasa.live.devices import Device, ScriptedDevice, open_device
 from lasa.live.session import Session, StopOnSignals, open_log
 from lasa.live.station import SESSION_TASKS, SessionConfig, Station
@@ -192,17 +193,6 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
         time.sleep(0.5)
 
 
-def _check_display() -> None:
-    """Refuse, with what to do, to open the viewer without a display."""
-    if sys.platform.startswith("linux") and not (
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    ):
-        raise ConfigError(
-            "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
-            "or with --no-viewer and scripted input"
-        )
-
-
 def _parser() -> argparse.ArgumentParser:
     """The command line's parser: ``run``, ``replay``, ``schedule`` and ``survey``."""
     parser = argparse.ArgumentParser(prog="python -m lasa.live.teleop", description=__doc__.splitlines()[0])
@@ -244,17 +234,6 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _open_input(spec: str) -> Device:
-    """The device ``--device`` names, saying which one it is."""
-    if spec.startswith("scripted:"):
-        device: Device = ScriptedDevice.from_file(spec.split(":", 1)[1])
-        print("input: scripted")
-        return device
-    device, message = open_device(spec)
-    print(message)
-    return device
-
-
 def _in_viewer(
     station: Station, device: Device, writer: SessionWriter, max_steps: int, screenshot: str | None
 ) -> dict[str, Any]:
@@ -286,10 +265,19 @@ def _run(args: argparse.Namespace) -> int:
     """``run``: one live session; 128 + the signal's number when a signal stopped it."""
     check_range("duration", args.duration, 0.0, low_open=True)
     config = SessionConfig(**{f.name: getattr(args, f.name) for f in dataclasses.fields(SessionConfig)})
-    if not args.no_viewer:
-        _check_display()
+    display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    if not args.no_viewer and sys.platform.startswith("linux") and not display:
+        raise ConfigError(
+            "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
+            "or with --no-viewer and scripted input"
+        )
     station = Station(config)
-    device = _open_input(args.device)
+    if args.device.startswith("scripted:"):
+        device: Device = ScriptedDevice.from_file(args.device.split(":", 1)[1])
+        message = "input: scripted"
+    else:
+        device, message = open_device(args.device)
+    print(message)
     writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
     try:
@@ -310,18 +298,6 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _study(args: argparse.Namespace) -> int:
-    """``schedule`` and ``survey``: the study kit."""
-    from lasa.live import studykit
-
-    if args.command == "schedule":
-        print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
-    else:
-        answers = None if args.answers is None else studykit.parse_answers(args.answers)
-        print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
-    return 0
-
-
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``run``, ``replay``, ``schedule`` and ``survey``; a bad input is one line, exit 2."""
     args = _parser().parse_args(argv)
@@ -330,9 +306,14 @@ def main(argv: list[str] | None = None) -> int:
             result = replay(args.session, args.mp4, allow_damaged=args.allow_damaged)
             print(result)
             return 0 if result["exact"] else 1
-        if args.command in ("schedule", "survey"):
-            return _study(args)
-        return _run(args)
+        if args.command == "run":
+            return _run(args)
+        if args.command == "schedule":  # the study kit
+            print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
+        else:
+            answers = None if args.answers is None else studykit.parse_answers(args.answers)
+            print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
+        return 0
     except LasaError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -162,11 +162,6 @@ class Study:
         return key
 
 
-def _same_origin(ws: WebSocket, extra: tuple[str, ...]) -> bool:
-    origin, host = ws.headers.get("origin"), ws.headers.get("host")
-    return bool(origin and host) and origin in {f"http://{host}", f"https://{host}", *extra}
-
-
 async def page(request: Request) -> Response:
     """The study page: the same for everyone (the token stays in the address's fragment)."""
     browser = request.app.state.study.config.frames == "browser"
@@ -200,23 +195,20 @@ async def _hello(ws: WebSocket) -> str | None:
     return msg.get("token") if msg["type"] == "hello" else None
 
 
-async def _refuse(ws: WebSocket, reason: str) -> None:
-    with contextlib.suppress(Exception):
-        await ws.send_json({"type": "refused", "reason": reason})
-        await ws.close(code=1008)
-
-
 async def socket(ws: WebSocket) -> None:
     """A participant's connection: the origin checked before it opens, the token in its first message."""
     study: Study = ws.app.state.study
-    if not _same_origin(ws, study.config.origins):
+    origin, host = ws.headers.get("origin"), ws.headers.get("host")
+    if not (origin and host and origin in {f"http://{host}", f"https://{host}", *study.config.origins}):
         await ws.close(code=1008)
         return
     await ws.accept()
     token = await _hello(ws)
     participant, reason = study.admit(token) if token is not None else (None, "no_hello")
     if participant is None:
-        await _refuse(ws, reason)
+        with contextlib.suppress(Exception):
+            await ws.send_json({"type": "refused", "reason": reason})
+            await ws.close(code=1008)
         return
     study.active.add(participant)
     try:

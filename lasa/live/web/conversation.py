@@ -20,7 +20,7 @@ from lasa.base.errors import ArtifactError, ConfigError
 from lasa.live.devices import StickSample
 from lasa.live.session import Session, open_log
 from lasa.live.station import SessionConfig, Station
-from lasa.live.web.plan import Step, plan_of, session_folder
+from lasa.live.web.plan import Step, plan_of
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
 
 if TYPE_CHECKING:
@@ -64,9 +64,8 @@ class Conversation:
         """Serve the participant until their plan is done or the page goes."""
         receiver = asyncio.create_task(self._receive())
         try:
-            await self._protocol()
-        except Gone:
-            pass
+            with contextlib.suppress(Gone):
+                await self._protocol()
         finally:
             receiver.cancel()
             with contextlib.suppress(asyncio.CancelledError):
@@ -184,7 +183,8 @@ class Conversation:
             "panda", step.task, step.condition, self.participant, self.study.config.build_dir
         )
         attempt = self.study.progress.attempt(self.participant)
-        folder = session_folder(self.study.config.sessions, step)
+        folder = Path(self.study.config.sessions)  # practice apart: the analysis reads the trials only
+        folder = folder / "practice" if step.kind == "practice" else folder
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
         except (ConfigError, ArtifactError) as exc:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-from pathlib import Path
 from typing import Any
 
 import pandas as pd
@@ -16,7 +15,7 @@ from lasa.base.io import write_text
 from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.web.tokens import check_participant, study_dir
 
-__all__ = ["Step", "plan_of", "Progress", "session_folder"]
+__all__ = ["Step", "plan_of", "Progress"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,8 +80,3 @@ class Progress:
 
     def _save(self) -> None:
         write_text(self.path, json.dumps(self._state, indent=2, sort_keys=True) + "\n")
-
-
-def session_folder(sessions: str | os.PathLike[str], step: Step) -> Path:
-    """Where a step's session is logged: practice apart, so the analysis reads the trials only."""
-    return Path(sessions) / "practice" if step.kind == "practice" else Path(sessions)
