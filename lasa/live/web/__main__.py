@@ -87,11 +87,7 @@ def _serve(argv: list[str]) -> int:
         "from the state), or nobody [%(default)s]",
     )
     parser.add_argument(
-        "--origin",
-        dest="origins",
-        action="append",
-        default=[],
-        help="a page origin allowed besides the server's",
+        "--origin", action="append", default=[], help="a page origin allowed besides the server's"
     )
     parser.add_argument(
         "--show-belief",
@@ -101,8 +97,8 @@ def _serve(argv: list[str]) -> int:
     )
     args = parser.parse_args(argv)
     host = args.host or DEFAULT_HOST
-    settings = {f.name: getattr(args, f.name) for f in dataclasses.fields(WebConfig)}
-    config = WebConfig(**settings | {"origins": tuple(args.origins)})
+    settings = {f.name: getattr(args, f.name, None) for f in dataclasses.fields(WebConfig)}
+    config = WebConfig(**settings | {"origins": tuple(args.origin)})
     conditions = preflight(config)  # every decoder, scene and npm file the schedule needs, or exit
     print(f"checked: every step of {', '.join(conditions)} can run", file=sys.stderr)
     app = create_app(config)
