@@ -20,11 +20,12 @@ from lasa.base.io import write_text
 __all__ = ["SessionWriter", "read_session", "check_scene"]
 
 STATUS = ("running", "complete", "interrupted")
+FLUSH_EVERY = 10  # rows between flushes to disk: a crash loses at most this many steps
 
 
 class SessionWriter:
-    """Write one session's steps as they happen: in ``folder`` (created), as ``stem``, the sidecar
-    ``meta`` (plain JSON), the scene's MJCF and the step ``columns``; flushed every ``flush_every`` steps."""
+    """Write one session's steps as they happen: in ``folder`` (created), as ``stem``, the sidecar ``meta``
+    (plain JSON), the scene's MJCF and the step ``columns``; flushed every :data:`FLUSH_EVERY` steps."""
 
     def __init__(
         self,
@@ -33,13 +34,11 @@ class SessionWriter:
         meta: dict[str, Any],
         scene_xml: str,
         columns: list[str],
-        flush_every: int = 10,
     ) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
         self.stem = stem
         self.columns = columns
-        self.flush_every = flush_every
         self.meta = {**meta, "status": "running", "steps": 0, "scene_sha256": _text_sha256(scene_xml)}
         self.csv = self.folder / f"{stem}.csv"
         self.part = self.folder / f"{stem}.csv.part"
@@ -56,12 +55,12 @@ class SessionWriter:
         write_text(self.sidecar, json.dumps(self.meta, indent=2, sort_keys=True) + "\n")
 
     def append(self, row: list[float]) -> None:
-        """Write one step's values (in ``columns`` order); flush every ``flush_every`` rows."""
+        """Write one step's values (in ``columns`` order); flush every :data:`FLUSH_EVERY` rows."""
         if len(row) != len(self.columns):
             raise ConfigError(f"a row has {len(self.columns)} values, got {len(row)}")
         self._fh.write(",".join(repr(float(v)) for v in row) + "\n")
         self._rows += 1
-        if self._rows % self.flush_every == 0:
+        if self._rows % FLUSH_EVERY == 0:
             self.flush()
 
     def flush(self) -> None:

@@ -47,8 +47,6 @@ class ScriptedDevice:
     """Samples from a script, one per step (``axes`` (T, 2), NaN reads zero; ``mode``, ``stop`` and
     ``connected`` (T,), default none, never, always), then rest (zero axes)."""
 
-    name = "scripted"
-
     def __init__(
         self,
         axes: np.ndarray,
@@ -124,10 +122,7 @@ class KeyboardDevice:
     """The keyboard, press-to-set through :meth:`key_callback` (MuJoCo's viewer reports presses, never
     releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
-    name = "keyboard"
-
-    def __init__(self, notch: float = NOTCH) -> None:
-        self.notch = notch
+    def __init__(self) -> None:
         self._axes = np.zeros(2)
         self._mode = False
         self._stop = False
@@ -138,7 +133,7 @@ class KeyboardDevice:
         with self._lock:
             if key in _ARROWS:
                 axis, sign = _ARROWS[key]
-                self._axes[axis] = min(1.0, max(-1.0, self._axes[axis] + sign * self.notch))
+                self._axes[axis] = min(1.0, max(-1.0, self._axes[axis] + sign * NOTCH))
             elif key == _KEY_SPACE:
                 self._axes[:] = 0.0
             elif key == _KEY_M:
@@ -161,9 +156,7 @@ class GamepadDevice:
     """A gamepad through pygame's SDL joystick API: axes 0 and 1 (y flipped: forward is +z2), button 0
     mode, button 1 stop; one gone away reads disconnected. ConfigError if none is connected."""
 
-    name = "gamepad"
-
-    def __init__(self, index: int = 0) -> None:
+    def __init__(self) -> None:
         import os
 
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
@@ -182,9 +175,9 @@ class GamepadDevice:
             pygame.event.pump()
         except pygame.error as exc:
             raise ConfigError(f"SDL could not start its joystick subsystem: {exc}") from exc
-        if pygame.joystick.get_count() <= index:
-            raise ConfigError(f"no gamepad at index {index} ({pygame.joystick.get_count()} connected)")
-        self._stick = pygame.joystick.Joystick(index)
+        if pygame.joystick.get_count() == 0:
+            raise ConfigError("no gamepad at index 0 (0 connected)")
+        self._stick = pygame.joystick.Joystick(0)
         self._was_pressed = False
 
     def poll(self) -> StickSample:
@@ -212,7 +205,10 @@ Device = ScriptedDevice | KeyboardDevice | GamepadDevice  # what the teleoperati
 
 
 def open_device(kind: str = "auto") -> tuple[Device, str]:
-    """The device ``gamepad``, ``keyboard`` or ``auto`` (a gamepad if connected), and a sentence naming it."""
+    """The device ``gamepad``, ``keyboard``, ``auto`` (a gamepad if connected) or ``scripted:<file.csv>``,
+    and a sentence naming it."""
+    if kind.startswith("scripted:"):
+        return ScriptedDevice.from_file(kind.split(":", 1)[1]), "input: scripted"
     if kind not in ("auto", "gamepad", "keyboard"):
         raise ConfigError(f"unknown device {kind!r}; choose 'auto', 'gamepad' or 'keyboard'")
     if kind in ("auto", "gamepad"):

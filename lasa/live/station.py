@@ -145,17 +145,13 @@ class Station:
         return self.runner.state[0]
 
     @property
-    def log_belief(self) -> np.ndarray:
-        """log b, shape (G,)."""
-        return self.runner.log_belief[0]
-
-    @property
     def belief(self) -> np.ndarray:
         """b over the task's goals, shape (G,)."""
-        return belief(self.log_belief)
+        return belief(self.runner.log_belief[0])
 
     def meta(self) -> dict[str, Any]:
         """The sidecar's description of this station."""
+        path = self.decoder_path
         return {
             **dataclasses.asdict(self.config),
             "goals": list(self.task.goal_names),
@@ -163,10 +159,8 @@ class Station:
             "dt": self.control.dt,
             "control": dataclasses.asdict(self.control),
             "alpha": self.alpha,
-            "decoder": None if self.decoder_path is None else self.decoder_path.name,
-            "decoder_sha256": None
-            if self.decoder_path is None
-            else hashlib.sha256(self.decoder_path.read_bytes()).hexdigest(),
+            "decoder": None if path is None else path.name,
+            "decoder_sha256": None if path is None else hashlib.sha256(path.read_bytes()).hexdigest(),
             "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
             "lasa_version": _lasa_version(),
         }

@@ -12,7 +12,7 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
-from lasa.evidence.sessions import QUESTIONS, SCALES
+from lasa.evidence.sessions import QUESTIONS, SCALES, read_likert
 
 __all__ = ["MAX_PARTICIPANTS", "write_schedule", "parse_answer", "parse_answers", "ask", "survey"]
 
@@ -112,8 +112,8 @@ def survey(
     with locked(path.parent):
         if not overwrite:  # again: another survey may have answered meanwhile
             _refuse_answered(path, participant, condition)
-        if path.exists():
-            old = pd.read_csv(path, dtype={"participant": str})
+        old = read_likert(path.parent)
+        if old is not None:
             keep = ~((old.participant == participant) & (old.condition == condition))
             new = pd.concat([old[keep], new], ignore_index=True)
         write_csv(path, new)
@@ -121,10 +121,9 @@ def survey(
 
 
 def _refuse_answered(path: Path, participant: str, condition: str) -> None:
-    if path.is_file():
-        old = pd.read_csv(path, dtype={"participant": str})
-        if ((old.participant == participant) & (old.condition == condition)).any():
-            raise ConfigError(
-                f"{participant} answered for {condition} already in {path}: "
-                "pass --overwrite to replace those answers"
-            )
+    old = read_likert(path.parent)
+    if old is not None and ((old.participant == participant) & (old.condition == condition)).any():
+        raise ConfigError(
+            f"{participant} answered for {condition} already in {path}: "
+            "pass --overwrite to replace those answers"
+        )

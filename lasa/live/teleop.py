@@ -18,6 +18,7 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -37,8 +38,11 @@ from lasa.method.retarget import MODES
 __all__ = ["run_session", "replay", "main"]
 
 
-def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
-    """Pose the viewer's robot, draw a belief sphere (1 to 5 cm) over each goal and the text, and sync."""
+def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> bool:
+    """Pose the viewer's robot, draw a belief sphere (1 to 5 cm) over each goal and the text, and sync;
+    False if the viewer was closed."""
+    if not viewer.is_running():
+        return False
     with viewer.lock():
         data.qpos[station.robot.qpos_adr] = rec["s"]
         mujoco.mj_forward(station.robot.model, data)
@@ -68,6 +72,7 @@ def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData,
     except (AttributeError, TypeError):  # an older viewer without text overlays
         pass
     viewer.sync()
+    return True
 
 
 def run_session(
@@ -77,30 +82,18 @@ def run_session(
     max_steps: int,
     *,
     realtime: bool = True,
-    viewer: Any = None,
-    viewer_data: mujoco.MjData | None = None,
-    on_step: Any = None,
+    show: Callable[[dict[str, Any]], bool] | None = None,
+    on_step: Callable[[int, dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """Run :class:`lasa.live.session.Session`, one step per Delta (or as fast as possible, not ``realtime``)
-    into ``writer`` (None: no log), drawing into ``viewer`` (launched with ``viewer_data``), calling
-    ``on_step(step, record)``; returns :meth:`~lasa.live.session.Session.timing` and the stopping ``signal``.
+    into ``writer`` (None: no log), showing each record (``show(record)``, False: the viewer closed) and
+    calling ``on_step(step, record)``; returns :meth:`~lasa.live.session.Session.timing` and the stopping
+    ``signal``.
 
     It ends after ``max_steps``, when the task is done, a scripted device runs out or the viewer is
     closed; a signal stops it at the next step (closed ``interrupted``); an exception closes the log
     ``interrupted`` and goes on.
     """
-    if viewer is not None and viewer_data is None:
-        raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
-    goals = station.robot.goal_positions() if viewer is not None else None
-
-    def show(rec: dict[str, Any]) -> bool:
-        if goals is None:
-            return True
-        if not viewer.is_running():
-            return False
-        _draw(station, goals, viewer, viewer_data, rec)
-        return True
-
     session = Session(station, writer, max_steps, realtime)
     status = "complete"
     with StopOnSignals() as stop:
@@ -194,7 +187,6 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    """The command line's parser: ``run``, ``replay``, ``schedule`` and ``survey``."""
     parser = argparse.ArgumentParser(prog="python -m lasa.live.teleop", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="drive the robot live and log the session")
@@ -249,7 +241,10 @@ def _in_viewer(
         with viewer.lock():  # the scene's own camera, as in the videos
             viewer.cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
             viewer.cam.fixedcamid = station.robot.model.camera(station.robot.spec.camera).id
-        timing = run_session(station, device, writer, max_steps, viewer=viewer, viewer_data=data)
+        goals = station.robot.goal_positions()
+        timing = run_session(
+            station, device, writer, max_steps, show=lambda rec: _draw(station, goals, viewer, data, rec)
+        )
         if screenshot:
             _screenshot(screenshot)
     # let the viewer's thread finish closing its window before Python tears down:
@@ -272,11 +267,7 @@ def _run(args: argparse.Namespace) -> int:
             "or with --no-viewer and scripted input"
         )
     station = Station(config)
-    if args.device.startswith("scripted:"):
-        device: Device = ScriptedDevice.from_file(args.device.split(":", 1)[1])
-        message = "input: scripted"
-    else:
-        device, message = open_device(args.device)
+    device, message = open_device(args.device)
     print(message)
     writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))

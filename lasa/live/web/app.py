@@ -32,7 +32,6 @@ from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_scene, npm_folder
 from lasa.live.web.tokens import TokenStore
 from lasa.world.fork import tip_frames
-from lasa.world.goals import GoalTask
 
 __all__ = ["FRAMES", "HELLO_S", "PING_S", "PING_TIMEOUT_S", "REFUSALS", "WebConfig", "Study", "create_app"]
 
@@ -107,19 +106,6 @@ def project(model: mujoco.MjModel, data: mujoco.MjData, camera: int, points: np.
     return np.stack([(x + 1.0) / 2.0, (1.0 - y) / 2.0], axis=1)
 
 
-def goal_labels(task: GoalTask, camera: int) -> list[dict[str, Any]]:
-    """``{"name", "x", "y"}`` per goal: where its name (at its goal pose's fork tip) goes on the picture."""
-    robot = task.robot
-    data = mujoco.MjData(robot.model)  # its own: the station's robot and data are left as they are
-    tips = tip_frames(robot, data, np.asarray(task.goals))[0]
-    mujoco.mj_forward(robot.model, data)  # the (fixed) camera's pose (cam_xpos: mj_camlight)
-    where = project(robot.model, data, camera, tips)
-    return [
-        {"name": str(name), "x": round(float(x), 4), "y": round(float(y), 4)}
-        for name, (x, y) in zip(task.goal_names, where, strict=True)
-    ]
-
-
 class Study:
     """The server's state: settings, tokens, progress, the connected participants, the renderer."""
 
@@ -149,10 +135,18 @@ class Study:
         return participant, ""
 
     def labels(self, station: Station) -> list[dict[str, Any]]:
-        """The goals' names and places on the picture, computed once (every trial: one scene, one camera)."""
+        """``{"name", "x", "y"}`` per goal: where its name (at its goal pose's fork tip) goes on the picture,
+        computed once (every trial: one scene, one camera)."""
         if self._labels is None:
-            robot = station.robot
-            self._labels = goal_labels(station.task, robot.model.camera(robot.spec.camera).id)
+            robot, task = station.robot, station.task
+            data = mujoco.MjData(robot.model)  # its own: the station's robot and data are left as they are
+            tips = tip_frames(robot, data, np.asarray(task.goals))[0]
+            mujoco.mj_forward(robot.model, data)  # the (fixed) camera's pose (cam_xpos: mj_camlight)
+            where = project(robot.model, data, robot.model.camera(robot.spec.camera).id, tips)
+            self._labels = [
+                {"name": str(name), "x": round(float(x), 4), "y": round(float(y), 4)}
+                for name, (x, y) in zip(task.goal_names, where, strict=True)
+            ]
         return self._labels
 
     def scene_key(self, xml: Path) -> str:

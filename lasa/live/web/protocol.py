@@ -77,17 +77,16 @@ def _number(value: Any) -> bool:
 
 
 class RateLimit:
-    """A token bucket: ``rate`` messages a second, bursts of up to ``rate``."""
+    """A token bucket: :data:`MAX_RATE` messages a second, bursts of up to as many."""
 
-    def __init__(self, rate: float = MAX_RATE) -> None:
-        self.rate = rate
-        self._level = rate
+    def __init__(self) -> None:
+        self._level = MAX_RATE
         self._last = time.monotonic()
 
     def allow(self) -> bool:
         """Whether one more message is within the limit now."""
         now = time.monotonic()
-        self._level = min(self.rate, self._level + (now - self._last) * self.rate)
+        self._level = min(MAX_RATE, self._level + (now - self._last) * MAX_RATE)
         self._last = now
         if self._level < 1.0:
             return False

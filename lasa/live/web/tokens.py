@@ -62,13 +62,9 @@ def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path
     participants = [check_participant(p) for p in dict.fromkeys(schedule.participant)]
     tokens = {p: secrets.token_urlsafe(TOKEN_BYTES) for p in participants}
     write_text(folder / "tokens.json", json.dumps({p: _hash(t) for p, t in tokens.items()}, indent=2) + "\n")
-    links = pd.DataFrame(
-        {
-            "participant": participants,
-            # the token in the fragment, which browsers never send: no server or proxy logs it
-            "link": [f"{base_url.rstrip('/')}/study#token={tokens[p]}" for p in participants],
-        }
-    )
+    # the token in the fragment, which browsers never send: no server or proxy logs it
+    link = [f"{base_url.rstrip('/')}/study#token={tokens[p]}" for p in participants]
+    links = pd.DataFrame({"participant": participants, "link": link})
     path = write_csv(folder / "links.csv", links)
     path.chmod(0o600)  # the only copy of the tokens
     return path
