@@ -83,12 +83,9 @@ class WebConfig:
         """What the consent page states: the longest practice and trial [s], the conditions, and the
         longest the study takes [min] (a practice, two trials and ~2 minutes of questions each)."""
         longest = round(conditions * (self.practice_s + 2 * self.trial_s + 120.0) / 60.0)
-        return {
-            "practice_s": self.practice_s,
-            "trial_s": self.trial_s,
-            "conditions": conditions,
-            "longest_min": longest,
-        }
+        return dict(
+            practice_s=self.practice_s, trial_s=self.trial_s, conditions=conditions, longest_min=longest
+        )
 
 
 ASPECT = 4.0 / 3.0  # width / height of the page's picture (320 x 240 frames, a 480 x 360 canvas)

@@ -179,12 +179,11 @@ class Conversation:
                 await self.send({"type": "error", "message": str(exc)})
 
     async def _drive(self, step: Step, limit_s: float) -> str:
-        config = SessionConfig(
-            "panda", step.task, step.condition, self.participant, self.study.config.build_dir
-        )
-        attempt = self.study.progress.attempt(self.participant)
-        folder = Path(self.study.config.sessions)  # practice apart: the analysis reads the trials only
-        folder = folder / "practice" if step.kind == "practice" else folder
+        study, practice = self.study, step.kind == "practice"
+        config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
+        attempt = study.progress.attempt(self.participant)
+        folder = Path(study.config.sessions)  # practice apart: the analysis reads the trials only
+        folder = folder / "practice" if practice else folder
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
         except (ConfigError, ArtifactError) as exc:
@@ -194,26 +193,26 @@ class Conversation:
             raise Gone from exc
         self.finish = False
         self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
-        practice = step.kind == "practice"
-        if self.study.config.frames != "none":  # the goals' names over the picture
-            await self.send({"type": "labels", "labels": self.study.labels(trial.station)})
+        if study.config.frames != "none":  # the goals' names over the picture
+            await self.send({"type": "labels", "labels": study.labels(trial.station)})
         key = None
-        if self.study.config.frames == "browser":
+        if study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
             writer = trial.writer
             assert writer is not None  # open_trial always logs
-            key = self.study.scene_key(writer.folder / f"{writer.stem}.xml")
+            key = study.scene_key(writer.folder / f"{writer.stem}.xml")
             robot = trial.station.robot
             camera = robot.model.camera(robot.spec.camera).id
-            scene = {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
-            await self.send(scene)
+            await self.send(
+                {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
+            )
         try:
             return await run_trial(
                 trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
             )
         finally:
-            self.study.scenes.pop(key or "", None)
+            study.scenes.pop(key or "", None)
 
     async def _tick(self, message: dict[str, Any]) -> None:
         if not self.study.config.show_belief:  # the paper's people saw the robot only
