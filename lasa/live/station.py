@@ -197,7 +197,7 @@ class Station:
         self.waypoint, self.done = int(waypoint[0]), bool(done[0])
 
     def step(self, sample: StickSample) -> dict[str, Any]:
-        """One control step from one sample; returns what the log records of it."""
+        """One control step from one sample; returns what the log records of it, in its columns' order."""
         z = sample.z  # safe: zero if disconnected or not finite, within [-1, 1]
         n = self.robot.n_joints
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
@@ -243,6 +243,4 @@ class Station:
 
 def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
     """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    flags = [float(rec["connected"]), float(rec["mode_press"]), float(rec["stop"])]
-    row = [step, t, float(late), *rec["raw"], *flags, *rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
-    return row + [v for key in ("s", "b", "a_h", "a_r", "a") for v in rec[key]]
+    return [step, t, float(late), *(float(v) for value in rec.values() for v in np.ravel(value))]
