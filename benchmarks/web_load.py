@@ -199,7 +199,7 @@ def main(argv: list[str] | None = None) -> int:
 
     folder = Path(tempfile.mkdtemp(prefix="web_load_"))
     wanted = len(modes) * sum(levels) + 1
-    # the server checks at startup that every condition can run (lasa.live.web.preflight)
+    # the server checks at startup that every condition can run (lasa.live.web.__main__.preflight)
     if not (Path(args.build_dir) / "models" / "eating_decoder_panda.pt").is_file():
         raise SystemExit(f"no eating decoder in {args.build_dir}: run make figures first")
     total = 4 * math.ceil((wanted + 4) / 4)  # whole rounds of the Latin square

@@ -396,7 +396,7 @@ def test_the_live_step_is_algorithm_1_by_hand(build, condition, axes):
     the belief (beta_b dt a_h in its exponent) to 1e-6. A wrong formula misses by 1e-3 or more."""
     st_ = station(build, condition)
     for z in axes:
-        s, b = st_.state.copy(), softmax(st_.log_belief)
+        s, b = st_.state.copy(), softmax(st_.runner.log_belief[0])
         rec = st_.step(StickSample(raw=np.asarray(z, dtype=float)))
         ref = latent_step(st_.decoder, st_.task, st_.control, s, b, z, st_.alpha, rest="zero")
         assert_allclose(rec["a_h"], ref["a_h"], rtol=0, atol=1e-7)
@@ -456,7 +456,7 @@ def test_the_live_retargeting_step_moves_the_hand_by_the_twist_of_its_mode(build
     components = {0: (0, 1), 1: (2, 5), 2: (3, 4)}  # mode -> twist components (vx vy vz wx wy wz)
     speed = np.array([0.15, 0.15, 0.15, 0.6, 0.6, 0.6])
     for z0, z1, press in inputs:
-        s, b, mode = st_.state.copy(), softmax(st_.log_belief), st_.mode
+        s, b, mode = st_.state.copy(), softmax(st_.runner.log_belief[0]), st_.mode
         rec = st_.step(StickSample(raw=np.array([z0, z1]), mode=press))
         if press or not (z0 or z1):
             assert not rec["a_h"].any()  # a press or a stick at rest moves nothing

@@ -282,11 +282,11 @@ def test_a_server_shutdown_mid_step_logs_that_step_before_closing_interrupted(tm
     import asyncio
 
     from lasa.live.station import SessionConfig
-    from lasa.live.web import loop
+    from lasa.live.web import conversation
     from lasa.live.web.protocol import Inputs
 
-    trial = loop.open_trial(SessionConfig(task="Entree", condition="R"), tmp_path, 1, 30.0)
-    in_step, real_tick, errors = threading.Event(), loop.tick, []
+    trial = conversation.open_trial(SessionConfig(task="Entree", condition="R"), tmp_path, 1, 30.0)
+    in_step, real_tick, errors = threading.Event(), conversation.tick, []
 
     def slow_tick(trial, sample):
         if trial.steps == 3:
@@ -298,13 +298,13 @@ def test_a_server_shutdown_mid_step_logs_that_step_before_closing_interrupted(tm
             errors.append(exc)
             raise
 
-    monkeypatch.setattr(loop, "tick", slow_tick)
+    monkeypatch.setattr(conversation, "tick", slow_tick)
 
     async def main():
         async def send(message):
             pass
 
-        task = asyncio.create_task(loop.run_trial(trial, Inputs(), send, lambda: True, lambda: False))
+        task = asyncio.create_task(conversation.run_trial(trial, Inputs(), send, lambda: True, lambda: False))
         while not in_step.is_set():
             await asyncio.sleep(0.01)
         task.cancel()
@@ -793,7 +793,7 @@ def test_participants_see_letters_not_condition_codes_and_no_belief_by_default(s
 
 
 def test_a_server_missing_a_decoder_exits_at_startup_in_one_line(tmp_path, decoder_build):
-    """The CLI checks every step the schedule needs before it listens (lasa.live.web.preflight)."""
+    """The CLI checks every step the schedule needs before it listens (lasa.live.web.__main__.preflight)."""
     import os
     import subprocess
     import sys

@@ -20,11 +20,12 @@ from lasa.base.io import write_text
 __all__ = ["SessionWriter", "read_session", "check_scene"]
 
 STATUS = ("running", "complete", "interrupted")
+FLUSH_EVERY = 10  # rows between flushes to disk: a crash loses at most this many steps
 
 
 class SessionWriter:
-    """Write one session's steps as they happen: in ``folder`` (created), as ``stem``, the sidecar
-    ``meta`` (plain JSON), the scene's MJCF and the step ``columns``; flushed every ``flush_every`` steps."""
+    """Write one session's steps as they happen: in ``folder`` (created), as ``stem``, the sidecar ``meta``
+    (plain JSON), the scene's MJCF and the step ``columns``; flushed every :data:`FLUSH_EVERY` steps."""
 
     def __init__(
         self,
@@ -33,13 +34,11 @@ class SessionWriter:
         meta: dict[str, Any],
         scene_xml: str,
         columns: list[str],
-        flush_every: int = 10,
     ) -> None:
         self.folder = Path(folder)
         self.folder.mkdir(parents=True, exist_ok=True)
         self.stem = stem
         self.columns = columns
-        self.flush_every = flush_every
         self.meta = {**meta, "status": "running", "steps": 0, "scene_sha256": _text_sha256(scene_xml)}
         self.csv = self.folder / f"{stem}.csv"
         self.part = self.folder / f"{stem}.csv.part"
@@ -56,12 +55,12 @@ class SessionWriter:
         write_text(self.sidecar, json.dumps(self.meta, indent=2, sort_keys=True) + "\n")
 
     def append(self, row: list[float]) -> None:
-        """Write one step's values (in ``columns`` order); flush every ``flush_every`` rows."""
+        """Write one step's values (in ``columns`` order); flush every :data:`FLUSH_EVERY` rows."""
         if len(row) != len(self.columns):
             raise ConfigError(f"a row has {len(self.columns)} values, got {len(row)}")
         self._fh.write(",".join(repr(float(v)) for v in row) + "\n")
         self._rows += 1
-        if self._rows % self.flush_every == 0:
+        if self._rows % FLUSH_EVERY == 0:
             self.flush()
 
     def flush(self) -> None:
@@ -76,8 +75,7 @@ class SessionWriter:
         self.flush()
         self._fh.close()
         os.replace(self.part, self.csv)
-        self.meta.update(extra)
-        self.meta.update(status=status, steps=self._rows)
+        self.meta.update(extra, status=status, steps=self._rows)
         self._write_meta()
         return self.csv
 
@@ -85,15 +83,20 @@ class SessionWriter:
 def read_session(
     path: str | os.PathLike[str], allow_damaged: bool = False
 ) -> tuple[pd.DataFrame, dict[str, Any]]:
-    """A session's steps and sidecar, from any of its files or its stem (a crashed one's ``.csv.part``
-    reads ``interrupted``); ``allow_damaged``: read the rows that parse of a damaged log (unparsable,
-    non-finite outside the raw axes, out of time order, or not its ``steps``), the reason in ``damaged``.
-
-    Raises:
-        ArtifactError: if the session's sidecar or rows are missing (DamagedLogError: damaged).
-    """
+    """A session's steps and sidecar, from any of its files or its stem (a crashed one's ``.csv.part`` reads
+    ``interrupted``); ArtifactError if its sidecar or rows are missing, DamagedLogError if damaged
+    (unparsable, non-finite outside the raw axes, out of time order, or not its ``steps``), unless
+    ``allow_damaged``: then the rows that parse, the reason in ``damaged``."""
     folder, stem = _locate(path)
-    meta = _read_sidecar(folder / f"{stem}.json")
+    sidecar = folder / f"{stem}.json"
+    if not sidecar.is_file():
+        raise ArtifactError(f"no session sidecar {sidecar}")
+    try:
+        meta = json.loads(sidecar.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not a JSON object")
     ended = meta.get("status") in STATUS[1:]
     rows = folder / f"{stem}.csv"
     if not rows.is_file():
@@ -139,18 +142,6 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
         if stem.endswith(suffix):
             stem = stem[: -len(suffix)]
     return p.parent, stem
-
-
-def _read_sidecar(sidecar: Path) -> dict[str, Any]:
-    if not sidecar.is_file():
-        raise ArtifactError(f"no session sidecar {sidecar}")
-    try:
-        meta = json.loads(sidecar.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
-    if not isinstance(meta, dict):
-        raise DamagedLogError(f"session sidecar {sidecar} is damaged: not a JSON object")
-    return meta
 
 
 def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:

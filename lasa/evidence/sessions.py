@@ -17,6 +17,7 @@ from lasa.base.conditions import CONDITIONS
 from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.io import locked
 from lasa.evidence.sessionlog import read_session
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
@@ -66,16 +67,9 @@ DROPPED = "a participant who did not do every condition (in every task the test 
 def scan_sessions(
     folder: str | os.PathLike[str], include_interrupted: bool = False, include_damaged: bool = False
 ) -> tuple[list[tuple[pd.DataFrame, dict[str, Any]]], pd.DataFrame]:
-    """The eating-task sessions in ``folder`` that can be analysed, and those left out with the reason
-    (:data:`LEFT_OUT`); ``include_damaged`` keeps a damaged log's rows that parse.
-
-    Returns:
-        The kept ``(rows, sidecar)`` pairs, by name, and the table ``session``, ``reason`` of those
-        left out.
-
-    Raises:
-        ArtifactError: if two kept sessions log the same participant, condition and task.
-    """
+    """The analysable eating-task sessions in ``folder`` (``(rows, sidecar)`` pairs, by name) and the table
+    ``session``, ``reason`` (:data:`LEFT_OUT`) of those left out; ``include_damaged`` keeps a damaged log's
+    rows that parse. ArtifactError if two kept sessions log one participant, condition and task."""
     logs, left_out = [], []
     for sidecar in sorted(Path(folder).glob("*.json")):
         try:
@@ -89,13 +83,8 @@ def scan_sessions(
             left_out.append((sidecar.stem, f"{LEFT_OUT['status']} ({meta['status']})"))
         else:
             logs.append((frame, {**meta, "session": sidecar.name}))
-    _refuse_duplicates([m for _, m in logs], folder)
-    return logs, pd.DataFrame(left_out, columns=["session", "reason"])
-
-
-def _refuse_duplicates(metas: list[dict[str, Any]], folder: str | os.PathLike[str]) -> None:
     seen: dict[tuple[str, str, str], str] = {}
-    for meta in metas:
+    for _, meta in logs:
         key = (str(meta.get("participant")), str(meta["condition"]), str(meta["task"]))
         if key in seen:
             raise ArtifactError(
@@ -103,6 +92,7 @@ def _refuse_duplicates(metas: list[dict[str, Any]], folder: str | os.PathLike[st
                 f"condition {key[1]}, task {key[2]}: move one of them out of the folder"
             )
         seen[key] = meta["session"]
+    return logs, pd.DataFrame(left_out, columns=["session", "reason"])
 
 
 def load_sessions(
@@ -137,46 +127,40 @@ def _episodes(
         raise ArtifactError(
             f"no sound eating-task session in {folder}" + (f" (left out: {why})" if why else "")
         )
-    robot = task.robot
-    n = robot.n_joints
-    horizon = max(len(f) for f, _ in logs)
+    robot, metas = task.robot, [m for _, m in logs]
+    n, horizon = robot.n_joints, max(len(f) for f, _ in logs)
     states = np.empty((horizon + 1, len(logs), n))
     phase = np.zeros((horizon + 1, len(logs)), dtype=int)
     idle = np.zeros((horizon, len(logs)), dtype=bool)
     switch = np.zeros((horizon, len(logs)), dtype=bool)
-    end = np.empty(len(logs), dtype=int)
-    for e, (frame, _) in enumerate(logs):
-        s = frame[[f"s{i}" for i in range(n)]].to_numpy()
-        states[0, e] = task.start
-        states[1 : len(s) + 1, e] = s
-        states[len(s) + 1 :, e] = s[-1] if len(s) else task.start
-        phase[1 : len(s) + 1, e] = frame.phase.to_numpy()
-        phase[len(s) + 1 :, e] = phase[len(s), e]
+    end = np.array([len(f) for f, _ in logs], dtype=int)
+    for e, (frame, meta) in enumerate(logs):
+        held = np.minimum(np.arange(horizon + 1), len(frame))  # each step's row, the last held after the end
+        states[:, e] = np.concatenate([task.start[None], frame[[f"s{i}" for i in range(n)]].to_numpy()])[held]
+        phase[:, e] = np.concatenate([[0], frame.phase.to_numpy()])[held]
         moved = (frame[["z0", "z1"]].to_numpy() != 0).any(axis=1)
         # a mode press is input in Retargeting (it switches modes) and nothing in latent actions
-        retargeting = parse_condition(str(logs[e][1]["condition"])).interface == "R"
-        pressed = (frame.mode_press.to_numpy() > 0) & retargeting
-        held = frame.stop.to_numpy() > 0
-        idle[: len(s), e] = ~moved & ~pressed & ~held
-        switch[: len(s), e] = pressed & ~held
-        end[e] = len(s)
-    data = mujoco.MjData(robot.model)
-    flat = states.reshape(-1, n)
-    tip, direction, _, _ = tip_frames(robot, data, flat)
-    meta_list = [m for _, m in logs]
-    conditions = np.array([m["condition"] for m in meta_list])
+        pressed = (frame.mode_press.to_numpy() > 0) & (
+            parse_condition(str(meta["condition"])).interface == "R"
+        )
+        stopped = frame.stop.to_numpy() > 0
+        idle[: len(frame), e] = ~moved & ~pressed & ~stopped
+        switch[: len(frame), e] = pressed & ~stopped
+    tip, direction, _, _ = tip_frames(robot, mujoco.MjData(robot.model), states.reshape(-1, n))
+    conditions = np.array([m["condition"] for m in metas])
+    assisted = np.array([parse_condition(str(c)).assisted for c in conditions], dtype=bool)
     return Episodes(
-        participant=np.array([m["participant"] for m in meta_list]),
+        participant=np.array([m["participant"] for m in metas]),
         condition=conditions,
         assistance=np.where(
-            np.array([parse_condition(str(c)).assisted for c in conditions], dtype=bool),
-            np.array([m.get("control", {}).get("assistance", "hindsight") for m in meta_list]),
+            assisted,
+            np.array([m.get("control", {}).get("assistance", "hindsight") for m in metas]),
             NO_ASSISTANCE,
         ),
-        task=np.array([m["task"] for m in meta_list]),
+        task=np.array([m["task"] for m in metas]),
         # the condition's position in the participant's schedule, as the web study records it (0
         # where a session does not say: the terminal's `teleop run`)
-        order=np.array([int(m.get("order", 0)) for m in meta_list], dtype=int),
+        order=np.array([int(m.get("order", 0)) for m in metas], dtype=int),
         states=states,
         tip=tip.reshape(horizon + 1, len(logs), 3),
         direction=direction.reshape(horizon + 1, len(logs), 3),
@@ -184,8 +168,8 @@ def _episodes(
         idle=idle,
         switch=switch,
         end=end,
-        completed=np.array([bool(m.get("done", False)) for m in meta_list]),
-        dt=float(meta_list[0]["dt"]),
+        completed=np.array([bool(m.get("done", False)) for m in metas]),
+        dt=float(metas[0]["dt"]),
     )
 
 
@@ -222,20 +206,16 @@ def complete_participants(
 
 
 def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.DataFrame]:
-    """People's sessions through the simulated cohort's measures and statistics.
-
-    Returns:
-        The tidy measure tables, ``means`` per condition, ``sa_effect``, ``time_tests`` and
-        ``likert`` (over participants who did every condition), ``left_out`` and ``dropped``.
-    """
+    """People's sessions through the simulated cohort's measures and statistics: the tidy measure tables,
+    ``means`` per condition, ``sa_effect``, ``time_tests`` and ``likert`` (over participants who did
+    every condition), ``left_out`` and ``dropped``."""
     from lasa.evidence import stats
     from lasa.world.measures import measures
 
     _check_task(task, "analyse_sessions")
     logs, left_out = scan_sessions(folder)
     frames = measures(task, _episodes(logs, left_out, folder, task))
-    out = dict(frames)
-    out["left_out"] = left_out
+    out = {**frames, "left_out": left_out}
     out["means"] = (
         frames["time"]
         .merge(frames["goal_error"], on=["robot", "participant", "condition", "assistance", "task", "order"])
@@ -263,21 +243,16 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
         if answers.participant.nunique() >= 2:
             out["likert"] = likert_tests(answers)
     out["dropped"] = dropped
-    for row in [*out["left_out"].itertuples(), *dropped.itertuples()]:
-        what = (
-            f"session {row.session}"
-            if hasattr(row, "session")
-            else f"participant {row.participant} from {row.test}"
-        )
-        warnings.warn(f"left out {what}: {row.reason}", stacklevel=2)
+    for row in left_out.itertuples():
+        warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=2)
+    for row in dropped.itertuples():
+        warnings.warn(f"left out participant {row.participant} from {row.test}: {row.reason}", stacklevel=2)
     return out
 
 
 def write_session_tables(tables: dict[str, pd.DataFrame], folder: str | os.PathLike[str]) -> list[Path]:
     """Write one analysis's tables as ``<folder>/sessions_<name>.csv`` (the paths, in order), replacing the
     previous set whole: staged first, so the folder never mixes two analyses and a failure keeps the old."""
-    from lasa.base.io import locked
-
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     with locked(folder):

@@ -1,17 +1,11 @@
-r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script.
-
-Every device answers :meth:`Device.poll` with one :class:`StickSample` per step (two axes, a mode
-press, stop held), made safe once (:func:`safe_axes`: disconnected or non-finite reads zero, clipped
-to [-1, 1]). The keyboard works by press-to-set (MuJoCo's viewer reports presses, never releases):
-each arrow press moves an axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop.
-"""
+r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script, each polled for one
+:class:`StickSample` per step (two axes, a mode press, stop held), made safe once (:func:`safe_axes`)."""
 
 from __future__ import annotations
 
 import dataclasses
 import threading
 from collections.abc import Sequence
-from typing import Protocol
 
 import numpy as np
 import pandas as pd
@@ -39,38 +33,19 @@ class StickSample:
         return safe_axes(self.raw, self.connected)
 
 
-def safe_axes(raw: np.ndarray, connected: bool = True, deadzone: float = 0.0) -> np.ndarray:
-    """z, (2,): ``raw`` made safe: zero if disconnected, non-finite axes zero, |axis| below ``deadzone``
-    zero, clipped to [-1, 1]."""
+def safe_axes(raw: np.ndarray, connected: bool = True) -> np.ndarray:
+    """z, (2,): ``raw`` made safe: zero if disconnected, non-finite axes zero, clipped to [-1, 1]."""
     axes = np.asarray(raw, dtype=float).reshape(-1)
     if axes.shape != (2,):
         raise ConfigError(f"a stick sample has 2 axes, got shape {np.shape(raw)}")
     if not connected:
         return np.zeros(2)
-    axes = np.where(np.isfinite(axes), axes, 0.0)
-    axes = np.where(np.abs(axes) < deadzone, 0.0, axes)
-    return np.clip(axes, -1.0, 1.0)
-
-
-class Device(Protocol):
-    """What the teleoperation loop reads from."""
-
-    name: str
-
-    def poll(self) -> StickSample:
-        """This step's input."""
-        ...
-
-    def close(self) -> None:
-        """Release the device."""
-        ...
+    return np.clip(np.where(np.isfinite(axes), axes, 0.0), -1.0, 1.0)
 
 
 class ScriptedDevice:
     """Samples from a script, one per step (``axes`` (T, 2), NaN reads zero; ``mode``, ``stop`` and
     ``connected`` (T,), default none, never, always), then rest (zero axes)."""
-
-    name = "scripted"
 
     def __init__(
         self,
@@ -81,14 +56,13 @@ class ScriptedDevice:
     ) -> None:
         self.axes = np.asarray(axes, dtype=float).reshape(-1, 2)
         n = len(self.axes)
-        self.mode = np.zeros(n, bool) if mode is None else np.asarray(mode, bool)
-        self.stop = np.zeros(n, bool) if stop is None else np.asarray(stop, bool)
-        self.connected = np.ones(n, bool) if connected is None else np.asarray(connected, bool)
+        self.mode, self.stop, self.connected = (
+            np.full(n, default) if flags is None else np.asarray(flags, bool)
+            for flags, default in ((mode, False), (stop, False), (connected, True))
+        )
         for name in ("mode", "stop", "connected"):
-            if getattr(self, name).shape != (n,):
-                raise ConfigError(
-                    f"{name} must have one entry per step ({n}), got {getattr(self, name).shape}"
-                )
+            if (shape := getattr(self, name).shape) != (n,):
+                raise ConfigError(f"{name} must have one entry per step ({n}), got {shape}")
         self.step = 0
 
     @classmethod
@@ -104,8 +78,7 @@ class ScriptedDevice:
 
     @classmethod
     def from_file(cls, path: str) -> ScriptedDevice:
-        """A script from a CSV file (columns as :meth:`from_table`); a missing, empty or column-less file
-        is a ConfigError in one line."""
+        """A script from a CSV file (columns as :meth:`from_table`); else a ConfigError in one line."""
         try:
             table = pd.read_csv(path)
         except FileNotFoundError:
@@ -140,19 +113,16 @@ class ScriptedDevice:
         """Nothing to release."""
 
 
-# GLFW key codes, as MuJoCo's viewer reports them to its key callback
-_KEY_RIGHT, _KEY_LEFT, _KEY_DOWN, _KEY_UP = 262, 263, 264, 265
+# GLFW key codes, as MuJoCo's viewer reports them to its key callback: the arrows' axis and direction
+_ARROWS = {262: (0, 1.0), 263: (0, -1.0), 264: (1, -1.0), 265: (1, 1.0)}
 _KEY_SPACE, _KEY_M, _KEY_S = 32, 77, 83
 
 
 class KeyboardDevice:
-    """The keyboard, press-to-set, through :meth:`key_callback` (``launch_passive(key_callback=...)``, run on
-    the viewer's thread under a lock)."""
+    """The keyboard, press-to-set through :meth:`key_callback` (MuJoCo's viewer reports presses, never
+    releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
-    name = "keyboard"
-
-    def __init__(self, notch: float = NOTCH) -> None:
-        self.notch = notch
+    def __init__(self) -> None:
         self._axes = np.zeros(2)
         self._mode = False
         self._stop = False
@@ -161,14 +131,9 @@ class KeyboardDevice:
     def key_callback(self, key: int) -> None:
         """Update the held axes, the mode press or the stop toggle from one key press."""
         with self._lock:
-            if key == _KEY_RIGHT:
-                self._axes[0] = min(1.0, self._axes[0] + self.notch)
-            elif key == _KEY_LEFT:
-                self._axes[0] = max(-1.0, self._axes[0] - self.notch)
-            elif key == _KEY_UP:
-                self._axes[1] = min(1.0, self._axes[1] + self.notch)
-            elif key == _KEY_DOWN:
-                self._axes[1] = max(-1.0, self._axes[1] - self.notch)
+            if key in _ARROWS:
+                axis, sign = _ARROWS[key]
+                self._axes[axis] = min(1.0, max(-1.0, self._axes[axis] + sign * NOTCH))
             elif key == _KEY_SPACE:
                 self._axes[:] = 0.0
             elif key == _KEY_M:
@@ -191,9 +156,7 @@ class GamepadDevice:
     """A gamepad through pygame's SDL joystick API: axes 0 and 1 (y flipped: forward is +z2), button 0
     mode, button 1 stop; one gone away reads disconnected. ConfigError if none is connected."""
 
-    name = "gamepad"
-
-    def __init__(self, index: int = 0) -> None:
+    def __init__(self) -> None:
         import os
 
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
@@ -212,9 +175,9 @@ class GamepadDevice:
             pygame.event.pump()
         except pygame.error as exc:
             raise ConfigError(f"SDL could not start its joystick subsystem: {exc}") from exc
-        if pygame.joystick.get_count() <= index:
-            raise ConfigError(f"no gamepad at index {index} ({pygame.joystick.get_count()} connected)")
-        self._stick = pygame.joystick.Joystick(index)
+        if pygame.joystick.get_count() == 0:
+            raise ConfigError("no gamepad at index 0 (0 connected)")
+        self._stick = pygame.joystick.Joystick(0)
         self._was_pressed = False
 
     def poll(self) -> StickSample:
@@ -222,31 +185,35 @@ class GamepadDevice:
         pg = self._pg
         try:
             pg.event.pump()
-            if not self._stick.get_init() or pg.joystick.get_count() == 0:
-                return StickSample(raw=np.full(2, np.nan), connected=False)
-            raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
-            pressed = bool(self._stick.get_button(0))
-            mode = pressed and not self._was_pressed  # one press, however long held
-            self._was_pressed = pressed
-            stop = bool(self._stick.get_button(1))
+            if self._stick.get_init() and pg.joystick.get_count() > 0:
+                raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
+                pressed = bool(self._stick.get_button(0))
+                mode = pressed and not self._was_pressed  # one press, however long held
+                self._was_pressed = pressed
+                stop = bool(self._stick.get_button(1))
+                return StickSample(raw=np.where(np.abs(raw) < DEADZONE, 0.0, raw), mode=mode, stop=stop)
         except pg.error:
-            return StickSample(raw=np.full(2, np.nan), connected=False)
-        raw = np.where(np.abs(raw) < DEADZONE, 0.0, raw)
-        return StickSample(raw=raw, mode=mode, stop=stop)
+            pass
+        return StickSample(raw=np.full(2, np.nan), connected=False)
 
     def close(self) -> None:
         """Release SDL's joystick subsystem."""
         self._pg.joystick.quit()
 
 
+Device = ScriptedDevice | KeyboardDevice | GamepadDevice  # what the teleoperation loop reads from
+
+
 def open_device(kind: str = "auto") -> tuple[Device, str]:
-    """The device ``gamepad``, ``keyboard`` or ``auto`` (a gamepad if connected), and a sentence naming it."""
+    """The device ``gamepad``, ``keyboard``, ``auto`` (a gamepad if connected) or ``scripted:<file.csv>``,
+    and a sentence naming it."""
+    if kind.startswith("scripted:"):
+        return ScriptedDevice.from_file(kind.split(":", 1)[1]), "input: scripted"
     if kind not in ("auto", "gamepad", "keyboard"):
         raise ConfigError(f"unknown device {kind!r}; choose 'auto', 'gamepad' or 'keyboard'")
     if kind in ("auto", "gamepad"):
         try:
-            pad = GamepadDevice()
-            return pad, "input: gamepad (stick = z, button 0 = mode, button 1 = stop)"
+            return GamepadDevice(), "input: gamepad (stick = z, button 0 = mode, button 1 = stop)"
         except (ConfigError, ImportError) as exc:
             if kind == "gamepad":
                 raise ConfigError(f"no gamepad: {exc}") from exc

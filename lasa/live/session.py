@@ -1,11 +1,5 @@
-"""The live session loop that ``teleop run`` and the web study share: one logged step per Delta.
-
-:class:`Session` holds each step to its deadline, counts the steps that overran it, keeps each
-step's compute time and closes the log with the timing (median, p99): ``complete``, or
-``interrupted`` on any other exit (:meth:`Session.guard`). :class:`StopOnSignals` turns SIGINT,
-SIGTERM and SIGHUP into a stop at the next step, so a killed session reads ``interrupted``
-(Python leaves SIGTERM and SIGHUP to their default; SDL swallows SIGINT and SIGTERM).
-"""
+"""The live session loop that ``teleop run`` and the web study share: one logged step per Delta
+(:class:`Session`), and :class:`StopOnSignals`, so that a killed session reads ``interrupted``."""
 
 from __future__ import annotations
 
@@ -32,12 +26,10 @@ SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # the ways a terminal or a supervisor
 
 
 class StopOnSignals:
-    """A context in which SIGINT, SIGTERM and SIGHUP ask the loop to stop (``received``: the first).
-
-    Outside the main thread it installs nothing. A second signal while one is pending raises
-    ``KeyboardInterrupt``; on exit the previous handlers (SIG_DFL where they were not Python's,
-    such as SDL's) are restored.
-    """
+    """A context in which SIGINT, SIGTERM and SIGHUP ask the loop to stop (``received``: the first; Python
+    leaves SIGTERM and SIGHUP to their default, SDL swallows SIGINT and SIGTERM). Outside the main thread it
+    installs nothing; a second signal raises ``KeyboardInterrupt``; on exit the previous handlers (SIG_DFL
+    where they were not Python's) are restored."""
 
     def __init__(self) -> None:
         self.received: str | None = None
@@ -78,13 +70,9 @@ def open_log(
 
 @dataclasses.dataclass
 class Session:
-    """A running session: its station, log (None: none), deadlines and counts.
-
-    Attributes:
-        realtime: Steps have deadlines and log wall-clock times (else ``step * dt``).
-        started: Wall-clock start [s, ``time.perf_counter``]; steps: steps logged;
-            misses: steps that overran their deadline; compute: each step's compute time [s].
-    """
+    """A running session: its station, log (None: none), ``realtime`` (steps have deadlines and log wall-clock
+    times, else ``step * dt``), ``started`` (``time.perf_counter``), ``steps`` logged, deadline ``misses`` and
+    each step's ``compute`` time [s]. It closes the log with the timing, ``complete`` or ``interrupted``."""
 
     station: Station
     writer: SessionWriter | None

@@ -1,10 +1,5 @@
-"""The robot side of a live session: its settings (:class:`SessionConfig`) and one control step per sample.
-
-A :class:`Station` builds the robot, the cup or eating task and the decoder ``make figures`` trained,
-and steps the episode runner (:class:`lasa.method.runner.Runner`) with the device as its chooser:
-the stick at rest commands nothing, the mode button cycles Retargeting's modes, and the stop input
-holds the robot (no action, the belief frozen). ``teleop run`` and the web study drive it alike.
-"""
+"""The robot side of a live session (teleop and web alike): its settings (:class:`SessionConfig`) and one
+control step per sample (:class:`Station`: the episode runner with the device as its chooser)."""
 
 from __future__ import annotations
 
@@ -74,13 +69,13 @@ def _lasa_version() -> str:
         return "0.0.0+unknown"
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 class Station:
     """The robot side of a session: ``robot``, ``task``, ``control``, ``decoder`` (None: Retargeting),
-    the ``mode`` of Retargeting, the ``waypoint`` worked towards and whether the task is ``done``."""
+    the ``mode`` of Retargeting, the ``waypoint`` worked towards and whether the task is ``done``.
+
+    The stick at rest commands nothing, the mode button cycles Retargeting's modes, and the stop input
+    holds the robot (no action, the belief frozen).
+    """
 
     def __init__(self, config: SessionConfig) -> None:
         self.config = config
@@ -92,28 +87,27 @@ class Station:
         if config.task == "cups":
             self.robot: Robot = load_robot(config.robot)
             self.task: GoalTask = make_cup_task(self.robot)
-            self.control: ControlConfig = self.robot.control
             name = "decoder_entropy" if condition.decoder == "entropy" else "decoder_lambda0"
         else:
             self.task = make_eating_task()
             self.robot = self.task.robot
-            self.control = self.robot.control
             self.tracker = WaypointTracker.of(self.robot)
             name = "eating_decoder"
+        self.control: ControlConfig = self.robot.control
         if condition.interface == "LA":
             self.decoder_path = paths.artifact(name, self.robot.name)
             self.decoder, meta = load_checkpoint(
                 self.decoder_path, robot=self.robot.name, make_hint=Paths.make_hint(name, self.robot.name)
             )
-            self._check_fit(self.decoder, self.decoder_path)
-            self._check_belief(meta, self.decoder_path)
+            self._check_decoder(self.decoder, meta, self.decoder_path)
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self._data = mujoco.MjData(self.robot.model)
         self.reset()
 
-    def _check_fit(self, decoder: ActionDecoder, path: Path) -> None:
-        """Refuse, before any session starts, a decoder made for another task's goals or joints."""
+    def _check_decoder(self, decoder: ActionDecoder, meta: dict[str, Any], path: Path) -> None:
+        """Refuse, before any session starts, a decoder made for another task's goals or joints, or trained
+        with another belief cap (a belief it never saw is an unknown context; none recorded: taken as is)."""
         config = getattr(decoder, "config", None)
         shape = (getattr(config, "n_joints", None), getattr(config, "n_goals", None))
         if shape != (self.robot.n_joints, self.task.n_goals) or decoder.z_dim > 2:
@@ -122,10 +116,6 @@ class Station:
                 f"{shape[0]} joints and {shape[1]} goals, the task needs at most 2-D z, "
                 f"{self.robot.n_joints} joints and {self.task.n_goals} goals"
             )
-
-    def _check_belief(self, meta: dict[str, Any], path: Path) -> None:
-        """Refuse a decoder trained with another belief cap (a belief it never saw is an unknown context);
-        a checkpoint that records no control units is taken as it is."""
         control = meta.get("control")
         if isinstance(control, dict) and control.get("belief_cap", None) != self.control.belief_cap:
             raise CheckpointError(
@@ -155,17 +145,13 @@ class Station:
         return self.runner.state[0]
 
     @property
-    def log_belief(self) -> np.ndarray:
-        """log b, shape (G,)."""
-        return self.runner.log_belief[0]
-
-    @property
     def belief(self) -> np.ndarray:
         """b over the task's goals, shape (G,)."""
-        return belief(self.log_belief)
+        return belief(self.runner.log_belief[0])
 
     def meta(self) -> dict[str, Any]:
         """The sidecar's description of this station."""
+        path = self.decoder_path
         return {
             **dataclasses.asdict(self.config),
             "goals": list(self.task.goal_names),
@@ -173,8 +159,8 @@ class Station:
             "dt": self.control.dt,
             "control": dataclasses.asdict(self.control),
             "alpha": self.alpha,
-            "decoder": None if self.decoder_path is None else self.decoder_path.name,
-            "decoder_sha256": None if self.decoder_path is None else _sha256(self.decoder_path),
+            "decoder": None if path is None else path.name,
+            "decoder_sha256": None if path is None else hashlib.sha256(path.read_bytes()).hexdigest(),
             "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
             "lasa_version": _lasa_version(),
         }
@@ -183,10 +169,10 @@ class Station:
         """The log's step columns."""
         n, g = self.robot.n_joints, self.task.n_goals
         cols = ["step", "time", "late", "raw0", "raw1", "connected", "mode_press", "stop", "z0", "z1"]
-        cols += ["mode", "phase", "waypoint"]
-        for name, size in (("s", n), ("b", g), ("a_h", n), ("a_r", n), ("a", n)):
-            cols += [f"{name}{i}" for i in range(size)]
-        return cols
+        sizes = (("s", n), ("b", g), ("a_h", n), ("a_r", n), ("a", n))
+        return (
+            cols + ["mode", "phase", "waypoint"] + [f"{name}{i}" for name, size in sizes for i in range(size)]
+        )
 
     @property
     def phase(self) -> int:
@@ -211,16 +197,15 @@ class Station:
         self.waypoint, self.done = int(waypoint[0]), bool(done[0])
 
     def step(self, sample: StickSample) -> dict[str, Any]:
-        """One control step from one sample; returns what the log records of it."""
+        """One control step from one sample; returns what the log records of it, in its columns' order."""
         z = sample.z  # safe: zero if disconnected or not finite, within [-1, 1]
         n = self.robot.n_joints
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
-        pressed = bool(sample.mode) and self.retarget is not None
         if not sample.stop:  # stop holds: no human action, no assistance, the belief frozen
-            result = self.runner.step(self._chooser(z, pressed))
-            a_h = result.human_action[0]
-            a_r = result.robot_action[0] if result.robot_action is not None else np.zeros(n)
-            a = result.action[0]
+            result = self.runner.step(self._chooser(z, bool(sample.mode) and self.retarget is not None))
+            a_h, a = result.human_action[0], result.action[0]
+            if result.robot_action is not None:
+                a_r = result.robot_action[0]
             self.track()
         return {
             "raw": np.asarray(sample.raw, float),
@@ -258,8 +243,4 @@ class Station:
 
 def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
     """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    flags = [float(rec["connected"]), float(rec["mode_press"]), float(rec["stop"])]
-    row = [step, t, float(late), *rec["raw"], *flags, *rec["z"], rec["mode"], rec["phase"], rec["waypoint"]]
-    for key in ("s", "b", "a_h", "a_r", "a"):
-        row += list(rec[key])
-    return row
+    return [step, t, float(late), *(float(v) for value in rec.values() for v in np.ravel(value))]

@@ -1,9 +1,5 @@
-"""The kit for running the eating study with people: the schedule and the questionnaire.
-
-:func:`write_schedule` orders the four conditions for N participants by a balanced Latin square
-(Williams), participant i on row i mod 4; :func:`survey` records the 7-point Likert questionnaire
-in ``likert.csv``. Neither replaces what exists unless asked (``overwrite``).
-"""
+"""The kit for running the eating study with people: the schedule (:func:`write_schedule`) and the 7-point
+Likert questionnaire (:func:`survey`). Neither replaces what exists unless asked (``overwrite``)."""
 
 from __future__ import annotations
 
@@ -16,7 +12,7 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
-from lasa.evidence.sessions import QUESTIONS, SCALES
+from lasa.evidence.sessions import QUESTIONS, SCALES, read_likert
 
 __all__ = ["MAX_PARTICIPANTS", "write_schedule", "parse_answer", "parse_answers", "ask", "survey"]
 
@@ -25,11 +21,8 @@ MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the
 
 
 def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False) -> Path:
-    """Write the order of conditions for ``n`` participants (CSV: participant, position, condition).
-
-    Raises:
-        ConfigError: ``n`` is not a whole number in 1..:data:`MAX_PARTICIPANTS`, or ``out`` exists.
-    """
+    """Write the order of conditions for ``n`` (1..:data:`MAX_PARTICIPANTS`) participants by a balanced Latin
+    square (Williams), participant i on row i mod 4 (CSV: participant, position, condition)."""
     if isinstance(n, bool) or int(n) != n or not 1 <= n <= MAX_PARTICIPANTS:
         raise ConfigError(
             f"the number of participants must be a whole number in 1..{MAX_PARTICIPANTS}, got {n!r}"
@@ -100,11 +93,8 @@ def survey(
     answers: list[int] | None = None,
     overwrite: bool = False,
 ) -> Path:
-    """Record ``participant``'s questionnaire after ``condition`` in ``<folder>/likert.csv``.
-
-    ``answers``: one in 1..7 per scale (asked on the terminal if None); ``overwrite`` replaces
-    answers recorded before (else they are a ConfigError, as a bad answer or count is).
-    """
+    """Record ``participant``'s ``answers`` (one in 1..7 per scale; None: asked on the terminal) after
+    ``condition`` in ``<folder>/likert.csv``; ``overwrite`` replaces answers recorded before."""
     if condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; choose one of {CONDITIONS}")
     path = Path(folder) / "likert.csv"
@@ -120,12 +110,10 @@ def survey(
         {"participant": participant, "condition": condition, "scale": SCALES, "answer": values}
     )
     with locked(path.parent):
-        if path.exists():
-            old = pd.read_csv(path, dtype={"participant": str})
-            if not overwrite and ((old.participant == participant) & (old.condition == condition)).any():
-                raise ConfigError(
-                    f"{participant} answered for {condition} already in {path}: pass --overwrite"
-                )
+        if not overwrite:  # again: another survey may have answered meanwhile
+            _refuse_answered(path, participant, condition)
+        old = read_likert(path.parent)
+        if old is not None:
             keep = ~((old.participant == participant) & (old.condition == condition))
             new = pd.concat([old[keep], new], ignore_index=True)
         write_csv(path, new)
@@ -133,10 +121,9 @@ def survey(
 
 
 def _refuse_answered(path: Path, participant: str, condition: str) -> None:
-    if path.is_file():
-        old = pd.read_csv(path, dtype={"participant": str})
-        if ((old.participant == participant) & (old.condition == condition)).any():
-            raise ConfigError(
-                f"{participant} answered for {condition} already in {path}: "
-                "pass --overwrite to replace those answers"
-            )
+    old = read_likert(path.parent)
+    if old is not None and ((old.participant == participant) & (old.condition == condition)).any():
+        raise ConfigError(
+            f"{participant} answered for {condition} already in {path}: "
+            "pass --overwrite to replace those answers"
+        )

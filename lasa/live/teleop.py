@@ -1,9 +1,7 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
-``python -m lasa.live.teleop run --task Dessert --condition LA+SA --participant p01`` runs the
-control step (:mod:`lasa.live.station`) at a fixed rate from a gamepad or the keyboard; ``replay``
-re-runs a log and checks its states bit for bit (``--mp4`` renders it); ``schedule`` and ``survey``
-are the study kit (:mod:`lasa.live.studykit`). Safety, the display and the logs: ``docs/method-notes.md``.
+``run`` steps :mod:`lasa.live.station` at a fixed rate from a gamepad or keyboard; ``replay`` re-runs a log
+and checks its states bit for bit (``--mp4`` renders it); ``schedule``, ``survey``: :mod:`lasa.live.studykit`.
 """
 
 from __future__ import annotations
@@ -14,9 +12,13 @@ if __name__ == "__main__":  # the CLI: renderer and kernels pinned before mujoco
     pin()
 
 import argparse
+import dataclasses
 import json
+import os
+import signal
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +29,7 @@ from lasa.base.conditions import ALL
 from lasa.base.config import check_range
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaError
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
+from lasa.live import studykit
 from lasa.live.devices import Device, ScriptedDevice, open_device
 from lasa.live.session import Session, StopOnSignals, open_log
 from lasa.live.station import SESSION_TASKS, SessionConfig, Station
@@ -35,9 +38,11 @@ from lasa.method.retarget import MODES
 __all__ = ["run_session", "replay", "main"]
 
 
-def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> None:
-    """Pose the viewer's robot at this step's state, draw a belief sphere over each goal (1 to 5 cm)
-    and the instruction text, and sync the window."""
+def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> bool:
+    """Pose the viewer's robot, draw a belief sphere (1 to 5 cm) over each goal and the text, and sync;
+    False if the viewer was closed."""
+    if not viewer.is_running():
+        return False
     with viewer.lock():
         data.qpos[station.robot.qpos_adr] = rec["s"]
         mujoco.mj_forward(station.robot.model, data)
@@ -67,6 +72,7 @@ def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData,
     except (AttributeError, TypeError):  # an older viewer without text overlays
         pass
     viewer.sync()
+    return True
 
 
 def run_session(
@@ -76,39 +82,18 @@ def run_session(
     max_steps: int,
     *,
     realtime: bool = True,
-    viewer: Any = None,
-    viewer_data: mujoco.MjData | None = None,
-    on_step: Any = None,
+    show: Callable[[dict[str, Any]], bool] | None = None,
+    on_step: Callable[[int, dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
-    """Run the control loop (:class:`lasa.live.session.Session`): one step per Delta, or as fast as possible.
+    """Run :class:`lasa.live.session.Session`, one step per Delta (or as fast as possible, not ``realtime``)
+    into ``writer`` (None: no log), showing each record (``show(record)``, False: the viewer closed) and
+    calling ``on_step(step, record)``; returns :meth:`~lasa.live.session.Session.timing` and the stopping
+    ``signal``.
 
-    The session ends after ``max_steps``, when the task is done, a scripted device runs out or
-    the viewer is closed; a signal stops it at the next step (closed ``interrupted``, its name in
-    ``signal``); an exception closes the log ``interrupted`` and goes on.
-
-    Args:
-        station: The robot side; device: the input; writer: the log (None: no log).
-        max_steps: The longest session, in steps.
-        realtime: Hold each step to its deadline (else run as fast as possible).
-        viewer: A passive viewer to draw into, showing ``viewer_data``.
-        viewer_data: The MjData the viewer was launched with.
-        on_step: Called as ``on_step(step, record)`` after each step.
-
-    Returns:
-        :meth:`lasa.live.session.Session.timing`, and the ``signal`` that stopped it (or None).
+    It ends after ``max_steps``, when the task is done, a scripted device runs out or the viewer is
+    closed; a signal stops it at the next step (closed ``interrupted``); an exception closes the log
+    ``interrupted`` and goes on.
     """
-    if viewer is not None and viewer_data is None:
-        raise ConfigError("a viewer needs viewer_data: the MjData it was launched with")
-    goals = station.robot.goal_positions() if viewer is not None else None
-
-    def show(rec: dict[str, Any]) -> bool:
-        if goals is None:
-            return True
-        if not viewer.is_running():
-            return False
-        _draw(station, goals, viewer, viewer_data, rec)
-        return True
-
     session = Session(station, writer, max_steps, realtime)
     status = "complete"
     with StopOnSignals() as stop:
@@ -152,16 +137,10 @@ def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) 
 
 
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
-    """Re-run a logged session from its inputs and compare its states with the log.
-
-    Returns:
-        ``{"steps", "max_state_difference", "exact", "status"}``, ``mp4`` if rendered, ``damaged``
-        (the reason) for a damaged log replayed with ``allow_damaged``.
-
-    Raises:
-        ArtifactError: the sidecar lacks the decoder's checksum or config, the decoder or scene is
-            not the logged one, or the log is damaged (without ``allow_damaged``).
-    """
+    """Re-run a logged session from its inputs: ``{"steps", "max_state_difference", "exact", "status"}``,
+    ``mp4`` if rendered, ``damaged`` (the reason) for a damaged log replayed with ``allow_damaged``.
+    ArtifactError if the sidecar cannot tell what ran, the decoder or scene is not the logged one,
+    or the log is damaged."""
     frame, meta = read_session(session, allow_damaged=allow_damaged)
     check_scene(session, meta)
     fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
@@ -207,21 +186,7 @@ def _screenshot(path: str, timeout_s: float = 30.0) -> None:
         time.sleep(0.5)
 
 
-def _check_display() -> None:
-    """Refuse, with what to do, to open the viewer without a display."""
-    import os
-
-    if sys.platform.startswith("linux") and not (
-        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
-    ):
-        raise ConfigError(
-            "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
-            "or with --no-viewer and scripted input"
-        )
-
-
 def _parser() -> argparse.ArgumentParser:
-    """The command line's parser: ``run``, ``replay``, ``schedule`` and ``survey``."""
     parser = argparse.ArgumentParser(prog="python -m lasa.live.teleop", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="drive the robot live and log the session")
@@ -261,17 +226,6 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _open_input(spec: str) -> Device:
-    """The device ``--device`` names, saying which one it is."""
-    if spec.startswith("scripted:"):
-        device: Device = ScriptedDevice.from_file(spec.split(":", 1)[1])
-        print("input: scripted")
-        return device
-    device, message = open_device(spec)
-    print(message)
-    return device
-
-
 def _in_viewer(
     station: Station, device: Device, writer: SessionWriter, max_steps: int, screenshot: str | None
 ) -> dict[str, Any]:
@@ -287,7 +241,10 @@ def _in_viewer(
         with viewer.lock():  # the scene's own camera, as in the videos
             viewer.cam.type = mujoco.mjtCamera.mjCAMERA_FIXED
             viewer.cam.fixedcamid = station.robot.model.camera(station.robot.spec.camera).id
-        timing = run_session(station, device, writer, max_steps, viewer=viewer, viewer_data=data)
+        goals = station.robot.goal_positions()
+        timing = run_session(
+            station, device, writer, max_steps, show=lambda rec: _draw(station, goals, viewer, data, rec)
+        )
         if screenshot:
             _screenshot(screenshot)
     # let the viewer's thread finish closing its window before Python tears down:
@@ -301,20 +258,17 @@ def _in_viewer(
 
 def _run(args: argparse.Namespace) -> int:
     """``run``: one live session; 128 + the signal's number when a signal stopped it."""
-    import signal
-
     check_range("duration", args.duration, 0.0, low_open=True)
-    config = SessionConfig(
-        robot=args.robot,
-        task=args.task,
-        condition=args.condition,
-        participant=args.participant,
-        build_dir=args.build_dir,
-    )
-    if not args.no_viewer:
-        _check_display()
+    config = SessionConfig(**{f.name: getattr(args, f.name) for f in dataclasses.fields(SessionConfig)})
+    display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    if not args.no_viewer and sys.platform.startswith("linux") and not display:
+        raise ConfigError(
+            "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
+            "or with --no-viewer and scripted input"
+        )
     station = Station(config)
-    device = _open_input(args.device)
+    device, message = open_device(args.device)
+    print(message)
     writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
     try:
@@ -335,18 +289,6 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _study(args: argparse.Namespace) -> int:
-    """``schedule`` and ``survey``: the study kit."""
-    from lasa.live import studykit
-
-    if args.command == "schedule":
-        print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
-    else:
-        answers = None if args.answers is None else studykit.parse_answers(args.answers)
-        print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
-    return 0
-
-
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``run``, ``replay``, ``schedule`` and ``survey``; a bad input is one line, exit 2."""
     args = _parser().parse_args(argv)
@@ -355,9 +297,14 @@ def main(argv: list[str] | None = None) -> int:
             result = replay(args.session, args.mp4, allow_damaged=args.allow_damaged)
             print(result)
             return 0 if result["exact"] else 1
-        if args.command in ("schedule", "survey"):
-            return _study(args)
-        return _run(args)
+        if args.command == "run":
+            return _run(args)
+        if args.command == "schedule":  # the study kit
+            print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
+        else:
+            answers = None if args.answers is None else studykit.parse_answers(args.answers)
+            print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
+        return 0
     except LasaError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

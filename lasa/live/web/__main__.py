@@ -1,18 +1,21 @@
 """Command line of the web study: ``serve`` (the default) and ``schedule``.
 
-``python -m lasa.live.web --port 8000 --sessions build/sessions [--host H]`` serves the study;
-``python -m lasa.live.web schedule --participants 12 --sessions build/sessions --url http://...``
-writes the schedule and one link per participant. The pre-registration is the simulated study's
-(``python -m lasa.experiments.study.preregister``).
+``--port 8000 --sessions build/sessions [--host H]`` serves the study; ``schedule --participants 12 --url
+http://...`` writes the schedule and one link per participant (pre-registration: lasa.experiments.study).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
+from typing import TYPE_CHECKING
 
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.runtime import pin
+
+if TYPE_CHECKING:
+    from lasa.live.web.app import WebConfig
 
 DEFAULT_HOST = "127.0.0.1"
 TLS_HINT = (
@@ -20,6 +23,29 @@ TLS_HINT = (
     "(e.g. Caddy: `caddy reverse-proxy --from study.example.org --to {host}:{port}`), and pass "
     "--origin https://study.example.org so its pages may connect"
 )
+
+
+def preflight(config: WebConfig) -> list[str]:
+    """The conditions of ``config``'s schedule, each built as a trial would on every task before the server
+    listens; else a ConfigError naming the first thing missing and the command that makes it, in one line."""
+    import pandas as pd
+
+    from lasa.evidence.sessions import PRACTICE_TASK
+    from lasa.live.station import SessionConfig, Station
+    from lasa.live.web.tokens import study_dir
+
+    schedule = study_dir(config.sessions) / "schedule.csv"
+    if not schedule.is_file():
+        raise ConfigError(f"no study in {config.sessions}: run `python -m lasa.live.web schedule` first")
+    conditions = list(dict.fromkeys(pd.read_csv(schedule).condition))
+    for condition in conditions:
+        for task in dict.fromkeys((PRACTICE_TASK, "Entree", "Dessert")):
+            try:
+                Station(SessionConfig("panda", task, condition, "p00", config.build_dir))
+            except (ArtifactError, ConfigError) as exc:
+                first = " ".join(str(exc).split())
+                raise ConfigError(f"the study's {condition} condition cannot run: {first}") from exc
+    return conditions
 
 
 def _schedule(argv: list[str]) -> int:
@@ -42,7 +68,6 @@ def _serve(argv: list[str]) -> int:
     import uvicorn
 
     from lasa.live.web.app import FRAMES, PING_S, PING_TIMEOUT_S, WebConfig, create_app
-    from lasa.live.web.preflight import preflight
     from lasa.live.web.protocol import MAX_MESSAGE_BYTES
 
     parser = argparse.ArgumentParser(prog="python -m lasa.live.web", description=__doc__.splitlines()[0])
@@ -72,15 +97,8 @@ def _serve(argv: list[str]) -> int:
     )
     args = parser.parse_args(argv)
     host = args.host or DEFAULT_HOST
-    config = WebConfig(
-        sessions=args.sessions,
-        build_dir=args.build_dir,
-        practice_s=args.practice_s,
-        trial_s=args.trial_s,
-        frames=args.frames,
-        origins=tuple(args.origin),
-        show_belief=args.show_belief,
-    )
+    settings = {f.name: getattr(args, f.name, None) for f in dataclasses.fields(WebConfig)}
+    config = WebConfig(**settings | {"origins": tuple(args.origin)})
     conditions = preflight(config)  # every decoder, scene and npm file the schedule needs, or exit
     print(f"checked: every step of {', '.join(conditions)} can run", file=sys.stderr)
     app = create_app(config)

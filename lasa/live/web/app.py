@@ -1,20 +1,20 @@
-"""The study's web application (Starlette): ``/study`` (the page), ``/static``, ``/npm`` and ``/scene``
-(``--frames browser``: MuJoCo's WebAssembly and the trial's scene, behind the trial's ``X-Scene-Key``)
-and ``WS /ws`` (:class:`lasa.live.web.conversation.Conversation`). No URL carries a secret: the token
-is in the link's fragment and the page sends it once, as the WebSocket's first message; another
-site's page is refused (``Origin``), and so is a token invalid, done or connected elsewhere.
-"""
+"""The study's web application (Starlette): ``/study``, ``/static``, ``/npm`` and ``/scene`` (``--frames
+browser``, behind the trial's ``X-Scene-Key``) and ``WS /ws``. No URL carries a secret: the page sends the
+token (its link's fragment) as the WebSocket's first message; another site's page is refused (``Origin``)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
 import dataclasses
+import math
 import secrets
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
+import mujoco
+import numpy as np
 from starlette.applications import Starlette
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
@@ -27,11 +27,11 @@ from lasa.base.errors import ConfigError
 from lasa.live.station import Station
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
-from lasa.live.web.labels import goal_labels
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_scene, npm_folder
 from lasa.live.web.tokens import TokenStore
+from lasa.world.fork import tip_frames
 
 __all__ = ["FRAMES", "HELLO_S", "PING_S", "PING_TIMEOUT_S", "REFUSALS", "WebConfig", "Study", "create_app"]
 
@@ -55,10 +55,10 @@ HEADERS = {
     ),
 }
 # MuJoCo's bindings build wrappers with `new Function` and compile the .wasm: its own origin's only
-BROWSER_CSP = (
-    "default-src 'self'; script-src 'self' 'unsafe-eval' 'wasm-unsafe-eval'; img-src 'self' blob:; "
-    "connect-src 'self'; frame-ancestors 'none'"
-)
+BROWSER_HEADERS = HEADERS | {
+    "Content-Security-Policy": "default-src 'self'; script-src 'self' 'unsafe-eval' 'wasm-unsafe-eval'; "
+    "img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -82,13 +82,25 @@ class WebConfig:
     def durations(self, conditions: int) -> dict[str, float]:
         """What the consent page states: the longest practice and trial [s], the conditions, and the
         longest the study takes [min] (a practice, two trials and ~2 minutes of questions each)."""
-        per_condition = self.practice_s + 2 * self.trial_s + 120.0
-        return {
-            "practice_s": self.practice_s,
-            "trial_s": self.trial_s,
-            "conditions": conditions,
-            "longest_min": round(conditions * per_condition / 60.0),
-        }
+        longest = round(conditions * (self.practice_s + 2 * self.trial_s + 120.0) / 60.0)
+        return dict(
+            practice_s=self.practice_s, trial_s=self.trial_s, conditions=conditions, longest_min=longest
+        )
+
+
+ASPECT = 4.0 / 3.0  # width / height of the page's picture (320 x 240 frames, a 480 x 360 canvas)
+
+
+def project(model: mujoco.MjModel, data: mujoco.MjData, camera: int, points: np.ndarray) -> np.ndarray:
+    """Image coordinates (x right, y down, in [0, 1] inside the picture) of world ``points`` (N, 3), through
+    a fixed camera (MuJoCo's: along -z, y up, ``cam_fovy``)."""
+    pos, rot = data.cam_xpos[camera], data.cam_xmat[camera].reshape(3, 3)
+    local = (np.asarray(points, dtype=float) - pos) @ rot  # camera frame: x right, y up, -z ahead
+    tan = math.tan(math.radians(float(model.cam_fovy[camera])) / 2.0)
+    depth = -local[:, 2]
+    x = local[:, 0] / (depth * tan * ASPECT)
+    y = local[:, 1] / (depth * tan)
+    return np.stack([(x + 1.0) / 2.0, (1.0 - y) / 2.0], axis=1)
 
 
 class Study:
@@ -120,10 +132,18 @@ class Study:
         return participant, ""
 
     def labels(self, station: Station) -> list[dict[str, Any]]:
-        """The goals' names and places on the picture, computed once (every trial: one scene, one camera)."""
+        """``{"name", "x", "y"}`` per goal: where its name (at its goal pose's fork tip) goes on the picture,
+        computed once (every trial: one scene, one camera)."""
         if self._labels is None:
-            robot = station.robot
-            self._labels = goal_labels(station.task, robot.model.camera(robot.spec.camera).id)
+            robot, task = station.robot, station.task
+            data = mujoco.MjData(robot.model)  # its own: the station's robot and data are left as they are
+            tips = tip_frames(robot, data, np.asarray(task.goals))[0]
+            mujoco.mj_forward(robot.model, data)  # the (fixed) camera's pose (cam_xpos: mj_camlight)
+            where = project(robot.model, data, robot.model.camera(robot.spec.camera).id, tips)
+            self._labels = [
+                {"name": str(name), "x": round(float(x), 4), "y": round(float(y), 4)}
+                for name, (x, y) in zip(task.goal_names, where, strict=True)
+            ]
         return self._labels
 
     def scene_key(self, xml: Path) -> str:
@@ -133,44 +153,24 @@ class Study:
         return key
 
 
-def _same_origin(ws: WebSocket, extra: tuple[str, ...]) -> bool:
-    origin, host = ws.headers.get("origin"), ws.headers.get("host")
-    return bool(origin and host) and origin in {f"http://{host}", f"https://{host}", *extra}
-
-
 async def page(request: Request) -> Response:
     """The study page: the same for everyone (the token stays in the address's fragment)."""
-    study: Study = request.app.state.study
-    headers = (
-        HEADERS | {"Content-Security-Policy": BROWSER_CSP} if study.config.frames == "browser" else HEADERS
-    )
-    return FileResponse(STATIC / "index.html", headers=headers)
+    browser = request.app.state.study.config.frames == "browser"
+    return FileResponse(STATIC / "index.html", headers=BROWSER_HEADERS if browser else HEADERS)
 
 
-def _scene_of(request: Request) -> tuple[str, dict[str, Path]] | Response:
+async def scene(request: Request) -> Response:
+    """The current trial's scene as the page loads it: ``{"xml": ..., "assets": [names]}`` at ``/scene``, or
+    one of its files at ``/scene/{name}``, by a name the server gave (else 404)."""
     study: Study = request.app.state.study
     key = request.headers.get("x-scene-key", "")
     xml = study.scenes.get(key) if 0 < len(key) <= 64 else None
     if xml is None or study.config.frames != "browser":
         return PlainTextResponse("No trial of this page is running.", 404, headers=HEADERS)
-    return browser_scene(xml)
-
-
-async def scene(request: Request) -> Response:
-    """The current trial's scene as the page loads it: ``{"xml": ..., "assets": [names]}``."""
-    found = _scene_of(request)
-    if isinstance(found, Response):
-        return found
-    xml, assets = found
-    return JSONResponse({"xml": xml, "assets": sorted(assets)}, headers=HEADERS)
-
-
-async def scene_asset(request: Request) -> Response:
-    """One file of the current trial's scene, by a name the server gave (else 404)."""
-    found = _scene_of(request)
-    if isinstance(found, Response):
-        return found
-    path = found[1].get(request.path_params["name"])
+    text, assets = browser_scene(xml)
+    if "name" not in request.path_params:
+        return JSONResponse({"xml": text, "assets": sorted(assets)}, headers=HEADERS)
+    path = assets.get(request.path_params["name"])
     if path is None:
         return PlainTextResponse("No such file.", 404, headers=HEADERS)
     return FileResponse(path, media_type=ASSET_TYPES[path.suffix.lower()], headers=HEADERS)
@@ -186,23 +186,20 @@ async def _hello(ws: WebSocket) -> str | None:
     return msg.get("token") if msg["type"] == "hello" else None
 
 
-async def _refuse(ws: WebSocket, reason: str) -> None:
-    with contextlib.suppress(Exception):
-        await ws.send_json({"type": "refused", "reason": reason})
-        await ws.close(code=1008)
-
-
 async def socket(ws: WebSocket) -> None:
     """A participant's connection: the origin checked before it opens, the token in its first message."""
     study: Study = ws.app.state.study
-    if not _same_origin(ws, study.config.origins):
+    origin, host = ws.headers.get("origin"), ws.headers.get("host")
+    if not (origin and host and origin in {f"http://{host}", f"https://{host}", *study.config.origins}):
         await ws.close(code=1008)
         return
     await ws.accept()
     token = await _hello(ws)
     participant, reason = study.admit(token) if token is not None else (None, "no_hello")
     if participant is None:
-        await _refuse(ws, reason)
+        with contextlib.suppress(Exception):
+            await ws.send_json({"type": "refused", "reason": reason})
+            await ws.close(code=1008)
         return
     study.active.add(participant)
     try:
@@ -229,7 +226,7 @@ def create_app(config: WebConfig) -> Starlette:
         WebSocketRoute("/ws", socket),
     ]
     if config.frames == "browser":
-        routes += [Route("/scene", scene), Route("/scene/{name}", scene_asset)]
+        routes += [Route("/scene", scene), Route("/scene/{name}", scene)]
         routes += [Mount(f"/npm/{name}", NpmFiles(directory=npm_folder(name))) for name in NPM_PACKAGES]
     app = Starlette(lifespan=lifespan, routes=routes)
     app.state.study = study

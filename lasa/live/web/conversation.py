@@ -1,32 +1,32 @@
-"""One participant's connection: the protocol's steps, driven by the server, over one WebSocket.
-
-The server decides what comes next (:mod:`lasa.live.web.plan`); the page shows it and answers.
-A receiving task checks every page message (:mod:`lasa.live.web.protocol`): input updates the
-next tick's sample, anything else goes to the step waiting for it. A refused message closes
-the connection; a page that goes away mid-trial leaves that session ``interrupted`` with its
-rows, and its progress where it was, so the same link resumes with a new session.
+"""One participant's connection: the protocol's steps (:mod:`lasa.live.web.plan`), driven by the server over
+one WebSocket, and each trial's loop (:func:`run_trial`). Page input updates the next tick's sample; a page
+gone mid-trial leaves that session ``interrupted`` and its progress where it was, for the same link to resume.
 """
 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
 import dataclasses
 import logging
+from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.live.station import SessionConfig
-from lasa.live.web.loop import open_trial, run_trial
-from lasa.live.web.plan import Step, plan_of, session_folder
+from lasa.live.devices import StickSample
+from lasa.live.session import Session, open_log
+from lasa.live.station import SessionConfig, Station
+from lasa.live.web.plan import Step, plan_of
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
 
 if TYPE_CHECKING:
     from lasa.live.web.app import Study
 
-__all__ = ["Gone", "Conversation"]
+__all__ = ["STEPPER", "Gone", "Conversation", "open_trial", "tick", "run_trial"]
 
 LOG = logging.getLogger("lasa.live.web")
 # Page messages (consent, start, survey, hello) waiting for the step that reads them: a connection
@@ -64,9 +64,8 @@ class Conversation:
         """Serve the participant until their plan is done or the page goes."""
         receiver = asyncio.create_task(self._receive())
         try:
-            await self._protocol()
-        except Gone:
-            pass
+            with contextlib.suppress(Gone):
+                await self._protocol()
         finally:
             receiver.cancel()
             with contextlib.suppress(asyncio.CancelledError):
@@ -117,11 +116,14 @@ class Conversation:
                 raise Gone
             self.dropped += 1
 
-    async def send(self, message: dict[str, Any]) -> None:
-        """Send one JSON message; a failed send means the page is gone."""
+    async def send(self, message: dict[str, Any] | bytes) -> None:
+        """Send one JSON message (bytes: a JPEG frame); a failed send means the page is gone."""
         try:
             async with self._send_lock:
-                await self.ws.send_json(message)
+                if isinstance(message, bytes):
+                    await self.ws.send_bytes(message)
+                else:
+                    await self.ws.send_json(message)
         except Exception:
             self.gone = True
 
@@ -177,15 +179,11 @@ class Conversation:
                 await self.send({"type": "error", "message": str(exc)})
 
     async def _drive(self, step: Step, limit_s: float) -> str:
-        config = SessionConfig(
-            robot="panda",
-            task=step.task,
-            condition=step.condition,
-            participant=self.participant,
-            build_dir=self.study.config.build_dir,
-        )
-        attempt = self.study.progress.attempt(self.participant)
-        folder = session_folder(self.study.config.sessions, step)
+        study, practice = self.study, step.kind == "practice"
+        config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
+        attempt = study.progress.attempt(self.participant)
+        folder = Path(study.config.sessions)  # practice apart: the analysis reads the trials only
+        folder = folder / "practice" if practice else folder
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
         except (ConfigError, ArtifactError) as exc:
@@ -195,26 +193,26 @@ class Conversation:
             raise Gone from exc
         self.finish = False
         self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
-        practice = step.kind == "practice"
-        if self.study.config.frames != "none":  # the goals' names over the picture
-            await self.send({"type": "labels", "labels": self.study.labels(trial.station)})
+        if study.config.frames != "none":  # the goals' names over the picture
+            await self.send({"type": "labels", "labels": study.labels(trial.station)})
         key = None
-        if self.study.config.frames == "browser":
+        if study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
             writer = trial.writer
             assert writer is not None  # open_trial always logs
-            key = self.study.scene_key(writer.folder / f"{writer.stem}.xml")
+            key = study.scene_key(writer.folder / f"{writer.stem}.xml")
             robot = trial.station.robot
             camera = robot.model.camera(robot.spec.camera).id
-            scene = {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
-            await self.send(scene)
+            await self.send(
+                {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
+            )
         try:
             return await run_trial(
                 trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
             )
         finally:
-            self.study.scenes.pop(key or "", None)
+            study.scenes.pop(key or "", None)
 
     async def _tick(self, message: dict[str, Any]) -> None:
         if not self.study.config.show_belief:  # the paper's people saw the robot only
@@ -229,10 +227,75 @@ class Conversation:
     async def _frame(self, q: list[float]) -> None:
         assert self.study.renderer is not None
         jpeg = await self.study.renderer.frame(q)
-        if jpeg is None or self.gone:
-            return
+        if jpeg is not None and not self.gone:
+            await self.send(jpeg)
+
+
+STEPPER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="lasa-step")
+"""The one thread that runs every participant's :func:`tick`, in turn: steps of small NumPy and torch calls in
+several threads fight over the GIL and each takes several times as long (``benchmarks/web_load.py``)."""
+
+
+def open_trial(
+    config: SessionConfig, folder: Path, attempt: int, duration_s: float, order: int = 0
+) -> Session:
+    """A warmed-up station and its new log ``<participant>_<task>_<condition>_<time>_a<attempt>`` (a new name
+    for each attempt); ``order``: the condition's position in the participant's schedule."""
+    station = Station(config)
+    station.warm_up()
+    writer = open_log(
+        station, folder, suffix=f"_a{attempt}", interface="web", attempt=attempt, order=int(order)
+    )
+    return Session(station, writer, max(1, int(round(duration_s / station.control.dt))))
+
+
+def tick(trial: Session, sample: StickSample) -> dict[str, Any]:
+    """The loop's one step on ``sample``, logged, and the page's state message."""
+    rec = trial.step(sample)
+    assert rec is not None
+    station = trial.station
+    return {
+        "type": "tick",
+        "step": trial.steps,
+        "q": [float(v) for v in rec["s"]],
+        "belief": [float(v) for v in rec["b"]],
+        "goals": list(station.task.goal_names),
+        "instruction": station.phase_text(),
+        "late": trial.misses,
+        "stop": bool(rec["stop"]),
+        "connected": bool(rec["connected"]),
+        "done": station.done,
+        "remaining_s": (trial.max_steps - trial.steps) * station.control.dt,
+    }
+
+
+async def run_trial(
+    trial: Session,
+    inputs: Inputs,
+    send: Callable[[dict[str, Any]], Awaitable[None]],
+    connected: Callable[[], bool],
+    finish: Callable[[], bool],
+) -> str:
+    """Tick until done, out of time, ``finish()`` or the page goes; the status the log closed with:
+    ``interrupted`` if the page went or anything raised (a cancelled loop logs its step's row first)."""
+    status = "complete"
+    step: concurrent.futures.Future[dict[str, Any]] | None = None
+    with trial.guard():
         try:
-            async with self._send_lock:
-                await self.ws.send_bytes(jpeg)
-        except Exception:
-            self.gone = True
+            while trial.steps < trial.max_steps:
+                if not connected():
+                    status = "interrupted"
+                    break
+                step = STEPPER.submit(tick, trial, inputs.take())
+                await send(await asyncio.wrap_future(step))
+                if trial.station.done or finish():
+                    break
+                pause = trial.pause()
+                if pause > 0:
+                    await asyncio.sleep(pause)
+        except BaseException:
+            if step is not None:
+                concurrent.futures.wait([step])  # a few ms: the step's row goes in before the log closes
+            raise
+    trial.close(status)
+    return status

@@ -1,8 +1,5 @@
-"""The robot drawn on the server (``--frames server``): MuJoCo's off-screen renderer, small JPEG frames.
-
-Rendering is slow, so frames are best effort: one worker renders the newest state, a request that
-arrives while it is busy is dropped, and the control loop never waits for a frame.
-"""
+"""The robot drawn on the server (``--frames server``): MuJoCo's off-screen renderer, small JPEG frames, best
+effort: one worker renders the newest state, a request while it is busy is dropped, the loop never waits."""
 
 from __future__ import annotations
 
@@ -18,17 +15,10 @@ __all__ = ["FrameRenderer"]
 
 
 class FrameRenderer:
-    """JPEG frames of the eating scene at given joint positions, from one rendering thread.
+    """JPEG frames (320 x 240 px, quality 70) of the eating scene at given joint positions, from one rendering
+    thread."""
 
-    Args:
-        width: Frame width [px].
-        height: Frame height [px].
-        quality: JPEG quality (1-95).
-    """
-
-    def __init__(self, width: int = 320, height: int = 240, quality: int = 70) -> None:
-        self.size = (height, width)
-        self.quality = quality
+    def __init__(self) -> None:
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="frames")
         self._busy = False
         self._scene: Any = None  # (robot, renderer, data, camera), made on the rendering thread
@@ -41,7 +31,7 @@ class FrameRenderer:
             from lasa.world.eating import make_eating_task
 
             robot = make_eating_task().robot
-            renderer = mujoco.Renderer(robot.model, *self.size)
+            renderer = mujoco.Renderer(robot.model, 240, 320)
             camera = robot.model.camera(robot.spec.camera).id
             self._scene = (robot, renderer, mujoco.MjData(robot.model), camera)
         robot, renderer, data, camera = self._scene
@@ -50,7 +40,7 @@ class FrameRenderer:
         mujoco.mj_forward(robot.model, data)
         renderer.update_scene(data, camera=camera)
         buffer = io.BytesIO()
-        Image.fromarray(renderer.render()).save(buffer, "JPEG", quality=self.quality)
+        Image.fromarray(renderer.render()).save(buffer, "JPEG", quality=70)
         return buffer.getvalue()
 
     async def warm_up(self) -> None:

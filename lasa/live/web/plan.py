@@ -1,16 +1,12 @@
-"""A participant's protocol and their progress through it, kept on the server.
-
-Consent; per condition in the participant's order (``study/schedule.csv``) a practice, the Entree,
-the Dessert and the questionnaire; thanks. Progress (``study/progress.json``) lets a participant who
-disconnects come back where they left off, and ends a finished participant's link.
-"""
+"""A participant's protocol (consent; per condition in their ``study/schedule.csv`` order a practice, the
+Entree, the Dessert and the questionnaire; thanks) and their progress through it (``study/progress.json``:
+one who disconnects comes back where they left off; a finished participant's link ends)."""
 
 from __future__ import annotations
 
 import dataclasses
 import json
 import os
-from pathlib import Path
 from typing import Any
 
 import pandas as pd
@@ -19,7 +15,7 @@ from lasa.base.io import write_text
 from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.web.tokens import check_participant, study_dir
 
-__all__ = ["Step", "plan_of", "Progress", "session_folder"]
+__all__ = ["Step", "plan_of", "Progress"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -42,15 +38,8 @@ def plan_of(sessions: str | os.PathLike[str], participant: str) -> list[Step]:
     """The participant's steps, from the study's schedule (empty if they are not in it)."""
     schedule = pd.read_csv(study_dir(sessions) / "schedule.csv", dtype={"participant": str})
     rows = schedule[schedule.participant == check_participant(participant)].sort_values("position")
-    steps: list[Step] = []
-    for order, condition in enumerate(rows.condition):
-        steps += [
-            Step("practice", condition, PRACTICE_TASK, order),
-            Step("trial", condition, "Entree", order),
-            Step("trial", condition, "Dessert", order),
-            Step("survey", condition, "", order),
-        ]
-    return steps
+    kinds = (("practice", PRACTICE_TASK), ("trial", "Entree"), ("trial", "Dessert"), ("survey", ""))
+    return [Step(kind, c, task, order) for order, c in enumerate(rows.condition) for kind, task in kinds]
 
 
 class Progress:
@@ -91,8 +80,3 @@ class Progress:
 
     def _save(self) -> None:
         write_text(self.path, json.dumps(self._state, indent=2, sort_keys=True) + "\n")
-
-
-def session_folder(sessions: str | os.PathLike[str], step: Step) -> Path:
-    """Where a step's session is logged: practice apart, so the analysis reads the trials only."""
-    return Path(sessions) / "practice" if step.kind == "practice" else Path(sessions)

@@ -1,10 +1,6 @@
-"""The messages between the page and the server, and the limits on what a page may send.
-
-The page sends JSON (at most :data:`MAX_MESSAGE_BYTES`): ``hello`` (the token, first), ``consent``,
-``start``, ``finish``, ``input`` (``axes``, ``mode``, ``stop``) and ``survey`` (``answers``); anything
-else, a larger message or more than :data:`MAX_RATE` a second ends the connection. The server sends
-``phase``, ``tick``, ``scene``, ``labels`` and ``refused`` messages, and JPEG frames (``--frames server``).
-"""
+"""The messages between the page and the server: the page's (:data:`KINDS`, JSON of at most
+:data:`MAX_MESSAGE_BYTES`, at most :data:`MAX_RATE` a second; anything else ends the connection) and the
+server's (``phase``, ``tick``, ``scene``, ``labels``, ``refused``; JPEG frames with ``--frames server``)."""
 
 from __future__ import annotations
 
@@ -20,19 +16,12 @@ from lasa.base.errors import LasaError
 from lasa.live.devices import StickSample
 from lasa.live.web.tokens import MAX_TOKEN_CHARS
 
-__all__ = [
-    "MAX_MESSAGE_BYTES",
-    "MAX_RATE",
-    "STALE_S",
-    "ProtocolError",
-    "parse",
-    "RateLimit",
-    "Inputs",
-]
+__all__ = ["MAX_MESSAGE_BYTES", "MAX_RATE", "STALE_S", "ProtocolError", "parse", "RateLimit", "Inputs"]
 
 MAX_MESSAGE_BYTES = 4096
 MAX_RATE = 50.0  # messages per second, averaged over a burst of as many
 STALE_S = 0.5  # input older than this reads as disconnected: zero input, never a held command
+# hello (the token, first), consent, start, finish, input (axes, mode, stop) and survey (answers)
 KINDS = ("hello", "consent", "start", "finish", "input", "survey")
 
 
@@ -88,17 +77,16 @@ def _number(value: Any) -> bool:
 
 
 class RateLimit:
-    """A token bucket: ``rate`` messages a second, bursts of up to ``rate``."""
+    """A token bucket: :data:`MAX_RATE` messages a second, bursts of up to as many."""
 
-    def __init__(self, rate: float = MAX_RATE) -> None:
-        self.rate = rate
-        self._level = rate
+    def __init__(self) -> None:
+        self._level = MAX_RATE
         self._last = time.monotonic()
 
     def allow(self) -> bool:
         """Whether one more message is within the limit now."""
         now = time.monotonic()
-        self._level = min(self.rate, self._level + (now - self._last) * self.rate)
+        self._level = min(MAX_RATE, self._level + (now - self._last) * MAX_RATE)
         self._last = now
         if self._level < 1.0:
             return False

@@ -1,9 +1,6 @@
-"""The robot drawn in the browser (``--frames browser``): MuJoCo's WebAssembly build and three.js.
-
-The server serves both npm packages itself (:class:`NpmFiles`, installed by ``make setup``) and the
-trial's scene XML, whose mesh paths :func:`browser_scene` rewrites to safe names of its own
-choosing: no string from a client ever reaches a path.
-"""
+"""The robot drawn in the browser (``--frames browser``): MuJoCo's WebAssembly build and three.js, served by
+the server itself (:class:`NpmFiles`), and the trial's scene, its files renamed by :func:`browser_scene`: no
+string from a client ever reaches a path."""
 
 from __future__ import annotations
 
@@ -21,10 +18,7 @@ from lasa.base.paths import repo_root
 __all__ = ["NPM_PACKAGES", "ASSET_TYPES", "npm_folder", "NpmFiles", "browser_scene"]
 
 # The npm packages the page loads: URL name -> (folder under .venv, the file that must be there).
-NPM_PACKAGES = {
-    "mujoco": ("mujoco-js", "mujoco.wasm"),
-    "three": ("three", "three.module.js"),
-}
+NPM_PACKAGES = {"mujoco": ("mujoco-js", "mujoco.wasm"), "three": ("three", "three.module.js")}
 # The scene's asset files the page may fetch, by suffix, with their content types.
 ASSET_TYPES = {
     ".stl": "model/stl",
@@ -35,11 +29,7 @@ ASSET_TYPES = {
 
 
 def npm_folder(name: str) -> Path:
-    """Where ``make setup`` put npm package ``name`` (a key of :data:`NPM_PACKAGES`).
-
-    Raises:
-        ArtifactError: if it is not there.
-    """
+    """Where ``make setup`` put npm package ``name`` (a key of :data:`NPM_PACKAGES`); else ArtifactError."""
     folder, marker = NPM_PACKAGES[name]
     path = repo_root() / ".venv" / folder
     if not (path / marker).is_file():
@@ -70,12 +60,8 @@ class NpmFiles(StaticFiles):
 
 
 def browser_scene(xml_path: Path) -> tuple[str, dict[str, Path]]:
-    """The scene ``xml_path`` as the page loads it: its MJCF with every ``file`` renamed, and the map
-    from those names to the files on the server.
-
-    Raises:
-        ArtifactError: if the scene names a file of a kind the page does not load, or one that is missing.
-    """
+    """The scene ``xml_path`` as the page loads it: its MJCF with every ``file`` renamed, and the map from
+    those names to the files on the server; ArtifactError for a missing file or one the page cannot load."""
     root = ET.fromstring(xml_path.read_text())
     for compiler in root.iter("compiler"):
         for attr in ("meshdir", "texturedir", "assetdir"):

@@ -1,9 +1,6 @@
-"""The study's links: one secret token per participant, kept on the server only as its SHA-256.
-
-:func:`issue_links` writes the schedule, ``tokens.json`` (hashes) and ``links.csv`` (the only copy of
-the tokens) into ``<sessions>/study/``; :class:`TokenStore` maps a token to its participant. Ids
-come from the schedule only (:data:`PARTICIPANT_ID`): no string a browser sends becomes a path.
-"""
+"""The study's links: one secret token per participant, kept on the server only as its SHA-256
+(:func:`issue_links`, :class:`TokenStore`). Ids come from the schedule only (:data:`PARTICIPANT_ID`):
+no string a browser sends becomes a path."""
 
 from __future__ import annotations
 
@@ -45,8 +42,9 @@ def _hash(token: str) -> str:
 
 
 def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path:
-    """Schedule ``n`` participants in ``sessions`` and write one link each to the server at ``base_url``;
-    returns the links' CSV. An existing study (tokens, progress and sessions together) is never replaced."""
+    """Schedule ``n`` participants in ``<sessions>/study/``, write ``tokens.json`` (hashes) and one link each
+    to the server at ``base_url`` (``links.csv``, the only copy of the tokens; returned). An existing study
+    (tokens, progress and sessions together) is never replaced."""
     from lasa.live.studykit import write_schedule
 
     folder = study_dir(sessions)
@@ -64,13 +62,9 @@ def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path
     participants = [check_participant(p) for p in dict.fromkeys(schedule.participant)]
     tokens = {p: secrets.token_urlsafe(TOKEN_BYTES) for p in participants}
     write_text(folder / "tokens.json", json.dumps({p: _hash(t) for p, t in tokens.items()}, indent=2) + "\n")
-    links = pd.DataFrame(
-        {
-            "participant": participants,
-            # the token in the fragment, which browsers never send: no server or proxy logs it
-            "link": [f"{base_url.rstrip('/')}/study#token={tokens[p]}" for p in participants],
-        }
-    )
+    # the token in the fragment, which browsers never send: no server or proxy logs it
+    link = [f"{base_url.rstrip('/')}/study#token={tokens[p]}" for p in participants]
+    links = pd.DataFrame({"participant": participants, "link": link})
     path = write_csv(folder / "links.csv", links)
     path.chmod(0o600)  # the only copy of the tokens
     return path
@@ -92,8 +86,7 @@ class TokenStore:
         if not token or len(token) > MAX_TOKEN_CHARS:
             return None
         digest = _hash(token)
-        found = None
-        for participant, stored in self._hashes.items():
-            if hmac.compare_digest(digest, stored):
-                found = participant
-        return found
+        found = [
+            p for p, stored in self._hashes.items() if hmac.compare_digest(digest, stored)
+        ]  # all compared
+        return found[-1] if found else None

@@ -1,5 +1,5 @@
 // The study page: shows what the server says and sends the stick. The robot's step runs on the
-// server only (lasa.live.web.loop); this page never computes a state. The robot is a JPEG frame from
+// server only (lasa.live.web.conversation); this page never computes a state. The robot is a JPEG frame from
 // the server (--frames server) or drawn here from the tick's joint positions (--frames browser:
 // view.js, MuJoCo's WebAssembly build and three.js, loaded on the server's first "scene" message).
 "use strict";
@@ -118,7 +118,7 @@ function tick(msg) {
   });
 }
 
-// The goals' names over the picture, where the server's camera sees each goal (lasa.live.web.labels).
+// The goals' names over the picture, where the server's camera sees each goal (lasa.live.web.app.goal_labels).
 function labels(msg) {
   $("labels").replaceChildren(...msg.labels.map((g) => {
     const span = Object.assign(document.createElement("span"), { textContent: g.name });

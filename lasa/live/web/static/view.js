@@ -1,6 +1,6 @@
 // The robot drawn in this page (--frames browser): MuJoCo's official WebAssembly bindings place the
 // geoms at the joint positions the server sends, three.js draws them. No control code here: the
-// step runs on the server only (lasa.live.web.loop); this module only draws its state.
+// step runs on the server only (lasa.live.web.conversation); this module only draws its state.
 import * as THREE from "/npm/three/three.module.js";
 import loadMujoco from "/npm/mujoco/mujoco.js";
 
