@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 import pandas as pd
@@ -41,6 +42,18 @@ def safe_axes(raw: np.ndarray, connected: bool = True) -> np.ndarray:
     if not connected:
         return np.zeros(2)
     return np.clip(np.where(np.isfinite(axes), axes, 0.0), -1.0, 1.0)
+
+
+class Device(Protocol):
+    """What the teleoperation loop reads from: a device of your own needs only these two methods."""
+
+    def poll(self) -> StickSample:
+        """This step's input."""
+        ...
+
+    def close(self) -> None:
+        """Release the device."""
+        ...
 
 
 class ScriptedDevice:
@@ -199,9 +212,6 @@ class GamepadDevice:
     def close(self) -> None:
         """Release SDL's joystick subsystem."""
         self._pg.joystick.quit()
-
-
-Device = ScriptedDevice | KeyboardDevice | GamepadDevice  # what the teleoperation loop reads from
 
 
 def open_device(kind: str = "auto") -> tuple[Device, str]:
