@@ -119,3 +119,16 @@ def test_every_positive_int_setting_refuses_zero_and_below_and_keeps_what_it_acc
         cls(**{name: bad})
     good = data.draw(st.integers(1, 50))
     assert getattr(from_dict(cls, to_dict(cls(**{name: good}))), name) == good
+
+
+@pytest.mark.parametrize("module", ["lasa.experiments.eating_task", "lasa.experiments.study.run"])
+def test_both_cap_sweeps_read_none_and_refuse_a_repeated_cap(module):
+    import importlib
+
+    config_class = importlib.import_module(module).Config
+    read = config_class(belief_cap="None", cap_sweep=(0.9, "none"))
+    assert read.belief_cap is None and read.cap_sweep == (0.9, None)
+    with pytest.raises(ConfigError, match=r"cap_sweep must not repeat a cap, got \(0.9, None, None\)"):
+        config_class(cap_sweep=(0.9, None, "none"))
+    with pytest.raises(ConfigError, match=r"cap_sweep\[0\] must be in \(0.5, 1\)"):  # checked before repeats
+        config_class(cap_sweep=(1.5, 1.5))

@@ -33,6 +33,7 @@ __all__ = [
     "Seed",
     "BeliefCap",
     "cap_setting",
+    "validate_caps",
     "Why",
     "Rationality",
     "validate",
@@ -89,6 +90,16 @@ BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
 def cap_setting(value: Any) -> Any:
     """A belief cap as a record keeps it: the word ``"none"`` (any case) is None, else as given."""
     return None if isinstance(value, str) and value.strip().lower() == "none" else value
+
+
+def validate_caps(config: Any) -> None:
+    """:func:`validate` a frozen config with a ``belief_cap`` and a ``cap_sweep``, each read by
+    :func:`cap_setting` first; ConfigError if the sweep repeats a cap."""
+    object.__setattr__(config, "belief_cap", cap_setting(config.belief_cap))
+    object.__setattr__(config, "cap_sweep", tuple(cap_setting(c) for c in config.cap_sweep))
+    validate(config)
+    if len(set(config.cap_sweep)) != len(config.cap_sweep):
+        raise ConfigError(f"cap_sweep must not repeat a cap, got {config.cap_sweep}")
 
 
 def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:

@@ -23,11 +23,10 @@ from lasa.base.config import (
     Positive,
     PositiveInt,
     Seed,
-    cap_setting,
     check_choice,
     check_list,
     to_dict,
-    validate,
+    validate_caps,
 )
 from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
@@ -97,11 +96,7 @@ class Config:
     jobs: PositiveInt = 1
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
-        object.__setattr__(self, "cap_sweep", tuple(cap_setting(c) for c in self.cap_sweep))
-        validate(self)
-        if len(set(self.cap_sweep)) != len(self.cap_sweep):
-            raise ConfigError(f"cap_sweep must not repeat a cap, got {self.cap_sweep}")
+        validate_caps(self)
         check_choice("goal", self.goal, GOALS)
         if self.train.z_dim != 2:
             raise ConfigError(

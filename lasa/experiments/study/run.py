@@ -20,10 +20,9 @@ from lasa.base.config import (
     NonNegativeInt,
     PositiveInt,
     Seed,
-    cap_setting,
     check_choice,
     check_list,
-    validate,
+    validate_caps,
 )
 from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import require_file
@@ -91,11 +90,7 @@ class Config:
     sweep_participants: AtLeastTwo = 10  # at most the cohort: sweep_n [-]
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "belief_cap", cap_setting(self.belief_cap))
-        object.__setattr__(self, "cap_sweep", tuple(cap_setting(c) for c in self.cap_sweep))
-        validate(self)
-        if len(set(self.cap_sweep)) != len(self.cap_sweep):
-            raise ConfigError(f"cap_sweep must not repeat a cap, got {self.cap_sweep}")
+        validate_caps(self)
         object.__setattr__(self, "participant_models", tuple(self.participant_models))
         models = self.participant_models
         if not models or len(set(models)) != len(models):
