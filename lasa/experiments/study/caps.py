@@ -22,7 +22,7 @@ from lasa.evidence.claims import Claim
 from lasa.evidence.decision import effect_word
 from lasa.evidence.hypotheses import for_member
 from lasa.experiments.eating_task import cap_decoder_name, cap_label
-from lasa.experiments.study import claims
+from lasa.experiments.study import analysis, claims
 from lasa.experiments.study import run as study
 from lasa.experiments.study.analysis import pct
 from lasa.method.decoder import ActionDecoder
@@ -34,6 +34,7 @@ __all__ = [
     "NAME",
     "COLUMNS",
     "load_decoders",
+    "stuck",
     "run",
     "uncapped_claims",
     "sweep",
@@ -220,6 +221,20 @@ def sweep(
     ordered = sorted(parts, key=lambda c: np.inf if c is None else c)
     out = [dict(row, order=i) for i, c in enumerate(ordered) for row in parts[c]]
     return pd.DataFrame(out, columns=list(COLUMNS))
+
+
+def stuck(
+    task: EatingTask,
+    runs: Mapping[float | None, CapRun],
+    decoders: Mapping[float | None, tuple[str, ActionDecoder]],
+    config: study.Config,
+    model: str,
+    cap: float | None = None,
+) -> pd.DataFrame:
+    """Where the unfinished LA episodes of the run at ``cap`` stopped (:func:`.analysis.stuck_episodes`)."""
+    r = runs[cap]
+    episodes = {model: {r.decoder: r.episodes}}
+    return analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
 
 
 def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
