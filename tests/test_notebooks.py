@@ -20,7 +20,7 @@ from lasa.base.config import from_dict
 from lasa.evidence.claims import CLAIM_COLUMNS
 from lasa.evidence.video import read_video
 from lasa.experiments import sim1, sim2, sim3, sim4
-from lasa.pipeline.execute import load_config
+from lasa.pipeline.execute import execute, load_config
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = ROOT / "configs" / "quick.yaml"
@@ -289,19 +289,16 @@ def test_a_notebook_runs_from_its_own_folder_with_relative_paths(executed, monke
     ``LASA_ROOT`` points the repository root at the QUICK run's folder, so the relative
     ``build`` and ``figures`` are that run's, wherever the kernel's working directory is.
     """
-    import papermill as pm
-
     monkeypatch.setenv("LASA_ROOT", str(executed))
     params = load_config(QUICK, ROOT / "notebooks" / "06_learning_users.ipynb")
     params.update(build_dir="build", figures_dir="figures", robot="planar5")
     before = pd.read_csv(executed / "figures" / "sim3_learning_users.csv")
-    pm.execute_notebook(
-        str(ROOT / "notebooks" / "06_learning_users.ipynb"),
-        str(tmp_path / "06.ipynb"),
-        parameters=params,
-        cwd=str(ROOT / "notebooks"),
-        kernel_name="python3",
-        progress_bar=False,
+    execute(
+        ROOT / "notebooks" / "06_learning_users.ipynb",
+        tmp_path / "06.ipynb",
+        params,
+        ROOT / "notebooks",
+        False,
     )
     after = pd.read_csv(executed / "figures" / "sim3_learning_users.csv")
     pd.testing.assert_frame_equal(before, after)  # it read the run's decoders and rewrote the same rows

@@ -111,37 +111,51 @@ def test_malformed_config_is_an_error(tmp_path):
         load_config(bad, NOTEBOOKS[0])
 
 
-def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
-    """The CLI's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
-    import subprocess
-    import sys
-
-    nb = {
+def _notebook(*source: str) -> dict:
+    """A notebook of an empty ``parameters`` cell and one code cell of ``source``'s lines."""
+    cells = [(["parameters"], ["settings = {}\n"]), ([], list(source))]
+    return {
         "cells": [
             {
                 "cell_type": "code",
-                "id": "p",
-                "metadata": {"tags": ["parameters"]},
+                "id": f"c{i}",
+                "metadata": {"tags": tags},
                 "execution_count": None,
                 "outputs": [],
-                "source": ["settings = {}\n"],
-            },
-            {
-                "cell_type": "code",
-                "id": "c",
-                "metadata": {},
-                "execution_count": None,
-                "outputs": [],
-                "source": [
-                    "from lasa.base.config import check_range\n",
-                    "check_range('alpha', 2.0, 0.0, 1.0)\n",
-                ],
-            },
+                "source": text,
+            }
+            for i, (tags, text) in enumerate(cells)
         ],
         "metadata": {"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}},
         "nbformat": 4,
         "nbformat_minor": 5,
     }
+
+
+def test_the_kernel_listens_on_unix_sockets_in_a_folder_of_its_own(tmp_path):
+    """No TCP port to race for between kernels started side by side; the folder goes with the run."""
+    from lasa.pipeline.execute import execute
+
+    notebook = tmp_path / "sockets.ipynb"
+    lines = (
+        "from ipykernel import get_connection_info\n",
+        "{k: get_connection_info(unpack=True)[k] for k in ('transport', 'ip')}\n",
+    )
+    notebook.write_text(json.dumps(_notebook(*lines)))
+    execute(notebook, tmp_path / "out.ipynb", {}, tmp_path, progress=False)
+    result = json.loads((tmp_path / "out.ipynb").read_text())
+    info = ast.literal_eval("".join(result["cells"][-1]["outputs"][0]["data"]["text/plain"]))
+    assert info["transport"] == "ipc"
+    folder = Path(info["ip"]).parent
+    assert folder.name.startswith("lasa-kernel-") and not folder.exists()
+
+
+def test_a_failed_notebook_ends_with_the_librarys_own_error(tmp_path):
+    """The CLI's last line is the cause (a ConfigError raised in a cell) and the partial run's path."""
+    import subprocess
+    import sys
+
+    nb = _notebook("from lasa.base.config import check_range\n", "check_range('alpha', 2.0, 0.0, 1.0)\n")
     notebook = tmp_path / "broken.ipynb"
     notebook.write_text(json.dumps(nb))
     config = tmp_path / "c.yaml"

@@ -15,6 +15,7 @@ import datetime
 import os
 import signal
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -25,6 +26,7 @@ sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
 
 import papermill as pm  # noqa: E402
 import yaml  # noqa: E402
+from traitlets.config import Config  # noqa: E402
 
 from lasa.base import journal  # noqa: E402
 from lasa.base.errors import ArtifactError, ConfigError, NotebookError  # noqa: E402
@@ -32,7 +34,7 @@ from lasa.base.io import atomic_path, require_file  # noqa: E402
 from lasa.base.paths import resolve  # noqa: E402
 from lasa.pipeline.timings import append_run  # noqa: E402
 
-__all__ = ["notebook_parameters", "load_config", "run_notebook", "parse_params", "main"]
+__all__ = ["notebook_parameters", "load_config", "execute", "run_notebook", "parse_params", "main"]
 
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
@@ -67,6 +69,30 @@ def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]
     return params
 
 
+def execute(
+    notebook: str | os.PathLike[str],
+    out: str | os.PathLike[str],
+    parameters: dict[str, Any],
+    cwd: str | os.PathLike[str],
+    progress: bool = True,
+) -> None:
+    """papermill's run of ``notebook`` into ``out``, its kernel in ``cwd`` on Unix sockets in a folder
+    of its own. Over TCP, jupyter_client picks free ports that the kernel binds a moment later, and
+    kernels started side by side (``make figures``, the tests) now and then take each other's
+    ("Address already in use", "Kernel died before replying to kernel_info")."""
+    with tempfile.TemporaryDirectory(prefix="lasa-kernel-") as folder:
+        sockets = Config({"KernelManager": {"transport": "ipc", "ip": os.path.join(folder, "kernel")}})
+        pm.execute_notebook(
+            str(notebook),
+            str(out),
+            parameters=parameters,
+            kernel_name="python3",
+            cwd=str(cwd),
+            progress_bar=progress,
+            config=sockets,
+        )
+
+
 def run_notebook(
     notebook: str | os.PathLike[str],
     config: str | os.PathLike[str],
@@ -90,14 +116,7 @@ def run_notebook(
     figures = params.get("figures_dir", defaults.get("figures_dir"))
     with atomic_path(out) as tmp, _journaled(out, figures) as undo:
         try:
-            pm.execute_notebook(
-                str(notebook),
-                str(tmp),
-                parameters=params,
-                kernel_name="python3",
-                cwd=str(Path.cwd()),
-                progress_bar=progress,
-            )
+            execute(notebook, tmp, params, Path.cwd(), progress)
         except pm.PapermillExecutionError as exc:
             os.replace(tmp, failed)  # the partial run, under a name no Make rule takes for done
             raise NotebookError(str(notebook), exc.ename, str(exc.evalue), str(failed), undo()) from None
