@@ -12,8 +12,6 @@ import os
 import sys
 import warnings
 
-__all__ = ["PINNED", "RENDERER", "pin", "record", "main"]
-
 PINNED: dict[str, str] = {
     # torch's own vectorised kernels (tanh, exp, reductions): its AVX2 build of each (DispatchStub)
     "ATEN_CPU_CAPABILITY": "avx2",

@@ -11,9 +11,9 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 
-from lasa.base.config import ControlConfig
+from lasa.base.config import BUILT_IN_ASSISTANCE, ControlConfig
 from lasa.base.errors import ConfigError
-from lasa.method.assistance import BUILT_IN_ASSISTANCE, assist, hindsight_value, nearest_grasps
+from lasa.method.assistance import assist, hindsight_value, nearest_grasps
 
 # Two goals in a 2-D joint space. Goal 0 is the point (1, 0), its grasps the segment from
 # (1, -1) to (1, 1); goal 1 the point (-1, 0), its grasps the segment from (-1, -1) to (-1, 1).

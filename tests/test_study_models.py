@@ -6,6 +6,7 @@ import pytest
 from stand_ins import LinearDecoder
 
 from lasa.base.errors import ConfigError
+from lasa.evidence.hypotheses import headline_model
 from lasa.experiments.study import analysis, claims, plots
 from lasa.experiments.study import run as study
 from lasa.people import participants
@@ -139,7 +140,7 @@ def test_headline_model_is_the_first_whose_retargeting_episodes_finish() -> None
     ok = {"R": [True] * 20, "R+SA": [True] * 19 + [False], "LA": [False] * 20}  # LA plays no part
     short = {"R": [True] * 18 + [False] * 2, "R+SA": [True] * 20}  # R: 90%
     time = pd.DataFrame(rows("planning", short) + rows("one_step", ok))
-    assert analysis.headline_model(time, ("planning", "one_step")) == "one_step"
+    assert headline_model(time, ("planning", "one_step")) == "one_step"
     time = pd.DataFrame(rows("planning", ok) + rows("one_step", ok))
     assert analysis.headline_model(time, ("planning", "one_step")) == "planning"
     time = pd.DataFrame(rows("planning", short) + rows("one_step", short))

@@ -12,8 +12,6 @@ import numpy as np
 
 from lasa.base.errors import ConfigError
 
-__all__ = ["Condition", "parse", "METHODS", "CONDITIONS", "ALL", "alpha_of", "williams_square"]
-
 METHODS = ("LA", "LA+SA", "LA+SA+Entropy")  # the simulations' methods (sims 1-4)
 CONDITIONS = ("R", "R+SA", "LA", "LA+SA")  # the study's 2x2 design (interface x assistance)
 

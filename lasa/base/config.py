@@ -19,34 +19,6 @@ from typing_extensions import TypedDict
 
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "ASSISTANCE",
-    "BUILT_IN_ASSISTANCE",
-    "Number",
-    "Integer",
-    "PositiveInt",
-    "NonNegativeInt",
-    "AtLeastTwo",
-    "Positive",
-    "NonNegative",
-    "UnitInterval",
-    "Seed",
-    "BeliefCap",
-    "cap_setting",
-    "validate_caps",
-    "Why",
-    "Rationality",
-    "validate",
-    "interval",
-    "expects",
-    "ControlConfig",
-    "check_range",
-    "check_choice",
-    "check_list",
-    "from_dict",
-    "to_dict",
-]
-
 T = TypeVar("T")
 
 

@@ -8,8 +8,6 @@ import importlib.resources
 import os
 from pathlib import Path
 
-__all__ = ["pinned_ffmpeg"]
-
 
 @functools.cache
 def pinned_ffmpeg() -> str:

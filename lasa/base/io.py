@@ -16,18 +16,6 @@ import pandas as pd
 from lasa.base import journal
 from lasa.base.errors import ArtifactError, ConfigError
 
-__all__ = [
-    "sync_between",
-    "atomic_path",
-    "locked",
-    "write_csv",
-    "update_csv",
-    "write_text",
-    "save_npz",
-    "load_npz",
-    "require_file",
-]
-
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:

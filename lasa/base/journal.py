@@ -21,7 +21,6 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # pandas loads with lasa.base.io anyway; imported in the functions that use it
     import pandas as pd
 
-__all__ = ["ENV", "recording", "discard", "before_write", "after_write", "note_rows", "restore"]
 
 ENV = "LASA_WRITE_JOURNAL"  # the journal folder of the run in progress, if any
 _META = "journal.json"  # in the journal folder: {"root": the journaled folder}

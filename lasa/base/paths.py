@@ -9,8 +9,6 @@ from pathlib import Path
 
 from lasa.base.errors import ConfigError
 
-__all__ = ["repo_root", "resolve", "ARTIFACTS", "Paths"]
-
 _PACKAGE = Path(__file__).resolve().parents[1]  # lasa/ (this module is lasa/base/paths.py)
 
 

@@ -32,23 +32,6 @@ from lasa.evidence.findings import completion_text, finding, on_robots, short_co
 from lasa.evidence.rules import RULES
 from lasa.evidence.values import VALUE_COLUMNS, VALUES_NAME, Number, Numbers, Values, read_values, reading_of
 
-__all__ = [
-    "Claim",
-    "update_claims",
-    "render_markdown",
-    "render_verdicts",
-    "sync_readme",
-    "CLAIM_COLUMNS",
-    "README_MARKERS",
-    "SHOWN_COLUMNS",
-    "claims_frame",
-    "numbers_of",
-    "paper_numbers_of",
-    "criteria",
-    "words_text",
-    "note_lead",
-]
-
 README_MARKERS = (
     "<!-- verdicts:begin (generated from figures/verdicts.md by make figures) -->",
     "<!-- verdicts:end -->",

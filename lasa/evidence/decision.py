@@ -11,21 +11,6 @@ from collections.abc import Callable, Mapping
 
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "Quantity",
-    "Rule",
-    "VERDICTS",
-    "UNDECIDED",
-    "NOT_TESTABLE",
-    "CENSORED",
-    "WORDS",
-    "NUMBER_WORDS",
-    "PaperNumber",
-    "Direction",
-    "effect_word",
-    "word",
-]
-
 VERDICTS = ("yes", "partly", "no")  # what a rule can decide
 UNDECIDED = "undecided"  # what a claim reads when its intervals straddle a threshold
 # the claim's test cannot run on the data (a precondition fails); never settled, the reason in its note

@@ -10,16 +10,6 @@ from lasa.evidence.rules import COMPLETION_BAR
 from lasa.evidence.stats import format_f
 from lasa.evidence.values import Number, Numbers, Values
 
-__all__ = [
-    "finding",
-    "study_effect",
-    "side_of",
-    "on_robots",
-    "below_bar",
-    "short_conditions",
-    "completion_text",
-]
-
 _NONE: dict[str, Number] = {}
 
 

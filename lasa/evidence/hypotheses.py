@@ -20,17 +20,6 @@ from lasa.evidence.findings import below_bar, completion_text
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import complete_participants
 
-__all__ = [
-    "Judged",
-    "for_member",
-    "headline_model",
-    "analyse",
-    "judge",
-    "h3_comparator",
-    "people_claims",
-    "likert_verdict",
-]
-
 _TIMES = ("total_time", "idle_time")  # H3's measures
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]

@@ -21,8 +21,6 @@ from lasa.method.step import Assist
 from lasa.world.eating import TASKS, EatingTask, waypoints
 from lasa.world.goals import GoalTask
 
-__all__ = ["PropertyConfig", "held_input_paths", "phase_ends", "leave_paths", "measure"]
-
 
 @dataclasses.dataclass(frozen=True)
 class PropertyConfig:

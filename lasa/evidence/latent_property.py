@@ -15,19 +15,6 @@ from matplotlib.figure import Figure
 
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "COLUMNS",
-    "LEAVE_COUNT",
-    "CONDITIONS",
-    "summary",
-    "leave_table",
-    "has_property",
-    "stay_holds",
-    "holds",
-    "ranking",
-    "choose",
-]
-
 NAME = "latent_property"
 KEY = "source"  # the CSV's rows are replaced per source (one notebook run's decoders)
 COLUMNS = tuple(

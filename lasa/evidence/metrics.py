@@ -7,8 +7,6 @@ import numpy as np
 
 from lasa.base.config import check_range
 
-__all__ = ["normalized_error", "time_to_reach", "confidence"]
-
 
 def normalized_error(states: np.ndarray, target: np.ndarray, goal_distance: float) -> np.ndarray:
     """||s - s*|| / goal_distance, shape (...) for states (..., n) and targets broadcastable."""

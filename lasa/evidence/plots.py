@@ -24,29 +24,6 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import ROBOTS
 from lasa.world.task import CupTask
 
-__all__ = [
-    "METHOD_COLORS",
-    "GOAL_COLORS",
-    "goal_colors",
-    "belief_cmap",
-    "draw_scene",
-    "frame_around",
-    "method_lineplot",
-    "band_handle",
-    "legend_below",
-    "paper_handle",
-    "probability_axis",
-    "users_text",
-    "paper_point",
-    "paper_slope",
-    "wrap_to",
-    "plot_demonstrations",
-    "plot_training_curves",
-    "project",
-    "robot_rows",
-    "robots_present",
-]
-
 METHOD_COLORS = {"LA": "#d95f02", "LA+SA": "#1b9e77", "LA+SA+Entropy": "#7570b3"}
 # Every goal's colour, in goal order: the two cups', the blue of a new cup's render, then more.
 GOAL_COLORS = ("#e6553f", "#3f9959", "#4073d9", "#d9a02b", "#8c5bbf", "#3fb3b3", "#bf4f8f", "#7a7a7a")

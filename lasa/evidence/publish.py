@@ -16,8 +16,6 @@ from lasa.base.io import atomic_path, locked, update_csv
 from lasa.base.paths import Paths
 from lasa.evidence.claims import Claim, update_claims
 
-__all__ = ["publish", "save_figure"]
-
 
 class FigureModule(Protocol):
     """What :func:`publish` needs of a figure's module; optional ``DPI`` (150) and ``KEY`` (``robot``)."""

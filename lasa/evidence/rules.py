@@ -10,8 +10,6 @@ from types import MappingProxyType
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import Direction, PaperNumber, Quantity, Rule
 
-__all__ = ["COMPLETION_BAR", "RULES", "AFTER_RESULTS", "rule"]
-
 _SIGNIFICANCE = 0.05  # the paper's significance level, the study's tests' [-]
 COMPLETION_BAR = 0.95  # H1 and H3 are judged only if every condition finishes this share of its episodes [-]
 Decide = Callable[[Mapping[str, float]], str]

@@ -17,8 +17,6 @@ import pandas as pd
 from lasa.base.errors import ArtifactError, ConfigError, DamagedLogError
 from lasa.base.io import write_text
 
-__all__ = ["SessionWriter", "read_session", "check_scene"]
-
 STATUS = ("running", "complete", "interrupted")
 FLUSH_EVERY = 10  # rows between flushes to disk: a crash loses at most this many steps
 

@@ -22,21 +22,6 @@ from lasa.evidence.sessionlog import read_session
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
 
-__all__ = [
-    "QUESTIONS",
-    "SCALES",
-    "PRACTICE_TASK",
-    "LEFT_OUT",
-    "DROPPED",
-    "complete_participants",
-    "read_likert",
-    "scan_sessions",
-    "load_sessions",
-    "likert_tests",
-    "analyse_sessions",
-    "write_session_tables",
-]
-
 QUESTIONS = {  # the 7-point Likert questionnaire after each condition: scale -> statement
     "Easy": "It was easy to complete the tasks with this robot.",
     "Helpful": "The robot was helpful.",

@@ -27,17 +27,6 @@ from lasa.evidence.study_design import (
     prepare,
 )
 
-__all__ = [
-    "sa_effect_between",
-    "rm_anova",
-    "sa_effect_within",
-    "pairwise",
-    "paired_bootstrap",
-    "restricted_times",
-    "rmst_contrasts",
-    "format_f",
-]
-
 EFFECTS: tuple[str, ...] = ("interface", "assistance", "interface:assistance")  # rm_anova's rows, in order
 
 # what sa_effect_between and sa_effect_within return, in order

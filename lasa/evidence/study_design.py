@@ -11,16 +11,6 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ConfigError
 
-__all__ = [
-    "SA_LEVELS",
-    "factors",
-    "prepare",
-    "check_participants",
-    "aggregate",
-    "participant_means",
-    "condition_cells",
-]
-
 INTERFACES: tuple[str, ...] = ("R", "LA")  # levels of the interface factor
 SA_LEVELS: tuple[str, ...] = ("none", "SA")  # levels of the assistance factor
 AGGS: tuple[str, ...] = ("mean", "sum")  # how a participant's cell (its tasks) reduces to one value

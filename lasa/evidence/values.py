@@ -10,8 +10,6 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-__all__ = ["Number", "Numbers", "Values", "VALUE_COLUMNS", "VALUES_NAME", "read_values", "reading_of"]
-
 VALUES_NAME = "claim_values.csv"  # beside claims.csv
 VALUE_COLUMNS = ("id", "robot", "figure", "reading", "quantity", "value", "low", "high", "level", "n")
 HEADLINE = "headline"  # the reading column of a headline row

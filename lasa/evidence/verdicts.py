@@ -18,25 +18,6 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.claims import Claim, criteria, words_text
 from lasa.evidence.decision import UNDECIDED
 
-__all__ = [
-    "ALPHA",
-    "USER",
-    "NO_ASSISTANCE",
-    "N_BOOT",
-    "MIN_USERS",
-    "Looks",
-    "Sequential",
-    "assess",
-    "block_seed",
-    "block_users",
-    "sequential",
-    "member_frame",
-    "check_looks",
-    "group_means",
-    "min_resamples",
-    "shortfall",
-]
-
 N_BOOT = 1000  # bootstrap resamples per interval: a 98.75% percentile interval has ~6 resamples per tail [-]
 # The least evidence a settled verdict may rest on (:func:`shortfall`), fixed in advance.
 MIN_USERS = 60  # users per point (fewer gave zero-width intervals) [-]

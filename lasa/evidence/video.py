@@ -19,16 +19,6 @@ from lasa.base.ffmpeg import pinned_ffmpeg
 from lasa.base.io import atomic_path
 from lasa.world.robot import Robot
 
-__all__ = [
-    "render_states",
-    "render_many",
-    "label_frames",
-    "side_by_side",
-    "write_video",
-    "read_video",
-    "write_clips",
-]
-
 LAYOUTS = ("side_by_side", "in_turn")  # write_clips: the clips beside each other, or one after another
 
 

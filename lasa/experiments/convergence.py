@@ -35,8 +35,6 @@ from lasa.people.rollout import Trajectories, rollout
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
-__all__ = ["NAME", "COLUMNS", "Config", "radius", "measure", "run", "summary", "plot"]
-
 NAME = "convergence"
 # the contract's columns first, then what summary and plot read: ``error`` ||e(t)|| = ||g* - s(t)||
 # [rad]; ``delta`` the paper's radius (alpha = 0.5), sigma_h + (1 - b*) sigma_r, and ``delta_alpha``

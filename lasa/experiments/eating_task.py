@@ -41,23 +41,6 @@ from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import GOALS, STUDY_BELIEF_CAP, EatingTask
 from lasa.world.fork import tip_frames
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "BELIEFS",
-    "variant_names",
-    "train_variants",
-    "CAP_SOURCE",
-    "cap_label",
-    "cap_decoder_name",
-    "train_caps",
-    "directions",
-    "plot",
-    "property_sentence",
-    "caps_sentence",
-]
-
 NAME = "eating_latent"
 # latent_property.csv's source and task of the cap sweep's decoders (train_caps): apart from the
 # decoder variants the rule chooses among (source and task "eating")

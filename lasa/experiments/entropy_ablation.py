@@ -25,19 +25,6 @@ from lasa.method.train import TrainConfig, reconstruction_error, train_decoder
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "Sweep",
-    "Run",
-    "train_all",
-    "run_sweep",
-    "grid_rows",
-    "plot",
-    "findings",
-]
-
 NAME = "entropy_ablation"
 # kind "sweep": one row per lambda; kind "grid": one row per context of the grid, for
 # lambda = 0 and the chosen lambda

@@ -30,8 +30,6 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import load_robot
 from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, make_cup_task
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "plot", "property_findings"]
-
 NAME = "latent_map"
 COLUMNS = ("robot", "context", "z", "cup_axis", "grasp_theta", "steps")
 DPI = 130

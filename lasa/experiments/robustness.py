@@ -47,23 +47,6 @@ from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "LEVEL",
-    "COLOURS",
-    "Config",
-    "Grid",
-    "ScaledDecoder",
-    "cells",
-    "run_cell",
-    "run",
-    "default_frames",
-    "summary",
-    "describe",
-    "plot",
-]
-
 NAME = "claims_robustness"
 # the contract's columns first: ``seed`` is the seed of the cell's users and ``measured`` the
 # number the claim's verdict rests on (``lasa.evidence.claims.Claim.value``), with its interval at

@@ -29,8 +29,6 @@ from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "plot", "time_ratio_band", "findings"]
-
 NAME = "sim1_fixed_expertise"
 # the contract's columns first, then what the notebook and the claims read
 COLUMNS = (

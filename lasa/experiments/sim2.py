@@ -24,25 +24,6 @@ from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "Config",
-    "run",
-    "claims",
-    "boot_values",
-    "plot",
-    "after_the_change",
-    "failures",
-    "escape_times",
-    "wrong_goal",
-    "findings",
-    "claim_sentence",
-    "success_sentence",
-    "belief_sentence",
-    "dip_sentence",
-]
-
 NAME = "sim2_change_of_mind"
 COLUMNS = (
     "robot",

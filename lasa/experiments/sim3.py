@@ -21,8 +21,6 @@ from lasa.experiments import sweep
 from lasa.people.rollout import Trajectories
 from lasa.world.goals import GoalTask
 
-__all__ = ["NAME", "COLUMNS", "Config", "run", "claims", "boot_values", "episode_means", "plot", "findings"]
-
 NAME = "sim3_learning_users"
 COLUMNS = ("robot", "method", "learner", "slope", USER, "t", "error", "assistance", "look")
 LEARNERS = ("fast", "slow")

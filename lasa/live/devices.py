@@ -13,8 +13,6 @@ import pandas as pd
 
 from lasa.base.errors import ConfigError
 
-__all__ = ["StickSample", "Device", "safe_axes", "ScriptedDevice", "KeyboardDevice", "open_device"]
-
 NOTCH = 0.25  # keyboard: one arrow press moves an axis by this much [-]
 DEADZONE = 0.05  # gamepad: |axis| below this reads as zero (stick drift) [-]
 

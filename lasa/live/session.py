@@ -20,8 +20,6 @@ from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import StickSample
 from lasa.live.station import Station, log_row
 
-__all__ = ["SIGNALS", "StopOnSignals", "Session", "open_log"]
-
 SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # the ways a terminal or a supervisor stops a process
 
 

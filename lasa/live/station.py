@@ -29,8 +29,6 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
 
-__all__ = ["SESSION_TASKS", "SessionConfig", "Station", "log_row"]
-
 SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs
 
 

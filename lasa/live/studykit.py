@@ -14,9 +14,6 @@ from lasa.base.errors import ConfigError
 from lasa.base.io import locked, write_csv
 from lasa.evidence.sessions import QUESTIONS, SCALES, read_likert
 
-__all__ = ["MAX_PARTICIPANTS", "write_schedule", "parse_answer", "parse_answers", "ask", "survey"]
-
-
 MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the kit runs
 
 

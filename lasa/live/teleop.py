@@ -35,8 +35,6 @@ from lasa.live.session import Session, StopOnSignals, open_log
 from lasa.live.station import SESSION_TASKS, SessionConfig, Station
 from lasa.method.retarget import MODES
 
-__all__ = ["run_session", "replay", "main"]
-
 
 def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> bool:
     """Pose the viewer's robot, draw a belief sphere (1 to 5 cm) over each goal and the text, and sync;

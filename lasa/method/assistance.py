@@ -14,18 +14,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 from numpy import ndarray
 
-from lasa.base.config import BUILT_IN_ASSISTANCE
 from lasa.base.errors import ConfigError
-
-__all__ = [
-    "BUILT_IN_ASSISTANCE",
-    "MEMBERS",
-    "Member",
-    "assist",
-    "hindsight_value",
-    "nearest_grasps",
-    "resolve",
-]
 
 
 @runtime_checkable
@@ -149,7 +138,7 @@ def hindsight_point(
 
 MEMBERS: Mapping[str, Member] = MappingProxyType(
     {m.__name__: m for m in (point, grasp_set, arbitrated, hindsight, hindsight_point)}
-)  # the built-in members by the names configs use, :data:`BUILT_IN_ASSISTANCE`
+)  # the built-in members by the names configs use, :data:`lasa.base.config.BUILT_IN_ASSISTANCE`
 
 
 def resolve(member: str | Member) -> Member:

@@ -14,23 +14,6 @@ import torch
 from lasa.base.config import LIKELIHOODS, check_choice, check_range
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "belief_targets",
-    "uniform_log_belief",
-    "distance_to_sets",
-    "distance_to_sets_torch",
-    "nearest_distance",
-    "log_likelihood",
-    "log_likelihood_torch",
-    "logsumexp",
-    "cap_log_belief",
-    "update_log_belief",
-    "confident_belief",
-    "confidence_threshold",
-    "CONFIDENT_MARGIN",
-    "belief",
-]
-
 # a context is "confident" when its top belief lies within this of the cap (or of one) [-]
 CONFIDENT_MARGIN = 0.01
 

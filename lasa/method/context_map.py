@@ -20,17 +20,6 @@ from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import Robot
 from lasa.world.task import CupTask, grasp_frame
 
-__all__ = [
-    "ContextMap",
-    "TaskSpaceMap",
-    "context_map",
-    "MappedDecoder",
-    "extend_task",
-    "new_goal_frames",
-    "MAP_KINDS",
-    "JOINT_KINDS",
-]
-
 JOINT_KINDS = ("grasp", "straight_line")  # the maps of :class:`ContextMap`, in joint space
 MAP_KINDS = (*JOINT_KINDS, "straight_line_ee")  # and :class:`TaskSpaceMap`'s, in the gripper's space
 

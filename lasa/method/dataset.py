@@ -13,17 +13,6 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import load_npz, save_npz
 from lasa.world.task import CupTask
 
-__all__ = [
-    "Demonstrations",
-    "save_demonstrations",
-    "load_demonstrations",
-    "REACH",
-    "ADJUST",
-    "HOLD",
-    "STROKE",
-    "PHASE_NAMES",
-]
-
 REACH, ADJUST, HOLD, STROKE = 0, 1, 2, 3  # phase labels of a tuple (strokes: the eating task)
 PHASE_NAMES = ("reach", "adjust", "hold", "stroke")
 

@@ -22,8 +22,6 @@ from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import atomic_path, require_file
 from lasa.method.inference import inference_plan
 
-__all__ = ["ActionDecoder", "DecoderConfig", "LatentActionModel", "save_checkpoint", "load_checkpoint"]
-
 
 @dataclasses.dataclass(frozen=True)
 class DecoderConfig:

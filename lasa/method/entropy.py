@@ -17,17 +17,6 @@ from lasa.method.belief import log_likelihood_torch, nearest_distance
 from lasa.method.decoder import LatentActionModel
 from lasa.method.step import latent_grid
 
-__all__ = [
-    "EntropyRegularizer",
-    "goal_scores",
-    "goal_distribution",
-    "entropy",
-    "context_entropy",
-    "context_grid",
-    "LAMBDA_COST",
-    "choose_lambda",
-]
-
 
 def goal_scores(
     model: LatentActionModel,

@@ -18,7 +18,6 @@ from lasa.base.errors import ConfigError
 if TYPE_CHECKING:
     from lasa.method.decoder import LatentActionModel
 
-__all__ = ["inference_plan"]
 
 _CHUNK_ROWS = 1024  # rows per chunk: two 1024 x 128 float32 buffers stay in a core's L2 cache
 

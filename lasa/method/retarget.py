@@ -15,8 +15,6 @@ from lasa.base.config import NonNegative, Positive, check_range, validate
 from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot
 
-__all__ = ["MODES", "RetargetConfig", "twist", "next_mode", "Retargeting", "retarget_action"]
-
 # The twist components in order (vx, vy, vz, wx, wy, wz), world frame, the site's
 TWIST_COMPONENTS: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
 

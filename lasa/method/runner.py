@@ -15,8 +15,6 @@ from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import Assist, StepResult, advance, human_action
 
-__all__ = ["Now", "Chooser", "Record", "Runner", "held_input", "check_horizon"]
-
 
 @dataclasses.dataclass(frozen=True)
 class Now:

@@ -16,8 +16,6 @@ import torch
 from lasa.base.errors import ConfigError
 from lasa.method.dataset import REACH, Demonstrations
 
-__all__ = ["sector_roles", "sector_loss", "DEPARTURE", "MANIPULATION", "FREE"]
-
 FREE, DEPARTURE, MANIPULATION = 0, 1, 2  # a tuple's role on the ring
 
 

@@ -18,23 +18,6 @@ from lasa.method.belief import belief, belief_targets, log_likelihood, update_lo
 from lasa.method.decoder import ActionDecoder
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "Assist",
-    "StepResult",
-    "check_decoder",
-    "decode_candidates",
-    "latent_grid",
-    "advance",
-    "blend",
-    "sanitize",
-    "safe_step",
-    "shared_autonomy_step",
-    "human_action",
-    "METHODS",
-    "METHOD_DECODER",
-    "method_alpha",
-]
-
 # Each method's decoder: "base" (reconstruction alone, Sec. III-A) or "entropy" (Eq. T6)
 METHOD_DECODER: dict[str, str] = {m: str(conditions.parse(m, METHODS).decoder) for m in METHODS}
 

@@ -32,8 +32,6 @@ from lasa.method.decoder import DecoderConfig, LatentActionModel
 from lasa.method.entropy import EntropyRegularizer
 from lasa.method.sectors import sector_loss, sector_roles
 
-__all__ = ["TrainConfig", "train_decoder", "reconstruction_error"]
-
 ExtraLoss = Callable[[LatentActionModel, torch.Tensor, torch.Tensor], torch.Tensor]
 
 

@@ -12,8 +12,6 @@ from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.config import NonNegative, Positive, UnitInterval, interval, validate
 from lasa.base.errors import ConfigError
 
-__all__ = ["ParticipantConfig", "Cohort", "draw_cohort"]
-
 
 @dataclasses.dataclass(frozen=True)
 class ParticipantConfig:

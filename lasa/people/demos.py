@@ -39,15 +39,6 @@ from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demons
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
 
-__all__ = [
-    "DemoConfig",
-    "collect_demonstrations",
-    "demonstration_summary",
-    "collect_eating_demonstrations",
-    "EATING_DEMOS",
-    "SEGMENTATIONS",
-]
-
 Segment = tuple[np.ndarray, float, int]  # a motion of a demonstration: its states, preference and phase
 Stroke = Callable[[int, float], list[Segment]]
 

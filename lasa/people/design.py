@@ -30,8 +30,6 @@ from lasa.people.cohort import Cohort, ParticipantConfig
 from lasa.world.eating import TASK_NAMES
 from lasa.world.fork import ANGLE_TOL, POSITION_TOL
 
-__all__ = ["interface_of", "StudyConfig", "Layout", "layout"]
-
 
 def interface_of(condition: str) -> str:
     """``R`` or ``LA``: the control interface of one of the study's conditions."""

@@ -21,8 +21,6 @@ from lasa.world.eating import EatingTask
 from lasa.world.fork import normalise, tip_motion
 from lasa.world.record import Episodes
 
-__all__ = ["simulate"]
-
 
 def _foresee(
     study: Setting, run: State, now: Now, la: np.ndarray

@@ -28,8 +28,6 @@ from lasa.world.eating import EatingTask
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
 
-__all__ = ["PlanConfig", "simulate"]
-
 
 @dataclasses.dataclass(frozen=True)
 class PlanConfig:

@@ -12,8 +12,6 @@ from lasa.people.design import Layout
 from lasa.people.users import choose_latent, gumbel_noise
 from lasa.world.fork import angle_between
 
-__all__ = ["progress_gain", "rationality", "choose"]
-
 
 def progress_gain(
     pos: np.ndarray,

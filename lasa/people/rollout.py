@@ -17,8 +17,6 @@ from lasa.method.step import Assist, check_decoder, decode_candidates, latent_gr
 from lasa.people.users import UserPopulation, choose_latent, gumbel_noise, pilot_choice, user_costs
 from lasa.world.goals import GoalTask
 
-__all__ = ["Trajectories", "rollout"]
-
 
 @dataclasses.dataclass(frozen=True)
 class Trajectories:

@@ -26,8 +26,6 @@ from lasa.world.eating import TASK_NAMES, EatingTask
 from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.record import Episodes
 
-__all__ = ["Setting", "State", "prepare", "start", "progress", "act", "run_steps"]
-
 
 @dataclasses.dataclass(frozen=True)
 class Setting:

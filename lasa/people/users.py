@@ -12,8 +12,6 @@ import numpy as np
 from lasa.base.config import check_choice
 from lasa.base.errors import ConfigError
 
-__all__ = ["PILOTS", "UserPopulation", "user_costs", "choose_latent", "gumbel_noise", "pilot_choice"]
-
 PILOTS = ("boltzmann", "laggy", "noisy")
 _SCALARS = ("pilot", "pilot_prob")  # UserPopulation fields shared by every user
 

@@ -21,8 +21,6 @@ from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
 from lasa.pipeline.pages import cell_text
 
-__all__ = ["build_book", "main"]
-
 ROBOT_ORDER = ("planar5", "panda")
 ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
 

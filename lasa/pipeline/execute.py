@@ -34,8 +34,6 @@ from lasa.base.io import atomic_path, require_file  # noqa: E402
 from lasa.base.paths import resolve  # noqa: E402
 from lasa.pipeline.timings import append_run  # noqa: E402
 
-__all__ = ["notebook_parameters", "load_config", "execute", "run_notebook", "parse_params", "main"]
-
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
     """Names and default values of a notebook's ``parameters`` cell (ConfigError if it has none)."""

@@ -12,8 +12,6 @@ import json
 import sys
 from pathlib import Path
 
-__all__ = ["imports_of", "closure", "notebook_sources", "main"]
-
 ROOT = Path(__file__).resolve().parents[2]
 ALWAYS = ("lasa/__init__.py", "pyproject.toml")
 

@@ -21,9 +21,6 @@ from lasa.base.errors import ArtifactError
 from lasa.base.io import write_text
 from lasa.base.paths import repo_root
 
-__all__ = ["BUDGET", "PageBudgetError", "cell_text", "clean_notebook", "page_text", "write_pages", "main"]
-
-
 BUDGET = 5_000_000  # bytes of every page together (issue 47: "at most 5 MB in all")
 PAGES = "notebooks"  # the pages' folder inside the figures folder
 SOURCE_DIR = "notebooks"  # where the source notebooks' relative links start from

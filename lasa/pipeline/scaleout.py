@@ -11,8 +11,6 @@ from tqdm.auto import tqdm
 
 from lasa.base.errors import ConfigError
 
-__all__ = ["SCHEDULER_ENV", "scheduler_address", "run_jobs"]
-
 SCHEDULER_ENV = "LASA_SCHEDULER"
 T = TypeVar("T")
 R = TypeVar("R")

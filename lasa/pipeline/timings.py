@@ -22,9 +22,6 @@ from typing import Any
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked, sync_between, write_text
 
-__all__ = ["append_run", "read_runs", "summarize", "record_figures", "sync_readmes", "main"]
-
-
 README_MARKERS = (
     "<!-- figures-time:begin (generated from benchmarks/results.json by make figures) -->",
     "<!-- figures-time:end -->",

@@ -22,8 +22,6 @@ import pandas as pd
 from lasa.base.errors import ArtifactError
 from lasa.pipeline.pages import cell_text
 
-__all__ = ["Tolerance", "key_columns", "compare_folders", "main"]
-
 CLAIMS = "claims.csv"
 KERNELS = "kernels.json"  # the run's kernel settings (lasa.runtime), printed for both runs
 VERDICT_COLUMNS = ("effect", "number", "reproduced", "settled")  # a claim's words, per (id, robot)

@@ -18,8 +18,6 @@ from lasa.world.goals import GoalTask
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import CupTask, make_cup_task
 
-__all__ = ["Workspace", "EATING_ROBOTS"]
-
 EATING_ROBOTS = ("panda",)  # the robots the eating scene is built for
 TaskT = TypeVar("TaskT", bound=GoalTask)
 

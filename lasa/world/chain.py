@@ -10,8 +10,6 @@ import dataclasses
 import mujoco
 import numpy as np
 
-__all__ = ["SerialChain", "rot_z"]
-
 
 def rot_z(angle: float | np.ndarray) -> np.ndarray:
     """The rotation by ``angle`` [rad] about z, (3, 3); for angles of shape (...,), (..., 3, 3)."""

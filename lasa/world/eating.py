@@ -20,21 +20,6 @@ from lasa.world.goals import GoalTask
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import ASSETS, ROBOTS, Robot
 
-__all__ = [
-    "STUDY_BELIEF_CAP",
-    "GOALS",
-    "PREFERENCES",
-    "TASKS",
-    "TASK_NAMES",
-    "EatingTask",
-    "load_eating_robot",
-    "fork_direction",
-    "fork_frame",
-    "instruction",
-    "make_eating_task",
-    "waypoints",
-]
-
 GOALS = ("rice", "middle", "icing", "plate")  # goal names, in goal order (left, middle, right bowl; plate)
 STUDY_BELIEF_CAP = 0.99  # Javdani et al.'s cap on any goal's belief (max_prob_any_goal) [-]
 TILT_MAX = np.pi / 3  # psi_max: the tilt of a scoop from pointing straight down [rad]

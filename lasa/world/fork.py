@@ -14,16 +14,6 @@ from lasa.world.robot import Robot
 POSITION_TOL = 0.015  # a waypoint is reached this close to it (the tines' width) [m]
 ANGLE_TOL = 0.2  # ... with the fork's direction this close (~11 degrees) [rad]
 
-__all__ = [
-    "POSITION_TOL",
-    "ANGLE_TOL",
-    "tip_frames",
-    "angle_between",
-    "normalise",
-    "tip_motion",
-    "WaypointTracker",
-]
-
 
 def tip_frames(
     robot: Robot, data: mujoco.MjData, qs: np.ndarray

@@ -15,8 +15,6 @@ from lasa.base.errors import ConfigError
 from lasa.world.chain import rot_z
 from lasa.world.robot import Robot, mesh_dir
 
-__all__ = ["LOWER", "UPPER", "READY", "PACKAGED_OFFSETS", "dh_frames", "packaged_chain", "check_against_dh"]
-
 # (a_{i-1} [m], d_i [m], alpha_{i-1} [rad]) for joints 1..7, from Franka's documentation.
 DH: tuple[tuple[float, float, float], ...] = (
     (0.0, 0.333, 0.0),

@@ -14,8 +14,6 @@ from scipy.interpolate import CubicSpline
 from lasa.base.errors import ConfigError
 from lasa.world.robot import Robot
 
-__all__ = ["GoalTask"]
-
 
 @dataclasses.dataclass(frozen=True)
 class GoalTask:

@@ -12,8 +12,6 @@ import numpy as np
 from lasa.base.errors import IKError
 from lasa.world.robot import Robot
 
-__all__ = ["solve_grasp_ik", "pose_error"]
-
 
 @dataclasses.dataclass(frozen=True)
 class _Solver:

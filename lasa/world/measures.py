@@ -10,8 +10,6 @@ from lasa.world.eating import GOALS, PREFERENCES, TASK_NAMES, TASKS, EatingTask,
 from lasa.world.record import Episodes
 from lasa.world.robot import Robot
 
-__all__ = ["goal_error", "total_time", "idle_time", "alignment", "measures"]
-
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
     """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.

@@ -7,8 +7,6 @@ import dataclasses
 
 import numpy as np
 
-__all__ = ["Episodes"]
-
 
 @dataclasses.dataclass(frozen=True)
 class Episodes:

@@ -19,8 +19,6 @@ from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.world.chain import SerialChain
 
-__all__ = ["RobotSpec", "Robot", "ROBOTS", "load_robot", "scene_problems"]
-
 ASSETS = Path(__file__).parent / "assets"
 
 

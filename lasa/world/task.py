@@ -17,8 +17,6 @@ from lasa.world.goals import GoalTask
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import Robot
 
-__all__ = ["CupTask", "make_cup_task", "grasp_frame", "cup_axis", "grasp_preference"]
-
 
 def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.ndarray]:
     """Grasp-site position (3,) and rotation (3, 3) for cup ``goal`` at preference ``theta`` in [0, 1]."""

@@ -16,24 +16,6 @@ from lasa.evidence import verdicts
 from lasa.evidence.claims import Claim
 from lasa.experiments import sweep
 
-__all__ = [
-    "MEASURES",
-    "FORMS",
-    "BANDS",
-    "fit_form",
-    "fits",
-    "claims",
-    "boot_values",
-    "end_shares",
-    "with_cup_columns",
-    "no_map_check",
-    "by_preference",
-    "equation",
-    "identity_sentence",
-    "map_sentences",
-    "medians_sentence",
-]
-
 # the measures: (distance column, error column); "table" is the headline, the others are
 # readings whose claims carry ``@<measure>`` ids
 MEASURES = {"table": ("distance", "error"), "joint_space": ("distance_joint", "error_joint")}

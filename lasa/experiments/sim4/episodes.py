@@ -33,19 +33,6 @@ from lasa.world.fork import angle_between
 from lasa.world.robot import Robot
 from lasa.world.task import CupTask
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "EPISODE_COLUMNS",
-    "CUP_COLUMNS",
-    "CLAIM_MAPS",
-    "Config",
-    "new_cup_positions",
-    "map_geometry",
-    "run",
-    "grasp_error",
-]
-
 NAME = "sim4_new_goals"
 EPISODE_COLUMNS = (  # what :func:`run` returns, one row per episode
     "robot",

@@ -16,8 +16,6 @@ from lasa.evidence.plots import paper_slope, robots_present, users_text, wrap_to
 from lasa.experiments import sweep
 from lasa.experiments.sim4.analysis import end_shares, equation, fits
 
-__all__ = ["plot", "other_share_text"]
-
 # per kind of map: colour, name, marker, line dashes and x offset of its markers: near-equal lines and
 # means of two maps (the grasp-to-grasp and the gripper's-space maps, within 0.01 D) stay visible
 H_STYLES: dict[str, tuple[str, str, str, tuple[float, ...], float]] = {

@@ -12,7 +12,7 @@ from scipy import stats as sps
 
 from lasa.base.config import NO_ASSISTANCE
 from lasa.base.errors import ConfigError
-from lasa.evidence.hypotheses import for_member, headline_model
+from lasa.evidence.hypotheses import for_member
 from lasa.evidence.rules import COMPLETION_BAR
 from lasa.experiments.study.run import PAPER_N, Config
 from lasa.method.decoder import ActionDecoder
@@ -21,18 +21,6 @@ from lasa.people.policy import progress_gain
 from lasa.world.eating import GOALS, TASK_NAMES, TASKS, EatingTask, fork_frame, waypoints
 from lasa.world.fork import tip_frames, tip_motion
 from lasa.world.record import Episodes
-
-__all__ = [
-    "completion",
-    "headline_model",
-    "switch_share",
-    "switch_shares",
-    "stuck_episodes",
-    "stuck_summary",
-    "break_even",
-    "completion_sentence",
-    "switch_sentence",
-]
 
 HERLANT_SHARE = 0.174  # mode switching's share of execution time, JACO + joystick (Herlant et al. 2016) [-]
 STUCK_COLUMNS = tuple(

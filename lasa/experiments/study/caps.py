@@ -30,21 +30,6 @@ from lasa.pipeline.scaleout import run_jobs
 from lasa.world.eating import EatingTask
 from lasa.world.record import Episodes
 
-__all__ = [
-    "NAME",
-    "COLUMNS",
-    "load_decoders",
-    "stuck",
-    "run",
-    "uncapped_claims",
-    "sweep",
-    "label",
-    "plot",
-    "cap_sentence",
-    "across_caps",
-    "findings",
-]
-
 NAME = "study_belief_cap"
 # one row per (cap, what): a condition's completion, a claim's measured effect, or the property; cap: its
 # value or "none"; word: a claim's effect word, or whether the decoder meets the property rule

@@ -24,22 +24,6 @@ from lasa.evidence.verdicts import shortfall
 from lasa.experiments.study.run import PAPER_N
 from lasa.people.design import interface_of
 
-__all__ = [
-    "claims",
-    "claim_id",
-    "figure_stats",
-    "h1_table",
-    "h2_table",
-    "h3_tables",
-    "members_table",
-    "reading_of",
-    "variants_table",
-    "untestable_reason",
-    "with_flips",
-    "likert_row",
-    "facts",
-]
-
 Analyses = Mapping[tuple, Mapping[str, Any]]  # claims()'s analyses, keyed by reading
 
 CLAIM_TEXT = {

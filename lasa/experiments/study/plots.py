@@ -27,20 +27,6 @@ from lasa.evidence.plots import wrap_to
 from lasa.experiments.study.run import PAPER_N
 from lasa.world.record import Episodes
 
-__all__ = [
-    "FigureSpec",
-    "ROW_KEYS",
-    "GOAL_ERROR",
-    "TIME",
-    "ALIGNMENT",
-    "PAPER_H",
-    "CENSORED",
-    "plot_goal_error",
-    "plot_time",
-    "plot_alignment",
-    "video_clips",
-]
-
 PALETTE = {"R": "#8c8c8c", "R+SA": "#4c72b0", "LA": "#dd8452", "LA+SA": "#55a868"}
 TASKS = ("Entree", "Dessert")
 PHASES = ("stab", "scoop", "dip")  # the Dessert phases the alignment figure draws (the paper's three)

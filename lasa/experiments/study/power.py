@@ -19,8 +19,6 @@ from lasa.evidence.hypotheses import analyse, for_member, judge
 from lasa.evidence.rules import rule
 from lasa.pipeline.scaleout import run_jobs
 
-__all__ = ["POWER_CLAIMS", "SIZES", "power", "needed", "sentence"]
-
 POWER_CLAIMS: tuple[str, ...] = ("h1", "h2", "h3")  # the claim keys of judge whose power is simulated
 SIZES: tuple[int, ...] = (6, 10, 16, 24, 40, 60)  # cohort sizes simulated by default [participants]
 _TABLES = ("goal_error", "time", "alignment")  # lasa.experiments.study.run.run's tables

@@ -15,24 +15,13 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import require_file, write_text
+from lasa.evidence.hypotheses import headline_model
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import DROPPED, LEFT_OUT, PRACTICE_TASK, QUESTIONS, SCALES
-from lasa.experiments.study import analysis as study_analysis
 from lasa.experiments.study import power as study_power
 from lasa.experiments.study import run as study
 from lasa.world import measures
 from lasa.world.eating import STUDY_BELIEF_CAP
-
-__all__ = [
-    "HYPOTHESES",
-    "MEASURES",
-    "Reading",
-    "cohort",
-    "headline_reading",
-    "power_table",
-    "document",
-    "main",
-]
 
 # The paper's three hypotheses (Sec. VI), each with the claim whose rule tests it.
 HYPOTHESES = {
@@ -69,7 +58,7 @@ def headline_reading(figures: Path, frames: dict[str, pd.DataFrame]) -> Reading:
     """Notebook 11's headline: its first SA member, the property rule's decoder, its model rule's model."""
     config = study.Config()
     decoder = study.variants_to_run(study.eating_property(figures), "property")[0]
-    model = study_analysis.headline_model(frames["time"], config.participant_models)
+    model = headline_model(frames["time"], config.participant_models)
     return config.session.assistance[0], decoder, model
 
 

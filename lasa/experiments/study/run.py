@@ -37,17 +37,6 @@ from lasa.world.eating import STUDY_BELIEF_CAP, EatingTask
 from lasa.world.measures import measures
 from lasa.world.record import Episodes
 
-__all__ = [
-    "Config",
-    "PAPER_N",
-    "PARTICIPANT_MODELS",
-    "load_decoders",
-    "eating_property",
-    "participant_table",
-    "variants_to_run",
-    "run",
-]
-
 PAPER_N = 10  # the paper's participants
 DECODER_SELECTIONS = ("property", "all")  # Config.decoders: which decoder variants the study runs
 Simulate = Callable[..., Episodes]  # lasa.people.participants.simulate's signature and return type

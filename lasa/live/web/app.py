@@ -33,8 +33,6 @@ from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_sce
 from lasa.live.web.tokens import TokenStore
 from lasa.world.fork import tip_frames
 
-__all__ = ["FRAMES", "HELLO_S", "PING_S", "PING_TIMEOUT_S", "REFUSALS", "WebConfig", "Study", "create_app"]
-
 # How the page shows the robot: server-drawn JPEG, drawn by the browser (MuJoCo WebAssembly), or not.
 FRAMES = ("server", "browser", "none")
 

@@ -26,7 +26,6 @@ from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
 if TYPE_CHECKING:
     from lasa.live.web.app import Study
 
-__all__ = ["STEPPER", "Gone", "Conversation", "open_trial", "tick", "run_trial"]
 
 LOG = logging.getLogger("lasa.live.web")
 # Page messages (consent, start, survey, hello) waiting for the step that reads them: a connection

@@ -11,8 +11,6 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FrameRenderer"]
-
 
 class FrameRenderer:
     """JPEG frames (320 x 240 px, quality 70) of the eating scene at given joint positions, from one rendering

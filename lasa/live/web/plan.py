@@ -15,8 +15,6 @@ from lasa.base.io import write_text
 from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.web.tokens import check_participant, study_dir
 
-__all__ = ["Step", "plan_of", "Progress"]
-
 
 @dataclasses.dataclass(frozen=True)
 class Step:

@@ -16,8 +16,6 @@ from lasa.base.errors import LasaError
 from lasa.live.devices import StickSample
 from lasa.live.web.tokens import MAX_TOKEN_CHARS
 
-__all__ = ["MAX_MESSAGE_BYTES", "MAX_RATE", "STALE_S", "ProtocolError", "parse", "RateLimit", "Inputs"]
-
 MAX_MESSAGE_BYTES = 4096
 MAX_RATE = 50.0  # messages per second, averaged over a burst of as many
 STALE_S = 0.5  # input older than this reads as disconnected: zero input, never a held command

@@ -15,8 +15,6 @@ from starlette.types import Scope
 from lasa.base.errors import ArtifactError
 from lasa.base.paths import repo_root
 
-__all__ = ["NPM_PACKAGES", "ASSET_TYPES", "npm_folder", "NpmFiles", "browser_scene"]
-
 # The npm packages the page loads: URL name -> (folder under .venv, the file that must be there).
 NPM_PACKAGES = {"mujoco": ("mujoco-js", "mujoco.wasm"), "three": ("three", "three.module.js")}
 # The scene's asset files the page may fetch, by suffix, with their content types.

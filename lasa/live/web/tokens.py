@@ -18,8 +18,6 @@ import pandas as pd
 from lasa.base.errors import ConfigError
 from lasa.base.io import write_csv, write_text
 
-__all__ = ["PARTICIPANT_ID", "check_participant", "study_dir", "issue_links", "TokenStore"]
-
 PARTICIPANT_ID = re.compile(r"p[0-9]{2,4}")
 TOKEN_BYTES = 32  # 256 bits of randomness per link
 MAX_TOKEN_CHARS = 128  # a longer presented token is refused before hashing
