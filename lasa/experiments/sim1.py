@@ -116,13 +116,11 @@ def _means(frame: pd.DataFrame) -> pd.DataFrame:
 def _sa_claims(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> list[Claim]:
     """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
     robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
-    betas = set(frame.beta)
-    if not set(CLAIM_BETAS) <= betas:
+    if not set(CLAIM_BETAS) <= set(frame.beta):
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
     means = _means(frame) if means is None else means
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
-    r75 = tim.loc[75.0, a] / tim.loc[75.0, b]
-    r1000 = tim.loc[1000.0, a] / tim.loc[1000.0, b]
+    r75, r1000 = (tim.loc[beta, a] / tim.loc[beta, b] for beta in CLAIM_BETAS)
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
     share = {"share_lower": n_lower / n_total}
@@ -183,8 +181,7 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
     """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
     robot = str(frame.robot.iloc[0])
     err = (_means(frame) if means is None else means)["final_error"]
-    counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
-    total = len(err)
+    counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
     values = {"share_weaker": min(counts.values()) / total}
     return sweep.sim_claim(
         "sim1.entropy_sa",
@@ -213,21 +210,18 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     err = group_means(frame, ["beta", "method"], "final_error", counts)
     tim = group_means(frame, ["beta", "method"], "time", counts)
     betas = sorted({b for b, _ in err})
-    methods = {m for _, m in err}
 
     def lower(m: str) -> np.ndarray:
         return np.mean([err[(b, m)] < err[(b, "LA")] for b in betas], axis=0)
 
-    r75 = tim[(75.0, "LA")] / tim[(75.0, "LA+SA")]
-    r1000 = tim[(1000.0, "LA")] / tim[(1000.0, "LA+SA")]
-    d75 = err[(75.0, "LA")] - err[(75.0, "LA+SA")]
-    d1000 = err[(1000.0, "LA")] - err[(1000.0, "LA+SA")]
+    r75, r1000 = (tim[(beta, "LA")] / tim[(beta, "LA+SA")] for beta in CLAIM_BETAS)
+    d75, d1000 = (err[(beta, "LA")] - err[(beta, "LA+SA")] for beta in CLAIM_BETAS)
     out = {
         "sim1.final_error": {"share_lower": lower("LA+SA")},
         "sim1.time_ratio": {"ratio_75": r75, "ratio_1000": r1000},
         "sim1.gap_narrows": _gap_values(r75, r1000, d75, d1000),
     }
-    if "LA+SA+Entropy" in methods:
+    if any(m == "LA+SA+Entropy" for _, m in err):
         out["sim1.entropy_sa"] = {"share_weaker": np.minimum(lower("LA+SA"), lower("LA+SA+Entropy"))}
     return out
 
@@ -259,26 +253,21 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         color = plots.METHOD_COLORS["LA+SA"]
         ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
         extra.append(plots.paper_handle(PAPER_FINAL_ERROR))
-    if metric == "time" and "completed" in frame:
-        extra += _mark_censored(frame, ax)
+    if metric == "time" and "completed" in frame:  # redraw open each mean time with episodes cut short
+        stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
+        cut = stats[stats.done < 1.0]
+        for method, part in cut.groupby(level="method"):
+            betas, color = part.index.get_level_values("beta"), plots.METHOD_COLORS[str(method)]
+            ax.plot(betas, part.time, mec=color, **OPEN)
+        if not cut.empty:
+            horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
+            label = (
+                f"open: episodes cut at the horizon ({horizon} steps) count {horizon}, so the mean is a "
+                f"lower bound; completion there {cut.done.min():.0%}–{cut.done.max():.0%}"
+            )
+            extra.append(Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN))
     plots.legend_below(ax, extra)
     return ax
-
-
-def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
-    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry."""
-    stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
-    cut = stats[stats.done < 1.0]
-    for method, part in cut.groupby(level="method"):
-        ax.plot(part.index.get_level_values("beta"), part.time, mec=plots.METHOD_COLORS[str(method)], **OPEN)
-    if cut.empty:
-        return []
-    horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
-    label = (
-        f"open: episodes cut at the horizon ({horizon} steps) count {horizon}, so the mean is a "
-        f"lower bound; completion there {cut.done.min():.0%}–{cut.done.max():.0%}"
-    )
-    return [Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN)]
 
 
 def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000) -> pd.DataFrame:

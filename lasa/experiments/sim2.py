@@ -176,8 +176,13 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
     ax = plots.method_lineplot(frame, "change_step", metric, ax, level=sweep.LEVEL)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
-    if metric == "success":
-        _mark_thresholds(ax, int(frame.change_step.max()))
+    if metric == "success":  # short dashed marks at the largest N: LA+SA+Entropy's success thresholds
+        n_max, rule_id = int(frame.change_step.max()), "sim2.entropy_escapes"
+        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
+        for i, level in enumerate(limits):
+            label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
+            xs = [n_max * 0.93, n_max * 1.07]
+            ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
     if metric in PROBABILITIES:
         plots.probability_axis(ax)
     extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
@@ -185,15 +190,6 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
     plots.legend_below(ax, extra)
     return ax
-
-
-def _mark_thresholds(ax: Axes, n_max: int, rule_id: str = "sim2.entropy_escapes") -> None:
-    """Short dashed marks at the largest N: the success thresholds of LA+SA+Entropy's verdict, labelled."""
-    limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
-    for i, level in enumerate(limits):
-        label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
-        xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
-        ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
@@ -306,14 +302,6 @@ def _trend(first: float, last: float) -> str:
     )
 
 
-def _part(value: float, low: float, high: float, up: str, down: str) -> str:
-    """One part of sim2.sa_trapped: which way the number moves, by how much, with its interval."""
-    if value <= 0:
-        up, value, low, high = down, -value, -high, -low  # the same interval, said the other way round
-    sure = "" if low > 0 or high < 0 else " (its interval contains 0)"
-    return f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"
-
-
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
     """sim2.sa_trapped's two parts as a Markdown bullet: LA+SA's error and confidence from N = ``steps``."""
     if claim.id != "sim2.sa_trapped":
@@ -321,7 +309,10 @@ def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
     parts = []
     for name, up, down in (("error_growth", "grows", "falls"), ("confidence_drop", "falls", "rises")):
         value, low, high = sweep.number(claim, name)
-        parts.append((value > 0, _part(value, float(low), float(high), up, down)))
+        holds, sure = value > 0, "" if low > 0 or high < 0 else " (its interval contains 0)"
+        if not holds:  # the same interval, said the other way round
+            up, value, low, high = down, -value, -high, -low
+        parts.append((holds, f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"))
     holds = sum(h for h, _ in parts)
     count = ("neither part holds", "one part holds", "both parts hold")[holds]
     return (
@@ -373,10 +364,6 @@ def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, m
     return head_ + " " + _lost_sentence(after, method, n_max, tolerance)
 
 
-def _steps(median: float) -> str:
-    return f"in {median:.0f} steps" if np.isfinite(median) else "never"
-
-
 def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: float) -> str:
     """Where ``method``'s unsuccessful users end at the largest N, and how long the belief takes to turn."""
     part = after[(after.method == method) & (after.change_step == n_max)]
@@ -385,7 +372,9 @@ def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: floa
     lost, left = part[~part.success.astype(bool)], int(part.steps_left.iloc[0])
     last = after[after.change_step == n_max].fillna({"turn": np.inf})
     turn = last.groupby("method").turn.median()
-    times = ", ".join(f"{_steps(turn[m])} under {m}" for m in turn.index)
+    times = ", ".join(
+        f"in {t:.0f} steps under {m}" if np.isfinite(t) else f"never under {m}" for m, t in turn.items()
+    )
     won = after[(after.method == method) & after.success.astype(bool)].reach
     reach = (
         f"{method}'s successful users reach the true cup a median {won.median():.0f} steps after N "
