@@ -313,8 +313,7 @@ def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
         if not holds:  # the same interval, said the other way round
             up, value, low, high = down, -value, -high, -low
         parts.append((holds, f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"))
-    holds = sum(h for h, _ in parts)
-    count = ("neither part holds", "one part holds", "both parts hold")[holds]
+    count = ("neither part holds", "one part holds", "both parts hold")[sum(h for h, _ in parts)]
     return (
         f"- **The claim, as the paper states it ({claim.robot}, {claim.n_users} users per point).** From "
         f"N = {steps[0]} to N = {steps[1]} LA+SA's mean final error {parts[0][1]}, and its mean confidence "
