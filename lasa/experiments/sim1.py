@@ -88,7 +88,7 @@ def run(
     users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
-    frame = pd.DataFrame(
+    return pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": ran.method,
@@ -103,8 +103,7 @@ def run(
             "assistance": ran.member,
             "look": look,
         }
-    )
-    return frame, traj
+    ), traj
 
 
 def _means(frame: pd.DataFrame) -> pd.DataFrame:

@@ -86,7 +86,7 @@ def run(
     )
     users, traj = ran.users, ran.traj
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
-    frame = pd.DataFrame(
+    return pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": ran.method,
@@ -100,8 +100,7 @@ def run(
             "assistance": ran.member,
             "look": look,
         }
-    )
-    return frame, traj
+    ), traj
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
@@ -360,17 +359,12 @@ def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, m
             f"confidence in the true cup is at most {_prob(median[median.index >= since].max())}; "
             f"{mean} ({share})."
         )
-    return head_ + " " + _lost_sentence(after, method, n_max, tolerance)
-
-
-def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: float) -> str:
-    """Where ``method``'s unsuccessful users end at the largest N, and how long the belief takes to turn."""
+    # where its unsuccessful users end at the largest N, and how long the belief takes to turn
     part = after[(after.method == method) & (after.change_step == n_max)]
     if part.empty:
         raise ConfigError(f"no {method} episodes at N = {n_max} in the after-the-change rows")
     lost, left = part[~part.success.astype(bool)], int(part.steps_left.iloc[0])
-    last = after[after.change_step == n_max].fillna({"turn": np.inf})
-    turn = last.groupby("method").turn.median()
+    turn = after[after.change_step == n_max].fillna({"turn": np.inf}).groupby("method").turn.median()
     times = ", ".join(
         f"in {t:.0f} steps under {m}" if np.isfinite(t) else f"never under {m}" for m, t in turn.items()
     )
@@ -381,7 +375,7 @@ def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: floa
         if len(won)
         else f"no {method} user reaches the true cup"
     )
-    where = f"After N = {n_max} the median user's b(g*) passes 0.5 {times}; {reach}."
+    where = f"{head_} After N = {n_max} the median user's b(g*) passes 0.5 {times}; {reach}."
     if lost.empty:
         return f"{where} Every {method} user succeeds at N = {n_max}."
     near, err = int((lost.wrong_error <= tolerance).sum()), lost.final_error
