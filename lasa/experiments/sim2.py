@@ -293,14 +293,6 @@ def _prob(p: float) -> str:
     return f"{p:.{digits}f}".rstrip("0").rstrip(".")
 
 
-def _trend(first: float, last: float) -> str:
-    """How a share moves from its first value to its last: falls, rises or stays (in whole percent)."""
-    a, b = f"{first:.0%}", f"{last:.0%}"
-    return (
-        f"stays at {a}" if a == b else f"falls from {a} to {b}" if last < first else f"rises from {a} to {b}"
-    )
-
-
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
     """sim2.sa_trapped's two parts as a Markdown bullet: LA+SA's error and confidence from N = ``steps``."""
     if claim.id != "sim2.sa_trapped":
@@ -329,12 +321,13 @@ def _rates(head: pd.DataFrame) -> pd.DataFrame:
 
 def success_sentence(head: pd.DataFrame) -> str:
     """Each method's success share at every N in ``head`` (one member's rows and LA's), and its trend."""
-    rates = _rates(head)
+    rates, lines = _rates(head), []
+    for m in rates.columns:  # how the share moves from the first N to the last (in whole percent)
+        first, last = rates[m].iloc[0], rates[m].iloc[-1]
+        a, b, word = f"{first:.0%}", f"{last:.0%}", "falls" if last < first else "rises"
+        trend = f"stays at {a}" if a == b else f"{word} from {a} to {b}"
+        lines.append(f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({trend})")
     steps = ", ".join(str(n) for n in rates.index)
-    lines = [
-        f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({_trend(rates[m].iloc[0], rates[m].iloc[-1])})"
-        for m in rates.columns
-    ]
     return f"- **Success at N = {steps}.** " + "; ".join(lines) + "."
 
 
