@@ -112,12 +112,12 @@ def _means(frame: pd.DataFrame) -> pd.DataFrame:
     return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
 
 
-def _sa_claims(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> list[Claim]:
+def _sa_claims(frame: pd.DataFrame) -> list[Claim]:
     """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
     robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
     if not set(CLAIM_BETAS) <= set(frame.beta):
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
-    means = _means(frame) if means is None else means
+    means = _means(frame)
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
     r75, r1000 = (tim.loc[beta, a] / tim.loc[beta, b] for beta in CLAIM_BETAS)
     lower = err[b] < err[a]
@@ -176,16 +176,14 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
     }
 
 
-def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Claim:
+def _entropy_claim(frame: pd.DataFrame) -> Claim:
     """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
-    robot = str(frame.robot.iloc[0])
-    err = (_means(frame) if means is None else means)["final_error"]
+    err = _means(frame)["final_error"]
     counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
-    values = {"share_weaker": min(counts.values()) / total}
     return sweep.sim_claim(
         "sim1.entropy_sa",
-        robot,
-        values,
+        str(frame.robot.iloc[0]),
+        {"share_weaker": min(counts.values()) / total},
         claim="SA improves on LA whether or not the decoder was trained with entropy",
         paper="LA+SA and LA+SA+Entropy both below LA (final error)",
         measured=f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
@@ -200,8 +198,7 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy."""
-    means = _means(frame)
-    return [*_sa_claims(frame, means=means), _entropy_claim(frame, means)]
+    return [*_sa_claims(frame), _entropy_claim(frame)]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:

@@ -181,8 +181,6 @@ def run_population(
             decoders[key], task, group, alpha[idx], control, horizon, noise, progress, pilot_noise, member
         )
         parts.append((idx, traj))
-    if len(parts) == 1:
-        return parts[0][1]
     order = np.argsort(np.concatenate([idx for idx, _ in parts]))  # the users' rows back in their order
     fields = [f.name for f in dataclasses.fields(Trajectories)]
     return Trajectories(
