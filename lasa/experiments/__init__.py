@@ -1,3 +1,2 @@
 """One module (or package: ``sim4``, ``study``) per figure, read by its notebook: its config, its tidy
-columns, ``run``, ``claims`` and ``plot`` (``docs/method-notes.md``); :mod:`.sweep` holds what sims 1-4 share.
-"""
+columns, ``run``, ``claims``, ``plot`` (``docs/method-notes.md``); :mod:`.sweep`: what sims 1-4 share."""

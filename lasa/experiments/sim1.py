@@ -1,6 +1,5 @@
 """Fig. sim1: users of fixed expertise (Sec. V-A): every method against users of fixed rationality beta
-(Eq. S1), final state error and time to reach s* per beta. Notebook ``04_fixed_expertise``.
-"""
+(Eq. S1), final state error and time to reach s* per beta. Notebook ``04_fixed_expertise``."""
 
 from __future__ import annotations
 

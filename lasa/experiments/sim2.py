@@ -1,6 +1,5 @@
 """Fig. sim2: users who change their mind (Sec. V-B): near-optimal users aim at the wrong cup for the
-first N steps, then at the right one. Notebook ``05_changing_goals``.
-"""
+first N steps, then at the right one. Notebook ``05_changing_goals``."""
 
 from __future__ import annotations
 
@@ -72,8 +71,7 @@ def run(
     """Fig. sim2: final error and confidence in the true cup against the change step N, per episode."""
 
     def changing(change: list[int], goal: np.ndarray, theta: np.ndarray) -> dict[str, np.ndarray]:
-        first = task.target(wrong_goal(goal, task.n_goals), theta)
-        n = len(goal)
+        first, n = task.target(wrong_goal(goal, task.n_goals), theta), len(goal)
         return {
             "beta0": np.full(n, config.beta),
             "slope": np.zeros(n),
@@ -110,16 +108,15 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     by = ["method", "change_step"]
     rate, err, conf = (frame.groupby(by)[c].mean() for c in ("success", "final_error", "confidence"))
     sa_lo, sa_hi, en_hi = rate["LA+SA", lo], rate["LA+SA", hi], rate["LA+SA+Entropy", hi]
-    values1 = {
+    values = {
         "error_growth": float(err["LA+SA", hi] - err["LA+SA", lo]),
         "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),
     }
-    values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
     return [
         sweep.sim_claim(
             "sim2.sa_trapped",
             robot,
-            values1,
+            values,
             claim="LA+SA cannot escape the wrong goal as N grows",
             paper="LA+SA's final error grows and its confidence falls as N grows",
             measured=f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
@@ -130,7 +127,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         sweep.sim_claim(
             "sim2.entropy_escapes",
             robot,
-            values2,
+            {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)},
             claim="LA+SA+Entropy can escape the wrong goal",
             paper="LA+SA+Entropy users switch goals",
             measured=f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
@@ -231,8 +228,7 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
     target = task.target(goal, frame.theta.to_numpy())
     error = normalized_error(states, target[None], task.goal_distance)  # (T+1, U)
     belief = traj.beliefs[:, rows, goal]  # (T+1, U)
-    t = np.arange(n_steps + 1)[:, None]
-    after = t >= change[None]
+    after = np.arange(n_steps + 1)[:, None] >= change[None]
     moved = np.linalg.norm(states[-1] - states[-1 - min(STILL_STEPS, n_steps)], axis=-1)
     wrong = task.target(wrong_goal(goal, task.n_goals), frame.theta.to_numpy())
     return frame.assign(

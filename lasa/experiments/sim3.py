@@ -1,6 +1,5 @@
 """Fig. sim3: users who learn within the task (Sec. V-C): rationality grows from random, beta(t) = m t,
-for a fast and a slow learner. Notebook ``06_learning_users``.
-"""
+for a fast and a slow learner. Notebook ``06_learning_users``."""
 
 from __future__ import annotations
 

@@ -1,7 +1,6 @@
 """What the simulated-user sweeps share: drawing episodes, rolling out mixed methods, claim rows, figures.
 
-One batched population covers every condition; user i (the CSVs' ``seed``) is the same in each (paired).
-"""
+One batched population covers every condition; user i (the CSVs' ``seed``) is the same in each (paired)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
 """Fig. sim4's analysis: lines of the grasp error against the new cup's distance (through the origin, the
-paper's form), the claims on them, and notebook 07's tables and sentences of what they mean.
-"""
+paper's form), the claims on them, and notebook 07's tables and sentences of what they mean."""
 
 from __future__ import annotations
 

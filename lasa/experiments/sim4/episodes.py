@@ -1,6 +1,5 @@
 """Fig. sim4's episodes: near-optimal users want a grasp at new cups, reached through each kind of context
-map h and without it; and where each map sends the new cups' grasps.
-"""
+map h and without it; and where each map sends the new cups' grasps."""
 
 from __future__ import annotations
 
