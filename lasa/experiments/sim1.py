@@ -330,8 +330,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
 
 def _side(low: float, high: float, at: float, below: str, above: str) -> str:
     """``below`` or ``above`` when the interval lies on one side of ``at``; otherwise that it contains it."""
-    said = {"below": below, "above": above}
-    return said.get(side_of((low, high), at), f"its interval contains {at:g}")
+    return {"below": below, "above": above}.get(side_of((low, high), at), f"its interval contains {at:g}")
 
 
 def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:

@@ -323,8 +323,7 @@ def success_sentence(head: pd.DataFrame) -> str:
         a, b, word = f"{first:.0%}", f"{last:.0%}", "falls" if last < first else "rises"
         trend = f"stays at {a}" if a == b else f"{word} from {a} to {b}"
         lines.append(f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({trend})")
-    steps = ", ".join(str(n) for n in rates.index)
-    return f"- **Success at N = {steps}.** " + "; ".join(lines) + "."
+    return f"- **Success at N = {', '.join(str(n) for n in rates.index)}.** " + "; ".join(lines) + "."
 
 
 def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = "LA+SA") -> str:
