@@ -1,6 +1,5 @@
 """Fig. sim1: users of fixed expertise (Sec. V-A): every method against users of fixed rationality beta
-(Eq. S1), final state error and time to reach s* per beta. Notebook ``04_fixed_expertise``.
-"""
+(Eq. S1), final state error and time to reach s* per beta. Notebook ``04_fixed_expertise``."""
 
 from __future__ import annotations
 
@@ -88,7 +87,7 @@ def run(
     users, traj = ran.users, ran.traj
     errors = normalized_error(traj.states, users.target[None], task.goal_distance)
     steps, completed = time_to_reach(errors, config.tolerance)
-    frame = pd.DataFrame(
+    return pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": ran.method,
@@ -103,8 +102,7 @@ def run(
             "assistance": ran.member,
             "look": look,
         }
-    )
-    return frame, traj
+    ), traj
 
 
 def _means(frame: pd.DataFrame) -> pd.DataFrame:
@@ -113,16 +111,14 @@ def _means(frame: pd.DataFrame) -> pd.DataFrame:
     return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
 
 
-def _sa_claims(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> list[Claim]:
+def _sa_claims(frame: pd.DataFrame) -> list[Claim]:
     """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
     robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
-    betas = set(frame.beta)
-    if not set(CLAIM_BETAS) <= betas:
+    if not set(CLAIM_BETAS) <= set(frame.beta):
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
-    means = _means(frame) if means is None else means
+    means = _means(frame)
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
-    r75 = tim.loc[75.0, a] / tim.loc[75.0, b]
-    r1000 = tim.loc[1000.0, a] / tim.loc[1000.0, b]
+    r75, r1000 = (tim.loc[beta, a] / tim.loc[beta, b] for beta in CLAIM_BETAS)
     lower = err[b] < err[a]
     n_lower, n_total = int(lower.sum()), len(lower)
     share = {"share_lower": n_lower / n_total}
@@ -179,17 +175,14 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
     }
 
 
-def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Claim:
+def _entropy_claim(frame: pd.DataFrame) -> Claim:
     """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
-    robot = str(frame.robot.iloc[0])
-    err = (_means(frame) if means is None else means)["final_error"]
-    counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
-    total = len(err)
-    values = {"share_weaker": min(counts.values()) / total}
+    err = _means(frame)["final_error"]
+    counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
     return sweep.sim_claim(
         "sim1.entropy_sa",
-        robot,
-        values,
+        str(frame.robot.iloc[0]),
+        {"share_weaker": min(counts.values()) / total},
         claim="SA improves on LA whether or not the decoder was trained with entropy",
         paper="LA+SA and LA+SA+Entropy both below LA (final error)",
         measured=f"the weaker of the two below LA at {min(counts.values())}/{total} betas "
@@ -204,8 +197,7 @@ def _entropy_claim(frame: pd.DataFrame, means: pd.DataFrame | None = None) -> Cl
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy."""
-    means = _means(frame)
-    return [*_sa_claims(frame, means=means), _entropy_claim(frame, means)]
+    return [*_sa_claims(frame), _entropy_claim(frame)]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
@@ -213,21 +205,18 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
     err = group_means(frame, ["beta", "method"], "final_error", counts)
     tim = group_means(frame, ["beta", "method"], "time", counts)
     betas = sorted({b for b, _ in err})
-    methods = {m for _, m in err}
 
     def lower(m: str) -> np.ndarray:
         return np.mean([err[(b, m)] < err[(b, "LA")] for b in betas], axis=0)
 
-    r75 = tim[(75.0, "LA")] / tim[(75.0, "LA+SA")]
-    r1000 = tim[(1000.0, "LA")] / tim[(1000.0, "LA+SA")]
-    d75 = err[(75.0, "LA")] - err[(75.0, "LA+SA")]
-    d1000 = err[(1000.0, "LA")] - err[(1000.0, "LA+SA")]
+    r75, r1000 = (tim[(beta, "LA")] / tim[(beta, "LA+SA")] for beta in CLAIM_BETAS)
+    d75, d1000 = (err[(beta, "LA")] - err[(beta, "LA+SA")] for beta in CLAIM_BETAS)
     out = {
         "sim1.final_error": {"share_lower": lower("LA+SA")},
         "sim1.time_ratio": {"ratio_75": r75, "ratio_1000": r1000},
         "sim1.gap_narrows": _gap_values(r75, r1000, d75, d1000),
     }
-    if "LA+SA+Entropy" in methods:
+    if any(m == "LA+SA+Entropy" for _, m in err):
         out["sim1.entropy_sa"] = {"share_weaker": np.minimum(lower("LA+SA"), lower("LA+SA+Entropy"))}
     return out
 
@@ -259,26 +248,21 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         color = plots.METHOD_COLORS["LA+SA"]
         ax.plot(lower, np.full(len(lower), 0.97), "v", color=color, ms=6, transform=top, label=label)
         extra.append(plots.paper_handle(PAPER_FINAL_ERROR))
-    if metric == "time" and "completed" in frame:
-        extra += _mark_censored(frame, ax)
+    if metric == "time" and "completed" in frame:  # redraw open each mean time with episodes cut short
+        stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
+        cut = stats[stats.done < 1.0]
+        for method, part in cut.groupby(level="method"):
+            betas, color = part.index.get_level_values("beta"), plots.METHOD_COLORS[str(method)]
+            ax.plot(betas, part.time, mec=color, **OPEN)
+        if not cut.empty:
+            horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
+            label = (
+                f"open: episodes cut at the horizon ({horizon} steps) count {horizon}, so the mean is a "
+                f"lower bound; completion there {cut.done.min():.0%}–{cut.done.max():.0%}"
+            )
+            extra.append(Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN))
     plots.legend_below(ax, extra)
     return ax
-
-
-def _mark_censored(frame: pd.DataFrame, ax: Axes) -> list[Artist]:
-    """Redraw open each mean time of which some episodes were cut at the horizon; its legend entry."""
-    stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
-    cut = stats[stats.done < 1.0]
-    for method, part in cut.groupby(level="method"):
-        ax.plot(part.index.get_level_values("beta"), part.time, mec=plots.METHOD_COLORS[str(method)], **OPEN)
-    if cut.empty:
-        return []
-    horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
-    label = (
-        f"open: episodes cut at the horizon ({horizon} steps) count {horizon}, so the mean is a "
-        f"lower bound; completion there {cut.done.min():.0%}–{cut.done.max():.0%}"
-    )
-    return [Line2D([], [], mec="0.3", label=textwrap.fill(label, 60), **OPEN)]
 
 
 def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot: int = 1000) -> pd.DataFrame:
@@ -346,8 +330,7 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
 
 def _side(low: float, high: float, at: float, below: str, above: str) -> str:
     """``below`` or ``above`` when the interval lies on one side of ``at``; otherwise that it contains it."""
-    said = {"below": below, "above": above}
-    return said.get(side_of((low, high), at), f"its interval contains {at:g}")
+    return {"below": below, "above": above}.get(side_of((low, high), at), f"its interval contains {at:g}")
 
 
 def findings(claims: list[Claim], robot: str, assistance: str = "point") -> str:

@@ -1,6 +1,5 @@
 """Fig. sim2: users who change their mind (Sec. V-B): near-optimal users aim at the wrong cup for the
-first N steps, then at the right one. Notebook ``05_changing_goals``.
-"""
+first N steps, then at the right one. Notebook ``05_changing_goals``."""
 
 from __future__ import annotations
 
@@ -72,8 +71,7 @@ def run(
     """Fig. sim2: final error and confidence in the true cup against the change step N, per episode."""
 
     def changing(change: list[int], goal: np.ndarray, theta: np.ndarray) -> dict[str, np.ndarray]:
-        first = task.target(wrong_goal(goal, task.n_goals), theta)
-        n = len(goal)
+        first, n = task.target(wrong_goal(goal, task.n_goals), theta), len(goal)
         return {
             "beta0": np.full(n, config.beta),
             "slope": np.zeros(n),
@@ -86,7 +84,7 @@ def run(
     )
     users, traj = ran.users, ran.traj
     final = normalized_error(traj.states[-1], users.target, task.goal_distance)
-    frame = pd.DataFrame(
+    return pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": ran.method,
@@ -100,8 +98,7 @@ def run(
             "assistance": ran.member,
             "look": look,
         }
-    )
-    return frame, traj
+    ), traj
 
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
@@ -111,16 +108,15 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     by = ["method", "change_step"]
     rate, err, conf = (frame.groupby(by)[c].mean() for c in ("success", "final_error", "confidence"))
     sa_lo, sa_hi, en_hi = rate["LA+SA", lo], rate["LA+SA", hi], rate["LA+SA+Entropy", hi]
-    values1 = {
+    values = {
         "error_growth": float(err["LA+SA", hi] - err["LA+SA", lo]),
         "confidence_drop": float(conf["LA+SA", lo] - conf["LA+SA", hi]),
     }
-    values2 = {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)}
     return [
         sweep.sim_claim(
             "sim2.sa_trapped",
             robot,
-            values1,
+            values,
             claim="LA+SA cannot escape the wrong goal as N grows",
             paper="LA+SA's final error grows and its confidence falls as N grows",
             measured=f"LA+SA's mean final error {err['LA+SA', lo]:.3f} at N={lo} -> {err['LA+SA', hi]:.3f} "
@@ -131,7 +127,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         sweep.sim_claim(
             "sim2.entropy_escapes",
             robot,
-            values2,
+            {"success_entropy": float(en_hi), "margin": float(en_hi - sa_hi)},
             claim="LA+SA+Entropy can escape the wrong goal",
             paper="LA+SA+Entropy users switch goals",
             measured=f"LA+SA+Entropy reaches the right cup in {en_hi:.0%} at N={hi} (LA+SA {sa_hi:.0%}); "
@@ -176,8 +172,13 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
     ax = plots.method_lineplot(frame, "change_step", metric, ax, level=sweep.LEVEL)
     ax.set_xlabel("change of mind at step N")
     ax.set_ylabel(METRIC_LABELS.get(metric, metric))
-    if metric == "success":
-        _mark_thresholds(ax, int(frame.change_step.max()))
+    if metric == "success":  # short dashed marks at the largest N: LA+SA+Entropy's success thresholds
+        n_max, rule_id = int(frame.change_step.max()), "sim2.entropy_escapes"
+        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
+        for i, level in enumerate(limits):
+            label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
+            xs = [n_max * 0.93, n_max * 1.07]
+            ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
     if metric in PROBABILITIES:
         plots.probability_axis(ax)
     extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
@@ -185,15 +186,6 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
     plots.legend_below(ax, extra)
     return ax
-
-
-def _mark_thresholds(ax: Axes, n_max: int, rule_id: str = "sim2.entropy_escapes") -> None:
-    """Short dashed marks at the largest N: the success thresholds of LA+SA+Entropy's verdict, labelled."""
-    limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
-    for i, level in enumerate(limits):
-        label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
-        xs = [n_max * 0.93, n_max * 1.07]  # a short mark around the largest N
-        ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
@@ -236,8 +228,7 @@ def after_the_change(frame: pd.DataFrame, traj: Trajectories, task: GoalTask, su
     target = task.target(goal, frame.theta.to_numpy())
     error = normalized_error(states, target[None], task.goal_distance)  # (T+1, U)
     belief = traj.beliefs[:, rows, goal]  # (T+1, U)
-    t = np.arange(n_steps + 1)[:, None]
-    after = t >= change[None]
+    after = np.arange(n_steps + 1)[:, None] >= change[None]
     moved = np.linalg.norm(states[-1] - states[-1 - min(STILL_STEPS, n_steps)], axis=-1)
     wrong = task.target(wrong_goal(goal, task.n_goals), frame.theta.to_numpy())
     return frame.assign(
@@ -298,22 +289,6 @@ def _prob(p: float) -> str:
     return f"{p:.{digits}f}".rstrip("0").rstrip(".")
 
 
-def _trend(first: float, last: float) -> str:
-    """How a share moves from its first value to its last: falls, rises or stays (in whole percent)."""
-    a, b = f"{first:.0%}", f"{last:.0%}"
-    return (
-        f"stays at {a}" if a == b else f"falls from {a} to {b}" if last < first else f"rises from {a} to {b}"
-    )
-
-
-def _part(value: float, low: float, high: float, up: str, down: str) -> str:
-    """One part of sim2.sa_trapped: which way the number moves, by how much, with its interval."""
-    if value <= 0:
-        up, value, low, high = down, -value, -high, -low  # the same interval, said the other way round
-    sure = "" if low > 0 or high < 0 else " (its interval contains 0)"
-    return f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"
-
-
 def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
     """sim2.sa_trapped's two parts as a Markdown bullet: LA+SA's error and confidence from N = ``steps``."""
     if claim.id != "sim2.sa_trapped":
@@ -321,9 +296,11 @@ def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
     parts = []
     for name, up, down in (("error_growth", "grows", "falls"), ("confidence_drop", "falls", "rises")):
         value, low, high = sweep.number(claim, name)
-        parts.append((value > 0, _part(value, float(low), float(high), up, down)))
-    holds = sum(h for h, _ in parts)
-    count = ("neither part holds", "one part holds", "both parts hold")[holds]
+        holds, sure = value > 0, "" if low > 0 or high < 0 else " (its interval contains 0)"
+        if not holds:  # the same interval, said the other way round
+            up, value, low, high = down, -value, -high, -low
+        parts.append((holds, f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"))
+    count = ("neither part holds", "one part holds", "both parts hold")[sum(h for h, _ in parts)]
     return (
         f"- **The claim, as the paper states it ({claim.robot}, {claim.n_users} users per point).** From "
         f"N = {steps[0]} to N = {steps[1]} LA+SA's mean final error {parts[0][1]}, and its mean confidence "
@@ -340,13 +317,13 @@ def _rates(head: pd.DataFrame) -> pd.DataFrame:
 
 def success_sentence(head: pd.DataFrame) -> str:
     """Each method's success share at every N in ``head`` (one member's rows and LA's), and its trend."""
-    rates = _rates(head)
-    steps = ", ".join(str(n) for n in rates.index)
-    lines = [
-        f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({_trend(rates[m].iloc[0], rates[m].iloc[-1])})"
-        for m in rates.columns
-    ]
-    return f"- **Success at N = {steps}.** " + "; ".join(lines) + "."
+    rates, lines = _rates(head), []
+    for m in rates.columns:  # how the share moves from the first N to the last (in whole percent)
+        first, last = rates[m].iloc[0], rates[m].iloc[-1]
+        a, b, word = f"{first:.0%}", f"{last:.0%}", "falls" if last < first else "rises"
+        trend = f"stays at {a}" if a == b else f"{word} from {a} to {b}"
+        lines.append(f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({trend})")
+    return f"- **Success at N = {', '.join(str(n) for n in rates.index)}.** " + "; ".join(lines) + "."
 
 
 def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, method: str = "LA+SA") -> str:
@@ -370,22 +347,15 @@ def belief_sentence(head: pd.DataFrame, after: pd.DataFrame, tolerance: float, m
             f"confidence in the true cup is at most {_prob(median[median.index >= since].max())}; "
             f"{mean} ({share})."
         )
-    return head_ + " " + _lost_sentence(after, method, n_max, tolerance)
-
-
-def _steps(median: float) -> str:
-    return f"in {median:.0f} steps" if np.isfinite(median) else "never"
-
-
-def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: float) -> str:
-    """Where ``method``'s unsuccessful users end at the largest N, and how long the belief takes to turn."""
+    # where its unsuccessful users end at the largest N, and how long the belief takes to turn
     part = after[(after.method == method) & (after.change_step == n_max)]
     if part.empty:
         raise ConfigError(f"no {method} episodes at N = {n_max} in the after-the-change rows")
     lost, left = part[~part.success.astype(bool)], int(part.steps_left.iloc[0])
-    last = after[after.change_step == n_max].fillna({"turn": np.inf})
-    turn = last.groupby("method").turn.median()
-    times = ", ".join(f"{_steps(turn[m])} under {m}" for m in turn.index)
+    turn = after[after.change_step == n_max].fillna({"turn": np.inf}).groupby("method").turn.median()
+    times = ", ".join(
+        f"in {t:.0f} steps under {m}" if np.isfinite(t) else f"never under {m}" for m, t in turn.items()
+    )
     won = after[(after.method == method) & after.success.astype(bool)].reach
     reach = (
         f"{method}'s successful users reach the true cup a median {won.median():.0f} steps after N "
@@ -393,7 +363,7 @@ def _lost_sentence(after: pd.DataFrame, method: str, n_max: int, tolerance: floa
         if len(won)
         else f"no {method} user reaches the true cup"
     )
-    where = f"After N = {n_max} the median user's b(g*) passes 0.5 {times}; {reach}."
+    where = f"{head_} After N = {n_max} the median user's b(g*) passes 0.5 {times}; {reach}."
     if lost.empty:
         return f"{where} Every {method} user succeeds at N = {n_max}."
     near, err = int((lost.wrong_error <= tolerance).sum()), lost.final_error

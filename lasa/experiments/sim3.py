@@ -1,6 +1,5 @@
 """Fig. sim3: users who learn within the task (Sec. V-C): rationality grows from random, beta(t) = m t,
-for a fast and a slow learner. Notebook ``06_learning_users``.
-"""
+for a fast and a slow learner. Notebook ``06_learning_users``."""
 
 from __future__ import annotations
 
@@ -70,7 +69,7 @@ def run(
     errors = normalized_error(ran.traj.states, ran.users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
     k = len(steps)
-    frame = pd.DataFrame(
+    return pd.DataFrame(
         {
             "robot": task.robot.name,
             "method": np.repeat(ran.method, k),
@@ -82,8 +81,7 @@ def run(
             "assistance": np.repeat(ran.member, k),
             "look": look,
         }
-    )
-    return frame, ran.traj
+    ), ran.traj
 
 
 def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
@@ -94,7 +92,6 @@ def episode_means(frame: pd.DataFrame) -> pd.DataFrame:
 
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Evaluate Fig. sim3's claim: entropy improves in-task performance of learning users."""
-    robot = str(frame.robot.iloc[0])
     mean = frame.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     learners = sorted(set(frame.learner))
     gain = {name: mean[name, "LA+SA"] - mean[name, "LA+SA+Entropy"] for name in learners}
@@ -102,7 +99,7 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     return [
         sweep.sim_claim(
             "sim3.entropy_learners",
-            robot,
+            str(frame.robot.iloc[0]),
             values,
             claim="entropy improves in-task performance for both fast and slow learners",
             paper="LA+SA+Entropy below LA+SA in error over time, fast and slow",
@@ -160,13 +157,11 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
 def findings(claims: list[Claim], head: pd.DataFrame) -> str:
     """Fig. sim3's result on ``head``'s robot and member (its rows and LA's) as Markdown bullets."""
     claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
-    robot = claim.robot
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
     lines, lower, learners = [], [], sorted(set(head.learner))
     for learner in learners:
         gain, low, high = sweep.number(claim, f"gain_{learner}")
-        word = "lowers" if gain > 0 else "raises"
-        said = sweep.interval_text(gain, low, high, "{:+.3f}")
+        word, said = "lowers" if gain > 0 else "raises", sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"
         if gain > 0:
             lower.append(learner)
@@ -182,7 +177,7 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
     else:
         which = f"the {' and '.join(lower)} learner only"
     lines.append(
-        f"- **The claim ({robot}, {claim.n_users} users per point)** reads *{claim.reproduced}*: the term "
-        f"lowers the mean error for {which}."
+        f"- **The claim ({claim.robot}, {claim.n_users} users per point)** reads *{claim.reproduced}*: "
+        f"the term lowers the mean error for {which}."
     )
     return "\n".join(lines)

@@ -1,7 +1,6 @@
 """What the simulated-user sweeps share: drawing episodes, rolling out mixed methods, claim rows, figures.
 
-One batched population covers every condition; user i (the CSVs' ``seed``) is the same in each (paired).
-"""
+One batched population covers every condition; user i (the CSVs' ``seed``) is the same in each (paired)."""
 
 from __future__ import annotations
 
@@ -181,8 +180,6 @@ def run_population(
             decoders[key], task, group, alpha[idx], control, horizon, noise, progress, pilot_noise, member
         )
         parts.append((idx, traj))
-    if len(parts) == 1:
-        return parts[0][1]
     order = np.argsort(np.concatenate([idx for idx, _ in parts]))  # the users' rows back in their order
     fields = [f.name for f in dataclasses.fields(Trajectories)]
     return Trajectories(

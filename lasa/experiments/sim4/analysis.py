@@ -1,6 +1,5 @@
 """Fig. sim4's analysis: lines of the grasp error against the new cup's distance (through the origin, the
-paper's form), the claims on them, and notebook 07's tables and sentences of what they mean.
-"""
+paper's form), the claims on them, and notebook 07's tables and sentences of what they mean."""
 
 from __future__ import annotations
 
@@ -93,43 +92,31 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         if measure == HEADLINE and "angle_error_deg" in frame:
             angles = frame.groupby(["h", x]).angle_error_deg.mean()
         for kind, cid in _ids(measure, form, table.index):
-            f = table.loc[kind or "none"]
+            f, notes = table.loc[kind or "none"], []
             values = {"slope": float(f.slope), "r2": float(f.r2)}
-            note = _angle_note(angles, kind or "none")
             claim = "without the map, the robot only reaches for the training goal"
             if kind:
                 below = means[kind] < means["none"]
-                above = int((~below).sum())
                 values["share_below"] = float(below.mean())
-                above_note = f"Above the no-map error at {above} of {n_cups} cups." if above else ""
-                note = " ".join(t for t in (above_note, note) if t)
+                if above := int((~below).sum()):
+                    notes.append(f"Above the no-map error at {above} of {n_cups} cups.")
                 claim = (
                     f"with {_KIND_CLAIMS[kind][2]}, the error at a new goal grows linearly with its distance"
                 )
+            if angles is not None and (kind or "none") in angles.index.get_level_values(0):
+                per_cup = angles[kind or "none"]  # the mean approach-axis error at each cup
+                notes.append(
+                    f"Mean approach-axis error {per_cup.iloc[0]:.1f}° at the nearest cup, "
+                    f"{per_cup.iloc[-1]:.1f}° at the farthest."
+                )
+            uncentred = " (uncentred)" if f.intercept == 0.0 else ""  # R^2 of a line through the origin
+            measured = (
+                f"{equation(f)}, R^2{uncentred} = {f.r2:.3f} over the {n_cups} cups' means "
+                f"({f.r2_episodes:.2f} over episodes) (the interval is for the slope)"
+            )
             paper = "y = 0.11x, R^2 = 0.98" if kind else "y = x"
-            measured = _line(f, n_cups) + " (the interval is for the slope)"
-            out.append(sweep.sim_claim(cid, robot, values, claim, paper, measured, note))
+            out.append(sweep.sim_claim(cid, robot, values, claim, paper, measured, " ".join(notes)))
     return out
-
-
-def _angle_note(angles: pd.Series | None, kind: str) -> str:
-    """The mean approach-axis error at the nearest and the farthest cup, as a sentence of numbers."""
-    if angles is None or kind not in angles.index.get_level_values(0):
-        return ""
-    per_cup = angles[kind]
-    return (
-        f"Mean approach-axis error {per_cup.iloc[0]:.1f}° at the nearest cup, "
-        f"{per_cup.iloc[-1]:.1f}° at the farthest."
-    )
-
-
-def _line(f: pd.Series, n_cups: int) -> str:
-    """A fit's line, its R^2 over the cups' means and over the episodes (uncentred through the origin)."""
-    kind = " (uncentred)" if f.intercept == 0.0 else ""
-    return (
-        f"{equation(f)}, R^2{kind} = {f.r2:.3f} over the {n_cups} cups' means "
-        f"({f.r2_episodes:.2f} over episodes)"
-    )
 
 
 def _lines(x: np.ndarray, ys: np.ndarray, form: str) -> tuple[np.ndarray, np.ndarray]:

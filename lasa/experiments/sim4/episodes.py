@@ -1,6 +1,5 @@
 """Fig. sim4's episodes: near-optimal users want a grasp at new cups, reached through each kind of context
-map h and without it; and where each map sends the new cups' grasps.
-"""
+map h and without it; and where each map sends the new cups' grasps."""
 
 from __future__ import annotations
 
@@ -83,9 +82,7 @@ class Config(sweep.LooksConfig):
         offsets = check_list("offsets", self.offsets, at_least=3, ascending=True, why=why)
         object.__setattr__(self, "offsets", tuple(float(o) for o in offsets))
         if self.direction is not None and (
-            len(self.direction) != 2
-            or not np.isfinite(self.direction).all()
-            or np.hypot(*self.direction) < 1e-9
+            not np.isfinite(self.direction).all() or np.hypot(*self.direction) < 1e-9
         ):
             raise ConfigError(f"direction must be a non-zero (dx, dy) on the table, got {self.direction!r}")
         check_choice("method", self.method, METHODS)
@@ -107,9 +104,8 @@ def new_cup_positions(task: CupTask, config: Config) -> np.ndarray:
     """Grasp centres of the new cups, shape (len(offsets), 3) [m]."""
     cups = task.robot.goal_positions()
     ref = cups[config.ref_goal]
-    if config.direction is None:
-        other = cups[(config.ref_goal + 1) % task.n_goals]
-        direction = (ref - other)[:2]
+    if config.direction is None:  # from the other training cup to the reference one
+        direction = (ref - cups[(config.ref_goal + 1) % task.n_goals])[:2]
     else:
         direction = np.asarray(config.direction, dtype=float)
     direction = np.r_[direction / np.linalg.norm(direction), 0.0]

@@ -79,8 +79,7 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     label = f"mean per cup, bars: {100 * sweep.LEVEL:.4g}% bootstrap interval (the verdicts' level)"
     ax.errorbar([], [], yerr=[], fmt="o", color="0.4", label=label, **MEAN_STYLE)
     ax.scatter([], [], marker="o", edgecolors="0.4", label="median per cup", **MEDIAN_STYLE)
-    share = other_share_text(frame)
-    if share:
+    if share := other_share_text(frame):
         ax.text(0.02, 0.98, share, transform=ax.transAxes, va="top", fontsize=7, wrap=True)
     for slope, (label, ls) in PAPER_LINES.items():
         paper_slope(ax, slope, label, x_max=1.05, ls=ls, lw=1.8, zorder=6)
