@@ -1,7 +1,6 @@
 """Session logs of live use: ``<stem>.csv`` (a row per step, floats to 17 digits for bit-exact replay;
 written as ``.csv.part``, renamed at the end), the ``<stem>.json`` sidecar (what ran, its ``status``)
-and ``<stem>.xml`` (the scene, checked by its ``scene_sha256``).
-"""
+and ``<stem>.xml`` (the scene, checked by its ``scene_sha256``)."""
 
 from __future__ import annotations
 
@@ -137,8 +136,7 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
     p = Path(path)
     stem = p.name
     for suffix in (".csv.part", ".csv", ".json", ".xml"):
-        if stem.endswith(suffix):
-            stem = stem[: -len(suffix)]
+        stem = stem.removesuffix(suffix)
     return p.parent, stem
 
 

@@ -4,6 +4,7 @@ r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script, 
 from __future__ import annotations
 
 import dataclasses
+import os
 import threading
 from collections.abc import Sequence
 from typing import Protocol
@@ -47,11 +48,9 @@ class Device(Protocol):
 
     def poll(self) -> StickSample:
         """This step's input."""
-        ...
 
     def close(self) -> None:
         """Release the device."""
-        ...
 
 
 class ScriptedDevice:
@@ -109,10 +108,7 @@ class ScriptedDevice:
         if i >= len(self.axes):
             return StickSample(raw=np.zeros(2))
         return StickSample(
-            raw=self.axes[i].copy(),
-            mode=bool(self.mode[i]),
-            stop=bool(self.stop[i]),
-            connected=bool(self.connected[i]),
+            self.axes[i].copy(), *(bool(flags[i]) for flags in (self.mode, self.stop, self.connected))
         )
 
     @property
@@ -134,10 +130,7 @@ class KeyboardDevice:
     releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
     def __init__(self) -> None:
-        self._axes = np.zeros(2)
-        self._mode = False
-        self._stop = False
-        self._lock = threading.Lock()
+        self._axes, self._mode, self._stop, self._lock = np.zeros(2), False, False, threading.Lock()
 
     def key_callback(self, key: int) -> None:
         """Update the held axes, the mode press or the stop toggle from one key press."""
@@ -168,8 +161,6 @@ class GamepadDevice:
     mode, button 1 stop; one gone away reads disconnected. ConfigError if none is connected."""
 
     def __init__(self) -> None:
-        import os
-
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         # SDL's event queue (which the joystick needs) comes with its video subsystem; the
         # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
