@@ -166,8 +166,7 @@ def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
     for scale, part in answers.groupby("scale", sort=False):
         frame = part.assign(task="survey").rename(columns={"answer": "value"})
         pairs = [("LA+SA", c) for c in CONDITIONS if c != "LA+SA" and c in set(frame.condition)]
-        table = stats.pairwise(frame, "value", pairs=pairs)
-        out.append(table.assign(scale=scale))
+        out.append(stats.pairwise(frame, "value", pairs=pairs).assign(scale=scale))
     return pd.concat(out, ignore_index=True)
 
 

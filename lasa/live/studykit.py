@@ -33,7 +33,6 @@ def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False)
             f"a schedule of {n} participants fills the balanced Latin square's {len(square)} orders unevenly "
             f"({n // len(square)} full round(s) and {n % len(square)} more): the orders and their "
             f"carry-over are balanced only for a multiple of {len(square)}",
-            UserWarning,
             stacklevel=2,
         )
     rows = [

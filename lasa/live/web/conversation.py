@@ -16,9 +16,11 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.evidence.sessions import QUESTIONS, SCALES
 from lasa.live.devices import StickSample
 from lasa.live.session import Session, open_log
 from lasa.live.station import SessionConfig, Station
+from lasa.live.studykit import survey
 from lasa.live.web.plan import Step, plan_of
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
 
@@ -159,9 +161,6 @@ class Conversation:
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        from lasa.evidence.sessions import QUESTIONS, SCALES
-        from lasa.live.studykit import survey
-
         questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
         await self.send(header | {"questions": questions})
         while True:
@@ -195,10 +194,8 @@ class Conversation:
             assert trial.writer is not None  # open_trial always logs
             key = study.scene_key(trial.writer.csv.with_suffix(".xml"))
             robot = trial.station.robot
-            camera = robot.model.camera(robot.spec.camera).id
-            await self.send(
-                {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
-            )
+            qpos_adr, camera = robot.qpos_adr.tolist(), robot.model.camera(robot.spec.camera).id
+            await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera})
         try:
             return await run_trial(
                 trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
