@@ -3,6 +3,7 @@ r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script, 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 import threading
@@ -185,7 +186,7 @@ class GamepadDevice:
     def poll(self) -> StickSample:
         """Read the stick; a gamepad that went away reads as disconnected (zero input)."""
         pg = self._pg
-        try:
+        with contextlib.suppress(pg.error):
             pg.event.pump()
             if self._stick.get_init() and pg.joystick.get_count() > 0:
                 raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
@@ -194,8 +195,6 @@ class GamepadDevice:
                 self._was_pressed = pressed
                 stop = bool(self._stick.get_button(1))
                 return StickSample(raw=np.where(np.abs(raw) < DEADZONE, 0.0, raw), mode=mode, stop=stop)
-        except pg.error:
-            pass
         return StickSample(raw=np.full(2, np.nan), connected=False)
 
     def close(self) -> None:

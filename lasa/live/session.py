@@ -20,7 +20,7 @@ from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import StickSample
 from lasa.live.station import Station, log_row
 
-SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # the ways a terminal or a supervisor stops a process
+SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # how a terminal or supervisor stops a process (Windows: no SIGHUP)
 
 
 class StopOnSignals:
@@ -34,11 +34,8 @@ class StopOnSignals:
         self._previous: dict[int, Any] = {}
 
     def __enter__(self) -> StopOnSignals:
-        if threading.current_thread() is not threading.main_thread():
-            return self
-        for name in SIGNALS:
-            number = getattr(signal, name, None)  # no SIGHUP on Windows
-            if number is not None:
+        if threading.current_thread() is threading.main_thread():
+            for number in (getattr(signal, name) for name in SIGNALS if hasattr(signal, name)):
                 self._previous[number] = signal.signal(number, self._handle)
         return self
 

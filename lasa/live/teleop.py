@@ -11,6 +11,7 @@ if __name__ == "__main__":  # the CLI: renderer and kernels pinned before mujoco
     pin()
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
@@ -64,10 +65,8 @@ def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData,
         + "belief: "
         + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
     )
-    try:  # takes the viewer's own lock: outside ours
-        viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
-    except (AttributeError, TypeError):  # an older viewer without text overlays
-        pass
+    with contextlib.suppress(AttributeError, TypeError):  # an older viewer has no text overlays
+        viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))  # its own lock: outside ours
     viewer.sync()
     return True
 
@@ -250,13 +249,11 @@ def _run(args: argparse.Namespace) -> int:
     print(message)
     writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
-    try:
+    with contextlib.closing(device):
         if args.no_viewer:
             timing = run_session(station, device, writer, max_steps, realtime=not args.fast)
         else:
             timing = _in_viewer(station, device, writer, max_steps, args.screenshot)
-    finally:
-        device.close()
     if timing["signal"] is not None:
         print(
             f"session {writer.csv} interrupted by {timing['signal']} after {timing['steps']} steps "

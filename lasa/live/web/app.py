@@ -110,9 +110,6 @@ class Study:
         self.renderer = FrameRenderer() if config.frames == "server" else None
         self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
         self._labels: list[dict[str, Any]] | None = None  # the goals' places: one scene, one camera
-        if config.frames == "browser":
-            for name in NPM_PACKAGES:
-                npm_folder(name)  # fail at start, not in a participant's page
 
     def admit(self, token: str | None) -> tuple[str | None, str]:
         """(participant, "") for a valid token whose schedule is not done and that is not connected
@@ -215,7 +212,7 @@ def create_app(config: WebConfig) -> Starlette:
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
         WebSocketRoute("/ws", socket),
     ]
-    if config.frames == "browser":
+    if config.frames == "browser":  # npm_folder fails at start, not in a participant's page
         routes += [Route("/scene", scene), Route("/scene/{name}", scene)]
         routes += [Mount(f"/npm/{name}", NpmFiles(directory=npm_folder(name))) for name in NPM_PACKAGES]
     app = Starlette(lifespan=lifespan, routes=routes)
