@@ -78,9 +78,8 @@ class ScriptedDevice:
 
     @classmethod
     def from_table(cls, table: pd.DataFrame, mode: str = "mode") -> ScriptedDevice:
-        """A script from a table with columns ``raw0``, ``raw1`` and, optionally, ``mode`` (or the
-        column named by ``mode``), ``stop`` and ``connected`` (nonzero = true): a script file, or a
-        session log (whose mode column is ``mode_press``)."""
+        """A script from a table of ``raw0``, ``raw1`` and optional ``stop``, ``connected`` and ``mode`` (or
+        the column named by ``mode``: a session log's ``mode_press``), nonzero = true."""
         flags = {
             name: table[col].to_numpy() > 0 if col in table else None
             for name, col in (("mode", mode), ("stop", "stop"), ("connected", "connected"))

@@ -60,11 +60,9 @@ def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData,
             scn.ngeom += 1
     mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
     status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
-    text = (
-        f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
-        + "belief: "
-        + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
-    )
+    z = f"z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})"
+    beliefs = "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
+    text = f"{station.phase_text()}\n{status}   {mode}   {z}\nbelief: {beliefs}"
     with contextlib.suppress(AttributeError, TypeError):  # an older viewer has no text overlays
         viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))  # its own lock: outside ours
     viewer.sync()
@@ -83,8 +81,9 @@ def run_session(
 ) -> dict[str, Any]:
     """Run a :class:`lasa.live.session.Session` into ``writer`` (None: no log), one step per Delta unless not
     ``realtime``, each record to ``show`` (False: the viewer closed) and ``on_step(step, record)``, until
-    ``max_steps``, the task done, a scripted device's end or a closed viewer; a signal or exception closes
-    the log ``interrupted``. Returns :meth:`~lasa.live.session.Session.timing` and the stopping ``signal``."""
+    ``max_steps``, the task done, a scripted device's end or a closed viewer; a signal (at the next step) or
+    an exception (raised on) closes the log ``interrupted``. Returns :meth:`~lasa.live.session.Session.timing`
+    and the stopping ``signal``."""
     session = Session(station, writer, max_steps, realtime)
     status = "complete"
     with StopOnSignals() as stop:
@@ -107,9 +106,8 @@ def run_session(
 
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
     """Re-run a logged session from its inputs: ``{"steps", "max_state_difference", "exact", "status"}``,
-    ``mp4`` if rendered, ``damaged`` (the reason) for a damaged log replayed with ``allow_damaged``.
-    ArtifactError if the sidecar cannot tell what ran, the decoder or scene is not the logged one,
-    or the log is damaged."""
+    ``mp4`` if rendered, ``damaged`` (why) if ``allow_damaged``; ArtifactError if the sidecar cannot tell
+    what ran, the decoder or scene is not the logged one, or the log is damaged."""
     frame, meta = read_session(session, allow_damaged=allow_damaged)
     check_scene(session, meta)
     fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
