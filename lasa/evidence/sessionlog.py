@@ -1,7 +1,6 @@
 """Session logs of live use: ``<stem>.csv`` (a row per step, floats to 17 digits for bit-exact replay;
 written as ``.csv.part``, renamed at the end), the ``<stem>.json`` sidecar (what ran, its ``status``)
-and ``<stem>.xml`` (the scene, checked by its ``scene_sha256``).
-"""
+and ``<stem>.xml`` (the scene, checked by its ``scene_sha256``)."""
 
 from __future__ import annotations
 
@@ -137,8 +136,7 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
     p = Path(path)
     stem = p.name
     for suffix in (".csv.part", ".csv", ".json", ".xml"):
-        if stem.endswith(suffix):
-            stem = stem[: -len(suffix)]
+        stem = stem.removesuffix(suffix)
     return p.parent, stem
 
 
@@ -157,23 +155,19 @@ def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
         row, col = np.argwhere(bad.to_numpy())[0]
         value = raw.iat[row, col]
         return numbers, f"row {row + 1}, column {raw.columns[col]!r} holds {value!r}, not a number"
-    return numbers, _unsound(numbers)
-
-
-def _unsound(numbers: pd.DataFrame) -> str | None:
     checked = [c for c in numbers.columns if not str(c).startswith("raw")]
     finite = np.isfinite(numbers[checked].to_numpy())
     if not finite.all():
         row, col = np.argwhere(~finite)[0]
         value = float(numbers[checked].iat[row, col])
-        return f"row {row + 1}, column {checked[col]!r} holds {value}, not a finite number"
-    for column in ("step", "time"):
-        if column in numbers and len(numbers) > 1:
-            back = np.flatnonzero(np.diff(numbers[column].to_numpy()) <= 0)
-            if back.size:
-                row = int(back[0]) + 2
-                return f"rows out of time order: row {row}'s {column} does not come after row {row - 1}'s"
-    return None
+        return numbers, f"row {row + 1}, column {checked[col]!r} holds {value}, not a finite number"
+    for column in [c for c in ("step", "time") if c in numbers]:
+        back = np.flatnonzero(np.diff(numbers[column].to_numpy()) <= 0)
+        if back.size:
+            row = int(back[0]) + 2
+            why = f"rows out of time order: row {row}'s {column} does not come after row {row - 1}'s"
+            return numbers, why
+    return numbers, None
 
 
 def _floats(raw: pd.DataFrame) -> pd.DataFrame:

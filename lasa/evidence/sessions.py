@@ -134,14 +134,11 @@ def _episodes(
     tip, direction, _, _ = tip_frames(robot, mujoco.MjData(robot.model), states.reshape(-1, n))
     conditions = np.array([m["condition"] for m in metas])
     assisted = np.array([parse_condition(str(c)).assisted for c in conditions], dtype=bool)
+    members = np.array([m.get("control", {}).get("assistance", "hindsight") for m in metas])
     return Episodes(
         participant=np.array([m["participant"] for m in metas]),
         condition=conditions,
-        assistance=np.where(
-            assisted,
-            np.array([m.get("control", {}).get("assistance", "hindsight") for m in metas]),
-            NO_ASSISTANCE,
-        ),
+        assistance=np.where(assisted, members, NO_ASSISTANCE),
         task=np.array([m["task"] for m in metas]),
         # the condition's position in the participant's schedule, as the web study records it (0
         # where a session does not say: the terminal's `teleop run`)
@@ -166,8 +163,7 @@ def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
     for scale, part in answers.groupby("scale", sort=False):
         frame = part.assign(task="survey").rename(columns={"answer": "value"})
         pairs = [("LA+SA", c) for c in CONDITIONS if c != "LA+SA" and c in set(frame.condition)]
-        table = stats.pairwise(frame, "value", pairs=pairs)
-        out.append(table.assign(scale=scale))
+        out.append(stats.pairwise(frame, "value", pairs=pairs).assign(scale=scale))
     return pd.concat(out, ignore_index=True)
 
 

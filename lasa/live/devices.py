@@ -3,7 +3,9 @@ r"""Input devices for live teleoperation: a gamepad, the keyboard, or a script, 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import os
 import threading
 from collections.abc import Sequence
 from typing import Protocol
@@ -47,11 +49,9 @@ class Device(Protocol):
 
     def poll(self) -> StickSample:
         """This step's input."""
-        ...
 
     def close(self) -> None:
         """Release the device."""
-        ...
 
 
 class ScriptedDevice:
@@ -78,9 +78,8 @@ class ScriptedDevice:
 
     @classmethod
     def from_table(cls, table: pd.DataFrame, mode: str = "mode") -> ScriptedDevice:
-        """A script from a table with columns ``raw0``, ``raw1`` and, optionally, ``mode`` (or the
-        column named by ``mode``), ``stop`` and ``connected`` (nonzero = true): a script file, or a
-        session log (whose mode column is ``mode_press``)."""
+        """A script from a table of ``raw0``, ``raw1`` and optional ``stop``, ``connected`` and ``mode`` (or
+        the column named by ``mode``: a session log's ``mode_press``), nonzero = true."""
         flags = {
             name: table[col].to_numpy() > 0 if col in table else None
             for name, col in (("mode", mode), ("stop", "stop"), ("connected", "connected"))
@@ -109,10 +108,7 @@ class ScriptedDevice:
         if i >= len(self.axes):
             return StickSample(raw=np.zeros(2))
         return StickSample(
-            raw=self.axes[i].copy(),
-            mode=bool(self.mode[i]),
-            stop=bool(self.stop[i]),
-            connected=bool(self.connected[i]),
+            self.axes[i].copy(), *(bool(flags[i]) for flags in (self.mode, self.stop, self.connected))
         )
 
     @property
@@ -134,10 +130,7 @@ class KeyboardDevice:
     releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
     def __init__(self) -> None:
-        self._axes = np.zeros(2)
-        self._mode = False
-        self._stop = False
-        self._lock = threading.Lock()
+        self._axes, self._mode, self._stop, self._lock = np.zeros(2), False, False, threading.Lock()
 
     def key_callback(self, key: int) -> None:
         """Update the held axes, the mode press or the stop toggle from one key press."""
@@ -168,8 +161,6 @@ class GamepadDevice:
     mode, button 1 stop; one gone away reads disconnected. ConfigError if none is connected."""
 
     def __init__(self) -> None:
-        import os
-
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         # SDL's event queue (which the joystick needs) comes with its video subsystem; the
         # dummy driver gives it without opening a window (MuJoCo's viewer is the window)
@@ -194,7 +185,7 @@ class GamepadDevice:
     def poll(self) -> StickSample:
         """Read the stick; a gamepad that went away reads as disconnected (zero input)."""
         pg = self._pg
-        try:
+        with contextlib.suppress(pg.error):
             pg.event.pump()
             if self._stick.get_init() and pg.joystick.get_count() > 0:
                 raw = np.array([self._stick.get_axis(0), -self._stick.get_axis(1)], dtype=float)
@@ -203,8 +194,6 @@ class GamepadDevice:
                 self._was_pressed = pressed
                 stop = bool(self._stick.get_button(1))
                 return StickSample(raw=np.where(np.abs(raw) < DEADZONE, 0.0, raw), mode=mode, stop=stop)
-        except pg.error:
-            pass
         return StickSample(raw=np.full(2, np.nan), connected=False)
 
     def close(self) -> None:

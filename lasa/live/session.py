@@ -11,7 +11,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from types import FrameType, TracebackType
+from types import FrameType
 from typing import Any
 
 import numpy as np
@@ -20,7 +20,7 @@ from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import StickSample
 from lasa.live.station import Station, log_row
 
-SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # the ways a terminal or a supervisor stops a process
+SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # how a terminal or supervisor stops a process (Windows: no SIGHUP)
 
 
 class StopOnSignals:
@@ -34,11 +34,8 @@ class StopOnSignals:
         self._previous: dict[int, Any] = {}
 
     def __enter__(self) -> StopOnSignals:
-        if threading.current_thread() is not threading.main_thread():
-            return self
-        for name in SIGNALS:
-            number = getattr(signal, name, None)  # no SIGHUP on Windows
-            if number is not None:
+        if threading.current_thread() is threading.main_thread():
+            for number in (getattr(signal, name) for name in SIGNALS if hasattr(signal, name)):
                 self._previous[number] = signal.signal(number, self._handle)
         return self
 
@@ -47,9 +44,7 @@ class StopOnSignals:
             raise KeyboardInterrupt(f"{signal.Signals(number).name} while stopping")
         self.received = signal.Signals(number).name
 
-    def __exit__(
-        self, kind: type[BaseException] | None, value: BaseException | None, tb: TracebackType | None
-    ) -> None:
+    def __exit__(self, *exc: object) -> None:
         for number, previous in self._previous.items():
             signal.signal(number, signal.SIG_DFL if previous is None else previous)
         self._previous.clear()

@@ -30,6 +30,10 @@ from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
 
 SESSION_TASKS = ("cups", "Entree", "Dessert")  # the tasks a session runs
+try:  # lasa.__version__, read as it reads it (without importing the package's exports)
+    _LASA_VERSION = importlib.metadata.version("lasa")
+except Exception:  # a source tree that was never installed
+    _LASA_VERSION = "0.0.0+unknown"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,9 +47,8 @@ class SessionConfig:
     build_dir: str = "build"  # where `make figures` left the decoders
 
     def __post_init__(self) -> None:
-        check_choice("robot", self.robot, ("planar5", "panda"))
-        check_choice("task", self.task, SESSION_TASKS)
-        check_choice("condition", self.condition, ALL)
+        for name, choices in (("robot", ("planar5", "panda")), ("task", SESSION_TASKS), ("condition", ALL)):
+            check_choice(name, getattr(self, name), choices)
         if self.task != "cups" and self.robot != "panda":
             raise ConfigError(f"the {self.task} task is built for the Panda, not {self.robot!r}")
         if self.task != "cups" and self.condition == "LA+SA+Entropy":
@@ -59,21 +62,10 @@ class SessionConfig:
             )
 
 
-def _lasa_version() -> str:
-    """``lasa.__version__``, read as it reads it (without importing the package's exports)."""
-    try:
-        return importlib.metadata.version("lasa")
-    except Exception:  # a source tree that was never installed
-        return "0.0.0+unknown"
-
-
 class Station:
-    """The robot side of a session: ``robot``, ``task``, ``control``, ``decoder`` (None: Retargeting),
-    the ``mode`` of Retargeting, the ``waypoint`` worked towards and whether the task is ``done``.
-
-    The stick at rest commands nothing, the mode button cycles Retargeting's modes, and the stop input
-    holds the robot (no action, the belief frozen).
-    """
+    """The robot side of a session: ``robot``, ``task``, ``control``, ``decoder`` (None: Retargeting), its
+    ``mode``, the ``waypoint`` worked towards, ``done``. The stick at rest commands nothing, the mode button
+    cycles Retargeting's modes, the stop input holds the robot (no action, the belief frozen)."""
 
     def __init__(self, config: SessionConfig) -> None:
         self.config = config
@@ -160,17 +152,15 @@ class Station:
             "decoder": None if path is None else path.name,
             "decoder_sha256": None if path is None else hashlib.sha256(path.read_bytes()).hexdigest(),
             "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
-            "lasa_version": _lasa_version(),
+            "lasa_version": _LASA_VERSION,
         }
 
     def columns(self) -> list[str]:
         """The log's step columns."""
         n, g = self.robot.n_joints, self.task.n_goals
-        cols = ["step", "time", "late", "raw0", "raw1", "connected", "mode_press", "stop", "z0", "z1"]
         sizes = (("s", n), ("b", g), ("a_h", n), ("a_r", n), ("a", n))
-        return (
-            cols + ["mode", "phase", "waypoint"] + [f"{name}{i}" for name, size in sizes for i in range(size)]
-        )
+        cols = "step time late raw0 raw1 connected mode_press stop z0 z1 mode phase waypoint".split()
+        return cols + [f"{name}{i}" for name, size in sizes for i in range(size)]
 
     @property
     def phase(self) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 
 import pandas as pd
@@ -32,7 +33,6 @@ def write_schedule(n: int, out: str | os.PathLike[str], overwrite: bool = False)
             f"a schedule of {n} participants fills the balanced Latin square's {len(square)} orders unevenly "
             f"({n // len(square)} full round(s) and {n % len(square)} more): the orders and their "
             f"carry-over are balanced only for a multiple of {len(square)}",
-            UserWarning,
             stacklevel=2,
         )
     rows = [
@@ -53,14 +53,6 @@ def parse_answer(answer: object) -> int:
     if isinstance(answer, bool) or not value.is_integer() or not 1 <= value <= 7:
         raise ConfigError(f"a Likert answer is a whole number from 1 to 7, got {text!r}")
     return int(value)
-
-
-def parse_answers(text: str) -> list[int]:
-    """``"7,6,6,7,7"`` as one answer per scale of :data:`SCALES`."""
-    answers = [parse_answer(a) for a in text.split(",")]
-    if len(answers) != len(SCALES):
-        raise ConfigError(f"give {len(SCALES)} answers in 1..7 ({', '.join(SCALES)}), got {len(answers)}")
-    return answers
 
 
 def ask(participant: str, condition: str) -> list[int]:
@@ -87,10 +79,10 @@ def survey(
     folder: str | os.PathLike[str],
     participant: str,
     condition: str,
-    answers: list[int] | None = None,
+    answers: Sequence[int | str] | None = None,
     overwrite: bool = False,
 ) -> Path:
-    """Record ``participant``'s ``answers`` (one in 1..7 per scale; None: asked on the terminal) after
+    """Record ``participant``'s ``answers`` (one in 1..7 per scale, ``6`` or ``"6"``; None: asked) after
     ``condition`` in ``<folder>/likert.csv``; ``overwrite`` replaces answers recorded before."""
     if condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; choose one of {CONDITIONS}")

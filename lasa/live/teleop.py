@@ -1,8 +1,7 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
 ``run`` steps :mod:`lasa.live.station` at a fixed rate from a gamepad or keyboard; ``replay`` re-runs a log
-and checks its states bit for bit (``--mp4`` renders it); ``schedule``, ``survey``: :mod:`lasa.live.studykit`.
-"""
+and checks its states bit for bit (``--mp4`` renders it); ``schedule``, ``survey``: :mod:`.studykit`."""
 
 from __future__ import annotations
 
@@ -12,6 +11,7 @@ if __name__ == "__main__":  # the CLI: renderer and kernels pinned before mujoco
     pin()
 
 import argparse
+import contextlib
 import dataclasses
 import json
 import os
@@ -60,15 +60,11 @@ def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData,
             scn.ngeom += 1
     mode = f"mode {'/'.join(MODES[rec['mode']])}" if station.retarget is not None else "latent z"
     status = "STOPPED (stop input held)" if rec["stop"] else station.config.condition
-    text = (
-        f"{station.phase_text()}\n{status}   {mode}   z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})\n"
-        + "belief: "
-        + "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
-    )
-    try:  # takes the viewer's own lock: outside ours
-        viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))
-    except (AttributeError, TypeError):  # an older viewer without text overlays
-        pass
+    z = f"z = ({rec['z'][0]:+.2f}, {rec['z'][1]:+.2f})"
+    beliefs = "  ".join(f"{n} {p:.2f}" for n, p in zip(station.task.goal_names, rec["b"], strict=True))
+    text = f"{station.phase_text()}\n{status}   {mode}   {z}\nbelief: {beliefs}"
+    with contextlib.suppress(AttributeError, TypeError):  # an older viewer has no text overlays
+        viewer.set_texts((None, mujoco.mjtGridPos.mjGRID_TOPLEFT, text, ""))  # its own lock: outside ours
     viewer.sync()
     return True
 
@@ -83,15 +79,11 @@ def run_session(
     show: Callable[[dict[str, Any]], bool] | None = None,
     on_step: Callable[[int, dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
-    """Run :class:`lasa.live.session.Session`, one step per Delta (or as fast as possible, not ``realtime``)
-    into ``writer`` (None: no log), showing each record (``show(record)``, False: the viewer closed) and
-    calling ``on_step(step, record)``; returns :meth:`~lasa.live.session.Session.timing` and the stopping
-    ``signal``.
-
-    It ends after ``max_steps``, when the task is done, a scripted device runs out or the viewer is
-    closed; a signal stops it at the next step (closed ``interrupted``); an exception closes the log
-    ``interrupted`` and goes on.
-    """
+    """Run a :class:`lasa.live.session.Session` into ``writer`` (None: no log), one step per Delta unless not
+    ``realtime``, each record to ``show`` (False: the viewer closed) and ``on_step(step, record)``, until
+    ``max_steps``, the task done, a scripted device's end or a closed viewer; a signal (at the next step) or
+    an exception (raised on) closes the log ``interrupted``. Returns :meth:`~lasa.live.session.Session.timing`
+    and the stopping ``signal``."""
     session = Session(station, writer, max_steps, realtime)
     status = "complete"
     with StopOnSignals() as stop:
@@ -112,9 +104,20 @@ def run_session(
     return {**session.timing(), "signal": stop.received}
 
 
-def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) -> None:
-    """Refuse a replay whose decoder on disk is not the logged one (checksum, config)."""
-    logged, here = meta["decoder_sha256"], station.meta()
+def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
+    """Re-run a logged session from its inputs: ``{"steps", "max_state_difference", "exact", "status"}``,
+    ``mp4`` if rendered, ``damaged`` (why) if ``allow_damaged``; ArtifactError if the sidecar cannot tell
+    what ran, the decoder or scene is not the logged one, or the log is damaged."""
+    frame, meta = read_session(session, allow_damaged=allow_damaged)
+    check_scene(session, meta)
+    fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
+    missing = [k for k in fields if k not in meta]
+    if missing:
+        raise ArtifactError(
+            f"session {session}'s sidecar records no {', '.join(missing)}: replay cannot tell what it ran"
+        )
+    station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
+    logged, here = meta["decoder_sha256"], station.meta()  # the decoder on disk must be the logged one
     if logged is None and station.decoder_path is not None:
         raise ArtifactError(
             f"session {session}'s sidecar records no decoder checksum for {station.config.condition}: "
@@ -132,35 +135,16 @@ def _check_decoder(station: Station, meta: dict[str, Any], session: str | Path) 
         raise CheckpointError(
             f"the decoder's config differs from the one session {session} logged in {', '.join(diff)}"
         )
-
-
-def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
-    """Re-run a logged session from its inputs: ``{"steps", "max_state_difference", "exact", "status"}``,
-    ``mp4`` if rendered, ``damaged`` (the reason) for a damaged log replayed with ``allow_damaged``.
-    ArtifactError if the sidecar cannot tell what ran, the decoder or scene is not the logged one,
-    or the log is damaged."""
-    frame, meta = read_session(session, allow_damaged=allow_damaged)
-    check_scene(session, meta)
-    fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
-    missing = [k for k in fields if k not in meta]
-    if missing:
-        raise ArtifactError(
-            f"session {session}'s sidecar records no {', '.join(missing)}: replay cannot tell what it ran"
-        )
-    station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
-    _check_decoder(station, meta, session)
     device = ScriptedDevice.from_table(frame, mode="mode_press")
-    logged = frame[[f"s{i}" for i in range(station.robot.n_joints)]].to_numpy()
+    states = frame[[f"s{i}" for i in range(station.robot.n_joints)]].to_numpy()
     replayed = np.asarray([station.step(device.poll())["s"] for _ in range(len(frame))])
-    diff = float(np.abs(replayed - logged).max()) if len(logged) else 0.0
     out: dict[str, Any] = {
         "steps": len(frame),
-        "max_state_difference": diff,
-        "exact": bool(np.array_equal(replayed, logged)),
+        "max_state_difference": float(np.abs(replayed - states).max()) if len(states) else 0.0,
+        "exact": bool(np.array_equal(replayed, states)),
         "status": meta["status"],
+        **{k: meta[k] for k in ("damaged",) if k in meta},
     }
-    if "damaged" in meta:
-        out["damaged"] = meta["damaged"]
     if mp4 is not None:
         from lasa.evidence.video import label_frames, render_states, write_video
 
@@ -168,20 +152,6 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
         frames = label_frames(frames, f"replay {Path(session).name}")
         out["mp4"] = str(write_video(mp4, frames, fps=1.0 / station.control.dt))
     return out
-
-
-def _screenshot(path: str, timeout_s: float = 30.0) -> None:
-    """Save a screenshot of the X display once it is not flat (grabbed every 0.5 s, up to ``timeout_s``)."""
-    from PIL import ImageGrab
-
-    start = time.perf_counter()
-    while True:
-        image = ImageGrab.grab(xdisplay=None)
-        drawn = float(np.asarray(image.convert("L"), dtype=float).std()) > 20.0
-        if drawn or time.perf_counter() - start > timeout_s:
-            image.save(path)
-            return
-        time.sleep(0.5)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -243,8 +213,16 @@ def _in_viewer(
         timing = run_session(
             station, device, writer, max_steps, show=lambda rec: _draw(station, goals, viewer, data, rec)
         )
-        if screenshot:
-            _screenshot(screenshot)
+        deadline = time.perf_counter() + 30.0
+        while screenshot:  # grabbed every 0.5 s until the display is not flat (or 30 s went by)
+            from PIL import ImageGrab
+
+            image = ImageGrab.grab(xdisplay=None)
+            drawn = float(np.asarray(image.convert("L"), dtype=float).std()) > 20.0
+            if drawn or time.perf_counter() > deadline:
+                image.save(screenshot)
+                break
+            time.sleep(0.5)
     # let the viewer's thread finish closing its window before Python tears down:
     # exiting while it still holds the GL context can crash the interpreter's exit
     deadline = time.perf_counter() + 5.0
@@ -269,13 +247,11 @@ def _run(args: argparse.Namespace) -> int:
     print(message)
     writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
-    try:
+    with contextlib.closing(device):
         if args.no_viewer:
             timing = run_session(station, device, writer, max_steps, realtime=not args.fast)
         else:
             timing = _in_viewer(station, device, writer, max_steps, args.screenshot)
-    finally:
-        device.close()
     if timing["signal"] is not None:
         print(
             f"session {writer.csv} interrupted by {timing['signal']} after {timing['steps']} steps "
@@ -300,7 +276,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "schedule":  # the study kit
             print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
         else:
-            answers = None if args.answers is None else studykit.parse_answers(args.answers)
+            answers = None if args.answers is None else args.answers.split(",")
             print(studykit.survey(args.sessions, args.participant, args.condition, answers, args.overwrite))
         return 0
     except LasaError as exc:

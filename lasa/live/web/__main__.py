@@ -1,8 +1,7 @@
 """Command line of the web study: ``serve`` (the default) and ``schedule``.
 
 ``--port 8000 --sessions build/sessions [--host H]`` serves the study; ``schedule --participants 12 --url
-http://...`` writes the schedule and one link per participant (pre-registration: lasa.experiments.study).
-"""
+http://...`` writes the schedule and one link per participant (pre-registration: lasa.experiments.study)."""
 
 from __future__ import annotations
 

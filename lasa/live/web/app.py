@@ -43,19 +43,17 @@ PING_TIMEOUT_S = 5.0
 REFUSALS = ("invalid", "finished", "elsewhere", "no_hello")
 
 STATIC = Path(__file__).parent / "static"
+CSP = "default-src 'self'; {}img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
 HEADERS = {
     "Cache-Control": "no-store",
     "Referrer-Policy": "no-referrer",  # the token is in the page's address (its fragment)
     "X-Content-Type-Options": "nosniff",
     "X-Frame-Options": "DENY",
-    "Content-Security-Policy": (
-        "default-src 'self'; img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
-    ),
+    "Content-Security-Policy": CSP.format(""),
 }
 # MuJoCo's bindings build wrappers with `new Function` and compile the .wasm: its own origin's only
 BROWSER_HEADERS = HEADERS | {
-    "Content-Security-Policy": "default-src 'self'; script-src 'self' 'unsafe-eval' 'wasm-unsafe-eval'; "
-    "img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
+    "Content-Security-Policy": CSP.format("script-src 'self' 'unsafe-eval' 'wasm-unsafe-eval'; ")
 }
 
 
@@ -112,9 +110,6 @@ class Study:
         self.renderer = FrameRenderer() if config.frames == "server" else None
         self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
         self._labels: list[dict[str, Any]] | None = None  # the goals' places: one scene, one camera
-        if config.frames == "browser":
-            for name in NPM_PACKAGES:
-                npm_folder(name)  # fail at start, not in a participant's page
 
     def admit(self, token: str | None) -> tuple[str | None, str]:
         """(participant, "") for a valid token whose schedule is not done and that is not connected
@@ -174,16 +169,6 @@ async def scene(request: Request) -> Response:
     return FileResponse(path, media_type=ASSET_TYPES[path.suffix.lower()], headers=HEADERS)
 
 
-async def _hello(ws: WebSocket) -> str | None:
-    """The token of the connection's first message, or None (not a hello, or not in time)."""
-    try:
-        message = await asyncio.wait_for(ws.receive(), HELLO_S)
-        msg = parse(message.get("text"))
-    except (TimeoutError, ProtocolError, KeyError):
-        return None
-    return msg.get("token") if msg["type"] == "hello" else None
-
-
 async def socket(ws: WebSocket) -> None:
     """A participant's connection: the origin checked before it opens, the token in its first message."""
     study: Study = ws.app.state.study
@@ -192,7 +177,11 @@ async def socket(ws: WebSocket) -> None:
         await ws.close(code=1008)
         return
     await ws.accept()
-    token = await _hello(ws)
+    try:  # the token of the connection's first message (a hello, in time)
+        msg = parse((await asyncio.wait_for(ws.receive(), HELLO_S)).get("text"))
+        token = msg.get("token") if msg["type"] == "hello" else None
+    except (TimeoutError, ProtocolError, KeyError):
+        token = None
     participant, reason = study.admit(token) if token is not None else (None, "no_hello")
     if participant is None:
         with contextlib.suppress(Exception):
@@ -223,7 +212,7 @@ def create_app(config: WebConfig) -> Starlette:
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
         WebSocketRoute("/ws", socket),
     ]
-    if config.frames == "browser":
+    if config.frames == "browser":  # npm_folder fails at start, not in a participant's page
         routes += [Route("/scene", scene), Route("/scene/{name}", scene)]
         routes += [Mount(f"/npm/{name}", NpmFiles(directory=npm_folder(name))) for name in NPM_PACKAGES]
     app = Starlette(lifespan=lifespan, routes=routes)

@@ -1,7 +1,6 @@
 """One participant's connection: the protocol's steps (:mod:`lasa.live.web.plan`), driven by the server over
 one WebSocket, and each trial's loop (:func:`run_trial`). Page input updates the next tick's sample; a page
-gone mid-trial leaves that session ``interrupted`` and its progress where it was, for the same link to resume.
-"""
+gone mid-trial leaves its session ``interrupted`` and its progress where it was, for its link to resume."""
 
 from __future__ import annotations
 
@@ -17,9 +16,11 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
+from lasa.evidence.sessions import QUESTIONS, SCALES
 from lasa.live.devices import StickSample
 from lasa.live.session import Session, open_log
 from lasa.live.station import SessionConfig, Station
+from lasa.live.studykit import survey
 from lasa.live.web.plan import Step, plan_of
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
 
@@ -75,10 +76,7 @@ class Conversation:
     async def _receive(self) -> None:
         limit = RateLimit()
         try:
-            while True:
-                message = await self.ws.receive()
-                if message["type"] == "websocket.disconnect":
-                    break
+            while (message := await self.ws.receive())["type"] != "websocket.disconnect":
                 if not limit.allow():
                     raise ProtocolError("too many messages")
                 msg = parse(message.get("text"))
@@ -107,8 +105,7 @@ class Conversation:
             self.dropped += 1
 
     def _clear(self) -> None:
-        """Start a step from a clean queue: what the page sent before it (a second Start, an early
-        survey) is dropped and counted."""
+        """Drop and count what the page sent before this step (a second Start, an early survey)."""
         while not self._queue.empty():
             msg = self._queue.get_nowait()
             if msg["type"] == "_gone":
@@ -164,9 +161,6 @@ class Conversation:
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        from lasa.evidence.sessions import QUESTIONS, SCALES
-        from lasa.live.studykit import survey
-
         questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
         await self.send(header | {"questions": questions})
         while True:
@@ -181,8 +175,7 @@ class Conversation:
         study, practice = self.study, step.kind == "practice"
         config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
         attempt = study.progress.attempt(self.participant)
-        folder = Path(study.config.sessions)  # practice apart: the analysis reads the trials only
-        folder = folder / "practice" if practice else folder
+        folder = Path(study.config.sessions, "practice" if practice else "")  # the analysis reads trials only
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
         except (ConfigError, ArtifactError) as exc:
@@ -198,14 +191,11 @@ class Conversation:
         if study.config.frames == "browser":
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
-            writer = trial.writer
-            assert writer is not None  # open_trial always logs
-            key = study.scene_key(writer.folder / f"{writer.stem}.xml")
+            assert trial.writer is not None  # open_trial always logs
+            key = study.scene_key(trial.writer.csv.with_suffix(".xml"))
             robot = trial.station.robot
-            camera = robot.model.camera(robot.spec.camera).id
-            await self.send(
-                {"type": "scene", "key": key, "qpos_adr": robot.qpos_adr.tolist(), "camera": camera}
-            )
+            qpos_adr, camera = robot.qpos_adr.tolist(), robot.model.camera(robot.spec.camera).id
+            await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera})
         try:
             return await run_trial(
                 trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish

@@ -47,9 +47,8 @@ def parse(text: str | bytes | None) -> dict[str, Any]:
         raise ProtocolError("a message is one JSON object") from exc
     if not isinstance(msg, dict) or msg.get("type") not in KINDS:
         raise ProtocolError(f"a message's type is one of {KINDS}")
-    if msg["type"] == "hello" and not (
-        isinstance(msg.get("token"), str) and len(msg["token"]) <= MAX_TOKEN_CHARS
-    ):
+    token = msg.get("token")
+    if msg["type"] == "hello" and not (isinstance(token, str) and len(token) <= MAX_TOKEN_CHARS):
         raise ProtocolError("hello carries the token, a short string")
     if msg["type"] == "input":
         axes = msg.get("axes")

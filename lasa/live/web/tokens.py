@@ -83,8 +83,6 @@ class TokenStore:
         """The participant whose token this is, or None (compared in constant time)."""
         if not token or len(token) > MAX_TOKEN_CHARS:
             return None
-        digest = _hash(token)
-        found = [
-            p for p, stored in self._hashes.items() if hmac.compare_digest(digest, stored)
-        ]  # all compared
+        digest = _hash(token)  # compared with every stored hash, each in constant time
+        found = [p for p, stored in self._hashes.items() if hmac.compare_digest(digest, stored)]
         return found[-1] if found else None
