@@ -232,7 +232,7 @@ def collect_eating_demonstrations(
         down = c.curve(functools.partial(task.pose, g, theta), 0.0, 1.0)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
-    home, leave = segmentation == "home", segmentation == "leaves"
+    home, leave, transfers = (segmentation == name for name in ("home", "leaves", "transfers"))
     n_home = config.n_starts + (task.n_goals - 1 if home else 0)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
@@ -246,13 +246,9 @@ def collect_eating_demonstrations(
             starts: list[tuple[np.ndarray, np.ndarray | None, bool]] = [(q, None, True) for q in homes]
             for other in [] if home else [o for o in range(task.n_goals) if o != g]:
                 tilt = float(c.rng.uniform())
-                entry = task.target(other, tilt)
-                if leave:
-                    entry = task.pose(other, np.array([tilt]), np.array([1.0]))[0]
+                entry = task.pose(other, tilt, 1.0) if leave else task.target(other, tilt)
                 settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
-                starts.append(
-                    (entry, None if segmentation == "transfers" else settled, segmentation == "continuous")
-                )
+                starts.append((entry, None if transfers else settled, segmentation == "continuous"))
             for start, b0, work in starts:
                 segments = [(c.line(start, task.target(g, theta)), float(theta), REACH)]
                 if work:  # else a separate transfer: the reach, and its hold, only

@@ -9,7 +9,7 @@ import dataclasses
 
 import numpy as np
 
-from lasa.base.config import check_choice
+from lasa.base.config import check_choice, check_range
 from lasa.base.errors import ConfigError
 
 PILOTS = ("boltzmann", "laggy", "noisy")
@@ -42,8 +42,7 @@ class UserPopulation:
 
     def __post_init__(self) -> None:
         check_choice("pilot", self.pilot, PILOTS)
-        if not 0.0 <= self.pilot_prob <= 1.0:
-            raise ConfigError(f"pilot_prob must be in [0, 1], got {self.pilot_prob!r}")
+        check_range("pilot_prob", self.pilot_prob, 0.0, 1.0)
         for name, value in self._rows().items():
             if value is not None and len(value) != len(self.goal):
                 raise ConfigError(f"UserPopulation.{name} has {len(value)} rows, expected {len(self.goal)}")
