@@ -2,8 +2,7 @@ r"""Demonstrations D = {(s, a, b)}: reaches to each goal, then adjustments of th
 
 Motions (from home, or home perturbed, to :math:`s^*(g, \theta)`, then along the preference curve) run
 under a saturated proportional speed law :math:`a = \min(k, v/\|e\|)\, e`, each followed by a hold;
-beliefs are the robot's online ones; noisy copies teach the decoder to return to the demonstrations.
-"""
+beliefs are the robot's online ones; noisy copies teach the decoder to return to the demonstrations."""
 
 from __future__ import annotations
 
@@ -223,8 +222,7 @@ def collect_eating_demonstrations(
     ``segmentation`` (:data:`SEGMENTATIONS`), how a teacher cuts them, decides each tuple's belief:
     ``continuous`` (moves between goals start from the belief settled there), ``home`` (all from
     (perturbed) home, uniform), ``transfers`` (plus separate moves between goals' entries, uniform)
-    or ``leaves`` (those moves leave a stroke's end, confident: Sec. IV-B; ``docs/method-notes.md``).
-    """
+    or ``leaves`` (those moves leave a stroke's end, confident: Sec. IV-B; ``docs/method-notes.md``)."""
     check_choice("segmentation", segmentation, SEGMENTATIONS)
     c = _Collector(task, control, config)
 

@@ -1,8 +1,7 @@
 r"""Planning participants of the eating study: the one-step participants' people, who every ``replan``
 seconds choose an input z and a hold h by the Boltzmann rule on the progress rate :math:`V(z, h) =
 (C_\text{now} - C_\text{after}(z, h)) / (n\, \Delta t\, v_\text{lin})`, :math:`n = \max(\text{presses} +
-h/\Delta t, \text{replan}/\Delta t)`; latent plans rolled by the real step, Retargeting's by its twist.
-"""
+h/\Delta t, \text{replan}/\Delta t)`; latent plans rolled by the real step, Retargeting's by its twist."""
 
 from __future__ import annotations
 

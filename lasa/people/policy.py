@@ -1,7 +1,6 @@
 r"""How a simulated participant of the eating study chooses an input, however they foresee it: by how
 far it lowers the cost :math:`C = \|p - p^*\| + \ell\, \angle(d, d^*)` to the waypoint, Boltzmann with
-:math:`\beta(t) = \beta_\infty (1 - (1 - \rho) e^{-(E_0 + t\Delta)/\tau})`, or rest.
-"""
+:math:`\beta(t) = \beta_\infty (1 - (1 - \rho) e^{-(E_0 + t\Delta)/\tau})`, or rest."""
 
 from __future__ import annotations
 

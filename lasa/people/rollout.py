@@ -76,8 +76,7 @@ def rollout(
     """Run Algorithm 1 for ``horizon`` steps of a batch of simulated users, blended by ``alpha`` (per
     user (U,) or one), each user u drawing from uniforms ``noise[users.user[u]]`` in (0, 1), (N, T, K)
     for K joystick candidates, and as pilots from ``pilot_noise`` (N, T, 2)
-    (:func:`lasa.people.users.pilot_choice`); ``assistance``: each user's member (default the control's).
-    """
+    (:func:`lasa.people.users.pilot_choice`); ``assistance``: each user's member (default the control's)."""
     check_decoder(decoder, task)
     check_horizon(horizon)
     n_users, k = len(users), control.n_z**decoder.z_dim

@@ -1,7 +1,6 @@
 """The simulated eating study's driver, whichever participant model chooses: the same episodes
 (:func:`lasa.people.design.layout`), each with its stream ``default_rng([seed, participant, condition,
-task])`` (the SA members' paired), waypoints tracked, the record kept, the episode runner stepping them.
-"""
+task])`` (the SA members' paired), waypoints tracked, the record kept, the episode runner stepping them."""
 
 from __future__ import annotations
 

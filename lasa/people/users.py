@@ -1,7 +1,6 @@
 r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1), by Gumbel-max on their own draws,
 :math:`p(z) \propto \exp\{-\beta(t) \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\}`, :math:`\beta(t) =
-\beta_0 + m t`, their goal maybe changing at step N; :data:`PILOTS` adds laggy and noisy pilots.
-"""
+\beta_0 + m t`, their goal maybe changing at step N; :data:`PILOTS` adds laggy and noisy pilots."""
 
 from __future__ import annotations
 
@@ -26,8 +25,7 @@ class UserPopulation:
         user: Each user's index, which picks their draws from the noise, (U,) (the CSVs' ``seed``).
         first_target, change_step: The pose each user aims at before step N, and N, (U, n) and (U,)
             (``None``: users who never change their mind).
-        pilot, pilot_prob: The kind of all users (:data:`PILOTS`) and p of a laggy or noisy pilot [-].
-    """
+        pilot, pilot_prob: The kind of all users (:data:`PILOTS`) and p of a laggy or noisy pilot [-]."""
 
     goal: np.ndarray
     theta: np.ndarray

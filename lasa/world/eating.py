@@ -2,8 +2,7 @@ r"""The eating task of the paper's user study (Sec. VI): the Panda's fork over t
 
 A preference is a tilt :math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}`
 from pointing down towards a sideways r; strokes run 5 cm along m(theta), ending 1 cm into the food
-(:func:`fork_frame`). Tasks are phases, each with its waypoints. Why: ``docs/method-notes.md``.
-"""
+(:func:`fork_frame`). Tasks are phases, each with its waypoints. Why: ``docs/method-notes.md``."""
 
 from __future__ import annotations
 
@@ -163,9 +162,8 @@ class EatingTask(GoalTask):
         theta_arr, depth_arr = np.broadcast_arrays(
             np.asarray(theta, dtype=float), np.asarray(depth, dtype=float)
         )
-        if depth_arr.size:
-            check_range("depth", float(depth_arr.min()), 0.0, 1.0)
-            check_range("depth", float(depth_arr.max()), 0.0, 1.0)
+        if not np.all((depth_arr >= 0.0) & (depth_arr <= 1.0)):  # NaN too
+            raise ConfigError(f"depth must be in [0, 1], got {depth}")
         th, u = theta_arr.ravel(), depth_arr.ravel()
         grid = self.depth_grid
         k = np.clip(np.searchsorted(grid, u, side="right") - 1, 0, len(grid) - 2)

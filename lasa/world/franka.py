@@ -1,7 +1,6 @@
 r"""Franka's official Panda conventions, the yardstick our ``panda`` is checked against: the modified
 (Craig) Denavit-Hartenberg table, :math:`T_i = R_x(\alpha_{i-1}) T_x(a_{i-1}) R_z(\theta_i) T_z(d_i)`,
-flange and TCP offsets, joint limits, "ready" pose, and the ``gymnasium-robotics`` Panda's chain.
-"""
+flange and TCP offsets, joint limits, "ready" pose, and the ``gymnasium-robotics`` Panda's chain."""
 
 from __future__ import annotations
 
@@ -70,11 +69,9 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def packaged_chain() -> mujoco.MjModel:
-    """The Panda chain that ``gymnasium-robotics`` ships, compiled for kinematics only.
-
-    Geoms, inertias and classes are stripped (they need the package's defaults and meshes);
-    bodies, joints and sites are kept exactly. Its site ``end_effector`` is the packaged TCP.
-    """
+    """The Panda chain that ``gymnasium-robotics`` ships, compiled for kinematics only: bodies, joints and
+    sites (``end_effector``: the packaged TCP) exactly, without geoms, inertias and classes (they need the
+    package's defaults and meshes)."""
     root = mesh_dir("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets")
     chain = ET.parse(root / "chain.xml").getroot()
     for parent in list(chain.iter()):
@@ -103,11 +100,7 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
     packaged = packaged_chain()
     pdata = mujoco.MjData(packaged)
     site = robot.model.site(robot.spec.grasp_site).id
-    rows = {name: [0.0, 0.0, 0.0] for name in ("lasa panda", "packaged, same q", "packaged, q - offsets")}
-
-    def rot_err(a: np.ndarray, b: np.ndarray) -> float:
-        return float(np.arccos(np.clip((np.trace(a.T @ b) - 1) / 2, -1.0, 1.0)))
-
+    records = []
     for q in qs:
         ref = dh_frames(q)
         tcp = ref["tcp"]
@@ -116,16 +109,18 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
         frames = max(
             float(np.linalg.norm(ours.body(f"link{i}").xpos - ref[f"link{i}"][:3, 3])) for i in range(1, 8)
         )
-        cases = {"lasa panda": (ours.site_xpos[site].copy(), ours.site_xmat[site].copy(), frames)}
+        cases = [("lasa panda", ours.site_xpos[site].copy(), ours.site_xmat[site].copy(), frames)]
         for name, qq in (("packaged, same q", q), ("packaged, q - offsets", q - PACKAGED_OFFSETS)):
             pdata.qpos[:7] = qq
             mujoco.mj_kinematics(packaged, pdata)
             s = pdata.site("end_effector")
-            cases[name] = (s.xpos.copy(), s.xmat.copy(), float("nan"))
-        for name, (pos, mat, fr) in cases.items():
-            row = rows[name]
-            row[0] = max(row[0], float(np.linalg.norm(pos - tcp[:3, 3])))
-            row[1] = max(row[1], rot_err(mat.reshape(3, 3), tcp[:3, :3]))
-            row[2] = fr if np.isnan(fr) else max(row[2], fr)
+            cases.append((name, s.xpos.copy(), s.xmat.copy(), float("nan")))
+        for name, pos, mat, fr in cases:
+            cos = (np.trace(mat.reshape(3, 3).T @ tcp[:3, :3]) - 1) / 2
+            records.append(
+                (name, float(np.linalg.norm(pos - tcp[:3, 3])), float(np.arccos(np.clip(cos, -1.0, 1.0))), fr)
+            )
     columns = ("max_tcp_position_error_m", "max_tcp_rotation_error_rad", "max_frame_position_error_m")
-    return pd.DataFrame([{"model": k, **dict(zip(columns, v, strict=True))} for k, v in rows.items()])
+    return (
+        pd.DataFrame(records, columns=("model", *columns)).groupby("model", sort=False, as_index=False).max()
+    )

@@ -62,8 +62,7 @@ def solve_grasp_ik(
     """Joint positions (n,), within the limits, that put the grasp site at ``position`` (3,) [m] with
     ``rotation`` (3, 3), the posture task pulling towards ``seed`` (n,) [rad]: accepted within
     ``position_tol`` [m] and ``rotation_tol`` [rad] after at most ``max_iters`` iterations, else IKError,
-    its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``).
-    """
+    its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``)."""
     solver = _solver(robot)
     configuration, frame, posture_task = solver.configuration, solver.frame, solver.posture
     q_full = robot.model.qpos0.copy()  # no state of the last solve

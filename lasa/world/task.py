@@ -1,8 +1,7 @@
 r"""The cup task: cups as the goals, and a preference from a top grasp (theta = 0) to a side grasp (1,
 from the base towards the cup, turned towards the midline by ``RobotSpec.side_azimuth``):
 :math:`d(\theta) = \cos\psi \, d_{top} + \sin\psi \, d_{side}`, :math:`\psi = \theta \pi / 2`, the site at
-:math:`p(\theta) = c - \rho \, d(\theta)` (standoff :math:`\rho`).
-"""
+:math:`p(\theta) = c - \rho \, d(\theta)` (standoff :math:`\rho`)."""
 
 from __future__ import annotations
 
