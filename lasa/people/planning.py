@@ -182,9 +182,8 @@ def _choose(study: _Study, run: _Run, now: Now) -> np.ndarray:
     z = study.grid[np.where(moving, run.z_plan[idx], study.rest)]
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
     if la.any():
-        a_h[la] = human_action(
-            study.decoder.decode_numpy(z[la], now.state[la], now.belief[la]), z[la], rest="zero"
-        )
+        phi = study.decoder.decode_numpy(z[la], now.state[la], now.belief[la])
+        a_h[la] = human_action(phi, z[la], rest="zero")
     act(study, run, now, a_h, z, press, ~press & ~moving)
     run.presses_left[idx] -= press
     run.hold_left[idx] -= moving

@@ -91,8 +91,7 @@ def rollout(
     chooser = BoltzmannUsers(decoder, users, control, horizon, noise, pilot_noise if piloted else None)
     alphas = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
     start = np.broadcast_to(task.start, (n_users, task.robot.n_joints))
-    runner = Runner(
-        Assist(task, control, alphas, assistance), start, uniform_log_belief(n_users, task.n_goals)
-    )
+    assist = Assist(task, control, alphas, assistance)
+    runner = Runner(assist, start, uniform_log_belief(n_users, task.n_goals))
     record = runner.run(chooser, horizon, progress=progress, desc=f"rollout {n_users} users")
     return Trajectories(record.states, record.beliefs, chooser.z, record.human_actions, record.actions)

@@ -159,9 +159,7 @@ class EatingTask(GoalTask):
     def pose(self, goal: int, theta: float | np.ndarray, depth: float | np.ndarray) -> np.ndarray:
         """s*(g, theta, u), shape (..., n): cubic in theta (as :meth:`target`), linear in depth
         between the solved depths; ``theta`` and ``depth`` broadcast."""
-        theta_arr, depth_arr = np.broadcast_arrays(
-            np.asarray(theta, dtype=float), np.asarray(depth, dtype=float)
-        )
+        theta_arr, depth_arr = np.broadcast_arrays(np.asarray(theta, float), np.asarray(depth, float))
         if not np.all((depth_arr >= 0.0) & (depth_arr <= 1.0)):  # NaN too
             raise ConfigError(f"depth must be in [0, 1], got {depth}")
         th, u = theta_arr.ravel(), depth_arr.ravel()
@@ -206,9 +204,7 @@ def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
             label = f"goal {GOALS[g]!r}, theta = {theta:.3f}"
             for d, u in enumerate(us):
                 where = f"{label}, depth u = {u:.3f}" if d else label
-                strokes[g, k, d] = solve_grasp_ik(
-                    robot, *fork_frame(robot, g, theta, u), strokes[g, k, d - 1] if d else q, label=where
-                )
+                q = strokes[g, k, d] = solve_grasp_ik(robot, *fork_frame(robot, g, theta, u), q, label=where)
             q = strokes[g, k, 0]
     curves = strokes[:, :, 0].copy()
     return EatingTask(

@@ -69,12 +69,8 @@ def solve_grasp_ik(
     adr = robot.qpos_adr
     q_full[adr] = robot.clip(np.asarray(seed, dtype=float))
     configuration.update(q_full)
-    frame.set_target(
-        mink.SE3.from_rotation_and_translation(
-            mink.SO3.from_matrix(np.asarray(rotation, dtype=float)),
-            np.asarray(position, dtype=float),
-        )
-    )
+    rotation_so3 = mink.SO3.from_matrix(np.asarray(rotation, dtype=float))
+    frame.set_target(mink.SE3.from_rotation_and_translation(rotation_so3, np.asarray(position, dtype=float)))
     target = q_full.copy()
     target[adr] = seed
     posture_task.set_target(target)

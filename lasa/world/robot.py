@@ -116,9 +116,8 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         frame.attach_body(tool.worldbody.first_body(), "fork_", "")
     for name, position in spec.extra_cups:  # shaped like the first cup, its site at `position`
         site, geom = mj_spec.site(spec.goal_sites[0]), mj_spec.geom(spec.goal_sites[0])
-        body = mj_spec.worldbody.add_body(
-            name=name, pos=np.asarray(position, dtype=float) - np.asarray(site.pos)
-        )
+        offset = np.asarray(position, dtype=float) - np.asarray(site.pos)
+        body = mj_spec.worldbody.add_body(name=name, pos=offset)
         cylinder = mujoco.mjtGeom.mjGEOM_CYLINDER
         kw = {"size": geom.size, "pos": geom.pos, "rgba": NEW_CUP_RGBA, "contype": 0, "conaffinity": 0}
         body.add_geom(name=name, type=cylinder, **kw)
@@ -304,9 +303,8 @@ class Robot:
             raise ConfigError(f"the scene already has a cup named {name!r}")
         x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
         cups = (*self.spec.extra_cups, (name, (x, y, z)))
-        return Robot(
-            dataclasses.replace(self.spec, goal_sites=(*self.spec.goal_sites, name), extra_cups=cups)
-        )
+        spec = dataclasses.replace(self.spec, goal_sites=(*self.spec.goal_sites, name), extra_cups=cups)
+        return Robot(spec)
 
     def xml(self) -> str:
         """The scene as one MJCF document (meshes by absolute path), for a session log to replay."""
