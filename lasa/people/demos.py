@@ -68,23 +68,17 @@ def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame
     """One row per (demonstration, phase): ``robot``, ``demo``, ``goal`` (its name), ``phase``,
     ``steps``, and the belief in the goal, ``belief_min`` and ``belief_end``."""
     clean = demos.clean()
-    return (
-        pd.DataFrame(
-            {
-                "robot": demos.robot,
-                "demo": clean.demo,
-                "goal": np.asarray(task.goal_names)[clean.goal],
-                "phase": np.asarray(PHASE_NAMES)[clean.phase],
-                "belief_true_goal": clean.beliefs[np.arange(len(clean)), clean.goal],
-            }
-        )
-        .groupby(["robot", "demo", "goal", "phase"], as_index=False)
-        .agg(
-            steps=("belief_true_goal", "size"),
-            belief_min=("belief_true_goal", "min"),
-            belief_end=("belief_true_goal", "last"),
-        )
+    frame = pd.DataFrame(
+        {
+            "robot": demos.robot,
+            "demo": clean.demo,
+            "goal": np.asarray(task.goal_names)[clean.goal],
+            "phase": np.asarray(PHASE_NAMES)[clean.phase],
+            "belief": clean.beliefs[np.arange(len(clean)), clean.goal],
+        }
     )
+    per_phase = frame.groupby(["robot", "demo", "goal", "phase"], as_index=False)["belief"]
+    return per_phase.agg(steps="size", belief_min="min", belief_end="last")
 
 
 class _Collector:
@@ -141,10 +135,10 @@ class _Collector:
         )
         for path, th, phase in segments:
             s = np.concatenate([path[:-1], np.repeat(path[-1:], hold, 0)])
-            a = np.concatenate(
-                [np.diff(path, axis=0) / control.dt, np.zeros((hold, self.task.robot.n_joints))]
-            )
-            ph = np.full(len(s), phase)
+            still = np.zeros((hold, self.task.robot.n_joints))
+            a = np.concatenate([np.diff(path, axis=0) / control.dt, still])
+            n = len(s)
+            ph = np.full(n, phase)
             ph[len(path) - 1 :] = HOLD
             for k in range(len(s)):
                 self.beliefs.append(belief(log_b))
@@ -152,18 +146,14 @@ class _Collector:
                     s[k], a[k], self.goal_sets, control.dt, control.belief_beta, control.likelihood_step
                 )
                 log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
-            self.rows.append(
-                (s, a, np.full(len(s), self.n_demos), np.full(len(s), goal), np.full(len(s), th), ph)
-            )
+            self.rows.append((s, a, np.full(n, self.n_demos), np.full(n, goal), np.full(n, th), ph))
         self.n_demos += 1
 
     def dataset(self) -> Demonstrations:
         """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
         back towards the demonstrated state (clipped below sigma_h)."""
         robot, config = self.task.robot, self.config
-        states, actions, demo, goal, theta, phase = (
-            np.concatenate(column) for column in zip(*self.rows, strict=True)
-        )
+        states, actions, demo, goal, theta, phase = map(np.concatenate, zip(*self.rows, strict=True))
         copies_s, copies_a = [states], [actions]
         for _ in range(config.n_perturb):
             noise = self.rng.normal(0.0, config.perturb_std, states.shape)

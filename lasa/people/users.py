@@ -82,9 +82,8 @@ def user_costs(target: np.ndarray, state: np.ndarray, phi: np.ndarray, dt: float
     """||s* - (s + dt phi(z))||^2, (U, K), for targets and states (U, n) and candidates' phi (U, K, n)."""
     offset = (target - state)[:, None, :]
     diff = dt * phi
-    if diff.shape == np.broadcast_shapes(offset.shape, diff.shape) and diff.dtype == np.result_type(
-        offset, diff
-    ):
+    same_shape = diff.shape == np.broadcast_shapes(offset.shape, diff.shape)
+    if same_shape and diff.dtype == np.result_type(offset, diff):
         np.subtract(offset, diff, out=diff)  # the same difference, without a second buffer
     else:
         diff = offset - diff

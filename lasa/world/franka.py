@@ -119,10 +119,6 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
             cos = (np.trace(mat.reshape(3, 3).T @ tcp[:3, :3]) - 1) / 2
             rot_err = float(np.arccos(np.clip(cos, -1.0, 1.0)))
             records.append((name, float(np.linalg.norm(pos - tcp[:3, 3])), rot_err, fr))
-    columns = (
-        "model",
-        "max_tcp_position_error_m",
-        "max_tcp_rotation_error_rad",
-        "max_frame_position_error_m",
-    )
-    return pd.DataFrame(records, columns=columns).groupby("model", sort=False, as_index=False).max()
+    columns = ("max_tcp_position_error_m", "max_tcp_rotation_error_rad", "max_frame_position_error_m")
+    frame = pd.DataFrame(records, columns=("model", *columns))
+    return frame.groupby("model", sort=False, as_index=False).max()
