@@ -207,16 +207,7 @@ def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
                 q = strokes[g, k, d] = solve_grasp_ik(robot, *fork_frame(robot, g, theta, u), q, label=where)
             q = strokes[g, k, 0]
     curves = strokes[:, :, 0].copy()
-    return EatingTask(
-        robot=robot,
-        goal_names=GOALS,
-        theta_grid=thetas,
-        curves=curves,
-        goals=curves[:, n_theta // 2].copy(),
-        start=robot.home,
-        depth_grid=us,
-        strokes=strokes,
-    )
+    return EatingTask(robot, GOALS, thetas, curves, curves[:, n_theta // 2].copy(), robot.home, us, strokes)
 
 
 def waypoints(task: str) -> list[Waypoint]:
