@@ -40,15 +40,11 @@ def _rot_x(a: float) -> np.ndarray:
     return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
 
 
-def _about_z(a: float) -> np.ndarray:
-    """R_z(a) as a 4 x 4 transform."""
+def _transform(rotation: np.ndarray | None = None, x: float = 0.0, z: float = 0.0) -> np.ndarray:
+    """The 4 x 4 transform of ``rotation`` (3, 3; None: none) and the translation (x, 0, z)."""
     t = np.eye(4)
-    t[:3, :3] = rot_z(a)
-    return t
-
-
-def _trans(x: float = 0.0, z: float = 0.0) -> np.ndarray:
-    t = np.eye(4)
+    if rotation is not None:
+        t[:3, :3] = rotation
     t[0, 3], t[2, 3] = x, z
     return t
 
@@ -61,10 +57,10 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
     frames: dict[str, np.ndarray] = {}
     t = np.eye(4)
     for i, ((a, d, alpha), theta) in enumerate(zip(DH, q, strict=True), start=1):
-        t = t @ _rot_x(alpha) @ _trans(x=a) @ _about_z(theta) @ _trans(z=d)
+        t = t @ _rot_x(alpha) @ _transform(x=a) @ _transform(rot_z(theta)) @ _transform(z=d)
         frames[f"link{i}"] = t
-    frames["flange"] = flange = t @ _trans(z=FLANGE_D)
-    frames["tcp"] = flange @ _about_z(HAND_YAW) @ _trans(z=TCP_D)
+    frames["flange"] = flange = t @ _transform(z=FLANGE_D)
+    frames["tcp"] = flange @ _transform(rot_z(HAND_YAW)) @ _transform(z=TCP_D)
     return frames
 
 
