@@ -39,8 +39,7 @@ class GoalTask:
     @property
     def goal_distance(self) -> float:
         """Largest joint-space distance between two goals: the paper's error normaliser."""
-        diff = self.goals[:, None, :] - self.goals[None, :, :]
-        return float(np.linalg.norm(diff, axis=-1).max())
+        return float(np.linalg.norm(self.goals[:, None, :] - self.goals[None, :, :], axis=-1).max())
 
     @property
     def preference_sets(self) -> np.ndarray:

@@ -41,5 +41,4 @@ class Episodes:
 
     def active(self) -> np.ndarray:
         """(T, E): whether each episode was still running at each step."""
-        steps = np.arange(self.idle.shape[0])[:, None]
-        return steps < self.end[None, :]
+        return np.arange(self.idle.shape[0])[:, None] < self.end[None, :]

@@ -37,8 +37,7 @@ def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.n
     axis = np.cross(top, side)
     r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
     rotation = mink.SO3.exp(axis * psi).as_matrix() @ r_top
-    position = cup - robot.spec.grasp_standoff * approach
-    return position, rotation
+    return cup - robot.spec.grasp_standoff * approach, rotation
 
 
 @dataclasses.dataclass(frozen=True)
