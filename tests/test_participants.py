@@ -205,8 +205,11 @@ def test_tip_motion_is_the_first_order_motion_of_the_kinematics(eating):
 def test_bad_settings_are_errors(eating):
     with pytest.raises(ConfigError, match="n_z"):
         StudyConfig(n_z=4)
-    with pytest.raises(ConfigError, match="assistance"):
-        StudyConfig(assistance=("telepathy",))
+    for assistance in [("telepathy",), (), ("point", "point")]:
+        with pytest.raises(ConfigError, match="assistance"):
+            StudyConfig(assistance=assistance)
+    with pytest.raises(ConfigError, match="practice_max must be >= practice_min"):
+        ParticipantConfig(practice_min=100.0, practice_max=50.0)
     with pytest.raises(ConfigError, match="transfer"):
         ParticipantConfig(transfer=1.5)
     with pytest.raises(ConfigError, match="participants"):

@@ -4,12 +4,11 @@ four conditions in a counterbalanced order (Williams 1949); how they choose: :mo
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
 from lasa.base.conditions import CONDITIONS, williams_square
-from lasa.base.config import NonNegative, Positive, UnitInterval, interval, validate
+from lasa.base.config import NonNegative, Positive, UnitInterval, validate
 from lasa.base.errors import ConfigError
 
 
@@ -37,8 +36,7 @@ class ParticipantConfig:
         validate(self)
         if self.practice_max < self.practice_min:
             raise ConfigError(
-                f"practice_max must be in {interval(self.practice_min, math.inf)} (at least practice_min), "
-                f"got {self.practice_max!r}"
+                f"practice_max must be >= practice_min = {self.practice_min!r}, got {self.practice_max!r}"
             )
 
 

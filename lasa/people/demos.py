@@ -2,8 +2,7 @@ r"""Demonstrations D = {(s, a, b)}: reaches to each goal, then adjustments of th
 
 Motions (from home, or home perturbed, to :math:`s^*(g, \theta)`, then along the preference curve) run
 under a saturated proportional speed law :math:`a = \min(k, v/\|e\|)\, e`, each followed by a hold;
-beliefs are the robot's online ones; noisy copies teach the decoder to return to the demonstrations.
-"""
+beliefs are the robot's online ones; noisy copies teach the decoder to return to the demonstrations."""
 
 from __future__ import annotations
 
@@ -69,23 +68,17 @@ def demonstration_summary(task: GoalTask, demos: Demonstrations) -> pd.DataFrame
     """One row per (demonstration, phase): ``robot``, ``demo``, ``goal`` (its name), ``phase``,
     ``steps``, and the belief in the goal, ``belief_min`` and ``belief_end``."""
     clean = demos.clean()
-    return (
-        pd.DataFrame(
-            {
-                "robot": demos.robot,
-                "demo": clean.demo,
-                "goal": np.asarray(task.goal_names)[clean.goal],
-                "phase": np.asarray(PHASE_NAMES)[clean.phase],
-                "belief_true_goal": clean.beliefs[np.arange(len(clean)), clean.goal],
-            }
-        )
-        .groupby(["robot", "demo", "goal", "phase"], as_index=False)
-        .agg(
-            steps=("belief_true_goal", "size"),
-            belief_min=("belief_true_goal", "min"),
-            belief_end=("belief_true_goal", "last"),
-        )
+    frame = pd.DataFrame(
+        {
+            "robot": demos.robot,
+            "demo": clean.demo,
+            "goal": np.asarray(task.goal_names)[clean.goal],
+            "phase": np.asarray(PHASE_NAMES)[clean.phase],
+            "belief": clean.beliefs[np.arange(len(clean)), clean.goal],
+        }
     )
+    per_phase = frame.groupby(["robot", "demo", "goal", "phase"], as_index=False)["belief"]
+    return per_phase.agg(steps="size", belief_min="min", belief_end="last")
 
 
 class _Collector:
@@ -142,10 +135,10 @@ class _Collector:
         )
         for path, th, phase in segments:
             s = np.concatenate([path[:-1], np.repeat(path[-1:], hold, 0)])
-            a = np.concatenate(
-                [np.diff(path, axis=0) / control.dt, np.zeros((hold, self.task.robot.n_joints))]
-            )
-            ph = np.full(len(s), phase)
+            still = np.zeros((hold, self.task.robot.n_joints))
+            a = np.concatenate([np.diff(path, axis=0) / control.dt, still])
+            n = len(s)
+            ph = np.full(n, phase)
             ph[len(path) - 1 :] = HOLD
             for k in range(len(s)):
                 self.beliefs.append(belief(log_b))
@@ -153,18 +146,14 @@ class _Collector:
                     s[k], a[k], self.goal_sets, control.dt, control.belief_beta, control.likelihood_step
                 )
                 log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
-            self.rows.append(
-                (s, a, np.full(len(s), self.n_demos), np.full(len(s), goal), np.full(len(s), th), ph)
-            )
+            self.rows.append((s, a, np.full(n, self.n_demos), np.full(n, goal), np.full(n, th), ph))
         self.n_demos += 1
 
     def dataset(self) -> Demonstrations:
         """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
         back towards the demonstrated state (clipped below sigma_h)."""
         robot, config = self.task.robot, self.config
-        states, actions, demo, goal, theta, phase = (
-            np.concatenate(column) for column in zip(*self.rows, strict=True)
-        )
+        states, actions, demo, goal, theta, phase = map(np.concatenate, zip(*self.rows, strict=True))
         copies_s, copies_a = [states], [actions]
         for _ in range(config.n_perturb):
             noise = self.rng.normal(0.0, config.perturb_std, states.shape)
@@ -223,8 +212,7 @@ def collect_eating_demonstrations(
     ``segmentation`` (:data:`SEGMENTATIONS`), how a teacher cuts them, decides each tuple's belief:
     ``continuous`` (moves between goals start from the belief settled there), ``home`` (all from
     (perturbed) home, uniform), ``transfers`` (plus separate moves between goals' entries, uniform)
-    or ``leaves`` (those moves leave a stroke's end, confident: Sec. IV-B; ``docs/method-notes.md``).
-    """
+    or ``leaves`` (those moves leave a stroke's end, confident: Sec. IV-B; ``docs/method-notes.md``)."""
     check_choice("segmentation", segmentation, SEGMENTATIONS)
     c = _Collector(task, control, config)
 
@@ -232,7 +220,7 @@ def collect_eating_demonstrations(
         down = c.curve(functools.partial(task.pose, g, theta), 0.0, 1.0)
         return [(down, theta, STROKE), (down[::-1], theta, STROKE)]
 
-    home, leave = segmentation == "home", segmentation == "leaves"
+    home, leave, transfers = (segmentation == name for name in ("home", "leaves", "transfers"))
     n_home = config.n_starts + (task.n_goals - 1 if home else 0)
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
@@ -246,13 +234,9 @@ def collect_eating_demonstrations(
             starts: list[tuple[np.ndarray, np.ndarray | None, bool]] = [(q, None, True) for q in homes]
             for other in [] if home else [o for o in range(task.n_goals) if o != g]:
                 tilt = float(c.rng.uniform())
-                entry = task.target(other, tilt)
-                if leave:
-                    entry = task.pose(other, np.array([tilt]), np.array([1.0]))[0]
+                entry = task.pose(other, tilt, 1.0) if leave else task.target(other, tilt)
                 settled = confident_belief(task.n_goals, other, control.belief_floor, control.belief_cap)
-                starts.append(
-                    (entry, None if segmentation == "transfers" else settled, segmentation == "continuous")
-                )
+                starts.append((entry, None if transfers else settled, segmentation == "continuous"))
             for start, b0, work in starts:
                 segments = [(c.line(start, task.target(g, theta)), float(theta), REACH)]
                 if work:  # else a separate transfer: the reach, and its hold, only

@@ -54,11 +54,8 @@ class StudyConfig:
 
     def __post_init__(self) -> None:
         validate(self)
-        if not self.assistance:
-            raise ConfigError("assistance must name at least one member")
-        for name in self.assistance:
+        for name in check_list("assistance", self.assistance):
             check_choice("assistance", name, BUILT_IN_ASSISTANCE)
-        check_list("assistance", self.assistance)
         if self.n_z % 2 == 0:
             raise ConfigError(
                 f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"

@@ -15,20 +15,19 @@ from lasa.method.runner import Now
 from lasa.method.step import decode_candidates, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.policy import choose, rationality
+from lasa.people.policy import choose
 from lasa.people.simulation import Setting, State, act, prepare, progress, run_steps, start
 from lasa.world.eating import EatingTask
 from lasa.world.fork import normalise, tip_motion
 from lasa.world.record import Episodes
 
 
-def _foresee(
-    study: Setting, run: State, now: Now, la: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """phi of the stick positions (A, K, n) (zero for Retargeting), and the foreseen tip motion of
-    every (mode, z) candidate: displacements and new directions, (A, M K, 3) each."""
-    n_k, n_m, dt, idx = len(study.grid), len(MODES), study.control.dt, now.rows
-    a_i = run.axis[idx]
+def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
+    """The chooser: every running participant's input, one step ahead (or rest); a_h (A, n)."""
+    n_k, n_m, dt, idx, rest = len(study.grid), len(MODES), study.control.dt, now.rows, study.rest
+    la, r_rows, a_i = study.layout.is_la[idx], np.flatnonzero(~study.layout.is_la[idx]), run.axis[idx]
+    # phi of the stick positions (zero for Retargeting), and the foreseen tip motion of every (mode, z)
+    # candidate: displacements and new directions, (A, M K, 3) each
     dp = np.zeros((len(idx), n_m * n_k, 3))
     new_dir = np.repeat(a_i[:, None, :], n_m * n_k, axis=1)
     phi = np.zeros((len(idx), n_k, study.task.robot.n_joints))
@@ -36,47 +35,26 @@ def _foresee(
         rows = idx[la]
         phi[la] = decode_candidates(study.decoder, study.grid, now.state[la], now.belief[la])
         dp[la, :n_k], new_dir[la, :n_k] = tip_motion(run.jp[rows], run.jr[rows], a_i[la], dt * phi[la])
-    if (~la).any():
+    if len(r_rows):
         tw = study.r_twist.reshape(n_m * n_k, 6)
         dp[~la] = dt * tw[None, :, :3]
         new_dir[~la] = normalise(a_i[~la, None, :] + dt * np.cross(tw[None, :, 3:], a_i[~la, None, :]))
-    return phi, dp, new_dir
-
-
-def _values(
-    study: Setting, run: State, idx: np.ndarray, la: np.ndarray, dp: np.ndarray, new_dir: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Each candidate's progress in best-step units (-inf: no such input), (A, M K), and each
-    episode's rest position among them, (A,)."""
-    n_k, n_m, rest = len(study.grid), len(MODES), study.rest
+    # each candidate's progress in best-step units (-inf: no such input): LA's are the K stick
+    # positions, R's every (mode, z) but other modes' rest, spread over the presses of the mode button
     gain = progress(study, run, idx, dp, new_dir) / study.unit
-    # LA's candidates are the K stick positions; R's every (mode, z) but other modes' rest
     valid = np.zeros_like(gain, dtype=bool)
     valid[la, :n_k] = True
-    r_rows = np.flatnonzero(~la)
     valid[r_rows] = True
-    other_rest = np.arange(n_m)[None, :] != run.mode[idx[r_rows], None]  # (R, M)
-    valid[r_rows[:, None], np.arange(n_m)[None, :] * n_k + rest] = ~other_rest
+    modes, r_mode = np.arange(n_m)[None, :], run.mode[idx[r_rows], None]  # (1, M), (R, 1)
+    valid[r_rows[:, None], modes * n_k + rest] = modes == r_mode
     rest_col = np.where(la, rest, run.mode[idx] * n_k + rest)
-    # another mode's input is spread over its presses of the mode button and the move
-    presses_needed = (np.arange(n_m)[None, :] - run.mode[idx[r_rows], None]) % n_m  # (R, M)
-    gain[r_rows] /= np.repeat(1.0 + presses_needed, n_k, axis=1)
+    gain[r_rows] /= np.repeat(1.0 + (modes - r_mode) % n_m, n_k, axis=1)
     gain = np.where(valid, gain, -np.inf)
     gain[np.arange(len(idx)), rest_col] = 0.0  # resting moves nothing
-    return gain, rest_col
-
-
-def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
-    """The chooser: every running participant's input, one step ahead (or rest); a_h (A, n)."""
-    t, idx = now.t, now.rows
-    la = study.layout.is_la[idx]
-    phi, dp, new_dir = _foresee(study, run, now, la)
-    gain, rest_col = _values(study, run, idx, la, dp, new_dir)
-    pc, dt = study.config.participant, study.control.dt
-    beta = rationality(study.layout, idx, t, dt, pc)
-    choice, wants = choose(gain, beta, study.streams, idx, run.waited, dt, pc)
+    pc = study.config.participant
+    choice, wants = choose(gain, study.layout, idx, now.t, study.streams, run.waited, dt, pc)
     choice = np.where(wants, choice, rest_col)
-    mode, k = choice // len(study.grid), choice % len(study.grid)
+    mode, k = choice // n_k, choice % n_k
     z = study.grid[k]
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
     a_h[la] = human_action(phi[la, k[la]], z[la], rest="zero")

@@ -1,10 +1,7 @@
-r"""Planning participants of the eating study: the one-step participants' people
-(:mod:`lasa.people.participants`), who every ``replan`` seconds choose an input z and a hold h (a
-decoder's good inputs may pay off only when held) by the Boltzmann rule on the progress rate
-:math:`V(z, h) = (C_\text{now} - C_\text{after}(z, h)) / (n\, \Delta t\, v_\text{lin})`, :math:`n =
-\max(\text{presses} + h/\Delta t, \text{replan}/\Delta t)`, latent plans foreseen by rolling the real
-step, Retargeting plans by the promised twist (``docs/method-notes.md``).
-"""
+r"""Planning participants of the eating study: the one-step participants' people, who every ``replan``
+seconds choose an input z and a hold h by the Boltzmann rule on the progress rate :math:`V(z, h) =
+(C_\text{now} - C_\text{after}(z, h)) / (n\, \Delta t\, v_\text{lin})`, :math:`n = \max(\text{presses} +
+h/\Delta t, \text{replan}/\Delta t)`; latent plans rolled by the real step, Retargeting's by its twist."""
 
 from __future__ import annotations
 
@@ -13,7 +10,7 @@ import functools
 
 import numpy as np
 
-from lasa.base.config import ControlConfig, Positive, PositiveInt, validate
+from lasa.base.config import ControlConfig, Positive, PositiveInt, check_list, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import belief
 from lasa.method.decoder import ActionDecoder
@@ -22,7 +19,7 @@ from lasa.method.runner import Now
 from lasa.method.step import Assist, advance, human_action
 from lasa.people.cohort import Cohort
 from lasa.people.design import StudyConfig
-from lasa.people.policy import choose, rationality
+from lasa.people.policy import choose
 from lasa.people.simulation import Setting, State, act, prepare, progress, run_steps, start
 from lasa.world.eating import EatingTask
 from lasa.world.fork import tip_frames
@@ -46,8 +43,7 @@ class PlanConfig:
             raise ConfigError(f"holds must be a non-empty sequence of times in seconds, got {self.holds!r}")
         object.__setattr__(self, "holds", tuple(self.holds))
         validate(self)
-        if any(b <= a for a, b in zip(self.holds, self.holds[1:], strict=False)):
-            raise ConfigError(f"holds must be strictly increasing, got {self.holds!r}")
+        check_list("holds", self.holds, ascending=True)
 
     def steps(self, dt: float) -> tuple[int, np.ndarray]:
         """The re-plan period and the holds in control steps of ``dt``; ConfigError unless each is a whole
@@ -167,8 +163,7 @@ def _plan(study: _Study, run: _Run, now: Now) -> None:
         values[la, :n_la] = _latent_values(study, run, idx[la], now.state[la], now.log_belief[la])
     if (~la).any():
         values[~la] = _retarget_values(study, run, idx[~la])
-    beta = rationality(lay, idx, t, study.control.dt, pc)
-    choice, wants = choose(values, beta, study.streams, idx, run.waited, study.control.dt, pc)
+    choice, wants = choose(values, lay, idx, t, study.streams, run.waited, study.control.dt, pc)
     plan_mode, rem = np.divmod(choice, len(study.moves) * n_h)
     move, hold = np.divmod(rem, n_h)
     run.z_plan[idx] = np.where(wants, study.moves[move], study.rest)
@@ -187,9 +182,8 @@ def _choose(study: _Study, run: _Run, now: Now) -> np.ndarray:
     z = study.grid[np.where(moving, run.z_plan[idx], study.rest)]
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
     if la.any():
-        a_h[la] = human_action(
-            study.decoder.decode_numpy(z[la], now.state[la], now.belief[la]), z[la], rest="zero"
-        )
+        phi = study.decoder.decode_numpy(z[la], now.state[la], now.belief[la])
+        a_h[la] = human_action(phi, z[la], rest="zero")
     act(study, run, now, a_h, z, press, ~press & ~moving)
     run.presses_left[idx] -= press
     run.hold_left[idx] -= moving
@@ -211,12 +205,8 @@ def simulate(
     """:func:`lasa.people.participants.simulate` (the same study, record, random streams and errors)
     with planning participants, who plan as ``plan`` says (:meth:`PlanConfig.steps`)."""
     study = _prepare(prepare(task, decoder, cohort, control, config, seed, interfaces), plan)
-    zeros = np.zeros(len(study.layout.part), dtype=int)
-    run = _Run(
-        **vars(start(study)),
-        z_plan=np.full(len(zeros), study.rest),
-        presses_left=zeros.copy(),
-        hold_left=zeros.copy(),
-    )
-    desc = f"planning study: {len(cohort)} participants, {len(study.layout.part)} episodes"
+    n_e = len(study.layout.part)
+    none_left = {k: np.zeros(n_e, dtype=int) for k in ("presses_left", "hold_left")}
+    run = _Run(**vars(start(study)), z_plan=np.full(n_e, study.rest), **none_left)
+    desc = f"planning study: {len(cohort)} participants, {n_e} episodes"
     return run_steps(study, run, functools.partial(_choose, study, run), desc, progress)

@@ -1,7 +1,6 @@
 r"""How a simulated participant of the eating study chooses an input, however they foresee it: by how
 far it lowers the cost :math:`C = \|p - p^*\| + \ell\, \angle(d, d^*)` to the waypoint, Boltzmann with
-:math:`\beta(t) = \beta_\infty (1 - (1 - \rho) e^{-(E_0 + t\Delta)/\tau})`, or rest.
-"""
+:math:`\beta(t) = \beta_\infty (1 - (1 - \rho) e^{-(E_0 + t\Delta)/\tau})`, or rest."""
 
 from __future__ import annotations
 
@@ -29,28 +28,24 @@ def progress_gain(
     return c_now[:, None] - c_new
 
 
-def rationality(
-    layout: Layout, idx: np.ndarray, t: int, dt: float, participant: ParticipantConfig
-) -> np.ndarray:
-    """beta(t) of the participants of episodes ``idx`` at step t of their task, (A,)."""
-    experience = layout.e0[idx] + t * dt
-    return layout.beta_inf[idx] * (
-        1.0 - (1.0 - participant.novice_fraction) * np.exp(-experience / layout.tau[idx])
-    )
-
-
 def choose(
     values: np.ndarray,
-    beta: np.ndarray,
-    streams: list[np.random.Generator],
+    layout: Layout,
     idx: np.ndarray,
+    t: int,
+    streams: list[np.random.Generator],
     waited: np.ndarray,
     dt: float,
     participant: ParticipantConfig,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The Boltzmann choice (A,) of episodes ``idx`` among candidates worth ``values`` (A, P), each
-    drawing P uniforms from ``streams[e]``, and whether to give it rather than rest (A,): when the
-    best is worth ``idle_threshold``, or after resting (``waited``, (E,) steps) for ``patience``."""
+    """The Boltzmann choice (A,) of episodes ``idx`` at step t of their task, by their participants'
+    beta(t), among candidates worth ``values`` (A, P), each drawing P uniforms from ``streams[e]``, and
+    whether to give it rather than rest (A,): when the best is worth ``idle_threshold``, or after resting
+    (``waited``, (E,) steps) for ``patience``."""
+    experience = layout.e0[idx] + t * dt
+    beta = layout.beta_inf[idx] * (
+        1.0 - (1.0 - participant.novice_fraction) * np.exp(-experience / layout.tau[idx])
+    )
     uniforms = np.stack([streams[e].random(values.shape[1]) for e in idx])
     choice = choose_latent(-values, beta, gumbel_noise(uniforms))
     patience_steps = max(1, round(participant.patience / dt))

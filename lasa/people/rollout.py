@@ -76,8 +76,7 @@ def rollout(
     """Run Algorithm 1 for ``horizon`` steps of a batch of simulated users, blended by ``alpha`` (per
     user (U,) or one), each user u drawing from uniforms ``noise[users.user[u]]`` in (0, 1), (N, T, K)
     for K joystick candidates, and as pilots from ``pilot_noise`` (N, T, 2)
-    (:func:`lasa.people.users.pilot_choice`); ``assistance``: each user's member (default the control's).
-    """
+    (:func:`lasa.people.users.pilot_choice`); ``assistance``: each user's member (default the control's)."""
     check_decoder(decoder, task)
     check_horizon(horizon)
     n_users, k = len(users), control.n_z**decoder.z_dim
@@ -92,8 +91,7 @@ def rollout(
     chooser = BoltzmannUsers(decoder, users, control, horizon, noise, pilot_noise if piloted else None)
     alphas = np.broadcast_to(np.asarray(alpha, dtype=float), (n_users,))
     start = np.broadcast_to(task.start, (n_users, task.robot.n_joints))
-    runner = Runner(
-        Assist(task, control, alphas, assistance), start, uniform_log_belief(n_users, task.n_goals)
-    )
+    assist = Assist(task, control, alphas, assistance)
+    runner = Runner(assist, start, uniform_log_belief(n_users, task.n_goals))
     record = runner.run(chooser, horizon, progress=progress, desc=f"rollout {n_users} users")
     return Trajectories(record.states, record.beliefs, chooser.z, record.human_actions, record.actions)

@@ -1,7 +1,6 @@
 """The simulated eating study's driver, whichever participant model chooses: the same episodes
 (:func:`lasa.people.design.layout`), each with its stream ``default_rng([seed, participant, condition,
-task])`` (the SA members' paired), waypoints tracked, the record kept, the episode runner stepping them.
-"""
+task])`` (the SA members' paired), waypoints tracked, the record kept, the episode runner stepping them."""
 
 from __future__ import annotations
 
@@ -109,22 +108,14 @@ def prepare(
 
 def start(setting: Setting) -> State:
     """Every episode at the task's start, nothing recorded yet."""
-    n_e, horizon = len(setting.layout.part), setting.config.horizon
-    n = setting.task.robot.n_joints
-    zeros = np.zeros(n_e, dtype=int)
+    n_e, horizon, n = len(setting.layout.part), setting.config.horizon, setting.task.robot.n_joints
     return State(
-        mode=zeros.copy(),
-        w=zeros.copy(),
-        waited=zeros.copy(),
-        pos=np.zeros((n_e, 3)),
-        axis=np.zeros((n_e, 3)),
-        jp=np.zeros((n_e, 3, n)),
-        jr=np.zeros((n_e, 3, n)),
-        tip=np.empty((horizon + 1, n_e, 3)),
-        direction=np.empty((horizon + 1, n_e, 3)),
+        **{k: np.zeros(n_e, dtype=int) for k in ("mode", "w", "waited")},
+        **{k: np.zeros((n_e, 3)) for k in ("pos", "axis")},
+        **{k: np.zeros((n_e, 3, n)) for k in ("jp", "jr")},
+        **{k: np.empty((horizon + 1, n_e, 3)) for k in ("tip", "direction")},
         phase=np.zeros((horizon + 1, n_e), dtype=int),
-        idle=np.zeros((horizon, n_e), dtype=bool),
-        switch=np.zeros((horizon, n_e), dtype=bool),
+        **{k: np.zeros((horizon, n_e), dtype=bool) for k in ("idle", "switch")},
     )
 
 
@@ -174,11 +165,7 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
         task=np.asarray(TASK_NAMES)[lay.tsk],
         order=lay.order,
         states=record.states,
-        tip=state.tip,
-        direction=state.direction,
-        phase=state.phase,
-        idle=state.idle,
-        switch=state.switch,
+        **{k: getattr(state, k) for k in ("tip", "direction", "phase", "idle", "switch")},
         end=record.end,
         completed=record.end < setting.config.horizon,
         dt=setting.control.dt,

@@ -1,7 +1,6 @@
 r"""Simulated users: Boltzmann-rational joystick choices (Eq. S1), by Gumbel-max on their own draws,
 :math:`p(z) \propto \exp\{-\beta(t) \|s^* - (s + \Delta\,\phi(z, s, b))\|^2\}`, :math:`\beta(t) =
-\beta_0 + m t`, their goal maybe changing at step N; :data:`PILOTS` adds laggy and noisy pilots.
-"""
+\beta_0 + m t`, their goal maybe changing at step N; :data:`PILOTS` adds laggy and noisy pilots."""
 
 from __future__ import annotations
 
@@ -9,7 +8,7 @@ import dataclasses
 
 import numpy as np
 
-from lasa.base.config import check_choice
+from lasa.base.config import check_choice, check_range
 from lasa.base.errors import ConfigError
 
 PILOTS = ("boltzmann", "laggy", "noisy")
@@ -26,8 +25,7 @@ class UserPopulation:
         user: Each user's index, which picks their draws from the noise, (U,) (the CSVs' ``seed``).
         first_target, change_step: The pose each user aims at before step N, and N, (U, n) and (U,)
             (``None``: users who never change their mind).
-        pilot, pilot_prob: The kind of all users (:data:`PILOTS`) and p of a laggy or noisy pilot [-].
-    """
+        pilot, pilot_prob: The kind of all users (:data:`PILOTS`) and p of a laggy or noisy pilot [-]."""
 
     goal: np.ndarray
     theta: np.ndarray
@@ -42,8 +40,7 @@ class UserPopulation:
 
     def __post_init__(self) -> None:
         check_choice("pilot", self.pilot, PILOTS)
-        if not 0.0 <= self.pilot_prob <= 1.0:
-            raise ConfigError(f"pilot_prob must be in [0, 1], got {self.pilot_prob!r}")
+        check_range("pilot_prob", self.pilot_prob, 0.0, 1.0)
         for name, value in self._rows().items():
             if value is not None and len(value) != len(self.goal):
                 raise ConfigError(f"UserPopulation.{name} has {len(value)} rows, expected {len(self.goal)}")
@@ -85,9 +82,8 @@ def user_costs(target: np.ndarray, state: np.ndarray, phi: np.ndarray, dt: float
     """||s* - (s + dt phi(z))||^2, (U, K), for targets and states (U, n) and candidates' phi (U, K, n)."""
     offset = (target - state)[:, None, :]
     diff = dt * phi
-    if diff.shape == np.broadcast_shapes(offset.shape, diff.shape) and diff.dtype == np.result_type(
-        offset, diff
-    ):
+    same_shape = diff.shape == np.broadcast_shapes(offset.shape, diff.shape)
+    if same_shape and diff.dtype == np.result_type(offset, diff):
         np.subtract(offset, diff, out=diff)  # the same difference, without a second buffer
     else:
         diff = offset - diff

@@ -2,8 +2,7 @@ r"""The eating task of the paper's user study (Sec. VI): the Panda's fork over t
 
 A preference is a tilt :math:`\theta \in [0, 1]`: the fork turns by :math:`\psi = \theta\,\psi_{max}`
 from pointing down towards a sideways r; strokes run 5 cm along m(theta), ending 1 cm into the food
-(:func:`fork_frame`). Tasks are phases, each with its waypoints. Why: ``docs/method-notes.md``.
-"""
+(:func:`fork_frame`). Tasks are phases, each with its waypoints. Why: ``docs/method-notes.md``."""
 
 from __future__ import annotations
 
@@ -160,12 +159,9 @@ class EatingTask(GoalTask):
     def pose(self, goal: int, theta: float | np.ndarray, depth: float | np.ndarray) -> np.ndarray:
         """s*(g, theta, u), shape (..., n): cubic in theta (as :meth:`target`), linear in depth
         between the solved depths; ``theta`` and ``depth`` broadcast."""
-        theta_arr, depth_arr = np.broadcast_arrays(
-            np.asarray(theta, dtype=float), np.asarray(depth, dtype=float)
-        )
-        if depth_arr.size:
-            check_range("depth", float(depth_arr.min()), 0.0, 1.0)
-            check_range("depth", float(depth_arr.max()), 0.0, 1.0)
+        theta_arr, depth_arr = np.broadcast_arrays(np.asarray(theta, float), np.asarray(depth, float))
+        if not np.all((depth_arr >= 0.0) & (depth_arr <= 1.0)):  # NaN too
+            raise ConfigError(f"depth must be in [0, 1], got {depth}")
         th, u = theta_arr.ravel(), depth_arr.ravel()
         grid = self.depth_grid
         k = np.clip(np.searchsorted(grid, u, side="right") - 1, 0, len(grid) - 2)
@@ -208,21 +204,10 @@ def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
             label = f"goal {GOALS[g]!r}, theta = {theta:.3f}"
             for d, u in enumerate(us):
                 where = f"{label}, depth u = {u:.3f}" if d else label
-                strokes[g, k, d] = solve_grasp_ik(
-                    robot, *fork_frame(robot, g, theta, u), strokes[g, k, d - 1] if d else q, label=where
-                )
+                q = strokes[g, k, d] = solve_grasp_ik(robot, *fork_frame(robot, g, theta, u), q, label=where)
             q = strokes[g, k, 0]
     curves = strokes[:, :, 0].copy()
-    return EatingTask(
-        robot=robot,
-        goal_names=GOALS,
-        theta_grid=thetas,
-        curves=curves,
-        goals=curves[:, n_theta // 2].copy(),
-        start=robot.home,
-        depth_grid=us,
-        strokes=strokes,
-    )
+    return EatingTask(robot, GOALS, thetas, curves, curves[:, n_theta // 2].copy(), robot.home, us, strokes)
 
 
 def waypoints(task: str) -> list[Waypoint]:

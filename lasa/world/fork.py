@@ -38,8 +38,7 @@ def tip_motion(
     jp: np.ndarray, jr: np.ndarray, axis: np.ndarray, dq: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """The tip's displacements (A, K, 3) [m] and new unit directions (A, K, 3) for joint steps ``dq``
-    (A, K, n) [rad], to first order, from Jacobians ``jp``, ``jr`` (A, 3, n) and direction ``axis`` (A, 3).
-    """
+    (A, K, n) [rad], to first order, from Jacobians ``jp``, ``jr`` (A, 3, n) and direction ``axis`` (A, 3)."""
     dp = np.einsum("aij,akj->aki", jp, dq)
     rot = np.einsum("aij,akj->aki", jr, dq)
     return dp, normalise(axis[:, None, :] + np.cross(rot, axis[:, None, :]))
@@ -53,8 +52,7 @@ class WaypointTracker:
     Attributes:
         position, direction: The waypoints' tip positions [m] and fork directions, (T, W, 3) each.
         phase: Each waypoint's phase, (T, W); count: each task's waypoints, (T,).
-        position_tol, angle_tol: Reached this close [m] with the fork's direction this close [rad].
-    """
+        position_tol, angle_tol: Reached this close [m] with the fork's direction this close [rad]."""
 
     position: np.ndarray
     direction: np.ndarray

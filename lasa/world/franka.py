@@ -1,7 +1,6 @@
 r"""Franka's official Panda conventions, the yardstick our ``panda`` is checked against: the modified
 (Craig) Denavit-Hartenberg table, :math:`T_i = R_x(\alpha_{i-1}) T_x(a_{i-1}) R_z(\theta_i) T_z(d_i)`,
-flange and TCP offsets, joint limits, "ready" pose, and the ``gymnasium-robotics`` Panda's chain.
-"""
+flange and TCP offsets, joint limits, "ready" pose, and the ``gymnasium-robotics`` Panda's chain."""
 
 from __future__ import annotations
 
@@ -41,15 +40,11 @@ def _rot_x(a: float) -> np.ndarray:
     return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1.0]])
 
 
-def _about_z(a: float) -> np.ndarray:
-    """R_z(a) as a 4 x 4 transform."""
+def _transform(rotation: np.ndarray | None = None, x: float = 0.0, z: float = 0.0) -> np.ndarray:
+    """The 4 x 4 transform of ``rotation`` (3, 3; None: none) and the translation (x, 0, z)."""
     t = np.eye(4)
-    t[:3, :3] = rot_z(a)
-    return t
-
-
-def _trans(x: float = 0.0, z: float = 0.0) -> np.ndarray:
-    t = np.eye(4)
+    if rotation is not None:
+        t[:3, :3] = rotation
     t[0, 3], t[2, 3] = x, z
     return t
 
@@ -62,19 +57,17 @@ def dh_frames(q: np.ndarray) -> dict[str, np.ndarray]:
     frames: dict[str, np.ndarray] = {}
     t = np.eye(4)
     for i, ((a, d, alpha), theta) in enumerate(zip(DH, q, strict=True), start=1):
-        t = t @ _rot_x(alpha) @ _trans(x=a) @ _about_z(theta) @ _trans(z=d)
+        t = t @ _rot_x(alpha) @ _transform(x=a) @ _transform(rot_z(theta)) @ _transform(z=d)
         frames[f"link{i}"] = t
-    frames["flange"] = flange = t @ _trans(z=FLANGE_D)
-    frames["tcp"] = flange @ _about_z(HAND_YAW) @ _trans(z=TCP_D)
+    frames["flange"] = flange = t @ _transform(z=FLANGE_D)
+    frames["tcp"] = flange @ _transform(rot_z(HAND_YAW)) @ _transform(z=TCP_D)
     return frames
 
 
 def packaged_chain() -> mujoco.MjModel:
-    """The Panda chain that ``gymnasium-robotics`` ships, compiled for kinematics only.
-
-    Geoms, inertias and classes are stripped (they need the package's defaults and meshes);
-    bodies, joints and sites are kept exactly. Its site ``end_effector`` is the packaged TCP.
-    """
+    """The Panda chain that ``gymnasium-robotics`` ships, compiled for kinematics only: bodies, joints and
+    sites (``end_effector``: the packaged TCP) exactly, without geoms, inertias and classes (they need the
+    package's defaults and meshes)."""
     root = mesh_dir("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets")
     chain = ET.parse(root / "chain.xml").getroot()
     for parent in list(chain.iter()):
@@ -103,11 +96,7 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
     packaged = packaged_chain()
     pdata = mujoco.MjData(packaged)
     site = robot.model.site(robot.spec.grasp_site).id
-    rows = {name: [0.0, 0.0, 0.0] for name in ("lasa panda", "packaged, same q", "packaged, q - offsets")}
-
-    def rot_err(a: np.ndarray, b: np.ndarray) -> float:
-        return float(np.arccos(np.clip((np.trace(a.T @ b) - 1) / 2, -1.0, 1.0)))
-
+    records = []
     for q in qs:
         ref = dh_frames(q)
         tcp = ref["tcp"]
@@ -116,16 +105,16 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
         frames = max(
             float(np.linalg.norm(ours.body(f"link{i}").xpos - ref[f"link{i}"][:3, 3])) for i in range(1, 8)
         )
-        cases = {"lasa panda": (ours.site_xpos[site].copy(), ours.site_xmat[site].copy(), frames)}
+        cases = [("lasa panda", ours.site_xpos[site].copy(), ours.site_xmat[site].copy(), frames)]
         for name, qq in (("packaged, same q", q), ("packaged, q - offsets", q - PACKAGED_OFFSETS)):
             pdata.qpos[:7] = qq
             mujoco.mj_kinematics(packaged, pdata)
             s = pdata.site("end_effector")
-            cases[name] = (s.xpos.copy(), s.xmat.copy(), float("nan"))
-        for name, (pos, mat, fr) in cases.items():
-            row = rows[name]
-            row[0] = max(row[0], float(np.linalg.norm(pos - tcp[:3, 3])))
-            row[1] = max(row[1], rot_err(mat.reshape(3, 3), tcp[:3, :3]))
-            row[2] = fr if np.isnan(fr) else max(row[2], fr)
+            cases.append((name, s.xpos.copy(), s.xmat.copy(), float("nan")))
+        for name, pos, mat, fr in cases:
+            cos = (np.trace(mat.reshape(3, 3).T @ tcp[:3, :3]) - 1) / 2
+            rot_err = float(np.arccos(np.clip(cos, -1.0, 1.0)))
+            records.append((name, float(np.linalg.norm(pos - tcp[:3, 3])), rot_err, fr))
     columns = ("max_tcp_position_error_m", "max_tcp_rotation_error_rad", "max_frame_position_error_m")
-    return pd.DataFrame([{"model": k, **dict(zip(columns, v, strict=True))} for k, v in rows.items()])
+    frame = pd.DataFrame(records, columns=("model", *columns))
+    return frame.groupby("model", sort=False, as_index=False).max()

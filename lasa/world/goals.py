@@ -1,7 +1,6 @@
 r"""The goal task: a robot, G >= 2 goals, and at each goal the desired final poses :math:`s^*(g, \theta)`,
 solved by IK on a grid of preferences theta in [0, 1] and interpolated by cubic splines. Subclasses:
-:class:`lasa.world.task.CupTask`, :class:`lasa.world.eating.EatingTask`, a new task's.
-"""
+:class:`lasa.world.task.CupTask`, :class:`lasa.world.eating.EatingTask`, a new task's."""
 
 from __future__ import annotations
 
@@ -23,8 +22,7 @@ class GoalTask:
         goal_names: Names of the goals, in goal order.
         theta_grid: Preferences at which IK was solved, shape (K,); ``curves`` s*(g, theta) on it, (G, K, n).
         goals: The goals g in joint space, the mid-preference poses (what Eq. M2 pulls towards), (G, n).
-        start: Start pose of every episode, shape (n,) [rad].
-    """
+        start: Start pose of every episode, shape (n,) [rad]."""
 
     robot: Robot
     goal_names: tuple[str, ...]
@@ -41,8 +39,7 @@ class GoalTask:
     @property
     def goal_distance(self) -> float:
         """Largest joint-space distance between two goals: the paper's error normaliser."""
-        diff = self.goals[:, None, :] - self.goals[None, :, :]
-        return float(np.linalg.norm(diff, axis=-1).max())
+        return float(np.linalg.norm(self.goals[:, None, :] - self.goals[None, :, :], axis=-1).max())
 
     @property
     def preference_sets(self) -> np.ndarray:
@@ -53,11 +50,9 @@ class GoalTask:
         """Desired final poses s*(g, theta), shape (..., n), for goal indices and preferences in [0, 1]
         that broadcast."""
         goal_arr, theta_arr = np.broadcast_arrays(np.asarray(goal), np.asarray(theta, float))
-        if goal_arr.size and (goal_arr.min() < 0 or goal_arr.max() >= self.n_goals):
+        if not np.all((goal_arr >= 0) & (goal_arr < self.n_goals)):
             raise ConfigError(f"goal index must be in [0, {self.n_goals}), got {goal}")
-        if theta_arr.size and (
-            not np.all(np.isfinite(theta_arr)) or theta_arr.min() < 0 or theta_arr.max() > 1
-        ):
+        if not np.all((theta_arr >= 0) & (theta_arr <= 1)):  # NaN too
             raise ConfigError(f"theta must be in [0, 1], got {theta}")
         out = np.empty((*goal_arr.shape, self.robot.n_joints))
         for g in range(self.n_goals):

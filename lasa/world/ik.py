@@ -3,7 +3,6 @@ light posture task that picks one solution out of the arm's redundancy, the join
 
 from __future__ import annotations
 
-import dataclasses
 import weakref
 
 import mink
@@ -12,25 +11,16 @@ import numpy as np
 from lasa.base.errors import IKError
 from lasa.world.robot import Robot
 
-
-@dataclasses.dataclass(frozen=True)
-class _Solver:
-    """mink's objects for one robot, made once (they cost more than a solve); reuse changes no result:
-    a solve sets every joint (from ``qpos0``) and each task's target first."""
-
-    configuration: mink.Configuration
-    frame: mink.FrameTask
-    posture: mink.PostureTask
-    limits: list[mink.ConfigurationLimit]
-
-
+_Solver = tuple[mink.Configuration, mink.FrameTask, mink.PostureTask, list[mink.ConfigurationLimit]]
 _SOLVERS: weakref.WeakKeyDictionary[Robot, _Solver] = weakref.WeakKeyDictionary()
 DT, DAMPING = 0.05, 1e-4  # each iteration's step [s] and Levenberg-Marquardt damping
 
 
 def _solver(robot: Robot) -> _Solver:
+    """mink's objects for one robot, made once (they cost more than a solve); reuse changes no result:
+    a solve sets every joint (from ``qpos0``) and each task's target first."""
     if robot not in _SOLVERS:
-        _SOLVERS[robot] = _Solver(
+        _SOLVERS[robot] = (
             mink.Configuration(robot.model),
             mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0),
             mink.PostureTask(robot.model, cost=1e-3),  # light, relative to the frame task
@@ -62,26 +52,20 @@ def solve_grasp_ik(
     """Joint positions (n,), within the limits, that put the grasp site at ``position`` (3,) [m] with
     ``rotation`` (3, 3), the posture task pulling towards ``seed`` (n,) [rad]: accepted within
     ``position_tol`` [m] and ``rotation_tol`` [rad] after at most ``max_iters`` iterations, else IKError,
-    its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``).
-    """
-    solver = _solver(robot)
-    configuration, frame, posture_task = solver.configuration, solver.frame, solver.posture
+    its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``)."""
+    configuration, frame, posture_task, limits = _solver(robot)
     q_full = robot.model.qpos0.copy()  # no state of the last solve
     adr = robot.qpos_adr
     q_full[adr] = robot.clip(np.asarray(seed, dtype=float))
     configuration.update(q_full)
-    frame.set_target(
-        mink.SE3.from_rotation_and_translation(
-            mink.SO3.from_matrix(np.asarray(rotation, dtype=float)),
-            np.asarray(position, dtype=float),
-        )
-    )
+    rotation_so3 = mink.SO3.from_matrix(np.asarray(rotation, dtype=float))
+    frame.set_target(mink.SE3.from_rotation_and_translation(rotation_so3, np.asarray(position, dtype=float)))
     target = q_full.copy()
     target[adr] = seed
     posture_task.set_target(target)
     for _ in range(max_iters):
         velocity = mink.solve_ik(
-            configuration, [frame, posture_task], DT, "daqp", damping=DAMPING, limits=solver.limits
+            configuration, [frame, posture_task], DT, "daqp", damping=DAMPING, limits=limits
         )
         configuration.integrate_inplace(velocity, DT)
         q = configuration.q[adr].copy()

@@ -12,10 +12,8 @@ from lasa.world.robot import Robot
 
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
-    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.
-
-    Per episode [m s], (E,), from ``tip`` (T, E, 3), ``goals`` (G, 3) and the ``active`` steps (T, E).
-    """
+    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt, per
+    episode [m s], (E,), from ``tip`` (T, E, 3), ``goals`` (G, 3) and the ``active`` steps (T, E)."""
     dist = np.linalg.norm(tip[:, :, None, :] - goals[None, None], axis=-1).min(axis=-1)
     return (dist * active).sum(axis=0) * dt
 
@@ -31,11 +29,8 @@ def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
 
 
 def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,).
-
-    ``direction`` (T, E, 3) is the fork's, ``desired`` d(theta) (E, 3) or (T, E, 3), ``mask`` (T, E) the
-    phase's steps.
-    """
+    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,), of the
+    fork's ``direction`` (T, E, 3), ``desired`` d(theta) (E, 3) or (T, E, 3), the phase's ``mask`` (T, E)."""
     dots = np.einsum("tei,tei->te", direction, np.broadcast_to(desired, direction.shape))
     count = mask.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -46,29 +41,20 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
     """The study's tidy tables ``goal_error``, ``time`` and ``alignment``: one row per participant x
     condition x task (x phase for alignment). Goal Error is to the closest of all four goals
     (``goal_error``) or of the three bowls (``goal_error_bowls``); ``mean_distance`` is it over the time."""
-    robot = task.robot
-    goals = robot.goal_positions()
-    active = episodes.active()
-    tip = episodes.tip[:-1]
+    robot, dt, active, tip = task.robot, episodes.dt, episodes.active(), episodes.tip[:-1]
+    goals, bowls = robot.goal_positions(), [i for i, g in enumerate(GOALS) if g != "plate"]
     who = ("participant", "condition", "assistance", "task", "order")
-    keys = {"robot": robot.name, **{k: getattr(episodes, k) for k in who}}
-    bowls = [i for i, g in enumerate(GOALS) if g != "plate"]
-    error = pd.DataFrame(
-        {
-            **keys,
-            "goal_error": goal_error(tip, goals, active, episodes.dt),
-            "goal_error_bowls": goal_error(tip, goals[bowls], active, episodes.dt),
-        }
+    keys = pd.DataFrame({"robot": robot.name, **{k: getattr(episodes, k) for k in who}})
+    error = keys.assign(
+        goal_error=goal_error(tip, goals, active, dt),
+        goal_error_bowls=goal_error(tip, goals[bowls], active, dt),
     )
-    error["mean_distance"] = error.goal_error / np.maximum(episodes.end * episodes.dt, episodes.dt)
-    time = pd.DataFrame(
-        {
-            **keys,
-            "total_time": total_time(episodes.end, episodes.dt),
-            "idle_time": idle_time(episodes.idle, active, episodes.dt),
-            "mode_switches": (episodes.switch & active).sum(axis=0),
-            "completed": episodes.completed,
-        }
+    error["mean_distance"] = error.goal_error / np.maximum(episodes.end * dt, dt)
+    time = keys.assign(
+        total_time=total_time(episodes.end, dt),
+        idle_time=idle_time(episodes.idle, active, dt),
+        mode_switches=(episodes.switch & active).sum(axis=0),
+        completed=episodes.completed,
     )
     return {"goal_error": error, "time": time, "alignment": _alignment_table(robot, episodes, active)}
 
@@ -83,17 +69,14 @@ def _alignment_table(robot: Robot, episodes: Episodes, active: np.ndarray) -> pd
             pref = PREFERENCES[ph.preference or "stab"]
             desired = fork_direction(robot, GOALS.index(ph.goal), pref.theta)
             mask = (episodes.phase[:-1, cols] == i) & active[:, cols]
-            rows.append(
-                pd.DataFrame(
-                    {
-                        "robot": robot.name,
-                        **{k: getattr(episodes, k)[cols] for k in ("participant", "condition", "assistance")},
-                        "task": name,
-                        "phase": ph.name,
-                        "preference": pref.name,
-                        "alignment": alignment(direction[:, cols], desired, mask),
-                        "steps": mask.sum(axis=0),
-                    }
-                )
-            )
+            row = {
+                "robot": robot.name,
+                **{k: getattr(episodes, k)[cols] for k in ("participant", "condition", "assistance")},
+                "task": name,
+                "phase": ph.name,
+                "preference": pref.name,
+                "alignment": alignment(direction[:, cols], desired, mask),
+                "steps": mask.sum(axis=0),
+            }
+            rows.append(pd.DataFrame(row))
     return pd.concat(rows, ignore_index=True)

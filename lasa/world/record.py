@@ -20,8 +20,7 @@ class Episodes:
         idle, switch: Whether the participant gave no stick input, or switched mode (R), (T, E).
         end: The step each episode ended (the horizon if unfinished), (E,); ``completed`` within it.
         belief: The robot's belief over the goals, (T+1, E, G); waypoint: the one worked towards at
-            the end, (E,) (None: not logged).
-    """
+            the end, (E,) (None: not logged)."""
 
     participant: np.ndarray
     condition: np.ndarray
@@ -42,5 +41,4 @@ class Episodes:
 
     def active(self) -> np.ndarray:
         """(T, E): whether each episode was still running at each step."""
-        steps = np.arange(self.idle.shape[0])[:, None]
-        return steps < self.end[None, :]
+        return np.arange(self.idle.shape[0])[:, None] < self.end[None, :]

@@ -1,8 +1,7 @@
 """Robots: a MuJoCo scene plus the named quantities the goal tasks need.
 
 A :class:`RobotSpec` names what lasa reads from an MJCF scene (:func:`load_robot`); a :class:`Robot`
-is that scene compiled. The state ``s`` is the arm's joint positions [rad]; the action a joint velocity.
-"""
+is that scene compiled. The state ``s`` is the arm's joint positions [rad]; the action a joint velocity."""
 
 from __future__ import annotations
 
@@ -29,15 +28,16 @@ class RobotSpec:
     name: str  # e.g. "planar5"; decoders and checkpoints are made for a robot of this name
     scene: Path  # MJCF scene: the arm, a table, the goals (cups, bowls) and a camera
     joints: tuple[str, ...]  # arm joints, in state order
-    grasp_site: str  # site between the finger tips; local +z is the approach direction
-    goal_sites: tuple[str, ...]  # one site per goal (a cup's grasp centre, a bowl's surface), in goal order
-    camera: str  # fixed camera used for videos
-    home_key: str  # keyframe of the start pose
     top_grasp_rotation: tuple[float, ...]  # 3x3 row-major grasp-site rotation of a top grasp
     grasp_standoff: float  # distance from cup centre to the grasp site [m]
     side_azimuth: float  # side-grasp approach: the radial direction turned this far towards the midline [rad]
     ik_guesses: tuple[tuple[float, ...], ...]  # one joint-space IK guess per cup [rad]
-    control: ControlConfig  # default units of the control loop for this robot
+    grasp_site: str = "grasp"  # site between the finger tips; local +z is the approach direction
+    # one site per goal (a cup's grasp centre, a bowl's surface), in goal order
+    goal_sites: tuple[str, ...] = ("cup_left", "cup_right")
+    camera: str = "front"  # fixed camera used for videos
+    home_key: str = "home"  # keyframe of the start pose
+    control: ControlConfig = ControlConfig()  # default units of the control loop for this robot
     mesh_package: tuple[str, str] | None = None  # (package, folder inside it) holding the meshes
     # cups added after training (Sec. IV-C), built like the first cup: (site name, grasp centre [m])
     extra_cups: tuple[tuple[str, tuple[float, float, float]], ...] = ()
@@ -53,33 +53,23 @@ ROBOTS: MappingProxyType[str, RobotSpec] = MappingProxyType(
             name="planar5",
             scene=ASSETS / "planar5" / "scene.xml",
             joints=("joint1", "joint2", "joint3", "joint4", "joint5"),
-            grasp_site="grasp",
-            goal_sites=("cup_left", "cup_right"),
-            camera="front",
-            home_key="home",
             # Fingers pointing down (-z); the hand's x axis along -x, its y along +y.
             top_grasp_rotation=(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
             grasp_standoff=0.10,
             side_azimuth=0.0,  # in the arm's plane the side grasp points away from the base
             ik_guesses=((-0.9, -0.9, -0.7, -0.3, 0.0), (0.9, 0.9, 0.7, 0.3, 0.0)),
-            # a step moves <= dt * sigma_h = 0.0375 rad, beta = 75 is noisy, 1000 nearly optimal (notebook 04)
-            control=ControlConfig(),
+            # control: a step <= dt sigma_h = 0.0375 rad; beta = 75 is noisy, 1000 near optimal (notebook 04)
         ),
         "panda": RobotSpec(
             name="panda",
             scene=ASSETS / "panda" / "scene.xml",
             joints=tuple(f"joint{i}" for i in range(1, 8)),
-            grasp_site="grasp",
-            goal_sites=("cup_left", "cup_right"),
-            camera="front",
-            home_key="home",
             # Hand pointing down, fingers closing along world y: the TCP frame of the ready pose.
             top_grasp_rotation=(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0),
             grasp_standoff=0.0,  # the TCP at the cup's grasp point: the preference is the orientation
             # each cup approached from its outer side (radially outward flips the wrist; notebook 01)
             side_azimuth=1.5707963267948966,  # pi/2
             ik_guesses=((0.0, -0.7854, 0.0, -2.3562, 0.0, 1.5708, 0.7854),) * 2,  # the ready pose
-            control=ControlConfig(),
             mesh_package=("gymnasium_robotics", "envs/assets/kitchen_franka/franka_assets/meshes"),
         ),
     }
@@ -126,9 +116,8 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         frame.attach_body(tool.worldbody.first_body(), "fork_", "")
     for name, position in spec.extra_cups:  # shaped like the first cup, its site at `position`
         site, geom = mj_spec.site(spec.goal_sites[0]), mj_spec.geom(spec.goal_sites[0])
-        body = mj_spec.worldbody.add_body(
-            name=name, pos=np.asarray(position, dtype=float) - np.asarray(site.pos)
-        )
+        offset = np.asarray(position, dtype=float) - np.asarray(site.pos)
+        body = mj_spec.worldbody.add_body(name=name, pos=offset)
         cylinder = mujoco.mjtGeom.mjGEOM_CYLINDER
         kw = {"size": geom.size, "pos": geom.pos, "rgba": NEW_CUP_RGBA, "contype": 0, "conaffinity": 0}
         body.add_geom(name=name, type=cylinder, **kw)
@@ -199,8 +188,7 @@ def load_robot(robot: str | RobotSpec) -> Robot:
     (the cup, ``size[0]`` its radius; new cups copy it; ``cup_<x>`` names goal ``<x>``); a box geom
     ``table``, a camera ``spec.camera``, a keyframe ``spec.home_key`` (every episode's start, within the
     ranges); ``<compiler angle="radian"/>`` (else MJCF reads ranges, ``euler`` and ``axisangle`` in
-    degrees, a keyframe's ``qpos`` in radians). The spec gives one IK guess per cup and control units.
-    """
+    degrees, a keyframe's ``qpos`` in radians). The spec gives one IK guess per cup and control units."""
     if isinstance(robot, str):
         check_choice("robot", robot, tuple(ROBOTS))
         return Robot(ROBOTS[robot])
@@ -275,12 +263,9 @@ class Robot:
     def grasp_jacobians(
         self, qs: np.ndarray, data: mujoco.MjData | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Grasp-site positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n) at joints ``qs`` (B, n).
-
-        The Jacobian stacks the translational rows over the rotational ones (world frame). An arm
-        that is not a chain of hinges goes through MuJoCo one configuration at a time, writing
-        ``data`` (default: this robot's own).
-        """
+        """Grasp-site positions (B, 3), rotations (B, 3, 3) and Jacobians (B, 6, n), translation over
+        rotation (world frame), at joints ``qs`` (B, n); an arm that is not a chain of hinges goes through
+        MuJoCo one configuration at a time, writing ``data`` (default: this robot's own)."""
         qs = np.asarray(qs, dtype=float).reshape(-1, self.n_joints)
         if self._chain is not None:  # the batch at once (lasa.world.chain)
             return self._chain.site_jacobians(qs)
@@ -318,9 +303,8 @@ class Robot:
             raise ConfigError(f"the scene already has a cup named {name!r}")
         x, y, z = (float(v) for v in np.asarray(position, dtype=float).reshape(3))
         cups = (*self.spec.extra_cups, (name, (x, y, z)))
-        return Robot(
-            dataclasses.replace(self.spec, goal_sites=(*self.spec.goal_sites, name), extra_cups=cups)
-        )
+        spec = dataclasses.replace(self.spec, goal_sites=(*self.spec.goal_sites, name), extra_cups=cups)
+        return Robot(spec)
 
     def xml(self) -> str:
         """The scene as one MJCF document (meshes by absolute path), for a session log to replay."""

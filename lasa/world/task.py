@@ -1,8 +1,7 @@
 r"""The cup task: cups as the goals, and a preference from a top grasp (theta = 0) to a side grasp (1,
 from the base towards the cup, turned towards the midline by ``RobotSpec.side_azimuth``):
 :math:`d(\theta) = \cos\psi \, d_{top} + \sin\psi \, d_{side}`, :math:`\psi = \theta \pi / 2`, the site at
-:math:`p(\theta) = c - \rho \, d(\theta)` (standoff :math:`\rho`).
-"""
+:math:`p(\theta) = c - \rho \, d(\theta)` (standoff :math:`\rho`)."""
 
 from __future__ import annotations
 
@@ -38,8 +37,7 @@ def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.n
     axis = np.cross(top, side)
     r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
     rotation = mink.SO3.exp(axis * psi).as_matrix() @ r_top
-    position = cup - robot.spec.grasp_standoff * approach
-    return position, rotation
+    return cup - robot.spec.grasp_standoff * approach, rotation
 
 
 @dataclasses.dataclass(frozen=True)
