@@ -235,13 +235,13 @@ def _number_text(x: float) -> str:
 def _value_rows(claim: Claim) -> list[dict[str, object]]:
     """The claim's rows of ``claim_values.csv``: its rule's numbers with their intervals, then its facts."""
     head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
-    numbers = [(k, v, claim.intervals.get(k, _NAN)) for k, v in claim.values.items()]
-    out = []
-    for name, value, (low, high) in numbers + [(k, v, _NAN) for k, v in claim.facts.items()]:
-        level = _number_text(claim.level) if math.isfinite(low) and math.isfinite(high) else ""
-        cells = {"value": _number_text(value), "low": _number_text(low), "high": _number_text(high)}
-        out.append(head | {"quantity": name} | cells | {"level": level, "n": claim.n_users})
-    return out
+    return [
+        head
+        | {"quantity": name}
+        | {k: _number_text(getattr(x, k)) for k in ("value", "low", "high")}
+        | {"level": _number_text(x.level) if x.interval else "", "n": x.n}
+        for name, x in numbers_of(claim).items()
+    ]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -251,22 +251,28 @@ class PaperClaim:
     id: str  # the headline row's id in claims.csv
     claim: str  # the claim, in the paper's words
     paper: str  # the paper's number
-    notebook: str  # the notebook (file stem) that measures it
     short: str  # the claim in a few words, for the README's summary
     # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
     # writes each result sentence from the rows' numbers: lasa.evidence.findings)
     mechanism: str = ""
     why: str = ""  # why it does not reproduce where it does not, in a few words (the summary's)
-    section: str = "What it shows, against the paper"  # its section that explains the mechanism
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
 
 
+# the notebook (file stem) that measures a figure's claims, and its section that explains the mechanisms
+_NOTEBOOKS = {
+    "sim1": "04_fixed_expertise",
+    "sim2": "05_changing_goals",
+    "sim3": "06_learning_users",
+    "sim4": "07_new_goals",
+    "study": "11_eating_study",
+}
+_MECHANISMS = "#what-it-shows-against-the-paper"
 PAPER_CLAIMS: tuple[PaperClaim, ...] = (
     PaperClaim(
         "sim1.final_error",
         "shared autonomy reduces the final state error (Fig. sim1)",
         "LA+SA below LA at every beta",
-        "04_fixed_expertise",
         "SA lowers the final error (sim1)",
         "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "Eq. M2 pulls towards the mid-preference grasp",
@@ -275,7 +281,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.time_ratio",
         "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
         "time ratio 1.45 and 1.30",
-        "04_fixed_expertise",
         "LA is slower than LA+SA (sim1)",
         "the pull is largest far from the goal",
     ),
@@ -283,14 +288,12 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.gap_narrows",
         "the gap between LA and LA+SA narrows as the user becomes more rational",
         "45% at beta = 75 -> 30% at beta = 1000",
-        "04_fixed_expertise",
         "the LA/LA+SA gap narrows with rationality (sim1)",
     ),
     PaperClaim(
         "sim1.entropy_sa",
         "shared autonomy helps with or without the entropy term",
         "LA+SA and LA+SA+Entropy below LA",
-        "04_fixed_expertise",
         "SA helps with and without entropy (sim1)",
         "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "Eq. M2 pulls to the mid grasp",
@@ -299,7 +302,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim2.sa_trapped",
         "with LA+SA, a user who changes their mind late is stuck at the first goal",
         "final error grows, confidence falls with N",
-        "05_changing_goals",
         "a late change of mind is stuck with LA+SA (sim2)",
         "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
     ),
@@ -307,7 +309,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim2.entropy_escapes",
         "the entropy term lets users change their mind",
         "LA+SA+Entropy reaches the new goal",
-        "05_changing_goals",
         "entropy lets users change their mind (sim2)",
         "Eq. T6 keeps some input leading to each goal at every belief",
     ),
@@ -315,7 +316,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim3.entropy_learners",
         "entropy improves in-task performance for fast and slow learners",
         "LA+SA+Entropy below LA+SA over time",
-        "06_learning_users",
         "entropy helps learning users (sim3)",
         "a learner's early random inputs commit the belief; entropy lets them undo it",
     ),
@@ -323,7 +323,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "07_new_goals",
         "with the map, the error grows linearly with distance (sim4)",
         "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "the straight-line map misses the new cup's grasps by a margin",
@@ -332,7 +331,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.grasp_linear",
         "the same, with our grasp-to-grasp context map (not the paper's)",
         "y = 0.11x, R^2 = 0.98",
-        "07_new_goals",
         "our grasp-to-grasp map (sim4)",
         "the grasp-to-grasp map is exact at every grasp",
         ours=True,
@@ -341,7 +339,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "07_new_goals",
         "without the map, the robot reaches the training goal (sim4)",
         "without the map the robot reaches for the training cup; some users' belief ends on the other one",
     ),
@@ -349,28 +346,24 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h1",
         "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
         "F(1,18) = 29.9, p < .001",
-        "11_eating_study",
         "H1, SA keeps the goal (study)",
     ),
     PaperClaim(
         "study.h2",
         "H2: latent actions let users execute their preferences (Dessert, scoop)",
         "LA+SA adjusts to scoop; R+SA stays stabbing",
-        "11_eating_study",
         "H2, LA lets users scoop (study)",
     ),
     PaperClaim(
         "study.h3",
         "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
         "LA+SA fastest, p < .05 vs each",
-        "11_eating_study",
         "H3, LA+SA is fastest (study)",
     ),
     PaperClaim(
         "study.likert",
         "H3, subjective: users rate LA+SA above the other conditions (Fig. dessert, Likert)",
         "LA+SA higher, t-tests p < .05",
-        "11_eating_study",
         "H3's Likert ratings (study)",
         "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
     ),
@@ -401,10 +394,8 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     if row.figure == "study":
         effect = study_effect(str(row.id), numbers)
         if row.effect == NOT_TESTABLE:
-            short = short_conditions(numbers)
-            why = f" (completion: {completion_text(short)})" if short else f" ({_untestable_why(row)})"
             seen = f"; measured, not judged: {effect}" if effect else ""
-            return f"{head}{why}, N = {row.n_users}{seen}"
+            return f"{head} ({_untestable_why(row, numbers)}), N = {row.n_users}{seen}"
         said = [effect] if effect else []
     else:
         r = RULES.get(str(row.id).split("@", 1)[0])
@@ -424,21 +415,19 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     return "; ".join([f"**{head}**" if bold else head, *said]) + f", N = {row.n_users}{settled}"
 
 
-def _heads(table: pd.DataFrame) -> list[pd.Series]:
+def _heads(table: pd.DataFrame) -> tuple[list[str], int, str]:
+    """The headline rows' effect words, how many numbers they state and ``1 in, 4 out, ...``."""
     rows = _by_key(table)
-    return [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
-
-
-def _numbers_said(table: pd.DataFrame) -> tuple[int, str]:
-    numbers = [w for r in _heads(table) for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
-    return len(numbers), ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    heads = [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
+    numbers = [w for r in heads for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
+    stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    return [str(r.effect) for r in heads], len(numbers), stated
 
 
 def count_line(table: pd.DataFrame) -> str:
     """``Of 21 paper claims × robot, the effect: 8 reproduced, ...; of the 5 numbers ...: 1 in, ...``."""
-    effects = [str(r.effect) for r in _heads(table)]
+    effects, n, stated = _heads(table)
     counts = ", ".join(f"{effects.count(w)} {w}" for w in WORDS)
-    n, stated = _numbers_said(table)
     return (
         f"Of {len(effects)} paper claims × robot, the effect: {counts}. Of the {n} numbers "
         f"the paper states, on the robot it states them for (the Panda), the number: {stated}."
@@ -516,10 +505,10 @@ def render_verdicts(
         cells = [_cell(rows.get((pc.id, r)), values.get((pc.id, r), {})) for r in ROBOTS]
         if cells == ["—", "—"]:
             continue
-        anchor = pc.section.lower().replace(",", "").replace(" ", "-")
-        target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
+        notebook = _NOTEBOOKS[pc.id.split(".", 1)[0]]
+        target = link(notebook) if link is not None else f"notebooks/{notebook}.ipynb"
         said = "; ".join(s for s in (finding(pc.id, values, ROBOTS), pc.mechanism) if s)
-        mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
+        mech = " ".join(s for s in (said, f"([{notebook[:2]}]({target}{_MECHANISMS}))") if s)
         flipped, n = flips(rows, pc.id)
         listed = f" ([list]({claims_md}#{pc.id.replace('.', '').lower()}))" if flipped else ""
         count = f"{len(flipped)} of {n}{listed}" if n else "none"
@@ -548,9 +537,8 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
             if w == "not reproduced" and why:
                 said += f": {why.replace('; ', ', ')}"
             if w == NOT_TESTABLE:
-                short = short_conditions(values.get((pc.id, robots[0]), {}))
-                done = f"completion {completion_text(short)} within the horizon" if short else ""
-                said += f": {done or _untestable_why(rows[(pc.id, robots[0])])}"
+                row, numbers = rows[(pc.id, robots[0])], values.get((pc.id, robots[0]), {})
+                said += f": {_untestable_why(row, numbers, 'completion {} within the horizon')}"
             by_word.setdefault(w, []).append(said)
     lines = [
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
@@ -558,13 +546,15 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     ]
     listed = [(w, by_word[w]) for w in WORDS if w in by_word]
     lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
-    n, stated = _numbers_said(table)
+    _, n, stated = _heads(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"
 
 
-def _untestable_why(row: pd.Series) -> str:
-    """Why a headline row is not testable, in a line: its ``measured`` when that says why."""
+def _untestable_why(row: pd.Series, numbers: Numbers, completion: str = "completion: {}") -> str:
+    """Why a headline row is not testable: its short conditions' ``completion``, else its ``measured``'s."""
+    if short := short_conditions(numbers):
+        return completion.format(completion_text(short))
     if str(row.measured).startswith(f"{NOT_TESTABLE} (") and "completion" not in str(row.measured):
         return str(row.measured)[len(NOT_TESTABLE) + 2 :].split(")", 1)[0]
     return "too few episodes finish within the horizon"
@@ -598,7 +588,6 @@ if __name__ == "__main__":
     verdicts = write_verdicts(csv, csv.with_name("verdicts.md"))
     if len(sys.argv) == 2:  # an OUT= or QUICK run: its verdicts.md beside its claims, no README
         print(f"{verdicts} written")
-        raise SystemExit(0)
-    readme = Path(sys.argv[1])
-    changed = sync_readme(readme, verdicts)
-    print(f"{verdicts} written; {readme}: verdict table {'updated' if changed else 'already current'}")
+    else:
+        said = "updated" if sync_readme(sys.argv[1], verdicts) else "already current"
+        print(f"{verdicts} written; {Path(sys.argv[1])}: verdict table {said}")
