@@ -103,17 +103,23 @@ def pairwise(
     pairs: Sequence[tuple[str, str]] | None = None,
     correction: str = "holm",
 ) -> pd.DataFrame:
-    """Paired t-tests between conditions on per-participant values (``agg``: ``"mean"`` or ``"sum"`` over
-    tasks), corrected across the ``pairs`` (default all 6 of :data:`CONDITIONS`) by a ``multipletests`` method
-    or ``"none"`` (pairs whose p is not finite are left out). Returns one row per pair: ``a``, ``b``,
-    ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t`` (positive when ``a`` is larger), ``df``
-    (N-1), ``p_unc``, ``p_corr``, ``correction``; a ConfigError for invalid data, ``agg``, pair or correction,
-    or a participant missing a compared condition."""
-    chosen = _chosen_pairs(pairs)
+    """Paired t-tests between conditions on per-participant values (``agg`` over tasks), corrected across
+    the ``pairs`` (default all 6) by a ``multipletests`` method or ``"none"`` (non-finite p left out): per
+    pair ``a``, ``b``, ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t`` (positive when ``a``
+    is larger), ``df`` (N-1), ``p_unc``, ``p_corr``, ``correction``."""
+    chosen = [tuple(pair) for pair in (combinations(CONDITIONS, 2) if pairs is None else pairs)]
+    if not chosen:
+        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
+    for pair in chosen:
+        if len(pair) != 2:
+            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
+        for condition in pair:
+            factors(condition)
+        if pair[0] == pair[1]:
+            raise ConfigError(f"pair {pair!r} compares a condition with itself")
     used = [c for c in CONDITIONS if any(c in pair for pair in chosen)]
     cells = condition_cells(frame, measure, agg, used)
     wide = cells.pivot(index="participant", columns="condition", values=measure)
-
     rows = []
     for a, b in chosen:
         x, y = wide[a].to_numpy(dtype=float), wide[b].to_numpy(dtype=float)
@@ -127,45 +133,25 @@ def pairwise(
     return out
 
 
-def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
-    chosen = [tuple(pair) for pair in (combinations(CONDITIONS, 2) if pairs is None else pairs)]
-    if not chosen:
-        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
-    for pair in chosen:
-        if len(pair) != 2:
-            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
-        for condition in pair:
-            factors(condition)
-        if pair[0] == pair[1]:
-            raise ConfigError(f"pair {pair!r} compares a condition with itself")
-    return chosen
-
-
 def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
-    p_corr = p_unc.copy()
-    if correction != "none":
-        finite = np.isfinite(p_unc)
-        if finite.any():
-            try:
-                p_corr[finite] = _multipletests(p_unc[finite], correction)
-            except ValueError as error:
-                raise ConfigError(
-                    f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
-                ) from error
-    return p_corr
-
-
-def _multipletests(p: np.ndarray, method: str) -> np.ndarray:
-    """statsmodels' corrected p-values with the objects alive here frozen (and thawed after): its Holm
-    branch calls ``gc.collect()`` each time, which scans every object of a large process."""
+    """The finite ``p_unc`` corrected by ``correction``, the live objects frozen meanwhile (and thawed
+    after): statsmodels' Holm branch calls ``gc.collect()``, which scans every object of a large process."""
+    p_corr, finite = p_unc.copy(), np.isfinite(p_unc)
+    if correction == "none" or not finite.any():
+        return p_corr
     already = gc.get_freeze_count() > 0
     if not already:
         gc.freeze()
     try:
-        return np.asarray(multipletests(p, method=method)[1])
+        p_corr[finite] = np.asarray(multipletests(p_unc[finite], method=correction)[1])
+    except ValueError as error:
+        raise ConfigError(
+            f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
+        ) from error
     finally:
         if not already:
             gc.unfreeze()
+    return p_corr
 
 
 def paired_bootstrap(

@@ -37,11 +37,9 @@ _BITEXACT_ARGS = (
 )  # fmt: skip
 
 
-def render_states(
-    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, camera: str | None = None
-) -> np.ndarray:
-    """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from
-    ``camera`` (default the robot's video camera); height and width even."""
+def render_states(robot: Robot, states: np.ndarray, height: int = 240, width: int = 320) -> np.ndarray:
+    """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from the
+    robot's video camera; height and width even."""
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
     states = np.atleast_2d(states)
@@ -51,7 +49,7 @@ def render_states(
         for i, q in enumerate(states):
             data.qpos[robot.qpos_adr] = q
             mujoco.mj_forward(robot.model, data)
-            renderer.update_scene(data, camera=camera or robot.spec.camera)
+            renderer.update_scene(data, camera=robot.spec.camera)
             frames[i] = renderer.render()
     return frames
 
