@@ -100,7 +100,8 @@ class Claim:
     @property
     def stated(self) -> tuple[PaperNumber, ...]:
         """The numbers the paper states for this claim on its robot (its rule's)."""
-        return _stated(self.judged_by, self.robot)
+        r = self.judged_by
+        return tuple(p for p in r.paper if p.robot == self.robot) if r is not None else ()
 
 
 # what a notebook shows of its claims (claims_frame): the row, its member, its evidence, its verdict
@@ -113,13 +114,10 @@ def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFra
     return pd.DataFrame([c.__dict__ for c in claims], columns=columns)
 
 
-def _stated(r: Rule | None, robot: str) -> tuple[PaperNumber, ...]:
-    return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
-
-
 def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
     """The numbers the paper states for a paper claim on ``robot`` (none for another robot)."""
-    return _stated(RULES.get(claim_id.split("@", 1)[0]), robot)
+    r = RULES.get(claim_id.split("@", 1)[0])
+    return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
 
 
 def criteria(claim: Claim) -> dict[str, str]:
@@ -194,10 +192,9 @@ def render_markdown(frame: pd.DataFrame) -> str:
 
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
-    """Replace every row of these claims' (figure, robot) pairs in the CSV at ``path`` (and in
-    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal, and
-    return the whole table, ordered by figure, robot and id (a ConfigError if two claims share an (id,
-    robot), or the file has other columns)."""
+    """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``, ``claim_values.csv``
+    and the ``.md`` twin, under the folder lock and the run's write journal; return the whole table, by
+    figure, robot and id (a ConfigError if two claims share an (id, robot), or a file has other columns)."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
     if dup := new.loc[new.duplicated(["id", "robot"]), "id"].tolist():
@@ -398,8 +395,7 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
             return f"{head} ({_untestable_why(row, numbers)}), N = {row.n_users}{seen}"
         said = [effect] if effect else []
     else:
-        r = RULES.get(str(row.id).split("@", 1)[0])
-        paper = _stated(r, str(row.robot))
+        r, paper = RULES.get(str(row.id).split("@", 1)[0]), paper_numbers_of(str(row.id), str(row.robot))
         said = [
             f"{p.value:g} {w}: {_interval_text(numbers[p.quantity])}"
             for p, w in zip(paper, str(row.number).split("; "), strict=False)
@@ -492,9 +488,8 @@ def render_verdicts(
     link: Callable[[str], str] | None = None,
     claims_md: str = "figures/claims.md",
 ) -> str:
-    """The verdict table of ``table`` (``claims.csv`` as strings) and its ``values``: one row per paper
-    claim, both robots side by side, our additions apart; ``link`` maps a notebook stem to its page
-    (default ``notebooks/<stem>.ipynb``), ``claims_md`` is where the readings that flip a claim are."""
+    """The verdict table of ``table`` (``claims.csv`` as strings) and its ``values``, a row per paper claim;
+    ``link`` maps a notebook stem to its page, ``claims_md`` is where the readings that flip a claim are."""
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
@@ -521,15 +516,13 @@ def render_verdicts(
 
 
 def render_summary(table: pd.DataFrame, values: Values) -> str:
-    """The README's summary: per effect word the paper claims that read it, why where not
-    reproduced or not testable, then the count of the paper's numbers."""
+    """The README's summary: per effect word its paper claims (why, where not reproduced or not testable)."""
     rows = _by_key(table)
     by_word: dict[str, list[str]] = {}
     for pc in [pc for pc in PAPER_CLAIMS if not pc.ours]:
         words: dict[str, list[str]] = {}
-        for robot in ROBOTS:
-            if (pc.id, robot) in rows:
-                words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
+        for robot in [r for r in ROBOTS if (pc.id, r) in rows]:
+            words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
         for w, robots in words.items():
             where = on_robots(robots)
             said = f"{pc.short[:-1]}; {where})" if pc.short.endswith(")") else f"{pc.short} ({where})"
