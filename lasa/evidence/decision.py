@@ -74,8 +74,7 @@ class PaperNumber:
 
     def word(self, interval: tuple[float, float]) -> str:
         """``out`` if the interval misses ``value +- tolerance``, ``n/a`` if unknown; ``in`` if at most
-        :attr:`width_limit` wide and inside the band (without a tolerance: contains the value); else
-        ``undecided``."""
+        :attr:`width_limit` wide and in the band (without one: holding the value); else ``undecided``."""
         low, high = interval
         met = self.inside(interval)
         if met != "yes":
@@ -84,14 +83,11 @@ class PaperNumber:
         return IN if high - low <= self.width_limit and (self.tolerance == 0.0 or band) else UNDECIDED
 
     def describe(self, interval: tuple[float, float], measured: float) -> str:
-        """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``."""
-        return f"{self.label}: {self.word(interval)}, {measured:.3g} [{interval[0]:.3g}, {interval[1]:.3g}]"
-
-    @property
-    def label(self) -> str:
-        """``1.45 ± 0.15 (beta = 75)``: the number, its tolerance and where the paper states it."""
+        """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``: the number, its tolerance, where the paper
+        states it, its word and our measure and interval."""
         tol = f" ± {self.tolerance:g}" if self.tolerance else ""
-        return f"{self.value:g}{tol} ({self.where})"
+        said = f"{self.word(interval)}, {measured:.3g} [{interval[0]:.3g}, {interval[1]:.3g}]"
+        return f"{self.value:g}{tol} ({self.where}): {said}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -114,9 +110,8 @@ class Direction:
 
 @dataclasses.dataclass(frozen=True)
 class Rule:
-    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds (a ConfigError
-    if the id is not ``<figure>.<name>``, it has no quantity, or a paper number or the direction names no
-    quantity)."""
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds; its paper numbers
+    and direction name its quantities."""
 
     id: str  # the claim id, "<figure>.<name>"
     text: str  # the rule in words, as the claims table states it

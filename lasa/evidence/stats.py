@@ -36,10 +36,8 @@ WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
 
 
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2). Returns
-    :data:`RESULT_KEYS`: ``n`` participants, the means over their means, ``ci_*`` bounding SA - no SA (95%,
-    pooled t); a ConfigError for invalid data, fewer than 2 participants, or a participant without rows both
-    with and without SA."""
+    """The SA effect as the paper's F(1,18), a one-way ANOVA on 2N participant means, df (1, 2N-2), as
+    :data:`RESULT_KEYS` (``ci_*``: SA - no SA, 95%, pooled t); a participant lacking either is an error."""
     data = prepare(frame, measure)
     n = check_participants(data)
     means = aggregate(data, measure, ["assistance"], "mean")
@@ -70,9 +68,7 @@ def _sa_result(
 
 def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFrame:
     """Two-way (interface x assistance) repeated-measures ANOVA, participants as subjects, on tasks
-    aggregated by ``agg`` (``"mean"`` or ``"sum"``): per effect of :data:`EFFECTS` its ``F``, ``df1``,
-    ``df2`` (1, N-1) and ``p``; a ConfigError for invalid data or ``agg``, fewer than 2 participants, or
-    a participant missing a condition (or a task within one)."""
+    aggregated by ``agg``: per effect of :data:`EFFECTS` its ``F``, ``df1``, ``df2`` (1, N-1) and ``p``."""
     cells = condition_cells(frame, measure, agg, CONDITIONS)
     table = AnovaRM(cells, depvar=measure, subject="participant", within=["interface", "assistance"]).fit()
     rows = [table.anova_table.loc[effect] for effect in EFFECTS]
@@ -190,9 +186,8 @@ def rmst_contrasts(
     n_resamples: int = 10_000,
     seed: int = 0,
 ) -> pd.DataFrame:
-    """Restricted mean time of ``reference`` minus each other condition (rows in :data:`CONDITIONS`
-    order): ``a``, ``b``, their restricted means over participants ``mean_a``, ``mean_b``, ``diff``
-    (``mean_a - mean_b``), its paired-bootstrap 95% interval ``ci_low``, ``ci_high``, and ``n``."""
+    """Restricted mean time of ``reference`` minus each other condition: ``a``, ``b``, ``mean_a``, ``mean_b``,
+    ``diff`` (``mean_a - mean_b``), its paired-bootstrap 95% interval ``ci_low``, ``ci_high``, and ``n``."""
     factors(reference)
     wide = restricted_times(frame, measure, horizon)
     others = [c for c in CONDITIONS if c != reference]
@@ -203,17 +198,12 @@ def rmst_contrasts(
     return pd.DataFrame({"a": reference, "b": others} | means | bounds)
 
 
-def _format_df(value: Any) -> str:
-    number = float(value)
-    return str(int(number)) if number.is_integer() else f"{number:g}"
-
-
 def format_f(result: dict[str, Any]) -> str:
-    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``;
-    a ConfigError if a key is missing."""
+    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``."""
     if missing := [key for key in ("F", "df1", "df2", "p") if key not in result]:
         raise ConfigError(f"result is missing {', '.join(map(repr, missing))}; got keys {sorted(result)}")
     f_value, p_value = float(result["F"]), float(result["p"])
     f_text = f"{f_value:.1f}" if abs(f_value) >= 10 else f"{f_value:.2f}"
     p_text = "p < .001" if p_value < 0.001 else f"p = {f'{p_value:.3f}'.removeprefix('0')}"
-    return f"F({_format_df(result['df1'])},{_format_df(result['df2'])}) = {f_text}, {p_text}"
+    df = [str(int(x)) if (x := float(result[k])).is_integer() else f"{x:g}" for k in ("df1", "df2")]
+    return f"F({df[0]},{df[1]}) = {f_text}, {p_text}"

@@ -226,8 +226,7 @@ def member_frame(frame: pd.DataFrame, assistance: str) -> pd.DataFrame:
 
 @dataclasses.dataclass(frozen=True)
 class Sequential:
-    """The outcome of :func:`sequential`: every look's rows, the claims, and per (look, claim) of the
-    headline member its users per point, verdict and whether settled."""
+    """The outcome of :func:`sequential`: every look's rows, the claims, and each look's headline verdicts."""
 
     frame: pd.DataFrame
     claims: list[Claim]
@@ -245,10 +244,9 @@ def sequential(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> Sequential:
-    """Add users in blocks until every headline verdict is settled or the cap is reached: the first
-    look runs every member of ``assistance``, later ones only ``default`` (the headline member, a
-    ConfigError if not among them); ``run_block(look, members)`` returns the rows of that look's new
-    users (:func:`block_users`), LA rows labelled ``none``; the rest as :func:`assess` takes them."""
+    """Add users in blocks until every headline verdict is settled or the cap is reached: the first look runs
+    every member of ``assistance``, later ones only ``default``, the headline member; ``run_block(look,
+    members)`` returns the rows of that look's new users (:func:`block_users`), LA rows labelled ``none``."""
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
     judge = functools.partial(

@@ -90,9 +90,8 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 
 
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
-    """Atomically write frames (T, H, W, 3), uint8, to an H.264 (yuv420p) MP4, the same bytes on
-    every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``); a
-    ConfigError if the frames are not (T, H, W, 3) or H or W is odd."""
+    """Atomically write frames (T, H, W, 3), uint8, H and W even, to an H.264 (yuv420p) MP4, the same bytes
+    on every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``)."""
     frames = np.asarray(frames)
     if frames.ndim != 4 or frames.shape[-1] != 3:
         raise ConfigError(f"frames must have shape (T, H, W, 3), got {frames.shape}")
@@ -117,11 +116,9 @@ def write_clips(
     width: int = 320,
     n_jobs: int = 1,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, caption each
-    frame, lay the clips out (``layout``: see :data:`LAYOUTS`; beside each other, shorter clips hold their
-    last frame) and write the MP4; render with ``n_jobs`` workers (:func:`render_many`). Returns the video
-    (T', height, width', 3) and the captioned clips, (T, height, width, 3) each; a ConfigError for no clips, a
-    clip without states, a caption list of the wrong length, an unknown ``layout`` or an odd frame size."""
+    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, with ``n_jobs``
+    workers, caption each frame, lay the clips out (:data:`LAYOUTS`; beside each other, shorter clips hold
+    their last frame) and write the MP4. Returns the video and the captioned clips."""
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
