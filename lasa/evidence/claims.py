@@ -370,9 +370,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 def effect_text(row: pd.Series, numbers: Numbers) -> str:
     """A row's effect word, ``(censored: lower bound)`` where it rests on one, and a study row's
     saying that its participants are simulated (``not reproduced by simulated participants``)."""
-    censored = numbers.get("censored")
-    bound = censored is not None and censored.value == 1.0
-    said = f"{row.effect} ({CENSORED})" if bound else str(row.effect)
+    censored = numbers.get("censored", Number(0.0)).value == 1.0
+    said = f"{row.effect} ({CENSORED})" if censored else str(row.effect)
     if str(row.figure) != "study":
         return said
     return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} simulated participants"

@@ -26,11 +26,7 @@ def _parts(*held: bool) -> str:
 
 def _share(name: str, partly_above: float) -> Decide:
     """``yes`` if the share ``name`` is 1 (or more), ``partly`` if above ``partly_above``, else ``no``."""
-
-    def decide(v: Mapping[str, float]) -> str:
-        return "yes" if v[name] >= 1.0 else "partly" if v[name] > partly_above else "no"
-
-    return decide
+    return lambda v: "yes" if v[name] >= 1.0 else "partly" if v[name] > partly_above else "no"
 
 
 def _above(ref: float, *parts: tuple[str, ...]) -> Decide:

@@ -37,12 +37,23 @@ _BITEXACT_ARGS = (
 )  # fmt: skip
 
 
-def render_states(robot: Robot, states: np.ndarray, height: int = 240, width: int = 320) -> np.ndarray:
+def render_states(
+    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
+) -> np.ndarray:
     """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from the
-    robot's video camera; height and width even."""
+    robot's video camera, height and width even; with ``n_jobs`` > 1 the states are split into as many
+    contiguous parts, rendered by worker processes (joblib): the same frames with any number."""
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
+    if int(n_jobs) != n_jobs or n_jobs < 1:
+        raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
     states = np.atleast_2d(states)
+    if n_jobs > 1 and len(states) > 1:
+        from joblib import Parallel, delayed  # noqa: PLC0415 (only when asked for workers)
+
+        parts = np.array_split(states, min(n_jobs, len(states)))
+        rendered = Parallel(n_jobs=len(parts))(delayed(render_states)(robot, p, height, width) for p in parts)
+        return np.concatenate(rendered)
     data = mujoco.MjData(robot.model)
     frames = np.empty((len(states), height, width, 3), dtype=np.uint8)
     with mujoco.Renderer(robot.model, height, width) as renderer:
@@ -52,23 +63,6 @@ def render_states(robot: Robot, states: np.ndarray, height: int = 240, width: in
             renderer.update_scene(data, camera=robot.spec.camera)
             frames[i] = renderer.render()
     return frames
-
-
-def render_many(
-    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
-) -> np.ndarray:
-    """:func:`render_states`, the states split into ``n_jobs`` contiguous parts rendered by as many
-    worker processes (joblib): the same frames with any number (a ConfigError unless positive)."""
-    if int(n_jobs) != n_jobs or n_jobs < 1:
-        raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
-    states = np.atleast_2d(states)
-    if n_jobs == 1 or len(states) < 2:
-        return render_states(robot, states, height, width)
-    from joblib import Parallel, delayed  # noqa: PLC0415 (only when asked for workers)
-
-    parts = np.array_split(states, min(n_jobs, len(states)))
-    rendered = Parallel(n_jobs=len(parts))(delayed(render_states)(robot, p, height, width) for p in parts)
-    return np.concatenate(rendered)
 
 
 def label_frames(frames: np.ndarray, text: str | list[str]) -> np.ndarray:
@@ -129,7 +123,7 @@ def write_clips(
             raise ConfigError(f"clip {i} has no states to render")
         if not isinstance(caption, str) and len(caption) != len(s):
             raise ConfigError(f"clip {i}: {len(caption)} captions for {len(s)} frames")
-    frames = render_many(robot, np.concatenate(states), height, width, n_jobs=n_jobs)
+    frames = render_states(robot, np.concatenate(states), height, width, n_jobs)
     parts = np.split(frames, np.cumsum([len(s) for s in states])[:-1])
     shown = [
         label_frames(part, caption if isinstance(caption, str) else list(caption))
