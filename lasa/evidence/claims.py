@@ -74,8 +74,7 @@ class Claim:
     # each of the rule's numbers' interval, at the row's level (lasa.evidence.verdicts)
     intervals: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
     level: float = math.nan  # the intervals' level (0.9875 under the sims' sequential design)
-    # numbers a sentence reads beside the rule's, without an interval: the study's test statistics
-    # and each condition's completion (``completion.LA``), keyed as in ``claim_values.csv``
+    # numbers a sentence reads beside the rule's, without an interval (test statistics, ``completion.LA``)
     facts: Mapping[str, float] = dataclasses.field(default_factory=dict)
     rule: Rule | None = None  # a claim of your own's rule; None: the paper's, by id
 
@@ -121,8 +120,7 @@ def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
 
 
 def criteria(claim: Claim) -> dict[str, str]:
-    """The row's two words and replication criteria: ``effect``, ``number``, ``reproduced``,
-    ``paper_in_ci``, ``direction``, ``paper_numbers`` and ``fragile`` (``n/a`` where not testable)."""
+    """The row's two words and replication criteria (``n/a`` where not testable), by column."""
     r, paper = claim.judged_by, claim.stated
     testable = claim.reproduced != NOT_TESTABLE
     found = [(p, claim.intervals.get(p.quantity, _NAN)) for p in paper] if testable else []
@@ -249,9 +247,7 @@ class PaperClaim:
     claim: str  # the claim, in the paper's words
     paper: str  # the paper's number
     short: str  # the claim in a few words, for the README's summary
-    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
-    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
-    mechanism: str = ""
+    mechanism: str = ""  # what makes our verdict, in a line; never a result (lasa.evidence.findings)
     why: str = ""  # why it does not reproduce where it does not, in a few words (the summary's)
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
 
@@ -553,8 +549,7 @@ def _untestable_why(row: pd.Series, numbers: Numbers, completion: str = "complet
 
 
 def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
-    """Render ``claims_csv`` (and its ``claim_values.csv``) as the verdict table into ``out``, its
-    summary beside it (``summary.md``), and claims.md afresh."""
+    """Render ``claims_csv`` as the verdict table into ``out``, ``summary.md`` beside it, and claims.md."""
     claims_csv = Path(claims_csv)
     table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
     values = read_values(pd.read_csv(claims_csv.with_name(VALUES_NAME), dtype=str, keep_default_na=False))
@@ -564,8 +559,7 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers; whether
-    the README changed (a ConfigError if it lacks a marker)."""
+    """Whether the README changed on putting ``table_md`` and its ``summary.md`` between its markers."""
     summary = Path(table_md).with_name("summary.md")
     changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False
     return sync_between(readme, README_MARKERS, Path(table_md).read_text()) or changed

@@ -211,7 +211,6 @@ FINDINGS: dict[str, Callable[[Values, Sequence[str]], str]] = {
 
 
 def finding(claim_id: str, values: Values, robots: Sequence[str]) -> str:
-    """The result sentence of headline claim ``claim_id`` (:data:`FINDINGS`) from the rows of
-    ``robots`` (named in that order) in ``values``; empty if it has none."""
+    """The result sentence of headline claim ``claim_id`` (:data:`FINDINGS`) on ``robots``; empty if none."""
     make = FINDINGS.get(claim_id)
     return make(values, robots) if make is not None else ""

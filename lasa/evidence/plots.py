@@ -93,8 +93,7 @@ def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08
 def plot_demonstrations(
     task: CupTask, demos: Demonstrations, ax: Axes | None = None, goal_index: int = 1
 ) -> Axes:
-    """Grasp-site paths of the clean demonstrations, coloured by the belief in cup ``goal_index``
-    (:func:`belief_cmap`: in a cup's colour where the belief is on it)."""
+    """Grasp-site paths of the clean demonstrations, coloured by the belief in cup ``goal_index``."""
     ax = draw_scene(task, ax)
     clean = demos.clean()
     norm = Normalize(0.0, 1.0)
@@ -147,8 +146,7 @@ def robots_present(table: pd.DataFrame) -> list[str]:
 def robot_rows(
     table: pd.DataFrame, n_cols: int, figsize_per_row: tuple[float, float]
 ) -> tuple[Figure, list[tuple[str, pd.DataFrame, np.ndarray]]]:
-    """A figure with one row of ``n_cols`` panels per robot in ``table`` (``figsize_per_row`` in
-    inches), and for each robot its name, its rows and its row of axes."""
+    """A figure with a row of ``n_cols`` panels per robot in ``table``; each robot's name, rows and axes."""
     present = robots_present(table)
     width, height = figsize_per_row
     fig, axes = plt.subplots(len(present), n_cols, figsize=(width, height * len(present)), squeeze=False)

@@ -53,7 +53,6 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     fit = anova_lm(ols("y ~ C(sa)", data=table).fit())
     row = fit.loc["C(sa)"]
     sa, no_sa = table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
-    # the 95% interval of SA - no SA read so: a pooled-variance two-sample t
     ci = scipy.stats.ttest_ind(sa, no_sa).confidence_interval()
     df = (int(round(float(row["df"]))), int(round(float(fit.loc["Residual", "df"]))))
     return _sa_result(BETWEEN_TEST, float(row["F"]), df, float(row["PR(>F)"]), n, sa, no_sa, ci)
@@ -153,8 +152,8 @@ def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
 def paired_bootstrap(
     diffs: np.ndarray, n_resamples: int = 10_000, seed: int = 0, level: float = 0.95
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean of paired differences ``(participants[, contrasts])`` and its percentile bootstrap
-    interval at ``level``, every contrast resampled with the same participants: ``(mean, low, high)``."""
+    """``(mean, low, high)`` of paired differences ``(participants[, contrasts])``, a percentile bootstrap
+    interval at ``level``, every contrast resampled with the same participants."""
     x = np.asarray(diffs, dtype=float)
     if x.ndim not in (1, 2) or len(x) < 2:
         raise ConfigError(f"diffs must be (participants[, contrasts]) with >= 2 participants, got {x.shape}")

@@ -63,8 +63,7 @@ def check_looks(first: int, block: int, cap: int) -> None:
 
 
 def block_seed(seed: int, block: int) -> int:
-    """The seed of look ``block``'s new users: ``seed`` for the first, else ``SeedSequence([seed,
-    block])``'s, so adding a block leaves the earlier users unchanged."""
+    """Look ``block``'s new users' seed: ``seed`` for the first, else ``SeedSequence([seed, block])``'s."""
     if block == 0:
         return int(seed)
     return int(np.random.SeedSequence([int(seed), int(block)]).generate_state(1)[0])
@@ -113,8 +112,7 @@ BootValues = Callable[[pd.DataFrame, np.ndarray], dict[str, dict[str, np.ndarray
 
 
 def min_resamples(level: float) -> int:
-    """The fewest resamples a settled verdict at interval ``level`` may rest on: :data:`MIN_TAIL`
-    beyond each bound of the percentile interval (800 at 98.75%, 200 at 95%)."""
+    """The fewest resamples a settled verdict at ``level`` rests on: :data:`MIN_TAIL` beyond each bound."""
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     return math.ceil(round(MIN_TAIL / ((1.0 - level) / 2.0), 6))
