@@ -168,8 +168,7 @@ def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
 
 def _row(claim: Claim) -> dict[str, object]:
     row: dict[str, object] = {c: getattr(claim, c) for c in CLAIM_COLUMNS if hasattr(claim, c)}
-    row["settled"] = "yes" if claim.settled else "no"
-    row.update(criteria(claim))
+    row |= {"settled": "yes" if claim.settled else "no"} | criteria(claim)
     note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
     if row["fragile"] == "yes":
         note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
