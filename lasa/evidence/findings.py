@@ -182,8 +182,7 @@ def _hypothesis(
 FINDINGS: dict[str, Callable[[Values, Sequence[str]], str]] = {
     "sim1.time_ratio": _time_ratio,
     "sim1.gap_narrows": _gap_narrows,
-    "sim4.straight_line_linear": _grows("sim4.straight_line_linear"),
-    "sim4.grasp_linear": _grows("sim4.grasp_linear"),
+    **{cid: _grows(cid) for cid in ("sim4.straight_line_linear", "sim4.grasp_linear")},
     "study.h1": _hypothesis(
         "study.h1",
         lambda short: (
