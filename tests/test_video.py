@@ -10,7 +10,6 @@ from lasa.base.errors import ConfigError
 from lasa.evidence.video import (
     label_frames,
     read_video,
-    render_many,
     render_states,
     side_by_side,
     write_clips,
@@ -190,11 +189,11 @@ def test_write_clips_refuses_bad_input(robot, tmp_path, clips, layout, match):
 
 
 def test_frames_rendered_by_workers_are_the_same_frames(robot, task, tmp_path):
-    """render_many over 3 processes gives render_states' frames, in order; write_clips with workers
+    """render_states over 3 processes gives its frames without workers, in order; write_clips with workers
     writes the same MP4 bytes as without them (a frame is a function of its state alone)."""
     states = np.linspace(robot.home, task.goals[0], 7)
     alone = render_states(robot, states, height=24, width=32)
-    assert (render_many(robot, states, height=24, width=32, n_jobs=3) == alone).all()
+    assert (render_states(robot, states, height=24, width=32, n_jobs=3) == alone).all()
     clips = [(states[:4], "a"), (states[2:], [f"b{i}" for i in range(5)])]
     write_clips(robot, clips, tmp_path / "one.mp4", fps=5, height=24, width=32)
     write_clips(robot, clips, tmp_path / "two.mp4", fps=5, height=24, width=32, n_jobs=2)
@@ -202,6 +201,6 @@ def test_frames_rendered_by_workers_are_the_same_frames(robot, task, tmp_path):
 
 
 @pytest.mark.parametrize("n_jobs", [0, -1, 1.5])
-def test_render_many_refuses_a_bad_worker_count(robot, n_jobs):
+def test_render_states_refuses_a_bad_worker_count(robot, n_jobs):
     with pytest.raises(ConfigError, match="n_jobs must be a positive integer"):
-        render_many(robot, np.zeros((2, robot.n_joints)), height=16, width=16, n_jobs=n_jobs)
+        render_states(robot, np.zeros((2, robot.n_joints)), height=16, width=16, n_jobs=n_jobs)

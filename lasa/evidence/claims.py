@@ -74,8 +74,7 @@ class Claim:
     # each of the rule's numbers' interval, at the row's level (lasa.evidence.verdicts)
     intervals: Mapping[str, tuple[float, float]] = dataclasses.field(default_factory=dict)
     level: float = math.nan  # the intervals' level (0.9875 under the sims' sequential design)
-    # numbers a sentence reads beside the rule's, without an interval: the study's test statistics
-    # and each condition's completion (``completion.LA``), keyed as in ``claim_values.csv``
+    # numbers a sentence reads beside the rule's, without an interval (test statistics, ``completion.LA``)
     facts: Mapping[str, float] = dataclasses.field(default_factory=dict)
     rule: Rule | None = None  # a claim of your own's rule; None: the paper's, by id
 
@@ -100,7 +99,8 @@ class Claim:
     @property
     def stated(self) -> tuple[PaperNumber, ...]:
         """The numbers the paper states for this claim on its robot (its rule's)."""
-        return _stated(self.judged_by, self.robot)
+        r = self.judged_by
+        return tuple(p for p in r.paper if p.robot == self.robot) if r is not None else ()
 
 
 # what a notebook shows of its claims (claims_frame): the row, its member, its evidence, its verdict
@@ -113,18 +113,14 @@ def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFra
     return pd.DataFrame([c.__dict__ for c in claims], columns=columns)
 
 
-def _stated(r: Rule | None, robot: str) -> tuple[PaperNumber, ...]:
+def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
+    """The numbers the paper states for a paper claim on ``robot`` (none for another robot)."""
+    r = RULES.get(claim_id.split("@", 1)[0])
     return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
 
 
-def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
-    """The numbers the paper states for a paper claim on ``robot`` (none for another robot)."""
-    return _stated(RULES.get(claim_id.split("@", 1)[0]), robot)
-
-
 def criteria(claim: Claim) -> dict[str, str]:
-    """The row's two words and replication criteria: ``effect``, ``number``, ``reproduced``,
-    ``paper_in_ci``, ``direction``, ``paper_numbers`` and ``fragile`` (``n/a`` where not testable)."""
+    """The row's two words and replication criteria (``n/a`` where not testable), by column."""
     r, paper = claim.judged_by, claim.stated
     testable = claim.reproduced != NOT_TESTABLE
     found = [(p, claim.intervals.get(p.quantity, _NAN)) for p in paper] if testable else []
@@ -172,8 +168,7 @@ def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
 
 def _row(claim: Claim) -> dict[str, object]:
     row: dict[str, object] = {c: getattr(claim, c) for c in CLAIM_COLUMNS if hasattr(claim, c)}
-    row["settled"] = "yes" if claim.settled else "no"
-    row.update(criteria(claim))
+    row |= {"settled": "yes" if claim.settled else "no"} | criteria(claim)
     note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
     if row["fragile"] == "yes":
         note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
@@ -194,10 +189,9 @@ def render_markdown(frame: pd.DataFrame) -> str:
 
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
-    """Replace every row of these claims' (figure, robot) pairs in the CSV at ``path`` (and in
-    ``claim_values.csv`` and the ``.md`` twin), under the folder lock and the run's write journal, and
-    return the whole table, ordered by figure, robot and id (a ConfigError if two claims share an (id,
-    robot), or the file has other columns)."""
+    """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``, ``claim_values.csv``
+    and the ``.md`` twin, under the folder lock and the run's write journal; return the whole table, by
+    figure, robot and id (a ConfigError if two claims share an (id, robot), or a file has other columns)."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
     if dup := new.loc[new.duplicated(["id", "robot"]), "id"].tolist():
@@ -235,13 +229,13 @@ def _number_text(x: float) -> str:
 def _value_rows(claim: Claim) -> list[dict[str, object]]:
     """The claim's rows of ``claim_values.csv``: its rule's numbers with their intervals, then its facts."""
     head = {"id": claim.id, "robot": claim.robot, "figure": claim.figure, "reading": reading_of(claim.id)}
-    numbers = [(k, v, claim.intervals.get(k, _NAN)) for k, v in claim.values.items()]
-    out = []
-    for name, value, (low, high) in numbers + [(k, v, _NAN) for k, v in claim.facts.items()]:
-        level = _number_text(claim.level) if math.isfinite(low) and math.isfinite(high) else ""
-        cells = {"value": _number_text(value), "low": _number_text(low), "high": _number_text(high)}
-        out.append(head | {"quantity": name} | cells | {"level": level, "n": claim.n_users})
-    return out
+    return [
+        head
+        | {"quantity": name}
+        | {k: _number_text(getattr(x, k)) for k in ("value", "low", "high")}
+        | {"level": _number_text(x.level) if x.interval else "", "n": x.n}
+        for name, x in numbers_of(claim).items()
+    ]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -251,22 +245,26 @@ class PaperClaim:
     id: str  # the headline row's id in claims.csv
     claim: str  # the claim, in the paper's words
     paper: str  # the paper's number
-    notebook: str  # the notebook (file stem) that measures it
     short: str  # the claim in a few words, for the README's summary
-    # what makes our verdict, in a line: the mechanism only, never a result (the verdict table
-    # writes each result sentence from the rows' numbers: lasa.evidence.findings)
-    mechanism: str = ""
+    mechanism: str = ""  # what makes our verdict, in a line; never a result (lasa.evidence.findings)
     why: str = ""  # why it does not reproduce where it does not, in a few words (the summary's)
-    section: str = "What it shows, against the paper"  # its section that explains the mechanism
     ours: bool = False  # our addition, not a claim of the paper: listed apart, never counted
 
 
+# the notebook (file stem) that measures a figure's claims, and its section that explains the mechanisms
+_NOTEBOOKS = {
+    "sim1": "04_fixed_expertise",
+    "sim2": "05_changing_goals",
+    "sim3": "06_learning_users",
+    "sim4": "07_new_goals",
+    "study": "11_eating_study",
+}
+_MECHANISMS = "#what-it-shows-against-the-paper"
 PAPER_CLAIMS: tuple[PaperClaim, ...] = (
     PaperClaim(
         "sim1.final_error",
         "shared autonomy reduces the final state error (Fig. sim1)",
         "LA+SA below LA at every beta",
-        "04_fixed_expertise",
         "SA lowers the final error (sim1)",
         "Eq. M2 pulls towards the mid-preference grasp; a myopic Eq. S1 user never fully resists it (Eq. T4)",
         "Eq. M2 pulls towards the mid-preference grasp",
@@ -275,7 +273,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.time_ratio",
         "LA takes 45% more time than LA+SA at beta = 75 and 30% more at beta = 1000",
         "time ratio 1.45 and 1.30",
-        "04_fixed_expertise",
         "LA is slower than LA+SA (sim1)",
         "the pull is largest far from the goal",
     ),
@@ -283,14 +280,12 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim1.gap_narrows",
         "the gap between LA and LA+SA narrows as the user becomes more rational",
         "45% at beta = 75 -> 30% at beta = 1000",
-        "04_fixed_expertise",
         "the LA/LA+SA gap narrows with rationality (sim1)",
     ),
     PaperClaim(
         "sim1.entropy_sa",
         "shared autonomy helps with or without the entropy term",
         "LA+SA and LA+SA+Entropy below LA",
-        "04_fixed_expertise",
         "SA helps with and without entropy (sim1)",
         "the entropy decoder keeps inputs towards the other cup, and Eq. M2 pulls to the mid grasp",
         "Eq. M2 pulls to the mid grasp",
@@ -299,7 +294,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim2.sa_trapped",
         "with LA+SA, a user who changes their mind late is stuck at the first goal",
         "final error grows, confidence falls with N",
-        "05_changing_goals",
         "a late change of mind is stuck with LA+SA (sim2)",
         "the belief holds the first cup (Panda), or Eq. M2 pulls there until it turns (planar5)",
     ),
@@ -307,7 +301,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim2.entropy_escapes",
         "the entropy term lets users change their mind",
         "LA+SA+Entropy reaches the new goal",
-        "05_changing_goals",
         "entropy lets users change their mind (sim2)",
         "Eq. T6 keeps some input leading to each goal at every belief",
     ),
@@ -315,7 +308,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim3.entropy_learners",
         "entropy improves in-task performance for fast and slow learners",
         "LA+SA+Entropy below LA+SA over time",
-        "06_learning_users",
         "entropy helps learning users (sim3)",
         "a learner's early random inputs commit the belief; entropy lets them undo it",
     ),
@@ -323,7 +315,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.straight_line_linear",
         "with the context map, the error at a new goal grows linearly with its distance",
         "y = 0.11x, R^2 = 0.98",
-        "07_new_goals",
         "with the map, the error grows linearly with distance (sim4)",
         "the straight-line map moves the grasp curve rigidly in joint space, missing the new cup's grasps",
         "the straight-line map misses the new cup's grasps by a margin",
@@ -332,7 +323,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.grasp_linear",
         "the same, with our grasp-to-grasp context map (not the paper's)",
         "y = 0.11x, R^2 = 0.98",
-        "07_new_goals",
         "our grasp-to-grasp map (sim4)",
         "the grasp-to-grasp map is exact at every grasp",
         ours=True,
@@ -341,7 +331,6 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "sim4.no_map_training_goal",
         "without the map, the robot only reaches for the training goal",
         "y = x",
-        "07_new_goals",
         "without the map, the robot reaches the training goal (sim4)",
         "without the map the robot reaches for the training cup; some users' belief ends on the other one",
     ),
@@ -349,28 +338,24 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
         "study.h1",
         "H1: with shared autonomy users maintain their goals more accurately (Goal Error)",
         "F(1,18) = 29.9, p < .001",
-        "11_eating_study",
         "H1, SA keeps the goal (study)",
     ),
     PaperClaim(
         "study.h2",
         "H2: latent actions let users execute their preferences (Dessert, scoop)",
         "LA+SA adjusts to scoop; R+SA stays stabbing",
-        "11_eating_study",
         "H2, LA lets users scoop (study)",
     ),
     PaperClaim(
         "study.h3",
         "H3: LA+SA completes the tasks most efficiently (Total and Idle Time)",
         "LA+SA fastest, p < .05 vs each",
-        "11_eating_study",
         "H3, LA+SA is fastest (study)",
     ),
     PaperClaim(
         "study.likert",
         "H3, subjective: users rate LA+SA above the other conditions (Fig. dessert, Likert)",
         "LA+SA higher, t-tests p < .05",
-        "11_eating_study",
         "H3's Likert ratings (study)",
         "simulated participants answer no questionnaire; people's sessions are judged in notebook 11",
     ),
@@ -380,9 +365,8 @@ PAPER_CLAIMS: tuple[PaperClaim, ...] = (
 def effect_text(row: pd.Series, numbers: Numbers) -> str:
     """A row's effect word, ``(censored: lower bound)`` where it rests on one, and a study row's
     saying that its participants are simulated (``not reproduced by simulated participants``)."""
-    censored = numbers.get("censored")
-    bound = censored is not None and censored.value == 1.0
-    said = f"{row.effect} ({CENSORED})" if bound else str(row.effect)
+    censored = numbers.get("censored", Number(0.0)).value == 1.0
+    said = f"{row.effect} ({CENSORED})" if censored else str(row.effect)
     if str(row.figure) != "study":
         return said
     return f"{said} {'with' if row.effect in (UNDECIDED, NOT_TESTABLE) else 'by'} simulated participants"
@@ -401,14 +385,11 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     if row.figure == "study":
         effect = study_effect(str(row.id), numbers)
         if row.effect == NOT_TESTABLE:
-            short = short_conditions(numbers)
-            why = f" (completion: {completion_text(short)})" if short else f" ({_untestable_why(row)})"
             seen = f"; measured, not judged: {effect}" if effect else ""
-            return f"{head}{why}, N = {row.n_users}{seen}"
+            return f"{head} ({_untestable_why(row, numbers)}), N = {row.n_users}{seen}"
         said = [effect] if effect else []
     else:
-        r = RULES.get(str(row.id).split("@", 1)[0])
-        paper = _stated(r, str(row.robot))
+        r, paper = RULES.get(str(row.id).split("@", 1)[0]), paper_numbers_of(str(row.id), str(row.robot))
         said = [
             f"{p.value:g} {w}: {_interval_text(numbers[p.quantity])}"
             for p, w in zip(paper, str(row.number).split("; "), strict=False)
@@ -424,21 +405,19 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
     return "; ".join([f"**{head}**" if bold else head, *said]) + f", N = {row.n_users}{settled}"
 
 
-def _heads(table: pd.DataFrame) -> list[pd.Series]:
+def _heads(table: pd.DataFrame) -> tuple[list[str], int, str]:
+    """The headline rows' effect words, how many numbers they state and ``1 in, 4 out, ...``."""
     rows = _by_key(table)
-    return [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
-
-
-def _numbers_said(table: pd.DataFrame) -> tuple[int, str]:
-    numbers = [w for r in _heads(table) for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
-    return len(numbers), ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    heads = [rows[(pc.id, r)] for pc in PAPER_CLAIMS if not pc.ours for r in ROBOTS if (pc.id, r) in rows]
+    numbers = [w for r in heads for w in str(r.number).split("; ") if w != NOT_APPLICABLE]
+    stated = ", ".join(f"{numbers.count(w)} {w}" for w in NUMBER_WORDS if w != NOT_APPLICABLE)
+    return [str(r.effect) for r in heads], len(numbers), stated
 
 
 def count_line(table: pd.DataFrame) -> str:
     """``Of 21 paper claims × robot, the effect: 8 reproduced, ...; of the 5 numbers ...: 1 in, ...``."""
-    effects = [str(r.effect) for r in _heads(table)]
+    effects, n, stated = _heads(table)
     counts = ", ".join(f"{effects.count(w)} {w}" for w in WORDS)
-    n, stated = _numbers_said(table)
     return (
         f"Of {len(effects)} paper claims × robot, the effect: {counts}. Of the {n} numbers "
         f"the paper states, on the robot it states them for (the Panda), the number: {stated}."
@@ -503,9 +482,8 @@ def render_verdicts(
     link: Callable[[str], str] | None = None,
     claims_md: str = "figures/claims.md",
 ) -> str:
-    """The verdict table of ``table`` (``claims.csv`` as strings) and its ``values``: one row per paper
-    claim, both robots side by side, our additions apart; ``link`` maps a notebook stem to its page
-    (default ``notebooks/<stem>.ipynb``), ``claims_md`` is where the readings that flip a claim are."""
+    """The verdict table of ``table`` (``claims.csv`` as strings) and its ``values``, a row per paper claim;
+    ``link`` maps a notebook stem to its page, ``claims_md`` is where the readings that flip a claim are."""
     head = [
         "| claim (paper) | paper | planar5 | Panda | readings that flip it | mechanism |",
         "| --- | --- | --- | --- | --- | --- |",
@@ -516,10 +494,10 @@ def render_verdicts(
         cells = [_cell(rows.get((pc.id, r)), values.get((pc.id, r), {})) for r in ROBOTS]
         if cells == ["—", "—"]:
             continue
-        anchor = pc.section.lower().replace(",", "").replace(" ", "-")
-        target = link(pc.notebook) if link is not None else f"notebooks/{pc.notebook}.ipynb"
+        notebook = _NOTEBOOKS[pc.id.split(".", 1)[0]]
+        target = link(notebook) if link is not None else f"notebooks/{notebook}.ipynb"
         said = "; ".join(s for s in (finding(pc.id, values, ROBOTS), pc.mechanism) if s)
-        mech = " ".join(s for s in (said, f"([{pc.notebook[:2]}]({target}#{anchor}))") if s)
+        mech = " ".join(s for s in (said, f"([{notebook[:2]}]({target}{_MECHANISMS}))") if s)
         flipped, n = flips(rows, pc.id)
         listed = f" ([list]({claims_md}#{pc.id.replace('.', '').lower()}))" if flipped else ""
         count = f"{len(flipped)} of {n}{listed}" if n else "none"
@@ -532,15 +510,13 @@ def render_verdicts(
 
 
 def render_summary(table: pd.DataFrame, values: Values) -> str:
-    """The README's summary: per effect word the paper claims that read it, why where not
-    reproduced or not testable, then the count of the paper's numbers."""
+    """The README's summary: per effect word its paper claims (why, where not reproduced or not testable)."""
     rows = _by_key(table)
     by_word: dict[str, list[str]] = {}
     for pc in [pc for pc in PAPER_CLAIMS if not pc.ours]:
         words: dict[str, list[str]] = {}
-        for robot in ROBOTS:
-            if (pc.id, robot) in rows:
-                words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
+        for robot in [r for r in ROBOTS if (pc.id, r) in rows]:
+            words.setdefault(str(rows[(pc.id, robot)].effect), []).append(robot)
         for w, robots in words.items():
             where = on_robots(robots)
             said = f"{pc.short[:-1]}; {where})" if pc.short.endswith(")") else f"{pc.short} ({where})"
@@ -548,9 +524,8 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
             if w == "not reproduced" and why:
                 said += f": {why.replace('; ', ', ')}"
             if w == NOT_TESTABLE:
-                short = short_conditions(values.get((pc.id, robots[0]), {}))
-                done = f"completion {completion_text(short)} within the horizon" if short else ""
-                said += f": {done or _untestable_why(rows[(pc.id, robots[0])])}"
+                row, numbers = rows[(pc.id, robots[0])], values.get((pc.id, robots[0]), {})
+                said += f": {_untestable_why(row, numbers, 'completion {} within the horizon')}"
             by_word.setdefault(w, []).append(said)
     lines = [
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
@@ -558,21 +533,22 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
     ]
     listed = [(w, by_word[w]) for w in WORDS if w in by_word]
     lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
-    n, stated = _numbers_said(table)
+    _, n, stated = _heads(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"
 
 
-def _untestable_why(row: pd.Series) -> str:
-    """Why a headline row is not testable, in a line: its ``measured`` when that says why."""
+def _untestable_why(row: pd.Series, numbers: Numbers, completion: str = "completion: {}") -> str:
+    """Why a headline row is not testable: its short conditions' ``completion``, else its ``measured``'s."""
+    if short := short_conditions(numbers):
+        return completion.format(completion_text(short))
     if str(row.measured).startswith(f"{NOT_TESTABLE} (") and "completion" not in str(row.measured):
         return str(row.measured)[len(NOT_TESTABLE) + 2 :].split(")", 1)[0]
     return "too few episodes finish within the horizon"
 
 
 def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[str]) -> Path:
-    """Render ``claims_csv`` (and its ``claim_values.csv``) as the verdict table into ``out``, its
-    summary beside it (``summary.md``), and claims.md afresh."""
+    """Render ``claims_csv`` as the verdict table into ``out``, ``summary.md`` beside it, and claims.md."""
     claims_csv = Path(claims_csv)
     table = pd.read_csv(claims_csv, dtype=str, keep_default_na=False)
     values = read_values(pd.read_csv(claims_csv.with_name(VALUES_NAME), dtype=str, keep_default_na=False))
@@ -582,8 +558,7 @@ def write_verdicts(claims_csv: str | os.PathLike[str], out: str | os.PathLike[st
 
 
 def sync_readme(readme: str | os.PathLike[str], table_md: str | os.PathLike[str]) -> bool:
-    """Put the verdict table ``table_md`` and its ``summary.md`` between the README's markers; whether
-    the README changed (a ConfigError if it lacks a marker)."""
+    """Whether the README changed on putting ``table_md`` and its ``summary.md`` between its markers."""
     summary = Path(table_md).with_name("summary.md")
     changed = sync_between(readme, SUMMARY_MARKERS, summary.read_text()) if summary.exists() else False
     return sync_between(readme, README_MARKERS, Path(table_md).read_text()) or changed
@@ -598,7 +573,6 @@ if __name__ == "__main__":
     verdicts = write_verdicts(csv, csv.with_name("verdicts.md"))
     if len(sys.argv) == 2:  # an OUT= or QUICK run: its verdicts.md beside its claims, no README
         print(f"{verdicts} written")
-        raise SystemExit(0)
-    readme = Path(sys.argv[1])
-    changed = sync_readme(readme, verdicts)
-    print(f"{verdicts} written; {readme}: verdict table {'updated' if changed else 'already current'}")
+    else:
+        said = "updated" if sync_readme(sys.argv[1], verdicts) else "already current"
+        print(f"{verdicts} written; {Path(sys.argv[1])}: verdict table {said}")

@@ -69,14 +69,12 @@ class PaperNumber:
     def inside(self, interval: tuple[float, float]) -> str:
         """``yes`` if ``value +- tolerance`` meets the interval, ``no`` if not, ``n/a`` if unknown."""
         low, high = interval
-        if not _known(interval):
-            return "n/a"
-        return "yes" if low <= self.value + self.tolerance and high >= self.value - self.tolerance else "no"
+        met = low <= self.value + self.tolerance and high >= self.value - self.tolerance
+        return "n/a" if not _known(interval) else "yes" if met else "no"
 
     def word(self, interval: tuple[float, float]) -> str:
         """``out`` if the interval misses ``value +- tolerance``, ``n/a`` if unknown; ``in`` if at most
-        :attr:`width_limit` wide and inside the band (without a tolerance: contains the value); else
-        ``undecided``."""
+        :attr:`width_limit` wide and in the band (without one: holding the value); else ``undecided``."""
         low, high = interval
         met = self.inside(interval)
         if met != "yes":
@@ -85,15 +83,11 @@ class PaperNumber:
         return IN if high - low <= self.width_limit and (self.tolerance == 0.0 or band) else UNDECIDED
 
     def describe(self, interval: tuple[float, float], measured: float) -> str:
-        """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``."""
-        low, high = interval
-        return f"{self.label}: {self.word(interval)}, {measured:.3g} [{low:.3g}, {high:.3g}]"
-
-    @property
-    def label(self) -> str:
-        """``1.45 ± 0.15 (beta = 75)``: the number, its tolerance and where the paper states it."""
+        """``1.45 ± 0.15 (beta = 75): out, 0.961 [0.844, 1.1]``: the number, its tolerance, where the paper
+        states it, its word and our measure and interval."""
         tol = f" ± {self.tolerance:g}" if self.tolerance else ""
-        return f"{self.value:g}{tol} ({self.where})"
+        said = f"{self.word(interval)}, {measured:.3g} [{interval[0]:.3g}, {interval[1]:.3g}]"
+        return f"{self.value:g}{tol} ({self.where}): {said}"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,18 +104,14 @@ class Direction:
 
     def judge(self, interval: tuple[float, float]) -> str:
         """``yes`` if the interval lies on the paper's side of ``null``; ``n/a`` if unknown; else ``no``."""
-        low, high = interval
-        if not _known(interval):
-            return "n/a"
-        clear = low > self.null if self.sign > 0 else high < self.null
-        return "yes" if clear else "no"
+        clear = interval[0] > self.null if self.sign > 0 else interval[1] < self.null
+        return "n/a" if not _known(interval) else "yes" if clear else "no"
 
 
 @dataclasses.dataclass(frozen=True)
 class Rule:
-    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds (a ConfigError
-    if the id is not ``<figure>.<name>``, it has no quantity, or a paper number or the direction names no
-    quantity)."""
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds; its paper numbers
+    and direction name its quantities."""
 
     id: str  # the claim id, "<figure>.<name>"
     text: str  # the rule in words, as the claims table states it
@@ -170,8 +160,7 @@ class Rule:
             if not _known((low, high)):
                 return set(VERDICTS)  # an unknown interval decides nothing
             cuts = [low, *sorted(t for t in q.thresholds if low <= t <= high), high]
-            points = set(cuts) | {(a + b) / 2 for a, b in itertools.pairwise(cuts)}
-            axes.append(sorted(points))
+            axes.append(sorted(set(cuts) | {(a + b) / 2 for a, b in itertools.pairwise(cuts)}))
         names = [q.name for q in self.quantities]
         return {self.verdict(dict(zip(names, p, strict=True))) for p in itertools.product(*axes)}
 

@@ -182,8 +182,7 @@ def _hypothesis(
 FINDINGS: dict[str, Callable[[Values, Sequence[str]], str]] = {
     "sim1.time_ratio": _time_ratio,
     "sim1.gap_narrows": _gap_narrows,
-    "sim4.straight_line_linear": _grows("sim4.straight_line_linear"),
-    "sim4.grasp_linear": _grows("sim4.grasp_linear"),
+    **{cid: _grows(cid) for cid in ("sim4.straight_line_linear", "sim4.grasp_linear")},
     "study.h1": _hypothesis(
         "study.h1",
         lambda short: (
@@ -211,7 +210,6 @@ FINDINGS: dict[str, Callable[[Values, Sequence[str]], str]] = {
 
 
 def finding(claim_id: str, values: Values, robots: Sequence[str]) -> str:
-    """The result sentence of headline claim ``claim_id`` (:data:`FINDINGS`) from the rows of
-    ``robots`` (named in that order) in ``values``; empty if it has none."""
+    """The result sentence of headline claim ``claim_id`` (:data:`FINDINGS`) on ``robots``; empty if none."""
     make = FINDINGS.get(claim_id)
     return make(values, robots) if make is not None else ""

@@ -93,8 +93,7 @@ def frame_around(task: GoalTask, ax: Axes, points: np.ndarray, pad: float = 0.08
 def plot_demonstrations(
     task: CupTask, demos: Demonstrations, ax: Axes | None = None, goal_index: int = 1
 ) -> Axes:
-    """Grasp-site paths of the clean demonstrations, coloured by the belief in cup ``goal_index``
-    (:func:`belief_cmap`: in a cup's colour where the belief is on it)."""
+    """Grasp-site paths of the clean demonstrations, coloured by the belief in cup ``goal_index``."""
     ax = draw_scene(task, ax)
     clean = demos.clean()
     norm = Normalize(0.0, 1.0)
@@ -147,8 +146,7 @@ def robots_present(table: pd.DataFrame) -> list[str]:
 def robot_rows(
     table: pd.DataFrame, n_cols: int, figsize_per_row: tuple[float, float]
 ) -> tuple[Figure, list[tuple[str, pd.DataFrame, np.ndarray]]]:
-    """A figure with one row of ``n_cols`` panels per robot in ``table`` (``figsize_per_row`` in
-    inches), and for each robot its name, its rows and its row of axes."""
+    """A figure with a row of ``n_cols`` panels per robot in ``table``; each robot's name, rows and axes."""
     present = robots_present(table)
     width, height = figsize_per_row
     fig, axes = plt.subplots(len(present), n_cols, figsize=(width, height * len(present)), squeeze=False)
@@ -174,13 +172,12 @@ def band_handle(level: float) -> Patch:
     return Patch(color="0.5", alpha=0.3, lw=0, label=f"bands: {100 * level:.4g}% bootstrap CI over users")
 
 
-def legend_below(ax: Axes, extra: Sequence[Artist] = (), ncol: int = 1, fontsize: float = 7.5) -> None:
+def legend_below(ax: Axes, extra: Sequence[Artist] = ()) -> None:
     """The axes' legend, plus ``extra`` entries, below the axes, where it covers no data."""
     handles, labels = ax.get_legend_handles_labels()
     handles += list(extra)
     labels += [h.get_label() for h in extra]
-    below: dict[str, Any] = {"loc": "upper center", "bbox_to_anchor": (0.5, -0.17)}
-    ax.legend(handles, labels, ncol=ncol, frameon=False, fontsize=fontsize, **below)
+    ax.legend(handles, labels, frameon=False, fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.17))
 
 
 def probability_axis(ax: Axes) -> None:
@@ -215,14 +212,11 @@ def paper_slope(ax: Axes, slope: float, label: str, x_max: float = 1.0, **style:
     return line
 
 
-def paper_point(
-    ax: Axes, x: float, y: float, label: str, tolerance: float | None = None, tol_label: str | None = None
-) -> Line2D:
-    """The paper's value ``y`` at ``x``: a star, labelled (``label``) in the legend and beside it;
-    ``tolerance`` draws y +- it faintly, labelled ``tol_label``."""
-    if tolerance is not None:
-        band: dict[str, Any] = {"fmt": "none", "ecolor": "0.1", "alpha": 0.3, "elinewidth": 6, "capsize": 0}
-        ax.errorbar([x], [y], yerr=tolerance, label=tol_label, zorder=3, **band)
+def paper_point(ax: Axes, x: float, y: float, label: str, tolerance: float, tol_label: str | None) -> Line2D:
+    """The paper's value ``y`` at ``x``: a star, labelled (``label``) in the legend and beside it, and
+    y +- ``tolerance`` faintly, labelled ``tol_label``."""
+    band: dict[str, Any] = {"fmt": "none", "ecolor": "0.1", "alpha": 0.3, "elinewidth": 6, "capsize": 0}
+    ax.errorbar([x], [y], yerr=tolerance, label=tol_label, zorder=3, **band)
     (point,) = ax.plot([x], [y], marker="*", ms=11, ls="none", color="0.1", label=label, zorder=5)
     ax.annotate(f"paper {y:g}", (x, y), xytext=(7, 0), textcoords="offset points", fontsize=7, va="center")
     return point

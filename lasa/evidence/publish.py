@@ -34,15 +34,10 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 150) -> Path:
 
 
 def publish(
-    module: FigureModule,
-    frame: pd.DataFrame,
-    paths: Paths,
-    claims: Sequence[Claim] = (),
-    **plot_args: Any,
+    module: FigureModule, frame: pd.DataFrame, paths: Paths, claims: Sequence[Claim] = (), **plot_args: Any
 ) -> pd.DataFrame:
-    """Merge ``frame`` into the figure's CSV (replacing this robot's rows), redraw its PNG from the
-    file (``plot_args`` to ``module.plot``), write ``claims``, and return the merged table of every robot
-    present (a ConfigError if ``frame`` lacks a column of ``module.COLUMNS``)."""
+    """Merge ``frame`` into the figure's CSV (replacing this robot's rows), redraw its PNG from the file
+    (``plot_args`` to ``module.plot``), write ``claims``, and return the merged table of every robot."""
     if missing := [c for c in module.COLUMNS if c not in frame.columns]:
         raise ConfigError(f"{module.NAME} rows lack column(s) {missing}")
     with locked(paths.figures):

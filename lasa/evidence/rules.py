@@ -26,19 +26,12 @@ def _parts(*held: bool) -> str:
 
 def _share(name: str, partly_above: float) -> Decide:
     """``yes`` if the share ``name`` is 1 (or more), ``partly`` if above ``partly_above``, else ``no``."""
-
-    def decide(v: Mapping[str, float]) -> str:
-        return "yes" if v[name] >= 1.0 else "partly" if v[name] > partly_above else "no"
-
-    return decide
+    return lambda v: "yes" if v[name] >= 1.0 else "partly" if v[name] > partly_above else "no"
 
 
-def _sim1_gap_narrows(v: Mapping[str, float]) -> str:
-    # a part holds when its gap has the paper's sign at beta = 75 (LA+SA better) and is smaller
-    # in size at beta = 1000; a gap that narrows in the other direction does not count
-    time = v["time_gap_75"] > 0.0 and v["time_narrowing"] > 0.0
-    error = v["error_gap_75"] > 0.0 and v["error_narrowing"] > 0.0
-    return _parts(time, error)
+def _above(ref: float, *parts: tuple[str, ...]) -> Decide:
+    """A part holds when each of its quantities is above ``ref`` (the paper's direction): :func:`_parts`."""
+    return lambda v: _parts(*(all(v[name] > ref for name in part) for part in parts))
 
 
 def _sim2_escapes(v: Mapping[str, float]) -> str:
@@ -50,11 +43,6 @@ def _sim2_escapes(v: Mapping[str, float]) -> str:
 def _sim4_linear(v: Mapping[str, float]) -> str:
     # two parts: the error grows linearly with the distance; the map lowers it at every cup
     return _parts(v["slope"] > 0.0 and v["r2"] >= 0.9, v["share_below"] >= 1.0)
-
-
-def _sim4_no_map(v: Mapping[str, float]) -> str:
-    # the shape of y = x: the error grows linearly with the distance (its size is the number)
-    return "yes" if v["slope"] > 0.0 and v["r2"] >= 0.9 else "no"
 
 
 def _sa_lowers(v: Mapping[str, float]) -> str:
@@ -88,11 +76,7 @@ def _two_parts(
     rule_id: str, text: str, a: Quantity, b: Quantity, ref: float = 0.0, paper: tuple[PaperNumber, ...] = ()
 ) -> Rule:
     """Two parts, each holding when its quantity is above ``ref``; the paper's sign is the first's."""
-
-    def decide(v: Mapping[str, float]) -> str:
-        return _parts(v[a.name] > ref, v[b.name] > ref)
-
-    return Rule(rule_id, text, (a, b), decide, paper, Direction(a.name, +1, ref))
+    return Rule(rule_id, text, (a, b), _above(ref, (a.name,), (b.name,)), paper, Direction(a.name, +1, ref))
 
 
 def _every_beta(rule_id: str, text: str, name: str, meaning: str) -> Rule:
@@ -167,7 +151,7 @@ _PAPER = (
             _q("error_narrowing", (0.0,), "d75 - |d1000| of the final-error gap d = LA - LA+SA"),
             _q("error_gap_75", (0.0,), "the final-error gap at beta = 75: > 0 if LA+SA ends closer"),
         ),
-        _sim1_gap_narrows,
+        _above(0.0, ("time_gap_75", "time_narrowing"), ("error_gap_75", "error_narrowing")),
         direction=Direction("time_narrowing", +1),  # its paper numbers are sim1.time_ratio's
     ),
     _every_beta(
@@ -212,7 +196,7 @@ _PAPER = (
             _q("slope", (0.0,), "slope of the line through the origin of the no-map mean error"),
             _q("r2", (0.9,), "uncentred R^2 of that line over the cups' means (@intercept: centred)"),
         ),
-        _sim4_no_map,
+        lambda v: _parts(v["slope"] > 0.0 and v["r2"] >= 0.9),  # y = x's shape: its size is the number
         paper=(PaperNumber("slope", 1.0, 0.15, "y = x"),),
         direction=_GROWS,
     ),

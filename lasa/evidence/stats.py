@@ -36,10 +36,8 @@ WITHIN_TEST = "within-subjects 2x2 repeated-measures ANOVA, SA main effect"
 
 
 def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
-    """The SA effect as the paper's F(1,18): a one-way ANOVA on 2N participant means, df (1, 2N-2). Returns
-    :data:`RESULT_KEYS`: ``n`` participants, the means over their means, ``ci_*`` bounding SA - no SA (95%,
-    pooled t); a ConfigError for invalid data, fewer than 2 participants, or a participant without rows both
-    with and without SA."""
+    """The SA effect as the paper's F(1,18), a one-way ANOVA on 2N participant means, df (1, 2N-2), as
+    :data:`RESULT_KEYS` (``ci_*``: SA - no SA, 95%, pooled t); a participant lacking either is an error."""
     data = prepare(frame, measure)
     n = check_participants(data)
     means = aggregate(data, measure, ["assistance"], "mean")
@@ -55,7 +53,6 @@ def sa_effect_between(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     fit = anova_lm(ols("y ~ C(sa)", data=table).fit())
     row = fit.loc["C(sa)"]
     sa, no_sa = table.loc[table["sa"] == "SA", "y"], table.loc[table["sa"] == "none", "y"]
-    # the 95% interval of SA - no SA read so: a pooled-variance two-sample t
     ci = scipy.stats.ttest_ind(sa, no_sa).confidence_interval()
     df = (int(round(float(row["df"]))), int(round(float(fit.loc["Residual", "df"]))))
     return _sa_result(BETWEEN_TEST, float(row["F"]), df, float(row["PR(>F)"]), n, sa, no_sa, ci)
@@ -70,9 +67,7 @@ def _sa_result(
 
 def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFrame:
     """Two-way (interface x assistance) repeated-measures ANOVA, participants as subjects, on tasks
-    aggregated by ``agg`` (``"mean"`` or ``"sum"``): per effect of :data:`EFFECTS` its ``F``, ``df1``,
-    ``df2`` (1, N-1) and ``p``; a ConfigError for invalid data or ``agg``, fewer than 2 participants, or
-    a participant missing a condition (or a task within one)."""
+    aggregated by ``agg``: per effect of :data:`EFFECTS` its ``F``, ``df1``, ``df2`` (1, N-1) and ``p``."""
     cells = condition_cells(frame, measure, agg, CONDITIONS)
     table = AnovaRM(cells, depvar=measure, subject="participant", within=["interface", "assistance"]).fit()
     rows = [table.anova_table.loc[effect] for effect in EFFECTS]
@@ -103,17 +98,23 @@ def pairwise(
     pairs: Sequence[tuple[str, str]] | None = None,
     correction: str = "holm",
 ) -> pd.DataFrame:
-    """Paired t-tests between conditions on per-participant values (``agg``: ``"mean"`` or ``"sum"`` over
-    tasks), corrected across the ``pairs`` (default all 6 of :data:`CONDITIONS`) by a ``multipletests`` method
-    or ``"none"`` (pairs whose p is not finite are left out). Returns one row per pair: ``a``, ``b``,
-    ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t`` (positive when ``a`` is larger), ``df``
-    (N-1), ``p_unc``, ``p_corr``, ``correction``; a ConfigError for invalid data, ``agg``, pair or correction,
-    or a participant missing a compared condition."""
-    chosen = _chosen_pairs(pairs)
+    """Paired t-tests between conditions on per-participant values (``agg`` over tasks), corrected across
+    the ``pairs`` (default all 6) by a ``multipletests`` method or ``"none"`` (non-finite p left out): per
+    pair ``a``, ``b``, ``mean_a``, ``mean_b``, ``diff`` (``mean_a - mean_b``), ``t`` (positive when ``a``
+    is larger), ``df`` (N-1), ``p_unc``, ``p_corr``, ``correction``."""
+    chosen = [tuple(pair) for pair in (combinations(CONDITIONS, 2) if pairs is None else pairs)]
+    if not chosen:
+        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
+    for pair in chosen:
+        if len(pair) != 2:
+            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
+        for condition in pair:
+            factors(condition)
+        if pair[0] == pair[1]:
+            raise ConfigError(f"pair {pair!r} compares a condition with itself")
     used = [c for c in CONDITIONS if any(c in pair for pair in chosen)]
     cells = condition_cells(frame, measure, agg, used)
     wide = cells.pivot(index="participant", columns="condition", values=measure)
-
     rows = []
     for a, b in chosen:
         x, y = wide[a].to_numpy(dtype=float), wide[b].to_numpy(dtype=float)
@@ -127,52 +128,32 @@ def pairwise(
     return out
 
 
-def _chosen_pairs(pairs: Sequence[tuple[str, str]] | None) -> list[tuple[str, ...]]:
-    chosen = [tuple(pair) for pair in (combinations(CONDITIONS, 2) if pairs is None else pairs)]
-    if not chosen:
-        raise ConfigError("pairs is empty; give at least one (a, b) pair of conditions")
-    for pair in chosen:
-        if len(pair) != 2:
-            raise ConfigError(f"each pair must be (a, b), got {pair!r}")
-        for condition in pair:
-            factors(condition)
-        if pair[0] == pair[1]:
-            raise ConfigError(f"pair {pair!r} compares a condition with itself")
-    return chosen
-
-
 def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
-    p_corr = p_unc.copy()
-    if correction != "none":
-        finite = np.isfinite(p_unc)
-        if finite.any():
-            try:
-                p_corr[finite] = _multipletests(p_unc[finite], correction)
-            except ValueError as error:
-                raise ConfigError(
-                    f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
-                ) from error
-    return p_corr
-
-
-def _multipletests(p: np.ndarray, method: str) -> np.ndarray:
-    """statsmodels' corrected p-values with the objects alive here frozen (and thawed after): its Holm
-    branch calls ``gc.collect()`` each time, which scans every object of a large process."""
+    """The finite ``p_unc`` corrected by ``correction``, the live objects frozen meanwhile (and thawed
+    after): statsmodels' Holm branch calls ``gc.collect()``, which scans every object of a large process."""
+    p_corr, finite = p_unc.copy(), np.isfinite(p_unc)
+    if correction == "none" or not finite.any():
+        return p_corr
     already = gc.get_freeze_count() > 0
     if not already:
         gc.freeze()
     try:
-        return np.asarray(multipletests(p, method=method)[1])
+        p_corr[finite] = np.asarray(multipletests(p_unc[finite], method=correction)[1])
+    except ValueError as error:
+        raise ConfigError(
+            f"unknown correction {correction!r}: {error}; use a multipletests method or 'none'"
+        ) from error
     finally:
         if not already:
             gc.unfreeze()
+    return p_corr
 
 
 def paired_bootstrap(
     diffs: np.ndarray, n_resamples: int = 10_000, seed: int = 0, level: float = 0.95
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean of paired differences ``(participants[, contrasts])`` and its percentile bootstrap
-    interval at ``level``, every contrast resampled with the same participants: ``(mean, low, high)``."""
+    """``(mean, low, high)`` of paired differences ``(participants[, contrasts])``, a percentile bootstrap
+    interval at ``level``, every contrast resampled with the same participants."""
     x = np.asarray(diffs, dtype=float)
     if x.ndim not in (1, 2) or len(x) < 2:
         raise ConfigError(f"diffs must be (participants[, contrasts]) with >= 2 participants, got {x.shape}")
@@ -204,9 +185,8 @@ def rmst_contrasts(
     n_resamples: int = 10_000,
     seed: int = 0,
 ) -> pd.DataFrame:
-    """Restricted mean time of ``reference`` minus each other condition (rows in :data:`CONDITIONS`
-    order): ``a``, ``b``, their restricted means over participants ``mean_a``, ``mean_b``, ``diff``
-    (``mean_a - mean_b``), its paired-bootstrap 95% interval ``ci_low``, ``ci_high``, and ``n``."""
+    """Restricted mean time of ``reference`` minus each other condition: ``a``, ``b``, ``mean_a``, ``mean_b``,
+    ``diff`` (``mean_a - mean_b``), its paired-bootstrap 95% interval ``ci_low``, ``ci_high``, and ``n``."""
     factors(reference)
     wide = restricted_times(frame, measure, horizon)
     others = [c for c in CONDITIONS if c != reference]
@@ -217,17 +197,12 @@ def rmst_contrasts(
     return pd.DataFrame({"a": reference, "b": others} | means | bounds)
 
 
-def _format_df(value: Any) -> str:
-    number = float(value)
-    return str(int(number)) if number.is_integer() else f"{number:g}"
-
-
 def format_f(result: dict[str, Any]) -> str:
-    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``;
-    a ConfigError if a key is missing."""
+    """APA-style F report of a dict with ``F``, ``df1``, ``df2`` and ``p``: ``"F(1,9) = 12.3, p = .004"``."""
     if missing := [key for key in ("F", "df1", "df2", "p") if key not in result]:
         raise ConfigError(f"result is missing {', '.join(map(repr, missing))}; got keys {sorted(result)}")
     f_value, p_value = float(result["F"]), float(result["p"])
     f_text = f"{f_value:.1f}" if abs(f_value) >= 10 else f"{f_value:.2f}"
     p_text = "p < .001" if p_value < 0.001 else f"p = {f'{p_value:.3f}'.removeprefix('0')}"
-    return f"F({_format_df(result['df1'])},{_format_df(result['df2'])}) = {f_text}, {p_text}"
+    df = [str(int(x)) if (x := float(result[k])).is_integer() else f"{x:g}" for k in ("df1", "df2")]
+    return f"F({df[0]},{df[1]}) = {f_text}, {p_text}"

@@ -63,8 +63,7 @@ def check_looks(first: int, block: int, cap: int) -> None:
 
 
 def block_seed(seed: int, block: int) -> int:
-    """The seed of look ``block``'s new users: ``seed`` for the first, else ``SeedSequence([seed,
-    block])``'s, so adding a block leaves the earlier users unchanged."""
+    """Look ``block``'s new users' seed: ``seed`` for the first, else ``SeedSequence([seed, block])``'s."""
     if block == 0:
         return int(seed)
     return int(np.random.SeedSequence([int(seed), int(block)]).generate_state(1)[0])
@@ -91,21 +90,14 @@ def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = US
         yield sample
 
 
-def resample_counts(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = USER) -> np.ndarray:
-    """(n_boot, users): how often each user is drawn in :func:`bootstrap_frames`'s resample r."""
-    n = int(frame[unit].nunique())
-    rng = np.random.default_rng(seed)
-    return np.stack([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)])
-
-
 def group_means(
     frame: pd.DataFrame, keys: list[str], metric: str, counts: np.ndarray, unit: str = USER
 ) -> dict[tuple[Any, ...], np.ndarray]:
     """Group label (tuple of ``keys``' values) -> mean of ``metric`` in each resample (R,), without
     building them: sum_u c_u S_ug / sum_u c_u N_ug (S, N: each user's sum and count in the group)."""
     users = pd.factorize(frame[unit], sort=True)[0]
-    groups = frame.groupby(keys, sort=True).ngroup().to_numpy()
-    labels = list(frame.groupby(keys, sort=True).groups)
+    grouped = frame.groupby(keys, sort=True)
+    groups, labels = grouped.ngroup().to_numpy(), list(grouped.groups)
     n_users, n_groups = counts.shape[1], len(labels)
     sums, sizes = np.zeros((n_users, n_groups)), np.zeros((n_users, n_groups))
     np.add.at(sums, (users, groups), frame[metric].to_numpy(dtype=float))
@@ -120,8 +112,7 @@ BootValues = Callable[[pd.DataFrame, np.ndarray], dict[str, dict[str, np.ndarray
 
 
 def min_resamples(level: float) -> int:
-    """The fewest resamples a settled verdict at interval ``level`` may rest on: :data:`MIN_TAIL`
-    beyond each bound of the percentile interval (800 at 98.75%, 200 at 95%)."""
+    """The fewest resamples a settled verdict at ``level`` rests on: :data:`MIN_TAIL` beyond each bound."""
     if not 0.0 < level < 1.0:
         raise ConfigError(f"level must lie in (0, 1), got {level!r}")
     return math.ceil(round(MIN_TAIL / ((1.0 - level) / 2.0), 6))
@@ -155,18 +146,18 @@ def assess(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> list[Claim]:
-    """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``,
-    with their intervals at ``level`` over resamples of ``unit``, ``settled``, ``n_users``, and
-    ``reproduced`` ``undecided`` where an interval straddles a threshold or the evidence falls short
-    (:func:`shortfall`). ``fast``, the figure's vectorized bootstrap (:func:`group_means`), gives the
-    same numbers on the same resamples; if None, ``evaluate`` runs on every resample. A ConfigError if
-    a claim has no rule, or its verdict is not its rule's at its values."""
-    if not 0.0 < level < 1.0:
-        raise ConfigError(f"level must lie in (0, 1), got {level!r}")
+    """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``, with
+    intervals at ``level`` over resamples of ``unit``, ``undecided`` where one straddles a threshold or the
+    evidence falls short (:func:`shortfall`); ``fast`` (:func:`group_means`) gives the same numbers on the
+    same resamples, else ``evaluate`` runs on each. A ConfigError if a claim's verdict is not its rule's."""
+    n_users = int(frame[unit].nunique())
+    short = shortfall(n_users, n_boot, level, min_users)  # a ConfigError for a level outside (0, 1)
     point = evaluate(frame)
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
     if fast is not None:
-        boot = fast(frame, resample_counts(frame, n_boot, seed, unit))
+        rng = np.random.default_rng(seed)  # bootstrap_frames' resamples, as how often each user is drawn
+        counts = [np.bincount(rng.integers(0, n_users, n_users), minlength=n_users) for _ in range(n_boot)]
+        boot = fast(frame, np.stack(counts))
         samples = {
             cid: {k: [float(x) for x in boot.get(cid, {}).get(k, [])] for k in s}
             for cid, s in samples.items()
@@ -177,8 +168,6 @@ def assess(
                 for k, v in c.values.items():
                     if c.id in samples and k in samples[c.id]:
                         samples[c.id][k].append(v)
-    n_users = int(frame[unit].nunique())
-    short = shortfall(n_users, n_boot, level, min_users)
     return [_judged(c, samples[c.id], level, n_users, short) for c in point]
 
 
@@ -235,8 +224,7 @@ def member_frame(frame: pd.DataFrame, assistance: str) -> pd.DataFrame:
 
 @dataclasses.dataclass(frozen=True)
 class Sequential:
-    """The outcome of :func:`sequential`: every look's rows, the claims, and per (look, claim) of the
-    headline member its users per point, verdict and whether settled."""
+    """The outcome of :func:`sequential`: every look's rows, the claims, and each look's headline verdicts."""
 
     frame: pd.DataFrame
     claims: list[Claim]
@@ -254,10 +242,9 @@ def sequential(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> Sequential:
-    """Add users in blocks until every headline verdict is settled or the cap is reached: the first
-    look runs every member of ``assistance``, later ones only ``default`` (the headline member, a
-    ConfigError if not among them); ``run_block(look, members)`` returns the rows of that look's new
-    users (:func:`block_users`), LA rows labelled ``none``; the rest as :func:`assess` takes them."""
+    """Add users in blocks until every headline verdict is settled or the cap is reached: the first look runs
+    every member of ``assistance``, later ones only ``default``, the headline member; ``run_block(look,
+    members)`` returns the rows of that look's new users (:func:`block_users`), LA rows labelled ``none``."""
     if default not in assistance:
         raise ConfigError(f"the headline member {default!r} is not among the members {assistance}")
     judge = functools.partial(

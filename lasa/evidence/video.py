@@ -38,39 +38,31 @@ _BITEXACT_ARGS = (
 
 
 def render_states(
-    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, camera: str | None = None
+    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
 ) -> np.ndarray:
-    """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from
-    ``camera`` (default the robot's video camera); height and width even."""
+    """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from the
+    robot's video camera, height and width even; with ``n_jobs`` > 1 the states are split into as many
+    contiguous parts, rendered by worker processes (joblib): the same frames with any number."""
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
+    if int(n_jobs) != n_jobs or n_jobs < 1:
+        raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
     states = np.atleast_2d(states)
+    if n_jobs > 1 and len(states) > 1:
+        from joblib import Parallel, delayed  # noqa: PLC0415 (only when asked for workers)
+
+        parts = np.array_split(states, min(n_jobs, len(states)))
+        rendered = Parallel(n_jobs=len(parts))(delayed(render_states)(robot, p, height, width) for p in parts)
+        return np.concatenate(rendered)
     data = mujoco.MjData(robot.model)
     frames = np.empty((len(states), height, width, 3), dtype=np.uint8)
     with mujoco.Renderer(robot.model, height, width) as renderer:
         for i, q in enumerate(states):
             data.qpos[robot.qpos_adr] = q
             mujoco.mj_forward(robot.model, data)
-            renderer.update_scene(data, camera=camera or robot.spec.camera)
+            renderer.update_scene(data, camera=robot.spec.camera)
             frames[i] = renderer.render()
     return frames
-
-
-def render_many(
-    robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
-) -> np.ndarray:
-    """:func:`render_states`, the states split into ``n_jobs`` contiguous parts rendered by as many
-    worker processes (joblib): the same frames with any number (a ConfigError unless positive)."""
-    if int(n_jobs) != n_jobs or n_jobs < 1:
-        raise ConfigError(f"n_jobs must be a positive integer, got {n_jobs!r}")
-    states = np.atleast_2d(states)
-    if n_jobs == 1 or len(states) < 2:
-        return render_states(robot, states, height, width)
-    from joblib import Parallel, delayed  # noqa: PLC0415 (only when asked for workers)
-
-    parts = np.array_split(states, min(n_jobs, len(states)))
-    rendered = Parallel(n_jobs=len(parts))(delayed(render_states)(robot, p, height, width) for p in parts)
-    return np.concatenate(rendered)
 
 
 def label_frames(frames: np.ndarray, text: str | list[str]) -> np.ndarray:
@@ -92,9 +84,8 @@ def side_by_side(*videos: np.ndarray) -> np.ndarray:
 
 
 def write_video(path: str | os.PathLike[str], frames: np.ndarray, fps: float = 10.0) -> Path:
-    """Atomically write frames (T, H, W, 3), uint8, to an H.264 (yuv420p) MP4, the same bytes on
-    every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``); a
-    ConfigError if the frames are not (T, H, W, 3) or H or W is odd."""
+    """Atomically write frames (T, H, W, 3), uint8, H and W even, to an H.264 (yuv420p) MP4, the same bytes
+    on every machine; quantiser 20 up to 640x480 pixels, 28 above (why: ``docs/method-notes.md``)."""
     frames = np.asarray(frames)
     if frames.ndim != 4 or frames.shape[-1] != 3:
         raise ConfigError(f"frames must have shape (T, H, W, 3), got {frames.shape}")
@@ -119,11 +110,9 @@ def write_clips(
     width: int = 320,
     n_jobs: int = 1,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, caption each
-    frame, lay the clips out (``layout``: see :data:`LAYOUTS`; beside each other, shorter clips hold their
-    last frame) and write the MP4; render with ``n_jobs`` workers (:func:`render_many`). Returns the video
-    (T', height, width', 3) and the captioned clips, (T, height, width, 3) each; a ConfigError for no clips, a
-    clip without states, a caption list of the wrong length, an unknown ``layout`` or an odd frame size."""
+    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, with ``n_jobs``
+    workers, caption each frame, lay the clips out (:data:`LAYOUTS`; beside each other, shorter clips hold
+    their last frame) and write the MP4. Returns the video and the captioned clips."""
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
@@ -134,7 +123,7 @@ def write_clips(
             raise ConfigError(f"clip {i} has no states to render")
         if not isinstance(caption, str) and len(caption) != len(s):
             raise ConfigError(f"clip {i}: {len(caption)} captions for {len(s)} frames")
-    frames = render_many(robot, np.concatenate(states), height, width, n_jobs=n_jobs)
+    frames = render_states(robot, np.concatenate(states), height, width, n_jobs)
     parts = np.split(frames, np.cumsum([len(s) for s in states])[:-1])
     shown = [
         label_frames(part, caption if isinstance(caption, str) else list(caption))
