@@ -246,21 +246,16 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     steps = max(1, round(run.config.leave_hold / control.dt))
     paths = leave_paths(run.decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)
     pos = task.robot.grasp_positions(paths[:, 1:])  # (R, T, 3)
+    trees = [cKDTree(pset.positions) for pset in run.preference_sets]
     dist = np.stack(
-        [
-            cKDTree(pset.positions).query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2])
-            for pset in run.preference_sets
-        ],
-        axis=1,
+        [t.query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for t in trees], axis=1
     )  # (R, G, T)
     near = dist <= run.config.reach_distance
     first = np.where(near.any(axis=2), near.argmax(axis=2) + 1, -1)  # first step within reach, (R, G)
     frames = []
     for i, (g, label, _, cond) in enumerate(runs):
         rows = slice(i * k, (i + 1) * k)
-        for h in range(task.n_goals):
-            if h == g:
-                continue
+        for h in [h for h in range(task.n_goals) if h != g]:
             arrived = first[rows, h] > 0
             exit_time = np.where(arrived, first[rows, h] * control.dt, np.nan)
             leave = dict(start=label, condition=cond, target=names[h], exit_time=exit_time)

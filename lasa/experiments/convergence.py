@@ -208,9 +208,6 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
         def share(num: str, den: str, sums: pd.Series = sums) -> float:
             return float(sums[num] / sums[den]) if sums[den] > 0 else math.nan
 
-        ball = float(late.error.quantile(quantile))
-        r_alpha = float((end.delta_alpha / end.belief).median())
-        r_half = float((end.delta / end.belief).median())
         rows.append(
             {
                 "robot": robot,
@@ -224,10 +221,10 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
                 "beyond_slack_given_bound": share("rises_beyond_slack", "bound_steps"),
                 "bound_share_half": share("bound_steps_half", "steps"),
                 "rose_given_bound_half": share("rises_half", "bound_steps_half"),
-                "ball": ball,
+                "ball": float(late.error.quantile(quantile)),
                 "ball_target": float(late.error_target.quantile(quantile)),
-                "radius_alpha": r_alpha,
-                "radius_half": r_half,
+                "radius_alpha": float((end.delta_alpha / end.belief).median()),
+                "radius_half": float((end.delta / end.belief).median()),
                 "tightness_alpha": float((late.belief * late.error / late.delta_alpha).quantile(quantile)),
                 "tightness_half": float((late.belief * late.error / late.delta).quantile(quantile)),
                 "late_outside_alpha": float(late.bound_holds.astype(bool).mean()),
@@ -236,11 +233,6 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
             }
         )
     return pd.DataFrame(rows)
-
-
-def _assistance_present(table: pd.DataFrame) -> list[str]:
-    present = set(table.assistance)
-    return [m for m in ASSISTANCE if m in present]
 
 
 def _band(ax: Axes, part: pd.DataFrame, column: str, color: str, **line: object) -> None:
@@ -252,7 +244,7 @@ def _band(ax: Axes, part: pd.DataFrame, column: str, color: str, **line: object)
 
 def _bars(ax: Axes, table: pd.DataFrame, column: str, hatched: bool = False) -> None:
     """``column`` of a summary as bars per beta (x) and member (colour)."""
-    assistance = _assistance_present(table)
+    assistance = [m for m in ASSISTANCE if (table.assistance == m).any()]
     betas = sorted(table.beta.unique())
     width = 0.8 / len(assistance)
     for i, sa in enumerate(assistance):
@@ -273,7 +265,7 @@ def plot(table: pd.DataFrame) -> Figure:
     fig, rows = robot_rows(table, 4, (18, 3.8))
     stats = summary(table)
     for name, part, row in rows:
-        assistance = _assistance_present(part)
+        assistance = [m for m in ASSISTANCE if (part.assistance == m).any()]
         beta = part.beta.max()
         top = part[part.beta == beta]
         for sa in assistance:

@@ -32,6 +32,7 @@ from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_measure, latent_property
 from lasa.experiments import entropy_ablation
+from lasa.experiments.sweep import check_names
 from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
@@ -85,10 +86,7 @@ class Config:
             raise ConfigError(
                 f"train.z_dim must be 2 (the study's stick has two axes), got {self.train.z_dim}"
             )
-        if not self.segmentations:
-            raise ConfigError("segmentations must name at least one of " + ", ".join(SEGMENTATIONS))
-        for name in self.segmentations:
-            check_choice("segmentation", name, SEGMENTATIONS)
+        check_names("segmentations", self.segmentations, SEGMENTATIONS)
         if "continuous" not in self.segmentations:
             raise ConfigError("segmentations must include 'continuous': the lambda sweep runs on its base")
         for field in ("lambdas", "search_lambdas"):
@@ -101,12 +99,9 @@ class Config:
             raise ConfigError(
                 f"search_seeds must differ from train.seed ({self.train.seed}), got {self.search_seeds}"
             )
-        for field in _SUBSETS:
-            for name in getattr(self, field):
-                if name not in self.segmentations:
-                    raise ConfigError(
-                        f"{field} must be among segmentations {self.segmentations}, got {name!r}"
-                    )
+        for field, name in ((f, n) for f in _SUBSETS for n in getattr(self, f)):
+            if name not in self.segmentations:
+                raise ConfigError(f"{field} must be among segmentations {self.segmentations}, got {name!r}")
         if self.sector_segmentations and not self.sector_weight > 0:
             raise ConfigError(
                 f"sector_weight must be > 0 when sector_segmentations are trained, got {self.sector_weight}"
@@ -198,13 +193,13 @@ def train_variants(
     path = paths.artifact("eating_decoder", task.robot.name)
     _save(models[headline], path, fines[headline], control, config, headline)
     kept = {name: model for name, model, _, _ in variants}
-    return Variants(kept, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
+    return Variants(kept, sweep.table, float(sweep.chosen), demo_rows, frame, headline)
 
 
 def _demonstrations(
     task: EatingTask, control: ControlConfig, config: Config, paths: Paths
-) -> tuple[dict[str, Demonstrations], list[dict[str, object]]]:
-    """Each segmentation's tuples (saved), and a row of its sizes."""
+) -> tuple[dict[str, Demonstrations], pd.DataFrame]:
+    """Each segmentation's tuples (saved), and a row per segmentation of their sizes."""
     datasets, rows = {}, []
     for segmentation in config.segmentations:
         demos = collect_eating_demonstrations(task, control, config.demos, segmentation=segmentation)
@@ -212,13 +207,11 @@ def _demonstrations(
             demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=segmentation)
         )
         clean = demos.clean()
-        steps, minutes = len(clean), len(clean) * control.dt / 60
-        sizes = (segmentation, int(clean.demo.max() + 1), steps, minutes, len(demos))
         rows.append(
-            dict(zip(("reading", "demonstrations", "steps", "minutes", "tuples"), sizes, strict=True))
+            (segmentation, int(clean.demo.max() + 1), len(clean), len(clean) * control.dt / 60, len(demos))
         )
         datasets[segmentation] = demos
-    return datasets, rows
+    return datasets, pd.DataFrame(rows, columns=["reading", "demonstrations", "steps", "minutes", "tuples"])
 
 
 def _save(
@@ -296,8 +289,7 @@ def train_caps(
 
 def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
     """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
-    task, prop, source = shared
-    model, control, name = job
+    (task, prop, source), (model, control, name) = shared, job
     return latent_measure.measure(
         task, model, control, prop, source=source, task_name=source, decoder_name=name
     )

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
-from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -85,7 +84,9 @@ def plot_held_paths(task: GoalTask, paths: np.ndarray, z_values: np.ndarray, ax:
     start = drawn[0][0]
     ax.plot(start[0], start[1], "ko", ms=4)
     frame_around(task, ax, np.concatenate(drawn))
-    _z_colorbar(ax, norm, cmap)
+    plt.colorbar(
+        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+    )
     ax.set_title(title)
     return ax
 
@@ -120,15 +121,11 @@ def plot_grasp_sweep(
     ax.plot(start[0], start[1], "ko", ms=4)
     ax.set(aspect="equal", xlabel="along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
-    _z_colorbar(ax, norm, cmap)
-    ax.set_title(title)
-    return ax
-
-
-def _z_colorbar(ax: Axes, norm: Normalize, cmap: Any) -> None:
     plt.colorbar(
         plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
     )
+    ax.set_title(title)
+    return ax
 
 
 def plot_latent_meaning(frame: pd.DataFrame, ax: Axes) -> Axes:

@@ -40,7 +40,7 @@ from lasa.evidence.decision import UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Looks, assess, member_frame
 from lasa.experiments import sim1, sim2, sim3
-from lasa.experiments.sweep import as_decoders, check_assistance, check_needed
+from lasa.experiments.sweep import as_decoders, check_assistance, check_names, check_needed
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
@@ -92,8 +92,7 @@ class Config:
             object.__setattr__(self, name, tuple(float(v) for v in values))
         check_needed("betas", self.betas, sim1.CLAIM_BETAS, "the sim1 claims")
         check_assistance(self.assistance)
-        for p in check_list("pilots", self.pilots):
-            check_choice("pilot", p, PILOTS)
+        check_names("pilots", self.pilots, PILOTS)
         check_choice("design", self.design, DESIGNS)
         why = "the sim2 claims compare the smallest N with the largest"
         check_list("change_steps", self.change_steps, at_least=2, ascending=True, why=why)
