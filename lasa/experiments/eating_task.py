@@ -76,8 +76,7 @@ class Config:
     search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the variants' own: train.seed) [-]
     belief_cap: BeliefCap = STUDY_BELIEF_CAP  # the study's; None ("none"): Algorithm 1's uncapped
     cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)  # the headline's recipe again (train_caps)
-    # local worker processes for the trainings (entropy_ablation.train_all): the same decoders with any [-]
-    jobs: PositiveInt = 1
+    jobs: PositiveInt = 1  # local worker processes for the trainings: the same decoders with any number [-]
 
     def __post_init__(self) -> None:
         validate_caps(self)
@@ -114,16 +113,15 @@ def variant_names(config: Config) -> list[str]:
 
 
 def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float]]:
-    """(name, base, lambda) of every decoder variant; ``chosen``: notebook 03's rule's lambda."""
+    """(name, base, lambda) of every decoder variant, the sector and seed bases (:func:`_bases`) as they
+    are; ``chosen``: notebook 03's rule's lambda."""
     out: list[tuple[str, str, float]] = []
+    bases = _bases(config)
     for r in config.segmentations:
         out += [(r, r, 0.0), (f"{r}_entropy", r, chosen)]
         if r in config.search_segmentations:
             out += [(f"{r}_lambda{w:g}", r, w) for w in config.search_lambdas]
-        if r in config.sector_segmentations:
-            out.append((f"{r}_sectors", f"{r}_sectors", 0.0))
-        if r in config.seed_segmentations:
-            out += [(f"{r}_seed{s}", f"{r}_seed{s}", 0.0) for s in config.search_seeds]
+        out += [(b, b, 0.0) for b, (segmentation, _) in bases.items() if segmentation == r and b != r]
     return out
 
 
@@ -243,16 +241,6 @@ def cap_decoder_name(headline: str, cap: float | None) -> str:
     return f"{headline}_{cap_label(cap)}"
 
 
-@dataclasses.dataclass(frozen=True)
-class CapDecoders:
-    """The cap sweep's decoders (:func:`train_caps`), per cap (None: uncapped), the headline's recipe
-    at that cap; their names (:func:`cap_decoder_name`) and property rows (source :data:`CAP_SOURCE`)."""
-
-    models: dict[float | None, LatentActionModel]
-    names: dict[float | None, str]
-    property: pd.DataFrame
-
-
 def train_caps(
     task: EatingTask,
     control: ControlConfig,
@@ -261,8 +249,9 @@ def train_caps(
     variants: Variants,
     prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
-) -> CapDecoders:
-    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's."""
+) -> pd.DataFrame:
+    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's (each
+    saved as :func:`cap_decoder_name`): their property rows (source :data:`CAP_SOURCE`)."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     base, weight = {n: (b, w) for n, b, w in fine_tunes(config, variants.chosen_lambda)}[variants.headline]
     segmentation, base_train = _bases(config)[base]
@@ -280,11 +269,11 @@ def train_caps(
         for c, (model, _) in zip(caps, bases, strict=True)
     ]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
-    models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
-    names = {c: cap_decoder_name(variants.headline, c) for c in caps}
-    kept = [(names[c], models[c], fine, controls[c]) for c in caps]
-    frame = _keep(config, paths, (task, prop, CAP_SOURCE), kept)
-    return CapDecoders(models, names, frame)
+    kept = [
+        (cap_decoder_name(variants.headline, c), model, fine, controls[c])
+        for c, (model, _) in zip(caps, fitted, strict=True)
+    ]
+    return _keep(config, paths, (task, prop, CAP_SOURCE), kept)
 
 
 def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
@@ -370,20 +359,6 @@ def _names(items: list[str]) -> str:
     return quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} and {quoted[-1]}"
 
 
-def _misses(rows: pd.DataFrame) -> str:
-    """Where one decoder's property fails: the half and the goals, e.g. ``the stay half at the plate``."""
-    parts = []
-    for half, column in (("stay", "stay_holds"), ("leave", "leave_holds")):
-        goals = list(rows.goal[~rows[column].astype(bool)])
-        if len(goals) == len(rows):
-            parts.append(f"the {half} half at every goal")
-        elif goals:
-            parts.append(f"the {half} half at {' and '.join(f'the {g}' for g in goals)}")
-    if not rows.all_reached.astype(bool).all():
-        parts.append("a goal from home")
-    return " and ".join(parts) or "the rule"
-
-
 def property_sentence(prop: pd.DataFrame) -> str:
     """Which decoder variants meet the two-half rule, which the rule ranks first, how the others fall
     short; ``prop``: one task's :func:`lasa.evidence.latent_property.summary`."""
@@ -416,8 +391,19 @@ def caps_sentence(cap_prop: pd.DataFrame) -> str:
 
 
 def _shortfalls(prop: pd.DataFrame, meets: pd.Series, share: str) -> str:
-    """```d`` misses ...`` of each decoder that misses the rule, ``share`` formatting its top stay share."""
-    missing = prop[prop.decoder.isin(list(meets[~meets].index))].groupby("decoder", sort=False)
-    return "; ".join(
-        f"`{d}` misses {_misses(p)}" + share.format(100 * p.stay_share.max()) for d, p in missing
-    )
+    """```d`` misses ...`` of each decoder that misses the rule: the halves and goals (``the stay half at
+    the plate``), or ``a goal from home``; ``share`` formats its top stay share."""
+    tails = []
+    for d, rows in prop[prop.decoder.isin(list(meets[~meets].index))].groupby("decoder", sort=False):
+        parts = []
+        for half, column in (("stay", "stay_holds"), ("leave", "leave_holds")):
+            goals = list(rows.goal[~rows[column].astype(bool)])
+            if len(goals) == len(rows):
+                parts.append(f"the {half} half at every goal")
+            elif goals:
+                parts.append(f"the {half} half at {' and '.join(f'the {g}' for g in goals)}")
+        if not rows.all_reached.astype(bool).all():
+            parts.append("a goal from home")
+        misses = " and ".join(parts) or "the rule"
+        tails.append(f"`{d}` misses {misses}" + share.format(100 * rows.stay_share.max()))
+    return "; ".join(tails)

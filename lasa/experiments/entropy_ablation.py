@@ -45,11 +45,9 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        check_list("lambdas", self.lambdas, ascending=True)
+        check_list("lambdas", self.lambdas, at_least=2, ascending=True, why="0 and at least one lambda > 0")
         if 0.0 not in {float(lam) for lam in self.lambdas}:
             raise ConfigError(f"lambdas must include 0 (the control), got {self.lambdas!r}")
-        if len(set(self.lambdas)) < 2:
-            raise ConfigError("lambdas must hold 0 and at least one lambda > 0")
 
 
 @dataclasses.dataclass(frozen=True)

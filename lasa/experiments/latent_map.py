@@ -128,25 +128,10 @@ def plot_grasp_sweep(
     return ax
 
 
-def plot_latent_meaning(frame: pd.DataFrame, ax: Axes) -> Axes:
-    """What z controls in each context (:func:`run`'s rows): the cup reached, or the grasp."""
-    uni = frame[frame.context == "uniform"]
-    conf = frame[frame.context == "confident"]
-    ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
-    ax.set(xlabel="held joystick input z", ylabel="grasp site: left cup (-) ... right cup (+) [m]")
-    ax.axhline(0, color="0.8", lw=0.8)
-    twin = ax.twinx()
-    twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")
-    twin.set_ylabel("grasp preference $\\theta$ (0 top, 1 side)")
-    twin.set_ylim(min(-0.05, conf.grasp_theta.min() - 0.05), max(1.05, conf.grasp_theta.max() + 0.05))
-    lines = ax.get_lines()[:1] + twin.get_lines()
-    ax.legend(lines, [str(ln.get_label()) for ln in lines], frameon=False, loc="upper left", fontsize=8)
-    return ax
-
-
 def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | None = None) -> Figure:
     """The latent map: one row per robot present whose held-input paths are saved (artifact
-    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name."""
+    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name. Its last panel:
+    what z controls in each context (:func:`run`'s rows), the cup reached or the grasp."""
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
     size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
     fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
@@ -157,8 +142,18 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
         plot_held_paths(task, saved["uniform"], saved["z"], row[0], home)
         cup = f"{name}: confident in the right cup:\nz picks the grasp"
         plot_grasp_sweep(task, saved["confident"], saved["z"], 1, row[1], cup)
-        plot_latent_meaning(table[table.robot == name], ax=row[2])
-        row[2].set_title(f"{name}: what z controls, per context")
+        mine = table[table.robot == name]
+        ax, uni, conf = row[2], mine[mine.context == "uniform"], mine[mine.context == "confident"]
+        ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
+        ax.set(xlabel="held joystick input z", ylabel="grasp site: left cup (-) ... right cup (+) [m]")
+        ax.axhline(0, color="0.8", lw=0.8)
+        twin = ax.twinx()
+        twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")
+        twin.set_ylabel("grasp preference $\\theta$ (0 top, 1 side)")
+        twin.set_ylim(min(-0.05, conf.grasp_theta.min() - 0.05), max(1.05, conf.grasp_theta.max() + 0.05))
+        lines = ax.get_lines()[:1] + twin.get_lines()
+        ax.legend(lines, [str(ln.get_label()) for ln in lines], frameon=False, loc="upper left", fontsize=8)
+        ax.set_title(f"{name}: what z controls, per context")
     fig.tight_layout()
     return fig
 
