@@ -212,12 +212,10 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
     return _rows(run.base, "uncertain", "home", z, reached=reached, distance=best)
 
 
-def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **columns: object) -> pd.DataFrame:
-    empty = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
+def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **cols: object) -> pd.DataFrame:
+    none = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
     z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
-    frame = pd.DataFrame(
-        {**base, "context": context, "goal": goal, "z1": z[:, 0], "z2": z2, **empty, **columns}
-    )
+    frame = pd.DataFrame({**base, "context": context, "goal": goal, "z1": z[:, 0], "z2": z2, **none, **cols})
     return frame.reindex(columns=list(COLUMNS))
 
 

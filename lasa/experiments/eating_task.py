@@ -327,15 +327,14 @@ def plot(frame: pd.DataFrame) -> Figure:
     cmap = plt.get_cmap("coolwarm")
     norm = plt.Normalize(-vmax, vmax)
     scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
+    arrow = {"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
     for ax, name in zip(axes, BELIEFS, strict=True):
         part = frame[frame.belief == name]
         ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.8", lw=1))
         for _, row in part.iterrows():
             x0, y0 = row.z1, row.z2
             xy = (x0 - row.vy * scale, y0 + row.vx * scale)
-            ax.annotate(
-                "", xy=xy, xytext=(x0, y0), arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
-            )
+            ax.annotate("", xy=xy, xytext=(x0, y0), arrowprops=arrow)
             ax.scatter([x0], [y0], s=90, color=cmap(norm(np.degrees(row.tilt_rate))), edgecolor="k", zorder=3)
             label = f"{row.toward}\n{100 * row.vz:+.0f} cm/s up"
             ax.text(x0 * 1.3, y0 * 1.3 - 0.12, label, fontsize=7, ha="center", va="center")
