@@ -199,10 +199,8 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
     task, z = run.task, run.z
     robot = task.robot
     steps = max(1, round(run.config.uncertain_hold / run.control.dt))
-    uniform = np.full(task.n_goals, 1.0 / task.n_goals)
-    paths = held_input_paths(
-        run.decoder, task, run.control, task.start, uniform, z, steps, update_belief=True
-    )
+    flat = np.full(task.n_goals, 1.0 / task.n_goals)  # the uniform belief
+    paths = held_input_paths(run.decoder, task, run.control, task.start, flat, z, steps, update_belief=True)
     end = paths[:, -1]
     pos, axis = robot.grasp_positions(end), robot.grasp_axes(end)
     dist = np.stack([_nearest(s, pos, axis, 0.0)[0] for s in run.preference_sets], axis=1)  # (K, G)
@@ -237,17 +235,13 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     ]
     k = len(z)
     starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
-    beliefs = np.concatenate(
-        [np.broadcast_to(_confident(task, g, control), (k, task.n_goals)) for g, _, _, _ in runs]
-    )
+    beliefs = np.repeat(np.stack([_confident(task, g, control) for g, *_ in runs]), k, axis=0)
     alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
     steps = max(1, round(run.config.leave_hold / control.dt))
     paths = leave_paths(run.decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)
     pos = task.robot.grasp_positions(paths[:, 1:])  # (R, T, 3)
-    trees = [cKDTree(pset.positions) for pset in run.preference_sets]
-    dist = np.stack(
-        [t.query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for t in trees], axis=1
-    )  # (R, G, T)
+    trees = [cKDTree(pset.positions) for pset in run.preference_sets]  # dist: (R, G, T)
+    dist = np.stack([t.query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for t in trees], axis=1)
     near = dist <= run.config.reach_distance
     first = np.where(near.any(axis=2), near.argmax(axis=2) + 1, -1)  # first step within reach, (R, G)
     frames = []

@@ -112,8 +112,7 @@ def ranking(table: pd.DataFrame) -> pd.DataFrame:
         stay=("stay_share", "min"),
         tilt=("theta_range", "min"),
     )
-    order = ["meets", "all_reached", "goals", "stay_goals", "leave", "stay", "tilt"]
-    return per.sort_values(order, ascending=False, kind="stable")
+    return per.sort_values(list(per.columns), ascending=False, kind="stable")  # by each column in turn
 
 
 def choose(table: pd.DataFrame) -> str:

@@ -137,11 +137,6 @@ def _bases(config: Config) -> dict[str, tuple[str, TrainConfig]]:
     return out
 
 
-def _fine(config: Config, base: str, weight: float) -> TrainConfig:
-    """The fine-tune of ``base`` (:func:`_bases`) with entropy weight ``weight``."""
-    return dataclasses.replace(_bases(config)[base][1], steps=config.sweep_steps, entropy_lambda=weight)
-
-
 @dataclasses.dataclass(frozen=True)
 class Variants:
     """The trained variants of the study's decoder, notebook 03's sweep on the continuous base, the
@@ -164,7 +159,15 @@ def train_variants(
     progress: bool = True,
 ) -> Variants:
     """Train every decoder variant, measure its property, choose the headline by the property alone."""
-    datasets, demo_rows = _demonstrations(task, control, config, paths)
+    datasets: dict[str, Demonstrations] = {}
+    sizes: list[tuple[object, ...]] = []
+    robot = task.robot.name
+    for r in config.segmentations:  # each segmentation's tuples, saved, and a row of their sizes
+        datasets[r] = demos = collect_eating_demonstrations(task, control, config.demos, segmentation=r)
+        save_demonstrations(demos, paths.artifact("eating_segmentation_demos", robot, segmentation=r))
+        clean = demos.clean()
+        sizes.append((r, int(clean.demo.max() + 1), len(clean), len(clean) * control.dt / 60, len(demos)))
+    demo_rows = pd.DataFrame(sizes, columns=["reading", "demonstrations", "steps", "minutes", "tuples"])
     plan = _bases(config)
     runs = [entropy_ablation.Run(datasets[r], control, settings) for r, settings in plan.values()]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="base decoders")
@@ -181,35 +184,18 @@ def train_variants(
         if base == "continuous" and weight in sweep.models:  # the sweep's own
             models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
         else:
-            fines[name] = _fine(config, base, weight)
+            fines[name] = dataclasses.replace(plan[base][1], steps=config.sweep_steps, entropy_lambda=weight)
             runs_of[name] = entropy_ablation.Run(datasets[base], control, fines[name], goal_sets, bases[base])
     fitted = entropy_ablation.train_all(list(runs_of.values()), config.jobs, progress, "decoder readings")
     models.update({name: model for name, (model, _) in zip(runs_of, fitted, strict=True)})
     variants = [(name, models[name], fines[name], control) for name, _, _ in fine_tunes(config, sweep.chosen)]
     frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
-    path = paths.artifact("eating_decoder", task.robot.name)
-    _save(models[headline], path, fines[headline], control, config, headline)
+    _save(
+        models[headline], paths.artifact("eating_decoder", robot), fines[headline], control, config, headline
+    )
     kept = {name: model for name, model, _, _ in variants}
     return Variants(kept, sweep.table, float(sweep.chosen), demo_rows, frame, headline)
-
-
-def _demonstrations(
-    task: EatingTask, control: ControlConfig, config: Config, paths: Paths
-) -> tuple[dict[str, Demonstrations], pd.DataFrame]:
-    """Each segmentation's tuples (saved), and a row per segmentation of their sizes."""
-    datasets, rows = {}, []
-    for segmentation in config.segmentations:
-        demos = collect_eating_demonstrations(task, control, config.demos, segmentation=segmentation)
-        save_demonstrations(
-            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=segmentation)
-        )
-        clean = demos.clean()
-        rows.append(
-            (segmentation, int(clean.demo.max() + 1), len(clean), len(clean) * control.dt / 60, len(demos))
-        )
-        datasets[segmentation] = demos
-    return datasets, pd.DataFrame(rows, columns=["reading", "demonstrations", "steps", "minutes", "tuples"])
 
 
 def _save(
@@ -221,8 +207,7 @@ def _save(
 
 
 def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant]) -> pd.DataFrame:
-    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows
-    (``shared``: the task, how to measure, the rows' source)."""
+    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows."""
     for name, model, fine, control in variants:
         path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=name)
         _save(model, path, fine, control, config, name)
@@ -255,7 +240,7 @@ def train_caps(
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     base, weight = {n: (b, w) for n, b, w in fine_tunes(config, variants.chosen_lambda)}[variants.headline]
     segmentation, base_train = _bases(config)[base]
-    fine = _fine(config, base, weight)
+    fine = dataclasses.replace(base_train, steps=config.sweep_steps, entropy_lambda=weight)
     controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
     demos = {
         c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=segmentation)
@@ -294,14 +279,12 @@ def directions(
     states = np.broadcast_to(state, (len(z), len(state)))
     confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
-    data = mujoco.MjData(task.robot.model)
-    pos, axis, jp, jr = tip_frames(task.robot, data, state[None])
+    pos, axis, jp, jr = tip_frames(task.robot, mujoco.MjData(task.robot.model), state[None])
     goals = task.robot.goal_positions()
     rows = []
     for name, b in beliefs.items():
         qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
-        v = qdot @ jp[0].T  # (Z, 3)
-        w = qdot @ jr[0].T
+        v, w = qdot @ jp[0].T, qdot @ jr[0].T  # (Z, 3)
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
         # tilt from vertical: angle between the axis and (0, 0, -1); its rate
         tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)

@@ -54,10 +54,8 @@ class Config:
 class Sweep:
     """The sweep's results: per lambda its decoder, training config and log, and ``table``, one row per
     lambda: ``entropy_confident`` (mean entropy of p_(s,b) at confident demonstrated contexts [nats]),
-    ``recon_error`` (on the clean demonstrations) and ``val_error`` (held out) [(rad/s)^2]; ``chosen``
-    the rule's lambda (0 if no lambda > 0 was within its cost bound:
-    :func:`lasa.method.entropy.choose_lambda`).
-    """
+    ``recon_error`` (on the clean demonstrations) and ``val_error`` (held out) [(rad/s)^2]; ``chosen`` the
+    rule's lambda (0 if no lambda > 0 is within its cost bound: :func:`lasa.method.entropy.choose_lambda`)."""
 
     table: pd.DataFrame
     models: dict[float, LatentActionModel]
@@ -218,13 +216,10 @@ def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
     spread = f"{run.entropy_confident:.3f} nats, {run.entropy_confident / top:.0%} of the most, log {n_goals}"
     cost = run.recon_error / control.recon_error
     side = "below" if cost < 1 else "above" if cost > 1 else "equal to"
-    return "\n".join(
-        [
-            f"- **The rule chooses λ = {chosen:g}.** At confident contexts its mean entropy of p is "
-            f"{spread}; "
-            f"the control's is {control.entropy_confident:.3f} ({control.entropy_confident / top:.0%}).",
-            f"- **Its cost.** Its reconstruction error is {run.recon_error:.3g} (rad/s)², {cost:.2f}× the "
-            f"control's {control.recon_error:.3g} ({side} it); held out, {run.val_error:.3g} against "
-            f"{control.val_error:.3g}.",
-        ]
+    return (
+        f"- **The rule chooses λ = {chosen:g}.** At confident contexts its mean entropy of p is {spread}; "
+        f"the control's is {control.entropy_confident:.3f} ({control.entropy_confident / top:.0%}).\n"
+        f"- **Its cost.** Its reconstruction error is {run.recon_error:.3g} (rad/s)², {cost:.2f}× the "
+        f"control's {control.recon_error:.3g} ({side} it); held out, {run.val_error:.3g} against "
+        f"{control.val_error:.3g}."
     )

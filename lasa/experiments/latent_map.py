@@ -25,7 +25,6 @@ from lasa.evidence import latent_property
 from lasa.evidence.latent_measure import held_input_paths
 from lasa.evidence.plots import draw_scene, frame_around, goal_colors, project, robots_present
 from lasa.method.decoder import ActionDecoder
-from lasa.world.goals import GoalTask
 from lasa.world.robot import load_robot
 from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, make_cup_task
 
@@ -70,27 +69,6 @@ def run(
     return pd.concat(parts, ignore_index=True), {"z": z, **paths}
 
 
-def plot_held_paths(task: GoalTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes, title: str) -> Axes:
-    """Grasp-site paths (``paths``: states (K, steps + 1, n)) when each input of ``z_values`` (K,) is
-    held, coloured by z."""
-    ax = draw_scene(task, ax)
-    norm = Normalize(-1.0, 1.0)
-    cmap = plt.get_cmap("coolwarm")
-    drawn = []
-    for path, z in zip(paths, z_values, strict=True):
-        xy = project(task, task.robot.grasp_positions(path))
-        drawn.append(xy)
-        ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
-    start = drawn[0][0]
-    ax.plot(start[0], start[1], "ko", ms=4)
-    frame_around(task, ax, np.concatenate(drawn))
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
-    ax.set_title(title)
-    return ax
-
-
 def plot_grasp_sweep(
     task: CupTask, paths: np.ndarray, z_values: np.ndarray, goal: int, ax: Axes, title: str
 ) -> Axes:
@@ -108,9 +86,8 @@ def plot_grasp_sweep(
 
     norm = Normalize(-1.0, 1.0)
     cmap = plt.get_cmap("coolwarm")
-    ax.add_patch(
-        Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=goal_colors(task.n_goals)[goal], alpha=0.6)
-    )
+    color = goal_colors(task.n_goals)[goal]
+    ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=color, alpha=0.6))
     for path, z in zip(paths, z_values, strict=True):
         xy = plane(robot.grasp_positions(path))
         ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=0.8)
@@ -130,16 +107,26 @@ def plot_grasp_sweep(
 
 def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | None = None) -> Figure:
     """The latent map: one row per robot present whose held-input paths are saved (artifact
-    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name. Its last panel:
+    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name. Its panels: the
+    grasp-site paths from home, coloured by the held z; the grasps at the cup (:func:`plot_grasp_sweep`);
     what z controls in each context (:func:`run`'s rows), the cup reached or the grasp."""
+    norm, cmap = Normalize(-1.0, 1.0), plt.get_cmap("coolwarm")
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
     size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
     fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
     for name, row in zip(rows, axes, strict=True):
         task = (tasks or {}).get(name) or make_cup_task(load_robot(name))
         saved = load_npz(run_paths.artifact("latent_paths", name), Paths.make_hint("latent_paths", name))
-        home = f"{name}: from home (belief uniform at first):\nz picks the cup"
-        plot_held_paths(task, saved["uniform"], saved["z"], row[0], home)
+        drawn = [project(task, task.robot.grasp_positions(path)) for path in saved["uniform"]]
+        ax = draw_scene(task, row[0])
+        for xy, z in zip(drawn, saved["z"], strict=True):
+            ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
+        ax.plot(drawn[0][0][0], drawn[0][0][1], "ko", ms=4)
+        frame_around(task, ax, np.concatenate(drawn))
+        plt.colorbar(
+            plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+        )
+        ax.set_title(f"{name}: from home (belief uniform at first):\nz picks the cup")
         cup = f"{name}: confident in the right cup:\nz picks the grasp"
         plot_grasp_sweep(task, saved["confident"], saved["z"], 1, row[1], cup)
         mine = table[table.robot == name]

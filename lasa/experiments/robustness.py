@@ -247,8 +247,7 @@ def run(
     todo = cells(config, control)
     done: list[pd.DataFrame] = []
     if defaults is not None and todo and todo[0].setting == "default":
-        robot = task.robot.name
-        parts = [_judge(m, defaults[key], todo[0], robot, config) for key, m in SIMS]
+        parts = [_judge(m, defaults[key], todo[0], task.robot.name, config) for key, m in SIMS]
         done = [pd.concat(parts, ignore_index=True)]
         todo = todo[1:]
     frames = run_jobs(run_cell, todo, config.scheduler, config.n_jobs, progress, "grid cells", shared=grid)
@@ -280,9 +279,8 @@ def describe(table: pd.DataFrame) -> list[str]:
         undecided = int(row.undecided)
         tail = f" ({undecided} undecided cell{'s' if undecided != 1 else ''})" if undecided else ""
         if row.default == UNDECIDED:
-            said = "undecided in the default cell" + (
-                f"; settled elsewhere: {row.moves}" if row.moves else ""
-            )
+            elsewhere = f"; settled elsewhere: {row.moves}" if row.moves else ""
+            said = "undecided in the default cell" + elsewhere
         elif row.stable:
             said = f"'{row.default}' in every settled cell"
         else:
