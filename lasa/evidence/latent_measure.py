@@ -199,10 +199,8 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
     task, z = run.task, run.z
     robot = task.robot
     steps = max(1, round(run.config.uncertain_hold / run.control.dt))
-    uniform = np.full(task.n_goals, 1.0 / task.n_goals)
-    paths = held_input_paths(
-        run.decoder, task, run.control, task.start, uniform, z, steps, update_belief=True
-    )
+    flat = np.full(task.n_goals, 1.0 / task.n_goals)  # the uniform belief
+    paths = held_input_paths(run.decoder, task, run.control, task.start, flat, z, steps, update_belief=True)
     end = paths[:, -1]
     pos, axis = robot.grasp_positions(end), robot.grasp_axes(end)
     dist = np.stack([_nearest(s, pos, axis, 0.0)[0] for s in run.preference_sets], axis=1)  # (K, G)
@@ -212,12 +210,10 @@ def _uncertain_rows(run: _Run) -> pd.DataFrame:
     return _rows(run.base, "uncertain", "home", z, reached=reached, distance=best)
 
 
-def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **columns: object) -> pd.DataFrame:
-    empty = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
+def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **cols: object) -> pd.DataFrame:
+    none = {"drift": np.nan, "stays": False, "theta": np.nan, "stroke": np.nan}
     z2 = z[:, 1] if z.shape[1] > 1 else np.full(len(z), np.nan)
-    frame = pd.DataFrame(
-        {**base, "context": context, "goal": goal, "z1": z[:, 0], "z2": z2, **empty, **columns}
-    )
+    frame = pd.DataFrame({**base, "context": context, "goal": goal, "z1": z[:, 0], "z2": z2, **none, **cols})
     return frame.reindex(columns=list(COLUMNS))
 
 
@@ -239,28 +235,19 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     ]
     k = len(z)
     starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
-    beliefs = np.concatenate(
-        [np.broadcast_to(_confident(task, g, control), (k, task.n_goals)) for g, _, _, _ in runs]
-    )
+    beliefs = np.repeat(np.stack([_confident(task, g, control) for g, *_ in runs]), k, axis=0)
     alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
     steps = max(1, round(run.config.leave_hold / control.dt))
     paths = leave_paths(run.decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)
     pos = task.robot.grasp_positions(paths[:, 1:])  # (R, T, 3)
-    dist = np.stack(
-        [
-            cKDTree(pset.positions).query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2])
-            for pset in run.preference_sets
-        ],
-        axis=1,
-    )  # (R, G, T)
+    trees = [cKDTree(pset.positions) for pset in run.preference_sets]  # dist: (R, G, T)
+    dist = np.stack([t.query(pos.reshape(-1, 3))[0].reshape(pos.shape[:2]) for t in trees], axis=1)
     near = dist <= run.config.reach_distance
     first = np.where(near.any(axis=2), near.argmax(axis=2) + 1, -1)  # first step within reach, (R, G)
     frames = []
     for i, (g, label, _, cond) in enumerate(runs):
         rows = slice(i * k, (i + 1) * k)
-        for h in range(task.n_goals):
-            if h == g:
-                continue
+        for h in [h for h in range(task.n_goals) if h != g]:
             arrived = first[rows, h] > 0
             exit_time = np.where(arrived, first[rows, h] * control.dt, np.nan)
             leave = dict(start=label, condition=cond, target=names[h], exit_time=exit_time)

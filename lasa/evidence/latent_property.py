@@ -46,16 +46,14 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
     for key, part in frame.groupby(list(_KEYS), sort=False):
         conf = part[part.context == "confident"]
         home = part[part.context == "uncertain"]
-        counts = _leave_counts(part)
+        counts = leave_table(part)
         goals = list(dict.fromkeys(conf.goal))
         all_reached = set(goals) <= set(home.reached)
         for goal in goals:
             at = conf[conf.goal == goal]
             stay = at[at.stays.astype(bool)]
-            mine = counts[counts.goal == goal] if len(counts) else counts
-            least = [
-                float(mine[mine.condition == c].inputs.min()) if len(mine) else np.nan for c in CONDITIONS
-            ]
+            mine = counts[counts.goal == goal]
+            least = [float(mine[mine.condition == c].inputs.min()) for c in CONDITIONS]  # NaN: none
             theta = [float(stay.theta.min()), float(stay.theta.max())] if len(stay) else [np.nan, np.nan]
             ranges = [float(np.ptp(stay.theta)), float(np.ptp(stay.stroke))] if len(stay) else [0.0, 0.0]
             home_share = float((home.reached == goal).mean()) if len(home) else np.nan
@@ -68,27 +66,18 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
     return table
 
 
-def _leave_counts(frame: pd.DataFrame) -> pd.DataFrame:
-    leave = frame[frame.context == "leave"]
-    if leave.empty:
-        return pd.DataFrame(columns=list(_LEAVE))
-    arrived = leave.assign(arrived=leave.reached == leave.target)
-    return (
-        arrived.groupby(["goal", "start", "condition", "target"], sort=False)
-        .agg(inputs=("arrived", "sum"), exit_time=("exit_time", "median"))
-        .reset_index()
-    )
-
-
 def leave_table(frame: pd.DataFrame) -> pd.DataFrame:
     """The leave half, one row per (decoder, goal, phase end, condition, other goal): ``inputs`` that
     reach the other goal's set within the hold, ``exit_time`` their median first arrival [s]."""
-    parts = [
-        _leave_counts(part).assign(**dict(zip(_KEYS, key, strict=True)))
-        for key, part in frame.groupby(list(_KEYS), sort=False)
-    ]
-    out = pd.concat(parts, ignore_index=True) if parts else _leave_counts(frame)
-    return out[[*_KEYS, *_LEAVE]]
+    leave = frame[frame.context == "leave"]
+    if leave.empty:
+        return pd.DataFrame(columns=[*_KEYS, *_LEAVE])
+    arrived = leave.assign(arrived=leave.reached == leave.target)
+    return (
+        arrived.groupby([*_KEYS, "goal", "start", "condition", "target"], sort=False)
+        .agg(inputs=("arrived", "sum"), exit_time=("exit_time", "median"))
+        .reset_index()
+    )
 
 
 def stay_holds(table: pd.DataFrame) -> pd.Series:
@@ -123,8 +112,7 @@ def ranking(table: pd.DataFrame) -> pd.DataFrame:
         stay=("stay_share", "min"),
         tilt=("theta_range", "min"),
     )
-    order = ["meets", "all_reached", "goals", "stay_goals", "leave", "stay", "tilt"]
-    return per.sort_values(order, ascending=False, kind="stable")
+    return per.sort_values(list(per.columns), ascending=False, kind="stable")  # by each column in turn
 
 
 def choose(table: pd.DataFrame) -> str:
@@ -149,9 +137,8 @@ def plot(frame: pd.DataFrame) -> Figure:
     n_goals = max(table[table.task == t].goal.nunique() for t in tasks)
     sns.set_theme(style="white")
     size = (5.0 + 4 * 0.9 * n_goals, 1.3 + 0.38 * sum(heights))
-    fig, axes = plt.subplots(
-        len(tasks), 4, figsize=size, gridspec_kw={"height_ratios": heights}, squeeze=False
-    )
+    ratios = {"height_ratios": heights}
+    fig, axes = plt.subplots(len(tasks), 4, figsize=size, gridspec_kw=ratios, squeeze=False)
     for row_axes, name in zip(axes, tasks, strict=True):
         _plot_task(row_axes, table[table.task == name], name)
     fig.suptitle(

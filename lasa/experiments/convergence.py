@@ -8,6 +8,7 @@ r"""Sec. IV-A measured: the Lyapunov ball of LA+SA along simulated rollouts (not
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -47,15 +48,13 @@ NAME = "convergence"
 # [rad]; ``goal``, ``theta`` the user's cup and grasp; then counts of steps in the row's window [t, next
 # recorded t): all, with bound_holds, of those with V rising, rising beyond the slack, with
 # bound_holds_half, of those with V rising
-COLUMNS = (
-    *("robot", "assistance", "beta", USER, "t", "error", "delta", "v_dot", "v", "belief", "sigma_r"),
-    *("delta_alpha", "bound_holds", "bound_holds_half", "v_rose", "slack", "clipped", "error_target"),
-    *("goal", "theta", "steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_half"),
-    "rises_half",
+_STEP = tuple(  # measure's
+    "error delta v_dot v belief sigma_r delta_alpha bound_holds bound_holds_half v_rose slack clipped "
+    "error_target".split()
 )
-MEMBER_COLORS = {"point": "#1b9e77", "grasp_set": "#d95f02", "arbitrated": "#7570b3", "hindsight": "#e7298a"}
-_STEP = COLUMNS[COLUMNS.index("error") : COLUMNS.index("goal")]  # measure's: error ... error_target
 _COUNTS = ("steps", "bound_steps", "rises", "rises_beyond_slack", "bound_steps_half", "rises_half")
+COLUMNS = ("robot", "assistance", "beta", USER, "t", *_STEP, "goal", "theta", *_COUNTS)
+MEMBER_COLORS = {"point": "#1b9e77", "grasp_set": "#d95f02", "arbitrated": "#7570b3", "hindsight": "#e7298a"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,8 +70,9 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        betas = check_list("betas", self.betas, ascending=True)
-        object.__setattr__(self, "betas", tuple(float(b) for b in betas))
+        object.__setattr__(
+            self, "betas", tuple(float(b) for b in check_list("betas", self.betas, ascending=True))
+        )
         object.__setattr__(self, "assistance", tuple(self.assistance))
         check_assistance(self.assistance)
         # the last step is recorded whatever record_every (run appends it): only the bound
@@ -159,11 +159,9 @@ def run(
     progress: bool = False,
 ) -> pd.DataFrame:
     """LA+SA users of fixed rationality under each assistance member (replacing ``control.assistance``),
-    with the T4 quantities: one row per (member, beta, user, recorded step), columns :data:`COLUMNS`.
-
-    ``decoder`` is LA+SA's (``Workspace.sim_decoders()["base"]``); ConfigError if ``control.alpha``
-    is 0 (LA alone: no assistance, no ball).
-    """
+    with the T4 quantities: one row per (member, beta, user, recorded step), columns :data:`COLUMNS`;
+    ``decoder`` is LA+SA's (``Workspace.sim_decoders()["base"]``); ConfigError if ``control.alpha`` is 0
+    (LA alone: no assistance, no ball)."""
     if control.alpha <= 0:
         raise ConfigError("the Sec. IV-A bound needs alpha > 0 (LA+SA); control.alpha is 0")
     n_candidates = len(latent_grid(control.n_z, decoder.z_dim))
@@ -208,9 +206,6 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
         def share(num: str, den: str, sums: pd.Series = sums) -> float:
             return float(sums[num] / sums[den]) if sums[den] > 0 else math.nan
 
-        ball = float(late.error.quantile(quantile))
-        r_alpha = float((end.delta_alpha / end.belief).median())
-        r_half = float((end.delta / end.belief).median())
         rows.append(
             {
                 "robot": robot,
@@ -224,10 +219,10 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
                 "beyond_slack_given_bound": share("rises_beyond_slack", "bound_steps"),
                 "bound_share_half": share("bound_steps_half", "steps"),
                 "rose_given_bound_half": share("rises_half", "bound_steps_half"),
-                "ball": ball,
+                "ball": float(late.error.quantile(quantile)),
                 "ball_target": float(late.error_target.quantile(quantile)),
-                "radius_alpha": r_alpha,
-                "radius_half": r_half,
+                "radius_alpha": float((end.delta_alpha / end.belief).median()),
+                "radius_half": float((end.delta / end.belief).median()),
                 "tightness_alpha": float((late.belief * late.error / late.delta_alpha).quantile(quantile)),
                 "tightness_half": float((late.belief * late.error / late.delta).quantile(quantile)),
                 "late_outside_alpha": float(late.bound_holds.astype(bool).mean()),
@@ -238,11 +233,6 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
     return pd.DataFrame(rows)
 
 
-def _assistance_present(table: pd.DataFrame) -> list[str]:
-    present = set(table.assistance)
-    return [m for m in ASSISTANCE if m in present]
-
-
 def _band(ax: Axes, part: pd.DataFrame, column: str, color: str, **line: object) -> None:
     """Median over users against t, with the 25-75% band."""
     q = part.groupby("t")[column].quantile([0.25, 0.5, 0.75]).unstack()
@@ -250,16 +240,16 @@ def _band(ax: Axes, part: pd.DataFrame, column: str, color: str, **line: object)
     ax.fill_between(q.index, q[0.25], q[0.75], color=color, alpha=0.15, lw=0)
 
 
-def _bars(ax: Axes, table: pd.DataFrame, column: str, hatched: bool = False) -> None:
-    """``column`` of a summary as bars per beta (x) and member (colour)."""
-    assistance = _assistance_present(table)
+def _bars(ax: Axes, table: pd.DataFrame, solid: str, hatched: str) -> None:
+    """Columns ``solid`` and ``hatched`` of a summary as bars per beta (x) and member (colour)."""
+    assistance = [m for m in ASSISTANCE if (table.assistance == m).any()]
     betas = sorted(table.beta.unique())
     width = 0.8 / len(assistance)
-    for i, sa in enumerate(assistance):
+    for column, (i, sa) in itertools.product((solid, hatched), enumerate(assistance)):
         color = MEMBER_COLORS[sa]
         values = table[table.assistance == sa].set_index("beta").reindex(betas)[column].to_numpy()
         x = np.arange(len(betas)) - 0.4 + width * (i + 0.5)
-        if hatched:
+        if column == hatched:
             ax.bar(x, values, width, fill=False, hatch="//", edgecolor=color, lw=0.8)
         else:
             ax.bar(x, values, width, color=color, alpha=0.85, label=sa)
@@ -273,7 +263,7 @@ def plot(table: pd.DataFrame) -> Figure:
     fig, rows = robot_rows(table, 4, (18, 3.8))
     stats = summary(table)
     for name, part, row in rows:
-        assistance = _assistance_present(part)
+        assistance = [m for m in ASSISTANCE if (part.assistance == m).any()]
         beta = part.beta.max()
         top = part[part.beta == beta]
         for sa in assistance:
@@ -294,14 +284,12 @@ def plot(table: pd.DataFrame) -> Figure:
         e_title = rf"{name}: $\|e(t)\|$ and the radii, $\beta$ = {beta:g}"
         row[1].set(title=e_title, xlabel="time step t", ylabel="[rad]")
         s = stats[stats.robot == name]
-        _bars(row[2], s, "tightness_alpha")
-        _bars(row[2], s, "tightness_half", hatched=True)
+        _bars(row[2], s, "tightness_alpha", "tightness_half")
         row[2].axhline(1.0, color="0.3", lw=0.8)
         ratios = r"$b^*\|e\|/\delta_\alpha$ (solid), $b^*\|e\|/\delta$ (hatched)"
         ball = f"{name}: settled ball, 95th pct of\n" + ratios
         row[2].set(yscale="log", title=ball, ylabel="last 25% of steps [-]")
-        _bars(row[3], s, "rose_given_bound")
-        _bars(row[3], s, "rose_given_bound_half", hatched=True)
+        _bars(row[3], s, "rose_given_bound", "rose_given_bound_half")
         bounds = r"$b^*\|e\| > \delta_\alpha$ (solid), $> \delta$ (hatched)"
         rose = f"{name}: V rose, of steps with\n" + bounds
         row[3].set(ylim=(0, 1), title=rose, ylabel="V rose [share of steps]")

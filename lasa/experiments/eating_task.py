@@ -32,6 +32,7 @@ from lasa.base.errors import ConfigError
 from lasa.base.paths import Paths
 from lasa.evidence import latent_measure, latent_property
 from lasa.experiments import entropy_ablation
+from lasa.experiments.sweep import check_names
 from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
@@ -75,8 +76,7 @@ class Config:
     search_seeds: tuple[Seed, ...] = (1, 2)  # their training seeds (the variants' own: train.seed) [-]
     belief_cap: BeliefCap = STUDY_BELIEF_CAP  # the study's; None ("none"): Algorithm 1's uncapped
     cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)  # the headline's recipe again (train_caps)
-    # local worker processes for the trainings (entropy_ablation.train_all): the same decoders with any [-]
-    jobs: PositiveInt = 1
+    jobs: PositiveInt = 1  # local worker processes for the trainings: the same decoders with any number [-]
 
     def __post_init__(self) -> None:
         validate_caps(self)
@@ -85,10 +85,7 @@ class Config:
             raise ConfigError(
                 f"train.z_dim must be 2 (the study's stick has two axes), got {self.train.z_dim}"
             )
-        if not self.segmentations:
-            raise ConfigError("segmentations must name at least one of " + ", ".join(SEGMENTATIONS))
-        for name in self.segmentations:
-            check_choice("segmentation", name, SEGMENTATIONS)
+        check_names("segmentations", self.segmentations, SEGMENTATIONS)
         if "continuous" not in self.segmentations:
             raise ConfigError("segmentations must include 'continuous': the lambda sweep runs on its base")
         for field in ("lambdas", "search_lambdas"):
@@ -101,12 +98,9 @@ class Config:
             raise ConfigError(
                 f"search_seeds must differ from train.seed ({self.train.seed}), got {self.search_seeds}"
             )
-        for field in _SUBSETS:
-            for name in getattr(self, field):
-                if name not in self.segmentations:
-                    raise ConfigError(
-                        f"{field} must be among segmentations {self.segmentations}, got {name!r}"
-                    )
+        for field, name in ((f, n) for f in _SUBSETS for n in getattr(self, f)):
+            if name not in self.segmentations:
+                raise ConfigError(f"{field} must be among segmentations {self.segmentations}, got {name!r}")
         if self.sector_segmentations and not self.sector_weight > 0:
             raise ConfigError(
                 f"sector_weight must be > 0 when sector_segmentations are trained, got {self.sector_weight}"
@@ -119,16 +113,15 @@ def variant_names(config: Config) -> list[str]:
 
 
 def fine_tunes(config: Config, chosen: float) -> list[tuple[str, str, float]]:
-    """(name, base, lambda) of every decoder variant; ``chosen``: notebook 03's rule's lambda."""
+    """(name, base, lambda) of every decoder variant, the sector and seed bases (:func:`_bases`) as they
+    are; ``chosen``: notebook 03's rule's lambda."""
     out: list[tuple[str, str, float]] = []
+    bases = _bases(config)
     for r in config.segmentations:
         out += [(r, r, 0.0), (f"{r}_entropy", r, chosen)]
         if r in config.search_segmentations:
             out += [(f"{r}_lambda{w:g}", r, w) for w in config.search_lambdas]
-        if r in config.sector_segmentations:
-            out.append((f"{r}_sectors", f"{r}_sectors", 0.0))
-        if r in config.seed_segmentations:
-            out += [(f"{r}_seed{s}", f"{r}_seed{s}", 0.0) for s in config.search_seeds]
+        out += [(b, b, 0.0) for b, (segmentation, _) in bases.items() if segmentation == r and b != r]
     return out
 
 
@@ -142,11 +135,6 @@ def _bases(config: Config) -> dict[str, tuple[str, TrainConfig]]:
     for r in config.seed_segmentations:
         out.update({f"{r}_seed{s}": (r, dataclasses.replace(train, seed=s)) for s in config.search_seeds})
     return out
-
-
-def _fine(config: Config, base: str, weight: float) -> TrainConfig:
-    """The fine-tune of ``base`` (:func:`_bases`) with entropy weight ``weight``."""
-    return dataclasses.replace(_bases(config)[base][1], steps=config.sweep_steps, entropy_lambda=weight)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -171,7 +159,15 @@ def train_variants(
     progress: bool = True,
 ) -> Variants:
     """Train every decoder variant, measure its property, choose the headline by the property alone."""
-    datasets, demo_rows = _demonstrations(task, control, config, paths)
+    datasets: dict[str, Demonstrations] = {}
+    sizes: list[tuple[object, ...]] = []
+    robot = task.robot.name
+    for r in config.segmentations:  # each segmentation's tuples, saved, and a row of their sizes
+        datasets[r] = demos = collect_eating_demonstrations(task, control, config.demos, segmentation=r)
+        save_demonstrations(demos, paths.artifact("eating_segmentation_demos", robot, segmentation=r))
+        clean = demos.clean()
+        sizes.append((r, int(clean.demo.max() + 1), len(clean), len(clean) * control.dt / 60, len(demos)))
+    demo_rows = pd.DataFrame(sizes, columns=["reading", "demonstrations", "steps", "minutes", "tuples"])
     plan = _bases(config)
     runs = [entropy_ablation.Run(datasets[r], control, settings) for r, settings in plan.values()]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="base decoders")
@@ -188,37 +184,18 @@ def train_variants(
         if base == "continuous" and weight in sweep.models:  # the sweep's own
             models[name], fines[name] = sweep.models[weight], sweep.configs[weight]
         else:
-            fines[name] = _fine(config, base, weight)
+            fines[name] = dataclasses.replace(plan[base][1], steps=config.sweep_steps, entropy_lambda=weight)
             runs_of[name] = entropy_ablation.Run(datasets[base], control, fines[name], goal_sets, bases[base])
     fitted = entropy_ablation.train_all(list(runs_of.values()), config.jobs, progress, "decoder readings")
     models.update({name: model for name, (model, _) in zip(runs_of, fitted, strict=True)})
     variants = [(name, models[name], fines[name], control) for name, _, _ in fine_tunes(config, sweep.chosen)]
     frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
-    path = paths.artifact("eating_decoder", task.robot.name)
-    _save(models[headline], path, fines[headline], control, config, headline)
+    _save(
+        models[headline], paths.artifact("eating_decoder", robot), fines[headline], control, config, headline
+    )
     kept = {name: model for name, model, _, _ in variants}
-    return Variants(kept, sweep.table, float(sweep.chosen), pd.DataFrame(demo_rows), frame, headline)
-
-
-def _demonstrations(
-    task: EatingTask, control: ControlConfig, config: Config, paths: Paths
-) -> tuple[dict[str, Demonstrations], list[dict[str, object]]]:
-    """Each segmentation's tuples (saved), and a row of its sizes."""
-    datasets, rows = {}, []
-    for segmentation in config.segmentations:
-        demos = collect_eating_demonstrations(task, control, config.demos, segmentation=segmentation)
-        save_demonstrations(
-            demos, paths.artifact("eating_segmentation_demos", task.robot.name, segmentation=segmentation)
-        )
-        clean = demos.clean()
-        steps, minutes = len(clean), len(clean) * control.dt / 60
-        sizes = (segmentation, int(clean.demo.max() + 1), steps, minutes, len(demos))
-        rows.append(
-            dict(zip(("reading", "demonstrations", "steps", "minutes", "tuples"), sizes, strict=True))
-        )
-        datasets[segmentation] = demos
-    return datasets, rows
+    return Variants(kept, sweep.table, float(sweep.chosen), demo_rows, frame, headline)
 
 
 def _save(
@@ -230,8 +207,7 @@ def _save(
 
 
 def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant]) -> pd.DataFrame:
-    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows
-    (``shared``: the task, how to measure, the rows' source)."""
+    """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows."""
     for name, model, fine, control in variants:
         path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=name)
         _save(model, path, fine, control, config, name)
@@ -250,16 +226,6 @@ def cap_decoder_name(headline: str, cap: float | None) -> str:
     return f"{headline}_{cap_label(cap)}"
 
 
-@dataclasses.dataclass(frozen=True)
-class CapDecoders:
-    """The cap sweep's decoders (:func:`train_caps`), per cap (None: uncapped), the headline's recipe
-    at that cap; their names (:func:`cap_decoder_name`) and property rows (source :data:`CAP_SOURCE`)."""
-
-    models: dict[float | None, LatentActionModel]
-    names: dict[float | None, str]
-    property: pd.DataFrame
-
-
 def train_caps(
     task: EatingTask,
     control: ControlConfig,
@@ -268,12 +234,13 @@ def train_caps(
     variants: Variants,
     prop: latent_measure.PropertyConfig = latent_measure.PropertyConfig(),
     progress: bool = True,
-) -> CapDecoders:
-    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's."""
+) -> pd.DataFrame:
+    """The headline's recipe trained again at every cap of ``config.cap_sweep`` but the study's (each
+    saved as :func:`cap_decoder_name`): their property rows (source :data:`CAP_SOURCE`)."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     base, weight = {n: (b, w) for n, b, w in fine_tunes(config, variants.chosen_lambda)}[variants.headline]
     segmentation, base_train = _bases(config)[base]
-    fine = _fine(config, base, weight)
+    fine = dataclasses.replace(base_train, steps=config.sweep_steps, entropy_lambda=weight)
     controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
     demos = {
         c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=segmentation)
@@ -287,17 +254,16 @@ def train_caps(
         for c, (model, _) in zip(caps, bases, strict=True)
     ]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
-    models = {c: model for c, (model, _) in zip(caps, fitted, strict=True)}
-    names = {c: cap_decoder_name(variants.headline, c) for c in caps}
-    kept = [(names[c], models[c], fine, controls[c]) for c in caps]
-    frame = _keep(config, paths, (task, prop, CAP_SOURCE), kept)
-    return CapDecoders(models, names, frame)
+    kept = [
+        (cap_decoder_name(variants.headline, c), model, fine, controls[c])
+        for c, (model, _) in zip(caps, fitted, strict=True)
+    ]
+    return _keep(config, paths, (task, prop, CAP_SOURCE), kept)
 
 
 def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
     """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
-    task, prop, source = shared
-    model, control, name = job
+    (task, prop, source), (model, control, name) = shared, job
     return latent_measure.measure(
         task, model, control, prop, source=source, task_name=source, decoder_name=name
     )
@@ -313,14 +279,12 @@ def directions(
     states = np.broadcast_to(state, (len(z), len(state)))
     confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
-    data = mujoco.MjData(task.robot.model)
-    pos, axis, jp, jr = tip_frames(task.robot, data, state[None])
+    pos, axis, jp, jr = tip_frames(task.robot, mujoco.MjData(task.robot.model), state[None])
     goals = task.robot.goal_positions()
     rows = []
     for name, b in beliefs.items():
         qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
-        v = qdot @ jp[0].T  # (Z, 3)
-        w = qdot @ jr[0].T
+        v, w = qdot @ jp[0].T, qdot @ jr[0].T  # (Z, 3)
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
         # tilt from vertical: angle between the axis and (0, 0, -1); its rate
         tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)
@@ -346,15 +310,14 @@ def plot(frame: pd.DataFrame) -> Figure:
     cmap = plt.get_cmap("coolwarm")
     norm = plt.Normalize(-vmax, vmax)
     scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
+    arrow = {"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
     for ax, name in zip(axes, BELIEFS, strict=True):
         part = frame[frame.belief == name]
         ax.add_patch(plt.Circle((0, 0), 1.0, fill=False, color="0.8", lw=1))
         for _, row in part.iterrows():
             x0, y0 = row.z1, row.z2
             xy = (x0 - row.vy * scale, y0 + row.vx * scale)
-            ax.annotate(
-                "", xy=xy, xytext=(x0, y0), arrowprops={"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
-            )
+            ax.annotate("", xy=xy, xytext=(x0, y0), arrowprops=arrow)
             ax.scatter([x0], [y0], s=90, color=cmap(norm(np.degrees(row.tilt_rate))), edgecolor="k", zorder=3)
             label = f"{row.toward}\n{100 * row.vz:+.0f} cm/s up"
             ax.text(x0 * 1.3, y0 * 1.3 - 0.12, label, fontsize=7, ha="center", va="center")
@@ -376,20 +339,6 @@ def _names(items: list[str]) -> str:
     """```a```, ```a`` and ``b```, ```a``, ``b`` and ``c```."""
     quoted = [f"`{i}`" for i in items]
     return quoted[0] if len(quoted) == 1 else f"{', '.join(quoted[:-1])} and {quoted[-1]}"
-
-
-def _misses(rows: pd.DataFrame) -> str:
-    """Where one decoder's property fails: the half and the goals, e.g. ``the stay half at the plate``."""
-    parts = []
-    for half, column in (("stay", "stay_holds"), ("leave", "leave_holds")):
-        goals = list(rows.goal[~rows[column].astype(bool)])
-        if len(goals) == len(rows):
-            parts.append(f"the {half} half at every goal")
-        elif goals:
-            parts.append(f"the {half} half at {' and '.join(f'the {g}' for g in goals)}")
-    if not rows.all_reached.astype(bool).all():
-        parts.append("a goal from home")
-    return " and ".join(parts) or "the rule"
 
 
 def property_sentence(prop: pd.DataFrame) -> str:
@@ -424,8 +373,19 @@ def caps_sentence(cap_prop: pd.DataFrame) -> str:
 
 
 def _shortfalls(prop: pd.DataFrame, meets: pd.Series, share: str) -> str:
-    """```d`` misses ...`` of each decoder that misses the rule, ``share`` formatting its top stay share."""
-    missing = prop[prop.decoder.isin(list(meets[~meets].index))].groupby("decoder", sort=False)
-    return "; ".join(
-        f"`{d}` misses {_misses(p)}" + share.format(100 * p.stay_share.max()) for d, p in missing
-    )
+    """```d`` misses ...`` of each decoder that misses the rule: the halves and goals (``the stay half at
+    the plate``), or ``a goal from home``; ``share`` formats its top stay share."""
+    tails = []
+    for d, rows in prop[prop.decoder.isin(list(meets[~meets].index))].groupby("decoder", sort=False):
+        parts = []
+        for half, column in (("stay", "stay_holds"), ("leave", "leave_holds")):
+            goals = list(rows.goal[~rows[column].astype(bool)])
+            if len(goals) == len(rows):
+                parts.append(f"the {half} half at every goal")
+            elif goals:
+                parts.append(f"the {half} half at {' and '.join(f'the {g}' for g in goals)}")
+        if not rows.all_reached.astype(bool).all():
+            parts.append("a goal from home")
+        misses = " and ".join(parts) or "the rule"
+        tails.append(f"`{d}` misses {misses}" + share.format(100 * rows.stay_share.max()))
+    return "; ".join(tails)

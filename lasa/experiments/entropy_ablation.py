@@ -11,7 +11,6 @@ import dataclasses
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, NonNegative, PositiveInt, Seed, check_list, validate
@@ -46,21 +45,17 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        check_list("lambdas", self.lambdas, ascending=True)
+        check_list("lambdas", self.lambdas, at_least=2, ascending=True, why="0 and at least one lambda > 0")
         if 0.0 not in {float(lam) for lam in self.lambdas}:
             raise ConfigError(f"lambdas must include 0 (the control), got {self.lambdas!r}")
-        if len(set(self.lambdas)) < 2:
-            raise ConfigError("lambdas must hold 0 and at least one lambda > 0")
 
 
 @dataclasses.dataclass(frozen=True)
 class Sweep:
     """The sweep's results: per lambda its decoder, training config and log, and ``table``, one row per
     lambda: ``entropy_confident`` (mean entropy of p_(s,b) at confident demonstrated contexts [nats]),
-    ``recon_error`` (on the clean demonstrations) and ``val_error`` (held out) [(rad/s)^2]; ``chosen``
-    the rule's lambda (0 if no lambda > 0 was within its cost bound:
-    :func:`lasa.method.entropy.choose_lambda`).
-    """
+    ``recon_error`` (on the clean demonstrations) and ``val_error`` (held out) [(rad/s)^2]; ``chosen`` the
+    rule's lambda (0 if no lambda > 0 is within its cost bound: :func:`lasa.method.entropy.choose_lambda`)."""
 
     table: pd.DataFrame
     models: dict[float, LatentActionModel]
@@ -166,68 +161,39 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
     return pd.concat(frames, ignore_index=True)
 
 
-def plot_entropy_grid(
-    progress: np.ndarray, conf: np.ndarray, values: np.ndarray, ax: Axes, title: str
-) -> None:
-    """Entropy of p_(s,b) over a grid of contexts: progress to the goal x confidence in it."""
-    ps, cs = np.unique(progress), np.unique(conf)
-    grid = values.reshape(len(ps), len(cs)).T
-    mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
-    plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")
-    ax.set(xlabel="state: from home (0) to the right cup's goal (1)", ylabel="belief in the right cup")
-    ax.set_title(title)
-
-
-def plot_entropy_tradeoff(sweep: pd.DataFrame, chosen: float, ax: Axes) -> None:
-    """Reconstruction error on the clean demonstrations against entropy at confident contexts, per lambda."""
-    ax.plot(sweep.entropy_confident, sweep.recon_error, "o-", color="#444")
-    for _, row in sweep.iterrows():
-        mark = " (chosen)" if np.isclose(row["lambda"], chosen) else ""
-        ax.annotate(
-            f"λ={row['lambda']:g}{mark}",
-            (row.entropy_confident, row.recon_error),
-            textcoords="offset points",
-            xytext=(5, 5),
-            fontsize=8,
-        )
-    ax.set(
-        xlabel="mean entropy of p(s,b) at confident contexts [nats]",
-        ylabel="reconstruction error on the demonstrations [(rad/s)$^2$]",
-    )
-
-
 def plot(table: pd.DataFrame) -> Figure:
-    """One row per robot present: the entropy grid at lambda = 0 and at the chosen lambda, and the
-    sweep's trade-off."""
+    """One row per robot present: the entropy of p_(s,b) over a grid of contexts (progress to the goal x
+    confidence in it) at lambda = 0 and at the chosen lambda, and the sweep's trade-off: reconstruction
+    error on the clean demonstrations against entropy at confident contexts, per lambda."""
     fig, rows = robot_rows(table, 3, (16, 4.2))
     for name, part, row in rows:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
         for ax, lam in zip(row, lams, strict=False):
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]
-            title = f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)")
-            grid = (g.progress.to_numpy(), g.confidence.to_numpy(), g.entropy.to_numpy())
-            plot_entropy_grid(*grid, ax, title)
+            ps, cs = np.unique(g.progress.to_numpy()), np.unique(g.confidence.to_numpy())
+            grid = g.entropy.to_numpy().reshape(len(ps), len(cs)).T
+            mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
+            plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")
+            ax.set(
+                xlabel="state: from home (0) to the right cup's goal (1)", ylabel="belief in the right cup"
+            )
+            ax.set_title(f"{name}: lambda = {lam:g}" + (" (control)" if lam == 0 else " (chosen)"))
         if len(lams) == 1:  # the rule kept the control: no other decoder to draw
             row[1].set_axis_off()
             row[1].set_title(f"{name}: no lambda > 0 within the rule's cost bound")
-        sw = part[part.kind == "sweep"].rename(columns={"entropy": "entropy_confident"})
-        plot_entropy_tradeoff(sw, max(lams), row[2])
+        sweep = part[part.kind == "sweep"]
+        row[2].plot(sweep.entropy, sweep.recon_error, "o-", color="#444")
+        for _, r in sweep.iterrows():
+            mark = " (chosen)" if np.isclose(r["lambda"], max(lams)) else ""
+            where = {"textcoords": "offset points", "xytext": (5, 5), "fontsize": 8}
+            row[2].annotate(f"λ={r['lambda']:g}{mark}", (r.entropy, r.recon_error), **where)
+        row[2].set(
+            xlabel="mean entropy of p(s,b) at confident contexts [nats]",
+            ylabel="reconstruction error on the demonstrations [(rad/s)$^2$]",
+        )
         row[2].set_title(f"{name}: reconstruction vs entropy over lambda")
     fig.tight_layout()
     return fig
-
-
-def _kept_control(rows: pd.DataFrame, control: pd.Series) -> str:
-    """:func:`findings` when the rule kept the control: no lambda > 0 was within its cost bound."""
-    others = rows[rows.index > 0]
-    cheapest = others.recon_error.idxmin()
-    return (
-        f"- **The rule keeps the control, λ = 0.** No λ > 0 of the sweep keeps the reconstruction error "
-        f"within {LAMBDA_COST:g}× the control's {control.recon_error:.3g} (rad/s)²: the least costly, "
-        f"λ = {cheapest:g}, has {others.recon_error[cheapest] / control.recon_error:.2f}× it. The "
-        f"LA+SA+Entropy decoder is then the control's, without the entropy term; a sweep of smaller λ "
-        f"may find one."
-    )
 
 
 def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
@@ -237,18 +203,23 @@ def findings(table: pd.DataFrame, chosen: float, n_goals: int) -> str:
     if 0.0 not in rows.index or chosen not in rows.index:
         raise ConfigError(f"the sweep must hold lambda = 0 and {chosen:g}; it has {list(rows.index)}")
     run, control, top = rows.loc[chosen], rows.loc[0.0], float(np.log(n_goals))
-    if chosen == 0.0:
-        return _kept_control(rows, control)
+    if chosen == 0.0:  # no lambda > 0 was within the rule's cost bound
+        others = rows[rows.index > 0]
+        cheapest = others.recon_error.idxmin()
+        return (
+            f"- **The rule keeps the control, λ = 0.** No λ > 0 of the sweep keeps the reconstruction error "
+            f"within {LAMBDA_COST:g}× the control's {control.recon_error:.3g} (rad/s)²: the least costly, "
+            f"λ = {cheapest:g}, has {others.recon_error[cheapest] / control.recon_error:.2f}× it. The "
+            f"LA+SA+Entropy decoder is then the control's, without the entropy term; a sweep of smaller λ "
+            f"may find one."
+        )
     spread = f"{run.entropy_confident:.3f} nats, {run.entropy_confident / top:.0%} of the most, log {n_goals}"
     cost = run.recon_error / control.recon_error
     side = "below" if cost < 1 else "above" if cost > 1 else "equal to"
-    return "\n".join(
-        [
-            f"- **The rule chooses λ = {chosen:g}.** At confident contexts its mean entropy of p is "
-            f"{spread}; "
-            f"the control's is {control.entropy_confident:.3f} ({control.entropy_confident / top:.0%}).",
-            f"- **Its cost.** Its reconstruction error is {run.recon_error:.3g} (rad/s)², {cost:.2f}× the "
-            f"control's {control.recon_error:.3g} ({side} it); held out, {run.val_error:.3g} against "
-            f"{control.val_error:.3g}.",
-        ]
+    return (
+        f"- **The rule chooses λ = {chosen:g}.** At confident contexts its mean entropy of p is {spread}; "
+        f"the control's is {control.entropy_confident:.3f} ({control.entropy_confident / top:.0%}).\n"
+        f"- **Its cost.** Its reconstruction error is {run.recon_error:.3g} (rad/s)², {cost:.2f}× the "
+        f"control's {control.recon_error:.3g} ({side} it); held out, {run.val_error:.3g} against "
+        f"{control.val_error:.3g}."
     )

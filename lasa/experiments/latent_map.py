@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
-from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -26,7 +25,6 @@ from lasa.evidence import latent_property
 from lasa.evidence.latent_measure import held_input_paths
 from lasa.evidence.plots import draw_scene, frame_around, goal_colors, project, robots_present
 from lasa.method.decoder import ActionDecoder
-from lasa.world.goals import GoalTask
 from lasa.world.robot import load_robot
 from lasa.world.task import CupTask, cup_axis, grasp_frame, grasp_preference, make_cup_task
 
@@ -71,25 +69,6 @@ def run(
     return pd.concat(parts, ignore_index=True), {"z": z, **paths}
 
 
-def plot_held_paths(task: GoalTask, paths: np.ndarray, z_values: np.ndarray, ax: Axes, title: str) -> Axes:
-    """Grasp-site paths (``paths``: states (K, steps + 1, n)) when each input of ``z_values`` (K,) is
-    held, coloured by z."""
-    ax = draw_scene(task, ax)
-    norm = Normalize(-1.0, 1.0)
-    cmap = plt.get_cmap("coolwarm")
-    drawn = []
-    for path, z in zip(paths, z_values, strict=True):
-        xy = project(task, task.robot.grasp_positions(path))
-        drawn.append(xy)
-        ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
-    start = drawn[0][0]
-    ax.plot(start[0], start[1], "ko", ms=4)
-    frame_around(task, ax, np.concatenate(drawn))
-    _z_colorbar(ax, norm, cmap)
-    ax.set_title(title)
-    return ax
-
-
 def plot_grasp_sweep(
     task: CupTask, paths: np.ndarray, z_values: np.ndarray, goal: int, ax: Axes, title: str
 ) -> Axes:
@@ -107,9 +86,8 @@ def plot_grasp_sweep(
 
     norm = Normalize(-1.0, 1.0)
     cmap = plt.get_cmap("coolwarm")
-    ax.add_patch(
-        Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=goal_colors(task.n_goals)[goal], alpha=0.6)
-    )
+    color = goal_colors(task.n_goals)[goal]
+    ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=color, alpha=0.6))
     for path, z in zip(paths, z_values, strict=True):
         xy = plane(robot.grasp_positions(path))
         ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=0.8)
@@ -120,48 +98,49 @@ def plot_grasp_sweep(
     ax.plot(start[0], start[1], "ko", ms=4)
     ax.set(aspect="equal", xlabel="along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
-    _z_colorbar(ax, norm, cmap)
-    ax.set_title(title)
-    return ax
-
-
-def _z_colorbar(ax: Axes, norm: Normalize, cmap: Any) -> None:
     plt.colorbar(
         plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
     )
-
-
-def plot_latent_meaning(frame: pd.DataFrame, ax: Axes) -> Axes:
-    """What z controls in each context (:func:`run`'s rows): the cup reached, or the grasp."""
-    uni = frame[frame.context == "uniform"]
-    conf = frame[frame.context == "confident"]
-    ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
-    ax.set(xlabel="held joystick input z", ylabel="grasp site: left cup (-) ... right cup (+) [m]")
-    ax.axhline(0, color="0.8", lw=0.8)
-    twin = ax.twinx()
-    twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")
-    twin.set_ylabel("grasp preference $\\theta$ (0 top, 1 side)")
-    twin.set_ylim(min(-0.05, conf.grasp_theta.min() - 0.05), max(1.05, conf.grasp_theta.max() + 0.05))
-    lines = ax.get_lines()[:1] + twin.get_lines()
-    ax.legend(lines, [str(ln.get_label()) for ln in lines], frameon=False, loc="upper left", fontsize=8)
+    ax.set_title(title)
     return ax
 
 
 def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | None = None) -> Figure:
     """The latent map: one row per robot present whose held-input paths are saved (artifact
-    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name."""
+    ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name. Its panels: the
+    grasp-site paths from home, coloured by the held z; the grasps at the cup (:func:`plot_grasp_sweep`);
+    what z controls in each context (:func:`run`'s rows), the cup reached or the grasp."""
+    norm, cmap = Normalize(-1.0, 1.0), plt.get_cmap("coolwarm")
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
     size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
     fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
     for name, row in zip(rows, axes, strict=True):
         task = (tasks or {}).get(name) or make_cup_task(load_robot(name))
         saved = load_npz(run_paths.artifact("latent_paths", name), Paths.make_hint("latent_paths", name))
-        home = f"{name}: from home (belief uniform at first):\nz picks the cup"
-        plot_held_paths(task, saved["uniform"], saved["z"], row[0], home)
+        drawn = [project(task, task.robot.grasp_positions(path)) for path in saved["uniform"]]
+        ax = draw_scene(task, row[0])
+        for xy, z in zip(drawn, saved["z"], strict=True):
+            ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
+        ax.plot(drawn[0][0][0], drawn[0][0][1], "ko", ms=4)
+        frame_around(task, ax, np.concatenate(drawn))
+        plt.colorbar(
+            plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+        )
+        ax.set_title(f"{name}: from home (belief uniform at first):\nz picks the cup")
         cup = f"{name}: confident in the right cup:\nz picks the grasp"
         plot_grasp_sweep(task, saved["confident"], saved["z"], 1, row[1], cup)
-        plot_latent_meaning(table[table.robot == name], ax=row[2])
-        row[2].set_title(f"{name}: what z controls, per context")
+        mine = table[table.robot == name]
+        ax, uni, conf = row[2], mine[mine.context == "uniform"], mine[mine.context == "confident"]
+        ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
+        ax.set(xlabel="held joystick input z", ylabel="grasp site: left cup (-) ... right cup (+) [m]")
+        ax.axhline(0, color="0.8", lw=0.8)
+        twin = ax.twinx()
+        twin.plot(conf.z, conf.grasp_theta, "s-", color="#7570b3", label="confident belief: grasp $\\theta$")
+        twin.set_ylabel("grasp preference $\\theta$ (0 top, 1 side)")
+        twin.set_ylim(min(-0.05, conf.grasp_theta.min() - 0.05), max(1.05, conf.grasp_theta.max() + 0.05))
+        lines = ax.get_lines()[:1] + twin.get_lines()
+        ax.legend(lines, [str(ln.get_label()) for ln in lines], frameon=False, loc="upper left", fontsize=8)
+        ax.set_title(f"{name}: what z controls, per context")
     fig.tight_layout()
     return fig
 

@@ -16,7 +16,6 @@ import annotated_types as at
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
@@ -37,11 +36,11 @@ from lasa.base.config import (
 )
 from lasa.base.errors import ConfigError
 from lasa.evidence.claims import criteria
-from lasa.evidence.decision import NOT_TESTABLE, UNDECIDED, WORDS
+from lasa.evidence.decision import UNDECIDED, WORDS
 from lasa.evidence.plots import robots_present
 from lasa.evidence.verdicts import MIN_USERS, N_BOOT, USER, Looks, assess, member_frame
 from lasa.experiments import sim1, sim2, sim3
-from lasa.experiments.sweep import as_decoders, check_assistance, check_needed
+from lasa.experiments.sweep import as_decoders, check_assistance, check_names, check_needed
 from lasa.method.decoder import ActionDecoder
 from lasa.people.users import PILOTS
 from lasa.pipeline.scaleout import run_jobs
@@ -61,14 +60,8 @@ SIMS = (("sim1", sim1), ("sim2", sim2), ("sim3", sim3))  # the sims each cell ru
 # every cell's interval level: the claims table's, each look's 1 - ALPHA / K of the sequential
 # design (lasa.evidence.verdicts.Looks), so a cell and its claims-table row read alike [-]
 LEVEL = Looks().level
-# each effect word's colour (lasa.evidence.decision.WORDS); an undecided cell is also hatched
-COLOURS = {
-    "reproduced": "#1b9e77",
-    "partly": "#e6ab02",
-    "not reproduced": "#d95f02",
-    UNDECIDED: "#d9d9d9",
-    NOT_TESTABLE: "#ffffff",
-}
+# each effect word's colour (lasa.evidence.decision.WORDS, in order); an undecided cell is also hatched
+COLOURS = dict(zip(WORDS, ("#1b9e77", "#e6ab02", "#d95f02", "#d9d9d9", "#ffffff"), strict=True))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -76,11 +69,7 @@ class Config:
     """The robustness grid of notebook 08, and the sweep run in each of its cells."""
 
     assistance: tuple[str, ...] = ASSISTANCE  # members of the shared-autonomy family
-    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (
-        0.1,
-        0.2,
-        0.5,
-    )  # Eq. M1's blend weights [-]
+    alphas: tuple[Annotated[Number, at.Gt(0.0), at.Le(1.0)], ...] = (0.1, 0.2, 0.5)  # Eq. M1's weights [-]
     action_scales: tuple[Positive, ...] = (0.25, 0.375, 0.5)  # sigma_h, the human's speed bound [rad/s]
     pilots: tuple[str, ...] = PILOTS  # simulated users (lasa.people.users.PILOTS)
     lag_prob: UnitInterval = 0.85  # laggy pilot: probability of repeating the last input [-]
@@ -103,19 +92,13 @@ class Config:
             object.__setattr__(self, name, tuple(float(v) for v in values))
         check_needed("betas", self.betas, sim1.CLAIM_BETAS, "the sim1 claims")
         check_assistance(self.assistance)
-        if not self.pilots:
-            raise ConfigError("pilots must not be empty")
-        for p in self.pilots:
-            check_choice("pilot", p, PILOTS)
-        check_list("pilots", self.pilots)
+        check_names("pilots", self.pilots, PILOTS)
         check_choice("design", self.design, DESIGNS)
         why = "the sim2 claims compare the smallest N with the largest"
         check_list("change_steps", self.change_steps, at_least=2, ascending=True, why=why)
-        every = sim3.Config.record_every  # sim3 records its error every this many steps, the last included
-        if self.horizon % every:
+        if self.horizon % (every := sim3.Config.record_every):  # sim3 records every this many steps
             raise ConfigError(
-                f"horizon must be a multiple of {every} (sim3 records its error every {every} steps, "
-                f"the last included), got {self.horizon}"
+                f"horizon must be a multiple of sim3's record_every ({every}), got {self.horizon}"
             )
 
 
@@ -178,10 +161,6 @@ class Grid:
     config: Config
 
 
-def _pilot_prob(config: Config, pilot: str) -> float:
-    return {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[pilot]
-
-
 def _sim_configs(config: Config, pilot: dict[str, Any]) -> list[tuple[Any, Any, Any]]:
     """(module, config, reduce) of sims 1-3 at the map's sizes: one look of ``users`` users."""
     common: dict[str, Any] = {"users": config.users, "cap": config.users, "seed": config.seed}
@@ -215,7 +194,8 @@ def run_cell(grid: Grid, cell: Cell) -> pd.DataFrame:
     ctrl = dataclasses.replace(control, alpha=cell.alpha, action_scale=cell.action_scale)
     factor = cell.action_scale / control.action_scale
     decoders = {k: ScaledDecoder(d, factor) for k, d in grid.decoders.items()}
-    pilot: dict[str, Any] = {"pilot": cell.pilot, "pilot_prob": _pilot_prob(config, cell.pilot)}
+    prob = {"boltzmann": 0.0, "laggy": config.lag_prob, "noisy": config.noise_prob}[cell.pilot]
+    pilot: dict[str, Any] = {"pilot": cell.pilot, "pilot_prob": prob}
     parts = []
     robot = grid.task.robot.name
     for module, sim_config, reduce in _sim_configs(config, pilot):
@@ -267,8 +247,7 @@ def run(
     todo = cells(config, control)
     done: list[pd.DataFrame] = []
     if defaults is not None and todo and todo[0].setting == "default":
-        robot = task.robot.name
-        parts = [_judge(m, defaults[key], todo[0], robot, config) for key, m in SIMS]
+        parts = [_judge(m, defaults[key], todo[0], task.robot.name, config) for key, m in SIMS]
         done = [pd.concat(parts, ignore_index=True)]
         todo = todo[1:]
     frames = run_jobs(run_cell, todo, config.scheduler, config.n_jobs, progress, "grid cells", shared=grid)
@@ -287,17 +266,10 @@ def summary(table: pd.DataFrame) -> pd.DataFrame:
         head = str(default.iloc[0]) if len(default) else ""
         settled = part[part.settled.astype(bool) & (part.column != "default")]
         moves = settled.loc[settled.effect != head, ["column", "effect"]]
-        rows.append(
-            {
-                "robot": robot,
-                "id": claim,
-                **{v: int(counts.get(v, 0)) for v in WORDS},
-                "default": head,
-                "stable": bool(head) and head != UNDECIDED and moves.empty,
-                "moves": ", ".join(f"{c} {v}" for c, v in moves.itertuples(index=False)),
-            }
-        )
-    return pd.DataFrame(rows)
+        stable = bool(head) and head != UNDECIDED and moves.empty
+        said = ", ".join(f"{c} {v}" for c, v in moves.itertuples(index=False))
+        rows.append((robot, claim, *(int(counts.get(v, 0)) for v in WORDS), head, stable, said))
+    return pd.DataFrame(rows, columns=["robot", "id", *WORDS, "default", "stable", "moves"])
 
 
 def describe(table: pd.DataFrame) -> list[str]:
@@ -307,9 +279,8 @@ def describe(table: pd.DataFrame) -> list[str]:
         undecided = int(row.undecided)
         tail = f" ({undecided} undecided cell{'s' if undecided != 1 else ''})" if undecided else ""
         if row.default == UNDECIDED:
-            said = "undecided in the default cell" + (
-                f"; settled elsewhere: {row.moves}" if row.moves else ""
-            )
+            elsewhere = f"; settled elsewhere: {row.moves}" if row.moves else ""
+            said = "undecided in the default cell" + elsewhere
         elif row.stable:
             said = f"'{row.default}' in every settled cell"
         else:
@@ -327,21 +298,16 @@ def _label(row: Any) -> str:
     }.get(row.setting, f"a={row.alpha:g} s={row.action_scale:g} {row.pilot}")
 
 
-def level_of(table: pd.DataFrame) -> float:
-    """The one interval level of ``table``'s cells (its ``level`` column); ConfigError if the column is
-    missing (a table from before it was written) or holds more than one level."""
+def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
+    """The verdict map: claims (rows) x members and settings (columns), one panel per robot; ConfigError
+    if the table has no single interval level (no ``level`` column: a table from before it was written),
+    or a word outside ``WORDS``."""
     if "level" not in table.columns:
         raise ConfigError("the verdict map's table has no `level` column: run notebook 08 again")
     levels = sorted(set(table.level.astype(float)))
     if len(levels) != 1:
         raise ConfigError(f"the verdict map's cells must share one interval level, got {levels}")
-    return levels[0]
-
-
-def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
-    """The verdict map: claims (rows) x members and settings (columns), one panel per robot; ConfigError
-    if the table has no single interval level, or a word outside ``WORDS``."""
-    level = level_of(table)
+    level = levels[0]
     unknown = sorted(set(table.effect) - set(WORDS))
     if unknown:
         raise ConfigError(f"effect words must be among {WORDS}, got {unknown}")
@@ -362,8 +328,12 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
         grid = np.full((len(ids), len(order_cols)), np.nan)
         for row in table[table.robot == robot].itertuples(index=False):
             r, c = ids.index(row.id), order_cols.index(row.column)
-            grid[r, c] = code[row.effect]
-            _cell_text(ax, r, c, float(row.measured), row.effect == UNDECIDED)
+            grid[r, c], undecided = code[row.effect], row.effect == UNDECIDED
+            if undecided:  # hatched, its number with a "?"
+                xy = (c - 0.5, r - 0.5)
+                ax.add_patch(plt.Rectangle(xy, 1, 1, fill=False, hatch="///", lw=0, color="0.5"))
+            number = f"{float(row.measured):.2g}" + ("?" if undecided else "")
+            ax.text(c, r, number, ha="center", va="center", fontsize=6)
         ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=-0.5, vmax=len(WORDS) - 0.5, aspect="auto")
         ax.set_title(robot, fontsize=9)
         ax.set_xticks(range(len(order_cols)), order_cols, rotation=60, ha="right", fontsize=7)
@@ -380,10 +350,3 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     fig.legend(handles, WORDS, loc="lower center", ncol=len(WORDS), frameon=False, fontsize=8)
     return fig
-
-
-def _cell_text(ax: Axes, r: int, c: int, measured: float, undecided: bool) -> None:
-    """A cell's number (with a "?" and a hatch if it is undecided) at row ``r``, column ``c``."""
-    if undecided:
-        ax.add_patch(plt.Rectangle((c - 0.5, r - 0.5), 1, 1, fill=False, hatch="///", lw=0, color="0.5"))
-    ax.text(c, r, f"{measured:.2g}" + ("?" if undecided else ""), ha="center", va="center", fontsize=6)
