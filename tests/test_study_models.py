@@ -142,8 +142,8 @@ def test_headline_model_is_the_first_whose_retargeting_episodes_finish() -> None
     time = pd.DataFrame(rows("planning", short) + rows("one_step", ok))
     assert headline_model(time, ("planning", "one_step")) == "one_step"
     time = pd.DataFrame(rows("planning", ok) + rows("one_step", ok))
-    assert analysis.headline_model(time, ("planning", "one_step")) == "planning"
+    assert headline_model(time, ("planning", "one_step")) == "planning"
     time = pd.DataFrame(rows("planning", short) + rows("one_step", short))
-    assert analysis.headline_model(time, ("planning", "one_step")) == "planning"  # none qualifies: the first
+    assert headline_model(time, ("planning", "one_step")) == "planning"  # none qualifies: the first
     with pytest.raises(ConfigError, match="at least one"):
-        analysis.headline_model(time, ())
+        headline_model(time, ())

@@ -133,11 +133,11 @@ def test_the_committed_study_video_reads_back_with_its_frame_count():
     import pandas as pd
 
     figures = Path(__file__).resolve().parents[1] / "figures"
-    from lasa.experiments.study import analysis
+    from lasa.evidence.hypotheses import headline_model
     from lasa.experiments.study import run as study
 
     time = pd.read_csv(figures / "study_time.csv")
-    model = analysis.headline_model(time, study.Config().participant_models)  # the video's participants
+    model = headline_model(time, study.Config().participant_models)  # the video's participants
     shown = time[
         (time.participant == 0)
         & (time.task == "Dessert")
