@@ -28,6 +28,7 @@ from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import require_file
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property
+from lasa.experiments.sweep import check_names
 from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.people import participants, planning
 from lasa.people.cohort import Cohort, ParticipantConfig, draw_cohort
@@ -81,11 +82,7 @@ class Config:
     def __post_init__(self) -> None:
         validate_caps(self)
         object.__setattr__(self, "participant_models", tuple(self.participant_models))
-        models = self.participant_models
-        if not models or len(set(models)) != len(models):
-            raise ConfigError(f"participant_models must be non-empty and without repeats, got {models}")
-        for name in models:
-            check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
+        check_names("participant model", self.participant_models, tuple(PARTICIPANT_MODELS))
         check_choice("decoders", self.decoders, DECODER_SELECTIONS)
         for name in self.variants_per_model:
             check_choice("variants_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
