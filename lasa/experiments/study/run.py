@@ -91,27 +91,24 @@ class Config:
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
             )
         check_list("power_sizes", self.power_sizes, ascending=True)
-        self._warn_about_the_cohort()
-
-    def _warn_about_the_cohort(self) -> None:
-        """Warn of a cohort the Williams square does not balance, and of power sizes beyond it."""
+        # warn of a cohort the Williams square does not balance, and of power sizes beyond it
         rows = len(williams_square(len(CONDITIONS)))
-        if self.participants % rows:
-            warnings.warn(
+        beyond = [n for n in self.power_sizes if n > self.participants]
+        for warn, text in (
+            (
+                self.participants % rows,
                 f"participants = {self.participants} is not a multiple of {rows}: the balanced Latin "
                 f"square's {rows} orders are filled unevenly, so order and carry-over are not balanced",
-                UserWarning,
-                stacklevel=1,  # its own line: a config built twice (a replace) warns once
-            )
-        beyond = [n for n in self.power_sizes if n > self.participants]
-        if beyond:
-            warnings.warn(
+            ),
+            (
+                beyond,
                 f"power_sizes {beyond} exceed participants ({self.participants}): those cohorts are "
                 f"drawn with replacement from the {self.participants} simulated participants, so their "
                 f"power rests on the spread of {self.participants} people",
-                UserWarning,
-                stacklevel=1,
-            )
+            ),
+        ):
+            if warn:  # stacklevel 1, its own line: a config built twice (a replace) warns once
+                warnings.warn(text, UserWarning, stacklevel=1)
 
     @property
     def sweep_n(self) -> int:
