@@ -68,9 +68,8 @@ def prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
 
     out = frame[keys].copy()
     out[measure] = values
-    levels = {name: factors(name) for name in CONDITIONS}
-    out["interface"] = conditions.map(lambda c: levels[c][0])
-    out["assistance"] = conditions.map(lambda c: levels[c][1])
+    out["interface"] = conditions.map(lambda c: factors(c)[0])
+    out["assistance"] = conditions.map(lambda c: factors(c)[1])
     return out
 
 

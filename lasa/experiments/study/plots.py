@@ -235,16 +235,11 @@ def plot_time(
         horizon = float(cut.max()) if len(cut) else math.nan
     fig, axes, n = _layout(data, stats, (7.6, 4.8), _time_axes, n_axes=len(TASKS))
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
-    idle_note = (idle, "light: Idle Time; text: share of episodes finished")
-    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
-    whiskers = [
-        (
-            Line2D([], [], color=colour, lw=2),
-            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
-        )
-        for m, (dx, colour) in WHISKERS.items()
-    ]
-    notes = [_hatch_note(data, horizon), idle_note, *whiskers]
+    notes: list[tuple[Artist, str]] = [(idle, "light: Idle Time; text: share of episodes finished")]
+    for m, (dx, colour) in WHISKERS.items():  # "Total Time's 95% CI: whisker left of the bar's centre"
+        what = f"{m.replace('_', ' ').title()}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'}"
+        notes.append((Line2D([], [], color=colour, lw=2), f"{what} of the bar's centre"))
+    notes.insert(0, _hatch_note(data, horizon))
     title = wrap_to(f"Total and Idle Time ({_caption(assistance, decoder, model)})", 7.6 * n, 10)
     title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * n, 10)}"
     return _finish(fig, axes, title, notes, keys=None)
