@@ -37,9 +37,9 @@ def test_the_registry_and_the_config_validate_participant_models(twin):
     assert study.Config(participant_models=["twin", "one_step"]).participant_models == ("twin", "one_step")
     with pytest.raises(ConfigError, match="participant model 'psychic'"):
         study.Config(participant_models=("one_step", "psychic"))
-    with pytest.raises(ConfigError, match="without repeats"):
+    with pytest.raises(ConfigError, match="must not repeat"):
         study.Config(participant_models=("one_step", "one_step"))
-    with pytest.raises(ConfigError, match="non-empty"):
+    with pytest.raises(ConfigError, match="must name at least one"):
         study.Config(participant_models=())
 
 

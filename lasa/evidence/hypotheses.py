@@ -21,6 +21,7 @@ from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.sessions import complete_participants
 
 _TIMES = ("total_time", "idle_time")  # H3's measures
+TABLES = ("goal_error", "time", "alignment")  # the study's tables (lasa.experiments.study.run.run)
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
 
@@ -67,9 +68,7 @@ def analyse(
 ) -> dict[str, object]:
     """Every test the claims rest on, for one SA member, decoder variant, participant model and first ``n``;
     ``horizon`` [s] cuts H3's restricted times, ``n_resamples`` is its paired bootstrap's."""
-    err = for_member(frames["goal_error"], assistance, n, decoder, model)
-    time = for_member(frames["time"], assistance, n, decoder, model)
-    align = for_member(frames["alignment"], assistance, n, decoder, model)
+    err, time, align = (for_member(frames[k], assistance, n, decoder, model) for k in TABLES)
     out: dict[str, object] = {
         "n": int(err.participant.nunique()),
         "h1_within": stats.sa_effect_within(err, "goal_error"),
@@ -130,7 +129,7 @@ def people_claims(
     # within-subject tests: those who did every condition in every task (sessions.DROPPED; two or more)
     full = set(complete_participants(time, "claims")[0].participant)
     likert = frames.get("likert")  # people's answers' tests (lasa.evidence.sessions.likert_tests), if any
-    frames = {k: frames[k][frames[k].participant.isin(full)] for k in ("goal_error", "time", "alignment")}
+    frames = {k: frames[k][frames[k].participant.isin(full)] for k in TABLES}
     rows = []
     for assistance in sorted(set(time.assistance) - {NO_ASSISTANCE}) if len(full) >= 2 else []:
         result = analyse(frames, assistance, horizon=horizon, n_resamples=n_resamples)
@@ -164,12 +163,6 @@ def judge(result: Mapping[str, object]) -> dict[str, Judged]:
     return _censored_goal_error(out, done)
 
 
-def _uncomputed(numbers: Mapping[str, float]) -> str:
-    """Why a test with a non-finite number (e.g. ``F = -inf``) is not testable; "" if none is."""
-    lost = [name for name, v in numbers.items() if not math.isfinite(v)]
-    return f"{NOT_TESTABLE} (its test could not be computed: {', '.join(lost)} not finite)" if lost else ""
-
-
 def _h1(result: Mapping[str, object], name: str, unit: str = "m s", scale: float = 1.0) -> Judged:
     """H1 on the test ``name``: within subjects with its pairwise comparisons (values in ``unit`` by
     ``scale``), or ``h1_between``, the paper's F(1,18) reading (no pairwise comparisons)."""
@@ -181,9 +174,10 @@ def _h1(result: Mapping[str, object], name: str, unit: str = "m s", scale: float
     tests = {"effect": diff, "p": test["p"]}
     for r in pairs:
         tests |= {f"effect {r.a} - {r.b}": r.diff, f"p {r.a} - {r.b}": r.p_corr}
-    lost = _uncomputed(tests | {"F": test["F"]})
+    lost = [name for name, v in (tests | {"F": test["F"]}).items() if not math.isfinite(v)]  # e.g. F = -inf
     if lost:
-        return NOT_TESTABLE, math.nan, math.nan, math.nan, lost
+        said = f"{NOT_TESTABLE} (its test could not be computed: {', '.join(lost)} not finite)"
+        return NOT_TESTABLE, math.nan, math.nan, math.nan, said
     how = "between, the paper's df" if between else "within"
     said = f"SA - no SA = {scale * diff:+.2f} {unit}; {stats.format_f(test)} ({how})"
     if not between:

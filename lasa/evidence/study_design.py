@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
+from lasa.base.config import check_choice
 from lasa.base.errors import ConfigError
 
 INTERFACES: tuple[str, ...] = ("R", "LA")  # levels of the interface factor
@@ -25,11 +26,6 @@ def factors(condition: str) -> tuple[str, str]:
         raise ConfigError(f"unknown condition {condition!r}; allowed: {', '.join(CONDITIONS)}")
     interface, _, assistance = condition.partition("+")
     return interface, assistance or "none"
-
-
-def _check_agg(agg: str) -> None:
-    if agg not in AGGS:
-        raise ConfigError(f"agg must be one of {', '.join(map(repr, AGGS))}, got {agg!r}")
 
 
 def prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
@@ -72,9 +68,8 @@ def prepare(frame: pd.DataFrame, measure: str) -> pd.DataFrame:
 
     out = frame[keys].copy()
     out[measure] = values
-    levels = {name: factors(name) for name in CONDITIONS}
-    out["interface"] = conditions.map(lambda c: levels[c][0])
-    out["assistance"] = conditions.map(lambda c: levels[c][1])
+    out["interface"] = conditions.map(lambda c: factors(c)[0])
+    out["assistance"] = conditions.map(lambda c: factors(c)[1])
     return out
 
 
@@ -123,7 +118,7 @@ def participant_means(
 ) -> pd.DataFrame:
     """One value of ``measure`` per participant and ``by`` level (``()``: everything), the ``agg``
     (``"mean"``/``"sum"``) of the rest, in the study's order; a ConfigError for invalid data."""
-    _check_agg(agg)
+    check_choice("agg", agg, AGGS)
     by = list(by)
     data = prepare(frame, measure)
     unknown = [name for name in by if name not in data.columns or name == "participant" or name == measure]
@@ -135,7 +130,7 @@ def participant_means(
 
 def condition_cells(frame: pd.DataFrame, measure: str, agg: str, conditions: Sequence[str]) -> pd.DataFrame:
     """Validated per participant x condition values for ``conditions``, complete and balanced."""
-    _check_agg(agg)
+    check_choice("agg", agg, AGGS)
     data = prepare(frame, measure)
     check_participants(data)
     _check_complete(data, conditions)

@@ -63,11 +63,10 @@ def switch_share(time: pd.DataFrame, dt: float, n: int | None = None) -> pd.Data
 
 def switch_shares(time: pd.DataFrame, dt: float, models: Sequence[str]) -> pd.DataFrame:
     """:func:`switch_share` of each model (``model``), first 10 and cohort (``participants_of``)."""
-    parts = [("first 10", time[time.participant < PAPER_N]), ("cohort", time)]
     shares = (
-        switch_share(for_n[for_n.model == m], dt).assign(model=m, participants_of=label)
+        switch_share(time[time.model == m], dt, n).assign(model=m, participants_of=label)
         for m in models
-        for label, for_n in parts
+        for label, n in (("first 10", PAPER_N), ("cohort", None))
     )
     return pd.concat(shares, ignore_index=True)
 

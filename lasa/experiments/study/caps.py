@@ -130,23 +130,6 @@ def label(cap: float | None) -> str:
     return "none" if cap is None else f"{cap:g}"
 
 
-def _effects(result: Mapping[str, object]) -> dict[str, tuple[float, float, float, float, str]]:
-    """H1-H3's measured effects, testable or not: (value, 95% low, high, p, in words) per claim."""
-    within, phases, total = result["h1_within"], result["h2_phases"], result["h3_total"]
-    assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
-    diff = float(within["mean_sa"] - within["mean_no_sa"])
-    h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))
-    mean, low, high, p, pairs = phases["scoop"]
-    r = total.set_index("b").loc["R"]
-    h2 = f"LA+SA - R+SA = {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"
-    h3 = f"LA+SA - R = {r['diff']:+.1f} s [{r.ci_low:+.1f}, {r.ci_high:+.1f}] (restricted means)"
-    return {
-        "h1": (*h1, f"SA - no SA = {diff:+.2f} m s, {stats.format_f(within)}"),
-        "h2": (float(mean), float(low), float(high), float(p), h2),
-        "h3": (float(r["diff"]), float(r.ci_low), float(r.ci_high), np.nan, h3),
-    }
-
-
 def _cap_rows(
     cap: float | None,
     decoder: str,
@@ -161,8 +144,21 @@ def _cap_rows(
     blank = base | {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "settled": False, "text": ""}
     done = time.groupby("condition").completed.mean()
     out = [blank | {"kind": "completion", "item": c, "value": float(done.get(c, np.nan))} for c in CONDITIONS]
+    within, phases, total = result["h1_within"], result["h2_phases"], result["h3_total"]
+    assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
+    diff = float(within["mean_sa"] - within["mean_no_sa"])
+    h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))
+    mean, low, high, p, pairs = phases["scoop"]
+    r = total.set_index("b").loc["R"]
+    h2 = f"LA+SA - R+SA = {mean:+.3f}, paired t, {pairs} pairs, p = {p:.3g}"
+    h3 = f"LA+SA - R = {r['diff']:+.1f} s [{r.ci_low:+.1f}, {r.ci_high:+.1f}] (restricted means)"
+    effects = {
+        "h1": (*h1, f"SA - no SA = {diff:+.2f} m s, {stats.format_f(within)}"),
+        "h2": (float(mean), float(low), float(high), float(p), h2),
+        "h3": (float(r["diff"]), float(r.ci_low), float(r.ci_high), np.nan, h3),
+    }
     words = {row.id.split(".", 1)[1].split("@")[0]: row for row in rows}
-    for key, (value, low, high, p, text) in _effects(result).items():
+    for key, (value, low, high, p, text) in effects.items():
         row = words.get(key)
         word = "" if row is None else effect_word(row.reproduced)
         said = {"word": word, "settled": row is not None and bool(row.settled)}

@@ -40,7 +40,6 @@ CENSORED = f"{CUT} (a lower bound)"  # what the legend says HATCH means
 # Fig. time's whiskers, dodged so a bar's two intervals never merge: (offset [slot widths], colour)
 WHISKERS = {"total_time": (-0.15, "0.15"), "idle_time": (0.15, "0.5")}
 Stats = Mapping[str, str] | None  # our result per panel (HEADLINE, COHORT), a short line each
-Panels = Sequence[tuple[str, pd.DataFrame]]  # each panel's name (HEADLINE, COHORT) and rows
 Bars = dict[Hashable, mpatches.Rectangle]  # a drawn bar by its group (a condition, or a (x level, condition))
 
 
@@ -71,50 +70,36 @@ def _caption(assistance: str, decoder: str | None, model: str | None) -> str:
     return "; ".join(f"{what} = {name}" for what, name in said.items() if name)
 
 
-def _panels(data: pd.DataFrame) -> list[tuple[str, pd.DataFrame]]:
-    """The panels' names and rows: the first PAPER_N participants, and the whole table if it holds more."""
-    head = data[data.participant < PAPER_N]
-    panels = [(HEADLINE, head)]
-    if data.participant.nunique() > head.participant.nunique():
-        panels.append((COHORT, data))
-    return panels
-
-
-def _panel_titles(panels: Panels, stats: Stats, inches: float) -> list[str]:
-    """Each panel's title: its N and, if ``stats`` has one, our result; padded to the same line count."""
-    titles = []
-    for panel, part in panels:
-        n = part.participant.nunique()
-        what = (
-            f"first {n} simulated participants (the headline)"
-            if panel == HEADLINE
-            else f"cohort of {n} (a reading)"
-        )
-        ours = (stats or {}).get(panel)
-        titles.append("\n".join(wrap_to(line, inches, 10) for line in (what, ours) if line))
-    lines = max(t.count("\n") for t in titles)
-    return [t + "\n " * (lines - t.count("\n")) for t in titles]
-
-
 def _layout(
-    panels: Panels, stats: Stats, size: tuple[float, float], draw: Callable[..., None], n_axes: int = 1
-) -> tuple[Figure, list[Axes]]:
-    """A figure of a titled subfigure per panel, each of ``n_axes`` axes drawn by ``draw(rows, *axes)``."""
+    data: pd.DataFrame, stats: Stats, size: tuple[float, float], draw: Callable[..., None], n_axes: int = 1
+) -> tuple[Figure, list[Axes], int]:
+    """A figure of a subfigure per panel (the first PAPER_N participants, and the whole table if it holds
+    more), titled with its N and our result (``stats``), each of ``n_axes`` axes drawn by
+    ``draw(rows, *axes)``; its axes and number of panels."""
     unknown = sorted(set(stats or {}) - set(PANELS))
     if unknown:
         raise ConfigError(f"stats keys must be among {PANELS}, got {unknown}")
+    head, n = data[data.participant < PAPER_N], data.participant.nunique()
+    panels = [(HEADLINE, head, f"first {head.participant.nunique()} simulated participants (the headline)")]
+    if n > head.participant.nunique():
+        panels.append((COHORT, data, f"cohort of {n} (a reading)"))
     sns.set_theme(style="whitegrid")
     width, height = size
     fig = plt.figure(figsize=(width * len(panels), height), layout="constrained")
     subs: Iterable[SubFigure] = fig.subfigures(1, len(panels), squeeze=False)[0]
+    # the titles fit the panel beside a legend on the right (of the conditions, ~1.6 in), padded to one height
+    titles = [
+        "\n".join(wrap_to(t, width - 1.6, 10) for t in (what, (stats or {}).get(p)) if t)
+        for p, _, what in panels
+    ]
+    lines = max(t.count("\n") for t in titles)
     grid = []
-    # the titles fit the panel beside a legend on the right (of the conditions, ~1.6 in)
-    for sub, title in zip(subs, _panel_titles(panels, stats, width - 1.6), strict=True):
-        sub.suptitle(title, fontsize=10)
+    for sub, title in zip(subs, titles, strict=True):
+        sub.suptitle(title + "\n " * (lines - title.count("\n")), fontsize=10)
         grid.append(list(np.atleast_1d(sub.subplots(1, n_axes, sharey=True))))
-    for (_, part), axes in zip(panels, grid, strict=True):
+    for (_, part, _), axes in zip(panels, grid, strict=True):
         draw(part, *axes)
-    return fig, [ax for axes in grid for ax in axes]
+    return fig, [ax for axes in grid for ax in axes], len(panels)
 
 
 def _finish(
@@ -177,20 +162,13 @@ def _censored(part: pd.DataFrame, by: Sequence[str]) -> dict[Hashable, bool]:
     return {key: not bool(ok) for key, ok in done.items()}
 
 
-def _slots(levels: Sequence[str], hues: Sequence[str] = ()) -> dict[Hashable, float]:
-    """The centre of each bar seaborn draws: per level at 0, 1, ...; with hues, dodged over 0.8 of a level."""
-    if not hues:
-        return {level: float(i) for i, level in enumerate(levels)}
-    width = 0.8 / len(hues)
-    return {
-        (level, hue): i - 0.4 + width * (j + 0.5)
-        for i, level in enumerate(levels)
-        for j, hue in enumerate(hues)
-    }
-
-
-def _bars_at(patches: Iterable[Artist], slots: Mapping[Hashable, float]) -> Bars:
-    """The drawn bars (rectangles of a finite height) by the group whose slot their centre is at."""
+def _bars_at(patches: Iterable[Artist], levels: Sequence[str], hues: Sequence[str] = ()) -> Bars:
+    """The drawn bars (rectangles of a finite height) by their group: seaborn centres a level's bar at 0, 1,
+    ...; with hues, a (level, hue)'s bar dodged over 0.8 of a level."""
+    slots: dict[Hashable, float] = {level: float(i) for i, level in enumerate(levels)}
+    if hues:
+        w = 0.8 / len(hues)
+        slots = {(lv, h): i - 0.4 + w * (j + 0.5) for i, lv in enumerate(levels) for j, h in enumerate(hues)}
     bars: Bars = {}
     for bar in patches:
         if not isinstance(bar, mpatches.Rectangle) or math.isnan(bar.get_height()):
@@ -222,9 +200,8 @@ def plot_goal_error(
     member ``assistance``, ``decoder`` and ``model`` (None: every row); ``stats``: our result per panel;
     ``completed``, the Time table, marks the censored bars."""
     data = _with_completion(for_member(frame, assistance, decoder=decoder, model=model), completed)
-    panels = _panels(data)
-    fig, axes = _layout(panels, stats, (5.6, 4.4), _goal_error_axes)
-    paper = wrap_to(PAPER_H["h1"], 5.6 * len(panels), 10)
+    fig, axes, n = _layout(data, stats, (5.6, 4.4), _goal_error_axes)
+    paper = wrap_to(PAPER_H["h1"], 5.6 * n, 10)
     title = f"Goal Error ({_caption(assistance, decoder, model)})\n{paper}"
     return _finish(fig, axes, title, [_hatch_note(data)])
 
@@ -234,7 +211,7 @@ def _goal_error_axes(part: pd.DataFrame, ax: Axes) -> None:
     before = len(ax.patches)
     kwargs = {"x": "task", "y": "goal_error", "order": TASKS, "hue": "condition", "hue_order": CONDITIONS}
     sns.barplot(data=part, **kwargs, palette=PALETTE, **CI, ax=ax, alpha=0.85, legend=False)
-    _hatch(_bars_at(ax.patches[before:], _slots(TASKS, CONDITIONS)), _censored(part, ("task", "condition")))
+    _hatch(_bars_at(ax.patches[before:], TASKS, CONDITIONS), _censored(part, ("task", "condition")))
     # no jitter: seaborn jitters with an unseeded generator, and the PNG would change run to run
     dots = {"dodge": True, "size": 2.5, "jitter": False, "legend": False, "alpha": 0.5}
     sns.stripplot(data=part, **kwargs, palette=PALETTE, **dots, ax=ax)
@@ -256,21 +233,15 @@ def plot_time(
     if horizon is None:
         cut = data.total_time[~data.completed]
         horizon = float(cut.max()) if len(cut) else math.nan
-    panels = _panels(data)
-    fig, axes = _layout(panels, stats, (7.6, 4.8), _time_axes, n_axes=len(TASKS))
+    fig, axes, n = _layout(data, stats, (7.6, 4.8), _time_axes, n_axes=len(TASKS))
     idle = mpatches.Patch(facecolor="0.85", edgecolor="white")
-    idle_note = (idle, "light: Idle Time; text: share of episodes finished")
-    names = {"total_time": "Total Time", "idle_time": "Idle Time"}
-    whiskers = [
-        (
-            Line2D([], [], color=colour, lw=2),
-            f"{names[m]}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'} of the bar's centre",
-        )
-        for m, (dx, colour) in WHISKERS.items()
-    ]
-    notes = [_hatch_note(data, horizon), idle_note, *whiskers]
-    title = wrap_to(f"Total and Idle Time ({_caption(assistance, decoder, model)})", 7.6 * len(panels), 10)
-    title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * len(panels), 10)}"
+    notes: list[tuple[Artist, str]] = [(idle, "light: Idle Time; text: share of episodes finished")]
+    for m, (dx, colour) in WHISKERS.items():  # "Total Time's 95% CI: whisker left of the bar's centre"
+        what = f"{m.replace('_', ' ').title()}'s {CI_LEVEL:g}% CI: whisker {'left' if dx < 0 else 'right'}"
+        notes.append((Line2D([], [], color=colour, lw=2), f"{what} of the bar's centre"))
+    notes.insert(0, _hatch_note(data, horizon))
+    title = wrap_to(f"Total and Idle Time ({_caption(assistance, decoder, model)})", 7.6 * n, 10)
+    title += f"\n{wrap_to(PAPER_H['h3'], 7.6 * n, 10)}"
     return _finish(fig, axes, title, notes, keys=None)
 
 
@@ -282,7 +253,7 @@ def _time_axes(part: pd.DataFrame, *axes: Axes) -> None:
         before, lines = len(ax.patches), len(ax.lines)
         common = {"data": rows, "x": "condition", "order": CONDITIONS, **CI, "ax": ax}
         sns.barplot(**common, y="total_time", palette=PALETTE, hue="condition", legend=False)
-        bars = _bars_at(ax.patches[before:], _slots(CONDITIONS))
+        bars = _bars_at(ax.patches[before:], CONDITIONS)
         _hatch(bars, _censored(rows, ("condition",)))
         done = rows.groupby("condition").completed.mean()
         for condition, bar in bars.items():
@@ -327,13 +298,12 @@ def plot_alignment(
     data = for_member(frame, assistance, decoder=decoder, model=model)
     data = data[(data.task == "Dessert") & data.phase.isin(PHASES)]
     data = _with_completion(data, completed)
-    panels = _panels(data)
-    fig, axes = _layout(panels, stats, (6.6, 4.4), _alignment_axes)
+    fig, axes, n = _layout(data, stats, (6.6, 4.4), _alignment_axes)
     scoop = mpatches.Patch(facecolor="0.92", label="shaded: the scoop phase (H2)")
     count = (mpatches.Patch(visible=False), "n (at a bar's foot): participants who reached the phase")
     notes = [_hatch_note(data, also="some participant did not reach the phase"), count]
     title = f"Dessert: alignment with each phase's preference ({_caption(assistance, decoder, model)})"
-    title = f"{wrap_to(title, 6.6 * len(panels), 10)}\n{PAPER_H['h2']}"
+    title = f"{wrap_to(title, 6.6 * n, 10)}\n{PAPER_H['h2']}"
     return _finish(fig, axes, title, notes, keys=[scoop])
 
 
@@ -351,7 +321,7 @@ def _alignment_axes(part: pd.DataFrame, ax: Axes) -> None:
     censored = n < of
     if "completed" in part.columns:
         censored |= ~groups.completed.all()
-    bars = _bars_at(ax.patches[before:], _slots(PHASES, CONDITIONS))
+    bars = _bars_at(ax.patches[before:], PHASES, CONDITIONS)
     _hatch(bars, {key: bool(c) for key, c in censored.items()})
     for key, bar in bars.items():
         _label(ax, bar, f"n={int(n[key]) if key in n.index else 0}", foot=True)

@@ -15,13 +15,12 @@ import pandas as pd
 from lasa.base.config import NO_ASSISTANCE, check_choice
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE
-from lasa.evidence.hypotheses import analyse, for_member, judge
+from lasa.evidence.hypotheses import TABLES, analyse, for_member, judge
 from lasa.evidence.rules import rule
 from lasa.pipeline.scaleout import run_jobs
 
 POWER_CLAIMS: tuple[str, ...] = ("h1", "h2", "h3")  # the claim keys of judge whose power is simulated
 SIZES: tuple[int, ...] = (6, 10, 16, 24, 40, 60)  # cohort sizes simulated by default [participants]
-_TABLES = ("goal_error", "time", "alignment")  # lasa.experiments.study.run.run's tables
 _CHUNK = 10  # drawn cohorts per job (the progress bar steps by a job) [-]
 
 # what each claim's effect says, by its sign: (above 0, below 0)
@@ -53,7 +52,17 @@ def power(
     :func:`lasa.experiments.study.run.run`'s ``frames`` of one member, decoder and model (None: the only
     one): ``draws`` cohorts of each of ``sizes`` drawn with replacement from ``seed`` (whatever ``n_jobs``);
     ``horizon`` [s] and ``n_resamples`` are H3's."""
-    sizes = _checked(sizes, draws, n_resamples, n_jobs)
+    sizes = list(sizes)
+    if not sizes or any(int(n) != n or n < 2 for n in sizes) or len(set(sizes)) != len(sizes):
+        raise ConfigError(f"sizes must be distinct whole numbers >= 2 (participants), got {sizes}")
+    for name, v, unit in (
+        ("draws", draws, ""),
+        ("n_resamples", n_resamples, ""),
+        ("n_jobs", n_jobs, " (worker processes)"),
+    ):
+        if int(v) != v or v < 1:
+            raise ConfigError(f"{name} must be a whole number >= 1{unit}, got {v!r}")
+    sizes = [int(n) for n in sizes]
     tables = _rows_of(frames, assistance, decoder, model)
     setting = (assistance, decoder, model, float(horizon), int(n_resamples))
     full = _outcome(tables, setting, strict=True)
@@ -77,26 +86,11 @@ def power(
     return pd.DataFrame(rows, columns=_COLUMNS).astype({"paper_direction": "boolean"})
 
 
-def _checked(sizes: Sequence[int], draws: int, n_resamples: int, n_jobs: int) -> list[int]:
-    """``sizes`` as a list of ints, after checking every argument of :func:`power` it is given."""
-    sizes = list(sizes)
-    if not sizes or any(int(n) != n or n < 2 for n in sizes) or len(set(sizes)) != len(sizes):
-        raise ConfigError(f"sizes must be distinct whole numbers >= 2 (participants), got {sizes}")
-    for name, v, unit in (
-        ("draws", draws, ""),
-        ("n_resamples", n_resamples, ""),
-        ("n_jobs", n_jobs, " (worker processes)"),
-    ):
-        if int(v) != v or v < 1:
-            raise ConfigError(f"{name} must be a whole number >= 1{unit}, got {v!r}")
-    return [int(n) for n in sizes]
-
-
 def _rows_of(
     frames: dict[str, pd.DataFrame], assistance: str, decoder: str | None, model: str | None
 ) -> dict[str, pd.DataFrame]:
     """The three tables' rows of one member, decoder variant and model (``for_member``), checked."""
-    missing = [k for k in _TABLES if k not in frames]
+    missing = [k for k in TABLES if k not in frames]
     if missing:
         raise ConfigError(f"frames lacks {missing}; pass lasa.experiments.study.run.run's three tables")
     time = frames["time"]
@@ -105,7 +99,7 @@ def _rows_of(
             check_choice(name, value, sorted(set(time[column]) - {NO_ASSISTANCE}))
     if model is not None and "model" in time.columns:
         check_choice("participant model", model, sorted(set(time.model)))
-    out = {k: for_member(frames[k], assistance, None, decoder, model) for k in _TABLES}
+    out = {k: for_member(frames[k], assistance, None, decoder, model) for k in TABLES}
     if out["time"].participant.nunique() < 2:
         raise ConfigError(f"the rows of ({assistance}, {decoder}, {model}) have fewer than 2 participants")
     return out

@@ -28,6 +28,7 @@ from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import require_file
 from lasa.base.paths import Paths
 from lasa.evidence import latent_property
+from lasa.experiments.sweep import check_names
 from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.people import participants, planning
 from lasa.people.cohort import Cohort, ParticipantConfig, draw_cohort
@@ -81,11 +82,7 @@ class Config:
     def __post_init__(self) -> None:
         validate_caps(self)
         object.__setattr__(self, "participant_models", tuple(self.participant_models))
-        models = self.participant_models
-        if not models or len(set(models)) != len(models):
-            raise ConfigError(f"participant_models must be non-empty and without repeats, got {models}")
-        for name in models:
-            check_choice("participant model", name, tuple(PARTICIPANT_MODELS))
+        check_names("participant model", self.participant_models, tuple(PARTICIPANT_MODELS))
         check_choice("decoders", self.decoders, DECODER_SELECTIONS)
         for name in self.variants_per_model:
             check_choice("variants_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
@@ -94,27 +91,24 @@ class Config:
                 f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
             )
         check_list("power_sizes", self.power_sizes, ascending=True)
-        self._warn_about_the_cohort()
-
-    def _warn_about_the_cohort(self) -> None:
-        """Warn of a cohort the Williams square does not balance, and of power sizes beyond it."""
+        # warn of a cohort the Williams square does not balance, and of power sizes beyond it
         rows = len(williams_square(len(CONDITIONS)))
-        if self.participants % rows:
-            warnings.warn(
+        beyond = [n for n in self.power_sizes if n > self.participants]
+        for warn, text in (
+            (
+                self.participants % rows,
                 f"participants = {self.participants} is not a multiple of {rows}: the balanced Latin "
                 f"square's {rows} orders are filled unevenly, so order and carry-over are not balanced",
-                UserWarning,
-                stacklevel=1,  # its own line: a config built twice (a replace) warns once
-            )
-        beyond = [n for n in self.power_sizes if n > self.participants]
-        if beyond:
-            warnings.warn(
+            ),
+            (
+                beyond,
                 f"power_sizes {beyond} exceed participants ({self.participants}): those cohorts are "
                 f"drawn with replacement from the {self.participants} simulated participants, so their "
                 f"power rests on the spread of {self.participants} people",
-                UserWarning,
-                stacklevel=1,
-            )
+            ),
+        ):
+            if warn:  # stacklevel 1, its own line: a config built twice (a replace) warns once
+                warnings.warn(text, UserWarning, stacklevel=1)
 
     @property
     def sweep_n(self) -> int:
