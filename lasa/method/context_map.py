@@ -135,12 +135,17 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
 
 def _saturation(start: np.ndarray, goal: np.ndarray, points: np.ndarray, same: str) -> float:
     """lambda_1: the least progress of ``points`` along start -> goal, at most 1; ConfigError (``same``)
-    if goal is start."""
+    if goal is start, or if lambda_1 < 0.2 (the new cup's grasps not far enough ahead)."""
     line = goal - start
     if np.linalg.norm(line) < 1e-6:
         raise ConfigError(f"{same}: no path to map")
     progress = (points - start) @ line / (line @ line)
-    return float(min(progress.min(), 1.0))
+    saturation = float(min(progress.min(), 1.0))
+    if saturation < 0.2:
+        raise ConfigError(
+            f"the new cup's grasps do not lie far enough ahead of the start (least progress {saturation:.2f})"
+        )
+    return saturation
 
 
 class _MergedBelief:
@@ -189,11 +194,9 @@ class ContextMap(_MergedBelief):
         saturation = _saturation(start, g, task.curves[-1], "the new goal coincides with the start pose")
         # along the straight line to g, d(s_hat)/d(lambda) must keep pointing forwards
         shift = float(line @ (task.goals[ref_index] - g)) / (float(line @ line) * saturation)
-        if saturation < 0.2 or 1.0 + shift < 0.2:
+        if 1.0 + shift < 0.2:
             raise ConfigError(
-                "the new goal's grasps do not lie far enough ahead of the start along the path "
-                f"(least progress {saturation:.2f}), or the new cup is too far from the reference "
-                "one for the map to be invertible; put it nearer the reference cup"
+                "the new cup is too far from the reference one for the map to be invertible; put it nearer"
             )
         shifted = kind == "straight_line"
         ref_curve = (
@@ -254,12 +257,7 @@ class ContextMap(_MergedBelief):
 
     def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
         """a = J_h(s)^{-1} a_hat, (..., n) (``s[:, None]`` for (U, K, n) candidates)."""
-        jac = self.jacobian(state)
-        action = np.asarray(action, dtype=float)
-        shape = np.broadcast_shapes(jac.shape[:-2], action.shape[:-1])
-        jac = np.broadcast_to(jac, (*shape, *jac.shape[-2:]))
-        rhs = np.broadcast_to(action, (*shape, action.shape[-1]))
-        return np.linalg.solve(jac, rhs[..., None])[..., 0]
+        return np.linalg.solve(self.jacobian(state), np.asarray(action, dtype=float)[..., None])[..., 0]
 
 
 @dataclasses.dataclass
@@ -298,11 +296,6 @@ class TaskSpaceMap(_MergedBelief):
         )
         p0, pg = sites[0], sites[1]
         saturation = _saturation(p0, pg, sites[2:], "the new goal's grasp site coincides with the start's")
-        if saturation < 0.2:
-            raise ConfigError(
-                "the new cup's grasps do not lie far enough ahead of the start "
-                f"(least progress {saturation:.2f})"
-            )
         return cls(
             robot,
             task.start.copy(),

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from lasa.base.config import check_range
 from lasa.base.errors import ConfigError
 from lasa.method.dataset import REACH, Demonstrations
 
@@ -22,8 +23,7 @@ FREE, DEPARTURE, MANIPULATION = 0, 1, 2  # a tuple's role on the ring
 def sector_roles(demos: Demonstrations, confident: float = 0.9) -> np.ndarray:
     """Each tuple's role on the ring, (N,): :data:`DEPARTURE`, :data:`MANIPULATION` (both from a
     top belief of ``confident``) or :data:`FREE`."""
-    if not 0.0 < confident <= 1.0:
-        raise ConfigError(f"confident must be in (0, 1], got {confident}")
+    check_range("confident", confident, 0.0, 1.0, low_open=True)
     believed = demos.beliefs.argmax(axis=1)
     reach = demos.phase == REACH
     roles = np.full(len(demos), FREE, dtype=np.int64)
@@ -38,8 +38,7 @@ def sector_loss(z: torch.Tensor, roles: torch.Tensor, share: float) -> torch.Ten
     roles (B,), ``share`` s in (0, 1)."""
     if z.shape[-1] != 2:
         raise ConfigError(f"the sector loss needs a 2-D latent (a 2-axis stick), got z_dim={z.shape[-1]}")
-    if not 0.0 < share < 1.0:
-        raise ConfigError(f"the departure sector's share must be in (0, 1), got {share}")
+    check_range("the departure sector's share", share, 0.0, 1.0, low_open=True, high_open=True)
     angle = torch.atan2(z[:, 1], z[:, 0]).abs()
     half = torch.pi * share
     outside = torch.where(
