@@ -260,56 +260,34 @@ class ContextMap(_MergedBelief):
         return np.linalg.solve(self.jacobian(state), np.asarray(action, dtype=float)[..., None])[..., 0]
 
 
-@dataclasses.dataclass
 class TaskSpaceMap(_MergedBelief):
-    r"""The paper's straight-line map in the gripper's space (kind ``"straight_line_ee"``).
+    r"""The paper's straight-line map in the gripper's space (kind ``"straight_line_ee"``) for the last
+    goal of ``task`` (the new cup) onto training goal ``ref_index``.
 
     :math:`\hat p = p + w\,(T^{-1} p - p)`, :math:`\hat R = R_z(-w\delta)\,R` (T the table's turn
     back to the training cup); :math:`\hat s` is their IK seeded at :math:`s + w(\hat g - g)` (kept
     where IK fails: ``fallbacks``); actions map back in least squares, keeping null-space motion.
     """
 
-    robot: Robot
-    start: np.ndarray
-    new_goal: np.ndarray
-    ref_goal: np.ndarray
-    new_cup: np.ndarray
-    ref_cup: np.ndarray
-    delta: float
-    site_start: np.ndarray
-    site_goal: np.ndarray
-    saturation: float
-    ref_index: int
-    n_train: int
-    fallbacks: int = 0
-    _cache: tuple[bytes, np.ndarray] | None = dataclasses.field(default=None, repr=False)
-
-    @classmethod
-    def for_task(cls, task: CupTask, n_train: int, ref_index: int) -> TaskSpaceMap:
-        """The map for the last goal of ``task`` (the new cup) onto training goal ``ref_index``."""
+    def __init__(self, task: CupTask, n_train: int, ref_index: int) -> None:
         _check_grown(task, n_train, ref_index)
-        robot = task.robot
-        cups = robot.goal_positions()
-        delta = _turn(robot, cups[-1], cups[ref_index]) * abs(_yaw_axis(robot))
-        sites = robot.grasp_positions(
+        self.robot, self.n_train, self.ref_index = task.robot, n_train, ref_index
+        cups = self.robot.goal_positions()
+        self.delta = _turn(self.robot, cups[-1], cups[ref_index]) * abs(_yaw_axis(self.robot))
+        self.start = task.start.copy()
+        self.new_goal = task.goals[-1].copy()
+        self.ref_goal = task.goals[ref_index].copy()
+        self.new_cup = cups[-1].copy()
+        self.ref_cup = cups[ref_index].copy()
+        sites = self.robot.grasp_positions(
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )
-        p0, pg = sites[0], sites[1]
-        saturation = _saturation(p0, pg, sites[2:], "the new goal's grasp site coincides with the start's")
-        return cls(
-            robot,
-            task.start.copy(),
-            task.goals[-1].copy(),
-            task.goals[ref_index].copy(),
-            cups[-1].copy(),
-            cups[ref_index].copy(),
-            delta,
-            p0,
-            pg,
-            saturation,
-            ref_index,
-            n_train,
+        self.site_start, self.site_goal = sites[0], sites[1]
+        self.saturation = _saturation(
+            sites[0], sites[1], sites[2:], "the new goal's grasp site coincides with the start's"
         )
+        self.fallbacks = 0  # states whose IK failed, kept at their seed
+        self._cache: tuple[bytes, np.ndarray] | None = None  # the last state's bytes and s_hat
 
     def _poses(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
         """Site positions, rotations and Jacobians at s (B, n); w, inside; p_hat and R_hat."""
@@ -386,7 +364,7 @@ def context_map(
     """The context map of ``kind`` (:data:`MAP_KINDS`) for the last goal of ``task`` onto ``ref_index``."""
     check_choice("kind", kind, MAP_KINDS)
     if kind == "straight_line_ee":
-        return TaskSpaceMap.for_task(task, n_train, ref_index)
+        return TaskSpaceMap(task, n_train, ref_index)
     return ContextMap.for_task(task, n_train, ref_index, kind)
 
 

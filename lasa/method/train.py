@@ -93,15 +93,10 @@ def _with_entropy(
     if goal_sets is None:
         raise ConfigError("entropy_lambda > 0 needs goal_sets (belief_targets(task, control.likelihood))")
     c = config
-    regularizer = EntropyRegularizer(
+    term = EntropyRegularizer(
         c.entropy_lambda, goal_sets, control, c.entropy_n_z, c.entropy_horizon, c.entropy_contexts, c.seed
     )
-
-    def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-        term = regularizer(model, s, b)
-        return term if extra_loss is None else term + extra_loss(model, s, b)
-
-    return combined
+    return term if extra_loss is None else lambda model, s, b: term(model, s, b) + extra_loss(model, s, b)
 
 
 def _initial_model(
