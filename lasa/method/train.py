@@ -1,6 +1,7 @@
 r"""Training the latent-action model on demonstrations: the reconstruction error of Sec. III-A,
 :math:`\|\phi(z, s, b) - a\|^2`, :math:`z = \psi(s, a, b)`, in units of sigma_h, with Gaussian noise
-on z (clipped to [-1, 1]) to spread actions over the stick's range and smooth the decoder in z.
+on z (clipped to [-1, 1]) to spread actions over the stick's range and smooth the decoder in z; and
+the optional sector loss, whose 2-D latent's ring keeps departures and manipulation apart.
 """
 
 from __future__ import annotations
@@ -24,13 +25,13 @@ from lasa.base.config import (
     Positive,
     PositiveInt,
     Seed,
+    check_range,
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.method.dataset import Demonstrations
+from lasa.method.dataset import REACH, Demonstrations
 from lasa.method.decoder import DecoderConfig, LatentActionModel
 from lasa.method.entropy import EntropyRegularizer
-from lasa.method.sectors import sector_loss, sector_roles
 
 ExtraLoss = Callable[[LatentActionModel, torch.Tensor, torch.Tensor], torch.Tensor]
 
@@ -53,7 +54,7 @@ class TrainConfig:
     entropy_n_z: AtLeastTwo = 11  # joystick inputs the entropy term's sum over z runs over [-]
     entropy_horizon: PositiveInt = 10  # steps over which the entropy term reads an input's evidence [-]
     entropy_contexts: PositiveInt = 64  # contexts per batch the entropy term is evaluated on [-]
-    # the latent's sectors (lasa.method.sectors; 2-D latents): departures from a confident goal
+    # the latent's sectors (:func:`sector_loss`; 2-D latents): departures from a confident goal
     # in a share of the ring, manipulation outside it; 0 trains without
     sector_weight: NonNegative = 0.0  # weight of the sector loss [1/rad] [-]
     sector_share: Annotated[Number, at.Gt(0.0), at.Lt(1.0)] = 0.375  # departure sector's share [-]
@@ -217,3 +218,41 @@ def _batch_loss(
     if extra_loss is not None:
         loss = loss + extra_loss(model, s, b)
     return loss
+
+
+FREE, DEPARTURE, MANIPULATION = 0, 1, 2  # a tuple's role on the ring
+
+
+def sector_roles(demos: Demonstrations, confident: float = 0.9) -> np.ndarray:
+    """Each tuple's role on the ring, (N,): :data:`DEPARTURE`, :data:`MANIPULATION` (both from a
+    top belief of ``confident``) or :data:`FREE`."""
+    check_range("confident", confident, 0.0, 1.0, low_open=True)
+    believed = demos.beliefs.argmax(axis=1)
+    reach = demos.phase == REACH
+    roles = np.full(len(demos), FREE, dtype=np.int64)
+    sure = demos.beliefs.max(axis=1) >= confident
+    roles[reach & sure & (believed != demos.goal)] = DEPARTURE
+    roles[~reach & sure] = MANIPULATION
+    return roles
+
+
+def sector_loss(z: torch.Tensor, roles: torch.Tensor, share: float) -> torch.Tensor:
+    r"""The hinge on each tuple's angle outside its sector, averaged over the batch [rad]; z (B, 2),
+    roles (B,), ``share`` s in (0, 1). The angle :math:`\vartheta = \operatorname{atan2}(z_2, z_1)` of
+    a departure (a reach confident in another goal) stays in :math:`|\vartheta| \le \pi s`, of
+    manipulation (a confident stroke, adjustment or hold) outside it (Secs. III, IV-B):
+
+    .. math::  L_\text{sector} = \frac{1}{B}\Big(\sum_{\text{departures}} [\,|\vartheta| - \pi s\,]_+
+        + \sum_{\text{manipulation}} [\,\pi s - |\vartheta|\,]_+\Big).
+    """
+    if z.shape[-1] != 2:
+        raise ConfigError(f"the sector loss needs a 2-D latent (a 2-axis stick), got z_dim={z.shape[-1]}")
+    check_range("the departure sector's share", share, 0.0, 1.0, low_open=True, high_open=True)
+    angle = torch.atan2(z[:, 1], z[:, 0]).abs()
+    half = torch.pi * share
+    outside = torch.where(
+        roles == DEPARTURE,
+        torch.relu(angle - half),
+        torch.where(roles == MANIPULATION, torch.relu(half - angle), torch.zeros_like(angle)),
+    )
+    return outside.mean()
