@@ -190,18 +190,15 @@ class ContextMap(_MergedBelief):
         _check_grown(task, n_train, ref_index)
         check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
-        line = g - start
+        line, offset = g - start, task.goals[ref_index] - g
         saturation = _saturation(start, g, task.curves[-1], "the new goal coincides with the start pose")
         # along the straight line to g, d(s_hat)/d(lambda) must keep pointing forwards
-        shift = float(line @ (task.goals[ref_index] - g)) / (float(line @ line) * saturation)
+        shift = float(line @ offset) / (float(line @ line) * saturation)
         if 1.0 + shift < 0.2:
             raise ConfigError(
                 "the new cup is too far from the reference one for the map to be invertible; put it nearer"
             )
-        shifted = kind == "straight_line"
-        ref_curve = (
-            task.curves[-1] + (task.goals[ref_index] - g) if shifted else task.curves[ref_index].copy()
-        )
+        ref_curve = task.curves[-1] + offset if kind == "straight_line" else task.curves[ref_index].copy()
         return cls(start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, kind=kind)
 
     @property
