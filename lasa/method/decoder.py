@@ -90,10 +90,8 @@ class LatentActionModel(nn.Module):
         self.n_goals: int = config.n_goals  # G, the length of the belief it reads
         self.z_dim: int = config.z_dim  # d, the latent (joystick) dimension
         n, g, d = config.n_joints, config.n_goals, config.z_dim
-        mean = torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32)
-        std = torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32)
-        self.register_buffer("state_mean", mean)
-        self.register_buffer("state_std", std)
+        self.register_buffer("state_mean", torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32))
+        self.register_buffer("state_std", torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32))
         self.encoder = _mlp(2 * n + g, d, config.hidden, config.depth)
         self.decoder = _mlp(d + n + g, n, config.hidden, config.depth)
 

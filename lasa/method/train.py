@@ -160,13 +160,10 @@ def train_decoder(
             "collect more demonstrations or lower batch_size"
         )
     model = _initial_model(demos, control, config, init)
-    data = (
-        torch.as_tensor(demos.states[train_mask], dtype=torch.float32),
-        torch.as_tensor(demos.actions[train_mask], dtype=torch.float32),
-        torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32),
-        torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None,
-    )
-    val = (demos.states[val_mask], demos.actions[val_mask], demos.beliefs[val_mask])
+    arrays = (demos.states, demos.actions, demos.beliefs)
+    s, a, b = (torch.as_tensor(x[train_mask], dtype=torch.float32) for x in arrays)
+    roles = torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None
+    data, val = (s, a, b, roles), tuple(x[val_mask] for x in arrays)
 
     # fused: one kernel per parameter for the whole update, about 3x faster on CPU
     optim = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay, fused=True)
