@@ -33,7 +33,6 @@ class Member(Protocol):
     ) -> tuple[ndarray, ndarray]:
         """a_r (U, n) [rad/s] and w (U,) from b (U, G), s (U, n), one pose per goal (G, n), each
         goal's grasps (G, K, n), the period Delta [s] and the human's speed bound sigma_h [rad/s]."""
-        ...
 
 
 def point(

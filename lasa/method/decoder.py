@@ -53,21 +53,17 @@ class ActionDecoder(Protocol):
     @property
     def robot(self) -> str:
         """The robot whose joint space phi acts in."""
-        ...
 
     @property
     def n_goals(self) -> int:
         """G: the length of the belief phi reads."""
-        ...
 
     @property
     def z_dim(self) -> int:
         """d: the joystick axes."""
-        ...
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), broadcast over the leading dimensions of z (..., d), s (..., n), b (..., G)."""
-        ...
 
 
 def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
