@@ -122,15 +122,9 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
             f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}): {robot.name}'s grasps there do not form a smooth "
             f"curve (a {jump:.2f} rad jump between neighbouring preferences); move the cup"
         )
-    mid = len(task.theta_grid) // 2
-    return CupTask(
-        robot=robot,
-        goal_names=(*task.goal_names, "new"),
-        theta_grid=task.theta_grid,
-        curves=np.concatenate([task.curves, curve[None]]),
-        goals=np.concatenate([task.goals, curve[None, mid]]),
-        start=task.start,
-    )
+    curves = np.concatenate([task.curves, curve[None]])
+    goals = np.concatenate([task.goals, curve[None, len(task.theta_grid) // 2]])
+    return CupTask(robot, (*task.goal_names, "new"), task.theta_grid, curves, goals, task.start)
 
 
 def _saturation(start: np.ndarray, goal: np.ndarray, points: np.ndarray, same: str) -> float:
