@@ -108,7 +108,7 @@ def hindsight_value(state: ndarray, goal_sets: ndarray, delta: float) -> ndarray
 def _hindsight_pull(
     belief: ndarray, state: ndarray, targets: ndarray, delta: float, action_scale: float
 ) -> ndarray:
-    """sigma_h sum_g b(g) (t_g - s) / max(||t_g - s||, delta), with t_g each goal's target, (U, G, n)."""
+    """sigma_h sum_g b(g) (t_g - s) / max(||t_g - s||, delta), with t_g each goal's target, (U or 1, G, n)."""
     diff = targets - state[:, None, :]  # (U, G, n)
     dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), delta)
     return action_scale * np.einsum("ug,ugn->un", belief, diff / dist)
@@ -131,8 +131,7 @@ def hindsight_point(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
     """``hindsight_point``: :func:`hindsight` with one target per goal, its pose in ``goals``; w = 1."""
-    targets = np.broadcast_to(goals[None], (len(state), *goals.shape))
-    return _hindsight_pull(belief, state, targets, dt * action_scale, action_scale), np.ones(len(state))
+    return _hindsight_pull(belief, state, goals[None], dt * action_scale, action_scale), np.ones(len(state))
 
 
 MEMBERS: Mapping[str, Member] = MappingProxyType(
