@@ -319,11 +319,9 @@ class TaskSpaceMap(_MergedBelief):
         line = self.site_goal - self.site_start
         grad = np.einsum("bin,i->bn", jac[:, :3], line) / (float(line @ line) * self.saturation)
         grad *= inside[:, None]
-        turn = rot_z(-self.delta)
-        a_pos = (1.0 - w)[:, None, None] * np.eye(3) + w[:, None, None] * turn
+        a_pos = (1.0 - w)[:, None, None] * np.eye(3) + w[:, None, None] * rot_z(-self.delta)
         top = np.einsum("bij,bjn->bin", a_pos, jac[:, :3]) + (back - p)[:, :, None] * grad[:, None, :]
-        spin = rot_z(-w * self.delta)
-        bottom = np.einsum("bij,bjn->bin", spin, jac[:, 3:])
+        bottom = np.einsum("bij,bjn->bin", rot_z(-w * self.delta), jac[:, 3:])
         bottom[:, 2] -= self.delta * grad
         return np.concatenate([top, bottom], axis=1)
 
@@ -340,8 +338,7 @@ class TaskSpaceMap(_MergedBelief):
         _, sv, vt = np.linalg.svd(j_hat)
         rank = int(np.median((sv > 1e-8 * sv[:, :1]).sum(axis=1)))
         null = vt[:, rank:, :]  # (U, n - rank, n)
-        lhs = np.concatenate([m, null], axis=1)
-        solve = np.linalg.pinv(lhs)  # (U, n, 6 + n - rank)
+        solve = np.linalg.pinv(np.concatenate([m, null], axis=1))  # (U, n, 6 + n - rank)
         a_hat = action.reshape(len(users), -1, n)
         rhs = np.concatenate(
             [np.einsum("uin,ukn->uki", j_hat, a_hat), np.einsum("uin,ukn->uki", null, a_hat)], axis=-1
