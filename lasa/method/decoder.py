@@ -226,8 +226,7 @@ class _InferencePlan:
     def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), float64; see :meth:`lasa.method.decoder.LatentActionModel.decode_numpy`."""
         z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)  # z clamped to [-1, 1]
-        s = np.asarray(s, dtype=np.float64)
-        b = np.asarray(b, dtype=np.float64)
+        s, b = np.asarray(s, dtype=np.float64), np.asarray(b, dtype=np.float64)
         if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
             raise ConfigError(
                 f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
