@@ -127,10 +127,8 @@ class Retargeting:
         lead = np.broadcast_shapes(qs.shape[:-1], xis.shape[:-1])
         q_rows = np.broadcast_to(qs, (*lead, self.n_joints)).reshape(-1, self.n_joints)
         xi_rows = np.broadcast_to(xis, (*lead, 6)).reshape(-1, 6)
-        out = np.empty((len(q_rows), self.n_joints))
-        for i in range(len(q_rows)):  # mink solves one configuration at a time
-            out[i] = self._solve(q_rows[i], xi_rows[i])
-        return out.reshape(*lead, self.n_joints)
+        out = [self._solve(q_row, xi) for q_row, xi in zip(q_rows, xi_rows, strict=True)]  # one QP each
+        return np.array(out, dtype=float).reshape(*lead, self.n_joints)
 
 
 def retarget_action(
