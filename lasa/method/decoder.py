@@ -404,15 +404,13 @@ def load_checkpoint(
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
         )
-    if robot is not None and model.robot != robot:
-        raise CheckpointError(
-            f"{path} was trained for robot {model.robot!r}, not {robot!r}. "
-            f"Use the checkpoint for {robot!r} or re-make it with: {make_hint}"
-        )
-    if n_goals is not None and model.n_goals != n_goals:
-        raise CheckpointError(
-            f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
-            f"Use the checkpoint for that task or re-make it with: {make_hint}"
-        )
+    for wanted, got, differs, use in (
+        (robot, model.robot, f"was trained for robot {model.robot!r}, not {robot!r}", repr(robot)),
+        (n_goals, model.n_goals, f"reads a belief over {model.n_goals} goals, not {n_goals}", "that task"),
+    ):
+        if wanted is not None and got != wanted:
+            raise CheckpointError(
+                f"{path} {differs}. Use the checkpoint for {use} or re-make it with: {make_hint}"
+            )
     model.eval()
     return model, dict(payload.get("extra", {}))

@@ -106,7 +106,6 @@ def _initial_model(
     """A fresh model with the demonstrations' state normalisation, or a trainable copy of ``init``
     (ConfigError if its architecture differs)."""
     clean_states = demos.states[~demos.perturbed]
-    std = np.maximum(clean_states.std(axis=0), 1e-3)
     model = LatentActionModel(
         DecoderConfig(
             robot=demos.robot,
@@ -117,7 +116,7 @@ def _initial_model(
             depth=config.depth,
             action_scale=control.action_scale,
             state_mean=tuple(float(x) for x in clean_states.mean(axis=0)),
-            state_std=tuple(float(x) for x in std),
+            state_std=tuple(float(x) for x in np.maximum(clean_states.std(axis=0), 1e-3)),
         )
     )
     if init is not None:
