@@ -106,8 +106,7 @@ def context_grid(
     conf = np.linspace(1.0 / n_goals, 0.999, n_belief)
     pp, cc = np.meshgrid(progress, conf, indexing="ij")
     states = start + pp.reshape(-1, 1) * (goal - start)
-    rest = (1.0 - cc.reshape(-1, 1)) / (n_goals - 1)
-    beliefs = np.repeat(rest, n_goals, axis=1)
+    beliefs = np.repeat((1.0 - cc.reshape(-1, 1)) / (n_goals - 1), n_goals, axis=1)
     beliefs[:, goal_index] = cc.reshape(-1)
     return pp.reshape(-1), cc.reshape(-1), states, beliefs
 
