@@ -100,8 +100,7 @@ def arbitrated(
 def hindsight_value(state: ndarray, goal_sets: ndarray, delta: float) -> ndarray:
     """V_g(s) = min_k H(||g_k - s||), each goal's hindsight cost-to-go, (U, G); H the Huber cost of
     radius ``delta``: d for d >= delta, d^2 / (2 delta) + delta / 2 within it."""
-    nearest = nearest_grasps(state, goal_sets)
-    dist = np.linalg.norm(nearest - state[:, None, :], axis=-1)
+    dist = np.linalg.norm(nearest_grasps(state, goal_sets) - state[:, None, :], axis=-1)
     return np.where(dist >= delta, dist, dist**2 / (2.0 * delta) + delta / 2.0)
 
 

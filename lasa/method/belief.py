@@ -187,8 +187,7 @@ def cap_log_belief(log_b: np.ndarray, cap: float) -> np.ndarray:
         return log_b
     is_top = np.arange(n_goals) == top
     # the top's excess b_top - cap = (1 - cap) - sum of the others: exact when b_top is near one
-    log_rest = logsumexp(np.where(is_top, -np.inf, log_b))
-    excess = np.where(over, (1.0 - cap) - np.exp(log_rest), 1.0)
+    excess = np.where(over, (1.0 - cap) - np.exp(logsumexp(np.where(is_top, -np.inf, log_b))), 1.0)
     share = np.log(np.maximum(excess, 1e-300) / (n_goals - 1))
     return np.where(over, np.where(is_top, np.log(cap), np.logaddexp(log_b, share)), log_b)
 

@@ -101,8 +101,7 @@ class LatentActionModel(nn.Module):
 
     def decode(self, z: torch.Tensor, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         """phi(z, s, b): joint velocities with norm below sigma_h = action_scale."""
-        z = z.clamp(-1.0, 1.0)
-        v = self.decoder(torch.cat([z, self._context(s, b)], dim=-1))
+        v = self.decoder(torch.cat([z.clamp(-1.0, 1.0), self._context(s, b)], dim=-1))
         norm = v.norm(dim=-1, keepdim=True).clamp_min(1e-8)
         return self.config.action_scale * torch.tanh(norm) * v / norm
 

@@ -92,8 +92,7 @@ def safe_step(
     [lower, upper]; ConfigError if ``state`` is not finite (a sensor fault is not a command)."""
     if not np.all(np.isfinite(state)):
         raise ConfigError("state holds NaN or infinite joint positions; refusing to command")
-    velocity = np.clip(sanitize(action), -max_speed, max_speed)
-    return np.clip(state + dt * velocity, lower, upper)
+    return np.clip(state + dt * np.clip(sanitize(action), -max_speed, max_speed), lower, upper)
 
 
 def advance(

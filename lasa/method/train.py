@@ -209,8 +209,7 @@ def _batch_loss(
         config.sector_weight * sector_loss(z, roles[idx], config.sector_share) if roles is not None else 0.0
     )
     z = (z + config.z_noise * torch.randn(z.shape, generator=gen)).clamp(-1.0, 1.0)
-    a_hat = model.decode(z, s, b)
-    loss = (((a_hat - a) / scale) ** 2).sum(-1).mean() + sector
+    loss = (((model.decode(z, s, b) - a) / scale) ** 2).sum(-1).mean() + sector
     if extra_loss is not None:
         loss = loss + extra_loss(model, s, b)
     return loss
