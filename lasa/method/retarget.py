@@ -136,10 +136,8 @@ def retarget_action(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Retargeting's a_h for a batch, and each row's mode after the step: a press cycles the mode and
     moves nothing, a stick at rest nothing, else z (U, 2) is a twist in the row's mode."""
-    state = np.asarray(state, dtype=float)
-    z = np.asarray(z, dtype=float)
-    mode = np.asarray(mode, dtype=int)
-    press = np.asarray(press, dtype=bool)
+    state, z = np.asarray(state, dtype=float), np.asarray(z, dtype=float)
+    mode, press = np.asarray(mode, dtype=int), np.asarray(press, dtype=bool)
     a_h = np.zeros(state.shape)
     move = ~press & np.any(z != 0.0, axis=-1)
     if move.any():

@@ -70,8 +70,7 @@ def _split(demos: Demonstrations, holdout: float, rng: np.random.Generator) -> t
     """Train / validation masks that keep whole demonstrations together."""
     ids = np.unique(demos.demo)
     n_val = int(round(holdout * len(ids)))
-    val_ids = rng.choice(ids, size=n_val, replace=False) if n_val else np.array([], int)
-    val = np.isin(demos.demo, val_ids)
+    val = np.isin(demos.demo, rng.choice(ids, size=n_val, replace=False) if n_val else np.array([], int))
     return ~val, val & ~demos.perturbed
 
 
