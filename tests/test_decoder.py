@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from lasa.base.errors import ArtifactError, CheckpointError, ConfigError
-from lasa.method import inference as inference_module
+from lasa.method import decoder as inference_module
 from lasa.method.decoder import DecoderConfig, LatentActionModel, load_checkpoint, save_checkpoint
 
 # decode_numpy against decode (float32 torch): the split first layer and the float64 squash

@@ -1,4 +1,4 @@
-"""The latent's sectors (lasa.method.sectors): roles of tuples and the hinge, against hand-computed cases."""
+"""The latent's sectors (lasa.method.train): roles of tuples and the hinge, against hand-computed cases."""
 
 from __future__ import annotations
 
@@ -8,8 +8,7 @@ import torch
 
 from lasa.base.errors import ConfigError
 from lasa.method.dataset import ADJUST, HOLD, REACH, STROKE, Demonstrations
-from lasa.method.sectors import DEPARTURE, FREE, MANIPULATION, sector_loss, sector_roles
-from lasa.method.train import TrainConfig
+from lasa.method.train import DEPARTURE, FREE, MANIPULATION, TrainConfig, sector_loss, sector_roles
 
 
 def _demos(phase: list[int], goal: list[int], beliefs: list[list[float]]) -> Demonstrations:

@@ -33,7 +33,6 @@ class Member(Protocol):
     ) -> tuple[ndarray, ndarray]:
         """a_r (U, n) [rad/s] and w (U,) from b (U, G), s (U, n), one pose per goal (G, n), each
         goal's grasps (G, K, n), the period Delta [s] and the human's speed bound sigma_h [rad/s]."""
-        ...
 
 
 def point(
@@ -101,15 +100,14 @@ def arbitrated(
 def hindsight_value(state: ndarray, goal_sets: ndarray, delta: float) -> ndarray:
     """V_g(s) = min_k H(||g_k - s||), each goal's hindsight cost-to-go, (U, G); H the Huber cost of
     radius ``delta``: d for d >= delta, d^2 / (2 delta) + delta / 2 within it."""
-    nearest = nearest_grasps(state, goal_sets)
-    dist = np.linalg.norm(nearest - state[:, None, :], axis=-1)
+    dist = np.linalg.norm(nearest_grasps(state, goal_sets) - state[:, None, :], axis=-1)
     return np.where(dist >= delta, dist, dist**2 / (2.0 * delta) + delta / 2.0)
 
 
 def _hindsight_pull(
     belief: ndarray, state: ndarray, targets: ndarray, delta: float, action_scale: float
 ) -> ndarray:
-    """sigma_h sum_g b(g) (t_g - s) / max(||t_g - s||, delta), with t_g each goal's target, (U, G, n)."""
+    """sigma_h sum_g b(g) (t_g - s) / max(||t_g - s||, delta), with t_g each goal's target, (U or 1, G, n)."""
     diff = targets - state[:, None, :]  # (U, G, n)
     dist = np.maximum(np.linalg.norm(diff, axis=-1, keepdims=True), delta)
     return action_scale * np.einsum("ug,ugn->un", belief, diff / dist)
@@ -132,8 +130,7 @@ def hindsight_point(
     belief: ndarray, state: ndarray, goals: ndarray, goal_sets: ndarray, dt: float, action_scale: float
 ) -> tuple[ndarray, ndarray]:
     """``hindsight_point``: :func:`hindsight` with one target per goal, its pose in ``goals``; w = 1."""
-    targets = np.broadcast_to(goals[None], (len(state), *goals.shape))
-    return _hindsight_pull(belief, state, targets, dt * action_scale, action_scale), np.ones(len(state))
+    return _hindsight_pull(belief, state, goals[None], dt * action_scale, action_scale), np.ones(len(state))
 
 
 MEMBERS: Mapping[str, Member] = MappingProxyType(

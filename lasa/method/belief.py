@@ -70,8 +70,7 @@ def _segment_distances(
 ) -> torch.Tensor:
     """Distances from points p to segments a + t ab (``denom`` = ||ab||^2 >= 1e-12)."""
     t = ((p - a) * ab).sum(-1) / denom
-    closest = a + t.clamp(0.0, 1.0)[..., None] * ab
-    return torch.linalg.vector_norm(p - closest, dim=-1)
+    return torch.linalg.vector_norm(p - (a + t.clamp(0.0, 1.0)[..., None] * ab), dim=-1)
 
 
 _CANDIDATE_ROWS = 1024  # rows per block of _candidates: its work arrays stay in a core's L2 cache
@@ -188,11 +187,9 @@ def cap_log_belief(log_b: np.ndarray, cap: float) -> np.ndarray:
         return log_b
     is_top = np.arange(n_goals) == top
     # the top's excess b_top - cap = (1 - cap) - sum of the others: exact when b_top is near one
-    log_rest = logsumexp(np.where(is_top, -np.inf, log_b))
-    excess = np.where(over, (1.0 - cap) - np.exp(log_rest), 1.0)
+    excess = np.where(over, (1.0 - cap) - np.exp(logsumexp(np.where(is_top, -np.inf, log_b))), 1.0)
     share = np.log(np.maximum(excess, 1e-300) / (n_goals - 1))
-    capped = np.where(is_top, np.log(cap), np.logaddexp(log_b, share))
-    return np.where(over, capped, log_b)
+    return np.where(over, np.where(is_top, np.log(cap), np.logaddexp(log_b, share)), log_b)
 
 
 def update_log_belief(

@@ -122,25 +122,24 @@ def extend_task(task: CupTask, position: np.ndarray, ref_goal: int = 1) -> CupTa
             f"new cup at ({pos[0]:.3f}, {pos[1]:.3f}): {robot.name}'s grasps there do not form a smooth "
             f"curve (a {jump:.2f} rad jump between neighbouring preferences); move the cup"
         )
-    mid = len(task.theta_grid) // 2
-    return CupTask(
-        robot=robot,
-        goal_names=(*task.goal_names, "new"),
-        theta_grid=task.theta_grid,
-        curves=np.concatenate([task.curves, curve[None]]),
-        goals=np.concatenate([task.goals, curve[None, mid]]),
-        start=task.start,
-    )
+    curves = np.concatenate([task.curves, curve[None]])
+    goals = np.concatenate([task.goals, curve[None, len(task.theta_grid) // 2]])
+    return CupTask(robot, (*task.goal_names, "new"), task.theta_grid, curves, goals, task.start)
 
 
 def _saturation(start: np.ndarray, goal: np.ndarray, points: np.ndarray, same: str) -> float:
     """lambda_1: the least progress of ``points`` along start -> goal, at most 1; ConfigError (``same``)
-    if goal is start."""
+    if goal is start, or if lambda_1 < 0.2 (the new cup's grasps not far enough ahead)."""
     line = goal - start
     if np.linalg.norm(line) < 1e-6:
         raise ConfigError(f"{same}: no path to map")
     progress = (points - start) @ line / (line @ line)
-    return float(min(progress.min(), 1.0))
+    saturation = float(min(progress.min(), 1.0))
+    if saturation < 0.2:
+        raise ConfigError(
+            f"the new cup's grasps do not lie far enough ahead of the start (least progress {saturation:.2f})"
+        )
+    return saturation
 
 
 class _MergedBelief:
@@ -185,20 +184,15 @@ class ContextMap(_MergedBelief):
         _check_grown(task, n_train, ref_index)
         check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
-        line = g - start
+        line, offset = g - start, task.goals[ref_index] - g
         saturation = _saturation(start, g, task.curves[-1], "the new goal coincides with the start pose")
         # along the straight line to g, d(s_hat)/d(lambda) must keep pointing forwards
-        shift = float(line @ (task.goals[ref_index] - g)) / (float(line @ line) * saturation)
-        if saturation < 0.2 or 1.0 + shift < 0.2:
+        shift = float(line @ offset) / (float(line @ line) * saturation)
+        if 1.0 + shift < 0.2:
             raise ConfigError(
-                "the new goal's grasps do not lie far enough ahead of the start along the path "
-                f"(least progress {saturation:.2f}), or the new cup is too far from the reference "
-                "one for the map to be invertible; put it nearer the reference cup"
+                "the new cup is too far from the reference one for the map to be invertible; put it nearer"
             )
-        shifted = kind == "straight_line"
-        ref_curve = (
-            task.curves[-1] + (task.goals[ref_index] - g) if shifted else task.curves[ref_index].copy()
-        )
+        ref_curve = task.curves[-1] + offset if kind == "straight_line" else task.curves[ref_index].copy()
         return cls(start.copy(), task.curves[-1].copy(), ref_curve, ref_index, n_train, saturation, kind=kind)
 
     @property
@@ -254,69 +248,37 @@ class ContextMap(_MergedBelief):
 
     def action_from_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
         """a = J_h(s)^{-1} a_hat, (..., n) (``s[:, None]`` for (U, K, n) candidates)."""
-        jac = self.jacobian(state)
-        action = np.asarray(action, dtype=float)
-        shape = np.broadcast_shapes(jac.shape[:-2], action.shape[:-1])
-        jac = np.broadcast_to(jac, (*shape, *jac.shape[-2:]))
-        rhs = np.broadcast_to(action, (*shape, action.shape[-1]))
-        return np.linalg.solve(jac, rhs[..., None])[..., 0]
+        return np.linalg.solve(self.jacobian(state), np.asarray(action, dtype=float)[..., None])[..., 0]
 
 
-@dataclasses.dataclass
 class TaskSpaceMap(_MergedBelief):
-    r"""The paper's straight-line map in the gripper's space (kind ``"straight_line_ee"``).
+    r"""The paper's straight-line map in the gripper's space (kind ``"straight_line_ee"``) for the last
+    goal of ``task`` (the new cup) onto training goal ``ref_index``.
 
     :math:`\hat p = p + w\,(T^{-1} p - p)`, :math:`\hat R = R_z(-w\delta)\,R` (T the table's turn
     back to the training cup); :math:`\hat s` is their IK seeded at :math:`s + w(\hat g - g)` (kept
     where IK fails: ``fallbacks``); actions map back in least squares, keeping null-space motion.
     """
 
-    robot: Robot
-    start: np.ndarray
-    new_goal: np.ndarray
-    ref_goal: np.ndarray
-    new_cup: np.ndarray
-    ref_cup: np.ndarray
-    delta: float
-    site_start: np.ndarray
-    site_goal: np.ndarray
-    saturation: float
-    ref_index: int
-    n_train: int
-    fallbacks: int = 0
-    _cache: tuple[bytes, np.ndarray] | None = dataclasses.field(default=None, repr=False)
-
-    @classmethod
-    def for_task(cls, task: CupTask, n_train: int, ref_index: int) -> TaskSpaceMap:
-        """The map for the last goal of ``task`` (the new cup) onto training goal ``ref_index``."""
+    def __init__(self, task: CupTask, n_train: int, ref_index: int) -> None:
         _check_grown(task, n_train, ref_index)
-        robot = task.robot
-        cups = robot.goal_positions()
-        delta = _turn(robot, cups[-1], cups[ref_index]) * abs(_yaw_axis(robot))
-        sites = robot.grasp_positions(
+        self.robot, self.n_train, self.ref_index = task.robot, n_train, ref_index
+        cups = self.robot.goal_positions()
+        self.delta = _turn(self.robot, cups[-1], cups[ref_index]) * abs(_yaw_axis(self.robot))
+        self.start = task.start.copy()
+        self.new_goal = task.goals[-1].copy()
+        self.ref_goal = task.goals[ref_index].copy()
+        self.new_cup = cups[-1].copy()
+        self.ref_cup = cups[ref_index].copy()
+        sites = self.robot.grasp_positions(
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )
-        p0, pg = sites[0], sites[1]
-        saturation = _saturation(p0, pg, sites[2:], "the new goal's grasp site coincides with the start's")
-        if saturation < 0.2:
-            raise ConfigError(
-                "the new cup's grasps do not lie far enough ahead of the start "
-                f"(least progress {saturation:.2f})"
-            )
-        return cls(
-            robot,
-            task.start.copy(),
-            task.goals[-1].copy(),
-            task.goals[ref_index].copy(),
-            cups[-1].copy(),
-            cups[ref_index].copy(),
-            delta,
-            p0,
-            pg,
-            saturation,
-            ref_index,
-            n_train,
+        self.site_start, self.site_goal = sites[0], sites[1]
+        self.saturation = _saturation(
+            sites[0], sites[1], sites[2:], "the new goal's grasp site coincides with the start's"
         )
+        self.fallbacks = 0  # states whose IK failed, kept at their seed
+        self._cache: tuple[bytes, np.ndarray] | None = None  # the last state's bytes and s_hat
 
     def _poses(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
         """Site positions, rotations and Jacobians at s (B, n); w, inside; p_hat and R_hat."""
@@ -357,11 +319,9 @@ class TaskSpaceMap(_MergedBelief):
         line = self.site_goal - self.site_start
         grad = np.einsum("bin,i->bn", jac[:, :3], line) / (float(line @ line) * self.saturation)
         grad *= inside[:, None]
-        turn = rot_z(-self.delta)
-        a_pos = (1.0 - w)[:, None, None] * np.eye(3) + w[:, None, None] * turn
+        a_pos = (1.0 - w)[:, None, None] * np.eye(3) + w[:, None, None] * rot_z(-self.delta)
         top = np.einsum("bij,bjn->bin", a_pos, jac[:, :3]) + (back - p)[:, :, None] * grad[:, None, :]
-        spin = rot_z(-w * self.delta)
-        bottom = np.einsum("bij,bjn->bin", spin, jac[:, 3:])
+        bottom = np.einsum("bij,bjn->bin", rot_z(-w * self.delta), jac[:, 3:])
         bottom[:, 2] -= self.delta * grad
         return np.concatenate([top, bottom], axis=1)
 
@@ -378,8 +338,7 @@ class TaskSpaceMap(_MergedBelief):
         _, sv, vt = np.linalg.svd(j_hat)
         rank = int(np.median((sv > 1e-8 * sv[:, :1]).sum(axis=1)))
         null = vt[:, rank:, :]  # (U, n - rank, n)
-        lhs = np.concatenate([m, null], axis=1)
-        solve = np.linalg.pinv(lhs)  # (U, n, 6 + n - rank)
+        solve = np.linalg.pinv(np.concatenate([m, null], axis=1))  # (U, n, 6 + n - rank)
         a_hat = action.reshape(len(users), -1, n)
         rhs = np.concatenate(
             [np.einsum("uin,ukn->uki", j_hat, a_hat), np.einsum("uin,ukn->uki", null, a_hat)], axis=-1
@@ -393,7 +352,7 @@ def context_map(
     """The context map of ``kind`` (:data:`MAP_KINDS`) for the last goal of ``task`` onto ``ref_index``."""
     check_choice("kind", kind, MAP_KINDS)
     if kind == "straight_line_ee":
-        return TaskSpaceMap.for_task(task, n_train, ref_index)
+        return TaskSpaceMap(task, n_train, ref_index)
     return ContextMap.for_task(task, n_train, ref_index, kind)
 
 

@@ -60,8 +60,7 @@ class Demonstrations:
 
 def save_demonstrations(demos: Demonstrations, path: str | os.PathLike[str]) -> Path:
     """Atomically save a dataset to ``.npz``."""
-    arrays = {f.name: np.asarray(getattr(demos, f.name)) for f in dataclasses.fields(demos)}
-    return save_npz(path, **arrays)
+    return save_npz(path, **{f.name: np.asarray(getattr(demos, f.name)) for f in dataclasses.fields(demos)})
 
 
 def load_demonstrations(

@@ -1,14 +1,16 @@
-r"""The latent-action model: a conditional autoencoder over (state, belief) contexts (Sec. III-A).
-
-:math:`z = \psi(s, a, b) \in [-1, 1]^d`, :math:`a_h = \phi(z, s, b) = \sigma_h \tanh(\|v\|)\, v /
-\|v\|`, so :math:`\|\phi\| < \sigma_h` (Eq. T4). Checkpoints (state dict and config) load with
-``weights_only=True``. Why the bounds: ``docs/method-notes.md``.
+r"""The latent-action model: a conditional autoencoder over (state, belief) contexts (Sec. III-A),
+:math:`z = \psi(s, a, b) \in [-1, 1]^d`, :math:`a_h = \phi(z, s, b) = \sigma_h \tanh(\|v\|)\, v / \|v\|`,
+so :math:`\|\phi\| < \sigma_h` (Eq. T4; why: ``docs/method-notes.md``); its numpy forward, an inference
+plan (weights refolded once, chunked into per-thread buffers); checkpoints (``weights_only=True``).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
+import threading
+import weakref
 from pathlib import Path
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
@@ -20,7 +22,6 @@ from typing_extensions import TypeVar
 from lasa.base.config import AtLeastTwo, Positive, PositiveInt, validate
 from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.io import atomic_path, require_file
-from lasa.method.inference import inference_plan
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,7 +36,7 @@ class DecoderConfig:
     depth: PositiveInt = 3  # number of hidden layers in the encoder and in the decoder
     action_scale: Positive = 1.0  # sigma_h: bound on ||phi|| [rad/s]
     state_mean: tuple[float, ...] = ()  # input normalisation of s (from the data) [rad]
-    state_std: tuple[float, ...] = ()  # ... and its spread [rad]
+    state_std: tuple[Positive, ...] = ()  # ... and its spread [rad]
 
     def __post_init__(self) -> None:
         validate(self)
@@ -43,8 +44,6 @@ class DecoderConfig:
             value = getattr(self, name)
             if value and len(value) != self.n_joints:
                 raise ConfigError(f"{name} must have n_joints={self.n_joints} entries")
-        if self.state_std and min(self.state_std) <= 0:
-            raise ConfigError("state_std entries must be positive")
 
 
 @runtime_checkable
@@ -54,21 +53,17 @@ class ActionDecoder(Protocol):
     @property
     def robot(self) -> str:
         """The robot whose joint space phi acts in."""
-        ...
 
     @property
     def n_goals(self) -> int:
         """G: the length of the belief phi reads."""
-        ...
 
     @property
     def z_dim(self) -> int:
         """d: the joystick axes."""
-        ...
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b), broadcast over the leading dimensions of z (..., d), s (..., n), b (..., G)."""
-        ...
 
 
 def _mlp(n_in: int, n_out: int, hidden: int, depth: int) -> nn.Sequential:
@@ -91,10 +86,8 @@ class LatentActionModel(nn.Module):
         self.n_goals: int = config.n_goals  # G, the length of the belief it reads
         self.z_dim: int = config.z_dim  # d, the latent (joystick) dimension
         n, g, d = config.n_joints, config.n_goals, config.z_dim
-        mean = torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32)
-        std = torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32)
-        self.register_buffer("state_mean", mean)
-        self.register_buffer("state_std", std)
+        self.register_buffer("state_mean", torch.tensor(config.state_mean or [0.0] * n, dtype=torch.float32))
+        self.register_buffer("state_std", torch.tensor(config.state_std or [1.0] * n, dtype=torch.float32))
         self.encoder = _mlp(2 * n + g, d, config.hidden, config.depth)
         self.decoder = _mlp(d + n + g, n, config.hidden, config.depth)
 
@@ -108,8 +101,7 @@ class LatentActionModel(nn.Module):
 
     def decode(self, z: torch.Tensor, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         """phi(z, s, b): joint velocities with norm below sigma_h = action_scale."""
-        z = z.clamp(-1.0, 1.0)
-        v = self.decoder(torch.cat([z, self._context(s, b)], dim=-1))
+        v = self.decoder(torch.cat([z.clamp(-1.0, 1.0), self._context(s, b)], dim=-1))
         norm = v.norm(dim=-1, keepdim=True).clamp_min(1e-8)
         return self.config.action_scale * torch.tanh(norm) * v / norm
 
@@ -120,7 +112,7 @@ class LatentActionModel(nn.Module):
 
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b) on numpy arrays (broadcast), float64: :meth:`decode` to float32 rounding by
-        :mod:`lasa.method.inference` (a subclass's or patched ``decode`` runs itself)."""
+        :func:`inference_plan` (a subclass's or patched ``decode`` runs itself)."""
         if getattr(self.decode, "__func__", None) is not _DECODE:
             return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode
         return inference_plan(self).decode(z, s, b)
@@ -135,6 +127,207 @@ class LatentActionModel(nn.Module):
 
 
 _DECODE = LatentActionModel.decode  # the decode that the inference plan implements
+_CHUNK_ROWS = 1024  # rows per chunk: two 1024 x 128 float32 buffers stay in a core's L2 cache
+
+
+def _weight_tensors(model: LatentActionModel) -> list[torch.Tensor]:
+    """The decoder's parameters and the state normalisation, without nn.Module's (slow) traversal."""
+    params = [layer._parameters.values() for layer in model.decoder._modules.values() if layer is not None]
+    return [t for values in params for t in values if t is not None] + [model.state_mean, model.state_std]
+
+
+_KEEP_ROWS = 4 * _CHUNK_ROWS  # largest chunk whose buffers a thread keeps between calls
+
+
+class _Buffers(threading.local):
+    """One thread's activation buffers and their views, reused across chunks and calls."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+        self.a = torch.empty(0)
+        self.b = torch.empty(0)
+        self.views: dict[tuple[int, ...], tuple[Any, ...]] = {}
+        self.out = torch.empty(0, 0)
+        self.out64 = np.empty((0, 0))
+
+    def output(self, n: int, rows: int) -> tuple[torch.Tensor, np.ndarray]:
+        """The (n x rows) output layer's buffer, float32, and one of float64 for its squash (kept
+        between calls up to ``_KEEP_ROWS`` x 8 rows)."""
+        if rows > 8 * _KEEP_ROWS:
+            return torch.empty(n, rows), np.empty((n, rows))
+        if self.out.shape[0] != n or self.out.shape[1] < rows:
+            self.out = torch.empty(n, max(rows, self.out.shape[1]))
+            self.out64 = np.empty(self.out.shape)
+        return self.out[:, :rows], self.out64[:, :rows]
+
+    def get(self, shape: tuple[int, ...], width: int) -> tuple[Any, ...]:
+        """Views of the two (rows x width) buffers a, b for a chunk of leading shape ``shape``:
+        (a as numpy of shape ``shape + (width,)``, a as torch of that shape, a, b, a.T, b.T)."""
+        view = self.views.get(shape)
+        if view is None:
+            rows = math.prod(shape)
+            if rows > _KEEP_ROWS:  # a chunk this large (trailing axes > _CHUNK_ROWS) is not kept
+                a, b = torch.empty(rows, width), torch.empty(rows, width)
+                a_nd = a.view(*shape, width)
+                return (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
+            if len(self.views) >= 64:
+                self.views = {}
+            if rows > self.rows:
+                self.rows = rows
+                self.a = torch.empty(rows, width)
+                self.b = torch.empty(rows, width)
+                self.views = {}
+            a, b = self.a[:rows], self.b[:rows]
+            a_nd = a.view(*shape, width)
+            view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
+            self.views[shape] = view
+        return view
+
+
+class _InferencePlan:
+    """The decoder's weights refolded for ``LatentActionModel.decode_numpy`` (read-only)."""
+
+    def __init__(self, model: LatentActionModel) -> None:
+        cfg = model.config
+        d, n = cfg.z_dim, cfg.n_joints
+        layers = [m for m in model.decoder if isinstance(m, nn.Linear)]
+        with torch.no_grad():
+            w1, c1 = layers[0].weight.detach().double(), layers[0].bias.detach().double()
+            mean, std = model.state_mean.detach().double(), model.state_std.detach().double()
+            w_s = w1[:, d : d + n] / std
+            # h1 = W_z z + [W_s / std, W_b] [s, b] + (c1 - W_s mean / std), in float64
+            self.w_z = w1[:, :d].T.numpy().copy()  # (d, H)
+            self.w_sb = torch.cat([w_s, w1[:, d + n :]], dim=1).T.numpy().copy()  # (n + G, H)
+            self.c1 = (c1 - w_s @ mean).numpy()  # (H,)
+            # float32 views of the hidden weights, as decode's nn.Linear reads them
+            self.hidden = [(layer.weight.detach().t(), layer.bias.detach()) for layer in layers[1:-1]]
+            self.w_o = layers[-1].weight.detach().contiguous()  # (n, H): V^T = W_o U^T + c_o
+            self.c_o = layers[-1].bias.detach()[:, None].contiguous()  # (n, 1)
+        self.tensors = _weight_tensors(model)  # held, so that identity checks are exact
+        self.versions = [t._version for t in self.tensors]
+        self.scale = float(cfg.action_scale)
+        self.width = int(w1.shape[0])
+        self.d, self.n, self.g = d, n, cfg.n_goals
+        self.buffers = _Buffers()
+
+    def fits(self, model: LatentActionModel) -> bool:
+        """Whether the plan was built from the model's current weights."""
+        tensors = _weight_tensors(model)
+        return (
+            self.scale == model.config.action_scale
+            and len(tensors) == len(self.tensors)
+            and all(
+                t is u and t._version == v
+                for t, u, v in zip(tensors, self.tensors, self.versions, strict=True)
+            )
+        )
+
+    def decode(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """phi(z, s, b), float64; see :meth:`lasa.method.decoder.LatentActionModel.decode_numpy`."""
+        z = np.minimum(np.maximum(np.asarray(z, dtype=np.float64), -1.0), 1.0)  # z clamped to [-1, 1]
+        s, b = np.asarray(s, dtype=np.float64), np.asarray(b, dtype=np.float64)
+        if z.shape[-1:] != (self.d,) or s.shape[-1:] != (self.n,) or b.shape[-1:] != (self.g,):
+            raise ConfigError(
+                f"decode_numpy needs z (..., {self.d}), s (..., {self.n}) and b (..., {self.g}); "
+                f"got {z.shape}, {s.shape} and {b.shape}"
+            )
+        shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
+        lead = shape or (1,)
+        t_z, t_c = self._first_terms(z, s, b)
+        rows_total = math.prod(lead)
+        if rows_total == 0:
+            return np.zeros(shape + (self.n,))
+        # each term rounded to float32 once, then added in float32: a row's first layer is
+        # the same whichever chunk, batch or branch of _forward computes it
+        v = self._forward(t_z.astype(np.float32), t_c.astype(np.float32), lead, rows_total)
+        return self._squash(v, shape)
+
+    def _first_terms(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The first layer's z term (with its bias) and context term, float64, each unexpanded."""
+        z_lead, s_lead, b_lead = z.shape[:-1], s.shape[:-1], b.shape[:-1]
+        width = self.width
+        if self.d == 1:
+            t_z = z * self.w_z[0] + self.c1
+        else:
+            t_z = (z.reshape(-1, self.d) @ self.w_z + self.c1).reshape(z_lead + (width,))
+        if s_lead == b_lead:
+            sb = np.concatenate((s, b), axis=-1)
+            t_c = (sb.reshape(-1, sb.shape[-1]) @ self.w_sb).reshape(s_lead + (width,))
+        else:
+            ns = s.shape[-1]
+            t_c = s @ self.w_sb[:ns] + b @ self.w_sb[ns:]
+        return t_z, t_c
+
+    def _forward(
+        self, t_z32: np.ndarray, t_c32: np.ndarray, lead: tuple[int, ...], rows_total: int
+    ) -> np.ndarray:
+        """The MLP from the first layer's float32 terms, in chunks along the first broadcast axis;
+        the output layer transposed (n x rows), copied to float64 (a reused buffer)."""
+        width, buffers = self.width, self.buffers
+        inner = math.prod(lead[1:])
+        chunks = -(-lead[0] // max(1, _CHUNK_ROWS // max(inner, 1)))
+        step = -(-lead[0] // chunks)  # indices of the first axis per chunk, balanced
+        out_t, v = buffers.output(self.n, rows_total)  # V transposed, and its float64 copy
+        if chunks == 1:  # the first layer's add in numpy: fewer calls for small batches
+            first_np, _, h, g, a_t, b_t = buffers.get(lead, width)
+            np.add(t_z32, t_c32, out=first_np)
+            self._layers(h, g, a_t, b_t, out_t)
+        else:
+            full = len(lead) + 1
+            tz32, tc32 = torch.from_numpy(t_z32), torch.from_numpy(t_c32)
+            for start in range(0, lead[0], step):
+                stop = min(lead[0], start + step)
+                _, first, h, g, a_t, b_t = buffers.get((stop - start, *lead[1:]), width)
+                torch.add(
+                    _along_first(tz32, start, stop, full), _along_first(tc32, start, stop, full), out=first
+                )
+                self._layers(h, g, a_t, b_t, out_t[:, start * inner : stop * inner])
+        np.copyto(v, out_t.numpy())  # (n, rows), float64
+        return v
+
+    def _layers(
+        self, h: torch.Tensor, g: torch.Tensor, a_t: torch.Tensor, b_t: torch.Tensor, out: torch.Tensor
+    ) -> None:
+        """The first layer's tanh on h (buffer a), the hidden layers (h and g in turn), the output
+        (from a_t or b_t, as the count of hidden layers is even or odd) into ``out`` (n x rows)."""
+        h.tanh_()
+        for w, c in self.hidden:
+            torch.addmm(c, h, w, out=g)
+            g.tanh_()
+            h, g = g, h
+        last_is_b = len(self.hidden) % 2 == 1
+        torch.addmm(self.c_o, self.w_o, b_t if last_is_b else a_t, out=out)
+
+    def _squash(self, v: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+        """The radial squash sigma_h tanh(|v|) v / |v| in float64, rows back to ``shape + (n,)``."""
+        norm = np.sqrt(np.einsum("ij,ij->j", v, v))
+        np.maximum(norm, 1e-8, out=norm)
+        factor = np.tanh(norm)
+        factor /= norm
+        if self.scale != 1.0:
+            factor *= self.scale
+        return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (self.n,))
+
+
+def _along_first(term: torch.Tensor, start: int, stop: int, full: int) -> torch.Tensor:
+    """Indices ``start:stop`` of the first broadcast axis of a first-layer term (itself if broadcast)."""
+    if term.dim() == full and term.shape[0] != 1:
+        return term[start:stop]
+    return term
+
+
+_PLANS: weakref.WeakKeyDictionary[LatentActionModel, _InferencePlan] = weakref.WeakKeyDictionary()
+
+
+def inference_plan(model: LatentActionModel) -> _InferencePlan:
+    """The model's cached inference plan (``plan.decode`` is ``model.decode_numpy``), rebuilt when
+    its weights have changed."""
+    plan = _PLANS.get(model)
+    if plan is None or not plan.fits(model):
+        plan = _InferencePlan(model)
+        _PLANS[model] = plan
+    return plan
+
 
 M = TypeVar("M", bound=nn.Module, default=LatentActionModel)  # a decoder class
 
@@ -179,13 +372,9 @@ def load_checkpoint(
     n_goals: int | None = None,
 ) -> tuple[M, dict[str, Any]]:
     """A model saved by :func:`save_checkpoint` (eval mode) and its ``extra``, built as
-    ``decoder(decoder.config_class(**config))`` and checked against ``robot`` and ``n_goals`` if given.
-
-    Raises:
-        ArtifactError: if the file is missing.
-        CheckpointError: if it is corrupt, of another decoder class, robot or number of goals.
-        ConfigError: if ``decoder`` has no ``config_class`` or is no :class:`ActionDecoder`.
-    """
+    ``decoder(decoder.config_class(**config))`` and checked against ``robot`` and ``n_goals`` if given:
+    ArtifactError if the file is missing, CheckpointError if it is corrupt or of another decoder class,
+    robot or number of goals, ConfigError if ``decoder`` has no ``config_class`` or is no ActionDecoder."""
     config_class = getattr(decoder, "config_class", None)
     if not isinstance(config_class, type) or not dataclasses.is_dataclass(config_class):
         raise ConfigError(
@@ -214,15 +403,13 @@ def load_checkpoint(
         raise ConfigError(
             f"decoder class {decoder.__name__} does not follow lasa.method.decoder.ActionDecoder"
         )
-    if robot is not None and model.robot != robot:
-        raise CheckpointError(
-            f"{path} was trained for robot {model.robot!r}, not {robot!r}. "
-            f"Use the checkpoint for {robot!r} or re-make it with: {make_hint}"
-        )
-    if n_goals is not None and model.n_goals != n_goals:
-        raise CheckpointError(
-            f"{path} reads a belief over {model.n_goals} goals, not {n_goals}. "
-            f"Use the checkpoint for that task or re-make it with: {make_hint}"
-        )
+    for wanted, got, differs, use in (
+        (robot, model.robot, f"was trained for robot {model.robot!r}, not {robot!r}", repr(robot)),
+        (n_goals, model.n_goals, f"reads a belief over {model.n_goals} goals, not {n_goals}", "that task"),
+    ):
+        if wanted is not None and got != wanted:
+            raise CheckpointError(
+                f"{path} {differs}. Use the checkpoint for {use} or re-make it with: {make_hint}"
+            )
     model.eval()
     return model, dict(payload.get("extra", {}))

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import torch
 
-from lasa.base.config import ControlConfig, check_range
+from lasa.base.config import AtLeastTwo, ControlConfig, Positive, PositiveInt, Seed, validate
 from lasa.base.errors import ConfigError
 from lasa.method.belief import log_likelihood_torch, nearest_distance
 from lasa.method.decoder import LatentActionModel
@@ -58,21 +58,16 @@ class EntropyRegularizer:
     """The extra loss lambda * mean over contexts of sum_g p log p (Eq. T6), on ``contexts`` contexts
     of each batch drawn with ``seed``, z over ``n_z`` inputs per axis, evidence over ``horizon`` steps."""
 
-    lam: float
+    entropy_lambda: Positive
     goal_sets: np.ndarray
     control: ControlConfig
-    n_z: int = 11
-    horizon: int = 10
-    contexts: int = 64
-    seed: int = 0
+    n_z: AtLeastTwo = 11
+    horizon: PositiveInt = 10
+    contexts: PositiveInt = 64
+    seed: Seed = 0
 
     def __post_init__(self) -> None:
-        check_range("entropy_lambda", self.lam, 0.0, low_open=True)
-        if self.n_z < 2 or self.contexts < 1 or self.horizon < 1:
-            raise ConfigError(
-                f"n_z must be >= 2, horizon and contexts >= 1; "
-                f"got {self.n_z}, {self.horizon}, {self.contexts}"
-            )
+        validate(self)
         self._goal_sets = torch.as_tensor(np.asarray(self.goal_sets), dtype=torch.float32)
         self._gen = torch.Generator().manual_seed(self.seed)
 
@@ -82,7 +77,7 @@ class EntropyRegularizer:
         scores = goal_scores(
             model, states[pick], beliefs[pick], grid, self._goal_sets, self.control, self.horizon
         )
-        return -self.lam * entropy(goal_distribution(scores)).mean()
+        return -self.entropy_lambda * entropy(goal_distribution(scores)).mean()
 
 
 def context_entropy(
@@ -111,8 +106,7 @@ def context_grid(
     conf = np.linspace(1.0 / n_goals, 0.999, n_belief)
     pp, cc = np.meshgrid(progress, conf, indexing="ij")
     states = start + pp.reshape(-1, 1) * (goal - start)
-    rest = (1.0 - cc.reshape(-1, 1)) / (n_goals - 1)
-    beliefs = np.repeat(rest, n_goals, axis=1)
+    beliefs = np.repeat((1.0 - cc.reshape(-1, 1)) / (n_goals - 1), n_goals, axis=1)
     beliefs[:, goal_index] = cc.reshape(-1)
     return pp.reshape(-1), cc.reshape(-1), states, beliefs
 

@@ -127,10 +127,8 @@ class Retargeting:
         lead = np.broadcast_shapes(qs.shape[:-1], xis.shape[:-1])
         q_rows = np.broadcast_to(qs, (*lead, self.n_joints)).reshape(-1, self.n_joints)
         xi_rows = np.broadcast_to(xis, (*lead, 6)).reshape(-1, 6)
-        out = np.empty((len(q_rows), self.n_joints))
-        for i in range(len(q_rows)):  # mink solves one configuration at a time
-            out[i] = self._solve(q_rows[i], xi_rows[i])
-        return out.reshape(*lead, self.n_joints)
+        out = [self._solve(q_row, xi) for q_row, xi in zip(q_rows, xi_rows, strict=True)]  # one QP each
+        return np.array(out, dtype=float).reshape(*lead, self.n_joints)
 
 
 def retarget_action(
@@ -138,10 +136,8 @@ def retarget_action(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Retargeting's a_h for a batch, and each row's mode after the step: a press cycles the mode and
     moves nothing, a stick at rest nothing, else z (U, 2) is a twist in the row's mode."""
-    state = np.asarray(state, dtype=float)
-    z = np.asarray(z, dtype=float)
-    mode = np.asarray(mode, dtype=int)
-    press = np.asarray(press, dtype=bool)
+    state, z = np.asarray(state, dtype=float), np.asarray(z, dtype=float)
+    mode, press = np.asarray(mode, dtype=int), np.asarray(press, dtype=bool)
     a_h = np.zeros(state.shape)
     move = ~press & np.any(z != 0.0, axis=-1)
     if move.any():

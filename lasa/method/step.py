@@ -82,8 +82,7 @@ def blend(a_h: np.ndarray, a_r: np.ndarray, alpha: float | np.ndarray) -> np.nda
 
 def sanitize(action: np.ndarray) -> np.ndarray:
     """Replace every row that holds a non-finite entry by a zero action."""
-    bad = ~np.all(np.isfinite(action), axis=-1, keepdims=True)
-    return np.where(bad, 0.0, action)
+    return np.where(~np.all(np.isfinite(action), axis=-1, keepdims=True), 0.0, action)
 
 
 def safe_step(
@@ -93,8 +92,7 @@ def safe_step(
     [lower, upper]; ConfigError if ``state`` is not finite (a sensor fault is not a command)."""
     if not np.all(np.isfinite(state)):
         raise ConfigError("state holds NaN or infinite joint positions; refusing to command")
-    velocity = np.clip(sanitize(action), -max_speed, max_speed)
-    return np.clip(state + dt * velocity, lower, upper)
+    return np.clip(state + dt * np.clip(sanitize(action), -max_speed, max_speed), lower, upper)
 
 
 def advance(
@@ -197,5 +195,4 @@ def decode_candidates(
 def latent_grid(n_z: int, z_dim: int = 1) -> np.ndarray:
     """The joystick candidates a user weighs: an even grid on [-1, 1]^d, (n_z^d, d)."""
     axis = np.linspace(-1.0, 1.0, n_z)
-    mesh = np.meshgrid(*([axis] * z_dim), indexing="ij")
-    return np.stack([m.ravel() for m in mesh], axis=-1)
+    return np.stack([m.ravel() for m in np.meshgrid(*([axis] * z_dim), indexing="ij")], axis=-1)

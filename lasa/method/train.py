@@ -1,6 +1,7 @@
 r"""Training the latent-action model on demonstrations: the reconstruction error of Sec. III-A,
 :math:`\|\phi(z, s, b) - a\|^2`, :math:`z = \psi(s, a, b)`, in units of sigma_h, with Gaussian noise
-on z (clipped to [-1, 1]) to spread actions over the stick's range and smooth the decoder in z.
+on z (clipped to [-1, 1]) to spread actions over the stick's range and smooth the decoder in z; and
+the optional sector loss, whose 2-D latent's ring keeps departures and manipulation apart.
 """
 
 from __future__ import annotations
@@ -24,13 +25,13 @@ from lasa.base.config import (
     Positive,
     PositiveInt,
     Seed,
+    check_range,
     validate,
 )
 from lasa.base.errors import ConfigError
-from lasa.method.dataset import Demonstrations
+from lasa.method.dataset import REACH, Demonstrations
 from lasa.method.decoder import DecoderConfig, LatentActionModel
 from lasa.method.entropy import EntropyRegularizer
-from lasa.method.sectors import sector_loss, sector_roles
 
 ExtraLoss = Callable[[LatentActionModel, torch.Tensor, torch.Tensor], torch.Tensor]
 
@@ -53,7 +54,7 @@ class TrainConfig:
     entropy_n_z: AtLeastTwo = 11  # joystick inputs the entropy term's sum over z runs over [-]
     entropy_horizon: PositiveInt = 10  # steps over which the entropy term reads an input's evidence [-]
     entropy_contexts: PositiveInt = 64  # contexts per batch the entropy term is evaluated on [-]
-    # the latent's sectors (lasa.method.sectors; 2-D latents): departures from a confident goal
+    # the latent's sectors (:func:`sector_loss`; 2-D latents): departures from a confident goal
     # in a share of the ring, manipulation outside it; 0 trains without
     sector_weight: NonNegative = 0.0  # weight of the sector loss [1/rad] [-]
     sector_share: Annotated[Number, at.Gt(0.0), at.Lt(1.0)] = 0.375  # departure sector's share [-]
@@ -69,8 +70,7 @@ def _split(demos: Demonstrations, holdout: float, rng: np.random.Generator) -> t
     """Train / validation masks that keep whole demonstrations together."""
     ids = np.unique(demos.demo)
     n_val = int(round(holdout * len(ids)))
-    val_ids = rng.choice(ids, size=n_val, replace=False) if n_val else np.array([], int)
-    val = np.isin(demos.demo, val_ids)
+    val = np.isin(demos.demo, rng.choice(ids, size=n_val, replace=False) if n_val else np.array([], int))
     return ~val, val & ~demos.perturbed
 
 
@@ -93,15 +93,10 @@ def _with_entropy(
     if goal_sets is None:
         raise ConfigError("entropy_lambda > 0 needs goal_sets (belief_targets(task, control.likelihood))")
     c = config
-    regularizer = EntropyRegularizer(
+    term = EntropyRegularizer(
         c.entropy_lambda, goal_sets, control, c.entropy_n_z, c.entropy_horizon, c.entropy_contexts, c.seed
     )
-
-    def combined(model: LatentActionModel, s: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-        term = regularizer(model, s, b)
-        return term if extra_loss is None else term + extra_loss(model, s, b)
-
-    return combined
+    return term if extra_loss is None else lambda model, s, b: term(model, s, b) + extra_loss(model, s, b)
 
 
 def _initial_model(
@@ -110,7 +105,6 @@ def _initial_model(
     """A fresh model with the demonstrations' state normalisation, or a trainable copy of ``init``
     (ConfigError if its architecture differs)."""
     clean_states = demos.states[~demos.perturbed]
-    std = np.maximum(clean_states.std(axis=0), 1e-3)
     model = LatentActionModel(
         DecoderConfig(
             robot=demos.robot,
@@ -121,7 +115,7 @@ def _initial_model(
             depth=config.depth,
             action_scale=control.action_scale,
             state_mean=tuple(float(x) for x in clean_states.mean(axis=0)),
-            state_std=tuple(float(x) for x in std),
+            state_std=tuple(float(x) for x in np.maximum(clean_states.std(axis=0), 1e-3)),
         )
     )
     if init is not None:
@@ -164,13 +158,10 @@ def train_decoder(
             "collect more demonstrations or lower batch_size"
         )
     model = _initial_model(demos, control, config, init)
-    data = (
-        torch.as_tensor(demos.states[train_mask], dtype=torch.float32),
-        torch.as_tensor(demos.actions[train_mask], dtype=torch.float32),
-        torch.as_tensor(demos.beliefs[train_mask], dtype=torch.float32),
-        torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None,
-    )
-    val = (demos.states[val_mask], demos.actions[val_mask], demos.beliefs[val_mask])
+    arrays = (demos.states, demos.actions, demos.beliefs)
+    s, a, b = (torch.as_tensor(x[train_mask], dtype=torch.float32) for x in arrays)
+    roles = torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None
+    data, val = (s, a, b, roles), tuple(x[val_mask] for x in arrays)
 
     # fused: one kernel per parameter for the whole update, about 3x faster on CPU
     optim = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay, fused=True)
@@ -217,8 +208,45 @@ def _batch_loss(
         config.sector_weight * sector_loss(z, roles[idx], config.sector_share) if roles is not None else 0.0
     )
     z = (z + config.z_noise * torch.randn(z.shape, generator=gen)).clamp(-1.0, 1.0)
-    a_hat = model.decode(z, s, b)
-    loss = (((a_hat - a) / scale) ** 2).sum(-1).mean() + sector
+    loss = (((model.decode(z, s, b) - a) / scale) ** 2).sum(-1).mean() + sector
     if extra_loss is not None:
         loss = loss + extra_loss(model, s, b)
     return loss
+
+
+FREE, DEPARTURE, MANIPULATION = 0, 1, 2  # a tuple's role on the ring
+
+
+def sector_roles(demos: Demonstrations, confident: float = 0.9) -> np.ndarray:
+    """Each tuple's role on the ring, (N,): :data:`DEPARTURE`, :data:`MANIPULATION` (both from a
+    top belief of ``confident``) or :data:`FREE`."""
+    check_range("confident", confident, 0.0, 1.0, low_open=True)
+    believed = demos.beliefs.argmax(axis=1)
+    reach = demos.phase == REACH
+    roles = np.full(len(demos), FREE, dtype=np.int64)
+    sure = demos.beliefs.max(axis=1) >= confident
+    roles[reach & sure & (believed != demos.goal)] = DEPARTURE
+    roles[~reach & sure] = MANIPULATION
+    return roles
+
+
+def sector_loss(z: torch.Tensor, roles: torch.Tensor, share: float) -> torch.Tensor:
+    r"""The hinge on each tuple's angle outside its sector, averaged over the batch [rad]; z (B, 2),
+    roles (B,), ``share`` s in (0, 1). The angle :math:`\vartheta = \operatorname{atan2}(z_2, z_1)` of
+    a departure (a reach confident in another goal) stays in :math:`|\vartheta| \le \pi s`, of
+    manipulation (a confident stroke, adjustment or hold) outside it (Secs. III, IV-B):
+
+    .. math::  L_\text{sector} = \frac{1}{B}\Big(\sum_{\text{departures}} [\,|\vartheta| - \pi s\,]_+
+        + \sum_{\text{manipulation}} [\,\pi s - |\vartheta|\,]_+\Big).
+    """
+    if z.shape[-1] != 2:
+        raise ConfigError(f"the sector loss needs a 2-D latent (a 2-axis stick), got z_dim={z.shape[-1]}")
+    check_range("the departure sector's share", share, 0.0, 1.0, low_open=True, high_open=True)
+    angle = torch.atan2(z[:, 1], z[:, 0]).abs()
+    half = torch.pi * share
+    outside = torch.where(
+        roles == DEPARTURE,
+        torch.relu(angle - half),
+        torch.where(roles == MANIPULATION, torch.relu(half - angle), torch.zeros_like(angle)),
+    )
+    return outside.mean()
