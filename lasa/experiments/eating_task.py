@@ -67,7 +67,7 @@ class Config:
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda run (notebook 03's) [-]
     search_lambdas: tuple[Positive, ...] = (0.003, 0.01, 0.03)  # small weights searched for both halves [-]
     search_segmentations: tuple[str, ...] = ()  # bases the search fine-tunes (LARGE=1: transfers, leaves) [-]
-    # bases trained with the sector loss too (lasa.method.sectors; <segmentation>_sectors, lambda = 0); the
+    # bases trained with the sector loss too (lasa.method.train; <segmentation>_sectors, lambda = 0); the
     # weight had the lower held-out reconstruction error of two probes (0.2: 0.0085, 1.0: 0.0118)
     sector_segmentations: tuple[str, ...] = ()  # segmentations trained with sectors (LARGE=1: leaves) [-]
     sector_weight: NonNegative = 0.2  # weight of the sector loss of those segmentations [-]
