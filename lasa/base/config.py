@@ -41,19 +41,13 @@ UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
 
 
-@dataclasses.dataclass(frozen=True)
-class Why:
-    """Why a field's type has its bounds, stated after a range error (e.g. :data:`Rationality`)."""
-
-    reason: str
-
-
-# a simulated user's rationality on a swept grid (Eq. S1), in (0, inf)
+# a simulated user's rationality on a swept grid (Eq. S1), in (0, inf); a type's at.doc is why it has
+# its bounds, stated after a range error
 Rationality = Annotated[
     Number,
     at.Gt(0.0),
     at.Lt(math.inf),
-    Why("the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"),
+    at.doc("the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"),
 ]
 # the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None (cap_setting: "none")
 BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
@@ -74,19 +68,7 @@ def validate_caps(config: Any) -> None:
         raise ConfigError(f"cap_sweep must not repeat a cap, got {config.cap_sweep}")
 
 
-def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:
-    """(low, high, low_open, high_open) of an Annotated number type's bounds."""
-    low, high, low_open, high_open = -math.inf, math.inf, False, False
-    for meta in getattr(annotation, "__metadata__", ()):
-        if isinstance(meta, at.Ge):
-            low = float(meta.ge)  # type: ignore[arg-type]
-        elif isinstance(meta, at.Gt):
-            low, low_open = float(meta.gt), True  # type: ignore[arg-type]
-        elif isinstance(meta, at.Le):
-            high = float(meta.le)  # type: ignore[arg-type]
-        elif isinstance(meta, at.Lt):
-            high, high_open = float(meta.lt), True  # type: ignore[arg-type]
-    return low, high, low_open, high_open
+_SIDES = {at.Ge: (0, False), at.Gt: (0, True), at.Le: (1, False), at.Lt: (1, True)}  # bound: (side, open)
 
 
 def interval(low: float, high: float, low_open: bool = False, high_open: bool = False) -> str:
@@ -98,11 +80,13 @@ def expects(annotation: Any) -> str:
     """What a field of this type accepts, in words: ``an integer >= 1``, ``a number in [0, 1]``."""
     origin = typing.get_origin(annotation)
     if origin is Annotated:
-        base = typing.get_args(annotation)[0]
-        low, high, low_open, high_open = _bounds(annotation)
-        if base is int and high == math.inf:
-            return f"an integer >= {low + 1 if low_open else low:g}"
-        return f"{'an integer' if base is int else 'a number'} in {interval(low, high, low_open, high_open)}"
+        ends, opens, base = [-math.inf, math.inf], [False, False], typing.get_args(annotation)[0]
+        for bound in (m for m in annotation.__metadata__ if type(m) in _SIDES):
+            side, opens[side] = _SIDES[type(bound)]
+            ends[side] = float(getattr(bound, type(bound).__name__.lower()))  # Ge(1).ge, Lt(1).lt ...
+        if base is int and ends[1] == math.inf:
+            return f"an integer >= {ends[0] + 1 if opens[0] else ends[0]:g}"
+        return f"{'an integer' if base is int else 'a number'} in {interval(ends[0], ends[1], *opens)}"
     if origin is tuple:
         return f"a list, each {expects(typing.get_args(annotation)[0])}"
     if origin in (typing.Union, types.UnionType):
@@ -139,7 +123,7 @@ def validate(record: Any) -> None:
         expected = expects(item if len(loc) > 1 else annotation)
         if isinstance(err["input"], int | float) and expected.startswith("a number in "):
             expected = expected.removeprefix("a number ")  # it is a number: only the range is wrong
-        reasons = [m.reason for m in getattr(item, "__metadata__", ()) if isinstance(m, Why)]  # its Why
+        reasons = [m.documentation for m in getattr(item, "__metadata__", ()) if isinstance(m, at.DocInfo)]
         why = f": {reasons[0]}" if reasons else ""
         raise ConfigError(f"{name} must be {expected}, got {err['input']!r}{why}") from None
 
@@ -230,9 +214,7 @@ class ControlConfig:
         check_choice("assistance", self.assistance, BUILT_IN_ASSISTANCE)
 
 
-def to_dict(config: Any) -> dict[str, Any]:
-    """A plain ``dict`` of a config dataclass (safe for JSON and torch checkpoints)."""
-    return dataclasses.asdict(config)
+to_dict = dataclasses.asdict  # a plain dict of a config record (safe for JSON and torch checkpoints)
 
 
 def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
