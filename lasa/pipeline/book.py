@@ -19,21 +19,16 @@ from lasa.base.io import write_text
 from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
-from lasa.pipeline.pages import cell_text
+from lasa.pipeline.pages import cell_text, executed_notebooks
 
-ROBOT_ORDER = ("planar5", "panda")
-ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
+ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}  # paper's order
 
 
 def ordered_notebooks(folder: Path) -> list[Path]:
     """The executed notebooks in ``folder``, in the paper's order (number, then planar5, Panda)."""
-    books = [p for p in folder.glob("*.ipynb") if not p.name.endswith(".failed.ipynb")]
-
-    def key(path: Path) -> tuple[str, int]:
-        stem, _, robot = path.stem.partition("-")
-        return stem, ROBOT_ORDER.index(robot) if robot in ROBOT_ORDER else -1
-
-    return sorted(books, key=key)
+    rank = {robot: i for i, robot in enumerate(ROBOT_TITLES)}
+    runs = {p: p.stem.partition("-")[::2] for p in executed_notebooks(folder)}  # (stem, robot)
+    return sorted(runs, key=lambda p: (runs[p][0], rank.get(runs[p][1], -1)))
 
 
 def front_page(claims: pd.DataFrame, pages: set[str], values: Values | None = None) -> str:
@@ -79,13 +74,10 @@ def retitle(notebook: Path, robot: str) -> None:
 
 
 def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, progress: bool = True) -> Path:
-    """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
-    folder and build the site into ``out/html``; return its ``index.html``. ArtifactError without
-    notebooks, claims table or MathJax (``make setup`` installs it)."""
+    """Build the book's sources under ``out/src`` and its site into ``out/html``; return its ``index.html``.
+    ArtifactError without notebooks, claims table or MathJax (``make setup`` installs it)."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
-    if not books:
-        raise ArtifactError(f"no executed notebooks in {notebooks}; run: make figures")
     claims_csv = figures / "claims.csv"
     if not claims_csv.is_file():
         raise ArtifactError(f"no claims table {claims_csv}; run: make figures")

@@ -13,7 +13,6 @@ import json
 import posixpath
 import re
 import sys
-from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -146,12 +145,9 @@ def _clean_cell(
     cell: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any]:
     """One cell without volatile metadata, its outputs cleaned and numbered ``count``; links moved."""
-    out = {k: copy.deepcopy(v) for k, v in cell.items() if k != "metadata"}
-    volatile = ("execution", "papermill", "collapsed", "scrolled")
-    metadata = {k: copy.deepcopy(v) for k, v in cell.get("metadata", {}).items() if k not in volatile}
-    if not metadata.get("tags"):
-        metadata.pop("tags", None)
-    out["metadata"] = metadata
+    volatile = ("execution", "papermill", "collapsed", "scrolled")  # and empty tags
+    metadata = {k: v for k, v in cell.get("metadata", {}).items() if k not in volatile and (v or k != "tags")}
+    out = copy.deepcopy({**{k: v for k, v in cell.items() if k != "metadata"}, "metadata": metadata})
     if INJECTED in metadata.get("tags", ()):
         out["id"] = INJECTED  # papermill gives it a random id
     if cell["cell_type"] == "markdown" and relink:
@@ -209,7 +205,7 @@ def _read(path: Path) -> dict[str, Any]:
 _PARTIAL = re.compile(r"^\.|\.(failed|tmp)\.ipynb$")
 
 
-def _executed(folder: Path) -> list[Path]:
+def executed_notebooks(folder: Path) -> list[Path]:
     """The executed notebooks of ``folder`` (not the partial runs ``*.failed.ipynb``), by name."""
     if not folder.is_dir():
         raise ArtifactError(f"no executed notebooks: {folder} does not exist (run `make figures` first)")
@@ -217,11 +213,6 @@ def _executed(folder: Path) -> list[Path]:
     if not found:
         raise ArtifactError(f"no executed notebooks in {folder} (run `make figures` first)")
     return found
-
-
-def _pages(sources: Iterable[Path], figures: FigureIndex, link: Link) -> dict[str, dict[str, Any]]:
-    """Each executed notebook's page, by file name."""
-    return {p.name: clean_notebook(_read(p), figures, link) for p in sources}
 
 
 def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
@@ -251,16 +242,15 @@ def write_pages(
     """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``; return
     the pages, the bytes of all pages in the folder and the figures linked to fit. PageBudgetError (and
     nothing written) if they exceed ``budget`` even so; ArtifactError without notebooks."""
-    sources, index = _executed(Path(executed)), FigureIndex(Path(figures))
-    folder = Path(figures) / PAGES
-    regenerated = {p.name for p in sources}
-    others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in regenerated)
-    embedded = _pages(sources, index, link=False)
+    notebooks = {p.name: _read(p) for p in executed_notebooks(Path(executed))}
+    index, folder = FigureIndex(Path(figures)), Path(figures) / PAGES
+    others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in notebooks)
+    embedded = {name: clean_notebook(nb, index) for name, nb in notebooks.items()}
     pages = {name: page_text(page) for name, page in embedded.items()}
     linked: frozenset[str] = frozenset()
-    if others + _size(pages) > budget:
-        linked = _to_link(_figure_bytes(embedded, index), others + _size(pages) - budget)
-        pages = {name: page_text(page) for name, page in _pages(sources, index, link=linked).items()}
+    if (excess := others + _size(pages) - budget) > 0:
+        linked = _to_link(_figure_bytes(embedded, index), excess)
+        pages = {name: page_text(clean_notebook(nb, index, linked)) for name, nb in notebooks.items()}
     total = others + _size(pages)
     if total > budget:
         biggest = sorted(pages, key=lambda n: -len(pages[n].encode()))[:3]

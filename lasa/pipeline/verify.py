@@ -1,7 +1,6 @@
-"""Did a regenerated figures folder reproduce the committed one? (``make verify``)
-
-Prints each run's ``kernels.json``, a table of every file (CSVs by column, pages by outputs, others by
-bytes) and a summary; status 1 only if a verdict differs or a claims table is missing, 2 if a folder is."""
+"""Did a regenerated figures folder reproduce the committed one? (``make verify``) Prints each run's
+``kernels.json``, a table of every file (CSVs by column, pages by outputs, others by bytes) and a summary;
+status 1 only if a verdict differs or a claims table is missing, 2 if a folder is."""
 
 from __future__ import annotations
 
@@ -20,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from lasa.base.errors import ArtifactError
-from lasa.pipeline.pages import cell_text
+from lasa.pipeline.pages import INJECTED, cell_text
 
 CLAIMS = "claims.csv"
 KERNELS = "kernels.json"  # the run's kernel settings (lasa.runtime), printed for both runs
@@ -78,14 +77,12 @@ def _files(folder: Path) -> dict[str, Path]:
 def _run_folders(cells: list[dict]) -> dict[str, str]:
     """``{value: placeholder}`` of the injected cell's ``figures_dir`` and ``build_dir``, longest first."""
     values: dict[str, str] = {}
-    for cell in cells:
-        if "injected-parameters" not in cell.get("metadata", {}).get("tags", ()):
-            continue
-        for node in ast.parse(cell_text(cell["source"])).body:
-            if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
-                name, value = ast.unparse(node.targets[0]), node.value.value
-                if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
-                    values[value.rstrip("/")] = f"<{name}>"
+    injected = (c for c in cells if INJECTED in c.get("metadata", {}).get("tags", ()))
+    for node in (node for cell in injected for node in ast.parse(cell_text(cell["source"])).body):
+        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
+            name, value = ast.unparse(node.targets[0]), node.value.value
+            if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
+                values[value.rstrip("/")] = f"<{name}>"
     return dict(sorted(values.items(), key=lambda kv: -len(kv[0])))
 
 
@@ -129,12 +126,9 @@ def _notebook_outputs(path: Path) -> dict[str, list[str]]:
 
 def _first_difference(old: list[str], new: list[str]) -> str:
     """The first line at which two cells' outputs differ, as ``old -> new`` (shortened)."""
-
-    def short(line: str | None) -> str:
-        return "(none)" if line is None else repr(line if len(line) <= 60 else line[:57] + "...")
-
-    i, a, b = next((i, a, b) for i, (a, b) in enumerate(itertools.zip_longest(old, new)) if a != b)
-    return f"line {i + 1}: {short(a)} -> {short(b)}"
+    i, *lines = next((i, a, b) for i, (a, b) in enumerate(itertools.zip_longest(old, new)) if a != b)
+    a, b = ("(none)" if x is None else repr(x if len(x) <= 60 else x[:57] + "...") for x in lines)
+    return f"line {i + 1}: {a} -> {b}"
 
 
 def _compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
@@ -246,10 +240,8 @@ def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
         report.claims_missing = True
         return
     old, new = _verdicts(old_path), _verdicts(new_path)
-    for key in sorted(old.keys() | new.keys()):
+    for key in sorted(k for k in old.keys() | new.keys() if old.get(k) != new.get(k)):
         a, b = old.get(key), new.get(key)
-        if a == b:
-            continue
         if a is None or b is None:
             why = "only in the new table" if a is None else "missing from the new table"
         else:
