@@ -1,7 +1,6 @@
-"""The conditions and methods, named once and parsed in one place.
-
-A name gives the **interface** (``R``, Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)),
-whether it is **assisted** (``+SA``, Eq. M1; else alpha = 0) and the **decoder** (``+Entropy``: Eq. T6)."""
+"""The conditions and methods, named once and parsed in one place. A name gives the **interface** (``R``,
+Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)), whether it is **assisted** (``+SA``, Eq. M1;
+else alpha = 0) and the **decoder** (``+Entropy``: Eq. T6)."""
 
 from __future__ import annotations
 

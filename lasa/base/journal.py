@@ -1,8 +1,6 @@
-"""A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
-
-Each atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
-state and the identity of the file put in place, a merged table (:func:`note_rows`) also the keys of
-its rows; :func:`restore` puts back what no other run rewrote since (a merged table's rows)."""
+"""A write journal: what a notebook run changed in the figures folder, to undo it if the run fails. Each
+atomic write (:func:`lasa.base.io.atomic_path`) records the path's old state and the file put in place, a
+merged table (:func:`note_rows`) its rows' keys; :func:`restore` puts back what no run rewrote since."""
 
 from __future__ import annotations
 

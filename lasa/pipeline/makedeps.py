@@ -1,8 +1,6 @@
-"""Which of lasa's files each notebook runs: the Make prerequisites of the figure targets.
-
-Read from the source with the standard library only (Make runs it with the system Python): the lasa
-modules a notebook imports, transitively (not under ``if TYPE_CHECKING:``), the MJCF assets, :data:`ALWAYS`.
-"""
+"""Which of lasa's files each notebook runs (the Make prerequisites of the figure targets), read from the
+source with the standard library only (Make runs it with the system Python): the lasa modules a notebook
+imports, transitively (not under ``if TYPE_CHECKING:``), the MJCF assets, :data:`ALWAYS`."""
 
 from __future__ import annotations
 
