@@ -56,11 +56,9 @@ _EXPORTS = _lazy_table()
 
 def __getattr__(name: str) -> Any:
     """Import a public name's module when the name is first used."""
-    module = _EXPORTS.get(name)
-    if module is None:
+    if name not in _EXPORTS:
         raise AttributeError(f"module 'lasa' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
+    globals()[name] = value = getattr(importlib.import_module(_EXPORTS[name]), name)
     return value
 
 

@@ -60,16 +60,11 @@ def imports_of(source: str, root: Path = ROOT) -> set[str]:
 
 def closure(modules: set[str], root: Path = ROOT) -> set[str]:
     """Every lasa module reached from ``modules`` by imports (them included)."""
-    seen: set[str] = set()
-    todo = sorted(modules)
+    seen, todo = set(), set(modules)
     while todo:
-        name = todo.pop()
-        if name in seen:
-            continue
-        seen.add(name)
-        path = module_file(name, root)
-        assert path is not None
-        todo.extend(sorted(imports_of(path.read_text(), root) - seen))
+        seen |= todo
+        files = (module_file(name, root) for name in todo)
+        todo = {m for f in files if f is not None for m in imports_of(f.read_text(), root)} - seen
     return seen
 
 
