@@ -1,5 +1,5 @@
-"""A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``): the
-verdict table as front page, the notebooks in the paper's order, the claims table last; nothing runs again."""
+"""A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
+The verdict table as front page, the notebooks in the paper's order, the claims table last; nothing runs."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""The pipeline's wall times (``make figures``): each notebook run appends a line to
-``<build>/timings.jsonl``; :func:`record_figures` turns a whole run's file into ``figures_s`` of
-``benchmarks/results.json``, :func:`sync_readmes` the READMEs' words."""
+"""The pipeline's wall times, from the run that measured them (``make figures``).
+Each notebook run appends a line to ``<build>/timings.jsonl``; :func:`record_figures` turns a whole run's
+file into ``figures_s`` of ``benchmarks/results.json``, :func:`sync_readmes` the READMEs' words."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Did a regenerated figures folder reproduce the committed one? (``make verify``) Prints each run's
-``kernels.json``, a table of every file (CSVs by column, pages by outputs, others by bytes) and a summary;
-status 1 only if a verdict differs or a claims table is missing, 2 if a folder is."""
+"""Did a regenerated figures folder reproduce the committed one? (``make verify``)
+Prints each run's ``kernels.json``, a table of every file (CSVs by column, pages by outputs, others by
+bytes) and a summary; status 1 only if a verdict differs or a claims table is missing, 2 if a folder is."""
 
 from __future__ import annotations
 
