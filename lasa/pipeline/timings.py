@@ -21,13 +21,9 @@ from typing import Any
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked, sync_between, write_text
 
-README_MARKERS = (
-    "<!-- figures-time:begin (generated from benchmarks/results.json by make figures) -->",
-    "<!-- figures-time:end -->",
-)
-BENCH_MARKERS = (
-    "<!-- figures-table:begin (generated from results.json by make figures) -->",
-    "<!-- figures-table:end -->",
+README_MARKERS, BENCH_MARKERS = (
+    (f"<!-- figures-{n}:begin (generated from {src} by make figures) -->", f"<!-- figures-{n}:end -->")
+    for n, src in (("time", "benchmarks/results.json"), ("table", "results.json"))
 )
 PARTS = ("paper", "quick")  # figures_s's top level, or its "quick" part
 _ROWS = {  # each part's row in benchmarks/README.md's table and its target in results.json
@@ -64,7 +60,6 @@ def append_run(
 
 
 def _when(value: str | None) -> datetime.datetime | None:
-    """An ISO 8601 time, as an aware UTC datetime (a naive one is read as UTC)."""
     if value is None:
         return None
     when = datetime.datetime.fromisoformat(value)
@@ -140,9 +135,8 @@ def summarize(
     host: Mapping[str, Any] | None = None,
     commit: str | None = None,
 ) -> dict[str, Any]:
-    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``
-    (``host``, ``commit``: :func:`machine`'s and :func:`git_commit`'s by default): ``total`` is the wall
-    time from the first start to the last end; ConfigError without runs, or a run's start or end."""
+    """One part of ``figures_s`` from a whole run's ``runs`` (``host``, ``commit``: :func:`machine`'s and
+    :func:`git_commit`'s by default): ``total`` is the wall time from the first start to the last end."""
     if not runs:
         raise ConfigError("no notebook runs to summarize")
     if any(run.start is None or run.end is None for run in runs):
@@ -164,7 +158,6 @@ def summarize(
 
 
 def _read_results(path: Path) -> dict[str, Any]:
-    """``results.json`` as a dict (empty if the file does not exist yet)."""
     if not path.exists():
         return {}
     try:
@@ -184,9 +177,8 @@ def record_figures(
     command: str,
     **summary: Any,
 ) -> dict[str, Any] | None:
-    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (its top level, or its
-    ``quick`` for ``part`` "quick") and return them; None (nothing written, why printed) unless every
-    ``expected`` notebook ran once. ConfigError for an unknown ``part`` or a non-object ``results``."""
+    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (``part`` "quick": its
+    ``quick``); return them, or None (nothing written, why printed) unless each ``expected`` notebook ran."""
     if part not in PARTS:
         raise ConfigError(f"part must be one of {PARTS}, got {part!r}")
     timings, results = Path(timings), Path(results)
@@ -210,7 +202,6 @@ def record_figures(
 
 
 def _duration(seconds: float) -> str:
-    """A wall time in words: seconds below two minutes, else whole minutes (``50 min``)."""
     return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
 
 
@@ -236,8 +227,7 @@ def sync_readmes(
     bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
 ) -> list[Path]:
     """Write the README's sentence and ``benchmarks/README.md``'s table from ``results`` between their
-    markers (a README ``None``: left alone); return the files changed. ConfigError without a paper-scale
-    ``figures_s`` or a file's markers."""
+    markers (a README ``None``: left alone); return the files changed."""
     data = _read_results(Path(results))
     figures = data.get("figures_s") or {}
     if "total" not in figures:
