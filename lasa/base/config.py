@@ -59,8 +59,7 @@ def cap_setting(value: Any) -> Any:
 
 
 def validate_caps(config: Any) -> None:
-    """:func:`validate` a frozen config with a ``belief_cap`` and a ``cap_sweep``, each read by
-    :func:`cap_setting` first; ConfigError if the sweep repeats a cap."""
+    """:func:`validate` a config's ``belief_cap`` and ``cap_sweep`` (:func:`cap_setting`), no cap twice."""
     object.__setattr__(config, "belief_cap", cap_setting(config.belief_cap))
     object.__setattr__(config, "cap_sweep", tuple(cap_setting(c) for c in config.cap_sweep))
     validate(config)
@@ -133,8 +132,7 @@ LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.b
 # members; hindsight_point (hindsight with one target per goal) only the study runs by default.
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
-# The assistance label of rows and episodes with none (alpha = 0: LA, R), named once.
-NO_ASSISTANCE = "none"
+NO_ASSISTANCE = "none"  # the assistance label of rows and episodes with none (alpha = 0: LA, R)
 
 
 def check_range(

@@ -134,7 +134,6 @@ def sync_between(
 ) -> bool:
     """Put ``text`` between the (begin, end) ``markers`` in the file ``path`` (``inline``: within a
     line); return whether the file changed. ConfigError if the markers are missing or out of order."""
-
     path = Path(path)
     content = path.read_text()
     begin, end = markers

@@ -14,11 +14,9 @@ import shutil
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:  # pandas loads with lasa.base.io anyway; imported in the functions that use it
-    import pandas as pd
-
+import pandas as pd  # loaded with lasa.base.io anyway
 
 ENV = "LASA_WRITE_JOURNAL"  # the journal folder of the run in progress, if any
 _META = "journal.json"  # in the journal folder: {"root": the journaled folder}
@@ -114,8 +112,6 @@ def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[s
     found = _entry(path)
     if found is None:
         return
-    import pandas as pd
-
     before_write(path)
     text = keys.drop_duplicates().to_csv(index=False, float_format="%.6g")
     written = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False)
@@ -128,8 +124,7 @@ def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[s
 
 @dataclasses.dataclass
 class Restored:
-    """What :func:`restore` did (the paths put back, the ``(path, why)`` left as another run wrote
-    them), its text a sentence for the runner's error message."""
+    """What :func:`restore` did: the paths put back, the ``(path, why)`` left as another run wrote them."""
 
     root: Path
     restored: list[Path] = dataclasses.field(default_factory=list)
@@ -154,10 +149,9 @@ def restore(journal: str | os.PathLike[str]) -> Restored:
     result = Restored(Path(json.loads((journal / _META).read_text())["root"]))
     records = [json.loads(p.read_text()) for p in journal.glob("*.json") if p.name != _META]
     with locked(result.root):
-        for record in sorted(records, key=lambda r: r["first"], reverse=True):
+        landed = (r for r in records if r["wrote"] is not None)  # not those recorded but never written
+        for record in sorted(landed, key=lambda r: r["first"], reverse=True):
             path = Path(record["path"])
-            if record["wrote"] is None:  # recorded, but its write never landed
-                continue
             old = _entry_of(journal, path).with_suffix(".old") if record["existed"] else None
             why = ""
             if _identity(path) == record["wrote"]:
@@ -174,7 +168,6 @@ def restore(journal: str | os.PathLike[str]) -> Restored:
 
 
 def _entry_of(journal: Path, path: Path) -> Path:
-    """The journal entry of a resolved path: a file named by the path's hash."""
     return journal / f"{hashlib.sha1(str(path).encode()).hexdigest()[:20]}.json"
 
 
@@ -191,8 +184,6 @@ def _put_back(path: Path, old: Path | None) -> None:
 
 def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
     """Put back the old rows of the journaled keys in the table at ``path``; why not, or ``""``."""
-    import pandas as pd
-
     columns, sort = rows["columns"], rows["sort"]
     keys = pd.MultiIndex.from_tuples([tuple(k) for k in rows["keys"]], names=columns)
     now, before = (
@@ -223,7 +214,5 @@ def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
 
 def _sort_key(column: pd.Series) -> pd.Series:
     """A text column as the writer sorted it: by number if every cell is one, else as text."""
-    import pandas as pd
-
     numbers = pd.to_numeric(column, errors="coerce")
     return numbers if numbers.notna().all() else column

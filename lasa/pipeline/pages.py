@@ -191,7 +191,6 @@ def page_text(notebook: dict[str, Any]) -> str:
 
 
 def _read(path: Path) -> dict[str, Any]:
-    """An executed notebook's JSON."""
     try:
         data = json.loads(path.read_text())
     except (ValueError, UnicodeDecodeError) as exc:

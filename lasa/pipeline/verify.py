@@ -68,7 +68,6 @@ class Report:
 
 
 def _files(folder: Path) -> dict[str, Path]:
-    """Every file under ``folder``, by its path relative to it (POSIX form)."""
     if not folder.is_dir():
         raise ArtifactError(f"figures folder {folder} does not exist (run `make figures OUT=...` first)")
     return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
@@ -291,7 +290,6 @@ def _kernels_text(committed: str | Path, new: str | Path) -> str:
 
 
 def _format_table(rows: Sequence[Row]) -> str:
-    """The rows as a Markdown table (readable as plain text too)."""
     header = [f.name for f in dataclasses.fields(Row)]
     cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in rows)]
     widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
