@@ -196,11 +196,8 @@ def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
     header = list(tables[0].columns)
     if any(list(t.columns) != header or not set(columns) <= set(header) for t in tables):
         return "another run rewrote it since, with other columns"
-    parts = []
-    if now is not None:  # every row of the keys this run did not write, as it is now
-        parts.append(now[~pd.MultiIndex.from_frame(now[columns]).isin(keys)])
-    if before is not None:  # the rows of the keys it wrote, as they were
-        parts.append(before[pd.MultiIndex.from_frame(before[columns]).isin(keys)])
+    # every row of the keys this run did not write as it is now, the rows of those it wrote as they were
+    parts = (t[pd.MultiIndex.from_frame(t[columns]).isin(keys) == (t is before)] for t in tables)
     table = pd.concat(parts, ignore_index=True)
     if table.empty and before is None:
         path.unlink(missing_ok=True)

@@ -69,8 +69,7 @@ class Paths:
     @staticmethod
     def make_hint(name: str, robot: str) -> str:
         """The command that makes artifact ``name`` for ``robot``."""
-        notebook = ARTIFACTS[name][1]
-        return f"make figures (it runs notebooks/{notebook}.ipynb for {robot})"
+        return f"make figures (it runs notebooks/{ARTIFACTS[name][1]}.ipynb for {robot})"
 
     def figure(self, name: str) -> Path:
         """A file in the figures folder, e.g. ``figure("sim1_fixed_expertise.csv")``."""

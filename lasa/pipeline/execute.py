@@ -55,8 +55,7 @@ def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]
         raise ConfigError(f"{path} is not a YAML file{at}: {getattr(exc, 'problem', None) or exc}") from None
     if not isinstance(data, dict) or not all(isinstance(v, dict) for v in data.values()):
         raise ConfigError(f"{path} must map section names to parameter mappings")
-    stem = Path(notebook).stem
-    params = {**data.get("common", {}), **data.get(stem, {})}
+    params = {**data.get("common", {}), **data.get(Path(notebook).stem, {})}
     known = notebook_parameters(notebook)
     unknown = sorted(set(params) - set(known))
     if unknown:
@@ -160,7 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timings", help="append {notebook, robot, seconds, start, end} (UTC) to this file")
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
-    signal.signal(signal.SIGTERM, _terminated)  # a killed run undoes its writes, as Ctrl-C does
+    # SIGTERM leaves by an exception, as Ctrl-C does: a killed run's writes are undone on the way out
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     started = datetime.datetime.now(datetime.UTC)
     start = time.perf_counter()
     try:
@@ -179,11 +179,6 @@ def main(argv: list[str] | None = None) -> int:
         append_run(args.timings, Path(args.notebook).stem, args.robot, seconds, started, ended)
     print(f"{out} ({seconds:.1f} s)")
     return 0
-
-
-def _terminated(signum: int, frame: object) -> None:
-    """``SIGTERM``: leave by an exception, so that the run's writes are undone on the way out."""
-    raise SystemExit(128 + signum)
 
 
 def parse_params(items: list[str]) -> dict[str, Any]:
