@@ -12,7 +12,6 @@ import itertools
 import json
 import re
 import sys
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -274,30 +273,6 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
     return report
 
 
-def _kernels_text(committed: str | Path, new: str | Path) -> str:
-    """Each run's ``kernels.json`` (:func:`lasa.runtime.record`) as one line, or that it is missing."""
-    lines = []
-    for label, folder in (("committed", committed), ("new", new)):
-        path = Path(folder) / KERNELS
-        if not path.is_file():
-            lines.append(f"kernels of the {label} run: {KERNELS} missing (its kernels were not recorded)")
-            continue
-        data = json.loads(path.read_text())
-        env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
-        state = "pinned" if data.get("pinned") else "NOT pinned"
-        lines.append(f"kernels of the {label} run: {state}, torch {data.get('torch_cpu_capability')}; {env}")
-    return "\n".join(lines)
-
-
-def _format_table(rows: Sequence[Row]) -> str:
-    header = [f.name for f in dataclasses.fields(Row)]
-    cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in rows)]
-    widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
-    cells.insert(1, ["-" * w for w in widths])
-    lines = (" | ".join(v.ljust(w) for v, w in zip(c, widths, strict=True)) for c in cells)
-    return "\n".join(f"| {line} |" for line in lines)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``python -m lasa.pipeline.verify COMMITTED NEW [--rtol R] [--atol A]``."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
@@ -311,8 +286,21 @@ def main(argv: list[str] | None = None) -> int:
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(_kernels_text(args.committed, args.new))
-    print(_format_table(report.rows))
+    for label, folder in (("committed", args.committed), ("new", args.new)):  # lasa.runtime.record's
+        path, what = Path(folder) / KERNELS, f"kernels of the {label} run"
+        if not path.is_file():
+            print(f"{what}: {KERNELS} missing (its kernels were not recorded)")
+            continue
+        data = json.loads(path.read_text())
+        env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
+        state = "pinned" if data.get("pinned") else "NOT pinned"
+        print(f"{what}: {state}, torch {data.get('torch_cpu_capability')}; {env}")
+    header = [f.name for f in dataclasses.fields(Row)]  # the rows as a Markdown table, readable as text
+    cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in report.rows)]
+    widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
+    cells.insert(1, ["-" * w for w in widths])
+    for line in cells:
+        print(f"| {' | '.join(v.ljust(w) for v, w in zip(line, widths, strict=True))} |")
     if report.claims_missing:
         print(f"error: {CLAIMS} is missing from {args.committed} or {args.new}", file=sys.stderr)
     print(report.summary())
