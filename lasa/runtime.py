@@ -49,8 +49,7 @@ def pin() -> None:
 
 
 def record() -> dict[str, object]:
-    """What the numerical kernels run with: the variables of :data:`PINNED` as set, whether all hold
-    their pinned value, and torch's CPU capability (torch imported here)."""
+    """The variables of :data:`PINNED` as set, whether all hold their pinned value, torch's CPU capability."""
     import torch  # noqa: PLC0415 (reading the capability needs torch; pinning must not import it)
 
     env = {name: os.environ.get(name) for name in PINNED}

@@ -48,8 +48,7 @@ def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str 
 
 
 def williams_square(n: int) -> np.ndarray:
-    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n): each
-    appears once in every position and follows every other once (carry-over balanced)."""
+    """A Williams design, (n, n) for n even: each condition once in every position, after every other once."""
     if n < 2 or n % 2:
         raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
     first = [0, *itertools.chain.from_iterable((k, n - k) for k in range(1, n // 2)), n // 2]

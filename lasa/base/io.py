@@ -132,8 +132,7 @@ def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarr
 def sync_between(
     path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
 ) -> bool:
-    """Put ``text`` between the (begin, end) ``markers`` in the file ``path`` (``inline``: within a
-    line); return whether the file changed. ConfigError if the markers are missing or out of order."""
+    """Put ``text`` between the (begin, end) ``markers`` in file ``path`` (``inline``: in a line); changed?"""
     path = Path(path)
     content = path.read_text()
     begin, end = markers

@@ -72,8 +72,7 @@ def retitle(notebook: Path, robot: str) -> None:
 
 
 def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, progress: bool = True) -> Path:
-    """Build the book's sources under ``out/src`` and its site into ``out/html``; return its ``index.html``.
-    ArtifactError without notebooks, claims table or MathJax (``make setup`` installs it)."""
+    """Build the book's sources in ``out/src``, its site in ``out/html``; return its ``index.html``."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
     claims_csv = figures / "claims.csv"
@@ -82,9 +81,26 @@ def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, prog
     mathjax = repo_root() / ".venv" / "mathjax" / "es5"
     if not (mathjax / "tex-chtml.js").is_file():
         raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
-    src = out / "src"
+    src, build = out / "src", out / "_build"
     _write_sources(src, books, figures, mathjax, pd.read_csv(claims_csv, dtype=str, keep_default_na=False))
-    return _jupyter_book(src, out, progress)
+    shutil.rmtree(build, ignore_errors=True)
+    command = [
+        str(Path(sys.executable).parent / "jupyter-book"),
+        "build",
+        str(src),
+        "--path-output",
+        str(out),
+    ]
+    result = subprocess.run(command, capture_output=not progress, text=True)
+    html = build / "html"
+    if result.returncode != 0 or not (html / "index.html").is_file():
+        detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
+        raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")
+    target = out / "html"
+    shutil.rmtree(target, ignore_errors=True)
+    shutil.move(str(html), target)
+    shutil.rmtree(build, ignore_errors=True)
+    return target / "index.html"
 
 
 _CONFIG = """title: lasa
@@ -109,8 +125,7 @@ def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, c
     (src / "notebooks").mkdir(parents=True)
     for book in books:
         shutil.copy2(book, src / "notebooks" / book.name)
-        _, _, robot = book.stem.partition("-")
-        if robot:
+        if robot := book.stem.partition("-")[2]:
             retitle(src / "notebooks" / book.name, robot)
     shutil.copytree(figures, src / "figures", ignore=shutil.ignore_patterns("*.csv", "*.md"))
     shutil.copytree(mathjax, src / "_extra" / "mathjax")
@@ -125,24 +140,6 @@ def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, c
     toc.append("- file: claims")
     write_text(src / "_toc.yml", "\n".join(toc) + "\n")
     write_text(src / "_config.yml", _CONFIG)
-
-
-def _jupyter_book(src: Path, out: Path, progress: bool) -> Path:
-    """Build the site from ``src`` with Jupyter Book into ``out/html``; returns its front page."""
-    build = out / "_build"
-    shutil.rmtree(build, ignore_errors=True)
-    jupyter_book = str(Path(sys.executable).parent / "jupyter-book")
-    command = [jupyter_book, "build", str(src), "--path-output", str(out)]
-    result = subprocess.run(command, capture_output=not progress, text=True)
-    html = build / "html"
-    if result.returncode != 0 or not (html / "index.html").is_file():
-        detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
-        raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")
-    target = out / "html"
-    shutil.rmtree(target, ignore_errors=True)
-    shutil.move(str(html), target)
-    shutil.rmtree(build, ignore_errors=True)
-    return target / "index.html"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -97,9 +97,8 @@ def run_notebook(
     overrides: dict[str, Any] | None = None,
     progress: bool = True,
 ) -> Path:
-    """Execute ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (as
-    ``<stem>-<robot>.ipynb`` with a ``robot`` override); return its path. A failed run's writes to the
-    figures are undone (:mod:`lasa.base.journal`); NotebookError for a failed cell, naming the partial run."""
+    """Run ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (``<stem>-<robot>``
+    for a ``robot``); return its path. A failed run's writes are undone (:mod:`lasa.base.journal`)."""
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
     overrides = overrides or {}

@@ -238,9 +238,8 @@ def _size(pages: dict[str, str]) -> int:
 def write_pages(
     executed: str | Path, figures: str | Path, budget: int = BUDGET
 ) -> tuple[list[Path], int, frozenset[str]]:
-    """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``; return
-    the pages, the bytes of all pages in the folder and the figures linked to fit. PageBudgetError (and
-    nothing written) if they exceed ``budget`` even so; ArtifactError without notebooks."""
+    """Write the page of each executed notebook of ``executed`` to ``<figures>/notebooks/``; return them,
+    the bytes of all pages there and the figures linked to fit; PageBudgetError (nothing written) if over."""
     notebooks = {p.name: _read(p) for p in executed_notebooks(Path(executed))}
     index, folder = FigureIndex(Path(figures)), Path(figures) / PAGES
     others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in notebooks)

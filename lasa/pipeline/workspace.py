@@ -73,8 +73,7 @@ class Workspace(Generic[TaskT]):
         )
 
     def decoder(self, name: str = "decoder", **fields: str) -> tuple[LatentActionModel, dict[str, Any]]:
-        """A checkpoint (``decoder``, ``decoder_lambda0``, ``decoder_entropy``, ``eating_decoder``, or
-        ``eating_segmentation_decoder`` with its ``segmentation``) and its metadata."""
+        """A checkpoint (a decoder of :data:`lasa.base.paths.ARTIFACTS`, ``fields`` filling it), metadata."""
         return load_checkpoint(
             self.artifact(name, **fields), robot=self.name, make_hint=Paths.make_hint(name, self.name)
         )
