@@ -1,7 +1,6 @@
-"""lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020).
-
-A reproducibility package (extending it: ``docs/extending.md``). ``import lasa`` only re-exports,
-lazily (PEP 562), and sets nothing: call :func:`lasa.runtime.pin` first, before numpy, torch or mujoco."""
+"""lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020), a reproducibility
+package (extending it: ``docs/extending.md``). ``import lasa`` only re-exports, lazily (PEP 562), and sets
+nothing: call :func:`lasa.runtime.pin` first, before numpy, torch or mujoco."""
 
 import contextlib
 import importlib

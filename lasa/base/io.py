@@ -96,8 +96,7 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
                     "delete it and re-run the notebooks that write it"
                 )
             frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
-        # rows ordered by key whatever order the robots ran in: the same file, run after run
-        frame = frame.sort_values(key, kind="stable", ignore_index=True)
+        frame = frame.sort_values(key, kind="stable", ignore_index=True)  # whatever order robots ran in
         write_csv(path, frame)
     return path
 

@@ -101,9 +101,7 @@ def after_write(path: str | os.PathLike[str]) -> None:
     found = _entry(path)
     if found is None or not found[0].exists():
         return
-    record = json.loads(found[0].read_text())
-    record["wrote"] = _identity(found[1])
-    _save(found[0], record)
+    _save(found[0], {**json.loads(found[0].read_text()), "wrote": _identity(found[1])})
 
 
 def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:

@@ -13,7 +13,7 @@ from pathlib import Path
 import pandas as pd
 
 from lasa.base.errors import ArtifactError
-from lasa.base.io import write_text
+from lasa.base.io import require_file, write_text
 from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
@@ -75,12 +75,8 @@ def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, prog
     """Build the book's sources in ``out/src``, its site in ``out/html``; return its ``index.html``."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
-    claims_csv = figures / "claims.csv"
-    if not claims_csv.is_file():
-        raise ArtifactError(f"no claims table {claims_csv}; run: make figures")
-    mathjax = repo_root() / ".venv" / "mathjax" / "es5"
-    if not (mathjax / "tex-chtml.js").is_file():
-        raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
+    claims_csv = require_file(figures / "claims.csv", "make figures")
+    mathjax = require_file(repo_root() / ".venv" / "mathjax" / "es5" / "tex-chtml.js", "make setup").parent
     src, build = out / "src", out / "_build"
     _write_sources(src, books, figures, mathjax, pd.read_csv(claims_csv, dtype=str, keep_default_na=False))
     shutil.rmtree(build, ignore_errors=True)

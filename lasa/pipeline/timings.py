@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.base.io import locked, sync_between, write_text
+from lasa.base.io import locked, require_file, sync_between, write_text
 
 README_MARKERS, BENCH_MARKERS = (
     (f"<!-- figures-{n}:begin (generated from {src} by make figures) -->", f"<!-- figures-{n}:end -->")
@@ -68,9 +68,7 @@ def _when(value: str | None) -> datetime.datetime | None:
 
 def read_runs(path: str | os.PathLike[str]) -> list[Run]:
     """A ``timings.jsonl``'s runs in finishing order; ArtifactError if missing, ConfigError if malformed."""
-    path = Path(path)
-    if not path.is_file():
-        raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
+    path = require_file(path, "make figures (lasa.pipeline.execute --timings)")
     runs = []
     for number, line in enumerate(path.read_text().splitlines(), 1):
         if not line.strip():
