@@ -32,12 +32,10 @@ _READ_BY = {"MUJOCO_GL": "mujoco", "NPY_DISABLE_CPU_FEATURES": "numpy", "OPENBLA
 def pin() -> None:
     """Set each variable of :data:`RENDERER` and :data:`PINNED` in ``os.environ`` unless already set
     (yours wins); one set after the library that reads it was imported is a ``RuntimeWarning``."""
-    late = []
-    for name, value in {**RENDERER, **PINNED}.items():
-        if name not in os.environ:
-            os.environ[name] = value
-            if _READ_BY.get(name, "torch") in sys.modules:
-                late.append(f"{name} ({_READ_BY.get(name, 'torch')})")
+    unset = {name: value for name, value in {**RENDERER, **PINNED}.items() if name not in os.environ}
+    os.environ.update(unset)
+    readers = {name: _READ_BY.get(name, "torch") for name in unset}
+    late = [f"{name} ({reader})" for name, reader in readers.items() if reader in sys.modules]
     if late:
         warnings.warn(
             f"lasa.runtime.pin() came after the import of what reads {', '.join(late)}: not in effect in "

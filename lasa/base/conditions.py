@@ -25,21 +25,16 @@ class Condition:
     decoder: str | None
 
 
-_TABLE = {
-    "R": Condition("R", "R", False, None),
-    "R+SA": Condition("R+SA", "R", True, None),
-    "LA": Condition("LA", "LA", False, "base"),
-    "LA+SA": Condition("LA+SA", "LA", True, "base"),
-    "LA+SA+Entropy": Condition("LA+SA+Entropy", "LA", True, "entropy"),
-}
-ALL = tuple(_TABLE)  # every condition a person can drive (the table's order)
+ALL = ("R", "R+SA", "LA", "LA+SA", "LA+SA+Entropy")  # every condition a person can drive
 
 
 def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
     """The :class:`Condition` a name stands for; ConfigError (calling it ``what``) unless ``allowed``."""
     if not isinstance(name, str) or name not in allowed:
         raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(map(repr, allowed))}")
-    return _TABLE[name]
+    interface, *parts = name.split("+")
+    decoder = None if interface == "R" else "entropy" if "Entropy" in parts else "base"
+    return Condition(name, interface, "SA" in parts, decoder)
 
 
 def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str = "condition") -> float:

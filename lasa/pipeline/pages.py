@@ -214,16 +214,6 @@ def executed_notebooks(folder: Path) -> list[Path]:
     return found
 
 
-def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
-    """The bytes each committed figure takes, embedded, over all ``pages``."""
-    taken: dict[str, int] = {}
-    outputs = (o for page in pages.values() for cell in page["cells"] for o in cell.get("outputs", []))
-    for png in (cell_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
-        if (name := figures.name_of(base64.b64decode(png))) is not None:
-            taken[name] = taken.get(name, 0) + len(png)
-    return taken
-
-
 def _to_link(taken: dict[str, int], excess: int) -> frozenset[str]:
     """The figures to link so that ``excess`` bytes go: the largest first (then by name)."""
     ranked = sorted(taken.items(), key=lambda kv: (-kv[1], kv[0]))
@@ -247,7 +237,12 @@ def write_pages(
     pages = {name: page_text(page) for name, page in embedded.items()}
     linked: frozenset[str] = frozenset()
     if (excess := others + _size(pages) - budget) > 0:
-        linked = _to_link(_figure_bytes(embedded, index), excess)
+        taken: dict[str, int] = {}  # the bytes each committed figure takes, embedded, over all pages
+        outputs = (o for p in embedded.values() for cell in p["cells"] for o in cell.get("outputs", []))
+        for png in (cell_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
+            if (name := index.name_of(base64.b64decode(png))) is not None:
+                taken[name] = taken.get(name, 0) + len(png)
+        linked = _to_link(taken, excess)
         pages = {name: page_text(clean_notebook(nb, index, linked)) for name, nb in notebooks.items()}
     total = others + _size(pages)
     if total > budget:
