@@ -35,8 +35,7 @@ def pin() -> None:
     unset = {name: value for name, value in {**RENDERER, **PINNED}.items() if name not in os.environ}
     os.environ.update(unset)
     readers = {name: _READ_BY.get(name, "torch") for name in unset}
-    late = [f"{name} ({reader})" for name, reader in readers.items() if reader in sys.modules]
-    if late:
+    if late := [f"{name} ({reader})" for name, reader in readers.items() if reader in sys.modules]:
         warnings.warn(
             f"lasa.runtime.pin() came after the import of what reads {', '.join(late)}: not in effect in "
             "this process (results may differ in the last bits from another CPU's, rendering may need a "

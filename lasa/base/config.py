@@ -173,8 +173,7 @@ def check_list(
     if len(given) < at_least:
         what = "a value" if at_least == 1 else f"at least {at_least} distinct values"
         raise ConfigError(f"{name} must hold {what}{reason}, got {list(given)}")
-    repeated = [v for i, v in enumerate(given) if v in given[:i]]
-    if repeated:
+    if repeated := [v for i, v in enumerate(given) if v in given[:i]]:
         raise ConfigError(f"{name} must not repeat a value, got {list(given)} ({repeated[0]!r} twice)")
     if ascending and any(b < a for a, b in itertools.pairwise(given)):
         raise ConfigError(f"{name} must be in ascending order, got {list(given)}; sorted: {sorted(given)}")
@@ -231,8 +230,7 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
 def _changes(prefix: str, record: Any, values: Mapping[str, Any]) -> dict[str, Any]:
     """``values`` as ``record``'s fields take them (nested records, tuples); errors name the whole path."""
     known = {f.name: f for f in dataclasses.fields(record)}
-    unknown = sorted(set(values) - set(known))
-    if unknown:
+    if unknown := sorted(set(values) - set(known)):
         raise ConfigError(f"unknown setting(s) {[prefix + u for u in unknown]}; known: {sorted(known)}")
     changes = {}
     for key, value in values.items():

@@ -50,8 +50,7 @@ def discard(journal: str | os.PathLike[str]) -> None:
 
 def _entry(path: str | os.PathLike[str]) -> tuple[Path, Path] | None:
     """The journal entry (a JSON file) of ``path`` and the path resolved, if ``path`` is journaled."""
-    folder = os.environ.get(ENV)
-    if not folder:
+    if not (folder := os.environ.get(ENV)):
         return None
     if folder not in _ROOTS:
         _ROOTS[folder] = Path(json.loads((Path(folder) / _META).read_text())["root"])
@@ -89,8 +88,7 @@ def before_write(path: str | os.PathLike[str]) -> None:
     if found is None or found[0].exists():
         return
     entry, target = found
-    existed = target.exists()
-    if existed:
+    if existed := target.exists():
         _link_or_copy(target, entry.with_suffix(".old"))
     record = {"path": str(target), "first": time.time_ns(), "existed": existed, "wrote": None, "rows": None}
     _save(entry, record)
@@ -188,8 +186,7 @@ def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
         pd.read_csv(p, dtype=str, keep_default_na=False) if p is not None and p.exists() else None
         for p in (path, old)
     )  # each cell as written
-    tables = [t for t in (now, before) if t is not None]
-    if not tables:
+    if not (tables := [t for t in (now, before) if t is not None]):
         return ""
     header = list(tables[0].columns)
     if any(list(t.columns) != header or not set(columns) <= set(header) for t in tables):

@@ -37,8 +37,7 @@ from lasa.pipeline.timings import append_run  # noqa: E402
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
     """Names and default values of a notebook's ``parameters`` cell (ConfigError if it has none)."""
-    params = pm.inspect_notebook(str(notebook))
-    if not params:
+    if not (params := pm.inspect_notebook(str(notebook))):
         raise ConfigError(f"{notebook} has no cell tagged 'parameters'")
     return {name: info["default"] for name, info in params.items()}
 
@@ -57,8 +56,7 @@ def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]
         raise ConfigError(f"{path} must map section names to parameter mappings")
     params = {**data.get("common", {}), **data.get(Path(notebook).stem, {})}
     known = notebook_parameters(notebook)
-    unknown = sorted(set(params) - set(known))
-    if unknown:
+    if unknown := sorted(set(params) - set(known)):
         raise ConfigError(
             f"{path} passes unknown parameter(s) {unknown} to {Path(notebook).name}; "
             f"its parameters cell defines {sorted(known)}"
@@ -102,8 +100,7 @@ def run_notebook(
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
     overrides = overrides or {}
-    unknown = sorted(set(overrides) - set(defaults))
-    if unknown:
+    if unknown := sorted(set(overrides) - set(defaults)):
         raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
     params.update(overrides)
     robot = f"-{overrides['robot']}" if "robot" in overrides else ""

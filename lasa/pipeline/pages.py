@@ -208,8 +208,7 @@ def executed_notebooks(folder: Path) -> list[Path]:
     """The executed notebooks of ``folder`` (not the partial runs ``*.failed.ipynb``), by name."""
     if not folder.is_dir():
         raise ArtifactError(f"no executed notebooks: {folder} does not exist (run `make figures` first)")
-    found = sorted(p for p in folder.glob("*.ipynb") if not _PARTIAL.search(p.name))
-    if not found:
+    if not (found := sorted(p for p in folder.glob("*.ipynb") if not _PARTIAL.search(p.name))):
         raise ArtifactError(f"no executed notebooks in {folder} (run `make figures` first)")
     return found
 

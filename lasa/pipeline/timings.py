@@ -184,8 +184,7 @@ def record_figures(
         print(f"{results} left as it was: no notebook ran in this invocation ({timings} does not exist)")
         return None
     runs = read_runs(timings)
-    why = _incomplete(runs, expected)
-    if why is not None:
+    if (why := _incomplete(runs, expected)) is not None:
         print(f"{results} left as it was: not a whole run ({why}); a whole run needs `make clean` first")
         return None
     written = summarize(runs, command, str(timings), **summary)

@@ -195,8 +195,7 @@ def _column_rows(
             rows += lines
             beyond_any |= beyond
         else:
-            cells = int((_cells(old[column]) != _cells(new[column])).sum())
-            if cells:
+            if cells := int((_cells(old[column]) != _cells(new[column])).sum()):
                 rows.append(Row(name, column, "text differs", f"{cells} cells"))
     if beyond_any.any():
         rows.insert(0, Row(name, "rows", "beyond tolerance", f"{beyond_any.sum()} of {len(old)} rows"))
@@ -225,8 +224,7 @@ def _compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> l
 def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
     """``(id, robot) -> (effect, number, reproduced, settled)`` of a claims table, every cell as written."""
     frame = pd.read_csv(path, dtype=str, keep_default_na=False)
-    absent = [c for c in ("id", "robot", *VERDICT_COLUMNS) if c not in frame.columns]
-    if absent:
+    if absent := [c for c in ("id", "robot", *VERDICT_COLUMNS) if c not in frame.columns]:
         raise ArtifactError(f"{path} has no column(s) {', '.join(absent)}: not a claims table")
     return {(r["id"], r["robot"]): tuple(r[c] for c in VERDICT_COLUMNS) for r in frame.to_dict("records")}
 
