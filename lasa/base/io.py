@@ -140,8 +140,7 @@ def sync_between(
     head, rest = content.split(begin, 1)
     _, tail = rest.split(end, 1)
     body = text.strip() if inline else f"\n{text.strip()}\n"
-    new = f"{head}{begin}{body}{end}{tail}"
-    if new == content:
+    if (new := f"{head}{begin}{body}{end}{tail}") == content:
         return False
     write_text(path, new)
     return True

@@ -54,8 +54,7 @@ def _entry(path: str | os.PathLike[str]) -> tuple[Path, Path] | None:
         return None
     if folder not in _ROOTS:
         _ROOTS[folder] = Path(json.loads((Path(folder) / _META).read_text())["root"])
-    target = Path(path).resolve()
-    if not target.is_relative_to(_ROOTS[folder]):
+    if not (target := Path(path).resolve()).is_relative_to(_ROOTS[folder]):
         return None
     return _entry_of(Path(folder), target), target
 
@@ -84,8 +83,7 @@ def _link_or_copy(src: Path, dst: Path) -> None:
 
 def before_write(path: str | os.PathLike[str]) -> None:
     """Record ``path``'s state before this run first replaces it; a no-op without a journal."""
-    found = _entry(path)
-    if found is None or found[0].exists():
+    if (found := _entry(path)) is None or found[0].exists():
         return
     entry, target = found
     if existed := target.exists():
@@ -96,8 +94,7 @@ def before_write(path: str | os.PathLike[str]) -> None:
 
 def after_write(path: str | os.PathLike[str]) -> None:
     """Record the identity of the file this run just put at ``path``; a no-op without a journal."""
-    found = _entry(path)
-    if found is None or not found[0].exists():
+    if (found := _entry(path)) is None or not found[0].exists():
         return
     _save(found[0], {**json.loads(found[0].read_text()), "wrote": _identity(found[1])})
 
@@ -105,8 +102,7 @@ def after_write(path: str | os.PathLike[str]) -> None:
 def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:
     """Record, before writing the merged table, that this run replaces the rows of ``path`` whose
     ``keys`` columns match ``keys``' rows (as the CSV writer writes them); ``sort``: its order."""
-    found = _entry(path)
-    if found is None:
+    if (found := _entry(path)) is None:
         return
     before_write(path)
     text = keys.drop_duplicates().to_csv(index=False, float_format="%.6g")

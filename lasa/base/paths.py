@@ -15,8 +15,7 @@ _PACKAGE = Path(__file__).resolve().parents[1]  # lasa/ (this module is lasa/bas
 def repo_root() -> Path:
     """``LASA_ROOT`` if set (ConfigError unless a folder), else the folder above ``lasa/``."""
     if env := os.environ.get("LASA_ROOT"):
-        root = Path(env).expanduser().resolve()
-        if not root.is_dir():
+        if not (root := Path(env).expanduser().resolve()).is_dir():
             raise ConfigError(f"LASA_ROOT={env!r} is not a folder")
         return root
     return _PACKAGE.parent

@@ -243,8 +243,7 @@ def write_pages(
                 taken[name] = taken.get(name, 0) + len(png)
         linked = _to_link(taken, excess)
         pages = {name: page_text(clean_notebook(nb, index, linked)) for name, nb in notebooks.items()}
-    total = others + _size(pages)
-    if total > budget:
+    if (total := others + _size(pages)) > budget:
         biggest = sorted(pages, key=lambda n: -len(pages[n].encode()))[:3]
         sizes = ", ".join(f"{n} {len(pages[n].encode()) / 1e6:.2f} MB" for n in biggest)
         raise PageBudgetError(

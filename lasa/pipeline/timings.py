@@ -226,8 +226,7 @@ def sync_readmes(
     """Write the README's sentence and ``benchmarks/README.md``'s table from ``results`` between their
     markers (a README ``None``: left alone); return the files changed."""
     data = _read_results(Path(results))
-    figures = data.get("figures_s") or {}
-    if "total" not in figures:
+    if "total" not in (figures := data.get("figures_s") or {}):
         raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
     m, changed = figures["machine"], []
     sentence = (
