@@ -110,9 +110,8 @@ def validate(record: Any) -> None:
     """Check every field of a config record against its annotated type (pydantic), converting none;
     ConfigError names the field (and item), what it expects and got: ``betas[0] must be ..., got 'x'``."""
     adapter, fields = _schema(type(record))  # type: ignore[arg-type]
-    values = {name: getattr(record, name) for name in fields}
     try:
-        adapter.validate_python(values)
+        adapter.validate_python({name: getattr(record, name) for name in fields})
     except pydantic.ValidationError as exc:
         err = exc.errors()[0]
         loc = [str(x) for x in err["loc"]]
@@ -169,10 +168,9 @@ def check_list(
     """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0 repeat),
     ascending if ``ascending``; else raise ConfigError naming ``name`` and ``why`` it needs ``at_least``."""
     given = tuple(values)
-    reason = f" ({why})" if why else ""
     if len(given) < at_least:
         what = "a value" if at_least == 1 else f"at least {at_least} distinct values"
-        raise ConfigError(f"{name} must hold {what}{reason}, got {list(given)}")
+        raise ConfigError(f"{name} must hold {what}{f' ({why})' if why else ''}, got {list(given)}")
     if repeated := [v for i, v in enumerate(given) if v in given[:i]]:
         raise ConfigError(f"{name} must not repeat a value, got {list(given)} ({repeated[0]!r} twice)")
     if ascending and any(b < a for a, b in itertools.pairwise(given)):

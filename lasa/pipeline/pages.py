@@ -46,10 +46,9 @@ class FigureIndex:
     """The committed figures folder's PNG and MP4 files, found by name or by their bytes."""
 
     def __init__(self, folder: Path | None) -> None:
-        self.folder = folder
         files = sorted(folder.glob("*.png")) + sorted(folder.glob("*.mp4")) if folder else []
         self.by_digest = {hashlib.sha256(p.read_bytes()).hexdigest(): p.name for p in files}
-        self.names = {p.name for p in files}
+        self.files = {p.name: p for p in files}
 
     def name_of(self, data: bytes) -> str | None:
         """The name of the committed file with exactly these bytes, if any."""
@@ -57,7 +56,7 @@ class FigureIndex:
 
     def read(self, name: str) -> bytes | None:
         """The bytes of the committed file ``name``, if it is there."""
-        return (self.folder / name).read_bytes() if self.folder is not None and name in self.names else None
+        return self.files[name].read_bytes() if name in self.files else None
 
 
 def cell_text(value: str | list[str]) -> str:
@@ -96,7 +95,7 @@ def _video(data: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
         name = figures.name_of(base64.b64decode(re.sub(r"\s", "", match.group(1))))
     elif (match := VIDEO_SRC.search(html)) is not None:
         base = posixpath.basename(match.group(1))
-        name = base if base in figures.names else None
+        name = base if base in figures.files else None
     return None if name is None else _markdown_output(f"Video: [{name}](../{name})", f"video: {name}")
 
 
