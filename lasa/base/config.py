@@ -143,8 +143,7 @@ def check_range(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """Return ``value`` as a float if it lies within [low, high] (``low_open``, ``high_open``
-    exclude the bounds), else raise ConfigError naming ``name``; NaN is always refused."""
+    """``value`` as a float if in [low, high] (``low_open``, ``high_open``: bound excluded), never NaN."""
     allowed = interval(low, high, low_open, high_open)
     try:
         v = float(value)

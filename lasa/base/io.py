@@ -43,8 +43,7 @@ _HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting d
 
 @contextlib.contextmanager
 def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
-    """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write: an advisory
-    ``flock`` on the folder itself (released if the process dies), re-entrant within a process."""
+    """Hold an exclusive ``flock`` on ``folder`` (made if missing), for a read-modify-write; re-entrant."""
     folder = Path(folder).resolve()
     if _HELD.get(folder):
         _HELD[folder] += 1

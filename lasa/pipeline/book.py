@@ -63,8 +63,7 @@ def retitle(notebook: Path, robot: str) -> None:
     """Append the robot to a notebook's first heading, so its two robots' pages differ."""
     nb = json.loads(notebook.read_text())
     for cell in nb["cells"]:
-        text = cell_text(cell["source"])
-        if cell["cell_type"] == "markdown" and text.startswith("# "):
+        if cell["cell_type"] == "markdown" and (text := cell_text(cell["source"])).startswith("# "):
             first, newline, rest = text.partition("\n")
             cell["source"] = f"{first} — {ROBOT_TITLES.get(robot, robot)}" + (newline + rest if rest else "")
             break

@@ -172,11 +172,9 @@ def clean_notebook(
         out["metadata"]["language_info"] = {"name": metadata["language_info"].get("name", "python")}
     relink = metadata.get("lasa", {}).get("links_from") != PAGE_DIR  # False for a page: idempotent
     out["metadata"]["lasa"] = {"links_from": PAGE_DIR}
-    codes = itertools.accumulate(int(c["cell_type"] == "code") for c in notebook.get("cells", []))
-    out["cells"] = [
-        _clean_cell(c, index, link_figures, n, relink)
-        for c, n in zip(notebook.get("cells", []), codes, strict=True)
-    ]
+    cells = notebook.get("cells", [])
+    codes = itertools.accumulate(int(c["cell_type"] == "code") for c in cells)
+    out["cells"] = [_clean_cell(c, index, link_figures, n, relink) for c, n in zip(cells, codes, strict=True)]
     return out
 
 
