@@ -43,12 +43,8 @@ Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 
 
 # a simulated user's rationality on a swept grid (Eq. S1), in (0, inf); a type's at.doc is why it has
 # its bounds, stated after a range error
-Rationality = Annotated[
-    Number,
-    at.Gt(0.0),
-    at.Lt(math.inf),
-    at.doc("the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"),
-]
+_LOG_AXIS = "the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"
+Rationality = Annotated[Number, at.Gt(0.0), at.Lt(math.inf), at.doc(_LOG_AXIS)]
 # the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None (cap_setting: "none")
 BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
 

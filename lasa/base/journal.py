@@ -54,9 +54,8 @@ def _entry(path: str | os.PathLike[str]) -> tuple[Path, Path] | None:
         return None
     if folder not in _ROOTS:
         _ROOTS[folder] = Path(json.loads((Path(folder) / _META).read_text())["root"])
-    if not (target := Path(path).resolve()).is_relative_to(_ROOTS[folder]):
-        return None
-    return _entry_of(Path(folder), target), target
+    target = Path(path).resolve()
+    return (_entry_of(Path(folder), target), target) if target.is_relative_to(_ROOTS[folder]) else None
 
 
 def _identity(path: Path) -> list[int] | None:

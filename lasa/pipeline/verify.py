@@ -194,9 +194,8 @@ def _column_rows(
             beyond, lines = _numeric_rows(name, column, old, new, tol, keys)
             rows += lines
             beyond_any |= beyond
-        else:
-            if cells := int((_cells(old[column]) != _cells(new[column])).sum()):
-                rows.append(Row(name, column, "text differs", f"{cells} cells"))
+        elif cells := int((_cells(old[column]) != _cells(new[column])).sum()):
+            rows.append(Row(name, column, "text differs", f"{cells} cells"))
     if beyond_any.any():
         rows.insert(0, Row(name, "rows", "beyond tolerance", f"{beyond_any.sum()} of {len(old)} rows"))
     return rows
