@@ -30,8 +30,7 @@ _READ_BY = {"MUJOCO_GL": "mujoco", "NPY_DISABLE_CPU_FEATURES": "numpy", "OPENBLA
 
 
 def pin() -> None:
-    """Set each variable of :data:`RENDERER` and :data:`PINNED` in ``os.environ`` unless already set
-    (yours wins); one set after the library that reads it was imported is a ``RuntimeWarning``."""
+    """Set each unset variable of :data:`RENDERER` and :data:`PINNED`; warn if its reader came first."""
     unset = {name: value for name, value in {**RENDERER, **PINNED}.items() if name not in os.environ}
     os.environ.update(unset)
     readers = {name: _READ_BY.get(name, "torch") for name in unset}

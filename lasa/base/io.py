@@ -79,8 +79,7 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
 
 
 def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> Path:
-    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others (under
-    :func:`locked`, journaled row by row); a file of other columns only if all its rows go."""
+    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s (journaled, under :func:`locked`)."""
     path = Path(path)
     with locked(path.parent):
         journal.note_rows(path, frame[[key]], sort=[key])  # undone row by row if the run fails

@@ -99,8 +99,7 @@ def after_write(path: str | os.PathLike[str]) -> None:
 
 
 def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:
-    """Record, before writing the merged table, that this run replaces the rows of ``path`` whose
-    ``keys`` columns match ``keys``' rows (as the CSV writer writes them); ``sort``: its order."""
+    """Record that the merged table ``path`` gets this run's rows of ``keys`` (sorted by ``sort``)."""
     if (found := _entry(path)) is None:
         return
     before_write(path)

@@ -43,8 +43,7 @@ def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
 
 
 def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """The parameters a config file passes to ``notebook``: ``common`` plus its section; ConfigError if
-    the file is not a YAML mapping of sections or passes a name the ``parameters`` cell lacks."""
+    """The parameters a YAML config passes to ``notebook``: ``common`` plus its section, each in its cell."""
     path = require_file(config, "it ships with the repository under configs/")
     try:
         data = yaml.safe_load(path.read_text()) or {}

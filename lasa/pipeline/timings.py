@@ -221,8 +221,7 @@ def sync_readmes(
     readme: str | os.PathLike[str] | None = "README.md",
     bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
 ) -> list[Path]:
-    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results`` between their
-    markers (a README ``None``: left alone); return the files changed."""
+    """Write the READMEs' sentence and table from ``results`` between their markers; the files changed."""
     data = _read_results(Path(results))
     if "total" not in (figures := data.get("figures_s") or {}):
         raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
