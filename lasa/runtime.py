@@ -1,7 +1,6 @@
 """The process's renderer and numerical kernels, pinned by one explicit call: :func:`pin`. An AVX-512 kernel
 sums in another order than an AVX2 one and training amplifies the last bits (an AMD run moved 37 of 47 Intel
-files and 3 verdicts): pinned to AVX2, every x86-64 CPU runs the same code. ``python -m lasa.runtime --out
-FILE`` records them (``figures/kernels.json``)."""
+files and 3 verdicts): pinned to AVX2, every x86-64 CPU runs the same code (``figures/kernels.json``)."""
 
 from __future__ import annotations
 

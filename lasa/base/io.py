@@ -19,8 +19,7 @@ from lasa.base.errors import ArtifactError, ConfigError
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside ``path`` (same suffix, for writers that infer the format); rename
-    it onto ``path`` on success (journaled: :mod:`lasa.base.journal`), remove it on any exception."""
+    """A temporary path beside ``path`` (same suffix), renamed onto it (journaled) if all goes well."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)

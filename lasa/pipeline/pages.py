@@ -1,6 +1,5 @@
-"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``, each
-cleaned (:func:`clean_notebook`), all under :data:`BUDGET` (the largest committed figures linked until
-they fit; else :class:`PageBudgetError`, exit status 1)."""
+"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``, all under
+:data:`BUDGET` (the largest committed figures linked until they fit, else :class:`PageBudgetError`)."""
 
 from __future__ import annotations
 

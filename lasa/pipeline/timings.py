@@ -133,8 +133,7 @@ def summarize(
     host: Mapping[str, Any] | None = None,
     commit: str | None = None,
 ) -> dict[str, Any]:
-    """One part of ``figures_s`` from a whole run's ``runs`` (``host``, ``commit``: :func:`machine`'s and
-    :func:`git_commit`'s by default): ``total`` is the wall time from the first start to the last end."""
+    """One part of ``figures_s`` from a whole run's ``runs``; ``total``: first start to last end."""
     if not runs:
         raise ConfigError("no notebook runs to summarize")
     if any(run.start is None or run.end is None for run in runs):
