@@ -160,8 +160,7 @@ def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) ->
 def check_list(
     name: str, values: Sequence[Any], *, at_least: int = 1, ascending: bool = False, why: str = ""
 ) -> tuple[Any, ...]:
-    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0 repeat),
-    ascending if ``ascending``; else raise ConfigError naming ``name`` and ``why`` it needs ``at_least``."""
+    """A list setting as a tuple of ``at_least`` values, none twice (1 and 1.0 repeat), ascending if asked."""
     given = tuple(values)
     if len(given) < at_least:
         what = "a value" if at_least == 1 else f"at least {at_least} distinct values"

@@ -25,8 +25,7 @@ _ROOTS: dict[str, Path] = {}  # journal folder -> its root, read once per proces
 
 @contextlib.contextmanager
 def recording(journal: str | os.PathLike[str], root: str | os.PathLike[str]) -> Iterator[Path]:
-    """Journal the writes under ``root`` made while the block runs, by this process and its children
-    (:data:`ENV` names ``journal``, made afresh, for the block only; the journal stays)."""
+    """Journal the writes under ``root`` in the block, by this process and its children (:data:`ENV`)."""
     journal = Path(journal)
     shutil.rmtree(journal, ignore_errors=True)
     journal.mkdir(parents=True)

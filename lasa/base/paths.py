@@ -27,8 +27,7 @@ def resolve(path: str | os.PathLike[str]) -> Path:
     return path if path.is_absolute() else repo_root() / path
 
 
-# name -> (path under the build folder, the notebook that writes it)
-ARTIFACTS: dict[str, tuple[str, str]] = {
+ARTIFACTS: dict[str, tuple[str, str]] = {  # name -> (path under the build folder, the notebook writing it)
     "demos": ("data/demos_{robot}.npz", "01_demonstrations"),
     "decoder": ("models/decoder_{robot}.pt", "02_decoder_training"),
     "latent_paths": ("analysis/latent_{robot}.npz", "02_decoder_training"),
