@@ -41,8 +41,7 @@ UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
 
 
-# a simulated user's rationality on a swept grid (Eq. S1), in (0, inf); a type's at.doc is why it has
-# its bounds, stated after a range error
+# a simulated user's rationality (Eq. S1); a type's at.doc, why it has its bounds, follows a range error
 _LOG_AXIS = "the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"
 Rationality = Annotated[Number, at.Gt(0.0), at.Lt(math.inf), at.doc(_LOG_AXIS)]
 # the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None (cap_setting: "none")
@@ -123,8 +122,7 @@ def validate(record: Any) -> None:
 
 
 LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)
-# The built-in members' names (lasa.method.assistance.MEMBERS): ASSISTANCE are the figures' default
-# members; hindsight_point (hindsight with one target per goal) only the study runs by default.
+# members' names (lasa.method.assistance.MEMBERS): the figures' defaults, and the study's hindsight_point
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
 NO_ASSISTANCE = "none"  # the assistance label of rows and episodes with none (alpha = 0: LA, R)

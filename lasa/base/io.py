@@ -1,5 +1,4 @@
-"""Atomic file writes (a temporary file renamed into place) and artifact loading whose errors name
-the command that makes a missing or unreadable file."""
+"""Atomic file writes (a temporary file renamed into place); loads whose errors name what makes the file."""
 
 from __future__ import annotations
 

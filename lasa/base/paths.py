@@ -1,5 +1,4 @@
-"""Where things live: the repository root (relative folders resolve against it, never the working
-directory), and every artifact's path, named once with the notebook that makes it."""
+"""Where things live: the repository root (never the working directory) and each artifact's path."""
 
 from __future__ import annotations
 

@@ -1,5 +1,4 @@
-"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way:
-each a pure, seeded function run with one torch thread, the results in the jobs' order."""
+"""Independent jobs by joblib or on a Dask cluster: pure, seeded, one torch thread each, results in order."""
 
 from __future__ import annotations
 
