@@ -149,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", required=True, help="folder of the executed copy")
     parser.add_argument("--robot", help="run for this robot (the notebook's `robot` parameter)")
     parser.add_argument(
-        "--param", "-p", action="append", default=[], metavar="NAME=VALUE", help="VALUE as YAML"
+        "--param", "-p", action="append", default=[], metavar="NAME=VALUE", help="a parameter, VALUE as YAML"
     )
     parser.add_argument("--timings", help="append {notebook, robot, seconds, start, end} (UTC) to this file")
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
