@@ -44,7 +44,7 @@ def pin() -> None:
 
 
 def record() -> dict[str, object]:
-    """The variables of :data:`PINNED` as set, whether all hold their pinned value, torch's CPU capability."""
+    """What the kernels run with: :data:`PINNED` as set, whether all hold, and torch's CPU capability."""
     import torch  # noqa: PLC0415 (reading the capability needs torch; pinning must not import it)
 
     env = {name: os.environ.get(name) for name in PINNED}
