@@ -1,9 +1,10 @@
-"""lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020).
+"""lasa: Shared Autonomy with Learned Latent Actions (Jeon, Losey & Sadigh, RSS 2020), a reproducibility
+package (extending it: ``docs/extending.md``). ``import lasa`` only re-exports, lazily (PEP 562), and sets
+nothing: call :func:`lasa.runtime.pin` first, before numpy, torch or mujoco."""
 
-A reproducibility package (extending it: ``docs/extending.md``). ``import lasa`` only re-exports,
-lazily (PEP 562), and sets nothing: call :func:`lasa.runtime.pin` first, before numpy, torch or mujoco."""
-
+import contextlib
 import importlib
+import importlib.metadata
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the lazy names for type checkers, and (_lazy_table) what __getattr__ imports
@@ -56,19 +57,14 @@ _EXPORTS = _lazy_table()
 
 def __getattr__(name: str) -> Any:
     """Import a public name's module when the name is first used."""
-    module = _EXPORTS.get(name)
-    if module is None:
+    if name not in _EXPORTS:
         raise AttributeError(f"module 'lasa' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
+    globals()[name] = value = getattr(importlib.import_module(_EXPORTS[name]), name)
     return value
 
 
-try:  # the installed package's version (pyproject.toml), so that it cannot drift from the release
-    from importlib.metadata import version as _version
-
-    __version__ = _version("lasa")
-except Exception:  # running from a source tree that was never installed
-    __version__ = "0.0.0+unknown"
+__version__ = "0.0.0+unknown"  # a source tree that was never installed
+with contextlib.suppress(Exception):  # the installed package's (pyproject.toml): it cannot drift
+    __version__ = importlib.metadata.version("lasa")
 
 __all__ = [*_EXPORTS]

@@ -1,8 +1,6 @@
-"""The process's renderer and numerical kernels, pinned by one explicit call: :func:`pin`.
-
-An AVX-512 kernel sums in another order than an AVX2 one and training amplifies the last bits (an AMD
-run moved 37 of 47 Intel files and 3 verdicts): pinned to AVX2, every x86-64 CPU runs the same code.
-``python -m lasa.runtime --out FILE`` records them (``figures/kernels.json``)."""
+"""The process's renderer and numerical kernels, pinned by one explicit call: :func:`pin`. An AVX-512 kernel
+sums in another order than an AVX2 one and training amplifies the last bits (an AMD run moved 37 of 47 Intel
+files and 3 verdicts): pinned to AVX2, every x86-64 CPU runs the same code (``figures/kernels.json``)."""
 
 from __future__ import annotations
 
@@ -31,15 +29,11 @@ _READ_BY = {"MUJOCO_GL": "mujoco", "NPY_DISABLE_CPU_FEATURES": "numpy", "OPENBLA
 
 
 def pin() -> None:
-    """Set each variable of :data:`RENDERER` and :data:`PINNED` in ``os.environ`` unless already set
-    (yours wins); one set after the library that reads it was imported is a ``RuntimeWarning``."""
-    late = []
-    for name, value in {**RENDERER, **PINNED}.items():
-        if name not in os.environ:
-            os.environ[name] = value
-            if _READ_BY.get(name, "torch") in sys.modules:
-                late.append(f"{name} ({_READ_BY.get(name, 'torch')})")
-    if late:
+    """Set each unset variable of :data:`RENDERER` and :data:`PINNED`; warn if its reader came first."""
+    unset = {name: value for name, value in {**RENDERER, **PINNED}.items() if name not in os.environ}
+    os.environ.update(unset)
+    readers = {name: _READ_BY.get(name, "torch") for name in unset}
+    if late := [f"{name} ({reader})" for name, reader in readers.items() if reader in sys.modules]:
         warnings.warn(
             f"lasa.runtime.pin() came after the import of what reads {', '.join(late)}: not in effect in "
             "this process (results may differ in the last bits from another CPU's, rendering may need a "
@@ -50,8 +44,7 @@ def pin() -> None:
 
 
 def record() -> dict[str, object]:
-    """What the numerical kernels run with: the variables of :data:`PINNED` as set, whether all hold
-    their pinned value, and torch's CPU capability (torch imported here)."""
+    """What the kernels run with: :data:`PINNED` as set, whether all hold, and torch's CPU capability."""
     import torch  # noqa: PLC0415 (reading the capability needs torch; pinning must not import it)
 
     env = {name: os.environ.get(name) for name in PINNED}

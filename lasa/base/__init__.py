@@ -1,3 +1,1 @@
-"""The base: errors, validated settings, repository paths, atomic file I/O and the pinned ffmpeg.
-
-Nothing here imports another part of lasa, MuJoCo or torch."""
+"""The base (errors, settings, paths, atomic I/O, pinned ffmpeg): no other part of lasa, MuJoCo or torch."""

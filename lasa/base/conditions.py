@@ -1,7 +1,6 @@
-"""The conditions and methods, named once and parsed in one place.
-
-A name gives the **interface** (``R``, Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)),
-whether it is **assisted** (``+SA``, Eq. M1; else alpha = 0) and the **decoder** (``+Entropy``: Eq. T6)."""
+"""The conditions and methods, named once and parsed in one place. A name gives the **interface** (``R``,
+Retargeting by IK; ``LA``, latent actions a_h = phi(z, s, b)), whether it is **assisted** (``+SA``, Eq. M1;
+else alpha = 0) and the **decoder** (``+Entropy``: Eq. T6)."""
 
 from __future__ import annotations
 
@@ -26,21 +25,16 @@ class Condition:
     decoder: str | None
 
 
-_TABLE = {
-    "R": Condition("R", "R", False, None),
-    "R+SA": Condition("R+SA", "R", True, None),
-    "LA": Condition("LA", "LA", False, "base"),
-    "LA+SA": Condition("LA+SA", "LA", True, "base"),
-    "LA+SA+Entropy": Condition("LA+SA+Entropy", "LA", True, "entropy"),
-}
-ALL = tuple(_TABLE)  # every condition a person can drive (the table's order)
+ALL = ("R", "R+SA", "LA", "LA+SA", "LA+SA+Entropy")  # every condition a person can drive
 
 
 def parse(name: str, allowed: tuple[str, ...] = ALL, what: str = "condition") -> Condition:
     """The :class:`Condition` a name stands for; ConfigError (calling it ``what``) unless ``allowed``."""
     if not isinstance(name, str) or name not in allowed:
         raise ConfigError(f"unknown {what} {name!r}; choose one of {', '.join(map(repr, allowed))}")
-    return _TABLE[name]
+    interface, *parts = name.split("+")
+    decoder = None if interface == "R" else "entropy" if "Entropy" in parts else "base"
+    return Condition(name, interface, "SA" in parts, decoder)
 
 
 def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str = "condition") -> float:
@@ -49,8 +43,7 @@ def alpha_of(name: str, alpha: float, allowed: tuple[str, ...] = ALL, what: str 
 
 
 def williams_square(n: int) -> np.ndarray:
-    """A balanced Latin square (Williams design) for an even number n of conditions, (n, n): each
-    appears once in every position and follows every other once (carry-over balanced)."""
+    """A Williams design, (n, n) for n even: each condition once in every position, after every other once."""
     if n < 2 or n % 2:
         raise ConfigError(f"a Williams square needs an even number of conditions >= 2, got {n}")
     first = [0, *itertools.chain.from_iterable((k, n - k) for k in range(1, n // 2)), n // 2]

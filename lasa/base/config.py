@@ -41,20 +41,9 @@ UnitInterval = Annotated[Number, at.Ge(0.0), at.Le(1.0)]  # a number in [0, 1] (
 Seed = Annotated[Integer, at.Ge(0)]  # a random generator's seed: an integer >= 0 (what NumPy accepts)
 
 
-@dataclasses.dataclass(frozen=True)
-class Why:
-    """Why a field's type has its bounds, stated after a range error (e.g. :data:`Rationality`)."""
-
-    reason: str
-
-
-# a simulated user's rationality on a swept grid (Eq. S1), in (0, inf)
-Rationality = Annotated[
-    Number,
-    at.Gt(0.0),
-    at.Lt(math.inf),
-    Why("the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"),
-]
+# a simulated user's rationality (Eq. S1); a type's at.doc, why it has its bounds, follows a range error
+_LOG_AXIS = "the figures' beta axis is logarithmic and Eq. S1's Boltzmann user needs 0 < beta < inf"
+Rationality = Annotated[Number, at.Gt(0.0), at.Lt(math.inf), at.doc(_LOG_AXIS)]
 # the most belief any goal may keep (lasa.method.belief.cap_log_belief), or None (cap_setting: "none")
 BeliefCap = Annotated[Number, at.Gt(0.5), at.Lt(1.0)] | None
 
@@ -65,8 +54,7 @@ def cap_setting(value: Any) -> Any:
 
 
 def validate_caps(config: Any) -> None:
-    """:func:`validate` a frozen config with a ``belief_cap`` and a ``cap_sweep``, each read by
-    :func:`cap_setting` first; ConfigError if the sweep repeats a cap."""
+    """:func:`validate` a config's ``belief_cap`` and ``cap_sweep`` (:func:`cap_setting`), no cap twice."""
     object.__setattr__(config, "belief_cap", cap_setting(config.belief_cap))
     object.__setattr__(config, "cap_sweep", tuple(cap_setting(c) for c in config.cap_sweep))
     validate(config)
@@ -74,19 +62,7 @@ def validate_caps(config: Any) -> None:
         raise ConfigError(f"cap_sweep must not repeat a cap, got {config.cap_sweep}")
 
 
-def _bounds(annotation: Any) -> tuple[float, float, bool, bool]:
-    """(low, high, low_open, high_open) of an Annotated number type's bounds."""
-    low, high, low_open, high_open = -math.inf, math.inf, False, False
-    for meta in getattr(annotation, "__metadata__", ()):
-        if isinstance(meta, at.Ge):
-            low = float(meta.ge)  # type: ignore[arg-type]
-        elif isinstance(meta, at.Gt):
-            low, low_open = float(meta.gt), True  # type: ignore[arg-type]
-        elif isinstance(meta, at.Le):
-            high = float(meta.le)  # type: ignore[arg-type]
-        elif isinstance(meta, at.Lt):
-            high, high_open = float(meta.lt), True  # type: ignore[arg-type]
-    return low, high, low_open, high_open
+_SIDES = {at.Ge: (0, False), at.Gt: (0, True), at.Le: (1, False), at.Lt: (1, True)}  # bound: (side, open)
 
 
 def interval(low: float, high: float, low_open: bool = False, high_open: bool = False) -> str:
@@ -98,11 +74,13 @@ def expects(annotation: Any) -> str:
     """What a field of this type accepts, in words: ``an integer >= 1``, ``a number in [0, 1]``."""
     origin = typing.get_origin(annotation)
     if origin is Annotated:
-        base = typing.get_args(annotation)[0]
-        low, high, low_open, high_open = _bounds(annotation)
-        if base is int and high == math.inf:
-            return f"an integer >= {low + 1 if low_open else low:g}"
-        return f"{'an integer' if base is int else 'a number'} in {interval(low, high, low_open, high_open)}"
+        ends, opens, base = [-math.inf, math.inf], [False, False], typing.get_args(annotation)[0]
+        for bound in (m for m in annotation.__metadata__ if type(m) in _SIDES):
+            side, opens[side] = _SIDES[type(bound)]
+            ends[side] = float(getattr(bound, type(bound).__name__.lower()))  # Ge(1).ge, Lt(1).lt ...
+        if base is int and ends[1] == math.inf:
+            return f"an integer >= {ends[0] + 1 if opens[0] else ends[0]:g}"
+        return f"{'an integer' if base is int else 'a number'} in {interval(ends[0], ends[1], *opens)}"
     if origin is tuple:
         return f"a list, each {expects(typing.get_args(annotation)[0])}"
     if origin in (typing.Union, types.UnionType):
@@ -127,9 +105,8 @@ def validate(record: Any) -> None:
     """Check every field of a config record against its annotated type (pydantic), converting none;
     ConfigError names the field (and item), what it expects and got: ``betas[0] must be ..., got 'x'``."""
     adapter, fields = _schema(type(record))  # type: ignore[arg-type]
-    values = {name: getattr(record, name) for name in fields}
     try:
-        adapter.validate_python(values)
+        adapter.validate_python({name: getattr(record, name) for name in fields})
     except pydantic.ValidationError as exc:
         err = exc.errors()[0]
         loc = [str(x) for x in err["loc"]]
@@ -139,18 +116,16 @@ def validate(record: Any) -> None:
         expected = expects(item if len(loc) > 1 else annotation)
         if isinstance(err["input"], int | float) and expected.startswith("a number in "):
             expected = expected.removeprefix("a number ")  # it is a number: only the range is wrong
-        reasons = [m.reason for m in getattr(item, "__metadata__", ()) if isinstance(m, Why)]  # its Why
+        reasons = [m.documentation for m in getattr(item, "__metadata__", ()) if isinstance(m, at.DocInfo)]
         why = f": {reasons[0]}" if reasons else ""
         raise ConfigError(f"{name} must be {expected}, got {err['input']!r}{why}") from None
 
 
 LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.belief_targets)
-# The built-in members' names (lasa.method.assistance.MEMBERS): ASSISTANCE are the figures' default
-# members; hindsight_point (hindsight with one target per goal) only the study runs by default.
+# members' names (lasa.method.assistance.MEMBERS): the figures' defaults, and the study's hindsight_point
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
-# The assistance label of rows and episodes with none (alpha = 0: LA, R), named once.
-NO_ASSISTANCE = "none"
+NO_ASSISTANCE = "none"  # the assistance label of rows and episodes with none (alpha = 0: LA, R)
 
 
 def check_range(
@@ -162,8 +137,7 @@ def check_range(
     low_open: bool = False,
     high_open: bool = False,
 ) -> float:
-    """Return ``value`` as a float if it lies within [low, high] (``low_open``, ``high_open``
-    exclude the bounds), else raise ConfigError naming ``name``; NaN is always refused."""
+    """``value`` as a float if in [low, high] (``low_open``, ``high_open``: bound excluded), never NaN."""
     allowed = interval(low, high, low_open, high_open)
     try:
         v = float(value)
@@ -184,15 +158,12 @@ def check_choice(name: str, value: str, choices: tuple[str, ...] | list[str]) ->
 def check_list(
     name: str, values: Sequence[Any], *, at_least: int = 1, ascending: bool = False, why: str = ""
 ) -> tuple[Any, ...]:
-    """Return a list setting as a tuple if it holds ``at_least`` values, none twice (1 and 1.0 repeat),
-    ascending if ``ascending``; else raise ConfigError naming ``name`` and ``why`` it needs ``at_least``."""
+    """A list setting as a tuple of ``at_least`` values, none twice (1 and 1.0 repeat), ascending if asked."""
     given = tuple(values)
-    reason = f" ({why})" if why else ""
     if len(given) < at_least:
         what = "a value" if at_least == 1 else f"at least {at_least} distinct values"
-        raise ConfigError(f"{name} must hold {what}{reason}, got {list(given)}")
-    repeated = [v for i, v in enumerate(given) if v in given[:i]]
-    if repeated:
+        raise ConfigError(f"{name} must hold {what}{f' ({why})' if why else ''}, got {list(given)}")
+    if repeated := [v for i, v in enumerate(given) if v in given[:i]]:
         raise ConfigError(f"{name} must not repeat a value, got {list(given)} ({repeated[0]!r} twice)")
     if ascending and any(b < a for a, b in itertools.pairwise(given)):
         raise ConfigError(f"{name} must be in ascending order, got {list(given)}; sorted: {sorted(given)}")
@@ -230,9 +201,7 @@ class ControlConfig:
         check_choice("assistance", self.assistance, BUILT_IN_ASSISTANCE)
 
 
-def to_dict(config: Any) -> dict[str, Any]:
-    """A plain ``dict`` of a config dataclass (safe for JSON and torch checkpoints)."""
-    return dataclasses.asdict(config)
+to_dict = dataclasses.asdict  # a plain dict of a config record (safe for JSON and torch checkpoints)
 
 
 def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None = None) -> T:
@@ -251,8 +220,7 @@ def from_dict(cls: type[T], values: Mapping[str, Any] | None, where: str | None 
 def _changes(prefix: str, record: Any, values: Mapping[str, Any]) -> dict[str, Any]:
     """``values`` as ``record``'s fields take them (nested records, tuples); errors name the whole path."""
     known = {f.name: f for f in dataclasses.fields(record)}
-    unknown = sorted(set(values) - set(known))
-    if unknown:
+    if unknown := sorted(set(values) - set(known)):
         raise ConfigError(f"unknown setting(s) {[prefix + u for u in unknown]}; known: {sorted(known)}")
     changes = {}
     for key, value in values.items():

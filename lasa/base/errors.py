@@ -32,8 +32,7 @@ class IKError(LasaError, RuntimeError):
 
 
 class NotebookError(LasaError, RuntimeError):
-    """A notebook stopped on an exception ``ename: evalue``: the message is its cause, the ``partial``
-    run's path, and what the runner ``restored`` of the files it had written (a sentence)."""
+    """A notebook stopped on ``ename: evalue``: its cause, the ``partial`` run, what was ``restored``."""
 
     def __init__(self, notebook: str, ename: str, evalue: str, partial: str, restored: str = "") -> None:
         self.ename, self.evalue, self.partial, self.restored = ename, evalue, partial, restored

@@ -11,9 +11,7 @@ from pathlib import Path
 
 @functools.cache
 def pinned_ffmpeg() -> str:
-    """The absolute path of the ffmpeg binary inside the installed ``imageio-ffmpeg`` wheel, never
-    another one (``IMAGEIO_FFMPEG_EXE``, the PATH); RuntimeError if the wheel ships none."""
-
+    """The path of the ffmpeg inside the installed ``imageio-ffmpeg`` wheel, never another (the PATH's)."""
     folder = importlib.resources.files("imageio_ffmpeg.binaries")
     found = [Path(str(f)) for f in folder.iterdir() if f.name.startswith("ffmpeg")]
     found = [f for f in found if not f.name.endswith((".py", ".md", ".txt"))]

@@ -1,5 +1,4 @@
-"""Atomic file writes (a temporary file renamed into place) and artifact loading whose errors name
-the command that makes a missing or unreadable file."""
+"""Atomic file writes (a temporary file renamed into place); loads whose errors name what makes the file."""
 
 from __future__ import annotations
 
@@ -19,8 +18,7 @@ from lasa.base.errors import ArtifactError, ConfigError
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path beside ``path`` (same suffix, for writers that infer the format); rename
-    it onto ``path`` on success (journaled: :mod:`lasa.base.journal`), remove it on any exception."""
+    """A temporary path beside ``path`` (same suffix), renamed onto it (journaled) if all goes well."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".tmp{path.suffix}", dir=path.parent)
@@ -43,8 +41,7 @@ _HELD: dict[Path, int] = {}  # folders this process holds locked, with nesting d
 
 @contextlib.contextmanager
 def locked(folder: str | os.PathLike[str]) -> Iterator[Path]:
-    """Hold an exclusive lock on ``folder`` (created if missing) for a read-modify-write: an advisory
-    ``flock`` on the folder itself (released if the process dies), re-entrant within a process."""
+    """Hold an exclusive ``flock`` on ``folder`` (made if missing), for a read-modify-write; re-entrant."""
     folder = Path(folder).resolve()
     if _HELD.get(folder):
         _HELD[folder] += 1
@@ -80,8 +77,7 @@ def write_csv(path: str | os.PathLike[str], frame: pd.DataFrame) -> Path:
 
 
 def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "robot") -> Path:
-    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s, keep the others (under
-    :func:`locked`, journaled row by row); a file of other columns only if all its rows go."""
+    """Replace the rows of ``path`` whose ``key`` matches ``frame``'s (journaled, under :func:`locked`)."""
     path = Path(path)
     with locked(path.parent):
         journal.note_rows(path, frame[[key]], sort=[key])  # undone row by row if the run fails
@@ -96,8 +92,7 @@ def update_csv(path: str | os.PathLike[str], frame: pd.DataFrame, key: str = "ro
                     "delete it and re-run the notebooks that write it"
                 )
             frame = pd.concat([old[~old[key].isin(frame[key].unique())], frame], ignore_index=True)
-        # rows ordered by key whatever order the robots ran in: the same file, run after run
-        frame = frame.sort_values(key, kind="stable", ignore_index=True)
+        frame = frame.sort_values(key, kind="stable", ignore_index=True)  # whatever order robots ran in
         write_csv(path, frame)
     return path
 
@@ -132,9 +127,7 @@ def load_npz(path: str | os.PathLike[str], make_hint: str) -> dict[str, np.ndarr
 def sync_between(
     path: str | os.PathLike[str], markers: tuple[str, str], text: str, inline: bool = False
 ) -> bool:
-    """Put ``text`` between the (begin, end) ``markers`` in the file ``path`` (``inline``: within a
-    line); return whether the file changed. ConfigError if the markers are missing or out of order."""
-
+    """Put ``text`` between the (begin, end) ``markers`` in file ``path`` (``inline``: in a line); changed?"""
     path = Path(path)
     content = path.read_text()
     begin, end = markers
@@ -143,8 +136,7 @@ def sync_between(
     head, rest = content.split(begin, 1)
     _, tail = rest.split(end, 1)
     body = text.strip() if inline else f"\n{text.strip()}\n"
-    new = f"{head}{begin}{body}{end}{tail}"
-    if new == content:
+    if (new := f"{head}{begin}{body}{end}{tail}") == content:
         return False
     write_text(path, new)
     return True

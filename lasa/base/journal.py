@@ -1,8 +1,6 @@
-"""A write journal: what a notebook run changed in the figures folder, to undo it if the run fails.
-
-Each atomic write (:func:`lasa.base.io.atomic_path`) under the journaled folder records the path's old
-state and the identity of the file put in place, a merged table (:func:`note_rows`) also the keys of
-its rows; :func:`restore` puts back what no other run rewrote since (a merged table's rows)."""
+"""A write journal: what a notebook run changed in the figures folder, to undo it if the run fails. Each
+atomic write (:func:`lasa.base.io.atomic_path`) records the path's old state and the file put in place, a
+merged table (:func:`note_rows`) its rows' keys; :func:`restore` puts back what no run rewrote since."""
 
 from __future__ import annotations
 
@@ -16,11 +14,9 @@ import shutil
 import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:  # pandas loads with lasa.base.io anyway; imported in the functions that use it
-    import pandas as pd
-
+import pandas as pd  # loaded with lasa.base.io anyway
 
 ENV = "LASA_WRITE_JOURNAL"  # the journal folder of the run in progress, if any
 _META = "journal.json"  # in the journal folder: {"root": the journaled folder}
@@ -29,8 +25,7 @@ _ROOTS: dict[str, Path] = {}  # journal folder -> its root, read once per proces
 
 @contextlib.contextmanager
 def recording(journal: str | os.PathLike[str], root: str | os.PathLike[str]) -> Iterator[Path]:
-    """Journal the writes under ``root`` made while the block runs, by this process and its children
-    (:data:`ENV` names ``journal``, made afresh, for the block only; the journal stays)."""
+    """Journal the writes under ``root`` in the block, by this process and its children (:data:`ENV`)."""
     journal = Path(journal)
     shutil.rmtree(journal, ignore_errors=True)
     journal.mkdir(parents=True)
@@ -54,15 +49,12 @@ def discard(journal: str | os.PathLike[str]) -> None:
 
 def _entry(path: str | os.PathLike[str]) -> tuple[Path, Path] | None:
     """The journal entry (a JSON file) of ``path`` and the path resolved, if ``path`` is journaled."""
-    folder = os.environ.get(ENV)
-    if not folder:
+    if not (folder := os.environ.get(ENV)):
         return None
     if folder not in _ROOTS:
         _ROOTS[folder] = Path(json.loads((Path(folder) / _META).read_text())["root"])
     target = Path(path).resolve()
-    if not target.is_relative_to(_ROOTS[folder]):
-        return None
-    return _entry_of(Path(folder), target), target
+    return (_entry_of(Path(folder), target), target) if target.is_relative_to(_ROOTS[folder]) else None
 
 
 def _identity(path: Path) -> list[int] | None:
@@ -89,12 +81,10 @@ def _link_or_copy(src: Path, dst: Path) -> None:
 
 def before_write(path: str | os.PathLike[str]) -> None:
     """Record ``path``'s state before this run first replaces it; a no-op without a journal."""
-    found = _entry(path)
-    if found is None or found[0].exists():
+    if (found := _entry(path)) is None or found[0].exists():
         return
     entry, target = found
-    existed = target.exists()
-    if existed:
+    if existed := target.exists():
         _link_or_copy(target, entry.with_suffix(".old"))
     record = {"path": str(target), "first": time.time_ns(), "existed": existed, "wrote": None, "rows": None}
     _save(entry, record)
@@ -102,22 +92,15 @@ def before_write(path: str | os.PathLike[str]) -> None:
 
 def after_write(path: str | os.PathLike[str]) -> None:
     """Record the identity of the file this run just put at ``path``; a no-op without a journal."""
-    found = _entry(path)
-    if found is None or not found[0].exists():
+    if (found := _entry(path)) is None or not found[0].exists():
         return
-    record = json.loads(found[0].read_text())
-    record["wrote"] = _identity(found[1])
-    _save(found[0], record)
+    _save(found[0], {**json.loads(found[0].read_text()), "wrote": _identity(found[1])})
 
 
 def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[str]) -> None:
-    """Record, before writing the merged table, that this run replaces the rows of ``path`` whose
-    ``keys`` columns match ``keys``' rows (as the CSV writer writes them); ``sort``: its order."""
-    found = _entry(path)
-    if found is None:
+    """Record that the merged table ``path`` gets this run's rows of ``keys`` (sorted by ``sort``)."""
+    if (found := _entry(path)) is None:
         return
-    import pandas as pd
-
     before_write(path)
     text = keys.drop_duplicates().to_csv(index=False, float_format="%.6g")
     written = pd.read_csv(io.StringIO(text), dtype=str, keep_default_na=False)
@@ -130,8 +113,7 @@ def note_rows(path: str | os.PathLike[str], keys: pd.DataFrame, sort: Sequence[s
 
 @dataclasses.dataclass
 class Restored:
-    """What :func:`restore` did (the paths put back, the ``(path, why)`` left as another run wrote
-    them), its text a sentence for the runner's error message."""
+    """What :func:`restore` did: the paths put back, the ``(path, why)`` left as another run wrote them."""
 
     root: Path
     restored: list[Path] = dataclasses.field(default_factory=list)
@@ -156,10 +138,9 @@ def restore(journal: str | os.PathLike[str]) -> Restored:
     result = Restored(Path(json.loads((journal / _META).read_text())["root"]))
     records = [json.loads(p.read_text()) for p in journal.glob("*.json") if p.name != _META]
     with locked(result.root):
-        for record in sorted(records, key=lambda r: r["first"], reverse=True):
+        landed = (r for r in records if r["wrote"] is not None)  # not those recorded but never written
+        for record in sorted(landed, key=lambda r: r["first"], reverse=True):
             path = Path(record["path"])
-            if record["wrote"] is None:  # recorded, but its write never landed
-                continue
             old = _entry_of(journal, path).with_suffix(".old") if record["existed"] else None
             why = ""
             if _identity(path) == record["wrote"]:
@@ -176,7 +157,6 @@ def restore(journal: str | os.PathLike[str]) -> Restored:
 
 
 def _entry_of(journal: Path, path: Path) -> Path:
-    """The journal entry of a resolved path: a file named by the path's hash."""
     return journal / f"{hashlib.sha1(str(path).encode()).hexdigest()[:20]}.json"
 
 
@@ -193,25 +173,19 @@ def _put_back(path: Path, old: Path | None) -> None:
 
 def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
     """Put back the old rows of the journaled keys in the table at ``path``; why not, or ``""``."""
-    import pandas as pd
-
     columns, sort = rows["columns"], rows["sort"]
     keys = pd.MultiIndex.from_tuples([tuple(k) for k in rows["keys"]], names=columns)
     now, before = (
         pd.read_csv(p, dtype=str, keep_default_na=False) if p is not None and p.exists() else None
         for p in (path, old)
     )  # each cell as written
-    tables = [t for t in (now, before) if t is not None]
-    if not tables:
+    if not (tables := [t for t in (now, before) if t is not None]):
         return ""
     header = list(tables[0].columns)
     if any(list(t.columns) != header or not set(columns) <= set(header) for t in tables):
         return "another run rewrote it since, with other columns"
-    parts = []
-    if now is not None:  # every row of the keys this run did not write, as it is now
-        parts.append(now[~pd.MultiIndex.from_frame(now[columns]).isin(keys)])
-    if before is not None:  # the rows of the keys it wrote, as they were
-        parts.append(before[pd.MultiIndex.from_frame(before[columns]).isin(keys)])
+    # every row of the keys this run did not write as it is now, the rows of those it wrote as they were
+    parts = (t[pd.MultiIndex.from_frame(t[columns]).isin(keys) == (t is before)] for t in tables)
     table = pd.concat(parts, ignore_index=True)
     if table.empty and before is None:
         path.unlink(missing_ok=True)
@@ -225,7 +199,5 @@ def _restore_rows(path: Path, old: Path | None, rows: dict[str, Any]) -> str:
 
 def _sort_key(column: pd.Series) -> pd.Series:
     """A text column as the writer sorted it: by number if every cell is one, else as text."""
-    import pandas as pd
-
     numbers = pd.to_numeric(column, errors="coerce")
     return numbers if numbers.notna().all() else column

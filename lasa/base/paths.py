@@ -1,5 +1,4 @@
-"""Where things live: the repository root (relative folders resolve against it, never the working
-directory), and every artifact's path, named once with the notebook that makes it."""
+"""Where things live: the repository root (never the working directory) and each artifact's path."""
 
 from __future__ import annotations
 
@@ -14,10 +13,8 @@ _PACKAGE = Path(__file__).resolve().parents[1]  # lasa/ (this module is lasa/bas
 
 def repo_root() -> Path:
     """``LASA_ROOT`` if set (ConfigError unless a folder), else the folder above ``lasa/``."""
-    env = os.environ.get("LASA_ROOT")
-    if env:
-        root = Path(env).expanduser().resolve()
-        if not root.is_dir():
+    if env := os.environ.get("LASA_ROOT"):
+        if not (root := Path(env).expanduser().resolve()).is_dir():
             raise ConfigError(f"LASA_ROOT={env!r} is not a folder")
         return root
     return _PACKAGE.parent
@@ -29,8 +26,7 @@ def resolve(path: str | os.PathLike[str]) -> Path:
     return path if path.is_absolute() else repo_root() / path
 
 
-# name -> (path under the build folder, the notebook that writes it)
-ARTIFACTS: dict[str, tuple[str, str]] = {
+ARTIFACTS: dict[str, tuple[str, str]] = {  # name -> (path under the build folder, the notebook writing it)
     "demos": ("data/demos_{robot}.npz", "01_demonstrations"),
     "decoder": ("models/decoder_{robot}.pt", "02_decoder_training"),
     "latent_paths": ("analysis/latent_{robot}.npz", "02_decoder_training"),
@@ -69,8 +65,7 @@ class Paths:
     @staticmethod
     def make_hint(name: str, robot: str) -> str:
         """The command that makes artifact ``name`` for ``robot``."""
-        notebook = ARTIFACTS[name][1]
-        return f"make figures (it runs notebooks/{notebook}.ipynb for {robot})"
+        return f"make figures (it runs notebooks/{ARTIFACTS[name][1]}.ipynb for {robot})"
 
     def figure(self, name: str) -> Path:
         """A file in the figures folder, e.g. ``figure("sim1_fixed_expertise.csv")``."""

@@ -1,2 +1,1 @@
-"""The pipeline: notebook execution, a robot's workspace of artifacts, the scale-out of grids (joblib,
-Dask), the committed pages, the book, the wall times and ``make verify``."""
+"""The pipeline: notebook runs, a robot's workspace, the grids' scale-out, pages, book, wall times, verify."""

@@ -1,7 +1,5 @@
 """A browsable book of the executed notebooks, built offline with Jupyter Book (``make book``).
-
-The verdict table as front page, the notebooks in the paper's order, the claims table last; nothing
-runs again."""
+The verdict table as front page, the notebooks in the paper's order, the claims table last; nothing runs."""
 
 from __future__ import annotations
 
@@ -15,25 +13,20 @@ from pathlib import Path
 import pandas as pd
 
 from lasa.base.errors import ArtifactError
-from lasa.base.io import write_text
+from lasa.base.io import require_file, write_text
 from lasa.base.paths import repo_root, resolve
 from lasa.evidence.claims import render_markdown, render_verdicts
 from lasa.evidence.values import VALUES_NAME, Values, read_values
-from lasa.pipeline.pages import cell_text
+from lasa.pipeline.pages import cell_text, executed_notebooks
 
-ROBOT_ORDER = ("planar5", "panda")
-ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}
+ROBOT_TITLES = {"planar5": "planar5 (5-DoF planar arm)", "panda": "Panda (7-DoF Franka)"}  # paper's order
 
 
 def ordered_notebooks(folder: Path) -> list[Path]:
     """The executed notebooks in ``folder``, in the paper's order (number, then planar5, Panda)."""
-    books = [p for p in folder.glob("*.ipynb") if not p.name.endswith(".failed.ipynb")]
-
-    def key(path: Path) -> tuple[str, int]:
-        stem, _, robot = path.stem.partition("-")
-        return stem, ROBOT_ORDER.index(robot) if robot in ROBOT_ORDER else -1
-
-    return sorted(books, key=key)
+    rank = {robot: i for i, robot in enumerate(ROBOT_TITLES)}
+    runs = {p: p.stem.partition("-")[::2] for p in executed_notebooks(folder)}  # (stem, robot)
+    return sorted(runs, key=lambda p: (runs[p][0], rank.get(runs[p][1], -1)))
 
 
 def front_page(claims: pd.DataFrame, pages: set[str], values: Values | None = None) -> str:
@@ -70,8 +63,7 @@ def retitle(notebook: Path, robot: str) -> None:
     """Append the robot to a notebook's first heading, so its two robots' pages differ."""
     nb = json.loads(notebook.read_text())
     for cell in nb["cells"]:
-        text = cell_text(cell["source"])
-        if cell["cell_type"] == "markdown" and text.startswith("# "):
+        if cell["cell_type"] == "markdown" and (text := cell_text(cell["source"])).startswith("# "):
             first, newline, rest = text.partition("\n")
             cell["source"] = f"{first} — {ROBOT_TITLES.get(robot, robot)}" + (newline + rest if rest else "")
             break
@@ -79,22 +71,31 @@ def retitle(notebook: Path, robot: str) -> None:
 
 
 def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, progress: bool = True) -> Path:
-    """Assemble the book's sources under ``out/src`` from the executed ``notebooks`` and the ``figures``
-    folder and build the site into ``out/html``; return its ``index.html``. ArtifactError without
-    notebooks, claims table or MathJax (``make setup`` installs it)."""
+    """Build the book's sources in ``out/src``, its site in ``out/html``; return its ``index.html``."""
     notebooks, figures, out = resolve(notebooks), resolve(figures), resolve(out)
     books = ordered_notebooks(notebooks)
-    if not books:
-        raise ArtifactError(f"no executed notebooks in {notebooks}; run: make figures")
-    claims_csv = figures / "claims.csv"
-    if not claims_csv.is_file():
-        raise ArtifactError(f"no claims table {claims_csv}; run: make figures")
-    mathjax = repo_root() / ".venv" / "mathjax" / "es5"
-    if not (mathjax / "tex-chtml.js").is_file():
-        raise ArtifactError(f"MathJax is missing from {mathjax}; run: make setup")
-    src = out / "src"
+    claims_csv = require_file(figures / "claims.csv", "make figures")
+    mathjax = require_file(repo_root() / ".venv" / "mathjax" / "es5" / "tex-chtml.js", "make setup").parent
+    src, build = out / "src", out / "_build"
     _write_sources(src, books, figures, mathjax, pd.read_csv(claims_csv, dtype=str, keep_default_na=False))
-    return _jupyter_book(src, out, progress)
+    shutil.rmtree(build, ignore_errors=True)
+    command = [
+        str(Path(sys.executable).parent / "jupyter-book"),
+        "build",
+        str(src),
+        "--path-output",
+        str(out),
+    ]
+    result = subprocess.run(command, capture_output=not progress, text=True)
+    html = build / "html"
+    if result.returncode != 0 or not (html / "index.html").is_file():
+        detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
+        raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")
+    target = out / "html"
+    shutil.rmtree(target, ignore_errors=True)
+    shutil.move(str(html), target)
+    shutil.rmtree(build, ignore_errors=True)
+    return target / "index.html"
 
 
 _CONFIG = """title: lasa
@@ -119,8 +120,7 @@ def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, c
     (src / "notebooks").mkdir(parents=True)
     for book in books:
         shutil.copy2(book, src / "notebooks" / book.name)
-        _, _, robot = book.stem.partition("-")
-        if robot:
+        if robot := book.stem.partition("-")[2]:
             retitle(src / "notebooks" / book.name, robot)
     shutil.copytree(figures, src / "figures", ignore=shutil.ignore_patterns("*.csv", "*.md"))
     shutil.copytree(mathjax, src / "_extra" / "mathjax")
@@ -135,24 +135,6 @@ def _write_sources(src: Path, books: list[Path], figures: Path, mathjax: Path, c
     toc.append("- file: claims")
     write_text(src / "_toc.yml", "\n".join(toc) + "\n")
     write_text(src / "_config.yml", _CONFIG)
-
-
-def _jupyter_book(src: Path, out: Path, progress: bool) -> Path:
-    """Build the site from ``src`` with Jupyter Book into ``out/html``; returns its front page."""
-    build = out / "_build"
-    shutil.rmtree(build, ignore_errors=True)
-    jupyter_book = str(Path(sys.executable).parent / "jupyter-book")
-    command = [jupyter_book, "build", str(src), "--path-output", str(out)]
-    result = subprocess.run(command, capture_output=not progress, text=True)
-    html = build / "html"
-    if result.returncode != 0 or not (html / "index.html").is_file():
-        detail = "" if progress else (result.stdout or "")[-3000:] + (result.stderr or "")[-3000:]
-        raise ArtifactError(f"jupyter-book could not build the book from {src}\n{detail}")
-    target = out / "html"
-    shutil.rmtree(target, ignore_errors=True)
-    shutil.move(str(html), target)
-    shutil.rmtree(build, ignore_errors=True)
-    return target / "index.html"
 
 
 def main(argv: list[str] | None = None) -> int:

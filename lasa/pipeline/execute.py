@@ -37,15 +37,13 @@ from lasa.pipeline.timings import append_run  # noqa: E402
 
 def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
     """Names and default values of a notebook's ``parameters`` cell (ConfigError if it has none)."""
-    params = pm.inspect_notebook(str(notebook))
-    if not params:
+    if not (params := pm.inspect_notebook(str(notebook))):
         raise ConfigError(f"{notebook} has no cell tagged 'parameters'")
     return {name: info["default"] for name, info in params.items()}
 
 
 def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """The parameters a config file passes to ``notebook``: ``common`` plus its section; ConfigError if
-    the file is not a YAML mapping of sections or passes a name the ``parameters`` cell lacks."""
+    """The parameters a YAML config passes to ``notebook``: ``common`` plus its section, each in its cell."""
     path = require_file(config, "it ships with the repository under configs/")
     try:
         data = yaml.safe_load(path.read_text()) or {}
@@ -55,11 +53,9 @@ def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]
         raise ConfigError(f"{path} is not a YAML file{at}: {getattr(exc, 'problem', None) or exc}") from None
     if not isinstance(data, dict) or not all(isinstance(v, dict) for v in data.values()):
         raise ConfigError(f"{path} must map section names to parameter mappings")
-    stem = Path(notebook).stem
-    params = {**data.get("common", {}), **data.get(stem, {})}
+    params = {**data.get("common", {}), **data.get(Path(notebook).stem, {})}
     known = notebook_parameters(notebook)
-    unknown = sorted(set(params) - set(known))
-    if unknown:
+    if unknown := sorted(set(params) - set(known)):
         raise ConfigError(
             f"{path} passes unknown parameter(s) {unknown} to {Path(notebook).name}; "
             f"its parameters cell defines {sorted(known)}"
@@ -98,14 +94,12 @@ def run_notebook(
     overrides: dict[str, Any] | None = None,
     progress: bool = True,
 ) -> Path:
-    """Execute ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (as
-    ``<stem>-<robot>.ipynb`` with a ``robot`` override); return its path. A failed run's writes to the
-    figures are undone (:mod:`lasa.base.journal`); NotebookError for a failed cell, naming the partial run."""
+    """Run ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (``<stem>-<robot>``
+    for a ``robot``); return its path. A failed run's writes are undone (:mod:`lasa.base.journal`)."""
     params = load_config(config, notebook)
     defaults = notebook_parameters(notebook)
     overrides = overrides or {}
-    unknown = sorted(set(overrides) - set(defaults))
-    if unknown:
+    if unknown := sorted(set(overrides) - set(defaults)):
         raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
     params.update(overrides)
     robot = f"-{overrides['robot']}" if "robot" in overrides else ""
@@ -160,7 +154,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timings", help="append {notebook, robot, seconds, start, end} (UTC) to this file")
     parser.add_argument("--no-progress", action="store_true", help="no cell progress bar")
     args = parser.parse_args(argv)
-    signal.signal(signal.SIGTERM, _terminated)  # a killed run undoes its writes, as Ctrl-C does
+    # SIGTERM leaves by an exception, as Ctrl-C does: a killed run's writes are undone on the way out
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     started = datetime.datetime.now(datetime.UTC)
     start = time.perf_counter()
     try:
@@ -179,11 +174,6 @@ def main(argv: list[str] | None = None) -> int:
         append_run(args.timings, Path(args.notebook).stem, args.robot, seconds, started, ended)
     print(f"{out} ({seconds:.1f} s)")
     return 0
-
-
-def _terminated(signum: int, frame: object) -> None:
-    """``SIGTERM``: leave by an exception, so that the run's writes are undone on the way out."""
-    raise SystemExit(128 + signum)
 
 
 def parse_params(items: list[str]) -> dict[str, Any]:

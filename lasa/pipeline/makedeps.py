@@ -1,13 +1,12 @@
-"""Which of lasa's files each notebook runs: the Make prerequisites of the figure targets.
-
-Read from the source with the standard library only (Make runs it with the system Python): the lasa
-modules a notebook imports, transitively (not under ``if TYPE_CHECKING:``), the MJCF assets, :data:`ALWAYS`.
-"""
+"""Which of lasa's files each notebook runs (the Make prerequisites of the figure targets), read from the
+source with the standard library only (Make runs it with the system Python): the lasa modules a notebook
+imports, transitively (not under ``if TYPE_CHECKING:``), the MJCF assets, :data:`ALWAYS`."""
 
 from __future__ import annotations
 
 import ast
 import functools
+import itertools
 import json
 import sys
 from pathlib import Path
@@ -44,34 +43,27 @@ def _run_nodes(node: ast.AST) -> list[ast.AST]:
 def imports_of(source: str, root: Path = ROOT) -> set[str]:
     """The lasa modules a piece of Python source imports (each name resolved to its module)."""
     found: set[str] = set()
-    exports = _exports(root)
     for node in _run_nodes(ast.parse(source)):
         if isinstance(node, ast.Import):
             modules = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
             modules = [node.module, *(f"{node.module}.{alias.name}" for alias in node.names)]
             if node.module == "lasa":
-                found.update(exports[alias.name] for alias in node.names if alias.name in exports)
+                found.update(_exports(root)[a.name] for a in node.names if a.name in _exports(root))
         else:
             continue
-        for name in modules:
-            parts = name.split(".")
-            found.update(".".join(parts[: i + 1]) for i in range(len(parts)))
+        for name in modules:  # the module and each package above it
+            found.update(itertools.accumulate(name.split("."), lambda a, b: f"{a}.{b}"))
     return {m for m in found if module_file(m, root) is not None}
 
 
 def closure(modules: set[str], root: Path = ROOT) -> set[str]:
     """Every lasa module reached from ``modules`` by imports (them included)."""
-    seen: set[str] = set()
-    todo = sorted(modules)
+    seen, todo = set(), set(modules)
     while todo:
-        name = todo.pop()
-        if name in seen:
-            continue
-        seen.add(name)
-        path = module_file(name, root)
-        assert path is not None
-        todo.extend(sorted(imports_of(path.read_text(), root) - seen))
+        seen |= todo
+        files = (module_file(name, root) for name in todo)
+        todo = {m for f in files if f is not None for m in imports_of(f.read_text(), root)} - seen
     return seen
 
 

@@ -1,6 +1,5 @@
-"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``, each
-cleaned (:func:`clean_notebook`), all under :data:`BUDGET` (the largest committed figures linked until
-they fit; else :class:`PageBudgetError`, exit status 1)."""
+"""The executed notebooks as committed pages: light, stable copies under ``figures/notebooks/``, all under
+:data:`BUDGET` (the largest committed figures linked until they fit, else :class:`PageBudgetError`)."""
 
 from __future__ import annotations
 
@@ -13,7 +12,6 @@ import json
 import posixpath
 import re
 import sys
-from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -47,10 +45,9 @@ class FigureIndex:
     """The committed figures folder's PNG and MP4 files, found by name or by their bytes."""
 
     def __init__(self, folder: Path | None) -> None:
-        self.folder = folder
         files = sorted(folder.glob("*.png")) + sorted(folder.glob("*.mp4")) if folder else []
         self.by_digest = {hashlib.sha256(p.read_bytes()).hexdigest(): p.name for p in files}
-        self.names = {p.name for p in files}
+        self.files = {p.name: p for p in files}
 
     def name_of(self, data: bytes) -> str | None:
         """The name of the committed file with exactly these bytes, if any."""
@@ -58,7 +55,7 @@ class FigureIndex:
 
     def read(self, name: str) -> bytes | None:
         """The bytes of the committed file ``name``, if it is there."""
-        return (self.folder / name).read_bytes() if self.folder is not None and name in self.names else None
+        return self.files[name].read_bytes() if name in self.files else None
 
 
 def cell_text(value: str | list[str]) -> str:
@@ -97,7 +94,7 @@ def _video(data: dict[str, Any], figures: FigureIndex) -> dict[str, Any] | None:
         name = figures.name_of(base64.b64decode(re.sub(r"\s", "", match.group(1))))
     elif (match := VIDEO_SRC.search(html)) is not None:
         base = posixpath.basename(match.group(1))
-        name = base if base in figures.names else None
+        name = base if base in figures.files else None
     return None if name is None else _markdown_output(f"Video: [{name}](../{name})", f"video: {name}")
 
 
@@ -146,12 +143,9 @@ def _clean_cell(
     cell: dict[str, Any], figures: FigureIndex, link: Link, count: int, relink: bool = True
 ) -> dict[str, Any]:
     """One cell without volatile metadata, its outputs cleaned and numbered ``count``; links moved."""
-    out = {k: copy.deepcopy(v) for k, v in cell.items() if k != "metadata"}
-    volatile = ("execution", "papermill", "collapsed", "scrolled")
-    metadata = {k: copy.deepcopy(v) for k, v in cell.get("metadata", {}).items() if k not in volatile}
-    if not metadata.get("tags"):
-        metadata.pop("tags", None)
-    out["metadata"] = metadata
+    volatile = ("execution", "papermill", "collapsed", "scrolled")  # and empty tags
+    metadata = {k: v for k, v in cell.get("metadata", {}).items() if k not in volatile and (v or k != "tags")}
+    out = copy.deepcopy({**{k: v for k, v in cell.items() if k != "metadata"}, "metadata": metadata})
     if INJECTED in metadata.get("tags", ()):
         out["id"] = INJECTED  # papermill gives it a random id
     if cell["cell_type"] == "markdown" and relink:
@@ -177,11 +171,9 @@ def clean_notebook(
         out["metadata"]["language_info"] = {"name": metadata["language_info"].get("name", "python")}
     relink = metadata.get("lasa", {}).get("links_from") != PAGE_DIR  # False for a page: idempotent
     out["metadata"]["lasa"] = {"links_from": PAGE_DIR}
-    codes = itertools.accumulate(int(c["cell_type"] == "code") for c in notebook.get("cells", []))
-    out["cells"] = [
-        _clean_cell(c, index, link_figures, n, relink)
-        for c, n in zip(notebook.get("cells", []), codes, strict=True)
-    ]
+    cells = notebook.get("cells", [])
+    codes = itertools.accumulate(int(c["cell_type"] == "code") for c in cells)
+    out["cells"] = [_clean_cell(c, index, link_figures, n, relink) for c, n in zip(cells, codes, strict=True)]
     return out
 
 
@@ -195,7 +187,6 @@ def page_text(notebook: dict[str, Any]) -> str:
 
 
 def _read(path: Path) -> dict[str, Any]:
-    """An executed notebook's JSON."""
     try:
         data = json.loads(path.read_text())
     except (ValueError, UnicodeDecodeError) as exc:
@@ -209,29 +200,13 @@ def _read(path: Path) -> dict[str, Any]:
 _PARTIAL = re.compile(r"^\.|\.(failed|tmp)\.ipynb$")
 
 
-def _executed(folder: Path) -> list[Path]:
+def executed_notebooks(folder: Path) -> list[Path]:
     """The executed notebooks of ``folder`` (not the partial runs ``*.failed.ipynb``), by name."""
     if not folder.is_dir():
         raise ArtifactError(f"no executed notebooks: {folder} does not exist (run `make figures` first)")
-    found = sorted(p for p in folder.glob("*.ipynb") if not _PARTIAL.search(p.name))
-    if not found:
+    if not (found := sorted(p for p in folder.glob("*.ipynb") if not _PARTIAL.search(p.name))):
         raise ArtifactError(f"no executed notebooks in {folder} (run `make figures` first)")
     return found
-
-
-def _pages(sources: Iterable[Path], figures: FigureIndex, link: Link) -> dict[str, dict[str, Any]]:
-    """Each executed notebook's page, by file name."""
-    return {p.name: clean_notebook(_read(p), figures, link) for p in sources}
-
-
-def _figure_bytes(pages: dict[str, dict[str, Any]], figures: FigureIndex) -> dict[str, int]:
-    """The bytes each committed figure takes, embedded, over all ``pages``."""
-    taken: dict[str, int] = {}
-    outputs = (o for page in pages.values() for cell in page["cells"] for o in cell.get("outputs", []))
-    for png in (cell_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
-        if (name := figures.name_of(base64.b64decode(png))) is not None:
-            taken[name] = taken.get(name, 0) + len(png)
-    return taken
 
 
 def _to_link(taken: dict[str, int], excess: int) -> frozenset[str]:
@@ -248,21 +223,23 @@ def _size(pages: dict[str, str]) -> int:
 def write_pages(
     executed: str | Path, figures: str | Path, budget: int = BUDGET
 ) -> tuple[list[Path], int, frozenset[str]]:
-    """Write the page of every executed notebook of ``executed`` to ``<figures>/notebooks/``; return
-    the pages, the bytes of all pages in the folder and the figures linked to fit. PageBudgetError (and
-    nothing written) if they exceed ``budget`` even so; ArtifactError without notebooks."""
-    sources, index = _executed(Path(executed)), FigureIndex(Path(figures))
-    folder = Path(figures) / PAGES
-    regenerated = {p.name for p in sources}
-    others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in regenerated)
-    embedded = _pages(sources, index, link=False)
+    """Write the page of each executed notebook of ``executed`` to ``<figures>/notebooks/``; return them,
+    the bytes of all pages there and the figures linked to fit; PageBudgetError (nothing written) if over."""
+    notebooks = {p.name: _read(p) for p in executed_notebooks(Path(executed))}
+    index, folder = FigureIndex(Path(figures)), Path(figures) / PAGES
+    others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in notebooks)
+    embedded = {name: clean_notebook(nb, index) for name, nb in notebooks.items()}
     pages = {name: page_text(page) for name, page in embedded.items()}
     linked: frozenset[str] = frozenset()
-    if others + _size(pages) > budget:
-        linked = _to_link(_figure_bytes(embedded, index), others + _size(pages) - budget)
-        pages = {name: page_text(page) for name, page in _pages(sources, index, link=linked).items()}
-    total = others + _size(pages)
-    if total > budget:
+    if (excess := others + _size(pages) - budget) > 0:
+        taken: dict[str, int] = {}  # the bytes each committed figure takes, embedded, over all pages
+        outputs = (o for p in embedded.values() for cell in p["cells"] for o in cell.get("outputs", []))
+        for png in (cell_text(o["data"]["image/png"]) for o in outputs if "image/png" in o.get("data", {})):
+            if (name := index.name_of(base64.b64decode(png))) is not None:
+                taken[name] = taken.get(name, 0) + len(png)
+        linked = _to_link(taken, excess)
+        pages = {name: page_text(clean_notebook(nb, index, linked)) for name, nb in notebooks.items()}
+    if (total := others + _size(pages)) > budget:
         biggest = sorted(pages, key=lambda n: -len(pages[n].encode()))[:3]
         sizes = ", ".join(f"{n} {len(pages[n].encode()) / 1e6:.2f} MB" for n in biggest)
         raise PageBudgetError(

@@ -1,5 +1,4 @@
-"""Independent jobs, run through joblib locally or on a Dask cluster, with the same results either way:
-each a pure, seeded function run with one torch thread, the results in the jobs' order."""
+"""Independent jobs by joblib or on a Dask cluster: pure, seeded, one torch thread each, results in order."""
 
 from __future__ import annotations
 
@@ -45,9 +44,8 @@ def run_jobs(
     timeout: str = "20s",
     shared: Any = None,
 ) -> list[R]:
-    """``[fn(item) for item in items]`` (``fn(shared, item)`` if ``shared`` is not None, scattered to a
-    cluster's workers once), through joblib: ``n_jobs`` local processes, or every worker of the Dask
-    ``scheduler`` (:func:`scheduler_address`, answering within ``timeout``); ConfigError if unreachable."""
+    """``[fn(item) for item in items]`` (``fn(shared, item)`` with ``shared``, sent to each worker once) by
+    joblib: ``n_jobs`` processes, or the Dask ``scheduler``'s workers (:func:`scheduler_address`)."""
     from joblib import Parallel, delayed, parallel_config  # noqa: PLC0415
 
     if int(n_jobs) != n_jobs or n_jobs < 1:

@@ -1,7 +1,6 @@
 """The pipeline's wall times, from the run that measured them (``make figures``).
-
-Each notebook run appends a line to ``<build>/timings.jsonl``; :func:`record_figures` turns a whole
-run's file into ``figures_s`` of ``benchmarks/results.json``, :func:`sync_readmes` the READMEs' words."""
+Each notebook run appends a line to ``<build>/timings.jsonl``; :func:`record_figures` turns a whole run's
+file into ``figures_s`` of ``benchmarks/results.json``, :func:`sync_readmes` the READMEs' words."""
 
 from __future__ import annotations
 
@@ -20,15 +19,11 @@ from pathlib import Path
 from typing import Any
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.base.io import locked, sync_between, write_text
+from lasa.base.io import locked, require_file, sync_between, write_text
 
-README_MARKERS = (
-    "<!-- figures-time:begin (generated from benchmarks/results.json by make figures) -->",
-    "<!-- figures-time:end -->",
-)
-BENCH_MARKERS = (
-    "<!-- figures-table:begin (generated from results.json by make figures) -->",
-    "<!-- figures-table:end -->",
+README_MARKERS, BENCH_MARKERS = (
+    (f"<!-- figures-{n}:begin (generated from {src} by make figures) -->", f"<!-- figures-{n}:end -->")
+    for n, src in (("time", "benchmarks/results.json"), ("table", "results.json"))
 )
 PARTS = ("paper", "quick")  # figures_s's top level, or its "quick" part
 _ROWS = {  # each part's row in benchmarks/README.md's table and its target in results.json
@@ -65,7 +60,6 @@ def append_run(
 
 
 def _when(value: str | None) -> datetime.datetime | None:
-    """An ISO 8601 time, as an aware UTC datetime (a naive one is read as UTC)."""
     if value is None:
         return None
     when = datetime.datetime.fromisoformat(value)
@@ -74,9 +68,7 @@ def _when(value: str | None) -> datetime.datetime | None:
 
 def read_runs(path: str | os.PathLike[str]) -> list[Run]:
     """A ``timings.jsonl``'s runs in finishing order; ArtifactError if missing, ConfigError if malformed."""
-    path = Path(path)
-    if not path.is_file():
-        raise ArtifactError(f"{path} does not exist: `make figures` writes it (execute's --timings)")
+    path = require_file(path, "make figures (lasa.pipeline.execute --timings)")
     runs = []
     for number, line in enumerate(path.read_text().splitlines(), 1):
         if not line.strip():
@@ -141,9 +133,7 @@ def summarize(
     host: Mapping[str, Any] | None = None,
     commit: str | None = None,
 ) -> dict[str, Any]:
-    """One part of ``figures_s`` from a whole run's ``runs``, run by ``command``, read from ``source``
-    (``host``, ``commit``: :func:`machine`'s and :func:`git_commit`'s by default): ``total`` is the wall
-    time from the first start to the last end; ConfigError without runs, or a run's start or end."""
+    """One part of ``figures_s`` from a whole run's ``runs``; ``total``: first start to last end."""
     if not runs:
         raise ConfigError("no notebook runs to summarize")
     if any(run.start is None or run.end is None for run in runs):
@@ -165,7 +155,6 @@ def summarize(
 
 
 def _read_results(path: Path) -> dict[str, Any]:
-    """``results.json`` as a dict (empty if the file does not exist yet)."""
     if not path.exists():
         return {}
     try:
@@ -185,9 +174,8 @@ def record_figures(
     command: str,
     **summary: Any,
 ) -> dict[str, Any] | None:
-    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (its top level, or its
-    ``quick`` for ``part`` "quick") and return them; None (nothing written, why printed) unless every
-    ``expected`` notebook ran once. ConfigError for an unknown ``part`` or a non-object ``results``."""
+    """Write a whole run's times from ``timings`` into ``results``' ``figures_s`` (``part`` "quick": its
+    ``quick``); return them, or None (nothing written, why printed) unless each ``expected`` notebook ran."""
     if part not in PARTS:
         raise ConfigError(f"part must be one of {PARTS}, got {part!r}")
     timings, results = Path(timings), Path(results)
@@ -195,8 +183,7 @@ def record_figures(
         print(f"{results} left as it was: no notebook ran in this invocation ({timings} does not exist)")
         return None
     runs = read_runs(timings)
-    why = _incomplete(runs, expected)
-    if why is not None:
+    if (why := _incomplete(runs, expected)) is not None:
         print(f"{results} left as it was: not a whole run ({why}); a whole run needs `make clean` first")
         return None
     written = summarize(runs, command, str(timings), **summary)
@@ -211,7 +198,6 @@ def record_figures(
 
 
 def _duration(seconds: float) -> str:
-    """A wall time in words: seconds below two minutes, else whole minutes (``50 min``)."""
     return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
 
 
@@ -225,10 +211,8 @@ def _row(part: str, figures: Mapping[str, Any] | None, targets: Mapping[str, flo
     verdict = "" if target is None else ("met" if total <= target else "**missed**")
     at = "commit unknown" if figures["commit"] == "unknown" else f"at {figures['commit']}"
     run = f"{m['cpu']}, {m['cores']} cores, {figures['date']}, {at}: `{figures['command']}`"
-    return (
-        f"| {label} | **{total:,.0f} s** ({_duration(total)}) | "
-        f"{figures['sum_of_notebooks']:,.0f} s | {run} | {bound} | {verdict} |"
-    )
+    wall = f"**{total:,.0f} s** ({_duration(total)}) | {figures['sum_of_notebooks']:,.0f} s"
+    return f"| {label} | {wall} | {run} | {bound} | {verdict} |"
 
 
 def sync_readmes(
@@ -236,12 +220,9 @@ def sync_readmes(
     readme: str | os.PathLike[str] | None = "README.md",
     bench_readme: str | os.PathLike[str] | None = "benchmarks/README.md",
 ) -> list[Path]:
-    """Write the README's sentence and ``benchmarks/README.md``'s table from ``results`` between their
-    markers (a README ``None``: left alone); return the files changed. ConfigError without a paper-scale
-    ``figures_s`` or a file's markers."""
+    """Write the READMEs' sentence and table from ``results`` between their markers; the files changed."""
     data = _read_results(Path(results))
-    figures = data.get("figures_s") or {}
-    if "total" not in figures:
+    if "total" not in (figures := data.get("figures_s") or {}):
         raise ConfigError(f"{results} has no paper-scale figures_s: `make figures` (paper scale) writes it")
     m, changed = figures["machine"], []
     sentence = (

@@ -1,5 +1,4 @@
 """Did a regenerated figures folder reproduce the committed one? (``make verify``)
-
 Prints each run's ``kernels.json``, a table of every file (CSVs by column, pages by outputs, others by
 bytes) and a summary; status 1 only if a verdict differs or a claims table is missing, 2 if a folder is."""
 
@@ -13,14 +12,13 @@ import itertools
 import json
 import re
 import sys
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from lasa.base.errors import ArtifactError
-from lasa.pipeline.pages import cell_text
+from lasa.pipeline.pages import INJECTED, cell_text
 
 CLAIMS = "claims.csv"
 KERNELS = "kernels.json"  # the run's kernel settings (lasa.runtime), printed for both runs
@@ -69,7 +67,6 @@ class Report:
 
 
 def _files(folder: Path) -> dict[str, Path]:
-    """Every file under ``folder``, by its path relative to it (POSIX form)."""
     if not folder.is_dir():
         raise ArtifactError(f"figures folder {folder} does not exist (run `make figures OUT=...` first)")
     return {p.relative_to(folder).as_posix(): p for p in sorted(folder.rglob("*")) if p.is_file()}
@@ -78,14 +75,12 @@ def _files(folder: Path) -> dict[str, Path]:
 def _run_folders(cells: list[dict]) -> dict[str, str]:
     """``{value: placeholder}`` of the injected cell's ``figures_dir`` and ``build_dir``, longest first."""
     values: dict[str, str] = {}
-    for cell in cells:
-        if "injected-parameters" not in cell.get("metadata", {}).get("tags", ()):
-            continue
-        for node in ast.parse(cell_text(cell["source"])).body:
-            if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
-                name, value = ast.unparse(node.targets[0]), node.value.value
-                if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
-                    values[value.rstrip("/")] = f"<{name}>"
+    injected = (c for c in cells if INJECTED in c.get("metadata", {}).get("tags", ()))
+    for node in (node for cell in injected for node in ast.parse(cell_text(cell["source"])).body):
+        if isinstance(node, ast.Assign) and isinstance(node.value, ast.Constant):
+            name, value = ast.unparse(node.targets[0]), node.value.value
+            if name in ("build_dir", "figures_dir") and isinstance(value, str) and value:
+                values[value.rstrip("/")] = f"<{name}>"
     return dict(sorted(values.items(), key=lambda kv: -len(kv[0])))
 
 
@@ -129,12 +124,9 @@ def _notebook_outputs(path: Path) -> dict[str, list[str]]:
 
 def _first_difference(old: list[str], new: list[str]) -> str:
     """The first line at which two cells' outputs differ, as ``old -> new`` (shortened)."""
-
-    def short(line: str | None) -> str:
-        return "(none)" if line is None else repr(line if len(line) <= 60 else line[:57] + "...")
-
-    i, a, b = next((i, a, b) for i, (a, b) in enumerate(itertools.zip_longest(old, new)) if a != b)
-    return f"line {i + 1}: {short(a)} -> {short(b)}"
+    i, *lines = next((i, a, b) for i, (a, b) in enumerate(itertools.zip_longest(old, new)) if a != b)
+    a, b = ("(none)" if x is None else repr(x if len(x) <= 60 else x[:57] + "...") for x in lines)
+    return f"line {i + 1}: {a} -> {b}"
 
 
 def _compare_notebook(name: str, old: Path, new: Path) -> list[Row]:
@@ -202,10 +194,8 @@ def _column_rows(
             beyond, lines = _numeric_rows(name, column, old, new, tol, keys)
             rows += lines
             beyond_any |= beyond
-        else:
-            cells = int((_cells(old[column]) != _cells(new[column])).sum())
-            if cells:
-                rows.append(Row(name, column, "text differs", f"{cells} cells"))
+        elif cells := int((_cells(old[column]) != _cells(new[column])).sum()):
+            rows.append(Row(name, column, "text differs", f"{cells} cells"))
     if beyond_any.any():
         rows.insert(0, Row(name, "rows", "beyond tolerance", f"{beyond_any.sum()} of {len(old)} rows"))
     return rows
@@ -233,8 +223,7 @@ def _compare_csv(name: str, old_path: Path, new_path: Path, tol: Tolerance) -> l
 def _verdicts(path: Path) -> dict[tuple[str, str], tuple[str, ...]]:
     """``(id, robot) -> (effect, number, reproduced, settled)`` of a claims table, every cell as written."""
     frame = pd.read_csv(path, dtype=str, keep_default_na=False)
-    absent = [c for c in ("id", "robot", *VERDICT_COLUMNS) if c not in frame.columns]
-    if absent:
+    if absent := [c for c in ("id", "robot", *VERDICT_COLUMNS) if c not in frame.columns]:
         raise ArtifactError(f"{path} has no column(s) {', '.join(absent)}: not a claims table")
     return {(r["id"], r["robot"]): tuple(r[c] for c in VERDICT_COLUMNS) for r in frame.to_dict("records")}
 
@@ -246,10 +235,8 @@ def _compare_claims(report: Report, files: dict[str, dict[str, Path]]) -> None:
         report.claims_missing = True
         return
     old, new = _verdicts(old_path), _verdicts(new_path)
-    for key in sorted(old.keys() | new.keys()):
+    for key in sorted(k for k in old.keys() | new.keys() if old.get(k) != new.get(k)):
         a, b = old.get(key), new.get(key)
-        if a == b:
-            continue
         if a is None or b is None:
             why = "only in the new table" if a is None else "missing from the new table"
         else:
@@ -283,31 +270,6 @@ def compare_folders(committed: str | Path, new: str | Path, tol: Tolerance | Non
     return report
 
 
-def _kernels_text(committed: str | Path, new: str | Path) -> str:
-    """Each run's ``kernels.json`` (:func:`lasa.runtime.record`) as one line, or that it is missing."""
-    lines = []
-    for label, folder in (("committed", committed), ("new", new)):
-        path = Path(folder) / KERNELS
-        if not path.is_file():
-            lines.append(f"kernels of the {label} run: {KERNELS} missing (its kernels were not recorded)")
-            continue
-        data = json.loads(path.read_text())
-        env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
-        state = "pinned" if data.get("pinned") else "NOT pinned"
-        lines.append(f"kernels of the {label} run: {state}, torch {data.get('torch_cpu_capability')}; {env}")
-    return "\n".join(lines)
-
-
-def _format_table(rows: Sequence[Row]) -> str:
-    """The rows as a Markdown table (readable as plain text too)."""
-    header = [f.name for f in dataclasses.fields(Row)]
-    cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in rows)]
-    widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
-    cells.insert(1, ["-" * w for w in widths])
-    lines = (" | ".join(v.ljust(w) for v, w in zip(c, widths, strict=True)) for c in cells)
-    return "\n".join(f"| {line} |" for line in lines)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Command line: ``python -m lasa.pipeline.verify COMMITTED NEW [--rtol R] [--atol A]``."""
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
@@ -321,8 +283,21 @@ def main(argv: list[str] | None = None) -> int:
     except ArtifactError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(_kernels_text(args.committed, args.new))
-    print(_format_table(report.rows))
+    for label, folder in (("committed", args.committed), ("new", args.new)):  # lasa.runtime.record's
+        path, what = Path(folder) / KERNELS, f"kernels of the {label} run"
+        if not path.is_file():
+            print(f"{what}: {KERNELS} missing (its kernels were not recorded)")
+            continue
+        data = json.loads(path.read_text())
+        env = ", ".join(f"{k}={v}" for k, v in sorted(data.get("environment", {}).items()))
+        state = "pinned" if data.get("pinned") else "NOT pinned"
+        print(f"{what}: {state}, torch {data.get('torch_cpu_capability')}; {env}")
+    header = [f.name for f in dataclasses.fields(Row)]  # the rows as a Markdown table, readable as text
+    cells = [header, *([str(v) for v in dataclasses.astuple(r)] for r in report.rows)]
+    widths = [max(len(line[i]) for line in cells) for i in range(len(header))]
+    cells.insert(1, ["-" * w for w in widths])
+    for line in cells:
+        print(f"| {' | '.join(v.ljust(w) for v, w in zip(line, widths, strict=True))} |")
     if report.claims_missing:
         print(f"error: {CLAIMS} is missing from {args.committed} or {args.new}", file=sys.stderr)
     print(report.summary())

@@ -1,5 +1,4 @@
-"""A notebook's workspace: one robot's task and units, the run's folders (resolved against the
-repository root), its artifacts (a missing one names the notebook that makes it)."""
+"""A notebook's workspace: one robot's task and units, the run's folders, its artifacts (by name)."""
 
 from __future__ import annotations
 
@@ -49,8 +48,7 @@ class Workspace(Generic[TaskT]):
         figures_dir: str | os.PathLike[str] = "figures",
         belief_cap: float | str | None = STUDY_BELIEF_CAP,
     ) -> Workspace[EatingTask]:
-        """:meth:`open` for the eating study: the robot with its fork in the eating scene, its task, and
-        the belief's cap (``ControlConfig.belief_cap``: 0.99 by default, ``"none"`` for Algorithm 1's)."""
+        """:meth:`open` for the eating study: the robot with its fork, its task, the belief's cap ("none")."""
         check_choice("robot", robot, EATING_ROBOTS)
         paths = _folders(build_dir, figures_dir)
         task = make_eating_task()  # mink IK over every goal's tilts and strokes (once per process)
@@ -73,15 +71,13 @@ class Workspace(Generic[TaskT]):
         )
 
     def decoder(self, name: str = "decoder", **fields: str) -> tuple[LatentActionModel, dict[str, Any]]:
-        """A checkpoint (``decoder``, ``decoder_lambda0``, ``decoder_entropy``, ``eating_decoder``, or
-        ``eating_segmentation_decoder`` with its ``segmentation``) and its metadata."""
+        """A checkpoint (a decoder of :data:`lasa.base.paths.ARTIFACTS`, ``fields`` filling it), metadata."""
         return load_checkpoint(
             self.artifact(name, **fields), robot=self.name, make_hint=Paths.make_hint(name, self.name)
         )
 
     def sim_decoders(self) -> dict[str, LatentActionModel]:
-        """The pair the sims compare (notebook 03): ``base`` (lambda = 0, fine-tuned like the other) for
-        LA and LA+SA, ``entropy``: the two differ only by the entropy term."""
+        """The sims' pair (notebook 03): ``base`` (lambda = 0) and ``entropy``, differing only by the term."""
         return {"base": self.decoder("decoder_lambda0")[0], "entropy": self.decoder("decoder_entropy")[0]}
 
 
