@@ -56,27 +56,26 @@ def scan_sessions(
     ``session``, ``reason`` (:data:`LEFT_OUT`) of those left out; ``include_damaged`` keeps a damaged log's
     rows that parse. ArtifactError if two kept sessions log one participant, condition and task."""
     logs, left_out = [], []
+    seen: dict[tuple[str, str, str], str] = {}
     for sidecar in sorted(Path(folder).glob("*.json")):
         try:
             frame, meta = read_session(sidecar, allow_damaged=include_damaged)
         except ArtifactError as exc:
             left_out.append((sidecar.stem, f"{LEFT_OUT['damaged']} ({exc})"))
             continue
+        key = (str(meta.get("participant")), str(meta.get("condition")), str(meta.get("task")))
         if meta.get("task") not in ("Entree", "Dessert") or meta.get("condition") not in CONDITIONS:
             left_out.append((sidecar.stem, f"{LEFT_OUT['task']} (task {meta.get('task')!r})"))
         elif meta["status"] != "complete" and not include_interrupted:
             left_out.append((sidecar.stem, f"{LEFT_OUT['status']} ({meta['status']})"))
-        else:
-            logs.append((frame, {**meta, "session": sidecar.name}))
-    seen: dict[tuple[str, str, str], str] = {}
-    for _, meta in logs:
-        key = (str(meta.get("participant")), str(meta["condition"]), str(meta["task"]))
-        if key in seen:
+        elif key in seen:
             raise ArtifactError(
-                f"sessions {seen[key]} and {meta['session']} in {folder} both log participant {key[0]}, "
+                f"sessions {seen[key]} and {sidecar.name} in {folder} both log participant {key[0]}, "
                 f"condition {key[1]}, task {key[2]}: move one of them out of the folder"
             )
-        seen[key] = meta["session"]
+        else:
+            seen[key] = sidecar.name
+            logs.append((frame, {**meta, "session": sidecar.name}))
     return logs, pd.DataFrame(left_out, columns=["session", "reason"])
 
 

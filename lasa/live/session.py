@@ -18,7 +18,7 @@ import numpy as np
 
 from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import StickSample
-from lasa.live.station import Station, log_row
+from lasa.live.station import Station
 
 SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # how a terminal or supervisor stops a process (Windows: no SIGHUP)
 
@@ -88,8 +88,9 @@ class Session:
         late = self.realtime and now > deadline
         self.compute.append(now - t0)
         self.misses += int(late)
-        if self.writer is not None:
-            self.writer.append(log_row(k, now - self.started if self.realtime else k * dt, late, rec))
+        if self.writer is not None:  # the row in Station.columns' order: step, time, late, then the record
+            row = [k, now - self.started if self.realtime else k * dt, float(late)]
+            self.writer.append(row + [float(v) for value in rec.values() for v in np.ravel(value)])
         self.steps = k + 1
         return rec
 

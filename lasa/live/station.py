@@ -227,8 +227,3 @@ class Station:
             return a_h
 
         return choose
-
-
-def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
-    """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    return [step, t, float(late), *(float(v) for value in rec.values() for v in np.ravel(value))]
