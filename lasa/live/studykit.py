@@ -59,19 +59,17 @@ def ask(participant: str, condition: str) -> list[int]:
     """The questionnaire on the terminal: a bad answer is said and asked again, the others kept."""
     answers: list[int] = []
     print(f"{participant}, {condition}: 1 = strongly disagree ... 7 = strongly agree")
-    for scale in SCALES:
-        while True:
-            try:
-                text = input(f"{QUESTIONS[scale]} [1-7]: ")
-            except EOFError:
-                raise ConfigError(
-                    f"the questionnaire ended after {len(answers)} answers; nothing was saved"
-                ) from None
-            try:
-                answers.append(parse_answer(text))
-                break
-            except ConfigError as exc:
-                print(f"{exc}; please answer again")
+    while len(answers) < len(SCALES):  # the next scale's question until it is answered
+        try:
+            text = input(f"{QUESTIONS[SCALES[len(answers)]]} [1-7]: ")
+        except EOFError:
+            raise ConfigError(
+                f"the questionnaire ended after {len(answers)} answers; nothing was saved"
+            ) from None
+        try:
+            answers.append(parse_answer(text))
+        except ConfigError as exc:
+            print(f"{exc}; please answer again")
     return answers
 
 

@@ -10,7 +10,6 @@ import contextlib
 import dataclasses
 import math
 import os
-import secrets
 import xml.etree.ElementTree as ET
 from collections.abc import AsyncIterator
 from pathlib import Path
@@ -136,12 +135,6 @@ class Study:
                 for name, (u, v) in zip(task.goal_names, where, strict=True)
             ]
         return self._labels
-
-    def scene_key(self, xml: Path) -> str:
-        """A new random key for a trial's scene (the ``X-Scene-Key`` of its requests)."""
-        key = secrets.token_urlsafe(24)
-        self.scenes[key] = xml
-        return key
 
 
 # The npm packages the page loads: URL name -> (folder under .venv, the file that must be there).

@@ -9,6 +9,7 @@ import concurrent.futures
 import contextlib
 import dataclasses
 import logging
+import secrets
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -155,7 +156,7 @@ class Conversation:
                 await self._expect("start")
                 if await self._drive(step, limit) != "complete":
                     raise Gone
-            study.progress.advance(participant)
+            study.progress.count(participant, "step")
         await self.send({"type": "phase", "kind": "thanks"})
         with contextlib.suppress(Exception):
             await self.ws.close(code=1000)
@@ -174,7 +175,7 @@ class Conversation:
     async def _drive(self, step: Step, limit_s: float) -> str:
         study, practice = self.study, step.kind == "practice"
         config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
-        attempt = study.progress.attempt(self.participant)
+        attempt = study.progress.count(self.participant, "attempts")
         folder = Path(study.config.sessions, "practice" if practice else "")  # the analysis reads trials only
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
@@ -192,7 +193,8 @@ class Conversation:
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
             assert trial.writer is not None  # open_trial always logs
-            key = study.scene_key(trial.writer.csv.with_suffix(".xml"))
+            key = secrets.token_urlsafe(24)
+            study.scenes[key] = trial.writer.csv.with_suffix(".xml")
             robot = trial.station.robot
             qpos_adr, camera = robot.qpos_adr.tolist(), robot.model.camera(robot.spec.camera).id
             await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera})
