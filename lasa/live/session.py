@@ -20,8 +20,6 @@ from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import StickSample
 from lasa.live.station import Station
 
-SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # how a terminal or supervisor stops a process (Windows: no SIGHUP)
-
 
 class StopOnSignals:
     """A context in which SIGINT, SIGTERM and SIGHUP ask the loop to stop (``received``: the first; Python
@@ -35,7 +33,8 @@ class StopOnSignals:
 
     def __enter__(self) -> StopOnSignals:
         if threading.current_thread() is threading.main_thread():
-            for number in (getattr(signal, name) for name in SIGNALS if hasattr(signal, name)):
+            # how a terminal or supervisor stops a process (Windows: no SIGHUP)
+            for number in (getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)):
                 self._previous[number] = signal.signal(number, self._handle)
         return self
 

@@ -115,9 +115,8 @@ class Station:
 
     def warm_up(self) -> None:
         """Run the step's heavy calls once, off the record (torch's and mink's first calls are slow)."""
-        s, b = self.state[None], self.belief[None]
         if self.decoder is not None:
-            self.decoder.decode_numpy(np.zeros((1, self.decoder.z_dim)), s, b)
+            self.decoder.decode_numpy(np.zeros((1, self.decoder.z_dim)), self.state[None], self.belief[None])
         if self.retarget is not None:
             self.retarget.joint_velocity(self.state, twist(0, np.array([1.0, 0.0])))
 

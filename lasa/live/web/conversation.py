@@ -162,8 +162,7 @@ class Conversation:
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
-        await self.send(header | {"questions": questions})
+        await self.send(header | {"questions": [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]})
         while True:
             answers = (await self._expect("survey"))["answers"]
             try:
