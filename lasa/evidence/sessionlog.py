@@ -137,15 +137,17 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
 
 
 def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
+    torn = None
     try:
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False)
     except pd.errors.EmptyDataError:
         return pd.DataFrame(), f"its log {rows.name} is empty (not even a header)"
-    except pd.errors.ParserError as exc:  # a row with another number of fields
-        detail = str(exc).strip().splitlines()[-1]
+    except pd.errors.ParserError as exc:  # a row with another number of fields: the rows that parse
+        torn = f"a row has the wrong number of fields ({str(exc).strip().splitlines()[-1]})"
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False, on_bad_lines="skip")
-        return _floats(raw), f"a row has the wrong number of fields ({detail})"
-    numbers = _floats(raw)
+    numbers = raw.apply(lambda c: pd.to_numeric(c, errors="coerce")).astype(np.float64)
+    if torn is not None:
+        return numbers, torn
     bad = numbers.isna() & ~raw.apply(lambda c: c.str.lower().isin(["nan", "-nan"]))
     if bad.to_numpy().any():
         row, col = np.argwhere(bad.to_numpy())[0]
@@ -164,7 +166,3 @@ def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
             why = f"rows out of time order: row {row}'s {column} does not come after row {row - 1}'s"
             return numbers, why
     return numbers, None
-
-
-def _floats(raw: pd.DataFrame) -> pd.DataFrame:
-    return raw.apply(lambda c: pd.to_numeric(c, errors="coerce")).astype(np.float64)

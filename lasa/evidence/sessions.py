@@ -92,8 +92,7 @@ def load_sessions(
 def _episodes(
     folder: str | os.PathLike[str], task: Any, caller: str, *flags: bool
 ) -> tuple[Episodes, pd.DataFrame]:
-    """The sessions :func:`scan_sessions` keeps (``flags``: its own), each left out named in a warning, and
-    the table of those left out."""
+    """The sessions :func:`scan_sessions` keeps (``flags``: its own) and those left out, each in a warning."""
     import mujoco
 
     from lasa.world.eating import EatingTask
@@ -131,7 +130,7 @@ def _episodes(
     conditions = np.array([m["condition"] for m in metas])
     assisted = np.array([parse_condition(str(c)).assisted for c in conditions], dtype=bool)
     members = np.array([m.get("control", {}).get("assistance", "hindsight") for m in metas])
-    episodes = Episodes(
+    return Episodes(
         participant=np.array([m["participant"] for m in metas]),
         condition=conditions,
         assistance=np.where(assisted, members, NO_ASSISTANCE),
@@ -148,8 +147,7 @@ def _episodes(
         end=end,
         completed=np.array([bool(m.get("done", False)) for m in metas]),
         dt=float(metas[0]["dt"]),
-    )
-    return episodes, left_out
+    ), left_out
 
 
 def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:

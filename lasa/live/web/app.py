@@ -43,7 +43,6 @@ HELLO_S = 10.0  # how long a connection may take to send its token [s]
 # uvicorn's WebSocket pings: a sleeping laptop holds its link at most PING_S + PING_TIMEOUT_S [s]
 PING_S = 3.0
 PING_TIMEOUT_S = 5.0
-REFUSALS = ("invalid", "finished", "elsewhere", "no_hello")
 
 STATIC = Path(__file__).parent / "static"
 CSP = "default-src 'self'; {}img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
@@ -104,7 +103,7 @@ class Study:
 
     def admit(self, token: str | None) -> tuple[str | None, str]:
         """(participant, "") for a valid token whose schedule is not done and that is not connected
-        elsewhere, else (None, the reason: one of :data:`REFUSALS`)."""
+        elsewhere, else (None, the reason: ``invalid``, ``finished`` or ``elsewhere``)."""
         participant = self.tokens.participant(token)
         if participant is None:
             return None, "invalid"

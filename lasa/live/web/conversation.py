@@ -208,8 +208,7 @@ class Conversation:
         if not self.study.config.show_belief:  # the paper's people saw the robot only
             message = {k: v for k, v in message.items() if k not in ("belief", "goals")}
         await self.send(message)
-        renderer = self.study.renderer
-        if renderer is not None and not self._frames:
+        if self.study.renderer is not None and not self._frames:
             task = asyncio.create_task(self._frame(message["q"]))
             self._frames.add(task)
             task.add_done_callback(self._frames.discard)
