@@ -19,10 +19,9 @@ from starlette.websockets import WebSocketDisconnect
 from lasa.base.errors import ConfigError
 from lasa.evidence.sessionlog import read_session
 from lasa.live.teleop import replay
-from lasa.live.web.app import WebConfig, create_app
+from lasa.live.web.app import NPM_PACKAGES, WebConfig, create_app
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import MAX_MESSAGE_BYTES
-from lasa.live.web.scene import NPM_PACKAGES
 from lasa.live.web.tokens import check_participant, issue_links, study_dir
 
 with warnings.catch_warnings():  # Starlette 1.x suggests httpx2 for its test client; httpx works

@@ -36,7 +36,8 @@ class SessionWriter:
         self.folder.mkdir(parents=True, exist_ok=True)
         self.stem = stem
         self.columns = columns
-        self.meta = {**meta, "status": "running", "steps": 0, "scene_sha256": _text_sha256(scene_xml)}
+        digest = hashlib.sha256(scene_xml.encode()).hexdigest()
+        self.meta = {**meta, "status": "running", "steps": 0, "scene_sha256": digest}
         self.csv = self.folder / f"{stem}.csv"
         self.part = self.folder / f"{stem}.csv.part"
         self.sidecar = self.folder / f"{stem}.json"
@@ -94,15 +95,14 @@ def read_session(
         raise DamagedLogError(f"session sidecar {sidecar} is damaged: not JSON ({exc})") from None
     if not isinstance(meta, dict):
         raise DamagedLogError(f"session sidecar {sidecar} is damaged: not a JSON object")
-    ended = meta.get("status") in STATUS[1:]
     rows = folder / f"{stem}.csv"
+    ended = rows.is_file() and meta.get("status") in STATUS[1:]
+    if not rows.is_file() or meta.get("status") == "running":  # crashed (rows in .csv.part) or never closed
+        meta["status"] = "interrupted"
     if not rows.is_file():
         rows = folder / f"{stem}.csv.part"
-        meta["status"], ended = "interrupted", False
     if not rows.is_file():
         raise ArtifactError(f"session {stem} has no rows in {folder}")
-    if meta.get("status") == "running":
-        meta["status"] = "interrupted"
     frame, problem = _parse_rows(rows)
     if problem is None and ended and int(meta.get("steps", -1)) != len(frame):
         problem = f"its sidecar records {meta.get('steps')} steps, the log holds {len(frame)} rows"
@@ -123,13 +123,9 @@ def check_scene(path: str | os.PathLike[str], meta: dict[str, Any]) -> Path:
             f"session {stem} has no scene {scene}: it cannot be checked against the scene it ran in"
         )
     expected = meta.get("scene_sha256")
-    if expected and _text_sha256(scene.read_text()) != expected:
+    if expected and hashlib.sha256(scene.read_text().encode()).hexdigest() != expected:
         raise DamagedLogError(f"{scene} is not the scene session {stem} logged (checksum differs)")
     return scene
-
-
-def _text_sha256(text: str) -> str:
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
@@ -141,15 +137,17 @@ def _locate(path: str | os.PathLike[str]) -> tuple[Path, str]:
 
 
 def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
+    torn = None
     try:
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False)
     except pd.errors.EmptyDataError:
         return pd.DataFrame(), f"its log {rows.name} is empty (not even a header)"
-    except pd.errors.ParserError as exc:  # a row with another number of fields
-        detail = str(exc).strip().splitlines()[-1]
+    except pd.errors.ParserError as exc:  # a row with another number of fields: the rows that parse
+        torn = f"a row has the wrong number of fields ({str(exc).strip().splitlines()[-1]})"
         raw = pd.read_csv(rows, dtype=str, keep_default_na=False, on_bad_lines="skip")
-        return _floats(raw), f"a row has the wrong number of fields ({detail})"
-    numbers = _floats(raw)
+    numbers = raw.apply(lambda c: pd.to_numeric(c, errors="coerce")).astype(np.float64)
+    if torn is not None:
+        return numbers, torn
     bad = numbers.isna() & ~raw.apply(lambda c: c.str.lower().isin(["nan", "-nan"]))
     if bad.to_numpy().any():
         row, col = np.argwhere(bad.to_numpy())[0]
@@ -168,7 +166,3 @@ def _parse_rows(rows: Path) -> tuple[pd.DataFrame, str | None]:
             why = f"rows out of time order: row {row}'s {column} does not come after row {row - 1}'s"
             return numbers, why
     return numbers, None
-
-
-def _floats(raw: pd.DataFrame) -> pd.DataFrame:
-    return raw.apply(lambda c: pd.to_numeric(c, errors="coerce")).astype(np.float64)

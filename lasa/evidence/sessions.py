@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import os
-import shutil
 import tempfile
 import warnings
 from pathlib import Path
@@ -56,27 +55,26 @@ def scan_sessions(
     ``session``, ``reason`` (:data:`LEFT_OUT`) of those left out; ``include_damaged`` keeps a damaged log's
     rows that parse. ArtifactError if two kept sessions log one participant, condition and task."""
     logs, left_out = [], []
+    seen: dict[tuple[str, str, str], str] = {}
     for sidecar in sorted(Path(folder).glob("*.json")):
         try:
             frame, meta = read_session(sidecar, allow_damaged=include_damaged)
         except ArtifactError as exc:
             left_out.append((sidecar.stem, f"{LEFT_OUT['damaged']} ({exc})"))
             continue
+        key = (str(meta.get("participant")), str(meta.get("condition")), str(meta.get("task")))
         if meta.get("task") not in ("Entree", "Dessert") or meta.get("condition") not in CONDITIONS:
             left_out.append((sidecar.stem, f"{LEFT_OUT['task']} (task {meta.get('task')!r})"))
         elif meta["status"] != "complete" and not include_interrupted:
             left_out.append((sidecar.stem, f"{LEFT_OUT['status']} ({meta['status']})"))
-        else:
-            logs.append((frame, {**meta, "session": sidecar.name}))
-    seen: dict[tuple[str, str, str], str] = {}
-    for _, meta in logs:
-        key = (str(meta.get("participant")), str(meta["condition"]), str(meta["task"]))
-        if key in seen:
+        elif key in seen:
             raise ArtifactError(
-                f"sessions {seen[key]} and {meta['session']} in {folder} both log participant {key[0]}, "
+                f"sessions {seen[key]} and {sidecar.name} in {folder} both log participant {key[0]}, "
                 f"condition {key[1]}, task {key[2]}: move one of them out of the folder"
             )
-        seen[key] = meta["session"]
+        else:
+            seen[key] = sidecar.name
+            logs.append((frame, {**meta, "session": sidecar.name}))
     return logs, pd.DataFrame(left_out, columns=["session", "reason"])
 
 
@@ -88,25 +86,22 @@ def load_sessions(
 ) -> Episodes:
     """The eating-task sessions in ``folder`` (:func:`scan_sessions`, each left out named in a
     warning) as :class:`lasa.world.record.Episodes`; an ArtifactError if none is sound."""
-    _check_task(task, "load_sessions")
-    logs, left_out = scan_sessions(folder, include_interrupted, include_damaged)
-    for row in left_out.itertuples():
-        warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=2)
-    return _episodes(logs, left_out, folder, task)
+    return _episodes(folder, task, "load_sessions", include_interrupted, include_damaged)[0]
 
 
-def _check_task(task: object, caller: str) -> None:
+def _episodes(
+    folder: str | os.PathLike[str], task: Any, caller: str, *flags: bool
+) -> tuple[Episodes, pd.DataFrame]:
+    """The sessions :func:`scan_sessions` keeps (``flags``: its own) and those left out, each in a warning."""
+    import mujoco
+
     from lasa.world.eating import EatingTask
 
     if not isinstance(task, EatingTask):
         raise ConfigError(f"{caller} reads eating-task sessions; pass lasa.world.eating.make_eating_task()")
-
-
-def _episodes(
-    logs: list[tuple[pd.DataFrame, dict[str, Any]]], left_out: pd.DataFrame, folder: object, task: Any
-) -> Episodes:
-    import mujoco
-
+    logs, left_out = scan_sessions(folder, *flags)
+    for row in left_out.itertuples():
+        warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=3)
     if not logs:
         why = "; ".join(f"{r.session}: {r.reason}" for r in left_out.itertuples())
         raise ArtifactError(
@@ -152,7 +147,7 @@ def _episodes(
         end=end,
         completed=np.array([bool(m.get("done", False)) for m in metas]),
         dt=float(metas[0]["dt"]),
-    )
+    ), left_out
 
 
 def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
@@ -193,9 +188,8 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
     from lasa.evidence import stats
     from lasa.world.measures import measures
 
-    _check_task(task, "analyse_sessions")
-    logs, left_out = scan_sessions(folder)
-    frames = measures(task, _episodes(logs, left_out, folder, task))
+    episodes, left_out = _episodes(folder, task, "analyse_sessions")
+    frames = measures(task, episodes)
     out = {**frames, "left_out": left_out}
     out["means"] = (
         frames["time"]
@@ -224,8 +218,6 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
         if answers.participant.nunique() >= 2:
             out["likert"] = likert_tests(answers)
     out["dropped"] = dropped
-    for row in left_out.itertuples():
-        warnings.warn(f"left out session {row.session}: {row.reason}", stacklevel=2)
     for row in dropped.itertuples():
         warnings.warn(f"left out participant {row.participant} from {row.test}: {row.reason}", stacklevel=2)
     return out
@@ -237,15 +229,14 @@ def write_session_tables(tables: dict[str, pd.DataFrame], folder: str | os.PathL
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     with locked(folder):
-        stage = Path(tempfile.mkdtemp(prefix=".sessions.", dir=folder))
-        try:
+        with tempfile.TemporaryDirectory(
+            prefix=".sessions.", dir=folder, ignore_cleanup_errors=True
+        ) as stage:
             for name, table in tables.items():
-                table.to_csv(stage / f"sessions_{name}.csv", index=False, float_format="%.6g")
+                table.to_csv(Path(stage, f"sessions_{name}.csv"), index=False, float_format="%.6g")
             for old in folder.glob("sessions_*.csv"):
                 old.unlink()
             paths = [folder / f"sessions_{name}.csv" for name in tables]
             for path in paths:
-                os.replace(stage / path.name, path)
-        finally:
-            shutil.rmtree(stage, ignore_errors=True)
+                os.replace(Path(stage, path.name), path)
     return paths

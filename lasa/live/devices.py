@@ -51,10 +51,11 @@ class Device(Protocol):
         """This step's input."""
 
     def close(self) -> None:
-        """Release the device."""
+        """Release the device (by default: nothing to release)."""
+        return None
 
 
-class ScriptedDevice:
+class ScriptedDevice(Device):
     """Samples from a script, one per step (``axes`` (T, 2), NaN reads zero; ``mode``, ``stop`` and
     ``connected`` (T,), default none, never, always), then rest (zero axes)."""
 
@@ -116,16 +117,13 @@ class ScriptedDevice:
         """Whether every scripted sample has been read."""
         return self.step >= len(self.axes)
 
-    def close(self) -> None:
-        """Nothing to release."""
-
 
 # GLFW key codes, as MuJoCo's viewer reports them to its key callback: the arrows' axis and direction
 _ARROWS = {262: (0, 1.0), 263: (0, -1.0), 264: (1, -1.0), 265: (1, 1.0)}
 _KEY_SPACE, _KEY_M, _KEY_S = 32, 77, 83
 
 
-class KeyboardDevice:
+class KeyboardDevice(Device):
     """The keyboard, press-to-set through :meth:`key_callback` (MuJoCo's viewer reports presses, never
     releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
@@ -152,11 +150,8 @@ class KeyboardDevice:
             self._mode = False
         return sample
 
-    def close(self) -> None:
-        """Nothing to release."""
 
-
-class GamepadDevice:
+class GamepadDevice(Device):
     """A gamepad through pygame's SDL joystick API: axes 0 and 1 (y flipped: forward is +z2), button 0
     mode, button 1 stop; one gone away reads disconnected. ConfigError if none is connected."""
 

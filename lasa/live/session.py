@@ -18,9 +18,7 @@ import numpy as np
 
 from lasa.evidence.sessionlog import SessionWriter
 from lasa.live.devices import StickSample
-from lasa.live.station import Station, log_row
-
-SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")  # how a terminal or supervisor stops a process (Windows: no SIGHUP)
+from lasa.live.station import Station
 
 
 class StopOnSignals:
@@ -35,7 +33,8 @@ class StopOnSignals:
 
     def __enter__(self) -> StopOnSignals:
         if threading.current_thread() is threading.main_thread():
-            for number in (getattr(signal, name) for name in SIGNALS if hasattr(signal, name)):
+            # how a terminal or supervisor stops a process (Windows: no SIGHUP)
+            for number in (getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)):
                 self._previous[number] = signal.signal(number, self._handle)
         return self
 
@@ -88,8 +87,9 @@ class Session:
         late = self.realtime and now > deadline
         self.compute.append(now - t0)
         self.misses += int(late)
-        if self.writer is not None:
-            self.writer.append(log_row(k, now - self.started if self.realtime else k * dt, late, rec))
+        if self.writer is not None:  # the row in Station.columns' order: step, time, late, then the record
+            row = [k, now - self.started if self.realtime else k * dt, float(late)]
+            self.writer.append(row + [float(v) for value in rec.values() for v in np.ravel(value)])
         self.steps = k + 1
         return rec
 

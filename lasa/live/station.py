@@ -115,9 +115,8 @@ class Station:
 
     def warm_up(self) -> None:
         """Run the step's heavy calls once, off the record (torch's and mink's first calls are slow)."""
-        s, b = self.state[None], self.belief[None]
         if self.decoder is not None:
-            self.decoder.decode_numpy(np.zeros((1, self.decoder.z_dim)), s, b)
+            self.decoder.decode_numpy(np.zeros((1, self.decoder.z_dim)), self.state[None], self.belief[None])
         if self.retarget is not None:
             self.retarget.joint_velocity(self.state, twist(0, np.array([1.0, 0.0])))
 
@@ -227,8 +226,3 @@ class Station:
             return a_h
 
         return choose
-
-
-def log_row(step: int, t: float, late: bool, rec: dict[str, Any]) -> list[float]:
-    """One session log row (:meth:`Station.columns` order) of step ``step``, finished at ``t`` [s]."""
-    return [step, t, float(late), *(float(v) for value in rec.values() for v in np.ravel(value))]

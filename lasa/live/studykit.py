@@ -59,19 +59,17 @@ def ask(participant: str, condition: str) -> list[int]:
     """The questionnaire on the terminal: a bad answer is said and asked again, the others kept."""
     answers: list[int] = []
     print(f"{participant}, {condition}: 1 = strongly disagree ... 7 = strongly agree")
-    for scale in SCALES:
-        while True:
-            try:
-                text = input(f"{QUESTIONS[scale]} [1-7]: ")
-            except EOFError:
-                raise ConfigError(
-                    f"the questionnaire ended after {len(answers)} answers; nothing was saved"
-                ) from None
-            try:
-                answers.append(parse_answer(text))
-                break
-            except ConfigError as exc:
-                print(f"{exc}; please answer again")
+    while len(answers) < len(SCALES):  # the next scale's question until it is answered
+        try:
+            text = input(f"{QUESTIONS[SCALES[len(answers)]]} [1-7]: ")
+        except EOFError:
+            raise ConfigError(
+                f"the questionnaire ended after {len(answers)} answers; nothing was saved"
+            ) from None
+        try:
+            answers.append(parse_answer(text))
+        except ConfigError as exc:
+            print(f"{exc}; please answer again")
     return answers
 
 
@@ -87,8 +85,7 @@ def survey(
     if condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; choose one of {CONDITIONS}")
     path = Path(folder) / "likert.csv"
-    if not overwrite:  # before asking: refused answers would be lost
-        _refuse_answered(path, participant, condition)
+    _others(path, participant, condition, overwrite)  # before asking: refused answers would be lost
     if answers is None:
         answers = ask(participant, condition)
     values = [parse_answer(a) for a in answers]
@@ -99,20 +96,20 @@ def survey(
         {"participant": participant, "condition": condition, "scale": SCALES, "answer": values}
     )
     with locked(path.parent):
-        if not overwrite:  # again: another survey may have answered meanwhile
-            _refuse_answered(path, participant, condition)
-        old = read_likert(path.parent)
-        if old is not None:
-            keep = ~((old.participant == participant) & (old.condition == condition))
-            new = pd.concat([old[keep], new], ignore_index=True)
-        write_csv(path, new)
+        old = _others(path, participant, condition, overwrite)  # again: another survey may have answered
+        write_csv(path, new if old is None else pd.concat([old, new], ignore_index=True))
     return path
 
 
-def _refuse_answered(path: Path, participant: str, condition: str) -> None:
+def _others(path: Path, participant: str, condition: str, overwrite: bool) -> pd.DataFrame | None:
+    """The answers in ``path`` but ``participant``'s for ``condition`` (those only if ``overwrite``)."""
     old = read_likert(path.parent)
-    if old is not None and ((old.participant == participant) & (old.condition == condition)).any():
+    if old is None:
+        return None
+    mine = (old.participant == participant) & (old.condition == condition)
+    if mine.any() and not overwrite:
         raise ConfigError(
             f"{participant} answered for {condition} already in {path}: "
             "pass --overwrite to replace those answers"
         )
+    return old[~mine]

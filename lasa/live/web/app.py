@@ -1,5 +1,6 @@
 """The study's web application (Starlette): ``/study``, ``/static``, ``/npm`` and ``/scene`` (``--frames
-browser``, behind the trial's ``X-Scene-Key``) and ``WS /ws``. No URL carries a secret: the page sends the
+browser``: MuJoCo's WebAssembly build, three.js and the trial's scene, files renamed by :func:`browser_scene`,
+behind the trial's ``X-Scene-Key``) and ``WS /ws``. No URL or client string reaches a path: the page sends the
 token (its link's fragment) as the WebSocket's first message; another site's page is refused (``Origin``)."""
 
 from __future__ import annotations
@@ -8,7 +9,8 @@ import asyncio
 import contextlib
 import dataclasses
 import math
-import secrets
+import os
+import xml.etree.ElementTree as ET
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
@@ -20,16 +22,17 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
+from starlette.types import Scope
 from starlette.websockets import WebSocket
 
 from lasa.base.config import Positive, validate
-from lasa.base.errors import ConfigError
+from lasa.base.errors import ArtifactError, ConfigError
+from lasa.base.paths import repo_root
 from lasa.live.station import Station
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import ProtocolError, parse
-from lasa.live.web.scene import ASSET_TYPES, NPM_PACKAGES, NpmFiles, browser_scene, npm_folder
 from lasa.live.web.tokens import TokenStore
 from lasa.world.fork import tip_frames
 
@@ -40,7 +43,6 @@ HELLO_S = 10.0  # how long a connection may take to send its token [s]
 # uvicorn's WebSocket pings: a sleeping laptop holds its link at most PING_S + PING_TIMEOUT_S [s]
 PING_S = 3.0
 PING_TIMEOUT_S = 5.0
-REFUSALS = ("invalid", "finished", "elsewhere", "no_hello")
 
 STATIC = Path(__file__).parent / "static"
 CSP = "default-src 'self'; {}img-src 'self' blob:; connect-src 'self'; frame-ancestors 'none'"
@@ -87,18 +89,6 @@ class WebConfig:
 ASPECT = 4.0 / 3.0  # width / height of the page's picture (320 x 240 frames, a 480 x 360 canvas)
 
 
-def project(model: mujoco.MjModel, data: mujoco.MjData, camera: int, points: np.ndarray) -> np.ndarray:
-    """Image coordinates (x right, y down, in [0, 1] inside the picture) of world ``points`` (N, 3), through
-    a fixed camera (MuJoCo's: along -z, y up, ``cam_fovy``)."""
-    pos, rot = data.cam_xpos[camera], data.cam_xmat[camera].reshape(3, 3)
-    local = (np.asarray(points, dtype=float) - pos) @ rot  # camera frame: x right, y up, -z ahead
-    tan = math.tan(math.radians(float(model.cam_fovy[camera])) / 2.0)
-    depth = -local[:, 2]
-    x = local[:, 0] / (depth * tan * ASPECT)
-    y = local[:, 1] / (depth * tan)
-    return np.stack([(x + 1.0) / 2.0, (1.0 - y) / 2.0], axis=1)
-
-
 class Study:
     """The server's state: settings, tokens, progress, the connected participants, the renderer."""
 
@@ -113,7 +103,7 @@ class Study:
 
     def admit(self, token: str | None) -> tuple[str | None, str]:
         """(participant, "") for a valid token whose schedule is not done and that is not connected
-        elsewhere, else (None, the reason: one of :data:`REFUSALS`)."""
+        elsewhere, else (None, the reason: ``invalid``, ``finished`` or ``elsewhere``)."""
         participant = self.tokens.participant(token)
         if participant is None:
             return None, "invalid"
@@ -125,25 +115,89 @@ class Study:
         return participant, ""
 
     def labels(self, station: Station) -> list[dict[str, Any]]:
-        """``{"name", "x", "y"}`` per goal: where its name (at its goal pose's fork tip) goes on the picture,
-        computed once (every trial: one scene, one camera)."""
+        """``{"name", "x", "y"}`` per goal: where its name (at its goal pose's fork tip) goes on the picture
+        (x right, y down, in [0, 1]), computed once (every trial: one scene, one camera)."""
         if self._labels is None:
             robot, task = station.robot, station.task
             data = mujoco.MjData(robot.model)  # its own: the station's robot and data are left as they are
             tips = tip_frames(robot, data, np.asarray(task.goals))[0]
             mujoco.mj_forward(robot.model, data)  # the (fixed) camera's pose (cam_xpos: mj_camlight)
-            where = project(robot.model, data, robot.model.camera(robot.spec.camera).id, tips)
+            camera = robot.model.camera(robot.spec.camera).id
+            # the tips in the camera's frame (MuJoCo's: x right, y up, looking along -z), then its image
+            local = (tips - data.cam_xpos[camera]) @ data.cam_xmat[camera].reshape(3, 3)
+            tan = math.tan(math.radians(float(robot.model.cam_fovy[camera])) / 2.0)
+            x = local[:, 0] / (-local[:, 2] * tan * ASPECT)
+            y = local[:, 1] / (-local[:, 2] * tan)
+            where = np.stack([(x + 1.0) / 2.0, (1.0 - y) / 2.0], axis=1)
             self._labels = [
-                {"name": str(name), "x": round(float(x), 4), "y": round(float(y), 4)}
-                for name, (x, y) in zip(task.goal_names, where, strict=True)
+                {"name": str(name), "x": round(float(u), 4), "y": round(float(v), 4)}
+                for name, (u, v) in zip(task.goal_names, where, strict=True)
             ]
         return self._labels
 
-    def scene_key(self, xml: Path) -> str:
-        """A new random key for a trial's scene (the ``X-Scene-Key`` of its requests)."""
-        key = secrets.token_urlsafe(24)
-        self.scenes[key] = xml
-        return key
+
+# The npm packages the page loads: URL name -> (folder under .venv, the file that must be there).
+NPM_PACKAGES = {"mujoco": ("mujoco-js", "mujoco.wasm"), "three": ("three", "three.module.js")}
+# The scene's asset files the page may fetch, by suffix, with their content types.
+ASSET_TYPES = {
+    ".stl": "model/stl",
+    ".obj": "model/obj",
+    ".msh": "application/octet-stream",
+    ".png": "image/png",
+}
+
+
+def npm_folder(name: str) -> Path:
+    """Where ``make setup`` put npm package ``name`` (a key of :data:`NPM_PACKAGES`); else ArtifactError."""
+    folder, marker = NPM_PACKAGES[name]
+    path = repo_root() / ".venv" / folder
+    if not (path / marker).is_file():
+        raise ArtifactError(f"{path / marker} is missing (the page draws the robot with it): run make setup")
+    return path
+
+
+class NpmFiles(StaticFiles):
+    """A read-only folder of an npm package: ``.wasm`` as ``application/wasm``, ``.js`` as JavaScript,
+    cacheable (the folder holds one pinned version)."""
+
+    TYPES = {".wasm": "application/wasm", ".js": "text/javascript", ".mjs": "text/javascript"}
+
+    def file_response(
+        self,
+        full_path: str | os.PathLike[str],
+        stat_result: os.stat_result,
+        scope: Scope,
+        status_code: int = 200,
+    ) -> Response:
+        response = super().file_response(full_path, stat_result, scope, status_code)
+        media_type = self.TYPES.get(Path(full_path).suffix)
+        if media_type is not None:
+            response.headers["content-type"] = media_type
+        response.headers["cache-control"] = "public, max-age=86400"
+        response.headers["x-content-type-options"] = "nosniff"
+        return response
+
+
+def browser_scene(xml_path: Path) -> tuple[str, dict[str, Path]]:
+    """The scene ``xml_path`` as the page loads it: its MJCF with every ``file`` renamed, and the map from
+    those names to the files on the server; ArtifactError for a missing file or one the page cannot load."""
+    root = ET.fromstring(xml_path.read_text())
+    for compiler in root.iter("compiler"):
+        for attr in ("meshdir", "texturedir", "assetdir"):
+            compiler.attrib.pop(attr, None)
+    assets: dict[str, Path] = {}
+    for element in root.iter():
+        source = element.get("file")
+        if source is None:
+            continue
+        path = Path(source)
+        suffix = path.suffix.lower()
+        if suffix not in ASSET_TYPES or not path.is_absolute() or not path.is_file():
+            raise ArtifactError(f"the scene {xml_path.name} names {source!r}, which the page cannot load")
+        name = f"asset{len(assets)}{suffix}"
+        assets[name] = path
+        element.set("file", name)
+    return ET.tostring(root, encoding="unicode"), assets
 
 
 async def page(request: Request) -> Response:

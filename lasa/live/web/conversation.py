@@ -9,6 +9,7 @@ import concurrent.futures
 import contextlib
 import dataclasses
 import logging
+import secrets
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -155,14 +156,13 @@ class Conversation:
                 await self._expect("start")
                 if await self._drive(step, limit) != "complete":
                     raise Gone
-            study.progress.advance(participant)
+            study.progress.count(participant, "step")
         await self.send({"type": "phase", "kind": "thanks"})
         with contextlib.suppress(Exception):
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        questions = [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]
-        await self.send(header | {"questions": questions})
+        await self.send(header | {"questions": [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]})
         while True:
             answers = (await self._expect("survey"))["answers"]
             try:
@@ -174,7 +174,7 @@ class Conversation:
     async def _drive(self, step: Step, limit_s: float) -> str:
         study, practice = self.study, step.kind == "practice"
         config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
-        attempt = study.progress.attempt(self.participant)
+        attempt = study.progress.count(self.participant, "attempts")
         folder = Path(study.config.sessions, "practice" if practice else "")  # the analysis reads trials only
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
@@ -192,7 +192,8 @@ class Conversation:
             # the page fetches this trial's scene (GET /scene) and draws the robot from the ticks' q
             # with a key of its own (X-Scene-Key), valid while the trial runs: no token in a URL
             assert trial.writer is not None  # open_trial always logs
-            key = study.scene_key(trial.writer.csv.with_suffix(".xml"))
+            key = secrets.token_urlsafe(24)
+            study.scenes[key] = trial.writer.csv.with_suffix(".xml")
             robot = trial.station.robot
             qpos_adr, camera = robot.qpos_adr.tolist(), robot.model.camera(robot.spec.camera).id
             await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera})
@@ -207,8 +208,7 @@ class Conversation:
         if not self.study.config.show_belief:  # the paper's people saw the robot only
             message = {k: v for k, v in message.items() if k not in ("belief", "goals")}
         await self.send(message)
-        renderer = self.study.renderer
-        if renderer is not None and not self._frames:
+        if self.study.renderer is not None and not self._frames:
             task = asyncio.create_task(self._frame(message["q"]))
             self._frames.add(task)
             task.add_done_callback(self._frames.discard)

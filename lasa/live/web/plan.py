@@ -60,17 +60,12 @@ class Progress:
         self.of(participant)["consented"] = True
         self._save()
 
-    def attempt(self, participant: str) -> int:
-        """Count one more session started by the participant; returns its number (1, 2, ...)."""
+    def count(self, participant: str, key: str) -> int:
+        """One more ``attempts`` (a session started) or ``step`` (the current one done); the new count."""
         entry = self.of(participant)
-        entry["attempts"] += 1
+        entry[key] += 1
         self._save()
-        return int(entry["attempts"])
-
-    def advance(self, participant: str) -> None:
-        """The participant's current step is done."""
-        self.of(participant)["step"] += 1
-        self._save()
+        return int(entry[key])
 
     def finished(self, participant: str, plan: list[Step]) -> bool:
         """Whether every step of ``plan`` is done."""

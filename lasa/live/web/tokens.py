@@ -62,8 +62,7 @@ def issue_links(n: int, sessions: str | os.PathLike[str], base_url: str) -> Path
     write_text(folder / "tokens.json", json.dumps({p: _hash(t) for p, t in tokens.items()}, indent=2) + "\n")
     # the token in the fragment, which browsers never send: no server or proxy logs it
     link = [f"{base_url.rstrip('/')}/study#token={tokens[p]}" for p in participants]
-    links = pd.DataFrame({"participant": participants, "link": link})
-    path = write_csv(folder / "links.csv", links)
+    path = write_csv(folder / "links.csv", pd.DataFrame({"participant": participants, "link": link}))
     path.chmod(0o600)  # the only copy of the tokens
     return path
 
