@@ -156,7 +156,6 @@ METRIC_LABELS = {
     "success": "success: share that reach the true cup",
     "confidence": "confidence b(g*) at the end",
 }
-PROBABILITIES = ("success", "confidence")  # panels of a share or a probability: a [0, 1] axis
 # what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled legend entry
 PAPER_SHAPES = {
     "final_error": "paper: LA+SA's error grows with N; LA+SA+Entropy stays low",
@@ -179,8 +178,8 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
             label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
             xs = [n_max * 0.93, n_max * 1.07]
             ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
-    if metric in PROBABILITIES:
-        plots.probability_axis(ax)
+    if metric in ("success", "confidence"):  # a share or a probability: [0, 1] and a margin for the markers
+        ax.set_ylim(-0.02, 1.02)
     extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
     if metric in PAPER_SHAPES:
         extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
@@ -192,11 +191,10 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     """Fig. sim2 under member ``assistance``: per robot, final error, success and confidence against N."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
-        for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):
+        titles = ("final state error", "success (sim2.entropy_escapes' number)", "confidence in the true cup")
+        for ax, metric, title in zip(row, ("final_error", "success", "confidence"), titles, strict=True):
             plot_metric(part, metric, ax=ax)
-        row[0].set_title(f"{name}: final state error")
-        row[1].set_title(f"{name}: success (sim2.entropy_escapes' number)")
-        row[2].set_title(f"{name}: confidence in the true cup")
+            ax.set_title(f"{name}: {title}")
 
     title = "Fig. sim2: users who change their mind"
     return sweep.sim_figure(table, assistance, title, (3, (16, 5.6), draw), ["method", "change_step"])
