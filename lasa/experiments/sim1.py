@@ -175,11 +175,12 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
     }
 
 
-def _entropy_claim(frame: pd.DataFrame) -> Claim:
-    """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
+def claims(frame: pd.DataFrame) -> list[Claim]:
+    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with or without entropy."""
+    sa = _sa_claims(frame)
     err = _means(frame)["final_error"]
     counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
-    return sweep.sim_claim(
+    entropy = sweep.sim_claim(
         "sim1.entropy_sa",
         str(frame.robot.iloc[0]),
         {"share_weaker": min(counts.values()) / total},
@@ -193,11 +194,7 @@ def _entropy_claim(frame: pd.DataFrame) -> Claim:
             f"{m} {err.loc[1000.0, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy") if 1000.0 in err.index
         ),
     )
-
-
-def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy."""
-    return [*_sa_claims(frame), _entropy_claim(frame)]
+    return [*sa, entropy]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
