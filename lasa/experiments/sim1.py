@@ -105,18 +105,12 @@ def run(
     ), traj
 
 
-def _means(frame: pd.DataFrame) -> pd.DataFrame:
-    """Mean final error and time per (beta, method), methods as columns."""
-    metrics = [m for m in ("final_error", "time") if m in frame]
-    return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
-
-
 def _sa_claims(frame: pd.DataFrame) -> list[Claim]:
     """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
     robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
     if not set(CLAIM_BETAS) <= set(frame.beta):
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
-    means = _means(frame)
+    means = frame.groupby(["beta", "method"])[["final_error", "time"]].mean().unstack("method")
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
     r75, r1000 = (tim.loc[beta, a] / tim.loc[beta, b] for beta in CLAIM_BETAS)
     lower = err[b] < err[a]
@@ -178,7 +172,7 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
 def claims(frame: pd.DataFrame) -> list[Claim]:
     """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with or without entropy."""
     sa = _sa_claims(frame)
-    err = _means(frame)["final_error"]
+    err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
     counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
     entropy = sweep.sim_claim(
         "sim1.entropy_sa",
