@@ -7,7 +7,6 @@ import dataclasses
 
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, Positive, PositiveInt
@@ -126,29 +125,22 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
 
 
-def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
-    """One panel: one learner's error over time per method, with bands at the verdicts' level."""
-    part = frame[frame.learner == learner]
-    ax = method_lineplot(part, "t", "error", ax, level=sweep.LEVEL)
-    ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
-    ax.set_xlabel("time step t")
-    ax.set_ylabel("state error (normalised)")
-    mean = part.groupby(["method", USER]).error.mean().groupby("method").mean()
-    handles, _ = ax.get_legend_handles_labels()
-    for handle in handles:
-        if handle.get_label() in mean:
-            handle.set_label(f"{handle.get_label()}: mean over the episode {mean[handle.get_label()]:.3f}")
-    legend_below(ax, [band_handle(sweep.LEVEL), paper_handle(PAPER_SHAPE)])
-    return ax
-
-
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim3 under member ``assistance``: per robot, the fast and the slow learner."""
+    """Fig. sim3 under member ``assistance``: per robot, the fast and the slow learner's error over time per
+    method, with bands at the verdicts' level."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, learner in zip(row, LEARNERS, strict=True):
-            plot_learner(part, learner, ax=ax)
-            ax.set_title(f"{name}: {ax.get_title()}")
+            one = part[part.learner == learner]
+            method_lineplot(one, "t", "error", ax, level=sweep.LEVEL)
+            ax.set_title(f"{name}: {learner} learner: beta(t) = {one.slope.iloc[0]:g} t")
+            ax.set_xlabel("time step t")
+            ax.set_ylabel("state error (normalised)")
+            mean = one.groupby(["method", USER]).error.mean().groupby("method").mean()
+            for handle in ax.get_legend_handles_labels()[0]:
+                if (method := handle.get_label()) in mean:
+                    handle.set_label(f"{method}: mean over the episode {mean[method]:.3f}")
+            legend_below(ax, [band_handle(sweep.LEVEL), paper_handle(PAPER_SHAPE)])
 
     title, keys = "Fig. sim3: users who learn", ["method", "learner", "t"]
     return sweep.sim_figure(table, assistance, title, (2, (11, 5.2), draw), keys, "curve")
