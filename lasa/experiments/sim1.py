@@ -7,7 +7,6 @@ import dataclasses
 import textwrap
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.artist import Artist
@@ -277,38 +276,31 @@ def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot
     return pd.DataFrame(rows, columns=["beta", "ratio", "low", "high"])
 
 
-def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars."""
-    ax = plt.gca() if ax is None else ax
-    band = time_ratio_band(frame)
-    color = plots.METHOD_COLORS["LA+SA"]
-    label = f"ours: {100 * sweep.LEVEL:.4g}% bootstrap CI (the verdicts' level)"
-    ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
-    ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
-    if "completed" in frame:
-        done = frame[frame.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()
-        cut = band[band.beta.map(done).lt(1.0).to_numpy()]
-        if len(cut):
-            label = "open: some LA or LA+SA episodes cut at the horizon (their times are lower bounds)"
-            ax.plot(cut.beta, cut.ratio, mec=color, label=textwrap.fill(label, 60), **OPEN)
-    ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
-    for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
-        tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
-        plots.paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
-    ax.set_xscale("log")
-    ax.set_xlabel(r"user rationality $\beta$")
-    ax.set_ylabel("time ratio LA / LA+SA [-]")
-    plots.legend_below(ax)
-    return ax
-
-
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     """Fig. sim1 under member ``assistance``: per robot, final error (log), time, time ratio against beta."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
-        plot_time_ratio(part, ax=row[2])
+        ax, band = row[2], time_ratio_band(part)  # the time ratio, ours with its band, the paper's as stars
+        color = plots.METHOD_COLORS["LA+SA"]
+        label = f"ours: {100 * sweep.LEVEL:.4g}% bootstrap CI (the verdicts' level)"
+        ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
+        ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
+        if "completed" in part:
+            done = part[part.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()
+            cut = band[band.beta.map(done).lt(1.0).to_numpy()]
+            if len(cut):
+                label = "open: some LA or LA+SA episodes cut at the horizon (their times are lower bounds)"
+                ax.plot(cut.beta, cut.ratio, mec=color, label=textwrap.fill(label, 60), **OPEN)
+        ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
+        for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
+            tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
+            plots.paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
+        ax.set_xscale("log")
+        ax.set_xlabel(r"user rationality $\beta$")
+        ax.set_ylabel("time ratio LA / LA+SA [-]")
+        plots.legend_below(ax)
         row[0].set_yscale("log")
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: time to reach s*")
