@@ -85,6 +85,12 @@ def swept_assistance(control: ControlConfig, assistance: tuple[str, ...]) -> tup
     return tuple(dict.fromkeys((control.assistance, *assistance)))
 
 
+def pairs(methods: tuple[str, ...], assistance: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(method, member) pairs of a sweep: LA once (member ``none``), each assisted method under each one."""
+    out = [(m, NO_ASSISTANCE) for m in methods if m == "LA"]
+    return out + [(m, a) for a in assistance for m in methods if m != "LA"]
+
+
 @dataclasses.dataclass(frozen=True)
 class LooksConfig:
     """How a sweep's verdicts get their users: the sequential looks, the bootstrap, the members."""
@@ -210,10 +216,7 @@ def run_look(
     seed = verdicts.block_seed(config.seed, look)
     goal, theta, noise = episodes(decoders, task, control, n_users, config.horizon, seed)
     assistance = swept_assistance(control, config.assistance) if assistance is None else assistance
-    # (method, member) pairs: LA once (member ``none``), each assisted method under each member
-    pairs = [(m, NO_ASSISTANCE) for m in config.methods if m == "LA"]
-    pairs += [(m, a) for a in assistance for m in config.methods if m != "LA"]
-    grid = list(itertools.product(pairs, conditions, range(n_users)))
+    grid = list(itertools.product(pairs(config.methods, assistance), conditions, range(n_users)))
     method, member = np.array([m for (m, _), _, _ in grid]), np.array([a for (_, a), _, _ in grid])
     condition, user = [c for _, c, _ in grid], np.array([u for _, _, u in grid])
     goal, theta = goal[user], theta[user]
