@@ -42,11 +42,6 @@ class Config(sweep.SweepConfig):
             )
         sweep.check_record_every(self.record_every, self.horizon)
 
-    @property
-    def learners(self) -> tuple[tuple[str, float], ...]:
-        """(name, slope m) of each learner."""
-        return (("fast", float(self.fast_slope)), ("slow", float(self.slow_slope)))
-
 
 def run(
     decoders: sweep.Decoders,
@@ -62,9 +57,8 @@ def run(
     def learning(learners: list[tuple[str, float]], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
         return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
 
-    ran = sweep.run_look(
-        decoders, task, control, config, config.learners, learning, progress, look, assistance
-    )
+    learners = (("fast", float(config.fast_slope)), ("slow", float(config.slow_slope)))  # (name, slope m)
+    ran = sweep.run_look(decoders, task, control, config, learners, learning, progress, look, assistance)
     errors = normalized_error(ran.traj.states, ran.users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
     k = len(steps)
