@@ -271,8 +271,9 @@ def test_sim1_entropy_claim_rule():
     rows = []
     for beta, (la, sa, en) in {75.0: (0.3, 0.2, 0.25), 1000.0: (0.1, 0.05, 0.2)}.items():
         for method, err in (("LA", la), ("LA+SA", sa), ("LA+SA+Entropy", en)):
-            rows.append(dict(robot="planar5", method=method, beta=beta, final_error=err))
-    assert sim1._entropy_claim(pd.DataFrame(rows)).reproduced == "no"  # entropy below LA at 1 of 2
+            rows.append(dict(robot="planar5", method=method, beta=beta, final_error=err, time=1.0))
+    entropy = sim1.claims(pd.DataFrame(rows))[-1]
+    assert entropy.id == "sim1.entropy_sa" and entropy.reproduced == "no"  # entropy below LA at 1 of 2
 
 
 def test_sim1_claims_have_stable_ids():

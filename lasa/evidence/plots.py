@@ -180,11 +180,6 @@ def legend_below(ax: Axes, extra: Sequence[Artist] = ()) -> None:
     ax.legend(handles, labels, frameon=False, fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.17))
 
 
-def probability_axis(ax: Axes) -> None:
-    """Limit ``ax``'s y axis to [0, 1] and a margin for the markers."""
-    ax.set_ylim(-0.02, 1.02)
-
-
 def users_text(table: pd.DataFrame, keys: Sequence[str], per: str = "point") -> str:
     """A title's N, distinct users over the groups of ``keys``: ``"150 users per point"``, or per
     robot ``"users per point: planar5 60, panda 150"``; a range ``60–150`` where groups differ."""

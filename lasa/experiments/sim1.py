@@ -7,7 +7,6 @@ import dataclasses
 import textwrap
 from typing import Any
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.artist import Artist
@@ -105,18 +104,12 @@ def run(
     ), traj
 
 
-def _means(frame: pd.DataFrame) -> pd.DataFrame:
-    """Mean final error and time per (beta, method), methods as columns."""
-    metrics = [m for m in ("final_error", "time") if m in frame]
-    return frame.groupby(["beta", "method"])[metrics].mean().unstack("method")
-
-
 def _sa_claims(frame: pd.DataFrame) -> list[Claim]:
     """The paper's Fig. sim1 claims on a sim1 frame, comparing LA with LA+SA (at beta = 75 and 1000)."""
     robot, a, b = str(frame.robot.iloc[0]), "LA", "LA+SA"
     if not set(CLAIM_BETAS) <= set(frame.beta):
         raise ConfigError("sim1 claims need beta = 75 and beta = 1000 in the sweep")
-    means = _means(frame)
+    means = frame.groupby(["beta", "method"])[["final_error", "time"]].mean().unstack("method")
     err, tim = means["final_error"][[a, b]], means["time"][[a, b]]
     r75, r1000 = (tim.loc[beta, a] / tim.loc[beta, b] for beta in CLAIM_BETAS)
     lower = err[b] < err[a]
@@ -175,11 +168,12 @@ def _gap_values(r75: Any, r1000: Any, d75: Any, d1000: Any) -> dict[str, Any]:
     }
 
 
-def _entropy_claim(frame: pd.DataFrame) -> Claim:
-    """Fig. sim1: SA improves on LA whether or not the decoder was trained with entropy."""
-    err = _means(frame)["final_error"]
+def claims(frame: pd.DataFrame) -> list[Claim]:
+    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with or without entropy."""
+    sa = _sa_claims(frame)
+    err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
     counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
-    return sweep.sim_claim(
+    entropy = sweep.sim_claim(
         "sim1.entropy_sa",
         str(frame.robot.iloc[0]),
         {"share_weaker": min(counts.values()) / total},
@@ -193,11 +187,7 @@ def _entropy_claim(frame: pd.DataFrame) -> Claim:
             f"{m} {err.loc[1000.0, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy") if 1000.0 in err.index
         ),
     )
-
-
-def claims(frame: pd.DataFrame) -> list[Claim]:
-    """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with entropy."""
-    return [*_sa_claims(frame), _entropy_claim(frame)]
+    return [*sa, entropy]
 
 
 def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, np.ndarray]]:
@@ -286,38 +276,31 @@ def time_ratio_band(frame: pd.DataFrame, a: str = "LA", b: str = "LA+SA", n_boot
     return pd.DataFrame(rows, columns=["beta", "ratio", "low", "high"])
 
 
-def plot_time_ratio(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
-    """One panel: the time ratio LA / LA+SA against beta, ours with its band, the paper's as stars."""
-    ax = plt.gca() if ax is None else ax
-    band = time_ratio_band(frame)
-    color = plots.METHOD_COLORS["LA+SA"]
-    label = f"ours: {100 * sweep.LEVEL:.4g}% bootstrap CI (the verdicts' level)"
-    ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
-    ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
-    if "completed" in frame:
-        done = frame[frame.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()
-        cut = band[band.beta.map(done).lt(1.0).to_numpy()]
-        if len(cut):
-            label = "open: some LA or LA+SA episodes cut at the horizon (their times are lower bounds)"
-            ax.plot(cut.beta, cut.ratio, mec=color, label=textwrap.fill(label, 60), **OPEN)
-    ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
-    for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
-        tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
-        plots.paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
-    ax.set_xscale("log")
-    ax.set_xlabel(r"user rationality $\beta$")
-    ax.set_ylabel("time ratio LA / LA+SA [-]")
-    plots.legend_below(ax)
-    return ax
-
-
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     """Fig. sim1 under member ``assistance``: per robot, final error (log), time, time ratio against beta."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
-        plot_time_ratio(part, ax=row[2])
+        ax, band = row[2], time_ratio_band(part)  # the time ratio, ours with its band, the paper's as stars
+        color = plots.METHOD_COLORS["LA+SA"]
+        label = f"ours: {100 * sweep.LEVEL:.4g}% bootstrap CI (the verdicts' level)"
+        ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)
+        ax.plot(band.beta, band.ratio, "o-", color=color, ms=4, label="ours: mean time LA / LA+SA")
+        if "completed" in part:
+            done = part[part.method.isin(["LA", "LA+SA"])].groupby("beta").completed.mean()
+            cut = band[band.beta.map(done).lt(1.0).to_numpy()]
+            if len(cut):
+                label = "open: some LA or LA+SA episodes cut at the horizon (their times are lower bounds)"
+                ax.plot(cut.beta, cut.ratio, mec=color, label=textwrap.fill(label, 60), **OPEN)
+        ax.axhline(1.0, color="0.6", ls="--", lw=0.8, zorder=0, label="ratio 1: LA as fast as LA+SA")
+        for i, (beta, value) in enumerate(PAPER_RATIOS.items()):
+            tol = f"rule's tolerance: paper ± {RATIO_TOLERANCE:g}" if i == 0 else None
+            plots.paper_point(ax, beta, value, f"paper: {value:.2f} (β = {beta:g})", RATIO_TOLERANCE, tol)
+        ax.set_xscale("log")
+        ax.set_xlabel(r"user rationality $\beta$")
+        ax.set_ylabel("time ratio LA / LA+SA [-]")
+        plots.legend_below(ax)
         row[0].set_yscale("log")
         row[0].set_title(f"{name}: final state error")
         row[1].set_title(f"{name}: time to reach s*")

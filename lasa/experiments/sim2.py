@@ -8,8 +8,6 @@ import textwrap
 
 import numpy as np
 import pandas as pd
-from matplotlib.artist import Artist
-from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, NonNegative, NonNegativeInt, Positive, PositiveInt, check_list
@@ -156,7 +154,6 @@ METRIC_LABELS = {
     "success": "success: share that reach the true cup",
     "confidence": "confidence b(g*) at the end",
 }
-PROBABILITIES = ("success", "confidence")  # panels of a share or a probability: a [0, 1] axis
 # what the paper's Fig. sim2 shows, per panel (Sec. V-B), drawn as a labelled legend entry
 PAPER_SHAPES = {
     "final_error": "paper: LA+SA's error grows with N; LA+SA+Entropy stays low",
@@ -165,38 +162,31 @@ PAPER_SHAPES = {
 }
 
 
-def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axes:
-    """One panel: final error, success share or confidence in the true cup against the change step N."""
-    if metric == "success":
-        frame = frame.assign(success=frame.success.astype(float))
-    ax = plots.method_lineplot(frame, "change_step", metric, ax, level=sweep.LEVEL)
-    ax.set_xlabel("change of mind at step N")
-    ax.set_ylabel(METRIC_LABELS.get(metric, metric))
-    if metric == "success":  # short dashed marks at the largest N: LA+SA+Entropy's success thresholds
-        n_max, rule_id = int(frame.change_step.max()), "sim2.entropy_escapes"
-        limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
-        for i, level in enumerate(limits):
-            label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
-            xs = [n_max * 0.93, n_max * 1.07]
-            ax.plot(xs, [level, level], "--", color=plots.METHOD_COLORS["LA+SA+Entropy"], lw=1.5, label=label)
-    if metric in PROBABILITIES:
-        plots.probability_axis(ax)
-    extra: list[Artist] = [plots.band_handle(sweep.LEVEL)]
-    if metric in PAPER_SHAPES:
-        extra.append(plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56)))
-    plots.legend_below(ax, extra)
-    return ax
-
-
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim2 under member ``assistance``: per robot, final error, success and confidence against N."""
+    """Fig. sim2 under member ``assistance``: per robot, final error, success and confidence in the true
+    cup against the change step N, with bands at the verdicts' level."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
-        for ax, metric in zip(row, ("final_error", "success", "confidence"), strict=True):
-            plot_metric(part, metric, ax=ax)
-        row[0].set_title(f"{name}: final state error")
-        row[1].set_title(f"{name}: success (sim2.entropy_escapes' number)")
-        row[2].set_title(f"{name}: confidence in the true cup")
+        part, n_max = part.assign(success=part.success.astype(float)), int(part.change_step.max())
+        titles = ("final state error", "success (sim2.entropy_escapes' number)", "confidence in the true cup")
+        for ax, metric, title in zip(row, METRIC_LABELS, titles, strict=True):
+            plots.method_lineplot(part, "change_step", metric, ax, level=sweep.LEVEL)
+            ax.set_xlabel("change of mind at step N")
+            ax.set_ylabel(METRIC_LABELS[metric])
+            if metric == "success":  # short dashed marks at the largest N: LA+SA+Entropy's success thresholds
+                rule_id = "sim2.entropy_escapes"
+                limits = {q.name: q.thresholds for q in rule(rule_id).quantities}["success_entropy"]
+                for i, level in enumerate(limits):
+                    label = f"{rule_id}: LA+SA+Entropy's threshold at N = {n_max}" if i == 0 else None
+                    color = plots.METHOD_COLORS["LA+SA+Entropy"]
+                    ax.plot(
+                        [n_max * 0.93, n_max * 1.07], [level, level], "--", color=color, lw=1.5, label=label
+                    )
+            if metric != "final_error":  # a share or a probability: [0, 1] and a margin for the markers
+                ax.set_ylim(-0.02, 1.02)
+            paper = plots.paper_handle(textwrap.fill(PAPER_SHAPES[metric], 56))
+            plots.legend_below(ax, [plots.band_handle(sweep.LEVEL), paper])
+            ax.set_title(f"{name}: {title}")
 
     title = "Fig. sim2: users who change their mind"
     return sweep.sim_figure(table, assistance, title, (3, (16, 5.6), draw), ["method", "change_step"])

@@ -7,7 +7,6 @@ import dataclasses
 
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from lasa.base.config import ControlConfig, Positive, PositiveInt
@@ -43,11 +42,6 @@ class Config(sweep.SweepConfig):
             )
         sweep.check_record_every(self.record_every, self.horizon)
 
-    @property
-    def learners(self) -> tuple[tuple[str, float], ...]:
-        """(name, slope m) of each learner."""
-        return (("fast", float(self.fast_slope)), ("slow", float(self.slow_slope)))
-
 
 def run(
     decoders: sweep.Decoders,
@@ -63,9 +57,8 @@ def run(
     def learning(learners: list[tuple[str, float]], goal: np.ndarray, _: np.ndarray) -> dict[str, np.ndarray]:
         return {"beta0": np.zeros(len(goal)), "slope": np.array([m for _, m in learners], dtype=float)}
 
-    ran = sweep.run_look(
-        decoders, task, control, config, config.learners, learning, progress, look, assistance
-    )
+    learners = (("fast", float(config.fast_slope)), ("slow", float(config.slow_slope)))  # (name, slope m)
+    ran = sweep.run_look(decoders, task, control, config, learners, learning, progress, look, assistance)
     errors = normalized_error(ran.traj.states, ran.users.target[None], task.goal_distance)  # (T+1, U)
     steps = np.arange(0, config.horizon + 1, config.record_every)
     k = len(steps)
@@ -126,29 +119,22 @@ def boot_values(frame: pd.DataFrame, counts: np.ndarray) -> dict[str, dict[str, 
 PAPER_SHAPE = "paper: LA+SA+Entropy below LA+SA over time"  # Fig. sim3, fast and slow (Sec. V-C)
 
 
-def plot_learner(frame: pd.DataFrame, learner: str, ax: Axes | None = None) -> Axes:
-    """One panel: one learner's error over time per method, with bands at the verdicts' level."""
-    part = frame[frame.learner == learner]
-    ax = method_lineplot(part, "t", "error", ax, level=sweep.LEVEL)
-    ax.set_title(f"{learner} learner: beta(t) = {part.slope.iloc[0]:g} t")
-    ax.set_xlabel("time step t")
-    ax.set_ylabel("state error (normalised)")
-    mean = part.groupby(["method", USER]).error.mean().groupby("method").mean()
-    handles, _ = ax.get_legend_handles_labels()
-    for handle in handles:
-        if handle.get_label() in mean:
-            handle.set_label(f"{handle.get_label()}: mean over the episode {mean[handle.get_label()]:.3f}")
-    legend_below(ax, [band_handle(sweep.LEVEL), paper_handle(PAPER_SHAPE)])
-    return ax
-
-
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
-    """Fig. sim3 under member ``assistance``: per robot, the fast and the slow learner."""
+    """Fig. sim3 under member ``assistance``: per robot, the fast and the slow learner's error over time per
+    method, with bands at the verdicts' level."""
 
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         for ax, learner in zip(row, LEARNERS, strict=True):
-            plot_learner(part, learner, ax=ax)
-            ax.set_title(f"{name}: {ax.get_title()}")
+            one = part[part.learner == learner]
+            method_lineplot(one, "t", "error", ax, level=sweep.LEVEL)
+            ax.set_title(f"{name}: {learner} learner: beta(t) = {one.slope.iloc[0]:g} t")
+            ax.set_xlabel("time step t")
+            ax.set_ylabel("state error (normalised)")
+            mean = one.groupby(["method", USER]).error.mean().groupby("method").mean()
+            for handle in ax.get_legend_handles_labels()[0]:
+                if (method := handle.get_label()) in mean:
+                    handle.set_label(f"{method}: mean over the episode {mean[method]:.3f}")
+            legend_below(ax, [band_handle(sweep.LEVEL), paper_handle(PAPER_SHAPE)])
 
     title, keys = "Fig. sim3: users who learn", ["method", "learner", "t"]
     return sweep.sim_figure(table, assistance, title, (2, (11, 5.2), draw), keys, "curve")
@@ -158,18 +144,17 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
     """Fig. sim3's result on ``head``'s robot and member (its rows and LA's) as Markdown bullets."""
     claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
-    lines, lower, learners = [], [], sorted(set(head.learner))
+    lines, learners = [], sorted(set(head.learner))
     for learner in learners:
         gain, low, high = sweep.number(claim, f"gain_{learner}")
         word, said = "lowers" if gain > 0 else "raises", sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"
-        if gain > 0:
-            lower.append(learner)
         errors = ", ".join(f"{m} {mean[learner, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy"))
         lines.append(
             f"- **The {learner} learner.** Mean error over the episode: {errors}. The entropy term {word} "
             f"LA+SA's (gain LA+SA − LA+SA+Entropy {said}{sure})."
         )
+    lower = [learner for learner in learners if sweep.number(claim, f"gain_{learner}")[0] > 0]
     if not lower:
         which = "neither learner"
     elif len(lower) == len(learners):

@@ -23,7 +23,6 @@ from lasa.base.config import (
     UnitInterval,
     check_choice,
     check_list,
-    check_range,
     validate,
 )
 from lasa.base.errors import ConfigError
@@ -120,7 +119,6 @@ class SweepConfig(LooksConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         check_choice("pilot", self.pilot, PILOTS)
-        check_range("pilot_prob", self.pilot_prob, 0.0, 1.0)
         check_names("methods", self.methods, METHODS)
         # sims 1-3's claims and sentences compare all three (LA+SA+Entropy against LA+SA, both
         # against LA): a subset would run the whole sweep and fail in its claims

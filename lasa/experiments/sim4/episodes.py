@@ -179,8 +179,7 @@ def run(
         decoder, task, control, n_users, config.horizon, verdicts.block_seed(config.seed, look)
     )
     alpha = method_alpha(config.method, control)
-    if assistance is None:
-        assistance = sweep.swept_assistance(control, config.assistance)
+    assistance = sweep.swept_assistance(control, config.assistance) if assistance is None else assistance
     assistance = assistance if alpha > 0 else (verdicts.NO_ASSISTANCE,)
     cups = new_cup_positions(task, config)
     grown = [extend_task(task, p, ref) for p in cups]

@@ -54,10 +54,13 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     xs = np.array([float(frame.distance.min()), 1.0])  # the fits over the cups measured
     tops, bottoms = [1.05], [0.0]  # the paper's y = x, drawn to x = 1.05
     angles = frame.groupby(["h", "distance"]).angle_error_deg.mean() if "angle_error_deg" in frame else None
+    side = make_axes_locatable(ax).append_axes("right", size="38%", pad=0.6)  # every episode's error
     for kind, (color, name, marker, dashes, dx) in H_STYLES.items():
         if kind not in table.index:
             continue
-        cups = _cup_means(frame[frame.h == kind])
+        part = frame[frame.h == kind]
+        side.scatter(part.distance, part.error, s=5, color=color, alpha=0.35, lw=0, label=name)
+        cups = _cup_means(part)
         bars = [cups["mean"] - cups.low, cups.high - cups["mean"]]
         ax.errorbar(
             cups.distance + dx, cups["mean"], yerr=bars, fmt=marker, color=color, zorder=3, **MEAN_STYLE
@@ -88,7 +91,17 @@ def plot_robot(frame: pd.DataFrame, ax: Axes | None = None) -> Axes:
     ax.set_xlabel(f"distance of the new cup from the training cup (normalised)\n{PAPER_UNITS}", fontsize=8)
     ax.set_ylabel("grasp error at the gripper (normalised)")
     ax.legend(frameon=False, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2))
-    _episodes_panel(ax, frame, table)
+    side.set_xlim(0, 1.05)
+    side.set_ylim(0, max(1.1, float(frame.error.max()) * 1.05))
+    side.set_title("every episode", fontsize=8)
+    side.set_ylabel("grasp error of each episode (normalised)", fontsize=7)
+    legend = side.legend(
+        frameon=False, fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.12), markerscale=2.5
+    )
+    for handle in legend.legend_handles:
+        if handle is not None:
+            handle.set_alpha(1.0)
+    side.tick_params(labelsize=7)
     return ax
 
 
@@ -102,26 +115,6 @@ def other_share_text(frame: pd.DataFrame) -> str:
         f"without the map, belief ends on the other training cup:\n{100 * other.iloc[0]:.0f}% of users at "
         f"the nearest cup, {100 * other.iloc[-1]:.0f}% at the farthest"
     )
-
-
-def _episodes_panel(ax: Axes, frame: pd.DataFrame, table: pd.DataFrame) -> None:
-    """Every episode's error, in a panel beside ``ax`` whose y-axis reaches the largest of them."""
-    side = make_axes_locatable(ax).append_axes("right", size="38%", pad=0.6)
-    for kind, (color, name, *_) in H_STYLES.items():
-        if kind in table.index:
-            part = frame[frame.h == kind]
-            side.scatter(part.distance, part.error, s=5, color=color, alpha=0.35, lw=0, label=name)
-    side.set_xlim(0, 1.05)
-    side.set_ylim(0, max(1.1, float(frame.error.max()) * 1.05))
-    side.set_title("every episode", fontsize=8)
-    side.set_ylabel("grasp error of each episode (normalised)", fontsize=7)
-    legend = side.legend(
-        frameon=False, fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.12), markerscale=2.5
-    )
-    for handle in legend.legend_handles:
-        if handle is not None:
-            handle.set_alpha(1.0)
-    side.tick_params(labelsize=7)
 
 
 def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
