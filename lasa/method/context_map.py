@@ -231,16 +231,13 @@ class ContextMap(_MergedBelief):
         inside = ((lam > 0.0) & (lam < 1.0))[..., None]
         p = self._assignment(state)
         offsets = self.ref_curve - self.new_curve
-        u = p @ offsets
-        c_bar = p @ self.new_curve
+        u, c_bar = p @ offsets, p @ self.new_curve
         du = np.einsum(
             "...k,...ki,...kj->...ij", p, offsets - u[..., None, :], self.new_curve - c_bar[..., None, :]
         )
         du /= self.width**2
-        n = state.shape[-1]
-        return (
-            np.eye(n) + u[..., :, None] * np.where(inside, grad, 0.0)[..., None, :] + w[..., None, None] * du
-        )
+        eye = np.eye(state.shape[-1])
+        return eye + u[..., :, None] * np.where(inside, grad, 0.0)[..., None, :] + w[..., None, None] * du
 
     def action_to_training(self, action: np.ndarray, state: np.ndarray) -> np.ndarray:
         """a_hat = J_h(s) a, (..., n) (``s[:, None]`` for (U, K, n) candidates)."""
@@ -268,8 +265,7 @@ class TaskSpaceMap(_MergedBelief):
         self.start = task.start.copy()
         self.new_goal = task.goals[-1].copy()
         self.ref_goal = task.goals[ref_index].copy()
-        self.new_cup = cups[-1].copy()
-        self.ref_cup = cups[ref_index].copy()
+        self.new_cup, self.ref_cup = cups[-1].copy(), cups[ref_index].copy()
         sites = self.robot.grasp_positions(
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )

@@ -113,17 +113,13 @@ class LatentActionModel(nn.Module):
     def decode_numpy(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
         """phi(z, s, b) on numpy arrays (broadcast), float64: :meth:`decode` to float32 rounding by
         :func:`inference_plan` (a subclass's or patched ``decode`` runs itself)."""
-        if getattr(self.decode, "__func__", None) is not _DECODE:
-            return self._decode_numpy_reference(z, s, b)  # a subclass's or a patched decode
-        return inference_plan(self).decode(z, s, b)
-
-    @torch.inference_mode()
-    def _decode_numpy_reference(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """decode_numpy through :meth:`decode` itself: float32 inputs expanded to the batch."""
-        zt, st, bt = (torch.as_tensor(x, dtype=torch.float32) for x in (z, s, b))
-        shape = torch.broadcast_shapes(zt.shape[:-1], st.shape[:-1], bt.shape[:-1])
-        zt, st, bt = (x.expand(*shape, x.shape[-1]) for x in (zt, st, bt))
-        return self.decode(zt, st, bt).double().numpy()
+        if getattr(self.decode, "__func__", None) is _DECODE:
+            return inference_plan(self).decode(z, s, b)
+        with torch.inference_mode():  # a subclass's or a patched decode itself: float32, expanded
+            zt, st, bt = (torch.as_tensor(x, dtype=torch.float32) for x in (z, s, b))
+            shape = torch.broadcast_shapes(zt.shape[:-1], st.shape[:-1], bt.shape[:-1])
+            zt, st, bt = (x.expand(*shape, x.shape[-1]) for x in (zt, st, bt))
+            return self.decode(zt, st, bt).double().numpy()
 
 
 _DECODE = LatentActionModel.decode  # the decode that the inference plan implements
@@ -164,22 +160,20 @@ class _Buffers(threading.local):
         """Views of the two (rows x width) buffers a, b for a chunk of leading shape ``shape``:
         (a as numpy of shape ``shape + (width,)``, a as torch of that shape, a, b, a.T, b.T)."""
         view = self.views.get(shape)
-        if view is None:
-            rows = math.prod(shape)
-            if rows > _KEEP_ROWS:  # a chunk this large (trailing axes > _CHUNK_ROWS) is not kept
-                a, b = torch.empty(rows, width), torch.empty(rows, width)
-                a_nd = a.view(*shape, width)
-                return (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
-            if len(self.views) >= 64:
+        if view is not None:
+            return view
+        rows = math.prod(shape)
+        if rows > _KEEP_ROWS:  # a chunk this large (trailing axes > _CHUNK_ROWS) is not kept
+            a, b = torch.empty(rows, width), torch.empty(rows, width)
+        else:
+            if len(self.views) >= 64 or rows > self.rows:
                 self.views = {}
             if rows > self.rows:
-                self.rows = rows
-                self.a = torch.empty(rows, width)
-                self.b = torch.empty(rows, width)
-                self.views = {}
+                self.rows, self.a, self.b = rows, torch.empty(rows, width), torch.empty(rows, width)
             a, b = self.a[:rows], self.b[:rows]
-            a_nd = a.view(*shape, width)
-            view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
+        a_nd = a.view(*shape, width)
+        view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
+        if rows <= _KEEP_ROWS:
             self.views[shape] = view
         return view
 
@@ -233,30 +227,30 @@ class _InferencePlan:
             )
         shape = np.broadcast_shapes(z.shape[:-1], s.shape[:-1], b.shape[:-1])
         lead = shape or (1,)
-        t_z, t_c = self._first_terms(z, s, b)
         rows_total = math.prod(lead)
         if rows_total == 0:
             return np.zeros(shape + (self.n,))
-        # each term rounded to float32 once, then added in float32: a row's first layer is
-        # the same whichever chunk, batch or branch of _forward computes it
-        v = self._forward(t_z.astype(np.float32), t_c.astype(np.float32), lead, rows_total)
-        return self._squash(v, shape)
-
-    def _first_terms(self, z: np.ndarray, s: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The first layer's z term (with its bias) and context term, float64, each unexpanded."""
-        z_lead, s_lead, b_lead = z.shape[:-1], s.shape[:-1], b.shape[:-1]
-        width = self.width
+        # the first layer's z term (with its bias) and context term, float64, each unexpanded
         if self.d == 1:
             t_z = z * self.w_z[0] + self.c1
         else:
-            t_z = (z.reshape(-1, self.d) @ self.w_z + self.c1).reshape(z_lead + (width,))
-        if s_lead == b_lead:
+            t_z = (z.reshape(-1, self.d) @ self.w_z + self.c1).reshape(z.shape[:-1] + (self.width,))
+        if s.shape[:-1] == b.shape[:-1]:
             sb = np.concatenate((s, b), axis=-1)
-            t_c = (sb.reshape(-1, sb.shape[-1]) @ self.w_sb).reshape(s_lead + (width,))
+            t_c = (sb.reshape(-1, sb.shape[-1]) @ self.w_sb).reshape(s.shape[:-1] + (self.width,))
         else:
-            ns = s.shape[-1]
-            t_c = s @ self.w_sb[:ns] + b @ self.w_sb[ns:]
-        return t_z, t_c
+            t_c = s @ self.w_sb[: self.n] + b @ self.w_sb[self.n :]
+        # each term rounded to float32 once, then added in float32: a row's first layer is
+        # the same whichever chunk, batch or branch of _forward computes it
+        v = self._forward(t_z.astype(np.float32), t_c.astype(np.float32), lead, rows_total)
+        # the radial squash sigma_h tanh(|v|) v / |v| in float64, rows back to shape + (n,)
+        norm = np.sqrt(np.einsum("ij,ij->j", v, v))
+        np.maximum(norm, 1e-8, out=norm)
+        factor = np.tanh(norm)
+        factor /= norm
+        if self.scale != 1.0:
+            factor *= self.scale
+        return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (self.n,))
 
     def _forward(
         self, t_z32: np.ndarray, t_c32: np.ndarray, lead: tuple[int, ...], rows_total: int
@@ -295,18 +289,7 @@ class _InferencePlan:
             torch.addmm(c, h, w, out=g)
             g.tanh_()
             h, g = g, h
-        last_is_b = len(self.hidden) % 2 == 1
-        torch.addmm(self.c_o, self.w_o, b_t if last_is_b else a_t, out=out)
-
-    def _squash(self, v: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-        """The radial squash sigma_h tanh(|v|) v / |v| in float64, rows back to ``shape + (n,)``."""
-        norm = np.sqrt(np.einsum("ij,ij->j", v, v))
-        np.maximum(norm, 1e-8, out=norm)
-        factor = np.tanh(norm)
-        factor /= norm
-        if self.scale != 1.0:
-            factor *= self.scale
-        return np.multiply(v.T, factor[:, None], order="C").reshape(shape + (self.n,))
+        torch.addmm(self.c_o, self.w_o, b_t if len(self.hidden) % 2 == 1 else a_t, out=out)
 
 
 def _along_first(term: torch.Tensor, start: int, stop: int, full: int) -> torch.Tensor:

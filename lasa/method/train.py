@@ -148,10 +148,9 @@ def train_decoder(
     Returns the model (eval mode) and the log: ``step``, ``train_loss``, ``val_error``, ``seconds``.
     """
     extra_loss = _with_entropy(config, control, goal_sets, extra_loss)
-    rng = np.random.default_rng(config.seed)
     gen = torch.Generator().manual_seed(config.seed)
     torch.manual_seed(config.seed)  # nn.Linear initialisation draws from the global generator
-    train_mask, val_mask = _split(demos, config.holdout, rng)
+    train_mask, val_mask = _split(demos, config.holdout, np.random.default_rng(config.seed))
     if train_mask.sum() < config.batch_size:
         raise ConfigError(
             f"only {train_mask.sum()} training tuples for batch_size={config.batch_size}; "
