@@ -231,7 +231,8 @@ class ContextMap(_MergedBelief):
         inside = ((lam > 0.0) & (lam < 1.0))[..., None]
         p = self._assignment(state)
         offsets = self.ref_curve - self.new_curve
-        u, c_bar = p @ offsets, p @ self.new_curve
+        u = p @ offsets
+        c_bar = p @ self.new_curve
         du = np.einsum(
             "...k,...ki,...kj->...ij", p, offsets - u[..., None, :], self.new_curve - c_bar[..., None, :]
         )
@@ -265,7 +266,8 @@ class TaskSpaceMap(_MergedBelief):
         self.start = task.start.copy()
         self.new_goal = task.goals[-1].copy()
         self.ref_goal = task.goals[ref_index].copy()
-        self.new_cup, self.ref_cup = cups[-1].copy(), cups[ref_index].copy()
+        self.new_cup = cups[-1].copy()
+        self.ref_cup = cups[ref_index].copy()
         sites = self.robot.grasp_positions(
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )

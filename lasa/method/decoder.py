@@ -169,7 +169,8 @@ class _Buffers(threading.local):
             if len(self.views) >= 64 or rows > self.rows:
                 self.views = {}
             if rows > self.rows:
-                self.rows, self.a, self.b = rows, torch.empty(rows, width), torch.empty(rows, width)
+                self.rows = rows
+                self.a, self.b = torch.empty(rows, width), torch.empty(rows, width)
             a, b = self.a[:rows], self.b[:rows]
         a_nd = a.view(*shape, width)
         view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
