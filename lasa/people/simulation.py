@@ -5,7 +5,6 @@ task])`` (the SA members' paired), waypoints tracked, the record kept, the episo
 from __future__ import annotations
 
 import dataclasses
-import functools
 
 import mujoco
 import numpy as np
@@ -16,7 +15,7 @@ from lasa.base.errors import ConfigError
 from lasa.method.belief import belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
-from lasa.method.runner import Chooser, Now, Record, Runner
+from lasa.method.runner import Chooser, Now, Runner
 from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
@@ -119,16 +118,6 @@ def start(setting: Setting) -> State:
     )
 
 
-def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarray:
-    """Record the fork at step t, move on past reached waypoints; the episodes that finished."""
-    tsk = setting.layout.tsk
-    state.pos, state.axis, state.jp, state.jr = tip_frames(setting.task.robot, setting.data, runner.state)
-    state.tip[t], state.direction[t] = state.pos, state.axis
-    state.w, finished = setting.waypoints.advance(tsk, state.w, state.pos, state.axis, runner.running)
-    state.phase[t] = setting.waypoints.phase[tsk, state.w]
-    return finished
-
-
 def progress(study: Setting, run: State, idx: np.ndarray, dp: np.ndarray, new_dir: np.ndarray) -> np.ndarray:
     """How far tip motions ``dp`` to directions ``new_dir`` (A, P, 3) of episodes ``idx`` lower the cost to
     their waypoints (:func:`lasa.people.policy.progress_gain`), (A, P) [m]."""
@@ -153,9 +142,27 @@ def act(
     run.waited[idx] = np.where(rest, run.waited[idx] + 1, 0)
 
 
-def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
-    """The record of a finished study."""
-    lay, last = setting.layout, int(record.end.max())
+def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
+    """The study's record, the runner stepping the running episodes by ``choose`` (the participant model)
+    from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
+    lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
+    # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
+    assist = Assist(
+        task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets, only_blended=True
+    )
+    start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
+    runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
+
+    def observe(t: int, runner: Runner) -> np.ndarray:
+        """Record the fork at step t, move on past reached waypoints; the episodes that finished."""
+        state.pos, state.axis, state.jp, state.jr = tip_frames(task.robot, setting.data, runner.state)
+        state.tip[t], state.direction[t] = state.pos, state.axis
+        state.w, finished = setting.waypoints.advance(lay.tsk, state.w, state.pos, state.axis, runner.running)
+        state.phase[t] = setting.waypoints.phase[lay.tsk, state.w]
+        return finished
+
+    record = runner.run(choose, setting.config.horizon, observe, progress, desc)
+    last = int(record.end.max())
     state.tip[last + 1 :], state.direction[last + 1 :] = state.tip[last], state.direction[last]
     state.phase[last + 1 :] = state.phase[last]
     return Episodes(
@@ -172,18 +179,3 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
         belief=record.beliefs,
         waypoint=state.w,
     )
-
-
-def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
-    """The study's record, the runner stepping the running episodes by ``choose`` (the participant model)
-    from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
-    lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
-    # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
-    assist = Assist(
-        task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets, only_blended=True
-    )
-    start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
-    runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
-    observe = functools.partial(_observe, setting, state)
-    record = runner.run(choose, setting.config.horizon, observe, progress, desc)
-    return _episodes(setting, state, record)

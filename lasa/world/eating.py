@@ -39,16 +39,8 @@ EATING = dataclasses.replace(  # the cup task's Panda (its name, joints, home; h
 )
 
 
-@dataclasses.dataclass(frozen=True)
-class Preference:
-    """A fine-grained motion at a goal: the fork's tilt theta in [0, 1]."""
-
-    name: str  # "stab", "cut", "scoop", "dip" or "place"
-    theta: float  # tilt as a fraction of TILT_MAX [-]
-
-
-_TILTS = {"stab": 0.0, "cut": 0.5, "scoop": 1.0, "dip": 0.0, "place": 0.0}
-PREFERENCES: dict[str, Preference] = {name: Preference(name, theta) for name, theta in _TILTS.items()}
+# the fine-grained motions at a goal, each the fork's tilt theta in [0, 1] (a fraction of TILT_MAX) [-]
+PREFERENCES: dict[str, float] = {"stab": 0.0, "cut": 0.5, "scoop": 1.0, "dip": 0.0, "place": 0.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -194,8 +186,7 @@ def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
     robot = load_eating_robot()
     if n_theta < 3 or n_theta % 2 == 0:
         raise ConfigError(f"n_theta must be an odd integer >= 3, got {n_theta}")
-    if depths < 2:
-        raise ConfigError(f"depths must be >= 2, got {depths}")
+    check_range("depths", depths, 2)
     thetas, us = np.linspace(0.0, 1.0, n_theta), np.linspace(0.0, 1.0, depths)
     strokes = np.empty((len(GOALS), n_theta, depths, robot.n_joints))
     for g, guess in enumerate(robot.spec.ik_guesses):
@@ -214,7 +205,7 @@ def waypoints(task: str) -> list[Waypoint]:
     """The poses a user reaches, in order, to complete ``task`` ("Entree" or "Dessert")."""
     check_choice("task", task, tuple(TASKS))
     return [
-        Waypoint(i, GOALS.index(phase.goal), PREFERENCES[phase.preference or "stab"].theta, depth)
+        Waypoint(i, GOALS.index(phase.goal), PREFERENCES[phase.preference or "stab"], depth)
         for i, phase in enumerate(TASKS[task])
         for depth in ((0.0,) if phase.preference is None else (0.0, 1.0))
     ]

@@ -118,9 +118,8 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         site, geom = mj_spec.site(spec.goal_sites[0]), mj_spec.geom(spec.goal_sites[0])
         offset = np.asarray(position, dtype=float) - np.asarray(site.pos)
         body = mj_spec.worldbody.add_body(name=name, pos=offset)
-        cylinder = mujoco.mjtGeom.mjGEOM_CYLINDER
         kw = {"size": geom.size, "pos": geom.pos, "rgba": NEW_CUP_RGBA, "contype": 0, "conaffinity": 0}
-        body.add_geom(name=name, type=cylinder, **kw)
+        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, **kw)
         body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
     return mj_spec
 
@@ -133,8 +132,7 @@ def scene_problems(spec: RobotSpec) -> list[str]:
     out = []
     if len(spec.goal_sites) < 2:
         out.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
-    guesses = [len(q) for q in spec.ik_guesses]
-    if guesses != [len(spec.joints)] * len(spec.goal_sites):
+    if [len(q) for q in spec.ik_guesses] != [len(spec.joints)] * len(spec.goal_sites):
         out.append(f"ik_guesses must hold one guess of {len(spec.joints)} joint values per goal site")
     if len(spec.top_grasp_rotation) != 9:
         out.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
@@ -196,8 +194,7 @@ def load_robot(robot: str | RobotSpec) -> Robot:
         return Robot(robot)
     if robot.name in ROBOTS:
         raise ConfigError(f"{robot.name!r} is one of the package's robots; name yours otherwise")
-    problems = scene_problems(robot)
-    if problems:
+    if problems := scene_problems(robot):
         raise ConfigError(
             f"robot {robot.name!r} ({robot.scene}) breaks the naming contract of load_robot: "
             + "; ".join(problems)

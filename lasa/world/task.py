@@ -80,5 +80,4 @@ def cup_axis(task: CupTask, points: np.ndarray) -> np.ndarray:
 def grasp_preference(task: CupTask, states: np.ndarray) -> np.ndarray:
     """The grasp preference theta the approach axis shows: its angle from straight down over pi/2, (...)."""
     axes = task.robot.grasp_axes(states)
-    horizontal = np.linalg.norm(axes[..., :2], axis=-1)
-    return np.arctan2(horizontal, -axes[..., 2]) / (np.pi / 2)
+    return np.arctan2(np.linalg.norm(axes[..., :2], axis=-1), -axes[..., 2]) / (np.pi / 2)
