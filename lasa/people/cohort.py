@@ -53,12 +53,10 @@ class Cohort:
 
     def experience(self) -> np.ndarray:
         """E_0: practice with each condition plus ``transfer`` x the practice before it, (N, 4) [s]."""
-        out = self.practice.copy()
-        for i, order in enumerate(self.order):
-            carried = 0.0
-            for c in order:
-                out[i, c] += self.config.transfer * carried
-                carried += self.practice[i, c]
+        ordered = np.take_along_axis(self.practice, self.order, axis=1)  # in session order
+        carried = np.cumsum(np.pad(ordered[:, :-1], ((0, 0), (1, 0))), axis=1)  # the practice before each
+        out = np.empty_like(self.practice)
+        np.put_along_axis(out, self.order, ordered + self.config.transfer * carried, axis=1)
         return out
 
 

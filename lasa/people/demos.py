@@ -113,8 +113,7 @@ class _Collector:
     def curve(self, curve: Callable[[np.ndarray], np.ndarray], start: float, end: float) -> np.ndarray:
         """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
         grid = np.linspace(start, end, 64)
-        pts = curve(grid)
-        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve(grid), axis=0), axis=1))])
         return curve(np.interp(self._progress(float(arc[-1])), arc, grid))
 
     def adjust(

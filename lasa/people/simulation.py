@@ -85,7 +85,6 @@ def prepare(
         np.random.default_rng([seed, int(p), int(c), int(k)])
         for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
     ]
-    robot = task.robot
     grid = latent_grid(config.n_z, 2)
     return Setting(
         task=task,
@@ -94,14 +93,14 @@ def prepare(
         config=config,
         layout=episodes,
         streams=streams,
-        waypoints=WaypointTracker.of(robot, config.position_tol, config.angle_tol),
+        waypoints=WaypointTracker.of(task.robot, config.position_tol, config.angle_tol),
         grid=grid,
         rest=int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0]),
         unit=control.dt * config.retarget.linear_speed,
-        retarget=Retargeting(robot, control.dt, config.retarget),
+        retarget=Retargeting(task.robot, control.dt, config.retarget),
         r_twist=twist(np.arange(len(MODES))[:, None], grid, config.retarget),
         goal_sets=belief_targets(task, control.likelihood),
-        data=mujoco.MjData(robot.model),
+        data=mujoco.MjData(task.robot.model),
     )
 
 

@@ -103,12 +103,7 @@ def load_eating_robot() -> Robot:
 def _sideways(robot: Robot, goal: int) -> np.ndarray:
     """r at ``goal``, unit (3,): base-to-goal turned a quarter turn to the robot's left (the Panda's
     wrist tilts the fork ~40 degrees at most outward or inward, 60 sideways)."""
-    outward = robot.goal_positions()[goal] - robot.base_position()
-    outward[2] = 0.0
-    norm = np.linalg.norm(outward)
-    if norm < 1e-6:
-        raise ConfigError(f"goal {goal} stands above the robot's base: no tilt direction")
-    return np.cross([0.0, 0.0, 1.0], outward / norm)
+    return np.cross([0.0, 0.0, 1.0], robot.radial(goal))
 
 
 def fork_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.ndarray:
@@ -132,8 +127,7 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
     sideways = _sideways(robot, goal)
     down = np.array([0.0, 0.0, -1.0])
     axis = np.cross(down, sideways)  # rotating down about it by psi turns it towards sideways
-    r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
-    rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ r_top
+    rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ robot.top_rotation
     surface = robot.goal_positions()[goal]
     position = surface + INTO_FOOD * down + (depth - 1.0) * STROKE * stroke_direction(robot, goal, theta)
     return position, rotation

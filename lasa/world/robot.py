@@ -221,6 +221,7 @@ class Robot:
         self.lower, self.upper = self.model.jnt_range[joint_ids].T.copy()
         self._site = self.model.site(spec.grasp_site).id
         self._home = self.model.key(spec.home_key).qpos[self.qpos_adr].copy()
+        self.top_rotation = np.asarray(spec.top_grasp_rotation, dtype=float).reshape(3, 3)  # of a top grasp
         # the site's kinematics for a whole batch at once; None unless the arm is a chain of hinges
         self._chain = SerialChain.of(self.model, self._site, self.qpos_adr)
 
@@ -292,6 +293,15 @@ class Robot:
         """World positions of the goals' sites, shape (G, 3), in goal order."""
         mujoco.mj_kinematics(self.model, self.data)
         return np.stack([self.data.site(name).xpos.copy() for name in self.spec.goal_sites])
+
+    def radial(self, goal: int) -> np.ndarray:
+        """The unit horizontal direction from the arm's base to goal ``goal``'s site, (3,)."""
+        out = self.goal_positions()[goal] - self.base_position()
+        out[2] = 0.0
+        norm = np.linalg.norm(out)
+        if norm < 1e-6:
+            raise ConfigError(f"goal {goal} stands above the robot's base: no direction towards it")
+        return out / norm
 
     def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
         """The same robot in a scene with one more cup, the last goal, its grasp centre at ``position``
