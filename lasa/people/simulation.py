@@ -5,6 +5,7 @@ task])`` (the SA members' paired), waypoints tracked, the record kept, the episo
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import mujoco
 import numpy as np
@@ -117,6 +118,16 @@ def start(setting: Setting) -> State:
     )
 
 
+def _observe(setting: Setting, state: State, t: int, runner: Runner) -> np.ndarray:
+    """Record the fork at step t, move on past reached waypoints; the episodes that finished."""
+    tsk = setting.layout.tsk
+    state.pos, state.axis, state.jp, state.jr = tip_frames(setting.task.robot, setting.data, runner.state)
+    state.tip[t], state.direction[t] = state.pos, state.axis
+    state.w, finished = setting.waypoints.advance(tsk, state.w, state.pos, state.axis, runner.running)
+    state.phase[t] = setting.waypoints.phase[tsk, state.w]
+    return finished
+
+
 def progress(study: Setting, run: State, idx: np.ndarray, dp: np.ndarray, new_dir: np.ndarray) -> np.ndarray:
     """How far tip motions ``dp`` to directions ``new_dir`` (A, P, 3) of episodes ``idx`` lower the cost to
     their waypoints (:func:`lasa.people.policy.progress_gain`), (A, P) [m]."""
@@ -151,15 +162,7 @@ def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progre
     )
     start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
     runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
-
-    def observe(t: int, runner: Runner) -> np.ndarray:
-        """Record the fork at step t, move on past reached waypoints; the episodes that finished."""
-        state.pos, state.axis, state.jp, state.jr = tip_frames(task.robot, setting.data, runner.state)
-        state.tip[t], state.direction[t] = state.pos, state.axis
-        state.w, finished = setting.waypoints.advance(lay.tsk, state.w, state.pos, state.axis, runner.running)
-        state.phase[t] = setting.waypoints.phase[lay.tsk, state.w]
-        return finished
-
+    observe = functools.partial(_observe, setting, state)
     record = runner.run(choose, setting.config.horizon, observe, progress, desc)
     last = int(record.end.max())
     state.tip[last + 1 :], state.direction[last + 1 :] = state.tip[last], state.direction[last]

@@ -124,9 +124,8 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
     p(g, theta, u) = c_g - 0.01 d_up + (u - 1) 0.05 m(theta)."""
     check_range("theta", theta, 0.0, 1.0)
     check_range("depth", depth, 0.0, 1.0)
-    sideways = _sideways(robot, goal)
     down = np.array([0.0, 0.0, -1.0])
-    axis = np.cross(down, sideways)  # rotating down about it by psi turns it towards sideways
+    axis = np.cross(down, _sideways(robot, goal))  # rotating down about it by psi turns it towards r
     rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ robot.top_rotation
     surface = robot.goal_positions()[goal]
     position = surface + INTO_FOOD * down + (depth - 1.0) * STROKE * stroke_direction(robot, goal, theta)
