@@ -71,11 +71,11 @@ def test_preference_directions_by_hand():
     robot = load_eating_robot()
     down = np.array([0.0, 0.0, -1.0])
     for g in range(len(GOALS)):
-        assert_allclose(fork_direction(robot, g, PREFERENCES["stab"].theta), down, atol=1e-12)
-        scoop = fork_direction(robot, g, PREFERENCES["scoop"].theta)
+        assert_allclose(fork_direction(robot, g, PREFERENCES["stab"]), down, atol=1e-12)
+        scoop = fork_direction(robot, g, PREFERENCES["scoop"])
         assert np.isclose(np.linalg.norm(scoop), 1.0)
         assert np.isclose(np.arccos(-scoop[2]), TILT_MAX)  # 60 degrees from straight down
-        cut = fork_direction(robot, g, PREFERENCES["cut"].theta)
+        cut = fork_direction(robot, g, PREFERENCES["cut"])
         assert np.isclose(np.arccos(-cut[2]), TILT_MAX / 2)
         assert_allclose(stroke_direction(robot, g, 0.0), down, atol=1e-12)
         assert np.isclose(stroke_direction(robot, g, 1.0)[2], 0.0)  # a scoop drags horizontally

@@ -159,7 +159,7 @@ def test_a_tap_is_followed_by_rest_until_the_replan(eating):
 def detour(eating):
     """A decoder whose pushes first lead away from the first waypoint, then to it."""
     robot, control = eating.robot, eating.robot.control
-    stab = PREFERENCES["stab"].theta
+    stab = PREFERENCES["stab"]
     target = eating.pose(GOALS.index("middle"), stab, 0.0)
     p_star, r_star = fork_frame(robot, GOALS.index("middle"), stab, 0.0)
     start = eating.start
@@ -207,7 +207,7 @@ def test_a_planner_finds_the_detour_a_one_step_participant_does_not(eating, deto
     [
         ({"replan": 0.0}, "replan must be in"),
         ({"replan": "1"}, "replan must be a number"),
-        ({"holds": ()}, "holds must be a non-empty"),
+        ({"holds": ()}, "holds must hold a value"),
         ({"holds": (2.0, 0.5)}, "ascending order"),
         ({"holds": (0.5, 0.5)}, "must not repeat"),
         ({"holds": (0.1, -1.0)}, r"holds\[1\] must be in"),

@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 
 from lasa.base.conditions import CONDITIONS, williams_square
-from lasa.base.config import NonNegative, Positive, UnitInterval, validate
+from lasa.base.config import NonNegative, Positive, UnitInterval, check_range, validate
 from lasa.base.errors import ConfigError
 
 
@@ -34,10 +34,7 @@ class ParticipantConfig:
 
     def __post_init__(self) -> None:
         validate(self)
-        if self.practice_max < self.practice_min:
-            raise ConfigError(
-                f"practice_max must be >= practice_min = {self.practice_min!r}, got {self.practice_max!r}"
-            )
+        check_range("practice_max", self.practice_max, self.practice_min)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,12 +53,10 @@ class Cohort:
 
     def experience(self) -> np.ndarray:
         """E_0: practice with each condition plus ``transfer`` x the practice before it, (N, 4) [s]."""
-        out = self.practice.copy()
-        for i, order in enumerate(self.order):
-            carried = 0.0
-            for c in order:
-                out[i, c] += self.config.transfer * carried
-                carried += self.practice[i, c]
+        ordered = np.take_along_axis(self.practice, self.order, axis=1)  # in session order
+        carried = np.cumsum(np.pad(ordered[:, :-1], ((0, 0), (1, 0))), axis=1)  # the practice before each
+        out = np.empty_like(self.practice)
+        np.put_along_axis(out, self.order, ordered + self.config.transfer * carried, axis=1)
         return out
 
 
@@ -70,12 +65,11 @@ def draw_cohort(n: int, config: ParticipantConfig = ParticipantConfig(), seed: i
     row ``i mod 4`` of the Williams square: any 4 consecutive ones balance order and carry-over."""
     if int(n) != n or n < 1:
         raise ConfigError(f"the number of participants must be a positive integer, got {n!r}")
-    square = williams_square(len(CONDITIONS))
     beta, tau, practice = np.empty(n), np.empty(n), np.empty((n, len(CONDITIONS)))
     for i in range(n):
         rng = np.random.default_rng([seed, i])
         beta[i] = config.beta_median * np.exp(config.beta_spread * rng.standard_normal())
         tau[i] = config.learning_median * np.exp(config.learning_spread * rng.standard_normal())
         practice[i] = rng.uniform(config.practice_min, config.practice_max, len(CONDITIONS))
-    order = square[np.arange(n) % len(CONDITIONS)]
+    order = williams_square(len(CONDITIONS))[np.arange(n) % len(CONDITIONS)]
     return Cohort(beta=beta, learning_time=tau, practice=practice, order=order, config=config)

@@ -101,6 +101,10 @@ class _Collector:
             u.append(u[-1] + dt * min(config.gain * (span - u[-1]), self.cruise))
         return np.asarray(u)
 
+    def perturbed(self, q: np.ndarray) -> np.ndarray:
+        """``q`` plus the start perturbation, clipped to the joint limits."""
+        return self.task.robot.clip(q + self.rng.normal(0.0, self.config.start_noise, q.shape))
+
     def line(self, start: np.ndarray, target: np.ndarray) -> np.ndarray:
         """States along the joint-space line from ``start`` to ``target`` under the speed law."""
         span = float(np.linalg.norm(target - start))
@@ -109,8 +113,7 @@ class _Collector:
     def curve(self, curve: Callable[[np.ndarray], np.ndarray], start: float, end: float) -> np.ndarray:
         """States along ``curve(x)`` (x from ``start`` to ``end``) under the speed law, by arc length."""
         grid = np.linspace(start, end, 64)
-        pts = curve(grid)
-        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve(grid), axis=0), axis=1))])
         return curve(np.interp(self._progress(float(arc[-1])), arc, grid))
 
     def adjust(
@@ -130,6 +133,7 @@ class _Collector:
         """Append one demonstration: each (path, preference, phase)'s finite differences, then a hold,
         with the online belief from ``start_belief`` (default uniform)."""
         control, hold = self.control, self.config.hold_steps
+        model = (self.goal_sets, control.dt, control.belief_beta, control.likelihood_step)
         log_b = (
             uniform_log_belief(1, len(self.goal_sets))[0] if start_belief is None else np.log(start_belief)
         )
@@ -140,11 +144,9 @@ class _Collector:
             n = len(s)
             ph = np.full(n, phase)
             ph[len(path) - 1 :] = HOLD
-            for k in range(len(s)):
+            for k in range(n):
                 self.beliefs.append(belief(log_b))
-                lik = log_likelihood(
-                    s[k], a[k], self.goal_sets, control.dt, control.belief_beta, control.likelihood_step
-                )
+                lik = log_likelihood(s[k], a[k], *model)
                 log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
             self.rows.append((s, a, np.full(n, self.n_demos), np.full(n, goal), np.full(n, th), ph))
         self.n_demos += 1
@@ -152,30 +154,20 @@ class _Collector:
     def dataset(self) -> Demonstrations:
         """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
         back towards the demonstrated state (clipped below sigma_h)."""
-        robot, config = self.task.robot, self.config
-        states, actions, demo, goal, theta, phase = map(np.concatenate, zip(*self.rows, strict=True))
-        copies_s, copies_a = [states], [actions]
+        robot, config, limit = self.task.robot, self.config, 0.99 * self.control.action_scale
+        states, actions, *labels = map(np.concatenate, zip(*self.rows, strict=True))
+        copies = [(states, actions)]
         for _ in range(config.n_perturb):
-            noise = self.rng.normal(0.0, config.perturb_std, states.shape)
-            s_new = robot.clip(states + noise)
+            s_new = robot.clip(states + self.rng.normal(0.0, config.perturb_std, states.shape))
             a_new = actions + config.perturb_gain * (states - s_new)
             norm = np.linalg.norm(a_new, axis=1, keepdims=True)
-            limit = 0.99 * self.control.action_scale
-            a_new = np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)
-            copies_s.append(s_new)
-            copies_a.append(a_new)
+            copies.append((s_new, np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)))
         reps = config.n_perturb + 1
-        return Demonstrations(
-            robot.name,
-            np.concatenate(copies_s),
-            np.concatenate(copies_a),
-            np.tile(np.stack(self.beliefs), (reps, 1)),
-            np.tile(demo, reps),
-            np.tile(goal, reps),
-            np.tile(theta, reps),
-            np.tile(phase, reps),
-            np.arange(len(states) * reps) >= len(states),  # perturbed
-        )
+        s, a = map(np.concatenate, zip(*copies, strict=True))
+        beliefs = np.tile(np.stack(self.beliefs), (reps, 1))
+        demo, goal, theta, phase = (np.tile(x, reps) for x in labels)
+        perturbed = np.arange(len(s)) >= len(states)
+        return Demonstrations(robot.name, s, a, beliefs, demo, goal, theta, phase, perturbed)
 
 
 def collect_demonstrations(
@@ -187,9 +179,7 @@ def collect_demonstrations(
     for g in range(task.n_goals):
         for theta in np.linspace(0.0, 1.0, config.n_theta):
             for j in range(config.n_starts):
-                start = task.start.copy()
-                if j > 0:
-                    start = task.robot.clip(start + c.rng.normal(0.0, config.start_noise, start.shape))
+                start = c.perturbed(task.start) if j > 0 else task.start.copy()
                 c.append(c.adjust(g, theta, [(c.line(start, task.target(g, theta)), theta, REACH)]), g)
     return c.dataset()
 
@@ -227,10 +217,7 @@ def collect_eating_demonstrations(
             # home and perturbed homes, uniform (None) and manipulating; then, unless ``home``, each other
             # goal's entry at a random tilt (``leaves``: its stroke's end), from the belief settled there
             # (uniform for ``transfers``), manipulating for ``continuous`` only; all drawn before the moves
-            homes = [task.start.copy()] + [
-                task.robot.clip(task.start + c.rng.normal(0.0, config.start_noise, task.start.shape))
-                for _ in range(n_home - 1)
-            ]
+            homes = [task.start.copy()] + [c.perturbed(task.start) for _ in range(n_home - 1)]
             starts: list[tuple[np.ndarray, np.ndarray | None, bool]] = [(q, None, True) for q in homes]
             for other in [] if home else [o for o in range(task.n_goals) if o != g]:
                 tilt = float(c.rng.uniform())

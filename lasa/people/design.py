@@ -57,9 +57,7 @@ class StudyConfig:
         for name in check_list("assistance", self.assistance):
             check_choice("assistance", name, BUILT_IN_ASSISTANCE)
         if self.n_z % 2 == 0:
-            raise ConfigError(
-                f"n_z must be an odd integer >= 3 (the rest position on the grid), got {self.n_z!r}"
-            )
+            raise ConfigError(f"n_z must be odd (the rest position is the grid's middle), got {self.n_z!r}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -39,11 +39,8 @@ class PlanConfig:
     coarse: PositiveInt = 5  # control steps per rolled step beyond the re-plan period [-]
 
     def __post_init__(self) -> None:
-        if not isinstance(self.holds, tuple | list) or not self.holds:
-            raise ConfigError(f"holds must be a non-empty sequence of times in seconds, got {self.holds!r}")
-        object.__setattr__(self, "holds", tuple(self.holds))
         validate(self)
-        check_list("holds", self.holds, ascending=True)
+        object.__setattr__(self, "holds", check_list("holds", self.holds, ascending=True))
 
     def steps(self, dt: float) -> tuple[int, np.ndarray]:
         """The re-plan period and the holds in control steps of ``dt``; ConfigError unless each is a whole

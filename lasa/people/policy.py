@@ -49,5 +49,4 @@ def choose(
     uniforms = np.stack([streams[e].random(values.shape[1]) for e in idx])
     choice = choose_latent(-values, beta, gumbel_noise(uniforms))
     patience_steps = max(1, round(participant.patience / dt))
-    wants = (values.max(axis=1) >= participant.idle_threshold) | (waited[idx] >= patience_steps)
-    return choice, wants
+    return choice, (values.max(axis=1) >= participant.idle_threshold) | (waited[idx] >= patience_steps)

@@ -16,7 +16,7 @@ from lasa.base.errors import ConfigError
 from lasa.method.belief import belief_targets, uniform_log_belief
 from lasa.method.decoder import ActionDecoder
 from lasa.method.retarget import MODES, Retargeting, retarget_action, twist
-from lasa.method.runner import Chooser, Now, Record, Runner
+from lasa.method.runner import Chooser, Now, Runner
 from lasa.method.step import Assist, check_decoder, latent_grid
 from lasa.people.cohort import Cohort
 from lasa.people.design import Layout, StudyConfig, layout
@@ -86,7 +86,6 @@ def prepare(
         np.random.default_rng([seed, int(p), int(c), int(k)])
         for p, c, k in zip(episodes.part, episodes.cond, episodes.tsk, strict=True)
     ]
-    robot = task.robot
     grid = latent_grid(config.n_z, 2)
     return Setting(
         task=task,
@@ -95,14 +94,14 @@ def prepare(
         config=config,
         layout=episodes,
         streams=streams,
-        waypoints=WaypointTracker.of(robot, config.position_tol, config.angle_tol),
+        waypoints=WaypointTracker.of(task.robot, config.position_tol, config.angle_tol),
         grid=grid,
         rest=int(np.flatnonzero(np.all(grid == 0.0, axis=1))[0]),
         unit=control.dt * config.retarget.linear_speed,
-        retarget=Retargeting(robot, control.dt, config.retarget),
+        retarget=Retargeting(task.robot, control.dt, config.retarget),
         r_twist=twist(np.arange(len(MODES))[:, None], grid, config.retarget),
         goal_sets=belief_targets(task, control.likelihood),
-        data=mujoco.MjData(robot.model),
+        data=mujoco.MjData(task.robot.model),
     )
 
 
@@ -153,9 +152,19 @@ def act(
     run.waited[idx] = np.where(rest, run.waited[idx] + 1, 0)
 
 
-def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
-    """The record of a finished study."""
-    lay, last = setting.layout, int(record.end.max())
+def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
+    """The study's record, the runner stepping the running episodes by ``choose`` (the participant model)
+    from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
+    lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
+    # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
+    assist = Assist(
+        task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets, only_blended=True
+    )
+    start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
+    runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
+    observe = functools.partial(_observe, setting, state)
+    record = runner.run(choose, setting.config.horizon, observe, progress, desc)
+    last = int(record.end.max())
     state.tip[last + 1 :], state.direction[last + 1 :] = state.tip[last], state.direction[last]
     state.phase[last + 1 :] = state.phase[last]
     return Episodes(
@@ -172,18 +181,3 @@ def _episodes(setting: Setting, state: State, record: Record) -> Episodes:
         belief=record.beliefs,
         waypoint=state.w,
     )
-
-
-def run_steps(setting: Setting, state: State, choose: Chooser, desc: str, progress: bool) -> Episodes:
-    """The study's record, the runner stepping the running episodes by ``choose`` (the participant model)
-    from ``state`` (:func:`start`, advanced in place); ``desc`` labels the progress bar."""
-    lay, task, n_e = setting.layout, setting.task, len(setting.layout.part)
-    # the rows without assistance (R, LA) skip its computation: the same steps (Assist.only_blended)
-    assist = Assist(
-        task, setting.control, lay.alpha, lay.assistance_run, setting.goal_sets, only_blended=True
-    )
-    start_state = np.broadcast_to(task.start, (n_e, task.robot.n_joints))
-    runner = Runner(assist, start_state, uniform_log_belief(n_e, task.n_goals))
-    observe = functools.partial(_observe, setting, state)
-    record = runner.run(choose, setting.config.horizon, observe, progress, desc)
-    return _episodes(setting, state, record)

@@ -76,8 +76,7 @@ class SerialChain:
             adr, axis = int(model.jnt_qposadr[j]), model.jnt_axis[j]
             unit, zero = axis / np.linalg.norm(axis), float(model.qpos0[adr])
             links.append(_Link(*offset, arm[adr], model.jnt_pos[j].copy(), unit, zero))
-        covered = sorted(link.arm for link in links if link.arm >= 0)
-        if covered != list(range(len(qpos_adr))):
+        if sorted(link.arm for link in links if link.arm >= 0) != list(range(len(qpos_adr))):
             return None
         return cls(tuple(links), model.site_pos[site].copy(), _quat_to_mat(model.site_quat[site]), len(arm))
 

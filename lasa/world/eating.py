@@ -39,16 +39,8 @@ EATING = dataclasses.replace(  # the cup task's Panda (its name, joints, home; h
 )
 
 
-@dataclasses.dataclass(frozen=True)
-class Preference:
-    """A fine-grained motion at a goal: the fork's tilt theta in [0, 1]."""
-
-    name: str  # "stab", "cut", "scoop", "dip" or "place"
-    theta: float  # tilt as a fraction of TILT_MAX [-]
-
-
-_TILTS = {"stab": 0.0, "cut": 0.5, "scoop": 1.0, "dip": 0.0, "place": 0.0}
-PREFERENCES: dict[str, Preference] = {name: Preference(name, theta) for name, theta in _TILTS.items()}
+# the fine-grained motions at a goal, each the fork's tilt theta in [0, 1] (a fraction of TILT_MAX) [-]
+PREFERENCES: dict[str, float] = {"stab": 0.0, "cut": 0.5, "scoop": 1.0, "dip": 0.0, "place": 0.0}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -111,12 +103,7 @@ def load_eating_robot() -> Robot:
 def _sideways(robot: Robot, goal: int) -> np.ndarray:
     """r at ``goal``, unit (3,): base-to-goal turned a quarter turn to the robot's left (the Panda's
     wrist tilts the fork ~40 degrees at most outward or inward, 60 sideways)."""
-    outward = robot.goal_positions()[goal] - robot.base_position()
-    outward[2] = 0.0
-    norm = np.linalg.norm(outward)
-    if norm < 1e-6:
-        raise ConfigError(f"goal {goal} stands above the robot's base: no tilt direction")
-    return np.cross([0.0, 0.0, 1.0], outward / norm)
+    return np.cross([0.0, 0.0, 1.0], robot.radial(goal))
 
 
 def fork_direction(robot: Robot, goal: int, theta: float | np.ndarray) -> np.ndarray:
@@ -137,11 +124,9 @@ def fork_frame(robot: Robot, goal: int, theta: float, depth: float) -> tuple[np.
     p(g, theta, u) = c_g - 0.01 d_up + (u - 1) 0.05 m(theta)."""
     check_range("theta", theta, 0.0, 1.0)
     check_range("depth", depth, 0.0, 1.0)
-    sideways = _sideways(robot, goal)
     down = np.array([0.0, 0.0, -1.0])
-    axis = np.cross(down, sideways)  # rotating down about it by psi turns it towards sideways
-    r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
-    rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ r_top
+    axis = np.cross(down, _sideways(robot, goal))  # rotating down about it by psi turns it towards r
+    rotation = mink.SO3.exp(axis * theta * TILT_MAX).as_matrix() @ robot.top_rotation
     surface = robot.goal_positions()[goal]
     position = surface + INTO_FOOD * down + (depth - 1.0) * STROKE * stroke_direction(robot, goal, theta)
     return position, rotation
@@ -194,8 +179,7 @@ def make_eating_task(n_theta: int = 9, depths: int = 3) -> EatingTask:
     robot = load_eating_robot()
     if n_theta < 3 or n_theta % 2 == 0:
         raise ConfigError(f"n_theta must be an odd integer >= 3, got {n_theta}")
-    if depths < 2:
-        raise ConfigError(f"depths must be >= 2, got {depths}")
+    check_range("depths", depths, 2)
     thetas, us = np.linspace(0.0, 1.0, n_theta), np.linspace(0.0, 1.0, depths)
     strokes = np.empty((len(GOALS), n_theta, depths, robot.n_joints))
     for g, guess in enumerate(robot.spec.ik_guesses):
@@ -214,7 +198,7 @@ def waypoints(task: str) -> list[Waypoint]:
     """The poses a user reaches, in order, to complete ``task`` ("Entree" or "Dessert")."""
     check_choice("task", task, tuple(TASKS))
     return [
-        Waypoint(i, GOALS.index(phase.goal), PREFERENCES[phase.preference or "stab"].theta, depth)
+        Waypoint(i, GOALS.index(phase.goal), PREFERENCES[phase.preference or "stab"], depth)
         for i, phase in enumerate(TASKS[task])
         for depth in ((0.0,) if phase.preference is None else (0.0, 1.0))
     ]

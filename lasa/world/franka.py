@@ -90,8 +90,7 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
     """How far models' forward kinematics are from Franka's DH table at ``n`` uniform joint vectors: per
     model (``robot``; the packaged chain at the same q; with its joint-6/7 offsets undone), the largest
     TCP position [m] and orientation [rad] errors, and over frames 1..7 [m] (``robot`` only)."""
-    rng = np.random.default_rng(seed)
-    qs = rng.uniform(LOWER, UPPER, size=(n, 7))
+    qs = np.random.default_rng(seed).uniform(LOWER, UPPER, size=(n, 7))
     ours = mujoco.MjData(robot.model)
     packaged = packaged_chain()
     pdata = mujoco.MjData(packaged)

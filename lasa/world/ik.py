@@ -16,19 +16,6 @@ _SOLVERS: weakref.WeakKeyDictionary[Robot, _Solver] = weakref.WeakKeyDictionary(
 DT, DAMPING = 0.05, 1e-4  # each iteration's step [s] and Levenberg-Marquardt damping
 
 
-def _solver(robot: Robot) -> _Solver:
-    """mink's objects for one robot, made once (they cost more than a solve); reuse changes no result:
-    a solve sets every joint (from ``qpos0``) and each task's target first."""
-    if robot not in _SOLVERS:
-        _SOLVERS[robot] = (
-            mink.Configuration(robot.model),
-            mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0),
-            mink.PostureTask(robot.model, cost=1e-3),  # light, relative to the frame task
-            [mink.ConfigurationLimit(robot.model)],
-        )
-    return _SOLVERS[robot]
-
-
 def pose_error(
     robot: Robot, q: np.ndarray, position: np.ndarray, rotation: np.ndarray
 ) -> tuple[float, float]:
@@ -53,7 +40,16 @@ def solve_grasp_ik(
     ``rotation`` (3, 3), the posture task pulling towards ``seed`` (n,) [rad]: accepted within
     ``position_tol`` [m] and ``rotation_tol`` [rad] after at most ``max_iters`` iterations, else IKError,
     its message naming the pose by ``label`` (``"cup 'cup_left', theta = 0.250"``)."""
-    configuration, frame, posture_task, limits = _solver(robot)
+    # mink's objects, made once per robot (they cost more than a solve); reuse changes no result: a
+    # solve sets every joint (from qpos0) and each task's target first
+    if robot not in _SOLVERS:
+        _SOLVERS[robot] = (
+            mink.Configuration(robot.model),
+            mink.FrameTask(robot.spec.grasp_site, "site", position_cost=1.0, orientation_cost=1.0),
+            mink.PostureTask(robot.model, cost=1e-3),  # light, relative to the frame task
+            [mink.ConfigurationLimit(robot.model)],
+        )
+    configuration, frame, posture_task, limits = _SOLVERS[robot]
     q_full = robot.model.qpos0.copy()  # no state of the last solve
     adr = robot.qpos_adr
     q_full[adr] = robot.clip(np.asarray(seed, dtype=float))

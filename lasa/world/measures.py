@@ -8,7 +8,6 @@ import pandas as pd
 
 from lasa.world.eating import GOALS, PREFERENCES, TASK_NAMES, TASKS, EatingTask, fork_direction
 from lasa.world.record import Episodes
-from lasa.world.robot import Robot
 
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
@@ -56,27 +55,22 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
         mode_switches=(episodes.switch & active).sum(axis=0),
         completed=episodes.completed,
     )
-    return {"goal_error": error, "time": time, "alignment": _alignment_table(robot, episodes, active)}
-
-
-def _alignment_table(robot: Robot, episodes: Episodes, active: np.ndarray) -> pd.DataFrame:
-    """Preference Alignment, one row per episode x phase of its task."""
     direction = episodes.direction[:-1]
     rows = []
     for name in TASK_NAMES:
         cols = episodes.task == name
         for i, ph in enumerate(TASKS[name]):
-            pref = PREFERENCES[ph.preference or "stab"]
-            desired = fork_direction(robot, GOALS.index(ph.goal), pref.theta)
+            pref = ph.preference or "stab"
+            desired = fork_direction(robot, GOALS.index(ph.goal), PREFERENCES[pref])
             mask = (episodes.phase[:-1, cols] == i) & active[:, cols]
             row = {
                 "robot": robot.name,
                 **{k: getattr(episodes, k)[cols] for k in ("participant", "condition", "assistance")},
                 "task": name,
                 "phase": ph.name,
-                "preference": pref.name,
+                "preference": pref,
                 "alignment": alignment(direction[:, cols], desired, mask),
                 "steps": mask.sum(axis=0),
             }
             rows.append(pd.DataFrame(row))
-    return pd.concat(rows, ignore_index=True)
+    return {"goal_error": error, "time": time, "alignment": pd.concat(rows, ignore_index=True)}

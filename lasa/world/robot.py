@@ -118,9 +118,8 @@ def _scene_spec(spec: RobotSpec) -> mujoco.MjSpec:
         site, geom = mj_spec.site(spec.goal_sites[0]), mj_spec.geom(spec.goal_sites[0])
         offset = np.asarray(position, dtype=float) - np.asarray(site.pos)
         body = mj_spec.worldbody.add_body(name=name, pos=offset)
-        cylinder = mujoco.mjtGeom.mjGEOM_CYLINDER
         kw = {"size": geom.size, "pos": geom.pos, "rgba": NEW_CUP_RGBA, "contype": 0, "conaffinity": 0}
-        body.add_geom(name=name, type=cylinder, **kw)
+        body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, **kw)
         body.add_site(name=name, pos=site.pos, size=site.size, rgba=site.rgba)
     return mj_spec
 
@@ -133,8 +132,7 @@ def scene_problems(spec: RobotSpec) -> list[str]:
     out = []
     if len(spec.goal_sites) < 2:
         out.append(f"{len(spec.goal_sites)} goal sites: at least two are needed")
-    guesses = [len(q) for q in spec.ik_guesses]
-    if guesses != [len(spec.joints)] * len(spec.goal_sites):
+    if [len(q) for q in spec.ik_guesses] != [len(spec.joints)] * len(spec.goal_sites):
         out.append(f"ik_guesses must hold one guess of {len(spec.joints)} joint values per goal site")
     if len(spec.top_grasp_rotation) != 9:
         out.append("top_grasp_rotation must hold 9 values (3 x 3, row-major)")
@@ -196,8 +194,7 @@ def load_robot(robot: str | RobotSpec) -> Robot:
         return Robot(robot)
     if robot.name in ROBOTS:
         raise ConfigError(f"{robot.name!r} is one of the package's robots; name yours otherwise")
-    problems = scene_problems(robot)
-    if problems:
+    if problems := scene_problems(robot):
         raise ConfigError(
             f"robot {robot.name!r} ({robot.scene}) breaks the naming contract of load_robot: "
             + "; ".join(problems)
@@ -224,6 +221,7 @@ class Robot:
         self.lower, self.upper = self.model.jnt_range[joint_ids].T.copy()
         self._site = self.model.site(spec.grasp_site).id
         self._home = self.model.key(spec.home_key).qpos[self.qpos_adr].copy()
+        self.top_rotation = np.asarray(spec.top_grasp_rotation, dtype=float).reshape(3, 3)  # of a top grasp
         # the site's kinematics for a whole batch at once; None unless the arm is a chain of hinges
         self._chain = SerialChain.of(self.model, self._site, self.qpos_adr)
 
@@ -295,6 +293,15 @@ class Robot:
         """World positions of the goals' sites, shape (G, 3), in goal order."""
         mujoco.mj_kinematics(self.model, self.data)
         return np.stack([self.data.site(name).xpos.copy() for name in self.spec.goal_sites])
+
+    def radial(self, goal: int) -> np.ndarray:
+        """The unit horizontal direction from the arm's base to goal ``goal``'s site, (3,)."""
+        out = self.goal_positions()[goal] - self.base_position()
+        out[2] = 0.0
+        norm = np.linalg.norm(out)
+        if norm < 1e-6:
+            raise ConfigError(f"goal {goal} stands above the robot's base: no direction towards it")
+        return out / norm
 
     def with_cup(self, position: np.ndarray, name: str = "cup_new") -> Robot:
         """The same robot in a scene with one more cup, the last goal, its grasp centre at ``position``

@@ -20,13 +20,7 @@ from lasa.world.robot import Robot
 def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.ndarray]:
     """Grasp-site position (3,) and rotation (3, 3) for cup ``goal`` at preference ``theta`` in [0, 1]."""
     check_range("theta", theta, 0.0, 1.0)
-    cup = robot.goal_positions()[goal]
-    radial = cup - robot.base_position()
-    radial[2] = 0.0
-    norm = np.linalg.norm(radial)
-    if norm < 1e-6:
-        raise ConfigError(f"cup {goal} stands above the robot's base: no side direction")
-    radial /= norm
+    cup, radial = robot.goal_positions()[goal], robot.radial(goal)
     # turn the radial direction by side_azimuth towards the midline (y = 0)
     turn = -np.sign(cup[1]) * robot.spec.side_azimuth if cup[1] != 0 else 0.0
     c, s = np.cos(turn), np.sin(turn)
@@ -35,8 +29,7 @@ def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.n
     psi = theta * np.pi / 2
     approach = np.cos(psi) * top + np.sin(psi) * side
     axis = np.cross(top, side)
-    r_top = np.asarray(robot.spec.top_grasp_rotation, dtype=float).reshape(3, 3)
-    rotation = mink.SO3.exp(axis * psi).as_matrix() @ r_top
+    rotation = mink.SO3.exp(axis * psi).as_matrix() @ robot.top_rotation
     return cup - robot.spec.grasp_standoff * approach, rotation
 
 
@@ -80,5 +73,4 @@ def cup_axis(task: CupTask, points: np.ndarray) -> np.ndarray:
 def grasp_preference(task: CupTask, states: np.ndarray) -> np.ndarray:
     """The grasp preference theta the approach axis shows: its angle from straight down over pi/2, (...)."""
     axes = task.robot.grasp_axes(states)
-    horizontal = np.linalg.norm(axes[..., :2], axis=-1)
-    return np.arctan2(horizontal, -axes[..., 2]) / (np.pi / 2)
+    return np.arctan2(np.linalg.norm(axes[..., :2], axis=-1), -axes[..., 2]) / (np.pi / 2)
