@@ -182,7 +182,7 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     names = list(task.goal_names)
     hold = max(1, round(config.hold / dt))
     pset = preference_sets[g]
-    b = _confident(task, g, run.control)
+    b = confident_belief(task.n_goals, g, run.control.belief_floor, run.control.belief_cap)
     paths = held_input_paths(run.decoder, task, run.control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
     pos, axis = robot.grasp_positions(paths[:, 1:]), robot.grasp_axes(paths[:, 1:])
     dist, _ = _nearest(pset, pos, axis, config.rotation_weight)  # (K, H)
@@ -217,11 +217,6 @@ def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **cols: 
     return frame.reindex(columns=list(COLUMNS))
 
 
-def _confident(task: GoalTask, goal: int, control: ControlConfig) -> np.ndarray:
-    """The belief after working at ``goal``: the most confident the update keeps, (G,)."""
-    return confident_belief(task.n_goals, goal, control.belief_floor, control.belief_cap)
-
-
 def _leave_rows(run: _Run) -> pd.DataFrame:
     """The leave rows, per (goal, phase end, condition, input, other goal), in one batch."""
     task, control, z = run.task, run.control, run.z
@@ -235,7 +230,10 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     ]
     k = len(z)
     starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
-    beliefs = np.repeat(np.stack([_confident(task, g, control) for g, *_ in runs]), k, axis=0)
+    confident = [
+        confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap) for g, *_ in runs
+    ]
+    beliefs = np.repeat(np.stack(confident), k, axis=0)
     alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
     steps = max(1, round(run.config.leave_hold / control.dt))
     paths = leave_paths(run.decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)

@@ -34,8 +34,9 @@ _SUMMARY = _KEYS + tuple(  # summary's columns but the three it derives from the
 _LEAVE = ("goal", "start", "condition", "target", "inputs", "exit_time")  # leave_table's, after _KEYS
 # tasks whose decoders are one recipe at several settings, not alternatives: no choice (★) marked
 SWEEP_TASKS = ("eating_caps",)
-_HEATMAP = {"annot": True, "cbar": True, "cbar_kws": {"shrink": 0.8}, "linewidths": 0.5, "linecolor": "white"}
-_HEATMAP |= {"annot_kws": {"fontsize": 8}}
+_HEATMAP = dict(
+    annot=True, annot_kws={"fontsize": 8}, cbar_kws={"shrink": 0.8}, linewidths=0.5, linecolor="white"
+)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:

@@ -32,7 +32,7 @@ from lasa.evidence.verdicts import USER
 from lasa.experiments.sweep import check_assistance, check_record_every, draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
-from lasa.people.rollout import Trajectories, rollout
+from lasa.people.rollout import rollout
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
@@ -70,9 +70,8 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        object.__setattr__(
-            self, "betas", tuple(float(b) for b in check_list("betas", self.betas, ascending=True))
-        )
+        betas = check_list("betas", self.betas, ascending=True)
+        object.__setattr__(self, "betas", tuple(float(b) for b in betas))
         object.__setattr__(self, "assistance", tuple(self.assistance))
         check_assistance(self.assistance)
         # the last step is recorded whatever record_every (run appends it): only the bound
@@ -176,9 +175,7 @@ def run(
     parts = []
     for assistance in config.assistance:
         ctl = dataclasses.replace(control, assistance=assistance)
-        traj: Trajectories = rollout(
-            decoder, task, users, control.alpha, ctl, config.horizon, noise, progress
-        )
+        traj = rollout(decoder, task, users, control.alpha, ctl, config.horizon, noise, progress)
         bound = (control.dt, control.action_scale, control.alpha)
         m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
         counts = _window_counts(m, times)

@@ -191,9 +191,8 @@ def train_variants(
     variants = [(name, models[name], fines[name], control) for name, _, _ in fine_tunes(config, sweep.chosen)]
     frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
-    _save(
-        models[headline], paths.artifact("eating_decoder", robot), fines[headline], control, config, headline
-    )
+    path = paths.artifact("eating_decoder", robot)
+    _save(models[headline], path, fines[headline], control, config, headline)
     kept = {name: model for name, model, _, _ in variants}
     return Variants(kept, sweep.table, float(sweep.chosen), demo_rows, frame, headline)
 
@@ -239,25 +238,20 @@ def train_caps(
     saved as :func:`cap_decoder_name`): their property rows (source :data:`CAP_SOURCE`)."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     base, weight = {n: (b, w) for n, b, w in fine_tunes(config, variants.chosen_lambda)}[variants.headline]
-    segmentation, base_train = _bases(config)[base]
+    seg, base_train = _bases(config)[base]
     fine = dataclasses.replace(base_train, steps=config.sweep_steps, entropy_lambda=weight)
-    controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
-    demos = {
-        c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=segmentation)
-        for c in caps
-    }
-    runs = [entropy_ablation.Run(demos[c], controls[c], base_train) for c in caps]
+    controls = [dataclasses.replace(control, belief_cap=c) for c in caps]
+    demos = [collect_eating_demonstrations(task, c, config.demos, segmentation=seg) for c in controls]
+    runs = [entropy_ablation.Run(d, c, base_train) for d, c in zip(demos, controls, strict=True)]
     bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
     goal_sets = belief_targets(task, control.likelihood)
     runs = [
-        entropy_ablation.Run(demos[c], controls[c], fine, goal_sets, model)
-        for c, (model, _) in zip(caps, bases, strict=True)
+        entropy_ablation.Run(d, c, fine, goal_sets, m)
+        for d, c, (m, _) in zip(demos, controls, bases, strict=True)
     ]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
-    kept = [
-        (cap_decoder_name(variants.headline, c), model, fine, controls[c])
-        for c, (model, _) in zip(caps, fitted, strict=True)
-    ]
+    names = [cap_decoder_name(variants.headline, c) for c in caps]
+    kept = [(n, m, fine, c) for n, (m, _), c in zip(names, fitted, controls, strict=True)]
     return _keep(config, paths, (task, prop, CAP_SOURCE), kept)
 
 

@@ -39,9 +39,7 @@ class Config:
     lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
     seed: Seed = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
-    # local worker processes the runs are spread over (train_all): the same decoders with any
-    # number, each run seeded and single-threaded [-]
-    jobs: PositiveInt = 1
+    jobs: PositiveInt = 1  # worker processes (train_all), runs seeded: the same decoders with any number [-]
 
     def __post_init__(self) -> None:
         validate(self)
@@ -127,8 +125,7 @@ def run_sweep(
     }
     runs = [Run(demos, control, configs[lam], goal_sets, base) for lam in lambdas]
     trained = train_all(runs, config.jobs, progress, desc="lambda sweep")
-    models = {lam: model for lam, (model, _) in zip(lambdas, trained, strict=True)}
-    histories = {lam: history for lam, (_, history) in zip(lambdas, trained, strict=True)}
+    models, histories = (dict(zip(lambdas, part, strict=True)) for part in zip(*trained, strict=True))
     rows = [
         {
             "lambda": lam,

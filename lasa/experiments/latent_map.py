@@ -98,9 +98,6 @@ def plot_grasp_sweep(
     ax.plot(start[0], start[1], "ko", ms=4)
     ax.set(aspect="equal", xlabel="along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
     ax.set_title(title)
     return ax
 
@@ -123,12 +120,13 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
             ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
         ax.plot(drawn[0][0][0], drawn[0][0][1], "ko", ms=4)
         frame_around(task, ax, np.concatenate(drawn))
-        plt.colorbar(
-            plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-        )
         ax.set_title(f"{name}: from home (belief uniform at first):\nz picks the cup")
         cup = f"{name}: confident in the right cup:\nz picks the grasp"
         plot_grasp_sweep(task, saved["confident"], saved["z"], 1, row[1], cup)
+        for ax in row[:2]:
+            plt.colorbar(
+                plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+            )
         mine = table[table.robot == name]
         ax, uni, conf = row[2], mine[mine.context == "uniform"], mine[mine.context == "confident"]
         ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
