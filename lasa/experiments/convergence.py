@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import math
 
 import numpy as np
 import pandas as pd
@@ -178,12 +177,11 @@ def run(
         traj = rollout(decoder, task, users, control.alpha, ctl, config.horizon, noise, progress)
         bound = (control.dt, control.action_scale, control.alpha)
         m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
-        counts = _window_counts(m, times)
         per_user = {"beta": beta, USER: user, "goal": users.goal, "theta": users.theta}
         cols = {"robot": task.robot.name, "assistance": assistance, "t": np.tile(times, len(user))}
         cols |= {name: np.repeat(values, len(times)) for name, values in per_user.items()}
         cols |= {name: values[times].T.ravel() for name, values in m.items()}
-        cols |= {name: values.T.ravel() for name, values in counts.items()}
+        cols |= {name: values.T.ravel() for name, values in _window_counts(m, times).items()}
         parts.append(pd.DataFrame(cols))
     return pd.concat(parts, ignore_index=True)[list(COLUMNS)]
 
@@ -199,10 +197,7 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
         late = part[part.t >= (1.0 - settle) * last]
         end = part[part.t == last]
         sums = part[list(_COUNTS)].sum()
-
-        def share(num: str, den: str, sums: pd.Series = sums) -> float:
-            return float(sums[num] / sums[den]) if sums[den] > 0 else math.nan
-
+        den = sums.where(sums > 0)  # NaN where no step counts: its shares are NaN
         rows.append(
             {
                 "robot": robot,
@@ -211,11 +206,11 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
                 "users": int(part[USER].nunique()),
                 "steps": int(sums["steps"]),
                 "bound_steps": int(sums["bound_steps"]),
-                "bound_share": share("bound_steps", "steps"),
-                "rose_given_bound": share("rises", "bound_steps"),
-                "beyond_slack_given_bound": share("rises_beyond_slack", "bound_steps"),
-                "bound_share_half": share("bound_steps_half", "steps"),
-                "rose_given_bound_half": share("rises_half", "bound_steps_half"),
+                "bound_share": float(sums.bound_steps / den.steps),
+                "rose_given_bound": float(sums.rises / den.bound_steps),
+                "beyond_slack_given_bound": float(sums.rises_beyond_slack / den.bound_steps),
+                "bound_share_half": float(sums.bound_steps_half / den.steps),
+                "rose_given_bound_half": float(sums.rises_half / den.bound_steps_half),
                 "ball": float(late.error.quantile(quantile)),
                 "ball_target": float(late.error_target.quantile(quantile)),
                 "radius_alpha": float((end.delta_alpha / end.belief).median()),

@@ -35,8 +35,7 @@ DPI = 130
 class Config:
     """The lambda sweep."""
 
-    # the sweep: distinct, ascending, 0 (the control) and at least one lambda > 0 [-]
-    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # ascending, 0 (the control) and > 0 [-]
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
     seed: Seed = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
     jobs: PositiveInt = 1  # worker processes (train_all), runs seeded: the same decoders with any number [-]

@@ -242,8 +242,7 @@ def run(
     """Every cell of the grid (:func:`cells`) around ``control``, locally or on a Dask cluster, with
     notebook 03's pair: one row per (claim, cell, member), cells in order; ``defaults``
     (:func:`default_frames`) are judged as the default cell instead of running it again."""
-    decoders = as_decoders(decoders)
-    grid = Grid(decoders, task, control, config)
+    grid = Grid(as_decoders(decoders), task, control, config)
     todo = cells(config, control)
     done: list[pd.DataFrame] = []
     if defaults is not None and todo and todo[0].setting == "default":
