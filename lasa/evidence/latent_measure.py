@@ -178,8 +178,7 @@ class _Run:
 
 def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     task, config, z, preference_sets = run.task, run.config, run.z, run.preference_sets
-    robot, dt = task.robot, run.control.dt
-    names = list(task.goal_names)
+    robot, dt, names = task.robot, run.control.dt, task.goal_names
     hold = max(1, round(config.hold / dt))
     pset = preference_sets[g]
     b = confident_belief(task.n_goals, g, run.control.belief_floor, run.control.belief_cap)
@@ -196,8 +195,7 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
 
 
 def _uncertain_rows(run: _Run) -> pd.DataFrame:
-    task, z = run.task, run.z
-    robot = task.robot
+    task, z, robot = run.task, run.z, run.task.robot
     steps = max(1, round(run.config.uncertain_hold / run.control.dt))
     flat = np.full(task.n_goals, 1.0 / task.n_goals)  # the uniform belief
     paths = held_input_paths(run.decoder, task, run.control, task.start, flat, z, steps, update_belief=True)

@@ -31,7 +31,6 @@ _SUMMARY = _KEYS + tuple(  # summary's columns but the three it derives from the
     "goal n_inputs stay_share theta_min theta_max theta_range stroke_range from_home all_reached "
     "leave_min leave_la_min".split()
 )
-_LEAVE = ("goal", "start", "condition", "target", "inputs", "exit_time")  # leave_table's, after _KEYS
 # tasks whose decoders are one recipe at several settings, not alternatives: no choice (★) marked
 SWEEP_TASKS = ("eating_caps",)
 _HEATMAP = dict(
@@ -72,7 +71,7 @@ def leave_table(frame: pd.DataFrame) -> pd.DataFrame:
     reach the other goal's set within the hold, ``exit_time`` their median first arrival [s]."""
     leave = frame[frame.context == "leave"]
     if leave.empty:
-        return pd.DataFrame(columns=[*_KEYS, *_LEAVE])
+        return pd.DataFrame(columns=[*_KEYS, "goal", "start", "condition", "target", "inputs", "exit_time"])
     arrived = leave.assign(arrived=leave.reached == leave.target)
     return (
         arrived.groupby([*_KEYS, "goal", "start", "condition", "target"], sort=False)

@@ -192,24 +192,23 @@ def train_variants(
     frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
     path = paths.artifact("eating_decoder", robot)
-    _save(models[headline], path, fines[headline], control, config, headline)
+    _save(path, (headline, models[headline], fines[headline], control), config)
     kept = {name: model for name, model, _, _ in variants}
     return Variants(kept, sweep.table, float(sweep.chosen), demo_rows, frame, headline)
 
 
-def _save(
-    model: LatentActionModel, path: Path, fine: TrainConfig, control: ControlConfig, config: Config, name: str
-) -> None:
+def _save(path: Path, variant: _Variant, config: Config) -> None:
     """A variant's decoder, saved with the settings that made it and the variant's name."""
+    name, model, fine, control = variant
     extra = {"train": to_dict(fine), "control": to_dict(control), "demos": to_dict(config.demos)}
     save_checkpoint(model, path, **extra, reading=name)
 
 
 def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant]) -> pd.DataFrame:
     """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows."""
-    for name, model, fine, control in variants:
-        path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=name)
-        _save(model, path, fine, control, config, name)
+    for variant in variants:
+        path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=variant[0])
+        _save(path, variant, config)
     jobs = [(model, control, name) for name, model, _, control in variants]
     frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=shared)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)

@@ -146,14 +146,10 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
     robot = task.robot.name
     lams = dict.fromkeys((0.0, sweep.chosen))  # the control alone if the rule kept it
     grid = {lam: context_entropy(sweep.models[lam], states, beliefs, goal_sets, control) for lam in lams}
-    parts: list[tuple[object, ...]] = [
-        (robot, "grid", lam, progress, conf, e, np.nan, np.nan) for lam, e in grid.items()
-    ]
+    grids = [(robot, "grid", lam, progress, conf, e, np.nan, np.nan) for lam, e in grid.items()]
     t = sweep.table
-    parts.append(
-        (robot, "sweep", t["lambda"], np.nan, np.nan, t.entropy_confident, t.recon_error, t.val_error)
-    )
-    frames = [pd.DataFrame(dict(zip(COLUMNS, part, strict=True))) for part in parts]
+    swept = (robot, "sweep", t["lambda"], np.nan, np.nan, t.entropy_confident, t.recon_error, t.val_error)
+    frames = [pd.DataFrame(dict(zip(COLUMNS, part, strict=True))) for part in [*grids, swept]]
     return pd.concat(frames, ignore_index=True)
 
 
