@@ -62,8 +62,7 @@ def preference_set(task: GoalTask, goal: int, n_grid: int = 41) -> PreferenceSet
         tt, uu = np.meshgrid(thetas, us, indexing="ij")
         theta, stroke = tt.ravel(), uu.ravel()
         states = pose(goal, theta, stroke)
-    robot = task.robot
-    return PreferenceSet(theta, stroke, robot.grasp_positions(states), robot.grasp_axes(states))
+    return PreferenceSet(theta, stroke, task.robot.grasp_positions(states), task.robot.grasp_axes(states))
 
 
 def ring(n: int, z_dim: int) -> np.ndarray:
@@ -217,8 +216,7 @@ def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **cols: 
 
 def _leave_rows(run: _Run) -> pd.DataFrame:
     """The leave rows, per (goal, phase end, condition, input, other goal), in one batch."""
-    task, control, z = run.task, run.control, run.z
-    names = list(task.goal_names)
+    task, control, z, names = run.task, run.control, run.z, run.task.goal_names
     alphas = {"LA": 0.0, "LA+SA": control.alpha}
     runs = [
         (g, label, state, cond)

@@ -44,8 +44,7 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
     leave (``leave_min`` under LA+SA, ``leave_la_min`` under LA), and whether each half holds."""
     rows = []
     for key, part in frame.groupby(list(_KEYS), sort=False):
-        conf = part[part.context == "confident"]
-        home = part[part.context == "uncertain"]
+        conf, home = (part[part.context == context] for context in ("confident", "uncertain"))
         counts = leave_table(part)
         goals = list(dict.fromkeys(conf.goal))
         all_reached = set(goals) <= set(home.reached)
@@ -153,8 +152,7 @@ def plot(frame: pd.DataFrame) -> Figure:
 
 
 def _plot_task(row_axes: np.ndarray, part: pd.DataFrame, name: str) -> None:
-    rows = list(dict.fromkeys(part.row))
-    goals = list(dict.fromkeys(part.goal))
+    rows, goals = (list(dict.fromkeys(part[column])) for column in ("row", "goal"))
     n = int(part.n_inputs.max())
     stay, leave = "share of inputs that stay\n(confident belief)", f"fewest of {n} inputs that leave\n"
     tilt, home = "tilt range the staying inputs\nreach (confident belief)", "share of inputs that reach\n"

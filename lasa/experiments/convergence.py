@@ -255,14 +255,12 @@ def plot(table: pd.DataFrame) -> Figure:
     fig, rows = robot_rows(table, 4, (18, 3.8))
     stats = summary(table)
     for name, part, row in rows:
-        assistance = [m for m in ASSISTANCE if (part.assistance == m).any()]
         beta = part.beta.max()
         top = part[part.beta == beta]
-        for sa in assistance:
-            color = MEMBER_COLORS[sa]
+        for sa in [m for m in ASSISTANCE if (part.assistance == m).any()]:
             sub = top[top.assistance == sa]
-            _band(row[0], sub, "v", color, label=sa)
-            _band(row[1], sub, "error", color)
+            _band(row[0], sub, "v", MEMBER_COLORS[sa], label=sa)
+            _band(row[1], sub, "error", MEMBER_COLORS[sa])
         for column, ls, label in (
             ("delta", "--", r"$\delta$ ($\alpha$ = 0.5)"),
             ("delta_alpha", "-.", r"$\delta_\alpha$"),

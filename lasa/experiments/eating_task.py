@@ -256,10 +256,8 @@ def train_caps(
 
 def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
     """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
-    (task, prop, source), (model, control, name) = shared, job
-    return latent_measure.measure(
-        task, model, control, prop, source=source, task_name=source, decoder_name=name
-    )
+    (task, prop, source), (model, ctl, name) = shared, job
+    return latent_measure.measure(task, model, ctl, prop, source=source, task_name=source, decoder_name=name)
 
 
 def directions(
@@ -273,7 +271,8 @@ def directions(
     confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
     pos, axis, jp, jr = tip_frames(task.robot, mujoco.MjData(task.robot.model), state[None])
-    goals = task.robot.goal_positions()
+    to_goal = task.robot.goal_positions() - pos[0]
+    to_goal /= np.linalg.norm(to_goal, axis=1, keepdims=True)
     rows = []
     for name, b in beliefs.items():
         qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
@@ -281,8 +280,6 @@ def directions(
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
         # tilt from vertical: angle between the axis and (0, 0, -1); its rate
         tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)
-        to_goal = goals - pos[0]
-        to_goal /= np.linalg.norm(to_goal, axis=1, keepdims=True)
         speed = np.linalg.norm(v, axis=1)
         cos = (v / np.maximum(speed, 1e-12)[:, None]) @ to_goal.T
         best = np.where(np.arange(len(GOALS)) == g, -np.inf, cos).argmax(axis=1)  # other goals
@@ -300,8 +297,7 @@ def plot(frame: pd.DataFrame) -> Figure:
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
     tilt = np.degrees(frame.tilt_rate.to_numpy())
     vmax = max(float(np.abs(tilt).max()), 1.0)
-    cmap = plt.get_cmap("coolwarm")
-    norm = plt.Normalize(-vmax, vmax)
+    cmap, norm = plt.get_cmap("coolwarm"), plt.Normalize(-vmax, vmax)
     scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
     arrow = {"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
     for ax, name in zip(axes, BELIEFS, strict=True):

@@ -84,8 +84,7 @@ def plot_grasp_sweep(
         rel = np.asarray(p) - cup
         return np.stack([rel @ side, rel[..., 2]], axis=-1)
 
-    norm = Normalize(-1.0, 1.0)
-    cmap = plt.get_cmap("coolwarm")
+    norm, cmap = Normalize(-1.0, 1.0), plt.get_cmap("coolwarm")
     color = goal_colors(task.n_goals)[goal]
     ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=color, alpha=0.6))
     for path, z in zip(paths, z_values, strict=True):
