@@ -209,8 +209,7 @@ def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant
     for variant in variants:
         path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=variant[0])
         _save(path, variant, config)
-    jobs = [(model, control, name) for name, model, _, control in variants]
-    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=shared)
+    frames = run_jobs(_measure, variants, n_jobs=config.jobs, shared=shared)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
 
 
@@ -254,9 +253,9 @@ def train_caps(
     return _keep(config, paths, (task, prop, CAP_SOURCE), kept)
 
 
-def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
-    """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
-    (task, prop, source), (model, ctl, name) = shared, job
+def _measure(shared: _Shared, job: _Variant) -> pd.DataFrame:
+    """One variant's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
+    (task, prop, source), (name, model, _, ctl) = shared, job
     return latent_measure.measure(task, model, ctl, prop, source=source, task_name=source, decoder_name=name)
 
 
@@ -316,9 +315,8 @@ def plot(frame: pd.DataFrame) -> Figure:
     axes[0].set_ylabel("stick axis z2")
     sm = plt.cm.ScalarMappable(cmap=cmap, norm=norm)
     fig.colorbar(sm, ax=axes, label="tilt rate of the fork [deg/s]", shrink=0.75)
-    goal = frame.goal.iloc[0]
     fig.suptitle(
-        f"What each stick deflection does at the {goal} bowl\n"
+        f"What each stick deflection does at the {frame.goal.iloc[0]} bowl\n"
         "arrows: the fork tip's velocity seen from above, 0.1 m/s = half a radius"
     )
     return fig

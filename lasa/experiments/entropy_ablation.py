@@ -135,8 +135,7 @@ def run_sweep(
         for lam in lambdas
     ]
     table = pd.DataFrame(rows)
-    chosen = choose_lambda(table, task.n_goals)
-    return Sweep(table, models, configs, histories, chosen)
+    return Sweep(table, models, configs, histories, choose_lambda(table, task.n_goals))
 
 
 def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFrame:

@@ -223,8 +223,7 @@ def default_frames(
                 f"(set the sims' `users` to at least the map's)"
             )
         if column is not None:
-            missing = sorted(set(values) - set(part[column]))
-            if missing:
+            if missing := sorted(set(values) - set(part[column])):
                 raise ConfigError(f"{name}'s rows lack {column} {missing}, which the map judges")
             part = part[part[column].isin(values)]
         out[name] = sim3.episode_means(part) if name == "sim3" else part
@@ -306,8 +305,7 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     levels = sorted(set(table.level.astype(float)))
     if len(levels) != 1:
         raise ConfigError(f"the verdict map's cells must share one interval level, got {levels}")
-    unknown = sorted(set(table.effect) - set(WORDS))
-    if unknown:
+    if unknown := sorted(set(table.effect) - set(WORDS)):
         raise ConfigError(f"effect words must be among {WORDS}, got {unknown}")
     default = (table.assistance == headline) & (table.setting == "default")
     table = table.assign(column=table.apply(_label, axis=1).where(~default, "default"))
