@@ -62,8 +62,7 @@ def preference_set(task: GoalTask, goal: int, n_grid: int = 41) -> PreferenceSet
         tt, uu = np.meshgrid(thetas, us, indexing="ij")
         theta, stroke = tt.ravel(), uu.ravel()
         states = pose(goal, theta, stroke)
-    robot = task.robot
-    return PreferenceSet(theta, stroke, robot.grasp_positions(states), robot.grasp_axes(states))
+    return PreferenceSet(theta, stroke, task.robot.grasp_positions(states), task.robot.grasp_axes(states))
 
 
 def ring(n: int, z_dim: int) -> np.ndarray:
@@ -178,11 +177,10 @@ class _Run:
 
 def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     task, config, z, preference_sets = run.task, run.config, run.z, run.preference_sets
-    robot, dt = task.robot, run.control.dt
-    names = list(task.goal_names)
+    robot, dt, names = task.robot, run.control.dt, task.goal_names
     hold = max(1, round(config.hold / dt))
     pset = preference_sets[g]
-    b = _confident(task, g, run.control)
+    b = confident_belief(task.n_goals, g, run.control.belief_floor, run.control.belief_cap)
     paths = held_input_paths(run.decoder, task, run.control, task.target(g, 0.5), b, z, hold)  # (K, H+1, n)
     pos, axis = robot.grasp_positions(paths[:, 1:]), robot.grasp_axes(paths[:, 1:])
     dist, _ = _nearest(pset, pos, axis, config.rotation_weight)  # (K, H)
@@ -196,8 +194,7 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
 
 
 def _uncertain_rows(run: _Run) -> pd.DataFrame:
-    task, z = run.task, run.z
-    robot = task.robot
+    task, z, robot = run.task, run.z, run.task.robot
     steps = max(1, round(run.config.uncertain_hold / run.control.dt))
     flat = np.full(task.n_goals, 1.0 / task.n_goals)  # the uniform belief
     paths = held_input_paths(run.decoder, task, run.control, task.start, flat, z, steps, update_belief=True)
@@ -217,15 +214,9 @@ def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **cols: 
     return frame.reindex(columns=list(COLUMNS))
 
 
-def _confident(task: GoalTask, goal: int, control: ControlConfig) -> np.ndarray:
-    """The belief after working at ``goal``: the most confident the update keeps, (G,)."""
-    return confident_belief(task.n_goals, goal, control.belief_floor, control.belief_cap)
-
-
 def _leave_rows(run: _Run) -> pd.DataFrame:
     """The leave rows, per (goal, phase end, condition, input, other goal), in one batch."""
-    task, control, z = run.task, run.control, run.z
-    names = list(task.goal_names)
+    task, control, z, names = run.task, run.control, run.z, run.task.goal_names
     alphas = {"LA": 0.0, "LA+SA": control.alpha}
     runs = [
         (g, label, state, cond)
@@ -235,7 +226,10 @@ def _leave_rows(run: _Run) -> pd.DataFrame:
     ]
     k = len(z)
     starts = np.concatenate([np.broadcast_to(state, (k, len(state))) for _, _, state, _ in runs])
-    beliefs = np.repeat(np.stack([_confident(task, g, control) for g, *_ in runs]), k, axis=0)
+    confident = [
+        confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap) for g, *_ in runs
+    ]
+    beliefs = np.repeat(np.stack(confident), k, axis=0)
     alpha = np.repeat([alphas[cond] for *_, cond in runs], k)
     steps = max(1, round(run.config.leave_hold / control.dt))
     paths = leave_paths(run.decoder, task, control, starts, beliefs, np.tile(z, (len(runs), 1)), alpha, steps)

@@ -31,11 +31,11 @@ _SUMMARY = _KEYS + tuple(  # summary's columns but the three it derives from the
     "goal n_inputs stay_share theta_min theta_max theta_range stroke_range from_home all_reached "
     "leave_min leave_la_min".split()
 )
-_LEAVE = ("goal", "start", "condition", "target", "inputs", "exit_time")  # leave_table's, after _KEYS
 # tasks whose decoders are one recipe at several settings, not alternatives: no choice (★) marked
 SWEEP_TASKS = ("eating_caps",)
-_HEATMAP = {"annot": True, "cbar": True, "cbar_kws": {"shrink": 0.8}, "linewidths": 0.5, "linecolor": "white"}
-_HEATMAP |= {"annot_kws": {"fontsize": 8}}
+_HEATMAP = dict(
+    annot=True, annot_kws={"fontsize": 8}, cbar_kws={"shrink": 0.8}, linewidths=0.5, linecolor="white"
+)
 
 
 def summary(frame: pd.DataFrame) -> pd.DataFrame:
@@ -44,8 +44,7 @@ def summary(frame: pd.DataFrame) -> pd.DataFrame:
     leave (``leave_min`` under LA+SA, ``leave_la_min`` under LA), and whether each half holds."""
     rows = []
     for key, part in frame.groupby(list(_KEYS), sort=False):
-        conf = part[part.context == "confident"]
-        home = part[part.context == "uncertain"]
+        conf, home = (part[part.context == context] for context in ("confident", "uncertain"))
         counts = leave_table(part)
         goals = list(dict.fromkeys(conf.goal))
         all_reached = set(goals) <= set(home.reached)
@@ -71,7 +70,7 @@ def leave_table(frame: pd.DataFrame) -> pd.DataFrame:
     reach the other goal's set within the hold, ``exit_time`` their median first arrival [s]."""
     leave = frame[frame.context == "leave"]
     if leave.empty:
-        return pd.DataFrame(columns=[*_KEYS, *_LEAVE])
+        return pd.DataFrame(columns=[*_KEYS, "goal", "start", "condition", "target", "inputs", "exit_time"])
     arrived = leave.assign(arrived=leave.reached == leave.target)
     return (
         arrived.groupby([*_KEYS, "goal", "start", "condition", "target"], sort=False)
@@ -153,8 +152,7 @@ def plot(frame: pd.DataFrame) -> Figure:
 
 
 def _plot_task(row_axes: np.ndarray, part: pd.DataFrame, name: str) -> None:
-    rows = list(dict.fromkeys(part.row))
-    goals = list(dict.fromkeys(part.goal))
+    rows, goals = (list(dict.fromkeys(part[column])) for column in ("row", "goal"))
     n = int(part.n_inputs.max())
     stay, leave = "share of inputs that stay\n(confident belief)", f"fewest of {n} inputs that leave\n"
     tilt, home = "tilt range the staying inputs\nreach (confident belief)", "share of inputs that reach\n"

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import math
 
 import numpy as np
 import pandas as pd
@@ -32,7 +31,7 @@ from lasa.evidence.verdicts import USER
 from lasa.experiments.sweep import check_assistance, check_record_every, draw_episodes
 from lasa.method.decoder import ActionDecoder
 from lasa.method.step import latent_grid
-from lasa.people.rollout import Trajectories, rollout
+from lasa.people.rollout import rollout
 from lasa.people.users import UserPopulation
 from lasa.world.goals import GoalTask
 
@@ -70,9 +69,8 @@ class Config:
 
     def __post_init__(self) -> None:
         validate(self)
-        object.__setattr__(
-            self, "betas", tuple(float(b) for b in check_list("betas", self.betas, ascending=True))
-        )
+        betas = check_list("betas", self.betas, ascending=True)
+        object.__setattr__(self, "betas", tuple(float(b) for b in betas))
         object.__setattr__(self, "assistance", tuple(self.assistance))
         check_assistance(self.assistance)
         # the last step is recorded whatever record_every (run appends it): only the bound
@@ -176,17 +174,14 @@ def run(
     parts = []
     for assistance in config.assistance:
         ctl = dataclasses.replace(control, assistance=assistance)
-        traj: Trajectories = rollout(
-            decoder, task, users, control.alpha, ctl, config.horizon, noise, progress
-        )
+        traj = rollout(decoder, task, users, control.alpha, ctl, config.horizon, noise, progress)
         bound = (control.dt, control.action_scale, control.alpha)
         m = measure(traj.states, traj.beliefs, traj.actions, users.goal, task.goals, target, *bound)
-        counts = _window_counts(m, times)
         per_user = {"beta": beta, USER: user, "goal": users.goal, "theta": users.theta}
         cols = {"robot": task.robot.name, "assistance": assistance, "t": np.tile(times, len(user))}
         cols |= {name: np.repeat(values, len(times)) for name, values in per_user.items()}
         cols |= {name: values[times].T.ravel() for name, values in m.items()}
-        cols |= {name: values.T.ravel() for name, values in counts.items()}
+        cols |= {name: values.T.ravel() for name, values in _window_counts(m, times).items()}
         parts.append(pd.DataFrame(cols))
     return pd.concat(parts, ignore_index=True)[list(COLUMNS)]
 
@@ -202,10 +197,7 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
         late = part[part.t >= (1.0 - settle) * last]
         end = part[part.t == last]
         sums = part[list(_COUNTS)].sum()
-
-        def share(num: str, den: str, sums: pd.Series = sums) -> float:
-            return float(sums[num] / sums[den]) if sums[den] > 0 else math.nan
-
+        den = sums.where(sums > 0)  # NaN where no step counts: its shares are NaN
         rows.append(
             {
                 "robot": robot,
@@ -214,11 +206,11 @@ def summary(frame: pd.DataFrame, settle: float = 0.25, quantile: float = 0.95) -
                 "users": int(part[USER].nunique()),
                 "steps": int(sums["steps"]),
                 "bound_steps": int(sums["bound_steps"]),
-                "bound_share": share("bound_steps", "steps"),
-                "rose_given_bound": share("rises", "bound_steps"),
-                "beyond_slack_given_bound": share("rises_beyond_slack", "bound_steps"),
-                "bound_share_half": share("bound_steps_half", "steps"),
-                "rose_given_bound_half": share("rises_half", "bound_steps_half"),
+                "bound_share": float(sums.bound_steps / den.steps),
+                "rose_given_bound": float(sums.rises / den.bound_steps),
+                "beyond_slack_given_bound": float(sums.rises_beyond_slack / den.bound_steps),
+                "bound_share_half": float(sums.bound_steps_half / den.steps),
+                "rose_given_bound_half": float(sums.rises_half / den.bound_steps_half),
                 "ball": float(late.error.quantile(quantile)),
                 "ball_target": float(late.error_target.quantile(quantile)),
                 "radius_alpha": float((end.delta_alpha / end.belief).median()),
@@ -263,14 +255,12 @@ def plot(table: pd.DataFrame) -> Figure:
     fig, rows = robot_rows(table, 4, (18, 3.8))
     stats = summary(table)
     for name, part, row in rows:
-        assistance = [m for m in ASSISTANCE if (part.assistance == m).any()]
         beta = part.beta.max()
         top = part[part.beta == beta]
-        for sa in assistance:
-            color = MEMBER_COLORS[sa]
+        for sa in [m for m in ASSISTANCE if (part.assistance == m).any()]:
             sub = top[top.assistance == sa]
-            _band(row[0], sub, "v", color, label=sa)
-            _band(row[1], sub, "error", color)
+            _band(row[0], sub, "v", MEMBER_COLORS[sa], label=sa)
+            _band(row[1], sub, "error", MEMBER_COLORS[sa])
         for column, ls, label in (
             ("delta", "--", r"$\delta$ ($\alpha$ = 0.5)"),
             ("delta_alpha", "-.", r"$\delta_\alpha$"),

@@ -191,28 +191,25 @@ def train_variants(
     variants = [(name, models[name], fines[name], control) for name, _, _ in fine_tunes(config, sweep.chosen)]
     frame = _keep(config, paths, (task, prop, "eating"), variants)
     headline = latent_property.choose(latent_property.summary(frame))
-    _save(
-        models[headline], paths.artifact("eating_decoder", robot), fines[headline], control, config, headline
-    )
+    path = paths.artifact("eating_decoder", robot)
+    _save(path, (headline, models[headline], fines[headline], control), config)
     kept = {name: model for name, model, _, _ in variants}
     return Variants(kept, sweep.table, float(sweep.chosen), demo_rows, frame, headline)
 
 
-def _save(
-    model: LatentActionModel, path: Path, fine: TrainConfig, control: ControlConfig, config: Config, name: str
-) -> None:
+def _save(path: Path, variant: _Variant, config: Config) -> None:
     """A variant's decoder, saved with the settings that made it and the variant's name."""
+    name, model, fine, control = variant
     extra = {"train": to_dict(fine), "control": to_dict(control), "demos": to_dict(config.demos)}
     save_checkpoint(model, path, **extra, reading=name)
 
 
 def _keep(config: Config, paths: Paths, shared: _Shared, variants: list[_Variant]) -> pd.DataFrame:
     """Save each (name, decoder, fine-tune, control) as its variant's decoder; their property rows."""
-    for name, model, fine, control in variants:
-        path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=name)
-        _save(model, path, fine, control, config, name)
-    jobs = [(model, control, name) for name, model, _, control in variants]
-    frames = run_jobs(_measure, jobs, n_jobs=config.jobs, shared=shared)
+    for variant in variants:
+        path = paths.artifact("eating_segmentation_decoder", shared[0].robot.name, segmentation=variant[0])
+        _save(path, variant, config)
+    frames = run_jobs(_measure, variants, n_jobs=config.jobs, shared=shared)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=latent_property.COLUMNS)
 
 
@@ -239,34 +236,27 @@ def train_caps(
     saved as :func:`cap_decoder_name`): their property rows (source :data:`CAP_SOURCE`)."""
     caps = [c for c in config.cap_sweep if c != control.belief_cap]
     base, weight = {n: (b, w) for n, b, w in fine_tunes(config, variants.chosen_lambda)}[variants.headline]
-    segmentation, base_train = _bases(config)[base]
+    seg, base_train = _bases(config)[base]
     fine = dataclasses.replace(base_train, steps=config.sweep_steps, entropy_lambda=weight)
-    controls = {c: dataclasses.replace(control, belief_cap=c) for c in caps}
-    demos = {
-        c: collect_eating_demonstrations(task, controls[c], config.demos, segmentation=segmentation)
-        for c in caps
-    }
-    runs = [entropy_ablation.Run(demos[c], controls[c], base_train) for c in caps]
+    controls = [dataclasses.replace(control, belief_cap=c) for c in caps]
+    demos = [collect_eating_demonstrations(task, c, config.demos, segmentation=seg) for c in controls]
+    runs = [entropy_ablation.Run(d, c, base_train) for d, c in zip(demos, controls, strict=True)]
     bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
     goal_sets = belief_targets(task, control.likelihood)
     runs = [
-        entropy_ablation.Run(demos[c], controls[c], fine, goal_sets, model)
-        for c, (model, _) in zip(caps, bases, strict=True)
+        entropy_ablation.Run(d, c, fine, goal_sets, m)
+        for d, c, (m, _) in zip(demos, controls, bases, strict=True)
     ]
     fitted = entropy_ablation.train_all(runs, config.jobs, progress, desc="decoders at each cap")
-    kept = [
-        (cap_decoder_name(variants.headline, c), model, fine, controls[c])
-        for c, (model, _) in zip(caps, fitted, strict=True)
-    ]
+    names = [cap_decoder_name(variants.headline, c) for c in caps]
+    kept = [(n, m, fine, c) for n, (m, _), c in zip(names, fitted, controls, strict=True)]
     return _keep(config, paths, (task, prop, CAP_SOURCE), kept)
 
 
-def _measure(shared: _Shared, job: tuple[LatentActionModel, ControlConfig, str]) -> pd.DataFrame:
-    """One decoder's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
-    (task, prop, source), (model, control, name) = shared, job
-    return latent_measure.measure(
-        task, model, control, prop, source=source, task_name=source, decoder_name=name
-    )
+def _measure(shared: _Shared, job: _Variant) -> pd.DataFrame:
+    """One variant's property rows (a job of :func:`lasa.pipeline.scaleout.run_jobs`)."""
+    (task, prop, source), (name, model, _, ctl) = shared, job
+    return latent_measure.measure(task, model, ctl, prop, source=source, task_name=source, decoder_name=name)
 
 
 def directions(
@@ -280,7 +270,8 @@ def directions(
     confident = confident_belief(task.n_goals, g, control.belief_floor, control.belief_cap)
     beliefs = {"uncertain": np.full(task.n_goals, 1.0 / task.n_goals), "confident": confident}
     pos, axis, jp, jr = tip_frames(task.robot, mujoco.MjData(task.robot.model), state[None])
-    goals = task.robot.goal_positions()
+    to_goal = task.robot.goal_positions() - pos[0]
+    to_goal /= np.linalg.norm(to_goal, axis=1, keepdims=True)
     rows = []
     for name, b in beliefs.items():
         qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
@@ -288,8 +279,6 @@ def directions(
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
         # tilt from vertical: angle between the axis and (0, 0, -1); its rate
         tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)
-        to_goal = goals - pos[0]
-        to_goal /= np.linalg.norm(to_goal, axis=1, keepdims=True)
         speed = np.linalg.norm(v, axis=1)
         cos = (v / np.maximum(speed, 1e-12)[:, None]) @ to_goal.T
         best = np.where(np.arange(len(GOALS)) == g, -np.inf, cos).argmax(axis=1)  # other goals
@@ -307,8 +296,7 @@ def plot(frame: pd.DataFrame) -> Figure:
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
     tilt = np.degrees(frame.tilt_rate.to_numpy())
     vmax = max(float(np.abs(tilt).max()), 1.0)
-    cmap = plt.get_cmap("coolwarm")
-    norm = plt.Normalize(-vmax, vmax)
+    cmap, norm = plt.get_cmap("coolwarm"), plt.Normalize(-vmax, vmax)
     scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
     arrow = {"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
     for ax, name in zip(axes, BELIEFS, strict=True):
@@ -327,9 +315,8 @@ def plot(frame: pd.DataFrame) -> Figure:
     axes[0].set_ylabel("stick axis z2")
     sm = plt.cm.ScalarMappable(cmap=cmap, norm=norm)
     fig.colorbar(sm, ax=axes, label="tilt rate of the fork [deg/s]", shrink=0.75)
-    goal = frame.goal.iloc[0]
     fig.suptitle(
-        f"What each stick deflection does at the {goal} bowl\n"
+        f"What each stick deflection does at the {frame.goal.iloc[0]} bowl\n"
         "arrows: the fork tip's velocity seen from above, 0.1 m/s = half a radius"
     )
     return fig

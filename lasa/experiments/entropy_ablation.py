@@ -35,13 +35,10 @@ DPI = 130
 class Config:
     """The lambda sweep."""
 
-    # the sweep: distinct, ascending, 0 (the control) and at least one lambda > 0 [-]
-    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)
+    lambdas: tuple[NonNegative, ...] = (0.0, 0.1, 0.3, 1.0, 3.0)  # ascending, 0 (the control) and > 0 [-]
     sweep_steps: PositiveInt = 800  # fine-tuning steps of every lambda, 0 included, from the base decoder [-]
     seed: Seed = 0  # seed of every fine-tuning run (the same for all lambdas: paired batches) [-]
-    # local worker processes the runs are spread over (train_all): the same decoders with any
-    # number, each run seeded and single-threaded [-]
-    jobs: PositiveInt = 1
+    jobs: PositiveInt = 1  # worker processes (train_all), runs seeded: the same decoders with any number [-]
 
     def __post_init__(self) -> None:
         validate(self)
@@ -127,8 +124,7 @@ def run_sweep(
     }
     runs = [Run(demos, control, configs[lam], goal_sets, base) for lam in lambdas]
     trained = train_all(runs, config.jobs, progress, desc="lambda sweep")
-    models = {lam: model for lam, (model, _) in zip(lambdas, trained, strict=True)}
-    histories = {lam: history for lam, (_, history) in zip(lambdas, trained, strict=True)}
+    models, histories = (dict(zip(lambdas, part, strict=True)) for part in zip(*trained, strict=True))
     rows = [
         {
             "lambda": lam,
@@ -139,8 +135,7 @@ def run_sweep(
         for lam in lambdas
     ]
     table = pd.DataFrame(rows)
-    chosen = choose_lambda(table, task.n_goals)
-    return Sweep(table, models, configs, histories, chosen)
+    return Sweep(table, models, configs, histories, choose_lambda(table, task.n_goals))
 
 
 def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFrame:
@@ -150,14 +145,10 @@ def grid_rows(sweep: Sweep, task: GoalTask, control: ControlConfig) -> pd.DataFr
     robot = task.robot.name
     lams = dict.fromkeys((0.0, sweep.chosen))  # the control alone if the rule kept it
     grid = {lam: context_entropy(sweep.models[lam], states, beliefs, goal_sets, control) for lam in lams}
-    parts: list[tuple[object, ...]] = [
-        (robot, "grid", lam, progress, conf, e, np.nan, np.nan) for lam, e in grid.items()
-    ]
+    grids = [(robot, "grid", lam, progress, conf, e, np.nan, np.nan) for lam, e in grid.items()]
     t = sweep.table
-    parts.append(
-        (robot, "sweep", t["lambda"], np.nan, np.nan, t.entropy_confident, t.recon_error, t.val_error)
-    )
-    frames = [pd.DataFrame(dict(zip(COLUMNS, part, strict=True))) for part in parts]
+    swept = (robot, "sweep", t["lambda"], np.nan, np.nan, t.entropy_confident, t.recon_error, t.val_error)
+    frames = [pd.DataFrame(dict(zip(COLUMNS, part, strict=True))) for part in [*grids, swept]]
     return pd.concat(frames, ignore_index=True)
 
 

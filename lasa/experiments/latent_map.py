@@ -84,8 +84,7 @@ def plot_grasp_sweep(
         rel = np.asarray(p) - cup
         return np.stack([rel @ side, rel[..., 2]], axis=-1)
 
-    norm = Normalize(-1.0, 1.0)
-    cmap = plt.get_cmap("coolwarm")
+    norm, cmap = Normalize(-1.0, 1.0), plt.get_cmap("coolwarm")
     color = goal_colors(task.n_goals)[goal]
     ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=color, alpha=0.6))
     for path, z in zip(paths, z_values, strict=True):
@@ -98,9 +97,6 @@ def plot_grasp_sweep(
     ax.plot(start[0], start[1], "ko", ms=4)
     ax.set(aspect="equal", xlabel="along the side-grasp direction [m]")
     ax.set_ylabel("height above the cup's grasp point [m]")
-    plt.colorbar(
-        plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-    )
     ax.set_title(title)
     return ax
 
@@ -123,12 +119,13 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
             ax.plot(xy[:, 0], xy[:, 1], color=cmap(norm(z)), lw=1.3)
         ax.plot(drawn[0][0][0], drawn[0][0][1], "ko", ms=4)
         frame_around(task, ax, np.concatenate(drawn))
-        plt.colorbar(
-            plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
-        )
         ax.set_title(f"{name}: from home (belief uniform at first):\nz picks the cup")
         cup = f"{name}: confident in the right cup:\nz picks the grasp"
         plot_grasp_sweep(task, saved["confident"], saved["z"], 1, row[1], cup)
+        for ax in row[:2]:
+            plt.colorbar(
+                plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
+            )
         mine = table[table.robot == name]
         ax, uni, conf = row[2], mine[mine.context == "uniform"], mine[mine.context == "confident"]
         ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")

@@ -223,8 +223,7 @@ def default_frames(
                 f"(set the sims' `users` to at least the map's)"
             )
         if column is not None:
-            missing = sorted(set(values) - set(part[column]))
-            if missing:
+            if missing := sorted(set(values) - set(part[column])):
                 raise ConfigError(f"{name}'s rows lack {column} {missing}, which the map judges")
             part = part[part[column].isin(values)]
         out[name] = sim3.episode_means(part) if name == "sim3" else part
@@ -242,8 +241,7 @@ def run(
     """Every cell of the grid (:func:`cells`) around ``control``, locally or on a Dask cluster, with
     notebook 03's pair: one row per (claim, cell, member), cells in order; ``defaults``
     (:func:`default_frames`) are judged as the default cell instead of running it again."""
-    decoders = as_decoders(decoders)
-    grid = Grid(decoders, task, control, config)
+    grid = Grid(as_decoders(decoders), task, control, config)
     todo = cells(config, control)
     done: list[pd.DataFrame] = []
     if defaults is not None and todo and todo[0].setting == "default":
@@ -307,15 +305,10 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     levels = sorted(set(table.level.astype(float)))
     if len(levels) != 1:
         raise ConfigError(f"the verdict map's cells must share one interval level, got {levels}")
-    level = levels[0]
-    unknown = sorted(set(table.effect) - set(WORDS))
-    if unknown:
+    if unknown := sorted(set(table.effect) - set(WORDS)):
         raise ConfigError(f"effect words must be among {WORDS}, got {unknown}")
-    table = table.assign(
-        column=table.apply(
-            lambda r: _label(r) if r.assistance != headline or r.setting != "default" else "default", axis=1
-        )
-    )
+    default = (table.assistance == headline) & (table.setting == "default")
+    table = table.assign(column=table.apply(_label, axis=1).where(~default, "default"))
     robots = robots_present(table)
     order_cols = list(dict.fromkeys(table.column))
     ids = sorted(dict.fromkeys(table.id))
@@ -323,8 +316,7 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
     code = {v: i for i, v in enumerate(WORDS)}
     size = (2.6 + 0.5 * len(order_cols) * len(robots), 1.4 + 0.36 * len(ids))
     fig, axes = plt.subplots(1, len(robots), figsize=size, squeeze=False, sharey=True)
-    for j, robot in enumerate(robots):
-        ax = axes[0, j]
+    for ax, robot in zip(axes[0], robots, strict=True):
         grid = np.full((len(ids), len(order_cols)), np.nan)
         for row in table[table.robot == robot].itertuples(index=False):
             r, c = ids.index(row.id), order_cols.index(row.column)
@@ -340,10 +332,10 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
         ax.set_yticks(range(len(ids)), ids, fontsize=7)
     handles = [plt.Rectangle((0, 0), 1, 1, facecolor=COLOURS[v], edgecolor="0.6", lw=0.5) for v in WORDS]
     n = int(table.users.min()) if len(table) else 0
-    source = ", the claims table's level" if math.isclose(level, LEVEL) else ""
+    source = ", the claims table's level" if math.isclose(levels[0], LEVEL) else ""
     fig.suptitle(
         f"Claims robustness: the effect per reading and setting, at least {n} users per point\n"
-        f"({100 * level:.4g}% intervals{source}; grey and hatched: undecided; "
+        f"({100 * levels[0]:.4g}% intervals{source}; grey and hatched: undecided; "
         "text: the number the verdict rests on)",
         fontsize=9,
     )
