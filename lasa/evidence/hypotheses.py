@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -24,6 +25,7 @@ _TIMES = ("total_time", "idle_time")  # H3's measures
 TABLES = ("goal_error", "time", "alignment")  # the study's tables (lasa.experiments.study.run.run)
 # a claim's judgement: (the tests' verdict, value, 95% ci_low, ci_high, measured)
 Judged = tuple[str, float, float, float, str]
+Result = Mapping[str, Any]  # analyse's numbers by name
 
 
 def for_member(
@@ -65,11 +67,11 @@ def analyse(
     model: str | None = None,
     horizon: float = math.inf,
     n_resamples: int = 10_000,
-) -> dict[str, object]:
+) -> dict[str, Any]:
     """Every test the claims rest on, for one SA member, decoder variant, participant model and first ``n``;
     ``horizon`` [s] cuts H3's restricted times, ``n_resamples`` is its paired bootstrap's."""
     err, time, align = (for_member(frames[k], assistance, n, decoder, model) for k in TABLES)
-    out: dict[str, object] = {
+    out: dict[str, Any] = {
         "n": int(err.participant.nunique()),
         "h1_within": stats.sa_effect_within(err, "goal_error"),
         "h1_between": stats.sa_effect_between(err, "goal_error"),
@@ -89,7 +91,7 @@ def analyse(
     return out
 
 
-def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, object]:
+def _h3(time: pd.DataFrame, horizon: float, n_resamples: int) -> dict[str, Any]:
     """H3's numbers: completion (``h3_short``: below the bar), restricted means, LA+SA's contrasts."""
     done = time.groupby("condition").completed.mean().reindex(list(CONDITIONS))
     contrasts = {m: stats.rmst_contrasts(time, m, horizon, n_resamples=n_resamples) for m in _TIMES}
@@ -149,7 +151,7 @@ def likert_verdict(likert: pd.DataFrame) -> tuple[str, float, int]:
     return rule("study.likert").verdict({"share": share}), share, int(len(likert))
 
 
-def judge(result: Mapping[str, object]) -> dict[str, Judged]:
+def judge(result: Result) -> dict[str, Judged]:
     """(the claim's rule on its tests' numbers, the effect, its 95% interval, measured) per claim key."""
     out = {
         "h1": _h1(result, "h1_within"),
@@ -158,18 +160,14 @@ def judge(result: Mapping[str, object]) -> dict[str, Judged]:
         "h2": _h2(result),
         "h3": _h3_verdict(result),
     }
-    done = result["h3_completion"]
-    assert isinstance(done, pd.Series)
-    return _censored_goal_error(out, done)
+    return _censored_goal_error(out, result["h3_completion"])
 
 
-def _h1(result: Mapping[str, object], name: str, unit: str = "m s", scale: float = 1.0) -> Judged:
+def _h1(result: Result, name: str, unit: str = "m s", scale: float = 1.0) -> Judged:
     """H1 on the test ``name``: within subjects with its pairwise comparisons (values in ``unit`` by
     ``scale``), or ``h1_between``, the paper's F(1,18) reading (no pairwise comparisons)."""
-    between = name == "h1_between"
-    test, table = result[name], None if between else result[name.replace("within", "pairs")]
-    assert isinstance(test, dict) and (table is None or isinstance(table, pd.DataFrame))
-    pairs = [] if table is None else list(table.itertuples())
+    between, test = name == "h1_between", result[name]
+    pairs = [] if between else list(result[name.replace("within", "pairs")].itertuples())
     diff = test["mean_sa"] - test["mean_no_sa"]
     tests = {"effect": diff, "p": test["p"]}
     for r in pairs:
@@ -188,10 +186,9 @@ def _h1(result: Mapping[str, object], name: str, unit: str = "m s", scale: float
     return verdict, diff, test["ci_low"], test["ci_high"], said
 
 
-def _h2(result: Mapping[str, object]) -> Judged:
+def _h2(result: Result) -> Judged:
     """H2: scoop-phase alignment LA+SA - R+SA; ``measured`` lists every Dessert phase."""
     phases = result["h2_phases"]
-    assert isinstance(phases, dict)
     mean, low, high, p, _ = phases["scoop"]
     text = "; ".join(
         f"{ph}: {m:+.3f} (p = {pp:.3g}, {k} pairs)" if np.isfinite(pp) else f"{ph}: no test ({k} pairs)"
@@ -235,13 +232,10 @@ def _censored_goal_error(out: dict[str, Judged], done: pd.Series) -> dict[str, J
     return out
 
 
-def _h3_verdict(result: Mapping[str, object]) -> Judged:
+def _h3_verdict(result: Result) -> Judged:
     """H3: the rule on LA+SA's restricted-mean contrasts, its gap to the fastest other condition."""
     total, idle, means, gap = result["h3_total"], result["h3_idle"], result["means"], result["h3_gap"]
     short, done, horizon = result["h3_short"], result["h3_completion"], result["horizon"]
-    assert isinstance(total, pd.DataFrame) and isinstance(idle, pd.DataFrame)
-    assert isinstance(means, pd.DataFrame) and isinstance(gap, tuple) and isinstance(done, pd.Series)
-    assert isinstance(horizon, float | int)
     to = "uncut" if math.isinf(horizon) else f"restricted to the {horizon:g} s horizon"
     times = ", ".join(
         f"{c} {means.total_time[c]:.0f} s (idle {means.idle_time[c]:.0f} s)" for c in CONDITIONS
@@ -249,7 +243,7 @@ def _h3_verdict(result: Mapping[str, object]) -> Judged:
     finished = ", ".join(f"{c} {100 * v:.3g}%" for c, v in done.fillna(0.0).items())
     tail = f"mean total (idle) time over both tasks, {to}: {times}; completion: {finished}"
     if short:
-        return _h3_censored(total, done, tail)
+        return _h3_censored(result, tail)
     tests = {
         f"high {m} {r.a} - {r.b}": r.ci_high
         for m, contrasts in (("total_time", total), ("idle_time", idle))
@@ -268,22 +262,19 @@ def _censored_comparator(total: pd.DataFrame, censored: list[str]) -> pd.Series 
     return None if clear.empty else clear.loc[clear.mean_b.idxmin()]
 
 
-def h3_comparator(result: Mapping[str, object]) -> str | None:
+def h3_comparator(result: Result) -> str | None:
     """The condition H3 compares LA+SA with (:func:`_h3_verdict`), None if none."""
-    total, done, gap = result["h3_total"], result["h3_completion"], result["h3_gap"]
-    assert isinstance(total, pd.DataFrame) and isinstance(done, pd.Series) and isinstance(gap, tuple)
     if not result["h3_short"]:
-        return str(gap[0])
-    r = _censored_comparator(total, _censored(done))
+        return str(result["h3_gap"][0])
+    r = _censored_comparator(result["h3_total"], _censored(result["h3_completion"]))
     return None if r is None else str(r.b)
 
 
-def _h3_censored(total: pd.DataFrame, done: pd.Series, tail: str) -> Judged:
+def _h3_censored(result: Result, tail: str) -> Judged:
     """H3 with a censored condition: ``no`` if LA+SA's restricted mean Total Time is above a measured
     comparator's (the fastest, interval clear of 0; LA+SA's a lower bound if censored), else not testable."""
-    censored = _censored(done)
-    short = _short_text(done, censored)
-    r = _censored_comparator(total, censored)
+    censored, short = _censored(result["h3_completion"]), result["h3_short"]
+    r = _censored_comparator(result["h3_total"], censored)
     if r is None:
         return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"
     bound = "LA+SA" in censored

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Mapping
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -20,7 +21,7 @@ from lasa.base.paths import Paths
 from lasa.evidence import latent_property, stats
 from lasa.evidence.claims import Claim
 from lasa.evidence.decision import effect_word
-from lasa.evidence.hypotheses import for_member
+from lasa.evidence.hypotheses import Result, for_member
 from lasa.experiments.eating_task import cap_decoder_name, cap_label
 from lasa.experiments.study import analysis, claims
 from lasa.experiments.study import run as study
@@ -35,7 +36,6 @@ NAME = "study_belief_cap"
 # value or "none"; word: a claim's effect word, or whether the decoder meets the property rule
 _KEYS = ("robot", "cap", "order", "decoder", "n", "kind", "item")
 COLUMNS: tuple[str, ...] = (*_KEYS, "value", "low", "high", "p", "word", "settled", "text")
-CLAIMS = ("h1", "h2", "h3")  # the claims the sweep shows, under the paper's measures
 
 
 @dataclasses.dataclass(frozen=True)
@@ -116,7 +116,7 @@ def _claims(
     prop: pd.DataFrame,
     horizon: float,
     belief: str | None = None,
-) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+) -> tuple[list[Claim], dict[tuple, dict[str, Any]]]:
     """One run's :func:`.claims.claims` (unflipped), not testable where its decoder misses the property."""
     reason = claims.untestable_reason(prop[prop.decoder == decoder])
     head = config.session.assistance[:1]
@@ -134,18 +134,17 @@ def _cap_rows(
     cap: float | None,
     decoder: str,
     time: pd.DataFrame,
-    rows: list[Claim],
-    result: Mapping[str, object],
+    by_key: Mapping[str, Claim],
+    result: Result,
     prop: pd.DataFrame,
 ) -> list[dict[str, object]]:
-    """One cap's rows of the sweep: completion per condition, the claims' words and effects, the property."""
+    """One cap's sweep rows: completion per condition, the claims' (by key) words, effects, the property."""
     n = int(time.participant.nunique())
     base = {"robot": "panda", "cap": label(cap), "order": 0, "decoder": decoder, "n": n}
     blank = base | {"low": np.nan, "high": np.nan, "p": np.nan, "word": "", "settled": False, "text": ""}
     done = time.groupby("condition").completed.mean()
     out = [blank | {"kind": "completion", "item": c, "value": float(done.get(c, np.nan))} for c in CONDITIONS]
     within, phases, total = result["h1_within"], result["h2_phases"], result["h3_total"]
-    assert isinstance(within, dict) and isinstance(phases, dict) and isinstance(total, pd.DataFrame)
     diff = float(within["mean_sa"] - within["mean_no_sa"])
     h1 = (diff, float(within["ci_low"]), float(within["ci_high"]), float(within["p"]))
     mean, low, high, p, pairs = phases["scoop"]
@@ -157,9 +156,8 @@ def _cap_rows(
         "h2": (float(mean), float(low), float(high), float(p), h2),
         "h3": (float(r["diff"]), float(r.ci_low), float(r.ci_high), np.nan, h3),
     }
-    words = {row.id.split(".", 1)[1].split("@")[0]: row for row in rows}
     for key, (value, low, high, p, text) in effects.items():
-        row = words.get(key)
+        row = by_key.get(key)
         word = "" if row is None else effect_word(row.reproduced)
         said = {"word": word, "settled": row is not None and bool(row.settled)}
         effect = {"value": value, "low": low, "high": high, "p": p, "text": text}
@@ -190,15 +188,14 @@ def sweep(
         config.belief_cap: (headline, mine, prop),
         **{c: (r.decoder, r.frames, caps_prop) for c, r in runs.items()},
     }
-    cohort = n > study.PAPER_N
-    keys = {claims.claim_id(h, 0, head, cohort) for h in CLAIMS}
-    paper_n = n if cohort else study.PAPER_N
+    ids = {claims.claim_id(h, 0, head, n > study.PAPER_N): h for h in claims.PAPER_KEYS}
+    paper_n = max(n, study.PAPER_N)
     parts: dict[float | None, list[dict[str, object]]] = {}
     for cap, (decoder, tables, table) in runs_by_cap.items():
         first = {k: f[f.participant < n] for k, f in tables.items()}
         rows, analyses = _claims(first, decoder, n, config, table, horizon)
-        mine_rows = [r for r in rows if r.id in keys]
-        parts[cap] = _cap_rows(cap, decoder, first["time"], mine_rows, analyses[(head, paper_n)], table)
+        said = {ids[r.id]: r for r in rows if r.id in ids}
+        parts[cap] = _cap_rows(cap, decoder, first["time"], said, analyses[(head, paper_n)], table)
     ordered = sorted(parts, key=lambda c: np.inf if c is None else c)
     out = [dict(row, order=i) for i, c in enumerate(ordered) for row in parts[c]]
     return pd.DataFrame(out, columns=list(COLUMNS))
@@ -218,6 +215,13 @@ def stuck(
     return analysis.stuck_episodes(task, episodes, {r.decoder: decoders[cap][1]}, config, [model])
 
 
+_EFFECTS = {  # how each claim's measured effect reads, its unit and format; its panel's title
+    "h1": ("SA − no SA Goal Error", " m s", "{:+.2f}", "H1: SA - no SA, Goal Error [m s]"),
+    "h2": ("LA+SA − R+SA scoop alignment", "", "{:+.3f}", "H2: LA+SA - R+SA, scoop alignment"),
+    "h3": ("LA+SA − R restricted mean time", " s", "{:+.1f}", "H3: LA+SA - R, restricted mean time [s]"),
+}
+
+
 def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
     """Completion per arm, and H1-H3's measured effects with their 95% intervals and words, per cap."""
     sns.set_theme(style="whitegrid")
@@ -233,13 +237,8 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
         axes[0].plot(x, 100 * part.value.to_numpy(), style, marker="os^v"[k], label=cond, alpha=0.85)
     axes[0].set(ylabel="episodes finished [%]", ylim=(-5, 105), title="completion per arm")
     axes[0].legend(fontsize=8, loc="center left")
-    titles = {
-        "h1": "H1: SA - no SA, Goal Error [m s]",
-        "h2": "H2: LA+SA - R+SA, scoop alignment",
-        "h3": "H3: LA+SA - R, restricted mean time [s]",
-    }
     said = frame[frame.kind == "claim"]
-    for ax, key in zip(axes[1:], CLAIMS, strict=True):
+    for ax, key in zip(axes[1:], claims.PAPER_KEYS, strict=True):
         part = said[said["item"] == key].set_index("cap").reindex(caps.cap)
         value, low, high = (part[c].to_numpy(dtype=float) for c in ("value", "low", "high"))
         ok = np.isfinite(low) & np.isfinite(high)
@@ -251,7 +250,7 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
             x[~settled], value[~settled], facecolor="white", edgecolor="C3", zorder=3, label="not settled"
         )
         ax.axhline(0.0, color="0.3", lw=0.8)
-        ax.set_title(titles[key])
+        ax.set_title(_EFFECTS[key][3])
         for i, word in enumerate(part.word.fillna("")):
             if np.isfinite(value[i]):
                 ax.annotate(word, (x[i], value[i]), textcoords="offset points", xytext=(6, 4), fontsize=6.5)
@@ -273,16 +272,9 @@ def plot(frame: pd.DataFrame, study_cap: str = "0.99") -> Figure:
     return fig
 
 
-_EFFECTS = {  # how each claim's measured effect reads, and its unit
-    "h1": ("SA − no SA Goal Error", " m s", "{:+.2f}"),
-    "h2": ("LA+SA − R+SA scoop alignment", "", "{:+.3f}"),
-    "h3": ("LA+SA − R restricted mean time", " s", "{:+.1f}"),
-}
-
-
 def _effect(row: pd.Series) -> str:
     """A claim's measured effect, 95% interval and word: ``H1 (...) −2.04 m s [−2.80, −1.27]: *word*``."""
-    name, unit, fmt = _EFFECTS[str(row["item"])]
+    name, unit, fmt, _ = _EFFECTS[str(row["item"])]
     if not np.isfinite(row.value):
         return f"{str(row['item']).upper()} ({name}) not measured: *{row.word}*"
     span = f" [{fmt.format(row.low)}, {fmt.format(row.high)}]" if np.isfinite(row.low) else ""
@@ -298,7 +290,7 @@ def cap_sentence(frame: pd.DataFrame, cap: str) -> str:
     done = rows[rows.kind == "completion"].set_index("item").value
     finish = ", ".join(f"{c} {pct(done[c])}" for c in CONDITIONS if c in done.index)
     said = rows[rows.kind == "claim"].set_index("item", drop=False)
-    effects = "; ".join(_effect(said.loc[c]) for c in CLAIMS if c in said.index)
+    effects = "; ".join(_effect(said.loc[c]) for c in claims.PAPER_KEYS if c in said.index)
     n, decoder = int(rows.n.iloc[0]), rows.decoder.iloc[0]
     return f"with `{decoder}` and {n} participants, episodes finished: {finish}. {effects}."
 

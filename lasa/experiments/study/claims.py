@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 import pandas as pd
@@ -18,13 +18,13 @@ from lasa.evidence import latent_property
 from lasa.evidence.claims import Claim, numbers_of
 from lasa.evidence.decision import CENSORED, NOT_TESTABLE, UNDECIDED, effect_word, word
 from lasa.evidence.findings import study_effect
-from lasa.evidence.hypotheses import Judged, analyse, h3_comparator, judge
+from lasa.evidence.hypotheses import Judged, Result, analyse, h3_comparator, judge
 from lasa.evidence.rules import COMPLETION_BAR, rule
 from lasa.evidence.verdicts import shortfall
 from lasa.experiments.study.run import PAPER_N
 from lasa.people.design import interface_of
 
-Analyses = Mapping[tuple, Mapping[str, Any]]  # claims()'s analyses, keyed by reading
+Analyses = Mapping[tuple, Result]  # claims()'s analyses, keyed by reading
 
 CLAIM_TEXT = {
     "h1": (
@@ -69,7 +69,7 @@ def claim_id(
     return f"study.{base}" + (f"@{'+'.join(parts)}" if parts else "")
 
 
-DECODER_KEYS = ("h1", "h2", "h3")  # the claims judged for every other decoder variant (the paper's measures)
+PAPER_KEYS = ("h1", "h2", "h3")  # the paper's measures' claims: judged for every decoder variant and cap
 
 
 def claims(
@@ -85,7 +85,7 @@ def claims(
     n_resamples: int = 10_000,
     belief: str | None = None,
     flips: bool = True,
-) -> tuple[list[Claim], dict[tuple, dict[str, object]]]:
+) -> tuple[list[Claim], dict[tuple, dict[str, Any]]]:
     """The claims rows under every reading (measure, member, decoder, model, n; the headlines first) and
     the analyses keyed ``(member, n)``, ``(member, n, decoder)``, ``(member, n, decoder, model)``;
     ``untestable`` (every row's) and ``untestable_decoders`` say why rows are not testable."""
@@ -95,7 +95,7 @@ def claims(
     runs = [(m_i, sa, head) for m_i, sa in enumerate(assistance)]
     runs += [(0, assistance[0], d) for d in decoders[1:]]
     sizes = [(PAPER_N, False)] + ([(n_total, True)] if n_total > PAPER_N else [])
-    analyses: dict[tuple, dict[str, object]] = {}
+    analyses: dict[tuple, dict[str, Any]] = {}
     rows: list[Claim] = []
     for k, model in enumerate(models or (None,)):
         for (m_i, sa, decoder), (n, cohort) in itertools.product(runs, sizes):
@@ -106,7 +106,7 @@ def claims(
             key = (sa, n, decoder, model) if k else (sa, n, other) if other else (sa, n)
             analyses[key] = result = analyse(frames, sa, n, decoder, model, horizon, n_resamples)
             for name, judged in judge(result).items():
-                if other is None or name in DECODER_KEYS:
+                if other is None or name in PAPER_KEYS:
                     cid = claim_id(name, m_i, sa, cohort, other, model if k else None, belief)
                     rows.append(_claim_row(cid, name, judged, result, sa, decoder, model, reason))
     if belief is None and rows:  # a claim of its own, without readings
@@ -192,31 +192,25 @@ def _ran(time: pd.DataFrame, model: str | None, decoder: str | None) -> bool:
     return len(time) > 0
 
 
-def facts(key: str, result: Mapping[str, object], judged: Judged) -> dict[str, float]:
+def facts(key: str, result: Result, judged: Judged) -> dict[str, float]:
     """The numbers a row's sentences read beside its effect (``claim_values.csv``'s facts): ``testable``,
     ``censored``, ``completion.<condition>``, ``difference``, ``F``, ``p`` and so on, H3's ``versus.<c>``."""
     verdict, _, _, _, measured = judged
-    done = result["h3_completion"]
-    assert isinstance(done, pd.Series)
     out = {"testable": float(verdict != NOT_TESTABLE), "censored": float(measured.startswith(CENSORED))}
-    out |= {f"completion.{c}": float(v) for c, v in done.fillna(0.0).items()}
+    out |= {f"completion.{c}": float(v) for c, v in result["h3_completion"].fillna(0.0).items()}
     if key.startswith("h1"):
         tests = {"h1_paper_test": "h1_between", "h1_mean_distance": "h1_mean_within"}
         test = result[tests.get(key, "h1_within")]
-        assert isinstance(test, dict)
         scale = 100.0 if key == "h1_mean_distance" else 1.0
         out["difference"] = scale * float(test["mean_sa"] - test["mean_no_sa"])
         out |= {k: float(test[k]) for k in ("F", "df1", "df2", "p")}
     elif key == "h2":
-        phases = result["h2_phases"]
-        assert isinstance(phases, dict)
-        mean, _, _, p, pairs = phases["scoop"]
+        mean, _, _, p, pairs = result["h2_phases"]["scoop"]
         out |= {"difference": float(mean), "p": float(p), "pairs": float(pairs)}
     else:
-        other, means = h3_comparator(result), result["means"]
-        assert isinstance(means, pd.DataFrame)
+        other = h3_comparator(result)
         if other is not None:
-            out[f"versus.{other}"] = float(means.total_time[other])
+            out[f"versus.{other}"] = float(result["means"].total_time[other])
     return out
 
 
@@ -224,7 +218,7 @@ def _claim_row(
     cid: str,
     key: str,
     judged: Judged,
-    result: Mapping[str, object],
+    result: Result,
     assistance: str,
     decoder: str | None,
     model: str | None,
@@ -238,9 +232,9 @@ def _claim_row(
         verdict, measured = NOT_TESTABLE, f"{NOT_TESTABLE} (too few pairs for an interval); {measured}"
     numbers = {k: v for k, v in numbers.items() if math.isfinite(v)}  # F of an uncomputed test
     testable = verdict != NOT_TESTABLE and reason is None
-    n = int(result["n"])  # type: ignore[call-overload]
+    n = int(result["n"])
     resamples = result.get("n_resamples") if key == "h3" else None
-    short = shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")  # type: ignore[arg-type]
+    short = shortfall(n, resamples, 0.95, min_users=PAPER_N, unit="participants")
     settled = testable and r.settled({"effect": (low, high)}) and not short
     if verdict == NOT_TESTABLE and "too few pairs" in measured:
         why = f"{NOT_TESTABLE} (too few pairs for an interval): fewer than two participants "
@@ -291,11 +285,10 @@ def _claim_row(
 
 def with_flips(rows: list[Claim]) -> list[Claim]:
     """Each headline row's note led by the readings whose effect word differs from it (once per row list)."""
-    read = {c.id.split("@", 1)[0] for c in rows if "@" in c.id}
-    heads = {c.id for c in rows if "@" not in c.id and c.id in read}
+    read = {c.id.split("@", 1)[0] for c in rows if "@" in c.id}  # the headlines with other readings
     out = []
     for c in rows:
-        if c.id in heads:
+        if c.id in read:
             flips = [
                 f"{o.id.split('@')[1]} (effect {effect_word(o.reproduced)})"
                 for o in rows
@@ -338,19 +331,13 @@ def variants_table(
     if not models and "model" in done.columns:
         models = tuple(dict.fromkeys(done.model))
     by_id = {c.id: c for c in rows}
-    finished = _finished(done)
     out = []
     for k, model in enumerate(models or (None,)):
-        lead = () if model is None else (model,)
         for d in decoders:
             if not _ran(done, model, d):
                 continue
             other = None if d == decoders[0] else d
             mine = prop[prop.decoder == d]
-            runs_as = {
-                c: (NO_ASSISTANCE if interface_of(c) == "R" else d, assistance if "+" in c else NO_ASSISTANCE)
-                for c in CONDITIONS
-            }
             out.append(
                 {
                     **({} if model is None else {"model": model}),
@@ -358,23 +345,19 @@ def variants_table(
                     "headline": other is None,
                     "goals with the property": int(mine.has_property.sum()),
                     "least share staying": mine.stay_share.min(),
-                    **{f"{c} finished": finished.get((*lead, *runs_as[c], c)) for c in CONDITIONS},
-                    **_verdict_cells(by_id, assistance, other, model if k else None),
+                    **_finished(done, model, d, assistance, CONDITIONS),
+                    **_verdict_cells(by_id, 0, assistance, other, model if k else None),
                 }
             )
     return pd.DataFrame(out)
 
 
 def _verdict_cells(
-    by_id: Mapping[str, Claim],
-    assistance: str,
-    decoder: str | None,
-    model: str | None,
-    assistance_index: int = 0,
+    by_id: Mapping[str, Claim], assistance_index: int, assistance: str, decoder: str | None, model: str | None
 ) -> dict[str, str]:
     """H1-H3's verdicts of one reading (:func:`claim_id`'s args), ``10 / all``, and the first 10's effect."""
     out = {}
-    for h in DECODER_KEYS:
+    for h in PAPER_KEYS:
         ids = [claim_id(h, assistance_index, assistance, cohort, decoder, model) for cohort in (False, True)]
         out[f"{h.upper()} (10 / all)"] = " / ".join(_word(by_id[i]) if i in by_id else "-" for i in ids)
         out[f"{h.upper()} effect (10)"] = _effect(by_id[ids[0]]) if ids[0] in by_id else "-"
@@ -397,32 +380,37 @@ def members_table(
 ) -> pd.DataFrame:
     """The SA members side by side under the headline ``decoder`` and ``model``: R+SA's and LA+SA's
     completion (``done``: :func:`.analysis.completion`) and H1-H3's verdicts (:func:`_verdict_cells`)."""
-    finished = _finished(done)
-    keys = finished.index.names
     by_id = {c.id: c for c in rows}
-    out = []
-    for m_i, sa in enumerate(assistance):
-        cells: dict[str, object] = {"SA": sa, "headline": m_i == 0}
-        for c in ("R+SA", "LA+SA"):
-            arm = {"model": model, "decoder": NO_ASSISTANCE if c == "R+SA" else decoder}
-            arm |= {"assistance": sa, "condition": c}
-            cells[f"{c} finished"] = finished.get(tuple(arm[k] for k in keys))
-        cells |= _verdict_cells(by_id, sa, None, None, m_i)
-        out.append(cells)
-    return pd.DataFrame(out)
+    return pd.DataFrame(
+        [
+            {"SA": sa, "headline": m_i == 0}
+            | _finished(done, model, decoder, sa, ("R+SA", "LA+SA"))
+            | _verdict_cells(by_id, m_i, sa, None, None)
+            for m_i, sa in enumerate(assistance)
+        ]
+    )
 
 
-def _finished(done: pd.DataFrame) -> pd.Series:
-    """:func:`.analysis.completion`'s share finished, indexed by its keys."""
+def _finished(
+    done: pd.DataFrame, model: str | None, decoder: str, assistance: str, conditions: Sequence[str]
+) -> dict[str, object]:
+    """``<condition> finished``: :func:`.analysis.completion`'s share of each of ``conditions`` under the
+    reading (R's rows run no decoder, the unassisted ones no SA member)."""
     keys = [k for k in ("model", "decoder", "assistance", "condition") if k in done.columns]
-    return done.set_index(keys).finished
+    finished = done.set_index(keys).finished
+    out = {}
+    for c in conditions:
+        arm = {"model": model, "decoder": NO_ASSISTANCE if interface_of(c) == "R" else decoder}
+        arm |= {"assistance": assistance if "+" in c else NO_ASSISTANCE, "condition": c}
+        out[f"{c} finished"] = finished.get(tuple(arm[k] for k in keys))
+    return out
 
 
 def figure_stats(rows: list[Claim], n_total: int) -> dict[str, dict[str, str]]:
     """Our result per claim and figure panel (the plots' ``stats``): ``"ours (10): <word>; <effect>"``."""
     by_id = {c.id: c for c in rows}
     panels = (("headline", False), ("cohort", True))[: 2 if n_total > PAPER_N else 1]
-    found = {h: {p: by_id.get(claim_id(h, 0, "", cohort)) for p, cohort in panels} for h in DECODER_KEYS}
+    found = {h: {p: by_id.get(claim_id(h, 0, "", cohort)) for p, cohort in panels} for h in PAPER_KEYS}
     return {
         h: {p: f"ours ({r.n_users}): {_word(r)}; {_effect(r)}" for p, r in mine.items() if r is not None}
         for h, mine in found.items()

@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-from lasa.base.config import NO_ASSISTANCE, check_choice
+from lasa.base.config import NO_ASSISTANCE, check_choice, check_range
 from lasa.base.errors import ConfigError
 from lasa.evidence.decision import NOT_TESTABLE
 from lasa.evidence.hypotheses import TABLES, analyse, for_member, judge
@@ -190,8 +190,7 @@ def _row(
 def needed(table: pd.DataFrame, target: float = 0.8, interpolate: bool = False) -> pd.DataFrame:
     """Per claim of :func:`power`'s ``table``, the smallest cohort from which every size reaches ``target``
     power (``interpolate``: linearly where it crosses, rounded up): ``needed`` (NA if none) and why."""
-    if not 0.0 < target < 1.0:
-        raise ConfigError(f"target must be a power in (0, 1), got {target!r}")
+    check_range("target (a power)", target, 0.0, 1.0, low_open=True, high_open=True)
     lacking = [c for c in _COLUMNS if c not in table.columns]
     if lacking:
         raise ConfigError(f"table lacks {lacking}; pass lasa.experiments.study.power.power's table")

@@ -21,7 +21,7 @@ from lasa.evidence.sessions import DROPPED, LEFT_OUT, PRACTICE_TASK, QUESTIONS, 
 from lasa.experiments.study import power as study_power
 from lasa.experiments.study import run as study
 from lasa.world import measures
-from lasa.world.eating import STUDY_BELIEF_CAP
+from lasa.world.eating import STUDY_BELIEF_CAP, load_eating_robot
 
 # The paper's three hypotheses (Sec. VI), each with the claim whose rule tests it.
 HYPOTHESES = {
@@ -71,8 +71,6 @@ def power_table(
     progress: bool = False,
 ) -> pd.DataFrame:
     """:func:`lasa.experiments.study.power.power` on the simulated cohort's ``frames``, for ``reading``."""
-    from lasa.world.eating import load_eating_robot
-
     config = study.Config()
     horizon = config.session.horizon * load_eating_robot().control.dt  # notebook 11's [s]
     seed = config.seed

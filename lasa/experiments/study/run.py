@@ -22,6 +22,7 @@ from lasa.base.config import (
     Seed,
     check_choice,
     check_list,
+    check_range,
     validate_caps,
 )
 from lasa.base.errors import CheckpointError, ConfigError
@@ -86,10 +87,7 @@ class Config:
         check_choice("decoders", self.decoders, DECODER_SELECTIONS)
         for name in self.variants_per_model:
             check_choice("variants_per_model's participant model", name, tuple(PARTICIPANT_MODELS))
-        if not 0 <= self.video_participant < self.participants:
-            raise ConfigError(
-                f"video_participant must be in [0, {self.participants}), got {self.video_participant}"
-            )
+        check_range("video_participant", self.video_participant, 0, self.participants, high_open=True)
         check_list("power_sizes", self.power_sizes, ascending=True)
         # warn of a cohort the Williams square does not balance, and of power sizes beyond it
         rows = len(williams_square(len(CONDITIONS)))
