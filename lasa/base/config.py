@@ -74,7 +74,9 @@ def expects(annotation: Any) -> str:
     """What a field of this type accepts, in words: ``an integer >= 1``, ``a number in [0, 1]``."""
     origin = typing.get_origin(annotation)
     if origin is Annotated:
-        ends, opens, base = [-math.inf, math.inf], [False, False], typing.get_args(annotation)[0]
+        ends = [-math.inf, math.inf]
+        opens = [False, False]
+        base = typing.get_args(annotation)[0]
         for bound in (m for m in annotation.__metadata__ if type(m) in _SIDES):
             side, opens[side] = _SIDES[type(bound)]
             ends[side] = float(getattr(bound, type(bound).__name__.lower()))  # Ge(1).ge, Lt(1).lt ...

@@ -389,7 +389,8 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
             return f"{head} ({_untestable_why(row, numbers)}), N = {row.n_users}{seen}"
         said = [effect] if effect else []
     else:
-        r, paper = RULES.get(str(row.id).split("@", 1)[0]), paper_numbers_of(str(row.id), str(row.robot))
+        r = RULES.get(str(row.id).split("@", 1)[0])
+        paper = paper_numbers_of(str(row.id), str(row.robot))
         said = [
             f"{p.value:g} {w}: {_interval_text(numbers[p.quantity])}"
             for p, w in zip(paper, str(row.number).split("; "), strict=False)
@@ -524,7 +525,8 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
             if w == "not reproduced" and why:
                 said += f": {why.replace('; ', ', ')}"
             if w == NOT_TESTABLE:
-                row, numbers = rows[(pc.id, robots[0])], values.get((pc.id, robots[0]), {})
+                row = rows[(pc.id, robots[0])]
+                numbers = values.get((pc.id, robots[0]), {})
                 said += f": {_untestable_why(row, numbers, 'completion {} within the horizon')}"
             by_word.setdefault(w, []).append(said)
     lines = [

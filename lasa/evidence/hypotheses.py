@@ -166,7 +166,8 @@ def judge(result: Result) -> dict[str, Judged]:
 def _h1(result: Result, name: str, unit: str = "m s", scale: float = 1.0) -> Judged:
     """H1 on the test ``name``: within subjects with its pairwise comparisons (values in ``unit`` by
     ``scale``), or ``h1_between``, the paper's F(1,18) reading (no pairwise comparisons)."""
-    between, test = name == "h1_between", result[name]
+    between = name == "h1_between"
+    test = result[name]
     pairs = [] if between else list(result[name.replace("within", "pairs")].itertuples())
     diff = test["mean_sa"] - test["mean_no_sa"]
     tests = {"effect": diff, "p": test["p"]}
@@ -273,7 +274,8 @@ def h3_comparator(result: Result) -> str | None:
 def _h3_censored(result: Result, tail: str) -> Judged:
     """H3 with a censored condition: ``no`` if LA+SA's restricted mean Total Time is above a measured
     comparator's (the fastest, interval clear of 0; LA+SA's a lower bound if censored), else not testable."""
-    censored, short = _censored(result["h3_completion"]), result["h3_short"]
+    censored = _censored(result["h3_completion"])
+    short = result["h3_short"]
     r = _censored_comparator(result["h3_total"], censored)
     if r is None:
         return NOT_TESTABLE, math.nan, math.nan, math.nan, f"{NOT_TESTABLE} (completion: {short}); {tail}"

@@ -177,7 +177,9 @@ class _Run:
 
 def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
     task, config, z, preference_sets = run.task, run.config, run.z, run.preference_sets
-    robot, dt, names = task.robot, run.control.dt, task.goal_names
+    robot = task.robot
+    dt = run.control.dt
+    names = task.goal_names
     hold = max(1, round(config.hold / dt))
     pset = preference_sets[g]
     b = confident_belief(task.n_goals, g, run.control.belief_floor, run.control.belief_cap)
@@ -194,7 +196,9 @@ def _confident_rows(run: _Run, g: int) -> pd.DataFrame:
 
 
 def _uncertain_rows(run: _Run) -> pd.DataFrame:
-    task, z, robot = run.task, run.z, run.task.robot
+    task = run.task
+    z = run.z
+    robot = run.task.robot
     steps = max(1, round(run.config.uncertain_hold / run.control.dt))
     flat = np.full(task.n_goals, 1.0 / task.n_goals)  # the uniform belief
     paths = held_input_paths(run.decoder, task, run.control, task.start, flat, z, steps, update_belief=True)
@@ -216,7 +220,10 @@ def _rows(base: dict[str, str], context: str, goal: str, z: np.ndarray, **cols: 
 
 def _leave_rows(run: _Run) -> pd.DataFrame:
     """The leave rows, per (goal, phase end, condition, input, other goal), in one batch."""
-    task, control, z, names = run.task, run.control, run.z, run.task.goal_names
+    task = run.task
+    control = run.control
+    z = run.z
+    names = run.task.goal_names
     alphas = {"LA": 0.0, "LA+SA": control.alpha}
     runs = [
         (g, label, state, cond)

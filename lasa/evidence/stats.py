@@ -131,7 +131,8 @@ def pairwise(
 def _corrected(p_unc: np.ndarray, correction: str) -> np.ndarray:
     """The finite ``p_unc`` corrected by ``correction``, the live objects frozen meanwhile (and thawed
     after): statsmodels' Holm branch calls ``gc.collect()``, which scans every object of a large process."""
-    p_corr, finite = p_unc.copy(), np.isfinite(p_unc)
+    p_corr = p_unc.copy()
+    finite = np.isfinite(p_unc)
     if correction == "none" or not finite.any():
         return p_corr
     already = gc.get_freeze_count() > 0

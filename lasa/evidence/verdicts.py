@@ -97,7 +97,8 @@ def group_means(
     building them: sum_u c_u S_ug / sum_u c_u N_ug (S, N: each user's sum and count in the group)."""
     users = pd.factorize(frame[unit], sort=True)[0]
     grouped = frame.groupby(keys, sort=True)
-    groups, labels = grouped.ngroup().to_numpy(), list(grouped.groups)
+    groups = grouped.ngroup().to_numpy()
+    labels = list(grouped.groups)
     n_users, n_groups = counts.shape[1], len(labels)
     sums, sizes = np.zeros((n_users, n_groups)), np.zeros((n_users, n_groups))
     np.add.at(sums, (users, groups), frame[metric].to_numpy(dtype=float))

@@ -275,7 +275,8 @@ def directions(
     rows = []
     for name, b in beliefs.items():
         qdot = decoder.decode_numpy(z, states, np.broadcast_to(b, (len(z), len(b))))
-        v, w = qdot @ jp[0].T, qdot @ jr[0].T  # (Z, 3)
+        v = qdot @ jp[0].T
+        w = qdot @ jr[0].T
         d_axis = np.cross(w, axis[0])  # rate of change of the fork's direction
         # tilt from vertical: angle between the axis and (0, 0, -1); its rate
         tilt_rate = -d_axis[:, 2] / max(np.sqrt(1.0 - axis[0, 2] ** 2), 1e-6)
@@ -296,7 +297,8 @@ def plot(frame: pd.DataFrame) -> Figure:
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.2))
     tilt = np.degrees(frame.tilt_rate.to_numpy())
     vmax = max(float(np.abs(tilt).max()), 1.0)
-    cmap, norm = plt.get_cmap("coolwarm"), plt.Normalize(-vmax, vmax)
+    cmap = plt.get_cmap("coolwarm")
+    norm = plt.Normalize(-vmax, vmax)
     scale = 0.5 / 0.1  # 0.1 m/s -> half the unit circle
     arrow = {"arrowstyle": "-|>", "color": "0.2", "lw": 1.6}
     for ax, name in zip(axes, BELIEFS, strict=True):

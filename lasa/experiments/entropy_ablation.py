@@ -161,7 +161,8 @@ def plot(table: pd.DataFrame) -> Figure:
         lams = sorted(set(part[part.kind == "grid"]["lambda"]))
         for ax, lam in zip(row, lams, strict=False):
             g = part[(part.kind == "grid") & (part["lambda"] == lam)]
-            ps, cs = np.unique(g.progress.to_numpy()), np.unique(g.confidence.to_numpy())
+            ps = np.unique(g.progress.to_numpy())
+            cs = np.unique(g.confidence.to_numpy())
             grid = g.entropy.to_numpy().reshape(len(ps), len(cs)).T
             mesh = ax.pcolormesh(ps, cs, grid, vmin=0.0, vmax=np.log(2), cmap="viridis", shading="nearest")
             plt.colorbar(mesh, ax=ax, label="entropy of p(s,b) [nats] (max log 2)")

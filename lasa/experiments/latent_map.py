@@ -84,7 +84,8 @@ def plot_grasp_sweep(
         rel = np.asarray(p) - cup
         return np.stack([rel @ side, rel[..., 2]], axis=-1)
 
-    norm, cmap = Normalize(-1.0, 1.0), plt.get_cmap("coolwarm")
+    norm = Normalize(-1.0, 1.0)
+    cmap = plt.get_cmap("coolwarm")
     color = goal_colors(task.n_goals)[goal]
     ax.add_patch(Rectangle((-0.035, -cup[2]), 0.07, cup[2] + 0.02, color=color, alpha=0.6))
     for path, z in zip(paths, z_values, strict=True):
@@ -106,7 +107,8 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
     ``latent_paths`` of ``run_paths``); ``tasks``: those already built, by robot name. Its panels: the
     grasp-site paths from home, coloured by the held z; the grasps at the cup (:func:`plot_grasp_sweep`);
     what z controls in each context (:func:`run`'s rows), the cup reached or the grasp."""
-    norm, cmap = Normalize(-1.0, 1.0), plt.get_cmap("coolwarm")
+    norm = Normalize(-1.0, 1.0)
+    cmap = plt.get_cmap("coolwarm")
     rows = [name for name in robots_present(table) if run_paths.artifact("latent_paths", name).is_file()]
     size, widths = (15, 4.3 * len(rows)), {"width_ratios": [1.1, 1.1, 1]}
     fig, axes = plt.subplots(len(rows), 3, figsize=size, squeeze=False, gridspec_kw=widths)
@@ -127,7 +129,9 @@ def plot(table: pd.DataFrame, run_paths: Paths, tasks: Mapping[str, CupTask] | N
                 plt.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, label="held joystick input z", shrink=0.8
             )
         mine = table[table.robot == name]
-        ax, uni, conf = row[2], mine[mine.context == "uniform"], mine[mine.context == "confident"]
+        ax = row[2]
+        uni = mine[mine.context == "uniform"]
+        conf = mine[mine.context == "confident"]
         ax.plot(uni.z, uni.cup_axis, "o-", color="#444", label="from uniform belief: cup reached")
         ax.set(xlabel="held joystick input z", ylabel="grasp site: left cup (-) ... right cup (+) [m]")
         ax.axhline(0, color="0.8", lw=0.8)

@@ -320,7 +320,8 @@ def plot(table: pd.DataFrame, headline: str = "point") -> Figure:
         grid = np.full((len(ids), len(order_cols)), np.nan)
         for row in table[table.robot == robot].itertuples(index=False):
             r, c = ids.index(row.id), order_cols.index(row.column)
-            grid[r, c], undecided = code[row.effect], row.effect == UNDECIDED
+            grid[r, c] = code[row.effect]
+            undecided = row.effect == UNDECIDED
             if undecided:  # hatched, its number with a "?"
                 xy = (c - 0.5, r - 0.5)
                 ax.add_patch(plt.Rectangle(xy, 1, 1, fill=False, hatch="///", lw=0, color="0.5"))

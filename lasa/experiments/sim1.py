@@ -172,7 +172,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
     """Fig. sim1's claims on one robot's frame: LA against LA+SA, and SA with or without entropy."""
     sa = _sa_claims(frame)
     err = frame.groupby(["beta", "method"]).final_error.mean().unstack("method")
-    counts, total = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}, len(err)
+    counts = {m: int((err[m] < err["LA"]).sum()) for m in ("LA+SA", "LA+SA+Entropy")}
+    total = len(err)
     entropy = sweep.sim_claim(
         "sim1.entropy_sa",
         str(frame.robot.iloc[0]),
@@ -242,7 +243,8 @@ def plot_metric(frame: pd.DataFrame, metric: str, ax: Axes | None = None) -> Axe
         stats = frame.groupby(["method", "beta"]).agg(time=("time", "mean"), done=("completed", "mean"))
         cut = stats[stats.done < 1.0]
         for method, part in cut.groupby(level="method"):
-            betas, color = part.index.get_level_values("beta"), plots.METHOD_COLORS[str(method)]
+            betas = part.index.get_level_values("beta")
+            color = plots.METHOD_COLORS[str(method)]
             ax.plot(betas, part.time, mec=color, **OPEN)
         if not cut.empty:
             horizon = int(frame.loc[~frame.completed.astype(bool), "time"].max())
@@ -282,7 +284,8 @@ def plot(table: pd.DataFrame, assistance: str = "point") -> Figure:
     def draw(name: str, part: pd.DataFrame, row: np.ndarray) -> None:
         plot_metric(part, "final_error", ax=row[0])
         plot_metric(part, "time", ax=row[1])
-        ax, band = row[2], time_ratio_band(part)  # the time ratio, ours with its band, the paper's as stars
+        ax = row[2]
+        band = time_ratio_band(part)
         color = plots.METHOD_COLORS["LA+SA"]
         label = f"ours: {100 * sweep.LEVEL:.4g}% bootstrap CI (the verdicts' level)"
         ax.fill_between(band.beta, band.low, band.high, color=color, alpha=0.25, lw=0, label=label)

@@ -69,7 +69,8 @@ def run(
     """Fig. sim2: final error and confidence in the true cup against the change step N, per episode."""
 
     def changing(change: list[int], goal: np.ndarray, theta: np.ndarray) -> dict[str, np.ndarray]:
-        first, n = task.target(wrong_goal(goal, task.n_goals), theta), len(goal)
+        first = task.target(wrong_goal(goal, task.n_goals), theta)
+        n = len(goal)
         return {
             "beta0": np.full(n, config.beta),
             "slope": np.zeros(n),
@@ -286,7 +287,8 @@ def claim_sentence(claim: Claim, steps: tuple[int, int]) -> str:
     parts = []
     for name, up, down in (("error_growth", "grows", "falls"), ("confidence_drop", "falls", "rises")):
         value, low, high = sweep.number(claim, name)
-        holds, sure = value > 0, "" if low > 0 or high < 0 else " (its interval contains 0)"
+        holds = value > 0
+        sure = "" if low > 0 or high < 0 else " (its interval contains 0)"
         if not holds:  # the same interval, said the other way round
             up, value, low, high = down, -value, -high, -low
         parts.append((holds, f"{up} by {sweep.interval_text(value, low, high, '{:.2f}')}{sure}"))
@@ -307,10 +309,14 @@ def _rates(head: pd.DataFrame) -> pd.DataFrame:
 
 def success_sentence(head: pd.DataFrame) -> str:
     """Each method's success share at every N in ``head`` (one member's rows and LA's), and its trend."""
-    rates, lines = _rates(head), []
+    rates = _rates(head)
+    lines = []
     for m in rates.columns:  # how the share moves from the first N to the last (in whole percent)
-        first, last = rates[m].iloc[0], rates[m].iloc[-1]
-        a, b, word = f"{first:.0%}", f"{last:.0%}", "falls" if last < first else "rises"
+        first = rates[m].iloc[0]
+        last = rates[m].iloc[-1]
+        a = f"{first:.0%}"
+        b = f"{last:.0%}"
+        word = "falls" if last < first else "rises"
         trend = f"stays at {a}" if a == b else f"{word} from {a} to {b}"
         lines.append(f"{m} {', '.join(f'{r:.0%}' for r in rates[m])} ({trend})")
     return f"- **Success at N = {', '.join(str(n) for n in rates.index)}.** " + "; ".join(lines) + "."

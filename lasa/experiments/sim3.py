@@ -144,10 +144,12 @@ def findings(claims: list[Claim], head: pd.DataFrame) -> str:
     """Fig. sim3's result on ``head``'s robot and member (its rows and LA's) as Markdown bullets."""
     claim = sweep.headline_claim(claims, "sim3.entropy_learners", head)
     mean = head.groupby(["learner", "method", USER]).error.mean().groupby(["learner", "method"]).mean()
-    lines, learners = [], sorted(set(head.learner))
+    lines = []
+    learners = sorted(set(head.learner))
     for learner in learners:
         gain, low, high = sweep.number(claim, f"gain_{learner}")
-        word, said = "lowers" if gain > 0 else "raises", sweep.interval_text(gain, low, high, "{:+.3f}")
+        word = "lowers" if gain > 0 else "raises"
+        said = sweep.interval_text(gain, low, high, "{:+.3f}")
         sure = "" if low > 0 or high < 0 else "; its interval contains 0"
         errors = ", ".join(f"{m} {mean[learner, m]:.3f}" for m in ("LA", "LA+SA", "LA+SA+Entropy"))
         lines.append(

@@ -128,7 +128,10 @@ class KeyboardDevice(Device):
     releases): an arrow moves its axis a notch and it stays there; space recentres, ``M`` mode, ``S`` stop."""
 
     def __init__(self) -> None:
-        self._axes, self._mode, self._stop, self._lock = np.zeros(2), False, False, threading.Lock()
+        self._axes = np.zeros(2)
+        self._mode = False
+        self._stop = False
+        self._lock = threading.Lock()
 
     def key_callback(self, key: int) -> None:
         """Update the held axes, the mode press or the stop toggle from one key press."""

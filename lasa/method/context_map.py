@@ -184,7 +184,8 @@ class ContextMap(_MergedBelief):
         _check_grown(task, n_train, ref_index)
         check_choice("kind", kind, JOINT_KINDS)
         start, g = task.start, task.goals[-1]
-        line, offset = g - start, task.goals[ref_index] - g
+        line = g - start
+        offset = task.goals[ref_index] - g
         saturation = _saturation(start, g, task.curves[-1], "the new goal coincides with the start pose")
         # along the straight line to g, d(s_hat)/d(lambda) must keep pointing forwards
         shift = float(line @ offset) / (float(line @ line) * saturation)
@@ -260,7 +261,9 @@ class TaskSpaceMap(_MergedBelief):
 
     def __init__(self, task: CupTask, n_train: int, ref_index: int) -> None:
         _check_grown(task, n_train, ref_index)
-        self.robot, self.n_train, self.ref_index = task.robot, n_train, ref_index
+        self.robot = task.robot
+        self.n_train = n_train
+        self.ref_index = ref_index
         cups = self.robot.goal_positions()
         self.delta = _turn(self.robot, cups[-1], cups[ref_index]) * abs(_yaw_axis(self.robot))
         self.start = task.start.copy()
@@ -271,7 +274,8 @@ class TaskSpaceMap(_MergedBelief):
         sites = self.robot.grasp_positions(
             np.concatenate([task.start[None], task.goals[-1][None], task.curves[-1]])
         )
-        self.site_start, self.site_goal = sites[0], sites[1]
+        self.site_start = sites[0]
+        self.site_goal = sites[1]
         self.saturation = _saturation(
             sites[0], sites[1], sites[2:], "the new goal's grasp site coincides with the start's"
         )

@@ -164,14 +164,17 @@ class _Buffers(threading.local):
             return view
         rows = math.prod(shape)
         if rows > _KEEP_ROWS:  # a chunk this large (trailing axes > _CHUNK_ROWS) is not kept
-            a, b = torch.empty(rows, width), torch.empty(rows, width)
+            a = torch.empty(rows, width)
+            b = torch.empty(rows, width)
         else:
             if len(self.views) >= 64 or rows > self.rows:
                 self.views = {}
             if rows > self.rows:
                 self.rows = rows
-                self.a, self.b = torch.empty(rows, width), torch.empty(rows, width)
-            a, b = self.a[:rows], self.b[:rows]
+                self.a = torch.empty(rows, width)
+                self.b = torch.empty(rows, width)
+            a = self.a[:rows]
+            b = self.b[:rows]
         a_nd = a.view(*shape, width)
         view = (a_nd.numpy(), a_nd, a, b, a.t(), b.t())
         if rows <= _KEEP_ROWS:
@@ -184,11 +187,14 @@ class _InferencePlan:
 
     def __init__(self, model: LatentActionModel) -> None:
         cfg = model.config
-        d, n = cfg.z_dim, cfg.n_joints
+        d = cfg.z_dim
+        n = cfg.n_joints
         layers = [m for m in model.decoder if isinstance(m, nn.Linear)]
         with torch.no_grad():
-            w1, c1 = layers[0].weight.detach().double(), layers[0].bias.detach().double()
-            mean, std = model.state_mean.detach().double(), model.state_std.detach().double()
+            w1 = layers[0].weight.detach().double()
+            c1 = layers[0].bias.detach().double()
+            mean = model.state_mean.detach().double()
+            std = model.state_std.detach().double()
             w_s = w1[:, d : d + n] / std
             # h1 = W_z z + [W_s / std, W_b] [s, b] + (c1 - W_s mean / std), in float64
             self.w_z = w1[:, :d].T.numpy().copy()  # (d, H)
@@ -202,7 +208,9 @@ class _InferencePlan:
         self.versions = [t._version for t in self.tensors]
         self.scale = float(cfg.action_scale)
         self.width = int(w1.shape[0])
-        self.d, self.n, self.g = d, n, cfg.n_goals
+        self.d = d
+        self.n = n
+        self.g = cfg.n_goals
         self.buffers = _Buffers()
 
     def fits(self, model: LatentActionModel) -> bool:
@@ -258,7 +266,8 @@ class _InferencePlan:
     ) -> np.ndarray:
         """The MLP from the first layer's float32 terms, in chunks along the first broadcast axis;
         the output layer transposed (n x rows), copied to float64 (a reused buffer)."""
-        width, buffers = self.width, self.buffers
+        width = self.width
+        buffers = self.buffers
         inner = math.prod(lead[1:])
         chunks = -(-lead[0] // max(1, _CHUNK_ROWS // max(inner, 1)))
         step = -(-lead[0] // chunks)  # indices of the first axis per chunk, balanced
@@ -269,7 +278,8 @@ class _InferencePlan:
             self._layers(h, g, a_t, b_t, out_t)
         else:
             full = len(lead) + 1
-            tz32, tc32 = torch.from_numpy(t_z32), torch.from_numpy(t_c32)
+            tz32 = torch.from_numpy(t_z32)
+            tc32 = torch.from_numpy(t_c32)
             for start in range(0, lead[0], step):
                 stop = min(lead[0], start + step)
                 _, first, h, g, a_t, b_t = buffers.get((stop - start, *lead[1:]), width)

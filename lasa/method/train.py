@@ -160,7 +160,8 @@ def train_decoder(
     arrays = (demos.states, demos.actions, demos.beliefs)
     s, a, b = (torch.as_tensor(x[train_mask], dtype=torch.float32) for x in arrays)
     roles = torch.as_tensor(sector_roles(demos)[train_mask]) if config.sector_weight > 0 else None
-    data, val = (s, a, b, roles), tuple(x[val_mask] for x in arrays)
+    data = (s, a, b, roles)
+    val = tuple(x[val_mask] for x in arrays)
 
     # fused: one kernel per parameter for the whole update, about 3x faster on CPU
     optim = torch.optim.AdamW(model.parameters(), lr=config.lr, weight_decay=config.weight_decay, fused=True)

@@ -154,7 +154,9 @@ class _Collector:
     def dataset(self) -> Demonstrations:
         """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
         back towards the demonstrated state (clipped below sigma_h)."""
-        robot, config, limit = self.task.robot, self.config, 0.99 * self.control.action_scale
+        robot = self.task.robot
+        config = self.config
+        limit = 0.99 * self.control.action_scale
         states, actions, *labels = map(np.concatenate, zip(*self.rows, strict=True))
         copies = [(states, actions)]
         for _ in range(config.n_perturb):

@@ -24,8 +24,14 @@ from lasa.world.record import Episodes
 
 def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
     """The chooser: every running participant's input, one step ahead (or rest); a_h (A, n)."""
-    n_k, n_m, dt, idx, rest = len(study.grid), len(MODES), study.control.dt, now.rows, study.rest
-    la, r_rows, a_i = study.layout.is_la[idx], np.flatnonzero(~study.layout.is_la[idx]), run.axis[idx]
+    n_k = len(study.grid)
+    n_m = len(MODES)
+    dt = study.control.dt
+    idx = now.rows
+    rest = study.rest
+    la = study.layout.is_la[idx]
+    r_rows = np.flatnonzero(~study.layout.is_la[idx])
+    a_i = run.axis[idx]
     # phi of the stick positions (zero for Retargeting), and the foreseen tip motion of every (mode, z)
     # candidate: displacements and new directions, (A, M K, 3) each
     dp = np.zeros((len(idx), n_m * n_k, 3))
@@ -45,7 +51,8 @@ def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
     valid = np.zeros_like(gain, dtype=bool)
     valid[la, :n_k] = True
     valid[r_rows] = True
-    modes, r_mode = np.arange(n_m)[None, :], run.mode[idx[r_rows], None]  # (1, M), (R, 1)
+    modes = np.arange(n_m)[None, :]
+    r_mode = run.mode[idx[r_rows], None]
     valid[r_rows[:, None], modes * n_k + rest] = modes == r_mode
     rest_col = np.where(la, rest, run.mode[idx] * n_k + rest)
     gain[r_rows] /= np.repeat(1.0 + (modes - r_mode) % n_m, n_k, axis=1)
@@ -54,7 +61,8 @@ def _choose(study: Setting, run: State, now: Now) -> np.ndarray:
     pc = study.config.participant
     choice, wants = choose(gain, study.layout, idx, now.t, study.streams, run.waited, dt, pc)
     choice = np.where(wants, choice, rest_col)
-    mode, k = choice // n_k, choice % n_k
+    mode = choice // n_k
+    k = choice % n_k
     z = study.grid[k]
     a_h = np.zeros((len(idx), study.task.robot.n_joints))
     a_h[la] = human_action(phi[la, k[la]], z[la], rest="zero")

@@ -107,7 +107,9 @@ def prepare(
 
 def start(setting: Setting) -> State:
     """Every episode at the task's start, nothing recorded yet."""
-    n_e, horizon, n = len(setting.layout.part), setting.config.horizon, setting.task.robot.n_joints
+    n_e = len(setting.layout.part)
+    horizon = setting.config.horizon
+    n = setting.task.robot.n_joints
     return State(
         **{k: np.zeros(n_e, dtype=int) for k in ("mode", "w", "waited")},
         **{k: np.zeros((n_e, 3)) for k in ("pos", "axis")},

@@ -76,7 +76,8 @@ def build_book(notebooks: str | Path, figures: str | Path, out: str | Path, prog
     books = ordered_notebooks(notebooks)
     claims_csv = require_file(figures / "claims.csv", "make figures")
     mathjax = require_file(repo_root() / ".venv" / "mathjax" / "es5" / "tex-chtml.js", "make setup").parent
-    src, build = out / "src", out / "_build"
+    src = out / "src"
+    build = out / "_build"
     _write_sources(src, books, figures, mathjax, pd.read_csv(claims_csv, dtype=str, keep_default_na=False))
     shutil.rmtree(build, ignore_errors=True)
     command = [

@@ -59,7 +59,8 @@ def imports_of(source: str, root: Path = ROOT) -> set[str]:
 
 def closure(modules: set[str], root: Path = ROOT) -> set[str]:
     """Every lasa module reached from ``modules`` by imports (them included)."""
-    seen, todo = set(), set(modules)
+    seen = set()
+    todo = set(modules)
     while todo:
         seen |= todo
         files = (module_file(name, root) for name in todo)

@@ -226,7 +226,8 @@ def write_pages(
     """Write the page of each executed notebook of ``executed`` to ``<figures>/notebooks/``; return them,
     the bytes of all pages there and the figures linked to fit; PageBudgetError (nothing written) if over."""
     notebooks = {p.name: _read(p) for p in executed_notebooks(Path(executed))}
-    index, folder = FigureIndex(Path(figures)), Path(figures) / PAGES
+    index = FigureIndex(Path(figures))
+    folder = Path(figures) / PAGES
     others = sum(p.stat().st_size for p in folder.glob("*.ipynb") if p.name not in notebooks)
     embedded = {name: clean_notebook(nb, index) for name, nb in notebooks.items()}
     pages = {name: page_text(page) for name, page in embedded.items()}

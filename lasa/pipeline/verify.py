@@ -284,7 +284,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     for label, folder in (("committed", args.committed), ("new", args.new)):  # lasa.runtime.record's
-        path, what = Path(folder) / KERNELS, f"kernels of the {label} run"
+        path = Path(folder) / KERNELS
+        what = f"kernels of the {label} run"
         if not path.is_file():
             print(f"{what}: {KERNELS} missing (its kernels were not recorded)")
             continue

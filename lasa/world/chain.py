@@ -74,7 +74,8 @@ class SerialChain:
             if n > 1 or model.jnt_type[j] != mujoco.mjtJoint.mjJNT_HINGE or model.jnt_qposadr[j] not in arm:
                 return None
             adr, axis = int(model.jnt_qposadr[j]), model.jnt_axis[j]
-            unit, zero = axis / np.linalg.norm(axis), float(model.qpos0[adr])
+            unit = axis / np.linalg.norm(axis)
+            zero = float(model.qpos0[adr])
             links.append(_Link(*offset, arm[adr], model.jnt_pos[j].copy(), unit, zero))
         if sorted(link.arm for link in links if link.arm >= 0) != list(range(len(qpos_adr))):
             return None

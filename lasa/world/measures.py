@@ -40,8 +40,12 @@ def measures(task: EatingTask, episodes: Episodes) -> dict[str, pd.DataFrame]:
     """The study's tidy tables ``goal_error``, ``time`` and ``alignment``: one row per participant x
     condition x task (x phase for alignment). Goal Error is to the closest of all four goals
     (``goal_error``) or of the three bowls (``goal_error_bowls``); ``mean_distance`` is it over the time."""
-    robot, dt, active, tip = task.robot, episodes.dt, episodes.active(), episodes.tip[:-1]
-    goals, bowls = robot.goal_positions(), [i for i, g in enumerate(GOALS) if g != "plate"]
+    robot = task.robot
+    dt = episodes.dt
+    active = episodes.active()
+    tip = episodes.tip[:-1]
+    goals = robot.goal_positions()
+    bowls = [i for i, g in enumerate(GOALS) if g != "plate"]
     who = ("participant", "condition", "assistance", "task", "order")
     keys = pd.DataFrame({"robot": robot.name, **{k: getattr(episodes, k) for k in who}})
     error = keys.assign(

@@ -20,7 +20,8 @@ from lasa.world.robot import Robot
 def grasp_frame(robot: Robot, goal: int, theta: float) -> tuple[np.ndarray, np.ndarray]:
     """Grasp-site position (3,) and rotation (3, 3) for cup ``goal`` at preference ``theta`` in [0, 1]."""
     check_range("theta", theta, 0.0, 1.0)
-    cup, radial = robot.goal_positions()[goal], robot.radial(goal)
+    cup = robot.goal_positions()[goal]
+    radial = robot.radial(goal)
     # turn the radial direction by side_azimuth towards the midline (y = 0)
     turn = -np.sign(cup[1]) * robot.spec.side_azimuth if cup[1] != 0 else 0.0
     c, s = np.cos(turn), np.sin(turn)

@@ -92,7 +92,8 @@ def claims(frame: pd.DataFrame) -> list[Claim]:
         if measure == HEADLINE and "angle_error_deg" in frame:
             angles = frame.groupby(["h", x]).angle_error_deg.mean()
         for kind, cid in _ids(measure, form, table.index):
-            f, notes = table.loc[kind or "none"], []
+            f = table.loc[kind or "none"]
+            notes = []
             values = {"slope": float(f.slope), "r2": float(f.r2)}
             claim = "without the map, the robot only reaches for the training goal"
             if kind:

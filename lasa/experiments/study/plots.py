@@ -79,7 +79,8 @@ def _layout(
     unknown = sorted(set(stats or {}) - set(PANELS))
     if unknown:
         raise ConfigError(f"stats keys must be among {PANELS}, got {unknown}")
-    head, n = data[data.participant < PAPER_N], data.participant.nunique()
+    head = data[data.participant < PAPER_N]
+    n = data.participant.nunique()
     panels = [(HEADLINE, head, f"first {head.participant.nunique()} simulated participants (the headline)")]
     if n > head.participant.nunique():
         panels.append((COHORT, data, f"cohort of {n} (a reading)"))

@@ -195,7 +195,8 @@ class Conversation:
             key = secrets.token_urlsafe(24)
             study.scenes[key] = trial.writer.csv.with_suffix(".xml")
             robot = trial.station.robot
-            qpos_adr, camera = robot.qpos_adr.tolist(), robot.model.camera(robot.spec.camera).id
+            qpos_adr = robot.qpos_adr.tolist()
+            camera = robot.model.camera(robot.spec.camera).id
             await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera})
         try:
             return await run_trial(
