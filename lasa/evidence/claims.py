@@ -99,8 +99,7 @@ class Claim:
     @property
     def stated(self) -> tuple[PaperNumber, ...]:
         """The numbers the paper states for this claim on its robot (its rule's)."""
-        r = self.judged_by
-        return tuple(p for p in r.paper if p.robot == self.robot) if r is not None else ()
+        return paper_numbers_of(self.id, self.robot, self.rule)
 
 
 # what a notebook shows of its claims (claims_frame): the row, its member, its evidence, its verdict
@@ -113,9 +112,9 @@ def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFra
     return pd.DataFrame([c.__dict__ for c in claims], columns=columns)
 
 
-def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
-    """The numbers the paper states for a paper claim on ``robot`` (none for another robot)."""
-    r = RULES.get(claim_id.split("@", 1)[0])
+def paper_numbers_of(claim_id: str, robot: str, rule: Rule | None = None) -> tuple[PaperNumber, ...]:
+    """The numbers ``rule`` (None: the paper's for the id) states for a claim on ``robot``."""
+    r = rule if rule is not None else RULES.get(claim_id.split("@", 1)[0])
     return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
 
 
@@ -160,16 +159,11 @@ def words_text(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
     return f"effect {effect}; " + ", ".join(f"{p.value:g} {w}" for p, w in zip(paper, numbers, strict=True))
 
 
-def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
-    """The sentence a row's note begins with: its two words, ``Effect reproduced; 0.11 out.``."""
-    text = words_text(effect, number, paper)
-    return text[0].upper() + text[1:] + ". "
-
-
 def _row(claim: Claim) -> dict[str, object]:
     row: dict[str, object] = {c: getattr(claim, c) for c in CLAIM_COLUMNS if hasattr(claim, c)}
     row |= {"settled": "yes" if claim.settled else "no"} | criteria(claim)
-    note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
+    said = words_text(str(row["effect"]), str(row["number"]), claim.stated)  # "Effect reproduced; 0.11 out. "
+    note = f"{said[0].upper()}{said[1:]}. {claim.note}"
     if row["fragile"] == "yes":
         note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
     row["note"] = note

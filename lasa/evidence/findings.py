@@ -130,26 +130,6 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
     return f"LA+SA is {side} than {versus[0]} by {by} (restricted means)"
 
 
-def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
-    sides = []
-    for numbers in (values.get((cid, "panda")), values.get((f"{cid}@cohort", "panda"))):
-        effect = numbers.get("effect") if numbers is not None else None
-        if effect is not None:
-            interval = effect.interval if _testable(numbers or _NONE) else None
-            sides.append((effect.n, side_of(interval, 0.0) if interval is not None else "untestable"))
-    if not sides:
-        return ""
-    told = [side for _, side in sides if side in ("above", "below")]
-    lead = told[-1] if told else "reaches"
-    tell = {lead: "tell it", "reaches": "cannot tell", "untestable": "cannot test it"}
-    verbs = [tell.get(side, "tell the opposite") for _, side in sides]
-    if len(set(verbs)) == 1 and len(sides) > 1:
-        ns = " and ".join(str(n) for n, _ in sides)
-        return f"{says[lead]}; {ns} simulated participants alike {verbs[0]}"
-    named = [f"{n} simulated participants" if i == 0 else str(n) for i, (n, _) in enumerate(sides)]
-    return f"{says[lead]}; {', '.join(f'{who} {verb}' for who, verb in zip(named, verbs, strict=True))}"
-
-
 def _testable(numbers: Numbers) -> bool:
     effect = numbers.get("effect")
     return _fact(numbers, "testable") == 1 and effect is not None and effect.interval is not None
@@ -168,12 +148,29 @@ def _h3_short(short: Sequence[tuple[str, float]]) -> str:
 def _hypothesis(
     cid: str, short_text: Callable[[Sequence[tuple[str, float]]], str], *says: str
 ) -> Callable[[Values, Sequence[str]], str]:
-    sides = dict(zip(("below", "above", "reaches"), says, strict=True))
+    said = dict(zip(("below", "above", "reaches"), says, strict=True))
 
     def find(values: Values, robots: Sequence[str]) -> str:
-        numbers = values.get((cid, "panda"), _NONE)
-        short = short_conditions(numbers) if not _testable(numbers) else []
-        return short_text(short) if short else _study(values, cid, sides)
+        headline = values.get((cid, "panda"), _NONE)
+        if short := short_conditions(headline) if not _testable(headline) else []:
+            return short_text(short)
+        sides = []
+        for numbers in (values.get((cid, "panda")), values.get((f"{cid}@cohort", "panda"))):
+            effect = numbers.get("effect") if numbers is not None else None
+            if effect is not None:
+                interval = effect.interval if _testable(numbers or _NONE) else None
+                sides.append((effect.n, side_of(interval, 0.0) if interval is not None else "untestable"))
+        if not sides:
+            return ""
+        told = [side for _, side in sides if side in ("above", "below")]
+        lead = told[-1] if told else "reaches"
+        tell = {lead: "tell it", "reaches": "cannot tell", "untestable": "cannot test it"}
+        verbs = [tell.get(side, "tell the opposite") for _, side in sides]
+        if len(set(verbs)) == 1 and len(sides) > 1:
+            ns = " and ".join(str(n) for n, _ in sides)
+            return f"{said[lead]}; {ns} simulated participants alike {verbs[0]}"
+        named = [f"{n} simulated participants" if i == 0 else str(n) for i, (n, _) in enumerate(sides)]
+        return f"{said[lead]}; {', '.join(f'{who} {verb}' for who, verb in zip(named, verbs, strict=True))}"
 
     return find
 
