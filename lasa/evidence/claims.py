@@ -133,13 +133,8 @@ def criteria(claim: Claim) -> dict[str, str]:
         "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
         "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN)) if direction else "n/a",
         "paper_numbers": "; ".join(said),
-        "fragile": "yes" if _fragile(claim) else "no",
+        "fragile": "yes" if r is not None and testable and r.fragile(claim.intervals) else "no",
     }
-
-
-def _fragile(claim: Claim) -> list[str]:
-    r = claim.judged_by
-    return [] if r is None or claim.reproduced == NOT_TESTABLE else r.fragile(claim.intervals)
 
 
 def numbers_of(claim: Claim) -> dict[str, Number]:
@@ -164,8 +159,9 @@ def _row(claim: Claim) -> dict[str, object]:
     row |= {"settled": "yes" if claim.settled else "no"} | criteria(claim)
     said = words_text(str(row["effect"]), str(row["number"]), claim.stated)  # "Effect reproduced; 0.11 out. "
     note = f"{said[0].upper()}{said[1:]}. {claim.note}"
-    if row["fragile"] == "yes":
-        note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
+    if row["fragile"] == "yes" and (r := claim.judged_by) is not None:
+        near = "; ".join(r.fragile(claim.intervals))
+        note = f"{note.rstrip()} Fragile: {near} (within a fifth of its width)."
     row["note"] = note
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"

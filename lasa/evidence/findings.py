@@ -36,11 +36,9 @@ def _across(
 
 
 def _time_ratio(values: Values, robots: Sequence[str]) -> str:
-    parts = []
-    for beta in ("1000", "75"):
-        says = {"above": "LA+SA is faster", "below": "LA+SA is slower", "reaches": "no clear gain"}
-        at = {side: f"at beta = {beta} {said}" for side, said in says.items()}
-        parts.append(_across(values, robots, "sim1.time_ratio", f"ratio_{beta}", 1.0, at))
+    says = {"above": "LA+SA is faster", "below": "LA+SA is slower", "reaches": "no clear gain"}
+    at = {b: {side: f"at beta = {b} {said}" for side, said in says.items()} for b in ("1000", "75")}
+    parts = [_across(values, robots, "sim1.time_ratio", f"ratio_{b}", 1.0, by) for b, by in at.items()]
     return "; ".join(p for p in parts if p)
 
 

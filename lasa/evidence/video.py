@@ -65,7 +65,7 @@ def render_states(
     return frames
 
 
-def label_frames(frames: np.ndarray, text: str | list[str]) -> np.ndarray:
+def label_frames(frames: np.ndarray, text: str | Sequence[str]) -> np.ndarray:
     """Write a caption in the top-left corner of every frame (one per frame, or shared)."""
     out = frames.copy()
     texts = [text] * len(frames) if isinstance(text, str) else text
@@ -125,10 +125,7 @@ def write_clips(
             raise ConfigError(f"clip {i}: {len(caption)} captions for {len(s)} frames")
     frames = render_states(robot, np.concatenate(states), height, width, n_jobs)
     parts = np.split(frames, np.cumsum([len(s) for s in states])[:-1])
-    shown = [
-        label_frames(part, caption if isinstance(caption, str) else list(caption))
-        for part, (_, caption) in zip(parts, clips, strict=True)
-    ]
+    shown = [label_frames(part, caption) for part, (_, caption) in zip(parts, clips, strict=True)]
     video = side_by_side(*shown) if layout == "side_by_side" else np.concatenate(shown)
     write_video(path, video, fps=fps)
     return video, shown
