@@ -14,8 +14,7 @@ _NONE: dict[str, Number] = {}
 
 
 def _interval(values: Values, cid: str, robot: str, name: str) -> tuple[float, float] | None:
-    number = values.get((cid, robot), _NONE).get(name)
-    return number.interval if number is not None else None
+    return values.get((cid, robot), _NONE).get(name, Number(math.nan)).interval
 
 
 def side_of(interval: tuple[float, float], ref: float) -> str:
@@ -95,8 +94,7 @@ def completion_text(conditions: Sequence[tuple[str, float]]) -> str:
 
 
 def _fact(numbers: Numbers, name: str) -> float:
-    number = numbers.get(name)
-    return number.value if number is not None else math.nan
+    return numbers.get(name, Number(math.nan)).value
 
 
 def study_effect(claim_id: str, numbers: Numbers) -> str:

@@ -141,16 +141,15 @@ def assess(
     frame: pd.DataFrame,
     n_boot: int = N_BOOT,
     seed: int = 0,
-    unit: str = USER,
     level: float = 0.95,
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> list[Claim]:
     """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``, with
-    intervals at ``level`` over resamples of ``unit``, ``undecided`` where one straddles a threshold or the
+    intervals at ``level`` over resamples of users, ``undecided`` where one straddles a threshold or the
     evidence falls short (:func:`shortfall`); ``fast`` (:func:`group_means`) gives the same numbers on the
     same resamples, else ``evaluate`` runs on each. A ConfigError if a claim's verdict is not its rule's."""
-    n_users = int(frame[unit].nunique())
+    n_users = int(frame[USER].nunique())
     short = shortfall(n_users, n_boot, level, min_users)  # a ConfigError for a level outside (0, 1)
     point = evaluate(frame)
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
@@ -163,7 +162,7 @@ def assess(
             for cid, s in samples.items()
         }
     else:
-        for sample in bootstrap_frames(frame, n_boot, seed, unit):
+        for sample in bootstrap_frames(frame, n_boot, seed):
             for c in evaluate(sample):
                 for k, v in c.values.items():
                     if c.id in samples and k in samples[c.id]:
