@@ -52,9 +52,7 @@ _NAN = (math.nan, math.nan)
 
 @dataclasses.dataclass(frozen=True)
 class Claim:
-    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule`` (a
-    ConfigError if the id is not ``<figure>.<name>``, ``reproduced`` no verdict, a not testable claim
-    settled, or ``rule`` not the claim's: a paper claim's is its own)."""
+    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule``."""
 
     id: str  # stable key, "<figure>.<name>": survives a rewording of ``claim``
     claim: str  # the paper's claim, in a sentence
@@ -102,7 +100,6 @@ class Claim:
         return paper_numbers_of(self.id, self.robot, self.rule)
 
 
-# what a notebook shows of its claims (claims_frame): the row, its member, its evidence, its verdict
 SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high", "reproduced", "settled")
 
 
@@ -180,8 +177,7 @@ def render_markdown(frame: pd.DataFrame) -> str:
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
     """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``, ``claim_values.csv``
-    and the ``.md`` twin, under the folder lock and the run's write journal; return the whole table, by
-    figure, robot and id (a ConfigError if two claims share an (id, robot), or a file has other columns)."""
+    and the ``.md`` twin, under the folder lock and the run's write journal; return the whole table."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
     if dup := new.loc[new.duplicated(["id", "robot"]), "id"].tolist():

@@ -145,10 +145,9 @@ def assess(
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> list[Claim]:
-    """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``, with
-    intervals at ``level`` over resamples of users, ``undecided`` where one straddles a threshold or the
-    evidence falls short (:func:`shortfall`); ``fast`` (:func:`group_means`) gives the same numbers on the
-    same resamples, else ``evaluate`` runs on each. A ConfigError if a claim's verdict is not its rule's."""
+    """The claims of ``evaluate`` on ``frame``, with intervals at ``level`` over resamples of users,
+    ``undecided`` where one straddles a threshold or the evidence falls short (:func:`shortfall`); ``fast``
+    (:func:`group_means`) gives the same numbers on the same resamples, else ``evaluate`` runs on each."""
     n_users = int(frame[USER].nunique())
     short = shortfall(n_users, n_boot, level, min_users)  # a ConfigError for a level outside (0, 1)
     point = evaluate(frame)
