@@ -382,8 +382,7 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
             if p.quantity in numbers
         ]
         if not said and r is not None and r.quantities[0].name in numbers:
-            first = r.quantities[0].name
-            said = [f"{first} {_interval_text(numbers[first])}"]
+            said = [f"{r.quantities[0].name} {_interval_text(numbers[r.quantities[0].name])}"]
         if r is not None and r.paper and not paper:
             said.append(f"no paper number for {row.robot}")
     bold = row.effect not in (UNDECIDED, NOT_TESTABLE)

@@ -19,8 +19,7 @@ def _interval(values: Values, cid: str, robot: str, name: str) -> tuple[float, f
 
 def side_of(interval: tuple[float, float], ref: float) -> str:
     """Where an interval lies against ``ref``: ``above``, ``below``, or ``reaches`` it."""
-    low, high = interval
-    return "above" if low > ref else "below" if high < ref else "reaches"
+    return "above" if interval[0] > ref else "below" if interval[1] < ref else "reaches"
 
 
 def _across(
@@ -127,8 +126,7 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
 
 
 def _testable(numbers: Numbers) -> bool:
-    effect = numbers.get("effect")
-    return _fact(numbers, "testable") == 1 and effect is not None and effect.interval is not None
+    return _fact(numbers, "testable") == 1 and numbers.get("effect", Number(math.nan)).interval is not None
 
 
 def _finish(short: Sequence[tuple[str, float]]) -> str:

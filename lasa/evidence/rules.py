@@ -58,8 +58,7 @@ def _sa_lowers(v: Mapping[str, float]) -> str:
 def _la_aligns(v: Mapping[str, float]) -> str:
     """H2's test: ``effect`` (scoop alignment LA+SA - R+SA) and its paired t-test's ``p``: yes if above
     0 with p < .05, partly if above 0, no otherwise (also when NaN: too few pairs)."""
-    above = v["effect"] > 0.0
-    return "yes" if above and v["p"] < _SIGNIFICANCE else "partly" if above else "no"
+    return _parts(v["effect"] > 0.0, v["effect"] > 0.0 and v["p"] < _SIGNIFICANCE)
 
 
 def _la_sa_fastest(v: Mapping[str, float]) -> str:
