@@ -184,8 +184,7 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
         intervals[q.name] = (float(bounds[0]), float(bounds[1]))
     settled = r.settled(intervals) and not short
     text = "; ".join(
-        f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
-        for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
+        f"{k} = {_fmt(c.values[k])} [{_fmt(lo)}, {_fmt(hi)}]" for k, (lo, hi) in intervals.items()
     )
     lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
     if not settled:
