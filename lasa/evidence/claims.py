@@ -168,10 +168,8 @@ def _row(claim: Claim) -> dict[str, object]:
 def render_markdown(frame: pd.DataFrame) -> str:
     """``claims.md``: the readings that flip each headline (:func:`render_flips`), then every row."""
     cols = list(CLAIM_COLUMNS)
-    lines = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
-    for _, row in frame.iterrows():
-        cells = [str(row[c]).replace("|", "\\|").replace("\n", " ") for c in cols]
-        lines.append("| " + " | ".join(cells) + " |")
+    rows = [[str(row[c]).replace("|", "\\|").replace("\n", " ") for c in cols] for _, row in frame.iterrows()]
+    lines = ["| " + " | ".join(cells) + " |" for cells in (cols, ["---"] * len(cols), *rows)]
     return render_flips(frame) + "\n# Every row of claims.csv\n\n" + "\n".join(lines) + "\n"
 
 
@@ -516,8 +514,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
         "simulated participants, not a replication with people; words and N: [the verdicts](#the-verdicts)):"
     ]
-    listed = [(w, by_word[w]) for w in WORDS if w in by_word]
-    lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
+    lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w in WORDS if (s := by_word.get(w))]
     _, n, stated = _heads(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"

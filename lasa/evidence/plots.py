@@ -173,8 +173,7 @@ def band_handle(level: float) -> Patch:
 def legend_below(ax: Axes, extra: Sequence[Artist] = ()) -> None:
     """The axes' legend, plus ``extra`` entries, below the axes, where it covers no data."""
     handles, labels = ax.get_legend_handles_labels()
-    handles += list(extra)
-    labels += [h.get_label() for h in extra]
+    handles, labels = [*handles, *extra], [*labels, *(h.get_label() for h in extra)]
     ax.legend(handles, labels, frameon=False, fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.17))
 
 
