@@ -27,8 +27,7 @@ def _across(
 ) -> str:
     groups: dict[str, list[str]] = {}
     for robot in robots:
-        interval = _interval(values, cid, robot, name)
-        if interval is not None:
+        if (interval := _interval(values, cid, robot, name)) is not None:
             groups.setdefault(side_of(interval, ref), []).append(robot)
     return "; ".join(f"{says[side]} ({on_robots(where)})" for side, where in groups.items())
 

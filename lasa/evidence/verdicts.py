@@ -258,8 +258,7 @@ def sequential(
         # the stopping rule reads the headline claims only, never a figure's own readings
         if all(c.settled for c in head if "@" not in c.id):
             break
-    first = frame[frame.look == 0]
-    others = {m: judge(member_frame(first, m)) for m in assistance if m != default}
+    others = {m: judge(member_frame(frame[frame.look == 0], m)) for m in assistance if m != default}
     rows: list[Claim] = []
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]
