@@ -34,12 +34,6 @@ def _above(ref: float, *parts: tuple[str, ...]) -> Decide:
     return lambda v: _parts(*(all(v[name] > ref for name in part) for part in parts))
 
 
-def _sim2_escapes(v: Mapping[str, float]) -> str:
-    if v["success_entropy"] >= 0.8 and v["margin"] >= 0.2:
-        return "yes"
-    return "partly" if v["margin"] > 0.0 else "no"
-
-
 def _sim4_linear(v: Mapping[str, float]) -> str:
     # two parts: the error grows linearly with the distance; the map lowers it at every cup
     return _parts(v["slope"] > 0.0 and v["r2"] >= 0.9, v["share_below"] >= 1.0)
@@ -175,7 +169,7 @@ _PAPER = (
             _q("success_entropy", (0.8,), "LA+SA+Entropy's success rate at the largest N"),
             _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
         ),
-        _sim2_escapes,
+        lambda v: _parts(v["margin"] > 0.0, v["success_entropy"] >= 0.8 and v["margin"] >= 0.2),
         direction=Direction("margin", +1),
     ),
     _two_parts(
