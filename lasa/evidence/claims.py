@@ -136,11 +136,10 @@ def criteria(claim: Claim) -> dict[str, str]:
 
 def numbers_of(claim: Claim) -> dict[str, Number]:
     """A claim's numbers as ``claim_values.csv`` holds them."""
-    out = {
+    return {
         k: Number(float(v), *claim.intervals.get(k, _NAN), level=claim.level, n=claim.n_users)
         for k, v in claim.values.items()
-    }
-    return out | {k: Number(float(v), n=claim.n_users) for k, v in claim.facts.items()}
+    } | {k: Number(float(v), n=claim.n_users) for k, v in claim.facts.items()}
 
 
 def words_text(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:

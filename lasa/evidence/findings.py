@@ -148,10 +148,9 @@ def _hypothesis(
         if short := short_conditions(headline) if not _testable(headline) else []:
             return short_text(short)
         sides = []
-        for numbers in (values.get((cid, "panda")), values.get((f"{cid}@cohort", "panda"))):
-            effect = numbers.get("effect") if numbers is not None else None
-            if effect is not None:
-                interval = effect.interval if _testable(numbers or _NONE) else None
+        for numbers in (values.get((cid, "panda"), _NONE), values.get((f"{cid}@cohort", "panda"), _NONE)):
+            if (effect := numbers.get("effect")) is not None:
+                interval = effect.interval if _testable(numbers) else None
                 sides.append((effect.n, side_of(interval, 0.0) if interval is not None else "untestable"))
         if not sides:
             return ""
