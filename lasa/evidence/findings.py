@@ -110,8 +110,7 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
         p, pairs = _fact(numbers, "p"), int(_fact(numbers, "pairs"))
         if not math.isfinite(p):
             return f"no scoop-phase comparison ({pairs} pairs)"
-        side = "above" if diff > 0 else "below"
-        said = f"LA+SA's scoop alignment is {side} R+SA's by {diff:+.3f}"
+        said = f"LA+SA's scoop alignment is {'above' if diff > 0 else 'below'} R+SA's by {diff:+.3f}"
         return f"{said}, paired t, {pairs} pairs, p = {p:.3g}"
     effect = numbers.get("effect")
     versus = [k.split(".", 1)[1] for k in numbers if k.startswith("versus.")]
