@@ -84,9 +84,8 @@ def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = US
     for _ in range(n_boot):
         picks = rng.integers(0, len(units), len(units))
         rows = np.concatenate([order[starts[p] : starts[p + 1]] for p in picks])
-        sizes = starts[picks + 1] - starts[picks]
         sample = frame.iloc[rows].copy()
-        sample[unit] = np.repeat(np.arange(len(picks)), sizes)
+        sample[unit] = np.repeat(np.arange(len(picks)), starts[picks + 1] - starts[picks])
         yield sample
 
 
