@@ -1,6 +1,6 @@
 """Every row of the committed claims table: its note's words and numbers are the row's own.
 
-A note is generated from its row (lasa.evidence.claims.note_lead, lasa.evidence.verdicts.assess,
+A note is generated from its row (lasa.evidence.claims._row, lasa.evidence.verdicts.assess,
 sequential and the study's rows); these checks read the note back and hold it against the row's
 columns, so a sentence that contradicts its own row fails here.
 """
@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from lasa.base.config import ASSISTANCE
-from lasa.evidence.claims import note_lead, paper_numbers_of, words_text
+from lasa.evidence.claims import paper_numbers_of, words_text
 from lasa.evidence.decision import NOT_TESTABLE, NUMBER_WORDS, UNDECIDED, WORDS
 from lasa.evidence.values import VALUES_NAME, read_values
 
@@ -41,7 +41,8 @@ def row(request):
 def test_the_note_begins_with_the_rows_two_words(row):
     assert row.effect in WORDS
     assert all(w in NUMBER_WORDS for w in row.number.split("; "))
-    assert row.note.startswith(note_lead(row.effect, row.number, paper_numbers_of(row.id, row.robot)))
+    said = words_text(row.effect, row.number, paper_numbers_of(row.id, row.robot))
+    assert row.note.startswith(said[0].upper() + said[1:] + ". ")
 
 
 def test_each_paper_numbers_word_is_the_number_columns(row):

@@ -52,9 +52,7 @@ _NAN = (math.nan, math.nan)
 
 @dataclasses.dataclass(frozen=True)
 class Claim:
-    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule`` (a
-    ConfigError if the id is not ``<figure>.<name>``, ``reproduced`` no verdict, a not testable claim
-    settled, or ``rule`` not the claim's: a paper claim's is its own)."""
+    """One row of the claims table; a claim of your own carries its :class:`Rule` in ``rule``."""
 
     id: str  # stable key, "<figure>.<name>": survives a rewording of ``claim``
     claim: str  # the paper's claim, in a sentence
@@ -99,11 +97,9 @@ class Claim:
     @property
     def stated(self) -> tuple[PaperNumber, ...]:
         """The numbers the paper states for this claim on its robot (its rule's)."""
-        r = self.judged_by
-        return tuple(p for p in r.paper if p.robot == self.robot) if r is not None else ()
+        return paper_numbers_of(self.id, self.robot, self.rule)
 
 
-# what a notebook shows of its claims (claims_frame): the row, its member, its evidence, its verdict
 SHOWN_COLUMNS = ("id", "assistance", "n_users", "measured", "ci_low", "ci_high", "reproduced", "settled")
 
 
@@ -113,9 +109,9 @@ def claims_frame(claims: Sequence[Claim], assistance: bool = True) -> pd.DataFra
     return pd.DataFrame([c.__dict__ for c in claims], columns=columns)
 
 
-def paper_numbers_of(claim_id: str, robot: str) -> tuple[PaperNumber, ...]:
-    """The numbers the paper states for a paper claim on ``robot`` (none for another robot)."""
-    r = RULES.get(claim_id.split("@", 1)[0])
+def paper_numbers_of(claim_id: str, robot: str, rule: Rule | None = None) -> tuple[PaperNumber, ...]:
+    """The numbers ``rule`` (None: the paper's for the id) states for a claim on ``robot``."""
+    r = rule if rule is not None else RULES.get(claim_id.split("@", 1)[0])
     return tuple(p for p in r.paper if p.robot == robot) if r is not None else ()
 
 
@@ -134,22 +130,16 @@ def criteria(claim: Claim) -> dict[str, str]:
         "paper_in_ci": "; ".join(p.inside(iv) for p, iv in found) or "n/a",
         "direction": direction.judge(claim.intervals.get(direction.quantity, _NAN)) if direction else "n/a",
         "paper_numbers": "; ".join(said),
-        "fragile": "yes" if _fragile(claim) else "no",
+        "fragile": "yes" if r is not None and testable and r.fragile(claim.intervals) else "no",
     }
-
-
-def _fragile(claim: Claim) -> list[str]:
-    r = claim.judged_by
-    return [] if r is None or claim.reproduced == NOT_TESTABLE else r.fragile(claim.intervals)
 
 
 def numbers_of(claim: Claim) -> dict[str, Number]:
     """A claim's numbers as ``claim_values.csv`` holds them."""
-    out = {
+    return {
         k: Number(float(v), *claim.intervals.get(k, _NAN), level=claim.level, n=claim.n_users)
         for k, v in claim.values.items()
-    }
-    return out | {k: Number(float(v), n=claim.n_users) for k, v in claim.facts.items()}
+    } | {k: Number(float(v), n=claim.n_users) for k, v in claim.facts.items()}
 
 
 def words_text(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
@@ -160,18 +150,14 @@ def words_text(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
     return f"effect {effect}; " + ", ".join(f"{p.value:g} {w}" for p, w in zip(paper, numbers, strict=True))
 
 
-def note_lead(effect: str, number: str, paper: tuple[PaperNumber, ...]) -> str:
-    """The sentence a row's note begins with: its two words, ``Effect reproduced; 0.11 out.``."""
-    text = words_text(effect, number, paper)
-    return text[0].upper() + text[1:] + ". "
-
-
 def _row(claim: Claim) -> dict[str, object]:
     row: dict[str, object] = {c: getattr(claim, c) for c in CLAIM_COLUMNS if hasattr(claim, c)}
     row |= {"settled": "yes" if claim.settled else "no"} | criteria(claim)
-    note = note_lead(str(row["effect"]), str(row["number"]), claim.stated) + claim.note
-    if row["fragile"] == "yes":
-        note = f"{note.rstrip()} Fragile: {'; '.join(_fragile(claim))} (within a fifth of its width)."
+    said = words_text(str(row["effect"]), str(row["number"]), claim.stated)  # "Effect reproduced; 0.11 out. "
+    note = f"{said[0].upper()}{said[1:]}. {claim.note}"
+    if row["fragile"] == "yes" and (r := claim.judged_by) is not None:
+        near = "; ".join(r.fragile(claim.intervals))
+        note = f"{note.rstrip()} Fragile: {near} (within a fifth of its width)."
     row["note"] = note
     for key in ("ci_low", "ci_high"):
         row[key] = "" if math.isnan(getattr(claim, key)) else f"{getattr(claim, key):.4g}"
@@ -181,17 +167,14 @@ def _row(claim: Claim) -> dict[str, object]:
 def render_markdown(frame: pd.DataFrame) -> str:
     """``claims.md``: the readings that flip each headline (:func:`render_flips`), then every row."""
     cols = list(CLAIM_COLUMNS)
-    lines = ["| " + " | ".join(cols) + " |", "| " + " | ".join("---" for _ in cols) + " |"]
-    for _, row in frame.iterrows():
-        cells = [str(row[c]).replace("|", "\\|").replace("\n", " ") for c in cols]
-        lines.append("| " + " | ".join(cells) + " |")
+    rows = [[str(row[c]).replace("|", "\\|").replace("\n", " ") for c in cols] for _, row in frame.iterrows()]
+    lines = ["| " + " | ".join(cells) + " |" for cells in (cols, ["---"] * len(cols), *rows)]
     return render_flips(frame) + "\n# Every row of claims.csv\n\n" + "\n".join(lines) + "\n"
 
 
 def update_claims(path: str | os.PathLike[str], claims: list[Claim]) -> pd.DataFrame:
     """Replace the rows of these claims' (figure, robot) pairs in the CSV at ``path``, ``claim_values.csv``
-    and the ``.md`` twin, under the folder lock and the run's write journal; return the whole table, by
-    figure, robot and id (a ConfigError if two claims share an (id, robot), or a file has other columns)."""
+    and the ``.md`` twin, under the folder lock and the run's write journal; return the whole table."""
     path = Path(path)
     new = pd.DataFrame([_row(c) for c in claims], columns=list(CLAIM_COLUMNS))
     if dup := new.loc[new.duplicated(["id", "robot"]), "id"].tolist():
@@ -397,8 +380,7 @@ def _cell(row: pd.Series | None, numbers: Numbers) -> str:
             if p.quantity in numbers
         ]
         if not said and r is not None and r.quantities[0].name in numbers:
-            first = r.quantities[0].name
-            said = [f"{first} {_interval_text(numbers[first])}"]
+            said = [f"{r.quantities[0].name} {_interval_text(numbers[r.quantities[0].name])}"]
         if r is not None and r.paper and not paper:
             said.append(f"no paper number for {row.robot}")
     bold = row.effect not in (UNDECIDED, NOT_TESTABLE)
@@ -533,8 +515,7 @@ def render_summary(table: pd.DataFrame, values: Values) -> str:
         "**In short.** What reproduced, claim by claim (sims 1–4: simulated users; the study: "
         "simulated participants, not a replication with people; words and N: [the verdicts](#the-verdicts)):"
     ]
-    listed = [(w, by_word[w]) for w in WORDS if w in by_word]
-    lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w, s in listed]
+    lines += [f"- **{w.capitalize()}** ({len(s)}): {'; '.join(s)}." for w in WORDS if (s := by_word.get(w))]
     _, n, stated = _heads(table)
     lines.append(f"- **The paper's numbers** ({n}, stated for the Panda): {stated}.")
     return "\n".join(lines) + "\n"

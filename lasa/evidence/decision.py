@@ -110,8 +110,7 @@ class Direction:
 
 @dataclasses.dataclass(frozen=True)
 class Rule:
-    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds; its paper numbers
-    and direction name its quantities."""
+    """A claim's decision rule: numbers -> verdict, piecewise constant between thresholds."""
 
     id: str  # the claim id, "<figure>.<name>"
     text: str  # the rule in words, as the claims table states it

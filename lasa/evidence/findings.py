@@ -14,14 +14,12 @@ _NONE: dict[str, Number] = {}
 
 
 def _interval(values: Values, cid: str, robot: str, name: str) -> tuple[float, float] | None:
-    number = values.get((cid, robot), _NONE).get(name)
-    return number.interval if number is not None else None
+    return values.get((cid, robot), _NONE).get(name, Number(math.nan)).interval
 
 
 def side_of(interval: tuple[float, float], ref: float) -> str:
     """Where an interval lies against ``ref``: ``above``, ``below``, or ``reaches`` it."""
-    low, high = interval
-    return "above" if low > ref else "below" if high < ref else "reaches"
+    return "above" if interval[0] > ref else "below" if interval[1] < ref else "reaches"
 
 
 def _across(
@@ -29,18 +27,15 @@ def _across(
 ) -> str:
     groups: dict[str, list[str]] = {}
     for robot in robots:
-        interval = _interval(values, cid, robot, name)
-        if interval is not None:
+        if (interval := _interval(values, cid, robot, name)) is not None:
             groups.setdefault(side_of(interval, ref), []).append(robot)
     return "; ".join(f"{says[side]} ({on_robots(where)})" for side, where in groups.items())
 
 
 def _time_ratio(values: Values, robots: Sequence[str]) -> str:
-    parts = []
-    for beta in ("1000", "75"):
-        says = {"above": "LA+SA is faster", "below": "LA+SA is slower", "reaches": "no clear gain"}
-        at = {side: f"at beta = {beta} {said}" for side, said in says.items()}
-        parts.append(_across(values, robots, "sim1.time_ratio", f"ratio_{beta}", 1.0, at))
+    says = {"above": "LA+SA is faster", "below": "LA+SA is slower", "reaches": "no clear gain"}
+    at = {b: {side: f"at beta = {b} {said}" for side, said in says.items()} for b in ("1000", "75")}
+    parts = [_across(values, robots, "sim1.time_ratio", f"ratio_{b}", 1.0, by) for b, by in at.items()]
     return "; ".join(p for p in parts if p)
 
 
@@ -97,8 +92,7 @@ def completion_text(conditions: Sequence[tuple[str, float]]) -> str:
 
 
 def _fact(numbers: Numbers, name: str) -> float:
-    number = numbers.get(name)
-    return number.value if number is not None else math.nan
+    return numbers.get(name, Number(math.nan)).value
 
 
 def study_effect(claim_id: str, numbers: Numbers) -> str:
@@ -116,8 +110,7 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
         p, pairs = _fact(numbers, "p"), int(_fact(numbers, "pairs"))
         if not math.isfinite(p):
             return f"no scoop-phase comparison ({pairs} pairs)"
-        side = "above" if diff > 0 else "below"
-        said = f"LA+SA's scoop alignment is {side} R+SA's by {diff:+.3f}"
+        said = f"LA+SA's scoop alignment is {'above' if diff > 0 else 'below'} R+SA's by {diff:+.3f}"
         return f"{said}, paired t, {pairs} pairs, p = {p:.3g}"
     effect = numbers.get("effect")
     versus = [k.split(".", 1)[1] for k in numbers if k.startswith("versus.")]
@@ -130,29 +123,8 @@ def study_effect(claim_id: str, numbers: Numbers) -> str:
     return f"LA+SA is {side} than {versus[0]} by {by} (restricted means)"
 
 
-def _study(values: Values, cid: str, says: Mapping[str, str]) -> str:
-    sides = []
-    for numbers in (values.get((cid, "panda")), values.get((f"{cid}@cohort", "panda"))):
-        effect = numbers.get("effect") if numbers is not None else None
-        if effect is not None:
-            interval = effect.interval if _testable(numbers or _NONE) else None
-            sides.append((effect.n, side_of(interval, 0.0) if interval is not None else "untestable"))
-    if not sides:
-        return ""
-    told = [side for _, side in sides if side in ("above", "below")]
-    lead = told[-1] if told else "reaches"
-    tell = {lead: "tell it", "reaches": "cannot tell", "untestable": "cannot test it"}
-    verbs = [tell.get(side, "tell the opposite") for _, side in sides]
-    if len(set(verbs)) == 1 and len(sides) > 1:
-        ns = " and ".join(str(n) for n, _ in sides)
-        return f"{says[lead]}; {ns} simulated participants alike {verbs[0]}"
-    named = [f"{n} simulated participants" if i == 0 else str(n) for i, (n, _) in enumerate(sides)]
-    return f"{says[lead]}; {', '.join(f'{who} {verb}' for who, verb in zip(named, verbs, strict=True))}"
-
-
 def _testable(numbers: Numbers) -> bool:
-    effect = numbers.get("effect")
-    return _fact(numbers, "testable") == 1 and effect is not None and effect.interval is not None
+    return _fact(numbers, "testable") == 1 and numbers.get("effect", Number(math.nan)).interval is not None
 
 
 def _finish(short: Sequence[tuple[str, float]]) -> str:
@@ -168,12 +140,28 @@ def _h3_short(short: Sequence[tuple[str, float]]) -> str:
 def _hypothesis(
     cid: str, short_text: Callable[[Sequence[tuple[str, float]]], str], *says: str
 ) -> Callable[[Values, Sequence[str]], str]:
-    sides = dict(zip(("below", "above", "reaches"), says, strict=True))
+    said = dict(zip(("below", "above", "reaches"), says, strict=True))
 
     def find(values: Values, robots: Sequence[str]) -> str:
-        numbers = values.get((cid, "panda"), _NONE)
-        short = short_conditions(numbers) if not _testable(numbers) else []
-        return short_text(short) if short else _study(values, cid, sides)
+        headline = values.get((cid, "panda"), _NONE)
+        if short := short_conditions(headline) if not _testable(headline) else []:
+            return short_text(short)
+        sides = []
+        for numbers in (values.get((cid, "panda"), _NONE), values.get((f"{cid}@cohort", "panda"), _NONE)):
+            if (effect := numbers.get("effect")) is not None:
+                interval = effect.interval if _testable(numbers) else None
+                sides.append((effect.n, side_of(interval, 0.0) if interval is not None else "untestable"))
+        if not sides:
+            return ""
+        told = [side for _, side in sides if side in ("above", "below")]
+        lead = told[-1] if told else "reaches"
+        tell = {lead: "tell it", "reaches": "cannot tell", "untestable": "cannot test it"}
+        verbs = [tell.get(side, "tell the opposite") for _, side in sides]
+        if len(set(verbs)) == 1 and len(sides) > 1:
+            ns = " and ".join(str(n) for n, _ in sides)
+            return f"{said[lead]}; {ns} simulated participants alike {verbs[0]}"
+        named = [f"{n} simulated participants" if i == 0 else str(n) for i, (n, _) in enumerate(sides)]
+        return f"{said[lead]}; {', '.join(f'{who} {verb}' for who, verb in zip(named, verbs, strict=True))}"
 
     return find
 

@@ -20,8 +20,7 @@ def time_to_reach(errors: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.
     check_range("tolerance", tolerance, 0.0, low_open=True)
     reached = errors <= tolerance
     completed = reached.any(axis=0)
-    horizon = errors.shape[0] - 1
-    return np.where(completed, reached.argmax(axis=0), horizon), np.asarray(completed)
+    return np.where(completed, reached.argmax(axis=0), errors.shape[0] - 1), np.asarray(completed)
 
 
 def confidence(beliefs: np.ndarray, goal: np.ndarray) -> np.ndarray:

@@ -53,9 +53,7 @@ def project(task: GoalTask, points: np.ndarray) -> np.ndarray:
     """World points (..., 3) onto the task's drawing plane, (..., 2): a planar arm's x-z plane, any
     other robot from above with its left on the left, (-y, x)."""
     points = np.asarray(points)
-    if is_planar(task):
-        return points[..., [0, 2]]
-    return np.stack([-points[..., 1], points[..., 0]], axis=-1)
+    return points[..., [0, 2]] if is_planar(task) else np.stack([-points[..., 1], points[..., 0]], axis=-1)
 
 
 def draw_scene(task: GoalTask, ax: Axes | None = None) -> Axes:
@@ -175,8 +173,7 @@ def band_handle(level: float) -> Patch:
 def legend_below(ax: Axes, extra: Sequence[Artist] = ()) -> None:
     """The axes' legend, plus ``extra`` entries, below the axes, where it covers no data."""
     handles, labels = ax.get_legend_handles_labels()
-    handles += list(extra)
-    labels += [h.get_label() for h in extra]
+    handles, labels = [*handles, *extra], [*labels, *(h.get_label() for h in extra)]
     ax.legend(handles, labels, frameon=False, fontsize=7.5, loc="upper center", bbox_to_anchor=(0.5, -0.17))
 
 

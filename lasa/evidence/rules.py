@@ -34,12 +34,6 @@ def _above(ref: float, *parts: tuple[str, ...]) -> Decide:
     return lambda v: _parts(*(all(v[name] > ref for name in part) for part in parts))
 
 
-def _sim2_escapes(v: Mapping[str, float]) -> str:
-    if v["success_entropy"] >= 0.8 and v["margin"] >= 0.2:
-        return "yes"
-    return "partly" if v["margin"] > 0.0 else "no"
-
-
 def _sim4_linear(v: Mapping[str, float]) -> str:
     # two parts: the error grows linearly with the distance; the map lowers it at every cup
     return _parts(v["slope"] > 0.0 and v["r2"] >= 0.9, v["share_below"] >= 1.0)
@@ -58,8 +52,7 @@ def _sa_lowers(v: Mapping[str, float]) -> str:
 def _la_aligns(v: Mapping[str, float]) -> str:
     """H2's test: ``effect`` (scoop alignment LA+SA - R+SA) and its paired t-test's ``p``: yes if above
     0 with p < .05, partly if above 0, no otherwise (also when NaN: too few pairs)."""
-    above = v["effect"] > 0.0
-    return "yes" if above and v["p"] < _SIGNIFICANCE else "partly" if above else "no"
+    return _parts(v["effect"] > 0.0, v["effect"] > 0.0 and v["p"] < _SIGNIFICANCE)
 
 
 def _la_sa_fastest(v: Mapping[str, float]) -> str:
@@ -176,7 +169,7 @@ _PAPER = (
             _q("success_entropy", (0.8,), "LA+SA+Entropy's success rate at the largest N"),
             _q("margin", (0.0, 0.2), "LA+SA+Entropy's success minus LA+SA's at the largest N"),
         ),
-        _sim2_escapes,
+        lambda v: _parts(v["margin"] > 0.0, v["success_entropy"] >= 0.8 and v["margin"] >= 0.2),
         direction=Direction("margin", +1),
     ),
     _two_parts(

@@ -80,8 +80,7 @@ def rm_anova(frame: pd.DataFrame, measure: str, agg: str = "mean") -> pd.DataFra
 def sa_effect_within(frame: pd.DataFrame, measure: str) -> dict[str, Any]:
     """The SA main effect of the 2x2 repeated-measures ANOVA (:func:`rm_anova`, task means), as
     :func:`sa_effect_between` returns it, with df (1, N-1) and ``ci_*`` a paired t over participants."""
-    table = rm_anova(frame, measure, agg="mean")
-    row = table.set_index("effect").loc["assistance"]
+    row = rm_anova(frame, measure, agg="mean").set_index("effect").loc["assistance"]
     cells = condition_cells(frame, measure, "mean", CONDITIONS)
     per_participant = cells.groupby(["participant", "assistance"])[measure].mean().unstack("assistance")
     # the 95% interval of SA - no SA: a paired t over participants (its t^2 is the main effect's F)

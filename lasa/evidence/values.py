@@ -28,8 +28,7 @@ class Number:
     @property
     def interval(self) -> tuple[float, float] | None:
         """``(low, high)`` if both ends are known, else None."""
-        known = math.isfinite(self.low) and math.isfinite(self.high)
-        return (self.low, self.high) if known else None
+        return (self.low, self.high) if math.isfinite(self.low) and math.isfinite(self.high) else None
 
 
 Numbers = Mapping[str, Number]  # quantity -> its number, for one claims row

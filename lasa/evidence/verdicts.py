@@ -84,9 +84,8 @@ def bootstrap_frames(frame: pd.DataFrame, n_boot: int, seed: int, unit: str = US
     for _ in range(n_boot):
         picks = rng.integers(0, len(units), len(units))
         rows = np.concatenate([order[starts[p] : starts[p + 1]] for p in picks])
-        sizes = starts[picks + 1] - starts[picks]
         sample = frame.iloc[rows].copy()
-        sample[unit] = np.repeat(np.arange(len(picks)), sizes)
+        sample[unit] = np.repeat(np.arange(len(picks)), starts[picks + 1] - starts[picks])
         yield sample
 
 
@@ -142,16 +141,14 @@ def assess(
     frame: pd.DataFrame,
     n_boot: int = N_BOOT,
     seed: int = 0,
-    unit: str = USER,
     level: float = 0.95,
     fast: BootValues | None = None,
     min_users: int = MIN_USERS,
 ) -> list[Claim]:
-    """The claims of ``evaluate`` (frame -> claims with the ``values`` their rules read) on ``frame``, with
-    intervals at ``level`` over resamples of ``unit``, ``undecided`` where one straddles a threshold or the
-    evidence falls short (:func:`shortfall`); ``fast`` (:func:`group_means`) gives the same numbers on the
-    same resamples, else ``evaluate`` runs on each. A ConfigError if a claim's verdict is not its rule's."""
-    n_users = int(frame[unit].nunique())
+    """The claims of ``evaluate`` on ``frame``, with intervals at ``level`` over resamples of users,
+    ``undecided`` where one straddles a threshold or the evidence falls short (:func:`shortfall`); ``fast``
+    (:func:`group_means`) gives the same numbers on the same resamples, else ``evaluate`` runs on each."""
+    n_users = int(frame[USER].nunique())
     short = shortfall(n_users, n_boot, level, min_users)  # a ConfigError for a level outside (0, 1)
     point = evaluate(frame)
     samples: dict[str, dict[str, list[float]]] = {c.id: {k: [] for k in c.values} for c in point}
@@ -164,7 +161,7 @@ def assess(
             for cid, s in samples.items()
         }
     else:
-        for sample in bootstrap_frames(frame, n_boot, seed, unit):
+        for sample in bootstrap_frames(frame, n_boot, seed):
             for c in evaluate(sample):
                 for k, v in c.values.items():
                     if c.id in samples and k in samples[c.id]:
@@ -187,8 +184,7 @@ def _judged(c: Claim, samples: dict[str, list[float]], level: float, n_users: in
         intervals[q.name] = (float(bounds[0]), float(bounds[1]))
     settled = r.settled(intervals) and not short
     text = "; ".join(
-        f"{q.name} = {_fmt(c.values[q.name])} [{_fmt(lo)}, {_fmt(hi)}]"
-        for q, (lo, hi) in zip(r.quantities, intervals.values(), strict=True)
+        f"{k} = {_fmt(c.values[k])} [{_fmt(lo)}, {_fmt(hi)}]" for k, (lo, hi) in intervals.items()
     )
     lead = f"{n_users} users per point; {100 * level:.4g}% intervals: {text}. "
     if not settled:
@@ -262,8 +258,7 @@ def sequential(
         # the stopping rule reads the headline claims only, never a figure's own readings
         if all(c.settled for c in head if "@" not in c.id):
             break
-    first = frame[frame.look == 0]
-    others = {m: judge(member_frame(first, m)) for m in assistance if m != default}
+    others = {m: judge(member_frame(frame[frame.look == 0], m)) for m in assistance if m != default}
     rows: list[Claim] = []
     for i, c in enumerate(head):
         flips = [f"{m} ({_words(o[i])})" for m, o in others.items() if _words(o[i]) != _words(c)]

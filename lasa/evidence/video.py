@@ -40,9 +40,8 @@ _BITEXACT_ARGS = (
 def render_states(
     robot: Robot, states: np.ndarray, height: int = 240, width: int = 320, n_jobs: int = 1
 ) -> np.ndarray:
-    """Frames (T, height, width, 3), uint8, one per joint configuration of ``states`` (T, n), from the
-    robot's video camera, height and width even; with ``n_jobs`` > 1 the states are split into as many
-    contiguous parts, rendered by worker processes (joblib): the same frames with any number."""
+    """Frames (T, height, width, 3), uint8, of ``states`` (T, n) from the robot's video camera, height and
+    width even; ``n_jobs`` > 1 worker processes (joblib) render contiguous parts: the same frames."""
     if height % 2 or width % 2:
         raise ConfigError(f"frame size must be even for H.264, got {width}x{height}")
     if int(n_jobs) != n_jobs or n_jobs < 1:
@@ -65,7 +64,7 @@ def render_states(
     return frames
 
 
-def label_frames(frames: np.ndarray, text: str | list[str]) -> np.ndarray:
+def label_frames(frames: np.ndarray, text: str | Sequence[str]) -> np.ndarray:
     """Write a caption in the top-left corner of every frame (one per frame, or shared)."""
     out = frames.copy()
     texts = [text] * len(frames) if isinstance(text, str) else text
@@ -110,9 +109,8 @@ def write_clips(
     width: int = 320,
     n_jobs: int = 1,
 ) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Render ``clips``, ``(states (T, n), caption)`` each with one caption or one per frame, with ``n_jobs``
-    workers, caption each frame, lay the clips out (:data:`LAYOUTS`; beside each other, shorter clips hold
-    their last frame) and write the MP4. Returns the video and the captioned clips."""
+    """Render and caption ``clips``, ``(states (T, n), caption or one per frame)``, lay them out
+    (:data:`LAYOUTS`; shorter clips side by side hold their last frame), write the MP4: the video, clips."""
     if layout not in LAYOUTS:
         raise ConfigError(f"layout must be one of {LAYOUTS}, got {layout!r}")
     if not clips:
@@ -125,10 +123,7 @@ def write_clips(
             raise ConfigError(f"clip {i}: {len(caption)} captions for {len(s)} frames")
     frames = render_states(robot, np.concatenate(states), height, width, n_jobs)
     parts = np.split(frames, np.cumsum([len(s) for s in states])[:-1])
-    shown = [
-        label_frames(part, caption if isinstance(caption, str) else list(caption))
-        for part, (_, caption) in zip(parts, clips, strict=True)
-    ]
+    shown = [label_frames(part, caption) for part, (_, caption) in zip(parts, clips, strict=True)]
     video = side_by_side(*shown) if layout == "side_by_side" else np.concatenate(shown)
     write_video(path, video, fps=fps)
     return video, shown
