@@ -11,8 +11,10 @@ from lasa.world.record import Episodes
 
 
 def goal_error(tip: np.ndarray, goals: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
-    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt, per
-    episode [m s], (E,), from ``tip`` (T, E, 3), ``goals`` (G, 3) and the ``active`` steps (T, E)."""
+    """Goal Error: the tip's distance to the closest goal, summed over the task's steps, times dt.
+
+    Per episode [m s], (E,), from ``tip`` (T, E, 3), ``goals`` (G, 3) and the ``active`` steps (T, E).
+    """
     dist = np.linalg.norm(tip[:, :, None, :] - goals[None, None], axis=-1).min(axis=-1)
     return (dist * active).sum(axis=0) * dt
 
@@ -28,8 +30,11 @@ def idle_time(idle: np.ndarray, active: np.ndarray, dt: float) -> np.ndarray:
 
 
 def alignment(direction: np.ndarray, desired: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,), of the
-    fork's ``direction`` (T, E, 3), ``desired`` d(theta) (E, 3) or (T, E, 3), the phase's ``mask`` (T, E)."""
+    """Preference Alignment: mean of d . d* over the masked steps, per episode (NaN if none), (E,).
+
+    ``direction`` (T, E, 3) is the fork's, ``desired`` d(theta) (E, 3) or (T, E, 3), ``mask`` (T, E) the
+    phase's steps.
+    """
     dots = np.einsum("tei,tei->te", direction, np.broadcast_to(desired, direction.shape))
     count = mask.sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
