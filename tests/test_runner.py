@@ -202,3 +202,21 @@ def test_a_missing_or_non_yaml_config_is_one_line(tmp_path, capsys, text, messag
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1
     assert __import__("re").match(message, err), err
+
+
+def test_a_run_reads_the_parameters_cell_once(tmp_path, monkeypatch):
+    """run_notebook checks the config and the overrides against one read of the ``parameters`` cell."""
+    import papermill as pm
+
+    from lasa.pipeline import execute
+
+    calls = []
+    inspect = pm.inspect_notebook
+    monkeypatch.setattr(pm, "inspect_notebook", lambda path: calls.append(path) or inspect(path))
+    notebook = tmp_path / "once.ipynb"
+    notebook.write_text(json.dumps(_notebook("print(settings)\n")))
+    config = tmp_path / "c.yaml"
+    config.write_text("common: {settings: {a: 1}}\n")
+    out = execute.run_notebook(notebook, config, tmp_path / "out", {"settings": {"a": 2}}, progress=False)
+    assert len(calls) == 1 and out.is_file()
+    assert "{'a': 2}" in "".join(json.loads(out.read_text())["cells"][-1]["outputs"][0]["text"])

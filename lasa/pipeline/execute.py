@@ -42,8 +42,11 @@ def notebook_parameters(notebook: str | os.PathLike[str]) -> dict[str, Any]:
     return {name: info["default"] for name, info in params.items()}
 
 
-def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]) -> dict[str, Any]:
-    """The parameters a YAML config passes to ``notebook``: ``common`` plus its section, each in its cell."""
+def load_config(
+    config: str | os.PathLike[str], notebook: str | os.PathLike[str], known: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The parameters a YAML config passes to ``notebook``: ``common`` plus its section, each in its cell
+    (``known``: the cell's :func:`notebook_parameters`, if the caller has read them already)."""
     path = require_file(config, "it ships with the repository under configs/")
     try:
         data = yaml.safe_load(path.read_text()) or {}
@@ -54,7 +57,7 @@ def load_config(config: str | os.PathLike[str], notebook: str | os.PathLike[str]
     if not isinstance(data, dict) or not all(isinstance(v, dict) for v in data.values()):
         raise ConfigError(f"{path} must map section names to parameter mappings")
     params = {**data.get("common", {}), **data.get(Path(notebook).stem, {})}
-    known = notebook_parameters(notebook)
+    known = notebook_parameters(notebook) if known is None else known
     if unknown := sorted(set(params) - set(known)):
         raise ConfigError(
             f"{path} passes unknown parameter(s) {unknown} to {Path(notebook).name}; "
@@ -96,8 +99,8 @@ def run_notebook(
 ) -> Path:
     """Run ``notebook`` with ``config``'s parameters and ``overrides`` into ``out_dir`` (``<stem>-<robot>``
     for a ``robot``); return its path. A failed run's writes are undone (:mod:`lasa.base.journal`)."""
-    params = load_config(config, notebook)
-    defaults = notebook_parameters(notebook)
+    defaults = notebook_parameters(notebook)  # papermill reads the notebook once
+    params = load_config(config, notebook, defaults)
     overrides = overrides or {}
     if unknown := sorted(set(overrides) - set(defaults)):
         raise ConfigError(f"unknown parameter(s) {unknown} for {Path(notebook).name}")
