@@ -49,6 +49,24 @@ class StopOnSignals:
         self._previous.clear()
 
 
+class Watchdog:
+    """Why a session on a physical link must stop now, or None: no connected input for ``no_input_s``
+    (default 0.3 s), a late tick (its step ended past its deadline)."""
+
+    def __init__(self, dt: float, no_input_s: float = 0.3) -> None:
+        self.dt, self.no_input_s = dt, no_input_s
+        self.silent = 0  # consecutive steps without a connected input
+
+    def check(self, sample: StickSample, late: bool) -> str | None:
+        """The reason to stop after a step on ``sample`` that was ``late`` or not."""
+        self.silent = 0 if sample.connected else self.silent + 1
+        if self.silent * self.dt >= self.no_input_s - 1e-9:
+            return f"watchdog: no input for {self.silent * self.dt:.1f} s"
+        if late:
+            return "watchdog: a late tick"
+        return None
+
+
 def open_log(
     station: Station, folder: str | Path, stem: str | None = None, suffix: str = "", **meta: Any
 ) -> SessionWriter:
@@ -73,6 +91,7 @@ class Session:
     started: float = 0.0
     steps: int = 0
     misses: int = 0
+    late: bool = False  # whether the last step ended past its deadline
     compute: list[float] = dataclasses.field(default_factory=list)
 
     def step(self, sample: StickSample, show: Callable[[dict[str, Any]], bool] | None = None) -> dict | None:
@@ -87,6 +106,7 @@ class Session:
         late = self.realtime and now > deadline
         self.compute.append(now - t0)
         self.misses += int(late)
+        self.late = late
         if self.writer is not None:  # the row in Station.columns' order: step, time, late, then the record
             row = [k, now - self.started if self.realtime else k * dt, float(late)]
             self.writer.append(row + [float(v) for value in rec.values() for v in np.ravel(value)])

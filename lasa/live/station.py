@@ -18,6 +18,7 @@ from lasa.base.config import ControlConfig, check_choice
 from lasa.base.errors import CheckpointError, ConfigError
 from lasa.base.paths import Paths
 from lasa.live.devices import StickSample
+from lasa.live.link import RobotLink, SimLink
 from lasa.method.belief import belief, uniform_log_belief
 from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.method.retarget import Retargeting, retarget_action, twist
@@ -64,10 +65,11 @@ class SessionConfig:
 
 class Station:
     """The robot side of a session: ``robot``, ``task``, ``control``, ``decoder`` (None: Retargeting), its
-    ``mode``, the ``waypoint`` worked towards, ``done``. The stick at rest commands nothing, the mode button
-    cycles Retargeting's modes, the stop input holds the robot (no action, the belief frozen)."""
+    ``mode``, the ``waypoint`` worked towards, ``done``, and the ``link`` it steps against (default: MuJoCo's
+    transition). The stick at rest commands nothing, the mode button cycles Retargeting's modes, the stop
+    input holds the robot (no action, the belief frozen)."""
 
-    def __init__(self, config: SessionConfig) -> None:
+    def __init__(self, config: SessionConfig, link: RobotLink | None = None) -> None:
         self.config = config
         paths = Paths.of(config.build_dir, "figures")
         self.decoder: ActionDecoder | None = None
@@ -93,6 +95,7 @@ class Station:
         self.retarget = Retargeting(self.robot, self.control.dt) if condition.interface == "R" else None
         self.alpha = alpha_of(condition.name, self.control.alpha)
         self._data = mujoco.MjData(self.robot.model)
+        self.link: RobotLink = SimLink(self.task.start) if link is None else link
         self.reset()
 
     def _check_decoder(self, decoder: ActionDecoder, meta: dict[str, Any], path: Path) -> None:
@@ -121,9 +124,12 @@ class Station:
             self.retarget.joint_velocity(self.state, twist(0, np.array([1.0, 0.0])))
 
     def reset(self) -> None:
-        """Back to the start pose, a uniform belief, mode 0, the first waypoint."""
+        """Back to the start pose (a physical link: the arm where it is), a uniform belief, mode 0, the first
+        waypoint."""
         assist = Assist(self.task, self.control, np.array([self.alpha]))
-        self.runner = Runner(assist, self.task.start[None], uniform_log_belief(1, self.task.n_goals))
+        self.link.reset(self.task.start)
+        start = self.link.read()[None]
+        self.runner = Runner(assist, start, uniform_log_belief(1, self.task.n_goals))
         self.mode = 0
         self.waypoint = 0
         self.done = False
@@ -152,6 +158,9 @@ class Station:
             "decoder_sha256": None if path is None else hashlib.sha256(path.read_bytes()).hexdigest(),
             "decoder_config": None if self.decoder is None else dataclasses.asdict(self.decoder.config),  # type: ignore[attr-defined]
             "lasa_version": _LASA_VERSION,
+            "link": self.link.name,
+            # s: a physical link's measured joints as each step began; MuJoCo's: the state each step reached
+            "state_logged": "measured" if self.link.physical else "stepped",
         }
 
     def columns(self) -> list[str]:
@@ -159,7 +168,7 @@ class Station:
         n, g = self.robot.n_joints, self.task.n_goals
         sizes = (("s", n), ("b", g), ("a_h", n), ("a_r", n), ("a", n))
         cols = "step time late raw0 raw1 connected mode_press stop z0 z1 mode phase waypoint".split()
-        return cols + [f"{name}{i}" for name, size in sizes for i in range(size)]
+        return cols + [f"{name}{i}" for name, size in sizes for i in range(size)] + self.link.columns()
 
     @property
     def phase(self) -> int:
@@ -174,26 +183,32 @@ class Station:
             return "Reach the cup you want, with the grasp you want"
         return instruction(self.config.task, None if self.done else self.phase)
 
-    def track(self) -> None:
-        """Move on past the waypoint the fork reached (:class:`lasa.world.fork.WaypointTracker`)."""
+    def track(self, state: np.ndarray) -> None:
+        """Move past the waypoint the fork at ``state`` reached (:class:`lasa.world.fork.WaypointTracker`)."""
         if self.tracker is None or self.done:
             return
-        tip, axis, _, _ = tip_frames(self.robot, self._data, self.state[None])
+        tip, axis, _, _ = tip_frames(self.robot, self._data, state[None])
         task = np.array([TASK_NAMES.index(self.config.task)])
         waypoint, done = self.tracker.advance(task, np.array([self.waypoint]), tip, axis)
         self.waypoint, self.done = int(waypoint[0]), bool(done[0])
 
     def step(self, sample: StickSample) -> dict[str, Any]:
-        """One control step from one sample; returns what the log records of it, in its columns' order."""
+        """One control step from one sample against the link: read the joints, Algorithm 1's step, command
+        the link; returns what the log records of it, in its columns' order."""
         z = sample.z  # safe: zero if disconnected or not finite, within [-1, 1]
         n = self.robot.n_joints
         a_h, a_r, a = np.zeros(n), np.zeros(n), np.zeros(n)
-        if not sample.stop:  # stop holds: no human action, no assistance, the belief frozen
+        measured = self.link.read()
+        self.runner.state[0] = measured
+        if sample.stop:  # stop holds: no human action, no assistance, the belief frozen
+            command = self.link.hold()
+        else:
             result = self.runner.step(self._chooser(z, bool(sample.mode) and self.retarget is not None))
             a_h, a = result.human_action[0], result.action[0]
             if result.robot_action is not None:
                 a_r = result.robot_action[0]
-            self.track()
+            command = self.link.command(measured, self.state, self.control.dt)
+            self.track(measured if self.link.physical else self.state)
         return {
             "raw": np.asarray(sample.raw, float),
             "connected": sample.connected,
@@ -203,11 +218,12 @@ class Station:
             "mode": self.mode,
             "phase": self.phase,
             "waypoint": self.waypoint,
-            "s": self.state.copy(),
+            "s": (measured if self.link.physical else self.state).copy(),
             "b": self.belief,
             "a_h": a_h,
             "a_r": a_r,
             "a": a,
+            **command,
         }
 
     def _chooser(self, z: np.ndarray, pressed: bool) -> Chooser:

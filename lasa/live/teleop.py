@@ -31,7 +31,8 @@ from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaEr
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live import studykit
 from lasa.live.devices import Device, ScriptedDevice, open_device
-from lasa.live.session import Session, StopOnSignals, open_log
+from lasa.live.link import LinkError
+from lasa.live.session import Session, StopOnSignals, Watchdog, open_log
 from lasa.live.station import SESSION_TASKS, SessionConfig, Station
 from lasa.method.retarget import MODES
 
@@ -85,14 +86,22 @@ def run_session(
     an exception (raised on) closes the log ``interrupted``. Returns :meth:`~lasa.live.session.Session.timing`
     and the stopping ``signal``."""
     session = Session(station, writer, max_steps, realtime)
-    status = "complete"
+    status, reason = "complete", None
+    watchdog = Watchdog(station.control.dt) if station.link.physical else None
     with StopOnSignals() as stop:
         station.warm_up()  # so that the first deadlines measure the loop, not one-off start-up costs
         with session.guard():
             while session.steps < max_steps:
-                rec = None if stop.received is not None else session.step(device.poll(), show)
-                if rec is None:
+                sample = device.poll()
+                try:
+                    rec = None if stop.received is not None else session.step(sample, show)
+                except LinkError as exc:  # the arm is stopped; the operator recovers it by hand
+                    rec, reason = None, f"link: {exc}"
+                if rec is not None and watchdog is not None:
+                    reason = watchdog.check(sample, session.late)
+                if rec is None or reason is not None:
                     status = "interrupted"
+                    station.link.hold()
                     break
                 if on_step is not None:
                     on_step(session.steps - 1, rec)
@@ -100,8 +109,9 @@ def run_session(
                     break
                 if realtime:
                     time.sleep(max(0.0, session.pause()))
-    session.close(status, signal=stop.received)
-    return {**session.timing(), "signal": stop.received}
+    station.link.hold()
+    session.close(status, signal=stop.received, reason=reason)
+    return {**session.timing(), "signal": stop.received, "reason": reason}
 
 
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:

@@ -29,6 +29,19 @@ TCP_D = 0.1034  # Franka Hand TCP beyond the flange [m]
 HAND_YAW = -np.pi / 4  # hand mounting rotation about the flange's z [rad]
 LOWER = np.array([-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973])  # [rad]
 UPPER = np.array([2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973])  # [rad]
+# Franka's published limits of the Panda (velocity [rad/s], acceleration [rad/s^2]) and of the FR3
+# (joints, velocity, acceleration), and the limits both arms share: a live station drives either
+# (lasa.live.guard narrows these further).
+VELOCITY = np.array([2.175, 2.175, 2.175, 2.175, 2.61, 2.61, 2.61])
+ACCELERATION = np.array([15.0, 7.5, 10.0, 12.5, 15.0, 20.0, 20.0])
+FR3_LOWER = np.array([-2.7437, -1.7837, -2.9007, -3.0421, -2.8065, 0.5445, -3.0159])
+FR3_UPPER = np.array([2.7437, 1.7837, 2.9007, -0.1518, 2.8065, 4.5169, 3.0159])
+FR3_VELOCITY = np.array([2.62, 2.62, 2.62, 2.62, 5.26, 4.18, 5.26])
+FR3_ACCELERATION = np.full(7, 10.0)
+SHARED_LOWER = np.maximum(LOWER, FR3_LOWER)
+SHARED_UPPER = np.minimum(UPPER, FR3_UPPER)
+SHARED_VELOCITY = np.minimum(VELOCITY, FR3_VELOCITY)
+SHARED_ACCELERATION = np.minimum(ACCELERATION, FR3_ACCELERATION)
 READY = np.array([0.0, -np.pi / 4, 0.0, -3 * np.pi / 4, 0.0, np.pi / 2, np.pi / 4])  # [rad]
 
 # The packaged chain's joints 6 and 7 are re-framed: its q equals Franka's q minus these.
