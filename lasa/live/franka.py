@@ -4,7 +4,7 @@ the measured joints and sends the guarded joint velocity for the next tick (:mod
 The same code drives a real arm at its FCI address and ``franky-sim`` (libfranka's protocol, MuJoCo inside)
 on a loopback address. ``dry_run`` (shadow mode) reads and computes everything and sends nothing. A
 libfranka error stops the arm and raises :class:`lasa.live.link.LinkError`; recovery is an explicit call
-(:meth:`FrankaLink.recover`, ``python -m lasa.live.teleop recover``), never automatic."""
+(:func:`recover`, ``python -m lasa.live.teleop recover``), never automatic."""
 
 from __future__ import annotations
 
@@ -15,7 +15,9 @@ import re
 import shutil
 import subprocess
 import sys
+import threading
 import time
+import types
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -23,8 +25,10 @@ from typing import Any
 import numpy as np
 
 from lasa.base.errors import ConfigError
-from lasa.live.guard import Guard
+from lasa.live.guard import Guard, Workspace
 from lasa.live.link import LinkError
+from lasa.live.station import SessionConfig, Station
+from lasa.world.eating import make_eating_task
 
 START_TOLERANCE = 0.05  # [rad] each joint this close to the task's start pose, or the session refuses
 HOME_SPEED = 0.1  # franky's relative dynamics factor of the confirmed move to the start pose
@@ -38,20 +42,36 @@ def realtime_default(address: str) -> str:
         return "enforce"  # a host name: a real robot's
 
 
-def connect(address: str, realtime: str | None = None) -> Any:
+def connect(address: str, realtime: str | None = None, timeout: float = 30.0) -> Any:
     """A ``franky.Robot`` at ``address``; ``realtime`` ``enforce`` (a real-time kernel, as on a real arm) or
-    ``ignore`` (default by :func:`realtime_default`). LinkError if it cannot connect."""
+    ``ignore`` (default by :func:`realtime_default`). LinkError if it cannot connect, or no answer comes
+    within ``timeout`` seconds (the robot serves one client at a time)."""
     import franky
 
     realtime = realtime or realtime_default(address)
     if realtime not in ("enforce", "ignore"):
         raise ConfigError(f"realtime must be 'enforce' or 'ignore', got {realtime!r}")
     config = franky.RealtimeConfig.Enforce if realtime == "enforce" else franky.RealtimeConfig.Ignore
-    try:
-        return franky.Robot(address, realtime_config=config)
-    except franky.Exception as exc:
+    result: list[Any] = []
+
+    def attempt() -> None:
+        try:
+            result.append(franky.Robot(address, realtime_config=config))
+        except (franky.Exception, RuntimeError) as exc:
+            result.append(exc)
+
+    worker = threading.Thread(target=attempt, daemon=True)
+    worker.start()
+    worker.join(timeout)
+    if not result:
+        raise LinkError(
+            f"the Franka at {address} did not answer within {timeout:g} s: is another program connected?"
+        )
+    if isinstance(result[0], Exception):
+        exc = result[0]
         hint = " (no real-time kernel: pass --realtime ignore)" if "realtime" in str(exc).lower() else ""
         raise LinkError(f"cannot connect to the Franka at {address}: {exc}{hint}") from exc
+    return result[0]
 
 
 class FrankaLink:
@@ -73,7 +93,7 @@ class FrankaLink:
         """The measured joint positions, (7,) [rad]."""
         try:
             q = np.array(self.robot.current_joint_state.position, dtype=float)
-        except self._franky.Exception as exc:
+        except (self._franky.Exception, RuntimeError) as exc:  # libfranka's network errors: RuntimeError
             raise LinkError(f"reading the Franka's state failed: {exc}") from exc
         if q.shape != (7,) or not np.all(np.isfinite(q)):
             raise LinkError(f"the Franka reported joint positions {q}")
@@ -92,7 +112,7 @@ class FrankaLink:
             )
             try:
                 self.robot.move(motion, asynchronous=True)
-            except self._franky.Exception as exc:
+            except (self._franky.Exception, RuntimeError) as exc:  # libfranka's network errors: RuntimeError
                 self.hold()
                 raise LinkError(f"the Franka refused a command: {exc}") from exc
             self.sent += 1
@@ -119,12 +139,16 @@ class FrankaLink:
         except Exception:  # noqa: BLE001 - a lost link has nothing to join
             pass
 
-    def recover(self) -> None:
-        """Clear libfranka's error state: the operator's explicit command after checking the arm."""
-        try:
-            self.robot.recover_from_errors()
-        except self._franky.Exception as exc:
-            raise LinkError(f"recovery failed: {exc}") from exc
+
+def recover(robot: Any) -> None:
+    """Clear libfranka's error state: the operator's explicit command after checking the arm (a session never
+    calls it)."""
+    import franky
+
+    try:
+        robot.recover_from_errors()
+    except franky.Exception as exc:
+        raise LinkError(f"recovery failed: {exc}") from exc
 
 
 def check_start(
@@ -159,13 +183,24 @@ def move_home(robot: Any, start: np.ndarray, guard: Guard, speed: float = HOME_S
         target = franky.JointState(np.asarray(start, float).tolist())
         motion = franky.JointMotion(target, relative_dynamics_factor=speed)
         robot.move(motion)
+        deadline = time.perf_counter() + 3.0  # the motion's end: the arm's own tracking still settles
+        while np.abs(np.array(robot.current_joint_state.position) - start).max() > 0.01:
+            if time.perf_counter() > deadline:
+                break
+            time.sleep(0.05)
     except franky.Exception as exc:
         raise LinkError(f"the move to the start pose failed: {exc}") from exc
     return time.perf_counter() - t0
 
 
+class SimulatorAddress(str):
+    """franky-sim's loopback address, with its server ``process`` (a test stops it to cut the link)."""
+
+    process: subprocess.Popen[str]
+
+
 @contextlib.contextmanager
-def simulator(timeout: float = 60.0) -> Iterator[str]:
+def simulator(timeout: float = 60.0) -> Iterator[SimulatorAddress]:
     """Run ``franky-sim`` (libfranka's protocol, MuJoCo inside, headless) on a free loopback address for
     the ``with`` block; yields the address to connect to. Tests and benchmarks use it; so can you."""
     exe = shutil.which("franky-sim", path=str(Path(sys.executable).parent)) or shutil.which("franky-sim")
@@ -176,7 +211,10 @@ def simulator(timeout: float = 60.0) -> Iterator[str]:
         [exe, "--simulator", "mujoco"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env
     )
     try:
-        address = _address(proc, time.monotonic() + timeout)
+        address = SimulatorAddress(_address(proc, time.monotonic() + timeout))
+        address.process = proc
+        assert proc.stdout is not None  # drained, so that the server never blocks on a full pipe
+        threading.Thread(target=proc.stdout.read, daemon=True).start()
         yield address
     finally:
         proc.terminate()
@@ -200,3 +238,42 @@ def _address(proc: subprocess.Popen[str], deadline: float) -> str:
         if found:
             return found.group(1)
     raise LinkError(f"franky-sim did not start: {' | '.join(seen[-5:]) or 'no output'}")
+
+
+def franka_station(
+    config: SessionConfig, address: str, *, dry_run: bool = False, realtime: str | None = None
+) -> Station:
+    """A station of an eating task on the Franka at ``address``, guarded, after the start check."""
+    if config.task == "cups" or config.robot != "panda":
+        raise ConfigError(
+            "a Franka runs the eating tasks (Entree, Dessert) with the Panda model; the cups' scene has no "
+            "table for the workspace guard"
+        )
+    task = make_eating_task()
+    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    link = FrankaLink(connect(address, realtime), guard, address, dry_run=dry_run)
+    check_start(link.read(), task.start, guard)
+    return Station(config, link)
+
+
+class LoggedArm:
+    """A physical session's measured joints, read back in order (its first row twice: the station reads
+    once at its start): a dry-run :class:`FrankaLink` on it recomputes every logged command."""
+
+    def __init__(self, states: np.ndarray) -> None:
+        self._states = np.concatenate([states[:1], states])
+        self._next = 0
+
+    @property
+    def current_joint_state(self) -> Any:
+        """The next logged state, as franky's ``JointState`` shows it (``.position``)."""
+        row = self._states[min(self._next, len(self._states) - 1)]
+        self._next += 1
+        return types.SimpleNamespace(position=row)
+
+
+def replay_link(states: np.ndarray) -> FrankaLink:
+    """A dry-run link that reads a Franka session's logged ``states`` (T, 7) back, guarded as live."""
+    task = make_eating_task()
+    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    return FrankaLink(LoggedArm(states), guard, "a session log", dry_run=True)

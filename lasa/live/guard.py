@@ -12,7 +12,9 @@ In this order, on the command :math:`v = (s' - s)/\Delta` from the measured :mat
 4. **workspace**: the fork tip at :math:`s + \Delta v` must stay above the table plane and inside a box
    around the bowls and the plate; a command that takes it further out is refused (zero velocity).
 
-Each is stricter than the simulation's safe step (:func:`lasa.method.step.safe_step`), so a command the
+A joint limit or the workspace may stop a joint faster than the ramp allows (a stop is always allowed;
+franky's motion generator bounds the arm's own deceleration, and the margin takes the overshoot). Each is
+stricter than the simulation's safe step (:func:`lasa.method.step.safe_step`), so a command the
 simulation would refuse never passes (``tests/test_franka.py`` checks it as a property)."""
 
 from __future__ import annotations

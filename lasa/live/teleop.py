@@ -1,7 +1,10 @@
 r"""Live teleoperation: drive any condition yourself, in MuJoCo's viewer, and log the session.
 
-``run`` steps :mod:`lasa.live.station` at a fixed rate from a gamepad or keyboard; ``replay`` re-runs a log
-and checks its states bit for bit (``--mp4`` renders it); ``schedule``, ``survey``: :mod:`.studykit`."""
+``run`` steps :mod:`lasa.live.station` at a fixed rate from a gamepad or keyboard, against MuJoCo or, with
+``--franka ADDRESS``, a Franka over libfranka (:mod:`lasa.live.franka`; ``--dry-run`` sends nothing);
+``home`` moves the Franka to the start pose once confirmed, ``recover`` clears its errors; ``replay`` re-runs
+a log and checks its states (a Franka's: its commands) bit for bit (``--mp4`` renders it); ``schedule``,
+``survey``: :mod:`.studykit`."""
 
 from __future__ import annotations
 
@@ -31,10 +34,13 @@ from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaEr
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live import studykit
 from lasa.live.devices import Device, ScriptedDevice, open_device
+from lasa.live.franka import connect, franka_station, move_home, recover, replay_link
+from lasa.live.guard import Guard, Workspace
 from lasa.live.link import LinkError
 from lasa.live.session import Session, StopOnSignals, Watchdog, open_log
 from lasa.live.station import SESSION_TASKS, SessionConfig, Station
 from lasa.method.retarget import MODES
+from lasa.world.eating import make_eating_task
 
 
 def _draw(station: Station, goals: np.ndarray, viewer: Any, data: mujoco.MjData, rec: dict[str, Any]) -> bool:
@@ -117,7 +123,9 @@ def run_session(
 def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bool = False) -> dict[str, Any]:
     """Re-run a logged session from its inputs: ``{"steps", "max_state_difference", "exact", "status"}``,
     ``mp4`` if rendered, ``damaged`` (why) if ``allow_damaged``; ArtifactError if the sidecar cannot tell
-    what ran, the decoder or scene is not the logged one, or the log is damaged."""
+    what ran, the decoder or scene is not the logged one, or the log is damaged. A Franka's session (its
+    states measured) re-computes each step from the measured state and compares the commands sent
+    (``max_command_difference``)."""
     frame, meta = read_session(session, allow_damaged=allow_damaged)
     check_scene(session, meta)
     fields = ("robot", "task", "condition", "participant", "build_dir", "decoder_sha256", "decoder_config")
@@ -126,7 +134,10 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
         raise ArtifactError(
             f"session {session}'s sidecar records no {', '.join(missing)}: replay cannot tell what it ran"
         )
-    station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}))
+    states = frame[[f"s{i}" for i in range(len(meta.get("joints", [])) or 7)]].to_numpy()
+    physical = meta.get("state_logged") == "measured"  # a Franka's session: its commands are re-computed
+    link = replay_link(states) if physical else None
+    station = Station(SessionConfig(**{k: meta[k] for k in fields[:5]}), link)
     logged, here = meta["decoder_sha256"], station.meta()  # the decoder on disk must be the logged one
     if logged is None and station.decoder_path is not None:
         raise ArtifactError(
@@ -146,19 +157,22 @@ def replay(session: str | Path, mp4: str | Path | None = None, allow_damaged: bo
             f"the decoder's config differs from the one session {session} logged in {', '.join(diff)}"
         )
     device = ScriptedDevice.from_table(frame, mode="mode_press")
-    states = frame[[f"s{i}" for i in range(station.robot.n_joints)]].to_numpy()
-    replayed = np.asarray([station.step(device.poll())["s"] for _ in range(len(frame))])
+    key = "v" if physical else "s"
+    logged = frame[[f"{key}{i}" for i in range(station.robot.n_joints)]].to_numpy()
+    replayed = np.asarray([station.step(device.poll())[key] for _ in range(len(frame))])
+    difference = float(np.abs(replayed - logged).max()) if len(logged) else 0.0
     out: dict[str, Any] = {
         "steps": len(frame),
-        "max_state_difference": float(np.abs(replayed - states).max()) if len(states) else 0.0,
-        "exact": bool(np.array_equal(replayed, states)),
+        "max_command_difference" if physical else "max_state_difference": difference,
+        "exact": bool(np.array_equal(replayed, logged)),
         "status": meta["status"],
         **{k: meta[k] for k in ("damaged",) if k in meta},
     }
     if mp4 is not None:
         from lasa.evidence.video import label_frames, render_states, write_video
 
-        frames = render_states(station.robot, np.concatenate([station.task.start[None], replayed]), 240, 320)
+        shown = states if physical else np.concatenate([station.task.start[None], replayed])
+        frames = render_states(station.robot, shown, 240, 320)
         frames = label_frames(frames, f"replay {Path(session).name}")
         out["mp4"] = str(write_video(mp4, frames, fps=1.0 / station.control.dt))
     return out
@@ -183,6 +197,15 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--no-viewer", action="store_true", help="run without a window (scripted input)")
     run.add_argument("--fast", action="store_true", help="do not wait for wall-clock time (no viewer)")
     run.add_argument("--screenshot", help="save a screenshot of the display when the session ends")
+    _franka_arguments(run)
+    run.add_argument(
+        "--dry-run", action="store_true", help="with --franka: read the arm, compute and log, send nothing"
+    )
+    home = sub.add_parser("home", help="move a Franka to the task's start pose (a joint motion you confirm)")
+    _franka_arguments(home, required=True)
+    home.add_argument("--yes", action="store_true", help="move without asking (you watch the arm)")
+    recover = sub.add_parser("recover", help="clear a Franka's error state, after checking the arm")
+    _franka_arguments(recover, required=True)
     rep = sub.add_parser("replay", help="re-run a session from its inputs; check its states")
     rep.add_argument("session", help="a session's .csv, .json or stem")
     rep.add_argument("--mp4", help="render the replay to this MP4 (off-screen)")
@@ -202,6 +225,45 @@ def _parser() -> argparse.ArgumentParser:
     sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
     sur.add_argument("--overwrite", action="store_true", help="replace answers given for this condition")
     return parser
+
+
+def _franka_arguments(parser: argparse.ArgumentParser, required: bool = False) -> None:
+    parser.add_argument(
+        "--franka",
+        required=required,
+        metavar="ADDRESS",
+        help="drive a Franka at this address over libfranka (franky-sim: its loopback address)",
+    )
+    parser.add_argument(
+        "--realtime",
+        choices=("enforce", "ignore"),
+        help="libfranka's real-time check [enforce; ignore on a loopback address]",
+    )
+
+
+def _home(args: argparse.Namespace) -> int:
+    """``home``: how far the arm is from the eating tasks' start pose; move it there once confirmed."""
+    task = make_eating_task()
+    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    robot = connect(args.franka, args.realtime)
+    now = np.array(robot.current_joint_state.position, dtype=float)
+    print(f"the arm is at {np.round(now, 3).tolist()}; the start pose is {np.round(task.start, 3).tolist()}")
+    print(
+        f"the largest joint move is {np.abs(now - task.start).max():.3f} rad, at franky's dynamics factor 0.1"
+    )
+    if not args.yes and input("clear the space around the arm; type yes to move: ").strip() != "yes":
+        print("not moved")
+        return 1
+    print(f"at the start pose after {move_home(robot, task.start, guard):.1f} s")
+    return 0
+
+
+def _recover(args: argparse.Namespace) -> int:
+    """``recover``: libfranka's error recovery, the only way a session's stop is undone."""
+    robot = connect(args.franka, args.realtime)
+    recover(robot)
+    print(f"the Franka at {args.franka} has no error now: check the arm, then `home` and `run` again")
+    return 0
 
 
 def _in_viewer(
@@ -252,12 +314,18 @@ def _run(args: argparse.Namespace) -> int:
             "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
             "or with --no-viewer and scripted input"
         )
-    station = Station(config)
+    if args.franka:
+        station = franka_station(config, args.franka, dry_run=args.dry_run, realtime=args.realtime)
+        print(f"robot: {station.link.name}, at the start pose")
+    elif args.dry_run:
+        raise ConfigError("--dry-run reads a real arm: give its address with --franka")
+    else:
+        station = Station(config)
     device, message = open_device(args.device)
     print(message)
     writer = open_log(station, args.sessions)
     max_steps = int(round(args.duration / station.control.dt))
-    with contextlib.closing(device):
+    with contextlib.closing(device), contextlib.closing(station.link):
         if args.no_viewer:
             timing = run_session(station, device, writer, max_steps, realtime=not args.fast)
         else:
@@ -269,12 +337,18 @@ def _run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 128 + int(getattr(signal, timing["signal"]))
+    if timing["reason"] is not None:
+        print(
+            f"session {writer.csv} stopped after {timing['steps']} steps: {timing['reason']}", file=sys.stderr
+        )
+        return 3
     print(f"session {writer.csv}: {timing}")
     return 0
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: ``run``, ``replay``, ``schedule`` and ``survey``; a bad input is one line, exit 2."""
+    """Command line: ``run``, ``replay``, ``home``, ``recover``, ``schedule`` and ``survey``; a bad input is
+    one line, exit 2; a session the watchdog or the robot link stopped, exit 3."""
     args = _parser().parse_args(argv)
     try:
         if args.command == "replay":
@@ -283,6 +357,8 @@ def main(argv: list[str] | None = None) -> int:
             return 0 if result["exact"] else 1
         if args.command == "run":
             return _run(args)
+        if args.command in ("home", "recover"):
+            return _home(args) if args.command == "home" else _recover(args)
         if args.command == "schedule":  # the study kit
             print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
         else:
