@@ -5,6 +5,7 @@ import os
 import re
 import shutil
 import subprocess
+import time
 from pathlib import Path
 
 from lasa.pipeline.makedeps import closure, imports_of, notebook_sources
@@ -97,11 +98,22 @@ def test_an_edit_to_live_use_leaves_make_figures_nothing_to_do(tmp_path):
     for stamp in (".venv/.lasa-installed", ".venv/mathjax/es5/tex-chtml.js", *npm, "o/notebooks/.keep"):
         (tree / stamp).parent.mkdir(parents=True, exist_ok=True)
         (tree / stamp).touch()
+    # every file as if checked out 1000 s ago and the notebooks made (`make -t`) 900 s ago: the edits
+    # below fall between those and now (an edit dated in the future kept make remaking build/make-deps.mk,
+    # older than the edit, until the clock caught up: 10 s of each `make -n`)
+    checkout = time.time() - 1000
+    for path in tree.rglob("*"):
+        os.utime(path, (checkout, checkout))
     subprocess.run(["make", "-t", "notebooks", "OUT=o"], cwd=tree, capture_output=True, check=True)
+    made = [path for path in tree.rglob("*") if path.stat().st_mtime > checkout]
+    assert any(path.suffix == ".ipynb" for path in made)
+    for path in made:
+        os.utime(path, (checkout + 100, checkout + 100))
     assert _runs(tree) == []
 
     def touch(*files: str) -> None:
         later = max(p.stat().st_mtime for p in (tree / "o").rglob("*.ipynb")) + 10
+        assert later < time.time()  # in the past: make sees the edit once, as in real use
         for f in files:
             os.utime(tree / f, (later, later))
 
