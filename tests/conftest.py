@@ -61,8 +61,8 @@ def panda_model(panda_task: CupTask):
 
 # The test files that take longest (summed --durations of a `make test` run, longest first): under
 # pytest-xdist's --dist loadfile (`make test`), the workers take the files in this order and the rest
-# after them, so that no long file starts last while the other worker sits idle (longest first:
-# measured 487 s -> see CHANGELOG). Only the order of whole files changes; each file's tests keep theirs.
+# after them, so that no long file starts last while the other worker sits idle. Only the order of
+# whole files changes; each file's tests keep theirs.
 SLOWEST_FILES = (
     "test_notebooks.py", "test_bench.py", "test_web.py", "test_figure_titles.py", "test_teleop.py",
     "test_docs.py", "test_robustness.py", "test_study_claims.py", "test_study_power.py",
