@@ -59,6 +59,37 @@ def panda_model(panda_task: CupTask):
     return trained
 
 
+# The test files that take longest (summed --durations of a `make test` run, longest first): under
+# pytest-xdist's --dist loadfile (`make test`), the workers take the files in this order and the rest
+# after them, so that no long file starts last while the other worker sits idle. Only the order of
+# whole files changes; each file's tests keep theirs.
+SLOWEST_FILES = (
+    "test_notebooks.py", "test_bench.py", "test_web.py", "test_figure_titles.py", "test_teleop.py",
+    "test_docs.py", "test_robustness.py", "test_study_claims.py", "test_study_power.py",
+    "test_notebook_caps.py", "test_timings.py", "test_makedeps.py", "test_demos.py", "test_video.py",
+    "test_init.py", "test_entropy.py", "test_planning.py", "test_verdicts.py", "test_preregister.py",
+    "test_runtime.py", "test_rollback.py", "test_verify.py", "test_sim1_to_sim3.py",
+)  # fmt: skip
+
+
+def pytest_collection_modifyitems(config, items):
+    """In an xdist worker (whose collection order the controller schedules by), the slowest files first."""
+    if hasattr(config, "workerinput"):
+        rank = {name: i for i, name in enumerate(SLOWEST_FILES)}
+        items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: the rest keep their order
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """--dist loadfile in the collection's order (above), not xdist's default of the most tests first."""
+    if config.getoption("dist") != "loadfile":
+        return None
+    from xdist.scheduler import LoadFileScheduling
+
+    config.option.loadscopereorder = False
+    return LoadFileScheduling(config, log)
+
+
 # Files a test leaves for a person to look at (a screenshot, say), listed at the end of the run.
 # They ride on the test's report (``user_properties``), which pytest-xdist's workers send back to
 # the process that prints the summary.

@@ -91,10 +91,15 @@ def test_the_titles_n_is_the_users_per_point_shown(name: str) -> None:
 def test_the_check_fails_on_a_wrong_n(monkeypatch: pytest.MonkeyPatch) -> None:
     """The committed sim3 CSV has 60 planar5 and 150 Panda users: one N for both is wrong (sims 1-3 title
     through :func:`lasa.experiments.sweep.sim_figure`)."""
-    assert shown_ns(_table("sim3"), FIGURES["sim3"][2]) == {"planar5": (60, 60), "panda": (150, 150)}
+    table, keys = _table("sim3"), FIGURES["sim3"][2]
+    assert shown_ns(table, keys) == {"planar5": (60, 60), "panda": (150, 150)}
+    # drawn at its first three time steps, every user kept: the same N per point, and a fourteenth of
+    # the bands' bootstraps to draw (the N, not the number of points, is what this test is about)
+    few = table[table.t.isin(sorted(table.t.unique())[:3])]
+    assert shown_ns(few, keys) == shown_ns(table, keys) and few.t.nunique() == 3
     monkeypatch.setattr(sweep, "users_text", lambda *args, **kwargs: "150 users per curve")
-    with pytest.raises(AssertionError):
-        check_title(sim3.plot(_table("sim3")), _table("sim3"), FIGURES["sim3"][2])
+    with pytest.raises(AssertionError, match="150 users per curve"):
+        check_title(sim3.plot(few), few, keys)
 
 
 def test_title_ns_reads_every_form() -> None:

@@ -5,6 +5,7 @@ import os
 import re
 import shutil
 import subprocess
+import time
 from pathlib import Path
 
 from lasa.pipeline.makedeps import closure, imports_of, notebook_sources
@@ -52,11 +53,13 @@ def test_a_notebook_depends_on_what_it_runs(tmp_path):
 
 
 def test_the_real_notebooks_never_reach_live_use():
+    read: dict = {}  # each module parsed once for all the notebooks, as make's run of makedeps does
     for nb in sorted((ROOT / "notebooks").glob("[0-9]*.ipynb")):
-        files = notebook_sources(nb)
+        files = notebook_sources(nb, read=read)
         assert not [f for f in files if f.startswith("lasa/live/") or f == "lasa/pipeline/book.py"], nb.name
         assert "lasa/base/config.py" in files and "pyproject.toml" in files
     sim1 = notebook_sources(ROOT / "notebooks" / "04_fixed_expertise.ipynb")
+    assert notebook_sources(ROOT / "notebooks" / "04_fixed_expertise.ipynb", read=read) == sim1
     assert "lasa/experiments/sim1.py" in sim1 and "lasa/experiments/sim2.py" not in sim1
     assert "lasa/world/assets/panda/panda.xml" in sim1  # it reaches the robots, so their models
     demos = notebook_sources(ROOT / "notebooks" / "01_demonstrations.ipynb")
@@ -95,11 +98,22 @@ def test_an_edit_to_live_use_leaves_make_figures_nothing_to_do(tmp_path):
     for stamp in (".venv/.lasa-installed", ".venv/mathjax/es5/tex-chtml.js", *npm, "o/notebooks/.keep"):
         (tree / stamp).parent.mkdir(parents=True, exist_ok=True)
         (tree / stamp).touch()
+    # every file as if checked out 1000 s ago and the notebooks made (`make -t`) 900 s ago: the edits
+    # below fall between those and now (an edit dated in the future kept make remaking build/make-deps.mk,
+    # older than the edit, until the clock caught up: 10 s of each `make -n`)
+    checkout = time.time() - 1000
+    for path in tree.rglob("*"):
+        os.utime(path, (checkout, checkout))
     subprocess.run(["make", "-t", "notebooks", "OUT=o"], cwd=tree, capture_output=True, check=True)
+    made = [path for path in tree.rglob("*") if path.stat().st_mtime > checkout]
+    assert any(path.suffix == ".ipynb" for path in made)
+    for path in made:
+        os.utime(path, (checkout + 100, checkout + 100))
     assert _runs(tree) == []
 
     def touch(*files: str) -> None:
         later = max(p.stat().st_mtime for p in (tree / "o").rglob("*.ipynb")) + 10
+        assert later < time.time()  # in the past: make sees the edit once, as in real use
         for f in files:
             os.utime(tree / f, (later, later))
 

@@ -34,10 +34,16 @@ def _exports(root: Path) -> dict[str, str]:
 
 
 def _run_nodes(node: ast.AST) -> list[ast.AST]:
-    """``node`` and every node under it except those under ``if TYPE_CHECKING:`` (imports for typing only)."""
-    typing_only = isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
-    children = node.orelse if typing_only else ast.iter_child_nodes(node)  # type: ignore[attr-defined]
-    return [node, *(found for child in children for found in _run_nodes(child))]
+    """``node`` and every node under it except those under ``if TYPE_CHECKING:`` (imports for typing only),
+    depth first in source order (a stack: the recursion copied each subtree's list once per level)."""
+    found, stack = [], [node]
+    while stack:
+        node = stack.pop()
+        found.append(node)
+        typing_only = isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+        children = node.orelse if typing_only else ast.iter_child_nodes(node)  # type: ignore[attr-defined]
+        stack.extend(reversed(list(children)))
+    return found
 
 
 def imports_of(source: str, root: Path = ROOT) -> set[str]:
@@ -57,24 +63,33 @@ def imports_of(source: str, root: Path = ROOT) -> set[str]:
     return {m for m in found if module_file(m, root) is not None}
 
 
-def closure(modules: set[str], root: Path = ROOT) -> set[str]:
-    """Every lasa module reached from ``modules`` by imports (them included)."""
+def closure(modules: set[str], root: Path = ROOT, read: dict[Path, set[str]] | None = None) -> set[str]:
+    """Every lasa module reached from ``modules`` by imports (them included). ``read`` keeps each file's
+    imports for the next call (:func:`main`'s notebooks share one: a module is parsed once, not once per
+    notebook); pass one only while the files stay as they are."""
+    read = {} if read is None else read
     seen = set()
     todo = set(modules)
     while todo:
         seen |= todo
-        files = (module_file(name, root) for name in todo)
-        todo = {m for f in files if f is not None for m in imports_of(f.read_text(), root)} - seen
+        files = [f for f in (module_file(name, root) for name in todo) if f is not None]
+        for f in files:
+            if f not in read:
+                read[f] = imports_of(f.read_text(), root)
+        todo = {m for f in files for m in read[f]} - seen
     return seen
 
 
-def notebook_sources(notebook: str | Path, root: Path = ROOT) -> list[str]:
-    """The repository files a notebook's run depends on, sorted, relative to ``root``."""
+def notebook_sources(
+    notebook: str | Path, root: Path = ROOT, read: dict[Path, set[str]] | None = None
+) -> list[str]:
+    """The repository files a notebook's run depends on, sorted, relative to ``root`` (``read``: as
+    :func:`closure`'s)."""
     cells = json.loads(Path(notebook).read_text())["cells"]
     code = "\n".join("".join(c["source"]) for c in cells if c["cell_type"] == "code")
     # IPython magics and shell escapes are not Python: leave them out of the parse
     lines = [line for line in code.splitlines() if not line.lstrip().startswith(("%", "!"))]
-    modules = closure(imports_of("\n".join(lines), root) | {"lasa"}, root)
+    modules = closure(imports_of("\n".join(lines), root) | {"lasa"}, root, read)
     files = {str(module_file(m, root).relative_to(root)) for m in modules}  # type: ignore[union-attr]
     if "lasa.world.robot" in modules:
         files |= {str(p.relative_to(root)) for p in (root / "lasa" / "world" / "assets").rglob("*.xml")}
@@ -83,8 +98,9 @@ def notebook_sources(notebook: str | Path, root: Path = ROOT) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     """Print ``NB_SRC_<stem> := <files>`` for each notebook named on the command line."""
+    read: dict[Path, set[str]] = {}  # each module's imports, parsed once for all the notebooks
     for notebook in argv if argv is not None else sys.argv[1:]:
-        print(f"NB_SRC_{Path(notebook).stem} := {' '.join(notebook_sources(notebook))}")
+        print(f"NB_SRC_{Path(notebook).stem} := {' '.join(notebook_sources(notebook, read=read))}")
     return 0
 
 
