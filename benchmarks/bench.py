@@ -13,6 +13,12 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 - ``station_step_us``: the step live teleoperation runs (:meth:`lasa.live.station.Station.step`,
   Dessert), for Retargeting (``R+SA``: the mink solve included) and latent actions
   (``LA+SA``, with the eating decoder of ``--decoder-build``; skipped when there is none).
+- ``franky_station``: the 10 Hz live station over franky (:class:`lasa.live.franka.FrankaLink`, the
+  guard on, Dessert) against ``franky-sim`` on loopback for ``franky_seconds`` (60 s), driven by a
+  scripted stick through :func:`lasa.live.teleop.run_session` in real time: the tick's latency (from
+  reading the measured joints to the velocity command sent: :meth:`~lasa.live.station.Station.step`)
+  p50 and p99 [ms], and the ticks that missed their deadline. ``LA+SA`` with the eating decoder of
+  ``--decoder-build``, else ``R+SA`` (``condition`` says which ran).
 - ``sweep``: simulated user-steps per second of the batched rollout
   (:func:`lasa.people.rollout.rollout`) for 1 to 4096 users, against a per-user, per-step
   loop over the same decoder and the same step functions (``loop``: the rollout run
@@ -44,7 +50,8 @@ A script, not part of the ``lasa`` library. What it measures, on the machine it 
 Usage, from the repository root: ``python benchmarks/bench.py --out benchmarks``
 (``--tiny`` runs every part at a toy size in seconds, as ``tests/test_bench.py`` does;
 ``--skip-pipeline`` leaves out the two ``make figures`` runs; ``--only dask``,
-``--only decoder_vs_gemm`` or ``--only pinning`` re-measures one part and updates its keys).
+``--only decoder_vs_gemm``, ``--only pinning`` or ``--only franky_station`` re-measures one part and
+updates its keys).
 See ``benchmarks/README.md``.
 """
 
@@ -61,6 +68,7 @@ import contextlib  # noqa: E402
 import dataclasses  # noqa: E402
 import datetime  # noqa: E402
 import importlib  # noqa: E402
+import importlib.metadata  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import shutil  # noqa: E402
@@ -132,6 +140,8 @@ TARGETS: dict[str, float] = {
     "dask_overhead_1_worker": 0.10,  # overhead_fraction: 1 Dask worker / in-process - 1, large grid
     "figures_total_s": 900.0,  # make figures, paper scale, fresh, alone on 2 cores (15 min)
     "figures_quick_total_s": 90.0,
+    "franky_station_p99_ms": 10.0,  # a 10 Hz tick over franky, read to command sent, p99 [ms]
+    "franky_station_missed_ticks": 0,  # ticks past their deadline in franky_seconds [-]
 }
 
 
@@ -159,6 +169,7 @@ class BenchConfig:
     study_repeats: int = 9  # interleaved timed steps of each variant; the median is reported [-]
     pinning_rounds: int = 5  # alternated proxy runs with the kernels pinned and free [-]
     pinning_steps: int = 150  # entropy fine-tuning steps of each proxy run [-]
+    franky_seconds: float = 60.0  # the live station's run against franky-sim [s]
     hidden: int = 128  # decoder width, as in configs/paper.yaml [-]
     depth: int = 3  # decoder depth, as in configs/paper.yaml [-]
     seed: int = 0  # seed of inputs, users and weights [-]
@@ -184,6 +195,7 @@ class BenchConfig:
             study_repeats=1,
             pinning_rounds=1,
             pinning_steps=5,
+            franky_seconds=2.0,
             hidden=16,
             depth=2,
         )
@@ -292,6 +304,64 @@ def station_latency(
         station.step(sample)
         times[i] = clock() - t0
     return _percentiles(times[warm:])
+
+
+def franky_station(build_dir: str | os.PathLike[str], seconds: float, seed: int = 0) -> dict[str, Any]:
+    """The live station's 10 Hz loop over franky against ``franky-sim``, for ``seconds`` of real time.
+
+    The arm is moved to the Dessert task's start pose (a joint motion), then
+    :func:`lasa.live.teleop.run_session` steps :class:`lasa.live.station.Station` with a
+    :class:`lasa.live.franka.FrankaLink` (its guard on) from a scripted stick: a random walk in
+    [-1, 1]^2 (``seed``), the mode button pressed every 50 ticks. The session's watchdog stops it at
+    the first late tick. ``LA+SA`` decodes with the eating decoder in ``build_dir``; without one,
+    ``R+SA``.
+
+    Returns:
+        ``condition``, ``ticks`` run of ``ticks_planned``, the tick latency ``p50_ms`` and ``p99_ms``
+        (reading the joints to the command sent), ``missed_ticks``, the stop ``reason`` (None: the
+        script's end), the commands ``sent`` and the ``franky_sim`` version.
+    """
+    from lasa.live.devices import ScriptedDevice
+    from lasa.live.franka import FrankaLink, connect, move_home, simulator
+    from lasa.live.guard import Guard, Workspace
+    from lasa.live.station import SessionConfig, Station
+    from lasa.live.teleop import run_session
+
+    with simulator() as address:
+        arm = connect(address)
+        station = None
+        for condition in ("LA+SA", "R+SA"):
+            config = SessionConfig(task="Dessert", condition=condition, build_dir=str(build_dir))
+            try:
+                station = Station(config)  # MuJoCo's link first: the decoder loads before the arm moves
+            except ArtifactError:
+                continue
+            break
+        assert station is not None  # R+SA needs no decoder
+        robot, start, dt = station.robot, station.task.start, station.control.dt
+        guard = Guard(robot, Workspace.around(robot, start), dt)
+        move_home(arm, start, guard, speed=0.5)
+        link = FrankaLink(arm, guard, address)
+        station.link = link
+        station.reset()
+        ticks = int(round(seconds / dt))
+        rng = np.random.default_rng(seed)
+        axes = np.clip(np.cumsum(rng.normal(0, 0.2, (ticks, 2)), axis=0), -1, 1)
+        device = ScriptedDevice(axes, mode=np.arange(ticks) % 50 == 25)
+        timing = run_session(station, device, None, ticks)
+        link.close()
+    return {
+        "condition": station.config.condition,
+        "seconds": seconds,
+        "ticks": timing["steps"],
+        "ticks_planned": ticks,
+        "p50_ms": timing["step_time_median_s"] * 1e3,
+        "p99_ms": timing["step_time_p99_s"] * 1e3,
+        "missed_ticks": timing["deadline_misses"],
+        "reason": timing["reason"],
+        "sent": link.sent,
+        "franky_sim": importlib.metadata.version("franky-sim"),
+    }
 
 
 def step_deadline(control: ControlConfig, latency_us: dict[str, float]) -> dict[str, float]:
@@ -916,17 +986,24 @@ def pinning_cost(rounds: int, steps: int) -> dict[str, Any]:
     }
 
 
-PARTS = ("decoder_vs_gemm", "dask", "pinning", "study_step")  # what ``--only`` re-measures alone
+# what ``--only`` re-measures alone
+PARTS = ("decoder_vs_gemm", "dask", "pinning", "study_step", "franky_station")
 PART_SIZES = {
     "decoder_vs_gemm": ("gemm_", "hidden", "depth", "batches"),
     "dask": ("grid_", "dask_"),
     "pinning": ("pinning_",),
     "study_step": ("study_",),
+    "franky_station": ("franky_", "seed"),
 }
 
 
-def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tuple[str, ...]:
+def _measure_part(
+    part: str, results: dict[str, Any], config: BenchConfig, decoder_build: str = "build"
+) -> tuple[str, ...]:
     """Measure ``part`` on the Panda into ``results``; the keys it wrote."""
+    if part == "franky_station":
+        results["franky_station"] = franky_station(decoder_build, config.franky_seconds, config.seed)
+        return ("franky_station",)
     arm = load_robot("panda")
     task = make_cup_task(arm)
     model = _decoder(task, arm.control, config)
@@ -944,7 +1021,7 @@ def _measure_part(part: str, results: dict[str, Any], config: BenchConfig) -> tu
     return ("decoder_vs_gemm_fraction",)
 
 
-def remeasure(part: str, config: BenchConfig, path: Path) -> int:
+def remeasure(part: str, config: BenchConfig, path: Path, decoder_build: str = "build") -> int:
     """Re-run one part of :data:`PARTS` and update its keys in the results at ``path``.
 
     Every other key is kept as it was. ``remeasured[part]`` records the machine and date
@@ -956,8 +1033,10 @@ def remeasure(part: str, config: BenchConfig, path: Path) -> int:
     results: dict[str, Any] = json.loads(path.read_text()) if path.exists() else {}
     print(f"{part} alone", flush=True)
     torch.set_num_threads(1)
-    shown = _measure_part(part, results, config)
+    shown = _measure_part(part, results, config, decoder_build)
     results.setdefault("targets", dict(TARGETS))
+    for key, target in TARGETS.items():  # a part's target added since the run of `machine`
+        results["targets"].setdefault(key, target)
     results.setdefault("remeasured", {})[part] = {
         "machine": machine(),
         "threads": {"torch": 1, "omp_num_threads": os.environ.get("OMP_NUM_THREADS")},
@@ -1003,7 +1082,7 @@ def main(argv: list[str] | None = None) -> int:
         config = dataclasses.replace(config, grid_min_s=args.grid_min_s)
     out = Path(args.out).resolve()
     if args.only:
-        return remeasure(args.only, config, out / "results.json")
+        return remeasure(args.only, config, out / "results.json", args.decoder_build)
     build = Path(args.build).resolve()  # the pipeline runs from the repository root
     step_threads = 1  # one user's step: a second thread only adds overhead
     results: dict[str, Any] = {
@@ -1054,6 +1133,9 @@ def main(argv: list[str] | None = None) -> int:
 
     print("the study's step with and without the unassisted rows' assistance", flush=True)
     results["study_step"] = study_step(config.study_rows, config.study_repeats, config.seed)
+
+    print("the live station over franky against franky-sim (10 Hz, real time)", flush=True)
+    results["franky_station"] = franky_station(args.decoder_build, config.franky_seconds, config.seed)
 
     print("rendering", flush=True)
     results["render_fps"] = {

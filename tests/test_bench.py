@@ -72,6 +72,11 @@ def test_results_hold_every_key(tiny_results):
     assert set(results["station_step_us"]) == {"R+SA", "LA+SA"}
     for row in results["station_step_us"].values():
         assert set(row) == {"p50", "p99", "mean", "n"} and 0 < row["p50"] <= row["p99"]
+    # the live station over franky against franky-sim, LA+SA with the small decoder, every tick sent
+    live = results["franky_station"]
+    assert live["condition"] == "LA+SA" and live["ticks_planned"] == round(TINY.franky_seconds / 0.1)
+    assert 1 <= live["ticks"] <= live["ticks_planned"] and live["sent"] == live["ticks"]
+    assert 0 < live["p50_ms"] <= live["p99_ms"] and live["missed_ticks"] >= 0
     assert set(results["sweep"]) == {str(b) for b in TINY.batches}
     for row in results["sweep"].values():
         assert set(row) == {"batched", "loop", "floor"} and all(v > 0 for v in row.values())

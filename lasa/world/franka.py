@@ -130,3 +130,74 @@ def check_against_dh(robot: Robot, n: int = 200, seed: int = 0) -> pd.DataFrame:
     columns = ("max_tcp_position_error_m", "max_tcp_rotation_error_rad", "max_frame_position_error_m")
     frame = pd.DataFrame(records, columns=("model", *columns))
     return frame.groupby("model", sort=False, as_index=False).max()
+
+
+# ---- The connected arm's forward kinematics against the package's Panda ---------------------------------
+# The package's Panda (the decoders' robot) is built on the DH table above; Franka's FR3 shares that table,
+# flange and Franka Hand TCP, and differs in joint limits (FR3_LOWER, FR3_UPPER) and dynamics. libfranka
+# reports the end effector as O_T_EE (base to EE, with F_T_EE the configured hand: TCP_D along the flange's
+# z, HAND_YAW about it), which is the package Panda's EE_SITE; both put the arm's base at the world origin.
+# lasa.live.kinematics moves a connected arm and compares.
+EE_SITE = "grasp"  # the package Panda's site at Franka's EE (flange + Franka Hand TCP), every scene's
+
+
+_ABOVE_FLOOR = ("link3", "link4", "link5", "link6", "link7", "flange", "tcp")  # the frames kept off the table
+
+
+def shared_configurations(n: int, seed: int, margin: float = 0.2, floor: float = 0.1) -> np.ndarray:
+    """``n`` uniform joint vectors (n, 7) [rad] inside the limits the Panda and the FR3 share, ``margin``
+    [rad] from each, whose frames (:func:`dh_frames`: link 3 to the TCP) stay ``floor`` [m] above the base's
+    plane (the table a real arm stands on); ``seed`` the generator's. Self-collisions are not checked."""
+    lower, upper = SHARED_LOWER + margin, SHARED_UPPER - margin
+    if n < 1 or np.any(lower >= upper):
+        raise ConfigError(f"need n >= 1 and a margin below half the shared range, got n={n}, margin={margin}")
+    rng = np.random.default_rng(seed)
+    kept: list[np.ndarray] = []
+    for _ in range(1000 * n):
+        q = rng.uniform(lower, upper)
+        frames = dh_frames(q)
+        if min(frames[k][2, 3] for k in _ABOVE_FLOOR) >= floor:
+            kept.append(q)
+            if len(kept) == n:
+                return np.array(kept)
+    raise ConfigError(f"fewer than {n} of {1000 * n} samples keep {floor} m above the base: lower the floor")
+
+
+def ee_poses(robot: Robot, q: np.ndarray) -> np.ndarray:
+    """The package Panda's EE (site :data:`EE_SITE`) at joint vectors ``q`` (n, 7), (n, 4, 4) transforms."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    data = mujoco.MjData(robot.model)
+    site = robot.model.site(EE_SITE).id
+    out = np.tile(np.eye(4), (len(q), 1, 1))
+    for pose, qq in zip(out, q, strict=True):
+        data.qpos[robot.qpos_adr] = qq
+        mujoco.mj_kinematics(robot.model, data)
+        pose[:3, :3] = data.site_xmat[site].reshape(3, 3)
+        pose[:3, 3] = data.site_xpos[site]
+    return out
+
+
+def rotation_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    r"""The angle [rad] of the rotation between (..., 3, 3) rotations ``a`` and ``b``,
+    :math:`\theta = \operatorname{atan2}(\|\operatorname{vee}(R - R^T)\| / 2, (\operatorname{tr} R - 1) / 2)`
+    with :math:`R = a^T b` (accurate near 0, where arccos of the trace is not)."""
+    r = np.swapaxes(a, -1, -2) @ b
+    skew = np.stack(
+        [r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1
+    )
+    return np.arctan2(np.linalg.norm(skew, axis=-1) / 2, (np.trace(r, axis1=-2, axis2=-1) - 1) / 2)
+
+
+def fk_errors(robot: Robot, q: np.ndarray, measured: np.ndarray) -> pd.DataFrame:
+    """How far the package Panda's EE at joint vectors ``q`` (n, 7) [rad] is from the ``measured`` EE poses
+    (n, 4, 4; libfranka's O_T_EE read with ``q``): one row per configuration, ``q0``..``q6``,
+    ``position_error_m`` and ``orientation_error_rad``."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    measured = np.asarray(measured, dtype=float).reshape(-1, 4, 4)
+    if q.shape != (len(measured), 7):
+        raise ConfigError(f"q must be (n, 7) with one row per pose, got {q.shape} for {len(measured)} poses")
+    ours = ee_poses(robot, q)
+    table = pd.DataFrame(q, columns=[f"q{i}" for i in range(7)])
+    table["position_error_m"] = np.linalg.norm(ours[:, :3, 3] - measured[:, :3, 3], axis=-1)
+    table["orientation_error_rad"] = rotation_angle(ours[:, :3, :3], measured[:, :3, :3])
+    return table
