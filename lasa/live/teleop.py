@@ -201,7 +201,19 @@ def _parser() -> argparse.ArgumentParser:
     sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
     sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
     sur.add_argument("--overwrite", action="store_true", help="replace answers given for this condition")
+    dem = sub.add_parser("demos", help="record kinesthetic demonstrations (guiding mode) into a dataset")
+    dem.add_argument("--franka", required=True, help="the Franka's address (franky-sim: a loopback address)")
+    dem.add_argument("--out", required=True, help="the demonstrations file, .npz (the raw stream beside it)")
+    dem.add_argument("--duration", type=float, help="seconds to record (default: until Ctrl-C)")
+    dem.add_argument("--realtime", choices=("enforce", "ignore"), help="libfranka's real-time kernel check")
     return parser
+
+
+def _demos(args: argparse.Namespace) -> int:
+    """``demos``: :func:`lasa.live.kinesthetic.run_demos` (imported here: franky loads only for it)."""
+    from lasa.live.kinesthetic import run_demos
+
+    return run_demos(args.franka, args.out, args.duration, args.realtime)
 
 
 def _in_viewer(
@@ -283,6 +295,8 @@ def main(argv: list[str] | None = None) -> int:
             return 0 if result["exact"] else 1
         if args.command == "run":
             return _run(args)
+        if args.command == "demos":
+            return _demos(args)
         if args.command == "schedule":  # the study kit
             print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
         else:
