@@ -29,13 +29,14 @@ from lasa.base.config import (
     validate_caps,
 )
 from lasa.base.errors import ConfigError
-from lasa.base.paths import Paths
+from lasa.base.paths import Paths, resolve
 from lasa.evidence import latent_measure, latent_property
 from lasa.experiments import entropy_ablation
 from lasa.experiments.sweep import check_names
 from lasa.method.belief import belief_targets, confident_belief
 from lasa.method.dataset import Demonstrations, save_demonstrations
 from lasa.method.decoder import ActionDecoder, LatentActionModel, save_checkpoint
+from lasa.method.kinesthetic import load_recorded, relabel_beliefs
 from lasa.method.train import TrainConfig
 from lasa.people.demos import EATING_DEMOS, SEGMENTATIONS, DemoConfig, collect_eating_demonstrations
 from lasa.pipeline.scaleout import run_jobs
@@ -77,6 +78,9 @@ class Config:
     belief_cap: BeliefCap = STUDY_BELIEF_CAP  # the study's; None ("none"): Algorithm 1's uncapped
     cap_sweep: tuple[BeliefCap, ...] = (0.9, 0.95, 0.999, None)  # the headline's recipe again (train_caps)
     jobs: PositiveInt = 1  # local worker processes for the trainings: the same decoders with any number [-]
+    # kinesthetic demonstrations recorded on the arm (`python -m lasa.live.teleop demos`), a .npz relative
+    # to the repository: every reading trains from them instead of the synthetic ones; None: synthetic [-]
+    recorded_demos: str | None = None
 
     def __post_init__(self) -> None:
         validate_caps(self)
@@ -105,6 +109,25 @@ class Config:
             raise ConfigError(
                 f"sector_weight must be > 0 when sector_segmentations are trained, got {self.sector_weight}"
             )
+
+
+def demonstrations(
+    task: EatingTask, control: ControlConfig, config: Config, segmentation: str = "continuous"
+) -> Demonstrations:
+    """The demonstrations a reading trains from: ``config.recorded_demos`` (checked against ``task``, the
+    beliefs recomputed under ``control``'s cap if it is not the study's), else the synthetic ones cut by
+    ``segmentation``."""
+    if config.recorded_demos is None:
+        return collect_eating_demonstrations(task, control, config.demos, segmentation=segmentation)
+    demos = load_recorded(resolve(config.recorded_demos), task)
+    return demos if control == task.robot.control else relabel_beliefs(demos, task, control)
+
+
+def demonstrations_used(config: Config) -> str:
+    """Which demonstrations the decoders train from, for the notebook to say."""
+    if config.recorded_demos is None:
+        return "synthetic demonstrations (lasa.people.demos.collect_eating_demonstrations)"
+    return f"recorded kinesthetic demonstrations {resolve(config.recorded_demos)}"
 
 
 def variant_names(config: Config) -> list[str]:
@@ -163,7 +186,7 @@ def train_variants(
     sizes: list[tuple[object, ...]] = []
     robot = task.robot.name
     for r in config.segmentations:  # each segmentation's tuples, saved, and a row of their sizes
-        datasets[r] = demos = collect_eating_demonstrations(task, control, config.demos, segmentation=r)
+        datasets[r] = demos = demonstrations(task, control, config, segmentation=r)
         save_demonstrations(demos, paths.artifact("eating_segmentation_demos", robot, segmentation=r))
         clean = demos.clean()
         sizes.append((r, int(clean.demo.max() + 1), len(clean), len(clean) * control.dt / 60, len(demos)))
@@ -200,7 +223,13 @@ def train_variants(
 def _save(path: Path, variant: _Variant, config: Config) -> None:
     """A variant's decoder, saved with the settings that made it and the variant's name."""
     name, model, fine, control = variant
-    extra = {"train": to_dict(fine), "control": to_dict(control), "demos": to_dict(config.demos)}
+    extra: dict[str, object] = {
+        "train": to_dict(fine),
+        "control": to_dict(control),
+        "demos": to_dict(config.demos),
+    }
+    if config.recorded_demos is not None:  # only then: the synthetic path's checkpoints stay as they were
+        extra["recorded_demos"] = config.recorded_demos
     save_checkpoint(model, path, **extra, reading=name)
 
 
@@ -239,7 +268,7 @@ def train_caps(
     seg, base_train = _bases(config)[base]
     fine = dataclasses.replace(base_train, steps=config.sweep_steps, entropy_lambda=weight)
     controls = [dataclasses.replace(control, belief_cap=c) for c in caps]
-    demos = [collect_eating_demonstrations(task, c, config.demos, segmentation=seg) for c in controls]
+    demos = [demonstrations(task, c, config, segmentation=seg) for c in controls]
     runs = [entropy_ablation.Run(d, c, base_train) for d, c in zip(demos, controls, strict=True)]
     bases = entropy_ablation.train_all(runs, config.jobs, progress, desc="bases at each cap")
     goal_sets = belief_targets(task, control.likelihood)

@@ -224,6 +224,10 @@ def _parser() -> argparse.ArgumentParser:
     sur.add_argument("--answers", help="comma-separated answers 1-7 (Easy,Helpful,Precise,Intuitive,Prefer)")
     sur.add_argument("--sessions", default="build/sessions", help="folder of likert.csv [%(default)s]")
     sur.add_argument("--overwrite", action="store_true", help="replace answers given for this condition")
+    dem = sub.add_parser("demos", help="record kinesthetic demonstrations (guiding mode) into a dataset")
+    _franka_arguments(dem, required=True)
+    dem.add_argument("--out", required=True, help="the demonstrations file, .npz (the raw stream beside it)")
+    dem.add_argument("--duration", type=float, help="seconds to record (default: until Ctrl-C)")
     return parser
 
 
@@ -264,6 +268,13 @@ def _recover(args: argparse.Namespace) -> int:
     recover(robot)
     print(f"the Franka at {args.franka} has no error now: check the arm, then `home` and `run` again")
     return 0
+
+
+def _demos(args: argparse.Namespace) -> int:
+    """``demos``: :func:`lasa.live.kinesthetic.run_demos` (imported here: franky loads only for it)."""
+    from lasa.live.kinesthetic import run_demos
+
+    return run_demos(args.franka, args.out, args.duration, args.realtime)
 
 
 def _in_viewer(
@@ -347,8 +358,8 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line: ``run``, ``replay``, ``home``, ``recover``, ``schedule`` and ``survey``; a bad input is
-    one line, exit 2; a session the watchdog or the robot link stopped, exit 3."""
+    """Command line: ``run``, ``replay``, ``home``, ``recover``, ``demos``, ``schedule`` and ``survey``; a bad
+    input is one line, exit 2; a session the watchdog or the robot link stopped, exit 3."""
     args = _parser().parse_args(argv)
     try:
         if args.command == "replay":
@@ -359,6 +370,8 @@ def main(argv: list[str] | None = None) -> int:
             return _run(args)
         if args.command in ("home", "recover"):
             return _home(args) if args.command == "home" else _recover(args)
+        if args.command == "demos":
+            return _demos(args)
         if args.command == "schedule":  # the study kit
             print(studykit.write_schedule(args.participants, args.out, overwrite=args.overwrite))
         else:

@@ -11,7 +11,7 @@ from collections.abc import Callable
 import numpy as np
 import torch
 
-from lasa.base.config import LIKELIHOODS, check_choice, check_range
+from lasa.base.config import LIKELIHOODS, ControlConfig, check_choice, check_range
 from lasa.world.goals import GoalTask
 
 # a context is "confident" when its top belief lies within this of the cap (or of one) [-]
@@ -225,3 +225,23 @@ def confidence_threshold(cap: float | None) -> float:
 def belief(log_b: np.ndarray) -> np.ndarray:
     """Beliefs from log-beliefs (they sum to one along the last axis)."""
     return np.exp(log_b - logsumexp(log_b))
+
+
+def online_beliefs(
+    goal_sets: np.ndarray,
+    control: ControlConfig,
+    states: np.ndarray,
+    actions: np.ndarray,
+    log_b0: np.ndarray | None = None,
+) -> np.ndarray:
+    r"""The belief before each (s, a) of a demonstration, (N, G): what the online update (Algorithm 1,
+    line 8, with ``control``'s beta_b, Delta sigma_h, floor and cap) computes along it from ``log_b0`` (G,)
+    (default uniform). The likelihoods are one batched call; the update, a recurrence through the floor
+    and cap, runs step by step on G numbers."""
+    lik = log_likelihood(states, actions, goal_sets, control.dt, control.belief_beta, control.likelihood_step)
+    log_b = uniform_log_belief(1, len(goal_sets))[0] if log_b0 is None else np.asarray(log_b0, float)
+    out = np.empty((len(states), len(goal_sets)))
+    for k in range(len(states)):
+        out[k] = belief(log_b)
+        log_b = update_log_belief(log_b, lik[k], control.belief_floor, control.belief_cap)
+    return out

@@ -11,6 +11,7 @@ import numpy as np
 
 from lasa.base.errors import ArtifactError
 from lasa.base.io import load_npz, save_npz
+from lasa.world.robot import Robot
 from lasa.world.task import CupTask
 
 REACH, ADJUST, HOLD, STROKE = 0, 1, 2, 3  # phase labels of a tuple (strokes: the eating task)
@@ -56,6 +57,34 @@ class Demonstrations:
                 caption = f"demo {d}: {task.goal_names[g]} cup, reach to theta={theta[d]:.2f}, then adjust"
                 out.append((d, caption))
         return out
+
+
+def add_noisy_copies(
+    clean: Demonstrations,
+    robot: Robot,
+    action_scale: float,
+    copies: tuple[int, float, float],
+    rng: np.random.Generator,
+) -> Demonstrations:
+    """``clean`` and ``n`` noisy copies of every tuple, ``copies = (n, std, gain)``: the state perturbed by
+    N(0, std^2) [rad] (clipped to the joint limits), the action corrected back towards the demonstrated
+    state, :math:`a + k (s - \tilde s)` with gain k [1/s], clipped below 0.99 sigma_h (``action_scale``);
+    labels and beliefs repeated, the copies after the tuples (``perturbed`` True)."""
+    n_perturb, std, gain = copies
+    limit = 0.99 * action_scale
+    states, actions = clean.states, clean.actions
+    pairs = [(states, actions)]
+    for _ in range(n_perturb):
+        s_new = robot.clip(states + rng.normal(0.0, std, states.shape))
+        a_new = actions + gain * (states - s_new)
+        norm = np.linalg.norm(a_new, axis=1, keepdims=True)
+        pairs.append((s_new, np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)))
+    reps = n_perturb + 1
+    s, a = map(np.concatenate, zip(*pairs, strict=True))
+    beliefs = np.tile(clean.beliefs, (reps, 1))
+    demo, goal, theta, phase = (np.tile(x, reps) for x in (clean.demo, clean.goal, clean.theta, clean.phase))
+    perturbed = np.arange(len(s)) >= len(states)
+    return Demonstrations(robot.name, s, a, beliefs, demo, goal, theta, phase, perturbed)
 
 
 def save_demonstrations(demos: Demonstrations, path: str | os.PathLike[str]) -> Path:

@@ -34,7 +34,7 @@ from lasa.method.belief import (
     uniform_log_belief,
     update_log_belief,
 )
-from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations
+from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations, add_noisy_copies
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
 
@@ -152,24 +152,15 @@ class _Collector:
         self.n_demos += 1
 
     def dataset(self) -> Demonstrations:
-        """The tuples and ``n_perturb`` noisy copies of each: the state perturbed, the action corrected
-        back towards the demonstrated state (clipped below sigma_h)."""
-        robot = self.task.robot
+        """The tuples and ``n_perturb`` noisy copies of each (:func:`.add_noisy_copies`)."""
         config = self.config
-        limit = 0.99 * self.control.action_scale
         states, actions, *labels = map(np.concatenate, zip(*self.rows, strict=True))
-        copies = [(states, actions)]
-        for _ in range(config.n_perturb):
-            s_new = robot.clip(states + self.rng.normal(0.0, config.perturb_std, states.shape))
-            a_new = actions + config.perturb_gain * (states - s_new)
-            norm = np.linalg.norm(a_new, axis=1, keepdims=True)
-            copies.append((s_new, np.where(norm > limit, a_new * limit / np.maximum(norm, 1e-12), a_new)))
-        reps = config.n_perturb + 1
-        s, a = map(np.concatenate, zip(*copies, strict=True))
-        beliefs = np.tile(np.stack(self.beliefs), (reps, 1))
-        demo, goal, theta, phase = (np.tile(x, reps) for x in labels)
-        perturbed = np.arange(len(s)) >= len(states)
-        return Demonstrations(robot.name, s, a, beliefs, demo, goal, theta, phase, perturbed)
+        demo, goal, theta, phase = labels
+        beliefs = np.stack(self.beliefs)
+        robot, none = self.task.robot, np.zeros(len(states), bool)
+        clean = Demonstrations(robot.name, states, actions, beliefs, demo, goal, theta, phase, none)
+        copies = (config.n_perturb, config.perturb_std, config.perturb_gain)
+        return add_noisy_copies(clean, robot, self.control.action_scale, copies, self.rng)
 
 
 def collect_demonstrations(
