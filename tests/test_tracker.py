@@ -28,8 +28,7 @@ def test_the_simulation_and_the_live_station_track_the_same_phases_and_times():
     station = Station(SessionConfig(task="Dessert", condition="R"))
     live_phase, live_done = [], []
     for q in path:
-        station.runner.state[0] = q
-        station.track()
+        station.track(q)
         live_phase.append(station.phase)
         live_done.append(station.done)
 

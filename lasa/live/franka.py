@@ -74,6 +74,20 @@ def connect(address: str, realtime: str | None = None, timeout: float = 30.0) ->
     return result[0]
 
 
+def joints(robot: Any) -> np.ndarray:
+    """A franky robot's measured joint positions, (7,) [rad]; LinkError if it cannot be read or reports
+    something that is not 7 finite numbers."""
+    import franky
+
+    try:
+        q = np.array(robot.current_joint_state.position, dtype=float)
+    except (franky.Exception, RuntimeError) as exc:  # libfranka's network errors: RuntimeError
+        raise LinkError(f"reading the Franka's state failed: {exc}") from exc
+    if q.shape != (7,) or not np.all(np.isfinite(q)):
+        raise LinkError(f"the Franka reported joint positions {q}")
+    return q
+
+
 class FrankaLink:
     """A Franka over franky; ``guard`` checks each command, ``dry_run`` sends none."""
 
@@ -90,14 +104,8 @@ class FrankaLink:
         self.sent = 0
 
     def read(self) -> np.ndarray:
-        """The measured joint positions, (7,) [rad]."""
-        try:
-            q = np.array(self.robot.current_joint_state.position, dtype=float)
-        except (self._franky.Exception, RuntimeError) as exc:  # libfranka's network errors: RuntimeError
-            raise LinkError(f"reading the Franka's state failed: {exc}") from exc
-        if q.shape != (7,) or not np.all(np.isfinite(q)):
-            raise LinkError(f"the Franka reported joint positions {q}")
-        return q
+        """The measured joint positions, (7,) [rad] (:func:`joints`)."""
+        return joints(self.robot)
 
     def columns(self) -> list[str]:
         """The guarded velocity sent ``v0``..``v6``, whether it was ``sent`` and the ``guard`` code."""

@@ -18,7 +18,7 @@ import pandas as pd
 from lasa.base.config import check_range
 from lasa.base.errors import ConfigError
 from lasa.base.io import save_npz
-from lasa.live.franka import connect
+from lasa.live.franka import connect, joints
 from lasa.live.link import LinkError
 from lasa.live.session import StopOnSignals
 from lasa.method.dataset import PHASE_NAMES, save_demonstrations
@@ -51,14 +51,8 @@ class JointReader:
         self.robot = robot
 
     def read(self) -> np.ndarray:
-        """The measured joint positions, (7,) [rad]; LinkError if the Franka cannot be read."""
-        try:
-            q = np.array(self.robot.current_joint_state.position, dtype=float)
-        except Exception as exc:  # franky.Exception, a lost connection
-            raise LinkError(f"reading the Franka's state failed: {exc}") from exc
-        if q.shape != (7,) or not np.all(np.isfinite(q)):
-            raise LinkError(f"the Franka reported joint positions {q}")
-        return q
+        """The measured joint positions, (7,) [rad] (:func:`lasa.live.franka.joints`)."""
+        return joints(self.robot)
 
 
 def record(

@@ -34,7 +34,7 @@ from lasa.base.errors import ArtifactError, CheckpointError, ConfigError, LasaEr
 from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live import studykit
 from lasa.live.devices import Device, ScriptedDevice, open_device
-from lasa.live.franka import connect, franka_station, move_home, recover, replay_link
+from lasa.live.franka import connect, franka_station, joints, move_home, recover, replay_link
 from lasa.live.guard import Guard, Workspace
 from lasa.live.link import LinkError
 from lasa.live.session import Session, StopOnSignals, Watchdog, open_log
@@ -250,7 +250,7 @@ def _home(args: argparse.Namespace) -> int:
     task = make_eating_task()
     guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
     robot = connect(args.franka, args.realtime)
-    now = np.array(robot.current_joint_state.position, dtype=float)
+    now = joints(robot)
     print(f"the arm is at {np.round(now, 3).tolist()}; the start pose is {np.round(task.start, 3).tolist()}")
     print(
         f"the largest joint move is {np.abs(now - task.start).max():.3f} rad, at franky's dynamics factor 0.1"
