@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.sessionlog import read_session
+from lasa.evidence.sessions import load_sessions
 from lasa.live import guard as guards
 from lasa.live.devices import ScriptedDevice
 from lasa.live.franka import FrankaLink, check_start, connect, franka_station, move_home, simulator
@@ -116,6 +117,15 @@ def test_a_dessert_session_runs_through_franky_from_the_cli_and_replays(server, 
     assert 0.0 < np.abs(s[1:] - predicted).max() < 0.05
     result = replay(csv)
     assert result["exact"] and result["max_command_difference"] == 0.0 and result["steps"] == 25
+    # the analysis reads it like a simulated session: from the start pose, then each row's state (here:
+    # measured as the step began, one tick behind a simulated row's state after the step)
+    episodes = load_sessions(tmp_path, TASK)
+    assert episodes.participant.tolist() == ["p00"] and np.array_equal(episodes.states[1:26, 0], s)
+
+
+def test_recovery_is_an_explicit_command(server, capsys):
+    assert main(["recover", "--franka", server]) == 0
+    assert "no error now" in capsys.readouterr().out
 
 
 def test_a_dry_run_computes_and_logs_every_command_and_sends_none(server, build, tmp_path):
