@@ -132,11 +132,7 @@ $(THREE): | sysdeps
 $(STAMP): environment.lock pyproject.toml
 	@test -n "$(PYTHON)" || { echo "error: Python 3.11 not found (set PYTHON=...)"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --disable-pip-version-check --no-compile -r environment.lock 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
-	@# byte-compiled on every core (pip compiles one file at a time): on 2 cores 27 s, not about 50 s. The
-	@# .pyc files must exist up front: with PYTHONDONTWRITEBYTECODE set, imports would never write them.
-	@# A few third-party files are not Python 3 (pip skips them the same way): their errors are dropped.
-	$(BIN)/python -m compileall -qq -j 0 $(VENV)/lib >/dev/null 2>&1 || true
+	$(BIN)/pip install --quiet --disable-pip-version-check -r environment.lock 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
 	@# an older build's lasa.egg-info in the tree would shadow the installed version (lasa.__version__)
 	rm -rf lasa.egg-info
 	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
