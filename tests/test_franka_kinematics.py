@@ -4,7 +4,6 @@ check itself."""
 
 from __future__ import annotations
 
-import importlib.util
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -78,7 +77,6 @@ def test_eating_start_is_inside_the_shared_limits():
     assert guard.within_limits(task.start)  # and the guard's margin inside them
 
 
-@pytest.mark.skipif(importlib.util.find_spec("franky_sim") is None, reason="franky-sim is not installed")
 def test_fr3_limits_are_franky_sims_model():
     ranges = _fr3_xml_ranges()
     assert_array_equal(ranges[:, 0], FR3_LOWER)
@@ -125,9 +123,7 @@ def test_fk_errors_match_the_dh_table_and_catch_a_wrong_offset(panda, scene):
 @pytest.fixture(scope="module")
 def franky_sim_fields(panda):
     """Five configurations measured on franky-sim (JointMotion at 0.9 of the dynamics limits)."""
-    pytest.importorskip("franky")
-    pytest.importorskip("franky_sim")
-    from lasa.live.franka import connect, simulator
+    from lasa.live.franka import connect, simulator  # franky and franky-sim are pinned: never skipped
     from lasa.live.kinematics import measure
 
     started = time.perf_counter()

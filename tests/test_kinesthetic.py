@@ -235,8 +235,7 @@ def test_cli_errors_are_one_line(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def franky_sim():
-    pytest.importorskip("franky")
-    from lasa.live.franka import simulator
+    from lasa.live.franka import simulator  # franky-sim is pinned in environment.lock: never skipped
 
     with simulator() as address:
         yield address
