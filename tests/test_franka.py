@@ -145,6 +145,12 @@ def test_the_cli_refuses_a_dry_run_without_an_arm(tmp_path, capsys):
     assert "--franka" in capsys.readouterr().err
 
 
+def test_the_cli_refuses_an_arm_out_of_real_time(tmp_path, capsys):
+    device = write_script(tmp_path / "s.txt", 2)
+    assert main(["run", "--franka", "127.255.255.254", "--fast", "--no-viewer", "--device", device]) == 2
+    assert "real time" in capsys.readouterr().err and not list(tmp_path.glob("*.csv"))
+
+
 def session(address, build, tmp_path, device, **kwargs):
     station = franka_station(SessionConfig(condition="LA+SA", build_dir=str(build)), address)
     writer = open_log(station, tmp_path)

@@ -195,7 +195,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--sessions", default="build/sessions", help="folder of the session logs")
     run.add_argument("--build-dir", default="build", help="where make figures left the decoder [%(default)s]")
     run.add_argument("--no-viewer", action="store_true", help="run without a window (scripted input)")
-    run.add_argument("--fast", action="store_true", help="do not wait for wall-clock time (no viewer)")
+    run.add_argument(
+        "--fast", action="store_true", help="do not wait for wall-clock time (no viewer; MuJoCo only)"
+    )
     run.add_argument("--screenshot", help="save a screenshot of the display when the session ends")
     _franka_arguments(run)
     run.add_argument(
@@ -325,6 +327,8 @@ def _run(args: argparse.Namespace) -> int:
             "no display for MuJoCo's viewer: run on a desktop, under `xvfb-run -a`, "
             "or with --no-viewer and scripted input"
         )
+    if args.franka and args.fast:  # each tick's command lasts one period: faster ticks would not ramp
+        raise ConfigError("--fast does not wait for wall-clock time; a session on an arm runs in real time")
     if args.franka:
         station = franka_station(config, args.franka, dry_run=args.dry_run, realtime=args.realtime)
         print(f"robot: {station.link.name}, at the start pose")
