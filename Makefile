@@ -260,10 +260,11 @@ verify: setup
 	@$(MAKE) --no-print-directory figures OUT=$(VERIFY_OUT)
 	$(BIN)/python -m lasa.pipeline.verify figures $(VERIFY_OUT)/figures
 
-LINT = $(BIN)/ruff check lasa tests benchmarks && $(BIN)/ruff format --check lasa tests benchmarks \
-  && $(BIN)/mypy lasa && $(BIN)/lint-imports --no-cache
 lint: setup
-	$(LINT)
+	$(BIN)/ruff check lasa tests benchmarks
+	$(BIN)/ruff format --check lasa tests benchmarks
+	$(BIN)/mypy lasa
+	$(BIN)/lint-imports --no-cache
 
 # The tests in TEST_JOBS processes (pytest-xdist), a test file per process at a time: the QUICK
 # notebook pipeline (about 6 of the suite's 11 minutes alone) runs beside the other files. Many
@@ -271,15 +272,8 @@ lint: setup
 # much as they compute, so three processes keep 2 cores busier than two (measured: pytest 5:33 with
 # 3, 5:47 and 5:51 with 2). TEST_JOBS=0 runs them all in this process.
 TEST_JOBS ?= 3
-# The lint (mostly mypy: about 25 s on one core) runs beside the tests, its output shown after
-# theirs; `make test` fails if either fails.
-test: setup
-	@log=$$(mktemp); { $(LINT); } > $$log 2>&1 & lint=$$!; \
-	$(BIN)/python -m pytest -q -n $(TEST_JOBS) --dist loadfile && tests=0 || tests=$$?; \
-	wait $$lint && linted=0 || linted=$$?; \
-	cat $$log; rm -f $$log; \
-	if [ $$linted != 0 ]; then echo "error: make lint failed (above)"; fi; \
-	exit $$(( tests != 0 || linted != 0 ))
+test: setup lint
+	$(BIN)/python -m pytest -q -n $(TEST_JOBS) --dist loadfile
 
 # Benchmarks (not timed tests): control-step latency, sweep throughput, training, the
 # pipeline's wall time (a fresh paper-scale and QUICK run under build/bench).
