@@ -323,7 +323,7 @@ def franky_station(build_dir: str | os.PathLike[str], seconds: float, seed: int 
     """
     from lasa.live.devices import ScriptedDevice
     from lasa.live.franka import FrankaLink, connect, move_home, simulator
-    from lasa.live.guard import Guard, Workspace
+    from lasa.live.guard import Guard
     from lasa.live.station import SessionConfig, Station
     from lasa.live.teleop import run_session
 
@@ -339,7 +339,7 @@ def franky_station(build_dir: str | os.PathLike[str], seconds: float, seed: int 
             break
         assert station is not None  # R+SA needs no decoder
         robot, start, dt = station.robot, station.task.start, station.control.dt
-        guard = Guard(robot, Workspace.around(robot, start), dt)
+        guard = Guard.around(robot, start)
         move_home(arm, start, guard, speed=0.5)
         link = FrankaLink(arm, guard, address)
         station.link = link

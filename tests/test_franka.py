@@ -37,7 +37,7 @@ DT = ROBOT.control.dt
 
 
 def make_guard() -> Guard:
-    return Guard(ROBOT, Workspace.around(ROBOT, TASK.start), DT)
+    return Guard.around(ROBOT, TASK.start)
 
 
 @pytest.fixture(scope="module")

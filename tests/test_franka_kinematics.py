@@ -13,7 +13,7 @@ import pytest
 from numpy.testing import assert_allclose, assert_array_equal
 
 from lasa.base.errors import ConfigError
-from lasa.live.guard import Guard, Workspace
+from lasa.live.guard import Guard
 from lasa.world.eating import make_eating_task
 from lasa.world.franka import (
     DH,
@@ -73,7 +73,7 @@ def test_shared_limits_are_the_intersection_by_hand():
 def test_eating_start_is_inside_the_shared_limits():
     task = make_eating_task()
     assert np.all((task.start > SHARED_LOWER) & (task.start < SHARED_UPPER))
-    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    guard = Guard.around(task.robot, task.start)
     assert guard.within_limits(task.start)  # and the guard's margin inside them
 
 

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from lasa.base.errors import ConfigError
-from lasa.live.guard import Guard, Workspace
+from lasa.live.guard import Guard
 from lasa.live.link import LinkError
 from lasa.live.station import SessionConfig, Station
 from lasa.world.eating import make_eating_task
@@ -258,7 +258,7 @@ def franka_station(
             "table for the workspace guard"
         )
     task = make_eating_task()
-    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    guard = Guard.around(task.robot, task.start)
     link = FrankaLink(connect(address, realtime), guard, address, dry_run=dry_run)
     check_start(link.read(), task.start, guard)
     return Station(config, link)
@@ -283,5 +283,5 @@ class LoggedArm:
 def replay_link(states: np.ndarray) -> FrankaLink:
     """A dry-run link that reads a Franka session's logged ``states`` (T, 7) back, guarded as live."""
     task = make_eating_task()
-    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    guard = Guard.around(task.robot, task.start)
     return FrankaLink(LoggedArm(states), guard, "a session log", dry_run=True)

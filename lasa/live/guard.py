@@ -83,6 +83,12 @@ class Guard:
     accel_scale: float = 0.3  # of the published acceleration limits
     last: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(7))
 
+    @classmethod
+    def around(cls, robot: Robot, start: np.ndarray) -> Guard:
+        """The default guard of a session of ``robot`` from ``start``: :meth:`Workspace.around` them, the
+        robot's control period."""
+        return cls(robot, Workspace.around(robot, start), robot.control.dt)
+
     def __post_init__(self) -> None:
         for name in ("speed_scale", "accel_scale"):
             value = getattr(self, name)

@@ -35,7 +35,7 @@ from lasa.evidence.sessionlog import SessionWriter, check_scene, read_session
 from lasa.live import studykit
 from lasa.live.devices import Device, ScriptedDevice, open_device
 from lasa.live.franka import connect, franka_station, joints, move_home, recover, replay_link
-from lasa.live.guard import Guard, Workspace
+from lasa.live.guard import Guard
 from lasa.live.link import LinkError
 from lasa.live.session import Session, StopOnSignals, Watchdog, open_log
 from lasa.live.station import SESSION_TASKS, SessionConfig, Station
@@ -250,7 +250,7 @@ def _franka_arguments(parser: argparse.ArgumentParser, required: bool = False) -
 def _home(args: argparse.Namespace) -> int:
     """``home``: how far the arm is from the eating tasks' start pose; move it there once confirmed."""
     task = make_eating_task()
-    guard = Guard(task.robot, Workspace.around(task.robot, task.start), task.robot.control.dt)
+    guard = Guard.around(task.robot, task.start)
     robot = connect(args.franka, args.realtime)
     now = joints(robot)
     print(f"the arm is at {np.round(now, 3).tolist()}; the start pose is {np.round(task.start, 3).tolist()}")
