@@ -445,7 +445,8 @@ def test_a_real_browser_consents_drives_and_sees_the_goals_and_ticks(study, repo
     from selenium.webdriver.common.by import By
 
     sessions, tokens = study
-    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="server")
+    # a practice longer than every wait below: on a loaded machine it must not end by its limit mid-test
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=600.0, frames="server")
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
@@ -562,8 +563,8 @@ def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact,
     npm_installed()
     sessions, tokens = study
     config = WebConfig(
-        sessions=str(sessions), build_dir="no-decoders", practice_s=60.0, frames="browser", show_belief=True
-    )
+        sessions=str(sessions), build_dir="no-decoders", practice_s=600.0, frames="browser", show_belief=True
+    )  # a practice longer than every wait below (the wasm build can take a minute on a loaded machine)
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: browser.execute_script("return window.lasaView.frames") >= 10, timeout=90)
@@ -574,7 +575,10 @@ def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact,
         labels_shown(browser)
         stats = browser.execute_script("return window.lasaView")
         assert stats["geoms"] >= 20 and stats["modelMs"] > 0  # the arm's links, the table, the food
-        assert browser.find_element(By.ID, "canvas").is_displayed()
+        shown = browser.execute_script(
+            "return [...document.querySelectorAll('section:not([hidden])')].map((s) => s.id)"
+        )
+        assert browser.find_element(By.ID, "canvas").is_displayed(), f"the page shows {shown}, not the drive"
         assert not browser.find_element(By.ID, "view").is_displayed()
         url = browser.execute_script("return document.getElementById('canvas').toDataURL('image/png')")
         canvas = Image.open(io.BytesIO(base64.b64decode(url.split(",", 1)[1]))).convert("L")
