@@ -280,7 +280,10 @@ lint: setup
 # much as they compute, so three processes keep 2 cores busier than two (measured: pytest 5:33 with
 # 3, 5:47 and 5:51 with 2). TEST_JOBS=0 runs them all in this process.
 TEST_JOBS ?= 3
+# lasa's bytecode is written first: the suite starts Python processes by the hundred (notebook kernels,
+# CLIs, servers), and under PYTHONDONTWRITEBYTECODE each one would compile the package again.
 test: setup lint
+	$(BIN)/python -m compileall -q lasa
 	$(BIN)/python -m pytest -q -n $(TEST_JOBS) --dist loadfile
 
 # Benchmarks (not timed tests): control-step latency, sweep throughput, training, the
