@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import functools
 
+import mujoco
 import numpy as np
 
 from lasa.base.config import check_choice
@@ -45,7 +46,9 @@ def bowl_sides(camera: str = PICTURE_CAMERA) -> dict[str, str]:
     bowls = [g for g in GOALS if g != PLATE]
     if len(bowls) != len(SIDES):
         raise ConfigError(f"the eating scene must have {len(SIDES)} bowls, has {len(bowls)}")
-    surfaces = robot.goal_positions()[[GOALS.index(b) for b in bowls]]
+    data = mujoco.MjData(robot.model)  # its own: the shared robot's data is left to its users
+    mujoco.mj_kinematics(robot.model, data)
+    surfaces = np.stack([data.site(robot.spec.goal_sites[GOALS.index(b)]).xpos for b in bowls])
     x = project(robot, surfaces, camera, aspect=1.0)[:, 0]
     return {bowls[i]: side for i, side in zip(np.argsort(x), SIDES, strict=True)}
 
