@@ -415,12 +415,13 @@ def belief_shown(browser):
 
 
 def labels_shown(browser):
-    """The goals' names over the picture, in the picture (its box), rice right of the plate."""
+    """The goals' names over the picture (what is at each, as the instructions name it), in the picture
+    (its box), rice right of the plate."""
     from selenium.webdriver.common.by import By
 
     stage = browser.find_element(By.CSS_SELECTOR, ".stage").rect
     spans = {s.text: s.rect for s in browser.find_elements(By.CSS_SELECTOR, "#labels span")}
-    assert set(spans) == {"rice", "middle", "icing", "plate"}, spans
+    assert set(spans) == {"rice", "tofu, marshmallows", "icing", "plate"}, spans
     for rect in spans.values():
         assert stage["x"] < rect["x"] < stage["x"] + stage["width"]
         assert stage["y"] < rect["y"] < stage["y"] + stage["height"]
@@ -516,7 +517,8 @@ def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(
             assert ws.receive_json()["kind"] == "practice"
             ws.send_json({"type": "start"})
             labelled = ws.receive_json()  # the goals' names and their places on the picture
-            assert [g["name"] for g in labelled["labels"]] == ["rice", "middle", "icing", "plate"]
+            names = ["rice", "tofu, marshmallows", "icing", "plate"]
+            assert [g["name"] for g in labelled["labels"]] == names
             assert all(0.1 < g["x"] < 0.9 and 0.1 < g["y"] < 0.9 for g in labelled["labels"])
             announced = ws.receive_json()
             assert announced["type"] == "scene" and announced["qpos_adr"] == list(range(7))

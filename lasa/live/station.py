@@ -24,9 +24,10 @@ from lasa.method.decoder import ActionDecoder, load_checkpoint
 from lasa.method.retarget import Retargeting, retarget_action, twist
 from lasa.method.runner import Chooser, Now, Runner, held_input
 from lasa.method.step import Assist
-from lasa.world.eating import TASK_NAMES, instruction, make_eating_task
+from lasa.world.eating import TASK_NAMES, make_eating_task
 from lasa.world.fork import WaypointTracker, tip_frames
 from lasa.world.goals import GoalTask
+from lasa.world.instructions import instruction
 from lasa.world.robot import Robot, load_robot
 from lasa.world.task import make_cup_task
 

@@ -19,7 +19,9 @@ from lasa.world.goals import GoalTask
 from lasa.world.ik import solve_grasp_ik
 from lasa.world.robot import ASSETS, ROBOTS, Robot
 
-GOALS = ("rice", "middle", "icing", "plate")  # goal names, in goal order (left, middle, right bowl; plate)
+# goal names, in goal order: the robot's left, middle and right bowl, then the plate (the words a participant
+# reads, where the picture mirrors left and right: lasa.world.instructions)
+GOALS = ("rice", "middle", "icing", "plate")
 STUDY_BELIEF_CAP = 0.99  # Javdani et al.'s cap on any goal's belief (max_prob_any_goal) [-]
 TILT_MAX = np.pi / 3  # psi_max: the tilt of a scoop from pointing straight down [rad]
 STROKE = 0.05  # length of a stroke through the food [m]
@@ -67,21 +69,6 @@ TASKS: dict[str, tuple[Phase, ...]] = {
     ),
 }
 TASK_NAMES = tuple(TASKS)  # the study's tasks, in their order
-_PLACES = {  # how a participant is told where each goal is
-    "rice": "the rice (left bowl)",
-    "middle": "the middle bowl",
-    "icing": "the icing (right bowl)",
-    "plate": "the plate",
-}
-
-
-def instruction(task: str, phase: int | None) -> str:
-    """What a participant is asked to do in ``phase`` of ``task`` (None: the task is done)."""
-    if phase is None:
-        return f"{task}: done"
-    phases = TASKS[task]
-    verb = phases[phase].preference or "reach"
-    return f"{task} {phase + 1}/{len(phases)}: {verb} at {_PLACES[phases[phase].goal]}"
 
 
 @dataclasses.dataclass(frozen=True)

@@ -8,7 +8,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import dataclasses
-import math
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import AsyncIterator
@@ -34,7 +33,9 @@ from lasa.live.web.frames import FrameRenderer
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.tokens import TokenStore
+from lasa.world.camera import project
 from lasa.world.fork import tip_frames
+from lasa.world.instructions import DISPLAY_NAMES, PICTURE_CAMERA
 
 # How the page shows the robot: server-drawn JPEG, drawn by the browser (MuJoCo WebAssembly), or not.
 FRAMES = ("server", "browser", "none")
@@ -119,18 +120,10 @@ class Study:
         (x right, y down, in [0, 1]), computed once (every trial: one scene, one camera)."""
         if self._labels is None:
             robot, task = station.robot, station.task
-            data = mujoco.MjData(robot.model)  # its own: the station's robot and data are left as they are
-            tips = tip_frames(robot, data, np.asarray(task.goals))[0]
-            mujoco.mj_forward(robot.model, data)  # the (fixed) camera's pose (cam_xpos: mj_camlight)
-            camera = robot.model.camera(robot.spec.camera).id
-            # the tips in the camera's frame (MuJoCo's: x right, y up, looking along -z), then its image
-            local = (tips - data.cam_xpos[camera]) @ data.cam_xmat[camera].reshape(3, 3)
-            tan = math.tan(math.radians(float(robot.model.cam_fovy[camera])) / 2.0)
-            x = local[:, 0] / (-local[:, 2] * tan * ASPECT)
-            y = local[:, 1] / (-local[:, 2] * tan)
-            where = np.stack([(x + 1.0) / 2.0, (1.0 - y) / 2.0], axis=1)
+            tips = tip_frames(robot, mujoco.MjData(robot.model), np.asarray(task.goals))[0]
+            where = project(robot, tips, PICTURE_CAMERA, ASPECT)
             self._labels = [
-                {"name": str(name), "x": round(float(u), 4), "y": round(float(v), 4)}
+                {"name": DISPLAY_NAMES[name], "x": round(float(u), 4), "y": round(float(v), 4)}
                 for name, (u, v) in zip(task.goal_names, where, strict=True)
             ]
         return self._labels
