@@ -142,15 +142,37 @@ def test_a_token_is_its_own_participants_only_and_ends_with_the_schedule(study):
     assert {p for p in set(files(sessions)) - set(before) if p.parts[0] != "study"} == set()
 
 
-def test_a_second_browser_on_one_token_is_refused_while_the_first_is_connected(study):
+def test_a_newer_page_of_a_link_takes_over_and_its_trial_runs_again(study, caplog):
+    """Two pages of one link (a reload, a second tab): the newest wins; the older is closed with
+    REPLACED, its running trial ends ``interrupted`` and is logged; the newer resumes that step as a
+    new attempt."""
+    from lasa.live.web.conversation import REPLACED
+
     sessions, tokens = study
-    with client(sessions) as app:
-        with connect(app, tokens["p00"]) as first:
-            assert first.receive_json()["kind"] == "consent"
-            assert refused(app, tokens["p00"]) == "elsewhere"
-            assert refused(app, tokens["p00"]) == "elsewhere"
-        with connect(app, tokens["p00"]) as again:
-            assert again.receive_json()["kind"] == "consent"  # free again once the first has gone
+    progress = Progress(sessions)
+    progress.consent("p01")
+    progress.of("p01")["step"] = 1  # p01's first trial (R+SA, Entree)
+    progress._save()
+    caplog.set_level("INFO", logger="lasa.live.web")
+    with client(sessions, trial_s=30.0) as app, connect(app, tokens["p01"]) as first:
+        assert first.receive_json()["task"] == "Entree"
+        drive(first, ticks=3)
+        with connect(app, tokens["p01"]) as second:
+            with pytest.raises(WebSocketDisconnect) as closed:
+                while True:
+                    first.receive_json()
+            assert closed.value.code == REPLACED
+            msg = second.receive_json()
+            assert (msg["kind"], msg["task"], msg["label"]) == ("trial", "Entree", "A")
+            ticks, _ = drive(second, ticks=2)
+    (old,) = sessions.glob("p01_Entree_R+SA_*_a1.csv")
+    assert read_session(old)[1]["status"] == "interrupted" and len(list(sessions.glob("p01_*_a2.csv"))) == 1
+    text = caplog.text
+    assert (
+        "p01: a newer page takes over" in text
+        and f"newer page of the same link took over (close {REPLACED})" in text
+    )
+    assert "p01: trial Entree, way A (R+SA), attempt 1 interrupted" in text
 
 
 @pytest.mark.parametrize(
@@ -1048,3 +1070,69 @@ def test_a_connections_queue_is_bounded_and_out_of_step_messages_are_counted():
         assert conv._queue.empty() and conv.dropped == 3 * QUEUE_MAX
 
     asyncio.run(main())
+
+
+CODE_OR_PATH = re.compile(r"\b(?:R|LA)(?:\+SA)?\b|/|--|\.csv|\.pt\b")
+
+
+def test_every_error_a_participant_can_get_is_plain_and_a_repeat_survey_goes_on(study, monkeypatch, caplog):
+    """Each error path forced: a step the server cannot run, answers out of range, answers that cannot
+    be saved, a refused message; none tells the page a condition's code, a path or an option (the log
+    has the detail). Answers stored before a crash (the step not yet counted) are recognised: go on."""
+    from lasa.live.web import conversation
+    from lasa.live.web.conversation import MESSAGES, REPLACED
+
+    sessions, tokens = study
+    caplog.set_level("INFO", logger="lasa.live.web")
+    progress = Progress(sessions)
+    for who in ("p00", "p01"):
+        progress.consent(who)
+        progress.of(who)["step"] = 3  # the survey after the first condition
+    progress._save()
+    said = []
+    who_la = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition.startswith("LA"))
+    with client(sessions, build_dir=str(sessions / "no-decoders")) as app:
+        with connect(app, tokens[who_la]) as ws:  # the LA decoder is missing
+            ws.receive_json()
+            ws.send_json({"type": "consent"})
+            assert ws.receive_json()["kind"] == "practice"
+            ws.send_json({"type": "start"})
+            said.append(ws.receive_json())
+        with connect(app, tokens["p00"]) as ws:
+            assert ws.receive_json()["kind"] == "survey"
+            ws.send_json({"type": "survey", "answers": [9, 1, 1, 1, 1]})
+            said.append(ws.receive_json())
+            real = conversation.survey
+            monkeypatch.setattr(
+                conversation,
+                "survey",
+                lambda *a: (_ for _ in ()).throw(OSError(f"{sessions}/likert.csv: disk full")),
+            )
+            ws.send_json({"type": "survey", "answers": [4, 4, 4, 4, 4]})
+            said.append(ws.receive_json())
+            monkeypatch.setattr(conversation, "survey", real)
+            ws.send_json({"type": "input", "axes": "--overwrite /etc/passwd"})
+            with pytest.raises(WebSocketDisconnect) as closed:
+                ws.receive_json()
+            said.append({"close": closed.value.code, "reason": closed.value.reason})
+        from lasa.live.studykit import survey
+
+        survey(sessions, "p01", plan_of(sessions, "p01")[3].condition, [5] * 5)  # stored; the crash came next
+        with connect(app, tokens["p01"]) as ws:
+            assert ws.receive_json()["kind"] == "survey"
+            ws.send_json({"type": "survey", "answers": [2] * 5})  # a repeat submit: passed through
+            after = ws.receive_json()
+            assert after["kind"] == "practice" and after["label"] == "B"
+    assert [m.get("message") for m in said[:3]] == [
+        MESSAGES["unavailable"],
+        MESSAGES["answers"],
+        MESSAGES["not_saved"],
+    ]
+    assert said[3]["close"] == 1008 and REPLACED != 1008
+    for message in said:
+        text = " ".join(str(v) for v in message.values())
+        assert not CODE_OR_PATH.search(text), text
+    assert "disk full" in caplog.text and "no-decoders" in caplog.text  # the detail: the experimenter's
+    assert "input carries two numeric axes" in caplog.text
+    likert = pd.read_csv(sessions / "likert.csv", dtype={"participant": str})
+    assert list(likert[likert.participant == "p01"].answer) == [5] * 5  # the first answers kept
