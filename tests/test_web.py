@@ -1136,3 +1136,76 @@ def test_every_error_a_participant_can_get_is_plain_and_a_repeat_survey_goes_on(
     assert "input carries two numeric axes" in caplog.text
     likert = pd.read_csv(sessions / "likert.csv", dtype={"participant": str})
     assert list(likert[likert.participant == "p01"].answer) == [5] * 5  # the first answers kept
+
+
+def _ticked(folder, participant, inputs, ticks=10, limit_s=30.0):
+    """A web trial of ``ticks`` steps on ``inputs`` (run_trial's own loop), closed as it closes."""
+    import asyncio
+
+    from lasa.live.station import SessionConfig
+    from lasa.live.web import conversation
+
+    config = SessionConfig(task="Entree", condition="R", participant=participant)
+    trial = conversation.open_trial(config, folder, 1, limit_s)
+    trial.max_steps, trial.realtime = ticks, False
+
+    async def send(message):
+        pass
+
+    asyncio.run(conversation.run_trial(trial, inputs, send, lambda: True, lambda: False))
+    return trial.writer.csv
+
+
+def test_a_trial_without_input_is_flagged_and_left_out_by_name(tmp_path):
+    """The sidecar counts the ticks without input; past DISCONNECTED_SHARE the trial is flagged and the
+    analysis leaves it out, named in its warning; its limit is the sidecar's."""
+    from lasa.evidence.sessions import DISCONNECTED_SHARE, LEFT_OUT, scan_sessions, session_limit
+    from lasa.live.web.protocol import Inputs
+
+    class Held(Inputs):
+        def take(self):  # a page that sends input before every tick
+            self.update({"axes": [0.2, 0.0]})
+            return super().take()
+
+    silent = _ticked(tmp_path, "p00", Inputs(), limit_s=42.0)  # a frozen page: no input at all
+    driven = _ticked(tmp_path, "p01", Held())
+    _, meta = read_session(silent)
+    assert (
+        meta["disconnected_ticks"] == 10 and meta["flagged"] == "10 of 10 ticks without input (more than 5%)"
+    )
+    assert meta["limit_s"] == 42.0 == session_limit(meta) and meta["status"] == "complete"
+    assert read_session(driven)[1]["disconnected_ticks"] == 0 and read_session(driven)[1]["flagged"] is None
+    assert session_limit({}) == 150.0 and DISCONNECTED_SHARE == 0.05
+    logs, left_out = scan_sessions(tmp_path)
+    assert [m["participant"] for _, m in logs] == ["p01"]
+    assert list(left_out.session) == [silent.stem] and left_out.reason[0].startswith(LEFT_OUT["disconnected"])
+
+
+def test_sessions_a_killed_server_left_running_are_closed_at_startup(tmp_path):
+    """A trial and a practice whose server was killed: sidecar ``running``, rows in ``.csv.part`` (one torn
+    last line). The repair closes both ``interrupted``, the rows kept; a closed session is untouched."""
+    from lasa.live.station import SessionConfig
+    from lasa.live.web import conversation
+    from lasa.live.web.app import repair_sessions
+
+    sessions = tmp_path / "sessions"
+    kept = _ticked(sessions, "p02", conversation.Inputs())
+    before = kept.with_suffix(".json").read_bytes()
+    for folder, who in ((sessions, "p00"), (sessions / "practice", "p01")):
+        trial = conversation.open_trial(
+            SessionConfig(task="Entree", condition="R", participant=who), folder, 1, 30
+        )
+        for _ in range(12):
+            trial.step(conversation.Inputs().take())
+        trial.writer.flush()
+        with open(trial.writer.part, "a") as torn:
+            torn.write("12,1.2,0.0,0.5")  # the process died mid-row
+    assert repair_sessions(sessions) == [
+        p.name.removesuffix(".json") for p in sorted(sessions.glob("p00_*.json"))
+    ] + [p.name.removesuffix(".json") for p in (sessions / "practice").glob("*.json")]
+    for part in (sessions.glob("p00_*.csv"), (sessions / "practice").glob("*.csv")):
+        (csv,) = part
+        frame, meta = read_session(csv)
+        assert meta["status"] == "interrupted" and meta["reason"] == "the server stopped"
+        assert meta["steps"] == len(frame) == 12 and not csv.with_suffix(".csv.part").exists()
+    assert kept.with_suffix(".json").read_bytes() == before and repair_sessions(sessions) == []

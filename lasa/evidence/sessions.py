@@ -14,11 +14,10 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.conditions import parse as parse_condition
-from lasa.base.config import NO_ASSISTANCE, ControlConfig
+from lasa.base.config import NO_ASSISTANCE, TRIAL_LIMIT_S
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked
 from lasa.evidence.sessionlog import read_session
-from lasa.people.design import StudyConfig
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
 
@@ -39,10 +38,6 @@ def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
     return pd.read_csv(path, dtype={"participant": str}) if path.is_file() else None
 
 
-# One trial limit for people and simulated participants [s]: the simulated study's horizon (notebook
-# 11's `session.horizon` steps of the control period), the web server's `--trial-s` default, and the
-# limit of a session whose sidecar records none (`limit_s`: every web session records its own).
-TRIAL_LIMIT_S = round(StudyConfig.horizon * ControlConfig.dt, 6)
 # The largest share of a trial's ticks without the participant's input (a frozen tab, a lost network)
 # that still counts as the participant's own trial; more, and the trial is left out. The principle,
 # fixed before any session was read: a page that runs sends input 20 times a second and the server

@@ -13,6 +13,7 @@ from pathlib import Path
 import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
+from lasa.base.config import TRIAL_LIMIT_S
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import require_file, write_text
 from lasa.evidence.hypotheses import headline_model
@@ -24,7 +25,6 @@ from lasa.evidence.sessions import (
     PRACTICE_TASK,
     QUESTIONS,
     SCALES,
-    TRIAL_LIMIT_S,
 )
 from lasa.experiments.study import power as study_power
 from lasa.experiments.study import run as study

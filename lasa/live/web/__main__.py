@@ -70,7 +70,7 @@ def _serve(argv: list[str]) -> int:
     import torch
     import uvicorn
 
-    from lasa.evidence.sessions import TRIAL_LIMIT_S
+    from lasa.base.config import TRIAL_LIMIT_S
     from lasa.live.web import logs
     from lasa.live.web.app import FRAMES, PING_S, PING_TIMEOUT_S, WebConfig, create_app, repair_sessions
     from lasa.live.web.protocol import MAX_MESSAGE_BYTES

@@ -26,11 +26,10 @@ from starlette.staticfiles import StaticFiles
 from starlette.types import Scope
 from starlette.websockets import WebSocket
 
-from lasa.base.config import Positive, validate
+from lasa.base.config import TRIAL_LIMIT_S, Positive, validate
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.paths import repo_root
 from lasa.evidence.sessionlog import repair_running
-from lasa.evidence.sessions import TRIAL_LIMIT_S
 from lasa.live.station import Station
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
