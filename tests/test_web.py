@@ -425,7 +425,7 @@ def belief_shown(browser):
     from selenium.webdriver.common.by import By
 
     bars = browser.find_elements(By.CSS_SELECTOR, "#belief .goal")
-    assert len(bars) == 4 and browser.find_element(By.ID, "late").text.isdigit()
+    assert len(bars) == 4 and re.fullmatch(r"\d+:\d\d left", browser.find_element(By.ID, "left").text)
     assert "Dessert" in browser.find_element(By.ID, "instruction").text
     # one read of all four in the page's own script, between two of its 10 Hz updates: read one at a time,
     # the bars could come from different ticks (the capped belief keeps moving at 0.99), summing to 1.06
@@ -434,6 +434,23 @@ def belief_shown(browser):
     )
     values = browser.execute_script(script)
     assert abs(sum(values) - 1) < 0.03 and max(values) > 0.3  # the held stick moved the belief
+
+
+def ticks_seen(browser):
+    """The page's latest tick (a hidden data attribute: the page shows no counter)."""
+    from selenium.webdriver.common.by import By
+
+    return int(browser.find_element(By.ID, "drive").get_attribute("data-tick") or 0)
+
+
+def no_counters_shown(browser):
+    """The drive view shows the instruction and the time left, no tick, late-tick or stick numbers."""
+    from selenium.webdriver.common.by import By
+
+    text = browser.find_element(By.ID, "drive").text
+    assert re.search(r"\d+:\d\d left", text) and not re.search(
+        r"(?i)\b(?:tick|late|stick)\b|\d\.\d\d", text
+    ), text
 
 
 def labels_shown(browser):
@@ -462,7 +479,7 @@ def end_practice(browser):
 def test_a_real_browser_consents_drives_and_sees_the_goals_and_ticks(study, report_artifact, tmp_path):
     """Headless Chromium against the real server (uvicorn), frames from the server, the study's
     defaults: consent, the practice, keys held for a few ticks; the page shows the goals' names
-    over a frame, the tick and late-tick counters, and no belief (off by default)."""
+    over a frame, the time left and no counter, and no belief (off by default)."""
     from PIL import Image
     from selenium.webdriver.common.by import By
 
@@ -471,8 +488,9 @@ def test_a_real_browser_consents_drives_and_sees_the_goals_and_ticks(study, repo
     config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=600.0, frames="server")
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
-        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
+        wait_for(lambda: ticks_seen(browser) >= 20, timeout=60)
         wait_for(lambda: browser.execute_script("return document.getElementById('view').naturalWidth") > 0)
+        no_counters_shown(browser)
         assert not browser.find_element(By.ID, "belief-panel").is_displayed()
         labels_shown(browser)
         # the committed docs/web_study.png is this screenshot; the test never writes into the tree
@@ -543,7 +561,8 @@ def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(
             announced = ws.receive_json()
             assert announced["type"] == "scene" and announced["qpos_adr"] == list(range(7))
             key = {"x-scene-key": announced["key"]}
-            assert tokens["p00"] not in json.dumps(announced)
+            assert tokens["p00"] not in json.dumps(announced) and len(announced["q"]) == 7
+            ws.send_json({"type": "ready"})  # the page has drawn the robot: the trial's clock starts
             ws.send_json({"type": "input", "axes": [0.5, 0.5]})
             assert ws.receive_json()["type"] == "tick"  # state only: no frame in browser mode
             reply = app.get("/scene", headers=key)
@@ -575,7 +594,7 @@ def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(
 def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact, tmp_path):
     """Headless Chromium, --frames browser: the page loads MuJoCo's wasm build and the trial's scene from
     the server, draws the robot from each tick's joint positions (the canvas is not blank), and the
-    belief and the tick counter update."""
+    belief and the time left update."""
     import base64
     import io
 
@@ -590,9 +609,9 @@ def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact,
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: browser.execute_script("return window.lasaView.frames") >= 10, timeout=90)
-        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 20, timeout=60)
-        first = int(browser.find_element(By.ID, "tick").text)
-        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) > first)
+        wait_for(lambda: ticks_seen(browser) >= 20, timeout=60)
+        first = ticks_seen(browser)
+        wait_for(lambda: ticks_seen(browser) > first)
         belief_shown(browser)
         labels_shown(browser)
         stats = browser.execute_script("return window.lasaView")
@@ -669,7 +688,7 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
     )
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens[who]}")  # the practice
-        wait_for(lambda: int(browser.find_element(By.ID, "tick").text) >= 5, timeout=60)
+        wait_for(lambda: ticks_seen(browser) >= 5, timeout=60)
         end_practice(browser)
         for _task in ("Entree", "Dessert"):  # each trial ends at its 2 s limit, keys held
             browser.find_element(By.ID, "start").click()

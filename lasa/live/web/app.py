@@ -104,6 +104,7 @@ class Study:
         self.active: dict[str, Conversation] = {}  # participant -> their page's connection
         self.renderer = FrameRenderer() if config.frames == "server" else None
         self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
+        self.resume: dict[str, int] = {}  # participant -> the step whose trial the page left: it restarts
         self._labels: list[dict[str, Any]] | None = None  # the goals' places: one scene, one camera
 
     async def admit(self, token: str | None) -> tuple[str | None, str]:

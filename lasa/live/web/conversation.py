@@ -205,6 +205,8 @@ class Conversation:
             # the condition's letter, never its code (the page is blind to it, as the paper's people were)
             header: dict[str, Any] = {"type": "phase", "kind": step.kind, "label": step.label}
             header |= {"task": step.task, "index": index + 1, "total": len(plan)}
+            if study.resume.pop(participant, None) == index:  # the page left this trial: it starts again
+                header["resume"] = True
             if step.kind == "survey":
                 await self._survey(step, header)
             else:
@@ -212,6 +214,7 @@ class Conversation:
                 await self.send(header | {"limit_s": limit})
                 await self._expect("start")
                 if await self._drive(step, limit) != "complete":
+                    study.resume[participant] = index
                     raise Gone
             study.progress.count(participant, "step")
         await self.send({"type": "phase", "kind": "thanks"})
@@ -278,7 +281,11 @@ class Conversation:
             q = [float(v) for v in trial.station.state]
             await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera, "q": q})
         try:
-            await self._picture(trial)
+            try:
+                await self._picture(trial)
+            except BaseException:  # the server stopping while the page loads: no step ran
+                trial.close("interrupted")
+                raise
             status = await run_trial(
                 trial, self.inputs, self._tick, self._connected, lambda: practice and self.finish
             )
@@ -297,7 +304,10 @@ class Conversation:
         """Wait until the page shows the robot, so that the clock starts with a picture: the page's
         ``ready`` (``--frames browser``; at most :data:`READY_S`), or the first frame sent (``server``)."""
         if self.study.config.frames == "browser":
-            if await self._expect("ready", READY_S) is None:
+            ready = None
+            with contextlib.suppress(Gone):  # a page gone meanwhile: the trial loop ends it at once
+                ready = await self._expect("ready", READY_S)
+            if not self.gone and ready is None:
                 LOG.info(
                     "participant %s: no picture after %.0f s; the trial starts", self.participant, READY_S
                 )
@@ -305,8 +315,6 @@ class Conversation:
             jpeg = await self.study.renderer.frame([float(v) for v in trial.station.state])
             if jpeg is not None:
                 await self.send(jpeg)
-        if self.gone:
-            raise Gone
 
     def _connected(self) -> bool:
         self.silent()
