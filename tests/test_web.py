@@ -1261,3 +1261,99 @@ def test_sessions_a_killed_server_left_running_are_closed_at_startup(tmp_path):
         assert meta["status"] == "interrupted" and meta["reason"] == "the server stopped"
         assert meta["steps"] == len(frame) == 12 and not csv.with_suffix(".csv.part").exists()
     assert kept.with_suffix(".json").read_bytes() == before and repair_sessions(sessions) == []
+
+
+class Proxy:
+    """A TCP proxy on a free port of this machine to ``target``: :meth:`cut` drops every connection and stops
+    listening (a network gone), :meth:`restore` listens again on the same port."""
+
+    def __init__(self, target: int) -> None:
+        self.target, self.port, self._open = target, _free_port(), []
+        self.restore()
+
+    def restore(self) -> None:
+        self._listener = socket.create_server(("127.0.0.1", self.port))
+        threading.Thread(target=self._accept, args=(self._listener,), daemon=True).start()
+
+    def _accept(self, listener) -> None:
+        while True:
+            try:
+                client, _ = listener.accept()
+            except OSError:
+                return
+            upstream = socket.create_connection(("127.0.0.1", self.target))
+            self._open += [client, upstream]
+            for a, b in ((client, upstream), (upstream, client)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    @staticmethod
+    def _pipe(a, b) -> None:
+        with contextlib.suppress(OSError):
+            while data := a.recv(65536):
+                b.sendall(data)
+        for end in (a, b):
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+
+    def cut(self) -> None:
+        for end in [self._listener, *self._open]:
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+            end.close()
+        self._open = []
+
+
+def test_a_real_browser_drives_on_after_a_reload_a_network_drop_and_a_frozen_tab(study):
+    """Headless Chromium mid-trial, through a TCP proxy: the page reloaded, then its network cut and
+    restored: after each the page drives again by itself (no click), the left trial ``interrupted``, a
+    new attempt running. Then the tab frozen for 3 s: that trial's sidecar counts its ticks without
+    input and flags it (Chromium closes a frozen page's connection when it wakes: it reconnects too)."""
+    from selenium.webdriver.common.by import By
+
+    sessions, tokens = study
+    progress = Progress(sessions)
+    progress.consent("p01")
+    progress.of("p01")["step"] = 1  # p01's first trial (R+SA, Entree)
+    progress._save()
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", trial_s=600.0, frames="none")
+    shown = lambda browser, id_: browser.find_element(By.ID, id_).is_displayed()  # noqa: E731
+
+    def attempt(n):
+        (sidecar,) = sessions.glob(f"p01_Entree_R+SA_*_a{n}.json")
+        return read_session(sidecar, allow_damaged=True)[1] if sidecar.with_suffix(".csv").exists() else {}
+
+    def driving(browser, n):
+        """The page drives attempt n by itself (no click): its ticks count up, nothing is noticed."""
+        wait_for(lambda: list(sessions.glob(f"p01_*_a{n}.csv.part")), timeout=30)  # the new page's Start
+        wait_for(lambda: shown(browser, "drive") and ticks_seen(browser) >= 5, timeout=30)
+        assert not shown(browser, "notice")
+
+    with served(config) as port, chromium() as browser:
+        proxy = Proxy(port)
+        try:
+            browser.get(f"http://127.0.0.1:{proxy.port}/study#token={tokens['p01']}")
+            wait_for(lambda: shown(browser, "start"))
+            browser.find_element(By.ID, "start").click()
+            driving(browser, 1)
+            browser.refresh()
+            driving(browser, 2)
+            wait_for(lambda: attempt(1).get("status") == "interrupted")
+            proxy.cut()
+            wait_for(lambda: shown(browser, "notice"))
+            time.sleep(1.0)
+            proxy.restore()
+            driving(browser, 3)
+            wait_for(lambda: attempt(2).get("status") == "interrupted")
+            browser.execute_cdp_cmd("Page.setWebLifecycleState", {"state": "frozen"})
+            time.sleep(3.0)
+            browser.execute_cdp_cmd("Page.setWebLifecycleState", {"state": "active"})
+            first = ticks_seen(browser)
+            wait_for(lambda: ticks_seen(browser) > first + 5)  # the page runs again, as does the trial
+        finally:
+            proxy.cut()  # the page's trial ends: interrupted, its sidecar written
+    wait_for(lambda: attempt(3).get("status") == "interrupted")
+    frozen = attempt(3)
+    assert 20 <= frozen["disconnected_ticks"] <= 40, frozen["disconnected_ticks"]  # ~3 s at 10 Hz
+    assert frozen["flagged"].endswith("ticks without input (more than 5%)")
+    for n in (1, 2):
+        assert attempt(n)["disconnected_ticks"] <= 3 and attempt(n)["flagged"] is None

@@ -9,6 +9,7 @@ import concurrent.futures
 import contextlib
 import dataclasses
 import logging
+import math
 import secrets
 import time
 from collections.abc import Awaitable, Callable
@@ -36,6 +37,8 @@ LOG = logging.getLogger("lasa.live.web")
 QUEUE_MAX = 8
 # How long a trial waits for the page to draw its picture (--frames browser) before its clock starts [s]
 READY_S = 15.0
+# How long a trial waits for the page's first input after its Start (it sends 20 a second) [s]
+FIRST_INPUT_S = 1.0
 # A page silent this long (no heartbeat, no message) is noted in the experimenter's log [s]
 SILENT_S = 3.0
 # Close code of a connection a newer page of the same link took over (a private code: 4000-4999)
@@ -302,7 +305,8 @@ class Conversation:
 
     async def _picture(self, trial: Session) -> None:
         """Wait until the page shows the robot, so that the clock starts with a picture: the page's
-        ``ready`` (``--frames browser``; at most :data:`READY_S`), or the first frame sent (``server``)."""
+        ``ready`` (``--frames browser``; at most :data:`READY_S`), or the first frame sent (``server``); then
+        the page's first input (at most :data:`FIRST_INPUT_S`), so that the first tick reads it."""
         if self.study.config.frames == "browser":
             ready = None
             with contextlib.suppress(Gone):  # a page gone meanwhile: the trial loop ends it at once
@@ -315,6 +319,9 @@ class Conversation:
             jpeg = await self.study.renderer.frame([float(v) for v in trial.station.state])
             if jpeg is not None:
                 await self.send(jpeg)
+        deadline = time.monotonic() + FIRST_INPUT_S
+        while self.inputs.received == -math.inf and time.monotonic() < deadline and not self.gone:
+            await asyncio.sleep(0.01)
 
     def _connected(self) -> bool:
         self.silent()

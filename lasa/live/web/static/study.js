@@ -17,6 +17,10 @@ const RETRY_S = [1, 2, 3, 5, 5, 10]; // waits between reconnection attempts, the
 let ws = null, retries = 0;
 let admitted = false; // whether the server has let this page in (then an "elsewhere" is a reload's race)
 let racing = false; // this page's own older connection still held: try again
+let leaving = false; // the page is being closed or reloaded: it must not connect again
+for (const event of ["beforeunload", "pagehide"]) { // a reload starts: this page's connection is done
+  window.addEventListener(event, () => { leaving = true; if (ws) ws.close(1000); });
+}
 
 // Why the server refused this page's connection (lasa.live.web.app.REFUSALS), in the participant's words.
 const REFUSED = {
@@ -271,6 +275,7 @@ function connect() {
   };
   ws.onclose = (event) => {
     driving = false;
+    if (leaving) return; // a reload's new page connects itself
     if (event.code === REPLACED) return stop("replaced"); // a newer page of this link drives: this one stops
     if (!$("thanks").hidden || refused || event.code === 1000) return;
     // a refused message (1008, 1009: too many, too large); a retry that finds no server yet keeps
