@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 from starlette.websockets import WebSocketDisconnect
 
-from lasa.base.errors import ConfigError
+from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.sessionlog import read_session
 from lasa.live.teleop import replay
 from lasa.live.web.app import NPM_PACKAGES, WebConfig, create_app
@@ -271,6 +271,7 @@ def test_a_browser_drives_a_trial_logged_as_teleop_logs_it(study):
     assert result["exact"] and result["steps"] == 4
     episodes = load_sessions(sessions, make_eating_task())
     assert list(episodes.participant) == ["p00"] and list(episodes.task) == ["Entree"]
+    assert list(episodes.order) == [0] and meta["disconnected_ticks"] == 0  # input before every tick
 
 
 def test_a_disconnect_leaves_the_session_interrupted_and_the_link_resumes_anew(study):
@@ -942,7 +943,8 @@ async def _stale_start_and_held_stick(port: int, token: str) -> list[str]:
 
 def test_a_step_starts_from_its_own_start_and_a_resting_stick(tmp_path, decoder_build):
     """A stale Start does not start the next trial; the stick held at a step's end is not carried
-    into the next; the sidecar records the condition's position in the schedule (order)."""
+    into the next; the sidecar records the condition's position in the schedule (order); a trial
+    without input is left out of the analysis, by name."""
     import asyncio
 
     from lasa.evidence.sessions import load_sessions
@@ -960,8 +962,12 @@ def test_a_step_starts_from_its_own_start_and_a_resting_stick(tmp_path, decoder_
     assert meta["order"] == 0
     second = plan_of(sessions, who)[4]  # the next condition's practice: its order is 1
     assert second.order == 1 and second.label == "B"
-    episodes = load_sessions(sessions, make_eating_task(), include_interrupted=True)
-    assert list(episodes.order) == [0]
+    assert meta["disconnected_ticks"] == len(frame) and meta["flagged"]  # the page sent no input
+    with (
+        pytest.warns(UserWarning, match="ticks without input"),
+        pytest.raises(ArtifactError, match="no sound"),
+    ):
+        load_sessions(sessions, make_eating_task(), include_interrupted=True)
 
 
 @pytest.mark.parametrize(

@@ -257,6 +257,8 @@ class Conversation:
     async def _drive(self, step: Step, limit_s: float) -> str:
         study, practice = self.study, step.kind == "practice"
         config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
+        self.finish = False
+        self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
         attempt = study.progress.count(self.participant, "attempts")
         folder = Path(study.config.sessions, "practice" if practice else "")  # the analysis reads trials only
         try:
@@ -267,8 +269,6 @@ class Conversation:
             await self.send({"type": "error", "message": UNAVAILABLE})
             self.why = "the server could not run the step"
             raise Gone from exc
-        self.finish = False
-        self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
         if study.config.frames != "none":  # the goals' names over the picture
             await self.send({"type": "labels", "labels": study.labels(trial.station)})
         key = None
@@ -306,7 +306,7 @@ class Conversation:
     async def _picture(self, trial: Session) -> None:
         """Wait until the page shows the robot, so that the clock starts with a picture: the page's
         ``ready`` (``--frames browser``; at most :data:`READY_S`), or the first frame sent (``server``); then
-        the page's first input (at most :data:`FIRST_INPUT_S`), so that the first tick reads it."""
+        the page's first input since its Start (at most :data:`FIRST_INPUT_S`): the first tick reads it."""
         if self.study.config.frames == "browser":
             ready = None
             with contextlib.suppress(Gone):  # a page gone meanwhile: the trial loop ends it at once
