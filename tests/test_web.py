@@ -713,7 +713,7 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
     episodes = load_sessions(sessions, make_eating_task())
     with pytest.warns(UserWarning, match="left out participant"):  # one condition of four: no test
         people = analyse_sessions(sessions, make_eating_task())
-    assert set(people["goal_error"].participant) == {who}
+    assert set(people["goal_error"].participant) == {who} and list(people["limit"].limit_s) == [2.0]
     assert "LA+SA" in set(people["means"].reset_index().condition), people["means"]
     assert {(who, "LA+SA", "Dessert"), (who, "LA+SA", "Entree")} <= set(
         zip(episodes.participant, episodes.condition, episodes.task, strict=True)
