@@ -76,6 +76,7 @@ async def participant(url: str, token: str, origin: str, duration: float) -> int
         await ws.send(json.dumps({"type": "consent"}))
         assert json.loads(await ws.recv())["kind"] == "practice"
         await ws.send(json.dumps({"type": "start"}))
+        await ws.send(json.dumps({"type": "ready"}))  # --frames browser: the clock starts (it draws nothing)
         frames = [0]
         reader = asyncio.create_task(drain(ws, frames))
         start = time.monotonic()

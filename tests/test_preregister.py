@@ -111,6 +111,11 @@ def test_peoples_sessions_are_judged_by_the_claims_own_tests():
     for row in table.itertuples():
         assert row.verdict == direct[row.claim][0] and row.measured == direct[row.claim][4]
     assert set(table.claim) >= {"h1", "h2", "h3"} and "likert" not in set(table.claim)  # no answers given
+    # the sessions' trial limit (analyse_sessions' `limit`, from their sidecars) is H3's horizon
+    limited = hypotheses.people_claims(
+        {**one_short, "limit": pd.DataFrame({"limit_s": [60.0]})}, n_resamples=50
+    )
+    assert "restricted to the 60 s horizon" in limited[limited.claim == "h3"].measured.iloc[0]
     assert hypotheses.people_claims({n: f[f.participant == "p0"] for n, f in frames.items()}).empty
     # with people's Likert answers (lasa.evidence.sessions.likert_tests' table), Fig. dessert's
     # subjective claim gets a row, judged by its rule

@@ -128,6 +128,10 @@ LIKELIHOODS = ("preferences", "goal")  # the belief models (lasa.method.belief.b
 ASSISTANCE = ("point", "grasp_set", "arbitrated", "hindsight")
 BUILT_IN_ASSISTANCE = (*ASSISTANCE, "hindsight_point")
 NO_ASSISTANCE = "none"  # the assistance label of rows and episodes with none (alpha = 0: LA, R)
+# One trial limit for people and simulated participants [s]: the simulated study's horizon (notebook 11's
+# `session.horizon`, lasa.people.design.StudyConfig), the web server's `--trial-s` default, and the limit
+# of a session whose sidecar records none (lasa.evidence.sessions.session_limit).
+TRIAL_LIMIT_S = 150.0
 
 
 def check_range(

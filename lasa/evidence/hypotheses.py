@@ -125,9 +125,13 @@ def people_claims(
     frames: dict[str, pd.DataFrame], horizon: float | None = None, n_resamples: int = 10_000
 ) -> pd.DataFrame:
     """H1-H3 (and with ``likert`` tests, :func:`likert_verdict`) on people's sessions by the cohort's own
-    tests and rules: a row per SA member and claim; ``horizon`` [s] defaults to the longest Total Time."""
+    tests and rules: a row per SA member and claim; ``horizon`` [s] defaults to the sessions' trial limit
+    (``frames["limit"]``, from their sidecars: :func:`lasa.evidence.sessions.analyse_sessions`), else to
+    the longest Total Time."""
     time = frames["time"]
-    horizon = float(time.total_time.max()) if horizon is None else horizon
+    if horizon is None:
+        limit = frames.get("limit")
+        horizon = float(limit.limit_s.min()) if limit is not None else float(time.total_time.max())
     # within-subject tests: those who did every condition in every task (sessions.DROPPED; two or more)
     full = set(complete_participants(time, "claims")[0].participant)
     likert = frames.get("likert")  # people's answers' tests (lasa.evidence.sessions.likert_tests), if any

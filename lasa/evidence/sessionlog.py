@@ -78,6 +78,40 @@ class SessionWriter:
         return self.csv
 
 
+def repair_running(folder: str | os.PathLike[str], reason: str = "the server stopped") -> list[str]:
+    """Close every session in ``folder`` whose sidecar still says ``running`` (its process was killed):
+    its rows kept (``.csv.part`` renamed ``.csv``, a torn last line dropped), its sidecar ``interrupted``
+    with ``reason`` and the rows it holds. The repaired sessions' stems, in order."""
+    repaired = []
+    for sidecar in sorted(Path(folder).glob("*.json")):
+        try:
+            meta = json.loads(sidecar.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            continue  # a damaged sidecar: the analysis names it; nothing here can be sure of it
+        if not isinstance(meta, dict) or meta.get("status") != "running":
+            continue
+        stem = sidecar.name.removesuffix(".json")
+        part, rows = sidecar.with_name(f"{stem}.csv.part"), sidecar.with_name(f"{stem}.csv")
+        if part.is_file() and not rows.exists():
+            _drop_torn_line(part)
+            os.replace(part, rows)
+        steps = max(0, len(rows.read_bytes().splitlines()) - 1) if rows.is_file() else 0
+        meta.update(status="interrupted", reason=reason, steps=steps)
+        write_text(sidecar, json.dumps(meta, indent=2, sort_keys=True) + "\n")
+        repaired.append(stem)
+    return repaired
+
+
+def _drop_torn_line(path: Path) -> None:
+    """Cut ``path`` after its last newline: a row half-written when the process died goes."""
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with open(path, "r+b") as fh:
+            fh.truncate(data.rfind(b"\n") + 1)
+            fh.flush()
+            os.fsync(fh.fileno())
+
+
 def read_session(
     path: str | os.PathLike[str], allow_damaged: bool = False
 ) -> tuple[pd.DataFrame, dict[str, Any]]:

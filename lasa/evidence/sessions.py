@@ -14,7 +14,7 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
 from lasa.base.conditions import parse as parse_condition
-from lasa.base.config import NO_ASSISTANCE
+from lasa.base.config import NO_ASSISTANCE, TRIAL_LIMIT_S
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked
 from lasa.evidence.sessionlog import read_session
@@ -38,12 +38,46 @@ def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
     return pd.read_csv(path, dtype={"participant": str}) if path.is_file() else None
 
 
+# The largest share of a trial's ticks without the participant's input (a frozen tab, a lost network)
+# that still counts as the participant's own trial; more, and the trial is left out. The principle,
+# fixed before any session was read: a page that runs sends input 20 times a second and the server
+# reads input as missing only after half a second of silence, so a working page loses no tick; we
+# allow the same 5% that the tests allow a false positive, and no more, so that at least 19 of 20
+# logged ticks were driven by the person. Not tuned on any result.
+DISCONNECTED_SHARE = 0.05
 # Why a session is left out of the analysis (scan_sessions), as a pre-registration states it.
 LEFT_OUT = {
     "damaged": "a damaged log: an unreadable sidecar, a torn or non-finite row, rows out of time order",
     "task": "not an eating-study session (another task, or a condition outside the four)",
     "status": "a session that did not end normally (interrupted, or stopped by a failure)",
+    "disconnected": f"a trial in which more than {DISCONNECTED_SHARE:.0%} of the ticks had no input from "
+    "the participant (a frozen page, a lost network)",
 }
+
+
+def session_limit(meta: dict[str, Any]) -> float:
+    """A session's trial limit [s]: its sidecar's ``limit_s``, else :data:`TRIAL_LIMIT_S`."""
+    return float(meta.get("limit_s", TRIAL_LIMIT_S))
+
+
+def disconnected(frame: pd.DataFrame, meta: dict[str, Any]) -> tuple[int, int]:
+    """A session's ticks without the participant's input and its ticks: the sidecar's
+    ``disconnected_ticks`` if it records them, else its rows' ``connected`` column (none: 0)."""
+    if "disconnected_ticks" in meta:
+        return int(meta["disconnected_ticks"]), len(frame)
+    if "connected" in frame:
+        return int((frame.connected.to_numpy() == 0).sum()), len(frame)
+    return 0, len(frame)
+
+
+def disconnected_flag(ticks: int, steps: int) -> str | None:
+    """Why a trial of ``steps`` ticks, ``ticks`` of them without input, breaks :data:`DISCONNECTED_SHARE`
+    (None: it does not)."""
+    if steps <= 0 or ticks <= DISCONNECTED_SHARE * steps:
+        return None
+    return f"{ticks} of {steps} ticks without input (more than {DISCONNECTED_SHARE:.0%})"
+
+
 # Who a within-subject test leaves out (complete_participants).
 DROPPED = "a participant who did not do every condition (in every task the test reads) is named and left out."
 
@@ -67,6 +101,8 @@ def scan_sessions(
             left_out.append((sidecar.stem, f"{LEFT_OUT['task']} (task {meta.get('task')!r})"))
         elif meta["status"] != "complete" and not include_interrupted:
             left_out.append((sidecar.stem, f"{LEFT_OUT['status']} ({meta['status']})"))
+        elif (flag := disconnected_flag(*disconnected(frame, meta))) is not None:
+            left_out.append((sidecar.stem, f"{LEFT_OUT['disconnected']} ({flag})"))
         elif key in seen:
             raise ArtifactError(
                 f"sessions {seen[key]} and {sidecar.name} in {folder} both log participant {key[0]}, "
@@ -91,8 +127,9 @@ def load_sessions(
 
 def _episodes(
     folder: str | os.PathLike[str], task: Any, caller: str, *flags: bool
-) -> tuple[Episodes, pd.DataFrame]:
-    """The sessions :func:`scan_sessions` keeps (``flags``: its own) and those left out, each in a warning."""
+) -> tuple[Episodes, pd.DataFrame, float]:
+    """The sessions :func:`scan_sessions` keeps (``flags``: its own), those left out (each in a warning)
+    and the shortest trial limit among those kept [s] (:func:`session_limit`)."""
     import mujoco
 
     from lasa.world.eating import EatingTask
@@ -130,7 +167,7 @@ def _episodes(
     conditions = np.array([m["condition"] for m in metas])
     assisted = np.array([parse_condition(str(c)).assisted for c in conditions], dtype=bool)
     members = np.array([m.get("control", {}).get("assistance", "hindsight") for m in metas])
-    return Episodes(
+    episodes = Episodes(
         participant=np.array([m["participant"] for m in metas]),
         condition=conditions,
         assistance=np.where(assisted, members, NO_ASSISTANCE),
@@ -147,7 +184,8 @@ def _episodes(
         end=end,
         completed=np.array([bool(m.get("done", False)) for m in metas]),
         dt=float(metas[0]["dt"]),
-    ), left_out
+    )
+    return episodes, left_out, min(session_limit(m) for m in metas)
 
 
 def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
@@ -184,13 +222,14 @@ def complete_participants(
 def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.DataFrame]:
     """People's sessions through the simulated cohort's measures and statistics: the tidy measure tables,
     ``means`` per condition, ``sa_effect``, ``time_tests`` and ``likert`` (over participants who did
-    every condition), ``left_out`` and ``dropped``."""
+    every condition), ``left_out``, ``dropped`` and ``limit`` (one row: ``limit_s``, the shortest trial
+    limit of the sessions read, H3's horizon in :func:`lasa.evidence.hypotheses.people_claims`)."""
     from lasa.evidence import stats
     from lasa.world.measures import measures
 
-    episodes, left_out = _episodes(folder, task, "analyse_sessions")
+    episodes, left_out, limit_s = _episodes(folder, task, "analyse_sessions")
     frames = measures(task, episodes)
-    out = {**frames, "left_out": left_out}
+    out = {**frames, "left_out": left_out, "limit": pd.DataFrame({"limit_s": [limit_s]})}
     out["means"] = (
         frames["time"]
         .merge(frames["goal_error"], on=["robot", "participant", "condition", "assistance", "task", "order"])

@@ -15,6 +15,7 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import (
     BUILT_IN_ASSISTANCE,
     NO_ASSISTANCE,
+    TRIAL_LIMIT_S,
     ControlConfig,
     Integer,
     Number,
@@ -40,8 +41,8 @@ def interface_of(condition: str) -> str:
 class StudyConfig:
     """How a study session runs (the participants' parameters are in ``participant``)."""
 
-    # steps allowed per task (150 s at dt = 0.1 s); unfinished tasks count the horizon [-]
-    horizon: PositiveInt = 1500
+    # steps allowed per task (TRIAL_LIMIT_S, 150 s, at dt = 0.1 s); unfinished tasks count the horizon [-]
+    horizon: PositiveInt = round(TRIAL_LIMIT_S / ControlConfig.dt)
     # a waypoint is reached this close [m] with the fork's direction this close [rad] (WaypointTracker)
     position_tol: Positive = POSITION_TOL
     angle_tol: Annotated[Number, at.Gt(0.0), at.Le(math.pi)] = ANGLE_TOL

@@ -13,11 +13,19 @@ from pathlib import Path
 import pandas as pd
 
 from lasa.base.conditions import CONDITIONS
+from lasa.base.config import TRIAL_LIMIT_S
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import require_file, write_text
 from lasa.evidence.hypotheses import headline_model
 from lasa.evidence.rules import COMPLETION_BAR, rule
-from lasa.evidence.sessions import DROPPED, LEFT_OUT, PRACTICE_TASK, QUESTIONS, SCALES
+from lasa.evidence.sessions import (
+    DISCONNECTED_SHARE,
+    DROPPED,
+    LEFT_OUT,
+    PRACTICE_TASK,
+    QUESTIONS,
+    SCALES,
+)
 from lasa.experiments.study import power as study_power
 from lasa.experiments.study import run as study
 from lasa.world import measures
@@ -131,6 +139,10 @@ def document(
         "## 6. Outliers and exclusions",
         "Sessions left out of every analysis, each named with its reason:",
         "\n".join(f"- {reason}" for reason in LEFT_OUT.values()),
+        f"A tick without input is one at which the participant's page had sent no input for half a "
+        f"second. The share of such ticks a trial may hold ({DISCONNECTED_SHARE:.0%}) was fixed before "
+        "any session was collected: a working page loses none, and at least 19 of every 20 ticks of a "
+        "kept trial were driven by its participant. The server records each trial's count in its log.",
         f"Participants left out of a within-subject test: {DROPPED}",
         "## 7. Sample size",
         f"From the simulated cohort (participant model `{model}`): the power of each hypothesis's own test "
@@ -160,7 +172,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--practice-s", type=float, default=300.0, help="the server's --practice-s [%(default)s]"
     )
-    parser.add_argument("--trial-s", type=float, default=300.0, help="the server's --trial-s [%(default)s]")
+    parser.add_argument(
+        "--trial-s", type=float, default=TRIAL_LIMIT_S, help="the server's --trial-s [%(default)s]"
+    )
     parser.add_argument("--draws", type=int, default=100, help="drawn cohorts per n [%(default)s]")
     parser.add_argument(
         "--sizes", type=int, nargs="+", default=list(study_power.SIZES), help="cohort sizes [%(default)s]"

@@ -1,13 +1,16 @@
 """Command line of the web study: ``serve`` (the default) and ``schedule``.
 
-``--port 8000 --sessions build/sessions [--host H]`` serves the study; ``schedule --participants 12 --url
-http://...`` writes the schedule and one link per participant (pre-registration: lasa.experiments.study)."""
+``--port 8000 --sessions build/sessions [--host H] [--log FILE]`` serves the study; ``schedule --participants
+12 --url http://...`` writes the schedule and one link per participant (pre-registration:
+lasa.experiments.study)."""
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import logging
 import sys
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from lasa.base.errors import ArtifactError, ConfigError
@@ -17,6 +20,7 @@ if TYPE_CHECKING:
     from lasa.live.web.app import WebConfig
 
 DEFAULT_HOST = "127.0.0.1"
+LOG = logging.getLogger("lasa.live.web")
 TLS_HINT = (
     "serving on {host} without TLS: put a reverse proxy that terminates HTTPS in front "
     "(e.g. Caddy: `caddy reverse-proxy --from study.example.org --to {host}:{port}`), and pass "
@@ -66,8 +70,11 @@ def _serve(argv: list[str]) -> int:
     import torch
     import uvicorn
 
-    from lasa.live.web.app import FRAMES, PING_S, PING_TIMEOUT_S, WebConfig, create_app
+    from lasa.base.config import TRIAL_LIMIT_S
+    from lasa.live.web import logs
+    from lasa.live.web.app import FRAMES, PING_S, PING_TIMEOUT_S, WebConfig, create_app, repair_sessions
     from lasa.live.web.protocol import MAX_MESSAGE_BYTES
+    from lasa.live.web.tokens import study_dir
 
     parser = argparse.ArgumentParser(prog="python -m lasa.live.web", description=__doc__.splitlines()[0])
     parser.add_argument("--port", type=int, default=8000, help="the port [%(default)s]")
@@ -77,7 +84,12 @@ def _serve(argv: list[str]) -> int:
         "--build-dir", default="build", help="where make figures left the decoders [%(default)s]"
     )
     parser.add_argument("--practice-s", type=float, default=300.0, help="longest practice [s] [%(default)s]")
-    parser.add_argument("--trial-s", type=float, default=300.0, help="longest trial [s] [%(default)s]")
+    parser.add_argument(
+        "--trial-s",
+        type=float,
+        default=TRIAL_LIMIT_S,
+        help="longest trial [s], the analysis' horizon too [%(default)s]",
+    )
     parser.add_argument(
         "--frames",
         choices=FRAMES,
@@ -94,23 +106,38 @@ def _serve(argv: list[str]) -> int:
         help="show participants the robot's belief over the goals (off: the paper's people saw "
         "the robot only)",
     )
+    parser.add_argument(
+        "--log", help="the experimenter's log (appended; no IP address in it) [<sessions>/study/server.log]"
+    )
+    parser.add_argument(
+        "--log-level", default="info", choices=("debug", "info", "warning", "error"), help="[%(default)s]"
+    )
     args = parser.parse_args(argv)
     host = args.host or DEFAULT_HOST
     settings = {f.name: getattr(args, f.name, None) for f in dataclasses.fields(WebConfig)}
     config = WebConfig(**settings | {"origins": tuple(args.origin)})
     conditions = preflight(config)  # every decoder, scene and npm file the schedule needs, or exit
-    print(f"checked: every step of {', '.join(conditions)} can run", file=sys.stderr)
+    log = logs.setup(args.log or Path(study_dir(config.sessions), "server.log"), args.log_level)
+    repaired = repair_sessions(config.sessions)  # a killed server's trials: interrupted, rows kept
+    LOG.info(
+        "checked: every step of %s can run; %d session(s) left running closed as interrupted; log: %s",
+        ", ".join(conditions), len(repaired), log,
+    )  # fmt: skip
     app = create_app(config)
     # one participant's step at a time decodes one row: torch's own threads only contend with the
     # event loop's thread for the machine's cores (the load test measured it)
     torch.set_num_threads(1)
     if args.host:
-        print(TLS_HINT.format(host=host, port=args.port), file=sys.stderr)
-    print(f"study of {args.sessions} at http://{host}:{args.port}/study#token=...", file=sys.stderr)
+        LOG.warning(TLS_HINT.format(host=host, port=args.port))
+    where = "this machine only" if host == DEFAULT_HOST else "the interface given by --host"
+    LOG.info("study of %s on port %d (%s): links /study#token=...", args.sessions, args.port, where)
     uvicorn.run(
         app,
         host=host,
         port=args.port,
+        log_config=None,  # lasa.live.web.logs: uvicorn's lines too, without IP addresses
+        log_level=args.log_level,
+        proxy_headers=False,  # X-Forwarded-For is not trusted, nor logged: no participant's address
         ws_max_size=MAX_MESSAGE_BYTES,
         ws_per_message_deflate=False,  # the messages are small: compressing them costs more than it saves
         ws_ping_interval=PING_S,  # the heartbeat: a dead connection frees its link within ~8 s

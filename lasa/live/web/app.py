@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import dataclasses
+import logging
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import AsyncIterator
@@ -24,9 +25,10 @@ from starlette.staticfiles import StaticFiles
 from starlette.types import Scope
 from starlette.websockets import WebSocket
 
-from lasa.base.config import Positive, validate
+from lasa.base.config import TRIAL_LIMIT_S, Positive, validate
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.paths import repo_root
+from lasa.evidence.sessionlog import repair_running
 from lasa.live.station import Station
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
@@ -40,7 +42,10 @@ from lasa.world.instructions import DISPLAY_NAMES, PICTURE_CAMERA
 # How the page shows the robot: server-drawn JPEG, drawn by the browser (MuJoCo WebAssembly), or not.
 FRAMES = ("server", "browser", "none")
 
+LOG = logging.getLogger("lasa.live.web")
 HELLO_S = 10.0  # how long a connection may take to send its token [s]
+# how long a newer page of a link waits for the older one's trial to close before it is refused [s]
+TAKEOVER_S = 10.0
 # uvicorn's WebSocket pings: a sleeping laptop holds its link at most PING_S + PING_TIMEOUT_S [s]
 PING_S = 3.0
 PING_TIMEOUT_S = 5.0
@@ -68,7 +73,7 @@ class WebConfig:
     sessions: str  # the sessions folder (its study/ holds the schedule and the tokens)
     build_dir: str = "build"  # where `make figures` left the decoders
     practice_s: Positive = 300.0  # the longest practice per condition [s] (the paper: 5 minutes)
-    trial_s: Positive = 300.0  # the longest trial [s]
+    trial_s: Positive = TRIAL_LIMIT_S  # the longest trial [s]: the analysis' horizon (one limit)
     frames: str = "browser"  # how the page shows the robot (FRAMES)
     origins: tuple[str, ...] = ()  # page origins allowed besides the server's own (behind a proxy)
     show_belief: bool = False
@@ -97,21 +102,35 @@ class Study:
         self.config = config
         self.tokens = TokenStore(config.sessions)
         self.progress = Progress(config.sessions)
-        self.active: set[str] = set()
+        self.active: dict[str, Conversation] = {}  # participant -> their page's connection
         self.renderer = FrameRenderer() if config.frames == "server" else None
         self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
+        self.resume: dict[str, int] = {}  # participant -> the step whose trial the page left: it restarts
         self._labels: list[dict[str, Any]] | None = None  # the goals' places: one scene, one camera
 
-    def admit(self, token: str | None) -> tuple[str | None, str]:
-        """(participant, "") for a valid token whose schedule is not done and that is not connected
-        elsewhere, else (None, the reason: ``invalid``, ``finished`` or ``elsewhere``)."""
+    async def admit(self, token: str | None) -> tuple[str | None, str]:
+        """(participant, "") for a valid token whose schedule is not done, else (None, the reason:
+        ``invalid``, ``finished``, or ``elsewhere`` if an older page of the link would not let go within
+        :data:`TAKEOVER_S`). The newest page wins: an older one's connection is closed, its trial
+        ``interrupted`` (the step runs again as a new attempt)."""
         participant = self.tokens.participant(token)
         if participant is None:
             return None, "invalid"
+        older = self.active.get(participant)
+        if older is not None:
+            LOG.info("participant %s: a newer page takes over from the open one", participant)
+            await older.replace()
+            try:
+                await asyncio.wait_for(older.ended.wait(), TAKEOVER_S)
+            except TimeoutError:
+                LOG.warning(
+                    "participant %s: the open page did not let go; the newer one is refused", participant
+                )
+                return None, "elsewhere"
         plan = plan_of(self.config.sessions, participant)
         if not plan or self.progress.finished(participant, plan):
             return None, "finished"
-        if participant in self.active:
+        if self.active.get(participant, older) is not older:  # a third page took over meanwhile
             return None, "elsewhere"
         return participant, ""
 
@@ -229,17 +248,28 @@ async def socket(ws: WebSocket) -> None:
         token = msg.get("token") if msg["type"] == "hello" else None
     except (TimeoutError, ProtocolError, KeyError):
         token = None
-    participant, reason = study.admit(token) if token is not None else (None, "no_hello")
+    participant, reason = await study.admit(token) if token is not None else (None, "no_hello")
     if participant is None:
         with contextlib.suppress(Exception):
             await ws.send_json({"type": "refused", "reason": reason})
             await ws.close(code=1008)
         return
-    study.active.add(participant)
+    conversation = study.active[participant] = Conversation(ws, study, participant)
     try:
-        await Conversation(ws, study, participant).run()
+        await conversation.run()
     finally:
-        study.active.discard(participant)
+        if study.active.get(participant) is conversation:
+            del study.active[participant]
+
+
+def repair_sessions(sessions: str | os.PathLike[str]) -> list[str]:
+    """Close the sessions a killed server left ``running`` (trials and practice): ``interrupted``, with the
+    reason "the server stopped", their rows kept (:func:`lasa.evidence.sessionlog.repair_running`); each
+    named in the log. Their stems."""
+    repaired = [*repair_running(sessions), *repair_running(Path(sessions, "practice"))]
+    for stem in repaired:
+        LOG.info("session %s was left running: closed as interrupted (the server stopped)", stem)
+    return repaired
 
 
 def create_app(config: WebConfig) -> Starlette:

@@ -9,7 +9,9 @@ import concurrent.futures
 import contextlib
 import dataclasses
 import logging
+import math
 import secrets
+import time
 from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -17,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.evidence.sessions import QUESTIONS, SCALES
+from lasa.evidence.sessions import QUESTIONS, SCALES, disconnected_flag, read_likert
 from lasa.live.devices import StickSample
 from lasa.live.session import Session, open_log
 from lasa.live.station import SessionConfig, Station
@@ -30,14 +32,27 @@ if TYPE_CHECKING:
 
 
 LOG = logging.getLogger("lasa.live.web")
-# Page messages (consent, start, survey, hello) waiting for the step that reads them: a connection
+# Page messages (consent, start, survey, ready, hello) waiting for the step that reads them: a connection
 # holds at most this many; more, and any a step did not ask for, are dropped and counted.
 QUEUE_MAX = 8
-# What a participant reads when the server cannot run their step (preflight makes it rare).
-UNAVAILABLE = (
-    "The study cannot go on right now, through no fault of yours. Please tell the person who sent "
-    "you the link; you can come back with the same link later."
-)
+# How long a trial waits for the page to draw its picture (--frames browser) before its clock starts [s]
+READY_S = 15.0
+# How long a trial waits for the page's first input after its Start (it sends 20 a second) [s]
+FIRST_INPUT_S = 1.0
+# A page silent this long (no heartbeat, no message) is noted in the experimenter's log [s]
+SILENT_S = 3.0
+# Close code of a connection a newer page of the same link took over (a private code: 4000-4999)
+REPLACED = 4000
+# What a participant reads when something goes wrong: a few fixed, plain messages, never a condition's
+# code, a path or an option (the detail goes to the experimenter's log).
+MESSAGES = {
+    "unavailable": "The study cannot go on right now, through no fault of yours. Please tell the person "
+    "who sent you the link; you can come back with the same link later.",
+    "answers": "Please answer every question with one of the numbers from 1 to 7.",
+    "not_saved": "Your answers could not be saved, through no fault of yours. Please try again in a "
+    "moment; if this happens again, tell the person who sent you the link.",
+}
+UNAVAILABLE = MESSAGES["unavailable"]
 
 
 class Gone(Exception):
@@ -55,15 +70,21 @@ class Conversation:
     gone: bool = False
     finish: bool = False
     dropped: int = 0  # out-of-step page messages dropped (logged when the connection ends)
+    why: str = ""  # why the connection ended, for the experimenter's log
 
     def __post_init__(self) -> None:
         self._queue: asyncio.Queue[dict[str, Any]] = asyncio.Queue(QUEUE_MAX)
         self._send_lock = asyncio.Lock()
         self._frames: set[asyncio.Task[None]] = set()
+        self.ended = asyncio.Event()  # set once run() has returned: the trial (if any) is closed
+        self.heard = time.monotonic()  # the page's last message (a heartbeat at least every second)
+        self._silent = False  # whether the log says the page went silent
 
     async def run(self) -> None:
         """Serve the participant until their plan is done or the page goes."""
         receiver = asyncio.create_task(self._receive())
+        step = int(self.study.progress.of(self.participant)["step"])
+        LOG.info("participant %s: joined at step %d", self.participant, step + 1)
         try:
             with contextlib.suppress(Gone):
                 await self._protocol()
@@ -73,6 +94,24 @@ class Conversation:
                 await receiver
             if self.dropped:
                 LOG.info("participant %s: %d out-of-step messages dropped", self.participant, self.dropped)
+            LOG.info("participant %s: connection closed: %s", self.participant, self.why or "the page went")
+            self.ended.set()
+
+    async def replace(self) -> None:
+        """End this connection for a newer page of the same link: its trial (if any) ends ``interrupted``,
+        the page is closed with :data:`REPLACED` (it says the study goes on in another window)."""
+        self.why = f"a newer page of the same link took over (close {REPLACED})"
+        self._end()
+        with contextlib.suppress(Exception):
+            await asyncio.wait_for(self.ws.close(code=REPLACED, reason="replaced"), 1.0)
+
+    def _end(self) -> None:
+        """The page is gone: the trial loop stops at its next tick, a waiting step wakes."""
+        self.gone = True
+        if self._queue.full():  # the end always reaches the step waiting for a message
+            self._queue.get_nowait()
+            self.dropped += 1
+        self._queue.put_nowait({"type": "_gone"})
 
     async def _receive(self) -> None:
         limit = RateLimit()
@@ -81,23 +120,38 @@ class Conversation:
                 if not limit.allow():
                     raise ProtocolError("too many messages")
                 msg = parse(message.get("text"))
+                self._heard()
                 if msg["type"] == "input":
                     self.inputs.update(msg)
                 elif msg["type"] == "finish":
                     self.finish = True
-                else:
+                elif msg["type"] != "beat":
                     self._put(msg)
+            self.why = self.why or f"the page closed it (code {message.get('code', 1005)})"
         except ProtocolError as exc:
-            with contextlib.suppress(Exception):
-                await self.ws.close(code=exc.code, reason=str(exc)[:100])
-        except Exception:  # a broken connection: the page is gone either way
-            pass
+            self.why = self.why or f"a refused message: {exc} (close {exc.code})"
+            with contextlib.suppress(Exception):  # the page shows its own plain words for the code
+                await self.ws.close(code=exc.code, reason="refused message")
+        except Exception as exc:  # a broken connection: the page is gone either way
+            self.why = self.why or f"the connection broke ({type(exc).__name__})"
         finally:
-            self.gone = True
-            if self._queue.full():  # the end always reaches the step waiting for a message
-                self._queue.get_nowait()
-                self.dropped += 1
-            self._queue.put_nowait({"type": "_gone"})
+            if not self.gone:
+                self._end()
+
+    def _heard(self) -> None:
+        now = time.monotonic()
+        if self._silent:
+            LOG.info("participant %s: page heard again after %.1f s", self.participant, now - self.heard)
+            self._silent = False
+        self.heard = now
+
+    def silent(self) -> bool:
+        """Whether the page has sent nothing for :data:`SILENT_S` (noted once in the log)."""
+        quiet = time.monotonic() - self.heard > SILENT_S
+        if quiet and not self._silent:
+            LOG.info("participant %s: page silent for %.0f s (a frozen tab?)", self.participant, SILENT_S)
+            self._silent = True
+        return quiet
 
     def _put(self, msg: dict[str, Any]) -> None:
         try:
@@ -124,9 +178,15 @@ class Conversation:
         except Exception:
             self.gone = True
 
-    async def _expect(self, kind: str) -> dict[str, Any]:
+    async def _expect(self, kind: str, timeout: float | None = None) -> dict[str, Any] | None:
+        """The page's next ``kind`` message (others dropped and counted); None after ``timeout`` [s]."""
+        deadline = None if timeout is None else time.monotonic() + timeout
         while True:
-            msg = await self._queue.get()
+            try:
+                left = None if deadline is None else max(0.0, deadline - time.monotonic())
+                msg = await asyncio.wait_for(self._queue.get(), left)
+            except TimeoutError:
+                return None
             if msg["type"] == "_gone":
                 raise Gone
             if msg["type"] == kind:
@@ -148,6 +208,8 @@ class Conversation:
             # the condition's letter, never its code (the page is blind to it, as the paper's people were)
             header: dict[str, Any] = {"type": "phase", "kind": step.kind, "label": step.label}
             header |= {"task": step.task, "index": index + 1, "total": len(plan)}
+            if study.resume.pop(participant, None) == index:  # the page left this trial: it starts again
+                header["resume"] = True
             if step.kind == "survey":
                 await self._survey(step, header)
             else:
@@ -155,36 +217,58 @@ class Conversation:
                 await self.send(header | {"limit_s": limit})
                 await self._expect("start")
                 if await self._drive(step, limit) != "complete":
+                    study.resume[participant] = index
                     raise Gone
             study.progress.count(participant, "step")
         await self.send({"type": "phase", "kind": "thanks"})
+        self.why = "the study is finished (close 1000)"
         with contextlib.suppress(Exception):
             await self.ws.close(code=1000)
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
         await self.send(header | {"questions": [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]})
         while True:
-            answers = (await self._expect("survey"))["answers"]
+            msg = await self._expect("survey")
+            assert msg is not None  # no timeout
+            if self._answered(step):  # stored before a crash kept the step from being counted: go on
+                LOG.info(
+                    "participant %s: %s answers stored already; going on", self.participant, step.condition
+                )
+                return
+            answers = msg["answers"]
             try:
                 survey(self.study.config.sessions, self.participant, step.condition, answers)
                 return
-            except ConfigError as exc:
-                await self.send({"type": "error", "message": str(exc)})
+            except ConfigError as exc:  # the detail is the experimenter's; the page gets plain words
+                bad = len(answers) != len(SCALES) or not all(1 <= a <= 7 for a in answers)
+                LOG.warning("participant %s: survey not stored: %s", self.participant, exc)
+                await self.send({"type": "error", "message": MESSAGES["answers" if bad else "not_saved"]})
+            except OSError as exc:
+                LOG.error("participant %s: survey not stored: %s", self.participant, exc)
+                await self.send({"type": "error", "message": MESSAGES["not_saved"]})
+
+    def _answered(self, step: Step) -> bool:
+        """Whether the participant's answers for ``step``'s condition are stored already."""
+        old = read_likert(self.study.config.sessions)
+        return old is not None and bool(
+            ((old.participant == self.participant) & (old.condition == step.condition)).any()
+        )
 
     async def _drive(self, step: Step, limit_s: float) -> str:
         study, practice = self.study, step.kind == "practice"
         config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
+        self.finish = False
+        self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
         attempt = study.progress.count(self.participant, "attempts")
         folder = Path(study.config.sessions, "practice" if practice else "")  # the analysis reads trials only
         try:
             trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
-        except (ConfigError, ArtifactError) as exc:
+        except (ConfigError, ArtifactError, OSError) as exc:
             # the detail (paths, commands) is the experimenter's, in the server's log; never the page's
             LOG.error("participant %s cannot run %s %s: %s", self.participant, step.task, step.condition, exc)
             await self.send({"type": "error", "message": UNAVAILABLE})
+            self.why = "the server could not run the step"
             raise Gone from exc
-        self.finish = False
-        self.inputs.reset()  # a zero stick: nothing the page sent before this Start moves the robot
         if study.config.frames != "none":  # the goals' names over the picture
             await self.send({"type": "labels", "labels": study.labels(trial.station)})
         key = None
@@ -197,13 +281,51 @@ class Conversation:
             robot = trial.station.robot
             qpos_adr = robot.qpos_adr.tolist()
             camera = robot.model.camera(robot.spec.camera).id
-            await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera})
+            q = [float(v) for v in trial.station.state]
+            await self.send({"type": "scene", "key": key, "qpos_adr": qpos_adr, "camera": camera, "q": q})
         try:
-            return await run_trial(
-                trial, self.inputs, self._tick, lambda: not self.gone, lambda: practice and self.finish
+            try:
+                await self._picture(trial)
+            except BaseException:  # the server stopping while the page loads: no step ran
+                trial.close("interrupted")
+                raise
+            status = await run_trial(
+                trial, self.inputs, self._tick, self._connected, lambda: practice and self.finish
             )
         finally:
             study.scenes.pop(key or "", None)
+        if status != "complete":
+            assert trial.writer is not None
+            LOG.info(
+                "participant %s: %s %s, way %s (%s), attempt %d interrupted after %d steps: %s",
+                self.participant, step.kind, step.task, step.label, step.condition, attempt,
+                trial.steps, self.why or "the page went",
+            )  # fmt: skip
+        return status
+
+    async def _picture(self, trial: Session) -> None:
+        """Wait until the page shows the robot, so that the clock starts with a picture: the page's
+        ``ready`` (``--frames browser``; at most :data:`READY_S`), or the first frame sent (``server``); then
+        the page's first input since its Start (at most :data:`FIRST_INPUT_S`): the first tick reads it."""
+        if self.study.config.frames == "browser":
+            ready = None
+            with contextlib.suppress(Gone):  # a page gone meanwhile: the trial loop ends it at once
+                ready = await self._expect("ready", READY_S)
+            if not self.gone and ready is None:
+                LOG.info(
+                    "participant %s: no picture after %.0f s; the trial starts", self.participant, READY_S
+                )
+        elif self.study.renderer is not None:
+            jpeg = await self.study.renderer.frame([float(v) for v in trial.station.state])
+            if jpeg is not None:
+                await self.send(jpeg)
+        deadline = time.monotonic() + FIRST_INPUT_S
+        while self.inputs.received == -math.inf and time.monotonic() < deadline and not self.gone:
+            await asyncio.sleep(0.01)
+
+    def _connected(self) -> bool:
+        self.silent()
+        return not self.gone
 
     async def _tick(self, message: dict[str, Any]) -> None:
         if not self.study.config.show_belief:  # the paper's people saw the robot only
@@ -230,11 +352,18 @@ def open_trial(
     config: SessionConfig, folder: Path, attempt: int, duration_s: float, order: int = 0
 ) -> Session:
     """A warmed-up station and its new log ``<participant>_<task>_<condition>_<time>_a<attempt>`` (a new name
-    for each attempt); ``order``: the condition's position in the participant's schedule."""
+    for each attempt, its sidecar the limit ``limit_s``); ``order``: the condition's position in the
+    participant's schedule."""
     station = Station(config)
     station.warm_up()
     writer = open_log(
-        station, folder, suffix=f"_a{attempt}", interface="web", attempt=attempt, order=int(order)
+        station,
+        folder,
+        suffix=f"_a{attempt}",
+        interface="web",
+        attempt=attempt,
+        order=int(order),
+        limit_s=float(duration_s),
     )
     return Session(station, writer, max(1, int(round(duration_s / station.control.dt))))
 
@@ -267,8 +396,10 @@ async def run_trial(
     finish: Callable[[], bool],
 ) -> str:
     """Tick until done, out of time, ``finish()`` or the page goes; the status the log closed with:
-    ``interrupted`` if the page went or anything raised (a cancelled loop logs its step's row first)."""
-    status = "complete"
+    ``interrupted`` if the page went or anything raised (a cancelled loop logs its step's row first).
+    The sidecar counts the ticks without input (``disconnected_ticks``) and says why it is ``flagged``
+    when they break :data:`lasa.evidence.sessions.DISCONNECTED_SHARE` (None: it is not)."""
+    status, missing = "complete", 0
     step: concurrent.futures.Future[dict[str, Any]] | None = None
     with trial.guard():
         try:
@@ -277,7 +408,9 @@ async def run_trial(
                     status = "interrupted"
                     break
                 step = STEPPER.submit(tick, trial, inputs.take())
-                await send(await asyncio.wrap_future(step))
+                message = await asyncio.wrap_future(step)
+                missing += not message["connected"]
+                await send(message)
                 if trial.station.done or finish():
                     break
                 pause = trial.pause()
@@ -287,5 +420,5 @@ async def run_trial(
             if step is not None:
                 concurrent.futures.wait([step])  # a few ms: the step's row goes in before the log closes
             raise
-    trial.close(status)
+    trial.close(status, disconnected_ticks=missing, flagged=disconnected_flag(missing, trial.steps))
     return status

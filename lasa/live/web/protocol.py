@@ -1,6 +1,7 @@
 """The messages between the page and the server: the page's (:data:`KINDS`, JSON of at most
 :data:`MAX_MESSAGE_BYTES`, at most :data:`MAX_RATE` a second; anything else ends the connection) and the
-server's (``phase``, ``tick``, ``scene``, ``labels``, ``refused``; JPEG frames with ``--frames server``)."""
+server's (``phase``, ``tick``, ``scene``, ``labels``, ``refused``, ``error``; JPEG frames with ``--frames
+server``)."""
 
 from __future__ import annotations
 
@@ -19,8 +20,9 @@ from lasa.live.web.tokens import MAX_TOKEN_CHARS
 MAX_MESSAGE_BYTES = 4096
 MAX_RATE = 50.0  # messages per second, averaged over a burst of as many
 STALE_S = 0.5  # input older than this reads as disconnected: zero input, never a held command
-# hello (the token, first), consent, start, finish, input (axes, mode, stop) and survey (answers)
-KINDS = ("hello", "consent", "start", "finish", "input", "survey")
+# hello (the token, first), consent, start, finish, input (axes, mode, stop), survey (answers), beat (the
+# page's heartbeat, every second in every step) and ready (the trial's picture is drawn: its clock starts)
+KINDS = ("hello", "consent", "start", "finish", "input", "survey", "beat", "ready")
 
 
 class ProtocolError(LasaError, ValueError):

@@ -5,6 +5,8 @@
 "use strict";
 
 const SEND_HZ = 20; // input messages a second while driving (the server allows 50)
+const BEAT_MS = 1000; // the heartbeat: a "beat" every second, from this page's main thread, in every step
+const MOMENT_MS = 2000; // how long "Done" or "Time is up" stays before the next step
 const DEADZONE = 0.05;
 const $ = (id) => document.getElementById(id);
 // The token is in the link's fragment (#token=...), which the browser never sends: it travels once,
@@ -13,12 +15,19 @@ const token = new URLSearchParams(location.hash.slice(1)).get("token") || "";
 const scheme = location.protocol === "https:" ? "wss" : "ws";
 const RETRY_S = [1, 2, 3, 5, 5, 10]; // waits between reconnection attempts, then every 10 s
 let ws = null, retries = 0;
+let admitted = false; // whether the server has let this page in (then an "elsewhere" is a reload's race)
+let racing = false; // this page's own older connection still held: try again
+let leaving = false; // the page is being closed or reloaded: it must not connect again
+for (const event of ["beforeunload", "pagehide"]) { // a reload starts: this page's connection is done
+  window.addEventListener(event, () => { leaving = true; if (ws) ws.close(1000); });
+}
 
 // Why the server refused this page's connection (lasa.live.web.app.REFUSALS), in the participant's words.
 const REFUSED = {
   invalid: "This link is not valid. Check that you opened the whole link you were sent, then try again.",
   finished: "You have finished the study with this link. Thank you! You may close this page.",
   elsewhere: "This link is open in another window or tab. Close that one, then reload this page.",
+  replaced: "This study continues in another window or tab. You may close this one.",
   no_hello: "This page could not reach the study in time. Reload this page.",
 };
 let refused = false;
@@ -28,17 +37,20 @@ const LOST = {
   1001: "The study server is restarting. This page reconnects by itself; you will go on where you left off.",
 };
 const LOST_OTHER = "The connection to the study was lost. This page reconnects by itself; you will go on where you left off.";
+const CLOSED = "The study server closed this page's connection. This page reconnects by itself; you will go on where you left off.";
+const REPLACED = 4000; // lasa.live.web.conversation.REPLACED: a newer page of this link took over
 
 const keys = { left: false, right: false, up: false, down: false };
 let keyStop = false, modePress = false, driving = false, padWasPressed = false, frameUrl = null;
 let view = null; // view.js once a "scene" message has come (--frames browser)
+let lastTick = null; // the running trial's latest tick: how it ended (done, out of time)
 
 function show(id) {
   for (const s of document.querySelectorAll("section")) s.hidden = s.id !== id;
 }
 
 function send(msg) {
-  if (ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+  if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
 }
 
 // A duration as a person reads it: "45 seconds", "1 minute", "5 minutes", "about 1.5 hours".
@@ -60,6 +72,13 @@ function consent(msg) {
 
 function phase(msg) {
   driving = false;
+  const ended = lastTick && !$("drive").hidden && (lastTick.done ? "Done" : lastTick.remaining_s <= 0 ? "Time is up" : "");
+  lastTick = null;
+  if (ended) { // a moment to see the trial end before the next step
+    $("instruction").textContent = ended;
+    setTimeout(() => phase(msg), MOMENT_MS);
+    return;
+  }
   $("status").textContent = msg.index ? `Step ${msg.index} of ${msg.total}` : "";
   if (msg.kind === "consent") return consent(msg);
   if (msg.kind === "thanks") return show(msg.kind);
@@ -72,6 +91,7 @@ function phase(msg) {
     : `Feed the ${msg.task.toLowerCase()} following the instruction at the top of the screen (at most ${duration(msg.limit_s)}).`;
   $("ready").hidden = !practice;
   show("intro");
+  if (msg.resume) startDriving(); // the page left this trial (a reload, a lost network): on again by itself
 }
 
 function survey(msg) {
@@ -93,11 +113,17 @@ function survey(msg) {
   show("survey");
 }
 
+// Seconds as the time left reads: "4:05".
+function clock(seconds) {
+  const s = Math.max(0, Math.ceil(seconds));
+  return `${Math.floor(s / 60)}:${String(s % 60).padStart(2, "0")}`;
+}
+
 function tick(msg) {
+  lastTick = msg;
+  $("drive").dataset.tick = msg.step; // for tests only: the page shows no counter
   $("instruction").textContent = msg.instruction;
-  $("tick").textContent = msg.step;
-  $("late").textContent = msg.late;
-  $("left").textContent = msg.remaining_s.toFixed(0);
+  $("left").textContent = `${clock(msg.remaining_s)} left`;
   $("stopped").hidden = !msg.stop;
   $("belief-panel").hidden = !msg.belief; // only when the study shows it (off by default)
   if (!msg.belief) return;
@@ -128,13 +154,17 @@ function labels(msg) {
   }));
 }
 
+// The trial's scene (--frames browser): loaded, drawn at its start pose, then "ready" (the clock starts).
 function scene(msg) {
   $("view").hidden = true;
   $("canvas").hidden = false;
   view = import("/static/view.js");
-  view.then((m) => m.load(msg.key, msg, $("canvas"))).catch((err) => {
-    $("status").textContent = `The robot cannot be drawn in this browser (${err.message || err}); the task goes on.`;
-  });
+  view.then((m) => m.load(msg.key, msg, $("canvas")).then(() => m.show(msg.q)))
+    .then(() => requestAnimationFrame(() => requestAnimationFrame(() => send({ type: "ready" }))))
+    .catch(() => {
+      $("status").textContent = "The robot cannot be drawn in this browser; the task goes on.";
+      send({ type: "ready" });
+    });
 }
 
 function frame(blob) {
@@ -162,11 +192,9 @@ function stick() {
 }
 
 setInterval(() => {
-  if (!driving) return;
-  const msg = stick();
-  $("stick").textContent = `${msg.axes[0].toFixed(2)}, ${msg.axes[1].toFixed(2)}`;
-  send(msg);
+  if (driving) send(stick());
 }, 1000 / SEND_HZ);
+setInterval(() => send({ type: "beat" }), BEAT_MS); // a frozen tab sends none: the server notes it
 
 const KEYS = { ArrowLeft: "left", ArrowRight: "right", ArrowUp: "up", ArrowDown: "down" };
 document.addEventListener("keydown", (e) => {
@@ -183,14 +211,17 @@ document.addEventListener("keyup", (e) => {
 window.addEventListener("blur", () => { for (const k in keys) keys[k] = false; });
 
 $("agree").onclick = () => send({ type: "consent" });
-$("start").onclick = () => {
+function startDriving() {
   for (const k in keys) keys[k] = false;
   keyStop = false;
   driving = true;
-  $("instruction").textContent = "Starting…";
+  lastTick = null;
+  $("instruction").textContent = "Loading the robot…"; // the clock starts once the picture is there
+  $("left").textContent = "";
   show("drive");
   send({ type: "start" });
-};
+}
+$("start").onclick = startDriving;
 $("ready").onclick = () => send({ type: "finish" });
 $("submit").onclick = () => {
   const answers = [...$("survey-form").querySelectorAll(".question")].map((q) => {
@@ -210,12 +241,20 @@ function received(event) {
   else if (msg.type === "labels") labels(msg);
   else if (msg.type === "error") notice(msg.message); // the page stays as it is: a form keeps its answers
   else if (msg.type === "refused") {
-    refused = true;
-    notice("");
-    $("status").textContent = "";
-    $("error-text").textContent = REFUSED[msg.reason] || REFUSED.invalid;
-    show("error");
+    // a page the server had let in, refused as "elsewhere": its own earlier connection not yet let go
+    if (msg.reason === "elsewhere" && admitted) { racing = true; return; }
+    stop(msg.reason);
   }
+}
+
+// The server sent this page away for good: say why (REFUSED) and stop trying.
+function stop(reason) {
+  refused = true;
+  driving = false;
+  notice("");
+  $("status").textContent = "";
+  $("error-text").textContent = REFUSED[reason] || REFUSED.invalid;
+  show("error");
 }
 
 // A message above the page's current step, which it never replaces ("" clears it).
@@ -229,18 +268,22 @@ function connect() {
   ws.binaryType = "blob";
   ws.onopen = () => { ws.send(JSON.stringify({ type: "hello", token })); };
   ws.onmessage = (event) => {
-    if (retries) { retries = 0; notice(""); } // the server answered: back where we left off
+    const refusal = typeof event.data === "string" && event.data.includes('"refused"');
+    if (!refusal) admitted = true;
+    if (retries && !refusal) { retries = 0; notice(""); } // the server answered: back where we left off
     received(event);
   };
   ws.onclose = (event) => {
     driving = false;
+    if (leaving) return; // a reload's new page connects itself
+    if (event.code === REPLACED) return stop("replaced"); // a newer page of this link drives: this one stops
     if (!$("thanks").hidden || refused || event.code === 1000) return;
-    // a refused message (1008: too many, not the protocol's; 1009: too large) names its reason
-    const refusedMessage = (event.code === 1008 || event.code === 1009) && event.reason;
-    // a retry that finds no server yet keeps the notice of why the connection ended ("restarting")
-    const message = refusedMessage
-      ? `The study server closed this page's connection: ${event.reason}. This page reconnects by itself; you will go on where you left off.`
+    // a refused message (1008, 1009: too many, too large); a retry that finds no server yet keeps
+    // the notice of why the connection ended ("restarting")
+    const message = racing ? LOST_OTHER : event.code === 1008 || event.code === 1009
+      ? CLOSED
       : LOST[event.code] || (retries ? $("notice").textContent : LOST_OTHER);
+    racing = false;
     notice(message || LOST_OTHER);
     setTimeout(connect, 1000 * RETRY_S[Math.min(retries, RETRY_S.length - 1)]);
     retries += 1;
