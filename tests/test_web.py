@@ -486,8 +486,9 @@ def test_a_real_browser_consents_drives_and_sees_the_goals_and_ticks(study, repo
     from selenium.webdriver.common.by import By
 
     sessions, tokens = study
-    # a practice longer than every wait below: on a loaded machine it must not end by its limit mid-test
-    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=600.0, frames="server")
+    # the default practice (5 minutes): longer than every wait below, so on a loaded machine it never ends
+    # by its limit mid-test; the screenshot shows the defaults
+    config = WebConfig(sessions=str(sessions), build_dir="no-decoders", practice_s=300.0, frames="server")
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: ticks_seen(browser) >= 20, timeout=60)
@@ -607,8 +608,8 @@ def test_a_real_browser_draws_the_robot_with_mujoco_wasm(study, report_artifact,
     npm_installed()
     sessions, tokens = study
     config = WebConfig(
-        sessions=str(sessions), build_dir="no-decoders", practice_s=600.0, frames="browser", show_belief=True
-    )  # a practice longer than every wait below (the wasm build can take a minute on a loaded machine)
+        sessions=str(sessions), build_dir="no-decoders", practice_s=300.0, frames="browser", show_belief=True
+    )  # the default practice: longer than every wait below (the wasm build can take a minute when loaded)
     with served(config) as port, chromium() as browser:
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens['p00']}")
         wait_for(lambda: browser.execute_script("return window.lasaView.frames") >= 10, timeout=90)
