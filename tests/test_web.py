@@ -258,6 +258,7 @@ def test_a_browser_drives_a_trial_logged_as_teleop_logs_it(study):
             assert nxt["kind"] == "trial" and nxt["task"] == "Dessert"
     assert len(ticks) == 4 and ticks[-1]["step"] == 4 and len(ticks[-1]["belief"]) == 4
     assert {"q", "belief", "goals", "instruction", "late"} <= set(ticks[-1])
+    assert ticks[-1]["goals"] == ["rice", "tofu, marshmallows", "icing", "plate"]  # as the labels name them
     assert abs(sum(ticks[-1]["belief"]) - 1) < 1e-9 and ticks[-1]["q"] != ticks[0]["q"]
     (practice,) = (sessions / "practice").glob("*.csv")
     (entree,) = sessions.glob("p00_Entree_R_*_a2.csv")

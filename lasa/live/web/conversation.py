@@ -26,6 +26,7 @@ from lasa.live.station import SessionConfig, Station
 from lasa.live.studykit import survey
 from lasa.live.web.plan import Step, plan_of
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
+from lasa.world.instructions import DISPLAY_NAMES
 
 if TYPE_CHECKING:
     from lasa.live.web.app import Study
@@ -378,7 +379,7 @@ def tick(trial: Session, sample: StickSample) -> dict[str, Any]:
         "step": trial.steps,
         "q": [float(v) for v in rec["s"]],
         "belief": [float(v) for v in rec["b"]],
-        "goals": list(station.task.goal_names),
+        "goals": [DISPLAY_NAMES[g] for g in station.task.goal_names],  # as the labels name them
         "instruction": station.phase_text(),
         "late": trial.misses,
         "stop": bool(rec["stop"]),
