@@ -41,7 +41,8 @@ STUDY = ["10_eating_task", "11_eating_study"]  # the eating study: the Panda onl
 
 def _sessions(out: Path) -> Path:
     """Teleoperation sessions as the kit logs them: 2 participants x 4 conditions, scripted
-    Dessert inputs, and their questionnaires; with notebook 10's decoder."""
+    Dessert inputs, their questionnaires (Likert, NASA-TLX) and demographics; with notebook 10's decoder."""
+    from lasa.live.answers import record_demographics, record_tlx
     from lasa.live.devices import ScriptedDevice
     from lasa.live.session import open_log
     from lasa.live.station import SessionConfig, Station
@@ -64,6 +65,14 @@ def _sessions(out: Path) -> Path:
                 condition,
                 [6, 6, 5, 6, 7] if condition == "LA+SA" else [3 + i, 4, 3, 4, 3],
             )
+            # the web study's NASA-TLX: LA+SA the least demanding on every subscale
+            record_tlx(
+                folder,
+                participant,
+                condition,
+                [20 + 5 * i] * 6 if condition == "LA+SA" else [60, 55, 50, 65, 70, 45 + 5 * k],
+            )
+        record_demographics(folder, participant, {"age": "25-34", "handedness": ("right-handed", "both")[i]})
     return folder
 
 
@@ -498,6 +507,13 @@ def test_study_notebook_reads_logged_sessions(executed):
     assert list(sa.measure) == ["goal_error", "mean_distance"] and (sa.df2 == 1).all()
     likert = pd.read_csv(fig / "sessions_likert.csv")
     assert len(likert) == 5 * 3 and (likert["diff"] > 0).all()  # LA+SA rated higher on every scale
+    tlx = pd.read_csv(fig / "sessions_tlx.csv")  # the raw TLX and its six subscales, LA+SA against the others
+    assert len(tlx) == 7 * 3 and (tlx["diff"] < 0).all() and (tlx.df == 1).all()
+    raw = tlx[(tlx.scale == "raw") & (tlx.b == "R")].iloc[0]
+    assert raw.mean_a == 22.5 and raw.mean_b == 57.5  # (20 + 25) / 2; (345 / 6 + 345 / 6) / 2
+    demographics = pd.read_csv(fig / "sessions_demographics.csv").set_index(["item", "answer"])["count"]
+    assert demographics[("age", "25-34")] == 2 and demographics[("handedness", "both")] == 1
+    assert demographics[("gender", "prefer not to say")] == 0
     cells = json.loads((executed / "notebooks" / "11_eating_study.ipynb").read_text())["cells"]
     (cell,) = [c for c in cells if "people_claims(people)" in "".join(c["source"])]
     shown = "".join("".join(o.get("data", {}).get("text/plain", "")) for o in cell["outputs"])

@@ -62,6 +62,13 @@ def connect(app, token, headers=ORIGIN):
         yield ws
 
 
+def agree(ws):
+    """Consent, and skip the optional demographics that follow on a participant's first visit."""
+    ws.send_json({"type": "consent"})
+    assert ws.receive_json()["kind"] == "demographics"
+    ws.send_json({"type": "demographics", "skip": True})
+
+
 def refused(app, token, headers=ORIGIN):
     """Why a connection with ``token`` is refused: "origin" (403, before it opens), the server's
     reason (a ``refused`` message, then close 1008), or None if it was not refused."""
@@ -136,7 +143,7 @@ def test_a_token_is_its_own_participants_only_and_ends_with_the_schedule(study):
         with app.websocket_connect("/ws?participant=p00", headers=ORIGIN) as ws:
             ws.send_json({"type": "hello", "token": tokens["p01"], "participant": "p00"})
             assert ws.receive_json()["kind"] == "consent"
-            ws.send_json({"type": "consent"})
+            agree(ws)
             assert ws.receive_json()["kind"] == "practice"
     assert Progress(sessions).of("p01")["consented"] and not Progress(sessions).of("p00")["consented"]
     assert {p for p in set(files(sessions)) - set(before) if p.parts[0] != "study"} == set()
@@ -244,7 +251,7 @@ def test_a_browser_drives_a_trial_logged_as_teleop_logs_it(study):
     with client(sessions, show_belief=True) as app:
         with connect(app, tokens["p00"]) as ws:
             ws.receive_json()
-            ws.send_json({"type": "consent"})
+            agree(ws)
             assert ws.receive_json() | {"limit_s": 0} == {
                 "type": "phase", "kind": "practice", "label": "A", "task": "Dessert",
                 "index": 1, "total": 16, "limit_s": 0,
@@ -354,7 +361,7 @@ def test_the_survey_is_stored_as_the_terminal_survey_stores_it(study):
             assert msg["kind"] == "survey" and len(msg["questions"]) == 5
             ws.send_json({"type": "survey", "answers": [9, 1, 1, 1, 1]})
             assert ws.receive_json()["type"] == "error"
-            ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3]})
+            ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3], "tlx": [50, 40, 30, 20, 10, 0]})
             assert ws.receive_json()["label"] == "B"  # R+SA, p00's second condition
     likert = read_likert(sessions)
     assert list(likert.answer) == [7, 6, 5, 4, 3] and set(likert.condition) == {"R"}
@@ -387,8 +394,9 @@ def served(config):
 
 
 @contextlib.contextmanager
-def chromium():
-    """Headless Chromium; WebGL through its software renderer (SwiftShader), as on a machine without a GPU."""
+def chromium(*extra):
+    """Headless Chromium; WebGL through its software renderer (SwiftShader), as on a machine without a GPU;
+    ``extra``: more command-line switches."""
     from selenium import webdriver
     from selenium.webdriver.chrome.options import Options
     from selenium.webdriver.chrome.service import Service
@@ -399,6 +407,8 @@ def chromium():
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader"):
         options.add_argument(arg)
     options.add_argument("--window-size=1100,800")
+    for arg in extra:
+        options.add_argument(arg)
     options.binary_location = binary
     browser = webdriver.Chrome(options=options, service=Service(driver))
     try:
@@ -416,10 +426,28 @@ def consent_and_start(browser, url):
     browser.get(url)
     wait_for(lambda: browser.find_element(By.ID, "agree").is_displayed())
     browser.find_element(By.ID, "agree").click()
+    wait_for(lambda: browser.find_element(By.ID, "demographics-skip").is_displayed())
+    browser.find_element(By.ID, "demographics-skip").click()
     wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
     assert browser.find_element(By.ID, "intro-title").text == "Practice: way A"  # never a code
+    stick_check(browser)
     browser.find_element(By.ID, "start").click()
     ActionChains(browser).key_down(Keys.ARROW_RIGHT).key_down(Keys.ARROW_UP).perform()
+
+
+def stick_check(browser):
+    """The check before the first practice: Start is disabled until each arrow key has been held."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+
+    start = browser.find_element(By.ID, "start")
+    for n, key in enumerate((Keys.ARROW_LEFT, Keys.ARROW_RIGHT, Keys.ARROW_UP, Keys.ARROW_DOWN)):
+        assert not start.is_enabled()
+        ActionChains(browser).key_down(key).perform()
+        wait_for(lambda n=n: len(browser.find_elements(By.CSS_SELECTOR, "#check .reached")) == n + 1)
+        ActionChains(browser).key_up(key).perform()
+    wait_for(start.is_enabled)
 
 
 def belief_shown(browser):
@@ -556,7 +584,7 @@ def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(
         assert files(sessions) == before
         with connect(app, tokens["p00"]) as ws:
             ws.receive_json()
-            ws.send_json({"type": "consent"})
+            agree(ws)
             assert ws.receive_json()["kind"] == "practice"
             ws.send_json({"type": "start"})
             labelled = ws.receive_json()  # the goals' names and their places on the picture
@@ -695,6 +723,12 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
         consent_and_start(browser, f"http://127.0.0.1:{port}/study#token={tokens[who]}")  # the practice
         wait_for(lambda: ticks_seen(browser) >= 5, timeout=60)
         end_practice(browser)
+        # a gamepad the browser cannot read in the standard layout is not used, and the page says so
+        fake = "[{connected: true, mapping: '', id: 'Odd pad', axes: [1, 1], buttons: []}]"
+        browser.execute_script(f"navigator.getGamepads = () => {fake};")
+        wait_for(lambda: browser.find_element(By.ID, "pad-notice").is_displayed())
+        browser.execute_script("navigator.getGamepads = () => [];")
+        wait_for(lambda: not browser.find_element(By.ID, "pad-notice").is_displayed())
         for _task in ("Entree", "Dessert"):  # each trial ends at its 2 s limit, keys held
             browser.find_element(By.ID, "start").click()
             ActionChains(browser).key_down(Keys.ARROW_LEFT).perform()
@@ -704,7 +738,7 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
             ActionChains(browser).key_up(Keys.ARROW_LEFT).perform()
         next_step(browser, "survey")
         for question in browser.find_elements(By.CSS_SELECTOR, "#survey-form .question"):
-            question.find_elements(By.CSS_SELECTOR, "input")[4].click()  # 5 of 7 on every scale
+            question.find_elements(By.CSS_SELECTOR, "input")[4].click()  # 5 of 7; 20 of 100 on the TLX
         browser.find_element(By.ID, "submit").click()
         wait_for(lambda: browser.find_element(By.ID, "intro").is_displayed(), timeout=30)
     (dessert,) = sessions.glob(f"{who}_Dessert_LA+SA_*.csv")
@@ -725,6 +759,9 @@ def test_a_real_browser_takes_part_practice_la_sa_dessert_and_survey(tmp_path, d
     likert = pd.read_csv(sessions / "likert.csv", dtype={"participant": str})
     mine = likert[(likert.participant == who) & (likert.condition == "LA+SA")]
     assert len(mine) > 0 and (mine.answer == 5).all()
+    tlx = pd.read_csv(sessions / "tlx.csv", dtype={"participant": str})  # the fifth of 0, 5, ..., 100
+    assert len(tlx) == 6 and (tlx.value == 20).all() and set(tlx.participant) == {who}
+    assert meta["device"] == {"kind": "keyboard"}
 
 
 @contextlib.contextmanager
@@ -760,6 +797,8 @@ async def _at_practice(port: int, token: str):
         await ws.send(json.dumps({"type": "hello", "token": token}))
         assert json.loads(await ws.recv())["kind"] == "consent"
         await ws.send(json.dumps({"type": "consent"}))
+        assert json.loads(await ws.recv())["kind"] == "demographics"
+        await ws.send(json.dumps({"type": "demographics", "skip": True}))
         assert json.loads(await ws.recv())["kind"] == "practice"
         yield ws
 
@@ -834,6 +873,7 @@ def test_no_token_nor_ip_reaches_the_servers_log_or_any_file_but_the_links(tmp_p
         f"participant {who}: trial Entree, way A (",
         "interrupted after 3 steps: a newer page",
         "0 session(s) left running",
+        "EXAMPLE consent text",  # no --consent: the server says the page shows the example
     ):
         assert line in mine, line
     written = [p for p in sessions.rglob("*") if p.is_file() and p != study_dir(sessions) / "links.csv"]
@@ -855,10 +895,11 @@ def test_participants_see_letters_not_condition_codes_and_no_belief_by_default(s
     seen = []
     with client(sessions, practice_s=90.0, trial_s=45.0) as app, connect(app, tokens["p01"]) as ws:
         seen.append(ws.receive_json())
-        ws.send_json({"type": "consent"})
+        agree(ws)
         seen.append(ws.receive_json())
         ticks, _ = drive(ws, ticks=3)
     consent, practice = seen
+    assert consent.pop("html") and consent.pop("webgl") is False  # the consent text: test_web_study.py
     assert consent == {
         "type": "phase", "kind": "consent", "practice_s": 90.0, "trial_s": 45.0, "conditions": 4,
         "longest_min": round(4 * (90 + 2 * 45 + 120) / 60),
@@ -913,7 +954,7 @@ def test_a_step_the_server_cannot_run_shows_the_page_no_server_path(study):
     who = next(p for p in sorted(tokens) if plan_of(sessions, p)[0].condition.startswith("LA"))
     with client(sessions, build_dir=str(sessions / "no-decoders")) as app, connect(app, tokens[who]) as ws:
         ws.receive_json()
-        ws.send_json({"type": "consent"})
+        agree(ws)
         assert ws.receive_json()["kind"] == "practice"
         ws.send_json({"type": "start"})
         msg = ws.receive_json()
@@ -1115,7 +1156,7 @@ def test_a_real_browser_says_what_happened_and_recovers_from_a_restart(tmp_path,
         with cli_server(sessions, decoder_build, log, port=port):
             wait_for(lambda: not browser.find_element(By.ID, "notice").is_displayed(), timeout=30)
             browser.find_element(By.ID, "agree").click()
-            wait_for(lambda: browser.find_element(By.ID, "start").is_displayed())
+            wait_for(lambda: browser.find_element(By.ID, "demographics-skip").is_displayed())
     assert Progress(sessions).of("p00")["consented"]
 
 
@@ -1157,7 +1198,7 @@ def test_every_error_a_participant_can_get_is_plain_and_a_repeat_survey_goes_on(
     with client(sessions, build_dir=str(sessions / "no-decoders")) as app:
         with connect(app, tokens[who_la]) as ws:  # the LA decoder is missing
             ws.receive_json()
-            ws.send_json({"type": "consent"})
+            agree(ws)
             assert ws.receive_json()["kind"] == "practice"
             ws.send_json({"type": "start"})
             said.append(ws.receive_json())
@@ -1171,7 +1212,7 @@ def test_every_error_a_participant_can_get_is_plain_and_a_repeat_survey_goes_on(
                 "survey",
                 lambda *a: (_ for _ in ()).throw(OSError(f"{sessions}/likert.csv: disk full")),
             )
-            ws.send_json({"type": "survey", "answers": [4, 4, 4, 4, 4]})
+            ws.send_json({"type": "survey", "answers": [4, 4, 4, 4, 4], "tlx": [50] * 6})
             said.append(ws.receive_json())
             monkeypatch.setattr(conversation, "survey", real)
             ws.send_json({"type": "input", "axes": "--overwrite /etc/passwd"})
@@ -1183,7 +1224,7 @@ def test_every_error_a_participant_can_get_is_plain_and_a_repeat_survey_goes_on(
         survey(sessions, "p01", plan_of(sessions, "p01")[3].condition, [5] * 5)  # stored; the crash came next
         with connect(app, tokens["p01"]) as ws:
             assert ws.receive_json()["kind"] == "survey"
-            ws.send_json({"type": "survey", "answers": [2] * 5})  # a repeat submit: passed through
+            ws.send_json({"type": "survey", "answers": [2] * 5, "tlx": [50] * 6})  # a repeat: passed through
             after = ws.receive_json()
             assert after["kind"] == "practice" and after["label"] == "B"
     assert [m.get("message") for m in said[:3]] == [

@@ -17,17 +17,12 @@ from lasa.base.conditions import parse as parse_condition
 from lasa.base.config import NO_ASSISTANCE, TRIAL_LIMIT_S
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.io import locked
+from lasa.evidence.questionnaire import DEMOGRAPHICS, LIKERT, TLX_SUBSCALES
 from lasa.evidence.sessionlog import read_session
 from lasa.world.fork import tip_frames
 from lasa.world.record import Episodes
 
-QUESTIONS = {  # the 7-point Likert questionnaire after each condition: scale -> statement
-    "Easy": "It was easy to complete the tasks with this robot.",
-    "Helpful": "The robot was helpful.",
-    "Precise": "I could make precise motions.",
-    "Intuitive": "The robot was intuitive to control.",
-    "Prefer": "I would use this condition again.",
-}
+QUESTIONS = LIKERT  # the 7-point Likert questionnaire after each condition: scale -> statement
 SCALES = tuple(QUESTIONS)
 PRACTICE_TASK = "Dessert"  # practice on the harder task; its logs go to <sessions>/practice/, never analysed
 
@@ -36,6 +31,35 @@ def read_likert(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
     """The questionnaire answers saved in ``folder``, or None if there are none."""
     path = Path(folder) / "likert.csv"
     return pd.read_csv(path, dtype={"participant": str}) if path.is_file() else None
+
+
+def read_tlx(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
+    """The NASA-TLX ratings saved in ``folder`` (participant, condition, subscale, value), with each
+    participant's and condition's raw TLX (the mean of the six subscales) as subscale ``raw``; None if
+    there are none."""
+    path = Path(folder) / "tlx.csv"
+    if not path.is_file():
+        return None
+    tlx = pd.read_csv(path, dtype={"participant": str})
+    tlx = tlx[tlx.subscale.isin(TLX_SUBSCALES)]
+    raw = tlx.groupby(["participant", "condition"], sort=False).value.mean().reset_index()
+    return pd.concat([tlx, raw.assign(subscale="raw")[tlx.columns]], ignore_index=True)
+
+
+def read_demographics(folder: str | os.PathLike[str]) -> pd.DataFrame | None:
+    """The optional demographics saved in ``folder`` (participant, item, answer), or None."""
+    path = Path(folder) / "demographics.csv"
+    return pd.read_csv(path, dtype=str, keep_default_na=False) if path.is_file() else None
+
+
+def demographics_counts(answers: pd.DataFrame) -> pd.DataFrame:
+    """How many participants gave each answer to each item (item, answer, count), in the form's order."""
+    rows = [
+        (item, answer, int(((answers.item == item) & (answers.answer == answer)).sum()))
+        for item, choices in DEMOGRAPHICS.items()
+        for answer in choices
+    ]
+    return pd.DataFrame(rows, columns=["item", "answer", "count"])
 
 
 # The largest share of a trial's ticks without the participant's input (a frozen tab, a lost network)
@@ -200,6 +224,12 @@ def likert_tests(answers: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(out, ignore_index=True)
 
 
+def tlx_tests(ratings: pd.DataFrame) -> pd.DataFrame:
+    """The raw TLX and each subscale: LA+SA against each other condition, as :func:`likert_tests` (paired t,
+    Holm); ``scale`` names the subscale (``raw``: the mean of the six)."""
+    return likert_tests(ratings.rename(columns={"subscale": "scale", "value": "answer"}))
+
+
 def complete_participants(
     frame: pd.DataFrame, test: str, by_task: bool = True
 ) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -221,9 +251,11 @@ def complete_participants(
 
 def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.DataFrame]:
     """People's sessions through the simulated cohort's measures and statistics: the tidy measure tables,
-    ``means`` per condition, ``sa_effect``, ``time_tests`` and ``likert`` (over participants who did
-    every condition), ``left_out``, ``dropped`` and ``limit`` (one row: ``limit_s``, the shortest trial
-    limit of the sessions read, H3's horizon in :func:`lasa.evidence.hypotheses.people_claims`)."""
+    ``means`` per condition, ``sa_effect``, ``time_tests``, ``likert`` and ``tlx`` (over participants who
+    did every condition; ``tlx`` when ``tlx.csv`` is there), ``demographics`` (counts, when
+    ``demographics.csv`` is there), ``left_out``, ``dropped`` and ``limit`` (one row: ``limit_s``, the
+    shortest trial limit of the sessions read, H3's horizon in
+    :func:`lasa.evidence.hypotheses.people_claims`)."""
     from lasa.evidence import stats
     from lasa.world.measures import measures
 
@@ -256,6 +288,15 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
         dropped = pd.concat([dropped, dropped_likert], ignore_index=True)
         if answers.participant.nunique() >= 2:
             out["likert"] = likert_tests(answers)
+    ratings = read_tlx(folder)
+    if ratings is not None:
+        ratings, dropped_tlx = complete_participants(ratings, "tlx", by_task=False)
+        dropped = pd.concat([dropped, dropped_tlx], ignore_index=True)
+        if ratings.participant.nunique() >= 2:
+            out["tlx"] = tlx_tests(ratings)
+    demographics = read_demographics(folder)
+    if demographics is not None:
+        out["demographics"] = demographics_counts(demographics)
     out["dropped"] = dropped
     for row in dropped.itertuples():
         warnings.warn(f"left out participant {row.participant} from {row.test}: {row.reason}", stacklevel=2)

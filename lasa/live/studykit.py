@@ -12,8 +12,9 @@ import pandas as pd
 
 from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
-from lasa.base.io import locked, write_csv
+from lasa.base.io import write_csv
 from lasa.evidence.sessions import QUESTIONS, SCALES, read_likert
+from lasa.live.answers import record
 
 MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the kit runs
 
@@ -81,35 +82,33 @@ def survey(
     overwrite: bool = False,
 ) -> Path:
     """Record ``participant``'s ``answers`` (one in 1..7 per scale, ``6`` or ``"6"``; None: asked) after
-    ``condition`` in ``<folder>/likert.csv``; ``overwrite`` replaces answers recorded before."""
+    ``condition`` in ``<folder>/likert.csv``; ``overwrite`` replaces answers recorded before, and the same
+    answers recorded before pass."""
     if condition not in CONDITIONS:
         raise ConfigError(f"unknown condition {condition!r}; choose one of {CONDITIONS}")
     path = Path(folder) / "likert.csv"
-    _others(path, participant, condition, overwrite)  # before asking: refused answers would be lost
     if answers is None:
+        _others(path, participant, condition, overwrite)  # before asking: refused answers would be lost
         answers = ask(participant, condition)
     values = [parse_answer(a) for a in answers]
     if len(values) != len(SCALES):
         raise ConfigError(f"give {len(SCALES)} answers in 1..7 ({', '.join(SCALES)}), got {answers}")
-    path.parent.mkdir(parents=True, exist_ok=True)
     new = pd.DataFrame(
         {"participant": participant, "condition": condition, "scale": SCALES, "answer": values}
     )
-    with locked(path.parent):
-        old = _others(path, participant, condition, overwrite)  # again: another survey may have answered
-        write_csv(path, new if old is None else pd.concat([old, new], ignore_index=True))
-    return path
+    # the same answers again pass (a server that crashed before its progress step asks again)
+    return record(path, new, {"participant": participant, "condition": condition}, overwrite)
 
 
-def _others(path: Path, participant: str, condition: str, overwrite: bool) -> pd.DataFrame | None:
-    """The answers in ``path`` but ``participant``'s for ``condition`` (those only if ``overwrite``)."""
+def _others(path: Path, participant: str, condition: str, overwrite: bool) -> None:
+    """A ConfigError if ``path`` holds ``participant``'s answers for ``condition`` (and not ``overwrite``)."""
     old = read_likert(path.parent)
-    if old is None:
-        return None
-    mine = (old.participant == participant) & (old.condition == condition)
-    if mine.any() and not overwrite:
+    if (
+        old is not None
+        and not overwrite
+        and ((old.participant == participant) & (old.condition == condition)).any()
+    ):
         raise ConfigError(
             f"{participant} answered for {condition} already in {path}: "
             "pass --overwrite to replace those answers"
         )
-    return old[~mine]

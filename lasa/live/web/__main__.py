@@ -1,8 +1,10 @@
-"""Command line of the web study: ``serve`` (the default) and ``schedule``.
+"""Command line of the web study: ``serve`` (the default), ``schedule``, ``consent-template``, ``withdraw``
+and ``export``.
 
 ``--port 8000 --sessions build/sessions [--host H] [--log FILE]`` serves the study; ``schedule --participants
 12 --url http://...`` writes the schedule and one link per participant (pre-registration:
-lasa.experiments.study)."""
+lasa.experiments.study); ``consent-template --out FILE`` the consent text to start from; ``withdraw
+--participant p03`` deletes one participant's data; ``export --out FILE.zip`` archives the data to share."""
 
 from __future__ import annotations
 
@@ -21,6 +23,10 @@ if TYPE_CHECKING:
 
 DEFAULT_HOST = "127.0.0.1"
 LOG = logging.getLogger("lasa.live.web")
+EXAMPLE_CONSENT = (
+    "no --consent given: participants read the package's EXAMPLE consent text, with its [bracketed] parts "
+    "unfilled; write your own with `python -m lasa.live.web consent-template --out consent.md`"
+)
 TLS_HINT = (
     "serving on {host} without TLS: put a reverse proxy that terminates HTTPS in front "
     "(e.g. Caddy: `caddy reverse-proxy --from study.example.org --to {host}:{port}`), and pass "
@@ -112,6 +118,7 @@ def _serve(argv: list[str]) -> int:
     parser.add_argument(
         "--log-level", default="info", choices=("debug", "info", "warning", "error"), help="[%(default)s]"
     )
+    _study_options(parser)
     args = parser.parse_args(argv)
     host = args.host or DEFAULT_HOST
     settings = {f.name: getattr(args, f.name, None) for f in dataclasses.fields(WebConfig)}
@@ -123,6 +130,8 @@ def _serve(argv: list[str]) -> int:
         "checked: every step of %s can run; %d session(s) left running closed as interrupted; log: %s",
         ", ".join(conditions), len(repaired), log,
     )  # fmt: skip
+    if not config.consent:
+        LOG.warning(EXAMPLE_CONSENT)
     app = create_app(config)
     # one participant's step at a time decodes one row: torch's own threads only contend with the
     # event loop's thread for the machine's cores (the load test measured it)
@@ -147,12 +156,76 @@ def _serve(argv: list[str]) -> int:
     return 0
 
 
+def _study_options(parser: argparse.ArgumentParser) -> None:
+    """The lab's own study: its consent text and what the thank-you page gives."""
+    parser.add_argument(
+        "--consent",
+        default="",
+        help="the consent text (Markdown; `consent-template` writes one to start from)",
+    )
+    parser.add_argument(
+        "--completion-code", default="", help="a code the thank-you page shows (e.g. Prolific's)"
+    )
+    parser.add_argument(
+        "--completion-url", default="", help="a link the thank-you page gives back to the recruiter"
+    )
+
+
+def _consent_template(argv: list[str]) -> int:
+    from lasa.live.web.consent import write_template
+
+    parser = argparse.ArgumentParser(prog="python -m lasa.live.web consent-template")
+    parser.add_argument("--out", required=True, help="the Markdown file to write (never replaced)")
+    args = parser.parse_args(argv)
+    print(f"wrote {write_template(args.out)}: fill in the parts in [square brackets], then pass --consent")
+    return 0
+
+
+def _withdraw(argv: list[str]) -> int:
+    from lasa.live.web.withdraw import withdraw
+
+    parser = argparse.ArgumentParser(prog="python -m lasa.live.web withdraw")
+    parser.add_argument("--participant", required=True, help="the id the participant quotes (e.g. p03)")
+    parser.add_argument("--sessions", default="build/sessions", help="the sessions folder [%(default)s]")
+    parser.add_argument("--yes", action="store_true", help="do not ask for confirmation")
+    args = parser.parse_args(argv)
+    if not args.yes:
+        question = f"delete every session and answer of {args.participant} in {args.sessions}? type yes: "
+        if input(question).strip() != "yes":
+            print("nothing deleted")
+            return 1
+    deleted = withdraw(args.sessions, args.participant)
+    print(f"withdrew {args.participant}: deleted {len(deleted)} items; recorded in study/withdrawn.csv")
+    return 0
+
+
+def _export(argv: list[str]) -> int:
+    from lasa.live.web.withdraw import export
+
+    parser = argparse.ArgumentParser(prog="python -m lasa.live.web export")
+    parser.add_argument("--sessions", default="build/sessions", help="the sessions folder [%(default)s]")
+    parser.add_argument("--out", required=True, help="the zip file to write")
+    args = parser.parse_args(argv)
+    names = export(args.sessions, args.out)
+    print(f"wrote {args.out}: {len(names)} files (tables, session logs, README.md); no tokens or links")
+    return 0
+
+
+COMMANDS = {
+    "schedule": _schedule,
+    "consent-template": _consent_template,
+    "withdraw": _withdraw,
+    "export": _export,
+}
+
+
 def main(argv: list[str] | None = None) -> int:
-    """``schedule ...`` writes the links; anything else serves."""
+    """``schedule``, ``consent-template``, ``withdraw`` or ``export ...``; anything else serves."""
     argv = sys.argv[1:] if argv is None else argv
     pin()  # the renderer and kernels, before the server imports mujoco, numpy and torch
     try:
-        return _schedule(argv[1:]) if argv[:1] == ["schedule"] else _serve(argv)
+        command = COMMANDS.get(argv[0]) if argv else None
+        return command(argv[1:]) if command is not None else _serve(argv)
     except (ConfigError, ArtifactError) as exc:  # a bad setting; npm files missing (make setup)
         print(f"error: {exc}", file=sys.stderr)
         return 2

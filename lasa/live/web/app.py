@@ -30,11 +30,13 @@ from lasa.base.errors import ArtifactError, ConfigError
 from lasa.base.paths import repo_root
 from lasa.evidence.sessionlog import repair_running
 from lasa.live.station import Station
+from lasa.live.web.consent import read_consent
 from lasa.live.web.conversation import Conversation
 from lasa.live.web.frames import FrameRenderer
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.protocol import ProtocolError, parse
 from lasa.live.web.tokens import TokenStore
+from lasa.live.web.withdraw import withdrawn
 from lasa.world.camera import project
 from lasa.world.fork import tip_frames
 from lasa.world.instructions import DISPLAY_NAMES, PICTURE_CAMERA
@@ -77,11 +79,23 @@ class WebConfig:
     frames: str = "browser"  # how the page shows the robot (FRAMES)
     origins: tuple[str, ...] = ()  # page origins allowed besides the server's own (behind a proxy)
     show_belief: bool = False
+    # the lab's own study: its consent text (Markdown; "": the package's example), what the thank-you
+    # page gives (a completion code, a link back to the recruiting site)
+    consent: str = ""
+    completion_code: str = ""
+    completion_url: str = ""
 
     def __post_init__(self) -> None:
         validate(self)
         if self.frames not in FRAMES:
             raise ConfigError(f"frames is one of {FRAMES}, got {self.frames!r}")
+        self._check_completion()
+
+    def _check_completion(self) -> None:
+        if len(self.completion_code) > 64 or not self.completion_code.isprintable():
+            raise ConfigError("a completion code is at most 64 printable characters")
+        if self.completion_url and not self.completion_url.startswith(("https://", "http://")):
+            raise ConfigError(f"a completion URL starts with https://, got {self.completion_url!r}")
 
     def durations(self, conditions: int) -> dict[str, float]:
         """What the consent page states: the longest practice and trial [s], the conditions, and the
@@ -107,6 +121,7 @@ class Study:
         self.scenes: dict[str, Path] = {}  # scene key -> the scene XML of a trial in progress
         self.resume: dict[str, int] = {}  # participant -> the step whose trial the page left: it restarts
         self._labels: list[dict[str, Any]] | None = None  # the goals' places: one scene, one camera
+        self.consent = read_consent(config.consent)  # a bad file fails at start, not in a page
 
     async def admit(self, token: str | None) -> tuple[str | None, str]:
         """(participant, "") for a valid token whose schedule is not done, else (None, the reason:
@@ -114,7 +129,7 @@ class Study:
         :data:`TAKEOVER_S`). The newest page wins: an older one's connection is closed, its trial
         ``interrupted`` (the step runs again as a new attempt)."""
         participant = self.tokens.participant(token)
-        if participant is None:
+        if participant is None or participant in withdrawn(self.config.sessions):
             return None, "invalid"
         older = self.active.get(participant)
         if older is not None:

@@ -19,11 +19,14 @@ from typing import TYPE_CHECKING, Any
 from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
-from lasa.evidence.sessions import QUESTIONS, SCALES, disconnected_flag, read_likert
+from lasa.evidence.questionnaire import page_demographics, page_questions
+from lasa.evidence.sessions import disconnected_flag, read_likert
+from lasa.live.answers import clean_comment, parse_tlx, record_comment, record_demographics, record_tlx
 from lasa.live.devices import StickSample
 from lasa.live.session import Session, open_log
 from lasa.live.station import SessionConfig, Station
-from lasa.live.studykit import survey
+from lasa.live.studykit import parse_answer, survey
+from lasa.live.web.consent import render_consent
 from lasa.live.web.plan import Step, plan_of
 from lasa.live.web.protocol import Inputs, ProtocolError, RateLimit, parse
 from lasa.world.instructions import DISPLAY_NAMES
@@ -49,11 +52,18 @@ REPLACED = 4000
 MESSAGES = {
     "unavailable": "The study cannot go on right now, through no fault of yours. Please tell the person "
     "who sent you the link; you can come back with the same link later.",
-    "answers": "Please answer every question with one of the numbers from 1 to 7.",
+    "answers": "Please answer every question with one of the choices shown, then submit again.",
     "not_saved": "Your answers could not be saved, through no fault of yours. Please try again in a "
     "moment; if this happens again, tell the person who sent you the link.",
 }
 UNAVAILABLE = MESSAGES["unavailable"]
+
+
+FORM_ERROR = MESSAGES["answers"]  # a form (the questionnaire, the demographics) refused: never its detail
+
+
+def _first_line(exc: Exception) -> str:
+    return " ".join(str(exc).split())[:300]
 
 
 class Gone(Exception):
@@ -198,10 +208,10 @@ class Conversation:
         study, participant = self.study, self.participant
         plan = plan_of(study.config.sessions, participant)
         if not study.progress.of(participant)["consented"]:
-            conditions = len({step.condition for step in plan})
-            await self.send({"type": "phase", "kind": "consent"} | study.config.durations(conditions))
-            await self._expect("consent")
-            study.progress.consent(participant)
+            await self._consent(plan)
+        done = study.progress.of(participant)
+        if not done.get("demographics") and int(done["step"]) == 0:  # before the first practice only
+            await self._demographics()
         while not study.progress.finished(participant, plan):
             self._clear()
             index = int(study.progress.of(participant)["step"])
@@ -216,36 +226,74 @@ class Conversation:
             else:
                 limit = study.config.practice_s if step.kind == "practice" else study.config.trial_s
                 await self.send(header | {"limit_s": limit})
-                await self._expect("start")
-                if await self._drive(step, limit) != "complete":
+                device = (await self._expect("start") or {}).get("device")
+                if await self._drive(step, limit, device) != "complete":
                     study.resume[participant] = index
                     raise Gone
             study.progress.count(participant, "step")
-        await self.send({"type": "phase", "kind": "thanks"})
+        await self.send(self._thanks())
         self.why = "the study is finished (close 1000)"
         with contextlib.suppress(Exception):
             await self.ws.close(code=1000)
 
+    async def _consent(self, plan: list[Step]) -> None:
+        """The consent text (the server's HTML, its durations filled in) until the participant agrees; with
+        ``--frames browser`` the page first checks that it can draw the robot (``webgl``)."""
+        config = self.study.config
+        durations = config.durations(len({step.condition for step in plan}))
+        html = render_consent(
+            self.study.consent,
+            durations["practice_s"],
+            durations["trial_s"],
+            int(durations["conditions"]),
+            durations["longest_min"],
+        )
+        webgl = config.frames == "browser"
+        await self.send({"type": "phase", "kind": "consent", "html": html, "webgl": webgl} | durations)
+        await self._expect("consent")
+        self.study.progress.consent(self.participant)
+
+    async def _demographics(self) -> None:
+        """The optional demographics form, once, before the first practice: answered (in part) or skipped."""
+        await self.send({"type": "phase", "kind": "demographics", "items": page_demographics()})
+        while True:
+            msg = await self._expect("demographics")
+            assert msg is not None  # no timeout
+            try:
+                if not msg.get("skip"):
+                    record_demographics(self.study.config.sessions, self.participant, msg.get("answers", {}))
+                break
+            except ConfigError as exc:
+                LOG.warning("participant %s: demographics refused: %s", self.participant, _first_line(exc))
+                await self.send({"type": "error", "message": FORM_ERROR})
+        self.study.progress.mark(self.participant, "demographics")
+
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
-        await self.send(header | {"questions": [{"scale": s, "text": QUESTIONS[s]} for s in SCALES]})
+        """The questionnaire after a way: the Likert items, the TLX and the optional comment, checked whole,
+        then stored (the Likert answers last: stored, they mark the whole form stored); a refused form gets
+        a fixed message, the detail going to the experimenter's log (never the comment)."""
+        await self.send(header | page_questions())
+        folder, who, condition = self.study.config.sessions, self.participant, step.condition
         while True:
             msg = await self._expect("survey")
             assert msg is not None  # no timeout
             if self._answered(step):  # stored before a crash kept the step from being counted: go on
-                LOG.info(
-                    "participant %s: %s answers stored already; going on", self.participant, step.condition
-                )
+                LOG.info("participant %s: %s answers stored already; going on", who, condition)
                 return
-            answers = msg["answers"]
             try:
-                survey(self.study.config.sessions, self.participant, step.condition, answers)
+                parse_tlx(msg.get("tlx", []))  # every part checked before any is written
+                clean_comment(msg.get("comment", ""))
+                for answer in msg["answers"]:
+                    parse_answer(answer)
+                record_tlx(folder, who, condition, msg.get("tlx", []), overwrite=True)  # a form never stored
+                record_comment(folder, who, condition, msg.get("comment", ""), overwrite=True)
+                survey(folder, who, condition, msg["answers"])
                 return
-            except ConfigError as exc:  # the detail is the experimenter's; the page gets plain words
-                bad = len(answers) != len(SCALES) or not all(1 <= a <= 7 for a in answers)
-                LOG.warning("participant %s: survey not stored: %s", self.participant, exc)
-                await self.send({"type": "error", "message": MESSAGES["answers" if bad else "not_saved"]})
+            except ConfigError as exc:
+                LOG.warning("participant %s: questionnaire refused: %s", who, _first_line(exc))
+                await self.send({"type": "error", "message": MESSAGES["answers"]})
             except OSError as exc:
-                LOG.error("participant %s: survey not stored: %s", self.participant, exc)
+                LOG.error("participant %s: questionnaire not stored: %s", who, exc)
                 await self.send({"type": "error", "message": MESSAGES["not_saved"]})
 
     def _answered(self, step: Step) -> bool:
@@ -255,7 +303,19 @@ class Conversation:
             ((old.participant == self.participant) & (old.condition == step.condition)).any()
         )
 
-    async def _drive(self, step: Step, limit_s: float) -> str:
+    def _thanks(self) -> dict[str, Any]:
+        """The thank-you page: the participant's id (to quote in a withdrawal request) and the completion
+        code and link of the recruiting site, if the server has them."""
+        config = self.study.config
+        return {
+            "type": "phase",
+            "kind": "thanks",
+            "participant": self.participant,
+            "code": config.completion_code,
+            "url": config.completion_url,
+        }
+
+    async def _drive(self, step: Step, limit_s: float, device: dict[str, str] | None = None) -> str:
         study, practice = self.study, step.kind == "practice"
         config = SessionConfig("panda", step.task, step.condition, self.participant, study.config.build_dir)
         self.finish = False
@@ -263,7 +323,7 @@ class Conversation:
         attempt = study.progress.count(self.participant, "attempts")
         folder = Path(study.config.sessions, "practice" if practice else "")  # the analysis reads trials only
         try:
-            trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order)
+            trial = await asyncio.to_thread(open_trial, config, folder, attempt, limit_s, step.order, device)
         except (ConfigError, ArtifactError, OSError) as exc:
             # the detail (paths, commands) is the experimenter's, in the server's log; never the page's
             LOG.error("participant %s cannot run %s %s: %s", self.participant, step.task, step.condition, exc)
@@ -350,22 +410,21 @@ several threads fight over the GIL and each takes several times as long (``bench
 
 
 def open_trial(
-    config: SessionConfig, folder: Path, attempt: int, duration_s: float, order: int = 0
+    config: SessionConfig,
+    folder: Path,
+    attempt: int,
+    duration_s: float,
+    order: int = 0,
+    device: dict[str, str] | None = None,
 ) -> Session:
     """A warmed-up station and its new log ``<participant>_<task>_<condition>_<time>_a<attempt>`` (a new name
     for each attempt, its sidecar the limit ``limit_s``); ``order``: the condition's position in the
-    participant's schedule."""
+    participant's schedule; ``device``: the input device the page uses
+    (:func:`lasa.live.web.protocol.device`), in the sidecar."""
     station = Station(config)
     station.warm_up()
-    writer = open_log(
-        station,
-        folder,
-        suffix=f"_a{attempt}",
-        interface="web",
-        attempt=attempt,
-        order=int(order),
-        limit_s=float(duration_s),
-    )
+    meta: dict[str, Any] = dict(interface="web", attempt=attempt, order=int(order), limit_s=float(duration_s))
+    writer = open_log(station, folder, suffix=f"_a{attempt}", **meta, device=device or {"kind": "unknown"})
     return Session(station, writer, max(1, int(round(duration_s / station.control.dt))))
 
 

@@ -14,6 +14,7 @@ import pandas as pd
 from lasa.base.io import write_text
 from lasa.evidence.sessions import PRACTICE_TASK
 from lasa.live.web.tokens import check_participant, study_dir
+from lasa.live.web.withdraw import withdrawn
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,6 +61,11 @@ class Progress:
         self.of(participant)["consented"] = True
         self._save()
 
+    def mark(self, participant: str, key: str) -> None:
+        """Record that the participant has done ``key`` (``demographics``: answered or skipped)."""
+        self.of(participant)[key] = True
+        self._save()
+
     def count(self, participant: str, key: str) -> int:
         """One more ``attempts`` (a session started) or ``step`` (the current one done); the new count."""
         entry = self.of(participant)
@@ -72,4 +78,6 @@ class Progress:
         return int(self.of(participant)["step"]) >= len(plan)
 
     def _save(self) -> None:
-        write_text(self.path, json.dumps(self._state, indent=2, sort_keys=True) + "\n")
+        gone = withdrawn(self.path.parent.parent)  # a withdrawal while the server runs stays done
+        state = {p: entry for p, entry in self._state.items() if p not in gone}
+        write_text(self.path, json.dumps(state, indent=2, sort_keys=True) + "\n")

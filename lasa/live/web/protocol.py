@@ -20,9 +20,11 @@ from lasa.live.web.tokens import MAX_TOKEN_CHARS
 MAX_MESSAGE_BYTES = 4096
 MAX_RATE = 50.0  # messages per second, averaged over a burst of as many
 STALE_S = 0.5  # input older than this reads as disconnected: zero input, never a held command
-# hello (the token, first), consent, start, finish, input (axes, mode, stop), survey (answers), beat (the
-# page's heartbeat, every second in every step) and ready (the trial's picture is drawn: its clock starts)
-KINDS = ("hello", "consent", "start", "finish", "input", "survey", "beat", "ready")
+# hello (the token, first), consent, demographics (answers or skip), start (device), finish, input (axes,
+# mode, stop), survey (answers, tlx, comment), beat (the page's heartbeat, every second in every step) and
+# ready (the trial's picture is drawn: its clock starts)
+KINDS = ("hello", "consent", "demographics", "start", "finish", "input", "survey", "beat", "ready")
+DEVICE_ID_CHARS = 100  # a gamepad's name as the browser reports it: free text, kept this short
 
 
 class ProtocolError(LasaError, ValueError):
@@ -62,7 +64,45 @@ def parse(text: str | bytes | None) -> dict[str, Any]:
         answers = msg.get("answers")
         if not (isinstance(answers, list) and len(answers) <= 16 and all(type(a) is int for a in answers)):
             raise ProtocolError("survey answers are a short list of integers")
+    _check_study(msg)
     return msg
+
+
+def _check_study(msg: dict[str, Any]) -> None:
+    """The questionnaires' and the device's fields: their shapes (their values are the study's to check)."""
+    if msg["type"] == "survey":
+        tlx = msg.get("tlx", [])
+        if not (isinstance(tlx, list) and len(tlx) <= 16 and all(type(v) is int for v in tlx)):
+            raise ProtocolError("survey's tlx is a short list of integers")
+        if not isinstance(msg.get("comment", ""), str):
+            raise ProtocolError("survey's comment is text")
+    if msg["type"] == "demographics":
+        answers = msg.get("answers", {})
+        if not (
+            isinstance(answers, dict)
+            and len(answers) <= 16
+            and all(isinstance(a, str) for a in answers.values())
+        ):
+            raise ProtocolError("demographics answers are a short object of text")
+    if msg["type"] == "start":
+        msg["device"] = device(msg.get("device"))
+
+
+def device(raw: Any) -> dict[str, str]:
+    """The input device a ``start`` names, as its session records it: ``{"kind": "keyboard"}`` or
+    ``{"kind": "gamepad", "id": ..., "mapping": ...}`` (the id and mapping cut to
+    :data:`DEVICE_ID_CHARS` printable characters); a start naming none: ``{"kind": "unknown"}``."""
+    if raw is None:
+        return {"kind": "unknown"}
+    if not isinstance(raw, dict) or raw.get("kind") not in ("keyboard", "gamepad"):
+        raise ProtocolError("start's device is a keyboard or a gamepad")
+    if raw["kind"] == "keyboard":
+        return {"kind": "keyboard"}
+    text = {k: raw.get(k, "") for k in ("id", "mapping")}
+    if not all(isinstance(v, str) for v in text.values()):
+        raise ProtocolError("a gamepad's id and mapping are text")
+    clean = {k: "".join(c for c in v if c.isprintable())[:DEVICE_ID_CHARS] for k, v in text.items()}
+    return {"kind": "gamepad"} | clean
 
 
 def _number(value: Any) -> bool:

@@ -62,13 +62,71 @@ function duration(seconds) {
   return hours === 1 ? "about an hour" : `about ${hours} hours`;
 }
 
+// Whether this browser can draw the robot (--frames browser): a WebGL context, asked before consent.
+function webgl() {
+  try {
+    const canvas = document.createElement("canvas");
+    return !!(canvas.getContext("webgl2") || canvas.getContext("webgl"));
+  } catch (err) {
+    return false;
+  }
+}
+const NO_WEBGL = "This browser cannot run the study: it cannot draw the robot (it has no WebGL). Please open "
+  + "your link in an up-to-date Chrome, Firefox, Edge or Safari, with hardware acceleration turned on in its "
+  + "settings, on a computer rather than a phone.";
+
+// The consent text: the server's HTML of the study's Markdown (raw HTML in it is shown as text).
 function consent(msg) {
-  $("consent-conditions").textContent = ["no", "one", "two", "three", "four", "five", "six"][msg.conditions] || msg.conditions;
-  $("consent-practice").textContent = duration(msg.practice_s);
-  $("consent-trial").textContent = duration(msg.trial_s);
-  $("consent-total").textContent = duration(60 * msg.longest_min);
+  if (msg.webgl && !webgl()) {
+    refused = true; // nothing this page can do: no consent, no reconnection
+    $("status").textContent = "";
+    $("error-text").textContent = NO_WEBGL;
+    return show("error");
+  }
+  $("consent-text").innerHTML = msg.html;
   show("consent");
 }
+
+// The optional questions about the participant, once, before the first practice.
+function demographics(msg) {
+  const form = $("demographics-form");
+  form.replaceChildren(...msg.items.map((item) => {
+    const div = Object.assign(document.createElement("div"), { className: "question" });
+    div.dataset.item = item.item;
+    div.append(Object.assign(document.createElement("p"), { textContent: item.question }));
+    for (const answer of item.answers) {
+      const label = document.createElement("label");
+      const input = Object.assign(document.createElement("input"), { type: "radio", name: item.item, value: answer });
+      label.append(input, ` ${answer}`);
+      div.append(label);
+    }
+    return div;
+  }));
+  show("demographics");
+}
+
+// The stick check before the first practice: each of the four directions, shown as it is reached.
+const reached = new Set();
+let checking = false;
+function startCheck() {
+  reached.clear();
+  for (const span of document.querySelectorAll("#check [data-dir]")) span.classList.remove("reached");
+  checking = true;
+  $("check").hidden = false;
+  $("start").disabled = true;
+}
+setInterval(() => {
+  if ($("intro").hidden) return;
+  if (!checking) { gamepad(); return; } // a pad plugged in now: said at once if it cannot be used
+  const [x, y] = stick().axes;
+  const now = { left: x < -0.5, right: x > 0.5, up: y > 0.5, down: y < -0.5 };
+  for (const dir in now) {
+    if (!now[dir]) continue;
+    reached.add(dir);
+    document.querySelector(`#check [data-dir="${dir}"]`).classList.add("reached");
+  }
+  if (reached.size === 4) { checking = false; $("start").disabled = false; }
+}, 50);
 
 function phase(msg) {
   driving = false;
@@ -79,9 +137,11 @@ function phase(msg) {
     setTimeout(() => phase(msg), MOMENT_MS);
     return;
   }
+  notice(""); // a new step: a form's message belongs to the step before
   $("status").textContent = msg.index ? `Step ${msg.index} of ${msg.total}` : "";
   if (msg.kind === "consent") return consent(msg);
-  if (msg.kind === "thanks") return show(msg.kind);
+  if (msg.kind === "demographics") return demographics(msg);
+  if (msg.kind === "thanks") return thanks(msg);
   if (msg.kind === "survey") return survey(msg);
   const practice = msg.kind === "practice";
   // the condition's letter in this participant's order, never its code (a blind protocol)
@@ -90,26 +150,55 @@ function phase(msg) {
     ? `Get to know way ${msg.label} of controlling the robot, for up to ${duration(msg.limit_s)}. End the practice when you are ready.`
     : `Feed the ${msg.task.toLowerCase()} following the instruction at the top of the screen (at most ${duration(msg.limit_s)}).`;
   $("ready").hidden = !practice;
+  checking = false;
+  $("check").hidden = true;
+  $("start").disabled = false;
+  if (practice && msg.index === 1) startCheck();
   show("intro");
   if (msg.resume) startDriving(); // the page left this trial (a reload, a lost network): on again by itself
 }
 
+// The thank-you page: the participant's id (for a withdrawal), the recruiter's completion code and link.
+function thanks(msg) {
+  $("participant").textContent = msg.participant || "";
+  $("completion-code").textContent = msg.code || "";
+  $("completion").hidden = !msg.code;
+  if (msg.url) $("completion-url").href = msg.url;
+  $("completion-link").hidden = !msg.url;
+  show("thanks");
+}
+
+// One question of radio buttons: values, each labelled, with the words at its two ends.
+function scale(name, text, values, low, high, className) {
+  const div = Object.assign(document.createElement("div"), { className: `question ${className}` });
+  div.dataset.name = name;
+  div.append(Object.assign(document.createElement("p"), { textContent: text }));
+  const points = Object.assign(document.createElement("div"), { className: "points" });
+  for (const v of values) {
+    const label = Object.assign(document.createElement("label"), { title: `${v}` });
+    label.append(Object.assign(document.createElement("input"), { type: "radio", name, value: v }));
+    if (className === "likert") label.append(` ${v}`);
+    points.append(label);
+  }
+  div.append(points);
+  const ends = Object.assign(document.createElement("div"), { className: "ends" });
+  ends.append(Object.assign(document.createElement("span"), { textContent: low }),
+    Object.assign(document.createElement("span"), { textContent: high }));
+  div.append(ends);
+  return div;
+}
+
 function survey(msg) {
   $("survey-title").textContent = `About way ${msg.label}, which you just used`;
-  const form = $("survey-form");
-  form.replaceChildren();
-  for (const q of msg.questions) {
-    const div = document.createElement("div");
-    div.className = "question";
-    div.append(Object.assign(document.createElement("p"), { textContent: q.text }));
-    for (let v = 1; v <= 7; v++) {
-      const label = document.createElement("label");
-      const input = Object.assign(document.createElement("input"), { type: "radio", name: q.scale, value: v });
-      label.append(input, ` ${v}`);
-      div.append(label);
-    }
-    form.append(div);
-  }
+  const [low, high] = msg.likert_anchors;
+  $("likert-anchors").textContent = `1 = ${low} … 7 = ${high}`;
+  $("likert").replaceChildren(...msg.questions.map((q) =>
+    scale(q.scale, q.text, [1, 2, 3, 4, 5, 6, 7], `1 = ${low}`, `7 = ${high}`, "likert")));
+  const tlxValues = [];
+  for (let v = 0; v <= 100; v += msg.tlx_step) tlxValues.push(v);
+  $("tlx").replaceChildren(...msg.tlx.map((q) => scale(`tlx-${q.name}`, q.question, tlxValues, q.low, q.high, "tlx")));
+  $("comment").value = "";
+  $("comment").maxLength = msg.comment_chars;
   show("survey");
 }
 
@@ -177,7 +266,7 @@ function stick() {
   let x = (keys.right ? 1 : 0) - (keys.left ? 1 : 0);
   let y = (keys.up ? 1 : 0) - (keys.down ? 1 : 0);
   let stop = keyStop, mode = modePress;
-  const pad = navigator.getGamepads ? [...navigator.getGamepads()].find((p) => p && p.connected) : null;
+  const pad = gamepad();
   if (pad) {
     const ax = pad.axes[0] || 0, ay = -(pad.axes[1] || 0);
     if (Math.abs(ax) >= DEADZONE) x = ax;
@@ -191,6 +280,21 @@ function stick() {
   return { type: "input", axes: [x, y], mode, stop };
 }
 
+// The gamepad in use: a connected one the browser reads in the standard layout (any other is not used,
+// and the page says so).
+function gamepad() {
+  const pads = navigator.getGamepads ? [...navigator.getGamepads()].filter((p) => p && p.connected) : [];
+  const pad = pads.find((p) => p.mapping === "standard") || null;
+  $("pad-notice").hidden = !(pads.length && !pad);
+  return pad;
+}
+
+// What the session records of the device in use: the keyboard, or the gamepad's name and layout.
+function device() {
+  const pad = gamepad();
+  return pad ? { kind: "gamepad", id: pad.id.slice(0, 100), mapping: pad.mapping } : { kind: "keyboard" };
+}
+
 setInterval(() => {
   if (driving) send(stick());
 }, 1000 / SEND_HZ);
@@ -198,7 +302,7 @@ setInterval(() => send({ type: "beat" }), BEAT_MS); // a frozen tab sends none: 
 
 const KEYS = { ArrowLeft: "left", ArrowRight: "right", ArrowUp: "up", ArrowDown: "down" };
 document.addEventListener("keydown", (e) => {
-  if (!driving) return;
+  if (!driving && !checking) return;
   if (KEYS[e.key]) keys[KEYS[e.key]] = true;
   else if (e.key === "m" || e.key === "M") modePress = true;
   else if ((e.key === "s" || e.key === "S" || e.key === " ") && !e.repeat) keyStop = !keyStop;
@@ -215,22 +319,32 @@ function startDriving() {
   for (const k in keys) keys[k] = false;
   keyStop = false;
   driving = true;
+  checking = false;
   lastTick = null;
   $("instruction").textContent = "Loading the robot…"; // the clock starts once the picture is there
   $("left").textContent = "";
   show("drive");
-  send({ type: "start" });
+  send({ type: "start", device: device() });
 }
 $("start").onclick = startDriving;
 $("ready").onclick = () => send({ type: "finish" });
 $("submit").onclick = () => {
-  const answers = [...$("survey-form").querySelectorAll(".question")].map((q) => {
-    const checked = q.querySelector("input:checked");
-    return checked ? Number(checked.value) : 0;
-  });
-  if (answers.includes(0)) { alert("Please answer every question."); return; }
-  send({ type: "survey", answers });
+  const chosen = (q) => { const c = q.querySelector("input:checked"); return c ? Number(c.value) : null; };
+  const answers = [...document.querySelectorAll("#likert .question")].map(chosen);
+  const tlx = [...document.querySelectorAll("#tlx .question")].map(chosen);
+  if (answers.includes(null) || tlx.includes(null)) { notice("Please answer every question (the comment is optional)."); return; }
+  notice("");
+  send({ type: "survey", answers, tlx, comment: $("comment").value });
 };
+$("demographics-submit").onclick = () => {
+  const answers = {};
+  for (const q of document.querySelectorAll("#demographics-form .question")) {
+    const c = q.querySelector("input:checked");
+    if (c) answers[q.dataset.item] = c.value;
+  }
+  send({ type: "demographics", answers });
+};
+$("demographics-skip").onclick = () => send({ type: "demographics", skip: true });
 
 function received(event) {
   if (typeof event.data !== "string") return frame(event.data);
