@@ -64,11 +64,12 @@ def panda_model(panda_task: CupTask):
 # after them, so that no long file starts last while the other worker sits idle. Only the order of
 # whole files changes; each file's tests keep theirs.
 SLOWEST_FILES = (
-    "test_notebooks.py", "test_bench.py", "test_web.py", "test_figure_titles.py", "test_teleop.py",
-    "test_docs.py", "test_robustness.py", "test_study_claims.py", "test_study_power.py",
-    "test_notebook_caps.py", "test_timings.py", "test_makedeps.py", "test_demos.py", "test_video.py",
-    "test_init.py", "test_entropy.py", "test_planning.py", "test_verdicts.py", "test_preregister.py",
-    "test_runtime.py", "test_rollback.py", "test_verify.py", "test_sim1_to_sim3.py",
+    "test_notebooks.py", "test_bench.py", "test_web.py", "test_teleop.py", "test_docs.py", "test_franka.py",
+    "test_study_claims.py", "test_study_power.py", "test_figure_titles.py", "test_robustness.py",
+    "test_notebook_caps.py", "test_video.py", "test_demos.py", "test_init.py", "test_entropy.py",
+    "test_web_study.py", "test_runtime.py", "test_franka_kinematics.py", "test_preregister.py",
+    "test_planning.py", "test_kinesthetic.py", "test_timings.py", "test_makedeps.py", "test_verdicts.py",
+    "test_rollback.py", "test_verify.py", "test_sim1_to_sim3.py",
 )  # fmt: skip
 
 
