@@ -572,6 +572,27 @@ def test_the_npm_packages_are_served_locally_with_their_types(study):
         WebConfig(sessions=str(sessions), frames="gpu")
 
 
+def test_no_step_runs_before_the_page_has_drawn_the_robot(study):
+    """--frames browser: the trial's clock waits for the page's ``ready`` (its picture drawn), even with
+    the stick held: 1.5 s of input before it (15 ticks' worth) logs no row; after it, ticks come."""
+    sessions, tokens = study
+    with client(sessions, frames="browser") as app, connect(app, tokens["p00"]) as ws:
+        ws.receive_json()
+        agree(ws)
+        assert ws.receive_json()["kind"] == "practice"
+        ws.send_json({"type": "start"})
+        assert ws.receive_json()["type"] == "labels" and ws.receive_json()["type"] == "scene"
+        for _ in range(15):
+            ws.send_json({"type": "input", "axes": [0.5, 0.5]})
+            time.sleep(0.1)
+        (part,) = (sessions / "practice").glob("p00_*.csv.part")
+        assert len(part.read_text().splitlines()) <= 1  # at most the header: no step (rows flush every 10)
+        ws.send_json({"type": "ready"})
+        ws.send_json({"type": "input", "axes": [0.5, 0.5]})
+        tick = ws.receive_json()
+        assert tick["type"] == "tick" and tick["step"] == 1
+
+
 def test_the_scene_route_needs_the_trials_key_and_serves_only_the_servers_files(study):
     """The page gets its trial's scene with the meshes under names the server chose; nothing else."""
     sessions, tokens = study
