@@ -282,18 +282,17 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
             ],
             ignore_index=True,
         )
-    answers = read_likert(folder)
-    if answers is not None:
-        answers, dropped_likert = complete_participants(answers, "likert", by_task=False)
-        dropped = pd.concat([dropped, dropped_likert], ignore_index=True)
-        if answers.participant.nunique() >= 2:
-            out["likert"] = likert_tests(answers)
-    ratings = read_tlx(folder)
-    if ratings is not None:
-        ratings, dropped_tlx = complete_participants(ratings, "tlx", by_task=False)
-        dropped = pd.concat([dropped, dropped_tlx], ignore_index=True)
-        if ratings.participant.nunique() >= 2:
-            out["tlx"] = tlx_tests(ratings)
+    for name, answers, tests in (
+        ("likert", read_likert(folder), likert_tests),
+        ("tlx", read_tlx(folder), tlx_tests),
+    ):
+        if (
+            answers is not None
+        ):  # a questionnaire's paired tests, over those who answered after every condition
+            answers, left = complete_participants(answers, name, by_task=False)
+            dropped = pd.concat([dropped, left], ignore_index=True)
+            if answers.participant.nunique() >= 2:
+                out[name] = tests(answers)
     demographics = read_demographics(folder)
     if demographics is not None:
         out["demographics"] = demographics_counts(demographics)
