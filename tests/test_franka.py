@@ -40,9 +40,10 @@ def make_guard() -> Guard:
     return Guard.around(ROBOT, TASK.start)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def server():
-    """One franky-sim server for the module's tests (it serves one client at a time)."""
+    """A franky-sim server of the test's own: it serves one client at a time, and a failed test's traceback
+    keeps that test's client alive, so a shared server would refuse every test after a failure."""
     with simulator() as address:
         yield address
 
@@ -76,12 +77,17 @@ def measured(robot) -> np.ndarray:
     return np.array(robot.current_joint_state.position)
 
 
-def at_rest(robot) -> bool:
-    """Whether no joint moves more than 2 mrad in 0.3 s (franky-sim's reported velocity of joint 7
-    chatters at +-0.08 rad/s while its position stands still, so positions are compared)."""
-    before = measured(robot)
-    time.sleep(0.3)
-    return bool(np.abs(measured(robot) - before).max() < 2e-3)
+def comes_to_rest(robot, within: float = 5.0) -> bool:
+    """Whether, within ``within`` seconds, no joint moves more than 2 mrad in 0.3 s (franky-sim's reported
+    velocity of joint 7 chatters at +-0.08 rad/s while its position stands still, so positions are
+    compared). The arm brakes in the simulator's time, which lags the wall clock on a loaded machine."""
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        before = measured(robot)
+        time.sleep(0.3)
+        if np.abs(measured(robot) - before).max() < 2e-3:
+            return True
+    return False
 
 
 def write_script(path, n, axes=(0.0, 0.8), **flags) -> str:
@@ -168,7 +174,7 @@ def test_the_stop_input_holds_the_arm(server, build, tmp_path):
     v = frame[[f"v{i}" for i in range(7)]].to_numpy()
     assert meta["status"] == "complete" and np.abs(v[:10]).max() > 0.01
     assert (v[10:] == 0.0).all() and (frame.stop[10:] == 1).all()
-    assert at_rest(station.link.robot)
+    assert comes_to_rest(station.link.robot)
 
 
 @pytest.mark.parametrize("fault", ["no input", "late tick"])
@@ -188,7 +194,7 @@ def test_the_watchdog_stops_the_arm(server, build, tmp_path, fault):
     assert len(frame) == (
         8 + 3 if fault == "no input" else 8
     )  # 0.3 s of silence; the step after the late one
-    assert at_rest(station.link.robot)
+    assert comes_to_rest(station.link.robot)
 
 
 def test_a_lost_link_stops_the_session_and_nothing_recovers_by_itself(build, tmp_path):
@@ -245,17 +251,22 @@ def test_the_workspace_guard_keeps_the_fork_above_the_table(sim):
     link = FrankaLink(robot, guard, address)
     data = mujoco.MjData(ROBOT.model)
     tips, codes = [], []
-    for _ in range(45):  # the tip straight down at 0.15 m/s, through the table if nothing stopped it
+    refused = 0
+    # the tip straight down at 0.15 m/s, through the table if nothing stopped it: until the guard has
+    # refused 10 ticks in a row (the arm reaches the floor later in wall time on a loaded machine; 200
+    # ticks, 20 s, bound the wait)
+    while refused < 10 and len(codes) < 200:
         q = link.read()
         tip, _, jp, _ = tip_frames(ROBOT, data, q[None])
         v = np.linalg.pinv(jp[0]) @ np.array([0.0, 0.0, -0.15])
         codes.append(link.command(q, q + DT * v, DT)["guard"])
         tips.append(tip[0])
+        refused = refused + 1 if "workspace" in reasons(codes[-1]) else 0
         time.sleep(DT)
     link.hold()
     heights = np.array(tips)[:, 2]
     assert heights[0] > 0.3 and heights.min() >= guard.workspace.floor - 0.005
-    assert any("workspace" in reasons(c) for c in codes)
+    assert refused == 10  # held at the floor, 10 ticks running
 
 
 def test_a_hand_computed_command_is_scaled_then_ramped():

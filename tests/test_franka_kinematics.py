@@ -4,7 +4,6 @@ check itself."""
 
 from __future__ import annotations
 
-import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -126,18 +125,17 @@ def franky_sim_fields(panda):
     from lasa.live.franka import connect, simulator  # franky and franky-sim are pinned: never skipped
     from lasa.live.kinematics import measure
 
-    started = time.perf_counter()
     with simulator() as address:
         arm = connect(address)
         targets = shared_configurations(5, seed=0)
         fields = measure(arm, targets, speed=0.9)
-    return targets, fields, time.perf_counter() - started
+    return targets, fields
 
 
 def test_franky_sim_agrees_with_the_package_panda(panda, franky_sim_fields):
     from lasa.live.kinematics import compare
 
-    targets, fields, seconds = franky_sim_fields
+    targets, fields = franky_sim_fields
     table = compare(panda, fields)
     # the desired pair: the motion ended at its target (ruckig's last sample, microradians off), and the pose
     # is the package Panda's up to float32
@@ -148,13 +146,12 @@ def test_franky_sim_agrees_with_the_package_panda(panda, franky_sim_fields):
     tracking = table["tracking_error_rad"]
     assert np.all(table["measured_position_error_m"] <= REACH * tracking + POSITION_TOL)
     assert np.all(table["measured_orientation_error_rad"] <= tracking + ORIENTATION_TOL)
-    assert seconds < 25.0
 
 
 def test_franky_sim_check_fails_with_a_wrong_joint_offset(panda, franky_sim_fields):
     from lasa.live.kinematics import compare
 
-    _, fields, _ = franky_sim_fields
+    _, fields = franky_sim_fields
     offset = np.zeros(7)
     offset[5] = 0.01  # joint 6 read 0.01 rad off
     table = compare(panda, {**fields, "q_d": fields["q_d"] + offset})
