@@ -848,16 +848,27 @@ def _time_grid(cells: list[Any], shared: Any, scheduler: str | None) -> tuple[fl
 
 
 @contextlib.contextmanager
-def _local_cluster(n_workers: int) -> Iterator[str]:
-    """A ``LocalCluster`` of one-thread worker processes that have imported lasa: its address."""
+def _local_cluster(n_workers: int) -> Iterator[Callable[[int], str]]:
+    """A ``LocalCluster`` of ``n_workers`` one-thread worker processes; yields ``resize(n)``, which grows or
+    shrinks it to ``n`` workers that have all imported lasa and returns its address (the workers already
+    running are kept: each costs a process start and lasa's import)."""
     from distributed import Client, LocalCluster  # noqa: PLC0415
 
     with LocalCluster(
         n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None
     ) as cluster:
-        with Client(cluster) as client:  # imports are start-up, not work: before the clock
-            client.run(importlib.import_module, "lasa.experiments.robustness")
-        yield cluster.scheduler_address
+        with Client(cluster) as client:
+
+            def resize(n: int) -> str:
+                cluster.scale(n)
+                client.wait_for_workers(n)
+                while len(client.scheduler_info()["workers"]) != n:  # a worker shrunk away leaves late
+                    time.sleep(0.05)
+                # imports are start-up, not work: before the clock
+                client.run(importlib.import_module, "lasa.experiments.robustness")
+                return str(cluster.scheduler_address)
+
+            yield resize
 
 
 def fit_overhead(
@@ -904,15 +915,15 @@ def _large_size(config: BenchConfig, small_s: float) -> int:
 def dask_grid(
     model: LatentActionModel, task: CupTask, control: ControlConfig, config: BenchConfig
 ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The verdict-map grid here and on LocalClusters: ``(dask_grid, dask_overhead_1_worker)``.
+    """The verdict-map grid here and on a LocalCluster: ``(dask_grid, dask_overhead_1_worker)``.
 
     Cells of a factorial grid (every member in each, taken in order and starting over past
     its 27 cells), with the bench's decoder as both the base and the entropy decoder. The
     overhead of one Dask worker is measured at two sizes, ``grid_cells`` (the large one grown
     until the in-process run takes ``grid_min_s``, estimated from the small one), in this
     process and then on a 1-worker cluster, and split by :func:`fit_overhead`. The speedup of
-    the other ``dask_workers`` is timed at the small size (reported, not a target). Cluster
-    start-up is not timed: the workers import ``lasa`` before the clock starts. The
+    the other ``dask_workers`` is timed at the small size, the same cluster grown to each (reported,
+    not a target). Cluster start-up is not timed: the workers import ``lasa`` before the clock starts. The
     decoders and task go to each worker once (``run_jobs(shared=...)``).
     """
     all_cells, shared = _grid_cells(model, task, control, config)
@@ -922,15 +933,15 @@ def dask_grid(
     local.append(_time_grid(_take(all_cells, sizes[1]), shared, None))
     if local[1][0] < config.grid_min_s:
         print(f"warning: the large grid ran {local[1][0]:.1f} s in-process (< {config.grid_min_s} s)")
-    with _local_cluster(1) as address:
+    with _local_cluster(1) as resize:
+        address = resize(1)
         dask = [_time_grid(_take(all_cells, n), shared, address) for n in sizes]
-    identical = all(d[1].equals(lo[1]) for d, lo in zip(dask, local, strict=True))
-    grid: dict[str, Any] = {"cells": small, "local_s": local[0][0], "workers": {"1": dask[0][0]}}
-    for n in (w for w in config.dask_workers if w != 1):
-        with _local_cluster(n) as address:
-            seconds, frame = _time_grid(_take(all_cells, small), shared, address)
-        grid["workers"][str(n)] = seconds
-        identical = identical and frame.equals(local[0][1])
+        identical = all(d[1].equals(lo[1]) for d, lo in zip(dask, local, strict=True))
+        grid: dict[str, Any] = {"cells": small, "local_s": local[0][0], "workers": {"1": dask[0][0]}}
+        for n in (w for w in config.dask_workers if w != 1):
+            seconds, frame = _time_grid(_take(all_cells, small), shared, resize(n))
+            grid["workers"][str(n)] = seconds
+            identical = identical and frame.equals(local[0][1])
     grid["identical"] = bool(identical)
     if "2" in grid["workers"]:
         grid["speedup_2_over_1"] = grid["workers"]["1"] / grid["workers"]["2"]  # reported, not a target
@@ -1125,7 +1136,7 @@ def main(argv: list[str] | None = None) -> int:
     results["decoder_vs_gemm"] = decoder_vs_gemm(model, control, config)
     results["decoder_vs_gemm_fraction"] = results["decoder_vs_gemm"]["fraction"]
 
-    print("verdict-map grid: local and on Dask LocalClusters (two sizes)", flush=True)
+    print("verdict-map grid: local and on a Dask LocalCluster (two sizes)", flush=True)
     results["dask_grid"], results["dask_overhead_1_worker"] = dask_grid(model, task, control, config)
 
     print("the kernels pinned to AVX2 against each library's own choice (fresh processes)", flush=True)
