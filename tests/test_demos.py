@@ -43,6 +43,31 @@ def test_belief_starts_uniform_and_commits_to_the_demonstrated_cup(demos):
     assert np.all(true[clean.phase > 0] > 0.99)  # confident during grasp adjustments
 
 
+def test_beliefs_are_the_online_update_step_by_step(demos, task):
+    """The collector's batched likelihoods give, bit for bit, the beliefs of Algorithm 1's update run one
+    tuple at a time from uniform along each demonstration."""
+    from lasa.method.belief import (
+        belief,
+        belief_targets,
+        log_likelihood,
+        uniform_log_belief,
+        update_log_belief,
+    )
+
+    control, clean = task.robot.control, demos.clean()
+    sets = belief_targets(task, control.likelihood)
+    expected = np.empty_like(clean.beliefs)
+    for k in range(len(clean)):
+        if k == 0 or clean.demo[k] != clean.demo[k - 1]:
+            log_b = uniform_log_belief(1, task.n_goals)[0]
+        expected[k] = belief(log_b)
+        lik = log_likelihood(
+            clean.states[k], clean.actions[k], sets, control.dt, control.belief_beta, control.likelihood_step
+        )
+        log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
+    assert_array_equal(clean.beliefs, expected)
+
+
 def test_same_seed_same_data(task):
     a = collect_demonstrations(task, task.robot.control, SMALL_DEMOS)
     b = collect_demonstrations(task, task.robot.control, SMALL_DEMOS)

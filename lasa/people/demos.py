@@ -26,14 +26,7 @@ from lasa.base.config import (
     check_choice,
     validate,
 )
-from lasa.method.belief import (
-    belief,
-    belief_targets,
-    confident_belief,
-    log_likelihood,
-    uniform_log_belief,
-    update_log_belief,
-)
+from lasa.method.belief import belief_targets, confident_belief, online_beliefs
 from lasa.method.dataset import ADJUST, HOLD, PHASE_NAMES, REACH, STROKE, Demonstrations, add_noisy_copies
 from lasa.world.eating import EatingTask
 from lasa.world.goals import GoalTask
@@ -131,12 +124,9 @@ class _Collector:
 
     def append(self, segments: list[Segment], goal: int, start_belief: np.ndarray | None = None) -> None:
         """Append one demonstration: each (path, preference, phase)'s finite differences, then a hold,
-        with the online belief from ``start_belief`` (default uniform)."""
+        with the online belief along the whole of it from ``start_belief`` (default uniform)."""
         control, hold = self.control, self.config.hold_steps
-        model = (self.goal_sets, control.dt, control.belief_beta, control.likelihood_step)
-        log_b = (
-            uniform_log_belief(1, len(self.goal_sets))[0] if start_belief is None else np.log(start_belief)
-        )
+        rows = []
         for path, th, phase in segments:
             s = np.concatenate([path[:-1], np.repeat(path[-1:], hold, 0)])
             still = np.zeros((hold, self.task.robot.n_joints))
@@ -144,11 +134,11 @@ class _Collector:
             n = len(s)
             ph = np.full(n, phase)
             ph[len(path) - 1 :] = HOLD
-            for k in range(n):
-                self.beliefs.append(belief(log_b))
-                lik = log_likelihood(s[k], a[k], *model)
-                log_b = update_log_belief(log_b, lik, control.belief_floor, control.belief_cap)
-            self.rows.append((s, a, np.full(n, self.n_demos), np.full(n, goal), np.full(n, th), ph))
+            rows.append((s, a, np.full(n, self.n_demos), np.full(n, goal), np.full(n, th), ph))
+        states, actions = (np.concatenate([row[i] for row in rows]) for i in (0, 1))
+        log_b0 = None if start_belief is None else np.log(start_belief)
+        self.beliefs.append(online_beliefs(self.goal_sets, control, states, actions, log_b0))
+        self.rows += rows
         self.n_demos += 1
 
     def dataset(self) -> Demonstrations:
@@ -156,7 +146,7 @@ class _Collector:
         config = self.config
         states, actions, *labels = map(np.concatenate, zip(*self.rows, strict=True))
         demo, goal, theta, phase = labels
-        beliefs = np.stack(self.beliefs)
+        beliefs = np.concatenate(self.beliefs)
         robot, none = self.task.robot, np.zeros(len(states), bool)
         clean = Demonstrations(robot.name, states, actions, beliefs, demo, goal, theta, phase, none)
         copies = (config.n_perturb, config.perturb_std, config.perturb_gain)
