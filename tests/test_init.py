@@ -4,16 +4,33 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import lasa
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_star_import_works_in_a_fresh_interpreter():
-    code = "from lasa import *; print(Runner.__name__, publish.__name__, DemoConfig.__name__)"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.split() == ["Runner", "publish", "DemoConfig"]
+@pytest.fixture(scope="module")
+def fresh() -> list[str]:
+    """One fresh process with a bare environment: ``import lasa`` and three lazy exports (whether numpy,
+    torch or mujoco loaded, whether ``os.environ`` and ``sys.meta_path`` are as before), then
+    ``from lasa import *`` (three of its names): its printed words."""
+    code = (
+        "import os, sys; env = dict(os.environ); hooks = list(sys.meta_path); import lasa;"
+        "light = not {'numpy', 'torch', 'mujoco'} & set(sys.modules); lasa.Paths; lasa.Runner; lasa.publish;"
+        "print(light, dict(os.environ) == env, sys.meta_path == hooks);"
+        "from lasa import *; print(Runner.__name__, publish.__name__, DemoConfig.__name__)"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=False, env={"PATH": ""}, cwd=ROOT
+    )
+    assert run.returncode == 0, run.stderr
+    return run.stdout.split()
+
+
+def test_star_import_works_in_a_fresh_interpreter(fresh):
+    assert fresh[3:] == ["Runner", "publish", "DemoConfig"]
 
 
 def test_all_and_the_lazy_table_agree():
@@ -31,24 +48,13 @@ def test_all_and_the_lazy_table_agree():
         assert getattr(lasa, name) is getattr(home, name), name
 
 
-def test_import_lasa_changes_no_environment_variable_and_adds_no_import_hook():
+def test_import_lasa_changes_no_environment_variable_and_adds_no_import_hook(fresh):
     """In a fresh process with a bare environment: ``import lasa`` and the lazy exports it resolves
     leave ``os.environ`` and ``sys.meta_path`` as they were, and load neither numpy nor mujoco."""
-    code = (
-        "import os, sys; env = dict(os.environ); hooks = list(sys.meta_path); import lasa;"
-        "light = not {'numpy', 'torch', 'mujoco'} & set(sys.modules); lasa.Paths; lasa.Runner; lasa.publish;"
-        "print(light, dict(os.environ) == env, sys.meta_path == hooks)"
-    )
-    run = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=False, env={"PATH": ""}, cwd=ROOT
-    )
-    assert run.returncode == 0, run.stderr
-    assert run.stdout.split() == ["True", "True", "True"]
+    assert fresh[:3] == ["True", "True", "True"]
 
 
 def test_unknown_name_is_an_attribute_error():
-    import pytest
-
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         lasa.nope  # noqa: B018
 
