@@ -76,15 +76,22 @@ def _sessions(out: Path) -> Path:
     return folder
 
 
-def _chain(robot: str | None, out: Path) -> None:
-    """One robot's notebooks (or, for None, the eating study's), in order, each in its own
-    papermill run (as `make figures`); the study's notebook 11 also reads logged sessions."""
-    for stem in ORDER if robot else STUDY:
-        extra = [] if stem != "11_eating_study" else ["--param", f"sessions_dir={_sessions(out)}"]
-        command = [
-            sys.executable,
-            "-m",
-            "lasa.pipeline.execute",
+# One Python process runs a chain's notebooks one after another through the command line's own entry
+# point (each notebook still in a kernel of its own, as `make figures` runs them), stopping at the first
+# that fails: a process per notebook cost a second of start-up each.
+RUN_ALL = """
+import json, sys
+from lasa.pipeline.execute import main
+for argv in json.loads(sys.argv[1]):
+    if main(argv) != 0:
+        sys.exit(f"failed: {argv[0]}")
+"""
+
+
+def _run(stems: list[str], robot: str | None, out: Path, extra: tuple[str, ...] = ()) -> None:
+    """``python -m lasa.pipeline.execute`` of each of ``stems`` in order (QUICK, into ``out``)."""
+    runs = [
+        [
             str(ROOT / "notebooks" / f"{stem}.ipynb"),
             "--config",
             str(QUICK),
@@ -97,9 +104,24 @@ def _chain(robot: str | None, out: Path) -> None:
             f"figures_dir={out / 'figures'}",
             *extra,
         ]
-        result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT)
-        if result.returncode != 0:
-            raise RuntimeError(f"{stem} ({robot}) failed:\n{result.stdout[-2000:]}\n{result.stderr[-4000:]}")
+        for stem in stems
+    ]
+    result = subprocess.run(
+        [sys.executable, "-c", RUN_ALL, json.dumps(runs)], capture_output=True, text=True, cwd=ROOT
+    )
+    if result.returncode != 0:
+        raise RuntimeError(f"{stems} ({robot}) failed:\n{result.stdout[-2000:]}\n{result.stderr[-4000:]}")
+
+
+def _chain(robot: str | None, out: Path) -> None:
+    """One robot's notebooks (or, for None, the eating study's), in order, each in its own
+    papermill run (as `make figures`); the study's notebook 11 also reads logged sessions, which
+    need notebook 10's decoder."""
+    if robot:
+        _run(ORDER, robot, out)
+        return
+    _run(STUDY[:1], None, out)
+    _run(STUDY[1:], None, out, ("--param", f"sessions_dir={_sessions(out)}"))
 
 
 @pytest.fixture(scope="module")
