@@ -282,17 +282,17 @@ def analyse_sessions(folder: str | os.PathLike[str], task: Any) -> dict[str, pd.
             ],
             ignore_index=True,
         )
+    # each questionnaire's paired tests, over those who answered after every condition
     for name, answers, tests in (
         ("likert", read_likert(folder), likert_tests),
         ("tlx", read_tlx(folder), tlx_tests),
     ):
-        if (
-            answers is not None
-        ):  # a questionnaire's paired tests, over those who answered after every condition
-            answers, left = complete_participants(answers, name, by_task=False)
-            dropped = pd.concat([dropped, left], ignore_index=True)
-            if answers.participant.nunique() >= 2:
-                out[name] = tests(answers)
+        if answers is None:
+            continue
+        answers, left = complete_participants(answers, name, by_task=False)
+        dropped = pd.concat([dropped, left], ignore_index=True)
+        if answers.participant.nunique() >= 2:
+            out[name] = tests(answers)
     demographics = read_demographics(folder)
     if demographics is not None:
         out["demographics"] = demographics_counts(demographics)

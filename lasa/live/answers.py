@@ -10,6 +10,7 @@ import os
 import unicodedata
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import NoReturn
 
 import pandas as pd
 
@@ -18,24 +19,36 @@ from lasa.base.io import locked, write_csv
 from lasa.evidence.questionnaire import COMMENT_CHARS, DEMOGRAPHICS, TLX_STEP, TLX_SUBSCALES
 
 
+def answered(path: Path, key: Mapping[str, str]) -> tuple[pd.DataFrame | None, pd.Series | None]:
+    """The CSV at ``path`` as text (None if there is none) and which of its rows hold ``key``'s values."""
+    if not path.is_file():
+        return None, None
+    old = pd.read_csv(path, dtype=str, keep_default_na=False)
+    mine = pd.Series(True, index=old.index)
+    for column, value in key.items():
+        mine &= old[column] == value
+    return old, mine
+
+
+def refuse_answered(path: Path, key: Mapping[str, str]) -> NoReturn:
+    """A ConfigError saying that ``key``'s participant answered already (in ``path``)."""
+    after = f" for {key['condition']}" if "condition" in key else ""
+    raise ConfigError(
+        f"{key['participant']} answered{after} already in {path}: pass --overwrite to replace those answers"
+    )
+
+
 def record(path: Path, new: pd.DataFrame, key: Mapping[str, str], overwrite: bool = False) -> Path:
     """Add ``new`` (rows whose ``key`` columns hold ``key``'s values) to the CSV at ``path``: the same rows
     recorded before pass, other rows recorded before for ``key`` are a ConfigError unless ``overwrite``."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with locked(path.parent):
-        old = pd.read_csv(path, dtype=str, keep_default_na=False) if path.is_file() else None
-        if old is not None:
-            mine = pd.Series(True, index=old.index)
-            for column, value in key.items():
-                mine &= old[column] == value
+        old, mine = answered(path, key)
+        if old is not None and mine is not None:
             if mine.any() and not overwrite:
                 if old[mine].reset_index(drop=True).equals(new.astype(str).reset_index(drop=True)):
                     return path  # the same answers again: recorded already
-                after = f" for {key['condition']}" if "condition" in key else ""
-                raise ConfigError(
-                    f"{key['participant']} answered{after} already in {path}: "
-                    "pass --overwrite to replace those answers"
-                )
+                refuse_answered(path, key)
             new = pd.concat([old[~mine], new.astype(str)], ignore_index=True)
         write_csv(path, new)
     return path

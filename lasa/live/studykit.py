@@ -13,8 +13,8 @@ import pandas as pd
 from lasa.base.conditions import CONDITIONS, williams_square
 from lasa.base.errors import ConfigError
 from lasa.base.io import write_csv
-from lasa.evidence.sessions import QUESTIONS, SCALES, read_likert
-from lasa.live.answers import record
+from lasa.evidence.sessions import QUESTIONS, SCALES
+from lasa.live.answers import answered, record, refuse_answered
 
 MAX_PARTICIPANTS = 1000  # a schedule's largest cohort: far beyond any study the kit runs
 
@@ -102,13 +102,7 @@ def survey(
 
 def _others(path: Path, participant: str, condition: str, overwrite: bool) -> None:
     """A ConfigError if ``path`` holds ``participant``'s answers for ``condition`` (and not ``overwrite``)."""
-    old = read_likert(path.parent)
-    if (
-        old is not None
-        and not overwrite
-        and ((old.participant == participant) & (old.condition == condition)).any()
-    ):
-        raise ConfigError(
-            f"{participant} answered for {condition} already in {path}: "
-            "pass --overwrite to replace those answers"
-        )
+    key = {"participant": participant, "condition": condition}
+    _, mine = answered(path, key)
+    if mine is not None and mine.any() and not overwrite:
+        refuse_answered(path, key)
