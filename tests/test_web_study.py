@@ -10,7 +10,7 @@ import pytest
 
 from lasa.base.errors import ConfigError
 from lasa.evidence.questionnaire import DEMOGRAPHICS, LIKERT, PREFER_NOT, TLX, TLX_SUBSCALES
-from lasa.live.web.conversation import FORM_ERROR
+from lasa.live.web.conversation import MESSAGES
 from lasa.live.web.plan import Progress, plan_of
 from lasa.live.web.tokens import issue_links, study_dir
 from tests.test_web import agree, chromium, client, connect, drive, refused, served, wait_for
@@ -96,7 +96,7 @@ def test_demographics_are_optional_stored_tidy_and_asked_once_before_the_first_p
             assert [i["item"] for i in form["items"]] == list(DEMOGRAPHICS)
             assert all(PREFER_NOT in i["answers"] for i in form["items"])
             ws.send_json({"type": "demographics", "answers": {"age": "200"}})
-            assert ws.receive_json() == {"type": "error", "message": FORM_ERROR}
+            assert ws.receive_json() == {"type": "error", "message": MESSAGES["answers"]}
             ws.send_json({"type": "demographics", "answers": {"age": "25-34", "gender": PREFER_NOT}})
             assert ws.receive_json()["kind"] == "practice"
         with connect(app, tokens["p00"]) as ws:  # back again: straight to the practice
@@ -138,9 +138,9 @@ def test_the_questionnaire_stores_likert_tlx_and_comment_and_a_repeat_passes(stu
             ):  # no TLX, out of 0..100, steps
                 ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3], "tlx": bad[5:] * 6})
                 error = ws.receive_json()
-                assert error == {"type": "error", "message": FORM_ERROR}
+                assert error == {"type": "error", "message": MESSAGES["answers"]}
             ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 9], "tlx": tlx})
-            assert ws.receive_json()["message"] == FORM_ERROR
+            assert ws.receive_json()["message"] == MESSAGES["answers"]
             assert not any((sessions / n).exists() for n in ("likert.csv", "tlx.csv", "comments.csv"))
             ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3], "tlx": tlx, "comment": comment})
             assert ws.receive_json()["label"] == "B"
@@ -175,7 +175,7 @@ def test_the_comment_is_length_limited_and_never_logged(study, caplog):
     with client(sessions) as app, connect(app, tokens["p00"]) as ws:
         ws.receive_json()
         ws.send_json({"type": "survey", "answers": [7, 6, 5, 4, 3], "tlx": [5] * 6, "comment": secret})
-        assert ws.receive_json() == {"type": "error", "message": FORM_ERROR}
+        assert ws.receive_json() == {"type": "error", "message": MESSAGES["answers"]}
     assert "my-private-remark" not in caplog.text and "questionnaire refused" in caplog.text
     assert not (sessions / "comments.csv").exists()
 

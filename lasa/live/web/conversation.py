@@ -20,8 +20,15 @@ from starlette.websockets import WebSocket
 
 from lasa.base.errors import ArtifactError, ConfigError
 from lasa.evidence.questionnaire import page_demographics, page_questions
-from lasa.evidence.sessions import disconnected_flag, read_likert
-from lasa.live.answers import clean_comment, parse_tlx, record_comment, record_demographics, record_tlx
+from lasa.evidence.sessions import disconnected_flag
+from lasa.live.answers import (
+    answered,
+    clean_comment,
+    parse_tlx,
+    record_comment,
+    record_demographics,
+    record_tlx,
+)
 from lasa.live.devices import StickSample
 from lasa.live.session import Session, open_log
 from lasa.live.station import SessionConfig, Station
@@ -57,9 +64,6 @@ MESSAGES = {
     "moment; if this happens again, tell the person who sent you the link.",
 }
 UNAVAILABLE = MESSAGES["unavailable"]
-
-
-FORM_ERROR = MESSAGES["answers"]  # a form (the questionnaire, the demographics) refused: never its detail
 
 
 def _first_line(exc: Exception) -> str:
@@ -265,7 +269,7 @@ class Conversation:
                 break
             except ConfigError as exc:
                 LOG.warning("participant %s: demographics refused: %s", self.participant, _first_line(exc))
-                await self.send({"type": "error", "message": FORM_ERROR})
+                await self.send({"type": "error", "message": MESSAGES["answers"]})
         self.study.progress.mark(self.participant, "demographics")
 
     async def _survey(self, step: Step, header: dict[str, Any]) -> None:
@@ -298,10 +302,9 @@ class Conversation:
 
     def _answered(self, step: Step) -> bool:
         """Whether the participant's answers for ``step``'s condition are stored already."""
-        old = read_likert(self.study.config.sessions)
-        return old is not None and bool(
-            ((old.participant == self.participant) & (old.condition == step.condition)).any()
-        )
+        key = {"participant": self.participant, "condition": step.condition}
+        _, mine = answered(Path(self.study.config.sessions) / "likert.csv", key)
+        return mine is not None and bool(mine.any())
 
     def _thanks(self) -> dict[str, Any]:
         """The thank-you page: the participant's id (to quote in a withdrawal request) and the completion

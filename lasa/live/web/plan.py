@@ -58,8 +58,7 @@ class Progress:
 
     def consent(self, participant: str) -> None:
         """Record the participant's consent."""
-        self.of(participant)["consented"] = True
-        self._save()
+        self.mark(participant, "consented")
 
     def mark(self, participant: str, key: str) -> None:
         """Record that the participant has done ``key`` (``demographics``: answered or skipped)."""

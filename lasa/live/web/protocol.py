@@ -60,19 +60,21 @@ def parse(text: str | bytes | None) -> dict[str, Any]:
             raise ProtocolError("input carries two numeric axes")
         if not isinstance(msg.get("mode", False), bool) or not isinstance(msg.get("stop", False), bool):
             raise ProtocolError("input's mode and stop are true or false")
-    if msg["type"] == "survey":
-        answers = msg.get("answers")
-        if not (isinstance(answers, list) and len(answers) <= 16 and all(type(a) is int for a in answers)):
-            raise ProtocolError("survey answers are a short list of integers")
+    if msg["type"] == "survey" and not _short_ints(msg.get("answers")):
+        raise ProtocolError("survey answers are a short list of integers")
     _check_study(msg)
     return msg
+
+
+def _short_ints(value: Any) -> bool:
+    """Whether ``value`` is a list of at most 16 integers (a form's ratings)."""
+    return isinstance(value, list) and len(value) <= 16 and all(type(v) is int for v in value)
 
 
 def _check_study(msg: dict[str, Any]) -> None:
     """The questionnaires' and the device's fields: their shapes (their values are the study's to check)."""
     if msg["type"] == "survey":
-        tlx = msg.get("tlx", [])
-        if not (isinstance(tlx, list) and len(tlx) <= 16 and all(type(v) is int for v in tlx)):
+        if not _short_ints(msg.get("tlx", [])):
             raise ProtocolError("survey's tlx is a short list of integers")
         if not isinstance(msg.get("comment", ""), str):
             raise ProtocolError("survey's comment is text")
